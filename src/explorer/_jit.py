@@ -1,0 +1,39 @@
+"""The only place that imports numba.
+
+``njit`` compiles with ``cache=True`` and never with ``fastmath`` (fastmath
+reassociation deletes compensated sums and ``nnan`` deletes NaN checks).
+Set ``EXPLORER_NOJIT=1`` to run every kernel as plain Python (debugging,
+coverage); ``prange`` then falls back to ``range``.
+"""
+import os
+
+NOJIT = os.environ.get("EXPLORER_NOJIT", "") not in ("", "0")
+
+if NOJIT:  # pragma: no cover - debugging switch
+    def njit(*args, **kwargs):
+        if len(args) == 1 and callable(args[0]) and not kwargs:
+            return args[0]
+        return lambda f: f
+
+    prange = range
+
+    def set_num_threads(n):
+        return None
+
+    def get_num_threads():
+        return 1
+else:
+    import numba
+
+    def njit(*args, **kwargs):
+        """``numba.njit`` with ``cache=True`` (and never fastmath)."""
+        kwargs.setdefault("cache", True)
+        if kwargs.get("fastmath"):
+            raise ValueError("fastmath is forbidden in explorer kernels")
+        if len(args) == 1 and callable(args[0]):
+            return numba.njit(**kwargs)(args[0])
+        return numba.njit(*args, **kwargs)
+
+    prange = numba.prange
+    set_num_threads = numba.set_num_threads
+    get_num_threads = numba.get_num_threads

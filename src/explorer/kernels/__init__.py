@@ -1,0 +1,38 @@
+"""Model-agnostic numerical kernels.
+
+The kernel contract (every function in this package keeps it):
+
+1. Inputs are C-contiguous float64 arrays (int64 for index tables) and
+   scalars; no Python objects, no callables (a jitted function passed as an
+   argument defeats numba's on-disk cache).  A step that needs the vector
+   field is split into pieces and the caller (``explorer.drivers``) evaluates
+   the field between them.
+2. Outputs go into preallocated arrays passed by the caller; kernels never
+   allocate inside their loops.
+3. Kernels never raise: success or failure is an integer status (the codes
+   below); the user layer (``explorer.sections``) turns codes into messages.
+4. Compiled with ``explorer._jit.njit`` (``cache=True``, never ``fastmath``:
+   it breaks compensated sums and NaN checks).
+5. Results do not depend on the number of threads: parallel loops run over
+   independent orbits only, each orbit's arithmetic is sequential.
+
+Modules: ``dop853_coefficients`` (tables), ``dop853`` (step pieces, error
+norm, dense output), ``taylor`` (order and step-size control, Horner),
+``splitting`` (composition weights and flow sequences), ``events`` (root
+refinement of event functions).
+"""
+
+# Per-orbit status codes (the driver returns one per orbit).
+STATUS_DONE = 0          #: all requested crossings found
+STATUS_TMAX = 1          #: the time budget ran out first (fewer crossings)
+STATUS_NONFINITE = 2     #: a non-finite state appeared; the orbit was stopped
+STATUS_MAX_STEPS = 3     #: the step budget ran out first
+STATUS_STEP_UNDERFLOW = 4  #: the adaptive step became negligible against t
+
+STATUS_NAMES = {
+    STATUS_DONE: "done",
+    STATUS_TMAX: "time budget exhausted",
+    STATUS_NONFINITE: "non-finite state",
+    STATUS_MAX_STEPS: "step budget exhausted",
+    STATUS_STEP_UNDERFLOW: "step size underflow",
+}

@@ -1,0 +1,84 @@
+"""Model-agnostic pieces of an adaptive Taylor-series integrator.
+
+The caller fills the normalised Taylor coefficients ``X[i, k] = y_i^(k)/k!``
+(for this project: ``explorer.equations.taylor_coefficients``); these kernels
+choose the order from the tolerance, the step from the decay of the last two
+coefficients, and evaluate the series.
+
+References: A. Jorba, M. Zou, "A software package for the numerical
+integration of ODEs by means of high-order Taylor methods", Exp. Math. 14
+(2005) 99-117 (order and step-size rules); F. Biscani, D. Izzo, "Revisiting
+high-order Taylor methods for astrodynamics and celestial mechanics", MNRAS
+504 (2021) 2614 (the same rules as used by heyoka).
+"""
+import math
+
+from .._jit import njit
+
+MIN_ORDER = 4
+MAX_ORDER = 40
+#: Jorba-Zou safety factor exp(-0.7/(p-1))/e^2 is applied to the radius estimate.
+RHO_EXPONENT = -0.7
+
+
+def order_for_tolerance(tol):
+    """Jorba-Zou optimal order p = ceil(-ln(tol)/2 + 1), clipped to [MIN_ORDER, MAX_ORDER]."""
+    p = int(math.ceil(-math.log(tol) / 2.0 + 1.0))
+    return max(MIN_ORDER, min(MAX_ORDER, p))
+
+
+def safety_factor(order):
+    """Jorba-Zou safety factor exp(-0.7/(p-1)) / e^2 applied to the radius estimate."""
+    return math.exp(RHO_EXPONENT / (order - 1) - 2.0)
+
+
+@njit
+def step_size(X, order, factor):
+    """Step from the radius-of-convergence estimate (Jorba-Zou 2005, Sec. 3.2.1):
+    rho_m = (s / ||x^[m]||_inf)^(1/m) for m = p-1, p with s = max(1, ||x_0||_inf),
+    h = min(rho_{p-1}, rho_p) * factor, factor = :func:`safety_factor` (p).  Returns +inf
+    when the last two coefficients vanish (polynomial solution)."""
+    n = X.shape[0]
+    s = 1.0
+    a = 0.0
+    bm = 0.0
+    for i in range(n):
+        v = abs(X[i, 0])
+        if v > s:
+            s = v
+        v = abs(X[i, order])
+        if v > a:
+            a = v
+        v = abs(X[i, order - 1])
+        if v > bm:
+            bm = v
+    rho = math.inf
+    if a > 0.0:
+        rho = (s / a) ** (1.0 / order)
+    if bm > 0.0:
+        r2 = (s / bm) ** (1.0 / (order - 1))
+        if r2 < rho:
+            rho = r2
+    return rho * factor
+
+
+@njit
+def evaluate(X, order, h, out):
+    """out[i] = sum_k X[i, k] h^k (Horner)."""
+    n = X.shape[0]
+    for i in range(n):
+        acc = X[i, order]
+        for k in range(order - 1, -1, -1):
+            acc = acc * h + X[i, k]
+        out[i] = acc
+
+
+@njit
+def evaluate_derivative(X, order, h, out):
+    """out[i] = sum_k k X[i, k] h^(k-1) (Horner)."""
+    n = X.shape[0]
+    for i in range(n):
+        acc = order * X[i, order]
+        for k in range(order - 1, 0, -1):
+            acc = acc * h + k * X[i, k]
+        out[i] = acc

@@ -1,0 +1,49 @@
+"""Shared fixtures.  ``tests/`` is put on sys.path so that tests can
+``import reference`` (the independent numpy/scipy implementation of R3)."""
+import os
+import sys
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, os.path.dirname(__file__))
+
+from explorer import model  # noqa: E402
+
+#: Figure-4 scene (MODEL.md R9) and asymmetric sets (chi, zeta, xi, eta != 0, lam < 0).
+PARAM_SETS = {
+    "figure4_mu0.5": model.FIGURE4.with_(mu=0.5),
+    "asym_lam_neg": model.Params(a1=1.3, a2=0.6, b=1.7, lam=-0.8, chi=0.2, zeta=-0.15, mu=0.7, xi=0.3, eta=-0.25),
+    "asym_lam_pos": model.Params(a1=0.8, a2=1.4, b=2.5, lam=1.6, chi=-0.3, zeta=0.25, mu=1.2, xi=-0.2, eta=0.4),
+}
+
+
+@pytest.fixture(params=sorted(PARAM_SETS))
+def param_set(request):
+    return request.param, PARAM_SETS[request.param]
+
+
+def random_states(params, n, seed=0, scale=1.0):
+    """Random physical states (p1, p2, M, sin phi, cos phi)."""
+    rng = np.random.default_rng(seed)
+    y = np.empty((n, 5))
+    y[:, :3] = scale * rng.normal(size=(n, 3))
+    phi = rng.uniform(0, 2 * np.pi, n)
+    y[:, 3] = np.sin(phi)
+    y[:, 4] = np.cos(phi)
+    return y
+
+
+def pytest_sessionstart(session):
+    """Compile the main kernels once, in this process, before any test starts subprocesses or
+    joblib workers: they then load the kernels from numba's on-disk cache instead of compiling
+    the same functions concurrently (concurrent writers of one cache entry are a known numba
+    hazard, and a cold cache is what CI starts with)."""
+    from explorer import fixedpoints, lyapunov, sections
+
+    prm = model.FIGURE4.with_(mu=0.1)
+    y0 = model.section_state(prm, [0.2], [0.1], 2.0)
+    for method in ("taylor", "dop853", "split4"):
+        sections.crossings(prm, y0, 1, method=method, tol=1e-10, dt=0.05)
+        lyapunov.indicators(prm, y0, 1.0, method=method, tol=1e-10, dt=0.05)
+    fixedpoints.find_fixed_point(model.FIGURE4, 2.0)

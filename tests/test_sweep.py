@@ -1,0 +1,224 @@
+"""`python -m explorer sweep`: store, resume, skip, determinism across jobs and backends, errors."""
+import os
+import random
+import signal
+import subprocess
+import sys
+import time
+
+import h5py
+import numpy as np
+import pytest
+
+from explorer import cli, store
+
+SMALL = """
+name = "small"
+[model]
+mu = 0.0
+[energy]
+h = 2.0
+[sweep]
+parameter = "mu"
+values = [0.1, 0.6, 1.5]
+[seeds]
+kind = "grid"
+n = 24
+[integration]
+method = "taylor"
+tol = 1e-12
+crossings = 40
+tmax = 400.0
+[figure]
+layout = "row"
+"""
+
+
+def write_scene(tmp_path, text=SMALL, name="scene.toml"):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+def sweep(args, capsys=None):
+    code = cli.main(["sweep"] + [str(a) for a in args] + ["--quiet"])
+    out = capsys.readouterr() if capsys is not None else None
+    return code, out
+
+
+def datasets(path):
+    """Every dataset of the store (panel data only; attrs with timestamps excluded)."""
+    out = {}
+    with h5py.File(path, "r") as f:
+        def visit(name, obj):
+            if isinstance(obj, h5py.Dataset):
+                out[name] = obj[()]
+        f.visititems(visit)
+    return out
+
+
+def assert_same_data(a, b):
+    da, db = datasets(a), datasets(b)
+    assert sorted(da) == sorted(db)
+    for k in da:
+        np.testing.assert_array_equal(da[k], db[k], err_msg=k)
+
+
+def test_sweep_writes_every_panel_and_the_figure(tmp_path, capsys):
+    scene = write_scene(tmp_path)
+    out = tmp_path / "r.h5"
+    code, (stdout, _) = sweep([scene, "--out", out, "--figure", tmp_path / "fig"], capsys)
+    assert code == 0
+    assert "3 panels (3 computed, 0 already stored)" in stdout
+    data = store.read_store(out)
+    assert sorted(data.panels) == [0, 1, 2]
+    for i, pd in data.panels.items():
+        n = len(pd.arrays["count"])
+        assert 15 <= n <= 40
+        assert pd.arrays["offsets"][-1] == len(pd.arrays["crossings"]) == pd.arrays["count"].sum()
+        assert np.all(np.isfinite(pd.arrays["crossings"]))
+    assert (tmp_path / "fig.png").stat().st_size > 10000
+    assert (tmp_path / "fig.pdf").read_bytes()[:4] == b"%PDF"
+    # provenance
+    assert data.attrs["scene_name"] == "small" and "parameter = \"mu\"" in data.attrs["scene"]
+
+
+def test_rerun_skips_complete_panels_and_recomputes_only_a_changed_one(tmp_path, capsys):
+    scene = write_scene(tmp_path)
+    out = tmp_path / "r.h5"
+    sweep([scene, "--out", out, "--no-figure"], capsys)
+    before = datasets(out)
+    code, (stdout, _) = sweep([scene, "--out", out, "--no-figure"], capsys)
+    assert code == 0 and "(0 computed, 3 already stored)" in stdout
+    scene2 = write_scene(tmp_path, SMALL.replace("[0.1, 0.6, 1.5]", "[0.1, 0.7, 1.5]"), "scene2.toml")
+    code, (stdout, _) = sweep([scene2, "--out", out, "--no-figure"], capsys)
+    assert "(1 computed, 2 already stored)" in stdout
+    after = datasets(out)
+    for k in before:
+        if k.startswith("panels/001"):
+            continue
+        np.testing.assert_array_equal(before[k], after[k])
+    assert not np.array_equal(before["panels/001/crossings"], after["panels/001/crossings"])
+    code, (stdout, _) = sweep([scene2, "--out", out, "--no-figure", "--force"], capsys)
+    assert "(3 computed, 0 already stored)" in stdout
+
+
+def test_jobs_1_and_2_give_identical_files(tmp_path, capsys):
+    scene = write_scene(tmp_path)
+    a, b = tmp_path / "a.h5", tmp_path / "b.h5"
+    assert sweep([scene, "--out", a, "--no-figure", "--jobs", "1"], capsys)[0] == 0
+    assert sweep([scene, "--out", b, "--no-figure", "--jobs", "2"], capsys)[0] == 0
+    assert_same_data(a, b)
+
+
+def test_dask_local_cluster_gives_the_same_file(tmp_path, capsys):
+    distributed = pytest.importorskip("distributed")
+    scene = write_scene(tmp_path)
+    a, b = tmp_path / "a.h5", tmp_path / "b.h5"
+    assert sweep([scene, "--out", a, "--no-figure"], capsys)[0] == 0
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        code, _ = sweep([scene, "--out", b, "--no-figure", "--backend", "dask", "--scheduler",
+                         cluster.scheduler_address], capsys)
+    assert code == 0
+    assert_same_data(a, b)
+
+
+def test_killed_sweep_resumes_to_the_same_file(tmp_path):
+    """SIGKILL a sweep subprocess at random moments, rerun to completion, compare with an
+    uninterrupted run: identical data, nothing lost, nothing duplicated."""
+    text = SMALL.replace("values = [0.1, 0.6, 1.5]", "values = [0.1, 0.3, 0.6, 0.9, 1.2, 1.5]")
+    scene = write_scene(tmp_path, text)
+    ref = tmp_path / "ref.h5"
+    out = tmp_path / "killed.h5"
+    cmd = [sys.executable, "-m", "explorer", "sweep", str(scene), "--no-figure", "--quiet"]
+    subprocess.run(cmd + ["--out", str(ref)], check=True, capture_output=True, timeout=600)
+    rng = random.Random(7)
+    kills = 0
+    for _ in range(6):
+        proc = subprocess.Popen(cmd + ["--out", str(out)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        time.sleep(rng.uniform(0.3, 2.0))
+        if proc.poll() is None:
+            os.kill(proc.pid, signal.SIGKILL)
+            kills += 1
+        proc.wait()
+        if out.exists():
+            store.read_store(out)  # opens, whatever the moment of the kill
+    subprocess.run(cmd + ["--out", str(out)], check=True, capture_output=True, timeout=600)
+    assert kills >= 1
+    assert_same_data(ref, out)
+    assert not list(tmp_path.glob("killed.h5.tmp-*"))
+
+
+@pytest.mark.parametrize("args,fragment", [
+    (["no-such-scene"], "no-such-scene"),
+    (["figure4", "--jobs", "0"], "--jobs must be >= 1"),
+    (["figure4", "--scheduler", "tcp://127.0.0.1:1"], "--scheduler needs --backend dask"),
+    (["figure4", "--backend", "spark"], "--backend"),
+])
+def test_bad_sweep_input_gives_one_line_and_status_2(args, fragment, capsys):
+    code = cli.main(["sweep"] + args)
+    _, err = capsys.readouterr()
+    assert code == 2
+    assert len(err.strip().splitlines()) == 1 and fragment in err and "Traceback" not in err
+
+
+def test_corrupt_output_file_is_refused_not_overwritten(tmp_path, capsys):
+    scene = write_scene(tmp_path)
+    out = tmp_path / "bad.h5"
+    out.write_bytes(b"not an hdf5 file at all" * 10)
+    code = cli.main(["sweep", str(scene), "--out", str(out), "--quiet", "--no-figure"])
+    _, err = capsys.readouterr()
+    assert code == 2 and str(out) in err and len(err.strip().splitlines()) == 1
+    assert out.read_bytes().startswith(b"not an hdf5")
+
+
+CHAOS = """
+name = "chaos_small"
+[sweep]
+parameter = "mu"
+values = [0.0, 0.5, 4.0]
+[seeds]
+kind = "grid"
+n = 40
+[integration]
+crossings = 20
+tmax = 300.0
+[compute]
+sections = true
+lyapunov = true
+separatrices = true
+[lyapunov]
+time = 300.0
+threshold = 4.0
+[figure]
+share_scale = false
+"""
+
+
+def test_sweep_stores_chaos_indicators_fraction_and_separatrices(tmp_path, capsys):
+    scene = write_scene(tmp_path, CHAOS)
+    out = tmp_path / "c.h5"
+    code, (stdout, _) = sweep([scene, "--out", out, "--figure", tmp_path / "c"], capsys)
+    assert code == 0
+    assert "chaotic fraction" in stdout
+    data = store.read_store(out)
+    fr = []
+    for i in range(3):
+        pd = data.panels[i]
+        n = pd.n_orbits
+        for k in ("megno", "mlce", "fli", "lyapunov_status"):
+            assert pd.extra[k].shape == (n,)
+        fr.append(pd.attrs["chaotic_fraction"])
+        assert 0 <= pd.attrs["chaotic_fraction_error"] < 0.2
+    # mu = 0 is integrable (Chaplygin): almost nothing chaotic; mu = 0.5: almost everything
+    assert fr[0] < 0.1 and fr[1] > 0.8
+    # separatrices where the central fixed point is hyperbolic (mu = 0, 0.5), none where stable (mu = 4)
+    import json
+    fp = [json.loads(data.panels[i].attrs["fixed_point"]) for i in range(3)]
+    assert [f["stable"] for f in fp] == [False, False, True]
+    assert len(data.panels[0].separatrices()) == 4 and data.panels[2].separatrices() == []
+    assert abs(fp[0]["p1"]) < 1e-12 and abs(fp[0]["trace"] - 9.0339110031) < 1e-8
+    for suffix in ("", "_chaosmap", "_fraction"):
+        assert (tmp_path / f"c{suffix}.png").stat().st_size > 5000
+        assert (tmp_path / f"c{suffix}.pdf").exists()
