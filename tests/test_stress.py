@@ -317,14 +317,6 @@ def grazing_state(sep):
     return np.array([0.3, 0.1, GRAZE_M0 + 9.1e-4 * (sep / 0.05) ** 2, math.sin(phi), math.cos(phi)])
 
 
-GRAZING_BUG = pytest.mark.xfail(strict=True, reason=(
-    "open bug (issue 6): the crossing test only compares the signs of sin(phi - phi0) at the two "
-    "ends of a step, so a crossing followed by the body turning back inside the same step (M changes "
-    "sign) is missed; fix: when M changes sign in a step, locate M = 0 on the step's polynomial and "
-    "test the sign of g there"))
-
-
-@GRAZING_BUG
 @pytest.mark.parametrize("method,kw,sep", [
     ("taylor", dict(tol=1e-13), 0.1),
     ("taylor", dict(tol=1e-13), 0.02),
@@ -333,16 +325,15 @@ GRAZING_BUG = pytest.mark.xfail(strict=True, reason=(
     ("split8", dict(dt=0.05), 0.005),
 ])
 def test_grazing_pair_of_crossings_inside_one_step_is_found(method, kw, sep):
-    """KNOWN BUG (fails at the time of writing): a crossing of phi = pi followed by the
-    crossing back within the same integration step is missed, because the drivers look for a
-    sign change of sin(phi - phi0) between the ends of a step only (drivers.orbit_taylor,
-    lanes.run_taylor_lanes_batch, drivers.orbit_dop853, drivers.orbit_split via
-    kernels.events.sign_change; the same in drivers_tangent.return_map_taylor).  The Taylor
-    method misses pairs 0.1 apart at any tol (its steps are ~0.14 here), dop853 at tol 1e-13
-    pairs 0.02 apart, split8 at dt 0.05 pairs 0.005 apart.  In ordinary runs at mu = 2, 4, 8
-    (taylor tol 1e-13 and split8 dt 0.05) 0.8e-3 .. 2.3e-3 of the crossings are lost this way,
+    """A crossing of phi = pi followed by the crossing back within the same integration step
+    is found (both, at the reference times).  A search for a sign change of sin(phi - phi0)
+    between the ends of a step alone misses the pair: the Taylor method's steps are ~0.14
+    here, so pairs 0.1 apart fall inside one step at any tol, dop853 at tol 1e-13 pairs 0.02
+    apart, split8 at dt 0.05 pairs 0.005 apart.  Before the fix (kernels.events.poly_step_roots,
+    dense_step_roots, drivers._split_step_roots), in ordinary runs at mu = 2, 4, 8
+    (taylor tol 1e-13 and split8 dt 0.05) 0.8e-3 .. 2.3e-3 of the crossings were lost this way,
     none at mu = 0.5 (benchmarks/stress/stress_crossings.py, part C); an orbit started on the
-    section with a tiny M that falls back and crosses again within the first step loses that
+    section with a tiny M that falls back and crosses again within the first step lost that
     crossing too (the start counts as g = 0; part A).  Between the two roots M changes sign
     (dg/dt = cos(phi - phi0) M / b), so a step in which M changes sign while g keeps its sign (or
     starts at 0) must be searched at the root of M.  Reference: scipy DOP853 rtol = atol =
@@ -380,14 +371,13 @@ def compare_with_scipy(prm, y0, methods, window, K=6, margin=0.05, t_atol=None):
     return bad
 
 
-@GRAZING_BUG
 def test_crossings_near_the_boundary_of_the_allowed_region_match_scipy():
     """112 orbits started on the section at 1 - eps of the allowed ellipse (eps = 1e-2 .. 1e-9:
     M -> 0 at phi = pi, grazing starts, slow or no returns) at mu = 0.03, 0.5, 2, 8; crossing
     times over a window of 10 time units (before chaotic divergence) against scipy's DOP853 with
     events (rtol = atol = 1e-13): no missed, duplicated or spurious crossing, times within 1e-8
-    (taylor, dop853 at tol 1e-13) and 1e-6 (split8, dt 0.01).  At the time of writing this fails
-    for taylor at mu = 2 (a grazing pair inside one step, see the test above)."""
+    (taylor, dop853 at tol 1e-13) and 1e-6 (split8, dt 0.01).  Before the grazing-pair fix this
+    failed for taylor at mu = 2 (a grazing pair inside one step, see the test above)."""
     th = np.linspace(0, 2 * np.pi, 7, endpoint=False) + 0.3
     TH, E = np.meshgrid(th, [1e-2, 1e-4, 1e-6, 1e-9])
     u, v = (1 - E.ravel()) * np.cos(TH.ravel()), (1 - E.ravel()) * np.sin(TH.ravel())

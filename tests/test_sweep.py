@@ -124,28 +124,67 @@ def test_dask_local_cluster_gives_the_same_file(tmp_path, capsys):
     assert_same_data(a, b)
 
 
+KILL_SCENE = SMALL.replace("values = [0.1, 0.6, 1.5]", "values = [0.1, 0.3, 0.6, 0.9, 1.2, 1.5]") \
+    .replace("n = 24", "n = 60").replace("crossings = 40", "crossings = 300") \
+    .replace("tmax = 400.0", "tmax = 3000.0")
+
+
+def _stored_panels(path):
+    """Indices of the panels committed to the store at path (none if there is no file yet)."""
+    return sorted(store.read_store(path).panels) if path.exists() else []
+
+
 def test_killed_sweep_resumes_to_the_same_file(tmp_path):
-    """SIGKILL a sweep subprocess at random moments, rerun to completion, compare with an
-    uninterrupted run: identical data, nothing lost, nothing duplicated."""
-    text = SMALL.replace("values = [0.1, 0.6, 1.5]", "values = [0.1, 0.3, 0.6, 0.9, 1.2, 1.5]")
-    scene = write_scene(tmp_path, text)
+    """SIGKILL a sweep subprocess again and again, rerun to completion, compare with an
+    uninterrupted run: identical data, nothing lost, nothing duplicated, no temporary left.
+
+    The kills do not depend on how fast the machine is: every other run is killed the moment
+    it has committed a new panel (the file then holds a part of the sweep, the case resuming
+    must handle), the others at a random moment within the uninterrupted run's wall time
+    (start-up, compilation, mid-panel, mid-commit).  A run that finishes before its kill
+    starts the next round on a fresh file.  After every kill the file opens and every panel
+    it holds equals the reference panel."""
+    scene = write_scene(tmp_path, KILL_SCENE)
     ref = tmp_path / "ref.h5"
     out = tmp_path / "killed.h5"
     cmd = [sys.executable, "-m", "explorer", "sweep", str(scene), "--no-figure", "--quiet"]
+    t0 = time.perf_counter()
     subprocess.run(cmd + ["--out", str(ref)], check=True, capture_output=True, timeout=600)
+    wall = time.perf_counter() - t0
+    reference = datasets(ref)
+    npanels = len(_stored_panels(ref))
+    assert npanels == 6
     rng = random.Random(7)
-    kills = 0
-    for _ in range(6):
-        proc = subprocess.Popen(cmd + ["--out", str(out)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        time.sleep(rng.uniform(0.3, 2.0))
+    kills = partial_kills = 0
+    for attempt in range(40):
+        if kills >= 6 and partial_kills >= 2:
+            break
+        before = len(_stored_panels(out))
+        if before == npanels:   # a run finished: start the next round on a fresh file
+            out.unlink()
+            before = 0
+        proc = subprocess.Popen(cmd + ["--out", str(out)], stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL)
+        if attempt % 2 == 0:    # kill as soon as this run has committed a panel
+            deadline = time.perf_counter() + 600
+            while proc.poll() is None and time.perf_counter() < deadline:
+                if len(_stored_panels(out)) > before:
+                    break
+                time.sleep(0.005)
+        else:
+            time.sleep(rng.uniform(0.05, wall))
         if proc.poll() is None:
             os.kill(proc.pid, signal.SIGKILL)
             kills += 1
+            proc.wait()
+            stored = _stored_panels(out)   # opens, whatever the moment of the kill
+            partial_kills += 0 < len(stored) < npanels
+            now = datasets(out) if out.exists() else {}
+            for k, v in now.items():
+                np.testing.assert_array_equal(v, reference[k], err_msg=k)
         proc.wait()
-        if out.exists():
-            store.read_store(out)  # opens, whatever the moment of the kill
+    assert kills >= 6 and partial_kills >= 2, (kills, partial_kills)
     subprocess.run(cmd + ["--out", str(out)], check=True, capture_output=True, timeout=600)
-    assert kills >= 1
     assert_same_data(ref, out)
     assert not list(tmp_path.glob("killed.h5.tmp-*"))
 

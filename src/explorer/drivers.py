@@ -33,7 +33,8 @@ from .kernels import (STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE,
 from .kernels import taylor as tk
 from .kernels import dop853 as dp
 from .kernels.clock import advance_time, clip_step
-from .kernels.events import ROOT_MAX_ITER, ROOT_XTOL, dense_root, poly_root, sign_change
+from .kernels.events import (ROOT_MAX_ITER, ROOT_XTOL, dense_step_roots, poly_step_roots,
+                             sign_change, turns)
 
 EPS = 2.220446049250313e-16
 #: A start point with |sin(phi - phi0)| below this is on the section (not a crossing).
@@ -86,6 +87,8 @@ def orbit_taylor(y0, P, cphi, sphi, direction, tmax, order, max_steps, cross, yo
     ynew = np.empty(5)
     yc = np.empty(5)
     gc = np.empty(order + 1)
+    mc = np.empty(order + 1)
+    roots = np.empty(2)
     factor = math.exp(tk.RHO_EXPONENT / (order - 1) - 2.0)  # = tk.safety_factor(order)
     for i in range(5):
         yout[i] = y0[i]
@@ -122,16 +125,28 @@ def orbit_taylor(y0, P, cphi, sphi, direction, tmax, order, max_steps, cross, yo
             status = STATUS_NONFINITE
             break
         gnew = section_g(ynew, cphi, sphi)
-        if sign_change(gprev, gnew, direction):
+        if sign_change(gprev, gnew, direction) or turns(yout[2], ynew[2]):
+            # the roots of the Taylor polynomial of sin(phi - phi0), the step split where
+            # M (dphi/dt = M/b) changes sign: a crossing and the turn back inside one step
             for k in range(order + 1):
                 gc[k] = X[3, k] * cphi - X[4, k] * sphi
-            tau = poly_root(gc, order, h, gprev, gnew)
-            tk.evaluate(X, order, tau, yc)
-            if section_c(yc, cphi, sphi) > 0.0:
-                if not _record(cross, count, (t - tc) + tau, yc, energy(yc, P) - H0):
-                    status = STATUS_NONFINITE
+                mc[k] = X[2, k]
+            nroots = poly_step_roots(gc, mc, order, h, gprev, gnew, yout[2], ynew[2], direction,
+                                     roots)
+            bad = False
+            for r in range(nroots):
+                if count >= ncross:
                     break
-                count += 1
+                tau = roots[r]
+                tk.evaluate(X, order, tau, yc)
+                if section_c(yc, cphi, sphi) > 0.0:
+                    if not _record(cross, count, (t - tc) + tau, yc, energy(yc, P) - H0):
+                        bad = True
+                        break
+                    count += 1
+            if bad:
+                status = STATUS_NONFINITE
+                break
         # compensated t += h
         t, tc = advance_time(t, tc, h, last, tmax)
         for i in range(5):
@@ -167,23 +182,37 @@ def split_step(y, P, dt, flow_ids, fracs):
         apply_flow(flow_ids[i], y, P, fracs[i] * dt)
 
 
+#: the functionals of the splitting root search: sin(phi - phi0), and M (the turn of phi)
+_SPLIT_G = 0
+_SPLIT_M = 1
+
+
 @njit
-def _split_root(y, P, dt, flow_ids, fracs, cphi, sphi, gprev, gnew, yc):
-    """tau in (0, dt] with sin(phi - phi0) = 0 at Psi_tau(y), Psi the composition step.
+def _split_value_rate(yc, P, which, cphi, sphi, f):
+    """(value, d/dt) along the exact flow of the functional ``which`` at yc."""
+    if which == _SPLIT_G:
+        return section_g(yc, cphi, sphi), section_g_rate(yc, P, cphi, sphi)
+    rhs(yc, P, f)
+    return yc[2], f[2]  # MODEL.md (R3): dM/dt
+
+
+@njit
+def _split_root(y, P, dt, flow_ids, fracs, which, cphi, sphi, a, b, ga, gb, yc, f):
+    """tau in (a, b] with the functional ``which`` (sin(phi - phi0) or M) zero at Psi_tau(y),
+    Psi the composition step, given its values ga, gb at a, b of opposite signs (or gb = 0);
+    yc is left at Psi_tau(y).
 
     The step map Psi_tau is itself a method of the scheme's order for every tau,
     so its root is located at that order (an "equally accurate" alternative to
-    Henon's trick).  Newton with the derivative of the exact flow,
-    d/dtau sin(phi - phi0) = (M/b) cos(phi - phi0), safeguarded by bisection."""
-    if gnew == 0.0:
+    Henon's trick).  Newton with the derivative of the exact flow
+    (d/dtau sin(phi - phi0) = (M/b) cos(phi - phi0); dM/dt from R3), safeguarded by
+    bisection."""
+    if gb == 0.0:
         for i in range(5):
             yc[i] = y[i]
-        split_step(yc, P, dt, flow_ids, fracs)
-        return dt
-    a = 0.0
-    b = dt
-    ga = gprev
-    x = a - ga * (b - a) / (gnew - ga)
+        split_step(yc, P, b, flow_ids, fracs)
+        return b
+    x = a - ga * (b - a) / (gb - ga)
     if not (x > a and x < b):
         x = 0.5 * (a + b)
     tol = ROOT_XTOL * dt
@@ -191,7 +220,7 @@ def _split_root(y, P, dt, flow_ids, fracs, cphi, sphi, gprev, gnew, yc):
         for i in range(5):
             yc[i] = y[i]
         split_step(yc, P, x, flow_ids, fracs)
-        g = section_g(yc, cphi, sphi)
+        g, d = _split_value_rate(yc, P, which, cphi, sphi, f)
         if g == 0.0:
             return x
         if (g < 0.0) == (ga < 0.0):
@@ -199,7 +228,6 @@ def _split_root(y, P, dt, flow_ids, fracs, cphi, sphi, gprev, gnew, yc):
             ga = g
         else:
             b = x
-        d = section_g_rate(yc, P, cphi, sphi)
         xn = x - g / d if d != 0.0 else 0.5 * (a + b)
         if not (xn > a and xn < b):
             xn = 0.5 * (a + b)
@@ -213,12 +241,41 @@ def _split_root(y, P, dt, flow_ids, fracs, cphi, sphi, gprev, gnew, yc):
 
 
 @njit
+def _split_step_roots(y, P, dt, flow_ids, fracs, cphi, sphi, gprev, gnew, mnew, direction,
+                      roots, yc, f):
+    """kernels.events.poly_step_roots for a composition step from y: the crossings tau in
+    (0, dt] in the given direction, the step split at the root of M when M changes sign.
+    Returns n, roots[0:n] increasing (yc is scratch)."""
+    if turns(y[2], mnew):
+        tm = _split_root(y, P, dt, flow_ids, fracs, _SPLIT_M, cphi, sphi, 0.0, dt, y[2], mnew,
+                         yc, f)
+        gm = section_g(yc, cphi, sphi)
+        n = 0
+        if sign_change(gprev, gm, direction):
+            roots[n] = _split_root(y, P, dt, flow_ids, fracs, _SPLIT_G, cphi, sphi, 0.0, tm,
+                                   gprev, gm, yc, f)
+            n += 1
+        if sign_change(gm, gnew, direction):
+            roots[n] = _split_root(y, P, dt, flow_ids, fracs, _SPLIT_G, cphi, sphi, tm, dt,
+                                   gm, gnew, yc, f)
+            n += 1
+        return n
+    if sign_change(gprev, gnew, direction):
+        roots[0] = _split_root(y, P, dt, flow_ids, fracs, _SPLIT_G, cphi, sphi, 0.0, dt,
+                               gprev, gnew, yc, f)
+        return 1
+    return 0
+
+
+@njit
 def orbit_split(y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max_steps, cross, yout):
     """One orbit with a fixed-step composition of exact flows; t_n = n dt (no summation
     error).  Returns (count, status, t, steps)."""
     ncross = cross.shape[0]
     ynew = np.empty(5)
     yc = np.empty(5)
+    f = np.empty(5)
+    roots = np.empty(2)
     for i in range(5):
         yout[i] = y0[i]
     H0 = energy(y0, P)
@@ -244,13 +301,26 @@ def orbit_split(y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max_ste
             status = STATUS_NONFINITE
             break
         gnew = section_g(ynew, cphi, sphi)
-        if sign_change(gprev, gnew, direction):
-            tau = _split_root(yout, P, dt, flow_ids, fracs, cphi, sphi, gprev, gnew, yc)
-            if section_c(yc, cphi, sphi) > 0.0 and t + tau <= tmax:
-                if not _record(cross, count, t + tau, yc, energy(yc, P) - H0):
-                    status = STATUS_NONFINITE
+        if sign_change(gprev, gnew, direction) or turns(yout[2], ynew[2]):
+            nroots = _split_step_roots(yout, P, dt, flow_ids, fracs, cphi, sphi, gprev, gnew,
+                                       ynew[2], direction, roots, yc, f)
+            bad = False
+            for r in range(nroots):
+                tau = roots[r]
+                if count >= ncross or t + tau > tmax:
                     break
-                count += 1
+                if nroots > 1:   # yc holds the state at the last root searched
+                    for i in range(5):
+                        yc[i] = yout[i]
+                    split_step(yc, P, tau, flow_ids, fracs)
+                if section_c(yc, cphi, sphi) > 0.0:
+                    if not _record(cross, count, t + tau, yc, energy(yc, P) - H0):
+                        bad = True
+                        break
+                    count += 1
+            if bad:
+                status = STATUS_NONFINITE
+                break
         for i in range(5):
             yout[i] = ynew[i]
         gprev = gnew
@@ -286,6 +356,8 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
     K = np.empty((16, 5))
     F = np.empty((7, 5))
     Fg = np.empty(7)
+    Fm = np.empty(7)
+    roots = np.empty(2)
     tmp = np.empty(5)
     ynew = np.empty(5)
     yc = np.empty(5)
@@ -332,7 +404,7 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
             continue
         rhs(ynew, P, K[12])
         gnew = section_g(ynew, cphi, sphi)
-        if sign_change(gprev, gnew, direction):
+        if sign_change(gprev, gnew, direction) or turns(yout[2], ynew[2]):
             for s in range(13, 16):
                 dp.stage_input(yout, K, s, h, tmp)
                 rhs(tmp, P, K[s])
@@ -340,13 +412,22 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
             g_old = section_g(yout, cphi, sphi)
             for k in range(7):
                 Fg[k] = F[k, 3] * cphi - F[k, 4] * sphi
-            theta = dense_root(Fg, g_old, gnew)
-            dp.dense_eval(F, yout, theta, yc)
-            if section_c(yc, cphi, sphi) > 0.0:
-                if not _record(cross, count, (t - tc) + theta * h, yc, energy(yc, P) - H0):
-                    status = STATUS_NONFINITE
+                Fm[k] = F[k, 2]
+            nroots = dense_step_roots(Fg, g_old, gnew, Fm, yout[2], ynew[2], direction, roots)
+            bad = False
+            for r in range(nroots):
+                if count >= ncross:
                     break
-                count += 1
+                theta = roots[r]
+                dp.dense_eval(F, yout, theta, yc)
+                if section_c(yc, cphi, sphi) > 0.0:
+                    if not _record(cross, count, (t - tc) + theta * h, yc, energy(yc, P) - H0):
+                        bad = True
+                        break
+                    count += 1
+            if bad:
+                status = STATUS_NONFINITE
+                break
         h_abs *= dp.accepted_factor(err, rejected)
         rejected = False
         t, tc = advance_time(t, tc, h, last, tmax)

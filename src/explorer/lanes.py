@@ -10,7 +10,7 @@ into lanes and the number of threads:
   (one vector instruction per scalar instruction of ``equations.taylor_coefficients`` and
   ``kernels.taylor``: lane-wise the same IEEE operations in the same order);
 * everything else - step size, time and step budgets, last step clipped to tmax, Kahan time
-  sum, NaN and step-underflow checks, sign change, ``poly_root`` on the lane's own
+  sum, NaN and step-underflow checks, ``poly_step_roots`` on the lane's own
   polynomial, ``section_c``, ``_record`` - is the control flow of
   :func:`explorer.drivers.orbit_taylor`, run per lane in scalar code.
 
@@ -46,7 +46,7 @@ from .kernels import (STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE,
                       STATUS_STEP_UNDERFLOW, STATUS_TMAX)
 from .kernels import taylor as tk
 from .kernels.clock import advance_time, clip_step
-from .kernels.events import poly_root, sign_change
+from .kernels.events import poly_step_roots, sign_change, turns
 
 _IDLE = -1
 #: positive normal doubles: the range where vlog2_approx is valid
@@ -148,6 +148,8 @@ def _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, m
     yl = np.empty(NVAR)
     yc = np.empty(NVAR)
     gc = np.empty(order + 1)
+    mc = np.empty(order + 1)
+    roots = np.empty(2)
     # per-lane state of orbit_taylor
     orb = np.full(LANES, _IDLE, np.int64)
     L_t = np.zeros(LANES)
@@ -217,18 +219,25 @@ def _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, m
                 gprev = L_gprev[l]
                 count = L_count[l]
                 gnew = section_g(yl, cphi, sphi)
-                if sign_change(gprev, gnew, direction):
+                if sign_change(gprev, gnew, direction) or turns(X[0, 2, l], yl[2]):
                     for k in range(order + 1):
                         gc[k] = X[k, 3, l] * cphi - X[k, 4, l] * sphi
-                    tau = poly_root(gc, order, h, gprev, gnew)
-                    _evaluate_lane(X, order, l, tau, yc)
-                    if section_c(yc, cphi, sphi) > 0.0:
-                        if _record(out_cross[j], count, (t - tc) + tau, yc, energy(yc, P) - L_H0[l]):
-                            count += 1
-                            L_count[l] = count
-                        else:
-                            L_status[l] = STATUS_NONFINITE
-                            L_stop[l] = True
+                        mc[k] = X[k, 2, l]
+                    nroots = poly_step_roots(gc, mc, order, h, gprev, gnew, X[0, 2, l], yl[2],
+                                             direction, roots)
+                    for r in range(nroots):
+                        if count >= ncross:
+                            break
+                        tau = roots[r]
+                        _evaluate_lane(X, order, l, tau, yc)
+                        if section_c(yc, cphi, sphi) > 0.0:
+                            if _record(out_cross[j], count, (t - tc) + tau, yc, energy(yc, P) - L_H0[l]):
+                                count += 1
+                                L_count[l] = count
+                            else:
+                                L_status[l] = STATUS_NONFINITE
+                                L_stop[l] = True
+                                break
             if not L_stop[l]:
                 # compensated t += h
                 t, tc = advance_time(t, tc, h, L_last[l], tmax)
