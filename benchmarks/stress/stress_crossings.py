@@ -19,8 +19,9 @@ D. Crossings at step ends: uniform rotation (mu = 0) placed within +-100 ulps of
    step 37 for every splitting scheme: counted exactly once, at the exact time.
 
 Checks: no discrepancy in A, every pair found in B (for the settings listed), no missed
-crossing in C, D exact.  At the time of writing A, B and C fail for the reason documented in
-tests/test_stress.py::test_grazing_pair_of_crossings_inside_one_step_is_found.
+crossing in C, D exact.  A, B and C found the bug of crossings hidden inside one step (a
+crossing and the turn back; tests/test_stress.py::test_grazing_pair_of_crossings_inside_one_step_is_found),
+fixed by isolating every root of the step's polynomial (kernels.events).
 
     python benchmarks/stress/stress_crossings.py            # ~8 min on 2 cores
     python benchmarks/stress/stress_crossings.py --quick    # 100 orbits, ~1 min

@@ -33,8 +33,8 @@ from .kernels import (STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE,
 from .kernels import taylor as tk
 from .kernels import dop853 as dp
 from .kernels.clock import advance_time, clip_step
-from .kernels.events import (ROOT_MAX_ITER, ROOT_XTOL, dense_step_roots, poly_step_roots,
-                             sign_change, turns)
+from .kernels.events import (ISOLATE_STACK, MAX_STEP_ROOTS, ROOT_MAX_ITER, ROOT_XTOL,
+                             dense_step_roots, poly_step_roots, sign_change, turns)
 
 EPS = 2.220446049250313e-16
 #: A start point with |sin(phi - phi0)| below this is on the section (not a crossing).
@@ -87,8 +87,10 @@ def orbit_taylor(y0, P, cphi, sphi, direction, tmax, order, max_steps, cross, yo
     ynew = np.empty(5)
     yc = np.empty(5)
     gc = np.empty(order + 1)
-    mc = np.empty(order + 1)
-    roots = np.empty(2)
+    work = np.empty(order + 1)
+    roots = np.empty(MAX_STEP_ROOTS)
+    brackets = np.empty((MAX_STEP_ROOTS, 4))
+    stack = np.empty((ISOLATE_STACK, 5))
     factor = math.exp(tk.RHO_EXPONENT / (order - 1) - 2.0)  # = tk.safety_factor(order)
     for i in range(5):
         yout[i] = y0[i]
@@ -125,28 +127,26 @@ def orbit_taylor(y0, P, cphi, sphi, direction, tmax, order, max_steps, cross, yo
             status = STATUS_NONFINITE
             break
         gnew = section_g(ynew, cphi, sphi)
-        if sign_change(gprev, gnew, direction) or turns(yout[2], ynew[2]):
-            # the roots of the Taylor polynomial of sin(phi - phi0), the step split where
-            # M (dphi/dt = M/b) changes sign: a crossing and the turn back inside one step
-            for k in range(order + 1):
-                gc[k] = X[3, k] * cphi - X[4, k] * sphi
-                mc[k] = X[2, k]
-            nroots = poly_step_roots(gc, mc, order, h, gprev, gnew, yout[2], ynew[2], direction,
-                                     roots)
-            bad = False
-            for r in range(nroots):
-                if count >= ncross:
-                    break
-                tau = roots[r]
-                tk.evaluate(X, order, tau, yc)
-                if section_c(yc, cphi, sphi) > 0.0:
-                    if not _record(cross, count, (t - tc) + tau, yc, energy(yc, P) - H0):
-                        bad = True
-                        break
-                    count += 1
-            if bad:
-                status = STATUS_NONFINITE
+        # every root of the step's Taylor polynomial of sin(phi - phi0), isolated (a crossing
+        # and the turn back, or two turns, inside one step included: kernels.events)
+        for k in range(order + 1):
+            gc[k] = X[3, k] * cphi - X[4, k] * sphi
+        nroots = poly_step_roots(gc, order, h, gprev, gnew, direction, roots, brackets, work,
+                                 stack)
+        bad = False
+        for r in range(nroots):
+            if count >= ncross:
                 break
+            tau = roots[r]
+            tk.evaluate(X, order, tau, yc)
+            if section_c(yc, cphi, sphi) > 0.0:
+                if not _record(cross, count, (t - tc) + tau, yc, energy(yc, P) - H0):
+                    bad = True
+                    break
+                count += 1
+        if bad:
+            status = STATUS_NONFINITE
+            break
         # compensated t += h
         t, tc = advance_time(t, tc, h, last, tmax)
         for i in range(5):
@@ -347,6 +347,27 @@ def run_split_batch(Y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max
 
 
 # ====================================================================== DOP853
+#: a DOP853 step whose ends are within NEAR_SECTION times the reach of the step (below) of
+#: the section gets its dense output searched even without a sign change at its ends
+NEAR_SECTION = 2.0
+
+
+@njit
+def _may_reach_section(y_old, y_new, K, P, h, g_old, g_new):
+    """Whether sin(phi - phi0) might vanish inside a DOP853 step whose end values have one sign
+    (a crossing and the turn back, or M turning twice): |d/dt sin(phi - phi0)| <= |M|/b and
+    |M| <= |M_end| + t |dM/dt|, so the step reaches at most
+    h (|M_old| + |M_new|) / b + h^2 (|dM/dt|_old + |dM/dt|_new) / b from its ends (MODEL.md R3,
+    dphi/dt = M/b; dM/dt taken at the ends, K[0] and K[12]).  A screen that decides whether
+    the three extra stages of the dense output are worth computing; the dense output is then
+    searched rigorously (kernels.events.dense_step_roots)."""
+    if turns(y_old[2], y_new[2]):
+        return True
+    b = P[2]
+    reach = (h * (abs(y_old[2]) + abs(y_new[2])) + h * h * (abs(K[0, 2]) + abs(K[12, 2]))) / b
+    return min(abs(g_old), abs(g_new)) <= NEAR_SECTION * reach
+
+
 @njit
 def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cross, yout):
     """One orbit with adaptive DOP853 (Hairer-Nørsett-Wanner; controller and first step as
@@ -356,8 +377,11 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
     K = np.empty((16, 5))
     F = np.empty((7, 5))
     Fg = np.empty(7)
-    Fm = np.empty(7)
-    roots = np.empty(2)
+    coef = np.empty(8)
+    work = np.empty(8)
+    roots = np.empty(MAX_STEP_ROOTS)
+    brackets = np.empty((MAX_STEP_ROOTS, 4))
+    stack = np.empty((ISOLATE_STACK, 5))
     tmp = np.empty(5)
     ynew = np.empty(5)
     yc = np.empty(5)
@@ -404,7 +428,8 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
             continue
         rhs(ynew, P, K[12])
         gnew = section_g(ynew, cphi, sphi)
-        if sign_change(gprev, gnew, direction) or turns(yout[2], ynew[2]):
+        if sign_change(gprev, gnew, direction) or _may_reach_section(yout, ynew, K, P, h, gprev,
+                                                                     gnew):
             for s in range(13, 16):
                 dp.stage_input(yout, K, s, h, tmp)
                 rhs(tmp, P, K[s])
@@ -412,8 +437,8 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
             g_old = section_g(yout, cphi, sphi)
             for k in range(7):
                 Fg[k] = F[k, 3] * cphi - F[k, 4] * sphi
-                Fm[k] = F[k, 2]
-            nroots = dense_step_roots(Fg, g_old, gnew, Fm, yout[2], ynew[2], direction, roots)
+            nroots = dense_step_roots(Fg, g_old, gprev, gnew, direction, roots, brackets, coef,
+                                      work, stack)
             bad = False
             for r in range(nroots):
                 if count >= ncross:

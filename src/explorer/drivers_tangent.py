@@ -22,7 +22,7 @@ from .equations import (apply_flow_tangent, rhs, rhs_tangent, taylor_coefficient
                         taylor_coefficients_tangent)
 from .kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW
 from .kernels import STATUS_TMAX as STATUS_TMAX_CODE
-from .kernels.events import poly_step_roots, sign_change, turns
+from .kernels.events import ISOLATE_STACK, MAX_STEP_ROOTS, poly_step_roots
 from .kernels import dop853 as dp
 from .kernels.clock import clip_step
 from .kernels import taylor as tk
@@ -257,8 +257,10 @@ def return_map_taylor(y0, V0, P, cphi, sphi, tsign, tmax, order, max_steps, yout
     y = np.empty(5)
     ynew = np.empty(5)
     gc = np.empty(order + 1)
-    mc = np.empty(order + 1)
-    roots = np.empty(2)
+    work = np.empty(order + 1)
+    roots = np.empty(MAX_STEP_ROOTS)
+    brackets = np.empty((MAX_STEP_ROOTS, 4))
+    stack = np.empty((ISOLATE_STACK, 5))
     factor = math.exp(tk.RHO_EXPONENT / (order - 1) - 2.0)
     V = np.empty((m, 5))
     for i in range(5):
@@ -303,19 +305,17 @@ def return_map_taylor(y0, V0, P, cphi, sphi, tsign, tmax, order, max_steps, yout
         gnew = ynew[3] * cphi - ynew[4] * sphi
         found = False
         tau = h
-        if sign_change(gprev, gnew, direction) or turns(y[2], ynew[2]):
-            # as drivers.orbit_taylor: the step split where M changes sign
-            for k in range(order + 1):
-                gc[k] = X[3, k] * cphi - X[4, k] * sphi
-                mc[k] = X[2, k]
-            nroots = poly_step_roots(gc, mc, order, h, gprev, gnew, y[2], ynew[2], direction,
-                                     roots)
-            for r in range(nroots):
-                tau = roots[r]
-                tk.evaluate(X, order, tau, yout)
-                if yout[4] * cphi + yout[3] * sphi > 0.0:
-                    found = True
-                    break
+        # every root of the step's polynomial (as drivers.orbit_taylor)
+        for k in range(order + 1):
+            gc[k] = X[3, k] * cphi - X[4, k] * sphi
+        nroots = poly_step_roots(gc, order, h, gprev, gnew, direction, roots, brackets, work,
+                                 stack)
+        for r in range(nroots):
+            tau = roots[r]
+            tk.evaluate(X, order, tau, yout)
+            if yout[4] * cphi + yout[3] * sphi > 0.0:
+                found = True
+                break
         if found:
             for r in range(m):
                 tk.evaluate(D[r], order, tau, Vout[r])

@@ -46,7 +46,7 @@ from .kernels import (STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE,
                       STATUS_STEP_UNDERFLOW, STATUS_TMAX)
 from .kernels import taylor as tk
 from .kernels.clock import advance_time, clip_step
-from .kernels.events import poly_step_roots, sign_change, turns
+from .kernels.events import ISOLATE_STACK, MAX_STEP_ROOTS, poly_step_roots
 
 _IDLE = -1
 #: positive normal doubles: the range where vlog2_approx is valid
@@ -148,8 +148,10 @@ def _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, m
     yl = np.empty(NVAR)
     yc = np.empty(NVAR)
     gc = np.empty(order + 1)
-    mc = np.empty(order + 1)
-    roots = np.empty(2)
+    work = np.empty(order + 1)
+    roots = np.empty(MAX_STEP_ROOTS)
+    brackets = np.empty((MAX_STEP_ROOTS, 4))
+    stack = np.empty((ISOLATE_STACK, 5))
     # per-lane state of orbit_taylor
     orb = np.full(LANES, _IDLE, np.int64)
     L_t = np.zeros(LANES)
@@ -219,25 +221,23 @@ def _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, m
                 gprev = L_gprev[l]
                 count = L_count[l]
                 gnew = section_g(yl, cphi, sphi)
-                if sign_change(gprev, gnew, direction) or turns(X[0, 2, l], yl[2]):
-                    for k in range(order + 1):
-                        gc[k] = X[k, 3, l] * cphi - X[k, 4, l] * sphi
-                        mc[k] = X[k, 2, l]
-                    nroots = poly_step_roots(gc, mc, order, h, gprev, gnew, X[0, 2, l], yl[2],
-                                             direction, roots)
-                    for r in range(nroots):
-                        if count >= ncross:
+                for k in range(order + 1):
+                    gc[k] = X[k, 3, l] * cphi - X[k, 4, l] * sphi
+                nroots = poly_step_roots(gc, order, h, gprev, gnew, direction, roots, brackets,
+                                         work, stack)
+                for r in range(nroots):
+                    if count >= ncross:
+                        break
+                    tau = roots[r]
+                    _evaluate_lane(X, order, l, tau, yc)
+                    if section_c(yc, cphi, sphi) > 0.0:
+                        if _record(out_cross[j], count, (t - tc) + tau, yc, energy(yc, P) - L_H0[l]):
+                            count += 1
+                            L_count[l] = count
+                        else:
+                            L_status[l] = STATUS_NONFINITE
+                            L_stop[l] = True
                             break
-                        tau = roots[r]
-                        _evaluate_lane(X, order, l, tau, yc)
-                        if section_c(yc, cphi, sphi) > 0.0:
-                            if _record(out_cross[j], count, (t - tc) + tau, yc, energy(yc, P) - L_H0[l]):
-                                count += 1
-                                L_count[l] = count
-                            else:
-                                L_status[l] = STATUS_NONFINITE
-                                L_stop[l] = True
-                                break
             if not L_stop[l]:
                 # compensated t += h
                 t, tc = advance_time(t, tc, h, L_last[l], tmax)
