@@ -49,6 +49,20 @@ def test_orbit_that_stops_early_reports_its_status(capsys):
     assert doc["status"] == "time budget exhausted" and 0 < len(doc["crossings"]) < 50
 
 
+def test_orbit_with_a_step_too_coarse_for_its_energy_error_is_warned(capsys):
+    """split4 at dt = 0.5 on Figure 4 (mu = 0.5) drifts in energy by far more than 1e-6 h: the
+    crossings are printed and stderr names the energy error and the setting to refine; the
+    default taylor run of the same orbit stays silent."""
+    base = ["orbit", "--p1", "0.3", "--p2", "0.1", "--crossings", "20", "--mu", "0.5", "--json"]
+    code, out, err = run_cli(base + ["--method", "split4", "--dt", "0.5"], capsys)
+    dh = np.abs(np.array(json.loads(out)["crossings"])[:, 4]).max()
+    assert code == 0 and dh > 2e-6
+    assert len(err.strip().splitlines()) == 1
+    assert "warning: energy error up to" in err and "--dt 0.5" in err
+    code, out, err = run_cli(base, capsys)
+    assert code == 0 and err == ""
+
+
 @pytest.mark.parametrize("args,fragment", [
     (["--p1", "5", "--p2", "0"], "outside the allowed region"),
     (["--p1", "0", "--p2", "0", "--a1", "-1"], "a1 must be > 0"),

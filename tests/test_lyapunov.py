@@ -200,3 +200,30 @@ def test_lyapunov_cli_bad_input(args, fragment, capsys):
     code = cli.main(["lyapunov"] + args)
     _, err = capsys.readouterr()
     assert code == 2 and len(err.strip().splitlines()) == 1 and fragment in err
+
+
+def test_lyapunov_cli_reports_an_orbit_that_stopped_without_inventing_numbers(capsys, monkeypatch):
+    """An orbit stopped at t = 0 (here: a step budget of zero steps) has no estimate: the JSON
+    gives null, never 0.0, and stderr says why in one line; one stopped later gives the
+    estimates over the time it reached and says so."""
+    real = lyapunov.indicators
+
+    def budget(steps):
+        def run(*args, **kw):
+            kw["max_steps"] = steps
+            return real(*args, **kw)
+        return run
+
+    monkeypatch.setattr(lyapunov, "indicators", budget(0))
+    code = cli.main(["lyapunov", "--p1", "0", "--p2", "0.3", "--mu", "0.5", "--time", "50", "--json"])
+    out, err = capsys.readouterr()
+    doc = json.loads(out)
+    assert code == 0 and doc["status"] == "step budget exhausted" and doc["time"] == 0.0
+    assert doc["mlce"] is None and doc["megno"] is None and doc["fli"] is None
+    assert len(err.strip().splitlines()) == 1 and "no estimate" in err
+    monkeypatch.setattr(lyapunov, "indicators", budget(200))
+    code = cli.main(["lyapunov", "--p1", "0", "--p2", "0.3", "--mu", "0.5", "--time", "1e4", "--json"])
+    out, err = capsys.readouterr()
+    doc = json.loads(out)
+    assert 0 < doc["time"] < 1e4 and math.isfinite(doc["mlce"])
+    assert "the estimates cover [0, " in err and "step budget exhausted" in err

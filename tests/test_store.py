@@ -189,6 +189,29 @@ def test_large_datasets_are_gzip_shuffle_fletcher32_small_ones_are_not(tmp_path)
     np.testing.assert_array_equal(read_store(path).panels[0].crossings, arrays["data"].reshape(-1, 5))
 
 
+def test_replacing_a_panel_does_not_grow_the_file_and_keeps_the_others(tmp_path):
+    """HDF5 never reclaims a deleted group's space: a store whose panel is replaced again and
+    again is rebuilt compactly (no growth beyond a few percent), with every other panel, the
+    root attributes and 'created' unchanged."""
+    path = tmp_path / "s.h5"
+    for i in range(3):
+        commit_panel(path, i, *make_panel(i, 0), FILE_ATTRS)
+    created = read_store(path).attrs["created"]
+    for gen in range(1, 11):
+        commit_panel(path, 1, *make_panel(1, gen), FILE_ATTRS)
+    fresh = tmp_path / "fresh.h5"      # the same content written once
+    for i, gen in ((0, 0), (1, 10), (2, 0)):
+        commit_panel(fresh, i, *make_panel(i, gen), FILE_ATTRS)
+    assert path.stat().st_size < 1.05 * fresh.stat().st_size, (path.stat().st_size, fresh.stat().st_size)
+    data = read_store(path)
+    assert sorted(data.panels) == [0, 1, 2]
+    assert_panel_equals(data.panels[0], 0, 0)
+    assert_panel_equals(data.panels[1], 1, 10)
+    assert_panel_equals(data.panels[2], 2, 0)
+    assert data.attrs["created"] == created and data.attrs["scene"] == SCENE_TOML
+    assert not list(tmp_path.glob("s.h5.tmp-*"))
+
+
 def test_crash_before_replace_leaves_original_unchanged_and_readable(tmp_path, monkeypatch):
     path = tmp_path / "s.h5"
     commit_panel(path, 0, *make_panel(0, 1), FILE_ATTRS)

@@ -103,6 +103,19 @@ def test_rerun_skips_complete_panels_and_recomputes_only_a_changed_one(tmp_path,
     assert "(3 computed, 0 already stored)" in stdout
 
 
+def test_summary_gives_the_energy_error_and_warns_when_the_step_is_too_coarse(tmp_path, capsys):
+    scene = write_scene(tmp_path)
+    code, (stdout, _) = sweep([scene, "--out", tmp_path / "a.h5", "--no-figure"], capsys)
+    data = store.read_store(tmp_path / "a.h5")
+    dh = max(np.abs(p.crossings[:, 4]).max() for p in data.panels.values())
+    assert code == 0 and f"max |H - H0| over all crossings {dh:.1e}" in stdout
+    assert "warning" not in stdout
+    coarse = write_scene(tmp_path, SMALL.replace('method = "taylor"\ntol = 1e-12',
+                                                 'method = "split4"\ndt = 0.5'), "coarse.toml")
+    code, (stdout, _) = sweep([coarse, "--out", tmp_path / "b.h5", "--no-figure"], capsys)
+    assert code == 0 and "warning: energy error up to" in stdout and "dt = 0.5 ([integration])" in stdout
+
+
 def test_jobs_1_and_2_give_identical_files(tmp_path, capsys):
     scene = write_scene(tmp_path)
     a, b = tmp_path / "a.h5", tmp_path / "b.h5"

@@ -202,7 +202,7 @@ def _direction(text: str) -> int:
 
 
 def cmd_orbit(args) -> int:
-    from .sections import METHODS, section_crossings
+    from .sections import METHODS, energy_warning, max_energy_error, section_crossings
 
     params = _params_from(args)
     if args.method not in METHODS:
@@ -217,6 +217,8 @@ def cmd_orbit(args) -> int:
                             phi0=args.phi0, direction=direction)
     rows = res.orbit(0)
     status = res.status_name(0)
+    setting = f"--dt {res.settings['dt']:g}" if "dt" in res.settings else f"--tol {args.tol:g}"
+    warning = energy_warning(max_energy_error(rows), args.h, setting)
     if args.json:
         out = {"params": params.as_dict(), "h": args.h, "method": args.method, "status": status,
                "settings": res.settings,
@@ -229,6 +231,8 @@ def cmd_orbit(args) -> int:
         print("\n".join(lines))
         if status != "done":
             print(f"explorer: orbit stopped after {len(rows)} crossings: {status}", file=sys.stderr)
+    if warning:
+        print(f"explorer: warning: {warning}", file=sys.stderr)
     return 0
 
 
@@ -252,11 +256,21 @@ def cmd_lyapunov(args) -> int:
     r = lyapunov.indicators(params, y0, args.time, method=args.method, tol=args.tol, dt=args.dt,
                             history=args.history)
     hist = [[float(v) for v in row[:3]] + [float(row[4])] for row in r.history[0] if np.isfinite(row[0])]
+    reached = float(r.time[0])
+    status = r.status_name(0)
+
+    def estimate(v):      # an orbit stopped at t = 0 has no estimate (null, never a made-up 0)
+        return float(v) if reached > 0 and math.isfinite(float(v)) else None
+
     out = {"params": params.as_dict(), "h": args.h, "p1": args.p1, "p2": args.p2, "method": args.method,
-           "settings": r.settings, "status": r.status_name(0), "time": float(r.time[0]),
-           "mlce": float(r.mlce[0]), "megno": float(r.megno[0]), "fli": float(r.fli[0]),
-           "regular_bound": lyapunov.regular_bound(float(r.time[0])) if r.time[0] > 1 else None,
+           "settings": r.settings, "status": status, "time": reached,
+           "mlce": estimate(r.mlce[0]), "megno": estimate(r.megno[0]), "fli": estimate(r.fli[0]),
+           "regular_bound": lyapunov.regular_bound(reached) if reached > 1 else None,
            "history": hist}
+    if status != "done":
+        cover = f"the estimates cover [0, {reached:g}]" if reached > 0 else "no estimate"
+        print(f"explorer: the orbit stopped at t = {reached:g} of {args.time:g} ({status}); {cover}",
+              file=sys.stderr)
     if args.json:
         print(json.dumps(out))
     else:

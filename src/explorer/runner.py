@@ -18,6 +18,7 @@ from . import store, sweep
 from .kernels import STATUS_NAMES, STATUS_TMAX
 from .fixedpoints import chaotic_fraction
 from .model import ParameterError
+from .sections import ADAPTIVE_METHODS, energy_warning, max_energy_error
 
 
 def _panel_points(panel_data):
@@ -134,7 +135,7 @@ def run_sweep(args) -> int:
     prov = json.dumps(store.provenance({"scene": scene.name}), sort_keys=True)
     file_attrs = {"scene_name": scene.name, "scene": scene.text, "provenance": prov}
     integ = scene.integration
-    stats = {"orbits": 0, "crossings": 0, "stopped": 0, "statuses": {}}
+    stats = {"orbits": 0, "crossings": 0, "stopped": 0, "statuses": {}, "max_dh": 0.0, "max_dh_h": 0.0}
 
     def on_panel(panel, arrays):
         i = panel.index
@@ -164,6 +165,9 @@ def run_sweep(args) -> int:
         store.commit_panel(out, i, payload, attrs, file_attrs)
         stats["orbits"] += len(arrays["count"])
         stats["crossings"] += int(arrays["count"].sum())
+        dh = max_energy_error(arrays["data"])
+        if dh > stats["max_dh"]:
+            stats["max_dh"], stats["max_dh_h"] = dh, panel.h
         stopped = (arrays["status"] == STATUS_TMAX) & (arrays["count"] < integ.crossings)
         stats["stopped"] += int(stopped.sum())
         for code, n in zip(*np.unique(arrays["status"], return_counts=True)):
@@ -197,6 +201,12 @@ def run_sweep(args) -> int:
         st = ", ".join(f"{k}: {v}" for k, v in sorted(stats["statuses"].items()))
         lines.append(f"  orbits {stats['orbits']}, crossings {stats['crossings']}, "
                      f"orbits that stopped crossing {stats['stopped']} ({st})")
+        lines.append(f"  energy error max |H - H0| over all crossings {stats['max_dh']:.1e}")
+        setting = (f"tol = {integ.tol:g}" if integ.method in ADAPTIVE_METHODS
+                   else f"dt = {integ.dt:g}") + " ([integration])"
+        warning = energy_warning(stats["max_dh"], stats["max_dh_h"], setting)
+        if warning:
+            lines.append(f"  warning: {warning}")
     for label, frac, err in stats.get("fractions", []):
         lines.append(f"  {label}: chaotic fraction {frac:.3f} +- {err:.3f} (MEGNO > {scene.lyapunov.threshold:g})")
     if figure_paths:

@@ -42,6 +42,9 @@ MIN_TOL = 1e-16
 MAX_TOL = 1e-2
 DEFAULT_DT = 0.05
 DEFAULT_MAX_STEPS = 10**9
+#: a run whose energy error exceeds this fraction of max(|h|, 1) gets a warning: its step
+#: (splitting) or tolerance is too coarse for the scene to trust the section's fine structure
+ENERGY_WARN_REL = 1e-6
 
 
 @dataclass
@@ -67,6 +70,24 @@ class Crossings:
 
     def status_name(self, i: int) -> str:
         return STATUS_NAMES[int(self.status[i])]
+
+
+def max_energy_error(data) -> float:
+    """max |H - H0| over the crossings in ``data`` (rows (t, p1, p2, M, H - H0), NaN padding
+    ignored); 0.0 if there are none."""
+    dh = np.abs(np.asarray(data, dtype=np.float64)[..., 4])
+    dh = dh[np.isfinite(dh)]
+    return float(dh.max()) if dh.size else 0.0
+
+
+def energy_warning(max_dh: float, h: float, setting: str) -> str | None:
+    """A one-line warning when the energy error max_dh exceeds ENERGY_WARN_REL * max(|h|, 1),
+    naming the setting to refine; None otherwise."""
+    limit = ENERGY_WARN_REL * max(abs(h), 1.0)
+    if max_dh <= limit:
+        return None
+    return (f"energy error up to {max_dh:.2e} (> {limit:.0e} = {ENERGY_WARN_REL:g} x max(|h|, 1)): "
+            f"{setting} is too coarse for this orbit; refine it to trust the section")
 
 
 def _positive(name, value, lo=0.0, hi=math.inf, inclusive=False):

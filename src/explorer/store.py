@@ -711,6 +711,31 @@ def _write_panel(f, index: int, arrays: dict, attrs: dict, status_names: dict) -
     grp.attrs["complete"] = True  # last: the panel is whole
 
 
+def _holds_panel(path: str, index: int) -> bool:
+    with h5py.File(path, "r") as f:
+        return "panels" in f and f"{index:03d}" in f["panels"]
+
+
+def _copy_without_panel(src_path: str, dst_path: str, index: int) -> None:
+    """Write to dst_path a compact copy of the store at src_path without panel ``index``:
+    root attributes, every top-level object and every other panel group (datasets with their
+    chunking, filters and attributes, via HDF5's object copy)."""
+    skip = f"{index:03d}"
+    with h5py.File(src_path, "r") as src, h5py.File(dst_path, "w") as dst:
+        for key, value in src.attrs.items():
+            dst.attrs[key] = value
+        for name in src:
+            if name != "panels":
+                src.copy(src[name], dst, name=name)
+        if "panels" in src:
+            panels = dst.create_group("panels")
+            for key, value in src["panels"].attrs.items():
+                panels.attrs[key] = value
+            for name in src["panels"]:
+                if name != skip:
+                    src.copy(src["panels"][name], panels, name=name)
+
+
 def commit_panel(path, index: int, arrays: dict, attrs: dict, file_attrs: dict | None = None, *,
                  replace_corrupt: bool = False, status_names: dict | None = None) -> None:
     """Atomically add or replace panel ``index`` of the store at ``path``.
@@ -757,7 +782,11 @@ def commit_panel(path, index: int, arrays: dict, attrs: dict, file_attrs: dict |
     directory = os.path.dirname(os.path.abspath(path))
     tmp = _tmp_name(path)
     try:
-        if existing:
+        if existing and _holds_panel(path, index):
+            # replacing a panel: copy everything else into a fresh file, so the file does not
+            # keep the old panel's bytes (HDF5 never reclaims the space of a deleted group)
+            _copy_without_panel(path, tmp, index)
+        elif existing:
             shutil.copyfile(path, tmp)
         with h5py.File(tmp, "r+" if existing else "w") as f:
             now = _utcnow()
