@@ -105,12 +105,16 @@ def command_line(script_name, argv=None):
     return " ".join([sys.executable, f"benchmarks/{script_name}"] + [shlex.quote(a) for a in argv])
 
 
-def header(title, command, started, seconds, load_start, extra=()):
-    m, v = machine(), versions()
+def header(title, command, started, seconds, load_start, extra=(), stored=None):
+    """The common head of a RESULTS.md section.  ``stored``: a run's JSON document (machine,
+    versions, load_end) when a section is re-rendered from it rather than written by the run."""
+    m = stored["machine"] if stored else machine()
+    v = stored["versions"] if stored else versions()
+    load_end = stored["load_end"] if stored else loadavg()
     lines = [f"## {title}", "",
              f"- Date: {started.isoformat(timespec='seconds')}; run time {seconds:.0f} s",
              f"- Command (from the repository root): `{command}`",
-             f"- Machine: {machine_line(m)}; load average at start {load_start}, at end {loadavg()} "
+             f"- Machine: {machine_line(m)}; load average at start {load_start}, at end {load_end} "
              "(other jobs may have run at the same time)",
              "- Versions: " + ", ".join(f"{k} {val}" for k, val in v.items())]
     lines += [f"- {e}" for e in extra]

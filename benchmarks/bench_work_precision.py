@@ -28,9 +28,11 @@ WORK-PRECISION section of benchmarks/RESULTS.md (full run only).
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
 import warnings
+from pathlib import Path
 
 import numpy as np
 
@@ -78,7 +80,11 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="small workload, few rows; RESULTS.md untouched")
     ap.add_argument("--repeats", type=int, default=None, help="timing runs per row (default 3; quick 1)")
     ap.add_argument("--no-heyoka", action="store_true", help="do not use heyoka even when installed")
+    ap.add_argument("--render", metavar="JSON", help="only re-render the WORK-PRECISION section of "
+                    "RESULTS.md from a full run's JSON (e.g. benchmarks/results/work_precision.json)")
     args = ap.parse_args(argv)
+    if args.render:
+        return render(Path(args.render))
     quick = args.quick
     N, K = (8, 40) if quick else (32, 500)
     per_orbit = 4 if quick else 8
@@ -252,9 +258,64 @@ def plot(results, path, N, K):
     return out
 
 
-def markdown(results, doc, N, K, seconds, started, load0, png):
+#: an explorer row matches a comparator's accuracy when its median one-step error is at most
+#: MATCH_FACTOR times the comparator's
+MATCH_FACTOR = 2.0
+
+
+def matched_accuracy(rows):
+    """For each comparator row (heyoka, scipy): the fastest explorer row, and the fastest of each
+    explorer method, whose median one-step error is at most MATCH_FACTOR times the
+    comparator's; their throughput ratios.  Returns (lines, verdicts), verdicts a list of
+    (comparator setting, ratio of the fastest matching explorer row or None)."""
+    ours = [r for r in rows if r["family"].startswith("explorer") and np.isfinite(r["err_median"])]
+    lines, verdicts = [], []
+    for c in rows:
+        if c["family"].startswith("explorer") or not np.isfinite(c["err_median"]):
+            continue
+        target = MATCH_FACTOR * c["err_median"]
+        ok = [r for r in ours if r["err_median"] <= target]
+        name = f"{c['family']} {c['setting']}"
+        if not ok:
+            lines.append(f"- {name} (median {C.fmt_e(c['err_median'])}, {c['rate']:,.0f} crossings/s): "
+                         "no explorer setting tried reaches its accuracy")
+            verdicts.append((name, None))
+            continue
+        best = max(ok, key=lambda r: r["rate"])
+        per = []
+        for fam in sorted({r["family"] for r in ours}):
+            cand = [r for r in ok if r["family"] == fam]
+            if cand:
+                b = max(cand, key=lambda r: r["rate"])
+                per.append(f"{fam.replace('explorer ', '')} {b['setting']} {b['rate'] / c['rate']:.2f}x")
+            else:
+                per.append(f"{fam.replace('explorer ', '')}: none of the settings tried")
+        lines.append(f"- {name} (median {C.fmt_e(c['err_median'])}, {c['rate']:,.0f} crossings/s): fastest "
+                     f"row at matched accuracy: {best['family']} {best['setting']} (median "
+                     f"{C.fmt_e(best['err_median'])}, {best['rate']:,.0f}/s) = **{best['rate'] / c['rate']:.2f}x**; "
+                     "per method: " + "; ".join(per))
+        verdicts.append((name, best["rate"] / c["rate"]))
+    return lines, verdicts
+
+
+def render(path):
+    """Re-render the WORK-PRECISION section from a full run's JSON document."""
+    import datetime as _dt
+    doc = json.loads(path.read_text())
+    if doc.get("quick"):
+        raise SystemExit(f"{path}: a --quick run; only full runs go into RESULTS.md")
+    w = doc["workload"]
+    lines = markdown(doc["results"], doc, w["orbits"], w["crossings"], doc["seconds"],
+                     _dt.datetime.fromisoformat(doc["date"]), doc["load_start"], C.ROOT / doc["figure"],
+                     stored=doc)
+    C.update_section(SECTION, lines)
+    print(f"updated {C.RESULTS_MD} from {path}")
+    return 0
+
+
+def markdown(results, doc, N, K, seconds, started, load0, png, stored=None):
     lines, _ = C.header("Work-precision: one-step error and energy error against wall time", doc["command"],
-                        started, seconds, load0, extra=[
+                        started, seconds, load0, stored=stored, extra=[
                             f"Workload per mu: Figure-4 scene, h = {H}, {N} orbits x {K} crossings from phi = pi "
                             "across the allowed ellipse (p2 = c2); wall = best of up to 3 runs (warm); scipy "
                             "timed on a few orbits and extrapolated (marked *).",
@@ -275,6 +336,13 @@ def markdown(results, doc, N, K, seconds, started, load0, png):
             wall = f"{r['wall']:.3f}" + ("*" if r["extrapolated"] else "")
             lines.append(f"| {r['family']} | {setting} | {wall} | {r['rate']:,.0f} | {C.fmt_e(r['err_median'])} | "
                          f"{C.fmt_e(r['err_max'])} | {C.fmt_e(r['max_dH'])} |")
+        comp, verdicts = matched_accuracy(res["rows"])
+        if comp:
+            lines += ["", f"At matched accuracy (explorer median one-step error at most {MATCH_FACTOR:g}x the "
+                      "comparator's; throughput ratio explorer / comparator, computed by the script):", ""] + comp
+            behind = [n for n, ratio in verdicts if ratio is None or ratio < 1.0]
+            lines += ["", "Verdict: explorer is ahead of every comparator row at matched accuracy." if not behind
+                      else "Verdict: explorer is NOT ahead of: " + ", ".join(behind) + "."]
     return lines
 
 
