@@ -12,7 +12,10 @@ into lanes and the number of threads:
 * everything else - step size, time and step budgets, last step clipped to tmax, Kahan time
   sum, NaN and step-underflow checks, ``poly_step_roots`` on the lane's own
   polynomial, ``section_c``, ``_record`` - is the control flow of
-  :func:`explorer.drivers.orbit_taylor`, run per lane in scalar code.
+  :func:`explorer.drivers.orbit_taylor`, run per lane in scalar code.  The root isolation
+  is skipped for a lane when a bound of the variation of sin(phi - phi0) over the step,
+  computed for all lanes in one vectorised loop, proves it has no root there (then
+  ``poly_step_roots`` would find none either: ``kernels.events.excluded_by_variation``).
 
 Lanes never exchange values: a lane computes exactly what ``orbit_taylor`` computes for
 its orbit, so which orbits share a vector, in which order they are taken and how many
@@ -39,14 +42,16 @@ import numpy as np
 
 from ._jit import get_num_threads, njit, prange
 from ._lanes_generated import (LANES, LOG2_APPROX_ERR, NVAR, atomic_fetch_add, evaluate_lanes,
-                               step_norms_lanes, taylor_coefficients_lanes)
+                               step_norms_lanes, taylor_coefficients_lanes, vabs, vadd, vload,
+                               vmul, vsplat, vstore, vsub, vzero)
 from .drivers import EPS, _finite5, _record, _start_g
 from .equations import energy, section_c, section_g
 from .kernels import (STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE,
                       STATUS_STEP_UNDERFLOW, STATUS_TMAX)
 from .kernels import taylor as tk
 from .kernels.clock import advance_time, clip_step
-from .kernels.events import ISOLATE_STACK, MAX_STEP_ROOTS, poly_step_roots
+from .kernels.events import (ISOLATE_STACK, MAX_STEP_ROOTS, excluded_by_variation,
+                             poly_step_roots)
 
 _IDLE = -1
 #: positive normal doubles: the range where vlog2_approx is valid
@@ -54,6 +59,9 @@ _TINY = 2.2250738585072014e-308
 _HUGE = 1.7976931348623157e308
 #: rows of the step_norms_lanes output
 _N_NORMS = 7
+#: rows of sin(phi) = g1 and cos(phi) = g2 in the state (p1, p2, M, g1, g2)
+_G1 = 3
+_G2 = 4
 
 
 @njit
@@ -75,6 +83,22 @@ def lane_step_size(a, bm, u, v, d, e_p, e_q, margin, factor):
         if r2 < rho:
             rho = r2
     return rho * factor
+
+
+@njit
+def variation_lanes(X, order, h, cphi, sphi, out):
+    """out[l] = sum_{k>=1} |X[k, G1, l] cos phi0 - X[k, G2, l] sin phi0| h[l]^k for every lane
+    in one vector chain (Horner): the bound of the variation of sin(phi - phi0) over the step
+    that kernels.events.no_root_within uses (up to the rounding its slack covers)."""
+    hv = vload(h, 0)
+    cv = vsplat(cphi)
+    sv = vsplat(sphi)
+    acc = vzero()
+    for k in range(order, 0, -1):
+        o = k * (NVAR * LANES)
+        ck = vsub(vmul(vload(X, o + _G1 * LANES), cv), vmul(vload(X, o + _G2 * LANES), sv))
+        acc = vmul(vadd(acc, vabs(ck)), hv)
+    vstore(out, 0, acc)
 
 
 @njit
@@ -144,6 +168,7 @@ def _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, m
     X = np.zeros((order + 1, NVAR, LANES))
     norms = np.empty((_N_NORMS, LANES))
     hv = np.zeros(LANES)
+    vary = np.zeros(LANES)
     ynew = np.empty((NVAR, LANES))
     yl = np.empty(NVAR)
     yc = np.empty(NVAR)
@@ -202,6 +227,10 @@ def _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, m
             hv[l] = h
             L_last[l] = last
         evaluate_lanes(X, order, hv, ynew)
+        # ---- all lanes at once (vectorised): a bound of the variation of sin(phi - phi0) over
+        # the step, sum_{k>=1} |c_k| h^k, so that steps far from the section skip the root
+        # isolation (kernels.events.excluded_by_variation)
+        variation_lanes(X, order, hv, cphi, sphi, vary)
         # ---- per lane: the rest of the step of orbit_taylor
         for l in range(LANES):
             j = orb[l]
@@ -221,10 +250,12 @@ def _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, m
                 gprev = L_gprev[l]
                 count = L_count[l]
                 gnew = section_g(yl, cphi, sphi)
-                for k in range(order + 1):
-                    gc[k] = X[k, 3, l] * cphi - X[k, 4, l] * sphi
-                nroots = poly_step_roots(gc, order, h, gprev, gnew, direction, roots, brackets,
-                                         work, stack)
+                nroots = 0
+                if not excluded_by_variation(X[0, 3, l] * cphi - X[0, 4, l] * sphi, vary[l]):
+                    for k in range(order + 1):
+                        gc[k] = X[k, 3, l] * cphi - X[k, 4, l] * sphi
+                    nroots = poly_step_roots(gc, order, h, gprev, gnew, direction, roots,
+                                             brackets, work, stack)
                 for r in range(nroots):
                     if count >= ncross:
                         break

@@ -146,6 +146,15 @@ def monotone_within(d, order, r):
 
 
 @njit
+def excluded_by_variation(g0, variation):
+    """True if g cannot vanish in a step where g(0) = g0 and ``variation`` bounds
+    sum_{k>=1} |c_k| h^k (any upper bound; the bound of :func:`no_root_within` is the
+    tightest).  Implies that :func:`isolate_crossings` finds nothing, so a driver may skip it:
+    a cheap screen computed for many orbits at once (``explorer.lanes``)."""
+    return abs(g0) > variation + BOUND_SLACK * (abs(g0) + variation)
+
+
+@njit
 def isolate_crossings(gc, order, h, g_old, g_new, direction, brackets, work, stack):
     """Brackets of every crossing in (0, h] of the polynomial g(x) = sum_k gc[k] x^k in the
     given direction (as :func:`sign_change`), g_old and g_new its values at the ends as the
