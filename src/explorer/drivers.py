@@ -69,6 +69,18 @@ def _record(cross, k, t, yc, H):
 
 
 @njit
+def _keep(cross, count, t, yc, P, H0, cphi, sphi):
+    """Record the root at state yc, time t as crossing number ``count`` if it lies on the
+    branch phi = phi0 (cos(phi - phi0) > 0; the root at phi0 + pi is not a crossing).
+    Returns the new count, or -1 if a value is not finite (nothing stored)."""
+    if section_c(yc, cphi, sphi) <= 0.0:
+        return count
+    if not _record(cross, count, t, yc, energy(yc, P) - H0):
+        return -1
+    return count + 1
+
+
+@njit
 def _start_g(y, cphi, sphi):
     g = section_g(y, cphi, sphi)
     if abs(g) <= ON_SECTION:
@@ -133,20 +145,17 @@ def orbit_taylor(y0, P, cphi, sphi, direction, tmax, order, max_steps, cross, yo
             gc[k] = X[3, k] * cphi - X[4, k] * sphi
         nroots = poly_step_roots(gc, order, h, gprev, gnew, direction, roots, brackets, work,
                                  stack)
-        bad = False
+        kept = count
         for r in range(nroots):
-            if count >= ncross:
+            if kept < 0 or kept >= ncross:
                 break
             tau = roots[r]
             tk.evaluate(X, order, tau, yc)
-            if section_c(yc, cphi, sphi) > 0.0:
-                if not _record(cross, count, (t - tc) + tau, yc, energy(yc, P) - H0):
-                    bad = True
-                    break
-                count += 1
-        if bad:
+            kept = _keep(cross, kept, (t - tc) + tau, yc, P, H0, cphi, sphi)
+        if kept < 0:
             status = STATUS_NONFINITE
             break
+        count = kept
         # compensated t += h
         t, tc = advance_time(t, tc, h, last, tmax)
         for i in range(5):
@@ -304,23 +313,20 @@ def orbit_split(y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max_ste
         if sign_change(gprev, gnew, direction) or turns(yout[2], ynew[2]):
             nroots = _split_step_roots(yout, P, dt, flow_ids, fracs, cphi, sphi, gprev, gnew,
                                        ynew[2], direction, roots, yc, f)
-            bad = False
+            kept = count
             for r in range(nroots):
                 tau = roots[r]
-                if count >= ncross or t + tau > tmax:
+                if kept < 0 or kept >= ncross or t + tau > tmax:
                     break
                 if nroots > 1:   # yc holds the state at the last root searched
                     for i in range(5):
                         yc[i] = yout[i]
                     split_step(yc, P, tau, flow_ids, fracs)
-                if section_c(yc, cphi, sphi) > 0.0:
-                    if not _record(cross, count, t + tau, yc, energy(yc, P) - H0):
-                        bad = True
-                        break
-                    count += 1
-            if bad:
+                kept = _keep(cross, kept, t + tau, yc, P, H0, cphi, sphi)
+            if kept < 0:
                 status = STATUS_NONFINITE
                 break
+            count = kept
         for i in range(5):
             yout[i] = ynew[i]
         gprev = gnew
@@ -439,20 +445,17 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
                 Fg[k] = F[k, 3] * cphi - F[k, 4] * sphi
             nroots = dense_step_roots(Fg, g_old, gprev, gnew, direction, roots, brackets, coef,
                                       work, stack)
-            bad = False
+            kept = count
             for r in range(nroots):
-                if count >= ncross:
+                if kept < 0 or kept >= ncross:
                     break
                 theta = roots[r]
                 dp.dense_eval(F, yout, theta, yc)
-                if section_c(yc, cphi, sphi) > 0.0:
-                    if not _record(cross, count, (t - tc) + theta * h, yc, energy(yc, P) - H0):
-                        bad = True
-                        break
-                    count += 1
-            if bad:
+                kept = _keep(cross, kept, (t - tc) + theta * h, yc, P, H0, cphi, sphi)
+            if kept < 0:
                 status = STATUS_NONFINITE
                 break
+            count = kept
         h_abs *= dp.accepted_factor(err, rejected)
         rejected = False
         t, tc = advance_time(t, tc, h, last, tmax)

@@ -11,7 +11,7 @@ into lanes and the number of threads:
   ``kernels.taylor``: lane-wise the same IEEE operations in the same order);
 * everything else - step size, time and step budgets, last step clipped to tmax, Kahan time
   sum, NaN and step-underflow checks, ``poly_step_roots`` on the lane's own
-  polynomial, ``section_c``, ``_record`` - is the control flow of
+  polynomial, ``_keep`` (branch test and record) - is the control flow of
   :func:`explorer.drivers.orbit_taylor`, run per lane in scalar code.  The root isolation
   is skipped for a lane when a bound of the variation of sin(phi - phi0) over the step,
   computed for all lanes in one vectorised loop, proves it has no root there (then
@@ -44,8 +44,8 @@ from ._jit import get_num_threads, njit, prange
 from ._lanes_generated import (LANES, LOG2_APPROX_ERR, NVAR, atomic_fetch_add, evaluate_lanes,
                                step_norms_lanes, taylor_coefficients_lanes, vabs, vadd, vload,
                                vmul, vsplat, vstore, vsub, vzero)
-from .drivers import EPS, _finite5, _record, _start_g
-from .equations import energy, section_c, section_g
+from .drivers import EPS, _finite5, _keep, _start_g
+from .equations import energy, section_g
 from .kernels import (STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE,
                       STATUS_STEP_UNDERFLOW, STATUS_TMAX)
 from .kernels import taylor as tk
@@ -261,14 +261,13 @@ def _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, m
                         break
                     tau = roots[r]
                     _evaluate_lane(X, order, l, tau, yc)
-                    if section_c(yc, cphi, sphi) > 0.0:
-                        if _record(out_cross[j], count, (t - tc) + tau, yc, energy(yc, P) - L_H0[l]):
-                            count += 1
-                            L_count[l] = count
-                        else:
-                            L_status[l] = STATUS_NONFINITE
-                            L_stop[l] = True
-                            break
+                    kept = _keep(out_cross[j], count, (t - tc) + tau, yc, P, L_H0[l], cphi, sphi)
+                    if kept < 0:
+                        L_status[l] = STATUS_NONFINITE
+                        L_stop[l] = True
+                        break
+                    count = kept
+                    L_count[l] = count
             if not L_stop[l]:
                 # compensated t += h
                 t, tc = advance_time(t, tc, h, L_last[l], tmax)

@@ -1,0 +1,21 @@
+"""README.md's two commands: the test command is exactly what CI runs, and both commands
+install into a fresh virtual environment before they run anything."""
+import re
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def fenced_bash(text):
+    return re.findall(r"```bash\n(.*?)\n```", text, re.S)
+
+
+def test_ci_runs_exactly_the_readme_test_command():
+    blocks = fenced_bash((ROOT / "README.md").read_text())
+    main_job, tests = blocks[0].strip(), blocks[1].strip()
+    assert main_job.endswith("python -m explorer sweep") and "pip install ." in main_job
+    assert tests.endswith("python -m pytest -q") and 'pip install -q ".[test]"' in tests
+    for cmd in (main_job, tests):
+        assert cmd.startswith("python3 -m venv .venv && . .venv/bin/activate && ")
+    ci_lines = [ln.strip() for ln in (ROOT / ".ci" / "run").read_text().splitlines()]
+    assert tests in ci_lines
