@@ -135,7 +135,9 @@ def run_sweep(args) -> int:
     prov = json.dumps(store.provenance({"scene": scene.name}), sort_keys=True)
     file_attrs = {"scene_name": scene.name, "scene": scene.text, "provenance": prov}
     integ = scene.integration
-    stats = {"orbits": 0, "crossings": 0, "stopped": 0, "statuses": {}, "max_dh": 0.0, "max_dh_h": 0.0}
+    stats = {"orbits": 0, "crossings": 0, "stopped": 0, "statuses": {}, "max_dh": 0.0, "warning": None}
+    setting = (f"tol = {integ.tol:g}" if integ.method in ADAPTIVE_METHODS
+               else f"dt = {integ.dt:g}") + " ([integration])"
 
     def on_panel(panel, arrays):
         i = panel.index
@@ -166,8 +168,8 @@ def run_sweep(args) -> int:
         stats["orbits"] += len(arrays["count"])
         stats["crossings"] += int(arrays["count"].sum())
         dh = max_energy_error(arrays["data"])
-        if dh > stats["max_dh"]:
-            stats["max_dh"], stats["max_dh_h"] = dh, panel.h
+        stats["max_dh"] = max(stats["max_dh"], dh)
+        stats["warning"] = stats["warning"] or energy_warning(dh, panel.h, setting)  # each panel its own h
         stopped = (arrays["status"] == STATUS_TMAX) & (arrays["count"] < integ.crossings)
         stats["stopped"] += int(stopped.sum())
         for code, n in zip(*np.unique(arrays["status"], return_counts=True)):
@@ -202,11 +204,8 @@ def run_sweep(args) -> int:
         lines.append(f"  orbits {stats['orbits']}, crossings {stats['crossings']}, "
                      f"orbits that stopped crossing {stats['stopped']} ({st})")
         lines.append(f"  energy error max |H - H0| over all crossings {stats['max_dh']:.1e}")
-        setting = (f"tol = {integ.tol:g}" if integ.method in ADAPTIVE_METHODS
-                   else f"dt = {integ.dt:g}") + " ([integration])"
-        warning = energy_warning(stats["max_dh"], stats["max_dh_h"], setting)
-        if warning:
-            lines.append(f"  warning: {warning}")
+        if stats["warning"]:
+            lines.append(f"  warning: {stats['warning']}")
     for label, frac, err in stats.get("fractions", []):
         lines.append(f"  {label}: chaotic fraction {frac:.3f} +- {err:.3f} (MEGNO > {scene.lyapunov.threshold:g})")
     if figure_paths:

@@ -711,11 +711,6 @@ def _write_panel(f, index: int, arrays: dict, attrs: dict, status_names: dict) -
     grp.attrs["complete"] = True  # last: the panel is whole
 
 
-def _holds_panel(path: str, index: int) -> bool:
-    with h5py.File(path, "r") as f:
-        return "panels" in f and f"{index:03d}" in f["panels"]
-
-
 def _copy_without_panel(src_path: str, dst_path: str, index: int) -> None:
     """Write to dst_path a compact copy of the store at src_path without panel ``index``:
     root attributes, every top-level object and every other panel group (datasets with their
@@ -771,9 +766,11 @@ def commit_panel(path, index: int, arrays: dict, attrs: dict, file_attrs: dict |
         file_attrs["provenance"] = _canonical_json(file_attrs["provenance"])
 
     existing = os.path.exists(path)
+    replacing = False
     if existing:
         try:
-            _open_store(path).close()
+            with _open_store(path) as f:
+                replacing = "panels" in f and f"{index:03d}" in f["panels"]
         except StoreError:
             if not replace_corrupt:
                 raise
@@ -782,7 +779,7 @@ def commit_panel(path, index: int, arrays: dict, attrs: dict, file_attrs: dict |
     directory = os.path.dirname(os.path.abspath(path))
     tmp = _tmp_name(path)
     try:
-        if existing and _holds_panel(path, index):
+        if replacing:
             # replacing a panel: copy everything else into a fresh file, so the file does not
             # keep the old panel's bytes (HDF5 never reclaims the space of a deleted group)
             _copy_without_panel(path, tmp, index)

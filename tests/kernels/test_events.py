@@ -83,12 +83,12 @@ def test_four_roots_inside_one_step_come_out_sorted():
 
 
 def test_ordinary_steps_take_the_fast_path_and_match_the_end_value_test():
-    """A monotone step: exactly the sign change of the end values (and poly_root's root)."""
+    """A monotone step: exactly the sign change of the end values (and poly_root_in's root)."""
     c = np.ascontiguousarray([-0.2, 1.0, 0.1, -0.05, 0.001])
     order = 4
     got = step_roots(c, 0.5, +1)
     assert len(got) == 1
-    assert got[0] == ev.poly_root(c, order, 0.5, c[0], np.polynomial.polynomial.polyval(0.5, c))
+    assert got[0] == ev.poly_root_in(c, order, 0.0, 0.5, c[0], np.polynomial.polynomial.polyval(0.5, c))
     assert len(step_roots(c, 0.1, +1)) == 0           # no sign change in (0, 0.1]
     assert len(step_roots(c, 0.5, -1)) == 0           # wrong direction
 

@@ -105,13 +105,6 @@ def poly_root_in(c, order, a, b, ga, gb):
 
 
 @njit
-def poly_root(c, order, h, g_lo, g_hi):
-    """Root in (0, h] of the polynomial sum_k c_k x^k, given g(0) = g_lo and g(h) = g_hi of
-    opposite signs (or g_hi == 0).  Safeguarded Newton; returns x."""
-    return poly_root_in(c, order, 0.0, h, g_lo, g_hi)
-
-
-@njit
 def taylor_shift(c, order, m, out):
     """out[k] = coefficients of p(m + x) = sum_k out[k] x^k for p(x) = sum_k c[k] x^k
     (repeated synthetic division, order^2 / 2 multiply-adds)."""
@@ -123,15 +116,24 @@ def taylor_shift(c, order, m, out):
 
 
 @njit
+def excluded_by_variation(g0, variation):
+    """True if g cannot vanish where g = g0 + (terms whose sum is at most ``variation`` in
+    size): |g0| > variation, with BOUND_SLACK.  The test of :func:`no_root_within` and
+    :func:`monotone_within`; a driver may also call it with a cheaper upper bound computed for
+    many orbits at once (``explorer.lanes``): it then implies that :func:`isolate_crossings`
+    finds nothing."""
+    return abs(g0) > variation + BOUND_SLACK * (abs(g0) + variation)
+
+
+@njit
 def no_root_within(d, order, r):
-    """True if p(x) = sum_k d[k] x^k has no root for |x| <= r: |d0| > sum_{k>=1} |d_k| r^k
-    (with BOUND_SLACK)."""
+    """True if p(x) = sum_k d[k] x^k has no root for |x| <= r: |d0| > sum_{k>=1} |d_k| r^k."""
     s = 0.0
     rk = 1.0
     for k in range(1, order + 1):
         rk *= r
         s += abs(d[k]) * rk
-    return abs(d[0]) > s + BOUND_SLACK * (abs(d[0]) + s)
+    return excluded_by_variation(d[0], s)
 
 
 @njit
@@ -142,16 +144,7 @@ def monotone_within(d, order, r):
     for k in range(2, order + 1):
         rk *= r
         s += k * abs(d[k]) * rk
-    return abs(d[1]) > s + BOUND_SLACK * (abs(d[1]) + s)
-
-
-@njit
-def excluded_by_variation(g0, variation):
-    """True if g cannot vanish in a step where g(0) = g0 and ``variation`` bounds
-    sum_{k>=1} |c_k| h^k (any upper bound; the bound of :func:`no_root_within` is the
-    tightest).  Implies that :func:`isolate_crossings` finds nothing, so a driver may skip it:
-    a cheap screen computed for many orbits at once (``explorer.lanes``)."""
-    return abs(g0) > variation + BOUND_SLACK * (abs(g0) + variation)
+    return excluded_by_variation(d[1], s)
 
 
 @njit
