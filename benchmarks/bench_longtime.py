@@ -47,7 +47,8 @@ def sample_times(T_end, per_decade=4):
 def run_method(prm, y0, method, kw, T_end):
     """Continuous run in chunks; returns per-chunk-end rows (t, max |dH| over orbits at the end,
     max |dH| over the chunk's crossings, max |Casimir - 1|) and per-orbit end values."""
-    from explorer import model, sections
+    from explorer import model
+    from explorer.analysis import sections
     H0 = model.energy(prm, y0)
     y = y0.copy()
     dt = kw.get("dt")
@@ -115,7 +116,8 @@ def main(argv=None):
     T_end = args.time or (1e3 if quick else 1e6)
     command = C.command_line("bench_longtime.py", argv)
     started, load0, T0 = C.now(), C.loadavg(), time.perf_counter()
-    from explorer import model, sections
+    from explorer import model
+    from explorer.analysis import sections
 
     results = []
     for regime, mu in REGIMES:

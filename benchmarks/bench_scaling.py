@@ -75,7 +75,8 @@ def main(argv=None):
     sweep_n, sweep_k = (16, 20) if quick else (100, 200)
     command = C.command_line("bench_scaling.py", argv)
     started, load0, T0 = C.now(), C.loadavg(), time.perf_counter()
-    from explorer import model, sections
+    from explorer import model
+    from explorer.analysis import sections
     from explorer._jit import get_num_threads
     prm = model.FIGURE4.with_(mu=MU)
     Ymax = C.section_seeds(prm, H, max(max(Ns), N_K, N_T))

@@ -1,7 +1,7 @@
 #!/usr/bin/env python
 """Start-up costs, each measured in fresh processes:
 
-- import time of explorer (python -c "import explorer.sections", in-process perf_counter around
+- import time of explorer (python -c "import explorer.analysis.sections", in-process perf_counter around
   the import) and the bare interpreter start (python -c pass) for comparison;
 - cold compile per method: a fresh process with NUMBA_CACHE_DIR = an empty directory of its own
   times the first small call of one method (taylor, dop853, split4, split6, split8: each alone,
@@ -39,7 +39,7 @@ METHODS = (("taylor", "tol=1e-13"), ("dop853", "tol=1e-12"), ("split4", "dt=0.05
 IMPORT_SCRIPT = r"""
 import time
 t0 = time.perf_counter()
-import explorer.sections
+import explorer.analysis.sections
 print(time.perf_counter() - t0)
 """
 
@@ -47,7 +47,8 @@ FIRST_CALL = r"""
 import json, time
 t0 = time.perf_counter()
 import numpy as np
-from explorer import model, sections
+from explorer import model
+from explorer.analysis import sections
 t_import = time.perf_counter() - t0
 prm = model.FIGURE4.with_(mu=0.5)
 Y0 = model.section_state(prm, [0.0, 0.3], [0.0, 0.0], 2.0)
@@ -90,7 +91,7 @@ def main(argv=None):
         walls.append(w)
         inner.append(float(out.strip().splitlines()[-1]))
     res["imports"] = dict(process_wall=min(walls), in_process=min(inner))
-    print(f"interpreter {res['interpreter']:.3f} s; import explorer.sections {min(inner):.3f} s in process, "
+    print(f"interpreter {res['interpreter']:.3f} s; import explorer.analysis.sections {min(inner):.3f} s in process, "
           f"{min(walls):.3f} s process", flush=True)
 
     tmp_root = Path(tempfile.mkdtemp(prefix="explorer_startup_"))
@@ -145,8 +146,8 @@ def main(argv=None):
                                f"run; best of {repeats} warm runs."])
     lines += ["", "| measurement | seconds |", "|---|---:|",
               f"| interpreter start (`python -c pass`, process) | {res['interpreter']:.3f} |",
-              f"| `import explorer.sections` (in process) | {res['imports']['in_process']:.3f} |",
-              f"| `python -c 'import explorer.sections'` (process) | {res['imports']['process_wall']:.3f} |"]
+              f"| `import explorer.analysis.sections` (in process) | {res['imports']['in_process']:.3f} |",
+              f"| `python -c 'import explorer.analysis.sections'` (process) | {res['imports']['process_wall']:.3f} |"]
     lines += ["", "| method | setting | cold: first call (compile) | cold: process | warm: first call (cache load) "
               "| warm: process |", "|---|---|---:|---:|---:|---:|"]
     for m, d in res["methods"].items():

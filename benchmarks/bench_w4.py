@@ -63,7 +63,7 @@ def scene(n_orbits):
 def section_points(prm, Y0, per_orbit):
     """One-step test points: crossings 1..per_orbit of every W4 orbit from a tight explorer
     taylor run (tol 1e-15), put exactly on the section (g1, g2) = (0, -1)."""
-    from explorer import sections
+    from explorer.analysis import sections
     r = sections.crossings(prm, Y0, per_orbit, method="taylor", tol=1e-15)
     assert np.all(r.count == per_orbit), "tight run did not produce the section points"
     rows = r.data[:, :per_orbit, :].reshape(-1, 5)
@@ -480,7 +480,8 @@ COLD_SCRIPT = r"""
 import json, time
 t0 = time.perf_counter()
 import numpy as np
-from explorer import model, sections
+from explorer import model
+from explorer.analysis import sections
 t_import = time.perf_counter() - t0
 prm = model.FIGURE4.with_(mu=0.5)
 c1, c2, r1, r2 = model.allowed_ellipse(prm, 2.0)
@@ -497,7 +498,8 @@ WARM_SCRIPT = r"""
 import time
 t0 = time.perf_counter()
 import numpy as np
-from explorer import model, sections
+from explorer import model
+from explorer.analysis import sections
 prm = model.FIGURE4.with_(mu=0.5)
 Y0 = model.section_state(prm, [0.0, 0.3], [0.0, 0.0], 2.0)
 r = sections.crossings(prm, Y0, 5, method="taylor", tol=1e-13)
@@ -571,7 +573,7 @@ def main(argv=None):
     command = "/work/venv/bin/python benchmarks/bench_w4.py" + (" " + " ".join(sys.argv[1:]) if argv is None and sys.argv[1:] else "")
 
     import numba
-    from explorer import sections
+    from explorer.analysis import sections
     import heyoka
 
     T_START = time.perf_counter()

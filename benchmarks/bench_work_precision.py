@@ -57,7 +57,7 @@ def rows_config(quick):
 
 
 def one_step_points(prm, Y0, per_orbit):
-    from explorer import sections
+    from explorer.analysis import sections
     r = sections.crossings(prm, Y0, per_orbit, method="taylor", tol=1e-15)
     ok = r.count == per_orbit
     rows = r.data[ok, :per_orbit, :].reshape(-1, 5)
@@ -100,7 +100,8 @@ def main(argv=None):
     started, load0, T0 = C.now(), C.loadavg(), time.perf_counter()
     log = lambda *a: print(*a, flush=True)  # noqa: E731
 
-    from explorer import model, sections
+    from explorer import model
+    from explorer.analysis import sections
     import bench_w4 as w4
 
     results = []

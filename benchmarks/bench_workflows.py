@@ -36,7 +36,9 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
     args = ap.parse_args()
-    from explorer import fixedpoints, lyapunov, model
+    from explorer import model
+    from explorer.analysis import fixedpoints
+    from explorer.analysis import lyapunov
 
     rows = []
     with tempfile.TemporaryDirectory() as tmp:

@@ -17,7 +17,7 @@ import sys
 
 import pytest
 
-from explorer import cli
+from explorer.app import cli
 
 P0 = ["--p1", "0", "--p2", "0"]
 

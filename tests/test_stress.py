@@ -23,10 +23,15 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import reference
-from explorer import drivers, exact, fixedpoints, lyapunov, model, sections
+from explorer import model
+from explorer.integrate import drivers
+from explorer.model import exact
+from explorer.analysis import fixedpoints
+from explorer.analysis import lyapunov
+from explorer.analysis import sections
 from explorer._jit import get_num_threads, njit, set_num_threads
-from explorer.drivers_tangent import return_map_taylor
-from explorer.equations import rhs, taylor_coefficients
+from explorer.integrate.tangent import return_map_taylor
+from explorer.model.equations import rhs, taylor_coefficients
 from explorer.kernels import STATUS_DONE, STATUS_NONFINITE, STATUS_TMAX, splitting
 from explorer.kernels import dop853 as dp
 from explorer.kernels import taylor as tk

@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Write ``src/explorer/_lanes_generated.py``: the lane (SIMD) kernels of the Taylor method.
+"""Write ``src/explorer/integrate/_lanes_generated.py``: the lane (SIMD) kernels of the Taylor method.
 
 The generated kernels advance LANES orbits in lockstep.  Their coefficient arrays have the
 layout ``X[k, var, lane]`` (lanes contiguous), and every lane-parallel operation is one LLVM
@@ -8,7 +8,7 @@ module).  IEEE fadd/fsub/fmul/fneg on a vector are lane-wise the same operations
 scalar, and no fast-math flag is ever set (no reassociation, no FMA contraction), so each
 lane computes bit for bit what the scalar kernels compute - provided the expression trees are
 the same.  That is why the coefficient kernel is not written by hand: it is *translated* from
-the source of the scalar :func:`explorer.equations.taylor_coefficients` (its Python AST), so
+the source of the scalar :func:`explorer.model.equations.taylor_coefficients` (its Python AST), so
 every formula keeps its operation order; the Horner and step-norm kernels mirror the few
 lines of :func:`explorer.kernels.taylor.evaluate` / ``step_size``.
 
@@ -22,7 +22,7 @@ on AVX-512 (vs ~150 ns with SLP, ~225 ns scalar).
 Regenerate after changing ``equations.taylor_coefficients`` (tests/test_lanes.py checks that
 the file is up to date)::
 
-    /work/venv/bin/python tools/gen_lanes.py            # writes src/explorer/_lanes_generated.py
+    /work/venv/bin/python tools/gen_lanes.py            # writes src/explorer/integrate/_lanes_generated.py
     /work/venv/bin/python tools/gen_lanes.py --check    # exit 1 if the file is stale
     /work/venv/bin/python tools/gen_lanes.py -o FILE    # write elsewhere
 """
@@ -34,8 +34,8 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-EQUATIONS = ROOT / "src" / "explorer" / "equations.py"
-OUTPUT = ROOT / "src" / "explorer" / "_lanes_generated.py"
+EQUATIONS = ROOT / "src" / "explorer" / "model" / "equations.py"
+OUTPUT = ROOT / "src" / "explorer" / "integrate" / "_lanes_generated.py"
 
 #: lanes per vector: 8 doubles = one AVX-512 register (two AVX2 registers elsewhere).
 #: Measured (order 15, coefficients per orbit-step): 4 lanes ~62 ns, 8 lanes ~42 ns, 16 lanes
@@ -45,17 +45,17 @@ NVAR = 5
 
 HEADER = '''\
 # GENERATED FILE - DO NOT EDIT.
-# Written by tools/gen_lanes.py from explorer.equations.taylor_coefficients (translated
+# Written by tools/gen_lanes.py from explorer.model.equations.taylor_coefficients (translated
 # operation by operation) and templates mirroring explorer.kernels.taylor.
 # Regenerate:  /work/venv/bin/python tools/gen_lanes.py     (check: --check)
 """Lane kernels of the Taylor method: LANES = {L} orbits per vector, coefficient arrays
 X[k, var, lane] (C-contiguous, lanes contiguous).  Each lane computes bit for bit what the
 scalar kernels compute (same IEEE operations in the same order, no fast-math, no FMA).
-Used by :mod:`explorer.lanes`.
+Used by :mod:`explorer.integrate.lanes`.
 """
 import numpy as np
 
-from ._jit import NOJIT, njit
+from explorer._jit import NOJIT, njit
 
 #: orbits advanced in lockstep by one vector instruction
 LANES = {L}

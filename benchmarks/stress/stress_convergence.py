@@ -56,7 +56,7 @@ def heyoka_state(P, y0, t):
 
 
 def final(prm, y0, t, method, **kw):
-    from explorer import sections
+    from explorer.analysis import sections
     r = sections.crossings(prm, y0, 10**4, method=method, tmax=t, **kw)
     assert r.info[0, 0] == t
     return r.final[0]
@@ -80,8 +80,9 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true")
     args = ap.parse_args(argv)
     ck = Checks("stress_convergence", args.quick, argv)
-    from explorer import drivers, model
-    from explorer.equations import rhs, taylor_coefficients
+    from explorer import model
+    from explorer.integrate import drivers
+    from explorer.model.equations import rhs, taylor_coefficients
     from explorer.kernels import dop853 as dp
     from explorer.kernels import splitting
     from explorer.kernels import taylor as tk

@@ -66,7 +66,8 @@ def compare(got, ref, window, K, margin, tol):
 
 
 def part_a(ck, quick):
-    from explorer import model, sections
+    from explorer import model
+    from explorer.analysis import sections
     mus = (0.03, 0.5, 2.0, 4.0, 8.0)
     n_dir = 5 if quick else 50
     eps = (1e-2, 1e-4, 1e-6, 1e-9)
@@ -112,7 +113,8 @@ def part_a(ck, quick):
 
 
 def part_b(ck):
-    from explorer import model, sections
+    from explorer import model
+    from explorer.analysis import sections
     prm = model.FIGURE4.with_(mu=2.0)
     phi = math.pi - 0.5
     settings = [("taylor", dict(tol=1e-10)), ("taylor", dict(tol=1e-13)), ("taylor", dict(tol=1e-16)),
@@ -134,7 +136,8 @@ def part_b(ck):
 
 
 def part_c(ck, quick):
-    from explorer import model, sections
+    from explorer import model
+    from explorer.analysis import sections
     W = 5.0
     out = {}
     for mu in (0.5, 2.0, 4.0, 8.0):
@@ -179,7 +182,8 @@ def part_c(ck, quick):
 
 
 def part_d(ck):
-    from explorer import model, sections
+    from explorer import model
+    from explorer.analysis import sections
     from explorer.kernels import splitting
     prm = model.FIGURE4
     c = math.sqrt(2 * prm.b * 2.0)

@@ -77,7 +77,8 @@ def energy_scale(prm, y):
 
 
 def run_case(prm, h):
-    from explorer import model, sections
+    from explorer import model
+    from explorer.analysis import sections
     from explorer.model import ParameterError
     e = model.allowed_ellipse(prm, h)
     u = np.array([-0.9, -0.3, 0.0, 0.5, 0.95, 0.2])
@@ -118,7 +119,7 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true")
     args = ap.parse_args(argv)
     ck = Checks("stress_extreme", args.quick, argv)
-    from explorer import sections
+    from explorer.analysis import sections
     main_cases, beyond = cases(args.quick)
     worst, refused = {}, 0
     for name, (prm, h) in main_cases.items():

@@ -85,7 +85,7 @@ def main(argv=None):
     rounds = [(n_kills - n_kills // 4 * 3, 1)] + [(n_kills // 4, 1)] * 2 + [(n_kills // 4, 2)]
     rounds = [r for r in rounds if r[0] > 0]
     ck = Checks("stress_kill_resume", args.quick, argv)
-    from explorer import store
+    from explorer.io import store
     rng = random.Random(args.seed)
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)

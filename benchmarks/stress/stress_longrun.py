@@ -34,7 +34,8 @@ MAX_CHUNK = 10**6
 
 
 def run(prm, y0, method, n_total):
-    from explorer import model, sections
+    from explorer import model
+    from explorer.analysis import sections
     H0 = model.energy(prm, y0)
     y, n = y0.copy(), 0
     decades = {}

@@ -39,9 +39,11 @@ def main(argv=None):
     args = ap.parse_args(argv)
     quick = args.quick
     ck = Checks("stress_reversibility", quick, argv)
-    from explorer import drivers, model, sections
+    from explorer import model
+    from explorer.integrate import drivers
+    from explorer.analysis import sections
     from explorer._jit import njit
-    from explorer.drivers_tangent import return_map_taylor
+    from explorer.integrate.tangent import return_map_taylor
     from explorer.kernels import splitting
     from explorer.kernels.taylor import order_for_tolerance
 

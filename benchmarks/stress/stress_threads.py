@@ -54,7 +54,10 @@ def main(argv=None):
     args = ap.parse_args(argv)
     quick = args.quick
     ck = Checks("stress_threads", quick, argv)
-    from explorer import fixedpoints, lyapunov, model, sections
+    from explorer import model
+    from explorer.analysis import fixedpoints
+    from explorer.analysis import lyapunov
+    from explorer.analysis import sections
     from explorer._jit import get_num_threads, set_num_threads
     from explorer.kernels import splitting
     nmax = max(2, get_num_threads())

@@ -5,7 +5,7 @@
   drift over 1e7 steps (compare FMPy #106, preCICE #1933); the true time is ``t - tc``, and the
   last step lands exactly on ``tend``.
 """
-from .._jit import njit
+from explorer._jit import njit
 
 
 @njit

@@ -26,8 +26,8 @@ comparison with scipy of benchmarks/stress/stress_crossings.py at dt <= 0.05).
 """
 import math
 
-from .._jit import njit
-from .dop853 import dense_eval_scalar, dense_eval_scalar_derivative
+from explorer._jit import njit
+from explorer.kernels.dop853 import dense_eval_scalar, dense_eval_scalar_derivative
 
 EPS = 2.220446049250313e-16
 #: stop when the Newton correction falls below this fraction of the step

@@ -16,7 +16,7 @@ but round-off; Skokos 2010, Lect. Notes Phys. 790, 63).
 """
 import math
 
-from .._jit import njit
+from explorer._jit import njit
 
 #: layout of the accumulator vector
 ACC_LOG, ACC_W, ACC_YINT, ACC_FLI, ACC_Y, ACC_T = range(6)

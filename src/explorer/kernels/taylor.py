@@ -13,7 +13,7 @@ high-order Taylor methods for astrodynamics and celestial mechanics", MNRAS
 """
 import math
 
-from .._jit import njit
+from explorer._jit import njit
 
 MIN_ORDER = 4
 MAX_ORDER = 40

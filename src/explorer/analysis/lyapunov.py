@@ -1,0 +1,146 @@
+"""Chaos indicators of orbits (user level): finite-time maximal Lyapunov exponent, MEGNO, FLI.
+
+``indicators(params, y0, T, method=...)`` advances each orbit and one deviation vector for a
+time T with tangent dynamics consistent with the integrator (variational equations for
+``taylor`` and ``dop853``, exact tangent maps of the sub-flows for ``split*``; see
+:mod:`explorer.drivers_tangent`) and returns, per orbit,
+
+- ``mlce``  finite-time maximal Lyapunov exponent chi(T) = ln(|delta(T)|/|delta(0)|) / T
+  (Benettin, Galgani, Giorgilli & Strelcyn 1980, Meccanica 15, 9);
+- ``megno`` mean MEGNO <Y>(T) (Cincotta & Simó 2000, A&AS 147, 205): -> 2 for quasi-periodic
+  orbits, -> 0 for stable periodic ones, grows like chi t / 2 for chaotic ones;
+- ``fli``   fast Lyapunov indicator max_{t <= T} ln |delta(t)| (Froeschlé, Lega & Gonczi 1997,
+  Celest. Mech. 67, 41);
+
+with a convergence history at ``history`` log-spaced times.  The deviation vector starts
+tangent to the energy shell and to the Casimir surface (orthogonal to grad H and grad C), so
+it measures stretching within the dynamics' own invariant manifold.
+"""
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import dataclass
+
+import numpy as np
+
+from explorer.integrate import tangent as dt_
+from explorer import model
+from explorer.kernels import STATUS_NAMES, splitting
+from explorer.kernels.taylor import order_for_tolerance
+from explorer.model import ParameterError
+from explorer.analysis.sections import METHODS, MAX_TOL, MIN_TOL, _params_array, _positive
+from explorer._jit import get_num_threads, set_num_threads
+
+DEFAULT_TIME = 1000.0
+DEFAULT_DT = 0.02
+#: a generic start direction (no symmetry of the model), projected onto the shell
+GENERIC_DIRECTION = np.array([0.8017, -0.3327, 0.4721, 0.1190, -0.0712])
+
+
+def energy_gradient(params, y):
+    """grad H of MODEL.md R3 (analytic)."""
+    P = params.as_array() if isinstance(params, model.Params) else np.asarray(params, float)
+    a1, a2, b, lam, chi, zeta, mu, xi, eta = P
+    p1, p2, m, g1, g2 = np.moveaxis(np.asarray(y, float), -1, 0)
+    k = mu / lam
+    return np.stack([p1 / a1 - k * g2, p2 / a2 + k * g1, m / b,
+                     k * (p2 - zeta) + mu * xi, -k * (p1 - chi) + mu * eta], axis=-1)
+
+
+def deviation_vector(params, y, direction=GENERIC_DIRECTION):
+    """Unit vector(s) tangent to {H = H(y)} and {g1^2 + g2^2 = 1} at y: ``direction`` with its
+    components along grad H and grad C removed (Gram-Schmidt)."""
+    y = np.atleast_2d(np.asarray(y, float))
+    gH = energy_gradient(params, y)
+    gC = np.zeros_like(y)
+    gC[:, 3] = 2 * y[:, 3]
+    gC[:, 4] = 2 * y[:, 4]
+    v = np.broadcast_to(np.asarray(direction, float), y.shape).copy()
+    e1 = gC / np.linalg.norm(gC, axis=1, keepdims=True)
+    gH = gH - np.sum(gH * e1, axis=1, keepdims=True) * e1
+    nH = np.linalg.norm(gH, axis=1, keepdims=True)
+    e2 = np.divide(gH, nH, out=np.zeros_like(gH), where=nH > 0)
+    for e in (e1, e2):
+        v -= np.sum(v * e, axis=1, keepdims=True) * e
+    return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+
+@dataclass
+class Indicators:
+    """Per-orbit chaos indicators at time ``time`` and their history."""
+
+    time: np.ndarray       # (N,) time reached
+    mlce: np.ndarray       # (N,) finite-time maximal Lyapunov exponent
+    megno: np.ndarray      # (N,) mean MEGNO <Y>
+    Y: np.ndarray          # (N,) MEGNO Y at the end
+    fli: np.ndarray        # (N,) fast Lyapunov indicator
+    status: np.ndarray     # (N,) status codes (kernels.STATUS_*)
+    steps: np.ndarray      # (N,)
+    final: np.ndarray      # (N, 5) final states
+    history_t: np.ndarray  # (H,) requested history times
+    history: np.ndarray    # (N, H, 5) rows (t, mlce, <Y>, Y, fli), NaN where not reached
+    method: str
+    settings: dict
+
+    def status_name(self, i):
+        return STATUS_NAMES[int(self.status[i])]
+
+
+def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", tol: float = 1e-13,
+               dt: float = DEFAULT_DT, history: int = 0, v0=None, max_steps: int = 10**9,
+               threads: int | None = None) -> Indicators:
+    """Chaos indicators of the orbits starting at ``y0`` ((N, 5) or (5,)) over the time ``T``."""
+    P = _params_array(params)
+    if method not in METHODS:
+        raise ParameterError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
+    T = _positive("time", T)
+    Y0 = np.ascontiguousarray(np.atleast_2d(np.asarray(y0, dtype=np.float64)))
+    if Y0.ndim != 2 or Y0.shape[1] != 5 or not np.all(np.isfinite(Y0)):
+        raise ParameterError("y0 must be finite with shape (N, 5) = (p1, p2, M, g1, g2) per orbit")
+    V0 = deviation_vector(P, Y0) if v0 is None else np.atleast_2d(np.asarray(v0, float))
+    V0 = np.ascontiguousarray(np.broadcast_to(V0, Y0.shape), dtype=np.float64)
+    if not isinstance(history, numbers.Integral) or history < 0:
+        raise ParameterError(f"history must be an integer >= 0, got {history!r}")
+    N = Y0.shape[0]
+    hist_t = (np.geomspace(min(1.0, T), T, history) if history else np.zeros(0))
+    hist = np.full((N, len(hist_t), 5), np.nan)
+    res = np.zeros((N, 5))
+    status = np.zeros(N, np.int64)
+    final = np.zeros((N, 5))
+    steps = np.zeros(N, np.int64)
+    settings = {"method": method, "time": T}
+    old = get_num_threads()
+    if threads is not None:
+        set_num_threads(min(int(threads), old))
+    try:
+        if method == "taylor":
+            tol = _positive("tol", tol, MIN_TOL, MAX_TOL, inclusive=True)
+            order = order_for_tolerance(tol)
+            settings.update(tol=tol, order=order)
+            dt_.run_tangent_taylor_batch(Y0, V0, P, T, order, int(max_steps), hist_t, hist, res, status,
+                                         final, steps)
+        elif method == "dop853":
+            tol = _positive("tol", tol, MIN_TOL, MAX_TOL, inclusive=True)
+            settings.update(rtol=tol, atol=tol)
+            dt_.run_tangent_dop853_batch(Y0, V0, P, T, tol, tol, int(max_steps), hist_t, hist, res, status,
+                                         final, steps)
+        else:
+            dt = _positive("dt", dt)
+            weights = splitting.SCHEMES[method][0]
+            ids, fr = splitting.flow_sequence(weights, 4)
+            settings.update(dt=dt)
+            dt_.run_tangent_split_batch(Y0, V0, P, T, dt, np.ascontiguousarray(ids, np.int64),
+                                        np.ascontiguousarray(fr, np.float64), int(max_steps), hist_t, hist,
+                                        res, status, final, steps)
+    finally:
+        if threads is not None:
+            set_num_threads(old)
+    return Indicators(res[:, 0], res[:, 1], res[:, 2], res[:, 3], res[:, 4], status, steps, final, hist_t,
+                      hist, method, settings)
+
+
+def regular_bound(T: float) -> float:
+    """Upper envelope of the finite-time exponent of a regular orbit, 3 ln T / T
+    (the exponent of a regular orbit decays like ln T / T; Cincotta & Simó 2000)."""
+    return 3.0 * math.log(T) / T

@@ -1,0 +1,715 @@
+"""The body in the plane: the full system R1 with the position (x, y), for every lam
+(including lam = 0, the falling body of Chaplygin, Steklov and Kozlov).
+
+State and equations (MODEL.md R1, polynomial form)
+--------------------------------------------------
+``y = (p1, p2, M, g1, g2, x, y)`` with ``(g1, g2) = (sin phi, cos phi)``::
+
+    dp1/dt = (M/b)(p2 - zeta) - mu g1 - lam p2/a2
+    dp2/dt = -(M/b)(p1 - chi) - mu g2 + lam p1/a1
+    dM/dt  = (p1 - chi) p2/a2 - (p2 - zeta) p1/a1 - mu (xi g2 - eta g1)
+    dg1/dt = (M/b) g2,   dg2/dt = -(M/b) g1
+    dx/dt  = (p1/a1) g2 - (p2/a2) g1
+    dy/dt  = (p1/a1) g1 + (p2/a2) g2
+
+a quadratic 7-dimensional system (the first five equations are the reduced field R3, which
+does not involve x, y and does not divide by lam).  Integrals checked along every orbit:
+
+    H   = 1/2 (p1^2/a1 + p2^2/a2 + M^2/b) + mu (y + xi g1 + eta g2)                (R1)
+    p_x = p1 g2 - p2 g1 + lam y + zeta g1 - chi g2 = c1                            (R2)
+    p_y = p1 g1 + p2 g2 - lam x - zeta g2 - chi g1 = c2 - mu t                     (R2)
+
+Integrator
+----------
+Adaptive DOP853 (Hairer-Norsett-Wanner; the project's kernels :mod:`explorer.kernels.dop853`,
+controller and first step as scipy's) with ``rtol = atol = tol``, on the 7-dim polynomial
+state.  DOP853 rather than the Taylor recurrence because its 7th-order continuous extension
+gives the samples at the requested times and the turning points of phi (roots of M, found
+with :func:`explorer.kernels.events.dense_root` on the interpolant) at no extra cost of
+step-size control; the 3 extra dense-output stages are evaluated only in steps that contain
+a sample time or a sign change of M.  The time is summed with Kahan compensation.
+
+The angle is unwrapped in the compiled loop: at the end of every accepted step (and at every
+sample or turning point) phi is atan2(g1, g2) + 2 pi k with the branch k closest to the
+previous phi plus the trapezoidal increment h (M_old + M_new)/(2b); the trapezoid is wrong by
+O(h^3) while a wrong branch would need an error of pi, so the winding is never lost.
+
+The drift and the band (ur25 with the corrected R2)
+---------------------------------------------------
+Solving the two momentum integrals R2 for x and y (lam != 0)::
+
+    x = (mu/lam) t + ((p1 - chi) sin phi + (p2 - zeta) cos phi - c2) / lam
+    y = c1/lam - ((p1 - chi) cos phi - (p2 - zeta) sin phi) / lam
+
+The bracketed terms are the components of p - s rotated by phi, so
+``|y - c1/lam| <= |p - s|/|lam|`` pointwise (the band) and
+``x(t) - x(0) - (mu/lam) t`` is bounded by ``2 max|p - s|/|lam|``: the mean horizontal velocity
+is **+mu/lam**.  The seed's ur25 prints -mu/lam because its ur10 prints ``p_y = mu t + c2``;
+with R1 (and the bracket ur8) dp_y/dt = -mu (MODEL.md R2), and the simulation confirms +mu/lam
+(:func:`drift`).  |p - s| is bounded a priori by the energy: with a = max(a1, a2),
+h_r = H - mu c1/lam (the reduced energy R3) and q = |p|,
+q^2/(2a) <= h_r + (mu/|lam|)(q + |s|) + mu |r|  (kinetic energy >= q^2/(2a), M^2/b >= 0).
+
+The falling body (lam = 0, Kozlov)
+----------------------------------
+With lam = 0 the momentum (c1, c2 - mu t) in the fixed frame grows linearly; eliminating p
+(ur17) the leading term is ``phi'' = (mu^2 t^2 / 2b)(1/a2 - 1/a1) sin 2 phi``, so phi
+oscillates about phi_inf (pi/2 mod pi when a1 > a2, 0 mod pi when a1 < a2) with
+angular frequency ``Omega(t) = mu t sqrt(|1/a2 - 1/a1|/b)`` (frequency ~ t) and, by the
+adiabatic invariant E/Omega, amplitude ~ Omega^(-1/2) ~ t^(-1/2) (Kozlov 1989).
+:func:`kozlov` measures both exponents from the turning points of phi (M = 0).
+
+API
+---
+``full_params(params=None, **changes) -> dict``      validated parameters (lam = 0 allowed)
+``initial_state(params, p1, p2, M, phi, x=0, y=0) -> (7,) array``
+``trajectory(params, y0_full, t_end, n_samples=2001, tol=1e-12) -> dict``
+    samples ``t, x, y, phi, p1, p2, M, H, px, py`` (+ ``g1, g2``, the turning points, status)
+``conservation(result) -> dict``                      errors of H, p_x, p_y + mu t (abs and rel)
+``drift(params, y0_full, T, ...) -> dict``            measured mean velocity vs +mu/lam; the band
+``kozlov(params, y0_full, T, ...) -> dict``           lam = 0: fitted exponents of amplitude, frequency
+``path_figure(result, params, ...) -> Figure``        the path with the body's orientation, the band
+``kozlov_figure(kres, params, ...) -> Figure``        amplitude and frequency vs t (log-log, fits)
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import numpy as np
+
+from explorer import model
+from explorer._jit import njit
+from explorer.kernels import (STATUS_DONE, STATUS_MAX_STEPS, STATUS_NAMES, STATUS_NONFINITE,
+                      STATUS_STEP_UNDERFLOW)
+from explorer.kernels import dop853 as dp
+from explorer.kernels.clock import advance_time, clip_step
+from explorer.kernels.events import dense_root
+
+#: layout of the full state (MODEL.md R1, polynomial form)
+P1, P2, M, G1, G2, X, Y = range(7)
+STATE_DIM = 7
+TWO_PI = 2.0 * math.pi
+#: the CLI's default scene: Figure 4 (MODEL.md R9) with mu = 0.5
+DEFAULT_PARAMS = dict(model.FIGURE4.as_dict(), mu=0.5)
+DEFAULT_TOL = 1e-12
+DEFAULT_MAX_STEPS = 10 ** 8
+
+
+# ====================================================================== compiled core
+@njit
+def rhs_full(y, P, dy):
+    """MODEL.md R1 in the polynomial form (g1, g2) = (sin phi, cos phi)."""
+    a1, a2, b, lam, chi, zeta, mu, xi, eta = P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8]
+    p1, p2, m, g1, g2 = y[0], y[1], y[2], y[3], y[4]
+    w = m / b
+    u1 = p1 / a1
+    u2 = p2 / a2
+    dy[0] = w * (p2 - zeta) - mu * g1 - lam * u2
+    dy[1] = -w * (p1 - chi) - mu * g2 + lam * u1
+    dy[2] = (p1 - chi) * u2 - (p2 - zeta) * u1 - mu * (xi * g2 - eta * g1)
+    dy[3] = w * g2
+    dy[4] = -w * g1
+    dy[5] = u1 * g2 - u2 * g1
+    dy[6] = u1 * g1 + u2 * g2
+
+
+@njit
+def energy_full(y, P):
+    """MODEL.md R1: H = 1/2(p1^2/a1 + p2^2/a2 + M^2/b) + mu (y + xi g1 + eta g2)."""
+    kin = 0.5 * (y[0] * y[0] / P[0] + y[1] * y[1] / P[1] + y[2] * y[2] / P[2])
+    return kin + P[6] * (y[6] + P[7] * y[3] + P[8] * y[4])
+
+
+@njit
+def _branch(phi_guess, g1, g2):
+    """atan2(g1, g2) + 2 pi k, the branch closest to phi_guess."""
+    a = math.atan2(g1, g2)
+    k = math.floor((phi_guess - a) / TWO_PI + 0.5)
+    return a + TWO_PI * k
+
+
+@njit
+def _finite(y):
+    s = 0.0
+    for i in range(y.shape[0]):
+        s += y[i]
+    return s - s == 0.0
+
+
+@njit
+def integrate_full(y0, phi0, P, t_samples, rtol, atol, max_steps, out, out_phi, turns):
+    """Adaptive DOP853 of R1 from t = 0 to t_samples[-1] (sorted, >= 0).
+
+    Fills out[j] (7,) and out_phi[j] (unwrapped angle) at every t_samples[j] reached, and
+    the turning points of phi (roots of M) into turns[k] = (t, phi, dM/dt sign) for
+    k < turns.shape[0] (more are counted, not stored).
+    Returns (status, n_samples_filled, n_turns, steps, t_reached)."""
+    n = 7
+    ns = t_samples.shape[0]
+    cap = turns.shape[0]
+    K = np.empty((16, n))
+    F = np.empty((7, n))
+    Fg = np.empty(7)
+    tmp = np.empty(n)
+    yc = np.empty(n)
+    ynew = np.empty(n)
+    ycur = np.empty(n)
+    for i in range(n):
+        ycur[i] = y0[i]
+    b = P[2]
+    phi = phi0
+    tmax = t_samples[ns - 1]
+    j = 0
+    while j < ns and t_samples[j] <= 0.0:
+        for i in range(n):
+            out[j, i] = ycur[i]
+        out_phi[j] = phi
+        j += 1
+    nturn = 0
+    steps = 0
+    if j >= ns:
+        return STATUS_DONE, j, nturn, steps, 0.0
+    rhs_full(ycur, P, K[0])
+    h0 = dp.initial_step_part1(ycur, K[0], rtol, atol, tmax, 1.0, tmp)
+    rhs_full(tmp, P, K[1])
+    h_abs = dp.initial_step_part2(ycur, K[0], K[1], h0, rtol, atol, tmax)
+    t = 0.0
+    tc = 0.0
+    rejected = False
+    status = STATUS_DONE
+    while True:
+        if t >= tmax:
+            status = STATUS_DONE
+            break
+        if steps >= max_steps:
+            status = STATUS_MAX_STEPS
+            break
+        if dp.step_too_small(t, h_abs):
+            status = STATUS_STEP_UNDERFLOW
+            break
+        h = h_abs
+        h, last = clip_step(t, h, tmax)
+        for s in range(1, 12):
+            dp.stage_input(ycur, K, s, h, tmp)
+            rhs_full(tmp, P, K[s])
+        dp.step_solution(ycur, K, h, ynew)
+        err = dp.error_norm(ycur, ynew, K, h, rtol, atol)
+        steps += 1
+        if not (err == err) or not _finite(ynew):
+            status = STATUS_NONFINITE
+            break
+        if err >= 1.0:
+            h_abs *= dp.step_factor(err)
+            rejected = True
+            continue
+        rhs_full(ynew, P, K[12])
+        t_old = t - tc  # compensated start of the step
+        t_new = tmax if last else t_old + h
+        m_old = ycur[2]
+        m_new = ynew[2]
+        sign_m = (m_old < 0.0 and m_new >= 0.0) or (m_old > 0.0 and m_new <= 0.0)
+        need_dense = sign_m or (j < ns and t_samples[j] <= t_new)
+        if need_dense:
+            for s in range(13, 16):
+                dp.stage_input(ycur, K, s, h, tmp)
+                rhs_full(tmp, P, K[s])
+            dp.dense_coefficients(ycur, ynew, K, h, F)
+            if sign_m:
+                for k in range(7):
+                    Fg[k] = F[k, 2]
+                theta = dense_root(Fg, m_old, m_new)
+                dp.dense_eval(F, ycur, theta, yc)
+                if nturn < cap:
+                    turns[nturn, 0] = t_old + theta * h
+                    turns[nturn, 1] = _branch(phi + theta * h * (m_old + yc[2]) / (2.0 * b), yc[3], yc[4])
+                    turns[nturn, 2] = 1.0 if m_new > m_old else -1.0
+                nturn += 1
+            while j < ns and t_samples[j] <= t_new:
+                theta = (t_samples[j] - t_old) / h
+                if theta > 1.0:
+                    theta = 1.0
+                if theta < 0.0:
+                    theta = 0.0
+                dp.dense_eval(F, ycur, theta, yc)
+                for i in range(n):
+                    out[j, i] = yc[i]
+                out_phi[j] = _branch(phi + theta * h * (m_old + yc[2]) / (2.0 * b), yc[3], yc[4])
+                j += 1
+        phi = _branch(phi + h * (m_old + m_new) / (2.0 * b), ynew[3], ynew[4])
+        h_abs *= dp.accepted_factor(err, rejected)
+        rejected = False
+        t, tc = advance_time(t, tc, h, last, tmax)
+        for i in range(n):
+            ycur[i] = ynew[i]
+            K[0, i] = K[12, i]
+    return status, j, nturn, steps, t - tc
+
+
+# ====================================================================== parameters, states
+def full_params(params=None, **changes) -> dict:
+    """Validated parameters of the full system R1 as a dict (keys ``model.PARAM_NAMES``).
+
+    ``params``: a :class:`model.Params`, a mapping (missing keys from :data:`DEFAULT_PARAMS`:
+    Figure 4 with mu = 0.5), a packed sequence of 9 numbers, or None (the defaults).
+    Unlike the reduced system, R1 is valid for lam = 0.  ``model.Params`` refuses lam = 0, so
+    everything except lam is validated by ``model.Params`` with lam replaced by 1 (a1, a2, b > 0,
+    mu >= 0, all finite); lam is checked here (finite, any sign, 0 allowed)."""
+    if params is None:
+        d = dict(DEFAULT_PARAMS)
+    elif isinstance(params, model.Params):
+        d = params.as_dict()
+    elif isinstance(params, Mapping):
+        unknown = sorted(set(params) - set(model.PARAM_NAMES))
+        if unknown:
+            raise model.ParameterError(f"unknown parameter(s) {', '.join(unknown)}; "
+                                       f"allowed: {', '.join(model.PARAM_NAMES)}")
+        d = dict(DEFAULT_PARAMS, **params)
+    else:
+        arr = np.asarray(params, dtype=np.float64).ravel()
+        if arr.shape != (len(model.PARAM_NAMES),):
+            raise model.ParameterError(f"packed parameters need {len(model.PARAM_NAMES)} numbers "
+                                       f"({', '.join(model.PARAM_NAMES)}), got {arr.size}")
+        d = dict(zip(model.PARAM_NAMES, arr.tolist()))
+    unknown = sorted(set(changes) - set(model.PARAM_NAMES))
+    if unknown:
+        raise model.ParameterError(f"unknown parameter(s) {', '.join(unknown)}")
+    d.update(changes)
+    lam = d["lam"]
+    try:
+        lam = float(lam)
+    except (TypeError, ValueError):
+        raise model.ParameterError(f"lam must be a real number, got {d['lam']!r}") from None
+    if not math.isfinite(lam):
+        raise model.ParameterError(f"lam must be finite, got {d['lam']!r}")
+    # model.Params validates every other parameter; lam = 0 is legal for R1, so it is replaced by 1 here.
+    checked = model.Params(**dict(d, lam=1.0)).as_dict()
+    checked["lam"] = lam
+    return checked
+
+
+def _finite_arg(name, value) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise model.ParameterError(f"{name} must be a real number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise model.ParameterError(f"{name} must be finite, got {value!r}")
+    return v
+
+
+def initial_state(params, p1, p2, M, phi, x=0.0, y=0.0) -> np.ndarray:
+    """The full state (p1, p2, M, sin phi, cos phi, x, y) (MODEL.md R1); ``params`` is only
+    validated (the state does not depend on it)."""
+    full_params(params)
+    vals = [_finite_arg(n, v) for n, v in (("p1", p1), ("p2", p2), ("M", M), ("phi", phi), ("x", x), ("y", y))]
+    p1, p2, M_, phi, x, y = vals
+    return np.array([p1, p2, M_, math.sin(phi), math.cos(phi), x, y], dtype=np.float64)
+
+
+def _check_run(t_end, n_samples, tol):
+    t_end = _finite_arg("T (time)", t_end)
+    if not t_end > 0.0:
+        raise model.ParameterError(f"T (time) must be > 0, got {t_end!r}")
+    try:
+        ns = int(n_samples)
+    except (TypeError, ValueError):
+        raise model.ParameterError(f"samples must be an integer >= 2, got {n_samples!r}") from None
+    if ns != n_samples or ns < 2:
+        raise model.ParameterError(f"samples must be an integer >= 2, got {n_samples!r}")
+    tol = _finite_arg("tol", tol)
+    if not (0.0 < tol < 1.0):
+        raise model.ParameterError(f"tol must be in (0, 1), got {tol!r}")
+    return t_end, ns, tol
+
+
+# ====================================================================== integration
+def momentum_integrals(P, t, p1, p2, g1, g2, x, y):
+    """MODEL.md R2: (p_x, p_y); p_x = c1, p_y = c2 - mu t along orbits."""
+    lam, chi, zeta = P[3], P[4], P[5]
+    px = p1 * g2 - p2 * g1 + lam * y + zeta * g1 - chi * g2
+    py = p1 * g1 + p2 * g2 - lam * x - zeta * g2 - chi * g1
+    return px, py
+
+
+def trajectory(params, y0_full, t_end, n_samples=2001, tol=DEFAULT_TOL, *, phi_start=None,
+               max_steps=DEFAULT_MAX_STEPS, max_turns=None) -> dict:
+    """Integrate R1 from ``y0_full`` (:func:`initial_state`) over [0, t_end] and sample it at
+    ``n_samples`` equally spaced times (both ends included).
+
+    Returns a dict of arrays ``t, x, y, phi (unwrapped), p1, p2, M, g1, g2, H, px, py`` and
+    ``turn_t, turn_phi, turn_dir`` (turning points of phi, M = 0; dir = sign of dM/dt), and
+    ``status`` ('done' or why it stopped; samples after the stop are NaN), ``steps``,
+    ``params`` (dict), ``tol``, ``P`` (packed), ``y0``.  ``phi_start`` fixes the branch of the
+    initial angle (default atan2(sin phi, cos phi) in (-pi, pi]).
+    """
+    prm = full_params(params)
+    P = np.array([prm[n] for n in model.PARAM_NAMES], dtype=np.float64)
+    t_end, ns, tol = _check_run(t_end, n_samples, tol)
+    y0 = np.ascontiguousarray(np.asarray(y0_full, dtype=np.float64).ravel())
+    if y0.shape != (STATE_DIM,):
+        raise model.ParameterError(f"the full state has {STATE_DIM} components (p1, p2, M, g1, g2, x, y), "
+                                   f"got {y0.size}")
+    if not np.all(np.isfinite(y0)):
+        raise model.ParameterError("the initial state must be finite")
+    if abs(y0[G1] ** 2 + y0[G2] ** 2 - 1.0) > 1e-12:
+        raise model.ParameterError("the initial state needs g1^2 + g2^2 = 1 (g = (sin phi, cos phi)); "
+                                   "use initial_state()")
+    phi0 = math.atan2(y0[G1], y0[G2])
+    if phi_start is not None:
+        ps = _finite_arg("phi", phi_start)
+        phi0 = phi0 + TWO_PI * math.floor((ps - phi0) / TWO_PI + 0.5)
+    t = np.linspace(0.0, t_end, ns)
+    out = np.full((ns, STATE_DIM), np.nan)
+    out_phi = np.full(ns, np.nan)
+    cap = 1024 if max_turns is None else int(max_turns)
+    while True:
+        turns = np.empty((cap, 3))
+        status, filled, nturn, steps, t_reached = integrate_full(
+            y0, phi0, P, t, tol, tol, int(max_steps), out, out_phi, turns)
+        if nturn <= cap or max_turns is not None:
+            break
+        cap = nturn  # too many turning points for the buffer: run again with room for all
+    nturn = min(nturn, cap)
+    p1, p2, m, g1, g2, x, y = (out[:, i] for i in range(STATE_DIM))
+    kin = 0.5 * (p1 ** 2 / P[0] + p2 ** 2 / P[1] + m ** 2 / P[2])
+    H = kin + P[6] * (y + P[7] * g1 + P[8] * g2)
+    px, py = momentum_integrals(P, t, p1, p2, g1, g2, x, y)
+    return {
+        "t": t, "x": x, "y": y, "phi": out_phi, "p1": p1, "p2": p2, "M": m, "g1": g1, "g2": g2,
+        "H": H, "px": px, "py": py,
+        "turn_t": turns[:nturn, 0].copy(), "turn_phi": turns[:nturn, 1].copy(),
+        "turn_dir": turns[:nturn, 2].copy(),
+        "status": STATUS_NAMES.get(int(status), f"status {status}"), "steps": int(steps),
+        "t_reached": float(t_reached), "n_filled": int(filled),
+        "params": prm, "P": P, "tol": tol, "y0": y0.copy(),
+    }
+
+
+def conservation(result) -> dict:
+    """Errors of the integrals along a :func:`trajectory` result (finite samples only).
+
+    ``H``: max |H - H(0)|; ``px``: max |p_x - c1|; ``py``: max |p_y + mu t - c2|; each also
+    relative to the size of its terms (``*_rel``): the maximum over the orbit of
+    T + mu(|y| + |xi g1 + eta g2|) for H, |p| + |s| + |lam y| for p_x and
+    |p| + |s| + |lam x| + mu t for p_y.  ``casimir``: max |g1^2 + g2^2 - 1|."""
+    P = result["P"]
+    ok = np.isfinite(result["x"])
+    t = result["t"][ok]
+    g = {k: result[k][ok] for k in ("p1", "p2", "M", "g1", "g2", "x", "y", "H", "px", "py")}
+    mu, lam = P[6], P[3]
+    pn = np.hypot(g["p1"], g["p2"])
+    s = math.hypot(P[4], P[5])
+    kin = 0.5 * (g["p1"] ** 2 / P[0] + g["p2"] ** 2 / P[1] + g["M"] ** 2 / P[2])
+    scale_H = np.max(kin + mu * (np.abs(g["y"]) + np.abs(P[7] * g["g1"] + P[8] * g["g2"])))
+    scale_px = np.max(pn + s + abs(lam) * np.abs(g["y"]))
+    scale_py = np.max(pn + s + abs(lam) * np.abs(g["x"]) + mu * t)
+    eH = float(np.max(np.abs(g["H"] - g["H"][0])))
+    ex = float(np.max(np.abs(g["px"] - g["px"][0])))
+    ey = float(np.max(np.abs(g["py"] + mu * t - g["py"][0])))
+    tiny = np.finfo(float).tiny
+    return {"H": eH, "px": ex, "py": ey,
+            "H_rel": eH / max(scale_H, tiny), "px_rel": ex / max(scale_px, tiny),
+            "py_rel": ey / max(scale_py, tiny),
+            "casimir": float(np.max(np.abs(g["g1"] ** 2 + g["g2"] ** 2 - 1.0))),
+            "samples": int(ok.sum())}
+
+
+# ====================================================================== drift and band (ur25)
+def energy_band_halfwidth(params, y0_full) -> float:
+    """A priori bound on |p - s|/|lam| from the energy (lam != 0), hence on |y - c1/lam|.
+
+    With a = max(a1, a2), q = |p|, h_r = H - mu c1/lam (reduced energy R3):
+    q^2/(2a) <= h_r + (mu/|lam|)(q + |s|) + mu |r|, so
+    q <= a mu/|lam| + sqrt((a mu/lam)^2 + 2a (h_r + mu |s|/|lam| + mu |r|)), and
+    |p - s| <= q + |s|."""
+    prm = full_params(params)
+    P = np.array([prm[n] for n in model.PARAM_NAMES])
+    lam = P[3]
+    if lam == 0.0:
+        return math.inf
+    y0 = np.asarray(y0_full, dtype=np.float64)
+    H = float(energy_full(y0, P))
+    px, _ = momentum_integrals(P, 0.0, y0[P1], y0[P2], y0[G1], y0[G2], y0[X], y0[Y])
+    mu = P[6]
+    hr = H - mu * px / lam
+    a = max(P[0], P[1])
+    s = math.hypot(P[4], P[5])
+    r = math.hypot(P[7], P[8])
+    k = a * mu / abs(lam)
+    q = k + math.sqrt(k * k + 2.0 * a * max(hr + mu * s / abs(lam) + mu * r, 0.0))
+    return float((q + s) / abs(lam))
+
+
+def drift(params, y0_full, T, n_samples=20001, tol=DEFAULT_TOL, *, result=None, phi_start=None) -> dict:
+    """Mean horizontal velocity over [0, T] vs the prediction +mu/lam (R2, ur25), and the band
+    in y.  Needs lam != 0.
+
+    ``measured``: least-squares slope of x(t) over the samples; ``endpoint``: (x(T) - x(0))/T,
+    whose distance to mu/lam is at most ``remainder_bound`` = 2 max|p - s| / (|lam| T) (ur25);
+    ``predicted`` = +mu/lam; ``seed`` = -mu/lam (ur25 as printed); ``rel_error`` of the slope.
+    ``band``: measured y_min, y_max; centre c1/lam; ``halfwidth_orbit`` = max|p - s|/|lam|
+    (|y - c1/lam| <= |p - s|/|lam| at every instant); ``halfwidth_energy`` the a priori
+    bound of :func:`energy_band_halfwidth`; ``inside``: the samples lie in the orbit band.
+    ``result``: an existing :func:`trajectory` result to reuse."""
+    prm = full_params(params)
+    if prm["lam"] == 0.0:
+        raise model.ParameterError("drift needs lam != 0 (for lam = 0 the body falls: use kozlov())")
+    res = trajectory(prm, y0_full, T, n_samples, tol, phi_start=phi_start) if result is None else result
+    P = res["P"]
+    lam, mu = P[3], P[6]
+    ok = np.isfinite(res["x"])
+    t, x, y = res["t"][ok], res["x"][ok], res["y"][ok]
+    slope = float(np.polyfit(t, x, 1)[0])
+    T_ = float(t[-1])
+    endpoint = float((x[-1] - x[0]) / T_)
+    ps = np.hypot(res["p1"][ok] - P[4], res["p2"][ok] - P[5])
+    pred = float(mu / lam)
+    c1 = float(res["px"][0])
+    half = float(np.max(ps) / abs(lam))
+    centre = float(c1 / lam)
+    dev = np.abs(y - centre)
+    return {
+        "measured": slope, "endpoint": endpoint, "predicted": pred, "seed": -pred,
+        "rel_error": (slope - pred) / abs(pred) if pred != 0 else math.nan,
+        "endpoint_rel_error": (endpoint - pred) / abs(pred) if pred != 0 else math.nan,
+        "abs_error": slope - pred,
+        "remainder_bound": 2.0 * half / T_,
+        "T": T_, "status": res["status"],
+        "band": {"y_min": float(y.min()), "y_max": float(y.max()), "centre": centre,
+                 "halfwidth_orbit": half, "halfwidth_energy": energy_band_halfwidth(prm, res["y0"]),
+                 "max_deviation": float(dev.max()),
+                 "inside": bool(np.all(dev <= np.max(ps) / abs(lam) * (1 + 1e-9) + 1e-12))},
+        "result": res,
+    }
+
+
+# ====================================================================== the falling body (lam = 0)
+def kozlov_omega_rate(params) -> float:
+    """d Omega/dt of the linearised ur17 (lam = 0): Omega(t) = mu t sqrt(|1/a2 - 1/a1|/b)."""
+    prm = full_params(params)
+    return prm["mu"] * math.sqrt(abs(1.0 / prm["a2"] - 1.0 / prm["a1"]) / prm["b"])
+
+
+def kozlov(params, y0_full, T, tol=DEFAULT_TOL, *, fit_from=0.3, n_samples=4001, result=None,
+           phi_start=None) -> dict:
+    """lam = 0: fit amplitude ~ t^alpha and frequency ~ t^beta of the oscillation of phi about
+    phi_inf (Kozlov: alpha = -1/2, beta = 1) over t in [fit_from T, T].
+
+    From consecutive turning points (t_k, phi_k), (t_{k+1}, phi_{k+1}) (roots of M, one max and
+    one min): amplitude |phi_{k+1} - phi_k|/2 and frequency 1/(2 (t_{k+1} - t_k)) at
+    (t_k + t_{k+1})/2 (both independent of phi_inf and of its slow O(1/t) drift).
+    ``phi_inf``: mean of the midpoints (phi_k + phi_{k+1})/2 over the last 20 half-periods.
+    Also ``freq_rate`` (measured frequency/t, median over the window) vs ``freq_rate_predicted``
+    = Omega'/(2 pi) of the linearisation.  Needs lam = 0, mu > 0, a1 != a2."""
+    prm = full_params(params)
+    if prm["lam"] != 0.0:
+        raise model.ParameterError("kozlov needs lam = 0 (the falling body without circulation)")
+    if not prm["mu"] > 0.0:
+        raise model.ParameterError("kozlov needs mu > 0 (a heavy body)")
+    if prm["a1"] == prm["a2"]:
+        raise model.ParameterError("kozlov needs a1 != a2 (no restoring torque when a1 = a2)")
+    fit_from = float(fit_from)
+    if not 0.0 <= fit_from < 1.0:
+        raise model.ParameterError(f"fit_from must be in [0, 1), got {fit_from!r}")
+    res = trajectory(prm, y0_full, T, n_samples, tol, phi_start=phi_start) if result is None else result
+    tt, ph = res["turn_t"], res["turn_phi"]
+    if tt.size < 3:
+        raise model.ParameterError(f"only {tt.size} turning points of phi up to T = {T}: the body has not "
+                                   "started to oscillate; use a longer time")
+    tm = 0.5 * (tt[1:] + tt[:-1])
+    amp = 0.5 * np.abs(ph[1:] - ph[:-1])
+    freq = 0.5 / np.diff(tt)
+    mid = 0.5 * (ph[1:] + ph[:-1])
+    T_ = float(res["t_reached"])
+    w = tm >= fit_from * T_
+    if w.sum() < 10:
+        raise model.ParameterError(f"only {int(w.sum())} half-periods in the fit window t >= {fit_from * T_:g}; "
+                                   "use a longer time")
+    la, lf, lt = np.log(amp[w]), np.log(freq[w]), np.log(tm[w])
+    alpha, ca = np.polyfit(lt, la, 1)
+    beta, cf = np.polyfit(lt, lf, 1)
+    phi_inf = float(np.mean(mid[-20:]))
+    a1_gt = prm["a1"] > prm["a2"]
+    period = math.pi  # equilibria of sin 2 phi repeat every pi
+    base = 0.5 * math.pi if a1_gt else 0.0
+    phi_inf_mod = float((phi_inf - base + 0.5 * period) % period - 0.5 * period + base)
+    return {
+        "amplitude_exponent": float(alpha), "frequency_exponent": float(beta),
+        "amplitude_prefactor": float(math.exp(ca)), "frequency_prefactor": float(math.exp(cf)),
+        "expected_amplitude_exponent": -0.5, "expected_frequency_exponent": 1.0,
+        "freq_rate": float(np.median(freq[w] / tm[w])),
+        "freq_rate_predicted": kozlov_omega_rate(prm) / TWO_PI,
+        "phi_inf": phi_inf, "phi_inf_mod_pi": phi_inf_mod,
+        "phi_inf_predicted_mod_pi": base,
+        "fit_window": [float(fit_from * T_), T_], "n_half_periods": int(w.sum()),
+        "n_turns": int(tt.size), "T": T_, "status": res["status"],
+        "t_mid": tm, "amplitude": amp, "frequency": freq, "fit_mask": w,
+        "result": res,
+    }
+
+
+# ====================================================================== figures
+def _param_title(prm) -> str:
+    from explorer.app.figures import mathtext_label
+
+    parts = [f"{n} = {prm[n]:g}" for n in ("a1", "a2", "b", "lam", "mu")]
+    parts += [f"{n} = {prm[n]:g}" for n in ("chi", "zeta", "xi", "eta") if prm[n] != 0.0]
+    return mathtext_label(", ".join(parts))
+
+
+def path_figure(result, params=None, *, glyphs=40, band=None, title=None, dpi=200, width=7.0):
+    """The path (x, y) of the body with its orientation every few samples, and the band in y.
+
+    ``result``: a :func:`trajectory` result; ``params``: defaults to ``result['params']``;
+    ``glyphs``: number of orientation glyphs along the path; ``band``: the ``band`` dict of
+    :func:`drift` (computed here when lam != 0 and not given).
+
+    Glyph: an ellipse with semi-axes proportional to sqrt(a2) along the body axis e1 =
+    (cos phi, sin phi) and sqrt(a1) along e2 = (-sin phi, cos phi) (an elliptic cylinder of that
+    shape has added masses in the ratio a1 : a2), with a segment along e1; drawn in screen units
+    (not to scale) at the body's true angle phi (x to the right, y up).  The axes have equal
+    aspect when the extents of x and y differ by less than a factor 4; otherwise the title says
+    "axes not to scale" (the glyph angles stay true).  Colour: time.  The orbit band
+    c1/lam +- max|p - s|/|lam| is shaded, the a priori energy band dashed, the measured y range
+    dotted."""
+    from explorer.app.figures import _matplotlib
+
+    mpl = _matplotlib()
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.collections import EllipseCollection, LineCollection
+    from matplotlib.figure import Figure
+
+    prm = full_params(result["params"] if params is None else params)
+    ok = np.isfinite(result["x"]) & np.isfinite(result["phi"])
+    t, x, y, phi = result["t"][ok], result["x"][ok], result["y"][ok], result["phi"][ok]
+    if t.size < 2:
+        raise ValueError("path_figure needs at least two finite samples")
+    if band is None and prm["lam"] != 0.0:
+        band = drift(prm, result["y0"], result["t"][-1], result=result)["band"]
+    ylo, yhi = float(y.min()), float(y.max())
+    if band is not None:
+        ylo = min(ylo, band["centre"] - band["halfwidth_orbit"])
+        yhi = max(yhi, band["centre"] + band["halfwidth_orbit"])
+        if math.isfinite(band.get("halfwidth_energy", math.inf)):
+            ylo = min(ylo, band["centre"] - band["halfwidth_energy"])
+            yhi = max(yhi, band["centre"] + band["halfwidth_energy"])
+    xr = max(float(x.max() - x.min()), 1e-12)
+    yr = max(yhi - ylo, 1e-12)
+    to_scale = 0.25 <= yr / xr <= 4.0
+    # equal aspect: a figure whose height fits the data (axes width ~ width - 1.7 in)
+    height = 0.55 * width if not to_scale else min(max((width - 1.7) * (1.24 * yr) / (1.08 * xr) + 1.2, 2.5), 9.0)
+    with mpl.rc_context({"mathtext.fontset": "dejavusans", "axes.linewidth": 0.6}):
+        fig = Figure(figsize=(width, height), dpi=dpi, layout="constrained")
+        FigureCanvasAgg(fig)
+        ax = fig.subplots()
+        ax.plot(x, y, color="0.25", lw=0.6, zorder=2)
+        ax.plot(x[0], y[0], "o", color="tab:green", ms=4, zorder=4, label="start")
+        ax.plot(x[-1], y[-1], "s", color="tab:red", ms=4, zorder=4, label="end")
+        if band is not None:
+            c, hw = band["centre"], band["halfwidth_orbit"]
+            ax.axhspan(c - hw, c + hw, color="tab:blue", alpha=0.12, lw=0, zorder=0,
+                       label=r"band $c_1/\lambda \pm \max|p-s|/|\lambda|$")
+            he = band.get("halfwidth_energy", math.inf)
+            if math.isfinite(he):
+                for s in (-1, 1):
+                    ax.axhline(c + s * he, color="tab:blue", lw=0.7, ls="--", zorder=1,
+                               label="energy bound" if s < 0 else None)
+            for v in (band["y_min"], band["y_max"]):
+                ax.axhline(v, color="0.3", lw=0.6, ls=":", zorder=1,
+                           label="measured range of y" if v == band["y_min"] else None)
+        ax.set_xlim(x.min() - 0.04 * xr, x.max() + 0.04 * xr)
+        ax.set_ylim(ylo - 0.12 * yr, yhi + 0.12 * yr)
+        if to_scale:
+            ax.set_aspect("equal", adjustable="box")
+        ax.set_xlabel("$x$")
+        ax.set_ylabel("$y$")
+        ax.tick_params(direction="in", top=True, right=True, labelsize=8)
+        # everything that changes the layout (colour bar, title) comes before measuring the
+        # data-to-screen scale used for the e1 segments
+        cmap = mpl.colormaps["viridis"]
+        norm = mpl.colors.Normalize(vmin=float(t[0]), vmax=float(t[-1]))
+        cb = fig.colorbar(mpl.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, pad=0.01, shrink=0.9)
+        cb.set_label("$t$")
+        head = title if title is not None else "path of the body (R1), orientation glyphs: axis $e_1$"
+        if not to_scale:
+            head += " (axes not to scale; glyphs at the true angle)"
+        ax.set_title(head + "\n" + _param_title(prm), fontsize=9)
+        fig.draw_without_rendering()
+        fig.set_layout_engine("none")  # freeze the layout: the scale measured here stays valid
+        bb = ax.get_window_extent()
+        x0, x1 = ax.get_xlim()
+        y0, y1 = ax.get_ylim()
+        sx = (x1 - x0) / bb.width   # data units per pixel
+        sy = (y1 - y0) / bb.height
+        n_gl = max(1, min(int(glyphs), t.size))
+        idx = np.unique(np.linspace(0, t.size - 1, n_gl).round().astype(int))
+        ang = np.degrees(phi[idx])  # screen angle of e1 = the body's true angle (x right, y up)
+        size = 0.16  # inches, longer glyph axis
+        r1, r2 = math.sqrt(prm["a2"]), math.sqrt(prm["a1"])
+        wd = size * r1 / max(r1, r2)
+        ht = size * r2 / max(r1, r2)
+        offs = np.column_stack([x[idx], y[idx]])
+        ec = EllipseCollection(np.full(idx.size, 2 * wd), np.full(idx.size, 2 * ht), ang, units="inches",
+                               offsets=offs, offset_transform=ax.transData, facecolors="none",
+                               edgecolors=cmap(norm(t[idx])), linewidths=0.8, zorder=3)
+        ax.add_collection(ec)
+        # segment along e1 (screen direction), half-length wd inches
+        ppi = fig.dpi
+        ux, uy = np.cos(np.radians(ang)), np.sin(np.radians(ang))
+        dx, dy = ux * wd * ppi * sx, uy * wd * ppi * sy
+        segs = np.stack([np.column_stack([x[idx] - dx, y[idx] - dy]),
+                         np.column_stack([x[idx] + dx, y[idx] + dy])], axis=1)
+        ax.add_collection(LineCollection(segs, colors=cmap(norm(t[idx])), linewidths=1.0, zorder=3))
+        ax.legend(fontsize=7, loc="best", framealpha=0.8)
+    return fig
+
+
+def kozlov_figure(kres, params=None, *, title=None, dpi=200):
+    """Two panels for lam = 0 (:func:`kozlov` result): the half-amplitude of the oscillation of
+    phi about phi_inf vs t and its frequency vs t, log-log, with the fitted power laws (slopes)
+    and Kozlov's exponents -1/2 and 1 for comparison; the fit window is marked."""
+    from explorer.app.figures import _matplotlib
+
+    mpl = _matplotlib()
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    prm = full_params(kres["result"]["params"] if params is None else params)
+    tm, amp, freq, w = kres["t_mid"], kres["amplitude"], kres["frequency"], kres["fit_mask"]
+    with mpl.rc_context({"mathtext.fontset": "dejavusans", "axes.linewidth": 0.6}):
+        fig = Figure(figsize=(8.0, 3.4), dpi=dpi, layout="constrained")
+        FigureCanvasAgg(fig)
+        axa, axf = fig.subplots(1, 2)
+        tf = np.array([tm[w].min(), tm[w].max()])
+        for ax, data, expo, pref, expect, lab in (
+                (axa, amp, kres["amplitude_exponent"], kres["amplitude_prefactor"], -0.5,
+                 r"half-amplitude of $\varphi - \varphi_\infty$"),
+                (axf, freq, kres["frequency_exponent"], kres["frequency_prefactor"], 1.0, "frequency")):
+            ax.loglog(tm[~w], data[~w], ".", color="0.6", ms=2, rasterized=True)
+            ax.loglog(tm[w], data[w], ".", color="k", ms=2, rasterized=True, label="turning points")
+            ax.loglog(tf, pref * tf ** expo, "-", color="tab:red", lw=1.2, label=f"fit: slope {expo:.4f}")
+            ref = pref * tf[0] ** expo * (tf / tf[0]) ** expect
+            ax.loglog(tf, ref, "--", color="tab:blue", lw=0.9, label=f"Kozlov: slope {expect:g}")
+            ax.axvspan(tf[0], tf[1], color="tab:orange", alpha=0.08, lw=0)
+            ax.set_xlabel("$t$")
+            ax.set_ylabel(lab)
+            ax.tick_params(direction="in", which="both", top=True, right=True, labelsize=8)
+            ax.legend(fontsize=7)
+        head = title if title is not None else (r"falling body ($\lambda = 0$): $\varphi_\infty$ = "
+                                                f"{kres['phi_inf_mod_pi']:.4f} (mod $\\pi$)")
+        fig.suptitle(head + "\n" + _param_title(prm), fontsize=9)
+    return fig
+
+
+def summary(res_drift=None, res_kozlov=None, cons=None) -> dict:
+    """JSON-ready numbers of a run (arrays dropped)."""
+    out = {}
+    if res_drift is not None:
+        out["drift"] = {k: v for k, v in res_drift.items() if k != "result"}
+    if res_kozlov is not None:
+        out["kozlov"] = {k: v for k, v in res_kozlov.items()
+                         if k not in ("result", "t_mid", "amplitude", "frequency", "fit_mask")}
+    if cons is not None:
+        out["conservation"] = cons
+    return out

@@ -1,0 +1,476 @@
+"""Command line: ``python -m explorer COMMAND ...``.
+
+Bad input prints one line ``explorer: error: ...`` naming the parameter and
+what is allowed, and exits with status 2 (no traceback).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+
+import numpy as np
+
+from explorer import __version__, model
+
+EXIT_USAGE = 2
+
+
+class UsageError(Exception):
+    """Bad input: reported on one line, exit status 2."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, no usage dump
+        raise UsageError(message)
+
+
+def _add_model_args(p, defaults: model.Params):
+    g = p.add_argument_group("model parameters (MODEL.md; defaults: Figure 4, R9)")
+    for name, help_ in (("a1", "added mass along axis 1 (> 0)"), ("a2", "added mass along axis 2 (> 0)"),
+                        ("b", "added moment of inertia (> 0)"), ("lam", "circulation x density (!= 0)"),
+                        ("chi", "asymmetry term chi"), ("zeta", "asymmetry term zeta"),
+                        ("mu", "weight (>= 0)"), ("xi", "centre of mass xi"), ("eta", "centre of mass eta")):
+        g.add_argument(f"--{name}", type=float, default=getattr(defaults, name), help=f"{help_} [%(default)s]")
+
+
+def _params_from(args) -> model.Params:
+    return model.Params(**{n: getattr(args, n) for n in model.PARAM_NAMES})
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from explorer.analysis.sections import DEFAULT_DT, DEFAULT_TOL, METHODS
+
+    parser = _Parser(prog="explorer", description="Poincaré sections and chaos for Chaplygin's equations "
+                     "of a heavy rigid body in an ideal fluid with circulation.")
+    parser.add_argument("--version", action="version", version=f"explorer {__version__}")
+    sub = parser.add_subparsers(dest="command", parser_class=_Parser)
+
+    o = sub.add_parser("orbit", help="crossings of one orbit with the section phi = phi0",
+                       description="Start on the section phi = phi0 at (p1, p2) with M from the energy h "
+                       "(MODEL.md R9) and print the next K crossings as CSV (k,t,p1,p2,M,dH) or JSON.")
+    o.add_argument("--p1", type=float, required=True, help="start point p1 on the section")
+    o.add_argument("--p2", type=float, required=True, help="start point p2 on the section")
+    o.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
+    o.add_argument("--crossings", "-K", type=int, default=10, help="number of crossings K [%(default)s]")
+    o.add_argument("--method", default="taylor", help=f"one of {', '.join(METHODS)} [%(default)s]")
+    o.add_argument("--tol", type=float, default=DEFAULT_TOL, help="tolerance of taylor/dop853 [%(default)s]")
+    o.add_argument("--dt", type=float, default=DEFAULT_DT, help="fixed step of the split* methods [%(default)s]")
+    o.add_argument("--tmax", type=float, default=None, help="time budget [100 K]")
+    o.add_argument("--max-steps", type=int, default=10**9, help="step budget [%(default)s]")
+    o.add_argument("--phi0", type=float, default=math.pi, help="section angle phi0 [pi]")
+    o.add_argument("--direction", default="+", help="crossing direction: + (dphi/dt > 0), - or both [+]")
+    o.add_argument("--json", action="store_true", help="print JSON instead of CSV")
+    _add_model_args(o, model.FIGURE4)
+
+    w = sub.add_parser("sweep", help="Poincaré sections of every panel of a scene (default: figure4)",
+                       description="Run every panel of a scene (a TOML file or a built-in preset), store all "
+                       "crossings in one HDF5 file and draw the figure. Panels already stored with the same "
+                       "settings are skipped; a killed run resumes where it stopped.")
+    w.add_argument("scene", nargs="?", default="figure4", help="scene file (.toml) or preset name [figure4]")
+    w.add_argument("--out", default=None, help="HDF5 file [results/<scene>.h5]")
+    w.add_argument("--figure", default=None, help="figure path without extension [figures/<scene>]")
+    w.add_argument("--no-figure", action="store_true", help="do not draw the figure")
+    w.add_argument("--jobs", type=int, default=1,
+                   help="joblib worker processes (1: this process with Numba threads over orbits) [1]")
+    w.add_argument("--backend", default=None, choices=["loky", "multiprocessing", "dask"],
+                   help="joblib backend for --jobs > 1 (dask: run on a dask.distributed cluster)")
+    w.add_argument("--scheduler", default=None,
+                   help="dask scheduler address (with --backend dask; default: a local cluster of --jobs workers)")
+    w.add_argument("--force", action="store_true", help="recompute every panel")
+    w.add_argument("--quiet", action="store_true", help="no progress bar")
+
+    ly = sub.add_parser("lyapunov", help="chaos indicators of one orbit: finite-time mLCE, MEGNO, FLI",
+                        description="Start on the section phi = pi at (p1, p2) with M from the energy h and "
+                        "integrate the orbit with one deviation vector (tangent to the energy shell) for a "
+                        "time T; print the finite-time maximal Lyapunov exponent, the mean MEGNO <Y> and the "
+                        "FLI, with their convergence history.")
+    ly.add_argument("--p1", type=float, required=True, help="start point p1 on the section")
+    ly.add_argument("--p2", type=float, required=True, help="start point p2 on the section")
+    ly.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
+    ly.add_argument("--time", "-T", type=float, default=1000.0, help="integration time T [%(default)s]")
+    ly.add_argument("--method", default="taylor", help=f"one of {', '.join(METHODS)} [%(default)s]")
+    ly.add_argument("--tol", type=float, default=1e-13, help="tolerance of taylor/dop853 [%(default)s]")
+    ly.add_argument("--dt", type=float, default=0.02, help="fixed step of the split* methods [%(default)s]")
+    ly.add_argument("--history", type=int, default=12, help="history points (log-spaced in time) [%(default)s]")
+    ly.add_argument("--json", action="store_true", help="print JSON")
+    _add_model_args(ly, model.FIGURE4)
+
+    fx = sub.add_parser("fixedpoint", help="a fixed point of the section map, its stability, continuation",
+                        description="Newton's method on the section map phi = pi (Jacobian from the tangent "
+                        "dynamics); prints the point, the monodromy eigenvalues, trace and stability. With "
+                        "--continue PARAM START STOP STEP, follows the branch and reports where |trace| = 2.")
+    fx.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
+    fx.add_argument("--guess", default="0,0", help="start of Newton's method: p1,p2 [0,0]")
+    fx.add_argument("--continue", dest="cont", nargs=4, metavar=("PARAM", "START", "STOP", "STEP"),
+                    help="continue the fixed point in PARAM (a model parameter or h)")
+    fx.add_argument("--tol", type=float, default=1e-15, help="Taylor tolerance [%(default)s]")
+    fx.add_argument("--json", action="store_true", help="print JSON")
+    _add_model_args(fx, model.FIGURE4)
+
+    # ---- explore: interactive explorer (explorer/explore.py) -------------------------------
+    x = sub.add_parser("explore", help="interactive window: click on the section, watch the orbit appear",
+                       description="Open a matplotlib window with the allowed region of the section phi = pi at "
+                       "energy h; a click inside starts an orbit and draws its crossings as they are computed. "
+                       "Keys: c clear, r re-run seeds, s save PNG, w write HDF5, x colour by the divergence "
+                       "proxy, p separatrices. Needs a display.")
+    x.add_argument("scene", nargs="?", default=None,
+                   help="scene file (.toml) or preset name (e.g. figure4): start from its panel's parameters, "
+                   "h and integration settings [none: Figure 4 with mu = 0, h = 2]")
+    x.add_argument("--panel", type=int, default=0, help="panel of the scene [0]")
+    x.add_argument("--h", type=float, default=None, help="energy level [the scene's, else 2]")
+    x.add_argument("--method", default=None, help=f"one of {', '.join(METHODS)} [the scene's, else taylor]")
+    x.add_argument("--tol", type=float, default=None, help=f"tolerance of taylor/dop853 [{DEFAULT_TOL}]")
+    x.add_argument("--dt", type=float, default=None, help=f"fixed step of the split* methods [{DEFAULT_DT}]")
+    x.add_argument("--crossings-per-chunk", type=int, default=50,
+                   help="crossings computed per orbit between redraws [%(default)s]")
+    x.add_argument("--max-crossings", type=int, default=2000, help="crossings per orbit [%(default)s]")
+    x.add_argument("--out-dir", default=".", help="where s (PNG) and w (HDF5) write [current directory]")
+    xg = x.add_argument_group("model parameters (override the scene's; defaults: Figure 4, R9, mu = 0)")
+    for name in model.PARAM_NAMES:
+        xg.add_argument(f"--{name}", type=float, default=None)
+    # ---- end explore ------------------------------------------------------------------------
+    # ---- melnikov: Melnikov integral ur23/ur24 (explorer/melnikov.py) ------------------------
+    mk = sub.add_parser("melnikov", help="Melnikov integral ur23 along the homoclinic orbits R7; check of ur24",
+                        description="Quadrature of J(g0) = int {F0, H1} dt along both homoclinic orbits R7 of "
+                        "solution I at c = sqrt(2 b h) (g0: phi at the orbit's centre), fitted as "
+                        "J = A sin g0 + B cos g0 per unit mu, compared with ur24 as printed and with the "
+                        "corrected closed form. --splitting adds the splitting measured on the section "
+                        "phi = pi against mu J(g0). Needs lam > 0, a1 > a2, chi = zeta = 0, "
+                        "lam b/a1 < c < lam b/a2.")
+    mk.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level h = c^2/(2b) [%(default)s]")
+    mk.add_argument("--splitting", action="store_true",
+                    help="also measure the splitting on the section for mu in --mus at phase --g0")
+    mk.add_argument("--mus", default="1e-4,3e-4,1e-3,3e-3", help="mu values of --splitting [%(default)s]")
+    mk.add_argument("--g0", type=float, default=0.5 * math.pi, help="phase g0 of --splitting [pi/2]")
+    mk.add_argument("--json", action="store_true", help="print JSON")
+    _add_model_args(mk, model.FIGURE4)
+    # ---- end melnikov -------------------------------------------------------------------------
+    # ---- trajectory: the body in the plane, full system R1 (explorer/trajectory.py) ----------
+    tj = sub.add_parser("trajectory", help="the body in the plane (full system R1, any lam): drift, band, "
+                        "falling body",
+                        description="Integrate the full system R1 (p1, p2, M, phi, x, y) with adaptive DOP853, "
+                        "check H and the momentum integrals R2, print the measured mean horizontal velocity "
+                        "against +mu/lam and the band in y (lam != 0) or, for lam = 0 (the falling body), "
+                        "the fitted exponents of the amplitude (Kozlov: -1/2) and frequency (Kozlov: 1) of "
+                        "the oscillation of phi; draw the path with the body's orientation (PNG and PDF).")
+    tj.add_argument("--p1", type=float, default=0.5, help="initial p1 [%(default)s]")
+    tj.add_argument("--p2", type=float, default=0.0, help="initial p2 [%(default)s]")
+    tj.add_argument("--M", type=float, default=2.0, help="initial M [%(default)s]")
+    tj.add_argument("--phi", type=float, default=0.0, help="initial angle phi [%(default)s]")
+    tj.add_argument("--time", "-T", type=float, default=300.0, help="integration time T [%(default)s]")
+    tj.add_argument("--samples", type=int, default=20001, help="samples on [0, T] [%(default)s]")
+    tj.add_argument("--tol", type=float, default=1e-12, help="DOP853 tolerance (rtol = atol) [%(default)s]")
+    tj.add_argument("--glyphs", type=int, default=40, help="orientation glyphs along the path [%(default)s]")
+    tj.add_argument("--out", default="figures/trajectory",
+                    help="figure path without extension (lam = 0 adds <out>_kozlov) [%(default)s]")
+    tj.add_argument("--no-figure", action="store_true", help="do not draw the figure")
+    tj.add_argument("--json", action="store_true", help="print JSON")
+    tjg = tj.add_argument_group("model parameters (MODEL.md; defaults: Figure 4 with mu = 0.5)")
+    for name, help_ in (("a1", "added mass along axis 1 (> 0)"), ("a2", "added mass along axis 2 (> 0)"),
+                        ("b", "added moment of inertia (> 0)"),
+                        ("lam", "circulation x density (any; 0 = falling body)"),
+                        ("chi", "asymmetry term chi"), ("zeta", "asymmetry term zeta"),
+                        ("mu", "weight (>= 0)"), ("xi", "centre of mass xi"), ("eta", "centre of mass eta")):
+        tjg.add_argument(f"--{name}", type=float, default=model.FIGURE4.with_(mu=0.5).as_dict()[name],
+                         help=f"{help_} [%(default)s]")
+    # ---- end trajectory -----------------------------------------------------------------------
+    # ---- figures: every figure of the seed paper (explorer/paper.py) ---------------------------
+    fg = sub.add_parser("figures", help="regenerate every figure of the paper (PNG and PDF)",
+                        description="Regenerate the figures of the seed paper into --out-dir (PNG and PDF): "
+                        "figure2, figure3, figure4, chaotic_fraction, chaos_map, continuation, work_precision, "
+                        "homoclinic, melnikov, trajectory. Sweeps reuse results/<scene>.h5 when complete with "
+                        "the same scene hash; --quick uses reduced settings where a store is incomplete.")
+    fg.add_argument("--only", default=None, metavar="NAME", help="only this figure (one name)")
+    fg.add_argument("--out-dir", default="figures", help="where the figures go [%(default)s]")
+    fg.add_argument("--results-dir", default="results", help="HDF5 stores of the sweeps [%(default)s]")
+    fg.add_argument("--quick", action="store_true",
+                    help="reduced settings (sweeps whose store is incomplete, continuation step, curves)")
+    fg.add_argument("--benchmark", default=None,
+                    help="W4 results JSON for work_precision [benchmarks/results_w4.json]")
+    fg.add_argument("--quiet", action="store_true", help="no progress bar")
+    # ---- end figures ----------------------------------------------------------------------------
+    return parser
+
+
+def _direction(text: str) -> int:
+    table = {"+": 1, "+1": 1, "1": 1, "up": 1, "-": -1, "-1": -1, "down": -1, "both": 0, "0": 0}
+    if text not in table:
+        raise model.ParameterError(f"direction must be one of +, -, both; got {text!r}")
+    return table[text]
+
+
+def cmd_orbit(args) -> int:
+    from explorer.analysis.sections import METHODS, energy_warning, max_energy_error, section_crossings
+
+    params = _params_from(args)
+    if args.method not in METHODS:
+        raise model.ParameterError(f"method must be one of {', '.join(METHODS)}; got {args.method!r}")
+    for name in ("p1", "p2", "h", "phi0"):
+        v = getattr(args, name)
+        if not math.isfinite(v):
+            raise model.ParameterError(f"{name} must be finite, got {v!r}")
+    direction = _direction(args.direction)
+    res = section_crossings(params, [args.p1], [args.p2], args.h, args.crossings, method=args.method,
+                            tol=args.tol, dt=args.dt, tmax=args.tmax, max_steps=args.max_steps,
+                            phi0=args.phi0, direction=direction)
+    rows = res.orbit(0)
+    status = res.status_name(0)
+    setting = f"--dt {res.settings['dt']:g}" if "dt" in res.settings else f"--tol {args.tol:g}"
+    warning = energy_warning(max_energy_error(rows), args.h, setting)
+    if args.json:
+        out = {"params": params.as_dict(), "h": args.h, "method": args.method, "status": status,
+               "settings": res.settings,
+               "crossings": [[float(v) for v in r] for r in rows]}
+        print(json.dumps(out))
+    else:
+        lines = ["k,t,p1,p2,M,dH"]
+        lines += [f"{k + 1},{r[0]!r},{r[1]!r},{r[2]!r},{r[3]!r},{r[4]!r}"
+                  for k, r in enumerate(rows.tolist())]
+        print("\n".join(lines))
+        if status != "done":
+            print(f"explorer: orbit stopped after {len(rows)} crossings: {status}", file=sys.stderr)
+    if warning:
+        print(f"explorer: warning: {warning}", file=sys.stderr)
+    return 0
+
+
+def cmd_sweep(args) -> int:
+    from explorer.app.runner import run_sweep
+
+    return run_sweep(args)
+
+
+def cmd_lyapunov(args) -> int:
+    from explorer.analysis import lyapunov
+    from explorer.analysis.sections import METHODS
+
+    params = _params_from(args)
+    if args.method not in METHODS:
+        raise model.ParameterError(f"method must be one of {', '.join(METHODS)}; got {args.method!r}")
+    for name in ("p1", "p2", "h"):
+        if not math.isfinite(getattr(args, name)):
+            raise model.ParameterError(f"{name} must be finite, got {getattr(args, name)!r}")
+    y0 = model.section_state(params, [args.p1], [args.p2], args.h)
+    r = lyapunov.indicators(params, y0, args.time, method=args.method, tol=args.tol, dt=args.dt,
+                            history=args.history)
+    hist = [[float(v) for v in row[:3]] + [float(row[4])] for row in r.history[0] if np.isfinite(row[0])]
+    reached = float(r.time[0])
+    status = r.status_name(0)
+
+    def estimate(v):      # an orbit stopped at t = 0 has no estimate (null, never a made-up 0)
+        return float(v) if reached > 0 and math.isfinite(float(v)) else None
+
+    out = {"params": params.as_dict(), "h": args.h, "p1": args.p1, "p2": args.p2, "method": args.method,
+           "settings": r.settings, "status": status, "time": reached,
+           "mlce": estimate(r.mlce[0]), "megno": estimate(r.megno[0]), "fli": estimate(r.fli[0]),
+           "regular_bound": lyapunov.regular_bound(reached) if reached > 1 else None,
+           "history": hist}
+    if status != "done":
+        cover = f"the estimates cover [0, {reached:g}]" if reached > 0 else "no estimate"
+        print(f"explorer: the orbit stopped at t = {reached:g} of {args.time:g} ({status}); {cover}",
+              file=sys.stderr)
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(f"time {out['time']!r}\nmlce {out['mlce']!r}\nmegno {out['megno']!r}\nfli {out['fli']!r}\n"
+              f"status {out['status']}")
+        if hist:
+            print("history: t, mlce, megno, fli")
+            for row in hist:
+                print(",".join(repr(v) for v in row))
+    return 0
+
+
+def _pair(text, name):
+    try:
+        a, b = (float(v) for v in text.split(","))
+    except ValueError:
+        raise model.ParameterError(f"{name} must be two numbers p1,p2 (e.g. 0.1,-0.2), got {text!r}") from None
+    if not (math.isfinite(a) and math.isfinite(b)):
+        raise model.ParameterError(f"{name} must be finite, got {text!r}")
+    return a, b
+
+
+def cmd_fixedpoint(args) -> int:
+    from explorer.analysis import fixedpoints
+
+    params = _params_from(args)
+    if not math.isfinite(args.h):
+        raise model.ParameterError(f"h must be finite, got {args.h!r}")
+    guess = _pair(args.guess, "--guess")
+    if args.cont:
+        name, *nums = args.cont
+        try:
+            start, stop, step = (float(v) for v in nums)
+        except ValueError:
+            raise model.ParameterError(f"--continue needs PARAM START STOP STEP numbers, got {nums}") from None
+        br = fixedpoints.continue_branch(params, args.h, name, start, stop, step, guess, tol=args.tol)
+        rows = [dict(fp.as_dict(), **{name: float(v)}) for v, fp in zip(br.values, br.points)]
+        if args.json:
+            print(json.dumps({"parameter": name, "branch": rows, "bifurcations": br.bifurcations}))
+        else:
+            print(f"{name},p1,p2,trace,stable")
+            for r in rows:
+                print(f"{r[name]!r},{r['p1']!r},{r['p2']!r},{r['trace']!r},{r['stable']}")
+            print("bifurcations (|trace| = 2) at " + name + " = " +
+                  (", ".join(f"{b:.10g}" for b in br.bifurcations) or "none in range"))
+        return 0
+    fp = fixedpoints.find_fixed_point(params, args.h, guess, tol=args.tol)
+    out = dict(fp.as_dict(), params=params.as_dict(), h=args.h)
+    if args.json:
+        print(json.dumps(out))
+    else:
+        for k in ("p1", "p2", "trace", "det", "eigenvalues", "stable", "return_time"):
+            print(f"{k} {out[k]!r}")
+    return 0
+
+
+# ---- melnikov: Melnikov integral ur23/ur24 (explorer/melnikov.py) --------------------------
+def cmd_melnikov(args) -> int:
+    from explorer.analysis import melnikov
+
+    params = _params_from(args)
+    out = melnikov.amplitudes(params, args.h)
+    if args.splitting:
+        try:
+            mus = [float(v) for v in args.mus.split(",")]
+        except ValueError:
+            raise model.ParameterError(f"--mus must be comma-separated numbers, got {args.mus!r}") from None
+        if not mus or not all(math.isfinite(m) and m > 0 for m in mus):
+            raise model.ParameterError(f"--mus must be finite and > 0, got {args.mus!r}")
+        if not math.isfinite(args.g0):
+            raise model.ParameterError(f"g0 must be finite, got {args.g0!r}")
+        out["splitting"] = melnikov.melnikov_table(params, args.h, mus, (args.g0,))
+    if args.json:
+        print(json.dumps(out))
+        return 0
+    print(f"c {out['c']!r}  (h {out['h']!r}; S {out['S']:.10g}, alpha {out['alpha']:.10g}, B {out['B']:.10g})")
+    print("J(g0) per unit mu, g0 = phi at the centre of the homoclinic orbit (quadrature):")
+    for s, name in ((1, "plus"), (-1, "minus")):
+        print(f"  sign {s:+d}: J = {out['sin_' + name]:.12g} sin g0 {out['cos_' + name]:+.12g} cos g0"
+              f"   (xi = eta = 0 amplitude {out['amplitude_' + name]:.12g})")
+    print(f"ur24 as printed: J = {out['ur24_sin']:.12g} sin g0 {out['ur24_cos']:+.12g} cos g0"
+          f"   (xi = eta = 0 amplitude {out['ur24']:.12g}, ratio to quadrature {out['ur24_ratio']:.6g})")
+    print(f"closed form (residues, corrected): sign +1 {out['closed_form_sin_plus']:.12g} sin g0, "
+          f"sign -1 {out['closed_form_sin_minus']:.12g} sin g0, {out['closed_form_cos']:.12g} cos g0")
+    print("verdict: ur24 " + ("holds" if out["ur24_holds"] else "does NOT hold") + " (rtol 1e-6)")
+    if args.splitting:
+        print("splitting on phi = pi, F0(W^u) - F0(W^s):")
+        print(melnikov.format_table(out["splitting"]))
+    return 0
+
+
+# ---- end melnikov ---------------------------------------------------------------------------
+# ---- trajectory: the body in the plane, full system R1 (explorer/trajectory.py) ------------
+def cmd_trajectory(args) -> int:
+    from explorer.analysis import trajectory as tr
+
+    # R1 allows lam = 0: full_params validates the rest with model.Params (lam replaced by 1)
+    prm = tr.full_params({n: getattr(args, n) for n in model.PARAM_NAMES})
+    y0 = tr.initial_state(prm, args.p1, args.p2, args.M, args.phi)
+    if args.glyphs < 1:
+        raise model.ParameterError(f"glyphs must be >= 1, got {args.glyphs!r}")
+    res = tr.trajectory(prm, y0, args.time, args.samples, args.tol, phi_start=args.phi)
+    cons = tr.conservation(res)
+    d = k = None
+    if prm["lam"] != 0.0:
+        d = tr.drift(prm, y0, args.time, result=res)
+    elif prm["mu"] > 0.0 and prm["a1"] != prm["a2"]:
+        k = tr.kozlov(prm, y0, args.time, result=res)
+    out = {"params": prm, "initial": {"p1": args.p1, "p2": args.p2, "M": args.M, "phi": args.phi},
+           "time": args.time, "samples": args.samples, "tol": args.tol, "status": res["status"],
+           "steps": res["steps"]}
+    out.update(tr.summary(d, k, cons))
+    if not args.no_figure:
+        figs = []
+        from explorer.app.figures import save_figure
+
+        fig = tr.path_figure(res, prm, glyphs=args.glyphs, band=None if d is None else d["band"])
+        figs += [str(p) for p in save_figure(fig, args.out)]
+        if k is not None:
+            figs += [str(p) for p in save_figure(tr.kozlov_figure(k, prm), str(args.out) + "_kozlov")]
+        out["figures"] = figs
+    if args.json:
+        print(json.dumps(out))
+        return 0
+    print(f"status {res['status']}  (T {args.time:g}, {res['steps']} steps, tol {args.tol:g})")
+    print(f"conservation: |dH| {cons['H']:.3g} (rel {cons['H_rel']:.3g}), |d p_x| {cons['px']:.3g} "
+          f"(rel {cons['px_rel']:.3g}), |d(p_y + mu t)| {cons['py']:.3g} (rel {cons['py_rel']:.3g})")
+    if d is not None:
+        b = d["band"]
+        print(f"drift: measured {d['measured']:.10g} (fit of x(t)), endpoint {d['endpoint']:.10g}; "
+              f"predicted +mu/lam = {d['predicted']:.10g} (seed ur25: {d['seed']:.10g}); "
+              f"relative error {d['rel_error']:.3g}")
+        print(f"band in y: measured [{b['y_min']:.6g}, {b['y_max']:.6g}]; predicted c1/lam +- max|p - s|/|lam| = "
+              f"{b['centre']:.6g} +- {b['halfwidth_orbit']:.6g} (energy bound +- {b['halfwidth_energy']:.6g}); "
+              f"inside: {b['inside']}")
+    elif k is not None:
+        print(f"falling body (lam = 0), fit over t in [{k['fit_window'][0]:g}, {k['fit_window'][1]:g}], "
+              f"{k['n_half_periods']} half-periods:")
+        print(f"  amplitude ~ t^{k['amplitude_exponent']:.5f} (Kozlov: -1/2); "
+              f"frequency ~ t^{k['frequency_exponent']:.5f} (Kozlov: 1)")
+        print(f"  frequency/t {k['freq_rate']:.6g} (linearised ur17: {k['freq_rate_predicted']:.6g}); "
+              f"phi_inf = {k['phi_inf_mod_pi']:.6g} mod pi (predicted {k['phi_inf_predicted_mod_pi']:.6g})")
+    else:
+        print("lam = 0 without a restoring torque (mu = 0 or a1 = a2): no drift, no Kozlov fit")
+    for f in out.get("figures", []):
+        print(f"wrote {f}")
+    return 0
+
+
+# ---- end trajectory -------------------------------------------------------------------------
+# ---- figures: every figure of the seed paper (explorer/paper.py) ---------------------------
+def cmd_figures(args) -> int:
+    from explorer.app import paper
+
+    if args.only is not None and args.only not in paper.FIGURES:
+        raise model.ParameterError(f"unknown figure {args.only!r}; names: {', '.join(paper.FIGURES)}")
+    names = [args.only] if args.only else None
+    outcomes = paper.generate(names, out_dir=args.out_dir, results_dir=args.results_dir, quick=args.quick,
+                              benchmark=args.benchmark, quiet=args.quiet)
+    for o in outcomes:
+        print(o.line())
+    return 1 if any(o.status == "failed" for o in outcomes) else 0
+
+
+# ---- end figures ----------------------------------------------------------------------------
+COMMANDS = {"figures": cmd_figures, "trajectory": cmd_trajectory, "orbit": cmd_orbit, "sweep": cmd_sweep, "lyapunov": cmd_lyapunov, "fixedpoint": cmd_fixedpoint,
+            "melnikov": cmd_melnikov}
+
+
+# ---- explore: interactive explorer (explorer/explore.py) -----------------------------------
+def cmd_explore(args) -> int:
+    from explorer.app import explore
+
+    problem = explore.display_problem()  # no display: one line, exit 2 (no traceback)
+    if problem:
+        raise model.ParameterError(problem)
+    explore.from_args(args).run()
+    return 0
+
+
+COMMANDS["explore"] = cmd_explore
+# ---- end explore ----------------------------------------------------------------------------
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+        if args.command is None:
+            parser.print_help()
+            return EXIT_USAGE
+        return COMMANDS[args.command](args)
+    except (UsageError, model.ParameterError) as exc:
+        msg = " ".join(str(exc).split())
+        print(f"explorer: error: {msg}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("explorer: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,262 @@
+"""`python -m explorer sweep`: scene -> sweep -> HDF5 store -> figure (interface layer).
+
+Only this module (in the parent process) writes the store and the figure.
+Skips panels whose stored settings hash equals the scene's; each finished
+panel is committed atomically (see :mod:`explorer.store`), so a run killed at
+any moment leaves a readable file and the rerun computes only what is missing.
+"""
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from explorer.io import store
+from explorer.analysis import sweep
+from explorer.kernels import STATUS_NAMES, STATUS_TMAX
+from explorer.analysis.fixedpoints import chaotic_fraction
+from explorer.model import ParameterError
+from explorer.analysis.sections import ADAPTIVE_METHODS, energy_warning, max_energy_error
+
+
+def _panel_points(panel_data):
+    rows = panel_data.arrays["crossings"]
+    return rows[:, 1:3] if len(rows) else np.zeros((0, 2))
+
+
+#: separatrices: iterations of the fundamental domain, its initial size, sampling
+SEPARATRIX_SETTINGS = dict(iterations=6, n_domain=40, max_gap=0.02, first=1e-6, max_points=6000)
+
+
+def panel_separatrices(scene, i):
+    """The central fixed point of panel i, followed by continuation from mu = 0 (where it is
+    solution I, R6) or from the first sweep value, and its four separatrix branches when it is
+    hyperbolic.  Returns (fixed point attrs dict, list of (M, 2) curves)."""
+    from explorer.analysis import fixedpoints as fpm
+    from explorer import model as mdl
+
+    prm, h, _label = scene.panel(i)
+    name = scene.sweep_parameter
+    phi0 = scene.integration.phi0
+    if name is None:
+        c1, c2, _r1, _r2 = mdl.allowed_ellipse(prm, h, phi0)
+        fp = fpm.find_fixed_point(prm, h, (c1, c2), phi0=phi0)
+    else:
+        start = 0.0 if name == "mu" else scene.sweep_values[0]
+        sprm, sh = fpm._with(prm, h, name, start)
+        c1, c2, _r1, _r2 = mdl.allowed_ellipse(sprm, sh, phi0)
+        target = scene.sweep_values[i]
+        fp = fpm.follow(prm, h, name, start, target, (c1, c2), phi0=phi0)
+    info = {k: v for k, v in fp.as_dict().items() if k != "eigenvalues"}
+    curves = [] if fp.stable else fpm.separatrices(fp, phi0=phi0, **SEPARATRIX_SETTINGS)
+    return info, curves
+
+
+def draw_figure(scene, out_path, stem):
+    """Read the store and draw the scene's figure (PNG and PDF). Returns the paths."""
+    from explorer.app import figures
+
+    data = store.read_store(out_path)
+    panels = []
+    for i in range(scene.n_panels):
+        params, h, label = scene.panel(i)
+        pd = data.panels.get(i)
+        points = _panel_points(pd) if pd is not None else np.zeros((0, 2))
+        panels.append({"points": points, "params": params, "h": h, "phi0": scene.integration.phi0,
+                       "label": label})
+        if pd is not None:
+            panels[-1]["curves"] = pd.separatrices()
+            fpa = pd.attrs.get("fixed_point")
+            if fpa:
+                fp = json.loads(fpa)
+                if fp.get("stable"):
+                    panels[-1]["note"] = f"fixed point stable (trace {fp['trace']:.3g})"
+    fs = scene.figure
+    fig = figures.section_panels(panels, layout=fs.layout, columns=fs.columns, share_scale=fs.share_scale,
+                                 own_scale=tuple(fs.own_scale), marker_size=fs.marker_size, dpi=fs.dpi)
+    paths = list(figures.save_figure(fig, stem))
+    if "lyapunov" in scene.compute:
+        maps, fractions = [], []
+        for i in range(scene.n_panels):
+            params, h, label = scene.panel(i)
+            pd = data.panels.get(i)
+            if pd is None or "megno" not in pd.extra:
+                continue
+            ok = pd.extra["lyapunov_status"] == 0
+            maps.append({"seeds": pd.seeds, "megno": pd.extra["megno"], "valid": ok, "params": params, "h": h,
+                         "phi0": scene.integration.phi0, "label": label})
+            value = scene.sweep_values[i] if scene.sweep_values else 0.0
+            fractions.append((value,) + chaotic_fraction(pd.extra["megno"], scene.lyapunov.threshold, ok)[:2])
+        if maps:
+            fig = figures.chaos_maps(maps, layout=fs.layout, columns=fs.columns, threshold=scene.lyapunov.threshold,
+                                     dpi=fs.dpi)
+            paths += figures.save_figure(fig, stem.with_name(stem.name + "_chaosmap"))
+        if len(fractions) > 1:
+            fr = np.array(fractions)
+            fig = figures.fraction_curve(fr[:, 0], fr[:, 1], fr[:, 2], parameter=scene.sweep_parameter or "",
+                                         threshold=scene.lyapunov.threshold, dpi=fs.dpi)
+            paths += figures.save_figure(fig, stem.with_name(stem.name + "_fraction"))
+    return paths
+
+
+def run_sweep(args) -> int:
+    from explorer.io.scene import load_scene
+
+    t_start = time.perf_counter()
+    if args.jobs < 1:
+        raise ParameterError(f"--jobs must be >= 1, got {args.jobs}")
+    if args.scheduler and args.backend != "dask":
+        raise ParameterError("--scheduler needs --backend dask")
+    scene = load_scene(args.scene)
+    out = Path(args.out) if args.out else Path("results") / f"{scene.name}.h5"
+    stem = Path(args.figure) if args.figure else Path("figures") / scene.name
+    _check_writable(out.parent, "--out", out)
+    if not args.no_figure:
+        _check_writable(stem.parent, "--figure", stem)
+    store.clean_stale_temporaries(out)
+
+    try:
+        on_disk = {} if args.force else store.panel_hashes(out)
+    except store.StoreError as exc:
+        raise ParameterError(str(exc)) from None
+    hashes = [scene.panel_hash(i) for i in range(scene.n_panels)]
+    todo = [i for i in range(scene.n_panels) if args.force or on_disk.get(i) != hashes[i]]
+    jobs = args.jobs
+    backend = args.backend
+    client = None
+    if backend == "dask":
+        client = _dask_client(args.scheduler, jobs)
+        jobs = -1
+    chunk_orbits = sweep.default_jobs_layout(1 if (jobs == 1 and backend is None) else 2)
+    spec = sweep.build_spec(scene, todo, chunk_orbits=chunk_orbits) if todo else None
+
+    prov = json.dumps(store.provenance({"scene": scene.name}), sort_keys=True)
+    file_attrs = {"scene_name": scene.name, "scene": scene.text, "provenance": prov}
+    integ = scene.integration
+    stats = {"orbits": 0, "crossings": 0, "stopped": 0, "statuses": {}, "max_dh": 0.0, "warning": None}
+    setting = (f"tol = {integ.tol:g}" if integ.method in ADAPTIVE_METHODS
+               else f"dt = {integ.dt:g}") + " ([integration])"
+
+    def on_panel(panel, arrays):
+        i = panel.index
+        settings = scene.panel_settings(i)
+        attrs = {"index": i, "label": panel.label, "parameter": scene.sweep_parameter or "",
+                 "value": float(scene.sweep_values[i]) if scene.sweep_values else float("nan"), "h": panel.h,
+                 "params": json.dumps(settings.get("params", {}), sort_keys=True),
+                 "settings": json.dumps(settings, sort_keys=True), "hash": hashes[i],
+                 "method": integ.method, "tol": float(integ.tol), "dt": float(integ.dt),
+                 "phi0": float(integ.phi0), "direction": int(integ.direction),
+                 "crossings_requested": int(integ.crossings), "wall_time": arrays["wall_time"]}
+        payload = {"seeds": panel.seeds, "y0": panel.y0, "data": arrays["data"], "count": arrays["count"],
+                   "status": arrays["status"], "final": arrays["final"], "info": arrays["info"]}
+        if "megno" in arrays:
+            for k in ("megno", "mlce", "fli", "lyapunov_status"):
+                payload[k] = arrays[k]
+            frac, err, n_ok = chaotic_fraction(arrays["megno"], scene.lyapunov.threshold,
+                                               arrays["lyapunov_status"] == 0)
+            attrs.update(chaotic_fraction=frac, chaotic_fraction_error=err, megno_threshold=scene.lyapunov.threshold)
+            stats.setdefault("fractions", []).append((panel.label, frac, err))
+        if "separatrices" in scene.compute:
+            fp_info, curves = panel_separatrices(scene, i)
+            attrs["fixed_point"] = json.dumps(fp_info, sort_keys=True)
+            if curves:
+                payload["separatrix_offsets"] = np.concatenate([[0], np.cumsum([len(c) for c in curves])])
+                payload["separatrix_points"] = np.concatenate(curves)
+        store.commit_panel(out, i, payload, attrs, file_attrs)
+        stats["orbits"] += len(arrays["count"])
+        stats["crossings"] += int(arrays["count"].sum())
+        dh = max_energy_error(arrays["data"])
+        stats["max_dh"] = max(stats["max_dh"], dh)
+        stats["warning"] = stats["warning"] or energy_warning(dh, panel.h, setting)  # each panel its own h
+        stopped = (arrays["status"] == STATUS_TMAX) & (arrays["count"] < integ.crossings)
+        stats["stopped"] += int(stopped.sum())
+        for code, n in zip(*np.unique(arrays["status"], return_counts=True)):
+            name = STATUS_NAMES[int(code)]
+            stats["statuses"][name] = stats["statuses"].get(name, 0) + int(n)
+
+    try:
+        if spec is not None:
+            bar = _progress(len(spec.chunks), args.quiet, f"sweep {scene.name}")
+            try:
+                sweep.run(spec, on_panel, jobs=jobs, backend="dask" if client is not None else backend,
+                          progress=bar.update if bar is not None else None)
+            finally:
+                if bar is not None:
+                    bar.close()
+    finally:
+        if client is not None:
+            client.close()
+
+    figure_paths = None
+    if not args.no_figure:
+        png, pdf = stem.with_suffix(".png"), stem.with_suffix(".pdf")
+        stale = (not png.exists() or not pdf.exists() or png.stat().st_mtime < out.stat().st_mtime
+                 or pdf.stat().st_mtime < out.stat().st_mtime)
+        if todo or stale or args.force:
+            figure_paths = draw_figure(scene, out, stem)
+    wall = time.perf_counter() - t_start
+    lines = [f"scene {scene.name}: {scene.n_panels} panels ({len(todo)} computed, "
+             f"{scene.n_panels - len(todo)} already stored) -> {out}"]
+    if todo:
+        st = ", ".join(f"{k}: {v}" for k, v in sorted(stats["statuses"].items()))
+        lines.append(f"  orbits {stats['orbits']}, crossings {stats['crossings']}, "
+                     f"orbits that stopped crossing {stats['stopped']} ({st})")
+        lines.append(f"  energy error max |H - H0| over all crossings {stats['max_dh']:.1e}")
+        if stats["warning"]:
+            lines.append(f"  warning: {stats['warning']}")
+    for label, frac, err in stats.get("fractions", []):
+        lines.append(f"  {label}: chaotic fraction {frac:.3f} +- {err:.3f} (MEGNO > {scene.lyapunov.threshold:g})")
+    if figure_paths:
+        lines.append("  figure " + ", ".join(str(p) for p in figure_paths))
+    lines.append(f"  wall time {wall:.2f} s")
+    print("\n".join(lines))
+    return 0
+
+
+def _check_writable(directory: Path, option: str, target: Path):
+    """Refuse, before any computation, an output place that cannot be created or written."""
+    import tempfile
+
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=directory, prefix=".explorer-write-test-"):
+            pass
+    except OSError as exc:
+        raise ParameterError(f"{option} {target}: cannot write into the directory '{directory}' "
+                             f"({exc.strerror or exc})") from None
+
+
+def _progress(total, quiet, desc):
+    if quiet or total == 0:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc=desc, unit="chunk", file=sys.stderr, disable=None, leave=False)
+
+
+def _dask_client(address, jobs):
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError:
+        raise ParameterError("--backend dask needs the 'distributed' package (pip install 'explorer[dask]')") from None
+    if address:
+        return Client(address)
+    cluster = LocalCluster(n_workers=max(1, jobs), threads_per_worker=1, processes=True,
+                           dashboard_address=None)
+    return _ClientWithCluster(Client(cluster), cluster)
+
+
+class _ClientWithCluster:
+    """A client to a local cluster this run started: closing it closes both."""
+
+    def __init__(self, client, cluster):
+        self.client = client
+        self.cluster = cluster
+
+    def close(self):
+        self.client.close()
+        self.cluster.close()
+

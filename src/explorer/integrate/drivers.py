@@ -1,0 +1,485 @@
+"""Compiled loops that join the physics (``equations``) and the numerics
+(``kernels``): many orbits in parallel, each integrated until it has crossed
+the section phi = phi0 K times, or its time or step budget runs out.
+
+Low-level twins of :mod:`explorer.sections` (which validates and maps the
+status codes); no validation here.  One batch function per method so that a
+run compiles (or loads from the cache) only what it uses.
+
+Common arguments
+----------------
+Y0 : (N, 5) initial states (p1, p2, M, g1, g2)
+P : (9,) packed parameters (see ``explorer.model``)
+cphi, sphi : cos phi0, sin phi0 of the section angle
+direction : +1 (phi increasing through phi0), -1 (decreasing), 0 (both)
+tmax : time budget per orbit;  max_steps : step budget per orbit
+
+Outputs (preallocated by the caller)
+------------------------------------
+out_cross : (N, K, 5) rows (t, p1, p2, M, H - H0) of the crossings
+out_count : (N,) int64 crossings found;  out_status : (N,) int64 (kernels.STATUS_*)
+out_final : (N, 5) state where the orbit stopped
+out_info : (N, 3) final time, steps taken, final Casimir error g1^2 + g2^2 - 1
+"""
+import math
+
+import numpy as np
+
+from explorer._jit import njit, prange
+from explorer.model.equations import (N_FLOWS, apply_flow, energy, rhs, section_c, section_g, section_g_rate,
+                        taylor_coefficients)
+from explorer.kernels import (STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE,
+                      STATUS_STEP_UNDERFLOW, STATUS_TMAX)
+from explorer.kernels import taylor as tk
+from explorer.kernels import dop853 as dp
+from explorer.kernels.clock import advance_time, clip_step
+from explorer.kernels.events import (ISOLATE_STACK, MAX_STEP_ROOTS, ROOT_MAX_ITER, ROOT_XTOL,
+                             dense_step_roots, poly_step_roots, sign_change, turns)
+
+EPS = 2.220446049250313e-16
+#: A start point with |sin(phi - phi0)| below this is on the section (not a crossing).
+ON_SECTION = 8.0 * EPS
+
+
+@njit
+def _finite5(y):
+    s = y[0] + y[1] + y[2] + y[3] + y[4]
+    return s - s == 0.0
+
+
+@njit
+def _finite_col(X, k):
+    s = X[0, k] + X[1, k] + X[2, k] + X[3, k] + X[4, k]
+    return s - s == 0.0
+
+
+@njit
+def _record(cross, k, t, yc, H):
+    """Store a crossing row; returns False (nothing stored) if any value is not finite,
+    so that no NaN is ever stored as data."""
+    s = t + yc[0] + yc[1] + yc[2] + H
+    if not (s - s == 0.0):
+        return False
+    cross[k, 0] = t
+    cross[k, 1] = yc[0]
+    cross[k, 2] = yc[1]
+    cross[k, 3] = yc[2]
+    cross[k, 4] = H
+    return True
+
+
+@njit
+def _keep(cross, count, t, yc, P, H0, cphi, sphi):
+    """Record the root at state yc, time t as crossing number ``count`` if it lies on the
+    branch phi = phi0 (cos(phi - phi0) > 0; the root at phi0 + pi is not a crossing).
+    Returns the new count, or -1 if a value is not finite (nothing stored)."""
+    if section_c(yc, cphi, sphi) <= 0.0:
+        return count
+    if not _record(cross, count, t, yc, energy(yc, P) - H0):
+        return -1
+    return count + 1
+
+
+@njit
+def _start_g(y, cphi, sphi):
+    g = section_g(y, cphi, sphi)
+    if abs(g) <= ON_SECTION:
+        return 0.0
+    return g
+
+
+# ====================================================================== Taylor
+@njit
+def orbit_taylor(y0, P, cphi, sphi, direction, tmax, order, max_steps, cross, yout):
+    """One orbit with the adaptive Taylor method of the given order.
+    Returns (count, status, t, steps).  The crossing is the root of the Taylor
+    polynomial of sin(phi - phi0) in the step: exact to the order of the method."""
+    ncross = cross.shape[0]
+    X = np.empty((5, order + 1))
+    ynew = np.empty(5)
+    yc = np.empty(5)
+    gc = np.empty(order + 1)
+    work = np.empty(order + 1)
+    roots = np.empty(MAX_STEP_ROOTS)
+    brackets = np.empty((MAX_STEP_ROOTS, 4))
+    stack = np.empty((ISOLATE_STACK, 5))
+    factor = math.exp(tk.RHO_EXPONENT / (order - 1) - 2.0)  # = tk.safety_factor(order)
+    for i in range(5):
+        yout[i] = y0[i]
+    H0 = energy(y0, P)
+    t = 0.0
+    tc = 0.0  # Kahan compensation of the time sum
+    gprev = _start_g(y0, cphi, sphi)
+    count = 0
+    steps = 0
+    status = STATUS_TMAX
+    if ncross == 0:
+        return 0, STATUS_DONE, t, 0
+    while True:
+        if t >= tmax:
+            status = STATUS_TMAX
+            break
+        if steps >= max_steps:
+            status = STATUS_MAX_STEPS
+            break
+        for i in range(5):
+            X[i, 0] = yout[i]
+        taylor_coefficients(P, X, order)
+        if not (_finite_col(X, order) and _finite_col(X, order - 1)):
+            status = STATUS_NONFINITE
+            break
+        h = tk.step_size(X, order, factor)
+        h, last = clip_step(t, h, tmax)
+        if not (h > EPS * abs(t)):
+            status = STATUS_STEP_UNDERFLOW
+            break
+        tk.evaluate(X, order, h, ynew)
+        steps += 1
+        if not _finite5(ynew):
+            status = STATUS_NONFINITE
+            break
+        gnew = section_g(ynew, cphi, sphi)
+        # every root of the step's Taylor polynomial of sin(phi - phi0), isolated (a crossing
+        # and the turn back, or two turns, inside one step included: kernels.events)
+        for k in range(order + 1):
+            gc[k] = X[3, k] * cphi - X[4, k] * sphi
+        nroots = poly_step_roots(gc, order, h, gprev, gnew, direction, roots, brackets, work,
+                                 stack)
+        kept = count
+        for r in range(nroots):
+            if kept < 0 or kept >= ncross:
+                break
+            tau = roots[r]
+            tk.evaluate(X, order, tau, yc)
+            kept = _keep(cross, kept, (t - tc) + tau, yc, P, H0, cphi, sphi)
+        if kept < 0:
+            status = STATUS_NONFINITE
+            break
+        count = kept
+        # compensated t += h
+        t, tc = advance_time(t, tc, h, last, tmax)
+        for i in range(5):
+            yout[i] = ynew[i]
+        gprev = gnew
+        if count >= ncross:
+            status = STATUS_DONE
+            break
+    return count, status, t, steps
+
+
+@njit(parallel=True)
+def run_taylor_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps,
+                     out_cross, out_count, out_status, out_final, out_info):
+    """Batch twin of :func:`orbit_taylor`, parallel over orbits (prange)."""
+    n = Y0.shape[0]
+    for j in prange(n):
+        count, status, t, steps = orbit_taylor(Y0[j], P, cphi, sphi, direction, tmax, order,
+                                               max_steps, out_cross[j], out_final[j])
+        out_count[j] = count
+        out_status[j] = status
+        out_info[j, 0] = t
+        out_info[j, 1] = steps
+        out_info[j, 2] = out_final[j, 3] ** 2 + out_final[j, 4] ** 2 - 1.0
+    return 0
+
+
+# ====================================================================== splitting
+@njit
+def split_step(y, P, dt, flow_ids, fracs):
+    """One step of a composition of exact sub-flows (MODEL.md R4), in place."""
+    for i in range(flow_ids.shape[0]):
+        apply_flow(flow_ids[i], y, P, fracs[i] * dt)
+
+
+#: the functionals of the splitting root search: sin(phi - phi0), and M (the turn of phi)
+_SPLIT_G = 0
+_SPLIT_M = 1
+
+
+@njit
+def _split_value_rate(yc, P, which, cphi, sphi, f):
+    """(value, d/dt) along the exact flow of the functional ``which`` at yc."""
+    if which == _SPLIT_G:
+        return section_g(yc, cphi, sphi), section_g_rate(yc, P, cphi, sphi)
+    rhs(yc, P, f)
+    return yc[2], f[2]  # MODEL.md (R3): dM/dt
+
+
+@njit
+def _split_root(y, P, dt, flow_ids, fracs, which, cphi, sphi, a, b, ga, gb, yc, f):
+    """tau in (a, b] with the functional ``which`` (sin(phi - phi0) or M) zero at Psi_tau(y),
+    Psi the composition step, given its values ga, gb at a, b of opposite signs (or gb = 0);
+    yc is left at Psi_tau(y).
+
+    The step map Psi_tau is itself a method of the scheme's order for every tau,
+    so its root is located at that order (an "equally accurate" alternative to
+    Henon's trick).  Newton with the derivative of the exact flow
+    (d/dtau sin(phi - phi0) = (M/b) cos(phi - phi0); dM/dt from R3), safeguarded by
+    bisection."""
+    if gb == 0.0:
+        for i in range(5):
+            yc[i] = y[i]
+        split_step(yc, P, b, flow_ids, fracs)
+        return b
+    x = a - ga * (b - a) / (gb - ga)
+    if not (x > a and x < b):
+        x = 0.5 * (a + b)
+    tol = ROOT_XTOL * dt
+    for _ in range(ROOT_MAX_ITER):
+        for i in range(5):
+            yc[i] = y[i]
+        split_step(yc, P, x, flow_ids, fracs)
+        g, d = _split_value_rate(yc, P, which, cphi, sphi, f)
+        if g == 0.0:
+            return x
+        if (g < 0.0) == (ga < 0.0):
+            a = x
+            ga = g
+        else:
+            b = x
+        xn = x - g / d if d != 0.0 else 0.5 * (a + b)
+        if not (xn > a and xn < b):
+            xn = 0.5 * (a + b)
+        if abs(xn - x) <= tol or abs(b - a) <= tol:
+            for i in range(5):
+                yc[i] = y[i]
+            split_step(yc, P, xn, flow_ids, fracs)
+            return xn
+        x = xn
+    return x
+
+
+@njit
+def _split_step_roots(y, P, dt, flow_ids, fracs, cphi, sphi, gprev, gnew, mnew, direction,
+                      roots, yc, f):
+    """kernels.events.poly_step_roots for a composition step from y: the crossings tau in
+    (0, dt] in the given direction, the step split at the root of M when M changes sign.
+    Returns n, roots[0:n] increasing (yc is scratch)."""
+    if turns(y[2], mnew):
+        tm = _split_root(y, P, dt, flow_ids, fracs, _SPLIT_M, cphi, sphi, 0.0, dt, y[2], mnew,
+                         yc, f)
+        gm = section_g(yc, cphi, sphi)
+        n = 0
+        if sign_change(gprev, gm, direction):
+            roots[n] = _split_root(y, P, dt, flow_ids, fracs, _SPLIT_G, cphi, sphi, 0.0, tm,
+                                   gprev, gm, yc, f)
+            n += 1
+        if sign_change(gm, gnew, direction):
+            roots[n] = _split_root(y, P, dt, flow_ids, fracs, _SPLIT_G, cphi, sphi, tm, dt,
+                                   gm, gnew, yc, f)
+            n += 1
+        return n
+    if sign_change(gprev, gnew, direction):
+        roots[0] = _split_root(y, P, dt, flow_ids, fracs, _SPLIT_G, cphi, sphi, 0.0, dt,
+                               gprev, gnew, yc, f)
+        return 1
+    return 0
+
+
+@njit
+def orbit_split(y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max_steps, cross, yout):
+    """One orbit with a fixed-step composition of exact flows; t_n = n dt (no summation
+    error).  Returns (count, status, t, steps)."""
+    ncross = cross.shape[0]
+    ynew = np.empty(5)
+    yc = np.empty(5)
+    f = np.empty(5)
+    roots = np.empty(2)
+    for i in range(5):
+        yout[i] = y0[i]
+    H0 = energy(y0, P)
+    gprev = _start_g(y0, cphi, sphi)
+    count = 0
+    n = 0
+    status = STATUS_TMAX
+    if ncross == 0:
+        return 0, STATUS_DONE, 0.0, 0
+    while True:
+        t = n * dt
+        if t >= tmax:
+            status = STATUS_TMAX
+            break
+        if n >= max_steps:
+            status = STATUS_MAX_STEPS
+            break
+        for i in range(5):
+            ynew[i] = yout[i]
+        split_step(ynew, P, dt, flow_ids, fracs)
+        n += 1
+        if not _finite5(ynew):
+            status = STATUS_NONFINITE
+            break
+        gnew = section_g(ynew, cphi, sphi)
+        if sign_change(gprev, gnew, direction) or turns(yout[2], ynew[2]):
+            nroots = _split_step_roots(yout, P, dt, flow_ids, fracs, cphi, sphi, gprev, gnew,
+                                       ynew[2], direction, roots, yc, f)
+            kept = count
+            for r in range(nroots):
+                tau = roots[r]
+                if kept < 0 or kept >= ncross or t + tau > tmax:
+                    break
+                if nroots > 1:   # yc holds the state at the last root searched
+                    for i in range(5):
+                        yc[i] = yout[i]
+                    split_step(yc, P, tau, flow_ids, fracs)
+                kept = _keep(cross, kept, t + tau, yc, P, H0, cphi, sphi)
+            if kept < 0:
+                status = STATUS_NONFINITE
+                break
+            count = kept
+        for i in range(5):
+            yout[i] = ynew[i]
+        gprev = gnew
+        if count >= ncross:
+            status = STATUS_DONE
+            break
+    return count, status, n * dt, n
+
+
+@njit(parallel=True)
+def run_split_batch(Y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max_steps,
+                    out_cross, out_count, out_status, out_final, out_info):
+    """Batch twin of :func:`orbit_split`, parallel over orbits (prange)."""
+    n = Y0.shape[0]
+    for j in prange(n):
+        count, status, t, steps = orbit_split(Y0[j], P, cphi, sphi, direction, tmax, dt,
+                                              flow_ids, fracs, max_steps, out_cross[j], out_final[j])
+        out_count[j] = count
+        out_status[j] = status
+        out_info[j, 0] = t
+        out_info[j, 1] = steps
+        out_info[j, 2] = out_final[j, 3] ** 2 + out_final[j, 4] ** 2 - 1.0
+    return 0
+
+
+# ====================================================================== DOP853
+#: a DOP853 step whose ends are within NEAR_SECTION times the reach of the step (below) of
+#: the section gets its dense output searched even without a sign change at its ends
+NEAR_SECTION = 2.0
+
+
+@njit
+def _may_reach_section(y_old, y_new, K, P, h, g_old, g_new):
+    """Whether sin(phi - phi0) might vanish inside a DOP853 step whose end values have one sign
+    (a crossing and the turn back, or M turning twice): |d/dt sin(phi - phi0)| <= |M|/b and
+    |M| <= |M_end| + t |dM/dt|, so the step reaches at most
+    h (|M_old| + |M_new|) / b + h^2 (|dM/dt|_old + |dM/dt|_new) / b from its ends (MODEL.md R3,
+    dphi/dt = M/b; dM/dt taken at the ends, K[0] and K[12]).  A screen that decides whether
+    the three extra stages of the dense output are worth computing; the dense output is then
+    searched rigorously (kernels.events.dense_step_roots)."""
+    if turns(y_old[2], y_new[2]):
+        return True
+    b = P[2]
+    reach = (h * (abs(y_old[2]) + abs(y_new[2])) + h * h * (abs(K[0, 2]) + abs(K[12, 2]))) / b
+    return min(abs(g_old), abs(g_new)) <= NEAR_SECTION * reach
+
+
+@njit
+def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cross, yout):
+    """One orbit with adaptive DOP853 (Hairer-Nørsett-Wanner; controller and first step as
+    scipy's).  The three extra stages of the dense output are computed only in steps that
+    bracket a crossing.  Returns (count, status, t, steps); steps counts attempts."""
+    ncross = cross.shape[0]
+    K = np.empty((16, 5))
+    F = np.empty((7, 5))
+    Fg = np.empty(7)
+    coef = np.empty(8)
+    work = np.empty(8)
+    roots = np.empty(MAX_STEP_ROOTS)
+    brackets = np.empty((MAX_STEP_ROOTS, 4))
+    stack = np.empty((ISOLATE_STACK, 5))
+    tmp = np.empty(5)
+    ynew = np.empty(5)
+    yc = np.empty(5)
+    for i in range(5):
+        yout[i] = y0[i]
+    H0 = energy(y0, P)
+    if ncross == 0:
+        return 0, STATUS_DONE, 0.0, 0
+    rhs(yout, P, K[0])
+    h0 = dp.initial_step_part1(yout, K[0], rtol, atol, tmax, 1.0, tmp)
+    rhs(tmp, P, K[1])
+    h_abs = dp.initial_step_part2(yout, K[0], K[1], h0, rtol, atol, tmax)
+    t = 0.0
+    tc = 0.0
+    gprev = _start_g(y0, cphi, sphi)
+    count = 0
+    steps = 0
+    rejected = False
+    status = STATUS_TMAX
+    while True:
+        if t >= tmax:
+            status = STATUS_TMAX
+            break
+        if steps >= max_steps:
+            status = STATUS_MAX_STEPS
+            break
+        if dp.step_too_small(t, h_abs):
+            status = STATUS_STEP_UNDERFLOW
+            break
+        h = h_abs
+        h, last = clip_step(t, h, tmax)
+        for s in range(1, 12):
+            dp.stage_input(yout, K, s, h, tmp)
+            rhs(tmp, P, K[s])
+        dp.step_solution(yout, K, h, ynew)
+        err = dp.error_norm(yout, ynew, K, h, rtol, atol)
+        steps += 1
+        if not (err == err) or not _finite5(ynew):
+            status = STATUS_NONFINITE
+            break
+        if err >= 1.0:
+            h_abs *= dp.step_factor(err)
+            rejected = True
+            continue
+        rhs(ynew, P, K[12])
+        gnew = section_g(ynew, cphi, sphi)
+        if sign_change(gprev, gnew, direction) or _may_reach_section(yout, ynew, K, P, h, gprev,
+                                                                     gnew):
+            for s in range(13, 16):
+                dp.stage_input(yout, K, s, h, tmp)
+                rhs(tmp, P, K[s])
+            dp.dense_coefficients(yout, ynew, K, h, F)
+            g_old = section_g(yout, cphi, sphi)
+            for k in range(7):
+                Fg[k] = F[k, 3] * cphi - F[k, 4] * sphi
+            nroots = dense_step_roots(Fg, g_old, gprev, gnew, direction, roots, brackets, coef,
+                                      work, stack)
+            kept = count
+            for r in range(nroots):
+                if kept < 0 or kept >= ncross:
+                    break
+                theta = roots[r]
+                dp.dense_eval(F, yout, theta, yc)
+                kept = _keep(cross, kept, (t - tc) + theta * h, yc, P, H0, cphi, sphi)
+            if kept < 0:
+                status = STATUS_NONFINITE
+                break
+            count = kept
+        h_abs *= dp.accepted_factor(err, rejected)
+        rejected = False
+        t, tc = advance_time(t, tc, h, last, tmax)
+        for i in range(5):
+            yout[i] = ynew[i]
+            K[0, i] = K[12, i]
+        gprev = gnew
+        if count >= ncross:
+            status = STATUS_DONE
+            break
+    return count, status, t, steps
+
+
+@njit(parallel=True)
+def run_dop853_batch(Y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps,
+                     out_cross, out_count, out_status, out_final, out_info):
+    """Batch twin of :func:`orbit_dop853`, parallel over orbits (prange)."""
+    n = Y0.shape[0]
+    for j in prange(n):
+        count, status, t, steps = orbit_dop853(Y0[j], P, cphi, sphi, direction, tmax, rtol, atol,
+                                               max_steps, out_cross[j], out_final[j])
+        out_count[j] = count
+        out_status[j] = status
+        out_info[j, 0] = t
+        out_info[j, 1] = steps
+        out_info[j, 2] = out_final[j, 3] ** 2 + out_final[j, 4] ** 2 - 1.0
+    return 0

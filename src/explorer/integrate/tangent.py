@@ -1,0 +1,328 @@
+"""Compiled loops for chaos indicators: the orbit and one deviation vector advanced together
+by tangent dynamics consistent with each integrator (low-level twins of
+:mod:`explorer.lyapunov`).
+
+- ``taylor``: the variational equations' Taylor series (``taylor_coefficients_tangent``), the
+  step chosen from the orbit's own coefficients;
+- ``dop853``: DOP853 on the 10-dimensional system (y, v) with v' = Df(y) v;
+- ``split*``: the exact tangent maps of the sub-flows (the symplectic tangent map method,
+  Skokos & Gerlach 2010, Phys. Rev. E 82, 036704), so the indicator is that of the map the
+  scheme actually computes.
+
+The deviation vector is renormalised every step; the indicators are accumulated by
+:mod:`explorer.kernels.tangent`.  Outputs per orbit: a result row (t, mLCE, <Y>, Y, FLI), a
+history of such rows at the requested times (first step end at or after each), the status.
+"""
+import math
+
+import numpy as np
+
+from explorer._jit import njit, prange
+from explorer.model.equations import (apply_flow_tangent, rhs, rhs_tangent, taylor_coefficients,
+                        taylor_coefficients_tangent)
+from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW
+from explorer.kernels import STATUS_TMAX as STATUS_TMAX_CODE
+from explorer.kernels.events import ISOLATE_STACK, MAX_STEP_ROOTS, poly_step_roots
+from explorer.kernels import dop853 as dp
+from explorer.kernels.clock import clip_step
+from explorer.kernels import taylor as tk
+from explorer.kernels import tangent as tg
+
+EPS = 2.220446049250313e-16
+
+
+@njit
+def _finite(v, n):
+    s = 0.0
+    for i in range(n):
+        s += v[i]
+    return s - s == 0.0
+
+
+@njit
+def _history(acc, hist_t, hist, hpos, row):
+    while hpos < hist_t.shape[0] and acc[tg.ACC_T] >= hist_t[hpos]:
+        tg.result(acc, row)
+        for c in range(tg.N_RES):
+            hist[hpos, c] = row[c]
+        hpos += 1
+    return hpos
+
+
+# ====================================================================== Taylor
+@njit
+def orbit_tangent_taylor(y0, v0, P, T, order, max_steps, hist_t, hist, res, yout):
+    X = np.empty((5, order + 1))
+    D = np.empty((5, order + 1))
+    y = np.empty(5)
+    v = np.empty(5)
+    acc = np.zeros(tg.N_ACC)
+    row = np.empty(tg.N_RES)
+    factor = math.exp(tk.RHO_EXPONENT / (order - 1) - 2.0)  # = tk.safety_factor(order)
+    for i in range(5):
+        y[i] = y0[i]
+        v[i] = v0[i]
+    tg.renormalize(v, 5)
+    t = 0.0
+    steps = 0
+    hpos = 0
+    status = STATUS_DONE
+    while t < T:
+        if steps >= max_steps:
+            status = STATUS_MAX_STEPS
+            break
+        for i in range(5):
+            X[i, 0] = y[i]
+            D[i, 0] = v[i]
+        taylor_coefficients_tangent(P, X, D, order)
+        h = tk.step_size(X, order, factor)
+        h, last = clip_step(t, h, T)
+        if not (h > EPS * t) or not (h == h):
+            status = STATUS_STEP_UNDERFLOW if h == h else STATUS_NONFINITE
+            break
+        tk.evaluate(X, order, h, y)
+        tk.evaluate(D, order, h, v)
+        steps += 1
+        if not (_finite(y, 5) and _finite(v, 5)):
+            status = STATUS_NONFINITE
+            break
+        dlog = tg.renormalize(v, 5)
+        t_new = T if last else t + h
+        tg.accumulate(acc, t, t_new, dlog)
+        t = t_new
+        hpos = _history(acc, hist_t, hist, hpos, row)
+    tg.result(acc, res)
+    for i in range(5):
+        yout[i] = y[i]
+    return status, steps
+
+
+# ====================================================================== DOP853
+@njit
+def _rhs_aug(z, P, dz):
+    rhs(z[:5], P, dz[:5])
+    rhs_tangent(z[:5], z[5:], P, dz[5:])
+
+
+@njit
+def orbit_tangent_dop853(y0, v0, P, T, rtol, atol, max_steps, hist_t, hist, res, yout):
+    n = 10
+    K = np.empty((16, n))
+    z = np.empty(n)
+    znew = np.empty(n)
+    tmp = np.empty(n)
+    acc = np.zeros(tg.N_ACC)
+    row = np.empty(tg.N_RES)
+    for i in range(5):
+        z[i] = y0[i]
+        z[5 + i] = v0[i]
+    tg.renormalize(z[5:], 5)
+    _rhs_aug(z, P, K[0])
+    h0 = dp.initial_step_part1(z, K[0], rtol, atol, T, 1.0, tmp)
+    _rhs_aug(tmp, P, K[1])
+    h_abs = dp.initial_step_part2(z, K[0], K[1], h0, rtol, atol, T)
+    t = 0.0
+    steps = 0
+    hpos = 0
+    rejected = False
+    status = STATUS_DONE
+    while t < T:
+        if steps >= max_steps:
+            status = STATUS_MAX_STEPS
+            break
+        if dp.step_too_small(t, h_abs):
+            status = STATUS_STEP_UNDERFLOW
+            break
+        h = h_abs
+        h, last = clip_step(t, h, T)
+        for s in range(1, 12):
+            dp.stage_input(z, K, s, h, tmp)
+            _rhs_aug(tmp, P, K[s])
+        dp.step_solution(z, K, h, znew)
+        err = dp.error_norm(z, znew, K, h, rtol, atol)
+        steps += 1
+        if not (err == err) or not _finite(znew, n):
+            status = STATUS_NONFINITE
+            break
+        if err >= 1.0:
+            h_abs *= dp.step_factor(err)
+            rejected = True
+            continue
+        h_abs *= dp.accepted_factor(err, rejected)
+        rejected = False
+        # the deviation is renormalised, so the FSAL stage is recomputed for the scaled vector
+        dlog = tg.renormalize(znew[5:], 5)
+        for i in range(n):
+            z[i] = znew[i]
+        _rhs_aug(z, P, K[0])
+        t_new = T if last else t + h
+        tg.accumulate(acc, t, t_new, dlog)
+        t = t_new
+        hpos = _history(acc, hist_t, hist, hpos, row)
+    tg.result(acc, res)
+    for i in range(5):
+        yout[i] = z[i]
+    return status, steps
+
+
+# ====================================================================== splitting
+@njit
+def orbit_tangent_split(y0, v0, P, T, dt, flow_ids, fracs, max_steps, hist_t, hist, res, yout):
+    y = np.empty(5)
+    v = np.empty(5)
+    acc = np.zeros(tg.N_ACC)
+    row = np.empty(tg.N_RES)
+    for i in range(5):
+        y[i] = y0[i]
+        v[i] = v0[i]
+    tg.renormalize(v, 5)
+    n = 0
+    hpos = 0
+    status = STATUS_DONE
+    nsteps = int(np.ceil(T / dt - 1e-9))
+    while n < nsteps:
+        if n >= max_steps:
+            status = STATUS_MAX_STEPS
+            break
+        for i in range(flow_ids.shape[0]):
+            apply_flow_tangent(flow_ids[i], y, v, P, fracs[i] * dt)
+        if not (_finite(y, 5) and _finite(v, 5)):
+            status = STATUS_NONFINITE
+            break
+        dlog = tg.renormalize(v, 5)
+        tg.accumulate(acc, n * dt, (n + 1) * dt, dlog)
+        n += 1
+        hpos = _history(acc, hist_t, hist, hpos, row)
+    tg.result(acc, res)
+    for i in range(5):
+        yout[i] = y[i]
+    return status, n
+
+
+# ====================================================================== batches
+@njit(parallel=True)
+def run_tangent_taylor_batch(Y0, V0, P, T, order, max_steps, hist_t, out_hist, out_res, out_status,
+                             out_final, out_steps):
+    for j in prange(Y0.shape[0]):
+        st, steps = orbit_tangent_taylor(Y0[j], V0[j], P, T, order, max_steps, hist_t, out_hist[j],
+                                         out_res[j], out_final[j])
+        out_status[j] = st
+        out_steps[j] = steps
+    return 0
+
+
+@njit(parallel=True)
+def run_tangent_dop853_batch(Y0, V0, P, T, rtol, atol, max_steps, hist_t, out_hist, out_res, out_status,
+                             out_final, out_steps):
+    for j in prange(Y0.shape[0]):
+        st, steps = orbit_tangent_dop853(Y0[j], V0[j], P, T, rtol, atol, max_steps, hist_t, out_hist[j],
+                                         out_res[j], out_final[j])
+        out_status[j] = st
+        out_steps[j] = steps
+    return 0
+
+
+@njit(parallel=True)
+def run_tangent_split_batch(Y0, V0, P, T, dt, flow_ids, fracs, max_steps, hist_t, out_hist, out_res,
+                            out_status, out_final, out_steps):
+    for j in prange(Y0.shape[0]):
+        st, steps = orbit_tangent_split(Y0[j], V0[j], P, T, dt, flow_ids, fracs, max_steps, hist_t,
+                                        out_hist[j], out_res[j], out_final[j])
+        out_status[j] = st
+        out_steps[j] = steps
+    return 0
+
+
+# ====================================================================== section return map
+@njit
+def _flip_odd(X, order):
+    for k in range(1, order + 1, 2):
+        for i in range(X.shape[0]):
+            X[i, k] = -X[i, k]
+
+
+@njit
+def return_map_taylor(y0, V0, P, cphi, sphi, tsign, tmax, order, max_steps, yout, Vout):
+    """The next crossing of the section phi = phi0 (phi increasing through phi0 in forward time)
+    from y0, forward (tsign = +1) or backward (tsign = -1) in time, with the tangent map of the
+    flow applied to the rows of V0 (m deviation vectors) up to the crossing time.
+
+    Backward: the Taylor series of y(t - s) has coefficients (-1)^k X_k, so the same step, root
+    and evaluation code runs in s = -t; a forward crossing with dphi/dt > 0 appears as a
+    decreasing sin(phi - phi0) in s.  Returns (status, signed time of the crossing)."""
+    m = V0.shape[0]
+    X = np.empty((5, order + 1))
+    Xs = np.empty((5, order + 1))
+    D = np.empty((m, 5, order + 1))
+    y = np.empty(5)
+    ynew = np.empty(5)
+    gc = np.empty(order + 1)
+    work = np.empty(order + 1)
+    roots = np.empty(MAX_STEP_ROOTS)
+    brackets = np.empty((MAX_STEP_ROOTS, 4))
+    stack = np.empty((ISOLATE_STACK, 5))
+    factor = math.exp(tk.RHO_EXPONENT / (order - 1) - 2.0)
+    V = np.empty((m, 5))
+    for i in range(5):
+        y[i] = y0[i]
+        for r in range(m):
+            V[r, i] = V0[r, i]
+    direction = 1 if tsign > 0 else -1
+    g0 = y[3] * cphi - y[4] * sphi
+    gprev = 0.0 if abs(g0) <= 8.0 * EPS else g0
+    s = 0.0
+    steps = 0
+    while True:
+        if s >= tmax:
+            return STATUS_TMAX_CODE, tsign * s
+        if steps >= max_steps:
+            return STATUS_MAX_STEPS, tsign * s
+        for r in range(m):
+            for i in range(5):
+                Xs[i, 0] = y[i]
+                D[r, i, 0] = V[r, i]
+            taylor_coefficients_tangent(P, Xs, D[r], order)
+        if m == 0:
+            X[:, 0] = y
+            taylor_coefficients(P, X, order)
+        else:
+            for i in range(5):
+                for k in range(order + 1):
+                    X[i, k] = Xs[i, k]
+        if tsign < 0:
+            _flip_odd(X, order)
+            for r in range(m):
+                _flip_odd(D[r], order)
+        h = tk.step_size(X, order, factor)
+        if s + h > tmax:
+            h = tmax - s
+        if not (h > EPS * s) or not (h == h):
+            return STATUS_STEP_UNDERFLOW, tsign * s
+        tk.evaluate(X, order, h, ynew)
+        steps += 1
+        if not _finite(ynew, 5):
+            return STATUS_NONFINITE, tsign * s
+        gnew = ynew[3] * cphi - ynew[4] * sphi
+        found = False
+        tau = h
+        # every root of the step's polynomial (as drivers.orbit_taylor)
+        for k in range(order + 1):
+            gc[k] = X[3, k] * cphi - X[4, k] * sphi
+        nroots = poly_step_roots(gc, order, h, gprev, gnew, direction, roots, brackets, work,
+                                 stack)
+        for r in range(nroots):
+            tau = roots[r]
+            tk.evaluate(X, order, tau, yout)
+            if yout[4] * cphi + yout[3] * sphi > 0.0:
+                found = True
+                break
+        if found:
+            for r in range(m):
+                tk.evaluate(D[r], order, tau, Vout[r])
+            return STATUS_DONE, tsign * (s + tau)
+        for r in range(m):
+            tk.evaluate(D[r], order, h, V[r])
+        for i in range(5):
+            y[i] = ynew[i]
+        s += h
+        gprev = gnew

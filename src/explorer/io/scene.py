@@ -1,0 +1,880 @@
+"""Scenes: what a Poincaré-section sweep computes and how it is drawn, read from TOML.
+
+A scene names the model parameters, the energy ``h``, an optional swept
+parameter (one panel per value), how initial conditions are seeded on the
+section phi = phi0 (MODEL.md R9), the integration settings (method,
+tolerance or step, crossings per orbit, budgets), what to compute and how to
+draw it.  Pure Python + numpy: no numba, h5py or matplotlib here.
+
+Format
+------
+All tables are optional; ``name`` is the only required key.  The example
+below shows every key (keys marked "grid only", "random only", ... are
+accepted with any kind/layout but only used with theirs)::
+
+    name = "figure4"                 # required, [A-Za-z0-9_.-]+ (not starting with '.')
+    description = "..."              # optional free text
+    [model]                          # any of a1 a2 b lam chi zeta mu xi eta; defaults = model.FIGURE4
+    mu = 0.0
+    [energy]
+    h = 2.0                          # default model.FIGURE4_H
+    [sweep]                          # optional; without it the scene has one panel
+    parameter = "mu"                 # any model parameter name or "h"
+    values = [0.05, 0.2, 0.5, 1.0, 2.0]   # non-empty list of finite numbers, no duplicates
+    [seeds]
+    kind = "grid"                    # "grid" | "lines" | "random" | "points"
+    n = 200                          # grid: target number of points inside the region; random: count; lines: points per line
+    margin = 0.98                    # points stay inside the ellipse scaled by margin (0 < margin <= 1)
+    seed = 12345                     # random only (numpy default_rng)
+    lines = [[-1.0, 0.0, 1.0, 0.0]]  # lines only: segments [u_a, v_a, u_b, v_b], u, v in [-1, 1]
+    points = [[0.1, 0.0], [0.3, 0.2]]  # points only: absolute (p1, p2)
+    [integration]
+    method = "taylor"                # one of sections.METHODS
+    tol = 1e-13                      # adaptive methods (taylor, dop853), in [1e-16, 0.01]
+    dt = 0.05                        # splitting methods (split*), > 0
+    crossings = 1000                 # K >= 1
+    tmax = 2e4                       # time budget per orbit (> 0); default 100 * crossings
+    max_steps = 1000000000           # step budget per orbit (>= 1)
+    phi0 = 3.141592653589793         # section angle; default pi (exactly math.pi)
+    direction = 1                    # 1 (dphi/dt > 0), -1 (< 0) or 0 (both)
+    [compute]
+    sections = true                  # the only quantity for now; unknown keys are errors
+    [figure]
+    layout = "row"                   # "row" | "grid"
+    columns = 3                      # grid only (default ceil(sqrt(panels)))
+    share_scale = true               # same axes limits for all panels ...
+    own_scale = [4]                  # ... except these panel indices
+    marker_size = 0.25               # > 0
+    dpi = 200                        # integer in [10, 2400]
+
+Defaults of [seeds]: kind "grid", n 200, margin 0.98, seed 0.  Defaults of
+[integration]: taylor, tol ``sections.DEFAULT_TOL``, dt ``sections.DEFAULT_DT``,
+1000 crossings, max_steps ``sections.DEFAULT_MAX_STEPS``, phi0 = pi, direction 1.
+Defaults of [figure]: row, share_scale true, own_scale [], marker_size 0.25, dpi 200.
+
+Validation: unknown tables or keys, wrong types (a string or a boolean for a
+number, a float for an integer; an integer is fine for a float) and values
+out of range raise :class:`SceneError` (a :class:`model.ParameterError`)
+with a one-line message naming the dotted key, e.g. ``scene key
+'integration.tol' must be in [1e-16, 0.01], got 0.5``.  Every panel is
+checked: its parameters must be valid (:class:`model.Params`) and its
+allowed region of the section non-empty (error names ``sweep.values[i]``,
+or ``energy.h`` when there is no sweep or no panel has a region).
+
+Seeding (:func:`seed_points`)
+-----------------------------
+Let the allowed region be the ellipse ((p1-c1)/r1)^2 + ((p2-c2)/r2)^2 <= 1
+(:func:`model.allowed_ellipse`) and s = margin.  Seeds are placed in units
+(u, v) of the scaled ellipse, p1 = c1 + s r1 u, p2 = c2 + s r2 v, and kept
+where u^2 + v^2 <= 1 (< 1 for grid and random) and M^2 = ``model.section_M2``
+> 0; points failing the second test are dropped and counted (possible only at
+margin 1, e.g. line ends on the boundary, or for ``points``).
+
+* ``grid``: the square lattice u = i d, v = j d (i, j integers; equal
+  spacing d in units of r1, r2, lattice centred on the ellipse centre),
+  ordered row-major (v ascending, then u ascending).  d is chosen among
+  d0 * 1.001^k, |k| <= 150, d0 = sqrt(pi / n), as the one whose number of
+  lattice points inside the unit disc is closest to n (ties: smallest |k|,
+  then negative k).  The count is within 10 % of n for n >= 50.
+* ``random``: n points uniform in the area of the scaled ellipse:
+  rng = numpy.random.default_rng(seed), rho = sqrt(rng.random(n)),
+  theta = 2 pi rng.random(n), (u, v) = rho (cos theta, sin theta).
+* ``lines``: n equally spaced points on each segment from (u_a, v_a) to
+  (u_b, v_b) (both ends included; the midpoint when n = 1), segments in
+  order; points outside the scaled ellipse (u^2 + v^2 > 1) are dropped and
+  counted.  With margin < 1 a segment [-1, 0, 1, 0] keeps both ends.
+* ``points``: the given absolute (p1, p2), in order; margin is not used;
+  points with M^2 <= 0 are dropped and counted.
+
+Panel hashes
+------------
+:meth:`Scene.panel_settings` lists everything that determines panel i's
+numbers (its parameters, h, the seeding keys used by the kind, the
+integration keys used by the method with tmax resolved, compute) and
+:meth:`Scene.panel_hash` is the sha256 of its canonical JSON (sorted keys,
+floats by ``repr``) together with :data:`FORMAT_VERSION`.  Name,
+description, figure and the panel's position do not enter the hash.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import numbers
+import os
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python < 3.11
+    import tomli as tomllib
+
+import numpy as np
+
+from explorer import model
+from explorer.analysis import sections
+from explorer.model import PARAM_NAMES, ParameterError
+
+#: Version of the panel-settings layout; part of every panel hash.
+FORMAT_VERSION = 1
+
+SEED_KINDS = ("grid", "lines", "random", "points")
+LAYOUTS = ("row", "grid")
+SWEEP_PARAMETERS = PARAM_NAMES + ("h",)
+COMPUTE_QUANTITIES = ("sections", "lyapunov", "separatrices")
+#: quantities computed when [compute] does not mention them
+COMPUTE_DEFAULTS = {"sections": True, "lyapunov": False, "separatrices": False}
+
+DEFAULT_SEED_N = 200
+DEFAULT_MARGIN = 0.98
+DEFAULT_RANDOM_SEED = 0
+DEFAULT_CROSSINGS = 1000
+DEFAULT_MARKER_SIZE = 0.25
+DEFAULT_DPI = 200
+MIN_DPI, MAX_DPI = 10, 2400
+#: largest number of seeds per panel (n, n * len(lines), len(points))
+MAX_SEEDS = 10_000_000
+MAX_NAME_LENGTH = 128
+#: grid spacing search: d0 * GRID_SCAN_RATIO**k, |k| <= GRID_SCAN_HALF
+GRID_SCAN_RATIO = 1.001
+GRID_SCAN_HALF = 150
+
+_NAME_RE = re.compile(r"[A-Za-z0-9_.-]+\Z")
+_TOP_KEYS = ("name", "description", "model", "energy", "sweep", "seeds", "integration", "compute", "lyapunov",
+             "figure")
+_SEED_KEYS = ("kind", "n", "margin", "seed", "lines", "points")
+#: the [seeds] keys that determine the points of each kind
+_SEED_USED = {"grid": ("kind", "n", "margin"), "random": ("kind", "n", "margin", "seed"),
+              "lines": ("kind", "n", "margin", "lines"), "points": ("kind", "points")}
+_INTEGRATION_KEYS = ("method", "tol", "dt", "crossings", "tmax", "max_steps", "phi0", "direction")
+_FIGURE_KEYS = ("layout", "columns", "share_scale", "own_scale", "marker_size", "dpi")
+_LYAPUNOV_KEYS = ("time", "method", "tol", "dt", "threshold")
+
+
+class SceneError(ParameterError):
+    """Bad scene: a one-line message naming the dotted key and what is allowed."""
+
+
+# ---------------------------------------------------------------- validators
+def _short(v, limit=60) -> str:
+    r = repr(v)
+    return r if len(r) <= limit else r[: limit - 3] + "..."
+
+
+def _fail(key, msg):
+    raise SceneError(f"scene key '{key}' {msg}")
+
+
+def _got(v) -> str:
+    return f"got {_short(v)} ({type(v).__name__})"
+
+
+def _real(key, v, lo=None, hi=None, lo_open=False) -> float:
+    """A finite real number (int or float, not bool) in [lo, hi] (or (lo, hi] if lo_open)."""
+    if isinstance(v, bool) or not isinstance(v, numbers.Real):
+        _fail(key, f"must be a number, {_got(v)}")
+    x = float(v)
+    if not math.isfinite(x):
+        _fail(key, f"must be finite, got {_short(v)}")
+    if lo is not None and hi is not None:
+        if not ((x > lo if lo_open else x >= lo) and x <= hi):
+            _fail(key, f"must be in {'(' if lo_open else '['}{lo:g}, {hi:g}], got {_short(v)}")
+    elif lo is not None and not (x > lo if lo_open else x >= lo):
+        _fail(key, f"must be {'>' if lo_open else '>='} {lo:g}, got {_short(v)}")
+    return x
+
+
+def _int(key, v, lo=None, hi=None) -> int:
+    if isinstance(v, bool) or not isinstance(v, numbers.Integral):
+        _fail(key, f"must be an integer, {_got(v)}")
+    i = int(v)
+    if lo is not None and hi is not None and not lo <= i <= hi:
+        _fail(key, f"must be an integer in [{lo}, {hi}], got {i}")
+    if lo is not None and i < lo:
+        _fail(key, f"must be an integer >= {lo}, got {i}")
+    return i
+
+
+def _bool(key, v) -> bool:
+    if not isinstance(v, (bool, np.bool_)):
+        _fail(key, f"must be true or false, {_got(v)}")
+    return bool(v)
+
+
+def _str(key, v) -> str:
+    if not isinstance(v, str):
+        _fail(key, f"must be a string, {_got(v)}")
+    return v
+
+
+def _choice(key, v, choices) -> str:
+    _str(key, v)
+    if v not in choices:
+        _fail(key, f"must be one of {', '.join(choices)}; got {_short(v)}")
+    return v
+
+
+def _list(key, v, min_len=1) -> list:
+    if not isinstance(v, (list, tuple)):
+        _fail(key, f"must be a list, {_got(v)}")
+    if len(v) < min_len:
+        _fail(key, "must be a non-empty list" if min_len == 1 else f"must have at least {min_len} items")
+    return list(v)
+
+
+def _table(key, v, allowed) -> dict:
+    """Check that ``v`` is a table whose keys are all in ``allowed``."""
+    if not isinstance(v, dict):
+        _fail(key, f"must be a table, {_got(v)}")
+    for k in v:
+        if k not in allowed:
+            raise SceneError(f"scene: unknown key '{key}.{k}' (allowed: {', '.join(allowed)})")
+    return v
+
+
+# ---------------------------------------------------------------- specs
+@dataclass(frozen=True)
+class SeedSpec:
+    """How initial conditions are placed on the section (see the module docstring).
+
+    ``lines`` is a tuple of (u_a, v_a, u_b, v_b), ``points`` a tuple of (p1, p2);
+    keys not used by ``kind`` are validated and kept but do not affect the seeds.
+    """
+
+    kind: str = "grid"
+    n: int = DEFAULT_SEED_N
+    margin: float = DEFAULT_MARGIN
+    seed: int = DEFAULT_RANDOM_SEED
+    lines: tuple | None = None
+    points: tuple | None = None
+
+    def __post_init__(self):
+        kind = _choice("seeds.kind", self.kind, SEED_KINDS)
+        n = _int("seeds.n", self.n, 1, MAX_SEEDS)
+        margin = _real("seeds.margin", self.margin, 0.0, 1.0, lo_open=True)
+        seed = _int("seeds.seed", self.seed, 0)
+        lines = points = None
+        if self.lines is not None:
+            lines = []
+            for i, seg in enumerate(_list("seeds.lines", self.lines)):
+                k = f"seeds.lines[{i}]"
+                seg = _list(k, seg)
+                if len(seg) != 4:
+                    _fail(k, f"must be [u_a, v_a, u_b, v_b] (4 numbers), got {len(seg)} items")
+                lines.append(tuple(_real(k, x, -1.0, 1.0) for x in seg))
+            lines = tuple(lines)
+            if n * len(lines) > MAX_SEEDS:
+                _fail("seeds.n", f"times the number of lines must be <= {MAX_SEEDS}, got {n} * {len(lines)}")
+        if self.points is not None:
+            pts = _list("seeds.points", self.points)
+            if len(pts) > MAX_SEEDS:
+                _fail("seeds.points", f"must have at most {MAX_SEEDS} points, got {len(pts)}")
+            points = []
+            for i, pt in enumerate(pts):
+                k = f"seeds.points[{i}]"
+                pt = _list(k, pt)
+                if len(pt) != 2:
+                    _fail(k, f"must be [p1, p2] (2 numbers), got {len(pt)} items")
+                points.append((_real(k, pt[0]), _real(k, pt[1])))
+            points = tuple(points)
+        if kind == "lines" and lines is None:
+            _fail("seeds.lines", "is required with kind = 'lines'")
+        if kind == "points" and points is None:
+            _fail("seeds.points", "is required with kind = 'points'")
+        for name, value in (("kind", kind), ("n", n), ("margin", margin), ("seed", seed),
+                            ("lines", lines), ("points", points)):
+            object.__setattr__(self, name, value)
+
+    def to_dict(self) -> dict:
+        """All keys (as in the [seeds] table), JSON-able."""
+        d = {"kind": self.kind, "n": self.n, "margin": self.margin, "seed": self.seed}
+        if self.lines is not None:
+            d["lines"] = [list(s) for s in self.lines]
+        if self.points is not None:
+            d["points"] = [list(p) for p in self.points]
+        return d
+
+    def used_dict(self) -> dict:
+        """Only the keys that determine the points of this kind."""
+        d = self.to_dict()
+        return {k: d[k] for k in _SEED_USED[self.kind]}
+
+
+@dataclass(frozen=True)
+class IntegrationSpec:
+    """Settings handed to :func:`explorer.sections.section_crossings`.
+
+    ``tmax`` None means the default budget 100 * crossings (:attr:`effective_tmax`).
+    """
+
+    method: str = "taylor"
+    tol: float = sections.DEFAULT_TOL
+    dt: float = sections.DEFAULT_DT
+    crossings: int = DEFAULT_CROSSINGS
+    tmax: float | None = None
+    max_steps: int = sections.DEFAULT_MAX_STEPS
+    phi0: float = math.pi
+    direction: int = 1
+
+    def __post_init__(self):
+        values = {
+            "method": _choice("integration.method", self.method, sections.METHODS),
+            "tol": _real("integration.tol", self.tol, sections.MIN_TOL, sections.MAX_TOL),
+            "dt": _real("integration.dt", self.dt, 0.0, lo_open=True),
+            "crossings": _int("integration.crossings", self.crossings, 1),
+            "tmax": None if self.tmax is None else _real("integration.tmax", self.tmax, 0.0, lo_open=True),
+            "max_steps": _int("integration.max_steps", self.max_steps, 1),
+            "phi0": _real("integration.phi0", self.phi0),
+            "direction": _int("integration.direction", self.direction),
+        }
+        if values["direction"] not in (-1, 0, 1):
+            _fail("integration.direction", f"must be 1, -1 or 0 (both), got {values['direction']}")
+        for name, value in values.items():
+            object.__setattr__(self, name, value)
+
+    @property
+    def adaptive(self) -> bool:
+        return self.method in sections.ADAPTIVE_METHODS
+
+    @property
+    def effective_tmax(self) -> float:
+        return 100.0 * self.crossings if self.tmax is None else self.tmax
+
+    def to_dict(self) -> dict:
+        """All keys as in the [integration] table (tmax only when set)."""
+        d = {k: getattr(self, k) for k in _INTEGRATION_KEYS}
+        if self.tmax is None:
+            del d["tmax"]
+        return d
+
+    def used_dict(self) -> dict:
+        """The settings that determine the numbers: tol or dt by method, tmax resolved."""
+        d = {"method": self.method, "crossings": self.crossings, "tmax": self.effective_tmax,
+             "max_steps": self.max_steps, "phi0": self.phi0, "direction": self.direction}
+        if self.adaptive:
+            d["tol"] = self.tol
+        else:
+            d["dt"] = self.dt
+        return d
+
+    def section_kwargs(self) -> dict:
+        """Keywords for ``sections.section_crossings(params, p1, p2, h, self.crossings, **kw)``."""
+        d = self.used_dict()
+        del d["crossings"]
+        return d
+
+
+@dataclass(frozen=True)
+class LyapunovSpec:
+    """Chaos indicators of every seed (:func:`explorer.lyapunov.indicators`): integration time,
+    method and tolerance/step, and the MEGNO threshold above which an orbit counts as chaotic
+    (regular orbits have <Y> -> 2, chaotic ones <Y> ~ chi T / 2)."""
+
+    time: float = 1000.0
+    method: str = "taylor"
+    tol: float = 1e-12
+    dt: float = 0.02
+    threshold: float = 4.0
+
+    def __post_init__(self):
+        object.__setattr__(self, "time", _real("lyapunov.time", self.time, 0.0, lo_open=True))
+        object.__setattr__(self, "method", _choice("lyapunov.method", self.method, sections.METHODS))
+        object.__setattr__(self, "tol", _real("lyapunov.tol", self.tol, sections.MIN_TOL, sections.MAX_TOL))
+        object.__setattr__(self, "dt", _real("lyapunov.dt", self.dt, 0.0, lo_open=True))
+        object.__setattr__(self, "threshold", _real("lyapunov.threshold", self.threshold, 2.0, lo_open=True))
+
+    def to_dict(self) -> dict:
+        return {k: getattr(self, k) for k in _LYAPUNOV_KEYS}
+
+    def used_dict(self) -> dict:
+        """The keys that determine the numbers (tol or dt by method; the threshold only
+        classifies, so it is left out of panel hashes)."""
+        d = {"time": self.time, "method": self.method}
+        if self.method in sections.ADAPTIVE_METHODS:
+            d["tol"] = self.tol
+        else:
+            d["dt"] = self.dt
+        return d
+
+
+@dataclass(frozen=True)
+class FigureSpec:
+    """How the panels are drawn (never affects the numbers nor the panel hashes)."""
+
+    layout: str = "row"
+    columns: int | None = None
+    share_scale: bool = True
+    own_scale: tuple = ()
+    marker_size: float = DEFAULT_MARKER_SIZE
+    dpi: int = DEFAULT_DPI
+
+    def __post_init__(self):
+        own = []
+        for i, j in enumerate(_list("figure.own_scale", self.own_scale, min_len=0)):
+            j = _int(f"figure.own_scale[{i}]", j, 0)
+            if j in own:
+                _fail(f"figure.own_scale[{i}]", f"duplicates panel index {j}")
+            own.append(j)
+        values = {
+            "layout": _choice("figure.layout", self.layout, LAYOUTS),
+            "columns": None if self.columns is None else _int("figure.columns", self.columns, 1),
+            "share_scale": _bool("figure.share_scale", self.share_scale),
+            "own_scale": tuple(own),
+            "marker_size": _real("figure.marker_size", self.marker_size, 0.0, lo_open=True),
+            "dpi": _int("figure.dpi", self.dpi, MIN_DPI, MAX_DPI),
+        }
+        for name, value in values.items():
+            object.__setattr__(self, name, value)
+
+    def to_dict(self) -> dict:
+        d = {k: getattr(self, k) for k in _FIGURE_KEYS}
+        d["own_scale"] = list(self.own_scale)
+        if self.columns is None:
+            del d["columns"]
+        return d
+
+
+def _canonical_json(obj) -> str:
+    """Sorted keys, no spaces, floats by repr (json's float formatting), no NaN."""
+    return json.dumps(obj, sort_keys=True, separators=(",", ":"), allow_nan=False, ensure_ascii=True)
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A Poincaré-section sweep: one panel per sweep value (one panel without a sweep).
+
+    Validated on construction (every panel's parameters and allowed region);
+    ``text`` is the TOML source ("" for a scene built in Python; see :meth:`to_toml`).
+    """
+
+    name: str
+    params: model.Params = model.FIGURE4
+    h: float = model.FIGURE4_H
+    sweep_parameter: str | None = None
+    sweep_values: tuple = ()
+    seeds: SeedSpec = field(default_factory=SeedSpec)
+    integration: IntegrationSpec = field(default_factory=IntegrationSpec)
+    compute: tuple = ("sections",)
+    lyapunov: LyapunovSpec = field(default_factory=LyapunovSpec)
+    figure: FigureSpec = field(default_factory=FigureSpec)
+    description: str = ""
+    text: str = ""
+
+    def __post_init__(self):
+        name = _str("name", self.name)
+        if not _NAME_RE.match(name) or name.startswith(".") or len(name) > MAX_NAME_LENGTH:
+            _fail("name", f"must match [A-Za-z0-9_.-]+, not start with '.', and have at most "
+                  f"{MAX_NAME_LENGTH} characters; got {_short(name)}")
+        _str("description", self.description)
+        _str("text", self.text)
+        if not isinstance(self.params, model.Params):
+            _fail("model", f"must be a model.Params, {_got(self.params)}")
+        object.__setattr__(self, "h", _real("energy.h", self.h))
+        for attr, cls, key in (("seeds", SeedSpec, "seeds"), ("integration", IntegrationSpec, "integration"),
+                               ("figure", FigureSpec, "figure")):
+            if not isinstance(getattr(self, attr), cls):
+                _fail(key, f"must be a {cls.__name__}, {_got(getattr(self, attr))}")
+        self._check_sweep()
+        compute = tuple(_choice(f"compute[{i}]", q, COMPUTE_QUANTITIES)
+                        for i, q in enumerate(_list("compute", self.compute, min_len=0)))
+        if "sections" not in compute:
+            _fail("compute.sections", "must be true: every panel starts from its section run")
+        if not isinstance(self.lyapunov, LyapunovSpec):
+            _fail("lyapunov", f"must be a LyapunovSpec, {_got(self.lyapunov)}")
+        object.__setattr__(self, "compute", compute)
+        self._check_panels()
+        for j, idx in enumerate(self.figure.own_scale):
+            if idx >= self.n_panels:
+                _fail(f"figure.own_scale[{j}]", f"must be a panel index in [0, {self.n_panels - 1}], got {idx}")
+
+    def _check_sweep(self):
+        if self.sweep_parameter is None:
+            if len(self.sweep_values):
+                _fail("sweep.parameter", "is required when sweep values are given")
+            object.__setattr__(self, "sweep_values", ())
+            return
+        _choice("sweep.parameter", self.sweep_parameter, SWEEP_PARAMETERS)
+        values = []
+        for i, v in enumerate(_list("sweep.values", self.sweep_values)):
+            x = _real(f"sweep.values[{i}]", v)
+            if x in values:
+                _fail(f"sweep.values[{i}]", f"duplicates sweep.values[{values.index(x)}] = {x!r}")
+            values.append(x)
+        object.__setattr__(self, "sweep_values", tuple(values))
+
+    def _panel_key(self, i) -> str:
+        return "energy.h" if self.sweep_parameter is None else f"sweep.values[{i}]"
+
+    def _check_panels(self):
+        phi0 = self.integration.phi0
+        empty = []
+        for i in range(self.n_panels):
+            try:
+                prm, h, label = self.panel(i)
+            except ParameterError as e:
+                raise SceneError(f"scene key '{self._panel_key(i)}' ({self._label(i)}): {e}") from None
+            e = model.allowed_ellipse(prm, h, phi0)
+            if e is None or not (e[2] > 0.0 and e[3] > 0.0):
+                empty.append(i)
+        if empty:
+            i = empty[0]
+            key = self._panel_key(i)
+            if self.sweep_parameter not in (None, "h") and len(empty) == self.n_panels:
+                key = "energy.h"
+            h = self.panel_h(i)
+            what = f"= {h!r}" if key == "energy.h" else f"({self._label(i)})"
+            _fail(key, f"{what}: the allowed region of the section phi0 = {phi0!r} at h = {h!r} is empty "
+                  f"(h is below the minimum of the energy on the section)")
+        if self.seeds.kind in ("lines", "points"):
+            for i in range(self.n_panels):
+                p1, _p2, _dropped = self.panel_seeds(i)
+                if p1.size == 0:
+                    where = f" of panel {i} ({self._label(i)})" if self.sweep_parameter is not None else ""
+                    _fail(f"seeds.{self.seeds.kind}", f"gives no point inside the allowed region{where}")
+
+    # ------------------------------------------------------------ panels
+    @property
+    def n_panels(self) -> int:
+        return max(1, len(self.sweep_values))
+
+    def _check_index(self, i):
+        if isinstance(i, bool) or not isinstance(i, numbers.Integral) or not 0 <= i < self.n_panels:
+            raise IndexError(f"panel index must be an integer in [0, {self.n_panels - 1}], got {i!r}")
+        return int(i)
+
+    def _label(self, i) -> str:
+        if self.sweep_parameter is None:
+            return ""
+        return f"{self.sweep_parameter} = {self.sweep_values[i]!r}"
+
+    def panel_h(self, i) -> float:
+        i = self._check_index(i)
+        return self.sweep_values[i] if self.sweep_parameter == "h" else self.h
+
+    def panel(self, i):
+        """(Params, h, label) of panel i; label is e.g. ``"mu = 0.5"`` ("" without a sweep)."""
+        i = self._check_index(i)
+        prm = self.params
+        if self.sweep_parameter in PARAM_NAMES:
+            prm = prm.with_(**{self.sweep_parameter: self.sweep_values[i]})
+        return prm, self.panel_h(i), self._label(i)
+
+    def panel_seeds(self, i):
+        """:func:`seed_points` of panel i: (p1, p2, n_dropped)."""
+        prm, h, _label = self.panel(i)
+        return seed_points(self.seeds, prm, h, self.integration.phi0)
+
+    def panel_settings(self, i) -> dict:
+        """Everything that determines panel i's numbers, as plain JSON-able values."""
+        prm, h, _label = self.panel(i)
+        d = {"params": prm.as_dict(), "h": h, "seeds": self.seeds.used_dict(),
+             "integration": self.integration.used_dict(), "compute": {q: True for q in self.compute}}
+        if "lyapunov" in self.compute:
+            d["lyapunov"] = self.lyapunov.used_dict()
+        return d
+
+    def panel_hash(self, i) -> str:
+        """sha256 hex of the canonical JSON of panel_settings(i) and FORMAT_VERSION."""
+        payload = {"format_version": FORMAT_VERSION, "panel": self.panel_settings(i)}
+        return hashlib.sha256(_canonical_json(payload).encode("ascii")).hexdigest()
+
+    def grid_shape(self) -> tuple:
+        """(rows, columns) of the figure: (1, n) for "row"; for "grid" ``columns``
+        (default ceil(sqrt(n))) and as many rows as needed."""
+        n = self.n_panels
+        if self.figure.layout == "row":
+            return 1, n
+        cols = self.figure.columns if self.figure.columns is not None else math.ceil(math.sqrt(n))
+        cols = min(cols, n)
+        return -(-n // cols), cols
+
+    # ------------------------------------------------------------ export
+    def to_dict(self) -> dict:
+        """The scene as nested plain values in the layout of the TOML tables
+        (``scene_from_dict(s.to_dict(), s.text) == s``)."""
+        d = {"name": self.name, "description": self.description, "model": self.params.as_dict(),
+             "energy": {"h": self.h}}
+        if self.sweep_parameter is not None:
+            d["sweep"] = {"parameter": self.sweep_parameter, "values": list(self.sweep_values)}
+        d["seeds"] = self.seeds.to_dict()
+        d["integration"] = self.integration.to_dict()
+        d["compute"] = {q: (q in self.compute) for q in COMPUTE_QUANTITIES}
+        d["lyapunov"] = self.lyapunov.to_dict()
+        d["figure"] = self.figure.to_dict()
+        return d
+
+    def to_toml(self) -> str:
+        """TOML text of :meth:`to_dict` (``parse_scene(s.to_toml())`` equals ``s`` but for ``text``)."""
+        d = self.to_dict()
+        out = []
+        for k in ("name", "description"):
+            out.append(f"{k} = {_toml_value(d[k])}")
+        for table in _TOP_KEYS[2:]:
+            if table in d:
+                out.append(f"\n[{table}]")
+                out.extend(f"{k} = {_toml_value(v)}" for k, v in d[table].items())
+        return "\n".join(out) + "\n"
+
+
+def _toml_string(s: str) -> str:
+    r = json.dumps(s, ensure_ascii=False)  # TOML basic strings share JSON's escapes
+    return r.replace("\x7f", "\\u007f")
+
+
+def _toml_value(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, numbers.Integral):
+        return str(int(v))
+    if isinstance(v, float):
+        return repr(v)
+    if isinstance(v, str):
+        return _toml_string(v)
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    raise TypeError(f"cannot write {v!r} as TOML")
+
+
+# ---------------------------------------------------------------- loading
+def scene_from_dict(data: dict, text: str = "") -> Scene:
+    """A validated :class:`Scene` from nested tables (as produced by ``tomllib``)."""
+    if not isinstance(data, dict):
+        _fail("<top level>", f"must be a table, {_got(data)}")
+    for k, v in data.items():
+        if k not in _TOP_KEYS:
+            what = "table" if isinstance(v, dict) else "key"
+            raise SceneError(f"scene: unknown {what} '{k}' (allowed: {', '.join(_TOP_KEYS)})")
+    if "name" not in data:
+        _fail("name", "is required (a string matching [A-Za-z0-9_.-]+)")
+    kw = {"name": data["name"], "description": data.get("description", ""), "text": text}
+
+    given = _table("model", data.get("model", {}), PARAM_NAMES)
+    values = {k: _real(f"model.{k}", v) for k, v in given.items()}
+    try:
+        kw["params"] = model.FIGURE4.with_(**values)
+    except ParameterError as e:
+        msg = str(e)
+        bad = next((k for k in values if msg.startswith(k + " ")), None)
+        raise SceneError(f"scene key 'model.{bad}': {msg}" if bad else f"scene key 'model': {msg}") from None
+
+    energy = _table("energy", data.get("energy", {}), ("h",))
+    if "h" in energy:
+        kw["h"] = energy["h"]
+
+    if "sweep" in data:
+        sweep = _table("sweep", data["sweep"], ("parameter", "values"))
+        for k in ("parameter", "values"):
+            if k not in sweep:
+                _fail(f"sweep.{k}", "is required in a [sweep] table")
+        kw["sweep_parameter"] = _str("sweep.parameter", sweep["parameter"])
+        kw["sweep_values"] = tuple(_list("sweep.values", sweep["values"]))
+
+    kw["seeds"] = SeedSpec(**_table("seeds", data.get("seeds", {}), _SEED_KEYS))
+    kw["integration"] = IntegrationSpec(**_table("integration", data.get("integration", {}), _INTEGRATION_KEYS))
+
+    comp = _table("compute", data.get("compute", {}), COMPUTE_QUANTITIES)
+    kw["compute"] = tuple(q for q in COMPUTE_QUANTITIES
+                          if _bool(f"compute.{q}", comp.get(q, COMPUTE_DEFAULTS[q])))
+    kw["lyapunov"] = LyapunovSpec(**_table("lyapunov", data.get("lyapunov", {}), _LYAPUNOV_KEYS))
+
+    fig = dict(_table("figure", data.get("figure", {}), _FIGURE_KEYS))
+    if "own_scale" in fig:
+        fig["own_scale"] = tuple(_list("figure.own_scale", fig["own_scale"], min_len=0))
+    kw["figure"] = FigureSpec(**fig)
+    return Scene(**kw)
+
+
+def parse_scene(text: str, source: str = "<string>") -> Scene:
+    """A validated :class:`Scene` from TOML text (``source`` names it in syntax errors)."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        msg = " ".join(str(e).split())
+        raise SceneError(f"scene: TOML syntax error in {source}: {msg}") from None
+    return scene_from_dict(data, text=text)
+
+
+def load_scene(spec) -> Scene:
+    """A built-in preset by name (:data:`PRESETS`), else the path of a ``.toml`` file."""
+    if isinstance(spec, str) and spec in PRESETS:
+        return parse_scene(PRESETS[spec], source=f"preset '{spec}'")
+    path = Path(os.fspath(spec))
+    if not path.is_file():
+        raise SceneError(f"scene: no built-in preset or file named '{path}' "
+                         f"(presets: {', '.join(sorted(PRESETS))})")
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except (OSError, UnicodeDecodeError) as e:
+        raise SceneError(f"scene: cannot read '{path}': {' '.join(str(e).split())}") from None
+    return parse_scene(text, source=str(path))
+
+
+# ---------------------------------------------------------------- seeding
+def _grid_count(d: float) -> int:
+    """Number of lattice points (i d, j d) with (i d)^2 + (j d)^2 < 1 (the selection rule)."""
+    k = int(math.floor(1.0 / d)) + 1
+    q = (np.arange(-k, k + 1) * d) ** 2
+    return int(np.searchsorted(np.sort(q), 1.0 - q, side="left").sum())
+
+
+def grid_spacing(n: int) -> float:
+    """Lattice spacing d (in units of the scaled semi-axes) of a grid of about n points."""
+    d0 = math.sqrt(math.pi / n)
+    best = None
+    for k in range(-GRID_SCAN_HALF, GRID_SCAN_HALF + 1):
+        d = d0 * GRID_SCAN_RATIO ** k
+        key = (abs(_grid_count(d) - n), abs(k), k)
+        if best is None or key < best[0]:
+            best = (key, d)
+    return best[1]
+
+
+def _unit_grid(n: int):
+    d = grid_spacing(n)
+    k = int(math.floor(1.0 / d)) + 1
+    u = np.arange(-k, k + 1) * d
+    uu = u * u
+    inside = uu[None, :] + uu[:, None] < 1.0     # [j, i]: row j is v = u[j]
+    U, V = np.meshgrid(u, u)                     # U[j, i] = u[i], V[j, i] = u[j]
+    return U[inside], V[inside]                  # C order: v ascending, then u ascending
+
+
+def seed_points(seeds: SeedSpec, params, h: float, phi0: float = math.pi):
+    """Initial points (p1, p2) strictly inside the allowed region of the section phi = phi0
+    at energy h, following ``seeds`` (rules in the module docstring).
+
+    Returns float64 arrays p1, p2 (model.section_M2 > 0 at every point) and the number
+    of candidate points dropped.  Deterministic.  Raises SceneError if the region is empty.
+    """
+    if not isinstance(seeds, SeedSpec):
+        raise TypeError(f"seeds must be a SeedSpec, got {type(seeds).__name__}")
+    h = float(h)
+    phi0 = float(phi0)
+    ell = model.allowed_ellipse(params, h, phi0)
+    if ell is None or not (ell[2] > 0.0 and ell[3] > 0.0):
+        raise SceneError(f"scene key 'energy.h' = {h!r}: the allowed region of the section phi0 = {phi0!r} "
+                         f"is empty; cannot place seeds")
+    c1, c2, r1, r2 = ell
+    s = seeds.margin
+    n_dropped = 0
+    if seeds.kind == "points":
+        pts = np.array(seeds.points, dtype=np.float64).reshape(-1, 2)
+        p1, p2 = pts[:, 0].copy(), pts[:, 1].copy()
+    else:
+        if seeds.kind == "grid":
+            u, v = _unit_grid(seeds.n)
+        elif seeds.kind == "random":
+            rng = np.random.default_rng(seeds.seed)
+            rho = np.sqrt(rng.random(seeds.n))
+            theta = 2.0 * math.pi * rng.random(seeds.n)
+            u, v = rho * np.cos(theta), rho * np.sin(theta)
+        else:  # lines
+            t = np.linspace(0.0, 1.0, seeds.n) if seeds.n > 1 else np.array([0.5])
+            seg = np.array(seeds.lines, dtype=np.float64).reshape(-1, 4)
+            u = (seg[:, 0:1] + t[None, :] * (seg[:, 2:3] - seg[:, 0:1])).ravel()
+            v = (seg[:, 1:2] + t[None, :] * (seg[:, 3:4] - seg[:, 1:2])).ravel()
+            keep = u * u + v * v <= 1.0
+            n_dropped += int(u.size - np.count_nonzero(keep))
+            u, v = u[keep], v[keep]
+        p1 = c1 + (s * r1) * u
+        p2 = c2 + (s * r2) * v
+    with np.errstate(over="ignore", invalid="ignore"):
+        m2 = model.section_M2(params, p1, p2, h, phi0)
+    keep = m2 > 0.0
+    n_dropped += int(p1.size - np.count_nonzero(keep))
+    return (np.ascontiguousarray(p1[keep], dtype=np.float64),
+            np.ascontiguousarray(p2[keep], dtype=np.float64), n_dropped)
+
+
+# ---------------------------------------------------------------- presets
+FIGURE4_TOML = """\
+name = "figure4"
+description = "Borisov & Mamaev, Figure 4: sections phi = pi (dphi/dt > 0) at h = 2 as the weight mu grows (MODEL.md R9)"
+
+[model]
+a1 = 1.0
+a2 = 0.5
+b = 2.0
+lam = 1.0
+chi = 0.0
+zeta = 0.0
+xi = 0.0
+eta = 0.0
+
+[energy]
+h = 2.0
+
+# regular -> thin stochastic layer around the split separatrices -> wide layer;
+# then the central fixed point has turned stable (islands around it), region much larger
+[sweep]
+parameter = "mu"
+values = [0.002, 0.01, 0.03, 4.0, 8.0]
+
+[seeds]
+kind = "grid"
+n = 200
+margin = 0.98
+
+[integration]
+method = "taylor"
+tol = 1e-13
+crossings = 1000
+# orbits that stop turning over are integrated up to this budget (~2.5x the time of 1000 turns)
+tmax = 10000.0
+
+[compute]
+sections = true
+# separatrices of the central fixed point where it is hyperbolic (found by continuation in mu)
+separatrices = true
+
+[figure]
+layout = "row"
+share_scale = true
+own_scale = [3, 4]
+"""
+
+#: Chaos maps of the Figure-4 panels: MEGNO of 900 seeds per panel (and the chaotic fraction).
+CHAOS_TOML = FIGURE4_TOML.replace('name = "figure4"', 'name = "chaos"').replace(
+    "[seeds]\nkind = \"grid\"\nn = 200", "[seeds]\nkind = \"grid\"\nn = 900").replace(
+    "crossings = 1000", "crossings = 100").replace("separatrices = true", "lyapunov = true\n\n[lyapunov]\n"
+                                                   "time = 1000.0\nmethod = \"taylor\"\ntol = 1e-12\n"
+                                                   "threshold = 4.0").replace(
+    "description = \"Borisov & Mamaev, Figure 4:", "description = \"Chaos maps (MEGNO) of the Figure-4 panels;")
+
+#: The chaotic fraction of the section as mu grows: 13 panels from 0 to 8, 400 seeds each.
+FRACTION_TOML = """\
+name = "fraction"
+description = "Chaotic fraction of the allowed section (MEGNO > threshold) against mu, Figure-4 parameters, h = 2"
+
+[sweep]
+parameter = "mu"
+values = [0.0, 0.002, 0.005, 0.01, 0.02, 0.03, 0.05, 0.1, 0.3, 1.0, 2.0, 4.0, 8.0]
+
+[seeds]
+kind = "grid"
+n = 400
+
+[integration]
+method = "taylor"
+tol = 1e-12
+crossings = 50
+tmax = 1000.0
+
+[compute]
+sections = true
+lyapunov = true
+
+[lyapunov]
+time = 1000.0
+threshold = 4.0
+
+[figure]
+layout = "grid"
+columns = 5
+share_scale = false
+"""
+
+#: Built-in scenes: name -> TOML text.
+PRESETS = {"figure4": FIGURE4_TOML, "chaos": CHAOS_TOML, "fraction": FRACTION_TOML}

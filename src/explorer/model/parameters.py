@@ -1,0 +1,300 @@
+"""The physics a reader checks against ../shared/MODEL.md (labels R1-R10).
+
+Plain numpy, no numba: the compiled twin of the vector field lives in
+:mod:`explorer.equations`.  Everything here is vectorised over the last axis
+of a state ``y = (p1, p2, M, g1, g2)`` with ``(g1, g2) = (sin phi, cos phi)``
+(MODEL.md R3, the polynomial form of the reduced system).
+
+Parameters (MODEL.md, table "Parameters"):
+
+=========  ================================================  =============
+symbol     meaning                                           constraint
+=========  ================================================  =============
+a1, a2     added masses along the body axes                  > 0
+b          added moment of inertia                           > 0
+lam        circulation x density (lambda = I rho)            != 0 (reduced)
+chi, zeta  circulation-asymmetry terms, s = (chi, zeta)      any
+mu         weight                                            >= 0
+xi, eta    centre of mass in body axes, r = (xi, eta)        any
+=========  ================================================  =============
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields, replace
+
+import numpy as np
+
+# Packed layout of the parameter vector handed to the kernels.
+A1, A2, B, LAM, CHI, ZETA, MU, XI, ETA = range(9)
+__all__ = [
+    "A1",
+    "A2",
+    "B",
+    "LAM",
+    "CHI",
+    "ZETA",
+    "MU",
+    "XI",
+    "ETA",
+    "P1",
+    "P2",
+    "M",
+    "G1",
+    "G2",
+    "PARAM_NAMES",
+    "STATE_DIM",
+    "ParameterError",
+    "Params",
+    "FIGURE4",
+    "FIGURE4_H",
+    "params_array",
+    "energy",
+    "casimir",
+    "rhs",
+    "chaplygin_integral",
+    "kozlov_integral",
+    "case3_integral",
+    "hess_eta",
+    "hess_function",
+    "section_gamma",
+    "section_M2",
+    "is_admissible",
+    "allowed_ellipse",
+    "section_state",
+    "describe_region",
+]
+
+PARAM_NAMES = ("a1", "a2", "b", "lam", "chi", "zeta", "mu", "xi", "eta")
+# Layout of the reduced state (MODEL.md R3).
+P1, P2, M, G1, G2 = range(5)
+STATE_DIM = 5
+
+
+class ParameterError(ValueError):
+    """Bad input: the message names the parameter and what is allowed."""
+
+
+def _check_finite(name, value):
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be a real number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise ParameterError(f"{name} must be finite, got {value!r}")
+    return v
+
+
+@dataclass(frozen=True)
+class Params:
+    """Model parameters of Chaplygin's equations (MODEL.md, R1/R3).
+
+    Validation (on construction): every value finite; a1, a2, b > 0;
+    mu >= 0; lam != 0 (the reduced system R3 divides by lambda).
+    """
+
+    a1: float = 1.0
+    a2: float = 0.5
+    b: float = 2.0
+    lam: float = 1.0
+    chi: float = 0.0
+    zeta: float = 0.0
+    mu: float = 0.0
+    xi: float = 0.0
+    eta: float = 0.0
+
+    def __post_init__(self):
+        for f in fields(self):
+            object.__setattr__(self, f.name, _check_finite(f.name, getattr(self, f.name)))
+        for name in ("a1", "a2", "b"):
+            if getattr(self, name) <= 0.0:
+                raise ParameterError(f"{name} must be > 0 (a mass or moment of inertia), got {getattr(self, name)!r}")
+        if self.mu < 0.0:
+            raise ParameterError(f"mu must be >= 0 (the weight), got {self.mu!r}")
+        if self.lam == 0.0:
+            raise ParameterError("lam must be nonzero: the reduced system (MODEL.md R3) needs circulation "
+                                 "(lam = 0 is the full system R1 only)")
+
+    def as_array(self) -> np.ndarray:
+        """Packed float64 vector [a1, a2, b, lam, chi, zeta, mu, xi, eta] for the kernels."""
+        return np.array([getattr(self, n) for n in PARAM_NAMES], dtype=np.float64)
+
+    def as_dict(self) -> dict:
+        return {n: getattr(self, n) for n in PARAM_NAMES}
+
+    def with_(self, **changes) -> "Params":
+        """A copy with some parameters changed (validated again)."""
+        return replace(self, **changes)
+
+    @classmethod
+    def from_array(cls, P) -> "Params":
+        return cls(**{n: float(P[i]) for i, n in enumerate(PARAM_NAMES)})
+
+
+#: MODEL.md R9: the scene of the seed's Figure 4 (xi, eta not given: 0).
+FIGURE4 = Params(a1=1.0, a2=0.5, b=2.0, lam=1.0, chi=0.0, zeta=0.0, mu=0.0, xi=0.0, eta=0.0)
+#: MODEL.md R9: the energy level of Figure 4.
+FIGURE4_H = 2.0
+
+
+def params_array(params) -> np.ndarray:
+    """The packed float64 parameter vector of a :class:`Params` (or of an array given as is)."""
+    return params.as_array() if isinstance(params, Params) else np.asarray(params, dtype=np.float64)
+
+
+_P = params_array
+
+
+def energy(params, y) -> np.ndarray:
+    """MODEL.md R3: H = 1/2(p1^2/a1 + p2^2/a2 + M^2/b) - (mu/lam)(p - s, J g) + mu (r, g),
+    with (p - s, J g) = (p1 - chi) g2 - (p2 - zeta) g1."""
+    P = _P(params)
+    y = np.asarray(y, dtype=np.float64)
+    p1, p2, m, g1, g2 = y[..., P1], y[..., P2], y[..., M], y[..., G1], y[..., G2]
+    kinetic = 0.5 * (p1 * p1 / P[A1] + p2 * p2 / P[A2] + m * m / P[B])
+    pJg = (p1 - P[CHI]) * g2 - (p2 - P[ZETA]) * g1
+    return kinetic - (P[MU] / P[LAM]) * pJg + P[MU] * (P[XI] * g1 + P[ETA] * g2)
+
+
+def casimir(y) -> np.ndarray:
+    """MODEL.md R3: the Casimir g1^2 + g2^2 (equal to 1 on physical states)."""
+    y = np.asarray(y, dtype=np.float64)
+    return y[..., G1] ** 2 + y[..., G2] ** 2
+
+
+def rhs(params, y) -> np.ndarray:
+    """MODEL.md R3 (numpy twin of :func:`explorer.equations.rhs`):
+    dp/dt = (M/b) J (p - s) - mu g - lam J A p;  dM/dt = (p - s, J A p) - mu (r, J g);
+    dg/dt = (M/b) J g, with J v = (v2, -v1)."""
+    P = _P(params)
+    y = np.asarray(y, dtype=np.float64)
+    p1, p2, m, g1, g2 = y[..., P1], y[..., P2], y[..., M], y[..., G1], y[..., G2]
+    w = m / P[B]
+    out = np.empty_like(y)
+    out[..., P1] = w * (p2 - P[ZETA]) - P[MU] * g1 - P[LAM] * p2 / P[A2]
+    out[..., P2] = -w * (p1 - P[CHI]) - P[MU] * g2 + P[LAM] * p1 / P[A1]
+    out[..., M] = (p1 - P[CHI]) * p2 / P[A2] - (p2 - P[ZETA]) * p1 / P[A1] - P[MU] * (P[XI] * g2 - P[ETA] * g1)
+    out[..., G1] = w * g2
+    out[..., G2] = -w * g1
+    return out
+
+
+# ---------------------------------------------------------------- integrals (R5, R6)
+def chaplygin_integral(params, y):
+    """MODEL.md R5 case 1 (mu = 0): F = 1/2 |p - s|^2 + lam M."""
+    P = _P(params)
+    y = np.asarray(y, dtype=np.float64)
+    return 0.5 * ((y[..., P1] - P[CHI]) ** 2 + (y[..., P2] - P[ZETA]) ** 2) + P[LAM] * y[..., M]
+
+
+def kozlov_integral(params, y):
+    """MODEL.md R5 case 2 (chi = zeta = 0, a1 = a2): F = M^2/(2b) + mu (r, g)."""
+    P = _P(params)
+    y = np.asarray(y, dtype=np.float64)
+    return y[..., M] ** 2 / (2 * P[B]) + P[MU] * (P[XI] * y[..., G1] + P[ETA] * y[..., G2])
+
+
+def case3_integral(params, y):
+    """MODEL.md R5 case 3 (chi = -lam eta, zeta = lam xi, a1 = a2 = 1):
+    F = 1/2 M^2 - lam b (M + (p, J r)) + mu b (r, g), with (p, J r) = p1 eta - p2 xi."""
+    P = _P(params)
+    y = np.asarray(y, dtype=np.float64)
+    pJr = y[..., P1] * P[ETA] - y[..., P2] * P[XI]
+    return (0.5 * y[..., M] ** 2 - P[LAM] * P[B] * (y[..., M] + pJr)
+            + P[MU] * P[B] * (P[XI] * y[..., G1] + P[ETA] * y[..., G2]))
+
+
+def hess_eta(params) -> float:
+    """MODEL.md R5 case 4: the positive eta = sqrt(b (1/a2 - 1/a1)) of the Hess relation (a1 > a2)."""
+    P = _P(params)
+    if not P[A1] > P[A2]:
+        raise ParameterError("the Hess relation needs a1 > a2")
+    return math.sqrt(P[B] * (1.0 / P[A2] - 1.0 / P[A1]))
+
+
+def hess_function(params, y):
+    """MODEL.md R5 case 4 (chi = zeta = xi = 0, eta^2 = b(1/a2 - 1/a1)):
+    F = M + eta p1 - lam b / a2, with dF/dt = (eta/b) p2 F."""
+    P = _P(params)
+    y = np.asarray(y, dtype=np.float64)
+    return y[..., M] + P[ETA] * y[..., P1] - P[LAM] * P[B] / P[A2]
+
+
+# ---------------------------------------------------------------- the section (R9)
+def section_gamma(phi0: float):
+    """(g1, g2) = (sin phi0, cos phi0), exact at phi0 = pi (g = (0, -1))."""
+    if phi0 == math.pi:
+        return 0.0, -1.0
+    return math.sin(phi0), math.cos(phi0)
+
+
+def section_M2(params, p1, p2, h, phi0=math.pi):
+    """M^2 on the section phi = phi0 at energy h (MODEL.md R9, generalised to any phi0):
+    M^2 = 2b (h - 1/2(p1^2/a1 + p2^2/a2) + (mu/lam)(p - s, J g) - mu (r, g)).
+    At phi0 = pi this is 2b (h - 1/2(...) - (mu/lam)(p1 - chi) + mu eta)."""
+    P = _P(params)
+    g1, g2 = section_gamma(phi0)
+    p1 = np.asarray(p1, dtype=np.float64)
+    p2 = np.asarray(p2, dtype=np.float64)
+    with np.errstate(over="ignore", invalid="ignore"):  # huge inputs give inf: refused by the callers
+        kinetic = 0.5 * (p1 * p1 / P[A1] + p2 * p2 / P[A2])
+        pJg = (p1 - P[CHI]) * g2 - (p2 - P[ZETA]) * g1
+        return 2.0 * P[B] * (h - kinetic + (P[MU] / P[LAM]) * pJg - P[MU] * (P[XI] * g1 + P[ETA] * g2))
+
+
+def is_admissible(params, p1, p2, h, phi0=math.pi):
+    """True where the point (p1, p2) lies in the allowed region of the section (M^2 >= 0)."""
+    return section_M2(params, p1, p2, h, phi0) >= 0.0
+
+
+def allowed_ellipse(params, h, phi0=math.pi):
+    """The allowed region of the section as an ellipse (MODEL.md R9, completing squares).
+
+    Returns ``(c1, c2, r1, r2)``: centre and semi-axes along p1 and p2, the
+    region being ((p1-c1)/r1)^2 + ((p2-c2)/r2)^2 <= 1.  Returns ``None`` when
+    the region is empty (h below the minimum of the energy on the section).
+    """
+    P = _P(params)
+    g1, g2 = section_gamma(phi0)
+    k1 = (P[MU] / P[LAM]) * g2
+    k2 = (P[MU] / P[LAM]) * g1
+    c1, c2 = P[A1] * k1, -P[A2] * k2
+    R = (h - P[MU] * (P[XI] * g1 + P[ETA] * g2) - (P[MU] / P[LAM]) * (P[CHI] * g2 - P[ZETA] * g1)
+         + 0.5 * P[A1] * k1 * k1 + 0.5 * P[A2] * k2 * k2)
+    if R < 0.0:
+        return None
+    return c1, c2, math.sqrt(2.0 * P[A1] * R), math.sqrt(2.0 * P[A2] * R)
+
+
+def section_state(params, p1, p2, h, phi0=math.pi, direction=1):
+    """Full states y = (p1, p2, M, g1, g2) on phi = phi0 at energy h.
+
+    M = +sqrt(M^2) for direction +1 (phi increasing), -sqrt for -1.
+    Raises ParameterError naming the point if any lies outside the allowed region.
+    """
+    p1 = np.atleast_1d(np.asarray(p1, dtype=np.float64))
+    p2 = np.atleast_1d(np.asarray(p2, dtype=np.float64))
+    p1, p2 = np.broadcast_arrays(p1, p2)
+    m2 = section_M2(params, p1, p2, h, phi0)
+    bad = ~(m2 >= 0.0)
+    if np.any(bad):
+        i = int(np.flatnonzero(bad)[0])
+        raise ParameterError(
+            f"start point (p1, p2) = ({p1[i]:g}, {p2[i]:g}) lies outside the allowed region of the section "
+            f"at h = {h:g} (M^2 = {m2[i]:.3g} < 0); allowed: {describe_region(params, h, phi0)}")
+    g1, g2 = section_gamma(phi0)
+    y = np.empty(p1.shape + (STATE_DIM,), dtype=np.float64)
+    y[..., P1] = p1
+    y[..., P2] = p2
+    y[..., M] = (1.0 if direction >= 0 else -1.0) * np.sqrt(m2)
+    y[..., G1] = g1
+    y[..., G2] = g2
+    return y
+
+
+def describe_region(params, h, phi0=math.pi) -> str:
+    e = allowed_ellipse(params, h, phi0)
+    if e is None:
+        return "none (the region is empty at this energy)"
+    c1, c2, r1, r2 = e
+    return f"((p1 - {c1:.6g})/{r1:.6g})^2 + ((p2 - {c2:.6g})/{r2:.6g})^2 <= 1"

@@ -1,0 +1,117 @@
+"""Fixed points of the section map: analytic solution I, Jacobian, continuation, separatrices."""
+import json
+import math
+
+import numpy as np
+import pytest
+
+from explorer import model
+from explorer.app import cli
+from explorer.analysis import fixedpoints as fpm
+
+
+def test_fixed_point_at_mu0_is_solution_I_with_the_analytic_eigenvalues():
+    """MODEL.md R6/R9: p = 0 is solution I, c = sqrt(2 b h) = 2 sqrt 2 in the unstable band (2, 4)."""
+    fp = fpm.find_fixed_point(model.FIGURE4, 2.0, (0.05, -0.03))
+    assert np.abs(fp.point).max() < 1e-12
+    ev, tr = fpm.analytic_eigenvalues_solution_I(model.FIGURE4, 2.0)
+    np.testing.assert_allclose(np.sort(np.real(fp.eigenvalues)), np.sort(np.real(ev)), rtol=1e-9)
+    assert fp.trace == pytest.approx(tr, rel=1e-10) and not fp.stable
+    assert fp.det == pytest.approx(1.0, abs=1e-10)
+    assert fp.period_time == pytest.approx(2 * math.pi * 2.0 / math.sqrt(8.0), rel=1e-12)
+
+
+def test_solution_I_outside_the_band_is_elliptic_with_the_analytic_rotation():
+    h = 5.0  # c = sqrt(20) > lam b / a2 = 4: stable
+    fp = fpm.find_fixed_point(model.FIGURE4, h, (0.01, 0.0))
+    ev, tr = fpm.analytic_eigenvalues_solution_I(model.FIGURE4, h)
+    assert fp.stable and abs(tr) < 2
+    assert fp.trace == pytest.approx(tr, abs=1e-9)
+    np.testing.assert_allclose(np.abs(fp.eigenvalues), 1.0, atol=1e-9)
+
+
+@pytest.mark.parametrize("mu,x", [(0.5, (-0.1, 0.2)), (2.0, (-0.5, -0.3))])
+def test_section_map_jacobian_matches_finite_differences(mu, x):
+    smap = fpm.SectionMap(model.FIGURE4.with_(mu=mu, xi=0.1, chi=0.05), 2.0)
+    r = smap(np.array(x))
+    eps = 1e-6
+    fd = np.column_stack([(smap(np.array(x) + eps * e, jacobian=False).point
+                           - smap(np.array(x) - eps * e, jacobian=False).point) / (2 * eps) for e in np.eye(2)])
+    # (central differences with eps = 1e-6 carry an O(eps^2 |D^3 P|) error: entries reach 1e3 here)
+    np.testing.assert_allclose(r.jacobian, fd, atol=1e-4 * max(1.0, np.abs(fd).max()))
+
+
+def test_backward_map_inverts_the_forward_map():
+    smap = fpm.SectionMap(model.FIGURE4.with_(mu=0.3), 2.0)
+    x = np.array([0.4, -0.2])
+    fwd = smap(x)
+    back = smap(fwd.point, backward=True)
+    np.testing.assert_allclose(back.point, x, atol=1e-10)
+    assert back.time == pytest.approx(-fwd.time, rel=1e-10)
+    np.testing.assert_allclose(back.jacobian @ fwd.jacobian, np.eye(2), atol=1e-8)
+
+
+def test_continuation_in_mu_finds_the_stability_change_of_the_central_point():
+    br = fpm.continue_branch(model.FIGURE4, 2.0, "mu", 0.0, 4.0, 0.25)
+    assert len(br.bifurcations) == 1
+    mu_b = br.bifurcations[0]
+    assert 2.5 < mu_b < 3.5
+    below = fpm.find_fixed_point(model.FIGURE4.with_(mu=mu_b - 1e-3), 2.0, br.points[12].point)
+    above = fpm.find_fixed_point(model.FIGURE4.with_(mu=mu_b + 1e-3), 2.0, br.points[12].point)
+    assert not below.stable and above.stable
+    assert below.trace > 2 > above.trace
+    assert all(abs(p.det - 1) < 1e-8 for p in br.points)
+
+
+def _distance_to_polyline(points, curve):
+    a, b = curve[:-1], curve[1:]
+    d = []
+    for p in points:
+        ab = b - a
+        t = np.clip(np.sum((p - a) * ab, axis=1) / np.maximum(np.sum(ab * ab, axis=1), 1e-300), 0, 1)
+        d.append(np.min(np.linalg.norm(a + t[:, None] * ab - p, axis=1)))
+    return np.array(d)
+
+
+@pytest.mark.parametrize("stable", [False, True])
+def test_manifolds_are_invariant(stable):
+    """Images of points between the samples of a separatrix lie on the separatrix."""
+    fp = fpm.find_fixed_point(model.FIGURE4.with_(mu=0.01), 2.0)
+    curve = fpm.manifold(fp, stable=stable, iterations=5, n_domain=30, max_gap=0.01)
+    smap = fpm.SectionMap(fp.params, fp.h, tol=1e-14)
+    n = len(curve)
+    mids = 0.5 * (curve[1: n // 2: 7] + curve[2: n // 2 + 1: 7])
+    imgs = np.array([smap(m, backward=stable, jacobian=False).point for m in mids])
+    assert np.max(_distance_to_polyline(imgs, curve)) < 2e-3
+    # and the curve leaves the fixed point along the eigenvector
+    assert np.linalg.norm(curve[0] - fp.point) < 1e-12
+
+
+def test_elliptic_point_has_no_separatrices():
+    fp = fpm.find_fixed_point(model.FIGURE4.with_(mu=4.0), 2.0, (-2.16, 0.0))
+    assert fp.stable
+    with pytest.raises(model.ParameterError, match="elliptic"):
+        fpm.manifold(fp)
+
+
+def test_fixedpoint_cli_json_and_continuation(capsys):
+    assert cli.main(["fixedpoint", "--json"]) == 0
+    doc = json.loads(capsys.readouterr()[0])
+    assert {"p1", "p2", "trace", "eigenvalues", "stable"} <= set(doc)
+    assert doc["stable"] is False and abs(doc["trace"] - 9.0339110031) < 1e-8
+    assert cli.main(["fixedpoint", "--continue", "mu", "2.5", "3.5", "0.25", "--guess=-1.2,0", "--json"]) == 0
+    doc = json.loads(capsys.readouterr()[0])
+    assert len(doc["branch"]) == 5 and len(doc["bifurcations"]) == 1
+
+
+@pytest.mark.parametrize("args,fragment", [
+    (["--guess", "9,9"], "outside the allowed region"),
+    (["--guess", "a,b"], "--guess must be two numbers"),
+    (["--continue", "nu", "0", "1", "0.5"], "continuation parameter must be one of"),
+    (["--continue", "mu", "0", "1", "-0.5"], "STEP of the sign"),
+    (["--b", "-1"], "b must be > 0"),
+])
+def test_fixedpoint_cli_bad_input(args, fragment, capsys):
+    code = cli.main(["fixedpoint"] + args)
+    _, err = capsys.readouterr()
+    assert code == 2 and len(err.strip().splitlines()) == 1 and fragment in err

@@ -1,0 +1,106 @@
+"""`python -m explorer orbit`: output formats, agreement with the library, bad input."""
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from explorer import model
+from explorer.app import cli
+from explorer.analysis import sections
+
+
+def run_cli(args, capsys):
+    code = cli.main(args)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_orbit_csv_has_header_and_one_row_per_crossing(capsys):
+    code, out, err = run_cli(["orbit", "--p1", "0.3", "--p2", "0.1", "--h", "2", "--crossings", "5", "--mu", "0.5"], capsys)
+    assert code == 0, err
+    lines = out.strip().splitlines()
+    assert lines[0] == "k,t,p1,p2,M,dH"
+    rows = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])
+    assert rows.shape == (5, 6)
+    np.testing.assert_array_equal(rows[:, 0], np.arange(1, 6))
+    lib = sections.section_crossings(model.FIGURE4.with_(mu=0.5), [0.3], [0.1], 2.0, 5).orbit(0)
+    np.testing.assert_array_equal(rows[:, 1:], lib)  # repr round-trips exactly
+
+
+def test_orbit_json_matches_the_documented_shape(capsys):
+    code, out, _ = run_cli(["orbit", "--p1", "0", "--p2", "0", "--crossings", "3", "--json", "--method", "split8",
+                            "--dt", "0.01"], capsys)
+    assert code == 0
+    doc = json.loads(out)
+    assert set(doc) >= {"params", "h", "method", "status", "crossings"}
+    assert doc["params"] == model.FIGURE4.as_dict()
+    assert doc["method"] == "split8" and doc["status"] == "done" and doc["h"] == 2.0
+    t = np.array(doc["crossings"])[:, 0]
+    c = math.sqrt(2 * 2.0 * 2.0)
+    np.testing.assert_allclose(t, 2 * math.pi * 2.0 / c * np.arange(1, 4), rtol=1e-12)
+
+
+def test_orbit_that_stops_early_reports_its_status(capsys):
+    code, out, err = run_cli(["orbit", "--p1", "0.1", "--p2", "0", "--crossings", "50", "--tmax", "10",
+                              "--json", "--mu", "0.5"], capsys)
+    assert code == 0
+    doc = json.loads(out)
+    assert doc["status"] == "time budget exhausted" and 0 < len(doc["crossings"]) < 50
+
+
+def test_orbit_with_a_step_too_coarse_for_its_energy_error_is_warned(capsys):
+    """split4 at dt = 0.5 on Figure 4 (mu = 0.5) drifts in energy by far more than 1e-6 h: the
+    crossings are printed and stderr names the energy error and the setting to refine; the
+    default taylor run of the same orbit stays silent."""
+    base = ["orbit", "--p1", "0.3", "--p2", "0.1", "--crossings", "20", "--mu", "0.5", "--json"]
+    code, out, err = run_cli(base + ["--method", "split4", "--dt", "0.5"], capsys)
+    dh = np.abs(np.array(json.loads(out)["crossings"])[:, 4]).max()
+    assert code == 0 and dh > 2e-6
+    assert len(err.strip().splitlines()) == 1
+    assert "warning: energy error up to" in err and "--dt 0.5" in err
+    code, out, err = run_cli(base, capsys)
+    assert code == 0 and err == ""
+
+
+@pytest.mark.parametrize("args,fragment", [
+    (["--p1", "5", "--p2", "0"], "outside the allowed region"),
+    (["--p1", "0", "--p2", "0", "--a1", "-1"], "a1 must be > 0"),
+    (["--p1", "0", "--p2", "0", "--b", "0"], "b must be > 0"),
+    (["--p1", "0", "--p2", "0", "--lam", "0"], "lam must be nonzero"),
+    (["--p1", "nan", "--p2", "0"], "p1 must be finite"),
+    (["--p1", "0", "--p2", "0", "--h", "inf"], "h must be finite"),
+    (["--p1", "0", "--p2", "0", "--mu", "-2"], "mu must be >= 0"),
+    (["--p1", "0", "--p2", "0", "--method", "euler"], "method must be one of"),
+    (["--p1", "0", "--p2", "0", "--tol", "0"], "tol must be"),
+    (["--p1", "0", "--p2", "0", "--method", "split4", "--dt", "-1"], "dt must be"),
+    (["--p1", "0", "--p2", "0", "--crossings", "0"], "crossings must be"),
+    (["--p1", "0", "--p2", "0", "--tmax", "-5"], "tmax must be"),
+    (["--p1", "0", "--p2", "0", "--direction", "sideways"], "direction must be"),
+    (["--p1", "abc", "--p2", "0"], "--p1"),
+    (["--p2", "0"], "--p1"),
+    (["--p1", "0", "--p2", "0", "--bogus", "1"], "unrecognized arguments"),
+])
+def test_bad_input_gives_one_line_and_status_2(args, fragment, capsys):
+    code, out, err = run_cli(["orbit"] + args, capsys)
+    assert code == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("explorer: error:") and fragment in lines[0]
+    assert "Traceback" not in err
+
+
+def test_unknown_command_is_an_error(capsys):
+    code, _, err = run_cli(["fly"], capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1
+
+
+def test_python_dash_m_explorer_runs_and_exits_2_on_bad_input():
+    ok = subprocess.run([sys.executable, "-m", "explorer", "orbit", "--p1", "0", "--p2", "0", "--crossings", "2"],
+                        capture_output=True, text=True, timeout=300)
+    assert ok.returncode == 0 and ok.stdout.startswith("k,t,p1,p2,M,dH")
+    bad = subprocess.run([sys.executable, "-m", "explorer", "orbit", "--p1", "0", "--p2", "0", "--lam", "0"],
+                         capture_output=True, text=True, timeout=300)
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr and len(bad.stderr.strip().splitlines()) == 1

@@ -1,0 +1,238 @@
+"""The lane (SIMD) Taylor driver is bit for bit the scalar one: kernels, step size, whole
+batches (parameter sets, orbit counts not multiple of LANES, very different orbit lengths and
+stop reasons, lane groupings, threads); the generated kernel file is up to date."""
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import PARAM_SETS, random_states
+
+from explorer.integrate import _lanes_generated as G
+from explorer import model
+from explorer.integrate import drivers
+from explorer.model import equations
+from explorer.integrate import lanes
+from explorer.analysis import sections
+from explorer._jit import NOJIT, get_num_threads, njit, set_num_threads
+from explorer.kernels import (STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_TMAX)
+from explorer.kernels import taylor as tk
+
+ROOT = Path(__file__).resolve().parents[2]
+L = G.LANES
+
+
+# ---------------------------------------------------------------- the generated file
+def test_generated_file_is_up_to_date(tmp_path):
+    out = tmp_path / "gen.py"
+    subprocess.run([sys.executable, str(ROOT / "tools" / "gen_lanes.py"), "-o", str(out)],
+                   check=True, capture_output=True)
+    assert out.read_text() == (ROOT / "src" / "explorer" / "integrate" / "_lanes_generated.py").read_text(), \
+        "src/explorer/integrate/_lanes_generated.py is stale: run tools/gen_lanes.py"
+
+
+# ---------------------------------------------------------------- kernels
+@pytest.mark.parametrize("name", sorted(PARAM_SETS))
+@pytest.mark.parametrize("order", [4, 5, 15, 16, 19, 27])
+def test_kernels_match_scalar_bitwise(name, order):
+    P = PARAM_SETS[name].as_array()
+    rng = np.random.default_rng(order)
+    X = np.zeros((order + 1, 5, L))
+    X[0] = random_states(PARAM_SETS[name], L, seed=order, scale=2.0).T
+    X[0, :, 0] = 0.0      # an idle lane
+    X[0, 2, 1] = 1e150    # a lane whose coefficients overflow
+    G.taylor_coefficients_lanes(P, X, order)
+    h = rng.uniform(0.0, 0.5, L)
+    out = np.empty((5, L))
+    G.evaluate_lanes(X, order, h, out)
+    e_p, e_q = 1.0 / order, 1.0 / (order - 1)
+    norms = np.empty((7, L))
+    with np.errstate(all="ignore"):
+        G.step_norms_lanes(X, order, e_p, e_q, norms)
+        for l in range(L):
+            _check_lane(P, X, order, h, out, norms, l)
+
+
+def _check_lane(P, X, order, h, out, norms, l):
+    """Lane l of the vector kernels against the scalar ones."""
+    e_p, e_q = 1.0 / order, 1.0 / (order - 1)
+    Xs = np.zeros((5, order + 1))
+    Xs[:, 0] = X[0, :, l]
+    equations.taylor_coefficients(P, Xs, order)
+    np.testing.assert_array_equal(Xs.T, X[:, :, l])
+    ys = np.empty(5)
+    tk.evaluate(Xs, order, h[l], ys)
+    np.testing.assert_array_equal(ys, out[:, l])
+    assert (norms[0, l] == Xs[0, order] + Xs[1, order] + Xs[2, order] + Xs[3, order] + Xs[4, order]
+            or np.isnan(norms[0, l]))
+    assert drivers._finite_col(Xs, order) == (norms[0, l] - norms[0, l] == 0.0)
+    assert drivers._finite_col(Xs, order - 1) == (norms[1, l] - norms[1, l] == 0.0)
+    if drivers._finite_col(Xs, order) and drivers._finite_col(Xs, order - 1):
+        s = max(1.0, np.abs(Xs[:, 0]).max())
+        assert norms[2, l] == np.abs(Xs[:, order]).max()
+        assert norms[3, l] == np.abs(Xs[:, order - 1]).max()
+        factor = tk.safety_factor(order)
+        margin = (e_p + e_q) * G.LOG2_APPROX_ERR + 1e-12
+        got = lanes.lane_step_size(norms[2, l], norms[3, l], norms[4, l], norms[5, l], norms[6, l],
+                                   e_p, e_q, margin, factor)
+        assert got == tk.step_size(Xs, order, factor)
+        assert norms[4, l] == s / norms[2, l] and norms[5, l] == s / norms[3, l]
+
+
+@pytest.mark.skipif(NOJIT, reason="the approximation is the compiled intrinsic")
+def test_log2_approx_error_bound():
+    @njit(cache=False)
+    def approx(v, out):
+        for i in range(0, v.shape[0], G.LANES):
+            G.vstore(out, i, G.vlog2_approx(G.vload(v, i)))
+
+    rng = np.random.default_rng(5)
+    n = 64 * 4096
+    m = np.concatenate([np.linspace(1.0, 2.0, n // 2, endpoint=False), rng.uniform(1.0, 2.0, n // 2)])
+    e = rng.integers(-1022, 1024, n)
+    v = np.ldexp(m, e)
+    v[:4] = [2.2250738585072014e-308, 1.7976931348623157e308, 1.0, np.nextafter(2.0, 0.0)]
+    out = np.empty(n)
+    approx(v, out)
+    err = np.abs(out - np.log2(v))
+    assert err.max() <= 0.6 * G.LOG2_APPROX_ERR
+
+
+@pytest.mark.parametrize("order", [4, 15, 16, 25, 40])
+def test_lane_step_size_near_ties(order):
+    """The single-pow shortcut returns step_size's double even when the two radii are nearly
+    equal and the log2 estimate d is off by the whole error bound, either way."""
+    rng = np.random.default_rng(order)
+    e_p, e_q = 1.0 / order, 1.0 / (order - 1)
+    factor = tk.safety_factor(order)
+    bound = (e_p + e_q) * G.LOG2_APPROX_ERR
+    margin = bound + 1e-12
+    for _ in range(3000):
+        s = max(1.0, 10.0 ** rng.uniform(-1, 3))
+        a = 10.0 ** rng.uniform(-300, 5)
+        # bm such that (s/bm)^e_q = (s/a)^e_p (1 + rel), rel from exact ties to far apart
+        rel = rng.choice([0.0, 1e-16, -1e-16, 1e-13, -1e-13, 1e-9, -1e-9, 1e-5, -1e-5, 0.1, -0.5])
+        with np.errstate(all="ignore"):
+            bm = s / ((s / a) ** (e_p / e_q) * (1.0 + rel) ** (1.0 / e_q))
+        if not (np.isfinite(bm) and bm > 0.0):
+            continue
+        X = np.zeros((5, order + 1))
+        X[2, 0], X[3, order], X[1, order - 1] = s, -a, bm
+        want = tk.step_size(X, order, factor)
+        u, v = s / a, s / bm
+        d = e_q * math.log2(v) - e_p * math.log2(u)
+        for dd in (d, d + bound, d - bound):
+            assert lanes.lane_step_size(a, bm, u, v, dd, e_p, e_q, margin, factor) == want
+    # zero, infinite and subnormal norms take the exact path
+    for a, bm in [(0.0, 0.0), (0.0, 1e-3), (1e-3, 0.0), (5e-324, 1e-3), (1e-3, 5e-324)]:
+        X = np.zeros((5, order + 1))
+        X[0, 0], X[0, order], X[0, order - 1] = 1.0, a, bm
+        with np.errstate(all="ignore"):
+            u, v = np.float64(1.0) / a, np.float64(1.0) / bm
+        got = lanes.lane_step_size(a, bm, u, v, 0.0, e_p, e_q, margin, factor)
+        assert got == tk.step_size(X, order, factor)
+
+
+# ---------------------------------------------------------------- whole batches
+def _run(fn, Y0, P, K, *, order=15, tmax=None, max_steps=10**9, phi0=math.pi, direction=1, **kw):
+    n = Y0.shape[0]
+    g1, g2 = model.section_gamma(phi0)
+    out = (np.full((n, K, 5), np.nan), np.zeros(n, np.int64), np.zeros(n, np.int64),
+           np.zeros((n, 5)), np.zeros((n, 3)))
+    tmax = 100.0 * K if tmax is None else tmax
+    fn(np.ascontiguousarray(Y0), P, g2, g1, direction, tmax, order, max_steps, *out, **kw)
+    return out
+
+
+def _assert_identical(a, b):
+    for name, x, y in zip(("cross", "count", "status", "final", "info"), a, b):
+        assert x.dtype == y.dtype and x.shape == y.shape, name
+        np.testing.assert_array_equal(x, y, err_msg=name)   # bitwise (NaN rows too)
+        assert np.array_equal(x.view(np.uint8), y.view(np.uint8)), name
+
+
+def _mixed_states(prm, n, seed):
+    """n start states: section states of the Figure-4 kind, random states, a libration about
+    phi = 0 that never reaches phi = pi, and an orbit whose coefficients overflow (M = 1e150)."""
+    h = 2.0
+    c1, c2, r1, r2 = model.allowed_ellipse(prm, h)
+    p1 = c1 + r1 * np.linspace(-0.9, 0.9, max(n, 2))[:n]
+    Y = model.section_state(prm, p1, np.full(n, c2), h)
+    R = random_states(prm, n, seed=seed)
+    Y[1::3] = R[1::3]
+    if n >= 3:
+        Y[2] = [0.0, 0.0, 0.0, math.sin(0.05), math.cos(0.05)]
+    if n >= 5:
+        Y[4] = [0.1, -0.2, 1e150, 0.6, 0.8]
+    return Y
+
+
+@pytest.mark.parametrize("name", sorted(PARAM_SETS))
+@pytest.mark.parametrize("n", [1, 3, 7, 13, 64])
+def test_batch_bitwise_identical(name, n):
+    prm = PARAM_SETS[name]
+    P = prm.as_array()
+    Y0 = _mixed_states(prm, n, seed=n)
+    K = 12
+    ref = _run(drivers.run_taylor_batch, Y0, P, K)
+    for max_lanes in (L, 3):
+        _assert_identical(ref, _run(lanes.run_taylor_lanes_batch, Y0, P, K, max_lanes=max_lanes))
+    if n >= 5:
+        assert ref[2][4] == STATUS_NONFINITE
+    if n >= 3 and name == "figure4_mu0.5":
+        assert ref[2][2] == STATUS_TMAX and ref[1][2] == 0
+
+
+def test_batch_statuses_and_settings():
+    """Budgets (time, steps), both directions, another section angle, another order: every
+    stop reason of the W4-like batch, lane groupings 1..LANES."""
+    prm = PARAM_SETS["asym_lam_neg"]
+    P = prm.as_array()
+    Y0 = _mixed_states(prm, 23, seed=3)
+    cases = [dict(K=10, max_steps=300), dict(K=40, tmax=25.0), dict(K=6, direction=-1, phi0=1.0),
+             dict(K=6, direction=0, order=19), dict(K=5, order=4, tmax=30.0)]
+    seen = set()
+    for kw in cases:
+        kw = dict(kw)
+        K = kw.pop("K")
+        ref = _run(drivers.run_taylor_batch, Y0, P, K, **kw)
+        seen.update(ref[2].tolist())
+        for max_lanes in (1, 2, 5, L):
+            _assert_identical(ref, _run(lanes.run_taylor_lanes_batch, Y0, P, K, max_lanes=max_lanes, **kw))
+    assert {STATUS_DONE, STATUS_TMAX, STATUS_MAX_STEPS, STATUS_NONFINITE} <= seen
+
+
+def test_batch_degenerate_budgets():
+    """Orbits that stop before their first step: K = 0, tmax <= 0, max_steps = 0."""
+    prm = PARAM_SETS["figure4_mu0.5"]
+    P = prm.as_array()
+    Y0 = _mixed_states(prm, 9, seed=1)
+    for K, kw in [(0, {}), (3, dict(tmax=0.0)), (3, dict(max_steps=0)), (3, dict(max_steps=1))]:
+        ref = _run(drivers.run_taylor_batch, Y0, P, K, **kw)
+        _assert_identical(ref, _run(lanes.run_taylor_lanes_batch, Y0, P, K, **kw))
+
+
+def test_threads_do_not_change_results():
+    prm = PARAM_SETS["figure4_mu0.5"]
+    P = prm.as_array()
+    Y0 = _mixed_states(prm, 29, seed=7)
+    ref = _run(drivers.run_taylor_batch, Y0, P, 25, order=16)
+    old = get_num_threads()
+    try:
+        for threads in (1, 2):
+            set_num_threads(min(threads, old))
+            _assert_identical(ref, _run(lanes.run_taylor_lanes_batch, Y0, P, 25, order=16))
+    finally:
+        set_num_threads(old)
+
+
+def test_sections_taylor_uses_the_lanes_and_matches_the_scalar_driver():
+    prm = PARAM_SETS["figure4_mu0.5"]
+    c1, c2, r1, r2 = model.allowed_ellipse(prm, 2.0)
+    p1 = c1 + r1 * np.linspace(-0.95, 0.95, 11)
+    res = sections.section_crossings(prm, p1, np.zeros(11), 2.0, 30, method="taylor", tol=1e-12)
+    Y0 = model.section_state(prm, p1, np.zeros(11), 2.0)
+    ref = _run(drivers.run_taylor_batch, Y0, prm.as_array(), 30, order=res.settings["order"])
+    _assert_identical(ref, (res.data, res.count, res.status, res.final, res.info))

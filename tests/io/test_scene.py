@@ -1,0 +1,459 @@
+"""explorer.scene: TOML scenes, validation with dotted keys, seeding, panel hashes."""
+import ast
+import dataclasses
+import inspect
+import math
+import re
+
+import numpy as np
+import pytest
+
+from explorer import model
+from explorer.io import scene
+from explorer.analysis import sections
+from explorer.io.scene import SceneError, SeedSpec, load_scene, parse_scene, seed_points
+
+from conftest import PARAM_SETS
+
+
+def _docstring_example() -> str:
+    """The full example of the module docstring (the indented block after 'Format')."""
+    doc = scene.__doc__
+    block = doc.split("shows every key", 1)[1].split("::\n\n", 1)[1]
+    lines = []
+    for line in block.splitlines():
+        if line.strip() and not line.startswith("    "):
+            break
+        lines.append(line[4:])
+    return "\n".join(lines)
+
+
+BASE = 'name = "t"\n'
+
+
+# ---------------------------------------------------------------- parsing
+def test_full_docstring_example_parses_with_every_key():
+    text = _docstring_example()
+    s = parse_scene(text)
+    assert s.name == "figure4" and s.text == text
+    assert s.params == model.FIGURE4
+    assert s.h == 2.0
+    assert s.sweep_parameter == "mu" and s.sweep_values == (0.05, 0.2, 0.5, 1.0, 2.0)
+    assert s.seeds == SeedSpec(kind="grid", n=200, margin=0.98, seed=12345,
+                               lines=((-1.0, 0.0, 1.0, 0.0),), points=((0.1, 0.0), (0.3, 0.2)))
+    i = s.integration
+    assert (i.method, i.tol, i.dt, i.crossings, i.tmax, i.max_steps, i.direction) == \
+        ("taylor", 1e-13, 0.05, 1000, 2e4, 10**9, 1)
+    assert i.phi0 == math.pi
+    assert s.compute == ("sections",)
+    f = s.figure
+    assert (f.layout, f.columns, f.share_scale, f.own_scale, f.marker_size, f.dpi) == \
+        ("row", 3, True, (4,), 0.25, 200)
+    assert s.n_panels == 5
+
+
+def test_minimal_scene_has_documented_defaults_and_one_panel():
+    s = parse_scene(BASE)
+    assert s.params == model.FIGURE4 and s.h == model.FIGURE4_H
+    assert s.n_panels == 1 and s.panel(0) == (model.FIGURE4, model.FIGURE4_H, "")
+    assert s.seeds == SeedSpec("grid", 200, 0.98, 0, None, None)
+    assert s.integration == scene.IntegrationSpec()
+    assert s.integration.phi0 == math.pi and s.integration.tol == sections.DEFAULT_TOL
+    assert s.integration.effective_tmax == 100.0 * s.integration.crossings
+    assert s.figure == scene.FigureSpec() and s.compute == ("sections",)
+
+
+def test_preset_figure4_loads_with_the_figure4_scene():
+    s = load_scene("figure4")
+    assert s.name == "figure4" and s.text == scene.PRESETS["figure4"]
+    assert s.sweep_parameter == "mu" and s.sweep_values == (0.002, 0.01, 0.03, 4.0, 8.0)
+    for i, mu in enumerate(s.sweep_values):
+        prm, h, label = s.panel(i)
+        assert prm == model.FIGURE4.with_(mu=mu) and h == model.FIGURE4_H == 2.0
+        assert label == f"mu = {mu!r}"
+    assert s.seeds.used_dict() == {"kind": "grid", "n": 200, "margin": 0.98}
+    assert (s.integration.method, s.integration.tol, s.integration.crossings) == ("taylor", 1e-13, 1000)
+    assert (s.figure.layout, s.figure.share_scale, s.figure.own_scale) == ("row", True, (3, 4))
+    assert s.integration.tmax == 10000.0
+    assert s.grid_shape() == (1, 5)
+
+
+def test_load_scene_reads_a_toml_file(tmp_path):
+    p = tmp_path / "my.toml"
+    text = BASE + '[sweep]\nparameter = "h"\nvalues = [1.0, 3]\n'
+    p.write_text(text, encoding="utf-8")
+    s = load_scene(str(p))
+    assert s.text == text and s.sweep_values == (1.0, 3.0)
+    assert [s.panel(i)[1] for i in range(2)] == [1.0, 3.0] and s.panel(1)[2] == "h = 3.0"
+    assert load_scene(p) == s
+
+
+def test_missing_file_is_a_scene_error_naming_the_path(tmp_path):
+    missing = tmp_path / "nope.toml"
+    with pytest.raises(SceneError, match=re.escape(str(missing))) as ei:
+        load_scene(str(missing))
+    assert "\n" not in str(ei.value)
+
+
+def test_toml_syntax_error_is_a_scene_error_with_the_line():
+    with pytest.raises(SceneError) as ei:
+        parse_scene('name = "t"\n[model]\nmu = = 1\n', source="x.toml")
+    msg = str(ei.value)
+    assert "TOML syntax error" in msg and "x.toml" in msg and "line 3" in msg and "\n" not in msg
+
+
+def test_scene_error_is_a_parameter_error():
+    assert issubclass(SceneError, model.ParameterError)
+
+
+BAD = [
+    # (id, toml body after name, dotted key that must be named)
+    ("unknown_table", "[modle]\nmu = 1.0\n", "modle"),
+    ("unknown_top_key", "nmae = 'x'\n", "nmae"),
+    ("unknown_model_key", "[model]\nnu = 1.0\n", "model.nu"),
+    ("unknown_energy_key", "[energy]\nE = 1.0\n", "energy.E"),
+    ("unknown_sweep_key", "[sweep]\nparameter = 'mu'\nvalues = [1.0]\nvalue = 2\n", "sweep.value"),
+    ("unknown_seeds_key", "[seeds]\nnn = 3\n", "seeds.nn"),
+    ("unknown_integration_key", "[integration]\ntolerance = 1e-10\n", "integration.tolerance"),
+    ("unknown_compute_key", "[compute]\nfractal = true\n", "compute.fractal"),
+    ("unknown_lyapunov_key", "[lyapunov]\ntimes = 3\n", "lyapunov.times"),
+    ("lyapunov_time_negative", "[lyapunov]\ntime = -3.0\n", "lyapunov.time"),
+    ("lyapunov_bad_method", "[lyapunov]\nmethod = \"euler\"\n", "lyapunov.method"),
+    ("lyapunov_threshold_low", "[lyapunov]\nthreshold = 1.0\n", "lyapunov.threshold"),
+    ("unknown_figure_key", "[figure]\nsize = 3\n", "figure.size"),
+    ("table_as_value", "model = 3\n", "model"),
+    ("string_for_number", "[energy]\nh = '2'\n", "energy.h"),
+    ("bool_for_number", "[model]\nmu = true\n", "model.mu"),
+    ("bool_for_int", "[integration]\ncrossings = true\n", "integration.crossings"),
+    ("float_for_crossings", "[integration]\ncrossings = 1000.0\n", "integration.crossings"),
+    ("float_for_n", "[seeds]\nn = 200.0\n", "seeds.n"),
+    ("nan_model", "[model]\nchi = nan\n", "model.chi"),
+    ("inf_energy", "[energy]\nh = inf\n", "energy.h"),
+    ("inf_sweep_value", "[sweep]\nparameter = 'mu'\nvalues = [0.5, inf]\n", "sweep.values[1]"),
+    ("nonpositive_mass", "[model]\na1 = 0.0\n", "model.a1"),
+    ("lam_zero", "[model]\nlam = 0\n", "model.lam"),
+    ("negative_mu", "[model]\nmu = -1.0\n", "model.mu"),
+    ("negative_crossings", "[integration]\ncrossings = -5\n", "integration.crossings"),
+    ("zero_crossings", "[integration]\ncrossings = 0\n", "integration.crossings"),
+    ("bad_method", "[integration]\nmethod = 'rk4'\n", "integration.method"),
+    ("tol_too_large", "[integration]\ntol = 0.5\n", "integration.tol"),
+    ("tol_too_small", "[integration]\ntol = 1e-20\n", "integration.tol"),
+    ("dt_zero", "[integration]\ndt = 0.0\n", "integration.dt"),
+    ("dt_negative", "[integration]\nmethod = 'split4'\ndt = -0.1\n", "integration.dt"),
+    ("tmax_zero", "[integration]\ntmax = 0.0\n", "integration.tmax"),
+    ("max_steps_zero", "[integration]\nmax_steps = 0\n", "integration.max_steps"),
+    ("phi0_string", "[integration]\nphi0 = 'pi'\n", "integration.phi0"),
+    ("bad_direction", "[integration]\ndirection = 2\n", "integration.direction"),
+    ("direction_string", "[integration]\ndirection = '+'\n", "integration.direction"),
+    ("margin_zero", "[seeds]\nmargin = 0.0\n", "seeds.margin"),
+    ("margin_above_one", "[seeds]\nmargin = 1.5\n", "seeds.margin"),
+    ("bad_kind", "[seeds]\nkind = 'hex'\n", "seeds.kind"),
+    ("n_zero", "[seeds]\nn = 0\n", "seeds.n"),
+    ("negative_seed", "[seeds]\nkind = 'random'\nseed = -1\n", "seeds.seed"),
+    ("lines_missing", "[seeds]\nkind = 'lines'\n", "seeds.lines"),
+    ("line_outside_unit_box", "[seeds]\nkind = 'lines'\nlines = [[-1.5, 0.0, 1.0, 0.0]]\n", "seeds.lines[0]"),
+    ("line_wrong_length", "[seeds]\nkind = 'lines'\nlines = [[0.0, 0.0, 1.0]]\n", "seeds.lines[0]"),
+    ("points_wrong_length", "[seeds]\nkind = 'points'\npoints = [[0.1, 0.0, 0.0]]\n", "seeds.points[0]"),
+    ("points_all_outside", "[seeds]\nkind = 'points'\npoints = [[10.0, 0.0]]\n", "seeds.points"),
+    ("empty_values", "[sweep]\nparameter = 'mu'\nvalues = []\n", "sweep.values"),
+    ("values_missing", "[sweep]\nparameter = 'mu'\n", "sweep.values"),
+    ("duplicate_values", "[sweep]\nparameter = 'mu'\nvalues = [0.5, 1.0, 0.5]\n", "sweep.values[2]"),
+    ("duplicate_int_float", "[sweep]\nparameter = 'mu'\nvalues = [1, 1.0]\n", "sweep.values[1]"),
+    ("sweep_unknown_parameter", "[sweep]\nparameter = 'nu'\nvalues = [1.0]\n", "sweep.parameter"),
+    ("sweep_mu_negative", "[sweep]\nparameter = 'mu'\nvalues = [0.5, -0.1]\n", "sweep.values[1]"),
+    ("sweep_lam_hits_zero", "[sweep]\nparameter = 'lam'\nvalues = [1.0, 0.0, -1.0]\n", "sweep.values[1]"),
+    ("sweep_a2_zero", "[sweep]\nparameter = 'a2'\nvalues = [0.0]\n", "sweep.values[0]"),
+    ("energy_below_region", "[energy]\nh = -1.0\n", "energy.h"),
+    ("energy_below_region_in_mu_sweep", "[energy]\nh = -1.0\n[sweep]\nparameter = 'mu'\nvalues = [0.05, 0.2]\n",
+     "energy.h"),
+    ("sweep_h_below_region", "[sweep]\nparameter = 'h'\nvalues = [2.0, -1.0]\n", "sweep.values[1]"),
+    ("sweep_eta_empties_one_panel", "[model]\nmu = 1.0\n[sweep]\nparameter = 'eta'\nvalues = [0.0, -5.0]\n",
+     "sweep.values[1]"),
+    ("compute_nothing", "[compute]\nsections = false\n", "compute.sections"),
+    ("compute_not_bool", "[compute]\nsections = 1\n", "compute.sections"),
+    ("bad_layout", "[figure]\nlayout = 'column'\n", "figure.layout"),
+    ("columns_zero", "[figure]\nlayout = 'grid'\ncolumns = 0\n", "figure.columns"),
+    ("own_scale_out_of_range", "[figure]\nown_scale = [1]\n", "figure.own_scale[0]"),
+    ("own_scale_out_of_range_sweep", "[sweep]\nparameter = 'mu'\nvalues = [0.1, 0.2]\n[figure]\nown_scale = [0, 2]\n",
+     "figure.own_scale[1]"),
+    ("own_scale_duplicate", "[sweep]\nparameter = 'mu'\nvalues = [0.1, 0.2]\n[figure]\nown_scale = [1, 1]\n",
+     "figure.own_scale[1]"),
+    ("share_scale_not_bool", "[figure]\nshare_scale = 'yes'\n", "figure.share_scale"),
+    ("marker_size_negative", "[figure]\nmarker_size = -1.0\n", "figure.marker_size"),
+    ("dpi_zero", "[figure]\ndpi = 0\n", "figure.dpi"),
+    ("description_not_string", "description = 3\n", "description"),
+]
+
+
+@pytest.mark.parametrize("body,key", [b[1:] for b in BAD], ids=[b[0] for b in BAD])
+def test_bad_scene_raises_scene_error_naming_the_key(body, key):
+    with pytest.raises(SceneError) as ei:
+        parse_scene(BASE + body)
+    msg = str(ei.value)
+    assert f"'{key}'" in msg, msg
+    assert "\n" not in msg
+
+
+@pytest.mark.parametrize("name", ["fig 4", "", "a/b", ".hidden", "x" * 200, "π"])
+def test_bad_name_raises_scene_error_naming_name(name):
+    with pytest.raises(SceneError, match="'name'"):
+        parse_scene(f"name = {scene._toml_string(name)}\n")
+
+
+def test_missing_name_and_non_string_name_raise():
+    with pytest.raises(SceneError, match="'name'"):
+        parse_scene("[energy]\nh = 2.0\n")
+    with pytest.raises(SceneError, match="'name'"):
+        parse_scene("name = 4\n")
+
+
+def test_unknown_key_message_lists_the_allowed_keys():
+    with pytest.raises(SceneError) as ei:
+        parse_scene(BASE + "[seeds]\nnn = 3\n")
+    assert str(ei.value) == "scene: unknown key 'seeds.nn' (allowed: kind, n, margin, seed, lines, points)"
+
+
+def test_range_message_names_range_and_value():
+    with pytest.raises(SceneError) as ei:
+        parse_scene(BASE + "[integration]\ntol = 0.5\n")
+    assert str(ei.value) == "scene key 'integration.tol' must be in [1e-16, 0.01], got 0.5"
+
+
+def test_integer_is_accepted_for_a_float_and_stored_as_float():
+    s = parse_scene(BASE + "[energy]\nh = 3\n[model]\nmu = 1\n[integration]\ntmax = 500\n")
+    assert type(s.h) is float and type(s.params.mu) is float and type(s.integration.tmax) is float
+
+
+def test_dataclasses_validate_when_built_in_python():
+    with pytest.raises(SceneError, match="'seeds.margin'"):
+        SeedSpec(margin=0.0)
+    with pytest.raises(SceneError, match="'integration.method'"):
+        scene.IntegrationSpec(method="euler")
+    with pytest.raises(SceneError, match="'figure.dpi'"):
+        scene.FigureSpec(dpi=1.5)
+    with pytest.raises(SceneError, match="'sweep.values\\[0\\]'"):
+        scene.Scene(name="x", sweep_parameter="mu", sweep_values=(-1.0,))
+
+
+def test_panel_index_out_of_range_raises_index_error():
+    s = load_scene("figure4")
+    for bad in (-1, 5, 1.0):
+        with pytest.raises(IndexError):
+            s.panel(bad)
+
+
+def test_dict_and_toml_round_trips_give_the_same_scene():
+    for s in (load_scene("figure4"), parse_scene(_docstring_example()),
+              parse_scene(BASE + 'description = "quote \\" tab\\t é"\n[seeds]\nkind = "lines"\n'
+                          "lines = [[-1.0, 0.0, 1.0, 0.0], [0.0, -1, 0.0, 1]]\n[integration]\nphi0 = 1.25\n")):
+        assert scene.scene_from_dict(s.to_dict(), s.text) == s
+        assert dataclasses.replace(parse_scene(s.to_toml()), text=s.text) == s
+
+
+def test_section_kwargs_fit_section_crossings():
+    for method in ("taylor", "split4"):
+        spec = scene.IntegrationSpec(method=method, crossings=7, direction=0)
+        kw = spec.section_kwargs()
+        inspect.signature(sections.section_crossings).bind(model.FIGURE4, [0.0], [0.0], 2.0, spec.crossings, **kw)
+        assert ("tol" in kw) == (method == "taylor") and ("dt" in kw) == (method != "taylor")
+        assert kw["tmax"] == 700.0
+
+
+def test_module_imports_no_numba_h5py_or_matplotlib():
+    tree = ast.parse(inspect.getsource(scene))
+    names = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names.update(a.name.split(".")[0] for a in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.level == 0:
+            names.add(node.module.split(".")[0])
+    assert not names & {"numba", "h5py", "matplotlib"}
+
+
+# ---------------------------------------------------------------- panel hashes
+SWEEP_SCENE = BASE + "[sweep]\nparameter = 'mu'\nvalues = [0.1, 0.5, 1.0]\n[integration]\ntol = 1e-12\n"
+
+
+def _hashes(text):
+    s = parse_scene(text)
+    return [s.panel_hash(i) for i in range(s.n_panels)]
+
+
+def test_panel_hashes_are_distinct_hex_sha256():
+    h = _hashes(SWEEP_SCENE)
+    assert len(set(h)) == 3 and all(re.fullmatch(r"[0-9a-f]{64}", x) for x in h)
+
+
+def test_figure_name_and_description_changes_keep_panel_hashes():
+    base = _hashes(SWEEP_SCENE)
+    changed = SWEEP_SCENE.replace('name = "t"', 'name = "other"\ndescription = "words"') + \
+        "[figure]\nlayout = 'grid'\ncolumns = 2\nshare_scale = false\nown_scale = [2]\nmarker_size = 1.0\ndpi = 100\n"
+    assert _hashes(changed) == base
+
+
+def test_changing_one_sweep_value_changes_exactly_that_panel_hash():
+    base = _hashes(SWEEP_SCENE)
+    new = _hashes(SWEEP_SCENE.replace("0.5,", "0.6,"))
+    assert [a == b for a, b in zip(base, new)] == [True, False, True]
+
+
+def test_reordering_sweep_values_moves_the_hashes_with_the_values():
+    base = _hashes(SWEEP_SCENE)
+    new = _hashes(SWEEP_SCENE.replace("[0.1, 0.5, 1.0]", "[1.0, 0.1, 0.5]"))
+    assert new == [base[2], base[0], base[1]]
+
+
+@pytest.mark.parametrize("change", [
+    ("tol = 1e-12", "tol = 1e-11"),
+    ("tol = 1e-12", "tol = 1e-12\ncrossings = 999"),
+    ("tol = 1e-12", "tol = 1e-12\nphi0 = 1.0"),
+    ("tol = 1e-12", "tol = 1e-12\ndirection = -1"),
+    ("tol = 1e-12", "tol = 1e-12\nmethod = 'dop853'"),
+    ("[integration]", "[seeds]\nn = 201\n[integration]"),
+    ("[integration]", "[model]\nchi = 0.1\n[integration]"),
+    ("[integration]", "[energy]\nh = 2.5\n[integration]"),
+], ids=["tol", "crossings", "phi0", "direction", "method", "seeds_n", "model", "energy"])
+def test_changing_a_shared_setting_changes_every_panel_hash(change):
+    base = _hashes(SWEEP_SCENE)
+    new = _hashes(SWEEP_SCENE.replace(*change))
+    assert all(a != b for a, b in zip(base, new))
+
+
+def test_unused_settings_do_not_change_panel_hashes():
+    base = _hashes(SWEEP_SCENE)
+    # dt is unused by taylor; seed unused by grid; default tmax written out; int vs float
+    same = SWEEP_SCENE.replace("tol = 1e-12", "tol = 1e-12\ndt = 0.01\ntmax = 100000\n") + \
+        "[seeds]\nseed = 7\n[energy]\nh = 2\n"
+    assert _hashes(same) == base
+
+
+def test_panel_settings_are_json_plain_and_describe_the_panel():
+    import json
+    s = parse_scene(SWEEP_SCENE)
+    st = s.panel_settings(1)
+    assert json.loads(json.dumps(st)) == st
+    assert st["params"]["mu"] == 0.5 and st["h"] == 2.0 and st["integration"]["tol"] == 1e-12
+    assert "dt" not in st["integration"] and st["seeds"] == {"kind": "grid", "n": 200, "margin": 0.98}
+
+
+# ---------------------------------------------------------------- seeding
+SEED_CASES = [(name, prm, h, phi0)
+              for name, prm in list(PARAM_SETS.items()) + [("figure4_mu0", model.FIGURE4),
+                                                           ("figure4_mu2", model.FIGURE4.with_(mu=2.0))]
+              for h, phi0 in ((2.0, math.pi), (1.5, 0.7), (3.0, -2.3))]
+SEED_IDS = [f"{c[0]}-h{c[2]}-phi{c[3]:.2f}" for c in SEED_CASES]
+
+SPECS = {
+    "grid": SeedSpec(kind="grid", n=300),
+    "grid_margin1": SeedSpec(kind="grid", n=500, margin=1.0),
+    "random": SeedSpec(kind="random", n=500, seed=3),
+    "random_margin1": SeedSpec(kind="random", n=500, margin=1.0, seed=4),
+    "lines": SeedSpec(kind="lines", n=101, margin=0.7,
+                      lines=((-1.0, 0.0, 1.0, 0.0), (-1.0, -1.0, 1.0, 1.0), (0.0, 1.0, 0.0, -1.0))),
+    "lines_margin1": SeedSpec(kind="lines", n=101, margin=1.0,
+                      lines=((-1.0, 0.0, 1.0, 0.0), (-1.0, -1.0, 1.0, 1.0), (0.0, 1.0, 0.0, -1.0))),
+    "points": SeedSpec(kind="points", points=((0.0, 0.0), (0.3, -0.2), (5.0, 5.0), (-1.0, 0.5), (1e3, 0.0))),
+}
+
+
+def _in_scaled_ellipse(prm, h, phi0, p1, p2, margin):
+    c1, c2, r1, r2 = model.allowed_ellipse(prm, h, phi0)
+    return ((p1 - c1) / (margin * r1)) ** 2 + ((p2 - c2) / (margin * r2)) ** 2 <= 1.0 + 1e-12
+
+
+@pytest.mark.parametrize("kind", sorted(SPECS))
+@pytest.mark.parametrize("name,prm,h,phi0", SEED_CASES, ids=SEED_IDS)
+def test_seeds_lie_strictly_inside_the_allowed_region(kind, name, prm, h, phi0):
+    spec = SPECS[kind]
+    p1, p2, dropped = seed_points(spec, prm, h, phi0)
+    assert p1.dtype == p2.dtype == np.float64 and p1.shape == p2.shape and p1.ndim == 1
+    assert np.all(model.section_M2(prm, p1, p2, h, phi0) > 0.0)
+    if spec.kind == "points":
+        m2 = model.section_M2(prm, [p[0] for p in spec.points], [p[1] for p in spec.points], h, phi0)
+        assert p1.size == np.count_nonzero(m2 > 0) and dropped == len(spec.points) - p1.size
+        assert p1.size < len(spec.points)   # (1e3, 0) is outside every region here
+    else:
+        assert p1.size > 0
+        assert np.all(_in_scaled_ellipse(prm, h, phi0, p1, p2, spec.margin))
+
+
+@pytest.mark.parametrize("kind", sorted(SPECS))
+def test_seeding_is_deterministic_bitwise(kind):
+    prm = PARAM_SETS["asym_lam_neg"]
+    a = seed_points(SPECS[kind], prm, 2.0, 0.7)
+    b = seed_points(dataclasses.replace(SPECS[kind]), prm, 2.0, 0.7)
+    assert a[0].tobytes() == b[0].tobytes() and a[1].tobytes() == b[1].tobytes() and a[2] == b[2]
+
+
+@pytest.mark.parametrize("n", [50, 64, 100, 200, 333, 1000, 5000, 20000])
+def test_grid_count_within_ten_percent_of_n(n):
+    for prm, h, phi0 in ((model.FIGURE4, 2.0, math.pi), (PARAM_SETS["asym_lam_pos"], 1.5, 0.7)):
+        p1, _p2, dropped = seed_points(SeedSpec(kind="grid", n=n), prm, h, phi0)
+        assert abs(p1.size - n) <= 0.1 * n and dropped == 0
+
+
+def test_grid_is_equally_spaced_in_region_units_and_row_major():
+    prm, h, margin = PARAM_SETS["asym_lam_neg"], 2.0, 0.9
+    c1, c2, r1, r2 = model.allowed_ellipse(prm, h)
+    p1, p2, _ = seed_points(SeedSpec(kind="grid", n=400, margin=margin), prm, h)
+    u, v = (p1 - c1) / (margin * r1), (p2 - c2) / (margin * r2)
+    d = scene.grid_spacing(400)
+    assert np.allclose(u / d, np.round(u / d), atol=1e-9) and np.allclose(v / d, np.round(v / d), atol=1e-9)
+    order = np.lexsort((p1, p2))          # sort by p2, then p1
+    assert np.array_equal(order, np.arange(p1.size))
+    assert np.any(np.isclose(u, 0.0) & np.isclose(v, 0.0))   # the lattice is centred
+
+
+def test_random_is_reproducible_and_changes_with_the_seed():
+    prm = PARAM_SETS["asym_lam_pos"]
+    a = seed_points(SeedSpec(kind="random", n=200, seed=1), prm, 2.0)
+    b = seed_points(SeedSpec(kind="random", n=200, seed=1), prm, 2.0)
+    c = seed_points(SeedSpec(kind="random", n=200, seed=2), prm, 2.0)
+    assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
+    assert not np.array_equal(a[0], c[0])
+    assert a[0].size == 200 and a[2] == 0
+
+
+def test_random_is_uniform_in_the_ellipse_area():
+    # uniform in a disc: E[rho^2] = 1/2 (a uniform radius would give 1/3)
+    prm, h, margin = model.FIGURE4.with_(mu=0.5), 2.0, 0.8
+    c1, c2, r1, r2 = model.allowed_ellipse(prm, h)
+    p1, p2, _ = seed_points(SeedSpec(kind="random", n=20000, margin=margin, seed=5), prm, h)
+    rho2 = ((p1 - c1) / (margin * r1)) ** 2 + ((p2 - c2) / (margin * r2)) ** 2
+    assert abs(rho2.mean() - 0.5) < 0.01
+    assert abs(np.mean(p1 - c1)) < 0.02 * r1 and abs(np.mean(p2 - c2)) < 0.02 * r2
+
+
+def test_lines_are_in_units_of_the_scaled_region_with_ends_included():
+    prm, h = model.FIGURE4.with_(mu=0.5), 2.0
+    c1, c2, r1, r2 = model.allowed_ellipse(prm, h)
+    p1, p2, dropped = seed_points(SeedSpec(kind="lines", n=11, margin=0.5, lines=((-1.0, 0.0, 1.0, 0.0),)), prm, h)
+    assert dropped == 0 and p1.size == 11
+    assert np.allclose(p1, c1 + 0.5 * r1 * np.linspace(-1, 1, 11), rtol=0, atol=1e-15) and np.all(p2 == c2)
+    # the diagonal leaves the unit disc for |t| > 1/sqrt(2): 4 of 11 points dropped and counted
+    p1, p2, dropped = seed_points(SeedSpec(kind="lines", n=11, margin=0.5, lines=((-1.0, -1.0, 1.0, 1.0),)), prm, h)
+    assert p1.size == 7 and dropped == 4
+    assert np.allclose((p1 - c1) / (0.5 * r1), np.linspace(-0.6, 0.6, 7), rtol=0, atol=1e-12)
+    # at margin 1 the ends lie on the boundary (M^2 ~ 0): never returned unless M^2 > 0
+    p1, p2, dropped = seed_points(SeedSpec(kind="lines", n=11, margin=1.0, lines=((-1.0, 0.0, 1.0, 0.0),)), prm, h)
+    assert p1.size + dropped == 11 and p1.size >= 9 and np.all(model.section_M2(prm, p1, p2, h) > 0)
+
+
+def test_points_are_kept_as_given_and_outside_ones_counted():
+    pts = ((0.1, 0.0), (9.0, 9.0), (0.3, 0.2))
+    p1, p2, dropped = seed_points(SeedSpec(kind="points", points=pts), model.FIGURE4, 2.0)
+    assert p1.tolist() == [0.1, 0.3] and p2.tolist() == [0.0, 0.2] and dropped == 1
+
+
+def test_seeding_an_empty_region_raises():
+    with pytest.raises(SceneError):
+        seed_points(SeedSpec(), model.FIGURE4, -1.0)
+
+
+def test_panel_seeds_use_the_panel_parameters_and_phi0():
+    s = parse_scene(SWEEP_SCENE + "phi0 = 1.0\n")
+    for i in range(s.n_panels):
+        prm, h, _ = s.panel(i)
+        got = s.panel_seeds(i)
+        want = seed_points(s.seeds, prm, h, 1.0)
+        assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1])
