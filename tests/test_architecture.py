@@ -1,0 +1,95 @@
+"""The layers of the package and the direction of its imports.
+
+explorer is built in layers, each allowed to import only from layers below it (or its own):
+
+    _jit  <-  kernels  <-  model  <-  integrate  <-  analysis  <-  io  <-  app
+
+- ``kernels``: model-agnostic numerics (DOP853 tableau and step, Taylor step control,
+  splitting compositions, event roots, tangent-vector accumulators);
+- ``model``: the physics of MODEL.md (parameters, vector field, sub-flows, exact solutions);
+- ``integrate``: the stepping loops applied to the model's compiled system;
+- ``analysis``: sections, chaos indicators, fixed points, Melnikov, trajectories, sweeps
+  (arrays in, arrays out);
+- ``io``: scenes and the HDF5 store;
+- ``app``: command line, sweep runner, figures, the interactive explorer.
+
+The test reads every module's imports (including those inside functions) from its syntax
+tree, so a lazy import cannot hide an upward dependency.  matplotlib may be imported only
+in ``app``, h5py only in ``io`` and ``app``.
+"""
+import ast
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[1] / "src" / "explorer"
+LAYERS = ["_jit", "kernels", "model", "integrate", "analysis", "io", "app"]
+#: third-party packages that only the upper layers may import
+RESTRICTED = {"matplotlib": "app", "h5py": "io"}
+
+
+def layer_of(dotted: str):
+    """Layer index of a module ``explorer.<layer>...`` (None for the package root)."""
+    parts = dotted.split(".")
+    if parts[0] != "explorer" or len(parts) < 2:
+        return None
+    return LAYERS.index(parts[1]) if parts[1] in LAYERS else None
+
+
+def modules():
+    for f in sorted(SRC.rglob("*.py")):
+        rel = f.relative_to(SRC.parent).with_suffix("")
+        yield ".".join(p for p in rel.parts if p != "__init__") if rel.name == "__init__" else ".".join(rel.parts), f
+
+
+def imports(path: Path, dotted: str):
+    """(module imported, line) for every import statement, relative ones resolved."""
+    tree = ast.parse(path.read_text())
+    pkg = dotted if path.name == "__init__.py" else dotted.rpartition(".")[0]
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                yield a.name, node.lineno
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = pkg.split(".")
+                base = base[: len(base) - (node.level - 1)]
+                mod = ".".join(base + ([node.module] if node.module else []))
+            else:
+                mod = node.module
+            if mod == "explorer":   # from explorer import model -> explorer.model
+                for a in node.names:
+                    yield f"explorer.{a.name}", node.lineno
+            else:
+                yield mod, node.lineno
+
+
+def test_every_module_lives_in_a_layer():
+    loose = [d for d, _ in modules() if layer_of(d) is None and d not in ("explorer", "explorer.__main__")]
+    assert not loose, f"modules outside the layer packages {LAYERS}: {loose}"
+
+
+def test_imports_point_down_the_layers():
+    bad = []
+    for dotted, path in modules():
+        mine = layer_of(dotted)
+        if mine is None:
+            continue
+        for mod, line in imports(path, dotted):
+            other = layer_of(mod)
+            if other is not None and other > mine:
+                bad.append(f"{path.relative_to(SRC.parent)}:{line} ({LAYERS[mine]}) imports {mod} ({LAYERS[other]})")
+    assert not bad, "imports against the layer order:\n" + "\n".join(bad)
+
+
+@pytest.mark.parametrize("package, lowest", sorted(RESTRICTED.items()))
+def test_heavy_io_packages_only_in_upper_layers(package, lowest):
+    bad = []
+    for dotted, path in modules():
+        mine = layer_of(dotted)
+        if mine is None or mine >= LAYERS.index(lowest):
+            continue
+        for mod, line in imports(path, dotted):
+            if mod.split(".")[0] == package:
+                bad.append(f"{path.relative_to(SRC.parent)}:{line}")
+    assert not bad, f"{package} imported below {lowest}: {bad}"
