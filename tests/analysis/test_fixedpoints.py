@@ -83,8 +83,21 @@ def test_manifolds_are_invariant(stable):
     mids = 0.5 * (curve[1: n // 2: 7] + curve[2: n // 2 + 1: 7])
     imgs = np.array([smap(m, backward=stable, jacobian=False).point for m in mids])
     assert np.max(_distance_to_polyline(imgs, curve)) < 2e-3
-    # and the curve leaves the fixed point along the eigenvector
+    # and the curve leaves the fixed point along the eigenvector of the (un)stable eigenvalue,
+    # here taken from a central-difference Jacobian of the map (independent of fp.jacobian,
+    # which comes from the tangent dynamics)
     assert np.linalg.norm(curve[0] - fp.point) < 1e-12
+    eps = 1e-6
+    J = np.empty((2, 2))
+    for k in range(2):
+        dx = np.zeros(2)
+        dx[k] = eps
+        J[:, k] = (smap(fp.point + dx, jacobian=False).point - smap(fp.point - dx, jacobian=False).point) / (2 * eps)
+    w, V = np.linalg.eig(J)
+    v = np.real(V[:, int(np.argmin(np.abs(w)) if stable else np.argmax(np.abs(w)))])
+    for x in curve[1:4]:
+        d = (x - fp.point) / np.linalg.norm(x - fp.point)
+        assert abs(d[0] * v[1] - d[1] * v[0]) < 1e-5, (d, v)
 
 
 def test_elliptic_point_has_no_separatrices():

@@ -136,15 +136,20 @@ def test_kozlov_case_is_regular_too():
     y0 = model.section_state(prm, [c1 + 0.3 * r1, c1 - 0.4 * r1], [c2 + 0.2 * r2, c2 - 0.1 * r2], 2.0)
     r = lyapunov.indicators(prm, y0, 1e4, method="taylor", tol=1e-12)
     assert np.all(r.mlce <= lyapunov.regular_bound(1e4))
-    assert np.all(r.megno < 2.2)
+    # quasi-periodic orbits: <Y> -> 2 from either side (measured 1.998, 1.999); a stable
+    # periodic orbit would give 0, a chaotic one grows like chi T / 2
+    assert np.all((r.megno > 1.8) & (r.megno < 2.2)), r.megno
 
 
 CHAOTIC = ([0.0, 0.3, -0.4, 0.2], [0.3, -0.2, 0.1, 0.5])
 
 
 def test_chaotic_orbits_have_a_positive_converged_exponent_that_integrators_agree_on():
-    """mu = 0.5 (Figure 4's chaotic sea): chi > 0, stable between T/2 and T, the same within 10%
-    from DOP853 (variational equations) and from split8 (exact tangent maps), and <Y> ~ chi T/2."""
+    """mu = 0.5 (Figure 4's chaotic sea): chi > 0, stable between T/2 and T, the same from
+    DOP853 (variational equations) and from split8 (exact tangent maps), and <Y> ~ chi T/2.
+    Held orbit by orbit: the finite-time exponents of one chaotic orbit fluctuate by
+    ~ 1/sqrt(T) (measured: integrators 4-16 % apart, T/2 against T 0.4-8 %), so each orbit
+    within 20 % (integrators) and 10 % (T/2), and the mean of the four within 10 %."""
     prm = PARAM_SETS["figure4_mu0.5"]
     y0 = model.section_state(prm, *CHAOTIC, 2.0)
     T = 2e4
@@ -155,8 +160,10 @@ def test_chaotic_orbits_have_a_positive_converged_exponent_that_integrators_agre
     np.testing.assert_allclose(d.history[:, -1, 1], d.mlce)
     mean_d, mean_s = d.mlce.mean(), s.mlce.mean()
     assert abs(mean_d - mean_s) < 0.1 * mean_d
+    assert np.all(np.abs(d.mlce - s.mlce) < 0.2 * d.mlce), (d.mlce, s.mlce)
     d_half = lyapunov.indicators(prm, y0, T / 2, method="dop853", tol=1e-12)
     assert abs(d_half.mlce.mean() - mean_d) < 0.1 * mean_d
+    assert np.all(np.abs(d_half.mlce - d.mlce) < 0.1 * d.mlce), (d_half.mlce, d.mlce)
     np.testing.assert_allclose(d.megno, d.mlce * T / 2, rtol=0.15)
 
 

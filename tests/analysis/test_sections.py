@@ -16,8 +16,15 @@ from explorer.kernels import (STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, S
 
 #: each method with the setting used for "tight" checks (one-step error <= 1e-9)
 TIGHT = {"taylor": dict(tol=1e-15), "dop853": dict(tol=1e-14), "split8": dict(dt=0.01),
-         "split6": dict(dt=0.005), "split4": dict(dt=0.0005)}
+         "split6": dict(dt=0.005), "split4": dict(dt=0.0005), "split2": dict(dt=4e-6),
+         "split4_suzuki": dict(dt=0.001), "split6_yoshida": dict(dt=0.002),
+         "split8_s17": dict(dt=0.01), "split8_yoshida": dict(dt=0.005)}
 ALL_METHODS = sorted(TIGHT)
+
+
+def test_every_method_has_a_tight_setting():
+    """The tests parametrised over ALL_METHODS cover every method the package offers."""
+    assert set(ALL_METHODS) == set(sections.METHODS)
 
 
 def fig4_seeds(prm, h, n, p2_frac=0.0, span=0.9):
@@ -161,6 +168,10 @@ def test_hess_invariant_relation_f_equals_zero_is_kept():
     ("split4", 4, [2.0**-3, 2.0**-4, 2.0**-5]),
     ("split6", 6, [2.0**-2, 2.0**-3, 2.0**-4]),
     ("split8", 8, [2.0**-2, 2.0**-3, 2.0**-4]),
+    ("split4_suzuki", 4, [2.0**-3, 2.0**-4, 2.0**-5]),
+    ("split6_yoshida", 6, [2.0**-2, 2.0**-3, 2.0**-4]),
+    ("split8_s17", 8, [2.0**-2, 2.0**-3, 2.0**-4]),
+    ("split8_yoshida", 8, [2.0**-2, 2.0**-3, 2.0**-4]),
 ])
 def test_observed_order_of_splitting_on_the_real_model(method, order, dts):
     """Step halving on the real model (asymmetric parameters), error of the state at a fixed
@@ -193,8 +204,11 @@ def test_direction_and_start_point(method):
     up = sections.section_crossings(prm, p1, p2, 2.0, 4, method=method, **kw)
     # the start point (on the section) is not a crossing
     assert np.all(up.data[:, 0, 0] > 0.5)
+    # section_crossings with direction -1 starts the body turning backwards (M < 0 from the
+    # energy) and finds its crossings with dphi/dt < 0
+    back = sections.section_crossings(prm, p1, p2, 2.0, 4, method=method, direction=-1, tmax=60.0, **kw)
+    assert np.all(back.count == 4) and np.all(back.data[:, :, 3] < 0) and np.all(back.data[:, 0, 0] > 0.5)
     # with M > 0 the body never crosses backwards: direction -1 finds nothing
-    down = sections.section_crossings(prm, p1, p2, 2.0, 4, method=method, direction=-1, tmax=60.0, **kw)
     y0 = model.section_state(prm, p1, p2, 2.0)
     down = sections.crossings(prm, y0, 4, method=method, direction=-1, tmax=60.0, **kw)
     assert np.all(down.count == 0) and np.all(down.status == STATUS_TMAX)

@@ -151,12 +151,14 @@ def test_a_stopped_run_reports_its_status_and_leaves_nan():
 
 # ---------------------------------------------------------------- drift and band (R2, ur25)
 @pytest.mark.parametrize("name", ["figure4_mu0.5", "asym_lam_neg", "asym_lam_pos"])
-def test_drift_is_plus_mu_over_lam_within_one_percent(name):
+def test_drift_is_plus_mu_over_lam_within_2e_4_relative(name):
+    """ur25: the mean horizontal velocity over T = 1000 is +mu/lam (measured relative errors
+    1.4e-6, 8.5e-7 and 1.2e-4 on the three sets: the finite-T remainder, bounded below)."""
     prm = SETS[name]
     d = tr.drift(prm, tr.initial_state(prm, *START, x=1.0, y=-2.0), 1000.0, 20001)
     pred = prm["mu"] / prm["lam"]
     assert d["predicted"] == pred and d["seed"] == -pred
-    assert abs(d["rel_error"]) < 0.01, d
+    assert abs(d["rel_error"]) < 2e-4, d
     # the end-point estimate obeys the ur25 bound |(x(T) - x(0))/T - mu/lam| <= 2 max|p - s| / (|lam| T)
     assert abs(d["endpoint"] - pred) <= d["remainder_bound"]
     # the seed's sign is wrong for this R1: the measured velocity is far from -mu/lam
