@@ -8,6 +8,13 @@ import pytest
 
 sys.path.insert(0, os.path.dirname(__file__))
 
+#: The thread tests compare 1 and 2 Numba threads.  Numba launches at most NUMBA_NUM_THREADS
+#: (default: the number of cores), so on a one-core machine a request for 2 could not be met;
+#: ask for at least 2 before numba is imported (2 threads on one core are time-sliced, and
+#: tests/test_stress.py::test_two_numba_threads_really_run asserts that both ran).
+if int(os.environ.get("NUMBA_NUM_THREADS", "0") or 0) < 2:
+    os.environ["NUMBA_NUM_THREADS"] = str(max(2, os.cpu_count() or 1))
+
 from explorer import model  # noqa: E402
 
 #: Figure-4 scene (MODEL.md R9) and asymmetric sets (chi, zeta, xi, eta != 0, lam < 0).

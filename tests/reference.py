@@ -16,6 +16,8 @@ scipy_one_step_map(P, y_start, ...)     next crossing from a point on the sectio
 """
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from scipy.integrate import solve_ivp
 
@@ -210,3 +212,89 @@ def scipy_one_step_map(P, y_start, phi0=np.pi, direction=+1, rtol=1e-13,
     out = scipy_crossings(P, y_start, 1, phi0=phi0, direction=direction,
                           rtol=rtol, atol=atol, t_max=t_max)
     return out[0] if len(out) else None
+
+
+# ---------------------------------------------------------------------------
+# Stability of the central fixed point of the section map (independent of the
+# package's Newton, tangent dynamics and continuation)
+# ---------------------------------------------------------------------------
+def trace_solution_I(a1, a2, b, lam, h):
+    """Trace of the section map's Jacobian at solution I (p = 0, M = c = sqrt(2 b h), mu = 0).
+
+    Linearising R6 about the uniform rotation: dp1/dt = alpha p2, dp2/dt = -beta p1 with
+    alpha = c/b - lam/a2, beta = c/b - lam/a1; over the return time T = 2 pi b / c the
+    monodromy of (p1, p2) has trace 2 cosh(sqrt(-alpha beta) T) when alpha beta < 0
+    (hyperbolic), 2 cos(sqrt(alpha beta) T) otherwise.
+    """
+    c = np.sqrt(2.0 * b * h)
+    alpha, beta = c / b - lam / a2, c / b - lam / a1
+    T = 2.0 * np.pi * b / c
+    ab = alpha * beta
+    return 2.0 * np.cosh(np.sqrt(-ab) * T) if ab < 0 else 2.0 * np.cos(np.sqrt(ab) * T)
+
+
+def section_map_p(P, p1, p2, h):
+    """(p1, p2) of the next crossing of phi = pi from the section point (p1, p2) at energy h."""
+    row = scipy_one_step_map(P, state_on_section(P, p1, p2, h), t_max=200.0)
+    if row is None:
+        raise ValueError("no return to the section")
+    return row[1:3]
+
+
+def symmetric_fixed_point(P, h, guess, xtol=1e-12):
+    """Fixed point (p1, 0) of the section map on the line p2 = 0 (where the central point of
+    the Figure 4 scene stays: with chi = zeta = xi = 0 the map is reversible with p2 = 0 as a
+    symmetry line).  A point of the line whose image is on the line again is a symmetric
+    fixed point or a point of a symmetric 2-cycle, so the secant method solves
+    P(p1, 0)_2 = 0 from a guess near the fixed point (its derivative J21 stays away from 0
+    where the trace is 2, unlike P_1 - p1, whose derivative J11 - 1 vanishes there); the
+    caller checks P(p1, 0)_1 = p1."""
+    x0, x1 = guess, guess + 1e-4
+    f0 = section_map_p(P, x0, 0.0, h)[1]
+    for _ in range(50):
+        f1 = section_map_p(P, x1, 0.0, h)[1]
+        if f1 == f0:
+            break
+        x0, x1, f0 = x1, x1 - f1 * (x1 - x0) / (f1 - f0), f1
+        if abs(x1 - x0) < xtol:
+            break
+    return x1
+
+
+def section_map_trace(P, h, p1_star, eps=1e-6):
+    """Trace of the Jacobian of the section map at (p1_star, 0) by central differences."""
+    tr = 0.0
+    for k in range(2):
+        d = np.zeros(2)
+        d[k] = eps
+        plus = section_map_p(P, p1_star + d[0], d[1], h)
+        minus = section_map_p(P, p1_star - d[0], -d[1], h)
+        tr += (plus[k] - minus[k]) / (2 * eps)
+    return tr
+
+
+FIGURE4_P = (1.0, 0.5, 2.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+@functools.lru_cache(maxsize=None)
+def figure4_stability_change_mu():
+    """mu* where the central fixed point of Figure 4's scene (h = 2) turns elliptic: the trace
+    crosses +2 between mu = 2.9 and 3.05 (about 1.5 s)."""
+    return stability_change_mu(FIGURE4_P, 2.0, 2.9, 3.05, -1.5, xtol=1e-8)
+
+
+def stability_change_mu(base, h, lo, hi, guess, xtol=1e-7):
+    """The mu in (lo, hi) where the trace of the central fixed point's section map crosses +2
+    (hyperbolic below, elliptic above), by bisection of trace - 2 on scipy's DOP853 alone.
+    ``base``: the packed parameters (mu is replaced)."""
+    from scipy.optimize import brentq
+
+    def g(mu):
+        P = np.array(base, dtype=float)
+        P[6] = mu
+        x = symmetric_fixed_point(P, h, guess)
+        if abs(section_map_p(P, x, 0.0, h)[0] - x) > 1e-9:
+            raise ValueError(f"no symmetric fixed point near p1 = {guess} at mu = {mu}")
+        return section_map_trace(P, h, x) - 2.0
+
+    return brentq(g, lo, hi, xtol=xtol)

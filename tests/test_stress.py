@@ -18,6 +18,7 @@ Fast versions (each well under 20 s); the long versions are scripts in benchmark
 import math
 import warnings
 
+import numba
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -29,7 +30,7 @@ from explorer.model import exact
 from explorer.analysis import fixedpoints
 from explorer.analysis import lyapunov
 from explorer.analysis import sections
-from explorer._jit import get_num_threads, njit, set_num_threads
+from explorer._jit import get_num_threads, njit, prange, set_num_threads
 from explorer.integrate.tangent import return_map_taylor
 from explorer.model.equations import rhs, taylor_coefficients
 from explorer.kernels import STATUS_DONE, STATUS_NONFINITE, STATUS_TMAX, splitting
@@ -611,17 +612,42 @@ def test_lyapunov_indicators_identical_for_1_and_2_threads(method, kw):
     c1, c2, r1, r2 = model.allowed_ellipse(prm, 2.0)
     y0 = model.section_state(prm, c1 + r1 * np.linspace(-0.9, 0.9, 12), c2 + 0.1 * r2, 2.0)
     a = lyapunov.indicators(prm, y0, 200.0, method=method, history=5, threads=1, **kw)
-    b = lyapunov.indicators(prm, y0, 200.0, method=method, history=5, threads=max(2, get_num_threads()), **kw)
+    b = lyapunov.indicators(prm, y0, 200.0, method=method, history=5, threads=2, **kw)
     for name in ("time", "mlce", "megno", "Y", "fli", "status", "steps", "final", "history"):
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+
+
+@njit(parallel=True)
+def _thread_of_each_iteration(out):
+    for i in prange(out.shape[0]):
+        s = 0.0
+        for k in range(2000):
+            s += math.sin(1e-3 * k + i)
+        out[i] = numba.get_thread_id() + 0.0 * s
+
+
+def test_two_numba_threads_really_run():
+    """The 1-against-2-threads tests mean something only if 2 threads run: with 2 threads
+    asked, a parallel loop's iterations are spread over both (thread ids 0 and 1), also on a
+    one-core machine (conftest raises NUMBA_NUM_THREADS to 2 there)."""
+    old = get_num_threads()
+    try:
+        set_num_threads(2)
+        assert get_num_threads() == 2
+        ids = np.full(64, -1.0)
+        _thread_of_each_iteration(ids)
+        assert set(ids.astype(int).tolist()) == {0, 1}, ids
+    finally:
+        set_num_threads(old)
 
 
 def test_fixed_points_and_separatrices_identical_for_1_and_2_threads():
     old = get_num_threads()
     out = []
     try:
-        for n in (1, max(2, old)):
-            set_num_threads(min(n, old))
+        for n in (1, 2):
+            set_num_threads(n)
+            assert get_num_threads() == n
             fp = fixedpoints.find_fixed_point(model.FIGURE4.with_(mu=0.5), 2.0, (-0.2, 0.0))
             curve = fixedpoints.manifold(fp, iterations=2, n_domain=10, max_points=200)
             br = fixedpoints.continue_branch(model.FIGURE4, 2.0, "mu", 0.0, 0.2, 0.1)

@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+import reference
 from explorer import model
 from explorer.app import cli
 from explorer.analysis import fixedpoints as fpm
@@ -111,7 +112,7 @@ def test_fixedpoint_cli_json_and_continuation(capsys):
     assert cli.main(["fixedpoint", "--json"]) == 0
     doc = json.loads(capsys.readouterr()[0])
     assert {"p1", "p2", "trace", "eigenvalues", "stable"} <= set(doc)
-    assert doc["stable"] is False and abs(doc["trace"] - 9.0339110031) < 1e-8
+    assert doc["stable"] is False and abs(doc["trace"] - reference.trace_solution_I(1.0, 0.5, 2.0, 1.0, 2.0)) < 1e-8
     assert cli.main(["fixedpoint", "--continue", "mu", "2.5", "3.5", "0.25", "--guess=-1.2,0", "--json"]) == 0
     doc = json.loads(capsys.readouterr()[0])
     assert len(doc["branch"]) == 5 and len(doc["bifurcations"]) == 1
@@ -128,3 +129,24 @@ def test_fixedpoint_cli_bad_input(args, fragment, capsys):
     code = cli.main(["fixedpoint"] + args)
     _, err = capsys.readouterr()
     assert code == 2 and len(err.strip().splitlines()) == 1 and fragment in err
+
+
+def test_central_point_changes_stability_where_an_independent_bisection_says():
+    """mu* of Figure 4's central fixed point from scipy's DOP853 alone (tests/reference.py:
+    fixed point on the symmetry line by the secant method, trace by central differences of the
+    map, bisection of trace - 2): the package's fixed point is hyperbolic just below, elliptic
+    just above, with trace 2 at mu*."""
+    mu_star = reference.figure4_stability_change_mu()
+    assert 2.9 < mu_star < 3.05
+    for d, stable in ((-0.01, False), (0.01, True)):
+        fp = fpm.find_fixed_point(model.FIGURE4.with_(mu=mu_star + d), 2.0, (-1.5, 0.0))
+        assert fp.stable is stable, (d, fp.trace)
+    fp = fpm.find_fixed_point(model.FIGURE4.with_(mu=mu_star), 2.0, (-1.5, 0.0))
+    assert abs(fp.trace - 2.0) < 1e-5, fp.trace
+
+
+def test_trace_of_solution_I_equals_its_closed_form():
+    """MODEL.md R6: at mu = 0 the trace at p = 0 is 2 cosh(k) (tests/reference.py writes the
+    linearisation independently of fixedpoints.analytic_eigenvalues_solution_I)."""
+    fp = fpm.find_fixed_point(model.FIGURE4, 2.0)
+    assert abs(fp.trace - reference.trace_solution_I(1.0, 0.5, 2.0, 1.0, 2.0)) < 1e-8

@@ -56,10 +56,31 @@ def test_exclusion_and_monotonicity_bounds_never_discard_a_root():
             checked += 1
             v = P.polyval(x, d)
             assert np.all(v > 0) or np.all(v < 0)
+            # sampling alone can miss two roots inside one cell: no real root in [-r, r] either
+            assert not real_roots_within(d, r), (d.tolist(), r)
         if ev.monotone_within(d, deg, r):
             dv = P.polyval(x, P.polyder(d))
             assert np.all(dv > 0) or np.all(dv < 0)
+            assert not real_roots_within(P.polyder(d), r), (d.tolist(), r)
     assert checked > 300
+
+
+def real_roots_within(c, r):
+    """The real roots (|imaginary part| <= 1e-9 of the modulus) of the polynomial with
+    coefficients c (increasing powers) in [-r, r], from the companion matrix."""
+    z = np.polynomial.polynomial.polyroots(c)
+    real = np.abs(z.imag) <= 1e-9 * np.maximum(1.0, np.abs(z))
+    return [float(v) for v in z.real[real] if abs(v) <= r]
+
+
+def test_real_roots_within_sees_a_pair_hidden_between_samples():
+    """Negative control of the check above: two roots 1e-6 apart between two of the 4001
+    samples of [-1, 1] (both samples positive) are found."""
+    a = 0.1234567
+    c = np.polynomial.polynomial.polyfromroots([a, a + 1e-6])
+    x = np.linspace(-1.0, 1.0, 4001)
+    assert np.all(np.polynomial.polynomial.polyval(x, c) > 0)
+    assert len(real_roots_within(c, 1.0)) == 2
 
 
 @pytest.mark.parametrize("sep", [0.3, 1e-2, 1e-4, 1e-6])
