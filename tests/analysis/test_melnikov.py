@@ -11,6 +11,7 @@ from explorer import model
 from explorer.app import cli
 from explorer.model import exact
 from explorer.analysis import melnikov
+from explorer.app import melnikov_figure
 
 FIG4 = model.FIGURE4
 H = model.FIGURE4_H
@@ -189,7 +190,7 @@ def test_no_splitting_at_the_symmetric_point():
 
 # ---------------------------------------------------------------- figure and CLI
 def test_figure_has_three_panels():
-    fig = melnikov.melnikov_figure(mus=(1e-4, 1e-3), n_measured=4)
+    fig = melnikov_figure.melnikov_figure(mus=(1e-4, 1e-3), n_measured=4)
     assert len(fig.axes) == 3
     assert len(fig.axes[0].lines) >= 7
 

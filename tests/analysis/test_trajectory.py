@@ -9,6 +9,7 @@ from scipy.integrate import solve_ivp
 from explorer import model
 from explorer.app import cli
 from explorer.analysis import trajectory as tr
+from explorer.app import trajectory_figure
 
 FIG4 = dict(model.FIGURE4.as_dict(), mu=0.5)
 #: parameter sets of the full system (lam = 0 allowed); asymmetric ones as in conftest.PARAM_SETS
@@ -258,7 +259,7 @@ def test_path_figure_renders_headless_with_glyphs_and_band(tmp_path):
 
     prm = SETS["figure4_mu0.5"]
     res = tr.trajectory(prm, tr.initial_state(prm, *START), 30.0, 1501)
-    fig = tr.path_figure(res, prm, glyphs=25)
+    fig = trajectory_figure.path_figure(res, prm, glyphs=25)
     ax = fig.axes[0]
     assert len(ax.collections) >= 2 and len(ax.patches) >= 1  # glyphs, e1 segments; the band
     assert "lambda = 1" in ax.get_title() or r"\lambda = 1" in ax.get_title()
@@ -270,12 +271,12 @@ def test_path_figure_renders_headless_with_glyphs_and_band(tmp_path):
 def test_kozlov_figure_renders_headless(tmp_path):
     prm = SETS["falling_lam0"]
     k = tr.kozlov(prm, tr.initial_state(prm, *START), 60.0)
-    fig = tr.kozlov_figure(k, prm)
+    fig = trajectory_figure.kozlov_figure(k, prm)
     assert len(fig.axes) == 2
     assert all(ax.get_xscale() == "log" and ax.get_yscale() == "log" for ax in fig.axes)
     assert "slope" in fig.axes[0].get_legend().get_texts()[1].get_text()
     assert _ink(fig) > 0.02
-    fig2 = tr.path_figure(k["result"], prm)  # lam = 0: no band
+    fig2 = trajectory_figure.path_figure(k["result"], prm)  # lam = 0: no band
     assert _ink(fig2) > 0.02
 
 

@@ -228,7 +228,7 @@ def test_quick_sweeps_are_reused_on_a_second_run(quick):
 def test_a_complete_full_store_is_used_even_under_quick(monkeypatch, tmp_path):
     from explorer.io import scene as sc
 
-    small = sc.FIGURE4_TOML.replace("n = 200", "n = 12").replace("crossings = 1000", "crossings = 20").replace(
+    small = sc.PRESETS["figure4"].replace("n = 200", "n = 12").replace("crossings = 1000", "crossings = 20").replace(
         "separatrices = true", "separatrices = false").replace("tmax = 10000.0", "tmax = 400.0")
     monkeypatch.setitem(sc.PRESETS, "figure4", small)
     scene, path, reduced, summary = paper.ensure_sweep("figure4", results_dir=tmp_path, quick=False)

@@ -57,7 +57,7 @@ class SweepSpec:
 
 def build_spec(scene, panel_indices, *, chunk_orbits: int) -> SweepSpec:
     """Seeds every panel to compute (inside the allowed region only, R9) and cuts it into chunks."""
-    from explorer.io.scene import seed_points
+    from explorer.analysis.seeds import seed_points
 
     integ = scene.integration
     panels = []

@@ -366,6 +366,7 @@ def cmd_melnikov(args) -> int:
 # ---- trajectory: the body in the plane, full system R1 (explorer/trajectory.py) ------------
 def cmd_trajectory(args) -> int:
     from explorer.analysis import trajectory as tr
+    from explorer.app import trajectory_figure
 
     # R1 allows lam = 0: full_params validates the rest with model.Params (lam replaced by 1)
     prm = tr.full_params({n: getattr(args, n) for n in model.PARAM_NAMES})
@@ -387,10 +388,10 @@ def cmd_trajectory(args) -> int:
         figs = []
         from explorer.app.figures import save_figure
 
-        fig = tr.path_figure(res, prm, glyphs=args.glyphs, band=None if d is None else d["band"])
+        fig = trajectory_figure.path_figure(res, prm, glyphs=args.glyphs, band=None if d is None else d["band"])
         figs += [str(p) for p in save_figure(fig, args.out)]
         if k is not None:
-            figs += [str(p) for p in save_figure(tr.kozlov_figure(k, prm), str(args.out) + "_kozlov")]
+            figs += [str(p) for p in save_figure(trajectory_figure.kozlov_figure(k, prm), str(args.out) + "_kozlov")]
         out["figures"] = figs
     if args.json:
         print(json.dumps(out))

@@ -20,8 +20,8 @@ name                   what
 ``continuation``       the central fixed point of the section map continued in mu (0..8)
 ``work_precision``     one-step error against throughput, ``benchmarks/results_w4.json``
 ``homoclinic``         R7 against the integrated flow, with its crossings of phi = pi
-``melnikov``           :func:`explorer.melnikov.melnikov_figure` (if the module is present)
-``trajectory``         :func:`explorer.trajectory.path_figure` (if the module is present)
+``melnikov``           :func:`explorer.app.melnikov_figure.melnikov_figure`
+``trajectory``         :func:`explorer.app.trajectory_figure.path_figure`
 =====================  ==========================================================================
 
 Sweeps (``figure4``, ``chaotic_fraction``, ``chaos_map``) go through
@@ -1221,21 +1221,18 @@ def chaos_map_figure(*, results_dir="results", quick=False, quiet=True) -> Drawn
                        "reduced": reduced}, [f"from {out}" + (f"; {_quick_note(scene)}" if reduced else "")])
 
 
-# ====================================================================== other engineers' figures
+# ====================================================================== Melnikov, the body in the plane
 def melnikov_figure(*, quick=False) -> Drawn:
-    try:
-        from explorer.analysis.melnikov import melnikov_figure as mf
-    except ImportError as exc:
-        raise FigureUnavailable(f"explorer.melnikov not importable: {exc}") from None
+    from explorer.app.melnikov_figure import melnikov_figure as mf
+
     kw = dict(mus=(1e-3, 3e-3), n_measured=4) if quick else {}
     return Drawn(mf(**kw), {"quick": quick})
 
 
 def trajectory_figure(*, quick=False) -> Drawn:
-    try:
-        from explorer.analysis.trajectory import full_params, initial_state, path_figure, trajectory
-    except ImportError as exc:
-        raise FigureUnavailable(f"explorer.trajectory not importable: {exc}") from None
+    from explorer.analysis.trajectory import full_params, initial_state, trajectory
+    from explorer.app.trajectory_figure import path_figure
+
     prm = full_params(None)
     T, n = (60.0, 4001) if quick else (300.0, 20001)
     res = trajectory(prm, initial_state(prm, 0.5, 0.0, 2.0, 0.0), T, n, 1e-12, phi_start=0.0)

@@ -61,30 +61,9 @@ checked: its parameters must be valid (:class:`model.Params`) and its
 allowed region of the section non-empty (error names ``sweep.values[i]``,
 or ``energy.h`` when there is no sweep or no panel has a region).
 
-Seeding (:func:`seed_points`)
------------------------------
-Let the allowed region be the ellipse ((p1-c1)/r1)^2 + ((p2-c2)/r2)^2 <= 1
-(:func:`model.allowed_ellipse`) and s = margin.  Seeds are placed in units
-(u, v) of the scaled ellipse, p1 = c1 + s r1 u, p2 = c2 + s r2 v, and kept
-where u^2 + v^2 <= 1 (< 1 for grid and random) and M^2 = ``model.section_M2``
-> 0; points failing the second test are dropped and counted (possible only at
-margin 1, e.g. line ends on the boundary, or for ``points``).
-
-* ``grid``: the square lattice u = i d, v = j d (i, j integers; equal
-  spacing d in units of r1, r2, lattice centred on the ellipse centre),
-  ordered row-major (v ascending, then u ascending).  d is chosen among
-  d0 * 1.001^k, |k| <= 150, d0 = sqrt(pi / n), as the one whose number of
-  lattice points inside the unit disc is closest to n (ties: smallest |k|,
-  then negative k).  The count is within 10 % of n for n >= 50.
-* ``random``: n points uniform in the area of the scaled ellipse:
-  rng = numpy.random.default_rng(seed), rho = sqrt(rng.random(n)),
-  theta = 2 pi rng.random(n), (u, v) = rho (cos theta, sin theta).
-* ``lines``: n equally spaced points on each segment from (u_a, v_a) to
-  (u_b, v_b) (both ends included; the midpoint when n = 1), segments in
-  order; points outside the scaled ellipse (u^2 + v^2 > 1) are dropped and
-  counted.  With margin < 1 a segment [-1, 0, 1, 0] keeps both ends.
-* ``points``: the given absolute (p1, p2), in order; margin is not used;
-  points with M^2 <= 0 are dropped and counted.
+Seeding
+-------
+The rules are in :mod:`explorer.analysis.seeds` (:func:`~explorer.analysis.seeds.seed_points`).
 
 Panel hashes
 ------------
@@ -115,6 +94,7 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis import sections
+from explorer.analysis.seeds import grid_spacing, seed_points  # noqa: F401  (re-exported)
 from explorer.model import PARAM_NAMES, ParameterError
 
 #: Version of the panel-settings layout; part of every panel hash.
@@ -137,9 +117,6 @@ MIN_DPI, MAX_DPI = 10, 2400
 #: largest number of seeds per panel (n, n * len(lines), len(points))
 MAX_SEEDS = 10_000_000
 MAX_NAME_LENGTH = 128
-#: grid spacing search: d0 * GRID_SCAN_RATIO**k, |k| <= GRID_SCAN_HALF
-GRID_SCAN_RATIO = 1.001
-GRID_SCAN_HALF = 150
 
 _NAME_RE = re.compile(r"[A-Za-z0-9_.-]+\Z")
 _TOP_KEYS = ("name", "description", "model", "energy", "sweep", "seeds", "integration", "compute", "lyapunov",
@@ -711,170 +688,15 @@ def load_scene(spec) -> Scene:
     return parse_scene(text, source=str(path))
 
 
-# ---------------------------------------------------------------- seeding
-def _grid_count(d: float) -> int:
-    """Number of lattice points (i d, j d) with (i d)^2 + (j d)^2 < 1 (the selection rule)."""
-    k = int(math.floor(1.0 / d)) + 1
-    q = (np.arange(-k, k + 1) * d) ** 2
-    return int(np.searchsorted(np.sort(q), 1.0 - q, side="left").sum())
-
-
-def grid_spacing(n: int) -> float:
-    """Lattice spacing d (in units of the scaled semi-axes) of a grid of about n points."""
-    d0 = math.sqrt(math.pi / n)
-    best = None
-    for k in range(-GRID_SCAN_HALF, GRID_SCAN_HALF + 1):
-        d = d0 * GRID_SCAN_RATIO ** k
-        key = (abs(_grid_count(d) - n), abs(k), k)
-        if best is None or key < best[0]:
-            best = (key, d)
-    return best[1]
-
-
-def _unit_grid(n: int):
-    d = grid_spacing(n)
-    k = int(math.floor(1.0 / d)) + 1
-    u = np.arange(-k, k + 1) * d
-    uu = u * u
-    inside = uu[None, :] + uu[:, None] < 1.0     # [j, i]: row j is v = u[j]
-    U, V = np.meshgrid(u, u)                     # U[j, i] = u[i], V[j, i] = u[j]
-    return U[inside], V[inside]                  # C order: v ascending, then u ascending
-
-
-def seed_points(seeds: SeedSpec, params, h: float, phi0: float = math.pi):
-    """Initial points (p1, p2) strictly inside the allowed region of the section phi = phi0
-    at energy h, following ``seeds`` (rules in the module docstring).
-
-    Returns float64 arrays p1, p2 (model.section_M2 > 0 at every point) and the number
-    of candidate points dropped.  Deterministic.  Raises SceneError if the region is empty.
-    """
-    if not isinstance(seeds, SeedSpec):
-        raise TypeError(f"seeds must be a SeedSpec, got {type(seeds).__name__}")
-    h = float(h)
-    phi0 = float(phi0)
-    ell = model.allowed_ellipse(params, h, phi0)
-    if ell is None or not (ell[2] > 0.0 and ell[3] > 0.0):
-        raise SceneError(f"scene key 'energy.h' = {h!r}: the allowed region of the section phi0 = {phi0!r} "
-                         f"is empty; cannot place seeds")
-    c1, c2, r1, r2 = ell
-    s = seeds.margin
-    n_dropped = 0
-    if seeds.kind == "points":
-        pts = np.array(seeds.points, dtype=np.float64).reshape(-1, 2)
-        p1, p2 = pts[:, 0].copy(), pts[:, 1].copy()
-    else:
-        if seeds.kind == "grid":
-            u, v = _unit_grid(seeds.n)
-        elif seeds.kind == "random":
-            rng = np.random.default_rng(seeds.seed)
-            rho = np.sqrt(rng.random(seeds.n))
-            theta = 2.0 * math.pi * rng.random(seeds.n)
-            u, v = rho * np.cos(theta), rho * np.sin(theta)
-        else:  # lines
-            t = np.linspace(0.0, 1.0, seeds.n) if seeds.n > 1 else np.array([0.5])
-            seg = np.array(seeds.lines, dtype=np.float64).reshape(-1, 4)
-            u = (seg[:, 0:1] + t[None, :] * (seg[:, 2:3] - seg[:, 0:1])).ravel()
-            v = (seg[:, 1:2] + t[None, :] * (seg[:, 3:4] - seg[:, 1:2])).ravel()
-            keep = u * u + v * v <= 1.0
-            n_dropped += int(u.size - np.count_nonzero(keep))
-            u, v = u[keep], v[keep]
-        p1 = c1 + (s * r1) * u
-        p2 = c2 + (s * r2) * v
-    with np.errstate(over="ignore", invalid="ignore"):
-        m2 = model.section_M2(params, p1, p2, h, phi0)
-    keep = m2 > 0.0
-    n_dropped += int(p1.size - np.count_nonzero(keep))
-    return (np.ascontiguousarray(p1[keep], dtype=np.float64),
-            np.ascontiguousarray(p2[keep], dtype=np.float64), n_dropped)
-
-
 # ---------------------------------------------------------------- presets
-FIGURE4_TOML = """\
-name = "figure4"
-description = "Borisov & Mamaev, Figure 4: sections phi = pi (dphi/dt > 0) at h = 2 as the weight mu grows (MODEL.md R9)"
+def _read_presets() -> dict:
+    """Built-in scenes: name -> TOML text, from the files ``explorer/io/presets/*.toml``."""
+    from importlib.resources import files
 
-[model]
-a1 = 1.0
-a2 = 0.5
-b = 2.0
-lam = 1.0
-chi = 0.0
-zeta = 0.0
-xi = 0.0
-eta = 0.0
+    folder = files("explorer.io").joinpath("presets")
+    return {f.name[:-5]: f.read_text(encoding="utf-8")
+            for f in sorted(folder.iterdir(), key=lambda f: f.name) if f.name.endswith(".toml")}
 
-[energy]
-h = 2.0
 
-# regular -> thin stochastic layer around the split separatrices -> wide layer;
-# then the central fixed point has turned stable (islands around it), region much larger
-[sweep]
-parameter = "mu"
-values = [0.002, 0.01, 0.03, 4.0, 8.0]
-
-[seeds]
-kind = "grid"
-n = 200
-margin = 0.98
-
-[integration]
-method = "taylor"
-tol = 1e-13
-crossings = 1000
-# orbits that stop turning over are integrated up to this budget (~2.5x the time of 1000 turns)
-tmax = 10000.0
-
-[compute]
-sections = true
-# separatrices of the central fixed point where it is hyperbolic (found by continuation in mu)
-separatrices = true
-
-[figure]
-layout = "row"
-share_scale = true
-own_scale = [3, 4]
-"""
-
-#: Chaos maps of the Figure-4 panels: MEGNO of 900 seeds per panel (and the chaotic fraction).
-CHAOS_TOML = FIGURE4_TOML.replace('name = "figure4"', 'name = "chaos"').replace(
-    "[seeds]\nkind = \"grid\"\nn = 200", "[seeds]\nkind = \"grid\"\nn = 900").replace(
-    "crossings = 1000", "crossings = 100").replace("separatrices = true", "lyapunov = true\n\n[lyapunov]\n"
-                                                   "time = 1000.0\nmethod = \"taylor\"\ntol = 1e-12\n"
-                                                   "threshold = 4.0").replace(
-    "description = \"Borisov & Mamaev, Figure 4:", "description = \"Chaos maps (MEGNO) of the Figure-4 panels;")
-
-#: The chaotic fraction of the section as mu grows: 13 panels from 0 to 8, 400 seeds each.
-FRACTION_TOML = """\
-name = "fraction"
-description = "Chaotic fraction of the allowed section (MEGNO > threshold) against mu, Figure-4 parameters, h = 2"
-
-[sweep]
-parameter = "mu"
-values = [0.0, 0.002, 0.005, 0.01, 0.02, 0.03, 0.05, 0.1, 0.3, 1.0, 2.0, 4.0, 8.0]
-
-[seeds]
-kind = "grid"
-n = 400
-
-[integration]
-method = "taylor"
-tol = 1e-12
-crossings = 50
-tmax = 1000.0
-
-[compute]
-sections = true
-lyapunov = true
-
-[lyapunov]
-time = 1000.0
-threshold = 4.0
-
-[figure]
-layout = "grid"
-columns = 5
-share_scale = false
-"""
-
-#: Built-in scenes: name -> TOML text.
-PRESETS = {"figure4": FIGURE4_TOML, "chaos": CHAOS_TOML, "fraction": FRACTION_TOML}
+#: Built-in scenes: name -> TOML text (``src/explorer/io/presets/<name>.toml``, each complete).
+PRESETS = _read_presets()

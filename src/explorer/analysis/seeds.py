@@ -1,0 +1,137 @@
+"""Initial conditions on the section: where a sweep's orbits start (MODEL.md R9).
+
+Arrays in, arrays out: the scene layer (:mod:`explorer.io.scene`) validates a ``[seeds]``
+table into a ``SeedSpec``; this module turns it into points of the allowed region.
+
+Rules
+-----
+Let the allowed region be the ellipse ((p1-c1)/r1)^2 + ((p2-c2)/r2)^2 <= 1
+(:func:`model.allowed_ellipse`) and s = margin.  Seeds are placed in units
+(u, v) of the scaled ellipse, p1 = c1 + s r1 u, p2 = c2 + s r2 v, and kept
+where u^2 + v^2 <= 1 (< 1 for grid and random) and M^2 = ``model.section_M2``
+> 0; points failing the second test are dropped and counted (possible only at
+margin 1, e.g. line ends on the boundary, or for ``points``).
+
+* ``grid``: the square lattice u = i d, v = j d (i, j integers; equal
+  spacing d in units of r1, r2, lattice centred on the ellipse centre),
+  ordered row-major (v ascending, then u ascending).  d is chosen among
+  d0 * 1.001^k, |k| <= 150, d0 = sqrt(pi / n), as the one whose number of
+  lattice points inside the unit disc is closest to n (ties: smallest |k|,
+  then negative k).  The count is within 10 % of n for n >= 50.
+* ``random``: n points uniform in the area of the scaled ellipse:
+  rng = numpy.random.default_rng(seed), rho = sqrt(rng.random(n)),
+  theta = 2 pi rng.random(n), (u, v) = rho (cos theta, sin theta).
+* ``lines``: n equally spaced points on each segment from (u_a, v_a) to
+  (u_b, v_b) (both ends included; the midpoint when n = 1), segments in
+  order; points outside the scaled ellipse (u^2 + v^2 > 1) are dropped and
+  counted.  With margin < 1 a segment [-1, 0, 1, 0] keeps both ends.
+* ``points``: the given absolute (p1, p2), in order; margin is not used;
+  points with M^2 <= 0 are dropped and counted.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from explorer import model
+from explorer.model import ParameterError
+
+#: the lattice spacings tried for a grid of about n points: d0 * GRID_SCAN_RATIO**k, |k| <= GRID_SCAN_HALF
+GRID_SCAN_RATIO = 1.001
+GRID_SCAN_HALF = 150
+#: what seed_points reads of a seeds specification
+SEED_ATTRIBUTES = ("kind", "n", "margin", "seed", "lines", "points")
+
+
+def _grid_count(d: float) -> int:
+    """Number of lattice points (i d, j d) with (i d)^2 + (j d)^2 < 1 (the selection rule)."""
+    k = int(math.floor(1.0 / d)) + 1
+    q = (np.arange(-k, k + 1) * d) ** 2
+    return int(np.searchsorted(np.sort(q), 1.0 - q, side="left").sum())
+
+
+def grid_spacing(n: int) -> float:
+    """Lattice spacing d (in units of the scaled semi-axes) of a grid of about n points."""
+    d0 = math.sqrt(math.pi / n)
+    best = None
+    for k in range(-GRID_SCAN_HALF, GRID_SCAN_HALF + 1):
+        d = d0 * GRID_SCAN_RATIO ** k
+        key = (abs(_grid_count(d) - n), abs(k), k)
+        if best is None or key < best[0]:
+            best = (key, d)
+    return best[1]
+
+
+def _unit_grid(n: int):
+    d = grid_spacing(n)
+    k = int(math.floor(1.0 / d)) + 1
+    u = np.arange(-k, k + 1) * d
+    uu = u * u
+    inside = uu[None, :] + uu[:, None] < 1.0     # [j, i]: row j is v = u[j]
+    U, V = np.meshgrid(u, u)                     # U[j, i] = u[i], V[j, i] = u[j]
+    return U[inside], V[inside]                  # C order: v ascending, then u ascending
+
+
+def seed_points(seeds, params, h: float, phi0: float = math.pi):
+    """Initial points (p1, p2) strictly inside the allowed region of the section phi = phi0
+    at energy h (MODEL.md R9), following ``seeds`` (rules in the module docstring).
+
+    Parameters
+    ----------
+    seeds : explorer.io.scene.SeedSpec
+        Or any object with the attributes ``kind``, ``n``, ``margin``, ``seed``, ``lines``,
+        ``points`` (already validated: the scene layer checks them).
+    params : explorer.model.Params
+    h, phi0 : float
+        Energy and section angle.
+
+    Returns
+    -------
+    p1, p2 : ndarray of float64
+        ``model.section_M2 > 0`` at every point.
+    n_dropped : int
+        Candidate points dropped (outside the scaled ellipse or with M^2 <= 0).
+
+    Deterministic.  Raises ParameterError if the region is empty.
+    """
+    missing = [k for k in SEED_ATTRIBUTES if not hasattr(seeds, k)]
+    if missing:
+        raise TypeError(f"seeds must have the attributes {', '.join(SEED_ATTRIBUTES)} (a SeedSpec); "
+                        f"{type(seeds).__name__} lacks {', '.join(missing)}")
+    h = float(h)
+    phi0 = float(phi0)
+    ell = model.allowed_ellipse(params, h, phi0)
+    if ell is None or not (ell[2] > 0.0 and ell[3] > 0.0):
+        raise ParameterError(f"scene key 'energy.h' = {h!r}: the allowed region of the section phi0 = {phi0!r} "
+                         f"is empty; cannot place seeds")
+    c1, c2, r1, r2 = ell
+    s = seeds.margin
+    n_dropped = 0
+    if seeds.kind == "points":
+        pts = np.array(seeds.points, dtype=np.float64).reshape(-1, 2)
+        p1, p2 = pts[:, 0].copy(), pts[:, 1].copy()
+    else:
+        if seeds.kind == "grid":
+            u, v = _unit_grid(seeds.n)
+        elif seeds.kind == "random":
+            rng = np.random.default_rng(seeds.seed)
+            rho = np.sqrt(rng.random(seeds.n))
+            theta = 2.0 * math.pi * rng.random(seeds.n)
+            u, v = rho * np.cos(theta), rho * np.sin(theta)
+        else:  # lines
+            t = np.linspace(0.0, 1.0, seeds.n) if seeds.n > 1 else np.array([0.5])
+            seg = np.array(seeds.lines, dtype=np.float64).reshape(-1, 4)
+            u = (seg[:, 0:1] + t[None, :] * (seg[:, 2:3] - seg[:, 0:1])).ravel()
+            v = (seg[:, 1:2] + t[None, :] * (seg[:, 3:4] - seg[:, 1:2])).ravel()
+            keep = u * u + v * v <= 1.0
+            n_dropped += int(u.size - np.count_nonzero(keep))
+            u, v = u[keep], v[keep]
+        p1 = c1 + (s * r1) * u
+        p2 = c2 + (s * r2) * v
+    with np.errstate(over="ignore", invalid="ignore"):
+        m2 = model.section_M2(params, p1, p2, h, phi0)
+    keep = m2 > 0.0
+    n_dropped += int(p1.size - np.count_nonzero(keep))
+    return (np.ascontiguousarray(p1[keep], dtype=np.float64),
+            np.ascontiguousarray(p2[keep], dtype=np.float64), n_dropped)
