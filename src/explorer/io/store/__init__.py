@@ -1,0 +1,109 @@
+"""HDF5 store of a Poincaré-section sweep: self-describing and crash-safe.
+
+Only the parent process of a sweep writes the store; workers return arrays.
+Every write is a whole-file transaction (:func:`commit_panel`): the new
+contents are written to a temporary file in the same directory, fsynced and
+``os.replace``'d onto the store, then the directory is fsynced.  After a
+SIGKILL or power loss at any instant the store is either the old complete file
+or the new complete file, never half-written; at worst a stale
+``<path>.tmp-<pid>-<random>`` is left behind, which the next sweep removes
+(:func:`clean_stale_temporaries`).
+
+Layout (``format = "explorer.sections"``, ``format_version = 1``)
+------------------------------------------------------------------
+::
+
+    /                               attrs: format = "explorer.sections", format_version = 1,
+                                           scene_name, scene (the scene's TOML text),
+                                           created, updated (ISO 8601 UTC),
+                                           provenance (JSON text: package and dependency
+                                           versions, python, platform, git revision,
+                                           command line), plus any extra file attrs
+                                           given by the caller
+    /panels/000, /panels/001, ...   one group per panel (zero-padded index), attrs:
+                                           index, label, parameter, value, h,
+                                           params (JSON text of the model parameters),
+                                           settings (JSON text), hash (sha256 of the settings),
+                                           method, tol, dt, phi0, direction,
+                                           crossings_requested, wall_time, complete = True
+        seeds      (N, 2) float64   p1, p2 of each initial condition on the section
+        y0         (N, 5) float64   full initial state (p1, p2, M, g1, g2)
+        count      (N,)   int64     crossings stored for each orbit
+        status     (N,)   int8      per-orbit status code;
+                                    attrs: status_names = JSON {code: name}
+        final      (N, 5) float64   state where each orbit stopped
+        info       (N, 3) float64   final time, steps, final Casimir error
+        offsets    (N+1,) int64     CSR offsets: orbit i's crossings are
+                                    crossings[offsets[i]:offsets[i+1]]
+        crossings  (total, 5) float64  rows t, p1, p2, M, dH;
+                                    attrs: columns = ["t","p1","p2","M","dH"]
+
+The ragged layout (``offsets`` + concatenated ``crossings`` rows) is made of
+plain datasets that any HDF5 reader understands; no NaN padding is stored and
+``count == diff(offsets)``.  Datasets with more than 10 000 rows are chunked,
+gzip-compressed (level 4, shuffle filter) and carry fletcher32 checksums.
+Nothing else is stored (no trajectories).  Attributes whose value is ``None``
+are omitted (absent means "not applicable"); dict-valued attributes are stored
+as JSON text.
+
+Settings hash: ``hash = sha256`` of the settings serialized as canonical JSON
+(:func:`settings_hash`: sorted keys, separators ``(",", ":")``), unless the
+caller supplies ``hash`` explicitly.  A sweep compares it with
+:func:`panel_hashes` to decide which panels are already done.
+
+Modules: :mod:`~explorer.io.store.format` (layout constants, reading),
+:mod:`~explorer.io.store.atomic` (crash-safe file replacement),
+:mod:`~explorer.io.store.commit` (provenance, the panel transaction).
+
+API
+---
+``commit_panel``, ``read_store`` (-> :class:`StoreData` / :class:`PanelData`),
+``panel_hashes``, ``clean_stale_temporaries``, ``provenance``,
+``settings_hash``, ``write_bytes_atomic``, ``atomic_path``; errors about a
+store file raise :class:`StoreError` (a ``ValueError``) with a one-line message
+naming the path.
+"""
+from __future__ import annotations
+
+from explorer.io.store.atomic import (
+                                      atomic_path,
+                                      clean_stale_temporaries,
+                                      write_bytes_atomic,
+)
+from explorer.io.store.commit import commit_panel, provenance
+from explorer.io.store.format import (
+                                      COLUMNS,
+                                      COMPRESS_ROWS,
+                                      DATASETS,
+                                      FORMAT,
+                                      FORMAT_VERSION,
+                                      OPTIONAL_DATASETS,
+                                      STATUS_NAMES,
+                                      PanelData,
+                                      StoreData,
+                                      StoreError,
+                                      panel_hashes,
+                                      read_store,
+                                      settings_hash,
+)
+
+__all__ = [
+    "FORMAT",
+    "FORMAT_VERSION",
+    "COLUMNS",
+    "COMPRESS_ROWS",
+    "StoreError",
+    "PanelData",
+    "StoreData",
+    "commit_panel",
+    "read_store",
+    "panel_hashes",
+    "clean_stale_temporaries",
+    "provenance",
+    "settings_hash",
+    "write_bytes_atomic",
+    "atomic_path",
+    "DATASETS",
+    "OPTIONAL_DATASETS",
+    "STATUS_NAMES",
+]

@@ -1,0 +1,353 @@
+"""The store's format: layout constants, attribute encoding, the settings hash, and reading.
+
+The layout is described in :mod:`explorer.io.store`; this module reads it
+(:func:`read_store`, :func:`panel_hashes`) and defines what the writer
+(:mod:`explorer.io.store.commit`) must produce.
+"""
+from __future__ import annotations
+
+import datetime as _dt
+import hashlib
+import json
+import numbers
+import os
+from dataclasses import dataclass, field
+
+import h5py
+import numpy as np
+
+from explorer.kernels import STATUS_NAMES
+
+FORMAT = "explorer.sections"
+FORMAT_VERSION = 1
+#: columns of a crossing row
+COLUMNS = ("t", "p1", "p2", "M", "dH")
+#: datasets with more rows than this are chunked + gzip(4) + shuffle + fletcher32
+COMPRESS_ROWS = 10_000
+GZIP_LEVEL = 4
+
+#: dataset name -> (trailing shape, dtype); N = number of orbits
+_PER_ORBIT = {
+    "seeds": ((2,), np.float64),
+    "y0": ((5,), np.float64),
+    "count": ((), np.int64),
+    "status": ((), np.int8),
+    "final": ((5,), np.float64),
+    "info": ((3,), np.float64),
+}
+DATASETS = tuple(_PER_ORBIT) + ("offsets", "crossings")
+#: optional datasets, present when the scene computes them: chaos indicators per orbit and
+#: the separatrices of the panel's fixed point (ragged polylines: points[offsets[k]:offsets[k+1]])
+_OPTIONAL_PER_ORBIT = {
+    "megno": ((), np.float64),
+    "mlce": ((), np.float64),
+    "fli": ((), np.float64),
+    "lyapunov_status": ((), np.int8),
+}
+OPTIONAL_DATASETS = tuple(_OPTIONAL_PER_ORBIT) + ("separatrix_offsets", "separatrix_points")
+_DEPENDENCIES = ("explorer", "numpy", "numba", "llvmlite", "h5py", "joblib", "matplotlib", "scipy")
+_FORCE_HINT = "use --force to overwrite it or choose another --out"
+
+
+class StoreError(ValueError):
+    """A store file is missing, unreadable, corrupt or of another format."""
+
+
+# --------------------------------------------------------------------------- helpers
+
+def _utcnow() -> str:
+    return _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+def _canonical_json(obj) -> str:
+    return json.dumps(obj, sort_keys=True, separators=(",", ":"), default=_json_default)
+
+
+def _json_default(obj):
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, (set, frozenset)):
+        return sorted(obj)
+    return str(obj)
+
+
+def settings_hash(settings) -> str:
+    """sha256 (hex) of the settings: of the text itself if ``settings`` is a
+    str (already-serialized JSON), else of its canonical JSON."""
+    text = settings if isinstance(settings, str) else _canonical_json(settings)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def _to_h5_attr(value):
+    """Python value -> something h5py stores as an attribute (None -> skip)."""
+    if value is None:
+        return None
+    if isinstance(value, (str, bool, np.bool_, numbers.Number, np.generic)):
+        return value
+    if isinstance(value, dict):
+        return _canonical_json(value)
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind in "OUS":
+            return np.array([str(v) for v in value.ravel()], dtype=h5py.string_dtype())
+        return value
+    if isinstance(value, (list, tuple)):
+        if value and all(isinstance(v, str) for v in value):
+            return np.array(list(value), dtype=h5py.string_dtype())
+        if all(isinstance(v, (numbers.Number, np.generic)) and not isinstance(v, bool) for v in value):
+            return np.asarray(value)
+        return _canonical_json(list(value))
+    return str(value)
+
+
+def _from_h5_attr(value):
+    """h5py attribute value -> plain Python (str, int, float, bool, list[str] or ndarray)."""
+    if isinstance(value, bytes):
+        return value.decode("utf-8", "replace")
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind in "OSU":
+            return [v.decode("utf-8", "replace") if isinstance(v, bytes) else str(v) for v in value.ravel()]
+        return value
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def _set_attrs(obj, attrs: dict) -> None:
+    for key, value in attrs.items():
+        v = _to_h5_attr(value)
+        if v is None:
+            if key in obj.attrs:
+                del obj.attrs[key]
+            continue
+        obj.attrs[key] = v
+
+
+def _read_attrs(obj) -> dict:
+    return {k: _from_h5_attr(v) for k, v in obj.attrs.items()}
+
+
+# --------------------------------------------------------------------------- reading
+
+@dataclass
+class PanelData:
+    """One panel read from a store: every dataset as a numpy array plus the attrs."""
+
+    index: int
+    seeds: np.ndarray
+    y0: np.ndarray
+    count: np.ndarray
+    status: np.ndarray
+    final: np.ndarray
+    info: np.ndarray
+    offsets: np.ndarray
+    crossings: np.ndarray
+    attrs: dict = field(default_factory=dict)
+    status_names: dict = field(default_factory=dict)
+    extra: dict = field(default_factory=dict)   # optional datasets present in the file
+
+    def separatrices(self) -> list:
+        """The stored separatrix polylines ((M, 2) arrays), [] if none."""
+        if "separatrix_offsets" not in self.extra:
+            return []
+        off, pts = self.extra["separatrix_offsets"], self.extra["separatrix_points"]
+        return [pts[off[k]:off[k + 1]] for k in range(len(off) - 1)]
+
+    @property
+    def arrays(self) -> dict:
+        """The datasets by name (seeds, y0, count, status, final, info, offsets, crossings)."""
+        return {name: getattr(self, name) for name in DATASETS}
+
+    @property
+    def n_orbits(self) -> int:
+        return int(self.count.shape[0])
+
+    @property
+    def complete(self) -> bool:
+        return bool(self.attrs.get("complete", False))
+
+    @property
+    def hash(self) -> str | None:
+        return self.attrs.get("hash")
+
+    @property
+    def params(self) -> dict:
+        """The model parameters (decoded from the ``params`` JSON attr)."""
+        return _json_attr(self.attrs.get("params"))
+
+    @property
+    def settings(self) -> dict:
+        """The settings (decoded from the ``settings`` JSON attr)."""
+        return _json_attr(self.attrs.get("settings"))
+
+    def orbit(self, i: int) -> np.ndarray:
+        """Crossings of orbit i, shape (count_i, 5), columns t, p1, p2, M, dH."""
+        n = self.n_orbits
+        if not -n <= i < n:
+            raise IndexError(f"orbit {i} out of range for a panel of {n} orbits")
+        i %= n
+        return self.crossings[self.offsets[i]:self.offsets[i + 1]]
+
+    def points(self) -> np.ndarray:
+        """All (p1, p2) crossing points of the panel, shape (total, 2)."""
+        return self.crossings[:, 1:3]
+
+    def orbit_index(self) -> np.ndarray:
+        """For each crossing row, the orbit it belongs to (total,)."""
+        return np.repeat(np.arange(self.n_orbits), np.diff(self.offsets))
+
+    def padded(self, fill: float = np.nan) -> np.ndarray:
+        """Crossings as (N, max count, 5), padded with ``fill``."""
+        k = int(self.count.max()) if self.n_orbits else 0
+        out = np.full((self.n_orbits, k, 5), fill)
+        if self.crossings.shape[0]:
+            rows = np.arange(self.crossings.shape[0]) - np.repeat(self.offsets[:-1], np.diff(self.offsets))
+            out[self.orbit_index(), rows] = self.crossings
+        return out
+
+
+def _json_attr(text):
+    if text is None:
+        return {}
+    if isinstance(text, dict):
+        return text
+    return json.loads(text)
+
+
+@dataclass
+class StoreData:
+    """A whole store: file attrs and complete panels by index."""
+
+    path: str
+    attrs: dict
+    panels: dict  # int -> PanelData
+
+    @property
+    def provenance(self) -> dict:
+        return _json_attr(self.attrs.get("provenance"))
+
+    @property
+    def scene(self) -> str | None:
+        return self.attrs.get("scene")
+
+    @property
+    def scene_name(self) -> str | None:
+        return self.attrs.get("scene_name")
+
+
+def _open_store(path: str):
+    """Open an existing store read-only and check its format; StoreError otherwise."""
+    if not os.path.exists(path):
+        raise StoreError(f"{path}: no such store file")
+    if os.path.isdir(path):
+        raise StoreError(f"{path}: is a directory, not an explorer store")
+    try:
+        is_h5 = h5py.is_hdf5(path)
+    except OSError as exc:
+        raise StoreError(f"{path}: cannot read the file ({exc.strerror or exc})") from None
+    if not is_h5:
+        raise StoreError(f"{path}: not an HDF5 file (corrupt or another format); {_FORCE_HINT}")
+    try:
+        f = h5py.File(path, "r")
+    except OSError as exc:
+        raise StoreError(f"{path}: corrupt HDF5 file ({_one_line(exc)}); {_FORCE_HINT}") from None
+    try:
+        fmt = _from_h5_attr(f.attrs.get("format"))
+        version = _from_h5_attr(f.attrs.get("format_version"))
+        if fmt != FORMAT:
+            raise StoreError(f"{path}: not an explorer store (format attribute is {fmt!r}, "
+                             f"expected {FORMAT!r}); {_FORCE_HINT}")
+        if not isinstance(version, int) or version < 1:
+            raise StoreError(f"{path}: invalid format_version {version!r}; {_FORCE_HINT}")
+        if version > FORMAT_VERSION:
+            raise StoreError(f"{path}: written by a newer explorer (format_version {version} > "
+                             f"{FORMAT_VERSION}); upgrade explorer or choose another --out")
+    except StoreError:
+        f.close()
+        raise
+    except Exception as exc:  # damaged attribute heap and the like
+        f.close()
+        raise StoreError(f"{path}: corrupt HDF5 file ({_one_line(exc)}); {_FORCE_HINT}") from None
+    return f
+
+
+def _one_line(exc) -> str:
+    text = str(exc).strip().splitlines()
+    return text[0] if text else type(exc).__name__
+
+
+def _panel_groups(f, path: str):
+    """(index, group) of every panel group, sorted by index."""
+    if "panels" not in f:
+        return []
+    out = []
+    for name, grp in f["panels"].items():
+        try:
+            idx = int(name)
+        except ValueError:
+            raise StoreError(f"{path}: unexpected group /panels/{name}") from None
+        if not isinstance(grp, h5py.Group):
+            raise StoreError(f"{path}: /panels/{name} is not a group")
+        out.append((idx, grp))
+    return sorted(out, key=lambda t: t[0])
+
+
+def _read_panel(idx: int, grp, path: str) -> PanelData:
+    missing = [d for d in DATASETS if d not in grp]
+    if missing:
+        raise StoreError(f"{path}: panel {idx} lacks dataset(s) {', '.join(missing)}")
+    arrays = {d: grp[d][()] for d in DATASETS}
+    extra = {d: grp[d][()] for d in OPTIONAL_DATASETS if d in grp}
+    names = _from_h5_attr(grp["status"].attrs.get("status_names"))
+    status_names = {int(k): v for k, v in json.loads(names).items()} if names else dict(STATUS_NAMES)
+    panel = PanelData(index=idx, attrs=_read_attrs(grp), status_names=status_names, extra=extra, **arrays)
+    n = panel.count.shape[0]
+    off = panel.offsets
+    if (off.shape != (n + 1,) or off[0] != 0 or off[-1] != panel.crossings.shape[0]
+            or np.any(np.diff(off) != panel.count)):
+        raise StoreError(f"{path}: panel {idx} has inconsistent offsets/count/crossings")
+    return panel
+
+
+def read_store(path) -> StoreData:
+    """Read a whole store (every panel group; see ``PanelData.complete``).
+
+    Raises StoreError naming ``path`` if the file is missing, not HDF5, not an
+    explorer store, or damaged (including fletcher32 checksum failures)."""
+    path = os.fspath(path)
+    f = _open_store(path)
+    try:
+        attrs = _read_attrs(f)
+        panels = {idx: _read_panel(idx, grp, path) for idx, grp in _panel_groups(f, path)}
+    except StoreError:
+        raise
+    except Exception as exc:
+        raise StoreError(f"{path}: corrupt store ({_one_line(exc)}); {_FORCE_HINT}") from None
+    finally:
+        f.close()
+    return StoreData(path=path, attrs=attrs, panels=panels)
+
+
+def panel_hashes(path) -> dict:
+    """{index: settings hash} of the complete panels; {} if ``path`` does not
+    exist; StoreError if it exists but is not a readable explorer store."""
+    path = os.fspath(path)
+    if not os.path.exists(path):
+        return {}
+    f = _open_store(path)
+    try:
+        out = {}
+        for idx, grp in _panel_groups(f, path):
+            a = grp.attrs
+            if bool(_from_h5_attr(a.get("complete", False))) and "hash" in a:
+                out[idx] = _from_h5_attr(a["hash"])
+        return out
+    except StoreError:
+        raise
+    except Exception as exc:
+        raise StoreError(f"{path}: corrupt store ({_one_line(exc)}); {_FORCE_HINT}") from None
+    finally:
+        f.close()
+
+
