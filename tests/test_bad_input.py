@@ -24,8 +24,8 @@ P0 = ["--p1", "0", "--p2", "0"]
 # (id, argv, fragment the message must contain)
 CLI_CASES = [
     # ---- orbit
-    ("orbit_tol_below_min", ["orbit"] + P0 + ["--tol", "1e-20"], "tol must be finite and in [1e-16, 0.01]"),
-    ("orbit_tol_above_max", ["orbit"] + P0 + ["--tol", "0.5"], "tol must be finite and in [1e-16, 0.01]"),
+    ("orbit_tol_below_min", ["orbit"] + P0 + ["--tol", "1e-20"], "tol must be in [1e-16, 0.01]"),
+    ("orbit_tol_above_max", ["orbit"] + P0 + ["--tol", "0.5"], "tol must be in [1e-16, 0.01]"),
     ("orbit_dt_nan", ["orbit"] + P0 + ["--method", "split8", "--dt", "nan"], "dt must be finite"),
     ("orbit_dt_zero", ["orbit"] + P0 + ["--method", "split8", "--dt", "0"], "dt must be"),
     ("orbit_crossings_not_int", ["orbit"] + P0 + ["--crossings", "abc"], "--crossings"),

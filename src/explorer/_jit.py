@@ -22,6 +22,9 @@ if NOJIT:  # pragma: no cover - debugging switch
 
     def get_num_threads():
         return 1
+
+    def max_threads():
+        return 1
 else:
     import numba
 
@@ -37,3 +40,7 @@ else:
     prange = numba.prange
     set_num_threads = numba.set_num_threads
     get_num_threads = numba.get_num_threads
+
+    def max_threads():
+        """Numba's NUMBA_NUM_THREADS: the most threads a parallel loop can use in this process."""
+        return numba.config.NUMBA_NUM_THREADS

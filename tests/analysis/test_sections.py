@@ -289,12 +289,10 @@ def test_start_with_infinite_energy_is_refused():
 # ---------------------------------------------------------------- determinism
 @pytest.mark.parametrize("method", ["taylor", "dop853", "split8"])
 def test_results_are_identical_whatever_the_thread_count(method):
-    from explorer._jit import get_num_threads
-
     prm = PARAM_SETS["figure4_mu0.5"]
     p1, p2 = fig4_seeds(prm, 2.0, 16, p2_frac=0.05)
     a = sections.section_crossings(prm, p1, p2, 2.0, 30, method=method, threads=1)
-    b = sections.section_crossings(prm, p1, p2, 2.0, 30, method=method, threads=max(2, get_num_threads()))
+    b = sections.section_crossings(prm, p1, p2, 2.0, 30, method=method, threads=2)
     np.testing.assert_array_equal(a.data, b.data)
     np.testing.assert_array_equal(a.status, b.status)
     np.testing.assert_array_equal(a.final, b.final)
@@ -306,7 +304,8 @@ def test_results_are_identical_whatever_the_thread_count(method):
     (dict(tol=0.0), "tol must be"), (dict(tol=float("nan")), "tol must be"),
     (dict(method="split4", dt=-0.1), "dt must be"), (dict(tmax=-1.0), "tmax must be"),
     (dict(direction=2), "direction must be"), (dict(max_steps=0), "max_steps must be"),
-    (dict(threads=0), "threads must be"),
+    (dict(threads=0), "threads must be"), (dict(threads=2.0), "threads must be an integer"),
+    (dict(threads=10**6), r"threads must be <= \d+ \(NUMBA_NUM_THREADS"),
 ])
 def test_bad_settings_are_refused_with_their_name(kw, fragment):
     prm = model.FIGURE4

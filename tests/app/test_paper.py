@@ -1,7 +1,6 @@
 """The figures of the seed paper (explorer.paper, `python -m explorer figures`) and the seed's
 typos that no other test covers (docs/errata.md lists every erratum with its test)."""
 import math
-import sys
 
 import numpy as np
 import pytest

@@ -33,7 +33,7 @@ from explorer.model.equations import rhs
 from explorer.kernels import STATUS_DONE, STATUS_NAMES
 from explorer.kernels.taylor import order_for_tolerance
 from explorer.analysis.lyapunov import energy_gradient
-from explorer.model import ParameterError
+from explorer.model import ParameterError, validation
 
 NEWTON_TOL = 1e-12
 NEWTON_MAX_ITER = 30
@@ -64,9 +64,9 @@ class SectionMap:
         self.phi0 = phi0
         g1, g2 = model.section_gamma(phi0)
         self.sphi, self.cphi = g1, g2
-        from explorer.analysis.sections import MAX_TOL, MIN_TOL, _positive
+        from explorer.analysis.sections import MAX_TOL, MIN_TOL
 
-        self.order = order_for_tolerance(_positive("tol", tol, MIN_TOL, MAX_TOL, inclusive=True))
+        self.order = order_for_tolerance(validation.real("tol", tol, MIN_TOL, MAX_TOL))
         self.tmax = tmax
 
     def state(self, x):
@@ -181,7 +181,7 @@ def continue_branch(params, h, parameter, start, stop, step, guess=(0.0, 0.0), *
     values = start + step * np.arange(n)
 
     def solve(v, g):
-        prm, hh = _with(params, h, parameter, v)
+        prm, hh = validation.with_value(params, h, parameter, v)
         return find_fixed_point(prm, hh, g, phi0=phi0, tol=tol)
 
     points = []
@@ -223,12 +223,6 @@ def continue_branch(params, h, parameter, start, stop, step, guess=(0.0, 0.0), *
                     hi = mid
             bif.append(0.5 * (lo + hi))
     return Branch(parameter, values, points, bif)
-
-
-def _with(params, h, name, value):
-    if name == "h":
-        return params, float(value)
-    return params.with_(**{name: float(value)}), h
 
 
 # ---------------------------------------------------------------- separatrices
@@ -310,7 +304,7 @@ def follow(params, h, parameter, start, stop, guess, *, max_step=0.25, phi0=math
     """The fixed point at ``parameter = stop`` on the branch through the point found near
     ``guess`` at ``parameter = start`` (continuation in steps of at most ``max_step``)."""
     if start == stop:
-        prm, hh = _with(params, h, parameter, start)
+        prm, hh = validation.with_value(params, h, parameter, start)
         return find_fixed_point(prm, hh, guess, phi0=phi0, tol=tol)
     n = max(1, math.ceil(abs(stop - start) / max_step))
     br = continue_branch(params, h, parameter, start, stop, (stop - start) / n, guess, phi0=phi0, tol=tol)

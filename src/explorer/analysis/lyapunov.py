@@ -28,9 +28,9 @@ from explorer.integrate import tangent as dt_
 from explorer import model
 from explorer.kernels import STATUS_NAMES, splitting
 from explorer.kernels.taylor import order_for_tolerance
-from explorer.model import ParameterError
-from explorer.analysis.sections import METHODS, MAX_TOL, MIN_TOL, _params_array, _positive
-from explorer._jit import get_num_threads, set_num_threads
+from explorer.model import ParameterError, validation
+from explorer.analysis.sections import METHODS, MAX_TOL, MIN_TOL
+from explorer._jit import get_num_threads, max_threads, set_num_threads
 
 DEFAULT_TIME = 1000.0
 DEFAULT_DT = 0.02
@@ -91,10 +91,10 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
                dt: float = DEFAULT_DT, history: int = 0, v0=None, max_steps: int = 10**9,
                threads: int | None = None) -> Indicators:
     """Chaos indicators of the orbits starting at ``y0`` ((N, 5) or (5,)) over the time ``T``."""
-    P = _params_array(params)
+    P = validation.packed_params(params)
     if method not in METHODS:
         raise ParameterError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
-    T = _positive("time", T)
+    T = validation.real("time", T, 0.0, lo_open=True)
     Y0 = np.ascontiguousarray(np.atleast_2d(np.asarray(y0, dtype=np.float64)))
     if Y0.ndim != 2 or Y0.shape[1] != 5 or not np.all(np.isfinite(Y0)):
         raise ParameterError("y0 must be finite with shape (N, 5) = (p1, p2, M, g1, g2) per orbit")
@@ -112,21 +112,21 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
     settings = {"method": method, "time": T}
     old = get_num_threads()
     if threads is not None:
-        set_num_threads(min(int(threads), old))
+        set_num_threads(validation.threads(threads, max_threads()))
     try:
         if method == "taylor":
-            tol = _positive("tol", tol, MIN_TOL, MAX_TOL, inclusive=True)
+            tol = validation.real("tol", tol, MIN_TOL, MAX_TOL)
             order = order_for_tolerance(tol)
             settings.update(tol=tol, order=order)
             dt_.run_tangent_taylor_batch(Y0, V0, P, T, order, int(max_steps), hist_t, hist, res, status,
                                          final, steps)
         elif method == "dop853":
-            tol = _positive("tol", tol, MIN_TOL, MAX_TOL, inclusive=True)
+            tol = validation.real("tol", tol, MIN_TOL, MAX_TOL)
             settings.update(rtol=tol, atol=tol)
             dt_.run_tangent_dop853_batch(Y0, V0, P, T, tol, tol, int(max_steps), hist_t, hist, res, status,
                                          final, steps)
         else:
-            dt = _positive("dt", dt)
+            dt = validation.real("dt", dt, 0.0, lo_open=True)
             weights = splitting.SCHEMES[method][0]
             ids, fr = splitting.flow_sequence(weights, 4)
             settings.update(dt=dt)

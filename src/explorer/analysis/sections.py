@@ -28,11 +28,11 @@ import numpy as np
 from explorer import model
 from explorer.integrate import drivers
 from explorer.integrate import lanes  # lanes: SIMD Taylor driver (see crossings)
-from explorer._jit import get_num_threads, set_num_threads
+from explorer._jit import get_num_threads, max_threads, set_num_threads
 from explorer.kernels import STATUS_NAMES
 from explorer.kernels import splitting
 from explorer.kernels.taylor import order_for_tolerance
-from explorer.model import ParameterError
+from explorer.model import ParameterError, validation
 
 ADAPTIVE_METHODS = ("taylor", "dop853")
 SPLIT_METHODS = tuple(splitting.SCHEMES)
@@ -92,27 +92,6 @@ def energy_warning(max_dh: float, h: float, setting: str) -> str | None:
             f"{setting} is too coarse for this orbit; refine it to trust the section")
 
 
-def _positive(name, value, lo=0.0, hi=math.inf, inclusive=False):
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(f"{name} must be a number, got {value!r}") from None
-    ok = math.isfinite(v) and (v >= lo if inclusive else v > lo) and v <= hi
-    if not ok:
-        right = ")" if math.isinf(hi) else "]"
-        rng = f"[{lo:g}, {hi:g}{right}" if inclusive else f"({lo:g}, {hi:g}{right}"
-        raise ParameterError(f"{name} must be finite and in {rng}, got {value!r}")
-    return v
-
-
-def _params_array(params):
-    if isinstance(params, model.Params):
-        return params.as_array()
-    if isinstance(params, dict):
-        return model.Params(**params).as_array()
-    return model.Params.from_array(params).as_array()
-
-
 def crossings(params, y0, n_crossings: int, *, method: str = "taylor", tol: float = DEFAULT_TOL,
               dt: float | None = None, tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS,
               phi0: float = math.pi, direction: int = 1, threads: int | None = None) -> Crossings:
@@ -124,7 +103,7 @@ def crossings(params, y0, n_crossings: int, *, method: str = "taylor", tol: floa
     methods (default 0.05).  ``threads`` sets numba's thread count for this call (default: all).
     A start point lying on the section is not reported as a crossing.
     """
-    P = _params_array(params)
+    P = validation.packed_params(params)
     if method not in METHODS:
         raise ParameterError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
     if not isinstance(n_crossings, numbers.Integral) or n_crossings < 1:
@@ -134,7 +113,7 @@ def crossings(params, y0, n_crossings: int, *, method: str = "taylor", tol: floa
     phi0 = float(phi0)
     if not math.isfinite(phi0):
         raise ParameterError(f"phi0 must be finite, got {phi0!r}")
-    tmax = 100.0 * n_crossings if tmax is None else _positive("tmax", tmax)
+    tmax = 100.0 * n_crossings if tmax is None else validation.real("tmax", tmax, 0.0, lo_open=True)
     if not isinstance(max_steps, numbers.Integral) or max_steps < 1:
         raise ParameterError(f"max_steps must be an integer >= 1, got {max_steps!r}")
     Y0 = np.ascontiguousarray(np.atleast_2d(np.asarray(y0, dtype=np.float64)))
@@ -160,24 +139,22 @@ def crossings(params, y0, n_crossings: int, *, method: str = "taylor", tol: floa
                 "max_steps": int(max_steps), "n_crossings": K}
     old_threads = get_num_threads()
     if threads is not None:
-        if not isinstance(threads, numbers.Integral) or threads < 1:
-            raise ParameterError(f"threads must be an integer >= 1, got {threads!r}")
-        set_num_threads(min(int(threads), old_threads))
+        set_num_threads(validation.threads(threads, max_threads()))
     try:
         if method == "taylor":
-            tol = _positive("tol", tol, MIN_TOL, MAX_TOL, inclusive=True)
+            tol = validation.real("tol", tol, MIN_TOL, MAX_TOL)
             order = order_for_tolerance(tol)
             settings.update(tol=tol, order=order)
             # [lanes] SIMD lane driver, bit for bit drivers.run_taylor_batch (the scalar reference)
             lanes.run_taylor_lanes_batch(Y0, P, cphi, sphi, int(direction), tmax, order, int(max_steps),
                                          data, count, status, final, info)
         elif method == "dop853":
-            tol = _positive("tol", tol, MIN_TOL, MAX_TOL, inclusive=True)
+            tol = validation.real("tol", tol, MIN_TOL, MAX_TOL)
             settings.update(rtol=tol, atol=tol)
             drivers.run_dop853_batch(Y0, P, cphi, sphi, int(direction), tmax, tol, tol, int(max_steps),
                                      data, count, status, final, info)
         else:
-            dt = DEFAULT_DT if dt is None else _positive("dt", dt)
+            dt = DEFAULT_DT if dt is None else validation.real("dt", dt, 0.0, lo_open=True)
             weights, order, _ref = splitting.SCHEMES[method][:3]
             ids, fracs = splitting.flow_sequence(weights, drivers.N_FLOWS)
             settings.update(dt=dt, order=order)

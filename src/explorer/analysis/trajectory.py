@@ -77,6 +77,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from explorer import model
+from explorer.model import validation
 from explorer._jit import njit
 from explorer.kernels import (STATUS_DONE, STATUS_MAX_STEPS, STATUS_NAMES, STATUS_NONFINITE,
                       STATUS_STEP_UNDERFLOW)
@@ -273,40 +274,24 @@ def full_params(params=None, **changes) -> dict:
     if unknown:
         raise model.ParameterError(f"unknown parameter(s) {', '.join(unknown)}")
     d.update(changes)
-    lam = d["lam"]
-    try:
-        lam = float(lam)
-    except (TypeError, ValueError):
-        raise model.ParameterError(f"lam must be a real number, got {d['lam']!r}") from None
-    if not math.isfinite(lam):
-        raise model.ParameterError(f"lam must be finite, got {d['lam']!r}")
+    lam = validation.real("lam", d["lam"])
     # model.Params validates every other parameter; lam = 0 is legal for R1, so it is replaced by 1 here.
     checked = model.Params(**dict(d, lam=1.0)).as_dict()
     checked["lam"] = lam
     return checked
 
 
-def _finite_arg(name, value) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise model.ParameterError(f"{name} must be a real number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise model.ParameterError(f"{name} must be finite, got {value!r}")
-    return v
-
-
 def initial_state(params, p1, p2, M, phi, x=0.0, y=0.0) -> np.ndarray:
     """The full state (p1, p2, M, sin phi, cos phi, x, y) (MODEL.md R1); ``params`` is only
     validated (the state does not depend on it)."""
     full_params(params)
-    vals = [_finite_arg(n, v) for n, v in (("p1", p1), ("p2", p2), ("M", M), ("phi", phi), ("x", x), ("y", y))]
+    vals = [validation.real(n, v) for n, v in (("p1", p1), ("p2", p2), ("M", M), ("phi", phi), ("x", x), ("y", y))]
     p1, p2, M_, phi, x, y = vals
     return np.array([p1, p2, M_, math.sin(phi), math.cos(phi), x, y], dtype=np.float64)
 
 
 def _check_run(t_end, n_samples, tol):
-    t_end = _finite_arg("T (time)", t_end)
+    t_end = validation.real("T (time)", t_end)
     if not t_end > 0.0:
         raise model.ParameterError(f"T (time) must be > 0, got {t_end!r}")
     try:
@@ -315,7 +300,7 @@ def _check_run(t_end, n_samples, tol):
         raise model.ParameterError(f"samples must be an integer >= 2, got {n_samples!r}") from None
     if ns != n_samples or ns < 2:
         raise model.ParameterError(f"samples must be an integer >= 2, got {n_samples!r}")
-    tol = _finite_arg("tol", tol)
+    tol = validation.real("tol", tol)
     if not (0.0 < tol < 1.0):
         raise model.ParameterError(f"tol must be in (0, 1), got {tol!r}")
     return t_end, ns, tol
@@ -355,7 +340,7 @@ def trajectory(params, y0_full, t_end, n_samples=2001, tol=DEFAULT_TOL, *, phi_s
                                    "use initial_state()")
     phi0 = math.atan2(y0[G1], y0[G2])
     if phi_start is not None:
-        ps = _finite_arg("phi", phi_start)
+        ps = validation.real("phi", phi_start)
         phi0 = phi0 + TWO_PI * math.floor((ps - phi0) / TWO_PI + 0.5)
     t = np.linspace(0.0, t_end, ns)
     out = np.full((ns, STATE_DIM), np.nan)

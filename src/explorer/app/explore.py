@@ -70,7 +70,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from explorer import model
-from explorer.model import PARAM_NAMES, ParameterError
+from explorer.model import PARAM_NAMES, ParameterError, validation
 
 #: time over which the chaos indicators (MEGNO, finite-time mLCE) of an orbit are computed
 INDICATOR_TIME = 1000.0
@@ -303,9 +303,9 @@ class Explorer:
         self.tol = sections.DEFAULT_TOL if tol is None else float(tol)
         self.dt = sections.DEFAULT_DT if dt is None else float(dt)
         if method in sections.ADAPTIVE_METHODS:
-            sections._positive("tol", self.tol, sections.MIN_TOL, sections.MAX_TOL, inclusive=True)
+            validation.real("tol", self.tol, sections.MIN_TOL, sections.MAX_TOL)
         else:
-            sections._positive("dt", self.dt)
+            validation.real("dt", self.dt, 0.0, lo_open=True)
         for name, v in (("crossings-per-chunk", chunk), ("max-crossings", max_crossings)):
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
                 raise ParameterError(f"{name} must be an integer >= 1, got {v!r}")

@@ -18,7 +18,7 @@ from explorer.io import store
 from explorer.analysis import sweep
 from explorer.kernels import STATUS_NAMES, STATUS_TMAX
 from explorer.analysis.fixedpoints import chaotic_fraction
-from explorer.model import ParameterError
+from explorer.model import ParameterError, validation
 from explorer.analysis.sections import ADAPTIVE_METHODS, energy_warning, max_energy_error
 
 
@@ -46,7 +46,7 @@ def panel_separatrices(scene, i):
         fp = fpm.find_fixed_point(prm, h, (c1, c2), phi0=phi0)
     else:
         start = 0.0 if name == "mu" else scene.sweep_values[0]
-        sprm, sh = fpm._with(prm, h, name, start)
+        sprm, sh = validation.with_value(prm, h, name, start)
         c1, c2, _r1, _r2 = mdl.allowed_ellipse(sprm, sh, phi0)
         target = scene.sweep_values[i]
         fp = fpm.follow(prm, h, name, start, target, (c1, c2), phi0=phi0)

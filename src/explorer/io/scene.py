@@ -90,12 +90,11 @@ try:
 except ModuleNotFoundError:  # Python < 3.11
     import tomli as tomllib
 
-import numpy as np
 
 from explorer import model
 from explorer.analysis import sections
 from explorer.analysis.seeds import grid_spacing, seed_points  # noqa: F401  (re-exported)
-from explorer.model import PARAM_NAMES, ParameterError
+from explorer.model import PARAM_NAMES, ParameterError, validation
 
 #: Version of the panel-settings layout; part of every panel hash.
 FORMAT_VERSION = 1
@@ -148,36 +147,25 @@ def _got(v) -> str:
     return f"got {_short(v)} ({type(v).__name__})"
 
 
+def _checked(check, key, *args, **kwargs):
+    """A value checked by :mod:`explorer.model.validation`, its refusal as a SceneError."""
+    try:
+        return check(f"scene key '{key}'", *args, **kwargs)
+    except ParameterError as exc:
+        raise SceneError(str(exc)) from None
+
+
 def _real(key, v, lo=None, hi=None, lo_open=False) -> float:
     """A finite real number (int or float, not bool) in [lo, hi] (or (lo, hi] if lo_open)."""
-    if isinstance(v, bool) or not isinstance(v, numbers.Real):
-        _fail(key, f"must be a number, {_got(v)}")
-    x = float(v)
-    if not math.isfinite(x):
-        _fail(key, f"must be finite, got {_short(v)}")
-    if lo is not None and hi is not None:
-        if not ((x > lo if lo_open else x >= lo) and x <= hi):
-            _fail(key, f"must be in {'(' if lo_open else '['}{lo:g}, {hi:g}], got {_short(v)}")
-    elif lo is not None and not (x > lo if lo_open else x >= lo):
-        _fail(key, f"must be {'>' if lo_open else '>='} {lo:g}, got {_short(v)}")
-    return x
+    return _checked(validation.real, key, v, lo, hi, lo_open=lo_open)
 
 
 def _int(key, v, lo=None, hi=None) -> int:
-    if isinstance(v, bool) or not isinstance(v, numbers.Integral):
-        _fail(key, f"must be an integer, {_got(v)}")
-    i = int(v)
-    if lo is not None and hi is not None and not lo <= i <= hi:
-        _fail(key, f"must be an integer in [{lo}, {hi}], got {i}")
-    if lo is not None and i < lo:
-        _fail(key, f"must be an integer >= {lo}, got {i}")
-    return i
+    return _checked(validation.integer, key, v, lo, hi)
 
 
 def _bool(key, v) -> bool:
-    if not isinstance(v, (bool, np.bool_)):
-        _fail(key, f"must be true or false, {_got(v)}")
-    return bool(v)
+    return _checked(validation.boolean, key, v)
 
 
 def _str(key, v) -> str:
@@ -187,10 +175,7 @@ def _str(key, v) -> str:
 
 
 def _choice(key, v, choices) -> str:
-    _str(key, v)
-    if v not in choices:
-        _fail(key, f"must be one of {', '.join(choices)}; got {_short(v)}")
-    return v
+    return _checked(validation.choice, key, v, choices)
 
 
 def _list(key, v, min_len=1) -> list:

@@ -25,6 +25,8 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
+from explorer.model.validation import ParameterError, packed_params, real
+
 # Packed layout of the parameter vector handed to the kernels.
 A1, A2, B, LAM, CHI, ZETA, MU, XI, ETA = range(9)
 __all__ = [
@@ -71,20 +73,6 @@ P1, P2, M, G1, G2 = range(5)
 STATE_DIM = 5
 
 
-class ParameterError(ValueError):
-    """Bad input: the message names the parameter and what is allowed."""
-
-
-def _check_finite(name, value):
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(f"{name} must be a real number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise ParameterError(f"{name} must be finite, got {value!r}")
-    return v
-
-
 @dataclass(frozen=True)
 class Params:
     """Model parameters of Chaplygin's equations (MODEL.md, R1/R3).
@@ -105,7 +93,7 @@ class Params:
 
     def __post_init__(self):
         for f in fields(self):
-            object.__setattr__(self, f.name, _check_finite(f.name, getattr(self, f.name)))
+            object.__setattr__(self, f.name, real(f.name, getattr(self, f.name)))
         for name in ("a1", "a2", "b"):
             if getattr(self, name) <= 0.0:
                 raise ParameterError(f"{name} must be > 0 (a mass or moment of inertia), got {getattr(self, name)!r}")
@@ -137,12 +125,11 @@ FIGURE4 = Params(a1=1.0, a2=0.5, b=2.0, lam=1.0, chi=0.0, zeta=0.0, mu=0.0, xi=0
 FIGURE4_H = 2.0
 
 
-def params_array(params) -> np.ndarray:
-    """The packed float64 parameter vector of a :class:`Params` (or of an array given as is)."""
-    return params.as_array() if isinstance(params, Params) else np.asarray(params, dtype=np.float64)
 
 
-_P = params_array
+#: the packed float64 parameter vector of a Params, mapping or sequence (validated)
+params_array = packed_params
+_P = packed_params
 
 
 def energy(params, y) -> np.ndarray:
