@@ -276,3 +276,25 @@ def test_sweep_stores_chaos_indicators_fraction_and_separatrices(tmp_path, capsy
     for suffix in ("", "_chaosmap", "_fraction"):
         assert (tmp_path / f"c{suffix}.png").stat().st_size > 5000
         assert (tmp_path / f"c{suffix}.pdf").exists()
+
+
+def test_run_sweep_returns_a_report_and_a_rerun_computes_nothing(tmp_path, capsys):
+    """The Python entry point: a frozen report (no printing); the counts agree with the store."""
+    import dataclasses
+
+    from explorer.app.runner import format_report, run_sweep
+
+    path = write_scene(tmp_path)
+    out = tmp_path / "small.h5"
+    first = run_sweep(path, out, draw=False, progress=False)
+    assert capsys.readouterr().out == ""
+    assert first.computed == (0, 1, 2) and first.n_panels == 3 and first.figure == ()
+    data = store.read_store(out)
+    assert first.crossings == sum(int(data.panels[i].arrays["count"].sum()) for i in range(3))
+    assert first.orbits == sum(len(data.panels[i].arrays["count"]) for i in range(3))
+    assert 0.0 < first.max_dh < 1e-8
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        first.orbits = 0
+    again = run_sweep(path, out, draw=False, progress=False)
+    assert again.computed == () and again.crossings == 0
+    assert "0 computed, 3 already stored" in format_report(again)

@@ -237,9 +237,17 @@ def cmd_orbit(args) -> int:
 
 
 def cmd_sweep(args) -> int:
-    from explorer.app.runner import run_sweep
+    from explorer.app.runner import format_report, run_sweep
 
-    return run_sweep(args)
+    if args.jobs < 1:  # the API says "jobs"; the command line names its option
+        raise model.ParameterError(f"--jobs must be >= 1, got {args.jobs}")
+    if args.scheduler and args.backend != "dask":
+        raise model.ParameterError("--scheduler needs --backend dask")
+    report = run_sweep(args.scene, args.out, figure=args.figure, draw=not args.no_figure, jobs=args.jobs,
+                       backend=args.backend, scheduler=args.scheduler, force=args.force,
+                       progress=not args.quiet)
+    print(format_report(report))
+    return 0
 
 
 def cmd_lyapunov(args) -> int:

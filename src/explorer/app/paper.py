@@ -25,7 +25,7 @@ name                   what
 =====================  ==========================================================================
 
 Sweeps (``figure4``, ``chaotic_fraction``, ``chaos_map``) go through
-:func:`explorer.runner.run_sweep`, which reuses ``<results_dir>/<scene>.h5`` when its panels
+:func:`explorer.app.runner.run_sweep`, which reuses ``<results_dir>/<scene>.h5`` when its panels
 are stored with the same settings hash and computes only what is missing.  With ``quick``
 a scene whose store is not complete is replaced by a reduced copy (fewer seeds, crossings,
 shorter MEGNO time) named ``<scene>-quick`` with its own store; the figure says so.
@@ -50,9 +50,6 @@ The line of III (c > lam b/a2) and the arc of I with c > lam b/a1 lie inside the
 """
 from __future__ import annotations
 
-import argparse
-import contextlib
-import io
 import json
 import math
 import os
@@ -1128,7 +1125,7 @@ def store_complete(scene, path) -> bool:
 
 def ensure_sweep(preset, *, results_dir="results", quick=False, quiet=True):
     """The scene and store of a preset, computing what is missing with
-    :func:`explorer.runner.run_sweep` (complete panels with the same hash are skipped).
+    :func:`explorer.app.runner.run_sweep` (complete panels with the same hash are skipped).
     Under ``quick`` an incomplete full store is left alone and the reduced scene is used.
     Returns (scene, store path, reduced?, summary text)."""
     from explorer.app import runner
@@ -1144,12 +1141,8 @@ def ensure_sweep(preset, *, results_dir="results", quick=False, quiet=True):
         scene = load_scene(spec)
         out = results_dir / f"{scene.name}.h5"
         reduced = True
-    ns = argparse.Namespace(scene=spec, out=str(out), figure=None, no_figure=True, jobs=1, backend=None,
-                            scheduler=None, force=False, quiet=quiet)
-    buf = io.StringIO()
-    with contextlib.redirect_stdout(buf):
-        runner.run_sweep(ns)
-    return scene, out, reduced, buf.getvalue().strip()
+    report = runner.run_sweep(scene, out, draw=False, progress=not quiet)
+    return scene, out, reduced, runner.format_report(report)
 
 
 def _quick_note(scene):

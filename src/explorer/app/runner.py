@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -102,33 +103,80 @@ def draw_figure(scene, out_path, stem):
     return paths
 
 
-def run_sweep(args) -> int:
-    from explorer.io.scene import load_scene
+@dataclass(frozen=True)
+class SweepReport:
+    """What one :func:`run_sweep` did; :func:`format_report` turns it into the CLI's summary."""
+
+    scene: str
+    out: Path
+    n_panels: int
+    computed: tuple          # indices of the panels computed by this run
+    orbits: int
+    crossings: int
+    stopped: int             # orbits that stopped crossing within the time budget
+    statuses: dict           # status name -> number of orbits
+    max_dh: float            # largest |H - H0| over all crossings computed
+    warning: str | None      # energy-error warning naming the setting to tighten
+    fractions: tuple         # (panel label, chaotic fraction, binomial error) per computed panel
+    threshold: float         # MEGNO threshold of the fractions
+    figure: tuple            # paths of the figure files drawn by this run (empty: none)
+    wall_time: float
+
+
+def format_report(r: SweepReport) -> str:
+    """The summary that ``explorer sweep`` prints."""
+    lines = [f"scene {r.scene}: {r.n_panels} panels ({len(r.computed)} computed, "
+             f"{r.n_panels - len(r.computed)} already stored) -> {r.out}"]
+    if r.computed:
+        st = ", ".join(f"{k}: {v}" for k, v in sorted(r.statuses.items()))
+        lines.append(f"  orbits {r.orbits}, crossings {r.crossings}, "
+                     f"orbits that stopped crossing {r.stopped} ({st})")
+        lines.append(f"  energy error max |H - H0| over all crossings {r.max_dh:.1e}")
+        if r.warning:
+            lines.append(f"  warning: {r.warning}")
+    for label, frac, err in r.fractions:
+        lines.append(f"  {label}: chaotic fraction {frac:.3f} +- {err:.3f} (MEGNO > {r.threshold:g})")
+    if r.figure:
+        lines.append("  figure " + ", ".join(str(p) for p in r.figure))
+    lines.append(f"  wall time {r.wall_time:.2f} s")
+    return "\n".join(lines)
+
+
+def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, scheduler=None,
+              force=False, progress=True) -> SweepReport:
+    """Compute every panel of ``scene`` that ``out`` does not hold with the same settings hash,
+    commit each atomically and (``draw``) redraw the figure when data changed or files are missing.
+
+    ``scene``: a :class:`~explorer.io.scene.Scene`, a TOML path or a preset name;
+    ``out``: HDF5 path [results/<scene>.h5]; ``figure``: figure stem [figures/<scene>];
+    ``jobs``/``backend``/``scheduler``: joblib processes (dask: a cluster); ``force``: recompute all;
+    ``progress``: a progress bar on stderr. Returns a :class:`SweepReport`; bad settings raise
+    :class:`~explorer.model.ParameterError`.
+    """
+    from explorer.io.scene import Scene, load_scene
 
     t_start = time.perf_counter()
-    if args.jobs < 1:
-        raise ParameterError(f"--jobs must be >= 1, got {args.jobs}")
-    if args.scheduler and args.backend != "dask":
-        raise ParameterError("--scheduler needs --backend dask")
-    scene = load_scene(args.scene)
-    out = Path(args.out) if args.out else Path("results") / f"{scene.name}.h5"
-    stem = Path(args.figure) if args.figure else Path("figures") / scene.name
+    jobs = validation.integer("jobs", jobs, lo=1)
+    if scheduler and backend != "dask":
+        raise ParameterError("scheduler needs backend 'dask' (--scheduler needs --backend dask)")
+    if not isinstance(scene, Scene):
+        scene = load_scene(scene)
+    out = Path(out) if out else Path("results") / f"{scene.name}.h5"
+    stem = Path(figure) if figure else Path("figures") / scene.name
     _check_writable(out.parent, "--out", out)
-    if not args.no_figure:
+    if draw:
         _check_writable(stem.parent, "--figure", stem)
     store.clean_stale_temporaries(out)
 
     try:
-        on_disk = {} if args.force else store.panel_hashes(out)
+        on_disk = {} if force else store.panel_hashes(out)
     except store.StoreError as exc:
         raise ParameterError(str(exc)) from None
     hashes = [scene.panel_hash(i) for i in range(scene.n_panels)]
-    todo = [i for i in range(scene.n_panels) if args.force or on_disk.get(i) != hashes[i]]
-    jobs = args.jobs
-    backend = args.backend
+    todo = [i for i in range(scene.n_panels) if force or on_disk.get(i) != hashes[i]]
     client = None
     if backend == "dask":
-        client = _dask_client(args.scheduler, jobs)
+        client = _dask_client(scheduler, jobs)
         jobs = -1
     chunk_orbits = sweep.default_jobs_layout(1 if (jobs == 1 and backend is None) else 2)
     spec = sweep.build_spec(scene, todo, chunk_orbits=chunk_orbits) if todo else None
@@ -136,7 +184,8 @@ def run_sweep(args) -> int:
     prov = json.dumps(store.provenance({"scene": scene.name}), sort_keys=True)
     file_attrs = {"scene_name": scene.name, "scene": scene.text, "provenance": prov}
     integ = scene.integration
-    stats = {"orbits": 0, "crossings": 0, "stopped": 0, "statuses": {}, "max_dh": 0.0, "warning": None}
+    stats = {"orbits": 0, "crossings": 0, "stopped": 0, "statuses": {}, "max_dh": 0.0, "warning": None,
+             "fractions": []}
     setting = (f"tol = {integ.tol:g}" if integ.method in ADAPTIVE_METHODS
                else f"dt = {integ.dt:g}") + " ([integration])"
 
@@ -158,7 +207,7 @@ def run_sweep(args) -> int:
             frac, err, n_ok = chaotic_fraction(arrays["megno"], scene.lyapunov.threshold,
                                                arrays["lyapunov_status"] == 0)
             attrs.update(chaotic_fraction=frac, chaotic_fraction_error=err, megno_threshold=scene.lyapunov.threshold)
-            stats.setdefault("fractions", []).append((panel.label, frac, err))
+            stats["fractions"].append((panel.label, frac, err))
         if "separatrices" in scene.compute:
             fp_info, curves = panel_separatrices(scene, i)
             attrs["fixed_point"] = json.dumps(fp_info, sort_keys=True)
@@ -179,7 +228,7 @@ def run_sweep(args) -> int:
 
     try:
         if spec is not None:
-            bar = _progress(len(spec.chunks), args.quiet, f"sweep {scene.name}")
+            bar = _progress(len(spec.chunks), not progress, f"sweep {scene.name}")
             try:
                 sweep.run(spec, on_panel, jobs=jobs, backend="dask" if client is not None else backend,
                           progress=bar.update if bar is not None else None)
@@ -190,30 +239,18 @@ def run_sweep(args) -> int:
         if client is not None:
             client.close()
 
-    figure_paths = None
-    if not args.no_figure:
+    figure_paths = ()
+    if draw:
         png, pdf = stem.with_suffix(".png"), stem.with_suffix(".pdf")
         stale = (not png.exists() or not pdf.exists() or png.stat().st_mtime < out.stat().st_mtime
                  or pdf.stat().st_mtime < out.stat().st_mtime)
-        if todo or stale or args.force:
-            figure_paths = draw_figure(scene, out, stem)
-    wall = time.perf_counter() - t_start
-    lines = [f"scene {scene.name}: {scene.n_panels} panels ({len(todo)} computed, "
-             f"{scene.n_panels - len(todo)} already stored) -> {out}"]
-    if todo:
-        st = ", ".join(f"{k}: {v}" for k, v in sorted(stats["statuses"].items()))
-        lines.append(f"  orbits {stats['orbits']}, crossings {stats['crossings']}, "
-                     f"orbits that stopped crossing {stats['stopped']} ({st})")
-        lines.append(f"  energy error max |H - H0| over all crossings {stats['max_dh']:.1e}")
-        if stats["warning"]:
-            lines.append(f"  warning: {stats['warning']}")
-    for label, frac, err in stats.get("fractions", []):
-        lines.append(f"  {label}: chaotic fraction {frac:.3f} +- {err:.3f} (MEGNO > {scene.lyapunov.threshold:g})")
-    if figure_paths:
-        lines.append("  figure " + ", ".join(str(p) for p in figure_paths))
-    lines.append(f"  wall time {wall:.2f} s")
-    print("\n".join(lines))
-    return 0
+        if todo or stale or force:
+            figure_paths = tuple(draw_figure(scene, out, stem))
+    return SweepReport(scene=scene.name, out=out, n_panels=scene.n_panels, computed=tuple(todo),
+                       orbits=stats["orbits"], crossings=stats["crossings"], stopped=stats["stopped"],
+                       statuses=dict(stats["statuses"]), max_dh=stats["max_dh"], warning=stats["warning"],
+                       fractions=tuple(stats["fractions"]), threshold=float(scene.lyapunov.threshold),
+                       figure=figure_paths, wall_time=time.perf_counter() - t_start)
 
 
 def _check_writable(directory: Path, option: str, target: Path):
