@@ -104,3 +104,46 @@ def test_python_dash_m_explorer_runs_and_exits_2_on_bad_input():
     bad = subprocess.run([sys.executable, "-m", "explorer", "orbit", "--p1", "0", "--p2", "0", "--lam", "0"],
                          capture_output=True, text=True, timeout=300)
     assert bad.returncode == 2 and "Traceback" not in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("argv, dest, value", [
+    (["fixedpoint", "--guess", "-0.4,0"], "guess", "-0.4,0"),
+    (["fixedpoint", "--guess", "-.4,-1e-3"], "guess", "-.4,-1e-3"),
+    (["orbit", "--p1", "-1.2", "--p2", "0"], "p1", -1.2),
+    (["orbit", "--p1", "-3e-1", "--p2", "0"], "p1", -0.3),
+    (["orbit", "--p1", "0", "--p2", "-inf"], "p2", -math.inf),
+    (["fixedpoint", "--continue", "xi", "-1e-3", "-0.5", "-0.1"], "cont", ["xi", "-1e-3", "-0.5", "-0.1"]),
+])
+def test_values_with_a_leading_minus_parse_without_equals(argv, dest, value):
+    args = cli.build_parser().parse_args(argv)
+    assert getattr(args, dest) == value
+
+
+def test_an_option_is_still_an_option_after_an_option_missing_its_value(capsys):
+    assert cli.main(["orbit", "--p1", "--p2", "0"]) == 2
+    assert "--p1: expected one argument" in capsys.readouterr().err
+
+
+def test_fixedpoint_with_a_negative_guess_without_equals_finds_the_fixed_point(capsys):
+    """The command the issue found broken: solution I at mu = 0.5 lies at p1 < 0 on p2 = 0."""
+    assert cli.main(["fixedpoint", "--guess", "-0.4,0", "--mu", "0.5", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    p1, p2 = out["p1"], out["p2"]
+    assert p1 < 0 and abs(p2) < 1e-10
+
+
+@pytest.mark.parametrize("command", sorted(cli.EXAMPLES))
+def test_every_help_ends_with_an_example_that_parses(command, capsys):
+    with pytest.raises(SystemExit) as exc:
+        cli.build_parser().parse_args([command, "--help"])
+    assert exc.value.code == 0
+    lines = capsys.readouterr().out.rstrip().splitlines()
+    assert lines[-2] == "example:"
+    example = lines[-1].split()
+    assert example[:4] == ["python", "-m", "explorer", command]
+    cli.build_parser().parse_args(example[3:])  # raises UsageError if the example is wrong
+
+
+def test_every_command_has_an_example():
+    sub = next(a for a in cli.build_parser()._actions if isinstance(a, __import__("argparse")._SubParsersAction))
+    assert set(sub.choices) == set(cli.EXAMPLES)

@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import sys
 
 import numpy as np
@@ -21,7 +22,41 @@ class UsageError(Exception):
     """Bad input: reported on one line, exit status 2."""
 
 
+#: a token that is a value, not an option, although it starts with "-": numbers and number
+#: lists such as -1.2, -3e-1, -0.4,0, -inf (argparse alone accepts only -1 and -1.5)
+NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d|inf\b|nan\b)[\w.,+\-]*$")
+
+#: the example printed at the end of each command's --help (tests/app/test_cli.py parses each)
+EXAMPLES = {
+    "orbit": "python -m explorer orbit --p1 -0.4 --p2 0 --mu 0.5 --crossings 20 --json",
+    "sweep": "python -m explorer sweep figure4 --out results/figure4.h5 --jobs 2",
+    "lyapunov": "python -m explorer lyapunov --p1 -0.2 --p2 0.1 --mu 1 -T 1000 --json",
+    "fixedpoint": "python -m explorer fixedpoint --guess -0.4,0 --mu 0.5 --continue mu 0.5 3.5 0.1",
+    "explore": "python -m explorer explore figure4 --panel 2",
+    "melnikov": "python -m explorer melnikov --splitting --mus 1e-4,1e-3 --json",
+    "trajectory": "python -m explorer trajectory --p1 0.5 --M 2 --mu 0.5 -T 300 --out figures/trajectory",
+    "figures": "python -m explorer figures --only figure4 --quick",
+}
+
+
+class _Formatter(argparse.HelpFormatter):
+    """Wraps the description as usual; keeps the example (epilog) on its own lines."""
+
+    def _fill_text(self, text, width, indent):
+        if text.startswith("example:"):
+            return "".join(indent + line for line in text.splitlines(keepends=True))
+        return super()._fill_text(text, width, indent)
+
+
 class _Parser(argparse.ArgumentParser):
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", _Formatter)
+        super().__init__(*args, **kwargs)
+        # values with a leading minus without "=" (--guess -0.4,0, --p1 -3e-1): argparse consults
+        # this matcher (CPython's argparse, stable since 3.2) before treating "-..." as an option;
+        # no option of this parser looks like a number, so the wider pattern is unambiguous
+        self._negative_number_matcher = NEGATIVE_VALUE
+
     def error(self, message):  # one line, no usage dump
         raise UsageError(message)
 
@@ -102,7 +137,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "dynamics); prints the point, the monodromy eigenvalues, trace and stability. With "
                         "--continue PARAM START STOP STEP, follows the branch and reports where |trace| = 2.")
     fx.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
-    fx.add_argument("--guess", default="0,0", help="start of Newton's method: p1,p2 [0,0]")
+    fx.add_argument("--guess", default="0,0", help="start of Newton's method: p1,p2, e.g. --guess -0.4,0 [0,0]")
     fx.add_argument("--continue", dest="cont", nargs=4, metavar=("PARAM", "START", "STOP", "STEP"),
                     help="continue the fixed point in PARAM (a model parameter or h)")
     fx.add_argument("--tol", type=float, default=1e-15, help="Taylor tolerance [%(default)s]")
@@ -191,6 +226,8 @@ def build_parser() -> argparse.ArgumentParser:
                     help="W4 results JSON for work_precision [benchmarks/results_w4.json]")
     fg.add_argument("--quiet", action="store_true", help="no progress bar")
     # ---- end figures ----------------------------------------------------------------------------
+    for name, cmd in sub.choices.items():
+        cmd.epilog = f"example:\n  {EXAMPLES[name]}"
     return parser
 
 
