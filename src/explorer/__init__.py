@@ -1,7 +1,73 @@
 """explorer: Poincaré sections and chaos for Chaplygin's equations of a heavy
 rigid body moving in an ideal fluid with circulation (Borisov & Mamaev).
 
-See README.md for the quick start and ../shared/MODEL.md (R1-R10) for the
-equations every module cites.
+The public Python API is the names in ``__all__``; each is loaded on first use
+(``import explorer`` itself imports neither Numba, matplotlib nor h5py)::
+
+    import explorer as ex
+
+    prm = ex.FIGURE4.with_(mu=0.5)                        # MODEL.md R9: the scene of Figure 4
+    res = ex.section_crossings(prm, [0.1, 0.3], [0.0, 0.0], ex.FIGURE4_H, 1000)
+    fp = ex.find_fixed_point(prm, ex.FIGURE4_H, (-0.2, 0.0))
+    ind = ex.indicators(prm, ex.section_state(prm, [0.1], [0.0], ex.FIGURE4_H), 1000.0)
+
+The layers below (``explorer.kernels`` <- ``model`` <- ``integrate`` <- ``analysis``
+<- ``io`` <- ``app``) are importable for more; see the documentation's architecture
+page.  ../shared/MODEL.md (R1-R10) gives the equations every module cites.
 """
+from __future__ import annotations
+
+import importlib
+
 __version__ = "0.1.0"
+
+#: public name -> module that defines it (loaded lazily by :func:`__getattr__`)
+_EXPORTS = {
+    # parameters, presets and the physics of MODEL.md (numpy only)
+    "Params": "explorer.model",
+    "ParameterError": "explorer.model",
+    "FIGURE4": "explorer.model",
+    "FIGURE4_H": "explorer.model",
+    "PARAM_NAMES": "explorer.model",
+    "energy": "explorer.model",
+    "casimir": "explorer.model",
+    "allowed_ellipse": "explorer.model",
+    "section_state": "explorer.model",
+    # crossings of the section
+    "METHODS": "explorer.analysis.sections",
+    "Crossings": "explorer.analysis.sections",
+    "crossings": "explorer.analysis.sections",
+    "section_crossings": "explorer.analysis.sections",
+    "Status": "explorer.kernels",
+    # chaos indicators
+    "Indicators": "explorer.analysis.lyapunov",
+    "indicators": "explorer.analysis.lyapunov",
+    "chaotic_fraction": "explorer.analysis.fixedpoints",
+    # fixed points of the section map
+    "FixedPoint": "explorer.analysis.fixedpoints",
+    "Branch": "explorer.analysis.fixedpoints",
+    "find_fixed_point": "explorer.analysis.fixedpoints",
+    "continue_branch": "explorer.analysis.fixedpoints",
+    "separatrices": "explorer.analysis.fixedpoints",
+    # scenes, sweeps and stores
+    "Scene": "explorer.io.scene",
+    "load_scene": "explorer.io.scene",
+    "read_store": "explorer.io.store",
+    "run_sweep": "explorer.app.runner",
+    "SweepReport": "explorer.app.runner",
+}
+
+__all__ = ["__version__", *_EXPORTS]
+
+
+def __getattr__(name: str):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'explorer' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # later lookups skip this function
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

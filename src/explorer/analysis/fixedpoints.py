@@ -46,7 +46,7 @@ DEFAULT_TOL = 1e-15
 RETURN_TMAX = 1e3
 
 
-@dataclass
+@dataclass(frozen=True)
 class MapResult:
     point: np.ndarray      # (p1, p2) image
     jacobian: np.ndarray   # 2x2
@@ -101,8 +101,26 @@ class SectionMap:
         return MapResult(yout[:2].copy(), J, float(t), yout.copy())
 
 
-@dataclass
+@dataclass(frozen=True)
 class FixedPoint:
+    """A fixed point of the section map P (phi = phi0, MODEL.md R9) and its linear stability.
+
+    Attributes
+    ----------
+    point : ndarray (2,)
+        (p1, p2) with P(point) = point (Newton residual ``residual``).
+    jacobian : ndarray (2, 2)
+        DP at the point, from the tangent dynamics (variational equations of R3) projected on
+        the section; area-preserving, so ``det`` = 1 up to the integration error.
+    eigenvalues : ndarray (2,)
+        Eigenvalues of ``jacobian``; ``trace`` their sum. |trace| < 2: elliptic (``stable``),
+        |trace| > 2: hyperbolic.
+    period_time : float
+        Return time of the periodic orbit through the point.
+    iterations : int
+        Newton iterations taken.
+    """
+
     point: np.ndarray
     jacobian: np.ndarray
     eigenvalues: np.ndarray
@@ -161,8 +179,15 @@ def find_fixed_point(params, h, guess=(0.0, 0.0), *, phi0=math.pi, tol=DEFAULT_T
                       float(np.max(np.abs(r.point - x))), smap.params, float(h))
 
 
-@dataclass
+@dataclass(frozen=True)
 class Branch:
+    """A branch of fixed points followed in one parameter by :func:`continue_branch`.
+
+    ``points[i]`` is the :class:`FixedPoint` at ``values[i]`` of ``parameter`` (a model
+    parameter or ``"h"``); ``bifurcations`` holds the values where |trace| = 2 (stability
+    changes), located by bisection.
+    """
+
     parameter: str
     values: np.ndarray
     points: list

@@ -26,7 +26,7 @@ import numpy as np
 
 from explorer.integrate import tangent as dt_
 from explorer import model
-from explorer.kernels import STATUS_NAMES, splitting
+from explorer.kernels import STATUS_NAMES, Status, splitting
 from explorer.kernels.taylor import order_for_tolerance
 from explorer.model import ParameterError, validation
 from explorer.analysis.sections import METHODS, MAX_TOL, MIN_TOL
@@ -66,9 +66,15 @@ def deviation_vector(params, y, direction=GENERIC_DIRECTION):
     return v / np.linalg.norm(v, axis=1, keepdims=True)
 
 
-@dataclass
+@dataclass(frozen=True)
 class Indicators:
-    """Per-orbit chaos indicators at time ``time`` and their history."""
+    """Per-orbit chaos indicators at time ``time`` and their history (:func:`indicators`).
+
+    mLCE: finite-time maximal Lyapunov exponent ln(|w(T)|/|w(0)|)/T of the deviation vector w
+    (Benettin et al. 1980; renormalised, Skokos 2010); MEGNO <Y>: Cincotta & Simó 2000 (-> 2 on
+    quasi-periodic orbits, grows like mLCE T/2 on chaotic ones); FLI: Froeschlé, Lega & Gonczi
+    1997, max ln |w| over [0, T].  ``status[i]`` is a :class:`~explorer.kernels.Status` code.
+    """
 
     time: np.ndarray       # (N,) time reached
     mlce: np.ndarray       # (N,) finite-time maximal Lyapunov exponent
@@ -85,6 +91,10 @@ class Indicators:
 
     def status_name(self, i):
         return STATUS_NAMES[int(self.status[i])]
+
+    def status_of(self, i: int) -> Status:
+        """Why orbit i stopped, as a :class:`~explorer.kernels.Status`."""
+        return Status(int(self.status[i]))
 
 
 def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", tol: float = 1e-13,

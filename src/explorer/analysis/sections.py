@@ -29,7 +29,7 @@ from explorer import model
 from explorer.integrate import drivers
 from explorer.integrate import lanes  # lanes: SIMD Taylor driver (see crossings)
 from explorer._jit import get_num_threads, max_threads, set_num_threads
-from explorer.kernels import STATUS_NAMES
+from explorer.kernels import STATUS_NAMES, Status
 from explorer.kernels import splitting
 from explorer.kernels.taylor import order_for_tolerance
 from explorer.model import ParameterError, validation
@@ -49,7 +49,7 @@ DEFAULT_MAX_STEPS = 10**9
 ENERGY_WARN_REL = 1e-6
 
 
-@dataclass
+@dataclass(frozen=True)
 class Crossings:
     """Result of :func:`crossings` for N orbits and up to K crossings each.
 
@@ -72,6 +72,10 @@ class Crossings:
 
     def status_name(self, i: int) -> str:
         return STATUS_NAMES[int(self.status[i])]
+
+    def status_of(self, i: int) -> Status:
+        """Why orbit i stopped, as a :class:`~explorer.kernels.Status`."""
+        return Status(int(self.status[i]))
 
 
 def max_energy_error(data) -> float:

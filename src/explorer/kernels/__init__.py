@@ -19,20 +19,11 @@ The kernel contract (every function in this package keeps it):
 Modules: ``dop853_coefficients`` (tables), ``dop853`` (step pieces, error
 norm, dense output), ``taylor`` (order and step-size control, Horner),
 ``splitting`` (composition weights and flow sequences), ``events`` (root
-refinement of event functions).
+refinement of event functions), ``status`` (the per-orbit status codes).
 """
 
-# Per-orbit status codes (the driver returns one per orbit).
-STATUS_DONE = 0          #: all requested crossings found
-STATUS_TMAX = 1          #: the time budget ran out first (fewer crossings)
-STATUS_NONFINITE = 2     #: a non-finite state appeared; the orbit was stopped
-STATUS_MAX_STEPS = 3     #: the step budget ran out first
-STATUS_STEP_UNDERFLOW = 4  #: the adaptive step became negligible against t
+from explorer.kernels.status import (STATUS_DONE, STATUS_MAX_STEPS, STATUS_NAMES, STATUS_NONFINITE,
+                                     STATUS_STEP_UNDERFLOW, STATUS_TMAX, Status)
 
-STATUS_NAMES = {
-    STATUS_DONE: "done",
-    STATUS_TMAX: "time budget exhausted",
-    STATUS_NONFINITE: "non-finite state",
-    STATUS_MAX_STEPS: "step budget exhausted",
-    STATUS_STEP_UNDERFLOW: "step size underflow",
-}
+__all__ = ["Status", "STATUS_DONE", "STATUS_TMAX", "STATUS_NONFINITE", "STATUS_MAX_STEPS",
+           "STATUS_STEP_UNDERFLOW", "STATUS_NAMES"]

@@ -130,7 +130,7 @@ def _read_attrs(obj) -> dict:
 
 # --------------------------------------------------------------------------- reading
 
-@dataclass
+@dataclass(frozen=True)
 class PanelData:
     """One panel read from a store: every dataset as a numpy array plus the attrs."""
 
@@ -215,7 +215,7 @@ def _json_attr(text):
     return json.loads(text)
 
 
-@dataclass
+@dataclass(frozen=True)
 class StoreData:
     """A whole store: file attrs and complete panels by index."""
 

@@ -1,0 +1,38 @@
+"""Per-orbit status codes: what every driver returns for each orbit (kernel contract, rule 3).
+
+:class:`Status` is the typed view for Python code; the kernels compare and store the plain
+``int`` constants below (Numba-compiled code and int32 status arrays), which are the same values.
+"""
+from enum import IntEnum
+
+
+class Status(IntEnum):
+    """Why an orbit stopped. ``Status(code).description`` is the message the user layer prints."""
+
+    DONE = 0            #: all requested crossings found (or the requested time reached)
+    TMAX = 1            #: the time budget ran out first (fewer crossings)
+    NONFINITE = 2       #: a non-finite state appeared; the orbit was stopped
+    MAX_STEPS = 3       #: the step budget ran out first
+    STEP_UNDERFLOW = 4  #: the adaptive step became negligible against t
+
+    @property
+    def description(self) -> str:
+        return _DESCRIPTIONS[self]
+
+
+_DESCRIPTIONS = {
+    Status.DONE: "done",
+    Status.TMAX: "time budget exhausted",
+    Status.NONFINITE: "non-finite state",
+    Status.MAX_STEPS: "step budget exhausted",
+    Status.STEP_UNDERFLOW: "step size underflow",
+}
+
+STATUS_DONE = int(Status.DONE)
+STATUS_TMAX = int(Status.TMAX)
+STATUS_NONFINITE = int(Status.NONFINITE)
+STATUS_MAX_STEPS = int(Status.MAX_STEPS)
+STATUS_STEP_UNDERFLOW = int(Status.STEP_UNDERFLOW)
+
+#: {code: description}: stored with every panel of the HDF5 store (``status_names`` attribute)
+STATUS_NAMES = {int(s): s.description for s in Status}
