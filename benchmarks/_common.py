@@ -101,8 +101,9 @@ def have(module):
 
 
 def command_line(script_name, argv=None):
+    """The command as a reader reruns it from the repository root (no path of this machine)."""
     argv = sys.argv[1:] if argv is None else argv
-    return " ".join([sys.executable, f"benchmarks/{script_name}"] + [shlex.quote(a) for a in argv])
+    return " ".join(["python", f"benchmarks/{script_name}"] + [shlex.quote(a) for a in argv])
 
 
 def header(title, command, started, seconds, load_start, extra=(), stored=None):

@@ -26,9 +26,8 @@ import argparse
 import sys
 import time
 
-import numpy as np
-
 import _common as C
+import numpy as np
 
 SECTION = "LONGTIME"
 H = 2.0

@@ -29,9 +29,8 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
-
 import _common as C
+import numpy as np
 
 SECTION = "SCALING"
 H = 2.0
@@ -76,8 +75,8 @@ def main(argv=None):
     command = C.command_line("bench_scaling.py", argv)
     started, load0, T0 = C.now(), C.loadavg(), time.perf_counter()
     from explorer import model
-    from explorer.analysis import sections
     from explorer._jit import get_num_threads
+    from explorer.analysis import sections
     prm = model.FIGURE4.with_(mu=MU)
     Ymax = C.section_seeds(prm, H, max(max(Ns), N_K, N_T))
     nthreads = get_num_threads()
@@ -98,13 +97,15 @@ def main(argv=None):
             idx = np.linspace(0, len(Ymax) - 1, N).round().astype(int)
             r = timed(method, kw, Ymax[idx], K_N)
             out["orbits"][method].append(dict(N=N, K=K_N, **r))
-            print(f"{method:<7} N={N:<4} K={K_N:<5} wall {r['wall']:7.3f} s  {r['rate']:10,.0f} crossings/s", flush=True)
+            print(f"{method:<7} N={N:<4} K={K_N:<5} wall {r['wall']:7.3f} s  {r['rate']:10,.0f} crossings/s",
+                  flush=True)
         out["crossings"][method] = []
         idx = np.linspace(0, len(Ymax) - 1, N_K).round().astype(int)
         for K in Ks:
             r = timed(method, kw, Ymax[idx], K)
             out["crossings"][method].append(dict(N=N_K, K=K, **r))
-            print(f"{method:<7} N={N_K:<4} K={K:<5} wall {r['wall']:7.3f} s  {r['rate']:10,.0f} crossings/s", flush=True)
+            print(f"{method:<7} N={N_K:<4} K={K:<5} wall {r['wall']:7.3f} s  {r['rate']:10,.0f} crossings/s",
+                  flush=True)
         idx = np.linspace(0, len(Ymax) - 1, N_T).round().astype(int)
         out["threads"][method] = {}
         for th in sorted({1, nthreads}):

@@ -16,8 +16,8 @@ max |H - H0| over all W4 crossings.  Also: explorer cold compile time and warm s
 
 Every number printed or written comes from this run.  See benchmarks/README.md.
 
-    /work/venv/bin/python benchmarks/bench_w4.py            # full run, ~10 min
-    /work/venv/bin/python benchmarks/bench_w4.py --quick    # smoke test, ~1-2 min
+    python benchmarks/bench_w4.py            # full run, ~10 min
+    python benchmarks/bench_w4.py --quick    # smoke test, ~1-2 min
 """
 from __future__ import annotations
 
@@ -426,10 +426,10 @@ def lscpu():
 
 
 def versions():
-    import numba
-    import scipy
     import heyoka
     import llvmlite
+    import numba
+    import scipy
     v = {"python": platform.python_version(), "numpy": np.__version__, "numba": numba.__version__,
          "llvmlite": llvmlite.__version__, "scipy": scipy.__version__, "heyoka": heyoka.__version__}
     try:
@@ -570,11 +570,13 @@ def main(argv=None):
     split_rows = (("split8", 0.1), ("split8", 0.05), ("split8", 0.025),
                   ("split6", 0.05), ("split6", 0.025),
                   ("split4", 0.02), ("split4", 0.01))
-    command = "/work/venv/bin/python benchmarks/bench_w4.py" + (" " + " ".join(sys.argv[1:]) if argv is None and sys.argv[1:] else "")
+    extra_args = " ".join(sys.argv[1:]) if argv is None and sys.argv[1:] else ""
+    command = ("python benchmarks/bench_w4.py " + extra_args).strip()
 
-    import numba
-    from explorer.analysis import sections
     import heyoka
+    import numba
+
+    from explorer.analysis import sections
 
     T_START = time.perf_counter()
     started = _dt.datetime.now().astimezone()
@@ -888,7 +890,7 @@ def update_results_md(meta, refcheck, table, startup, analysis_lines):
     s.append("## W4: Figure-4 section, 64 orbits x 2000 crossings")
     s.append("")
     s.append(f"- Date: {meta['date']}; total benchmark time {meta['seconds_total']:.0f} s")
-    s.append(f"- Command (from /work/main): `{meta['command']}`")
+    s.append(f"- Command (from the repository root): `{meta['command']}`")
     s.append(f"- Machine: {m.get('model_name')}, {m.get('cpus')} CPUs ({cores} cores, "
              f"{m.get('threads_per_core', '?')} thread/core); load average at start {meta['load_start']}, "
              f"at end {meta['load_end']} (other jobs may have run at the same time)")

@@ -36,9 +36,8 @@ import time
 import warnings
 from pathlib import Path
 
-import numpy as np
-
 import _common as C
+import numpy as np
 
 MUS = (("regular", 0.002), ("mixed", 0.03), ("chaotic", 0.5))
 H = 2.0
@@ -100,9 +99,10 @@ def main(argv=None):
     started, load0, T0 = C.now(), C.loadavg(), time.perf_counter()
     log = lambda *a: print(*a, flush=True)  # noqa: E731
 
+    import bench_w4 as w4
+
     from explorer import model
     from explorer.analysis import sections
-    import bench_w4 as w4
 
     results = []
     for regime, mu in MUS:

@@ -37,8 +37,7 @@ def main():
     ap.add_argument("--quick", action="store_true")
     args = ap.parse_args()
     from explorer import model
-    from explorer.analysis import fixedpoints
-    from explorer.analysis import lyapunov
+    from explorer.analysis import fixedpoints, lyapunov
 
     rows = []
     with tempfile.TemporaryDirectory() as tmp:

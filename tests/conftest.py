@@ -46,9 +46,7 @@ def pytest_sessionstart(session):
     joblib workers: they then load the kernels from numba's on-disk cache instead of compiling
     the same functions concurrently (concurrent writers of one cache entry are a known numba
     hazard, and a cold cache is what CI starts with)."""
-    from explorer.analysis import fixedpoints
-    from explorer.analysis import lyapunov
-    from explorer.analysis import sections
+    from explorer.analysis import fixedpoints, lyapunov, sections
 
     prm = model.FIGURE4.with_(mu=0.1)
     y0 = model.section_state(prm, [0.2], [0.1], 2.0)

@@ -276,7 +276,7 @@ def section_map_trace(P, h, p1_star, eps=1e-6):
 FIGURE4_P = (1.0, 0.5, 2.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def figure4_stability_change_mu():
     """mu* where the central fixed point of Figure 4's scene (h = 2) turns elliptic: the trace
     crosses +2 between mu = 2.9 and 3.05 (about 1.5 s)."""

@@ -25,19 +25,16 @@ from scipy.integrate import solve_ivp
 
 import reference
 from explorer import model
-from explorer.integrate import drivers
-from explorer.model import exact
-from explorer.analysis import fixedpoints
-from explorer.analysis import lyapunov
-from explorer.analysis import sections
 from explorer._jit import get_num_threads, njit, prange, set_num_threads
+from explorer.analysis import fixedpoints, lyapunov, sections
+from explorer.integrate import drivers
 from explorer.integrate.tangent import return_map_taylor
-from explorer.model.equations import rhs, taylor_coefficients
 from explorer.kernels import STATUS_DONE, STATUS_NONFINITE, STATUS_TMAX, splitting
 from explorer.kernels import dop853 as dp
 from explorer.kernels import taylor as tk
 from explorer.kernels.taylor import order_for_tolerance
-from explorer.model import ParameterError
+from explorer.model import ParameterError, exact
+from explorer.model.equations import N_FLOWS, rhs, taylor_coefficients
 
 EPS = np.finfo(float).eps
 ASYM = model.Params(a1=1.3, a2=0.6, b=1.7, lam=-0.8, chi=0.2, zeta=-0.15, mu=0.7, xi=0.3, eta=-0.25)
@@ -211,7 +208,7 @@ def test_splitting_forward_then_backward_returns_within_1e4_eps(method):
     """A symmetric composition satisfies Psi_{-dt} o Psi_dt = id: 1000 steps of dt then 1000 of
     -dt (drivers.split_step on the state) come back to the start within 1e4 machine epsilons
     (relative to max(1, |y|)), on regular (mu = 0.002) and chaotic (mu = 0.5) orbits, T = 10."""
-    ids, fr = splitting.flow_sequence(splitting.SCHEMES[method][0], drivers.N_FLOWS)
+    ids, fr = splitting.flow_sequence(splitting.SCHEMES[method][0], N_FLOWS)
     ids = np.ascontiguousarray(ids, np.int64)
     fr = np.ascontiguousarray(fr, np.float64)
     worst = 0.0

@@ -22,9 +22,9 @@ on AVX-512 (vs ~150 ns with SLP, ~225 ns scalar).
 Regenerate after changing ``equations.taylor_coefficients`` (tests/test_lanes.py checks that
 the file is up to date)::
 
-    /work/venv/bin/python tools/gen_lanes.py            # writes src/explorer/integrate/_lanes_generated.py
-    /work/venv/bin/python tools/gen_lanes.py --check    # exit 1 if the file is stale
-    /work/venv/bin/python tools/gen_lanes.py -o FILE    # write elsewhere
+    python tools/gen_lanes.py            # writes src/explorer/integrate/_lanes_generated.py
+    python tools/gen_lanes.py --check    # exit 1 if the file is stale
+    python tools/gen_lanes.py -o FILE    # write elsewhere
 """
 from __future__ import annotations
 
@@ -47,7 +47,7 @@ HEADER = '''\
 # GENERATED FILE - DO NOT EDIT.
 # Written by tools/gen_lanes.py from explorer.model.equations.taylor_coefficients (translated
 # operation by operation) and templates mirroring explorer.kernels.taylor.
-# Regenerate:  /work/venv/bin/python tools/gen_lanes.py     (check: --check)
+# Regenerate:  python tools/gen_lanes.py     (check: --check)
 """Lane kernels of the Taylor method: LANES = {L} orbits per vector, coefficient arrays
 X[k, var, lane] (C-contiguous, lanes contiguous).  Each lane computes bit for bit what the
 scalar kernels compute (same IEEE operations in the same order, no fast-math, no FMA).

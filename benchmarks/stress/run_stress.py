@@ -17,7 +17,7 @@ import subprocess
 import sys
 import time
 
-from _stress import C, HERE, RESULTS
+from _stress import HERE, RESULTS, C
 
 SCRIPTS = ("stress_convergence", "stress_longrun", "stress_reversibility", "stress_crossings", "stress_extreme",
            "stress_threads", "stress_kill_resume")

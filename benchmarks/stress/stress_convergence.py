@@ -31,7 +31,6 @@ import argparse
 import sys
 
 import numpy as np
-
 from _stress import C, Checks
 
 T = 2.0
@@ -47,8 +46,8 @@ def param_sets():
 
 
 def heyoka_state(P, y0, t):
-    import heyoka as hy
     import bench_w4
+    import heyoka as hy
     eqs, _ = bench_w4._hy_system(P)
     ta = hy.taylor_adaptive(eqs, np.array([np.longdouble(v) for v in y0]), fp_type=np.longdouble)
     ta.propagate_until(np.longdouble(t))
@@ -81,13 +80,12 @@ def main(argv=None):
     args = ap.parse_args(argv)
     ck = Checks("stress_convergence", args.quick, argv)
     from explorer import model
+    from explorer._jit import njit
     from explorer.integrate import drivers
-    from explorer.model.equations import rhs, taylor_coefficients
     from explorer.kernels import dop853 as dp
     from explorer.kernels import splitting
     from explorer.kernels import taylor as tk
-
-    from explorer._jit import njit
+    from explorer.model.equations import N_FLOWS, rhs, taylor_coefficients
 
     @njit
     def split_steps(y, P, dt, ids, fr, n):
@@ -112,7 +110,7 @@ def main(argv=None):
             ref_taylor = final(prm, y0, T, "dop853", tol=1e-16)
         # ---- splitting: n steps of dt = T/n
         for method, (weights, order, _ref) in splitting.SCHEMES.items():
-            ids, fr = splitting.flow_sequence(weights, drivers.N_FLOWS)
+            ids, fr = splitting.flow_sequence(weights, N_FLOWS)
             ids, fr = np.ascontiguousarray(ids, np.int64), np.ascontiguousarray(fr, np.float64)
             errs = []
             for n in NS:

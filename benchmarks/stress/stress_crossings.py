@@ -35,7 +35,6 @@ import time
 import warnings
 
 import numpy as np
-
 from _stress import Checks
 
 GRAZE_M0 = 1.1389650065057384       # tangency of the family below (see tests/test_stress.py)
@@ -45,6 +44,7 @@ METHODS_A = (("taylor", dict(tol=1e-13), 1e-8), ("dop853", dict(tol=1e-13), 1e-8
 def scipy_times(prm, y0, t_end, direction=1, max_step=np.inf, K=None):
     """Crossing times of phi = pi in (0, t_end] (cos(phi - pi) > 0), scipy DOP853 with events."""
     from scipy.integrate import solve_ivp
+
     from explorer import model
 
     def ev(t, y):

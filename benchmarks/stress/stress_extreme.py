@@ -25,7 +25,6 @@ import argparse
 import sys
 
 import numpy as np
-
 from _stress import Checks
 
 BOUNDS = {"taylor": 1e-11, "dop853": 1e-9, "split8": 1e-8, "split4": 1e-4}

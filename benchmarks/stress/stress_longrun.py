@@ -25,7 +25,6 @@ import sys
 import time
 
 import numpy as np
-
 from _stress import Checks
 
 METHODS = ("split4", "split6", "split8")

@@ -27,7 +27,6 @@ import argparse
 import sys
 
 import numpy as np
-
 from _stress import Checks
 
 EPS = np.finfo(float).eps
@@ -40,12 +39,13 @@ def main(argv=None):
     quick = args.quick
     ck = Checks("stress_reversibility", quick, argv)
     from explorer import model
-    from explorer.integrate import drivers
-    from explorer.analysis import sections
     from explorer._jit import njit
+    from explorer.analysis import sections
+    from explorer.integrate import drivers
     from explorer.integrate.tangent import return_map_taylor
     from explorer.kernels import splitting
     from explorer.kernels.taylor import order_for_tolerance
+    from explorer.model.equations import N_FLOWS
 
     @njit
     def steps(y, P, dt, ids, fr, n):
@@ -63,7 +63,7 @@ def main(argv=None):
 
     # ---- splitting
     for method in splitting.SCHEMES:
-        ids, fr = splitting.flow_sequence(splitting.SCHEMES[method][0], drivers.N_FLOWS)
+        ids, fr = splitting.flow_sequence(splitting.SCHEMES[method][0], N_FLOWS)
         ids, fr = np.ascontiguousarray(ids, np.int64), np.ascontiguousarray(fr, np.float64)
         worst, where = 0.0, None
         for mu in (0.002, 0.03, 0.5):

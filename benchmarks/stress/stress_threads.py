@@ -23,7 +23,6 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-
 from _stress import Checks
 
 SCENE = """name = "threads"
@@ -55,10 +54,8 @@ def main(argv=None):
     quick = args.quick
     ck = Checks("stress_threads", quick, argv)
     from explorer import model
-    from explorer.analysis import fixedpoints
-    from explorer.analysis import lyapunov
-    from explorer.analysis import sections
     from explorer._jit import get_num_threads, set_num_threads
+    from explorer.analysis import fixedpoints, lyapunov, sections
     from explorer.kernels import splitting
     nmax = max(2, get_num_threads())
     if get_num_threads() < 2:

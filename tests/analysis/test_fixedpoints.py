@@ -7,8 +7,8 @@ import pytest
 
 import reference
 from explorer import model
-from explorer.app import cli
 from explorer.analysis import fixedpoints as fpm
+from explorer.app import cli
 
 
 def test_fixed_point_at_mu0_is_solution_I_with_the_analytic_eigenvalues():

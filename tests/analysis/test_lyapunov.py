@@ -8,13 +8,12 @@ import pytest
 from conftest import PARAM_SETS, random_states
 
 from explorer import model
-from explorer.app import cli
-from explorer.model import equations
-from explorer.analysis import lyapunov
-from explorer.analysis import sections
 from explorer._jit import njit
+from explorer.analysis import lyapunov, sections
+from explorer.app import cli
 from explorer.kernels import STATUS_DONE
 from explorer.kernels import tangent as tg
+from explorer.model import equations
 
 FD = 1e-6
 

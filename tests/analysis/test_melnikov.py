@@ -8,10 +8,9 @@ from conftest import PARAM_SETS, random_states
 from scipy import integrate
 
 from explorer import model
-from explorer.app import cli
-from explorer.model import exact
 from explorer.analysis import melnikov
-from explorer.app import melnikov_figure
+from explorer.app import cli, melnikov_figure
+from explorer.model import exact
 
 FIG4 = model.FIGURE4
 H = model.FIGURE4_H

@@ -9,10 +9,9 @@ from conftest import PARAM_SETS
 
 import reference
 from explorer import model
-from explorer.model import exact
 from explorer.analysis import sections
-from explorer.kernels import (STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW,
-                              STATUS_TMAX)
+from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_TMAX
+from explorer.model import exact
 
 #: each method with the setting used for "tight" checks (one-step error <= 1e-9)
 TIGHT = {"taylor": dict(tol=1e-15), "dop853": dict(tol=1e-14), "split8": dict(dt=0.01),

@@ -11,7 +11,6 @@ from explorer.analysis import seeds
 from explorer.analysis.seeds import seed_points
 from explorer.io.scene import SeedSpec
 
-
 SEED_CASES = [(name, prm, h, phi0)
               for name, prm in list(PARAM_SETS.items()) + [("figure4_mu0", model.FIGURE4),
                                                            ("figure4_mu2", model.FIGURE4.with_(mu=2.0))]

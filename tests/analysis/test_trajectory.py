@@ -7,9 +7,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from explorer import model
-from explorer.app import cli
 from explorer.analysis import trajectory as tr
-from explorer.app import trajectory_figure
+from explorer.app import cli, trajectory_figure
 
 FIG4 = dict(model.FIGURE4.as_dict(), mu=0.5)
 #: parameter sets of the full system (lam = 0 allowed); asymmetric ones as in conftest.PARAM_SETS

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from explorer import model
-from explorer.app import cli
 from explorer.analysis import sections
+from explorer.app import cli
 
 
 def run_cli(args, capsys):
@@ -19,7 +19,8 @@ def run_cli(args, capsys):
 
 
 def test_orbit_csv_has_header_and_one_row_per_crossing(capsys):
-    code, out, err = run_cli(["orbit", "--p1", "0.3", "--p2", "0.1", "--h", "2", "--crossings", "5", "--mu", "0.5"], capsys)
+    code, out, err = run_cli(["orbit", "--p1", "0.3", "--p2", "0.1", "--h", "2", "--crossings", "5", "--mu", "0.5"],
+                             capsys)
     assert code == 0, err
     lines = out.strip().splitlines()
     assert lines[0] == "k,t,p1,p2,M,dH"

@@ -15,9 +15,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
 from explorer import model
-from explorer.app import cli
-from explorer.app import explore
 from explorer.analysis import sections
+from explorer.app import cli, explore
 from explorer.io import store  # noqa: E402
 
 H = model.FIGURE4_H

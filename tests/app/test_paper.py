@@ -4,13 +4,12 @@ import math
 
 import numpy as np
 import pytest
-import reference
 from conftest import random_states
 
+import reference
 from explorer import model
-from explorer.app import cli
+from explorer.app import cli, paper
 from explorer.model import exact
-from explorer.app import paper
 
 PRM = paper.CHAPLYGIN            # lam = 1, b = 2, a1 = 1, a2 = 1/2, mu = chi = zeta = 0
 C1, C2 = 2.0, 4.0                # lam b / a1, lam b / a2

@@ -10,15 +10,14 @@ import numpy as np
 import pytest
 from conftest import PARAM_SETS, random_states
 
-from explorer.integrate import _lanes_generated as G
 from explorer import model
-from explorer.integrate import drivers
-from explorer.model import equations
-from explorer.integrate import lanes
-from explorer.analysis import sections
 from explorer._jit import NOJIT, get_num_threads, njit, set_num_threads
-from explorer.kernels import (STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_TMAX)
+from explorer.analysis import sections
+from explorer.integrate import _lanes_generated as G
+from explorer.integrate import drivers, lanes
+from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_TMAX
 from explorer.kernels import taylor as tk
+from explorer.model import equations
 
 ROOT = Path(__file__).resolve().parents[2]
 L = G.LANES

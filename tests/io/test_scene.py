@@ -9,10 +9,9 @@ import numpy as np
 import pytest
 
 from explorer import model
-from explorer.io import scene
 from explorer.analysis import sections
+from explorer.io import scene
 from explorer.io.scene import SceneError, SeedSpec, load_scene, parse_scene, seed_points
-
 
 
 def _docstring_example() -> str:

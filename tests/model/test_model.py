@@ -7,8 +7,7 @@ from conftest import PARAM_SETS, random_states
 
 import reference
 from explorer import model
-from explorer.model import equations
-from explorer.model import ParameterError
+from explorer.model import ParameterError, equations
 
 
 def grad_fd(fun, y, eps=1e-6):
@@ -234,7 +233,8 @@ def test_r9_formula_at_phi_pi():
     """MODEL.md R9 as printed: M^2 = 2b (h - 1/2(p1^2/a1 + p2^2/a2) - (mu/lam)(p1 - chi) + mu eta)."""
     prm = PARAM_SETS["asym_lam_neg"]
     p1, p2, h = 0.3, -0.2, 2.0
-    expect = 2 * prm.b * (h - 0.5 * (p1**2 / prm.a1 + p2**2 / prm.a2) - prm.mu / prm.lam * (p1 - prm.chi) + prm.mu * prm.eta)
+    expect = 2 * prm.b * (h - 0.5 * (p1**2 / prm.a1 + p2**2 / prm.a2) - prm.mu / prm.lam * (p1 - prm.chi)
+                          + prm.mu * prm.eta)
     assert model.section_M2(prm, p1, p2, h) == pytest.approx(expect, abs=1e-14)
 
 

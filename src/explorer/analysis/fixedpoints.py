@@ -28,12 +28,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from explorer import model
+from explorer.analysis.lyapunov import energy_gradient
 from explorer.integrate.tangent import return_map_taylor
-from explorer.model.equations import rhs
 from explorer.kernels import STATUS_DONE, STATUS_NAMES
 from explorer.kernels.taylor import order_for_tolerance
-from explorer.analysis.lyapunov import energy_gradient
 from explorer.model import ParameterError, validation
+from explorer.model.equations import rhs
 
 NEWTON_TOL = 1e-12
 NEWTON_MAX_ITER = 30

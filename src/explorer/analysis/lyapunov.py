@@ -24,13 +24,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from explorer.integrate import tangent as dt_
 from explorer import model
+from explorer._jit import get_num_threads, max_threads, set_num_threads
+from explorer.analysis.sections import MAX_TOL, METHODS, MIN_TOL
+from explorer.integrate import tangent as dt_
 from explorer.kernels import STATUS_NAMES, Status, splitting
 from explorer.kernels.taylor import order_for_tolerance
 from explorer.model import ParameterError, validation
-from explorer.analysis.sections import METHODS, MAX_TOL, MIN_TOL
-from explorer._jit import get_num_threads, max_threads, set_num_threads
 
 DEFAULT_TIME = 1000.0
 DEFAULT_DT = 0.02

@@ -83,8 +83,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from explorer import model
-from explorer.model import exact
-from explorer.model import ParameterError, params_array
+from explorer.model import ParameterError, exact, params_array
 
 #: mu values of the measured-splitting table
 DEFAULT_MUS = (1e-4, 3e-4, 1e-3, 3e-3)

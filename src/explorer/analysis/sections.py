@@ -26,13 +26,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from explorer import model
-from explorer.integrate import drivers
-from explorer.integrate import lanes  # lanes: SIMD Taylor driver (see crossings)
 from explorer._jit import get_num_threads, max_threads, set_num_threads
-from explorer.kernels import STATUS_NAMES, Status
-from explorer.kernels import splitting
+from explorer.integrate import (
+    drivers,
+    lanes,  # lanes: SIMD Taylor driver (see crossings)
+)
+from explorer.kernels import STATUS_NAMES, Status, splitting
 from explorer.kernels.taylor import order_for_tolerance
 from explorer.model import ParameterError, validation
+from explorer.model.equations import N_FLOWS
 
 ADAPTIVE_METHODS = ("taylor", "dop853")
 SPLIT_METHODS = tuple(splitting.SCHEMES)
@@ -160,7 +162,7 @@ def crossings(params, y0, n_crossings: int, *, method: str = "taylor", tol: floa
         else:
             dt = DEFAULT_DT if dt is None else validation.real("dt", dt, 0.0, lo_open=True)
             weights, order, _ref = splitting.SCHEMES[method][:3]
-            ids, fracs = splitting.flow_sequence(weights, drivers.N_FLOWS)
+            ids, fracs = splitting.flow_sequence(weights, N_FLOWS)
             settings.update(dt=dt, order=order)
             drivers.run_split_batch(Y0, P, cphi, sphi, int(direction), tmax, dt,
                                     np.ascontiguousarray(ids, dtype=np.int64),

@@ -54,13 +54,10 @@ def _grid_count(d: float) -> int:
 def grid_spacing(n: int) -> float:
     """Lattice spacing d (in units of the scaled semi-axes) of a grid of about n points."""
     d0 = math.sqrt(math.pi / n)
-    best = None
-    for k in range(-GRID_SCAN_HALF, GRID_SCAN_HALF + 1):
-        d = d0 * GRID_SCAN_RATIO ** k
-        key = (abs(_grid_count(d) - n), abs(k), k)
-        if best is None or key < best[0]:
-            best = (key, d)
-    return best[1]
+    # the spacing whose count is closest to n; ties go to the smaller |k|, then the smaller k
+    keyed = ((abs(_grid_count(d0 * GRID_SCAN_RATIO ** k) - n), abs(k), k) for k in
+             range(-GRID_SCAN_HALF, GRID_SCAN_HALF + 1))
+    return d0 * GRID_SCAN_RATIO ** min(keyed)[2]
 
 
 def _unit_grid(n: int):

@@ -17,6 +17,7 @@ import math
 import os
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -52,7 +53,7 @@ class SweepSpec:
     phi0: float
     direction: int
     chunks: tuple = field(default=())   # (panel position, start, stop) for each task
-    lyapunov: object = None             # scene.LyapunovSpec when chaos indicators are asked for
+    lyapunov: Any = None                # scene.LyapunovSpec when chaos indicators are asked for
 
 
 def build_spec(scene, panel_indices, *, chunk_orbits: int) -> SweepSpec:
@@ -110,10 +111,10 @@ def run(spec: SweepSpec, on_panel, *, jobs: int = 1, backend: str | None = None,
     threads over orbits; otherwise joblib runs ``jobs`` workers (``backend`` as joblib names it:
     "loky" by default, "dask" with a dask.distributed Client active)."""
     n_chunks = len(spec.chunks)
-    per_panel = {}
+    per_panel: dict[int, list[int]] = {}
     for i, (pos, _a, _b) in enumerate(spec.chunks):
         per_panel.setdefault(pos, []).append(i)
-    done = {}
+    done: dict[int, dict] = {}
     next_pos = 0
 
     def flush():

@@ -77,13 +77,12 @@ from collections.abc import Mapping
 import numpy as np
 
 from explorer import model
-from explorer.model import validation
 from explorer._jit import njit
-from explorer.kernels import (STATUS_DONE, STATUS_MAX_STEPS, STATUS_NAMES, STATUS_NONFINITE,
-                      STATUS_STEP_UNDERFLOW)
+from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NAMES, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW
 from explorer.kernels import dop853 as dp
 from explorer.kernels.clock import advance_time, clip_step
 from explorer.kernels.events import dense_root
+from explorer.model import validation
 
 #: layout of the full state (MODEL.md R1, polynomial form)
 P1, P2, M, G1, G2, X, Y = range(7)

@@ -482,7 +482,8 @@ def cmd_figures(args) -> int:
 
 
 # ---- end figures ----------------------------------------------------------------------------
-COMMANDS = {"figures": cmd_figures, "trajectory": cmd_trajectory, "orbit": cmd_orbit, "sweep": cmd_sweep, "lyapunov": cmd_lyapunov, "fixedpoint": cmd_fixedpoint,
+COMMANDS = {"figures": cmd_figures, "trajectory": cmd_trajectory, "orbit": cmd_orbit, "sweep": cmd_sweep,
+            "lyapunov": cmd_lyapunov, "fixedpoint": cmd_fixedpoint,
             "melnikov": cmd_melnikov}
 
 

@@ -21,7 +21,8 @@ energy reference H0 = H(y0) itself: a stored row is
 method the step size is a function of the state alone, so the chunked states
 are those of one long run (only the time sum is split), and so are those of
 the fixed-step splitting methods; the adaptive DOP853 controller restarts at
-each chunk, which changes the steps by round-off-sized amounts.  Each chunk has the time budget ``100 * chunk`` (the default of
+each chunk, which changes the steps by round-off-sized amounts.  Each chunk has
+the time budget ``100 * chunk`` (the default of
 ``sections.crossings``); an orbit whose chunk ends early (it no longer turns
 over, or any other status) stops with that status.
 
@@ -1136,8 +1137,8 @@ class Explorer:
 def from_args(args, fig=None) -> Explorer:
     """An :class:`Explorer` from the ``explore`` command's arguments: the scene's panel (if a
     SCENE is given; else Figure 4 with mu = 0, h = 2), then the explicit options on top."""
-    from explorer.io import scene as scene_mod
     from explorer.analysis import sections
+    from explorer.io import scene as scene_mod
 
     base = model.FIGURE4
     h = model.FIGURE4_H

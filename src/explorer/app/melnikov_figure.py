@@ -7,8 +7,16 @@ import math
 import numpy as np
 
 from explorer import model
-from explorer.analysis.melnikov import (DEFAULT_MUS, _params, check_params, closed_form,
-                                        measured_splitting, melnikov_integral, melnikov_table, ur24)
+from explorer.analysis.melnikov import (
+    DEFAULT_MUS,
+    _params,
+    check_params,
+    closed_form,
+    measured_splitting,
+    melnikov_integral,
+    melnikov_table,
+    ur24,
+)
 from explorer.app.figures import _matplotlib
 from explorer.model import ParameterError
 

@@ -818,8 +818,8 @@ def homoclinic_figure(params=CHAPLYGIN, h=2.0, *, T0=20.0, dt=0.02, tol=1e-15, d
 
     data[sign]: t_exact, t_integrated (crossing times), max_dt (their largest difference),
     t (samples), y (integrated samples (n, 5)), exact (p1, p2, M at the samples)."""
-    from explorer.model import exact
     from explorer.analysis import sections
+    from explorer.model import exact
 
     prm = check_chaplygin(params)
     P = prm.as_array()
@@ -1165,8 +1165,8 @@ def figure4_figure(out_dir, *, results_dir="results", quick=False, quiet=True):
 
 
 def _lyapunov_panels(scene, out):
-    from explorer.io import store
     from explorer.analysis.fixedpoints import chaotic_fraction
+    from explorer.io import store
 
     data = store.read_store(out)
     maps, fractions = [], []

@@ -12,15 +12,16 @@ import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from explorer.io import store
 from explorer.analysis import sweep
-from explorer.kernels import STATUS_NAMES, STATUS_TMAX
 from explorer.analysis.fixedpoints import chaotic_fraction
-from explorer.model import ParameterError, validation
 from explorer.analysis.sections import ADAPTIVE_METHODS, energy_warning, max_energy_error
+from explorer.io import store
+from explorer.kernels import STATUS_NAMES, STATUS_TMAX
+from explorer.model import ParameterError, validation
 
 
 def _panel_points(panel_data):
@@ -36,8 +37,8 @@ def panel_separatrices(scene, i):
     """The central fixed point of panel i, followed by continuation from mu = 0 (where it is
     solution I, R6) or from the first sweep value, and its four separatrix branches when it is
     hyperbolic.  Returns (fixed point attrs dict, list of (M, 2) curves)."""
-    from explorer.analysis import fixedpoints as fpm
     from explorer import model as mdl
+    from explorer.analysis import fixedpoints as fpm
 
     prm, h, _label = scene.panel(i)
     name = scene.sweep_parameter
@@ -184,7 +185,7 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
     prov = json.dumps(store.provenance({"scene": scene.name}), sort_keys=True)
     file_attrs = {"scene_name": scene.name, "scene": scene.text, "provenance": prov}
     integ = scene.integration
-    stats = {"orbits": 0, "crossings": 0, "stopped": 0, "statuses": {}, "max_dh": 0.0, "warning": None,
+    stats: dict[str, Any] = {"orbits": 0, "crossings": 0, "stopped": 0, "statuses": {}, "max_dh": 0.0, "warning": None,
              "fractions": []}
     setting = (f"tol = {integ.tol:g}" if integ.method in ADAPTIVE_METHODS
                else f"dt = {integ.dt:g}") + " ([integration])"

@@ -1,7 +1,7 @@
 # GENERATED FILE - DO NOT EDIT.
 # Written by tools/gen_lanes.py from explorer.model.equations.taylor_coefficients (translated
 # operation by operation) and templates mirroring explorer.kernels.taylor.
-# Regenerate:  /work/venv/bin/python tools/gen_lanes.py     (check: --check)
+# Regenerate:  python tools/gen_lanes.py     (check: --check)
 """Lane kernels of the Taylor method: LANES = 8 orbits per vector, coefficient arrays
 X[k, var, lane] (C-contiguous, lanes contiguous).  Each lane computes bit for bit what the
 scalar kernels compute (same IEEE operations in the same order, no fast-math, no FMA).

@@ -26,15 +26,29 @@ import math
 import numpy as np
 
 from explorer._jit import njit, prange
-from explorer.model.equations import (N_FLOWS, apply_flow, energy, rhs, section_c, section_g, section_g_rate,
-                        taylor_coefficients)
-from explorer.kernels import (STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE,
-                      STATUS_STEP_UNDERFLOW, STATUS_TMAX)
-from explorer.kernels import taylor as tk
+from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_TMAX
 from explorer.kernels import dop853 as dp
+from explorer.kernels import taylor as tk
 from explorer.kernels.clock import advance_time, clip_step
-from explorer.kernels.events import (ISOLATE_STACK, MAX_STEP_ROOTS, ROOT_MAX_ITER, ROOT_XTOL,
-                             dense_step_roots, poly_step_roots, sign_change, turns)
+from explorer.kernels.events import (
+    ISOLATE_STACK,
+    MAX_STEP_ROOTS,
+    ROOT_MAX_ITER,
+    ROOT_XTOL,
+    dense_step_roots,
+    poly_step_roots,
+    sign_change,
+    turns,
+)
+from explorer.model.equations import (
+    apply_flow,
+    energy,
+    rhs,
+    section_c,
+    section_g,
+    section_g_rate,
+    taylor_coefficients,
+)
 
 EPS = 2.220446049250313e-16
 #: A start point with |sin(phi - phi0)| below this is on the section (not a crossing).

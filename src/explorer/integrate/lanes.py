@@ -41,17 +41,29 @@ import math
 import numpy as np
 
 from explorer._jit import get_num_threads, njit, prange
-from explorer.integrate._lanes_generated import (LANES, LOG2_APPROX_ERR, NVAR, atomic_fetch_add, evaluate_lanes,
-                               step_norms_lanes, taylor_coefficients_lanes, vabs, vadd, vload,
-                               vmul, vsplat, vstore, vsub, vzero)
+from explorer.integrate._lanes_generated import (
+    LANES,
+    LOG2_APPROX_ERR,
+    NVAR,
+    atomic_fetch_add,
+    evaluate_lanes,
+    step_norms_lanes,
+    taylor_coefficients_lanes,
+    vabs,
+    vadd,
+    vload,
+    vmul,
+    vsplat,
+    vstore,
+    vsub,
+    vzero,
+)
 from explorer.integrate.drivers import EPS, _finite5, _keep, _start_g
-from explorer.model.equations import energy, section_g
-from explorer.kernels import (STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE,
-                      STATUS_STEP_UNDERFLOW, STATUS_TMAX)
+from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_TMAX
 from explorer.kernels import taylor as tk
 from explorer.kernels.clock import advance_time, clip_step
-from explorer.kernels.events import (ISOLATE_STACK, MAX_STEP_ROOTS, excluded_by_variation,
-                             poly_step_roots)
+from explorer.kernels.events import ISOLATE_STACK, MAX_STEP_ROOTS, excluded_by_variation, poly_step_roots
+from explorer.model.equations import energy, section_g
 
 _IDLE = -1
 #: positive normal doubles: the range where vlog2_approx is valid

@@ -18,15 +18,20 @@ import math
 import numpy as np
 
 from explorer._jit import njit, prange
-from explorer.model.equations import (apply_flow_tangent, rhs, rhs_tangent, taylor_coefficients,
-                        taylor_coefficients_tangent)
 from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW
 from explorer.kernels import STATUS_TMAX as STATUS_TMAX_CODE
-from explorer.kernels.events import ISOLATE_STACK, MAX_STEP_ROOTS, poly_step_roots
 from explorer.kernels import dop853 as dp
-from explorer.kernels.clock import clip_step
-from explorer.kernels import taylor as tk
 from explorer.kernels import tangent as tg
+from explorer.kernels import taylor as tk
+from explorer.kernels.clock import clip_step
+from explorer.kernels.events import ISOLATE_STACK, MAX_STEP_ROOTS, poly_step_roots
+from explorer.model.equations import (
+    apply_flow_tangent,
+    rhs,
+    rhs_tangent,
+    taylor_coefficients,
+    taylor_coefficients_tangent,
+)
 
 EPS = 2.220446049250313e-16
 

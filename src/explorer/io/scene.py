@@ -23,7 +23,7 @@ accepted with any kind/layout but only used with theirs)::
     values = [0.05, 0.2, 0.5, 1.0, 2.0]   # non-empty list of finite numbers, no duplicates
     [seeds]
     kind = "grid"                    # "grid" | "lines" | "random" | "points"
-    n = 200                          # grid: target number of points inside the region; random: count; lines: points per line
+    n = 200                          # grid: target points inside the region; random: count; lines: per line
     margin = 0.98                    # points stay inside the ellipse scaled by margin (0 < margin <= 1)
     seed = 12345                     # random only (numpy default_rng)
     lines = [[-1.0, 0.0, 1.0, 0.0]]  # lines only: segments [u_a, v_a, u_b, v_b], u, v in [-1, 1]
@@ -477,8 +477,8 @@ class Scene:
                 prm, h, label = self.panel(i)
             except ParameterError as e:
                 raise SceneError(f"scene key '{self._panel_key(i)}' ({self._label(i)}): {e}") from None
-            e = model.allowed_ellipse(prm, h, phi0)
-            if e is None or not (e[2] > 0.0 and e[3] > 0.0):
+            ell = model.allowed_ellipse(prm, h, phi0)
+            if ell is None or not (ell[2] > 0.0 and ell[3] > 0.0):
                 empty.append(i)
         if empty:
             i = empty[0]

@@ -22,8 +22,15 @@ norm, dense output), ``taylor`` (order and step-size control, Horner),
 refinement of event functions), ``status`` (the per-orbit status codes).
 """
 
-from explorer.kernels.status import (STATUS_DONE, STATUS_MAX_STEPS, STATUS_NAMES, STATUS_NONFINITE,
-                                     STATUS_STEP_UNDERFLOW, STATUS_TMAX, Status)
+from explorer.kernels.status import (
+                                     STATUS_DONE,
+                                     STATUS_MAX_STEPS,
+                                     STATUS_NAMES,
+                                     STATUS_NONFINITE,
+                                     STATUS_STEP_UNDERFLOW,
+                                     STATUS_TMAX,
+                                     Status,
+)
 
 __all__ = ["Status", "STATUS_DONE", "STATUS_TMAX", "STATUS_NONFINITE", "STATUS_MAX_STEPS",
            "STATUS_STEP_UNDERFLOW", "STATUS_NAMES"]

@@ -63,15 +63,15 @@ import numpy as np
 
 from explorer._jit import njit
 from explorer.kernels.dop853_coefficients import (
-    A,
-    B,
-    D,
     E3,
     E5,
     ERROR_ESTIMATOR_ORDER,
     INTERPOLATOR_POWER,
     N_STAGES,
     N_STAGES_EXTENDED,
+    A,
+    B,
+    D,
 )
 
 # Step-size controller (Hairer-Norsett-Wanner II.4, values as in SciPy).

@@ -24,7 +24,6 @@ its ends (:func:`turns`, ``explorer.drivers._split_step_roots``), which misses
 only two turns of M inside one composition step (none in the 1,000-orbit
 comparison with scipy of benchmarks/stress/stress_crossings.py at dt <= 0.05).
 """
-import math
 
 from explorer._jit import njit
 from explorer.kernels.dop853 import dense_eval_scalar, dense_eval_scalar_derivative

@@ -110,12 +110,12 @@ class Params:
     def as_dict(self) -> dict:
         return {n: getattr(self, n) for n in PARAM_NAMES}
 
-    def with_(self, **changes) -> "Params":
+    def with_(self, **changes) -> Params:
         """A copy with some parameters changed (validated again)."""
         return replace(self, **changes)
 
     @classmethod
-    def from_array(cls, P) -> "Params":
+    def from_array(cls, P) -> Params:
         return cls(**{n: float(P[i]) for i, n in enumerate(PARAM_NAMES)})
 
 

@@ -9,7 +9,7 @@ import contextlib
 import glob
 import os
 import secrets
-from typing import Iterator
+from collections.abc import Iterator
 
 
 def _fsync_path(path: str) -> None:
