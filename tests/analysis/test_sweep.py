@@ -298,3 +298,33 @@ def test_run_sweep_returns_a_report_and_a_rerun_computes_nothing(tmp_path, capsy
     again = run_sweep(path, out, draw=False, progress=False)
     assert again.computed == () and again.crossings == 0
     assert "0 computed, 3 already stored" in format_report(again)
+
+
+def test_a_new_megno_threshold_reclassifies_the_stored_fraction_without_recomputing(tmp_path):
+    """Issue 14 point 6: the threshold is outside the panel hash, and the stored chaotic_fraction
+    follows it (recomputed from the stored MEGNO values, atomically)."""
+    from explorer.analysis.fixedpoints import chaotic_fraction
+    from explorer.app.runner import run_sweep
+
+    text = SMALL.replace("n = 24", "n = 12").replace("crossings = 40", "crossings = 5") + \
+        "[compute]\nlyapunov = true\n[lyapunov]\ntime = 200.0\nthreshold = 4.0\n"
+    out = tmp_path / "small.h5"
+    first = run_sweep(write_scene(tmp_path, text), out, draw=False, progress=False)
+    before = {i: store.read_store(out).panels[i].extra["megno"].copy() for i in range(3)}
+    again = run_sweep(write_scene(tmp_path, text.replace("threshold = 4.0", "threshold = 2.5")), out,
+                      draw=False, progress=False)
+    assert first.computed == (0, 1, 2) and again.computed == () and again.restamped == (0, 1, 2)
+    data = store.read_store(out)
+    changed = 0
+    for i in range(3):
+        pd = data.panels[i]
+        assert np.array_equal(pd.extra["megno"], before[i])          # nothing recomputed
+        ok = pd.extra["lyapunov_status"] == 0
+        frac, err, _ = chaotic_fraction(pd.extra["megno"], 2.5, ok)
+        assert pd.attrs["megno_threshold"] == 2.5
+        assert pd.attrs["chaotic_fraction"] == frac and pd.attrs["chaotic_fraction_error"] == err
+        changed += frac != chaotic_fraction(pd.extra["megno"], 4.0, ok)[0]
+    assert changed >= 1   # the threshold really moved some orbits across (else the test proves nothing)
+    third = run_sweep(write_scene(tmp_path, text.replace("threshold = 4.0", "threshold = 2.5")), out,
+                      draw=False, progress=False)
+    assert third.restamped == ()

@@ -317,6 +317,44 @@ def test_changing_a_shared_setting_changes_every_panel_hash(change):
     assert all(a != b for a, b in zip(base, new))
 
 
+# every key that changes a panel's numbers changes its hash (issue 14, point 6): each pair is
+# (base scene, changed scene) built from SWEEP_SCENE; the base already uses the key's table
+SPLIT_SCENE = SWEEP_SCENE.replace("tol = 1e-12", "method = 'split4'\ndt = 0.05")
+RANDOM_SCENE = SWEEP_SCENE + "[seeds]\nkind = 'random'\nn = 50\nseed = 1\n"
+LYAP_SCENE = SWEEP_SCENE + "[compute]\nlyapunov = true\n[lyapunov]\ntime = 500.0\nmethod = 'taylor'\ntol = 1e-12\n"
+LYAP_SPLIT = LYAP_SCENE.replace("method = 'taylor'\ntol = 1e-12", "method = 'split4'\ndt = 0.02")
+HASHED_CHANGES = {
+    "tmax": (SWEEP_SCENE, SWEEP_SCENE.replace("tol = 1e-12", "tol = 1e-12\ntmax = 5000")),
+    "max_steps": (SWEEP_SCENE, SWEEP_SCENE.replace("tol = 1e-12", "tol = 1e-12\nmax_steps = 1000")),
+    "split_dt": (SPLIT_SCENE, SPLIT_SCENE.replace("dt = 0.05", "dt = 0.04")),
+    "seeds_kind": (SWEEP_SCENE, SWEEP_SCENE + "[seeds]\nkind = 'random'\n"),
+    "seeds_margin": (SWEEP_SCENE, SWEEP_SCENE + "[seeds]\nmargin = 0.9\n"),
+    "seeds_seed": (RANDOM_SCENE, RANDOM_SCENE.replace("seed = 1", "seed = 2")),
+    "lyapunov_time": (LYAP_SCENE, LYAP_SCENE.replace("time = 500.0", "time = 600.0")),
+    "lyapunov_method": (LYAP_SCENE, LYAP_SCENE.replace("method = 'taylor'", "method = 'dop853'")),
+    "lyapunov_tol": (LYAP_SCENE, LYAP_SCENE.replace("tol = 1e-12\n", "tol = 1e-11\n").replace(
+        "[integration]\ntol = 1e-11", "[integration]\ntol = 1e-12")),
+    "lyapunov_split_dt": (LYAP_SPLIT, LYAP_SPLIT.replace("dt = 0.02", "dt = 0.01")),
+    "compute_lyapunov": (SWEEP_SCENE, LYAP_SCENE),
+    "compute_separatrices": (SWEEP_SCENE, SWEEP_SCENE + "[compute]\nseparatrices = true\n"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(HASHED_CHANGES))
+def test_every_setting_that_changes_the_numbers_changes_every_panel_hash(name):
+    base, changed = HASHED_CHANGES[name]
+    assert parse_scene(base) != parse_scene(changed)  # the edit took effect
+    assert all(a != b for a, b in zip(_hashes(base), _hashes(changed)))
+
+
+def test_the_megno_threshold_alone_keeps_panel_hashes():
+    """The threshold only classifies stored MEGNO values: no recomputation (the runner restamps
+    the stored chaotic fraction instead, tests/analysis/test_sweep.py)."""
+    changed = LYAP_SCENE.replace("[lyapunov]\n", "[lyapunov]\nthreshold = 6.0\n")
+    assert parse_scene(changed).lyapunov.threshold == 6.0
+    assert _hashes(changed) == _hashes(LYAP_SCENE)
+
+
 def test_unused_settings_do_not_change_panel_hashes():
     base = _hashes(SWEEP_SCENE)
     # dt is unused by taylor; seed unused by grid; default tmax written out; int vs float

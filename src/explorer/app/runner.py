@@ -122,6 +122,7 @@ class SweepReport:
     threshold: float         # MEGNO threshold of the fractions
     figure: tuple            # paths of the figure files drawn by this run (empty: none)
     wall_time: float
+    restamped: tuple = ()    # stored panels whose chaotic fraction was reclassified (new threshold)
 
 
 def format_report(r: SweepReport) -> str:
@@ -135,6 +136,9 @@ def format_report(r: SweepReport) -> str:
         lines.append(f"  energy error max |H - H0| over all crossings {r.max_dh:.1e}")
         if r.warning:
             lines.append(f"  warning: {r.warning}")
+    if r.restamped:
+        lines.append(f"  chaotic fraction reclassified at MEGNO > {r.threshold:g} (stored MEGNO, "
+                     f"nothing recomputed) for panels {', '.join(str(i) for i in r.restamped)}")
     for label, frac, err in r.fractions:
         lines.append(f"  {label}: chaotic fraction {frac:.3f} +- {err:.3f} (MEGNO > {r.threshold:g})")
     if r.figure:
@@ -175,6 +179,7 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
         raise ParameterError(str(exc)) from None
     hashes = [scene.panel_hash(i) for i in range(scene.n_panels)]
     todo = [i for i in range(scene.n_panels) if force or on_disk.get(i) != hashes[i]]
+    restamped = _restamp_fractions(scene, out, [i for i in range(scene.n_panels) if i not in todo])
     client = None
     if backend == "dask":
         client = _dask_client(scheduler, jobs)
@@ -245,13 +250,34 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
         png, pdf = stem.with_suffix(".png"), stem.with_suffix(".pdf")
         stale = (not png.exists() or not pdf.exists() or png.stat().st_mtime < out.stat().st_mtime
                  or pdf.stat().st_mtime < out.stat().st_mtime)
-        if todo or stale or force:
+        if todo or restamped or stale or force:
             figure_paths = tuple(draw_figure(scene, out, stem))
     return SweepReport(scene=scene.name, out=out, n_panels=scene.n_panels, computed=tuple(todo),
                        orbits=stats["orbits"], crossings=stats["crossings"], stopped=stats["stopped"],
                        statuses=dict(stats["statuses"]), max_dh=stats["max_dh"], warning=stats["warning"],
                        fractions=tuple(stats["fractions"]), threshold=float(scene.lyapunov.threshold),
-                       figure=figure_paths, wall_time=time.perf_counter() - t_start)
+                       figure=figure_paths, wall_time=time.perf_counter() - t_start, restamped=restamped)
+
+
+def _restamp_fractions(scene, out, stored) -> tuple:
+    """The MEGNO threshold only classifies orbits, so it is outside the panel hash (changing it
+    recomputes nothing); the stored ``chaotic_fraction`` depends on it, so a stored panel whose
+    ``megno_threshold`` differs from the scene's gets its fraction recomputed from the stored
+    MEGNO values (atomic attribute update).  Returns the indices restamped."""
+    if "lyapunov" not in scene.compute or not stored:
+        return ()
+    threshold = float(scene.lyapunov.threshold)
+    data = store.read_store(out)
+    done = []
+    for i in stored:
+        pd = data.panels.get(i)
+        if pd is None or "megno" not in pd.extra or pd.attrs.get("megno_threshold") == threshold:
+            continue
+        frac, err, _n_ok = chaotic_fraction(pd.extra["megno"], threshold, pd.extra["lyapunov_status"] == 0)
+        store.update_panel_attrs(out, i, {"chaotic_fraction": frac, "chaotic_fraction_error": err,
+                                          "megno_threshold": threshold})
+        done.append(i)
+    return tuple(done)
 
 
 def _check_writable(directory: Path, option: str, target: Path):

@@ -70,7 +70,7 @@ from explorer.io.store.atomic import (
                                       clean_stale_temporaries,
                                       write_bytes_atomic,
 )
-from explorer.io.store.commit import commit_panel, provenance
+from explorer.io.store.commit import commit_panel, provenance, update_panel_attrs
 from explorer.io.store.format import (
                                       COLUMNS,
                                       COMPRESS_ROWS,
@@ -96,6 +96,7 @@ __all__ = [
     "PanelData",
     "StoreData",
     "commit_panel",
+    "update_panel_attrs",
     "read_store",
     "panel_hashes",
     "clean_stale_temporaries",

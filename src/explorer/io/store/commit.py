@@ -294,3 +294,28 @@ def commit_panel(path, index: int, arrays: dict, attrs: dict, file_attrs: dict |
         raise
     _fsync_dir(directory)
 
+
+
+def update_panel_attrs(path, index: int, attrs: dict) -> None:
+    """Atomically set attributes of an existing panel (the data are not touched): a copy of
+    the store is changed, fsynced and ``os.replace``'d onto ``path``, as in
+    :func:`commit_panel`.  Used when a setting outside the panel hash changes a derived
+    attribute (the MEGNO threshold -> ``chaotic_fraction``)."""
+    path = os.fspath(path)
+    index = int(index)
+    with _open_store(path) as f:
+        if "panels" not in f or f"{index:03d}" not in f["panels"]:
+            raise StoreError(f"{path}: no panel {index} to update")
+    directory = os.path.dirname(os.path.abspath(path))
+    tmp = _tmp_name(path)
+    try:
+        shutil.copyfile(path, tmp)
+        with h5py.File(tmp, "r+") as f:
+            _set_attrs(f["panels"][f"{index:03d}"], attrs)
+            f.attrs["updated"] = _utcnow()
+        _fsync_path(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        _remove_quietly(tmp)
+        raise
+    _fsync_dir(directory)
