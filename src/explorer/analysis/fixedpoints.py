@@ -113,8 +113,8 @@ class FixedPoint:
         DP at the point, from the tangent dynamics (variational equations of R3) projected on
         the section; area-preserving, so ``det`` = 1 up to the integration error.
     eigenvalues : ndarray (2,)
-        Eigenvalues of ``jacobian``; ``trace`` their sum. |trace| < 2: elliptic (``stable``),
-        |trace| > 2: hyperbolic.
+        Eigenvalues of ``jacobian``; ``trace`` their sum. ``|trace| < 2``: elliptic (``stable``),
+        ``|trace| > 2``: hyperbolic.
     period_time : float
         Return time of the periodic orbit through the point.
     iterations : int
@@ -184,7 +184,7 @@ class Branch:
     """A branch of fixed points followed in one parameter by :func:`continue_branch`.
 
     ``points[i]`` is the :class:`FixedPoint` at ``values[i]`` of ``parameter`` (a model
-    parameter or ``"h"``); ``bifurcations`` holds the values where |trace| = 2 (stability
+    parameter or ``"h"``); ``bifurcations`` holds the values where ``|trace| = 2`` (stability
     changes), located by bisection.
     """
 
@@ -197,7 +197,7 @@ class Branch:
 def continue_branch(params, h, parameter, start, stop, step, guess=(0.0, 0.0), *, phi0=math.pi,
                     tol=DEFAULT_TOL, bisect_tol=1e-8) -> Branch:
     """Natural-parameter continuation of a fixed point in any model parameter (or "h"), with
-    the values where its stability changes located by bisection on |trace| - 2."""
+    the values where its stability changes located by bisection on ``|trace| - 2``."""
     if parameter not in model.PARAM_NAMES + ("h",):
         raise ParameterError(f"continuation parameter must be one of {', '.join(model.PARAM_NAMES + ('h',))}")
     if step == 0 or not all(math.isfinite(v) for v in (start, stop, step)) or (stop - start) * step < 0:

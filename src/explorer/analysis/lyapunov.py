@@ -70,10 +70,10 @@ def deviation_vector(params, y, direction=GENERIC_DIRECTION):
 class Indicators:
     """Per-orbit chaos indicators at time ``time`` and their history (:func:`indicators`).
 
-    mLCE: finite-time maximal Lyapunov exponent ln(|w(T)|/|w(0)|)/T of the deviation vector w
+    mLCE: finite-time maximal Lyapunov exponent ``ln(|w(T)| / |w(0)|) / T`` of the deviation vector w
     (Benettin et al. 1980; renormalised, Skokos 2010); MEGNO <Y>: Cincotta & Simó 2000 (-> 2 on
     quasi-periodic orbits, grows like mLCE T/2 on chaotic ones); FLI: Froeschlé, Lega & Gonczi
-    1997, max ln |w| over [0, T].  ``status[i]`` is a :class:`~explorer.kernels.Status` code.
+    1997, ``max ln |w|`` over [0, T].  ``status[i]`` is a :class:`~explorer.kernels.Status` code.
     """
 
     time: np.ndarray       # (N,) time reached

@@ -41,12 +41,11 @@ layers, stickiness near islands) can look regular at T = 1000; the label
 
 Separatrices ('p')
 ------------------
-If :mod:`explorer.fixedpoints` is importable and has ``find_fixed_point`` and
-``separatrices``, 'p' looks for fixed points of the section map by Newton's
+'p' looks for fixed points of the section map by Newton's
 method from p = 0, from the centre of the region and from half-way to its
 edge along both axes, marks them (o elliptic,
 x hyperbolic) and draws the stable and unstable manifolds of the hyperbolic
-ones; otherwise it says that separatrices are not available.
+ones (:mod:`explorer.analysis.fixedpoints`).
 
 API
 ---
@@ -834,20 +833,11 @@ class Explorer:
 
     # ------------------------------------------------------------ separatrices
     def _fixed_points_and_curves(self):
-        """(fixed points, curves, message) from :mod:`explorer.fixedpoints`: Newton's method from
-        p = 0 and from the centre of the region; the separatrices of the hyperbolic points.
-        (None, None, why) when that module or its functions are missing or fail."""
-        try:
-            from explorer.analysis import fixedpoints
-        except ImportError:
-            return None, None, "separatrices: not available yet (no explorer.fixedpoints module)"
-        except Exception as exc:
-            return None, None, f"separatrices: explorer.fixedpoints failed to import ({type(exc).__name__}: {exc})"
-        find = getattr(fixedpoints, "find_fixed_point", None)
-        sep = getattr(fixedpoints, "separatrices", None)
-        if find is None or sep is None:
-            return None, None, ("separatrices: not available yet (explorer.fixedpoints lacks "
-                                "find_fixed_point / separatrices)")
+        """(fixed points, curves, message) from :mod:`explorer.analysis.fixedpoints`: Newton's method
+        from p = 0 and from the centre of the region; the separatrices of the hyperbolic points."""
+        from explorer.analysis.fixedpoints import find_fixed_point as find
+        from explorer.analysis.fixedpoints import separatrices as sep
+
         if self.region is None:
             return [], [], "separatrices: the region is empty"
         c1, c2, r1, r2 = self.region
