@@ -25,8 +25,9 @@ def _test_functions(path):
 def _test_references(text):
     """(file, test name) for `tests/x.py::name` and the `::name` that follow it in one span."""
     refs = []
-    for m in re.finditer(r"(tests/[\w/]+\.py)((?:::\w+(?:\[[^\]]*\])?)?)((?:`?,?\s*(?:also\s+)?`::\w+(?:\[[^\]]*\])?)*)",
-                         text):
+    first = r"(tests/[\w/]+\.py)((?:::\w+(?:\[[^\]]*\])?)?)"
+    more = r"((?:`?,?\s*(?:also\s+)?`::\w+(?:\[[^\]]*\])?)*)"
+    for m in re.finditer(first + more, text):
         path = m.group(1)
         names = re.findall(r"::(\w+)", m.group(2) + m.group(3))
         refs.append((path, names))
