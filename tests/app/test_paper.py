@@ -90,7 +90,7 @@ def test_figure2_critical_levels_and_curves_in_every_interval():
 
 # ---------------------------------------------------------------- Figure 3
 def test_figure3_draws_the_branches_dashed_where_unstable():
-    d = paper.figure3(check=False)
+    d = paper.figure3_figure(check=False)
     ax = d.fig.axes[0]
     lines = {}
     for ln in ax.lines:
@@ -159,7 +159,9 @@ def test_figure3_check_agrees_with_the_drawn_classification_in_every_region():
 
 
 def test_figure3_check_refuses_a_wrong_classification(monkeypatch):
-    monkeypatch.setattr(paper, "branch_stable", lambda branch, c, params: True)
+    from explorer.app.paper import chaplygin
+
+    monkeypatch.setattr(chaplygin, "branch_stable", lambda branch, c, params: True)  # where figure3_check looks
     with pytest.raises(paper.CheckError, match="III at c"):
         paper.figure3_check(samples={"III": (5.0,)})
 
@@ -538,3 +540,26 @@ def test_canonical_variables_cos_l_and_the_conjugate_pairs():
         for a, bb, want in ((ell, Lc, 1.0), (g, G, 1.0), (ell, G, 0.0), (g, Lc, 0.0), (ell, g, 0.0),
                             (Lc, G, 0.0)):
             assert _bracket(a, bb, z, P) == pytest.approx(want, abs=1e-7)
+
+
+def test_the_registry_lists_every_figure_module_once_with_its_builder():
+    """One module per figure: each non-private module of explorer.app.paper is in the registry
+    under its NAME, with a description and a build function; the CLI lists the same names."""
+    import importlib
+    import pkgutil
+
+    from explorer.app import cli
+    from explorer.app.paper import registry
+
+    pkg = importlib.import_module("explorer.app.paper")
+    # registry itself and chaplygin (the analysis of R6 shared by figures 2 and 3) are not figures
+    modules = {m.name for m in pkgutil.iter_modules(pkg.__path__) if not m.name.startswith("_")}
+    modules -= {"registry", "chaplygin"}
+    assert set(registry.MODULES.values()) == {f"explorer.app.paper.{m}" for m in modules}
+    for name in registry.FIGURES:
+        mod = registry.module(name)
+        assert mod.NAME == name and mod.DESCRIPTION and callable(mod.build)
+    helptext = cli.build_parser()._subparsers._group_actions[0].choices["figures"].format_help()
+    assert all(name in " ".join(helptext.split()) for name in registry.FIGURES)
+    with pytest.raises(model.ParameterError, match="unknown figure 'figure9'; names: figure2, figure3"):
+        registry.module("figure9")

@@ -211,11 +211,12 @@ def build_parser() -> argparse.ArgumentParser:
         tjg.add_argument(f"--{name}", type=float, default=model.FIGURE4.with_(mu=0.5).as_dict()[name],
                          help=f"{help_} [%(default)s]")
     # ---- end trajectory -----------------------------------------------------------------------
-    # ---- figures: every figure of the seed paper (explorer/paper.py) ---------------------------
+    # ---- figures: every figure of the seed paper (explorer/app/paper/) -------------------------
+    from explorer.app.paper.registry import FIGURES
+
     fg = sub.add_parser("figures", help="regenerate every figure of the paper (PNG and PDF)",
                         description="Regenerate the figures of the seed paper into --out-dir (PNG and PDF): "
-                        "figure2, figure3, figure4, chaotic_fraction, chaos_map, continuation, work_precision, "
-                        "homoclinic, melnikov, trajectory. Sweeps reuse results/<scene>.h5 when complete with "
+                        f"{', '.join(FIGURES)}. Sweeps reuse results/<scene>.h5 when complete with "
                         "the same scene hash; --quick uses reduced settings where a store is incomplete.")
     fg.add_argument("--only", default=None, metavar="NAME", help="only this figure (one name)")
     fg.add_argument("--out-dir", default="figures", help="where the figures go [%(default)s]")
@@ -467,12 +468,12 @@ def cmd_trajectory(args) -> int:
 
 
 # ---- end trajectory -------------------------------------------------------------------------
-# ---- figures: every figure of the seed paper (explorer/paper.py) ---------------------------
+# ---- figures: every figure of the seed paper (explorer/app/paper/) -------------------------
 def cmd_figures(args) -> int:
     from explorer.app import paper
 
-    if args.only is not None and args.only not in paper.FIGURES:
-        raise model.ParameterError(f"unknown figure {args.only!r}; names: {', '.join(paper.FIGURES)}")
+    if args.only is not None:
+        paper.registry.module(args.only)  # an unknown name: ParameterError listing the names
     names = [args.only] if args.only else None
     outcomes = paper.generate(names, out_dir=args.out_dir, results_dir=args.results_dir, quick=args.quick,
                               benchmark=args.benchmark, quiet=args.quiet)
