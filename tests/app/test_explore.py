@@ -26,7 +26,7 @@ MU_REGULAR = model.FIGURE4.with_(mu=0.002)   # (0.2, 0.75) lies on an invariant 
 
 def make(params=MU_CHAOTIC, h=H, tmp_path=None, **kw):
     kw.setdefault("indicators", False)  # the tangent kernels are tested in test_lyapunov
-    fig = Figure(figsize=explore._FIGSIZE)
+    fig = Figure(figsize=explore.FIGSIZE)
     FigureCanvasAgg(fig)
     ex = explore.Explorer(params, h, fig=fig, out_dir=str(tmp_path or "."), **kw)
     fig.canvas.draw()  # final axes positions (equal aspect) before events are synthesised
@@ -87,7 +87,7 @@ def test_click_inside_draws_the_crossings_of_section_crossings(tmp_path, method,
     np.testing.assert_allclose(got[:, :4], ref[:, :4], rtol=0, atol=1e-9)
     np.testing.assert_allclose(got[:, 4], ref[:, 4], rtol=0, atol=1e-11)
     # the drawn points are the crossings
-    x, y = orbit.line.get_data()
+    x, y = ex.view.lines[orbit.number].get_data()
     np.testing.assert_array_equal(np.column_stack([x, y]), got[:, 1:3])
     first, _msg = ex.status_lines()
     assert f"{K}/{K} crossings" in first and "max|dH|" in first
@@ -240,9 +240,10 @@ def test_key_x_colours_by_megno(tmp_path):
     assert "regular-like" in ex.status_lines()[0]
     key(ex, "x")
     assert ex.color_by_indicator and ex.cax.get_visible()
-    assert matplotlib.colors.to_rgba(o.line.get_color()) == pytest.approx(ex.cmap(ex.norm(o.megno)))
+    assert matplotlib.colors.to_rgba(ex.view.lines[o.number].get_color()) == pytest.approx(ex.cmap(ex.norm(o.megno)))
     key(ex, "x")
-    assert matplotlib.colors.to_rgba(o.line.get_color()) == pytest.approx(matplotlib.colors.to_rgba(o.color))
+    own = matplotlib.colors.to_rgba(o.color)
+    assert matplotlib.colors.to_rgba(ex.view.lines[o.number].get_color()) == pytest.approx(own)
 
 
 def test_key_p_draws_separatrices_of_the_hyperbolic_point(tmp_path):
@@ -261,7 +262,7 @@ def test_key_p_draws_separatrices_of_the_hyperbolic_point(tmp_path):
 
 def test_separatrix_polylines_are_broken_at_unresolved_jumps():
     c = np.array([[0.0, 0.0], [0.01, 0.0], [0.5, 0.0], [0.51, 0.0]])
-    out = explore._break_jumps(c, 0.1)
+    out = explore.break_jumps(c, 0.1)
     assert out.shape == (5, 2) and np.isnan(out[2]).all()
     np.testing.assert_array_equal(out[[0, 1, 3, 4]], c)
 
@@ -308,7 +309,7 @@ def test_an_integration_error_stops_the_orbits_and_is_reported(tmp_path, monkeyp
     def broken(*args, **kwargs):
         raise RuntimeError("kernel exploded")
 
-    monkeypatch.setattr(ex._sections, "crossings", broken)
+    monkeypatch.setattr(sections, "crossings", broken)
     for func, args, kwargs in ex._timer.callbacks:  # the GUI loop must survive
         func(*args, **kwargs)
     assert not ex.running and ex.orbits[0].main.status == explore.STATUS_FAILED
