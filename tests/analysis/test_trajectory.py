@@ -9,6 +9,7 @@ from scipy.integrate import solve_ivp
 from explorer import model
 from explorer.analysis import trajectory as tr
 from explorer.app import cli, trajectory_figure
+from explorer.model import equations
 
 FIG4 = dict(model.FIGURE4.as_dict(), mu=0.5)
 #: parameter sets of the full system (lam = 0 allowed); asymmetric ones as in conftest.PARAM_SETS
@@ -62,7 +63,7 @@ def test_polynomial_field_equals_R1_and_integrals_have_the_right_rates(name):
         u = np.array([p1, p2, m, phi, x, y])
         ypoly = tr.initial_state(prm, p1, p2, m, phi, x, y)
         d = np.empty(7)
-        tr.rhs_full(ypoly, P, d)
+        equations.rhs_full(ypoly, P, d)
         ref = r1_trig(0.0, u, P)
         np.testing.assert_allclose(d[[0, 1, 2, 5, 6]], np.array(ref)[[0, 1, 2, 4, 5]], rtol=1e-13, atol=1e-13)
         np.testing.assert_allclose(d[3:5], ref[3] * np.array([math.cos(phi), -math.sin(phi)]), atol=1e-13)
@@ -71,14 +72,14 @@ def test_polynomial_field_equals_R1_and_integrals_have_the_right_rates(name):
         up, um = u + eps * np.array(ref), u - eps * np.array(ref)
         rates = (np.array(integrals_trig(up, P, eps)) - np.array(integrals_trig(um, P, -eps))) / (2 * eps)
         np.testing.assert_allclose(rates, 0.0, atol=1e-7 * (1 + np.abs(u).max() ** 2))
-        assert tr.energy_full(ypoly, P) == pytest.approx(integrals_trig(u, P, 0.0)[0], rel=1e-14, abs=1e-14)
+        assert equations.energy_full(ypoly, P) == pytest.approx(integrals_trig(u, P, 0.0)[0], rel=1e-14, abs=1e-14)
 
 
 def test_reduced_part_is_the_project_field_R3():
     prm = SETS["asym_lam_neg"]
     y = tr.initial_state(prm, 0.7, -0.2, 1.3, 0.4, 2.0, -1.0)
     d = np.empty(7)
-    tr.rhs_full(y, _P(prm), d)
+    equations.rhs_full(y, _P(prm), d)
     np.testing.assert_allclose(d[:5], model.rhs(model.Params(**prm), y[:5]), rtol=1e-15, atol=1e-15)
 
 

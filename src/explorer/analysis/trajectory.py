@@ -77,171 +77,19 @@ from collections.abc import Mapping
 import numpy as np
 
 from explorer import model
-from explorer._jit import njit
-from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NAMES, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW
-from explorer.kernels import dop853 as dp
-from explorer.kernels.clock import advance_time, clip_step
-from explorer.kernels.events import dense_root
+from explorer.integrate.full import integrate_full
+from explorer.kernels import STATUS_NAMES
 from explorer.model import validation
+from explorer.model.equations import FULL_DIM, energy_full
 
 #: layout of the full state (MODEL.md R1, polynomial form)
 P1, P2, M, G1, G2, X, Y = range(7)
-STATE_DIM = 7
+STATE_DIM = FULL_DIM
 TWO_PI = 2.0 * math.pi
 #: the CLI's default scene: Figure 4 (MODEL.md R9) with mu = 0.5
 DEFAULT_PARAMS = dict(model.FIGURE4.as_dict(), mu=0.5)
 DEFAULT_TOL = 1e-12
 DEFAULT_MAX_STEPS = 10 ** 8
-
-
-# ====================================================================== compiled core
-@njit
-def rhs_full(y, P, dy):
-    """MODEL.md R1 in the polynomial form (g1, g2) = (sin phi, cos phi)."""
-    a1, a2, b, lam, chi, zeta, mu, xi, eta = P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8]
-    p1, p2, m, g1, g2 = y[0], y[1], y[2], y[3], y[4]
-    w = m / b
-    u1 = p1 / a1
-    u2 = p2 / a2
-    dy[0] = w * (p2 - zeta) - mu * g1 - lam * u2
-    dy[1] = -w * (p1 - chi) - mu * g2 + lam * u1
-    dy[2] = (p1 - chi) * u2 - (p2 - zeta) * u1 - mu * (xi * g2 - eta * g1)
-    dy[3] = w * g2
-    dy[4] = -w * g1
-    dy[5] = u1 * g2 - u2 * g1
-    dy[6] = u1 * g1 + u2 * g2
-
-
-@njit
-def energy_full(y, P):
-    """MODEL.md R1: H = 1/2(p1^2/a1 + p2^2/a2 + M^2/b) + mu (y + xi g1 + eta g2)."""
-    kin = 0.5 * (y[0] * y[0] / P[0] + y[1] * y[1] / P[1] + y[2] * y[2] / P[2])
-    return kin + P[6] * (y[6] + P[7] * y[3] + P[8] * y[4])
-
-
-@njit
-def _branch(phi_guess, g1, g2):
-    """atan2(g1, g2) + 2 pi k, the branch closest to phi_guess."""
-    a = math.atan2(g1, g2)
-    k = math.floor((phi_guess - a) / TWO_PI + 0.5)
-    return a + TWO_PI * k
-
-
-@njit
-def _finite(y):
-    s = 0.0
-    for i in range(y.shape[0]):
-        s += y[i]
-    return s - s == 0.0
-
-
-@njit
-def integrate_full(y0, phi0, P, t_samples, rtol, atol, max_steps, out, out_phi, turns):
-    """Adaptive DOP853 of R1 from t = 0 to t_samples[-1] (sorted, >= 0).
-
-    Fills out[j] (7,) and out_phi[j] (unwrapped angle) at every t_samples[j] reached, and
-    the turning points of phi (roots of M) into turns[k] = (t, phi, dM/dt sign) for
-    k < turns.shape[0] (more are counted, not stored).
-    Returns (status, n_samples_filled, n_turns, steps, t_reached)."""
-    n = 7
-    ns = t_samples.shape[0]
-    cap = turns.shape[0]
-    K = np.empty((16, n))
-    F = np.empty((7, n))
-    Fg = np.empty(7)
-    tmp = np.empty(n)
-    yc = np.empty(n)
-    ynew = np.empty(n)
-    ycur = np.empty(n)
-    for i in range(n):
-        ycur[i] = y0[i]
-    b = P[2]
-    phi = phi0
-    tmax = t_samples[ns - 1]
-    j = 0
-    while j < ns and t_samples[j] <= 0.0:
-        for i in range(n):
-            out[j, i] = ycur[i]
-        out_phi[j] = phi
-        j += 1
-    nturn = 0
-    steps = 0
-    if j >= ns:
-        return STATUS_DONE, j, nturn, steps, 0.0
-    rhs_full(ycur, P, K[0])
-    h0 = dp.initial_step_part1(ycur, K[0], rtol, atol, tmax, 1.0, tmp)
-    rhs_full(tmp, P, K[1])
-    h_abs = dp.initial_step_part2(ycur, K[0], K[1], h0, rtol, atol, tmax)
-    t = 0.0
-    tc = 0.0
-    rejected = False
-    status = STATUS_DONE
-    while True:
-        if t >= tmax:
-            status = STATUS_DONE
-            break
-        if steps >= max_steps:
-            status = STATUS_MAX_STEPS
-            break
-        if dp.step_too_small(t, h_abs):
-            status = STATUS_STEP_UNDERFLOW
-            break
-        h = h_abs
-        h, last = clip_step(t, h, tmax)
-        for s in range(1, 12):
-            dp.stage_input(ycur, K, s, h, tmp)
-            rhs_full(tmp, P, K[s])
-        dp.step_solution(ycur, K, h, ynew)
-        err = dp.error_norm(ycur, ynew, K, h, rtol, atol)
-        steps += 1
-        if not (err == err) or not _finite(ynew):
-            status = STATUS_NONFINITE
-            break
-        if err >= 1.0:
-            h_abs *= dp.step_factor(err)
-            rejected = True
-            continue
-        rhs_full(ynew, P, K[12])
-        t_old = t - tc  # compensated start of the step
-        t_new = tmax if last else t_old + h
-        m_old = ycur[2]
-        m_new = ynew[2]
-        sign_m = (m_old < 0.0 and m_new >= 0.0) or (m_old > 0.0 and m_new <= 0.0)
-        need_dense = sign_m or (j < ns and t_samples[j] <= t_new)
-        if need_dense:
-            for s in range(13, 16):
-                dp.stage_input(ycur, K, s, h, tmp)
-                rhs_full(tmp, P, K[s])
-            dp.dense_coefficients(ycur, ynew, K, h, F)
-            if sign_m:
-                for k in range(7):
-                    Fg[k] = F[k, 2]
-                theta = dense_root(Fg, m_old, m_new)
-                dp.dense_eval(F, ycur, theta, yc)
-                if nturn < cap:
-                    turns[nturn, 0] = t_old + theta * h
-                    turns[nturn, 1] = _branch(phi + theta * h * (m_old + yc[2]) / (2.0 * b), yc[3], yc[4])
-                    turns[nturn, 2] = 1.0 if m_new > m_old else -1.0
-                nturn += 1
-            while j < ns and t_samples[j] <= t_new:
-                theta = (t_samples[j] - t_old) / h
-                if theta > 1.0:
-                    theta = 1.0
-                if theta < 0.0:
-                    theta = 0.0
-                dp.dense_eval(F, ycur, theta, yc)
-                for i in range(n):
-                    out[j, i] = yc[i]
-                out_phi[j] = _branch(phi + theta * h * (m_old + yc[2]) / (2.0 * b), yc[3], yc[4])
-                j += 1
-        phi = _branch(phi + h * (m_old + m_new) / (2.0 * b), ynew[3], ynew[4])
-        h_abs *= dp.accepted_factor(err, rejected)
-        rejected = False
-        t, tc = advance_time(t, tc, h, last, tmax)
-        for i in range(n):
-            ycur[i] = ynew[i]
-            K[0, i] = K[12, i]
-    return status, j, nturn, steps, t - tc
 
 
 # ====================================================================== parameters, states

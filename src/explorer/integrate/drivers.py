@@ -21,11 +21,11 @@ out_count : (N,) int64 crossings found;  out_status : (N,) int64 (kernels.STATUS
 out_final : (N, 5) state where the orbit stopped
 out_info : (N, 3) final time, steps taken, final Casimir error g1^2 + g2^2 - 1
 """
-import math
 
 import numpy as np
 
 from explorer._jit import njit, prange
+from explorer.integrate import systems as sy
 from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_TMAX
 from explorer.kernels import dop853 as dp
 from explorer.kernels import taylor as tk
@@ -117,7 +117,7 @@ def orbit_taylor(y0, P, cphi, sphi, direction, tmax, order, max_steps, cross, yo
     roots = np.empty(MAX_STEP_ROOTS)
     brackets = np.empty((MAX_STEP_ROOTS, 4))
     stack = np.empty((ISOLATE_STACK, 5))
-    factor = math.exp(tk.RHO_EXPONENT / (order - 1) - 2.0)  # = tk.safety_factor(order)
+    factor = tk.safety_factor(order)
     for i in range(5):
         yout[i] = y0[i]
     H0 = energy(y0, P)
@@ -410,10 +410,7 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
     H0 = energy(y0, P)
     if ncross == 0:
         return 0, STATUS_DONE, 0.0, 0
-    rhs(yout, P, K[0])
-    h0 = dp.initial_step_part1(yout, K[0], rtol, atol, tmax, 1.0, tmp)
-    rhs(tmp, P, K[1])
-    h_abs = dp.initial_step_part2(yout, K[0], K[1], h0, rtol, atol, tmax)
+    h_abs = sy.dop853_first_step(sy.REDUCED, yout, P, K, rtol, atol, tmax, tmp)
     t = 0.0
     tc = 0.0
     gprev = _start_g(y0, cphi, sphi)
@@ -425,34 +422,19 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
         if t >= tmax:
             status = STATUS_TMAX
             break
-        if steps >= max_steps:
-            status = STATUS_MAX_STEPS
-            break
-        if dp.step_too_small(t, h_abs):
-            status = STATUS_STEP_UNDERFLOW
-            break
-        h = h_abs
-        h, last = clip_step(t, h, tmax)
-        for s in range(1, 12):
-            dp.stage_input(yout, K, s, h, tmp)
-            rhs(tmp, P, K[s])
-        dp.step_solution(yout, K, h, ynew)
-        err = dp.error_norm(yout, ynew, K, h, rtol, atol)
-        steps += 1
-        if not (err == err) or not _finite5(ynew):
-            status = STATUS_NONFINITE
-            break
-        if err >= 1.0:
-            h_abs *= dp.step_factor(err)
+        code, err, h, last, h_abs, steps = sy.dop853_try(sy.REDUCED, yout, P, K, t, tmax, h_abs, steps, max_steps,
+                                                         rtol, atol, tmp, ynew)
+        if code == sy.STEP_REJECTED:
             rejected = True
             continue
+        if code != sy.STEP_OK:
+            status = code
+            break
         rhs(ynew, P, K[12])
         gnew = section_g(ynew, cphi, sphi)
         if sign_change(gprev, gnew, direction) or _may_reach_section(yout, ynew, K, P, h, gprev,
                                                                      gnew):
-            for s in range(13, 16):
-                dp.stage_input(yout, K, s, h, tmp)
-                rhs(tmp, P, K[s])
+            sy.dop853_dense_stages(sy.REDUCED, yout, P, K, h, tmp)
             dp.dense_coefficients(yout, ynew, K, h, F)
             g_old = section_g(yout, cphi, sphi)
             for k in range(7):

@@ -200,7 +200,7 @@ def _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, m
     L_status = np.zeros(LANES, np.int64)
     L_last = np.zeros(LANES, np.bool_)
     L_stop = np.zeros(LANES, np.bool_)
-    factor = math.exp(tk.RHO_EXPONENT / (order - 1) - 2.0)  # = tk.safety_factor(order)
+    factor = tk.safety_factor(order)
     e_p = 1.0 / order          # the exponents of kernels.taylor.step_size
     e_q = 1.0 / (order - 1)
     margin = (e_p + e_q) * LOG2_APPROX_ERR + 1e-12

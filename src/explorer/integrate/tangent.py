@@ -13,11 +13,11 @@ The deviation vector is renormalised every step; the indicators are accumulated 
 :mod:`explorer.kernels.tangent`.  Outputs per orbit: a result row (t, mLCE, <Y>, Y, FLI), a
 history of such rows at the requested times (first step end at or after each), the status.
 """
-import math
 
 import numpy as np
 
 from explorer._jit import njit, prange
+from explorer.integrate import systems as sy
 from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW
 from explorer.kernels import STATUS_TMAX as STATUS_TMAX_CODE
 from explorer.kernels import dop853 as dp
@@ -27,8 +27,6 @@ from explorer.kernels.clock import clip_step
 from explorer.kernels.events import ISOLATE_STACK, MAX_STEP_ROOTS, poly_step_roots
 from explorer.model.equations import (
     apply_flow_tangent,
-    rhs,
-    rhs_tangent,
     taylor_coefficients,
     taylor_coefficients_tangent,
 )
@@ -63,7 +61,7 @@ def orbit_tangent_taylor(y0, v0, P, T, order, max_steps, hist_t, hist, res, yout
     v = np.empty(5)
     acc = np.zeros(tg.N_ACC)
     row = np.empty(tg.N_RES)
-    factor = math.exp(tk.RHO_EXPONENT / (order - 1) - 2.0)  # = tk.safety_factor(order)
+    factor = tk.safety_factor(order)
     for i in range(5):
         y[i] = y0[i]
         v[i] = v0[i]
@@ -104,12 +102,6 @@ def orbit_tangent_taylor(y0, v0, P, T, order, max_steps, hist_t, hist, res, yout
 
 # ====================================================================== DOP853
 @njit
-def _rhs_aug(z, P, dz):
-    rhs(z[:5], P, dz[:5])
-    rhs_tangent(z[:5], z[5:], P, dz[5:])
-
-
-@njit
 def orbit_tangent_dop853(y0, v0, P, T, rtol, atol, max_steps, hist_t, hist, res, yout):
     n = 10
     K = np.empty((16, n))
@@ -122,44 +114,28 @@ def orbit_tangent_dop853(y0, v0, P, T, rtol, atol, max_steps, hist_t, hist, res,
         z[i] = y0[i]
         z[5 + i] = v0[i]
     tg.renormalize(z[5:], 5)
-    _rhs_aug(z, P, K[0])
-    h0 = dp.initial_step_part1(z, K[0], rtol, atol, T, 1.0, tmp)
-    _rhs_aug(tmp, P, K[1])
-    h_abs = dp.initial_step_part2(z, K[0], K[1], h0, rtol, atol, T)
+    h_abs = sy.dop853_first_step(sy.TANGENT, z, P, K, rtol, atol, T, tmp)
     t = 0.0
     steps = 0
     hpos = 0
     rejected = False
     status = STATUS_DONE
     while t < T:
-        if steps >= max_steps:
-            status = STATUS_MAX_STEPS
-            break
-        if dp.step_too_small(t, h_abs):
-            status = STATUS_STEP_UNDERFLOW
-            break
-        h = h_abs
-        h, last = clip_step(t, h, T)
-        for s in range(1, 12):
-            dp.stage_input(z, K, s, h, tmp)
-            _rhs_aug(tmp, P, K[s])
-        dp.step_solution(z, K, h, znew)
-        err = dp.error_norm(z, znew, K, h, rtol, atol)
-        steps += 1
-        if not (err == err) or not _finite(znew, n):
-            status = STATUS_NONFINITE
-            break
-        if err >= 1.0:
-            h_abs *= dp.step_factor(err)
+        code, err, h, last, h_abs, steps = sy.dop853_try(sy.TANGENT, z, P, K, t, T, h_abs, steps, max_steps,
+                                                         rtol, atol, tmp, znew)
+        if code == sy.STEP_REJECTED:
             rejected = True
             continue
+        if code != sy.STEP_OK:
+            status = code
+            break
         h_abs *= dp.accepted_factor(err, rejected)
         rejected = False
         # the deviation is renormalised, so the FSAL stage is recomputed for the scaled vector
         dlog = tg.renormalize(znew[5:], 5)
         for i in range(n):
             z[i] = znew[i]
-        _rhs_aug(z, P, K[0])
+        sy.field(sy.TANGENT, z, P, K[0])
         t_new = T if last else t + h
         tg.accumulate(acc, t, t_new, dlog)
         t = t_new
@@ -266,7 +242,7 @@ def return_map_taylor(y0, V0, P, cphi, sphi, tsign, tmax, order, max_steps, yout
     roots = np.empty(MAX_STEP_ROOTS)
     brackets = np.empty((MAX_STEP_ROOTS, 4))
     stack = np.empty((ISOLATE_STACK, 5))
-    factor = math.exp(tk.RHO_EXPONENT / (order - 1) - 2.0)
+    factor = tk.safety_factor(order)
     V = np.empty((m, 5))
     for i in range(5):
         y[i] = y0[i]

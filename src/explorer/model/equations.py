@@ -311,3 +311,32 @@ def apply_flow_tangent(k, y, v, P, t):
     else:
         tangent_flow_hm(y, v, P, t)
         flow_hm(y, P, t)
+
+
+# ====================================================================== the full system R1
+#: dimension of the full state (p1, p2, M, g1, g2, x, y): R3 plus the position (R1)
+FULL_DIM = 7
+
+
+@njit
+def rhs_full(y, P, dy):
+    """MODEL.md R1 in the polynomial form (g1, g2) = (sin phi, cos phi)."""
+    a1, a2, b, lam, chi, zeta, mu, xi, eta = P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8]
+    p1, p2, m, g1, g2 = y[0], y[1], y[2], y[3], y[4]
+    w = m / b
+    u1 = p1 / a1
+    u2 = p2 / a2
+    dy[0] = w * (p2 - zeta) - mu * g1 - lam * u2
+    dy[1] = -w * (p1 - chi) - mu * g2 + lam * u1
+    dy[2] = (p1 - chi) * u2 - (p2 - zeta) * u1 - mu * (xi * g2 - eta * g1)
+    dy[3] = w * g2
+    dy[4] = -w * g1
+    dy[5] = u1 * g2 - u2 * g1
+    dy[6] = u1 * g1 + u2 * g2
+
+
+@njit
+def energy_full(y, P):
+    """MODEL.md R1: H = 1/2(p1^2/a1 + p2^2/a2 + M^2/b) + mu (y + xi g1 + eta g2)."""
+    kin = 0.5 * (y[0] * y[0] / P[0] + y[1] * y[1] / P[1] + y[2] * y[2] / P[2])
+    return kin + P[6] * (y[6] + P[7] * y[3] + P[8] * y[4])

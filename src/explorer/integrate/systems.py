@@ -1,0 +1,99 @@
+"""The system seam: which compiled vector field a stepping loop advances, and the parts of
+the DOP853 loop that do not depend on what is observed along the way.
+
+A *system* is an integer id (no callables cross a compiled boundary: a jitted function passed
+as an argument defeats Numba's on-disk cache, kernel contract rule 1); :func:`field` dispatches
+on it.  The loops that use it -- crossings of the section (:mod:`explorer.integrate.drivers`),
+tangent dynamics (:mod:`explorer.integrate.tangent`) and the body in the plane
+(:mod:`explorer.integrate.full`) -- differ only in what they observe after an accepted step;
+the step itself (first step, the twelve stages, the solution, the error norm, the budget and
+non-finite checks, the three dense-output stages) is written once here.
+
+=============  ===  ========================================================================
+system          n   state and field
+=============  ===  ========================================================================
+``REDUCED``     5   (p1, p2, M, g1, g2), MODEL.md R3 (:func:`explorer.model.equations.rhs`)
+``TANGENT``    10   R3 and one deviation vector, the variational equations of R3
+``FULL``        7   R3 and the position (x, y), MODEL.md R1
+=============  ===  ========================================================================
+
+DOP853: Hairer, Nørsett & Wanner, *Solving ODEs I*, II.10 (tableau and continuous extension
+in :mod:`explorer.kernels.dop853`; controller and first step as scipy's ``DOP853``).
+"""
+from explorer._jit import njit
+from explorer.kernels import STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW
+from explorer.kernels import dop853 as dp
+from explorer.kernels.checks import all_finite
+from explorer.kernels.clock import clip_step
+from explorer.model.equations import FULL_DIM, rhs, rhs_full, rhs_tangent
+
+REDUCED = 0
+TANGENT = 1
+FULL = 2
+#: state dimension of each system
+DIMENSION = {REDUCED: 5, TANGENT: 10, FULL: FULL_DIM}
+#: a step attempt that neither failed nor exhausted a budget (not a kernel status)
+STEP_OK = -1
+#: a step attempt rejected by the error control (retried with a smaller step)
+STEP_REJECTED = -2
+
+
+@njit
+def field(system, y, P, dy):
+    """dy = f(y) of ``system``."""
+    if system == REDUCED:
+        rhs(y, P, dy)
+    elif system == TANGENT:
+        rhs(y[:5], P, dy[:5])                  # MODEL.md R3
+        rhs_tangent(y[:5], y[5:], P, dy[5:])   # its variational equations
+    else:
+        rhs_full(y, P, dy)                     # MODEL.md R1
+
+
+@njit
+def dop853_first_step(system, y, P, K, rtol, atol, span, tmp):
+    """K[0] = f(y) and scipy's initial step for an integration over ``span``."""
+    field(system, y, P, K[0])
+    h0 = dp.initial_step_part1(y, K[0], rtol, atol, span, 1.0, tmp)
+    field(system, tmp, P, K[1])
+    return dp.initial_step_part2(y, K[0], K[1], h0, rtol, atol, span)
+
+
+@njit
+def dop853_try(system, y, P, K, t, tend, h_abs, steps, max_steps, rtol, atol, tmp, ynew):
+    """One attempted step from ``y`` at time ``t`` towards ``tend`` (K[0] = f(y) on entry): the
+    budget checks, the step clipped to ``tend``, the eleven stages, the solution and the error
+    norm, then the controller's verdict.
+
+    Returns (code, err, h, last, h_abs, steps).  ``code`` is ``STATUS_MAX_STEPS`` or
+    ``STATUS_STEP_UNDERFLOW`` (no attempt made), ``STATUS_NONFINITE`` (the error or the solution
+    is not finite), ``STEP_REJECTED`` (err >= 1: ``h_abs`` is already shrunk by
+    ``dp.step_factor(err)``; try again) or ``STEP_OK`` (``ynew`` holds the solution at t + h;
+    ``last``: the step reaches ``tend``).  ``steps`` counts attempts.  The caller applies
+    ``dp.accepted_factor`` to ``h_abs`` after an accepted step and computes K[12] = f(ynew) when it
+    uses it (first same as last; the tangent loop renormalises first)."""
+    if steps >= max_steps:
+        return STATUS_MAX_STEPS, 0.0, 0.0, False, h_abs, steps
+    if dp.step_too_small(t, h_abs):
+        return STATUS_STEP_UNDERFLOW, 0.0, 0.0, False, h_abs, steps
+    h, last = clip_step(t, h_abs, tend)
+    for s in range(1, 12):
+        dp.stage_input(y, K, s, h, tmp)
+        field(system, tmp, P, K[s])
+    dp.step_solution(y, K, h, ynew)
+    err = dp.error_norm(y, ynew, K, h, rtol, atol)
+    steps += 1
+    if not (err == err) or not all_finite(ynew):
+        return STATUS_NONFINITE, err, h, last, h_abs, steps
+    if err >= 1.0:
+        return STEP_REJECTED, err, h, last, h_abs * dp.step_factor(err), steps
+    return STEP_OK, err, h, last, h_abs, steps
+
+
+@njit
+def dop853_dense_stages(system, y, P, K, h, tmp):
+    """The three extra stages K[13..15] of the 7th-order continuous extension (computed only in
+    steps whose dense output is used)."""
+    for s in range(13, 16):
+        dp.stage_input(y, K, s, h, tmp)
+        field(system, tmp, P, K[s])
