@@ -26,10 +26,8 @@ import numpy as np
 
 from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
-from explorer.analysis.sections import MAX_TOL, METHODS, MIN_TOL
-from explorer.integrate import tangent as dt_
-from explorer.kernels import STATUS_NAMES, Status, splitting
-from explorer.kernels.taylor import order_for_tolerance
+from explorer.integrate import methods
+from explorer.kernels import STATUS_NAMES, Status
 from explorer.model import ParameterError, validation
 
 DEFAULT_TIME = 1000.0
@@ -102,8 +100,7 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
                threads: int | None = None) -> Indicators:
     """Chaos indicators of the orbits starting at ``y0`` ((N, 5) or (5,)) over the time ``T``."""
     P = validation.packed_params(params)
-    if method not in METHODS:
-        raise ParameterError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
+    m = methods.get(method)
     T = validation.real("time", T, 0.0, lo_open=True)
     Y0 = np.ascontiguousarray(np.atleast_2d(np.asarray(y0, dtype=np.float64)))
     if Y0.ndim != 2 or Y0.shape[1] != 5 or not np.all(np.isfinite(Y0)):
@@ -124,25 +121,9 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
     if threads is not None:
         set_num_threads(validation.threads(threads, max_threads()))
     try:
-        if method == "taylor":
-            tol = validation.real("tol", tol, MIN_TOL, MAX_TOL)
-            order = order_for_tolerance(tol)
-            settings.update(tol=tol, order=order)
-            dt_.run_tangent_taylor_batch(Y0, V0, P, T, order, int(max_steps), hist_t, hist, res, status,
-                                         final, steps)
-        elif method == "dop853":
-            tol = validation.real("tol", tol, MIN_TOL, MAX_TOL)
-            settings.update(rtol=tol, atol=tol)
-            dt_.run_tangent_dop853_batch(Y0, V0, P, T, tol, tol, int(max_steps), hist_t, hist, res, status,
-                                         final, steps)
-        else:
-            dt = validation.real("dt", dt, 0.0, lo_open=True)
-            weights = splitting.SCHEMES[method][0]
-            ids, fr = splitting.flow_sequence(weights, 4)
-            settings.update(dt=dt)
-            dt_.run_tangent_split_batch(Y0, V0, P, T, dt, np.ascontiguousarray(ids, np.int64),
-                                        np.ascontiguousarray(fr, np.float64), int(max_steps), hist_t, hist,
-                                        res, status, final, steps)
+        prep = m.prepare(tol=tol, dt=dt)
+        settings.update(prep.settings)
+        methods.run_tangent(prep, Y0, V0, P, T, int(max_steps), hist_t, hist, res, status, final, steps)
     finally:
         if threads is not None:
             set_num_threads(old)

@@ -27,23 +27,15 @@ import numpy as np
 
 from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
-from explorer.integrate import (
-    drivers,
-    lanes,  # lanes: SIMD Taylor driver (see crossings)
-)
-from explorer.kernels import STATUS_NAMES, Status, splitting
-from explorer.kernels.taylor import order_for_tolerance
+from explorer.integrate import methods
+from explorer.integrate.methods import ADAPTIVE_METHODS, MAX_TOL, METHODS, MIN_TOL, SPLIT_METHODS
+from explorer.kernels import STATUS_NAMES, Status
 from explorer.model import ParameterError, validation
-from explorer.model.equations import N_FLOWS
 
-ADAPTIVE_METHODS = ("taylor", "dop853")
-SPLIT_METHODS = tuple(splitting.SCHEMES)
-METHODS = ADAPTIVE_METHODS + SPLIT_METHODS
+__all__ = ["ADAPTIVE_METHODS", "DEFAULT_DT", "DEFAULT_MAX_STEPS", "DEFAULT_TOL", "MAX_TOL", "METHODS", "MIN_TOL",
+           "SPLIT_METHODS", "Crossings", "crossings", "energy_warning", "max_energy_error", "section_crossings"]
 
 DEFAULT_TOL = 1e-13
-#: smallest tolerance accepted: below ~ 50 eps the error control only chases round-off
-MIN_TOL = 1e-16
-MAX_TOL = 1e-2
 DEFAULT_DT = 0.05
 DEFAULT_MAX_STEPS = 10**9
 #: a run whose energy error exceeds this fraction of max(|h|, 1) gets a warning: its step
@@ -110,8 +102,7 @@ def crossings(params, y0, n_crossings: int, *, method: str = "taylor", tol: floa
     A start point lying on the section is not reported as a crossing.
     """
     P = validation.packed_params(params)
-    if method not in METHODS:
-        raise ParameterError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
+    m = methods.get(method)
     if not isinstance(n_crossings, numbers.Integral) or n_crossings < 1:
         raise ParameterError(f"crossings must be an integer >= 1, got {n_crossings!r}")
     if direction not in (-1, 0, 1):
@@ -147,27 +138,10 @@ def crossings(params, y0, n_crossings: int, *, method: str = "taylor", tol: floa
     if threads is not None:
         set_num_threads(validation.threads(threads, max_threads()))
     try:
-        if method == "taylor":
-            tol = validation.real("tol", tol, MIN_TOL, MAX_TOL)
-            order = order_for_tolerance(tol)
-            settings.update(tol=tol, order=order)
-            # [lanes] SIMD lane driver, bit for bit drivers.run_taylor_batch (the scalar reference)
-            lanes.run_taylor_lanes_batch(Y0, P, cphi, sphi, int(direction), tmax, order, int(max_steps),
-                                         data, count, status, final, info)
-        elif method == "dop853":
-            tol = validation.real("tol", tol, MIN_TOL, MAX_TOL)
-            settings.update(rtol=tol, atol=tol)
-            drivers.run_dop853_batch(Y0, P, cphi, sphi, int(direction), tmax, tol, tol, int(max_steps),
-                                     data, count, status, final, info)
-        else:
-            dt = DEFAULT_DT if dt is None else validation.real("dt", dt, 0.0, lo_open=True)
-            weights, order, _ref = splitting.SCHEMES[method][:3]
-            ids, fracs = splitting.flow_sequence(weights, N_FLOWS)
-            settings.update(dt=dt, order=order)
-            drivers.run_split_batch(Y0, P, cphi, sphi, int(direction), tmax, dt,
-                                    np.ascontiguousarray(ids, dtype=np.int64),
-                                    np.ascontiguousarray(fracs, dtype=np.float64), int(max_steps),
-                                    data, count, status, final, info)
+        prep = m.prepare(tol=tol, dt=DEFAULT_DT if dt is None else dt)
+        settings.update(prep.settings)
+        methods.run_crossings(prep, Y0, P, cphi, sphi, int(direction), tmax, int(max_steps), data, count, status,
+                              final, info)
     finally:
         if threads is not None:
             set_num_threads(old_threads)

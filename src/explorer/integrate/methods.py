@@ -1,0 +1,133 @@
+"""The method registry: every integrator by name, its accuracy setting and its batch drivers.
+
+:data:`REGISTRY` maps a method name (``taylor``, ``dop853``, ``split2`` ... ``split8_yoshida``)
+to a :class:`Method`. The user layer (:mod:`explorer.analysis.sections`,
+:mod:`explorer.analysis.lyapunov`, scenes, the CLI) validates a method's setting and runs it
+through this table only, so adding an integrator means adding its loops and one entry here.
+
+================  ==============================================================  ===========
+kind              method                                                          setting
+================  ==============================================================  ===========
+``taylor``        adaptive Taylor series, order from the tolerance (Jorba & Zou    ``tol``
+                  2005), coefficients by the recurrence of R3
+``dop853``        Dormand-Prince 8(5,3) (Hairer, Nørsett & Wanner), scipy's        ``tol``
+                  controller (rtol = atol = tol)
+``split``         symmetric compositions of the exact sub-flows of R4              ``dt``
+                  (:data:`explorer.kernels.splitting.SCHEMES`)
+================  ==============================================================  ===========
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from explorer.integrate import drivers, lanes
+from explorer.integrate import tangent as tangent_drivers
+from explorer.kernels import splitting
+from explorer.kernels.taylor import order_for_tolerance
+from explorer.model import validation
+from explorer.model.equations import N_FLOWS
+
+#: tolerances accepted by the adaptive methods (below ~ 50 eps the error control only chases
+#: round-off)
+MIN_TOL = 1e-16
+MAX_TOL = 1e-2
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """A method with its setting validated: what its drivers need and what is recorded."""
+
+    method: Method
+    settings: dict                       # recorded with the results (tol, order / rtol, atol / dt)
+    tol: float = 0.0
+    order: int = 0
+    dt: float = 0.0
+    flow_ids: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    fracs: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+
+@dataclass(frozen=True)
+class Method:
+    """One integrator: ``kind`` is ``taylor``, ``dop853`` or ``split``; ``order`` the nominal order
+    (None: chosen from the tolerance); ``reference`` the paper it follows."""
+
+    name: str
+    kind: str
+    order: int | None
+    reference: str
+
+    @property
+    def adaptive(self) -> bool:
+        return self.kind != "split"
+
+    @property
+    def setting(self) -> str:
+        """The accuracy knob: ``tol`` (adaptive methods) or ``dt`` (fixed step)."""
+        return "tol" if self.adaptive else "dt"
+
+    def prepare(self, *, tol=None, dt=None) -> Prepared:
+        """Validate the method's setting (``tol`` in [MIN_TOL, MAX_TOL] or ``dt`` > 0; the other
+        one is ignored) and derive what its drivers need."""
+        if self.kind == "taylor":
+            tol = validation.real("tol", tol, MIN_TOL, MAX_TOL)
+            order = order_for_tolerance(tol)
+            return Prepared(self, {"tol": tol, "order": order}, tol=tol, order=order)
+        if self.kind == "dop853":
+            tol = validation.real("tol", tol, MIN_TOL, MAX_TOL)
+            return Prepared(self, {"rtol": tol, "atol": tol}, tol=tol)
+        dt = validation.real("dt", dt, 0.0, lo_open=True)
+        ids, fracs = splitting.flow_sequence(splitting.SCHEMES[self.name][0], N_FLOWS)
+        return Prepared(self, {"dt": dt, "order": self.order}, dt=dt,
+                        flow_ids=np.ascontiguousarray(ids, dtype=np.int64),
+                        fracs=np.ascontiguousarray(fracs, dtype=np.float64))
+
+
+def run_crossings(prep: Prepared, Y0, P, cphi, sphi, direction, tmax, max_steps, data, count, status, final,
+                  info):
+    """Crossings of the section for every orbit of ``Y0`` (arrays filled in place)."""
+    kind = prep.method.kind
+    if kind == "taylor":
+        # the SIMD lane driver, bit for bit drivers.run_taylor_batch (the scalar reference)
+        lanes.run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, prep.order, max_steps,
+                                     data, count, status, final, info)
+    elif kind == "dop853":
+        drivers.run_dop853_batch(Y0, P, cphi, sphi, direction, tmax, prep.tol, prep.tol, max_steps,
+                                 data, count, status, final, info)
+    else:
+        drivers.run_split_batch(Y0, P, cphi, sphi, direction, tmax, prep.dt, prep.flow_ids, prep.fracs,
+                                max_steps, data, count, status, final, info)
+
+
+def run_tangent(prep: Prepared, Y0, V0, P, T, max_steps, hist_t, hist, res, status, final, steps):
+    """Chaos indicators (one deviation vector) for every orbit of ``Y0`` over [0, T]."""
+    kind = prep.method.kind
+    if kind == "taylor":
+        tangent_drivers.run_tangent_taylor_batch(Y0, V0, P, T, prep.order, max_steps, hist_t, hist, res,
+                                                 status, final, steps)
+    elif kind == "dop853":
+        tangent_drivers.run_tangent_dop853_batch(Y0, V0, P, T, prep.tol, prep.tol, max_steps, hist_t, hist,
+                                                 res, status, final, steps)
+    else:
+        tangent_drivers.run_tangent_split_batch(Y0, V0, P, T, prep.dt, prep.flow_ids, prep.fracs, max_steps,
+                                                hist_t, hist, res, status, final, steps)
+
+
+REGISTRY: dict[str, Method] = {
+    "taylor": Method("taylor", "taylor", None, "A. Jorba, M. Zou, Experiment. Math. 14 (2005) 99-117"),
+    "dop853": Method("dop853", "dop853", 8, "E. Hairer, S. P. Nørsett, G. Wanner, Solving ODEs I, II.10"),
+    **{name: Method(name, "split", order, ref) for name, (_w, order, ref) in
+       ((n, splitting.SCHEMES[n][:3]) for n in splitting.SCHEMES)},
+}
+#: every method name, adaptive ones first
+METHODS = tuple(REGISTRY)
+ADAPTIVE_METHODS = tuple(n for n, m in REGISTRY.items() if m.adaptive)
+SPLIT_METHODS = tuple(n for n, m in REGISTRY.items() if not m.adaptive)
+
+
+def get(name) -> Method:
+    """The method called ``name`` (ParameterError naming the known methods otherwise)."""
+    if name not in REGISTRY:
+        raise validation.ParameterError(f"method must be one of {', '.join(METHODS)}; got {name!r}")
+    return REGISTRY[name]
