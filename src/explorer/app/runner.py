@@ -57,6 +57,24 @@ def panel_separatrices(scene, i):
     return info, curves
 
 
+def lyapunov_panels(scene, data):
+    """The chaos maps of the stored panels of ``scene`` (seeds, MEGNO, valid, parameters) and the
+    chaotic fraction per panel as rows (swept value, fraction, binomial error) at the scene's
+    MEGNO threshold."""
+    maps, fractions = [], []
+    for i in range(scene.n_panels):
+        params, h, label = scene.panel(i)
+        pd = data.panels.get(i)
+        if pd is None or "megno" not in pd.extra:
+            continue
+        ok = pd.extra["lyapunov_status"] == 0
+        maps.append({"seeds": pd.seeds, "megno": pd.extra["megno"], "valid": ok, "params": params, "h": h,
+                     "phi0": scene.integration.phi0, "label": label})
+        value = scene.sweep_values[i] if scene.sweep_values else 0.0
+        fractions.append((value,) + chaotic_fraction(pd.extra["megno"], scene.lyapunov.threshold, ok)[:2])
+    return maps, np.array(fractions).reshape(-1, 3)
+
+
 def draw_figure(scene, out_path, stem):
     """Read the store and draw the scene's figure (PNG and PDF). Returns the paths."""
     from explorer.app import figures
@@ -81,17 +99,7 @@ def draw_figure(scene, out_path, stem):
                                  own_scale=tuple(fs.own_scale), marker_size=fs.marker_size, dpi=fs.dpi)
     paths = list(figures.save_figure(fig, stem))
     if "lyapunov" in scene.compute:
-        maps, fractions = [], []
-        for i in range(scene.n_panels):
-            params, h, label = scene.panel(i)
-            pd = data.panels.get(i)
-            if pd is None or "megno" not in pd.extra:
-                continue
-            ok = pd.extra["lyapunov_status"] == 0
-            maps.append({"seeds": pd.seeds, "megno": pd.extra["megno"], "valid": ok, "params": params, "h": h,
-                         "phi0": scene.integration.phi0, "label": label})
-            value = scene.sweep_values[i] if scene.sweep_values else 0.0
-            fractions.append((value,) + chaotic_fraction(pd.extra["megno"], scene.lyapunov.threshold, ok)[:2])
+        maps, fractions = lyapunov_panels(scene, data)
         if maps:
             fig = figures.chaos_maps(maps, layout=fs.layout, columns=fs.columns, threshold=scene.lyapunov.threshold,
                                      dpi=fs.dpi)

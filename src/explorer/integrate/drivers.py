@@ -36,7 +36,9 @@ from explorer.kernels.events import (
     ROOT_MAX_ITER,
     ROOT_XTOL,
     dense_step_roots,
+    newton_in_bracket,
     poly_step_roots,
+    secant_start,
     sign_change,
     turns,
 )
@@ -181,6 +183,17 @@ def orbit_taylor(y0, P, cphi, sphi, direction, tmax, order, max_steps, cross, yo
     return count, status, t, steps
 
 
+@njit
+def store_orbit(j, count, status, t, steps, out_count, out_status, out_final, out_info):
+    """The per-orbit outputs of every crossing driver (scalar and lanes): count, status and
+    info = (time reached, steps, Casimir error g1^2 + g2^2 - 1 of the final state out_final[j])."""
+    out_count[j] = count
+    out_status[j] = status
+    out_info[j, 0] = t
+    out_info[j, 1] = steps
+    out_info[j, 2] = out_final[j, 3] ** 2 + out_final[j, 4] ** 2 - 1.0
+
+
 @njit(parallel=True)
 def run_taylor_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps,
                      out_cross, out_count, out_status, out_final, out_info):
@@ -189,11 +202,7 @@ def run_taylor_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps,
     for j in prange(n):
         count, status, t, steps = orbit_taylor(Y0[j], P, cphi, sphi, direction, tmax, order,
                                                max_steps, out_cross[j], out_final[j])
-        out_count[j] = count
-        out_status[j] = status
-        out_info[j, 0] = t
-        out_info[j, 1] = steps
-        out_info[j, 2] = out_final[j, 3] ** 2 + out_final[j, 4] ** 2 - 1.0
+        store_orbit(j, count, status, t, steps, out_count, out_status, out_final, out_info)
     return 0
 
 
@@ -235,9 +244,7 @@ def _split_root(y, P, dt, flow_ids, fracs, which, cphi, sphi, a, b, ga, gb, yc, 
             yc[i] = y[i]
         split_step(yc, P, b, flow_ids, fracs)
         return b
-    x = a - ga * (b - a) / (gb - ga)
-    if not (x > a and x < b):
-        x = 0.5 * (a + b)
+    x = secant_start(a, b, ga, gb)
     tol = ROOT_XTOL * dt
     for _ in range(ROOT_MAX_ITER):
         for i in range(5):
@@ -246,14 +253,7 @@ def _split_root(y, P, dt, flow_ids, fracs, which, cphi, sphi, a, b, ga, gb, yc, 
         g, d = _split_value_rate(yc, P, which, cphi, sphi, f)
         if g == 0.0:
             return x
-        if (g < 0.0) == (ga < 0.0):
-            a = x
-            ga = g
-        else:
-            b = x
-        xn = x - g / d if d != 0.0 else 0.5 * (a + b)
-        if not (xn > a and xn < b):
-            xn = 0.5 * (a + b)
+        xn, a, b, ga = newton_in_bracket(x, g, d, a, b, ga)
         if abs(xn - x) <= tol or abs(b - a) <= tol:
             for i in range(5):
                 yc[i] = y[i]
@@ -358,11 +358,7 @@ def run_split_batch(Y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max
     for j in prange(n):
         count, status, t, steps = orbit_split(Y0[j], P, cphi, sphi, direction, tmax, dt,
                                               flow_ids, fracs, max_steps, out_cross[j], out_final[j])
-        out_count[j] = count
-        out_status[j] = status
-        out_info[j, 0] = t
-        out_info[j, 1] = steps
-        out_info[j, 2] = out_final[j, 3] ** 2 + out_final[j, 4] ** 2 - 1.0
+        store_orbit(j, count, status, t, steps, out_count, out_status, out_final, out_info)
     return 0
 
 
@@ -416,17 +412,13 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
     gprev = _start_g(y0, cphi, sphi)
     count = 0
     steps = 0
-    rejected = False
     status = STATUS_TMAX
     while True:
         if t >= tmax:
             status = STATUS_TMAX
             break
-        code, err, h, last, h_abs, steps = sy.dop853_try(sy.REDUCED, yout, P, K, t, tmax, h_abs, steps, max_steps,
-                                                         rtol, atol, tmp, ynew)
-        if code == sy.STEP_REJECTED:
-            rejected = True
-            continue
+        code, h, last, h_abs, steps = sy.dop853_step(sy.REDUCED, yout, P, K, t, tmax, h_abs, steps, max_steps, rtol,
+                                                     atol, tmp, ynew)
         if code != sy.STEP_OK:
             status = code
             break
@@ -452,8 +444,6 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
                 status = STATUS_NONFINITE
                 break
             count = kept
-        h_abs *= dp.accepted_factor(err, rejected)
-        rejected = False
         t, tc = advance_time(t, tc, h, last, tmax)
         for i in range(5):
             yout[i] = ynew[i]
@@ -473,9 +463,5 @@ def run_dop853_batch(Y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps,
     for j in prange(n):
         count, status, t, steps = orbit_dop853(Y0[j], P, cphi, sphi, direction, tmax, rtol, atol,
                                                max_steps, out_cross[j], out_final[j])
-        out_count[j] = count
-        out_status[j] = status
-        out_info[j, 0] = t
-        out_info[j, 1] = steps
-        out_info[j, 2] = out_final[j, 3] ** 2 + out_final[j, 4] ** 2 - 1.0
+        store_orbit(j, count, status, t, steps, out_count, out_status, out_final, out_info)
     return 0

@@ -65,17 +65,13 @@ def integrate_full(y0, phi0, P, t_samples, rtol, atol, max_steps, out, out_phi, 
     h_abs = sy.dop853_first_step(sy.FULL, ycur, P, K, rtol, atol, tmax, tmp)
     t = 0.0
     tc = 0.0
-    rejected = False
     status = STATUS_DONE
     while True:
         if t >= tmax:
             status = STATUS_DONE
             break
-        code, err, h, last, h_abs, steps = sy.dop853_try(sy.FULL, ycur, P, K, t, tmax, h_abs, steps, max_steps,
-                                                         rtol, atol, tmp, ynew)
-        if code == sy.STEP_REJECTED:
-            rejected = True
-            continue
+        code, h, last, h_abs, steps = sy.dop853_step(sy.FULL, ycur, P, K, t, tmax, h_abs, steps, max_steps, rtol,
+                                                     atol, tmp, ynew)
         if code != sy.STEP_OK:
             status = code
             break
@@ -111,8 +107,6 @@ def integrate_full(y0, phi0, P, t_samples, rtol, atol, max_steps, out, out_phi, 
                 out_phi[j] = _branch(phi + theta * h * (m_old + yc[2]) / (2.0 * b), yc[3], yc[4])
                 j += 1
         phi = _branch(phi + h * (m_old + m_new) / (2.0 * b), ynew[3], ynew[4])
-        h_abs *= dp.accepted_factor(err, rejected)
-        rejected = False
         t, tc = advance_time(t, tc, h, last, tmax)
         for i in range(n):
             ycur[i] = ynew[i]

@@ -58,7 +58,7 @@ from explorer.integrate._lanes_generated import (
     vsub,
     vzero,
 )
-from explorer.integrate.drivers import EPS, _finite5, _keep, _start_g
+from explorer.integrate.drivers import EPS, _finite5, _keep, _start_g, store_orbit
 from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_TMAX
 from explorer.kernels import taylor as tk
 from explorer.kernels.clock import advance_time, clip_step
@@ -128,11 +128,7 @@ def _finish(j, l, X, count, status, t, steps, out_count, out_status, out_final, 
     """Write the outputs of orbit j from lane l (its state is X[0, :, l]), as run_taylor_batch."""
     for i in range(NVAR):
         out_final[j, i] = X[0, i, l]
-    out_count[j] = count
-    out_status[j] = status
-    out_info[j, 0] = t
-    out_info[j, 1] = steps
-    out_info[j, 2] = out_final[j, 3] ** 2 + out_final[j, 4] ** 2 - 1.0
+    store_orbit(j, count, status, t, steps, out_count, out_status, out_final, out_info)
 
 
 @njit

@@ -32,10 +32,8 @@ TANGENT = 1
 FULL = 2
 #: state dimension of each system
 DIMENSION = {REDUCED: 5, TANGENT: 10, FULL: FULL_DIM}
-#: a step attempt that neither failed nor exhausted a budget (not a kernel status)
+#: an accepted step (not a kernel status)
 STEP_OK = -1
-#: a step attempt rejected by the error control (retried with a smaller step)
-STEP_REJECTED = -2
 
 
 @njit
@@ -60,34 +58,36 @@ def dop853_first_step(system, y, P, K, rtol, atol, span, tmp):
 
 
 @njit
-def dop853_try(system, y, P, K, t, tend, h_abs, steps, max_steps, rtol, atol, tmp, ynew):
-    """One attempted step from ``y`` at time ``t`` towards ``tend`` (K[0] = f(y) on entry): the
-    budget checks, the step clipped to ``tend``, the eleven stages, the solution and the error
-    norm, then the controller's verdict.
+def dop853_step(system, y, P, K, t, tend, h_abs, steps, max_steps, rtol, atol, tmp, ynew):
+    """One accepted step from ``y`` at time ``t`` towards ``tend`` (K[0] = f(y) on entry), with
+    rejected attempts retried at the smaller step the controller proposes.
 
-    Returns (code, err, h, last, h_abs, steps).  ``code`` is ``STATUS_MAX_STEPS`` or
-    ``STATUS_STEP_UNDERFLOW`` (no attempt made), ``STATUS_NONFINITE`` (the error or the solution
-    is not finite), ``STEP_REJECTED`` (err >= 1: ``h_abs`` is already shrunk by
-    ``dp.step_factor(err)``; try again) or ``STEP_OK`` (``ynew`` holds the solution at t + h;
-    ``last``: the step reaches ``tend``).  ``steps`` counts attempts.  The caller applies
-    ``dp.accepted_factor`` to ``h_abs`` after an accepted step and computes K[12] = f(ynew) when it
-    uses it (first same as last; the tangent loop renormalises first)."""
-    if steps >= max_steps:
-        return STATUS_MAX_STEPS, 0.0, 0.0, False, h_abs, steps
-    if dp.step_too_small(t, h_abs):
-        return STATUS_STEP_UNDERFLOW, 0.0, 0.0, False, h_abs, steps
-    h, last = clip_step(t, h_abs, tend)
-    for s in range(1, 12):
-        dp.stage_input(y, K, s, h, tmp)
-        field(system, tmp, P, K[s])
-    dp.step_solution(y, K, h, ynew)
-    err = dp.error_norm(y, ynew, K, h, rtol, atol)
-    steps += 1
-    if not (err == err) or not all_finite(ynew):
-        return STATUS_NONFINITE, err, h, last, h_abs, steps
-    if err >= 1.0:
-        return STEP_REJECTED, err, h, last, h_abs * dp.step_factor(err), steps
-    return STEP_OK, err, h, last, h_abs, steps
+    Each attempt: the budget checks, the step clipped to ``tend``, the eleven stages, the solution
+    and the error norm.  Returns (code, h, last, h_abs, steps): ``code`` is ``STEP_OK`` (``ynew``
+    holds the solution at t + h; ``last``: the step reaches ``tend``; ``h_abs`` is the next step
+    proposed), ``STATUS_MAX_STEPS`` or ``STATUS_STEP_UNDERFLOW`` (a budget ran out before an
+    attempt) or ``STATUS_NONFINITE`` (the error or the solution is not finite).  ``steps`` counts
+    attempts.  The caller computes K[12] = f(ynew) when it uses it (first same as last; the
+    tangent loop renormalises first)."""
+    rejected = False
+    while True:
+        if steps >= max_steps:
+            return STATUS_MAX_STEPS, 0.0, False, h_abs, steps
+        if dp.step_too_small(t, h_abs):
+            return STATUS_STEP_UNDERFLOW, 0.0, False, h_abs, steps
+        h, last = clip_step(t, h_abs, tend)
+        for s in range(1, 12):
+            dp.stage_input(y, K, s, h, tmp)
+            field(system, tmp, P, K[s])
+        dp.step_solution(y, K, h, ynew)
+        err = dp.error_norm(y, ynew, K, h, rtol, atol)
+        steps += 1
+        if not (err == err) or not all_finite(ynew):
+            return STATUS_NONFINITE, h, last, h_abs, steps
+        if err < 1.0:
+            return STEP_OK, h, last, h_abs * dp.accepted_factor(err, rejected), steps
+        h_abs *= dp.step_factor(err)
+        rejected = True
 
 
 @njit

@@ -20,7 +20,6 @@ from explorer._jit import njit, prange
 from explorer.integrate import systems as sy
 from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW
 from explorer.kernels import STATUS_TMAX as STATUS_TMAX_CODE
-from explorer.kernels import dop853 as dp
 from explorer.kernels import tangent as tg
 from explorer.kernels import taylor as tk
 from explorer.kernels.clock import clip_step
@@ -118,19 +117,13 @@ def orbit_tangent_dop853(y0, v0, P, T, rtol, atol, max_steps, hist_t, hist, res,
     t = 0.0
     steps = 0
     hpos = 0
-    rejected = False
     status = STATUS_DONE
     while t < T:
-        code, err, h, last, h_abs, steps = sy.dop853_try(sy.TANGENT, z, P, K, t, T, h_abs, steps, max_steps,
-                                                         rtol, atol, tmp, znew)
-        if code == sy.STEP_REJECTED:
-            rejected = True
-            continue
+        code, h, last, h_abs, steps = sy.dop853_step(sy.TANGENT, z, P, K, t, T, h_abs, steps, max_steps, rtol,
+                                                     atol, tmp, znew)
         if code != sy.STEP_OK:
             status = code
             break
-        h_abs *= dp.accepted_factor(err, rejected)
-        rejected = False
         # the deviation is renormalised, so the FSAL stage is recomputed for the scaled vector
         dlog = tg.renormalize(znew[5:], 5)
         for i in range(n):

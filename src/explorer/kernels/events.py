@@ -75,28 +75,45 @@ def poly_value_derivative(c, order, x):
 
 
 @njit
+def secant_start(a, b, ga, gb):
+    """The first iterate of a bracketed root search on [a, b] (values ga, gb of opposite signs):
+    the secant root, or the midpoint when the secant leaves the bracket."""
+    x = a - ga * (b - a) / (gb - ga)
+    if not (x > a and x < b):
+        x = 0.5 * (a + b)
+    return x
+
+
+@njit
+def newton_in_bracket(x, g, d, a, b, ga):
+    """One safeguarded Newton step (Press et al., Numerical Recipes, rtsafe): the bracket [a, b]
+    (ga = g(a)) shrinks to the side of the sign change at x, then the Newton iterate x - g/d if it
+    falls inside, else the midpoint.  Returns (next x, a, b, ga)."""
+    if (g < 0.0) == (ga < 0.0):
+        a = x
+        ga = g
+    else:
+        b = x
+    xn = x - g / d if d != 0.0 else 0.5 * (a + b)
+    if not (xn > a and xn < b):
+        xn = 0.5 * (a + b)
+    return xn, a, b, ga
+
+
+@njit
 def poly_root_in(c, order, a, b, ga, gb):
     """Root in (a, b] of the polynomial sum_k c_k x^k, given its values ga at a and gb at b of
     opposite signs (or gb == 0).  Safeguarded Newton on the bracket; stops at ROOT_XTOL of
     max(|a|, |b|) (the step length for a = 0)."""
     if gb == 0.0:
         return b
-    x = a - ga * (b - a) / (gb - ga)  # secant start
-    if not (x > a and x < b):
-        x = 0.5 * (a + b)
+    x = secant_start(a, b, ga, gb)
     tol = ROOT_XTOL * max(abs(a), abs(b))
     for _ in range(ROOT_MAX_ITER):
         g, d = poly_value_derivative(c, order, x)
         if g == 0.0:
             return x
-        if (g < 0.0) == (ga < 0.0):
-            a = x
-            ga = g
-        else:
-            b = x
-        xn = x - g / d if d != 0.0 else 0.5 * (a + b)
-        if not (xn > a and xn < b):
-            xn = 0.5 * (a + b)
+        xn, a, b, ga = newton_in_bracket(x, g, d, a, b, ga)
         if abs(xn - x) <= tol or abs(b - a) <= tol:
             return xn
         x = xn
@@ -226,22 +243,13 @@ def dense_root_in(Fg, g_old, a, b, ga, gb):
     (or gb == 0), 0 <= a < b <= 1.  Safeguarded Newton on the 7th-order interpolant."""
     if gb == 0.0:
         return b
-    x = a - ga * (b - a) / (gb - ga)
-    if not (x > a and x < b):
-        x = 0.5 * (a + b)
+    x = secant_start(a, b, ga, gb)
     for _ in range(ROOT_MAX_ITER):
         g = dense_eval_scalar(Fg, g_old, x)
         if g == 0.0:
             return x
-        if (g < 0.0) == (ga < 0.0):
-            a = x
-            ga = g
-        else:
-            b = x
         d = dense_eval_scalar_derivative(Fg, 1.0, x)
-        xn = x - g / d if d != 0.0 else 0.5 * (a + b)
-        if not (xn > a and xn < b):
-            xn = 0.5 * (a + b)
+        xn, a, b, ga = newton_in_bracket(x, g, d, a, b, ga)
         if abs(xn - x) <= ROOT_XTOL or b - a <= ROOT_XTOL:
             return xn
         x = xn

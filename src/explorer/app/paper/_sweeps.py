@@ -3,8 +3,6 @@ same settings hash (:func:`explorer.app.runner.run_sweep` computes only what is 
 ``quick`` an incomplete store is replaced by a reduced copy of the scene named ``<scene>-quick``."""
 from pathlib import Path
 
-import numpy as np
-
 #: reduced scenes of ``quick``: (table, key) -> value
 QUICK_SCENES = {
     "figure4": {("seeds", "n"): 40, ("integration", "crossings"): 200, ("integration", "tmax"): 2000.0},
@@ -74,19 +72,7 @@ def _quick_note(scene):
 
 
 def _lyapunov_panels(scene, out):
-    from explorer.analysis.fixedpoints import chaotic_fraction
+    from explorer.app.runner import lyapunov_panels
     from explorer.io import store
 
-    data = store.read_store(out)
-    maps, fractions = [], []
-    for i in range(scene.n_panels):
-        params, h, label = scene.panel(i)
-        pd = data.panels.get(i)
-        if pd is None or "megno" not in pd.extra:
-            continue
-        ok = pd.extra["lyapunov_status"] == 0
-        maps.append({"seeds": pd.seeds, "megno": pd.extra["megno"], "valid": ok, "params": params, "h": h,
-                     "phi0": scene.integration.phi0, "label": label})
-        value = scene.sweep_values[i] if scene.sweep_values else 0.0
-        fractions.append((value,) + chaotic_fraction(pd.extra["megno"], scene.lyapunov.threshold, ok)[:2])
-    return maps, np.array(fractions)
+    return lyapunov_panels(scene, store.read_store(out))

@@ -12,7 +12,7 @@ import sys
 import h5py
 import numpy as np
 
-from explorer.io.store.atomic import _fsync_dir, _fsync_path, _remove_quietly, _tmp_name
+from explorer.io.store.atomic import atomic_path
 from explorer.io.store.format import (
     _DEPENDENCIES,
     _OPTIONAL_PER_ORBIT,
@@ -266,9 +266,7 @@ def commit_panel(path, index: int, arrays: dict, attrs: dict, file_attrs: dict |
                 raise
             existing = False
 
-    directory = os.path.dirname(os.path.abspath(path))
-    tmp = _tmp_name(path)
-    try:
+    with atomic_path(path) as tmp:
         if replacing:
             # replacing a panel: copy everything else into a fresh file, so the file does not
             # keep the old panel's bytes (HDF5 never reclaims the space of a deleted group)
@@ -287,12 +285,6 @@ def commit_panel(path, index: int, arrays: dict, attrs: dict, file_attrs: dict |
             f.attrs["updated"] = now
             _write_panel(f, index, prepared, attrs or {},
                          STATUS_NAMES if status_names is None else status_names)
-        _fsync_path(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        _remove_quietly(tmp)
-        raise
-    _fsync_dir(directory)
 
 
 
@@ -306,16 +298,8 @@ def update_panel_attrs(path, index: int, attrs: dict) -> None:
     with _open_store(path) as f:
         if "panels" not in f or f"{index:03d}" not in f["panels"]:
             raise StoreError(f"{path}: no panel {index} to update")
-    directory = os.path.dirname(os.path.abspath(path))
-    tmp = _tmp_name(path)
-    try:
+    with atomic_path(path) as tmp:
         shutil.copyfile(path, tmp)
         with h5py.File(tmp, "r+") as f:
             _set_attrs(f["panels"][f"{index:03d}"], attrs)
             f.attrs["updated"] = _utcnow()
-        _fsync_path(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        _remove_quietly(tmp)
-        raise
-    _fsync_dir(directory)

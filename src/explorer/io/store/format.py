@@ -6,6 +6,7 @@ The layout is described in :mod:`explorer.io.store`; this module reads it
 """
 from __future__ import annotations
 
+import contextlib
 import datetime as _dt
 import hashlib
 import json
@@ -310,22 +311,30 @@ def _read_panel(idx: int, grp, path: str) -> PanelData:
     return panel
 
 
-def read_store(path) -> StoreData:
-    """Read a whole store (every panel group; see ``PanelData.complete``).
-
-    Raises StoreError naming ``path`` if the file is missing, not HDF5, not an
-    explorer store, or damaged (including fletcher32 checksum failures)."""
-    path = os.fspath(path)
+@contextlib.contextmanager
+def _reading(path):
+    """The open store at ``path``; any failure while reading it becomes one StoreError naming
+    the file (a StoreError raised inside passes unchanged)."""
     f = _open_store(path)
     try:
-        attrs = _read_attrs(f)
-        panels = {idx: _read_panel(idx, grp, path) for idx, grp in _panel_groups(f, path)}
+        yield f
     except StoreError:
         raise
     except Exception as exc:
         raise StoreError(f"{path}: corrupt store ({_one_line(exc)}); {_FORCE_HINT}") from None
     finally:
         f.close()
+
+
+def read_store(path) -> StoreData:
+    """Read a whole store (every panel group; see ``PanelData.complete``).
+
+    Raises StoreError naming ``path`` if the file is missing, not HDF5, not an
+    explorer store, or damaged (including fletcher32 checksum failures)."""
+    path = os.fspath(path)
+    with _reading(path) as f:
+        attrs = _read_attrs(f)
+        panels = {idx: _read_panel(idx, grp, path) for idx, grp in _panel_groups(f, path)}
     return StoreData(path=path, attrs=attrs, panels=panels)
 
 
@@ -335,19 +344,12 @@ def panel_hashes(path) -> dict:
     path = os.fspath(path)
     if not os.path.exists(path):
         return {}
-    f = _open_store(path)
-    try:
-        out = {}
+    out = {}
+    with _reading(path) as f:
         for idx, grp in _panel_groups(f, path):
             a = grp.attrs
             if bool(_from_h5_attr(a.get("complete", False))) and "hash" in a:
                 out[idx] = _from_h5_attr(a["hash"])
-        return out
-    except StoreError:
-        raise
-    except Exception as exc:
-        raise StoreError(f"{path}: corrupt store ({_one_line(exc)}); {_FORCE_HINT}") from None
-    finally:
-        f.close()
+    return out
 
 
