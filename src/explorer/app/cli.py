@@ -70,6 +70,22 @@ def _add_model_args(p, defaults: model.Params):
         g.add_argument(f"--{name}", type=float, default=getattr(defaults, name), help=f"{help_} [%(default)s]")
 
 
+def _add_start_args(p):
+    """--p1 --p2 --h: a start point on the section and the energy level (M from R9)."""
+    p.add_argument("--p1", type=float, required=True, help="start point p1 on the section")
+    p.add_argument("--p2", type=float, required=True, help="start point p2 on the section")
+    p.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
+
+
+def _add_method_args(p, tol, dt):
+    """--method --tol --dt, with this command's defaults."""
+    from explorer.integrate.methods import METHODS
+
+    p.add_argument("--method", default="taylor", help=f"one of {', '.join(METHODS)} [%(default)s]")
+    p.add_argument("--tol", type=float, default=tol, help="tolerance of taylor/dop853 [%(default)s]")
+    p.add_argument("--dt", type=float, default=dt, help="fixed step of the split* methods [%(default)s]")
+
+
 def _params_from(args) -> model.Params:
     return model.Params(**{n: getattr(args, n) for n in model.PARAM_NAMES})
 
@@ -85,13 +101,9 @@ def build_parser() -> argparse.ArgumentParser:
     o = sub.add_parser("orbit", help="crossings of one orbit with the section phi = phi0",
                        description="Start on the section phi = phi0 at (p1, p2) with M from the energy h "
                        "(MODEL.md R9) and print the next K crossings as CSV (k,t,p1,p2,M,dH) or JSON.")
-    o.add_argument("--p1", type=float, required=True, help="start point p1 on the section")
-    o.add_argument("--p2", type=float, required=True, help="start point p2 on the section")
-    o.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
+    _add_start_args(o)
     o.add_argument("--crossings", "-K", type=int, default=10, help="number of crossings K [%(default)s]")
-    o.add_argument("--method", default="taylor", help=f"one of {', '.join(METHODS)} [%(default)s]")
-    o.add_argument("--tol", type=float, default=DEFAULT_TOL, help="tolerance of taylor/dop853 [%(default)s]")
-    o.add_argument("--dt", type=float, default=DEFAULT_DT, help="fixed step of the split* methods [%(default)s]")
+    _add_method_args(o, DEFAULT_TOL, DEFAULT_DT)
     o.add_argument("--tmax", type=float, default=None, help="time budget [100 K]")
     o.add_argument("--max-steps", type=int, default=10**9, help="step budget [%(default)s]")
     o.add_argument("--phi0", type=float, default=math.pi, help="section angle phi0 [pi]")
@@ -121,13 +133,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "integrate the orbit with one deviation vector (tangent to the energy shell) for a "
                         "time T; print the finite-time maximal Lyapunov exponent, the mean MEGNO <Y> and the "
                         "FLI, with their convergence history.")
-    ly.add_argument("--p1", type=float, required=True, help="start point p1 on the section")
-    ly.add_argument("--p2", type=float, required=True, help="start point p2 on the section")
-    ly.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
+    _add_start_args(ly)
     ly.add_argument("--time", "-T", type=float, default=1000.0, help="integration time T [%(default)s]")
-    ly.add_argument("--method", default="taylor", help=f"one of {', '.join(METHODS)} [%(default)s]")
-    ly.add_argument("--tol", type=float, default=1e-13, help="tolerance of taylor/dop853 [%(default)s]")
-    ly.add_argument("--dt", type=float, default=0.02, help="fixed step of the split* methods [%(default)s]")
+    _add_method_args(ly, 1e-13, 0.02)
     ly.add_argument("--history", type=int, default=12, help="history points (log-spaced in time) [%(default)s]")
     ly.add_argument("--json", action="store_true", help="print JSON")
     _add_model_args(ly, model.FIGURE4)

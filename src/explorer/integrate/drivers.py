@@ -31,13 +31,12 @@ from explorer.kernels import dop853 as dp
 from explorer.kernels import taylor as tk
 from explorer.kernels.clock import advance_time, clip_step
 from explorer.kernels.events import (
-    ISOLATE_STACK,
-    MAX_STEP_ROOTS,
     ROOT_MAX_ITER,
     ROOT_XTOL,
     dense_step_roots,
     newton_in_bracket,
     poly_step_roots,
+    root_workspace,
     secant_start,
     sign_change,
     turns,
@@ -114,11 +113,7 @@ def orbit_taylor(y0, P, cphi, sphi, direction, tmax, order, max_steps, cross, yo
     X = np.empty((5, order + 1))
     ynew = np.empty(5)
     yc = np.empty(5)
-    gc = np.empty(order + 1)
-    work = np.empty(order + 1)
-    roots = np.empty(MAX_STEP_ROOTS)
-    brackets = np.empty((MAX_STEP_ROOTS, 4))
-    stack = np.empty((ISOLATE_STACK, 5))
+    gc, work, roots, brackets, stack = root_workspace(order)
     factor = tk.safety_factor(order)
     for i in range(5):
         yout[i] = y0[i]
@@ -393,11 +388,7 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
     K = np.empty((16, 5))
     F = np.empty((7, 5))
     Fg = np.empty(7)
-    coef = np.empty(8)
-    work = np.empty(8)
-    roots = np.empty(MAX_STEP_ROOTS)
-    brackets = np.empty((MAX_STEP_ROOTS, 4))
-    stack = np.empty((ISOLATE_STACK, 5))
+    coef, work, roots, brackets, stack = root_workspace(7)  # the dense output is of degree 7
     tmp = np.empty(5)
     ynew = np.empty(5)
     yc = np.empty(5)
@@ -412,17 +403,11 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
     gprev = _start_g(y0, cphi, sphi)
     count = 0
     steps = 0
-    status = STATUS_TMAX
     while True:
-        if t >= tmax:
-            status = STATUS_TMAX
-            break
-        code, h, last, h_abs, steps = sy.dop853_step(sy.REDUCED, yout, P, K, t, tmax, h_abs, steps, max_steps, rtol,
-                                                     atol, tmp, ynew)
+        code, h, last, h_abs, steps = sy.dop853_step(sy.REDUCED, yout, P, K, t, tmax, STATUS_TMAX, h_abs, steps,
+                                                     max_steps, rtol, atol, tmp, ynew, True)
         if code != sy.STEP_OK:
-            status = code
             break
-        rhs(ynew, P, K[12])
         gnew = section_g(ynew, cphi, sphi)
         if sign_change(gprev, gnew, direction) or _may_reach_section(yout, ynew, K, P, h, gprev,
                                                                      gnew):
@@ -441,7 +426,7 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
                 dp.dense_eval(F, yout, theta, yc)
                 kept = _keep(cross, kept, (t - tc) + theta * h, yc, P, H0, cphi, sphi)
             if kept < 0:
-                status = STATUS_NONFINITE
+                code = STATUS_NONFINITE
                 break
             count = kept
         t, tc = advance_time(t, tc, h, last, tmax)
@@ -450,9 +435,9 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
             K[0, i] = K[12, i]
         gprev = gnew
         if count >= ncross:
-            status = STATUS_DONE
+            code = STATUS_DONE
             break
-    return count, status, t, steps
+    return count, code, t, steps
 
 
 @njit(parallel=True)

@@ -65,17 +65,11 @@ def integrate_full(y0, phi0, P, t_samples, rtol, atol, max_steps, out, out_phi, 
     h_abs = sy.dop853_first_step(sy.FULL, ycur, P, K, rtol, atol, tmax, tmp)
     t = 0.0
     tc = 0.0
-    status = STATUS_DONE
     while True:
-        if t >= tmax:
-            status = STATUS_DONE
-            break
-        code, h, last, h_abs, steps = sy.dop853_step(sy.FULL, ycur, P, K, t, tmax, h_abs, steps, max_steps, rtol,
-                                                     atol, tmp, ynew)
+        code, h, last, h_abs, steps = sy.dop853_step(sy.FULL, ycur, P, K, t, tmax, STATUS_DONE, h_abs, steps,
+                                                     max_steps, rtol, atol, tmp, ynew, True)
         if code != sy.STEP_OK:
-            status = code
             break
-        sy.field(sy.FULL, ynew, P, K[12])
         t_old = t - tc  # compensated start of the step
         t_new = tmax if last else t_old + h
         m_old = ycur[2]
@@ -111,4 +105,4 @@ def integrate_full(y0, phi0, P, t_samples, rtol, atol, max_steps, out, out_phi, 
         for i in range(n):
             ycur[i] = ynew[i]
             K[0, i] = K[12, i]
-    return status, j, nturn, steps, t - tc
+    return code, j, nturn, steps, t - tc

@@ -62,7 +62,7 @@ from explorer.integrate.drivers import EPS, _finite5, _keep, _start_g, store_orb
 from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_TMAX
 from explorer.kernels import taylor as tk
 from explorer.kernels.clock import advance_time, clip_step
-from explorer.kernels.events import ISOLATE_STACK, MAX_STEP_ROOTS, excluded_by_variation, poly_step_roots
+from explorer.kernels.events import excluded_by_variation, poly_step_roots, root_workspace
 from explorer.model.equations import energy, section_g
 
 _IDLE = -1
@@ -180,11 +180,7 @@ def _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, m
     ynew = np.empty((NVAR, LANES))
     yl = np.empty(NVAR)
     yc = np.empty(NVAR)
-    gc = np.empty(order + 1)
-    work = np.empty(order + 1)
-    roots = np.empty(MAX_STEP_ROOTS)
-    brackets = np.empty((MAX_STEP_ROOTS, 4))
-    stack = np.empty((ISOLATE_STACK, 5))
+    gc, work, roots, brackets, stack = root_workspace(order)
     # per-lane state of orbit_taylor
     orb = np.full(LANES, _IDLE, np.int64)
     L_t = np.zeros(LANES)

@@ -58,17 +58,20 @@ def dop853_first_step(system, y, P, K, rtol, atol, span, tmp):
 
 
 @njit
-def dop853_step(system, y, P, K, t, tend, h_abs, steps, max_steps, rtol, atol, tmp, ynew):
+def dop853_step(system, y, P, K, t, tend, end_code, h_abs, steps, max_steps, rtol, atol, tmp, ynew, fsal):
     """One accepted step from ``y`` at time ``t`` towards ``tend`` (K[0] = f(y) on entry), with
-    rejected attempts retried at the smaller step the controller proposes.
+    rejected attempts retried at the smaller step the controller proposes; ``end_code`` (with
+    h = 0) when ``t`` has reached ``tend``.
 
     Each attempt: the budget checks, the step clipped to ``tend``, the eleven stages, the solution
     and the error norm.  Returns (code, h, last, h_abs, steps): ``code`` is ``STEP_OK`` (``ynew``
     holds the solution at t + h; ``last``: the step reaches ``tend``; ``h_abs`` is the next step
     proposed), ``STATUS_MAX_STEPS`` or ``STATUS_STEP_UNDERFLOW`` (a budget ran out before an
     attempt) or ``STATUS_NONFINITE`` (the error or the solution is not finite).  ``steps`` counts
-    attempts.  The caller computes K[12] = f(ynew) when it uses it (first same as last; the
-    tangent loop renormalises first)."""
+    attempts.  With ``fsal`` an accepted step also sets K[12] = f(ynew) (first same as last; the
+    tangent loop renormalises first, so it computes f itself)."""
+    if not (t < tend):
+        return end_code, 0.0, False, h_abs, steps
     rejected = False
     while True:
         if steps >= max_steps:
@@ -85,6 +88,8 @@ def dop853_step(system, y, P, K, t, tend, h_abs, steps, max_steps, rtol, atol, t
         if not (err == err) or not all_finite(ynew):
             return STATUS_NONFINITE, h, last, h_abs, steps
         if err < 1.0:
+            if fsal:
+                field(system, ynew, P, K[12])
             return STEP_OK, h, last, h_abs * dp.accepted_factor(err, rejected), steps
         h_abs *= dp.step_factor(err)
         rejected = True

@@ -23,7 +23,7 @@ from explorer.kernels import STATUS_TMAX as STATUS_TMAX_CODE
 from explorer.kernels import tangent as tg
 from explorer.kernels import taylor as tk
 from explorer.kernels.clock import clip_step
-from explorer.kernels.events import ISOLATE_STACK, MAX_STEP_ROOTS, poly_step_roots
+from explorer.kernels.events import poly_step_roots, root_workspace
 from explorer.model.equations import (
     apply_flow_tangent,
     taylor_coefficients,
@@ -52,6 +52,16 @@ def _history(acc, hist_t, hist, hpos, row):
 
 
 # ====================================================================== Taylor
+@njit
+def _observe(acc, v, t_old, t_new, hist_t, hist, hpos, row):
+    """What every tangent loop does after a step from t_old to t_new: renormalise the deviation
+    vector v (Skokos 2010), add the step to the mLCE / MEGNO / FLI accumulators and record the
+    history rows passed. Returns the new history position."""
+    dlog = tg.renormalize(v, 5)
+    tg.accumulate(acc, t_old, t_new, dlog)
+    return _history(acc, hist_t, hist, hpos, row)
+
+
 @njit
 def orbit_tangent_taylor(y0, v0, P, T, order, max_steps, hist_t, hist, res, yout):
     X = np.empty((5, order + 1))
@@ -88,11 +98,9 @@ def orbit_tangent_taylor(y0, v0, P, T, order, max_steps, hist_t, hist, res, yout
         if not (_finite(y, 5) and _finite(v, 5)):
             status = STATUS_NONFINITE
             break
-        dlog = tg.renormalize(v, 5)
         t_new = T if last else t + h
-        tg.accumulate(acc, t, t_new, dlog)
+        hpos = _observe(acc, v, t, t_new, hist_t, hist, hpos, row)
         t = t_new
-        hpos = _history(acc, hist_t, hist, hpos, row)
     tg.result(acc, res)
     for i in range(5):
         yout[i] = y[i]
@@ -117,26 +125,22 @@ def orbit_tangent_dop853(y0, v0, P, T, rtol, atol, max_steps, hist_t, hist, res,
     t = 0.0
     steps = 0
     hpos = 0
-    status = STATUS_DONE
-    while t < T:
-        code, h, last, h_abs, steps = sy.dop853_step(sy.TANGENT, z, P, K, t, T, h_abs, steps, max_steps, rtol,
-                                                     atol, tmp, znew)
+    while True:
+        code, h, last, h_abs, steps = sy.dop853_step(sy.TANGENT, z, P, K, t, T, STATUS_DONE, h_abs, steps,
+                                                     max_steps, rtol, atol, tmp, znew, False)
         if code != sy.STEP_OK:
-            status = code
             break
-        # the deviation is renormalised, so the FSAL stage is recomputed for the scaled vector
-        dlog = tg.renormalize(znew[5:], 5)
+        t_new = T if last else t + h
+        hpos = _observe(acc, znew[5:], t, t_new, hist_t, hist, hpos, row)
+        t = t_new
+        # the deviation was renormalised, so the FSAL stage is recomputed for the scaled vector
         for i in range(n):
             z[i] = znew[i]
         sy.field(sy.TANGENT, z, P, K[0])
-        t_new = T if last else t + h
-        tg.accumulate(acc, t, t_new, dlog)
-        t = t_new
-        hpos = _history(acc, hist_t, hist, hpos, row)
     tg.result(acc, res)
     for i in range(5):
         yout[i] = z[i]
-    return status, steps
+    return code, steps
 
 
 # ====================================================================== splitting
@@ -163,10 +167,8 @@ def orbit_tangent_split(y0, v0, P, T, dt, flow_ids, fracs, max_steps, hist_t, hi
         if not (_finite(y, 5) and _finite(v, 5)):
             status = STATUS_NONFINITE
             break
-        dlog = tg.renormalize(v, 5)
-        tg.accumulate(acc, n * dt, (n + 1) * dt, dlog)
+        hpos = _observe(acc, v, n * dt, (n + 1) * dt, hist_t, hist, hpos, row)
         n += 1
-        hpos = _history(acc, hist_t, hist, hpos, row)
     tg.result(acc, res)
     for i in range(5):
         yout[i] = y[i]
@@ -230,11 +232,7 @@ def return_map_taylor(y0, V0, P, cphi, sphi, tsign, tmax, order, max_steps, yout
     D = np.empty((m, 5, order + 1))
     y = np.empty(5)
     ynew = np.empty(5)
-    gc = np.empty(order + 1)
-    work = np.empty(order + 1)
-    roots = np.empty(MAX_STEP_ROOTS)
-    brackets = np.empty((MAX_STEP_ROOTS, 4))
-    stack = np.empty((ISOLATE_STACK, 5))
+    gc, work, roots, brackets, stack = root_workspace(order)
     factor = tk.safety_factor(order)
     V = np.empty((m, 5))
     for i in range(5):

@@ -25,6 +25,8 @@ only two turns of M inside one composition step (none in the 1,000-orbit
 comparison with scipy of benchmarks/stress/stress_crossings.py at dt <= 0.05).
 """
 
+import numpy as np
+
 from explorer._jit import njit
 from explorer.kernels.dop853 import dense_eval_scalar, dense_eval_scalar_derivative
 
@@ -72,6 +74,15 @@ def poly_value_derivative(c, order, x):
         d = d * x + v
         v = v * x + c[k]
     return v, d
+
+
+@njit
+def root_workspace(degree):
+    """The work arrays of the root search in one step, for an event polynomial of ``degree``
+    (allocated once per orbit, kernel contract rule 2): (coefficients, work, roots, brackets,
+    bisection stack)."""
+    return (np.empty(degree + 1), np.empty(degree + 1), np.empty(MAX_STEP_ROOTS),
+            np.empty((MAX_STEP_ROOTS, 4)), np.empty((ISOLATE_STACK, 5)))
 
 
 @njit
@@ -142,24 +153,27 @@ def excluded_by_variation(g0, variation):
 
 
 @njit
-def no_root_within(d, order, r):
-    """True if p(x) = sum_k d[k] x^k has no root for |x| <= r: |d0| > sum_{k>=1} |d_k| r^k."""
+def _tail_bound(d, order, r, derivative):
+    """sum_{k>=1} |d_k| r^k, or with ``derivative`` sum_{k>=2} k |d_k| r^(k-1): the largest
+    change of p(x) = sum_k d[k] x^k (or of p') over |x| <= r."""
     s = 0.0
     rk = 1.0
-    for k in range(1, order + 1):
+    for k in range(2 if derivative else 1, order + 1):
         rk *= r
-        s += abs(d[k]) * rk
-    return excluded_by_variation(d[0], s)
+        s += (k if derivative else 1.0) * abs(d[k]) * rk
+    return s
+
+
+@njit
+def no_root_within(d, order, r):
+    """True if p(x) = sum_k d[k] x^k has no root for |x| <= r: |d0| > sum_{k>=1} |d_k| r^k."""
+    return excluded_by_variation(d[0], _tail_bound(d, order, r, False))
 
 
 @njit
 def monotone_within(d, order, r):
     """True if p'(x) has no root for |x| <= r: |d1| > sum_{k>=2} k |d_k| r^(k-1)."""
-    s = 0.0
-    rk = 1.0
-    for k in range(2, order + 1):
-        rk *= r
-        s += k * abs(d[k]) * rk
+    s = _tail_bound(d, order, r, True)
     return excluded_by_variation(d[1], s)
 
 

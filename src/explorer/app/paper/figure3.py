@@ -3,26 +3,8 @@ branches dashed, checked numerically (:func:`explorer.app.paper.chaplygin.figure
 
 import numpy as np
 
-from explorer.app.paper._common import (
-    _FS,
-    _SMALL,
-    _TS,
-    CHAPLYGIN,
-    FIGURE2_ENERGIES,
-    Drawn,
-    Outcome,
-    _new_figure,
-    _rc,
-    save,
-)
-from explorer.app.paper.chaplygin import (
-    admissible_hmin,
-    branch_h,
-    check_chaplygin,
-    critical_c,
-    critical_h,
-    figure3_check,
-)
+from explorer.app.paper import _common as cm
+from explorer.app.paper import chaplygin as ch
 
 #: the figure's name (``explorer figures --only figure3``) and what it shows
 NAME = "figure3"
@@ -30,28 +12,29 @@ DESCRIPTION = "the bifurcation diagram in the (c, h) plane, checked numerically"
 
 
 # ====================================================================== Figure 3
-def figure3_figure(params=CHAPLYGIN, *, check=True, c_range=(-1.5, 6.6), h_max=8.0, energies=FIGURE2_ENERGIES,
-            dpi=200) -> Drawn:
+def figure3_figure(params=cm.CHAPLYGIN, *, check=True, c_range=(-1.5, 6.6), h_max=8.0, energies=cm.FIGURE2_ENERGIES,
+            dpi=200) -> cm.Drawn:
     """The seed's Figure 3, the bifurcation diagram of Chaplygin's case in the (c, h) plane:
     the parabola of I (h = c^2/(2b)) and the lines of II and III tangent to it at
     c = lam b/a_j, unstable parts dashed (I for lam b/a1 < c < lam b/a2; III), the admissible
-    region {h >= :func:`admissible_hmin` (c)} in gray, the marks lam b/a_j and b lam^2/(2 a_j^2),
-    the energies of Figure 2, and the points checked by :func:`figure3_check` (filled:
+    region {h >= :func:`~explorer.app.paper.chaplygin.admissible_hmin` (c)} in gray, the marks lam b/a_j
+    and b lam^2/(2 a_j^2),
+    the energies of Figure 2, and the points checked by :func:`~explorer.app.paper.chaplygin.figure3_check` (filled:
     numerically stable, open: unstable).
 
     Artists carry gids: "admissible", "I-stable", "I-unstable", "II", "III", "checked".
     data: segments {gid: (c array, h array, dashed)}, checks (the records)."""
-    prm = check_chaplygin(params)
-    c1, c2 = critical_c(prm)
-    hc1, hc2 = critical_h(prm)
+    prm = ch.check_chaplygin(params)
+    c1, c2 = ch.critical_c(prm)
+    hc1, hc2 = ch.critical_h(prm)
     c0, cE = c_range
-    records = figure3_check(prm) if check else []
+    records = ch.figure3_check(prm) if check else []
     cc = np.linspace(c0, cE, 1601)
     segs = {}
 
     def seg(gid, lo, hi, branch, dashed):
         c = np.linspace(lo, hi, 400)
-        segs.setdefault(gid, []).append((c, branch_h(branch, c, prm), dashed))
+        segs.setdefault(gid, []).append((c, ch.branch_h(branch, c, prm), dashed))
 
     seg("I-stable", c0, c1, "I", False)
     seg("I-unstable", c1, c2, "I", True)
@@ -59,10 +42,10 @@ def figure3_figure(params=CHAPLYGIN, *, check=True, c_range=(-1.5, 6.6), h_max=8
     seg("II", c1, cE, "II", False)
     seg("III", c2, cE, "III", True)
     styles = {"I": dict(color="k"), "II": dict(color="#1f4e9c"), "III": dict(color="#b2182b")}
-    with _rc():
-        fig = _new_figure((5.2, 4.0), dpi=dpi)
+    with cm._rc():
+        fig = cm._new_figure((5.2, 4.0), dpi=dpi)
         ax = fig.subplots()
-        hmin = admissible_hmin(cc, prm)
+        hmin = ch.admissible_hmin(cc, prm)
         ax.fill_between(cc, hmin, h_max + 1.0, color="0.86", lw=0, zorder=0, gid="admissible",
                         label="admissible $(c, h)$")
         for gid, parts in segs.items():
@@ -76,13 +59,13 @@ def figure3_figure(params=CHAPLYGIN, *, check=True, c_range=(-1.5, 6.6), h_max=8
             ax.plot([cj], [hj], "o", ms=3, color="k", zorder=4)
         # labels of the branches
         def lab(x, branch, text, dy, ha="left"):
-            y = float(branch_h(branch, x, prm))
-            ax.text(x, y + dy, text, fontsize=_SMALL, ha=ha, va="center", color=styles[branch]["color"],
+            y = float(ch.branch_h(branch, x, prm))
+            ax.text(x, y + dy, text, fontsize=cm._SMALL, ha=ha, va="center", color=styles[branch]["color"],
                     zorder=5, bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8))
         lab(-0.9, "I", r"I: $h = c^2/2b$", 0.75)
         lab(5.0, "II", r"II: $h = \frac{\lambda}{a_1}c - \frac{\lambda^2 b}{2a_1^2}$", -0.75)
         ax.annotate(r"III: $h = \frac{\lambda}{a_2}c - \frac{\lambda^2 b}{2a_2^2}$",
-                    xy=(4.9, float(branch_h("III", 4.9, prm))), xytext=(4.45, 6.4), fontsize=_SMALL, ha="right",
+                    xy=(4.9, float(ch.branch_h("III", 4.9, prm))), xytext=(4.45, 6.4), fontsize=cm._SMALL, ha="right",
                     va="center", color=styles["III"]["color"], zorder=5,
                     bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8),
                     arrowprops=dict(arrowstyle="-", lw=0.5, color=styles["III"]["color"], shrinkA=0, shrinkB=1))
@@ -107,10 +90,10 @@ def figure3_figure(params=CHAPLYGIN, *, check=True, c_range=(-1.5, 6.6), h_max=8
         ax.minorticks_on()
         top = ax.secondary_xaxis("top")
         top.set_xticks([c1, c2], [r"$\lambda b/a_1$", r"$\lambda b/a_2$"])
-        top.tick_params(labelsize=_TS, direction="in", length=3)
+        top.tick_params(labelsize=cm._TS, direction="in", length=3)
         right = ax.secondary_yaxis("right")
         right.set_yticks([hc1, hc2], [r"$\frac{b\lambda^2}{2a_1^2}$", r"$\frac{b\lambda^2}{2a_2^2}$"])
-        right.tick_params(labelsize=_TS, direction="in", length=3)
+        right.tick_params(labelsize=cm._TS, direction="in", length=3)
         from matplotlib.lines import Line2D
         from matplotlib.patches import Patch
 
@@ -126,13 +109,13 @@ def figure3_figure(params=CHAPLYGIN, *, check=True, c_range=(-1.5, 6.6), h_max=8
         ax.legend(handles=handles, loc="upper left", frameon=True, framealpha=0.9, edgecolor="none",
                   borderpad=0.4, handlelength=2.4)
         ax.set_title(rf"$a_1 > a_2$:  $\lambda = {prm.lam:g}$, $b = {prm.b:g}$, $a_1 = {prm.a1:g}$, "
-                     rf"$a_2 = {prm.a2:g}$", fontsize=_FS)
+                     rf"$a_2 = {prm.a2:g}$", fontsize=cm._FS)
     data = {"segments": {g: [(c, hh, d) for c, hh, d in parts] for g, parts in segs.items()}, "checks": records,
             "critical_c": (c1, c2), "critical_h": (hc1, hc2)}
-    return Drawn(fig, data)
+    return cm.Drawn(fig, data)
 
 
-def build(out_dir, *, results_dir="results", quick=False, benchmark=None, quiet=True) -> Outcome:
+def build(out_dir, *, results_dir="results", quick=False, benchmark=None, quiet=True) -> cm.Outcome:
     d = figure3_figure()
     n = sum(1 for r in d.data["checks"] if r["agree"])
-    return Outcome(NAME, "written", save(d, out_dir, NAME), f"stability checked at {n} points, all agree", d.data)
+    return cm.Outcome(NAME, "written", cm.save(d, out_dir, NAME), f"stability checked at {n} points, all agree", d.data)
