@@ -61,7 +61,10 @@ class _Parser(argparse.ArgumentParser):
         raise UsageError(message)
 
 
-def _add_model_args(p, defaults: model.Params):
+def _add_model_args(p, defaults: model.Params, json: str | None = None):
+    """--json (with this help) and the model parameters with their defaults."""
+    if json:
+        p.add_argument("--json", action="store_true", help=json)
     g = p.add_argument_group("model parameters (MODEL.md; defaults: Figure 4, R9)")
     for name, help_ in (("a1", "added mass along axis 1 (> 0)"), ("a2", "added mass along axis 2 (> 0)"),
                         ("b", "added moment of inertia (> 0)"), ("lam", "circulation x density (!= 0)"),
@@ -108,8 +111,7 @@ def build_parser() -> argparse.ArgumentParser:
     o.add_argument("--max-steps", type=int, default=10**9, help="step budget [%(default)s]")
     o.add_argument("--phi0", type=float, default=math.pi, help="section angle phi0 [pi]")
     o.add_argument("--direction", default="+", help="crossing direction: + (dphi/dt > 0), - or both [+]")
-    o.add_argument("--json", action="store_true", help="print JSON instead of CSV")
-    _add_model_args(o, model.FIGURE4)
+    _add_model_args(o, model.FIGURE4, json="print JSON instead of CSV")
 
     w = sub.add_parser("sweep", help="Poincaré sections of every panel of a scene (default: figure4)",
                        description="Run every panel of a scene (a TOML file or a built-in preset), store all "
@@ -137,8 +139,7 @@ def build_parser() -> argparse.ArgumentParser:
     ly.add_argument("--time", "-T", type=float, default=1000.0, help="integration time T [%(default)s]")
     _add_method_args(ly, 1e-13, 0.02)
     ly.add_argument("--history", type=int, default=12, help="history points (log-spaced in time) [%(default)s]")
-    ly.add_argument("--json", action="store_true", help="print JSON")
-    _add_model_args(ly, model.FIGURE4)
+    _add_model_args(ly, model.FIGURE4, json="print JSON")
 
     fx = sub.add_parser("fixedpoint", help="a fixed point of the section map, its stability, continuation",
                         description="Newton's method on the section map phi = pi (Jacobian from the tangent "
@@ -149,8 +150,7 @@ def build_parser() -> argparse.ArgumentParser:
     fx.add_argument("--continue", dest="cont", nargs=4, metavar=("PARAM", "START", "STOP", "STEP"),
                     help="continue the fixed point in PARAM (a model parameter or h)")
     fx.add_argument("--tol", type=float, default=1e-15, help="Taylor tolerance [%(default)s]")
-    fx.add_argument("--json", action="store_true", help="print JSON")
-    _add_model_args(fx, model.FIGURE4)
+    _add_model_args(fx, model.FIGURE4, json="print JSON")
 
     # ---- explore: interactive explorer (explorer/explore.py) -------------------------------
     x = sub.add_parser("explore", help="interactive window: click on the section, watch the orbit appear",
@@ -187,8 +187,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="also measure the splitting on the section for mu in --mus at phase --g0")
     mk.add_argument("--mus", default="1e-4,3e-4,1e-3,3e-3", help="mu values of --splitting [%(default)s]")
     mk.add_argument("--g0", type=float, default=0.5 * math.pi, help="phase g0 of --splitting [pi/2]")
-    mk.add_argument("--json", action="store_true", help="print JSON")
-    _add_model_args(mk, model.FIGURE4)
+    _add_model_args(mk, model.FIGURE4, json="print JSON")
     # ---- end melnikov -------------------------------------------------------------------------
     # ---- trajectory: the body in the plane, full system R1 (explorer/trajectory.py) ----------
     tj = sub.add_parser("trajectory", help="the body in the plane (full system R1, any lam): drift, band, "

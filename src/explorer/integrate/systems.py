@@ -40,12 +40,19 @@ STEP_OK = -1
 def field(system, y, P, dy):
     """dy = f(y) of ``system``."""
     if system == REDUCED:
-        rhs(y, P, dy)
+        rhs(y, P, dy)                          # MODEL.md R3
     elif system == TANGENT:
-        rhs(y[:5], P, dy[:5])                  # MODEL.md R3
-        rhs_tangent(y[:5], y[5:], P, dy[5:])   # its variational equations
+        _rhs_augmented(y, P, dy)
     else:
         rhs_full(y, P, dy)                     # MODEL.md R1
+
+
+@njit
+def _rhs_augmented(z, P, dz):
+    """R3 for z[:5] and its variational equations for the deviation z[5:] (the views are made
+    here, not in :func:`field`, so that the other systems' steps carry no view bookkeeping)."""
+    rhs(z[:5], P, dz[:5])
+    rhs_tangent(z[:5], z[5:], P, dz[5:])
 
 
 @njit

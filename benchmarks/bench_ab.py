@@ -1,0 +1,99 @@
+#!/usr/bin/env python
+"""A/B of two revisions on the W4 workload (Figure 4 at mu = 0.5, h = 2, 64 orbits x 2000 crossings,
+as benchmarks/bench_w4.py) for the explorer's own rows: taylor (tol 1e-12), dop853 (tol 1e-12),
+split8 (dt 0.05), and the chaos indicators of 64 orbits over T = 1000 (taylor and dop853, tol 1e-12).
+
+Each revision runs in its own processes with its own Numba cache (warm: one untimed call
+first); the revisions alternate, ``--rounds`` times, and the best time per row is kept, so a
+load change on the machine hits both.  Used when a refactor must not slow W4 down (issue 13:
+at most 5 %).
+
+    git worktree add /tmp/base <rev>
+    python benchmarks/bench_ab.py /tmp/base .            # prints the table
+    python benchmarks/bench_ab.py /tmp/base . --write    # and records it in RESULTS.md
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import _common as C
+
+SNIPPET = r"""
+import json, sys, time
+import numpy as np
+src = sys.argv[1]
+sys.path.insert(0, src)
+import explorer
+assert explorer.__file__.startswith(src), explorer.__file__
+from explorer import model
+from explorer.analysis import lyapunov, sections
+prm = model.FIGURE4.with_(mu=0.5)
+c1, c2, r1, r2 = model.allowed_ellipse(prm, 2.0)
+p1 = c1 + r1 * np.linspace(-0.95, 0.95, 64)
+p2 = np.zeros(64)
+rows = {"taylor": dict(method="taylor", tol=1e-12), "dop853": dict(method="dop853", tol=1e-12),
+        "split8": dict(method="split8", dt=0.05)}
+out = {}
+for name, kw in rows.items():
+    sections.section_crossings(prm, p1[:2], p2[:2], 2.0, 5, **kw)   # load the compiled code
+    t0 = time.perf_counter()
+    r = sections.section_crossings(prm, p1, p2, 2.0, 2000, **kw)
+    out[name] = (time.perf_counter() - t0, int(r.count.sum()))
+y0 = model.section_state(prm, p1, p2, 2.0)
+for m in ("taylor", "dop853"):
+    lyapunov.indicators(prm, y0[:2], 10.0, method=m, tol=1e-12)
+    t0 = time.perf_counter()
+    lyapunov.indicators(prm, y0, 1000.0, method=m, tol=1e-12)
+    out["megno_" + m] = (time.perf_counter() - t0, 64)
+print(json.dumps(out))
+"""
+
+
+def run(rev: Path, cache: str) -> dict:
+    env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+    r = subprocess.run([sys.executable, "-c", SNIPPET, str(rev / "src")], capture_output=True, text=True,
+                       env=env, check=True)
+    return json.loads(r.stdout.strip().splitlines()[-1])
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("base", type=Path)
+    ap.add_argument("new", type=Path)
+    ap.add_argument("--rounds", type=int, default=4)
+    ap.add_argument("--write", action="store_true", help="record the table in RESULTS.md")
+    args = ap.parse_args(argv)
+    base, new = args.base.resolve(), args.new.resolve()
+    started, load0 = C.now(), C.loadavg()
+    caches = {k: tempfile.mkdtemp(prefix=f"nc-ab-{k}-") for k in ("base", "new")}
+    run(base, caches["base"])  # compile both once (not timed)
+    run(new, caches["new"])
+    best: dict = {"base": {}, "new": {}}
+    for _ in range(args.rounds):
+        for key, rev in (("base", base), ("new", new)):
+            for row, (sec, n) in run(rev, caches[key]).items():
+                if row not in best[key] or sec < best[key][row][0]:
+                    best[key][row] = (sec, n)
+    lines = ["| row | base (s) | new (s) | new / base | crossings (base = new) |", "|---|---|---|---|---|"]
+    for row in best["base"]:
+        b, n = best["base"][row], best["new"][row]
+        lines.append(f"| {row} | {b[0]:.3f} | {n[0]:.3f} | {n[0] / b[0]:.3f} | {b[1]} = {n[1]} |")
+    print("\n".join(lines))
+    if args.write:
+        rev = lambda p: subprocess.run(["git", "-C", str(p), "rev-parse", "--short", "HEAD"],  # noqa: E731
+                                       capture_output=True, text=True).stdout.strip()
+        seconds = (C.now() - started).total_seconds()
+        head, _ = C.header("A/B of two revisions on W4 (explorer rows)", C.command_line("bench_ab.py", [
+            "<worktree of base>", ".", "--rounds", str(args.rounds)]), started, seconds, load0,
+            extra=[f"base {rev(base)}, new {rev(new)}; best of {args.rounds} alternating rounds, warm caches"])
+        C.update_section("AB", head + [""] + lines)
+
+
+if __name__ == "__main__":
+    main()
