@@ -404,9 +404,10 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
     count = 0
     steps = 0
     rejected = False
-    # The step of systems.dop853_step written out here: this loop is the W4 hot path, and the
-    # call costs ~15 % of its time (benchmarks/bench_ab.py); the tangent and full-system loops
-    # call dop853_step.  tests/integrate/test_systems.py holds the two to the same numbers.
+    # The step of systems.dop853_step written out here: this loop is the W4 hot path, and even
+    # inlined the shared step costs it ~12 % (benchmarks/bench_ab.py); the tangent and
+    # full-system loops use dop853_step. tests/integrate/test_systems.py holds the two to the
+    # same steps and numbers, bit for bit.
     while True:
         if t >= tmax:
             code = STATUS_TMAX

@@ -36,7 +36,7 @@ DIMENSION = {REDUCED: 5, TANGENT: 10, FULL: FULL_DIM}
 STEP_OK = -1
 
 
-@njit
+@njit(inline="always")  # inlined at Numba IR level: the tangent loop ~10 % faster (bench_ab.py)
 def field(system, y, P, dy):
     """dy = f(y) of ``system``."""
     if system == REDUCED:
@@ -64,7 +64,7 @@ def dop853_first_step(system, y, P, K, rtol, atol, span, tmp):
     return dp.initial_step_part2(y, K[0], K[1], h0, rtol, atol, span)
 
 
-@njit
+@njit(inline="always")  # inlined into each loop (a call costs ~10 % of a tangent step)
 def dop853_step(system, y, P, K, t, tend, end_code, h_abs, steps, max_steps, rtol, atol, tmp, ynew, fsal):
     """One accepted step from ``y`` at time ``t`` towards ``tend`` (K[0] = f(y) on entry), with
     rejected attempts retried at the smaller step the controller proposes; ``end_code`` (with
