@@ -5,10 +5,10 @@ import os
 import subprocess
 import sys
 
+import matplotlib  # a run-time dependency: missing it is a failure, not a skip
 import numpy as np
 import pytest
 
-matplotlib = pytest.importorskip("matplotlib")
 matplotlib.use("Agg")
 from matplotlib.backend_bases import KeyEvent, MouseEvent  # noqa: E402
 from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402

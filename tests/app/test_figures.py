@@ -5,10 +5,10 @@ import os
 import subprocess
 import sys
 
+import matplotlib  # a run-time dependency: missing it is a failure, not a skip
 import numpy as np
 import pytest
 
-matplotlib = pytest.importorskip("matplotlib")
 matplotlib.use("Agg")
 import matplotlib.image as mpimg  # noqa: E402
 
