@@ -2,7 +2,7 @@
 
 The section map P: (p1, p2) -> (p1', p2') sends a point of phi = phi0 on the energy level h
 (M > 0 from the energy, MODEL.md R9) to the next crossing with dphi/dt > 0.  Its Jacobian
-comes from the tangent dynamics (variational Taylor series, :func:`drivers_tangent.return_map_taylor`),
+comes from the tangent dynamics (variational Taylor series, :func:`explorer.integrate.tangent.return_map_taylor`),
 not from finite differences:
 
     DP = Pi (I - f grad(g)^T / (grad(g) . f)) DPhi_T L
@@ -149,7 +149,36 @@ class FixedPoint:
 
 
 def find_fixed_point(params, h, guess=(0.0, 0.0), *, phi0=math.pi, tol=DEFAULT_TOL) -> FixedPoint:
-    """Newton's method on P(x) - x = 0 with the Jacobian from the tangent dynamics."""
+    """A fixed point of the section map P of phi = ``phi0`` at energy ``h`` (MODEL.md R9).
+
+    Newton's method on P(x) - x = 0 in (p1, p2), with DP from the tangent dynamics of R3 carried
+    to the next crossing (the Taylor return map, :func:`explorer.integrate.tangent.return_map_taylor`)
+    and projected on the section; steps halved when the residual grows. At mu = 0 the central
+    fixed point is solution I of R6, with the eigenvalues of its linearisation.
+
+    Parameters
+    ----------
+    params : Params
+        Model parameters.
+    h : float
+        Energy level.
+    guess : (float, float)
+        Start of Newton's method, (p1, p2) inside the allowed region.
+    phi0 : float
+        Section angle (default pi, the seed's section).
+    tol : float
+        Taylor tolerance of the return map.
+
+    Returns
+    -------
+    FixedPoint
+        The point, DP, its eigenvalues, trace and determinant, the return time.
+
+    Raises
+    ------
+    ParameterError
+        When Newton's method does not converge from ``guess`` (the message says so).
+    """
     smap = SectionMap(params, h, phi0=phi0, tol=tol)
     x = np.array(guess, dtype=float)
     if not model.is_admissible(smap.params, x[0], x[1], h, phi0):
@@ -196,8 +225,18 @@ class Branch:
 
 def continue_branch(params, h, parameter, start, stop, step, guess=(0.0, 0.0), *, phi0=math.pi,
                     tol=DEFAULT_TOL, bisect_tol=1e-8) -> Branch:
-    """Natural-parameter continuation of a fixed point in any model parameter (or "h"), with
-    the values where its stability changes located by bisection on ``|trace| - 2``."""
+    """Natural-parameter continuation of a fixed point in any model parameter (or "h").
+
+    From ``start`` to ``stop`` by ``step``, each point from the previous one (secant predictor,
+    steps halved on failure); the values where the stability changes (``|trace|`` crosses 2:
+    elliptic <-> hyperbolic) are located by bisection to ``bisect_tol`` (relative). For
+    Figure 4 (MODEL.md R9, h = 2) the central point turns stable at mu* ~ 2.98316.
+
+    Returns
+    -------
+    Branch
+        The parameter values, the fixed points and the bifurcation values.
+    """
     if parameter not in model.PARAM_NAMES + ("h",):
         raise ParameterError(f"continuation parameter must be one of {', '.join(model.PARAM_NAMES + ('h',))}")
     if step == 0 or not all(math.isfinite(v) for v in (start, stop, step)) or (stop - start) * step < 0:

@@ -3,7 +3,7 @@
 ``indicators(params, y0, T, method=...)`` advances each orbit and one deviation vector for a
 time T with tangent dynamics consistent with the integrator (variational equations for
 ``taylor`` and ``dop853``, exact tangent maps of the sub-flows for ``split*``; see
-:mod:`explorer.drivers_tangent`) and returns, per orbit,
+:mod:`explorer.integrate.tangent`) and returns, per orbit,
 
 - ``mlce``  finite-time maximal Lyapunov exponent chi(T) = ln(|delta(T)|/|delta(0)|) / T
   (Benettin, Galgani, Giorgilli & Strelcyn 1980, Meccanica 15, 9);
@@ -98,7 +98,42 @@ class Indicators:
 def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", tol: float = 1e-13,
                dt: float = DEFAULT_DT, history: int = 0, v0=None, max_steps: int = 10**9,
                threads: int | None = None) -> Indicators:
-    """Chaos indicators of the orbits starting at ``y0`` ((N, 5) or (5,)) over the time ``T``."""
+    """Chaos indicators of the orbits starting at ``y0`` over the time ``T``.
+
+    Each orbit of MODEL.md R3 is integrated with one deviation vector ``w`` obeying the
+    variational equations of R3 (started tangent to the energy shell and the Casimir surface,
+    :func:`deviation_vector`), renormalised at every step (Benettin et al. 1980; Skokos 2010).
+
+    Parameters
+    ----------
+    params : Params or array
+        Model parameters (MODEL.md, table "Parameters").
+    y0 : array (N, 5) or (5,)
+        Initial states (p1, p2, M, sin phi, cos phi).
+    T : float
+        Integration time (> 0).
+    method : str
+        A method of :data:`explorer.integrate.methods.METHODS`; its tangent dynamics are the
+        Taylor series of the variational equations (``taylor``), DOP853 on the 10-dimensional
+        system (``dop853``) or the exact tangent maps of the sub-flows of R4 (``split*``).
+    tol, dt : float
+        Tolerance of the adaptive methods, step of the splitting methods.
+    history : int
+        Number of log-spaced times at which the indicators are also recorded.
+    v0 : array, optional
+        Initial deviation vectors (default: :func:`deviation_vector`).
+    max_steps : int
+        Step budget per orbit.
+    threads : int, optional
+        Numba threads for this call (at most ``NUMBA_NUM_THREADS``).
+
+    Returns
+    -------
+    Indicators
+        mLCE ``ln(|w(T)| / |w(0)|) / T``, mean MEGNO <Y> (Cincotta & Simó 2000: -> 2 on
+        quasi-periodic orbits, ~ mLCE T / 2 on chaotic ones), FLI (Froeschlé, Lega & Gonczi
+        1997), per orbit, with a status code each.
+    """
     P = validation.packed_params(params)
     m = methods.get(method)
     T = validation.real("time", T, 0.0, lo_open=True)

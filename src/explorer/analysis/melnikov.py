@@ -20,7 +20,7 @@ The homoclinic orbits and the phase g0
 --------------------------------------
 For lam > 0, a1 > a2 and lam b/a1 < c < lam b/a2 the relative equilibrium I (p = 0, M = c,
 energy h = c^2/(2b)) is hyperbolic and has the two families of homoclinic orbits R7
-(:func:`explorer.exact.homoclinic`), ``sign = +1`` (p1 > 0 at the centre) and ``sign = -1``
+(:func:`explorer.model.exact.homoclinic`), ``sign = +1`` (p1 > 0 at the centre) and ``sign = -1``
 (p -> -p; README "Errata found").  Both are centred at t = 0 (p2 = 0, |p1| maximal, M minimal)
 and
 

@@ -1,7 +1,7 @@
 """Crossings of the Poincaré section phi = phi0 for many orbits at once (user level).
 
 :func:`crossings` validates its input, picks the compiled batch driver of the
-method (:mod:`explorer.drivers`), runs it in parallel over orbits with numba
+method (:mod:`explorer.integrate.drivers`), runs it in parallel over orbits with numba
 threads and returns a :class:`Crossings` whose status codes are already
 named.  Arrays in, arrays out: no I/O here.
 

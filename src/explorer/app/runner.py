@@ -2,7 +2,7 @@
 
 Only this module (in the parent process) writes the store and the figure.
 Skips panels whose stored settings hash equals the scene's; each finished
-panel is committed atomically (see :mod:`explorer.store`), so a run killed at
+panel is committed atomically (see :mod:`explorer.io.store`), so a run killed at
 any moment leaves a readable file and the rerun computes only what is missing.
 """
 from __future__ import annotations

@@ -2,7 +2,7 @@
 (``kernels``): many orbits in parallel, each integrated until it has crossed
 the section phi = phi0 K times, or its time or step budget runs out.
 
-Low-level twins of :mod:`explorer.sections` (which validates and maps the
+Low-level twins of :mod:`explorer.analysis.sections` (which validates and maps the
 status codes); no validation here.  One batch function per method so that a
 run compiles (or loads from the cache) only what it uses.
 

@@ -1,7 +1,7 @@
 """Lane (SIMD) batch driver of the Taylor method: LANES orbits advance in lockstep.
 
 :func:`run_taylor_lanes_batch` has the signature and the outputs of
-:func:`explorer.drivers.run_taylor_batch` and gives bit for bit the same results for every
+:func:`explorer.integrate.drivers.run_taylor_batch` and gives bit for bit the same results for every
 orbit (crossings, final state, status, time, step count), whatever the grouping of orbits
 into lanes and the number of threads:
 
@@ -12,7 +12,7 @@ into lanes and the number of threads:
 * everything else - step size, time and step budgets, last step clipped to tmax, Kahan time
   sum, NaN and step-underflow checks, ``poly_step_roots`` on the lane's own
   polynomial, ``_keep`` (branch test and record) - is the control flow of
-  :func:`explorer.drivers.orbit_taylor`, run per lane in scalar code.  The root isolation
+  :func:`explorer.integrate.drivers.orbit_taylor`, run per lane in scalar code.  The root isolation
   is skipped for a lane when a bound of the variation of sin(phi - phi0) over the step,
   computed for all lanes in one vectorised loop, proves it has no root there (then
   ``poly_step_roots`` would find none either: ``kernels.events.excluded_by_variation``).
@@ -312,7 +312,7 @@ def _run_lanes(nworkers, nlanes, Y0, P, cphi, sphi, direction, tmax, order, max_
 
 def run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps,
                            out_cross, out_count, out_status, out_final, out_info, max_lanes=LANES):
-    """Lane twin of :func:`explorer.drivers.run_taylor_batch` (same arguments and outputs, bit
+    """Lane twin of :func:`explorer.integrate.drivers.run_taylor_batch` (same arguments and outputs, bit
     for bit the same results).  One worker per numba thread (at most one per orbit), each with
     min(max_lanes, LANES, ceil(N / workers)) lanes.  A Python function: the thread count is
     read here (numba's get_num_threads inside a kernel would defeat the on-disk cache)."""

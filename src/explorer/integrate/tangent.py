@@ -1,6 +1,6 @@
 """Compiled loops for chaos indicators: the orbit and one deviation vector advanced together
 by tangent dynamics consistent with each integrator (low-level twins of
-:mod:`explorer.lyapunov`).
+:mod:`explorer.analysis.lyapunov`).
 
 - ``taylor``: the variational equations' Taylor series (``taylor_coefficients_tangent``), the
   step chosen from the orbit's own coefficients;

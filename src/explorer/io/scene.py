@@ -266,7 +266,7 @@ class SeedSpec:
 
 @dataclass(frozen=True)
 class IntegrationSpec:
-    """Settings handed to :func:`explorer.sections.section_crossings`.
+    """Settings handed to :func:`explorer.analysis.sections.section_crossings`.
 
     ``tmax`` None means the default budget 100 * crossings (:attr:`effective_tmax`).
     """
@@ -330,7 +330,7 @@ class IntegrationSpec:
 
 @dataclass(frozen=True)
 class LyapunovSpec:
-    """Chaos indicators of every seed (:func:`explorer.lyapunov.indicators`): integration time,
+    """Chaos indicators of every seed (:func:`explorer.analysis.lyapunov.indicators`): integration time,
     method and tolerance/step, and the MEGNO threshold above which an orbit counts as chaotic
     (regular orbits have <Y> -> 2, chaotic ones <Y> ~ chi T / 2)."""
 
@@ -659,7 +659,16 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
 
 
 def load_scene(spec) -> Scene:
-    """A built-in preset by name (:data:`PRESETS`), else the path of a ``.toml`` file."""
+    """A scene: a built-in preset by name (``figure4``, ``chaos``, ``fraction``: :data:`PRESETS`,
+    the TOML files of ``explorer/io/presets``), else the path of a ``.toml`` file, validated
+    (every bad key or value raises :class:`SceneError` naming the dotted key).
+
+    Returns
+    -------
+    Scene
+        Parameters, energy, the swept parameter, seeds, integration and figure settings; each
+        panel's settings hash (:meth:`Scene.panel_hash`) decides what a sweep recomputes.
+    """
     if isinstance(spec, str) and spec in PRESETS:
         return parse_scene(PRESETS[spec], source=f"preset '{spec}'")
     path = Path(os.fspath(spec))

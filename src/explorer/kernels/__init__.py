@@ -5,12 +5,12 @@ The kernel contract (every function in this package keeps it):
 1. Inputs are C-contiguous float64 arrays (int64 for index tables) and
    scalars; no Python objects, no callables (a jitted function passed as an
    argument defeats numba's on-disk cache).  A step that needs the vector
-   field is split into pieces and the caller (``explorer.drivers``) evaluates
+   field is split into pieces and the caller (``explorer.integrate.drivers``) evaluates
    the field between them.
 2. Outputs go into preallocated arrays passed by the caller; kernels never
    allocate inside their loops.
 3. Kernels never raise: success or failure is an integer status (the codes
-   below); the user layer (``explorer.sections``) turns codes into messages.
+   below); the user layer (``explorer.analysis.sections``) turns codes into messages.
 4. Compiled with ``explorer._jit.njit`` (``cache=True``, never ``fastmath``:
    it breaks compensated sums and NaN checks).
 5. Results do not depend on the number of threads: parallel loops run over

@@ -20,7 +20,7 @@ otherwise, down to ISOLATE_MAX_DEPTH levels.  Both tests are tried on the
 whole step first, with the expansion at its start, so an ordinary step costs
 two short sums and no shift.  The splitting methods' step map is not a
 polynomial; they split a step at the root of M when M changes sign between
-its ends (:func:`turns`, ``explorer.drivers._split_step_roots``), which misses
+its ends (:func:`turns`, ``explorer.integrate.drivers._split_step_roots``), which misses
 only two turns of M inside one composition step (none in the 1,000-orbit
 comparison with scipy of benchmarks/stress/stress_crossings.py at dt <= 0.05).
 """
@@ -147,7 +147,7 @@ def excluded_by_variation(g0, variation):
     """True if g cannot vanish where g = g0 + (terms whose sum is at most ``variation`` in
     size): |g0| > variation, with BOUND_SLACK.  The test of :func:`no_root_within` and
     :func:`monotone_within`; a driver may also call it with a cheaper upper bound computed for
-    many orbits at once (``explorer.lanes``): it then implies that :func:`isolate_crossings`
+    many orbits at once (``explorer.integrate.lanes``): it then implies that :func:`isolate_crossings`
     finds nothing."""
     return abs(g0) > variation + BOUND_SLACK * (abs(g0) + variation)
 

@@ -1,7 +1,7 @@
 """Model-agnostic pieces of an adaptive Taylor-series integrator.
 
 The caller fills the normalised Taylor coefficients ``X[i, k] = y_i^(k)/k!``
-(for this project: ``explorer.equations.taylor_coefficients``); these kernels
+(for this project: ``explorer.model.equations.taylor_coefficients``); these kernels
 choose the order from the tolerance, the step from the decay of the last two
 coefficients, and evaluate the series.
 

@@ -1,7 +1,7 @@
 """Closed-form solutions of Chaplygin's equations (reference for tests).
 
 This module is deliberately independent of the project's own physics code
-(it does not import :mod:`explorer.equations` or :mod:`explorer.model`); it is
+(it does not import :mod:`explorer.model.equations` or :mod:`explorer.model`); it is
 plain numpy and cites the verified equations of ``shared/MODEL.md`` (labels
 R1..R10).
 

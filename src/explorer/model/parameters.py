@@ -1,7 +1,7 @@
 """The physics a reader checks against ../shared/MODEL.md (labels R1-R10).
 
 Plain numpy, no numba: the compiled twin of the vector field lives in
-:mod:`explorer.equations`.  Everything here is vectorised over the last axis
+:mod:`explorer.model.equations`.  Everything here is vectorised over the last axis
 of a state ``y = (p1, p2, M, g1, g2)`` with ``(g1, g2) = (sin phi, cos phi)``
 (MODEL.md R3, the polynomial form of the reduced system).
 
@@ -150,7 +150,7 @@ def casimir(y) -> np.ndarray:
 
 
 def rhs(params, y) -> np.ndarray:
-    """MODEL.md R3 (numpy twin of :func:`explorer.equations.rhs`):
+    """MODEL.md R3 (numpy twin of :func:`explorer.model.equations.rhs`):
     dp/dt = (M/b) J (p - s) - mu g - lam J A p;  dM/dt = (p - s, J A p) - mu (r, J g);
     dg/dt = (M/b) J g, with J v = (v2, -v1)."""
     P = _P(params)

@@ -11,7 +11,7 @@ from explorer.app.paper.chaplygin import check_chaplygin
 # ====================================================================== dense integration
 def advance(params, Y, tau, *, tol=DENSE_TOL):
     """States Y (N, 5) advanced by the time tau > 0 with the project's Taylor integrator
-    (:func:`explorer.sections.crossings` stopped by its time budget, which ends the last step
+    (:func:`explorer.analysis.sections.crossings` stopped by its time budget, which ends the last step
     exactly at tau).  One thread: the call is short."""
     from explorer.analysis import sections
     from explorer.kernels import STATUS_TMAX

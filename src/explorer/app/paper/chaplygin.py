@@ -111,7 +111,7 @@ def chaplygin_H(params, y):
 
 def r6_jacobian(params, y3):
     """The 3x3 Jacobian of R6 in (p1, p2, M) at y3, from the project's compiled variational
-    field :func:`explorer.equations.rhs_tangent` (exact: the field is quadratic).  At mu = 0
+    field :func:`explorer.model.equations.rhs_tangent` (exact: the field is quadratic).  At mu = 0
     the (p, M) block does not depend on gamma."""
     from explorer.model.equations import rhs_tangent
 
@@ -154,7 +154,7 @@ def figure3_check(params=CHAPLYGIN, samples=None, *, tol=1e-15):
     dashed/solid classification of :func:`branch_stable`.
 
     * I (p = 0, M = c) is a fixed point of the section map phi = pi at h = c^2/(2b) when c > 0:
-      :func:`explorer.fixedpoints.find_fixed_point` (Newton, monodromy from the tangent dynamics)
+      :func:`explorer.analysis.fixedpoints.find_fixed_point` (Newton, monodromy from the tangent dynamics)
       and its ``stable`` (|trace| < 2); traces within TRACE_MARGIN of +-2 (resonances of the
       rotation, e.g. c = 4 + 4/sqrt(3)) are not classified.  The found point must be p = 0 and
       the trace that of :func:`fixedpoints.analytic_eigenvalues_solution_I`.

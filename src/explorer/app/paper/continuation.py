@@ -46,7 +46,7 @@ def _refine_trace_min(prm, h, mu, tr, points):
 def continuation_figure(params=None, h=None, *, start=0.0, stop=8.0, step=0.1, dpi=200,
                         marks=(0.002, 0.01, 0.03, 4.0, 8.0), refine_min=True) -> Drawn:
     """The central fixed point of the section map phi = pi at h = 2 continued in mu
-    (:func:`explorer.fixedpoints.continue_branch`): its p1 and the monodromy trace against mu,
+    (:func:`explorer.analysis.fixedpoints.continue_branch`): its p1 and the monodromy trace against mu,
     the lines trace = +-2, the value where it turns stable; the analytic trace of solution I at
     mu = 0 (:func:`fixedpoints.analytic_eigenvalues_solution_I`); ticks at Figure 4's mu."""
     from explorer.analysis import fixedpoints
