@@ -15,6 +15,7 @@ from explorer._jit import NOJIT, get_num_threads, njit, set_num_threads
 from explorer.analysis import sections
 from explorer.integrate import _lanes_generated as G
 from explorer.integrate import drivers, lanes
+from explorer.integrate import systems as sy
 from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_TMAX
 from explorer.kernels import taylor as tk
 from explorer.model import equations
@@ -66,9 +67,9 @@ def _check_lane(P, X, order, h, out, norms, l):
     np.testing.assert_array_equal(ys, out[:, l])
     assert (norms[0, l] == Xs[0, order] + Xs[1, order] + Xs[2, order] + Xs[3, order] + Xs[4, order]
             or np.isnan(norms[0, l]))
-    assert drivers._finite_col(Xs, order) == (norms[0, l] - norms[0, l] == 0.0)
-    assert drivers._finite_col(Xs, order - 1) == (norms[1, l] - norms[1, l] == 0.0)
-    if drivers._finite_col(Xs, order) and drivers._finite_col(Xs, order - 1):
+    assert sy._finite_column(Xs, order, 5) == (norms[0, l] - norms[0, l] == 0.0)
+    assert sy._finite_column(Xs, order - 1, 5) == (norms[1, l] - norms[1, l] == 0.0)
+    if sy._finite_column(Xs, order, 5) and sy._finite_column(Xs, order - 1, 5):
         s = max(1.0, np.abs(Xs[:, 0]).max())
         assert norms[2, l] == np.abs(Xs[:, order]).max()
         assert norms[3, l] == np.abs(Xs[:, order - 1]).max()

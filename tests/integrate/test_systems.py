@@ -1,6 +1,7 @@
-"""The system seam: the dispatched field is each system's field, and the shared DOP853 step takes
+"""The system seam: the dispatched field is each system's field; the shared DOP853 step takes
 exactly the steps of the crossing driver's own copy of it (the W4 hot path keeps the step
-written out, drivers.orbit_dop853)."""
+written out, drivers.orbit_dop853); the Taylor and splitting steps carry a deviation vector
+without touching the orbit, and that vector is the flow's derivative."""
 import numpy as np
 
 from explorer import model
@@ -70,3 +71,97 @@ def model_status_tmax():
     from explorer.kernels import Status
 
     return int(Status.TMAX)
+
+
+@njit
+def _plain_taylor(system, z0, P, T, order, max_steps):
+    """The bare loop over systems.taylor_step from 0 to T: final state, steps, times, code."""
+    n = z0.shape[0]
+    X = np.empty((n, order + 1))
+    z = z0.copy()
+    znew = np.empty(n)
+    factor = sy.tk.safety_factor(order)
+    times = np.empty(max_steps + 1)
+    t = 0.0
+    tc = 0.0
+    steps = 0
+    while True:
+        for i in range(n):
+            X[i, 0] = z[i]
+        code, h, last, steps = sy.taylor_step(system, X, P, t, T, 1, order, factor, steps, max_steps, znew)
+        if code != sy.STEP_OK:
+            return z, steps, times[:steps], code
+        t, tc = advance_time(t, tc, h, last, T)
+        times[steps - 1] = t
+        for i in range(n):
+            z[i] = znew[i]
+
+
+@njit
+def _plain_split(system, z0, P, dt, nsteps, flow_ids, fracs):
+    z = z0.copy()
+    znew = np.empty(z.shape[0])
+    steps = 0
+    while steps < nsteps:
+        code, steps = sy.split_step(system, z, P, dt, flow_ids, fracs, steps, 10**9, znew)
+        if code != sy.STEP_OK:
+            return z, code
+        for i in range(z.shape[0]):
+            z[i] = znew[i]
+    return z, 1
+
+
+def test_a_deviation_vector_never_changes_the_orbit_or_its_taylor_steps():
+    """The Taylor step is chosen from the orbit's own coefficients and the tangent recurrence
+    computes the orbit's as R3's: the orbit rows of TANGENT are REDUCED's, step for step, bit for bit."""
+    y0 = model.section_state(PRM, [0.3], [0.1], 2.0)[0]
+    z0 = np.concatenate([y0, [1.0, -0.5, 0.2, 0.0, 0.0]])
+    y, ns, ty, cy = _plain_taylor(sy.REDUCED, y0, P, 41.7, 17, 10**5)
+    z, nz, tz, cz = _plain_taylor(sy.TANGENT, z0, P, 41.7, 17, 10**5)
+    assert ns == nz > 100 and cy == cz == 1
+    np.testing.assert_array_equal(ty, tz)
+    np.testing.assert_array_equal(z[:5], y)
+    assert np.all(np.isfinite(z[5:])) and np.linalg.norm(z[5:]) > 0
+
+
+def test_the_taylor_steps_deviation_is_the_flows_derivative():
+    """TANGENT's deviation after T is D Phi_T v0: central differences of REDUCED's flow over the
+    same fixed number of steps (eps 1e-6, so agreement to ~1e-7 relative)."""
+    y0 = model.section_state(PRM, [0.3], [0.1], 2.0)[0]
+    v0 = np.array([0.3, -0.2, 0.1, 0.05, -0.04])
+    z0 = np.concatenate([y0, v0])
+    z, _, _, _ = _plain_taylor(sy.TANGENT, z0, P, 7.3, 20, 10**5)
+    e = 1e-6
+    yp, _, _, _ = _plain_taylor(sy.REDUCED, y0 + e * v0, P, 7.3, 20, 10**5)
+    ym, _, _, _ = _plain_taylor(sy.REDUCED, y0 - e * v0, P, 7.3, 20, 10**5)
+    fd = (yp - ym) / (2 * e)
+    np.testing.assert_allclose(z[5:], fd, rtol=1e-6, atol=1e-6 * np.linalg.norm(fd))
+
+
+def test_split_steps_of_tangent_carry_reduceds_orbit_and_its_derivative():
+    from explorer.integrate import methods
+
+    prep = methods.get("split6").prepare(dt=0.02)
+    y0 = model.section_state(PRM, [0.3], [0.1], 2.0)[0]
+    v0 = np.array([0.3, -0.2, 0.1, 0.05, -0.04])
+    y, cy = _plain_split(sy.REDUCED, y0, P, 0.02, 400, prep.flow_ids, prep.fracs)
+    z, cz = _plain_split(sy.TANGENT, np.concatenate([y0, v0]), P, 0.02, 400, prep.flow_ids, prep.fracs)
+    assert cy == cz == 1
+    np.testing.assert_array_equal(z[:5], y)
+    e = 1e-6
+    yp, _ = _plain_split(sy.REDUCED, y0 + e * v0, P, 0.02, 400, prep.flow_ids, prep.fracs)
+    ym, _ = _plain_split(sy.REDUCED, y0 - e * v0, P, 0.02, 400, prep.flow_ids, prep.fracs)
+    fd = (yp - ym) / (2 * e)
+    np.testing.assert_allclose(z[5:], fd, rtol=1e-6, atol=1e-6 * np.linalg.norm(fd))
+
+
+def test_a_taylor_step_budget_and_a_nonfinite_state_end_the_loop_with_their_codes():
+    from explorer.kernels import Status
+
+    y0 = model.section_state(PRM, [0.3], [0.1], 2.0)[0]
+    _, steps, _, code = _plain_taylor(sy.REDUCED, y0, P, 1e3, 15, 7)
+    assert steps == 7 and code == int(Status.MAX_STEPS)
+    bad = y0.copy()
+    bad[2] = np.nan
+    _, steps, _, code = _plain_taylor(sy.REDUCED, bad, P, 1e3, 15, 7)
+    assert steps == 0 and code == int(Status.NONFINITE)

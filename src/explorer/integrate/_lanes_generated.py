@@ -292,7 +292,7 @@ def evaluate_lanes(X, order, h, out):
 def step_norms_lanes(X, order, e_p, e_q, out):
     """Per lane, for the checks and the step size of drivers.orbit_taylor: out has shape (7, LANES);
     out[0] = sum_i X[order, i] and out[1] = sum_i X[order - 1, i] (in the order of
-    drivers._finite_col: non-finite iff a coefficient is, or the sum overflows);
+    systems._finite_column: non-finite iff a coefficient is, or the sum overflows);
     with s = max(1, max_i |X[0, i]|), a = max_i |X[order, i]|, bm = max_i |X[order - 1, i]| (the
     norms of kernels.taylor.step_size, in its order): out[2] = a, out[3] = bm, out[4] = s / a,
     out[5] = s / bm (the arguments of its two pow) and out[6] = e_q log2(s / bm) - e_p log2(s / a)

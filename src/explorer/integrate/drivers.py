@@ -42,13 +42,11 @@ from explorer.kernels.events import (
     turns,
 )
 from explorer.model.equations import (
-    apply_flow,
     energy,
     rhs,
     section_c,
     section_g,
     section_g_rate,
-    taylor_coefficients,
 )
 
 EPS = 2.220446049250313e-16
@@ -59,12 +57,6 @@ ON_SECTION = 8.0 * EPS
 @njit
 def _finite5(y):
     s = y[0] + y[1] + y[2] + y[3] + y[4]
-    return s - s == 0.0
-
-
-@njit
-def _finite_col(X, k):
-    s = X[0, k] + X[1, k] + X[2, k] + X[3, k] + X[4, k]
     return s - s == 0.0
 
 
@@ -106,7 +98,8 @@ def _start_g(y, cphi, sphi):
 # ====================================================================== Taylor
 @njit
 def orbit_taylor(y0, P, cphi, sphi, direction, tmax, order, max_steps, cross, yout):
-    """One orbit with the adaptive Taylor method of the given order.
+    """One orbit with the adaptive Taylor method of the given order (the step:
+    :func:`explorer.integrate.systems.taylor_step` of ``REDUCED``).
     Returns (count, status, t, steps).  The crossing is the root of the Taylor
     polynomial of sin(phi - phi0) in the step: exact to the order of the method."""
     ncross = cross.shape[0]
@@ -127,27 +120,12 @@ def orbit_taylor(y0, P, cphi, sphi, direction, tmax, order, max_steps, cross, yo
     if ncross == 0:
         return 0, STATUS_DONE, t, 0
     while True:
-        if t >= tmax:
-            status = STATUS_TMAX
-            break
-        if steps >= max_steps:
-            status = STATUS_MAX_STEPS
-            break
         for i in range(5):
             X[i, 0] = yout[i]
-        taylor_coefficients(P, X, order)
-        if not (_finite_col(X, order) and _finite_col(X, order - 1)):
-            status = STATUS_NONFINITE
-            break
-        h = tk.step_size(X, order, factor)
-        h, last = clip_step(t, h, tmax)
-        if not (h > EPS * abs(t)):
-            status = STATUS_STEP_UNDERFLOW
-            break
-        tk.evaluate(X, order, h, ynew)
-        steps += 1
-        if not _finite5(ynew):
-            status = STATUS_NONFINITE
+        code, h, last, steps = sy.taylor_step(sy.REDUCED, X, P, t, tmax, STATUS_TMAX, order, factor,
+                                              steps, max_steps, ynew)
+        if code != sy.STEP_OK:
+            status = code
             break
         gnew = section_g(ynew, cphi, sphi)
         # every root of the step's Taylor polynomial of sin(phi - phi0), isolated (a crossing
@@ -204,9 +182,9 @@ def run_taylor_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps,
 # ====================================================================== splitting
 @njit
 def split_step(y, P, dt, flow_ids, fracs):
-    """One step of a composition of exact sub-flows (MODEL.md R4), in place."""
-    for i in range(flow_ids.shape[0]):
-        apply_flow(flow_ids[i], y, P, fracs[i] * dt)
+    """One step of a composition of exact sub-flows (MODEL.md R4), in place
+    (:func:`explorer.integrate.systems.compose` of ``REDUCED``)."""
+    sy.compose(sy.REDUCED, y, P, dt, flow_ids, fracs)
 
 
 #: the functionals of the splitting root search: sin(phi - phi0), and M (the turn of phi)
@@ -287,7 +265,8 @@ def _split_step_roots(y, P, dt, flow_ids, fracs, cphi, sphi, gprev, gnew, mnew, 
 
 @njit
 def orbit_split(y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max_steps, cross, yout):
-    """One orbit with a fixed-step composition of exact flows; t_n = n dt (no summation
+    """One orbit with a fixed-step composition of exact flows (the step:
+    :func:`explorer.integrate.systems.split_step` of ``REDUCED``); t_n = n dt (no summation
     error).  Returns (count, status, t, steps)."""
     ncross = cross.shape[0]
     ynew = np.empty(5)
@@ -308,15 +287,9 @@ def orbit_split(y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max_ste
         if t >= tmax:
             status = STATUS_TMAX
             break
-        if n >= max_steps:
-            status = STATUS_MAX_STEPS
-            break
-        for i in range(5):
-            ynew[i] = yout[i]
-        split_step(ynew, P, dt, flow_ids, fracs)
-        n += 1
-        if not _finite5(ynew):
-            status = STATUS_NONFINITE
+        code, n = sy.split_step(sy.REDUCED, yout, P, dt, flow_ids, fracs, n, max_steps, ynew)
+        if code != sy.STEP_OK:
+            status = code
             break
         gnew = section_g(ynew, cphi, sphi)
         if sign_change(gprev, gnew, direction) or turns(yout[2], ynew[2]):

@@ -1,13 +1,22 @@
-"""The system seam: which compiled vector field a stepping loop advances, and the parts of
-the DOP853 loop that do not depend on what is observed along the way.
+"""The system seam: which compiled vector field a stepping loop advances, and the one step of
+each method (DOP853, Taylor, splitting) that does not depend on what is observed along the way.
 
 A *system* is an integer id (no callables cross a compiled boundary: a jitted function passed
 as an argument defeats Numba's on-disk cache, kernel contract rule 1); :func:`field` dispatches
 on it.  The loops that use it -- crossings of the section (:mod:`explorer.integrate.drivers`),
 tangent dynamics (:mod:`explorer.integrate.tangent`) and the body in the plane
 (:mod:`explorer.integrate.full`) -- differ only in what they observe after an accepted step;
-the step itself (first step, the twelve stages, the solution, the error norm, the budget and
-non-finite checks, the three dense-output stages) is written once here.
+the step itself is written once here, per method:
+
+- :func:`dop853_step` (first step, the twelve stages, the solution, the error norm, the budget
+  and non-finite checks, retries; :func:`dop853_dense_stages` the three dense-output stages);
+- :func:`taylor_step` (the budgets, the Taylor coefficients of the system by its recurrence,
+  their finiteness, the Jorba-Zou step from the orbit's own coefficients, the step clipped to
+  the end of the span, the Horner evaluation, the non-finite check);
+- :func:`split_step` (the step budget, one composition of the exact sub-flows of R4 -- with
+  their exact tangent maps for ``TANGENT`` -- and the non-finite check).
+
+A loop is then: take a step, observe it (crossings, tangent accumulators, samples), advance.
 
 =============  ===  ========================================================================
 system          n   state and field
@@ -19,13 +28,31 @@ system          n   state and field
 
 DOP853: Hairer, Nørsett & Wanner, *Solving ODEs I*, II.10 (tableau and continuous extension
 in :mod:`explorer.kernels.dop853`; controller and first step as scipy's ``DOP853``).
+Taylor: Jorba & Zou, Exp. Math. 14 (2005) 99 (order and step rules in
+:mod:`explorer.kernels.taylor`).  Splitting: compositions of :mod:`explorer.kernels.splitting`
+(Yoshida 1990; Kahan & Li 1997), tangent maps of the sub-flows as Skokos & Gerlach, Phys. Rev.
+E 82 (2010) 036704.
+
+The Taylor crossing loop on SIMD lanes (:mod:`explorer.integrate.lanes`) is :func:`taylor_step`
+of ``REDUCED`` with its arithmetic vectorised by the generator ``tools/gen_lanes.py`` and its
+control flow per lane (bit for bit the same steps, tests/integrate/test_lanes.py).
 """
 from explorer._jit import njit
 from explorer.kernels import STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW
 from explorer.kernels import dop853 as dp
+from explorer.kernels import taylor as tk
 from explorer.kernels.checks import all_finite
 from explorer.kernels.clock import clip_step
-from explorer.model.equations import FULL_DIM, rhs, rhs_full, rhs_tangent
+from explorer.model.equations import (
+    FULL_DIM,
+    apply_flow,
+    apply_flow_tangent,
+    rhs,
+    rhs_full,
+    rhs_tangent,
+    taylor_coefficients,
+    taylor_coefficients_tangent,
+)
 
 REDUCED = 0
 TANGENT = 1
@@ -34,6 +61,9 @@ FULL = 2
 DIMENSION = {REDUCED: 5, TANGENT: 10, FULL: FULL_DIM}
 #: an accepted step (not a kernel status)
 STEP_OK = -1
+#: rows of the orbit itself in every system's state (the rest: deviation vector, position)
+N_ORBIT = 5
+EPS = 2.220446049250313e-16
 
 
 @njit(inline="always")  # inlined at Numba IR level: the tangent loop ~10 % faster (bench_ab.py)
@@ -109,3 +139,82 @@ def dop853_dense_stages(system, y, P, K, h, tmp):
     for s in range(13, 16):
         dp.stage_input(y, K, s, h, tmp)
         field(system, tmp, P, K[s])
+
+
+# ====================================================================== Taylor
+@njit(inline="always")
+def taylor_coefficients_of(system, P, X, order):
+    """The normalised Taylor coefficients X[i, k] = y_i^(k)/k!, k = 0..order, of ``system`` from
+    X[:, 0] by its recurrence: R3 (``REDUCED``), or R3 and its variational equations
+    (``TANGENT``: rows 5..9 the deviation vector)."""
+    if system == REDUCED:
+        taylor_coefficients(P, X, order)
+    else:
+        taylor_coefficients_tangent(P, X[:N_ORBIT], X[N_ORBIT:], order)
+
+
+@njit
+def _finite_column(X, k, n):
+    s = 0.0
+    for i in range(n):
+        s += X[i, k]
+    return s - s == 0.0
+
+
+@njit(inline="always")  # inlined into each loop, as dop853_step
+def taylor_step(system, X, P, t, tend, end_code, order, factor, steps, max_steps, ynew):
+    """One step of the adaptive Taylor method of ``order`` from the state X[:, 0] at time ``t``
+    towards ``tend``; ``end_code`` (with h = 0) when ``t`` has reached ``tend``.
+
+    The budget check, the coefficients (:func:`taylor_coefficients_of`), the finiteness of the
+    orbit's last two coefficients, the step rho * ``factor`` from the orbit's own coefficients
+    (Jorba & Zou 2005; rows 0..4 only: a deviation vector does not choose the step), clipped to
+    ``tend``, the Horner sum into ``ynew`` and its finiteness.  Returns (code, h, last, steps):
+    ``code`` is ``STEP_OK`` (X holds the step's coefficients, ``ynew`` the state at t + h,
+    ``last``: the step reaches ``tend``), ``STATUS_MAX_STEPS``, ``STATUS_NONFINITE`` or
+    ``STATUS_STEP_UNDERFLOW`` (h <= eps |t|: time no longer advances)."""
+    if not (t < tend):
+        return end_code, 0.0, False, steps
+    if steps >= max_steps:
+        return STATUS_MAX_STEPS, 0.0, False, steps
+    taylor_coefficients_of(system, P, X, order)
+    if not (_finite_column(X, order, N_ORBIT) and _finite_column(X, order - 1, N_ORBIT)):
+        return STATUS_NONFINITE, 0.0, False, steps
+    h = tk.step_size(X[:N_ORBIT], order, factor)
+    h, last = clip_step(t, h, tend)
+    if not (h > EPS * abs(t)):
+        return STATUS_STEP_UNDERFLOW, 0.0, False, steps
+    tk.evaluate(X, order, h, ynew)
+    steps += 1
+    if not all_finite(ynew):
+        return STATUS_NONFINITE, h, last, steps
+    return STEP_OK, h, last, steps
+
+
+# ====================================================================== splitting
+@njit(inline="always")
+def compose(system, y, P, dt, flow_ids, fracs):
+    """One step ``dt`` of the composition (flow_ids, fracs) of the exact sub-flows of R4, in
+    place: the orbit (``REDUCED``), or the orbit and its deviation vector by the sub-flows'
+    exact tangent maps (``TANGENT``)."""
+    for i in range(flow_ids.shape[0]):
+        if system == REDUCED:
+            apply_flow(flow_ids[i], y, P, fracs[i] * dt)
+        else:
+            apply_flow_tangent(flow_ids[i], y[:N_ORBIT], y[N_ORBIT:], P, fracs[i] * dt)
+
+
+@njit(inline="always")
+def split_step(system, y, P, dt, flow_ids, fracs, steps, max_steps, ynew):
+    """One step of a splitting method from ``y`` into ``ynew`` (the loop decides when its span
+    ends: t_n = n dt is never summed).  Returns (code, steps): ``STEP_OK``,
+    ``STATUS_MAX_STEPS`` (before the step) or ``STATUS_NONFINITE``."""
+    if steps >= max_steps:
+        return STATUS_MAX_STEPS, steps
+    for i in range(y.shape[0]):
+        ynew[i] = y[i]
+    compose(system, ynew, P, dt, flow_ids, fracs)
+    steps += 1
+    if not all_finite(ynew):
+        return STATUS_NONFINITE, steps
+    return STEP_OK, steps

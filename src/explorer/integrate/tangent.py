@@ -22,10 +22,8 @@ from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, ST
 from explorer.kernels import STATUS_TMAX as STATUS_TMAX_CODE
 from explorer.kernels import tangent as tg
 from explorer.kernels import taylor as tk
-from explorer.kernels.clock import clip_step
 from explorer.kernels.events import poly_step_roots, root_workspace
 from explorer.model.equations import (
-    apply_flow_tangent,
     taylor_coefficients,
     taylor_coefficients_tangent,
 )
@@ -64,47 +62,39 @@ def _observe(acc, v, t_old, t_new, hist_t, hist, hpos, row):
 
 @njit
 def orbit_tangent_taylor(y0, v0, P, T, order, max_steps, hist_t, hist, res, yout):
-    X = np.empty((5, order + 1))
-    D = np.empty((5, order + 1))
-    y = np.empty(5)
-    v = np.empty(5)
+    """The orbit and one deviation vector by the Taylor series of R3 and its variational
+    equations (the step: :func:`explorer.integrate.systems.taylor_step` of ``TANGENT``, chosen
+    from the orbit's own coefficients)."""
+    n = 10
+    Z = np.empty((n, order + 1))
+    z = np.empty(n)
+    znew = np.empty(n)
     acc = np.zeros(tg.N_ACC)
     row = np.empty(tg.N_RES)
     factor = tk.safety_factor(order)
     for i in range(5):
-        y[i] = y0[i]
-        v[i] = v0[i]
-    tg.renormalize(v, 5)
+        z[i] = y0[i]
+        z[5 + i] = v0[i]
+    tg.renormalize(z[5:], 5)
     t = 0.0
     steps = 0
     hpos = 0
-    status = STATUS_DONE
-    while t < T:
-        if steps >= max_steps:
-            status = STATUS_MAX_STEPS
-            break
-        for i in range(5):
-            X[i, 0] = y[i]
-            D[i, 0] = v[i]
-        taylor_coefficients_tangent(P, X, D, order)
-        h = tk.step_size(X, order, factor)
-        h, last = clip_step(t, h, T)
-        if not (h > EPS * t) or not (h == h):
-            status = STATUS_STEP_UNDERFLOW if h == h else STATUS_NONFINITE
-            break
-        tk.evaluate(X, order, h, y)
-        tk.evaluate(D, order, h, v)
-        steps += 1
-        if not (_finite(y, 5) and _finite(v, 5)):
-            status = STATUS_NONFINITE
+    while True:
+        for i in range(n):
+            Z[i, 0] = z[i]
+        code, h, last, steps = sy.taylor_step(sy.TANGENT, Z, P, t, T, STATUS_DONE, order, factor, steps,
+                                              max_steps, znew)
+        if code != sy.STEP_OK:
             break
         t_new = T if last else t + h
-        hpos = _observe(acc, v, t, t_new, hist_t, hist, hpos, row)
+        hpos = _observe(acc, znew[5:], t, t_new, hist_t, hist, hpos, row)
         t = t_new
+        for i in range(n):
+            z[i] = znew[i]
     tg.result(acc, res)
     for i in range(5):
-        yout[i] = y[i]
-    return status, steps
+        yout[i] = z[i]
+    return code, steps
 
 
 # ====================================================================== DOP853
@@ -146,33 +136,33 @@ def orbit_tangent_dop853(y0, v0, P, T, rtol, atol, max_steps, hist_t, hist, res,
 # ====================================================================== splitting
 @njit
 def orbit_tangent_split(y0, v0, P, T, dt, flow_ids, fracs, max_steps, hist_t, hist, res, yout):
-    y = np.empty(5)
-    v = np.empty(5)
+    """The orbit and one deviation vector by the splitting method's own tangent map (the step:
+    :func:`explorer.integrate.systems.split_step` of ``TANGENT``); t_n = n dt."""
+    n = 10
+    z = np.empty(n)
+    znew = np.empty(n)
     acc = np.zeros(tg.N_ACC)
     row = np.empty(tg.N_RES)
     for i in range(5):
-        y[i] = y0[i]
-        v[i] = v0[i]
-    tg.renormalize(v, 5)
-    n = 0
+        z[i] = y0[i]
+        z[5 + i] = v0[i]
+    tg.renormalize(z[5:], 5)
+    steps = 0
     hpos = 0
-    status = STATUS_DONE
+    code = STATUS_DONE
     nsteps = int(np.ceil(T / dt - 1e-9))
-    while n < nsteps:
-        if n >= max_steps:
-            status = STATUS_MAX_STEPS
+    while steps < nsteps:
+        code, steps = sy.split_step(sy.TANGENT, z, P, dt, flow_ids, fracs, steps, max_steps, znew)
+        if code != sy.STEP_OK:
             break
-        for i in range(flow_ids.shape[0]):
-            apply_flow_tangent(flow_ids[i], y, v, P, fracs[i] * dt)
-        if not (_finite(y, 5) and _finite(v, 5)):
-            status = STATUS_NONFINITE
-            break
-        hpos = _observe(acc, v, n * dt, (n + 1) * dt, hist_t, hist, hpos, row)
-        n += 1
+        hpos = _observe(acc, znew[5:], (steps - 1) * dt, steps * dt, hist_t, hist, hpos, row)
+        for i in range(n):
+            z[i] = znew[i]
+        code = STATUS_DONE
     tg.result(acc, res)
     for i in range(5):
-        yout[i] = y[i]
-    return status, n
+        yout[i] = z[i]
+    return code, steps
 
 
 # ====================================================================== batches
