@@ -330,3 +330,16 @@ def test_cli_bad_input_is_one_line_exit_2(args, fragment, capsys):
     lines = err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("explorer: error:") and fragment in lines[0], err
     assert "Traceback" not in err
+
+
+def test_a_trajectory_is_a_frozen_result_readable_by_attribute_and_by_name():
+    import dataclasses
+
+    prm = tr.full_params()
+    res = tr.trajectory(prm, tr.initial_state(prm, 0.5, 0.0, 2.0, 0.0), 5.0, 11)
+    assert isinstance(res, tr.Trajectory) and res.status == "done"
+    assert res["x"] is res.x and set(res.keys()) >= {"t", "x", "y", "phi", "turn_t", "status"}
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        res.status = "x"
+    with pytest.raises(KeyError):
+        res["nope"]

@@ -73,6 +73,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -93,6 +94,66 @@ DEFAULT_MAX_STEPS = 10 ** 8
 
 
 # ====================================================================== parameters, states
+@dataclass(frozen=True)
+class Trajectory:
+    """The body in the plane sampled at equally spaced times (:func:`trajectory`).
+
+    Attributes
+    ----------
+    t : ndarray (n,)
+        Sample times, both ends of [0, t_end] included.
+    x, y, phi : ndarray (n,)
+        Position of the body and its angle (unwrapped), MODEL.md R1.
+    p1, p2, M, g1, g2 : ndarray (n,)
+        The reduced state (R3) at the samples.
+    H, px, py : ndarray (n,)
+        Energy and the momentum integrals of R1 (p_y + mu t is conserved).
+    turn_t, turn_phi, turn_dir : ndarray (m,)
+        Turning points of phi (M = 0) and the sign of dM/dt there.
+    status : str
+        ``'done'``, or why the integration stopped (samples after the stop are NaN).
+    steps, t_reached, n_filled : int, float, int
+        DOP853 steps taken, time reached, samples filled.
+    params : dict
+        Parameters (with ``lam``); ``P`` packed; ``tol`` DOP853's tolerance; ``y0`` the start.
+
+    The fields are also readable by name, ``res["x"]`` (the JSON-shaped access that the command
+    line and older code use).
+    """
+
+    t: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    phi: np.ndarray
+    p1: np.ndarray
+    p2: np.ndarray
+    M: np.ndarray
+    g1: np.ndarray
+    g2: np.ndarray
+    H: np.ndarray
+    px: np.ndarray
+    py: np.ndarray
+    turn_t: np.ndarray
+    turn_phi: np.ndarray
+    turn_dir: np.ndarray
+    status: str
+    steps: int
+    t_reached: float
+    n_filled: int
+    params: dict
+    P: np.ndarray
+    tol: float
+    y0: np.ndarray
+
+    def __getitem__(self, name):
+        if name not in self.keys():
+            raise KeyError(name)
+        return getattr(self, name)
+
+    def keys(self):
+        return tuple(f.name for f in fields(self))
+
+
 def full_params(params=None, **changes) -> dict:
     """Validated parameters of the full system R1 as a dict (keys ``model.PARAM_NAMES``).
 
@@ -163,13 +224,13 @@ def momentum_integrals(P, t, p1, p2, g1, g2, x, y):
 
 
 def trajectory(params, y0_full, t_end, n_samples=2001, tol=DEFAULT_TOL, *, phi_start=None,
-               max_steps=DEFAULT_MAX_STEPS, max_turns=None) -> dict:
+               max_steps=DEFAULT_MAX_STEPS, max_turns=None) -> Trajectory:
     """Integrate R1 from ``y0_full`` (:func:`initial_state`) over [0, t_end] and sample it at
     ``n_samples`` equally spaced times (both ends included).
 
-    Returns a dict of arrays ``t, x, y, phi (unwrapped), p1, p2, M, g1, g2, H, px, py`` and
-    ``turn_t, turn_phi, turn_dir`` (turning points of phi, M = 0; dir = sign of dM/dt), and
-    ``status`` ('done' or why it stopped; samples after the stop are NaN), ``steps``,
+    Returns a frozen :class:`Trajectory`: arrays ``t, x, y, phi (unwrapped), p1, p2, M, g1, g2,
+    H, px, py`` and ``turn_t, turn_phi, turn_dir`` (turning points of phi, M = 0; dir = sign of
+    dM/dt), ``status`` ('done' or why it stopped; samples after the stop are NaN), ``steps``,
     ``params`` (dict), ``tol``, ``P`` (packed), ``y0``.  ``phi_start`` fixes the branch of the
     initial angle (default atan2(sin phi, cos phi) in (-pi, pi]).
     """
@@ -205,15 +266,14 @@ def trajectory(params, y0_full, t_end, n_samples=2001, tol=DEFAULT_TOL, *, phi_s
     kin = 0.5 * (p1 ** 2 / P[0] + p2 ** 2 / P[1] + m ** 2 / P[2])
     H = kin + P[6] * (y + P[7] * g1 + P[8] * g2)
     px, py = momentum_integrals(P, t, p1, p2, g1, g2, x, y)
-    return {
-        "t": t, "x": x, "y": y, "phi": out_phi, "p1": p1, "p2": p2, "M": m, "g1": g1, "g2": g2,
-        "H": H, "px": px, "py": py,
-        "turn_t": turns[:nturn, 0].copy(), "turn_phi": turns[:nturn, 1].copy(),
-        "turn_dir": turns[:nturn, 2].copy(),
-        "status": STATUS_NAMES.get(int(status), f"status {status}"), "steps": int(steps),
-        "t_reached": float(t_reached), "n_filled": int(filled),
-        "params": prm, "P": P, "tol": tol, "y0": y0.copy(),
-    }
+    return Trajectory(
+        t=t, x=x, y=y, phi=out_phi, p1=p1, p2=p2, M=m, g1=g1, g2=g2, H=H, px=px, py=py,
+        turn_t=turns[:nturn, 0].copy(), turn_phi=turns[:nturn, 1].copy(),
+        turn_dir=turns[:nturn, 2].copy(),
+        status=STATUS_NAMES.get(int(status), f"status {status}"), steps=int(steps),
+        t_reached=float(t_reached), n_filled=int(filled),
+        params=prm, P=P, tol=tol, y0=y0.copy(),
+    )
 
 
 def conservation(result) -> dict:

@@ -434,8 +434,8 @@ def cmd_trajectory(args) -> int:
     elif prm["mu"] > 0.0 and prm["a1"] != prm["a2"]:
         k = tr.kozlov(prm, y0, args.time, result=res)
     out = {"params": prm, "initial": {"p1": args.p1, "p2": args.p2, "M": args.M, "phi": args.phi},
-           "time": args.time, "samples": args.samples, "tol": args.tol, "status": res["status"],
-           "steps": res["steps"]}
+           "time": args.time, "samples": args.samples, "tol": args.tol, "status": res.status,
+           "steps": res.steps}
     out.update(tr.summary(d, k, cons))
     if not args.no_figure:
         figs = []
@@ -449,7 +449,7 @@ def cmd_trajectory(args) -> int:
     if args.json:
         print(json.dumps(out))
         return 0
-    print(f"status {res['status']}  (T {args.time:g}, {res['steps']} steps, tol {args.tol:g})")
+    print(f"status {res.status}  (T {args.time:g}, {res.steps} steps, tol {args.tol:g})")
     print(f"conservation: |dH| {cons['H']:.3g} (rel {cons['H_rel']:.3g}), |d p_x| {cons['px']:.3g} "
           f"(rel {cons['px_rel']:.3g}), |d(p_y + mu t)| {cons['py']:.3g} (rel {cons['py_rel']:.3g})")
     if d is not None:
