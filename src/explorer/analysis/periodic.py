@@ -1,0 +1,733 @@
+"""Periodic orbits of any period K >= 1 of the section map, their stability and bifurcations.
+
+The section map P: (p1, p2) -> (p1', p2') of phi = phi0 at energy h (MODEL.md R9) is
+:class:`explorer.analysis.fixedpoints.SectionMap`: the image point and the 2x2 Jacobian DP
+from the tangent dynamics of R3.  A periodic orbit of period K is a point x with
+P^K(x) = x; its monodromy is the product DP(x_{K-1}) ... DP(x_0) of the K map Jacobians
+along the orbit x_i = P^i(x_0).
+
+Newton's method
+---------------
+* K <= ``MULTIPLE_SHOOTING_FROM - 1`` = 4: single shooting, Newton on P^K(x) - x = 0 with the
+  matrix (monodromy - I) (the period-1 case is :func:`explorer.analysis.fixedpoints.find_fixed_point`
+  written for K = 1, and gives its numbers);
+* K >= ``MULTIPLE_SHOOTING_FROM`` = 5: multiple shooting over the K points, unknowns
+  X = (x_0, ..., x_{K-1}) and residuals F_i = P(x_i) - x_{i+1 mod K}, a 2K x 2K Newton system
+  with DP(x_i) on the block diagonal and -I on the cyclic block superdiagonal.  The iterates of
+  P^K grow like |lambda|^K near a hyperbolic orbit; the K short maps do not.
+
+Steps are damped (halved) so that every point stays in the allowed region and the residual
+decreases.  A converged orbit is reduced to its minimal period: if x_{i+d} = x_i for a divisor
+d of K (within ``MINIMAL_PERIOD_TOL``) it is an orbit of period d, reported as such.
+
+Reversing symmetry
+------------------
+With zeta = xi = 0 (chi, eta, mu, lam any), the reduced system R3 in (p1, p2, M, phi) is
+reversible under
+
+    R: (p1, p2, M, phi) -> (p1, -p2, M, -phi),   t -> -t,
+
+i.e. (p1, p2, M, g1, g2) -> (p1, -p2, M, -g1, g2).  Derivation: let y(t) solve R3 and
+z(t) = R y(-t).  Then dphi_z/dt = phi'(-t) = M/b = M_z/b; dp1_z/dt = -p1'(-t) =
+-(M/b) p2 + mu sin phi + lam p2/a2, which is R3's right-hand side at z,
+(M/b)(-p2) - mu sin(-phi) - lam(-p2)/a2 (this needs zeta = 0); dp2_z/dt = -d(-p2)/dt(-t)
+= p2'(-t) = -(M/b)(p1 - chi) - mu cos phi + lam p1/a1, the right-hand side at z since
+cos(-phi) = cos phi; dM_z/dt = -M'(-t) = -(p1 - chi) p2/a2 + (p2 - zeta) p1/a1
++ mu(xi cos phi - eta sin phi), and the right-hand side at z is (p1 - chi)(-p2)/a2
+- (-p2 - zeta) p1/a1 - mu(xi cos phi + eta sin phi): equal when zeta = xi = 0.  R keeps M
+(so dphi/dt > 0) and maps phi = pi (and phi = 0) to itself, so on the section phi0 = pi
+(or 0) it induces the involution G0(p1, p2) = (p1, -p2) with G0 P G0 = P^{-1}.  The
+symmetry line Fix(G0) is p2 = 0; the second one, Fix(P G0), is the image on phi = pi of the
+line p2 = 0 of the section phi = 0 (the other set of R's fixed points) after half a turn.  A
+symmetric orbit of period K has two of its points on R's fixed set {p2 = 0, phi = 0 or pi},
+K half-turns apart; :func:`search_periodic_orbits` seeds Newton on both lines, where it
+finds the roots of p2 after K half-turns (tests/analysis/test_periodic.py proves the symmetry
+with an independent scipy integration).
+
+Bifurcations
+------------
+:func:`continue_periodic` steps a parameter and reports (i) where |trace| crosses 2 between
+samples (bisection): at trace = +2 a tangent (saddle-node or, for symmetric orbits, pitchfork)
+bifurcation, at trace = -2 a period doubling; (ii) where the trace only touches +-2: at an
+interior sample where the sampled trace has a local extremum within ``touch_window`` of +-2,
+the extremum is refined by golden-section search over the two neighbouring intervals; if the
+refined trace passes +-2 the two crossings on either side are located by bisection, and if it
+comes within ``touch_tol`` of +-2 without passing it is reported as a touch.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from explorer import model
+from explorer.analysis.fixedpoints import DEFAULT_TOL, RETURN_TMAX, SectionMap
+from explorer.model import ParameterError, validation
+
+__all__ = ["KIND_TOL", "MULTIPLE_SHOOTING_FROM", "PeriodicBranch", "PeriodicOrbit", "continue_periodic",
+           "find_periodic_orbit", "is_reversible", "reversor", "search_periodic_orbits", "symmetry_line_points"]
+
+#: Newton: converged when the step is below this (relative to max(1, |x|))
+NEWTON_TOL = 1e-12
+NEWTON_MAX_ITER = 30
+#: residual max_i |P(x_i) - x_{i+1}| accepted at the end (near |trace| = 2 Newton is slow)
+ACCEPT_RESIDUAL = 1e-9
+#: periods from which Newton uses multiple shooting (K > 4); single shooting below
+MULTIPLE_SHOOTING_FROM = 5
+#: |trace| within KIND_TOL of 2: "parabolic"
+KIND_TOL = 1e-6
+#: two points of an orbit closer than this are the same point (minimal period)
+MINIMAL_PERIOD_TOL = 1e-7
+#: two orbits are the same if a point of one is within this of a point of the other
+SAME_ORBIT_TOL = 1e-6
+#: continuation: a failed step is split in two at most this many times
+MAX_HALVINGS = 6
+
+
+@dataclass(frozen=True)
+class PeriodicOrbit:
+    """A periodic orbit of minimal period ``period`` of the section map P (phi = phi0).
+
+    Attributes
+    ----------
+    points : ndarray (K, 2)
+        (p1, p2) of the orbit, ``points[i + 1] = P(points[i])``.
+    period : int
+        Minimal period K.
+    jacobian : ndarray (2, 2)
+        Monodromy D(P^K) at ``points[0]``: the product of the K map Jacobians.
+    eigenvalues : ndarray (2,)
+        Eigenvalues of ``jacobian`` (multipliers).
+    trace, det : float
+        Trace and determinant of ``jacobian`` (det = 1: the map preserves area).
+    return_times : ndarray (K,)
+        Time from ``points[i]`` to ``points[i + 1]``.
+    residual : float
+        max_i |P(points[i]) - points[i + 1 mod K]|.
+    iterations : int
+        Newton iterations taken.
+    symmetric : bool
+        The set of points is invariant under the reversor G0(p1, p2) = (p1, -p2) (only when
+        :func:`is_reversible`; else False).
+    map_jacobians : ndarray (K, 2, 2)
+        DP at each point.
+    """
+
+    points: np.ndarray
+    period: int
+    jacobian: np.ndarray
+    eigenvalues: np.ndarray
+    trace: float
+    det: float
+    return_times: np.ndarray
+    residual: float
+    iterations: int
+    symmetric: bool
+    map_jacobians: np.ndarray
+    params: model.Params = None
+    h: float = float("nan")
+    phi0: float = math.pi
+
+    @property
+    def residue(self) -> float:
+        """Greene's residue R = (2 - trace)/4: 0 < R < 1 elliptic, R < 0 or R > 1 hyperbolic."""
+        return (2.0 - self.trace) / 4.0
+
+    @property
+    def stable(self) -> bool:
+        """Linear stability, |trace| < 2 (as :class:`~explorer.analysis.fixedpoints.FixedPoint`)."""
+        return abs(self.trace) < 2.0
+
+    @property
+    def kind(self) -> str:
+        """"parabolic" if ||trace| - 2| <= KIND_TOL, else "elliptic" (|trace| < 2) or "hyperbolic"."""
+        if abs(abs(self.trace) - 2.0) <= KIND_TOL:
+            return "parabolic"
+        return "elliptic" if abs(self.trace) < 2.0 else "hyperbolic"
+
+    @property
+    def total_time(self) -> float:
+        return float(np.sum(self.return_times))
+
+    def distance_to(self, x) -> float:
+        """Smallest distance from the point x to a point of the orbit."""
+        return float(np.min(np.linalg.norm(self.points - np.asarray(x, float), axis=1)))
+
+    def same_orbit(self, other, tol=SAME_ORBIT_TOL) -> bool:
+        """True if a point of ``other`` (an orbit or an (n, 2) array) lies within tol of this orbit."""
+        pts = other.points if isinstance(other, PeriodicOrbit) else np.atleast_2d(other)
+        d = np.linalg.norm(self.points[:, None, :] - pts[None, :, :], axis=2)
+        return bool(np.min(d) <= tol)
+
+    def as_dict(self):
+        ev = [complex(e) for e in self.eigenvalues]
+        return {"period": int(self.period), "points": [[float(a), float(b)] for a, b in self.points],
+                "trace": float(self.trace), "residue": float(self.residue), "det": float(self.det),
+                "eigenvalues": [[e.real, e.imag] if e.imag else e.real for e in ev],
+                "kind": self.kind, "stable": bool(self.stable), "symmetric": bool(self.symmetric),
+                "return_times": [float(t) for t in self.return_times], "residual": float(self.residual),
+                "iterations": int(self.iterations)}
+
+
+# ------------------------------------------------------------------ symmetry
+def is_reversible(params, phi0=math.pi) -> bool:
+    """True when R: (p1, p2, M, phi) -> (p1, -p2, M, -phi), t -> -t reverses R3 (zeta = xi = 0)
+    and maps the section phi = phi0 to itself (phi0 = 0 or pi mod 2 pi)."""
+    prm = params if isinstance(params, model.Params) else model.Params.from_array(params)
+    on_line = abs(math.sin(phi0)) < 1e-15 or phi0 == math.pi
+    return prm.zeta == 0.0 and prm.xi == 0.0 and on_line
+
+
+def reversor(x):
+    """The involution G0(p1, p2) = (p1, -p2) that R induces on the section (points (..., 2))."""
+    y = np.array(x, dtype=float, copy=True)
+    y[..., 1] = -y[..., 1]
+    return y
+
+
+def _is_symmetric(points, tol) -> bool:
+    g = reversor(points)
+    d = np.linalg.norm(g[:, None, :] - points[None, :, :], axis=2)
+    return bool(np.all(np.min(d, axis=1) <= tol))
+
+
+# ------------------------------------------------------------------ Newton
+class _Shooting:
+    """Evaluations of the K maps along a set of points (one call of the Taylor return map each)."""
+
+    def __init__(self, smap: SectionMap, K: int):
+        self.smap, self.K = smap, K
+
+    def along(self, x0, multiple, X=None):
+        """Images, Jacobians and times of the K maps: from the points X (multiple shooting) or
+        along the orbit of x0 (single shooting).  Raises ParameterError if a map fails."""
+        K = self.K
+        pts = np.empty((K, 2))
+        imgs = np.empty((K, 2))
+        jacs = np.empty((K, 2, 2))
+        times = np.empty(K)
+        x = np.asarray(x0, float)
+        for i in range(K):
+            xi = X[i] if multiple else x
+            if not model.section_M2(self.smap.params, xi[0], xi[1], self.smap.h, self.smap.phi0) > 0:
+                raise ParameterError(f"point ({xi[0]:.6g}, {xi[1]:.6g}) left the allowed region")
+            r = self.smap(xi)
+            pts[i], imgs[i], jacs[i], times[i] = xi, r.point, r.jacobian, r.time
+            x = r.point
+        return pts, imgs, jacs, times
+
+
+def _monodromy(jacs):
+    M = np.eye(2)
+    for J in jacs:
+        M = J @ M
+    return M
+
+
+def _residual(pts, imgs, multiple):
+    if multiple:
+        return float(np.max(np.abs(imgs - np.roll(pts, -1, axis=0))))
+    return float(np.max(np.abs(imgs[-1] - pts[0])))
+
+
+def _newton(smap, K, X0, max_iter=NEWTON_MAX_ITER, multiple=None):
+    """Newton's method for a K-periodic orbit from the points X0 ((K, 2), or (2,) for single
+    shooting).  Returns (points, images, jacobians, times, iterations); ParameterError on failure."""
+    multiple = K >= MULTIPLE_SHOOTING_FROM if multiple is None else multiple
+    sh = _Shooting(smap, K)
+    X0 = np.asarray(X0, float)
+    if multiple:
+        if X0.shape == (2,):  # start from the orbit of the guess
+            X0 = sh.along(X0, False)[0]
+        X = X0.reshape(K, 2).copy()
+        ev = sh.along(None, True, X)
+    else:
+        X = (X0.reshape(-1, 2)[0]).copy()
+        ev = sh.along(X, False)
+    res = _residual(ev[0], ev[1], multiple)
+    step = np.inf
+    it = 0
+    for it in range(1, max_iter + 1):
+        pts, imgs, jacs, _ = ev
+        if multiple:
+            F = (imgs - np.roll(pts, -1, axis=0)).ravel()
+            A = np.zeros((2 * K, 2 * K))
+            for i in range(K):
+                j = (i + 1) % K
+                A[2 * i:2 * i + 2, 2 * i:2 * i + 2] += jacs[i]
+                A[2 * i:2 * i + 2, 2 * j:2 * j + 2] -= np.eye(2)
+        else:
+            F = imgs[-1] - pts[0]
+            A = _monodromy(jacs) - np.eye(2)
+        try:
+            dx = np.linalg.solve(A, -F)
+        except np.linalg.LinAlgError:
+            raise ParameterError("Newton's matrix is singular (trace = 2)") from None
+        if not np.all(np.isfinite(dx)):
+            raise ParameterError("Newton's step is not finite")
+        alpha = 1.0
+        for _ in range(30):   # damped step: stay in the allowed region, do not let the residual grow
+            Xn = (X.ravel() + alpha * dx).reshape(X.shape)
+            try:
+                evn = sh.along(Xn[0] if multiple else Xn, multiple, Xn.reshape(-1, 2))
+                resn = _residual(evn[0], evn[1], multiple)
+            except ParameterError:
+                alpha *= 0.5
+                continue
+            if resn < res or resn < 1e-11:
+                break
+            alpha *= 0.5
+        else:
+            raise ParameterError(f"Newton's method stalled (residual {res:.3g})")
+        X, ev, res = Xn, evn, resn
+        step = alpha * float(np.max(np.abs(dx)))
+        if step < NEWTON_TOL * max(1.0, float(np.max(np.abs(X)))) or res < 1e-14:
+            break
+    if not res < ACCEPT_RESIDUAL:
+        raise ParameterError(f"Newton's method did not converge (residual {res:.3g}, last step {step:.3g})")
+    pts, imgs, jacs, times = ev
+    return pts, imgs, jacs, times, it
+
+
+def _minimal_period(pts, tol=MINIMAL_PERIOD_TOL) -> int:
+    K = len(pts)
+    scale = max(1.0, float(np.max(np.abs(pts))))
+    for d in range(1, K):
+        if K % d == 0 and np.max(np.abs(np.roll(pts, -d, axis=0) - pts)) <= tol * scale:
+            return d
+    return K
+
+
+def _make_orbit(smap, pts, imgs, jacs, times, iters, reduce=True) -> PeriodicOrbit:
+    K = len(pts)
+    d = _minimal_period(pts) if reduce else K
+    pts, imgs, jacs, times = pts[:d], imgs[:d], jacs[:d], times[:d]
+    M = _monodromy(jacs)
+    ev = np.linalg.eigvals(M)
+    sym = is_reversible(smap.params, smap.phi0) and _is_symmetric(pts, 1e3 * MINIMAL_PERIOD_TOL)
+    resid = float(np.max(np.abs(imgs - np.roll(pts, -1, axis=0))))
+    return PeriodicOrbit(pts.copy(), d, M, ev, float(np.trace(M)), float(np.linalg.det(M)), times.copy(), resid,
+                         int(iters), sym, jacs.copy(), smap.params, smap.h, smap.phi0)
+
+
+def _check_period(period) -> int:
+    if isinstance(period, bool) or not isinstance(period, (int, np.integer)) or period < 1:
+        raise ParameterError(f"period must be an integer K >= 1, got {period!r}")
+    return int(period)
+
+
+def find_periodic_orbit(params, h, guess, period, *, phi0=math.pi, tol=DEFAULT_TOL, max_iter=NEWTON_MAX_ITER,
+                        tmax=RETURN_TMAX, reduce=True) -> PeriodicOrbit:
+    """A periodic orbit of period ``period`` of the section map phi = ``phi0`` at energy ``h``.
+
+    Newton's method on P^K(x) = x (single shooting for K <= 4, multiple shooting over the K
+    points for K >= 5), the Jacobian from the tangent dynamics of MODEL.md R3 (the product of
+    the K map Jacobians).  For K = 1 it gives the numbers of
+    :func:`explorer.analysis.fixedpoints.find_fixed_point`.
+
+    Parameters
+    ----------
+    params : Params
+        Model parameters.
+    h : float
+        Energy level.
+    guess : (float, float) or array (K, 2)
+        Start of Newton's method: a point in the allowed region, or K points (multiple shooting).
+    period : int
+        K >= 1.
+    phi0 : float
+        Section angle (default pi).
+    tol : float
+        Taylor tolerance of the return map.
+    max_iter : int
+        Budget of Newton iterations.
+    tmax : float
+        Time budget of one return of the map.
+    reduce : bool
+        Report the orbit with its minimal period (an orbit of period 2 found with K = 4 has
+        period 2); with False, keep K points.
+
+    Returns
+    -------
+    PeriodicOrbit
+        The points, monodromy, eigenvalues, trace, residue, symmetry, return times.
+
+    Raises
+    ------
+    ParameterError
+        K < 1, a guess outside the allowed region, or Newton's method failing (the message says so).
+    """
+    K = _check_period(period)
+    smap = SectionMap(params, h, phi0=phi0, tol=tol, tmax=tmax)
+    g = np.asarray(guess, dtype=float)
+    if g.shape not in ((2,), (K, 2)) or not np.all(np.isfinite(g)):
+        raise ParameterError(f"guess must be a finite point (p1, p2) or {K} points, got shape {g.shape}")
+    for x in g.reshape(-1, 2):
+        if not model.is_admissible(smap.params, x[0], x[1], smap.h, phi0):
+            raise ParameterError(f"guess (p1, p2) = ({x[0]:g}, {x[1]:g}) lies outside the allowed region; "
+                                 f"allowed: {model.describe_region(smap.params, smap.h, phi0)}")
+    max_iter = validation.integer("max_iter", max_iter, 1)
+    try:
+        pts, imgs, jacs, times, it = _newton(smap, K, g, max_iter)
+    except ParameterError as exc:
+        raise ParameterError(f"no periodic orbit of period {K} from guess ({g.reshape(-1, 2)[0][0]:.6g}, "
+                             f"{g.reshape(-1, 2)[0][1]:.6g}): {exc}; try another guess") from None
+    return _make_orbit(smap, pts, imgs, jacs, times, it, reduce)
+
+
+# ------------------------------------------------------------------ search
+def _line_p1(params, h, phi0, n):
+    e = model.allowed_ellipse(params, h, phi0)
+    if e is None:
+        return np.empty(0)
+    c1, c2, r1, r2 = e
+    if abs(c2) > r2:
+        return np.empty(0)
+    half = r1 * math.sqrt(max(0.0, 1.0 - (c2 / r2) ** 2))
+    return c1 + half * np.linspace(-1.0, 1.0, n + 2)[1:-1]
+
+
+def symmetry_line_points(params, h, period, n=200, *, phi0=math.pi, tol=DEFAULT_TOL, tmax=RETURN_TMAX,
+                         threads=None):
+    """Seeds of symmetric orbits of period ``period`` on the two symmetry lines (see the module).
+
+    Start points z on R's fixed set: p2 = 0 on the section phi = phi0 (line 0) and p2 = 0 on
+    phi = phi0 + pi (line 1), n each across the allowed region; p2 after ``period`` half-turns
+    changes sign between neighbours where a symmetric orbit of that period (or a divisor)
+    passes; each bracket is refined by bisection (a few map evaluations) and the point on the
+    section phi = phi0 of that orbit is returned.  Returns an (m, 2) array of seeds.
+    """
+    from explorer.analysis.sections import crossings
+
+    K = _check_period(period)
+    prm = params if isinstance(params, model.Params) else model.Params.from_array(params)
+    if not is_reversible(prm, phi0):
+        return np.empty((0, 2))
+    other = phi0 + math.pi
+
+    def run(p1, line):
+        """(p2 after K half-turns, point on phi0) for starts p1 on line 0 or 1 (NaN when stopped)."""
+        start_phi = phi0 if line == 0 else other
+        Y0 = model.section_state(prm, p1, np.zeros_like(p1), h, start_phi)
+        # half-turn K lands on phi0 if (K even) == (line 0)
+        target = phi0 if (K % 2 == 0) == (line == 0) else other
+        n_target = (K + line) // 2 if target == phi0 else (K + 1 - line) // 2
+        n_target = max(n_target, 1)
+        c = crossings(prm, Y0, n_target, phi0=target, tol=tol, tmax=tmax * n_target, threads=threads)
+        f = np.where(c.count >= n_target, c.data[:, n_target - 1, 2], np.nan)
+        if line == 0:
+            on = np.column_stack([p1, np.zeros_like(p1)])
+        else:
+            c1 = crossings(prm, Y0, 1, phi0=phi0, tol=tol, tmax=tmax, threads=threads)
+            on = np.where((c1.count >= 1)[:, None], c1.data[:, 0, 1:3], np.nan)
+        return f, on
+
+    seeds = []
+    for line in (0, 1):
+        p1 = _line_p1(prm, h, phi0 if line == 0 else other, n)
+        if len(p1) < 2:
+            continue
+        f, _ = run(p1, line)
+        for i in np.flatnonzero(np.isfinite(f[:-1]) & np.isfinite(f[1:]) & (np.sign(f[:-1]) != np.sign(f[1:]))):
+            a, b, fa = p1[i], p1[i + 1], f[i]
+            for _ in range(30):   # bisection to ~1e-9 of the bracket, 1 call each
+                m = 0.5 * (a + b)
+                fm, _ = run(np.array([m]), line)
+                if not np.isfinite(fm[0]):
+                    break
+                if np.sign(fm[0]) == np.sign(fa):
+                    a, fa = m, fm[0]
+                else:
+                    b = m
+            _, on = run(np.array([0.5 * (a + b)]), line)
+            if np.all(np.isfinite(on[0])):
+                seeds.append(on[0])
+    return np.array(seeds).reshape(-1, 2)
+
+
+def _grid_seeds(prm, h, K, grid, phi0, tol, tmax, threads):
+    """Grid points of the allowed region where |P^K(x) - x| has a local minimum, best first."""
+    from explorer.analysis.sections import section_crossings
+
+    e = model.allowed_ellipse(prm, h, phi0)
+    if e is None:
+        return np.empty((0, 2))
+    c1, c2, r1, r2 = e
+    u = np.linspace(-1.0, 1.0, grid + 2)[1:-1]
+    U, V = np.meshgrid(c1 + r1 * u, c2 + r2 * u, indexing="ij")
+    inside = model.section_M2(prm, U, V, h, phi0) > 0
+    R = np.full(U.shape, np.inf)
+    if inside.any():
+        c = section_crossings(prm, U[inside], V[inside], h, K, phi0=phi0, tol=max(tol, 1e-13), tmax=tmax * K,
+                              threads=threads)
+        ok = c.count >= K
+        r = np.full(ok.shape, np.inf)
+        r[ok] = np.hypot(c.data[ok, K - 1, 1] - U[inside][ok], c.data[ok, K - 1, 2] - V[inside][ok])
+        R[inside] = r
+    pad = np.pad(R, 1, constant_values=np.inf)
+    nb = np.stack([pad[1 + di:1 + di + grid, 1 + dj:1 + dj + grid]
+                   for di in (-1, 0, 1) for dj in (-1, 0, 1) if di or dj])
+    ismin = np.isfinite(R) & (R <= nb.min(axis=0))
+    idx = np.flatnonzero(ismin.ravel())
+    idx = idx[np.argsort(R.ravel()[idx])]
+    return np.column_stack([U.ravel()[idx], V.ravel()[idx]])
+
+
+def _canonical(orb: PeriodicOrbit) -> PeriodicOrbit:
+    """The same orbit starting at its point nearest the symmetry line p2 = 0 (then smallest p1)."""
+    k = int(np.lexsort((orb.points[:, 0], np.round(np.abs(orb.points[:, 1]), 9)))[0])
+    if k == 0:
+        return orb
+    pts = np.roll(orb.points, -k, axis=0)
+    jacs = np.roll(orb.map_jacobians, -k, axis=0)
+    M = _monodromy(jacs)
+    return PeriodicOrbit(pts, orb.period, M, np.linalg.eigvals(M), float(np.trace(M)), float(np.linalg.det(M)),
+                         np.roll(orb.return_times, -k), orb.residual, orb.iterations, orb.symmetric, jacs,
+                         orb.params, orb.h, orb.phi0)
+
+
+def search_periodic_orbits(params, h, period, *, grid=12, line=None, phi0=math.pi, tol=DEFAULT_TOL,
+                           max_guesses=60, max_iter=NEWTON_MAX_ITER, tmax=RETURN_TMAX, time_limit=None,
+                           same_tol=SAME_ORBIT_TOL, threads=None) -> list:
+    """All periodic orbits of minimal period ``period`` found from guesses covering the section.
+
+    Guesses: (i) on the symmetry lines of the reversor (:func:`symmetry_line_points`, ``line``
+    start points per line, default 8 ``grid``), where symmetric orbits are found as roots;
+    (ii) the points of a ``grid`` x ``grid`` grid of the allowed region's bounding box, inside
+    the region, where |P^K(x) - x| is a local minimum over the grid (best first).  Newton's
+    method (:func:`find_periodic_orbit`) runs from at most ``max_guesses`` of them, skipping a
+    guess that lies on an orbit already found; orbits are reduced to their minimal period
+    (those of a smaller period are dropped) and deduplicated: two orbits are the same if a point
+    of one lies within ``same_tol`` of a point of the other.
+
+    Parameters
+    ----------
+    params, h : Params, float
+        Model parameters and energy level.
+    period : int
+        K >= 1.
+    grid : int
+        Grid points per axis (>= 2).
+    line : int or None
+        Start points per symmetry line.
+    max_guesses : int
+        Budget of Newton starts.
+    max_iter : int
+        Budget of Newton iterations per start.
+    tmax : float
+        Time budget of one return of the map.
+    time_limit : float or None
+        Wall-clock budget in seconds of the Newton phase (None: none).
+    threads : int or None
+        Numba threads of the batch integrations.
+
+    Returns
+    -------
+    list of PeriodicOrbit
+        Each orbit once, starting at its point nearest p2 = 0, sorted by that point's p1.
+    """
+    K = _check_period(period)
+    prm = params if isinstance(params, model.Params) else model.Params.from_array(params)
+    h = validation.real("h", h)
+    grid = validation.integer("grid", grid, 2, 1000)
+    line = 8 * grid if line is None else validation.integer("line", line, 2)
+    max_guesses = validation.integer("max_guesses", max_guesses, 1)
+    if model.allowed_ellipse(prm, h, phi0) is None:
+        raise ParameterError(f"the allowed region is empty at h = {h:g}; allowed: "
+                             f"{model.describe_region(prm, h, phi0)}")
+    seeds = [symmetry_line_points(prm, h, K, line, phi0=phi0, tol=tol, tmax=tmax, threads=threads),
+             _grid_seeds(prm, h, K, grid, phi0, tol, tmax, threads)]
+    guesses = np.concatenate(seeds)
+    t0 = time.perf_counter()
+    found: list[PeriodicOrbit] = []
+    tried = 0
+    for g in guesses:
+        if tried >= max_guesses or (time_limit is not None and time.perf_counter() - t0 > time_limit):
+            break
+        if any(o.distance_to(g) < 1e-4 for o in found):
+            continue
+        tried += 1
+        try:
+            orb = find_periodic_orbit(prm, h, g, K, phi0=phi0, tol=tol, max_iter=max_iter, tmax=tmax)
+        except ParameterError:
+            continue
+        if orb.period != K or any(o.same_orbit(orb, same_tol) for o in found):
+            continue
+        found.append(orb)
+    found = [_canonical(o) for o in found]
+    return sorted(found, key=lambda o: (o.points[0, 0], o.points[0, 1]))
+
+
+# ------------------------------------------------------------------ continuation
+@dataclass(frozen=True)
+class PeriodicBranch:
+    """A periodic orbit followed in one parameter by :func:`continue_periodic`.
+
+    ``orbits[i]`` is the orbit at ``values[i]``; ``bifurcations`` is a list of dicts
+    ``{"value", "type", "trace"}`` with type "tangent" (trace = +2), "period-doubling"
+    (trace = -2), "touch +2" or "touch -2"; ``stopped`` says why the branch ended early
+    (None when it reached ``stop``).
+    """
+
+    parameter: str
+    period: int
+    values: np.ndarray
+    orbits: list
+    bifurcations: list = field(default_factory=list)
+    stopped: str | None = None
+
+    @property
+    def traces(self) -> np.ndarray:
+        return np.array([o.trace for o in self.orbits])
+
+
+def _golden(f, a, b, tol):
+    """Maximum of f on [a, b] by golden-section search; returns (x, f(x))."""
+    g = (math.sqrt(5.0) - 1.0) / 2.0
+    c, d = b - g * (b - a), a + g * (b - a)
+    fc, fd = f(c), f(d)
+    while abs(b - a) > tol * max(1.0, abs(b)):
+        if fc > fd:
+            b, d, fd = d, c, fc
+            c = b - g * (b - a)
+            fc = f(c)
+        else:
+            a, c, fc = c, d, fd
+            d = a + g * (b - a)
+            fd = f(d)
+    return (c, fc) if fc > fd else (d, fd)
+
+
+def continue_periodic(params, h, period, parameter, start, stop, step, guess, *, phi0=math.pi, tol=DEFAULT_TOL,
+                      bisect_tol=1e-8, touch_window=0.05, touch_tol=1e-6) -> PeriodicBranch:
+    """Natural-parameter continuation of a periodic orbit of period K in a model parameter or "h".
+
+    From ``start`` to ``stop`` by ``step``; each orbit from the previous one (secant predictor
+    on all K points, steps halved on failure); the branch ends early (``stopped``) where
+    Newton fails, e.g. at a fold (trace -> +2), or where the orbit collapses to a smaller
+    period.  Stability changes (rule in the module docstring): |trace| crossing 2 located by
+    bisection to ``bisect_tol`` (relative), "tangent" at trace = +2, "period-doubling" at
+    trace = -2; a local extremum of the sampled trace within ``touch_window`` of +-2 is
+    refined by golden-section search and reported as a touch when it comes within
+    ``touch_tol`` of +-2 (or as two crossings when it passes it).
+
+    Parameters
+    ----------
+    params, h : Params, float
+        Model parameters and energy at which ``guess`` is an orbit (``parameter`` set to ``start``).
+    period : int
+        K >= 1.
+    parameter : str
+        A model parameter name or "h".
+    start, stop, step : float
+        The parameter values.
+    guess : (float, float), array (K, 2) or PeriodicOrbit
+        A point of the orbit at ``start``.
+
+    Returns
+    -------
+    PeriodicBranch
+    """
+    K = _check_period(period)
+    if parameter not in model.PARAM_NAMES + ("h",):
+        raise ParameterError(f"continuation parameter must be one of {', '.join(model.PARAM_NAMES + ('h',))}")
+    if step == 0 or not all(math.isfinite(v) for v in (start, stop, step)) or (stop - start) * step < 0:
+        raise ParameterError("--continue needs finite START, STOP and a STEP of the sign of STOP - START")
+    n = int(math.floor((stop - start) / step + 1e-9)) + 1
+    values = start + step * np.arange(n)
+    g0 = guess.points if isinstance(guess, PeriodicOrbit) else np.asarray(guess, float)
+
+    def solve(v, X):
+        prm, hh = validation.with_value(params, h, parameter, v)
+        orb = find_periodic_orbit(prm, hh, X, K, phi0=phi0, tol=tol, reduce=False)
+        if _minimal_period(orb.points) != K:
+            raise ParameterError(f"the orbit collapsed to period {_minimal_period(orb.points)}")
+        return orb
+
+    orbits: list[PeriodicOrbit] = []
+    done: list[float] = []
+    prev: list = []
+
+    def predict(v):
+        if len(prev) < 2:
+            return prev[-1][1] if prev else g0
+        (v0, x0), (v1, x1) = prev[-2], prev[-1]
+        return x1 + (x1 - x0) * (v - v1) / (v1 - v0)
+
+    def advance(v, depth=0):
+        try:
+            orb = solve(v, predict(v))
+        except ParameterError:
+            if depth >= MAX_HALVINGS or not prev:
+                raise
+            advance(0.5 * (prev[-1][0] + v), depth + 1)
+            return advance(v, depth + 1)
+        prev.append((v, orb.points))
+        del prev[:-2]
+        return orb
+
+    stopped = None
+    for v in values:
+        try:
+            orbits.append(advance(v))
+        except ParameterError as exc:
+            if not orbits:
+                raise
+            stopped = f"no orbit at {parameter} = {v:.10g} ({exc})"
+            break
+        done.append(float(v))
+    vals = np.array(done)
+
+    def nearest(v):
+        i = int(np.argmin(np.abs(vals - v)))
+        return orbits[i].points
+
+    bif: list = []
+
+    def crossing(a, b, oa):
+        """Bisection for the value where |trace| = 2 between a (orbit oa) and b."""
+        lo, hi, olo = a, b, oa
+        while abs(hi - lo) > bisect_tol * max(1.0, abs(hi)):
+            mid = 0.5 * (lo + hi)
+            om = solve(mid, olo.points)
+            if (abs(om.trace) < 2) == (abs(olo.trace) < 2):
+                lo, olo = mid, om
+            else:
+                hi = mid
+        kind = "tangent" if olo.trace > 0 else "period-doubling"
+        return {"value": 0.5 * (lo + hi), "type": kind, "trace": 2.0 if olo.trace > 0 else -2.0}
+
+    tr = np.array([o.trace for o in orbits])
+    for i in range(len(orbits) - 1):
+        if (abs(tr[i]) < 2) != (abs(tr[i + 1]) < 2):
+            try:
+                bif.append(crossing(vals[i], vals[i + 1], orbits[i]))
+            except ParameterError:
+                pass
+    for i in range(1, len(orbits) - 1):
+        d0, d1 = tr[i] - tr[i - 1], tr[i + 1] - tr[i]
+        s = 2.0 if tr[i] > 0 else -2.0
+        if d0 * d1 >= 0 or abs(tr[i] - s) > touch_window:
+            continue
+        if (abs(tr[i - 1]) < 2) != (abs(tr[i + 1]) < 2) or (abs(tr[i]) < 2) != (abs(tr[i - 1]) < 2):
+            continue      # crossings already reported
+        sign = 1.0 if d0 > 0 else -1.0    # maximum or minimum of the trace
+        try:
+            v_ext, f_ext = _golden(lambda v: sign * solve(v, nearest(v)).trace, vals[i - 1], vals[i + 1],
+                                   bisect_tol)
+        except ParameterError:
+            continue
+        t_ext = sign * f_ext
+        o_ext = solve(v_ext, nearest(v_ext))
+        if (abs(t_ext) < 2) != (abs(tr[i]) < 2):
+            try:
+                bif.append(crossing(vals[i - 1], v_ext, orbits[i - 1]))
+                bif.append(crossing(v_ext, vals[i + 1], o_ext))
+            except ParameterError:
+                pass
+        elif abs(t_ext - s) <= touch_tol:
+            bif.append({"value": float(v_ext), "type": f"touch {'+' if s > 0 else '-'}2", "trace": float(t_ext)})
+    bif.sort(key=lambda b: b["value"] * (1 if step > 0 else -1))
+    return PeriodicBranch(parameter, K, vals, orbits, bif, stopped)
