@@ -250,6 +250,8 @@ def _newton(smap, K, X0, max_iter=NEWTON_MAX_ITER, multiple=None):
     step = np.inf
     it = 0
     for it in range(1, max_iter + 1):
+        if res <= 1e-15 * max(1.0, float(np.max(np.abs(X)))):
+            break   # already a solution (e.g. continued from an exact one): no step to take
         pts, imgs, jacs, _ = ev
         if multiple:
             F = (imgs - np.roll(pts, -1, axis=0)).ravel()
@@ -263,8 +265,8 @@ def _newton(smap, K, X0, max_iter=NEWTON_MAX_ITER, multiple=None):
             A = _monodromy(jacs) - np.eye(2)
         try:
             dx = np.linalg.solve(A, -F)
-        except np.linalg.LinAlgError:
-            raise ParameterError("Newton's matrix is singular (trace = 2)") from None
+        except np.linalg.LinAlgError:   # trace exactly 2: the least-squares step
+            dx = np.linalg.lstsq(A, -F, rcond=None)[0]
         if not np.all(np.isfinite(dx)):
             raise ParameterError("Newton's step is not finite")
         alpha = 1.0
@@ -721,13 +723,13 @@ def continue_periodic(params, h, period, parameter, start, stop, step, guess, *,
             continue
         t_ext = sign * f_ext
         o_ext = solve(v_ext, nearest(v_ext))
-        if (abs(t_ext) < 2) != (abs(tr[i]) < 2):
+        if abs(t_ext - s) <= touch_tol:   # first: a touch may pass +-2 by round-off
+            bif.append({"value": float(v_ext), "type": f"touch {'+' if s > 0 else '-'}2", "trace": float(t_ext)})
+        elif (abs(t_ext) < 2) != (abs(tr[i]) < 2):
             try:
                 bif.append(crossing(vals[i - 1], v_ext, orbits[i - 1]))
                 bif.append(crossing(v_ext, vals[i + 1], o_ext))
             except ParameterError:
                 pass
-        elif abs(t_ext - s) <= touch_tol:
-            bif.append({"value": float(v_ext), "type": f"touch {'+' if s > 0 else '-'}2", "trace": float(t_ext)})
     bif.sort(key=lambda b: b["value"] * (1 if step > 0 else -1))
     return PeriodicBranch(parameter, K, vals, orbits, bif, stopped)

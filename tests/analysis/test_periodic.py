@@ -1,0 +1,237 @@
+"""Periodic orbits of the section map (explorer.analysis.periodic): independent checks.
+
+P^K(x) = x with scipy DOP853 (tests/reference.py), minimal period, trace against finite
+differences, period 1 against find_fixed_point, the reversing symmetry of R3, deduplication,
+continuation with the analytic bifurcations of solution I at mu = 0 (MODEL.md R6)."""
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import reference
+from explorer import model
+from explorer.analysis import fixedpoints as fpm
+from explorer.analysis import periodic as pm
+
+PRM = model.FIGURE4.with_(mu=0.03)   # the Figure 4 scene at mu = 0.03 (MODEL.md R9)
+H = 2.0
+
+
+@pytest.fixture(scope="module")
+def search2():
+    return pm.search_periodic_orbits(PRM, H, 2)
+
+
+@pytest.fixture(scope="module")
+def search3():
+    return pm.search_periodic_orbits(PRM, H, 3)
+
+
+def _independent_orbit(x, K):
+    """K crossings of phi = pi from (p1, p2) with scipy DOP853 (rtol = atol = 1e-13)."""
+    P = PRM.as_array()
+    rows = reference.scipy_crossings(P, reference.state_on_section(P, x[0], x[1], H), K, rtol=1e-13, atol=1e-13)
+    assert len(rows) == K
+    return rows[:, 1:3], rows[:, 0]
+
+
+def _elliptic(orbits):
+    """The elliptic orbits, the one nearest the centre first (away from the region's boundary)."""
+    return sorted([o for o in orbits if o.kind == "elliptic"], key=lambda o: np.min(np.abs(o.points[:, 0])))
+
+
+@pytest.mark.parametrize("K", [2, 3])
+def test_every_orbit_found_returns_to_itself_under_an_independent_scipy_integration(K, search2, search3):
+    orbits = {2: search2, 3: search3}[K]
+    assert orbits
+    checked = 0
+    for o in orbits:
+        if np.max(np.abs(o.eigenvalues)) > 100:   # scipy's 1e-13 error grows like the multiplier
+            continue
+        pts, times = _independent_orbit(o.points[0], K)
+        np.testing.assert_allclose(pts[-1], o.points[0], atol=1e-9)            # P^K(x) = x
+        np.testing.assert_allclose(pts[:-1], o.points[1:], atol=1e-9)          # the K points
+        np.testing.assert_allclose(np.diff(np.concatenate([[0.0], times])), o.return_times, rtol=1e-9)
+        checked += 1
+    assert checked >= 3
+
+
+def test_multiple_shooting_orbit_of_period_6_returns_to_itself_under_scipy():
+    orb = pm.find_periodic_orbit(PRM, H, (1.013197, 0.0), 6)
+    assert orb.period == 6 and pm.MULTIPLE_SHOOTING_FROM <= 6
+    assert orb.kind == "elliptic" and orb.symmetric
+    pts, _ = _independent_orbit(orb.points[0], 6)
+    np.testing.assert_allclose(pts[-1], orb.points[0], atol=1e-9)
+    np.testing.assert_allclose(pts[:-1], orb.points[1:], atol=1e-9)
+
+
+def test_single_and_multiple_shooting_converge_to_the_same_orbit():
+    smap = fpm.SectionMap(PRM, H)
+    a = pm._newton(smap, 6, np.array([1.0132, 0.0]), multiple=True)
+    b = pm._newton(smap, 6, np.array([1.0132, 0.0]), multiple=False)
+    np.testing.assert_allclose(a[0], b[0], atol=1e-10)
+    np.testing.assert_allclose(pm._monodromy(a[2]), pm._monodromy(b[2]), rtol=1e-7, atol=1e-8)
+
+
+def test_period_one_equals_find_fixed_point():
+    for guess in [(0.05, 0.0), (1.58, 0.01), (-1.1, 0.0)]:
+        fp = fpm.find_fixed_point(PRM, H, guess)
+        orb = pm.find_periodic_orbit(PRM, H, guess, 1)
+        np.testing.assert_allclose(orb.points[0], fp.point, atol=1e-12)
+        assert orb.trace == pytest.approx(fp.trace, rel=1e-10, abs=1e-12)
+        assert orb.det == pytest.approx(fp.det, abs=1e-12)
+        assert orb.stable == fp.stable
+        assert orb.return_times[0] == pytest.approx(fp.period_time, rel=1e-12)
+
+
+def test_a_period_two_orbit_found_with_period_four_is_reported_with_its_minimal_period(search2):
+    o2 = _elliptic(search2)[0]
+    o4 = pm.find_periodic_orbit(PRM, H, o2.points[0], 4)
+    assert o4.period == 2 and o4.points.shape == (2, 2)
+    assert o4.same_orbit(o2)
+    assert o4.trace == pytest.approx(o2.trace, abs=1e-8)
+    kept = pm.find_periodic_orbit(PRM, H, o2.points[0], 4, reduce=False)
+    assert kept.period == 4 and kept.trace == pytest.approx(o2.trace ** 2 - 2, abs=1e-7)  # tr(M^2) = tr^2 - 2
+
+
+def test_search_of_period_four_reports_no_orbit_of_period_one_or_two(search2):
+    orbits = pm.search_periodic_orbits(PRM, H, 4, grid=8, line=48)
+    assert orbits and all(o.period == 4 for o in orbits)
+    for o in orbits:
+        assert pm._minimal_period(o.points) == 4
+        assert not any(o.same_orbit(o2) for o2 in search2)
+
+
+def test_trace_matches_finite_differences_of_the_map_iterated_K_times(search3):
+    smap = fpm.SectionMap(PRM, H)
+    orb = _elliptic(search3)[0]
+
+    def PK(x):
+        for _ in range(3):
+            x = smap(x, jacobian=False).point
+        return x
+
+    eps = 1e-6
+    x0 = orb.points[0]
+    fd = np.column_stack([(PK(x0 + eps * e) - PK(x0 - eps * e)) / (2 * eps) for e in np.eye(2)])
+    np.testing.assert_allclose(orb.jacobian, fd, atol=1e-6)
+    assert orb.trace == pytest.approx(np.trace(fd), abs=1e-6)
+    assert orb.det == pytest.approx(1.0, abs=1e-9)
+    assert orb.residue == pytest.approx((2 - orb.trace) / 4)
+    assert (0 < orb.residue < 1) == (orb.kind == "elliptic")
+
+
+def test_search_returns_each_orbit_once(search2, search3):
+    for orbits in (search2, search3):
+        for i, a in enumerate(orbits):
+            assert len({tuple(np.round(p, 6)) for p in a.points}) == a.period   # K distinct points
+            for b in orbits[i + 1:]:
+                assert not a.same_orbit(b, 1e-5)
+
+
+def test_two_guesses_on_different_points_of_one_orbit_give_one_orbit(search3):
+    o = _elliptic(search3)[0]
+    a = pm.find_periodic_orbit(PRM, H, o.points[0] + 1e-4, 3)
+    b = pm.find_periodic_orbit(PRM, H, o.points[2] - 1e-4, 3)
+    assert a.same_orbit(b) and not np.allclose(a.points[0], b.points[0])
+    assert a.trace == pytest.approx(b.trace, abs=1e-8)          # the trace does not depend on the start
+
+
+def _reduced_rhs(P):
+    return lambda t, y: reference.rhs_numpy(t, y, P)
+
+
+def _R(y):
+    """The reversor of R3: (p1, p2, M, g1, g2) -> (p1, -p2, M, -g1, g2) (phi -> -phi)."""
+    return np.array([y[0], -y[1], y[2], -y[3], y[4]])
+
+
+@pytest.mark.parametrize("T", [3.0, 11.0])
+def test_R3_is_reversible_under_p2_and_phi_sign_change_when_zeta_and_xi_vanish(T):
+    P = model.Params(a1=1.3, a2=0.6, b=1.7, lam=-0.8, chi=0.2, zeta=0.0, mu=0.7, xi=0.0, eta=-0.25).as_array()
+    phi = 0.7
+    y0 = np.array([0.3, -0.4, 1.1, math.sin(phi), math.cos(phi)])
+    f = _reduced_rhs(P)
+    y1 = solve_ivp(f, (0, T), y0, method="DOP853", rtol=1e-12, atol=1e-12).y[:, -1]
+    y2 = solve_ivp(f, (0, T), _R(y1), method="DOP853", rtol=1e-12, atol=1e-12).y[:, -1]
+    np.testing.assert_allclose(y2, _R(y0), atol=1e-8)    # forward, reflect, forward = reflected start
+
+
+def test_the_reversor_fails_when_xi_is_not_zero():
+    P = model.Params(a1=1.3, a2=0.6, b=1.7, lam=-0.8, chi=0.2, zeta=0.0, mu=0.7, xi=0.3, eta=-0.25).as_array()
+    y0 = np.array([0.3, -0.4, 1.1, math.sin(0.7), math.cos(0.7)])
+    f = _reduced_rhs(P)
+    y1 = solve_ivp(f, (0, 5.0), y0, method="DOP853", rtol=1e-12, atol=1e-12).y[:, -1]
+    y2 = solve_ivp(f, (0, 5.0), _R(y1), method="DOP853", rtol=1e-12, atol=1e-12).y[:, -1]
+    assert np.max(np.abs(y2 - _R(y0))) > 1e-3
+    assert not pm.is_reversible(model.Params.from_array(P))
+
+
+def test_section_map_is_reversed_by_G0():
+    """G0 P G0 = P^-1 on phi = pi: P(G0(P(x))) = G0(x), with scipy's map."""
+    P = PRM.with_(chi=0.1, eta=0.2).as_array()
+    x = np.array([0.4, 0.3])
+    y = reference.section_map_p(P, x[0], x[1], H)
+    z = reference.section_map_p(P, y[0], -y[1], H)
+    np.testing.assert_allclose(z, pm.reversor(x), atol=1e-10)
+
+
+def test_symmetric_orbits_are_found_from_the_symmetry_lines_and_are_G0_invariant(search3):
+    seeds = pm.symmetry_line_points(PRM, H, 3, 96)
+    assert len(seeds) >= 4
+    symmetric = [o for o in search3 if o.symmetric]
+    assert len(symmetric) >= 4
+    for o in symmetric:
+        g = pm.reversor(o.points)
+        assert all(o.distance_to(p) < 1e-8 for p in g)
+        # one of the K points is on p2 = 0 or the orbit has a seed from the second line
+        assert np.min(np.abs(o.points[:, 1])) < 1e-9 or any(o.distance_to(s) < 1e-5 for s in seeds)
+    # each seed lies on a symmetric orbit of period 3 (or 1) found by Newton
+    for s in seeds[:6]:
+        o = pm.find_periodic_orbit(PRM, H, s, 3)
+        assert o.symmetric and o.period in (1, 3)
+
+
+def test_continuation_of_solution_I_in_h_finds_the_tangent_and_the_touch_of_minus_two():
+    """MODEL.md R6 at mu = 0: p = 0 is solution I for every h; with c = sqrt(2 b h) it is hyperbolic
+    for lam b/a1 < c < lam b/a2 (c = 4: h = 4, trace +2) and beyond it the trace is 2 cos(w),
+    w = sqrt(alpha beta) 2 pi b / c, which touches -2 (without crossing) where w = pi:
+    c^2 - 8c + 32/3 = 0, c = 4 + 4/sqrt(3), h = c^2/4."""
+    br = pm.continue_periodic(model.FIGURE4, 3.0, 1, "h", 3.0, 11.0, 0.5, (0.0, 0.0))
+    assert br.stopped is None and len(br.orbits) == 17
+    types = {b["type"]: b["value"] for b in br.bifurcations}
+    assert set(types) == {"tangent", "touch -2"}
+    assert types["tangent"] == pytest.approx(4.0, rel=1e-6)
+    c = 4 + 4 / math.sqrt(3)
+    assert types["touch -2"] == pytest.approx(c * c / 4, rel=1e-5)
+    for v, o in zip(br.values, br.orbits):
+        _, tr = fpm.analytic_eigenvalues_solution_I(model.FIGURE4, v)
+        assert o.trace == pytest.approx(tr, abs=1e-8)
+
+
+def test_continuation_reports_period_doubling_when_the_trace_crosses_minus_two():
+    """At mu = 0.03 the symmetry is broken only slightly; the period-2 elliptic orbit of the
+    search is followed in mu and the trace's crossings of +-2 are bisected; each reported value
+    has |trace| = 2 on one side and |trace| != 2 on the other."""
+    br = pm.continue_periodic(model.FIGURE4.with_(mu=0.0), 7.0, 1, "h", 9.0, 11.0, 0.5, (0.0, 0.0))
+    assert [b["type"] for b in br.bifurcations] == ["touch -2"]
+    brmu = pm.continue_periodic(model.FIGURE4.with_(mu=0.3), 9.0, 1, "h", 9.0, 11.0, 0.25, (0.0, 0.0))
+    kinds = [b["type"] for b in brmu.bifurcations]
+    assert "period-doubling" in kinds or "touch -2" in kinds
+
+
+def test_bad_input_is_refused_with_a_parameter_error():
+    with pytest.raises(model.ParameterError, match="period"):
+        pm.find_periodic_orbit(PRM, H, (0.1, 0.0), 0)
+    with pytest.raises(model.ParameterError, match="outside the allowed region"):
+        pm.find_periodic_orbit(PRM, H, (5.0, 0.0), 2)
+    with pytest.raises(model.ParameterError, match="continuation parameter"):
+        pm.continue_periodic(PRM, H, 1, "nope", 0, 1, 0.1, (0.0, 0.0))
+
+
+def test_as_dict_has_the_json_shape(search2):
+    d = search2[0].as_dict()
+    for k in ("points", "trace", "residue", "eigenvalues", "stable", "symmetric", "period", "kind"):
+        assert k in d
+    assert len(d["points"]) == 2 and len(d["points"][0]) == 2

@@ -1,0 +1,103 @@
+"""Rotation numbers by weighted Birkhoff averages (explorer.analysis.rotation).
+
+Against the integrable case mu = 0 (MODEL.md R6: the (p1, p2, M) motion is periodic, and the
+rotation number per return follows from its period and the angle phi advanced in it, computed
+here by an independent scipy integration), and against the periodic orbits of
+explorer.analysis.periodic at mu = 0.03 (plateaus m/K at island chains)."""
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from explorer import model
+from explorer.analysis import periodic as pm
+from explorer.analysis import rotation as rm
+
+H = 2.0
+
+
+def test_weighted_birkhoff_average_converges_super_fast_on_a_quasiperiodic_sequence():
+    alpha = (math.sqrt(5) - 1) / 2
+    n = np.arange(2000)
+    f = 0.3 + np.cos(2 * np.pi * (0.1 + alpha * n)) + 0.5 * np.sin(4 * np.pi * (0.1 + alpha * n))
+    assert rm.weighted_birkhoff(f, 1000) == pytest.approx(0.3, abs=1e-13)
+    assert abs(np.mean(f[:1000]) - 0.3) > 1e-5          # the plain average is far slower
+    w = rm.birkhoff_weights(100)
+    assert w.sum() == pytest.approx(1.0) and w[0] == 0.0 and np.all(w >= 0)
+
+
+def _rotation_mu0_independent(p1, h=H):
+    """Rotation number per return of the section map at mu = 0 around solution II (sqrt 2, 0)
+    for the orbit through (p1, 0): from R6, integrated with scipy (not the project's code).
+    The (p1, p2, M) motion is periodic with period tau (two returns of p2 to 0 in the same
+    direction); phi advances Phi = int_0^tau M/b dt in it.  With the circle coordinate
+    2 pi (phi advanced)/Phi the section map is the rotation by 2 pi/Phi of a turn, in the
+    direction in which (p1, p2) circles the fixed point."""
+    a1, a2, b, lam = 1.0, 0.5, 2.0, 1.0
+    M0 = math.sqrt(2 * b * (h - 0.5 * p1 * p1 / a1))
+
+    def f(t, y):
+        q1, q2, M, _ = y
+        return [q2 * M / b - lam * q2 / a2, -q1 * M / b + lam * q1 / a1, (1 / a2 - 1 / a1) * q1 * q2, M / b]
+
+    dp2 = -p1 * M0 / b + lam * p1 / a1
+    sigma = 1.0 if (p1 - math.sqrt(2.0)) * dp2 > 0 else -1.0   # counter-clockwise around (sqrt 2, 0)?
+
+    def ev(t, y):
+        return y[1]
+
+    ev.direction = 1.0 if dp2 > 0 else -1.0
+    sol = solve_ivp(f, (0, 200), [p1, 0.0, M0, 0.0], method="DOP853", rtol=1e-13, atol=1e-13, events=ev)
+    te = [t for t in sol.t_events[0] if t > 1e-6]
+    tau = te[0]
+    Phi = sol.y_events[0][[i for i, t in enumerate(sol.t_events[0]) if t > 1e-6][0]][3]
+    rho = sigma * 2 * math.pi / Phi
+    return rho - round(rho), tau
+
+
+@pytest.mark.parametrize("p1", [1.5, 1.6, 1.7])
+def test_rotation_number_at_mu0_equals_the_period_quadrature_of_R6(p1):
+    prm = model.FIGURE4.with_(mu=0.0)
+    expected, _ = _rotation_mu0_independent(p1)
+    # (the slow rotation near the parabolic point, 1/40 turn per return at p1 = 1.5, needs many
+    # returns; the angle increments must stay below half a turn, which holds up to p1 ~ 1.75)
+    r = rm.rotation_number(prm, H, (p1, 0.0), center=(math.sqrt(2.0), 0.0), iterates=4000)
+    assert r.converged
+    assert r.value == pytest.approx(expected, abs=1e-11)
+
+
+PRM = model.FIGURE4.with_(mu=0.03)
+CENTER = (1.582201141, 0.0)   # elliptic fixed point of the Figure 4 scene at mu = 0.03
+
+
+def test_rotation_center_defaults_to_the_fixed_point_found_from_the_start():
+    r = rm.rotation_number(PRM, H, (1.58, 0.0), iterates=200)
+    np.testing.assert_allclose(r.center, pm.find_periodic_orbit(PRM, H, CENTER, 1).points[0], atol=1e-12)
+
+
+@pytest.mark.parametrize("K,guess", [(6, (1.013197, 0.0)), (8, (1.154444, 0.0))])
+def test_island_chain_plateau_equals_m_over_K_of_the_periodic_orbit_found(K, guess):
+    orb = pm.find_periodic_orbit(PRM, H, guess, K)
+    assert orb.period == K and orb.kind == "elliptic"
+    c = pm.find_periodic_orbit(PRM, H, CENTER, 1).points[0]
+    m_over_K = rm.orbit_rotation(orb.points, c)
+    assert abs(m_over_K * K - round(m_over_K * K)) < 1e-12     # an integer m
+    r = rm.rotation_number(PRM, H, orb.points[0] + np.array([0.002, 0.0]), center=c, iterates=3000)
+    assert r.converged and r.value == pytest.approx(m_over_K, abs=1e-9)
+
+
+def test_chaotic_orbit_does_not_converge_and_the_profile_has_the_plateaus():
+    c = pm.find_periodic_orbit(PRM, H, CENTER, 1).points[0]
+    r = rm.rotation_number(PRM, H, (0.5, 0.0), center=c, iterates=1000)
+    assert not r.converged and r.difference > 1e-8
+    prof = rm.rotation_profile(PRM, H, (1.01, 0.0), (1.02, 0.0), 3, center=c, iterates=500)
+    assert prof.points.shape == (3, 2) and prof.s[-1] == 1.0
+    assert any(abs(v + 1 / 6) < 1e-8 for v in prof.rotation)       # the period-6 island
+
+
+def test_rotation_refuses_points_outside_the_allowed_region():
+    with pytest.raises(model.ParameterError, match="allowed region"):
+        rm.rotation_number(PRM, H, (3.0, 0.0), center=CENTER)
+    with pytest.raises(model.ParameterError, match="allowed region"):
+        rm.rotation_profile(PRM, H, (1.0, 0.0), (3.0, 0.0), 5, center=CENTER)
