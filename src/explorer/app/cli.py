@@ -32,6 +32,8 @@ EXAMPLES = {
     "sweep": "python -m explorer sweep figure4 --out results/figure4.h5 --jobs 2",
     "lyapunov": "python -m explorer lyapunov --p1 -0.2 --p2 0.1 --mu 1 -T 1000 --json",
     "fixedpoint": "python -m explorer fixedpoint --guess -0.4,0 --mu 0.5 --continue mu 0.5 3.5 0.1",
+    "periodic": "python -m explorer periodic --period 3 --search --grid 10 --mu 0.03 --json",
+    "rotation": "python -m explorer rotation --from 1.5822,0 --to 1.0,0 --n 30 --mu 0.03",
     "explore": "python -m explorer explore figure4 --panel 2",
     "melnikov": "python -m explorer melnikov --splitting --mus 1e-4,1e-3 --json",
     "trajectory": "python -m explorer trajectory --p1 0.5 --M 2 --mu 0.5 -T 300 --out figures/trajectory",
@@ -152,6 +154,40 @@ def build_parser() -> argparse.ArgumentParser:
     fx.add_argument("--tol", type=float, default=1e-15, help="Taylor tolerance [%(default)s]")
     _add_model_args(fx, model.FIGURE4, json="print JSON")
 
+    # ---- periodic, rotation: periodic orbits and rotation numbers (analysis/periodic.py, rotation.py)
+    pd = sub.add_parser("periodic", help="periodic orbits of period K of the section map, stability, continuation",
+                        description="Newton's method on P^K(x) = x for the section map phi = pi (Jacobian from "
+                        "the tangent dynamics; multiple shooting for K > 4), from --guess or by a --search "
+                        "covering the allowed region and the symmetry lines; prints each orbit once with its "
+                        "minimal period, points, trace, Greene's residue, eigenvalues, stability and symmetry. "
+                        "With --continue PARAM START STOP STEP (and --guess), follows the orbit and reports "
+                        "where |trace| crosses or touches 2.")
+    pd.add_argument("--period", "-K", type=int, required=True, help="period K >= 1")
+    pmode = pd.add_mutually_exclusive_group(required=True)
+    pmode.add_argument("--guess", default=None, help="start of Newton's method: p1,p2, e.g. --guess -0.4,0")
+    pmode.add_argument("--search", action="store_true", help="search the allowed region for all orbits")
+    pd.add_argument("--grid", type=int, default=12, help="grid points per axis of --search [%(default)s]")
+    pd.add_argument("--max-guesses", type=int, default=60, help="Newton starts of --search [%(default)s]")
+    pd.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
+    pd.add_argument("--continue", dest="cont", nargs=4, metavar=("PARAM", "START", "STOP", "STEP"),
+                    help="continue the orbit through --guess in PARAM (a model parameter or h)")
+    pd.add_argument("--tol", type=float, default=1e-15, help="Taylor tolerance [%(default)s]")
+    _add_model_args(pd, model.FIGURE4, json="print JSON")
+
+    rt = sub.add_parser("rotation", help="rotation numbers along a segment of the section (weighted Birkhoff)",
+                        description="Rotation numbers (turns per return) of orbits started at --n points from "
+                        "--from to --to around the elliptic fixed point (Newton from --center, default "
+                        "--from), by weighted Birkhoff averages over N and 2N returns; 'converged' false "
+                        "flags a chaotic orbit. Plateaus at m/K mark island chains of period K.")
+    rt.add_argument("--from", dest="start", required=True, help="start of the segment p1,p2")
+    rt.add_argument("--to", dest="stop", required=True, help="end of the segment p1,p2")
+    rt.add_argument("--n", type=int, default=21, help="points on the segment [%(default)s]")
+    rt.add_argument("--iterates", type=int, default=2000, help="N: each orbit has 2N returns [%(default)s]")
+    rt.add_argument("--center", default=None, help="guess of the elliptic fixed point p1,p2 [--from]")
+    rt.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
+    rt.add_argument("--tol", type=float, default=1e-15, help="Taylor tolerance [%(default)s]")
+    _add_model_args(rt, model.FIGURE4, json="print JSON")
+    # ---- end periodic, rotation ----------------------------------------------------------------
     # ---- explore: interactive explorer (explorer/explore.py) -------------------------------
     x = sub.add_parser("explore", help="interactive window: click on the section, watch the orbit appear",
                        description="Open a matplotlib window with the allowed region of the section phi = pi at "
@@ -380,6 +416,112 @@ def cmd_fixedpoint(args) -> int:
     return 0
 
 
+# ---- periodic, rotation --------------------------------------------------------------------
+def _orbit_line(o) -> str:
+    pts = " ".join(f"({p[0]:.10g},{p[1]:.10g})" for p in o.points)
+    return (f"K={o.period} {o.kind} trace={o.trace:.10g} residue={o.residue:.6g} "
+            f"symmetric={o.symmetric} points={pts}")
+
+
+def cmd_periodic(args) -> int:
+    from explorer.analysis import periodic
+    from explorer.model import validation
+
+    params = _params_from(args)
+    if not math.isfinite(args.h):
+        raise model.ParameterError(f"h must be finite, got {args.h!r}")
+    if args.period < 1:
+        raise model.ParameterError(f"--period must be an integer K >= 1, got {args.period}")
+    from explorer.analysis.sections import MAX_TOL, MIN_TOL
+
+    validation.real("tol", args.tol, MIN_TOL, MAX_TOL)
+    if model.allowed_ellipse(params, args.h) is None:
+        raise model.ParameterError(f"the region is empty at h = {args.h:g}; raise --h")
+    K = args.period
+    if args.cont:
+        if args.guess is None:
+            raise model.ParameterError("--continue needs --guess (a point of the orbit at START)")
+        name, *nums = args.cont
+        try:
+            start, stop, step = (float(v) for v in nums)
+        except ValueError:
+            raise model.ParameterError(f"--continue needs PARAM START STOP STEP numbers, got {nums}") from None
+        guess = _pair(args.guess, "--guess")
+        br = periodic.continue_periodic(params, args.h, K, name, start, stop, step, guess, tol=args.tol)
+        rows = [dict(o.as_dict(), **{name: float(v)}) for v, o in zip(br.values, br.orbits)]
+        if args.json:
+            print(json.dumps({"period": K, "parameter": name, "branch": rows, "bifurcations": br.bifurcations,
+                              "stopped": br.stopped}))
+        else:
+            print(f"{name},p1,p2,trace,residue,stable")
+            for r in rows:
+                print(f"{r[name]!r},{r['points'][0][0]!r},{r['points'][0][1]!r},{r['trace']!r},{r['residue']!r},"
+                      f"{r['stable']}")
+            print("stability changes: " + (", ".join(f"{b['type']} at {name} = {b['value']:.10g}"
+                                                     for b in br.bifurcations) or "none in range"))
+            if br.stopped:
+                print(f"branch stopped: {br.stopped}")
+        return 0
+    if args.search:
+        if args.grid < 2:
+            raise model.ParameterError(f"--grid must be an integer >= 2, got {args.grid}")
+        if args.max_guesses < 1:
+            raise model.ParameterError(f"--max-guesses must be an integer >= 1, got {args.max_guesses}")
+        orbits = periodic.search_periodic_orbits(params, args.h, K, grid=args.grid, max_guesses=args.max_guesses,
+                                                 tol=args.tol)
+    else:
+        guess = _pair(args.guess, "--guess")
+        orbits = [periodic.find_periodic_orbit(params, args.h, guess, K, tol=args.tol)]
+    if args.json:
+        print(json.dumps({"period": K, "params": params.as_dict(), "h": args.h,
+                          "orbits": [o.as_dict() for o in orbits]}))
+    else:
+        if args.search:
+            print(f"{len(orbits)} orbit(s) of minimal period {K}")
+        for o in orbits:
+            print(_orbit_line(o))
+    return 0
+
+
+def cmd_rotation(args) -> int:
+    from explorer.analysis import rotation
+
+    params = _params_from(args)
+    if not math.isfinite(args.h):
+        raise model.ParameterError(f"h must be finite, got {args.h!r}")
+    a, b = _pair(args.start, "--from"), _pair(args.stop, "--to")
+    if args.n < 2:
+        raise model.ParameterError(f"--n must be an integer >= 2, got {args.n}")
+    if args.iterates < 10:
+        raise model.ParameterError(f"--iterates must be an integer >= 10, got {args.iterates}")
+    from explorer.analysis.fixedpoints import find_fixed_point
+    from explorer.analysis.sections import MAX_TOL, MIN_TOL
+    from explorer.model import validation
+
+    validation.real("tol", args.tol, MIN_TOL, MAX_TOL)
+    if model.allowed_ellipse(params, args.h) is None:
+        raise model.ParameterError(f"the region is empty at h = {args.h:g}; raise --h")
+    for name, x in (("--from", a), ("--to", b)):
+        if not model.is_admissible(params, x[0], x[1], args.h):
+            raise model.ParameterError(f"{name} ({x[0]:g}, {x[1]:g}) lies outside the allowed region; allowed: "
+                                       f"{model.describe_region(params, args.h)}")
+    c_guess = _pair(args.center, "--center") if args.center else a
+    center = find_fixed_point(params, args.h, c_guess, tol=args.tol)
+    prof = rotation.rotation_profile(params, args.h, a, b, args.n, center=center.point, iterates=args.iterates,
+                                     tol=args.tol)
+    out = dict(prof.as_dict(), params=params.as_dict(), h=args.h, center_stable=bool(center.stable))
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(f"center ({float(prof.center[0])!r}, {float(prof.center[1])!r}) {center.kind}; "
+              f"{prof.iterates} returns per orbit")
+        print("s,p1,p2,rotation,converged")
+        for r in out["profile"]:
+            print(f"{r['s']!r},{r['p1']!r},{r['p2']!r},{r['rotation']!r},{r['converged']}")
+    return 0
+
+
+# ---- end periodic, rotation ----------------------------------------------------------------
 # ---- melnikov: Melnikov integral ur23/ur24 (explorer/melnikov.py) --------------------------
 def cmd_melnikov(args) -> int:
     from explorer.analysis import melnikov
@@ -492,7 +634,7 @@ def cmd_figures(args) -> int:
 # ---- end figures ----------------------------------------------------------------------------
 COMMANDS = {"figures": cmd_figures, "trajectory": cmd_trajectory, "orbit": cmd_orbit, "sweep": cmd_sweep,
             "lyapunov": cmd_lyapunov, "fixedpoint": cmd_fixedpoint,
-            "melnikov": cmd_melnikov}
+            "melnikov": cmd_melnikov, "periodic": cmd_periodic, "rotation": cmd_rotation}
 
 
 # ---- explore: interactive explorer (explorer/explore.py) -----------------------------------
