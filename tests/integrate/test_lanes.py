@@ -142,7 +142,11 @@ def _run(fn, Y0, P, K, *, order=15, tmax=None, max_steps=10**9, phi0=math.pi, di
     out = (np.full((n, K, 5), np.nan), np.zeros(n, np.int64), np.zeros(n, np.int64),
            np.zeros((n, 5)), np.zeros((n, 3)))
     tmax = 100.0 * K if tmax is None else tmax
-    fn(np.ascontiguousarray(Y0), P, g2, g1, direction, tmax, order, max_steps, *out, **kw)
+    Y0 = np.ascontiguousarray(Y0)
+    carry = np.empty((n, drivers.N_CARRY))
+    drivers.start_carry(Y0, P, g2, g1, carry)
+    limits = np.full((n, 2), K, np.int64)
+    fn(Y0, P, g2, g1, direction, tmax, order, max_steps, carry, limits, *out, **kw)
     return out
 
 

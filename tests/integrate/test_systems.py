@@ -61,7 +61,10 @@ def test_the_shared_step_and_the_crossing_drivers_copy_take_the_same_steps():
     y, steps, code = _plain_dop853(y0, P, T, 1e-11, 1e-11, 10**6)
     cross = np.full((10**4, 5), np.nan)
     yout = np.empty(5)
-    count, status, t, dsteps = drivers.orbit_dop853(y0, P, 1.0, 0.0, 1, T, 1e-11, 1e-11, 10**6, cross, yout)
+    carry = np.empty((1, drivers.N_CARRY))
+    drivers.start_carry(y0[None, :], P, 1.0, 0.0, carry)
+    count, status, t, dsteps = drivers.orbit_dop853(y0, P, 1.0, 0.0, 1, T, 1e-11, 1e-11, 10**6, cross, yout,
+                                                    carry[0], 10**4, 10**4)
     assert count >= 2 and status == model_status_tmax() and code == 1  # crossings found on the way
     assert dsteps == steps
     np.testing.assert_array_equal(yout, y)   # bit for bit: the same arithmetic in the same order

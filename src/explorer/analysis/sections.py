@@ -27,13 +27,15 @@ import numpy as np
 
 from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
-from explorer.integrate import methods
+from explorer.integrate import drivers, methods
 from explorer.integrate.methods import ADAPTIVE_METHODS, MAX_TOL, METHODS, MIN_TOL, SPLIT_METHODS
 from explorer.kernels import STATUS_NAMES, Status
 from explorer.model import ParameterError, validation
 
-__all__ = ["ADAPTIVE_METHODS", "DEFAULT_DT", "DEFAULT_MAX_STEPS", "DEFAULT_TOL", "MAX_TOL", "METHODS", "MIN_TOL",
-           "SPLIT_METHODS", "Crossings", "crossings", "energy_warning", "max_energy_error", "section_crossings"]
+__all__ = ["ADAPTIVE_METHODS", "DEFAULT_BLOCK", "DEFAULT_DT", "DEFAULT_MAX_STEPS", "DEFAULT_TOL", "MAX_TOL",
+           "METHODS", "MIN_TOL", "SPLIT_METHODS", "CrossingBlock", "Crossings", "StreamState", "crossings",
+           "energy_warning", "iter_crossings", "iter_section_crossings", "max_energy_error", "result_bytes",
+           "section_crossings"]
 
 DEFAULT_TOL = 1e-13
 DEFAULT_DT = 0.05
@@ -41,6 +43,14 @@ DEFAULT_MAX_STEPS = 10**9
 #: a run whose energy error exceeds this fraction of max(|h|, 1) gets a warning: its step
 #: (splitting) or tolerance is too coarse for the scene to trust the section's fine structure
 ENERGY_WARN_REL = 1e-6
+#: crossings per orbit and block of a streamed run (:func:`iter_crossings`): 40 bytes a row,
+#: so 1e5 rows = 4 MB per orbit in flight
+DEFAULT_BLOCK = 100_000
+#: bytes of one stored crossing row (t, p1, p2, M, dH as float64)
+ROW_BYTES = 40
+#: :func:`crossings` returns every row at once: it refuses a result larger than this fraction of
+#: the machine's memory (stream it with :func:`iter_crossings` instead)
+MAX_MEMORY_FRACTION = 0.5
 
 
 @dataclass(frozen=True)
@@ -90,17 +100,49 @@ def energy_warning(max_dh: float, h: float, setting: str) -> str | None:
             f"{setting} is too coarse for this orbit; refine it to trust the section")
 
 
-def crossings(params, y0, n_crossings: int, *, method: str = "taylor", tol: float = DEFAULT_TOL,
-              dt: float | None = None, tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS,
-              phi0: float = math.pi, direction: int = 1, threads: int | None = None) -> Crossings:
-    """Integrate each initial state of ``y0`` ((N, 5) or (5,)) until it has crossed the section
-    phi = phi0 ``n_crossings`` times in ``direction`` (+1: dphi/dt > 0, -1: < 0, 0: both), or until
-    its time budget ``tmax`` (default 100 * n_crossings) or step budget ``max_steps`` runs out.
+def result_bytes(n_orbits: int, n_crossings: int) -> int:
+    """Bytes of the crossing rows of ``n_orbits`` orbits with ``n_crossings`` crossings each
+    (the size of :attr:`Crossings.data`, and an upper bound of the rows a store holds before
+    compression)."""
+    return int(n_orbits) * int(n_crossings) * ROW_BYTES
 
-    ``tol`` is the tolerance of the adaptive methods, ``dt`` the fixed step of the splitting
-    methods (default 0.05).  ``threads`` sets numba's thread count for this call (default: all).
-    A start point lying on the section is not reported as a crossing.
-    """
+
+def physical_memory() -> int:
+    """Bytes of physical memory of this machine (0 when the system does not say)."""
+    try:
+        import os
+
+        return int(os.sysconf("SC_PAGE_SIZE")) * int(os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        return 0
+
+
+def _human(nbytes: float) -> str:
+    for unit in ("B", "kB", "MB", "GB", "TB", "PB"):
+        if nbytes < 1000 or unit == "PB":
+            return f"{nbytes:.3g} {unit}"
+        nbytes /= 1000.0
+    return f"{nbytes:.3g} PB"
+
+
+@dataclass(frozen=True)
+class _Run:
+    """A validated request: what every block of it shares."""
+
+    P: np.ndarray
+    Y0: np.ndarray
+    K: int
+    prep: methods.Prepared
+    cphi: float
+    sphi: float
+    direction: int
+    tmax: float
+    max_steps: int
+    threads: int | None
+    settings: dict
+
+
+def _validated(params, y0, n_crossings, method, tol, dt, tmax, max_steps, phi0, direction, threads) -> _Run:
     P = validation.packed_params(params)
     m = methods.get(method)
     if not isinstance(n_crossings, numbers.Integral) or n_crossings < 1:
@@ -124,28 +166,193 @@ def crossings(params, y0, n_crossings: int, *, method: str = "taylor", tol: floa
     if not np.all(np.isfinite(H0)):
         i = int(np.flatnonzero(~np.isfinite(H0))[0])
         raise ParameterError(f"y0 must have a finite energy; orbit {i} has H = {H0[i]!r}")
+    if threads is not None:
+        threads = validation.threads(threads, max_threads())
+    prep = m.prepare(tol=tol, dt=DEFAULT_DT if dt is None else dt)
     g1, g2 = model.section_gamma(phi0)
-    sphi, cphi = g1, g2
-    N, K = Y0.shape[0], int(n_crossings)
+    K = int(n_crossings)
+    settings = {"method": method, "phi0": phi0, "direction": int(direction), "tmax": tmax,
+                "max_steps": int(max_steps), "n_crossings": K}
+    settings.update(prep.settings)
+    return _Run(P, Y0, K, prep, g2, g1, int(direction), tmax, int(max_steps), threads, settings)
+
+
+def _run_block(run: _Run, Y, carry, limits, data, count, status, final, info) -> None:
+    """One block of the drivers for the orbits Y (arrays filled in place), with numba's thread
+    count set for the call when ``run.threads`` says so."""
+    old_threads = get_num_threads()
+    if run.threads is not None:
+        set_num_threads(run.threads)
+    try:
+        methods.run_crossings(run.prep, Y, run.P, run.cphi, run.sphi, run.direction, run.tmax, run.max_steps,
+                              carry, limits, data, count, status, final, info)
+    finally:
+        if run.threads is not None:
+            set_num_threads(old_threads)
+
+
+def crossings(params, y0, n_crossings: int, *, method: str = "taylor", tol: float = DEFAULT_TOL,
+              dt: float | None = None, tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS,
+              phi0: float = math.pi, direction: int = 1, threads: int | None = None) -> Crossings:
+    """Integrate each initial state of ``y0`` ((N, 5) or (5,)) until it has crossed the section
+    phi = phi0 ``n_crossings`` times in ``direction`` (+1: dphi/dt > 0, -1: < 0, 0: both), or until
+    its time budget ``tmax`` (default 100 * n_crossings) or step budget ``max_steps`` runs out.
+
+    ``tol`` is the tolerance of the adaptive methods, ``dt`` the fixed step of the splitting
+    methods (default 0.05).  ``threads`` sets numba's thread count for this call (default: all).
+    A start point lying on the section is not reported as a crossing.
+
+    Every row is returned at once, (N, n_crossings, 5) float64: a request larger than half the
+    machine's memory is refused (ParameterError naming its size); :func:`iter_crossings` streams
+    the same rows in blocks of bounded size.
+    """
+    run = _validated(params, y0, n_crossings, method, tol, dt, tmax, max_steps, phi0, direction, threads)
+    N, K = run.Y0.shape[0], run.K
+    need = result_bytes(N, K)
+    mem = physical_memory()
+    if mem and need > MAX_MEMORY_FRACTION * mem:
+        raise ParameterError(f"crossings: {N} orbits x {K} crossings need {_human(need)} in memory "
+                             f"(this machine has {_human(mem)}); stream them with iter_crossings() "
+                             "or lower crossings")
     data = np.full((N, K, 5), np.nan)
     count = np.zeros(N, np.int64)
     status = np.zeros(N, np.int64)
     final = np.zeros((N, 5))
     info = np.zeros((N, 3))
-    settings = {"method": method, "phi0": phi0, "direction": int(direction), "tmax": tmax,
-                "max_steps": int(max_steps), "n_crossings": K}
-    old_threads = get_num_threads()
-    if threads is not None:
-        set_num_threads(validation.threads(threads, max_threads()))
-    try:
-        prep = m.prepare(tol=tol, dt=DEFAULT_DT if dt is None else dt)
-        settings.update(prep.settings)
-        methods.run_crossings(prep, Y0, P, cphi, sphi, int(direction), tmax, int(max_steps), data, count, status,
-                              final, info)
-    finally:
-        if threads is not None:
-            set_num_threads(old_threads)
-    return Crossings(data, count, status, final, info, method, settings)
+    carry = np.empty((N, drivers.N_CARRY))
+    drivers.start_carry(run.Y0, run.P, run.cphi, run.sphi, carry)
+    limits = np.full((N, 2), K, np.int64)
+    _run_block(run, run.Y0, carry, limits, data, count, status, final, info)
+    return Crossings(data, count, status, final, info, method, run.settings)
+
+
+@dataclass
+class StreamState:
+    """Where a streamed run stands between two blocks: everything but the crossings themselves.
+
+    A run continued from it (``iter_crossings(..., state=...)``) takes exactly the steps of an
+    uninterrupted run, so its rows are bit for bit the same.  Small: O(N) numbers.
+
+    Attributes
+    ----------
+    y : ndarray (N, 5)
+        The state of every orbit where its last block ended.
+    carry : ndarray (N, N_CARRY)
+        The drivers' carry (time, its Kahan compensation, sin(phi - phi0), steps, H0, DOP853's
+        next step: :mod:`explorer.integrate.drivers`).
+    done : ndarray (N,) int64
+        Crossings found so far.
+    finished : ndarray (N,) bool
+        The orbit has stopped (its ``status`` is final).
+    status : ndarray (N,) int64
+        Status of the last block (final when ``finished``).
+    info : ndarray (N, 3)
+        Time reached, steps, Casimir error of ``y``.
+    blocks : int
+        Blocks computed so far.
+    """
+
+    y: np.ndarray
+    carry: np.ndarray
+    done: np.ndarray
+    finished: np.ndarray
+    status: np.ndarray
+    info: np.ndarray
+    blocks: int = 0
+
+    ARRAYS = ("y", "carry", "done", "finished", "status", "info")
+
+    @classmethod
+    def start(cls, run: _Run) -> StreamState:
+        N = run.Y0.shape[0]
+        carry = np.empty((N, drivers.N_CARRY))
+        drivers.start_carry(run.Y0, run.P, run.cphi, run.sphi, carry)
+        return cls(run.Y0.copy(), carry, np.zeros(N, np.int64), np.zeros(N, bool), np.zeros(N, np.int64),
+                   np.zeros((N, 3)), 0)
+
+    def copy(self) -> StreamState:
+        return StreamState(*(getattr(self, a).copy() for a in self.ARRAYS), self.blocks)
+
+    def as_arrays(self) -> dict:
+        """The state as plain arrays (for a checkpoint); :meth:`from_arrays` reads them back."""
+        out = {a: getattr(self, a) for a in self.ARRAYS}
+        out["blocks"] = np.array(self.blocks, np.int64)
+        return out
+
+    @classmethod
+    def from_arrays(cls, arrays) -> StreamState:
+        return cls(*(np.array(arrays[a]) for a in cls.ARRAYS), int(arrays["blocks"]))
+
+
+@dataclass(frozen=True)
+class CrossingBlock:
+    """One block of a streamed run (:func:`iter_crossings`).
+
+    ``index[i]`` is the orbit (row of ``y0``) whose next ``count[i]`` crossings are
+    ``data[i, :count[i]]``; they follow the ``start[i]`` it had before this block.  ``state`` is
+    the run's :class:`StreamState` after this block (a copy: store it to resume from here).
+    """
+
+    index: np.ndarray
+    start: np.ndarray
+    data: np.ndarray
+    count: np.ndarray
+    state: StreamState
+
+    def rows(self, i: int) -> np.ndarray:
+        """The rows of the i-th orbit of this block, (count[i], 5)."""
+        return self.data[i, : self.count[i]]
+
+
+def iter_crossings(params, y0, n_crossings: int, *, block: int = DEFAULT_BLOCK, state: StreamState | None = None,
+                   method: str = "taylor", tol: float = DEFAULT_TOL, dt: float | None = None,
+                   tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS, phi0: float = math.pi,
+                   direction: int = 1, threads: int | None = None):
+    """:func:`crossings` in blocks: yields a :class:`CrossingBlock` of at most about ``block``
+    crossings per orbit (at most ``block`` + the roots of one step, MAX_ROOTS_PER_STEP), until
+    every orbit has its ``n_crossings`` or has stopped; memory is O(N x block), whatever
+    ``n_crossings``.  The rows, final states and statuses are bit for bit those of
+    :func:`crossings` (each block continues the drivers from the previous one's carry: the same
+    steps, the same time sum).
+
+    ``state``: continue a run from the :class:`StreamState` of one of its blocks (e.g. read back
+    from a checkpoint), with the same arguments otherwise.  The last block's state gives the
+    final ``status`` and ``info`` of every orbit.
+    """
+    run = _validated(params, y0, n_crossings, method, tol, dt, tmax, max_steps, phi0, direction, threads)
+    if not isinstance(block, numbers.Integral) or block < 1:
+        raise ParameterError(f"block must be an integer >= 1, got {block!r}")
+    N, K = run.Y0.shape[0], run.K
+    st = StreamState.start(run) if state is None else state.copy()
+    if st.y.shape != (N, 5) or st.carry.shape != (N, drivers.N_CARRY):
+        raise ParameterError(f"state is for {st.y.shape[0]} orbits, y0 has {N}")
+    width = min(K, int(block) + drivers.MAX_ROOTS_PER_STEP)
+    while True:
+        idx = np.flatnonzero(~st.finished)
+        if idx.size == 0:
+            return
+        n = idx.size
+        remaining = K - st.done[idx]
+        limits = np.empty((n, 2), np.int64)
+        limits[:, drivers.LIMIT_TARGET] = np.minimum(block, remaining)
+        limits[:, drivers.LIMIT_ROOM] = np.minimum(remaining, width)
+        Y = np.ascontiguousarray(st.y[idx])
+        carry = np.ascontiguousarray(st.carry[idx])
+        data = np.full((n, width, 5), np.nan)
+        count = np.zeros(n, np.int64)
+        status = np.zeros(n, np.int64)
+        final = np.zeros((n, 5))
+        info = np.zeros((n, 3))
+        _run_block(run, Y, carry, limits, data, count, status, final, info)
+        start = st.done[idx].copy()
+        st.y[idx] = final
+        st.carry[idx] = carry
+        st.done[idx] += count
+        st.status[idx] = status
+        st.info[idx] = info
+        st.finished[idx] = (status != int(Status.DONE)) | (st.done[idx] >= K)
+        st.blocks += 1
+        yield CrossingBlock(idx, start, data, count, st.copy())
 
 
 def section_crossings(params, p1, p2, h: float, n_crossings: int, *, phi0: float = math.pi,
@@ -157,3 +364,13 @@ def section_crossings(params, p1, p2, h: float, n_crossings: int, *, phi0: float
         raise ParameterError(f"h must be finite, got {h!r}")
     Y0 = model.section_state(params, p1, p2, h, phi0, direction if direction != 0 else 1)
     return crossings(params, Y0, n_crossings, phi0=phi0, direction=direction, **kwargs)
+
+
+def iter_section_crossings(params, p1, p2, h: float, n_crossings: int, *, phi0: float = math.pi,
+                           direction: int = 1, **kwargs):
+    """:func:`section_crossings` in blocks (:func:`iter_crossings`)."""
+    h = float(h)
+    if not math.isfinite(h):
+        raise ParameterError(f"h must be finite, got {h!r}")
+    Y0 = model.section_state(params, p1, p2, h, phi0, direction if direction != 0 else 1)
+    return iter_crossings(params, Y0, n_crossings, phi0=phi0, direction=direction, **kwargs)

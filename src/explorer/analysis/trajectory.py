@@ -153,6 +153,9 @@ class Trajectory:
     def keys(self):
         return tuple(f.name for f in fields(self))
 
+    def __iter__(self):
+        return iter(self.keys())
+
 
 def full_params(params=None, **changes) -> dict:
     """Validated parameters of the full system R1 as a dict (keys ``model.PARAM_NAMES``).

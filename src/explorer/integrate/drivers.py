@@ -14,9 +14,24 @@ cphi, sphi : cos phi0, sin phi0 of the section angle
 direction : +1 (phi increasing through phi0), -1 (decreasing), 0 (both)
 tmax : time budget per orbit;  max_steps : step budget per orbit
 
+Resumable blocks
+----------------
+carry : (N, N_CARRY) in/out, the state of each orbit between blocks of crossings besides its
+    point in phase space: time reached, its Kahan compensation, sin(phi - phi0) at the state,
+    steps taken, the energy H0 of the first initial state (the reference of H - H0), DOP853's
+    proposed next step (0: not started).  :func:`start_carry` fills it for a first block;
+    each driver reads it at the start and writes it back at the end, so a run continued from
+    ``out_final`` and ``carry`` takes exactly the steps of an uninterrupted run (bit for bit:
+    times, states and H - H0 included).
+limits : (N, 2) int64, per orbit the block's ``target`` (the block ends after the step in
+    which the orbit's crossings reach it) and ``room`` (crossings recorded at most; roots of
+    that last step beyond the target are kept up to the room, as an uninterrupted run keeps
+    them).  One block of everything: target = room = K.  Budgets (``tmax``, ``max_steps``)
+    are for the whole run, not the block.
+
 Outputs (preallocated by the caller)
 ------------------------------------
-out_cross : (N, K, 5) rows (t, p1, p2, M, H - H0) of the crossings
+out_cross : (N, K, 5) rows (t, p1, p2, M, H - H0) of the crossings (K >= room)
 out_count : (N,) int64 crossings found;  out_status : (N,) int64 (kernels.STATUS_*)
 out_final : (N, 5) state where the orbit stopped
 out_info : (N, 3) final time, steps taken, final Casimir error g1^2 + g2^2 - 1
@@ -52,6 +67,21 @@ from explorer.model.equations import (
 EPS = 2.220446049250313e-16
 #: A start point with |sin(phi - phi0)| below this is on the section (not a crossing).
 ON_SECTION = 8.0 * EPS
+
+#: columns of ``carry`` (see the module docstring)
+CARRY_T = 0
+CARRY_TC = 1
+CARRY_G = 2
+CARRY_STEPS = 3
+CARRY_H0 = 4
+CARRY_HABS = 5
+N_CARRY = 6
+#: columns of ``limits``
+LIMIT_TARGET = 0
+LIMIT_ROOM = 1
+#: the most crossings one step can add past a block's target (roots of one step: the Taylor
+#: polynomial of degree <= MAX_ORDER, DOP853's dense output of degree 7, a splitting step 2)
+MAX_ROOTS_PER_STEP = tk.MAX_ORDER
 
 
 @njit
@@ -95,14 +125,34 @@ def _start_g(y, cphi, sphi):
     return g
 
 
+@njit
+def start_carry(Y0, P, cphi, sphi, carry):
+    """The carry of a first block: time 0, no steps, H0 = H(y0), sin(phi - phi0) at y0 (0 on the
+    section: a start point is not a crossing), DOP853 not started."""
+    for j in range(Y0.shape[0]):
+        carry[j, CARRY_T] = 0.0
+        carry[j, CARRY_TC] = 0.0
+        carry[j, CARRY_G] = _start_g(Y0[j], cphi, sphi)
+        carry[j, CARRY_STEPS] = 0.0
+        carry[j, CARRY_H0] = energy(Y0[j], P)
+        carry[j, CARRY_HABS] = 0.0
+
+
+@njit
+def _save_carry(carry, t, tc, g, steps):
+    carry[CARRY_T] = t
+    carry[CARRY_TC] = tc
+    carry[CARRY_G] = g
+    carry[CARRY_STEPS] = steps
+
+
 # ====================================================================== Taylor
 @njit
-def orbit_taylor(y0, P, cphi, sphi, direction, tmax, order, max_steps, cross, yout):
+def orbit_taylor(y0, P, cphi, sphi, direction, tmax, order, max_steps, cross, yout, carry, target, room):
     """One orbit with the adaptive Taylor method of the given order (the step:
     :func:`explorer.integrate.systems.taylor_step` of ``REDUCED``).
     Returns (count, status, t, steps).  The crossing is the root of the Taylor
     polynomial of sin(phi - phi0) in the step: exact to the order of the method."""
-    ncross = cross.shape[0]
     X = np.empty((5, order + 1))
     ynew = np.empty(5)
     yc = np.empty(5)
@@ -110,15 +160,15 @@ def orbit_taylor(y0, P, cphi, sphi, direction, tmax, order, max_steps, cross, yo
     factor = tk.safety_factor(order)
     for i in range(5):
         yout[i] = y0[i]
-    H0 = energy(y0, P)
-    t = 0.0
-    tc = 0.0  # Kahan compensation of the time sum
-    gprev = _start_g(y0, cphi, sphi)
+    H0 = carry[CARRY_H0]
+    t = carry[CARRY_T]
+    tc = carry[CARRY_TC]  # Kahan compensation of the time sum
+    gprev = carry[CARRY_G]
+    steps = int(carry[CARRY_STEPS])
     count = 0
-    steps = 0
     status = STATUS_TMAX
-    if ncross == 0:
-        return 0, STATUS_DONE, t, 0
+    if target == 0:
+        return 0, STATUS_DONE, t, steps
     while True:
         for i in range(5):
             X[i, 0] = yout[i]
@@ -136,7 +186,7 @@ def orbit_taylor(y0, P, cphi, sphi, direction, tmax, order, max_steps, cross, yo
                                  stack)
         kept = count
         for r in range(nroots):
-            if kept < 0 or kept >= ncross:
+            if kept < 0 or kept >= room:
                 break
             tau = roots[r]
             tk.evaluate(X, order, tau, yc)
@@ -150,9 +200,10 @@ def orbit_taylor(y0, P, cphi, sphi, direction, tmax, order, max_steps, cross, yo
         for i in range(5):
             yout[i] = ynew[i]
         gprev = gnew
-        if count >= ncross:
+        if count >= target:
             status = STATUS_DONE
             break
+    _save_carry(carry, t, tc, gprev, steps)
     return count, status, t, steps
 
 
@@ -168,13 +219,14 @@ def store_orbit(j, count, status, t, steps, out_count, out_status, out_final, ou
 
 
 @njit(parallel=True)
-def run_taylor_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps,
+def run_taylor_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
                      out_cross, out_count, out_status, out_final, out_info):
     """Batch twin of :func:`orbit_taylor`, parallel over orbits (prange)."""
     n = Y0.shape[0]
     for j in prange(n):
         count, status, t, steps = orbit_taylor(Y0[j], P, cphi, sphi, direction, tmax, order,
-                                               max_steps, out_cross[j], out_final[j])
+                                               max_steps, out_cross[j], out_final[j], carry[j],
+                                               limits[j, LIMIT_TARGET], limits[j, LIMIT_ROOM])
         store_orbit(j, count, status, t, steps, out_count, out_status, out_final, out_info)
     return 0
 
@@ -264,24 +316,24 @@ def _split_step_roots(y, P, dt, flow_ids, fracs, cphi, sphi, gprev, gnew, mnew, 
 
 
 @njit
-def orbit_split(y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max_steps, cross, yout):
+def orbit_split(y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max_steps, cross, yout, carry, target,
+                room):
     """One orbit with a fixed-step composition of exact flows (the step:
     :func:`explorer.integrate.systems.split_step` of ``REDUCED``); t_n = n dt (no summation
     error).  Returns (count, status, t, steps)."""
-    ncross = cross.shape[0]
     ynew = np.empty(5)
     yc = np.empty(5)
     f = np.empty(5)
     roots = np.empty(2)
     for i in range(5):
         yout[i] = y0[i]
-    H0 = energy(y0, P)
-    gprev = _start_g(y0, cphi, sphi)
+    H0 = carry[CARRY_H0]
+    gprev = carry[CARRY_G]
     count = 0
-    n = 0
+    n = int(carry[CARRY_STEPS])
     status = STATUS_TMAX
-    if ncross == 0:
-        return 0, STATUS_DONE, 0.0, 0
+    if target == 0:
+        return 0, STATUS_DONE, n * dt, n
     while True:
         t = n * dt
         if t >= tmax:
@@ -298,7 +350,7 @@ def orbit_split(y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max_ste
             kept = count
             for r in range(nroots):
                 tau = roots[r]
-                if kept < 0 or kept >= ncross or t + tau > tmax:
+                if kept < 0 or kept >= room or t + tau > tmax:
                     break
                 if nroots > 1:   # yc holds the state at the last root searched
                     for i in range(5):
@@ -312,20 +364,22 @@ def orbit_split(y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max_ste
         for i in range(5):
             yout[i] = ynew[i]
         gprev = gnew
-        if count >= ncross:
+        if count >= target:
             status = STATUS_DONE
             break
+    _save_carry(carry, n * dt, 0.0, gprev, n)
     return count, status, n * dt, n
 
 
 @njit(parallel=True)
-def run_split_batch(Y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max_steps,
+def run_split_batch(Y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max_steps, carry, limits,
                     out_cross, out_count, out_status, out_final, out_info):
     """Batch twin of :func:`orbit_split`, parallel over orbits (prange)."""
     n = Y0.shape[0]
     for j in prange(n):
         count, status, t, steps = orbit_split(Y0[j], P, cphi, sphi, direction, tmax, dt,
-                                              flow_ids, fracs, max_steps, out_cross[j], out_final[j])
+                                              flow_ids, fracs, max_steps, out_cross[j], out_final[j],
+                                              carry[j], limits[j, LIMIT_TARGET], limits[j, LIMIT_ROOM])
         store_orbit(j, count, status, t, steps, out_count, out_status, out_final, out_info)
     return 0
 
@@ -353,11 +407,11 @@ def _may_reach_section(y_old, y_new, K, P, h, g_old, g_new):
 
 
 @njit
-def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cross, yout):
+def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cross, yout, carry, target, room):
     """One orbit with adaptive DOP853 (Hairer-Nørsett-Wanner; controller and first step as
     scipy's).  The three extra stages of the dense output are computed only in steps that
-    bracket a crossing.  Returns (count, status, t, steps); steps counts attempts."""
-    ncross = cross.shape[0]
+    bracket a crossing.  Returns (count, status, t, steps); steps counts attempts.  A continued
+    run starts from the step its carry proposes (the FSAL stage recomputed: the same value)."""
     K = np.empty((16, 5))
     F = np.empty((7, 5))
     Fg = np.empty(7)
@@ -367,15 +421,19 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
     yc = np.empty(5)
     for i in range(5):
         yout[i] = y0[i]
-    H0 = energy(y0, P)
-    if ncross == 0:
-        return 0, STATUS_DONE, 0.0, 0
-    h_abs = sy.dop853_first_step(sy.REDUCED, yout, P, K, rtol, atol, tmax, tmp)
-    t = 0.0
-    tc = 0.0
-    gprev = _start_g(y0, cphi, sphi)
+    H0 = carry[CARRY_H0]
+    t = carry[CARRY_T]
+    tc = carry[CARRY_TC]
+    gprev = carry[CARRY_G]
+    steps = int(carry[CARRY_STEPS])
+    if target == 0:
+        return 0, STATUS_DONE, t, steps
+    h_abs = carry[CARRY_HABS]
+    if h_abs > 0.0:
+        sy.field(sy.REDUCED, yout, P, K[0])
+    else:
+        h_abs = sy.dop853_first_step(sy.REDUCED, yout, P, K, rtol, atol, tmax, tmp)
     count = 0
-    steps = 0
     rejected = False
     # The step of systems.dop853_step written out here: this loop is the W4 hot path, and even
     # inlined the shared step costs it ~12 % (benchmarks/bench_ab.py); the tangent and
@@ -420,7 +478,7 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
                                       work, stack)
             kept = count
             for r in range(nroots):
-                if kept < 0 or kept >= ncross:
+                if kept < 0 or kept >= room:
                     break
                 theta = roots[r]
                 dp.dense_eval(F, yout, theta, yc)
@@ -434,19 +492,22 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
             yout[i] = ynew[i]
             K[0, i] = K[12, i]
         gprev = gnew
-        if count >= ncross:
+        if count >= target:
             code = STATUS_DONE
             break
+    _save_carry(carry, t, tc, gprev, steps)
+    carry[CARRY_HABS] = h_abs
     return count, code, t, steps
 
 
 @njit(parallel=True)
-def run_dop853_batch(Y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps,
+def run_dop853_batch(Y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, carry, limits,
                      out_cross, out_count, out_status, out_final, out_info):
     """Batch twin of :func:`orbit_dop853`, parallel over orbits (prange)."""
     n = Y0.shape[0]
     for j in prange(n):
         count, status, t, steps = orbit_dop853(Y0[j], P, cphi, sphi, direction, tmax, rtol, atol,
-                                               max_steps, out_cross[j], out_final[j])
+                                               max_steps, out_cross[j], out_final[j], carry[j],
+                                               limits[j, LIMIT_TARGET], limits[j, LIMIT_ROOM])
         store_orbit(j, count, status, t, steps, out_count, out_status, out_final, out_info)
     return 0

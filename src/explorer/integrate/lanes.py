@@ -58,12 +58,25 @@ from explorer.integrate._lanes_generated import (
     vsub,
     vzero,
 )
-from explorer.integrate.drivers import EPS, _finite5, _keep, _start_g, store_orbit
+from explorer.integrate.drivers import (
+    CARRY_G,
+    CARRY_H0,
+    CARRY_STEPS,
+    CARRY_T,
+    CARRY_TC,
+    EPS,
+    LIMIT_ROOM,
+    LIMIT_TARGET,
+    _finite5,
+    _keep,
+    _save_carry,
+    store_orbit,
+)
 from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_TMAX
 from explorer.kernels import taylor as tk
 from explorer.kernels.clock import advance_time, clip_step
 from explorer.kernels.events import excluded_by_variation, poly_step_roots, root_workspace
-from explorer.model.equations import energy, section_g
+from explorer.model.equations import section_g
 
 _IDLE = -1
 #: positive normal doubles: the range where vlog2_approx is valid
@@ -124,20 +137,23 @@ def _evaluate_lane(X, order, l, h, out):
 
 
 @njit
-def _finish(j, l, X, count, status, t, steps, out_count, out_status, out_final, out_info):
-    """Write the outputs of orbit j from lane l (its state is X[0, :, l]), as run_taylor_batch."""
+def _finish(j, l, X, count, status, t, tc, gprev, steps, carry, out_count, out_status, out_final,
+            out_info):
+    """Write the outputs of orbit j from lane l (its state is X[0, :, l]) and its carry, as
+    run_taylor_batch."""
     for i in range(NVAR):
         out_final[j, i] = X[0, i, l]
+    _save_carry(carry[j], t, tc, gprev, steps)
     store_orbit(j, count, status, t, steps, out_count, out_status, out_final, out_info)
 
 
 @njit
-def _start_lane(l, X, orb, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, next_orbit,
-                Y0, P, cphi, sphi, tmax, max_steps, ncross,
-                out_count, out_status, out_final, out_info):
-    """Put the next unstarted orbit that needs a step on lane l (the start of orbit_taylor;
-    orbits that stop before their first step are written out at once).  Returns 1 if the
-    lane got an orbit, 0 if the batch is exhausted (the lane then idles on the zero state)."""
+def _start_lane(l, X, orb, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, L_target, L_room, next_orbit,
+                Y0, tmax, max_steps, carry, limits, out_count, out_status, out_final, out_info):
+    """Put the next unstarted orbit that needs a step on lane l (the start of orbit_taylor, from
+    the orbit's carry; orbits that stop before their first step are written out at once).
+    Returns 1 if the lane got an orbit, 0 if the batch is exhausted (the lane then idles on
+    the zero state)."""
     n = Y0.shape[0]
     while True:
         j = atomic_fetch_add(next_orbit, 0, 1)
@@ -148,31 +164,39 @@ def _start_lane(l, X, orb, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, next_orbi
             return 0
         for i in range(NVAR):
             X[0, i, l] = Y0[j, i]
-        if ncross == 0:
-            _finish(j, l, X, 0, STATUS_DONE, 0.0, 0, out_count, out_status, out_final, out_info)
+        t = carry[j, CARRY_T]
+        tc = carry[j, CARRY_TC]
+        g = carry[j, CARRY_G]
+        steps = int(carry[j, CARRY_STEPS])
+        if limits[j, LIMIT_TARGET] == 0:
+            _finish(j, l, X, 0, STATUS_DONE, t, tc, g, steps, carry, out_count, out_status, out_final,
+                    out_info)
             continue
-        if 0.0 >= tmax:
-            _finish(j, l, X, 0, STATUS_TMAX, 0.0, 0, out_count, out_status, out_final, out_info)
+        if t >= tmax:
+            _finish(j, l, X, 0, STATUS_TMAX, t, tc, g, steps, carry, out_count, out_status, out_final,
+                    out_info)
             continue
-        if 0 >= max_steps:
-            _finish(j, l, X, 0, STATUS_MAX_STEPS, 0.0, 0, out_count, out_status, out_final, out_info)
+        if steps >= max_steps:
+            _finish(j, l, X, 0, STATUS_MAX_STEPS, t, tc, g, steps, carry, out_count, out_status, out_final,
+                    out_info)
             continue
         orb[l] = j
-        L_H0[l] = energy(Y0[j], P)
-        L_gprev[l] = _start_g(Y0[j], cphi, sphi)
-        L_t[l] = 0.0
-        L_tc[l] = 0.0
+        L_H0[l] = carry[j, CARRY_H0]
+        L_gprev[l] = g
+        L_t[l] = t
+        L_tc[l] = tc
         L_count[l] = 0
-        L_steps[l] = 0
+        L_steps[l] = steps
+        L_target[l] = limits[j, LIMIT_TARGET]
+        L_room[l] = limits[j, LIMIT_ROOM]
         return 1
 
 
 @njit
-def _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps,
+def _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
                 out_cross, out_count, out_status, out_final, out_info):
     """Integrate orbits taken from the shared counter ``next_orbit`` on up to ``nlanes`` lanes
     until none is left; each lane is drivers.orbit_taylor step for step."""
-    ncross = out_cross.shape[1]
     X = np.zeros((order + 1, NVAR, LANES))
     norms = np.empty((_N_NORMS, LANES))
     hv = np.zeros(LANES)
@@ -189,6 +213,8 @@ def _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, m
     L_H0 = np.zeros(LANES)
     L_count = np.zeros(LANES, np.int64)
     L_steps = np.zeros(LANES, np.int64)
+    L_target = np.zeros(LANES, np.int64)
+    L_room = np.zeros(LANES, np.int64)
     L_status = np.zeros(LANES, np.int64)
     L_last = np.zeros(LANES, np.bool_)
     L_stop = np.zeros(LANES, np.bool_)
@@ -199,8 +225,8 @@ def _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, m
     active = 0
     for l in range(LANES):
         if l < nlanes:
-            active += _start_lane(l, X, orb, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, next_orbit,
-                                  Y0, P, cphi, sphi, tmax, max_steps, ncross,
+            active += _start_lane(l, X, orb, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, L_target, L_room,
+                                  next_orbit, Y0, tmax, max_steps, carry, limits,
                                   out_count, out_status, out_final, out_info)
         else:
             orb[l] = _IDLE
@@ -261,7 +287,7 @@ def _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, m
                     nroots = poly_step_roots(gc, order, h, gprev, gnew, direction, roots,
                                              brackets, work, stack)
                 for r in range(nroots):
-                    if count >= ncross:
+                    if count >= L_room[l]:
                         break
                     tau = roots[r]
                     _evaluate_lane(X, order, l, tau, yc)
@@ -280,7 +306,7 @@ def _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, m
                 for i in range(NVAR):
                     X[0, i, l] = yl[i]
                 L_gprev[l] = gnew
-                if count >= ncross:
+                if count >= L_target[l]:
                     L_status[l] = STATUS_DONE
                     L_stop[l] = True
                 elif t >= tmax:          # the checks at the top of orbit_taylor's loop
@@ -291,26 +317,26 @@ def _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, m
                     L_stop[l] = True
             if L_stop[l]:
                 # orbit j stopped: write it out and refill the lane
-                _finish(j, l, X, L_count[l], L_status[l], L_t[l], L_steps[l],
+                _finish(j, l, X, L_count[l], L_status[l], L_t[l], L_tc[l], L_gprev[l], L_steps[l], carry,
                         out_count, out_status, out_final, out_info)
-                active += _start_lane(l, X, orb, L_t, L_tc, L_gprev, L_H0, L_count, L_steps,
-                                      next_orbit, Y0, P, cphi, sphi, tmax, max_steps, ncross,
+                active += _start_lane(l, X, orb, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, L_target, L_room,
+                                      next_orbit, Y0, tmax, max_steps, carry, limits,
                                       out_count, out_status, out_final, out_info) - 1
     return 0
 
 
 @njit(parallel=True)
-def _run_lanes(nworkers, nlanes, Y0, P, cphi, sphi, direction, tmax, order, max_steps,
+def _run_lanes(nworkers, nlanes, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
                out_cross, out_count, out_status, out_final, out_info):
     """nworkers workers (prange) of nlanes lanes each, fed from one shared queue of orbits."""
     next_orbit = np.zeros(1, np.int64)
     for w in prange(nworkers):
-        _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps,
+        _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
                     out_cross, out_count, out_status, out_final, out_info)
     return 0
 
 
-def run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps,
+def run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
                            out_cross, out_count, out_status, out_final, out_info, max_lanes=LANES):
     """Lane twin of :func:`explorer.integrate.drivers.run_taylor_batch` (same arguments and outputs, bit
     for bit the same results).  One worker per numba thread (at most one per orbit), each with
@@ -320,4 +346,4 @@ def run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps,
     nworkers = max(1, min(get_num_threads(), n))
     nlanes = max(1, min(int(max_lanes), LANES, -(-n // nworkers)))
     return _run_lanes(nworkers, nlanes, Y0, P, cphi, sphi, int(direction), float(tmax), int(order),
-                      int(max_steps), out_cross, out_count, out_status, out_final, out_info)
+                      int(max_steps), carry, limits, out_cross, out_count, out_status, out_final, out_info)

@@ -84,20 +84,21 @@ class Method:
                         fracs=np.ascontiguousarray(fracs, dtype=np.float64))
 
 
-def run_crossings(prep: Prepared, Y0, P, cphi, sphi, direction, tmax, max_steps, data, count, status, final,
-                  info):
-    """Crossings of the section for every orbit of ``Y0`` (arrays filled in place)."""
+def run_crossings(prep: Prepared, Y0, P, cphi, sphi, direction, tmax, max_steps, carry, limits, data, count,
+                  status, final, info):
+    """Crossings of the section for every orbit of ``Y0`` (arrays filled in place), a block
+    continued from ``carry`` up to ``limits`` (:mod:`explorer.integrate.drivers`)."""
     kind = prep.method.kind
     if kind == "taylor":
         # the SIMD lane driver, bit for bit drivers.run_taylor_batch (the scalar reference)
-        lanes.run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, prep.order, max_steps,
+        lanes.run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, prep.order, max_steps, carry, limits,
                                      data, count, status, final, info)
     elif kind == "dop853":
-        drivers.run_dop853_batch(Y0, P, cphi, sphi, direction, tmax, prep.tol, prep.tol, max_steps,
-                                 data, count, status, final, info)
+        drivers.run_dop853_batch(Y0, P, cphi, sphi, direction, tmax, prep.tol, prep.tol, max_steps, carry,
+                                 limits, data, count, status, final, info)
     else:
         drivers.run_split_batch(Y0, P, cphi, sphi, direction, tmax, prep.dt, prep.flow_ids, prep.fracs,
-                                max_steps, data, count, status, final, info)
+                                max_steps, carry, limits, data, count, status, final, info)
 
 
 def run_tangent(prep: Prepared, Y0, V0, P, T, max_steps, hist_t, hist, res, status, final, steps):
