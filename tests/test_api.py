@@ -30,7 +30,7 @@ def test_result_types_are_frozen():
     import dataclasses
 
     for cls in (explorer.Crossings, explorer.Indicators, explorer.FixedPoint, explorer.Branch,
-                explorer.SweepReport):
+                explorer.SweepReport, explorer.PeriodicOrbit):
         assert dataclasses.is_dataclass(cls) and cls.__dataclass_params__.frozen, cls
 
 

@@ -49,6 +49,13 @@ _EXPORTS = {
     "find_fixed_point": "explorer.analysis.fixedpoints",
     "continue_branch": "explorer.analysis.fixedpoints",
     "separatrices": "explorer.analysis.fixedpoints",
+    # periodic orbits of any period and rotation numbers
+    "PeriodicOrbit": "explorer.analysis.periodic",
+    "find_periodic_orbit": "explorer.analysis.periodic",
+    "search_periodic_orbits": "explorer.analysis.periodic",
+    "continue_periodic": "explorer.analysis.periodic",
+    "rotation_number": "explorer.analysis.rotation",
+    "rotation_profile": "explorer.analysis.rotation",
     # scenes, sweeps and stores
     "Scene": "explorer.io.scene",
     "load_scene": "explorer.io.scene",

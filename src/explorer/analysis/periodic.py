@@ -105,7 +105,7 @@ class PeriodicOrbit:
     return_times : ndarray (K,)
         Time from ``points[i]`` to ``points[i + 1]``.
     residual : float
-        max_i |P(points[i]) - points[i + 1 mod K]|.
+        ``max_i |P(points[i]) - points[i + 1 mod K]|``.
     iterations : int
         Newton iterations taken.
     symmetric : bool
@@ -137,12 +137,13 @@ class PeriodicOrbit:
 
     @property
     def stable(self) -> bool:
-        """Linear stability, |trace| < 2 (as :class:`~explorer.analysis.fixedpoints.FixedPoint`)."""
+        """Linear stability, ``|trace| < 2`` (as :class:`~explorer.analysis.fixedpoints.FixedPoint`)."""
         return abs(self.trace) < 2.0
 
     @property
     def kind(self) -> str:
-        """"parabolic" if ||trace| - 2| <= KIND_TOL, else "elliptic" (|trace| < 2) or "hyperbolic"."""
+        """``"parabolic"`` if ``||trace| - 2| <= KIND_TOL``, else ``"elliptic"`` (``|trace| < 2``) or
+        ``"hyperbolic"``."""
         if abs(abs(self.trace) - 2.0) <= KIND_TOL:
             return "parabolic"
         return "elliptic" if abs(self.trace) < 2.0 else "hyperbolic"
@@ -498,7 +499,7 @@ def search_periodic_orbits(params, h, period, *, grid=12, line=None, phi0=math.p
     Guesses: (i) on the symmetry lines of the reversor (:func:`symmetry_line_points`, ``line``
     start points per line, default 8 ``grid``), where symmetric orbits are found as roots;
     (ii) the points of a ``grid`` x ``grid`` grid of the allowed region's bounding box, inside
-    the region, where |P^K(x) - x| is a local minimum over the grid (best first).  Newton's
+    the region, where ``|P^K(x) - x|`` is a local minimum over the grid (best first).  Newton's
     method (:func:`find_periodic_orbit`) runs from at most ``max_guesses`` of them, skipping a
     guess that lies on an orbit already found; orbits are reduced to their minimal period
     (those of a smaller period are dropped) and deduplicated: two orbits are the same if a point
@@ -609,7 +610,7 @@ def continue_periodic(params, h, period, parameter, start, stop, step, guess, *,
     From ``start`` to ``stop`` by ``step``; each orbit from the previous one (secant predictor
     on all K points, steps halved on failure); the branch ends early (``stopped``) where
     Newton fails, e.g. at a fold (trace -> +2), or where the orbit collapses to a smaller
-    period.  Stability changes (rule in the module docstring): |trace| crossing 2 located by
+    period.  Stability changes (rule in the module docstring): ``|trace|`` crossing 2 located by
     bisection to ``bisect_tol`` (relative), "tangent" at trace = +2, "period-doubling" at
     trace = -2; a local extremum of the sampled trace within ``touch_window`` of +-2 is
     refined by golden-section search and reported as a touch when it comes within

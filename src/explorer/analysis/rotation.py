@@ -150,7 +150,7 @@ def rotation_number(params, h, start, *, center=None, iterates=DEFAULT_ITERATES,
     tol : float
         Taylor tolerance of the orbit.
     conv_tol : float
-        |WB_N - WB_2N| (in turns) below which the orbit counts as regular.
+        ``|WB_N - WB_2N|`` (in turns) below which the orbit counts as regular.
 
     Returns
     -------
