@@ -36,6 +36,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 EQUATIONS = ROOT / "src" / "explorer" / "model" / "equations.py"
 OUTPUT = ROOT / "src" / "explorer" / "integrate" / "_lanes_generated.py"
+TANGENT_OUTPUT = ROOT / "src" / "explorer" / "integrate" / "_tangent_lanes_generated.py"
 
 #: lanes per vector: 8 doubles = one AVX-512 register (two AVX2 registers elsewhere).
 #: Measured (order 15, coefficients per orbit-step): 4 lanes ~62 ns, 8 lanes ~42 ns, 16 lanes
@@ -315,19 +316,30 @@ class Translator:
 
     BINOPS = {ast.Add: "vadd", ast.Sub: "vsub", ast.Mult: "vmul"}
 
-    def __init__(self, array_name):
+    def __init__(self, array_name, arrays=None, stride="NVAR"):
+        """``arrays`` maps each scalar array name to (lane array, first row): several scalar
+        arrays (the state X and a deviation D) can live in one lane array of ``stride`` rows."""
         self.X = array_name
+        self.arrays = arrays if arrays is not None else {array_name: (array_name, None)}
+        self.stride = stride
         self.vectors = set()
 
     def is_x(self, node):
-        return isinstance(node, ast.Subscript) and isinstance(node.value, ast.Name) and node.value.id == self.X
+        return isinstance(node, ast.Subscript) and isinstance(node.value, ast.Name) and node.value.id in self.arrays
+
+    def lane_array(self, node):
+        return self.arrays[node.value.id][0]
 
     def offset(self, node):
         idx = node.slice
         if not (isinstance(idx, ast.Tuple) and len(idx.elts) == 2):
             raise Untranslatable(ast.unparse(node))
         var, k = idx.elts
-        return f"({ast.unparse(k)}) * (NVAR * LANES) + ({ast.unparse(var)}) * LANES"
+        row = ast.unparse(var)
+        first = self.arrays[node.value.id][1]
+        if first is not None:
+            row = f"{first} + ({row})"
+        return f"({ast.unparse(k)}) * ({self.stride} * LANES) + ({row}) * LANES"
 
     def uses_vector(self, node):
         for sub in ast.walk(node):
@@ -338,7 +350,7 @@ class Translator:
     def expr(self, node):
         """(code, is_vector)."""
         if self.is_x(node):
-            return f"vload({self.X}, {self.offset(node)})", True
+            return f"vload({self.lane_array(node)}, {self.offset(node)})", True
         if not self.uses_vector(node):
             return ast.unparse(node), False
         if isinstance(node, ast.Name):
@@ -370,7 +382,7 @@ class Translator:
                 if self.is_x(tgt):
                     code, vec = self.expr(st.value)
                     code = code if vec else f"vsplat({code})"
-                    out.append(f"{pad}vstore({self.X}, {self.offset(tgt)}, {code})")
+                    out.append(f"{pad}vstore({self.lane_array(tgt)}, {self.offset(tgt)}, {code})")
                 elif isinstance(tgt, ast.Name) and isinstance(st.value, ast.Constant) and st.value.value == 0.0 \
                         and isinstance(st.value.value, float):
                     # an accumulator: a float zero in the lane loop is a zero vector
@@ -456,23 +468,202 @@ def generate(lanes=DEFAULT_LANES):
     return (HEADER.format(L=lanes, NVAR=NVAR) + SIMD + coefficients_kernel() + evaluate_kernel())
 
 
+# ----------------------------------------------------------------------------- tangent lanes
+#: rows of the tangent lane array Z[k, row, lane]: the orbit, then up to two deviation vectors
+TANGENT_ROWS = 15
+
+TANGENT_HEADER = '''\
+# GENERATED FILE - DO NOT EDIT.
+# Written by tools/gen_lanes.py from explorer.model.equations.taylor_coefficients_tangent
+# (translated operation by operation) and templates mirroring explorer.kernels.taylor.
+# Regenerate:  python tools/gen_lanes.py     (check: --check)
+"""Lane kernels of the tangent Taylor method: LANES orbits per vector, each with its state and
+up to two deviation vectors in Z[k, row, lane] (C-contiguous, NROWS rows: 0..4 the orbit,
+5..9 the first deviation vector, 10..14 the second).  Each lane computes bit for bit what
+equations.taylor_coefficients_tangent and kernels.taylor compute for it (same IEEE operations
+in the same order, no fast-math, no FMA).  Used by :mod:`explorer.integrate.tangent_lanes`.
+"""
+from explorer._jit import njit
+from explorer.integrate._lanes_generated import (  # noqa: F401 - the vector operations
+    LANES,
+    vabs,
+    vadd,
+    vdiv,
+    vload,
+    vlog2_approx,
+    vmax_gt,
+    vmul,
+    vneg,
+    vsplat,
+    vstore,
+    vsub,
+    vzero,
+)
+
+#: rows of the lane array: the orbit (5) and two deviation vectors (5 each)
+NROWS = {rows}
+#: first row of each deviation vector
+DEV1 = 5
+DEV2 = 10
+'''
+
+TANGENT_TEMPLATES = '''
+
+@njit
+def evaluate5_lanes(Z, order, h, out, base):
+    """out[base + i, l] = sum_k Z[k, base + i, l] h[l]^k for i = 0..4 (Horner, five interleaved
+    chains), out of shape (NROWS, LANES); per lane exactly kernels.taylor.evaluate."""
+    hv = vload(h, 0)
+    o = order * (NROWS * LANES) + base * LANES
+{init}
+    for k in range(order - 1, -1, -1):
+        o = k * (NROWS * LANES) + base * LANES
+{body}
+{store}
+
+
+@njit
+def tangent_step_norms_lanes(Z, order, e_p, e_q, out):
+    """The step norms of the orbit rows 0..4 (systems.taylor_step: finiteness of the last two
+    coefficients, kernels.taylor.step_size on rows 0..4 only), as _lanes_generated.step_norms_lanes:
+    out (7, LANES) = (f, g, a, bm, s / a, s / bm, d)."""
+    o0 = 0
+    op = order * (NROWS * LANES)
+    oq = (order - 1) * (NROWS * LANES)
+{norms}
+'''
+
+
+def _loaded_names(node):
+    return {n.id for n in ast.walk(node) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)}
+
+
+def prune(body, keep_array):
+    """The statements of ``body`` that the stores into ``keep_array`` need (a backward slice):
+    a store into another array is dropped, an assignment to a name is kept when a kept
+    statement reads that name, a loop when its body keeps something.  Statements are not
+    reordered or changed, so every kept expression is the scalar one."""
+    needed = set()
+
+    def walk(stmts, mark):
+        out = []
+        for st in stmts:
+            if isinstance(st, ast.Expr) and isinstance(st.value, ast.Constant):
+                continue
+            if isinstance(st, ast.For):
+                inner = walk(st.body, mark)
+                if inner:
+                    loop = ast.For(target=st.target, iter=st.iter, body=inner, orelse=[])
+                    out.append(loop)
+                    if mark:
+                        needed.update(_loaded_names(st.iter))
+                continue
+            if isinstance(st, ast.Assign):
+                tgt = st.targets[0]
+                if isinstance(tgt, ast.Subscript):
+                    keep = isinstance(tgt.value, ast.Name) and tgt.value.id == keep_array
+                    if keep:
+                        if mark:
+                            needed.update(_loaded_names(st.value) | _loaded_names(tgt.slice))
+                        out.append(st)
+                    continue
+                names = {n.id for n in ast.walk(tgt) if isinstance(n, ast.Name)}
+                if names & needed:
+                    if mark:
+                        needed.update(_loaded_names(st.value))
+                    out.append(st)
+                continue
+            if isinstance(st, ast.AugAssign) and isinstance(st.target, ast.Name):
+                if st.target.id in needed:
+                    if mark:
+                        needed.update(_loaded_names(st.value))
+                    out.append(st)
+                continue
+            raise Untranslatable(ast.unparse(st))
+        return out
+
+    while True:
+        before = set(needed)
+        walk(body, True)
+        if needed == before:
+            return walk(body, False)
+
+
+def tangent_kernels():
+    fn = scalar_function(EQUATIONS, "taylor_coefficients_tangent")
+    args = [a.arg for a in fn.args.args]
+    if args != ["P", "X", "D", "order"]:
+        raise Untranslatable(f"unexpected signature {args}")
+    arrays = {"X": ("Z", None), "D": ("Z", "db")}
+    full = Translator("X", arrays, stride="NROWS").stmts(fn.body, 4)
+    dev = Translator("X", arrays, stride="NROWS").stmts(prune(fn.body, "D"), 4)
+    doc_full = ('    """Lane twin of equations.taylor_coefficients_tangent, translated from its source by\n'
+                '    tools/gen_lanes.py: the orbit\'s coefficients in rows 0..4 and those of the deviation\n'
+                '    vector in rows db..db + 4 of Z[k, row, lane], k = 1..order, given Z[0]."""')
+    doc_dev = ('    """The deviation vector\'s part of taylor_coefficients_tangent only (its statements that\n'
+               '    the stores into D need, unchanged; tools/gen_lanes.py prune): rows db..db + 4 of Z\n'
+               '    from the orbit\'s coefficients already in rows 0..4 (the same numbers the full\n'
+               '    recurrence recomputes for them)."""')
+    pad = " " * 4
+    init = "\n".join(f"{pad}a{i} = vload(Z, o + {i} * LANES)" for i in range(NVAR))
+    body = "\n".join(f"{pad * 2}a{i} = vadd(vmul(a{i}, hv), vload(Z, o + {i} * LANES))" for i in range(NVAR))
+    store = "\n".join(f"{pad}vstore(out, (base + {i}) * LANES, a{i})" for i in range(NVAR))
+    norms = []
+    for name, base in (("f", "op"), ("g", "oq")):
+        terms = [f"vload(Z, {base} + {i} * LANES)" for i in range(NVAR)]
+        acc = terms[0]
+        for t in terms[1:]:
+            acc = f"vadd({acc}, {t})"
+        norms.append(f"{pad}{name} = {acc}")
+    norms.append(f"{pad}s = vsplat(1.0)")
+    norms.append(f"{pad}a = vzero()")
+    norms.append(f"{pad}bm = vzero()")
+    for i in range(NVAR):
+        norms.append(f"{pad}s = vmax_gt(vabs(vload(Z, o0 + {i} * LANES)), s)")
+        norms.append(f"{pad}a = vmax_gt(vabs(vload(Z, op + {i} * LANES)), a)")
+        norms.append(f"{pad}bm = vmax_gt(vabs(vload(Z, oq + {i} * LANES)), bm)")
+    norms.append(f"{pad}u = vdiv(s, a)")
+    norms.append(f"{pad}v = vdiv(s, bm)")
+    norms.append(f"{pad}d = vsub(vmul(vsplat(e_q), vlog2_approx(v)), vmul(vsplat(e_p), vlog2_approx(u)))")
+    for r, name in enumerate(("f", "g", "a", "bm", "u", "v", "d")):
+        norms.append(f"{pad}vstore(out, {r} * LANES, {name})")
+    return ("\n\n@njit\ndef tangent_coefficients_lanes(P, Z, order, db):\n" + doc_full + "\n" + "\n".join(full)
+            + "\n\n\n@njit\ndef deviation_coefficients_lanes(P, Z, order, db):\n" + doc_dev + "\n"
+            + "\n".join(dev) + "\n"
+            + TANGENT_TEMPLATES.format(init=init, body=body, store=store, norms="\n".join(norms)))
+
+
+def generate_tangent():
+    return TANGENT_HEADER.format(rows=TANGENT_ROWS) + tangent_kernels()
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("-o", "--output", type=Path, default=OUTPUT)
     ap.add_argument("--lanes", type=int, default=DEFAULT_LANES, help="orbits per vector (power of 2)")
     ap.add_argument("--check", action="store_true", help="do not write; exit 1 if the output differs")
+    ap.add_argument("--tangent-output", type=Path, default=None,
+                    help=f"where the tangent lane kernels go (default {TANGENT_OUTPUT.name} when -o is not given)")
     args = ap.parse_args(argv)
     if args.lanes < 1 or args.lanes & (args.lanes - 1):
         ap.error("--lanes must be a power of 2")
-    text = generate(args.lanes)
+    outputs = [(args.output, generate(args.lanes))]
+    tangent_out = args.tangent_output
+    if tangent_out is None and args.output == OUTPUT:
+        tangent_out = TANGENT_OUTPUT
+    if tangent_out is not None:
+        outputs.append((tangent_out, generate_tangent()))
     if args.check:
-        old = args.output.read_text() if args.output.exists() else ""
-        if old != text:
-            print(f"{args.output} is out of date; run tools/gen_lanes.py", file=sys.stderr)
-            return 1
-        return 0
-    args.output.write_text(text)
-    print(f"wrote {args.output} (LANES = {args.lanes})")
+        stale = 0
+        for path, text in outputs:
+            old = path.read_text() if path.exists() else ""
+            if old != text:
+                print(f"{path} is out of date; run tools/gen_lanes.py", file=sys.stderr)
+                stale = 1
+        return stale
+    for path, text in outputs:
+        path.write_text(text)
+        print(f"wrote {path} (LANES = {args.lanes})")
     return 0
 
 

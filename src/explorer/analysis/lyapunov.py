@@ -11,6 +11,9 @@ time T with tangent dynamics consistent with the integrator (variational equatio
   orbits, -> 0 for stable periodic ones, grows like chi t / 2 for chaotic ones;
 - ``fli``   fast Lyapunov indicator max_{t <= T} ln |delta(t)| (Froeschlé, Lega & Gonczi 1997,
   Celest. Mech. 67, 41);
+- ``sali``  smaller alignment index min(|w1 + w2|, |w1 - w2|) of two unit deviation vectors
+  (Skokos 2001, J. Phys. A 34, 10029) and ``gali2`` = |w1 ^ w2| (Skokos, Bountis & Antonopoulos
+  2007, Physica D 231, 30), when asked for (``which``; Taylor method);
 
 with a convergence history at ``history`` log-spaced times.  The deviation vector starts
 tangent to the energy shell and to the Casimir surface (orthogonal to grad H and grad C), so
@@ -20,7 +23,7 @@ from __future__ import annotations
 
 import math
 import numbers
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -32,6 +35,17 @@ from explorer.model import ParameterError, validation
 
 DEFAULT_TIME = 1000.0
 DEFAULT_DT = 0.02
+#: the indicators :func:`indicators` can compute (``which``)
+INDICATOR_NAMES = ("mlce", "megno", "fli", "sali", "gali2")
+#: computed unless ``which`` says otherwise (one deviation vector)
+DEFAULT_INDICATORS = ("mlce", "megno", "fli")
+#: early classification (``early_stop``): SALI below EARLY_SALI, or <Y> above EARLY_MEGNO at
+#: every step end of [t/2, t] with t >= EARLY_TIME, classifies an orbit chaotic at t
+EARLY_SALI = 1e-8
+EARLY_MEGNO = 8.0
+EARLY_TIME = 100.0
+#: why an orbit stopped before T (``Indicators.early``)
+EARLY_NAMES = ("none", "sali", "megno")
 #: a generic start direction (no symmetry of the model), projected onto the shell
 GENERIC_DIRECTION = np.array([0.8017, -0.3327, 0.4721, 0.1190, -0.0712])
 
@@ -64,6 +78,26 @@ def deviation_vector(params, y, direction=GENERIC_DIRECTION):
     return v / np.linalg.norm(v, axis=1, keepdims=True)
 
 
+#: a generic direction for the second deviation vector of SALI and GALI_2
+SECOND_DIRECTION = np.array([-0.2113, 0.5507, 0.1342, -0.4029, 0.2977])
+
+
+def second_deviation_vector(params, y, direction=SECOND_DIRECTION):
+    """Unit vector(s) tangent to the Casimir surface {g1^2 + g2^2 = 1} at y, *not* restricted to
+    the energy shell: the second deviation vector of SALI and GALI_2.  (Two vectors tangent to
+    the shell of a regular orbit of two degrees of freedom both end up along the one direction
+    in which the torus shears, so their SALI would decay like 1/t; with a component across the
+    shell they shear differently and SALI stays away from 0, as Skokos 2001 assumes.)"""
+    y = np.atleast_2d(np.asarray(y, float))
+    gC = np.zeros_like(y)
+    gC[:, 3] = y[:, 3]
+    gC[:, 4] = y[:, 4]
+    gC /= np.linalg.norm(gC, axis=1, keepdims=True)
+    w = np.broadcast_to(np.asarray(direction, float), y.shape).copy()
+    w -= np.sum(w * gC, axis=1, keepdims=True) * gC
+    return w / np.linalg.norm(w, axis=1, keepdims=True)
+
+
 @dataclass(frozen=True)
 class Indicators:
     """Per-orbit chaos indicators at time ``time`` and their history (:func:`indicators`).
@@ -86,6 +120,16 @@ class Indicators:
     history: np.ndarray    # (N, H, 5) rows (t, mlce, <Y>, Y, fli), NaN where not reached
     method: str
     settings: dict
+    sali: np.ndarray | None = None       # (N,) SALI at the end (NaN unless asked for)
+    gali2: np.ndarray | None = None      # (N,) GALI_2 at the end (NaN unless asked for)
+    early: np.ndarray | None = None      # (N,) 0: ran to T, 1: stopped by SALI, 2: by <Y> (EARLY_NAMES)
+    deviation: np.ndarray | None = None  # (N, 2, 5) final unit deviation vectors (NaN if not computed)
+    which: tuple = field(default=DEFAULT_INDICATORS)
+
+    def chaotic(self, threshold: float) -> np.ndarray:
+        """Orbits classified chaotic: <Y> > ``threshold`` or stopped early as chaotic."""
+        early = np.zeros(len(self.megno), bool) if self.early is None else self.early > 0
+        return early | (self.megno > threshold)
 
     def status_name(self, i):
         return STATUS_NAMES[int(self.status[i])]
@@ -97,7 +141,9 @@ class Indicators:
 
 def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", tol: float = 1e-13,
                dt: float = DEFAULT_DT, history: int = 0, v0=None, max_steps: int = 10**9,
-               threads: int | None = None) -> Indicators:
+               threads: int | None = None, which=None, early_stop: bool = False,
+               early_sali: float = EARLY_SALI, early_megno: float = EARLY_MEGNO,
+               early_time: float = EARLY_TIME, w0=None) -> Indicators:
     """Chaos indicators of the orbits starting at ``y0`` over the time ``T``.
 
     Each orbit of MODEL.md R3 is integrated with one deviation vector ``w`` obeying the
@@ -126,6 +172,15 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
         Step budget per orbit.
     threads : int, optional
         Numba threads for this call (at most ``NUMBA_NUM_THREADS``).
+    which : sequence of str, optional
+        The indicators to compute, among :data:`INDICATOR_NAMES` (default mlce, megno, fli);
+        ``sali`` or ``gali2`` add a second deviation vector (:func:`second_deviation_vector`,
+        or ``w0``; Taylor method only).
+    early_stop : bool
+        Early classification (Taylor method): an orbit stops as chaotic at the first step end
+        where SALI < ``early_sali`` (when SALI is computed) or where <Y> has stayed above
+        ``early_megno`` at every step end of [t/2, t] and t >= ``early_time``; its ``time`` is
+        the time reached and ``early`` says which rule fired.
 
     Returns
     -------
@@ -140,10 +195,21 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
     Y0 = np.ascontiguousarray(np.atleast_2d(np.asarray(y0, dtype=np.float64)))
     if Y0.ndim != 2 or Y0.shape[1] != 5 or not np.all(np.isfinite(Y0)):
         raise ParameterError("y0 must be finite with shape (N, 5) = (p1, p2, M, g1, g2) per orbit")
+    which = check_which(which)
+    nvec = 2 if ("sali" in which or "gali2" in which) else 1
+    if (nvec == 2 or early_stop) and m.kind != "taylor":
+        raise ParameterError(f"sali, gali2 and early_stop need method 'taylor'; got method {method!r}")
     V0 = deviation_vector(P, Y0) if v0 is None else np.atleast_2d(np.asarray(v0, float))
     V0 = np.ascontiguousarray(np.broadcast_to(V0, Y0.shape), dtype=np.float64)
+    W0 = second_deviation_vector(P, Y0) if w0 is None else np.atleast_2d(np.asarray(w0, float))
+    W0 = np.ascontiguousarray(np.broadcast_to(W0, Y0.shape), dtype=np.float64)
     if not isinstance(history, numbers.Integral) or history < 0:
         raise ParameterError(f"history must be an integer >= 0, got {history!r}")
+    early_stop = bool(early_stop)
+    if early_stop:
+        early_sali = validation.real("early_sali", early_sali, 0.0, 1.0)
+        early_megno = validation.real("early_megno", early_megno, 2.0, lo_open=True)
+        early_time = validation.real("early_time", early_time, 0.0)
     N = Y0.shape[0]
     hist_t = (np.geomspace(min(1.0, T), T, history) if history else np.zeros(0))
     hist = np.full((N, len(hist_t), 5), np.nan)
@@ -151,19 +217,48 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
     status = np.zeros(N, np.int64)
     final = np.zeros((N, 5))
     steps = np.zeros(N, np.int64)
+    ext = np.full((N, 3), np.nan)
+    dev = np.full((N, 2, 5), np.nan)
     settings = {"method": method, "time": T}
+    if early_stop:
+        settings.update(early_stop=True, early_sali=early_sali if nvec == 2 else 0.0, early_megno=early_megno,
+                        early_time=early_time)
     old = get_num_threads()
     if threads is not None:
         set_num_threads(validation.threads(threads, max_threads()))
     try:
         prep = m.prepare(tol=tol, dt=dt)
         settings.update(prep.settings)
-        methods.run_tangent(prep, Y0, V0, P, T, int(max_steps), hist_t, hist, res, status, final, steps)
+        if m.kind == "taylor":
+            # the SIMD lanes, bit for bit tangent.orbit_tangent_taylor (its scalar reference)
+            from explorer.integrate import tangent_lanes
+
+            tangent_lanes.run_tangent_lanes_batch(
+                Y0, V0, W0, nvec, P, T, prep.order, int(max_steps), early_stop,
+                float(early_sali) if nvec == 2 else 0.0, float(early_megno), float(early_time), hist_t, hist, res,
+                ext, status, final, steps, dev)
+        else:
+            methods.run_tangent(prep, Y0, V0, P, T, int(max_steps), hist_t, hist, res, status, final, steps)
+            ext[:, 2] = 0
     finally:
         if threads is not None:
             set_num_threads(old)
     return Indicators(res[:, 0], res[:, 1], res[:, 2], res[:, 3], res[:, 4], status, steps, final, hist_t,
-                      hist, method, settings)
+                      hist, method, settings, sali=ext[:, 0], gali2=ext[:, 1], early=ext[:, 2].astype(np.int64),
+                      deviation=dev, which=which)
+
+
+def check_which(which) -> tuple:
+    """The indicator names asked for (ParameterError naming the allowed ones)."""
+    if which is None:
+        return DEFAULT_INDICATORS
+    if isinstance(which, str):
+        which = (which,)
+    which = tuple(which)
+    bad = [w for w in which if w not in INDICATOR_NAMES]
+    if bad or not which:
+        raise ParameterError(f"indicators must be a non-empty list of {', '.join(INDICATOR_NAMES)}; got {which!r}")
+    return tuple(dict.fromkeys(which))
 
 
 def regular_bound(T: float) -> float:

@@ -97,6 +97,121 @@ def orbit_tangent_taylor(y0, v0, P, T, order, max_steps, hist_t, hist, res, yout
     return code, steps
 
 
+@njit
+def _early(acc, v, w, nvec, sali_stop, megno_level, tmin, since):
+    """The early classification rule after a step (kernels.tangent): SALI of the two unit
+    deviation vectors below ``sali_stop`` (when nvec == 2 and sali_stop > 0), or <Y> above
+    ``megno_level`` over [t/2, t] with t >= ``tmin`` (when megno_level > 0).  Returns
+    (EARLY_* code, since)."""
+    if nvec == 2 and sali_stop > 0.0 and tg.sali(v, w, 5) < sali_stop:
+        return tg.EARLY_SALI, since
+    if megno_level > 0.0:
+        stop, since = tg.megno_early(acc, since, megno_level, tmin)
+        if stop:
+            return tg.EARLY_MEGNO, since
+    return tg.EARLY_NONE, since
+
+
+@njit
+def _finish_ext(acc, v, w, nvec, early, res, ext, wout):
+    """The result row, (SALI, GALI_2, early code) and the final unit deviation vectors."""
+    tg.result(acc, res)
+    for i in range(5):
+        wout[0, i] = v[i]
+        if nvec == 2:
+            wout[1, i] = w[i]
+    if nvec == 2:
+        ext[tg.EXT_SALI] = tg.sali(v, w, 5)
+        ext[tg.EXT_GALI2] = tg.gali2(v, w, 5)
+    else:
+        ext[tg.EXT_SALI] = np.nan
+        ext[tg.EXT_GALI2] = np.nan
+    ext[tg.EXT_EARLY] = early
+
+
+@njit
+def orbit_tangent_taylor_ext(y0, v0, w0, nvec, P, T, order, max_steps, early_stop, sali_stop, megno_level,
+                             early_tmin, hist_t, hist, res, ext, wout, yout):
+    """:func:`orbit_tangent_taylor` with a second deviation vector ``w0`` (nvec = 2: SALI and
+    GALI_2; its coefficients from the same recurrence, taylor_coefficients_tangent, on the orbit's
+    coefficients) and the early classification (``early_stop``: :func:`_early` after every step;
+    the orbit stops with STATUS_DONE at the time reached and its EARLY_* code in ext).  With
+    nvec = 1 and no early stop the orbit, steps and indicators are those of
+    :func:`orbit_tangent_taylor` bit for bit.  The scalar reference of
+    :mod:`explorer.integrate.tangent_lanes`."""
+    n = 10
+    Z = np.empty((n, order + 1))
+    W = np.empty((5, order + 1))
+    z = np.empty(n)
+    znew = np.empty(n)
+    w = np.zeros(5)
+    wnew = np.empty(5)
+    acc = np.zeros(tg.N_ACC)
+    row = np.empty(tg.N_RES)
+    factor = tk.safety_factor(order)
+    for i in range(5):
+        z[i] = y0[i]
+        z[5 + i] = v0[i]
+        w[i] = w0[i]
+    tg.renormalize(z[5:], 5)
+    if nvec == 2:
+        tg.renormalize(w, 5)
+    t = 0.0
+    steps = 0
+    hpos = 0
+    since = -1.0
+    early = tg.EARLY_NONE
+    while True:
+        for i in range(n):
+            Z[i, 0] = z[i]
+        code, h, last, steps = sy.taylor_step(sy.TANGENT, Z, P, t, T, STATUS_DONE, order, factor, steps,
+                                              max_steps, znew)
+        if code != sy.STEP_OK:
+            break
+        if nvec == 2:
+            for i in range(5):
+                W[i, 0] = w[i]
+            # the orbit's rows are recomputed by the same recurrence: the same numbers
+            taylor_coefficients_tangent(P, Z[:5], W, order)
+            tk.evaluate(W, order, h, wnew)
+            if not _finite(wnew, 5):
+                code = STATUS_NONFINITE
+                break
+        t_new = T if last else t + h
+        hpos = _observe(acc, znew[5:], t, t_new, hist_t, hist, hpos, row)
+        if nvec == 2:
+            tg.renormalize(wnew, 5)
+            for i in range(5):
+                w[i] = wnew[i]
+        t = t_new
+        for i in range(n):
+            z[i] = znew[i]
+        if early_stop:
+            early, since = _early(acc, z[5:], w, nvec, sali_stop, megno_level, early_tmin, since)
+            if early != tg.EARLY_NONE:
+                code = STATUS_DONE
+                break
+    _finish_ext(acc, z[5:], w, nvec, early, res, ext, wout)
+    for i in range(5):
+        yout[i] = z[i]
+    return code, steps
+
+
+@njit(parallel=True)
+def run_tangent_taylor_ext_batch(Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop, megno_level,
+                                 early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps,
+                                 out_w):
+    """:func:`orbit_tangent_taylor_ext` over the orbits (prange); the signature of
+    :func:`explorer.integrate.tangent_lanes.run_tangent_lanes_batch`."""
+    for j in prange(Y0.shape[0]):
+        st, steps = orbit_tangent_taylor_ext(Y0[j], V0[j], W0[j], nvec, P, T, order, max_steps, early_stop,
+                                             sali_stop, megno_level, early_tmin, hist_t, out_hist[j], out_res[j],
+                                             out_ext[j], out_w[j], out_final[j])
+        out_status[j] = st
+        out_steps[j] = steps
+    return 0
+
+
 # ====================================================================== DOP853
 @njit
 def orbit_tangent_dop853(y0, v0, P, T, rtol, atol, max_steps, hist_t, hist, res, yout):

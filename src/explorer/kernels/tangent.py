@@ -13,6 +13,18 @@ returns ln of its norm, the log-stretch of the step) and hands the stretch to
 The integrals over a step use the trapezoid rule in time on the step's stretch; renormalising
 every step keeps the vector O(1) (the tangent equations are linear, so this changes nothing
 but round-off; Skokos 2010, Lect. Notes Phys. 790, 63).
+
+With a second deviation vector (both renormalised every step, each to unit norm):
+
+- SALI (Skokos 2001, J. Phys. A 34, 10029):  min(|w1 + w2|, |w1 - w2|) of the unit vectors;
+  stays away from 0 on regular orbits of two degrees of freedom, -> 0 exponentially fast
+  on chaotic ones (the two vectors align with the most unstable direction);
+- GALI_2 (Skokos, Bountis & Antonopoulos 2007, Physica D 231, 30):  |w1 ^ w2|, the norm of the
+  wedge product of the unit vectors, sqrt(sum_{i<j} (w1_i w2_j - w1_j w2_i)^2) (the area of
+  their parallelogram); ~ SALI on chaotic orbits.
+
+Early classification (:func:`megno_early`): an orbit whose <Y> has stayed above a level at
+every step end of [t/2, t], t >= tmin, is classified chaotic at t and stops.
 """
 import math
 
@@ -67,3 +79,51 @@ def result(acc, out):
     out[RES_MEGNO] = acc[ACC_YINT] / t if t > 0.0 else 0.0
     out[RES_Y] = acc[ACC_Y]
     out[RES_FLI] = acc[ACC_FLI]
+
+
+#: layout of the extra result row of two deviation vectors and early classification
+EXT_SALI, EXT_GALI2, EXT_EARLY = range(3)
+N_EXT = 3
+#: why an orbit stopped before T (EXT_EARLY): it did not, SALI fell below its level, <Y> stayed high
+EARLY_NONE, EARLY_SALI, EARLY_MEGNO = 0, 1, 2
+
+
+@njit
+def sali(v, w, n):
+    """SALI = min(|v + w|, |v - w|) of unit vectors v[:n], w[:n] (Skokos 2001)."""
+    sp = 0.0
+    sm = 0.0
+    for i in range(n):
+        a = v[i] + w[i]
+        b = v[i] - w[i]
+        sp += a * a
+        sm += b * b
+    return math.sqrt(min(sp, sm))
+
+
+@njit
+def gali2(v, w, n):
+    """GALI_2 = |v ^ w| = sqrt(sum_{i<j} (v_i w_j - v_j w_i)^2) of unit vectors v[:n], w[:n]
+    (Skokos, Bountis & Antonopoulos 2007; the wedge product's norm, accurate when they align)."""
+    s = 0.0
+    for i in range(n):
+        for j in range(i + 1, n):
+            m = v[i] * w[j] - v[j] * w[i]
+            s += m * m
+    return math.sqrt(s)
+
+
+@njit
+def megno_early(acc, since, level, tmin):
+    """The MEGNO rule of early classification after a step: ``since`` is the first step end of the
+    current run of step ends with <Y> > ``level`` (-1 when <Y> <= level at the last one).  Returns
+    (stop, since): stop when <Y> has stayed above ``level`` at every step end of [t/2, t] (since
+    <= t/2) and t >= ``tmin``."""
+    t = acc[ACC_T]
+    ym = acc[ACC_YINT] / t if t > 0.0 else 0.0
+    if ym > level:
+        if since < 0.0:
+            since = t
+    else:
+        since = -1.0
+    return since >= 0.0 and t >= tmin and 2.0 * since <= t, since

@@ -1,0 +1,259 @@
+"""Lane (SIMD) batch driver of tangent dynamics by the Taylor method: LANES orbits, each with
+one or two deviation vectors, advance in lockstep.
+
+:func:`run_tangent_lanes_batch` has the signature and the outputs of
+:func:`explorer.integrate.tangent.run_tangent_taylor_ext_batch` (the scalar reference; with one
+deviation vector and no early stop that is :func:`explorer.integrate.tangent.orbit_tangent_taylor`,
+the step of ``systems.taylor_step`` of ``TANGENT``) and gives bit for bit the same results for
+every orbit (indicators, history, SALI, GALI_2, final state and vectors, status, step count),
+whatever the grouping of orbits into lanes and the number of threads:
+
+* the Taylor coefficients of the orbit and its deviation vectors, the step norms and the Horner
+  sums of LANES orbits are computed together by the generated vector kernels of
+  :mod:`explorer.integrate._tangent_lanes_generated` (translated by ``tools/gen_lanes.py`` from
+  ``equations.taylor_coefficients_tangent``: lane-wise the same IEEE operations in the same
+  order; the second vector by the same recurrence's statements for the deviation only);
+* everything else - the step size from the orbit's rows (``lanes.lane_step_size``, the same
+  double as ``kernels.taylor.step_size``), the clip to T, the step budget, the finiteness and
+  underflow checks, the renormalisation and the accumulators of ``kernels.tangent``, the
+  history rows and the early classification - is the control flow of the scalar loop, run per
+  lane in scalar code.
+
+Lanes never exchange values, so the work is distributed dynamically as in
+:mod:`explorer.integrate.lanes`: one worker per thread, a lane whose orbit stops takes the next
+unstarted orbit of the batch at once (an atomic counter); idle lanes run on the zero state.
+
+Kernel contract: arrays are allocated per worker, never inside the step loop; no exceptions
+(status codes); no fastmath.
+"""
+import numpy as np
+
+from explorer._jit import get_num_threads, njit, prange
+from explorer.integrate._lanes_generated import LOG2_APPROX_ERR, atomic_fetch_add
+from explorer.integrate._tangent_lanes_generated import (
+    DEV1,
+    DEV2,
+    LANES,
+    NROWS,
+    deviation_coefficients_lanes,
+    evaluate5_lanes,
+    tangent_coefficients_lanes,
+    tangent_step_norms_lanes,
+)
+from explorer.integrate.lanes import lane_step_size
+from explorer.integrate.tangent import _early, _finish_ext, _history
+from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW
+from explorer.kernels import tangent as tg
+from explorer.kernels import taylor as tk
+from explorer.kernels.clock import clip_step
+
+_IDLE = -1
+EPS = 2.220446049250313e-16
+_N_NORMS = 7
+
+
+@njit
+def _finish(j, l, Z, acc, v, w, nvec, early, status, steps, out_res, out_ext, out_status, out_final,
+            out_steps, out_w):
+    """Write the outputs of orbit j from lane l (its state is Z[0, :, l])."""
+    for i in range(5):
+        v[i] = Z[0, DEV1 + i, l]
+        w[i] = Z[0, DEV2 + i, l]
+        out_final[j, i] = Z[0, i, l]
+    _finish_ext(acc[l], v, w, nvec, early, out_res[j], out_ext[j], out_w[j])
+    out_status[j] = status
+    out_steps[j] = steps
+
+
+@njit
+def _start_lane(l, Z, orb, acc, L_t, L_steps, L_hpos, L_since, next_orbit, Y0, V0, W0, nvec, T, max_steps,
+                v, w, out_res, out_ext, out_status, out_final, out_steps, out_w):
+    """Put the next unstarted orbit on lane l (the start of the scalar loop: the deviation
+    vectors renormalised; orbits that stop before their first step are written out at once).
+    Returns 1 if the lane got an orbit, 0 if the batch is exhausted (the lane idles on 0)."""
+    n = Y0.shape[0]
+    while True:
+        j = atomic_fetch_add(next_orbit, 0, 1)
+        if j >= n:
+            orb[l] = _IDLE
+            for i in range(NROWS):
+                Z[0, i, l] = 0.0
+            return 0
+        for i in range(5):
+            Z[0, i, l] = Y0[j, i]
+            v[i] = V0[j, i]
+            w[i] = W0[j, i] if nvec == 2 else 0.0
+        tg.renormalize(v, 5)
+        if nvec == 2:
+            tg.renormalize(w, 5)
+        for i in range(5):
+            Z[0, DEV1 + i, l] = v[i]
+            Z[0, DEV2 + i, l] = w[i]
+        tg.reset(acc[l])
+        if not (0.0 < T):
+            _finish(j, l, Z, acc, v, w, nvec, tg.EARLY_NONE, STATUS_DONE, 0, out_res, out_ext, out_status,
+                    out_final, out_steps, out_w)
+            continue
+        if 0 >= max_steps:
+            _finish(j, l, Z, acc, v, w, nvec, tg.EARLY_NONE, STATUS_MAX_STEPS, 0, out_res, out_ext, out_status,
+                    out_final, out_steps, out_w)
+            continue
+        orb[l] = j
+        L_t[l] = 0.0
+        L_steps[l] = 0
+        L_hpos[l] = 0
+        L_since[l] = -1.0
+        return 1
+
+
+@njit
+def _run_worker(nlanes, next_orbit, Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop, megno_level,
+                early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w):
+    """Integrate orbits taken from the shared counter ``next_orbit`` on up to ``nlanes`` lanes
+    until none is left; each lane is tangent.orbit_tangent_taylor_ext step for step."""
+    Z = np.zeros((order + 1, NROWS, LANES))
+    znew = np.zeros((NROWS, LANES))
+    norms = np.empty((_N_NORMS, LANES))
+    hv = np.zeros(LANES)
+    v = np.empty(5)
+    w = np.zeros(5)
+    row = np.empty(tg.N_RES)
+    acc = np.zeros((LANES, tg.N_ACC))
+    orb = np.full(LANES, _IDLE, np.int64)
+    L_t = np.zeros(LANES)
+    L_steps = np.zeros(LANES, np.int64)
+    L_hpos = np.zeros(LANES, np.int64)
+    L_since = np.zeros(LANES)
+    L_status = np.zeros(LANES, np.int64)
+    L_early = np.zeros(LANES, np.int64)
+    L_last = np.zeros(LANES, np.bool_)
+    L_stop = np.zeros(LANES, np.bool_)
+    factor = tk.safety_factor(order)
+    e_p = 1.0 / order
+    e_q = 1.0 / (order - 1)
+    margin = (e_p + e_q) * LOG2_APPROX_ERR + 1e-12
+    active = 0
+    for l in range(LANES):
+        if l < nlanes:
+            active += _start_lane(l, Z, orb, acc, L_t, L_steps, L_hpos, L_since, next_orbit, Y0, V0, W0, nvec, T,
+                                  max_steps, v, w, out_res, out_ext, out_status, out_final, out_steps, out_w)
+        else:
+            orb[l] = _IDLE
+
+    while active > 0:
+        tangent_coefficients_lanes(P, Z, order, DEV1)
+        if nvec == 2:
+            deviation_coefficients_lanes(P, Z, order, DEV2)
+        tangent_step_norms_lanes(Z, order, e_p, e_q, norms)
+        # ---- per lane: systems.taylor_step's checks and step size
+        for l in range(LANES):
+            hv[l] = 0.0
+            L_stop[l] = False
+            L_early[l] = tg.EARLY_NONE
+            if orb[l] == _IDLE:
+                continue
+            f = norms[0, l]
+            g = norms[1, l]
+            if not (f - f == 0.0 and g - g == 0.0):
+                L_status[l] = STATUS_NONFINITE
+                L_stop[l] = True
+                continue
+            h = lane_step_size(norms[2, l], norms[3, l], norms[4, l], norms[5, l], norms[6, l],
+                               e_p, e_q, margin, factor)
+            t = L_t[l]
+            h, last = clip_step(t, h, T)
+            if not (h > EPS * abs(t)):
+                L_status[l] = STATUS_STEP_UNDERFLOW
+                L_stop[l] = True
+                continue
+            hv[l] = h
+            L_last[l] = last
+        evaluate5_lanes(Z, order, hv, znew, 0)
+        evaluate5_lanes(Z, order, hv, znew, DEV1)
+        if nvec == 2:
+            evaluate5_lanes(Z, order, hv, znew, DEV2)
+        # ---- per lane: the rest of the step of the scalar loop
+        for l in range(LANES):
+            j = orb[l]
+            if j == _IDLE:
+                continue
+            if not L_stop[l]:
+                L_steps[l] += 1
+                s = 0.0                      # kernels.checks.all_finite of the 10 rows
+                for i in range(10):
+                    s += znew[i, l]
+                if not (s - s == 0.0):
+                    L_status[l] = STATUS_NONFINITE
+                    L_stop[l] = True
+                elif nvec == 2:
+                    s = 0.0
+                    for i in range(5):
+                        s += znew[DEV2 + i, l]
+                    if not (s - s == 0.0):
+                        L_status[l] = STATUS_NONFINITE
+                        L_stop[l] = True
+            if not L_stop[l]:
+                t = L_t[l]
+                t_new = T if L_last[l] else t + hv[l]
+                for i in range(5):
+                    v[i] = znew[DEV1 + i, l]
+                dlog = tg.renormalize(v, 5)
+                tg.accumulate(acc[l], t, t_new, dlog)
+                L_hpos[l] = _history(acc[l], hist_t, out_hist[j], L_hpos[l], row)
+                if nvec == 2:
+                    for i in range(5):
+                        w[i] = znew[DEV2 + i, l]
+                    tg.renormalize(w, 5)
+                L_t[l] = t_new
+                for i in range(5):
+                    Z[0, i, l] = znew[i, l]
+                    Z[0, DEV1 + i, l] = v[i]
+                    Z[0, DEV2 + i, l] = w[i] if nvec == 2 else 0.0
+                early = tg.EARLY_NONE
+                if early_stop:
+                    early, L_since[l] = _early(acc[l], v, w, nvec, sali_stop, megno_level, early_tmin, L_since[l])
+                if early != tg.EARLY_NONE:
+                    L_early[l] = early
+                    L_status[l] = STATUS_DONE
+                    L_stop[l] = True
+                elif not (t_new < T):        # the checks at the top of systems.taylor_step
+                    L_status[l] = STATUS_DONE
+                    L_stop[l] = True
+                elif L_steps[l] >= max_steps:
+                    L_status[l] = STATUS_MAX_STEPS
+                    L_stop[l] = True
+            if L_stop[l]:
+                _finish(j, l, Z, acc, v, w, nvec, L_early[l], L_status[l], L_steps[l], out_res, out_ext,
+                        out_status, out_final, out_steps, out_w)
+                active += _start_lane(l, Z, orb, acc, L_t, L_steps, L_hpos, L_since, next_orbit, Y0, V0, W0, nvec,
+                                      T, max_steps, v, w, out_res, out_ext, out_status, out_final, out_steps,
+                                      out_w) - 1
+    return 0
+
+
+@njit(parallel=True)
+def _run_lanes(nworkers, nlanes, Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop, megno_level,
+               early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w):
+    next_orbit = np.zeros(1, np.int64)
+    for _w in prange(nworkers):
+        _run_worker(nlanes, next_orbit, Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop,
+                    megno_level, early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps,
+                    out_w)
+    return 0
+
+
+def run_tangent_lanes_batch(Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop, megno_level,
+                            early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w,
+                            max_lanes=LANES):
+    """Lane twin of :func:`explorer.integrate.tangent.run_tangent_taylor_ext_batch` (same
+    arguments and outputs, bit for bit the same results).  One worker per numba thread (at
+    most one per orbit), each with min(max_lanes, LANES, ceil(N / workers)) lanes; the thread
+    count is read here, in Python (inside a kernel it would defeat the on-disk cache)."""
+    n = Y0.shape[0]
+    if n == 0:
+        return 0
+    nworkers = max(1, min(get_num_threads(), n))
+    nlanes = max(1, min(int(max_lanes), LANES, -(-n // nworkers)))
+    return _run_lanes(nworkers, nlanes, Y0, V0, W0, int(nvec), P, float(T), int(order), int(max_steps),
+                      bool(early_stop), float(sali_stop), float(megno_level), float(early_tmin), hist_t, out_hist,
+                      out_res, out_ext, out_status, out_final, out_steps, out_w)

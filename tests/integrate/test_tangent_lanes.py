@@ -1,0 +1,140 @@
+"""Tangent dynamics on SIMD lanes are bit for bit the scalar tangent Taylor driver: the
+generated kernels lane by lane, whole batches (one and two deviation vectors, early
+classification, history rows, orbits stopping for every reason) for several thread counts,
+lane widths and orbit orderings; the generated file is up to date."""
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import PARAM_SETS, random_states
+
+from explorer import model
+from explorer._jit import get_num_threads, set_num_threads
+from explorer.analysis import lyapunov
+from explorer.integrate import _tangent_lanes_generated as G
+from explorer.integrate import tangent, tangent_lanes
+from explorer.kernels import STATUS_MAX_STEPS, STATUS_NONFINITE
+from explorer.kernels import taylor as tk
+from explorer.model import equations
+
+ROOT = Path(__file__).resolve().parents[2]
+L = G.LANES
+
+
+def test_generated_tangent_file_is_up_to_date(tmp_path):
+    out = tmp_path / "gen.py"
+    tout = tmp_path / "tgen.py"
+    subprocess.run([sys.executable, str(ROOT / "tools" / "gen_lanes.py"), "-o", str(out), "--tangent-output",
+                    str(tout)], check=True, capture_output=True)
+    assert tout.read_text() == (ROOT / "src/explorer/integrate/_tangent_lanes_generated.py").read_text(), \
+        "src/explorer/integrate/_tangent_lanes_generated.py is stale: run tools/gen_lanes.py"
+
+
+@pytest.mark.parametrize("name", sorted(PARAM_SETS))
+@pytest.mark.parametrize("order", [4, 15, 20])
+def test_tangent_lane_kernels_match_the_scalar_recurrence_bitwise(name, order):
+    P = PARAM_SETS[name].as_array()
+    rng = np.random.default_rng(order)
+    Z = np.zeros((order + 1, G.NROWS, L))
+    Z[0, :5] = random_states(PARAM_SETS[name], L, seed=order, scale=2.0).T
+    Z[0, 5:] = rng.normal(size=(10, L))
+    Z[0, :, 0] = 0.0      # an idle lane
+    G.tangent_coefficients_lanes(P, Z, order, G.DEV1)
+    G.deviation_coefficients_lanes(P, Z, order, G.DEV2)
+    h = rng.uniform(0.0, 0.5, L)
+    out = np.empty((G.NROWS, L))
+    for base in (0, G.DEV1, G.DEV2):
+        G.evaluate5_lanes(Z, order, h, out, base)
+    for l in range(L):
+        X = np.zeros((5, order + 1))
+        D = np.zeros((5, order + 1))
+        D2 = np.zeros((5, order + 1))
+        X[:, 0] = Z[0, :5, l]
+        D[:, 0] = Z[0, 5:10, l]
+        D2[:, 0] = Z[0, 10:, l]
+        equations.taylor_coefficients_tangent(P, X, D, order)
+        X2 = X.copy()
+        equations.taylor_coefficients_tangent(P, X2, D2, order)
+        np.testing.assert_array_equal(X2, X)
+        for rows, A in ((slice(0, 5), X), (slice(5, 10), D), (slice(10, 15), D2)):
+            np.testing.assert_array_equal(A.T, Z[:, rows, l])
+            y = np.empty(5)
+            tk.evaluate(A, order, h[l], y)
+            np.testing.assert_array_equal(y, out[rows, l])
+
+
+# ---------------------------------------------------------------- whole batches
+def _orbits(n, seed=3):
+    """Orbits of Figure 4 at mu = 1 (regular and chaotic) and asymmetric sets, with a few that
+    stop early: a step budget, a non-finite start."""
+    prm = model.FIGURE4.with_(mu=1.0)
+    c1, c2, r1, r2 = model.allowed_ellipse(prm, 2.0)
+    rng = np.random.default_rng(seed)
+    rad = np.sqrt(rng.uniform(0, 0.8, n))
+    ang = rng.uniform(0, 2 * np.pi, n)
+    Y0 = model.section_state(prm, c1 + r1 * rad * np.cos(ang), c2 + r2 * rad * np.sin(ang), 2.0)
+    P = prm.as_array()
+    V0 = lyapunov.deviation_vector(P, Y0)
+    W0 = lyapunov.second_deviation_vector(P, Y0)
+    return P, np.ascontiguousarray(Y0), np.ascontiguousarray(V0), np.ascontiguousarray(W0)
+
+
+def _run(fn, P, Y0, V0, W0, nvec, early, T=60.0, order=16, max_steps=10**9, H=4, **kw):
+    n = Y0.shape[0]
+    hist_t = np.geomspace(1.0, T, H)
+    out = (np.full((n, H, 5), np.nan), np.zeros((n, 5)), np.zeros((n, 3)), np.zeros(n, np.int64),
+           np.zeros((n, 5)), np.zeros(n, np.int64), np.full((n, 2, 5), np.nan))
+    fn(Y0, V0, W0, nvec, P, T, order, max_steps, early, 1e-8, 6.0, 10.0, hist_t, *out, **kw)
+    return out
+
+
+def _assert_same(a, b):
+    for x, y in zip(a, b):
+        np.testing.assert_array_equal(x, y)
+
+
+@pytest.mark.parametrize("nvec,early", [(1, False), (2, False), (2, True), (1, True)])
+def test_lane_batches_equal_the_scalar_reference_for_any_threads_lanes_and_order(nvec, early):
+    P, Y0, V0, W0 = _orbits(37)
+    ref = _run(tangent.run_tangent_taylor_ext_batch, P, Y0, V0, W0, nvec, early)
+    if early:
+        assert np.any(ref[2][:, 2] > 0) and np.any(ref[2][:, 2] == 0)   # both kinds of orbits
+    old = get_num_threads()
+    try:
+        for threads in (1, 2):
+            set_num_threads(threads)
+            for max_lanes in (1, 3, L):
+                _assert_same(_run(tangent_lanes.run_tangent_lanes_batch, P, Y0, V0, W0, nvec, early,
+                                  max_lanes=max_lanes), ref)
+        perm = np.random.default_rng(0).permutation(len(Y0))
+        got = _run(tangent_lanes.run_tangent_lanes_batch, P, Y0[perm], V0[perm], W0[perm], nvec, early)
+        _assert_same([g[np.argsort(perm)] for g in got], ref)
+    finally:
+        set_num_threads(old)
+
+
+def test_one_vector_lanes_equal_orbit_tangent_taylor():
+    """With one deviation vector and no early stop the lanes give what the scalar driver of the
+    method registry (tangent.orbit_tangent_taylor) gives, bit for bit."""
+    P, Y0, V0, W0 = _orbits(21, seed=5)
+    n, H, T = len(Y0), 4, 60.0
+    hist_t = np.geomspace(1.0, T, H)
+    hist, res, st = np.full((n, H, 5), np.nan), np.zeros((n, 5)), np.zeros(n, np.int64)
+    fin, steps = np.zeros((n, 5)), np.zeros(n, np.int64)
+    tangent.run_tangent_taylor_batch(Y0, V0, P, T, 16, 10**9, hist_t, hist, res, st, fin, steps)
+    got = _run(tangent_lanes.run_tangent_lanes_batch, P, Y0, V0, W0, 1, False)
+    _assert_same((hist, res, st, fin, steps), (got[0], got[1], got[3], got[4], got[5]))
+
+
+def test_orbits_stopping_for_every_reason_are_written_as_the_scalar_driver_writes_them():
+    P, Y0, V0, W0 = _orbits(11, seed=7)
+    Y0[4, 2] = 1e200          # coefficients overflow: non-finite
+    for max_steps in (0, 7, 10**9):
+        ref = _run(tangent.run_tangent_taylor_ext_batch, P, Y0, V0, W0, 2, True, max_steps=max_steps)
+        got = _run(tangent_lanes.run_tangent_lanes_batch, P, Y0, V0, W0, 2, True, max_steps=max_steps)
+        _assert_same(got, ref)
+    assert ref[3][4] == STATUS_NONFINITE
+    ref = _run(tangent.run_tangent_taylor_ext_batch, P, Y0, V0, W0, 2, False, max_steps=7)
+    assert np.all(ref[3][np.arange(11) != 4] == STATUS_MAX_STEPS)
