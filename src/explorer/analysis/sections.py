@@ -33,9 +33,9 @@ from explorer.kernels import STATUS_NAMES, Status
 from explorer.model import ParameterError, validation
 
 __all__ = ["ADAPTIVE_METHODS", "DEFAULT_BLOCK", "DEFAULT_DT", "DEFAULT_MAX_STEPS", "DEFAULT_TOL", "MAX_TOL",
-           "METHODS", "MIN_TOL", "SPLIT_METHODS", "CrossingBlock", "Crossings", "StreamState", "crossings",
-           "energy_warning", "iter_crossings", "iter_section_crossings", "max_energy_error", "result_bytes",
-           "section_crossings"]
+           "METHODS", "MIN_TOL", "SPLIT_METHODS", "CrossingBlock", "Crossings", "StreamState", "crossing_settings",
+           "crossings", "energy_warning", "human_bytes", "iter_crossings", "iter_section_crossings",
+           "max_energy_error", "result_bytes", "section_crossings"]
 
 DEFAULT_TOL = 1e-13
 DEFAULT_DT = 0.05
@@ -117,7 +117,7 @@ def physical_memory() -> int:
         return 0
 
 
-def _human(nbytes: float) -> str:
+def human_bytes(nbytes: float) -> str:
     for unit in ("B", "kB", "MB", "GB", "TB", "PB"):
         if nbytes < 1000 or unit == "PB":
             return f"{nbytes:.3g} {unit}"
@@ -177,6 +177,15 @@ def _validated(params, y0, n_crossings, method, tol, dt, tmax, max_steps, phi0, 
     return _Run(P, Y0, K, prep, g2, g1, int(direction), tmax, int(max_steps), threads, settings)
 
 
+def crossing_settings(params, y0, n_crossings: int, *, method: str = "taylor", tol: float = DEFAULT_TOL,
+                      dt: float | None = None, tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS,
+                      phi0: float = math.pi, direction: int = 1) -> dict:
+    """The settings that :func:`crossings` (or :func:`iter_crossings`) records for this request,
+    validated as there (ParameterError otherwise), without running it."""
+    return dict(_validated(params, y0, n_crossings, method, tol, dt, tmax, max_steps, phi0, direction,
+                           None).settings)
+
+
 def _run_block(run: _Run, Y, carry, limits, data, count, status, final, info) -> None:
     """One block of the drivers for the orbits Y (arrays filled in place), with numba's thread
     count set for the call when ``run.threads`` says so."""
@@ -211,8 +220,8 @@ def crossings(params, y0, n_crossings: int, *, method: str = "taylor", tol: floa
     need = result_bytes(N, K)
     mem = physical_memory()
     if mem and need > MAX_MEMORY_FRACTION * mem:
-        raise ParameterError(f"crossings: {N} orbits x {K} crossings need {_human(need)} in memory "
-                             f"(this machine has {_human(mem)}); stream them with iter_crossings() "
+        raise ParameterError(f"crossings: {N} orbits x {K} crossings need {human_bytes(need)} in memory "
+                             f"(this machine has {human_bytes(mem)}); stream them with iter_crossings() "
                              "or lower crossings")
     data = np.full((N, K, 5), np.nan)
     count = np.zeros(N, np.int64)

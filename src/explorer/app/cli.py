@@ -113,7 +113,14 @@ def build_parser() -> argparse.ArgumentParser:
     o.add_argument("--max-steps", type=int, default=10**9, help="step budget [%(default)s]")
     o.add_argument("--phi0", type=float, default=math.pi, help="section angle phi0 [pi]")
     o.add_argument("--direction", default="+", help="crossing direction: + (dphi/dt > 0), - or both [+]")
-    _add_model_args(o, model.FIGURE4, json="print JSON instead of CSV")
+    o.add_argument("--out", default=None,
+                   help="stream the crossings into this HDF5 store, block by block (a rerun after a kill "
+                   "continues where it stopped) instead of printing them")
+    o.add_argument("--block", type=int, default=None,
+                   help="crossings computed (and printed or stored) per block; memory is O(block) "
+                   "[100000]")
+    o.add_argument("--force", action="store_true", help="with --out: overwrite a store of another run")
+    _add_model_args(o, model.FIGURE4, json="print JSON instead of CSV (with --out: a summary)")
 
     w = sub.add_parser("sweep", help="Poincaré sections of every panel of a scene (default: figure4)",
                        description="Run every panel of a scene (a TOML file or a built-in preset), store all "
@@ -283,7 +290,8 @@ def _direction(text: str) -> int:
 
 
 def cmd_orbit(args) -> int:
-    from explorer.analysis.sections import METHODS, energy_warning, max_energy_error, section_crossings
+    from explorer.analysis.sections import DEFAULT_BLOCK, METHODS, energy_warning
+    from explorer.app import orbit
 
     params = _params_from(args)
     if args.method not in METHODS:
@@ -292,26 +300,33 @@ def cmd_orbit(args) -> int:
         v = getattr(args, name)
         if not math.isfinite(v):
             raise model.ParameterError(f"{name} must be finite, got {v!r}")
-    direction = _direction(args.direction)
-    res = section_crossings(params, [args.p1], [args.p2], args.h, args.crossings, method=args.method,
-                            tol=args.tol, dt=args.dt, tmax=args.tmax, max_steps=args.max_steps,
-                            phi0=args.phi0, direction=direction)
-    rows = res.orbit(0)
-    status = res.status_name(0)
-    setting = f"--dt {res.settings['dt']:g}" if "dt" in res.settings else f"--tol {args.tol:g}"
-    warning = energy_warning(max_energy_error(rows), args.h, setting)
-    if args.json:
-        out = {"params": params.as_dict(), "h": args.h, "method": args.method, "status": status,
-               "settings": res.settings,
-               "crossings": [[float(v) for v in r] for r in rows]}
-        print(json.dumps(out))
+    block = DEFAULT_BLOCK if args.block is None else args.block
+    if block < 1:
+        raise model.ParameterError(f"--block must be an integer >= 1, got {args.block}")
+    kw = dict(method=args.method, tol=args.tol, dt=args.dt, tmax=args.tmax, max_steps=args.max_steps,
+              phi0=args.phi0, direction=_direction(args.direction))
+    if args.out is not None:
+        rep = orbit.to_store(args.out, params, args.p1, args.p2, args.h, args.crossings, block=block,
+                             force=args.force, **kw)
+        summary = {"out": rep.out, "crossings": rep.crossings, "status": rep.status, "max_dh": rep.max_dh,
+                   "blocks": rep.blocks, "resumed_blocks": rep.resumed_blocks,
+                   "already_complete": rep.already_complete, "settings": rep.settings}
+        if args.json:
+            print(json.dumps(summary))
+        else:
+            how = ("already complete" if rep.already_complete else
+                   f"{rep.blocks} blocks" + (f", {rep.resumed_blocks} of them from an earlier run"
+                                              if rep.resumed_blocks else ""))
+            print(f"{rep.out}: {rep.crossings} crossings ({how}); status {rep.status}; "
+                  f"max |H - H0| {rep.max_dh:.3g}")
     else:
-        lines = ["k,t,p1,p2,M,dH"]
-        lines += [f"{k + 1},{r[0]!r},{r[1]!r},{r[2]!r},{r[3]!r},{r[4]!r}"
-                  for k, r in enumerate(rows.tolist())]
-        print("\n".join(lines))
-        if status != "done":
-            print(f"explorer: orbit stopped after {len(rows)} crossings: {status}", file=sys.stderr)
+        rep = orbit.print_rows(params, args.p1, args.p2, args.h, args.crossings, as_json=args.json, block=block,
+                               **kw)
+        if rep.status != "done" and not args.json:
+            print(f"explorer: orbit stopped after {rep.crossings} crossings: {rep.status}", file=sys.stderr)
+    settings = rep.settings or {}
+    setting = f"--dt {settings['dt']:g}" if "dt" in settings else f"--tol {args.tol:g}"
+    warning = energy_warning(rep.max_dh, args.h, setting)
     if warning:
         print(f"explorer: warning: {warning}", file=sys.stderr)
     return 0

@@ -57,6 +57,9 @@ Modules: :mod:`~explorer.io.store.format` (layout constants, reading),
 
 API
 ---
+Streamed panels (rows written block by block, resumable after a kill):
+:mod:`~explorer.io.store.stream`.
+
 ``commit_panel``, ``read_store`` (-> :class:`StoreData` / :class:`PanelData`),
 ``panel_hashes``, ``clean_stale_temporaries``, ``provenance``,
 ``settings_hash``, ``write_bytes_atomic``, ``atomic_path``; errors about a
@@ -70,7 +73,7 @@ from explorer.io.store.atomic import (
                                       clean_stale_temporaries,
                                       write_bytes_atomic,
 )
-from explorer.io.store.commit import commit_panel, provenance, update_panel_attrs
+from explorer.io.store.commit import RowSource, commit_panel, provenance, update_panel_attrs
 from explorer.io.store.format import (
                                       COLUMNS,
                                       COMPRESS_ROWS,
@@ -82,6 +85,7 @@ from explorer.io.store.format import (
                                       PanelData,
                                       StoreData,
                                       StoreError,
+                                      iter_rows,
                                       panel_hashes,
                                       read_store,
                                       settings_hash,
@@ -96,8 +100,10 @@ __all__ = [
     "PanelData",
     "StoreData",
     "commit_panel",
+    "RowSource",
     "update_panel_attrs",
     "read_store",
+    "iter_rows",
     "panel_hashes",
     "clean_stale_temporaries",
     "provenance",

@@ -92,6 +92,17 @@ def provenance(extra: dict | None = None) -> dict:
 
 # --------------------------------------------------------------------------- writing
 
+class RowSource:
+    """Crossing rows that are written into the panel's ``crossings`` dataset piece by piece
+    instead of being held in memory (a streamed panel, :mod:`explorer.io.store.stream`):
+    ``fill(dataset)`` writes all ``total`` rows into the (total, 5) dataset created for them."""
+
+    def __init__(self, total: int, fill):
+        self.shape = (int(total), len(COLUMNS))
+        self.ndim = 2
+        self.fill = fill
+
+
 def _ragged_from_padded(data, count):
     """(N, K, 5) NaN-padded rows + count -> (count, offsets, crossings).
 
@@ -140,7 +151,9 @@ def _prepare_arrays(arrays: dict) -> dict:
             raise ValueError("status codes must fit in int8")
         out[name] = np.ascontiguousarray(a, dtype=dtype)
     offsets = np.ascontiguousarray(arrays["offsets"], dtype=np.int64)
-    crossings = np.ascontiguousarray(arrays["crossings"], dtype=np.float64)
+    crossings = arrays["crossings"]
+    if not isinstance(crossings, RowSource):
+        crossings = np.ascontiguousarray(crossings, dtype=np.float64)
     if crossings.ndim != 2 or crossings.shape[1] != len(COLUMNS):
         raise ValueError(f"crossings must have shape (total, {len(COLUMNS)}), got {crossings.shape}")
     if (offsets.shape != (n + 1,) or offsets[0] != 0 or np.any(np.diff(offsets) < 0)
@@ -168,13 +181,17 @@ def _prepare_arrays(arrays: dict) -> dict:
     return out
 
 
-def _create_dataset(grp, name: str, a: np.ndarray):
+def _create_dataset(grp, name: str, a):
     kw = {}
     if a.ndim >= 1 and a.shape[0] > COMPRESS_ROWS:
         row = int(np.prod(a.shape[1:], dtype=np.int64)) if a.ndim > 1 else 1
         rows = max(1, min(a.shape[0], (1 << 15) // row))
         kw = dict(chunks=(rows,) + a.shape[1:], compression="gzip", compression_opts=GZIP_LEVEL,
                   shuffle=True, fletcher32=True)
+    if isinstance(a, RowSource):
+        dset = grp.create_dataset(name, shape=a.shape, dtype=np.float64, **kw)
+        a.fill(dset)
+        return dset
     return grp.create_dataset(name, data=a, **kw)
 
 
@@ -227,7 +244,8 @@ def commit_panel(path, index: int, arrays: dict, attrs: dict, file_attrs: dict |
 
     ``arrays`` holds seeds, y0, count, status, final, info and either
     ``offsets`` + ``crossings`` or ``data`` (N, K, 5, NaN-padded) + ``count``
-    (the ragged arrays are then built, padding dropped).  ``attrs`` are the
+    (the ragged arrays are then built, padding dropped); ``crossings`` may be a
+    :class:`RowSource` that writes the rows into the dataset piece by piece.  ``attrs`` are the
     panel attrs (``params``/``settings`` may be dicts: stored as JSON text;
     ``hash`` defaults to :func:`settings_hash` of the settings; ``index`` and
     ``complete = True`` are set here).  ``file_attrs`` (scene_name, scene,

@@ -44,6 +44,9 @@ _OPTIONAL_PER_ORBIT = {
     "mlce": ((), np.float64),
     "fli": ((), np.float64),
     "lyapunov_status": ((), np.int8),
+    "sali": ((), np.float64),
+    "gali2": ((), np.float64),
+    "lyapunov_early": ((), np.int8),
 }
 OPTIONAL_DATASETS = tuple(_OPTIONAL_PER_ORBIT) + ("separatrix_offsets", "separatrix_points")
 _DEPENDENCIES = ("explorer", "numpy", "numba", "llvmlite", "h5py", "joblib", "matplotlib", "scipy")
@@ -336,6 +339,20 @@ def read_store(path) -> StoreData:
         attrs = _read_attrs(f)
         panels = {idx: _read_panel(idx, grp, path) for idx, grp in _panel_groups(f, path)}
     return StoreData(path=path, attrs=attrs, panels=panels)
+
+
+def iter_rows(path, index: int, rows: int = 1 << 18):
+    """The crossing rows of panel ``index`` in pieces of at most ``rows`` rows (t, p1, p2, M, dH),
+    in stored order (orbit after orbit, ``offsets`` tell where each starts): a panel too large
+    for memory can be read this way.  StoreError as :func:`read_store`."""
+    path = os.fspath(path)
+    with _reading(path) as f:
+        name = f"{int(index):03d}"
+        if "panels" not in f or name not in f["panels"]:
+            raise StoreError(f"{path}: no panel {index}")
+        dset = f["panels"][name]["crossings"]
+        for lo in range(0, dset.shape[0], int(rows)):
+            yield dset[lo: lo + int(rows)]
 
 
 def panel_hashes(path) -> dict:

@@ -1,0 +1,140 @@
+"""The ``orbit`` command's two ways of handing out crossings as they are computed: rows printed
+block by block (CSV or JSON), or a store written block by block that a rerun resumes after a
+kill.  Memory is O(one block) either way, whatever the number of crossings asked
+(:func:`explorer.analysis.sections.iter_crossings`)."""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import sys
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from explorer import model
+from explorer.analysis import sections
+from explorer.io import store
+from explorer.io.store import stream
+from explorer.kernels import STATUS_NAMES
+from explorer.model import ParameterError
+
+
+@dataclass(frozen=True)
+class OrbitReport:
+    """What a streamed orbit did: crossings found, why it stopped, the largest |H - H0| of its
+    crossings, blocks computed (``resumed_blocks`` of them in an earlier, interrupted run)."""
+
+    crossings: int
+    status: str
+    max_dh: float
+    blocks: int
+    resumed_blocks: int = 0
+    out: str | None = None
+    settings: dict | None = None
+    already_complete: bool = False
+
+
+def _identity(params, h, p1, p2, y0, settings) -> dict:
+    return {"kind": "orbit", "params": params.as_dict(), "h": float(h), "seeds": [[float(p1), float(p2)]],
+            "y0": [float(v) for v in y0[0]], "settings": settings}
+
+
+def print_rows(params, p1, p2, h, n_crossings, *, as_json=False, block=sections.DEFAULT_BLOCK, file=None,
+               **kw) -> OrbitReport:
+    """Print the crossings of one orbit as they come, block after block: CSV ``k,t,p1,p2,M,dH``
+    or one JSON object (``{"params", "h", "method", "settings", "crossings": [...], "status"}``)."""
+    out = sys.stdout if file is None else file
+    direction = kw.get("direction", 1)
+    y0 = model.section_state(params, [p1], [p2], h, kw.get("phi0", np.pi), direction if direction != 0 else 1)
+    settings = sections.crossing_settings(params, y0, n_crossings, **kw)
+    it = sections.iter_crossings(params, y0, n_crossings, block=block, **kw)
+    if as_json:
+        head = {"params": params.as_dict(), "h": h, "method": settings["method"], "settings": settings}
+        out.write(json.dumps(head)[:-1] + ', "crossings": [')
+    else:
+        out.write("k,t,p1,p2,M,dH\n")
+    k = 0
+    max_dh = 0.0
+    st = None
+    for b in it:
+        rows = b.rows(0) if b.count.size else np.zeros((0, 5))
+        max_dh = max(max_dh, sections.max_energy_error(rows))
+        if as_json:
+            text = ", ".join("[" + ", ".join(json.dumps(float(v)) for v in r) + "]" for r in rows.tolist())
+            out.write((", " if k and text else "") + text)
+        else:
+            out.write("".join(f"{k + i + 1},{r[0]!r},{r[1]!r},{r[2]!r},{r[3]!r},{r[4]!r}\n"
+                              for i, r in enumerate(rows.tolist())))
+        k += len(rows)
+        st = b.state
+    status = STATUS_NAMES[int(st.status[0])] if st is not None else "done"
+    if as_json:
+        out.write(f'], "status": {json.dumps(status)}}}\n')
+    out.flush()
+    return OrbitReport(k, status, max_dh, st.blocks if st is not None else 0, settings=settings)
+
+
+def to_store(path, params, p1, p2, h, n_crossings, *, block=sections.DEFAULT_BLOCK, force=False,
+             on_block=None, **kw) -> OrbitReport:
+    """Stream the crossings of one orbit into the store at ``path`` (one panel), block by block
+    (:mod:`explorer.io.store.stream`).  Rerunning the same request after a kill continues from the
+    last stored block, to the same file as an uninterrupted run; a store that already holds this
+    run is left alone (``already_complete``).  Refused up front (ParameterError) when the run may
+    need more disk than is free, or ``path`` holds something else (without ``force``)."""
+    path = os.fspath(path)
+    phi0 = kw.get("phi0", np.pi)
+    direction = kw.get("direction", 1)
+    y0 = model.section_state(params, [p1], [p2], h, phi0, direction if direction != 0 else 1)
+    settings = sections.crossing_settings(params, y0, n_crossings, **kw)
+    blocks = stream.BlockStream(path, _identity(params, h, p1, p2, y0, settings))
+    if blocks.complete() and not force:
+        data = store.read_store(path).panels[0]
+        return OrbitReport(int(data.count.sum()), STATUS_NAMES[int(data.status[0])],
+                           sections.max_energy_error(data.crossings), int(data.attrs.get("blocks", 0)),
+                           int(data.attrs.get("resumed_blocks", 0)), path, settings, True)
+    if os.path.exists(path) and not force and not os.path.isdir(stream.blocks_dir(path)):
+        raise ParameterError(f"{path} exists and holds another run; use --force to overwrite it or choose "
+                             "another --out")
+    directory = os.path.dirname(os.path.abspath(path))
+    need = stream.disk_needed(1, n_crossings)
+    free = shutil.disk_usage(directory).free
+    if need > free:
+        raise ParameterError(f"crossings: {n_crossings} crossings may need {sections.human_bytes(need)} on disk "
+                             f"({sections.human_bytes(need / 2)} of rows, twice while the store is written); "
+                             f"{sections.human_bytes(free)} free in {directory}")
+    try:
+        saved = blocks.resume(force=force)
+    except store.StoreError as exc:
+        raise ParameterError(str(exc)) from None
+    state = None if saved is None else sections.StreamState.from_arrays(saved)
+    resumed = 0 if state is None else state.blocks
+    t0 = time.perf_counter()
+    st = state
+    for b in sections.iter_crossings(params, y0, n_crossings, block=block, state=state, **kw):
+        blocks.append(b.index, b.start, b.count, b.data, b.state.as_arrays())
+        st = b.state
+        if on_block is not None:
+            on_block(b)
+    if st is None:  # nothing left to compute (the last block was stored before a kill)
+        st = state
+    wall = time.perf_counter() - t0
+    attrs = {"index": 0, "label": "orbit", "parameter": "", "value": float("nan"), "h": float(h),
+             "params": json.dumps(params.as_dict(), sort_keys=True), "settings": json.dumps(settings, sort_keys=True),
+             "method": settings["method"], "tol": float(settings.get("tol", np.nan)),
+             "dt": float(settings.get("dt", np.nan)), "phi0": float(settings["phi0"]),
+             "direction": int(settings["direction"]), "crossings_requested": int(n_crossings),
+             "wall_time": wall, "block": int(block), "blocks": int(st.blocks), "resumed_blocks": int(resumed)}
+    prov = json.dumps(store.provenance({"command": "orbit"}), sort_keys=True)
+    file_attrs = {"scene_name": "orbit", "scene": json.dumps(blocks.identity, sort_keys=True), "provenance": prov}
+    arrays = {"seeds": np.array([[p1, p2]], float), "y0": y0, "count": st.done, "status": st.status,
+              "final": st.y, "info": st.info}
+    if force and os.path.exists(path):
+        os.remove(path)
+    blocks.finish(arrays, attrs, file_attrs)
+    max_dh = 0.0
+    for rows in store.iter_rows(path, 0):
+        max_dh = max(max_dh, sections.max_energy_error(rows))
+    return OrbitReport(int(st.done[0]), STATUS_NAMES[int(st.status[0])], max_dh, int(st.blocks), resumed, path,
+                       settings)

@@ -1,0 +1,176 @@
+"""Streamed panels: the crossings of a long run written block by block, resumable after a kill.
+
+While a run streams, its blocks live beside the store, in the directory ``<path>.blocks/``::
+
+    run.json        the run's identity (everything that determines its numbers) and its sha256
+    000001.npz ...  one file per block: the orbits it advanced (``index``), the crossings each had
+                    before it (``start``), how many it added (``count``) and those rows
+                    (``rows``, concatenated orbit after orbit), and the run's state after the
+                    block (the arrays of :class:`explorer.analysis.sections.StreamState`:
+                    ``y``, ``carry``, ``done``, ``finished``, ``status``, ``info``, ``blocks``)
+
+Each block file is written whole under a temporary name, fsynced and renamed
+(:func:`~explorer.io.store.atomic.write_bytes_atomic`), so after a SIGKILL at any instant the
+directory holds complete blocks only: the block being computed is lost, nothing else.
+:meth:`BlockStream.resume` returns the state after the last block (block numbers must follow each
+other and the identity must match), from which the caller continues the run
+(``sections.iter_crossings(..., state=...)``: bit for bit the uninterrupted run).
+:meth:`BlockStream.finish` writes the panel into the store in one atomic transaction
+(:func:`~explorer.io.store.commit.commit_panel`): offsets from each orbit's total, rows copied
+block after block into the ``crossings`` dataset (a :class:`~explorer.io.store.commit.RowSource`),
+so memory stays O(one block); then the blocks directory is removed.  The finished store has the
+layout of every store (:mod:`explorer.io.store`), one panel.
+
+Disk: blocks hold rows uncompressed (40 bytes a row) until the panel is written, compressed, so a
+run needs up to about twice the size of its rows while it finishes (:func:`disk_needed`).
+"""
+from __future__ import annotations
+
+import io
+import json
+import os
+import re
+import shutil
+
+import numpy as np
+
+from explorer.io.store.atomic import write_bytes_atomic
+from explorer.io.store.commit import RowSource, commit_panel
+from explorer.io.store.format import COLUMNS, StoreError, _canonical_json, panel_hashes, settings_hash
+
+#: arrays of a block file besides the state
+BLOCK_ARRAYS = ("index", "start", "count", "rows")
+#: the state arrays stored with each block (sections.StreamState.as_arrays)
+STATE_ARRAYS = ("y", "carry", "done", "finished", "status", "info", "blocks")
+_BLOCK_NAME = re.compile(r"^(\d{6})\.npz$")
+ROW_BYTES = 8 * len(COLUMNS)
+
+
+def blocks_dir(path) -> str:
+    """The directory of the blocks of a store being streamed."""
+    return os.fspath(path) + ".blocks"
+
+
+def disk_needed(n_orbits: int, n_crossings: int) -> int:
+    """Bytes a streamed run of ``n_orbits`` x ``n_crossings`` rows may need on disk at its peak:
+    its uncompressed blocks plus the store being written from them."""
+    return 2 * int(n_orbits) * int(n_crossings) * ROW_BYTES
+
+
+def _npz_bytes(arrays: dict) -> bytes:
+    buf = io.BytesIO()
+    np.savez(buf, **arrays)
+    return buf.getvalue()
+
+
+class BlockStream:
+    """The blocks of one streamed panel of the store at ``path``; ``identity`` (JSON-able) is
+    everything that determines the run's numbers (parameters, start points, method and
+    settings, crossings requested), so a rerun of the same command continues the same run and
+    a different one is refused."""
+
+    def __init__(self, path, identity: dict):
+        self.path = os.fspath(path)
+        self.dir = blocks_dir(self.path)
+        self.identity = json.loads(_canonical_json(identity))
+        self.hash = settings_hash(self.identity)
+
+    # ------------------------------------------------------------------ state on disk
+    def _block_files(self) -> list[tuple[int, str]]:
+        if not os.path.isdir(self.dir):
+            return []
+        out = []
+        for name in os.listdir(self.dir):
+            m = _BLOCK_NAME.match(name)
+            if m:
+                out.append((int(m.group(1)), os.path.join(self.dir, name)))
+        return sorted(out)
+
+    def complete(self) -> bool:
+        """The store at ``path`` already holds this run, whole (its panel hash is this run's)."""
+        try:
+            return panel_hashes(self.path).get(0) == self.hash
+        except StoreError:
+            return False
+
+    def resume(self, *, force: bool = False) -> dict | None:
+        """Prepare the blocks directory and return the state arrays after the last stored block
+        (None: start from the beginning).
+
+        A blocks directory of another run (another identity) is a StoreError naming both, unless
+        ``force`` (then it is removed).  Block numbers must run 1, 2, ... without a gap."""
+        run_file = os.path.join(self.dir, "run.json")
+        if os.path.isdir(self.dir):
+            try:
+                with open(run_file, encoding="utf-8") as f:
+                    on_disk = json.load(f)
+                same = on_disk.get("hash") == self.hash
+            except (OSError, ValueError):
+                same = False
+            if not same:
+                if not force:
+                    raise StoreError(f"{self.dir} holds the blocks of another run (or is damaged); "
+                                     "use --force to discard them or choose another --out")
+                shutil.rmtree(self.dir)
+        if not os.path.isdir(self.dir):
+            os.makedirs(self.dir)
+            write_bytes_atomic(run_file, json.dumps({"hash": self.hash, "identity": self.identity},
+                                                    sort_keys=True).encode())
+            return None
+        for name in os.listdir(self.dir):   # temporaries of a block being written when killed
+            if name != "run.json" and not _BLOCK_NAME.match(name):
+                os.remove(os.path.join(self.dir, name))
+        files = self._block_files()
+        if not files:
+            return None
+        numbers = [k for k, _ in files]
+        if numbers != list(range(1, len(files) + 1)):
+            raise StoreError(f"{self.dir}: blocks {numbers[:5]}... do not follow each other; "
+                             "use --force to start again")
+        try:
+            with np.load(files[-1][1]) as z:
+                return {a: z[a].copy() for a in STATE_ARRAYS}
+        except Exception as exc:  # a damaged last block cannot come from a kill (atomic writes)
+            raise StoreError(f"{files[-1][1]}: unreadable block ({exc}); use --force to start again") from None
+
+    def append(self, index, start, count, data, state: dict) -> int:
+        """Store one block atomically: ``data[i, :count[i]]`` are the new rows of orbit
+        ``index[i]``; ``state`` the run's state arrays after it.  Returns the block number."""
+        number = int(state["blocks"])
+        count = np.asarray(count, np.int64)
+        rows = np.concatenate([data[i, : count[i]] for i in range(len(count))]) if len(count) else \
+            np.zeros((0, len(COLUMNS)))
+        arrays = {"index": np.asarray(index, np.int64), "start": np.asarray(start, np.int64), "count": count,
+                  "rows": np.ascontiguousarray(rows, dtype=np.float64)}
+        arrays.update({a: np.asarray(state[a]) for a in STATE_ARRAYS})
+        write_bytes_atomic(os.path.join(self.dir, f"{number:06d}.npz"), _npz_bytes(arrays))
+        return number
+
+    def _fill(self, offsets):
+        def fill(dset):
+            for _, name in self._block_files():
+                with np.load(name) as z:
+                    index, start, count, rows = (z[a] for a in BLOCK_ARRAYS)
+                pos = 0
+                for j, s, c in zip(index, start, count):
+                    if c:
+                        lo = offsets[j] + s
+                        dset[lo: lo + c] = rows[pos: pos + c]
+                    pos += c
+        return fill
+
+    def finish(self, arrays: dict, attrs: dict, file_attrs: dict | None = None) -> None:
+        """Write the panel (index 0) of the store from the blocks, atomically, and remove them.
+
+        ``arrays``: the per-orbit datasets (seeds, y0, count, status, final, info, and optional
+        ones); the rows come from the blocks.  ``attrs['hash']`` is set to this run's hash."""
+        count = np.asarray(arrays["count"], np.int64)
+        offsets = np.zeros(count.size + 1, np.int64)
+        np.cumsum(count, out=offsets[1:])
+        payload = dict(arrays, offsets=offsets, crossings=RowSource(int(offsets[-1]), self._fill(offsets)))
+        commit_panel(self.path, 0, payload, dict(attrs, hash=self.hash), file_attrs)
+        self.discard()
+
+    def discard(self) -> None:
+        """Remove the blocks directory (after the store holds the run, or to start again)."""
+        shutil.rmtree(self.dir, ignore_errors=True)
