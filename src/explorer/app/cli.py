@@ -139,11 +139,12 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--force", action="store_true", help="recompute every panel")
     w.add_argument("--quiet", action="store_true", help="no progress bar")
 
-    ly = sub.add_parser("lyapunov", help="chaos indicators of one orbit: finite-time mLCE, MEGNO, FLI",
+    ly = sub.add_parser("lyapunov", help="chaos indicators of one orbit: finite-time mLCE, MEGNO, FLI, SALI, GALI2",
                         description="Start on the section phi = pi at (p1, p2) with M from the energy h and "
                         "integrate the orbit with one deviation vector (tangent to the energy shell) for a "
                         "time T; print the finite-time maximal Lyapunov exponent, the mean MEGNO <Y> and the "
-                        "FLI, with their convergence history.")
+                        "FLI, with their convergence history; with the Taylor method also SALI and GALI2 "
+                        "from a second deviation vector (null for other methods).")
     _add_start_args(ly)
     ly.add_argument("--time", "-T", type=float, default=1000.0, help="integration time T [%(default)s]")
     _add_method_args(ly, 1e-13, 0.02)
@@ -357,8 +358,10 @@ def cmd_lyapunov(args) -> int:
         if not math.isfinite(getattr(args, name)):
             raise model.ParameterError(f"{name} must be finite, got {getattr(args, name)!r}")
     y0 = model.section_state(params, [args.p1], [args.p2], args.h)
+    # SALI and GALI_2 (a second deviation vector) with the Taylor method's tangent lanes
+    which = lyapunov.INDICATOR_NAMES if args.method == "taylor" else lyapunov.DEFAULT_INDICATORS
     r = lyapunov.indicators(params, y0, args.time, method=args.method, tol=args.tol, dt=args.dt,
-                            history=args.history)
+                            history=args.history, which=which)
     hist = [[float(v) for v in row[:3]] + [float(row[4])] for row in r.history[0] if np.isfinite(row[0])]
     reached = float(r.time[0])
     status = r.status_name(0)
@@ -369,6 +372,7 @@ def cmd_lyapunov(args) -> int:
     out = {"params": params.as_dict(), "h": args.h, "p1": args.p1, "p2": args.p2, "method": args.method,
            "settings": r.settings, "status": status, "time": reached,
            "mlce": estimate(r.mlce[0]), "megno": estimate(r.megno[0]), "fli": estimate(r.fli[0]),
+           "sali": estimate(r.sali[0]), "gali2": estimate(r.gali2[0]),
            "regular_bound": lyapunov.regular_bound(reached) if reached > 1 else None,
            "history": hist}
     if status != "done":
@@ -379,7 +383,7 @@ def cmd_lyapunov(args) -> int:
         print(json.dumps(out))
     else:
         print(f"time {out['time']!r}\nmlce {out['mlce']!r}\nmegno {out['megno']!r}\nfli {out['fli']!r}\n"
-              f"status {out['status']}")
+              f"sali {out['sali']!r}\ngali2 {out['gali2']!r}\nstatus {out['status']}")
         if hist:
             print("history: t, mlce, megno, fli")
             for row in hist:

@@ -57,6 +57,17 @@ def panel_separatrices(scene, i):
     return info, curves
 
 
+def classify_megno(arrays):
+    """<Y> for classifying orbits: an orbit stopped early as chaotic (``lyapunov_early`` > 0,
+    [lyapunov] early_stop) counts as above every threshold (the largest double; the stored <Y>
+    is the one it reached)."""
+    m = np.asarray(arrays["megno"], float)
+    early = arrays.get("lyapunov_early")
+    if early is None:
+        return m
+    return np.where(np.asarray(early) > 0, np.finfo(float).max, m)
+
+
 def lyapunov_panels(scene, data):
     """The chaos maps of the stored panels of ``scene`` (seeds, MEGNO, valid, parameters) and the
     chaotic fraction per panel as rows (swept value, fraction, binomial error) at the scene's
@@ -71,8 +82,18 @@ def lyapunov_panels(scene, data):
         maps.append({"seeds": pd.seeds, "megno": pd.extra["megno"], "valid": ok, "params": params, "h": h,
                      "phi0": scene.integration.phi0, "label": label})
         value = scene.sweep_values[i] if scene.sweep_values else 0.0
-        fractions.append((value,) + chaotic_fraction(pd.extra["megno"], scene.lyapunov.threshold, ok)[:2])
+        maps[-1].update(grid=_grid_of(pd.attrs), extra=pd.extra, curves=pd.separatrices())
+        fractions.append((value,) + chaotic_fraction(classify_megno(pd.extra), scene.lyapunov.threshold, ok)[:2])
     return maps, np.array(fractions).reshape(-1, 3)
+
+
+def _grid_of(attrs):
+    """The raster geometry of a stored chaos map panel, (resolution, p1_lo, p1_hi, p2_lo, p2_hi), or ()."""
+    if "map_resolution" not in attrs:
+        return ()
+    a1, b1 = (float(v) for v in attrs["map_p1"])
+    a2, b2 = (float(v) for v in attrs["map_p2"])
+    return (int(attrs["map_resolution"]), a1, b1, a2, b2)
 
 
 def draw_figure(scene, out_path, stem):
@@ -100,7 +121,18 @@ def draw_figure(scene, out_path, stem):
     paths = list(figures.save_figure(fig, stem))
     if "lyapunov" in scene.compute:
         maps, fractions = lyapunov_panels(scene, data)
-        if maps:
+        rasters = [m for m in maps if m.get("grid")]
+        if rasters:
+            from explorer.app.chaos_raster import chaos_rasters
+
+            ind = scene.lyapunov.map_indicator
+            for m in rasters:
+                m["values"] = m["extra"][ind] if ind in m["extra"] else m["megno"]
+                m["fraction"] = chaotic_fraction(classify_megno(m["extra"]), scene.lyapunov.threshold, m["valid"])[0]
+            fig = chaos_rasters(rasters, indicator=ind, threshold=scene.lyapunov.threshold, columns=fs.columns,
+                                dpi=fs.dpi)
+            paths += figures.save_figure(fig, stem.with_name(stem.name + "_map"))
+        elif maps:
             fig = figures.chaos_maps(maps, layout=fs.layout, columns=fs.columns, threshold=scene.lyapunov.threshold,
                                      dpi=fs.dpi)
             paths += figures.save_figure(fig, stem.with_name(stem.name + "_chaosmap"))
@@ -215,10 +247,14 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
                  "crossings_requested": int(integ.crossings), "wall_time": arrays["wall_time"]}
         payload = {"seeds": panel.seeds, "y0": panel.y0, "data": arrays["data"], "count": arrays["count"],
                    "status": arrays["status"], "final": arrays["final"], "info": arrays["info"]}
+        if panel.grid:
+            n, a1, b1, a2, b2 = panel.grid
+            attrs.update(map_resolution=int(n), map_p1=[float(a1), float(b1)], map_p2=[float(a2), float(b2)])
         if "megno" in arrays:
-            for k in ("megno", "mlce", "fli", "lyapunov_status"):
-                payload[k] = arrays[k]
-            frac, err, n_ok = chaotic_fraction(arrays["megno"], scene.lyapunov.threshold,
+            for k in ("megno", "mlce", "fli", "lyapunov_status", "sali", "gali2", "lyapunov_early"):
+                if k in arrays:
+                    payload[k] = arrays[k]
+            frac, err, n_ok = chaotic_fraction(classify_megno(arrays), scene.lyapunov.threshold,
                                                arrays["lyapunov_status"] == 0)
             attrs.update(chaotic_fraction=frac, chaotic_fraction_error=err, megno_threshold=scene.lyapunov.threshold)
             stats["fractions"].append((panel.label, frac, err))
@@ -281,7 +317,7 @@ def _restamp_fractions(scene, out, stored) -> tuple:
         pd = data.panels.get(i)
         if pd is None or "megno" not in pd.extra or pd.attrs.get("megno_threshold") == threshold:
             continue
-        frac, err, _n_ok = chaotic_fraction(pd.extra["megno"], threshold, pd.extra["lyapunov_status"] == 0)
+        frac, err, _n_ok = chaotic_fraction(classify_megno(pd.extra), threshold, pd.extra["lyapunov_status"] == 0)
         store.update_panel_attrs(out, i, {"chaotic_fraction": frac, "chaotic_fraction_error": err,
                                           "megno_threshold": threshold})
         done.append(i)

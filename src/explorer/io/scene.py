@@ -126,7 +126,12 @@ _SEED_USED = {"grid": ("kind", "n", "margin"), "random": ("kind", "n", "margin",
               "lines": ("kind", "n", "margin", "lines"), "points": ("kind", "points")}
 _INTEGRATION_KEYS = ("method", "tol", "dt", "crossings", "tmax", "max_steps", "phi0", "direction")
 _FIGURE_KEYS = ("layout", "columns", "share_scale", "own_scale", "marker_size", "dpi")
-_LYAPUNOV_KEYS = ("time", "method", "tol", "dt", "threshold")
+_LYAPUNOV_KEYS = ("time", "method", "tol", "dt", "threshold", "indicators", "early_stop", "early_sali", "early_megno",
+                  "early_time", "map_resolution", "map_indicator")
+#: the indicators a scene can ask for (explorer.analysis.lyapunov.INDICATOR_NAMES)
+LYAPUNOV_INDICATORS = ("mlce", "megno", "fli", "sali", "gali2")
+#: largest raster side of a chaos map ([lyapunov] map_resolution)
+MAX_MAP_RESOLUTION = 4096
 
 
 class SceneError(ParameterError):
@@ -339,6 +344,17 @@ class LyapunovSpec:
     tol: float = 1e-12
     dt: float = 0.02
     threshold: float = 4.0
+    #: what to compute ("sali"/"gali2" add a second deviation vector; Taylor method)
+    indicators: tuple = ("mlce", "megno", "fli")
+    #: early classification (off by default; the rule: explorer.analysis.lyapunov.indicators)
+    early_stop: bool = False
+    early_sali: float = 1e-8
+    early_megno: float = 8.0
+    early_time: float = 100.0
+    #: > 0: the seeds are the cell centres of a map_resolution^2 raster over the allowed region's
+    #: bounding box (cells outside it are the forbidden region), drawn as an image of map_indicator
+    map_resolution: int = 0
+    map_indicator: str = "megno"
 
     def __post_init__(self):
         object.__setattr__(self, "time", _real("lyapunov.time", self.time, 0.0, lo_open=True))
@@ -346,9 +362,32 @@ class LyapunovSpec:
         object.__setattr__(self, "tol", _real("lyapunov.tol", self.tol, sections.MIN_TOL, sections.MAX_TOL))
         object.__setattr__(self, "dt", _real("lyapunov.dt", self.dt, 0.0, lo_open=True))
         object.__setattr__(self, "threshold", _real("lyapunov.threshold", self.threshold, 2.0, lo_open=True))
+        ind = tuple(_choice(f"lyapunov.indicators[{i}]", q, LYAPUNOV_INDICATORS)
+                    for i, q in enumerate(_list("lyapunov.indicators", self.indicators)))
+        object.__setattr__(self, "indicators", tuple(dict.fromkeys(ind)))
+        object.__setattr__(self, "early_stop", _bool("lyapunov.early_stop", self.early_stop))
+        object.__setattr__(self, "early_sali", _real("lyapunov.early_sali", self.early_sali, 0.0, 1.0))
+        object.__setattr__(self, "early_megno", _real("lyapunov.early_megno", self.early_megno, 2.0, lo_open=True))
+        object.__setattr__(self, "early_time", _real("lyapunov.early_time", self.early_time, 0.0))
+        object.__setattr__(self, "map_resolution",
+                           _int("lyapunov.map_resolution", self.map_resolution, 0, MAX_MAP_RESOLUTION))
+        object.__setattr__(self, "map_indicator",
+                           _choice("lyapunov.map_indicator", self.map_indicator, LYAPUNOV_INDICATORS))
+        if (self.early_stop or {"sali", "gali2"} & set(self.indicators)) and self.method != "taylor":
+            _fail("lyapunov.method", f"must be 'taylor' for early_stop, sali and gali2; got {self.method!r}")
+        if self.map_resolution and self.map_indicator not in self.indicators:
+            _fail("lyapunov.map_indicator", f"must be one of lyapunov.indicators {list(self.indicators)}; "
+                  f"got {self.map_indicator!r}")
+
+    @property
+    def second_vector(self) -> bool:
+        """SALI or GALI_2 asked for: two deviation vectors."""
+        return bool({"sali", "gali2"} & set(self.indicators))
 
     def to_dict(self) -> dict:
-        return {k: getattr(self, k) for k in _LYAPUNOV_KEYS}
+        d = {k: getattr(self, k) for k in _LYAPUNOV_KEYS}
+        d["indicators"] = list(self.indicators)
+        return d
 
     def used_dict(self) -> dict:
         """The keys that determine the numbers (tol or dt by method; the threshold only
@@ -358,6 +397,15 @@ class LyapunovSpec:
             d["tol"] = self.tol
         else:
             d["dt"] = self.dt
+        # keys added by issue 10 enter only when they differ from what was computed before them,
+        # so the panels stored by earlier scenes keep their hashes
+        if self.second_vector:
+            d["indicators"] = sorted({"sali", "gali2"} & set(self.indicators))
+        if self.early_stop:
+            d.update(early_stop=True, early_sali=self.early_sali if self.second_vector else 0.0,
+                     early_megno=self.early_megno, early_time=self.early_time)
+        if self.map_resolution:
+            d["map_resolution"] = self.map_resolution
         return d
 
 
@@ -441,10 +489,13 @@ class Scene:
         self._check_sweep()
         compute = tuple(_choice(f"compute[{i}]", q, COMPUTE_QUANTITIES)
                         for i, q in enumerate(_list("compute", self.compute, min_len=0)))
-        if "sections" not in compute:
-            _fail("compute.sections", "must be true: every panel starts from its section run")
+        if "sections" not in compute and "lyapunov" not in compute:
+            _fail("compute.sections", "must be true unless compute.lyapunov is (a scene of chaos indicators only "
+                  "stores no crossings)")
         if not isinstance(self.lyapunov, LyapunovSpec):
             _fail("lyapunov", f"must be a LyapunovSpec, {_got(self.lyapunov)}")
+        if self.lyapunov.map_resolution and "lyapunov" not in compute:
+            _fail("lyapunov.map_resolution", "needs compute.lyapunov = true")
         object.__setattr__(self, "compute", compute)
         self._check_panels()
         for j, idx in enumerate(self.figure.own_scale):
@@ -639,7 +690,10 @@ def scene_from_dict(data: dict, text: str = "") -> Scene:
     comp = _table("compute", data.get("compute", {}), COMPUTE_QUANTITIES)
     kw["compute"] = tuple(q for q in COMPUTE_QUANTITIES
                           if _bool(f"compute.{q}", comp.get(q, COMPUTE_DEFAULTS[q])))
-    kw["lyapunov"] = LyapunovSpec(**_table("lyapunov", data.get("lyapunov", {}), _LYAPUNOV_KEYS))
+    ly = dict(_table("lyapunov", data.get("lyapunov", {}), _LYAPUNOV_KEYS))
+    if "indicators" in ly:
+        ly["indicators"] = tuple(_list("lyapunov.indicators", ly["indicators"]))
+    kw["lyapunov"] = LyapunovSpec(**ly)
 
     fig = dict(_table("figure", data.get("figure", {}), _FIGURE_KEYS))
     if "own_scale" in fig:

@@ -1,0 +1,103 @@
+"""High-resolution chaos maps drawn as rasters on their grid (issue 10): one image cell per seed
+of a ``[lyapunov] map_resolution`` scene (explorer.analysis.sweep.map_seeds), coloured by the
+chosen indicator, the forbidden region gray, the separatrices of the panel's fixed point on
+top, one colour bar.  Arrays in, figure out: the geometry comes from the store, so a map is
+redrawn without recomputing."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from explorer import model
+from explorer.analysis.sweep import map_raster
+from explorer.app.figures import (
+    _FONT_SIZE,
+    _TICK_SIZE,
+    BOUNDARY_COLOR,
+    BOUNDARY_WIDTH,
+    FORBIDDEN_COLOR,
+    PANEL_WIDTH,
+    _matplotlib,
+    mathtext_label,
+)
+
+#: colour scale of each indicator: (label, log scale, vmin, vmax or None for the data's max)
+SCALES = {
+    "megno": (r"mean MEGNO $\langle Y\rangle$", True, 0.5, None),
+    "mlce": (r"finite-time mLCE $\chi(T)$", True, 1e-4, None),
+    "fli": ("FLI", False, 0.0, None),
+    "sali": ("SALI", True, 1e-16, 2.0),
+    "gali2": (r"GALI$_2$", True, 1e-16, 1.0),
+}
+SEPARATRIX_COLOR = "#1f77b4"
+
+
+def chaos_rasters(maps, *, indicator="megno", threshold=4.0, columns=None, dpi=200, panel_width=PANEL_WIDTH):
+    """One raster per map: dicts with ``seeds`` (N, 2), ``values`` (N,) of ``indicator``,
+    ``grid`` (resolution, p1_lo, p1_hi, p2_lo, p2_hi), ``params``, ``h``, ``phi0``, ``label``,
+    optional ``curves`` (separatrix polylines (p1, p2)) and ``fraction`` (chaotic fraction).
+    Cells without a seed (outside the allowed region) are drawn gray."""
+    mpl = _matplotlib()
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.colors import LogNorm, Normalize
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Ellipse
+
+    if indicator not in SCALES:
+        raise ValueError(f"indicator must be one of {', '.join(SCALES)}; got {indicator!r}")
+    n = len(maps)
+    if n == 0:
+        raise ValueError("chaos_rasters needs at least one map")
+    label, log, vmin, vmax = SCALES[indicator]
+    if vmax is None:
+        finite = [float(np.nanmax(m["values"])) for m in maps if np.isfinite(m["values"]).any()]
+        vmax = max([vmin * 20 if log else 1.0] + finite)
+    norm = LogNorm(vmin=vmin, vmax=vmax) if log else Normalize(vmin=vmin, vmax=vmax)
+    cmap = mpl.colormaps["inferno_r" if indicator in ("megno", "mlce", "fli") else "inferno"].with_extremes(
+        bad=FORBIDDEN_COLOR)
+    ncols = min(n, 3 if columns is None else int(columns))
+    nrows = -(-n // ncols)
+    with mpl.rc_context({"mathtext.fontset": "dejavusans", "axes.linewidth": 0.6}):
+        fig = Figure(figsize=(panel_width * ncols + 0.9, 0.9 * panel_width * nrows + 0.3), dpi=dpi,
+                     layout="constrained")
+        FigureCanvasAgg(fig)
+        axes = fig.subplots(nrows, ncols, squeeze=False).ravel()
+        for ax in axes[n:]:
+            fig.delaxes(ax)
+        im = None
+        for ax, m in zip(axes, maps):
+            prm = m["params"] if isinstance(m["params"], model.Params) else model.Params(**m["params"])
+            res, a1, b1, a2, b2 = m["grid"]
+            vals = np.asarray(m["values"], float)
+            if log:
+                vals = np.clip(vals, vmin, None)
+            img = map_raster(np.asarray(m["seeds"], float), vals, m["grid"])
+            ax.set_facecolor(FORBIDDEN_COLOR)
+            im = ax.imshow(np.ma.masked_invalid(img), origin="lower", extent=(a1, b1, a2, b2), cmap=cmap, norm=norm,
+                           interpolation="nearest", aspect="equal", zorder=1)
+            region = model.allowed_ellipse(prm, m["h"], m.get("phi0", math.pi))
+            if region is not None:
+                c1, c2, r1, r2 = region
+                ax.add_patch(Ellipse((c1, c2), 2 * r1, 2 * r2, facecolor="none", edgecolor=BOUNDARY_COLOR,
+                                     linewidth=BOUNDARY_WIDTH, zorder=3))
+            for c in m.get("curves", ()) or ():
+                c = np.asarray(c, float)
+                if len(c):
+                    ax.plot(c[:, 0], c[:, 1], color=SEPARATRIX_COLOR, linewidth=0.5, zorder=2)
+            ax.set_xlim(a1, b1)
+            ax.set_ylim(a2, b2)
+            title = mathtext_label(m.get("label", ""))
+            if m.get("fraction") is not None and math.isfinite(m["fraction"]):
+                title += f"   chaotic {m['fraction']:.1%} (MEGNO > {threshold:g})"
+            ax.set_title(title, fontsize=_FONT_SIZE, pad=4)
+            ax.set_xlabel("$p_1$", fontsize=_FONT_SIZE)
+            ax.set_ylabel("$p_2$", fontsize=_FONT_SIZE)
+            ax.tick_params(direction="in", top=True, right=True, labelsize=_TICK_SIZE)
+            ax.text(0.01, 0.01, f"{int(res)}$\\times${int(res)}", transform=ax.transAxes, fontsize=_TICK_SIZE - 1,
+                    va="bottom", ha="left", zorder=4)
+        if im is not None:
+            cb = fig.colorbar(im, ax=list(axes[:n]), shrink=0.9, pad=0.01)
+            cb.set_label(label, fontsize=_FONT_SIZE)
+            cb.ax.tick_params(labelsize=_TICK_SIZE)
+    return fig

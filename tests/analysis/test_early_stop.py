@@ -1,0 +1,38 @@
+"""Early classification ([lyapunov] early_stop): an orbit stops as chaotic when SALI < 1e-8 or
+when <Y> has stayed above 8 over [t/2, t] with t >= 100; the chaotic fraction of every panel of
+the `fraction` preset agrees with the full-T run within its binomial error, in less time."""
+import time
+
+import numpy as np
+
+from explorer import model
+from explorer.analysis import lyapunov
+from explorer.analysis.fixedpoints import chaotic_fraction
+from explorer.analysis.seeds import seed_points
+from explorer.io.scene import load_scene
+
+
+def test_early_stop_keeps_the_chaotic_fraction_of_the_fraction_preset():
+    scene = load_scene("fraction")
+    ly = scene.lyapunov
+    full_time = early_time = 0.0
+    for i in range(scene.n_panels):
+        params, h, _label = scene.panel(i)
+        p1, p2, _ = seed_points(scene.seeds, params, h, scene.integration.phi0)
+        y0 = model.section_state(params, p1, p2, h, scene.integration.phi0)
+        t0 = time.perf_counter()
+        full = lyapunov.indicators(params, y0, ly.time, tol=ly.tol)
+        t1 = time.perf_counter()
+        early = lyapunov.indicators(params, y0, ly.time, tol=ly.tol, early_stop=True)
+        t2 = time.perf_counter()
+        full_time += t1 - t0
+        early_time += t2 - t1
+        ok = full.status == 0
+        f_full, err, n = chaotic_fraction(full.megno, ly.threshold, ok)
+        f_early = float(np.mean(early.chaotic(ly.threshold)[ok]))
+        assert abs(f_early - f_full) <= err, (params.mu, f_full, f_early, err, n)
+        # an orbit stopped early is chaotic in the full run too, but for a few borderline ones
+        stopped = early.early > 0
+        assert np.all(early.time[~stopped] == ly.time)
+        assert np.mean(full.megno[stopped] > ly.threshold) >= 0.98 if stopped.any() else True
+    assert early_time < full_time

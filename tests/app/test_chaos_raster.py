@@ -1,0 +1,76 @@
+"""High-resolution chaos maps: a scene of indicators only stores no crossings but its grid
+geometry, and is drawn as a raster (forbidden region gray, colour bar) that can be redrawn from
+the store; headless pixel checks as the other figure tests."""
+import matplotlib
+
+matplotlib.use("Agg")
+
+import numpy as np
+import pytest
+from matplotlib.image import imread
+
+from explorer.app import runner
+from explorer.io import store
+from explorer.io.scene import SceneError, load_scene
+
+SCENE = """
+name = "map_test"
+[model]
+a1 = 1.0
+a2 = 0.5
+b = 2.0
+lam = 1.0
+mu = 0.03
+[energy]
+h = 2.0
+[compute]
+sections = false
+lyapunov = true
+[lyapunov]
+time = 100.0
+indicators = ["megno", "sali"]
+map_resolution = 20
+map_indicator = "megno"
+[figure]
+dpi = 60
+"""
+
+
+def test_an_indicator_only_map_stores_no_crossings_and_is_drawn_as_a_raster(tmp_path):
+    path = tmp_path / "map_test.toml"
+    path.write_text(SCENE)
+    rep = runner.run_sweep(str(path), out=tmp_path / "m.h5", figure=tmp_path / "m", progress=False)
+    assert rep.crossings == 0
+    pd = store.read_store(tmp_path / "m.h5").panels[0]
+    assert pd.arrays["crossings"].shape[0] == 0
+    assert {"megno", "sali", "gali2"} <= set(pd.extra) and "lyapunov_early" not in pd.extra
+    assert int(pd.attrs["map_resolution"]) == 20 and len(pd.attrs["map_p1"]) == 2
+    # every seed is a cell centre of the raster inside the allowed region
+    n = len(pd.extra["megno"])
+    assert 0.6 * 400 < n < 400
+    img = imread(tmp_path / "m_map.png")
+    h, w = img.shape[:2]
+    assert w > h                                         # the colour bar is beside the map
+    gray = np.all(np.abs(img[..., :3] - 0.8) < 0.02, axis=-1)
+    assert gray.mean() > 0.01                            # the forbidden corners
+    colourful = (img[..., :3].max(axis=-1) - img[..., :3].min(axis=-1)) > 0.3
+    assert colourful.mean() > 0.15                       # the map itself
+    # redrawn from the store alone: the same image
+    (tmp_path / "m_map.png").unlink()
+    runner.draw_figure(load_scene(str(path)), tmp_path / "m.h5", tmp_path / "m")
+    np.testing.assert_array_equal(imread(tmp_path / "m_map.png"), img)
+
+
+@pytest.mark.parametrize("text,key", [
+    ('indicators = ["megno", "lyap"]', "lyapunov.indicators[1]"),
+    ('indicators = ["megno"]\nmap_resolution = 8\nmap_indicator = "sali"', "lyapunov.map_indicator"),
+    ('method = "split6"\nindicators = ["sali"]', "lyapunov.method"),
+    ('map_resolution = -1', "lyapunov.map_resolution"),
+    ('early_stop = "yes"', "lyapunov.early_stop"),
+])
+def test_bad_lyapunov_keys_name_the_key(tmp_path, text, key):
+    path = tmp_path / "bad.toml"
+    path.write_text(SCENE.replace('indicators = ["megno", "sali"]\nmap_resolution = 20\nmap_indicator = "megno"',
+                                  text))
+    with pytest.raises(SceneError, match=key.replace("[", r"\[").replace("]", r"\]")):
+        load_scene(str(path))
