@@ -189,15 +189,17 @@ def crossing_settings(params, y0, n_crossings: int, *, method: str = "taylor", t
 def _run_block(run: _Run, Y, carry, limits, data, count, status, final, info) -> None:
     """One block of the drivers for the orbits Y (arrays filled in place), with numba's thread
     count set for the call when ``run.threads`` says so."""
+    if run.threads is None:   # (numba's thread pool is started only when a batch asks for it)
+        methods.run_crossings(run.prep, Y, run.P, run.cphi, run.sphi, run.direction, run.tmax, run.max_steps,
+                              carry, limits, data, count, status, final, info)
+        return
     old_threads = get_num_threads()
-    if run.threads is not None:
-        set_num_threads(run.threads)
+    set_num_threads(run.threads)
     try:
         methods.run_crossings(run.prep, Y, run.P, run.cphi, run.sphi, run.direction, run.tmax, run.max_steps,
                               carry, limits, data, count, status, final, info)
     finally:
-        if run.threads is not None:
-            set_num_threads(old_threads)
+        set_num_threads(old_threads)
 
 
 def crossings(params, y0, n_crossings: int, *, method: str = "taylor", tol: float = DEFAULT_TOL,

@@ -15,8 +15,6 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis import sections
-from explorer.io import store
-from explorer.io.store import stream
 from explorer.kernels import STATUS_NAMES
 from explorer.model import ParameterError
 
@@ -83,6 +81,9 @@ def to_store(path, params, p1, p2, h, n_crossings, *, block=sections.DEFAULT_BLO
     last stored block, to the same file as an uninterrupted run; a store that already holds this
     run is left alone (``already_complete``).  Refused up front (ParameterError) when the run may
     need more disk than is free, or ``path`` holds something else (without ``force``)."""
+    from explorer.io import store  # h5py only for a run that writes a store
+    from explorer.io.store import stream
+
     path = os.fspath(path)
     phi0 = kw.get("phi0", np.pi)
     direction = kw.get("direction", 1)

@@ -343,7 +343,12 @@ def run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps,
     min(max_lanes, LANES, ceil(N / workers)) lanes.  A Python function: the thread count is
     read here (numba's get_num_threads inside a kernel would defeat the on-disk cache)."""
     n = Y0.shape[0]
-    nworkers = max(1, min(get_num_threads(), n))
+    # one orbit: one worker, run here without the parallel layer (numba's thread pool is neither
+    # asked nor started: a lone orbit pays for no threads)
+    nworkers = 1 if n <= 1 else max(1, min(get_num_threads(), n))
     nlanes = max(1, min(int(max_lanes), LANES, -(-n // nworkers)))
+    if nworkers == 1:
+        return _run_worker(nlanes, np.zeros(1, np.int64), Y0, P, cphi, sphi, int(direction), float(tmax), int(order),
+                           int(max_steps), carry, limits, out_cross, out_count, out_status, out_final, out_info)
     return _run_lanes(nworkers, nlanes, Y0, P, cphi, sphi, int(direction), float(tmax), int(order),
                       int(max_steps), carry, limits, out_cross, out_count, out_status, out_final, out_info)

@@ -22,8 +22,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from explorer.integrate import drivers, lanes
-from explorer.integrate import tangent as tangent_drivers
 from explorer.kernels import splitting
 from explorer.kernels.taylor import order_for_tolerance
 from explorer.model import validation
@@ -88,21 +86,31 @@ def run_crossings(prep: Prepared, Y0, P, cphi, sphi, direction, tmax, max_steps,
                   status, final, info):
     """Crossings of the section for every orbit of ``Y0`` (arrays filled in place), a block
     continued from ``carry`` up to ``limits`` (:mod:`explorer.integrate.drivers`)."""
+    # each method's loops are imported when first used: a run loads only the compiled code of
+    # the method it uses (start-up, benchmarks/bench_startup.py)
     kind = prep.method.kind
     if kind == "taylor":
+        from explorer.integrate import lanes
+
         # the SIMD lane driver, bit for bit drivers.run_taylor_batch (the scalar reference)
         lanes.run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, prep.order, max_steps, carry, limits,
                                      data, count, status, final, info)
     elif kind == "dop853":
+        from explorer.integrate import drivers
+
         drivers.run_dop853_batch(Y0, P, cphi, sphi, direction, tmax, prep.tol, prep.tol, max_steps, carry,
                                  limits, data, count, status, final, info)
     else:
+        from explorer.integrate import drivers
+
         drivers.run_split_batch(Y0, P, cphi, sphi, direction, tmax, prep.dt, prep.flow_ids, prep.fracs,
                                 max_steps, carry, limits, data, count, status, final, info)
 
 
 def run_tangent(prep: Prepared, Y0, V0, P, T, max_steps, hist_t, hist, res, status, final, steps):
     """Chaos indicators (one deviation vector) for every orbit of ``Y0`` over [0, T]."""
+    from explorer.integrate import tangent as tangent_drivers
+
     kind = prep.method.kind
     if kind == "taylor":
         tangent_drivers.run_tangent_taylor_batch(Y0, V0, P, T, prep.order, max_steps, hist_t, hist, res,
