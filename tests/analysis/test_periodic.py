@@ -130,6 +130,13 @@ def test_search_returns_each_orbit_once(search2, search3):
                 assert not a.same_orbit(b, 1e-5)
 
 
+def test_asymmetric_orbits_come_with_their_mirror_image(search2, search3):
+    for orbits in (search2, search3):
+        for o in orbits:
+            if not o.symmetric:
+                assert sum(b.same_orbit(pm.reversor(o.points)) for b in orbits) == 1
+
+
 def test_two_guesses_on_different_points_of_one_orbit_give_one_orbit(search3):
     o = _elliptic(search3)[0]
     a = pm.find_periodic_orbit(PRM, H, o.points[0] + 1e-4, 3)
@@ -210,15 +217,28 @@ def test_continuation_of_solution_I_in_h_finds_the_tangent_and_the_touch_of_minu
         assert o.trace == pytest.approx(tr, abs=1e-8)
 
 
-def test_continuation_reports_period_doubling_when_the_trace_crosses_minus_two():
-    """At mu = 0.03 the symmetry is broken only slightly; the period-2 elliptic orbit of the
-    search is followed in mu and the trace's crossings of +-2 are bisected; each reported value
-    has |trace| = 2 on one side and |trace| != 2 on the other."""
-    br = pm.continue_periodic(model.FIGURE4.with_(mu=0.0), 7.0, 1, "h", 9.0, 11.0, 0.5, (0.0, 0.0))
-    assert [b["type"] for b in br.bifurcations] == ["touch -2"]
-    brmu = pm.continue_periodic(model.FIGURE4.with_(mu=0.3), 9.0, 1, "h", 9.0, 11.0, 0.25, (0.0, 0.0))
-    kinds = [b["type"] for b in brmu.bifurcations]
-    assert "period-doubling" in kinds or "touch -2" in kinds
+def test_continuation_reports_period_doubling_where_the_trace_crosses_minus_two():
+    """The elliptic fixed point near (-1.155, 0) of the mu = 0.03 scene, followed in mu: its trace
+    falls through -2; the bisected value is checked with find_fixed_point on either side."""
+    br = pm.continue_periodic(PRM, H, 1, "mu", 0.03, 0.23, 0.05, (-1.155145, 0.0))
+    assert br.stopped is None
+    assert [b["type"] for b in br.bifurcations] == ["period-doubling"] and br.bifurcations[0]["refined"]
+    mu_star = br.bifurcations[0]["value"]
+    assert 0.13 < mu_star < 0.18
+    before = fpm.find_fixed_point(PRM.with_(mu=mu_star - 1e-6), H, (-1.155145 - 0.1, 0.0))
+    after = fpm.find_fixed_point(PRM.with_(mu=mu_star + 1e-6), H, before.point)
+    assert before.trace > -2 > after.trace
+    assert abs(before.trace + 2) < 1e-4 and abs(after.trace + 2) < 1e-4
+
+
+def test_a_sampled_minimum_near_minus_two_is_refined_into_a_touch():
+    """The fixed point near (-1.98, 0) followed in mu: the sampled trace has a minimum -1.989 near
+    mu = 0.13; golden-section search finds that it touches -2 (to round-off) without crossing."""
+    br = pm.continue_periodic(PRM, H, 1, "mu", 0.03, 0.23, 0.05, (-1.982035, 0.0))
+    touches = [b for b in br.bifurcations if b["type"].startswith("touch")]
+    assert len(touches) == 1 and touches[0]["type"] == "touch -2"
+    assert abs(touches[0]["trace"] + 2) < 1e-6
+    assert np.all(br.traces > -2)
 
 
 def test_bad_input_is_refused_with_a_parameter_error():

@@ -82,6 +82,9 @@ KIND_TOL = 1e-6
 MINIMAL_PERIOD_TOL = 1e-7
 #: two orbits are the same if a point of one is within this of a point of the other
 SAME_ORBIT_TOL = 1e-6
+#: time budget of one return of the map in a search (typical returns take ~6 at Figure 4's
+#: scene; orbits near the boundary of the region that hardly turn would cost up to RETURN_TMAX)
+SEARCH_TMAX = 50.0
 #: continuation: a failed step is split in two at most this many times
 MAX_HALVINGS = 6
 
@@ -410,7 +413,7 @@ def symmetry_line_points(params, h, period, n=200, *, phi0=math.pi, tol=DEFAULT_
         return np.empty((0, 2))
     other = phi0 + math.pi
 
-    def run(p1, line):
+    def run(p1, line, threads=threads):
         """(p2 after K half-turns, point on phi0) for starts p1 on line 0 or 1 (NaN when stopped)."""
         start_phi = phi0 if line == 0 else other
         Y0 = model.section_state(prm, p1, np.zeros_like(p1), h, start_phi)
@@ -435,16 +438,16 @@ def symmetry_line_points(params, h, period, n=200, *, phi0=math.pi, tol=DEFAULT_
         f, _ = run(p1, line)
         for i in np.flatnonzero(np.isfinite(f[:-1]) & np.isfinite(f[1:]) & (np.sign(f[:-1]) != np.sign(f[1:]))):
             a, b, fa = p1[i], p1[i + 1], f[i]
-            for _ in range(30):   # bisection to ~1e-9 of the bracket, 1 call each
+            for _ in range(16):   # bisection to 2^-16 of the bracket (Newton does the rest)
                 m = 0.5 * (a + b)
-                fm, _ = run(np.array([m]), line)
+                fm, _ = run(np.array([m]), line, 1)
                 if not np.isfinite(fm[0]):
                     break
                 if np.sign(fm[0]) == np.sign(fa):
                     a, fa = m, fm[0]
                 else:
                     b = m
-            _, on = run(np.array([0.5 * (a + b)]), line)
+            _, on = run(np.array([0.5 * (a + b)]), line, 1)
             if np.all(np.isfinite(on[0])):
                 seeds.append(on[0])
     return np.array(seeds).reshape(-1, 2)
@@ -492,7 +495,7 @@ def _canonical(orb: PeriodicOrbit) -> PeriodicOrbit:
 
 
 def search_periodic_orbits(params, h, period, *, grid=12, line=None, phi0=math.pi, tol=DEFAULT_TOL,
-                           max_guesses=60, max_iter=NEWTON_MAX_ITER, tmax=RETURN_TMAX, time_limit=None,
+                           max_guesses=60, max_iter=NEWTON_MAX_ITER, tmax=SEARCH_TMAX, time_limit=None,
                            same_tol=SAME_ORBIT_TOL, threads=None) -> list:
     """All periodic orbits of minimal period ``period`` found from guesses covering the section.
 
@@ -503,7 +506,8 @@ def search_periodic_orbits(params, h, period, *, grid=12, line=None, phi0=math.p
     method (:func:`find_periodic_orbit`) runs from at most ``max_guesses`` of them, skipping a
     guess that lies on an orbit already found; orbits are reduced to their minimal period
     (those of a smaller period are dropped) and deduplicated: two orbits are the same if a point
-    of one lies within ``same_tol`` of a point of the other.
+    of one lies within ``same_tol`` of a point of the other.  When the reversor applies, the
+    mirror image G0 of every asymmetric orbit found is added (Newton from its reflected point).
 
     Parameters
     ----------
@@ -520,7 +524,7 @@ def search_periodic_orbits(params, h, period, *, grid=12, line=None, phi0=math.p
     max_iter : int
         Budget of Newton iterations per start.
     tmax : float
-        Time budget of one return of the map.
+        Time budget of one return of the map (``SEARCH_TMAX``).
     time_limit : float or None
         Wall-clock budget in seconds of the Newton phase (None: none).
     threads : int or None
@@ -559,6 +563,17 @@ def search_periodic_orbits(params, h, period, *, grid=12, line=None, phi0=math.p
         if orb.period != K or any(o.same_orbit(orb, same_tol) for o in found):
             continue
         found.append(orb)
+    if is_reversible(prm, phi0):   # the mirror image G0(orbit) of an asymmetric orbit is an orbit too
+        for o in list(found):
+            if o.symmetric or any(f.same_orbit(reversor(o.points), same_tol) for f in found):
+                continue
+            try:
+                m = find_periodic_orbit(prm, h, reversor(o.points[0]), K, phi0=phi0, tol=tol, max_iter=max_iter,
+                                        tmax=tmax)
+            except ParameterError:
+                continue
+            if m.period == K and not any(f.same_orbit(m, same_tol) for f in found):
+                found.append(m)
     found = [_canonical(o) for o in found]
     return sorted(found, key=lambda o: (o.points[0, 0], o.points[0, 1]))
 
@@ -569,9 +584,10 @@ class PeriodicBranch:
     """A periodic orbit followed in one parameter by :func:`continue_periodic`.
 
     ``orbits[i]`` is the orbit at ``values[i]``; ``bifurcations`` is a list of dicts
-    ``{"value", "type", "trace"}`` with type "tangent" (trace = +2), "period-doubling"
-    (trace = -2), "touch +2" or "touch -2"; ``stopped`` says why the branch ended early
-    (None when it reached ``stop``).
+    ``{"value", "type", "trace", "refined"}`` with type "tangent" (trace = +2), "period-doubling"
+    (trace = -2), "touch +2" or "touch -2" (``refined`` False: the bisection stopped where
+    Newton failed, ``bracket`` gives the interval reached); ``stopped`` says why the branch
+    ended early (None when it reached ``stop``).
     """
 
     parameter: str
@@ -684,31 +700,37 @@ def continue_periodic(params, h, period, parameter, start, stop, step, guess, *,
     vals = np.array(done)
 
     def nearest(v):
-        i = int(np.argmin(np.abs(vals - v)))
-        return orbits[i].points
+        """The points at v interpolated linearly between the samples around v."""
+        i = int(np.clip(np.searchsorted(vals, v) - 1 if step > 0 else len(vals) - np.searchsorted(vals[::-1], v) - 1,
+                        0, len(vals) - 2))
+        w = (v - vals[i]) / (vals[i + 1] - vals[i])
+        return orbits[i].points + w * (orbits[i + 1].points - orbits[i].points)
 
     bif: list = []
 
-    def crossing(a, b, oa):
-        """Bisection for the value where |trace| = 2 between a (orbit oa) and b."""
-        lo, hi, olo = a, b, oa
-        while abs(hi - lo) > bisect_tol * max(1.0, abs(hi)):
-            mid = 0.5 * (lo + hi)
-            om = solve(mid, olo.points)
-            if (abs(om.trace) < 2) == (abs(olo.trace) < 2):
-                lo, olo = mid, om
-            else:
-                hi = mid
-        kind = "tangent" if olo.trace > 0 else "period-doubling"
-        return {"value": 0.5 * (lo + hi), "type": kind, "trace": 2.0 if olo.trace > 0 else -2.0}
+    def crossing(a, b, oa, ob):
+        """Bisection for the value where |trace| = 2 between a (orbit oa) and b (orbit ob), each
+        new orbit from the points interpolated between the bracket's orbits."""
+        lo, hi, olo, ohi = a, b, oa, ob
+        kind = "tangent" if oa.trace + ob.trace > 0 else "period-doubling"
+        try:
+            while abs(hi - lo) > bisect_tol * max(1.0, abs(hi)):
+                mid = 0.5 * (lo + hi)
+                om = solve(mid, olo.points + 0.5 * (ohi.points - olo.points))
+                if (abs(om.trace) < 2) == (abs(olo.trace) < 2):
+                    lo, olo = mid, om
+                else:
+                    hi, ohi = mid, om
+        except ParameterError as exc:   # reported with the bracket reached, not dropped
+            return {"value": 0.5 * (lo + hi), "type": kind, "trace": 2.0 if kind == "tangent" else -2.0,
+                    "refined": False, "bracket": [float(lo), float(hi)], "note": str(exc)}
+        return {"value": 0.5 * (lo + hi), "type": kind, "trace": 2.0 if kind == "tangent" else -2.0,
+                "refined": True, "bracket": [float(lo), float(hi)]}
 
     tr = np.array([o.trace for o in orbits])
     for i in range(len(orbits) - 1):
         if (abs(tr[i]) < 2) != (abs(tr[i + 1]) < 2):
-            try:
-                bif.append(crossing(vals[i], vals[i + 1], orbits[i]))
-            except ParameterError:
-                pass
+            bif.append(crossing(vals[i], vals[i + 1], orbits[i], orbits[i + 1]))
     for i in range(1, len(orbits) - 1):
         d0, d1 = tr[i] - tr[i - 1], tr[i + 1] - tr[i]
         s = 2.0 if tr[i] > 0 else -2.0
@@ -725,12 +747,10 @@ def continue_periodic(params, h, period, parameter, start, stop, step, guess, *,
         t_ext = sign * f_ext
         o_ext = solve(v_ext, nearest(v_ext))
         if abs(t_ext - s) <= touch_tol:   # first: a touch may pass +-2 by round-off
-            bif.append({"value": float(v_ext), "type": f"touch {'+' if s > 0 else '-'}2", "trace": float(t_ext)})
+            bif.append({"value": float(v_ext), "type": f"touch {'+' if s > 0 else '-'}2", "trace": float(t_ext),
+                        "refined": True})
         elif (abs(t_ext) < 2) != (abs(tr[i]) < 2):
-            try:
-                bif.append(crossing(vals[i - 1], v_ext, orbits[i - 1]))
-                bif.append(crossing(v_ext, vals[i + 1], o_ext))
-            except ParameterError:
-                pass
+            bif.append(crossing(vals[i - 1], v_ext, orbits[i - 1], o_ext))
+            bif.append(crossing(v_ext, vals[i + 1], o_ext, orbits[i + 1]))
     bif.sort(key=lambda b: b["value"] * (1 if step > 0 else -1))
     return PeriodicBranch(parameter, K, vals, orbits, bif, stopped)

@@ -21,6 +21,8 @@ name                   what
 ``chaotic_fraction``   the chaotic fraction against mu (scene preset ``fraction``)
 ``chaos_map``          MEGNO maps of the Figure-4 panels (scene preset ``chaos``)
 ``continuation``       the central fixed point of the section map continued in mu (0..8)
+``periodic``           Figure 4 at mu = 0.03 with the periodic orbits of periods 1..8 marked and
+                       the rotation-number profile from the elliptic fixed point
 ``work_precision``     one-step error against throughput, ``benchmarks/results_w4.json``
 ``homoclinic``         R7 against the integrated flow, with its crossings of phi = pi
 ``melnikov``           :func:`explorer.app.melnikov_figure.melnikov_figure`
@@ -88,6 +90,7 @@ _EXPORTS = {
     "r6_rhs": "chaplygin",
     "relative_equilibrium": "chaplygin",
     "continuation_figure": "continuation",
+    "periodic_figure": "periodic",
     "_figure2_levels": "figure2",
     "figure2_figure": "figure2",
     "figure3_figure": "figure3",

@@ -21,6 +21,7 @@ MODULES = {
     "chaotic_fraction": "explorer.app.paper.chaotic_fraction",
     "chaos_map": "explorer.app.paper.chaos_map",
     "continuation": "explorer.app.paper.continuation",
+    "periodic": "explorer.app.paper.periodic",
     "work_precision": "explorer.app.paper.work_precision",
     "homoclinic": "explorer.app.paper.homoclinic",
     "melnikov": "explorer.app.paper.melnikov",

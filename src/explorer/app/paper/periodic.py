@@ -1,0 +1,95 @@
+"""A Figure 4 panel (mu = 0.03, h = 2) with its island chains marked by period, and the
+rotation-number profile from the elliptic fixed point beside it."""
+import numpy as np
+
+from explorer import model
+from explorer.app.paper._common import _FS, _SMALL, Drawn, Outcome, _new_figure, _rc, save
+
+#: the figure's name (``explorer figures --only periodic``) and what it shows
+NAME = "periodic"
+DESCRIPTION = "Figure 4 at mu = 0.03: periodic orbits of periods 1..8 marked, rotation-number profile"
+
+#: the elliptic fixed point of the scene (Newton refines it) and the end of the profile segment
+CENTER_GUESS = (1.5822, 0.0)
+PROFILE_END = (0.9, 0.0)
+
+
+def periodic_figure(params=None, h=None, *, periods=range(1, 9), seeds=40, crossings=400, profile_n=120,
+                    iterates=2000, grid=12, dpi=200) -> Drawn:
+    """Left: crossings of ``seeds`` orbits started on p2 = 0 (gray) and the periodic orbits of
+    minimal period K in ``periods`` found by :func:`explorer.analysis.periodic.search_periodic_orbits`
+    (filled markers elliptic, open hyperbolic, one colour per period).  Right: the rotation
+    number (:func:`explorer.analysis.rotation.rotation_profile`) along p2 = 0 from the elliptic
+    fixed point, converged orbits dark, non-converged (chaotic) light, with the levels m/K of
+    the elliptic orbits found (plateaus of the island chains)."""
+    from explorer.analysis import periodic, rotation
+    from explorer.analysis.fixedpoints import find_fixed_point
+    from explorer.analysis.sections import section_crossings
+
+    prm = model.FIGURE4.with_(mu=0.03) if params is None else params
+    h = model.FIGURE4_H if h is None else h
+    c1, c2, r1, r2 = model.allowed_ellipse(prm, h)
+    p1s = c1 + r1 * np.linspace(-0.97, 0.97, seeds)
+    cr = section_crossings(prm, p1s, np.zeros_like(p1s), h, crossings, tol=1e-13)
+    pts = cr.data[..., 1:3].reshape(-1, 2)
+    pts = pts[np.isfinite(pts[:, 0])]
+    orbits = {K: periodic.search_periodic_orbits(prm, h, K, grid=grid) for K in periods}
+    center = find_fixed_point(prm, h, CENTER_GUESS)
+    prof = rotation.rotation_profile(prm, h, center.point, PROFILE_END, profile_n, center=center.point,
+                                     iterates=iterates)
+    levels = {}   # m/K of the elliptic orbits found whose level the profile reaches (a plateau)
+    reached = prof.rotation[prof.converged]
+    for K, obs in orbits.items():
+        for o in obs:
+            if o.kind == "elliptic":
+                r = rotation.orbit_rotation(o.points, center.point)
+                if np.any(np.abs(reached - r) < 1e-8):
+                    levels.setdefault(round(r * K) / K, (round(r * K), K))
+    colours = ["#000000", "#1f4e9c", "#b2182b", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2",
+               "#17becf", "#7f7f7f"]
+    with _rc():
+        fig = _new_figure((9.0, 4.2), dpi=dpi)
+        ax, bx = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.35, 1]})
+        t = np.linspace(0, 2 * np.pi, 400)
+        ax.set_facecolor("0.85")            # outside the allowed region: gray (as in Figure 4)
+        ax.fill(c1 + r1 * np.cos(t), c2 + r2 * np.sin(t), color="white", lw=0, zorder=0)
+        ax.plot(pts[:, 0], pts[:, 1], ",", color="0.55", zorder=1, rasterized=True)
+        for K, obs in orbits.items():
+            col = colours[(K - 1) % len(colours)]
+            for i, o in enumerate(obs):
+                ell = o.kind == "elliptic"
+                ax.plot(o.points[:, 0], o.points[:, 1], "o" if ell else "x", ms=3.2 if ell else 2.8,
+                        color=col, mfc=col if ell else "none", mew=0.7, zorder=3,
+                        label=f"K = {K}" if i == 0 else None)
+        ax.plot(*np.array([center.point, PROFILE_END]).T, "-", color="k", lw=0.5, zorder=2)
+        ax.set_xlim(c1 - 1.05 * r1, c1 + 1.05 * r1)
+        ax.set_ylim(c2 - 1.05 * r2, c2 + 1.05 * r2)
+        ax.set_xlabel("$p_1$")
+        ax.set_ylabel("$p_2$")
+        ax.legend(fontsize=6, frameon=False, loc="upper right", ncol=2, title="period (o elliptic, x hyperbolic)",
+                  title_fontsize=6)
+        ax.set_title(rf"$\varphi = \pi$, $\mu = {prm.mu:g}$, $h = {h:g}$: periodic orbits", fontsize=_FS)
+        conv = prof.converged
+        x = prof.points[:, 0]
+        bx.plot(x[~conv], prof.rotation[~conv], ".", color="0.7", ms=2.5, label="not converged (chaotic)")
+        bx.plot(x[conv], prof.rotation[conv], ".", color="k", ms=2.5, label="converged to 1e-10")
+        for lev, (m, K) in sorted(levels.items()):
+            bx.axhline(lev, color=colours[(K - 1) % len(colours)], lw=0.6, ls="--")
+            bx.text(x.min(), lev, f" {m:d}/{K}: island chain of period {K}", fontsize=_SMALL, va="bottom",
+                    color=colours[(K - 1) % len(colours)])
+        bx.set_xlabel("$p_1$ on $p_2 = 0$ (from the elliptic fixed point)")
+        bx.set_ylabel("rotation number (turns per return)")
+        bx.invert_xaxis()
+        bx.legend(fontsize=6, frameon=False, loc="lower left")
+        bx.set_title("weighted Birkhoff rotation number", fontsize=_FS)
+    data = {"orbits": {K: [o.as_dict() for o in obs] for K, obs in orbits.items()},
+            "counts": {K: len(obs) for K, obs in orbits.items()}, "levels": levels,
+            "center": center.point.tolist(), "rotation": prof.rotation, "converged": prof.converged}
+    return Drawn(fig, data)
+
+
+def build(out_dir, *, results_dir="results", quick=False, benchmark=None, quiet=True) -> Outcome:
+    kw = dict(periods=range(1, 4), seeds=16, crossings=150, profile_n=30, iterates=500, grid=6) if quick else {}
+    d = periodic_figure(**kw)
+    counts = ", ".join(f"K={K}: {n}" for K, n in d.data["counts"].items())
+    return Outcome(NAME, "written", save(d, out_dir, NAME), f"orbits {counts}", d.data)
