@@ -38,6 +38,10 @@ _EXPORTS = {
     "Crossings": "explorer.analysis.sections",
     "crossings": "explorer.analysis.sections",
     "section_crossings": "explorer.analysis.sections",
+    "iter_crossings": "explorer.analysis.sections",
+    "iter_section_crossings": "explorer.analysis.sections",
+    "CrossingBlock": "explorer.analysis.sections",
+    "StreamState": "explorer.analysis.sections",
     "Status": "explorer.kernels",
     # chaos indicators
     "Indicators": "explorer.analysis.lyapunov",
@@ -60,6 +64,7 @@ _EXPORTS = {
     "Scene": "explorer.io.scene",
     "load_scene": "explorer.io.scene",
     "read_store": "explorer.io.store",
+    "iter_rows": "explorer.io.store",
     "run_sweep": "explorer.app.runner",
     "SweepReport": "explorer.app.runner",
 }
