@@ -260,6 +260,19 @@ def test_key_p_draws_separatrices_of_the_hyperbolic_point(tmp_path):
     assert not ex.show_separatrices and ex._sep_artists == []
 
 
+def test_key_o_marks_the_periodic_orbits_with_their_stability(tmp_path):
+    ex = make(model.FIGURE4.with_(mu=0.03), tmp_path=tmp_path)
+    key(ex, "o")
+    assert ex.show_periodic and "K=1:" in ex.message and "K=4:" in ex.message
+    n_markers = len([a for a in ex.view.periodic_artists if hasattr(a, "get_marker")])
+    assert n_markers >= 10                                  # one marker line per orbit
+    ex.set_param("mu", 0.05)
+    assert not ex.show_periodic and ex.view.periodic_artists == [] and "press o" in ex.message
+    key(ex, "o")
+    key(ex, "o")
+    assert not ex.show_periodic and ex.view.periodic_artists == []
+
+
 def test_separatrix_polylines_are_broken_at_unresolved_jumps():
     c = np.array([[0.0, 0.0], [0.01, 0.0], [0.5, 0.0], [0.51, 0.0]])
     out = explore.break_jumps(c, 0.1)

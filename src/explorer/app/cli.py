@@ -201,7 +201,7 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Open a matplotlib window with the allowed region of the section phi = pi at "
                        "energy h; a click inside starts an orbit and draws its crossings as they are computed. "
                        "Keys: c clear, r re-run seeds, s save PNG, w write HDF5, x colour by the divergence "
-                       "proxy, p separatrices. Needs a display.")
+                       "proxy, p separatrices, o periodic orbits of periods 1..4. Needs a display.")
     x.add_argument("scene", nargs="?", default=None,
                    help="scene file (.toml) or preset name (e.g. figure4): start from its panel's parameters, "
                    "h and integration settings [none: Figure 4 with mu = 0, h = 2]")

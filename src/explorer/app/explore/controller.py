@@ -200,7 +200,7 @@ class Explorer:
         return orbit
 
     def on_key(self, event):
-        """Keys c, r, s, w, x, p (ignored while the text box is being typed into)."""
+        """Keys c, r, s, w, x, p, o (ignored while the text box is being typed into)."""
         if event is None or self.view.textbox.capturekeystrokes:
             return
         key = getattr(event, "key", None)
@@ -209,7 +209,7 @@ class Explorer:
 
     def do(self, key):
         """The action of a key / button: c clear, r re-run, s save PNG, w write HDF5,
-        x colour by the chaos indicator (MEGNO), p separatrices."""
+        x colour by the chaos indicator (MEGNO), p separatrices, o periodic orbits."""
         st = self.state
         try:
             if key == "c":
@@ -230,6 +230,8 @@ class Explorer:
                 self.toggle_indicator()
             elif key == "p":
                 self.toggle_separatrices()
+            elif key == "o":
+                self.toggle_periodic()
         except (OSError, ValueError) as exc:
             self._say(f"{key}: failed: {' '.join(str(exc).split())}")
         self.view.redraw()
@@ -281,6 +283,19 @@ class Explorer:
             return
         self._say(self._draw_separatrices())
 
+    # ------------------------------------------------------------ periodic orbits
+    def toggle_periodic(self):
+        """Show / hide the periodic orbits of periods 1..PERIODIC_MAX with their stability."""
+        st = self.state
+        st.show_periodic = not st.show_periodic
+        if not st.show_periodic:
+            self.view.clear_periodic()
+            self._say("periodic orbits hidden")
+            return
+        orbits, msg = st.periodic_orbits()
+        self.view.draw_periodic(orbits)
+        self._say(msg)
+
     # ------------------------------------------------------------ parameters
     def set_param(self, name, value):
         """Set a model parameter (a1 a2 b lam chi zeta mu xi eta) or h: see :meth:`set_params`."""
@@ -305,6 +320,10 @@ class Explorer:
             self._sep_timer.stop()
             self._sep_timer.start()
             self.state.message += "\nseparatrices: recomputing at the new parameters ..."
+        if self.state.show_periodic:   # stale at the new parameters: hidden (press o again)
+            self.view.clear_periodic()
+            self.state.show_periodic = False
+            self.state.message += "\nperiodic orbits hidden (parameters changed; press o)"
         self._refresh(reset_limits=True)
 
     def _slider_changed(self, name, value):

@@ -47,7 +47,10 @@ FAILED_NAME = "integration failed (exception)"
 #: keys of the explorer and what they do
 KEYS = {"c": "clear orbits and seeds", "r": "re-run the seeds at the current parameters",
         "s": "save the section as PNG", "w": "write the orbits as HDF5 (store format)",
-        "x": "colour by the chaos indicator (MEGNO)", "p": "toggle separatrices"}
+        "x": "colour by the chaos indicator (MEGNO)", "p": "toggle separatrices",
+        "o": "toggle the periodic orbits of periods 1..PERIODIC_MAX (o elliptic, x hyperbolic)"}
+#: key o marks the periodic orbits of periods 1..PERIODIC_MAX (analysis/periodic.py)
+PERIODIC_MAX = 4
 #: one colour per orbit, in turn
 COLORS = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf",
           "#bcbd22", "#393b79", "#637939", "#843c39", "#7b4173", "#3182bd", "#e6550d", "#31a354")
@@ -207,6 +210,7 @@ class ExplorerState:
         self.orbits: list[Orbit] = []       # orbits at the current parameters
         self.color_by_indicator = False
         self.show_separatrices = False
+        self.show_periodic = False
         self.message = ""
         self._next_color = 0
         self._orbit_number = 0
@@ -496,6 +500,25 @@ class ExplorerState:
         return changes
 
     # ------------------------------------------------------------ separatrices
+    def periodic_orbits(self, max_period=None):
+        """(orbits, message): the periodic orbits of minimal periods 1..``max_period`` (default
+        PERIODIC_MAX) found by :func:`explorer.analysis.periodic.search_periodic_orbits` (a coarse
+        grid, 8 x 8, and the symmetry lines), each once."""
+        from explorer.analysis.periodic import search_periodic_orbits
+
+        K = PERIODIC_MAX if max_period is None else int(max_period)
+        if self.region is None:
+            return [], "periodic orbits: the region is empty"
+        orbits = []
+        for k in range(1, K + 1):
+            try:
+                orbits += search_periodic_orbits(self.params, self.h, k, grid=8, max_guesses=30, phi0=self.phi0)
+            except Exception:  # noqa: BLE001 - a failed search marks nothing for this period
+                continue
+        counts = ", ".join(f"K={k}: {sum(o.period == k for o in orbits)} "
+                           f"({sum(o.period == k and o.stable for o in orbits)} stable)" for k in range(1, K + 1))
+        return orbits, f"periodic orbits {counts}"
+
     def fixed_points_and_curves(self):
         """(fixed points, curves, message) from :mod:`explorer.analysis.fixedpoints`: Newton's method
         from p = 0, from the centre of the region and half-way to its edge along both axes; the

@@ -23,7 +23,10 @@ FIGSIZE = (11.0, 7.6)
 DISPLAY_ERROR = "explore needs a display (set DISPLAY or use a GUI backend)"
 #: the buttons: key -> label (the same actions as the keys)
 BUTTONS = (("c", "clear  [c]"), ("r", "re-run seeds  [r]"), ("s", "save PNG  [s]"),
-           ("w", "write HDF5  [w]"), ("x", "colour by MEGNO  [x]"), ("p", "separatrices  [p]"))
+           ("w", "write HDF5  [w]"), ("x", "colour by MEGNO  [x]"), ("p", "separatrices  [p]"),
+           ("o", "periodic orbits  [o]"))
+#: colours of the periodic orbits by period (key o)
+PERIOD_COLORS = ("k", "#1f4e9c", "#b2182b", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2")
 
 
 def break_jumps(curve, gap):
@@ -81,6 +84,7 @@ class ExplorerView:
                                         markeredgewidth=1.0, zorder=4)
         self.lines: dict[int, object] = {}   # orbit number -> Line2D of its crossings
         self.sep_artists: list = []
+        self.periodic_artists: list = []
 
         # colour bar of the MEGNO (shown with 'x'); turbo: every colour is visible on white
         self.cmap = mpl.colormaps["turbo"]
@@ -119,6 +123,8 @@ class ExplorerView:
                      f"0: stable periodic, > {CHAOTIC_MEGNO:g}: chaotic-like)\n\n"
                      "p: fixed points (o elliptic, x hyperbolic)\n"
                      "and separatrices\n\n"
+                     "o: periodic orbits of periods 1..4\n"
+                     "(number: period)\n\n"
                      "toolbar zoom/pan: clicks do not start orbits")
         fig.text(0.73, 0.47, help_text, fontsize=8, va="top", color="0.2", linespacing=1.3)
         self.status_text = fig.text(0.01, 0.006, "", fontsize=9, va="bottom", ha="left", family="monospace")
@@ -217,6 +223,24 @@ class ExplorerView:
                                  marker="o" if fp.stable else "x", markersize=8, markeredgewidth=1.8,
                                  markerfacecolor="none", color=SEPARATRIX_COLOR)
             self.sep_artists.append(mk)
+
+    def clear_periodic(self):
+        for a in self.periodic_artists:
+            a.remove()
+        self.periodic_artists = []
+
+    def draw_periodic(self, orbits):
+        """Periodic orbits: o elliptic (filled), x hyperbolic, one colour per period, labelled K."""
+        self.clear_periodic()
+        for o in orbits or ():
+            col = PERIOD_COLORS[(o.period - 1) % len(PERIOD_COLORS)]
+            (mk,) = self.ax.plot(o.points[:, 0], o.points[:, 1], linestyle="none", zorder=4.6,
+                                 marker="o" if o.stable else "x", markersize=5, markeredgewidth=1.2,
+                                 color=col, markerfacecolor=col if o.stable else "none")
+            self.periodic_artists.append(mk)
+            for p in o.points:
+                self.periodic_artists.append(self.ax.annotate(str(o.period), p, xytext=(3, 3),
+                                                              textcoords="offset points", fontsize=6, color=col))
 
     # ------------------------------------------------------------ status, output
     def update_status(self):
