@@ -274,12 +274,27 @@ class StreamState:
     ARRAYS = ("y", "carry", "done", "finished", "status", "info")
 
     @classmethod
-    def start(cls, run: _Run) -> StreamState:
-        N = run.Y0.shape[0]
+    def initial(cls, params, y0, *, phi0: float = math.pi) -> StreamState:
+        """The state of a run from ``y0`` before its first block (where :func:`iter_crossings`
+        starts when given no state)."""
+        P = validation.packed_params(params)
+        Y0 = np.ascontiguousarray(np.atleast_2d(np.asarray(y0, dtype=np.float64)))
+        g1, g2 = model.section_gamma(float(phi0))
+        N = Y0.shape[0]
         carry = np.empty((N, drivers.N_CARRY))
-        drivers.start_carry(run.Y0, run.P, run.cphi, run.sphi, carry)
-        return cls(run.Y0.copy(), carry, np.zeros(N, np.int64), np.zeros(N, bool), np.zeros(N, np.int64),
+        drivers.start_carry(Y0, P, g2, g1, carry)
+        return cls(Y0.copy(), carry, np.zeros(N, np.int64), np.zeros(N, bool), np.zeros(N, np.int64),
                    np.zeros((N, 3)), 0)
+
+    def take(self, a: int, b: int) -> StreamState:
+        """The state of orbits a..b-1 (a copy)."""
+        return StreamState(*(getattr(self, n)[a:b].copy() for n in self.ARRAYS), self.blocks)
+
+    def put(self, a: int, part: StreamState) -> None:
+        """Write the state of orbits a, a+1, ... from ``part`` (of :meth:`take`)."""
+        b = a + part.y.shape[0]
+        for n in self.ARRAYS:
+            getattr(self, n)[a:b] = getattr(part, n)
 
     def copy(self) -> StreamState:
         return StreamState(*(getattr(self, a).copy() for a in self.ARRAYS), self.blocks)
@@ -334,7 +349,7 @@ def iter_crossings(params, y0, n_crossings: int, *, block: int = DEFAULT_BLOCK, 
     if not isinstance(block, numbers.Integral) or block < 1:
         raise ParameterError(f"block must be an integer >= 1, got {block!r}")
     N, K = run.Y0.shape[0], run.K
-    st = StreamState.start(run) if state is None else state.copy()
+    st = StreamState.initial(run.P, run.Y0, phi0=run.settings["phi0"]) if state is None else state.copy()
     if st.y.shape != (N, 5) or st.carry.shape != (N, drivers.N_CARRY):
         raise ParameterError(f"state is for {st.y.shape[0]} orbits, y0 has {N}")
     width = min(K, int(block) + drivers.MAX_ROOTS_PER_STEP)

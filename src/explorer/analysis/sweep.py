@@ -10,6 +10,14 @@ chunks with joblib (processes, one Numba thread each) or in this process
 (Numba threads over orbits), never both at once, and hands each finished
 panel to a callback in panel order; only that callback (in the parent) writes
 files.  Compare heyoka's ensemble ``gen(template, i)``.
+
+Streamed panels: a panel whose crossing rows would exceed :data:`STREAM_BYTES` is computed in
+rounds of at most ``spec.blocks[pos]`` crossings per orbit: each round maps the pure
+``task_block(spec, i, state)`` over the panel's unfinished chunks, each continuing its orbits from
+their :class:`~explorer.analysis.sections.StreamState` (bit for bit one uninterrupted run), and
+hands every chunk's block to ``streamer.block`` in the parent, which stores it; memory stays
+O(STREAM_BYTES) whatever the number of crossings, and a killed sweep resumes from the stored
+blocks (``streamer.resume``).
 """
 from __future__ import annotations
 
@@ -29,6 +37,11 @@ from explorer.model import ParameterError
 CHUNK_ORBITS_JOBS = 32
 #: chunks per panel when this process runs everything with Numba threads (progress granularity)
 CHUNKS_PER_PANEL_THREADS = 4
+#: a panel whose crossing rows (40 bytes each) exceed this is streamed to the store in blocks
+#: (32 MiB; the environment variable EXPLORER_STREAM_BYTES overrides it, e.g. to stream small runs)
+STREAM_BYTES = int(os.environ.get("EXPLORER_STREAM_BYTES", 32 * 2**20))
+#: the smallest block (crossings per orbit and round) of a streamed panel
+MIN_BLOCK = 256
 
 
 @dataclass(frozen=True)
@@ -56,6 +69,18 @@ class SweepSpec:
     chunks: tuple = field(default=())   # (panel position, start, stop) for each task
     lyapunov: Any = None                # scene.LyapunovSpec when chaos indicators are asked for
     sections: bool = True               # False: indicators only, no crossings are computed or stored
+    blocks: tuple = ()                  # crossings per orbit and round of each panel (crossings: not streamed)
+
+    def streamed(self, pos: int) -> bool:
+        """Panel ``pos`` is computed in rounds of blocks and streamed to the store."""
+        return bool(self.sections and self.blocks and self.blocks[pos] < self.crossings)
+
+
+def panel_block(n_orbits: int, crossings: int, budget: int | None = None) -> int:
+    """Crossings per orbit and round of a panel of ``n_orbits``: all of them when its rows fit in
+    ``budget`` bytes (default :data:`STREAM_BYTES`), else the block that fits (at least MIN_BLOCK)."""
+    fit = int(STREAM_BYTES if budget is None else budget) // (sections.ROW_BYTES * max(1, int(n_orbits)))
+    return int(crossings) if crossings <= fit else int(max(MIN_BLOCK, fit))
 
 
 def build_spec(scene, panel_indices, *, chunk_orbits: int) -> SweepSpec:
@@ -65,6 +90,7 @@ def build_spec(scene, panel_indices, *, chunk_orbits: int) -> SweepSpec:
     integ = scene.integration
     panels = []
     chunks = []
+    blocks = []
     ly = scene.lyapunov if "lyapunov" in scene.compute else None
     for pos, i in enumerate(panel_indices):
         params, h, label = scene.panel(i)
@@ -79,12 +105,13 @@ def build_spec(scene, panel_indices, *, chunk_orbits: int) -> SweepSpec:
         panels.append(PanelSpec(i, label, params.as_array(), float(h), np.ascontiguousarray(y0),
                                 np.column_stack([p1, p2]), grid))
         n = len(p1)
+        blocks.append(panel_block(n, integ.crossings))
         step = max(1, chunk_orbits if chunk_orbits > 0 else math.ceil(n / CHUNKS_PER_PANEL_THREADS))
         for a in range(0, n, step):
             chunks.append((pos, a, min(n, a + step)))
     return SweepSpec(tuple(panels), integ.method, integ.tol, integ.dt, integ.crossings, integ.effective_tmax,
                      integ.max_steps, integ.phi0, integ.direction, tuple(chunks), ly,
-                     "sections" in scene.compute)
+                     "sections" in scene.compute, tuple(blocks))
 
 
 def map_seeds(params, h: float, phi0: float, resolution: int):
@@ -153,11 +180,104 @@ def _worker_task(spec, i):
     return task(spec, i, threads=1)
 
 
-def run(spec: SweepSpec, on_panel, *, jobs: int = 1, backend: str | None = None, progress=None):
+def task_block(spec: SweepSpec, i: int, state, threads: int | None = None) -> dict:
+    """Pure map of a streamed panel: the next block of chunk i's orbits, continued from ``state``
+    (their :class:`~explorer.analysis.sections.StreamState`).  Returns the block's rows
+    (``index`` of the orbits in the panel, ``start``, ``count``, ``data``) and the new state."""
+    pos, a, b = spec.chunks[i]
+    panel = spec.panels[pos]
+    t0 = time.perf_counter()
+    it = sections.iter_crossings(panel.P, panel.y0[a:b], spec.crossings, block=spec.blocks[pos], state=state,
+                                 method=spec.method, tol=spec.tol, dt=spec.dt, tmax=spec.tmax,
+                                 max_steps=spec.max_steps, phi0=spec.phi0, direction=spec.direction, threads=threads)
+    blk = next(it, None)
+    it.close()
+    if blk is None:   # every orbit of the chunk had finished
+        return {"chunk": i, "index": np.zeros(0, np.int64), "start": np.zeros(0, np.int64),
+                "count": np.zeros(0, np.int64), "data": np.zeros((0, 0, 5)), "state": state,
+                "wall_time": time.perf_counter() - t0}
+    return {"chunk": i, "index": a + blk.index, "start": blk.start, "count": blk.count, "data": blk.data,
+            "state": blk.state, "wall_time": time.perf_counter() - t0}
+
+
+def _worker_task_block(spec, i, state):
+    return task_block(spec, i, state, threads=1)
+
+
+def _map(fn_local, fn_worker, args, jobs, backend):
+    """fn(*a) for every a of ``args``, results as they come: in this process, or with joblib."""
+    if jobs == 1 and backend is None:
+        for a in args:
+            yield fn_local(*a)
+        return
+    import joblib
+
+    with joblib.parallel_config(backend=backend or "loky"):
+        parallel = joblib.Parallel(n_jobs=jobs, return_as="generator")
+        yield from parallel(joblib.delayed(fn_worker)(*a) for a in args)
+
+
+def _stream_panel(spec: SweepSpec, pos: int, chunk_ids, streamer, jobs, backend, progress) -> dict:
+    """Rounds of blocks over the chunks of panel ``pos`` until every orbit has finished; each chunk's
+    block goes to ``streamer.block`` as it comes.  Returns the panel's per-orbit arrays (no rows)."""
+    import dataclasses
+
+    panel = spec.panels[pos]
+    state = streamer.resume(panel)
+    rounds = max(1, math.ceil(spec.crossings / spec.blocks[pos]))
+    wall = 0.0
+    while not state.finished.all():
+        todo = [i for i in chunk_ids if not state.finished[spec.chunks[i][1]:spec.chunks[i][2]].all()]
+        args = [(spec, i, state.take(spec.chunks[i][1], spec.chunks[i][2])) for i in todo]
+        for r in _map(task_block, _worker_task_block, args, jobs, backend):
+            _, a, b = spec.chunks[r["chunk"]]
+            state.put(a, r["state"])
+            state.blocks += 1
+            streamer.block(panel, state.blocks, r["index"], r["start"], r["count"], r["data"],
+                           np.arange(a, b), r["state"].as_arrays())
+            wall += r["wall_time"]
+            if progress is not None:
+                progress(1.0 / rounds)
+    out = {"count": state.done.copy(), "status": state.status.copy(), "final": state.y.copy(),
+           "info": state.info.copy(), "streamed": True, "settings": {}}
+    if spec.lyapunov is not None:   # indicators do not depend on the crossings: one pass, no rows
+        ly_spec = dataclasses.replace(spec, sections=False)
+        parts = sorted(_map(task, _worker_task, [(ly_spec, i) for i in chunk_ids], jobs, backend),
+                       key=lambda p: p["chunk"])
+        ly = _assemble(parts)
+        for k in ("megno", "mlce", "fli", "lyapunov_status", "sali", "gali2", "lyapunov_early"):
+            if k in ly:
+                out[k] = ly[k]
+        wall += ly["wall_time"]
+    out["wall_time"] = wall
+    return out
+
+
+def run(spec: SweepSpec, on_panel, *, jobs: int = 1, backend: str | None = None, progress=None, streamer=None):
     """Map ``task`` over the chunks and call ``on_panel(panel_spec, arrays)`` for each completed panel,
     in panel order, in this (the parent) process.  ``jobs == 1`` runs in this process with Numba
     threads over orbits; otherwise joblib runs ``jobs`` workers (``backend`` as joblib names it:
-    "loky" by default, "dask" with a dask.distributed Client active)."""
+    "loky" by default, "dask" with a dask.distributed Client active).
+
+    A streamed panel (``spec.streamed(pos)``) is computed in rounds of blocks (module docstring):
+    ``streamer.resume(panel_spec)`` gives the StreamState to start from (the stored blocks of a
+    killed run applied) and ``streamer.block(panel_spec, number, index, start, count, data, orbits,
+    state_arrays)`` stores each block; its ``arrays`` then hold no rows (``streamed``: True)."""
+    if any(spec.streamed(pos) for pos in range(len(spec.panels))):
+        if streamer is None:
+            raise ValueError("a streamed panel needs a streamer (the store's writer of blocks)")
+        for pos, panel in enumerate(spec.panels):
+            chunk_ids = [i for i, c in enumerate(spec.chunks) if c[0] == pos]
+            if spec.streamed(pos):
+                on_panel(panel, _stream_panel(spec, pos, chunk_ids, streamer, jobs, backend, progress))
+                continue
+            parts = []
+            for r in _map(task, _worker_task, [(spec, i) for i in chunk_ids], jobs, backend):
+                parts.append(r)
+                if progress is not None:
+                    progress(1)
+            on_panel(panel, _assemble(sorted(parts, key=lambda p: p["chunk"])))
+        return
     n_chunks = len(spec.chunks)
     per_panel: dict[int, list[int]] = {}
     for i, (pos, _a, _b) in enumerate(spec.chunks):

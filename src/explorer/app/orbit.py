@@ -105,21 +105,19 @@ def to_store(path, params, p1, p2, h, n_crossings, *, block=sections.DEFAULT_BLO
         raise ParameterError(f"crossings: {n_crossings} crossings may need {sections.human_bytes(need)} on disk "
                              f"({sections.human_bytes(need / 2)} of rows, twice while the store is written); "
                              f"{sections.human_bytes(free)} free in {directory}")
+    initial = sections.StreamState.initial(params, y0, phi0=phi0)
     try:
-        saved = blocks.resume(force=force)
+        saved, resumed = blocks.resume(initial.as_arrays(), force=force)
     except store.StoreError as exc:
         raise ParameterError(str(exc)) from None
-    state = None if saved is None else sections.StreamState.from_arrays(saved)
-    resumed = 0 if state is None else state.blocks
+    state = sections.StreamState.from_arrays(dict(saved, blocks=resumed))
     t0 = time.perf_counter()
     st = state
     for b in sections.iter_crossings(params, y0, n_crossings, block=block, state=state, **kw):
-        blocks.append(b.index, b.start, b.count, b.data, b.state.as_arrays())
+        blocks.append(b.state.blocks, b.index, b.start, b.count, b.data, [0], b.state.as_arrays())
         st = b.state
         if on_block is not None:
             on_block(b)
-    if st is None:  # nothing left to compute (the last block was stored before a kill)
-        st = state
     wall = time.perf_counter() - t0
     attrs = {"index": 0, "label": "orbit", "parameter": "", "value": float("nan"), "h": float(h),
              "params": json.dumps(params.as_dict(), sort_keys=True), "settings": json.dumps(settings, sort_keys=True),

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from explorer.analysis import sweep
+from explorer.analysis import sections, sweep
 from explorer.analysis.fixedpoints import chaotic_fraction
 from explorer.analysis.sections import ADAPTIVE_METHODS, energy_warning, max_energy_error
 from explorer.io import store
@@ -227,6 +227,10 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
     chunk_orbits = sweep.default_jobs_layout(1 if (jobs == 1 and backend is None) else 2)
     spec = sweep.build_spec(scene, todo, chunk_orbits=chunk_orbits) if todo else None
 
+    if spec is not None:
+        _check_disk(spec, out)
+    streams = _PanelStreams(out, hashes, scene.integration.phi0, force)
+
     prov = json.dumps(store.provenance({"scene": scene.name}), sort_keys=True)
     file_attrs = {"scene_name": scene.name, "scene": scene.text, "provenance": prov}
     integ = scene.integration
@@ -245,8 +249,10 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
                  "method": integ.method, "tol": float(integ.tol), "dt": float(integ.dt),
                  "phi0": float(integ.phi0), "direction": int(integ.direction),
                  "crossings_requested": int(integ.crossings), "wall_time": arrays["wall_time"]}
-        payload = {"seeds": panel.seeds, "y0": panel.y0, "data": arrays["data"], "count": arrays["count"],
+        payload = {"seeds": panel.seeds, "y0": panel.y0, "count": arrays["count"],
                    "status": arrays["status"], "final": arrays["final"], "info": arrays["info"]}
+        if not arrays.get("streamed"):
+            payload["data"] = arrays["data"]
         if panel.grid:
             n, a1, b1, a2, b2 = panel.grid
             attrs.update(map_resolution=int(n), map_p1=[float(a1), float(b1)], map_p2=[float(a2), float(b2)])
@@ -264,10 +270,15 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
             if curves:
                 payload["separatrix_offsets"] = np.concatenate([[0], np.cumsum([len(c) for c in curves])])
                 payload["separatrix_points"] = np.concatenate(curves)
-        store.commit_panel(out, i, payload, attrs, file_attrs)
+        if arrays.get("streamed"):   # rows stored block by block: the panel written from the blocks
+            attrs.update(block=int(spec.blocks[todo.index(i)]), resumed_blocks=streams.resumed.get(i, 0))
+            streams.finish(i, payload, attrs, file_attrs)
+            dh = max((max_energy_error(rows) for rows in store.iter_rows(out, i)), default=0.0)
+        else:
+            store.commit_panel(out, i, payload, attrs, file_attrs)
+            dh = max_energy_error(arrays["data"])
         stats["orbits"] += len(arrays["count"])
         stats["crossings"] += int(arrays["count"].sum())
-        dh = max_energy_error(arrays["data"])
         stats["max_dh"] = max(stats["max_dh"], dh)
         stats["warning"] = stats["warning"] or energy_warning(dh, panel.h, setting)  # each panel its own h
         stopped = (arrays["status"] == STATUS_TMAX) & (arrays["count"] < integ.crossings)
@@ -281,7 +292,7 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
             bar = _progress(len(spec.chunks), not progress, f"sweep {scene.name}")
             try:
                 sweep.run(spec, on_panel, jobs=jobs, backend="dask" if client is not None else backend,
-                          progress=bar.update if bar is not None else None)
+                          progress=bar.update if bar is not None else None, streamer=streams)
             finally:
                 if bar is not None:
                     bar.close()
@@ -335,6 +346,57 @@ def _check_writable(directory: Path, option: str, target: Path):
     except OSError as exc:
         raise ParameterError(f"{option} {target}: cannot write into the directory '{directory}' "
                              f"({exc.strerror or exc})") from None
+
+
+def _check_disk(spec, out: Path) -> None:
+    """Refuse up front a sweep whose rows may not fit on the disk of ``out`` (40 bytes a crossing;
+    a streamed panel needs its rows twice while its store is written)."""
+    import shutil
+
+    need = 0
+    for pos, panel in enumerate(spec.panels):
+        if spec.sections:
+            rows = sections.result_bytes(len(panel.y0), spec.crossings)
+            need += 2 * rows if spec.streamed(pos) else rows
+    directory = out.resolve().parent
+    directory.mkdir(parents=True, exist_ok=True)
+    free = shutil.disk_usage(directory).free
+    if need > free:
+        raise ParameterError(f"scene: crossings = {spec.crossings} for {sum(len(p.y0) for p in spec.panels)} orbits "
+                             f"may need {sections.human_bytes(need)} on disk; {sections.human_bytes(free)} free in "
+                             f"{directory}; lower [integration] crossings or the seeds")
+
+
+class _PanelStreams:
+    """The sweep's writer of streamed panels (``sweep.run``'s ``streamer``): one
+    :class:`~explorer.io.store.stream.BlockStream` per panel, its identity the panel's settings
+    hash, so a killed sweep resumes a streamed panel from its stored blocks."""
+
+    def __init__(self, out, hashes, phi0, force):
+        self.out, self.hashes, self.phi0, self.force = out, hashes, phi0, force
+        self.streams: dict = {}
+        self.resumed: dict = {}
+
+    def resume(self, panel):
+        from explorer.io.store import stream
+
+        bs = stream.BlockStream(self.out, {"panel_hash": self.hashes[panel.index]}, index=panel.index)
+        if self.force:
+            bs.discard()
+        initial = sections.StreamState.initial(panel.P, panel.y0, phi0=self.phi0)
+        try:
+            saved, n = bs.resume(initial.as_arrays(), force=True)   # blocks of another setting: stale
+        except store.StoreError as exc:
+            raise ParameterError(str(exc)) from None
+        self.streams[panel.index] = bs
+        self.resumed[panel.index] = n
+        return sections.StreamState.from_arrays(dict(saved, blocks=n))
+
+    def block(self, panel, number, index, start, count, data, orbits, state):
+        self.streams[panel.index].append(number, index, start, count, data, orbits, state)
+
+    def finish(self, i, payload, attrs, file_attrs):
+        self.streams.pop(i).finish(payload, attrs, file_attrs)
 
 
 def _progress(total, quiet, desc):

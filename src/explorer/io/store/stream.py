@@ -5,15 +5,16 @@ While a run streams, its blocks live beside the store, in the directory ``<path>
     run.json        the run's identity (everything that determines its numbers) and its sha256
     000001.npz ...  one file per block: the orbits it advanced (``index``), the crossings each had
                     before it (``start``), how many it added (``count``) and those rows
-                    (``rows``, concatenated orbit after orbit), and the run's state after the
-                    block (the arrays of :class:`explorer.analysis.sections.StreamState`:
-                    ``y``, ``carry``, ``done``, ``finished``, ``status``, ``info``, ``blocks``)
+                    (``rows``, concatenated orbit after orbit), and the state after the block of
+                    the orbits it covers (``orbits``: the arrays of
+                    :class:`explorer.analysis.sections.StreamState` -- ``y``, ``carry``, ``done``,
+                    ``finished``, ``status``, ``info`` -- for those orbits, and ``blocks``)
 
 Each block file is written whole under a temporary name, fsynced and renamed
 (:func:`~explorer.io.store.atomic.write_bytes_atomic`), so after a SIGKILL at any instant the
 directory holds complete blocks only: the block being computed is lost, nothing else.
-:meth:`BlockStream.resume` returns the state after the last block (block numbers must follow each
-other and the identity must match), from which the caller continues the run
+:meth:`BlockStream.resume` applies the blocks' states in order to the run's initial state (block
+numbers must follow each other and the identity must match), from which the caller continues the run
 (``sections.iter_crossings(..., state=...)``: bit for bit the uninterrupted run).
 :meth:`BlockStream.finish` writes the panel into the store in one atomic transaction
 (:func:`~explorer.io.store.commit.commit_panel`): offsets from each orbit's total, rows copied
@@ -40,15 +41,17 @@ from explorer.io.store.format import COLUMNS, StoreError, _canonical_json, panel
 
 #: arrays of a block file besides the state
 BLOCK_ARRAYS = ("index", "start", "count", "rows")
-#: the state arrays stored with each block (sections.StreamState.as_arrays)
-STATE_ARRAYS = ("y", "carry", "done", "finished", "status", "info", "blocks")
+#: the per-orbit state arrays stored with each block for the orbits it covers
+#: (sections.StreamState.as_arrays), and the run's block counter
+STATE_ARRAYS = ("y", "carry", "done", "finished", "status", "info")
 _BLOCK_NAME = re.compile(r"^(\d{6})\.npz$")
 ROW_BYTES = 8 * len(COLUMNS)
 
 
-def blocks_dir(path) -> str:
-    """The directory of the blocks of a store being streamed."""
-    return os.fspath(path) + ".blocks"
+def blocks_dir(path, index: int | None = None) -> str:
+    """The directory of the blocks of a store being streamed (``index``: of that panel of a
+    store of several panels)."""
+    return os.fspath(path) + (".blocks" if index is None else f".panel{int(index):03d}.blocks")
 
 
 def disk_needed(n_orbits: int, n_crossings: int) -> int:
@@ -69,9 +72,10 @@ class BlockStream:
     settings, crossings requested), so a rerun of the same command continues the same run and
     a different one is refused."""
 
-    def __init__(self, path, identity: dict):
+    def __init__(self, path, identity: dict, *, index: int | None = None):
         self.path = os.fspath(path)
-        self.dir = blocks_dir(self.path)
+        self.index = 0 if index is None else int(index)
+        self.dir = blocks_dir(self.path, index)
         self.identity = json.loads(_canonical_json(identity))
         self.hash = settings_hash(self.identity)
 
@@ -89,13 +93,14 @@ class BlockStream:
     def complete(self) -> bool:
         """The store at ``path`` already holds this run, whole (its panel hash is this run's)."""
         try:
-            return panel_hashes(self.path).get(0) == self.hash
+            return panel_hashes(self.path).get(self.index) == self.hash
         except StoreError:
             return False
 
-    def resume(self, *, force: bool = False) -> dict | None:
-        """Prepare the blocks directory and return the state arrays after the last stored block
-        (None: start from the beginning).
+    def resume(self, initial: dict, *, force: bool = False) -> tuple[dict, int]:
+        """Prepare the blocks directory and return (state arrays, blocks stored): ``initial`` (the
+        run's state before its first block, per-orbit arrays) with the state of every stored
+        block applied in order (0 blocks: ``initial`` itself).
 
         A blocks directory of another run (another identity) is a StoreError naming both, unless
         ``force`` (then it is removed).  Block numbers must run 1, 2, ... without a gap."""
@@ -112,39 +117,41 @@ class BlockStream:
                     raise StoreError(f"{self.dir} holds the blocks of another run (or is damaged); "
                                      "use --force to discard them or choose another --out")
                 shutil.rmtree(self.dir)
+        state = {a: np.array(initial[a]) for a in STATE_ARRAYS}
         if not os.path.isdir(self.dir):
             os.makedirs(self.dir)
             write_bytes_atomic(run_file, json.dumps({"hash": self.hash, "identity": self.identity},
                                                     sort_keys=True).encode())
-            return None
+            return state, 0
         for name in os.listdir(self.dir):   # temporaries of a block being written when killed
             if name != "run.json" and not _BLOCK_NAME.match(name):
                 os.remove(os.path.join(self.dir, name))
         files = self._block_files()
-        if not files:
-            return None
         numbers = [k for k, _ in files]
         if numbers != list(range(1, len(files) + 1)):
             raise StoreError(f"{self.dir}: blocks {numbers[:5]}... do not follow each other; "
                              "use --force to start again")
-        try:
-            with np.load(files[-1][1]) as z:
-                return {a: z[a].copy() for a in STATE_ARRAYS}
-        except Exception as exc:  # a damaged last block cannot come from a kill (atomic writes)
-            raise StoreError(f"{files[-1][1]}: unreadable block ({exc}); use --force to start again") from None
+        for _, name in files:
+            try:
+                with np.load(name) as z:
+                    orbits = z["orbits"]
+                    for a in STATE_ARRAYS:
+                        state[a][orbits] = z[a]
+            except Exception as exc:  # a damaged block cannot come from a kill (atomic writes)
+                raise StoreError(f"{name}: unreadable block ({exc}); use --force to start again") from None
+        return state, len(files)
 
-    def append(self, index, start, count, data, state: dict) -> int:
-        """Store one block atomically: ``data[i, :count[i]]`` are the new rows of orbit
-        ``index[i]``; ``state`` the run's state arrays after it.  Returns the block number."""
-        number = int(state["blocks"])
+    def append(self, number: int, index, start, count, data, orbits, state: dict) -> None:
+        """Store block ``number`` (1, 2, ...) atomically: ``data[i, :count[i]]`` are the new rows of
+        orbit ``index[i]``, ``state`` the state arrays after it of the orbits ``orbits``."""
         count = np.asarray(count, np.int64)
         rows = np.concatenate([data[i, : count[i]] for i in range(len(count))]) if len(count) else \
             np.zeros((0, len(COLUMNS)))
         arrays = {"index": np.asarray(index, np.int64), "start": np.asarray(start, np.int64), "count": count,
                   "rows": np.ascontiguousarray(rows, dtype=np.float64)}
         arrays.update({a: np.asarray(state[a]) for a in STATE_ARRAYS})
-        write_bytes_atomic(os.path.join(self.dir, f"{number:06d}.npz"), _npz_bytes(arrays))
-        return number
+        arrays["orbits"] = np.asarray(orbits, np.int64)
+        write_bytes_atomic(os.path.join(self.dir, f"{int(number):06d}.npz"), _npz_bytes(arrays))
 
     def _fill(self, offsets):
         def fill(dset):
@@ -160,15 +167,17 @@ class BlockStream:
         return fill
 
     def finish(self, arrays: dict, attrs: dict, file_attrs: dict | None = None) -> None:
-        """Write the panel (index 0) of the store from the blocks, atomically, and remove them.
+        """Write the panel of the store from the blocks, atomically, and remove them.
 
         ``arrays``: the per-orbit datasets (seeds, y0, count, status, final, info, and optional
-        ones); the rows come from the blocks.  ``attrs['hash']`` is set to this run's hash."""
+        ones); the rows come from the blocks.  ``attrs['hash']`` defaults to this run's hash."""
         count = np.asarray(arrays["count"], np.int64)
         offsets = np.zeros(count.size + 1, np.int64)
         np.cumsum(count, out=offsets[1:])
         payload = dict(arrays, offsets=offsets, crossings=RowSource(int(offsets[-1]), self._fill(offsets)))
-        commit_panel(self.path, 0, payload, dict(attrs, hash=self.hash), file_attrs)
+        attrs = dict(attrs)
+        attrs.setdefault("hash", self.hash)
+        commit_panel(self.path, self.index, payload, attrs, file_attrs)
         self.discard()
 
     def discard(self) -> None:
