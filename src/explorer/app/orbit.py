@@ -60,7 +60,7 @@ def print_rows(params, p1, p2, h, n_crossings, *, as_json=False, block=sections.
         rows = b.rows(0) if b.count.size else np.zeros((0, 5))
         max_dh = max(max_dh, sections.max_energy_error(rows))
         if as_json:
-            text = ", ".join("[" + ", ".join(json.dumps(float(v)) for v in r) + "]" for r in rows.tolist())
+            text = json.dumps(rows.tolist())[1:-1]   # the C encoder: floats as repr, as json.dumps writes them
             out.write((", " if k and text else "") + text)
         else:
             out.write("".join(f"{k + i + 1},{r[0]!r},{r[1]!r},{r[2]!r},{r[3]!r},{r[4]!r}\n"
