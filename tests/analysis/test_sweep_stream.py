@@ -96,7 +96,8 @@ def test_a_scene_whose_rows_do_not_fit_on_the_disk_is_refused_up_front(tmp_path,
     assert not (tmp_path / "h.h5").exists()
 
 
-@pytest.mark.parametrize("n,K,block", [(2, 10**6, 419430), (500, 10**3, 10**3), (1000, 10**3, 838), (10**5, 10**4, 256)])
+@pytest.mark.parametrize("n,K,block", [(2, 10**6, 104857), (200, 10**3, 10**3), (1000, 10**3, 256),
+                                      (10**5, 10**4, 256)])
 def test_panel_blocks_bound_the_rows_in_memory(n, K, block):
     assert sweep.panel_block(n, K) == block
     assert min(K, block) * n * 40 <= max(sweep.STREAM_BYTES, sweep.MIN_BLOCK * n * 40)

@@ -38,8 +38,9 @@ CHUNK_ORBITS_JOBS = 32
 #: chunks per panel when this process runs everything with Numba threads (progress granularity)
 CHUNKS_PER_PANEL_THREADS = 4
 #: a panel whose crossing rows (40 bytes each) exceed this is streamed to the store in blocks
-#: (32 MiB; the environment variable EXPLORER_STREAM_BYTES overrides it, e.g. to stream small runs)
-STREAM_BYTES = int(os.environ.get("EXPLORER_STREAM_BYTES", 32 * 2**20))
+#: (8 MiB: the default Figure-4 panels, 200 orbits x 1000 crossings, are not; the environment
+#: variable EXPLORER_STREAM_BYTES overrides it, e.g. to stream small runs)
+STREAM_BYTES = int(os.environ.get("EXPLORER_STREAM_BYTES", 8 * 2**20))
 #: the smallest block (crossings per orbit and round) of a streamed panel
 MIN_BLOCK = 256
 

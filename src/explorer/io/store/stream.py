@@ -27,7 +27,6 @@ run needs up to about twice the size of its rows while it finishes (:func:`disk_
 """
 from __future__ import annotations
 
-import io
 import json
 import os
 import re
@@ -35,7 +34,7 @@ import shutil
 
 import numpy as np
 
-from explorer.io.store.atomic import write_bytes_atomic
+from explorer.io.store.atomic import atomic_path, write_bytes_atomic
 from explorer.io.store.commit import RowSource, commit_panel
 from explorer.io.store.format import COLUMNS, StoreError, _canonical_json, panel_hashes, settings_hash
 
@@ -58,12 +57,6 @@ def disk_needed(n_orbits: int, n_crossings: int) -> int:
     """Bytes a streamed run of ``n_orbits`` x ``n_crossings`` rows may need on disk at its peak:
     its uncompressed blocks plus the store being written from them."""
     return 2 * int(n_orbits) * int(n_crossings) * ROW_BYTES
-
-
-def _npz_bytes(arrays: dict) -> bytes:
-    buf = io.BytesIO()
-    np.savez(buf, **arrays)
-    return buf.getvalue()
 
 
 class BlockStream:
@@ -151,7 +144,9 @@ class BlockStream:
                   "rows": np.ascontiguousarray(rows, dtype=np.float64)}
         arrays.update({a: np.asarray(state[a]) for a in STATE_ARRAYS})
         arrays["orbits"] = np.asarray(orbits, np.int64)
-        write_bytes_atomic(os.path.join(self.dir, f"{int(number):06d}.npz"), _npz_bytes(arrays))
+        # written straight to the temporary file (no copy of the rows in memory), then renamed
+        with atomic_path(os.path.join(self.dir, f"{int(number):06d}.npz")) as tmp:
+            np.savez(tmp, **arrays)
 
     def _fill(self, offsets):
         def fill(dset):
