@@ -9,6 +9,8 @@ QUICK_SCENES = {
     "chaos": {("seeds", "n"): 100, ("integration", "crossings"): 20, ("lyapunov", "time"): 200.0},
     "fraction": {("seeds", "n"): 60, ("integration", "crossings"): 20, ("integration", "tmax"): 400.0,
                  ("lyapunov", "time"): 200.0},
+    "fraction_curve": {("seeds", "n"): 60, ("lyapunov", "time"): 200.0},
+    "megno_map": {("lyapunov", "map_resolution"): 64, ("lyapunov", "time"): 200.0},
 }
 
 # ====================================================================== sweeps

@@ -20,6 +20,8 @@ MODULES = {
     "figure4": "explorer.app.paper.figure4",
     "chaotic_fraction": "explorer.app.paper.chaotic_fraction",
     "chaos_map": "explorer.app.paper.chaos_map",
+    "fraction_curve": "explorer.app.paper.fraction_curve",
+    "megno_map": "explorer.app.paper.megno_map",
     "continuation": "explorer.app.paper.continuation",
     "periodic": "explorer.app.paper.periodic",
     "work_precision": "explorer.app.paper.work_precision",
@@ -30,7 +32,8 @@ MODULES = {
 #: every figure, in the order they are generated
 FIGURES = tuple(MODULES)
 #: figures computed from stored sweeps (reduced under ``quick`` when their store is incomplete)
-SWEEP_FIGURES = {"figure4": "figure4", "chaotic_fraction": "fraction", "chaos_map": "chaos"}
+SWEEP_FIGURES = {"figure4": "figure4", "chaotic_fraction": "fraction", "chaos_map": "chaos",
+                 "fraction_curve": "fraction_curve", "megno_map": "megno_map"}
 
 
 def module(name):
