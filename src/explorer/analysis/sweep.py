@@ -115,6 +115,35 @@ def build_spec(scene, panel_indices, *, chunk_orbits: int) -> SweepSpec:
                      "sections" in scene.compute, tuple(blocks))
 
 
+def build_atlas_spec(scene, *, chunk_orbits: int) -> SweepSpec:
+    """The cells of a two-parameter atlas (a scene with [atlas]) as the panels of a sweep of
+    indicators only: cell i (row = sweep value, column = atlas value) with its seeds (R9);
+    cells whose allowed region is empty are left out (drawn gray).  ``task(spec, i)`` maps it
+    unchanged (PanelSpec.index is the cell index)."""
+    from explorer.analysis.seeds import seed_points
+
+    integ = scene.integration
+    panels: list[PanelSpec] = []
+    chunks: list[tuple[int, int, int]] = []
+    for i in range(scene.n_cells):
+        if not scene.cell_allowed(i):
+            continue
+        params, h, label = scene.cell(i)
+        p1, p2, _dropped = seed_points(scene.seeds, params, h, integ.phi0)
+        if len(p1) == 0:
+            continue
+        y0 = model.section_state(params, p1, p2, h, integ.phi0, integ.direction if integ.direction else 1)
+        pos = len(panels)
+        panels.append(PanelSpec(i, label, params.as_array(), float(h), np.ascontiguousarray(y0),
+                                np.column_stack([p1, p2])))
+        n = len(p1)
+        step = max(1, chunk_orbits if chunk_orbits > 0 else n)
+        for a in range(0, n, step):
+            chunks.append((pos, a, min(n, a + step)))
+    return SweepSpec(tuple(panels), integ.method, integ.tol, integ.dt, 1, integ.effective_tmax, integ.max_steps,
+                     integ.phi0, integ.direction, tuple(chunks), scene.lyapunov, False, ())
+
+
 def map_seeds(params, h: float, phi0: float, resolution: int):
     """The seeds of a chaos map: the centres of the cells of a resolution x resolution raster over
     the bounding box of the allowed ellipse of the section (MODEL.md R9) that lie inside the

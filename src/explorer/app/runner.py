@@ -206,6 +206,9 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
         raise ParameterError("scheduler needs backend 'dask' (--scheduler needs --backend dask)")
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
+    if scene.is_atlas:
+        return run_atlas(scene, out, figure=figure, draw=draw, jobs=jobs, backend=backend, scheduler=scheduler,
+                         force=force, progress=progress)
     out = Path(out) if out else Path("results") / f"{scene.name}.h5"
     stem = Path(figure) if figure else Path("figures") / scene.name
     _check_writable(out.parent, "--out", out)
@@ -312,6 +315,85 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
                        statuses=dict(stats["statuses"]), max_dh=stats["max_dh"], warning=stats["warning"],
                        fractions=tuple(stats["fractions"]), threshold=float(scene.lyapunov.threshold),
                        figure=figure_paths, wall_time=time.perf_counter() - t_start, restamped=restamped)
+
+
+def run_atlas(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, scheduler=None, force=False,
+              progress=True) -> SweepReport:
+    """A two-parameter atlas (a scene with [atlas]): the chaotic fraction of every cell
+    ([sweep] value x [atlas] value) from the indicators of its seeds, mapped by the same
+    ``task(spec, i)`` as a sweep (:func:`explorer.analysis.sweep.build_atlas_spec`), stored as one
+    small HDF5 file (:mod:`explorer.io.store.atlas`: fractions only, no orbits) and drawn as a
+    heat map.  An atlas stored with the same :meth:`~explorer.io.scene.Scene.atlas_hash` is not
+    recomputed (the file is written once, at the end: an interrupted atlas starts again)."""
+    from explorer.app.atlas_figure import atlas_heatmap
+    from explorer.app.figures import save_figure
+    from explorer.io.store import atlas as atlas_store
+
+    t_start = time.perf_counter()
+    jobs = validation.integer("jobs", jobs, lo=1)
+    if scheduler and backend != "dask":
+        raise ParameterError("scheduler needs backend 'dask' (--scheduler needs --backend dask)")
+    out = Path(out) if out else Path("results") / f"{scene.name}.h5"
+    stem = Path(figure) if figure else Path("figures") / scene.name
+    _check_writable(out.parent, "--out", out)
+    if draw:
+        _check_writable(stem.parent, "--figure", stem)
+    store.clean_stale_temporaries(out)
+    rows, cols = len(scene.sweep_values), len(scene.atlas_values)
+    key = scene.atlas_hash()
+    computed: tuple = ()
+    orbits = 0
+    if force or atlas_store.atlas_hash_on_disk(out) != key:
+        client = None
+        if backend == "dask":
+            client = _dask_client(scheduler, jobs)
+            jobs = -1
+        chunk_orbits = sweep.default_jobs_layout(1 if (jobs == 1 and backend is None) else 2)
+        spec = sweep.build_atlas_spec(scene, chunk_orbits=chunk_orbits)
+        frac = np.full((rows, cols), np.nan)
+        err = np.full((rows, cols), np.nan)
+        n_ok = np.zeros((rows, cols), np.int64)
+        wall = np.zeros((rows, cols))
+
+        def on_cell(panel, arrays):
+            r, c = divmod(panel.index, cols)
+            f, e, n = chaotic_fraction(classify_megno(arrays), scene.lyapunov.threshold,
+                                       arrays["lyapunov_status"] == 0)
+            frac[r, c], err[r, c], n_ok[r, c], wall[r, c] = f, e, n, arrays["wall_time"]
+
+        try:
+            bar = _progress(len(spec.chunks), not progress, f"atlas {scene.name}")
+            try:
+                sweep.run(spec, on_cell, jobs=jobs, backend="dask" if client is not None else backend,
+                          progress=bar.update if bar is not None else None)
+            finally:
+                if bar is not None:
+                    bar.close()
+        finally:
+            if client is not None:
+                client.close()
+        atlas_store.write_atlas(out, scene_name=scene.name, scene_text=scene.text, hash=key,
+                                row_parameter=scene.sweep_parameter, column_parameter=scene.atlas_parameter,
+                                row_values=scene.sweep_values, column_values=scene.atlas_values, fraction=frac,
+                                error=err, orbits=n_ok, wall_time=wall, threshold=scene.lyapunov.threshold,
+                                provenance=store.provenance({"scene": scene.name}))
+        computed = tuple(p.index for p in spec.panels)
+        orbits = int(sum(len(p.y0) for p in spec.panels))
+    figure_paths: tuple = ()
+    if draw:
+        png, pdf = stem.with_suffix(".png"), stem.with_suffix(".pdf")
+        stale = (not png.exists() or not pdf.exists() or png.stat().st_mtime < out.stat().st_mtime
+                 or pdf.stat().st_mtime < out.stat().st_mtime)
+        if computed or stale or force:
+            data = atlas_store.read_atlas(out)
+            ly = scene.lyapunov
+            title = (f"{scene.name}: chaotic fraction\n{scene.seeds.n} seeds per cell, MEGNO time {ly.time:g}"
+                     + (", early classification" if ly.early_stop else ""))
+            figure_paths = tuple(save_figure(atlas_heatmap(data, title=title, dpi=scene.figure.dpi), stem))
+    return SweepReport(scene=scene.name, out=out, n_panels=scene.n_cells, computed=computed, orbits=orbits,
+                       crossings=0, stopped=0, statuses={}, max_dh=0.0, warning=None, fractions=(),
+                       threshold=float(scene.lyapunov.threshold), figure=figure_paths,
+                       wall_time=time.perf_counter() - t_start)
 
 
 def _restamp_fractions(scene, out, stored) -> tuple:

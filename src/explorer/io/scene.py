@@ -61,6 +61,16 @@ checked: its parameters must be valid (:class:`model.Params`) and its
 allowed region of the section non-empty (error names ``sweep.values[i]``,
 or ``energy.h`` when there is no sweep or no panel has a region).
 
+Atlas
+-----
+An optional ``[atlas]`` table (``parameter``: a model parameter name or "h", not the [sweep]
+parameter; ``values``: a non-empty list without duplicates) makes the scene a two-parameter
+atlas: cell i = (row r, column c), i = r * len(atlas.values) + c, has the [sweep] value r and the
+[atlas] value c (:meth:`Scene.cell`).  An atlas needs ``[compute]`` lyapunov = true,
+sections = false, separatrices = false and no ``lyapunov.map_resolution``; it stores only the
+chaotic fraction per cell (``explorer.io.store.atlas``), keyed by :meth:`Scene.atlas_hash`.
+Cells whose allowed region is empty are left out (NaN, drawn gray).
+
 Seeding
 -------
 The rules are in :mod:`explorer.analysis.seeds` (:func:`~explorer.analysis.seeds.seed_points`).
@@ -119,7 +129,7 @@ MAX_NAME_LENGTH = 128
 
 _NAME_RE = re.compile(r"[A-Za-z0-9_.-]+\Z")
 _TOP_KEYS = ("name", "description", "model", "energy", "sweep", "seeds", "integration", "compute", "lyapunov",
-             "figure")
+             "figure", "atlas")
 _SEED_KEYS = ("kind", "n", "margin", "seed", "lines", "points")
 #: the [seeds] keys that determine the points of each kind
 _SEED_USED = {"grid": ("kind", "n", "margin"), "random": ("kind", "n", "margin", "seed"),
@@ -471,6 +481,8 @@ class Scene:
     figure: FigureSpec = field(default_factory=FigureSpec)
     description: str = ""
     text: str = ""
+    atlas_parameter: str | None = None   # [atlas]: the second swept parameter (columns of the atlas)
+    atlas_values: tuple = ()
 
     def __post_init__(self):
         name = _str("name", self.name)
@@ -497,6 +509,7 @@ class Scene:
         if self.lyapunov.map_resolution and "lyapunov" not in compute:
             _fail("lyapunov.map_resolution", "needs compute.lyapunov = true")
         object.__setattr__(self, "compute", compute)
+        self._check_atlas()
         self._check_panels()
         for j, idx in enumerate(self.figure.own_scale):
             if idx >= self.n_panels:
@@ -603,6 +616,83 @@ class Scene:
         cols = min(cols, n)
         return -(-n // cols), cols
 
+    # ------------------------------------------------------------ atlas
+    def _check_atlas(self):
+        """[atlas]: a scene of two swept parameters, [sweep] (rows) x [atlas] (columns), storing
+        only the chaotic fraction per cell (indicators only)."""
+        if self.atlas_parameter is None:
+            if len(self.atlas_values):
+                _fail("atlas.parameter", "is required when atlas values are given")
+            object.__setattr__(self, "atlas_values", ())
+            return
+        _choice("atlas.parameter", self.atlas_parameter, SWEEP_PARAMETERS)
+        if self.sweep_parameter is None:
+            _fail("sweep.parameter", "is required in an atlas scene (the atlas sweeps [sweep] x [atlas])")
+        if self.atlas_parameter == self.sweep_parameter:
+            _fail("atlas.parameter", f"must differ from sweep.parameter ({self.sweep_parameter!r})")
+        if "lyapunov" not in self.compute or "sections" in self.compute or "separatrices" in self.compute:
+            _fail("compute", "of an atlas scene must be lyapunov = true, sections = false, separatrices = false "
+                  "(an atlas stores only the chaotic fraction per cell)")
+        if self.lyapunov.map_resolution:
+            _fail("lyapunov.map_resolution", "is not used by an atlas scene (its cells are seeded by [seeds])")
+        values = []
+        for i, v in enumerate(_list("atlas.values", self.atlas_values)):
+            x = _real(f"atlas.values[{i}]", v)
+            if x in values:
+                _fail(f"atlas.values[{i}]", f"duplicates atlas.values[{values.index(x)}] = {x!r}")
+            values.append(x)
+        object.__setattr__(self, "atlas_values", tuple(values))
+        for i in range(self.n_cells):
+            try:
+                self.cell(i)
+            except ParameterError as e:
+                r, c = divmod(i, len(self.atlas_values))
+                raise SceneError(f"scene key 'atlas.values[{c}]' ({self._cell_label(r, c)}): {e}") from None
+
+    @property
+    def is_atlas(self) -> bool:
+        return self.atlas_parameter is not None
+
+    @property
+    def n_cells(self) -> int:
+        """Cells of an atlas: len(sweep.values) x len(atlas.values) (0 for other scenes)."""
+        return len(self.sweep_values) * len(self.atlas_values) if self.is_atlas else 0
+
+    def _cell_label(self, r, c) -> str:
+        return (f"{self.sweep_parameter} = {self.sweep_values[r]!r}, "
+                f"{self.atlas_parameter} = {self.atlas_values[c]!r}")
+
+    def cell(self, i):
+        """(Params, h, label) of atlas cell i = row * len(atlas.values) + column (row: sweep value,
+        column: atlas value)."""
+        if not self.is_atlas or isinstance(i, bool) or not isinstance(i, numbers.Integral) \
+                or not 0 <= i < self.n_cells:
+            raise IndexError(f"atlas cell index must be an integer in [0, {self.n_cells - 1}], got {i!r}")
+        r, c = divmod(int(i), len(self.atlas_values))
+        upd, h = {}, self.h
+        for name, v in ((self.sweep_parameter, self.sweep_values[r]), (self.atlas_parameter, self.atlas_values[c])):
+            if name == "h":
+                h = v
+            else:
+                upd[name] = v
+        return self.params.with_(**upd), h, self._cell_label(r, c)
+
+    def cell_allowed(self, i) -> bool:
+        """The allowed region of the section of cell i is non-empty (else the cell is drawn gray)."""
+        prm, h, _label = self.cell(i)
+        ell = model.allowed_ellipse(prm, h, self.integration.phi0)
+        return ell is not None and ell[2] > 0.0 and ell[3] > 0.0
+
+    def atlas_hash(self) -> str:
+        """sha256 of everything that determines an atlas's numbers (both axes, the model, h, seeds,
+        integration and [lyapunov] settings; not name, description or figure)."""
+        d = {"params": self.params.as_dict(), "h": self.h, "rows": [self.sweep_parameter, list(self.sweep_values)],
+             "columns": [self.atlas_parameter, list(self.atlas_values)], "seeds": self.seeds.used_dict(),
+             "phi0": self.integration.phi0, "direction": self.integration.direction,
+             "lyapunov": self.lyapunov.used_dict(), "threshold": self.lyapunov.threshold}
+        payload = {"format_version": FORMAT_VERSION, "atlas": d}
+        return hashlib.sha256(_canonical_json(payload).encode("ascii")).hexdigest()
+
     # ------------------------------------------------------------ export
     def to_dict(self) -> dict:
         """The scene as nested plain values in the layout of the TOML tables
@@ -616,6 +706,8 @@ class Scene:
         d["compute"] = {q: (q in self.compute) for q in COMPUTE_QUANTITIES}
         d["lyapunov"] = self.lyapunov.to_dict()
         d["figure"] = self.figure.to_dict()
+        if self.atlas_parameter is not None:
+            d["atlas"] = {"parameter": self.atlas_parameter, "values": list(self.atlas_values)}
         return d
 
     def to_toml(self) -> str:
@@ -699,7 +791,19 @@ def scene_from_dict(data: dict, text: str = "") -> Scene:
     if "own_scale" in fig:
         fig["own_scale"] = tuple(_list("figure.own_scale", fig["own_scale"], min_len=0))
     kw["figure"] = FigureSpec(**fig)
+    kw.update(_atlas_from_dict(data))
     return Scene(**kw)
+
+
+def _atlas_from_dict(data: dict) -> dict:
+    if "atlas" not in data:
+        return {}
+    atlas = _table("atlas", data["atlas"], ("parameter", "values"))
+    for k in ("parameter", "values"):
+        if k not in atlas:
+            _fail(f"atlas.{k}", "is required in an [atlas] table")
+    return {"atlas_parameter": _str("atlas.parameter", atlas["parameter"]),
+            "atlas_values": tuple(_list("atlas.values", atlas["values"]))}
 
 
 def parse_scene(text: str, source: str = "<string>") -> Scene:

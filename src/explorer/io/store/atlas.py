@@ -1,0 +1,89 @@
+"""HDF5 file of a two-parameter atlas (a scene with an [atlas] table): the chaotic fraction per
+cell only, no orbits, no crossings.  Written whole and atomically (:func:`atomic_path`).
+
+Layout (``format = "explorer.atlas"``, ``format_version = 1``)
+----------------------------------------------------------------
+::
+
+    /   attrs: format, format_version, scene_name, scene (TOML text), hash (Scene.atlas_hash),
+               row_parameter, column_parameter, threshold (MEGNO), created, provenance (JSON)
+        row_values     (R,)    float64   the [sweep] values (rows)
+        column_values  (C,)    float64   the [atlas] values (columns)
+        fraction       (R, C)  float64   chaotic fraction (NaN: empty allowed region)
+        error          (R, C)  float64   binomial standard error of the fraction
+        orbits         (R, C)  int64     orbits with a valid indicator (0: empty region)
+        wall_time      (R, C)  float64   seconds of integration per cell
+"""
+from __future__ import annotations
+
+import datetime as _dt
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from explorer.io.store.atomic import atomic_path
+
+FORMAT = "explorer.atlas"
+FORMAT_VERSION = 1
+
+
+@dataclass(frozen=True)
+class AtlasData:
+    """A stored atlas (:func:`read_atlas`)."""
+
+    row_parameter: str
+    column_parameter: str
+    row_values: np.ndarray
+    column_values: np.ndarray
+    fraction: np.ndarray
+    error: np.ndarray
+    orbits: np.ndarray
+    wall_time: np.ndarray
+    threshold: float
+    hash: str
+    attrs: dict
+
+
+def write_atlas(path, *, scene_name: str, scene_text: str, hash: str, row_parameter: str, column_parameter: str,
+                row_values, column_values, fraction, error, orbits, wall_time, threshold: float,
+                provenance: dict | None = None) -> Path:
+    import h5py
+
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        with h5py.File(tmp, "w") as f:
+            f.attrs.update(format=FORMAT, format_version=FORMAT_VERSION, scene_name=scene_name, scene=scene_text,
+                           hash=hash, row_parameter=row_parameter, column_parameter=column_parameter,
+                           threshold=float(threshold),
+                           created=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+                           provenance=json.dumps(provenance or {}, sort_keys=True))
+            f["row_values"] = np.asarray(row_values, float)
+            f["column_values"] = np.asarray(column_values, float)
+            f["fraction"] = np.asarray(fraction, float)
+            f["error"] = np.asarray(error, float)
+            f["orbits"] = np.asarray(orbits, np.int64)
+            f["wall_time"] = np.asarray(wall_time, float)
+    return path
+
+
+def read_atlas(path) -> AtlasData:
+    """The atlas stored at ``path`` (OSError / ValueError when it is not one)."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        if f.attrs.get("format") != FORMAT:
+            raise ValueError(f"{path}: not an explorer atlas file (format {f.attrs.get('format')!r})")
+        attrs = {k: (v.item() if hasattr(v, "item") else v) for k, v in f.attrs.items()}
+        return AtlasData(str(attrs["row_parameter"]), str(attrs["column_parameter"]), f["row_values"][()],
+                         f["column_values"][()], f["fraction"][()], f["error"][()], f["orbits"][()],
+                         f["wall_time"][()], float(attrs["threshold"]), str(attrs["hash"]), attrs)
+
+
+def atlas_hash_on_disk(path) -> str | None:
+    """The settings hash of the atlas stored at ``path`` (None: no file or not an atlas)."""
+    try:
+        return read_atlas(path).hash
+    except (OSError, ValueError, KeyError):
+        return None

@@ -1,0 +1,95 @@
+"""Two-parameter atlas (a scene with [atlas]): the chaotic fraction per cell of [sweep] x [atlas],
+through the sweep's task map, stored as fractions only and drawn as a heat map."""
+import matplotlib
+
+matplotlib.use("Agg")
+
+import numpy as np
+import pytest
+from matplotlib.image import imread
+
+from explorer.analysis import lyapunov, sweep
+from explorer.analysis.fixedpoints import chaotic_fraction
+from explorer.app import runner
+from explorer.io.scene import SceneError, load_scene, parse_scene
+from explorer.io.store.atlas import read_atlas
+
+SCENE = """
+name = "atlas_test"
+[sweep]
+parameter = "mu"
+values = [0.0, 1.0]
+[atlas]
+parameter = "h"
+values = [2.0, 4.0, 6.0]
+[seeds]
+n = 24
+[compute]
+sections = false
+lyapunov = true
+[lyapunov]
+time = 60.0
+indicators = ["megno"]
+[figure]
+dpi = 80
+"""
+
+
+def test_atlas_scene_cells_and_round_trip():
+    s = parse_scene(SCENE)
+    assert s.is_atlas and s.n_cells == 6 and s.n_panels == 2
+    prm, h, label = s.cell(4)                   # row 1 (mu = 1), column 1 (h = 4)
+    assert prm.mu == 1.0 and h == 4.0 and label == "mu = 1.0, h = 4.0"
+    assert parse_scene(s.to_toml()).atlas_hash() == s.atlas_hash()
+    assert parse_scene(SCENE.replace("time = 60.0", "time = 61.0")).atlas_hash() != s.atlas_hash()
+    assert load_scene("atlas").n_cells >= 100
+
+
+@pytest.mark.parametrize("old,new,key", [
+    ('parameter = "h"', 'parameter = "mu"', "atlas.parameter"),
+    ('parameter = "h"', 'parameter = "nu"', "atlas.parameter"),
+    ("values = [2.0, 4.0, 6.0]", "values = [2.0, 2.0]", r"atlas.values\[1\]"),
+    ("values = [2.0, 4.0, 6.0]", 'values = ["a"]', r"atlas.values\[0\]"),
+    ("sections = false", "sections = true", "compute"),
+    ('[sweep]\nparameter = "mu"\nvalues = [0.0, 1.0]\n', "", "sweep.parameter"),
+])
+def test_bad_atlas_keys_name_the_key(old, new, key):
+    with pytest.raises(SceneError, match=key):
+        parse_scene(SCENE.replace(old, new, 1))
+
+
+def test_atlas_cells_are_the_task_map_of_their_indicators():
+    s = parse_scene(SCENE)
+    spec = sweep.build_atlas_spec(s, chunk_orbits=10)
+    assert [p.index for p in spec.panels] == list(range(6)) and not spec.sections
+    i = 5
+    pos = [p.index for p in spec.panels].index(i)
+    parts = [sweep.task(spec, k) for k, c in enumerate(spec.chunks) if c[0] == pos]
+    megno = np.concatenate([p["megno"] for p in parts])
+    prm, h, _ = s.cell(i)
+    ind = lyapunov.indicators(prm, spec.panels[pos].y0, 60.0, tol=s.lyapunov.tol, which=("megno",))
+    np.testing.assert_array_equal(megno, ind.megno)
+
+
+def test_run_atlas_stores_fractions_only_and_draws_a_heat_map(tmp_path):
+    path = tmp_path / "a.toml"
+    path.write_text(SCENE)
+    rep = runner.run_sweep(str(path), out=tmp_path / "a.h5", figure=tmp_path / "a", progress=False)
+    assert rep.n_panels == 6 and len(rep.computed) == 6 and rep.crossings == 0
+    a = read_atlas(tmp_path / "a.h5")
+    assert a.fraction.shape == (2, 3) and a.row_parameter == "mu" and a.column_parameter == "h"
+    assert np.all(a.orbits > 15)
+    assert np.all(a.fraction[0] < 0.1) and a.fraction[1].max() > 0.5     # integrable at mu = 0
+    # the fraction of a cell is the one of its seeds' MEGNO
+    s = load_scene(str(path))
+    spec = sweep.build_atlas_spec(s, chunk_orbits=0)
+    prm, h, _ = s.cell(4)
+    m = lyapunov.indicators(prm, spec.panels[4].y0, 60.0, tol=s.lyapunov.tol, which=("megno",)).megno
+    assert a.fraction[1, 1] == chaotic_fraction(m, 4.0)[0]
+    img = imread(tmp_path / "a.png")
+    assert img.shape[1] > img.shape[0]
+    colourful = (img[..., :3].max(axis=-1) - img[..., :3].min(axis=-1)) > 0.3
+    assert colourful.mean() > 0.05                                       # the chaotic cells and the colour bar
+    # a second run recomputes nothing
+    rep2 = runner.run_sweep(str(path), out=tmp_path / "a.h5", figure=tmp_path / "a", progress=False)
+    assert rep2.computed == ()
