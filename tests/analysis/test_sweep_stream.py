@@ -3,6 +3,7 @@ written to the store block by block; its file is the file of an unstreamed run, 
 and for joblib workers; a killed streamed sweep resumes from its stored blocks; a scene whose rows
 would not fit on the disk is refused up front (exit 2, its size named)."""
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -16,6 +17,9 @@ from explorer.analysis import sweep
 from explorer.app import cli
 from explorer.io import store
 from explorer.io.store import stream
+
+#: a stored block (a block being written has a temporary name)
+BLOCK_FILE = re.compile(r"^\d{6}\.npz$")
 
 SCENE = """
 name = "streamed"
@@ -73,7 +77,7 @@ def test_a_killed_streamed_sweep_resumes_from_its_blocks(tmp_path):
     killed = False
     deadline = time.time() + 300
     while proc.poll() is None and time.time() < deadline:
-        if os.path.isdir(blocks) and len([f for f in os.listdir(blocks) if f.endswith(".npz")]) >= 6:
+        if os.path.isdir(blocks) and len([f for f in os.listdir(blocks) if BLOCK_FILE.match(f)]) >= 6:
             os.kill(proc.pid, signal.SIGKILL)
             killed = True
             break

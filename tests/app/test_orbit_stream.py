@@ -3,6 +3,7 @@ bit; a long orbit killed with SIGKILL loses at most its current block and its re
 same file as an uninterrupted run; huge or conflicting requests are refused up front (exit 2)."""
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -17,6 +18,9 @@ from explorer.analysis import sections
 from explorer.app import cli, orbit
 from explorer.io import store
 from explorer.io.store import stream
+
+#: a stored block (a block being written has a temporary name)
+BLOCK_FILE = re.compile(r"^\d{6}\.npz$")
 
 PRM = model.FIGURE4.with_(mu=0.5)
 ARGS = ["orbit", "--p1", "0.5", "--p2", "0", "--mu", "0.5", "--tol", "1e-12"]
@@ -69,7 +73,7 @@ def test_a_killed_long_orbit_resumes_to_the_same_file_as_an_uninterrupted_run(tm
         proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         deadline = time.time() + 120
         while time.time() < deadline and proc.poll() is None:
-            n = len([f for f in os.listdir(blocks) if f.endswith(".npz")]) if os.path.isdir(blocks) else 0
+            n = len([f for f in os.listdir(blocks) if BLOCK_FILE.match(f)]) if os.path.isdir(blocks) else 0
             if n >= wait:
                 os.kill(proc.pid, signal.SIGKILL)
                 kills += 1
