@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from explorer import model
+from explorer._jit import max_threads
 from explorer.analysis import sections
 from explorer.model import ParameterError
 
@@ -107,7 +108,10 @@ def build_spec(scene, panel_indices, *, chunk_orbits: int) -> SweepSpec:
                                 np.column_stack([p1, p2]), grid))
         n = len(p1)
         blocks.append(panel_block(n, integ.crossings))
-        step = max(1, chunk_orbits if chunk_orbits > 0 else math.ceil(n / CHUNKS_PER_PANEL_THREADS))
+        # threads over orbits: quarter panels, but never fewer orbits than threads per chunk (a
+        # 2-orbit panel is one chunk that both threads share, not two chunks run one after the other)
+        step = max(1, chunk_orbits if chunk_orbits > 0 else max(math.ceil(n / CHUNKS_PER_PANEL_THREADS),
+                                                                max_threads()))
         for a in range(0, n, step):
             chunks.append((pos, a, min(n, a + step)))
     return SweepSpec(tuple(panels), integ.method, integ.tol, integ.dt, integ.crossings, integ.effective_tmax,
