@@ -13,6 +13,8 @@ Benchmarks (script, RESULTS.md section):
   longtime        bench_longtime.py        LONGTIME (energy / Casimir error over 1e6 time units)
   scaling         bench_scaling.py         SCALING (orbits, crossings, threads, sweep --jobs)
   startup         bench_startup.py         STARTUP (import, cold compile, warm start, CLI)
+  long_orbit      bench_long_orbit.py      LONGORBIT (one long orbit vs heyoka scalar, start-up, memory)
+  early_stop      bench_early_stop.py      EARLYSTOP (time saved by early classification)
 
 Each section of RESULTS.md carries its own command, date, machine and versions; a full run of
 this script also writes the RUN-ALL section (what ran, exit status, wall time).  Benchmarks are
@@ -35,6 +37,8 @@ BENCHMARKS = {
     "longtime": "bench_longtime.py",
     "scaling": "bench_scaling.py",
     "startup": "bench_startup.py",
+    "long_orbit": "bench_long_orbit.py",
+    "early_stop": "bench_early_stop.py",
 }
 
 

@@ -63,7 +63,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from explorer import model
-from explorer.analysis.fixedpoints import DEFAULT_TOL, RETURN_TMAX, SectionMap
+from explorer.analysis.fixedpoints import (
+    DEFAULT_TOL,
+    RETURN_TMAX,
+    SectionMap,
+    continuation_values,
+    golden_section_max,
+    secant_follower,
+)
 from explorer.model import ParameterError, validation
 
 __all__ = ["KIND_TOL", "MULTIPLE_SHOOTING_FROM", "PeriodicBranch", "PeriodicOrbit", "continue_periodic",
@@ -336,9 +343,9 @@ def find_periodic_orbit(params, h, guess, period, *, phi0=math.pi, tol=DEFAULT_T
     Parameters
     ----------
     params : Params
-        Model parameters.
+        Model parameters (MODEL.md R3).
     h : float
-        Energy level.
+        Energy level of the section (R9).
     guess : (float, float) or array (K, 2)
         Start of Newton's method: a point in the allowed region, or K points (multiple shooting).
     period : int
@@ -602,23 +609,6 @@ class PeriodicBranch:
         return np.array([o.trace for o in self.orbits])
 
 
-def _golden(f, a, b, tol):
-    """Maximum of f on [a, b] by golden-section search; returns (x, f(x))."""
-    g = (math.sqrt(5.0) - 1.0) / 2.0
-    c, d = b - g * (b - a), a + g * (b - a)
-    fc, fd = f(c), f(d)
-    while abs(b - a) > tol * max(1.0, abs(b)):
-        if fc > fd:
-            b, d, fd = d, c, fc
-            c = b - g * (b - a)
-            fc = f(c)
-        else:
-            a, c, fc = c, d, fd
-            d = a + g * (b - a)
-            fd = f(d)
-    return (c, fc) if fc > fd else (d, fd)
-
-
 def continue_periodic(params, h, period, parameter, start, stop, step, guess, *, phi0=math.pi, tol=DEFAULT_TOL,
                       bisect_tol=1e-8, touch_window=0.05, touch_tol=1e-6) -> PeriodicBranch:
     """Natural-parameter continuation of a periodic orbit of period K in a model parameter or "h".
@@ -650,12 +640,7 @@ def continue_periodic(params, h, period, parameter, start, stop, step, guess, *,
     PeriodicBranch
     """
     K = _check_period(period)
-    if parameter not in model.PARAM_NAMES + ("h",):
-        raise ParameterError(f"continuation parameter must be one of {', '.join(model.PARAM_NAMES + ('h',))}")
-    if step == 0 or not all(math.isfinite(v) for v in (start, stop, step)) or (stop - start) * step < 0:
-        raise ParameterError("--continue needs finite START, STOP and a STEP of the sign of STOP - START")
-    n = int(math.floor((stop - start) / step + 1e-9)) + 1
-    values = start + step * np.arange(n)
+    values = continuation_values(parameter, start, stop, step)
     g0 = guess.points if isinstance(guess, PeriodicOrbit) else np.asarray(guess, float)
 
     def solve(v, X):
@@ -667,25 +652,7 @@ def continue_periodic(params, h, period, parameter, start, stop, step, guess, *,
 
     orbits: list[PeriodicOrbit] = []
     done: list[float] = []
-    prev: list = []
-
-    def predict(v):
-        if len(prev) < 2:
-            return prev[-1][1] if prev else g0
-        (v0, x0), (v1, x1) = prev[-2], prev[-1]
-        return x1 + (x1 - x0) * (v - v1) / (v1 - v0)
-
-    def advance(v, depth=0):
-        try:
-            orb = solve(v, predict(v))
-        except ParameterError:
-            if depth >= MAX_HALVINGS or not prev:
-                raise
-            advance(0.5 * (prev[-1][0] + v), depth + 1)
-            return advance(v, depth + 1)
-        prev.append((v, orb.points))
-        del prev[:-2]
-        return orb
+    advance = secant_follower(solve, g0, lambda orb: orb.points, MAX_HALVINGS)
 
     stopped = None
     for v in values:
@@ -740,7 +707,7 @@ def continue_periodic(params, h, period, parameter, start, stop, step, guess, *,
             continue      # crossings already reported
         sign = 1.0 if d0 > 0 else -1.0    # maximum or minimum of the trace
         try:
-            v_ext, f_ext = _golden(lambda v: sign * solve(v, nearest(v)).trace, vals[i - 1], vals[i + 1],
+            v_ext, f_ext = golden_section_max(lambda v: sign * solve(v, nearest(v)).trace, vals[i - 1], vals[i + 1],
                                    bisect_tol)
         except ParameterError:
             continue

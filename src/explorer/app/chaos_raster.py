@@ -20,6 +20,7 @@ from explorer.app.figures import (
     PANEL_WIDTH,
     _matplotlib,
     mathtext_label,
+    panel_axes,
 )
 
 #: colour scale of each indicator: (label, log scale, vmin, vmax or None for the data's max)
@@ -39,9 +40,7 @@ def chaos_rasters(maps, *, indicator="megno", threshold=4.0, columns=None, dpi=2
     optional ``curves`` (separatrix polylines (p1, p2)) and ``fraction`` (chaotic fraction).
     Cells without a seed (outside the allowed region) are drawn gray."""
     mpl = _matplotlib()
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.colors import LogNorm, Normalize
-    from matplotlib.figure import Figure
     from matplotlib.patches import Ellipse
 
     if indicator not in SCALES:
@@ -59,12 +58,7 @@ def chaos_rasters(maps, *, indicator="megno", threshold=4.0, columns=None, dpi=2
     ncols = min(n, 3 if columns is None else int(columns))
     nrows = -(-n // ncols)
     with mpl.rc_context({"mathtext.fontset": "dejavusans", "axes.linewidth": 0.6}):
-        fig = Figure(figsize=(panel_width * ncols + 0.9, 0.9 * panel_width * nrows + 0.3), dpi=dpi,
-                     layout="constrained")
-        FigureCanvasAgg(fig)
-        axes = fig.subplots(nrows, ncols, squeeze=False).ravel()
-        for ax in axes[n:]:
-            fig.delaxes(ax)
+        fig, axes = panel_axes(n, ncols, (panel_width * ncols + 0.9, 0.9 * panel_width * nrows + 0.3), dpi)
         im = None
         for ax, m in zip(axes, maps):
             prm = m["params"] if isinstance(m["params"], model.Params) else model.Params(**m["params"])

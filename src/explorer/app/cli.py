@@ -95,6 +95,15 @@ def _params_from(args) -> model.Params:
     return model.Params(**{n: getattr(args, n) for n in model.PARAM_NAMES})
 
 
+def _add_newton_args(p, continue_help):
+    """The options of the Newton commands (fixedpoint, periodic): energy, continuation, the Taylor
+    tolerance of the section map, the model."""
+    p.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
+    p.add_argument("--continue", dest="cont", nargs=4, metavar=("PARAM", "START", "STOP", "STEP"), help=continue_help)
+    p.add_argument("--tol", type=float, default=1e-15, help="Taylor tolerance [%(default)s]")
+    _add_model_args(p, model.FIGURE4, json="print JSON")
+
+
 def build_parser() -> argparse.ArgumentParser:
     from explorer.analysis.sections import DEFAULT_DT, DEFAULT_TOL, METHODS
 
@@ -155,12 +164,8 @@ def build_parser() -> argparse.ArgumentParser:
                         description="Newton's method on the section map phi = pi (Jacobian from the tangent "
                         "dynamics); prints the point, the monodromy eigenvalues, trace and stability. With "
                         "--continue PARAM START STOP STEP, follows the branch and reports where |trace| = 2.")
-    fx.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
     fx.add_argument("--guess", default="0,0", help="start of Newton's method: p1,p2, e.g. --guess -0.4,0 [0,0]")
-    fx.add_argument("--continue", dest="cont", nargs=4, metavar=("PARAM", "START", "STOP", "STEP"),
-                    help="continue the fixed point in PARAM (a model parameter or h)")
-    fx.add_argument("--tol", type=float, default=1e-15, help="Taylor tolerance [%(default)s]")
-    _add_model_args(fx, model.FIGURE4, json="print JSON")
+    _add_newton_args(fx, "continue the fixed point in PARAM (a model parameter or h)")
 
     # ---- periodic, rotation: periodic orbits and rotation numbers (analysis/periodic.py, rotation.py)
     pd = sub.add_parser("periodic", help="periodic orbits of period K of the section map, stability, continuation",
@@ -176,11 +181,7 @@ def build_parser() -> argparse.ArgumentParser:
     pmode.add_argument("--search", action="store_true", help="search the allowed region for all orbits")
     pd.add_argument("--grid", type=int, default=12, help="grid points per axis of --search [%(default)s]")
     pd.add_argument("--max-guesses", type=int, default=60, help="Newton starts of --search [%(default)s]")
-    pd.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
-    pd.add_argument("--continue", dest="cont", nargs=4, metavar=("PARAM", "START", "STOP", "STEP"),
-                    help="continue the orbit through --guess in PARAM (a model parameter or h)")
-    pd.add_argument("--tol", type=float, default=1e-15, help="Taylor tolerance [%(default)s]")
-    _add_model_args(pd, model.FIGURE4, json="print JSON")
+    _add_newton_args(pd, "continue the orbit through --guess in PARAM (a model parameter or h)")
 
     rt = sub.add_parser("rotation", help="rotation numbers along a segment of the section (weighted Birkhoff)",
                         description="Rotation numbers (turns per return) of orbits started at --n points from "
@@ -442,20 +443,27 @@ def _orbit_line(o) -> str:
             f"symmetric={o.symmetric} points={pts}")
 
 
-def cmd_periodic(args) -> int:
-    from explorer.analysis import periodic
+def _section_map_args(args):
+    """The model parameters of a command on the section map (periodic, rotation), with its energy
+    ``--h`` (finite, a non-empty allowed region) and Taylor ``--tol`` checked."""
+    from explorer.analysis.sections import MAX_TOL, MIN_TOL
     from explorer.model import validation
 
     params = _params_from(args)
     if not math.isfinite(args.h):
         raise model.ParameterError(f"h must be finite, got {args.h!r}")
-    if args.period < 1:
-        raise model.ParameterError(f"--period must be an integer K >= 1, got {args.period}")
-    from explorer.analysis.sections import MAX_TOL, MIN_TOL
-
     validation.real("tol", args.tol, MIN_TOL, MAX_TOL)
     if model.allowed_ellipse(params, args.h) is None:
         raise model.ParameterError(f"the region is empty at h = {args.h:g}; raise --h")
+    return params
+
+
+def cmd_periodic(args) -> int:
+    from explorer.analysis import periodic
+
+    if args.period < 1:
+        raise model.ParameterError(f"--period must be an integer K >= 1, got {args.period}")
+    params = _section_map_args(args)
     K = args.period
     if args.cont:
         if args.guess is None:
@@ -505,21 +513,14 @@ def cmd_periodic(args) -> int:
 def cmd_rotation(args) -> int:
     from explorer.analysis import rotation
 
-    params = _params_from(args)
-    if not math.isfinite(args.h):
-        raise model.ParameterError(f"h must be finite, got {args.h!r}")
     a, b = _pair(args.start, "--from"), _pair(args.stop, "--to")
     if args.n < 2:
         raise model.ParameterError(f"--n must be an integer >= 2, got {args.n}")
     if args.iterates < 10:
         raise model.ParameterError(f"--iterates must be an integer >= 10, got {args.iterates}")
     from explorer.analysis.fixedpoints import find_fixed_point
-    from explorer.analysis.sections import MAX_TOL, MIN_TOL
-    from explorer.model import validation
 
-    validation.real("tol", args.tol, MIN_TOL, MAX_TOL)
-    if model.allowed_ellipse(params, args.h) is None:
-        raise model.ParameterError(f"the region is empty at h = {args.h:g}; raise --h")
+    params = _section_map_args(args)
     for name, x in (("--from", a), ("--to", b)):
         if not model.is_admissible(params, x[0], x[1], args.h):
             raise model.ParameterError(f"{name} ({x[0]:g}, {x[1]:g}) lies outside the allowed region; allowed: "

@@ -97,6 +97,21 @@ _ASSIGN = re.compile(
 _RELATIONS = {"=": "=", "<=": r"\leq", ">=": r"\geq", "<": "<", ">": ">"}
 
 
+def panel_axes(n, ncols, size, dpi):
+    """A headless figure (constrained layout, an Agg canvas: ``fig.canvas.draw()`` works without
+    pyplot) of ``size`` inches with ``n`` axes on a grid of ``ncols`` columns, the unused cells
+    removed.  Call inside the rc context of the figure.  Returns (fig, axes[:n])."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=size, dpi=dpi, layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(-(-n // ncols), ncols, squeeze=False).ravel()
+    for ax in axes[n:]:
+        fig.delaxes(ax)
+    return fig, axes[:n]
+
+
 def _math_value(v: str) -> str:
     v = v.replace("\u2212", "-").replace(" ", "").replace("*", "")
     v = re.sub(r"pi", r"\\pi", v)
@@ -449,9 +464,7 @@ def chaos_maps(maps, *, layout="row", columns=None, threshold=4.0, dpi=200, pane
     ``params``, ``h``, ``phi0``, ``label``.  Every panel fits its own region; one shared colour
     bar; the title of each panel gives the chaotic fraction (<Y> > threshold)."""
     mpl = _matplotlib()
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.colors import LogNorm
-    from matplotlib.figure import Figure
     from matplotlib.patches import Ellipse
 
     n = len(maps)
@@ -462,12 +475,7 @@ def chaos_maps(maps, *, layout="row", columns=None, threshold=4.0, dpi=200, pane
     vmax = max(10.0, max(float(np.nanmax(np.asarray(m["megno"]))) if len(m["megno"]) else 10.0 for m in maps))
     norm = LogNorm(vmin=0.5, vmax=vmax)
     with mpl.rc_context({"mathtext.fontset": "dejavusans", "axes.linewidth": 0.6}):
-        fig = Figure(figsize=(panel_width * ncols + 0.8, 0.85 * panel_width * nrows + 0.3), dpi=dpi,
-                     layout="constrained")
-        FigureCanvasAgg(fig)
-        axes = fig.subplots(nrows, ncols, squeeze=False).ravel()
-        for ax in axes[n:]:
-            fig.delaxes(ax)
+        fig, axes = panel_axes(n, ncols, (panel_width * ncols + 0.8, 0.85 * panel_width * nrows + 0.3), dpi)
         sc = None
         for ax, m in zip(axes, maps):
             prm = m["params"] if isinstance(m["params"], model.Params) else model.Params(**m["params"])

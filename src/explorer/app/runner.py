@@ -201,20 +201,13 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
     from explorer.io.scene import Scene, load_scene
 
     t_start = time.perf_counter()
-    jobs = validation.integer("jobs", jobs, lo=1)
-    if scheduler and backend != "dask":
-        raise ParameterError("scheduler needs backend 'dask' (--scheduler needs --backend dask)")
+    jobs = _check_jobs(jobs, backend, scheduler)
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
     if scene.is_atlas:
         return run_atlas(scene, out, figure=figure, draw=draw, jobs=jobs, backend=backend, scheduler=scheduler,
                          force=force, progress=progress)
-    out = Path(out) if out else Path("results") / f"{scene.name}.h5"
-    stem = Path(figure) if figure else Path("figures") / scene.name
-    _check_writable(out.parent, "--out", out)
-    if draw:
-        _check_writable(stem.parent, "--figure", stem)
-    store.clean_stale_temporaries(out)
+    out, stem = _outputs(scene, out, figure, draw)
 
     try:
         on_disk = {} if force else store.panel_hashes(out)
@@ -290,18 +283,10 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
             name = STATUS_NAMES[int(code)]
             stats["statuses"][name] = stats["statuses"].get(name, 0) + int(n)
 
-    try:
-        if spec is not None:
-            bar = _progress(len(spec.chunks), not progress, f"sweep {scene.name}")
-            try:
-                sweep.run(spec, on_panel, jobs=jobs, backend="dask" if client is not None else backend,
-                          progress=bar.update if bar is not None else None, streamer=streams)
-            finally:
-                if bar is not None:
-                    bar.close()
-    finally:
-        if client is not None:
-            client.close()
+    if spec is not None:
+        _map_with_progress(spec, on_panel, jobs, backend, client, progress, f"sweep {scene.name}", streams)
+    elif client is not None:
+        client.close()
 
     figure_paths = ()
     if draw:
@@ -330,15 +315,8 @@ def run_atlas(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
     from explorer.io.store import atlas as atlas_store
 
     t_start = time.perf_counter()
-    jobs = validation.integer("jobs", jobs, lo=1)
-    if scheduler and backend != "dask":
-        raise ParameterError("scheduler needs backend 'dask' (--scheduler needs --backend dask)")
-    out = Path(out) if out else Path("results") / f"{scene.name}.h5"
-    stem = Path(figure) if figure else Path("figures") / scene.name
-    _check_writable(out.parent, "--out", out)
-    if draw:
-        _check_writable(stem.parent, "--figure", stem)
-    store.clean_stale_temporaries(out)
+    jobs = _check_jobs(jobs, backend, scheduler)
+    out, stem = _outputs(scene, out, figure, draw)
     rows, cols = len(scene.sweep_values), len(scene.atlas_values)
     key = scene.atlas_hash()
     computed: tuple = ()
@@ -361,17 +339,7 @@ def run_atlas(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
                                        arrays["lyapunov_status"] == 0)
             frac[r, c], err[r, c], n_ok[r, c], wall[r, c] = f, e, n, arrays["wall_time"]
 
-        try:
-            bar = _progress(len(spec.chunks), not progress, f"atlas {scene.name}")
-            try:
-                sweep.run(spec, on_cell, jobs=jobs, backend="dask" if client is not None else backend,
-                          progress=bar.update if bar is not None else None)
-            finally:
-                if bar is not None:
-                    bar.close()
-        finally:
-            if client is not None:
-                client.close()
+        _map_with_progress(spec, on_cell, jobs, backend, client, progress, f"atlas {scene.name}")
         atlas_store.write_atlas(out, scene_name=scene.name, scene_text=scene.text, hash=key,
                                 row_parameter=scene.sweep_parameter, column_parameter=scene.atlas_parameter,
                                 row_values=scene.sweep_values, column_values=scene.atlas_values, fraction=frac,
@@ -428,6 +396,41 @@ def _check_writable(directory: Path, option: str, target: Path):
     except OSError as exc:
         raise ParameterError(f"{option} {target}: cannot write into the directory '{directory}' "
                              f"({exc.strerror or exc})") from None
+
+
+def _map_with_progress(spec, on_panel, jobs, backend, client, progress, desc, streamer=None) -> None:
+    """sweep.run with a progress bar on stderr (unless ``progress`` is false); the dask
+    ``client`` (if any) is closed afterwards, whatever happens."""
+    try:
+        bar = _progress(len(spec.chunks), not progress, desc)
+        try:
+            sweep.run(spec, on_panel, jobs=jobs, backend="dask" if client is not None else backend,
+                      progress=bar.update if bar is not None else None, streamer=streamer)
+        finally:
+            if bar is not None:
+                bar.close()
+    finally:
+        if client is not None:
+            client.close()
+
+
+def _check_jobs(jobs, backend, scheduler) -> int:
+    jobs = validation.integer("jobs", jobs, lo=1)
+    if scheduler and backend != "dask":
+        raise ParameterError("scheduler needs backend 'dask' (--scheduler needs --backend dask)")
+    return jobs
+
+
+def _outputs(scene, out, figure, draw) -> tuple[Path, Path]:
+    """The store path [results/<scene>.h5] and figure stem [figures/<scene>], checked writable;
+    temporaries of killed runs next to the store removed."""
+    out = Path(out) if out else Path("results") / f"{scene.name}.h5"
+    stem = Path(figure) if figure else Path("figures") / scene.name
+    _check_writable(out.parent, "--out", out)
+    if draw:
+        _check_writable(stem.parent, "--figure", stem)
+    store.clean_stale_temporaries(out)
+    return out, stem
 
 
 def _check_disk(spec, out: Path) -> None:

@@ -110,6 +110,41 @@ def lane_step_size(a, bm, u, v, d, e_p, e_q, margin, factor):
     return rho * factor
 
 
+@njit(inline="always")
+def lane_step(l, norms, t, tend, e_p, e_q, margin, factor):
+    """The checks and the step of :func:`explorer.integrate.systems.taylor_step` for lane l from
+    its norms (step_norms_lanes): finiteness of the last two coefficients, the step size, clipped
+    to ``tend``, and the underflow test.  Returns (code, h, last): code -1 (systems.STEP_OK) or
+    STATUS_NONFINITE / STATUS_STEP_UNDERFLOW.  Shared by the crossing and the tangent lanes."""
+    f = norms[0, l]
+    g = norms[1, l]
+    if not (f - f == 0.0 and g - g == 0.0):
+        return STATUS_NONFINITE, 0.0, False
+    h = lane_step_size(norms[2, l], norms[3, l], norms[4, l], norms[5, l], norms[6, l], e_p, e_q, margin, factor)
+    h, last = clip_step(t, h, tend)
+    if not (h > EPS * abs(t)):
+        return STATUS_STEP_UNDERFLOW, 0.0, False
+    return -1, h, last
+
+
+@njit(inline="always")
+def step_lanes(orb, norms, L_t, tend, e_p, e_q, margin, factor, hv, L_last, L_status, L_stop):
+    """:func:`lane_step` for every lane that holds an orbit: its step in ``hv`` (0 for idle and
+    stopped lanes) and ``L_last``, or its stop in ``L_status``/``L_stop``."""
+    for l in range(LANES):
+        hv[l] = 0.0
+        L_stop[l] = False
+        if orb[l] == _IDLE:
+            continue
+        code, h, last = lane_step(l, norms, L_t[l], tend, e_p, e_q, margin, factor)
+        if code >= 0:
+            L_status[l] = code
+            L_stop[l] = True
+            continue
+        hv[l] = h
+        L_last[l] = last
+
+
 @njit
 def variation_lanes(X, order, h, cphi, sphi, out):
     """out[l] = sum_{k>=1} |X[k, G1, l] cos phi0 - X[k, G2, l] sin phi0| h[l]^k for every lane
@@ -147,6 +182,20 @@ def _finish(j, l, X, count, status, t, tc, gprev, steps, carry, out_count, out_s
     store_orbit(j, count, status, t, steps, out_count, out_status, out_final, out_info)
 
 
+@njit(inline="always")
+def next_lane_orbit(next_orbit, n, orb, l, X, nrows):
+    """The next unstarted orbit of a batch of ``n`` (the shared counter ``next_orbit``) for lane
+    l, or -1 when the batch is handed out: the lane then idles on the zero state (its ``nrows``
+    rows of X[0] set to 0: all its coefficients are 0, harmless)."""
+    j = atomic_fetch_add(next_orbit, 0, 1)
+    if j >= n:
+        orb[l] = _IDLE
+        for i in range(nrows):
+            X[0, i, l] = 0.0
+        return -1
+    return j
+
+
 @njit
 def _start_lane(l, X, orb, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, L_target, L_room, next_orbit,
                 Y0, tmax, max_steps, carry, limits, out_count, out_status, out_final, out_info):
@@ -154,13 +203,9 @@ def _start_lane(l, X, orb, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, L_target,
     the orbit's carry; orbits that stop before their first step are written out at once).
     Returns 1 if the lane got an orbit, 0 if the batch is exhausted (the lane then idles on
     the zero state)."""
-    n = Y0.shape[0]
     while True:
-        j = atomic_fetch_add(next_orbit, 0, 1)
-        if j >= n:
-            orb[l] = _IDLE
-            for i in range(NVAR):
-                X[0, i, l] = 0.0
+        j = next_lane_orbit(next_orbit, Y0.shape[0], orb, l, X, NVAR)
+        if j < 0:
             return 0
         for i in range(NVAR):
             X[0, i, l] = Y0[j, i]
@@ -235,27 +280,7 @@ def _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, m
         taylor_coefficients_lanes(P, X, order)
         step_norms_lanes(X, order, e_p, e_q, norms)
         # ---- per lane: finiteness of the last two coefficients, step size, underflow
-        for l in range(LANES):
-            hv[l] = 0.0
-            L_stop[l] = False
-            if orb[l] == _IDLE:
-                continue
-            f = norms[0, l]
-            g = norms[1, l]
-            if not (f - f == 0.0 and g - g == 0.0):
-                L_status[l] = STATUS_NONFINITE
-                L_stop[l] = True
-                continue
-            h = lane_step_size(norms[2, l], norms[3, l], norms[4, l], norms[5, l], norms[6, l],
-                               e_p, e_q, margin, factor)
-            t = L_t[l]
-            h, last = clip_step(t, h, tmax)
-            if not (h > EPS * abs(t)):
-                L_status[l] = STATUS_STEP_UNDERFLOW
-                L_stop[l] = True
-                continue
-            hv[l] = h
-            L_last[l] = last
+        step_lanes(orb, norms, L_t, tmax, e_p, e_q, margin, factor, hv, L_last, L_status, L_stop)
         evaluate_lanes(X, order, hv, ynew)
         # ---- all lanes at once (vectorised): a bound of the variation of sin(phi - phi0) over
         # the step, sum_{k>=1} |c_k| h^k, so that steps far from the section skip the root

@@ -49,6 +49,30 @@ def _history(acc, hist_t, hist, hpos, row):
     return hpos
 
 
+@njit
+def _start(y0, v0, z):
+    """z = (y0, v0 / |v0|): the state a tangent loop starts from."""
+    for i in range(5):
+        z[i] = y0[i]
+        z[5 + i] = v0[i]
+    tg.renormalize(z[5:], 5)
+
+
+@njit
+def _end(acc, res, z, yout):
+    """The indicators (t, mLCE, <Y>, Y, FLI) from the accumulators, and the orbit's final state."""
+    tg.result(acc, res)
+    for i in range(5):
+        yout[i] = z[i]
+
+
+@njit
+def _store(j, result, out_status, out_steps):
+    """Orbit j's (status, steps) from its loop."""
+    out_status[j] = result[0]
+    out_steps[j] = result[1]
+
+
 # ====================================================================== Taylor
 @njit
 def _observe(acc, v, t_old, t_new, hist_t, hist, hpos, row):
@@ -64,38 +88,12 @@ def _observe(acc, v, t_old, t_new, hist_t, hist, hpos, row):
 def orbit_tangent_taylor(y0, v0, P, T, order, max_steps, hist_t, hist, res, yout):
     """The orbit and one deviation vector by the Taylor series of R3 and its variational
     equations (the step: :func:`explorer.integrate.systems.taylor_step` of ``TANGENT``, chosen
-    from the orbit's own coefficients)."""
-    n = 10
-    Z = np.empty((n, order + 1))
-    z = np.empty(n)
-    znew = np.empty(n)
-    acc = np.zeros(tg.N_ACC)
-    row = np.empty(tg.N_RES)
-    factor = tk.safety_factor(order)
-    for i in range(5):
-        z[i] = y0[i]
-        z[5 + i] = v0[i]
-    tg.renormalize(z[5:], 5)
-    t = 0.0
-    steps = 0
-    hpos = 0
-    while True:
-        for i in range(n):
-            Z[i, 0] = z[i]
-        code, h, last, steps = sy.taylor_step(sy.TANGENT, Z, P, t, T, STATUS_DONE, order, factor, steps,
-                                              max_steps, znew)
-        if code != sy.STEP_OK:
-            break
-        t_new = T if last else t + h
-        hpos = _observe(acc, znew[5:], t, t_new, hist_t, hist, hpos, row)
-        t = t_new
-        for i in range(n):
-            z[i] = znew[i]
-    tg.result(acc, res)
-    for i in range(5):
-        yout[i] = z[i]
-    return code, steps
-
+    from the orbit's own coefficients): :func:`orbit_tangent_taylor_ext` with one vector and no
+    early classification."""
+    ext = np.empty(tg.N_EXT)
+    wout = np.empty((2, 5))
+    return orbit_tangent_taylor_ext(y0, v0, v0, 1, P, T, order, max_steps, False, 0.0, 0.0, 0.0, hist_t, hist, res,
+                                    ext, wout, yout)
 
 @njit
 def _early(acc, v, w, nvec, sali_stop, megno_level, tmin, since):
@@ -204,11 +202,9 @@ def run_tangent_taylor_ext_batch(Y0, V0, W0, nvec, P, T, order, max_steps, early
     """:func:`orbit_tangent_taylor_ext` over the orbits (prange); the signature of
     :func:`explorer.integrate.tangent_lanes.run_tangent_lanes_batch`."""
     for j in prange(Y0.shape[0]):
-        st, steps = orbit_tangent_taylor_ext(Y0[j], V0[j], W0[j], nvec, P, T, order, max_steps, early_stop,
-                                             sali_stop, megno_level, early_tmin, hist_t, out_hist[j], out_res[j],
-                                             out_ext[j], out_w[j], out_final[j])
-        out_status[j] = st
-        out_steps[j] = steps
+        _store(j, orbit_tangent_taylor_ext(Y0[j], V0[j], W0[j], nvec, P, T, order, max_steps, early_stop, sali_stop,
+                                           megno_level, early_tmin, hist_t, out_hist[j], out_res[j], out_ext[j],
+                                           out_w[j], out_final[j]), out_status, out_steps)
     return 0
 
 
@@ -222,10 +218,7 @@ def orbit_tangent_dop853(y0, v0, P, T, rtol, atol, max_steps, hist_t, hist, res,
     tmp = np.empty(n)
     acc = np.zeros(tg.N_ACC)
     row = np.empty(tg.N_RES)
-    for i in range(5):
-        z[i] = y0[i]
-        z[5 + i] = v0[i]
-    tg.renormalize(z[5:], 5)
+    _start(y0, v0, z)
     h_abs = sy.dop853_first_step(sy.TANGENT, z, P, K, rtol, atol, T, tmp)
     t = 0.0
     steps = 0
@@ -242,9 +235,7 @@ def orbit_tangent_dop853(y0, v0, P, T, rtol, atol, max_steps, hist_t, hist, res,
         for i in range(n):
             z[i] = znew[i]
         sy.field(sy.TANGENT, z, P, K[0])
-    tg.result(acc, res)
-    for i in range(5):
-        yout[i] = z[i]
+    _end(acc, res, z, yout)
     return code, steps
 
 
@@ -258,10 +249,7 @@ def orbit_tangent_split(y0, v0, P, T, dt, flow_ids, fracs, max_steps, hist_t, hi
     znew = np.empty(n)
     acc = np.zeros(tg.N_ACC)
     row = np.empty(tg.N_RES)
-    for i in range(5):
-        z[i] = y0[i]
-        z[5 + i] = v0[i]
-    tg.renormalize(z[5:], 5)
+    _start(y0, v0, z)
     steps = 0
     hpos = 0
     code = STATUS_DONE
@@ -274,9 +262,7 @@ def orbit_tangent_split(y0, v0, P, T, dt, flow_ids, fracs, max_steps, hist_t, hi
         for i in range(n):
             z[i] = znew[i]
         code = STATUS_DONE
-    tg.result(acc, res)
-    for i in range(5):
-        yout[i] = z[i]
+    _end(acc, res, z, yout)
     return code, steps
 
 
@@ -285,10 +271,8 @@ def orbit_tangent_split(y0, v0, P, T, dt, flow_ids, fracs, max_steps, hist_t, hi
 def run_tangent_taylor_batch(Y0, V0, P, T, order, max_steps, hist_t, out_hist, out_res, out_status,
                              out_final, out_steps):
     for j in prange(Y0.shape[0]):
-        st, steps = orbit_tangent_taylor(Y0[j], V0[j], P, T, order, max_steps, hist_t, out_hist[j],
-                                         out_res[j], out_final[j])
-        out_status[j] = st
-        out_steps[j] = steps
+        _store(j, orbit_tangent_taylor(Y0[j], V0[j], P, T, order, max_steps, hist_t, out_hist[j], out_res[j],
+                                       out_final[j]), out_status, out_steps)
     return 0
 
 
@@ -296,10 +280,8 @@ def run_tangent_taylor_batch(Y0, V0, P, T, order, max_steps, hist_t, out_hist, o
 def run_tangent_dop853_batch(Y0, V0, P, T, rtol, atol, max_steps, hist_t, out_hist, out_res, out_status,
                              out_final, out_steps):
     for j in prange(Y0.shape[0]):
-        st, steps = orbit_tangent_dop853(Y0[j], V0[j], P, T, rtol, atol, max_steps, hist_t, out_hist[j],
-                                         out_res[j], out_final[j])
-        out_status[j] = st
-        out_steps[j] = steps
+        _store(j, orbit_tangent_dop853(Y0[j], V0[j], P, T, rtol, atol, max_steps, hist_t, out_hist[j],
+                                       out_res[j], out_final[j]), out_status, out_steps)
     return 0
 
 
@@ -307,10 +289,8 @@ def run_tangent_dop853_batch(Y0, V0, P, T, rtol, atol, max_steps, hist_t, out_hi
 def run_tangent_split_batch(Y0, V0, P, T, dt, flow_ids, fracs, max_steps, hist_t, out_hist, out_res,
                             out_status, out_final, out_steps):
     for j in prange(Y0.shape[0]):
-        st, steps = orbit_tangent_split(Y0[j], V0[j], P, T, dt, flow_ids, fracs, max_steps, hist_t,
-                                        out_hist[j], out_res[j], out_final[j])
-        out_status[j] = st
-        out_steps[j] = steps
+        _store(j, orbit_tangent_split(Y0[j], V0[j], P, T, dt, flow_ids, fracs, max_steps, hist_t,
+                                      out_hist[j], out_res[j], out_final[j]), out_status, out_steps)
     return 0
 
 

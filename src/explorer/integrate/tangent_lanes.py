@@ -29,7 +29,7 @@ Kernel contract: arrays are allocated per worker, never inside the step loop; no
 import numpy as np
 
 from explorer._jit import get_num_threads, njit, prange
-from explorer.integrate._lanes_generated import LOG2_APPROX_ERR, atomic_fetch_add
+from explorer.integrate._lanes_generated import LOG2_APPROX_ERR
 from explorer.integrate._tangent_lanes_generated import (
     DEV1,
     DEV2,
@@ -40,12 +40,11 @@ from explorer.integrate._tangent_lanes_generated import (
     tangent_coefficients_lanes,
     tangent_step_norms_lanes,
 )
-from explorer.integrate.lanes import lane_step_size
+from explorer.integrate.lanes import next_lane_orbit, step_lanes
 from explorer.integrate.tangent import _early, _finish_ext, _history
-from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW
+from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE
 from explorer.kernels import tangent as tg
 from explorer.kernels import taylor as tk
-from explorer.kernels.clock import clip_step
 
 _IDLE = -1
 EPS = 2.220446049250313e-16
@@ -71,13 +70,9 @@ def _start_lane(l, Z, orb, acc, L_t, L_steps, L_hpos, L_since, next_orbit, Y0, V
     """Put the next unstarted orbit on lane l (the start of the scalar loop: the deviation
     vectors renormalised; orbits that stop before their first step are written out at once).
     Returns 1 if the lane got an orbit, 0 if the batch is exhausted (the lane idles on 0)."""
-    n = Y0.shape[0]
     while True:
-        j = atomic_fetch_add(next_orbit, 0, 1)
-        if j >= n:
-            orb[l] = _IDLE
-            for i in range(NROWS):
-                Z[0, i, l] = 0.0
+        j = next_lane_orbit(next_orbit, Y0.shape[0], orb, l, Z, NROWS)
+        if j < 0:
             return 0
         for i in range(5):
             Z[0, i, l] = Y0[j, i]
@@ -147,27 +142,8 @@ def _run_worker(nlanes, next_orbit, Y0, V0, W0, nvec, P, T, order, max_steps, ea
         tangent_step_norms_lanes(Z, order, e_p, e_q, norms)
         # ---- per lane: systems.taylor_step's checks and step size
         for l in range(LANES):
-            hv[l] = 0.0
-            L_stop[l] = False
             L_early[l] = tg.EARLY_NONE
-            if orb[l] == _IDLE:
-                continue
-            f = norms[0, l]
-            g = norms[1, l]
-            if not (f - f == 0.0 and g - g == 0.0):
-                L_status[l] = STATUS_NONFINITE
-                L_stop[l] = True
-                continue
-            h = lane_step_size(norms[2, l], norms[3, l], norms[4, l], norms[5, l], norms[6, l],
-                               e_p, e_q, margin, factor)
-            t = L_t[l]
-            h, last = clip_step(t, h, T)
-            if not (h > EPS * abs(t)):
-                L_status[l] = STATUS_STEP_UNDERFLOW
-                L_stop[l] = True
-                continue
-            hv[l] = h
-            L_last[l] = last
+        step_lanes(orb, norms, L_t, T, e_p, e_q, margin, factor, hv, L_last, L_status, L_stop)
         evaluate5_lanes(Z, order, hv, znew, 0)
         evaluate5_lanes(Z, order, hv, znew, DEV1)
         if nvec == 2:

@@ -201,6 +201,17 @@ def _list(key, v, min_len=1) -> list:
     return list(v)
 
 
+def _distinct_reals(key, seq) -> tuple:
+    """The finite reals of the list ``key``, each once (a repeated value names both places)."""
+    values: list = []
+    for i, v in enumerate(_list(key, seq)):
+        x = _real(f"{key}[{i}]", v)
+        if x in values:
+            _fail(f"{key}[{i}]", f"duplicates {key}[{values.index(x)}] = {x!r}")
+        values.append(x)
+    return tuple(values)
+
+
 def _table(key, v, allowed) -> dict:
     """Check that ``v`` is a table whose keys are all in ``allowed``."""
     if not isinstance(v, dict):
@@ -522,13 +533,7 @@ class Scene:
             object.__setattr__(self, "sweep_values", ())
             return
         _choice("sweep.parameter", self.sweep_parameter, SWEEP_PARAMETERS)
-        values = []
-        for i, v in enumerate(_list("sweep.values", self.sweep_values)):
-            x = _real(f"sweep.values[{i}]", v)
-            if x in values:
-                _fail(f"sweep.values[{i}]", f"duplicates sweep.values[{values.index(x)}] = {x!r}")
-            values.append(x)
-        object.__setattr__(self, "sweep_values", tuple(values))
+        object.__setattr__(self, "sweep_values", _distinct_reals("sweep.values", self.sweep_values))
 
     def _panel_key(self, i) -> str:
         return "energy.h" if self.sweep_parameter is None else f"sweep.values[{i}]"
@@ -635,13 +640,7 @@ class Scene:
                   "(an atlas stores only the chaotic fraction per cell)")
         if self.lyapunov.map_resolution:
             _fail("lyapunov.map_resolution", "is not used by an atlas scene (its cells are seeded by [seeds])")
-        values = []
-        for i, v in enumerate(_list("atlas.values", self.atlas_values)):
-            x = _real(f"atlas.values[{i}]", v)
-            if x in values:
-                _fail(f"atlas.values[{i}]", f"duplicates atlas.values[{values.index(x)}] = {x!r}")
-            values.append(x)
-        object.__setattr__(self, "atlas_values", tuple(values))
+        object.__setattr__(self, "atlas_values", _distinct_reals("atlas.values", self.atlas_values))
         for i in range(self.n_cells):
             try:
                 self.cell(i)

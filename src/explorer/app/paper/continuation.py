@@ -1,6 +1,5 @@
 """The central fixed point of the section map continued in mu, with its trace and the
 values where its stability changes."""
-import math
 
 import numpy as np
 
@@ -27,20 +26,9 @@ def _refine_trace_min(prm, h, mu, tr, points):
     def f(m):
         return fixedpoints.find_fixed_point(prm.with_(mu=float(m)), h, guess).trace
 
-    a, b = float(mu[k - 1]), float(mu[k + 1])
-    g = (math.sqrt(5) - 1) / 2
-    x1, x2 = b - g * (b - a), a + g * (b - a)
-    f1, f2 = f(x1), f(x2)
-    while b - a > 1e-7:
-        if f1 < f2:
-            b, x2, f2 = x2, x1, f1
-            x1 = b - g * (b - a)
-            f1 = f(x1)
-        else:
-            a, x1, f1 = x1, x2, f2
-            x2 = a + g * (b - a)
-            f2 = f(x2)
-    return (x1, f1) if f1 < f2 else (x2, f2)
+    # the least trace: the largest -trace, to 1e-7 (relative to max(1, mu))
+    x, neg = fixedpoints.golden_section_max(lambda m: -f(m), float(mu[k - 1]), float(mu[k + 1]), 1e-7)
+    return x, -neg
 
 
 def continuation_figure(params=None, h=None, *, start=0.0, stop=8.0, step=0.1, dpi=200,

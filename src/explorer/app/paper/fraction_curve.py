@@ -3,7 +3,7 @@
 classification, indicators only)."""
 
 from explorer.app.paper._common import Drawn, Outcome, save
-from explorer.app.paper._sweeps import _lyapunov_panels, _quick_note, ensure_sweep
+from explorer.app.paper.chaotic_fraction import fraction_drawn
 
 #: the figure's name (``explorer figures --only fraction_curve``) and what it shows
 NAME = "fraction_curve"
@@ -12,22 +12,12 @@ PRESET = "fraction_curve"
 
 
 def fraction_curve_figure(*, results_dir="results", quick=False, quiet=True, dpi=200) -> Drawn:
-    from explorer.app import figures
+    def title(scene, fr):
+        early = " with early classification" if scene.lyapunov.early_stop else ""
+        return (f"section $\\varphi = \\pi$ at $h = {scene.h:g}$: {len(fr)} values of $\\mu$, ~{scene.seeds.n} "
+                f"seeds each\nMEGNO time {scene.lyapunov.time:g}{early}")
 
-    scene, out, reduced, _summary = ensure_sweep(PRESET, results_dir=results_dir, quick=quick, quiet=quiet)
-    _maps, fr = _lyapunov_panels(scene, out)
-    fig = figures.fraction_curve(fr[:, 0], fr[:, 1], fr[:, 2], parameter=scene.sweep_parameter or "mu",
-                                 threshold=scene.lyapunov.threshold, dpi=dpi)
-    ax = fig.axes[0]
-    ax.set_xlabel(r"$\mu$")
-    early = " with early classification" if scene.lyapunov.early_stop else ""
-    ax.set_title(f"section $\\varphi = \\pi$ at $h = {scene.h:g}$: {len(fr)} values of $\\mu$, ~{scene.seeds.n} seeds "
-                 f"each\nMEGNO time {scene.lyapunov.time:g}{early}", fontsize=7)
-    if reduced:
-        ax.text(0.02, 0.97, _quick_note(scene), transform=ax.transAxes, ha="left", va="top", fontsize=6,
-                color="#b2182b")
-    return Drawn(fig, {"values": fr[:, 0], "fraction": fr[:, 1], "error": fr[:, 2], "store": str(out),
-                       "reduced": reduced}, [f"from {out}" + (f"; {_quick_note(scene)}" if reduced else "")])
+    return fraction_drawn(PRESET, title, results_dir=results_dir, quick=quick, quiet=quiet, dpi=dpi)
 
 
 def build(out_dir, *, results_dir="results", quick=False, benchmark=None, quiet=True) -> Outcome:
