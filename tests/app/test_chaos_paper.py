@@ -65,3 +65,18 @@ def test_megno_map_is_redrawn_from_a_complete_stored_panel(monkeypatch, tmp_path
     o2 = paper.make("megno_map", out_dir=tmp_path / "figs2", results_dir=tmp_path, quick=False)
     assert o2.data["orbits"] == o.data["orbits"]
     np.testing.assert_array_equal(imread(tmp_path / "figs2" / "megno_map.png"), img)
+
+
+def test_atlas_quick_figure_is_a_heat_map_of_every_cell(tmp_path):
+    o = paper.make("atlas", out_dir=tmp_path / "figs", results_dir=tmp_path / "res", quick=True)
+    assert o.status == "written" and o.data["reduced"] and tuple(o.data["shape"]) == (16, 12)
+    fr = np.asarray(o.data["fraction"])
+    ok = np.isfinite(fr)
+    assert ok.mean() > 0.9 and np.all((fr[ok] >= 0) & (fr[ok] <= 1))
+    assert fr[0][ok[0]].max() < 0.2 and np.nanmax(fr) > 0.8     # regular at mu = 0, chaotic at large mu
+    img = imread(tmp_path / "figs" / "atlas.png")
+    colourful = (img[..., :3].max(axis=-1) - img[..., :3].min(axis=-1)) > 0.3
+    assert img.shape[1] > 300 and colourful.mean() > 0.1
+    # a rerun redraws from the stored atlas: nothing recomputed, the same fractions
+    again = paper.make("atlas", out_dir=tmp_path / "figs", results_dir=tmp_path / "res", quick=True)
+    np.testing.assert_array_equal(np.asarray(again.data["fraction"]), fr)

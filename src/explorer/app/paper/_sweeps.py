@@ -11,6 +11,7 @@ QUICK_SCENES = {
                  ("lyapunov", "time"): 200.0},
     "fraction_curve": {("seeds", "n"): 60, ("lyapunov", "time"): 200.0},
     "megno_map": {("lyapunov", "map_resolution"): 64, ("lyapunov", "time"): 200.0},
+    "atlas": {("seeds", "n"): 24, ("lyapunov", "time"): 100.0},
 }
 
 # ====================================================================== sweeps
@@ -33,8 +34,17 @@ def _quick_scene(name, results_dir):
 
 
 def store_complete(scene, path) -> bool:
-    """True when every panel of ``scene`` is stored in ``path`` with its settings hash."""
+    """True when every panel of ``scene`` is stored in ``path`` with its settings hash (an atlas:
+    when its file holds this atlas, :meth:`~explorer.io.scene.Scene.atlas_hash`)."""
     from explorer.io import store
+
+    if scene.is_atlas:
+        from explorer.io.store.atlas import read_atlas
+
+        try:
+            return read_atlas(path).hash == scene.atlas_hash()
+        except (OSError, ValueError, KeyError):
+            return False
 
     try:
         on_disk = store.panel_hashes(path)

@@ -22,6 +22,7 @@ MODULES = {
     "chaos_map": "explorer.app.paper.chaos_map",
     "fraction_curve": "explorer.app.paper.fraction_curve",
     "megno_map": "explorer.app.paper.megno_map",
+    "atlas": "explorer.app.paper.atlas",
     "continuation": "explorer.app.paper.continuation",
     "periodic": "explorer.app.paper.periodic",
     "work_precision": "explorer.app.paper.work_precision",
@@ -33,7 +34,7 @@ MODULES = {
 FIGURES = tuple(MODULES)
 #: figures computed from stored sweeps (reduced under ``quick`` when their store is incomplete)
 SWEEP_FIGURES = {"figure4": "figure4", "chaotic_fraction": "fraction", "chaos_map": "chaos",
-                 "fraction_curve": "fraction_curve", "megno_map": "megno_map"}
+                 "fraction_curve": "fraction_curve", "megno_map": "megno_map", "atlas": "atlas"}
 
 
 def module(name):
