@@ -47,7 +47,6 @@ from explorer.kernels import tangent as tg
 from explorer.kernels import taylor as tk
 
 _IDLE = -1
-EPS = 2.220446049250313e-16
 _N_NORMS = 7
 
 
