@@ -437,14 +437,17 @@ def coefficients_kernel():
     return "\n\n@njit\ndef taylor_coefficients_lanes(P, X, order):\n" + doc + "\n" + "\n".join(body) + "\n"
 
 
-def evaluate_kernel():
+def horner_and_norms(arr, store_row):
+    """The template pieces shared by both generated files, for the coefficient array ``arr``
+    (X or Z): Horner's init, loop body and store (``store_row(i)`` = the out row of variable i),
+    and the step norms (kernels.taylor.step_size and the finiteness sums)."""
     pad = " " * 4
-    init = "\n".join(f"{pad}a{i} = vload(X, o + {i} * LANES)" for i in range(NVAR))
-    body = "\n".join(f"{pad * 2}a{i} = vadd(vmul(a{i}, hv), vload(X, o + {i} * LANES))" for i in range(NVAR))
-    store = "\n".join(f"{pad}vstore(out, {i} * LANES, a{i})" for i in range(NVAR))
+    init = "\n".join(f"{pad}a{i} = vload({arr}, o + {i} * LANES)" for i in range(NVAR))
+    body = "\n".join(f"{pad * 2}a{i} = vadd(vmul(a{i}, hv), vload({arr}, o + {i} * LANES))" for i in range(NVAR))
+    store = "\n".join(f"{pad}vstore(out, {store_row(i)} * LANES, a{i})" for i in range(NVAR))
     norms = []
     for name, base in (("f", "op"), ("g", "oq")):
-        terms = [f"vload(X, {base} + {i} * LANES)" for i in range(NVAR)]
+        terms = [f"vload({arr}, {base} + {i} * LANES)" for i in range(NVAR)]
         acc = terms[0]
         for t in terms[1:]:
             acc = f"vadd({acc}, {t})"
@@ -453,15 +456,19 @@ def evaluate_kernel():
     norms.append(f"{pad}a = vzero()")
     norms.append(f"{pad}bm = vzero()")
     for i in range(NVAR):
-        norms.append(f"{pad}s = vmax_gt(vabs(vload(X, o0 + {i} * LANES)), s)")
-        norms.append(f"{pad}a = vmax_gt(vabs(vload(X, op + {i} * LANES)), a)")
-        norms.append(f"{pad}bm = vmax_gt(vabs(vload(X, oq + {i} * LANES)), bm)")
+        norms.append(f"{pad}s = vmax_gt(vabs(vload({arr}, o0 + {i} * LANES)), s)")
+        norms.append(f"{pad}a = vmax_gt(vabs(vload({arr}, op + {i} * LANES)), a)")
+        norms.append(f"{pad}bm = vmax_gt(vabs(vload({arr}, oq + {i} * LANES)), bm)")
     norms.append(f"{pad}u = vdiv(s, a)")
     norms.append(f"{pad}v = vdiv(s, bm)")
     norms.append(f"{pad}d = vsub(vmul(vsplat(e_q), vlog2_approx(v)), vmul(vsplat(e_p), vlog2_approx(u)))")
     for r, name in enumerate(("f", "g", "a", "bm", "u", "v", "d")):
         norms.append(f"{pad}vstore(out, {r} * LANES, {name})")
-    return EVALUATE.format(init=init, body=body, store=store, norms="\n".join(norms))
+    return dict(init=init, body=body, store=store, norms="\n".join(norms))
+
+
+def evaluate_kernel():
+    return EVALUATE.format(**horner_and_norms("X", lambda i: i))
 
 
 def generate(lanes=DEFAULT_LANES):
@@ -604,33 +611,10 @@ def tangent_kernels():
                '    the stores into D need, unchanged; tools/gen_lanes.py prune): rows db..db + 4 of Z\n'
                '    from the orbit\'s coefficients already in rows 0..4 (the same numbers the full\n'
                '    recurrence recomputes for them)."""')
-    pad = " " * 4
-    init = "\n".join(f"{pad}a{i} = vload(Z, o + {i} * LANES)" for i in range(NVAR))
-    body = "\n".join(f"{pad * 2}a{i} = vadd(vmul(a{i}, hv), vload(Z, o + {i} * LANES))" for i in range(NVAR))
-    store = "\n".join(f"{pad}vstore(out, (base + {i}) * LANES, a{i})" for i in range(NVAR))
-    norms = []
-    for name, base in (("f", "op"), ("g", "oq")):
-        terms = [f"vload(Z, {base} + {i} * LANES)" for i in range(NVAR)]
-        acc = terms[0]
-        for t in terms[1:]:
-            acc = f"vadd({acc}, {t})"
-        norms.append(f"{pad}{name} = {acc}")
-    norms.append(f"{pad}s = vsplat(1.0)")
-    norms.append(f"{pad}a = vzero()")
-    norms.append(f"{pad}bm = vzero()")
-    for i in range(NVAR):
-        norms.append(f"{pad}s = vmax_gt(vabs(vload(Z, o0 + {i} * LANES)), s)")
-        norms.append(f"{pad}a = vmax_gt(vabs(vload(Z, op + {i} * LANES)), a)")
-        norms.append(f"{pad}bm = vmax_gt(vabs(vload(Z, oq + {i} * LANES)), bm)")
-    norms.append(f"{pad}u = vdiv(s, a)")
-    norms.append(f"{pad}v = vdiv(s, bm)")
-    norms.append(f"{pad}d = vsub(vmul(vsplat(e_q), vlog2_approx(v)), vmul(vsplat(e_p), vlog2_approx(u)))")
-    for r, name in enumerate(("f", "g", "a", "bm", "u", "v", "d")):
-        norms.append(f"{pad}vstore(out, {r} * LANES, {name})")
     return ("\n\n@njit\ndef tangent_coefficients_lanes(P, Z, order, db):\n" + doc_full + "\n" + "\n".join(full)
             + "\n\n\n@njit\ndef deviation_coefficients_lanes(P, Z, order, db):\n" + doc_dev + "\n"
             + "\n".join(dev) + "\n"
-            + TANGENT_TEMPLATES.format(init=init, body=body, store=store, norms="\n".join(norms)))
+            + TANGENT_TEMPLATES.format(**horner_and_norms("Z", lambda i: f"(base + {i})")))
 
 
 def generate_tangent():
