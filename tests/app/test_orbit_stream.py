@@ -38,6 +38,7 @@ def test_stored_rows_are_the_rows_of_one_run_bit_for_bit(tmp_path):
     assert rep.crossings == 3000 and rep.status == "done" and rep.blocks == 5
     p = store.read_store(tmp_path / "o.h5").panels[0]
     np.testing.assert_array_equal(p.crossings, ref.orbit(0))
+    assert rep.max_dh == sections.max_energy_error(p.crossings) > 0   # kept per block, not reread
     np.testing.assert_array_equal(p.final, ref.final)
     np.testing.assert_array_equal(p.info, ref.info)
     assert not os.path.exists(stream.blocks_dir(tmp_path / "o.h5"))   # blocks removed once stored
@@ -87,6 +88,8 @@ def test_a_killed_long_orbit_resumes_to_the_same_file_as_an_uninterrupted_run(tm
     rep = json.loads(out.stdout)
     assert rep["crossings"] == K and rep["resumed_blocks"] >= 3 and not rep["already_complete"]
     a, b = _datasets(full), _datasets(path)
+    # the energy error of the blocks stored before the kills is carried by their files
+    assert rep["max_dh"] == sections.max_energy_error(b["crossings"])
     assert a.keys() == b.keys()
     for k in a:
         np.testing.assert_array_equal(a[k], b[k], err_msg=k)

@@ -132,8 +132,5 @@ def to_store(path, params, p1, p2, h, n_crossings, *, block=sections.DEFAULT_BLO
     if force and os.path.exists(path):
         os.remove(path)
     blocks.finish(arrays, attrs, file_attrs)
-    max_dh = 0.0
-    for rows in store.iter_rows(path, 0):
-        max_dh = max(max_dh, sections.max_energy_error(rows))
-    return OrbitReport(int(st.done[0]), STATUS_NAMES[int(st.status[0])], max_dh, int(st.blocks), resumed, path,
+    return OrbitReport(int(st.done[0]), STATUS_NAMES[int(st.status[0])], blocks.max_dh, int(st.blocks), resumed, path,
                        settings)

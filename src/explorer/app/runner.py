@@ -268,8 +268,7 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
                 payload["separatrix_points"] = np.concatenate(curves)
         if arrays.get("streamed"):   # rows stored block by block: the panel written from the blocks
             attrs.update(block=int(spec.blocks[todo.index(i)]), resumed_blocks=streams.resumed.get(i, 0))
-            streams.finish(i, payload, attrs, file_attrs)
-            dh = max((max_energy_error(rows) for rows in store.iter_rows(out, i)), default=0.0)
+            dh = streams.finish(i, payload, attrs, file_attrs)
         else:
             store.commit_panel(out, i, payload, attrs, file_attrs)
             dh = max_energy_error(arrays["data"])
@@ -480,8 +479,11 @@ class _PanelStreams:
     def block(self, panel, number, index, start, count, data, orbits, state):
         self.streams[panel.index].append(number, index, start, count, data, orbits, state)
 
-    def finish(self, i, payload, attrs, file_attrs):
-        self.streams.pop(i).finish(payload, attrs, file_attrs)
+    def finish(self, i, payload, attrs, file_attrs) -> float:
+        """Write panel i from its blocks; returns the largest |H - H0| of its rows."""
+        bs = self.streams.pop(i)
+        bs.finish(payload, attrs, file_attrs)
+        return bs.max_dh
 
 
 def _progress(total, quiet, desc):

@@ -5,7 +5,8 @@ While a run streams, its blocks live beside the store, in the directory ``<path>
     run.json        the run's identity (everything that determines its numbers) and its sha256
     000001.npz ...  one file per block: the orbits it advanced (``index``), the crossings each had
                     before it (``start``), how many it added (``count``) and those rows
-                    (``rows``, concatenated orbit after orbit), and the state after the block of
+                    (``rows``, concatenated orbit after orbit), their largest |dH| (``max_dh``), and the state
+                    after the block of
                     the orbits it covers (``orbits``: the arrays of
                     :class:`explorer.analysis.sections.StreamState` -- ``y``, ``carry``, ``done``,
                     ``finished``, ``status``, ``info`` -- for those orbits, and ``blocks``)
@@ -45,6 +46,7 @@ BLOCK_ARRAYS = ("index", "start", "count", "rows")
 STATE_ARRAYS = ("y", "carry", "done", "finished", "status", "info")
 _BLOCK_NAME = re.compile(r"^(\d{6})\.npz$")
 ROW_BYTES = 8 * len(COLUMNS)
+_DH = COLUMNS.index("dH")
 
 
 def blocks_dir(path, index: int | None = None) -> str:
@@ -71,6 +73,9 @@ class BlockStream:
         self.dir = blocks_dir(self.path, index)
         self.identity = json.loads(_canonical_json(identity))
         self.hash = settings_hash(self.identity)
+        #: largest |dH| of the rows of the stored blocks (kept with each block, so a resumed run
+        #: knows it without reading the rows again)
+        self.max_dh = 0.0
 
     # ------------------------------------------------------------------ state on disk
     def _block_files(self) -> list[tuple[int, str]]:
@@ -130,6 +135,7 @@ class BlockStream:
                     orbits = z["orbits"]
                     for a in STATE_ARRAYS:
                         state[a][orbits] = z[a]
+                    self.max_dh = max(self.max_dh, float(z["max_dh"]))
             except Exception as exc:  # a damaged block cannot come from a kill (atomic writes)
                 raise StoreError(f"{name}: unreadable block ({exc}); use --force to start again") from None
         return state, len(files)
@@ -144,9 +150,12 @@ class BlockStream:
                   "rows": np.ascontiguousarray(rows, dtype=np.float64)}
         arrays.update({a: np.asarray(state[a]) for a in STATE_ARRAYS})
         arrays["orbits"] = np.asarray(orbits, np.int64)
+        dh = float(np.max(np.abs(rows[:, _DH]))) if len(rows) else 0.0
+        arrays["max_dh"] = np.array(dh)
         # written straight to the temporary file (no copy of the rows in memory), then renamed
         with atomic_path(os.path.join(self.dir, f"{int(number):06d}.npz")) as tmp:
             np.savez(tmp, **arrays)
+        self.max_dh = max(self.max_dh, dh)
 
     def _fill(self, offsets):
         def fill(dset):
