@@ -230,8 +230,7 @@ def crossings(params, y0, n_crossings: int, *, method: str = "taylor", tol: floa
     status = np.zeros(N, np.int64)
     final = np.zeros((N, 5))
     info = np.zeros((N, 3))
-    carry = np.empty((N, drivers.N_CARRY))
-    drivers.start_carry(run.Y0, run.P, run.cphi, run.sphi, carry)
+    carry = StreamState.initial(run.P, run.Y0, phi0=run.settings["phi0"]).carry
     limits = np.full((N, 2), K, np.int64)
     _run_block(run, run.Y0, carry, limits, data, count, status, final, info)
     return Crossings(data, count, status, final, info, method, run.settings)

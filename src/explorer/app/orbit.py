@@ -34,6 +34,13 @@ class OrbitReport:
     already_complete: bool = False
 
 
+def _start(params, p1, p2, h, kw):
+    """The start state on the section, as sections.section_crossings makes it (M from the energy,
+    its sign from the crossing direction)."""
+    direction = kw.get("direction", 1)
+    return model.section_state(params, [p1], [p2], h, kw.get("phi0", np.pi), direction if direction != 0 else 1)
+
+
 def _identity(params, h, p1, p2, y0, settings) -> dict:
     return {"kind": "orbit", "params": params.as_dict(), "h": float(h), "seeds": [[float(p1), float(p2)]],
             "y0": [float(v) for v in y0[0]], "settings": settings}
@@ -44,8 +51,7 @@ def print_rows(params, p1, p2, h, n_crossings, *, as_json=False, block=sections.
     """Print the crossings of one orbit as they come, block after block: CSV ``k,t,p1,p2,M,dH``
     or one JSON object (``{"params", "h", "method", "settings", "crossings": [...], "status"}``)."""
     out = sys.stdout if file is None else file
-    direction = kw.get("direction", 1)
-    y0 = model.section_state(params, [p1], [p2], h, kw.get("phi0", np.pi), direction if direction != 0 else 1)
+    y0 = _start(params, p1, p2, h, kw)
     settings = sections.crossing_settings(params, y0, n_crossings, **kw)
     it = sections.iter_crossings(params, y0, n_crossings, block=block, **kw)
     if as_json:
@@ -86,8 +92,7 @@ def to_store(path, params, p1, p2, h, n_crossings, *, block=sections.DEFAULT_BLO
 
     path = os.fspath(path)
     phi0 = kw.get("phi0", np.pi)
-    direction = kw.get("direction", 1)
-    y0 = model.section_state(params, [p1], [p2], h, phi0, direction if direction != 0 else 1)
+    y0 = _start(params, p1, p2, h, kw)
     settings = sections.crossing_settings(params, y0, n_crossings, **kw)
     blocks = stream.BlockStream(path, _identity(params, h, p1, p2, y0, settings))
     if blocks.complete() and not force:
