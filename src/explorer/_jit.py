@@ -1,4 +1,6 @@
-"""The only place that imports numba.
+"""The only place that imports numba, and only when a kernel is defined or a thread count is
+asked for: importing :mod:`explorer` (or validating input, or running a lone orbit on the
+native library, :mod:`explorer.integrate.native`) does not load numba.
 
 ``njit`` compiles with ``cache=True`` and never with ``fastmath`` (fastmath
 reassociation deletes compensated sums and ``nnan`` deletes NaN checks).
@@ -26,10 +28,10 @@ if NOJIT:  # pragma: no cover - debugging switch
     def max_threads():
         return 1
 else:
-    import numba
-
     def njit(*args, **kwargs):
         """``numba.njit`` with ``cache=True`` (and never fastmath)."""
+        import numba
+
         kwargs.setdefault("cache", True)
         if kwargs.get("fastmath"):
             raise ValueError("fastmath is forbidden in explorer kernels")
@@ -37,10 +39,26 @@ else:
             return numba.njit(**kwargs)(args[0])
         return numba.njit(*args, **kwargs)
 
-    prange = numba.prange
-    set_num_threads = numba.set_num_threads
-    get_num_threads = numba.get_num_threads
+    def set_num_threads(n):
+        import numba
+
+        numba.set_num_threads(n)
+
+    def get_num_threads():
+        import numba
+
+        return numba.get_num_threads()
 
     def max_threads():
         """Numba's NUMBA_NUM_THREADS: the most threads a parallel loop can use in this process."""
+        import numba
+
         return numba.config.NUMBA_NUM_THREADS
+
+    def __getattr__(name):
+        # ``from explorer._jit import prange`` in a kernel module (which imports numba anyway)
+        if name == "prange":
+            import numba
+
+            return numba.prange
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

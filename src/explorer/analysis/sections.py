@@ -27,7 +27,7 @@ import numpy as np
 
 from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
-from explorer.integrate import drivers, methods
+from explorer.integrate import layout, methods
 from explorer.integrate.methods import ADAPTIVE_METHODS, MAX_TOL, METHODS, MIN_TOL, SPLIT_METHODS
 from explorer.kernels import STATUS_NAMES, Status
 from explorer.model import ParameterError, validation
@@ -280,8 +280,8 @@ class StreamState:
         Y0 = np.ascontiguousarray(np.atleast_2d(np.asarray(y0, dtype=np.float64)))
         g1, g2 = model.section_gamma(float(phi0))
         N = Y0.shape[0]
-        carry = np.empty((N, drivers.N_CARRY))
-        drivers.start_carry(Y0, P, g2, g1, carry)
+        carry = np.empty((N, layout.N_CARRY))
+        methods.start_carry(Y0, P, g2, g1, carry)
         return cls(Y0.copy(), carry, np.zeros(N, np.int64), np.zeros(N, bool), np.zeros(N, np.int64),
                    np.zeros((N, 3)), 0)
 
@@ -349,9 +349,9 @@ def iter_crossings(params, y0, n_crossings: int, *, block: int = DEFAULT_BLOCK, 
         raise ParameterError(f"block must be an integer >= 1, got {block!r}")
     N, K = run.Y0.shape[0], run.K
     st = StreamState.initial(run.P, run.Y0, phi0=run.settings["phi0"]) if state is None else state.copy()
-    if st.y.shape != (N, 5) or st.carry.shape != (N, drivers.N_CARRY):
+    if st.y.shape != (N, 5) or st.carry.shape != (N, layout.N_CARRY):
         raise ParameterError(f"state is for {st.y.shape[0]} orbits, y0 has {N}")
-    width = min(K, int(block) + drivers.MAX_ROOTS_PER_STEP)
+    width = min(K, int(block) + layout.MAX_ROOTS_PER_STEP)
     while True:
         idx = np.flatnonzero(~st.finished)
         if idx.size == 0:
@@ -359,8 +359,8 @@ def iter_crossings(params, y0, n_crossings: int, *, block: int = DEFAULT_BLOCK, 
         n = idx.size
         remaining = K - st.done[idx]
         limits = np.empty((n, 2), np.int64)
-        limits[:, drivers.LIMIT_TARGET] = np.minimum(block, remaining)
-        limits[:, drivers.LIMIT_ROOM] = np.minimum(remaining, width)
+        limits[:, layout.LIMIT_TARGET] = np.minimum(block, remaining)
+        limits[:, layout.LIMIT_ROOM] = np.minimum(remaining, width)
         Y = np.ascontiguousarray(st.y[idx])
         carry = np.ascontiguousarray(st.carry[idx])
         data = np.full((n, width, 5), np.nan)

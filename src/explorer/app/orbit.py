@@ -41,6 +41,12 @@ def _start(params, p1, p2, h, kw):
     return model.section_state(params, [p1], [p2], h, kw.get("phi0", np.pi), direction if direction != 0 else 1)
 
 
+def check_request(params, p1, p2, h, n_crossings, **kw) -> None:
+    """Validate a request of :func:`print_rows` / :func:`to_store` without running it
+    (ParameterError naming the parameter otherwise)."""
+    sections.crossing_settings(params, _start(params, p1, p2, h, kw), n_crossings, **kw)
+
+
 def _identity(params, h, p1, p2, y0, settings) -> dict:
     return {"kind": "orbit", "params": params.as_dict(), "h": float(h), "seeds": [[float(p1), float(p2)]],
             "y0": [float(v) for v in y0[0]], "settings": settings}

@@ -41,6 +41,18 @@ import numpy as np
 
 from explorer._jit import njit, prange
 from explorer.integrate import systems as sy
+from explorer.integrate.layout import (  # noqa: F401 (the carry and limits columns, re-exported)
+    CARRY_G,
+    CARRY_H0,
+    CARRY_HABS,
+    CARRY_STEPS,
+    CARRY_T,
+    CARRY_TC,
+    LIMIT_ROOM,
+    LIMIT_TARGET,
+    MAX_ROOTS_PER_STEP,
+    N_CARRY,
+)
 from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_TMAX
 from explorer.kernels import dop853 as dp
 from explorer.kernels import taylor as tk
@@ -67,22 +79,6 @@ from explorer.model.equations import (
 EPS = 2.220446049250313e-16
 #: A start point with |sin(phi - phi0)| below this is on the section (not a crossing).
 ON_SECTION = 8.0 * EPS
-
-#: columns of ``carry`` (see the module docstring)
-CARRY_T = 0
-CARRY_TC = 1
-CARRY_G = 2
-CARRY_STEPS = 3
-CARRY_H0 = 4
-CARRY_HABS = 5
-N_CARRY = 6
-#: columns of ``limits``
-LIMIT_TARGET = 0
-LIMIT_ROOM = 1
-#: the most crossings one step can add past a block's target (roots of one step: the Taylor
-#: polynomial of degree <= MAX_ORDER, DOP853's dense output of degree 7, a splitting step 2)
-MAX_ROOTS_PER_STEP = tk.MAX_ORDER
-
 
 @njit
 def _finite5(y):

@@ -75,7 +75,7 @@ from explorer.integrate.drivers import (
 from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_TMAX
 from explorer.kernels import taylor as tk
 from explorer.kernels.clock import advance_time, clip_step
-from explorer.kernels.events import excluded_by_variation, poly_step_roots, root_workspace
+from explorer.kernels.events import ISOLATE_STACK, MAX_STEP_ROOTS, excluded_by_variation, poly_step_roots
 from explorer.model.equations import section_g
 
 _IDLE = -1
@@ -237,32 +237,107 @@ def _start_lane(l, X, orb, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, L_target,
         return 1
 
 
+#: the lane worker's work arrays: five of several dimensions, given one by one, and the 1-D ones
+#: that :func:`workspace_views` cuts from three flat buffers (float64, int64, bool); ``p`` is the
+#: order
+WORKSPACE_ND = (("X", "(p + 1, NVAR, LANES)"), ("norms", "(_N_NORMS, LANES)"), ("ynew", "(NVAR, LANES)"),
+                ("brackets", "(MAX_STEP_ROOTS, 4)"), ("stack", "(ISOLATE_STACK, 5)"))
+WORKSPACE_F = (("hv", "LANES"), ("vary", "LANES"), ("yl", "NVAR"), ("yc", "NVAR"), ("gc", "p + 1"),
+               ("work", "p + 1"), ("roots", "MAX_STEP_ROOTS"), ("L_t", "LANES"), ("L_tc", "LANES"),
+               ("L_gprev", "LANES"), ("L_H0", "LANES"))
+WORKSPACE_I = ("orb", "L_count", "L_steps", "L_target", "L_room", "L_status")
+WORKSPACE_B = ("L_last", "L_stop")
+#: length of the output of :func:`workspace_sizes`
+N_WORKSPACE = 8
+#: alignment (bytes) of the float work arrays: one cache line, one vector of LANES doubles
+ALIGN = 64
+
+
+@njit
+def workspace_sizes(order, out):
+    """Sizes of the worker's work arrays for ``order``: out[0:5] the elements of WORKSPACE_ND
+    (X, norms, ynew, brackets, stack), out[5:8] the lengths of the flat float64, int64 and bool
+    buffers of :func:`workspace_views`."""
+    p1 = order + 1
+    out[0] = p1 * NVAR * LANES
+    out[1] = _N_NORMS * LANES
+    out[2] = NVAR * LANES
+    out[3] = MAX_STEP_ROOTS * 4
+    out[4] = ISOLATE_STACK * 5
+    out[5] = 6 * LANES + 2 * NVAR + 2 * p1 + MAX_STEP_ROOTS
+    out[6] = 6 * LANES
+    out[7] = 2 * LANES
+
+
+@njit
+def workspace_views(order, wf, wi, wb):
+    """The 1-D work arrays (WORKSPACE_F, WORKSPACE_I, WORKSPACE_B) as views of the flat buffers
+    ``wf``, ``wi``, ``wb``.  Slices only: a reshape would call numba's run time, which the
+    native library (:mod:`explorer.integrate.native`) does not have."""
+    p1 = order + 1
+    hv = wf[0:LANES]
+    vary = wf[LANES:2 * LANES]
+    L_t = wf[2 * LANES:3 * LANES]
+    L_tc = wf[3 * LANES:4 * LANES]
+    L_gprev = wf[4 * LANES:5 * LANES]
+    L_H0 = wf[5 * LANES:6 * LANES]
+    a = 6 * LANES
+    yl = wf[a:a + NVAR]
+    yc = wf[a + NVAR:a + 2 * NVAR]
+    a += 2 * NVAR
+    gc = wf[a:a + p1]
+    work = wf[a + p1:a + 2 * p1]
+    a += 2 * p1
+    roots = wf[a:a + MAX_STEP_ROOTS]
+    orb = wi[0:LANES]
+    L_count = wi[LANES:2 * LANES]
+    L_steps = wi[2 * LANES:3 * LANES]
+    L_target = wi[3 * LANES:4 * LANES]
+    L_room = wi[4 * LANES:5 * LANES]
+    L_status = wi[5 * LANES:6 * LANES]
+    L_last = wb[0:LANES]
+    L_stop = wb[LANES:2 * LANES]
+    return (hv, vary, yl, yc, gc, work, roots, L_t, L_tc, L_gprev, L_H0, orb, L_count, L_steps, L_target, L_room,
+            L_status, L_last, L_stop)
+
+
 @njit
 def _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
                 out_cross, out_count, out_status, out_final, out_info):
+    """:func:`run_worker` on work arrays of its own."""
+    n = np.zeros(N_WORKSPACE, np.int64)
+    workspace_sizes(order, n)
+    return run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
+                      out_cross, out_count, out_status, out_final, out_info,
+                      aligned_zeros(n[0]).reshape((order + 1, NVAR, LANES)),
+                      aligned_zeros(n[1]).reshape((_N_NORMS, LANES)), aligned_zeros(n[2]).reshape((NVAR, LANES)),
+                      aligned_zeros(n[3]).reshape((MAX_STEP_ROOTS, 4)),
+                      aligned_zeros(n[4]).reshape((ISOLATE_STACK, 5)), aligned_zeros(n[5]),
+                      np.zeros(n[6], np.int64), np.zeros(n[7], np.bool_))
+
+
+@njit
+def aligned_zeros(n):
+    """n float64 zeros starting on a cache line (ALIGN bytes).  The lanes load and store whole
+    vectors of LANES doubles (64 bytes): a vector that straddles two lines costs two accesses,
+    and numba's allocator aligns to 32 bytes only, so an unaligned X made a lone orbit up to 20 %
+    slower in one run than in the next (benchmarks/RESULTS.md, LONGORBIT)."""
+    buf = np.zeros(n + ALIGN // 8)
+    skip = ((ALIGN - buf.ctypes.data % ALIGN) % ALIGN) // 8
+    return buf[skip:skip + n]
+
+
+@njit
+def run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
+               out_cross, out_count, out_status, out_final, out_info, X, norms, ynew, brackets, stack, wf, wi, wb):
     """Integrate orbits taken from the shared counter ``next_orbit`` on up to ``nlanes`` lanes
-    until none is left; each lane is drivers.orbit_taylor step for step."""
-    X = np.zeros((order + 1, NVAR, LANES))
-    norms = np.empty((_N_NORMS, LANES))
-    hv = np.zeros(LANES)
-    vary = np.zeros(LANES)
-    ynew = np.empty((NVAR, LANES))
-    yl = np.empty(NVAR)
-    yc = np.empty(NVAR)
-    gc, work, roots, brackets, stack = root_workspace(order)
-    # per-lane state of orbit_taylor
-    orb = np.full(LANES, _IDLE, np.int64)
-    L_t = np.zeros(LANES)
-    L_tc = np.zeros(LANES)
-    L_gprev = np.zeros(LANES)
-    L_H0 = np.zeros(LANES)
-    L_count = np.zeros(LANES, np.int64)
-    L_steps = np.zeros(LANES, np.int64)
-    L_target = np.zeros(LANES, np.int64)
-    L_room = np.zeros(LANES, np.int64)
-    L_status = np.zeros(LANES, np.int64)
-    L_last = np.zeros(LANES, np.bool_)
-    L_stop = np.zeros(LANES, np.bool_)
+    until none is left; each lane is drivers.orbit_taylor step for step.  The work arrays
+    (WORKSPACE_ND, then the flat buffers of :func:`workspace_views`) come zeroed from the
+    caller: nothing is allocated here."""
+    (hv, vary, yl, yc, gc, work, roots, L_t, L_tc, L_gprev, L_H0, orb, L_count, L_steps, L_target, L_room,
+     L_status, L_last, L_stop) = workspace_views(order, wf, wi, wb)
+    for l in range(LANES):
+        orb[l] = _IDLE
     factor = tk.safety_factor(order)
     e_p = 1.0 / order          # the exponents of kernels.taylor.step_size
     e_q = 1.0 / (order - 1)

@@ -22,10 +22,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from explorer.integrate import native
 from explorer.kernels import splitting
-from explorer.kernels.taylor import order_for_tolerance
+from explorer.kernels.taylor_order import order_for_tolerance
 from explorer.model import validation
-from explorer.model.equations import N_FLOWS
 
 #: tolerances accepted by the adaptive methods (below ~ 50 eps the error control only chases
 #: round-off)
@@ -76,6 +76,8 @@ class Method:
             tol = validation.real("tol", tol, MIN_TOL, MAX_TOL)
             return Prepared(self, {"rtol": tol, "atol": tol}, tol=tol)
         dt = validation.real("dt", dt, 0.0, lo_open=True)
+        from explorer.model.equations import N_FLOWS
+
         ids, fracs = splitting.flow_sequence(splitting.SCHEMES[self.name][0], N_FLOWS)
         return Prepared(self, {"dt": dt, "order": self.order}, dt=dt,
                         flow_ids=np.ascontiguousarray(ids, dtype=np.int64),
@@ -90,6 +92,12 @@ def run_crossings(prep: Prepared, Y0, P, cphi, sphi, direction, tmax, max_steps,
     # the method it uses (start-up, benchmarks/bench_startup.py)
     kind = prep.method.kind
     if kind == "taylor":
+        lib = native.active() if Y0.shape[0] == 1 else None
+        if lib is not None:
+            # a lone orbit in a process without numba: the same worker, compiled ahead of time
+            lib.lane_worker(1, np.zeros(1, np.int64), Y0, P, cphi, sphi, int(direction), float(tmax), prep.order,
+                            int(max_steps), carry, limits, data, count, status, final, info)
+            return
         from explorer.integrate import lanes
 
         # the SIMD lane driver, bit for bit drivers.run_taylor_batch (the scalar reference)
@@ -105,6 +113,18 @@ def run_crossings(prep: Prepared, Y0, P, cphi, sphi, direction, tmax, max_steps,
 
         drivers.run_split_batch(Y0, P, cphi, sphi, direction, tmax, prep.dt, prep.flow_ids, prep.fracs,
                                 max_steps, carry, limits, data, count, status, final, info)
+
+
+def start_carry(Y0, P, cphi, sphi, carry):
+    """The carry of a run's first block (:func:`explorer.integrate.drivers.start_carry`: H0 and
+    sin(phi - phi0) of each start state), from the native library when this process uses it."""
+    lib = native.active()
+    if lib is not None:
+        lib.start_carry(Y0, P, cphi, sphi, carry)
+        return
+    from explorer.integrate import drivers
+
+    drivers.start_carry(Y0, P, cphi, sphi, carry)
 
 
 def run_tangent(prep: Prepared, Y0, V0, P, T, max_steps, hist_t, hist, res, status, final, steps):

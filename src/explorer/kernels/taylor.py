@@ -14,17 +14,10 @@ high-order Taylor methods for astrodynamics and celestial mechanics", MNRAS
 import math
 
 from explorer._jit import njit
+from explorer.kernels.taylor_order import MAX_ORDER, MIN_ORDER, order_for_tolerance  # noqa: F401 (re-exported)
 
-MIN_ORDER = 4
-MAX_ORDER = 40
 #: Jorba-Zou safety factor exp(-0.7/(p-1))/e^2 is applied to the radius estimate.
 RHO_EXPONENT = -0.7
-
-
-def order_for_tolerance(tol):
-    """Jorba-Zou optimal order p = ceil(-ln(tol)/2 + 1), clipped to [MIN_ORDER, MAX_ORDER]."""
-    p = int(math.ceil(-math.log(tol) / 2.0 + 1.0))
-    return max(MIN_ORDER, min(MAX_ORDER, p))
 
 
 @njit

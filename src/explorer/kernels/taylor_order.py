@@ -1,0 +1,17 @@
+"""The order rule of the Taylor method (Jorba & Zou 2005), in plain Python: validation and the
+method registry read it without loading any compiled kernel (:mod:`explorer.kernels.taylor`
+re-exports it).
+
+Reference: A. Jorba, M. Zou, "A software package for the numerical integration of ODEs by
+means of high-order Taylor methods", Exp. Math. 14 (2005) 99-117, section 3.2.
+"""
+import math
+
+MIN_ORDER = 4
+MAX_ORDER = 40
+
+
+def order_for_tolerance(tol):
+    """Jorba-Zou optimal order p = ceil(-ln(tol)/2 + 1), clipped to [MIN_ORDER, MAX_ORDER]."""
+    p = int(math.ceil(-math.log(tol) / 2.0 + 1.0))
+    return max(MIN_ORDER, min(MAX_ORDER, p))
