@@ -727,8 +727,8 @@ def cmd_native(args) -> int:
     return status
 
 
-COMMANDS = {"native": cmd_native, "figures": cmd_figures, "trajectory": cmd_trajectory, "orbit": cmd_orbit, "sweep": cmd_sweep,
-            "lyapunov": cmd_lyapunov, "fixedpoint": cmd_fixedpoint,
+COMMANDS = {"native": cmd_native, "figures": cmd_figures, "trajectory": cmd_trajectory, "orbit": cmd_orbit,
+            "sweep": cmd_sweep, "lyapunov": cmd_lyapunov, "fixedpoint": cmd_fixedpoint,
             "melnikov": cmd_melnikov, "periodic": cmd_periodic, "rotation": cmd_rotation}
 
 

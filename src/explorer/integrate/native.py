@@ -261,7 +261,10 @@ def build(wait: bool = True):
     with open(lock, "w") as f:
         f.write(str(os.getpid()))
     tmp = tempfile.mkdtemp(prefix="explorer-native-numba-")
-    env = dict(os.environ, NUMBA_CACHE_DIR=tmp, EXPLORER_NATIVE_DIR=library_dir())
+    # the build removes its numba cache and the lock itself, even when the command that started
+    # it is killed meanwhile
+    env = dict(os.environ, NUMBA_CACHE_DIR=tmp, EXPLORER_NATIVE_DIR=library_dir(), EXPLORER_NATIVE_LOCK=lock,
+               EXPLORER_NATIVE_OWN_CACHE="1")
     proc = subprocess.Popen([sys.executable, "-m", "explorer.integrate.native_build", library_dir()], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     proc.explorer_cleanup = (tmp, lock)

@@ -281,10 +281,23 @@ def main(argv=None) -> int:
                 "built": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
         os.makedirs(dest, exist_ok=True)
         _write_json(os.path.join(dest, f"explorer-native-{key[:16]}.json"), desc)
-        print(json.dumps(desc))
-        return 1
+    finally:
+        _clean_up()
     print(json.dumps(desc))
-    return 0
+    return 0 if "error" not in desc else 1
+
+
+def _clean_up() -> None:
+    """Remove the lock and the numba cache that :func:`explorer.integrate.native.build` made for
+    this build."""
+    lock = os.environ.get("EXPLORER_NATIVE_LOCK")
+    if lock:
+        try:
+            os.remove(lock)
+        except OSError:
+            pass
+    if os.environ.get("EXPLORER_NATIVE_OWN_CACHE") == "1" and os.environ.get("NUMBA_CACHE_DIR"):
+        shutil.rmtree(os.environ["NUMBA_CACHE_DIR"], ignore_errors=True)
 
 
 if __name__ == "__main__":  # pragma: no cover

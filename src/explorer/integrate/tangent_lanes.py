@@ -40,7 +40,7 @@ from explorer.integrate._tangent_lanes_generated import (
     tangent_coefficients_lanes,
     tangent_step_norms_lanes,
 )
-from explorer.integrate.lanes import next_lane_orbit, step_lanes
+from explorer.integrate.lanes import aligned_zeros, next_lane_orbit, step_lanes
 from explorer.integrate.tangent import _early, _finish_ext, _history
 from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE
 from explorer.kernels import tangent as tg
@@ -105,10 +105,11 @@ def _run_worker(nlanes, next_orbit, Y0, V0, W0, nvec, P, T, order, max_steps, ea
                 early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w):
     """Integrate orbits taken from the shared counter ``next_orbit`` on up to ``nlanes`` lanes
     until none is left; each lane is tangent.orbit_tangent_taylor_ext step for step."""
-    Z = np.zeros((order + 1, NROWS, LANES))
-    znew = np.zeros((NROWS, LANES))
-    norms = np.empty((_N_NORMS, LANES))
-    hv = np.zeros(LANES)
+    # the vector operands on cache lines (lanes.aligned_zeros: a straddling vector costs two accesses)
+    Z = aligned_zeros((order + 1) * NROWS * LANES).reshape((order + 1, NROWS, LANES))
+    znew = aligned_zeros(NROWS * LANES).reshape((NROWS, LANES))
+    norms = aligned_zeros(_N_NORMS * LANES).reshape((_N_NORMS, LANES))
+    hv = aligned_zeros(LANES)
     v = np.empty(5)
     w = np.zeros(5)
     row = np.empty(tg.N_RES)
