@@ -275,12 +275,12 @@ def workspace_views(order, wf, wi, wb):
     ``wf``, ``wi``, ``wb``.  Slices only: a reshape would call numba's run time, which the
     native library (:mod:`explorer.integrate.native`) does not have."""
     p1 = order + 1
-    hv = wf[0:LANES]
-    vary = wf[LANES:2 * LANES]
-    L_t = wf[2 * LANES:3 * LANES]
-    L_tc = wf[3 * LANES:4 * LANES]
-    L_gprev = wf[4 * LANES:5 * LANES]
-    L_H0 = wf[5 * LANES:6 * LANES]
+    # six float and six int arrays of LANES each, then the float arrays of other lengths
+    hv, vary, L_t, L_tc, L_gprev, L_H0 = (wf[0:LANES], wf[LANES:2 * LANES], wf[2 * LANES:3 * LANES],
+                                          wf[3 * LANES:4 * LANES], wf[4 * LANES:5 * LANES], wf[5 * LANES:6 * LANES])
+    orb, L_count, L_steps, L_target, L_room, L_status = (wi[0:LANES], wi[LANES:2 * LANES], wi[2 * LANES:3 * LANES],
+                                                         wi[3 * LANES:4 * LANES], wi[4 * LANES:5 * LANES],
+                                                         wi[5 * LANES:6 * LANES])
     a = 6 * LANES
     yl = wf[a:a + NVAR]
     yc = wf[a + NVAR:a + 2 * NVAR]
@@ -289,12 +289,6 @@ def workspace_views(order, wf, wi, wb):
     work = wf[a + p1:a + 2 * p1]
     a += 2 * p1
     roots = wf[a:a + MAX_STEP_ROOTS]
-    orb = wi[0:LANES]
-    L_count = wi[LANES:2 * LANES]
-    L_steps = wi[2 * LANES:3 * LANES]
-    L_target = wi[3 * LANES:4 * LANES]
-    L_room = wi[4 * LANES:5 * LANES]
-    L_status = wi[5 * LANES:6 * LANES]
     L_last = wb[0:LANES]
     L_stop = wb[LANES:2 * LANES]
     return (hv, vary, yl, yc, gc, work, roots, L_t, L_tc, L_gprev, L_H0, orb, L_count, L_steps, L_target, L_room,
