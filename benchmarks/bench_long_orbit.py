@@ -168,9 +168,12 @@ def startup(repeats):
     steps = [("python -c pass", [sys.executable, "-c", "pass"]),
              ("import numpy", [sys.executable, "-c", "import numpy"]),
              ("import numba", [sys.executable, "-c", "import numba"]),
-             ("the command's imports", [sys.executable, "-c",
-                                        "import explorer.app.cli, explorer.app.orbit, explorer.analysis.sections, "
-                                        "explorer.integrate.lanes"]),
+             ("the command's imports (no numba)", [sys.executable, "-c",
+                                                   "import explorer.app.cli, explorer.app.orbit, "
+                                                   "explorer.analysis.sections, explorer.integrate.native"]),
+             ("+ numba's Taylor lanes (the numba path)", [sys.executable, "-c",
+                                                          "import explorer.app.cli, explorer.app.orbit, "
+                                                          "explorer.analysis.sections, explorer.integrate.lanes"]),
              ("explorer orbit -K 5 on numba (EXPLORER_NATIVE=0)", [sys.executable, "-m", "explorer"] + ORBIT_ARGS
               + ["--crossings", "5"]),
              ("explorer orbit -K 5 (whole command, native library)", [sys.executable, "-m", "explorer"] + ORBIT_ARGS
