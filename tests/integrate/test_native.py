@@ -248,3 +248,14 @@ def test_native_command_reports_missing_and_switched_off(tmp_path):
     r = subprocess.run([sys.executable, "-m", "explorer", "native", "--build"], env=dict(env, EXPLORER_NATIVE="0"),
                        capture_output=True, text=True)
     assert r.returncode == 2 and r.stderr.startswith("explorer: error:") and "Traceback" not in r.stderr
+
+
+def test_unwritable_library_directory_leaves_the_orbit_on_numba(tmp_path):
+    """No place to build the library (a file where its directory should be): the orbit runs on
+    numba and prints its rows, no traceback."""
+    blocker = tmp_path / "not_a_dir"
+    blocker.write_text("x")
+    env = dict(os.environ, EXPLORER_NATIVE_DIR=str(blocker / "native"))
+    r = _orbit(env)
+    assert r.returncode == 0 and len(json.loads(r.stdout)["crossings"]) == 700, r.stderr
+    assert "Traceback" not in r.stderr

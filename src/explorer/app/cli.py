@@ -344,7 +344,10 @@ def _start_native_build(method):
 
     if method != "taylor" or not native.missing():
         return None
-    return native.build(wait=False)
+    try:
+        return native.build(wait=False)
+    except OSError:       # e.g. no writable cache directory: stay on numba
+        return None
 
 
 def _finish_native_build(builder) -> int:
