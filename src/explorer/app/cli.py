@@ -316,6 +316,7 @@ def cmd_orbit(args) -> int:
     kw = dict(method=args.method, tol=args.tol, dt=args.dt, tmax=args.tmax, max_steps=args.max_steps,
               phi0=args.phi0, direction=_direction(args.direction))
     from explorer.app import orbit
+    from explorer.integrate import native
 
     orbit.check_request(params, args.p1, args.p2, args.h, args.crossings, **kw)
     builder = _start_native_build(args.method)
@@ -324,9 +325,9 @@ def cmd_orbit(args) -> int:
     except BaseException:
         if builder is not None:
             builder.terminate()
-            _finish_native_build(builder)
+            native.finish_build(builder)
         raise
-    if builder is not None and _finish_native_build(builder) != 0:
+    if builder is not None and native.finish_build(builder) != 0:
         print("explorer: note: the native library for lone orbits could not be built (see python -m explorer "
               "native); orbits run on numba", file=sys.stderr)
     settings = rep.settings or {}
@@ -348,12 +349,6 @@ def _start_native_build(method):
         return native.build(wait=False)
     except OSError:       # e.g. no writable cache directory: stay on numba
         return None
-
-
-def _finish_native_build(builder) -> int:
-    from explorer.integrate import native
-
-    return native.finish_build(builder)
 
 
 def _run_orbit(args, params, block, kw):

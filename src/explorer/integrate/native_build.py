@@ -139,6 +139,7 @@ def _self_test(lib_path: str, symbols: dict) -> dict:
     blocks, through two-root steps) and compare every output bit for bit."""
     from explorer import model
     from explorer.integrate import drivers, lanes, native
+    from explorer.kernels.taylor_order import order_for_tolerance
 
     lib = native.Library(lib_path, symbols)
     prm = model.FIGURE4.with_(mu=0.5)
@@ -152,8 +153,6 @@ def _self_test(lib_path: str, symbols: dict) -> dict:
     cphi, sphi = -1.0, 0.0
     checked = 0
     for Y0, K, nlanes, tol in cases:
-        from explorer.kernels.taylor_order import order_for_tolerance
-
         order = order_for_tolerance(tol)
         n = Y0.shape[0]
         c_lib = np.empty((n, drivers.N_CARRY))
