@@ -22,7 +22,6 @@ it measures stretching within the dynamics' own invariant manifold.
 from __future__ import annotations
 
 import math
-import numbers
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -203,8 +202,8 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
     V0 = np.ascontiguousarray(np.broadcast_to(V0, Y0.shape), dtype=np.float64)
     W0 = second_deviation_vector(P, Y0) if w0 is None else np.atleast_2d(np.asarray(w0, float))
     W0 = np.ascontiguousarray(np.broadcast_to(W0, Y0.shape), dtype=np.float64)
-    if not isinstance(history, numbers.Integral) or history < 0:
-        raise ParameterError(f"history must be an integer >= 0, got {history!r}")
+    history = validation.fits_in_memory("history", history, Y0.shape[0] * 5 * 8 + 8,
+                                        "a row of 5 float64 per orbit and history point")
     early_stop = bool(early_stop)
     if early_stop:
         early_sali = validation.real("early_sali", early_sali, 0.0, 1.0)

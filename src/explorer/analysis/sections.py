@@ -48,9 +48,11 @@ ENERGY_WARN_REL = 1e-6
 DEFAULT_BLOCK = 100_000
 #: bytes of one stored crossing row (t, p1, p2, M, dH as float64)
 ROW_BYTES = 40
-#: :func:`crossings` returns every row at once: it refuses a result larger than this fraction of
-#: the machine's memory (stream it with :func:`iter_crossings` instead)
-MAX_MEMORY_FRACTION = 0.5
+#: :func:`crossings` returns every row at once: it refuses a result larger than
+#: MAX_MEMORY_FRACTION of the machine's memory (stream it with :func:`iter_crossings` instead)
+MAX_MEMORY_FRACTION = validation.MAX_MEMORY_FRACTION
+physical_memory = validation.physical_memory
+human_bytes = validation.human_bytes
 
 
 @dataclass(frozen=True)
@@ -105,24 +107,6 @@ def result_bytes(n_orbits: int, n_crossings: int) -> int:
     (the size of :attr:`Crossings.data`, and an upper bound of the rows a store holds before
     compression)."""
     return int(n_orbits) * int(n_crossings) * ROW_BYTES
-
-
-def physical_memory() -> int:
-    """Bytes of physical memory of this machine (0 when the system does not say)."""
-    try:
-        import os
-
-        return int(os.sysconf("SC_PAGE_SIZE")) * int(os.sysconf("SC_PHYS_PAGES"))
-    except (ValueError, OSError, AttributeError):
-        return 0
-
-
-def human_bytes(nbytes: float) -> str:
-    for unit in ("B", "kB", "MB", "GB", "TB", "PB"):
-        if nbytes < 1000 or unit == "PB":
-            return f"{nbytes:.3g} {unit}"
-        nbytes /= 1000.0
-    return f"{nbytes:.3g} PB"
 
 
 @dataclass(frozen=True)

@@ -91,6 +91,9 @@ TWO_PI = 2.0 * math.pi
 DEFAULT_PARAMS = dict(model.FIGURE4.as_dict(), mu=0.5)
 DEFAULT_TOL = 1e-12
 DEFAULT_MAX_STEPS = 10 ** 8
+#: bytes per sample of a :func:`trajectory` result and its conservation check: about 20 float64
+#: arrays of n_samples (the state, phi, H, p_x, p_y, kinetic energy, masks, temporaries)
+SAMPLE_BYTES = 160
 
 
 # ====================================================================== parameters, states
@@ -185,7 +188,7 @@ def full_params(params=None, **changes) -> dict:
     if unknown:
         raise model.ParameterError(f"unknown parameter(s) {', '.join(unknown)}")
     d.update(changes)
-    lam = validation.real("lam", d["lam"])
+    lam = validation.magnitude("lam", d["lam"])
     # model.Params validates every other parameter; lam = 0 is legal for R1, so it is replaced by 1 here.
     checked = model.Params(**dict(d, lam=1.0)).as_dict()
     checked["lam"] = lam
@@ -196,7 +199,8 @@ def initial_state(params, p1, p2, M, phi, x=0.0, y=0.0) -> np.ndarray:
     """The full state (p1, p2, M, sin phi, cos phi, x, y) (MODEL.md R1); ``params`` is only
     validated (the state does not depend on it)."""
     full_params(params)
-    vals = [validation.real(n, v) for n, v in (("p1", p1), ("p2", p2), ("M", M), ("phi", phi), ("x", x), ("y", y))]
+    vals = [validation.magnitude(n, v) if n != "phi" else validation.real(n, v)
+            for n, v in (("p1", p1), ("p2", p2), ("M", M), ("phi", phi), ("x", x), ("y", y))]
     p1, p2, M_, phi, x, y = vals
     return np.array([p1, p2, M_, math.sin(phi), math.cos(phi), x, y], dtype=np.float64)
 
@@ -211,6 +215,7 @@ def _check_run(t_end, n_samples, tol):
         raise model.ParameterError(f"samples must be an integer >= 2, got {n_samples!r}") from None
     if ns != n_samples or ns < 2:
         raise model.ParameterError(f"samples must be an integer >= 2, got {n_samples!r}")
+    validation.fits_in_memory("samples", ns, SAMPLE_BYTES, "the arrays of the result", lo=2)
     tol = validation.real("tol", tol)
     if not (0.0 < tol < 1.0):
         raise model.ParameterError(f"tol must be in (0, 1), got {tol!r}")

@@ -15,6 +15,7 @@ import sys
 import numpy as np
 
 from explorer import __version__, model
+from explorer.model import validation
 
 EXIT_USAGE = 2
 
@@ -310,9 +311,12 @@ def cmd_orbit(args) -> int:
         v = getattr(args, name)
         if not math.isfinite(v):
             raise model.ParameterError(f"{name} must be finite, got {v!r}")
-    block = DEFAULT_BLOCK if args.block is None else args.block
-    if block < 1:
-        raise model.ParameterError(f"--block must be an integer >= 1, got {args.block}")
+    from explorer.analysis.sections import ROW_BYTES
+
+    block = validation.fits_in_memory("--block", DEFAULT_BLOCK if args.block is None else args.block, ROW_BYTES,
+                                      "a crossing row of 40 bytes", lo=1)
+    if args.out is not None:
+        validation.output_path("--out", args.out)
     kw = dict(method=args.method, tol=args.tol, dt=args.dt, tmax=args.tmax, max_steps=args.max_steps,
               phi0=args.phi0, direction=_direction(args.direction))
     from explorer.app import orbit
@@ -381,8 +385,14 @@ def cmd_sweep(args) -> int:
 
     if args.jobs < 1:  # the API says "jobs"; the command line names its option
         raise model.ParameterError(f"--jobs must be >= 1, got {args.jobs}")
-    if args.scheduler and args.backend != "dask":
+    validation.integer("--jobs", args.jobs, 1, validation.MAX_JOBS)
+    if args.scheduler is not None and args.backend != "dask":
         raise model.ParameterError("--scheduler needs --backend dask")
+    if args.scheduler is not None and not args.scheduler.strip():
+        raise model.ParameterError("--scheduler must be a dask scheduler address (host:port), got ''")
+    for option, path in (("--out", args.out), ("--figure", args.figure)):
+        if path is not None:
+            validation.output_path(option, path)
     report = run_sweep(args.scene, args.out, figure=args.figure, draw=not args.no_figure, jobs=args.jobs,
                        backend=args.backend, scheduler=args.scheduler, force=args.force,
                        progress=not args.quiet)
@@ -444,6 +454,17 @@ def _pair(text, name):
     return a, b
 
 
+def _continuation(cont):
+    """PARAM, START, STOP, STEP of --continue: numbers, STEP towards STOP, a bounded number of steps."""
+    name, *nums = cont
+    validation.choice("--continue PARAM", name, model.PARAM_NAMES + ("h",))
+    try:
+        start, stop, step = (float(v) for v in nums)
+    except ValueError:
+        raise model.ParameterError(f"--continue needs PARAM START STOP STEP numbers, got {nums}") from None
+    return (name, *validation.continuation_steps("--continue", start, stop, step))
+
+
 def cmd_fixedpoint(args) -> int:
     from explorer.analysis import fixedpoints
 
@@ -452,11 +473,7 @@ def cmd_fixedpoint(args) -> int:
         raise model.ParameterError(f"h must be finite, got {args.h!r}")
     guess = _pair(args.guess, "--guess")
     if args.cont:
-        name, *nums = args.cont
-        try:
-            start, stop, step = (float(v) for v in nums)
-        except ValueError:
-            raise model.ParameterError(f"--continue needs PARAM START STOP STEP numbers, got {nums}") from None
+        name, start, stop, step = _continuation(args.cont)
         br = fixedpoints.continue_branch(params, args.h, name, start, stop, step, guess, tol=args.tol)
         rows = [dict(fp.as_dict(), **{name: float(v)}) for v, fp in zip(br.values, br.points)]
         if args.json:
@@ -489,7 +506,6 @@ def _section_map_args(args):
     """The model parameters of a command on the section map (periodic, rotation), with its energy
     ``--h`` (finite, a non-empty allowed region) and Taylor ``--tol`` checked."""
     from explorer.analysis.sections import MAX_TOL, MIN_TOL
-    from explorer.model import validation
 
     params = _params_from(args)
     if not math.isfinite(args.h):
@@ -505,16 +521,16 @@ def cmd_periodic(args) -> int:
 
     if args.period < 1:
         raise model.ParameterError(f"--period must be an integer K >= 1, got {args.period}")
+    validation.integer("--period", args.period, 1, validation.MAX_PERIOD)
+    # --grid and --max-guesses are checked with or without --search (a bad value is a mistake either way)
+    validation.fits_in_memory("--grid", args.grid, 16 * args.grid, "grid^2 points of 16 bytes", lo=2)
+    validation.integer("--max-guesses", args.max_guesses, 1)
     params = _section_map_args(args)
     K = args.period
     if args.cont:
         if args.guess is None:
             raise model.ParameterError("--continue needs --guess (a point of the orbit at START)")
-        name, *nums = args.cont
-        try:
-            start, stop, step = (float(v) for v in nums)
-        except ValueError:
-            raise model.ParameterError(f"--continue needs PARAM START STOP STEP numbers, got {nums}") from None
+        name, start, stop, step = _continuation(args.cont)
         guess = _pair(args.guess, "--guess")
         br = periodic.continue_periodic(params, args.h, K, name, start, stop, step, guess, tol=args.tol)
         rows = [dict(o.as_dict(), **{name: float(v)}) for v, o in zip(br.values, br.orbits)]
@@ -532,10 +548,6 @@ def cmd_periodic(args) -> int:
                 print(f"branch stopped: {br.stopped}")
         return 0
     if args.search:
-        if args.grid < 2:
-            raise model.ParameterError(f"--grid must be an integer >= 2, got {args.grid}")
-        if args.max_guesses < 1:
-            raise model.ParameterError(f"--max-guesses must be an integer >= 1, got {args.max_guesses}")
         orbits = periodic.search_periodic_orbits(params, args.h, K, grid=args.grid, max_guesses=args.max_guesses,
                                                  tol=args.tol)
     else:
@@ -562,12 +574,14 @@ def cmd_rotation(args) -> int:
         raise model.ParameterError(f"--iterates must be an integer >= 10, got {args.iterates}")
     from explorer.analysis.fixedpoints import find_fixed_point
 
+    # each point keeps its 2N returns (p1, p2: 16 bytes each)
+    validation.fits_in_memory("--n", args.n, 32 * args.iterates, "2 x --iterates returns of 16 bytes per point", lo=2)
     params = _section_map_args(args)
-    for name, x in (("--from", a), ("--to", b)):
+    c_guess = _pair(args.center, "--center") if args.center is not None else a
+    for name, x in (("--from", a), ("--to", b), ("--center", c_guess)):
         if not model.is_admissible(params, x[0], x[1], args.h):
             raise model.ParameterError(f"{name} ({x[0]:g}, {x[1]:g}) lies outside the allowed region; allowed: "
                                        f"{model.describe_region(params, args.h)}")
-    c_guess = _pair(args.center, "--center") if args.center else a
     center = find_fixed_point(params, args.h, c_guess, tol=args.tol)
     prof = rotation.rotation_profile(params, args.h, a, b, args.n, center=center.point, iterates=args.iterates,
                                      tol=args.tol)
@@ -589,16 +603,17 @@ def cmd_melnikov(args) -> int:
     from explorer.analysis import melnikov
 
     params = _params_from(args)
+    # --mus and --g0 are checked with or without --splitting (a bad value is a mistake either way)
+    try:
+        mus = [float(v) for v in args.mus.split(",")]
+    except ValueError:
+        raise model.ParameterError(f"--mus must be comma-separated numbers, got {args.mus!r}") from None
+    if not mus or not all(math.isfinite(m) and m > 0 for m in mus):
+        raise model.ParameterError(f"--mus must be finite and > 0, got {args.mus!r}")
+    if not math.isfinite(args.g0):
+        raise model.ParameterError(f"g0 must be finite, got {args.g0!r}")
     out = melnikov.amplitudes(params, args.h)
     if args.splitting:
-        try:
-            mus = [float(v) for v in args.mus.split(",")]
-        except ValueError:
-            raise model.ParameterError(f"--mus must be comma-separated numbers, got {args.mus!r}") from None
-        if not mus or not all(math.isfinite(m) and m > 0 for m in mus):
-            raise model.ParameterError(f"--mus must be finite and > 0, got {args.mus!r}")
-        if not math.isfinite(args.g0):
-            raise model.ParameterError(f"g0 must be finite, got {args.g0!r}")
         out["splitting"] = melnikov.melnikov_table(params, args.h, mus, (args.g0,))
     if args.json:
         print(json.dumps(out))
@@ -630,6 +645,8 @@ def cmd_trajectory(args) -> int:
     y0 = tr.initial_state(prm, args.p1, args.p2, args.M, args.phi)
     if args.glyphs < 1:
         raise model.ParameterError(f"glyphs must be >= 1, got {args.glyphs!r}")
+    if not args.no_figure:
+        validation.output_path("--out", args.out)
     res = tr.trajectory(prm, y0, args.time, args.samples, args.tol, phi_start=args.phi)
     cons = tr.conservation(res)
     d = k = None
@@ -685,6 +702,10 @@ def cmd_figures(args) -> int:
 
     if args.only is not None:
         paper.registry.module(args.only)  # an unknown name: ParameterError listing the names
+    validation.output_path("--out-dir", args.out_dir, directory=True)
+    validation.output_path("--results-dir", args.results_dir, directory=True)
+    if args.benchmark is not None:
+        validation.input_file("--benchmark", args.benchmark)
     names = [args.only] if args.only else None
     outcomes = paper.generate(names, out_dir=args.out_dir, results_dir=args.results_dir, quick=args.quick,
                               benchmark=args.benchmark, quiet=args.quiet)
@@ -734,6 +755,7 @@ COMMANDS = {"native": cmd_native, "figures": cmd_figures, "trajectory": cmd_traj
 def cmd_explore(args) -> int:
     from explorer.app import explore
 
+    explore.check_args(args)  # bad input is reported as such, with or without a display
     problem = explore.display_problem()  # no display: one line, exit 2 (no traceback)
     if problem:
         raise model.ParameterError(problem)

@@ -67,7 +67,12 @@ class Method:
 
     def prepare(self, *, tol=None, dt=None) -> Prepared:
         """Validate the method's setting (``tol`` in [MIN_TOL, MAX_TOL] or ``dt`` > 0; the other
-        one is ignored) and derive what its drivers need."""
+        one is not used, but when given it is validated too: a NaN step is a mistake even for a
+        method that ignores it) and derive what its drivers need."""
+        if self.kind in ("taylor", "dop853") and dt is not None:
+            validation.real("dt", dt, 0.0, lo_open=True)
+        if self.kind not in ("taylor", "dop853") and tol is not None:
+            validation.real("tol", tol, MIN_TOL, MAX_TOL)
         if self.kind == "taylor":
             tol = validation.real("tol", tol, MIN_TOL, MAX_TOL)
             order = order_for_tolerance(tol)

@@ -218,7 +218,8 @@ def _table(key, v, allowed) -> dict:
         _fail(key, f"must be a table, {_got(v)}")
     for k in v:
         if k not in allowed:
-            raise SceneError(f"scene: unknown key '{key}.{k}' (allowed: {', '.join(allowed)})")
+            raise SceneError(f"scene: unknown key '{key}.{k}'{validation.did_you_mean(k, allowed)} "
+                             f"(allowed: {', '.join(allowed)})")
     return v
 
 
@@ -504,7 +505,7 @@ class Scene:
         _str("text", self.text)
         if not isinstance(self.params, model.Params):
             _fail("model", f"must be a model.Params, {_got(self.params)}")
-        object.__setattr__(self, "h", _real("energy.h", self.h))
+        object.__setattr__(self, "h", _checked(validation.magnitude, "energy.h", self.h))
         for attr, cls, key in (("seeds", SeedSpec, "seeds"), ("integration", IntegrationSpec, "integration"),
                                ("figure", FigureSpec, "figure")):
             if not isinstance(getattr(self, attr), cls):
@@ -749,7 +750,8 @@ def scene_from_dict(data: dict, text: str = "") -> Scene:
     for k, v in data.items():
         if k not in _TOP_KEYS:
             what = "table" if isinstance(v, dict) else "key"
-            raise SceneError(f"scene: unknown {what} '{k}' (allowed: {', '.join(_TOP_KEYS)})")
+            raise SceneError(f"scene: unknown {what} '{k}'{validation.did_you_mean(k, _TOP_KEYS)} "
+                             f"(allowed: {', '.join(_TOP_KEYS)})")
     if "name" not in data:
         _fail("name", "is required (a string matching [A-Za-z0-9_.-]+)")
     kw = {"name": data["name"], "description": data.get("description", ""), "text": text}

@@ -25,7 +25,7 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
-from explorer.model.validation import ParameterError, packed_params, real
+from explorer.model.validation import ParameterError, magnitude, packed_params
 
 # Packed layout of the parameter vector handed to the kernels.
 A1, A2, B, LAM, CHI, ZETA, MU, XI, ETA = range(9)
@@ -93,7 +93,7 @@ class Params:
 
     def __post_init__(self):
         for f in fields(self):
-            object.__setattr__(self, f.name, real(f.name, getattr(self, f.name)))
+            object.__setattr__(self, f.name, magnitude(f.name, getattr(self, f.name)))
         for name in ("a1", "a2", "b"):
             if getattr(self, name) <= 0.0:
                 raise ParameterError(f"{name} must be > 0 (a mass or moment of inertia), got {getattr(self, name)!r}")
@@ -242,6 +242,7 @@ def allowed_ellipse(params, h, phi0=math.pi):
     the region is empty (h below the minimum of the energy on the section).
     """
     P = _P(params)
+    h = magnitude("h", h)
     g1, g2 = section_gamma(phi0)
     k1 = (P[MU] / P[LAM]) * g2
     k2 = (P[MU] / P[LAM]) * g1
@@ -259,6 +260,7 @@ def section_state(params, p1, p2, h, phi0=math.pi, direction=1):
     M = +sqrt(M^2) for direction +1 (phi increasing), -sqrt for -1.
     Raises ParameterError naming the point if any lies outside the allowed region.
     """
+    h = magnitude("h", h)
     p1 = np.atleast_1d(np.asarray(p1, dtype=np.float64))
     p2 = np.atleast_1d(np.asarray(p2, dtype=np.float64))
     p1, p2 = np.broadcast_arrays(p1, p2)

@@ -8,6 +8,12 @@ parameter and what is allowed::
     tol must be in [1e-16, 0.01], got 0.5
     scene key 'seeds.n' must be an integer >= 1, got 2.5 (float)
 
+Limits (named once here, listed in docs/bad_input.md): model parameters, the energy and the
+coordinates a user gives have ``|x| <= MAX_MAGNITUDE``; a count that sizes an array is refused
+when the array would take more than ``MAX_MEMORY_FRACTION`` of the machine's memory
+(:func:`fits_in_memory`); a place a command writes must be a non-empty path in a writable
+directory, and an existing file there must be writable (:func:`output_path`).
+
 Accepted types: a real number is a Python or numpy int or float (not a bool, not a string:
 the command line converts its text before calling); an integer is a Python or numpy integer
 (not a bool, not a float with an integral value).  ``label`` is how the message names the
@@ -15,13 +21,33 @@ value (``"tol"``, ``"scene key 'integration.tol'"``).
 """
 from __future__ import annotations
 
+import difflib
 import math
 import numbers
+import os
+import tempfile
 
 import numpy as np
 
-__all__ = ["ParameterError", "real", "integer", "boolean", "choice", "threads", "packed_params",
-           "with_value"]
+__all__ = ["MAX_CONTINUATION_STEPS", "MAX_JOBS", "MAX_MAGNITUDE", "MAX_MEMORY_FRACTION", "MAX_PERIOD",
+           "ParameterError", "boolean", "choice", "continuation_steps", "did_you_mean", "fits_in_memory",
+           "human_bytes", "input_file", "integer", "magnitude", "output_path", "packed_params", "physical_memory",
+           "real", "threads", "with_value"]
+
+#: largest |value| of a model parameter, the energy h or a start coordinate.  The equations are
+#: written for parameters of order one (Figure 4: 0.5 to 2); up to 1e8 every method integrates
+#: (tests/test_stress.py runs h = 1e6), while at 1e12 to 1e30 the Taylor coefficients overflow at
+#: t = 0 or the kernels fail, and the time scale ~1/|lam| leaves any step budget.
+MAX_MAGNITUDE = 1e8
+#: an array sized by a user's count may take at most this fraction of the machine's memory
+#: (:func:`fits_in_memory`; :func:`explorer.analysis.sections.crossings` uses it too)
+MAX_MEMORY_FRACTION = 0.5
+#: largest period K of a periodic orbit: multiple shooting solves a (2K x 2K) system per Newton step
+MAX_PERIOD = 1000
+#: largest number of parameter steps of a continuation (--continue PARAM START STOP STEP)
+MAX_CONTINUATION_STEPS = 100_000
+#: largest number of worker processes of a sweep (--jobs)
+MAX_JOBS = 1024
 
 
 class ParameterError(ValueError):
@@ -67,6 +93,21 @@ def real(label: str, value, lo: float | None = None, hi: float | None = None, *,
     raise ParameterError(f"{label} must be {'<' if hi_open else '<='} {hi:g}, got {_short(value)}")
 
 
+def magnitude(label: str, value, limit: float = MAX_MAGNITUDE) -> float:
+    """A finite real number with ``|value| <= limit`` (default :data:`MAX_MAGNITUDE`).
+
+    >>> magnitude("chi", 1e30)
+    Traceback (most recent call last):
+    ...
+    explorer.model.validation.ParameterError: chi must be in [-1e+08, 1e+08] (MAX_MAGNITUDE), got 1e+30
+    """
+    x = real(label, value)
+    if abs(x) > limit:
+        name = "MAX_MAGNITUDE" if limit == MAX_MAGNITUDE else "the limit"
+        raise ParameterError(f"{label} must be in [-{limit:g}, {limit:g}] ({name}), got {x:g}")
+    return x
+
+
 def integer(label: str, value, lo: int | None = None, hi: int | None = None) -> int:
     """An integer in [lo, hi] (either bound may be None)."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
@@ -95,6 +136,103 @@ def choice(label: str, value, choices) -> str:
     if value not in choices:
         raise ParameterError(f"{label} must be one of {', '.join(choices)}; got {_short(value)}")
     return value
+
+
+def did_you_mean(value: str, choices) -> str:
+    """``" (did you mean 'x'?)"`` for the closest of ``choices``, or "" when none is close."""
+    value = str(value)
+    close = difflib.get_close_matches(value, list(choices), n=1) or [
+        c for c in choices if value and (value.startswith(c) or c.startswith(value))]
+    return f" (did you mean '{close[0]}'?)" if close else ""
+
+
+def physical_memory() -> int:
+    """Bytes of physical memory of this machine (0 when the system does not say)."""
+    try:
+        return int(os.sysconf("SC_PAGE_SIZE")) * int(os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        return 0
+
+
+def human_bytes(nbytes: float) -> str:
+    for unit in ("B", "kB", "MB", "GB", "TB", "PB"):
+        if nbytes < 1000 or unit == "PB":
+            return f"{nbytes:.3g} {unit}"
+        nbytes /= 1000.0
+    return f"{nbytes:.3g} PB"
+
+
+def fits_in_memory(label: str, count: int, item_bytes: int, what: str, lo: int = 0) -> int:
+    """``count`` (an integer >= ``lo``) when ``count * item_bytes`` bytes fit in
+    :data:`MAX_MEMORY_FRACTION` of this machine's memory; else a ParameterError naming the label,
+    the size and the machine's memory (``what`` says what is counted)."""
+    n = integer(label, count, lo)
+    need = n * int(item_bytes)
+    mem = physical_memory()
+    if mem and need > MAX_MEMORY_FRACTION * mem:
+        raise ParameterError(f"{label} = {n} needs {human_bytes(need)} in memory ({what}); at most "
+                             f"{MAX_MEMORY_FRACTION:g} x this machine's {human_bytes(mem)} (MAX_MEMORY_FRACTION)")
+    return n
+
+
+def continuation_steps(label: str, start, stop, step) -> tuple:
+    """(start, stop, step) of a continuation: finite numbers, STEP nonzero with the sign of
+    STOP - START, at most :data:`MAX_CONTINUATION_STEPS` steps."""
+    start, stop, step = (real(f"{label} {n}", v) for n, v in (("START", start), ("STOP", stop), ("STEP", step)))
+    if step == 0.0 or (stop - start) * step < 0.0:
+        raise ParameterError(f"{label} needs a nonzero STEP with the sign of STOP - START, got START {start:g}, "
+                             f"STOP {stop:g}, STEP {step:g}")
+    n = abs(stop - start) / abs(step)
+    if not n <= MAX_CONTINUATION_STEPS:
+        raise ParameterError(f"{label} would take {n:.3g} steps; at most {MAX_CONTINUATION_STEPS} "
+                             "(MAX_CONTINUATION_STEPS): raise STEP or narrow START..STOP")
+    return start, stop, step
+
+
+def _probe_directory(label: str, path: str, directory: str) -> None:
+    """Refuse unless a file can be created (and removed) in the existing ``directory``."""
+    if not os.path.isdir(directory):
+        raise ParameterError(f"{label} {path!r}: {directory!r} is not a directory")
+    try:
+        with tempfile.NamedTemporaryFile(dir=directory, prefix=".explorer-probe-"):
+            pass
+    except OSError as exc:
+        raise ParameterError(f"{label} {path!r}: cannot write in {directory!r} ({exc.strerror or exc})") from None
+
+
+def output_path(label: str, path, *, directory: bool = False) -> str:
+    """A place a command will write: a non-empty path whose nearest existing ancestor is a
+    directory where a file can be created; with ``directory`` the path itself is (or will be) a
+    directory, else it must not be one, and an existing file there must be writable (a read-only
+    file is refused, never replaced).  Nothing is created (a probe file is created and removed)."""
+    if not isinstance(path, (str, os.PathLike)) or not os.fspath(path).strip():
+        raise ParameterError(f"{label} must be a non-empty path, got {_short(path)}")
+    path = os.fspath(path)
+    full = os.path.abspath(path)
+    if os.path.isdir(full):
+        if not directory:
+            raise ParameterError(f"{label} {path!r} is a directory; give a file path")
+        _probe_directory(label, path, full)
+        return path
+    if os.path.exists(full):
+        if directory:
+            raise ParameterError(f"{label} {path!r} is a file; give a directory")
+        if not os.access(full, os.W_OK):
+            raise ParameterError(f"{label} {path!r} is read-only; make it writable or choose another path")
+    ancestor = os.path.dirname(full)
+    while not os.path.exists(ancestor):
+        ancestor = os.path.dirname(ancestor)
+    _probe_directory(label, path, ancestor)
+    return path
+
+
+def input_file(label: str, path) -> str:
+    """A file a command reads: a non-empty path of an existing regular file."""
+    if not isinstance(path, (str, os.PathLike)) or not os.fspath(path).strip():
+        raise ParameterError(f"{label} must be a non-empty path, got {_short(path)}")
+    if not os.path.isfile(path):
+        raise ParameterError(f"{label} {os.fspath(path)!r} is not a file")
+    return os.fspath(path)
 
 
 def threads(value, available: int) -> int:

@@ -66,7 +66,7 @@ API
 ``display_problem()``
     why no window can be opened (None if one can).
 """
-from explorer.app.explore.controller import Explorer, display_problem, from_args
+from explorer.app.explore.controller import Explorer, check_args, display_problem, from_args
 from explorer.app.explore.state import (
                                         CHAOTIC_MEGNO,
                                         FAILED_NAME,
@@ -83,4 +83,4 @@ from explorer.app.explore.view import DISPLAY_ERROR, FIGSIZE, ExplorerView, brea
 
 __all__ = ["CHAOTIC_MEGNO", "DISPLAY_ERROR", "FAILED_NAME", "FIGSIZE", "INDICATOR_TIME", "KEYS", "MAX_BATCH",
            "RUNNING_NAME", "STATUS_FAILED", "STATUS_RUNNING", "Explorer", "ExplorerState", "ExplorerView", "Orbit",
-           "break_jumps", "display_problem", "from_args"]
+           "break_jumps", "check_args", "display_problem", "from_args"]

@@ -413,8 +413,22 @@ class Explorer:
 def from_args(args, fig=None) -> Explorer:
     """An :class:`Explorer` from the ``explore`` command's arguments: the scene's panel (if a
     SCENE is given; else Figure 4 with mu = 0, h = 2), then the explicit options on top."""
+    params, h, settings = _settings(args)
+    return Explorer(params, h, fig=fig, **settings)
+
+
+def check_args(args) -> None:
+    """Validate the ``explore`` command's arguments without opening a window (ParameterError
+    naming the option otherwise), so that bad input is reported even where no display is."""
+    params, h, settings = _settings(args)
+    ExplorerState(params, h, **{k: v for k, v in settings.items() if k != "out_dir"})
+
+
+def _settings(args):
+    """(params, h, keywords of :class:`Explorer`) of the ``explore`` command's arguments."""
     from explorer.analysis import sections
     from explorer.io import scene as scene_mod
+    from explorer.model import validation
 
     base = model.FIGURE4
     h = model.FIGURE4_H
@@ -438,6 +452,6 @@ def from_args(args, fig=None) -> Explorer:
     method = args.method or method
     tol = args.tol if args.tol is not None else tol
     dt = args.dt if args.dt is not None else dt
-    return Explorer(params, h, method=method, tol=tol, dt=dt, chunk=args.crossings_per_chunk,
-                    max_crossings=args.max_crossings, phi0=phi0, direction=direction,
-                    out_dir=args.out_dir, label=label, fig=fig)
+    return params, h, dict(method=method, tol=tol, dt=dt, chunk=args.crossings_per_chunk,
+                           max_crossings=args.max_crossings, phi0=phi0, direction=direction,
+                           out_dir=validation.output_path("--out-dir", args.out_dir, directory=True), label=label)

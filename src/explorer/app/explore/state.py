@@ -185,7 +185,7 @@ class ExplorerState:
         if method not in sections.METHODS:
             raise ParameterError(f"method must be one of {', '.join(sections.METHODS)}; got {method!r}")
         self.params = params
-        self.h = _finite("h", h)
+        self.h = validation.magnitude("h", h)
         self.phi0 = _finite("phi0", phi0)
         if direction not in (-1, 0, 1):
             raise ParameterError(f"direction must be +1, -1 or 0 (both), got {direction!r}")
@@ -193,13 +193,11 @@ class ExplorerState:
         self.method = method
         self.tol = sections.DEFAULT_TOL if tol is None else float(tol)
         self.dt = sections.DEFAULT_DT if dt is None else float(dt)
-        if method in sections.ADAPTIVE_METHODS:
-            validation.real("tol", self.tol, sections.MIN_TOL, sections.MAX_TOL)
-        else:
-            validation.real("dt", self.dt, 0.0, lo_open=True)
+        # both settings are validated, the one the method does not use too (a NaN is a mistake)
+        validation.real("tol", self.tol, sections.MIN_TOL, sections.MAX_TOL)
+        validation.real("dt", self.dt, 0.0, lo_open=True)
         for name, v in (("crossings-per-chunk", chunk), ("max-crossings", max_crossings)):
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
-                raise ParameterError(f"{name} must be an integer >= 1, got {v!r}")
+            validation.fits_in_memory(name, v, sections.ROW_BYTES, "a crossing row per orbit", lo=1)
         self.chunk = int(chunk)
         self.max_crossings = int(max_crossings)
         self.label = str(label)
