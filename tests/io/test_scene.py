@@ -208,7 +208,8 @@ def test_missing_name_and_non_string_name_raise():
 def test_unknown_key_message_lists_the_allowed_keys():
     with pytest.raises(SceneError) as ei:
         parse_scene(BASE + "[seeds]\nnn = 3\n")
-    assert str(ei.value) == "scene: unknown key 'seeds.nn' (allowed: kind, n, margin, seed, lines, points)"
+    assert str(ei.value) == ("scene: unknown key 'seeds.nn' (did you mean 'n'?) "
+                             "(allowed: kind, n, margin, seed, lines, points)")
 
 
 def test_range_message_names_range_and_value():

@@ -34,10 +34,11 @@ __all__ = ["MAX_CONTINUATION_STEPS", "MAX_JOBS", "MAX_MAGNITUDE", "MAX_MEMORY_FR
            "human_bytes", "input_file", "integer", "magnitude", "output_path", "packed_params", "physical_memory",
            "real", "threads", "with_value"]
 
-#: largest |value| of a model parameter, the energy h or a start coordinate.  The equations are
-#: written for parameters of order one (Figure 4: 0.5 to 2); up to 1e8 every method integrates
-#: (tests/test_stress.py runs h = 1e6), while at 1e12 to 1e30 the Taylor coefficients overflow at
-#: t = 0 or the kernels fail, and the time scale ~1/|lam| leaves any step budget.
+#: largest absolute value of a model parameter, the energy h or a start coordinate.  The equations are
+#: written for parameters of order one (Figure 4: 0.5 to 2): every method integrates h = 1e6
+#: (tests/test_stress.py) and single orbits still integrate at 1e8, slowly (the time scale shrinks
+#: as the parameters grow); from 1e12 to 1e30 the Taylor coefficients overflow at t = 0 or a
+#: kernel fails (lyapunov at lam = 1e12).
 MAX_MAGNITUDE = 1e8
 #: an array sized by a user's count may take at most this fraction of the machine's memory
 #: (:func:`fits_in_memory`; :func:`explorer.analysis.sections.crossings` uses it too)
