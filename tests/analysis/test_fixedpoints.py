@@ -121,7 +121,7 @@ def test_fixedpoint_cli_json_and_continuation(capsys):
 @pytest.mark.parametrize("args,fragment", [
     (["--guess", "9,9"], "outside the allowed region"),
     (["--guess", "a,b"], "--guess must be two numbers"),
-    (["--continue", "nu", "0", "1", "0.5"], "continuation parameter must be one of"),
+    (["--continue", "nu", "0", "1", "0.5"], "--continue PARAM must be one of"),
     (["--continue", "mu", "0", "1", "-0.5"], "STEP of the sign"),
     (["--b", "-1"], "b must be > 0"),
 ])

@@ -181,7 +181,7 @@ def continuation_steps(label: str, start, stop, step) -> tuple:
     STOP - START, at most :data:`MAX_CONTINUATION_STEPS` steps."""
     start, stop, step = (real(f"{label} {n}", v) for n, v in (("START", start), ("STOP", stop), ("STEP", step)))
     if step == 0.0 or (stop - start) * step < 0.0:
-        raise ParameterError(f"{label} needs a nonzero STEP with the sign of STOP - START, got START {start:g}, "
+        raise ParameterError(f"{label} needs a nonzero STEP of the sign of STOP - START, got START {start:g}, "
                              f"STOP {stop:g}, STEP {step:g}")
     n = abs(stop - start) / abs(step)
     if not n <= MAX_CONTINUATION_STEPS:
