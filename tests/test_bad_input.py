@@ -69,7 +69,7 @@ REAL_OPTIONS = {
 }
 #: options taking an integer: (option, values out of range)
 INT_OPTIONS = {
-    "orbit": (("--crossings", ("0", "-1")), ("--max-steps", ("0",)), ("--block", ("0", BIG))),
+    "orbit": (("--crossings", ("0", "-1")), ("--max-steps", ("0",)), ("--block", ("0", "-1"))),
     "lyapunov": (("--history", ("-1", BIG)),),
     "periodic": (("--period", ("0", BIG)), ("--grid", ("1", "-1", BIG)), ("--max-guesses", ("0",))),
     "rotation": (("--n", ("1", BIG)), ("--iterates", ("9", BIG))),
@@ -109,6 +109,7 @@ def _cases():
                             ("unknown_parameter", ["bogus", "0", "1", "0.1"]), ("empty", ["", "", "", ""])):
             rows.append((f"{cmd}--continue={label}", BASE[cmd] + ["--continue"] + cont, "--continue"))
     rows += [
+        ("orbit--block=huge_with_huge_crossings", BASE["orbit"] + [f"--crossings={BIG}", f"--block={BIG}"], "--block"),
         ("orbit--method=empty", BASE["orbit"] + ["--method="], "method"),
         ("orbit--method=rk4", BASE["orbit"] + ["--method=rk4"], "method"),
         ("orbit--direction=empty", BASE["orbit"] + ["--direction="], "direction"),

@@ -313,8 +313,9 @@ def cmd_orbit(args) -> int:
             raise model.ParameterError(f"{name} must be finite, got {v!r}")
     from explorer.analysis.sections import ROW_BYTES
 
-    block = validation.fits_in_memory("--block", DEFAULT_BLOCK if args.block is None else args.block, ROW_BYTES,
-                                      "a crossing row of 40 bytes", lo=1)
+    block = validation.integer("--block", DEFAULT_BLOCK if args.block is None else args.block, 1)
+    # a block holds min(block, crossings) rows (sections.iter_crossings)
+    validation.fits_in_memory("--block", min(block, max(args.crossings, 1)), ROW_BYTES, "crossing rows of 40 bytes")
     if args.out is not None:
         validation.output_path("--out", args.out)
     kw = dict(method=args.method, tol=args.tol, dt=args.dt, tmax=args.tmax, max_steps=args.max_steps,
