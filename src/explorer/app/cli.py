@@ -444,6 +444,15 @@ def _pair(text, name):
     return a, b
 
 
+def _print_bifurcations(br, name) -> None:
+    """The stability changes and touches of a continued branch (fixed point or periodic orbit:
+    one detector, one report)."""
+    print("stability changes: " + (", ".join(f"{b['type']} at {name} = {b['value']:.10g}"
+                                             for b in br.bifurcations) or "none in range"))
+    if br.stopped:
+        print(f"branch stopped: {br.stopped}")
+
+
 def cmd_fixedpoint(args) -> int:
     from explorer.analysis import fixedpoints
 
@@ -460,13 +469,13 @@ def cmd_fixedpoint(args) -> int:
         br = fixedpoints.continue_branch(params, args.h, name, start, stop, step, guess, tol=args.tol)
         rows = [dict(fp.as_dict(), **{name: float(v)}) for v, fp in zip(br.values, br.points)]
         if args.json:
-            print(json.dumps({"parameter": name, "branch": rows, "bifurcations": br.bifurcations}))
+            print(json.dumps({"parameter": name, "branch": rows, "bifurcations": br.bifurcations,
+                              "stopped": br.stopped}))
         else:
             print(f"{name},p1,p2,trace,stable")
             for r in rows:
                 print(f"{r[name]!r},{r['p1']!r},{r['p2']!r},{r['trace']!r},{r['stable']}")
-            print("bifurcations (|trace| = 2) at " + name + " = " +
-                  (", ".join(f"{b:.10g}" for b in br.bifurcations) or "none in range"))
+            _print_bifurcations(br, name)
         return 0
     fp = fixedpoints.find_fixed_point(params, args.h, guess, tol=args.tol)
     out = dict(fp.as_dict(), params=params.as_dict(), h=args.h)
@@ -482,7 +491,7 @@ def cmd_fixedpoint(args) -> int:
 def _orbit_line(o) -> str:
     pts = " ".join(f"({p[0]:.10g},{p[1]:.10g})" for p in o.points)
     return (f"K={o.period} {o.kind} trace={o.trace:.10g} residue={o.residue:.6g} "
-            f"symmetric={o.symmetric} points={pts}")
+            f"symmetric={o.symmetric}{' degenerate' if o.degenerate else ''} points={pts}")
 
 
 def _section_map_args(args):
@@ -526,10 +535,7 @@ def cmd_periodic(args) -> int:
             for r in rows:
                 print(f"{r[name]!r},{r['points'][0][0]!r},{r['points'][0][1]!r},{r['trace']!r},{r['residue']!r},"
                       f"{r['stable']}")
-            print("stability changes: " + (", ".join(f"{b['type']} at {name} = {b['value']:.10g}"
-                                                     for b in br.bifurcations) or "none in range"))
-            if br.stopped:
-                print(f"branch stopped: {br.stopped}")
+            _print_bifurcations(br, name)
         return 0
     if args.search:
         if args.grid < 2:
