@@ -8,7 +8,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import re
 import sys
 
@@ -39,7 +38,6 @@ EXAMPLES = {
     "melnikov": "python -m explorer melnikov --splitting --mus 1e-4,1e-3 --json",
     "trajectory": "python -m explorer trajectory --p1 0.5 --M 2 --mu 0.5 -T 300 --out figures/trajectory",
     "figures": "python -m explorer figures --only figure4 --quick",
-    "native": "python -m explorer native --build",
 }
 
 
@@ -281,13 +279,6 @@ def build_parser() -> argparse.ArgumentParser:
                     help="W4 results JSON for work_precision [benchmarks/results_w4.json]")
     fg.add_argument("--quiet", action="store_true", help="no progress bar")
     # ---- end figures ----------------------------------------------------------------------------
-    nt = sub.add_parser("native", help="the native library that runs lone Taylor orbits without numba",
-                        description="Where the native library of lone Taylor orbits (explorer.integrate.native) "
-                        "is kept, whether it is built for this source, numba and CPU, and its self-test "
-                        "against numba. `explorer orbit` builds it when it is missing; --build builds it now "
-                        "(about 10 s). EXPLORER_NATIVE=0 switches it off.")
-    nt.add_argument("--build", action="store_true", help="build it now (again, if it exists)")
-    nt.add_argument("--json", action="store_true", help="print JSON")
     for name, cmd in sub.choices.items():
         cmd.epilog = f"example:\n  {EXAMPLES[name]}"
     return parser
@@ -316,39 +307,15 @@ def cmd_orbit(args) -> int:
     kw = dict(method=args.method, tol=args.tol, dt=args.dt, tmax=args.tmax, max_steps=args.max_steps,
               phi0=args.phi0, direction=_direction(args.direction))
     from explorer.app import orbit
-    from explorer.integrate import native
 
     orbit.check_request(params, args.p1, args.p2, args.h, args.crossings, **kw)
-    builder = _start_native_build(args.method)
-    try:
-        rep = _run_orbit(args, params, block, kw)
-    except BaseException:
-        if builder is not None:
-            builder.terminate()
-            native.finish_build(builder)
-        raise
-    if builder is not None and native.finish_build(builder) != 0:
-        print("explorer: note: the native library for lone orbits could not be built (see python -m explorer "
-              "native); orbits run on numba", file=sys.stderr)
+    rep = _run_orbit(args, params, block, kw)
     settings = rep.settings or {}
     setting = f"--dt {settings['dt']:g}" if "dt" in settings else f"--tol {args.tol:g}"
     warning = energy_warning(rep.max_dh, args.h, setting)
     if warning:
         print(f"explorer: warning: {warning}", file=sys.stderr)
     return 0
-
-
-def _start_native_build(method):
-    """A lone Taylor orbit runs on the native library (explorer.integrate.native) once it is built:
-    when it is missing, build it now, in another process, while this run goes on numba."""
-    from explorer.integrate import native
-
-    if method != "taylor" or not native.missing():
-        return None
-    try:
-        return native.build(wait=False)
-    except OSError:       # e.g. no writable cache directory: stay on numba
-        return None
 
 
 def _run_orbit(args, params, block, kw):
@@ -700,38 +667,7 @@ def cmd_figures(args) -> int:
 
 
 # ---- end figures ----------------------------------------------------------------------------
-def cmd_native(args) -> int:
-    from explorer.integrate import native
-
-    status = 0
-    if args.build:
-        if not native.enabled():
-            raise model.ParameterError("the native library is switched off here (EXPLORER_NATIVE=0, or not Linux)")
-        for path in native.paths():
-            if os.path.exists(path):
-                os.remove(path)
-        status = native.build()
-    d = native.describe()
-    desc = d["description"] or {}
-    if args.json:
-        print(json.dumps(d, sort_keys=True))
-        return status
-    if not d["enabled"]:
-        state = "switched off (EXPLORER_NATIVE=0, or not Linux): orbits run on numba"
-    elif d["built"]:
-        test = desc.get("self_test", {})
-        state = (f"built {desc.get('built', '?')} in {desc.get('build_seconds', '?')} s; self-test against numba: "
-                 f"{'identical' if test.get('identical') else 'not run'} ({test.get('cases', 0)} cases)")
-    elif desc.get("error"):
-        state = f"build failed: {desc['error']} (orbits run on numba; --build tries again)"
-    else:
-        state = "not built yet (the next `explorer orbit` builds it, or run with --build)"
-    print(f"native library: {d['library']}\nkey: {d['key'][:16]} (source, numba, llvmlite, python, CPU)\n"
-          f"status: {state}")
-    return status
-
-
-COMMANDS = {"native": cmd_native, "figures": cmd_figures, "trajectory": cmd_trajectory, "orbit": cmd_orbit,
+COMMANDS = {"figures": cmd_figures, "trajectory": cmd_trajectory, "orbit": cmd_orbit,
             "sweep": cmd_sweep, "lyapunov": cmd_lyapunov, "fixedpoint": cmd_fixedpoint,
             "melnikov": cmd_melnikov, "periodic": cmd_periodic, "rotation": cmd_rotation}
 

@@ -22,7 +22,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from explorer.integrate import native
 from explorer.kernels import splitting
 from explorer.kernels.taylor_order import order_for_tolerance
 from explorer.model import validation
@@ -92,12 +91,6 @@ def run_crossings(prep: Prepared, Y0, P, cphi, sphi, direction, tmax, max_steps,
     # the method it uses (start-up, benchmarks/bench_startup.py)
     kind = prep.method.kind
     if kind == "taylor":
-        lib = native.active() if Y0.shape[0] == 1 else None
-        if lib is not None:
-            # a lone orbit in a process without numba: the same worker, compiled ahead of time
-            lib.lane_worker(1, np.zeros(1, np.int64), Y0, P, cphi, sphi, int(direction), float(tmax), prep.order,
-                            int(max_steps), carry, limits, data, count, status, final, info)
-            return
         from explorer.integrate import lanes
 
         # the SIMD lane driver, bit for bit drivers.run_taylor_batch (the scalar reference)
@@ -117,11 +110,7 @@ def run_crossings(prep: Prepared, Y0, P, cphi, sphi, direction, tmax, max_steps,
 
 def start_carry(Y0, P, cphi, sphi, carry):
     """The carry of a run's first block (:func:`explorer.integrate.drivers.start_carry`: H0 and
-    sin(phi - phi0) of each start state), from the native library when this process uses it."""
-    lib = native.active()
-    if lib is not None:
-        lib.start_carry(Y0, P, cphi, sphi, carry)
-        return
+    sin(phi - phi0) of each start state)."""
     from explorer.integrate import drivers
 
     drivers.start_carry(Y0, P, cphi, sphi, carry)
