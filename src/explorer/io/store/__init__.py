@@ -73,20 +73,24 @@ from explorer.io.store.atomic import (
                                       clean_stale_temporaries,
                                       write_bytes_atomic,
 )
-from explorer.io.store.commit import RowSource, commit_panel, provenance, update_panel_attrs
+from explorer.io.store.commit import RowSource, commit_panel, provenance, update_panel, update_panel_attrs
 from explorer.io.store.format import (
                                       COLUMNS,
                                       COMPRESS_ROWS,
                                       DATASETS,
                                       FORMAT,
                                       FORMAT_VERSION,
+                                      INDICATOR_DATASETS,
                                       OPTIONAL_DATASETS,
+                                      PRODUCT_HASH_ATTRS,
                                       STATUS_NAMES,
                                       PanelData,
                                       StoreData,
                                       StoreError,
                                       iter_rows,
                                       panel_hashes,
+                                      panel_product_hashes,
+                                      read_panel_datasets,
                                       read_store,
                                       settings_hash,
 )
@@ -101,10 +105,13 @@ __all__ = [
     "StoreData",
     "commit_panel",
     "RowSource",
+    "update_panel",
     "update_panel_attrs",
     "read_store",
     "iter_rows",
     "panel_hashes",
+    "panel_product_hashes",
+    "read_panel_datasets",
     "clean_stale_temporaries",
     "provenance",
     "settings_hash",
@@ -112,5 +119,7 @@ __all__ = [
     "atomic_path",
     "DATASETS",
     "OPTIONAL_DATASETS",
+    "INDICATOR_DATASETS",
+    "PRODUCT_HASH_ATTRS",
     "STATUS_NAMES",
 ]
