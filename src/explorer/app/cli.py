@@ -464,7 +464,7 @@ def cmd_fixedpoint(args) -> int:
         else:
             print(f"{name},p1,p2,trace,stable")
             for r in rows:
-                print(f"{r[name]!r},{r['p1']!r},{r['p2']!r},{r['trace']!r},{r['stable']}")
+                print(f"{r[name]:.10g},{r['p1']!r},{r['p2']!r},{r['trace']!r},{r['stable']}")
             print("bifurcations (|trace| = 2) at " + name + " = " +
                   (", ".join(f"{b:.10g}" for b in br.bifurcations) or "none in range"))
         return 0
@@ -524,7 +524,7 @@ def cmd_periodic(args) -> int:
         else:
             print(f"{name},p1,p2,trace,residue,stable")
             for r in rows:
-                print(f"{r[name]!r},{r['points'][0][0]!r},{r['points'][0][1]!r},{r['trace']!r},{r['residue']!r},"
+                print(f"{r[name]:.10g},{r['points'][0][0]!r},{r['points'][0][1]!r},{r['trace']!r},{r['residue']!r},"
                       f"{r['stable']}")
             print("stability changes: " + (", ".join(f"{b['type']} at {name} = {b['value']:.10g}"
                                                      for b in br.bifurcations) or "none in range"))
