@@ -165,3 +165,12 @@ def test_continuation_prints_the_parameter_without_binary_round_off(command, cap
     assert cli.main(command + ["--guess", "0,0", "--continue", "mu", "0", "0.3", "0.1"]) == 0
     rows = capsys.readouterr().out.splitlines()[1:5]
     assert [r.split(",")[0] for r in rows] == ["0", "0.1", "0.2", "0.3"]
+
+
+def test_every_command_and_scene_table_has_the_same_default_splitting_step():
+    from explorer.io.scene import IntegrationSpec, LyapunovSpec
+
+    parser = cli.build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command").choices
+    defaults = {name: sub[name].get_default("dt") for name in ("orbit", "lyapunov")}
+    assert defaults["orbit"] == defaults["lyapunov"] == IntegrationSpec().dt == LyapunovSpec().dt

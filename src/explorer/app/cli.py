@@ -158,7 +158,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "from a second deviation vector (null for other methods).")
     _add_start_args(ly)
     ly.add_argument("--time", "-T", type=float, default=1000.0, help="integration time T [%(default)s]")
-    _add_method_args(ly, 1e-13, 0.02)
+    _add_method_args(ly, 1e-13, DEFAULT_DT)
     ly.add_argument("--history", type=int, default=12, help="history points (log-spaced in time) [%(default)s]")
     _add_model_args(ly, model.FIGURE4, json="print JSON")
 

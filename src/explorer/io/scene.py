@@ -366,7 +366,7 @@ class LyapunovSpec:
     time: float = 1000.0
     method: str = "taylor"
     tol: float = 1e-12
-    dt: float = 0.02
+    dt: float = sections.DEFAULT_DT
     threshold: float = 4.0
     #: what to compute ("sali"/"gali2" add a second deviation vector; Taylor method)
     indicators: tuple = ("mlce", "megno", "fli")
