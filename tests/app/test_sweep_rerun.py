@@ -124,13 +124,16 @@ def test_the_map_grid_seeds_the_indicators_and_the_sections_keep_the_scene_seeds
     assert run(tmp_path, text, out).computed == ()
 
 
-def test_seeds_outside_the_allowed_region_are_counted_printed_and_stored(tmp_path, capsys):
+@pytest.mark.parametrize("compute,orbits", [("", "orbits 1,"),
+                                            ("[compute]\nsections = false\nlyapunov = true\n[lyapunov]\ntime = 20.0\n",
+                                             "chaos indicators of 1 orbits")])
+def test_seeds_outside_the_allowed_region_are_counted_printed_and_stored(tmp_path, capsys, compute, orbits):
     text = ('name = "pts"\n[seeds]\nkind = "points"\npoints = [[5.0, 0.0], [0.0, 0.0]]\n'
-            "[integration]\ncrossings = 3\n")
+            "[integration]\ncrossings = 3\n" + compute)
     out = tmp_path / "p.h5"
     code = cli.main(["sweep", str(scene_file(tmp_path, text)), "--out", str(out), "--no-figure", "--quiet"])
     stdout = capsys.readouterr().out
-    assert code == 0 and "orbits 1," in stdout
+    assert code == 0 and orbits in stdout
     assert "seeds outside the allowed region (dropped, not integrated): 1" in stdout
     assert store.read_store(out).panels[0].attrs["seeds_dropped"] == 1
 

@@ -179,7 +179,7 @@ def format_report(r: SweepReport) -> str:
              f"{r.n_panels - len(r.computed)} already stored) -> {r.out}"]
     if len(r.products) > 1 and r.computed:
         lines.append("  computed: " + "; ".join(
-            f"{k} of panels {', '.join(map(str, v))}" if v else f"{k} of no panel" for k, v in r.products.items()))
+            f"{k} of panels {', '.join(map(str, v))}" if v else f"{k} already stored" for k, v in r.products.items()))
     if r.products.get("sections"):
         st = ", ".join(f"{k}: {v}" for k, v in sorted(r.statuses.items()))
         lines.append(f"  orbits {r.orbits}, crossings {r.crossings}, "
@@ -275,7 +275,7 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
     file_attrs = {"scene_name": scene.name, "scene": scene.text, "provenance": prov}
     integ, ly = scene.integration, scene.lyapunov
     stats: dict[str, Any] = {"orbits": 0, "crossings": 0, "stopped": 0, "statuses": {}, "max_dh": 0.0, "warning": None,
-                             "fractions": [], "dropped": 0, "ind_orbits": 0, "ind_dh": 0.0, "ind_warning": None,
+                             "fractions": [], "dropped": {}, "ind_orbits": 0, "ind_dh": 0.0, "ind_warning": None,
                              "ind_statuses": {}}
     setting = (f"tol = {integ.tol:g}" if integ.method in ADAPTIVE_METHODS
                else f"dt = {integ.dt:g}") + " ([integration])"
@@ -335,7 +335,7 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
             dh = max_energy_error(arrays["data"])
         stats["orbits"] += len(arrays["count"])
         stats["crossings"] += int(arrays["count"].sum())
-        stats["dropped"] += int(panel.dropped)
+        stats["dropped"][i] = max(stats["dropped"].get(i, 0), int(panel.dropped))
         stats["max_dh"] = max(stats["max_dh"], dh)
         stats["warning"] = stats["warning"] or energy_warning(dh, panel.h, setting)  # each panel its own h
         stopped = (arrays["status"] == STATUS_TMAX) & (arrays["count"] < integ.crossings)
@@ -345,6 +345,7 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
     def on_indicators(panel, arrays):
         i = panel.index
         payload, attrs = indicators_part(panel, i, arrays)
+        stats["dropped"][i] = max(stats["dropped"].get(i, 0), int(panel.dropped))   # 0 for a map grid
         if alone:   # the panel is its seeds and their indicators (no crossings)
             attrs.update(panel_attrs(panel, i, True), phi0=float(integ.phi0), direction=int(integ.direction),
                          wall_time=arrays["wall_time"], seeds_dropped=int(panel.dropped))
@@ -352,7 +353,6 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
                            final=arrays["final"], info=arrays["info"], data=arrays["data"])
             _separatrices(scene, i, payload, attrs)
             store.commit_panel(out, i, payload, attrs, file_attrs)
-            stats["dropped"] += int(panel.dropped)
         else:       # beside the stored sections of the panel, which stay as they are
             attrs.update(panel_attrs(panel, i, True))
             stale = [k for k in store.INDICATOR_DATASETS + INDICATOR_ATTRS if k not in payload and k not in attrs]
@@ -375,7 +375,7 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
                        statuses=dict(stats["statuses"]), max_dh=stats["max_dh"], warning=stats["warning"],
                        fractions=tuple(stats["fractions"]), threshold=float(ly.threshold),
                        figure=figure_paths, wall_time=time.perf_counter() - t_start, restamped=restamped,
-                       dropped=stats["dropped"], products={k: tuple(v) for k, v in todo.items()},
+                       dropped=sum(stats["dropped"].values()), products={k: tuple(v) for k, v in todo.items()},
                        indicator_orbits=stats["ind_orbits"], indicator_dh=stats["ind_dh"],
                        indicator_warning=stats["ind_warning"], indicator_statuses=dict(stats["ind_statuses"]))
 
