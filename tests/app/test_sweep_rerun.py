@@ -177,3 +177,23 @@ def test_every_command_and_scene_table_has_the_same_default_splitting_step():
     sub = next(a for a in parser._actions if a.dest == "command").choices
     defaults = {name: sub[name].get_default("dt") for name in ("orbit", "lyapunov")}
     assert defaults["orbit"] == defaults["lyapunov"] == IntegrationSpec().dt == LyapunovSpec().dt
+
+
+def test_streamed_sections_keep_the_stored_indicators_and_equal_unstreamed_ones(tmp_path, monkeypatch):
+    """New crossings of a streamed panel (rows written block by block) keep the stored indicators."""
+    from explorer.analysis import sweep
+
+    text = BOTH.replace("crossings = 6", "crossings = 300").replace("tmax = 200.0", "tmax = 3000.0")
+    plain, streamed = tmp_path / "plain.h5", tmp_path / "streamed.h5"
+    run(tmp_path, text.replace("crossings = 300", "crossings = 600"), plain)
+    run(tmp_path, text, streamed)
+    before = panel_arrays(streamed, ("megno",))
+    monkeypatch.setattr(sweep, "STREAM_BYTES", 300 * 16 * 40)   # 600 crossings: blocks of 300
+    rep = run(tmp_path, text.replace("crossings = 300", "crossings = 600"), streamed)
+    assert rep.products == {"sections": (0, 1), "indicators": ()}
+    data, ref = store.read_store(streamed), store.read_store(plain)
+    for i in (0, 1):
+        assert data.panels[i].attrs["block"] < 600                      # it was streamed
+        np.testing.assert_array_equal(data.panels[i].crossings, ref.panels[i].crossings)
+        np.testing.assert_array_equal(data.panels[i].extra["megno"], before[i]["megno"])
+        np.testing.assert_array_equal(data.panels[i].extra["megno"], ref.panels[i].extra["megno"])
