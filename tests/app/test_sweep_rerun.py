@@ -197,3 +197,24 @@ def test_streamed_sections_keep_the_stored_indicators_and_equal_unstreamed_ones(
         np.testing.assert_array_equal(data.panels[i].crossings, ref.panels[i].crossings)
         np.testing.assert_array_equal(data.panels[i].extra["megno"], before[i]["megno"])
         np.testing.assert_array_equal(data.panels[i].extra["megno"], ref.panels[i].extra["megno"])
+
+
+@pytest.mark.parametrize("old,new,changed", [
+    ("time = 60.0", "time = 61.0", {"indicators"}),
+    ("time = 60.0", "time = 60.0\nmap_resolution = 20", {"indicators"}),
+    ("time = 60.0", "time = 60.0\nthreshold = 3.0", set()),
+    ("crossings = 6", "crossings = 7", {"sections"}),
+    ("tol = 1e-12", "tol = 1e-11", {"sections"}),
+    ("n = 12", "n = 13", {"sections", "indicators"}),
+    ("values = [0.1, 0.6]", "values = [0.2, 0.6]", {"sections", "indicators"}),
+    ("[lyapunov]", "separatrices = true\n[lyapunov]", {"sections"}),
+    ("time = 60.0", "time = 60.0\n[figure]\nmarker_size = 2.0\ndpi = 100", set()),
+])
+def test_each_product_hash_changes_exactly_with_its_own_settings(old, new, changed):
+    from explorer.io.scene import parse_scene
+
+    a, b = parse_scene(BOTH), parse_scene(BOTH.replace(old, new))
+    differ = {k for k, v in a.product_hashes(0).items() if b.product_hashes(0)[k] != v}
+    assert differ == changed
+    figure_changed = a.figure_settings() != b.figure_settings()
+    assert figure_changed == ("marker_size" in new or "threshold" in new)
