@@ -218,3 +218,32 @@ def test_each_product_hash_changes_exactly_with_its_own_settings(old, new, chang
     assert differ == changed
     figure_changed = a.figure_settings() != b.figure_settings()
     assert figure_changed == ("marker_size" in new or "threshold" in new)
+
+
+def test_update_panel_replaces_the_indicators_keeps_the_crossings_and_does_not_grow(tmp_path):
+    path = tmp_path / "s.h5"
+    rng = np.random.default_rng(1)
+    n, k = 30, 400
+    data = rng.normal(size=(n, k, 5))
+    arrays = {"seeds": rng.normal(size=(n, 2)), "y0": rng.normal(size=(n, 5)), "count": np.full(n, k),
+              "status": np.zeros(n, np.int8), "final": rng.normal(size=(n, 5)), "info": rng.normal(size=(n, 3)),
+              "data": data, "megno": np.full(n, 2.0), "sali": np.ones(n)}
+    store.commit_panel(path, 0, arrays, {"settings": {"a": 1}, "chaotic_fraction": 0.5}, {"scene_name": "t"})
+    rows = store.read_store(path).panels[0].crossings.copy()
+    sizes = []
+    for j in range(3):
+        grid = rng.normal(size=(50, 2))
+        store.update_panel(path, 0, {"megno": np.full(50, 3.0 + j), "lyapunov_seeds": grid},
+                           {"chaotic_fraction": 0.1 * j}, remove=("sali",))
+        sizes.append(path.stat().st_size)
+        pd = store.read_store(path).panels[0]
+        np.testing.assert_array_equal(pd.crossings, rows)
+        assert pd.extra["megno"].shape == (50,) and pd.extra["megno"][0] == 3.0 + j and "sali" not in pd.extra
+        assert pd.attrs["chaotic_fraction"] == 0.1 * j and pd.attrs["settings"] == '{"a":1}' and pd.complete
+    assert sizes[2] <= sizes[0] * 1.01
+    before = path.read_bytes()
+    with pytest.raises(ValueError, match=r"megno must have shape \(50,\)"):
+        store.update_panel(path, 0, {"megno": np.ones(30)}, {})          # 30 rows for the 50 kept grid seeds
+    with pytest.raises(ValueError, match="replaces only"):
+        store.update_panel(path, 0, {"crossings": rows}, {})
+    assert path.read_bytes() == before

@@ -353,7 +353,9 @@ def update_panel(path, index: int, arrays: dict, attrs: dict, *, remove=()) -> N
     with _open_store(path) as f:
         if "panels" not in f or name not in f["panels"]:
             raise StoreError(f"{path}: no panel {index} to update")
-        n = f["panels"][name]["count"].shape[0]
+        grp = f["panels"][name]
+        kept_seeds = "lyapunov_seeds" in grp and "lyapunov_seeds" not in remove
+        n = grp["lyapunov_seeds" if kept_seeds else "count"].shape[0]   # rows of the indicator datasets
     prepared = _indicator_arrays(arrays, n)
     with atomic_path(path) as tmp:
         _copy_without_panel(path, tmp, index)
