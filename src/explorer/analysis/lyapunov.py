@@ -30,11 +30,11 @@ import numpy as np
 from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
 from explorer.integrate import methods
+from explorer.integrate.methods import DEFAULT_DT
 from explorer.kernels import STATUS_NAMES, Status
 from explorer.model import ParameterError, validation
 
 DEFAULT_TIME = 1000.0
-DEFAULT_DT = 0.02
 #: the indicators :func:`indicators` can compute (``which``)
 INDICATOR_NAMES = ("mlce", "megno", "fli", "sali", "gali2")
 #: computed unless ``which`` says otherwise (one deviation vector)

@@ -156,7 +156,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "from a second deviation vector (null for other methods).")
     _add_start_args(ly)
     ly.add_argument("--time", "-T", type=float, default=1000.0, help="integration time T [%(default)s]")
-    _add_method_args(ly, 1e-13, 0.02)
+    _add_method_args(ly, 1e-13, DEFAULT_DT)
     ly.add_argument("--history", type=int, default=12, help="history points (log-spaced in time) [%(default)s]")
     _add_model_args(ly, model.FIGURE4, json="print JSON")
 
@@ -441,7 +441,7 @@ def cmd_fixedpoint(args) -> int:
         else:
             print(f"{name},p1,p2,trace,stable")
             for r in rows:
-                print(f"{r[name]!r},{r['p1']!r},{r['p2']!r},{r['trace']!r},{r['stable']}")
+                print(f"{r[name]:.10g},{r['p1']!r},{r['p2']!r},{r['trace']!r},{r['stable']}")
             _print_bifurcations(br, name)
         return 0
     fp = fixedpoints.find_fixed_point(params, args.h, guess, tol=args.tol)
@@ -500,7 +500,7 @@ def cmd_periodic(args) -> int:
         else:
             print(f"{name},p1,p2,trace,residue,stable")
             for r in rows:
-                print(f"{r[name]!r},{r['points'][0][0]!r},{r['points'][0][1]!r},{r['trace']!r},{r['residue']!r},"
+                print(f"{r[name]:.10g},{r['points'][0][0]!r},{r['points'][0][1]!r},{r['trace']!r},{r['residue']!r},"
                       f"{r['stable']}")
             _print_bifurcations(br, name)
         return 0

@@ -30,6 +30,9 @@ from explorer.model import validation
 #: round-off)
 MIN_TOL = 1e-16
 MAX_TOL = 1e-2
+#: the step of the splitting methods when none is given: sections (orbit, sweep) and chaos
+#: indicators (lyapunov, [lyapunov] dt) alike, one default for every command
+DEFAULT_DT = 0.05
 
 
 @dataclass(frozen=True)

@@ -284,4 +284,12 @@ def describe_region(params, h, phi0=math.pi) -> str:
     if e is None:
         return "none (the region is empty at this energy)"
     c1, c2, r1, r2 = e
-    return f"((p1 - {c1:.6g})/{r1:.6g})^2 + ((p2 - {c2:.6g})/{r2:.6g})^2 <= 1"
+    return f"({_shifted('p1', c1)}/{r1:.6g})^2 + ({_shifted('p2', c2)}/{r2:.6g})^2 <= 1"
+
+
+def _shifted(name: str, c: float) -> str:
+    """``name - c`` with its sign written once: ``(p1 + 0.1)`` for c = -0.1, ``p2`` for c = 0 or -0."""
+    text = f"{abs(c):.6g}"
+    if float(text) == 0.0:
+        return name
+    return f"({name} {'+' if c < 0 else '-'} {text})"
