@@ -51,3 +51,44 @@ def test_scenes_accept_exactly_the_registered_methods():
         assert scene.IntegrationSpec(method=name).method == name
     with pytest.raises(model.ParameterError, match="integration.method"):
         scene.IntegrationSpec(method="rk4")
+
+
+# ---------------------------------------------------------------- a fixed step that does not resolve the motion
+#: a body spinning at M = 1e150 (dphi/dt = 5e149) and at M = 1e4, with an ordinary orbit of the Figure 4 scene
+SPINNING = np.array([[0.1, -0.2, 1e150, 0.6, 0.8], [0.1, -0.2, 1e4, 0.6, 0.8], [0.1, -0.2, 2.0, 0.6, 0.8]])
+
+
+@pytest.mark.parametrize("method", ["split2", "split4", "split8"])
+def test_a_fixed_step_that_does_not_resolve_the_motion_is_refused(method):
+    """At dt = 0.05 the split methods turned phi by 2.5e148 rad (M = 1e150) or 250 rad (M = 1e4)
+    per step and reported 5 crossings as "done" at times unrelated to the motion (0.54 against
+    the 6e-150 of the first crossing).  Now the run is refused, naming dt and the largest dt
+    that resolves the orbit, for the crossings and the chaos indicators alike; the adaptive
+    methods integrate the same orbits (M = 1e4: crossings every 2 pi b/M)."""
+    prm = model.FIGURE4.with_(mu=0.1)
+    for y0, orbit in ((SPINNING, "orbit 0"), (SPINNING[1:], "orbit 0"), (SPINNING[[2, 1]], "orbit 1")):
+        with pytest.raises(model.ParameterError, match=rf"dt = 0.05 does not resolve the motion of {orbit} "):
+            sections.crossings(prm, y0, 5, method=method, dt=0.05, tmax=100.0)
+        with pytest.raises(model.ParameterError, match="use dt <= "):
+            lyapunov.indicators(prm, y0, 10.0, method=method, dt=0.05)
+    fine = 0.5 * methods.MAX_STEP_PHASE / float(model.max_rate(prm, SPINNING[1]))
+    r = sections.crossings(prm, SPINNING[1:], 5, method=method, dt=fine, tmax=100.0)
+    assert list(r.count) == [5, 5]
+    t = sections.crossings(prm, SPINNING[1:], 5, method="taylor", tmax=100.0)
+    np.testing.assert_allclose(np.diff(t.orbit(0)[:, 0]), 2 * np.pi * prm.b / 1e4, rtol=1e-3)
+    np.testing.assert_allclose(r.orbit(0)[:, 0], t.orbit(0)[:, 0], rtol=1e-6)
+
+
+def test_max_rate_bounds_the_spin_along_the_whole_orbit():
+    """model.max_rate(y0) bounds |dphi/dt| = |M|/b over the orbit (an a-priori bound from the
+    energy R3), also for asymmetric parameters with a heavy body, and is the Figure-4 rate
+    max(|M|/b, lam/a2, ...) = 2 at mu = 0, h = 2 (so dt = 0.05 turns it by 0.1 rad per step)."""
+    prm = model.Params(a1=1.3, a2=0.6, b=1.7, lam=-0.8, chi=0.2, zeta=-0.15, mu=5.0, xi=0.3, eta=-0.25)
+    c1, c2, r1, r2 = model.allowed_ellipse(prm, 2.0)
+    y0 = model.section_state(prm, c1 + r1 * np.array([0.1, 0.5, -0.8]), c2 + r2 * np.array([0.0, 0.2, -0.1]), 2.0)
+    bound = model.max_rate(prm, y0)
+    r = sections.crossings(prm, y0, 30, method="taylor", tmax=300.0)
+    for i in range(3):
+        assert np.abs(r.orbit(i)[:, 3]).max() / prm.b <= bound[i]
+        assert np.abs(r.orbit(i)[:, 3]).max() / prm.b > 0.2 * bound[i]     # and not a vast over-estimate
+    assert model.max_rate(model.FIGURE4, model.section_state(model.FIGURE4, 0.3, 0.1, 2.0)) == pytest.approx(2.0)

@@ -228,6 +228,7 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
         set_num_threads(validation.threads(threads, max_threads()))
     try:
         prep = m.prepare(tol=tol, dt=dt)
+        methods.check_resolved(prep, P, Y0)
         settings.update(prep.settings)
         if m.kind == "taylor":
             # the SIMD lanes, bit for bit tangent.orbit_tangent_taylor (its scalar reference)

@@ -169,6 +169,7 @@ def _validated(params, y0, n_crossings, method, tol, dt, tmax, max_steps, phi0, 
     if threads is not None:
         threads = validation.threads(threads, max_threads())
     prep = m.prepare(tol=tol, dt=DEFAULT_DT if dt is None else dt)
+    methods.check_resolved(prep, P, Y0)
     g1, g2 = model.section_gamma(phi0)
     K = int(n_crossings)
     settings = {"method": method, "phi0": phi0, "direction": int(direction), "tmax": tmax,

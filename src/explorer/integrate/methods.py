@@ -18,10 +18,12 @@ kind              method                                                        
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from explorer import model
 from explorer.integrate import native
 from explorer.kernels import splitting
 from explorer.kernels.taylor_order import order_for_tolerance
@@ -31,6 +33,12 @@ from explorer.model import validation
 #: round-off)
 MIN_TOL = 1e-16
 MAX_TOL = 1e-2
+#: a fixed step may turn the fastest motion of the orbit (model.max_rate, a bound over the whole
+#: orbit) by at most this angle, half a turn (Nyquist): beyond it the step cannot tell the motion
+#: from its alias (phi may advance by more than pi per step, a crossing be skipped or invented)
+#: and the run is refused.  Below it the accuracy is judged by the energy error
+#: (explorer.analysis.sections.energy_warning)
+MAX_STEP_PHASE = math.pi
 
 
 @dataclass(frozen=True)
@@ -82,6 +90,25 @@ class Method:
         return Prepared(self, {"dt": dt, "order": self.order}, dt=dt,
                         flow_ids=np.ascontiguousarray(ids, dtype=np.int64),
                         fracs=np.ascontiguousarray(fracs, dtype=np.float64))
+
+
+def check_resolved(prep: Prepared, P, Y0) -> None:
+    """Refuse (ParameterError naming dt, the orbit and the largest dt allowed) a fixed-step run
+    whose step does not resolve the motion of some orbit of ``Y0``: dt * model.max_rate(y0) >
+    ``MAX_STEP_PHASE``.  The adaptive methods choose their own steps and pass."""
+    if prep.method.adaptive:
+        return
+    with np.errstate(over="ignore", invalid="ignore"):
+        phase = prep.dt * model.max_rate(P, Y0)
+    bad = np.flatnonzero(phase > MAX_STEP_PHASE)
+    if bad.size:
+        i = int(bad[np.argmax(phase[bad])])
+        rate = phase[i] / prep.dt
+        raise validation.ParameterError(
+            f"dt = {prep.dt:g} does not resolve the motion of orbit {i} ({prep.method.name}): its rates reach "
+            f"{rate:.3g} per unit time on its energy level (model.max_rate), dt x rate = {phase[i]:.3g} > "
+            f"{MAX_STEP_PHASE:.3g} (half a turn per step); use dt <= {MAX_STEP_PHASE / rate:.3g} or an "
+            "adaptive method (taylor, dop853)")
 
 
 def run_crossings(prep: Prepared, Y0, P, cphi, sphi, direction, tmax, max_steps, carry, limits, data, count,
