@@ -185,8 +185,9 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
     Returns
     -------
     Indicators
-        mLCE ``ln(|w(T)| / |w(0)|) / T``, mean MEGNO <Y> (Cincotta & Simó 2000: -> 2 on
-        quasi-periodic orbits, ~ mLCE T / 2 on chaotic ones), FLI (Froeschlé, Lega & Gonczi
+        mLCE ``ln(|w(T)| / |w(0)|) / T``, mean MEGNO <Y> (Cincotta & Simó 2000: -> 0 on
+        stable periodic orbits, -> 2 on quasi-periodic orbits, ~ mLCE T / 2 on chaotic ones;
+        docs/commands/lyapunov.md), FLI (Froeschlé, Lega & Gonczi
         1997), per orbit, with a status code each.
     """
     P = validation.packed_params(params)
