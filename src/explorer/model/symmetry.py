@@ -3,13 +3,12 @@
 Plain numpy on states ``y = (p1, p2, M, g1, g2)`` with ``(g1, g2) = (sin phi, cos phi)``
 (MODEL.md R3).  Derivation and consequences: docs/model.md, "Symmetries".
 
-=====  =============================================================  ===============================
-name   map (t the time)                                               a symmetry of R3 exactly when
-=====  =============================================================  ===============================
-G      (p1, p2, M, phi, t) -> (p1, -p2, M, -phi, -t)    (reversing)    zeta = 0 and mu xi = 0
-K      (p1, p2, M, phi, t) -> (-p1, p2, M, pi - phi, -t) (reversing)   chi = 0 and mu eta = 0
-S = GK (p1, p2, M, phi, t) -> (-p1, -p2, M, phi + pi, t)               chi = zeta = 0, mu xi = mu eta = 0
-=====  =============================================================  ===============================
+- G, the reflection: (p1, p2, M, phi, t) -> (p1, -p2, M, -phi, -t), reversing; a symmetry
+  exactly when zeta = 0 and mu xi = 0;
+- K, the half-turn reversor: (p1, p2, M, phi, t) -> (-p1, p2, M, pi - phi, -t), reversing;
+  exactly when chi = 0 and mu eta = 0;
+- S = G K, the half-turn: (p1, p2, M, phi, t) -> (-p1, -p2, M, phi + pi, t), time kept;
+  exactly when chi = zeta = 0 and mu xi = mu eta = 0.
 
 G is the reflection p2 -> -p2 of the section phi = pi (``explorer.analysis.periodic.reversor``).
 K, the half-turn reversor, maps the section phi = phi0 to phi = pi - phi0 (phi = pi to phi = 0)
