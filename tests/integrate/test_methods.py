@@ -7,7 +7,7 @@ from explorer import model
 from explorer.analysis import lyapunov, sections
 from explorer.integrate import methods
 from explorer.io import scene
-from explorer.kernels import splitting
+from explorer.kernels import STATUS_DONE, STATUS_UNRESOLVED, splitting
 
 
 def test_the_registry_holds_every_method_once_with_its_setting():
@@ -59,18 +59,27 @@ SPINNING = np.array([[0.1, -0.2, 1e150, 0.6, 0.8], [0.1, -0.2, 1e4, 0.6, 0.8], [
 
 
 @pytest.mark.parametrize("method", ["split2", "split4", "split8"])
-def test_a_fixed_step_that_does_not_resolve_the_motion_is_refused(method):
+def test_an_orbit_whose_motion_the_fixed_step_does_not_resolve_is_flagged_not_integrated(method):
     """At dt = 0.05 the split methods turned phi by 2.5e148 rad (M = 1e150) or 250 rad (M = 1e4)
     per step and reported 5 crossings as "done" at times unrelated to the motion (0.54 against
-    the 6e-150 of the first crossing).  Now the run is refused, naming dt and the largest dt
-    that resolves the orbit, for the crossings and the chaos indicators alike; the adaptive
-    methods integrate the same orbits (M = 1e4: crossings every 2 pi b/M)."""
+    the 6e-150 of the first crossing).  Now such an orbit (dt x model.max_rate > pi) is not
+    integrated: status UNRESOLVED, no crossing, no indicator, for the crossings (whole and
+    streamed) and the chaos indicators alike, and the other orbits of the batch give what they
+    give alone; a step that resolves it integrates it (M = 1e4: crossings every 2 pi b/M, as
+    Taylor finds them)."""
     prm = model.FIGURE4.with_(mu=0.1)
-    for y0, orbit in ((SPINNING, "orbit 0"), (SPINNING[1:], "orbit 0"), (SPINNING[[2, 1]], "orbit 1")):
-        with pytest.raises(model.ParameterError, match=rf"dt = 0.05 does not resolve the motion of {orbit} "):
-            sections.crossings(prm, y0, 5, method=method, dt=0.05, tmax=100.0)
-        with pytest.raises(model.ParameterError, match="use dt <= "):
-            lyapunov.indicators(prm, y0, 10.0, method=method, dt=0.05)
+    r = sections.crossings(prm, SPINNING, 5, method=method, dt=0.05, tmax=100.0)
+    assert list(r.status) == [STATUS_UNRESOLVED, STATUS_UNRESOLVED, STATUS_DONE]
+    assert list(r.count) == [0, 0, 5] and np.all(np.isnan(r.data[:2]))
+    assert "does not resolve the motion" in r.status_name(0)
+    np.testing.assert_array_equal(r.final[:2], SPINNING[:2])
+    alone = sections.crossings(prm, SPINNING[2:], 5, method=method, dt=0.05, tmax=100.0)
+    np.testing.assert_array_equal(r.data[2], alone.data[0])
+    blocks = list(sections.iter_crossings(prm, SPINNING, 5, block=2, method=method, dt=0.05, tmax=100.0))
+    np.testing.assert_array_equal(blocks[-1].state.status, r.status)
+    ind = lyapunov.indicators(prm, SPINNING, 10.0, method=method, dt=0.05)
+    assert list(ind.status) == [STATUS_UNRESOLVED, STATUS_UNRESOLVED, STATUS_DONE]
+    assert np.all(np.isnan(ind.mlce[:2])) and np.isfinite(ind.mlce[2])
     fine = 0.5 * methods.MAX_STEP_PHASE / float(model.max_rate(prm, SPINNING[1]))
     r = sections.crossings(prm, SPINNING[1:], 5, method=method, dt=fine, tmax=100.0)
     assert list(r.count) == [5, 5]

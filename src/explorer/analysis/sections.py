@@ -169,7 +169,6 @@ def _validated(params, y0, n_crossings, method, tol, dt, tmax, max_steps, phi0, 
     if threads is not None:
         threads = validation.threads(threads, max_threads())
     prep = m.prepare(tol=tol, dt=DEFAULT_DT if dt is None else dt)
-    methods.check_resolved(prep, P, Y0)
     g1, g2 = model.section_gamma(phi0)
     K = int(n_crossings)
     settings = {"method": method, "phi0": phi0, "direction": int(direction), "tmax": tmax,
@@ -189,7 +188,23 @@ def crossing_settings(params, y0, n_crossings: int, *, method: str = "taylor", t
 
 def _run_block(run: _Run, Y, carry, limits, data, count, status, final, info) -> None:
     """One block of the drivers for the orbits Y (arrays filled in place), with numba's thread
-    count set for the call when ``run.threads`` says so."""
+    count set for the call when ``run.threads`` says so.  An orbit whose motion the fixed step
+    does not resolve (:func:`explorer.integrate.methods.unresolved`) is not integrated: no
+    crossing, status UNRESOLVED, its state kept."""
+    slow = methods.unresolved(run.prep, run.P, Y)
+    if slow.any():
+        count[slow] = 0
+        status[slow] = int(Status.UNRESOLVED)
+        final[slow] = Y[slow]
+        info[slow] = 0.0
+        info[slow, 0] = carry[slow, layout.CARRY_T]
+        ok = np.flatnonzero(~slow)
+        if ok.size:
+            parts = [np.ascontiguousarray(a[ok]) for a in (Y, carry, limits, data, count, status, final, info)]
+            _run_block(run, *parts)
+            for a, part in zip((carry, data, count, status, final, info), parts[1:2] + parts[3:]):
+                a[ok] = part
+        return
     if run.threads is None:   # (numba's thread pool is started only when a batch asks for it)
         methods.run_crossings(run.prep, Y, run.P, run.cphi, run.sphi, run.direction, run.tmax, run.max_steps,
                               carry, limits, data, count, status, final, info)

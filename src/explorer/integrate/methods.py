@@ -36,8 +36,8 @@ MAX_TOL = 1e-2
 #: a fixed step may turn the fastest motion of the orbit (model.max_rate, a bound over the whole
 #: orbit) by at most this angle, half a turn (Nyquist): beyond it the step cannot tell the motion
 #: from its alias (phi may advance by more than pi per step, a crossing be skipped or invented)
-#: and the run is refused.  Below it the accuracy is judged by the energy error
-#: (explorer.analysis.sections.energy_warning)
+#: and the orbit is not integrated (status UNRESOLVED, :func:`unresolved`).  Below it the
+#: accuracy is judged by the energy error (explorer.analysis.sections.energy_warning)
 MAX_STEP_PHASE = math.pi
 
 
@@ -92,23 +92,15 @@ class Method:
                         fracs=np.ascontiguousarray(fracs, dtype=np.float64))
 
 
-def check_resolved(prep: Prepared, P, Y0) -> None:
-    """Refuse (ParameterError naming dt, the orbit and the largest dt allowed) a fixed-step run
-    whose step does not resolve the motion of some orbit of ``Y0``: dt * model.max_rate(y0) >
-    ``MAX_STEP_PHASE``.  The adaptive methods choose their own steps and pass."""
+def unresolved(prep: Prepared, P, Y) -> np.ndarray:
+    """Mask (N,) of the orbits of ``Y`` (N, 5) whose motion the fixed step of ``prep`` does not
+    resolve: dt * model.max_rate(y) > ``MAX_STEP_PHASE``.  The callers do not integrate them and
+    give them the status ``Status.UNRESOLVED``; the adaptive methods choose their own steps (all
+    False)."""
     if prep.method.adaptive:
-        return
+        return np.zeros(len(Y), bool)
     with np.errstate(over="ignore", invalid="ignore"):
-        phase = prep.dt * model.max_rate(P, Y0)
-    bad = np.flatnonzero(phase > MAX_STEP_PHASE)
-    if bad.size:
-        i = int(bad[np.argmax(phase[bad])])
-        rate = phase[i] / prep.dt
-        raise validation.ParameterError(
-            f"dt = {prep.dt:g} does not resolve the motion of orbit {i} ({prep.method.name}): its rates reach "
-            f"{rate:.3g} per unit time on its energy level (model.max_rate), dt x rate = {phase[i]:.3g} > "
-            f"{MAX_STEP_PHASE:.3g} (half a turn per step); use dt <= {MAX_STEP_PHASE / rate:.3g} or an "
-            "adaptive method (taylor, dop853)")
+        return ~(prep.dt * model.max_rate(P, Y) <= MAX_STEP_PHASE)
 
 
 def run_crossings(prep: Prepared, Y0, P, cphi, sphi, direction, tmax, max_steps, carry, limits, data, count,
