@@ -187,7 +187,23 @@ def crossing_settings(params, y0, n_crossings: int, *, method: str = "taylor", t
 
 def _run_block(run: _Run, Y, carry, limits, data, count, status, final, info) -> None:
     """One block of the drivers for the orbits Y (arrays filled in place), with numba's thread
-    count set for the call when ``run.threads`` says so."""
+    count set for the call when ``run.threads`` says so.  An orbit whose motion the fixed step
+    does not resolve (:func:`explorer.integrate.methods.unresolved`) is not integrated: no
+    crossing, status UNRESOLVED, its state kept."""
+    slow = methods.unresolved(run.prep, run.P, Y)
+    if slow.any():
+        count[slow] = 0
+        status[slow] = int(Status.UNRESOLVED)
+        final[slow] = Y[slow]
+        info[slow] = 0.0
+        info[slow, 0] = carry[slow, layout.CARRY_T]
+        ok = np.flatnonzero(~slow)
+        if ok.size:
+            parts = [np.ascontiguousarray(a[ok]) for a in (Y, carry, limits, data, count, status, final, info)]
+            _run_block(run, *parts)
+            for a, part in zip((carry, data, count, status, final, info), parts[1:2] + parts[3:]):
+                a[ok] = part
+        return
     if run.threads is None:   # (numba's thread pool is started only when a batch asks for it)
         methods.run_crossings(run.prep, Y, run.P, run.cphi, run.sphi, run.direction, run.tmax, run.max_steps,
                               carry, limits, data, count, status, final, info)

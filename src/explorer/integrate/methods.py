@@ -18,10 +18,12 @@ kind              method                                                        
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from explorer import model
 from explorer.kernels import splitting
 from explorer.kernels.taylor_order import order_for_tolerance
 from explorer.model import validation
@@ -33,6 +35,12 @@ MAX_TOL = 1e-2
 #: the step of the splitting methods when none is given: sections (orbit, sweep) and chaos
 #: indicators (lyapunov, [lyapunov] dt) alike, one default for every command
 DEFAULT_DT = 0.05
+#: a fixed step may turn the fastest motion of the orbit (model.max_rate, a bound over the whole
+#: orbit) by at most this angle, half a turn (Nyquist): beyond it the step cannot tell the motion
+#: from its alias (phi may advance by more than pi per step, a crossing be skipped or invented)
+#: and the orbit is not integrated (status UNRESOLVED, :func:`unresolved`).  Below it the
+#: accuracy is judged by the energy error (explorer.analysis.sections.energy_warning)
+MAX_STEP_PHASE = math.pi
 
 
 @dataclass(frozen=True)
@@ -84,6 +92,17 @@ class Method:
         return Prepared(self, {"dt": dt, "order": self.order}, dt=dt,
                         flow_ids=np.ascontiguousarray(ids, dtype=np.int64),
                         fracs=np.ascontiguousarray(fracs, dtype=np.float64))
+
+
+def unresolved(prep: Prepared, P, Y) -> np.ndarray:
+    """Mask (N,) of the orbits of ``Y`` (N, 5) whose motion the fixed step of ``prep`` does not
+    resolve: dt * model.max_rate(y) > ``MAX_STEP_PHASE``.  The callers do not integrate them and
+    give them the status ``Status.UNRESOLVED``; the adaptive methods choose their own steps (all
+    False)."""
+    if prep.method.adaptive:
+        return np.zeros(len(Y), bool)
+    with np.errstate(over="ignore", invalid="ignore"):
+        return ~(prep.dt * model.max_rate(P, Y) <= MAX_STEP_PHASE)
 
 
 def run_crossings(prep: Prepared, Y0, P, cphi, sphi, direction, tmax, max_steps, carry, limits, data, count,
