@@ -207,8 +207,10 @@ def test_the_same_isolated_orbits_come_out_when_the_seeds_move_by_1e_12(K):
 #: isolated orbits of minimal period K at the Figure-4 scene, mu = 0.03, h = 2, with the default
 #: search: the issue's requirement is that these counts are the same on any x86-64 CPU (.ci/run
 #: runs this test with Numba compiling for the host and for NUMBA_CPU_NAME=generic); the
-#: structure is checked too: symmetric orbits plus mirror pairs of asymmetric ones
-ISOLATED_COUNTS = {1: 5, 2: 8, 3: 14, 4: 11}
+#: structure is checked too: symmetric orbits plus mirror pairs of asymmetric ones (period 4
+#: had 11 before the half-turn partners completed the set: the partner of the symmetric orbit
+#: through (-1.8617, 0), trace -125.1, was missed)
+ISOLATED_COUNTS = {1: 5, 2: 8, 3: 14, 4: 12}
 
 
 @pytest.mark.cpu_dependent
@@ -339,3 +341,20 @@ def test_as_dict_has_the_json_shape(search2):
     for k in ("points", "trace", "residue", "eigenvalues", "stable", "symmetric", "period", "kind"):
         assert k in d
     assert len(d["points"]) == 2 and len(d["points"][0]) == 2
+
+
+@pytest.mark.cpu_dependent
+def test_every_isolated_orbit_comes_with_its_half_turn_partner_of_the_same_trace_and_period():
+    """docs/model.md, "Symmetries": T P = P^-1 T, so T(orbit) is an orbit with the same trace of the
+    monodromy and the same period (the sum of its return times).  Period 4 at the mu = 0.03 scene:
+    before the search completed its set with T, the partner of the orbit through (-1.8617, 0) was
+    missing."""
+    from explorer.analysis.halfturn import partner_points
+
+    orbits = _isolated(pm.search_periodic_orbits(PRM, H, 4))
+    for o in orbits:
+        image = partner_points(PRM, H, o.points).points
+        partners = [b for b in orbits if b.same_orbit(image, 1e-7)]
+        assert len(partners) == 1
+        assert partners[0].trace == pytest.approx(o.trace, rel=1e-8, abs=1e-8)
+        assert partners[0].total_time == pytest.approx(o.total_time, rel=1e-10)

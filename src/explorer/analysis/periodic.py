@@ -81,7 +81,7 @@ import numpy as np
 from explorer import model
 from explorer.analysis.continuation import continuation_values, golden_section_max, secant_follower
 from explorer.analysis.section_map import DEFAULT_TOL, RETURN_TMAX, SectionMap
-from explorer.model import ParameterError, validation
+from explorer.model import ParameterError, symmetry, validation
 
 __all__ = ["DEGENERATE_RESIDUE", "ISOLATION_TOL", "KIND_TOL", "MULTIPLE_SHOOTING_FROM", "PeriodicBranch",
            "PeriodicOrbit", "continue_periodic", "find_periodic_orbit", "is_reversible", "mirror_orbit",
@@ -578,6 +578,38 @@ def _canonical(orb: PeriodicOrbit) -> PeriodicOrbit:
                   orb.iterations, orb.symmetric)
 
 
+def _half_turn_partners(prm, h, orbits, same_tol, *, tol, max_iter, tmax, threads) -> list:
+    """The partners under the half-turn reversor T (docs/model.md, "Symmetries";
+    :mod:`explorer.analysis.halfturn`) of the isolated ``orbits`` that are not among them yet.
+
+    T P = P^-1 T, so the partner of x_0, ..., x_{K-1} is the orbit T(x_{K-1}), ..., T(x_0), with the
+    same trace and period.  The T-images of every point of every orbit are one batch of half-turn
+    flows; only an orbit whose image matches no orbit found gets a Newton polish (from a start
+    that is the orbit to the flow's accuracy: one or two iterations)."""
+    from explorer.analysis.halfturn import partner_points
+
+    isolated = [o for o in orbits if not o.degenerate]
+    if not isolated:
+        return []
+    images = partner_points(prm, h, np.concatenate([o.points for o in isolated]), phi0=isolated[0].phi0, tol=tol,
+                            threads=threads).points
+    added: list[PeriodicOrbit] = []
+    start = 0
+    for o in isolated:
+        pts = images[start:start + o.period][::-1]
+        start += o.period
+        if not np.all(np.isfinite(pts)) or any(f.same_orbit(pts, same_tol) for f in orbits + added):
+            continue
+        try:
+            partner = find_periodic_orbit(prm, h, pts if o.period >= MULTIPLE_SHOOTING_FROM else pts[0], o.period,
+                                          phi0=o.phi0, tol=tol, max_iter=max_iter, tmax=tmax)
+        except ParameterError:
+            continue
+        if partner.period == o.period and not partner.degenerate and partner.same_orbit(pts, 1e3 * same_tol):
+            added.append(partner)
+    return added
+
+
 def periodic_guesses(params, h, period, *, grid=12, line=None, phi0=math.pi, tol=DEFAULT_TOL, tmax=SEARCH_TMAX,
                      threads=None) -> np.ndarray:
     """The Newton starts of :func:`search_periodic_orbits`, in the order it tries them: the seeds on
@@ -671,6 +703,9 @@ def search_periodic_orbits(params, h, period, *, grid=12, line=None, phi0=math.p
             continue
         if orb.period == K and not any(o.same_orbit(orb, same_tol) for o in newton):
             newton.append(orb)
+    if symmetry.has_half_turn_symmetry(prm, phi0):
+        newton += _half_turn_partners(prm, h, newton, same_tol, tol=tol, max_iter=max_iter, tmax=tmax,
+                                      threads=threads)
     found: list[PeriodicOrbit] = []
     for o in newton:   # completed by symmetry: an orbit, then its exact mirror image
         if any(f.same_orbit(o, same_tol) for f in found):
