@@ -243,10 +243,35 @@ class ManifoldBranch:
         """Points of the branch at parameters ``sigma`` (computed afresh, no interpolation)."""
         return self.curve.points(sigma)
 
+    def distance(self, x, *, rounds=4, samples=24) -> float:
+        """Distance from the point x to the branch, from points computed afresh: the nearest
+        stored point's neighbourhood in sigma is sampled ``samples`` times and narrowed to the
+        best sample's neighbours ``rounds`` times (no chord error of the polyline)."""
+        x = np.asarray(x, float)
+        i = int(np.argmin(np.linalg.norm(self.points[1:] - x, axis=1))) + 1
+        lo = self.sigma[max(i - 1, 1)]
+        hi = self.sigma[min(i + 1, len(self.sigma) - 1)]
+        for _ in range(rounds):
+            s = np.linspace(lo, hi, samples)
+            pts = self.at(s)
+            k = int(np.nanargmin(np.linalg.norm(pts - x, axis=1)))
+            lo, hi = s[max(k - 1, 0)], s[min(k + 1, samples - 1)]
+        return _polyline_distance(pts[max(k - 1, 0):k + 2], x)
+
     def as_dict(self):
         return {"kind": self.kind, "sign": int(self.sign), "points": self.points.tolist(),
                 "arclength": float(self.arclength), "status": self.status,
                 "start_distance": self.start_distance, "start_tol": self.start_tol}
+
+
+def _polyline_distance(P, x):
+    """Distance from x to the polyline P (m, 2)."""
+    if len(P) == 1:
+        return float(np.linalg.norm(P[0] - x))
+    a, b = P[:-1], P[1:]
+    d = b - a
+    t = np.clip(np.sum((x - a) * d, axis=1) / np.maximum(np.sum(d * d, axis=1), 1e-300), 0.0, 1.0)
+    return float(np.min(np.linalg.norm(a + t[:, None] * d - x, axis=1)))
 
 
 def _arc(points):
@@ -338,10 +363,10 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
         if status is not None:
             break
         # (ii) extend: the last generation mapped once
-        last = sig > sig[-1] - cv.L
+        last = np.flatnonzero(sig > sig[-1] - cv.L)[:max_points - len(sig)]   # within the budget
         nsig = sig[last] + cv.L
         new = cv.map(pts[last], 1)
-        evals += int(last.sum())
+        evals += len(last)
         lo = len(sig) - 1
         fail = ~np.isfinite(new[:, 0])
         if fail.any():
