@@ -179,3 +179,12 @@ def test_turnstile_lobes_have_equal_areas_and_match_melnikov(saddle, tangle):
     A, B, _, _ = mk.fit_harmonics(prm0, mk.check_params(prm0, H), 1)
     predicted = 2.0 * prm0.lam * MU * math.hypot(A, B)
     assert abs(a1.area) / predicted == pytest.approx(1.0, abs=10 * MU ** 2)
+
+
+def test_flux_curve_ratio_to_melnikov_tends_to_one():
+    rows = tr.flux_curve(model.FIGURE4, H, [1e-3, 1e-2])
+    assert [r["status"] for r in rows] == ["ok", "ok"]
+    dev = [abs(r["ratio"] - 1.0) for r in rows]
+    assert dev[0] < dev[1] < 1e-4
+    for r in rows:   # the splitting angle at the primary point on p2 = 0 is of order mu
+        assert 0.0 < r["angle"] < 2.0 * r["mu"]

@@ -32,7 +32,7 @@ import numpy as np
 from explorer.analysis.manifolds import Homoclinic, ManifoldBranch, homoclinic_points
 from explorer.model import ParameterError
 
-__all__ = ["Lobe", "lobes", "polygon_area", "richardson_area"]
+__all__ = ["Lobe", "flux_curve", "lobes", "melnikov_lobe_area", "polygon_area", "richardson_area", "turnstile"]
 
 #: two homoclinic points are on the same orbit when their sigma_u + sigma_s agree to this
 SAME_ORBIT_SUM = 1e-6
@@ -111,7 +111,8 @@ def lobes(unstable: ManifoldBranch, stable: ManifoldBranch, *, points=None) -> l
     if prim is None:
         return []
     out = []
-    for h0 in prim[0]:
+    far = sorted(prim[0], key=lambda p: -np.linalg.norm(p.point - unstable.points[0]))
+    for h0 in far:   # the lobe farthest from the saddle first (on p2 = 0 when reversible)
         q = [p for p in prim[1] if h0.sigma_u < p.sigma_u < h0.sigma_u + L]
         if not q:
             continue
@@ -128,3 +129,78 @@ def lobes(unstable: ManifoldBranch, stable: ManifoldBranch, *, points=None) -> l
         if out:
             break
     return out
+
+
+def turnstile(sd, *, arclength=6.0, sign=1, **kw):
+    """The unstable branch ``sign`` of the saddle ``sd``, the stable branch it meets (either
+    sign), their homoclinic points and the turnstile's lobes: a dict with keys "unstable",
+    "stable", "homoclinic_points", "lobes" (``kw``: options of :func:`grow_branch`)."""
+    from explorer.analysis.manifolds import grow_branch
+
+    bu = grow_branch(sd, sign=sign, arclength=arclength, **kw)
+    best = None
+    for s in (sign, -sign):
+        bs = grow_branch(sd, stable=True, sign=s, arclength=arclength, **kw)
+        hs = homoclinic_points(bu, bs)
+        lb = lobes(bu, bs, points=hs)
+        if lb or best is None:
+            best = {"unstable": bu, "stable": bs, "homoclinic_points": hs, "lobes": lb}
+        if lb:
+            break
+    return best
+
+
+def melnikov_lobe_area(params, h, mu) -> float:
+    """First-order lobe area lam mu int |J(g0)| dg0 between consecutive zeros of J = 2 lam mu
+    sqrt(A^2 + B^2) for J = A sin g0 + B cos g0 (docs/manifolds.md, "From the Melnikov integral
+    to the lobe area"); ParameterError when R7 does not apply."""
+    from explorer import model
+    from explorer.analysis import melnikov as mk
+
+    prm0 = (params if isinstance(params, model.Params) else model.Params.from_array(params)).with_(mu=0.0)
+    A, B, _, _ = mk.fit_harmonics(prm0, mk.check_params(prm0, h), 1)
+    return 2.0 * abs(prm0.lam) * float(mu) * math.hypot(A, B)
+
+
+def flux_curve(params, h, mus, *, guess=(0.0, 0.0), arclength=6.0, sign=1, **kw) -> list:
+    """The flux across the broken separatrix of the central saddle (the fixed point followed
+    from ``guess`` at mu = 0 by continuation) for each mu of ``mus`` (increasing): one row per
+    mu, ``{"mu", "flux", "error", "lobes", "angle", "melnikov", "ratio", "status"}`` (flux: area
+    of one lobe of the turnstile per iteration; melnikov: :func:`melnikov_lobe_area` or None;
+    status "ok", or why there is no value: "elliptic", "no lobes", a ParameterError's text)."""
+    from explorer import model
+    from explorer.analysis import fixedpoints
+    from explorer.analysis.manifolds import saddle
+
+    prm = params if isinstance(params, model.Params) else model.Params.from_array(params)
+    mus = [float(m) for m in mus]
+    if any(b <= a for a, b in zip(mus, mus[1:])) or not mus or mus[0] < 0:
+        raise ParameterError(f"mus must be >= 0 and increasing, got {mus}")
+    rows = []
+    prev, x = 0.0, tuple(guess)
+    for mu in mus:
+        row = {"mu": mu, "flux": None, "error": None, "lobes": [], "angle": None, "melnikov": None, "ratio": None}
+        try:
+            fp = fixedpoints.follow(prm.with_(mu=prev), h, "mu", prev, mu, x, max_step=max(0.05, mu - prev))
+            prev, x = mu, tuple(fp.point)
+            try:
+                row["melnikov"] = melnikov_lobe_area(prm, h, mu)
+            except ParameterError:
+                pass
+            if fp.stable:
+                row["status"] = "elliptic"
+                rows.append(row)
+                continue
+            t = turnstile(saddle(fp), arclength=arclength, sign=sign, **kw)
+            if not t["lobes"]:
+                row["status"] = "no lobes"
+            else:
+                lb = t["lobes"]
+                row.update(flux=abs(lb[0].area), error=max(lobe.error for lobe in lb),
+                           lobes=[lobe.as_dict() for lobe in lb], angle=lb[0].start.angle, status="ok")
+                if row["melnikov"]:
+                    row["ratio"] = row["flux"] / row["melnikov"]
+        except ParameterError as exc:
+            row["status"] = str(exc)
+        rows.append(row)
+    return rows
