@@ -65,6 +65,7 @@ _EXPORTS = {
     "homoclinic_points": "explorer.analysis.manifolds",
     "lobes": "explorer.analysis.transport",
     "flux_curve": "explorer.analysis.transport",
+    "exit_times": "explorer.analysis.transport",
     "rotation_number": "explorer.analysis.rotation",
     "rotation_profile": "explorer.analysis.rotation",
     # scenes, sweeps and stores

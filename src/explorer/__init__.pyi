@@ -82,6 +82,9 @@ from explorer.analysis.sections import (
     section_crossings as section_crossings,
 )
 from explorer.analysis.transport import (
+    exit_times as exit_times,
+)
+from explorer.analysis.transport import (
     flux_curve as flux_curve,
 )
 from explorer.analysis.transport import (

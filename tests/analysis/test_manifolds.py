@@ -188,3 +188,27 @@ def test_flux_curve_ratio_to_melnikov_tends_to_one():
     assert dev[0] < dev[1] < 1e-4
     for r in rows:   # the splitting angle at the primary point on p2 = 0 is of order mu
         assert 0.0 < r["angle"] < 2.0 * r["mu"]
+
+
+@pytest.mark.parametrize("mu", [0.05, 0.1])
+def test_mean_transit_time_is_accessible_area_over_flux(mu):
+    """Meiss 1992: <min(T, N)> over the entry set = A(points of R leaving within N) / flux, within
+    the sampling error; the entry set's Monte Carlo area is the lobe area."""
+    fp = fpm.follow(model.FIGURE4, H, "mu", 0.0, mu, (0.0, 0.0))
+    t = tr.turnstile(mf.saddle(fp), arclength=6.0)
+    lb = t["lobes"]
+    phi = abs(lb[0].area)
+    h0 = min((lb[0].start, lb[0].end), key=lambda p: abs(p.point[1]))
+    r = tr.exit_times(t["unstable"], t["stable"], h0, samples=1500, max_iter=100)
+    assert r["entry"] > 50
+    assert abs(r["flux_mc"] - phi) < 3 * r["flux_mc_sem"]
+    expected = r["accessible_area"] / phi
+    assert abs(r["mean"] - expected) < 3 * math.hypot(r["sem"], r["accessible_sem"] / phi)
+    t_s, surv = r["survival"]
+    assert np.all(np.diff(surv) <= 0) and surv[0] <= 1.0
+
+
+def test_inside_follows_the_even_odd_rule():
+    square = np.array([[0, 0], [2, 0], [2, 2], [0, 2]], float)
+    got = tr.inside(square, [[1, 1], [3, 1], [-0.5, 1], [1, 2.5], [np.nan, 1]])
+    assert got.tolist() == [True, False, False, False, False]

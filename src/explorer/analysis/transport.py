@@ -32,7 +32,8 @@ import numpy as np
 from explorer.analysis.manifolds import Homoclinic, ManifoldBranch, homoclinic_points
 from explorer.model import ParameterError
 
-__all__ = ["Lobe", "flux_curve", "lobes", "melnikov_lobe_area", "polygon_area", "richardson_area", "turnstile"]
+__all__ = ["Lobe", "flux_curve", "inside", "lobes", "melnikov_lobe_area", "polygon_area", "resonance_zone",
+           "richardson_area", "exit_times", "turnstile"]
 
 #: two homoclinic points are on the same orbit when their sigma_u + sigma_s agree to this
 SAME_ORBIT_SUM = 1e-6
@@ -204,3 +205,102 @@ def flux_curve(params, h, mus, *, guess=(0.0, 0.0), arclength=6.0, sign=1, **kw)
             row["status"] = str(exc)
         rows.append(row)
     return rows
+
+
+# ------------------------------------------------------------------ transit times
+def inside(polygon, X, chunk=4096) -> np.ndarray:
+    """Whether each point of X (m, 2) lies inside the closed ``polygon`` (k, 2) (even-odd rule:
+    a ray along +p1 crosses the boundary an odd number of times); NaN points are outside."""
+    P = np.asarray(polygon, float)
+    a, b = P, np.roll(P, -1, axis=0)
+    X = np.asarray(X, float).reshape(-1, 2)
+    out = np.zeros(len(X), bool)
+    for i in range(0, len(X), chunk):
+        x, y = X[i:i + chunk, 0:1], X[i:i + chunk, 1:2]
+        straddle = (a[None, :, 1] > y) != (b[None, :, 1] > y)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            xc = a[None, :, 0] + (y - a[None, :, 1]) * (b[None, :, 0] - a[None, :, 0]) / (b[None, :, 1] - a[None, :, 1])
+        out[i:i + chunk] = (np.count_nonzero(straddle & (x < xc), axis=1) % 2) == 1
+    return out
+
+
+def resonance_zone(unstable: ManifoldBranch, stable: ManifoldBranch, point: Homoclinic) -> np.ndarray:
+    """The region bounded by the unstable arc from the saddle to the homoclinic ``point`` and the
+    stable arc from it back (the pseudo-separatrix; MacKay, Meiss & Percival 1984), as a closed
+    polygon (the stored points of the arcs and ``point``)."""
+    u = unstable.points[unstable.sigma < point.sigma_u]
+    s = stable.points[stable.sigma < point.sigma_s]
+    return np.vstack([u, [point.point], s[::-1][:-1]])
+
+
+def _steps_inside(smap, polygon, X, max_iter, block):
+    """For each start x (inside the polygon), the first k >= 1 with P^k(x) outside (or leaving the
+    allowed region, or with no return): max_iter + 1 when it stays max_iter iterations."""
+    from explorer.analysis.sections import section_crossings
+
+    T = np.full(len(X), max_iter + 1, np.int64)
+    alive = np.arange(len(X))
+    cur = np.asarray(X, float).copy()
+    done = 0
+    while alive.size and done < max_iter:
+        n = min(block, max_iter - done)
+        c = section_crossings(smap.params, cur[alive, 0], cur[alive, 1], smap.h, n, phi0=smap.phi0, tol=smap.tol,
+                              tmax=smap.tmax * n)
+        pts = c.data[:, :, 1:3]                           # NaN where no crossing
+        ins = inside(polygon, pts.reshape(-1, 2)).reshape(len(alive), n)
+        left = ~ins
+        first = np.where(left.any(axis=1), np.argmax(left, axis=1), -1)
+        gone = first >= 0
+        T[alive[gone]] = done + first[gone] + 1
+        cur[alive[~gone]] = pts[~gone, -1]
+        alive = alive[~gone]
+        done += n
+    return T
+
+
+def exit_times(unstable: ManifoldBranch, stable: ManifoldBranch, point: Homoclinic, *, samples=4000,
+                  max_iter=400, seed=0, block=50) -> dict:
+    """Transit times through the resonance zone R (:func:`resonance_zone`) and the mean-exit-time
+    identity (Meiss 1992, Rev. Mod. Phys. 64, 795): for an area-preserving map, the points of the
+    entry set I = {x in R: P^-1(x) not in R} (area = flux Phi) stay T(x) iterations in R, and
+    int_I T dA = A_acc, the area of R's accessible part, so <T>_I = A_acc / Phi.
+
+    ``samples`` points uniform in R (seeded): those whose preimage is outside form a uniform
+    sample of I (their fraction times A(R) estimates Phi independently of the lobes); each is
+    iterated until it leaves R (at most N = ``max_iter`` iterations); A_acc is A(R) times the
+    fraction of all samples that leave within N.  Truncated consistently: a point x = P^j(y) of
+    the transit orbit of an entry point y leaves within N iterations iff j >= T(y) - N, so
+    A(points leaving within N) = Phi <min(T, N)>_I exactly, and ``mean`` is <min(T, N)>_I (it
+    tends to <T>_I as N grows).  Returns a dict: area (of R, Green), flux_mc (and flux_mc_sem),
+    entry (the number of entry points), times (their T; N + 1 when capped), mean, sem (standard
+    error), capped (entry points still inside after N), accessible_area, accessible_sem,
+    survival (t, P(T > t)), all_times (T of all samples) and zone (the polygon R)."""
+    from explorer.analysis.manifolds import _images
+
+    smap = unstable.curve.sd.smap
+    R = resonance_zone(unstable, stable, point)
+    area = abs(polygon_area(R))
+    rng = np.random.default_rng(seed)
+    lo, hi = R.min(axis=0), R.max(axis=0)
+    X = np.empty((0, 2))
+    while len(X) < samples:
+        Y = lo + (hi - lo) * rng.random((2 * samples, 2))
+        X = np.vstack([X, Y[inside(R, Y)]])
+    X = X[:samples]
+    pre = _images(smap, X, 1, True)
+    entry = ~inside(R, pre)
+    T_all = _steps_inside(smap, R, X, max_iter, block)
+    T = T_all[entry]
+    Tc = np.minimum(T, max_iter)
+    acc = T_all <= max_iter
+    n = len(X)
+    p_acc = acc.mean()
+    t = np.unique(T[T <= max_iter]) if T.size else np.array([], np.int64)
+    surv = np.array([(T > k).mean() for k in t]) if T.size else np.array([])
+    q = entry.mean()
+    return {"area": area, "flux_mc": area * q, "flux_mc_sem": area * math.sqrt(q * (1 - q) / n),
+            "entry": int(entry.sum()), "times": T, "mean": float(Tc.mean()) if T.size else float("nan"),
+            "sem": float(Tc.std(ddof=1) / math.sqrt(T.size)) if T.size > 1 else float("nan"),
+            "capped": int(np.sum(T > max_iter)), "accessible_area": area * p_acc,
+            "accessible_sem": area * math.sqrt(p_acc * (1 - p_acc) / n), "survival": (t, surv),
+            "all_times": T_all, "zone": R}
