@@ -132,23 +132,30 @@ def lobes(unstable: ManifoldBranch, stable: ManifoldBranch, *, points=None) -> l
     return out
 
 
-def turnstile(sd, *, arclength=6.0, sign=1, **kw):
-    """The unstable branch ``sign`` of the saddle ``sd``, the stable branch it meets (either
-    sign), their homoclinic points and the turnstile's lobes: a dict with keys "unstable",
-    "stable", "homoclinic_points", "lobes" (``kw``: options of :func:`grow_branch`)."""
+def turnstile(sd, *, arclength=6.0, sign=1, max_arclength=None, **kw):
+    """The unstable branch ``sign`` of the saddle ``sd``, the stable branch it meets (the same
+    sign first, then the other), their homoclinic points and the turnstile's lobes: a dict with
+    keys "unstable", "stable", "homoclinic_points", "lobes", "arclength".  When no pair has two
+    primary orbits within ``arclength``, the branches are grown again at twice the length, up
+    to ``max_arclength`` (default: ``arclength``).  ``kw``: options of :func:`grow_branch`."""
     from explorer.analysis.manifolds import grow_branch
 
-    bu = grow_branch(sd, sign=sign, arclength=arclength, **kw)
-    best = None
-    for s in (sign, -sign):
-        bs = grow_branch(sd, stable=True, sign=s, arclength=arclength, **kw)
-        hs = homoclinic_points(bu, bs)
-        lb = lobes(bu, bs, points=hs)
-        if lb or best is None:
-            best = {"unstable": bu, "stable": bs, "homoclinic_points": hs, "lobes": lb}
-        if lb:
-            break
-    return best
+    length = float(arclength)
+    limit = length if max_arclength is None else float(max_arclength)
+    while True:
+        bu = grow_branch(sd, sign=sign, arclength=length, **kw)
+        best = None
+        for s in (sign, -sign):
+            bs = grow_branch(sd, stable=True, sign=s, arclength=length, **kw)
+            hs = homoclinic_points(bu, bs)
+            lb = lobes(bu, bs, points=hs)
+            if lb or best is None:
+                best = {"unstable": bu, "stable": bs, "homoclinic_points": hs, "lobes": lb, "arclength": length}
+            if lb:
+                return best
+        if 2 * length > limit * (1 + 1e-12):
+            return best
+        length *= 2
 
 
 def melnikov_lobe_area(params, h, mu) -> float:
@@ -163,11 +170,12 @@ def melnikov_lobe_area(params, h, mu) -> float:
     return 2.0 * abs(prm0.lam) * float(mu) * math.hypot(A, B)
 
 
-def flux_curve(params, h, mus, *, guess=(0.0, 0.0), arclength=6.0, sign=1, **kw) -> list:
+def flux_curve(params, h, mus, *, guess=(0.0, 0.0), arclength=6.0, max_arclength=None, sign=1, **kw) -> list:
     """The flux across the broken separatrix of the central saddle (the fixed point followed
     from ``guess`` at mu = 0 by continuation) for each mu of ``mus`` (increasing): one row per
-    mu, ``{"mu", "flux", "error", "lobes", "angle", "melnikov", "ratio", "status"}`` (flux: area
-    of one lobe of the turnstile per iteration; melnikov: :func:`melnikov_lobe_area` or None;
+    mu, ``{"mu", "flux", "error", "lobes", "angle", "melnikov", "ratio", "arclength", "status"}``
+    (flux: area of one lobe of the turnstile per iteration, :func:`turnstile` with branches of
+    ``arclength`` doubled up to ``max_arclength``; melnikov: :func:`melnikov_lobe_area` or None;
     status "ok", or why there is no value: "elliptic", "no lobes", a ParameterError's text)."""
     from explorer import model
     from explorer.analysis import fixedpoints
@@ -180,7 +188,8 @@ def flux_curve(params, h, mus, *, guess=(0.0, 0.0), arclength=6.0, sign=1, **kw)
     rows = []
     prev, x = 0.0, tuple(guess)
     for mu in mus:
-        row = {"mu": mu, "flux": None, "error": None, "lobes": [], "angle": None, "melnikov": None, "ratio": None}
+        row = {"mu": mu, "flux": None, "error": None, "lobes": [], "angle": None, "melnikov": None, "ratio": None,
+               "arclength": None}
         try:
             fp = fixedpoints.follow(prm.with_(mu=prev), h, "mu", prev, mu, x, max_step=max(0.05, mu - prev))
             prev, x = mu, tuple(fp.point)
@@ -192,9 +201,10 @@ def flux_curve(params, h, mus, *, guess=(0.0, 0.0), arclength=6.0, sign=1, **kw)
                 row["status"] = "elliptic"
                 rows.append(row)
                 continue
-            t = turnstile(saddle(fp), arclength=arclength, sign=sign, **kw)
+            t = turnstile(saddle(fp), arclength=arclength, max_arclength=max_arclength, sign=sign, **kw)
+            row["arclength"] = t["arclength"]
             if not t["lobes"]:
-                row["status"] = "no lobes"
+                row["status"] = f"no lobes within arclength {t['arclength']:g}"
             else:
                 lb = t["lobes"]
                 row.update(flux=abs(lb[0].area), error=max(lobe.error for lobe in lb),
