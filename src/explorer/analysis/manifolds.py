@@ -432,28 +432,35 @@ def _segment_crossings(A, B):
 
 
 def _refine(bu: ManifoldBranch, bs: ManifoldBranch, su, ss):
-    """Newton on x_u(su) - x_s(ss) = 0 with tangents by central differences in sigma."""
+    """Newton on x_u(su) - x_s(ss) = 0 with tangents by central differences in sigma; stops at
+    a residual below INTERSECTION_TOL or when two steps in a row fail to halve it (the map's
+    accuracy reached), and returns the best point evaluated."""
     hd = DIFF_STEP
+    best = None
+    stall = 0
     for _ in range(NEWTON_ITER):
         U = bu.at([su, su - hd, su + hd])
         S = bs.at([ss, ss - hd, ss + hd])
         if not (np.all(np.isfinite(U)) and np.all(np.isfinite(S))):
-            return None
+            break
         tu, ts = (U[2] - U[1]) / (2 * hd), (S[2] - S[1]) / (2 * hd)
         F = U[0] - S[0]
-        A = np.column_stack([tu, -ts])
-        try:
-            d = np.linalg.solve(A, -F)
-        except np.linalg.LinAlgError:
-            return None
-        su, ss = su + d[0], ss + d[1]
-        if np.linalg.norm(F) < INTERSECTION_TOL and np.max(np.abs(d)) < 1e-6:
+        nf = float(np.linalg.norm(F))
+        stall = stall + 1 if best is not None and nf > 0.5 * best[0] else 0
+        if best is None or nf < best[0]:
+            best = (nf, su, ss, U[0].copy(), tu, ts)
+        if nf < INTERSECTION_TOL or stall >= 2:
             break
-    x = bu.at([su])[0]
-    r = float(np.linalg.norm(x - bs.at([ss])[0]))
+        try:
+            d = np.linalg.solve(np.column_stack([tu, -ts]), -F)
+        except np.linalg.LinAlgError:
+            break
+        su, ss = su + d[0], ss + d[1]
+    if best is None:
+        return None
+    nf, su, ss, x, tu, ts = best
     c = abs(tu[0] * ts[1] - tu[1] * ts[0]) / (np.linalg.norm(tu) * np.linalg.norm(ts))
-    ang = math.asin(min(1.0, c))
-    return Homoclinic(x, float(su), float(ss), ang, r, bu.sign, bs.sign)
+    return Homoclinic(x, float(su), float(ss), math.asin(min(1.0, c)), nf, bu.sign, bs.sign)
 
 
 def homoclinic_points(unstable: ManifoldBranch, stable: ManifoldBranch, *, max_residual=1e-10) -> list:
