@@ -181,13 +181,19 @@ def test_turnstile_lobes_have_equal_areas_and_match_melnikov(saddle, tangle):
     assert abs(a1.area) / predicted == pytest.approx(1.0, abs=10 * MU ** 2)
 
 
-def test_flux_curve_ratio_to_melnikov_tends_to_one():
-    rows = tr.flux_curve(model.FIGURE4, H, [1e-3, 1e-2])
-    assert [r["status"] for r in rows] == ["ok", "ok"]
-    dev = [abs(r["ratio"] - 1.0) for r in rows]
-    assert dev[0] < dev[1] < 1e-4
-    for r in rows:   # the splitting angle at the primary point on p2 = 0 is of order mu
-        assert 0.0 < r["angle"] < 2.0 * r["mu"]
+def test_flux_curve_ratio_to_melnikov_tends_to_one(tangle):
+    """At mu = 1e-3 (continued from mu = 0) the ratio is closer to 1 than at mu = 0.03."""
+    (row,) = tr.flux_curve(model.FIGURE4, H, [1e-3])
+    assert row["status"] == "ok"
+    bu, bs, hs = tangle
+    prm0 = model.FIGURE4.with_(mu=0.0)
+    A, B, _, _ = mk.fit_harmonics(prm0, mk.check_params(prm0, H), 1)
+    ratio_03 = abs(tr.lobes(bu, bs, points=hs)[0].area) / (2.0 * MU * math.hypot(A, B))
+    assert abs(row["ratio"] - 1.0) < abs(ratio_03 - 1.0) < 1e-3
+    assert abs(row["ratio"] - 1.0) < 1e-6
+    on_line = max((p for p in hs if abs(p.point[1]) < 1e-9), key=lambda p: abs(p.point[0]))   # (1.788, 0)
+    for mu, angle in ((row["mu"], row["angle"]), (MU, on_line.angle)):
+        assert 0.0 < angle < 2.0 * mu   # the splitting angle at the primary point on p2 = 0 is O(mu)
 
 
 @pytest.mark.parametrize("mu", [0.05, 0.1])
@@ -212,3 +218,36 @@ def test_inside_follows_the_even_odd_rule():
     square = np.array([[0, 0], [2, 0], [2, 2], [0, 2]], float)
     got = tr.inside(square, [[1, 1], [3, 1], [-0.5, 1], [1, 2.5], [np.nan, 1]])
     assert got.tolist() == [True, False, False, False, False]
+
+
+@pytest.mark.parametrize("guess, maps", [((-1.8408, 0.0), 2), ((0.2909, 0.0), 4)])
+def test_manifolds_of_a_period_2_orbit_are_mapped_onto_each_other(guess, maps):
+    """Period 2 (trace 9.96, and -6.80: negative multipliers, so F = P^4 keeps each branch):
+    P maps W^u at the orbit's first point onto W^u at its second."""
+    from explorer.analysis.periodic import find_periodic_orbit
+
+    orb = find_periodic_orbit(model.FIGURE4.with_(mu=MU), H, guess, 2)
+    s0, s1 = mf.saddle(orb, index=0), mf.saddle(orb, index=1)
+    assert s0.maps == s1.maps == maps
+    assert s0.multiplier == pytest.approx(s1.multiplier, rel=1e-8)
+    b0 = mf.grow_branch(s0, sign=1, arclength=0.3)
+    b1 = [mf.grow_branch(s1, sign=s, arclength=2.0) for s in (1, -1)]
+    for x in b0.points[3::15]:
+        y = s0.smap(x, jacobian=False).point
+        assert min(b.distance(y) for b in b1) < 1e-9
+
+
+def test_stable_manifold_without_the_reversor_is_invariant():
+    """xi != 0: no reversor, W^s by backward integration point by point; its forward images
+    move down the branch by one generation, x(sigma) -> x(sigma - L)."""
+    prm = model.FIGURE4.with_(mu=MU, xi=0.05)
+    from explorer.analysis.periodic import is_reversible
+
+    assert not is_reversible(prm)
+    sd = mf.saddle(fpm.find_fixed_point(prm, H, (0.0, 0.0)))
+    ws = mf.grow_branch(sd, stable=True, sign=1, arclength=0.6)
+    assert ws.status == "arclength"
+    L = math.log(sd.multiplier)
+    for i in range(len(ws.points) - 1, len(ws.points) // 2, -23):
+        y = sd.smap(ws.points[i], jacobian=False).point
+        assert np.linalg.norm(y - ws.at([ws.sigma[i] - L])[0]) < 1e-9

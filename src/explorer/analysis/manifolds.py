@@ -256,7 +256,8 @@ class ManifoldBranch:
             pts = self.at(s)
             k = int(np.nanargmin(np.linalg.norm(pts - x, axis=1)))
             lo, hi = s[max(k - 1, 0)], s[min(k + 1, samples - 1)]
-        return _polyline_distance(pts[max(k - 1, 0):k + 2], x)
+        # the first segment (saddle to the first point) is the linear manifold, off by <= start_tol
+        return min(_polyline_distance(pts[max(k - 1, 0):k + 2], x), _polyline_distance(self.points[:2], x))
 
     def as_dict(self):
         return {"kind": self.kind, "sign": int(self.sign), "points": self.points.tolist(),
