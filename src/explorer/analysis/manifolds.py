@@ -307,6 +307,8 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
     max_angle = validation.real("max_angle", max_angle, 0.0, lo_open=True)
     max_gap_angle = validation.real("max_gap_angle", max_gap_angle, 0.0, lo_open=True)
     max_points = validation.integer("max_points", max_points, 3)
+    if max_time is not None:
+        max_time = validation.real("max_time", max_time, 0.0)
     t0 = time.perf_counter()
     cv = _Curve(sd, stable, sign, start_tol, integrate_backward)
     sig = cv.sigma0 + cv.L * np.arange(INITIAL_POINTS + 1) / INITIAL_POINTS
