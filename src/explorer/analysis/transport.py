@@ -37,6 +37,9 @@ __all__ = ["Lobe", "flux_curve", "inside", "lobes", "melnikov_lobe_area", "polyg
 
 #: two homoclinic points are on the same orbit when their sigma_u + sigma_s agree to this
 SAME_ORBIT_SUM = 1e-6
+#: the two lobes of a turnstile have equal areas (area preservation): a flux is reported only
+#: when they agree to this (relative) beyond their error estimates
+LOBE_AGREEMENT = 1e-6
 
 
 def polygon_area(points) -> float:
@@ -135,9 +138,10 @@ def lobes(unstable: ManifoldBranch, stable: ManifoldBranch, *, points=None) -> l
 def turnstile(sd, *, arclength=6.0, sign=1, max_arclength=None, **kw):
     """The unstable branch ``sign`` of the saddle ``sd``, the stable branch it meets (the same
     sign first, then the other), their homoclinic points and the turnstile's lobes: a dict with
-    keys "unstable", "stable", "homoclinic_points", "lobes", "arclength".  When no pair has two
-    primary orbits within ``arclength``, the branches are grown again at twice the length, up
-    to ``max_arclength`` (default: ``arclength``).  ``kw``: options of :func:`grow_branch`."""
+    keys "unstable", "stable", "homoclinic_points", "lobes", "arclength".  When no pair has
+    both lobes within ``arclength``, the branches are grown again at twice the length, up to
+    ``max_arclength`` (default: ``arclength``); the pair with the most lobes is returned.
+    ``kw``: options of :func:`grow_branch`."""
     from explorer.analysis.manifolds import grow_branch
 
     length = float(arclength)
@@ -149,9 +153,9 @@ def turnstile(sd, *, arclength=6.0, sign=1, max_arclength=None, **kw):
             bs = grow_branch(sd, stable=True, sign=s, arclength=length, **kw)
             hs = homoclinic_points(bu, bs)
             lb = lobes(bu, bs, points=hs)
-            if lb or best is None:
+            if best is None or len(lb) > len(best["lobes"]):
                 best = {"unstable": bu, "stable": bs, "homoclinic_points": hs, "lobes": lb, "arclength": length}
-            if lb:
+            if len(lb) == 2:
                 return best
         if 2 * length > limit * (1 + 1e-12):
             return best
@@ -176,7 +180,8 @@ def flux_curve(params, h, mus, *, guess=(0.0, 0.0), arclength=6.0, max_arclength
     mu, ``{"mu", "flux", "error", "lobes", "angle", "melnikov", "ratio", "arclength", "status"}``
     (flux: area of one lobe of the turnstile per iteration, :func:`turnstile` with branches of
     ``arclength`` doubled up to ``max_arclength``; melnikov: :func:`melnikov_lobe_area` or None;
-    status "ok", or why there is no value: "elliptic", "no lobes", a ParameterError's text)."""
+    status "ok" (both lobes found, with equal areas), or why there is no value: "elliptic", no
+    pair of lobes, lobes that differ, a ParameterError's text)."""
     from explorer import model
     from explorer.analysis import fixedpoints
     from explorer.analysis.manifolds import saddle
@@ -203,10 +208,14 @@ def flux_curve(params, h, mus, *, guess=(0.0, 0.0), arclength=6.0, max_arclength
                 continue
             t = turnstile(saddle(fp), arclength=arclength, max_arclength=max_arclength, sign=sign, **kw)
             row["arclength"] = t["arclength"]
-            if not t["lobes"]:
-                row["status"] = f"no lobes within arclength {t['arclength']:g}"
+            lb = t["lobes"]
+            if len(lb) < 2:
+                row["status"] = f"no pair of lobes within arclength {t['arclength']:g}"
+            elif abs(abs(lb[0].area) - abs(lb[1].area)) > LOBE_AGREEMENT * abs(lb[0].area) + 3 * (lb[0].error
+                                                                                                 + lb[1].error):
+                row["status"] = (f"the two lobes differ ({abs(lb[0].area):.6g}, {abs(lb[1].area):.6g}): "
+                                 "the primary intersections were not identified")
             else:
-                lb = t["lobes"]
                 row.update(flux=abs(lb[0].area), error=max(lobe.error for lobe in lb),
                            lobes=[lobe.as_dict() for lobe in lb], angle=lb[0].start.angle, status="ok")
                 if row["melnikov"]:

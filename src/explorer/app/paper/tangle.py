@@ -11,7 +11,7 @@ DESCRIPTION = "the homoclinic tangle of the central saddle (mu = 0.03) with its 
 #: the scene: Figure 4 (MODEL.md R9) at mu = 0.03, h = 2
 MU, H = 0.03, 2.0
 #: mu values of the flux curve (full run, --quick)
-FLUX_MUS = (1e-3, 3e-3, 1e-2, 3e-2, 0.1)
+FLUX_MUS = (1e-3, 3e-3, 1e-2, 3e-2, 0.1, 0.3)
 QUICK_MUS = (1e-3, 1e-2)
 
 
@@ -24,7 +24,7 @@ def tangle_figure(*, quick=False, dpi=200) -> Drawn:
     draw = manifolds.manifolds(fp, arclength=6.0 if quick else 10.0)
     hs = manifolds.homoclinic_points(draw[0], draw[2])
     t = {"lobes": transport.lobes(draw[0], draw[2], points=hs), "homoclinic_points": hs}
-    rows = transport.flux_curve(model.FIGURE4, H, QUICK_MUS if quick else FLUX_MUS)
+    rows = transport.flux_curve(model.FIGURE4, H, QUICK_MUS if quick else FLUX_MUS, max_arclength=24.0)
     e = model.allowed_ellipse(model.FIGURE4.with_(mu=MU), H)
     data = {"lobes": [lb.as_dict() for lb in t["lobes"]], "flux": rows,
             "homoclinic_points": [h.point.tolist() for h in hs]}
