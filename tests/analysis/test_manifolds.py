@@ -251,3 +251,14 @@ def test_stable_manifold_without_the_reversor_is_invariant():
     for i in range(len(ws.points) - 1, len(ws.points) // 2, -23):
         y = sd.smap(ws.points[i], jacobian=False).point
         assert np.linalg.norm(y - ws.at([ws.sigma[i] - L])[0]) < 1e-9
+
+
+def test_a_flux_needs_both_lobes_with_equal_areas(tangle):
+    """At mu = 0.5 the smallest-sum rule once paired the wrong intersections and flux_curve
+    reported one 'lobe' of area 5.7 as the flux; now both lobes must be found and agree."""
+    bu, bs, hs = tangle
+    lb = tr.lobes(bu, bs, points=hs)
+    assert tr.turnstile_check(lb, 6.0) == "ok"
+    assert tr.turnstile_check(lb[:1], 6.0).startswith("no pair of lobes")
+    wrong = tr.Lobe(lb[1].start, lb[1].end, 5.7, 1e-6, lb[1].boundary)
+    assert tr.turnstile_check([lb[0], wrong], 6.0).startswith("the two lobes differ")

@@ -33,7 +33,7 @@ from explorer.analysis.manifolds import Homoclinic, ManifoldBranch, homoclinic_p
 from explorer.model import ParameterError
 
 __all__ = ["Lobe", "flux_curve", "inside", "lobes", "melnikov_lobe_area", "polygon_area", "resonance_zone",
-           "richardson_area", "exit_times", "turnstile"]
+           "richardson_area", "exit_times", "turnstile", "turnstile_check"]
 
 #: two homoclinic points are on the same orbit when their sigma_u + sigma_s agree to this
 SAME_ORBIT_SUM = 1e-6
@@ -162,6 +162,18 @@ def turnstile(sd, *, arclength=6.0, sign=1, max_arclength=None, **kw):
         length *= 2
 
 
+def turnstile_check(lobes_found, arclength) -> str:
+    """"ok" when both lobes of a turnstile were found and their areas agree (area preservation:
+    relative ``LOBE_AGREEMENT`` beyond three times their error estimates), else why not."""
+    lb = lobes_found
+    if len(lb) < 2:
+        return f"no pair of lobes within arclength {arclength:g}"
+    if abs(abs(lb[0].area) - abs(lb[1].area)) > LOBE_AGREEMENT * abs(lb[0].area) + 3 * (lb[0].error + lb[1].error):
+        return (f"the two lobes differ ({abs(lb[0].area):.6g}, {abs(lb[1].area):.6g}): the primary "
+                "intersections were not identified")
+    return "ok"
+
+
 def melnikov_lobe_area(params, h, mu) -> float:
     """First-order lobe area lam mu int |J(g0)| dg0 between consecutive zeros of J = 2 lam mu
     sqrt(A^2 + B^2) for J = A sin g0 + B cos g0 (docs/manifolds.md, "From the Melnikov integral
@@ -209,15 +221,10 @@ def flux_curve(params, h, mus, *, guess=(0.0, 0.0), arclength=6.0, max_arclength
             t = turnstile(saddle(fp), arclength=arclength, max_arclength=max_arclength, sign=sign, **kw)
             row["arclength"] = t["arclength"]
             lb = t["lobes"]
-            if len(lb) < 2:
-                row["status"] = f"no pair of lobes within arclength {t['arclength']:g}"
-            elif abs(abs(lb[0].area) - abs(lb[1].area)) > LOBE_AGREEMENT * abs(lb[0].area) + 3 * (lb[0].error
-                                                                                                 + lb[1].error):
-                row["status"] = (f"the two lobes differ ({abs(lb[0].area):.6g}, {abs(lb[1].area):.6g}): "
-                                 "the primary intersections were not identified")
-            else:
+            row["status"] = turnstile_check(lb, t["arclength"])
+            if row["status"] == "ok":
                 row.update(flux=abs(lb[0].area), error=max(lobe.error for lobe in lb),
-                           lobes=[lobe.as_dict() for lobe in lb], angle=lb[0].start.angle, status="ok")
+                           lobes=[lobe.as_dict() for lobe in lb], angle=lb[0].start.angle)
                 if row["melnikov"]:
                     row["ratio"] = row["flux"] / row["melnikov"]
         except ParameterError as exc:
