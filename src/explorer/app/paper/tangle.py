@@ -25,12 +25,16 @@ def tangle_figure(*, quick=False, dpi=200) -> Drawn:
     hs = manifolds.homoclinic_points(draw[0], draw[2])
     t = {"lobes": transport.lobes(draw[0], draw[2], points=hs), "homoclinic_points": hs}
     rows = transport.flux_curve(model.FIGURE4, H, QUICK_MUS if quick else FLUX_MUS, max_arclength=24.0)
+    # transit times through the resonance zone at this mu: the stickiness tail
+    h0 = max((p for p in hs if abs(p.point[1]) < 1e-9), key=lambda p: abs(p.point[0]))
+    tt = transport.exit_times(draw[0], draw[2], h0, samples=1000 if quick else 4000, max_iter=100 if quick else 1000)
     e = model.allowed_ellipse(model.FIGURE4.with_(mu=MU), H)
     data = {"lobes": [lb.as_dict() for lb in t["lobes"]], "flux": rows,
-            "homoclinic_points": [h.point.tolist() for h in hs]}
+            "homoclinic_points": [h.point.tolist() for h in hs],
+            "transit": {k: tt[k] for k in ("mean", "sem", "accessible_area", "accessible_sem", "entry", "capped")}}
     with _rc():
-        fig = _new_figure((10.5, 3.6), dpi=dpi)
-        axs = fig.subplots(1, 3, gridspec_kw={"width_ratios": [1.5, 1.0, 1.0]})
+        fig = _new_figure((13.5, 3.6), dpi=dpi)
+        axs = fig.subplots(1, 4, gridspec_kw={"width_ratios": [1.5, 1.0, 1.0, 1.0]})
         ax = axs[0]
         if e is not None:
             c1, c2, r1, r2 = e
@@ -69,6 +73,17 @@ def tangle_figure(*, quick=False, dpi=200) -> Drawn:
         ax.set_xlabel(r"$\mu$")
         ax.set_title("(c) the ratio tends to 1", fontsize=_FS)
         ax.legend(loc="upper left", fontsize=_SMALL, frameon=False)
+        ax = axs[3]
+        ts, surv = tt["survival"]
+        ok_s = surv > 0
+        ax.loglog(ts[ok_s], surv[ok_s], "-", drawstyle="steps-post", color="k", lw=0.9)
+        phi = abs(t["lobes"][0].area) if t["lobes"] else float("nan")
+        ax.set_xlabel("transit time $T$ (iterations)")
+        ax.set_ylabel(r"$P(T > t)$ over the entry set")
+        ax.set_title(rf"(d) transit times, $\mu = {MU:g}$", fontsize=_FS)
+        ax.text(0.04, 0.04, rf"$\langle\min(T, N)\rangle = {tt['mean']:.2f} \pm {tt['sem']:.2f}$" "\n"
+                rf"$A_{{acc}}/\Phi = {tt['accessible_area'] / phi:.2f}$, {tt['entry']} entries",
+                transform=ax.transAxes, fontsize=_SMALL, va="bottom")
         fig.suptitle(rf"Homoclinic tangle and transport, Figure 4 scene, $h = {H:g}$", fontsize=_FS)
     return Drawn(fig, data)
 
