@@ -191,9 +191,10 @@ def flux_curve(params, h, mus, *, guess=(0.0, 0.0), arclength=6.0, max_arclength
     from ``guess`` at mu = 0 by continuation) for each mu of ``mus`` (increasing): one row per
     mu, ``{"mu", "flux", "error", "lobes", "angle", "melnikov", "ratio", "arclength", "status"}``
     (flux: area of one lobe of the turnstile per iteration, :func:`turnstile` with branches of
-    ``arclength`` doubled up to ``max_arclength``; melnikov: :func:`melnikov_lobe_area` or None;
-    status "ok" (both lobes found, with equal areas), or why there is no value: "elliptic", no
-    pair of lobes, lobes that differ, a ParameterError's text)."""
+    ``arclength`` doubled up to ``max_arclength``, default 4 ``arclength``; melnikov:
+    :func:`melnikov_lobe_area` or None; status "ok" (both lobes found, with equal areas), or
+    why there is no value: "elliptic", no pair of lobes, lobes that differ, a ParameterError's
+    text)."""
     from explorer import model
     from explorer.analysis import fixedpoints
     from explorer.analysis.manifolds import saddle
@@ -218,7 +219,8 @@ def flux_curve(params, h, mus, *, guess=(0.0, 0.0), arclength=6.0, max_arclength
                 row["status"] = "elliptic"
                 rows.append(row)
                 continue
-            t = turnstile(saddle(fp), arclength=arclength, max_arclength=max_arclength, sign=sign, **kw)
+            t = turnstile(saddle(fp), arclength=arclength, sign=sign,
+                          max_arclength=4 * arclength if max_arclength is None else max_arclength, **kw)
             row["arclength"] = t["arclength"]
             lb = t["lobes"]
             row["status"] = turnstile_check(lb, t["arclength"])
