@@ -152,13 +152,8 @@ def _images(smap: SectionMap, X, n, backward, integrate_backward=False):
         return X.copy()
     if backward and (integrate_backward or not is_reversible(smap.params, smap.phi0)):
         for i, x in enumerate(X):
-            try:
-                y = x
-                for _ in range(n):
-                    if not model.section_M2(smap.params, y[0], y[1], smap.h, smap.phi0) > 0:
-                        raise ParameterError("left the region")
-                    y = smap(y, backward=True, jacobian=False).point
-                out[i] = y
+            try:    # outside the region or no return: ParameterError, the row stays NaN
+                out[i] = smap.iterate(x, n, backward=True)[-1]
             except ParameterError:
                 pass
         return out
