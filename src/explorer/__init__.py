@@ -60,6 +60,12 @@ _EXPORTS = {
     "search_periodic_orbits": "explorer.analysis.periodic",
     "mirror_orbit": "explorer.analysis.periodic",
     "continue_periodic": "explorer.analysis.periodic",
+    # invariant manifolds, homoclinic tangles and transport (docs/manifolds.md)
+    "manifolds": "explorer.analysis.manifolds",
+    "homoclinic_points": "explorer.analysis.manifolds",
+    "lobes": "explorer.analysis.transport",
+    "flux_curve": "explorer.analysis.transport",
+    "exit_times": "explorer.analysis.transport",
     "rotation_number": "explorer.analysis.rotation",
     "rotation_profile": "explorer.analysis.rotation",
     # scenes, sweeps and stores

@@ -27,6 +27,12 @@ from explorer.analysis.lyapunov import (
 from explorer.analysis.lyapunov import (
     indicators as indicators,
 )
+from explorer.analysis.manifolds import (
+    homoclinic_points as homoclinic_points,
+)
+from explorer.analysis.manifolds import (
+    manifolds as manifolds,
+)
 from explorer.analysis.periodic import (
     PeriodicOrbit as PeriodicOrbit,
 )
@@ -74,6 +80,15 @@ from explorer.analysis.sections import (
 )
 from explorer.analysis.sections import (
     section_crossings as section_crossings,
+)
+from explorer.analysis.transport import (
+    exit_times as exit_times,
+)
+from explorer.analysis.transport import (
+    flux_curve as flux_curve,
+)
+from explorer.analysis.transport import (
+    lobes as lobes,
 )
 from explorer.app.runner import (
     SweepReport as SweepReport,
