@@ -32,11 +32,7 @@ def orbit_taylor(y0, P, cphi, sphi, direction, tmax, order, max_steps, cross, yo
     factor = tk.safety_factor(order)
     for i in range(5):
         yout[i] = y0[i]
-    H0 = carry[drivers.CARRY_H0]
-    t = carry[drivers.CARRY_T]
-    tc = carry[drivers.CARRY_TC]  # Kahan compensation of the time sum
-    gprev = carry[drivers.CARRY_G]
-    steps = int(carry[drivers.CARRY_STEPS])
+    t, tc, gprev, steps, H0 = drivers.read_carry(carry)  # tc: Kahan compensation of the time sum
     count = 0
     status = STATUS_TMAX
     if target == 0:

@@ -133,6 +133,14 @@ def start_carry(Y0, P, cphi, sphi, carry):
 
 
 @njit
+def read_carry(carry):
+    """(t, tc, g, steps, H0): where one orbit's block starts, from its carry (the columns
+    CARRY_*: time, its Kahan compensation, sin(phi - phi0) at the state, steps taken, and the
+    energy the crossings' H - H0 refers to)."""
+    return carry[CARRY_T], carry[CARRY_TC], carry[CARRY_G], int(carry[CARRY_STEPS]), carry[CARRY_H0]
+
+
+@njit
 def save_carry(carry, t, tc, g, steps):
     """The carry of one orbit at the end of its block (the columns CARRY_*: time, its Kahan
     compensation, sin(phi - phi0) at the final state, steps); DOP853 adds its next step."""
@@ -249,10 +257,8 @@ def orbit_split(y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max_ste
     roots = np.empty(2)
     for i in range(5):
         yout[i] = y0[i]
-    H0 = carry[CARRY_H0]
-    gprev = carry[CARRY_G]
+    _t, _tc, gprev, n, H0 = read_carry(carry)   # t_n = n dt: no time is carried
     count = 0
-    n = int(carry[CARRY_STEPS])
     status = STATUS_TMAX
     if target == 0:
         return 0, STATUS_DONE, n * dt, n
@@ -343,11 +349,7 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
     yc = np.empty(5)
     for i in range(5):
         yout[i] = y0[i]
-    H0 = carry[CARRY_H0]
-    t = carry[CARRY_T]
-    tc = carry[CARRY_TC]
-    gprev = carry[CARRY_G]
-    steps = int(carry[CARRY_STEPS])
+    t, tc, gprev, steps, H0 = read_carry(carry)
     if target == 0:
         return 0, STATUS_DONE, t, steps
     h_abs = carry[CARRY_HABS]

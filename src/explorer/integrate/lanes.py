@@ -53,15 +53,11 @@ import numpy as np
 from explorer._jit import get_num_threads, njit, prange
 from explorer.integrate._lanes_generated import NVAR, taylor_coefficients_lanes
 from explorer.integrate.drivers import (
-    CARRY_G,
-    CARRY_H0,
-    CARRY_STEPS,
-    CARRY_T,
-    CARRY_TC,
     EPS,
     LIMIT_ROOM,
     LIMIT_TARGET,
     keep_crossing,
+    read_carry,
     save_carry,
     store_orbit,
 )
@@ -299,10 +295,7 @@ def _start_lane(l, X, orb, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, L_target,
             return 0
         for i in range(NVAR):
             X[0, i, l] = Y0[j, i]
-        t = carry[j, CARRY_T]
-        tc = carry[j, CARRY_TC]
-        g = carry[j, CARRY_G]
-        steps = int(carry[j, CARRY_STEPS])
+        t, tc, g, steps, H0 = read_carry(carry[j])
         if limits[j, LIMIT_TARGET] == 0:
             _finish(j, l, X, 0, STATUS_DONE, t, tc, g, steps, carry, out_count, out_status, out_final,
                     out_info)
@@ -316,7 +309,7 @@ def _start_lane(l, X, orb, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, L_target,
                     out_info)
             continue
         orb[l] = j
-        L_H0[l] = carry[j, CARRY_H0]
+        L_H0[l] = H0
         L_gprev[l] = g
         L_t[l] = t
         L_tc[l] = tc
