@@ -35,6 +35,15 @@ def test_generated_file_is_up_to_date(tmp_path):
         "src/explorer/integrate/_lanes_generated.py is stale: run tools/gen_lanes.py"
 
 
+def test_gen_lanes_check_passes_on_the_repository_and_fails_on_a_stale_file(tmp_path):
+    gen = [sys.executable, str(ROOT / "tools" / "gen_lanes.py")]
+    assert subprocess.run([*gen, "--check"], capture_output=True).returncode == 0
+    stale = tmp_path / "stale.py"
+    stale.write_text((ROOT / "src" / "explorer" / "integrate" / "_lanes_generated.py").read_text() + "# edited\n")
+    r = subprocess.run([*gen, "-o", str(stale), "--check"], capture_output=True, text=True)
+    assert r.returncode == 1 and "out of date" in r.stderr
+
+
 # ---------------------------------------------------------------- kernels
 @pytest.mark.parametrize("name", sorted(PARAM_SETS))
 @pytest.mark.parametrize("order", [4, 5, 15, 16, 19, 27])
