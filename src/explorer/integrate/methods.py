@@ -115,7 +115,7 @@ def run_crossings(prep: Prepared, Y0, P, cphi, sphi, direction, tmax, max_steps,
     if kind == "taylor":
         from explorer.integrate import lanes
 
-        # the SIMD lane driver, bit for bit drivers.run_taylor_batch (the scalar reference)
+        # the Taylor crossing loop on SIMD lanes (a lone orbit is one lane)
         lanes.run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, prep.order, max_steps, carry, limits,
                                      data, count, status, final, info)
     elif kind == "dop853":
