@@ -63,7 +63,8 @@ def pytest_sessionstart(session):
 #: time with Numba compiling for NUMBA_CPU_NAME=generic (docs/tests.md, "Across machines").
 CPU_DEPENDENT_MODULES = (
     "analysis/test_periodic.py", "analysis/test_fixedpoints.py", "analysis/test_rotation.py",
-    "analysis/test_early_stop.py", "analysis/test_melnikov.py", "analysis/test_manifolds.py", "app/test_atlas.py", "app/test_chaos_paper.py",
+    "analysis/test_early_stop.py", "analysis/test_melnikov.py", "analysis/test_manifolds.py",
+    "app/test_atlas.py", "app/test_chaos_paper.py",
     "app/test_chaos_raster.py", "app/test_cli_periodic.py", "app/test_figures.py", "app/test_paper.py",
 )
 
