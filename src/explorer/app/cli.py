@@ -757,8 +757,8 @@ def main(argv=None) -> int:
         msg = " ".join(str(exc).split())
         print(f"explorer: error: {msg}", file=sys.stderr)
         return EXIT_USAGE
-    except KeyboardInterrupt:
-        print("explorer: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as exc:   # a sweep says what it kept (explorer.app.interrupt.Interrupted)
+        print("explorer: interrupted" + (f": {exc}" if str(exc) else ""), file=sys.stderr)
         return 130
 
 

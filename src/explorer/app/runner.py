@@ -7,7 +7,9 @@ any moment leaves a readable file and the rerun computes only what is missing.
 """
 from __future__ import annotations
 
+import contextlib
 import json
+import os
 import sys
 import time
 from dataclasses import dataclass
@@ -19,7 +21,10 @@ import numpy as np
 from explorer.analysis import sections, sweep
 from explorer.analysis.fixedpoints import chaotic_fraction
 from explorer.analysis.sections import ADAPTIVE_METHODS, energy_warning, max_energy_error
+from explorer.app import interrupt
+from explorer.app.interrupt import Interrupted
 from explorer.io import store
+from explorer.io.store import stream
 from explorer.kernels import STATUS_NAMES, STATUS_TMAX
 from explorer.model import ParameterError, validation
 
@@ -193,7 +198,7 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
     commit each atomically and (``draw``) redraw the figure when data changed or files are missing.
 
     ``scene``: a :class:`~explorer.io.scene.Scene`, a TOML path or a preset name;
-    ``out``: HDF5 path [results/<scene>.h5]; ``figure``: figure stem [figures/<scene>];
+    ``out``: HDF5 path [results/<scene>.h5]; ``figure``: figure stem [``out`` without .h5: beside the store];
     ``jobs``/``backend``/``scheduler``: joblib processes (dask: a cluster); ``force``: recompute all;
     ``progress``: a progress bar on stderr. Returns a :class:`SweepReport`; bad settings raise
     :class:`~explorer.model.ParameterError`.
@@ -208,7 +213,14 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
         return run_atlas(scene, out, figure=figure, draw=draw, jobs=jobs, backend=backend, scheduler=scheduler,
                          force=force, progress=progress)
     out, stem = _outputs(scene, out, figure, draw)
+    with _guarded(out) as stop:
+        return _sweep(scene, out, stem, draw=draw, jobs=jobs, backend=backend, scheduler=scheduler, force=force,
+                      progress=progress, stop=stop, t_start=t_start)
 
+
+def _sweep(scene, out, stem, *, draw, jobs, backend, scheduler, force, progress, stop, t_start) -> SweepReport:
+    """:func:`run_sweep` once the store is locked and Ctrl-C deferred to ``stop.check()``."""
+    _check_same_scene(scene, out, force)
     try:
         on_disk = {} if force else store.panel_hashes(out)
     except store.StoreError as exc:
@@ -225,6 +237,9 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
 
     if spec is not None:
         _check_disk(spec, out)
+    # block folders of finished, replaced or no longer streamed panels: nothing resumes from them
+    stream.remove_stale_blocks(out, keep={p.index for k, p in enumerate(spec.panels) if spec.streamed(k)}
+                               if spec is not None else ())
     streams = _PanelStreams(out, hashes, scene.integration.phi0, force)
 
     prov = json.dumps(store.provenance({"scene": scene.name}), sort_keys=True)
@@ -283,11 +298,16 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
             stats["statuses"][name] = stats["statuses"].get(name, 0) + int(n)
 
     if spec is not None:
-        _map_with_progress(spec, on_panel, jobs, backend, client, progress, f"sweep {scene.name}", streams)
+        try:
+            _map_with_progress(spec, on_panel, jobs, backend, client, progress, f"sweep {scene.name}", streams,
+                               stop.check)
+        except Interrupted:
+            raise Interrupted(_kept(out, hashes)) from None
     elif client is not None:
         client.close()
 
     figure_paths = ()
+    stop.check()
     if draw:
         png, pdf = stem.with_suffix(".png"), stem.with_suffix(".pdf")
         stale = (not png.exists() or not pdf.exists() or png.stat().st_mtime < out.stat().st_mtime
@@ -384,27 +404,14 @@ def _restamp_fractions(scene, out, stored) -> tuple:
     return tuple(done)
 
 
-def _check_writable(directory: Path, option: str, target: Path):
-    """Refuse, before any computation, an output place that cannot be created or written."""
-    import tempfile
-
-    try:
-        directory.mkdir(parents=True, exist_ok=True)
-        with tempfile.NamedTemporaryFile(dir=directory, prefix=".explorer-write-test-"):
-            pass
-    except OSError as exc:
-        raise ParameterError(f"{option} {target}: cannot write into the directory '{directory}' "
-                             f"({exc.strerror or exc})") from None
-
-
-def _map_with_progress(spec, on_panel, jobs, backend, client, progress, desc, streamer=None) -> None:
+def _map_with_progress(spec, on_panel, jobs, backend, client, progress, desc, streamer=None, check=None) -> None:
     """sweep.run with a progress bar on stderr (unless ``progress`` is false); the dask
     ``client`` (if any) is closed afterwards, whatever happens."""
     try:
         bar = _progress(len(spec.chunks), not progress, desc)
         try:
             sweep.run(spec, on_panel, jobs=jobs, backend="dask" if client is not None else backend,
-                      progress=bar.update if bar is not None else None, streamer=streamer)
+                      progress=bar.update if bar is not None else None, streamer=streamer, check=check)
         finally:
             if bar is not None:
                 bar.close()
@@ -424,12 +431,55 @@ def _outputs(scene, out, figure, draw) -> tuple[Path, Path]:
     """The store path [results/<scene>.h5] and figure stem [figures/<scene>], checked writable;
     temporaries of killed runs next to the store removed."""
     out = Path(out) if out else Path("results") / f"{scene.name}.h5"
-    stem = Path(figure) if figure else Path("figures") / scene.name
-    _check_writable(out.parent, "--out", out)
+    stem = Path(figure) if figure else out.with_suffix("")   # beside the store (docs/commands/sweep.md)
+    store.check_writable(out.parent, "--out", out)
     if draw:
-        _check_writable(stem.parent, "--figure", stem)
-    store.clean_stale_temporaries(out)
+        store.check_writable(stem.parent, "--figure", stem)
     return out, stem
+
+
+@contextlib.contextmanager
+def _guarded(out: Path):
+    """While a run writes the store ``out``: its lock held (a second process is refused with the
+    holder named, exit 2) and Ctrl-C deferred to ``stop.check()`` (:mod:`explorer.app.interrupt`).
+    Temporaries of killed runs next to the store are removed once the lock is ours."""
+    with interrupt.deferred_interrupt() as stop:
+        try:
+            with store.store_lock(out):
+                store.clean_stale_temporaries(out)
+                yield stop
+        except store.StoreBusy as exc:
+            raise ParameterError(str(exc)) from None
+
+
+def _check_same_scene(scene, out: Path, force: bool) -> None:
+    """A store holds one scene (its ``scene_name``): another scene is refused without ``force``;
+    with ``force`` the old store and its block folders are removed before anything is computed."""
+    try:
+        held = store.stored_scene_name(out)
+    except store.StoreError as exc:
+        if not force:
+            raise ParameterError(str(exc)) from None
+        held = ""
+    if held is None or held == scene.name:
+        return
+    if not force:
+        raise ParameterError(f"--out {out} holds the scene '{held}', not '{scene.name}'; use --force to replace it "
+                             "or choose another --out")
+    out.unlink()
+    stream.remove_stale_blocks(out)
+
+
+def _kept(out: Path, hashes) -> str:
+    """What an interrupted sweep leaves in ``out``: the panels stored whole, the blocks of streamed ones."""
+    try:
+        on_disk = store.panel_hashes(out)
+    except store.StoreError:
+        on_disk = {}
+    stored = sum(on_disk.get(i) == h for i, h in enumerate(hashes))
+    blocks = sum(len([n for n in os.listdir(d) if n.endswith(".npz")]) for d in stream.panel_block_dirs(out).values())
+    return (f"{stored} of {len(hashes)} panels stored whole in {out}" + (f", {blocks} blocks of streamed panels kept"
+            if blocks else "") + "; the same command continues from there")
 
 
 def _check_disk(spec, out: Path) -> None:
@@ -462,8 +512,6 @@ class _PanelStreams:
         self.resumed: dict = {}
 
     def resume(self, panel):
-        from explorer.io.store import stream
-
         bs = stream.BlockStream(self.out, {"panel_hash": self.hashes[panel.index]}, index=panel.index)
         if self.force:
             bs.discard()

@@ -61,7 +61,8 @@ Streamed panels (rows written block by block, resumable after a kill):
 :mod:`~explorer.io.store.stream`.
 
 ``commit_panel``, ``read_store`` (-> :class:`StoreData` / :class:`PanelData`),
-``panel_hashes``, ``clean_stale_temporaries``, ``provenance``,
+``panel_hashes``, ``stored_scene_name``, ``clean_stale_temporaries``, ``provenance``,
+``store_lock`` (one writer per store, :mod:`~explorer.io.store.lock`), ``check_writable``,
 ``settings_hash``, ``write_bytes_atomic``, ``atomic_path``; errors about a
 store file raise :class:`StoreError` (a ``ValueError``) with a one-line message
 naming the path.
@@ -89,7 +90,9 @@ from explorer.io.store.format import (
                                       panel_hashes,
                                       read_store,
                                       settings_hash,
+                                      stored_scene_name,
 )
+from explorer.io.store.lock import StoreBusy, check_writable, store_lock
 
 __all__ = [
     "FORMAT",
@@ -105,6 +108,10 @@ __all__ = [
     "read_store",
     "iter_rows",
     "panel_hashes",
+    "stored_scene_name",
+    "store_lock",
+    "StoreBusy",
+    "check_writable",
     "clean_stale_temporaries",
     "provenance",
     "settings_hash",
