@@ -300,8 +300,8 @@ def _sweep(scene, out, stem, *, draw, jobs, backend, scheduler, force, progress,
     if spec is not None:
         try:
             _map_with_progress(spec, on_panel, jobs, backend, client, progress, f"sweep {scene.name}", streams,
-                               stop.check)
-        except Interrupted:
+                               _checker(stop, client))
+        except KeyboardInterrupt:   # ours, or a worker's when Ctrl-C reached the whole process group
             raise Interrupted(_kept(out, hashes)) from None
     elif client is not None:
         client.close()
@@ -321,14 +321,20 @@ def _sweep(scene, out, stem, *, draw, jobs, backend, scheduler, force, progress,
                        figure=figure_paths, wall_time=time.perf_counter() - t_start, restamped=restamped)
 
 
+#: an atlas stores its finished cells at most this often (seconds; and when it ends or is interrupted)
+ATLAS_COMMIT_SECONDS = 2.0
+
+
 def run_atlas(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, scheduler=None, force=False,
               progress=True) -> SweepReport:
     """A two-parameter atlas (a scene with [atlas]): the chaotic fraction of every cell
     ([sweep] value x [atlas] value) from the indicators of its seeds, mapped by the same
     ``task(spec, i)`` as a sweep (:func:`explorer.analysis.sweep.build_atlas_spec`), stored as one
     small HDF5 file (:mod:`explorer.io.store.atlas`: fractions only, no orbits) and drawn as a
-    heat map.  An atlas stored with the same :meth:`~explorer.io.scene.Scene.atlas_hash` is not
-    recomputed (the file is written once, at the end: an interrupted atlas starts again)."""
+    heat map.  The file is rewritten atomically with the cells finished so far every
+    :data:`ATLAS_COMMIT_SECONDS` (and when the run ends or is interrupted), so a rerun with the same
+    :meth:`~explorer.io.scene.Scene.atlas_hash` computes only the cells it lacks, and nothing when
+    it is complete."""
     from explorer.app.atlas_figure import atlas_heatmap
     from explorer.app.figures import save_figure
     from explorer.io.store import atlas as atlas_store
@@ -340,47 +346,91 @@ def run_atlas(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
     key = scene.atlas_hash()
     computed: tuple = ()
     orbits = 0
-    if force or atlas_store.atlas_hash_on_disk(out) != key:
-        client = None
-        if backend == "dask":
-            client = _dask_client(scheduler, jobs)
-            jobs = -1
-        chunk_orbits = sweep.default_jobs_layout(1 if (jobs == 1 and backend is None) else 2)
-        spec = sweep.build_atlas_spec(scene, chunk_orbits=chunk_orbits)
-        frac = np.full((rows, cols), np.nan)
-        err = np.full((rows, cols), np.nan)
-        n_ok = np.zeros((rows, cols), np.int64)
-        wall = np.zeros((rows, cols))
+    with _guarded(out) as stop:
+        held = _stored_atlas(out, force)
+        if held is not None and held.attrs.get("scene_name") != scene.name and not force:
+            raise ParameterError(f"--out {out} holds the atlas '{held.attrs.get('scene_name')}', not '{scene.name}'; "
+                                 "use --force to replace it or choose another --out")
+        if force or held is None or held.hash != key:
+            held = None
+        if held is None or not held.complete:
+            frac = np.full((rows, cols), np.nan) if held is None else held.fraction.copy()
+            err = np.full((rows, cols), np.nan) if held is None else held.error.copy()
+            n_ok = np.zeros((rows, cols), np.int64) if held is None else held.orbits.copy()
+            wall = np.zeros((rows, cols)) if held is None else held.wall_time.copy()
+            done = np.zeros((rows, cols), bool) if held is None else held.done.copy()
+            client = None
+            if backend == "dask":
+                client = _dask_client(scheduler, jobs)
+                jobs = -1
+            chunk_orbits = sweep.default_jobs_layout(1 if (jobs == 1 and backend is None) else 2)
+            missing = {i for i in range(scene.n_cells) if not done.flat[i]}
+            spec = sweep.build_atlas_spec(scene, chunk_orbits=chunk_orbits, cells=missing)
+            done.flat[sorted(missing - {p.index for p in spec.panels})] = True   # no allowed region: gray
+            last = [time.perf_counter(), 0]      # time of the last commit, cells since
 
-        def on_cell(panel, arrays):
-            r, c = divmod(panel.index, cols)
-            f, e, n = chaotic_fraction(classify_megno(arrays), scene.lyapunov.threshold,
-                                       arrays["lyapunov_status"] == 0)
-            frac[r, c], err[r, c], n_ok[r, c], wall[r, c] = f, e, n, arrays["wall_time"]
+            def commit():
+                atlas_store.write_atlas(out, scene_name=scene.name, scene_text=scene.text, hash=key,
+                                        row_parameter=scene.sweep_parameter, column_parameter=scene.atlas_parameter,
+                                        row_values=scene.sweep_values, column_values=scene.atlas_values,
+                                        fraction=frac, error=err, orbits=n_ok, wall_time=wall,
+                                        threshold=scene.lyapunov.threshold,
+                                        provenance=store.provenance({"scene": scene.name}), done=done)
+                last[:] = [time.perf_counter(), 0]
 
-        _map_with_progress(spec, on_cell, jobs, backend, client, progress, f"atlas {scene.name}")
-        atlas_store.write_atlas(out, scene_name=scene.name, scene_text=scene.text, hash=key,
-                                row_parameter=scene.sweep_parameter, column_parameter=scene.atlas_parameter,
-                                row_values=scene.sweep_values, column_values=scene.atlas_values, fraction=frac,
-                                error=err, orbits=n_ok, wall_time=wall, threshold=scene.lyapunov.threshold,
-                                provenance=store.provenance({"scene": scene.name}))
-        computed = tuple(p.index for p in spec.panels)
-        orbits = int(sum(len(p.y0) for p in spec.panels))
-    figure_paths: tuple = ()
-    if draw:
-        png, pdf = stem.with_suffix(".png"), stem.with_suffix(".pdf")
-        stale = (not png.exists() or not pdf.exists() or png.stat().st_mtime < out.stat().st_mtime
-                 or pdf.stat().st_mtime < out.stat().st_mtime)
-        if computed or stale or force:
-            data = atlas_store.read_atlas(out)
-            ly = scene.lyapunov
-            title = (f"{scene.name}: chaotic fraction\n{scene.seeds.n} seeds per cell, MEGNO time {ly.time:g}"
-                     + (", early classification" if ly.early_stop else ""))
-            figure_paths = tuple(save_figure(atlas_heatmap(data, title=title, dpi=scene.figure.dpi), stem))
+            def on_cell(panel, arrays):
+                r, c = divmod(panel.index, cols)
+                f, e, n = chaotic_fraction(classify_megno(arrays), scene.lyapunov.threshold,
+                                           arrays["lyapunov_status"] == 0)
+                frac[r, c], err[r, c], n_ok[r, c], wall[r, c] = f, e, n, arrays["wall_time"]
+                done[r, c] = True
+                last[1] += 1
+                if time.perf_counter() - last[0] >= ATLAS_COMMIT_SECONDS:
+                    commit()
+
+            try:
+                _map_with_progress(spec, on_cell, jobs, backend, client, progress, f"atlas {scene.name}", None,
+                                   _checker(stop, client))
+            except KeyboardInterrupt:
+                if last[1]:
+                    commit()
+                raise Interrupted(f"{int(done.sum())} of {done.size} cells stored in {out}; the same command "
+                                  "continues from there") from None
+            commit()
+            computed = tuple(p.index for p in spec.panels)
+            orbits = int(sum(len(p.y0) for p in spec.panels))
+        figure_paths: tuple = ()
+        stop.check()
+        if draw:
+            png, pdf = stem.with_suffix(".png"), stem.with_suffix(".pdf")
+            stale = (not png.exists() or not pdf.exists() or png.stat().st_mtime < out.stat().st_mtime
+                     or pdf.stat().st_mtime < out.stat().st_mtime)
+            if computed or stale or force:
+                data = atlas_store.read_atlas(out)
+                ly = scene.lyapunov
+                title = (f"{scene.name}: chaotic fraction\n{scene.seeds.n} seeds per cell, MEGNO time {ly.time:g}"
+                         + (", early classification" if ly.early_stop else ""))
+                figure_paths = tuple(save_figure(atlas_heatmap(data, title=title, dpi=scene.figure.dpi), stem))
     return SweepReport(scene=scene.name, out=out, n_panels=scene.n_cells, computed=computed, orbits=orbits,
                        crossings=0, stopped=0, statuses={}, max_dh=0.0, warning=None, fractions=(),
                        threshold=float(scene.lyapunov.threshold), figure=figure_paths,
                        wall_time=time.perf_counter() - t_start)
+
+
+def _stored_atlas(out: Path, force: bool):
+    """The atlas stored at ``out`` (None: no file); a file that is not an atlas is refused without
+    ``force`` (with it, it is replaced)."""
+    from explorer.io.store import atlas as atlas_store
+
+    if not out.exists():
+        return None
+    try:
+        return atlas_store.read_atlas(out)
+    except (OSError, ValueError, KeyError) as exc:
+        if force:
+            return None
+        raise ParameterError(f"--out {out}: not an explorer atlas file ({' '.join(str(exc).split())}); use --force "
+                             "to replace it or choose another --out") from None
 
 
 def _restamp_fractions(scene, out, stored) -> tuple:
@@ -418,6 +468,22 @@ def _map_with_progress(spec, on_panel, jobs, backend, client, progress, desc, st
     finally:
         if client is not None:
             client.close()
+
+
+def _checker(stop, client):
+    """``stop.check``, which first quiets the logs of a dask ``client`` (its cancelled tasks are not news)."""
+    if client is None:
+        return stop.check
+
+    def check():
+        if stop.requested:
+            import logging
+
+            for name in list(logging.root.manager.loggerDict):
+                if name.split(".")[0] in ("distributed", "tornado"):
+                    logging.getLogger(name).setLevel(logging.CRITICAL + 1)
+        stop.check()
+    return check
 
 
 def _check_jobs(jobs, backend, scheduler) -> int:
@@ -549,8 +615,10 @@ def _dask_client(address, jobs):
         raise ParameterError("--backend dask needs the 'distributed' package (pip install 'explorer[dask]')") from None
     if address:
         return Client(address)
+    import logging
+
     cluster = LocalCluster(n_workers=max(1, jobs), threads_per_worker=1, processes=True,
-                           dashboard_address=None)
+                           dashboard_address=None, silence_logs=logging.ERROR)
     return _ClientWithCluster(Client(cluster), cluster)
 
 
