@@ -307,7 +307,8 @@ def _sweep(scene, out, stem, *, draw, jobs, backend, scheduler, force, progress,
         client.close()
 
     figure_paths = ()
-    stop.check()
+    if stop.requested:      # every panel is stored; the figure is drawn by the next run
+        raise Interrupted(_kept(out, hashes))
     if draw:
         png, pdf = stem.with_suffix(".png"), stem.with_suffix(".pdf")
         stale = (not png.exists() or not pdf.exists() or png.stat().st_mtime < out.stat().st_mtime
@@ -400,7 +401,8 @@ def run_atlas(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
             computed = tuple(p.index for p in spec.panels)
             orbits = int(sum(len(p.y0) for p in spec.panels))
         figure_paths: tuple = ()
-        stop.check()
+        if stop.requested:      # every cell is stored; the heat map is drawn by the next run
+            raise Interrupted(f"all {scene.n_cells} cells stored in {out}; the same command draws the heat map")
         if draw:
             png, pdf = stem.with_suffix(".png"), stem.with_suffix(".pdf")
             stale = (not png.exists() or not pdf.exists() or png.stat().st_mtime < out.stat().st_mtime
