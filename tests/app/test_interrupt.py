@@ -12,6 +12,7 @@ import weakref
 import h5py
 import numpy as np
 import pytest
+from test_atlas import SCENE as atlas_scene
 
 from explorer.analysis import sweep
 from explorer.app import cli, runner
@@ -172,23 +173,7 @@ def test_a_sigint_that_lands_in_a_weakref_callback_still_stops_the_sweep(tmp_pat
     assert err.strip().splitlines()[-1].startswith("explorer: interrupted:")
 
 
-ATLAS = """
-name = "atlas_ctrlc"
-[sweep]
-parameter = "mu"
-values = [0.0, 1.0]
-[atlas]
-parameter = "h"
-values = [2.0, 4.0, 6.0]
-[seeds]
-n = 24
-[compute]
-sections = false
-lyapunov = true
-[lyapunov]
-time = 60.0
-indicators = ["megno"]
-"""
+ATLAS = atlas_scene   # 2 x 3 cells of 24 seeds, MEGNO over T = 60
 
 
 def test_an_interrupted_atlas_resumes_from_its_stored_cells(tmp_path, monkeypatch, capsys):
