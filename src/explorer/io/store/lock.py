@@ -50,9 +50,9 @@ def check_writable(directory, option: str, target) -> None:
 
 
 def _holder_text() -> str:
+    """Who holds the lock: the line a refused writer prints, then the holder's command line."""
     now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
-    cmd = " ".join(os.path.basename(a) if i == 0 else a for i, a in enumerate(sys.argv))
-    return f"pid {os.getpid()} on {socket.gethostname()} since {now} ({cmd})\n"
+    return f"pid {os.getpid()} on {socket.gethostname()} since {now}\ncommand: {' '.join(sys.argv)}\n"
 
 
 @contextlib.contextmanager
@@ -61,8 +61,12 @@ def store_lock(path) -> Iterator[str]:
 
     Raises :class:`StoreBusy` ("<store> is being written by pid N on HOST since ...") when another
     process holds it; an ``OSError`` when the lock file cannot be created (check the directory
-    with :func:`check_writable` first)."""
-    import fcntl
+    with :func:`check_writable` first).  Where there is no ``fcntl`` (not POSIX) nothing is locked."""
+    try:
+        import fcntl
+    except ImportError:
+        yield lock_path(path)
+        return
 
     name = lock_path(path)
     while True:
@@ -70,7 +74,8 @@ def store_lock(path) -> Iterator[str]:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
-            holder = os.read(fd, 4096).decode("utf-8", "replace").strip() or "another process"
+            text = os.read(fd, 4096).decode("utf-8", "replace").strip()
+            holder = text.splitlines()[0] if text else "another process"
             os.close(fd)
             raise StoreBusy(f"{os.fspath(path)} is being written by {holder}; wait for it to finish or "
                             "choose another --out") from None
