@@ -49,6 +49,9 @@ CHUNK_ORBITS_THREADS = 512
 STREAM_BYTES = int(os.environ.get("EXPLORER_STREAM_BYTES", 8 * 2**20))
 #: the smallest block (crossings per orbit and round) of a streamed panel
 MIN_BLOCK = 256
+#: per-orbit arrays of the chaos indicators that ``task`` returns (``lyapunov_dh``: |H - H0| at the
+#: end of each orbit's indicator integration, measured, not stored)
+INDICATOR_ARRAYS = ("megno", "mlce", "fli", "lyapunov_status", "sali", "gali2", "lyapunov_early", "lyapunov_dh")
 
 
 @dataclass(frozen=True)
@@ -60,6 +63,7 @@ class PanelSpec:
     y0: np.ndarray         # (N, 5) initial states on the section
     seeds: np.ndarray      # (N, 2) p1, p2
     grid: tuple = ()       # chaos map raster: (resolution, p1_lo, p1_hi, p2_lo, p2_hi); () otherwise
+    dropped: int = 0       # [seeds] candidates outside the allowed region, not integrated (seeds.seed_points)
 
 
 @dataclass(frozen=True)
@@ -90,33 +94,48 @@ def panel_block(n_orbits: int, crossings: int, budget: int | None = None) -> int
     return int(crossings) if crossings <= fit else int(max(MIN_BLOCK, fit))
 
 
-def build_spec(scene, panel_indices, *, chunk_orbits: int) -> SweepSpec:
-    """Seeds every panel to compute (inside the allowed region only, R9) and cuts it into chunks."""
+#: the products of a panel a spec can compute (``build_spec``'s ``product``; Scene.product_hashes)
+PRODUCTS = ("sections", "indicators")
+
+
+def build_spec(scene, panel_indices, *, chunk_orbits: int, product: str | None = None) -> SweepSpec:
+    """Seeds every panel to compute (inside the allowed region only, R9) and cuts it into chunks.
+
+    ``product``: ``"sections"`` (the crossings of the [seeds]), ``"indicators"`` (the chaos
+    indicators of the [seeds], or of the map's grid with [lyapunov] map_resolution) or None (what
+    the scene computes, in one pass: the indicators then use the sections' seeds, so a scene with
+    both sections and a map grid needs two specs)."""
     from explorer.analysis.seeds import seed_points
 
+    if product is not None and product not in PRODUCTS:
+        raise ValueError(f"product must be one of {PRODUCTS} or None, got {product!r}")
     integ = scene.integration
     panels = []
     chunks = []
     blocks = []
-    ly = scene.lyapunov if "lyapunov" in scene.compute else None
+    ly = scene.lyapunov if "lyapunov" in scene.compute and product != "sections" else None
+    with_sections = "sections" in scene.compute and product != "indicators"
+    if product is None and with_sections and ly is not None and ly.map_resolution:
+        raise ValueError("sections with a map grid are two products: build one spec for each")
     for pos, i in enumerate(panel_indices):
         params, h, label = scene.panel(i)
         grid: tuple = ()
+        dropped = 0
         if ly is not None and ly.map_resolution:
             p1, p2, grid = map_seeds(params, h, integ.phi0, ly.map_resolution)
         else:
-            p1, p2, _dropped = seed_points(scene.seeds, params, h, integ.phi0)
+            p1, p2, dropped = seed_points(scene.seeds, params, h, integ.phi0)
         if len(p1) == 0:
             raise ParameterError(f"scene panel {i} ({label}): no seed lies inside the allowed region")
         y0 = model.section_state(params, p1, p2, h, integ.phi0, integ.direction if integ.direction else 1)
         panels.append(PanelSpec(i, label, params.as_array(), float(h), np.ascontiguousarray(y0),
-                                np.column_stack([p1, p2]), grid))
+                                np.column_stack([p1, p2]), grid, dropped))
         n = len(p1)
         blocks.append(panel_block(n, integ.crossings))
         chunks += _chunks(pos, n, chunk_orbits)
     return SweepSpec(tuple(panels), integ.method, integ.tol, integ.dt, integ.crossings, integ.effective_tmax,
                      integ.max_steps, integ.phi0, integ.direction, tuple(chunks), ly,
-                     "sections" in scene.compute, tuple(blocks))
+                     with_sections, tuple(blocks))
 
 
 def _chunks(pos: int, n: int, chunk_orbits: int, parts: int = CHUNKS_PER_PANEL_THREADS) -> list:
@@ -207,7 +226,10 @@ def task(spec: SweepSpec, i: int, threads: int | None = None) -> dict:
         ind = indicators(panel.P, panel.y0[a:b], ly.time, method=ly.method, tol=ly.tol, dt=ly.dt, threads=threads,
                          which=ly.indicators, early_stop=ly.early_stop, early_sali=ly.early_sali,
                          early_megno=ly.early_megno, early_time=ly.early_time)
-        out.update(megno=ind.megno, mlce=ind.mlce, fli=ind.fli, lyapunov_status=ind.status)
+        y0 = panel.y0[a:b]
+        with np.errstate(invalid="ignore", over="ignore"):   # |H - H0| where the indicator integration ended
+            dh = np.abs(model.energy(panel.P, ind.final) - model.energy(panel.P, y0))
+        out.update(megno=ind.megno, mlce=ind.mlce, fli=ind.fli, lyapunov_status=ind.status, lyapunov_dh=dh)
         if ly.second_vector:
             out.update(sali=ind.sali, gali2=ind.gali2)
         if ly.early_stop:
@@ -299,7 +321,7 @@ def _stream_panel(spec: SweepSpec, pos: int, chunk_ids, streamer, jobs, backend,
         parts = sorted(_map(task, _worker_task, [(ly_spec, i) for i in chunk_ids], jobs, backend, check),
                        key=lambda p: p["chunk"])
         ly = _assemble(parts)
-        for k in ("megno", "mlce", "fli", "lyapunov_status", "sali", "gali2", "lyapunov_early"):
+        for k in INDICATOR_ARRAYS:
             if k in ly:
                 out[k] = ly[k]
         wall += ly["wall_time"]
@@ -363,9 +385,7 @@ def run(spec: SweepSpec, on_panel, *, jobs: int = 1, backend: str | None = None,
 
 def _assemble(parts):
     keys = ["data", "count", "status", "final", "info"]
-    if "megno" in parts[0]:
-        keys += ["megno", "mlce", "fli", "lyapunov_status"]
-        keys += [k for k in ("sali", "gali2", "lyapunov_early") if k in parts[0]]
+    keys += [k for k in INDICATOR_ARRAYS if k in parts[0]]
     out = {k: np.concatenate([p[k] for p in parts]) for k in keys}
     out["settings"] = parts[0]["settings"]
     out["wall_time"] = float(sum(p["wall_time"] for p in parts))

@@ -8,7 +8,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import re
 import sys
 
@@ -39,7 +38,6 @@ EXAMPLES = {
     "melnikov": "python -m explorer melnikov --splitting --mus 1e-4,1e-3 --json",
     "trajectory": "python -m explorer trajectory --p1 0.5 --M 2 --mu 0.5 -T 300 --out figures/trajectory",
     "figures": "python -m explorer figures --only figure4 --quick",
-    "native": "python -m explorer native --build",
 }
 
 
@@ -158,7 +156,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "from a second deviation vector (null for other methods).")
     _add_start_args(ly)
     ly.add_argument("--time", "-T", type=float, default=1000.0, help="integration time T [%(default)s]")
-    _add_method_args(ly, 1e-13, 0.02)
+    _add_method_args(ly, 1e-13, DEFAULT_DT)
     ly.add_argument("--history", type=int, default=12, help="history points (log-spaced in time) [%(default)s]")
     _add_model_args(ly, model.FIGURE4, json="print JSON")
 
@@ -281,13 +279,6 @@ def build_parser() -> argparse.ArgumentParser:
                     help="W4 results JSON for work_precision [benchmarks/results_w4.json]")
     fg.add_argument("--quiet", action="store_true", help="no progress bar")
     # ---- end figures ----------------------------------------------------------------------------
-    nt = sub.add_parser("native", help="the native library that runs lone Taylor orbits without numba",
-                        description="Where the native library of lone Taylor orbits (explorer.integrate.native) "
-                        "is kept, whether it is built for this source, numba and CPU, and its self-test "
-                        "against numba. `explorer orbit` builds it when it is missing; --build builds it now "
-                        "(about 10 s). EXPLORER_NATIVE=0 switches it off.")
-    nt.add_argument("--build", action="store_true", help="build it now (again, if it exists)")
-    nt.add_argument("--json", action="store_true", help="print JSON")
     for name, cmd in sub.choices.items():
         cmd.epilog = f"example:\n  {EXAMPLES[name]}"
     return parser
@@ -316,39 +307,15 @@ def cmd_orbit(args) -> int:
     kw = dict(method=args.method, tol=args.tol, dt=args.dt, tmax=args.tmax, max_steps=args.max_steps,
               phi0=args.phi0, direction=_direction(args.direction))
     from explorer.app import orbit
-    from explorer.integrate import native
 
     orbit.check_request(params, args.p1, args.p2, args.h, args.crossings, **kw)
-    builder = _start_native_build(args.method)
-    try:
-        rep = _run_orbit(args, params, block, kw)
-    except BaseException:
-        if builder is not None:
-            builder.terminate()
-            native.finish_build(builder)
-        raise
-    if builder is not None and native.finish_build(builder) != 0:
-        print("explorer: note: the native library for lone orbits could not be built (see python -m explorer "
-              "native); orbits run on numba", file=sys.stderr)
+    rep = _run_orbit(args, params, block, kw)
     settings = rep.settings or {}
     setting = f"--dt {settings['dt']:g}" if "dt" in settings else f"--tol {args.tol:g}"
     warning = energy_warning(rep.max_dh, args.h, setting)
     if warning:
         print(f"explorer: warning: {warning}", file=sys.stderr)
     return 0
-
-
-def _start_native_build(method):
-    """A lone Taylor orbit runs on the native library (explorer.integrate.native) once it is built:
-    when it is missing, build it now, in another process, while this run goes on numba."""
-    from explorer.integrate import native
-
-    if method != "taylor" or not native.missing():
-        return None
-    try:
-        return native.build(wait=False)
-    except OSError:       # e.g. no writable cache directory: stay on numba
-        return None
 
 
 def _run_orbit(args, params, block, kw):
@@ -444,6 +411,15 @@ def _pair(text, name):
     return a, b
 
 
+def _print_bifurcations(br, name) -> None:
+    """The stability changes and touches of a continued branch (fixed point or periodic orbit:
+    one detector, one report)."""
+    print("stability changes: " + (", ".join(f"{b['type']} at {name} = {b['value']:.10g}"
+                                             for b in br.bifurcations) or "none in range"))
+    if br.stopped:
+        print(f"branch stopped: {br.stopped}")
+
+
 def cmd_fixedpoint(args) -> int:
     from explorer.analysis import fixedpoints
 
@@ -460,13 +436,13 @@ def cmd_fixedpoint(args) -> int:
         br = fixedpoints.continue_branch(params, args.h, name, start, stop, step, guess, tol=args.tol)
         rows = [dict(fp.as_dict(), **{name: float(v)}) for v, fp in zip(br.values, br.points)]
         if args.json:
-            print(json.dumps({"parameter": name, "branch": rows, "bifurcations": br.bifurcations}))
+            print(json.dumps({"parameter": name, "branch": rows, "bifurcations": br.bifurcations,
+                              "stopped": br.stopped}))
         else:
             print(f"{name},p1,p2,trace,stable")
             for r in rows:
-                print(f"{r[name]!r},{r['p1']!r},{r['p2']!r},{r['trace']!r},{r['stable']}")
-            print("bifurcations (|trace| = 2) at " + name + " = " +
-                  (", ".join(f"{b:.10g}" for b in br.bifurcations) or "none in range"))
+                print(f"{r[name]:.10g},{r['p1']!r},{r['p2']!r},{r['trace']!r},{r['stable']}")
+            _print_bifurcations(br, name)
         return 0
     fp = fixedpoints.find_fixed_point(params, args.h, guess, tol=args.tol)
     out = dict(fp.as_dict(), params=params.as_dict(), h=args.h)
@@ -482,7 +458,7 @@ def cmd_fixedpoint(args) -> int:
 def _orbit_line(o) -> str:
     pts = " ".join(f"({p[0]:.10g},{p[1]:.10g})" for p in o.points)
     return (f"K={o.period} {o.kind} trace={o.trace:.10g} residue={o.residue:.6g} "
-            f"symmetric={o.symmetric} points={pts}")
+            f"symmetric={o.symmetric}{' degenerate' if o.degenerate else ''} points={pts}")
 
 
 def _section_map_args(args):
@@ -524,12 +500,9 @@ def cmd_periodic(args) -> int:
         else:
             print(f"{name},p1,p2,trace,residue,stable")
             for r in rows:
-                print(f"{r[name]!r},{r['points'][0][0]!r},{r['points'][0][1]!r},{r['trace']!r},{r['residue']!r},"
+                print(f"{r[name]:.10g},{r['points'][0][0]!r},{r['points'][0][1]!r},{r['trace']!r},{r['residue']!r},"
                       f"{r['stable']}")
-            print("stability changes: " + (", ".join(f"{b['type']} at {name} = {b['value']:.10g}"
-                                                     for b in br.bifurcations) or "none in range"))
-            if br.stopped:
-                print(f"branch stopped: {br.stopped}")
+            _print_bifurcations(br, name)
         return 0
     if args.search:
         if args.grid < 2:
@@ -694,38 +667,7 @@ def cmd_figures(args) -> int:
 
 
 # ---- end figures ----------------------------------------------------------------------------
-def cmd_native(args) -> int:
-    from explorer.integrate import native
-
-    status = 0
-    if args.build:
-        if not native.enabled():
-            raise model.ParameterError("the native library is switched off here (EXPLORER_NATIVE=0, or not Linux)")
-        for path in native.paths():
-            if os.path.exists(path):
-                os.remove(path)
-        status = native.build()
-    d = native.describe()
-    desc = d["description"] or {}
-    if args.json:
-        print(json.dumps(d, sort_keys=True))
-        return status
-    if not d["enabled"]:
-        state = "switched off (EXPLORER_NATIVE=0, or not Linux): orbits run on numba"
-    elif d["built"]:
-        test = desc.get("self_test", {})
-        state = (f"built {desc.get('built', '?')} in {desc.get('build_seconds', '?')} s; self-test against numba: "
-                 f"{'identical' if test.get('identical') else 'not run'} ({test.get('cases', 0)} cases)")
-    elif desc.get("error"):
-        state = f"build failed: {desc['error']} (orbits run on numba; --build tries again)"
-    else:
-        state = "not built yet (the next `explorer orbit` builds it, or run with --build)"
-    print(f"native library: {d['library']}\nkey: {d['key'][:16]} (source, numba, llvmlite, python, CPU)\n"
-          f"status: {state}")
-    return status
-
-
-COMMANDS = {"native": cmd_native, "figures": cmd_figures, "trajectory": cmd_trajectory, "orbit": cmd_orbit,
+COMMANDS = {"figures": cmd_figures, "trajectory": cmd_trajectory, "orbit": cmd_orbit,
             "sweep": cmd_sweep, "lyapunov": cmd_lyapunov, "fixedpoint": cmd_fixedpoint,
             "melnikov": cmd_melnikov, "periodic": cmd_periodic, "rotation": cmd_rotation}
 

@@ -272,8 +272,7 @@ def workspace_sizes(order, out):
 @njit
 def workspace_views(order, wf, wi, wb):
     """The 1-D work arrays (WORKSPACE_F, WORKSPACE_I, WORKSPACE_B) as views of the flat buffers
-    ``wf``, ``wi``, ``wb``.  Slices only: a reshape would call numba's run time, which the
-    native library (:mod:`explorer.integrate.native`) does not have."""
+    ``wf``, ``wi``, ``wb`` (slices: views that cost nothing)."""
     p1 = order + 1
     # six float and six int arrays of LANES each, then the float arrays of other lengths
     hv, vary, L_t, L_tc, L_gprev, L_H0 = (wf[0:LANES], wf[LANES:2 * LANES], wf[2 * LANES:3 * LANES],
