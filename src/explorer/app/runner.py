@@ -606,8 +606,8 @@ def _check_jobs(jobs, backend, scheduler) -> int:
 
 
 def _outputs(scene, out, figure, draw) -> tuple[Path, Path]:
-    """The store path [results/<scene>.h5] and figure stem [figures/<scene>], checked writable;
-    temporaries of killed runs next to the store removed."""
+    """The store path [results/<scene>.h5] and figure stem [the store's path without .h5], both
+    places checked writable."""
     out = Path(out) if out else Path("results") / f"{scene.name}.h5"
     stem = Path(figure) if figure else out.with_suffix("")   # beside the store (docs/commands/sweep.md)
     store.check_writable(out.parent, "--out", out)
