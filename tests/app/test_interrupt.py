@@ -101,7 +101,7 @@ BACKENDS = {"threads": [], "loky": ["--jobs", "2"], "dask": ["--jobs", "2", "--b
 
 
 @pytest.mark.parametrize("backend", ["threads", "loky", _dask()])
-def test_a_sweep_stops_on_the_first_sigint_and_resumes_to_the_uninterrupted_store(tmp_path, reference, backend):
+def test_a_sweep_stops_on_the_first_sigint_and_resumes_to_the_uninterrupted_store(tmp_path, request, backend):
     """Every backend stops; the threads run is then resumed (the joblib backends store the same
     numbers: tests/analysis/test_sweep.py, test_sweep_stream.py)."""
     scene = write_scene(tmp_path, SCENE)
@@ -127,6 +127,7 @@ def test_a_sweep_stops_on_the_first_sigint_and_resumes_to_the_uninterrupted_stor
     assert not os.path.exists(lock.lock_path(out))     # the lock went with its holder
     if backend != "threads":
         return
+    reference = request.getfixturevalue("reference")
     # the same command finishes the run from what was kept: the store of an uninterrupted run
     again = subprocess.run([sys.executable, "-m", "explorer"] + [str(a) for a in args], capture_output=True,
                            text=True, timeout=300, env=dict(os.environ, **STREAM_ENV))
