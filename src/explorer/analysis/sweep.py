@@ -281,6 +281,8 @@ def _map(fn_local, fn_worker, args, jobs, backend, check=None):
         return
     import joblib
 
+    if check is not None:
+        check()
     with joblib.parallel_config(backend=backend or "loky"):
         results = joblib.Parallel(n_jobs=jobs, return_as="generator")(joblib.delayed(fn_worker)(*a) for a in args)
         for r in results:
