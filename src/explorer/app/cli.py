@@ -137,7 +137,8 @@ def build_parser() -> argparse.ArgumentParser:
                        "settings are skipped; a killed run resumes where it stopped.")
     w.add_argument("scene", nargs="?", default="figure4", help="scene file (.toml) or preset name [figure4]")
     w.add_argument("--out", default=None, help="HDF5 file [results/<scene>.h5]")
-    w.add_argument("--figure", default=None, help="figure path without extension [the --out path without .h5: beside the store]")
+    w.add_argument("--figure", default=None,
+                   help="figure path without extension [the --out path without .h5: beside the store]")
     w.add_argument("--no-figure", action="store_true", help="do not draw the figure")
     w.add_argument("--jobs", type=int, default=1,
                    help="joblib worker processes (1: this process with Numba threads over orbits) [1]")
