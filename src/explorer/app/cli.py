@@ -138,7 +138,8 @@ def build_parser() -> argparse.ArgumentParser:
                        "settings are skipped; a killed run resumes where it stopped.")
     w.add_argument("scene", nargs="?", default="figure4", help="scene file (.toml) or preset name [figure4]")
     w.add_argument("--out", default=None, help="HDF5 file [results/<scene>.h5]")
-    w.add_argument("--figure", default=None, help="figure path without extension [figures/<scene>]")
+    w.add_argument("--figure", default=None,
+                   help="figure path without extension [the --out path without .h5: beside the store]")
     w.add_argument("--no-figure", action="store_true", help="do not draw the figure")
     w.add_argument("--jobs", type=int, default=1,
                    help="joblib worker processes (1: this process with Numba threads over orbits) [1]")
@@ -763,8 +764,8 @@ def main(argv=None) -> int:
         msg = " ".join(str(exc).split())
         print(f"explorer: error: {msg}", file=sys.stderr)
         return EXIT_USAGE
-    except KeyboardInterrupt:
-        print("explorer: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as exc:   # a sweep says what it kept (explorer.app.interrupt.Interrupted)
+        print("explorer: interrupted" + (f": {exc}" if str(exc) else ""), file=sys.stderr)
         return 130
 
 

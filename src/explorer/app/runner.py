@@ -7,7 +7,9 @@ any moment leaves a readable file and the rerun computes only what is missing.
 """
 from __future__ import annotations
 
+import contextlib
 import json
+import os
 import sys
 import time
 from dataclasses import dataclass, field
@@ -19,7 +21,10 @@ import numpy as np
 from explorer.analysis import sections, sweep
 from explorer.analysis.fixedpoints import chaotic_fraction
 from explorer.analysis.sections import ADAPTIVE_METHODS, energy_warning, max_energy_error
+from explorer.app import interrupt
+from explorer.app.interrupt import Interrupted
 from explorer.io import store
+from explorer.io.store import stream
 from explorer.kernels import STATUS_NAMES, STATUS_TMAX
 from explorer.model import ParameterError, validation
 
@@ -231,7 +236,7 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
     when data or drawing settings changed or files are missing.
 
     ``scene``: a :class:`~explorer.io.scene.Scene`, a TOML path or a preset name;
-    ``out``: HDF5 path [results/<scene>.h5]; ``figure``: figure stem [figures/<scene>];
+    ``out``: HDF5 path [results/<scene>.h5]; ``figure``: figure stem [``out`` without .h5: beside the store];
     ``jobs``/``backend``/``scheduler``: joblib processes (dask: a cluster); ``force``: recompute all;
     ``progress``: a progress bar on stderr. Returns a :class:`SweepReport`; bad settings raise
     :class:`~explorer.model.ParameterError`.
@@ -246,7 +251,14 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
         return run_atlas(scene, out, figure=figure, draw=draw, jobs=jobs, backend=backend, scheduler=scheduler,
                          force=force, progress=progress)
     out, stem = _outputs(scene, out, figure, draw)
+    with _guarded(out) as stop:
+        return _sweep(scene, out, stem, draw=draw, jobs=jobs, backend=backend, scheduler=scheduler, force=force,
+                      progress=progress, stop=stop, t_start=t_start)
 
+
+def _sweep(scene, out, stem, *, draw, jobs, backend, scheduler, force, progress, stop, t_start) -> SweepReport:
+    """:func:`run_sweep` once the store is locked and Ctrl-C deferred to ``stop.check()``."""
+    _check_same_scene(scene, out, force)
     try:
         on_disk = {} if force else store.panel_product_hashes(out)
     except store.StoreError as exc:
@@ -268,6 +280,10 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
 
     if "sections" in specs:
         _check_disk(specs["sections"], out)
+    sec = specs.get("sections")
+    # block folders of finished, replaced or no longer streamed panels: nothing resumes from them
+    stream.remove_stale_blocks(out, keep={p.index for k, p in enumerate(sec.panels) if sec.streamed(k)}
+                               if sec is not None else ())
     sec_hashes = [w.get("sections") for w in want]
     streams = _PanelStreams(out, sec_hashes, scene.integration.phi0, force)
 
@@ -362,12 +378,16 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
         for product, on_panel in (("sections", on_sections), ("indicators", on_indicators)):
             if product in specs:
                 _map_with_progress(specs[product], on_panel, jobs, backend, None, progress,
-                                   f"sweep {scene.name} {product}", streams)
+                                   f"sweep {scene.name} {product}", streams, _checker(stop, client))
+    except KeyboardInterrupt:   # ours, or a worker's when Ctrl-C reached the whole process group
+        raise Interrupted(_kept(scene, out, want)) from None
     finally:
         if client is not None:
             client.close()
 
     figure_paths = ()
+    if stop.requested:      # every panel is stored; the figure is drawn by the next run
+        raise Interrupted(_kept(scene, out, want))
     if draw and (computed or restamped or force or _figure_stale(stem, out, scene.figure_settings())):
         figure_paths = tuple(draw_figure(scene, out, stem))
     return SweepReport(scene=scene.name, out=out, n_panels=scene.n_panels, computed=tuple(computed),
@@ -414,14 +434,20 @@ def _figure_stale(stem: Path, out: Path, settings: str) -> bool:
     return png_text(png, FIGURE_SETTINGS_KEY) != settings
 
 
+#: an atlas stores its finished cells at most this often (seconds; and when it ends or is interrupted)
+ATLAS_COMMIT_SECONDS = 2.0
+
+
 def run_atlas(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, scheduler=None, force=False,
               progress=True) -> SweepReport:
     """A two-parameter atlas (a scene with [atlas]): the chaotic fraction of every cell
     ([sweep] value x [atlas] value) from the indicators of its seeds, mapped by the same
     ``task(spec, i)`` as a sweep (:func:`explorer.analysis.sweep.build_atlas_spec`), stored as one
     small HDF5 file (:mod:`explorer.io.store.atlas`: fractions only, no orbits) and drawn as a
-    heat map.  An atlas stored with the same :meth:`~explorer.io.scene.Scene.atlas_hash` is not
-    recomputed (the file is written once, at the end: an interrupted atlas starts again)."""
+    heat map.  The file is rewritten atomically with the cells finished so far every
+    :data:`ATLAS_COMMIT_SECONDS` (and when the run ends or is interrupted), so a rerun with the same
+    :meth:`~explorer.io.scene.Scene.atlas_hash` computes only the cells it lacks, and nothing when
+    it is complete."""
     from explorer.app.atlas_figure import atlas_heatmap
     from explorer.app.figures import save_figure
     from explorer.io.store import atlas as atlas_store
@@ -433,45 +459,90 @@ def run_atlas(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
     key = scene.atlas_hash()
     computed: tuple = ()
     orbits = 0
-    if force or atlas_store.atlas_hash_on_disk(out) != key:
-        client = None
-        if backend == "dask":
-            client = _dask_client(scheduler, jobs)
-            jobs = -1
-        chunk_orbits = sweep.default_jobs_layout(1 if (jobs == 1 and backend is None) else 2)
-        spec = sweep.build_atlas_spec(scene, chunk_orbits=chunk_orbits)
-        frac = np.full((rows, cols), np.nan)
-        err = np.full((rows, cols), np.nan)
-        n_ok = np.zeros((rows, cols), np.int64)
-        wall = np.zeros((rows, cols))
+    with _guarded(out) as stop:
+        held = _stored_atlas(out, force)
+        if held is not None and held.attrs.get("scene_name") != scene.name and not force:
+            raise ParameterError(f"--out {out} holds the atlas '{held.attrs.get('scene_name')}', not '{scene.name}'; "
+                                 "use --force to replace it or choose another --out")
+        if force or held is None or held.hash != key:
+            held = None
+        if held is None or not held.complete:
+            frac = np.full((rows, cols), np.nan) if held is None else held.fraction.copy()
+            err = np.full((rows, cols), np.nan) if held is None else held.error.copy()
+            n_ok = np.zeros((rows, cols), np.int64) if held is None else held.orbits.copy()
+            wall = np.zeros((rows, cols)) if held is None else held.wall_time.copy()
+            done = np.zeros((rows, cols), bool) if held is None else held.done.copy()
+            client = None
+            if backend == "dask":
+                client = _dask_client(scheduler, jobs)
+                jobs = -1
+            chunk_orbits = sweep.default_jobs_layout(1 if (jobs == 1 and backend is None) else 2)
+            missing = {i for i in range(scene.n_cells) if not done.flat[i]}
+            spec = sweep.build_atlas_spec(scene, chunk_orbits=chunk_orbits, cells=missing)
+            done.flat[sorted(missing - {p.index for p in spec.panels})] = True   # no allowed region: gray
+            last = [time.perf_counter(), 0]      # time of the last commit, cells since
 
-        def on_cell(panel, arrays):
-            r, c = divmod(panel.index, cols)
-            f, e, n = chaotic_fraction(classify_megno(arrays), scene.lyapunov.threshold,
-                                       arrays["lyapunov_status"] == 0)
-            frac[r, c], err[r, c], n_ok[r, c], wall[r, c] = f, e, n, arrays["wall_time"]
+            def commit():
+                atlas_store.write_atlas(out, scene_name=scene.name, scene_text=scene.text, hash=key,
+                                        row_parameter=scene.sweep_parameter, column_parameter=scene.atlas_parameter,
+                                        row_values=scene.sweep_values, column_values=scene.atlas_values,
+                                        fraction=frac, error=err, orbits=n_ok, wall_time=wall,
+                                        threshold=scene.lyapunov.threshold,
+                                        provenance=store.provenance({"scene": scene.name}), done=done)
+                last[:] = [time.perf_counter(), 0]
 
-        _map_with_progress(spec, on_cell, jobs, backend, client, progress, f"atlas {scene.name}")
-        atlas_store.write_atlas(out, scene_name=scene.name, scene_text=scene.text, hash=key,
-                                row_parameter=scene.sweep_parameter, column_parameter=scene.atlas_parameter,
-                                row_values=scene.sweep_values, column_values=scene.atlas_values, fraction=frac,
-                                error=err, orbits=n_ok, wall_time=wall, threshold=scene.lyapunov.threshold,
-                                provenance=store.provenance({"scene": scene.name}))
-        computed = tuple(p.index for p in spec.panels)
-        orbits = int(sum(len(p.y0) for p in spec.panels))
-    figure_paths: tuple = ()
-    settings = scene.figure_settings()
-    if draw and (computed or force or _figure_stale(stem, out, settings)):
-        data = atlas_store.read_atlas(out)
-        ly = scene.lyapunov
-        title = (f"{scene.name}: chaotic fraction\n{scene.seeds.n} seeds per cell, MEGNO time {ly.time:g}"
-                 + (", early classification" if ly.early_stop else ""))
-        figure_paths = tuple(save_figure(atlas_heatmap(data, title=title, dpi=scene.figure.dpi), stem,
-                                         text={FIGURE_SETTINGS_KEY: settings}))
+            def on_cell(panel, arrays):
+                r, c = divmod(panel.index, cols)
+                f, e, n = chaotic_fraction(classify_megno(arrays), scene.lyapunov.threshold,
+                                           arrays["lyapunov_status"] == 0)
+                frac[r, c], err[r, c], n_ok[r, c], wall[r, c] = f, e, n, arrays["wall_time"]
+                done[r, c] = True
+                last[1] += 1
+                if time.perf_counter() - last[0] >= ATLAS_COMMIT_SECONDS:
+                    commit()
+
+            try:
+                _map_with_progress(spec, on_cell, jobs, backend, client, progress, f"atlas {scene.name}", None,
+                                   _checker(stop, client))
+            except KeyboardInterrupt:
+                if last[1]:
+                    commit()
+                raise Interrupted(f"{int(done.sum())} of {done.size} cells stored in {out}; the same command "
+                                  "continues from there") from None
+            commit()
+            computed = tuple(p.index for p in spec.panels)
+            orbits = int(sum(len(p.y0) for p in spec.panels))
+        figure_paths: tuple = ()
+        if stop.requested:      # every cell is stored; the heat map is drawn by the next run
+            raise Interrupted(f"all {scene.n_cells} cells stored in {out}; the same command draws the heat map")
+        settings = scene.figure_settings()
+        if draw and (computed or force or _figure_stale(stem, out, settings)):
+            data = atlas_store.read_atlas(out)
+            ly = scene.lyapunov
+            title = (f"{scene.name}: chaotic fraction\n{scene.seeds.n} seeds per cell, MEGNO time {ly.time:g}"
+                     + (", early classification" if ly.early_stop else ""))
+            figure_paths = tuple(save_figure(atlas_heatmap(data, title=title, dpi=scene.figure.dpi), stem,
+                                             text={FIGURE_SETTINGS_KEY: settings}))
     return SweepReport(scene=scene.name, out=out, n_panels=scene.n_cells, computed=computed, orbits=orbits,
                        crossings=0, stopped=0, statuses={}, max_dh=0.0, warning=None, fractions=(),
                        threshold=float(scene.lyapunov.threshold), figure=figure_paths,
                        wall_time=time.perf_counter() - t_start, products={"cells": computed})
+
+
+def _stored_atlas(out: Path, force: bool):
+    """The atlas stored at ``out`` (None: no file); a file that is not an atlas is refused without
+    ``force`` (with it, it is replaced)."""
+    from explorer.io.store import atlas as atlas_store
+
+    if not out.exists():
+        return None
+    try:
+        return atlas_store.read_atlas(out)
+    except (OSError, ValueError, KeyError) as exc:
+        if force:
+            return None
+        raise ParameterError(f"--out {out}: not an explorer atlas file ({' '.join(str(exc).split())}); use --force "
+                             "to replace it or choose another --out") from None
 
 
 def _restamp_fractions(scene, out, stored) -> tuple:
@@ -495,33 +566,36 @@ def _restamp_fractions(scene, out, stored) -> tuple:
     return tuple(done)
 
 
-def _check_writable(directory: Path, option: str, target: Path):
-    """Refuse, before any computation, an output place that cannot be created or written."""
-    import tempfile
-
-    try:
-        directory.mkdir(parents=True, exist_ok=True)
-        with tempfile.NamedTemporaryFile(dir=directory, prefix=".explorer-write-test-"):
-            pass
-    except OSError as exc:
-        raise ParameterError(f"{option} {target}: cannot write into the directory '{directory}' "
-                             f"({exc.strerror or exc})") from None
-
-
-def _map_with_progress(spec, on_panel, jobs, backend, client, progress, desc, streamer=None) -> None:
+def _map_with_progress(spec, on_panel, jobs, backend, client, progress, desc, streamer=None, check=None) -> None:
     """sweep.run with a progress bar on stderr (unless ``progress`` is false); the dask
     ``client`` (if any) is closed afterwards, whatever happens."""
     try:
         bar = _progress(len(spec.chunks), not progress, desc)
         try:
             sweep.run(spec, on_panel, jobs=jobs, backend="dask" if client is not None else backend,
-                      progress=bar.update if bar is not None else None, streamer=streamer)
+                      progress=bar.update if bar is not None else None, streamer=streamer, check=check)
         finally:
             if bar is not None:
                 bar.close()
     finally:
         if client is not None:
             client.close()
+
+
+def _checker(stop, client):
+    """``stop.check``, which first quiets the logs of a dask ``client`` (its cancelled tasks are not news)."""
+    if client is None:
+        return stop.check
+
+    def check():
+        if stop.requested:
+            import logging
+
+            for name in list(logging.root.manager.loggerDict):
+                if name.split(".")[0] in ("distributed", "tornado"):
+                    logging.getLogger(name).setLevel(logging.CRITICAL + 1)
+        stop.check()
+    return check
 
 
 def _check_jobs(jobs, backend, scheduler) -> int:
@@ -532,15 +606,59 @@ def _check_jobs(jobs, backend, scheduler) -> int:
 
 
 def _outputs(scene, out, figure, draw) -> tuple[Path, Path]:
-    """The store path [results/<scene>.h5] and figure stem [figures/<scene>], checked writable;
-    temporaries of killed runs next to the store removed."""
+    """The store path [results/<scene>.h5] and figure stem [the store's path without .h5], both
+    places checked writable."""
     out = Path(out) if out else Path("results") / f"{scene.name}.h5"
-    stem = Path(figure) if figure else Path("figures") / scene.name
-    _check_writable(out.parent, "--out", out)
+    stem = Path(figure) if figure else out.with_suffix("")   # beside the store (docs/commands/sweep.md)
+    store.check_writable(out.parent, "--out", out)
     if draw:
-        _check_writable(stem.parent, "--figure", stem)
-    store.clean_stale_temporaries(out)
+        store.check_writable(stem.parent, "--figure", stem)
     return out, stem
+
+
+@contextlib.contextmanager
+def _guarded(out: Path):
+    """While a run writes the store ``out``: its lock held (a second process is refused with the
+    holder named, exit 2) and Ctrl-C deferred to ``stop.check()`` (:mod:`explorer.app.interrupt`).
+    Temporaries of killed runs next to the store are removed once the lock is ours."""
+    with interrupt.deferred_interrupt() as stop:
+        try:
+            with store.store_lock(out):
+                store.clean_stale_temporaries(out)
+                yield stop
+        except store.StoreBusy as exc:
+            raise ParameterError(str(exc)) from None
+
+
+def _check_same_scene(scene, out: Path, force: bool) -> None:
+    """A store holds one scene (its ``scene_name``): another scene is refused without ``force``;
+    with ``force`` the old store and its block folders are removed before anything is computed."""
+    try:
+        held = store.stored_scene_name(out)
+    except store.StoreError as exc:
+        if not force:
+            raise ParameterError(str(exc)) from None
+        held = ""
+    if held is None or held == scene.name:
+        return
+    if not force:
+        raise ParameterError(f"--out {out} holds the scene '{held}', not '{scene.name}'; use --force to replace it "
+                             "or choose another --out")
+    out.unlink()
+    stream.remove_stale_blocks(out)
+
+
+def _kept(scene, out: Path, want) -> str:
+    """What an interrupted sweep leaves in ``out``: the panels stored whole (every product with the
+    scene's hash), the blocks of streamed ones."""
+    try:
+        on_disk = store.panel_product_hashes(out)
+    except store.StoreError:
+        on_disk = {}
+    stored = sum(_stored_products(scene, i, on_disk.get(i, {}), w) == set(w) for i, w in enumerate(want))
+    blocks = sum(len([n for n in os.listdir(d) if n.endswith(".npz")]) for d in stream.panel_block_dirs(out).values())
+    return (f"{stored} of {len(want)} panels stored whole in {out}" + (f", {blocks} blocks of streamed panels kept"
+            if blocks else "") + "; the same command continues from there")
 
 
 def _check_disk(spec, out: Path) -> None:
@@ -573,8 +691,6 @@ class _PanelStreams:
         self.resumed: dict = {}
 
     def resume(self, panel):
-        from explorer.io.store import stream
-
         bs = stream.BlockStream(self.out, {"panel_hash": self.hashes[panel.index]}, index=panel.index)
         if self.force:
             bs.discard()
@@ -612,8 +728,10 @@ def _dask_client(address, jobs):
         raise ParameterError("--backend dask needs the 'distributed' package (pip install 'explorer[dask]')") from None
     if address:
         return Client(address)
+    import logging
+
     cluster = LocalCluster(n_workers=max(1, jobs), threads_per_worker=1, processes=True,
-                           dashboard_address=None)
+                           dashboard_address=None, silence_logs=logging.ERROR)
     return _ClientWithCluster(Client(cluster), cluster)
 
 

@@ -66,7 +66,9 @@ Streamed panels (rows written block by block, resumable after a kill):
 :mod:`~explorer.io.store.stream`.
 
 ``commit_panel``, ``update_panel``, ``read_store`` (-> :class:`StoreData` / :class:`PanelData`),
-``read_panel_datasets``, ``panel_hashes``, ``panel_product_hashes``, ``clean_stale_temporaries``, ``provenance``,
+``read_panel_datasets``, ``panel_hashes``, ``panel_product_hashes``, ``stored_scene_name``,
+``clean_stale_temporaries``, ``provenance``,
+``store_lock`` (one writer per store, :mod:`~explorer.io.store.lock`), ``check_writable``,
 ``settings_hash``, ``write_bytes_atomic``, ``atomic_path``; errors about a
 store file raise :class:`StoreError` (a ``ValueError``) with a one-line message
 naming the path.
@@ -98,7 +100,9 @@ from explorer.io.store.format import (
                                       read_panel_datasets,
                                       read_store,
                                       settings_hash,
+                                      stored_scene_name,
 )
+from explorer.io.store.lock import StoreBusy, check_writable, store_lock
 
 __all__ = [
     "FORMAT",
@@ -117,6 +121,10 @@ __all__ = [
     "panel_hashes",
     "panel_product_hashes",
     "read_panel_datasets",
+    "stored_scene_name",
+    "store_lock",
+    "StoreBusy",
+    "check_writable",
     "clean_stale_temporaries",
     "provenance",
     "settings_hash",

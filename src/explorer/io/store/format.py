@@ -376,6 +376,15 @@ def panel_hashes(path) -> dict:
     return out
 
 
+def stored_scene_name(path) -> str | None:
+    """The ``scene_name`` attribute of the store at ``path`` (None: no file, or no name);
+    StoreError if it exists but is not a readable explorer store."""
+    path = os.fspath(path)
+    if not os.path.exists(path):
+        return None
+    with _reading(path) as f:
+        name = _from_h5_attr(f.attrs.get("scene_name"))
+    return None if name is None else str(name)
 
 
 def panel_product_hashes(path) -> dict:
