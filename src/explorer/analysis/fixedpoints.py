@@ -170,7 +170,7 @@ def continue_branch(params, h, parameter, start, stop, step, guess=(0.0, 0.0), *
 
 # ---------------------------------------------------------------- separatrices
 def manifold(fp: FixedPoint, *, stable=False, branch=1, iterations=6, n_domain=60, first=1e-6,
-             max_gap=0.02, max_points=20000, phi0=math.pi, tol=1e-14):
+             max_gap=0.02, max_points=20000, phi0=math.pi, tol=DEFAULT_TOL):
     """One branch (+1 or -1 along the eigenvector) of the unstable (stable: backward in time)
     manifold of a hyperbolic fixed point, as an (M, 2) polyline on the section.
 

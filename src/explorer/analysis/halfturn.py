@@ -25,12 +25,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from explorer import model
+from explorer.integrate.methods import MAP_TOL
 from explorer.model import ParameterError, symmetry
 
 __all__ = ["DEFAULT_TOL", "Partners", "partner_points"]
 
 #: Taylor tolerance of the half-turn flow
-DEFAULT_TOL = 1e-15
+DEFAULT_TOL = MAP_TOL
 #: time budget of the half-turn flow, per point
 TMAX = 1e3
 #: |pi - 2 phi0| (mod 2 pi) below which K maps the section phi0 to itself

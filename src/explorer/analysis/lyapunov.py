@@ -30,7 +30,7 @@ import numpy as np
 from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
 from explorer.integrate import methods
-from explorer.integrate.methods import DEFAULT_DT
+from explorer.integrate.methods import DEFAULT_DT, DEFAULT_TOL
 from explorer.kernels import STATUS_NAMES, Status
 from explorer.model import ParameterError, validation
 
@@ -139,7 +139,7 @@ class Indicators:
         return Status(int(self.status[i]))
 
 
-def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", tol: float = 1e-13,
+def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", tol: float = DEFAULT_TOL,
                dt: float = DEFAULT_DT, history: int = 0, v0=None, max_steps: int = 10**9,
                threads: int | None = None, which=None, early_stop: bool = False,
                early_sali: float = EARLY_SALI, early_megno: float = EARLY_MEGNO,

@@ -64,6 +64,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from explorer import model
+from explorer.integrate.methods import MAP_TOL
 from explorer.model import ParameterError, validation
 
 __all__ = ["CONVERGED_TOL", "DEFAULT_ITERATES", "RotationNumber", "RotationProfile", "birkhoff_weights",
@@ -74,7 +75,7 @@ CONVERGED_TOL = 1e-10
 #: N (the orbit has 2N returns)
 DEFAULT_ITERATES = 2000
 #: Taylor tolerance of the orbits (the rotation number inherits the integration error)
-DEFAULT_TOL = 1e-15
+DEFAULT_TOL = MAP_TOL
 #: sub-sections per return at the first try (the angle is sampled at phi0 + 2 pi k/m, see the module)
 SUBSECTIONS = 4
 #: most sub-sections per return: an orbit still under-sampled there is "unresolved"

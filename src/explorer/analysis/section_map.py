@@ -26,7 +26,7 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis.lyapunov import energy_gradient
-from explorer.integrate.methods import MAX_TOL, MIN_TOL
+from explorer.integrate.methods import MAP_TOL, MAX_TOL, MIN_TOL
 from explorer.integrate.tangent import return_map_taylor
 from explorer.kernels import STATUS_DONE, STATUS_NAMES
 from explorer.kernels.taylor import order_for_tolerance
@@ -38,7 +38,7 @@ __all__ = ["DEFAULT_TOL", "MAX_STEPS", "RETURN_TMAX", "MapResult", "SectionMap"]
 #: Taylor tolerance of the section map in Newton's method and its relatives (fixed points,
 #: periodic orbits, continuation, separatrices): the map is evaluated a few hundred times,
 #: never millions, so it is taken at the tightest tolerance the order rule allows
-DEFAULT_TOL = 1e-15
+DEFAULT_TOL = MAP_TOL
 #: time budget of one return of the map
 RETURN_TMAX = 1e3
 #: step budget of one return of the map

@@ -28,7 +28,15 @@ import numpy as np
 from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
 from explorer.integrate import layout, methods
-from explorer.integrate.methods import ADAPTIVE_METHODS, DEFAULT_DT, MAX_TOL, METHODS, MIN_TOL, SPLIT_METHODS
+from explorer.integrate.methods import (
+    ADAPTIVE_METHODS,
+    DEFAULT_DT,
+    DEFAULT_TOL,
+    MAX_TOL,
+    METHODS,
+    MIN_TOL,
+    SPLIT_METHODS,
+)
 from explorer.kernels import STATUS_NAMES, Status
 from explorer.model import ParameterError, validation
 
@@ -37,7 +45,6 @@ __all__ = ["ADAPTIVE_METHODS", "DEFAULT_BLOCK", "DEFAULT_DT", "DEFAULT_MAX_STEPS
            "crossings", "energy_warning", "human_bytes", "iter_crossings", "iter_section_crossings",
            "max_energy_error", "result_bytes", "section_crossings"]
 
-DEFAULT_TOL = 1e-13
 DEFAULT_MAX_STEPS = 10**9
 #: a run whose energy error exceeds this fraction of max(|h|, 1) gets a warning: its step
 #: (splitting) or tolerance is too coarse for the scene to trust the section's fine structure

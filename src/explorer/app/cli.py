@@ -14,6 +14,7 @@ import sys
 import numpy as np
 
 from explorer import __version__, model
+from explorer.integrate.methods import MAP_TOL, TRAJECTORY_TOL
 
 EXIT_USAGE = 2
 
@@ -101,7 +102,7 @@ def _add_newton_args(p, continue_help):
     tolerance of the section map, the model."""
     p.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
     p.add_argument("--continue", dest="cont", nargs=4, metavar=("PARAM", "START", "STOP", "STEP"), help=continue_help)
-    p.add_argument("--tol", type=float, default=1e-15, help="Taylor tolerance [%(default)s]")
+    p.add_argument("--tol", type=float, default=MAP_TOL, help="Taylor tolerance [%(default)s]")
     _add_model_args(p, model.FIGURE4, json="print JSON")
 
 
@@ -158,7 +159,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "from a second deviation vector (null for other methods).")
     _add_start_args(ly)
     ly.add_argument("--time", "-T", type=float, default=1000.0, help="integration time T [%(default)s]")
-    _add_method_args(ly, 1e-13, DEFAULT_DT)
+    _add_method_args(ly, DEFAULT_TOL, DEFAULT_DT)
     ly.add_argument("--history", type=int, default=12, help="history points (log-spaced in time) [%(default)s]")
     _add_model_args(ly, model.FIGURE4, json="print JSON")
 
@@ -196,7 +197,7 @@ def build_parser() -> argparse.ArgumentParser:
     rt.add_argument("--iterates", type=int, default=2000, help="N: each orbit has 2N returns [%(default)s]")
     rt.add_argument("--center", default=None, help="guess of the elliptic fixed point p1,p2 [--from]")
     rt.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
-    rt.add_argument("--tol", type=float, default=1e-15, help="Taylor tolerance [%(default)s]")
+    rt.add_argument("--tol", type=float, default=MAP_TOL, help="Taylor tolerance [%(default)s]")
     _add_model_args(rt, model.FIGURE4, json="print JSON")
     # ---- end periodic, rotation ----------------------------------------------------------------
     # ---- explore: interactive explorer (explorer/explore.py) -------------------------------
@@ -250,7 +251,7 @@ def build_parser() -> argparse.ArgumentParser:
     tj.add_argument("--phi", type=float, default=0.0, help="initial angle phi [%(default)s]")
     tj.add_argument("--time", "-T", type=float, default=300.0, help="integration time T [%(default)s]")
     tj.add_argument("--samples", type=int, default=20001, help="samples on [0, T] [%(default)s]")
-    tj.add_argument("--tol", type=float, default=1e-12, help="DOP853 tolerance (rtol = atol) [%(default)s]")
+    tj.add_argument("--tol", type=float, default=TRAJECTORY_TOL, help="DOP853 tolerance (rtol = atol) [%(default)s]")
     tj.add_argument("--glyphs", type=int, default=40, help="orientation glyphs along the path [%(default)s]")
     tj.add_argument("--out", default="figures/trajectory",
                     help="figure path without extension (lam = 0 adds <out>_kozlov) [%(default)s]")
@@ -705,7 +706,7 @@ def _add_manifold_parser(sub):
     mf.add_argument("--max-points", type=int, default=20000, help="points per branch at most [%(default)s]")
     mf.add_argument("--max-time", type=float, default=None, help="seconds per branch at most [none]")
     mf.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
-    mf.add_argument("--tol", type=float, default=1e-15, help="Taylor tolerance of the section map [%(default)s]")
+    mf.add_argument("--tol", type=float, default=MAP_TOL, help="Taylor tolerance of the section map [%(default)s]")
     _add_model_args(mf, model.FIGURE4, json="print JSON {orbit, branches, homoclinic_points, lobes, flux}")
 
 

@@ -229,7 +229,7 @@ def _stored_products(scene, i, stored: dict, want: dict) -> set:
     return set()
 
 
-def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, scheduler=None,
+def run_sweep(scene, out=None, *, figure=None, draw=None, jobs=1, backend=None, scheduler=None,
               force=False, progress=True) -> SweepReport:
     """Compute every product of every panel of ``scene`` (sections, indicators) that ``out`` does
     not hold with the same settings hash, commit each atomically and (``draw``) redraw the figure
@@ -237,6 +237,8 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
 
     ``scene``: a :class:`~explorer.io.scene.Scene`, a TOML path or a preset name;
     ``out``: HDF5 path [results/<scene>.h5]; ``figure``: figure stem [``out`` without .h5: beside the store];
+    ``draw``: draw the figure [only when ``figure`` is given: from Python a sweep computes and
+    stores, and writes no picture unless asked; the command line draws unless --no-figure];
     ``jobs``/``backend``/``scheduler``: joblib processes (dask: a cluster); ``force``: recompute all;
     ``progress``: a progress bar on stderr. Returns a :class:`SweepReport`; bad settings raise
     :class:`~explorer.model.ParameterError`.
@@ -244,6 +246,7 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
     from explorer.io.scene import Scene, load_scene
 
     t_start = time.perf_counter()
+    draw = figure is not None if draw is None else validation.boolean("draw", draw)
     jobs = _check_jobs(jobs, backend, scheduler)
     if not isinstance(scene, Scene):
         scene = load_scene(scene)

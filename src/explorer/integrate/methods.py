@@ -32,6 +32,16 @@ from explorer.model import validation
 #: round-off)
 MIN_TOL = 1e-16
 MAX_TOL = 1e-2
+# ---- default tolerances: one per purpose, named here once (docs/methods.md, "Default tolerances")
+#: crossings of the section and chaos indicators (sections, lyapunov, the orbit and lyapunov
+#: commands, a scene's [integration] and [lyapunov] tables; the presets set their own)
+DEFAULT_TOL = 1e-13
+#: the section map where it is evaluated hundreds of times, not millions: Newton for fixed points
+#: and periodic orbits, continuation, rotation numbers, half-turn partners, manifolds, the
+#: measured splitting; the tightest tolerance the order rule is built for
+MAP_TOL = 1e-15
+#: the full system R1 with the body's position (trajectory; DOP853's rtol = atol)
+TRAJECTORY_TOL = 1e-12
 #: the step of the splitting methods when none is given: sections (orbit, sweep) and chaos
 #: indicators (lyapunov, [lyapunov] dt) alike, one default for every command
 DEFAULT_DT = 0.05

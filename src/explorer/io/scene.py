@@ -365,7 +365,7 @@ class LyapunovSpec:
 
     time: float = 1000.0
     method: str = "taylor"
-    tol: float = 1e-12
+    tol: float = sections.DEFAULT_TOL
     dt: float = sections.DEFAULT_DT
     threshold: float = 4.0
     #: what to compute ("sali"/"gali2" add a second deviation vector; Taylor method)

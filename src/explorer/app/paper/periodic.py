@@ -4,6 +4,7 @@ import numpy as np
 
 from explorer import model
 from explorer.app.paper._common import _FS, _SMALL, Drawn, Outcome, _new_figure, _rc, save
+from explorer.integrate.methods import DEFAULT_TOL
 
 #: the figure's name (``explorer figures --only periodic``) and what it shows
 NAME = "periodic"
@@ -31,7 +32,7 @@ def periodic_figure(params=None, h=None, *, periods=range(1, 9), seeds=40, cross
     h = model.FIGURE4_H if h is None else h
     c1, c2, r1, r2 = model.allowed_ellipse(prm, h)
     p1s = c1 + r1 * np.linspace(-0.97, 0.97, seeds)
-    cr = section_crossings(prm, p1s, np.zeros_like(p1s), h, crossings, tol=1e-13)
+    cr = section_crossings(prm, p1s, np.zeros_like(p1s), h, crossings, tol=DEFAULT_TOL)
     pts = cr.data[..., 1:3].reshape(-1, 2)
     pts = pts[np.isfinite(pts[:, 0])]
     orbits = {K: periodic.search_periodic_orbits(prm, h, K, grid=grid) for K in periods}
