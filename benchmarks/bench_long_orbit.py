@@ -11,15 +11,13 @@ A. Whole process, warm caches (best of --repeats fresh processes each):
    ``python -m explorer orbit --p1 0.5 --p2 0 --mu 0.5 --crossings 30000 --tol 1e-12 --json`` against
    a fresh Python process that imports heyoka, builds the integrator, follows the same orbit to its
    30000th crossing and prints the same JSON rows.  Both print to a pipe that is read and dropped.
-   explorer runs twice: on its native library (the default for a lone orbit; built by the warm-up
-   run when missing) and on numba (EXPLORER_NATIVE=0); the two must print the same rows.
+   (explorer's start-up is numba's with its on-disk cache: the ahead-of-time native library of
+   issue 11 was removed in issue 21, being built on numba's private internals.)
 B. Single-orbit throughput in one process (after a warm-up): crossings per second of explorer's
-   ``sections.crossings`` for one orbit (on the native library when it is built: this process has
-   not imported numba) and of heyoka's scalar integrator; the first 20 crossings
+   ``sections.crossings`` for one orbit and of heyoka's scalar integrator; the first 20 crossings
    of the two are compared (max |p1, p2 difference|) to show they follow the same orbit.
 C. Start-up breakdown of a small ``explorer orbit`` (5 crossings), each step in fresh processes:
-   bare interpreter, ``import numpy``, ``import numba``, the command's imports, the whole command
-   on numba and on the native library.
+   bare interpreter, ``import numpy``, ``import numba``, the command's imports, the whole command.
 D. Peak resident memory (ru_maxrss of the child) of ``explorer orbit --out`` against the crossings
    per orbit (1e4 ... 1e7; --quick: up to 1e5), and of a 2-orbit sweep scene with the same counts.
 
@@ -48,8 +46,6 @@ HERE = Path(__file__).resolve().parent
 MU, H, P1, P2, TOL = 0.5, 2.0, 0.5, 0.0, 1e-12
 #: crossings compared between explorer and heyoka (the orbit may be chaotic: later ones diverge)
 AGREE_CROSSINGS = 20
-#: the environment of a run on numba (the native library switched off)
-NUMBA_ENV = dict(os.environ, EXPLORER_NATIVE="0")
 ORBIT_ARGS = ["orbit", "--p1", str(P1), "--p2", str(P2), "--mu", str(MU), "--tol", str(TOL)]
 
 HEYOKA_SCRIPT = r"""
@@ -121,16 +117,10 @@ def whole_process(repeats, K):
     ex_cmd = [sys.executable, "-m", "explorer"] + ORBIT_ARGS + ["--crossings", str(K), "--json"]
     hy_cmd = [sys.executable, "-c", HEYOKA_SCRIPT, str(HERE), json.dumps(prm.as_array().tolist()),
               json.dumps(y0.tolist()), str(K), str(TOL)]
-    _run(ex_cmd)                            # warm the Numba cache (and build the native library)
-    _run(ex_cmd, env=NUMBA_ENV)
+    _run(ex_cmd)                            # warm the Numba cache
     rows = {}
-    ex = min(_run(ex_cmd)[0] for _ in range(repeats))
+    rows["explorer"] = min(_run(ex_cmd)[0] for _ in range(repeats))
     ex_rows = np.array(json.loads(_run(ex_cmd)[1])["crossings"])
-    nb_rows = np.array(json.loads(_run(ex_cmd, env=NUMBA_ENV)[1])["crossings"])
-    if ex_rows.tobytes() != nb_rows.tobytes():
-        raise RuntimeError("the native library and numba printed different rows")
-    rows["explorer (native library)"] = ex
-    rows["explorer on numba (EXPLORER_NATIVE=0)"] = min(_run(ex_cmd, env=NUMBA_ENV)[0] for _ in range(repeats))
     if C.have("heyoka"):
         rows["heyoka scalar"] = min(_run(hy_cmd)[0] for _ in range(repeats))
         hy_rows = np.array(json.loads(_run(hy_cmd)[1])["crossings"])
@@ -148,11 +138,9 @@ def throughput(K):
 
     prm = model.FIGURE4.with_(mu=MU)
     y0 = model.section_state(prm, [P1], [P2], H)
-    from explorer.integrate import native
-
     sections.crossings(prm, y0, 10, tol=TOL)
     best = C.best_of(lambda: sections.crossings(prm, y0, K, tol=TOL), repeats=3)[0]
-    out = {"explorer" + (" (native library)" if native.active() is not None else " (numba)"): K / best}
+    out = {"explorer": K / best}
     if C.have("heyoka"):
         sys.path.insert(0, str(HERE))
         from bench_w4 import HeyokaSections
@@ -170,17 +158,14 @@ def startup(repeats):
              ("import numba", [sys.executable, "-c", "import numba"]),
              ("the command's imports (no numba)", [sys.executable, "-c",
                                                    "import explorer.app.cli, explorer.app.orbit, "
-                                                   "explorer.analysis.sections, explorer.integrate.native"]),
-             ("+ numba's Taylor lanes (the numba path)", [sys.executable, "-c",
-                                                          "import explorer.app.cli, explorer.app.orbit, "
-                                                          "explorer.analysis.sections, explorer.integrate.lanes"]),
-             ("explorer orbit -K 5 on numba (EXPLORER_NATIVE=0)", [sys.executable, "-m", "explorer"] + ORBIT_ARGS
-              + ["--crossings", "5"]),
-             ("explorer orbit -K 5 (whole command, native library)", [sys.executable, "-m", "explorer"] + ORBIT_ARGS
+                                                   "explorer.analysis.sections"]),
+             ("+ numba's Taylor lanes", [sys.executable, "-c",
+                                         "import explorer.app.cli, explorer.app.orbit, "
+                                         "explorer.analysis.sections, explorer.integrate.lanes"]),
+             ("explorer orbit -K 5 (whole command)", [sys.executable, "-m", "explorer"] + ORBIT_ARGS
               + ["--crossings", "5"])]
     _run(steps[-1][1])
-    envs = {steps[-2][0]: NUMBA_ENV}
-    return {name: min(_run(cmd, env=envs.get(name))[0] for _ in range(repeats)) for name, cmd in steps}
+    return {name: min(_run(cmd)[0] for _ in range(repeats)) for name, cmd in steps}
 
 
 def memory(counts):
@@ -232,7 +217,7 @@ def main(argv=None):
         extra=[f"Orbit: Figure 4 at mu = {MU}, h = {H}, start (p1, p2) = ({P1}, {P2}), tol {TOL:g}, "
                "crossings with dphi/dt > 0; explorer `taylor` (one orbit: the lane worker without the parallel "
                "layer), heyoka `taylor_adaptive` with the terminal event of bench_w4.py"])
-    ex = procs["explorer (native library)"]
+    ex = procs["explorer"]
     lines += ["", f"### A. Whole process, {K} crossings, warm caches (best of {repeats})", "",
               "| run | wall (s) | ratio heyoka / explorer |", "|---|---:|---:|"]
     for name, t in procs.items():

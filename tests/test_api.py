@@ -51,3 +51,19 @@ def test_the_package_docstring_example_runs_and_conserves_energy():
     y0 = ex.section_state(prm, [0.1], [0.0], ex.FIGURE4_H)
     ind = ex.indicators(prm, y0, 100.0)
     assert np.isfinite(ind.megno[0])
+
+
+def test_the_type_stub_names_exactly_the_public_api_from_the_modules_that_define_it():
+    """src/explorer/__init__.pyi (what IDEs read in place of the lazy __getattr__) imports each
+    public name from the module that defines it, and nothing else."""
+    import ast
+    from pathlib import Path
+
+    tree = ast.parse((Path(explorer.__file__).with_suffix(".pyi")).read_text())
+    stubbed = {}
+    for node in tree.body:
+        if isinstance(node, ast.ImportFrom):
+            for alias in node.names:
+                assert alias.asname == alias.name          # "import X as X": a re-export
+                stubbed[alias.name] = node.module
+    assert stubbed == explorer._EXPORTS

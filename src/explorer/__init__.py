@@ -47,7 +47,8 @@ _EXPORTS = {
     "Indicators": "explorer.analysis.lyapunov",
     "indicators": "explorer.analysis.lyapunov",
     "chaotic_fraction": "explorer.analysis.fixedpoints",
-    # fixed points of the section map
+    # the section map and its fixed points
+    "SectionMap": "explorer.analysis.section_map",
     "FixedPoint": "explorer.analysis.fixedpoints",
     "Branch": "explorer.analysis.fixedpoints",
     "find_fixed_point": "explorer.analysis.fixedpoints",
@@ -57,7 +58,14 @@ _EXPORTS = {
     "PeriodicOrbit": "explorer.analysis.periodic",
     "find_periodic_orbit": "explorer.analysis.periodic",
     "search_periodic_orbits": "explorer.analysis.periodic",
+    "mirror_orbit": "explorer.analysis.periodic",
     "continue_periodic": "explorer.analysis.periodic",
+    # invariant manifolds, homoclinic tangles and transport (docs/manifolds.md)
+    "manifolds": "explorer.analysis.manifolds",
+    "homoclinic_points": "explorer.analysis.manifolds",
+    "lobes": "explorer.analysis.transport",
+    "flux_curve": "explorer.analysis.transport",
+    "exit_times": "explorer.analysis.transport",
     "rotation_number": "explorer.analysis.rotation",
     "rotation_profile": "explorer.analysis.rotation",
     # scenes, sweeps and stores

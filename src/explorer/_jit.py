@@ -1,6 +1,5 @@
 """The only place that imports numba, and only when a kernel is defined or a thread count is
-asked for: importing :mod:`explorer` (or validating input, or running a lone orbit on the
-native library, :mod:`explorer.integrate.native`) does not load numba.
+asked for: importing :mod:`explorer` (or validating input) does not load numba.
 
 ``njit`` compiles with ``cache=True`` and never with ``fastmath`` (fastmath
 reassociation deletes compensated sums and ``nnan`` deletes NaN checks).

@@ -54,8 +54,8 @@ def test_backward_map_inverts_the_forward_map():
 
 def test_continuation_in_mu_finds_the_stability_change_of_the_central_point():
     br = fpm.continue_branch(model.FIGURE4, 2.0, "mu", 0.0, 4.0, 0.25)
-    assert len(br.bifurcations) == 1
-    mu_b = br.bifurcations[0]
+    assert [b["type"] for b in br.bifurcations] == ["tangent"]
+    mu_b = br.bifurcations[0]["value"]
     assert 2.5 < mu_b < 3.5
     below = fpm.find_fixed_point(model.FIGURE4.with_(mu=mu_b - 1e-3), 2.0, br.points[12].point)
     above = fpm.find_fixed_point(model.FIGURE4.with_(mu=mu_b + 1e-3), 2.0, br.points[12].point)
@@ -115,7 +115,7 @@ def test_fixedpoint_cli_json_and_continuation(capsys):
     assert doc["stable"] is False and abs(doc["trace"] - reference.trace_solution_I(1.0, 0.5, 2.0, 1.0, 2.0)) < 1e-8
     assert cli.main(["fixedpoint", "--continue", "mu", "2.5", "3.5", "0.25", "--guess=-1.2,0", "--json"]) == 0
     doc = json.loads(capsys.readouterr()[0])
-    assert len(doc["branch"]) == 5 and len(doc["bifurcations"]) == 1
+    assert len(doc["branch"]) == 5 and [b["type"] for b in doc["bifurcations"]] == ["tangent"]
 
 
 @pytest.mark.parametrize("args,fragment", [
@@ -150,3 +150,51 @@ def test_trace_of_solution_I_equals_its_closed_form():
     linearisation independently of fixedpoints.analytic_eigenvalues_solution_I)."""
     fp = fpm.find_fixed_point(model.FIGURE4, 2.0)
     assert abs(fp.trace - reference.trace_solution_I(1.0, 0.5, 2.0, 1.0, 2.0)) < 1e-8
+
+
+def test_newton_converges_from_a_guess_near_the_regions_edge():
+    """mu = 0.03: a guess on p2 = 0 at 0.9 of the allowed region's half-axis from its centre.
+    The fixed-point Newton of before (no residual test in its line search) stopped there with
+    'did not converge'; the one Newton of every period converges to the elliptic point, which
+    an independent scipy secant on the symmetry line confirms."""
+    prm = model.FIGURE4.with_(mu=0.03)
+    c1, _c2, r1, _r2 = model.allowed_ellipse(prm, 2.0)
+    fp = fpm.find_fixed_point(prm, 2.0, (c1 - 0.9 * r1, 0.0))
+    assert fp.stable and not fp.degenerate and fp.residual < 1e-12
+    p1 = reference.symmetric_fixed_point(prm.as_array(), 2.0, fp.point[0] + 1e-3)
+    assert fp.point[0] == pytest.approx(p1, abs=1e-9) and abs(fp.point[1]) < 1e-12
+    np.testing.assert_allclose(reference.section_map_p(prm.as_array(), p1, 0.0, 2.0), (p1, 0.0), atol=1e-9)
+
+
+def test_fixedpoint_and_periodic_continuations_report_the_same_touch_of_minus_two(capsys):
+    """One continuation for both commands: over mu = 3.5 .. 12 the central point's trace touches
+    -2 (near mu = 5.59) without crossing; `fixedpoint --continue` reported 'none in range' where
+    `periodic -K 1 --continue` found the touch."""
+    args = ["--continue", "mu", "3.5", "12", "0.5", "--guess=-1.84,0", "--json"]
+    assert cli.main(["fixedpoint"] + args) == 0
+    fixed = json.loads(capsys.readouterr()[0])
+    assert cli.main(["periodic", "-K", "1"] + args) == 0
+    periodic = json.loads(capsys.readouterr()[0])
+    assert fixed["bifurcations"] == periodic["bifurcations"]
+    touches = [b for b in fixed["bifurcations"] if b["type"] == "touch -2"]
+    assert len(touches) == 1 and 5.0 < touches[0]["value"] < 6.2 and abs(touches[0]["trace"] + 2) < 1e-6
+    fp = fpm.follow(model.FIGURE4, 2.0, "mu", 3.5, touches[0]["value"], (-1.84, 0.0))
+    assert fp.trace == pytest.approx(-2.0, abs=1e-6)     # the touch, checked by a fresh Newton
+
+
+def test_section_map_object_iterates_inverts_and_differentiates_consistently():
+    """The public SectionMap: iterate(x, n) are n applications of the map, inverse undoes one,
+    jacobian is that of a call; scipy's map gives the same first image."""
+    import explorer as ex
+
+    prm = model.FIGURE4.with_(mu=0.3)
+    smap = ex.SectionMap(prm, 2.0)
+    x = np.array([0.4, -0.2])
+    orbit = smap.iterate(x, 3)
+    assert orbit.shape == (4, 2) and np.array_equal(orbit[0], x)
+    np.testing.assert_allclose(orbit[1], reference.section_map_p(prm.as_array(), *x, 2.0), atol=1e-9)
+    np.testing.assert_allclose(smap.inverse(orbit[3]), orbit[2], atol=1e-10)
+    np.testing.assert_allclose(smap.iterate(orbit[3], 3, backward=True)[-1], x, atol=1e-9)
+    np.testing.assert_array_equal(smap.jacobian(x), smap(x).jacobian)
+    with pytest.raises(model.ParameterError, match="tol must be in"):
+        ex.SectionMap(prm, 2.0, tol=0.5)

@@ -140,6 +140,27 @@ def test_kozlov_case_is_regular_too():
     assert np.all((r.megno > 1.8) & (r.megno < 2.2)), r.megno
 
 
+def test_megno_tends_to_0_on_a_stable_periodic_orbit_and_to_2_on_the_tori_around_it():
+    """Cincotta & Simo (2000): <Y> -> 0 on a stable periodic orbit (the deviation vector, tangent
+    to the energy shell, only rotates), -> 2 on a torus (the shear between neighbouring tori
+    makes it grow linearly), ~ chi T/2 on a chaotic orbit (tested below).  At mu = 0 solution II
+    of R6, (sqrt 2, 0) on the section, is an exact stable periodic orbit: <Y> -> 0 while the
+    torus through (1.7, 0) is at 2.  Inside the island of the elliptic point (1.582201141, 0) at
+    mu = 0.03 the torus through (1.5, 0) has <Y> ~ 0 for T = 4000 and climbs towards 2 only
+    later than the wider torus through (1.4, 0): the closer a torus to the periodic orbit, the
+    weaker the shear and the longer <Y> stays near 0 (as the 0.29 reported inside an island)."""
+    prm = model.FIGURE4
+    y0 = model.section_state(prm, [math.sqrt(2.0), 1.7], [0.0, 0.0], 2.0)
+    r = lyapunov.indicators(prm, y0, 16000.0, method="taylor", tol=1e-13)
+    assert abs(r.megno[0]) < 1e-3 and abs(r.megno[1] - 2.0) < 0.05, r.megno
+    prm = model.FIGURE4.with_(mu=0.03)
+    y0 = model.section_state(prm, [1.582201141, 1.5, 1.4], [0.0, 0.0, 0.0], 2.0)
+    Y = np.array([lyapunov.indicators(prm, y0, T, method="taylor", tol=1e-13).megno for T in (4000.0, 64000.0)])
+    assert np.all(np.abs(Y[:, 0]) < 0.01) and abs(Y[1, 0]) < abs(Y[0, 0]), Y[:, 0]    # the periodic orbit
+    assert np.all(Y[1, 1:] > Y[0, 1:]) and np.all(Y[:, 1] < Y[:, 2]), Y                # the tori, inner slower
+    assert Y[0, 1] < 0.1 and Y[1, 2] > 1.5, Y
+
+
 CHAOTIC = ([0.0, 0.3, -0.4, 0.2], [0.3, -0.2, 0.1, 0.5])
 
 

@@ -52,19 +52,41 @@ def _rotation_mu0_independent(p1, h=H):
     te = [t for t in sol.t_events[0] if t > 1e-6]
     tau = te[0]
     Phi = sol.y_events[0][[i for i, t in enumerate(sol.t_events[0]) if t > 1e-6][0]][3]
-    rho = sigma * 2 * math.pi / Phi
-    return rho - round(rho), tau
+    return sigma * 2 * math.pi / Phi, tau    # turns per return through the flow (not reduced mod 1)
 
 
 @pytest.mark.parametrize("p1", [1.5, 1.6, 1.7])
 def test_rotation_number_at_mu0_equals_the_period_quadrature_of_R6(p1):
     prm = model.FIGURE4.with_(mu=0.0)
     expected, _ = _rotation_mu0_independent(p1)
-    # (the slow rotation near the parabolic point, 1/40 turn per return at p1 = 1.5, needs many
-    # returns; the angle increments must stay below half a turn, which holds up to p1 ~ 1.75)
+    # (the slow rotation near the parabolic point, 1/40 turn per return at p1 = 1.5, needs many returns)
     r = rm.rotation_number(prm, H, (p1, 0.0), center=(math.sqrt(2.0), 0.0), iterates=4000)
     assert r.converged
-    assert r.value == pytest.approx(expected, abs=1e-11)
+    assert r.value == pytest.approx(expected - round(expected), abs=1e-11)
+    assert r.turns == pytest.approx(expected, abs=1e-11)
+
+
+@pytest.mark.parametrize("p1", [1.8, 1.9, 1.97])
+def test_rotation_number_is_lifted_through_the_flow_out_to_the_edge_of_the_region(p1):
+    """Beyond p1 ~ 1.75 (the region's edge is p1 = 2) single returns turn by more than half a
+    turn around (sqrt 2, 0), some more and some less: wrapping each return's increment to
+    (-pi, pi] gave -0.007 for -0.429 at p1 = 1.8, -0.015 for -0.385 at 1.9, -0.03 for 0.327 at
+    1.97.  Lifted through the flow (sub-sections) it equals the scipy quadrature of R6, to
+    the accuracy of 1,000 returns on these slowly converging orbits (near the separatrix of
+    solution I at p1 ~ 1.82 and the edge)."""
+    prm = model.FIGURE4.with_(mu=0.0)
+    expected, _ = _rotation_mu0_independent(p1)
+    r = rm.rotation_number(prm, H, (p1, 0.0), center=(math.sqrt(2.0), 0.0), iterates=500)
+    assert r.status == "done"
+    assert r.value == pytest.approx(expected - math.ceil(expected - 0.5), abs=1e-6)
+    assert r.turns == pytest.approx(expected, abs=1e-6)
+
+
+def test_orbits_whose_angle_turns_back_get_no_rotation_number():
+    """At mu = 0 the orbit through (0, 1.3) has F = c < 2 (R6) and reaches M = 0: phi turns back,
+    the section map is not a flow in phi, and the rotation is refused with status "turned"."""
+    r = rm.rotation_number(model.FIGURE4.with_(mu=0.0), H, (0.0, 1.3), center=(math.sqrt(2.0), 0.0), iterates=100)
+    assert r.status == "turned" and math.isnan(r.value) and not r.converged
 
 
 PRM = model.FIGURE4.with_(mu=0.03)

@@ -170,6 +170,15 @@ def test_figure3_marks_the_checked_points(quick):
     assert len(recs) >= 15
 
 
+# ---------------------------------------------------------------- tangle (docs/manifolds.md)
+def test_tangle_lobes_are_equal_and_the_flux_matches_melnikov(quick):
+    _, out = quick
+    d = out["tangle"].data
+    a = [lb["signed_area"] for lb in d["lobes"]]
+    assert len(a) == 2 and a[0] * a[1] < 0 and abs(abs(a[0]) - abs(a[1])) < 1e-5
+    assert all(r["status"] == "ok" and abs(r["ratio"] - 1.0) < 1e-4 for r in d["flux"])
+
+
 # ---------------------------------------------------------------- homoclinic
 def test_homoclinic_exact_and_integrated_crossing_times_agree(quick):
     _root, out = quick

@@ -1,6 +1,7 @@
-"""The lane (SIMD) Taylor driver is bit for bit the scalar one: kernels, step size, whole
-batches (parameter sets, orbit counts not multiple of LANES, very different orbit lengths and
-stop reasons, lane groupings, threads); the generated kernel file is up to date."""
+"""The lane (SIMD) Taylor driver, the one Taylor crossing loop, is bit for bit the scalar oracle
+(tests/integrate/taylor_oracle.py): kernels, step size, whole batches (parameter sets, orbit
+counts not multiple of LANES, very different orbit lengths and stop reasons, lane groupings,
+threads); the generated kernel file is up to date."""
 import math
 import subprocess
 import sys
@@ -9,19 +10,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import PARAM_SETS, random_states
+from taylor_oracle import run_taylor_batch
 
 from explorer import model
 from explorer._jit import NOJIT, get_num_threads, njit, set_num_threads
 from explorer.analysis import sections
 from explorer.integrate import _lanes_generated as G
-from explorer.integrate import drivers, lanes
+from explorer.integrate import drivers, lanes, simd
 from explorer.integrate import systems as sy
 from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_TMAX
 from explorer.kernels import taylor as tk
 from explorer.model import equations
 
 ROOT = Path(__file__).resolve().parents[2]
-L = G.LANES
+L = simd.LANES
 
 
 # ---------------------------------------------------------------- the generated file
@@ -31,6 +33,15 @@ def test_generated_file_is_up_to_date(tmp_path):
                    check=True, capture_output=True)
     assert out.read_text() == (ROOT / "src" / "explorer" / "integrate" / "_lanes_generated.py").read_text(), \
         "src/explorer/integrate/_lanes_generated.py is stale: run tools/gen_lanes.py"
+
+
+def test_gen_lanes_check_passes_on_the_repository_and_fails_on_a_stale_file(tmp_path):
+    gen = [sys.executable, str(ROOT / "tools" / "gen_lanes.py")]
+    assert subprocess.run([*gen, "--check"], capture_output=True).returncode == 0
+    stale = tmp_path / "stale.py"
+    stale.write_text((ROOT / "src" / "explorer" / "integrate" / "_lanes_generated.py").read_text() + "# edited\n")
+    r = subprocess.run([*gen, "-o", str(stale), "--check"], capture_output=True, text=True)
+    assert r.returncode == 1 and "out of date" in r.stderr
 
 
 # ---------------------------------------------------------------- kernels
@@ -46,11 +57,11 @@ def test_kernels_match_scalar_bitwise(name, order):
     G.taylor_coefficients_lanes(P, X, order)
     h = rng.uniform(0.0, 0.5, L)
     out = np.empty((5, L))
-    G.evaluate_lanes(X, order, h, out)
+    lanes.evaluate_lanes(X, order, h, out, 0)
     e_p, e_q = 1.0 / order, 1.0 / (order - 1)
-    norms = np.empty((7, L))
+    norms = np.empty((lanes.N_NORMS, L))
     with np.errstate(all="ignore"):
-        G.step_norms_lanes(X, order, e_p, e_q, norms)
+        lanes.step_norms_lanes(X, order, e_p, e_q, norms)
         for l in range(L):
             _check_lane(P, X, order, h, out, norms, l)
 
@@ -73,8 +84,8 @@ def _check_lane(P, X, order, h, out, norms, l):
         s = max(1.0, np.abs(Xs[:, 0]).max())
         assert norms[2, l] == np.abs(Xs[:, order]).max()
         assert norms[3, l] == np.abs(Xs[:, order - 1]).max()
-        factor = tk.safety_factor(order)
-        margin = (e_p + e_q) * G.LOG2_APPROX_ERR + 1e-12
+        factor, e_p, e_q, margin = lanes.step_constants(order)
+        assert factor == tk.safety_factor(order)
         got = lanes.lane_step_size(norms[2, l], norms[3, l], norms[4, l], norms[5, l], norms[6, l],
                                    e_p, e_q, margin, factor)
         assert got == tk.step_size(Xs, order, factor)
@@ -85,8 +96,8 @@ def _check_lane(P, X, order, h, out, norms, l):
 def test_log2_approx_error_bound():
     @njit(cache=False)
     def approx(v, out):
-        for i in range(0, v.shape[0], G.LANES):
-            G.vstore(out, i, G.vlog2_approx(G.vload(v, i)))
+        for i in range(0, v.shape[0], simd.LANES):
+            simd.vstore(out, i, simd.vlog2_approx(simd.vload(v, i)))
 
     rng = np.random.default_rng(5)
     n = 64 * 4096
@@ -97,7 +108,7 @@ def test_log2_approx_error_bound():
     out = np.empty(n)
     approx(v, out)
     err = np.abs(out - np.log2(v))
-    assert err.max() <= 0.6 * G.LOG2_APPROX_ERR
+    assert err.max() <= 0.6 * simd.LOG2_APPROX_ERR
 
 
 @pytest.mark.parametrize("order", [4, 15, 16, 25, 40])
@@ -106,9 +117,9 @@ def test_lane_step_size_near_ties(order):
     equal and the log2 estimate d is off by the whole error bound, either way."""
     rng = np.random.default_rng(order)
     e_p, e_q = 1.0 / order, 1.0 / (order - 1)
-    factor = tk.safety_factor(order)
-    bound = (e_p + e_q) * G.LOG2_APPROX_ERR
-    margin = bound + 1e-12
+    factor, _e_p, _e_q, margin = lanes.step_constants(order)
+    bound = (e_p + e_q) * simd.LOG2_APPROX_ERR
+    assert margin > bound
     for _ in range(3000):
         s = max(1.0, 10.0 ** rng.uniform(-1, 3))
         a = 10.0 ** rng.uniform(-300, 5)
@@ -180,7 +191,7 @@ def test_batch_bitwise_identical(name, n):
     P = prm.as_array()
     Y0 = _mixed_states(prm, n, seed=n)
     K = 12
-    ref = _run(drivers.run_taylor_batch, Y0, P, K)
+    ref = _run(run_taylor_batch, Y0, P, K)
     for max_lanes in (L, 3):
         _assert_identical(ref, _run(lanes.run_taylor_lanes_batch, Y0, P, K, max_lanes=max_lanes))
     if n >= 5:
@@ -201,7 +212,7 @@ def test_batch_statuses_and_settings():
     for kw in cases:
         kw = dict(kw)
         K = kw.pop("K")
-        ref = _run(drivers.run_taylor_batch, Y0, P, K, **kw)
+        ref = _run(run_taylor_batch, Y0, P, K, **kw)
         seen.update(ref[2].tolist())
         for max_lanes in (1, 2, 5, L):
             _assert_identical(ref, _run(lanes.run_taylor_lanes_batch, Y0, P, K, max_lanes=max_lanes, **kw))
@@ -214,7 +225,7 @@ def test_batch_degenerate_budgets():
     P = prm.as_array()
     Y0 = _mixed_states(prm, 9, seed=1)
     for K, kw in [(0, {}), (3, dict(tmax=0.0)), (3, dict(max_steps=0)), (3, dict(max_steps=1))]:
-        ref = _run(drivers.run_taylor_batch, Y0, P, K, **kw)
+        ref = _run(run_taylor_batch, Y0, P, K, **kw)
         _assert_identical(ref, _run(lanes.run_taylor_lanes_batch, Y0, P, K, **kw))
 
 
@@ -222,7 +233,7 @@ def test_threads_do_not_change_results():
     prm = PARAM_SETS["figure4_mu0.5"]
     P = prm.as_array()
     Y0 = _mixed_states(prm, 29, seed=7)
-    ref = _run(drivers.run_taylor_batch, Y0, P, 25, order=16)
+    ref = _run(run_taylor_batch, Y0, P, 25, order=16)
     old = get_num_threads()
     try:
         for threads in (1, 2):
@@ -233,11 +244,11 @@ def test_threads_do_not_change_results():
         set_num_threads(old)
 
 
-def test_sections_taylor_uses_the_lanes_and_matches_the_scalar_driver():
+def test_sections_taylor_uses_the_lanes_and_matches_the_scalar_oracle():
     prm = PARAM_SETS["figure4_mu0.5"]
     c1, c2, r1, r2 = model.allowed_ellipse(prm, 2.0)
     p1 = c1 + r1 * np.linspace(-0.95, 0.95, 11)
     res = sections.section_crossings(prm, p1, np.zeros(11), 2.0, 30, method="taylor", tol=1e-12)
     Y0 = model.section_state(prm, p1, np.zeros(11), 2.0)
-    ref = _run(drivers.run_taylor_batch, Y0, prm.as_array(), 30, order=res.settings["order"])
+    ref = _run(run_taylor_batch, Y0, prm.as_array(), 30, order=res.settings["order"])
     _assert_identical(ref, (res.data, res.count, res.status, res.final, res.info))

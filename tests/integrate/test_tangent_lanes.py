@@ -14,7 +14,7 @@ from explorer import model
 from explorer._jit import get_num_threads, set_num_threads
 from explorer.analysis import lyapunov
 from explorer.integrate import _tangent_lanes_generated as G
-from explorer.integrate import tangent, tangent_lanes
+from explorer.integrate import lanes, tangent, tangent_lanes
 from explorer.kernels import STATUS_MAX_STEPS, STATUS_NONFINITE
 from explorer.kernels import taylor as tk
 from explorer.model import equations
@@ -46,7 +46,7 @@ def test_tangent_lane_kernels_match_the_scalar_recurrence_bitwise(name, order):
     h = rng.uniform(0.0, 0.5, L)
     out = np.empty((G.NROWS, L))
     for base in (0, G.DEV1, G.DEV2):
-        G.evaluate5_lanes(Z, order, h, out, base)
+        lanes.evaluate_lanes(Z, order, h, out, base)
     for l in range(L):
         X = np.zeros((5, order + 1))
         D = np.zeros((5, order + 1))

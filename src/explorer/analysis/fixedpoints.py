@@ -1,24 +1,18 @@
 """Fixed points of the section map, their stability, continuation, and separatrices.
 
-The section map P: (p1, p2) -> (p1', p2') sends a point of phi = phi0 on the energy level h
-(M > 0 from the energy, MODEL.md R9) to the next crossing with dphi/dt > 0.  Its Jacobian
-comes from the tangent dynamics (variational Taylor series, :func:`explorer.integrate.tangent.return_map_taylor`),
-not from finite differences:
+A fixed point of the section map P (:class:`explorer.analysis.section_map.SectionMap`, phi =
+phi0, docs/model.md R9) is a periodic orbit of period 1: :func:`find_fixed_point` is
+:func:`explorer.analysis.periodic.find_periodic_orbit` with K = 1 (one Newton for every
+period: damped steps that keep the point in the allowed region and make the residual fall),
+and :func:`continue_branch` is :func:`explorer.analysis.periodic.continue_periodic` with K = 1
+(one continuation, one bifurcation detector: |trace| crossing 2 and touching +-2).  At a
+fixed point det DP = 1; |trace| < 2 is stable (elliptic), > 2 unstable (hyperbolic).
 
-    DP = Pi (I - f grad(g)^T / (grad(g) . f)) DPhi_T L
-
-where L lifts (dp1, dp2) to the energy shell (dM = -(H_p1 dp1 + H_p2 dp2) / H_M, dg = 0),
-DPhi_T is the flow's tangent map up to the crossing time T, the bracket corrects for the
-change of T (g = sin(phi - phi0)), and Pi keeps (p1, p2).  At a fixed point det DP = 1 (the
-map preserves area in these coordinates up to a constant factor that cancels at a fixed
-point); |trace| < 2 is stable (elliptic), > 2 unstable (hyperbolic).
-
-Newton's method solves P(x) = x with (DP - I); continuation steps a parameter and detects
-where |trace| crosses 2 (bisection to the bifurcation value).  Separatrices of a hyperbolic
-point: a fundamental domain along the unstable (stable) eigenvector iterated forward
-(backward in time), with points inserted where consecutive images are far apart, so the
-curves stay smooth (Parker & Chua, Practical Numerical Algorithms for Chaotic Systems, 1989,
-Sec. 6; Krauskopf et al., Int. J. Bifurc. Chaos 15 (2005) 763).
+Separatrices of a hyperbolic point: a fundamental domain along the unstable (stable)
+eigenvector iterated forward (backward in time), with points inserted where consecutive
+images are far apart, so the curves stay smooth (Parker & Chua, Practical Numerical
+Algorithms for Chaotic Systems, 1989, Sec. 6; Krauskopf et al., Int. J. Bifurc. Chaos 15
+(2005) 763).
 """
 from __future__ import annotations
 
@@ -28,77 +22,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from explorer import model
-from explorer.analysis.lyapunov import energy_gradient
-from explorer.integrate.tangent import return_map_taylor
-from explorer.kernels import STATUS_DONE, STATUS_NAMES
-from explorer.kernels.taylor import order_for_tolerance
+from explorer.analysis.continuation import continuation_values, golden_section_max, secant_follower
+from explorer.analysis.section_map import DEFAULT_TOL, RETURN_TMAX, MapResult, SectionMap
 from explorer.model import ParameterError, validation
-from explorer.model.equations import rhs
 
-NEWTON_TOL = 1e-12
-NEWTON_MAX_ITER = 30
-#: residual |P(x) - x| accepted when Newton's steps stall (parabolic points)
-ACCEPT_RESIDUAL = 1e-9
-#: continuation: a failed step is split in two at most this many times
-MAX_HALVINGS = 8
-DEFAULT_TOL = 1e-15
-#: time budget of one return of the map
-RETURN_TMAX = 1e3
-
-
-@dataclass(frozen=True)
-class MapResult:
-    point: np.ndarray      # (p1, p2) image
-    jacobian: np.ndarray   # 2x2
-    time: float            # signed return time
-    state: np.ndarray      # full state at the crossing
-
-
-class SectionMap:
-    """The section map at fixed parameters, energy and section angle (Taylor method)."""
-
-    def __init__(self, params, h, *, phi0=math.pi, tol=DEFAULT_TOL, tmax=RETURN_TMAX):
-        self.params = params if isinstance(params, model.Params) else model.Params.from_array(params)
-        self.P = self.params.as_array()
-        self.h = float(h)
-        self.phi0 = phi0
-        g1, g2 = model.section_gamma(phi0)
-        self.sphi, self.cphi = g1, g2
-        from explorer.analysis.sections import MAX_TOL, MIN_TOL
-
-        self.order = order_for_tolerance(validation.real("tol", tol, MIN_TOL, MAX_TOL))
-        self.tmax = tmax
-
-    def state(self, x):
-        return model.section_state(self.params, [x[0]], [x[1]], self.h, self.phi0)[0]
-
-    def lift(self, y):
-        """Tangent vectors on the energy shell for dp1 = 1 and dp2 = 1 (dg = 0)."""
-        gH = energy_gradient(self.P, y)
-        V = np.zeros((2, 5))
-        for r in range(2):
-            V[r, r] = 1.0
-            V[r, 2] = -gH[r] / gH[2]
-        return V
-
-    def __call__(self, x, *, backward=False, jacobian=True) -> MapResult:
-        y0 = self.state(x)
-        V0 = self.lift(y0) if jacobian else np.zeros((0, 5))
-        yout = np.empty(5)
-        Vout = np.empty_like(V0)
-        status, t = return_map_taylor(y0, V0, self.P, self.cphi, self.sphi, -1.0 if backward else 1.0,
-                                      self.tmax, self.order, 10**8, yout, Vout)
-        if status != STATUS_DONE:
-            raise ParameterError(f"section map from (p1, p2) = ({x[0]:.6g}, {x[1]:.6g}): no return "
-                                 f"({STATUS_NAMES[int(status)]})")
-        J = None
-        if jacobian:
-            f = np.empty(5)
-            rhs(yout, self.P, f)
-            grad_g = np.array([0.0, 0.0, 0.0, self.cphi, -self.sphi])
-            W = Vout - np.outer(Vout @ grad_g, f) / (grad_g @ f)
-            J = W[:, :2].T.copy()
-        return MapResult(yout[:2].copy(), J, float(t), yout.copy())
+# names that lived here before the section map and the continuation helpers had their modules
+__all__ = ["DEFAULT_TOL", "RETURN_TMAX", "Branch", "FixedPoint", "MapResult", "SectionMap",
+           "analytic_eigenvalues_solution_I", "chaotic_fraction", "continuation_values", "continue_branch",
+           "find_fixed_point", "follow", "golden_section_max", "manifold", "secant_follower", "separatrices"]
 
 
 @dataclass(frozen=True)
@@ -131,6 +62,13 @@ class FixedPoint:
     residual: float
     params: model.Params = None
     h: float = float("nan")
+    degenerate: bool = False
+
+    @classmethod
+    def from_orbit(cls, orb) -> FixedPoint:
+        """The fixed point of a period-1 :class:`~explorer.analysis.periodic.PeriodicOrbit`."""
+        return cls(orb.points[0].copy(), orb.jacobian, orb.eigenvalues, orb.trace, orb.det,
+                   float(orb.return_times[0]), orb.iterations, orb.residual, orb.params, orb.h, orb.degenerate)
 
     @property
     def stable(self) -> bool:
@@ -145,16 +83,17 @@ class FixedPoint:
         return {"p1": float(self.point[0]), "p2": float(self.point[1]), "trace": float(self.trace),
                 "det": float(self.det), "eigenvalues": [[e.real, e.imag] if e.imag else e.real for e in ev],
                 "stable": bool(self.stable), "return_time": self.period_time, "iterations": self.iterations,
-                "residual": self.residual}
+                "residual": self.residual, "degenerate": bool(self.degenerate)}
 
 
 def find_fixed_point(params, h, guess=(0.0, 0.0), *, phi0=math.pi, tol=DEFAULT_TOL) -> FixedPoint:
     """A fixed point of the section map P of phi = ``phi0`` at energy ``h`` (MODEL.md R9).
 
-    Newton's method on P(x) - x = 0 in (p1, p2), with DP from the tangent dynamics of R3 carried
-    to the next crossing (the Taylor return map, :func:`explorer.integrate.tangent.return_map_taylor`)
-    and projected on the section; steps halved when the residual grows. At mu = 0 the central
-    fixed point is solution I of R6, with the eigenvalues of its linearisation.
+    Newton's method on P(x) - x = 0 in (p1, p2) (:func:`explorer.analysis.periodic.find_periodic_orbit`
+    with K = 1), with DP from the tangent dynamics of R3 carried to the next crossing and
+    projected on the section; steps halved until the point stays in the allowed region and the
+    residual falls. At mu = 0 the central fixed point is solution I of R6, with the eigenvalues
+    of its linearisation.
 
     Parameters
     ----------
@@ -179,33 +118,9 @@ def find_fixed_point(params, h, guess=(0.0, 0.0), *, phi0=math.pi, tol=DEFAULT_T
     ParameterError
         When Newton's method does not converge from ``guess`` (the message says so).
     """
-    smap = SectionMap(params, h, phi0=phi0, tol=tol)
-    x = np.array(guess, dtype=float)
-    if not model.is_admissible(smap.params, x[0], x[1], h, phi0):
-        raise ParameterError(f"guess (p1, p2) = ({x[0]:g}, {x[1]:g}) lies outside the allowed region; allowed: "
-                             f"{model.describe_region(smap.params, h, phi0)}")
-    for it in range(1, NEWTON_MAX_ITER + 1):
-        r = smap(x)
-        G = r.point - x
-        dx = np.linalg.solve(r.jacobian - np.eye(2), -G)
-        # damped step: never leave the allowed region (where the map is defined)
-        for _ in range(40):
-            if model.section_M2(smap.params, x[0] + dx[0], x[1] + dx[1], h, phi0) > 0:
-                break
-            dx = 0.5 * dx
-        x = x + dx
-        if np.max(np.abs(dx)) < NEWTON_TOL * max(1.0, np.max(np.abs(x))):
-            break
-    r = smap(x)
-    if it == NEWTON_MAX_ITER and not np.max(np.abs(r.point - x)) < ACCEPT_RESIDUAL:
-        # (near |trace| = 2 the matrix DP - I is nearly singular and Newton converges slowly:
-        # a small residual is accepted there)
-        raise ParameterError(f"Newton's method did not converge from guess ({guess[0]:.6g}, {guess[1]:.6g}) "
-                             f"(last step {np.max(np.abs(dx)):.3g}); try another --guess")
-    J = r.jacobian
-    ev = np.linalg.eigvals(J)
-    return FixedPoint(x, J, ev, float(np.trace(J)), float(np.linalg.det(J)), r.time, it,
-                      float(np.max(np.abs(r.point - x))), smap.params, float(h))
+    from explorer.analysis.periodic import find_periodic_orbit
+
+    return FixedPoint.from_orbit(find_periodic_orbit(params, h, guess, 1, phi0=phi0, tol=tol))
 
 
 @dataclass(frozen=True)
@@ -213,116 +128,49 @@ class Branch:
     """A branch of fixed points followed in one parameter by :func:`continue_branch`.
 
     ``points[i]`` is the :class:`FixedPoint` at ``values[i]`` of ``parameter`` (a model
-    parameter or ``"h"``); ``bifurcations`` holds the values where ``|trace| = 2`` (stability
-    changes), located by bisection.
+    parameter or ``"h"``); ``bifurcations`` is the list of dicts of
+    :class:`explorer.analysis.periodic.PeriodicBranch` (``{"value", "type", "trace", "refined"}``,
+    type "tangent", "period-doubling", "touch +2" or "touch -2"); ``stopped`` says why the
+    branch ended before ``stop`` (None when it reached it).
     """
 
     parameter: str
     values: np.ndarray
     points: list
-    bifurcations: list = field(default_factory=list)   # parameter values where |trace| = 2
+    bifurcations: list = field(default_factory=list)
+    stopped: str | None = None
 
-
-def continuation_values(parameter, start, stop, step) -> np.ndarray:
-    """The values start, start + step, ..., up to stop of a continuation in ``parameter`` (a model
-    parameter or "h"), validated (ParameterError naming what is allowed)."""
-    if parameter not in model.PARAM_NAMES + ("h",):
-        raise ParameterError(f"continuation parameter must be one of {', '.join(model.PARAM_NAMES + ('h',))}")
-    if step == 0 or not all(math.isfinite(v) for v in (start, stop, step)) or (stop - start) * step < 0:
-        raise ParameterError("--continue needs finite START, STOP and a STEP of the sign of STOP - START")
-    n = int(math.floor((stop - start) / step + 1e-9)) + 1
-    return start + step * np.arange(n)
-
-
-def secant_follower(solve, guess, state_of, max_halvings):
-    """Natural-parameter continuation: returns ``advance(v)``, the solution at parameter value
-    ``v`` by ``solve(v, prediction)``, predicted from the last two solutions by a secant (from
-    ``guess`` at first); when ``solve`` raises ParameterError the step is halved (the midpoint
-    solved first), at most ``max_halvings`` times.  ``state_of(solution)`` is what is predicted
-    (a point, or the K points of a periodic orbit)."""
-    prev: list = []  # (value, state) of the last two solutions
-
-    def predict(v):
-        if len(prev) < 2:
-            return prev[-1][1] if prev else guess
-        (v0, x0), (v1, x1) = prev[-2], prev[-1]
-        return x1 + (x1 - x0) * (v - v1) / (v1 - v0)
-
-    def advance(v, depth=0):
-        try:
-            sol = solve(v, predict(v))
-        except ParameterError:
-            if depth >= max_halvings or not prev:
-                raise
-            advance(0.5 * (prev[-1][0] + v), depth + 1)
-            return advance(v, depth + 1)
-        prev.append((v, state_of(sol)))
-        del prev[:-2]
-        return sol
-
-    return advance
-
-
-def golden_section_max(f, a, b, tol):
-    """Maximum of a unimodal f on [a, b] by golden-section search, to ``tol`` relative to
-    max(1, |b|); returns (x, f(x))."""
-    g = (math.sqrt(5.0) - 1.0) / 2.0
-    c, d = b - g * (b - a), a + g * (b - a)
-    fc, fd = f(c), f(d)
-    while abs(b - a) > tol * max(1.0, abs(b)):
-        if fc > fd:
-            b, d, fd = d, c, fc
-            c = b - g * (b - a)
-            fc = f(c)
-        else:
-            a, c, fc = c, d, fd
-            d = a + g * (b - a)
-            fd = f(d)
-    return (c, fc) if fc > fd else (d, fd)
+    @property
+    def traces(self) -> np.ndarray:
+        return np.array([fp.trace for fp in self.points])
 
 
 def continue_branch(params, h, parameter, start, stop, step, guess=(0.0, 0.0), *, phi0=math.pi,
                     tol=DEFAULT_TOL, bisect_tol=1e-8) -> Branch:
     """Natural-parameter continuation of a fixed point in any model parameter (or "h").
 
-    From ``start`` to ``stop`` by ``step``, each point from the previous one (secant predictor,
-    steps halved on failure); the values where the stability changes (``|trace|`` crosses 2:
-    elliptic <-> hyperbolic) are located by bisection to ``bisect_tol`` (relative). For
-    Figure 4 (MODEL.md R9, h = 2) the central point turns stable at mu* ~ 2.98316.
+    :func:`explorer.analysis.periodic.continue_periodic` with K = 1: from ``start`` to ``stop``
+    by ``step``, each point from the previous ones (secant predictor, steps halved on failure);
+    where ``|trace|`` crosses 2 (elliptic <-> hyperbolic) the value is bisected to
+    ``bisect_tol`` (relative), and a sampled extremum of the trace near +-2 is refined into a
+    touch.  For Figure 4 (MODEL.md R9, h = 2) the central point turns stable at mu* ~ 2.98316.
 
     Returns
     -------
     Branch
-        The parameter values, the fixed points and the bifurcation values.
+        The parameter values, the fixed points and the bifurcations.
     """
-    values = continuation_values(parameter, start, stop, step)
+    from explorer.analysis.periodic import continue_periodic
 
-    def solve(v, g):
-        prm, hh = validation.with_value(params, h, parameter, v)
-        return find_fixed_point(prm, hh, g, phi0=phi0, tol=tol)
-
-    points = []
-    advance = secant_follower(solve, np.asarray(guess, float), lambda fp: fp.point, MAX_HALVINGS)
-    for v in values:
-        points.append(advance(v))
-    bif = []
-    for a, b, fa, fb in zip(values[:-1], values[1:], points[:-1], points[1:]):
-        if (abs(fa.trace) < 2) != (abs(fb.trace) < 2):
-            lo, hi, flo = a, b, fa
-            while hi - lo > bisect_tol * max(1.0, abs(hi)):
-                mid = 0.5 * (lo + hi)
-                fm = solve(mid, flo.point)
-                if (abs(fm.trace) < 2) == (abs(flo.trace) < 2):
-                    lo, flo = mid, fm
-                else:
-                    hi = mid
-            bif.append(0.5 * (lo + hi))
-    return Branch(parameter, values, points, bif)
+    br = continue_periodic(params, h, 1, parameter, start, stop, step, guess, phi0=phi0, tol=tol,
+                           bisect_tol=bisect_tol)
+    return Branch(parameter, br.values, [FixedPoint.from_orbit(o) for o in br.orbits], br.bifurcations,
+                  br.stopped)
 
 
 # ---------------------------------------------------------------- separatrices
 def manifold(fp: FixedPoint, *, stable=False, branch=1, iterations=6, n_domain=60, first=1e-6,
-             max_gap=0.02, max_points=20000, phi0=math.pi, tol=1e-14):
+             max_gap=0.02, max_points=20000, phi0=math.pi, tol=DEFAULT_TOL):
     """One branch (+1 or -1 along the eigenvector) of the unstable (stable: backward in time)
     manifold of a hyperbolic fixed point, as an (M, 2) polyline on the section.
 
@@ -403,6 +251,8 @@ def follow(params, h, parameter, start, stop, guess, *, max_step=0.25, phi0=math
         return find_fixed_point(prm, hh, guess, phi0=phi0, tol=tol)
     n = max(1, math.ceil(abs(stop - start) / max_step))
     br = continue_branch(params, h, parameter, start, stop, (stop - start) / n, guess, phi0=phi0, tol=tol)
+    if br.stopped is not None:
+        raise ParameterError(f"the fixed point could not be followed to {parameter} = {stop:.10g}: {br.stopped}")
     return br.points[-1]
 
 

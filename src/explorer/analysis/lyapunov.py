@@ -29,11 +29,11 @@ import numpy as np
 from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
 from explorer.integrate import methods
+from explorer.integrate.methods import DEFAULT_DT, DEFAULT_TOL
 from explorer.kernels import STATUS_NAMES, Status
 from explorer.model import ParameterError, validation
 
 DEFAULT_TIME = 1000.0
-DEFAULT_DT = 0.02
 #: the indicators :func:`indicators` can compute (``which``)
 INDICATOR_NAMES = ("mlce", "megno", "fli", "sali", "gali2")
 #: computed unless ``which`` says otherwise (one deviation vector)
@@ -138,7 +138,7 @@ class Indicators:
         return Status(int(self.status[i]))
 
 
-def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", tol: float = 1e-13,
+def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", tol: float = DEFAULT_TOL,
                dt: float = DEFAULT_DT, history: int = 0, v0=None, max_steps: int = 10**9,
                threads: int | None = None, which=None, early_stop: bool = False,
                early_sali: float = EARLY_SALI, early_megno: float = EARLY_MEGNO,
@@ -184,8 +184,9 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
     Returns
     -------
     Indicators
-        mLCE ``ln(|w(T)| / |w(0)|) / T``, mean MEGNO <Y> (Cincotta & Simó 2000: -> 2 on
-        quasi-periodic orbits, ~ mLCE T / 2 on chaotic ones), FLI (Froeschlé, Lega & Gonczi
+        mLCE ``ln(|w(T)| / |w(0)|) / T``, mean MEGNO <Y> (Cincotta & Simó 2000: -> 0 on
+        stable periodic orbits, -> 2 on quasi-periodic orbits, ~ mLCE T / 2 on chaotic ones;
+        docs/commands/lyapunov.md), FLI (Froeschlé, Lega & Gonczi
         1997), per orbit, with a status code each.
     """
     P = validation.packed_params(params)
@@ -237,7 +238,21 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
                 float(early_sali) if nvec == 2 else 0.0, float(early_megno), float(early_time), hist_t, hist, res,
                 ext, status, final, steps, dev)
         else:
-            methods.run_tangent(prep, Y0, V0, P, T, int(max_steps), hist_t, hist, res, status, final, steps)
+            # an orbit whose motion the fixed step does not resolve is not integrated
+            slow = methods.unresolved(prep, P, Y0)
+            if not slow.any():
+                methods.run_tangent(prep, Y0, V0, P, T, int(max_steps), hist_t, hist, res, status, final, steps)
+            else:
+                ok = np.flatnonzero(~slow)
+                parts = [np.ascontiguousarray(a[ok]) for a in (Y0, V0, hist, res, status, final, steps)]
+                if ok.size:
+                    methods.run_tangent(prep, parts[0], parts[1], P, T, int(max_steps), hist_t, *parts[2:])
+                for a, part in zip((hist, res, status, final, steps), parts[2:]):
+                    a[ok] = part
+                res[slow] = np.nan
+                res[slow, 0] = 0.0
+                status[slow] = int(Status.UNRESOLVED)
+                final[slow] = Y0[slow]
             ext[:, 2] = 0
     finally:
         if threads is not None:

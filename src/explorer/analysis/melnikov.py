@@ -83,6 +83,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from explorer import model
+from explorer.integrate.methods import MAP_TOL
 from explorer.model import ParameterError, exact, params_array
 
 #: mu values of the measured-splitting table
@@ -408,7 +409,7 @@ def separatrix_point(params, h, g0, sign=1, phi0=math.pi):
     return x, tc, _section_F0_normal(prm, h, x, phi0)
 
 
-def measured_splitting(params, h, mu, g0, sign=1, *, s_local=1e-4, tol=1e-15, J=None) -> dict:
+def measured_splitting(params, h, mu, g0, sign=1, *, s_local=1e-4, tol=MAP_TOL, J=None) -> dict:
     """Splitting of the separatrices measured in F0 on the section phi = pi at weight mu.
 
     1. The hyperbolic fixed point at mu by continuation from p = 0 at mu = 0

@@ -20,6 +20,21 @@ Steps are damped (halved) so that every point stays in the allowed region and th
 decreases.  A converged orbit is reduced to its minimal period: if x_{i+d} = x_i for a divisor
 d of K (within ``MINIMAL_PERIOD_TOL``) it is an orbit of period d, reported as such.
 
+Degenerate orbits
+-----------------
+Newton's answer is an isolated orbit only if the map's accuracy pins it down.  Near a
+resonant curve (a torus of rotation number m/K that the perturbation barely breaks) P^K is
+the identity along the curve to round-off: ``|P^K(x) - x|`` stays at its noise floor over a
+whole arc, and Newton stops anywhere on it, at a point that depends on rounding and so on the
+CPU.  The rule: with M the monodromy, the noise floor of the residual is
+eps = max(residual, ``MAP_NOISE`` max(1, |M|)) and the position is determined to
+eps / s_min(M - I), the smallest singular value of M - I.  An orbit is **degenerate** when that
+``uncertainty`` exceeds ``ISOLATION_TOL`` (the distance below which two orbits are the same),
+or when |residue| < ``DEGENERATE_RESIDUE`` (|trace - 2| <= ``KIND_TOL``).  Degenerate orbits are
+flagged (``PeriodicOrbit.degenerate``), listed after the isolated ones by the search, never
+counted with them, and drawn apart in the figures; isolated orbits (s_min of order 1e-3 and
+more, uncertainty 1e-12 .. 1e-9) come out the same on every CPU.
+
 Reversing symmetry
 ------------------
 With zeta = xi = 0 (chi, eta, mu, lam any), the reduced system R3 in (p1, p2, M, phi) is
@@ -42,7 +57,8 @@ line p2 = 0 of the section phi = 0 (the other set of R's fixed points) after hal
 symmetric orbit of period K has two of its points on R's fixed set {p2 = 0, phi = 0 or pi},
 K half-turns apart; :func:`search_periodic_orbits` seeds Newton on both lines, where it
 finds the roots of p2 after K half-turns (tests/analysis/test_periodic.py proves the symmetry
-with an independent scipy integration).
+with an independent scipy integration).  The image G0(orbit) of an orbit is an orbit with the
+same trace, computed exactly by :func:`mirror_orbit`: the search completes its set with it.
 
 Bifurcations
 ------------
@@ -63,18 +79,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from explorer import model
-from explorer.analysis.fixedpoints import (
-    DEFAULT_TOL,
-    RETURN_TMAX,
-    SectionMap,
-    continuation_values,
-    golden_section_max,
-    secant_follower,
-)
-from explorer.model import ParameterError, validation
+from explorer.analysis.continuation import continuation_values, golden_section_max, secant_follower
+from explorer.analysis.section_map import DEFAULT_TOL, RETURN_TMAX, SectionMap
+from explorer.model import ParameterError, symmetry, validation
 
-__all__ = ["KIND_TOL", "MULTIPLE_SHOOTING_FROM", "PeriodicBranch", "PeriodicOrbit", "continue_periodic",
-           "find_periodic_orbit", "is_reversible", "reversor", "search_periodic_orbits", "symmetry_line_points"]
+__all__ = ["DEGENERATE_RESIDUE", "ISOLATION_TOL", "KIND_TOL", "MULTIPLE_SHOOTING_FROM", "PeriodicBranch",
+           "PeriodicOrbit", "continue_periodic", "find_periodic_orbit", "is_reversible", "mirror_orbit",
+           "periodic_guesses", "reversor", "search_periodic_orbits", "symmetry_line_points"]
 
 #: Newton: converged when the step is below this (relative to max(1, |x|))
 NEWTON_TOL = 1e-12
@@ -89,6 +100,16 @@ KIND_TOL = 1e-6
 MINIMAL_PERIOD_TOL = 1e-7
 #: two orbits are the same if a point of one is within this of a point of the other
 SAME_ORBIT_TOL = 1e-6
+#: isolation (module docstring, "Degenerate orbits"): an orbit whose position is determined only
+#: to worse than this by the map's accuracy is not isolated at the search's tolerance
+ISOLATION_TOL = SAME_ORBIT_TOL
+#: accuracy of one evaluation of P^K at the map's default tolerance, relative to the size of
+#: its Jacobian: the noise floor of |P^K(x) - x| is MAP_NOISE * max(1, |D(P^K)|).  Measured at
+#: the Figure-4 scene (mu = 0.03, K <= 4, |D(P^K)| from 5 to 4e3): P^K at tol 1e-15 against
+#: tol 1e-16 differs by 5e-17 .. 1e-16 times |D(P^K)|; the constant is ten times that.
+MAP_NOISE = 1e-15
+#: |residue| below this (|trace - 2| <= KIND_TOL) is degenerate whatever the conditioning
+DEGENERATE_RESIDUE = KIND_TOL / 4
 #: time budget of one return of the map in a search (typical returns take ~6 at Figure 4's
 #: scene; orbits near the boundary of the region that hardly turn would cost up to RETURN_TMAX)
 SEARCH_TMAX = 50.0
@@ -123,6 +144,13 @@ class PeriodicOrbit:
         :func:`is_reversible`; else False).
     map_jacobians : ndarray (K, 2, 2)
         DP at each point.
+    uncertainty : float
+        How well the map's accuracy determines the orbit's position: the noise floor of
+        ``|P^K(x) - x|`` over the smallest singular value of ``jacobian - I`` (module docstring).
+    degenerate : bool
+        Not isolated at the search's tolerance: ``uncertainty > ISOLATION_TOL`` or
+        ``|residue| < DEGENERATE_RESIDUE`` (a near-parabolic orbit on a resonant curve, where
+        Newton lands anywhere along the curve: the point reported is one of a continuum).
     """
 
     points: np.ndarray
@@ -139,6 +167,8 @@ class PeriodicOrbit:
     params: model.Params = None
     h: float = float("nan")
     phi0: float = math.pi
+    uncertainty: float = 0.0
+    degenerate: bool = False
 
     @property
     def residue(self) -> float:
@@ -179,7 +209,8 @@ class PeriodicOrbit:
                 "eigenvalues": [[e.real, e.imag] if e.imag else e.real for e in ev],
                 "kind": self.kind, "stable": bool(self.stable), "symmetric": bool(self.symmetric),
                 "return_times": [float(t) for t in self.return_times], "residual": float(self.residual),
-                "iterations": int(self.iterations)}
+                "iterations": int(self.iterations), "degenerate": bool(self.degenerate),
+                "uncertainty": float(self.uncertainty)}
 
 
 # ------------------------------------------------------------------ symmetry
@@ -293,6 +324,8 @@ def _newton(smap, K, X0, max_iter=NEWTON_MAX_ITER, multiple=None):
                 break
             alpha *= 0.5
         else:
+            if res < ACCEPT_RESIDUAL:
+                break    # at the residual's noise floor: no step can lower it (near-parabolic orbits)
             raise ParameterError(f"Newton's method stalled (residual {res:.3g})")
         X, ev, res = Xn, evn, resn
         step = alpha * float(np.max(np.abs(dx)))
@@ -313,16 +346,63 @@ def _minimal_period(pts, tol=MINIMAL_PERIOD_TOL) -> int:
     return K
 
 
+def _isolation(M, residual):
+    """(uncertainty, degenerate) of an orbit with monodromy M and Newton residual (module
+    docstring, "Degenerate orbits")."""
+    smin = float(np.linalg.svd(M - np.eye(2), compute_uv=False)[-1])
+    noise = max(float(residual), MAP_NOISE * max(1.0, float(np.linalg.norm(M, 2))))
+    uncertainty = noise / smin if smin > 0 else math.inf
+    residue = (2.0 - float(np.trace(M))) / 4.0
+    return uncertainty, bool(uncertainty > ISOLATION_TOL or abs(residue) < DEGENERATE_RESIDUE)
+
+
+def _orbit(smap, pts, jacs, times, resid, iters, symmetric=None) -> PeriodicOrbit:
+    """The PeriodicOrbit through ``pts`` with map Jacobians ``jacs`` (monodromy, eigenvalues,
+    symmetry and isolation derived from them)."""
+    M = _monodromy(jacs)
+    if symmetric is None:
+        symmetric = is_reversible(smap.params, smap.phi0) and _is_symmetric(pts, 1e3 * MINIMAL_PERIOD_TOL)
+    uncertainty, degenerate = _isolation(M, resid)
+    return PeriodicOrbit(np.array(pts, float), len(pts), M, np.linalg.eigvals(M), float(np.trace(M)),
+                         float(np.linalg.det(M)), np.array(times, float), float(resid), int(iters), bool(symmetric),
+                         np.array(jacs, float), smap.params, smap.h, smap.phi0, uncertainty, degenerate)
+
+
 def _make_orbit(smap, pts, imgs, jacs, times, iters, reduce=True) -> PeriodicOrbit:
     K = len(pts)
     d = _minimal_period(pts) if reduce else K
     pts, imgs, jacs, times = pts[:d], imgs[:d], jacs[:d], times[:d]
-    M = _monodromy(jacs)
-    ev = np.linalg.eigvals(M)
-    sym = is_reversible(smap.params, smap.phi0) and _is_symmetric(pts, 1e3 * MINIMAL_PERIOD_TOL)
     resid = float(np.max(np.abs(imgs - np.roll(pts, -1, axis=0))))
-    return PeriodicOrbit(pts.copy(), d, M, ev, float(np.trace(M)), float(np.linalg.det(M)), times.copy(), resid,
-                         int(iters), sym, jacs.copy(), smap.params, smap.h, smap.phi0)
+    return _orbit(smap, pts, jacs, times, resid, iters)
+
+
+def mirror_orbit(orb: PeriodicOrbit) -> PeriodicOrbit:
+    """The image G0(orbit) of a periodic orbit under the reversor, computed exactly (no search).
+
+    With G0 P G0 = P^-1 (module docstring), the points z_j = G0 x_{-j} (indices mod K) form an
+    orbit: P(z_j) = G0 P^-1(x_{-j}) = G0 x_{-j-1} = z_{j+1}.  Differentiating P = G0 P^-1 G0
+    gives DP(z_j) = G0 DP(x_{-j-1})^-1 G0, so the monodromy at z_0 is G0 M^-1 G0 (same
+    trace, det 1), and the return time from z_j to z_{j+1} is the time from x_{-j-1} to x_{-j}.
+    Raises ParameterError when the reversor does not apply (``is_reversible`` is False)."""
+    if not is_reversible(orb.params, orb.phi0):
+        raise ParameterError("the mirror image needs a reversible system (zeta = xi = 0) and phi0 = 0 or pi")
+    K = orb.period
+    G = np.diag([1.0, -1.0])
+    idx = (-np.arange(K)) % K                      # x_{-j}
+    prev = (-np.arange(K) - 1) % K                 # x_{-j-1}
+    pts = reversor(orb.points[idx])
+    jacs = np.array([G @ np.linalg.inv(orb.map_jacobians[i]) @ G for i in prev])
+    smap = _MapInfo(orb.params, orb.h, orb.phi0)
+    return _orbit(smap, pts, jacs, orb.return_times[prev], orb.residual, orb.iterations, orb.symmetric)
+
+
+@dataclass(frozen=True)
+class _MapInfo:
+    """What :func:`_orbit` needs of a section map (no integrator)."""
+
+    params: model.Params
+    h: float
+    phi0: float
 
 
 def _check_period(period) -> int:
@@ -493,28 +573,80 @@ def _canonical(orb: PeriodicOrbit) -> PeriodicOrbit:
     k = int(np.lexsort((orb.points[:, 0], np.round(np.abs(orb.points[:, 1]), 9)))[0])
     if k == 0:
         return orb
-    pts = np.roll(orb.points, -k, axis=0)
-    jacs = np.roll(orb.map_jacobians, -k, axis=0)
-    M = _monodromy(jacs)
-    return PeriodicOrbit(pts, orb.period, M, np.linalg.eigvals(M), float(np.trace(M)), float(np.linalg.det(M)),
-                         np.roll(orb.return_times, -k), orb.residual, orb.iterations, orb.symmetric, jacs,
-                         orb.params, orb.h, orb.phi0)
+    return _orbit(_MapInfo(orb.params, orb.h, orb.phi0), np.roll(orb.points, -k, axis=0),
+                  np.roll(orb.map_jacobians, -k, axis=0), np.roll(orb.return_times, -k), orb.residual,
+                  orb.iterations, orb.symmetric)
+
+
+def _half_turn_partners(prm, h, orbits, same_tol, *, tol, max_iter, tmax, threads) -> list:
+    """The partners under the half-turn reversor T (docs/model.md, "Symmetries";
+    :mod:`explorer.analysis.halfturn`) of the isolated ``orbits`` that are not among them yet.
+
+    T P = P^-1 T, so the partner of x_0, ..., x_{K-1} is the orbit T(x_{K-1}), ..., T(x_0), with the
+    same trace and period.  The T-images of every point of every orbit are one batch of half-turn
+    flows; only an orbit whose image matches no orbit found gets a Newton polish (from a start
+    that is the orbit to the flow's accuracy: one or two iterations)."""
+    from explorer.analysis.halfturn import partner_points
+
+    isolated = [o for o in orbits if not o.degenerate]
+    if not isolated:
+        return []
+    images = partner_points(prm, h, np.concatenate([o.points for o in isolated]), phi0=isolated[0].phi0, tol=tol,
+                            threads=threads).points
+    added: list[PeriodicOrbit] = []
+    start = 0
+    for o in isolated:
+        pts = images[start:start + o.period][::-1]
+        start += o.period
+        if not np.all(np.isfinite(pts)) or any(f.same_orbit(pts, same_tol) for f in orbits + added):
+            continue
+        try:
+            partner = find_periodic_orbit(prm, h, pts if o.period >= MULTIPLE_SHOOTING_FROM else pts[0], o.period,
+                                          phi0=o.phi0, tol=tol, max_iter=max_iter, tmax=tmax)
+        except ParameterError:
+            continue
+        if partner.period == o.period and not partner.degenerate and partner.same_orbit(pts, 1e3 * same_tol):
+            added.append(partner)
+    return added
+
+
+def periodic_guesses(params, h, period, *, grid=12, line=None, phi0=math.pi, tol=DEFAULT_TOL, tmax=SEARCH_TMAX,
+                     threads=None) -> np.ndarray:
+    """The Newton starts of :func:`search_periodic_orbits`, in the order it tries them: the seeds on
+    the symmetry lines (:func:`symmetry_line_points`, ``line`` per line, default 8 ``grid``), then
+    the points of a ``grid`` x ``grid`` grid of the allowed region where ``|P^K(x) - x|`` is a
+    local minimum (best first).  An (m, 2) array."""
+    K = _check_period(period)
+    prm = params if isinstance(params, model.Params) else model.Params.from_array(params)
+    h = validation.real("h", h)
+    grid = validation.integer("grid", grid, 2, 1000)
+    line = 8 * grid if line is None else validation.integer("line", line, 2)
+    if model.allowed_ellipse(prm, h, phi0) is None:
+        raise ParameterError(f"the allowed region is empty at h = {h:g}; allowed: "
+                             f"{model.describe_region(prm, h, phi0)}")
+    return np.concatenate([symmetry_line_points(prm, h, K, line, phi0=phi0, tol=tol, tmax=tmax, threads=threads),
+                           _grid_seeds(prm, h, K, grid, phi0, tol, tmax, threads)])
 
 
 def search_periodic_orbits(params, h, period, *, grid=12, line=None, phi0=math.pi, tol=DEFAULT_TOL,
                            max_guesses=60, max_iter=NEWTON_MAX_ITER, tmax=SEARCH_TMAX, time_limit=None,
-                           same_tol=SAME_ORBIT_TOL, threads=None) -> list:
+                           same_tol=SAME_ORBIT_TOL, threads=None, guesses=None) -> list:
     """All periodic orbits of minimal period ``period`` found from guesses covering the section.
 
-    Guesses: (i) on the symmetry lines of the reversor (:func:`symmetry_line_points`, ``line``
-    start points per line, default 8 ``grid``), where symmetric orbits are found as roots;
-    (ii) the points of a ``grid`` x ``grid`` grid of the allowed region's bounding box, inside
-    the region, where ``|P^K(x) - x|`` is a local minimum over the grid (best first).  Newton's
-    method (:func:`find_periodic_orbit`) runs from at most ``max_guesses`` of them, skipping a
-    guess that lies on an orbit already found; orbits are reduced to their minimal period
-    (those of a smaller period are dropped) and deduplicated: two orbits are the same if a point
-    of one lies within ``same_tol`` of a point of the other.  When the reversor applies, the
-    mirror image G0 of every asymmetric orbit found is added (Newton from its reflected point).
+    Guesses: :func:`periodic_guesses` (the symmetry lines first, then the local minima of
+    ``|P^K(x) - x|`` on a grid), or the (m, 2) array ``guesses``.  Newton's method
+    (:func:`find_periodic_orbit`) runs from at most ``max_guesses`` of them, skipping a guess
+    within 1e-4 of an isolated orbit already found (never near a degenerate one: where those
+    land depends on rounding, and what is tried must not); orbits are reduced to their minimal
+    period (those of a smaller period are dropped) and deduplicated (two orbits are the same if
+    a point of one lies within ``same_tol`` of a point of the other).  When the reversor
+    applies, the set is completed by symmetry: every asymmetric orbit comes with its mirror
+    image :func:`mirror_orbit`, computed exactly, and an orbit Newton also found as the mirror
+    of an earlier one is replaced by that exact image.
+
+    Degenerate orbits (``orbit.degenerate``: not isolated at the map's accuracy, module
+    docstring) are reported after the isolated ones and never counted with them; their number
+    and points may differ between CPUs, the isolated orbits may not.
 
     Parameters
     ----------
@@ -533,56 +665,56 @@ def search_periodic_orbits(params, h, period, *, grid=12, line=None, phi0=math.p
     tmax : float
         Time budget of one return of the map (``SEARCH_TMAX``).
     time_limit : float or None
-        Wall-clock budget in seconds of the Newton phase (None: none).
+        Wall-clock budget in seconds of the Newton phase (None: none; a limit makes the
+        result depend on the machine's speed).
     threads : int or None
         Numba threads of the batch integrations.
+    guesses : array (m, 2) or None
+        Newton starts to use instead of :func:`periodic_guesses`.
 
     Returns
     -------
     list of PeriodicOrbit
-        Each orbit once, starting at its point nearest p2 = 0, sorted by that point's p1.
+        The isolated orbits, then the degenerate ones; each orbit once, starting at its point
+        nearest p2 = 0, sorted by that point's p1 within each group.
     """
     K = _check_period(period)
     prm = params if isinstance(params, model.Params) else model.Params.from_array(params)
     h = validation.real("h", h)
-    grid = validation.integer("grid", grid, 2, 1000)
-    line = 8 * grid if line is None else validation.integer("line", line, 2)
     max_guesses = validation.integer("max_guesses", max_guesses, 1)
-    if model.allowed_ellipse(prm, h, phi0) is None:
-        raise ParameterError(f"the allowed region is empty at h = {h:g}; allowed: "
-                             f"{model.describe_region(prm, h, phi0)}")
-    seeds = [symmetry_line_points(prm, h, K, line, phi0=phi0, tol=tol, tmax=tmax, threads=threads),
-             _grid_seeds(prm, h, K, grid, phi0, tol, tmax, threads)]
-    guesses = np.concatenate(seeds)
+    if guesses is None:
+        guesses = periodic_guesses(prm, h, K, grid=grid, line=line, phi0=phi0, tol=tol, tmax=tmax, threads=threads)
+    else:
+        guesses = np.asarray(guesses, float).reshape(-1, 2)
+    reversible = is_reversible(prm, phi0)
     t0 = time.perf_counter()
-    found: list[PeriodicOrbit] = []
+    newton: list[PeriodicOrbit] = []
     tried = 0
     for g in guesses:
         if tried >= max_guesses or (time_limit is not None and time.perf_counter() - t0 > time_limit):
             break
-        if any(o.distance_to(g) < 1e-4 for o in found):
-            continue
+        if any(not o.degenerate and (o.distance_to(g) < 1e-4 or (reversible and o.distance_to(reversor(g)) < 1e-4))
+               for o in newton):
+            continue   # on an isolated orbit found already, or on its mirror image
         tried += 1
         try:
             orb = find_periodic_orbit(prm, h, g, K, phi0=phi0, tol=tol, max_iter=max_iter, tmax=tmax)
         except ParameterError:
             continue
-        if orb.period != K or any(o.same_orbit(orb, same_tol) for o in found):
+        if orb.period == K and not any(o.same_orbit(orb, same_tol) for o in newton):
+            newton.append(orb)
+    if symmetry.has_half_turn_symmetry(prm, phi0):
+        newton += _half_turn_partners(prm, h, newton, same_tol, tol=tol, max_iter=max_iter, tmax=tmax,
+                                      threads=threads)
+    found: list[PeriodicOrbit] = []
+    for o in newton:   # completed by symmetry: an orbit, then its exact mirror image
+        if any(f.same_orbit(o, same_tol) for f in found):
             continue
-        found.append(orb)
-    if is_reversible(prm, phi0):   # the mirror image G0(orbit) of an asymmetric orbit is an orbit too
-        for o in list(found):
-            if o.symmetric or any(f.same_orbit(reversor(o.points), same_tol) for f in found):
-                continue
-            try:
-                m = find_periodic_orbit(prm, h, reversor(o.points[0]), K, phi0=phi0, tol=tol, max_iter=max_iter,
-                                        tmax=tmax)
-            except ParameterError:
-                continue
-            if m.period == K and not any(f.same_orbit(m, same_tol) for f in found):
-                found.append(m)
+        found.append(o)
+        if reversible and not o.symmetric:
+            found.append(mirror_orbit(o))
     found = [_canonical(o) for o in found]
-    return sorted(found, key=lambda o: (o.points[0, 0], o.points[0, 1]))
+    return sorted(found, key=lambda o: (o.degenerate, o.points[0, 0], o.points[0, 1]))
 
 
 # ------------------------------------------------------------------ continuation

@@ -3,11 +3,43 @@
 The rotation number of an orbit x_n = P^n(x_0) of the section map (phi = phi0, MODEL.md R9)
 around a fixed point c is the mean angle advanced per return,
 
-    rho = lim (1/N) sum_n d_n / (2 pi),   d_n = wrap(theta_{n+1} - theta_n) in (-pi, pi],
+    rho = lim (1/N) sum_n d_n / (2 pi),
 
-with theta_n = atan2(p2_n - c2, p1_n - c1) (the increments measured around c and unwrapped:
-counter-clockwise positive in the (p1, p2) plane; rho is a fraction of a turn, defined modulo
-1 and reported in (-1/2, 1/2]).  The average is the weighted Birkhoff average of Das, Sander,
+d_n the angle turned by x - c from x_n to x_{n+1} (counter-clockwise positive in the (p1, p2)
+plane; rho is a fraction of a turn, defined modulo 1 and reported in (-1/2, 1/2]; the lifted
+value, turns per return through the flow, is kept as ``turns``).
+
+The lift
+--------
+Measuring d_n as atan2 at x_{n+1} minus atan2 at x_n, wrapped to (-pi, pi], is right only
+while every return turns by less than half a turn: where the increments straddle pi (at
+mu = 0 from p1 ~ 1.75 on the axis of the Figure 4 section to its edge at p1 = 2) a wrapped
+average is neither the rotation number nor converged.  The increment is lifted through the
+flow instead.  While M > 0 the angle phi is a time, the section map is the time-2 pi map of a
+planar flow in phi, and the periodic orbit x*(phi) of c never meets another orbit x(phi) at
+the same phi, so the angle theta(phi) of x(phi) - x*(phi) is a continuous function: d_n is
+its change over phi in [phi0 + 2 pi n, phi0 + 2 pi (n + 1)], a continuous function of x_n
+(the lift of the circle map).  theta is sampled on the m sub-sections phi0 + 2 pi k/m
+(k = 0..m-1, m = ``SUBSECTIONS`` doubled up to ``MAX_SUBSECTIONS`` until no sample-to-sample
+change exceeds ``MAX_SUBSTEP`` = pi/2) and unwrapped between samples.  At mu = 0 (MODEL.md
+R6) x*(phi) is the point c itself (solution II) and d_n sums to the exact 2 pi T/tau of
+the integrable motion (T the return time, tau the period of (p1, p2, M)).  An orbit whose
+phi turns back across a sub-section (M changes sign, the flow in phi is not defined) is
+reported with status ``"turned"`` and no rotation number; one whose samples still change by
+more than ``MAX_SUBSTEP`` at ``MAX_SUBSECTIONS`` with ``"unresolved"``.
+
+Sampling every return on m sub-sections costs m runs.  Most orbits need no such cost: the lift
+L(x) of the increment is continuous on the orbit's closure (an invariant circle, or a connected
+chaotic zone) and the wrapped increment is L - 2 pi j(x) with j integer, constant wherever L stays
+clear of the odd multiples of pi.  When every one of the 2N wrapped increments lies within
+``WRAP_SAFE`` = 3 pi/4 of 0, L cannot cross an odd multiple of pi on the orbit without a jump of
+more than pi/2 between neighbouring points of the orbit, so j is one constant: the wrapped
+increments are used, and j is read from the first lap sampled on sub-sections (``turns``).
+The other orbits are sampled on sub-sections at every return.
+
+The average
+-----------
+The weighted Birkhoff average of Das, Sander,
 Yorke & Meiss (Quantitative quasiperiodicity, Nonlinearity 30 (2017) 4111; Das & Yorke,
 Super convergence of ergodic averages for quasiperiodic orbits, Nonlinearity 31 (2018) 491):
 
@@ -19,10 +51,10 @@ difference below ``CONVERGED_TOL`` = 1e-10 marks the orbit regular (``converged`
 one flags chaos.  On an island chain of period K around c, rho = m/K exactly (plateaus of
 :func:`rotation_profile`).
 
-The orbit comes from :func:`explorer.analysis.sections.section_crossings` (the Taylor batch
-driver: 2N crossings in one compiled call, ~4x faster per crossing than stepping
+The orbit comes from :func:`explorer.analysis.sections.crossings` (the Taylor batch driver:
+2N crossings of one sub-section in one compiled call, ~4x faster per crossing than stepping
 :class:`~explorer.analysis.fixedpoints.SectionMap`, which pays a Python call and the tangent
-set-up per return), in parallel over the points of a profile.
+set-up per return), in parallel over the points of a profile; a rotation number costs m runs.
 """
 from __future__ import annotations
 
@@ -32,6 +64,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from explorer import model
+from explorer.integrate.methods import MAP_TOL
 from explorer.model import ParameterError, validation
 
 __all__ = ["CONVERGED_TOL", "DEFAULT_ITERATES", "RotationNumber", "RotationProfile", "birkhoff_weights",
@@ -42,7 +75,18 @@ CONVERGED_TOL = 1e-10
 #: N (the orbit has 2N returns)
 DEFAULT_ITERATES = 2000
 #: Taylor tolerance of the orbits (the rotation number inherits the integration error)
-DEFAULT_TOL = 1e-15
+DEFAULT_TOL = MAP_TOL
+#: sub-sections per return at the first try (the angle is sampled at phi0 + 2 pi k/m, see the module)
+SUBSECTIONS = 4
+#: most sub-sections per return: an orbit still under-sampled there is "unresolved"
+MAX_SUBSECTIONS = 256
+#: largest change of the angle between two consecutive samples accepted as resolved
+MAX_SUBSTEP = 0.5 * math.pi
+#: the fast path: when every return's increment, wrapped to (-pi, pi], stays within this bound, the
+#: wrapped increments are the lifted ones less one constant 2 pi j (see the module)
+WRAP_SAFE = 0.75 * math.pi
+#: time budget of an orbit per return
+TMAX_PER_RETURN = 1e3
 
 
 def birkhoff_weights(N: int) -> np.ndarray:
@@ -80,7 +124,9 @@ def orbit_rotation(points, center) -> float:
 class RotationNumber:
     """Rotation number of one orbit around ``center`` (see the module).
 
-    ``value`` is WB over 2N increments (NaN when the orbit stopped before 2N returns),
+    ``value`` is WB over 2N increments reduced to (-1/2, 1/2] (NaN when the orbit stopped before
+    2N returns or could not be lifted, ``status`` "turned" or "unresolved"), ``turns`` the same
+    average lifted through the flow (turns per return, not reduced),
     ``difference`` = |WB_N - WB_2N|, ``converged`` = difference < ``CONVERGED_TOL``
     (regular orbit; False flags chaos), ``status`` the orbit's stop reason.
     """
@@ -92,12 +138,14 @@ class RotationNumber:
     start: tuple
     center: tuple
     status: str = "done"
+    turns: float = float("nan")
 
     def as_dict(self):
         return {"p1": float(self.start[0]), "p2": float(self.start[1]),
                 "rotation": None if not math.isfinite(self.value) else float(self.value),
                 "converged": bool(self.converged),
                 "difference": None if not math.isfinite(self.difference) else float(self.difference),
+                "turns": None if not math.isfinite(self.turns) else float(self.turns),
                 "iterates": int(self.iterates), "status": self.status}
 
 
@@ -113,23 +161,123 @@ def _center(params, h, center, near, phi0, tol):
     return fp.point
 
 
-def _rotations(params, h, starts, center, N, phi0, tol, threads, conv_tol):
-    from explorer.analysis.sections import section_crossings
+class _Samples:
+    """The orbits of ``starts`` (and of ``center``, row 0) sampled on sub-sections phi0 + 2 pi f,
+    each sub-section run once and kept while the sampling is refined (see the module)."""
 
+    def __init__(self, params, h, starts, center, n_returns, phi0, tol, threads):
+        self.args = (params, n_returns, phi0, tol, threads)
+        self.center = center
+        self.starts = starts
+        self.Y0 = model.section_state(params, np.concatenate([[center[0]], starts[:, 0]]),
+                                      np.concatenate([[center[1]], starts[:, 1]]), h, phi0, 1)
+        self.runs: dict = {}
+
+    def at(self, f: float):
+        """Crossings of phi0 + 2 pi f, 0 <= f < 1 (f = 0: the returns to the section)."""
+        if f not in self.runs:
+            from explorer.analysis.sections import crossings
+
+            params, n_returns, phi0, tol, threads = self.args
+            c = crossings(params, self.Y0, n_returns, phi0=phi0 + 2.0 * math.pi * f, tol=tol, threads=threads,
+                          tmax=TMAX_PER_RETURN * n_returns)
+            if c.count[0] < 1:
+                raise ParameterError(f"center {tuple(self.center)} must be a point whose orbit crosses the "
+                                     f"section; its orbit stopped ({c.status_name(0)})")
+            self.runs[f] = c
+        return self.runs[f]
+
+    def increments(self, rows, m: int):
+        """For the orbits ``rows`` sampled on m sub-sections: (per-return increments (n, n_returns),
+        largest sample-to-sample change (n,), returns reached (n,), status names (n,)); rows of
+        orbits that stopped early or turned back are NaN."""
+        _, n_returns, _, _, _ = self.args
+        n = rows.size
+        xs = np.empty((n, n_returns, m, 2))     # x at phi0 + 2 pi (lap + (k + 1)/m), k = 0..m-1
+        ts = np.empty((n, n_returns, m))
+        ref = np.empty((m, 2))                  # x*(phi0 + 2 pi (k + 1)/m); x*(phi0 + 2 pi) = center
+        count = np.full(n, n_returns)
+        status = np.array(["done"] * n, dtype=object)
+        for k in range(1, m + 1):
+            c = self.at((k % m) / m)
+            ref[k - 1] = self.center if k == m else c.data[0, 0, 1:3]
+            xs[:, :, k - 1] = c.data[1 + rows, :, 1:3]
+            ts[:, :, k - 1] = c.data[1 + rows, :, 0]
+            for i in np.flatnonzero(c.count[1 + rows] < count):
+                count[i], status[i] = c.count[1 + rows[i]], c.status_name(1 + rows[i])
+        theta = np.arctan2(xs[..., 1] - ref[:, 1], xs[..., 0] - ref[:, 0]).reshape(n, -1)
+        x0 = self.starts[rows]
+        theta0 = np.arctan2(x0[:, 1] - self.center[1], x0[:, 0] - self.center[0])
+        d = np.diff(np.concatenate([theta0[:, None], theta], axis=1), axis=1)
+        d -= 2.0 * np.pi * np.ceil((d - np.pi) / (2.0 * np.pi))     # each sample-to-sample change in (-pi, pi]
+        t = np.concatenate([np.zeros((n, 1)), ts.reshape(n, -1)], axis=1)
+        with np.errstate(invalid="ignore"):
+            turned = ~np.all(np.diff(t, axis=1) > 0.0, axis=1) & (count == n_returns)
+        status[turned] = "turned"     # phi went back across a sub-section: the samples are not in phi order
+        d[turned] = np.nan
+        return d.reshape(n, n_returns, m).sum(axis=2), np.abs(d).max(axis=1, initial=0.0), count, status
+
+
+def _refined(samples: _Samples, n: int):
+    """:meth:`_Samples.increments` for the n orbits of ``samples``, the sub-sections doubled from
+    ``SUBSECTIONS`` for the orbits that need them (up to ``MAX_SUBSECTIONS``).  Returns
+    (increments, returns reached, status names); "unresolved" where the doubling ran out."""
+    inc = np.full((n, samples.args[1]), np.nan)
+    count = np.zeros(n, np.int64)
+    status = np.array(["unresolved"] * n, dtype=object)
+    todo = np.arange(n)
+    m = SUBSECTIONS
+    while todo.size and m <= MAX_SUBSECTIONS:
+        d, worst, cnt, st = samples.increments(todo, m)
+        ok = (worst <= MAX_SUBSTEP) | (st != "done")
+        inc[todo[ok]], count[todo[ok]], status[todo[ok]] = d[ok], cnt[ok], st[ok]
+        count[todo[~ok]] = cnt[~ok]
+        todo, m = todo[~ok], 2 * m
+    return inc, count, status
+
+
+def _lifted_increments(params, h, starts, center, n_returns, phi0, tol, threads):
+    """Per-return angle increments around the orbit of ``center``, lifted through the flow (see
+    the module).  Returns (increments, returns reached, status names, lifted): where ``lifted``
+    is False the increments are right modulo 2 pi only (the first lap could not be resolved)."""
+    n = starts.shape[0]
+    args = (params, h)
+    tail = (phi0, tol, threads)
+    # the returns alone (m = 1): the increments wrapped to (-pi, pi]
+    inc, worst, count, status = _Samples(*args, starts, center, n_returns, *tail).increments(np.arange(n), 1)
+    lifted = np.zeros(n, bool)
+    safe = np.flatnonzero((status == "done") & (worst <= WRAP_SAFE))
+    if safe.size:
+        # every wrapped increment is away from +-pi: the lift differs from it by one constant 2 pi j,
+        # read from the first lap sampled on sub-sections
+        first, _, st = _refined(_Samples(*args, starts[safe], center, 1, *tail), safe.size)
+        j = np.round((first[:, 0] - inc[safe, 0]) / (2.0 * np.pi))
+        known = (st == "done") & np.isfinite(j)
+        inc[safe[known]] += 2.0 * np.pi * j[known, None]
+        lifted[safe[known]] = True
+    rest = np.flatnonzero((status == "done") & (worst > WRAP_SAFE))
+    if rest.size:
+        d, cnt, st = _refined(_Samples(*args, starts[rest], center, n_returns, *tail), rest.size)
+        inc[rest], count[rest], status[rest] = d, cnt, st
+        lifted[rest] = st == "done"
+    return inc, count, status, lifted
+
+
+def _rotations(params, h, starts, center, N, phi0, tol, threads, conv_tol):
     starts = np.atleast_2d(np.asarray(starts, float))
-    c = section_crossings(params, starts[:, 0], starts[:, 1], h, 2 * N, phi0=phi0, tol=tol, threads=threads,
-                          tmax=1e3 * 2 * N)
+    inc, count, status, lifted = _lifted_increments(params, h, starts, np.asarray(center, float), 2 * N, phi0, tol,
+                                                    threads)
     out = []
     for i, s in enumerate(starts):
-        if c.count[i] < 2 * N:
-            out.append(RotationNumber(float("nan"), False, float("nan"), int(c.count[i]), tuple(s), tuple(center),
-                                      c.status_name(i)))
+        if status[i] != "done":
+            out.append(RotationNumber(float("nan"), False, float("nan"), int(count[i]), tuple(s), tuple(center),
+                                      str(status[i])))
             continue
-        pts = np.concatenate([s[None, :], c.data[i, :, 1:3]])
-        d = _increments(pts, center)
-        a, b = weighted_birkhoff(d, N), weighted_birkhoff(d, 2 * N)
+        a, b = weighted_birkhoff(inc[i], N), weighted_birkhoff(inc[i], 2 * N)
         diff = abs(a - b) / (2.0 * np.pi)
-        out.append(RotationNumber(b / (2.0 * np.pi), bool(diff < conv_tol), diff, 2 * N, tuple(s), tuple(center)))
+        turns = b / (2.0 * np.pi)
+        out.append(RotationNumber(turns - math.ceil(turns - 0.5), bool(diff < conv_tol), diff, 2 * N, tuple(s),
+                                  tuple(center), turns=turns if lifted[i] else float("nan")))
     return out
 
 
@@ -177,12 +325,19 @@ class RotationProfile:
     difference: np.ndarray
     center: np.ndarray
     iterates: int
+    turns: np.ndarray | None = None    # (n,) lifted rotation (turns per return through the flow)
+    status: tuple = ()                 # (n,) why each orbit stopped ("done", "turned", ...)
 
     def as_dict(self):
+        n = len(self.s)
+        turns = np.full(n, np.nan) if self.turns is None else self.turns
+        status = self.status or ("done",) * n
         return {"center": [float(v) for v in self.center], "iterates": int(self.iterates),
                 "profile": [{"s": float(s), "p1": float(p[0]), "p2": float(p[1]),
-                             "rotation": None if not math.isfinite(r) else float(r), "converged": bool(c)}
-                            for s, p, r, c in zip(self.s, self.points, self.rotation, self.converged)]}
+                             "rotation": None if not math.isfinite(r) else float(r), "converged": bool(c),
+                             "turns": None if not math.isfinite(t) else float(t), "status": st}
+                            for s, p, r, c, t, st in zip(self.s, self.points, self.rotation, self.converged,
+                                                         turns, status)]}
 
 
 def rotation_profile(params, h, start, stop, n, *, center=None, iterates=DEFAULT_ITERATES, phi0=math.pi,
@@ -206,4 +361,5 @@ def rotation_profile(params, h, start, stop, n, *, center=None, iterates=DEFAULT
     c = _center(params, h, center, a, phi0, tol)
     rs = _rotations(params, h, pts, c, N, phi0, tol, threads, conv_tol)
     return RotationProfile(pts, s, np.array([r.value for r in rs]), np.array([r.converged for r in rs]),
-                           np.array([r.difference for r in rs]), c, 2 * N)
+                           np.array([r.difference for r in rs]), c, 2 * N, np.array([r.turns for r in rs]),
+                           tuple(r.status for r in rs))

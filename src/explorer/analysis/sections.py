@@ -28,7 +28,15 @@ import numpy as np
 from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
 from explorer.integrate import layout, methods
-from explorer.integrate.methods import ADAPTIVE_METHODS, MAX_TOL, METHODS, MIN_TOL, SPLIT_METHODS
+from explorer.integrate.methods import (
+    ADAPTIVE_METHODS,
+    DEFAULT_DT,
+    DEFAULT_TOL,
+    MAX_TOL,
+    METHODS,
+    MIN_TOL,
+    SPLIT_METHODS,
+)
 from explorer.kernels import STATUS_NAMES, Status
 from explorer.model import ParameterError, validation
 
@@ -37,8 +45,6 @@ __all__ = ["ADAPTIVE_METHODS", "DEFAULT_BLOCK", "DEFAULT_DT", "DEFAULT_MAX_STEPS
            "crossings", "energy_warning", "human_bytes", "iter_crossings", "iter_section_crossings",
            "max_energy_error", "result_bytes", "section_crossings"]
 
-DEFAULT_TOL = 1e-13
-DEFAULT_DT = 0.05
 DEFAULT_MAX_STEPS = 10**9
 #: a run whose energy error exceeds this fraction of max(|h|, 1) gets a warning: its step
 #: (splitting) or tolerance is too coarse for the scene to trust the section's fine structure
@@ -172,7 +178,23 @@ def crossing_settings(params, y0, n_crossings: int, *, method: str = "taylor", t
 
 def _run_block(run: _Run, Y, carry, limits, data, count, status, final, info) -> None:
     """One block of the drivers for the orbits Y (arrays filled in place), with numba's thread
-    count set for the call when ``run.threads`` says so."""
+    count set for the call when ``run.threads`` says so.  An orbit whose motion the fixed step
+    does not resolve (:func:`explorer.integrate.methods.unresolved`) is not integrated: no
+    crossing, status UNRESOLVED, its state kept."""
+    slow = methods.unresolved(run.prep, run.P, Y)
+    if slow.any():
+        count[slow] = 0
+        status[slow] = int(Status.UNRESOLVED)
+        final[slow] = Y[slow]
+        info[slow] = 0.0
+        info[slow, 0] = carry[slow, layout.CARRY_T]
+        ok = np.flatnonzero(~slow)
+        if ok.size:
+            parts = [np.ascontiguousarray(a[ok]) for a in (Y, carry, limits, data, count, status, final, info)]
+            _run_block(run, *parts)
+            for a, part in zip((carry, data, count, status, final, info), parts[1:2] + parts[3:]):
+                a[ok] = part
+        return
     if run.threads is None:   # (numba's thread pool is started only when a batch asks for it)
         methods.run_crossings(run.prep, Y, run.P, run.cphi, run.sphi, run.direction, run.tmax, run.max_steps,
                               carry, limits, data, count, status, final, info)

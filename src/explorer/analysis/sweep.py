@@ -38,12 +38,20 @@ from explorer.model import ParameterError
 CHUNK_ORBITS_JOBS = 32
 #: chunks per panel when this process runs everything with Numba threads (progress granularity)
 CHUNKS_PER_PANEL_THREADS = 4
+#: ... but at most this many orbits per chunk (threads over orbits): one kernel call is then one
+#: chunk of at most this many orbits x one block of a streamed panel (at most 256 crossings when
+#: the panel has more than about 800 orbits), about a second on 2 cores, and a sweep checks for
+#: Ctrl-C between calls (:func:`run`'s ``check``); the numbers do not depend on the chunking
+CHUNK_ORBITS_THREADS = 512
 #: a panel whose crossing rows (40 bytes each) exceed this is streamed to the store in blocks
 #: (8 MiB: the default Figure-4 panels, 200 orbits x 1000 crossings, are not; the environment
 #: variable EXPLORER_STREAM_BYTES overrides it, e.g. to stream small runs)
 STREAM_BYTES = int(os.environ.get("EXPLORER_STREAM_BYTES", 8 * 2**20))
 #: the smallest block (crossings per orbit and round) of a streamed panel
 MIN_BLOCK = 256
+#: per-orbit arrays of the chaos indicators that ``task`` returns (``lyapunov_dh``: |H - H0| at the
+#: end of each orbit's indicator integration, measured, not stored)
+INDICATOR_ARRAYS = ("megno", "mlce", "fli", "lyapunov_status", "sali", "gali2", "lyapunov_early", "lyapunov_dh")
 
 
 @dataclass(frozen=True)
@@ -55,6 +63,7 @@ class PanelSpec:
     y0: np.ndarray         # (N, 5) initial states on the section
     seeds: np.ndarray      # (N, 2) p1, p2
     grid: tuple = ()       # chaos map raster: (resolution, p1_lo, p1_hi, p2_lo, p2_hi); () otherwise
+    dropped: int = 0       # [seeds] candidates outside the allowed region, not integrated (seeds.seed_points)
 
 
 @dataclass(frozen=True)
@@ -85,65 +94,82 @@ def panel_block(n_orbits: int, crossings: int, budget: int | None = None) -> int
     return int(crossings) if crossings <= fit else int(max(MIN_BLOCK, fit))
 
 
-def build_spec(scene, panel_indices, *, chunk_orbits: int) -> SweepSpec:
-    """Seeds every panel to compute (inside the allowed region only, R9) and cuts it into chunks."""
+#: the products of a panel a spec can compute (``build_spec``'s ``product``; Scene.product_hashes)
+PRODUCTS = ("sections", "indicators")
+
+
+def build_spec(scene, panel_indices, *, chunk_orbits: int, product: str | None = None) -> SweepSpec:
+    """Seeds every panel to compute (inside the allowed region only, R9) and cuts it into chunks.
+
+    ``product``: ``"sections"`` (the crossings of the [seeds]), ``"indicators"`` (the chaos
+    indicators of the [seeds], or of the map's grid with [lyapunov] map_resolution) or None (what
+    the scene computes, in one pass: the indicators then use the sections' seeds, so a scene with
+    both sections and a map grid needs two specs)."""
     from explorer.analysis.seeds import seed_points
 
+    if product is not None and product not in PRODUCTS:
+        raise ValueError(f"product must be one of {PRODUCTS} or None, got {product!r}")
     integ = scene.integration
     panels = []
     chunks = []
     blocks = []
-    ly = scene.lyapunov if "lyapunov" in scene.compute else None
+    ly = scene.lyapunov if "lyapunov" in scene.compute and product != "sections" else None
+    with_sections = "sections" in scene.compute and product != "indicators"
+    if product is None and with_sections and ly is not None and ly.map_resolution:
+        raise ValueError("sections with a map grid are two products: build one spec for each")
     for pos, i in enumerate(panel_indices):
         params, h, label = scene.panel(i)
         grid: tuple = ()
+        dropped = 0
         if ly is not None and ly.map_resolution:
             p1, p2, grid = map_seeds(params, h, integ.phi0, ly.map_resolution)
         else:
-            p1, p2, _dropped = seed_points(scene.seeds, params, h, integ.phi0)
+            p1, p2, dropped = seed_points(scene.seeds, params, h, integ.phi0)
         if len(p1) == 0:
             raise ParameterError(f"scene panel {i} ({label}): no seed lies inside the allowed region")
         y0 = model.section_state(params, p1, p2, h, integ.phi0, integ.direction if integ.direction else 1)
         panels.append(PanelSpec(i, label, params.as_array(), float(h), np.ascontiguousarray(y0),
-                                np.column_stack([p1, p2]), grid))
+                                np.column_stack([p1, p2]), grid, dropped))
         n = len(p1)
         blocks.append(panel_block(n, integ.crossings))
-        # threads over orbits: quarter panels, but never fewer orbits than threads per chunk (a
-        # 2-orbit panel is one chunk that both threads share, not two chunks run one after the other)
-        step = max(1, chunk_orbits if chunk_orbits > 0 else max(math.ceil(n / CHUNKS_PER_PANEL_THREADS),
-                                                                max_threads()))
-        for a in range(0, n, step):
-            chunks.append((pos, a, min(n, a + step)))
+        chunks += _chunks(pos, n, chunk_orbits)
     return SweepSpec(tuple(panels), integ.method, integ.tol, integ.dt, integ.crossings, integ.effective_tmax,
                      integ.max_steps, integ.phi0, integ.direction, tuple(chunks), ly,
-                     "sections" in scene.compute, tuple(blocks))
+                     with_sections, tuple(blocks))
 
 
-def build_atlas_spec(scene, *, chunk_orbits: int) -> SweepSpec:
+def _chunks(pos: int, n: int, chunk_orbits: int, parts: int = CHUNKS_PER_PANEL_THREADS) -> list:
+    """The chunks (pos, start, stop) of a panel of ``n`` orbits: ``chunk_orbits`` orbits each
+    (joblib workers), or (0: threads over orbits) ``parts`` chunks of at most CHUNK_ORBITS_THREADS
+    orbits, but never fewer orbits than threads per chunk (a 2-orbit panel is one chunk that both
+    threads share, not two chunks run one after the other)."""
+    part = min(math.ceil(n / parts), CHUNK_ORBITS_THREADS)
+    step = max(1, chunk_orbits if chunk_orbits > 0 else max(part, max_threads()))
+    return [(pos, a, min(n, a + step)) for a in range(0, n, step)]
+
+
+def build_atlas_spec(scene, *, chunk_orbits: int, cells=None) -> SweepSpec:
     """The cells of a two-parameter atlas (a scene with [atlas]) as the panels of a sweep of
     indicators only: cell i (row = sweep value, column = atlas value) with its seeds (R9);
-    cells whose allowed region is empty are left out (drawn gray).  ``task(spec, i)`` maps it
-    unchanged (PanelSpec.index is the cell index)."""
+    cells whose allowed region is empty are left out (drawn gray), and so are cells not in
+    ``cells`` (None: all; a resumed atlas computes only its missing cells).  ``task(spec, i)``
+    maps it unchanged (PanelSpec.index is the cell index)."""
     from explorer.analysis.seeds import seed_points
 
     integ = scene.integration
     panels: list[PanelSpec] = []
     chunks: list[tuple[int, int, int]] = []
     for i in range(scene.n_cells):
-        if not scene.cell_allowed(i):
+        if not scene.cell_allowed(i) or (cells is not None and i not in cells):
             continue
         params, h, label = scene.cell(i)
         p1, p2, _dropped = seed_points(scene.seeds, params, h, integ.phi0)
         if len(p1) == 0:
             continue
         y0 = model.section_state(params, p1, p2, h, integ.phi0, integ.direction if integ.direction else 1)
-        pos = len(panels)
+        chunks += _chunks(len(panels), len(p1), chunk_orbits, parts=1)
         panels.append(PanelSpec(i, label, params.as_array(), float(h), np.ascontiguousarray(y0),
                                 np.column_stack([p1, p2])))
-        n = len(p1)
-        step = max(1, chunk_orbits if chunk_orbits > 0 else n)
-        for a in range(0, n, step):
-            chunks.append((pos, a, min(n, a + step)))
     return SweepSpec(tuple(panels), integ.method, integ.tol, integ.dt, 1, integ.effective_tmax, integ.max_steps,
                      integ.phi0, integ.direction, tuple(chunks), scene.lyapunov, False, ())
 
@@ -200,7 +226,10 @@ def task(spec: SweepSpec, i: int, threads: int | None = None) -> dict:
         ind = indicators(panel.P, panel.y0[a:b], ly.time, method=ly.method, tol=ly.tol, dt=ly.dt, threads=threads,
                          which=ly.indicators, early_stop=ly.early_stop, early_sali=ly.early_sali,
                          early_megno=ly.early_megno, early_time=ly.early_time)
-        out.update(megno=ind.megno, mlce=ind.mlce, fli=ind.fli, lyapunov_status=ind.status)
+        y0 = panel.y0[a:b]
+        with np.errstate(invalid="ignore", over="ignore"):   # |H - H0| where the indicator integration ended
+            dh = np.abs(model.energy(panel.P, ind.final) - model.energy(panel.P, y0))
+        out.update(megno=ind.megno, mlce=ind.mlce, fli=ind.fli, lyapunov_status=ind.status, lyapunov_dh=dh)
         if ly.second_vector:
             out.update(sali=ind.sali, gali2=ind.gali2)
         if ly.early_stop:
@@ -238,20 +267,35 @@ def _worker_task_block(spec, i, state):
     return task_block(spec, i, state, threads=1)
 
 
-def _map(fn_local, fn_worker, args, jobs, backend):
-    """fn(*a) for every a of ``args``, results as they come: in this process, or with joblib."""
+def _map(fn_local, fn_worker, args, jobs, backend, check=None):
+    """fn(*a) for every a of ``args``, results as they come: in this process, or with joblib.
+
+    ``check()`` (it may raise, e.g. on Ctrl-C) runs before each call in this process and after each
+    result has been used; an exception it raises is thrown into joblib's generator, which cancels
+    the workers' tasks (loky, dask) before the exception propagates."""
     if jobs == 1 and backend is None:
         for a in args:
+            if check is not None:
+                check()
             yield fn_local(*a)
         return
     import joblib
 
+    if check is not None:
+        check()
     with joblib.parallel_config(backend=backend or "loky"):
-        parallel = joblib.Parallel(n_jobs=jobs, return_as="generator")
-        yield from parallel(joblib.delayed(fn_worker)(*a) for a in args)
+        results = joblib.Parallel(n_jobs=jobs, return_as="generator")(joblib.delayed(fn_worker)(*a) for a in args)
+        for r in results:
+            yield r
+            if check is not None:
+                try:
+                    check()
+                except BaseException as exc:
+                    results.throw(exc)
+                    raise
 
 
-def _stream_panel(spec: SweepSpec, pos: int, chunk_ids, streamer, jobs, backend, progress) -> dict:
+def _stream_panel(spec: SweepSpec, pos: int, chunk_ids, streamer, jobs, backend, progress, check=None) -> dict:
     """Rounds of blocks over the chunks of panel ``pos`` until every orbit has finished; each chunk's
     block goes to ``streamer.block`` as it comes.  Returns the panel's per-orbit arrays (no rows)."""
     import dataclasses
@@ -263,7 +307,7 @@ def _stream_panel(spec: SweepSpec, pos: int, chunk_ids, streamer, jobs, backend,
     while not state.finished.all():
         todo = [i for i in chunk_ids if not state.finished[spec.chunks[i][1]:spec.chunks[i][2]].all()]
         args = [(spec, i, state.take(spec.chunks[i][1], spec.chunks[i][2])) for i in todo]
-        for r in _map(task_block, _worker_task_block, args, jobs, backend):
+        for r in _map(task_block, _worker_task_block, args, jobs, backend, check):
             _, a, b = spec.chunks[r["chunk"]]
             state.put(a, r["state"])
             state.blocks += 1
@@ -276,10 +320,10 @@ def _stream_panel(spec: SweepSpec, pos: int, chunk_ids, streamer, jobs, backend,
            "info": state.info.copy(), "streamed": True, "settings": {}}
     if spec.lyapunov is not None:   # indicators do not depend on the crossings: one pass, no rows
         ly_spec = dataclasses.replace(spec, sections=False)
-        parts = sorted(_map(task, _worker_task, [(ly_spec, i) for i in chunk_ids], jobs, backend),
+        parts = sorted(_map(task, _worker_task, [(ly_spec, i) for i in chunk_ids], jobs, backend, check),
                        key=lambda p: p["chunk"])
         ly = _assemble(parts)
-        for k in ("megno", "mlce", "fli", "lyapunov_status", "sali", "gali2", "lyapunov_early"):
+        for k in INDICATOR_ARRAYS:
             if k in ly:
                 out[k] = ly[k]
         wall += ly["wall_time"]
@@ -287,32 +331,38 @@ def _stream_panel(spec: SweepSpec, pos: int, chunk_ids, streamer, jobs, backend,
     return out
 
 
-def run(spec: SweepSpec, on_panel, *, jobs: int = 1, backend: str | None = None, progress=None, streamer=None):
+def run(spec: SweepSpec, on_panel, *, jobs: int = 1, backend: str | None = None, progress=None, streamer=None,
+        check=None):
     """Map ``task`` over the chunks and call ``on_panel(panel_spec, arrays)`` for each completed panel,
     in panel order, in this (the parent) process.  ``jobs == 1`` runs in this process with Numba
     threads over orbits; otherwise joblib runs ``jobs`` workers (``backend`` as joblib names it:
-    "loky" by default, "dask" with a dask.distributed Client active).
+    "loky" by default, "dask" with a dask.distributed Client active).  ``check()`` runs between
+    chunks, blocks and panels (never inside ``on_panel`` or a block's storing) and may raise to
+    stop the run there (Ctrl-C: :class:`explorer.app.interrupt.deferred_interrupt`); the joblib
+    workers' tasks are then cancelled.
 
     A streamed panel (``spec.streamed(pos)``) is computed in rounds of blocks (module docstring):
     ``streamer.resume(panel_spec)`` gives the StreamState to start from (the stored blocks of a
     killed run applied) and ``streamer.block(panel_spec, number, index, start, count, data, orbits,
     state_arrays)`` stores each block; its ``arrays`` then hold no rows (``streamed``: True)."""
+    checked = check if check is not None else (lambda: None)
     if any(spec.streamed(pos) for pos in range(len(spec.panels))):
         if streamer is None:
             raise ValueError("a streamed panel needs a streamer (the store's writer of blocks)")
         for pos, panel in enumerate(spec.panels):
             chunk_ids = [i for i, c in enumerate(spec.chunks) if c[0] == pos]
             if spec.streamed(pos):
-                on_panel(panel, _stream_panel(spec, pos, chunk_ids, streamer, jobs, backend, progress))
+                on_panel(panel, _stream_panel(spec, pos, chunk_ids, streamer, jobs, backend, progress, check))
+                checked()
                 continue
             parts = []
-            for r in _map(task, _worker_task, [(spec, i) for i in chunk_ids], jobs, backend):
+            for r in _map(task, _worker_task, [(spec, i) for i in chunk_ids], jobs, backend, check):
                 parts.append(r)
                 if progress is not None:
                     progress(1)
             on_panel(panel, _assemble(sorted(parts, key=lambda p: p["chunk"])))
+            checked()
         return
-    n_chunks = len(spec.chunks)
     per_panel: dict[int, list[int]] = {}
     for i, (pos, _a, _b) in enumerate(spec.chunks):
         per_panel.setdefault(pos, []).append(i)
@@ -326,22 +376,8 @@ def run(spec: SweepSpec, on_panel, *, jobs: int = 1, backend: str | None = None,
             on_panel(spec.panels[next_pos], _assemble(parts))
             next_pos += 1
 
-    if jobs == 1 and backend is None:
-        results = (task(spec, i) for i in range(n_chunks))
-    else:
-        import joblib
-
-        # parallel_config registers external backends such as "dask" on first use
-        with joblib.parallel_config(backend=backend or "loky"):
-            parallel = joblib.Parallel(n_jobs=jobs, return_as="generator")
-            for r in parallel(joblib.delayed(_worker_task)(spec, i) for i in range(n_chunks)):
-                done[r["chunk"]] = r
-                if progress is not None:
-                    progress(1)
-                flush()
-        flush()
-        return
-    for r in results:
+    # joblib.parallel_config (in _map) registers external backends such as "dask" on first use
+    for r in _map(task, _worker_task, [(spec, i) for i in range(len(spec.chunks))], jobs, backend, check):
         done[r["chunk"]] = r
         if progress is not None:
             progress(1)
@@ -351,9 +387,7 @@ def run(spec: SweepSpec, on_panel, *, jobs: int = 1, backend: str | None = None,
 
 def _assemble(parts):
     keys = ["data", "count", "status", "final", "info"]
-    if "megno" in parts[0]:
-        keys += ["megno", "mlce", "fli", "lyapunov_status"]
-        keys += [k for k in ("sali", "gali2", "lyapunov_early") if k in parts[0]]
+    keys += [k for k in INDICATOR_ARRAYS if k in parts[0]]
     out = {k: np.concatenate([p[k] for p in parts]) for k in keys}
     out["settings"] = parts[0]["settings"]
     out["wall_time"] = float(sum(p["wall_time"] for p in parts))

@@ -79,6 +79,7 @@ import numpy as np
 
 from explorer import model
 from explorer.integrate.full import integrate_full
+from explorer.integrate.methods import TRAJECTORY_TOL
 from explorer.kernels import STATUS_NAMES
 from explorer.model import validation
 from explorer.model.equations import FULL_DIM, energy_full
@@ -89,7 +90,7 @@ STATE_DIM = FULL_DIM
 TWO_PI = 2.0 * math.pi
 #: the CLI's default scene: Figure 4 (MODEL.md R9) with mu = 0.5
 DEFAULT_PARAMS = dict(model.FIGURE4.as_dict(), mu=0.5)
-DEFAULT_TOL = 1e-12
+DEFAULT_TOL = TRAJECTORY_TOL
 DEFAULT_MAX_STEPS = 10 ** 8
 #: bytes per sample of a :func:`trajectory` result and its conservation check: about 20 float64
 #: arrays of n_samples (the state, phi, H, p_x, p_y, kinetic energy, masks, temporaries)

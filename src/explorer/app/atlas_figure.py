@@ -6,14 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from explorer.app.figures import _FONT_SIZE, _TICK_SIZE, FORBIDDEN_COLOR, _matplotlib
-
-_GREEK = {"mu": r"$\mu$", "lam": r"$\lambda$", "chi": r"$\chi$", "zeta": r"$\zeta$", "xi": r"$\xi$",
-          "eta": r"$\eta$", "h": "$h$", "b": "$b$", "a1": "$a_1$", "a2": "$a_2$"}
-
-
-def _label(name):
-    return _GREEK.get(name, str(name))
+from explorer.app.figures import _FONT_SIZE, _TICK_SIZE, FORBIDDEN_COLOR, _matplotlib, symbol_label
 
 
 def _ticks(values, max_ticks=9):
@@ -44,8 +37,8 @@ def atlas_heatmap(atlas, *, title="", dpi=200):
         yi, yl = _ticks(atlas.row_values)
         ax.set_xticks(xi, xl, rotation=45, ha="right")
         ax.set_yticks(yi, yl)
-        ax.set_xlabel(_label(atlas.column_parameter), fontsize=_FONT_SIZE)
-        ax.set_ylabel(_label(atlas.row_parameter), fontsize=_FONT_SIZE)
+        ax.set_xlabel(symbol_label(atlas.column_parameter), fontsize=_FONT_SIZE)
+        ax.set_ylabel(symbol_label(atlas.row_parameter), fontsize=_FONT_SIZE)
         ax.tick_params(labelsize=_TICK_SIZE)
         if title:
             ax.set_title(title, fontsize=_TICK_SIZE)

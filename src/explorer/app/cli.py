@@ -8,13 +8,13 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import re
 import sys
 
 import numpy as np
 
 from explorer import __version__, model
+from explorer.integrate.methods import MAP_TOL, TRAJECTORY_TOL
 from explorer.model import validation
 
 EXIT_USAGE = 2
@@ -40,7 +40,7 @@ EXAMPLES = {
     "melnikov": "python -m explorer melnikov --splitting --mus 1e-4,1e-3 --json",
     "trajectory": "python -m explorer trajectory --p1 0.5 --M 2 --mu 0.5 -T 300 --out figures/trajectory",
     "figures": "python -m explorer figures --only figure4 --quick",
-    "native": "python -m explorer native --build",
+    "manifold": "python -m explorer manifold --mu 0.03 --arclength 6 --json",
 }
 
 
@@ -103,7 +103,7 @@ def _add_newton_args(p, continue_help):
     tolerance of the section map, the model."""
     p.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
     p.add_argument("--continue", dest="cont", nargs=4, metavar=("PARAM", "START", "STOP", "STEP"), help=continue_help)
-    p.add_argument("--tol", type=float, default=1e-15, help="Taylor tolerance [%(default)s]")
+    p.add_argument("--tol", type=float, default=MAP_TOL, help="Taylor tolerance [%(default)s]")
     _add_model_args(p, model.FIGURE4, json="print JSON")
 
 
@@ -140,7 +140,8 @@ def build_parser() -> argparse.ArgumentParser:
                        "settings are skipped; a killed run resumes where it stopped.")
     w.add_argument("scene", nargs="?", default="figure4", help="scene file (.toml) or preset name [figure4]")
     w.add_argument("--out", default=None, help="HDF5 file [results/<scene>.h5]")
-    w.add_argument("--figure", default=None, help="figure path without extension [figures/<scene>]")
+    w.add_argument("--figure", default=None,
+                   help="figure path without extension [the --out path without .h5: beside the store]")
     w.add_argument("--no-figure", action="store_true", help="do not draw the figure")
     w.add_argument("--jobs", type=int, default=1,
                    help="joblib worker processes (1: this process with Numba threads over orbits) [1]")
@@ -159,7 +160,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "from a second deviation vector (null for other methods).")
     _add_start_args(ly)
     ly.add_argument("--time", "-T", type=float, default=1000.0, help="integration time T [%(default)s]")
-    _add_method_args(ly, 1e-13, 0.02)
+    _add_method_args(ly, DEFAULT_TOL, DEFAULT_DT)
     ly.add_argument("--history", type=int, default=12, help="history points (log-spaced in time) [%(default)s]")
     _add_model_args(ly, model.FIGURE4, json="print JSON")
 
@@ -197,7 +198,7 @@ def build_parser() -> argparse.ArgumentParser:
     rt.add_argument("--iterates", type=int, default=2000, help="N: each orbit has 2N returns [%(default)s]")
     rt.add_argument("--center", default=None, help="guess of the elliptic fixed point p1,p2 [--from]")
     rt.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
-    rt.add_argument("--tol", type=float, default=1e-15, help="Taylor tolerance [%(default)s]")
+    rt.add_argument("--tol", type=float, default=MAP_TOL, help="Taylor tolerance [%(default)s]")
     _add_model_args(rt, model.FIGURE4, json="print JSON")
     # ---- end periodic, rotation ----------------------------------------------------------------
     # ---- explore: interactive explorer (explorer/explore.py) -------------------------------
@@ -251,7 +252,7 @@ def build_parser() -> argparse.ArgumentParser:
     tj.add_argument("--phi", type=float, default=0.0, help="initial angle phi [%(default)s]")
     tj.add_argument("--time", "-T", type=float, default=300.0, help="integration time T [%(default)s]")
     tj.add_argument("--samples", type=int, default=20001, help="samples on [0, T] [%(default)s]")
-    tj.add_argument("--tol", type=float, default=1e-12, help="DOP853 tolerance (rtol = atol) [%(default)s]")
+    tj.add_argument("--tol", type=float, default=TRAJECTORY_TOL, help="DOP853 tolerance (rtol = atol) [%(default)s]")
     tj.add_argument("--glyphs", type=int, default=40, help="orientation glyphs along the path [%(default)s]")
     tj.add_argument("--out", default="figures/trajectory",
                     help="figure path without extension (lam = 0 adds <out>_kozlov) [%(default)s]")
@@ -282,13 +283,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="W4 results JSON for work_precision [benchmarks/results_w4.json]")
     fg.add_argument("--quiet", action="store_true", help="no progress bar")
     # ---- end figures ----------------------------------------------------------------------------
-    nt = sub.add_parser("native", help="the native library that runs lone Taylor orbits without numba",
-                        description="Where the native library of lone Taylor orbits (explorer.integrate.native) "
-                        "is kept, whether it is built for this source, numba and CPU, and its self-test "
-                        "against numba. `explorer orbit` builds it when it is missing; --build builds it now "
-                        "(about 10 s). EXPLORER_NATIVE=0 switches it off.")
-    nt.add_argument("--build", action="store_true", help="build it now (again, if it exists)")
-    nt.add_argument("--json", action="store_true", help="print JSON")
+    _add_manifold_parser(sub)
     for name, cmd in sub.choices.items():
         cmd.epilog = f"example:\n  {EXAMPLES[name]}"
     return parser
@@ -321,39 +316,15 @@ def cmd_orbit(args) -> int:
     kw = dict(method=args.method, tol=args.tol, dt=args.dt, tmax=args.tmax, max_steps=args.max_steps,
               phi0=args.phi0, direction=_direction(args.direction))
     from explorer.app import orbit
-    from explorer.integrate import native
 
     orbit.check_request(params, args.p1, args.p2, args.h, args.crossings, **kw)
-    builder = _start_native_build(args.method)
-    try:
-        rep = _run_orbit(args, params, block, kw)
-    except BaseException:
-        if builder is not None:
-            builder.terminate()
-            native.finish_build(builder)
-        raise
-    if builder is not None and native.finish_build(builder) != 0:
-        print("explorer: note: the native library for lone orbits could not be built (see python -m explorer "
-              "native); orbits run on numba", file=sys.stderr)
+    rep = _run_orbit(args, params, block, kw)
     settings = rep.settings or {}
     setting = f"--dt {settings['dt']:g}" if "dt" in settings else f"--tol {args.tol:g}"
     warning = energy_warning(rep.max_dh, args.h, setting)
     if warning:
         print(f"explorer: warning: {warning}", file=sys.stderr)
     return 0
-
-
-def _start_native_build(method):
-    """A lone Taylor orbit runs on the native library (explorer.integrate.native) once it is built:
-    when it is missing, build it now, in another process, while this run goes on numba."""
-    from explorer.integrate import native
-
-    if method != "taylor" or not native.missing():
-        return None
-    try:
-        return native.build(wait=False)
-    except OSError:       # e.g. no writable cache directory: stay on numba
-        return None
 
 
 def _run_orbit(args, params, block, kw):
@@ -466,6 +437,15 @@ def _continuation(cont):
     return (name, *validation.continuation_steps("--continue", start, stop, step))
 
 
+def _print_bifurcations(br, name) -> None:
+    """The stability changes and touches of a continued branch (fixed point or periodic orbit:
+    one detector, one report)."""
+    print("stability changes: " + (", ".join(f"{b['type']} at {name} = {b['value']:.10g}"
+                                             for b in br.bifurcations) or "none in range"))
+    if br.stopped:
+        print(f"branch stopped: {br.stopped}")
+
+
 def cmd_fixedpoint(args) -> int:
     from explorer.analysis import fixedpoints
 
@@ -478,13 +458,13 @@ def cmd_fixedpoint(args) -> int:
         br = fixedpoints.continue_branch(params, args.h, name, start, stop, step, guess, tol=args.tol)
         rows = [dict(fp.as_dict(), **{name: float(v)}) for v, fp in zip(br.values, br.points)]
         if args.json:
-            print(json.dumps({"parameter": name, "branch": rows, "bifurcations": br.bifurcations}))
+            print(json.dumps({"parameter": name, "branch": rows, "bifurcations": br.bifurcations,
+                              "stopped": br.stopped}))
         else:
             print(f"{name},p1,p2,trace,stable")
             for r in rows:
-                print(f"{r[name]!r},{r['p1']!r},{r['p2']!r},{r['trace']!r},{r['stable']}")
-            print("bifurcations (|trace| = 2) at " + name + " = " +
-                  (", ".join(f"{b:.10g}" for b in br.bifurcations) or "none in range"))
+                print(f"{r[name]:.10g},{r['p1']!r},{r['p2']!r},{r['trace']!r},{r['stable']}")
+            _print_bifurcations(br, name)
         return 0
     fp = fixedpoints.find_fixed_point(params, args.h, guess, tol=args.tol)
     out = dict(fp.as_dict(), params=params.as_dict(), h=args.h)
@@ -500,7 +480,7 @@ def cmd_fixedpoint(args) -> int:
 def _orbit_line(o) -> str:
     pts = " ".join(f"({p[0]:.10g},{p[1]:.10g})" for p in o.points)
     return (f"K={o.period} {o.kind} trace={o.trace:.10g} residue={o.residue:.6g} "
-            f"symmetric={o.symmetric} points={pts}")
+            f"symmetric={o.symmetric}{' degenerate' if o.degenerate else ''} points={pts}")
 
 
 def _section_map_args(args):
@@ -541,12 +521,9 @@ def cmd_periodic(args) -> int:
         else:
             print(f"{name},p1,p2,trace,residue,stable")
             for r in rows:
-                print(f"{r[name]!r},{r['points'][0][0]!r},{r['points'][0][1]!r},{r['trace']!r},{r['residue']!r},"
+                print(f"{r[name]:.10g},{r['points'][0][0]!r},{r['points'][0][1]!r},{r['trace']!r},{r['residue']!r},"
                       f"{r['stable']}")
-            print("stability changes: " + (", ".join(f"{b['type']} at {name} = {b['value']:.10g}"
-                                                     for b in br.bifurcations) or "none in range"))
-            if br.stopped:
-                print(f"branch stopped: {br.stopped}")
+            _print_bifurcations(br, name)
         return 0
     if args.search:
         orbits = periodic.search_periodic_orbits(params, args.h, K, grid=args.grid, max_guesses=args.max_guesses,
@@ -716,38 +693,7 @@ def cmd_figures(args) -> int:
 
 
 # ---- end figures ----------------------------------------------------------------------------
-def cmd_native(args) -> int:
-    from explorer.integrate import native
-
-    status = 0
-    if args.build:
-        if not native.enabled():
-            raise model.ParameterError("the native library is switched off here (EXPLORER_NATIVE=0, or not Linux)")
-        for path in native.paths():
-            if os.path.exists(path):
-                os.remove(path)
-        status = native.build()
-    d = native.describe()
-    desc = d["description"] or {}
-    if args.json:
-        print(json.dumps(d, sort_keys=True))
-        return status
-    if not d["enabled"]:
-        state = "switched off (EXPLORER_NATIVE=0, or not Linux): orbits run on numba"
-    elif d["built"]:
-        test = desc.get("self_test", {})
-        state = (f"built {desc.get('built', '?')} in {desc.get('build_seconds', '?')} s; self-test against numba: "
-                 f"{'identical' if test.get('identical') else 'not run'} ({test.get('cases', 0)} cases)")
-    elif desc.get("error"):
-        state = f"build failed: {desc['error']} (orbits run on numba; --build tries again)"
-    else:
-        state = "not built yet (the next `explorer orbit` builds it, or run with --build)"
-    print(f"native library: {d['library']}\nkey: {d['key'][:16]} (source, numba, llvmlite, python, CPU)\n"
-          f"status: {state}")
-    return status
-
-
-COMMANDS = {"native": cmd_native, "figures": cmd_figures, "trajectory": cmd_trajectory, "orbit": cmd_orbit,
+COMMANDS = {"figures": cmd_figures, "trajectory": cmd_trajectory, "orbit": cmd_orbit,
             "sweep": cmd_sweep, "lyapunov": cmd_lyapunov, "fixedpoint": cmd_fixedpoint,
             "melnikov": cmd_melnikov, "periodic": cmd_periodic, "rotation": cmd_rotation}
 
@@ -768,6 +714,68 @@ COMMANDS["explore"] = cmd_explore
 # ---- end explore ----------------------------------------------------------------------------
 
 
+# ---- manifold: invariant manifolds, homoclinic points, lobes (analysis/manifolds.py, transport.py)
+def _add_manifold_parser(sub):
+    mf = sub.add_parser("manifold", help="stable and unstable manifolds of a hyperbolic orbit, homoclinic "
+                        "points, lobes and flux",
+                        description="Finds the periodic orbit of period --period from --guess (default: the "
+                        "central hyperbolic fixed point), grows both branches of W^u and W^s at its point "
+                        "--index to --arclength (adaptive insertion), locates their intersections (Newton, "
+                        "1e-10) and the turnstile's lobes (Green's theorem); docs/manifolds.md.")
+    mf.add_argument("--guess", default="0,0", help="start of Newton's method for the orbit: p1,p2 [0,0]")
+    mf.add_argument("--period", type=int, default=1, help="period K of the orbit [%(default)s]")
+    mf.add_argument("--index", type=int, default=0, help="which point of the orbit [%(default)s]")
+    mf.add_argument("--arclength", type=float, default=6.0, help="length of each branch [%(default)s]")
+    mf.add_argument("--max-points", type=int, default=20000, help="points per branch at most [%(default)s]")
+    mf.add_argument("--max-time", type=float, default=None, help="seconds per branch at most [none]")
+    mf.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
+    mf.add_argument("--tol", type=float, default=MAP_TOL, help="Taylor tolerance of the section map [%(default)s]")
+    _add_model_args(mf, model.FIGURE4, json="print JSON {orbit, branches, homoclinic_points, lobes, flux}")
+
+
+def cmd_manifold(args) -> int:
+    from explorer.analysis import manifolds, periodic, transport
+
+    params = _section_map_args(args)
+    if args.period < 1:
+        raise model.ParameterError(f"--period must be an integer K >= 1, got {args.period}")
+    orb = periodic.find_periodic_orbit(params, args.h, _pair(args.guess, "--guess"), args.period, tol=args.tol)
+    sd = manifolds.saddle(orb, index=args.index, tol=args.tol)
+    kw = {"arclength": args.arclength, "max_points": args.max_points, "max_time": args.max_time}
+    branches = [manifolds.grow_branch(sd, stable=st, sign=sg, **kw) for st in (False, True) for sg in (1, -1)]
+    hps: list = []
+    lobes: list = []
+    for bu in branches[:2]:
+        for bs in branches[2:]:
+            found = manifolds.homoclinic_points(bu, bs)
+            hps += [h.point.tolist() for h in found]
+            if not lobes and found:
+                lobes = transport.lobes(bu, bs, points=found)
+    flux = abs(lobes[0].area) if lobes else None
+    ev = [complex(e) for e in orb.eigenvalues]
+    out = {"orbit": {"points": orb.points.tolist(), "period": int(orb.period),
+                     "eigenvalues": [[e.real, e.imag] if e.imag else e.real for e in ev]},
+           "branches": [{"kind": b.kind, "sign": b.sign, "points": b.points.tolist(), "arclength": b.arclength,
+                         "status": b.status} for b in branches],
+           "homoclinic_points": hps, "lobes": [{"area": abs(lb.area), "error": lb.error} for lb in lobes],
+           "flux": flux}
+    if args.json:
+        print(json.dumps(out))
+        return 0
+    print(f"orbit K={orb.period} point=({sd.point[0]:.10g},{sd.point[1]:.10g}) multiplier={sd.multiplier:.10g}")
+    for b in branches:
+        print(f"{b.kind} {b.sign:+d}: {len(b.points)} points, arclength {b.arclength:.6g} ({b.status})")
+    print(f"{len(hps)} homoclinic point(s)")
+    for lb in lobes:
+        print(f"lobe area {abs(lb.area):.10g} +- {lb.error:.2g}")
+    print(f"flux per iteration {flux!r}")
+    return 0
+
+
+COMMANDS["manifold"] = cmd_manifold
+# ---- end manifold ---------------------------------------------------------------------------
+
+
 def main(argv=None) -> int:
     parser = build_parser()
     try:
@@ -780,8 +788,8 @@ def main(argv=None) -> int:
         msg = " ".join(str(exc).split())
         print(f"explorer: error: {msg}", file=sys.stderr)
         return EXIT_USAGE
-    except KeyboardInterrupt:
-        print("explorer: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as exc:   # a sweep says what it kept (explorer.app.interrupt.Interrupted)
+        print("explorer: interrupted" + (f": {exc}" if str(exc) else ""), file=sys.stderr)
         return 130
 
 

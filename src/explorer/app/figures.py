@@ -146,6 +146,13 @@ def mathtext_label(text) -> str:
     return _ASSIGN.sub(sub, text)
 
 
+def symbol_label(name) -> str:
+    """The mathtext of a parameter name: ``"mu"`` -> ``"$\\mu$"``, ``"a1"`` -> ``"$a_1$"`` (the
+    symbols of :func:`mathtext_label`); an unknown name is returned as it is."""
+    name = str(name)
+    return f"${_SYMBOLS[name]}$" if name in _SYMBOLS else name
+
+
 # ---------------------------------------------------------------- region of the section
 def region_mask(params, h, phi0, p1, p2) -> np.ndarray:
     """True where ``(p1, p2)`` lies in the allowed region ``M^2 >= 0`` of the
@@ -434,13 +441,15 @@ def _atomic_savefig(fig, path: Path, fmt: str, **kwargs):
         raise
 
 
-def save_figure(fig, stem, dpi=None):
+def save_figure(fig, stem, dpi=None, *, text=None):
     """Write ``<stem>.png`` and ``<stem>.pdf`` atomically (temporary file in the same
     directory, then :func:`os.replace`), creating parent directories.
 
     ``dpi`` defaults to the figure's dpi (PNG resolution and resolution of the
     rasterized points in the PDF).  A ``stem`` ending in ``.png`` or ``.pdf`` is
-    stripped of it.  The PDF carries no creation date.  Returns ``(png_path, pdf_path)`` as :class:`pathlib.Path`.
+    stripped of it.  The PDF carries no creation date.  ``text``: {key: value} written into the
+    PNG as text chunks (:func:`png_text` reads them; the PNG is written last, so its text
+    describes both files).  Returns ``(png_path, pdf_path)`` as :class:`pathlib.Path`.
     """
     _matplotlib()
     stem = os.fspath(stem)
@@ -452,9 +461,21 @@ def save_figure(fig, stem, dpi=None):
     base.parent.mkdir(parents=True, exist_ok=True)
     dpi = fig.dpi if dpi is None else float(dpi)
     png, pdf = Path(stem + ".png"), Path(stem + ".pdf")
-    _atomic_savefig(fig, png, "png", dpi=dpi, facecolor="white")
     _atomic_savefig(fig, pdf, "pdf", dpi=dpi, facecolor="white", metadata={"CreationDate": None})
+    _atomic_savefig(fig, png, "png", dpi=dpi, facecolor="white", metadata=dict(text or {}))
     return png, pdf
+
+
+def png_text(path, key):
+    """The text chunk ``key`` of the PNG at ``path`` (:func:`save_figure`'s ``text``), None if the
+    file or the key is missing or the file is not a readable PNG."""
+    from PIL import Image
+
+    try:
+        with Image.open(path) as im:
+            return getattr(im, "text", {}).get(key)
+    except (OSError, ValueError, SyntaxError):
+        return None
 
 
 def chaos_maps(maps, *, layout="row", columns=None, threshold=4.0, dpi=200, panel_width=PANEL_WIDTH):
@@ -533,8 +554,7 @@ def fraction_curve(values, fraction, error, *, parameter="mu", threshold=4.0, dp
         if np.all(values > 0) or (np.sum(values > 0) > 2 and values.max() / values[values > 0].min() > 100):
             ax.set_xscale("symlog", linthresh=max(values[values > 0].min(), 1e-12) if np.any(values > 0) else 1.0)
         ax.set_ylim(-0.03, 1.03)
-        ax.set_xlabel(mathtext_label(f"{parameter} = x").split("=")[0].strip() + "$" if parameter else "value",
-                      fontsize=_FONT_SIZE)
+        ax.set_xlabel(symbol_label(parameter) if parameter else "value", fontsize=_FONT_SIZE)
         ax.set_ylabel(f"chaotic fraction (MEGNO > {threshold:g})", fontsize=_FONT_SIZE)
         ax.tick_params(direction="in", top=True, right=True, labelsize=_TICK_SIZE)
         ax.grid(alpha=0.3, lw=0.4)

@@ -15,6 +15,7 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis import sections
+from explorer.app.interrupt import Interrupted, deferred_interrupt
 from explorer.kernels import STATUS_NAMES
 from explorer.model import ParameterError
 
@@ -94,14 +95,29 @@ def to_store(path, params, p1, p2, h, n_crossings, *, block=sections.DEFAULT_BLO
     run is left alone (``already_complete``).  Refused up front (ParameterError) when the run may
     need more disk than is free, or ``path`` holds something else (without ``force``)."""
     from explorer.io import store  # h5py only for a run that writes a store
-    from explorer.io.store import stream
 
     path = os.fspath(path)
+    store.check_writable(os.path.dirname(os.path.abspath(path)), "--out", path)
+    with deferred_interrupt() as stop:
+        try:
+            with store.store_lock(path):
+                store.clean_stale_temporaries(path)
+                return _to_store(path, params, p1, p2, h, n_crossings, block, force, on_block, stop, kw)
+        except store.StoreBusy as exc:
+            raise ParameterError(str(exc)) from None
+
+
+def _to_store(path, params, p1, p2, h, n_crossings, block, force, on_block, stop, kw) -> OrbitReport:
+    """:func:`to_store` with the store locked and Ctrl-C deferred to ``stop.check()`` (between blocks)."""
+    from explorer.io import store
+    from explorer.io.store import stream
+
     phi0 = kw.get("phi0", np.pi)
     y0 = _start(params, p1, p2, h, kw)
     settings = sections.crossing_settings(params, y0, n_crossings, **kw)
     blocks = stream.BlockStream(path, _identity(params, h, p1, p2, y0, settings))
     if blocks.complete() and not force:
+        blocks.discard()     # blocks of an interrupted --force rerun of a finished run: stale
         data = store.read_store(path).panels[0]
         return OrbitReport(int(data.count.sum()), STATUS_NAMES[int(data.status[0])],
                            sections.max_energy_error(data.crossings), int(data.attrs.get("blocks", 0)),
@@ -129,6 +145,8 @@ def to_store(path, params, p1, p2, h, n_crossings, *, block=sections.DEFAULT_BLO
         st = b.state
         if on_block is not None:
             on_block(b)
+        if stop.requested:
+            raise Interrupted(f"{st.blocks} blocks stored in {blocks.dir}; the same command continues from there")
     wall = time.perf_counter() - t0
     attrs = {"index": 0, "label": "orbit", "parameter": "", "value": float("nan"), "h": float(h),
              "params": json.dumps(params.as_dict(), sort_keys=True), "settings": json.dumps(settings, sort_keys=True),

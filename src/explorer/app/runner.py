@@ -7,10 +7,12 @@ any moment leaves a readable file and the rerun computes only what is missing.
 """
 from __future__ import annotations
 
+import contextlib
 import json
+import os
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -19,7 +21,10 @@ import numpy as np
 from explorer.analysis import sections, sweep
 from explorer.analysis.fixedpoints import chaotic_fraction
 from explorer.analysis.sections import ADAPTIVE_METHODS, energy_warning, max_energy_error
+from explorer.app import interrupt
+from explorer.app.interrupt import Interrupted
 from explorer.io import store
+from explorer.io.store import stream
 from explorer.kernels import STATUS_NAMES, STATUS_TMAX
 from explorer.model import ParameterError, validation
 
@@ -79,7 +84,8 @@ def lyapunov_panels(scene, data):
         if pd is None or "megno" not in pd.extra:
             continue
         ok = pd.extra["lyapunov_status"] == 0
-        maps.append({"seeds": pd.seeds, "megno": pd.extra["megno"], "valid": ok, "params": params, "h": h,
+        seeds = pd.extra.get("lyapunov_seeds", pd.seeds)   # a map grid beside sections has its own seeds
+        maps.append({"seeds": seeds, "megno": pd.extra["megno"], "valid": ok, "params": params, "h": h,
                      "phi0": scene.integration.phi0, "label": label})
         value = scene.sweep_values[i] if scene.sweep_values else 0.0
         maps[-1].update(grid=_grid_of(pd.attrs), extra=pd.extra, curves=pd.separatrices())
@@ -116,9 +122,10 @@ def draw_figure(scene, out_path, stem):
                 if fp.get("stable"):
                     panels[-1]["note"] = f"fixed point stable (trace {fp['trace']:.3g})"
     fs = scene.figure
+    text = {FIGURE_SETTINGS_KEY: scene.figure_settings()}
     fig = figures.section_panels(panels, layout=fs.layout, columns=fs.columns, share_scale=fs.share_scale,
                                  own_scale=tuple(fs.own_scale), marker_size=fs.marker_size, dpi=fs.dpi)
-    paths = list(figures.save_figure(fig, stem))
+    paths = list(figures.save_figure(fig, stem, text=text))
     if "lyapunov" in scene.compute:
         maps, fractions = lyapunov_panels(scene, data)
         rasters = [m for m in maps if m.get("grid")]
@@ -131,16 +138,16 @@ def draw_figure(scene, out_path, stem):
                 m["fraction"] = chaotic_fraction(classify_megno(m["extra"]), scene.lyapunov.threshold, m["valid"])[0]
             fig = chaos_rasters(rasters, indicator=ind, threshold=scene.lyapunov.threshold, columns=fs.columns,
                                 dpi=fs.dpi)
-            paths += figures.save_figure(fig, stem.with_name(stem.name + "_map"))
+            paths += figures.save_figure(fig, stem.with_name(stem.name + "_map"), text=text)
         elif maps:
             fig = figures.chaos_maps(maps, layout=fs.layout, columns=fs.columns, threshold=scene.lyapunov.threshold,
                                      dpi=fs.dpi)
-            paths += figures.save_figure(fig, stem.with_name(stem.name + "_chaosmap"))
+            paths += figures.save_figure(fig, stem.with_name(stem.name + "_chaosmap"), text=text)
         if len(fractions) > 1:
             fr = np.array(fractions)
             fig = figures.fraction_curve(fr[:, 0], fr[:, 1], fr[:, 2], parameter=scene.sweep_parameter or "",
                                          threshold=scene.lyapunov.threshold, dpi=fs.dpi)
-            paths += figures.save_figure(fig, stem.with_name(stem.name + "_fraction"))
+            paths += figures.save_figure(fig, stem.with_name(stem.name + "_fraction"), text=text)
     return paths
 
 
@@ -151,8 +158,8 @@ class SweepReport:
     scene: str
     out: Path
     n_panels: int
-    computed: tuple          # indices of the panels computed by this run
-    orbits: int
+    computed: tuple          # indices of the panels of which this run computed a product
+    orbits: int              # orbits whose crossings were computed
     crossings: int
     stopped: int             # orbits that stopped crossing within the time budget
     statuses: dict           # status name -> number of orbits
@@ -163,19 +170,38 @@ class SweepReport:
     figure: tuple            # paths of the figure files drawn by this run (empty: none)
     wall_time: float
     restamped: tuple = ()    # stored panels whose chaotic fraction was reclassified (new threshold)
+    dropped: int = 0         # [seeds] candidates outside the allowed region (not integrated)
+    products: dict = field(default_factory=dict)   # product -> indices of the panels computed
+    indicator_orbits: int = 0    # orbits whose chaos indicators were computed
+    indicator_dh: float = 0.0    # largest |H - H0| at the end of the indicator integrations
+    indicator_warning: str | None = None
+    indicator_statuses: dict = field(default_factory=dict)
 
 
 def format_report(r: SweepReport) -> str:
-    """The summary that ``explorer sweep`` prints."""
+    """The summary that ``explorer sweep`` prints: what was computed and what was measured."""
     lines = [f"scene {r.scene}: {r.n_panels} panels ({len(r.computed)} computed, "
              f"{r.n_panels - len(r.computed)} already stored) -> {r.out}"]
-    if r.computed:
+    if len(r.products) > 1 and r.computed:
+        lines.append("  computed: " + "; ".join(
+            f"{k} of panels {', '.join(map(str, v))}" if v else f"{k} already stored" for k, v in r.products.items()))
+    if r.products.get("sections"):
         st = ", ".join(f"{k}: {v}" for k, v in sorted(r.statuses.items()))
         lines.append(f"  orbits {r.orbits}, crossings {r.crossings}, "
                      f"orbits that stopped crossing {r.stopped} ({st})")
         lines.append(f"  energy error max |H - H0| over all crossings {r.max_dh:.1e}")
         if r.warning:
             lines.append(f"  warning: {r.warning}")
+    if r.products.get("indicators"):
+        st = ", ".join(f"{k}: {v}" for k, v in sorted(r.indicator_statuses.items()))
+        lines.append(f"  chaos indicators of {r.indicator_orbits} orbits ({st}); energy error at the end of the "
+                     f"indicator integrations max |H - H0| {r.indicator_dh:.1e}")
+        if r.indicator_warning:
+            lines.append(f"  warning: {r.indicator_warning}")
+    if r.products.get("cells"):   # an atlas: chaotic fractions only
+        lines.append(f"  cells {len(r.products['cells'])}, orbits {r.orbits} (chaos indicators only)")
+    elif r.computed:
+        lines.append(f"  seeds outside the allowed region (dropped, not integrated): {r.dropped}")
     if r.restamped:
         lines.append(f"  chaotic fraction reclassified at MEGNO > {r.threshold:g} (stored MEGNO, "
                      f"nothing recomputed) for panels {', '.join(str(i) for i in r.restamped)}")
@@ -187,13 +213,32 @@ def format_report(r: SweepReport) -> str:
     return "\n".join(lines)
 
 
-def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, scheduler=None,
+#: the panel attributes of the indicators product (kept with it, replaced with it)
+INDICATOR_ATTRS = ("indicators_hash", "chaotic_fraction", "chaotic_fraction_error", "megno_threshold",
+                   "map_resolution", "map_p1", "map_p2", "indicators_wall_time")
+
+
+def _stored_products(scene, i, stored: dict, want: dict) -> set:
+    """The products of panel i that the store holds with the scene's settings.  A panel written
+    before products had their own hashes (only ``hash``) counts as whole when that hash is the
+    scene's, except with sections and a map grid (its sections were then of the grid's seeds)."""
+    if any(a in stored for a in store.PRODUCT_HASH_ATTRS.values()):
+        return {k for k, h in want.items() if stored.get(store.PRODUCT_HASH_ATTRS[k]) == h}
+    if stored.get("hash") == scene.panel_hash(i) and not ("sections" in want and scene.lyapunov.map_resolution):
+        return set(want)
+    return set()
+
+
+def run_sweep(scene, out=None, *, figure=None, draw=None, jobs=1, backend=None, scheduler=None,
               force=False, progress=True) -> SweepReport:
-    """Compute every panel of ``scene`` that ``out`` does not hold with the same settings hash,
-    commit each atomically and (``draw``) redraw the figure when data changed or files are missing.
+    """Compute every product of every panel of ``scene`` (sections, indicators) that ``out`` does
+    not hold with the same settings hash, commit each atomically and (``draw``) redraw the figure
+    when data or drawing settings changed or files are missing.
 
     ``scene``: a :class:`~explorer.io.scene.Scene`, a TOML path or a preset name;
-    ``out``: HDF5 path [results/<scene>.h5]; ``figure``: figure stem [figures/<scene>];
+    ``out``: HDF5 path [results/<scene>.h5]; ``figure``: figure stem [``out`` without .h5: beside the store];
+    ``draw``: draw the figure [only when ``figure`` is given: from Python a sweep computes and
+    stores, and writes no picture unless asked; the command line draws unless --no-figure];
     ``jobs``/``backend``/``scheduler``: joblib processes (dask: a cluster); ``force``: recompute all;
     ``progress``: a progress bar on stderr. Returns a :class:`SweepReport`; bad settings raise
     :class:`~explorer.model.ParameterError`.
@@ -201,6 +246,7 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
     from explorer.io.scene import Scene, load_scene
 
     t_start = time.perf_counter()
+    draw = figure is not None if draw is None else validation.boolean("draw", draw)
     jobs = _check_jobs(jobs, backend, scheduler)
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
@@ -208,97 +254,191 @@ def run_sweep(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
         return run_atlas(scene, out, figure=figure, draw=draw, jobs=jobs, backend=backend, scheduler=scheduler,
                          force=force, progress=progress)
     out, stem = _outputs(scene, out, figure, draw)
+    with _guarded(out) as stop:
+        return _sweep(scene, out, stem, draw=draw, jobs=jobs, backend=backend, scheduler=scheduler, force=force,
+                      progress=progress, stop=stop, t_start=t_start)
 
+
+def _sweep(scene, out, stem, *, draw, jobs, backend, scheduler, force, progress, stop, t_start) -> SweepReport:
+    """:func:`run_sweep` once the store is locked and Ctrl-C deferred to ``stop.check()``."""
+    _check_same_scene(scene, out, force)
     try:
-        on_disk = {} if force else store.panel_hashes(out)
+        on_disk = {} if force else store.panel_product_hashes(out)
     except store.StoreError as exc:
         raise ParameterError(str(exc)) from None
     hashes = [scene.panel_hash(i) for i in range(scene.n_panels)]
-    todo = [i for i in range(scene.n_panels) if force or on_disk.get(i) != hashes[i]]
-    restamped = _restamp_fractions(scene, out, [i for i in range(scene.n_panels) if i not in todo])
+    want = [scene.product_hashes(i) for i in range(scene.n_panels)]
+    have = [_stored_products(scene, i, on_disk.get(i, {}), want[i]) for i in range(scene.n_panels)]
+    todo = {k: [i for i in range(scene.n_panels) if k in want[i] and k not in have[i]] for k in sweep.PRODUCTS
+            if k in want[0]}
+    computed = sorted(set().union(*todo.values()))
+    restamped = _restamp_fractions(scene, out, [i for i in range(scene.n_panels)
+                                                if i not in todo.get("indicators", ())])
     client = None
     if backend == "dask":
         client = _dask_client(scheduler, jobs)
         jobs = -1
     chunk_orbits = sweep.default_jobs_layout(1 if (jobs == 1 and backend is None) else 2)
-    spec = sweep.build_spec(scene, todo, chunk_orbits=chunk_orbits) if todo else None
+    specs = {k: sweep.build_spec(scene, v, chunk_orbits=chunk_orbits, product=k) for k, v in todo.items() if v}
 
-    if spec is not None:
-        _check_disk(spec, out)
-    streams = _PanelStreams(out, hashes, scene.integration.phi0, force)
+    if "sections" in specs:
+        _check_disk(specs["sections"], out)
+    sec = specs.get("sections")
+    # block folders of finished, replaced or no longer streamed panels: nothing resumes from them
+    stream.remove_stale_blocks(out, keep={p.index for k, p in enumerate(sec.panels) if sec.streamed(k)}
+                               if sec is not None else ())
+    sec_hashes = [w.get("sections") for w in want]
+    streams = _PanelStreams(out, sec_hashes, scene.integration.phi0, force)
 
     prov = json.dumps(store.provenance({"scene": scene.name}), sort_keys=True)
     file_attrs = {"scene_name": scene.name, "scene": scene.text, "provenance": prov}
-    integ = scene.integration
+    integ, ly = scene.integration, scene.lyapunov
     stats: dict[str, Any] = {"orbits": 0, "crossings": 0, "stopped": 0, "statuses": {}, "max_dh": 0.0, "warning": None,
-             "fractions": []}
+                             "fractions": [], "dropped": {}, "ind_orbits": 0, "ind_dh": 0.0, "ind_warning": None,
+                             "ind_statuses": {}}
     setting = (f"tol = {integ.tol:g}" if integ.method in ADAPTIVE_METHODS
                else f"dt = {integ.dt:g}") + " ([integration])"
+    ly_setting = (f"tol = {ly.tol:g}" if ly.method in ADAPTIVE_METHODS else f"dt = {ly.dt:g}") + " ([lyapunov])"
+    alone = "sections" not in want[0]     # indicators only: they are the whole panel
 
-    def on_panel(panel, arrays):
-        i = panel.index
+    def panel_attrs(panel, i, complete):
         settings = scene.panel_settings(i)
-        attrs = {"index": i, "label": panel.label, "parameter": scene.sweep_parameter or "",
-                 "value": float(scene.sweep_values[i]) if scene.sweep_values else float("nan"), "h": panel.h,
-                 "params": json.dumps(settings.get("params", {}), sort_keys=True),
-                 "settings": json.dumps(settings, sort_keys=True), "hash": hashes[i],
-                 "method": integ.method, "tol": float(integ.tol), "dt": float(integ.dt),
-                 "phi0": float(integ.phi0), "direction": int(integ.direction),
-                 "crossings_requested": int(integ.crossings), "wall_time": arrays["wall_time"]}
-        payload = {"seeds": panel.seeds, "y0": panel.y0, "count": arrays["count"],
-                   "status": arrays["status"], "final": arrays["final"], "info": arrays["info"]}
-        if not arrays.get("streamed"):
-            payload["data"] = arrays["data"]
+        return {"index": i, "label": panel.label, "parameter": scene.sweep_parameter or "",
+                "value": float(scene.sweep_values[i]) if scene.sweep_values else float("nan"), "h": panel.h,
+                "params": json.dumps(settings.get("params", {}), sort_keys=True),
+                "settings": json.dumps(settings, sort_keys=True), "hash": hashes[i] if complete else None}
+
+    def indicators_part(panel, i, arrays):
+        payload = {k: arrays[k] for k in store.INDICATOR_DATASETS if k in arrays}
+        attrs = {"indicators_hash": want[i]["indicators"], "indicators_wall_time": arrays["wall_time"]}
         if panel.grid:
             n, a1, b1, a2, b2 = panel.grid
             attrs.update(map_resolution=int(n), map_p1=[float(a1), float(b1)], map_p2=[float(a2), float(b2)])
-        if "megno" in arrays:
-            for k in ("megno", "mlce", "fli", "lyapunov_status", "sali", "gali2", "lyapunov_early"):
-                if k in arrays:
-                    payload[k] = arrays[k]
-            frac, err, n_ok = chaotic_fraction(classify_megno(arrays), scene.lyapunov.threshold,
-                                               arrays["lyapunov_status"] == 0)
-            attrs.update(chaotic_fraction=frac, chaotic_fraction_error=err, megno_threshold=scene.lyapunov.threshold)
-            stats["fractions"].append((panel.label, frac, err))
-        if "separatrices" in scene.compute:
-            fp_info, curves = panel_separatrices(scene, i)
-            attrs["fixed_point"] = json.dumps(fp_info, sort_keys=True)
-            if curves:
-                payload["separatrix_offsets"] = np.concatenate([[0], np.cumsum([len(c) for c in curves])])
-                payload["separatrix_points"] = np.concatenate(curves)
+            if not alone:
+                payload["lyapunov_seeds"] = panel.seeds
+        frac, err, _n_ok = chaotic_fraction(classify_megno(arrays), ly.threshold, arrays["lyapunov_status"] == 0)
+        attrs.update(chaotic_fraction=frac, chaotic_fraction_error=err, megno_threshold=ly.threshold)
+        stats["fractions"].append((panel.label, frac, err))
+        dh = arrays["lyapunov_dh"]
+        dh = float(np.max(dh[np.isfinite(dh)])) if np.isfinite(dh).any() else 0.0
+        stats["ind_orbits"] += len(arrays["megno"])
+        stats["ind_dh"] = max(stats["ind_dh"], dh)
+        stats["ind_warning"] = stats["ind_warning"] or energy_warning(dh, panel.h, ly_setting)
+        _count_statuses(stats["ind_statuses"], arrays["lyapunov_status"])
+        return payload, attrs
+
+    def on_sections(panel, arrays):
+        i = panel.index
+        keep = {}
+        if "indicators" in want[i] and "indicators" in have[i]:   # stored indicators stay with new sections
+            kept, old_attrs = store.read_panel_datasets(out, i, store.INDICATOR_DATASETS)
+            keep = dict(kept, **{k: old_attrs[k] for k in INDICATOR_ATTRS if k in old_attrs})
+        attrs = panel_attrs(panel, i, "indicators" not in want[i] or bool(keep))
+        attrs.update({"sections_hash": want[i]["sections"], "method": integ.method, "tol": float(integ.tol),
+                      "dt": float(integ.dt), "phi0": float(integ.phi0), "direction": int(integ.direction),
+                      "crossings_requested": int(integ.crossings), "wall_time": arrays["wall_time"],
+                      "seeds_dropped": int(panel.dropped)})
+        attrs.update({k: v for k, v in keep.items() if k in INDICATOR_ATTRS})
+        payload = {"seeds": panel.seeds, "y0": panel.y0, "count": arrays["count"],
+                   "status": arrays["status"], "final": arrays["final"], "info": arrays["info"]}
+        payload.update({k: v for k, v in keep.items() if k in store.INDICATOR_DATASETS})
+        if not arrays.get("streamed"):
+            payload["data"] = arrays["data"]
+        _separatrices(scene, i, payload, attrs)
         if arrays.get("streamed"):   # rows stored block by block: the panel written from the blocks
-            attrs.update(block=int(spec.blocks[todo.index(i)]), resumed_blocks=streams.resumed.get(i, 0))
+            attrs.update(block=int(specs["sections"].blocks[todo["sections"].index(i)]),
+                         resumed_blocks=streams.resumed.get(i, 0))
             dh = streams.finish(i, payload, attrs, file_attrs)
         else:
             store.commit_panel(out, i, payload, attrs, file_attrs)
             dh = max_energy_error(arrays["data"])
         stats["orbits"] += len(arrays["count"])
         stats["crossings"] += int(arrays["count"].sum())
+        stats["dropped"][i] = max(stats["dropped"].get(i, 0), int(panel.dropped))
         stats["max_dh"] = max(stats["max_dh"], dh)
         stats["warning"] = stats["warning"] or energy_warning(dh, panel.h, setting)  # each panel its own h
         stopped = (arrays["status"] == STATUS_TMAX) & (arrays["count"] < integ.crossings)
         stats["stopped"] += int(stopped.sum())
-        for code, n in zip(*np.unique(arrays["status"], return_counts=True)):
-            name = STATUS_NAMES[int(code)]
-            stats["statuses"][name] = stats["statuses"].get(name, 0) + int(n)
+        _count_statuses(stats["statuses"], arrays["status"])
 
-    if spec is not None:
-        _map_with_progress(spec, on_panel, jobs, backend, client, progress, f"sweep {scene.name}", streams)
-    elif client is not None:
-        client.close()
+    def on_indicators(panel, arrays):
+        i = panel.index
+        payload, attrs = indicators_part(panel, i, arrays)
+        stats["dropped"][i] = max(stats["dropped"].get(i, 0), int(panel.dropped))   # 0 for a map grid
+        if alone:   # the panel is its seeds and their indicators (no crossings)
+            attrs.update(panel_attrs(panel, i, True), phi0=float(integ.phi0), direction=int(integ.direction),
+                         wall_time=arrays["wall_time"], seeds_dropped=int(panel.dropped))
+            payload.update(seeds=panel.seeds, y0=panel.y0, count=arrays["count"], status=arrays["status"],
+                           final=arrays["final"], info=arrays["info"], data=arrays["data"])
+            _separatrices(scene, i, payload, attrs)
+            store.commit_panel(out, i, payload, attrs, file_attrs)
+        else:       # beside the stored sections of the panel, which stay as they are
+            attrs.update(panel_attrs(panel, i, True))
+            stale = [k for k in store.INDICATOR_DATASETS + INDICATOR_ATTRS if k not in payload and k not in attrs]
+            store.update_panel(out, i, payload, attrs, remove=stale)
+
+    try:
+        for product, on_panel in (("sections", on_sections), ("indicators", on_indicators)):
+            if product in specs:
+                _map_with_progress(specs[product], on_panel, jobs, backend, None, progress,
+                                   f"sweep {scene.name} {product}", streams, _checker(stop, client))
+    except KeyboardInterrupt:   # ours, or a worker's when Ctrl-C reached the whole process group
+        raise Interrupted(_kept(scene, out, want)) from None
+    finally:
+        if client is not None:
+            client.close()
 
     figure_paths = ()
-    if draw:
-        png, pdf = stem.with_suffix(".png"), stem.with_suffix(".pdf")
-        stale = (not png.exists() or not pdf.exists() or png.stat().st_mtime < out.stat().st_mtime
-                 or pdf.stat().st_mtime < out.stat().st_mtime)
-        if todo or restamped or stale or force:
-            figure_paths = tuple(draw_figure(scene, out, stem))
-    return SweepReport(scene=scene.name, out=out, n_panels=scene.n_panels, computed=tuple(todo),
+    if stop.requested:      # every panel is stored; the figure is drawn by the next run
+        raise Interrupted(_kept(scene, out, want))
+    if draw and (computed or restamped or force or _figure_stale(stem, out, scene.figure_settings())):
+        figure_paths = tuple(draw_figure(scene, out, stem))
+    return SweepReport(scene=scene.name, out=out, n_panels=scene.n_panels, computed=tuple(computed),
                        orbits=stats["orbits"], crossings=stats["crossings"], stopped=stats["stopped"],
                        statuses=dict(stats["statuses"]), max_dh=stats["max_dh"], warning=stats["warning"],
-                       fractions=tuple(stats["fractions"]), threshold=float(scene.lyapunov.threshold),
-                       figure=figure_paths, wall_time=time.perf_counter() - t_start, restamped=restamped)
+                       fractions=tuple(stats["fractions"]), threshold=float(ly.threshold),
+                       figure=figure_paths, wall_time=time.perf_counter() - t_start, restamped=restamped,
+                       dropped=sum(stats["dropped"].values()), products={k: tuple(v) for k, v in todo.items()},
+                       indicator_orbits=stats["ind_orbits"], indicator_dh=stats["ind_dh"],
+                       indicator_warning=stats["ind_warning"], indicator_statuses=dict(stats["ind_statuses"]))
+
+
+def _count_statuses(counts: dict, status) -> None:
+    """Add the orbits of each status code in ``status`` to ``counts`` (status name -> orbits)."""
+    for code, n in zip(*np.unique(status, return_counts=True)):
+        name = STATUS_NAMES[int(code)]
+        counts[name] = counts.get(name, 0) + int(n)
+
+
+def _separatrices(scene, i, payload, attrs) -> None:
+    """With [compute] separatrices: panel i's fixed point (attrs) and separatrix branches (payload)."""
+    if "separatrices" in scene.compute:
+        fp_info, curves = panel_separatrices(scene, i)
+        attrs["fixed_point"] = json.dumps(fp_info, sort_keys=True)
+        if curves:
+            payload["separatrix_offsets"] = np.concatenate([[0], np.cumsum([len(c) for c in curves])])
+            payload["separatrix_points"] = np.concatenate(curves)
+
+
+#: the PNG text key of the drawing settings a figure was drawn with (Scene.figure_settings)
+FIGURE_SETTINGS_KEY = "explorer-figure-settings"
+
+
+def _figure_stale(stem: Path, out: Path, settings: str) -> bool:
+    """The figure ``stem`` (.png, .pdf) must be drawn again: a file is missing or older than the
+    store ``out``, or the PNG was drawn with other drawing settings (or records none)."""
+    from explorer.app.figures import png_text
+
+    png, pdf = stem.with_suffix(".png"), stem.with_suffix(".pdf")
+    if not png.exists() or not pdf.exists():
+        return True
+    if png.stat().st_mtime < out.stat().st_mtime or pdf.stat().st_mtime < out.stat().st_mtime:
+        return True
+    return png_text(png, FIGURE_SETTINGS_KEY) != settings
+
+
+#: an atlas stores its finished cells at most this often (seconds; and when it ends or is interrupted)
+ATLAS_COMMIT_SECONDS = 2.0
 
 
 def run_atlas(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, scheduler=None, force=False,
@@ -307,8 +447,10 @@ def run_atlas(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
     ([sweep] value x [atlas] value) from the indicators of its seeds, mapped by the same
     ``task(spec, i)`` as a sweep (:func:`explorer.analysis.sweep.build_atlas_spec`), stored as one
     small HDF5 file (:mod:`explorer.io.store.atlas`: fractions only, no orbits) and drawn as a
-    heat map.  An atlas stored with the same :meth:`~explorer.io.scene.Scene.atlas_hash` is not
-    recomputed (the file is written once, at the end: an interrupted atlas starts again)."""
+    heat map.  The file is rewritten atomically with the cells finished so far every
+    :data:`ATLAS_COMMIT_SECONDS` (and when the run ends or is interrupted), so a rerun with the same
+    :meth:`~explorer.io.scene.Scene.atlas_hash` computes only the cells it lacks, and nothing when
+    it is complete."""
     from explorer.app.atlas_figure import atlas_heatmap
     from explorer.app.figures import save_figure
     from explorer.io.store import atlas as atlas_store
@@ -320,47 +462,90 @@ def run_atlas(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
     key = scene.atlas_hash()
     computed: tuple = ()
     orbits = 0
-    if force or atlas_store.atlas_hash_on_disk(out) != key:
-        client = None
-        if backend == "dask":
-            client = _dask_client(scheduler, jobs)
-            jobs = -1
-        chunk_orbits = sweep.default_jobs_layout(1 if (jobs == 1 and backend is None) else 2)
-        spec = sweep.build_atlas_spec(scene, chunk_orbits=chunk_orbits)
-        frac = np.full((rows, cols), np.nan)
-        err = np.full((rows, cols), np.nan)
-        n_ok = np.zeros((rows, cols), np.int64)
-        wall = np.zeros((rows, cols))
+    with _guarded(out) as stop:
+        held = _stored_atlas(out, force)
+        if held is not None and held.attrs.get("scene_name") != scene.name and not force:
+            raise ParameterError(f"--out {out} holds the atlas '{held.attrs.get('scene_name')}', not '{scene.name}'; "
+                                 "use --force to replace it or choose another --out")
+        if force or held is None or held.hash != key:
+            held = None
+        if held is None or not held.complete:
+            frac = np.full((rows, cols), np.nan) if held is None else held.fraction.copy()
+            err = np.full((rows, cols), np.nan) if held is None else held.error.copy()
+            n_ok = np.zeros((rows, cols), np.int64) if held is None else held.orbits.copy()
+            wall = np.zeros((rows, cols)) if held is None else held.wall_time.copy()
+            done = np.zeros((rows, cols), bool) if held is None else held.done.copy()
+            client = None
+            if backend == "dask":
+                client = _dask_client(scheduler, jobs)
+                jobs = -1
+            chunk_orbits = sweep.default_jobs_layout(1 if (jobs == 1 and backend is None) else 2)
+            missing = {i for i in range(scene.n_cells) if not done.flat[i]}
+            spec = sweep.build_atlas_spec(scene, chunk_orbits=chunk_orbits, cells=missing)
+            done.flat[sorted(missing - {p.index for p in spec.panels})] = True   # no allowed region: gray
+            last = [time.perf_counter(), 0]      # time of the last commit, cells since
 
-        def on_cell(panel, arrays):
-            r, c = divmod(panel.index, cols)
-            f, e, n = chaotic_fraction(classify_megno(arrays), scene.lyapunov.threshold,
-                                       arrays["lyapunov_status"] == 0)
-            frac[r, c], err[r, c], n_ok[r, c], wall[r, c] = f, e, n, arrays["wall_time"]
+            def commit():
+                atlas_store.write_atlas(out, scene_name=scene.name, scene_text=scene.text, hash=key,
+                                        row_parameter=scene.sweep_parameter, column_parameter=scene.atlas_parameter,
+                                        row_values=scene.sweep_values, column_values=scene.atlas_values,
+                                        fraction=frac, error=err, orbits=n_ok, wall_time=wall,
+                                        threshold=scene.lyapunov.threshold,
+                                        provenance=store.provenance({"scene": scene.name}), done=done)
+                last[:] = [time.perf_counter(), 0]
 
-        _map_with_progress(spec, on_cell, jobs, backend, client, progress, f"atlas {scene.name}")
-        atlas_store.write_atlas(out, scene_name=scene.name, scene_text=scene.text, hash=key,
-                                row_parameter=scene.sweep_parameter, column_parameter=scene.atlas_parameter,
-                                row_values=scene.sweep_values, column_values=scene.atlas_values, fraction=frac,
-                                error=err, orbits=n_ok, wall_time=wall, threshold=scene.lyapunov.threshold,
-                                provenance=store.provenance({"scene": scene.name}))
-        computed = tuple(p.index for p in spec.panels)
-        orbits = int(sum(len(p.y0) for p in spec.panels))
-    figure_paths: tuple = ()
-    if draw:
-        png, pdf = stem.with_suffix(".png"), stem.with_suffix(".pdf")
-        stale = (not png.exists() or not pdf.exists() or png.stat().st_mtime < out.stat().st_mtime
-                 or pdf.stat().st_mtime < out.stat().st_mtime)
-        if computed or stale or force:
+            def on_cell(panel, arrays):
+                r, c = divmod(panel.index, cols)
+                f, e, n = chaotic_fraction(classify_megno(arrays), scene.lyapunov.threshold,
+                                           arrays["lyapunov_status"] == 0)
+                frac[r, c], err[r, c], n_ok[r, c], wall[r, c] = f, e, n, arrays["wall_time"]
+                done[r, c] = True
+                last[1] += 1
+                if time.perf_counter() - last[0] >= ATLAS_COMMIT_SECONDS:
+                    commit()
+
+            try:
+                _map_with_progress(spec, on_cell, jobs, backend, client, progress, f"atlas {scene.name}", None,
+                                   _checker(stop, client))
+            except KeyboardInterrupt:
+                if last[1]:
+                    commit()
+                raise Interrupted(f"{int(done.sum())} of {done.size} cells stored in {out}; the same command "
+                                  "continues from there") from None
+            commit()
+            computed = tuple(p.index for p in spec.panels)
+            orbits = int(sum(len(p.y0) for p in spec.panels))
+        figure_paths: tuple = ()
+        if stop.requested:      # every cell is stored; the heat map is drawn by the next run
+            raise Interrupted(f"all {scene.n_cells} cells stored in {out}; the same command draws the heat map")
+        settings = scene.figure_settings()
+        if draw and (computed or force or _figure_stale(stem, out, settings)):
             data = atlas_store.read_atlas(out)
             ly = scene.lyapunov
             title = (f"{scene.name}: chaotic fraction\n{scene.seeds.n} seeds per cell, MEGNO time {ly.time:g}"
                      + (", early classification" if ly.early_stop else ""))
-            figure_paths = tuple(save_figure(atlas_heatmap(data, title=title, dpi=scene.figure.dpi), stem))
+            figure_paths = tuple(save_figure(atlas_heatmap(data, title=title, dpi=scene.figure.dpi), stem,
+                                             text={FIGURE_SETTINGS_KEY: settings}))
     return SweepReport(scene=scene.name, out=out, n_panels=scene.n_cells, computed=computed, orbits=orbits,
                        crossings=0, stopped=0, statuses={}, max_dh=0.0, warning=None, fractions=(),
                        threshold=float(scene.lyapunov.threshold), figure=figure_paths,
-                       wall_time=time.perf_counter() - t_start)
+                       wall_time=time.perf_counter() - t_start, products={"cells": computed})
+
+
+def _stored_atlas(out: Path, force: bool):
+    """The atlas stored at ``out`` (None: no file); a file that is not an atlas is refused without
+    ``force`` (with it, it is replaced)."""
+    from explorer.io.store import atlas as atlas_store
+
+    if not out.exists():
+        return None
+    try:
+        return atlas_store.read_atlas(out)
+    except (OSError, ValueError, KeyError) as exc:
+        if force:
+            return None
+        raise ParameterError(f"--out {out}: not an explorer atlas file ({' '.join(str(exc).split())}); use --force "
+                             "to replace it or choose another --out") from None
 
 
 def _restamp_fractions(scene, out, stored) -> tuple:
@@ -384,33 +569,36 @@ def _restamp_fractions(scene, out, stored) -> tuple:
     return tuple(done)
 
 
-def _check_writable(directory: Path, option: str, target: Path):
-    """Refuse, before any computation, an output place that cannot be created or written."""
-    import tempfile
-
-    try:
-        directory.mkdir(parents=True, exist_ok=True)
-        with tempfile.NamedTemporaryFile(dir=directory, prefix=".explorer-write-test-"):
-            pass
-    except OSError as exc:
-        raise ParameterError(f"{option} {target}: cannot write into the directory '{directory}' "
-                             f"({exc.strerror or exc})") from None
-
-
-def _map_with_progress(spec, on_panel, jobs, backend, client, progress, desc, streamer=None) -> None:
+def _map_with_progress(spec, on_panel, jobs, backend, client, progress, desc, streamer=None, check=None) -> None:
     """sweep.run with a progress bar on stderr (unless ``progress`` is false); the dask
     ``client`` (if any) is closed afterwards, whatever happens."""
     try:
         bar = _progress(len(spec.chunks), not progress, desc)
         try:
             sweep.run(spec, on_panel, jobs=jobs, backend="dask" if client is not None else backend,
-                      progress=bar.update if bar is not None else None, streamer=streamer)
+                      progress=bar.update if bar is not None else None, streamer=streamer, check=check)
         finally:
             if bar is not None:
                 bar.close()
     finally:
         if client is not None:
             client.close()
+
+
+def _checker(stop, client):
+    """``stop.check``, which first quiets the logs of a dask ``client`` (its cancelled tasks are not news)."""
+    if client is None:
+        return stop.check
+
+    def check():
+        if stop.requested:
+            import logging
+
+            for name in list(logging.root.manager.loggerDict):
+                if name.split(".")[0] in ("distributed", "tornado"):
+                    logging.getLogger(name).setLevel(logging.CRITICAL + 1)
+        stop.check()
+    return check
 
 
 def _check_jobs(jobs, backend, scheduler) -> int:
@@ -421,15 +609,59 @@ def _check_jobs(jobs, backend, scheduler) -> int:
 
 
 def _outputs(scene, out, figure, draw) -> tuple[Path, Path]:
-    """The store path [results/<scene>.h5] and figure stem [figures/<scene>], checked writable;
-    temporaries of killed runs next to the store removed."""
+    """The store path [results/<scene>.h5] and figure stem [the store's path without .h5], both
+    places checked writable."""
     out = Path(out) if out else Path("results") / f"{scene.name}.h5"
-    stem = Path(figure) if figure else Path("figures") / scene.name
-    _check_writable(out.parent, "--out", out)
+    stem = Path(figure) if figure else out.with_suffix("")   # beside the store (docs/commands/sweep.md)
+    store.check_writable(out.parent, "--out", out)
     if draw:
-        _check_writable(stem.parent, "--figure", stem)
-    store.clean_stale_temporaries(out)
+        store.check_writable(stem.parent, "--figure", stem)
     return out, stem
+
+
+@contextlib.contextmanager
+def _guarded(out: Path):
+    """While a run writes the store ``out``: its lock held (a second process is refused with the
+    holder named, exit 2) and Ctrl-C deferred to ``stop.check()`` (:mod:`explorer.app.interrupt`).
+    Temporaries of killed runs next to the store are removed once the lock is ours."""
+    with interrupt.deferred_interrupt() as stop:
+        try:
+            with store.store_lock(out):
+                store.clean_stale_temporaries(out)
+                yield stop
+        except store.StoreBusy as exc:
+            raise ParameterError(str(exc)) from None
+
+
+def _check_same_scene(scene, out: Path, force: bool) -> None:
+    """A store holds one scene (its ``scene_name``): another scene is refused without ``force``;
+    with ``force`` the old store and its block folders are removed before anything is computed."""
+    try:
+        held = store.stored_scene_name(out)
+    except store.StoreError as exc:
+        if not force:
+            raise ParameterError(str(exc)) from None
+        held = ""
+    if held is None or held == scene.name:
+        return
+    if not force:
+        raise ParameterError(f"--out {out} holds the scene '{held}', not '{scene.name}'; use --force to replace it "
+                             "or choose another --out")
+    out.unlink()
+    stream.remove_stale_blocks(out)
+
+
+def _kept(scene, out: Path, want) -> str:
+    """What an interrupted sweep leaves in ``out``: the panels stored whole (every product with the
+    scene's hash), the blocks of streamed ones."""
+    try:
+        on_disk = store.panel_product_hashes(out)
+    except store.StoreError:
+        on_disk = {}
+    stored = sum(_stored_products(scene, i, on_disk.get(i, {}), w) == set(w) for i, w in enumerate(want))
+    blocks = sum(len([n for n in os.listdir(d) if n.endswith(".npz")]) for d in stream.panel_block_dirs(out).values())
+    return (f"{stored} of {len(want)} panels stored whole in {out}" + (f", {blocks} blocks of streamed panels kept"
+            if blocks else "") + "; the same command continues from there")
 
 
 def _check_disk(spec, out: Path) -> None:
@@ -462,8 +694,6 @@ class _PanelStreams:
         self.resumed: dict = {}
 
     def resume(self, panel):
-        from explorer.io.store import stream
-
         bs = stream.BlockStream(self.out, {"panel_hash": self.hashes[panel.index]}, index=panel.index)
         if self.force:
             bs.discard()
@@ -501,8 +731,10 @@ def _dask_client(address, jobs):
         raise ParameterError("--backend dask needs the 'distributed' package (pip install 'explorer[dask]')") from None
     if address:
         return Client(address)
+    import logging
+
     cluster = LocalCluster(n_workers=max(1, jobs), threads_per_worker=1, processes=True,
-                           dashboard_address=None)
+                           dashboard_address=None, silence_logs=logging.ERROR)
     return _ClientWithCluster(Client(cluster), cluster)
 
 

@@ -1,22 +1,20 @@
 # GENERATED FILE - DO NOT EDIT.
 # Written by tools/gen_lanes.py from explorer.model.equations.taylor_coefficients_tangent
-# (translated operation by operation) and templates mirroring explorer.kernels.taylor.
+# (translated operation by operation).
 # Regenerate:  python tools/gen_lanes.py     (check: --check)
 """Lane kernels of the tangent Taylor method: LANES orbits per vector, each with its state and
 up to two deviation vectors in Z[k, row, lane] (C-contiguous, NROWS rows: 0..4 the orbit,
-5..9 the first deviation vector, 10..14 the second).  Each lane computes bit for bit what
-equations.taylor_coefficients_tangent and kernels.taylor compute for it (same IEEE operations
-in the same order, no fast-math, no FMA).  Used by :mod:`explorer.integrate.tangent_lanes`.
+5..9 the first deviation vector, 10..14 the second).  Used by
+:mod:`explorer.integrate.tangent_lanes`.
+
+Each lane computes bit for bit what the scalar recurrence computes (the same IEEE operations in
+the same order; the vector operations of :mod:`explorer.integrate.simd`: no fast-math, no FMA).
 """
 from explorer._jit import njit
-from explorer.integrate._lanes_generated import (  # noqa: F401 - the vector operations
+from explorer.integrate.simd import (
     LANES,
-    vabs,
     vadd,
-    vdiv,
     vload,
-    vlog2_approx,
-    vmax_gt,
     vmul,
     vneg,
     vsplat,
@@ -123,68 +121,3 @@ def deviation_coefficients_lanes(P, Z, order, db):
         vstore(Z, (k + 1) * (NROWS * LANES) + (db + (2)) * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * LANES) + (db + (1)) * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * LANES) + (db + (0)) * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * LANES) + (db + (4)) * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * LANES) + (db + (3)) * LANES))), vsplat(r)))
         vstore(Z, (k + 1) * (NROWS * LANES) + (db + (3)) * LANES, vmul(vmul(dwg2, vsplat(inv_b)), vsplat(r)))
         vstore(Z, (k + 1) * (NROWS * LANES) + (db + (4)) * LANES, vmul(vmul(vneg(dwg1), vsplat(inv_b)), vsplat(r)))
-
-
-@njit
-def evaluate5_lanes(Z, order, h, out, base):
-    """out[base + i, l] = sum_k Z[k, base + i, l] h[l]^k for i = 0..4 (Horner, five interleaved
-    chains), out of shape (NROWS, LANES); per lane exactly kernels.taylor.evaluate."""
-    hv = vload(h, 0)
-    o = order * (NROWS * LANES) + base * LANES
-    a0 = vload(Z, o + 0 * LANES)
-    a1 = vload(Z, o + 1 * LANES)
-    a2 = vload(Z, o + 2 * LANES)
-    a3 = vload(Z, o + 3 * LANES)
-    a4 = vload(Z, o + 4 * LANES)
-    for k in range(order - 1, -1, -1):
-        o = k * (NROWS * LANES) + base * LANES
-        a0 = vadd(vmul(a0, hv), vload(Z, o + 0 * LANES))
-        a1 = vadd(vmul(a1, hv), vload(Z, o + 1 * LANES))
-        a2 = vadd(vmul(a2, hv), vload(Z, o + 2 * LANES))
-        a3 = vadd(vmul(a3, hv), vload(Z, o + 3 * LANES))
-        a4 = vadd(vmul(a4, hv), vload(Z, o + 4 * LANES))
-    vstore(out, (base + 0) * LANES, a0)
-    vstore(out, (base + 1) * LANES, a1)
-    vstore(out, (base + 2) * LANES, a2)
-    vstore(out, (base + 3) * LANES, a3)
-    vstore(out, (base + 4) * LANES, a4)
-
-
-@njit
-def tangent_step_norms_lanes(Z, order, e_p, e_q, out):
-    """The step norms of the orbit rows 0..4 (systems.taylor_step: finiteness of the last two
-    coefficients, kernels.taylor.step_size on rows 0..4 only), as _lanes_generated.step_norms_lanes:
-    out (7, LANES) = (f, g, a, bm, s / a, s / bm, d)."""
-    o0 = 0
-    op = order * (NROWS * LANES)
-    oq = (order - 1) * (NROWS * LANES)
-    f = vadd(vadd(vadd(vadd(vload(Z, op + 0 * LANES), vload(Z, op + 1 * LANES)), vload(Z, op + 2 * LANES)), vload(Z, op + 3 * LANES)), vload(Z, op + 4 * LANES))
-    g = vadd(vadd(vadd(vadd(vload(Z, oq + 0 * LANES), vload(Z, oq + 1 * LANES)), vload(Z, oq + 2 * LANES)), vload(Z, oq + 3 * LANES)), vload(Z, oq + 4 * LANES))
-    s = vsplat(1.0)
-    a = vzero()
-    bm = vzero()
-    s = vmax_gt(vabs(vload(Z, o0 + 0 * LANES)), s)
-    a = vmax_gt(vabs(vload(Z, op + 0 * LANES)), a)
-    bm = vmax_gt(vabs(vload(Z, oq + 0 * LANES)), bm)
-    s = vmax_gt(vabs(vload(Z, o0 + 1 * LANES)), s)
-    a = vmax_gt(vabs(vload(Z, op + 1 * LANES)), a)
-    bm = vmax_gt(vabs(vload(Z, oq + 1 * LANES)), bm)
-    s = vmax_gt(vabs(vload(Z, o0 + 2 * LANES)), s)
-    a = vmax_gt(vabs(vload(Z, op + 2 * LANES)), a)
-    bm = vmax_gt(vabs(vload(Z, oq + 2 * LANES)), bm)
-    s = vmax_gt(vabs(vload(Z, o0 + 3 * LANES)), s)
-    a = vmax_gt(vabs(vload(Z, op + 3 * LANES)), a)
-    bm = vmax_gt(vabs(vload(Z, oq + 3 * LANES)), bm)
-    s = vmax_gt(vabs(vload(Z, o0 + 4 * LANES)), s)
-    a = vmax_gt(vabs(vload(Z, op + 4 * LANES)), a)
-    bm = vmax_gt(vabs(vload(Z, oq + 4 * LANES)), bm)
-    u = vdiv(s, a)
-    v = vdiv(s, bm)
-    d = vsub(vmul(vsplat(e_q), vlog2_approx(v)), vmul(vsplat(e_p), vlog2_approx(u)))
-    vstore(out, 0 * LANES, f)
-    vstore(out, 1 * LANES, g)
-    vstore(out, 2 * LANES, a)
-    vstore(out, 3 * LANES, bm)
-    vstore(out, 4 * LANES, u)
-    vstore(out, 5 * LANES, v)
-    vstore(out, 6 * LANES, d)

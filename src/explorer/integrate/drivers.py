@@ -4,7 +4,11 @@ the section phi = phi0 K times, or its time or step budget runs out.
 
 Low-level twins of :mod:`explorer.analysis.sections` (which validates and maps the
 status codes); no validation here.  One batch function per method so that a
-run compiles (or loads from the cache) only what it uses.
+run compiles (or loads from the cache) only what it uses: :func:`run_dop853_batch` and
+:func:`run_split_batch` here, the Taylor method's in :mod:`explorer.integrate.lanes` (its loop on
+SIMD lanes; a lone orbit is one lane).  What every crossing loop shares is here too: the first
+block's carry (:func:`start_carry`), a crossing kept and recorded (:func:`keep_crossing`), an
+orbit's carry and outputs at the end of its block (:func:`save_carry`, :func:`store_orbit`).
 
 Common arguments
 ----------------
@@ -55,14 +59,13 @@ from explorer.integrate.layout import (  # noqa: F401 (the carry and limits colu
 )
 from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_TMAX
 from explorer.kernels import dop853 as dp
-from explorer.kernels import taylor as tk
+from explorer.kernels.checks import all_finite
 from explorer.kernels.clock import advance_time, clip_step
 from explorer.kernels.events import (
     ROOT_MAX_ITER,
     ROOT_XTOL,
     dense_step_roots,
     newton_in_bracket,
-    poly_step_roots,
     root_workspace,
     secant_start,
     sign_change,
@@ -81,12 +84,6 @@ EPS = 2.220446049250313e-16
 ON_SECTION = 8.0 * EPS
 
 @njit
-def _finite5(y):
-    s = y[0] + y[1] + y[2] + y[3] + y[4]
-    return s - s == 0.0
-
-
-@njit
 def _record(cross, k, t, yc, H):
     """Store a crossing row; returns False (nothing stored) if any value is not finite,
     so that no NaN is ever stored as data."""
@@ -102,10 +99,11 @@ def _record(cross, k, t, yc, H):
 
 
 @njit
-def _keep(cross, count, t, yc, P, H0, cphi, sphi):
-    """Record the root at state yc, time t as crossing number ``count`` if it lies on the
-    branch phi = phi0 (cos(phi - phi0) > 0; the root at phi0 + pi is not a crossing).
-    Returns the new count, or -1 if a value is not finite (nothing stored)."""
+def keep_crossing(cross, count, t, yc, P, H0, cphi, sphi):
+    """Record the root of sin(phi - phi0) at state yc, time t as crossing number ``count`` if it
+    lies on the branch phi = phi0 (cos(phi - phi0) > 0; the root at phi0 + pi is not a crossing):
+    the row (t, p1, p2, M, H - H0).  Returns the new count, or -1 if a value is not finite
+    (nothing stored).  Every crossing loop (Taylor lanes, DOP853, splitting) keeps its roots here."""
     if section_c(yc, cphi, sphi) <= 0.0:
         return count
     if not _record(cross, count, t, yc, energy(yc, P) - H0):
@@ -135,72 +133,21 @@ def start_carry(Y0, P, cphi, sphi, carry):
 
 
 @njit
-def _save_carry(carry, t, tc, g, steps):
+def read_carry(carry):
+    """(t, tc, g, steps, H0): where one orbit's block starts, from its carry (the columns
+    CARRY_*: time, its Kahan compensation, sin(phi - phi0) at the state, steps taken, and the
+    energy the crossings' H - H0 refers to)."""
+    return carry[CARRY_T], carry[CARRY_TC], carry[CARRY_G], int(carry[CARRY_STEPS]), carry[CARRY_H0]
+
+
+@njit
+def save_carry(carry, t, tc, g, steps):
+    """The carry of one orbit at the end of its block (the columns CARRY_*: time, its Kahan
+    compensation, sin(phi - phi0) at the final state, steps); DOP853 adds its next step."""
     carry[CARRY_T] = t
     carry[CARRY_TC] = tc
     carry[CARRY_G] = g
     carry[CARRY_STEPS] = steps
-
-
-# ====================================================================== Taylor
-@njit
-def orbit_taylor(y0, P, cphi, sphi, direction, tmax, order, max_steps, cross, yout, carry, target, room):
-    """One orbit with the adaptive Taylor method of the given order (the step:
-    :func:`explorer.integrate.systems.taylor_step` of ``REDUCED``).
-    Returns (count, status, t, steps).  The crossing is the root of the Taylor
-    polynomial of sin(phi - phi0) in the step: exact to the order of the method."""
-    X = np.empty((5, order + 1))
-    ynew = np.empty(5)
-    yc = np.empty(5)
-    gc, work, roots, brackets, stack = root_workspace(order)
-    factor = tk.safety_factor(order)
-    for i in range(5):
-        yout[i] = y0[i]
-    H0 = carry[CARRY_H0]
-    t = carry[CARRY_T]
-    tc = carry[CARRY_TC]  # Kahan compensation of the time sum
-    gprev = carry[CARRY_G]
-    steps = int(carry[CARRY_STEPS])
-    count = 0
-    status = STATUS_TMAX
-    if target == 0:
-        return 0, STATUS_DONE, t, steps
-    while True:
-        for i in range(5):
-            X[i, 0] = yout[i]
-        code, h, last, steps = sy.taylor_step(sy.REDUCED, X, P, t, tmax, STATUS_TMAX, order, factor,
-                                              steps, max_steps, ynew)
-        if code != sy.STEP_OK:
-            status = code
-            break
-        gnew = section_g(ynew, cphi, sphi)
-        # every root of the step's Taylor polynomial of sin(phi - phi0), isolated (a crossing
-        # and the turn back, or two turns, inside one step included: kernels.events)
-        for k in range(order + 1):
-            gc[k] = X[3, k] * cphi - X[4, k] * sphi
-        nroots = poly_step_roots(gc, order, h, gprev, gnew, direction, roots, brackets, work,
-                                 stack)
-        kept = count
-        for r in range(nroots):
-            if kept < 0 or kept >= room:
-                break
-            tau = roots[r]
-            tk.evaluate(X, order, tau, yc)
-            kept = _keep(cross, kept, (t - tc) + tau, yc, P, H0, cphi, sphi)
-        if kept < 0:
-            status = STATUS_NONFINITE
-            break
-        count = kept
-        # compensated t += h
-        t, tc = advance_time(t, tc, h, last, tmax)
-        for i in range(5):
-            yout[i] = ynew[i]
-        gprev = gnew
-        if count >= target:
-            status = STATUS_DONE
-            break
-    _save_carry(carry, t, tc, gprev, steps)
-    return count, status, t, steps
 
 
 @njit
@@ -212,19 +159,6 @@ def store_orbit(j, count, status, t, steps, out_count, out_status, out_final, ou
     out_info[j, 0] = t
     out_info[j, 1] = steps
     out_info[j, 2] = out_final[j, 3] ** 2 + out_final[j, 4] ** 2 - 1.0
-
-
-@njit(parallel=True)
-def run_taylor_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
-                     out_cross, out_count, out_status, out_final, out_info):
-    """Batch twin of :func:`orbit_taylor`, parallel over orbits (prange)."""
-    n = Y0.shape[0]
-    for j in prange(n):
-        count, status, t, steps = orbit_taylor(Y0[j], P, cphi, sphi, direction, tmax, order,
-                                               max_steps, out_cross[j], out_final[j], carry[j],
-                                               limits[j, LIMIT_TARGET], limits[j, LIMIT_ROOM])
-        store_orbit(j, count, status, t, steps, out_count, out_status, out_final, out_info)
-    return 0
 
 
 # ====================================================================== splitting
@@ -323,10 +257,8 @@ def orbit_split(y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max_ste
     roots = np.empty(2)
     for i in range(5):
         yout[i] = y0[i]
-    H0 = carry[CARRY_H0]
-    gprev = carry[CARRY_G]
+    _t, _tc, gprev, n, H0 = read_carry(carry)   # t_n = n dt: no time is carried
     count = 0
-    n = int(carry[CARRY_STEPS])
     status = STATUS_TMAX
     if target == 0:
         return 0, STATUS_DONE, n * dt, n
@@ -352,7 +284,7 @@ def orbit_split(y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max_ste
                     for i in range(5):
                         yc[i] = yout[i]
                     split_step(yc, P, tau, flow_ids, fracs)
-                kept = _keep(cross, kept, t + tau, yc, P, H0, cphi, sphi)
+                kept = keep_crossing(cross, kept, t + tau, yc, P, H0, cphi, sphi)
             if kept < 0:
                 status = STATUS_NONFINITE
                 break
@@ -363,7 +295,7 @@ def orbit_split(y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max_ste
         if count >= target:
             status = STATUS_DONE
             break
-    _save_carry(carry, n * dt, 0.0, gprev, n)
+    save_carry(carry, n * dt, 0.0, gprev, n)
     return count, status, n * dt, n
 
 
@@ -417,11 +349,7 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
     yc = np.empty(5)
     for i in range(5):
         yout[i] = y0[i]
-    H0 = carry[CARRY_H0]
-    t = carry[CARRY_T]
-    tc = carry[CARRY_TC]
-    gprev = carry[CARRY_G]
-    steps = int(carry[CARRY_STEPS])
+    t, tc, gprev, steps, H0 = read_carry(carry)
     if target == 0:
         return 0, STATUS_DONE, t, steps
     h_abs = carry[CARRY_HABS]
@@ -452,7 +380,7 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
         dp.step_solution(yout, K, h, ynew)
         err = dp.error_norm(yout, ynew, K, h, rtol, atol)
         steps += 1
-        if not (err == err) or not _finite5(ynew):
+        if not (err == err) or not all_finite(ynew):
             code = STATUS_NONFINITE
             break
         if err >= 1.0:
@@ -478,7 +406,7 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
                     break
                 theta = roots[r]
                 dp.dense_eval(F, yout, theta, yc)
-                kept = _keep(cross, kept, (t - tc) + theta * h, yc, P, H0, cphi, sphi)
+                kept = keep_crossing(cross, kept, (t - tc) + theta * h, yc, P, H0, cphi, sphi)
             if kept < 0:
                 code = STATUS_NONFINITE
                 break
@@ -491,7 +419,7 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
         if count >= target:
             code = STATUS_DONE
             break
-    _save_carry(carry, t, tc, gprev, steps)
+    save_carry(carry, t, tc, gprev, steps)
     carry[CARRY_HABS] = h_abs
     return count, code, t, steps
 

@@ -1,29 +1,39 @@
-"""Lane (SIMD) batch driver of the Taylor method: LANES orbits advance in lockstep.
+"""The Taylor crossing loop: LANES orbits advance in lockstep on SIMD vectors; one lane is the
+case of a lone orbit.  This is the only implementation of the Taylor method's crossings (the
+method registry runs it for every batch and every lone orbit); the scalar loop it was checked
+against lives in the tests as an oracle (tests/integrate/taylor_oracle.py), equal to it bit for
+bit for every orbit (crossings, final state, status, time, step count), whatever the grouping of
+orbits into lanes and the number of threads.
 
-:func:`run_taylor_lanes_batch` has the signature and the outputs of
-:func:`explorer.integrate.drivers.run_taylor_batch` and gives bit for bit the same results for every
-orbit (crossings, final state, status, time, step count), whatever the grouping of orbits
-into lanes and the number of threads:
+A step of :func:`run_worker`, for all lanes at once:
 
-* the Taylor coefficients, the step norms and the Horner evaluation of LANES orbits are
-  computed together by the generated vector kernels of :mod:`explorer._lanes_generated`
-  (one vector instruction per scalar instruction of ``equations.taylor_coefficients`` and
-  ``kernels.taylor``: lane-wise the same IEEE operations in the same order);
-* everything else - step size, time and step budgets, last step clipped to tmax, Kahan time
-  sum, NaN and step-underflow checks, ``poly_step_roots`` on the lane's own
-  polynomial, ``_keep`` (branch test and record) - is the control flow of
-  :func:`explorer.integrate.drivers.orbit_taylor`, run per lane in scalar code.  The root isolation
-  is skipped for a lane when a bound of the variation of sin(phi - phi0) over the step,
-  computed for all lanes in one vectorised loop, proves it has no root there (then
-  ``poly_step_roots`` would find none either: ``kernels.events.excluded_by_variation``).
+* the Taylor coefficients (the recurrence of R3 translated lane-wise by ``tools/gen_lanes.py``
+  into :mod:`explorer.integrate._lanes_generated`), the step norms (:func:`step_norms_lanes`) and
+  the Horner sum (:func:`evaluate_lanes`) as vector operations of :mod:`explorer.integrate.simd`
+  (lane-wise the same IEEE operations, in the same order, as ``equations.taylor_coefficients``
+  and ``kernels.taylor``);
+* per lane in scalar code, the step of the method (Jorba & Zou 2005): the finiteness of the last
+  two coefficients, the step size (:func:`lane_step_size`, the double of
+  ``kernels.taylor.step_size``) clipped to tmax, the underflow test (:func:`lane_step`), the
+  non-finite check of the new state; then the crossings: every root of the step's Taylor
+  polynomial of sin(phi - phi0) (``kernels.events.poly_step_roots``: exact to the order of the
+  method), each kept on the branch phi = phi0 (:func:`explorer.integrate.drivers.keep_crossing`);
+  the compensated time sum (``kernels.clock``); the target, time and step budgets.  The root
+  isolation is skipped for a lane when a bound of the variation of sin(phi - phi0) over the
+  step, computed for all lanes in one vectorised loop (:func:`variation_lanes`), proves it has
+  no root there (then ``poly_step_roots`` would find none either:
+  ``kernels.events.excluded_by_variation``).
 
-Lanes never exchange values: a lane computes exactly what ``orbit_taylor`` computes for
-its orbit, so which orbits share a vector, in which order they are taken and how many
-threads run cannot change any result.  The work is therefore distributed dynamically:
-one worker per thread (prange), each with up to LANES lanes; a lane whose orbit stops takes
-the next unstarted orbit of the batch at once (an atomic counter), so lanes idle only when
-the whole batch is handed out (then on the zero state: all its coefficients are 0, harmless,
-and ignored), and a long orbit cannot leave a thread idle.
+The blocks, the carry and the outputs are those of every crossing driver
+(:mod:`explorer.integrate.drivers`: ``start_carry``, ``save_carry``, ``store_orbit``).
+
+Lanes never exchange values: a lane computes exactly what the scalar loop computes for its
+orbit, so which orbits share a vector, in which order they are taken and how many threads run
+cannot change any result.  The work is therefore distributed dynamically: one worker per thread
+(prange), each with up to LANES lanes; a lane whose orbit stops takes the next unstarted orbit of
+the batch at once (an atomic counter), so lanes idle only when the whole batch is handed out
+(then on the zero state: all its coefficients are 0, harmless, and ignored), and a long orbit
+cannot leave a thread idle.
 
 Step size: ``kernels.taylor.step_size`` takes the smaller of two ``pow``,
 rho_p = (s/a)^(1/p) and rho_{p-1} = (s/bm)^(1/(p-1)).  The lanes compute d = log2 rho_{p-1} -
@@ -41,36 +51,31 @@ import math
 import numpy as np
 
 from explorer._jit import get_num_threads, njit, prange
-from explorer.integrate._lanes_generated import (
+from explorer.integrate._lanes_generated import NVAR, taylor_coefficients_lanes
+from explorer.integrate.drivers import (
+    EPS,
+    LIMIT_ROOM,
+    LIMIT_TARGET,
+    keep_crossing,
+    read_carry,
+    save_carry,
+    store_orbit,
+)
+from explorer.integrate.simd import (
     LANES,
     LOG2_APPROX_ERR,
-    NVAR,
     atomic_fetch_add,
-    evaluate_lanes,
-    step_norms_lanes,
-    taylor_coefficients_lanes,
     vabs,
     vadd,
+    vdiv,
     vload,
+    vlog2_approx,
+    vmax_gt,
     vmul,
     vsplat,
     vstore,
     vsub,
     vzero,
-)
-from explorer.integrate.drivers import (
-    CARRY_G,
-    CARRY_H0,
-    CARRY_STEPS,
-    CARRY_T,
-    CARRY_TC,
-    EPS,
-    LIMIT_ROOM,
-    LIMIT_TARGET,
-    _finite5,
-    _keep,
-    _save_carry,
-    store_orbit,
 )
 from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_TMAX
 from explorer.kernels import taylor as tk
@@ -83,10 +88,89 @@ _IDLE = -1
 _TINY = 2.2250738585072014e-308
 _HUGE = 1.7976931348623157e308
 #: rows of the step_norms_lanes output
-_N_NORMS = 7
+N_NORMS = 7
+#: rows of the orbit (p1, p2, M, g1, g2) in every lane array: the rows that choose the step
+N_ORBIT = 5
 #: rows of sin(phi) = g1 and cos(phi) = g2 in the state (p1, p2, M, g1, g2)
 _G1 = 3
 _G2 = 4
+#: slack added to the error bound of the log2 estimate (lane_step_size): pow's result
+#: differs from the exact power by < 1 ulp, far below this relative gap
+_POW_GAP = 1e-12
+
+
+@njit
+def step_constants(order):
+    """(factor, e_p, e_q, margin) of the steps of ``order``: the safety factor and the exponents
+    1/p, 1/(p-1) of kernels.taylor.step_size, and the margin of :func:`lane_step_size`."""
+    e_p = 1.0 / order
+    e_q = 1.0 / (order - 1)
+    return tk.safety_factor(order), e_p, e_q, (e_p + e_q) * LOG2_APPROX_ERR + _POW_GAP
+
+
+@njit
+def evaluate_lanes(X, order, h, out, base):
+    """out[base + i, l] = sum_k X[k, base + i, l] h[l]^k for i = 0..4 per lane (Horner: per lane
+    exactly kernels.taylor.evaluate), X of shape (order + 1, rows, LANES), h of shape (LANES,), out
+    of shape (rows', LANES).  The five chains are interleaved (independent)."""
+    hv = vload(h, 0)
+    stride = X.shape[1] * LANES
+    o = order * stride + base * LANES
+    a0 = vload(X, o)
+    a1 = vload(X, o + LANES)
+    a2 = vload(X, o + 2 * LANES)
+    a3 = vload(X, o + 3 * LANES)
+    a4 = vload(X, o + 4 * LANES)
+    for k in range(order - 1, -1, -1):
+        o = k * stride + base * LANES
+        a0 = vadd(vmul(a0, hv), vload(X, o))
+        a1 = vadd(vmul(a1, hv), vload(X, o + LANES))
+        a2 = vadd(vmul(a2, hv), vload(X, o + 2 * LANES))
+        a3 = vadd(vmul(a3, hv), vload(X, o + 3 * LANES))
+        a4 = vadd(vmul(a4, hv), vload(X, o + 4 * LANES))
+    o = base * LANES
+    vstore(out, o, a0)
+    vstore(out, o + LANES, a1)
+    vstore(out, o + 2 * LANES, a2)
+    vstore(out, o + 3 * LANES, a3)
+    vstore(out, o + 4 * LANES, a4)
+
+
+@njit
+def step_norms_lanes(X, order, e_p, e_q, out):
+    """Per lane, from the orbit's rows 0..4 of X (order + 1, rows, LANES), what the checks and the
+    step size of the Taylor step need (out of shape (N_NORMS, LANES)): out[0] = sum_i X[order, i]
+    and out[1] = sum_i X[order - 1, i] (in the order of systems._finite_column: non-finite iff a
+    coefficient is, or the sum overflows); with s = max(1, max_i |X[0, i]|), a = max_i
+    |X[order, i]|, bm = max_i |X[order - 1, i]| (the norms of kernels.taylor.step_size, in its
+    order): out[2] = a, out[3] = bm, out[4] = s / a, out[5] = s / bm (the arguments of its two
+    pow) and out[6] = e_q log2(s / bm) - e_p log2(s / a) with vlog2_approx (its sign tells which
+    pow is smaller when it is not too close to 0)."""
+    stride = X.shape[1] * LANES
+    op = order * stride
+    oq = (order - 1) * stride
+    f = vload(X, op)
+    g = vload(X, oq)
+    for i in range(1, N_ORBIT):
+        f = vadd(f, vload(X, op + i * LANES))
+        g = vadd(g, vload(X, oq + i * LANES))
+    s = vsplat(1.0)
+    a = vzero()
+    bm = vzero()
+    for i in range(N_ORBIT):
+        s = vmax_gt(vabs(vload(X, i * LANES)), s)
+        a = vmax_gt(vabs(vload(X, op + i * LANES)), a)
+        bm = vmax_gt(vabs(vload(X, oq + i * LANES)), bm)
+    u = vdiv(s, a)
+    v = vdiv(s, bm)
+    d = vsub(vmul(vsplat(e_q), vlog2_approx(v)), vmul(vsplat(e_p), vlog2_approx(u)))
+    vstore(out, 0, f)
+    vstore(out, LANES, g)
+    vstore(out, 2 * LANES, a)
+    vstore(out, 3 * LANES, bm)
+    vstore(out, 4 * LANES, u)
+    vstore(out, 5 * LANES, v)
+    vstore(out, 6 * LANES, d)
 
 
 @njit
@@ -174,11 +258,11 @@ def _evaluate_lane(X, order, l, h, out):
 @njit
 def _finish(j, l, X, count, status, t, tc, gprev, steps, carry, out_count, out_status, out_final,
             out_info):
-    """Write the outputs of orbit j from lane l (its state is X[0, :, l]) and its carry, as
-    run_taylor_batch."""
+    """Write the outputs of orbit j from lane l (its state is X[0, :, l]) and its carry (the
+    block's end: drivers.save_carry, drivers.store_orbit)."""
     for i in range(NVAR):
         out_final[j, i] = X[0, i, l]
-    _save_carry(carry[j], t, tc, gprev, steps)
+    save_carry(carry[j], t, tc, gprev, steps)
     store_orbit(j, count, status, t, steps, out_count, out_status, out_final, out_info)
 
 
@@ -199,8 +283,9 @@ def next_lane_orbit(next_orbit, n, orb, l, X, nrows):
 @njit
 def _start_lane(l, X, orb, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, L_target, L_room, next_orbit,
                 Y0, tmax, max_steps, carry, limits, out_count, out_status, out_final, out_info):
-    """Put the next unstarted orbit that needs a step on lane l (the start of orbit_taylor, from
-    the orbit's carry; orbits that stop before their first step are written out at once).
+    """Put the next unstarted orbit that needs a step on lane l (its start from the orbit's carry:
+    a block continued from ``carry`` takes the steps of an uninterrupted run; orbits that stop
+    before their first step - target 0, time or steps spent - are written out at once).
     Returns 1 if the lane got an orbit, 0 if the batch is exhausted (the lane then idles on
     the zero state)."""
     while True:
@@ -209,10 +294,7 @@ def _start_lane(l, X, orb, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, L_target,
             return 0
         for i in range(NVAR):
             X[0, i, l] = Y0[j, i]
-        t = carry[j, CARRY_T]
-        tc = carry[j, CARRY_TC]
-        g = carry[j, CARRY_G]
-        steps = int(carry[j, CARRY_STEPS])
+        t, tc, g, steps, H0 = read_carry(carry[j])
         if limits[j, LIMIT_TARGET] == 0:
             _finish(j, l, X, 0, STATUS_DONE, t, tc, g, steps, carry, out_count, out_status, out_final,
                     out_info)
@@ -226,7 +308,7 @@ def _start_lane(l, X, orb, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, L_target,
                     out_info)
             continue
         orb[l] = j
-        L_H0[l] = carry[j, CARRY_H0]
+        L_H0[l] = H0
         L_gprev[l] = g
         L_t[l] = t
         L_tc[l] = tc
@@ -240,7 +322,7 @@ def _start_lane(l, X, orb, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, L_target,
 #: the lane worker's work arrays: five of several dimensions, given one by one, and the 1-D ones
 #: that :func:`workspace_views` cuts from three flat buffers (float64, int64, bool); ``p`` is the
 #: order
-WORKSPACE_ND = (("X", "(p + 1, NVAR, LANES)"), ("norms", "(_N_NORMS, LANES)"), ("ynew", "(NVAR, LANES)"),
+WORKSPACE_ND = (("X", "(p + 1, NVAR, LANES)"), ("norms", "(N_NORMS, LANES)"), ("ynew", "(NVAR, LANES)"),
                 ("brackets", "(MAX_STEP_ROOTS, 4)"), ("stack", "(ISOLATE_STACK, 5)"))
 WORKSPACE_F = (("hv", "LANES"), ("vary", "LANES"), ("yl", "NVAR"), ("yc", "NVAR"), ("gc", "p + 1"),
                ("work", "p + 1"), ("roots", "MAX_STEP_ROOTS"), ("L_t", "LANES"), ("L_tc", "LANES"),
@@ -260,7 +342,7 @@ def workspace_sizes(order, out):
     buffers of :func:`workspace_views`."""
     p1 = order + 1
     out[0] = p1 * NVAR * LANES
-    out[1] = _N_NORMS * LANES
+    out[1] = N_NORMS * LANES
     out[2] = NVAR * LANES
     out[3] = MAX_STEP_ROOTS * 4
     out[4] = ISOLATE_STACK * 5
@@ -272,8 +354,7 @@ def workspace_sizes(order, out):
 @njit
 def workspace_views(order, wf, wi, wb):
     """The 1-D work arrays (WORKSPACE_F, WORKSPACE_I, WORKSPACE_B) as views of the flat buffers
-    ``wf``, ``wi``, ``wb``.  Slices only: a reshape would call numba's run time, which the
-    native library (:mod:`explorer.integrate.native`) does not have."""
+    ``wf``, ``wi``, ``wb`` (slices: views that cost nothing)."""
     p1 = order + 1
     # six float and six int arrays of LANES each, then the float arrays of other lengths
     hv, vary, L_t, L_tc, L_gprev, L_H0 = (wf[0:LANES], wf[LANES:2 * LANES], wf[2 * LANES:3 * LANES],
@@ -304,7 +385,7 @@ def _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, m
     return run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
                       out_cross, out_count, out_status, out_final, out_info,
                       aligned_zeros(n[0]).reshape((order + 1, NVAR, LANES)),
-                      aligned_zeros(n[1]).reshape((_N_NORMS, LANES)), aligned_zeros(n[2]).reshape((NVAR, LANES)),
+                      aligned_zeros(n[1]).reshape((N_NORMS, LANES)), aligned_zeros(n[2]).reshape((NVAR, LANES)),
                       aligned_zeros(n[3]).reshape((MAX_STEP_ROOTS, 4)),
                       aligned_zeros(n[4]).reshape((ISOLATE_STACK, 5)), aligned_zeros(n[5]),
                       np.zeros(n[6], np.int64), np.zeros(n[7], np.bool_))
@@ -325,17 +406,14 @@ def aligned_zeros(n):
 def run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
                out_cross, out_count, out_status, out_final, out_info, X, norms, ynew, brackets, stack, wf, wi, wb):
     """Integrate orbits taken from the shared counter ``next_orbit`` on up to ``nlanes`` lanes
-    until none is left; each lane is drivers.orbit_taylor step for step.  The work arrays
+    until none is left: the Taylor crossing loop (module docstring), each lane one orbit.  The work arrays
     (WORKSPACE_ND, then the flat buffers of :func:`workspace_views`) come zeroed from the
     caller: nothing is allocated here."""
     (hv, vary, yl, yc, gc, work, roots, L_t, L_tc, L_gprev, L_H0, orb, L_count, L_steps, L_target, L_room,
      L_status, L_last, L_stop) = workspace_views(order, wf, wi, wb)
     for l in range(LANES):
         orb[l] = _IDLE
-    factor = tk.safety_factor(order)
-    e_p = 1.0 / order          # the exponents of kernels.taylor.step_size
-    e_q = 1.0 / (order - 1)
-    margin = (e_p + e_q) * LOG2_APPROX_ERR + 1e-12
+    factor, e_p, e_q, margin = step_constants(order)
     active = 0
     for l in range(LANES):
         if l < nlanes:
@@ -350,21 +428,23 @@ def run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, ma
         step_norms_lanes(X, order, e_p, e_q, norms)
         # ---- per lane: finiteness of the last two coefficients, step size, underflow
         step_lanes(orb, norms, L_t, tmax, e_p, e_q, margin, factor, hv, L_last, L_status, L_stop)
-        evaluate_lanes(X, order, hv, ynew)
+        evaluate_lanes(X, order, hv, ynew, 0)
         # ---- all lanes at once (vectorised): a bound of the variation of sin(phi - phi0) over
         # the step, sum_{k>=1} |c_k| h^k, so that steps far from the section skip the root
         # isolation (kernels.events.excluded_by_variation)
         variation_lanes(X, order, hv, cphi, sphi, vary)
-        # ---- per lane: the rest of the step of orbit_taylor
+        # ---- per lane: the new state's check, the crossings in the step, the clock and budgets
         for l in range(LANES):
             j = orb[l]
             if j == _IDLE:
                 continue
             if not L_stop[l]:
                 L_steps[l] += 1
-                for i in range(NVAR):
+                s = 0.0    # kernels.checks.all_finite of the lane's new state, summed as it is copied
+                for i in range(NVAR):   # (a call to all_finite, a loop of unknown length here, costs ~1 %)
                     yl[i] = ynew[i, l]
-                if not _finite5(yl):
+                    s += yl[i]
+                if not (s - s == 0.0):
                     L_status[l] = STATUS_NONFINITE
                     L_stop[l] = True
             if not L_stop[l]:
@@ -385,7 +465,7 @@ def run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, ma
                         break
                     tau = roots[r]
                     _evaluate_lane(X, order, l, tau, yc)
-                    kept = _keep(out_cross[j], count, (t - tc) + tau, yc, P, L_H0[l], cphi, sphi)
+                    kept = keep_crossing(out_cross[j], count, (t - tc) + tau, yc, P, L_H0[l], cphi, sphi)
                     if kept < 0:
                         L_status[l] = STATUS_NONFINITE
                         L_stop[l] = True
@@ -403,7 +483,7 @@ def run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, ma
                 if count >= L_target[l]:
                     L_status[l] = STATUS_DONE
                     L_stop[l] = True
-                elif t >= tmax:          # the checks at the top of orbit_taylor's loop
+                elif t >= tmax:          # the budgets, checked before the next step
                     L_status[l] = STATUS_TMAX
                     L_stop[l] = True
                 elif L_steps[l] >= max_steps:
@@ -432,10 +512,12 @@ def _run_lanes(nworkers, nlanes, Y0, P, cphi, sphi, direction, tmax, order, max_
 
 def run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
                            out_cross, out_count, out_status, out_final, out_info, max_lanes=LANES):
-    """Lane twin of :func:`explorer.integrate.drivers.run_taylor_batch` (same arguments and outputs, bit
-    for bit the same results).  One worker per numba thread (at most one per orbit), each with
-    min(max_lanes, LANES, ceil(N / workers)) lanes.  A Python function: the thread count is
-    read here (numba's get_num_threads inside a kernel would defeat the on-disk cache)."""
+    """Crossings of the section by the Taylor method of ``order`` for every orbit of Y0: the
+    arguments and outputs of every batch driver (:mod:`explorer.integrate.drivers`: the carry, the
+    limits of a block, the outputs).  One worker per numba thread (at most one per orbit), each with
+    min(max_lanes, LANES, ceil(N / workers)) lanes; the results do not depend on either.  A Python
+    function: the thread count is read here (numba's get_num_threads inside a kernel would defeat
+    the on-disk cache)."""
     n = Y0.shape[0]
     # one orbit: one worker, run here without the parallel layer (numba's thread pool is neither
     # asked nor started: a lone orbit pays for no threads)

@@ -18,11 +18,12 @@ kind              method                                                        
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from explorer.integrate import native
+from explorer import model
 from explorer.kernels import splitting
 from explorer.kernels.taylor_order import order_for_tolerance
 from explorer.model import validation
@@ -31,6 +32,25 @@ from explorer.model import validation
 #: round-off)
 MIN_TOL = 1e-16
 MAX_TOL = 1e-2
+# ---- default tolerances: one per purpose, named here once (docs/methods.md, "Default tolerances")
+#: crossings of the section and chaos indicators (sections, lyapunov, the orbit and lyapunov
+#: commands, a scene's [integration] and [lyapunov] tables; the presets set their own)
+DEFAULT_TOL = 1e-13
+#: the section map where it is evaluated hundreds of times, not millions: Newton for fixed points
+#: and periodic orbits, continuation, rotation numbers, half-turn partners, manifolds, the
+#: measured splitting; the tightest tolerance the order rule is built for
+MAP_TOL = 1e-15
+#: the full system R1 with the body's position (trajectory; DOP853's rtol = atol)
+TRAJECTORY_TOL = 1e-12
+#: the step of the splitting methods when none is given: sections (orbit, sweep) and chaos
+#: indicators (lyapunov, [lyapunov] dt) alike, one default for every command
+DEFAULT_DT = 0.05
+#: a fixed step may turn the fastest motion of the orbit (model.max_rate, a bound over the whole
+#: orbit) by at most this angle, half a turn (Nyquist): beyond it the step cannot tell the motion
+#: from its alias (phi may advance by more than pi per step, a crossing be skipped or invented)
+#: and the orbit is not integrated (status UNRESOLVED, :func:`unresolved`).  Below it the
+#: accuracy is judged by the energy error (explorer.analysis.sections.energy_warning)
+MAX_STEP_PHASE = math.pi
 
 
 @dataclass(frozen=True)
@@ -89,6 +109,17 @@ class Method:
                         fracs=np.ascontiguousarray(fracs, dtype=np.float64))
 
 
+def unresolved(prep: Prepared, P, Y) -> np.ndarray:
+    """Mask (N,) of the orbits of ``Y`` (N, 5) whose motion the fixed step of ``prep`` does not
+    resolve: dt * model.max_rate(y) > ``MAX_STEP_PHASE``.  The callers do not integrate them and
+    give them the status ``Status.UNRESOLVED``; the adaptive methods choose their own steps (all
+    False)."""
+    if prep.method.adaptive:
+        return np.zeros(len(Y), bool)
+    with np.errstate(over="ignore", invalid="ignore"):
+        return ~(prep.dt * model.max_rate(P, Y) <= MAX_STEP_PHASE)
+
+
 def run_crossings(prep: Prepared, Y0, P, cphi, sphi, direction, tmax, max_steps, carry, limits, data, count,
                   status, final, info):
     """Crossings of the section for every orbit of ``Y0`` (arrays filled in place), a block
@@ -97,15 +128,9 @@ def run_crossings(prep: Prepared, Y0, P, cphi, sphi, direction, tmax, max_steps,
     # the method it uses (start-up, benchmarks/bench_startup.py)
     kind = prep.method.kind
     if kind == "taylor":
-        lib = native.active() if Y0.shape[0] == 1 else None
-        if lib is not None:
-            # a lone orbit in a process without numba: the same worker, compiled ahead of time
-            lib.lane_worker(1, np.zeros(1, np.int64), Y0, P, cphi, sphi, int(direction), float(tmax), prep.order,
-                            int(max_steps), carry, limits, data, count, status, final, info)
-            return
         from explorer.integrate import lanes
 
-        # the SIMD lane driver, bit for bit drivers.run_taylor_batch (the scalar reference)
+        # the Taylor crossing loop on SIMD lanes (a lone orbit is one lane)
         lanes.run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, prep.order, max_steps, carry, limits,
                                      data, count, status, final, info)
     elif kind == "dop853":
@@ -122,11 +147,7 @@ def run_crossings(prep: Prepared, Y0, P, cphi, sphi, direction, tmax, max_steps,
 
 def start_carry(Y0, P, cphi, sphi, carry):
     """The carry of a run's first block (:func:`explorer.integrate.drivers.start_carry`: H0 and
-    sin(phi - phi0) of each start state), from the native library when this process uses it."""
-    lib = native.active()
-    if lib is not None:
-        lib.start_carry(Y0, P, cphi, sphi, carry)
-        return
+    sin(phi - phi0) of each start state)."""
     from explorer.integrate import drivers
 
     drivers.start_carry(Y0, P, cphi, sphi, carry)

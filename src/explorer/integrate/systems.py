@@ -3,8 +3,8 @@ each method (DOP853, Taylor, splitting) that does not depend on what is observed
 
 A *system* is an integer id (no callables cross a compiled boundary: a jitted function passed
 as an argument defeats Numba's on-disk cache, kernel contract rule 1); :func:`field` dispatches
-on it.  The loops that use it -- crossings of the section (:mod:`explorer.integrate.drivers`),
-tangent dynamics (:mod:`explorer.integrate.tangent`) and the body in the plane
+on it.  The loops that use it -- crossings of the section (:mod:`explorer.integrate.drivers`,
+DOP853 and splitting), tangent dynamics (:mod:`explorer.integrate.tangent`) and the body in the plane
 (:mod:`explorer.integrate.full`) -- differ only in what they observe after an accepted step;
 the step itself is written once here, per method:
 
@@ -33,9 +33,10 @@ Taylor: Jorba & Zou, Exp. Math. 14 (2005) 99 (order and step rules in
 (Yoshida 1990; Kahan & Li 1997), tangent maps of the sub-flows as Skokos & Gerlach, Phys. Rev.
 E 82 (2010) 036704.
 
-The Taylor crossing loop on SIMD lanes (:mod:`explorer.integrate.lanes`) is :func:`taylor_step`
-of ``REDUCED`` with its arithmetic vectorised by the generator ``tools/gen_lanes.py`` and its
-control flow per lane (bit for bit the same steps, tests/integrate/test_lanes.py).
+The Taylor crossing loop runs on SIMD lanes (:mod:`explorer.integrate.lanes`): :func:`taylor_step`
+of ``REDUCED`` with its arithmetic vectorised (the recurrence translated by ``tools/gen_lanes.py``)
+and its control flow per lane; the scalar loop over :func:`taylor_step` of ``REDUCED`` is its
+oracle in the tests (tests/integrate/taylor_oracle.py, bit for bit the same steps).
 """
 from explorer._jit import njit
 from explorer.kernels import STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW

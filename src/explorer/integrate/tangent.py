@@ -362,7 +362,7 @@ def return_map_taylor(y0, V0, P, cphi, sphi, tsign, tmax, order, max_steps, yout
         gnew = ynew[3] * cphi - ynew[4] * sphi
         found = False
         tau = h
-        # every root of the step's polynomial (as drivers.orbit_taylor)
+        # every root of the step's polynomial (as the crossing loop, integrate.lanes)
         for k in range(order + 1):
             gc[k] = X[3, k] * cphi - X[4, k] * sphi
         nroots = poly_step_roots(gc, order, h, gprev, gnew, direction, roots, brackets, work,

@@ -8,11 +8,12 @@ the step of ``systems.taylor_step`` of ``TANGENT``) and gives bit for bit the sa
 every orbit (indicators, history, SALI, GALI_2, final state and vectors, status, step count),
 whatever the grouping of orbits into lanes and the number of threads:
 
-* the Taylor coefficients of the orbit and its deviation vectors, the step norms and the Horner
-  sums of LANES orbits are computed together by the generated vector kernels of
-  :mod:`explorer.integrate._tangent_lanes_generated` (translated by ``tools/gen_lanes.py`` from
-  ``equations.taylor_coefficients_tangent``: lane-wise the same IEEE operations in the same
-  order; the second vector by the same recurrence's statements for the deviation only);
+* the Taylor coefficients of the orbit and its deviation vectors of LANES orbits are computed
+  together by the generated vector kernels of :mod:`explorer.integrate._tangent_lanes_generated`
+  (translated by ``tools/gen_lanes.py`` from ``equations.taylor_coefficients_tangent``: lane-wise
+  the same IEEE operations in the same order; the second vector by the same recurrence's
+  statements for the deviation only), the step norms and the Horner sums by those of the
+  crossing lanes (``lanes.step_norms_lanes``, ``lanes.evaluate_lanes``);
 * everything else - the step size from the orbit's rows (``lanes.lane_step_size``, the same
   double as ``kernels.taylor.step_size``), the clip to T, the step budget, the finiteness and
   underflow checks, the renormalisation and the accumulators of ``kernels.tangent``, the
@@ -29,25 +30,28 @@ Kernel contract: arrays are allocated per worker, never inside the step loop; no
 import numpy as np
 
 from explorer._jit import get_num_threads, njit, prange
-from explorer.integrate._lanes_generated import LOG2_APPROX_ERR
 from explorer.integrate._tangent_lanes_generated import (
     DEV1,
     DEV2,
-    LANES,
     NROWS,
     deviation_coefficients_lanes,
-    evaluate5_lanes,
     tangent_coefficients_lanes,
-    tangent_step_norms_lanes,
 )
-from explorer.integrate.lanes import aligned_zeros, next_lane_orbit, step_lanes
+from explorer.integrate.lanes import (
+    N_NORMS,
+    aligned_zeros,
+    evaluate_lanes,
+    next_lane_orbit,
+    step_constants,
+    step_lanes,
+    step_norms_lanes,
+)
+from explorer.integrate.simd import LANES
 from explorer.integrate.tangent import _early, _finish_ext, _history
 from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE
 from explorer.kernels import tangent as tg
-from explorer.kernels import taylor as tk
 
 _IDLE = -1
-_N_NORMS = 7
 
 
 @njit
@@ -108,7 +112,7 @@ def _run_worker(nlanes, next_orbit, Y0, V0, W0, nvec, P, T, order, max_steps, ea
     # the vector operands on cache lines (lanes.aligned_zeros: a straddling vector costs two accesses)
     Z = aligned_zeros((order + 1) * NROWS * LANES).reshape((order + 1, NROWS, LANES))
     znew = aligned_zeros(NROWS * LANES).reshape((NROWS, LANES))
-    norms = aligned_zeros(_N_NORMS * LANES).reshape((_N_NORMS, LANES))
+    norms = aligned_zeros(N_NORMS * LANES).reshape((N_NORMS, LANES))
     hv = aligned_zeros(LANES)
     v = np.empty(5)
     w = np.zeros(5)
@@ -123,10 +127,7 @@ def _run_worker(nlanes, next_orbit, Y0, V0, W0, nvec, P, T, order, max_steps, ea
     L_early = np.zeros(LANES, np.int64)
     L_last = np.zeros(LANES, np.bool_)
     L_stop = np.zeros(LANES, np.bool_)
-    factor = tk.safety_factor(order)
-    e_p = 1.0 / order
-    e_q = 1.0 / (order - 1)
-    margin = (e_p + e_q) * LOG2_APPROX_ERR + 1e-12
+    factor, e_p, e_q, margin = step_constants(order)
     active = 0
     for l in range(LANES):
         if l < nlanes:
@@ -139,15 +140,15 @@ def _run_worker(nlanes, next_orbit, Y0, V0, W0, nvec, P, T, order, max_steps, ea
         tangent_coefficients_lanes(P, Z, order, DEV1)
         if nvec == 2:
             deviation_coefficients_lanes(P, Z, order, DEV2)
-        tangent_step_norms_lanes(Z, order, e_p, e_q, norms)
+        step_norms_lanes(Z, order, e_p, e_q, norms)
         # ---- per lane: systems.taylor_step's checks and step size
         for l in range(LANES):
             L_early[l] = tg.EARLY_NONE
         step_lanes(orb, norms, L_t, T, e_p, e_q, margin, factor, hv, L_last, L_status, L_stop)
-        evaluate5_lanes(Z, order, hv, znew, 0)
-        evaluate5_lanes(Z, order, hv, znew, DEV1)
+        evaluate_lanes(Z, order, hv, znew, 0)
+        evaluate_lanes(Z, order, hv, znew, DEV1)
         if nvec == 2:
-            evaluate5_lanes(Z, order, hv, znew, DEV2)
+            evaluate_lanes(Z, order, hv, znew, DEV2)
         # ---- per lane: the rest of the step of the scalar loop
         for l in range(LANES):
             j = orb[l]

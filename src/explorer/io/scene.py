@@ -83,6 +83,9 @@ integration keys used by the method with tmax resolved, compute) and
 :meth:`Scene.panel_hash` is the sha256 of its canonical JSON (sorted keys,
 floats by ``repr``) together with :data:`FORMAT_VERSION`.  Name,
 description, figure and the panel's position do not enter the hash.
+The products of a panel, sections and indicators, have their own hashes
+(:meth:`Scene.product_hashes`): a sweep recomputes only the product whose
+settings changed.  :meth:`Scene.figure_settings` are the drawing settings.
 """
 from __future__ import annotations
 
@@ -363,8 +366,8 @@ class LyapunovSpec:
 
     time: float = 1000.0
     method: str = "taylor"
-    tol: float = 1e-12
-    dt: float = 0.02
+    tol: float = sections.DEFAULT_TOL
+    dt: float = sections.DEFAULT_DT
     threshold: float = 4.0
     #: what to compute ("sali"/"gali2" add a second deviation vector; Taylor method)
     indicators: tuple = ("mlce", "megno", "fli")
@@ -373,8 +376,9 @@ class LyapunovSpec:
     early_sali: float = 1e-8
     early_megno: float = 8.0
     early_time: float = 100.0
-    #: > 0: the seeds are the cell centres of a map_resolution^2 raster over the allowed region's
-    #: bounding box (cells outside it are the forbidden region), drawn as an image of map_indicator
+    #: > 0: the indicators' seeds are the cell centres of a map_resolution^2 raster over the allowed
+    #: region's bounding box (cells outside it are the forbidden region), drawn as an image of
+    #: map_indicator; the sections keep the [seeds]
     map_resolution: int = 0
     map_indicator: str = "megno"
 
@@ -608,9 +612,47 @@ class Scene:
         return d
 
     def panel_hash(self, i) -> str:
-        """sha256 hex of the canonical JSON of panel_settings(i) and FORMAT_VERSION."""
+        """sha256 hex of the canonical JSON of panel_settings(i) and FORMAT_VERSION: the whole
+        panel (every product); stored as the panel's ``hash``."""
         payload = {"format_version": FORMAT_VERSION, "panel": self.panel_settings(i)}
         return hashlib.sha256(_canonical_json(payload).encode("ascii")).hexdigest()
+
+    def product_settings(self, i) -> dict:
+        """What determines each product of panel i, {product: settings}: ``"sections"`` (when
+        [compute] sections: the crossings of the [seeds] and, with separatrices, the fixed point's
+        separatrices) and ``"indicators"`` (when [compute] lyapunov: the indicators of the [seeds],
+        or of the map's grid when [lyapunov] map_resolution > 0).  Each is recomputed only when
+        its own settings change (:meth:`product_hashes`)."""
+        prm, h, _label = self.panel(i)
+        base = {"params": prm.as_dict(), "h": h}
+        out = {}
+        if "sections" in self.compute:
+            out["sections"] = dict(base, seeds=self.seeds.used_dict(), integration=self.integration.used_dict(),
+                                   separatrices="separatrices" in self.compute)
+        if "lyapunov" in self.compute:
+            ly = self.lyapunov.used_dict()
+            grid = ly.pop("map_resolution", 0)
+            d = dict(base, seeds={"map_resolution": grid} if grid else self.seeds.used_dict(),
+                     phi0=self.integration.phi0, direction=self.integration.direction, lyapunov=ly)
+            if "sections" not in self.compute:   # the indicators are the whole panel, separatrices included
+                d["alone"] = {"separatrices": "separatrices" in self.compute}
+            out["indicators"] = d
+        return out
+
+    def product_hashes(self, i) -> dict:
+        """{product: sha256 hex of the canonical JSON of its settings and FORMAT_VERSION}
+        (:meth:`product_settings`); stored as the panel's ``sections_hash`` / ``indicators_hash``."""
+        return {k: hashlib.sha256(_canonical_json({"format_version": FORMAT_VERSION, k: v}).encode("ascii"))
+                .hexdigest() for k, v in self.product_settings(i).items()}
+
+    def figure_settings(self) -> str:
+        """Canonical JSON of everything that changes the drawing but not the numbers ([figure], and
+        with [compute] lyapunov the MEGNO threshold and map_indicator): kept in the PNG, so a rerun
+        redraws the figure when they change, without recomputing."""
+        d: dict = {"figure": self.figure.to_dict()}
+        if "lyapunov" in self.compute:
+            d.update(threshold=self.lyapunov.threshold, map_indicator=self.lyapunov.map_indicator)
+        return _canonical_json(d)
 
     def grid_shape(self) -> tuple:
         """(rows, columns) of the figure: (1, n) for "row"; for "grid" ``columns``

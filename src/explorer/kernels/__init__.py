@@ -29,8 +29,9 @@ from explorer.kernels.status import (
                                      STATUS_NONFINITE,
                                      STATUS_STEP_UNDERFLOW,
                                      STATUS_TMAX,
+                                     STATUS_UNRESOLVED,
                                      Status,
 )
 
 __all__ = ["Status", "STATUS_DONE", "STATUS_TMAX", "STATUS_NONFINITE", "STATUS_MAX_STEPS",
-           "STATUS_STEP_UNDERFLOW", "STATUS_NAMES"]
+           "STATUS_STEP_UNDERFLOW", "STATUS_UNRESOLVED", "STATUS_NAMES"]

@@ -14,6 +14,7 @@ class Status(IntEnum):
     NONFINITE = 2       #: a non-finite state appeared; the orbit was stopped
     MAX_STEPS = 3       #: the step budget ran out first
     STEP_UNDERFLOW = 4  #: the adaptive step became negligible against t
+    UNRESOLVED = 5      #: the fixed step does not resolve the orbit's motion: not integrated
 
     @property
     def description(self) -> str:
@@ -26,6 +27,7 @@ _DESCRIPTIONS = {
     Status.NONFINITE: "non-finite state",
     Status.MAX_STEPS: "step budget exhausted",
     Status.STEP_UNDERFLOW: "step size underflow",
+    Status.UNRESOLVED: "step does not resolve the motion (dt x model.max_rate > pi: lower dt or use taylor, dop853)",
 }
 
 STATUS_DONE = int(Status.DONE)
@@ -33,6 +35,7 @@ STATUS_TMAX = int(Status.TMAX)
 STATUS_NONFINITE = int(Status.NONFINITE)
 STATUS_MAX_STEPS = int(Status.MAX_STEPS)
 STATUS_STEP_UNDERFLOW = int(Status.STEP_UNDERFLOW)
+STATUS_UNRESOLVED = int(Status.UNRESOLVED)
 
 #: {code: description}: stored with every panel of the HDF5 store (``status_names`` attribute)
 STATUS_NAMES = {int(s): s.description for s in Status}

@@ -65,6 +65,7 @@ __all__ = [
     "allowed_ellipse",
     "section_state",
     "describe_region",
+    "max_rate",
 ]
 
 PARAM_NAMES = ("a1", "a2", "b", "lam", "chi", "zeta", "mu", "xi", "eta")
@@ -207,6 +208,38 @@ def hess_function(params, y):
     return y[..., M] + P[ETA] * y[..., P1] - P[LAM] * P[B] / P[A2]
 
 
+# ---------------------------------------------------------------- time scales (R3, R4)
+def max_rate(params, y) -> np.ndarray:
+    """An a-priori bound of the fastest rate (1/time) of the motion on the energy level of ``y``,
+    for the whole orbit: the step of a fixed-step method resolves the motion only if
+    dt * max_rate is small.
+
+    With k = mu/|lam|, E = H(y) + k |s| + mu |r| and a = max(a1, a2), the energy R3 gives
+    |p|^2/(2a) + M^2/(2b) <= E + k |p| (from (p - s, J g) <= |p| + |s|, (r, g) >= -|r|), so on
+    the whole orbit |p| <= q = a (k + sqrt(k^2 + 2E/a)) and |M| <= m = sqrt(2b (E + a k^2/2)).
+    The rates of the sub-flows of R4 and of their coupling are then at most
+
+    - m/b: dphi/dt, the rotation of p - s and gamma by H_M;
+    - |lam|/min(a1, a2): the shears of p by H_1, H_2;
+    - sqrt((q + |s|) q / (min(a1, a2) b)): the exchange of M and p (dM/dp ~ |p|/a, dp/dM = J(p - s)/b);
+    - sqrt(mu |r| / b): the pendulum of the weight (dM/dt = -mu (r, J g), dg/dt = (M/b) J g);
+
+    and the largest of the four is returned (one value per state)."""
+    P = _P(params)
+    y = np.asarray(y, dtype=np.float64)
+    k = P[MU] / abs(P[LAM]) if P[MU] != 0.0 else 0.0
+    s = math.hypot(P[CHI], P[ZETA])
+    r = math.hypot(P[XI], P[ETA])
+    a, a_min = max(P[A1], P[A2]), min(P[A1], P[A2])
+    with np.errstate(over="ignore", invalid="ignore"):
+        E = np.maximum(energy(P, y) + k * s + P[MU] * r, 0.0)
+        q = a * (k + np.sqrt(k * k + 2.0 * E / a))
+        m = np.sqrt(2.0 * P[B] * (E + 0.5 * a * k * k))
+        return np.maximum.reduce([m / P[B], np.full(np.shape(E), abs(P[LAM]) / a_min),
+                                  np.sqrt((q + s) * q / (a_min * P[B])), np.full(np.shape(E),
+                                                                                 math.sqrt(P[MU] * r / P[B]))])
+
+
 # ---------------------------------------------------------------- the section (R9)
 def section_gamma(phi0: float):
     """(g1, g2) = (sin phi0, cos phi0), exact at phi0 = pi (g = (0, -1))."""
@@ -286,4 +319,12 @@ def describe_region(params, h, phi0=math.pi) -> str:
     if e is None:
         return "none (the region is empty at this energy)"
     c1, c2, r1, r2 = e
-    return f"((p1 - {c1:.6g})/{r1:.6g})^2 + ((p2 - {c2:.6g})/{r2:.6g})^2 <= 1"
+    return f"({_shifted('p1', c1)}/{r1:.6g})^2 + ({_shifted('p2', c2)}/{r2:.6g})^2 <= 1"
+
+
+def _shifted(name: str, c: float) -> str:
+    """``name - c`` with its sign written once: ``(p1 + 0.1)`` for c = -0.1, ``p2`` for c = 0 or -0."""
+    text = f"{abs(c):.6g}"
+    if float(text) == 0.0:
+        return name
+    return f"({name} {'+' if c < 0 else '-'} {text})"

@@ -20,8 +20,7 @@ def fraction_drawn(preset, title, *, results_dir="results", quick=False, quiet=T
     _maps, fr = _lyapunov_panels(scene, out)
     fig = figures.fraction_curve(fr[:, 0], fr[:, 1], fr[:, 2], parameter=scene.sweep_parameter or "mu",
                                  threshold=scene.lyapunov.threshold, dpi=dpi)
-    ax = fig.axes[0]
-    ax.set_xlabel(r"$\mu$" if scene.sweep_parameter == "mu" else str(scene.sweep_parameter))
+    ax = fig.axes[0]   # x-label: the parameter's symbol (figures.symbol_label)
     text = title(scene, fr)
     ax.set_title(text, fontsize=7 if "\n" in text else 8)
     if reduced:

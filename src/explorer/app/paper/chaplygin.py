@@ -7,6 +7,7 @@ import numpy as np
 
 from explorer import model
 from explorer.app.paper._common import CHAPLYGIN
+from explorer.integrate.methods import MAP_TOL
 from explorer.model import ParameterError
 
 
@@ -149,7 +150,7 @@ class CheckError(AssertionError):
     """The numerical stability disagrees with the classification drawn in Figure 3."""
 
 
-def figure3_check(params=CHAPLYGIN, samples=None, *, tol=1e-15):
+def figure3_check(params=CHAPLYGIN, samples=None, *, tol=MAP_TOL):
     """Numerical stability at sample points of every branch of Figure 3, against the
     dashed/solid classification of :func:`branch_stable`.
 

@@ -12,25 +12,6 @@ DESCRIPTION = "the central fixed point continued in mu, its trace and stability 
 
 
 # ====================================================================== continuation
-def _refine_trace_min(prm, h, mu, tr, points):
-    """(mu, trace) of the least trace near the sampled minimum, by golden-section search over
-    fixed points (Newton from the neighbouring sample); None if the minimum is at an end or
-    not near -2."""
-    from explorer.analysis import fixedpoints
-
-    k = int(np.argmin(tr))
-    if k == 0 or k == len(tr) - 1 or tr[k] > -1.9:
-        return None
-    guess = points[k]
-
-    def f(m):
-        return fixedpoints.find_fixed_point(prm.with_(mu=float(m)), h, guess).trace
-
-    # the least trace: the largest -trace, to 1e-7 (relative to max(1, mu))
-    x, neg = fixedpoints.golden_section_max(lambda m: -f(m), float(mu[k - 1]), float(mu[k + 1]), 1e-7)
-    return x, -neg
-
-
 def continuation_figure(params=None, h=None, *, start=0.0, stop=8.0, step=0.1, dpi=200,
                         marks=(0.002, 0.01, 0.03, 4.0, 8.0), refine_min=True) -> Drawn:
     """The central fixed point of the section map phi = pi at h = 2 continued in mu
@@ -48,12 +29,16 @@ def continuation_figure(params=None, h=None, *, start=0.0, stop=8.0, step=0.1, d
     tr = np.array([fp.trace for fp in br.points])
     _ev, tr0 = fixedpoints.analytic_eigenvalues_solution_I(prm.with_(mu=0.0), h)
     stable = np.abs(tr) < 2
-    tmin = _refine_trace_min(prm, h, mu, tr, [fp.point for fp in br.points]) if refine_min else None
+    # the continuation's one bifurcation detector: crossings of |trace| = 2 (vertical lines) and
+    # touches of -2 (annotated), as `fixedpoint --continue` and `periodic -K 1 --continue` print them
+    changes = [b["value"] for b in br.bifurcations if not b["type"].startswith("touch")]
+    touches = [(b["value"], b["trace"]) for b in br.bifurcations if b["type"] == "touch -2"]
+    tmin = touches[0] if (refine_min and touches) else None
     with _rc():
         fig = _new_figure((5.0, 4.6), dpi=dpi)
         ax1, ax2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [1, 1.3]})
         for ax in (ax1, ax2):
-            for b in br.bifurcations:
+            for b in changes:
                 ax.axvline(b, color="0.45", lw=0.8, ls="--", zorder=1)
         c1s = np.array([model.allowed_ellipse(prm.with_(mu=m), h)[0] for m in mu])
         ax1.plot(mu, c1s, color="0.6", lw=0.8, ls=":", label=r"centre of the allowed region, $-a_1\mu/\lambda$")
@@ -71,7 +56,7 @@ def continuation_figure(params=None, h=None, *, start=0.0, stop=8.0, step=0.1, d
         ax2.plot(mu[stable], tr[stable], "o", color="#1f4e9c", ms=2.6, zorder=3)
         ax2.plot([0.0], [tr0], "*", color="k", ms=9, mfc="none", zorder=4, clip_on=False,
                  label=rf"solution I, linearised R6: $2\cosh(\sqrt{{-\alpha\beta}}\,T)$ = {tr0:.5g}")
-        for b in br.bifurcations:
+        for b in changes:
             ax2.annotate(rf"$\mu^* = {b:.6g}$", xy=(b, 2), xytext=(b + 0.25, 5.0), fontsize=_SMALL,
                          arrowprops=dict(arrowstyle="->", lw=0.6))
         ax2.text(stop * 0.98, 1.55, "stable: $|\\mathrm{tr}| < 2$", ha="right", va="center", fontsize=_SMALL,
@@ -91,7 +76,7 @@ def continuation_figure(params=None, h=None, *, start=0.0, stop=8.0, step=0.1, d
                          xytext=(6.35, -0.55), fontsize=6, ha="center", va="center",
                          arrowprops=dict(arrowstyle="->", lw=0.5))
         ax1.set_title(rf"central fixed point of $\varphi = \pi$, $h = {h:g}$ (Figure 4's scene)", fontsize=_FS)
-    data = {"mu": mu, "p1": p1, "p2": p2, "trace": tr, "bifurcations": list(br.bifurcations), "trace_mu0": tr0,
+    data = {"mu": mu, "p1": p1, "p2": p2, "trace": tr, "bifurcations": changes, "trace_mu0": tr0,
             "trace_min": tmin}
     return Drawn(fig, data)
 

@@ -6,6 +6,7 @@ import numpy as np
 from explorer.app.paper._common import _FS, _SMALL, CHAPLYGIN, Drawn, Outcome, _new_figure, _rc, save
 from explorer.app.paper._dense import dense_orbits
 from explorer.app.paper.chaplygin import check_chaplygin
+from explorer.integrate.methods import MAP_TOL
 
 #: the figure's name (``explorer figures --only homoclinic``) and what it shows
 NAME = "homoclinic"
@@ -13,7 +14,7 @@ DESCRIPTION = "R7 against the integrated flow, with its crossings of phi = pi"
 
 
 # ====================================================================== homoclinic (R7)
-def homoclinic_figure(params=CHAPLYGIN, h=2.0, *, T0=20.0, dt=0.02, tol=1e-15, dpi=200) -> Drawn:
+def homoclinic_figure(params=CHAPLYGIN, h=2.0, *, T0=20.0, dt=0.02, tol=MAP_TOL, dpi=200) -> Drawn:
     """R7 (both separatrices, sign = +1 and the p -> -p branch sign = -1) against the
     integrated flow: the exact state at t = -T0 is integrated with the Taylor method (dense
     samples every dt, and the crossings of phi = pi by :func:`explorer.analysis.sections.crossings`),

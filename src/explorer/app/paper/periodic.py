@@ -4,6 +4,7 @@ import numpy as np
 
 from explorer import model
 from explorer.app.paper._common import _FS, _SMALL, Drawn, Outcome, _new_figure, _rc, save
+from explorer.integrate.methods import DEFAULT_TOL
 
 #: the figure's name (``explorer figures --only periodic``) and what it shows
 NAME = "periodic"
@@ -18,7 +19,8 @@ def periodic_figure(params=None, h=None, *, periods=range(1, 9), seeds=40, cross
                     iterates=2000, grid=12, dpi=200) -> Drawn:
     """Left: crossings of ``seeds`` orbits started on p2 = 0 (gray) and the periodic orbits of
     minimal period K in ``periods`` found by :func:`explorer.analysis.periodic.search_periodic_orbits`
-    (filled markers elliptic, open hyperbolic, one colour per period).  Right: the rotation
+    (filled markers elliptic, crosses hyperbolic, open squares degenerate orbits, one colour per
+    period).  Right: the rotation
     number (:func:`explorer.analysis.rotation.rotation_profile`) along p2 = 0 from the elliptic
     fixed point, converged orbits dark, non-converged (chaotic) light, with the levels m/K of
     the elliptic orbits found (plateaus of the island chains)."""
@@ -30,7 +32,7 @@ def periodic_figure(params=None, h=None, *, periods=range(1, 9), seeds=40, cross
     h = model.FIGURE4_H if h is None else h
     c1, c2, r1, r2 = model.allowed_ellipse(prm, h)
     p1s = c1 + r1 * np.linspace(-0.97, 0.97, seeds)
-    cr = section_crossings(prm, p1s, np.zeros_like(p1s), h, crossings, tol=1e-13)
+    cr = section_crossings(prm, p1s, np.zeros_like(p1s), h, crossings, tol=DEFAULT_TOL)
     pts = cr.data[..., 1:3].reshape(-1, 2)
     pts = pts[np.isfinite(pts[:, 0])]
     orbits = {K: periodic.search_periodic_orbits(prm, h, K, grid=grid) for K in periods}
@@ -41,7 +43,7 @@ def periodic_figure(params=None, h=None, *, periods=range(1, 9), seeds=40, cross
     reached = prof.rotation[prof.converged]
     for K, obs in orbits.items():
         for o in obs:
-            if o.kind == "elliptic":
+            if o.kind == "elliptic" and not o.degenerate:
                 r = rotation.orbit_rotation(o.points, center.point)
                 if np.any(np.abs(reached - r) < 1e-8):
                     levels.setdefault(round(r * K) / K, (round(r * K), K))
@@ -54,20 +56,27 @@ def periodic_figure(params=None, h=None, *, periods=range(1, 9), seeds=40, cross
         ax.set_facecolor("0.85")            # outside the allowed region: gray (as in Figure 4)
         ax.fill(c1 + r1 * np.cos(t), c2 + r2 * np.sin(t), color="white", lw=0, zorder=0)
         ax.plot(pts[:, 0], pts[:, 1], ",", color="0.55", zorder=1, rasterized=True)
+        degenerate_labelled = False
         for K, obs in orbits.items():
             col = colours[(K - 1) % len(colours)]
-            for i, o in enumerate(obs):
+            isolated = [o for o in obs if not o.degenerate]
+            for i, o in enumerate(isolated):
                 ell = o.kind == "elliptic"
                 ax.plot(o.points[:, 0], o.points[:, 1], "o" if ell else "x", ms=3.2 if ell else 2.8,
                         color=col, mfc=col if ell else "none", mew=0.7, zorder=3,
                         label=f"K = {K}" if i == 0 else None)
+            for o in obs:
+                if o.degenerate:   # not isolated at the map's accuracy: a point of a resonant curve
+                    ax.plot(o.points[:, 0], o.points[:, 1], "s", ms=3.4, color=col, mfc="none", mew=0.5,
+                            zorder=3, label=None if degenerate_labelled else "degenerate (not isolated)")
+                    degenerate_labelled = True
         ax.plot(*np.array([center.point, PROFILE_END]).T, "-", color="k", lw=0.5, zorder=2)
         ax.set_xlim(c1 - 1.05 * r1, c1 + 1.05 * r1)
         ax.set_ylim(c2 - 1.05 * r2, c2 + 1.05 * r2)
         ax.set_xlabel("$p_1$")
         ax.set_ylabel("$p_2$")
-        ax.legend(fontsize=6, frameon=False, loc="upper right", ncol=2, title="period (o elliptic, x hyperbolic)",
-                  title_fontsize=6)
+        ax.legend(fontsize=6, frameon=False, loc="upper right", ncol=2,
+                  title="period (o elliptic, x hyperbolic, square degenerate)", title_fontsize=6)
         ax.set_title(rf"$\varphi = \pi$, $\mu = {prm.mu:g}$, $h = {h:g}$: periodic orbits", fontsize=_FS)
         conv = prof.converged
         x = prof.points[:, 0]

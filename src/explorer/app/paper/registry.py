@@ -28,6 +28,7 @@ MODULES = {
     "work_precision": "explorer.app.paper.work_precision",
     "homoclinic": "explorer.app.paper.homoclinic",
     "melnikov": "explorer.app.paper.melnikov",
+    "tangle": "explorer.app.paper.tangle",
     "trajectory": "explorer.app.paper.trajectory",
 }
 #: every figure, in the order they are generated

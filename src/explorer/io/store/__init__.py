@@ -48,8 +48,13 @@ as JSON text.
 
 Settings hash: ``hash = sha256`` of the settings serialized as canonical JSON
 (:func:`settings_hash`: sorted keys, separators ``(",", ":")``), unless the
-caller supplies ``hash`` explicitly.  A sweep compares it with
-:func:`panel_hashes` to decide which panels are already done.
+caller supplies ``hash`` explicitly.  A sweep panel has two products, each with
+its own hash attribute (:data:`PRODUCT_HASH_ATTRS`): ``sections_hash`` (the
+datasets above) and ``indicators_hash`` (:data:`INDICATOR_DATASETS`, whose seeds
+are ``lyapunov_seeds`` when given, else ``seeds``); a sweep compares them
+(:func:`panel_product_hashes`) to decide what is already done, and replaces the
+indicators beside stored crossings with :func:`update_panel`.  A panel with
+``hash`` only was written before products had their own hashes.
 
 Modules: :mod:`~explorer.io.store.format` (layout constants, reading),
 :mod:`~explorer.io.store.atomic` (crash-safe file replacement),
@@ -60,8 +65,10 @@ API
 Streamed panels (rows written block by block, resumable after a kill):
 :mod:`~explorer.io.store.stream`.
 
-``commit_panel``, ``read_store`` (-> :class:`StoreData` / :class:`PanelData`),
-``panel_hashes``, ``clean_stale_temporaries``, ``provenance``,
+``commit_panel``, ``update_panel``, ``read_store`` (-> :class:`StoreData` / :class:`PanelData`),
+``read_panel_datasets``, ``panel_hashes``, ``panel_product_hashes``, ``stored_scene_name``,
+``clean_stale_temporaries``, ``provenance``,
+``store_lock`` (one writer per store, :mod:`~explorer.io.store.lock`), ``check_writable``,
 ``settings_hash``, ``write_bytes_atomic``, ``atomic_path``; errors about a
 store file raise :class:`StoreError` (a ``ValueError``) with a one-line message
 naming the path.
@@ -73,23 +80,29 @@ from explorer.io.store.atomic import (
                                       clean_stale_temporaries,
                                       write_bytes_atomic,
 )
-from explorer.io.store.commit import RowSource, commit_panel, provenance, update_panel_attrs
+from explorer.io.store.commit import RowSource, commit_panel, provenance, update_panel, update_panel_attrs
 from explorer.io.store.format import (
                                       COLUMNS,
                                       COMPRESS_ROWS,
                                       DATASETS,
                                       FORMAT,
                                       FORMAT_VERSION,
+                                      INDICATOR_DATASETS,
                                       OPTIONAL_DATASETS,
+                                      PRODUCT_HASH_ATTRS,
                                       STATUS_NAMES,
                                       PanelData,
                                       StoreData,
                                       StoreError,
                                       iter_rows,
                                       panel_hashes,
+                                      panel_product_hashes,
+                                      read_panel_datasets,
                                       read_store,
                                       settings_hash,
+                                      stored_scene_name,
 )
+from explorer.io.store.lock import StoreBusy, check_writable, store_lock
 
 __all__ = [
     "FORMAT",
@@ -101,10 +114,17 @@ __all__ = [
     "StoreData",
     "commit_panel",
     "RowSource",
+    "update_panel",
     "update_panel_attrs",
     "read_store",
     "iter_rows",
     "panel_hashes",
+    "panel_product_hashes",
+    "read_panel_datasets",
+    "stored_scene_name",
+    "store_lock",
+    "StoreBusy",
+    "check_writable",
     "clean_stale_temporaries",
     "provenance",
     "settings_hash",
@@ -112,5 +132,7 @@ __all__ = [
     "atomic_path",
     "DATASETS",
     "OPTIONAL_DATASETS",
+    "INDICATOR_DATASETS",
+    "PRODUCT_HASH_ATTRS",
     "STATUS_NAMES",
 ]

@@ -1,18 +1,24 @@
 """HDF5 file of a two-parameter atlas (a scene with an [atlas] table): the chaotic fraction per
-cell only, no orbits, no crossings.  Written whole and atomically (:func:`atomic_path`).
+cell only, no orbits, no crossings.  Written whole and atomically (:func:`atomic_path`), again
+after every group of finished cells while the atlas runs: ``done`` says which cells it holds, so
+an interrupted atlas is resumed from its cells (``complete`` once every cell is done).
 
 Layout (``format = "explorer.atlas"``, ``format_version = 1``)
 ----------------------------------------------------------------
 ::
 
     /   attrs: format, format_version, scene_name, scene (TOML text), hash (Scene.atlas_hash),
-               row_parameter, column_parameter, threshold (MEGNO), created, provenance (JSON)
+               row_parameter, column_parameter, threshold (MEGNO), created, provenance (JSON),
+               complete (every cell done)
         row_values     (R,)    float64   the [sweep] values (rows)
         column_values  (C,)    float64   the [atlas] values (columns)
         fraction       (R, C)  float64   chaotic fraction (NaN: empty allowed region)
         error          (R, C)  float64   binomial standard error of the fraction
         orbits         (R, C)  int64     orbits with a valid indicator (0: empty region)
         wall_time      (R, C)  float64   seconds of integration per cell
+        done           (R, C)  int8      1: the cell is stored (computed, or without an allowed region);
+                                         0: not computed yet (its fraction NaN). Absent: all done
+                                         (files written before atlases were resumable)
 """
 from __future__ import annotations
 
@@ -44,11 +50,19 @@ class AtlasData:
     threshold: float
     hash: str
     attrs: dict
+    done: np.ndarray | None = None
+
+    @property
+    def complete(self) -> bool:
+        """Every cell is stored."""
+        return self.done is None or bool(np.all(self.done))
 
 
 def write_atlas(path, *, scene_name: str, scene_text: str, hash: str, row_parameter: str, column_parameter: str,
                 row_values, column_values, fraction, error, orbits, wall_time, threshold: float,
-                provenance: dict | None = None) -> Path:
+                provenance: dict | None = None, done=None) -> Path:
+    """Write the atlas file at ``path`` whole and atomically; ``done`` (R, C booleans, default all)
+    marks the cells it holds."""
     import h5py
 
     path = Path(path)
@@ -58,13 +72,15 @@ def write_atlas(path, *, scene_name: str, scene_text: str, hash: str, row_parame
                            hash=hash, row_parameter=row_parameter, column_parameter=column_parameter,
                            threshold=float(threshold),
                            created=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-                           provenance=json.dumps(provenance or {}, sort_keys=True))
+                           provenance=json.dumps(provenance or {}, sort_keys=True),
+                           complete=bool(done is None or np.all(done)))
             f["row_values"] = np.asarray(row_values, float)
             f["column_values"] = np.asarray(column_values, float)
             f["fraction"] = np.asarray(fraction, float)
             f["error"] = np.asarray(error, float)
             f["orbits"] = np.asarray(orbits, np.int64)
             f["wall_time"] = np.asarray(wall_time, float)
+            f["done"] = np.ones(np.shape(fraction), np.int8) if done is None else np.asarray(done, np.int8)
     return path
 
 
@@ -78,12 +94,5 @@ def read_atlas(path) -> AtlasData:
         attrs = {k: (v.item() if hasattr(v, "item") else v) for k, v in f.attrs.items()}
         return AtlasData(str(attrs["row_parameter"]), str(attrs["column_parameter"]), f["row_values"][()],
                          f["column_values"][()], f["fraction"][()], f["error"][()], f["orbits"][()],
-                         f["wall_time"][()], float(attrs["threshold"]), str(attrs["hash"]), attrs)
-
-
-def atlas_hash_on_disk(path) -> str | None:
-    """The settings hash of the atlas stored at ``path`` (None: no file or not an atlas)."""
-    try:
-        return read_atlas(path).hash
-    except (OSError, ValueError, KeyError):
-        return None
+                         f["wall_time"][()], float(attrs["threshold"]), str(attrs["hash"]), attrs,
+                         f["done"][()].astype(bool) if "done" in f else None)

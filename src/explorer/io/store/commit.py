@@ -23,6 +23,7 @@ from explorer.io.store.format import (
     FORMAT,
     FORMAT_VERSION,
     GZIP_LEVEL,
+    INDICATOR_DATASETS,
     OPTIONAL_DATASETS,
     StoreError,
     _canonical_json,
@@ -163,12 +164,7 @@ def _prepare_arrays(arrays: dict) -> dict:
         raise ValueError("count must equal diff(offsets)")
     out["offsets"] = offsets
     out["crossings"] = crossings
-    for name, (tail, dtype) in _OPTIONAL_PER_ORBIT.items():
-        if name in arrays:
-            a = np.asarray(arrays[name])
-            if a.shape != (n,) + tail:
-                raise ValueError(f"{name} must have shape {(n,) + tail}, got {a.shape}")
-            out[name] = np.ascontiguousarray(a, dtype=dtype)
+    out.update(_indicator_arrays(arrays, n))
     if ("separatrix_offsets" in arrays) != ("separatrix_points" in arrays):
         raise ValueError("separatrix_offsets and separatrix_points go together")
     if "separatrix_offsets" in arrays:
@@ -178,6 +174,25 @@ def _prepare_arrays(arrays: dict) -> dict:
             raise ValueError("separatrix_offsets must start at 0, be non-decreasing and end at len(points)")
         out["separatrix_offsets"] = so
         out["separatrix_points"] = sp
+    return out
+
+
+def _indicator_arrays(arrays: dict, n: int) -> dict:
+    """The indicator datasets of ``arrays``, checked: one row per seed of ``lyapunov_seeds`` if
+    given, else per orbit (``n``)."""
+    out = {}
+    if "lyapunov_seeds" in arrays:
+        ls = np.ascontiguousarray(arrays["lyapunov_seeds"], dtype=np.float64)
+        if ls.ndim != 2 or ls.shape[1] != 2:
+            raise ValueError(f"lyapunov_seeds must have shape (M, 2), got {ls.shape}")
+        out["lyapunov_seeds"] = ls
+        n = ls.shape[0]
+    for name, (tail, dtype) in _OPTIONAL_PER_ORBIT.items():
+        if name in arrays:
+            a = np.asarray(arrays[name])
+            if a.shape != (n,) + tail:
+                raise ValueError(f"{name} must have shape {(n,) + tail}, got {a.shape}")
+            out[name] = np.ascontiguousarray(a, dtype=dtype)
     return out
 
 
@@ -321,3 +336,40 @@ def update_panel_attrs(path, index: int, attrs: dict) -> None:
         with h5py.File(tmp, "r+") as f:
             _set_attrs(f["panels"][f"{index:03d}"], attrs)
             f.attrs["updated"] = _utcnow()
+
+
+def update_panel(path, index: int, arrays: dict, attrs: dict, *, remove=()) -> None:
+    """Atomically replace or add indicator datasets (``megno``, ..., ``lyapunov_seeds``: the
+    indicators product) and attributes of the stored panel ``index``, keeping its other datasets
+    (the crossings are not read into memory); ``remove``: datasets and attributes to delete.  As
+    :func:`commit_panel`, the file is rebuilt in a temporary copy without the old bytes, fsynced and
+    ``os.replace``'d onto ``path``."""
+    path = os.fspath(path)
+    index = int(index)
+    name = f"{index:03d}"
+    unknown = sorted(set(arrays) - set(INDICATOR_DATASETS))
+    if unknown:
+        raise ValueError(f"update_panel replaces only {list(INDICATOR_DATASETS)}, got {unknown}")
+    with _open_store(path) as f:
+        if "panels" not in f or name not in f["panels"]:
+            raise StoreError(f"{path}: no panel {index} to update")
+        grp = f["panels"][name]
+        kept_seeds = "lyapunov_seeds" in grp and "lyapunov_seeds" not in remove
+        n = grp["lyapunov_seeds" if kept_seeds else "count"].shape[0]   # rows of the indicator datasets
+    prepared = _indicator_arrays(arrays, n)
+    with atomic_path(path) as tmp:
+        _copy_without_panel(path, tmp, index)
+        with h5py.File(path, "r") as src, h5py.File(tmp, "r+") as dst:
+            old = src["panels"][name]
+            grp = dst.require_group("panels").create_group(name)
+            for d in old:
+                if d not in prepared and d not in remove:
+                    src.copy(old[d], grp, name=d)
+            for d, a in prepared.items():
+                _create_dataset(grp, d, a)
+            for k, v in old.attrs.items():
+                if k not in remove and k not in attrs and k != "complete":
+                    grp.attrs[k] = v
+            _set_attrs(grp, attrs)
+            grp.attrs["complete"] = True  # last: the panel is whole
+            dst.attrs["updated"] = _utcnow()

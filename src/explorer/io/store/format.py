@@ -48,7 +48,13 @@ _OPTIONAL_PER_ORBIT = {
     "gali2": ((), np.float64),
     "lyapunov_early": ((), np.int8),
 }
-OPTIONAL_DATASETS = tuple(_OPTIONAL_PER_ORBIT) + ("separatrix_offsets", "separatrix_points")
+#: ``lyapunov_seeds`` (M, 2): the seeds of the indicators when they are not the panel's ``seeds``
+#: (a chaos map's grid beside sections of the [seeds]); the indicator datasets then have M rows
+OPTIONAL_DATASETS = tuple(_OPTIONAL_PER_ORBIT) + ("separatrix_offsets", "separatrix_points", "lyapunov_seeds")
+#: the datasets of a panel's indicators product (kept or replaced together)
+INDICATOR_DATASETS = tuple(_OPTIONAL_PER_ORBIT) + ("lyapunov_seeds",)
+#: the attributes that name the hash of each product of a panel (explorer.io.scene.Scene.product_hashes)
+PRODUCT_HASH_ATTRS = {"sections": "sections_hash", "indicators": "indicators_hash"}
 _DEPENDENCIES = ("explorer", "numpy", "numba", "llvmlite", "h5py", "joblib", "matplotlib", "scipy")
 _FORCE_HINT = "use --force to overwrite it or choose another --out"
 
@@ -370,3 +376,41 @@ def panel_hashes(path) -> dict:
     return out
 
 
+def stored_scene_name(path) -> str | None:
+    """The ``scene_name`` attribute of the store at ``path`` (None: no file, or no name);
+    StoreError if it exists but is not a readable explorer store."""
+    path = os.fspath(path)
+    if not os.path.exists(path):
+        return None
+    with _reading(path) as f:
+        name = _from_h5_attr(f.attrs.get("scene_name"))
+    return None if name is None else str(name)
+
+
+def panel_product_hashes(path) -> dict:
+    """{index: {"hash": ..., "sections_hash": ..., "indicators_hash": ...}} of the complete panels
+    (the attributes present; a store written before products had their own hashes has ``hash``
+    only); {} if ``path`` does not exist; StoreError as :func:`panel_hashes`."""
+    path = os.fspath(path)
+    if not os.path.exists(path):
+        return {}
+    keys = ("hash",) + tuple(PRODUCT_HASH_ATTRS.values())
+    out = {}
+    with _reading(path) as f:
+        for idx, grp in _panel_groups(f, path):
+            a = grp.attrs
+            if bool(_from_h5_attr(a.get("complete", False))):
+                out[idx] = {k: _from_h5_attr(a[k]) for k in keys if k in a}
+    return out
+
+
+def read_panel_datasets(path, index: int, names) -> tuple[dict, dict]:
+    """(datasets, attrs) of panel ``index``: only the datasets ``names`` that it holds (not the
+    crossings unless asked), and all its attributes.  StoreError as :func:`read_store`."""
+    path = os.fspath(path)
+    with _reading(path) as f:
+        name = f"{int(index):03d}"
+        if "panels" not in f or name not in f["panels"]:
+            raise StoreError(f"{path}: no panel {index}")
+        grp = f["panels"][name]
+        return {d: grp[d][()] for d in names if d in grp}, _read_attrs(grp)

@@ -55,6 +55,30 @@ def blocks_dir(path, index: int | None = None) -> str:
     return os.fspath(path) + (".blocks" if index is None else f".panel{int(index):03d}.blocks")
 
 
+def panel_block_dirs(path) -> dict:
+    """{panel index: directory} of the block folders ``<path>.panel<NNN>.blocks`` beside the store."""
+    import glob
+
+    base = os.fspath(path) + ".panel"
+    out = {}
+    for d in glob.glob(glob.escape(base) + "*.blocks"):
+        number = d[len(base):-len(".blocks")]
+        if number.isdigit() and os.path.isdir(d):
+            out[int(number)] = d
+    return out
+
+
+def remove_stale_blocks(path, keep=()) -> list:
+    """Remove the block folders of the panels of the store at ``path`` that are not in ``keep`` (a
+    finished, replaced or no longer streamed panel: nothing will resume from them); returns them."""
+    removed = []
+    for index, d in sorted(panel_block_dirs(path).items()):
+        if index not in keep:
+            shutil.rmtree(d, ignore_errors=True)
+            removed.append(d)
+    return removed
+
+
 def disk_needed(n_orbits: int, n_crossings: int) -> int:
     """Bytes a streamed run of ``n_orbits`` x ``n_crossings`` rows may need on disk at its peak:
     its uncompressed blocks plus the store being written from them."""

@@ -1,0 +1,491 @@
+"""Stable and unstable manifolds of hyperbolic periodic orbits of the section map, and their
+intersections (homoclinic points).  docs/manifolds.md has the method and its accuracy.
+
+Parametrisation
+---------------
+Let x* be a point of a hyperbolic orbit of period K of the section map P
+(:class:`~explorer.analysis.section_map.SectionMap`, MODEL.md R9), F = P^m with m = K (m = 2K
+when the multiplier is negative, so that F keeps each branch), Lambda > 1 the multiplier of F
+along the branch (F^{-1} for a stable manifold) and e the unit eigenvector (``sign`` = +1: the
+orientation with e[0] > 0, or e[1] > 0 when e[0] = 0).  Every point of the branch is
+
+    x(sigma) = F^n(x* + exp(sigma - n L) e),   L = log Lambda,   n = floor((sigma - sigma0) / L),
+
+with exp(sigma0) = s0 the start distance: the fundamental domain [s0, s0 Lambda) of the linear
+manifold and its n-th images.  sigma is continuous along the branch (F moves sigma by L), so
+the branch is the curve sigma -> x(sigma), computed exactly (to the map's accuracy) at any
+sigma, with no interpolation.
+
+Start distance: on the manifold, in the eigenbasis (u along e, v along the other eigenvector),
+v = a u^2 / 2 + O(u^3), so x* + s e is off the manifold by |a| s^2 / 2.  a is measured from one
+image of a trial point (the v-component of F(x* + s e) is a s^2 (Lambda^2 - 1/Lambda) / 2, the
+invariance of the graph), and s0 = sqrt(2 ``tol`` / |a|): the start points are within ``tol``
+of the manifold, and F contracts that transverse error by 1/Lambda per generation.
+
+Growth (Hobson 1993, J. Comput. Phys. 104, 14; Krauskopf & Osinga 1998, J. Comput. Phys. 146,
+404): start with ``INITIAL_POINTS`` points of the fundamental domain; repeat (i) refine: where
+the distance between neighbours exceeds ``max_gap``, the angle at a point exceeds
+``max_angle``, or distance times angle exceeds ``max_gap_angle``, insert the point at the
+mid-value of sigma (computed from the fundamental domain, n maps); (ii) extend: map the last
+generation once (F, one batch of the Taylor lanes, :func:`explorer.analysis.sections.section_crossings`)
+- until the branch has the requested arclength or a budget (points, wall time) runs out or a
+point has no return (the region's edge).  ``ManifoldBranch.status`` says which.
+
+Points of the stable manifold need F^{-1}: when the reversor applies
+(:func:`explorer.analysis.periodic.is_reversible`), F^{-1} = G0 F G0 and the batch runs
+forward; otherwise each point is integrated backward in time by the section map
+(``backward="integrate"`` forces that path).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from explorer import model
+from explorer.analysis.periodic import PeriodicOrbit, is_reversible, reversor
+from explorer.analysis.section_map import DEFAULT_TOL, RETURN_TMAX, SectionMap
+from explorer.model import ParameterError, validation
+
+__all__ = ["DEFAULT_MAX_ANGLE", "DEFAULT_MAX_GAP", "DEFAULT_MAX_GAP_ANGLE", "DEFAULT_START_TOL", "Homoclinic",
+           "ManifoldBranch", "Saddle", "grow_branch", "homoclinic_orbit", "homoclinic_points", "manifolds",
+           "saddle"]
+
+#: transverse distance of the start points from the manifold (module docstring)
+DEFAULT_START_TOL = 1e-12
+#: refinement bounds (Krauskopf & Osinga 1998): distance between neighbours, angle at a point
+#: (radians) and their product; the polyline deviates from the curve by about
+#: gap * angle / 8 <= DEFAULT_MAX_GAP_ANGLE / 8
+DEFAULT_MAX_GAP = 0.02
+DEFAULT_MAX_ANGLE = 0.2
+DEFAULT_MAX_GAP_ANGLE = 2e-4
+#: points of the first fundamental domain
+INITIAL_POINTS = 16
+#: trial distance along the eigenvector for the curvature estimate
+TRIAL_DISTANCE = 1e-4
+#: limits of the start distance
+MIN_START, MAX_START = 1e-9, 1e-3
+#: an interval of sigma narrower than this is not split further
+MIN_DSIGMA = 1e-11
+#: Newton for intersections: step of the central differences in sigma, tolerance, iterations
+DIFF_STEP = 1e-6
+INTERSECTION_TOL = 1e-12
+NEWTON_ITER = 30
+#: two intersections closer than this are the same point
+SAME_POINT = 1e-9
+
+STATUS_ARCLENGTH = "arclength"
+STATUS_EDGE = "edge"
+STATUS_MAX_POINTS = "max_points"
+STATUS_MAX_TIME = "max_time"
+
+
+# ------------------------------------------------------------------ the saddle
+@dataclass(frozen=True)
+class Saddle:
+    """A point x* of a hyperbolic orbit of period K, F = P^m (m = K, or 2K when the multiplier
+    is negative), the multiplier of F along the unstable direction (> 1) and the unit
+    eigenvectors of DF (unstable, stable) with the orientation of ``sign = +1``."""
+
+    point: np.ndarray
+    period: int
+    maps: int
+    multiplier: float
+    eigenvalues: np.ndarray
+    e_unstable: np.ndarray
+    e_stable: np.ndarray
+    smap: SectionMap
+    orbit_points: np.ndarray
+
+
+def _orient(v):
+    v = np.asarray(v, float) / np.linalg.norm(v)
+    return -v if (v[0] < 0 or (v[0] == 0 and v[1] < 0)) else v
+
+
+def saddle(orbit, params=None, h=None, *, index=0, phi0=None, tol=DEFAULT_TOL, tmax=RETURN_TMAX) -> Saddle:
+    """The :class:`Saddle` at point ``index`` of a hyperbolic ``orbit`` (a
+    :class:`~explorer.analysis.periodic.PeriodicOrbit` or a
+    :class:`~explorer.analysis.fixedpoints.FixedPoint`; ``params``, ``h`` default to the orbit's)."""
+    if isinstance(orbit, PeriodicOrbit):
+        pts, K, jacs = orbit.points, orbit.period, orbit.map_jacobians
+        phi0 = orbit.phi0 if phi0 is None else phi0
+    elif hasattr(orbit, "jacobian") and hasattr(orbit, "point"):
+        pts, K, jacs = np.atleast_2d(orbit.point), 1, np.array([orbit.jacobian])
+    else:
+        raise ParameterError(f"orbit must be a PeriodicOrbit or a FixedPoint, got {type(orbit).__name__}")
+    prm = orbit.params if params is None else params
+    h = orbit.h if h is None else h
+    if prm is None or not math.isfinite(float(h)):
+        raise ParameterError("the orbit carries no params/h: pass params= and h=")
+    phi0 = math.pi if phi0 is None else phi0
+    index = validation.integer("index", index, 0, K - 1)
+    M = np.eye(2)   # monodromy at point `index`: DP(x_{index-1}) ... DP(x_index)
+    for j in range(K):
+        M = jacs[(index + j) % K] @ M
+    w, V = np.linalg.eig(M)
+    if np.iscomplexobj(w) and np.any(np.abs(np.imag(w)) > 0):
+        raise ParameterError(f"the orbit is not hyperbolic (multipliers {w[0]:.6g}, {w[1]:.6g}): no manifolds")
+    w, V = np.real(w), np.real(V)
+    iu = int(np.argmax(np.abs(w)))
+    if not abs(w[iu]) > 1.0 + 1e-9:
+        raise ParameterError(f"the orbit is not hyperbolic (multipliers {w[0]:.6g}, {w[1]:.6g}): no manifolds")
+    maps = K if w[iu] > 0 else 2 * K
+    mult = abs(w[iu]) ** (maps // K)
+    smap = SectionMap(prm, h, phi0=phi0, tol=tol, tmax=tmax)
+    return Saddle(np.array(pts[index], float), K, maps, float(mult), w, _orient(V[:, iu]), _orient(V[:, 1 - iu]),
+                  smap, np.array(pts, float))
+
+
+# ------------------------------------------------------------------ images in batches
+def _images(smap: SectionMap, X, n, backward, integrate_backward=False):
+    """F-images: P^n (P^-n with ``backward``) of the points X (m, 2); rows that leave the region
+    or have no return are NaN.  Forward: one batch of the Taylor lanes; backward: the same batch
+    through the reversor G0 P^n G0 = P^-n when it applies, else the section map point by point."""
+    from explorer.analysis.sections import section_crossings
+
+    X = np.asarray(X, float).reshape(-1, 2)
+    out = np.full_like(X, np.nan)
+    if n == 0 or X.size == 0:
+        return X.copy()
+    if backward and (integrate_backward or not is_reversible(smap.params, smap.phi0)):
+        for i, x in enumerate(X):
+            try:    # outside the region or no return: ParameterError, the row stays NaN
+                out[i] = smap.iterate(x, n, backward=True)[-1]
+            except ParameterError:
+                pass
+        return out
+    Y = reversor(X) if backward else X
+    ok = model.section_M2(smap.params, Y[:, 0], Y[:, 1], smap.h, smap.phi0) > 0
+    if ok.any():
+        c = section_crossings(smap.params, Y[ok, 0], Y[ok, 1], smap.h, n, phi0=smap.phi0, tol=smap.tol,
+                              tmax=smap.tmax * n)
+        img = np.where((c.count >= n)[:, None], c.data[:, n - 1, 1:3], np.nan)
+        out[ok] = reversor(img) if backward else img
+    return out
+
+
+class _Curve:
+    """sigma -> x(sigma) of one branch (module docstring)."""
+
+    def __init__(self, sd: Saddle, stable: bool, sign: int, start_tol: float, integrate_backward: bool):
+        self.sd, self.stable, self.sign = sd, stable, sign
+        self.backward_integrated = integrate_backward
+        self.e = sign * (sd.e_stable if stable else sd.e_unstable)
+        self.L = math.log(sd.multiplier)
+        # curvature a of the graph v = a u^2 / 2 from one image of a trial point
+        s = TRIAL_DISTANCE
+        y = self.map(sd.point + s * self.e, 1)[0]
+        B = np.column_stack([sd.e_stable if stable else sd.e_unstable, sd.e_unstable if stable else sd.e_stable])
+        if np.all(np.isfinite(y)):
+            v = np.linalg.solve(B, y - sd.point)[1]
+            lam = sd.multiplier
+            a = 2.0 * abs(v) / (s * s * (lam * lam - 1.0 / lam))
+        else:
+            a = 1.0 / s
+        self.curvature = float(a)
+        s0 = math.sqrt(2.0 * start_tol / a) if a > 0 else MAX_START
+        self.s0 = float(min(max(s0, MIN_START), MAX_START))
+        self.sigma0 = math.log(self.s0)
+
+    def map(self, X, generations):
+        return _images(self.sd.smap, X, generations * self.sd.maps, self.stable, self.backward_integrated)
+
+    def generation(self, sigma):
+        return np.maximum(np.floor((np.asarray(sigma, float) - self.sigma0) / self.L), 0).astype(int)
+
+    def points(self, sigma):
+        """x(sigma) for an array of sigma (NaN where a map fails), each from the fundamental domain."""
+        sigma = np.atleast_1d(np.asarray(sigma, float))
+        n = self.generation(sigma)
+        out = np.empty((sigma.size, 2))
+        for g in np.unique(n):
+            sel = n == g
+            x0 = self.sd.point + np.exp(sigma[sel] - g * self.L)[:, None] * self.e
+            out[sel] = self.map(x0, int(g))
+        return out
+
+
+@dataclass(frozen=True)
+class ManifoldBranch:
+    """One branch of W^u (``kind`` "unstable") or W^s ("stable") of a saddle, as a polyline from
+    the orbit's point outwards.
+
+    ``points[0]`` is the saddle point; ``points[1:]`` are points x(sigma) of the manifold at the
+    parameters ``sigma[1:]`` (``sigma[0]`` = -inf), within ``start_tol`` of the manifold
+    (transversally; module docstring).  ``status``: "arclength" (grown to ``target``),
+    "edge" (a point further on has no return of the map or left the allowed region),
+    "max_points" or "max_time" (budgets).
+    """
+
+    kind: str
+    sign: int
+    points: np.ndarray
+    sigma: np.ndarray
+    arclength: float
+    target: float
+    status: str
+    start_distance: float
+    start_tol: float
+    curvature: float
+    evaluations: int
+    seconds: float
+    curve: _Curve = field(repr=False, compare=False, default=None)
+
+    def at(self, sigma) -> np.ndarray:
+        """Points of the branch at parameters ``sigma`` (computed afresh, no interpolation)."""
+        return self.curve.points(sigma)
+
+    def distance(self, x, *, rounds=4, samples=24) -> float:
+        """Distance from the point x to the branch, from points computed afresh: the nearest
+        stored point's neighbourhood in sigma is sampled ``samples`` times and narrowed to the
+        best sample's neighbours ``rounds`` times (no chord error of the polyline)."""
+        x = np.asarray(x, float)
+        i = int(np.argmin(np.linalg.norm(self.points[1:] - x, axis=1))) + 1
+        lo = self.sigma[max(i - 1, 1)]
+        hi = self.sigma[min(i + 1, len(self.sigma) - 1)]
+        for _ in range(rounds):
+            s = np.linspace(lo, hi, samples)
+            pts = self.at(s)
+            k = int(np.nanargmin(np.linalg.norm(pts - x, axis=1)))
+            lo, hi = s[max(k - 1, 0)], s[min(k + 1, samples - 1)]
+        # the first segment (saddle to the first point) is the linear manifold, off by <= start_tol
+        return min(_polyline_distance(pts[max(k - 1, 0):k + 2], x), _polyline_distance(self.points[:2], x))
+
+    def as_dict(self):
+        return {"kind": self.kind, "sign": int(self.sign), "points": self.points.tolist(),
+                "arclength": float(self.arclength), "status": self.status,
+                "start_distance": self.start_distance, "start_tol": self.start_tol}
+
+
+def _polyline_distance(P, x):
+    """Distance from x to the polyline P (m, 2)."""
+    if len(P) == 1:
+        return float(np.linalg.norm(P[0] - x))
+    a, b = P[:-1], P[1:]
+    d = b - a
+    t = np.clip(np.sum((x - a) * d, axis=1) / np.maximum(np.sum(d * d, axis=1), 1e-300), 0.0, 1.0)
+    return float(np.min(np.linalg.norm(a + t[:, None] * d - x, axis=1)))
+
+
+def _arc(points):
+    return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
+
+
+def _bad_intervals(P, max_gap, max_angle, max_gap_angle, lo):
+    """Indices i >= lo of intervals (P[i], P[i+1]) to split (the refinement rule)."""
+    d = np.linalg.norm(np.diff(P, axis=0), axis=1)
+    bad = d > max_gap
+    if len(P) >= 3:
+        u, v = P[1:-1] - P[:-2], P[2:] - P[1:-1]
+        cross = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+        ang = np.abs(np.arctan2(cross, np.sum(u * v, axis=1)))
+        worst = (ang > max_angle) | (ang * np.minimum(d[:-1], d[1:]) > max_gap_angle)
+        bad[:-1] |= worst
+        bad[1:] |= worst
+    bad[:max(lo, 1)] = False     # never split the linear segment from the saddle point
+    return np.flatnonzero(bad)
+
+
+def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DEFAULT_START_TOL,
+                max_gap=DEFAULT_MAX_GAP, max_angle=DEFAULT_MAX_ANGLE, max_gap_angle=DEFAULT_MAX_GAP_ANGLE,
+                max_points=20000, max_time=None, integrate_backward=False) -> ManifoldBranch:
+    """One branch of W^u (W^s with ``stable``) of the saddle ``sd`` grown to ``arclength``
+    (module docstring: parametrisation, start distance, refinement, budgets)."""
+    if sign not in (1, -1):
+        raise ParameterError(f"sign must be +1 or -1, got {sign!r}")
+    arclength = validation.real("arclength", arclength, 0.0, lo_open=True)
+    start_tol = validation.real("start_tol", start_tol, 0.0, lo_open=True)
+    max_gap = validation.real("max_gap", max_gap, 0.0, lo_open=True)
+    max_angle = validation.real("max_angle", max_angle, 0.0, lo_open=True)
+    max_gap_angle = validation.real("max_gap_angle", max_gap_angle, 0.0, lo_open=True)
+    max_points = validation.integer("max_points", max_points, 3)
+    if max_time is not None:
+        max_time = validation.real("max_time", max_time, 0.0)
+    t0 = time.perf_counter()
+    cv = _Curve(sd, stable, sign, start_tol, integrate_backward)
+    sig = cv.sigma0 + cv.L * np.arange(INITIAL_POINTS + 1) / INITIAL_POINTS
+    pts = cv.points(sig)
+    evals = len(sig)
+    edge = None                  # smallest sigma known to fail
+    status = None
+
+    def cut(sig, pts, bad_sigma):
+        keep = sig < bad_sigma
+        return sig[keep], pts[keep]
+
+    if not np.all(np.isfinite(pts)):
+        edge = float(sig[np.flatnonzero(~np.isfinite(pts[:, 0]))[0]])
+        sig, pts = cut(sig, pts, edge)
+    lo = 0                       # refinement starts here (earlier intervals are final)
+    while True:
+        # (i) refine
+        while True:
+            P = np.vstack([sd.point, pts])
+            bad = _bad_intervals(P, max_gap, max_angle, max_gap_angle, lo + 1) - 1  # interval i of pts
+            bad = bad[np.diff(sig)[bad] > MIN_DSIGMA]
+            if bad.size == 0:
+                break
+            if len(sig) + bad.size > max_points:
+                status = STATUS_MAX_POINTS
+                bad = bad[:max(0, max_points - len(sig))]
+            if bad.size == 0:
+                break
+            mid = 0.5 * (sig[bad] + sig[bad + 1])
+            new = cv.points(mid)
+            evals += len(mid)
+            sig = np.insert(sig, bad + 1, mid)
+            pts = np.insert(pts, bad + 1, new, axis=0)
+            fail = ~np.isfinite(pts[:, 0])
+            if fail.any():
+                edge = float(sig[np.flatnonzero(fail)[0]])
+                sig, pts = cut(sig, pts, edge)
+            if status is not None:
+                break
+            if max_time is not None and time.perf_counter() - t0 > max_time:
+                status = STATUS_MAX_TIME
+                break
+        s = _arc(np.vstack([sd.point, pts]))
+        if s[-1] >= arclength:
+            k = int(np.searchsorted(s, arclength))   # first point at or beyond the target
+            sig, pts = sig[:k], pts[:k]
+            status = STATUS_ARCLENGTH
+        if status is None and edge is not None:
+            status = STATUS_EDGE
+        if status is None and len(sig) >= max_points:
+            status = STATUS_MAX_POINTS
+        if status is None and max_time is not None and time.perf_counter() - t0 > max_time:
+            status = STATUS_MAX_TIME
+        if status is not None:
+            break
+        # (ii) extend: the last generation mapped once
+        last = np.flatnonzero(sig > sig[-1] - cv.L)[:max_points - len(sig)]   # within the budget
+        nsig = sig[last] + cv.L
+        new = cv.map(pts[last], 1)
+        evals += len(last)
+        lo = len(sig) - 1
+        fail = ~np.isfinite(new[:, 0])
+        if fail.any():
+            edge = float(nsig[np.flatnonzero(fail)[0]])
+            nsig, new = nsig[:np.flatnonzero(fail)[0]], new[:np.flatnonzero(fail)[0]]
+        sig = np.concatenate([sig, nsig])
+        pts = np.vstack([pts, new])
+    P = np.vstack([sd.point, pts])
+    return ManifoldBranch("stable" if stable else "unstable", sign, P, np.concatenate([[-np.inf], sig]),
+                          float(_arc(P)[-1]), float(arclength), status, cv.s0, float(start_tol), cv.curvature,
+                          evals, time.perf_counter() - t0, cv)
+
+
+def manifolds(orbit, params=None, h=None, *, arclength=5.0, kinds=("unstable", "stable"), signs=(1, -1),
+              index=0, phi0=None, tol=DEFAULT_TOL, **kw) -> list:
+    """The branches of W^u and W^s of a hyperbolic ``orbit`` (PeriodicOrbit or FixedPoint) at its
+    point ``index``, each grown to ``arclength`` (:func:`grow_branch`; ``kw`` its options).
+    Returns a list of :class:`ManifoldBranch`, unstable before stable, sign +1 before -1."""
+    sd = saddle(orbit, params, h, index=index, phi0=phi0, tol=tol)
+    for k in kinds:
+        if k not in ("unstable", "stable"):
+            raise ParameterError(f"kinds must be 'unstable' and/or 'stable', got {k!r}")
+    return [grow_branch(sd, stable=(k == "stable"), sign=s, arclength=arclength, **kw) for k in kinds for s in signs]
+
+
+# ------------------------------------------------------------------ intersections
+@dataclass(frozen=True)
+class Homoclinic:
+    """A point where an unstable and a stable branch meet: ``point``, the parameters
+    ``sigma_u``, ``sigma_s`` on the branches, the angle between them (radians, in (0, pi/2]),
+    the residual |x_u(sigma_u) - x_s(sigma_s)| and the signs of the two branches."""
+
+    point: np.ndarray
+    sigma_u: float
+    sigma_s: float
+    angle: float
+    residual: float
+    sign_u: int
+    sign_s: int
+
+
+def _segment_crossings(A, B):
+    """Pairs (i, j, ta, tb) where segment A[i]A[i+1] crosses B[j]B[j+1] (ta, tb in [0, 1))."""
+    out = []
+    a0, a1 = A[:-1], A[1:]
+    b0, b1 = B[:-1], B[1:]
+    bl, bh = np.minimum(b0, b1), np.maximum(b0, b1)
+    for i in range(len(a0)):
+        lo, hi = np.minimum(a0[i], a1[i]), np.maximum(a0[i], a1[i])
+        cand = np.flatnonzero(np.all((bh >= lo) & (bl <= hi), axis=1))
+        if cand.size == 0:
+            continue
+        r = a1[i] - a0[i]
+        s = b1[cand] - b0[cand]
+        den = r[0] * s[:, 1] - r[1] * s[:, 0]
+        q = b0[cand] - a0[i]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ta = (q[:, 0] * s[:, 1] - q[:, 1] * s[:, 0]) / den
+            tb = (q[:, 0] * r[1] - q[:, 1] * r[0]) / den
+        hit = (den != 0) & (ta >= 0) & (ta < 1) & (tb >= 0) & (tb < 1)
+        out.extend((i, int(j), float(x), float(y)) for j, x, y in zip(cand[hit], ta[hit], tb[hit]))
+    return out
+
+
+def _refine(bu: ManifoldBranch, bs: ManifoldBranch, su, ss):
+    """Newton on x_u(su) - x_s(ss) = 0 with tangents by central differences in sigma; stops at
+    a residual below INTERSECTION_TOL or when two steps in a row fail to halve it (the map's
+    accuracy reached), and returns the best point evaluated."""
+    hd = DIFF_STEP
+    best = None
+    stall = 0
+    for _ in range(NEWTON_ITER):
+        U = bu.at([su, su - hd, su + hd])
+        S = bs.at([ss, ss - hd, ss + hd])
+        if not (np.all(np.isfinite(U)) and np.all(np.isfinite(S))):
+            break
+        tu, ts = (U[2] - U[1]) / (2 * hd), (S[2] - S[1]) / (2 * hd)
+        F = U[0] - S[0]
+        nf = float(np.linalg.norm(F))
+        stall = stall + 1 if best is not None and nf > 0.5 * best[0] else 0
+        if best is None or nf < best[0]:
+            best = (nf, su, ss, U[0].copy(), tu, ts)
+        if nf < INTERSECTION_TOL or stall >= 2:
+            break
+        try:
+            d = np.linalg.solve(np.column_stack([tu, -ts]), -F)
+        except np.linalg.LinAlgError:
+            break
+        su, ss = su + d[0], ss + d[1]
+    if best is None:
+        return None
+    nf, su, ss, x, tu, ts = best
+    c = abs(tu[0] * ts[1] - tu[1] * ts[0]) / (np.linalg.norm(tu) * np.linalg.norm(ts))
+    return Homoclinic(x, float(su), float(ss), math.asin(min(1.0, c)), nf, bu.sign, bs.sign)
+
+
+def homoclinic_points(unstable: ManifoldBranch, stable: ManifoldBranch, *, max_residual=1e-10) -> list:
+    """The intersections of an unstable and a stable branch (of the same saddle: homoclinic; of
+    two saddles: heteroclinic): crossings of the two polylines, each refined by Newton's method
+    on x_u(sigma_u) = x_s(sigma_s) with the points computed afresh (no interpolation), kept when
+    the residual is below ``max_residual``; sorted by sigma_u (the order along W^u)."""
+    if unstable.kind != "unstable" or stable.kind != "stable":
+        raise ParameterError("homoclinic_points needs an unstable branch then a stable branch")
+    found: list[Homoclinic] = []
+    # skip the first segment of each (the saddle point itself is a trivial intersection)
+    for i, j, ta, tb in _segment_crossings(unstable.points[1:], stable.points[1:]):
+        su = unstable.sigma[i + 1] + ta * (unstable.sigma[i + 2] - unstable.sigma[i + 1])
+        ss = stable.sigma[j + 1] + tb * (stable.sigma[j + 2] - stable.sigma[j + 1])
+        hp = _refine(unstable, stable, su, ss)
+        if hp is None or hp.residual > max_residual:
+            continue
+        if any(np.linalg.norm(hp.point - f.point) < SAME_POINT for f in found):
+            continue
+        found.append(hp)
+    return sorted(found, key=lambda hp: hp.sigma_u)
+
+
+def homoclinic_orbit(smap: SectionMap, point, n=8) -> np.ndarray:
+    """The orbit of a homoclinic point: P^-n(x), ..., x, ..., P^n(x) as a (2n + 1, 2) array
+    (it tends to the saddle at both ends)."""
+    n = validation.integer("n", n, 0)
+    back = smap.iterate(point, n, backward=True)[::-1]
+    fwd = smap.iterate(point, n)
+    return np.vstack([back[:-1], fwd])

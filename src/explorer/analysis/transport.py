@@ -1,0 +1,334 @@
+"""Lobes of a homoclinic tangle and the flux across a broken separatrix (MacKay, Meiss &
+Percival 1984, Physica D 13, 55; Rom-Kedar & Wiggins 1990, Arch. Rat. Mech. Anal. 109, 239).
+docs/manifolds.md has the method, the error estimate and the Melnikov conversion.
+
+The section map P preserves dp1 dp2 (MODEL.md R11: (l, L') with p - s = sqrt(2 lam L')(cos l,
+sin l) is canonical, dp1 ^ dp2 = lam dL' ^ dl; tests/analysis/test_manifolds.py checks det DP = 1),
+so areas in the (p1, p2) plane are invariant and the flux is an area per iteration.
+
+Primary intersections: along a pair (W^u, W^s) of branches every homoclinic point x has
+parameters (sigma_u, sigma_s) (:mod:`explorer.analysis.manifolds`) and F = P^m maps it to
+(sigma_u + L, sigma_s - L): sigma_u + sigma_s is constant on a homoclinic orbit.  The two
+orbits with the smallest sums are the primary ones (they leave the saddle and come back
+soonest).  A point h0 of the first and the point q0 of the second with sigma_u(h0) <
+sigma_u(q0) < sigma_u(h0) + L bound a lobe: the unstable arc [sigma_u(h0), sigma_u(q0)] and the
+stable arc [sigma_s(q0), sigma_s(h0)]; the arcs from q0 to F(h0) bound the second lobe of the
+turnstile.  The flux across the broken separatrix per iteration of F is the area of one lobe
+(MacKay, Meiss & Percival 1984: the two lobes have equal areas, which the tests check).
+
+Area: Green's theorem, A = (1/2) closed-integral (p1 dp2 - p2 dp1), along the polygon of
+exactly computed points of the arcs (the shoelace sum) at the branch's spacing and at half that
+spacing (midpoints in sigma); the polygon's error is O(spacing^2), so the Richardson value
+A = A_fine + (A_fine - A_coarse)/3 is reported with the error estimate |A_fine - A_coarse|/3
+(conservative: the extrapolated value is better than that).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from explorer.analysis.manifolds import Homoclinic, ManifoldBranch, homoclinic_points
+from explorer.model import ParameterError
+
+__all__ = ["Lobe", "flux_curve", "inside", "lobes", "melnikov_lobe_area", "polygon_area", "resonance_zone",
+           "richardson_area", "exit_times", "turnstile", "turnstile_check"]
+
+#: two homoclinic points are on the same orbit when their sigma_u + sigma_s agree to this
+SAME_ORBIT_SUM = 1e-6
+#: the two lobes of a turnstile have equal areas (area preservation): a flux is reported only
+#: when they agree to this (relative) beyond their error estimates
+LOBE_AGREEMENT = 1e-6
+
+
+def polygon_area(points) -> float:
+    """Signed area of the closed polygon ``points`` (m, 2) by Green's theorem (shoelace):
+    (1/2) sum (x_i y_{i+1} - x_{i+1} y_i), positive counterclockwise."""
+    P = np.asarray(points, float)
+    x, y = P[:, 0], P[:, 1]
+    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+
+
+def richardson_area(coarse, fine):
+    """(area, error) from the polygon areas at a spacing and at half of it (module docstring)."""
+    a, b = polygon_area(coarse), polygon_area(fine)
+    return b + (b - a) / 3.0, abs(b - a) / 3.0
+
+
+@dataclass(frozen=True)
+class Lobe:
+    """A lobe bounded by the unstable arc from ``start`` to ``end`` (two adjacent primary
+    homoclinic points) and the stable arc back: signed ``area`` (counterclockwise positive),
+    its ``error`` estimate, the boundary ``boundary`` (closed polygon, (m, 2))."""
+
+    start: Homoclinic
+    end: Homoclinic
+    area: float
+    error: float
+    boundary: np.ndarray
+
+    def as_dict(self):
+        return {"area": abs(self.area), "signed_area": self.area, "error": self.error,
+                "start": self.start.point.tolist(), "end": self.end.point.tolist()}
+
+
+def _arc(branch: ManifoldBranch, a, b):
+    """Points of ``branch`` with sigma from a to b (either order): the stored ones inside and the
+    two ends computed afresh; and the same with the midpoints in sigma inserted."""
+    lo, hi = min(a, b), max(a, b)
+    inner = branch.sigma[(branch.sigma > lo) & (branch.sigma < hi)]
+    sig = np.concatenate([[lo], inner, [hi]])
+    mid = 0.5 * (sig[:-1] + sig[1:])
+    fine = np.empty(2 * sig.size - 1)
+    fine[0::2], fine[1::2] = sig, mid
+    pc, pf = branch.at(sig), branch.at(fine)
+    if a > b:
+        pc, pf = pc[::-1], pf[::-1]
+    return pc, pf
+
+
+def _primary(hs, L):
+    """The first points of the two primary homoclinic orbits (smallest sigma_u + sigma_s)."""
+    sums = np.array([h.sigma_u + h.sigma_s for h in hs])
+    classes: list[float] = []
+    for s in np.sort(sums):
+        if not classes or s - classes[-1] > SAME_ORBIT_SUM:
+            classes.append(float(s))
+    if len(classes) < 2:
+        return None
+    return [[h for h, s in zip(hs, sums) if abs(s - c) <= SAME_ORBIT_SUM] for c in classes[:2]]
+
+
+def lobes(unstable: ManifoldBranch, stable: ManifoldBranch, *, points=None) -> list:
+    """The two lobes of the turnstile between the primary homoclinic orbits of the pair
+    (``unstable``, ``stable``) (module docstring), as :class:`Lobe` s; [] when the branches are
+    too short to hold two primary orbits and the arcs between them.  ``points``: their
+    :func:`~explorer.analysis.manifolds.homoclinic_points` when already computed."""
+    hs = homoclinic_points(unstable, stable) if points is None else points
+    if unstable.curve is None or stable.curve is None:
+        raise ParameterError("lobes needs branches grown by grow_branch (they carry their parametrisation)")
+    L = unstable.curve.L
+    if not math.isclose(L, stable.curve.L, rel_tol=1e-9):
+        raise ParameterError("lobes needs the unstable and stable branch of the same saddle")
+    prim = _primary(hs, L)
+    if prim is None:
+        return []
+    out = []
+    far = sorted(prim[0], key=lambda p: -np.linalg.norm(p.point - unstable.points[0]))
+    for h0 in far:   # the lobe farthest from the saddle first (on p2 = 0 when reversible)
+        q = [p for p in prim[1] if h0.sigma_u < p.sigma_u < h0.sigma_u + L]
+        if not q:
+            continue
+        q0 = q[0]
+        h1 = [p for p in prim[0] if abs(p.sigma_u - (h0.sigma_u + L)) < 1e-6]
+        for a, b in ((h0, q0),) + (((q0, h1[0]),) if h1 else ()):
+            uc, uf = _arc(unstable, a.sigma_u, b.sigma_u)
+            sc, sf = _arc(stable, b.sigma_s, a.sigma_s)
+            if not (np.all(np.isfinite(uf)) and np.all(np.isfinite(sf))):
+                continue
+            coarse, fine = np.vstack([uc, sc[1:-1]]), np.vstack([uf, sf[1:-1]])
+            area, err = richardson_area(coarse, fine)
+            out.append(Lobe(a, b, area, err, fine))
+        if out:
+            break
+    return out
+
+
+def turnstile(sd, *, arclength=6.0, sign=1, max_arclength=None, **kw):
+    """The unstable branch ``sign`` of the saddle ``sd``, the stable branch it meets (the same
+    sign first, then the other), their homoclinic points and the turnstile's lobes: a dict with
+    keys "unstable", "stable", "homoclinic_points", "lobes", "arclength".  When no pair has
+    both lobes within ``arclength``, the branches are grown again at twice the length, up to
+    ``max_arclength`` (default: ``arclength``); the pair with the most lobes is returned.
+    ``kw``: options of :func:`grow_branch`."""
+    from explorer.analysis.manifolds import grow_branch
+
+    length = float(arclength)
+    limit = length if max_arclength is None else float(max_arclength)
+    while True:
+        bu = grow_branch(sd, sign=sign, arclength=length, **kw)
+        best = None
+        for s in (sign, -sign):
+            bs = grow_branch(sd, stable=True, sign=s, arclength=length, **kw)
+            hs = homoclinic_points(bu, bs)
+            lb = lobes(bu, bs, points=hs)
+            if best is None or len(lb) > len(best["lobes"]):
+                best = {"unstable": bu, "stable": bs, "homoclinic_points": hs, "lobes": lb, "arclength": length}
+            if len(lb) == 2:
+                return best
+        if 2 * length > limit * (1 + 1e-12):
+            return best
+        length *= 2
+
+
+def turnstile_check(lobes_found, arclength) -> str:
+    """"ok" when both lobes of a turnstile were found and their areas agree (area preservation:
+    relative ``LOBE_AGREEMENT`` beyond three times their error estimates), else why not."""
+    lb = lobes_found
+    if len(lb) < 2:
+        return f"no pair of lobes within arclength {arclength:g}"
+    if abs(abs(lb[0].area) - abs(lb[1].area)) > LOBE_AGREEMENT * abs(lb[0].area) + 3 * (lb[0].error + lb[1].error):
+        return (f"the two lobes differ ({abs(lb[0].area):.6g}, {abs(lb[1].area):.6g}): the primary "
+                "intersections were not identified")
+    return "ok"
+
+
+def melnikov_lobe_area(params, h, mu) -> float:
+    """First-order lobe area lam mu int |J(g0)| dg0 between consecutive zeros of J = 2 lam mu
+    sqrt(A^2 + B^2) for J = A sin g0 + B cos g0 (docs/manifolds.md, "From the Melnikov integral
+    to the lobe area"); ParameterError when R7 does not apply."""
+    from explorer import model
+    from explorer.analysis import melnikov as mk
+
+    prm0 = (params if isinstance(params, model.Params) else model.Params.from_array(params)).with_(mu=0.0)
+    A, B, _, _ = mk.fit_harmonics(prm0, mk.check_params(prm0, h), 1)
+    return 2.0 * abs(prm0.lam) * float(mu) * math.hypot(A, B)
+
+
+def flux_curve(params, h, mus, *, guess=(0.0, 0.0), arclength=6.0, max_arclength=None, sign=1, **kw) -> list:
+    """The flux across the broken separatrix of the central saddle (the fixed point followed
+    from ``guess`` at mu = 0 by continuation) for each mu of ``mus`` (increasing): one row per
+    mu, ``{"mu", "flux", "error", "lobes", "angle", "melnikov", "ratio", "arclength", "status"}``
+    (flux: area of one lobe of the turnstile per iteration, :func:`turnstile` with branches of
+    ``arclength`` doubled up to ``max_arclength``, default 4 ``arclength``; melnikov:
+    :func:`melnikov_lobe_area` or None; status "ok" (both lobes found, with equal areas), or
+    why there is no value: "elliptic", no pair of lobes, lobes that differ, a ParameterError's
+    text)."""
+    from explorer import model
+    from explorer.analysis import fixedpoints
+    from explorer.analysis.manifolds import saddle
+
+    prm = params if isinstance(params, model.Params) else model.Params.from_array(params)
+    mus = [float(m) for m in mus]
+    if any(b <= a for a, b in zip(mus, mus[1:])) or not mus or mus[0] < 0:
+        raise ParameterError(f"mus must be >= 0 and increasing, got {mus}")
+    rows = []
+    prev, x = 0.0, tuple(guess)
+    for mu in mus:
+        row = {"mu": mu, "flux": None, "error": None, "lobes": [], "angle": None, "melnikov": None, "ratio": None,
+               "arclength": None}
+        try:
+            fp = fixedpoints.follow(prm.with_(mu=prev), h, "mu", prev, mu, x, max_step=max(0.05, mu - prev))
+            prev, x = mu, tuple(fp.point)
+            try:
+                row["melnikov"] = melnikov_lobe_area(prm, h, mu)
+            except ParameterError:
+                pass
+            if fp.stable:
+                row["status"] = "elliptic"
+                rows.append(row)
+                continue
+            t = turnstile(saddle(fp), arclength=arclength, sign=sign,
+                          max_arclength=4 * arclength if max_arclength is None else max_arclength, **kw)
+            row["arclength"] = t["arclength"]
+            lb = t["lobes"]
+            row["status"] = turnstile_check(lb, t["arclength"])
+            if row["status"] == "ok":
+                row.update(flux=abs(lb[0].area), error=max(lobe.error for lobe in lb),
+                           lobes=[lobe.as_dict() for lobe in lb], angle=lb[0].start.angle)
+                if row["melnikov"]:
+                    row["ratio"] = row["flux"] / row["melnikov"]
+        except ParameterError as exc:
+            row["status"] = str(exc)
+        rows.append(row)
+    return rows
+
+
+# ------------------------------------------------------------------ transit times
+def inside(polygon, X, chunk=4096) -> np.ndarray:
+    """Whether each point of X (m, 2) lies inside the closed ``polygon`` (k, 2) (even-odd rule:
+    a ray along +p1 crosses the boundary an odd number of times); NaN points are outside."""
+    P = np.asarray(polygon, float)
+    a, b = P, np.roll(P, -1, axis=0)
+    X = np.asarray(X, float).reshape(-1, 2)
+    out = np.zeros(len(X), bool)
+    for i in range(0, len(X), chunk):
+        x, y = X[i:i + chunk, 0:1], X[i:i + chunk, 1:2]
+        straddle = (a[None, :, 1] > y) != (b[None, :, 1] > y)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            xc = a[None, :, 0] + (y - a[None, :, 1]) * (b[None, :, 0] - a[None, :, 0]) / (b[None, :, 1] - a[None, :, 1])
+        out[i:i + chunk] = (np.count_nonzero(straddle & (x < xc), axis=1) % 2) == 1
+    return out
+
+
+def resonance_zone(unstable: ManifoldBranch, stable: ManifoldBranch, point: Homoclinic) -> np.ndarray:
+    """The region bounded by the unstable arc from the saddle to the homoclinic ``point`` and the
+    stable arc from it back (the pseudo-separatrix; MacKay, Meiss & Percival 1984), as a closed
+    polygon (the stored points of the arcs and ``point``)."""
+    u = unstable.points[unstable.sigma < point.sigma_u]
+    s = stable.points[stable.sigma < point.sigma_s]
+    return np.vstack([u, [point.point], s[::-1][:-1]])
+
+
+def _steps_inside(smap, polygon, X, max_iter, block):
+    """For each start x (inside the polygon), the first k >= 1 with P^k(x) outside (or leaving the
+    allowed region, or with no return): max_iter + 1 when it stays max_iter iterations."""
+    from explorer.analysis.sections import section_crossings
+
+    T = np.full(len(X), max_iter + 1, np.int64)
+    alive = np.arange(len(X))
+    cur = np.asarray(X, float).copy()
+    done = 0
+    while alive.size and done < max_iter:
+        n = min(block, max_iter - done)
+        c = section_crossings(smap.params, cur[alive, 0], cur[alive, 1], smap.h, n, phi0=smap.phi0, tol=smap.tol,
+                              tmax=smap.tmax * n)
+        pts = c.data[:, :, 1:3]                           # NaN where no crossing
+        ins = inside(polygon, pts.reshape(-1, 2)).reshape(len(alive), n)
+        left = ~ins
+        first = np.where(left.any(axis=1), np.argmax(left, axis=1), -1)
+        gone = first >= 0
+        T[alive[gone]] = done + first[gone] + 1
+        cur[alive[~gone]] = pts[~gone, -1]
+        alive = alive[~gone]
+        done += n
+    return T
+
+
+def exit_times(unstable: ManifoldBranch, stable: ManifoldBranch, point: Homoclinic, *, samples=4000,
+                  max_iter=400, seed=0, block=50) -> dict:
+    """Transit times through the resonance zone R (:func:`resonance_zone`) and the mean-exit-time
+    identity (Meiss 1992, Rev. Mod. Phys. 64, 795): for an area-preserving map, the points of the
+    entry set I = {x in R: P^-1(x) not in R} (area = flux Phi) stay T(x) iterations in R, and
+    int_I T dA = A_acc, the area of R's accessible part, so <T>_I = A_acc / Phi.
+
+    ``samples`` points uniform in R (seeded): those whose preimage is outside form a uniform
+    sample of I (their fraction times A(R) estimates Phi independently of the lobes); each is
+    iterated until it leaves R (at most N = ``max_iter`` iterations); A_acc is A(R) times the
+    fraction of all samples that leave within N.  Truncated consistently: a point x = P^j(y) of
+    the transit orbit of an entry point y leaves within N iterations iff j >= T(y) - N, so
+    A(points leaving within N) = Phi <min(T, N)>_I exactly, and ``mean`` is <min(T, N)>_I (it
+    tends to <T>_I as N grows).  Returns a dict: area (of R, Green), flux_mc (and flux_mc_sem),
+    entry (the number of entry points), times (their T; N + 1 when capped), mean, sem (standard
+    error), capped (entry points still inside after N), accessible_area, accessible_sem,
+    survival (t, P(T > t)), all_times (T of all samples) and zone (the polygon R)."""
+    from explorer.analysis.manifolds import _images
+
+    smap = unstable.curve.sd.smap
+    R = resonance_zone(unstable, stable, point)
+    area = abs(polygon_area(R))
+    rng = np.random.default_rng(seed)
+    lo, hi = R.min(axis=0), R.max(axis=0)
+    X = np.empty((0, 2))
+    while len(X) < samples:
+        Y = lo + (hi - lo) * rng.random((2 * samples, 2))
+        X = np.vstack([X, Y[inside(R, Y)]])
+    X = X[:samples]
+    pre = _images(smap, X, 1, True)
+    entry = ~inside(R, pre)
+    T_all = _steps_inside(smap, R, X, max_iter, block)
+    T = T_all[entry]
+    Tc = np.minimum(T, max_iter)
+    acc = T_all <= max_iter
+    n = len(X)
+    p_acc = acc.mean()
+    t = np.unique(T[T <= max_iter]) if T.size else np.array([], np.int64)
+    surv = np.array([(T > k).mean() for k in t]) if T.size else np.array([])
+    q = entry.mean()
+    return {"area": area, "flux_mc": area * q, "flux_mc_sem": area * math.sqrt(q * (1 - q) / n),
+            "entry": int(entry.sum()), "times": T, "mean": float(Tc.mean()) if T.size else float("nan"),
+            "sem": float(Tc.std(ddof=1) / math.sqrt(T.size)) if T.size > 1 else float("nan"),
+            "capped": int(np.sum(T > max_iter)), "accessible_area": area * p_acc,
+            "accessible_sem": area * math.sqrt(p_acc * (1 - p_acc) / n), "survival": (t, surv),
+            "all_times": T_all, "zone": R}

@@ -1,0 +1,242 @@
+"""Vector values for the lane (SIMD) kernels: ``f64vec``, LANES float64 values held as one LLVM
+``<LANES x double>`` value, and its operations as numba intrinsics.
+
+Every operation is one LLVM vector instruction with no fast-math flag (no reassociation, no FMA
+contraction): IEEE fadd/fsub/fmul/fdiv/fneg on a vector are lane-wise the same operations as on
+a scalar, so a lane computes bit for bit what scalar code with the same expression tree
+computes.  Used by the Taylor lane kernels (:mod:`explorer.integrate.lanes`,
+:mod:`explorer.integrate.tangent_lanes`) and by the recurrences that ``tools/gen_lanes.py``
+translates into ``_lanes_generated.py`` and ``_tangent_lanes_generated.py``.
+
+- :func:`vload` / :func:`vstore`: LANES consecutive elements of a C-contiguous float64 array
+  (addressed by the flat index of the first);
+- :func:`vzero`, :func:`vsplat`, :func:`vadd`, :func:`vsub`, :func:`vmul`, :func:`vdiv`,
+  :func:`vneg`, :func:`vabs`, :func:`vmax_gt` (the scalar ``if v > s: s = v``);
+- :func:`vlog2_approx`: log2 within :data:`LOG2_APPROX_ERR` for positive normal values (used
+  only to decide which of two ``pow`` is the smaller, :func:`explorer.integrate.lanes.lane_step_size`);
+- :func:`atomic_fetch_add`: the shared queue of orbits of the lane workers.
+
+Why explicit vectors and not unrolled scalar lanes plus ``numba.config.SLP_VECTORIZE``: with
+lanes unrolled into scalar accumulators, LLVM's SLP vectorizer vectorizes the loop body but
+keeps the 5 x LANES accumulators as scalar phi nodes (a shuffle storm every iteration) and
+only runs when the flag is on at the moment of compilation (which on-disk caching does not
+record).  Explicit vector values need no flag: order 15, ~42 ns per orbit-step at LANES = 8
+on AVX-512 (vs ~150 ns with SLP, ~225 ns scalar).
+
+With ``EXPLORER_NOJIT=1`` the operations are numpy twins on arrays of LANES (elementwise: the
+same IEEE operations).
+"""
+import numpy as np
+
+from explorer._jit import NOJIT
+
+#: orbits advanced in lockstep by one vector instruction: 8 doubles = one AVX-512 register (two
+#: AVX2 registers elsewhere).  Measured (order 15, coefficients per orbit-step): 4 lanes ~62 ns,
+#: 8 lanes ~42 ns, 16 lanes ~37 ns; 8 is chosen because whole-run throughput also pays for idle
+#: lanes at block ends.
+LANES = 8
+#: log2(1 + x) ~ sum_k LOG2_POLY[k] x^k on [0, 1) (max error 2.05e-4) and a bound of the
+#: error of vlog2_approx (tests/integrate/test_lanes.py checks it)
+LOG2_POLY = (2.0426737e-4, 1.4360970, -0.66951221, 0.31221131, -0.079149502)
+LOG2_APPROX_ERR = 4e-4
+
+
+# ---------------------------------------------------------------------------- vector values
+# f64vec is <LANES x double> in LLVM.  vload/vstore address a C-contiguous float64 array by
+# its flat element index; the arithmetic is plain fadd/fsub/fmul/fneg (no fast-math flags).
+if NOJIT:  # pragma: no cover - plain-Python twins (numpy elementwise = the same IEEE ops)
+    def vload(a, i):
+        return a.reshape(-1)[i:i + LANES].copy()
+
+    def vstore(a, i, v):
+        a.reshape(-1)[i:i + LANES] = v
+
+    def vzero():
+        return np.zeros(LANES)
+
+    def vsplat(x):
+        return np.full(LANES, x)
+
+    def vadd(a, b):
+        return a + b
+
+    def vsub(a, b):
+        return a - b
+
+    def vmul(a, b):
+        return a * b
+
+    def vneg(a):
+        return -a
+
+    def vabs(a):
+        return np.abs(a)
+
+    def vmax_gt(v, s):
+        return np.where(v > s, v, s)
+
+    def vdiv(a, b):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            return a / b
+
+    def vlog2_approx(v):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.log2(v)
+
+    def atomic_fetch_add(a, i, v):
+        old = a[i]
+        a[i] += v
+        return old
+else:
+    from llvmlite import ir as _ir
+    from numba.core import cgutils as _cgutils
+    from numba.core import types as _types
+    from numba.extending import intrinsic as _intrinsic
+    from numba.extending import models as _models
+    from numba.extending import register_model as _register_model
+
+    class F64Vec(_types.Type):
+        """LANES float64 values held as one LLVM vector value."""
+
+        def __init__(self):
+            super().__init__(name="f64x%d" % LANES)
+
+    f64vec = F64Vec()
+    _VT = _ir.VectorType(_ir.DoubleType(), LANES)
+
+    @_register_model(F64Vec)
+    class _F64VecModel(_models.PrimitiveModel):
+        def __init__(self, dmm, fe_type):
+            super().__init__(dmm, fe_type, _VT)
+
+    def _is_c_f64(a):
+        return isinstance(a, _types.Array) and a.dtype == _types.float64 and a.layout == "C"
+
+    def _vec_ptr(context, builder, arrty, arr, idx):
+        ary = context.make_array(arrty)(context, builder, arr)
+        return builder.bitcast(builder.gep(ary.data, [idx]), _VT.as_pointer())
+
+    @_intrinsic
+    def vload(typingctx, a, i):
+        """a.flat[i:i + LANES] as a vector."""
+        if not (_is_c_f64(a) and isinstance(i, _types.Integer)):
+            return None
+
+        def codegen(context, builder, sig, args):
+            return builder.load(_vec_ptr(context, builder, sig.args[0], args[0], args[1]), align=8)
+        return f64vec(a, _types.intp), codegen
+
+    @_intrinsic
+    def vstore(typingctx, a, i, v):
+        """a.flat[i:i + LANES] = v."""
+        if not (_is_c_f64(a) and isinstance(i, _types.Integer) and v == f64vec):
+            return None
+
+        def codegen(context, builder, sig, args):
+            builder.store(args[2], _vec_ptr(context, builder, sig.args[0], args[0], args[1]), align=8)
+            return context.get_dummy_value()
+        return _types.void(a, _types.intp, f64vec), codegen
+
+    @_intrinsic
+    def vzero(typingctx):
+        def codegen(context, builder, sig, args):
+            return _ir.Constant(_VT, [0.0] * LANES)
+        return f64vec(), codegen
+
+    @_intrinsic
+    def vsplat(typingctx, x):
+        """(x, x, ..., x)."""
+        if not isinstance(x, (_types.Float, _types.Integer)):
+            return None
+
+        def codegen(context, builder, sig, args):
+            i32 = _ir.IntType(32)
+            v = builder.insert_element(_ir.Constant(_VT, _ir.Undefined), args[0], _ir.Constant(i32, 0))
+            return builder.shuffle_vector(v, _ir.Constant(_VT, _ir.Undefined),
+                                          _ir.Constant(_ir.VectorType(i32, LANES), [0] * LANES))
+        return f64vec(_types.float64), codegen
+
+    def _binary(op):
+        @_intrinsic
+        def f(typingctx, a, b):
+            if not (a == f64vec and b == f64vec):
+                return None
+
+            def codegen(context, builder, sig, args):
+                return getattr(builder, op)(args[0], args[1])
+            return f64vec(f64vec, f64vec), codegen
+        return f
+
+    vadd = _binary("fadd")
+    vsub = _binary("fsub")
+    vmul = _binary("fmul")
+    vdiv = _binary("fdiv")
+
+    @_intrinsic
+    def vneg(typingctx, a):
+        if a != f64vec:
+            return None
+
+        def codegen(context, builder, sig, args):
+            return builder.fneg(args[0])
+        return f64vec(f64vec), codegen
+
+    @_intrinsic
+    def vabs(typingctx, a):
+        """|a| (llvm.fabs, as numba's scalar abs)."""
+        if a != f64vec:
+            return None
+
+        def codegen(context, builder, sig, args):
+            fn = _cgutils.get_or_insert_function(builder.module, _ir.FunctionType(_VT, [_VT]),
+                                                 "llvm.fabs.v%df64" % LANES)
+            return builder.call(fn, [args[0]])
+        return f64vec(f64vec), codegen
+
+    @_intrinsic
+    def vmax_gt(typingctx, v, s):
+        """v where v > s else s (the scalar ``if v > s: s = v``; fcmp ogt + select)."""
+        if not (v == f64vec and s == f64vec):
+            return None
+
+        def codegen(context, builder, sig, args):
+            return builder.select(builder.fcmp_ordered(">", args[0], args[1]), args[0], args[1])
+        return f64vec(f64vec, f64vec), codegen
+
+    @_intrinsic
+    def vlog2_approx(typingctx, v):
+        """log2(v) within LOG2_APPROX_ERR for positive normal finite v (exponent field plus a
+        degree-4 polynomial of the mantissa); garbage for other values."""
+        if v != f64vec:
+            return None
+
+        def codegen(context, builder, sig, args):
+            i64 = _ir.IntType(64)
+            IT = _ir.VectorType(i64, LANES)
+
+            def isplat(c):
+                return _ir.Constant(IT, [c] * LANES)
+
+            def fsplat(c):
+                return _ir.Constant(_VT, [c] * LANES)
+            bits = builder.bitcast(args[0], IT)
+            e = builder.sitofp(builder.sub(builder.lshr(bits, isplat(52)), isplat(1023)), _VT)
+            m = builder.bitcast(builder.or_(builder.and_(bits, isplat(0x000FFFFFFFFFFFFF)),
+                                            isplat(0x3FF0000000000000)), _VT)
+            x = builder.fsub(m, fsplat(1.0))
+            p = fsplat(LOG2_POLY[-1])
+            for c in LOG2_POLY[-2::-1]:
+                p = builder.fadd(builder.fmul(p, x), fsplat(c))
+            return builder.fadd(e, p)
+        return f64vec(f64vec), codegen
+
+    @_intrinsic
+    def atomic_fetch_add(typingctx, a, i, v):
+        """old = a[i]; a[i] += v, atomically (a: C-contiguous int64 array)."""
+        if not (isinstance(a, _types.Array) and a.dtype == _types.int64 and a.layout == "C"):
+            return None
+
+        def codegen(context, builder, sig, args):
+            ary = context.make_array(sig.args[0])(context, builder, args[0])
+            return builder.atomic_rmw("add", builder.gep(ary.data, [args[1]]), args[2], "seq_cst")
+        return _types.int64(a, _types.intp, _types.int64), codegen

@@ -1,0 +1,101 @@
+"""Guards of a store: its directory must be writable, and one process at a time writes it.
+
+:func:`check_writable` refuses, before anything is computed, an output place that cannot be
+created or written (one line naming the option and the directory).
+
+:func:`store_lock` holds an OS file lock (``fcntl.flock``, exclusive, not waiting) on
+``<store>.lock`` beside the store for as long as a run writes the store, its block folders or its
+temporaries; the lock file says who holds it (pid, host, command line, since when).  A second
+process that asks for the same store gets :class:`StoreBusy` at once, naming the holder.  The
+kernel releases the lock when its holder dies, even by SIGKILL, so a lock file left behind by a
+killed run locks nothing: the next run takes it over.  The holder removes the file when it is done
+(after checking, under the lock, that the file it locked is still the one at that path, so two
+processes can never both believe they hold the lock).
+"""
+from __future__ import annotations
+
+import contextlib
+import datetime as _dt
+import os
+import socket
+import sys
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+
+from explorer.io.store.format import StoreError
+from explorer.model import ParameterError
+
+
+class StoreBusy(StoreError):
+    """Another process holds the lock of the store."""
+
+
+def lock_path(path) -> str:
+    """The lock file of the store at ``path``: ``<path>.lock``."""
+    return os.fspath(path) + ".lock"
+
+
+def check_writable(directory, option: str, target) -> None:
+    """Refuse (:class:`~explorer.model.ParameterError`, one line naming ``option``, ``target`` and
+    the reason) a ``directory`` that cannot be created or written into."""
+    directory = Path(directory)
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=directory, prefix=".explorer-write-test-"):
+            pass
+    except OSError as exc:
+        raise ParameterError(f"{option} {target}: cannot write into the directory '{directory}' "
+                             f"({exc.strerror or exc})") from None
+
+
+def _holder_text() -> str:
+    """Who holds the lock: the line a refused writer prints, then the holder's command line."""
+    now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+    return f"pid {os.getpid()} on {socket.gethostname()} since {now}\ncommand: {' '.join(sys.argv)}\n"
+
+
+@contextlib.contextmanager
+def store_lock(path) -> Iterator[str]:
+    """Hold the lock of the store at ``path`` for the ``with`` block (yields the lock file's path).
+
+    Raises :class:`StoreBusy` ("<store> is being written by pid N on HOST since ...") when another
+    process holds it; an ``OSError`` when the lock file cannot be created (check the directory
+    with :func:`check_writable` first).  Where there is no ``fcntl`` (not POSIX) nothing is locked."""
+    try:
+        import fcntl
+    except ImportError:
+        yield lock_path(path)
+        return
+
+    name = lock_path(path)
+    while True:
+        fd = os.open(name, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            text = os.read(fd, 4096).decode("utf-8", "replace").strip()
+            holder = text.splitlines()[0] if text else "another process"
+            os.close(fd)
+            raise StoreBusy(f"{os.fspath(path)} is being written by {holder}; wait for it to finish or "
+                            "choose another --out") from None
+        except BaseException:
+            os.close(fd)
+            raise
+        try:   # the holder before us may have removed the file between our open and our lock
+            same = os.fstat(fd).st_ino == os.stat(name).st_ino
+        except FileNotFoundError:
+            same = False
+        if same:
+            break
+        os.close(fd)
+    try:
+        os.ftruncate(fd, 0)
+        os.write(fd, _holder_text().encode())
+        yield name
+    finally:
+        try:
+            os.remove(name)     # still under the lock: nobody else holds this file
+        except FileNotFoundError:
+            pass
+        os.close(fd)            # releases the lock

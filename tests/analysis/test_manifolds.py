@@ -1,0 +1,264 @@
+"""Invariant manifolds, homoclinic points and lobes (explorer.analysis.manifolds, transport).
+
+Invariance by an independent path (backward integration of the section map), agreement with a
+tighter start, the reversor mapping W^u onto W^s, the exact separatrix R7 at mu = 0, budgets and
+the region's edge; Green's theorem on known areas; the turnstile's lobes against Melnikov."""
+import math
+
+import numpy as np
+import pytest
+
+from explorer import model
+from explorer.analysis import fixedpoints as fpm
+from explorer.analysis import manifolds as mf
+from explorer.analysis import melnikov as mk
+from explorer.analysis import transport as tr
+from explorer.analysis.periodic import reversor
+from explorer.analysis.section_map import SectionMap
+
+H = model.FIGURE4_H           # MODEL.md R9: Figure 4, h = 2
+MU = 0.03                     # the central saddle near (-0.011, 0), trace 9.03
+
+
+@pytest.fixture(scope="module")
+def saddle():
+    fp = fpm.find_fixed_point(model.FIGURE4.with_(mu=MU), H, (0.0, 0.0))
+    return mf.saddle(fp)
+
+
+@pytest.fixture(scope="module")
+def wu(saddle):
+    return mf.grow_branch(saddle, sign=1, arclength=3.0)
+
+
+def test_section_map_preserves_area_so_lobe_areas_are_invariant():
+    sm = SectionMap(model.FIGURE4.with_(mu=MU), H)
+    for x in ([0.3, 0.2], [-0.5, 0.1], [1.2, -0.4]):
+        assert abs(np.linalg.det(sm.jacobian(x)) - 1.0) < 1e-10
+
+
+def test_saddle_has_the_figure4_multiplier_and_starts_within_tolerance(saddle, wu):
+    assert saddle.point[0] == pytest.approx(-0.011, abs=1e-3)
+    assert saddle.multiplier + 1.0 / saddle.multiplier == pytest.approx(9.03, abs=0.01)
+    # the linear start error |a| s0^2 / 2 is the requested tolerance
+    assert 0.5 * wu.curvature * wu.start_distance ** 2 == pytest.approx(mf.DEFAULT_START_TOL, rel=1e-6)
+    assert wu.status == "arclength" and 3.0 <= wu.arclength < 3.0 + mf.DEFAULT_MAX_GAP
+    gaps = np.linalg.norm(np.diff(wu.points, axis=0), axis=1)
+    assert gaps[1:].max() <= mf.DEFAULT_MAX_GAP
+
+
+def test_preimages_of_unstable_points_lie_on_the_branch(saddle, wu):
+    """P^-1 by backward integration (not the forward batch that grew the branch)."""
+    L = math.log(saddle.multiplier)
+    idx = np.flatnonzero(wu.sigma > wu.sigma[1] + 2 * L)[::97][:4]
+    assert idx.size >= 3
+    for i in idx:
+        back = saddle.smap.inverse(wu.points[i])
+        assert np.linalg.norm(back - wu.at([wu.sigma[i] - L])[0]) < 1e-9
+        assert wu.distance(back) < 1e-10
+
+
+def test_a_tighter_start_gives_the_same_manifold(saddle):
+    loose = mf.grow_branch(saddle, sign=-1, arclength=2.0, start_tol=1e-8)
+    tight = mf.grow_branch(saddle, sign=-1, arclength=2.0, start_tol=1e-13)
+    assert loose.start_distance > 30 * tight.start_distance
+    for x in loose.points[len(loose.points) // 3::40]:
+        assert tight.distance(x) < 1e-8
+
+
+def test_the_reversor_maps_the_unstable_onto_the_stable_manifold(saddle, wu):
+    """W^s integrated backward in time (no use of the reversor) is G0 W^u."""
+    ws = mf.grow_branch(saddle, stable=True, sign=1, arclength=1.5, integrate_backward=True)
+    assert ws.status == "arclength"
+    for x in ws.points[5::25]:
+        assert wu.distance(reversor(x)) < 1e-9
+
+
+def test_branches_coincide_with_the_exact_separatrix_at_mu_0():
+    prm = model.FIGURE4.with_(mu=0.0)
+    fp = fpm.find_fixed_point(prm, H, (0.0, 0.0))
+    sd = mf.saddle(fp)
+    c = mk.check_params(prm, H)
+    branches = [mf.grow_branch(sd, stable=s, sign=g, arclength=4.0) for s in (False, True) for g in (1, -1)]
+    for b in branches:   # every point on the level F0 = c of R6/R7
+        y = model.section_state(prm, b.points[:, 0], b.points[:, 1], H)
+        assert np.max(np.abs(mk.F0(prm, y) - c)) < 1e-10
+    # R7's orbits cross the section on the branches (no splitting: W^u = W^s)
+    for sign in (1, -1):
+        for g0 in (0.5, 2.0, 4.0):
+            xc, _, _ = mk.separatrix_point(prm, H, g0, sign)
+            assert min(b.distance(xc) for b in branches[:2]) < 1e-9
+            assert min(b.distance(xc) for b in branches[2:]) < 1e-9
+
+
+def test_growth_stops_at_budgets_with_a_status(saddle):
+    b = mf.grow_branch(saddle, arclength=50.0, max_points=60)
+    assert b.status == "max_points" and len(b.points) <= 61
+    b = mf.grow_branch(saddle, arclength=50.0, max_time=0.0)
+    assert b.status == "max_time" and b.arclength < 50.0
+    with pytest.raises(model.ParameterError, match="arclength"):
+        mf.grow_branch(saddle, arclength=-1.0)
+
+
+def test_growth_stops_where_points_have_no_return(saddle):
+    """A time budget just above the saddle's return time: the branch ends at the first point
+    that needs longer ("edge"), and every point kept has its image."""
+    T = abs(saddle.smap(saddle.point, jacobian=False).time)
+    short = mf.saddle(fpm.find_fixed_point(model.FIGURE4.with_(mu=MU), H, (0.0, 0.0)), tmax=1.05 * T)
+    b = mf.grow_branch(short, sign=1, arclength=20.0)
+    assert b.status == "edge" and b.arclength < 20.0 and len(b.points) > 20
+    assert np.all(np.isfinite(b.points))
+
+
+def test_a_non_hyperbolic_orbit_is_refused():
+    c, s = math.cos(0.3), math.sin(0.3)    # an elliptic monodromy (rotation by 0.3)
+    J = np.array([[c, -s], [s, c]])
+    fp = fpm.FixedPoint(np.zeros(2), J, np.linalg.eigvals(J), 2 * c, 1.0, 6.0, 0, 0.0,
+                        model.FIGURE4.with_(mu=MU), H)
+    with pytest.raises(model.ParameterError, match="not hyperbolic"):
+        mf.saddle(fp)
+
+
+@pytest.fixture(scope="module")
+def tangle(saddle, wu):
+    bu = mf.grow_branch(saddle, sign=1, arclength=6.0)
+    bs = mf.grow_branch(saddle, stable=True, sign=1, arclength=6.0)
+    return bu, bs, mf.homoclinic_points(bu, bs)
+
+
+def test_primary_homoclinic_point_is_on_the_symmetry_line(saddle, tangle):
+    bu, bs, hs = tangle
+    assert hs
+    for hp in hs:
+        assert hp.residual < 1e-10
+        assert bu.distance(hp.point) < 1e-10 and bs.distance(hp.point) < 1e-10
+        # the reversor maps the tangle to itself: the mirror of an intersection is one
+        assert any(np.linalg.norm(reversor(hp.point) - q.point) < 1e-9 for q in hs) or \
+            abs(hp.point[1]) < 1e-10
+    on_line = [hp for hp in hs if abs(hp.sigma_u - hp.sigma_s) < 1e-6]
+    assert on_line and all(abs(hp.point[1]) < 1e-10 for hp in on_line)
+    h0 = min(on_line, key=lambda hp: hp.sigma_u)
+    # splitting angle: the tangents of W^u and W^s = G0 W^u at a point of p2 = 0 are mirror images
+    t = (bu.at([h0.sigma_u + 1e-6])[0] - bu.at([h0.sigma_u - 1e-6])[0])
+    mirror = 2 * math.atan(abs(t[1] / t[0]))
+    assert h0.angle == pytest.approx(min(mirror, math.pi - mirror), abs=1e-6)
+    orbit = mf.homoclinic_orbit(saddle.smap, h0.point, 6)
+    assert np.linalg.norm(orbit[0] - saddle.point) < 1e-3 and np.linalg.norm(orbit[-1] - saddle.point) < 1e-3
+
+
+def test_green_area_is_exact_on_polygons():
+    assert tr.polygon_area([[0, 0], [1, 0], [0, 1]]) == pytest.approx(0.5, abs=1e-15)
+    L_shape = [[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]]
+    assert tr.polygon_area(L_shape) == pytest.approx(3.0, abs=1e-15)
+    assert tr.polygon_area(L_shape[::-1]) == pytest.approx(-3.0, abs=1e-15)
+
+
+def test_green_area_of_an_ellipse_converges_and_its_error_estimate_holds():
+    a, b = 2.0, 0.5
+    exact = math.pi * a * b
+
+    def ring(n):
+        t = 2 * math.pi * np.arange(n) / n
+        return np.column_stack([a * np.cos(t), b * np.sin(t)])
+
+    errs = [abs(tr.polygon_area(ring(n)) - exact) for n in (16, 32, 64)]
+    assert errs[0] / errs[1] == pytest.approx(4.0, rel=0.05) and errs[1] / errs[2] == pytest.approx(4.0, rel=0.05)
+    area, err = tr.richardson_area(ring(32), ring(64))
+    assert abs(area - exact) <= err and err < errs[2]
+
+
+def test_turnstile_lobes_have_equal_areas_and_match_melnikov(saddle, tangle):
+    """Flux = lobe area; at first order 2 lam mu |J| (docs/manifolds.md): within O(mu^2)."""
+    bu, bs, hs = tangle
+    lb = tr.lobes(bu, bs, points=hs)
+    assert len(lb) == 2
+    a1, a2 = lb
+    assert a1.area * a2.area < 0                       # opposite orientation, one lobe each side
+    assert abs(abs(a1.area) - abs(a2.area)) <= 3 * (a1.error + a2.error) + 1e-9
+    prm0 = model.FIGURE4.with_(mu=0.0)
+    A, B, _, _ = mk.fit_harmonics(prm0, mk.check_params(prm0, H), 1)
+    predicted = 2.0 * prm0.lam * MU * math.hypot(A, B)
+    assert abs(a1.area) / predicted == pytest.approx(1.0, abs=10 * MU ** 2)
+
+
+def test_flux_curve_ratio_to_melnikov_tends_to_one(tangle):
+    """At mu = 1e-3 (continued from mu = 0) the ratio is closer to 1 than at mu = 0.03."""
+    (row,) = tr.flux_curve(model.FIGURE4, H, [1e-3])
+    assert row["status"] == "ok"
+    bu, bs, hs = tangle
+    prm0 = model.FIGURE4.with_(mu=0.0)
+    A, B, _, _ = mk.fit_harmonics(prm0, mk.check_params(prm0, H), 1)
+    ratio_03 = abs(tr.lobes(bu, bs, points=hs)[0].area) / (2.0 * MU * math.hypot(A, B))
+    assert abs(row["ratio"] - 1.0) < abs(ratio_03 - 1.0) < 1e-3
+    assert abs(row["ratio"] - 1.0) < 1e-6
+    on_line = max((p for p in hs if abs(p.point[1]) < 1e-9), key=lambda p: abs(p.point[0]))   # (1.788, 0)
+    for mu, angle in ((row["mu"], row["angle"]), (MU, on_line.angle)):
+        assert 0.0 < angle < 2.0 * mu   # the splitting angle at the primary point on p2 = 0 is O(mu)
+
+
+@pytest.mark.parametrize("mu", [0.05, 0.1])
+def test_mean_transit_time_is_accessible_area_over_flux(mu):
+    """Meiss 1992: <min(T, N)> over the entry set = A(points of R leaving within N) / flux, within
+    the sampling error; the entry set's Monte Carlo area is the lobe area."""
+    fp = fpm.follow(model.FIGURE4, H, "mu", 0.0, mu, (0.0, 0.0))
+    t = tr.turnstile(mf.saddle(fp), arclength=6.0)
+    lb = t["lobes"]
+    phi = abs(lb[0].area)
+    h0 = min((lb[0].start, lb[0].end), key=lambda p: abs(p.point[1]))
+    r = tr.exit_times(t["unstable"], t["stable"], h0, samples=1500, max_iter=100)
+    assert r["entry"] > 50
+    assert abs(r["flux_mc"] - phi) < 3 * r["flux_mc_sem"]
+    expected = r["accessible_area"] / phi
+    assert abs(r["mean"] - expected) < 3 * math.hypot(r["sem"], r["accessible_sem"] / phi)
+    t_s, surv = r["survival"]
+    assert np.all(np.diff(surv) <= 0) and surv[0] <= 1.0
+
+
+def test_inside_follows_the_even_odd_rule():
+    square = np.array([[0, 0], [2, 0], [2, 2], [0, 2]], float)
+    got = tr.inside(square, [[1, 1], [3, 1], [-0.5, 1], [1, 2.5], [np.nan, 1]])
+    assert got.tolist() == [True, False, False, False, False]
+
+
+@pytest.mark.parametrize("guess, maps", [((-1.8408, 0.0), 2), ((0.2909, 0.0), 4)])
+def test_manifolds_of_a_period_2_orbit_are_mapped_onto_each_other(guess, maps):
+    """Period 2 (trace 9.96, and -6.80: negative multipliers, so F = P^4 keeps each branch):
+    P maps W^u at the orbit's first point onto W^u at its second."""
+    from explorer.analysis.periodic import find_periodic_orbit
+
+    orb = find_periodic_orbit(model.FIGURE4.with_(mu=MU), H, guess, 2)
+    s0, s1 = mf.saddle(orb, index=0), mf.saddle(orb, index=1)
+    assert s0.maps == s1.maps == maps
+    assert s0.multiplier == pytest.approx(s1.multiplier, rel=1e-8)
+    b0 = mf.grow_branch(s0, sign=1, arclength=0.3)
+    b1 = [mf.grow_branch(s1, sign=s, arclength=2.0) for s in (1, -1)]
+    for x in b0.points[3::15]:
+        y = s0.smap(x, jacobian=False).point
+        assert min(b.distance(y) for b in b1) < 1e-9
+
+
+def test_stable_manifold_without_the_reversor_is_invariant():
+    """xi != 0: no reversor, W^s by backward integration point by point; its forward images
+    move down the branch by one generation, x(sigma) -> x(sigma - L)."""
+    prm = model.FIGURE4.with_(mu=MU, xi=0.05)
+    from explorer.analysis.periodic import is_reversible
+
+    assert not is_reversible(prm)
+    sd = mf.saddle(fpm.find_fixed_point(prm, H, (0.0, 0.0)))
+    ws = mf.grow_branch(sd, stable=True, sign=1, arclength=0.6)
+    assert ws.status == "arclength"
+    L = math.log(sd.multiplier)
+    for i in range(len(ws.points) - 1, len(ws.points) // 2, -23):
+        y = sd.smap(ws.points[i], jacobian=False).point
+        assert np.linalg.norm(y - ws.at([ws.sigma[i] - L])[0]) < 1e-9
+
+
+def test_a_flux_needs_both_lobes_with_equal_areas(tangle):
+    """At mu = 0.5 the smallest-sum rule once paired the wrong intersections and flux_curve
+    reported one 'lobe' of area 5.7 as the flux; now both lobes must be found and agree."""
+    bu, bs, hs = tangle
+    lb = tr.lobes(bu, bs, points=hs)
+    assert tr.turnstile_check(lb, 6.0) == "ok"
+    assert tr.turnstile_check(lb[:1], 6.0).startswith("no pair of lobes")
+    wrong = tr.Lobe(lb[1].start, lb[1].end, 5.7, 1e-6, lb[1].boundary)
+    assert tr.turnstile_check([lb[0], wrong], 6.0).startswith("the two lobes differ")
