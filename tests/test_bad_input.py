@@ -54,6 +54,7 @@ BASE = {
     "trajectory": ["trajectory", "--no-figure", "-T", "1", "--samples", "10"],
     "sweep": ["sweep", "{scene}", "--no-figure", "--quiet", "--out", "o.h5"],
     "figures": ["figures", "--only", "figure4"],
+    "manifold": ["manifold", "--arclength", "0.5"],
 }
 MODEL_OPTIONS = ("--a1", "--a2", "--b", "--lam", "--chi", "--zeta", "--mu", "--xi", "--eta")
 #: options taking a real number, per command (the model parameters are added below)
@@ -66,6 +67,7 @@ REAL_OPTIONS = {
     "explore": ("--h", "--tol", "--dt"),
     "melnikov": ("--h", "--g0"),
     "trajectory": ("--p1", "--p2", "--M", "--phi", "--time", "--tol"),
+    "manifold": ("--h", "--tol", "--arclength", "--max-time"),
 }
 #: options taking an integer: (option, values out of range)
 INT_OPTIONS = {
@@ -76,9 +78,11 @@ INT_OPTIONS = {
     "explore": (("--panel", ("1",)), ("--crossings-per-chunk", ("0", BIG)), ("--max-crossings", ("0", BIG))),
     "trajectory": (("--samples", ("1", BIG)), ("--glyphs", ("0", "-1"))),
     "sweep": (("--jobs", ("0", "-1", BIG)),),
+    "manifold": (("--period", ("0", BIG)), ("--index", ("-1", BIG)), ("--max-points", ("0", BIG))),
 }
 #: options taking a point p1,p2
-PAIR_OPTIONS = {"fixedpoint": ("--guess",), "periodic": ("--guess",), "rotation": ("--from", "--to", "--center")}
+PAIR_OPTIONS = {"manifold": ("--guess",), "fixedpoint": ("--guess",), "periodic": ("--guess",),
+                "rotation": ("--from", "--to", "--center")}
 
 
 def _cases():
@@ -90,7 +94,7 @@ def _cases():
                 values.append("1e300")          # past MAX_MAGNITUDE (or outside the region)
             if opt in ("--tol",):
                 values += ["0", "1", "-1e-12"]
-            if opt in ("--dt", "--time", "--tmax"):
+            if opt in ("--dt", "--time", "--tmax", "--arclength", "--max-time"):
                 values += ["0", "-1"]
             for v in values:
                 rows.append((f"{cmd}{opt}={v or 'empty'}", BASE[cmd] + [f"{opt}={v}"], opt))

@@ -739,6 +739,11 @@ def cmd_manifold(args) -> int:
     params = _section_map_args(args)
     if args.period < 1:
         raise model.ParameterError(f"--period must be an integer K >= 1, got {args.period}")
+    validation.integer("--period", args.period, 1, validation.MAX_PERIOD)
+    # four branches of at most --max-points points (p1, p2 and their parameter: about 64 bytes each)
+    validation.fits_in_memory("--max-points", args.max_points, 4 * 64, "4 branches of 64 bytes per point", lo=1)
+    if args.max_time is not None:
+        validation.real("--max-time", args.max_time, 0.0, lo_open=True)
     orb = periodic.find_periodic_orbit(params, args.h, _pair(args.guess, "--guess"), args.period, tol=args.tol)
     sd = manifolds.saddle(orb, index=args.index, tol=args.tol)
     kw = {"arclength": args.arclength, "max_points": args.max_points, "max_time": args.max_time}
