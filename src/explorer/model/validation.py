@@ -32,7 +32,7 @@ import numpy as np
 __all__ = ["MAX_CONTINUATION_STEPS", "MAX_JOBS", "MAX_MAGNITUDE", "MAX_MEMORY_FRACTION", "MAX_PERIOD",
            "ParameterError", "boolean", "choice", "continuation_steps", "did_you_mean", "fits_in_memory",
            "human_bytes", "input_file", "integer", "magnitude", "output_path", "packed_params", "physical_memory",
-           "real", "threads", "with_value"]
+           "real", "threads", "with_value", "writable_directory"]
 
 #: largest absolute value of a model parameter, the energy h or a start coordinate.  The equations are
 #: written for parameters of order one (Figure 4: 0.5 to 2): every method integrates h = 1e6
@@ -190,15 +190,19 @@ def continuation_steps(label: str, start, stop, step) -> tuple:
     return start, stop, step
 
 
-def _probe_directory(label: str, path: str, directory: str) -> None:
-    """Refuse unless a file can be created (and removed) in the existing ``directory``."""
+def writable_directory(label: str, target, directory) -> None:
+    """Refuse (one line naming ``label`` and ``target``) unless ``directory`` exists and a file can
+    be created in it (a probe file is created and removed at once: as root no permission bit
+    refuses, but a read-only or virtual file system such as /proc does)."""
+    directory = os.fspath(directory)
     if not os.path.isdir(directory):
-        raise ParameterError(f"{label} {path!r}: {directory!r} is not a directory")
+        raise ParameterError(f"{label} {target}: cannot write into the directory '{directory}' (not a directory)")
     try:
-        with tempfile.NamedTemporaryFile(dir=directory, prefix=".explorer-probe-"):
+        with tempfile.NamedTemporaryFile(dir=directory, prefix=".explorer-write-test-"):
             pass
     except OSError as exc:
-        raise ParameterError(f"{label} {path!r}: cannot write in {directory!r} ({exc.strerror or exc})") from None
+        raise ParameterError(f"{label} {target}: cannot write into the directory '{directory}' "
+                             f"({exc.strerror or exc})") from None
 
 
 def output_path(label: str, path, *, directory: bool = False) -> str:
@@ -212,18 +216,18 @@ def output_path(label: str, path, *, directory: bool = False) -> str:
     full = os.path.abspath(path)
     if os.path.isdir(full):
         if not directory:
-            raise ParameterError(f"{label} {path!r} is a directory; give a file path")
-        _probe_directory(label, path, full)
+            raise ParameterError(f"{label} {path}: is a directory; give a file path")
+        writable_directory(label, path, full)
         return path
     if os.path.exists(full):
         if directory:
-            raise ParameterError(f"{label} {path!r} is a file; give a directory")
+            raise ParameterError(f"{label} {path}: is a file; give a directory")
         if not os.access(full, os.W_OK):
-            raise ParameterError(f"{label} {path!r} is read-only; make it writable or choose another path")
+            raise ParameterError(f"{label} {path}: the file is read-only; make it writable or choose another path")
     ancestor = os.path.dirname(full)
     while not os.path.exists(ancestor):
         ancestor = os.path.dirname(ancestor)
-    _probe_directory(label, path, ancestor)
+    writable_directory(label, path, ancestor)
     return path
 
 

@@ -19,12 +19,11 @@ import datetime as _dt
 import os
 import socket
 import sys
-import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
 from explorer.io.store.format import StoreError
-from explorer.model import ParameterError
+from explorer.model import ParameterError, validation
 
 
 class StoreBusy(StoreError):
@@ -42,11 +41,10 @@ def check_writable(directory, option: str, target) -> None:
     directory = Path(directory)
     try:
         directory.mkdir(parents=True, exist_ok=True)
-        with tempfile.NamedTemporaryFile(dir=directory, prefix=".explorer-write-test-"):
-            pass
     except OSError as exc:
         raise ParameterError(f"{option} {target}: cannot write into the directory '{directory}' "
                              f"({exc.strerror or exc})") from None
+    validation.writable_directory(option, target, directory)
 
 
 def _holder_text() -> str:
