@@ -303,6 +303,8 @@ SCENE_TABLE += [
     ("unknown_top_key", 'nmae = "s"\n', "nmae"),
     ("table_as_value", 'name = "s"\nseeds = 1\n', "seeds"),
     ("empty_file", "", "name"),
+    ("not_utf8", b"\xff\xfe\x00 name", "scene"),
+    ("energy_h_below_the_region", scene_text("energy.h", "-1.0"), "energy.h"),
     ("toml_syntax", 'name = "s"\n[model\n', "TOML"),
     ("duplicate_key", 'name = "s"\nname = "t"\n', "TOML"),
     ("sweep_without_values", scene_text("sweep.parameter", "'mu'"), "sweep.values"),
@@ -327,7 +329,10 @@ def test_bad_scene_key_gives_one_line_naming_it_and_status_2_and_keeps_the_store
     for byte what it was).  Formerly bugs: energy.h and the model parameters at 1e300 were
     accepted (non-finite runs); unknown keys had no "did you mean"."""
     path = tmp_path / "bad.toml"
-    path.write_text(text)
+    if isinstance(text, bytes):
+        path.write_bytes(text)
+    else:
+        path.write_text(text)
     code, out, err = run_main(["sweep", str(path), "--out", str(tmp_path / "o.h5"), "--no-figure", "--quiet"],
                               capsys)
     assert_one_line_error(code, out, err, key)
