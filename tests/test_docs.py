@@ -106,7 +106,7 @@ def _repository_text_files():
         for f in sorted((ROOT / top).rglob("*")):
             rel = f.relative_to(ROOT).parts
             if f.is_file() and f.suffix in _TEXT_SUFFIXES and not any(
-                    p.startswith((".", "_build", "__pycache__")) for p in rel):
+                    p.startswith((".", "_build", "__pycache__")) or p.endswith(".egg-info") for p in rel):
                 yield f
     yield from (ROOT / "README.md", ROOT / "pyproject.toml")
 
