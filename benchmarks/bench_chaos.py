@@ -75,7 +75,7 @@ def explorer_run(prm, Y0, T, threads=2, repeats=3):
 
 # ----------------------------------------------------------------------------- heyoka
 def _hy_tangent_system(P):
-    """MODEL.md R3 and its variational equations d' = Df(y) d (one deviation vector) in heyoka
+    """docs/model.md R3 and its variational equations d' = Df(y) d (one deviation vector) in heyoka
     expressions (the Jacobian by heyoka's symbolic differentiation)."""
     import heyoka as hy
     y = hy.make_vars("p1", "p2", "M", "g1", "g2")

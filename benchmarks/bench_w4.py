@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Benchmark W4: the Figure-4 section (MODEL.md R9) side by side, in one run.
+"""Benchmark W4: the Figure-4 section (docs/model.md R9) side by side, in one run.
 
 Workload W4: ``model.FIGURE4`` with mu = 0.5 at energy h = 2; 64 orbits started on
 the section phi = pi at p2 = 0, p1 = c1 + r1 * linspace(-0.95, 0.95, 64) (the allowed
@@ -81,7 +81,7 @@ def energies(prm, states):
 
 # ----------------------------------------------------------------------------- heyoka
 def _hy_system(P):
-    """MODEL.md R3 in heyoka expressions; returns (equations, g1 variable)."""
+    """docs/model.md R3 in heyoka expressions; returns (equations, g1 variable)."""
     import heyoka as hy
     p1, p2, M, g1, g2 = hy.make_vars("p1", "p2", "M", "g1", "g2")
     a1, a2, b, lam, chi, zeta, mu, xi, eta = (float(v) for v in P)

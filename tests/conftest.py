@@ -17,7 +17,7 @@ if int(os.environ.get("NUMBA_NUM_THREADS", "0") or 0) < 2:
 
 from explorer import model  # noqa: E402
 
-#: Figure-4 scene (MODEL.md R9) and asymmetric sets (chi, zeta, xi, eta != 0, lam < 0).
+#: Figure-4 scene (docs/model.md R9) and asymmetric sets (chi, zeta, xi, eta != 0, lam < 0).
 PARAM_SETS = {
     "figure4_mu0.5": model.FIGURE4.with_(mu=0.5),
     "asym_lam_neg": model.Params(a1=1.3, a2=0.6, b=1.7, lam=-0.8, chi=0.2, zeta=-0.15, mu=0.7, xi=0.3, eta=-0.25),

@@ -1,6 +1,6 @@
 """Independent plain-numpy / scipy reference for the tests.
 
-Written straight from ``shared/MODEL.md`` (R1, R3, R9) without importing the
+Written straight from ``docs/model.md`` (R1, R3, R9) without importing the
 project's physics code (``explorer.equations``, ``explorer.model``).
 
 Parameters ``P = [a1, a2, b, lam, chi, zeta, mu, xi, eta]``; reduced state

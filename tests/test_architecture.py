@@ -6,7 +6,7 @@ explorer is built in layers, each allowed to import only from layers below it (o
 
 - ``kernels``: model-agnostic numerics (DOP853 tableau and step, Taylor step control,
   splitting compositions, event roots, tangent-vector accumulators);
-- ``model``: the physics of MODEL.md (parameters, vector field, sub-flows, exact solutions);
+- ``model``: the physics of docs/model.md (parameters, vector field, sub-flows, exact solutions);
 - ``integrate``: the stepping loops applied to the model's compiled system;
 - ``analysis``: sections, chaos indicators, fixed points, Melnikov, trajectories, sweeps
   (arrays in, arrays out);

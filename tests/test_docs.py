@@ -88,3 +88,66 @@ def test_readme_is_a_front_door_that_links_every_command_page():
     for c in COMMANDS:
         assert f"docs/commands/{c}.md" in text, c
     assert "figures/figure4.png" in text
+
+
+# ---------------------------------------------------------------- the model page and its labels
+MODEL_PAGE = DOCS / "model.md"
+#: the equations file that once lived outside the repository (cited as a bare file name)
+_EXTERNAL_MODEL = re.compile(r"(?<![\w/])MODEL\.md")
+#: a label list after a citation of the model page: "R3", "(R6, R7, R8)", "R6/R9", "(labels R1-R11)"
+_CITED_LABELS = re.compile(r"docs/model\.md`{0,2}[\s(,:]*(?:labels?\s+)?"
+                           r"(R\d+(?:\s*(?:-|–|\.\.|/|,|and)\s*R\d+)*)")
+_SCANNED = ("src", "tests", "benchmarks", "tools", "docs")
+_TEXT_SUFFIXES = {".py", ".pyi", ".md", ".toml", ".txt", ".rst", ".cfg", ".ini", ".yml", ".yaml"}
+
+
+def _repository_text_files():
+    for top in _SCANNED:
+        for f in sorted((ROOT / top).rglob("*")):
+            rel = f.relative_to(ROOT).parts
+            if f.is_file() and f.suffix in _TEXT_SUFFIXES and not any(
+                    p.startswith((".", "_build", "__pycache__")) or p.endswith(".egg-info") for p in rel):
+                yield f
+    yield from (ROOT / "README.md", ROOT / "pyproject.toml")
+
+
+def _labels(span):
+    """The numbers of a label list, ranges expanded ("R1-R11", "R1..R11", "R1–R11")."""
+    out = set()
+    for a, sep, b in re.findall(r"R(\d+)(?=(\s*(?:-|–|\.\.)\s*R(\d+))?)", span):
+        out.add(int(a))
+        if sep:
+            out.update(range(int(a), int(b) + 1))
+    return out
+
+
+def _defined_model_labels():
+    """Labels with a heading ending "(R<n>)" right after its target "(model-r<n>)=" in docs/model.md."""
+    text = MODEL_PAGE.read_text()
+    return {int(a) for a, b in re.findall(r"^\(model-r(\d+)\)=\n#{1,6} .*\(R(\d+)\)$", text, re.M) if a == b}
+
+
+def test_model_page_defines_every_label_the_code_cites():
+    """Each R<n> the source cites, after "docs/model.md" or bare (inside the model package), has its
+    section on the model page, so the repository alone explains every formula the code names."""
+    defined = _defined_model_labels()
+    cited, bare = {}, {}
+    for f in sorted((ROOT / "src").rglob("*")):
+        if not (f.is_file() and f.suffix in {".py", ".toml"}):
+            continue
+        text = re.sub(r"\s*\n\s*#?\s*", " ", f.read_text())   # a citation may run over a line break
+        for m in _CITED_LABELS.finditer(text):
+            for n in _labels(m.group(1)):
+                cited.setdefault(n, f.relative_to(ROOT).as_posix())
+        for n in re.findall(r"\bR(\d+)\b", text):
+            bare.setdefault(int(n), f.relative_to(ROOT).as_posix())
+    assert cited, "no citation of docs/model.md found in src/: the pattern is out of date"
+    missing = {f"R{n} ({where})" for n, where in {**bare, **cited}.items() if n not in defined}
+    assert not missing, f"cited but not defined in docs/model.md: {sorted(missing)}"
+
+
+def test_nothing_cites_the_model_file_that_lived_outside_the_repository():
+    offenders = [f"{f.relative_to(ROOT)}:{i}" for f in _repository_text_files()
+                 for i, line in enumerate(f.read_text(errors="replace").splitlines(), 1)
+                 if _EXTERNAL_MODEL.search(line)]
+    assert not offenders, f"cite docs/model.md instead: {offenders}"

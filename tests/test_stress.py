@@ -225,7 +225,7 @@ def test_splitting_forward_then_backward_returns_within_1e4_eps(method):
 
 
 def reversed_system(prm):
-    """MODEL.md R3 is carried into itself, with time reversed, by (p, M, g) -> (p, -M, -g) and
+    """docs/model.md R3 is carried into itself, with time reversed, by (p, M, g) -> (p, -M, -g) and
     lam -> -lam, r -> -r: f'(R y) = -R f(y) (checked bitwise in the test).  Integrating it forward
     is, operation by operation, integrating the original system with negative steps."""
     return prm.with_(lam=-prm.lam, xi=-prm.xi, eta=-prm.eta)
@@ -457,7 +457,7 @@ def test_orbits_that_stop_crossing_and_long_returns_match_scipy():
 
 @pytest.mark.parametrize("method", ["split2", "split4", "split8"])
 def test_crossings_at_step_ends_are_counted_once(method):
-    """Uniform rotation (mu = 0, p = 0; MODEL.md R6): the first crossing is placed within a few
+    """Uniform rotation (mu = 0, p = 0; docs/model.md R6): the first crossing is placed within a few
     ulps before, on or after the end of step n (t = n dt), 41 shifts; every run reports every
     crossing exactly once (direction +1 and both) at the exact times."""
     prm = model.FIGURE4

@@ -7,7 +7,7 @@
   10 orbits at each of mu = 0.002, 0.03, 0.5; threshold 1e4 machine epsilons relative to
   max(1, |y0|);
 - taylor and dop853: forward T, then backward T by integrating the time-reversed system
-  (MODEL.md R3 is carried into itself with time reversed by (p, M, g) -> (p, -M, -g),
+  (docs/model.md R3 is carried into itself with time reversed by (p, M, g) -> (p, -M, -g),
   lam -> -lam, r -> -r; operation by operation the same arithmetic as negative steps), tol
   1e-10 and 1e-13, T = 10 on the chaotic orbits and 100 on the regular ones (mu = 0.002, the
   hyperbolic central point excluded); threshold 10 tol T (the adaptive methods control the error

@@ -6,14 +6,14 @@ The public Python API is the names in ``__all__``; each is loaded on first use
 
     import explorer as ex
 
-    prm = ex.FIGURE4.with_(mu=0.5)                        # MODEL.md R9: the scene of Figure 4
+    prm = ex.FIGURE4.with_(mu=0.5)                        # docs/model.md R9: the scene of Figure 4
     res = ex.section_crossings(prm, [0.1, 0.3], [0.0, 0.0], ex.FIGURE4_H, 1000)
     fp = ex.find_fixed_point(prm, ex.FIGURE4_H, (-0.2, 0.0))
     ind = ex.indicators(prm, ex.section_state(prm, [0.1], [0.0], ex.FIGURE4_H), 1000.0)
 
 The layers below (``explorer.kernels`` <- ``model`` <- ``integrate`` <- ``analysis``
 <- ``io`` <- ``app``) are importable for more; see the documentation's architecture
-page.  ../shared/MODEL.md (R1-R10) gives the equations every module cites.
+page.  docs/model.md (R1-R11) gives the equations every module cites.
 """
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ __version__ = "0.1.0"
 
 #: public name -> module that defines it (loaded lazily by :func:`__getattr__`)
 _EXPORTS = {
-    # parameters, presets and the physics of MODEL.md (numpy only)
+    # parameters, presets and the physics of docs/model.md (numpy only)
     "Params": "explorer.model",
     "ParameterError": "explorer.model",
     "FIGURE4": "explorer.model",

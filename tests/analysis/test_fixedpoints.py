@@ -12,7 +12,7 @@ from explorer.app import cli
 
 
 def test_fixed_point_at_mu0_is_solution_I_with_the_analytic_eigenvalues():
-    """MODEL.md R6/R9: p = 0 is solution I, c = sqrt(2 b h) = 2 sqrt 2 in the unstable band (2, 4)."""
+    """docs/model.md R6/R9: p = 0 is solution I, c = sqrt(2 b h) = 2 sqrt 2 in the unstable band (2, 4)."""
     fp = fpm.find_fixed_point(model.FIGURE4, 2.0, (0.05, -0.03))
     assert np.abs(fp.point).max() < 1e-12
     ev, tr = fpm.analytic_eigenvalues_solution_I(model.FIGURE4, 2.0)
@@ -146,7 +146,7 @@ def test_central_point_changes_stability_where_an_independent_bisection_says():
 
 
 def test_trace_of_solution_I_equals_its_closed_form():
-    """MODEL.md R6: at mu = 0 the trace at p = 0 is 2 cosh(k) (tests/reference.py writes the
+    """docs/model.md R6: at mu = 0 the trace at p = 0 is 2 cosh(k) (tests/reference.py writes the
     linearisation independently of fixedpoints.analytic_eigenvalues_solution_I)."""
     fp = fpm.find_fixed_point(model.FIGURE4, 2.0)
     assert abs(fp.trace - reference.trace_solution_I(1.0, 0.5, 2.0, 1.0, 2.0)) < 1e-8

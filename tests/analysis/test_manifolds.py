@@ -16,7 +16,7 @@ from explorer.analysis import transport as tr
 from explorer.analysis.periodic import reversor
 from explorer.analysis.section_map import SectionMap
 
-H = model.FIGURE4_H           # MODEL.md R9: Figure 4, h = 2
+H = model.FIGURE4_H           # docs/model.md R9: Figure 4, h = 2
 MU = 0.03                     # the central saddle near (-0.011, 0), trace 9.03
 
 

@@ -1,4 +1,4 @@
-"""The Melnikov integral ur23 along R7 (MODEL.md R8), ur24, and the splitting measured on the section."""
+"""The Melnikov integral ur23 along R7 (docs/model.md R8), ur24, and the splitting measured on the section."""
 import json
 import math
 

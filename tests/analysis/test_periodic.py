@@ -2,7 +2,7 @@
 
 P^K(x) = x with scipy DOP853 (tests/reference.py), minimal period, trace against finite
 differences, period 1 against find_fixed_point, the reversing symmetry of R3, deduplication,
-continuation with the analytic bifurcations of solution I at mu = 0 (MODEL.md R6)."""
+continuation with the analytic bifurcations of solution I at mu = 0 (docs/model.md R6)."""
 import math
 
 import numpy as np
@@ -14,7 +14,7 @@ from explorer import model
 from explorer.analysis import fixedpoints as fpm
 from explorer.analysis import periodic as pm
 
-PRM = model.FIGURE4.with_(mu=0.03)   # the Figure 4 scene at mu = 0.03 (MODEL.md R9)
+PRM = model.FIGURE4.with_(mu=0.03)   # the Figure 4 scene at mu = 0.03 (docs/model.md R9)
 H = 2.0
 
 
@@ -287,7 +287,7 @@ def test_symmetric_orbits_are_found_from_the_symmetry_lines_and_are_G0_invariant
 
 
 def test_continuation_of_solution_I_in_h_finds_the_tangent_and_the_touch_of_minus_two():
-    """MODEL.md R6 at mu = 0: p = 0 is solution I for every h; with c = sqrt(2 b h) it is hyperbolic
+    """docs/model.md R6 at mu = 0: p = 0 is solution I for every h; with c = sqrt(2 b h) it is hyperbolic
     for lam b/a1 < c < lam b/a2 (c = 4: h = 4, trace +2) and beyond it the trace is 2 cos(w),
     w = sqrt(alpha beta) 2 pi b / c, which touches -2 (without crossing) where w = pi:
     c^2 - 8c + 32/3 = 0, c = 4 + 4/sqrt(3), h = c^2/4."""

@@ -1,6 +1,6 @@
 """Rotation numbers by weighted Birkhoff averages (explorer.analysis.rotation).
 
-Against the integrable case mu = 0 (MODEL.md R6: the (p1, p2, M) motion is periodic, and the
+Against the integrable case mu = 0 (docs/model.md R6: the (p1, p2, M) motion is periodic, and the
 rotation number per return follows from its period and the angle phi advanced in it, computed
 here by an independent scipy integration), and against the periodic orbits of
 explorer.analysis.periodic at mu = 0.03 (plateaus m/K at island chains)."""

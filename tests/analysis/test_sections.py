@@ -43,7 +43,7 @@ def fig4_seeds(prm, h, n, p2_frac=0.0, span=0.9):
 # ---------------------------------------------------------------- exact solutions
 @pytest.mark.parametrize("method", ALL_METHODS)
 def test_crossing_time_matches_exact_uniform_rotation(method):
-    """MODEL.md R6/R9: at mu = 0 with p = 0 the body turns uniformly (M = c) and crosses every 2 pi b / c."""
+    """docs/model.md R6/R9: at mu = 0 with p = 0 the body turns uniformly (M = c) and crosses every 2 pi b / c."""
     prm = model.FIGURE4
     h = 2.0
     c = math.sqrt(2 * prm.b * h)
@@ -59,7 +59,7 @@ def test_crossing_time_matches_exact_uniform_rotation(method):
 @pytest.mark.parametrize("method", ALL_METHODS)
 @pytest.mark.parametrize("sign", [1, -1])
 def test_crossing_times_match_the_homoclinic_solution(method, sign):
-    """MODEL.md R7: start on the homoclinic orbit of solution I at t = -20 and compare every
+    """docs/model.md R7: start on the homoclinic orbit of solution I at t = -20 and compare every
     crossing of phi = pi over (-20, 20) with the exact times."""
     prm = model.FIGURE4
     c = 2 * math.sqrt(2.0)

@@ -1,4 +1,4 @@
-"""The body in the plane (MODEL.md R1, R2, ur25; Kozlov's falling body): explorer.trajectory."""
+"""The body in the plane (docs/model.md R1, R2, ur25; Kozlov's falling body): explorer.trajectory."""
 import json
 import math
 
@@ -27,9 +27,9 @@ def _P(prm):
     return np.array([prm[n] for n in model.PARAM_NAMES])
 
 
-# ---------------------------------------------------------------- independent reference (MODEL.md R1)
+# ---------------------------------------------------------------- independent reference (docs/model.md R1)
 def r1_trig(t, u, P):
-    """R1 verbatim, state (p1, p2, M, phi, x, y), written from MODEL.md (no project code)."""
+    """R1 verbatim, state (p1, p2, M, phi, x, y), written from docs/model.md (no project code)."""
     a1, a2, b, lam, chi, zeta, mu, xi, eta = P
     p1, p2, m, phi, x, y = u
     s, c = math.sin(phi), math.cos(phi)

@@ -1,4 +1,4 @@
-"""explorer.figures: the paper-style section figure (seed Figure 4, MODEL.md R9), checked on
+"""explorer.figures: the paper-style section figure (seed Figure 4, docs/model.md R9), checked on
 the rendered pixels (Agg backend) and on the files written."""
 import math
 import os

@@ -267,7 +267,7 @@ def test_cli_figures_unknown_name_is_one_line_exit_2(capsys):
 
 # ====================================================================== errata (docs/errata.md)
 def r1_field(u, P, *, torque_extra=0.0, gyro_swapped=False, chi_sign=1.0):
-    """R1 in the trig form (p1, p2, M, phi, x, y), written from MODEL.md; optional seed variants:
+    """R1 in the trig form (p1, p2, M, phi, x, y), written from docs/model.md; optional seed variants:
     ``gyro_swapped``: ur1 as printed (a1 omega v2, -a2 omega v1); ``chi_sign = -1``: ur7 as
     printed (-chi dH/dM in dp2/dt); ``torque_extra``: added to dM/dt."""
     a1, a2, b, lam, chi, zeta, mu, xi, eta = P

@@ -1,5 +1,5 @@
 """Tests of the closed-form solutions (explorer.exact) against the independent
-plain-numpy / scipy reference (tests/reference.py).  MODEL.md labels R3, R5,
+plain-numpy / scipy reference (tests/reference.py).  docs/model.md labels R3, R5,
 R6, R7, R9."""
 import numpy as np
 import pytest

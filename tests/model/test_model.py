@@ -1,4 +1,4 @@
-"""Every equation of MODEL.md used by the code, checked (R3, R4, R5, R9)."""
+"""Every equation of docs/model.md used by the code, checked (R3, R4, R5, R9)."""
 import math
 
 import numpy as np
@@ -71,7 +71,7 @@ def test_energy_and_casimir_are_integrals_of_the_field(name):
 
 
 def test_energy_would_fail_with_the_seed_double_counted_gravity():
-    """MODEL.md R3: reading dH/dp in ur12 as the full gradient counts -mu g twice; the
+    """docs/model.md R3: reading dH/dp in ur12 as the full gradient counts -mu g twice; the
     resulting field does not conserve H (so the test above can fail)."""
     prm = PARAM_SETS["figure4_mu0.5"]
     y = random_states(prm, 1, seed=3)[0]
@@ -100,7 +100,7 @@ def test_extra_integral_of_each_integrable_case_is_conserved_by_the_field(case):
 
 
 def test_case3_integral_fails_for_unequal_masses():
-    """MODEL.md R5: case 3 needs a1 = a2 = 1; with a1 != a2 F is not an integral."""
+    """docs/model.md R5: case 3 needs a1 = a2 = 1; with a1 != a2 F is not an integral."""
     kw = dict(CASES["case3"][0], a1=1.4)
     prm = model.Params(**kw)
     rates = [abs(grad_fd(lambda z: model.case3_integral(prm, z), y) @ field(prm, y))
@@ -109,7 +109,7 @@ def test_case3_integral_fails_for_unequal_masses():
 
 
 def test_hess_relation_df_dt_equals_eta_over_b_p2_f():
-    """MODEL.md R5 case 4: chi = zeta = xi = 0, eta^2 = b (1/a2 - 1/a1): dF/dt = (eta/b) p2 F."""
+    """docs/model.md R5 case 4: chi = zeta = xi = 0, eta^2 = b (1/a2 - 1/a1): dF/dt = (eta/b) p2 F."""
     base = model.Params(a1=1.5, a2=0.6, b=1.7, lam=0.9, mu=0.8)
     prm = base.with_(eta=model.hess_eta(base))
     for y in random_states(prm, 20, seed=6):
@@ -123,7 +123,7 @@ def test_hess_relation_df_dt_equals_eta_over_b_p2_f():
 
 # ---------------------------------------------------------------- R4: the splitting
 def subfield(k, P, y):
-    """The vector field of sub-Hamiltonian k written out from MODEL.md R4."""
+    """The vector field of sub-Hamiltonian k written out from docs/model.md R4."""
     a1, a2, b, lam, chi, zeta, mu, xi, eta = P
     p1, p2, m, g1, g2 = y
     if k == equations.FLOW_HM:
@@ -230,7 +230,7 @@ def test_allowed_region_boundary_has_zero_M(param_set):
 
 
 def test_r9_formula_at_phi_pi():
-    """MODEL.md R9 as printed: M^2 = 2b (h - 1/2(p1^2/a1 + p2^2/a2) - (mu/lam)(p1 - chi) + mu eta)."""
+    """docs/model.md R9 as printed: M^2 = 2b (h - 1/2(p1^2/a1 + p2^2/a2) - (mu/lam)(p1 - chi) + mu eta)."""
     prm = PARAM_SETS["asym_lam_neg"]
     p1, p2, h = 0.3, -0.2, 2.0
     expect = 2 * prm.b * (h - 0.5 * (p1**2 / prm.a1 + p2**2 / prm.a2) - prm.mu / prm.lam * (p1 - prm.chi)

@@ -1,6 +1,6 @@
 """The half-turn symmetries of R3 (docs/model.md, "Symmetries"; explorer.model.symmetry,
 explorer.analysis.halfturn), checked against the equations as tests/reference.py writes them from
-MODEL.md and against scipy's DOP853 (tests/reference.py), not the project's integrators."""
+docs/model.md and against scipy's DOP853 (tests/reference.py), not the project's integrators."""
 import math
 
 import numpy as np

@@ -34,7 +34,7 @@ __all__ = ["DEFAULT_TOL", "RETURN_TMAX", "Branch", "FixedPoint", "MapResult", "S
 
 @dataclass(frozen=True)
 class FixedPoint:
-    """A fixed point of the section map P (phi = phi0, MODEL.md R9) and its linear stability.
+    """A fixed point of the section map P (phi = phi0, docs/model.md R9) and its linear stability.
 
     Attributes
     ----------
@@ -87,7 +87,7 @@ class FixedPoint:
 
 
 def find_fixed_point(params, h, guess=(0.0, 0.0), *, phi0=math.pi, tol=DEFAULT_TOL) -> FixedPoint:
-    """A fixed point of the section map P of phi = ``phi0`` at energy ``h`` (MODEL.md R9).
+    """A fixed point of the section map P of phi = ``phi0`` at energy ``h`` (docs/model.md R9).
 
     Newton's method on P(x) - x = 0 in (p1, p2) (:func:`explorer.analysis.periodic.find_periodic_orbit`
     with K = 1), with DP from the tangent dynamics of R3 carried to the next crossing and
@@ -153,7 +153,7 @@ def continue_branch(params, h, parameter, start, stop, step, guess=(0.0, 0.0), *
     by ``step``, each point from the previous ones (secant predictor, steps halved on failure);
     where ``|trace|`` crosses 2 (elliptic <-> hyperbolic) the value is bisected to
     ``bisect_tol`` (relative), and a sampled extremum of the trace near +-2 is refined into a
-    touch.  For Figure 4 (MODEL.md R9, h = 2) the central point turns stable at mu* ~ 2.98316.
+    touch.  For Figure 4 (docs/model.md R9, h = 2) the central point turns stable at mu* ~ 2.98316.
 
     Returns
     -------
@@ -223,7 +223,7 @@ def separatrices(fp: FixedPoint, **kw):
 
 
 def analytic_eigenvalues_solution_I(params, h):
-    """MODEL.md R6/R9: at mu = 0 (chi = zeta = 0) the point p = 0 is solution I, M = c = sqrt(2 b h),
+    """docs/model.md R6/R9: at mu = 0 (chi = zeta = 0) the point p = 0 is solution I, M = c = sqrt(2 b h),
     a uniform rotation with return time T = 2 pi b / c.  Linearising R6 about it,
     dp1/dt = alpha p2, dp2/dt = -beta p1 with alpha = c/b - lam/a2, beta = c/b - lam/a1
     (dM is of second order), so the monodromy over T has eigenvalues exp(+-sqrt(-alpha beta) T)

@@ -50,7 +50,7 @@ GENERIC_DIRECTION = np.array([0.8017, -0.3327, 0.4721, 0.1190, -0.0712])
 
 
 def energy_gradient(params, y):
-    """grad H of MODEL.md R3 (analytic)."""
+    """grad H of docs/model.md R3 (analytic)."""
     P = params.as_array() if isinstance(params, model.Params) else np.asarray(params, float)
     a1, a2, b, lam, chi, zeta, mu, xi, eta = P
     p1, p2, m, g1, g2 = np.moveaxis(np.asarray(y, float), -1, 0)
@@ -145,14 +145,14 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
                early_time: float = EARLY_TIME, w0=None) -> Indicators:
     """Chaos indicators of the orbits starting at ``y0`` over the time ``T``.
 
-    Each orbit of MODEL.md R3 is integrated with one deviation vector ``w`` obeying the
+    Each orbit of docs/model.md R3 is integrated with one deviation vector ``w`` obeying the
     variational equations of R3 (started tangent to the energy shell and the Casimir surface,
     :func:`deviation_vector`), renormalised at every step (Benettin et al. 1980; Skokos 2010).
 
     Parameters
     ----------
     params : Params or array
-        Model parameters (MODEL.md, table "Parameters").
+        Model parameters (docs/model.md, table "Notation").
     y0 : array (N, 5) or (5,)
         Initial states (p1, p2, M, sin phi, cos phi).
     T : float

@@ -4,7 +4,7 @@ intersections (homoclinic points).  docs/manifolds.md has the method and its acc
 Parametrisation
 ---------------
 Let x* be a point of a hyperbolic orbit of period K of the section map P
-(:class:`~explorer.analysis.section_map.SectionMap`, MODEL.md R9), F = P^m with m = K (m = 2K
+(:class:`~explorer.analysis.section_map.SectionMap`, docs/model.md R9), F = P^m with m = K (m = 2K
 when the multiplier is negative, so that F keeps each branch), Lambda > 1 the multiplier of F
 along the branch (F^{-1} for a stable manifold) and e the unit eigenvector (``sign`` = +1: the
 orientation with e[0] > 0, or e[1] > 0 when e[0] = 0).  Every point of the branch is

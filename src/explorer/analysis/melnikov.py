@@ -1,7 +1,7 @@
-"""The Poincaré–Melnikov integral of the seed's ur23/ur24 (MODEL.md R6, R7, R8), and the
+"""The Poincaré–Melnikov integral of the seed's ur23/ur24 (docs/model.md R6, R7, R8), and the
 splitting of the separatrices it predicts, measured on the section phi = pi.
 
-Setting (MODEL.md R8)
+Setting (docs/model.md R8)
 ---------------------
 H = H0 + mu H1 with H0 the Chaplygin Hamiltonian (mu = 0, chi = zeta = 0, R6) and
 

@@ -1,6 +1,6 @@
 """Periodic orbits of any period K >= 1 of the section map, their stability and bifurcations.
 
-The section map P: (p1, p2) -> (p1', p2') of phi = phi0 at energy h (MODEL.md R9) is
+The section map P: (p1, p2) -> (p1', p2') of phi = phi0 at energy h (docs/model.md R9) is
 :class:`explorer.analysis.fixedpoints.SectionMap`: the image point and the 2x2 Jacobian DP
 from the tangent dynamics of R3.  A periodic orbit of period K is a point x with
 P^K(x) = x; its monodromy is the product DP(x_{K-1}) ... DP(x_0) of the K map Jacobians
@@ -416,14 +416,14 @@ def find_periodic_orbit(params, h, guess, period, *, phi0=math.pi, tol=DEFAULT_T
     """A periodic orbit of period ``period`` of the section map phi = ``phi0`` at energy ``h``.
 
     Newton's method on P^K(x) = x (single shooting for K <= 4, multiple shooting over the K
-    points for K >= 5), the Jacobian from the tangent dynamics of MODEL.md R3 (the product of
+    points for K >= 5), the Jacobian from the tangent dynamics of docs/model.md R3 (the product of
     the K map Jacobians).  For K = 1 it gives the numbers of
     :func:`explorer.analysis.fixedpoints.find_fixed_point`.
 
     Parameters
     ----------
     params : Params
-        Model parameters (MODEL.md R3).
+        Model parameters (docs/model.md R3).
     h : float
         Energy level of the section (R9).
     guess : (float, float) or array (K, 2)

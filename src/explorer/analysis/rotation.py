@@ -1,6 +1,6 @@
 """Rotation numbers of orbits of the section map around an elliptic fixed point.
 
-The rotation number of an orbit x_n = P^n(x_0) of the section map (phi = phi0, MODEL.md R9)
+The rotation number of an orbit x_n = P^n(x_0) of the section map (phi = phi0, docs/model.md R9)
 around a fixed point c is the mean angle advanced per return,
 
     rho = lim (1/N) sum_n d_n / (2 pi),
@@ -21,7 +21,7 @@ the same phi, so the angle theta(phi) of x(phi) - x*(phi) is a continuous functi
 its change over phi in [phi0 + 2 pi n, phi0 + 2 pi (n + 1)], a continuous function of x_n
 (the lift of the circle map).  theta is sampled on the m sub-sections phi0 + 2 pi k/m
 (k = 0..m-1, m = ``SUBSECTIONS`` doubled up to ``MAX_SUBSECTIONS`` until no sample-to-sample
-change exceeds ``MAX_SUBSTEP`` = pi/2) and unwrapped between samples.  At mu = 0 (MODEL.md
+change exceeds ``MAX_SUBSTEP`` = pi/2) and unwrapped between samples.  At mu = 0 (docs/model.md
 R6) x*(phi) is the point c itself (solution II) and d_n sums to the exact 2 pi T/tau of
 the integrable motion (T the return time, tau the period of (p1, p2, M)).  An orbit whose
 phi turns back across a sub-section (M changes sign, the flow in phi is not defined) is

@@ -13,7 +13,7 @@ Methods
             ODEs I, II.5); crossings are roots of its 7th-order dense output.
 ``split2`` ... ``split8`` (and the variants in ``kernels.splitting.SCHEMES``)
             fixed-step symmetric compositions of the exact sub-flows of
-            MODEL.md R4 (Strang; Yoshida 1990; Kahan & Li 1997); they keep the
+            docs/model.md R4 (Strang; Yoshida 1990; Kahan & Li 1997); they keep the
             Casimir to round-off and the energy error bounded; crossings are
             roots in tau of g(Psi_tau(y)), Psi the composition step itself.
 """
@@ -389,7 +389,7 @@ def iter_crossings(params, y0, n_crossings: int, *, block: int = DEFAULT_BLOCK, 
 def section_crossings(params, p1, p2, h: float, n_crossings: int, *, phi0: float = math.pi,
                       direction: int = 1, **kwargs) -> Crossings:
     """Start orbits on the section phi = phi0 at energy h from the points (p1, p2) (M from the
-    energy, MODEL.md R9; sign of M from ``direction``) and return their next crossings."""
+    energy, docs/model.md R9; sign of M from ``direction``) and return their next crossings."""
     h = float(h)
     if not math.isfinite(h):
         raise ParameterError(f"h must be finite, got {h!r}")

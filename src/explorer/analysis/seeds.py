@@ -1,4 +1,4 @@
-"""Initial conditions on the section: where a sweep's orbits start (MODEL.md R9).
+"""Initial conditions on the section: where a sweep's orbits start (docs/model.md R9).
 
 Arrays in, arrays out: the scene layer (:mod:`explorer.io.scene`) validates a ``[seeds]``
 table into a ``SeedSpec``; this module turns it into points of the allowed region.
@@ -72,7 +72,7 @@ def _unit_grid(n: int):
 
 def seed_points(seeds, params, h: float, phi0: float = math.pi):
     """Initial points (p1, p2) strictly inside the allowed region of the section phi = phi0
-    at energy h (MODEL.md R9), following ``seeds`` (rules in the module docstring).
+    at energy h (docs/model.md R9), following ``seeds`` (rules in the module docstring).
 
     Parameters
     ----------

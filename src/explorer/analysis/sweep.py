@@ -176,7 +176,7 @@ def build_atlas_spec(scene, *, chunk_orbits: int, cells=None) -> SweepSpec:
 
 def map_seeds(params, h: float, phi0: float, resolution: int):
     """The seeds of a chaos map: the centres of the cells of a resolution x resolution raster over
-    the bounding box of the allowed ellipse of the section (MODEL.md R9) that lie inside the
+    the bounding box of the allowed ellipse of the section (docs/model.md R9) that lie inside the
     allowed region (section_M2 > 0), in raster order (p2 rows ascending, then p1).  Returns
     (p1, p2, grid) with grid = (resolution, p1_lo, p1_hi, p2_lo, p2_hi): cell (r, c) has centre
     (p1_lo + (c + 1/2) d1, p2_lo + (r + 1/2) d2), d = (hi - lo) / resolution."""

@@ -1,7 +1,7 @@
 """The body in the plane: the full system R1 with the position (x, y), for every lam
 (including lam = 0, the falling body of Chaplygin, Steklov and Kozlov).
 
-State and equations (MODEL.md R1, polynomial form)
+State and equations (docs/model.md R1, polynomial form)
 --------------------------------------------------
 ``y = (p1, p2, M, g1, g2, x, y)`` with ``(g1, g2) = (sin phi, cos phi)``::
 
@@ -45,7 +45,7 @@ The bracketed terms are the components of p - s rotated by phi, so
 ``|y - c1/lam| <= |p - s|/|lam|`` pointwise (the band) and
 ``x(t) - x(0) - (mu/lam) t`` is bounded by ``2 max|p - s|/|lam|``: the mean horizontal velocity
 is **+mu/lam**.  The seed's ur25 prints -mu/lam because its ur10 prints ``p_y = mu t + c2``;
-with R1 (and the bracket ur8) dp_y/dt = -mu (MODEL.md R2), and the simulation confirms +mu/lam
+with R1 (and the bracket ur8) dp_y/dt = -mu (docs/model.md R2), and the simulation confirms +mu/lam
 (:func:`drift`).  |p - s| is bounded a priori by the energy: with a = max(a1, a2),
 h_r = H - mu c1/lam (the reduced energy R3) and q = |p|,
 q^2/(2a) <= h_r + (mu/|lam|)(q + |s|) + mu |r|  (kinetic energy >= q^2/(2a), M^2/b >= 0).
@@ -84,11 +84,11 @@ from explorer.kernels import STATUS_NAMES
 from explorer.model import validation
 from explorer.model.equations import FULL_DIM, energy_full
 
-#: layout of the full state (MODEL.md R1, polynomial form)
+#: layout of the full state (docs/model.md R1, polynomial form)
 P1, P2, M, G1, G2, X, Y = range(7)
 STATE_DIM = FULL_DIM
 TWO_PI = 2.0 * math.pi
-#: the CLI's default scene: Figure 4 (MODEL.md R9) with mu = 0.5
+#: the CLI's default scene: Figure 4 (docs/model.md R9) with mu = 0.5
 DEFAULT_PARAMS = dict(model.FIGURE4.as_dict(), mu=0.5)
 DEFAULT_TOL = TRAJECTORY_TOL
 DEFAULT_MAX_STEPS = 10 ** 8
@@ -107,7 +107,7 @@ class Trajectory:
     t : ndarray (n,)
         Sample times, both ends of [0, t_end] included.
     x, y, phi : ndarray (n,)
-        Position of the body and its angle (unwrapped), MODEL.md R1.
+        Position of the body and its angle (unwrapped), docs/model.md R1.
     p1, p2, M, g1, g2 : ndarray (n,)
         The reduced state (R3) at the samples.
     H, px, py : ndarray (n,)
@@ -197,7 +197,7 @@ def full_params(params=None, **changes) -> dict:
 
 
 def initial_state(params, p1, p2, M, phi, x=0.0, y=0.0) -> np.ndarray:
-    """The full state (p1, p2, M, sin phi, cos phi, x, y) (MODEL.md R1); ``params`` is only
+    """The full state (p1, p2, M, sin phi, cos phi, x, y) (docs/model.md R1); ``params`` is only
     validated (the state does not depend on it)."""
     full_params(params)
     vals = [validation.magnitude(n, v) if n != "phi" else validation.real(n, v)
@@ -225,7 +225,7 @@ def _check_run(t_end, n_samples, tol):
 
 # ====================================================================== integration
 def momentum_integrals(P, t, p1, p2, g1, g2, x, y):
-    """MODEL.md R2: (p_x, p_y); p_x = c1, p_y = c2 - mu t along orbits."""
+    """docs/model.md R2: (p_x, p_y); p_x = c1, p_y = c2 - mu t along orbits."""
     lam, chi, zeta = P[3], P[4], P[5]
     px = p1 * g2 - p2 * g1 + lam * y + zeta * g1 - chi * g2
     py = p1 * g1 + p2 * g2 - lam * x - zeta * g2 - chi * g1

@@ -2,7 +2,7 @@
 Percival 1984, Physica D 13, 55; Rom-Kedar & Wiggins 1990, Arch. Rat. Mech. Anal. 109, 239).
 docs/manifolds.md has the method, the error estimate and the Melnikov conversion.
 
-The section map P preserves dp1 dp2 (MODEL.md R11: (l, L') with p - s = sqrt(2 lam L')(cos l,
+The section map P preserves dp1 dp2 (docs/model.md R11: (l, L') with p - s = sqrt(2 lam L')(cos l,
 sin l) is canonical, dp1 ^ dp2 = lam dL' ^ dl; tests/analysis/test_manifolds.py checks det DP = 1),
 so areas in the (p1, p2) plane are invariant and the flux is an area per iteration.
 

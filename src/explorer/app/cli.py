@@ -70,7 +70,7 @@ def _add_model_args(p, defaults: model.Params, json: str | None = None):
     """--json (with this help) and the model parameters with their defaults."""
     if json:
         p.add_argument("--json", action="store_true", help=json)
-    g = p.add_argument_group("model parameters (MODEL.md; defaults: Figure 4, R9)")
+    g = p.add_argument_group("model parameters (docs/model.md; defaults: Figure 4, R9)")
     for name, help_ in (("a1", "added mass along axis 1 (> 0)"), ("a2", "added mass along axis 2 (> 0)"),
                         ("b", "added moment of inertia (> 0)"), ("lam", "circulation x density (!= 0)"),
                         ("chi", "asymmetry term chi"), ("zeta", "asymmetry term zeta"),
@@ -117,7 +117,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     o = sub.add_parser("orbit", help="crossings of one orbit with the section phi = phi0",
                        description="Start on the section phi = phi0 at (p1, p2) with M from the energy h "
-                       "(MODEL.md R9) and print the next K crossings as CSV (k,t,p1,p2,M,dH) or JSON.")
+                       "(docs/model.md R9) and print the next K crossings as CSV (k,t,p1,p2,M,dH) or JSON.")
     _add_start_args(o)
     o.add_argument("--crossings", "-K", type=int, default=10, help="number of crossings K [%(default)s]")
     _add_method_args(o, DEFAULT_TOL, DEFAULT_DT)
@@ -258,7 +258,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="figure path without extension (lam = 0 adds <out>_kozlov) [%(default)s]")
     tj.add_argument("--no-figure", action="store_true", help="do not draw the figure")
     tj.add_argument("--json", action="store_true", help="print JSON")
-    tjg = tj.add_argument_group("model parameters (MODEL.md; defaults: Figure 4 with mu = 0.5)")
+    tjg = tj.add_argument_group("model parameters (docs/model.md; defaults: Figure 4 with mu = 0.5)")
     for name, help_ in (("a1", "added mass along axis 1 (> 0)"), ("a2", "added mass along axis 2 (> 0)"),
                         ("b", "added moment of inertia (> 0)"),
                         ("lam", "circulation x density (any; 0 = falling body)"),

@@ -1,4 +1,4 @@
-"""Paper-style figures of Poincaré sections (the seed's Figure 4, MODEL.md R9).
+"""Paper-style figures of Poincaré sections (the seed's Figure 4, docs/model.md R9).
 
 Arrays in, figures out: this module never integrates.  It draws the crossing
 points ``(p1, p2)`` of the section ``phi = phi0`` computed elsewhere (e.g. by
@@ -156,7 +156,7 @@ def symbol_label(name) -> str:
 # ---------------------------------------------------------------- region of the section
 def region_mask(params, h, phi0, p1, p2) -> np.ndarray:
     """True where ``(p1, p2)`` lies in the allowed region ``M^2 >= 0`` of the
-    section ``phi = phi0`` at energy ``h`` (MODEL.md R9); broadcasts p1, p2."""
+    section ``phi = phi0`` at energy ``h`` (docs/model.md R9); broadcasts p1, p2."""
     return np.asarray(model.section_M2(params, p1, p2, h, phi0) >= 0.0)
 
 
@@ -325,7 +325,7 @@ def section_panels(panels, *, layout="row", columns=None, share_scale=True, own_
     ``points``  (M, 2) array of crossing points (p1, p2); may be empty or None;
     ``params``  :class:`explorer.model.Params` (or a dict of them);
     ``h``       energy level;
-    ``phi0``    section angle (default pi, MODEL.md R9);
+    ``phi0``    section angle (default pi, docs/model.md R9);
     ``label``   panel title, e.g. ``"mu = 0.5"`` (converted by :func:`mathtext_label`;
                 default ``"mu = <params.mu>"``);
     ``note``    optional short text shown small in the lower-left corner;

@@ -1,4 +1,4 @@
-"""The Melnikov figure (MODEL.md R8; ur24 against its correction): the numbers come from
+"""The Melnikov figure (docs/model.md R8; ur24 against its correction): the numbers come from
 :mod:`explorer.analysis.melnikov`, this module only draws them."""
 from __future__ import annotations
 

@@ -164,7 +164,7 @@ def store_orbit(j, count, status, t, steps, out_count, out_status, out_final, ou
 # ====================================================================== splitting
 @njit
 def split_step(y, P, dt, flow_ids, fracs):
-    """One step of a composition of exact sub-flows (MODEL.md R4), in place
+    """One step of a composition of exact sub-flows (docs/model.md R4), in place
     (:func:`explorer.integrate.systems.compose` of ``REDUCED``)."""
     sy.compose(sy.REDUCED, y, P, dt, flow_ids, fracs)
 
@@ -180,7 +180,7 @@ def _split_value_rate(yc, P, which, cphi, sphi, f):
     if which == _SPLIT_G:
         return section_g(yc, cphi, sphi), section_g_rate(yc, P, cphi, sphi)
     rhs(yc, P, f)
-    return yc[2], f[2]  # MODEL.md (R3): dM/dt
+    return yc[2], f[2]  # docs/model.md (R3): dM/dt
 
 
 @njit
@@ -323,7 +323,7 @@ def _may_reach_section(y_old, y_new, K, P, h, g_old, g_new):
     """Whether sin(phi - phi0) might vanish inside a DOP853 step whose end values have one sign
     (a crossing and the turn back, or M turning twice): |d/dt sin(phi - phi0)| <= |M|/b and
     |M| <= |M_end| + t |dM/dt|, so the step reaches at most
-    h (|M_old| + |M_new|) / b + h^2 (|dM/dt|_old + |dM/dt|_new) / b from its ends (MODEL.md R3,
+    h (|M_old| + |M_new|) / b + h^2 (|dM/dt|_old + |dM/dt|_new) / b from its ends (docs/model.md R3,
     dphi/dt = M/b; dM/dt taken at the ends, K[0] and K[12]).  A screen that decides whether
     the three extra stages of the dense output are worth computing; the dense output is then
     searched rigorously (kernels.events.dense_step_roots)."""

@@ -21,9 +21,9 @@ A loop is then: take a step, observe it (crossings, tangent accumulators, sample
 =============  ===  ========================================================================
 system          n   state and field
 =============  ===  ========================================================================
-``REDUCED``     5   (p1, p2, M, g1, g2), MODEL.md R3 (:func:`explorer.model.equations.rhs`)
+``REDUCED``     5   (p1, p2, M, g1, g2), docs/model.md R3 (:func:`explorer.model.equations.rhs`)
 ``TANGENT``    10   R3 and one deviation vector, the variational equations of R3
-``FULL``        7   R3 and the position (x, y), MODEL.md R1
+``FULL``        7   R3 and the position (x, y), docs/model.md R1
 =============  ===  ========================================================================
 
 DOP853: Hairer, Nørsett & Wanner, *Solving ODEs I*, II.10 (tableau and continuous extension
@@ -71,11 +71,11 @@ EPS = 2.220446049250313e-16
 def field(system, y, P, dy):
     """dy = f(y) of ``system``."""
     if system == REDUCED:
-        rhs(y, P, dy)                          # MODEL.md R3
+        rhs(y, P, dy)                          # docs/model.md R3
     elif system == TANGENT:
         _rhs_augmented(y, P, dy)
     else:
-        rhs_full(y, P, dy)                     # MODEL.md R1
+        rhs_full(y, P, dy)                     # docs/model.md R1
 
 
 @njit

@@ -2,7 +2,7 @@
 
 A scene names the model parameters, the energy ``h``, an optional swept
 parameter (one panel per value), how initial conditions are seeded on the
-section phi = phi0 (MODEL.md R9), the integration settings (method,
+section phi = phi0 (docs/model.md R9), the integration settings (method,
 tolerance or step, crossings per orbit, budgets), what to compute and how to
 draw it.  Pure Python + numpy: no numba, h5py or matplotlib here.
 

@@ -1,8 +1,8 @@
-"""Physics layer: the model of MODEL.md and nothing else.
+"""Physics layer: the model of docs/model.md and nothing else.
 
 - :mod:`explorer.model.parameters` -- parameters and presets, the energy, the
   Casimir, the extra integrals, the section and its allowed region (numpy,
-  vectorised; what a physicist checks against MODEL.md R1-R10);
+  vectorised; what a physicist checks against docs/model.md R1-R11);
 - :mod:`explorer.model.equations` -- the same vector field compiled for the
   integrators: right-hand side (R3), exact sub-flows (R4), Taylor recurrences,
   variational equations, the section function;

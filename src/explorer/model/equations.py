@@ -1,4 +1,4 @@
-"""Compiled physics of the reduced system (MODEL.md R3, R4): the vector field,
+"""Compiled physics of the reduced system (docs/model.md R3, R4): the vector field,
 the energy, the exact sub-flows of the splitting and the Taylor-coefficient
 recurrence.  Only numbers and arrays; the numpy twin a reader checks is
 :mod:`explorer.model`.
@@ -10,7 +10,7 @@ import math
 
 from explorer._jit import njit
 
-# Splitting H = U + H_2 + H_1 + H_M (MODEL.md R4). Flow ids, outermost first:
+# Splitting H = U + H_2 + H_1 + H_M (docs/model.md R4). Flow ids, outermost first:
 # the Strang base method applies U, H_2, H_1 half steps around a full H_M step,
 # so the one flow that needs sin/cos (H_M) runs once per stage.
 FLOW_U, FLOW_H2, FLOW_H1, FLOW_HM = 0, 1, 2, 3
@@ -19,7 +19,7 @@ N_FLOWS = 4
 
 @njit
 def rhs(y, P, dy):
-    """MODEL.md R3 (ur12 corrected):
+    """docs/model.md R3 (ur12 corrected):
     dp/dt = (M/b) J (p - s) - mu g - lam J A p;  dM/dt = (p - s, J A p) - mu (r, J g);
     dg/dt = (M/b) J g, with J v = (v2, -v1)."""
     a1, a2, b, lam, chi, zeta, mu, xi, eta = P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8]
@@ -27,7 +27,7 @@ def rhs(y, P, dy):
     w = m / b
     dy[0] = w * (p2 - zeta) - mu * g1 - lam * p2 / a2
     dy[1] = -w * (p1 - chi) - mu * g2 + lam * p1 / a1
-    # MODEL.md R3: dM/dt = (p - s, J A p) - mu (r, J g) = (p1-chi) p2/a2 - (p2-zeta) p1/a1 - mu (xi g2 - eta g1)
+    # docs/model.md R3: dM/dt = (p - s, J A p) - mu (r, J g) = (p1-chi) p2/a2 - (p2-zeta) p1/a1 - mu (xi g2 - eta g1)
     dy[2] = (p1 - chi) * p2 / a2 - (p2 - zeta) * p1 / a1 - mu * (xi * g2 - eta * g1)
     dy[3] = w * g2
     dy[4] = -w * g1
@@ -35,7 +35,8 @@ def rhs(y, P, dy):
 
 @njit
 def energy(y, P):
-    """MODEL.md R3: H = 1/2(p1^2/a1 + p2^2/a2 + M^2/b) - (mu/lam)((p1-chi) g2 - (p2-zeta) g1) + mu (xi g1 + eta g2)."""
+    """docs/model.md R3:
+    H = 1/2(p1^2/a1 + p2^2/a2 + M^2/b) - (mu/lam)((p1-chi) g2 - (p2-zeta) g1) + mu (xi g1 + eta g2)."""
     a1, a2, b, lam, chi, zeta, mu, xi, eta = P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8]
     p1, p2, m, g1, g2 = y[0], y[1], y[2], y[3], y[4]
     kin = 0.5 * (p1 * p1 / a1 + p2 * p2 / a2 + m * m / b)
@@ -45,7 +46,7 @@ def energy(y, P):
 # ------------------------------------------------------------------ exact sub-flows (R4)
 @njit
 def flow_hm(y, P, t):
-    """MODEL.md R4, H_M = M^2/(2b): M fixed; p - s and g rotate rigidly by the angle (M/b) t
+    """docs/model.md R4, H_M = M^2/(2b): M fixed; p - s and g rotate rigidly by the angle (M/b) t
     (d q/dt = (M/b) J q, J q = (q2, -q1))."""
     chi, zeta = P[4], P[5]
     th = y[2] / P[2] * t
@@ -63,7 +64,7 @@ def flow_hm(y, P, t):
 
 @njit
 def flow_h1(y, P, t):
-    """MODEL.md R4, H_1 = p1^2/(2 a1): p1, g fixed; p2(t) = p2 + (lam p1/a1) t;
+    """docs/model.md R4, H_1 = p1^2/(2 a1): p1, g fixed; p2(t) = p2 + (lam p1/a1) t;
     dM/dt = -(p2(t) - zeta) p1/a1, so M(t) = M - (p1/a1)((p2 - zeta) t + lam p1 t^2/(2 a1))."""
     u = y[0] / P[0]
     dp2 = P[3] * u * t
@@ -73,7 +74,7 @@ def flow_h1(y, P, t):
 
 @njit
 def flow_h2(y, P, t):
-    """MODEL.md R4, H_2 = p2^2/(2 a2): p2, g fixed; p1(t) = p1 - (lam p2/a2) t;
+    """docs/model.md R4, H_2 = p2^2/(2 a2): p2, g fixed; p1(t) = p1 - (lam p2/a2) t;
     dM/dt = (p1(t) - chi) p2/a2, so M(t) = M + (p2/a2)((p1 - chi) t - lam p2 t^2/(2 a2))."""
     v = y[1] / P[1]
     dp1 = -P[3] * v * t
@@ -83,7 +84,7 @@ def flow_h2(y, P, t):
 
 @njit
 def flow_u(y, P, t):
-    """MODEL.md R4, U = -(mu/lam)(p - s, J g) + mu (r, g): g fixed; p(t) = p - mu g t;
+    """docs/model.md R4, U = -(mu/lam)(p - s, J g) + mu (r, g): g fixed; p(t) = p - mu g t;
     dM/dt = -mu (r, J g) = -mu (xi g2 - eta g1) (constant)."""
     mu = P[6]
     y[0] -= mu * y[3] * t
@@ -168,7 +169,7 @@ def section_c(y, cphi, sphi):
 
 @njit
 def section_g_rate(y, P, cphi, sphi):
-    """d/dt sin(phi - phi0) = (M/b) cos(phi - phi0) (MODEL.md R3: dphi/dt = M/b)."""
+    """d/dt sin(phi - phi0) = (M/b) cos(phi - phi0) (docs/model.md R3: dphi/dt = M/b)."""
     return y[2] / P[2] * (y[4] * cphi + y[3] * sphi)
 
 
@@ -320,7 +321,7 @@ FULL_DIM = 7
 
 @njit
 def rhs_full(y, P, dy):
-    """MODEL.md R1 in the polynomial form (g1, g2) = (sin phi, cos phi)."""
+    """docs/model.md R1 in the polynomial form (g1, g2) = (sin phi, cos phi)."""
     a1, a2, b, lam, chi, zeta, mu, xi, eta = P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8]
     p1, p2, m, g1, g2 = y[0], y[1], y[2], y[3], y[4]
     w = m / b
@@ -337,6 +338,6 @@ def rhs_full(y, P, dy):
 
 @njit
 def energy_full(y, P):
-    """MODEL.md R1: H = 1/2(p1^2/a1 + p2^2/a2 + M^2/b) + mu (y + xi g1 + eta g2)."""
+    """docs/model.md R1: H = 1/2(p1^2/a1 + p2^2/a2 + M^2/b) + mu (y + xi g1 + eta g2)."""
     kin = 0.5 * (y[0] * y[0] / P[0] + y[1] * y[1] / P[1] + y[2] * y[2] / P[2])
     return kin + P[6] * (y[6] + P[7] * y[3] + P[8] * y[4])

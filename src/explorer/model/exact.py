@@ -2,8 +2,8 @@
 
 This module is deliberately independent of the project's own physics code
 (it does not import :mod:`explorer.model.equations` or :mod:`explorer.model`); it is
-plain numpy and cites the verified equations of ``shared/MODEL.md`` (labels
-R1..R10).
+plain numpy and cites the verified equations of ``docs/model.md`` (labels
+R1..R11).
 
 Parameters are a float64 array ``P`` of length 9,
 ``P = [a1, a2, b, lam, chi, zeta, mu, xi, eta]`` (indices ``A1 .. ETA`` below).

@@ -1,11 +1,11 @@
-"""The physics a reader checks against ../shared/MODEL.md (labels R1-R10).
+"""The physics a reader checks against docs/model.md (labels R1-R11).
 
 Plain numpy, no numba: the compiled twin of the vector field lives in
 :mod:`explorer.model.equations`.  Everything here is vectorised over the last axis
 of a state ``y = (p1, p2, M, g1, g2)`` with ``(g1, g2) = (sin phi, cos phi)``
-(MODEL.md R3, the polynomial form of the reduced system).
+(docs/model.md R3, the polynomial form of the reduced system).
 
-Parameters (MODEL.md, table "Parameters"):
+Parameters (docs/model.md, table "Notation"):
 
 =========  ================================================  =============
 symbol     meaning                                           constraint
@@ -69,14 +69,14 @@ __all__ = [
 ]
 
 PARAM_NAMES = ("a1", "a2", "b", "lam", "chi", "zeta", "mu", "xi", "eta")
-# Layout of the reduced state (MODEL.md R3).
+# Layout of the reduced state (docs/model.md R3).
 P1, P2, M, G1, G2 = range(5)
 STATE_DIM = 5
 
 
 @dataclass(frozen=True)
 class Params:
-    """Model parameters of Chaplygin's equations (MODEL.md, R1/R3).
+    """Model parameters of Chaplygin's equations (docs/model.md, R1/R3).
 
     Validation (on construction): every value finite; a1, a2, b > 0;
     mu >= 0; lam != 0 (the reduced system R3 divides by lambda).
@@ -101,7 +101,7 @@ class Params:
         if self.mu < 0.0:
             raise ParameterError(f"mu must be >= 0 (the weight), got {self.mu!r}")
         if self.lam == 0.0:
-            raise ParameterError("lam must be nonzero: the reduced system (MODEL.md R3) needs circulation "
+            raise ParameterError("lam must be nonzero: the reduced system (docs/model.md R3) needs circulation "
                                  "(lam = 0 is the full system R1 only)")
 
     def as_array(self) -> np.ndarray:
@@ -120,9 +120,9 @@ class Params:
         return cls(**{n: float(P[i]) for i, n in enumerate(PARAM_NAMES)})
 
 
-#: MODEL.md R9: the scene of the seed's Figure 4 (xi, eta not given: 0).
+#: docs/model.md R9: the scene of the seed's Figure 4 (xi, eta not given: 0).
 FIGURE4 = Params(a1=1.0, a2=0.5, b=2.0, lam=1.0, chi=0.0, zeta=0.0, mu=0.0, xi=0.0, eta=0.0)
-#: MODEL.md R9: the energy level of Figure 4.
+#: docs/model.md R9: the energy level of Figure 4.
 FIGURE4_H = 2.0
 
 
@@ -134,7 +134,7 @@ _P = packed_params
 
 
 def energy(params, y) -> np.ndarray:
-    """MODEL.md R3: H = 1/2(p1^2/a1 + p2^2/a2 + M^2/b) - (mu/lam)(p - s, J g) + mu (r, g),
+    """docs/model.md R3: H = 1/2(p1^2/a1 + p2^2/a2 + M^2/b) - (mu/lam)(p - s, J g) + mu (r, g),
     with (p - s, J g) = (p1 - chi) g2 - (p2 - zeta) g1."""
     P = _P(params)
     y = np.asarray(y, dtype=np.float64)
@@ -145,13 +145,13 @@ def energy(params, y) -> np.ndarray:
 
 
 def casimir(y) -> np.ndarray:
-    """MODEL.md R3: the Casimir g1^2 + g2^2 (equal to 1 on physical states)."""
+    """docs/model.md R3: the Casimir g1^2 + g2^2 (equal to 1 on physical states)."""
     y = np.asarray(y, dtype=np.float64)
     return y[..., G1] ** 2 + y[..., G2] ** 2
 
 
 def rhs(params, y) -> np.ndarray:
-    """MODEL.md R3 (numpy twin of :func:`explorer.model.equations.rhs`):
+    """docs/model.md R3 (numpy twin of :func:`explorer.model.equations.rhs`):
     dp/dt = (M/b) J (p - s) - mu g - lam J A p;  dM/dt = (p - s, J A p) - mu (r, J g);
     dg/dt = (M/b) J g, with J v = (v2, -v1)."""
     P = _P(params)
@@ -169,21 +169,21 @@ def rhs(params, y) -> np.ndarray:
 
 # ---------------------------------------------------------------- integrals (R5, R6)
 def chaplygin_integral(params, y):
-    """MODEL.md R5 case 1 (mu = 0): F = 1/2 |p - s|^2 + lam M."""
+    """docs/model.md R5 case 1 (mu = 0): F = 1/2 |p - s|^2 + lam M."""
     P = _P(params)
     y = np.asarray(y, dtype=np.float64)
     return 0.5 * ((y[..., P1] - P[CHI]) ** 2 + (y[..., P2] - P[ZETA]) ** 2) + P[LAM] * y[..., M]
 
 
 def kozlov_integral(params, y):
-    """MODEL.md R5 case 2 (chi = zeta = 0, a1 = a2): F = M^2/(2b) + mu (r, g)."""
+    """docs/model.md R5 case 2 (chi = zeta = 0, a1 = a2): F = M^2/(2b) + mu (r, g)."""
     P = _P(params)
     y = np.asarray(y, dtype=np.float64)
     return y[..., M] ** 2 / (2 * P[B]) + P[MU] * (P[XI] * y[..., G1] + P[ETA] * y[..., G2])
 
 
 def case3_integral(params, y):
-    """MODEL.md R5 case 3 (chi = -lam eta, zeta = lam xi, a1 = a2 = 1):
+    """docs/model.md R5 case 3 (chi = -lam eta, zeta = lam xi, a1 = a2 = 1):
     F = 1/2 M^2 - lam b (M + (p, J r)) + mu b (r, g), with (p, J r) = p1 eta - p2 xi."""
     P = _P(params)
     y = np.asarray(y, dtype=np.float64)
@@ -193,7 +193,7 @@ def case3_integral(params, y):
 
 
 def hess_eta(params) -> float:
-    """MODEL.md R5 case 4: the positive eta = sqrt(b (1/a2 - 1/a1)) of the Hess relation (a1 > a2)."""
+    """docs/model.md R5 case 4: the positive eta = sqrt(b (1/a2 - 1/a1)) of the Hess relation (a1 > a2)."""
     P = _P(params)
     if not P[A1] > P[A2]:
         raise ParameterError("the Hess relation needs a1 > a2")
@@ -201,7 +201,7 @@ def hess_eta(params) -> float:
 
 
 def hess_function(params, y):
-    """MODEL.md R5 case 4 (chi = zeta = xi = 0, eta^2 = b(1/a2 - 1/a1)):
+    """docs/model.md R5 case 4 (chi = zeta = xi = 0, eta^2 = b(1/a2 - 1/a1)):
     F = M + eta p1 - lam b / a2, with dF/dt = (eta/b) p2 F."""
     P = _P(params)
     y = np.asarray(y, dtype=np.float64)
@@ -249,7 +249,7 @@ def section_gamma(phi0: float):
 
 
 def section_M2(params, p1, p2, h, phi0=math.pi):
-    """M^2 on the section phi = phi0 at energy h (MODEL.md R9, generalised to any phi0):
+    """M^2 on the section phi = phi0 at energy h (docs/model.md R9, generalised to any phi0):
     M^2 = 2b (h - 1/2(p1^2/a1 + p2^2/a2) + (mu/lam)(p - s, J g) - mu (r, g)).
     At phi0 = pi this is 2b (h - 1/2(...) - (mu/lam)(p1 - chi) + mu eta)."""
     P = _P(params)
@@ -268,7 +268,7 @@ def is_admissible(params, p1, p2, h, phi0=math.pi):
 
 
 def allowed_ellipse(params, h, phi0=math.pi):
-    """The allowed region of the section as an ellipse (MODEL.md R9, completing squares).
+    """The allowed region of the section as an ellipse (docs/model.md R9, completing squares).
 
     Returns ``(c1, c2, r1, r2)``: centre and semi-axes along p1 and p2, the
     region being ((p1-c1)/r1)^2 + ((p2-c2)/r2)^2 <= 1.  Returns ``None`` when

@@ -1,7 +1,7 @@
 """Discrete symmetries of the reduced system R3 and what they do to the Poincaré section.
 
 Plain numpy on states ``y = (p1, p2, M, g1, g2)`` with ``(g1, g2) = (sin phi, cos phi)``
-(MODEL.md R3).  Derivation and consequences: docs/model.md, "Symmetries".
+(docs/model.md R3).  Derivation and consequences: docs/model.md, "Symmetries".
 
 - G, the reflection: (p1, p2, M, phi, t) -> (p1, -p2, M, -phi, -t), reversing; a symmetry
   exactly when zeta = 0 and mu xi = 0;

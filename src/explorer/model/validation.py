@@ -252,7 +252,7 @@ def threads(value, available: int) -> int:
 
 def packed_params(params) -> np.ndarray:
     """The packed float64 vector (a1, a2, b, lam, chi, zeta, mu, xi, eta) of a parameter set,
-    validated (MODEL.md R3: a1, a2, b > 0, lam != 0, all finite).
+    validated (docs/model.md R3: a1, a2, b > 0, lam != 0, all finite).
 
     ``params``: a :class:`explorer.model.Params`, a mapping of parameter names (missing
     ones from Figure 4), or a sequence of 9 numbers.

@@ -1,7 +1,7 @@
 """Interactive explorer: click on the section phi = phi0, watch the orbit appear.
 
 ``python -m explorer explore [SCENE]`` opens a matplotlib window with the
-allowed region of the section (MODEL.md R9: white inside the ellipse
+allowed region of the section (docs/model.md R9: white inside the ellipse
 M^2 >= 0 of :func:`explorer.model.allowed_ellipse`, light gray outside, as in
 :mod:`explorer.app.figures`).  A click inside starts an orbit there
 (:func:`explorer.model.section_state`, M > 0) and its crossings are drawn as

@@ -158,9 +158,9 @@ class ExplorerState:
     Parameters
     ----------
     params : model.Params
-        Model parameters (MODEL.md R3).
+        Model parameters (docs/model.md R3).
     h : float
-        Energy level; the section is phi = ``phi0`` (default pi, MODEL.md R9).
+        Energy level; the section is phi = ``phi0`` (default pi, docs/model.md R9).
     method, tol, dt :
         Integration settings of :func:`explorer.analysis.sections.crossings`.
     chunk : int
@@ -238,7 +238,7 @@ class ExplorerState:
         return any(o.running or (o.indicator_pending and self.indicators) for o in self.orbits)
 
     def admissible(self, p1, p2) -> bool:
-        """(p1, p2) lies in the allowed region (M^2 >= 0, MODEL.md R9)."""
+        """(p1, p2) lies in the allowed region (M^2 >= 0, docs/model.md R9)."""
         with np.errstate(all="ignore"):
             return bool(model.section_M2(self.params, p1, p2, self.h, self.phi0) >= 0.0)
 

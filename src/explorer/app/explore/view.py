@@ -1,4 +1,4 @@
-"""The explorer's drawing: the section with its allowed region (MODEL.md R9: white inside the
+"""The explorer's drawing: the section with its allowed region (docs/model.md R9: white inside the
 ellipse M^2 >= 0, light gray outside, as in :mod:`explorer.app.figures`), the orbits' crossings,
 the seeds, fixed points and separatrices, the MEGNO colour bar, the sliders, text box and buttons,
 and the status line. It reads an :class:`~explorer.app.explore.state.ExplorerState` and never

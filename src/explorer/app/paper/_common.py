@@ -5,7 +5,7 @@ from pathlib import Path
 from explorer import model
 
 #: the parameters of the seed's Figures 2 and 3: lam = 1, b = 2, a1 = 1, a2 = 1/2, chi = zeta = 0
-#: (mu = 0: Chaplygin's case, MODEL.md R6; Figure 4's scene at mu = 0)
+#: (mu = 0: Chaplygin's case, docs/model.md R6; Figure 4's scene at mu = 0)
 CHAPLYGIN = model.FIGURE4.with_(mu=0.0)
 #: the energies of Figure 2, one in each interval of the seed, (0, b lam^2/(2 a1^2)) = (0, 1),
 #: (1, b lam^2/(2 a2^2)) = (1, 4), (4, inf); h = 2 is Figure 4's level

@@ -19,7 +19,7 @@ def check_chaplygin(params) -> model.Params:
         raise ParameterError(f"Chaplygin's case needs mu = chi = zeta = 0, got mu = {prm.mu:g}, "
                              f"chi = {prm.chi:g}, zeta = {prm.zeta:g}")
     if not prm.lam > 0.0 or not prm.a1 > prm.a2:
-        raise ParameterError(f"the bifurcation analysis (seed, MODEL.md R6) assumes lam > 0 and a1 > a2, "
+        raise ParameterError(f"the bifurcation analysis (seed, docs/model.md R6) assumes lam > 0 and a1 > a2, "
                              f"got lam = {prm.lam:g}, a1 = {prm.a1:g}, a2 = {prm.a2:g}")
     return prm
 
@@ -50,7 +50,7 @@ def branch_exists(branch, c, params) -> bool:
 
 def branch_h(branch, c, params):
     """Energy of the permanent rotation of a branch at F = c: I: h = c^2/(2b); II, III:
-    h = lam c/a_j - lam^2 b/(2 a_j^2) (ur21 with its 1/2, MODEL.md R6)."""
+    h = lam c/a_j - lam^2 b/(2 a_j^2) (ur21 with its 1/2, docs/model.md R6)."""
     prm = check_chaplygin(params)
     c = np.asarray(c, dtype=float)
     if branch == "I":

@@ -8,7 +8,7 @@ from explorer.app.paper._common import _FS, _SMALL, Drawn, Outcome, _new_figure,
 #: the figure's name (``explorer figures --only tangle``) and what it shows
 NAME = "tangle"
 DESCRIPTION = "the homoclinic tangle of the central saddle (mu = 0.03) with its lobes, and the flux against Melnikov"
-#: the scene: Figure 4 (MODEL.md R9) at mu = 0.03, h = 2
+#: the scene: Figure 4 (docs/model.md R9) at mu = 0.03, h = 2
 MU, H = 0.03, 2.0
 #: mu values of the flux curve (full run, --quick)
 FLUX_MUS = (1e-3, 3e-3, 1e-2, 3e-2, 0.1, 0.3)
