@@ -305,6 +305,8 @@ def _newton(smap, K, X0, max_iter=NEWTON_MAX_ITER, multiple=None):
         else:
             F = imgs[-1] - pts[0]
             A = _monodromy(jacs) - np.eye(2)
+        if not (np.all(np.isfinite(A)) and np.all(np.isfinite(F))):
+            raise ParameterError(_not_finite(smap, X.reshape(-1, 2)[0]))
         try:
             dx = np.linalg.solve(A, -F)
         except np.linalg.LinAlgError:   # trace exactly 2: the least-squares step
@@ -356,10 +358,18 @@ def _isolation(M, residual):
     return uncertainty, bool(uncertainty > ISOLATION_TOL or abs(residue) < DEGENERATE_RESIDUE)
 
 
+def _not_finite(smap, x) -> str:
+    p = smap.params
+    return (f"the section map's Jacobian is not finite at (p1, p2) = ({x[0]:.6g}, {x[1]:.6g}): the tangent "
+            f"dynamics overflow at lam = {p.lam:g}, mu = {p.mu:g}, h = {smap.h:g} (the motion is too fast)")
+
+
 def _orbit(smap, pts, jacs, times, resid, iters, symmetric=None) -> PeriodicOrbit:
     """The PeriodicOrbit through ``pts`` with map Jacobians ``jacs`` (monodromy, eigenvalues,
     symmetry and isolation derived from them)."""
     M = _monodromy(jacs)
+    if not np.all(np.isfinite(M)):
+        raise ParameterError(_not_finite(smap, pts[0]))
     if symmetric is None:
         symmetric = is_reversible(smap.params, smap.phi0) and _is_symmetric(pts, 1e3 * MINIMAL_PERIOD_TOL)
     uncertainty, degenerate = _isolation(M, resid)

@@ -614,6 +614,7 @@ def _outputs(scene, out, figure, draw) -> tuple[Path, Path]:
     out = Path(out) if out else Path("results") / f"{scene.name}.h5"
     stem = Path(figure) if figure else out.with_suffix("")   # beside the store (docs/commands/sweep.md)
     store.check_writable(out.parent, "--out", out)
+    validation.output_path("--out", out)       # the default path too: a read-only store is never replaced
     if draw:
         store.check_writable(stem.parent, "--figure", stem)
     return out, stem
