@@ -1,0 +1,346 @@
+"""The page of ``explorer serve``: one Bokeh figure of the section in a Panel layout, the fields
+of the parameters, and the buttons.  One :class:`SectionPage` per browser session.
+
+What the page holds, by Bokeh model name (``Bokeh.documents[0].get_model_by_name(NAME)`` in the
+browser; the tests read them there):
+
+``region``     ColumnDataSource of the allowed ellipse (x, y, width, height; empty: no region)
+``crossings``  ColumnDataSource of every crossing on screen: orbit, t, p1, p2, M, dH, color
+``starts``     ColumnDataSource of the clicked starts: orbit, p1, p2, color
+``section``    the figure (a click on it starts an orbit)
+``message``    the last message (a refused value, an export, a click outside the region)
+``status``     one line: orbits running and crossings drawn
+
+Values from the page are read by :func:`explorer.app.serve.settings.parse_fields`; a refused
+value leaves everything as it was and says why in ``message``.  Crossings arrive from the
+session's :class:`~explorer.app.serve.orbits.Worker` thread and are streamed onto the document
+in its own event loop (``add_next_tick_callback``).
+"""
+from __future__ import annotations
+
+import io
+import math
+import os
+from functools import partial
+
+import numpy as np
+import panel as pn
+from bokeh.events import Tap
+from bokeh.models import ColumnDataSource, Div
+from bokeh.plotting import figure
+
+from explorer.app.explore.state import COLORS
+from explorer.app.serve import export, settings as settings_mod
+from explorer.app.serve.orbits import Worker
+from explorer.app.serve.settings import FIELDS, Settings, format_starts, parse_fields, parse_starts
+from explorer.model import ParameterError
+
+#: colours of the section (as the figures: forbidden region light gray, allowed region white)
+FORBIDDEN_COLOR = "#cccccc"
+ALLOWED_COLOR = "#ffffff"
+BOUNDARY_COLOR = "#262626"
+#: size of the figure in pixels, and of a crossing's dot
+FIGURE_WIDTH = 720
+FIGURE_HEIGHT = 560
+POINT_SIZE = 2.0
+#: the view shows the region's bounding box and this margin around it (fraction of the semi-axes)
+VIEW_MARGIN = 0.08
+#: labels of the fields
+LABELS = {"mu": "μ", "h": "h", "lam": "λ", "a1": "a1", "a2": "a2", "b": "b", "method": "method",
+          "tol": "tol (taylor, dop853)", "dt": "dt (split*)", "crossings": "crossings per click"}
+CROSSING_COLUMNS = ("orbit", "t", "p1", "p2", "M", "dH")
+
+
+def _empty_crossings() -> dict:
+    d = {c: np.zeros(0) for c in CROSSING_COLUMNS}
+    d["orbit"] = np.zeros(0, np.int64)
+    d["color"] = []
+    return d
+
+
+class SectionPage:
+    """One browser session: settings, starts, orbits, the Bokeh models and their callbacks.
+
+    ``base``: the settings before any URL argument or field (from the scene and the command
+    line); ``args``: the request's URL arguments ({name: text}); ``export_dir``: where the
+    export button writes (None: the page offers the scene as a download only)."""
+
+    def __init__(self, base: Settings, args: dict | None = None, export_dir=None, label: str = ""):
+        self.base = base
+        self.settings = base
+        self.export_dir = export_dir
+        self.label = label
+        self.starts: list[tuple] = []          # (orbit id, p1, p2, colour) of every start, in click order
+        self._color = 0
+        self._running: set = set()             # ids of the orbits still computing
+        self._doc = None
+        self.worker = Worker(self._on_block, self._on_error)
+        self._build()
+        self._load_url(args or {})
+
+    # ------------------------------------------------------------ layout
+    def _build(self):
+        self.region = ColumnDataSource({"x": [], "y": [], "width": [], "height": []}, name="region")
+        self.crossings = ColumnDataSource(_empty_crossings(), name="crossings")
+        self.start_source = ColumnDataSource({"orbit": [], "p1": [], "p2": [], "color": []}, name="starts")
+        fig = figure(name="section", width=FIGURE_WIDTH, height=FIGURE_HEIGHT, match_aspect=True,
+                     tools="pan,wheel_zoom,box_zoom,reset,save", active_scroll="wheel_zoom",
+                     x_axis_label="p1", y_axis_label="p2", background_fill_color=FORBIDDEN_COLOR,
+                     toolbar_location="above")
+        fig.ellipse("x", "y", width="width", height="height", source=self.region, fill_color=ALLOWED_COLOR,
+                    line_color=BOUNDARY_COLOR, line_width=1.0)
+        fig.scatter("p1", "p2", source=self.crossings, color="color", size=POINT_SIZE, line_width=0)
+        fig.scatter("p1", "p2", source=self.start_source, marker="cross", color="color", size=9, line_width=2)
+        fig.grid.visible = False
+        fig.on_event(Tap, self._on_tap)
+        self.figure = fig
+        s = self.settings.fields()
+        self.inputs = {}
+        for name in FIELDS:
+            if name == "method":
+                from explorer.analysis.sections import METHODS
+
+                w = pn.widgets.Select(name=LABELS[name], options=list(METHODS), value=s[name], width=140)
+            else:
+                w = pn.widgets.TextInput(name=LABELS[name], value=s[name], width=140)
+            w.param.watch(self._on_field, "value")
+            self.inputs[name] = w
+        clear = pn.widgets.Button(name="Clear", button_type="warning", width=90)
+        clear.on_click(lambda _e: self.clear())
+        undo = pn.widgets.Button(name="Undo", width=90)
+        undo.on_click(lambda _e: self.undo())
+        buttons = [clear, undo]
+        download = pn.widgets.FileDownload(callback=self._scene_file, filename=f"{export.SCENE_NAME}.toml",
+                                           label="Scene (TOML)", button_type="primary", width=190)
+        buttons.append(download)
+        if self.export_dir is not None:
+            save = pn.widgets.Button(name="Export scene", width=190)
+            save.on_click(lambda _e: self.export())
+            buttons.append(save)
+        self.message = Div(name="message", text="", styles={"color": "#b00020", "min-height": "1.2em"},
+                           width=FIGURE_WIDTH)
+        self.status = Div(name="status", text="click in the white region to start an orbit", width=FIGURE_WIDTH)
+        title = "explorer: Poincaré section φ = π" + (f" ({self.label})" if self.label else "")
+        controls = pn.Column(*self.inputs.values(), pn.Row(*buttons[:2]), *buttons[2:], width=200)
+        self.layout = pn.Row(controls, pn.Column(pn.pane.Markdown(f"### {title}"), pn.pane.Bokeh(fig),
+                                                 pn.pane.Bokeh(self.status), pn.pane.Bokeh(self.message)))
+
+    def attach(self, doc) -> None:
+        """The session's document: blocks are streamed into it; the worker ends with it."""
+        self._doc = doc
+        doc.on_session_destroyed(lambda _ctx: self.worker.stop(timeout=0))
+
+    # ------------------------------------------------------------ state in the URL
+    def _load_url(self, args: dict):
+        fields = {k: v for k, v in args.items() if k in FIELDS}
+        try:
+            self.settings = parse_fields(self.base, fields)
+            starts = parse_starts(args.get("orbits", ""))
+        except ParameterError as exc:
+            self.settings, starts = self.base, []
+            self.say(f"link ignored: {exc}")
+        self._show_fields()
+        self._draw_region()
+        for p1, p2 in starts:
+            self._start(p1, p2)
+
+    def url_query(self) -> dict:
+        """The view as URL arguments: every field and the starts."""
+        q = self.settings.fields()
+        q["orbits"] = format_starts((p1, p2) for _i, p1, p2, _c in self.starts)
+        return q
+
+    def _push_url(self):
+        loc = pn.state.location
+        if loc is not None:
+            loc.update_query(**self.url_query())
+
+    def _show_fields(self):
+        s = self.settings.fields()
+        for name, w in self.inputs.items():
+            if w.value != s[name]:
+                self._quiet = True
+                try:
+                    w.value = s[name]
+                finally:
+                    self._quiet = False
+
+    _quiet = False
+
+    # ------------------------------------------------------------ actions
+    def say(self, text: str) -> None:
+        self.message.text = text
+
+    def _draw_region(self):
+        r = self.settings.region
+        if r is None:
+            self.region.data = {"x": [], "y": [], "width": [], "height": []}
+            self.say(f"the allowed region is empty at h = {self.settings.h:g} (h is below the minimum of "
+                     "the energy on the section)")
+            return
+        c1, c2, r1, r2 = r
+        self.region.data = {"x": [c1], "y": [c2], "width": [2 * r1], "height": [2 * r2]}
+        m1, m2 = (1 + VIEW_MARGIN) * r1, (1 + VIEW_MARGIN) * r2
+        self.figure.x_range.start, self.figure.x_range.end = c1 - m1, c1 + m1
+        self.figure.y_range.start, self.figure.y_range.end = c2 - m2, c2 + m2
+
+    def _start(self, p1: float, p2: float, color: str | None = None):
+        if not self.settings.admissible(p1, p2):
+            return None
+        if color is None:
+            color = COLORS[self._color % len(COLORS)]
+            self._color += 1
+        run = self.worker.submit(p1, p2, self.settings)
+        self.starts.append((run.ident, p1, p2, color))
+        self.start_source.stream({"orbit": [run.ident], "p1": [p1], "p2": [p2], "color": [color]})
+        self._running = self._running | {run.ident}
+        self._update_status()
+        return run
+
+    def click(self, p1: float, p2: float):
+        """A click at (p1, p2): a new orbit, or a message saying why not."""
+        if not (math.isfinite(p1) and math.isfinite(p2)):
+            return None
+        if len(self.starts) >= settings_mod.MAX_STARTS:
+            self.say(f"at most {settings_mod.MAX_STARTS} orbits in a session: clear or undo first")
+            return None
+        if self.settings.region is None:
+            self.say("nothing to do: the allowed region is empty at this energy")
+            return None
+        if not self.settings.admissible(p1, p2):
+            self.say(f"({p1:.4g}, {p2:.4g}) is outside the allowed region (M^2 < 0 there): click in the white "
+                     "ellipse")
+            return None
+        run = self._start(p1, p2)
+        self.say("")
+        self._push_url()
+        return run
+
+    def _on_tap(self, event):
+        self.click(float(event.x), float(event.y))
+
+    def _on_field(self, event):
+        if self._quiet:
+            return
+        fields = {name: w.value for name, w in self.inputs.items()}
+        try:
+            new = parse_fields(self.base, fields)
+        except ParameterError as exc:
+            self.say(f"not applied: {exc}")
+            return
+        self.say("")
+        self.apply(new)
+
+    def apply(self, new: Settings) -> None:
+        """New settings: the orbits stop, the region is redrawn, the starts inside it run again."""
+        if new == self.settings:
+            return
+        self.worker.cancel()
+        old = self.starts
+        self.settings = new
+        self.starts = []
+        self._running = set()
+        self.crossings.data = _empty_crossings()
+        self.start_source.data = {"orbit": [], "p1": [], "p2": [], "color": []}
+        self._draw_region()
+        self._show_fields()
+        kept = [self._start(p1, p2, color) for _i, p1, p2, color in old]
+        dropped = sum(r is None for r in kept)
+        if dropped:
+            self.say(f"{dropped} start(s) outside the new allowed region dropped")
+        self._push_url()
+
+    def clear(self) -> None:
+        self.worker.cancel()
+        self.starts = []
+        self._running = set()
+        self.crossings.data = _empty_crossings()
+        self.start_source.data = {"orbit": [], "p1": [], "p2": [], "color": []}
+        self._update_status()
+        self._push_url()
+
+    def undo(self) -> None:
+        """Remove the last orbit (stopped if it runs)."""
+        if not self.starts:
+            return
+        ident = self.starts.pop()[0]
+        self.worker.remove(ident)
+        self._running = self._running - {ident}
+        keep = np.asarray(self.crossings.data["orbit"]) != ident
+        self.crossings.data = {k: np.asarray(v)[keep] if k != "color" else [c for c, ok in zip(v, keep) if ok]
+                               for k, v in self.crossings.data.items()}
+        keep = [o != ident for o in self.start_source.data["orbit"]]
+        self.start_source.data = {k: [x for x, ok in zip(v, keep) if ok] for k, v in self.start_source.data.items()}
+        self._update_status()
+        self._push_url()
+
+    def _scene_text(self) -> str:
+        return export.session_scene(self.settings, [(a, b) for _i, a, b, _c in self.starts]).to_toml()
+
+    def _scene_file(self):
+        try:
+            return io.StringIO(self._scene_text())
+        except ParameterError as exc:
+            self.say(str(exc))
+            return io.StringIO("")
+
+    def export(self) -> str | None:
+        """Write the session's scene into the export directory; returns its path."""
+        try:
+            sc = export.session_scene(self.settings, [(a, b) for _i, a, b, _c in self.starts])
+            path = export.write_scene(self.export_dir, sc)
+        except (ParameterError, OSError) as exc:
+            self.say(f"export failed: {exc}")
+            return None
+        self.say(f"scene written: {os.path.basename(path)} (rerun: explorer sweep {os.path.basename(path)})")
+        return path
+
+    # ------------------------------------------------------------ blocks from the worker
+    def _on_block(self, ident, rows, done, status):
+        """In the worker thread: move the block onto the document's loop."""
+        if self._doc is None:
+            return
+        self._doc.add_next_tick_callback(partial(self._stream, ident, rows, done, status))
+
+    def _on_error(self, ident, exc):
+        if self._doc is not None:
+            msg = f"orbit {ident} failed: {type(exc).__name__}: {' '.join(str(exc).split())}"
+            self._doc.add_next_tick_callback(partial(self._fail, ident, msg))
+
+    def _fail(self, ident, msg):
+        self._running = self._running - {ident}
+        self.say(msg)
+        self._update_status()
+
+    def _stream(self, ident, rows, done, status):
+        if not any(i == ident for i, *_ in self.starts):
+            return              # undone or cancelled meanwhile
+        color = next(c for i, _a, _b, c in self.starts if i == ident)
+        n = len(rows)
+        if n:
+            self.crossings.stream({"orbit": np.full(n, ident, np.int64), "t": rows[:, 0], "p1": rows[:, 1],
+                                   "p2": rows[:, 2], "M": rows[:, 3], "dH": rows[:, 4], "color": [color] * n})
+        if status != "running":
+            self._running = self._running - {ident}
+            if status != "done":
+                self.say(f"orbit {ident} stopped after {done} crossings: {status}")
+        self._update_status()
+
+    def _update_status(self):
+        running = len(self._running)
+        n = len(self.crossings.data["orbit"])
+        self.status.text = (f"{len(self.starts)} orbit(s), {running} running, {n} crossings drawn; "
+                            f"mu = {self.settings.params.mu:g}, h = {self.settings.h:g}, {self.settings.method}")
+
+
+def session_app(base: Settings, export_dir=None, label: str = ""):
+    """A Panel app function for ``pn.serve``: one :class:`SectionPage` per session, built from
+    the session's URL arguments."""
+    def app():
+        args = {k: v[0].decode("utf-8", "replace") for k, v in (pn.state.session_args or {}).items() if v}
+        page = SectionPage(base, args, export_dir=export_dir, label=label)
+        doc = pn.state.curdoc
+        if doc is not None:
+            page.attach(doc)
+        return page.layout
+    return app
