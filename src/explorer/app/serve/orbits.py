@@ -21,7 +21,7 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -84,6 +84,19 @@ class OrbitRun:
         target = int(rate * BLOCK_SECONDS) if rate else 2 * self.block
         self.block = max(MIN_BLOCK, min(MAX_BLOCK, target, 4 * self.block))
         return rows
+
+
+def warm_up(settings: Settings) -> None:
+    """Load (or compile) the crossing kernels of ``settings``' method before the first click: one
+    crossing from the centre of the region (nothing when the region is empty).  A failure here
+    only costs the first click its speed: it is not reported."""
+    region = settings.region
+    if region is None:
+        return
+    try:
+        OrbitRun(0, region[0], region[1], replace(settings, crossings=1), 0).advance()
+    except Exception:  # noqa: BLE001 - the click will report the same error with its orbit
+        return
 
 
 BlockCallback = Callable[[int, np.ndarray, int, str], None]

@@ -25,7 +25,7 @@ from functools import partial
 
 import numpy as np
 import panel as pn
-from bokeh.events import Tap
+from bokeh.events import DoubleTap, Tap
 from bokeh.models import ColumnDataSource, Div
 from bokeh.plotting import figure
 
@@ -45,6 +45,8 @@ FIGURE_HEIGHT = 560
 POINT_SIZE = 2.0
 #: the view shows the region's bounding box and this margin around it (fraction of the semi-axes)
 VIEW_MARGIN = 0.08
+#: a double tap within this many pixels of the click before it is that click again
+SAME_SPOT_PX = 4.0
 #: labels of the fields
 LABELS = {"mu": "μ", "h": "h", "lam": "λ", "a1": "a1", "a2": "a2", "b": "b", "method": "method",
           "tol": "tol (taylor, dop853)", "dt": "dt (split*)", "crossings": "crossings per click"}
@@ -63,9 +65,10 @@ class SectionPage:
 
     ``base``: the settings before any URL argument or field (from the scene and the command
     line); ``args``: the request's URL arguments ({name: text}); ``export_dir``: where the
-    export button writes (None: the page offers the scene as a download only)."""
+    export button writes (None: the page offers the scene as a download only); ``doc``: the
+    session's Bokeh document (:meth:`attach`)."""
 
-    def __init__(self, base: Settings, args: dict | None = None, export_dir=None, label: str = ""):
+    def __init__(self, base: Settings, args: dict | None = None, export_dir=None, label: str = "", doc=None):
         self.base = base
         self.settings = base
         self.export_dir = export_dir
@@ -76,6 +79,8 @@ class SectionPage:
         self._doc = None
         self.worker = Worker(self._on_block, self._on_error)
         self._build()
+        if doc is not None:
+            self.attach(doc)
         self._load_url(args or {})
 
     # ------------------------------------------------------------ layout
@@ -93,6 +98,7 @@ class SectionPage:
         fig.scatter("p1", "p2", source=self.start_source, marker="cross", color="color", size=9, line_width=2)
         fig.grid.visible = False
         fig.on_event(Tap, self._on_tap)
+        fig.on_event(DoubleTap, self._on_tap)   # a second click within 300 ms is a double tap
         self.figure = fig
         s = self.settings.fields()
         self.inputs = {}
@@ -103,19 +109,19 @@ class SectionPage:
                 w = pn.widgets.Select(name=LABELS[name], options=list(METHODS), value=s[name], width=140)
             else:
                 w = pn.widgets.TextInput(name=LABELS[name], value=s[name], width=140)
-            w.param.watch(self._on_field, "value")
+            w.param.watch(self._field_changed, "value")
             self.inputs[name] = w
         clear = pn.widgets.Button(name="Clear", button_type="warning", width=90)
-        clear.on_click(lambda _e: self.clear())
+        clear.on_click(lambda _e: self._later(self.clear))
         undo = pn.widgets.Button(name="Undo", width=90)
-        undo.on_click(lambda _e: self.undo())
+        undo.on_click(lambda _e: self._later(self.undo))
         buttons = [clear, undo]
         download = pn.widgets.FileDownload(callback=self._scene_file, filename=f"{export.SCENE_NAME}.toml",
                                            label="Scene (TOML)", button_type="primary", width=190)
         buttons.append(download)
         if self.export_dir is not None:
             save = pn.widgets.Button(name="Export scene", width=190)
-            save.on_click(lambda _e: self.export())
+            save.on_click(lambda _e: self._later(self.export))
             buttons.append(save)
         self.message = Div(name="message", text="", styles={"color": "#b00020", "min-height": "1.2em"},
                            width=FIGURE_WIDTH)
@@ -217,11 +223,31 @@ class SectionPage:
         return run
 
     def _on_tap(self, event):
+        """Tap or double tap: Bokeh reports a click that follows another within 300 ms as a double
+        tap instead of a tap; one at the place of the previous click is that click again (ignored),
+        one elsewhere is a new click."""
+        here = (float(event.sx), float(event.sy))
+        last, self._last_tap = self._last_tap, here
+        if isinstance(event, DoubleTap) and last is not None and max(abs(here[0] - last[0]),
+                                                                      abs(here[1] - last[1])) <= SAME_SPOT_PX:
+            return
         self.click(float(event.x), float(event.y))
 
-    def _on_field(self, event):
-        if self._quiet:
-            return
+    _last_tap: tuple | None = None
+
+    def _later(self, action) -> None:
+        """Run ``action`` on the document's loop with its lock (Panel calls widget watchers
+        outside it; the Bokeh models of the figure must be changed inside), or now without one."""
+        if self._doc is None:
+            action()
+        else:
+            self._doc.add_next_tick_callback(action)
+
+    def _field_changed(self, _event):
+        if not self._quiet:           # (a change made by _show_fields is not the user's)
+            self._later(self._on_field)
+
+    def _on_field(self):
         fields = {name: w.value for name, w in self.inputs.items()}
         try:
             new = parse_fields(self.base, fields)
@@ -338,9 +364,5 @@ def session_app(base: Settings, export_dir=None, label: str = ""):
     the session's URL arguments."""
     def app():
         args = {k: v[0].decode("utf-8", "replace") for k, v in (pn.state.session_args or {}).items() if v}
-        page = SectionPage(base, args, export_dir=export_dir, label=label)
-        doc = pn.state.curdoc
-        if doc is not None:
-            page.attach(doc)
-        return page.layout
+        return SectionPage(base, args, export_dir=export_dir, label=label, doc=pn.state.curdoc).layout
     return app

@@ -20,7 +20,9 @@ import ipaddress
 import secrets
 import socket
 import sys
+import threading
 
+from explorer.app.serve.orbits import warm_up
 from explorer.app.serve.settings import Settings
 
 DEFAULT_HOST = "127.0.0.1"
@@ -102,6 +104,7 @@ def run(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, t
     out = sys.stdout if out is None else out
     server, url = make_server(base, host=host, port=port, token=token, export_dir=export_dir, label=label)
     print(url, file=out, flush=True)
+    threading.Thread(target=warm_up, args=(base,), name="explorer-serve-warm-up", daemon=True).start()
     server.start()
     try:
         server.io_loop.start()
