@@ -28,7 +28,8 @@ import pytest
 
 from explorer import model
 from explorer.analysis import sections
-from explorer.app.serve import export, settings as settings_mod
+from explorer.app.serve import export
+from explorer.app.serve import settings as settings_mod
 from explorer.app.serve.orbits import Worker
 from explorer.app.serve.settings import Settings, format_starts, parse_fields, parse_starts
 from explorer.model import ParameterError

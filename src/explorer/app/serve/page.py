@@ -5,8 +5,9 @@ What the page holds, by Bokeh model name (``Bokeh.documents[0].get_model_by_name
 browser; the tests read them there):
 
 ``region``     ColumnDataSource of the allowed ellipse (x, y, width, height; empty: no region)
-``crossings``  ColumnDataSource of every crossing on screen: orbit, t, p1, p2, M, dH, color
-``starts``     ColumnDataSource of the clicked starts: orbit, p1, p2, color
+``crossings``  ColumnDataSource of every crossing on screen: orbit, t, p1, p2, M, dH and the
+               orbit's colour c (an index into COLORS)
+``starts``     ColumnDataSource of the clicked starts: orbit, p1, p2, c
 ``section``    the figure (a click on it starts an orbit)
 ``message``    the last message (a refused value, an export, a click outside the region)
 ``status``     one line: orbits running and crossings drawn
@@ -21,16 +22,18 @@ from __future__ import annotations
 import io
 import math
 import os
+import threading
 from functools import partial
 
 import numpy as np
 import panel as pn
 from bokeh.events import DoubleTap, Tap
-from bokeh.models import ColumnDataSource, Div
+from bokeh.models import ColumnDataSource, Div, LinearColorMapper
 from bokeh.plotting import figure
 
 from explorer.app.explore.state import COLORS
-from explorer.app.serve import export, settings as settings_mod
+from explorer.app.serve import export
+from explorer.app.serve import settings as settings_mod
 from explorer.app.serve.orbits import Worker
 from explorer.app.serve.settings import FIELDS, Settings, format_starts, parse_fields, parse_starts
 from explorer.model import ParameterError
@@ -56,8 +59,12 @@ CROSSING_COLUMNS = ("orbit", "t", "p1", "p2", "M", "dH")
 def _empty_crossings() -> dict:
     d = {c: np.zeros(0) for c in CROSSING_COLUMNS}
     d["orbit"] = np.zeros(0, np.int64)
-    d["color"] = []
+    d["c"] = np.zeros(0, np.int64)
     return d
+
+
+def _empty_starts() -> dict:
+    return {"orbit": [], "p1": [], "p2": [], "c": []}
 
 
 class SectionPage:
@@ -77,6 +84,8 @@ class SectionPage:
         self._color = 0
         self._running: set = set()             # ids of the orbits still computing
         self._doc = None
+        self._pending: list = []               # blocks from the worker not yet on the page
+        self._pending_lock = threading.Lock()
         self.worker = Worker(self._on_block, self._on_error)
         self._build()
         if doc is not None:
@@ -87,15 +96,17 @@ class SectionPage:
     def _build(self):
         self.region = ColumnDataSource({"x": [], "y": [], "width": [], "height": []}, name="region")
         self.crossings = ColumnDataSource(_empty_crossings(), name="crossings")
-        self.start_source = ColumnDataSource({"orbit": [], "p1": [], "p2": [], "color": []}, name="starts")
+        self.start_source = ColumnDataSource(_empty_starts(), name="starts")
+        colors = {"field": "c", "transform": LinearColorMapper(palette=list(COLORS), low=-0.5,
+                                                                high=len(COLORS) - 0.5)}
         fig = figure(name="section", width=FIGURE_WIDTH, height=FIGURE_HEIGHT, match_aspect=True,
                      tools="pan,wheel_zoom,box_zoom,reset,save", active_scroll="wheel_zoom",
                      x_axis_label="p1", y_axis_label="p2", background_fill_color=FORBIDDEN_COLOR,
                      toolbar_location="above")
         fig.ellipse("x", "y", width="width", height="height", source=self.region, fill_color=ALLOWED_COLOR,
                     line_color=BOUNDARY_COLOR, line_width=1.0)
-        fig.scatter("p1", "p2", source=self.crossings, color="color", size=POINT_SIZE, line_width=0)
-        fig.scatter("p1", "p2", source=self.start_source, marker="cross", color="color", size=9, line_width=2)
+        fig.scatter("p1", "p2", source=self.crossings, color=colors, size=POINT_SIZE, line_width=0)
+        fig.scatter("p1", "p2", source=self.start_source, marker="cross", color=colors, size=9, line_width=2)
         fig.grid.visible = False
         fig.on_event(Tap, self._on_tap)
         fig.on_event(DoubleTap, self._on_tap)   # a second click within 300 ms is a double tap
@@ -190,15 +201,15 @@ class SectionPage:
         self.figure.x_range.start, self.figure.x_range.end = c1 - m1, c1 + m1
         self.figure.y_range.start, self.figure.y_range.end = c2 - m2, c2 + m2
 
-    def _start(self, p1: float, p2: float, color: str | None = None):
+    def _start(self, p1: float, p2: float, color: int | None = None):
         if not self.settings.admissible(p1, p2):
             return None
         if color is None:
-            color = COLORS[self._color % len(COLORS)]
+            color = self._color % len(COLORS)
             self._color += 1
         run = self.worker.submit(p1, p2, self.settings)
         self.starts.append((run.ident, p1, p2, color))
-        self.start_source.stream({"orbit": [run.ident], "p1": [p1], "p2": [p2], "color": [color]})
+        self.start_source.stream({"orbit": [run.ident], "p1": [p1], "p2": [p2], "c": [color]})
         self._running = self._running | {run.ident}
         self._update_status()
         return run
@@ -267,7 +278,7 @@ class SectionPage:
         self.starts = []
         self._running = set()
         self.crossings.data = _empty_crossings()
-        self.start_source.data = {"orbit": [], "p1": [], "p2": [], "color": []}
+        self.start_source.data = _empty_starts()
         self._draw_region()
         self._show_fields()
         kept = [self._start(p1, p2, color) for _i, p1, p2, color in old]
@@ -281,7 +292,7 @@ class SectionPage:
         self.starts = []
         self._running = set()
         self.crossings.data = _empty_crossings()
-        self.start_source.data = {"orbit": [], "p1": [], "p2": [], "color": []}
+        self.start_source.data = _empty_starts()
         self._update_status()
         self._push_url()
 
@@ -293,8 +304,7 @@ class SectionPage:
         self.worker.remove(ident)
         self._running = self._running - {ident}
         keep = np.asarray(self.crossings.data["orbit"]) != ident
-        self.crossings.data = {k: np.asarray(v)[keep] if k != "color" else [c for c, ok in zip(v, keep) if ok]
-                               for k, v in self.crossings.data.items()}
+        self.crossings.data = {k: np.asarray(v)[keep] for k, v in self.crossings.data.items()}
         keep = [o != ident for o in self.start_source.data["orbit"]]
         self.start_source.data = {k: [x for x, ok in zip(v, keep) if ok] for k, v in self.start_source.data.items()}
         self._update_status()
@@ -323,10 +333,34 @@ class SectionPage:
 
     # ------------------------------------------------------------ blocks from the worker
     def _on_block(self, ident, rows, done, status):
-        """In the worker thread: move the block onto the document's loop."""
+        """In the worker thread: queue the block for the document's loop; blocks that come while
+        the loop is busy go to the page together (one message)."""
         if self._doc is None:
             return
-        self._doc.add_next_tick_callback(partial(self._stream, ident, rows, done, status))
+        with self._pending_lock:
+            self._pending.append((ident, rows, done, status))
+            if len(self._pending) > 1:
+                return                   # a flush is scheduled already
+        self._doc.add_next_tick_callback(self._flush)
+
+    def _flush(self):
+        with self._pending_lock:
+            blocks, self._pending = self._pending, []
+        live = {i: c for i, _a, _b, c in self.starts}
+        blocks = [b for b in blocks if b[0] in live]          # undone or cancelled meanwhile: dropped
+        full = [b for b in blocks if len(b[1])]
+        if full:
+            data = np.concatenate([b[1] for b in full])
+            self.crossings.stream({"orbit": np.concatenate([np.full(len(b[1]), b[0], np.int64) for b in full]),
+                                   "t": data[:, 0], "p1": data[:, 1], "p2": data[:, 2], "M": data[:, 3],
+                                   "dH": data[:, 4],
+                                   "c": np.concatenate([np.full(len(b[1]), live[b[0]], np.int64) for b in full])})
+        for ident, _rows, done, status in blocks:
+            if status != "running":
+                self._running = self._running - {ident}
+                if status != "done":
+                    self.say(f"orbit {ident} stopped after {done} crossings: {status}")
+        self._update_status()
 
     def _on_error(self, ident, exc):
         if self._doc is not None:
@@ -336,20 +370,6 @@ class SectionPage:
     def _fail(self, ident, msg):
         self._running = self._running - {ident}
         self.say(msg)
-        self._update_status()
-
-    def _stream(self, ident, rows, done, status):
-        if not any(i == ident for i, *_ in self.starts):
-            return              # undone or cancelled meanwhile
-        color = next(c for i, _a, _b, c in self.starts if i == ident)
-        n = len(rows)
-        if n:
-            self.crossings.stream({"orbit": np.full(n, ident, np.int64), "t": rows[:, 0], "p1": rows[:, 1],
-                                   "p2": rows[:, 2], "M": rows[:, 3], "dH": rows[:, 4], "color": [color] * n})
-        if status != "running":
-            self._running = self._running - {ident}
-            if status != "done":
-                self.say(f"orbit {ident} stopped after {done} crossings: {status}")
         self._update_status()
 
     def _update_status(self):

@@ -92,7 +92,8 @@ def make_server(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT
         pn.config.authorize_callback = _authorize(token)
         kw.update(sign_sessions=True, secret_key=secrets.token_urlsafe(48), websocket_origin="*")
     else:
-        kw["websocket_origin"] = [f"{h}:{port}" for h in dict.fromkeys(("127.0.0.1", "localhost", host)) if ":" not in h]
+        hosts = dict.fromkeys(("127.0.0.1", "localhost", host))
+        kw["websocket_origin"] = [f"{h}:{port}" for h in hosts if ":" not in h]   # (Bokeh takes no IPv6 here)
     server = pn.serve(session_app(base, export_dir=export_dir, label=label), port=port, address=host, show=False,
                       start=False, verbose=False, title="explorer", location=True, **kw)
     return server, url_of(host, port, token)
