@@ -350,3 +350,48 @@ def test_a_non_loopback_host_gets_a_token():
     assert not server.is_loopback("0.0.0.0") and not server.is_loopback("192.168.1.2")
     assert server.token_matches("abc", "abc") and not server.token_matches("abc", "abd")
     assert not server.token_matches("abc", None)
+
+
+def test_the_megno_raster_is_refined_and_marks_chaos_and_order():
+    from explorer.app.serve import raster
+
+    s = Settings(params=model.FIGURE4.with_(mu=0.03), tol=1e-10)
+    c1, c2, r1, r2 = s.region
+    w = raster.Window(c1 - r1, c1 + r1, c2 - r2, c2 + r2)
+    images = []
+    for im in raster.rasters(s, w):
+        images.append(im)
+        if im.n == raster.RESOLUTIONS[1] and im.complete:
+            break
+    assert [im.n for im in images if im.complete] == list(raster.RESOLUTIONS[:2])
+    final = images[-1].values
+    P1, P2 = w.centres(final.shape[0])
+    outside = model.section_M2(s.params, P1, P2, s.h) <= 0
+    assert np.isnan(final[outside]).all() and np.isfinite(final[~outside]).all()
+    # the chaotic sea (MEGNO grows) and regular islands (MEGNO near 2) are both on the map
+    assert np.nanmax(final) > 8 and np.nanmin(np.abs(final - 2)) < 0.3
+    stopped = list(raster.rasters(s, w, stop=lambda: True))
+    assert stopped == []
+
+
+@browser_needed
+def test_the_megno_layer_appears_coarse_first_and_follows_the_zoom(served, browser):
+    page = _open(browser, served.url)
+    page.get_by_role("checkbox").check()
+    raster_n = "() => { const d = Bokeh.documents[0].get_model_by_name('raster').data; return d.n.length ? d.n[0] : 0 }"
+    page.wait_for_function(f"() => ({raster_n})() >= 16", timeout=120_000)
+    assert "megno=1" in page.url
+    x, y = page.evaluate(TO_SCREEN, [0.0, 0.0])
+    page.mouse.move(x, y)
+    page.mouse.wheel(0, -400)                                   # zoom in (the wheel zoom is active)
+    ranges = ("() => { const f = Bokeh.documents[0].get_model_by_name('section');"
+              " return [f.x_range.start, f.x_range.end, f.y_range.start, f.y_range.end]; }")
+    page.wait_for_function(f"() => {{ const r = ({ranges})(); const d = Bokeh.documents[0]"
+                           ".get_model_by_name('raster').data; return d.x.length && d.x[0] === r[0] "
+                           "&& Math.abs(d.x[0] + d.dw[0] - r[1]) < 1e-12 && d.y[0] === r[2]; }", timeout=60_000)
+    x0, x1, _y0, _y1 = page.evaluate(ranges)
+    assert x1 - x0 < 4.0                                         # zoomed in: narrower than the region
+    page.get_by_role("checkbox").uncheck()
+    page.wait_for_function("() => Bokeh.documents[0].get_model_by_name('raster').data.x.length === 0",
+                           timeout=30_000)
+    page.close()

@@ -8,6 +8,7 @@ browser; the tests read them there):
 ``crossings``  ColumnDataSource of every crossing on screen: orbit, t, p1, p2, M, dH and the
                orbit's colour c (an index into COLORS)
 ``starts``     ColumnDataSource of the clicked starts: orbit, p1, p2, c
+``raster``     ColumnDataSource of the MEGNO layer: image, x, y, dw, dh (the window), n, complete
 ``section``    the figure (a click on it starts an orbit)
 ``message``    the last message (a refused value, an export, a click outside the region)
 ``status``     one line: orbits running and crossings drawn
@@ -27,12 +28,14 @@ from functools import partial
 
 import numpy as np
 import panel as pn
-from bokeh.events import DoubleTap, Tap
+from bokeh.events import DoubleTap, RangesUpdate, Tap
 from bokeh.models import ColumnDataSource, Div, LinearColorMapper
+from bokeh.palettes import Inferno256
 from bokeh.plotting import figure
 
 from explorer.app.explore.state import COLORS
 from explorer.app.serve import export
+from explorer.app.serve import raster as raster_mod
 from explorer.app.serve import settings as settings_mod
 from explorer.app.serve.orbits import Worker
 from explorer.app.serve.settings import FIELDS, Settings, format_starts, parse_fields, parse_starts
@@ -50,6 +53,9 @@ POINT_SIZE = 2.0
 VIEW_MARGIN = 0.08
 #: a double tap within this many pixels of the click before it is that click again
 SAME_SPOT_PX = 4.0
+#: colour scale of the MEGNO layer: <Y> from 0 (stable periodic) over 2 (quasi-periodic, light) to
+#: MEGNO_HIGH and above (chaotic, dark)
+MEGNO_LOW, MEGNO_HIGH = 0.0, 8.0
 #: labels of the fields
 LABELS = {"mu": "μ", "h": "h", "lam": "λ", "a1": "a1", "a2": "a2", "b": "b", "method": "method",
           "tol": "tol (taylor, dop853)", "dt": "dt (split*)", "crossings": "crossings per click"}
@@ -61,6 +67,10 @@ def _empty_crossings() -> dict:
     d["orbit"] = np.zeros(0, np.int64)
     d["c"] = np.zeros(0, np.int64)
     return d
+
+
+def _empty_raster() -> dict:
+    return {"image": [], "x": [], "y": [], "dw": [], "dh": [], "n": [], "complete": []}
 
 
 def _empty_starts() -> dict:
@@ -87,6 +97,9 @@ class SectionPage:
         self._pending: list = []               # blocks from the worker not yet on the page
         self._pending_lock = threading.Lock()
         self.worker = Worker(self._on_block, self._on_error)
+        self.raster = raster_mod.RasterWorker(self._on_image, self._on_raster_error)
+        self._raster_generation = 0
+        self.window: raster_mod.Window | None = None
         self._build()
         if doc is not None:
             self.attach(doc)
@@ -105,11 +118,17 @@ class SectionPage:
                      toolbar_location="above")
         fig.ellipse("x", "y", width="width", height="height", source=self.region, fill_color=ALLOWED_COLOR,
                     line_color=BOUNDARY_COLOR, line_width=1.0)
+        self.raster_source = ColumnDataSource(_empty_raster(), name="raster")
+        megno = LinearColorMapper(palette=list(reversed(Inferno256)), low=MEGNO_LOW, high=MEGNO_HIGH,
+                                  nan_color=(0, 0, 0, 0))
+        fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=self.raster_source, color_mapper=megno,
+                  alpha=0.85)
         fig.scatter("p1", "p2", source=self.crossings, color=colors, size=POINT_SIZE, line_width=0)
         fig.scatter("p1", "p2", source=self.start_source, marker="cross", color=colors, size=9, line_width=2)
         fig.grid.visible = False
         fig.on_event(Tap, self._on_tap)
         fig.on_event(DoubleTap, self._on_tap)   # a second click within 300 ms is a double tap
+        fig.on_event(RangesUpdate, self._on_ranges)
         self.figure = fig
         s = self.settings.fields()
         self.inputs = {}
@@ -127,6 +146,8 @@ class SectionPage:
         undo = pn.widgets.Button(name="Undo", width=90)
         undo.on_click(lambda _e: self._later(self.undo))
         buttons = [clear, undo]
+        self.layer = pn.widgets.Checkbox(name=f"MEGNO layer (T = {raster_mod.RASTER_TIME:g})", value=False)
+        self.layer.param.watch(lambda _e: self._later(self._layer_changed), "value")
         download = pn.widgets.FileDownload(callback=self._scene_file, filename=f"{export.SCENE_NAME}.toml",
                                            label="Scene (TOML)", button_type="primary", width=190)
         buttons.append(download)
@@ -138,14 +159,19 @@ class SectionPage:
                            width=FIGURE_WIDTH)
         self.status = Div(name="status", text="click in the white region to start an orbit", width=FIGURE_WIDTH)
         title = "explorer: Poincaré section φ = π" + (f" ({self.label})" if self.label else "")
-        controls = pn.Column(*self.inputs.values(), pn.Row(*buttons[:2]), *buttons[2:], width=200)
+        controls = pn.Column(*self.inputs.values(), self.layer, pn.Row(*buttons[:2]), *buttons[2:], width=200)
         self.layout = pn.Row(controls, pn.Column(pn.pane.Markdown(f"### {title}"), pn.pane.Bokeh(fig),
                                                  pn.pane.Bokeh(self.status), pn.pane.Bokeh(self.message)))
 
     def attach(self, doc) -> None:
         """The session's document: blocks are streamed into it; the worker ends with it."""
         self._doc = doc
-        doc.on_session_destroyed(lambda _ctx: self.worker.stop(timeout=0))
+        doc.on_session_destroyed(lambda _ctx: self.close())
+
+    def close(self) -> None:
+        """Stop the session's threads (the browser tab is gone)."""
+        self.worker.stop(timeout=0)
+        self.raster.stop()
 
     # ------------------------------------------------------------ state in the URL
     def _load_url(self, args: dict):
@@ -158,6 +184,7 @@ class SectionPage:
             self.say(f"link ignored: {exc}")
         self._show_fields()
         self._draw_region()
+        self.layer.value = args.get("megno") == "1"
         for p1, p2 in starts:
             self._start(p1, p2)
 
@@ -165,6 +192,7 @@ class SectionPage:
         """The view as URL arguments: every field and the starts."""
         q = self.settings.fields()
         q["orbits"] = format_starts((p1, p2) for _i, p1, p2, _c in self.starts)
+        q["megno"] = "1" if self.layer.value else "0"
         return q
 
     def _push_url(self):
@@ -200,6 +228,7 @@ class SectionPage:
         m1, m2 = (1 + VIEW_MARGIN) * r1, (1 + VIEW_MARGIN) * r2
         self.figure.x_range.start, self.figure.x_range.end = c1 - m1, c1 + m1
         self.figure.y_range.start, self.figure.y_range.end = c2 - m2, c2 + m2
+        self.window = raster_mod.Window(c1 - m1, c1 + m1, c2 - m2, c2 + m2)
 
     def _start(self, p1: float, p2: float, color: int | None = None):
         if not self.settings.admissible(p1, p2):
@@ -281,6 +310,7 @@ class SectionPage:
         self.start_source.data = _empty_starts()
         self._draw_region()
         self._show_fields()
+        self._restart_raster()
         kept = [self._start(p1, p2, color) for _i, p1, p2, color in old]
         dropped = sum(r is None for r in kept)
         if dropped:
@@ -330,6 +360,44 @@ class SectionPage:
             return None
         self.say(f"scene written: {os.path.basename(path)} (rerun: explorer sweep {os.path.basename(path)})")
         return path
+
+    # ------------------------------------------------------------ the MEGNO layer
+    def _on_ranges(self, event):
+        """The view moved (zoom, pan, reset): the layer follows the new window."""
+        try:
+            self.window = raster_mod.Window(float(event.x0), float(event.x1), float(event.y0), float(event.y1))
+        except (TypeError, ValueError):
+            return
+        if self.layer.value:
+            self._restart_raster()
+
+    def _layer_changed(self):
+        self._restart_raster()
+        self._push_url()
+
+    def _restart_raster(self):
+        if not self.layer.value or self.window is None or self.settings.region is None:
+            self.raster.cancel()
+            self._raster_generation = -1
+            self.raster_source.data = _empty_raster()
+            return
+        self._raster_generation = self.raster.start(self.settings, self.window)
+
+    def _on_image(self, generation, image):
+        if self._doc is not None:
+            self._doc.add_next_tick_callback(partial(self._show_image, generation, image))
+
+    def _on_raster_error(self, exc):
+        if self._doc is not None:
+            msg = f"MEGNO layer failed: {type(exc).__name__}: {' '.join(str(exc).split())}"
+            self._doc.add_next_tick_callback(partial(self.say, msg))
+
+    def _show_image(self, generation, image):
+        if generation != self._raster_generation:
+            return                          # an older window or older settings
+        w = image.window
+        self.raster_source.data = {"image": [image.values], "x": [w.x0], "y": [w.y0], "dw": [w.x1 - w.x0],
+                                   "dh": [w.y1 - w.y0], "n": [image.n], "complete": [image.complete]}
 
     # ------------------------------------------------------------ blocks from the worker
     def _on_block(self, ident, rows, done, status):
