@@ -395,3 +395,28 @@ def test_the_megno_layer_appears_coarse_first_and_follows_the_zoom(served, brows
     page.wait_for_function("() => Bokeh.documents[0].get_model_by_name('raster').data.x.length === 0",
                            timeout=30_000)
     page.close()
+
+
+def test_explore_in_a_notebook_renders_and_streams_the_clicked_orbit():
+    pn = pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    import explorer as ex
+
+    app = ex.explore(mu=0.5, crossings=60)
+    try:
+        root = pn.panel(app).get_root()                 # what a notebook cell renders
+        assert root.select_one({"name": "section"}) is not None
+        page = app.page
+        assert page.click(0.3, 0.1) is not None
+        t0 = time.time()
+        while len(page.crossings.data["t"]) < 60 and time.time() - t0 < 120:
+            page.poll()
+            time.sleep(0.01)
+        ref = sections.section_crossings(page.settings.params, [0.3], [0.1], page.settings.h, 60)
+        got = np.column_stack([np.asarray(page.crossings.data[k]) for k in ("t", "p1", "p2", "M", "dH")])
+        np.testing.assert_array_equal(got, ref.orbit(0))
+        page.undo()
+        assert len(page.crossings.data["t"]) == 0 and page.url_query()["orbits"] == ""
+        with pytest.raises(ParameterError, match="a1"):
+            ex.explore(a1=-1.0)
+    finally:
+        app.close()

@@ -6,7 +6,7 @@ import math
 import os
 
 from explorer import model
-from explorer.model import ParameterError, validation
+from explorer.model import ParameterError
 
 
 def add_parser(sub):
@@ -45,28 +45,12 @@ def add_parser(sub):
 
 
 def settings_from_args(args):
-    """The page's starting :class:`~explorer.app.serve.settings.Settings` and label: the scene's
-    panel (if a SCENE is given), then the options on top (all validated)."""
-    from dataclasses import replace
+    """The page's starting settings and label from the command's arguments."""
+    from explorer.app.serve.settings import settings_for
 
-    from explorer.app.serve.settings import MAX_CROSSINGS, Settings
-    from explorer.io import scene as scene_mod
-
-    base, label = Settings(), ""
-    if args.scene is not None:
-        sc = scene_mod.load_scene(args.scene)
-        i = validation.integer("--panel", args.panel, 0, sc.n_panels - 1)
-        params, h, plabel = sc.panel(i)
-        integ = sc.integration
-        base = Settings(params=params, h=h, method=integ.method, tol=integ.tol, dt=integ.dt,
-                        crossings=min(integ.crossings, MAX_CROSSINGS), phi0=integ.phi0, direction=integ.direction)
-        label = sc.name if not plabel else f"{sc.name}: {plabel}"
-    elif args.panel != 0:
-        raise ParameterError("--panel needs a SCENE")
-    overrides = {n: getattr(args, n) for n in model.PARAM_NAMES if getattr(args, n) is not None}
-    params = base.params.with_(**overrides) if overrides else base.params
-    changes = {k: getattr(args, k) for k in ("h", "method", "tol", "dt", "crossings") if getattr(args, k) is not None}
-    return replace(base, params=params, **changes), label
+    overrides = {n: getattr(args, n) for n in (*model.PARAM_NAMES, "h", "method", "tol", "dt", "crossings")
+                 if getattr(args, n) is not None}
+    return settings_for(args.scene, args.panel, **overrides)
 
 
 def cmd_serve(args) -> int:

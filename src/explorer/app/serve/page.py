@@ -96,6 +96,7 @@ class SectionPage:
         self._doc = None
         self._pending: list = []               # blocks from the worker not yet on the page
         self._pending_lock = threading.Lock()
+        self._inbox: list = []                 # notebook mode: what the workers handed in (poll)
         self.worker = Worker(self._on_block, self._on_error)
         self.raster = raster_mod.RasterWorker(self._on_image, self._on_raster_error)
         self._raster_generation = 0
@@ -136,23 +137,23 @@ class SectionPage:
             if name == "method":
                 from explorer.analysis.sections import METHODS
 
-                w = pn.widgets.Select(name=LABELS[name], options=list(METHODS), value=s[name], width=140)
+                w = pn.widgets.Select(label=LABELS[name], options=list(METHODS), value=s[name], width=140)
             else:
-                w = pn.widgets.TextInput(name=LABELS[name], value=s[name], width=140)
+                w = pn.widgets.TextInput(label=LABELS[name], value=s[name], width=140)
             w.param.watch(self._field_changed, "value")
             self.inputs[name] = w
-        clear = pn.widgets.Button(name="Clear", button_type="warning", width=90)
+        clear = pn.widgets.Button(label="Clear", color="warning", width=90)
         clear.on_click(lambda _e: self._later(self.clear))
-        undo = pn.widgets.Button(name="Undo", width=90)
+        undo = pn.widgets.Button(label="Undo", width=90)
         undo.on_click(lambda _e: self._later(self.undo))
         buttons = [clear, undo]
-        self.layer = pn.widgets.Checkbox(name=f"MEGNO layer (T = {raster_mod.RASTER_TIME:g})", value=False)
+        self.layer = pn.widgets.Checkbox(label=f"MEGNO layer (T = {raster_mod.RASTER_TIME:g})", value=False)
         self.layer.param.watch(lambda _e: self._later(self._layer_changed), "value")
         download = pn.widgets.FileDownload(callback=self._scene_file, filename=f"{export.SCENE_NAME}.toml",
-                                           label="Scene (TOML)", button_type="primary", width=190)
+                                           label="Scene (TOML)", color="primary", width=190)
         buttons.append(download)
         if self.export_dir is not None:
-            save = pn.widgets.Button(name="Export scene", width=190)
+            save = pn.widgets.Button(label="Export scene", width=190)
             save.on_click(lambda _e: self._later(self.export))
             buttons.append(save)
         self.message = Div(name="message", text="", styles={"color": "#b00020", "min-height": "1.2em"},
@@ -275,6 +276,24 @@ class SectionPage:
 
     _last_tap: tuple | None = None
 
+    def _post(self, action) -> None:
+        """From a worker thread: run ``action`` on the document's loop (a served page), or keep it
+        for :meth:`poll` (a notebook, where no Bokeh server owns the document)."""
+        if self._doc is not None:
+            self._doc.add_next_tick_callback(action)
+        else:
+            with self._pending_lock:
+                self._inbox.append(action)
+
+    def poll(self) -> bool:
+        """Run what the workers handed in since the last call (notebook mode: a periodic
+        callback calls it); returns whether there was anything."""
+        with self._pending_lock:
+            actions, self._inbox = self._inbox, []
+        for action in actions:
+            action()
+        return bool(actions)
+
     def _later(self, action) -> None:
         """Run ``action`` on the document's loop with its lock (Panel calls widget watchers
         outside it; the Bokeh models of the figure must be changed inside), or now without one."""
@@ -384,13 +403,10 @@ class SectionPage:
         self._raster_generation = self.raster.start(self.settings, self.window)
 
     def _on_image(self, generation, image):
-        if self._doc is not None:
-            self._doc.add_next_tick_callback(partial(self._show_image, generation, image))
+        self._post(partial(self._show_image, generation, image))
 
     def _on_raster_error(self, exc):
-        if self._doc is not None:
-            msg = f"MEGNO layer failed: {type(exc).__name__}: {' '.join(str(exc).split())}"
-            self._doc.add_next_tick_callback(partial(self.say, msg))
+        self._post(partial(self.say, f"MEGNO layer failed: {type(exc).__name__}: {' '.join(str(exc).split())}"))
 
     def _show_image(self, generation, image):
         if generation != self._raster_generation:
@@ -403,13 +419,11 @@ class SectionPage:
     def _on_block(self, ident, rows, done, status):
         """In the worker thread: queue the block for the document's loop; blocks that come while
         the loop is busy go to the page together (one message)."""
-        if self._doc is None:
-            return
         with self._pending_lock:
             self._pending.append((ident, rows, done, status))
             if len(self._pending) > 1:
                 return                   # a flush is scheduled already
-        self._doc.add_next_tick_callback(self._flush)
+        self._post(self._flush)
 
     def _flush(self):
         with self._pending_lock:
@@ -431,9 +445,8 @@ class SectionPage:
         self._update_status()
 
     def _on_error(self, ident, exc):
-        if self._doc is not None:
-            msg = f"orbit {ident} failed: {type(exc).__name__}: {' '.join(str(exc).split())}"
-            self._doc.add_next_tick_callback(partial(self._fail, ident, msg))
+        self._post(partial(self._fail, ident, f"orbit {ident} failed: {type(exc).__name__}: "
+                                               f"{' '.join(str(exc).split())}"))
 
     def _fail(self, ident, msg):
         self._running = self._running - {ident}

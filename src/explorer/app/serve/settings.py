@@ -87,6 +87,31 @@ class Settings:
         return args
 
 
+def settings_for(scene=None, panel: int = 0, **overrides) -> tuple:
+    """(Settings, label) to start from: the scene's panel ``panel`` (a TOML path or a preset name;
+    None: Figure 4 with mu = 0, h = 2), then ``overrides`` (model parameters, h, method, tol, dt,
+    crossings) on top, all validated."""
+    from explorer.io import scene as scene_mod
+
+    base, label = Settings(), ""
+    if scene is not None:
+        sc = scene if isinstance(scene, scene_mod.Scene) else scene_mod.load_scene(scene)
+        i = validation.integer("panel", panel, 0, sc.n_panels - 1)
+        params, h, plabel = sc.panel(i)
+        integ = sc.integration
+        base = Settings(params=params, h=h, method=integ.method, tol=integ.tol, dt=integ.dt,
+                        crossings=min(integ.crossings, MAX_CROSSINGS), phi0=integ.phi0, direction=integ.direction)
+        label = sc.name if not plabel else f"{sc.name}: {plabel}"
+    elif panel != 0:
+        raise ParameterError("panel needs a scene")
+    unknown = set(overrides) - set(model.PARAM_NAMES) - {"h", "method", "tol", "dt", "crossings"}
+    if unknown:
+        raise ParameterError(f"unknown setting {sorted(unknown)[0]!r}; model parameters, h, method, tol, dt, crossings")
+    params = {k: validation.real(k, v) for k, v in overrides.items() if k in model.PARAM_NAMES}
+    rest = {k: v for k, v in overrides.items() if k not in model.PARAM_NAMES}
+    return replace(base, params=base.params.with_(**params) if params else base.params, **rest), label
+
+
 def _number(name: str, text) -> float:
     """A field's text as a finite float (ParameterError naming the field otherwise)."""
     if isinstance(text, str):
