@@ -181,7 +181,9 @@ class Served:
 
 @pytest.fixture(scope="module")
 def served(tmp_path_factory):
-    s = Served("--crossings", str(CROSSINGS), "--mu", "0.03", "--export-dir", str(tmp_path_factory.mktemp("export")))
+    export_dir = tmp_path_factory.mktemp("export")
+    s = Served("--crossings", str(CROSSINGS), "--mu", "0.03", "--export-dir", str(export_dir))
+    s.export_dir = export_dir
     yield s
     code, err = s.interrupt()
     assert code in (0, 130) and "Traceback" not in err, err[-2000:]
@@ -420,3 +422,38 @@ def test_explore_in_a_notebook_renders_and_streams_the_clicked_orbit():
             ex.explore(a1=-1.0)
     finally:
         app.close()
+
+
+@browser_needed
+def test_rapid_clicks_undo_clear_and_export_keep_the_page_and_the_server_consistent(served, browser):
+    from explorer.io import scene as scene_mod
+
+    page = _open(browser, served.url)
+    s = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=CROSSINGS)
+    c1, c2, r1, r2 = s.region
+    for i in range(20):                                   # 20 clicks, 50 ms apart (double taps among them)
+        x, y = page.evaluate(TO_SCREEN, [c1 + (-0.9 + 0.09 * i) * r1, c2 + 0.05 * r2])
+        page.mouse.click(x, y)
+        page.wait_for_timeout(50)
+    _wait_crossings(page, 20 * CROSSINGS)
+    starts = page.evaluate(DATA, "starts")
+    assert len(starts["orbit"]) == 20 and len(set(starts["p1"])) == 20
+    data = page.evaluate(DATA, "crossings")
+    assert sorted(set(data["orbit"])) == sorted(starts["orbit"])
+    assert all(data["orbit"].count(i) == CROSSINGS for i in starts["orbit"])
+    page.get_by_role("button", name="Undo").click()
+    page.wait_for_function("() => Bokeh.documents[0].get_model_by_name('starts').data.orbit.length === 19",
+                           timeout=30_000)
+    assert len(page.evaluate(DATA, "crossings")["t"]) == 19 * CROSSINGS
+    page.get_by_role("button", name="Export scene").click()
+    page.wait_for_function(f"() => ({TEXT})('message').includes('scene written')", timeout=30_000)
+    files = list(Path(served.export_dir).glob("browser-session-*.toml"))
+    assert len(files) == 1
+    assert [list(p) for p in scene_mod.load_scene(str(files[0])).seeds.points] == \
+        [[a, b] for a, b in zip(starts["p1"][:19], starts["p2"][:19])]
+    page.get_by_role("button", name="Clear").click()
+    page.wait_for_function("() => Bokeh.documents[0].get_model_by_name('crossings').data.t.length === 0",
+                           timeout=30_000)
+    assert "orbits=&" in page.url or page.url.endswith("orbits=")
+    page.close()
+    assert urllib.request.urlopen(served.url, timeout=10).status == 200
