@@ -43,6 +43,8 @@ CROSSINGS = 150
 #: a cold numba cache compiles the crossing kernels at the first click: allow for it
 FIRST_ORBIT_TIMEOUT_MS = 240_000
 REPO = Path(__file__).resolve().parents[2]
+#: the settings of the served page (`--mu 0.03 --crossings CROSSINGS`) and its region (c1, c2, r1, r2)
+SERVED = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=CROSSINGS)
 
 
 # ---------------------------------------------------------------- without a browser
@@ -247,7 +249,7 @@ def _set_field(page, field, text):
 def test_clicked_orbits_in_the_page_equal_explorer_orbit_json(served, browser, tmp_path):
     page = _open(browser, served.url)
     region = page.evaluate(DATA, "region")
-    s = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=CROSSINGS)
+    s = SERVED
     c1, c2, r1, r2 = s.region
     assert region["x"] == [c1] and region["width"] == [2 * r1]
     targets = [(c1 + 0.5 * r1, c2), (c1 - 0.3 * r1, c2 + 0.2 * r2), (c1 + 0.1 * r1, c2 - 0.6 * r2)]
@@ -290,8 +292,7 @@ def test_clicked_orbits_in_the_page_equal_explorer_orbit_json(served, browser, t
 @browser_needed
 def test_a_change_of_mu_redraws_the_region_and_keeps_the_starts(served, browser):
     page = _open(browser, served.url)
-    s = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=CROSSINGS)
-    c1, c2, r1, r2 = s.region
+    c1, c2, r1, r2 = SERVED.region
     _click(page, c1 + 0.2 * r1, c2)
     _wait_crossings(page, CROSSINGS)
     _set_field(page, "mu", "0.5")
@@ -310,7 +311,7 @@ def test_a_change_of_mu_redraws_the_region_and_keeps_the_starts(served, browser)
 def test_a_bad_value_shows_a_message_and_computes_nothing(served, browser):
     page = _open(browser, served.url)
     before = page.evaluate(DATA, "region")
-    good = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=CROSSINGS).fields()
+    good = SERVED.fields()
     for field, text in (("a1", "-1"), ("mu", "abc"), ("tol", "0.5"), ("crossings", "1e9")):
         _set_field(page, field, text)
         page.wait_for_function(f"() => ({TEXT})('message').includes({json.dumps(field)})", timeout=30_000)
@@ -429,8 +430,7 @@ def test_rapid_clicks_undo_clear_and_export_keep_the_page_and_the_server_consist
     from explorer.io import scene as scene_mod
 
     page = _open(browser, served.url)
-    s = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=CROSSINGS)
-    c1, c2, r1, r2 = s.region
+    c1, c2, r1, r2 = SERVED.region
     for i in range(20):                                   # 20 clicks, 50 ms apart (double taps among them)
         x, y = page.evaluate(TO_SCREEN, [c1 + (-0.9 + 0.09 * i) * r1, c2 + 0.05 * r2])
         page.mouse.click(x, y)

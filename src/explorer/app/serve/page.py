@@ -320,13 +320,8 @@ class SectionPage:
         """New settings: the orbits stop, the region is redrawn, the starts inside it run again."""
         if new == self.settings:
             return
-        self.worker.cancel()
-        old = self.starts
+        old = self._drop_orbits()
         self.settings = new
-        self.starts = []
-        self._running = set()
-        self.crossings.data = _empty_crossings()
-        self.start_source.data = _empty_starts()
         self._draw_region()
         self._show_fields()
         self._restart_raster()
@@ -336,12 +331,16 @@ class SectionPage:
             self.say(f"{dropped} start(s) outside the new allowed region dropped")
         self._push_url()
 
-    def clear(self) -> None:
+    def _drop_orbits(self) -> list:
+        """Stop every orbit and take them off the page; returns their starts."""
         self.worker.cancel()
-        self.starts = []
-        self._running = set()
+        old, self.starts, self._running = self.starts, [], set()
         self.crossings.data = _empty_crossings()
         self.start_source.data = _empty_starts()
+        return old
+
+    def clear(self) -> None:
+        self._drop_orbits()
         self._update_status()
         self._push_url()
 
