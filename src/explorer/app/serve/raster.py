@@ -129,10 +129,15 @@ class RasterWorker:
                     self._cond.wait()
                 if self._stopped:
                     return
-                generation, settings, window = self._job
-                self._job = None
+                job, self._job = self._job, None
+            if job is None:
+                continue
+            generation, settings, window = job
+
+            def stale(g: int = generation) -> bool:
+                return g != self._generation
             try:
-                for image in rasters(settings, window, stop=lambda g=generation: g != self._generation):
+                for image in rasters(settings, window, stop=stale):
                     with self._cond:
                         if generation != self._generation:
                             break

@@ -139,7 +139,9 @@ def parse_fields(base: Settings, fields: dict) -> Settings:
     """``base`` with the page's ``fields`` ({name: text}) applied; every field validated
     (ParameterError, one line naming the field, and nothing changed otherwise).  Unknown names
     are refused."""
-    params, h, other = {}, base.h, {}
+    params: dict[str, float] = {}
+    other: dict[str, object] = {}
+    h = base.h
     for name, text in fields.items():
         if name not in FIELDS:
             raise ParameterError(f"unknown field {str(name)[:MAX_FIELD_CHARS]!r}; one of {', '.join(FIELDS)}")
@@ -154,7 +156,7 @@ def parse_fields(base: Settings, fields: dict) -> Settings:
         else:
             other[name] = _number(name, text)
     prm = base.params.with_(**params) if params else base.params   # Params checks a1, a2, b > 0, lam != 0
-    return replace(base, params=prm, h=h, **other)
+    return replace(base, params=prm, h=h, **other)  # type: ignore[arg-type]
 
 
 def format_starts(starts) -> str:
