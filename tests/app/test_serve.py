@@ -63,6 +63,25 @@ def test_page_values_are_validated_like_the_command_line():
         parse_fields(base, {"crossings": str(settings_mod.MAX_CROSSINGS + 1)})
 
 
+def test_a_session_holds_a_bounded_number_of_crossings(monkeypatch):
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    from explorer.app.serve.page import SectionPage
+
+    monkeypatch.setattr(settings_mod, "MAX_SESSION_CROSSINGS", 1000)
+    big = 500
+    page = SectionPage(Settings(crossings=big))
+    try:
+        assert page.click(0.1, 0.1) is not None and page.click(0.2, 0.1) is not None
+        assert page.click(0.3, 0.1) is None and "at most" in page.message.text      # a third would not fit
+        page.inputs["crossings"].value = str(big + 1)                                 # nor more per click
+        assert "not applied" in page.message.text and page.settings.crossings == big
+        link = SectionPage(Settings(), {"crossings": str(big), "orbits": "0.1,0;0.2,0;0.3,0"})
+        assert link.starts == [] and "link ignored" in link.message.text               # nor a link
+        link.close()
+    finally:
+        page.close()
+
+
 def test_starts_survive_the_url_bit_for_bit():
     rng = np.random.default_rng(1)
     starts = [tuple(map(float, rng.normal(size=2) / 3)) for _ in range(5)]

@@ -180,6 +180,9 @@ class SectionPage:
         try:
             self.settings = parse_fields(self.base, fields)
             starts = parse_starts(args.get("orbits", ""))
+            full = settings_mod.room_for(len(starts), self.settings.crossings)
+            if full:
+                raise ParameterError(full)
         except ParameterError as exc:
             self.settings, starts = self.base, []
             self.say(f"link ignored: {exc}")
@@ -248,8 +251,9 @@ class SectionPage:
         """A click at (p1, p2): a new orbit, or a message saying why not."""
         if not (math.isfinite(p1) and math.isfinite(p2)):
             return None
-        if len(self.starts) >= settings_mod.MAX_STARTS:
-            self.say(f"at most {settings_mod.MAX_STARTS} orbits in a session: clear or undo first")
+        full = settings_mod.room_for(len(self.starts) + 1, self.settings.crossings)
+        if full:
+            self.say(full)
             return None
         if self.settings.region is None:
             self.say("nothing to do: the allowed region is empty at this energy")
@@ -310,6 +314,9 @@ class SectionPage:
         fields = {name: w.value for name, w in self.inputs.items()}
         try:
             new = parse_fields(self.base, fields)
+            full = settings_mod.room_for(len(self.starts), new.crossings)
+            if full:
+                raise ParameterError(f"crossings: {full}")
         except ParameterError as exc:
             self.say(f"not applied: {exc}")
             return

@@ -26,6 +26,19 @@ DEFAULT_CROSSINGS = 2000
 MAX_CROSSINGS = 1_000_000
 #: at most this many orbits (clicked starts) in one session
 MAX_STARTS = 256
+#: at most this many crossings on one session's page (orbits x crossings per click): about 56
+#: bytes a row in the server's copy of the page's data, so a session stays below ~0.2 GB
+MAX_SESSION_CROSSINGS = 4_000_000
+
+
+def room_for(n_orbits: int, crossings: int) -> str | None:
+    """Why ``n_orbits`` orbits of ``crossings`` crossings do not fit in a session (None: they do)."""
+    if n_orbits > MAX_STARTS:
+        return f"at most {MAX_STARTS} orbits in a session: clear or undo first"
+    if n_orbits * crossings > MAX_SESSION_CROSSINGS:
+        return (f"at most {MAX_SESSION_CROSSINGS:,} crossings on a page: {n_orbits} orbits x {crossings} crossings "
+                "per click is more; clear, undo or lower the crossings per click")
+    return None
 #: longest field text read from the page or the URL
 MAX_FIELD_CHARS = 64
 
