@@ -300,6 +300,8 @@ def test_clicked_orbits_in_the_page_equal_explorer_orbit_json(served, browser, t
     assert saturated.sum() > 100
     print(f"first crossings {first * 1e3:.0f} ms after the click; screenshot {shot}")
     # a link reopens the same view
+    page.wait_for_function("() => (new URLSearchParams(window.location.search).get('orbits') || '')"
+                           ".split(';').length === 3", timeout=30_000)      # the URL follows the page
     again = _open(browser, page.url)
     _wait_crossings(again, 3 * CROSSINGS)
     assert again.evaluate(DATA, "starts")["p1"] == starts["p1"]
@@ -322,7 +324,7 @@ def test_a_change_of_mu_redraws_the_region_and_keeps_the_starts(served, browser)
     assert region["width"] == [2 * new[2]] and region["height"] == [2 * new[3]]
     assert len(page.evaluate(DATA, "starts")["orbit"]) == 1             # the start is kept and runs again
     _wait_crossings(page, CROSSINGS)
-    assert "mu=0.5" in page.url
+    page.wait_for_function("() => window.location.search.includes('mu=0.5&')", timeout=30_000)
     page.close()
 
 
@@ -402,7 +404,7 @@ def test_the_megno_layer_appears_coarse_first_and_follows_the_zoom(served, brows
     page.get_by_role("checkbox").check()
     raster_n = "() => { const d = Bokeh.documents[0].get_model_by_name('raster').data; return d.n.length ? d.n[0] : 0 }"
     page.wait_for_function(f"() => ({raster_n})() >= 16", timeout=120_000)
-    assert "megno=1" in page.url
+    page.wait_for_function("() => window.location.search.includes('megno=1')", timeout=30_000)
     x, y = page.evaluate(TO_SCREEN, [0.0, 0.0])
     page.mouse.move(x, y)
     page.mouse.wheel(0, -400)                                   # zoom in (the wheel zoom is active)
@@ -473,6 +475,6 @@ def test_rapid_clicks_undo_clear_and_export_keep_the_page_and_the_server_consist
     page.get_by_role("button", name="Clear").click()
     page.wait_for_function("() => Bokeh.documents[0].get_model_by_name('crossings').data.t.length === 0",
                            timeout=30_000)
-    assert "orbits=&" in page.url or page.url.endswith("orbits=")
+    page.wait_for_function("() => /[?&]orbits=(&|$)/.test(window.location.search)", timeout=30_000)  # the link too
     page.close()
     assert urllib.request.urlopen(served.url, timeout=10).status == 200
