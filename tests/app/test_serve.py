@@ -13,6 +13,7 @@ $EXPLORER_TEST_ARTEFACTS, else pytest's temporary directory) and its pixels chec
 """
 from __future__ import annotations
 
+import importlib.util
 import json
 import os
 import signal
@@ -179,9 +180,10 @@ class Served:
         if not self.url.startswith("http://"):
             self.proc.kill()
             raise AssertionError(f"serve printed {self.url!r}; stderr: {self.proc.stderr.read()[-2000:]}")
-        while time.time() - t0 < timeout:     # until the server answers
+        port = self.url.split("/")[2].rsplit(":", 1)[1]
+        while time.time() - t0 < timeout:     # until the server answers (on loopback: any --host binds it)
             try:
-                urllib.request.urlopen(self.url, timeout=5).close()
+                urllib.request.urlopen(f"http://127.0.0.1:{port}/", timeout=5).close()
                 return
             except urllib.error.HTTPError:
                 return
@@ -367,9 +369,23 @@ def test_a_bad_token_gets_no_app_and_ctrl_c_ends_the_server_cleanly(browser):
     assert code in (0, 130) and "Traceback" not in err, err[-2000:]
 
 
-def test_a_non_loopback_host_gets_a_token():
+@pytest.mark.skipif(importlib.util.find_spec("panel") is None, reason="panel is not installed (pip install panel)")
+def test_a_non_loopback_host_gets_a_token_that_every_page_request_needs():
     from explorer.app.serve import server
 
+    s = Served("--host", "0.0.0.0")
+    try:
+        head, _, token = s.url.partition("?token=")
+        assert len(token) >= 24
+        port = head.rstrip("/").rsplit(":", 1)[1]
+        local = f"http://127.0.0.1:{port}/"
+        with pytest.raises(urllib.error.HTTPError) as exc:
+            urllib.request.urlopen(local, timeout=10)
+        assert exc.value.code == 403
+        assert urllib.request.urlopen(f"{local}?token={token}", timeout=10).status == 200
+    finally:
+        code, err = s.interrupt()
+    assert code in (0, 130) and "Traceback" not in err, err[-2000:]
     assert server.is_loopback("127.0.0.1") and server.is_loopback("::1") and server.is_loopback("localhost")
     assert not server.is_loopback("0.0.0.0") and not server.is_loopback("192.168.1.2")
     assert server.token_matches("abc", "abc") and not server.token_matches("abc", "abd")
