@@ -35,7 +35,8 @@ from explorer.app.serve.orbits import Worker
 from explorer.app.serve.settings import Settings, format_starts, parse_fields, parse_starts
 from explorer.model import ParameterError
 
-CHROMIUM = "/usr/bin/chromium"
+#: the browser (Debian: apt-get install chromium); EXPLORER_CHROMIUM points elsewhere
+CHROMIUM = os.environ.get("EXPLORER_CHROMIUM", "/usr/bin/chromium")
 #: chromium's switches for a headless run that reaches nothing but the test's server
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
                  "--disable-background-networking", "--disable-component-update", "--disable-sync"]
