@@ -65,6 +65,29 @@ def test_page_values_are_validated_like_the_command_line():
         parse_fields(base, {"crossings": str(settings_mod.MAX_CROSSINGS + 1)})
 
 
+def test_the_overlay_marks_the_fixed_points_and_draws_their_separatrices():
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    from explorer.analysis.fixedpoints import find_fixed_point
+    from explorer.app.serve.page import SectionPage
+
+    page = SectionPage(Settings(params=model.FIGURE4.with_(mu=0.5)), {"separatrices": "1"})
+    try:
+        t0 = time.time()
+        while not page.fixed.data["p1"] and time.time() - t0 < 120:
+            page.poll()
+            time.sleep(0.02)
+        fp = find_fixed_point(page.settings.params, page.settings.h, (-0.2, 0.0))   # solution I, hyperbolic
+        found = list(zip(page.fixed.data["p1"], page.fixed.data["p2"], page.fixed.data["kind"]))
+        assert any(abs(a - fp.point[0]) < 1e-8 and abs(b - fp.point[1]) < 1e-8 and k == "hyperbolic"
+                   for a, b, k in found)
+        assert len(page.curves.data["xs"]) >= 2 and "separatrix" in page.overlay_text.text
+        assert page.url_query()["separatrices"] == "1"
+        page.overlay.value = False                         # off: the overlay goes
+        assert page.fixed.data["p1"] == [] and page.curves.data["xs"] == []
+    finally:
+        page.close()
+
+
 def test_a_session_holds_a_bounded_number_of_crossings(monkeypatch):
     pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
     from explorer.app.serve.page import SectionPage
@@ -418,7 +441,7 @@ def test_the_megno_raster_is_refined_and_marks_chaos_and_order():
 @browser_needed
 def test_the_megno_layer_appears_coarse_first_and_follows_the_zoom(served, browser):
     page = _open(browser, served.url)
-    page.get_by_role("checkbox").check()
+    page.get_by_role("checkbox").first.check()          # the MEGNO layer (first box)
     raster_n = "() => { const d = Bokeh.documents[0].get_model_by_name('raster').data; return d.n.length ? d.n[0] : 0 }"
     page.wait_for_function(f"() => ({raster_n})() >= 16", timeout=120_000)
     page.wait_for_function("() => window.location.search.includes('megno=1')", timeout=30_000)
@@ -432,7 +455,7 @@ def test_the_megno_layer_appears_coarse_first_and_follows_the_zoom(served, brows
                            "&& Math.abs(d.x[0] + d.dw[0] - r[1]) < 1e-12 && d.y[0] === r[2]; }", timeout=60_000)
     x0, x1, _y0, _y1 = page.evaluate(ranges)
     assert x1 - x0 < 4.0                                         # zoomed in: narrower than the region
-    page.get_by_role("checkbox").uncheck()
+    page.get_by_role("checkbox").first.uncheck()
     page.wait_for_function("() => Bokeh.documents[0].get_model_by_name('raster').data.x.length === 0",
                            timeout=30_000)
     page.close()

@@ -9,6 +9,9 @@ browser; the tests read them there):
                orbit's colour c (an index into COLORS)
 ``starts``     ColumnDataSource of the clicked starts: orbit, p1, p2, c
 ``raster``     ColumnDataSource of the MEGNO layer: image, x, y, dw, dh (the window), n, complete
+``fixed``      ColumnDataSource of the fixed points of the section map: p1, p2, kind, marker
+``separatrices`` ColumnDataSource of the separatrix branches: xs, ys (one polyline per branch)
+``overlay``    what the fixed-point search found
 ``section``    the figure (a click on it starts an orbit)
 ``message``    the last message (a refused value, an export, a click outside the region)
 ``status``     one line: orbits running and crossings drawn
@@ -56,6 +59,8 @@ SAME_SPOT_PX = 4.0
 #: colour scale of the MEGNO layer: <Y> from 0 (stable periodic) over 2 (quasi-periodic, light) to
 #: MEGNO_HIGH and above (chaotic, dark)
 MEGNO_LOW, MEGNO_HIGH = 0.0, 8.0
+#: colour of the separatrices
+SEPARATRIX_COLOR = "#303030"
 #: labels of the fields
 LABELS = {"mu": "μ", "h": "h", "lam": "λ", "a1": "a1", "a2": "a2", "b": "b", "method": "method",
           "tol": "tol (taylor, dop853)", "dt": "dt (split*)", "crossings": "crossings per click"}
@@ -101,6 +106,7 @@ class SectionPage:
         self.raster = raster_mod.RasterWorker(self._on_image, self._on_raster_error)
         self._raster_generation = 0
         self.window: raster_mod.Window | None = None
+        self._overlay_generation = 0
         self._build()
         if doc is not None:
             self.attach(doc)
@@ -124,8 +130,13 @@ class SectionPage:
                                   nan_color=(0, 0, 0, 0))
         fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=self.raster_source, color_mapper=megno,
                   alpha=0.85)
+        self.fixed = ColumnDataSource({"p1": [], "p2": [], "kind": [], "marker": []}, name="fixed")
+        self.curves = ColumnDataSource({"xs": [], "ys": []}, name="separatrices")
+        fig.multi_line("xs", "ys", source=self.curves, line_color=SEPARATRIX_COLOR, line_width=1.2)
         fig.scatter("p1", "p2", source=self.crossings, color=colors, size=POINT_SIZE, line_width=0)
         fig.scatter("p1", "p2", source=self.start_source, marker="cross", color=colors, size=9, line_width=2)
+        fig.scatter("p1", "p2", source=self.fixed, marker="marker", size=11, line_color="black",
+                    fill_color="white", line_width=2)
         fig.grid.visible = False
         fig.on_event(Tap, self._on_tap)
         fig.on_event(DoubleTap, self._on_tap)   # a second click within 300 ms is a double tap
@@ -149,6 +160,8 @@ class SectionPage:
         buttons = [clear, undo]
         self.layer = pn.widgets.Checkbox(label=f"MEGNO layer (T = {raster_mod.RASTER_TIME:g})", value=False)
         self.layer.param.watch(lambda _e: self._later(self._layer_changed), "value")
+        self.overlay = pn.widgets.Checkbox(label="fixed points, separatrices", value=False)
+        self.overlay.param.watch(lambda _e: self._later(self._overlay_changed), "value")
         download = pn.widgets.FileDownload(callback=self._scene_file, filename=f"{export.SCENE_NAME}.toml",
                                            label="Scene (TOML)", color="primary", width=190)
         buttons.append(download)
@@ -159,10 +172,13 @@ class SectionPage:
         self.message = Div(name="message", text="", styles={"color": "#b00020", "min-height": "1.2em"},
                            width=FIGURE_WIDTH)
         self.status = Div(name="status", text="click in the white region to start an orbit", width=FIGURE_WIDTH)
+        self.overlay_text = Div(name="overlay", text="", width=FIGURE_WIDTH)
         title = "explorer: Poincaré section φ = π" + (f" ({self.label})" if self.label else "")
-        controls = pn.Column(*self.inputs.values(), self.layer, pn.Row(*buttons[:2]), *buttons[2:], width=200)
+        controls = pn.Column(*self.inputs.values(), self.layer, self.overlay, pn.Row(*buttons[:2]), *buttons[2:],
+                             width=200)
         self.layout = pn.Row(controls, pn.Column(pn.pane.Markdown(f"### {title}"), pn.pane.Bokeh(fig),
-                                                 pn.pane.Bokeh(self.status), pn.pane.Bokeh(self.message)))
+                                                 pn.pane.Bokeh(self.status), pn.pane.Bokeh(self.message),
+                                                 pn.pane.Bokeh(self.overlay_text)))
 
     def attach(self, doc) -> None:
         """The session's document: blocks are streamed into it; the worker ends with it."""
@@ -189,6 +205,7 @@ class SectionPage:
         self._show_fields()
         self._draw_region()
         self.layer.value = args.get("megno") == "1"
+        self.overlay.value = args.get("separatrices") == "1"
         for p1, p2 in starts:
             self._start(p1, p2)
 
@@ -197,6 +214,7 @@ class SectionPage:
         q = self.settings.fields()
         q["orbits"] = format_starts((p1, p2) for _i, p1, p2, _c in self.starts)
         q["megno"] = "1" if self.layer.value else "0"
+        q["separatrices"] = "1" if self.overlay.value else "0"
         return q
 
     def _push_url(self):
@@ -332,6 +350,7 @@ class SectionPage:
         self._draw_region()
         self._show_fields()
         self._restart_raster()
+        self._restart_overlay()
         kept = [self._start(p1, p2, color) for _i, p1, p2, color in old]
         dropped = sum(r is None for r in kept)
         if dropped:
@@ -420,6 +439,42 @@ class SectionPage:
         w = image.window
         self.raster_source.data = {"image": [image.values], "x": [w.x0], "y": [w.y0], "dw": [w.x1 - w.x0],
                                    "dh": [w.y1 - w.y0], "n": [image.n], "complete": [image.complete]}
+
+    # ------------------------------------------------------------ fixed points and separatrices
+    def _overlay_changed(self):
+        self._restart_overlay()
+        self._push_url()
+
+    def _restart_overlay(self):
+        """Search the fixed points and draw the separatrices of the current settings (in a thread
+        of its own, about a second; a newer request makes an older result stale)."""
+        self._overlay_generation += 1
+        self.fixed.data = {"p1": [], "p2": [], "kind": [], "marker": []}
+        self.curves.data = {"xs": [], "ys": []}
+        self.overlay_text.text = ""
+        if not self.overlay.value or self.settings.region is None:
+            return
+        self.overlay_text.text = "searching fixed points ..."
+        threading.Thread(target=self._compute_overlay, args=(self._overlay_generation, self.settings),
+                         name="explorer-serve-separatrices", daemon=True).start()
+
+    def _compute_overlay(self, generation, settings):
+        from explorer.app.explore.state import fixed_points_and_curves
+
+        try:
+            points, curves, text = fixed_points_and_curves(settings)
+        except Exception as exc:  # noqa: BLE001 - reported in the page
+            points, curves, text = [], [], f"fixed points: failed ({type(exc).__name__}: {exc})"
+        self._post(partial(self._show_overlay, generation, points, curves, text))
+
+    def _show_overlay(self, generation, points, curves, text):
+        if generation != self._overlay_generation:
+            return
+        self.fixed.data = {"p1": [float(fp.point[0]) for fp in points], "p2": [float(fp.point[1]) for fp in points],
+                           "kind": ["elliptic" if fp.stable else "hyperbolic" for fp in points],
+                           "marker": ["circle" if fp.stable else "x" for fp in points]}
+        self.curves.data = {"xs": [c[:, 0] for c in curves], "ys": [c[:, 1] for c in curves]}
+        self.overlay_text.text = text
 
     # ------------------------------------------------------------ blocks from the worker
     def _on_block(self, ident, rows, done, status):
