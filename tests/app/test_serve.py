@@ -84,6 +84,15 @@ def test_the_overlay_marks_the_fixed_points_and_draws_their_separatrices():
         assert page.url_query()["separatrices"] == "1"
         page.overlay.value = False                         # off: the overlay goes
         assert page.fixed.data["p1"] == [] and page.curves.data["xs"] == []
+        page.periodic_box.value = True                     # periodic orbits: each period's points, K of them
+        t0 = time.time()
+        while not page.periodic.data["p1"] and time.time() - t0 < 240:
+            page.poll()
+            time.sleep(0.05)
+        periods = np.array(page.periodic.data["period"])
+        assert periods.size and set(periods) <= {1, 2, 3, 4} and "periodic orbits K=1" in page.overlay_text.text
+        for k in set(periods.tolist()):
+            assert (periods == k).sum() % k == 0
     finally:
         page.close()
 

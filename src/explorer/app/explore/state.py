@@ -501,23 +501,8 @@ class ExplorerState:
 
     # ------------------------------------------------------------ separatrices
     def periodic_orbits(self, max_period=None):
-        """(orbits, message): the periodic orbits of minimal periods 1..``max_period`` (default
-        PERIODIC_MAX) found by :func:`explorer.analysis.periodic.search_periodic_orbits` (a coarse
-        grid, 8 x 8, and the symmetry lines), each once."""
-        from explorer.analysis.periodic import search_periodic_orbits
-
-        K = PERIODIC_MAX if max_period is None else int(max_period)
-        if self.region is None:
-            return [], "periodic orbits: the region is empty"
-        orbits = []
-        for k in range(1, K + 1):
-            try:
-                orbits += search_periodic_orbits(self.params, self.h, k, grid=8, max_guesses=30, phi0=self.phi0)
-            except Exception:  # noqa: BLE001 - a failed search marks nothing for this period
-                continue
-        counts = ", ".join(f"K={k}: {sum(o.period == k for o in orbits)} "
-                           f"({sum(o.period == k and o.stable for o in orbits)} stable)" for k in range(1, K + 1))
-        return orbits, f"periodic orbits {counts}"
+        """(orbits, message): :func:`periodic_orbits` of this state."""
+        return periodic_orbits(self, max_period)
 
     def fixed_points_and_curves(self):
         """(fixed points, curves, message): :func:`fixed_points_and_curves` of this state."""
@@ -619,3 +604,23 @@ def fixed_points_and_curves(view):
     desc = ", ".join(f"({_num(fp.point[0])}, {_num(fp.point[1])}) {'elliptic' if fp.stable else 'hyperbolic'}"
                      for fp in points)
     return points, curves, f"fixed points {desc}; {len(curves)} separatrix branches"
+
+
+def periodic_orbits(view, max_period=None):
+    """(orbits, message): the periodic orbits of minimal periods 1..``max_period`` (default
+    PERIODIC_MAX) found by :func:`explorer.analysis.periodic.search_periodic_orbits` (a coarse
+    grid, 8 x 8, and the symmetry lines), each once.  ``view``: as for :func:`fixed_points_and_curves`."""
+    from explorer.analysis.periodic import search_periodic_orbits
+
+    K = PERIODIC_MAX if max_period is None else int(max_period)
+    if view.region is None:
+        return [], "periodic orbits: the region is empty"
+    orbits = []
+    for k in range(1, K + 1):
+        try:
+            orbits += search_periodic_orbits(view.params, view.h, k, grid=8, max_guesses=30, phi0=view.phi0)
+        except Exception:  # noqa: BLE001 - a failed search marks nothing for this period
+            continue
+    counts = ", ".join(f"K={k}: {sum(o.period == k for o in orbits)} "
+                       f"({sum(o.period == k and o.stable for o in orbits)} stable)" for k in range(1, K + 1))
+    return orbits, f"periodic orbits {counts}"

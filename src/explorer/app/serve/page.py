@@ -11,7 +11,8 @@ browser; the tests read them there):
 ``raster``     ColumnDataSource of the MEGNO layer: image, x, y, dw, dh (the window), n, complete
 ``fixed``      ColumnDataSource of the fixed points of the section map: p1, p2, kind, marker
 ``separatrices`` ColumnDataSource of the separatrix branches: xs, ys (one polyline per branch)
-``overlay``    what the fixed-point search found
+``periodic``   ColumnDataSource of the periodic orbits of periods 1..4: p1, p2, period, kind, marker
+``overlay``    what the searches found
 ``section``    the figure (a click on it starts an orbit)
 ``message``    the last message (a refused value, an export, a click outside the region)
 ``status``     one line: orbits running and crossings drawn
@@ -59,6 +60,9 @@ SAME_SPOT_PX = 4.0
 #: colour scale of the MEGNO layer: <Y> from 0 (stable periodic) over 2 (quasi-periodic, light) to
 #: MEGNO_HIGH and above (chaotic, dark)
 MEGNO_LOW, MEGNO_HIGH = 0.0, 8.0
+#: periodic orbits of periods 1..PERIODIC_MAX are marked, filled with the colour of their period
+PERIODIC_MAX = 4
+PERIOD_COLORS = ("#ffffff", "#f4a582", "#92c5de", "#b8e186")
 #: colour of the separatrices
 SEPARATRIX_COLOR = "#303030"
 #: labels of the fields
@@ -76,6 +80,10 @@ def _empty_crossings() -> dict:
 
 def _empty_raster() -> dict:
     return {"image": [], "x": [], "y": [], "dw": [], "dh": [], "n": [], "complete": []}
+
+
+def _empty_periodic() -> dict:
+    return {"p1": [], "p2": [], "period": [], "kind": [], "marker": []}
 
 
 def _empty_starts() -> dict:
@@ -132,9 +140,13 @@ class SectionPage:
                   alpha=0.85)
         self.fixed = ColumnDataSource({"p1": [], "p2": [], "kind": [], "marker": []}, name="fixed")
         self.curves = ColumnDataSource({"xs": [], "ys": []}, name="separatrices")
+        self.periodic = ColumnDataSource(_empty_periodic(), name="periodic")
         fig.multi_line("xs", "ys", source=self.curves, line_color=SEPARATRIX_COLOR, line_width=1.2)
         fig.scatter("p1", "p2", source=self.crossings, color=colors, size=POINT_SIZE, line_width=0)
         fig.scatter("p1", "p2", source=self.start_source, marker="cross", color=colors, size=9, line_width=2)
+        fig.scatter("p1", "p2", source=self.periodic, marker="marker", size=8, line_color="black",
+                    fill_color={"field": "period", "transform": LinearColorMapper(
+                        palette=list(PERIOD_COLORS), low=0.5, high=len(PERIOD_COLORS) + 0.5)}, line_width=1.5)
         fig.scatter("p1", "p2", source=self.fixed, marker="marker", size=11, line_color="black",
                     fill_color="white", line_width=2)
         fig.grid.visible = False
@@ -162,6 +174,8 @@ class SectionPage:
         self.layer.param.watch(lambda _e: self._later(self._layer_changed), "value")
         self.overlay = pn.widgets.Checkbox(label="fixed points, separatrices", value=False)
         self.overlay.param.watch(lambda _e: self._later(self._overlay_changed), "value")
+        self.periodic_box = pn.widgets.Checkbox(label=f"periodic orbits, periods 1-{PERIODIC_MAX}", value=False)
+        self.periodic_box.param.watch(lambda _e: self._later(self._overlay_changed), "value")
         download = pn.widgets.FileDownload(callback=self._scene_file, filename=f"{export.SCENE_NAME}.toml",
                                            label="Scene (TOML)", color="primary", width=190)
         buttons.append(download)
@@ -174,8 +188,8 @@ class SectionPage:
         self.status = Div(name="status", text="click in the white region to start an orbit", width=FIGURE_WIDTH)
         self.overlay_text = Div(name="overlay", text="", width=FIGURE_WIDTH)
         title = "explorer: Poincaré section φ = π" + (f" ({self.label})" if self.label else "")
-        controls = pn.Column(*self.inputs.values(), self.layer, self.overlay, pn.Row(*buttons[:2]), *buttons[2:],
-                             width=200)
+        controls = pn.Column(*self.inputs.values(), self.layer, self.overlay, self.periodic_box,
+                             pn.Row(*buttons[:2]), *buttons[2:], width=200)
         self.layout = pn.Row(controls, pn.Column(pn.pane.Markdown(f"### {title}"), pn.pane.Bokeh(fig),
                                                  pn.pane.Bokeh(self.status), pn.pane.Bokeh(self.message),
                                                  pn.pane.Bokeh(self.overlay_text)))
@@ -206,6 +220,7 @@ class SectionPage:
         self._draw_region()
         self.layer.value = args.get("megno") == "1"
         self.overlay.value = args.get("separatrices") == "1"
+        self.periodic_box.value = args.get("periodic") == "1"
         for p1, p2 in starts:
             self._start(p1, p2)
 
@@ -215,6 +230,7 @@ class SectionPage:
         q["orbits"] = format_starts((p1, p2) for _i, p1, p2, _c in self.starts)
         q["megno"] = "1" if self.layer.value else "0"
         q["separatrices"] = "1" if self.overlay.value else "0"
+        q["periodic"] = "1" if self.periodic_box.value else "0"
         return q
 
     def _push_url(self):
@@ -446,28 +462,50 @@ class SectionPage:
         self._push_url()
 
     def _restart_overlay(self):
-        """Search the fixed points and draw the separatrices of the current settings (in a thread
-        of its own, about a second; a newer request makes an older result stale)."""
+        """Search the fixed points (and separatrices) and the periodic orbits the boxes ask for,
+        at the current settings, in a thread of its own (about 1 s and 5 s); a newer request
+        makes an older result stale."""
         self._overlay_generation += 1
         self.fixed.data = {"p1": [], "p2": [], "kind": [], "marker": []}
         self.curves.data = {"xs": [], "ys": []}
+        self.periodic.data = _empty_periodic()
         self.overlay_text.text = ""
-        if not self.overlay.value or self.settings.region is None:
+        wanted = (self.overlay.value, self.periodic_box.value)
+        if not any(wanted) or self.settings.region is None:
             return
-        self.overlay_text.text = "searching fixed points ..."
-        threading.Thread(target=self._compute_overlay, args=(self._overlay_generation, self.settings),
-                         name="explorer-serve-separatrices", daemon=True).start()
+        self.overlay_text.text = "searching ..."
+        threading.Thread(target=self._compute_overlay, args=(self._overlay_generation, self.settings, *wanted),
+                         name="explorer-serve-overlay", daemon=True).start()
 
-    def _compute_overlay(self, generation, settings):
-        from explorer.app.explore.state import fixed_points_and_curves
+    def _compute_overlay(self, generation, settings, fixed, periodic):
+        from explorer.app.explore.state import fixed_points_and_curves, periodic_orbits
 
-        try:
-            points, curves, text = fixed_points_and_curves(settings)
-        except Exception as exc:  # noqa: BLE001 - reported in the page
-            points, curves, text = [], [], f"fixed points: failed ({type(exc).__name__}: {exc})"
-        self._post(partial(self._show_overlay, generation, points, curves, text))
+        texts = []
+        if fixed:
+            try:
+                points, curves, text = fixed_points_and_curves(settings)
+            except Exception as exc:  # noqa: BLE001 - reported in the page
+                points, curves, text = [], [], f"fixed points: failed ({type(exc).__name__}: {exc})"
+            texts.append(text)
+            self._post(partial(self._show_fixed, generation, points, curves, "; ".join(texts)))
+        if periodic and generation == self._overlay_generation:
+            try:
+                orbits, text = periodic_orbits(settings, PERIODIC_MAX)
+            except Exception as exc:  # noqa: BLE001 - reported in the page
+                orbits, text = [], f"periodic orbits: failed ({type(exc).__name__}: {exc})"
+            texts.append(text)
+            self._post(partial(self._show_periodic, generation, orbits, "; ".join(texts)))
 
-    def _show_overlay(self, generation, points, curves, text):
+    def _show_periodic(self, generation, orbits, text):
+        if generation != self._overlay_generation:
+            return
+        rows = [(float(p[0]), float(p[1]), int(o.period), o.stable) for o in orbits for p in np.asarray(o.points)]
+        self.periodic.data = {"p1": [r[0] for r in rows], "p2": [r[1] for r in rows], "period": [r[2] for r in rows],
+                              "kind": ["elliptic" if r[3] else "hyperbolic" for r in rows],
+                              "marker": ["circle" if r[3] else "x" for r in rows]}
+        self.overlay_text.text = text
+
+    def _show_fixed(self, generation, points, curves, text):
         if generation != self._overlay_generation:
             return
         self.fixed.data = {"p1": [float(fp.point[0]) for fp in points], "p2": [float(fp.point[1]) for fp in points],
