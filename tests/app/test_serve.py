@@ -516,11 +516,18 @@ def test_rapid_clicks_undo_clear_and_export_keep_the_page_and_the_server_consist
                            timeout=30_000)
     assert len(page.evaluate(DATA, "crossings")["t"]) == 19 * CROSSINGS
     page.get_by_role("button", name="Export scene").click()
-    page.wait_for_function(f"() => ({TEXT})('message').includes('scene written')", timeout=30_000)
+    page.wait_for_function(f"() => ({TEXT})('message').includes('(the orbits, sweep format)')", timeout=120_000)
     files = list(Path(served.export_dir).glob("browser-session-*.toml"))
     assert len(files) == 1
     assert [list(p) for p in scene_mod.load_scene(str(files[0])).seeds.points] == \
         [[a, b] for a, b in zip(starts["p1"][:19], starts["p2"][:19])]
+    from explorer.io.store import read_store
+
+    stored = read_store(str(files[0].with_suffix(".h5"))).panels[0]          # the page's orbits, bit for bit
+    for i, ident in enumerate(starts["orbit"][:19]):
+        mine = np.array(data["orbit"]) == ident
+        rows = np.column_stack([np.array(data[k])[mine] for k in ("t", "p1", "p2", "M", "dH")])
+        np.testing.assert_array_equal(stored.orbit(i), rows)
     page.get_by_role("button", name="Clear").click()
     page.wait_for_function("() => Bokeh.documents[0].get_model_by_name('crossings').data.t.length === 0",
                            timeout=30_000)

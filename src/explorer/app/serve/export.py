@@ -1,6 +1,7 @@
 """A browser session as a scene (docs/scenes.md) that ``explorer sweep`` reruns: the model, the
 energy, the clicked starts as ``[seeds] kind = "points"`` and the integration settings, so the
-sweep's panel has the session's orbits, crossing for crossing.
+sweep's panel has the session's orbits, crossing for crossing; and its orbits as an HDF5 store
+in the sweep's format (docs/store.md), written by that sweep (:func:`write_store`).
 
 Files are written only into the directory given at start (``--export-dir``), under a name made
 here (``<scene name>-<UTC time>.toml``), atomically; nothing from the page names a file.
@@ -44,3 +45,13 @@ def write_scene(directory, scene: scene_mod.Scene) -> str:
         path = os.path.join(os.fspath(directory), f"{scene.name}-{stamp}-{n}.toml")
     write_bytes_atomic(path, scene.to_toml().encode("utf-8"))
     return path
+
+
+def write_store(scene_path) -> str:
+    """Run the scene written by :func:`write_scene` into the store next to it (``.h5`` for
+    ``.toml``; the sweep's own atomic commit); returns the store's path."""
+    from explorer.app.runner import run_sweep
+
+    out = os.path.splitext(os.fspath(scene_path))[0] + ".h5"
+    run_sweep(os.fspath(scene_path), out, draw=False, progress=False)
+    return out

@@ -418,8 +418,19 @@ class SectionPage:
         except (ParameterError, OSError) as exc:
             self.say(f"export failed: {exc}")
             return None
-        self.say(f"scene written: {os.path.basename(path)} (rerun: explorer sweep {os.path.basename(path)})")
+        name = os.path.basename(path)
+        self.say(f"scene written: {name} (rerun: explorer sweep {name}); writing the orbits' store ...")
+        threading.Thread(target=self._write_store, args=(path,), name="explorer-serve-store", daemon=True).start()
         return path
+
+    def _write_store(self, scene_path):
+        """In a thread: the exported scene's orbits as an HDF5 store next to it."""
+        try:
+            out = export.write_store(scene_path)
+            text = f"written: {os.path.basename(scene_path)} and {os.path.basename(out)} (the orbits, sweep format)"
+        except Exception as exc:  # noqa: BLE001 - reported in the page
+            text = f"store export failed: {type(exc).__name__}: {' '.join(str(exc).split())}"
+        self._post(partial(self.say, text))
 
     # ------------------------------------------------------------ the MEGNO layer
     def _on_ranges(self, event):
