@@ -36,11 +36,11 @@ EXAMPLES = {
     "periodic": "python -m explorer periodic --period 3 --search --grid 10 --mu 0.03 --json",
     "rotation": "python -m explorer rotation --from 1.5822,0 --to 1.0,0 --n 30 --mu 0.03",
     "explore": "python -m explorer explore figure4 --panel 2",
+    "serve": "python -m explorer serve figure4 --mu 0.03",
     "melnikov": "python -m explorer melnikov --splitting --mus 1e-4,1e-3 --json",
     "trajectory": "python -m explorer trajectory --p1 0.5 --M 2 --mu 0.5 -T 300 --out figures/trajectory",
     "figures": "python -m explorer figures --only figure4 --quick",
     "native": "python -m explorer native --build",
-    "serve": "python -m explorer serve figure4 --mu 0.03",
 }
 
 
