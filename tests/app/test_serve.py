@@ -266,6 +266,9 @@ TO_SCREEN = """([x, y]) => { const v = Bokeh.index.all_views().find(v => v.model
 DATA = "(name) => { const d = Bokeh.documents[0].get_model_by_name(name).data; const o = {};" \
        " for (const k of Object.keys(d)) o[k] = Array.from(d[k]); return o; }"
 TEXT = "(name) => Bokeh.documents[0].get_model_by_name(name).text"
+#: tick or untick the check box whose label starts with the text (its Bokeh model, as a click does)
+SET_BOX = "([text, on]) => { const m = [...Bokeh.documents[0].all_models].find(m => m.type === 'Checkbox' &&" \
+          " String(m.label).startsWith(text)); m.active = on; }"
 
 
 def _open(browser, url):
@@ -450,7 +453,7 @@ def test_the_megno_raster_is_refined_and_marks_chaos_and_order():
 @browser_needed
 def test_the_megno_layer_appears_coarse_first_and_follows_the_zoom(served, browser):
     page = _open(browser, served.url)
-    page.get_by_role("checkbox").first.check()          # the MEGNO layer (first box)
+    page.evaluate(SET_BOX, ["MEGNO layer", True])
     raster_n = "() => { const d = Bokeh.documents[0].get_model_by_name('raster').data; return d.n.length ? d.n[0] : 0 }"
     page.wait_for_function(f"() => ({raster_n})() >= 16", timeout=120_000)
     page.wait_for_function("() => window.location.search.includes('megno=1')", timeout=30_000)
@@ -464,7 +467,7 @@ def test_the_megno_layer_appears_coarse_first_and_follows_the_zoom(served, brows
                            "&& Math.abs(d.x[0] + d.dw[0] - r[1]) < 1e-12 && d.y[0] === r[2]; }", timeout=60_000)
     x0, x1, _y0, _y1 = page.evaluate(ranges)
     assert x1 - x0 < 4.0                                         # zoomed in: narrower than the region
-    page.get_by_role("checkbox").first.uncheck()
+    page.evaluate(SET_BOX, ["MEGNO layer", False])
     page.wait_for_function("() => Bokeh.documents[0].get_model_by_name('raster').data.x.length === 0",
                            timeout=30_000)
     page.close()
@@ -487,6 +490,20 @@ def test_explore_in_a_notebook_renders_and_streams_the_clicked_orbit():
         ref = sections.section_crossings(page.settings.params, [0.3], [0.1], page.settings.h, 60)
         got = np.column_stack([np.asarray(page.crossings.data[k]) for k in ("t", "p1", "p2", "M", "dH")])
         np.testing.assert_array_equal(got, ref.orbit(0))
+        # the orbit's chaos indicators, as the Tk window computes them, colour its points on demand
+        from explorer.analysis import lyapunov
+        from explorer.app.explore.state import INDICATOR_TIME
+
+        while not page.indicators and time.time() - t0 < 120:
+            page.poll()
+            time.sleep(0.01)
+        (megno, mlce), = page.indicators.values()
+        ind = lyapunov.indicators(page.settings.params, ex.section_state(page.settings.params, [0.3], [0.1],
+                                                                         page.settings.h), INDICATOR_TIME)
+        assert (megno, mlce) == (float(ind.megno[0]), float(ind.mlce[0]))
+        assert np.all(np.asarray(page.crossings.data["megno"]) == megno) and "<Y> =" in page.status.text
+        page.colour_box.value = True
+        assert page.points.glyph.fill_color["field"] == "megno" and page.url_query()["colour"] == "megno"
         page.undo()
         assert len(page.crossings.data["t"]) == 0 and page.url_query()["orbits"] == ""
         with pytest.raises(ParameterError, match="a1"):

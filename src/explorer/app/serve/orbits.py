@@ -13,11 +13,14 @@ A :class:`Worker` owns one thread per session and serves its orbits newest first
 gets its first block before older orbits continue), round robin after that.  ``cancel`` stops
 every orbit of an older generation (a parameter change, clear) at its next block boundary;
 ``remove`` stops one (undo).  Each block is handed to ``on_block(orbit_id, rows, done,
-status)`` in the worker thread; the page moves it onto its document's event loop.  No web
+status)`` in the worker thread; the page moves it onto its document's event loop.  After an
+orbit's first block, its mean MEGNO and finite-time mLCE over INDICATOR_TIME (the Tk window's
+indicators) go to ``on_indicators(orbit_id, megno, mlce)``.  No web
 library here.
 """
 from __future__ import annotations
 
+import math
 import threading
 import time
 from collections.abc import Callable
@@ -27,6 +30,7 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis import sections
+from explorer.app.explore.state import INDICATOR_TIME
 from explorer.app.serve.settings import Settings
 from explorer.kernels import STATUS_NAMES
 
@@ -53,6 +57,7 @@ class OrbitRun:
     done: int = 0
     status: str = "running"
     wall: float = 0.0
+    wants_indicators: bool = True
 
     def __post_init__(self):
         s = self.settings
@@ -99,15 +104,30 @@ def warm_up(settings: Settings) -> None:
         return
 
 
+def orbit_indicators(settings: Settings, y0) -> tuple:
+    """(mean MEGNO <Y>, finite-time mLCE) over INDICATOR_TIME of the orbit from ``y0``, as the Tk
+    window computes them (:func:`explorer.analysis.lyapunov.indicators`, the orbit's method and
+    tolerance); NaN when the run stopped early."""
+    from explorer.analysis import lyapunov
+
+    res = lyapunov.indicators(settings.params, y0, INDICATOR_TIME, method=settings.method, tol=settings.tol,
+                              dt=settings.dt)
+    if int(res.status[0]) != 0:
+        return math.nan, math.nan
+    return float(res.megno[0]), float(res.mlce[0])
+
+
 BlockCallback = Callable[[int, np.ndarray, int, str], None]
 
 
 class Worker:
     """One thread that runs a session's orbits block by block (see the module docstring)."""
 
-    def __init__(self, on_block: BlockCallback, on_error: Callable[[int, BaseException], None] | None = None):
+    def __init__(self, on_block: BlockCallback, on_error: Callable[[int, BaseException], None] | None = None,
+                 on_indicators: Callable[[int, float, float], None] | None = None):
         self._on_block = on_block
         self._on_error = on_error
+        self._on_indicators = on_indicators
         self._runs: list[OrbitRun] = []
         self._cond = threading.Condition()
         self._generation = 0
@@ -191,3 +211,13 @@ class Worker:
                     continue
                 # handed out under the lock: cancel() cannot slip between the check and the hand-out
                 self._on_block(run.ident, rows, run.done, run.status)
+            if run.wants_indicators and self._on_indicators is not None:
+                # after the orbit's first block is out: its chaos indicators, once
+                run.wants_indicators = False
+                try:
+                    megno, mlce = orbit_indicators(run.settings, run.y0)
+                except Exception:  # noqa: BLE001 - an indicator that fails is shown as unknown
+                    megno = mlce = math.nan
+                with self._cond:
+                    if run.generation == self._generation:
+                        self._on_indicators(run.ident, megno, mlce)

@@ -5,8 +5,8 @@ What the page holds, by Bokeh model name (``Bokeh.documents[0].get_model_by_name
 browser; the tests read them there):
 
 ``region``     ColumnDataSource of the allowed ellipse (x, y, width, height; empty: no region)
-``crossings``  ColumnDataSource of every crossing on screen: orbit, t, p1, p2, M, dH and the
-               orbit's colour c (an index into COLORS)
+``crossings``  ColumnDataSource of every crossing on screen: orbit, t, p1, p2, M, dH, the
+               orbit's colour c (an index into COLORS) and its MEGNO (NaN until known)
 ``starts``     ColumnDataSource of the clicked starts: orbit, p1, p2, c
 ``raster``     ColumnDataSource of the MEGNO layer: image, x, y, dw, dh (the window), n, complete
 ``fixed``      ColumnDataSource of the fixed points of the section map: p1, p2, kind, marker
@@ -37,7 +37,7 @@ from bokeh.models import ColumnDataSource, Div, LinearColorMapper
 from bokeh.palettes import Inferno256
 from bokeh.plotting import figure
 
-from explorer.app.explore.state import COLORS
+from explorer.app.explore.state import CHAOTIC_MEGNO, COLORS, INDICATOR_TIME
 from explorer.app.serve import export
 from explorer.app.serve import raster as raster_mod
 from explorer.app.serve import settings as settings_mod
@@ -68,7 +68,7 @@ SEPARATRIX_COLOR = "#303030"
 #: labels of the fields
 LABELS = {"mu": "μ", "h": "h", "lam": "λ", "a1": "a1", "a2": "a2", "b": "b", "method": "method",
           "tol": "tol (taylor, dop853)", "dt": "dt (split*)", "crossings": "crossings per click"}
-CROSSING_COLUMNS = ("orbit", "t", "p1", "p2", "M", "dH")
+CROSSING_COLUMNS = ("orbit", "t", "p1", "p2", "M", "dH", "megno")
 
 
 def _empty_crossings() -> dict:
@@ -110,7 +110,8 @@ class SectionPage:
         self._pending: list = []               # blocks from the worker not yet on the page
         self._pending_lock = threading.Lock()
         self._inbox: list = []                 # notebook mode: what the workers handed in (poll)
-        self.worker = Worker(self._on_block, self._on_error)
+        self.indicators: dict = {}             # orbit id -> (mean MEGNO, mLCE) over INDICATOR_TIME
+        self.worker = Worker(self._on_block, self._on_error, self._on_indicators)
         self.raster = raster_mod.RasterWorker(self._on_image, self._on_raster_error)
         self._raster_generation = 0
         self.window: raster_mod.Window | None = None
@@ -142,7 +143,10 @@ class SectionPage:
         self.curves = ColumnDataSource({"xs": [], "ys": []}, name="separatrices")
         self.periodic = ColumnDataSource(_empty_periodic(), name="periodic")
         fig.multi_line("xs", "ys", source=self.curves, line_color=SEPARATRIX_COLOR, line_width=1.2)
-        fig.scatter("p1", "p2", source=self.crossings, color=colors, size=POINT_SIZE, line_width=0)
+        self._by_orbit = colors
+        self._by_megno = {"field": "megno", "transform": LinearColorMapper(
+            palette=list(reversed(Inferno256))[32:], low=MEGNO_LOW, high=MEGNO_HIGH, nan_color="#9e9e9e")}
+        self.points = fig.scatter("p1", "p2", source=self.crossings, color=colors, size=POINT_SIZE, line_width=0)
         fig.scatter("p1", "p2", source=self.start_source, marker="cross", color=colors, size=9, line_width=2)
         fig.scatter("p1", "p2", source=self.periodic, marker="marker", size=8, line_color="black",
                     fill_color={"field": "period", "transform": LinearColorMapper(
@@ -174,6 +178,8 @@ class SectionPage:
         self.layer.param.watch(lambda _e: self._later(self._layer_changed), "value")
         self.overlay = pn.widgets.Checkbox(label="fixed points, separatrices", value=False)
         self.overlay.param.watch(lambda _e: self._later(self._overlay_changed), "value")
+        self.colour_box = pn.widgets.Checkbox(label="colour orbits by MEGNO", value=False)
+        self.colour_box.param.watch(lambda _e: self._later(self._colour_changed), "value")
         self.periodic_box = pn.widgets.Checkbox(label=f"periodic orbits, periods 1-{PERIODIC_MAX}", value=False)
         self.periodic_box.param.watch(lambda _e: self._later(self._overlay_changed), "value")
         download = pn.widgets.FileDownload(callback=self._scene_file, filename=f"{export.SCENE_NAME}.toml",
@@ -188,7 +194,7 @@ class SectionPage:
         self.status = Div(name="status", text="click in the white region to start an orbit", width=FIGURE_WIDTH)
         self.overlay_text = Div(name="overlay", text="", width=FIGURE_WIDTH)
         title = "explorer: Poincaré section φ = π" + (f" ({self.label})" if self.label else "")
-        controls = pn.Column(*self.inputs.values(), self.layer, self.overlay, self.periodic_box,
+        controls = pn.Column(*self.inputs.values(), self.colour_box, self.layer, self.overlay, self.periodic_box,
                              pn.Row(*buttons[:2]), *buttons[2:], width=200)
         self.layout = pn.Row(controls, pn.Column(pn.pane.Markdown(f"### {title}"), pn.pane.Bokeh(fig),
                                                  pn.pane.Bokeh(self.status), pn.pane.Bokeh(self.message),
@@ -221,6 +227,7 @@ class SectionPage:
         self.layer.value = args.get("megno") == "1"
         self.overlay.value = args.get("separatrices") == "1"
         self.periodic_box.value = args.get("periodic") == "1"
+        self.colour_box.value = args.get("colour") == "megno"
         for p1, p2 in starts:
             self._start(p1, p2)
 
@@ -231,6 +238,7 @@ class SectionPage:
         q["megno"] = "1" if self.layer.value else "0"
         q["separatrices"] = "1" if self.overlay.value else "0"
         q["periodic"] = "1" if self.periodic_box.value else "0"
+        q["colour"] = "megno" if self.colour_box.value else "orbit"
         return q
 
     def _push_url(self):
@@ -377,6 +385,7 @@ class SectionPage:
         """Stop every orbit and take them off the page; returns their starts."""
         self.worker.cancel()
         old, self.starts, self._running = self.starts, [], set()
+        self.indicators = {}
         self.crossings.data = _empty_crossings()
         self.start_source.data = _empty_starts()
         return old
@@ -392,6 +401,7 @@ class SectionPage:
             return
         ident = self.starts.pop()[0]
         self.worker.remove(ident)
+        self.indicators.pop(ident, None)
         self._running = self._running - {ident}
         keep = np.asarray(self.crossings.data["orbit"]) != ident
         self.crossings.data = {k: np.asarray(v)[keep] for k, v in self.crossings.data.items()}
@@ -543,7 +553,9 @@ class SectionPage:
         full = [b for b in blocks if len(b[1])]
         if full:
             data = np.concatenate([b[1] for b in full])
+            megno = [self.indicators.get(b[0], (math.nan,))[0] for b in full]
             self.crossings.stream({"orbit": np.concatenate([np.full(len(b[1]), b[0], np.int64) for b in full]),
+                                   "megno": np.concatenate([np.full(len(b[1]), m) for b, m in zip(full, megno)]),
                                    "t": data[:, 0], "p1": data[:, 1], "p2": data[:, 2], "M": data[:, 3],
                                    "dH": data[:, 4],
                                    "c": np.concatenate([np.full(len(b[1]), live[b[0]], np.int64) for b in full])})
@@ -566,8 +578,34 @@ class SectionPage:
     def _update_status(self):
         running = len(self._running)
         n = len(self.crossings.data["orbit"])
-        self.status.text = (f"{len(self.starts)} orbit(s), {running} running, {n} crossings drawn; "
-                            f"mu = {self.settings.params.mu:g}, h = {self.settings.h:g}, {self.settings.method}")
+        text = (f"{len(self.starts)} orbit(s), {running} running, {n} crossings drawn; "
+                f"mu = {self.settings.params.mu:g}, h = {self.settings.h:g}, {self.settings.method}")
+        known = [i for i, *_ in self.starts if i in self.indicators]
+        if known:
+            megno, mlce = self.indicators[known[-1]]
+            kind = "chaotic-like" if megno > CHAOTIC_MEGNO else "regular-like"
+            text += (f"; orbit {known[-1]}: <Y> = {megno:.3g}, mLCE = {mlce:.3g} over t <= {INDICATOR_TIME:g}"
+                     + (f" ({kind})" if math.isfinite(megno) else " (unknown: the run stopped early)"))
+        self.status.text = text
+
+    # ------------------------------------------------------------ chaos indicators of the orbits
+    def _on_indicators(self, ident, megno, mlce):
+        self._post(partial(self._show_indicators, ident, megno, mlce))
+
+    def _show_indicators(self, ident, megno, mlce):
+        if not any(i == ident for i, *_ in self.starts):
+            return
+        self.indicators[ident] = (megno, mlce)
+        rows = np.flatnonzero(np.asarray(self.crossings.data["orbit"]) == ident)
+        if rows.size:      # the rows streamed before the indicator was known
+            self.crossings.patch({"megno": [(int(r), megno) for r in rows]})
+        self._update_status()
+
+    def _colour_changed(self):
+        spec = self._by_megno if self.colour_box.value else self._by_orbit
+        self.points.glyph.fill_color = spec
+        self.points.glyph.line_color = spec
+        self._push_url()
 
 
 def session_app(base: Settings, export_dir=None, label: str = ""):
