@@ -371,10 +371,11 @@ def test_a_bad_value_shows_a_message_and_computes_nothing(served, browser):
     page = _open(browser, served.url)
     before = page.evaluate(DATA, "region")
     good = SERVED.fields()
-    for field, text in (("a1", "-1"), ("mu", "abc"), ("tol", "0.5"), ("crossings", "1e9")):
+    for field, text in (("a1", "-1"), ("mu", "<img src=x onerror=alert(1)>"), ("tol", "0.5"), ("crossings", "1e9")):
         _set_field(page, field, text)
         page.wait_for_function(f"() => ({TEXT})('message').includes({json.dumps(field)})", timeout=30_000)
         assert "not applied" in page.evaluate(TEXT, "message")
+        assert page.locator("img[src=x]").count() == 0            # shown as text, not HTML
         assert page.evaluate(DATA, "region") == before
         assert page.evaluate(DATA, "crossings")["p1"] == []
         _set_field(page, field, good[field])           # back: the message goes

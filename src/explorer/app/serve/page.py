@@ -52,6 +52,8 @@ BOUNDARY_COLOR = "#262626"
 #: size of the figure in pixels, and of a crossing's dot
 FIGURE_WIDTH = 720
 FIGURE_HEIGHT = 560
+#: width of a field (two columns of them beside the figure)
+FIELD_WIDTH = 100
 POINT_SIZE = 2.0
 #: the view shows the region's bounding box and this margin around it (fraction of the semi-axes)
 VIEW_MARGIN = 0.08
@@ -66,7 +68,8 @@ PERIOD_COLORS = ("#ffffff", "#f4a582", "#92c5de", "#b8e186")
 #: colour of the separatrices
 SEPARATRIX_COLOR = "#303030"
 #: labels of the fields
-LABELS = {"mu": "μ", "h": "h", "lam": "λ", "a1": "a1", "a2": "a2", "b": "b", "method": "method",
+LABELS = {"mu": "μ", "h": "h", "lam": "λ", "a1": "a1", "a2": "a2", "b": "b", "chi": "χ", "zeta": "ζ", "xi": "ξ",
+          "eta": "η", "method": "method",
           "tol": "tol (taylor, dop853)", "dt": "dt (split*)", "crossings": "crossings per click"}
 CROSSING_COLUMNS = ("orbit", "t", "p1", "p2", "M", "dH", "megno")
 
@@ -164,9 +167,9 @@ class SectionPage:
             if name == "method":
                 from explorer.analysis.sections import METHODS
 
-                w = pn.widgets.Select(label=LABELS[name], options=list(METHODS), value=s[name], width=140)
+                w = pn.widgets.Select(label=LABELS[name], options=list(METHODS), value=s[name], width=FIELD_WIDTH)
             else:
-                w = pn.widgets.TextInput(label=LABELS[name], value=s[name], width=140)
+                w = pn.widgets.TextInput(label=LABELS[name], value=s[name], width=FIELD_WIDTH)
             w.param.watch(self._field_changed, "value")
             self.inputs[name] = w
         clear = pn.widgets.Button(label="Clear", color="warning", width=90)
@@ -189,13 +192,15 @@ class SectionPage:
             save = pn.widgets.Button(label="Export scene", width=190)
             save.on_click(lambda _e: self._later(self.export))
             buttons.append(save)
-        self.message = Div(name="message", text="", styles={"color": "#b00020", "min-height": "1.2em"},
-                           width=FIGURE_WIDTH)
-        self.status = Div(name="status", text="click in the white region to start an orbit", width=FIGURE_WIDTH)
-        self.overlay_text = Div(name="overlay", text="", width=FIGURE_WIDTH)
+        # text, never HTML: a message may quote what was typed into a field
+        self.message = Div(name="message", text="", render_as_text=True, width=FIGURE_WIDTH,
+                           styles={"color": "#b00020", "min-height": "1.2em"})
+        self.status = Div(name="status", text="click in the white region to start an orbit", render_as_text=True,
+                          width=FIGURE_WIDTH)
+        self.overlay_text = Div(name="overlay", text="", render_as_text=True, width=FIGURE_WIDTH)
         title = "explorer: Poincaré section φ = π" + (f" ({self.label})" if self.label else "")
-        controls = pn.Column(*self.inputs.values(), self.colour_box, self.layer, self.overlay, self.periodic_box,
-                             pn.Row(*buttons[:2]), *buttons[2:], width=200)
+        controls = pn.Column(pn.GridBox(*self.inputs.values(), ncols=2), self.colour_box, self.layer, self.overlay,
+                             self.periodic_box, pn.Row(*buttons[:2]), *buttons[2:], width=230)
         self.layout = pn.Row(controls, pn.Column(pn.pane.Markdown(f"### {title}"), pn.pane.Bokeh(fig),
                                                  pn.pane.Bokeh(self.status), pn.pane.Bokeh(self.message),
                                                  pn.pane.Bokeh(self.overlay_text)))

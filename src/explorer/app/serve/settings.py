@@ -16,10 +16,10 @@ from explorer import model
 from explorer.analysis import sections
 from explorer.model import ParameterError, validation
 
-#: the model parameters the page has a field for (the others keep the scene's values)
-PAGE_PARAMS = ("mu", "lam", "a1", "a2", "b")
+#: the model parameters the page has a field for (all of MODEL.md R3's)
+PAGE_PARAMS = ("mu", "lam", "a1", "a2", "b", "chi", "zeta", "xi", "eta")
 #: every field of the page, in the order they are shown (and written in the URL)
-FIELDS = ("mu", "h", "lam", "a1", "a2", "b", "method", "tol", "dt", "crossings")
+FIELDS = ("mu", "h", "lam", "a1", "a2", "b", "chi", "zeta", "xi", "eta", "method", "tol", "dt", "crossings")
 #: crossings per click: the page's default and its upper bound (bounded memory per orbit:
 #: 40 bytes a row in the server, about as much in the browser)
 DEFAULT_CROSSINGS = 2000
