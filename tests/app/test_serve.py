@@ -271,10 +271,23 @@ SET_BOX = "([text, on]) => { const m = [...Bokeh.documents[0].all_models].find(m
           " String(m.label).startsWith(text)); m.active = on; }"
 
 
+def _wait(page, expression, timeout=60_000, polling="raf"):
+    """page.wait_for_function, failing with what the page says (its message and status lines)."""
+    try:
+        page.wait_for_function(expression, timeout=timeout, polling=polling)
+    except Exception as exc:
+        try:
+            said = page.evaluate("() => [Bokeh.documents[0].get_model_by_name('message').text, "
+                                 "Bokeh.documents[0].get_model_by_name('status').text]")
+        except Exception:  # noqa: BLE001 - the page has no app (e.g. a refused token)
+            said = None
+        raise AssertionError(f"waited {timeout} ms for {expression[:200]}; the page says {said}") from exc
+
+
 def _open(browser, url):
     page = browser.new_page()
     page.goto(url)
-    page.wait_for_function(READY, timeout=60_000)
+    _wait(page, READY)
     return page
 
 
@@ -284,7 +297,7 @@ def _click(page, p1, p2):
 
 
 def _wait_crossings(page, n, timeout=FIRST_ORBIT_TIMEOUT_MS):
-    page.wait_for_function(f"() => Bokeh.documents[0].get_model_by_name('crossings').data.p1.length >= {n}",
+    _wait(page, f"() => Bokeh.documents[0].get_model_by_name('crossings').data.p1.length >= {n}",
                            timeout=timeout, polling=20)
 
 
@@ -338,8 +351,8 @@ def test_clicked_orbits_in_the_page_equal_explorer_orbit_json(served, browser, t
     assert saturated.sum() > 100
     print(f"first crossings {first * 1e3:.0f} ms after the click; screenshot {shot}")
     # a link reopens the same view
-    page.wait_for_function("() => (new URLSearchParams(window.location.search).get('orbits') || '')"
-                           ".split(';').length === 3", timeout=30_000)      # the URL follows the page
+    _wait(page, "() => (new URLSearchParams(window.location.search).get('orbits') || '')"
+                           ".split(';').length === 3", timeout=60_000)      # the URL follows the page
     again = _open(browser, page.url)
     _wait_crossings(again, 3 * CROSSINGS)
     assert again.evaluate(DATA, "starts")["p1"] == starts["p1"]
@@ -356,13 +369,13 @@ def test_a_change_of_mu_redraws_the_region_and_keeps_the_starts(served, browser)
     _wait_crossings(page, CROSSINGS)
     _set_field(page, "mu", "0.5")
     new = Settings(params=model.FIGURE4.with_(mu=0.5), crossings=CROSSINGS).region
-    page.wait_for_function(f"() => Bokeh.documents[0].get_model_by_name('region').data.x[0] === {new[0]!r}",
-                           timeout=30_000)
+    _wait(page, f"() => Bokeh.documents[0].get_model_by_name('region').data.x[0] === {new[0]!r}",
+                           timeout=60_000)
     region = page.evaluate(DATA, "region")
     assert region["width"] == [2 * new[2]] and region["height"] == [2 * new[3]]
     assert len(page.evaluate(DATA, "starts")["orbit"]) == 1             # the start is kept and runs again
     _wait_crossings(page, CROSSINGS)
-    page.wait_for_function("() => window.location.search.includes('mu=0.5&')", timeout=30_000)
+    _wait(page, "() => window.location.search.includes('mu=0.5&')", timeout=60_000)
     page.close()
 
 
@@ -373,13 +386,13 @@ def test_a_bad_value_shows_a_message_and_computes_nothing(served, browser):
     good = SERVED.fields()
     for field, text in (("a1", "-1"), ("mu", "<img src=x onerror=alert(1)>"), ("tol", "0.5"), ("crossings", "1e9")):
         _set_field(page, field, text)
-        page.wait_for_function(f"() => ({TEXT})('message').includes({json.dumps(field)})", timeout=30_000)
+        _wait(page, f"() => ({TEXT})('message').includes({json.dumps(field)})", timeout=60_000)
         assert "not applied" in page.evaluate(TEXT, "message")
         assert page.locator("img[src=x]").count() == 0            # shown as text, not HTML
         assert page.evaluate(DATA, "region") == before
         assert page.evaluate(DATA, "crossings")["p1"] == []
         _set_field(page, field, good[field])           # back: the message goes
-        page.wait_for_function(f"() => ({TEXT})('message') === ''", timeout=30_000)
+        _wait(page, f"() => ({TEXT})('message') === ''", timeout=60_000)
     page.close()
     assert served.proc.poll() is None                       # the server keeps running
     assert urllib.request.urlopen(served.url, timeout=10).status == 200
@@ -456,21 +469,21 @@ def test_the_megno_layer_appears_coarse_first_and_follows_the_zoom(served, brows
     page = _open(browser, served.url)
     page.evaluate(SET_BOX, ["MEGNO layer", True])
     raster_n = "() => { const d = Bokeh.documents[0].get_model_by_name('raster').data; return d.n.length ? d.n[0] : 0 }"
-    page.wait_for_function(f"() => ({raster_n})() >= 16", timeout=120_000)
-    page.wait_for_function("() => window.location.search.includes('megno=1')", timeout=30_000)
+    _wait(page, f"() => ({raster_n})() >= 16", timeout=120_000)
+    _wait(page, "() => window.location.search.includes('megno=1')", timeout=60_000)
     x, y = page.evaluate(TO_SCREEN, [0.0, 0.0])
     page.mouse.move(x, y)
     page.mouse.wheel(0, -400)                                   # zoom in (the wheel zoom is active)
     ranges = ("() => { const f = Bokeh.documents[0].get_model_by_name('section');"
               " return [f.x_range.start, f.x_range.end, f.y_range.start, f.y_range.end]; }")
-    page.wait_for_function(f"() => {{ const r = ({ranges})(); const d = Bokeh.documents[0]"
+    _wait(page, f"() => {{ const r = ({ranges})(); const d = Bokeh.documents[0]"
                            ".get_model_by_name('raster').data; return d.x.length && d.x[0] === r[0] "
                            "&& Math.abs(d.x[0] + d.dw[0] - r[1]) < 1e-12 && d.y[0] === r[2]; }", timeout=60_000)
     x0, x1, _y0, _y1 = page.evaluate(ranges)
     assert x1 - x0 < 4.0                                         # zoomed in: narrower than the region
     page.evaluate(SET_BOX, ["MEGNO layer", False])
-    page.wait_for_function("() => Bokeh.documents[0].get_model_by_name('raster').data.x.length === 0",
-                           timeout=30_000)
+    _wait(page, "() => Bokeh.documents[0].get_model_by_name('raster').data.x.length === 0",
+                           timeout=60_000)
     page.close()
 
 
@@ -530,11 +543,11 @@ def test_rapid_clicks_undo_clear_and_export_keep_the_page_and_the_server_consist
     assert sorted(set(data["orbit"])) == sorted(starts["orbit"])
     assert all(data["orbit"].count(i) == CROSSINGS for i in starts["orbit"])
     page.get_by_role("button", name="Undo").click()
-    page.wait_for_function("() => Bokeh.documents[0].get_model_by_name('starts').data.orbit.length === 19",
-                           timeout=30_000)
+    _wait(page, "() => Bokeh.documents[0].get_model_by_name('starts').data.orbit.length === 19",
+                           timeout=60_000)
     assert len(page.evaluate(DATA, "crossings")["t"]) == 19 * CROSSINGS
     page.get_by_role("button", name="Export scene").click()
-    page.wait_for_function(f"() => ({TEXT})('message').includes('(the orbits, sweep format)')", timeout=120_000)
+    _wait(page, f"() => ({TEXT})('message').includes('(the orbits, sweep format)')", timeout=120_000)
     files = list(Path(served.export_dir).glob("browser-session-*.toml"))
     assert len(files) == 1
     assert [list(p) for p in scene_mod.load_scene(str(files[0])).seeds.points] == \
@@ -547,8 +560,8 @@ def test_rapid_clicks_undo_clear_and_export_keep_the_page_and_the_server_consist
         rows = np.column_stack([np.array(data[k])[mine] for k in ("t", "p1", "p2", "M", "dH")])
         np.testing.assert_array_equal(stored.orbit(i), rows)
     page.get_by_role("button", name="Clear").click()
-    page.wait_for_function("() => Bokeh.documents[0].get_model_by_name('crossings').data.t.length === 0",
-                           timeout=30_000)
-    page.wait_for_function("() => /[?&]orbits=(&|$)/.test(window.location.search)", timeout=30_000)  # the link too
+    _wait(page, "() => Bokeh.documents[0].get_model_by_name('crossings').data.t.length === 0",
+                           timeout=60_000)
+    _wait(page, "() => /[?&]orbits=(&|$)/.test(window.location.search)", timeout=60_000)  # the link too
     page.close()
     assert urllib.request.urlopen(served.url, timeout=10).status == 200
