@@ -257,8 +257,9 @@ def browser(tmp_path_factory):
         ctx.close()
 
 
-READY = ("() => window.Bokeh && Bokeh.documents.length > 0 && Bokeh.documents[0].get_model_by_name('region') "
-         "!== null && Bokeh.index.all_views().some(v => v.model.name === 'section')")
+READY = ("() => window.Bokeh && Bokeh.documents.length > 0 && Bokeh.documents[0].is_idle && "
+         "Bokeh.documents[0].get_model_by_name('region') !== null && "
+         "Bokeh.index.all_views().some(v => v.model.name === 'section' && v.frame.bbox.width > 100)")
 #: page coordinates of the section point (p1, p2), from the figure's own scales
 TO_SCREEN = """([x, y]) => { const v = Bokeh.index.all_views().find(v => v.model.name === 'section');
   const r = v.el.getBoundingClientRect();
