@@ -8,11 +8,14 @@ import os
 from explorer import model
 from explorer.model import ParameterError
 
+#: where the page is served unless told otherwise (loopback only: docs/commands/serve.md)
+DEFAULT_HOST = "127.0.0.1"
+DEFAULT_PORT = 5006
+
 
 def add_parser(sub):
     """Add ``serve`` to the command line's subparsers."""
     from explorer.analysis.sections import METHODS
-    from explorer.app.serve.server import DEFAULT_HOST, DEFAULT_PORT
     from explorer.app.serve.settings import DEFAULT_CROSSINGS
 
     s = sub.add_parser("serve", help="the explorer in the browser: click on the section, watch the orbits appear",

@@ -30,7 +30,6 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis import sections
-from explorer.app.explore.state import INDICATOR_TIME
 from explorer.app.serve.settings import Settings
 from explorer.kernels import STATUS_NAMES
 
@@ -109,6 +108,7 @@ def orbit_indicators(settings: Settings, y0) -> tuple:
     window computes them (:func:`explorer.analysis.lyapunov.indicators`, the orbit's method and
     tolerance); NaN when the run stopped early."""
     from explorer.analysis import lyapunov
+    from explorer.app.explore.state import INDICATOR_TIME  # (the Tk window's package: loaded when used)
 
     res = lyapunov.indicators(settings.params, y0, INDICATOR_TIME, method=settings.method, tol=settings.tol,
                               dt=settings.dt)

@@ -22,11 +22,9 @@ import socket
 import sys
 import threading
 
-from explorer.app.serve.orbits import warm_up
+from explorer.app.serve.command import DEFAULT_HOST, DEFAULT_PORT
 from explorer.app.serve.settings import Settings
 
-DEFAULT_HOST = "127.0.0.1"
-DEFAULT_PORT = 5006
 #: the URL argument that carries the token
 TOKEN_ARG = "token"
 
@@ -102,6 +100,8 @@ def make_server(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT
 def run(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, token: str | None = None,
         export_dir=None, label: str = "", out=None) -> None:
     """Serve until interrupted: the URL is the first line printed."""
+    from explorer.app.serve.orbits import warm_up
+
     out = sys.stdout if out is None else out
     server, url = make_server(base, host=host, port=port, token=token, export_dir=export_dir, label=label)
     print(url, file=out, flush=True)
