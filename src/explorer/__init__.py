@@ -75,6 +75,8 @@ _EXPORTS = {
     "iter_rows": "explorer.io.store",
     "run_sweep": "explorer.app.runner",
     "SweepReport": "explorer.app.runner",
+    # the explorer in a notebook cell (explorer serve's page)
+    "explore": "explorer.app.serve.notebook",
 }
 
 __all__ = ["__version__", *_EXPORTS]

@@ -37,6 +37,7 @@ EXAMPLES = {
     "periodic": "python -m explorer periodic --period 3 --search --grid 10 --mu 0.03 --json",
     "rotation": "python -m explorer rotation --from 1.5822,0 --to 1.0,0 --n 30 --mu 0.03",
     "explore": "python -m explorer explore figure4 --panel 2",
+    "serve": "python -m explorer serve figure4 --mu 0.03",
     "melnikov": "python -m explorer melnikov --splitting --mus 1e-4,1e-3 --json",
     "trajectory": "python -m explorer trajectory --p1 0.5 --M 2 --mu 0.5 -T 300 --out figures/trajectory",
     "figures": "python -m explorer figures --only figure4 --quick",
@@ -223,6 +224,9 @@ def build_parser() -> argparse.ArgumentParser:
     for name in model.PARAM_NAMES:
         xg.add_argument(f"--{name}", type=float, default=None)
     # ---- end explore ------------------------------------------------------------------------
+    from explorer.app.serve.command import add_parser as add_serve_parser  # the explorer in the browser
+
+    add_serve_parser(sub)
     # ---- melnikov: Melnikov integral ur23/ur24 (explorer/melnikov.py) ------------------------
     mk = sub.add_parser("melnikov", help="Melnikov integral ur23 along the homoclinic orbits R7; check of ur24",
                         description="Quadrature of J(g0) = int {F0, H1} dt along both homoclinic orbits R7 of "
@@ -711,6 +715,15 @@ def cmd_explore(args) -> int:
 
 
 COMMANDS["explore"] = cmd_explore
+
+
+def cmd_serve(args) -> int:
+    from explorer.app.serve.command import cmd_serve as serve
+
+    return serve(args)
+
+
+COMMANDS["serve"] = cmd_serve
 # ---- end explore ----------------------------------------------------------------------------
 
 

@@ -1,0 +1,84 @@
+"""The ``serve`` command: its options (:func:`add_parser`, imports no web library, so
+``explorer --help`` stays fast) and what it does (:func:`cmd_serve`)."""
+from __future__ import annotations
+
+import math
+import os
+
+from explorer import model
+from explorer.model import ParameterError
+
+#: where the page is served unless told otherwise (loopback only: docs/commands/serve.md)
+DEFAULT_HOST = "127.0.0.1"
+DEFAULT_PORT = 5006
+
+
+def add_parser(sub):
+    """Add ``serve`` to the command line's subparsers."""
+    from explorer.analysis.sections import METHODS
+    from explorer.app.serve.settings import DEFAULT_CROSSINGS
+
+    s = sub.add_parser("serve", help="the explorer in the browser: click on the section, watch the orbits appear",
+                       description="Serve the explorer as a web page (HoloViz Panel on Bokeh). The first line "
+                       "printed is the URL to open (with the token when one is needed); runs until Ctrl-C. A "
+                       "click on the section starts an orbit whose crossings appear as they are computed "
+                       "(those of `explorer orbit` for the same start and settings); the fields set mu, h, "
+                       "lambda, a1, a2, b, the method, tol, dt and the crossings per click; the URL keeps "
+                       "the view. Binds 127.0.0.1 unless --host is given; another host needs a token.")
+    s.add_argument("scene", nargs="?", default=None,
+                   help="scene file (.toml) or preset name: start from its panel's parameters, h and integration "
+                   "settings [none: Figure 4 with mu = 0, h = 2]")
+    s.add_argument("--panel", type=int, default=0, help="panel of the scene [0]")
+    s.add_argument("--port", type=int, default=DEFAULT_PORT, help="TCP port (0: any free port) [%(default)s]")
+    s.add_argument("--host", default=DEFAULT_HOST, help="address to bind [%(default)s]; not a loopback "
+                   "address: a token is required (made and printed when --token is not given)")
+    s.add_argument("--token", default=None, help="require ?token=T on every page request [none on loopback]")
+    s.add_argument("--export-dir", default=None, help="directory the page's 'Export scene' button writes "
+                   "into [none: the page offers the scene as a download only]")
+    s.add_argument("--h", type=float, default=None, help="energy level [the scene's, else 2]")
+    s.add_argument("--method", default=None, help=f"one of {', '.join(METHODS)} [the scene's, else taylor]")
+    s.add_argument("--tol", type=float, default=None, help="tolerance of taylor/dop853 [the scene's, else 1e-13]")
+    s.add_argument("--dt", type=float, default=None, help="fixed step of the split* methods [the scene's, else 0.05]")
+    s.add_argument("--crossings", type=int, default=None,
+                   help=f"crossings per click [the scene's, else {DEFAULT_CROSSINGS}]")
+    g = s.add_argument_group("model parameters (override the scene's; defaults: Figure 4, R9, mu = 0)")
+    for name in model.PARAM_NAMES:
+        g.add_argument(f"--{name}", type=float, default=None)
+    return s
+
+
+def settings_from_args(args):
+    """The page's starting settings and label from the command's arguments."""
+    from explorer.app.serve.settings import settings_for
+
+    overrides = {n: getattr(args, n) for n in (*model.PARAM_NAMES, "h", "method", "tol", "dt", "crossings")
+                 if getattr(args, n) is not None}
+    return settings_for(args.scene, args.panel, **overrides)
+
+
+def cmd_serve(args) -> int:
+    from explorer.app.serve import server
+
+    if not 0 <= args.port <= 65535:
+        raise ParameterError(f"--port must be an integer in [0, 65535], got {args.port}")
+    if args.token is not None and (not args.token or len(args.token) > 256 or not args.token.isprintable()
+                                   or any(c in args.token for c in " &#?%/")):
+        raise ParameterError("--token must be 1 to 256 printable characters without spaces or & # ? % /")
+    for name in ("h", "tol", "dt"):
+        v = getattr(args, name)
+        if v is not None and not math.isfinite(v):
+            raise ParameterError(f"--{name} must be finite, got {v!r}")
+    if args.export_dir is not None and not os.path.isdir(args.export_dir):
+        raise ParameterError(f"--export-dir must be an existing directory, got {args.export_dir!r}")
+    base, label = settings_from_args(args)
+    try:
+        import panel  # noqa: F401
+    except ImportError:
+        raise ParameterError("serve needs the panel package (pip install panel)") from None
+    try:
+        server.run(base, host=args.host, port=args.port, token=args.token, export_dir=args.export_dir, label=label)
+    except OSError as exc:          # the port is taken, the address is not ours, ...
+        raise ParameterError(f"cannot serve on {args.host}:{args.port}: {exc.strerror or exc}") from None
+    except KeyboardInterrupt:
+        return 0
+    return 0

@@ -1,0 +1,57 @@
+"""A browser session as a scene (docs/scenes.md) that ``explorer sweep`` reruns: the model, the
+energy, the clicked starts as ``[seeds] kind = "points"`` and the integration settings, so the
+sweep's panel has the session's orbits, crossing for crossing; and its orbits as an HDF5 store
+in the sweep's format (docs/store.md), written by that sweep (:func:`write_store`).
+
+Files are written only into the directory given at start (``--export-dir``), under a name made
+here (``<scene name>-<UTC time>.toml``), atomically; nothing from the page names a file.
+"""
+from __future__ import annotations
+
+import os
+import time
+
+from explorer.app.serve.settings import Settings
+from explorer.io import scene as scene_mod
+from explorer.model import ParameterError
+
+#: name of an exported scene (a scene name: letters, digits, _ . -)
+SCENE_NAME = "browser-session"
+
+
+def session_scene(settings: Settings, starts, name: str = SCENE_NAME) -> scene_mod.Scene:
+    """The scene of a session: one panel, the admissible ``starts`` [(p1, p2), ...] as points
+    (ParameterError when there is none)."""
+    points = tuple((float(a), float(b)) for a, b in starts if settings.admissible(a, b))
+    if not points:
+        raise ParameterError("export: no orbit inside the allowed region yet; click on the section first")
+    seeds = scene_mod.SeedSpec(kind="points", points=points, n=len(points))
+    integ = scene_mod.IntegrationSpec(method=settings.method, tol=settings.tol, dt=settings.dt,
+                                      crossings=settings.crossings, phi0=settings.phi0,
+                                      direction=settings.direction)
+    return scene_mod.Scene(name=name, params=settings.params, h=settings.h, seeds=seeds, integration=integ,
+                           description="orbits clicked in `explorer serve`")
+
+
+def write_scene(directory, scene: scene_mod.Scene) -> str:
+    """Write ``scene`` as TOML into ``directory`` (atomically); returns the file's path."""
+    from explorer.io.store.atomic import write_bytes_atomic
+
+    stamp = time.strftime("%Y%m%dT%H%M%S", time.gmtime())
+    path = os.path.join(os.fspath(directory), f"{scene.name}-{stamp}.toml")
+    n = 1
+    while os.path.exists(path):
+        n += 1
+        path = os.path.join(os.fspath(directory), f"{scene.name}-{stamp}-{n}.toml")
+    write_bytes_atomic(path, scene.to_toml().encode("utf-8"))
+    return path
+
+
+def write_store(scene_path) -> str:
+    """Run the scene written by :func:`write_scene` into the store next to it (``.h5`` for
+    ``.toml``; the sweep's own atomic commit); returns the store's path."""
+    from explorer.app.runner import run_sweep
+
+    out = os.path.splitext(os.fspath(scene_path))[0] + ".h5"
+    run_sweep(os.fspath(scene_path), out, draw=False, progress=False)
+    return out

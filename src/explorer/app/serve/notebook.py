@@ -1,0 +1,61 @@
+"""The explorer in a notebook cell: ``ex.explore(scene)`` returns a Panel object that displays the
+page of ``explorer serve`` (the same :class:`~explorer.app.serve.page.SectionPage`).
+
+In a notebook no Bokeh server owns the page's document, so the workers' blocks and images wait in
+the page's inbox and a periodic callback (every ``POLL_MS``) moves them onto the page and pushes
+the change to the notebook (``panel.io.push_notebook``).  Needs ``pn.extension()`` in the notebook,
+as every Panel object does.
+"""
+from __future__ import annotations
+
+import panel as pn
+
+from explorer.app.serve.page import SectionPage
+from explorer.app.serve.settings import settings_for
+
+#: how often the notebook page takes in new crossings and raster images (ms)
+POLL_MS = 50
+
+
+class Explorer(pn.viewable.Viewer):
+    """The displayable explorer of a notebook cell; ``page`` is its :class:`SectionPage`
+    (``page.click(p1, p2)``, ``page.crossings.data``, ``page.url_query()``, ...)."""
+
+    def __init__(self, page: SectionPage, **params):
+        super().__init__(**params)
+        self.page = page
+        self._poller = None
+
+    def _poll(self):
+        if self.page.poll():
+            try:
+                pn.io.push_notebook(self.page.layout)
+            except Exception:  # noqa: BLE001 - not rendered in a notebook (yet): nothing to push
+                pass
+
+    def __panel__(self):
+        if self._poller is None:
+            self._poller = pn.state.add_periodic_callback(self._poll, period=POLL_MS)
+        return self.page.layout
+
+    def close(self) -> None:
+        """Stop the polling and the page's threads."""
+        if self._poller is not None:
+            self._poller.stop()
+        self.page.close()
+
+
+def explore(scene=None, *, panel: int = 0, export_dir=None, **settings) -> Explorer:
+    """The explorer as a Panel object for a notebook cell::
+
+        import panel as pn, explorer as ex
+        pn.extension()
+        ex.explore("figure4", panel=2)            # or ex.explore(mu=0.03, crossings=5000)
+
+    ``scene``: a scene (TOML path, preset name or :class:`explorer.Scene`; None: Figure 4 with
+    mu = 0, h = 2) and its ``panel``; ``settings``: model parameters, h, method, tol, dt,
+    crossings on top (validated: ParameterError).  ``export_dir``: where the page's *Export scene*
+    button writes (None: download only).  What the page does: docs/commands/serve.md.
+    """
+    base, label = settings_for(scene, panel, **settings)
+    return Explorer(SectionPage(base, {}, export_dir=export_dir, label=label))

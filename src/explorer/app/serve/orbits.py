@@ -1,0 +1,223 @@
+"""The orbits of one browser session, computed block by block in a worker thread.
+
+An :class:`OrbitRun` continues one clicked orbit with
+:func:`explorer.analysis.sections.iter_crossings`, one block at a time from the
+:class:`~explorer.analysis.sections.StreamState` the previous block ended in: its rows are bit for
+bit those of ``explorer orbit`` for the same start and settings whatever the block sizes
+(``iter_crossings`` continues the drivers' carry, ``tests/analysis/test_streaming.py``).  The
+first block is small (``FIRST_BLOCK`` crossings: something is on screen at once), later ones
+are sized so that a block takes about ``BLOCK_SECONDS``, which bounds how long a cancelled
+orbit keeps the worker and how long the page waits between updates.
+
+A :class:`Worker` owns one thread per session and serves its orbits newest first (a new click
+gets its first block before older orbits continue), round robin after that.  ``cancel`` stops
+every orbit of an older generation (a parameter change, clear) at its next block boundary;
+``remove`` stops one (undo).  Each block is handed to ``on_block(orbit_id, rows, done,
+status)`` in the worker thread; the page moves it onto its document's event loop.  After an
+orbit's first block, its mean MEGNO and finite-time mLCE over INDICATOR_TIME (the Tk window's
+indicators) go to ``on_indicators(orbit_id, megno, mlce)``.  No web
+library here.
+"""
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from explorer import model
+from explorer.analysis import sections
+from explorer.app.serve.settings import Settings
+from explorer.kernels import STATUS_NAMES
+
+#: crossings of an orbit's first block (the first points on screen, milliseconds after a click)
+FIRST_BLOCK = 16
+#: later blocks are sized to take about this long (s), between MIN_BLOCK and MAX_BLOCK crossings
+BLOCK_SECONDS = 0.05
+MIN_BLOCK = 16
+MAX_BLOCK = 20_000
+
+
+@dataclass
+class OrbitRun:
+    """One clicked orbit: its start, settings and where its stream stands."""
+
+    ident: int
+    p1: float
+    p2: float
+    settings: Settings
+    generation: int
+    y0: np.ndarray = field(init=False)
+    state: sections.StreamState = field(init=False)
+    block: int = FIRST_BLOCK
+    done: int = 0
+    status: str = "running"
+    wall: float = 0.0
+    wants_indicators: bool = True
+
+    def __post_init__(self):
+        s = self.settings
+        self.y0 = model.section_state(s.params, [self.p1], [self.p2], s.h, s.phi0, s.direction or 1)
+        self.state = sections.StreamState.initial(s.params, self.y0, phi0=s.phi0)
+
+    @property
+    def finished(self) -> bool:
+        return bool(self.state.finished[0])
+
+    def advance(self) -> np.ndarray:
+        """Compute the next block; returns its rows (n, 5): t, p1, p2, M, H - H0."""
+        s = self.settings
+        t0 = time.perf_counter()
+        it = sections.iter_crossings(s.params, self.y0, s.crossings, block=self.block, state=self.state,
+                                     **s.section_kwargs())
+        b = next(it, None)
+        elapsed = time.perf_counter() - t0
+        self.wall += elapsed
+        if b is None:           # nothing left (the state was finished already)
+            return np.zeros((0, 5))
+        rows = b.rows(0).copy() if b.count.size else np.zeros((0, 5))
+        self.state = b.state
+        self.done = int(self.state.done[0])
+        if self.finished:
+            self.status = STATUS_NAMES[int(self.state.status[0])]
+        # the next block: about BLOCK_SECONDS at this block's rate
+        rate = len(rows) / elapsed if elapsed > 0 and len(rows) else 0.0
+        target = int(rate * BLOCK_SECONDS) if rate else 2 * self.block
+        self.block = max(MIN_BLOCK, min(MAX_BLOCK, target, 4 * self.block))
+        return rows
+
+
+def warm_up(settings: Settings) -> None:
+    """Load (or compile) the crossing kernels of ``settings``' method before the first click: one
+    crossing from the centre of the region (nothing when the region is empty).  A failure here
+    only costs the first click its speed: it is not reported."""
+    region = settings.region
+    if region is None:
+        return
+    try:
+        OrbitRun(0, region[0], region[1], replace(settings, crossings=1), 0).advance()
+    except Exception:  # noqa: BLE001 - the click will report the same error with its orbit
+        return
+
+
+def orbit_indicators(settings: Settings, y0) -> tuple:
+    """(mean MEGNO <Y>, finite-time mLCE) over INDICATOR_TIME of the orbit from ``y0``, as the Tk
+    window computes them (:func:`explorer.analysis.lyapunov.indicators`, the orbit's method and
+    tolerance); NaN when the run stopped early."""
+    from explorer.analysis import lyapunov
+    from explorer.app.explore.state import INDICATOR_TIME  # (the Tk window's package: loaded when used)
+
+    res = lyapunov.indicators(settings.params, y0, INDICATOR_TIME, method=settings.method, tol=settings.tol,
+                              dt=settings.dt)
+    if int(res.status[0]) != 0:
+        return math.nan, math.nan
+    return float(res.megno[0]), float(res.mlce[0])
+
+
+BlockCallback = Callable[[int, np.ndarray, int, str], None]
+
+
+class Worker:
+    """One thread that runs a session's orbits block by block (see the module docstring)."""
+
+    def __init__(self, on_block: BlockCallback, on_error: Callable[[int, BaseException], None] | None = None,
+                 on_indicators: Callable[[int, float, float], None] | None = None):
+        self._on_block = on_block
+        self._on_error = on_error
+        self._on_indicators = on_indicators
+        self._runs: list[OrbitRun] = []
+        self._cond = threading.Condition()
+        self._generation = 0
+        self._next_id = 0
+        self._stopped = False
+        self._rr = 0
+        self._thread = threading.Thread(target=self._loop, name="explorer-serve-worker", daemon=True)
+        self._thread.start()
+
+    @property
+    def generation(self) -> int:
+        return self._generation
+
+    def submit(self, p1: float, p2: float, settings: Settings) -> OrbitRun:
+        """Queue an orbit from (p1, p2) (ParameterError, nothing queued, outside the region)."""
+        with self._cond:
+            self._next_id += 1
+            run = OrbitRun(self._next_id, float(p1), float(p2), settings, self._generation)
+            self._runs.insert(0, run)      # newest first: its first block comes next
+            self._cond.notify()
+        return run
+
+    def cancel(self) -> int:
+        """Stop every queued or running orbit (at its next block boundary); returns the new
+        generation (blocks of older generations are never handed out after this returns)."""
+        with self._cond:
+            self._generation += 1
+            self._runs = []
+            return self._generation
+
+    def remove(self, ident: int) -> None:
+        """Stop one orbit (undo)."""
+        with self._cond:
+            self._runs = [r for r in self._runs if r.ident != ident]
+
+    def busy(self) -> bool:
+        with self._cond:
+            return bool(self._runs)
+
+    def stop(self, timeout: float = 5.0) -> None:
+        """End the thread (the session is gone)."""
+        with self._cond:
+            self._stopped = True
+            self._runs = []
+            self._cond.notify()
+        if threading.current_thread() is not self._thread:
+            self._thread.join(timeout)
+
+    def _pick(self) -> OrbitRun | None:
+        fresh = [r for r in self._runs if r.done == 0]
+        if fresh:
+            return fresh[0]
+        if not self._runs:
+            return None
+        self._rr = (self._rr + 1) % len(self._runs)
+        return self._runs[self._rr]
+
+    def _loop(self) -> None:
+        while True:
+            with self._cond:
+                while not self._stopped and not self._runs:
+                    self._cond.wait()
+                if self._stopped:
+                    return
+                run = self._pick()
+            if run is None:
+                continue
+            try:
+                rows = run.advance()
+            except Exception as exc:  # noqa: BLE001 - reported in the page; the server keeps serving
+                with self._cond:
+                    self._runs = [r for r in self._runs if r is not run]
+                if self._on_error is not None:
+                    self._on_error(run.ident, exc)
+                continue
+            with self._cond:
+                current = run.generation == self._generation and any(r is run for r in self._runs)
+                if run.finished and current:
+                    self._runs = [r for r in self._runs if r is not run]
+                if not current:
+                    continue
+                # handed out under the lock: cancel() cannot slip between the check and the hand-out
+                self._on_block(run.ident, rows, run.done, run.status)
+            if run.wants_indicators and self._on_indicators is not None:
+                # after the orbit's first block is out: its chaos indicators, once
+                run.wants_indicators = False
+                try:
+                    megno, mlce = orbit_indicators(run.settings, run.y0)
+                except Exception:  # noqa: BLE001 - an indicator that fails is shown as unknown
+                    megno = mlce = math.nan
+                with self._cond:
+                    if run.generation == self._generation:
+                        self._on_indicators(run.ident, megno, mlce)

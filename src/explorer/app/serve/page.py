@@ -1,0 +1,622 @@
+"""The page of ``explorer serve``: one Bokeh figure of the section in a Panel layout, the fields
+of the parameters, and the buttons.  One :class:`SectionPage` per browser session.
+
+What the page holds, by Bokeh model name (``Bokeh.documents[0].get_model_by_name(NAME)`` in the
+browser; the tests read them there):
+
+``region``     ColumnDataSource of the allowed ellipse (x, y, width, height; empty: no region)
+``crossings``  ColumnDataSource of every crossing on screen: orbit, t, p1, p2, M, dH, the
+               orbit's colour c (an index into COLORS) and its MEGNO (NaN until known)
+``starts``     ColumnDataSource of the clicked starts: orbit, p1, p2, c
+``raster``     ColumnDataSource of the MEGNO layer: image, x, y, dw, dh (the window), n, complete
+``fixed``      ColumnDataSource of the fixed points of the section map: p1, p2, kind, marker
+``separatrices`` ColumnDataSource of the separatrix branches: xs, ys (one polyline per branch)
+``periodic``   ColumnDataSource of the periodic orbits of periods 1..4: p1, p2, period, kind, marker
+``overlay``    what the searches found
+``section``    the figure (a click on it starts an orbit)
+``message``    the last message (a refused value, an export, a click outside the region)
+``status``     one line: orbits running and crossings drawn
+
+Values from the page are read by :func:`explorer.app.serve.settings.parse_fields`; a refused
+value leaves everything as it was and says why in ``message``.  Crossings arrive from the
+session's :class:`~explorer.app.serve.orbits.Worker` thread and are streamed onto the document
+in its own event loop (``add_next_tick_callback``).
+"""
+from __future__ import annotations
+
+import io
+import math
+import os
+import threading
+from functools import partial
+
+import numpy as np
+import panel as pn
+from bokeh.events import DoubleTap, RangesUpdate, Tap
+from bokeh.models import ColumnDataSource, Div, LinearColorMapper
+from bokeh.palettes import Inferno256
+from bokeh.plotting import figure
+
+from explorer.app.explore.state import CHAOTIC_MEGNO, COLORS, INDICATOR_TIME
+from explorer.app.serve import export
+from explorer.app.serve import raster as raster_mod
+from explorer.app.serve import settings as settings_mod
+from explorer.app.serve.orbits import Worker
+from explorer.app.serve.settings import FIELDS, Settings, format_starts, parse_fields, parse_starts
+from explorer.model import ParameterError
+
+#: colours of the section (as the figures: forbidden region light gray, allowed region white)
+FORBIDDEN_COLOR = "#cccccc"
+ALLOWED_COLOR = "#ffffff"
+BOUNDARY_COLOR = "#262626"
+#: size of the figure in pixels, and of a crossing's dot
+FIGURE_WIDTH = 720
+FIGURE_HEIGHT = 560
+#: width of a field (two columns of them beside the figure)
+FIELD_WIDTH = 100
+POINT_SIZE = 2.0
+#: the view shows the region's bounding box and this margin around it (fraction of the semi-axes)
+VIEW_MARGIN = 0.08
+#: a double tap within this many pixels of the click before it is that click again
+SAME_SPOT_PX = 4.0
+#: colour scale of the MEGNO layer: <Y> from 0 (stable periodic) over 2 (quasi-periodic, light) to
+#: MEGNO_HIGH and above (chaotic, dark)
+MEGNO_LOW, MEGNO_HIGH = 0.0, 8.0
+#: periodic orbits of periods 1..PERIODIC_MAX are marked, filled with the colour of their period
+PERIODIC_MAX = 4
+PERIOD_COLORS = ("#ffffff", "#f4a582", "#92c5de", "#b8e186")
+#: colour of the separatrices
+SEPARATRIX_COLOR = "#303030"
+#: labels of the fields
+LABELS = {"mu": "μ", "h": "h", "lam": "λ", "a1": "a1", "a2": "a2", "b": "b", "chi": "χ", "zeta": "ζ", "xi": "ξ",
+          "eta": "η", "method": "method",
+          "tol": "tol (taylor, dop853)", "dt": "dt (split*)", "crossings": "crossings per click"}
+CROSSING_COLUMNS = ("orbit", "t", "p1", "p2", "M", "dH", "megno")
+
+
+def _empty_crossings() -> dict:
+    d = {c: np.zeros(0) for c in CROSSING_COLUMNS}
+    d["orbit"] = np.zeros(0, np.int64)
+    d["c"] = np.zeros(0, np.int64)
+    return d
+
+
+def _empty_raster() -> dict:
+    return {"image": [], "x": [], "y": [], "dw": [], "dh": [], "n": [], "complete": []}
+
+
+def _empty_periodic() -> dict:
+    return {"p1": [], "p2": [], "period": [], "kind": [], "marker": []}
+
+
+def _empty_starts() -> dict:
+    return {"orbit": [], "p1": [], "p2": [], "c": []}
+
+
+class SectionPage:
+    """One browser session: settings, starts, orbits, the Bokeh models and their callbacks.
+
+    ``base``: the settings before any URL argument or field (from the scene and the command
+    line); ``args``: the request's URL arguments ({name: text}); ``export_dir``: where the
+    export button writes (None: the page offers the scene as a download only); ``doc``: the
+    session's Bokeh document (:meth:`attach`)."""
+
+    def __init__(self, base: Settings, args: dict | None = None, export_dir=None, label: str = "", doc=None):
+        self.base = base
+        self.settings = base
+        self.export_dir = export_dir
+        self.label = label
+        self.starts: list[tuple] = []          # (orbit id, p1, p2, colour) of every start, in click order
+        self._color = 0
+        self._running: set = set()             # ids of the orbits still computing
+        self._doc = None
+        self._pending: list = []               # blocks from the worker not yet on the page
+        self._pending_lock = threading.Lock()
+        self._inbox: list = []                 # notebook mode: what the workers handed in (poll)
+        self.indicators: dict = {}             # orbit id -> (mean MEGNO, mLCE) over INDICATOR_TIME
+        self.worker = Worker(self._on_block, self._on_error, self._on_indicators)
+        self.raster = raster_mod.RasterWorker(self._on_image, self._on_raster_error)
+        self._raster_generation = 0
+        self.window: raster_mod.Window | None = None
+        self._overlay_generation = 0
+        self._build()
+        if doc is not None:
+            self.attach(doc)
+        self._load_url(args or {})
+
+    # ------------------------------------------------------------ layout
+    def _build(self):
+        self.region = ColumnDataSource({"x": [], "y": [], "width": [], "height": []}, name="region")
+        self.crossings = ColumnDataSource(_empty_crossings(), name="crossings")
+        self.start_source = ColumnDataSource(_empty_starts(), name="starts")
+        colors = {"field": "c", "transform": LinearColorMapper(palette=list(COLORS), low=-0.5,
+                                                                high=len(COLORS) - 0.5)}
+        fig = figure(name="section", width=FIGURE_WIDTH, height=FIGURE_HEIGHT, match_aspect=True,
+                     tools="pan,wheel_zoom,box_zoom,reset,save", active_scroll="wheel_zoom",
+                     x_axis_label="p1", y_axis_label="p2", background_fill_color=FORBIDDEN_COLOR,
+                     toolbar_location="above")
+        fig.ellipse("x", "y", width="width", height="height", source=self.region, fill_color=ALLOWED_COLOR,
+                    line_color=BOUNDARY_COLOR, line_width=1.0)
+        self.raster_source = ColumnDataSource(_empty_raster(), name="raster")
+        megno = LinearColorMapper(palette=list(reversed(Inferno256)), low=MEGNO_LOW, high=MEGNO_HIGH,
+                                  nan_color=(0, 0, 0, 0))
+        fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=self.raster_source, color_mapper=megno,
+                  alpha=0.85)
+        self.fixed = ColumnDataSource({"p1": [], "p2": [], "kind": [], "marker": []}, name="fixed")
+        self.curves = ColumnDataSource({"xs": [], "ys": []}, name="separatrices")
+        self.periodic = ColumnDataSource(_empty_periodic(), name="periodic")
+        fig.multi_line("xs", "ys", source=self.curves, line_color=SEPARATRIX_COLOR, line_width=1.2)
+        self._by_orbit = colors
+        self._by_megno = {"field": "megno", "transform": LinearColorMapper(
+            palette=list(reversed(Inferno256))[32:], low=MEGNO_LOW, high=MEGNO_HIGH, nan_color="#9e9e9e")}
+        self.points = fig.scatter("p1", "p2", source=self.crossings, color=colors, size=POINT_SIZE, line_width=0)
+        fig.scatter("p1", "p2", source=self.start_source, marker="cross", color=colors, size=9, line_width=2)
+        fig.scatter("p1", "p2", source=self.periodic, marker="marker", size=8, line_color="black",
+                    fill_color={"field": "period", "transform": LinearColorMapper(
+                        palette=list(PERIOD_COLORS), low=0.5, high=len(PERIOD_COLORS) + 0.5)}, line_width=1.5)
+        fig.scatter("p1", "p2", source=self.fixed, marker="marker", size=11, line_color="black",
+                    fill_color="white", line_width=2)
+        fig.grid.visible = False
+        fig.on_event(Tap, self._on_tap)
+        fig.on_event(DoubleTap, self._on_tap)   # a second click within 300 ms is a double tap
+        fig.on_event(RangesUpdate, self._on_ranges)
+        self.figure = fig
+        s = self.settings.fields()
+        self.inputs = {}
+        for name in FIELDS:
+            if name == "method":
+                from explorer.analysis.sections import METHODS
+
+                w = pn.widgets.Select(label=LABELS[name], options=list(METHODS), value=s[name], width=FIELD_WIDTH)
+            else:
+                w = pn.widgets.TextInput(label=LABELS[name], value=s[name], width=FIELD_WIDTH)
+            w.param.watch(self._field_changed, "value")
+            self.inputs[name] = w
+        clear = pn.widgets.Button(label="Clear", color="warning", width=90)
+        clear.on_click(lambda _e: self._later(self.clear))
+        undo = pn.widgets.Button(label="Undo", width=90)
+        undo.on_click(lambda _e: self._later(self.undo))
+        buttons = [clear, undo]
+        self.layer = pn.widgets.Checkbox(label=f"MEGNO layer (T = {raster_mod.RASTER_TIME:g})", value=False)
+        self.layer.param.watch(lambda _e: self._later(self._layer_changed), "value")
+        self.overlay = pn.widgets.Checkbox(label="fixed points, separatrices", value=False)
+        self.overlay.param.watch(lambda _e: self._later(self._overlay_changed), "value")
+        self.colour_box = pn.widgets.Checkbox(label="colour orbits by MEGNO", value=False)
+        self.colour_box.param.watch(lambda _e: self._later(self._colour_changed), "value")
+        self.periodic_box = pn.widgets.Checkbox(label=f"periodic orbits, periods 1-{PERIODIC_MAX}", value=False)
+        self.periodic_box.param.watch(lambda _e: self._later(self._overlay_changed), "value")
+        download = pn.widgets.FileDownload(callback=self._scene_file, filename=f"{export.SCENE_NAME}.toml",
+                                           label="Scene (TOML)", color="primary", width=190)
+        buttons.append(download)
+        if self.export_dir is not None:
+            save = pn.widgets.Button(label="Export scene", width=190)
+            save.on_click(lambda _e: self._later(self.export))
+            buttons.append(save)
+        # text, never HTML: a message may quote what was typed into a field
+        self.message = Div(name="message", text="", render_as_text=True, width=FIGURE_WIDTH,
+                           styles={"color": "#b00020", "min-height": "1.2em"})
+        self.status = Div(name="status", text="click in the white region to start an orbit", render_as_text=True,
+                          width=FIGURE_WIDTH)
+        self.overlay_text = Div(name="overlay", text="", render_as_text=True, width=FIGURE_WIDTH)
+        title = "explorer: Poincaré section φ = π" + (f" ({self.label})" if self.label else "")
+        controls = pn.Column(pn.GridBox(*self.inputs.values(), ncols=2), self.colour_box, self.layer, self.overlay,
+                             self.periodic_box, pn.Row(*buttons[:2]), *buttons[2:], width=230)
+        self.layout = pn.Row(controls, pn.Column(pn.pane.Markdown(f"### {title}"), pn.pane.Bokeh(fig),
+                                                 pn.pane.Bokeh(self.status), pn.pane.Bokeh(self.message),
+                                                 pn.pane.Bokeh(self.overlay_text)))
+
+    def attach(self, doc) -> None:
+        """The session's document: blocks are streamed into it; the worker ends with it."""
+        self._doc = doc
+        doc.on_session_destroyed(lambda _ctx: self.close())
+
+    def close(self) -> None:
+        """Stop the session's threads (the browser tab is gone)."""
+        self.worker.stop(timeout=0)
+        self.raster.stop()
+
+    # ------------------------------------------------------------ state in the URL
+    def _load_url(self, args: dict):
+        fields = {k: v for k, v in args.items() if k in FIELDS}
+        try:
+            self.settings = parse_fields(self.base, fields)
+            starts = parse_starts(args.get("orbits", ""))
+            full = settings_mod.room_for(len(starts), self.settings.crossings)
+            if full:
+                raise ParameterError(full)
+        except ParameterError as exc:
+            self.settings, starts = self.base, []
+            self.say(f"link ignored: {exc}")
+        self._show_fields()
+        self._draw_region()
+        self.layer.value = args.get("megno") == "1"
+        self.overlay.value = args.get("separatrices") == "1"
+        self.periodic_box.value = args.get("periodic") == "1"
+        self.colour_box.value = args.get("colour") == "megno"
+        for p1, p2 in starts:
+            self._start(p1, p2)
+
+    def url_query(self) -> dict:
+        """The view as URL arguments: every field and the starts."""
+        q = self.settings.fields()
+        q["orbits"] = format_starts((p1, p2) for _i, p1, p2, _c in self.starts)
+        q["megno"] = "1" if self.layer.value else "0"
+        q["separatrices"] = "1" if self.overlay.value else "0"
+        q["periodic"] = "1" if self.periodic_box.value else "0"
+        q["colour"] = "megno" if self.colour_box.value else "orbit"
+        return q
+
+    def _push_url(self):
+        loc = pn.state.location
+        if loc is not None:
+            loc.update_query(**self.url_query())
+
+    def _show_fields(self):
+        s = self.settings.fields()
+        for name, w in self.inputs.items():
+            if w.value != s[name]:
+                self._quiet = True
+                try:
+                    w.value = s[name]
+                finally:
+                    self._quiet = False
+
+    _quiet = False
+
+    # ------------------------------------------------------------ actions
+    def say(self, text: str) -> None:
+        self.message.text = text
+
+    def _draw_region(self):
+        r = self.settings.region
+        if r is None:
+            self.region.data = {"x": [], "y": [], "width": [], "height": []}
+            self.say(f"the allowed region is empty at h = {self.settings.h:g} (h is below the minimum of "
+                     "the energy on the section)")
+            return
+        c1, c2, r1, r2 = r
+        self.region.data = {"x": [c1], "y": [c2], "width": [2 * r1], "height": [2 * r2]}
+        m1, m2 = (1 + VIEW_MARGIN) * r1, (1 + VIEW_MARGIN) * r2
+        self.figure.x_range.start, self.figure.x_range.end = c1 - m1, c1 + m1
+        self.figure.y_range.start, self.figure.y_range.end = c2 - m2, c2 + m2
+        self.window = raster_mod.Window(c1 - m1, c1 + m1, c2 - m2, c2 + m2)
+
+    def _start(self, p1: float, p2: float, color: int | None = None):
+        if not self.settings.admissible(p1, p2):
+            return None
+        if color is None:
+            color = self._color % len(COLORS)
+            self._color += 1
+        run = self.worker.submit(p1, p2, self.settings)
+        self.starts.append((run.ident, p1, p2, color))
+        self.start_source.stream({"orbit": [run.ident], "p1": [p1], "p2": [p2], "c": [color]})
+        self._running = self._running | {run.ident}
+        self._update_status()
+        return run
+
+    def click(self, p1: float, p2: float):
+        """A click at (p1, p2): a new orbit, or a message saying why not."""
+        if not (math.isfinite(p1) and math.isfinite(p2)):
+            return None
+        full = settings_mod.room_for(len(self.starts) + 1, self.settings.crossings)
+        if full:
+            self.say(full)
+            return None
+        if self.settings.region is None:
+            self.say("nothing to do: the allowed region is empty at this energy")
+            return None
+        if not self.settings.admissible(p1, p2):
+            self.say(f"({p1:.4g}, {p2:.4g}) is outside the allowed region (M^2 < 0 there): click in the white "
+                     "ellipse")
+            return None
+        run = self._start(p1, p2)
+        self.say("")
+        self._push_url()
+        return run
+
+    def _on_tap(self, event):
+        """Tap or double tap: Bokeh reports a click that follows another within 300 ms as a double
+        tap instead of a tap; one at the place of the previous click is that click again (ignored),
+        one elsewhere is a new click."""
+        here = (float(event.sx), float(event.sy))
+        last, self._last_tap = self._last_tap, here
+        if isinstance(event, DoubleTap) and last is not None and max(abs(here[0] - last[0]),
+                                                                      abs(here[1] - last[1])) <= SAME_SPOT_PX:
+            return
+        self.click(float(event.x), float(event.y))
+
+    _last_tap: tuple | None = None
+
+    def _post(self, action) -> None:
+        """From a worker thread: run ``action`` on the document's loop (a served page), or keep it
+        for :meth:`poll` (a notebook, where no Bokeh server owns the document)."""
+        if self._doc is not None:
+            self._doc.add_next_tick_callback(action)
+        else:
+            with self._pending_lock:
+                self._inbox.append(action)
+
+    def poll(self) -> bool:
+        """Run what the workers handed in since the last call (notebook mode: a periodic
+        callback calls it); returns whether there was anything."""
+        with self._pending_lock:
+            actions, self._inbox = self._inbox, []
+        for action in actions:
+            action()
+        return bool(actions)
+
+    def _later(self, action) -> None:
+        """Run ``action`` on the document's loop with its lock (Panel calls widget watchers
+        outside it; the Bokeh models of the figure must be changed inside), or now without one."""
+        if self._doc is None:
+            action()
+        else:
+            self._doc.add_next_tick_callback(action)
+
+    def _field_changed(self, _event):
+        if not self._quiet:           # (a change made by _show_fields is not the user's)
+            self._later(self._on_field)
+
+    def _on_field(self):
+        fields = {name: w.value for name, w in self.inputs.items()}
+        try:
+            new = parse_fields(self.base, fields)
+            full = settings_mod.room_for(len(self.starts), new.crossings)
+            if full:
+                raise ParameterError(f"crossings: {full}")
+        except ParameterError as exc:
+            self.say(f"not applied: {exc}")
+            return
+        self.say("")
+        self.apply(new)
+
+    def apply(self, new: Settings) -> None:
+        """New settings: the orbits stop, the region is redrawn, the starts inside it run again."""
+        if new == self.settings:
+            return
+        old = self._drop_orbits()
+        self.settings = new
+        self._draw_region()
+        self._show_fields()
+        self._restart_raster()
+        self._restart_overlay()
+        kept = [self._start(p1, p2, color) for _i, p1, p2, color in old]
+        dropped = sum(r is None for r in kept)
+        if dropped:
+            self.say(f"{dropped} start(s) outside the new allowed region dropped")
+        self._push_url()
+
+    def _drop_orbits(self) -> list:
+        """Stop every orbit and take them off the page; returns their starts."""
+        self.worker.cancel()
+        old, self.starts, self._running = self.starts, [], set()
+        self.indicators = {}
+        self.crossings.data = _empty_crossings()
+        self.start_source.data = _empty_starts()
+        return old
+
+    def clear(self) -> None:
+        self._drop_orbits()
+        self._update_status()
+        self._push_url()
+
+    def undo(self) -> None:
+        """Remove the last orbit (stopped if it runs)."""
+        if not self.starts:
+            return
+        ident = self.starts.pop()[0]
+        self.worker.remove(ident)
+        self.indicators.pop(ident, None)
+        self._running = self._running - {ident}
+        keep = np.asarray(self.crossings.data["orbit"]) != ident
+        self.crossings.data = {k: np.asarray(v)[keep] for k, v in self.crossings.data.items()}
+        keep = [o != ident for o in self.start_source.data["orbit"]]
+        self.start_source.data = {k: [x for x, ok in zip(v, keep) if ok] for k, v in self.start_source.data.items()}
+        self._update_status()
+        self._push_url()
+
+    def _scene_text(self) -> str:
+        return export.session_scene(self.settings, [(a, b) for _i, a, b, _c in self.starts]).to_toml()
+
+    def _scene_file(self):
+        try:
+            return io.StringIO(self._scene_text())
+        except ParameterError as exc:
+            self.say(str(exc))
+            return io.StringIO("")
+
+    def export(self) -> str | None:
+        """Write the session's scene into the export directory; returns its path."""
+        try:
+            sc = export.session_scene(self.settings, [(a, b) for _i, a, b, _c in self.starts])
+            path = export.write_scene(self.export_dir, sc)
+        except (ParameterError, OSError) as exc:
+            self.say(f"export failed: {exc}")
+            return None
+        name = os.path.basename(path)
+        self.say(f"scene written: {name} (rerun: explorer sweep {name}); writing the orbits' store ...")
+        threading.Thread(target=self._write_store, args=(path,), name="explorer-serve-store", daemon=True).start()
+        return path
+
+    def _write_store(self, scene_path):
+        """In a thread: the exported scene's orbits as an HDF5 store next to it."""
+        try:
+            out = export.write_store(scene_path)
+            text = f"written: {os.path.basename(scene_path)} and {os.path.basename(out)} (the orbits, sweep format)"
+        except Exception as exc:  # noqa: BLE001 - reported in the page
+            text = f"store export failed: {type(exc).__name__}: {' '.join(str(exc).split())}"
+        self._post(partial(self.say, text))
+
+    # ------------------------------------------------------------ the MEGNO layer
+    def _on_ranges(self, event):
+        """The view moved (zoom, pan, reset): the layer follows the new window."""
+        try:
+            self.window = raster_mod.Window(float(event.x0), float(event.x1), float(event.y0), float(event.y1))
+        except (TypeError, ValueError):
+            return
+        if self.layer.value:
+            self._restart_raster()
+
+    def _layer_changed(self):
+        self._restart_raster()
+        self._push_url()
+
+    def _restart_raster(self):
+        if not self.layer.value or self.window is None or self.settings.region is None:
+            self.raster.cancel()
+            self._raster_generation = -1
+            self.raster_source.data = _empty_raster()
+            return
+        self._raster_generation = self.raster.start(self.settings, self.window)
+
+    def _on_image(self, generation, image):
+        self._post(partial(self._show_image, generation, image))
+
+    def _on_raster_error(self, exc):
+        self._post(partial(self.say, f"MEGNO layer failed: {type(exc).__name__}: {' '.join(str(exc).split())}"))
+
+    def _show_image(self, generation, image):
+        if generation != self._raster_generation:
+            return                          # an older window or older settings
+        w = image.window
+        self.raster_source.data = {"image": [image.values], "x": [w.x0], "y": [w.y0], "dw": [w.x1 - w.x0],
+                                   "dh": [w.y1 - w.y0], "n": [image.n], "complete": [image.complete]}
+
+    # ------------------------------------------------------------ fixed points and separatrices
+    def _overlay_changed(self):
+        self._restart_overlay()
+        self._push_url()
+
+    def _restart_overlay(self):
+        """Search the fixed points (and separatrices) and the periodic orbits the boxes ask for,
+        at the current settings, in a thread of its own (about 1 s and 5 s); a newer request
+        makes an older result stale."""
+        self._overlay_generation += 1
+        self.fixed.data = {"p1": [], "p2": [], "kind": [], "marker": []}
+        self.curves.data = {"xs": [], "ys": []}
+        self.periodic.data = _empty_periodic()
+        self.overlay_text.text = ""
+        wanted = (self.overlay.value, self.periodic_box.value)
+        if not any(wanted) or self.settings.region is None:
+            return
+        self.overlay_text.text = "searching ..."
+        threading.Thread(target=self._compute_overlay, args=(self._overlay_generation, self.settings, *wanted),
+                         name="explorer-serve-overlay", daemon=True).start()
+
+    def _compute_overlay(self, generation, settings, fixed, periodic):
+        from explorer.app.explore.state import fixed_points_and_curves, periodic_orbits
+
+        texts = []
+        if fixed:
+            try:
+                points, curves, text = fixed_points_and_curves(settings)
+            except Exception as exc:  # noqa: BLE001 - reported in the page
+                points, curves, text = [], [], f"fixed points: failed ({type(exc).__name__}: {exc})"
+            texts.append(text)
+            self._post(partial(self._show_fixed, generation, points, curves, "; ".join(texts)))
+        if periodic and generation == self._overlay_generation:
+            try:
+                orbits, text = periodic_orbits(settings, PERIODIC_MAX)
+            except Exception as exc:  # noqa: BLE001 - reported in the page
+                orbits, text = [], f"periodic orbits: failed ({type(exc).__name__}: {exc})"
+            texts.append(text)
+            self._post(partial(self._show_periodic, generation, orbits, "; ".join(texts)))
+
+    def _show_periodic(self, generation, orbits, text):
+        if generation != self._overlay_generation:
+            return
+        rows = [(float(p[0]), float(p[1]), int(o.period), o.stable) for o in orbits for p in np.asarray(o.points)]
+        self.periodic.data = {"p1": [r[0] for r in rows], "p2": [r[1] for r in rows], "period": [r[2] for r in rows],
+                              "kind": ["elliptic" if r[3] else "hyperbolic" for r in rows],
+                              "marker": ["circle" if r[3] else "x" for r in rows]}
+        self.overlay_text.text = text
+
+    def _show_fixed(self, generation, points, curves, text):
+        if generation != self._overlay_generation:
+            return
+        self.fixed.data = {"p1": [float(fp.point[0]) for fp in points], "p2": [float(fp.point[1]) for fp in points],
+                           "kind": ["elliptic" if fp.stable else "hyperbolic" for fp in points],
+                           "marker": ["circle" if fp.stable else "x" for fp in points]}
+        self.curves.data = {"xs": [c[:, 0] for c in curves], "ys": [c[:, 1] for c in curves]}
+        self.overlay_text.text = text
+
+    # ------------------------------------------------------------ blocks from the worker
+    def _on_block(self, ident, rows, done, status):
+        """In the worker thread: queue the block for the document's loop; blocks that come while
+        the loop is busy go to the page together (one message)."""
+        with self._pending_lock:
+            self._pending.append((ident, rows, done, status))
+            if len(self._pending) > 1:
+                return                   # a flush is scheduled already
+        self._post(self._flush)
+
+    def _flush(self):
+        with self._pending_lock:
+            blocks, self._pending = self._pending, []
+        live = {i: c for i, _a, _b, c in self.starts}
+        blocks = [b for b in blocks if b[0] in live]          # undone or cancelled meanwhile: dropped
+        full = [b for b in blocks if len(b[1])]
+        if full:
+            data = np.concatenate([b[1] for b in full])
+            megno = [self.indicators.get(b[0], (math.nan,))[0] for b in full]
+            self.crossings.stream({"orbit": np.concatenate([np.full(len(b[1]), b[0], np.int64) for b in full]),
+                                   "megno": np.concatenate([np.full(len(b[1]), m) for b, m in zip(full, megno)]),
+                                   "t": data[:, 0], "p1": data[:, 1], "p2": data[:, 2], "M": data[:, 3],
+                                   "dH": data[:, 4],
+                                   "c": np.concatenate([np.full(len(b[1]), live[b[0]], np.int64) for b in full])})
+        for ident, _rows, done, status in blocks:
+            if status != "running":
+                self._running = self._running - {ident}
+                if status != "done":
+                    self.say(f"orbit {ident} stopped after {done} crossings: {status}")
+        self._update_status()
+
+    def _on_error(self, ident, exc):
+        self._post(partial(self._fail, ident, f"orbit {ident} failed: {type(exc).__name__}: "
+                                               f"{' '.join(str(exc).split())}"))
+
+    def _fail(self, ident, msg):
+        self._running = self._running - {ident}
+        self.say(msg)
+        self._update_status()
+
+    def _update_status(self):
+        running = len(self._running)
+        n = len(self.crossings.data["orbit"])
+        text = (f"{len(self.starts)} orbit(s), {running} running, {n} crossings drawn; "
+                f"mu = {self.settings.params.mu:g}, h = {self.settings.h:g}, {self.settings.method}")
+        known = [i for i, *_ in self.starts if i in self.indicators]
+        if known:
+            megno, mlce = self.indicators[known[-1]]
+            kind = "chaotic-like" if megno > CHAOTIC_MEGNO else "regular-like"
+            text += (f"; orbit {known[-1]}: <Y> = {megno:.3g}, mLCE = {mlce:.3g} over t <= {INDICATOR_TIME:g}"
+                     + (f" ({kind})" if math.isfinite(megno) else " (unknown: the run stopped early)"))
+        self.status.text = text
+
+    # ------------------------------------------------------------ chaos indicators of the orbits
+    def _on_indicators(self, ident, megno, mlce):
+        self._post(partial(self._show_indicators, ident, megno, mlce))
+
+    def _show_indicators(self, ident, megno, mlce):
+        if not any(i == ident for i, *_ in self.starts):
+            return
+        self.indicators[ident] = (megno, mlce)
+        rows = np.flatnonzero(np.asarray(self.crossings.data["orbit"]) == ident)
+        if rows.size:      # the rows streamed before the indicator was known
+            self.crossings.patch({"megno": [(int(r), megno) for r in rows]})
+        self._update_status()
+
+    def _colour_changed(self):
+        spec = self._by_megno if self.colour_box.value else self._by_orbit
+        self.points.glyph.fill_color = spec
+        self.points.glyph.line_color = spec
+        self._push_url()
+
+
+def session_app(base: Settings, export_dir=None, label: str = ""):
+    """A Panel app function for ``pn.serve``: one :class:`SectionPage` per session, built from
+    the session's URL arguments."""
+    def app():
+        args = {k: v[0].decode("utf-8", "replace") for k, v in (pn.state.session_args or {}).items() if v}
+        return SectionPage(base, args, export_dir=export_dir, label=label, doc=pn.state.curdoc).layout
+    return app

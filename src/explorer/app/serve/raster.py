@@ -1,0 +1,146 @@
+"""The chaos layer of the page: a MEGNO raster of the visible window, coarse first, then refined.
+
+For each resolution of ``RESOLUTIONS`` (n x n cells over the window), the centres of the cells
+inside the allowed region are started on the section (MODEL.md R9, M > 0) and their mean MEGNO
+<Y>(``RASTER_TIME``) is computed with :func:`explorer.analysis.lyapunov.indicators` (the tangent
+lanes, the page's method and tolerance), ``BATCH`` seeds per call; cells outside the region are
+NaN.  After each batch the partial image is handed out (``on_image(generation, image)``), so the
+page fills in while the next batch runs.  A new window or new settings (:meth:`RasterWorker.start`)
+or :meth:`RasterWorker.cancel` stops the current raster at its next batch (a stale image is never
+handed out after the call returns).  No web library here.
+"""
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from explorer import model
+from explorer.app.serve.settings import Settings
+
+#: resolutions of the successive rasters of one window (each a refinement of the last)
+RESOLUTIONS = (16, 32, 64, 128)
+#: integration time of the MEGNO of a cell (quasi-periodic: <Y> -> 2, chaotic: grows ~ chi t / 2)
+RASTER_TIME = 200.0
+#: seeds per call of the indicators (bounds the time until a cancel takes effect)
+BATCH = 512
+
+
+@dataclass(frozen=True)
+class Window:
+    """The visible part of the section: p1 in [x0, x1], p2 in [y0, y1]."""
+
+    x0: float
+    x1: float
+    y0: float
+    y1: float
+
+    def __post_init__(self):
+        if not all(np.isfinite([self.x0, self.x1, self.y0, self.y1])) or not (self.x1 > self.x0 and self.y1 > self.y0):
+            raise ValueError(f"not a window: {self}")
+
+    def centres(self, n: int):
+        """Cell centres of an n x n raster, (n, n) arrays P1, P2 (row = p2 index)."""
+        u = (np.arange(n) + 0.5) / n
+        return np.meshgrid(self.x0 + (self.x1 - self.x0) * u, self.y0 + (self.y1 - self.y0) * u)
+
+
+@dataclass(frozen=True)
+class Image:
+    """One (partial) raster: ``values`` (n, n) mean MEGNO, NaN outside the region or not yet
+    computed; ``complete`` when every cell of this resolution is in."""
+
+    window: Window
+    n: int
+    values: np.ndarray
+    complete: bool
+
+
+def megno_cells(settings: Settings, p1, p2) -> np.ndarray:
+    """Mean MEGNO <Y>(RASTER_TIME) of the orbits started at (p1, p2) on the section."""
+    from explorer.analysis import lyapunov
+
+    y0 = model.section_state(settings.params, p1, p2, settings.h, settings.phi0, settings.direction or 1)
+    res = lyapunov.indicators(settings.params, y0, RASTER_TIME, method=settings.method, tol=settings.tol,
+                              dt=settings.dt, which=("megno",))
+    return np.asarray(res.megno, dtype=np.float64)
+
+
+def rasters(settings: Settings, window: Window, stop: Callable[[], bool] = lambda: False):
+    """Yield the :class:`Image` after every batch of every resolution (until ``stop()``)."""
+    previous = None
+    for n in RESOLUTIONS:
+        P1, P2 = window.centres(n)
+        inside = model.section_M2(settings.params, P1, P2, settings.h, settings.phi0) > 0.0
+        values = np.full((n, n), np.nan)
+        if previous is not None:     # until a cell is computed, it shows the coarser raster's value
+            k = n // previous.shape[0]
+            values = np.where(inside, np.kron(previous, np.ones((k, k))), np.nan)
+        rows, cols = np.nonzero(inside)
+        for a in range(0, len(rows), BATCH):
+            if stop():
+                return
+            r, c = rows[a:a + BATCH], cols[a:a + BATCH]
+            values[r, c] = megno_cells(settings, P1[r, c], P2[r, c])
+            yield Image(window, n, values.copy(), a + BATCH >= len(rows))
+        if not len(rows):
+            yield Image(window, n, values.copy(), True)
+        previous = values
+
+
+class RasterWorker:
+    """One thread that computes the rasters of the latest window (see the module docstring)."""
+
+    def __init__(self, on_image: Callable[[int, Image], None], on_error: Callable[[BaseException], None]):
+        self._on_image = on_image
+        self._on_error = on_error
+        self._cond = threading.Condition()
+        self._job: tuple | None = None
+        self._generation = 0
+        self._stopped = False
+        self._thread = threading.Thread(target=self._loop, name="explorer-serve-raster", daemon=True)
+        self._thread.start()
+
+    def start(self, settings: Settings, window: Window) -> int:
+        """Compute the rasters of ``window`` (the current one stops); returns its generation."""
+        with self._cond:
+            self._generation += 1
+            self._job = (self._generation, settings, window)
+            self._cond.notify()
+            return self._generation
+
+    def cancel(self) -> None:
+        with self._cond:
+            self._generation += 1
+            self._job = None
+
+    def stop(self) -> None:
+        with self._cond:
+            self._stopped = True
+            self._job = None
+            self._cond.notify()
+
+    def _loop(self) -> None:
+        while True:
+            with self._cond:
+                while not self._stopped and self._job is None:
+                    self._cond.wait()
+                if self._stopped:
+                    return
+                job, self._job = self._job, None
+            if job is None:
+                continue
+            generation, settings, window = job
+
+            def stale(g: int = generation) -> bool:
+                return g != self._generation
+            try:
+                for image in rasters(settings, window, stop=stale):
+                    with self._cond:
+                        if generation != self._generation:
+                            break
+                        self._on_image(generation, image)
+            except Exception as exc:  # noqa: BLE001 - reported in the page; the server keeps serving
+                self._on_error(exc)

@@ -1,0 +1,113 @@
+"""The web server of ``explorer serve``: Panel on Bokeh's Tornado server, one
+:class:`~explorer.app.serve.page.SectionPage` per browser session.
+
+Safe by default:
+
+- it binds 127.0.0.1 unless told otherwise; a host that is not a loopback address needs a token
+  (one is made when none is given: ``secrets.token_urlsafe``), printed in the URL;
+- with a token, every page request must carry it (``?token=...``, compared in constant time
+  by Panel's ``authorize_callback``; a missing or wrong token gets HTTP 403 and no app), and
+  Bokeh's sessions are signed with a secret made at start, so the websocket of a session can only
+  be opened from a page that was served (its signed session token carries the page's request);
+- without a token (loopback only) the websocket accepts pages of this host and port only
+  (Bokeh's origin check);
+- nothing from the page names a file: exports go to the directory given at start.
+"""
+from __future__ import annotations
+
+import hmac
+import ipaddress
+import secrets
+import socket
+import sys
+import threading
+
+from explorer.app.serve.command import DEFAULT_HOST, DEFAULT_PORT
+from explorer.app.serve.settings import Settings
+
+#: the URL argument that carries the token
+TOKEN_ARG = "token"
+
+
+def is_loopback(host: str) -> bool:
+    """``host`` is only reachable from this machine (127.0.0.0/8, ::1, localhost)."""
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def free_port(host: str) -> int:
+    """A port that is free on ``host`` now (for ``--port 0``)."""
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    with socket.socket(family, socket.SOCK_STREAM) as s:
+        s.bind((host, 0))
+        return int(s.getsockname()[1])
+
+
+def token_matches(expected: str, given) -> bool:
+    """The request's token equals ``expected`` (constant-time comparison)."""
+    if not isinstance(given, str):
+        return False
+    return hmac.compare_digest(expected.encode("utf-8"), given.encode("utf-8"))
+
+
+def url_of(host: str, port: int, token: str | None) -> str:
+    shown = f"[{host}]" if ":" in host else host
+    if host in ("0.0.0.0", "::"):
+        shown = socket.gethostname()
+    return f"http://{shown}:{port}/" + (f"?{TOKEN_ARG}={token}" if token else "")
+
+
+def _authorize(token: str):
+    """Panel's authorize_callback: the page request's ``token`` argument must match."""
+    def check(_user_info, _path):
+        import panel as pn
+
+        args = pn.state.session_args or {}
+        given = args.get(TOKEN_ARG, [b""])
+        given = given[0].decode("utf-8", "replace") if given else ""
+        return token_matches(token, given)
+    return check
+
+
+def make_server(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, token: str | None = None,
+                export_dir=None, label: str = ""):
+    """The Bokeh server (not started) and its URL.  ``token`` None on a loopback host: no token;
+    on another host one is made."""
+    import panel as pn
+
+    from explorer.app.serve.page import session_app
+
+    if token is None and not is_loopback(host):
+        token = secrets.token_urlsafe(24)
+    if port == 0:
+        port = free_port(host)
+    kw: dict = {}
+    if token:
+        pn.config.authorize_callback = _authorize(token)
+        kw.update(sign_sessions=True, secret_key=secrets.token_urlsafe(48), websocket_origin="*")
+    else:
+        hosts = dict.fromkeys(("127.0.0.1", "localhost", host))
+        kw["websocket_origin"] = [f"{h}:{port}" for h in hosts if ":" not in h]   # (Bokeh takes no IPv6 here)
+    server = pn.serve(session_app(base, export_dir=export_dir, label=label), port=port, address=host, show=False,
+                      start=False, verbose=False, title="explorer", location=True, **kw)
+    return server, url_of(host, port, token)
+
+
+def run(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, token: str | None = None,
+        export_dir=None, label: str = "", out=None) -> None:
+    """Serve until interrupted: the URL is the first line printed."""
+    from explorer.app.serve.orbits import warm_up
+
+    out = sys.stdout if out is None else out
+    server, url = make_server(base, host=host, port=port, token=token, export_dir=export_dir, label=label)
+    print(url, file=out, flush=True)
+    threading.Thread(target=warm_up, args=(base,), name="explorer-serve-warm-up", daemon=True).start()
+    server.start()
+    try:
+        server.io_loop.start()
+    finally:
+        server.stop()

@@ -1,0 +1,194 @@
+"""What the page may set, read and checked: the model parameters, the energy, the integration
+settings and the crossings per click (:class:`Settings`), from the text of the page's fields or
+of the URL (:func:`parse_fields`), and the clicked starts (:func:`parse_starts`).
+
+Every value from the page goes through :mod:`explorer.model.validation` and the model's own
+checks (:class:`explorer.model.Params`), as the command line's do: a bad value raises
+:class:`~explorer.model.ParameterError` with a one-line message naming the field, and nothing is
+changed.  No value here is a file path.  Pure Python (no web library): tested without a browser.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+from explorer import model
+from explorer.analysis import sections
+from explorer.model import ParameterError, validation
+
+#: the model parameters the page has a field for (all of MODEL.md R3's)
+PAGE_PARAMS = ("mu", "lam", "a1", "a2", "b", "chi", "zeta", "xi", "eta")
+#: every field of the page, in the order they are shown (and written in the URL)
+FIELDS = ("mu", "h", "lam", "a1", "a2", "b", "chi", "zeta", "xi", "eta", "method", "tol", "dt", "crossings")
+#: crossings per click: the page's default and its upper bound (bounded memory per orbit:
+#: 40 bytes a row in the server, about as much in the browser)
+DEFAULT_CROSSINGS = 2000
+MAX_CROSSINGS = 1_000_000
+#: at most this many orbits (clicked starts) in one session
+MAX_STARTS = 256
+#: at most this many crossings on one session's page (orbits x crossings per click): about 56
+#: bytes a row in the server's copy of the page's data, so a session stays below ~0.2 GB
+MAX_SESSION_CROSSINGS = 4_000_000
+
+
+def room_for(n_orbits: int, crossings: int) -> str | None:
+    """Why ``n_orbits`` orbits of ``crossings`` crossings do not fit in a session (None: they do)."""
+    if n_orbits > MAX_STARTS:
+        return f"at most {MAX_STARTS} orbits in a session: clear or undo first"
+    if n_orbits * crossings > MAX_SESSION_CROSSINGS:
+        return (f"at most {MAX_SESSION_CROSSINGS:,} crossings on a page: {n_orbits} orbits x {crossings} crossings "
+                "per click is more; clear, undo or lower the crossings per click")
+    return None
+#: longest field text read from the page or the URL
+MAX_FIELD_CHARS = 64
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Everything that determines a clicked orbit's crossings: ``explorer orbit --p1 P1 --p2 P2
+    --h H --method M --tol TOL --dt DT --crossings K`` with the model ``params`` gives the same
+    rows bit for bit (the section phi = ``phi0``, crossings in ``direction``)."""
+
+    params: model.Params = model.FIGURE4
+    h: float = model.FIGURE4_H
+    method: str = "taylor"
+    tol: float = sections.DEFAULT_TOL
+    dt: float = sections.DEFAULT_DT
+    crossings: int = DEFAULT_CROSSINGS
+    phi0: float = math.pi
+    direction: int = 1
+
+    def __post_init__(self):
+        validation.choice("method", self.method, sections.METHODS)
+        validation.real("tol", self.tol, sections.MIN_TOL, sections.MAX_TOL)
+        validation.real("dt", self.dt, 0.0, lo_open=True)
+        validation.integer("crossings", self.crossings, 1, MAX_CROSSINGS)
+        validation.real("h", self.h)
+
+    def section_kwargs(self) -> dict:
+        """Keywords of :func:`explorer.analysis.sections.iter_crossings` (with ``crossings``)."""
+        return {"method": self.method, "tol": self.tol, "dt": self.dt, "phi0": self.phi0,
+                "direction": self.direction}
+
+    @property
+    def region(self):
+        """(c1, c2, r1, r2) of the allowed region (MODEL.md R9), or None when it is empty."""
+        e = model.allowed_ellipse(self.params, self.h, self.phi0)
+        if e is None or not (e[2] > 0.0 and e[3] > 0.0):
+            return None
+        return tuple(float(v) for v in e)
+
+    def admissible(self, p1: float, p2: float) -> bool:
+        """(p1, p2) lies in the allowed region (M^2 >= 0, MODEL.md R9)."""
+        return bool(model.section_M2(self.params, p1, p2, self.h, self.phi0) >= 0.0)
+
+    def fields(self) -> dict:
+        """The page's fields as text (``repr`` of each float: read back, the same number)."""
+        d = {n: repr(float(getattr(self.params, n))) for n in PAGE_PARAMS}
+        d.update(h=repr(float(self.h)), method=self.method, tol=repr(float(self.tol)), dt=repr(float(self.dt)),
+                 crossings=str(self.crossings))
+        return {n: d[n] for n in FIELDS}
+
+    def orbit_args(self, p1: float, p2: float) -> list:
+        """The ``explorer orbit`` arguments that give this start's crossings (``--json`` rows)."""
+        args = ["orbit", "--p1", repr(float(p1)), "--p2", repr(float(p2)), "--h", repr(float(self.h)),
+                "--method", self.method, "--tol", repr(float(self.tol)), "--dt", repr(float(self.dt)),
+                "--crossings", str(self.crossings), "--phi0", repr(float(self.phi0)),
+                "--direction", {1: "+", -1: "-", 0: "both"}[self.direction]]
+        for n in model.PARAM_NAMES:
+            args += [f"--{n}", repr(float(getattr(self.params, n)))]
+        return args
+
+
+def settings_for(scene=None, panel: int = 0, **overrides) -> tuple:
+    """(Settings, label) to start from: the scene's panel ``panel`` (a TOML path or a preset name;
+    None: Figure 4 with mu = 0, h = 2), then ``overrides`` (model parameters, h, method, tol, dt,
+    crossings) on top, all validated."""
+    from explorer.io import scene as scene_mod
+
+    base, label = Settings(), ""
+    if scene is not None:
+        sc = scene if isinstance(scene, scene_mod.Scene) else scene_mod.load_scene(scene)
+        i = validation.integer("panel", panel, 0, sc.n_panels - 1)
+        params, h, plabel = sc.panel(i)
+        integ = sc.integration
+        base = Settings(params=params, h=h, method=integ.method, tol=integ.tol, dt=integ.dt,
+                        crossings=min(integ.crossings, MAX_CROSSINGS), phi0=integ.phi0, direction=integ.direction)
+        label = sc.name if not plabel else f"{sc.name}: {plabel}"
+    elif panel != 0:
+        raise ParameterError("panel needs a scene")
+    unknown = set(overrides) - set(model.PARAM_NAMES) - {"h", "method", "tol", "dt", "crossings"}
+    if unknown:
+        raise ParameterError(f"unknown setting {sorted(unknown)[0]!r}; model parameters, h, method, tol, dt, crossings")
+    params = {k: validation.real(k, v) for k, v in overrides.items() if k in model.PARAM_NAMES}
+    rest = {k: v for k, v in overrides.items() if k not in model.PARAM_NAMES}
+    return replace(base, params=base.params.with_(**params) if params else base.params, **rest), label
+
+
+def _number(name: str, text) -> float:
+    """A field's text as a finite float (ParameterError naming the field otherwise)."""
+    if isinstance(text, str):
+        s = text.strip()
+        if len(s) > MAX_FIELD_CHARS:
+            raise ParameterError(f"{name} must be a number (at most {MAX_FIELD_CHARS} characters)")
+        try:
+            value = float(s)
+        except ValueError:
+            raise ParameterError(f"{name} must be a number, got {s!r}") from None
+        return validation.real(name, value)
+    return validation.real(name, text)
+
+
+def _whole(name: str, text) -> int:
+    if isinstance(text, str):
+        s = text.strip()
+        if len(s) > MAX_FIELD_CHARS or not (s.isdigit() or (s[:1] in "+-" and s[1:].isdigit())):
+            raise ParameterError(f"{name} must be a whole number, got {s[:MAX_FIELD_CHARS]!r}")
+        text = int(s)
+    return validation.integer(name, text)
+
+
+def parse_fields(base: Settings, fields: dict) -> Settings:
+    """``base`` with the page's ``fields`` ({name: text}) applied; every field validated
+    (ParameterError, one line naming the field, and nothing changed otherwise).  Unknown names
+    are refused."""
+    params: dict[str, float] = {}
+    other: dict[str, object] = {}
+    h = base.h
+    for name, text in fields.items():
+        if name not in FIELDS:
+            raise ParameterError(f"unknown field {str(name)[:MAX_FIELD_CHARS]!r}; one of {', '.join(FIELDS)}")
+        if name in PAGE_PARAMS:
+            params[name] = _number(name, text)
+        elif name == "h":
+            h = _number("h", text)
+        elif name == "method":
+            other["method"] = validation.choice("method", str(text).strip(), sections.METHODS)
+        elif name == "crossings":
+            other["crossings"] = validation.integer("crossings", _whole("crossings", text), 1, MAX_CROSSINGS)
+        else:
+            other[name] = _number(name, text)
+    prm = base.params.with_(**params) if params else base.params   # Params checks a1, a2, b > 0, lam != 0
+    return replace(base, params=prm, h=h, **other)  # type: ignore[arg-type]
+
+
+def format_starts(starts) -> str:
+    """Starts as URL text: ``p1,p2;p1,p2`` with each float's ``repr`` (read back exactly)."""
+    return ";".join(f"{float(a)!r},{float(b)!r}" for a, b in starts)
+
+
+def parse_starts(text: str) -> list:
+    """The starts of :func:`format_starts` (ParameterError for anything else)."""
+    text = str(text).strip()
+    if not text:
+        return []
+    pieces = text.split(";")
+    if len(pieces) > MAX_STARTS:
+        raise ParameterError(f"orbits must list at most {MAX_STARTS} starts, got {len(pieces)}")
+    starts = []
+    for i, piece in enumerate(pieces):
+        xy = piece.split(",")
+        if len(xy) != 2:
+            raise ParameterError(f"orbits[{i}] must be p1,p2 (two numbers), got {piece[:MAX_FIELD_CHARS]!r}")
+        starts.append((_number(f"orbits[{i}].p1", xy[0]), _number(f"orbits[{i}].p2", xy[1])))
+    return starts

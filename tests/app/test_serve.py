@@ -1,0 +1,568 @@
+"""`explorer serve`: the explorer in the browser (src/explorer/app/serve, docs/commands/serve.md).
+
+Without a browser: the page's values are validated, starts survive the URL exactly, the worker's
+blocks are those of one uninterrupted run and a cancelled orbit hands out nothing more, the
+exported scene reruns to the same crossings.
+
+With a real browser (Debian's chromium driven by Playwright; skipped with the reason when either
+is missing): the served page is opened, three clicks on the section give orbits whose crossings in
+the page's data equal ``explorer orbit --json`` for the same starts, a change of mu redraws the
+region, a bad value shows a message and computes nothing, a link reopens the same view, a wrong
+token gets no app, and Ctrl-C ends the server cleanly.  A screenshot is saved (in
+$EXPLORER_TEST_ARTEFACTS, else pytest's temporary directory) and its pixels checked.
+"""
+from __future__ import annotations
+
+import importlib.util
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+import urllib.error
+import urllib.request
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from explorer import model
+from explorer.analysis import sections
+from explorer.app.serve import export
+from explorer.app.serve import settings as settings_mod
+from explorer.app.serve.orbits import Worker
+from explorer.app.serve.settings import Settings, format_starts, parse_fields, parse_starts
+from explorer.model import ParameterError
+
+#: the browser (Debian: apt-get install chromium); EXPLORER_CHROMIUM points elsewhere
+CHROMIUM = os.environ.get("EXPLORER_CHROMIUM", "/usr/bin/chromium")
+#: chromium's switches for a headless run that reaches nothing but the test's server
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                 "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+#: crossings per click in the browser tests (small: the test checks identity, not speed)
+CROSSINGS = 150
+#: a cold numba cache compiles the crossing kernels at the first click: allow for it
+FIRST_ORBIT_TIMEOUT_MS = 240_000
+REPO = Path(__file__).resolve().parents[2]
+#: the settings of the served page (`--mu 0.03 --crossings CROSSINGS`) and its region (c1, c2, r1, r2)
+SERVED = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=CROSSINGS)
+
+
+# ---------------------------------------------------------------- without a browser
+def test_page_values_are_validated_like_the_command_line():
+    base = Settings()
+    s = parse_fields(base, {"mu": "0.5", "h": " 2.5 ", "method": "dop853", "tol": "1e-12", "crossings": "300"})
+    assert (s.params.mu, s.h, s.method, s.tol, s.crossings) == (0.5, 2.5, "dop853", 1e-12, 300)
+    bad = {"a1": "-1", "mu": "abc", "lam": "0", "tol": "0.5", "h": "nan", "crossings": "2.5", "method": "rk4",
+           "b": "1e999", "dt": "0"}
+    for name, text in bad.items():
+        with pytest.raises(ParameterError, match=name):
+            parse_fields(base, {name: text})
+    with pytest.raises(ParameterError, match="unknown field"):
+        parse_fields(base, {"/etc/passwd": "1"})
+    with pytest.raises(ParameterError, match="crossings"):
+        parse_fields(base, {"crossings": str(settings_mod.MAX_CROSSINGS + 1)})
+
+
+def test_the_overlay_marks_the_fixed_points_and_draws_their_separatrices():
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    from explorer.analysis.fixedpoints import find_fixed_point
+    from explorer.app.serve.page import SectionPage
+
+    page = SectionPage(Settings(params=model.FIGURE4.with_(mu=0.5)), {"separatrices": "1"})
+    try:
+        t0 = time.time()
+        while not page.fixed.data["p1"] and time.time() - t0 < 120:
+            page.poll()
+            time.sleep(0.02)
+        fp = find_fixed_point(page.settings.params, page.settings.h, (-0.2, 0.0))   # solution I, hyperbolic
+        found = list(zip(page.fixed.data["p1"], page.fixed.data["p2"], page.fixed.data["kind"]))
+        assert any(abs(a - fp.point[0]) < 1e-8 and abs(b - fp.point[1]) < 1e-8 and k == "hyperbolic"
+                   for a, b, k in found)
+        assert len(page.curves.data["xs"]) >= 2 and "separatrix" in page.overlay_text.text
+        assert page.url_query()["separatrices"] == "1"
+        page.overlay.value = False                         # off: the overlay goes
+        assert page.fixed.data["p1"] == [] and page.curves.data["xs"] == []
+        page.periodic_box.value = True                     # periodic orbits: each period's points, K of them
+        t0 = time.time()
+        while not page.periodic.data["p1"] and time.time() - t0 < 240:
+            page.poll()
+            time.sleep(0.05)
+        periods = np.array(page.periodic.data["period"])
+        assert periods.size and set(periods) <= {1, 2, 3, 4} and "periodic orbits K=1" in page.overlay_text.text
+        for k in set(periods.tolist()):
+            assert (periods == k).sum() % k == 0
+    finally:
+        page.close()
+
+
+def test_a_session_holds_a_bounded_number_of_crossings(monkeypatch):
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    from explorer.app.serve.page import SectionPage
+
+    monkeypatch.setattr(settings_mod, "MAX_SESSION_CROSSINGS", 1000)
+    big = 500
+    page = SectionPage(Settings(crossings=big))
+    try:
+        assert page.click(0.1, 0.1) is not None and page.click(0.2, 0.1) is not None
+        assert page.click(0.3, 0.1) is None and "at most" in page.message.text      # a third would not fit
+        page.inputs["crossings"].value = str(big + 1)                                 # nor more per click
+        assert "not applied" in page.message.text and page.settings.crossings == big
+        link = SectionPage(Settings(), {"crossings": str(big), "orbits": "0.1,0;0.2,0;0.3,0"})
+        assert link.starts == [] and "link ignored" in link.message.text               # nor a link
+        link.close()
+    finally:
+        page.close()
+
+
+def test_starts_survive_the_url_bit_for_bit():
+    rng = np.random.default_rng(1)
+    starts = [tuple(map(float, rng.normal(size=2) / 3)) for _ in range(5)]
+    assert parse_starts(format_starts(starts)) == starts
+    s = Settings(params=model.FIGURE4.with_(mu=0.1 / 3), h=2.0 / 3 + 1)
+    assert parse_fields(Settings(), s.fields()) == s
+    for text in ("1,2,3", "a,b", "1;", "nan,0"):
+        with pytest.raises(ParameterError, match="orbits"):
+            parse_starts(text)
+
+
+def _collect(worker_blocks, timeout=120.0):
+    t0 = time.time()
+    while time.time() - t0 < timeout:
+        if worker_blocks["finished"]:
+            return
+        time.sleep(0.01)
+    raise AssertionError("the worker did not finish")
+
+
+def test_worker_blocks_are_one_uninterrupted_run_and_cancelled_orbits_hand_out_nothing():
+    s = Settings(params=model.FIGURE4.with_(mu=0.5), crossings=700)
+    got: dict = {"rows": {}, "finished": False, "sizes": []}
+
+    def on_block(ident, rows, done, status):
+        got["rows"].setdefault(ident, []).append(rows)
+        got["sizes"].append(len(rows))
+        if status != "running" and ident == 2:
+            got["finished"] = True
+
+    w = Worker(on_block)
+    try:
+        first = w.submit(0.3, 0.1, s)
+        w.cancel()                                   # before or after its first block: nothing more comes
+        n_before = len(got["rows"].get(first.ident, []))
+        second = w.submit(-0.4, 0.2, s)
+        _collect(got)
+        assert len(got["rows"].get(first.ident, [])) == n_before <= 1
+        rows = np.concatenate(got["rows"][second.ident])
+        assert len(set(got["sizes"])) > 1          # the blocks had different sizes
+    finally:
+        w.stop()
+    ref = sections.section_crossings(s.params, [-0.4], [0.2], s.h, s.crossings, **s.section_kwargs())
+    np.testing.assert_array_equal(rows, ref.orbit(0))
+
+
+def test_the_exported_scene_reruns_the_sessions_orbits(tmp_path):
+    from explorer.app.runner import run_sweep
+    from explorer.io import scene as scene_mod
+    from explorer.io.store import read_store
+
+    s = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=40)
+    starts = [(0.3, 0.1), (-0.5, 0.2), (50.0, 0.0)]           # the last is outside the region: dropped
+    path = export.write_scene(tmp_path, export.session_scene(s, starts))
+    assert os.path.dirname(path) == str(tmp_path)
+    sc = scene_mod.load_scene(path)
+    assert sc.seeds.points == tuple(starts[:2])
+    run_sweep(sc, tmp_path / "out.h5", draw=False, progress=False)
+    panel = read_store(tmp_path / "out.h5").panels[0]
+    for i, (p1, p2) in enumerate(starts[:2]):
+        ref = sections.section_crossings(s.params, [p1], [p2], s.h, s.crossings, **s.section_kwargs())
+        np.testing.assert_array_equal(panel.orbit(i), ref.orbit(0))
+    with pytest.raises(ParameterError, match="no orbit"):
+        export.session_scene(s, [(50.0, 0.0)])
+
+
+# ---------------------------------------------------------------- the served page in a browser
+def _browser_problem() -> str | None:
+    if not (os.path.exists(CHROMIUM) and os.access(CHROMIUM, os.X_OK)):
+        return f"no chromium at {CHROMIUM} (Debian: apt-get install chromium)"
+    try:
+        import playwright.sync_api  # noqa: F401
+    except ImportError:
+        return "playwright for Python is not installed (pip install playwright; no `playwright install`)"
+    try:
+        import panel  # noqa: F401
+    except ImportError:
+        return "panel is not installed (pip install panel)"
+    return None
+
+
+browser_needed = pytest.mark.skipif(_browser_problem() is not None, reason=str(_browser_problem()))
+
+
+class Served:
+    """``python -m explorer serve ...`` in a subprocess; ``url`` is its first line."""
+
+    def __init__(self, *args, timeout=120.0):
+        env = dict(os.environ, PYTHONUNBUFFERED="1")
+        self.proc = subprocess.Popen([sys.executable, "-m", "explorer", "serve", "--port", "0", *args],
+                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                                     cwd=REPO)
+        t0 = time.time()
+        self.url = self.proc.stdout.readline().strip()
+        if not self.url.startswith("http://"):
+            self.proc.kill()
+            raise AssertionError(f"serve printed {self.url!r}; stderr: {self.proc.stderr.read()[-2000:]}")
+        port = self.url.split("/")[2].rsplit(":", 1)[1]
+        while time.time() - t0 < timeout:     # until the server answers (on loopback: any --host binds it)
+            try:
+                urllib.request.urlopen(f"http://127.0.0.1:{port}/", timeout=5).close()
+                return
+            except urllib.error.HTTPError:
+                return
+            except OSError:
+                time.sleep(0.2)
+        raise AssertionError("serve did not answer")
+
+    def interrupt(self, timeout=30.0):
+        """Ctrl-C; returns (exit status, stderr)."""
+        self.proc.send_signal(signal.SIGINT)
+        try:
+            self.proc.wait(timeout)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+        return self.proc.returncode, self.proc.stderr.read()
+
+
+@pytest.fixture(scope="module")
+def served(tmp_path_factory):
+    export_dir = tmp_path_factory.mktemp("export")
+    s = Served("--crossings", str(CROSSINGS), "--mu", "0.03", "--export-dir", str(export_dir))
+    s.export_dir = export_dir
+    yield s
+    code, err = s.interrupt()
+    assert code in (0, 130) and "Traceback" not in err, err[-2000:]
+
+
+@pytest.fixture(scope="module")
+def browser(tmp_path_factory):
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        ctx = p.chromium.launch_persistent_context(str(tmp_path_factory.mktemp("chromium-profile")),
+                                                   executable_path=CHROMIUM, args=CHROMIUM_ARGS, headless=True,
+                                                   viewport={"width": 1100, "height": 800})
+        yield ctx
+        ctx.close()
+
+
+READY = ("() => window.Bokeh && Bokeh.documents.length > 0 && Bokeh.documents[0].is_idle && "
+         "Bokeh.documents[0].get_model_by_name('region') !== null && "
+         "Bokeh.index.all_views().some(v => v.model.name === 'section' && v.frame.bbox.width > 100)")
+#: page coordinates of the section point (p1, p2), from the figure's own scales
+TO_SCREEN = """([x, y]) => { const v = Bokeh.index.all_views().find(v => v.model.name === 'section');
+  const r = v.el.getBoundingClientRect();
+  return [r.left + v.frame.x_scale.compute(x), r.top + v.frame.y_scale.compute(y)]; }"""
+DATA = "(name) => { const d = Bokeh.documents[0].get_model_by_name(name).data; const o = {};" \
+       " for (const k of Object.keys(d)) o[k] = Array.from(d[k]); return o; }"
+TEXT = "(name) => Bokeh.documents[0].get_model_by_name(name).text"
+#: tick or untick the check box whose label starts with the text (its Bokeh model, as a click does)
+SET_BOX = "([text, on]) => { const m = [...Bokeh.documents[0].all_models].find(m => m.type === 'Checkbox' &&" \
+          " String(m.label).startsWith(text)); m.active = on; }"
+
+
+def _wait(page, expression, timeout=60_000, polling="raf"):
+    """page.wait_for_function, failing with what the page says (its message and status lines)."""
+    try:
+        page.wait_for_function(expression, timeout=timeout, polling=polling)
+    except Exception as exc:
+        try:
+            said = page.evaluate("() => [Bokeh.documents[0].get_model_by_name('message').text, "
+                                 "Bokeh.documents[0].get_model_by_name('status').text]")
+        except Exception:  # noqa: BLE001 - the page has no app (e.g. a refused token)
+            said = None
+        raise AssertionError(f"waited {timeout} ms for {expression[:200]}; the page says {said}") from exc
+
+
+def _open(browser, url):
+    page = browser.new_page()
+    page.goto(url)
+    _wait(page, READY)
+    return page
+
+
+def _click(page, p1, p2):
+    x, y = page.evaluate(TO_SCREEN, [p1, p2])
+    page.mouse.click(x, y)
+
+
+def _wait_crossings(page, n, timeout=FIRST_ORBIT_TIMEOUT_MS):
+    _wait(page, f"() => Bokeh.documents[0].get_model_by_name('crossings').data.p1.length >= {n}",
+                           timeout=timeout, polling=20)
+
+
+def _orbit_json(settings: Settings, p1, p2) -> np.ndarray:
+    out = subprocess.run([sys.executable, "-m", "explorer", *settings.orbit_args(p1, p2), "--json"],
+                         capture_output=True, text=True, check=True, cwd=REPO).stdout
+    return np.array(json.loads(out)["crossings"], dtype=np.float64).reshape(-1, 5)
+
+
+def _set_field(page, field, text):
+    from explorer.app.serve.page import LABELS
+
+    box = page.get_by_label(LABELS[field], exact=True)
+    box.fill(text)
+    box.press("Enter")
+
+
+@browser_needed
+def test_clicked_orbits_in_the_page_equal_explorer_orbit_json(served, browser, tmp_path):
+    page = _open(browser, served.url)
+    region = page.evaluate(DATA, "region")
+    s = SERVED
+    c1, c2, r1, r2 = s.region
+    assert region["x"] == [c1] and region["width"] == [2 * r1]
+    targets = [(c1 + 0.5 * r1, c2), (c1 - 0.3 * r1, c2 + 0.2 * r2), (c1 + 0.1 * r1, c2 - 0.6 * r2)]
+    t0 = time.perf_counter()
+    _click(page, *targets[0])
+    _wait_crossings(page, 1)
+    first = time.perf_counter() - t0
+    for p in targets[1:]:
+        _click(page, *p)
+    _wait_crossings(page, 3 * CROSSINGS)
+    starts = page.evaluate(DATA, "starts")
+    data = page.evaluate(DATA, "crossings")
+    assert len(starts["orbit"]) == 3
+    for ident, p1, p2, target in zip(starts["orbit"], starts["p1"], starts["p2"], targets):
+        assert abs(p1 - target[0]) < 0.01 * r1 and abs(p2 - target[1]) < 0.01 * r2   # the click landed there
+        mine = np.array(data["orbit"]) == ident
+        rows = np.column_stack([np.array(data[k])[mine] for k in ("t", "p1", "p2", "M", "dH")])
+        np.testing.assert_array_equal(rows, _orbit_json(s, p1, p2))       # bit for bit
+    # the screenshot: an artefact, and not blank (the white region, gray outside, coloured crossings)
+    where = Path(os.environ.get("EXPLORER_TEST_ARTEFACTS", tmp_path))
+    where.mkdir(parents=True, exist_ok=True)
+    shot = where / "serve.png"
+    page.screenshot(path=str(shot))
+    import matplotlib.image
+
+    img = matplotlib.image.imread(str(shot))[..., :3]
+    assert img.std() > 0.05
+    saturated = (img.max(axis=2) - img.min(axis=2)) > 0.3          # coloured pixels: the orbits
+    assert saturated.sum() > 100
+    print(f"first crossings {first * 1e3:.0f} ms after the click; screenshot {shot}")
+    # a link reopens the same view
+    _wait(page, "() => (new URLSearchParams(window.location.search).get('orbits') || '')"
+                           ".split(';').length === 3", timeout=60_000)      # the URL follows the page
+    again = _open(browser, page.url)
+    _wait_crossings(again, 3 * CROSSINGS)
+    assert again.evaluate(DATA, "starts")["p1"] == starts["p1"]
+    np.testing.assert_array_equal(np.array(again.evaluate(DATA, "crossings")["t"]).size, 3 * CROSSINGS)
+    again.close()
+    page.close()
+
+
+@browser_needed
+def test_a_change_of_mu_redraws_the_region_and_keeps_the_starts(served, browser):
+    page = _open(browser, served.url)
+    c1, c2, r1, r2 = SERVED.region
+    _click(page, c1 + 0.2 * r1, c2)
+    _wait_crossings(page, CROSSINGS)
+    _set_field(page, "mu", "0.5")
+    new = Settings(params=model.FIGURE4.with_(mu=0.5), crossings=CROSSINGS).region
+    _wait(page, f"() => Bokeh.documents[0].get_model_by_name('region').data.x[0] === {new[0]!r}",
+                           timeout=60_000)
+    region = page.evaluate(DATA, "region")
+    assert region["width"] == [2 * new[2]] and region["height"] == [2 * new[3]]
+    assert len(page.evaluate(DATA, "starts")["orbit"]) == 1             # the start is kept and runs again
+    _wait_crossings(page, CROSSINGS)
+    _wait(page, "() => window.location.search.includes('mu=0.5&')", timeout=60_000)
+    page.close()
+
+
+@browser_needed
+def test_a_bad_value_shows_a_message_and_computes_nothing(served, browser):
+    page = _open(browser, served.url)
+    before = page.evaluate(DATA, "region")
+    good = SERVED.fields()
+    for field, text in (("a1", "-1"), ("mu", "<img src=x onerror=alert(1)>"), ("tol", "0.5"), ("crossings", "1e9")):
+        _set_field(page, field, text)
+        _wait(page, f"() => ({TEXT})('message').includes({json.dumps(field)})", timeout=60_000)
+        assert "not applied" in page.evaluate(TEXT, "message")
+        assert page.locator("img[src=x]").count() == 0            # shown as text, not HTML
+        assert page.evaluate(DATA, "region") == before
+        assert page.evaluate(DATA, "crossings")["p1"] == []
+        _set_field(page, field, good[field])           # back: the message goes
+        _wait(page, f"() => ({TEXT})('message') === ''", timeout=60_000)
+    page.close()
+    assert served.proc.poll() is None                       # the server keeps running
+    assert urllib.request.urlopen(served.url, timeout=10).status == 200
+
+
+@browser_needed
+def test_a_bad_token_gets_no_app_and_ctrl_c_ends_the_server_cleanly(browser):
+    s = Served("--token", "s3cret")
+    try:
+        assert s.url.endswith("?token=s3cret")
+        bare = s.url.split("?")[0]
+        for url in (bare, bare + "?token=wrong", bare + "?token="):
+            with pytest.raises(urllib.error.HTTPError) as exc:
+                urllib.request.urlopen(url, timeout=10)
+            assert exc.value.code == 403
+        page = browser.new_page()
+        page.goto(bare + "?token=wrong")
+        page.wait_for_timeout(500)
+        assert page.evaluate("() => !window.Bokeh || Bokeh.documents.length === 0")
+        page.close()
+        assert urllib.request.urlopen(s.url, timeout=10).status == 200
+    finally:
+        code, err = s.interrupt()
+    assert code in (0, 130) and "Traceback" not in err, err[-2000:]
+
+
+@pytest.mark.skipif(importlib.util.find_spec("panel") is None, reason="panel is not installed (pip install panel)")
+def test_a_non_loopback_host_gets_a_token_that_every_page_request_needs():
+    from explorer.app.serve import server
+
+    s = Served("--host", "0.0.0.0")
+    try:
+        head, _, token = s.url.partition("?token=")
+        assert len(token) >= 24
+        port = head.rstrip("/").rsplit(":", 1)[1]
+        local = f"http://127.0.0.1:{port}/"
+        with pytest.raises(urllib.error.HTTPError) as exc:
+            urllib.request.urlopen(local, timeout=10)
+        assert exc.value.code == 403
+        assert urllib.request.urlopen(f"{local}?token={token}", timeout=10).status == 200
+    finally:
+        code, err = s.interrupt()
+    assert code in (0, 130) and "Traceback" not in err, err[-2000:]
+    assert server.is_loopback("127.0.0.1") and server.is_loopback("::1") and server.is_loopback("localhost")
+    assert not server.is_loopback("0.0.0.0") and not server.is_loopback("192.168.1.2")
+    assert server.token_matches("abc", "abc") and not server.token_matches("abc", "abd")
+    assert not server.token_matches("abc", None)
+
+
+def test_the_megno_raster_is_refined_and_marks_chaos_and_order():
+    from explorer.app.serve import raster
+
+    s = Settings(params=model.FIGURE4.with_(mu=0.03), tol=1e-10)
+    c1, c2, r1, r2 = s.region
+    w = raster.Window(c1 - r1, c1 + r1, c2 - r2, c2 + r2)
+    images = []
+    for im in raster.rasters(s, w):
+        images.append(im)
+        if im.n == raster.RESOLUTIONS[1] and im.complete:
+            break
+    assert [im.n for im in images if im.complete] == list(raster.RESOLUTIONS[:2])
+    final = images[-1].values
+    P1, P2 = w.centres(final.shape[0])
+    outside = model.section_M2(s.params, P1, P2, s.h) <= 0
+    assert np.isnan(final[outside]).all() and np.isfinite(final[~outside]).all()
+    # the chaotic sea (MEGNO grows) and regular islands (MEGNO near 2) are both on the map
+    assert np.nanmax(final) > 8 and np.nanmin(np.abs(final - 2)) < 0.3
+    stopped = list(raster.rasters(s, w, stop=lambda: True))
+    assert stopped == []
+
+
+@browser_needed
+def test_the_megno_layer_appears_coarse_first_and_follows_the_zoom(served, browser):
+    page = _open(browser, served.url)
+    page.evaluate(SET_BOX, ["MEGNO layer", True])
+    raster_n = "() => { const d = Bokeh.documents[0].get_model_by_name('raster').data; return d.n.length ? d.n[0] : 0 }"
+    _wait(page, f"() => ({raster_n})() >= 16", timeout=120_000)
+    _wait(page, "() => window.location.search.includes('megno=1')", timeout=60_000)
+    x, y = page.evaluate(TO_SCREEN, [0.0, 0.0])
+    page.mouse.move(x, y)
+    page.mouse.wheel(0, -400)                                   # zoom in (the wheel zoom is active)
+    ranges = ("() => { const f = Bokeh.documents[0].get_model_by_name('section');"
+              " return [f.x_range.start, f.x_range.end, f.y_range.start, f.y_range.end]; }")
+    _wait(page, f"() => {{ const r = ({ranges})(); const d = Bokeh.documents[0]"
+                           ".get_model_by_name('raster').data; return d.x.length && d.x[0] === r[0] "
+                           "&& Math.abs(d.x[0] + d.dw[0] - r[1]) < 1e-12 && d.y[0] === r[2]; }", timeout=60_000)
+    x0, x1, _y0, _y1 = page.evaluate(ranges)
+    assert x1 - x0 < 4.0                                         # zoomed in: narrower than the region
+    page.evaluate(SET_BOX, ["MEGNO layer", False])
+    _wait(page, "() => Bokeh.documents[0].get_model_by_name('raster').data.x.length === 0",
+                           timeout=60_000)
+    page.close()
+
+
+def test_explore_in_a_notebook_renders_and_streams_the_clicked_orbit():
+    pn = pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    import explorer as ex
+
+    app = ex.explore(mu=0.5, crossings=60)
+    try:
+        root = pn.panel(app).get_root()                 # what a notebook cell renders
+        assert root.select_one({"name": "section"}) is not None
+        page = app.page
+        assert page.click(0.3, 0.1) is not None
+        t0 = time.time()
+        while len(page.crossings.data["t"]) < 60 and time.time() - t0 < 120:
+            page.poll()
+            time.sleep(0.01)
+        ref = sections.section_crossings(page.settings.params, [0.3], [0.1], page.settings.h, 60)
+        got = np.column_stack([np.asarray(page.crossings.data[k]) for k in ("t", "p1", "p2", "M", "dH")])
+        np.testing.assert_array_equal(got, ref.orbit(0))
+        # the orbit's chaos indicators, as the Tk window computes them, colour its points on demand
+        from explorer.analysis import lyapunov
+        from explorer.app.explore.state import INDICATOR_TIME
+
+        while not page.indicators and time.time() - t0 < 120:
+            page.poll()
+            time.sleep(0.01)
+        (megno, mlce), = page.indicators.values()
+        ind = lyapunov.indicators(page.settings.params, ex.section_state(page.settings.params, [0.3], [0.1],
+                                                                         page.settings.h), INDICATOR_TIME)
+        assert (megno, mlce) == (float(ind.megno[0]), float(ind.mlce[0]))
+        assert np.all(np.asarray(page.crossings.data["megno"]) == megno) and "<Y> =" in page.status.text
+        page.colour_box.value = True
+        assert page.points.glyph.fill_color["field"] == "megno" and page.url_query()["colour"] == "megno"
+        page.undo()
+        assert len(page.crossings.data["t"]) == 0 and page.url_query()["orbits"] == ""
+        with pytest.raises(ParameterError, match="a1"):
+            ex.explore(a1=-1.0)
+    finally:
+        app.close()
+
+
+@browser_needed
+def test_rapid_clicks_undo_clear_and_export_keep_the_page_and_the_server_consistent(served, browser):
+    from explorer.io import scene as scene_mod
+
+    page = _open(browser, served.url)
+    c1, c2, r1, r2 = SERVED.region
+    for i in range(20):                                   # 20 clicks, 50 ms apart (double taps among them)
+        x, y = page.evaluate(TO_SCREEN, [c1 + (-0.9 + 0.09 * i) * r1, c2 + 0.05 * r2])
+        page.mouse.click(x, y)
+        page.wait_for_timeout(50)
+    _wait_crossings(page, 20 * CROSSINGS)
+    starts = page.evaluate(DATA, "starts")
+    assert len(starts["orbit"]) == 20 and len(set(starts["p1"])) == 20
+    data = page.evaluate(DATA, "crossings")
+    assert sorted(set(data["orbit"])) == sorted(starts["orbit"])
+    assert all(data["orbit"].count(i) == CROSSINGS for i in starts["orbit"])
+    page.get_by_role("button", name="Undo").click()
+    _wait(page, "() => Bokeh.documents[0].get_model_by_name('starts').data.orbit.length === 19",
+                           timeout=60_000)
+    assert len(page.evaluate(DATA, "crossings")["t"]) == 19 * CROSSINGS
+    page.get_by_role("button", name="Export scene").click()
+    _wait(page, f"() => ({TEXT})('message').includes('(the orbits, sweep format)')", timeout=120_000)
+    files = list(Path(served.export_dir).glob("browser-session-*.toml"))
+    assert len(files) == 1
+    assert [list(p) for p in scene_mod.load_scene(str(files[0])).seeds.points] == \
+        [[a, b] for a, b in zip(starts["p1"][:19], starts["p2"][:19])]
+    from explorer.io.store import read_store
+
+    stored = read_store(str(files[0].with_suffix(".h5"))).panels[0]          # the page's orbits, bit for bit
+    for i, ident in enumerate(starts["orbit"][:19]):
+        mine = np.array(data["orbit"]) == ident
+        rows = np.column_stack([np.array(data[k])[mine] for k in ("t", "p1", "p2", "M", "dH")])
+        np.testing.assert_array_equal(stored.orbit(i), rows)
+    page.get_by_role("button", name="Clear").click()
+    _wait(page, "() => Bokeh.documents[0].get_model_by_name('crossings').data.t.length === 0",
+                           timeout=60_000)
+    _wait(page, "() => /[?&]orbits=(&|$)/.test(window.location.search)", timeout=60_000)  # the link too
+    page.close()
+    assert urllib.request.urlopen(served.url, timeout=10).status == 200
