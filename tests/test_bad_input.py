@@ -55,6 +55,7 @@ BASE = {
     "sweep": ["sweep", "{scene}", "--no-figure", "--quiet", "--out", "o.h5"],
     "figures": ["figures", "--only", "figure4"],
     "manifold": ["manifold", "--arclength", "0.5"],
+    "serve": ["serve", "--port", "0"],     # never starts: the server is replaced (_no_server below)
 }
 MODEL_OPTIONS = ("--a1", "--a2", "--b", "--lam", "--chi", "--zeta", "--mu", "--xi", "--eta")
 #: options taking a real number, per command (the model parameters are added below)
@@ -68,6 +69,7 @@ REAL_OPTIONS = {
     "melnikov": ("--h", "--g0"),
     "trajectory": ("--p1", "--p2", "--M", "--phi", "--time", "--tol"),
     "manifold": ("--h", "--tol", "--arclength", "--max-time"),
+    "serve": ("--h", "--tol", "--dt"),
 }
 #: options taking an integer: (option, values out of range)
 INT_OPTIONS = {
@@ -79,6 +81,7 @@ INT_OPTIONS = {
     "trajectory": (("--samples", ("1", BIG)), ("--glyphs", ("0", "-1"))),
     "sweep": (("--jobs", ("0", "-1", BIG)),),
     "manifold": (("--period", ("0", BIG)), ("--index", ("-1", BIG)), ("--max-points", ("0", BIG))),
+    "serve": (("--panel", ("-1", "1")), ("--port", ("-1", "65536")), ("--crossings", ("0", BIG))),
 }
 #: options taking a point p1,p2
 PAIR_OPTIONS = {"manifold": ("--guess",), "fixedpoint": ("--guess",), "periodic": ("--guess",),
@@ -131,6 +134,12 @@ def _cases():
         ("figures--only=empty", ["figures", "--only="], "figure"),
         ("figures--only=unknown", ["figures", "--only=figure44"], "figure"),
         ("explore--unknown_scene", ["explore", "nosuchscene"], "scene"),
+        ("serve--unknown_scene", ["serve", "nosuchscene"], "scene"),
+        ("serve--method=bogus", BASE["serve"] + ["--method=bogus"], "method"),
+        ("serve--token=empty", BASE["serve"] + ["--token="], "--token"),
+        ("serve--token=space", BASE["serve"] + ["--token=a b"], "--token"),
+        ("serve--export-dir=missing", BASE["serve"] + ["--export-dir=/nonexistent/explorer"], "--export-dir"),
+        ("serve--host=empty", BASE["serve"] + ["--host="], "--host"),
         ("global_unknown_option", ["--bogus"], "--bogus"),
         ("global_unknown_command", ["orbitt"], "orbitt"),
         ("orbit_unknown_option", BASE["orbit"] + ["--tolerance=1e-9"], "--tolerance"),
@@ -145,6 +154,18 @@ CLI_TABLE = _cases()
 def _tokens(message: str) -> list:
     """The words of a message, '_' read as '-' (max_steps names --max-steps)."""
     return re.findall(r"[A-Za-z0-9][\w-]*", message.replace("_", "-"))
+
+
+@pytest.fixture(autouse=True)
+def _no_server(monkeypatch):
+    """`serve` must refuse every bad value before it starts a server: here a server that would
+    start raises instead, so a value that slips through fails its case rather than hanging."""
+    from explorer.app.serve import server
+
+    def started(*args, **kwargs):
+        raise RuntimeError("the server would have started")
+
+    monkeypatch.setattr(server, "run", started)
 
 
 def run_main(argv, capsys):

@@ -96,6 +96,9 @@ from explorer.app.runner import (
 from explorer.app.runner import (
     run_sweep as run_sweep,
 )
+from explorer.app.serve.notebook import (
+    explore as explore,
+)
 from explorer.io.scene import (
     Scene as Scene,
 )

@@ -6,7 +6,7 @@ import math
 import os
 
 from explorer import model
-from explorer.model import ParameterError
+from explorer.model import ParameterError, validation
 
 #: where the page is served unless told otherwise (loopback only: docs/commands/serve.md)
 DEFAULT_HOST = "127.0.0.1"
@@ -64,10 +64,15 @@ def cmd_serve(args) -> int:
     if args.token is not None and (not args.token or len(args.token) > 256 or not args.token.isprintable()
                                    or any(c in args.token for c in " &#?%/")):
         raise ParameterError("--token must be 1 to 256 printable characters without spaces or & # ? % /")
+    if not args.host or not args.host.strip() or any(c.isspace() for c in args.host):
+        # an empty address would bind every interface with no token: refused, not guessed
+        raise ParameterError(f"--host must be an address or host name (127.0.0.1 by default), got {args.host!r}")
     for name in ("h", "tol", "dt"):
         v = getattr(args, name)
         if v is not None and not math.isfinite(v):
             raise ParameterError(f"--{name} must be finite, got {v!r}")
+    if args.h is not None:
+        validation.magnitude("--h", args.h)
     if args.export_dir is not None and not os.path.isdir(args.export_dir):
         raise ParameterError(f"--export-dir must be an existing directory, got {args.export_dir!r}")
     base, label = settings_from_args(args)
