@@ -46,7 +46,7 @@ _EXPORTS = {
     # chaos indicators
     "Indicators": "explorer.analysis.lyapunov",
     "indicators": "explorer.analysis.lyapunov",
-    "chaotic_fraction": "explorer.analysis.fixedpoints",
+    "chaotic_fraction": "explorer.analysis.lyapunov",
     # the section map and its fixed points
     "SectionMap": "explorer.analysis.section_map",
     "FixedPoint": "explorer.analysis.fixedpoints",

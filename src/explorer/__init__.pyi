@@ -10,9 +10,6 @@ from explorer.analysis.fixedpoints import (
     FixedPoint as FixedPoint,
 )
 from explorer.analysis.fixedpoints import (
-    chaotic_fraction as chaotic_fraction,
-)
-from explorer.analysis.fixedpoints import (
     continue_branch as continue_branch,
 )
 from explorer.analysis.fixedpoints import (
@@ -23,6 +20,9 @@ from explorer.analysis.fixedpoints import (
 )
 from explorer.analysis.lyapunov import (
     Indicators as Indicators,
+)
+from explorer.analysis.lyapunov import (
+    chaotic_fraction as chaotic_fraction,
 )
 from explorer.analysis.lyapunov import (
     indicators as indicators,

@@ -7,7 +7,7 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis import lyapunov
-from explorer.analysis.fixedpoints import chaotic_fraction
+from explorer.analysis.lyapunov import chaotic_fraction
 from explorer.analysis.seeds import seed_points
 from explorer.io.scene import load_scene
 

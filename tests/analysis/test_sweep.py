@@ -303,7 +303,7 @@ def test_run_sweep_returns_a_report_and_a_rerun_computes_nothing(tmp_path, capsy
 def test_a_new_megno_threshold_reclassifies_the_stored_fraction_without_recomputing(tmp_path):
     """Issue 14 point 6: the threshold is outside the panel hash, and the stored chaotic_fraction
     follows it (recomputed from the stored MEGNO values, atomically)."""
-    from explorer.analysis.fixedpoints import chaotic_fraction
+    from explorer.analysis.lyapunov import chaotic_fraction
     from explorer.app.runner import run_sweep
 
     text = SMALL.replace("n = 24", "n = 12").replace("crossings = 40", "crossings = 5") + \

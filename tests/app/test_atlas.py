@@ -9,7 +9,7 @@ import pytest
 from matplotlib.image import imread
 
 from explorer.analysis import lyapunov, sweep
-from explorer.analysis.fixedpoints import chaotic_fraction
+from explorer.analysis.lyapunov import chaotic_fraction
 from explorer.app import runner
 from explorer.io.scene import SceneError, load_scene, parse_scene
 from explorer.io.store.atlas import read_atlas

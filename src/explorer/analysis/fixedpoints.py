@@ -28,7 +28,7 @@ from explorer.model import ParameterError, validation
 
 # names that lived here before the section map and the continuation helpers had their modules
 __all__ = ["DEFAULT_TOL", "RETURN_TMAX", "Branch", "FixedPoint", "MapResult", "SectionMap",
-           "analytic_eigenvalues_solution_I", "chaotic_fraction", "continuation_values", "continue_branch",
+           "analytic_eigenvalues_solution_I", "continuation_values", "continue_branch",
            "find_fixed_point", "follow", "golden_section_max", "manifold", "secant_follower", "separatrices"]
 
 
@@ -254,16 +254,3 @@ def follow(params, h, parameter, start, stop, guess, *, max_step=0.25, phi0=math
     if br.stopped is not None:
         raise ParameterError(f"the fixed point could not be followed to {parameter} = {stop:.10g}: {br.stopped}")
     return br.points[-1]
-
-
-def chaotic_fraction(megno, threshold, valid=None):
-    """Fraction of orbits with <Y> > threshold among the valid ones, with its binomial standard
-    error sqrt(p (1 - p) / n): with seeds on a uniform grid of the allowed region this estimates
-    the chaotic fraction of the section's area.  Returns (fraction, error, n)."""
-    megno = np.asarray(megno, float)
-    ok = np.isfinite(megno) if valid is None else (np.asarray(valid, bool) & np.isfinite(megno))
-    n = int(ok.sum())
-    if n == 0:
-        return float("nan"), float("nan"), 0
-    p = float(np.mean(megno[ok] > threshold))
-    return p, math.sqrt(max(p * (1 - p), 0.25 / n) / n), n

@@ -279,3 +279,16 @@ def regular_bound(T: float) -> float:
     """Upper envelope of the finite-time exponent of a regular orbit, 3 ln T / T
     (the exponent of a regular orbit decays like ln T / T; Cincotta & Simó 2000)."""
     return 3.0 * math.log(T) / T
+
+
+def chaotic_fraction(megno, threshold, valid=None):
+    """Fraction of orbits with <Y> > threshold among the valid ones, with its binomial standard
+    error sqrt(p (1 - p) / n): with seeds on a uniform grid of the allowed region this estimates
+    the chaotic fraction of the section's area.  Returns (fraction, error, n)."""
+    megno = np.asarray(megno, float)
+    ok = np.isfinite(megno) if valid is None else (np.asarray(valid, bool) & np.isfinite(megno))
+    n = int(ok.sum())
+    if n == 0:
+        return float("nan"), float("nan"), 0
+    p = float(np.mean(megno[ok] > threshold))
+    return p, math.sqrt(max(p * (1 - p), 0.25 / n) / n), n

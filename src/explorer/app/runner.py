@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from explorer.analysis import sections, sweep
-from explorer.analysis.fixedpoints import chaotic_fraction
+from explorer.analysis.lyapunov import chaotic_fraction
 from explorer.analysis.sections import ADAPTIVE_METHODS, energy_warning, max_energy_error
 from explorer.app import interrupt
 from explorer.app.interrupt import Interrupted

@@ -18,7 +18,7 @@ def quick_note(scene) -> str:
 
 
 def megno_map_figure(*, results_dir="results", quick=False, quiet=True) -> Drawn:
-    from explorer.analysis.fixedpoints import chaotic_fraction
+    from explorer.analysis.lyapunov import chaotic_fraction
     from explorer.app.chaos_raster import chaos_rasters
     from explorer.app.paper._sweeps import _lyapunov_panels
     from explorer.app.runner import classify_megno
