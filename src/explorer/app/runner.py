@@ -644,7 +644,7 @@ def _check_same_scene(scene, out: Path, force: bool) -> None:
     if not force:
         raise ParameterError(f"--out {out} holds the scene '{held}', not '{scene.name}'; use --force to replace it "
                              "or choose another --out")
-    out.unlink()
+    store.remove_store(out)
     stream.remove_stale_blocks(out)
 
 

@@ -75,12 +75,16 @@ naming the path.
 """
 from __future__ import annotations
 
-from explorer.io.store.atomic import (
-                                      atomic_path,
+from explorer.io.store.atomic import atomic_path, write_bytes_atomic
+from explorer.io.store.commit import (
+                                      RowSource,
                                       clean_stale_temporaries,
-                                      write_bytes_atomic,
+                                      commit_panel,
+                                      provenance,
+                                      remove_store,
+                                      update_panel,
+                                      update_panel_attrs,
 )
-from explorer.io.store.commit import RowSource, commit_panel, provenance, update_panel, update_panel_attrs
 from explorer.io.store.format import (
                                       COLUMNS,
                                       COMPRESS_ROWS,
@@ -96,6 +100,7 @@ from explorer.io.store.format import (
                                       StoreError,
                                       iter_rows,
                                       panel_hashes,
+                                      panels_dir,
                                       panel_product_hashes,
                                       read_panel_datasets,
                                       read_store,
@@ -122,6 +127,8 @@ __all__ = [
     "panel_product_hashes",
     "read_panel_datasets",
     "stored_scene_name",
+    "remove_store",
+    "panels_dir",
     "store_lock",
     "StoreBusy",
     "check_writable",

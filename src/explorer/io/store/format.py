@@ -20,7 +20,11 @@ import numpy as np
 from explorer.kernels import STATUS_NAMES
 
 FORMAT = "explorer.sections"
-FORMAT_VERSION = 1
+#: 2: one HDF5 file per panel in ``<store>.panels/``, joined by external links ``/panels/NNN`` in the
+#: store file; 1: every panel a group inside the store file (still read; converted on the next write)
+FORMAT_VERSION = 2
+#: the folder of a store's panel files: ``<store>`` + this
+PANELS_SUFFIX = ".panels"
 #: columns of a crossing row
 COLUMNS = ("t", "p1", "p2", "M", "dH")
 #: datasets with more rows than this are chunked + gzip(4) + shuffle + fletcher32
@@ -287,20 +291,57 @@ def _one_line(exc) -> str:
     return text[0] if text else type(exc).__name__
 
 
-def _panel_groups(f, path: str):
-    """(index, group) of every panel group, sorted by index."""
+def panels_dir(path) -> str:
+    """The folder of the panel files of the store at ``path``: ``<path>.panels``."""
+    return os.fspath(path) + PANELS_SUFFIX
+
+
+def panel_links(f) -> dict:
+    """{index: where panel ``index`` of the open store ``f`` lives}: the file name of its external
+    link, relative to the store's directory (format 2), or None for a group inside the store file
+    (format 1)."""
     if "panels" not in f:
-        return []
-    out = []
-    for name, grp in f["panels"].items():
+        return {}
+    out = {}
+    for name in f["panels"]:
+        link = f["panels"].get(name, getlink=True)
         try:
             idx = int(name)
         except ValueError:
-            raise StoreError(f"{path}: unexpected group /panels/{name}") from None
-        if not isinstance(grp, h5py.Group):
-            raise StoreError(f"{path}: /panels/{name} is not a group")
-        out.append((idx, grp))
-    return sorted(out, key=lambda t: t[0])
+            raise StoreError(f"{f.filename}: unexpected entry /panels/{name}") from None
+        out[idx] = link.filename if isinstance(link, h5py.ExternalLink) else None
+    return out
+
+
+def _panel_group(f, path: str, idx: int, *, missing: str = "raise", links: dict | None = None):
+    """The group of panel ``idx`` of the open store ``f`` (through its external link for format 2);
+    a panel file that is missing is a StoreError naming it (``missing="raise"``) or None
+    (``missing="skip"``: the panel counts as not stored, a sweep recomputes it)."""
+    name = f"{idx:03d}"
+    links = panel_links(f) if links is None else links
+    if idx not in links:
+        raise StoreError(f"{path}: no panel {idx}")
+    target = links[idx]
+    if target is not None and not os.path.isfile(os.path.join(os.path.dirname(os.path.abspath(path)), target)):
+        if missing == "skip":
+            return None
+        raise StoreError(f"{path}: the file of panel {idx} ({target}) is missing; a sweep recomputes it, "
+                         f"or {_FORCE_HINT}")
+    grp = f["panels"][name]
+    if not isinstance(grp, h5py.Group):
+        raise StoreError(f"{path}: /panels/{name} is not a group")
+    return grp
+
+
+def _panel_groups(f, path: str, *, missing: str = "raise"):
+    """(index, group) of every panel, sorted by index (``missing``: as :func:`_panel_group`)."""
+    out = []
+    links = panel_links(f)
+    for idx in sorted(links):
+        grp = _panel_group(f, path, idx, missing=missing, links=links)
+        if grp is not None:
+            out.append((idx, grp))
+    return out
 
 
 def _read_panel(idx: int, grp, path: str) -> PanelData:
@@ -353,10 +394,7 @@ def iter_rows(path, index: int, rows: int = 1 << 18):
     for memory can be read this way.  StoreError as :func:`read_store`."""
     path = os.fspath(path)
     with _reading(path) as f:
-        name = f"{int(index):03d}"
-        if "panels" not in f or name not in f["panels"]:
-            raise StoreError(f"{path}: no panel {index}")
-        dset = f["panels"][name]["crossings"]
+        dset = _panel_group(f, path, int(index))["crossings"]
         for lo in range(0, dset.shape[0], int(rows)):
             yield dset[lo: lo + int(rows)]
 
@@ -369,7 +407,7 @@ def panel_hashes(path) -> dict:
         return {}
     out = {}
     with _reading(path) as f:
-        for idx, grp in _panel_groups(f, path):
+        for idx, grp in _panel_groups(f, path, missing="skip"):
             a = grp.attrs
             if bool(_from_h5_attr(a.get("complete", False))) and "hash" in a:
                 out[idx] = _from_h5_attr(a["hash"])
@@ -397,7 +435,7 @@ def panel_product_hashes(path) -> dict:
     keys = ("hash",) + tuple(PRODUCT_HASH_ATTRS.values())
     out = {}
     with _reading(path) as f:
-        for idx, grp in _panel_groups(f, path):
+        for idx, grp in _panel_groups(f, path, missing="skip"):
             a = grp.attrs
             if bool(_from_h5_attr(a.get("complete", False))):
                 out[idx] = {k: _from_h5_attr(a[k]) for k in keys if k in a}
@@ -409,8 +447,5 @@ def read_panel_datasets(path, index: int, names) -> tuple[dict, dict]:
     crossings unless asked), and all its attributes.  StoreError as :func:`read_store`."""
     path = os.fspath(path)
     with _reading(path) as f:
-        name = f"{int(index):03d}"
-        if "panels" not in f or name not in f["panels"]:
-            raise StoreError(f"{path}: no panel {index}")
-        grp = f["panels"][name]
+        grp = _panel_group(f, path, int(index))
         return {d: grp[d][()] for d in names if d in grp}, _read_attrs(grp)
