@@ -334,7 +334,7 @@ def _transaction(path, index: int, write, file_attrs: dict | None = None, *, fre
         new = {}
         for idx, target in links.items():
             if idx != index and target is None:   # format 1: the panel moves into a file of its own
-                grp = old["panels"][f"{idx:03d}"]
+                grp = _panel_group(old, path, idx, links=links)
                 new[idx] = _new_panel_file(path, idx, lambda f, grp=grp: _copy_panel(grp, f), written)
             elif idx != index:
                 new[idx] = target
