@@ -198,3 +198,26 @@ def test_remove_store_and_a_fresh_commit_leave_no_panel_files_behind(tmp_path):
     assert_only_the_store(tmp_path, path)
     store.remove_store(path)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_reader_racing_a_commit_that_replaces_a_panel_reads_again(tmp_path, monkeypatch):
+    """A writer removes the panel file it replaces right after its commit; a reader that listed the
+    old store's links just before reads the new store instead of failing."""
+    from explorer.io.store import format as fmt
+
+    path = tmp_path / "s.h5"
+    for i in range(2):
+        commit_panel(path, i, *make_panel(i, 0, n=3, k=2), FILE_ATTRS)
+    links, calls = fmt.panel_links, []
+
+    def racing(f):
+        out = links(f)
+        if not calls:
+            calls.append(1)
+            commit_panel(path, 1, *make_panel(1, 9, n=3, k=2), FILE_ATTRS)   # the old file of panel 1 goes
+        return out
+
+    monkeypatch.setattr(fmt, "panel_links", racing)
+    s = read_store(path)
+    assert calls and sorted(s.panels) == [0, 1]
+    assert_panel_equals(s.panels[1], 1, 9, n=3, k=2)

@@ -351,8 +351,10 @@ def _transaction(path, index: int, write, file_attrs: dict | None = None, *, fre
             old.close()
     if links.get(index) is not None:
         superseded[index] = os.path.join(_store_dir(path), links[index])
-    for name in superseded.values():
-        _remove_quietly(name)
+    own = os.path.normpath(panels_dir(os.path.abspath(path)))
+    for name in superseded.values():   # only files of this store's folder (a copied store file links another's)
+        if os.path.dirname(os.path.normpath(name)) == own:
+            _remove_quietly(name)
 
 
 def commit_panel(path, index: int, arrays: dict, attrs: dict, file_attrs: dict | None = None, *,

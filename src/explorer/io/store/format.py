@@ -67,6 +67,15 @@ class StoreError(ValueError):
     """A store file is missing, unreadable, corrupt or of another format."""
 
 
+class PanelFileMissing(StoreError):
+    """The file of a panel that the store links is not there."""
+
+
+#: times :func:`read_store` reads again when a panel file vanished because a writer replaced the store
+#: meanwhile (it removes the panel files it supersedes right after its commit)
+READ_ATTEMPTS = 3
+
+
 # --------------------------------------------------------------------------- helpers
 
 def _utcnow() -> str:
@@ -325,8 +334,8 @@ def _panel_group(f, path: str, idx: int, *, missing: str = "raise", links: dict 
     if target is not None and not os.path.isfile(os.path.join(os.path.dirname(os.path.abspath(path)), target)):
         if missing == "skip":
             return None
-        raise StoreError(f"{path}: the file of panel {idx} ({target}) is missing; a sweep recomputes it, "
-                         f"or {_FORCE_HINT}")
+        raise PanelFileMissing(f"{path}: the file of panel {idx} ({target}) is missing (a store is its file "
+                               f"and the folder beside it, moved together); a sweep recomputes it, or {_FORCE_HINT}")
     grp = f["panels"][name]
     if not isinstance(grp, h5py.Group):
         raise StoreError(f"{path}: /panels/{name} is not a group")
@@ -382,10 +391,24 @@ def read_store(path) -> StoreData:
     Raises StoreError naming ``path`` if the file is missing, not HDF5, not an
     explorer store, or damaged (including fletcher32 checksum failures)."""
     path = os.fspath(path)
-    with _reading(path) as f:
-        attrs = _read_attrs(f)
-        panels = {idx: _read_panel(idx, grp, path) for idx, grp in _panel_groups(f, path)}
-    return StoreData(path=path, attrs=attrs, panels=panels)
+    for attempt in range(READ_ATTEMPTS):
+        before = _inode(path)
+        try:
+            with _reading(path) as f:
+                attrs = _read_attrs(f)
+                panels = {idx: _read_panel(idx, grp, path) for idx, grp in _panel_groups(f, path)}
+            return StoreData(path=path, attrs=attrs, panels=panels)
+        except PanelFileMissing:
+            if attempt + 1 == READ_ATTEMPTS or _inode(path) == before:   # not a writer's commit meanwhile
+                raise
+    raise AssertionError("unreachable")
+
+
+def _inode(path: str):
+    try:
+        return os.stat(path).st_ino
+    except OSError:
+        return None
 
 
 def iter_rows(path, index: int, rows: int = 1 << 18):
