@@ -221,3 +221,25 @@ def test_a_reader_racing_a_commit_that_replaces_a_panel_reads_again(tmp_path, mo
     s = read_store(path)
     assert calls and sorted(s.panels) == [0, 1]
     assert_panel_equals(s.panels[1], 1, 9, n=3, k=2)
+
+
+def test_a_store_renamed_with_its_folder_still_reads_and_its_next_commit_relinks_it(tmp_path, monkeypatch):
+    """The links name the folder ``<old name>.panels``; explorer finds the panel files in the
+    renamed folder, cleaning removes none of them, and the next commit links them by their new
+    place (then plain h5py reads it again)."""
+    old = tmp_path / "old.h5"
+    for i in range(2):
+        commit_panel(old, i, *make_panel(i, 0, n=3, k=2), FILE_ATTRS)
+    new = tmp_path / "new.h5"
+    old.rename(new)
+    (tmp_path / "old.h5.panels").rename(tmp_path / "new.h5.panels")
+    monkeypatch.chdir(tmp_path)                      # a relative path to the store, too
+    assert store.clean_stale_temporaries("new.h5") == []
+    s = read_store("new.h5")
+    assert sorted(s.panels) == [0, 1] and set(store.panel_hashes("new.h5")) == {0, 1}
+    assert_panel_equals(s.panels[1], 1, 0, n=3, k=2)
+    commit_panel("new.h5", 2, *make_panel(2, 0, n=3, k=2), FILE_ATTRS)
+    assert_only_the_store(tmp_path, new)
+    with h5py.File(new, "r") as f:
+        assert f["panels/001"].attrs["complete"]
+    assert_panel_equals(read_store(new).panels[0], 0, 0, n=3, k=2)

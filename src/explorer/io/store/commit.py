@@ -35,6 +35,7 @@ from explorer.io.store.format import (
     _panel_group,
     _set_attrs,
     _utcnow,
+    panel_file,
     panel_links,
     panels_dir,
     settings_hash,
@@ -301,7 +302,8 @@ def _linked_files(path: str) -> dict:
     except StoreError:
         return {}
     with f:
-        return {i: os.path.join(_store_dir(path), t) for i, t in panel_links(f).items() if t is not None}
+        found = {i: panel_file(path, t) for i, t in panel_links(f).items() if t is not None}
+    return {i: name for i, name in found.items() if name is not None}
 
 
 def _transaction(path, index: int, write, file_attrs: dict | None = None, *, fresh: bool = False,
@@ -336,8 +338,9 @@ def _transaction(path, index: int, write, file_attrs: dict | None = None, *, fre
             if idx != index and target is None:   # format 1: the panel moves into a file of its own
                 grp = _panel_group(old, path, idx, links=links)
                 new[idx] = _new_panel_file(path, idx, lambda f, grp=grp: _copy_panel(grp, f), written)
-            elif idx != index:
-                new[idx] = target
+            elif idx != index:   # kept; named in this store's folder if the store and folder were renamed
+                found = panel_file(path, target)
+                new[idx] = target if found is None else os.path.relpath(found, _store_dir(path))
         new[index] = _new_panel_file(path, index, lambda f: write(f, old_grp), written)
         _fsync_dir(panels_dir(path))
         with atomic_path(path) as tmp:
@@ -349,8 +352,9 @@ def _transaction(path, index: int, write, file_attrs: dict | None = None, *, fre
     finally:
         if old is not None:
             old.close()
-    if links.get(index) is not None:
-        superseded[index] = os.path.join(_store_dir(path), links[index])
+    replaced = panel_file(path, links[index]) if links.get(index) is not None else None
+    if replaced is not None:
+        superseded[index] = replaced
     own = os.path.normpath(panels_dir(os.path.abspath(path)))
     for name in superseded.values():   # only files of this store's folder (a copied store file links another's)
         if os.path.dirname(os.path.normpath(name)) == own:
@@ -452,8 +456,8 @@ def clean_stale_temporaries(path) -> list[str]:
     if os.path.exists(path):
         try:
             with _open_store(path) as f:
-                linked = {os.path.normpath(os.path.join(_store_dir(path), t))
-                          for t in panel_links(f).values() if t is not None}
+                found = [panel_file(path, t) for t in panel_links(f).values() if t is not None]
+            linked = {os.path.normpath(os.path.abspath(name)) for name in found if name is not None}
         except StoreError:
             return removed
     else:
@@ -461,7 +465,7 @@ def clean_stale_temporaries(path) -> list[str]:
     for name in sorted(os.listdir(folder)):
         full = os.path.join(folder, name)
         pid_text = name.split("-")[1] if name.count("-") >= 2 else ""
-        if os.path.normpath(full) in linked or not os.path.isfile(full):
+        if os.path.normpath(os.path.abspath(full)) in linked or not os.path.isfile(full):
             continue
         if pid_text.isdigit() and int(pid_text) != os.getpid() and _pid_alive(int(pid_text)):
             continue

@@ -331,15 +331,38 @@ def _panel_group(f, path: str, idx: int, *, missing: str = "raise", links: dict 
     if idx not in links:
         raise StoreError(f"{path}: no panel {idx}")
     target = links[idx]
-    if target is not None and not os.path.isfile(os.path.join(os.path.dirname(os.path.abspath(path)), target)):
-        if missing == "skip":
-            return None
-        raise PanelFileMissing(f"{path}: the file of panel {idx} ({target}) is missing (a store is its file "
-                               f"and the folder beside it, moved together); a sweep recomputes it, or {_FORCE_HINT}")
-    grp = f["panels"][name]
+    if target is None:              # format 1: a group inside the store file
+        grp = f["panels"][name]
+    else:
+        found = panel_file(path, target)
+        if found is None:
+            if missing == "skip":
+                return None
+            raise PanelFileMissing(f"{path}: the file of panel {idx} ({target}) is missing (a store is its file "
+                                   f"and the folder beside it, moved together); a sweep recomputes it, or "
+                                   f"{_FORCE_HINT}")
+        if found == os.path.join(os.path.dirname(os.path.abspath(path)), target):
+            grp = f["panels"][name]
+        else:   # the store and its folder were renamed: the link names the old folder
+            panel = h5py.File(found, "r")
+            grp = panel["/"]
+            grp._explorer_file = panel      # open as long as the group is used
     if not isinstance(grp, h5py.Group):
         raise StoreError(f"{path}: /panels/{name} is not a group")
     return grp
+
+
+def panel_file(path, target: str) -> str | None:
+    """The panel file that the link ``target`` of the store at ``path`` names: the file of that name
+    in the store's own folder (:func:`panels_dir`; the link's target itself unless the store and its
+    folder were renamed or copied together), else the target relative to the store's directory;
+    None if neither exists."""
+    path = os.path.abspath(os.fspath(path))
+    for candidate in (os.path.join(panels_dir(path), os.path.basename(target)),
+                      os.path.join(os.path.dirname(path), target)):
+        if os.path.isfile(candidate):
+            return candidate
+    return None
 
 
 def _panel_groups(f, path: str, *, missing: str = "raise"):
