@@ -338,7 +338,9 @@ def _transaction(path, index: int, write, file_attrs: dict | None = None, *, fre
             if idx != index and target is None:   # format 1: the panel moves into a file of its own
                 grp = _panel_group(old, path, idx, links=links)
                 new[idx] = _new_panel_file(path, idx, lambda f, grp=grp: _copy_panel(grp, f), written)
-            elif idx != index:   # kept; named in this store's folder if the store and folder were renamed
+            elif idx != index and os.path.dirname(target) == os.path.basename(panels_dir(path)):
+                new[idx] = target    # kept
+            elif idx != index:       # kept, named in this store's folder (the store and folder were renamed)
                 found = panel_file(path, target)
                 new[idx] = target if found is None else os.path.relpath(found, _store_dir(path))
         new[index] = _new_panel_file(path, index, lambda f: write(f, old_grp), written)

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 
 import h5py
 import numpy as np
+from h5py import h5l
 
 from explorer.kernels import STATUS_NAMES
 
@@ -311,14 +312,17 @@ def panel_links(f) -> dict:
     (format 1)."""
     if "panels" not in f:
         return {}
+    panels = f["panels"]
+    links = panels.id.links       # h5py's low-level link API: no object is opened
     out = {}
-    for name in f["panels"]:
-        link = f["panels"].get(name, getlink=True)
+    for name in panels:
         try:
             idx = int(name)
         except ValueError:
             raise StoreError(f"{f.filename}: unexpected entry /panels/{name}") from None
-        out[idx] = link.filename if isinstance(link, h5py.ExternalLink) else None
+        raw = name.encode()
+        external = links.get_info(raw).type == h5l.TYPE_EXTERNAL
+        out[idx] = links.get_val(raw)[0].decode() if external else None
     return out
 
 
