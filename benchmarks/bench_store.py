@@ -10,7 +10,7 @@ file and the store file), the size of the store file (root attributes and one ex
 panel), and what format 1 copied at that commit (the whole store so far).  The commit time should
 be flat against the panels stored; format 1 grew linearly.
 
-    python benchmarks/bench_store.py                 # 200 panels of 20 x 100 rows, ~15 s
+    python benchmarks/bench_store.py                 # 200 panels of 20 x 100 rows, ~5 s
     python benchmarks/bench_store.py --quick         # 30 panels
     python benchmarks/bench_store.py --json out.json # also the per-commit numbers as JSON
 
@@ -32,7 +32,7 @@ from explorer.io import store
 #: the numbers of panels already stored at which the table reports (those below --panels)
 REPORT_AT = (0, 1, 10, 50, 100, 150, 199)
 #: commits around each reported number whose times are pooled (median)
-WINDOW = 5
+WINDOW = 10
 COLUMNS = 5
 
 
@@ -84,7 +84,7 @@ def table(rows: list[dict]) -> list[str]:
     for k in REPORT_AT:
         if k >= len(rows):
             break
-        pool = rows[k: k + WINDOW] if k else rows[:1]
+        pool = rows[max(1, k - WINDOW // 2): k + WINDOW // 2 + 1] if k else rows[:1]
         ms = 1e3 * statistics.median(r["seconds"] for r in pool)
         r = rows[k]
         lines.append(f"| {k} | {ms:.1f} | {r['written']:,} | {r['store_file']:,} | {r['format1_copied'] / 1e6:.2f} |")
@@ -104,6 +104,7 @@ def main(argv=None) -> int:
     rows = run(n, a.orbits, a.crossings)
     print(f"store format {store.FORMAT_VERSION}: {n} panels of {a.orbits} orbits x {a.crossings} crossings "
           f"({a.orbits * a.crossings * 8 * COLUMNS / 1e3:.0f} kB of rows each), {time.perf_counter() - t0:.1f} s")
+    print(f"load average at the end {[round(v, 2) for v in os.getloadavg()]} (fsync times vary with other jobs)")
     print("\n".join(table(rows)))
     first, last = rows[:WINDOW], rows[-WINDOW:]
     ratio = statistics.median(r["seconds"] for r in last) / statistics.median(r["seconds"] for r in first)
