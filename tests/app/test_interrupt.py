@@ -49,10 +49,13 @@ def write_scene(directory, text):
 
 
 def datasets(path):
-    """Every dataset of a store (the numbers; attributes hold timestamps)."""
+    """Every dataset of a store (the numbers; attributes hold timestamps), panel by panel (HDF5's
+    visit does not cross the external links to the panel files)."""
     out = {}
     with h5py.File(path, "r") as f:
-        f.visititems(lambda name, obj: out.__setitem__(name, obj[()]) if isinstance(obj, h5py.Dataset) else None)
+        for p in f["panels"]:
+            f["panels"][p].visititems(lambda name, obj, p=p: out.__setitem__(f"panels/{p}/{name}", obj[()])
+                                      if isinstance(obj, h5py.Dataset) else None)
     return out
 
 

@@ -247,3 +247,37 @@ def test_update_panel_replaces_the_indicators_keeps_the_crossings_and_does_not_g
     with pytest.raises(ValueError, match="replaces only"):
         store.update_panel(path, 0, {"crossings": rows}, {})
     assert path.read_bytes() == before
+
+
+def test_a_panel_whose_file_was_lost_is_recomputed_alone_and_a_format_1_store_is_continued(tmp_path):
+    """Store format 2 (docs/store.md): the rerun of a sweep whose store lost one panel file computes
+    that panel only (the MEGNO threshold changed too: the other panel's fraction is restamped from
+    its stored indicators); a format-1 store (every panel inside the one file) is continued and
+    converted."""
+    out = tmp_path / "b.h5"
+    run(tmp_path, BOTH, out)
+    before = panel_arrays(out, ("crossings", "megno"))
+    with h5py.File(out, "r") as f:
+        lost = f["panels"].get("001", getlink=True).filename
+    (tmp_path / lost).unlink()
+    again = run(tmp_path, BOTH + "threshold = 3.0\n", out)
+    assert again.computed == (1,) and again.restamped == (0,)
+    after = panel_arrays(out, ("crossings", "megno"))
+    for k in ("crossings", "megno"):
+        np.testing.assert_array_equal(after[0][k], before[0][k])
+        np.testing.assert_array_equal(after[1][k], before[1][k])    # the same numbers, computed again
+    assert store.read_store(out).panels[0].attrs["megno_threshold"] == 3.0
+
+    old = tmp_path / "old.h5"                 # the same store in format 1
+    with h5py.File(out, "r") as s, h5py.File(old, "w") as d:
+        d.attrs.update(s.attrs)
+        d.attrs["format_version"] = 1
+        panels = d.create_group("panels")
+        for name in s["panels"]:
+            s.copy(s["panels"][name], panels, name=name)
+    assert run(tmp_path, BOTH + "threshold = 3.0\n", old).computed == ()
+    rep = run(tmp_path, BOTH.replace("values = [0.1, 0.6]", "values = [0.1, 0.6, 0.9]") + "threshold = 3.0\n", old)
+    assert rep.computed == (2,)
+    data = store.read_store(old)
+    assert data.attrs["format_version"] == store.FORMAT_VERSION and sorted(data.panels) == [0, 1, 2]
+    np.testing.assert_array_equal(data.panels[1].crossings, before[1]["crossings"])

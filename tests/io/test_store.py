@@ -72,6 +72,22 @@ def assert_panel_equals(p, index, gen, **kw):
     assert p.hash == store.settings_hash(attrs["settings"])
 
 
+def store_bytes(path):
+    """Bytes on disk of the store at ``path``: its file and its panel files."""
+    folder = path.parent / (path.name + ".panels")
+    return path.stat().st_size + sum(p.stat().st_size for p in folder.iterdir())
+
+
+def assert_only_the_store(directory, path):
+    """``directory`` holds the store file ``path`` and its panel folder, and the folder holds exactly
+    the panel files the store links: nothing half-written or unlinked is left behind."""
+    folder = path.parent / (path.name + ".panels")
+    assert sorted(directory.iterdir()) == sorted([path, folder])
+    with h5py.File(path, "r") as f:
+        linked = {f["panels"].get(name, getlink=True).filename for name in f["panels"]}
+    assert {f"{path.name}.panels/{p.name}" for p in folder.iterdir()} == linked
+
+
 def test_round_trip_two_panels_arrays_attrs_and_ragged_orbits(tmp_path):
     path = tmp_path / "s.h5"
     a0, t0 = make_panel(0, 7)
@@ -128,7 +144,7 @@ def test_file_attrs_format_version_scene_and_provenance(tmp_path):
     commit_panel(path, 0, *make_panel(0, 1), fa)
     s = read_store(path)
     assert s.attrs["format"] == "explorer.sections" == store.FORMAT
-    assert s.attrs["format_version"] == 1
+    assert s.attrs["format_version"] == store.FORMAT_VERSION == 2
     assert s.scene == SCENE_TOML and s.scene_name == "fig4"
     assert s.attrs["sweep_parameter"] == "mu"
     for key in ("created", "updated"):
@@ -202,7 +218,7 @@ def test_replacing_a_panel_does_not_grow_the_file_and_keeps_the_others(tmp_path)
     fresh = tmp_path / "fresh.h5"      # the same content written once
     for i, gen in ((0, 0), (1, 10), (2, 0)):
         commit_panel(fresh, i, *make_panel(i, gen), FILE_ATTRS)
-    assert path.stat().st_size < 1.05 * fresh.stat().st_size, (path.stat().st_size, fresh.stat().st_size)
+    assert store_bytes(path) < 1.05 * store_bytes(fresh), (store_bytes(path), store_bytes(fresh))
     data = read_store(path)
     assert sorted(data.panels) == [0, 1, 2]
     assert_panel_equals(data.panels[0], 0, 0)
@@ -233,7 +249,7 @@ def test_crash_before_replace_leaves_original_unchanged_and_readable(tmp_path, m
     s = read_store(path)
     assert sorted(s.panels) == [0]
     assert_panel_equals(s.panels[0], 0, 1)
-    assert list(tmp_path.iterdir()) == [path]  # the temporary was removed
+    assert_only_the_store(tmp_path, path)  # the temporaries were removed
 
 
 _KILL_CHILD = """
@@ -280,7 +296,7 @@ def test_sigkill_at_random_moments_never_leaves_a_half_written_store(tmp_path):
             seen_panels = max(seen_panels, len(s.panels))
     assert seen_panels > 0
     store.clean_stale_temporaries(path)
-    assert list(tmp_path.iterdir()) == [path]
+    assert_only_the_store(tmp_path, path)
 
 
 def test_stale_temporaries_are_cleaned_live_ones_and_other_files_kept(tmp_path):
@@ -362,7 +378,7 @@ def test_invalid_arrays_are_rejected_without_touching_the_file(tmp_path):
     with pytest.raises(ValueError, match="trajectory"):
         commit_panel(path, 1, arrays, attrs, FILE_ATTRS)
     assert path.read_bytes() == before
-    assert list(tmp_path.iterdir()) == [path]
+    assert_only_the_store(tmp_path, path)
 
 
 def test_write_bytes_atomic_and_atomic_path(tmp_path):

@@ -159,7 +159,7 @@ def _to_store(path, params, p1, p2, h, n_crossings, block, force, on_block, stop
     arrays = {"seeds": np.array([[p1, p2]], float), "y0": y0, "count": st.done, "status": st.status,
               "final": st.y, "info": st.info}
     if force and os.path.exists(path):
-        os.remove(path)
+        store.remove_store(path)
     blocks.finish(arrays, attrs, file_attrs)
     return OrbitReport(int(st.done[0]), STATUS_NAMES[int(st.status[0])], blocks.max_dh, int(st.blocks), resumed, path,
                        settings)

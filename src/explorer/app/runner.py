@@ -556,13 +556,15 @@ def _restamp_fractions(scene, out, stored) -> tuple:
     if "lyapunov" not in scene.compute or not stored:
         return ()
     threshold = float(scene.lyapunov.threshold)
-    data = store.read_store(out)
+    on_disk = store.panel_product_hashes(out)   # complete panels whose files are there
     done = []
     for i in stored:
-        pd = data.panels.get(i)
-        if pd is None or "megno" not in pd.extra or pd.attrs.get("megno_threshold") == threshold:
+        if i not in on_disk:
             continue
-        frac, err, _n_ok = chaotic_fraction(classify_megno(pd.extra), threshold, pd.extra["lyapunov_status"] == 0)
+        extra, attrs = store.read_panel_datasets(out, i, store.INDICATOR_DATASETS)   # not the crossings
+        if "megno" not in extra or attrs.get("megno_threshold") == threshold:
+            continue
+        frac, err, _n_ok = chaotic_fraction(classify_megno(extra), threshold, extra["lyapunov_status"] == 0)
         store.update_panel_attrs(out, i, {"chaotic_fraction": frac, "chaotic_fraction_error": err,
                                           "megno_threshold": threshold})
         done.append(i)
@@ -648,7 +650,7 @@ def _check_same_scene(scene, out: Path, force: bool) -> None:
     if not force:
         raise ParameterError(f"--out {out} holds the scene '{held}', not '{scene.name}'; use --force to replace it "
                              "or choose another --out")
-    out.unlink()
+    store.remove_store(out)
     stream.remove_stale_blocks(out)
 
 

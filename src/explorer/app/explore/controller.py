@@ -11,7 +11,6 @@ from __future__ import annotations
 import datetime as _dt
 import math
 import os
-import secrets
 import sys
 
 from explorer import model
@@ -382,17 +381,8 @@ class Explorer:
         path = os.fspath(path)
         os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
         file_attrs = {"scene_name": "explore", "scene": self.scene_text()}
-        tmp = f"{path}.tmp-{os.getpid()}-{secrets.token_hex(4)}"
-        try:
-            store.commit_panel(tmp, 0, self.state.panel_arrays(), self.state.panel_attrs(), file_attrs,
-                               status_names=self.state.status_names())
-            os.replace(tmp, path)
-        except BaseException:
-            try:
-                os.remove(tmp)
-            except FileNotFoundError:
-                pass
-            raise
+        store.commit_panel(path, 0, self.state.panel_arrays(), self.state.panel_attrs(), file_attrs,
+                           status_names=self.state.status_names(), fresh=True)
         return path
 
     # ------------------------------------------------------------ GUI

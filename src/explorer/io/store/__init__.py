@@ -1,26 +1,31 @@
-"""HDF5 store of a Poincaré-section sweep: self-describing and crash-safe.
+"""HDF5 store of a Poincaré-section sweep: self-describing, crash-safe, and a commit costs its panel.
 
 Only the parent process of a sweep writes the store; workers return arrays.
-Every write is a whole-file transaction (:func:`commit_panel`): the new
-contents are written to a temporary file in the same directory, fsynced and
-``os.replace``'d onto the store, then the directory is fsynced.  After a
-SIGKILL or power loss at any instant the store is either the old complete file
-or the new complete file, never half-written; at worst a stale
-``<path>.tmp-<pid>-<random>`` is left behind, which the next sweep removes
-(:func:`clean_stale_temporaries`).
+A store ``X.h5`` is a small **store file** (root attributes, one HDF5 external link
+``/panels/NNN`` per panel) and the **panel folder** ``X.h5.panels/`` with one HDF5 file per panel.
+Every write is a transaction (:func:`commit_panel`): the panel is written into a new file of the
+folder (a name no store links yet) and fsynced, then a new store file linking it is written to a
+temporary name, fsynced and ``os.replace``'d onto ``X.h5`` (the commit point), the directory is
+fsynced and the panel file it replaced is removed.  It writes the panel and the store file, not the
+other panels.  After a SIGKILL or power loss at any instant the store is either the old complete
+store or the new one, never half-written; at worst a stale ``<path>.tmp-<pid>-<random>`` or a panel
+file that no store links is left behind, which the next sweep removes (:func:`clean_stale_temporaries`).
 
-Layout (``format = "explorer.sections"``, ``format_version = 1``)
-------------------------------------------------------------------
+Layout (``format = "explorer.sections"``, ``format_version = 2``), read through the store file
+(h5py follows the links; format 1, still read and converted at its next write, held the panel
+groups inside the store file)
+--------------------------------------------------------------------------------------------------
 ::
 
-    /                               attrs: format = "explorer.sections", format_version = 1,
+    /                               attrs: format = "explorer.sections", format_version = 2,
                                            scene_name, scene (the scene's TOML text),
                                            created, updated (ISO 8601 UTC),
                                            provenance (JSON text: package and dependency
                                            versions, python, platform, git revision,
                                            command line), plus any extra file attrs
                                            given by the caller
-    /panels/000, /panels/001, ...   one group per panel (zero-padded index), attrs:
+    /panels/000, /panels/001, ...   one external link per panel (zero-padded index) to the root
+                                    group of ``X.h5.panels/NNN-<pid>-<random>.h5``, attrs:
                                            index, label, parameter, value, h,
                                            params (JSON text of the model parameters),
                                            settings (JSON text), hash (sha256 of the settings),
@@ -58,14 +63,15 @@ indicators beside stored crossings with :func:`update_panel`.  A panel with
 
 Modules: :mod:`~explorer.io.store.format` (layout constants, reading),
 :mod:`~explorer.io.store.atomic` (crash-safe file replacement),
-:mod:`~explorer.io.store.commit` (provenance, the panel transaction).
+:mod:`~explorer.io.store.commit` (provenance, the panel transaction, cleaning).
 
 API
 ---
 Streamed panels (rows written block by block, resumable after a kill):
 :mod:`~explorer.io.store.stream`.
 
-``commit_panel``, ``update_panel``, ``read_store`` (-> :class:`StoreData` / :class:`PanelData`),
+``commit_panel``, ``update_panel``, ``remove_store``, ``panels_dir``,
+``read_store`` (-> :class:`StoreData` / :class:`PanelData`),
 ``read_panel_datasets``, ``panel_hashes``, ``panel_product_hashes``, ``stored_scene_name``,
 ``clean_stale_temporaries``, ``provenance``,
 ``store_lock`` (one writer per store, :mod:`~explorer.io.store.lock`), ``check_writable``,
@@ -75,12 +81,16 @@ naming the path.
 """
 from __future__ import annotations
 
-from explorer.io.store.atomic import (
-                                      atomic_path,
+from explorer.io.store.atomic import atomic_path, write_bytes_atomic
+from explorer.io.store.commit import (
+                                      RowSource,
                                       clean_stale_temporaries,
-                                      write_bytes_atomic,
+                                      commit_panel,
+                                      provenance,
+                                      remove_store,
+                                      update_panel,
+                                      update_panel_attrs,
 )
-from explorer.io.store.commit import RowSource, commit_panel, provenance, update_panel, update_panel_attrs
 from explorer.io.store.format import (
                                       COLUMNS,
                                       COMPRESS_ROWS,
@@ -97,6 +107,7 @@ from explorer.io.store.format import (
                                       iter_rows,
                                       panel_hashes,
                                       panel_product_hashes,
+                                      panels_dir,
                                       read_panel_datasets,
                                       read_store,
                                       settings_hash,
@@ -122,6 +133,8 @@ __all__ = [
     "panel_product_hashes",
     "read_panel_datasets",
     "stored_scene_name",
+    "remove_store",
+    "panels_dir",
     "store_lock",
     "StoreBusy",
     "check_writable",

@@ -1,10 +1,12 @@
 """Writing the store: provenance, and :func:`commit_panel`, the transaction that adds or
-replaces one panel (a copy of the file is extended, fsynced and ``os.replace``'d onto the
-old one; replacing a panel rebuilds the file without the old panel's bytes)."""
+replaces one panel (the panel is written into a file of its own, then a new small store file
+linking every panel file is fsynced and ``os.replace``'d onto the old one: a commit costs the
+panel, not the store)."""
 from __future__ import annotations
 
 import os
 import platform as _platform
+import secrets
 import shutil
 import subprocess
 import sys
@@ -12,7 +14,8 @@ import sys
 import h5py
 import numpy as np
 
-from explorer.io.store.atomic import atomic_path
+from explorer.io.store.atomic import _fsync_dir, _fsync_path, _pid_alive, _remove_quietly, atomic_path
+from explorer.io.store.atomic import clean_stale_temporaries as _clean_temporaries
 from explorer.io.store.format import (
     _DEPENDENCIES,
     _OPTIONAL_PER_ORBIT,
@@ -25,11 +28,16 @@ from explorer.io.store.format import (
     GZIP_LEVEL,
     INDICATOR_DATASETS,
     OPTIONAL_DATASETS,
+    PANELS_SUFFIX,
     StoreError,
     _canonical_json,
     _open_store,
+    _panel_group,
     _set_attrs,
     _utcnow,
+    panel_file,
+    panel_links,
+    panels_dir,
     settings_hash,
 )
 from explorer.kernels import STATUS_NAMES
@@ -210,12 +218,8 @@ def _create_dataset(grp, name: str, a):
     return grp.create_dataset(name, data=a, **kw)
 
 
-def _write_panel(f, index: int, arrays: dict, attrs: dict, status_names: dict) -> None:
-    panels = f.require_group("panels")
-    name = f"{index:03d}"
-    if name in panels:
-        del panels[name]
-    grp = panels.create_group(name)
+def _fill_panel(grp, index: int, arrays: dict, attrs: dict, status_names: dict) -> None:
+    """Write panel ``index`` (its datasets and attributes, ``complete`` last) into the empty group ``grp``."""
     for d in DATASETS + OPTIONAL_DATASETS:
         if d in arrays:
             _create_dataset(grp, d, arrays[d])
@@ -233,28 +237,134 @@ def _write_panel(f, index: int, arrays: dict, attrs: dict, status_names: dict) -
     grp.attrs["complete"] = True  # last: the panel is whole
 
 
-def _copy_without_panel(src_path: str, dst_path: str, index: int) -> None:
-    """Write to dst_path a compact copy of the store at src_path without panel ``index``:
-    root attributes, every top-level object and every other panel group (datasets with their
-    chunking, filters and attributes, via HDF5's object copy)."""
-    skip = f"{index:03d}"
-    with h5py.File(src_path, "r") as src, h5py.File(dst_path, "w") as dst:
-        for key, value in src.attrs.items():
-            dst.attrs[key] = value
-        for name in src:
-            if name != "panels":
-                src.copy(src[name], dst, name=name)
-        if "panels" in src:
-            panels = dst.create_group("panels")
-            for key, value in src["panels"].attrs.items():
-                panels.attrs[key] = value
-            for name in src["panels"]:
-                if name != skip:
-                    src.copy(src["panels"][name], panels, name=name)
+def _copy_panel(src, dst, *, skip=(), attrs: dict | None = None) -> None:
+    """Copy the panel group ``src`` into the empty group ``dst`` (another file): its datasets (with
+    their chunking, filters and attributes, via HDF5's object copy; the rows are not read into
+    memory) except ``skip``, and its attributes except ``skip``, then set ``attrs``; ``complete`` last."""
+    for d in src:
+        if d not in skip:
+            src.copy(src[d], dst, name=d)
+    for k, v in src.attrs.items():
+        if k not in skip and k != "complete":
+            dst.attrs[k] = v
+    _set_attrs(dst, attrs or {})
+    dst.attrs["complete"] = True  # last: the panel is whole
+
+
+# --------------------------------------------------------------------------- the transaction
+
+def _store_dir(path: str) -> str:
+    return os.path.dirname(os.path.abspath(path))
+
+
+def _new_panel_file(path: str, index: int, write, written: list) -> str:
+    """Write a new panel file for panel ``index`` (``write(root group)``), fsynced; returns its name
+    relative to the store's directory (the external link's target), also appended to ``written``.
+    The name is unique (``NNN-<pid>-<random>.h5``), so no file that a store links is ever changed."""
+    name = f"{os.path.basename(path)}{PANELS_SUFFIX}/{index:03d}-{os.getpid()}-{secrets.token_hex(4)}.h5"
+    full = os.path.join(_store_dir(path), name)
+    written.append(full)
+    with h5py.File(full, "w") as f:
+        write(f)
+    _fsync_path(full)
+    return name
+
+
+def _write_top(tmp: str, old, links: dict, file_attrs: dict) -> None:
+    """The store file at ``tmp``: the root attributes of ``old`` (the open store, or None) updated
+    by ``file_attrs`` and the managed ones, and one external link ``/panels/NNN`` per panel."""
+    with h5py.File(tmp, "w") as f:
+        panels = f.create_group("panels")
+        if old is not None:
+            for key, value in old.attrs.items():
+                f.attrs[key] = value
+            if "panels" in old:
+                for key, value in old["panels"].attrs.items():
+                    panels.attrs[key] = value
+        now = _utcnow()
+        if "created" not in f.attrs:
+            f.attrs["created"] = now
+        if "provenance" not in file_attrs and "provenance" not in f.attrs:
+            file_attrs = dict(file_attrs, provenance=_canonical_json(provenance()))
+        f.attrs["format"] = FORMAT
+        f.attrs["format_version"] = FORMAT_VERSION
+        _set_attrs(f, file_attrs)
+        f.attrs["updated"] = now
+        for idx in sorted(links):
+            panels[f"{idx:03d}"] = h5py.ExternalLink(links[idx], "/")
+
+
+def _linked_files(path: str) -> dict:
+    """{index: absolute path of its panel file} of the store at ``path`` ({} if there is none or it
+    cannot be read)."""
+    try:
+        f = _open_store(path)
+    except StoreError:
+        return {}
+    with f:
+        found = {i: panel_file(path, t) for i, t in panel_links(f).items() if t is not None}
+    return {i: name for i, name in found.items() if name is not None}
+
+
+def _transaction(path, index: int, write, file_attrs: dict | None = None, *, fresh: bool = False,
+                 replace_corrupt: bool = False, existing_panel: bool = False) -> None:
+    """The one way a store changes: panel ``index`` is written into a new panel file by
+    ``write(new group, old group or None)``, then a new store file linking it and the other panels
+    is written under a temporary name, fsynced and ``os.replace``'d onto ``path`` (the commit
+    point), then the panel file it replaces is removed.  Bytes written: the panel and the small store
+    file, whatever the number of panels.  The panels of a format-1 store are first moved into
+    files of their own (once).  ``fresh``: the store becomes this one panel.  ``existing_panel``:
+    the panel must be stored already (StoreError otherwise)."""
+    path = os.fspath(path)
+    superseded = _linked_files(path) if fresh else {}
+    old = None
+    if os.path.exists(path) and not fresh:
+        try:
+            old = _open_store(path)
+        except StoreError:
+            if not replace_corrupt:
+                raise
+    written: list = []
+    try:
+        links = panel_links(old) if old is not None else {}
+        if existing_panel and index not in links:
+            raise StoreError(f"{path}: no panel {index} to update")
+        old_grp = _panel_group(old, path, index, missing="skip", links=links) if index in links else None
+        if existing_panel and old_grp is None:
+            _panel_group(old, path, index, links=links)   # raises: the panel's file is missing
+        os.makedirs(panels_dir(path), exist_ok=True)
+        new = {}
+        for idx, target in links.items():
+            if idx != index and target is None:   # format 1: the panel moves into a file of its own
+                grp = _panel_group(old, path, idx, links=links)
+                new[idx] = _new_panel_file(path, idx, lambda f, grp=grp: _copy_panel(grp, f), written)
+            elif idx != index and os.path.dirname(target) == os.path.basename(panels_dir(path)):
+                new[idx] = target    # kept
+            elif idx != index:       # kept, named in this store's folder (the store and folder were renamed)
+                found = panel_file(path, target)
+                new[idx] = target if found is None else os.path.relpath(found, _store_dir(path))
+        new[index] = _new_panel_file(path, index, lambda f: write(f, old_grp), written)
+        _fsync_dir(panels_dir(path))
+        with atomic_path(path) as tmp:
+            _write_top(tmp, old, new, file_attrs or {})
+    except BaseException:
+        for name in written:
+            _remove_quietly(name)
+        raise
+    finally:
+        if old is not None:
+            old.close()
+    replaced = panel_file(path, links[index]) if links.get(index) is not None else None
+    if replaced is not None:
+        superseded[index] = replaced
+    own = os.path.normpath(panels_dir(os.path.abspath(path)))
+    for name in superseded.values():   # only files of this store's folder (a copied store file links another's)
+        if os.path.dirname(os.path.normpath(name)) == own:
+            _remove_quietly(name)
 
 
 def commit_panel(path, index: int, arrays: dict, attrs: dict, file_attrs: dict | None = None, *,
-                 replace_corrupt: bool = False, status_names: dict | None = None) -> None:
+                 replace_corrupt: bool = False, status_names: dict | None = None, fresh: bool = False) -> None:
     """Atomically add or replace panel ``index`` of the store at ``path``.
 
     ``arrays`` holds seeds, y0, count, status, final, info and either
@@ -268,16 +378,17 @@ def commit_panel(path, index: int, arrays: dict, attrs: dict, file_attrs: dict |
     ``format_version``, ``created`` (kept from the existing file) and
     ``updated`` are managed here, and ``provenance`` is computed if neither the
     caller nor the existing file gives one.  ``status_names`` ({code: name})
-    defaults to ``explorer.kernels.STATUS_NAMES``.
+    defaults to ``explorer.kernels.STATUS_NAMES``.  ``fresh``: the store becomes this one panel
+    (whatever ``path`` held is replaced).
 
-    ``path`` is never modified in place: the new file is built as
-    ``<path>.tmp-<pid>-<random>`` (a copy of ``path`` if it exists), fsynced and
-    ``os.replace``'d onto ``path``; the directory is then fsynced.
+    Cost: the panel's bytes plus the small store file, not the whole store.  The panel is written
+    into a new file ``<path>.panels/NNN-<pid>-<random>.h5``, fsynced; then a new store file linking
+    it is built as ``<path>.tmp-<pid>-<random>.h5``, fsynced and ``os.replace``'d onto ``path``
+    (the directory is then fsynced); the panel file it replaces is removed last.
 
     Raises StoreError if ``path`` exists but is not a readable explorer store,
-    unless ``replace_corrupt=True`` (a fresh file then replaces it).
+    unless ``replace_corrupt=True`` (a fresh store then replaces it).
     """
-    path = os.fspath(path)
     index = int(index)
     if index < 0:
         raise ValueError(f"panel index must be >= 0, got {index}")
@@ -287,89 +398,81 @@ def commit_panel(path, index: int, arrays: dict, attrs: dict, file_attrs: dict |
         file_attrs.pop(key, None)
     if isinstance(file_attrs.get("provenance"), dict):
         file_attrs["provenance"] = _canonical_json(file_attrs["provenance"])
-
-    existing = os.path.exists(path)
-    replacing = False
-    if existing:
-        try:
-            with _open_store(path) as f:
-                replacing = "panels" in f and f"{index:03d}" in f["panels"]
-        except StoreError:
-            if not replace_corrupt:
-                raise
-            existing = False
-
-    with atomic_path(path) as tmp:
-        if replacing:
-            # replacing a panel: copy everything else into a fresh file, so the file does not
-            # keep the old panel's bytes (HDF5 never reclaims the space of a deleted group)
-            _copy_without_panel(path, tmp, index)
-        elif existing:
-            shutil.copyfile(path, tmp)
-        with h5py.File(tmp, "r+" if existing else "w") as f:
-            now = _utcnow()
-            if "created" not in f.attrs:
-                f.attrs["created"] = now
-            if "provenance" not in file_attrs and "provenance" not in f.attrs:
-                file_attrs["provenance"] = _canonical_json(provenance())
-            f.attrs["format"] = FORMAT
-            f.attrs["format_version"] = FORMAT_VERSION
-            _set_attrs(f, file_attrs)
-            f.attrs["updated"] = now
-            _write_panel(f, index, prepared, attrs or {},
-                         STATUS_NAMES if status_names is None else status_names)
-
+    names = STATUS_NAMES if status_names is None else status_names
+    _transaction(path, index, lambda grp, old: _fill_panel(grp, index, prepared, attrs or {}, names), file_attrs,
+                 fresh=fresh, replace_corrupt=replace_corrupt)
 
 
 def update_panel_attrs(path, index: int, attrs: dict) -> None:
-    """Atomically set attributes of an existing panel (the data are not touched): a copy of
-    the store is changed, fsynced and ``os.replace``'d onto ``path``, as in
-    :func:`commit_panel`.  Used when a setting outside the panel hash changes a derived
-    attribute (the MEGNO threshold -> ``chaotic_fraction``)."""
-    path = os.fspath(path)
-    index = int(index)
-    with _open_store(path) as f:
-        if "panels" not in f or f"{index:03d}" not in f["panels"]:
-            raise StoreError(f"{path}: no panel {index} to update")
-    with atomic_path(path) as tmp:
-        shutil.copyfile(path, tmp)
-        with h5py.File(tmp, "r+") as f:
-            _set_attrs(f["panels"][f"{index:03d}"], attrs)
-            f.attrs["updated"] = _utcnow()
+    """Atomically set attributes of an existing panel (its datasets are copied unchanged into the
+    panel's new file, as in :func:`commit_panel`).  Used when a setting outside the panel hash
+    changes a derived attribute (the MEGNO threshold -> ``chaotic_fraction``)."""
+    _transaction(path, int(index), lambda grp, old: _copy_panel(old, grp, attrs=attrs), existing_panel=True)
 
 
 def update_panel(path, index: int, arrays: dict, attrs: dict, *, remove=()) -> None:
     """Atomically replace or add indicator datasets (``megno``, ..., ``lyapunov_seeds``: the
     indicators product) and attributes of the stored panel ``index``, keeping its other datasets
-    (the crossings are not read into memory); ``remove``: datasets and attributes to delete.  As
-    :func:`commit_panel`, the file is rebuilt in a temporary copy without the old bytes, fsynced and
-    ``os.replace``'d onto ``path``."""
+    (the crossings are copied by HDF5, not read into memory); ``remove``: datasets and attributes to
+    delete.  As :func:`commit_panel`, the panel gets a new file and the store file is replaced."""
     path = os.fspath(path)
     index = int(index)
-    name = f"{index:03d}"
     unknown = sorted(set(arrays) - set(INDICATOR_DATASETS))
     if unknown:
         raise ValueError(f"update_panel replaces only {list(INDICATOR_DATASETS)}, got {unknown}")
     with _open_store(path) as f:
-        if "panels" not in f or name not in f["panels"]:
-            raise StoreError(f"{path}: no panel {index} to update")
-        grp = f["panels"][name]
+        grp = _panel_group(f, path, index)
         kept_seeds = "lyapunov_seeds" in grp and "lyapunov_seeds" not in remove
         n = grp["lyapunov_seeds" if kept_seeds else "count"].shape[0]   # rows of the indicator datasets
     prepared = _indicator_arrays(arrays, n)
-    with atomic_path(path) as tmp:
-        _copy_without_panel(path, tmp, index)
-        with h5py.File(path, "r") as src, h5py.File(tmp, "r+") as dst:
-            old = src["panels"][name]
-            grp = dst.require_group("panels").create_group(name)
-            for d in old:
-                if d not in prepared and d not in remove:
-                    src.copy(old[d], grp, name=d)
-            for d, a in prepared.items():
-                _create_dataset(grp, d, a)
-            for k, v in old.attrs.items():
-                if k not in remove and k not in attrs and k != "complete":
-                    grp.attrs[k] = v
-            _set_attrs(grp, attrs)
-            grp.attrs["complete"] = True  # last: the panel is whole
-            dst.attrs["updated"] = _utcnow()
+
+    def write(grp, old):
+        for d, a in prepared.items():
+            _create_dataset(grp, d, a)
+        _copy_panel(old, grp, skip=set(prepared) | set(remove), attrs=attrs)
+
+    _transaction(path, index, write, existing_panel=True)
+
+
+def remove_store(path) -> None:
+    """Remove the store at ``path`` and its panel files (the store file first: a kill in between
+    leaves panel files that nothing links, which :func:`clean_stale_temporaries` removes)."""
+    path = os.fspath(path)
+    _remove_quietly(path)
+    _fsync_dir(_store_dir(path))
+    shutil.rmtree(panels_dir(path), ignore_errors=True)
+
+
+def clean_stale_temporaries(path) -> list[str]:
+    """Remove what killed runs left beside the store at ``path``: ``<path>.tmp-*`` files
+    (:func:`explorer.io.store.atomic.clean_stale_temporaries`) and the files in ``<path>.panels/``
+    that the store does not link (a panel written, or replaced, by a run killed before or after its
+    commit point); returns the removed paths.  Files of another process that is still alive are
+    kept (its commit may be in flight); nothing is removed from the panel folder of a store that
+    cannot be read.  Call it while holding the store's lock."""
+    path = os.fspath(path)
+    removed = _clean_temporaries(path)
+    folder = panels_dir(path)
+    if not os.path.isdir(folder):
+        return removed
+    if os.path.exists(path):
+        try:
+            with _open_store(path) as f:
+                found = [panel_file(path, t) for t in panel_links(f).values() if t is not None]
+            linked = {os.path.normpath(os.path.abspath(name)) for name in found if name is not None}
+        except StoreError:
+            return removed
+    else:
+        linked = set()
+    for name in sorted(os.listdir(folder)):
+        full = os.path.join(folder, name)
+        pid_text = name.split("-")[1] if name.count("-") >= 2 else ""
+        if os.path.normpath(os.path.abspath(full)) in linked or not os.path.isfile(full):
+            continue
+        if pid_text.isdigit() and int(pid_text) != os.getpid() and _pid_alive(int(pid_text)):
+            continue
+        _remove_quietly(full)
+        removed.append(full)
+    if not os.path.exists(path) and not os.listdir(folder):
+        os.rmdir(folder)
+    return removed

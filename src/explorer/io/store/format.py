@@ -16,11 +16,16 @@ from dataclasses import dataclass, field
 
 import h5py
 import numpy as np
+from h5py import h5l
 
 from explorer.kernels import STATUS_NAMES
 
 FORMAT = "explorer.sections"
-FORMAT_VERSION = 1
+#: 2: one HDF5 file per panel in ``<store>.panels/``, joined by external links ``/panels/NNN`` in the
+#: store file; 1: every panel a group inside the store file (still read; converted on the next write)
+FORMAT_VERSION = 2
+#: the folder of a store's panel files: ``<store>`` + this
+PANELS_SUFFIX = ".panels"
 #: columns of a crossing row
 COLUMNS = ("t", "p1", "p2", "M", "dH")
 #: datasets with more rows than this are chunked + gzip(4) + shuffle + fletcher32
@@ -61,6 +66,15 @@ _FORCE_HINT = "use --force to overwrite it or choose another --out"
 
 class StoreError(ValueError):
     """A store file is missing, unreadable, corrupt or of another format."""
+
+
+class PanelFileMissing(StoreError):
+    """The file of a panel that the store links is not there."""
+
+
+#: times :func:`read_store` reads again when a panel file vanished because a writer replaced the store
+#: meanwhile (it removes the panel files it supersedes right after its commit)
+READ_ATTEMPTS = 3
 
 
 # --------------------------------------------------------------------------- helpers
@@ -287,20 +301,83 @@ def _one_line(exc) -> str:
     return text[0] if text else type(exc).__name__
 
 
-def _panel_groups(f, path: str):
-    """(index, group) of every panel group, sorted by index."""
+def panels_dir(path) -> str:
+    """The folder of the panel files of the store at ``path``: ``<path>.panels``."""
+    return os.fspath(path) + PANELS_SUFFIX
+
+
+def panel_links(f) -> dict:
+    """{index: where panel ``index`` of the open store ``f`` lives}: the file name of its external
+    link, relative to the store's directory (format 2), or None for a group inside the store file
+    (format 1)."""
     if "panels" not in f:
-        return []
-    out = []
-    for name, grp in f["panels"].items():
+        return {}
+    panels = f["panels"]
+    links = panels.id.links       # h5py's low-level link API: no object is opened
+    out = {}
+    for name in panels:
         try:
             idx = int(name)
         except ValueError:
-            raise StoreError(f"{path}: unexpected group /panels/{name}") from None
-        if not isinstance(grp, h5py.Group):
-            raise StoreError(f"{path}: /panels/{name} is not a group")
-        out.append((idx, grp))
-    return sorted(out, key=lambda t: t[0])
+            raise StoreError(f"{f.filename}: unexpected entry /panels/{name}") from None
+        raw = name.encode()
+        external = links.get_info(raw).type == h5l.TYPE_EXTERNAL
+        out[idx] = links.get_val(raw)[0].decode() if external else None
+    return out
+
+
+def _panel_group(f, path: str, idx: int, *, missing: str = "raise", links: dict | None = None):
+    """The group of panel ``idx`` of the open store ``f`` (through its external link for format 2);
+    a panel file that is missing is a StoreError naming it (``missing="raise"``) or None
+    (``missing="skip"``: the panel counts as not stored, a sweep recomputes it)."""
+    name = f"{idx:03d}"
+    links = panel_links(f) if links is None else links
+    if idx not in links:
+        raise StoreError(f"{path}: no panel {idx}")
+    target = links[idx]
+    if target is None:              # format 1: a group inside the store file
+        grp = f["panels"][name]
+    else:
+        found = panel_file(path, target)
+        if found is None:
+            if missing == "skip":
+                return None
+            raise PanelFileMissing(f"{path}: the file of panel {idx} ({target}) is missing (a store is its file "
+                                   f"and the folder beside it, moved together); a sweep recomputes it, or "
+                                   f"{_FORCE_HINT}")
+        if found == os.path.join(os.path.dirname(os.path.abspath(path)), target):
+            grp = f["panels"][name]
+        else:   # the store and its folder were renamed: the link names the old folder
+            panel = h5py.File(found, "r")
+            grp = panel["/"]
+            grp._explorer_file = panel      # open as long as the group is used
+    if not isinstance(grp, h5py.Group):
+        raise StoreError(f"{path}: /panels/{name} is not a group")
+    return grp
+
+
+def panel_file(path, target: str) -> str | None:
+    """The panel file that the link ``target`` of the store at ``path`` names: the file of that name
+    in the store's own folder (:func:`panels_dir`; the link's target itself unless the store and its
+    folder were renamed or copied together), else the target relative to the store's directory;
+    None if neither exists."""
+    path = os.path.abspath(os.fspath(path))
+    for candidate in (os.path.join(panels_dir(path), os.path.basename(target)),
+                      os.path.join(os.path.dirname(path), target)):
+        if os.path.isfile(candidate):
+            return candidate
+    return None
+
+
+def _panel_groups(f, path: str, *, missing: str = "raise"):
+    """(index, group) of every panel, sorted by index (``missing``: as :func:`_panel_group`)."""
+    out = []
+    links = panel_links(f)
+    for idx in sorted(links):
+        grp = _panel_group(f, path, idx, missing=missing, links=links)
+        if grp is not None:
+            out.append((idx, grp))
+    return out
 
 
 def _read_panel(idx: int, grp, path: str) -> PanelData:
@@ -341,10 +418,24 @@ def read_store(path) -> StoreData:
     Raises StoreError naming ``path`` if the file is missing, not HDF5, not an
     explorer store, or damaged (including fletcher32 checksum failures)."""
     path = os.fspath(path)
-    with _reading(path) as f:
-        attrs = _read_attrs(f)
-        panels = {idx: _read_panel(idx, grp, path) for idx, grp in _panel_groups(f, path)}
-    return StoreData(path=path, attrs=attrs, panels=panels)
+    for attempt in range(READ_ATTEMPTS):
+        before = _inode(path)
+        try:
+            with _reading(path) as f:
+                attrs = _read_attrs(f)
+                panels = {idx: _read_panel(idx, grp, path) for idx, grp in _panel_groups(f, path)}
+            return StoreData(path=path, attrs=attrs, panels=panels)
+        except PanelFileMissing:
+            if attempt + 1 == READ_ATTEMPTS or _inode(path) == before:   # not a writer's commit meanwhile
+                raise
+    raise AssertionError("unreachable")
+
+
+def _inode(path: str):
+    try:
+        return os.stat(path).st_ino
+    except OSError:
+        return None
 
 
 def iter_rows(path, index: int, rows: int = 1 << 18):
@@ -353,10 +444,7 @@ def iter_rows(path, index: int, rows: int = 1 << 18):
     for memory can be read this way.  StoreError as :func:`read_store`."""
     path = os.fspath(path)
     with _reading(path) as f:
-        name = f"{int(index):03d}"
-        if "panels" not in f or name not in f["panels"]:
-            raise StoreError(f"{path}: no panel {index}")
-        dset = f["panels"][name]["crossings"]
+        dset = _panel_group(f, path, int(index))["crossings"]
         for lo in range(0, dset.shape[0], int(rows)):
             yield dset[lo: lo + int(rows)]
 
@@ -369,7 +457,7 @@ def panel_hashes(path) -> dict:
         return {}
     out = {}
     with _reading(path) as f:
-        for idx, grp in _panel_groups(f, path):
+        for idx, grp in _panel_groups(f, path, missing="skip"):
             a = grp.attrs
             if bool(_from_h5_attr(a.get("complete", False))) and "hash" in a:
                 out[idx] = _from_h5_attr(a["hash"])
@@ -397,7 +485,7 @@ def panel_product_hashes(path) -> dict:
     keys = ("hash",) + tuple(PRODUCT_HASH_ATTRS.values())
     out = {}
     with _reading(path) as f:
-        for idx, grp in _panel_groups(f, path):
+        for idx, grp in _panel_groups(f, path, missing="skip"):
             a = grp.attrs
             if bool(_from_h5_attr(a.get("complete", False))):
                 out[idx] = {k: _from_h5_attr(a[k]) for k in keys if k in a}
@@ -409,8 +497,5 @@ def read_panel_datasets(path, index: int, names) -> tuple[dict, dict]:
     crossings unless asked), and all its attributes.  StoreError as :func:`read_store`."""
     path = os.fspath(path)
     with _reading(path) as f:
-        name = f"{int(index):03d}"
-        if "panels" not in f or name not in f["panels"]:
-            raise StoreError(f"{path}: no panel {index}")
-        grp = f["panels"][name]
+        grp = _panel_group(f, path, int(index))
         return {d: grp[d][()] for d in names if d in grp}, _read_attrs(grp)
