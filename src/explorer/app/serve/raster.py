@@ -1,7 +1,7 @@
 """The chaos layer of the page: a MEGNO raster of the visible window, coarse first, then refined.
 
 For each resolution of ``RESOLUTIONS`` (n x n cells over the window), the centres of the cells
-inside the allowed region are started on the section (MODEL.md R9, M > 0) and their mean MEGNO
+inside the allowed region are started on the section (docs/model.md R9, M > 0) and their mean MEGNO
 <Y>(``RASTER_TIME``) is computed with :func:`explorer.analysis.lyapunov.indicators` (the tangent
 lanes, the page's method and tolerance), ``BATCH`` seeds per call; cells outside the region are
 NaN.  After each batch the partial image is handed out (``on_image(generation, image)``), so the

@@ -16,7 +16,7 @@ from explorer import model
 from explorer.analysis import sections
 from explorer.model import ParameterError, validation
 
-#: the model parameters the page has a field for (all of MODEL.md R3's)
+#: the model parameters the page has a field for (all of docs/model.md R3's)
 PAGE_PARAMS = ("mu", "lam", "a1", "a2", "b", "chi", "zeta", "xi", "eta")
 #: every field of the page, in the order they are shown (and written in the URL)
 FIELDS = ("mu", "h", "lam", "a1", "a2", "b", "chi", "zeta", "xi", "eta", "method", "tol", "dt", "crossings")
@@ -72,14 +72,14 @@ class Settings:
 
     @property
     def region(self):
-        """(c1, c2, r1, r2) of the allowed region (MODEL.md R9), or None when it is empty."""
+        """(c1, c2, r1, r2) of the allowed region (docs/model.md R9), or None when it is empty."""
         e = model.allowed_ellipse(self.params, self.h, self.phi0)
         if e is None or not (e[2] > 0.0 and e[3] > 0.0):
             return None
         return tuple(float(v) for v in e)
 
     def admissible(self, p1: float, p2: float) -> bool:
-        """(p1, p2) lies in the allowed region (M^2 >= 0, MODEL.md R9)."""
+        """(p1, p2) lies in the allowed region (M^2 >= 0, docs/model.md R9)."""
         return bool(model.section_M2(self.params, p1, p2, self.h, self.phi0) >= 0.0)
 
     def fields(self) -> dict:
