@@ -19,7 +19,7 @@ EXAMPLE = "python -m explorer serve figure4 --mu 0.03"
 
 def add_parser(sub):
     """Add ``serve`` to the command line's subparsers."""
-    from explorer.analysis.sections import METHODS
+    from explorer.analysis.sections import DEFAULT_DT, DEFAULT_TOL, METHODS
     from explorer.app.serve.settings import DEFAULT_CROSSINGS
 
     s = sub.add_parser("serve", help="the explorer in the browser: click on the section, watch the orbits appear",
@@ -41,8 +41,10 @@ def add_parser(sub):
                    "into [none: the page offers the scene as a download only]")
     s.add_argument("--h", type=float, default=None, help="energy level [the scene's, else 2]")
     s.add_argument("--method", default=None, help=f"one of {', '.join(METHODS)} [the scene's, else taylor]")
-    s.add_argument("--tol", type=float, default=None, help="tolerance of taylor/dop853 [the scene's, else 1e-13]")
-    s.add_argument("--dt", type=float, default=None, help="fixed step of the split* methods [the scene's, else 0.05]")
+    s.add_argument("--tol", type=float, default=None,
+                   help=f"tolerance of taylor/dop853 [the scene's, else {DEFAULT_TOL}]")
+    s.add_argument("--dt", type=float, default=None,
+                   help=f"fixed step of the split* methods [the scene's, else {DEFAULT_DT}]")
     s.add_argument("--crossings", type=int, default=None,
                    help=f"crossings per click [the scene's, else {DEFAULT_CROSSINGS}]")
     options.add_model_args(s, None, title=options.SCENE_MODEL_GROUP)
