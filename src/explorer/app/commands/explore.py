@@ -45,4 +45,3 @@ def run(args) -> int:
         raise model.ParameterError(problem)
     explore.from_args(args).run()
     return 0
-

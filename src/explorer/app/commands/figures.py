@@ -44,5 +44,3 @@ def run(args) -> int:
     for o in outcomes:
         print(o.line())
     return 1 if any(o.status == "failed" for o in outcomes) else 0
-
-

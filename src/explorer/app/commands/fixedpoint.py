@@ -53,4 +53,3 @@ def run(args) -> int:
         for k in ("p1", "p2", "trace", "det", "eigenvalues", "stable", "return_time"):
             print(f"{k} {out[k]!r}")
     return 0
-

@@ -77,4 +77,3 @@ def run(args) -> int:
             for row in hist:
                 print(",".join(repr(v) for v in row))
     return 0
-

@@ -77,4 +77,3 @@ def run(args) -> int:
         print(f"lobe area {abs(lb.area):.10g} +- {lb.error:.2g}")
     print(f"flux per iteration {flux!r}")
     return 0
-

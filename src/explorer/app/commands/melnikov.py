@@ -65,5 +65,3 @@ def run(args) -> int:
         print("splitting on phi = pi, F0(W^u) - F0(W^s):")
         print(melnikov.format_table(out["splitting"]))
     return 0
-
-

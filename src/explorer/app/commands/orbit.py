@@ -102,4 +102,3 @@ def _run_orbit(args, params, block, kw):
         if rep.status != "done" and not args.json:
             print(f"explorer: orbit stopped after {rep.crossings} crossings: {rep.status}", file=sys.stderr)
     return rep
-

@@ -82,4 +82,3 @@ def run(args) -> int:
         for o in orbits:
             print(_orbit_line(o))
     return 0
-

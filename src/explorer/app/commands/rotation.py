@@ -64,5 +64,3 @@ def run(args) -> int:
         for r in out["profile"]:
             print(f"{r['s']!r},{r['p1']!r},{r['p2']!r},{r['rotation']!r},{r['converged']}")
     return 0
-
-

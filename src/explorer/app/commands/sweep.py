@@ -51,4 +51,3 @@ def run(args) -> int:
                        progress=not args.quiet)
     print(format_report(report))
     return 0
-

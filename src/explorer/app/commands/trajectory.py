@@ -98,5 +98,3 @@ def run(args) -> int:
     for f in out.get("figures", []):
         print(f"wrote {f}")
     return 0
-
-
