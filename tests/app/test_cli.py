@@ -148,3 +148,27 @@ def test_every_help_ends_with_an_example_that_parses(command, capsys):
 def test_every_command_has_an_example():
     sub = next(a for a in cli.build_parser()._actions if isinstance(a, __import__("argparse")._SubParsersAction))
     assert set(sub.choices) == set(cli.EXAMPLES)
+
+
+def test_the_registry_lists_every_command_module_once_with_its_page():
+    """One module per command (app/commands/<name>.py, serve beside its web page): each is in the
+    registry, has its parser, its run and its example, a page docs/commands/<name>.md in the
+    toctree, and the parser lists the commands in the registry's order."""
+    from pathlib import Path
+
+    from explorer.app import commands
+    from explorer.app.commands import registry
+
+    root = Path(commands.__file__).parent
+    modules = {f"explorer.app.commands.{p.stem}" for p in root.glob("*.py")} - {
+        "explorer.app.commands.__init__", "explorer.app.commands.options", "explorer.app.commands.registry"}
+    assert modules <= set(registry.MODULES.values())
+    assert len(set(registry.MODULES.values())) == len(registry.MODULES)
+    docs = Path(__file__).resolve().parents[2] / "docs"
+    toctree = (docs / "index.md").read_text().split()
+    for name in registry.COMMANDS:
+        mod = registry.module(name)
+        assert callable(mod.add_parser) and callable(mod.run) and mod.EXAMPLE.split()[3] == name
+        assert (docs / "commands" / f"{name}.md").is_file() and f"commands/{name}" in toctree, name
+    sub = next(a for a in cli.build_parser()._actions if isinstance(a, __import__("argparse")._SubParsersAction))
+    assert tuple(sub.choices) == registry.COMMANDS

@@ -1,21 +1,25 @@
 """The ``serve`` command: its options (:func:`add_parser`, imports no web library, so
-``explorer --help`` stays fast) and what it does (:func:`cmd_serve`)."""
+``explorer --help`` stays fast) and what it does (:func:`run`); listed in
+:mod:`explorer.app.commands.registry` like every command.  Its page: docs/commands/serve.md."""
 from __future__ import annotations
 
 import math
 import os
 
 from explorer import model
+from explorer.app.commands import options
 from explorer.model import ParameterError, validation
 
 #: where the page is served unless told otherwise (loopback only: docs/commands/serve.md)
 DEFAULT_HOST = "127.0.0.1"
 DEFAULT_PORT = 5006
+#: printed at the end of ``explorer serve --help`` (tests/app/test_cli.py parses it)
+EXAMPLE = "python -m explorer serve figure4 --mu 0.03"
 
 
 def add_parser(sub):
     """Add ``serve`` to the command line's subparsers."""
-    from explorer.analysis.sections import METHODS
+    from explorer.analysis.sections import DEFAULT_DT, DEFAULT_TOL, METHODS
     from explorer.app.serve.settings import DEFAULT_CROSSINGS
 
     s = sub.add_parser("serve", help="the explorer in the browser: click on the section, watch the orbits appear",
@@ -37,13 +41,13 @@ def add_parser(sub):
                    "into [none: the page offers the scene as a download only]")
     s.add_argument("--h", type=float, default=None, help="energy level [the scene's, else 2]")
     s.add_argument("--method", default=None, help=f"one of {', '.join(METHODS)} [the scene's, else taylor]")
-    s.add_argument("--tol", type=float, default=None, help="tolerance of taylor/dop853 [the scene's, else 1e-13]")
-    s.add_argument("--dt", type=float, default=None, help="fixed step of the split* methods [the scene's, else 0.05]")
+    s.add_argument("--tol", type=float, default=None,
+                   help=f"tolerance of taylor/dop853 [the scene's, else {DEFAULT_TOL}]")
+    s.add_argument("--dt", type=float, default=None,
+                   help=f"fixed step of the split* methods [the scene's, else {DEFAULT_DT}]")
     s.add_argument("--crossings", type=int, default=None,
                    help=f"crossings per click [the scene's, else {DEFAULT_CROSSINGS}]")
-    g = s.add_argument_group("model parameters (override the scene's; defaults: Figure 4, R9, mu = 0)")
-    for name in model.PARAM_NAMES:
-        g.add_argument(f"--{name}", type=float, default=None)
+    options.add_model_args(s, None, title=options.SCENE_MODEL_GROUP)
     return s
 
 
@@ -56,7 +60,7 @@ def settings_from_args(args):
     return settings_for(args.scene, args.panel, **overrides)
 
 
-def cmd_serve(args) -> int:
+def run(args) -> int:
     from explorer.app.serve import server
 
     if not 0 <= args.port <= 65535:

@@ -1,0 +1,46 @@
+"""``explorer figures``: every figure of the seed paper (explorer.app.paper, its registry).
+
+Its page: docs/commands/figures.md.
+"""
+from __future__ import annotations
+
+from explorer.model import validation
+
+#: printed at the end of ``explorer figures --help`` (tests/app/test_cli.py parses it)
+EXAMPLE = "python -m explorer figures --only figure4 --quick"
+
+
+def add_parser(sub):
+    """Add ``figures`` to the command line's subparsers."""
+    from explorer.app.paper.registry import FIGURES
+
+    fg = sub.add_parser("figures", help="regenerate every figure of the paper (PNG and PDF)",
+                        description="Regenerate the figures of the seed paper into --out-dir (PNG and PDF): "
+                        f"{', '.join(FIGURES)}. Sweeps reuse results/<scene>.h5 when complete with "
+                        "the same scene hash; --quick uses reduced settings where a store is incomplete.")
+    fg.add_argument("--only", default=None, metavar="NAME", help="only this figure (one name)")
+    fg.add_argument("--out-dir", default="figures", help="where the figures go [%(default)s]")
+    fg.add_argument("--results-dir", default="results", help="HDF5 stores of the sweeps [%(default)s]")
+    fg.add_argument("--quick", action="store_true",
+                    help="reduced settings (sweeps whose store is incomplete, continuation step, curves)")
+    fg.add_argument("--benchmark", default=None,
+                    help="W4 results JSON for work_precision [benchmarks/results_w4.json]")
+    fg.add_argument("--quiet", action="store_true", help="no progress bar")
+    return fg
+
+
+def run(args) -> int:
+    from explorer.app import paper
+
+    if args.only is not None:
+        paper.registry.module(args.only)  # an unknown name: ParameterError listing the names
+    validation.output_path("--out-dir", args.out_dir, directory=True)
+    validation.output_path("--results-dir", args.results_dir, directory=True)
+    if args.benchmark is not None:
+        validation.input_file("--benchmark", args.benchmark)
+    names = [args.only] if args.only else None
+    outcomes = paper.generate(names, out_dir=args.out_dir, results_dir=args.results_dir, quick=args.quick,
+                              benchmark=args.benchmark, quiet=args.quiet)
+    for o in outcomes:
+        print(o.line())
+    return 1 if any(o.status == "failed" for o in outcomes) else 0

@@ -1,0 +1,79 @@
+"""``explorer manifold``: invariant manifolds, homoclinic points, lobes (explorer.analysis.manifolds, transport).
+
+Its page: docs/commands/manifold.md.
+"""
+from __future__ import annotations
+
+import json
+
+from explorer import model
+from explorer.app.commands import options
+from explorer.integrate.methods import MAP_TOL
+from explorer.model import validation
+
+#: printed at the end of ``explorer manifold --help`` (tests/app/test_cli.py parses it)
+EXAMPLE = "python -m explorer manifold --mu 0.03 --arclength 6 --json"
+
+
+def add_parser(sub):
+    """Add ``manifold`` to the command line's subparsers."""
+    mf = sub.add_parser("manifold", help="stable and unstable manifolds of a hyperbolic orbit, homoclinic "
+                        "points, lobes and flux",
+                        description="Finds the periodic orbit of period --period from --guess (default: the "
+                        "central hyperbolic fixed point), grows both branches of W^u and W^s at its point "
+                        "--index to --arclength (adaptive insertion), locates their intersections (Newton, "
+                        "1e-10) and the turnstile's lobes (Green's theorem); docs/manifolds.md.")
+    mf.add_argument("--guess", default="0,0", help="start of Newton's method for the orbit: p1,p2 [0,0]")
+    mf.add_argument("--period", type=int, default=1, help="period K of the orbit [%(default)s]")
+    mf.add_argument("--index", type=int, default=0, help="which point of the orbit [%(default)s]")
+    mf.add_argument("--arclength", type=float, default=6.0, help="length of each branch [%(default)s]")
+    mf.add_argument("--max-points", type=int, default=20000, help="points per branch at most [%(default)s]")
+    mf.add_argument("--max-time", type=float, default=None, help="seconds per branch at most [none]")
+    mf.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
+    mf.add_argument("--tol", type=float, default=MAP_TOL, help="Taylor tolerance of the section map [%(default)s]")
+    options.add_model_args(mf, model.FIGURE4, json="print JSON {orbit, branches, homoclinic_points, lobes, flux}")
+    return mf
+
+
+def run(args) -> int:
+    from explorer.analysis import manifolds, periodic, transport
+
+    params = options.section_map_args(args)
+    if args.period < 1:
+        raise model.ParameterError(f"--period must be an integer K >= 1, got {args.period}")
+    validation.integer("--period", args.period, 1, validation.MAX_PERIOD)
+    # four branches of at most --max-points points (p1, p2 and their parameter: about 64 bytes each)
+    validation.fits_in_memory("--max-points", args.max_points, 4 * 64, "4 branches of 64 bytes per point", lo=1)
+    if args.max_time is not None:
+        validation.real("--max-time", args.max_time, 0.0, lo_open=True)
+    orb = periodic.find_periodic_orbit(params, args.h, options.pair(args.guess, "--guess"), args.period, tol=args.tol)
+    sd = manifolds.saddle(orb, index=args.index, tol=args.tol)
+    kw = {"arclength": args.arclength, "max_points": args.max_points, "max_time": args.max_time}
+    branches = [manifolds.grow_branch(sd, stable=st, sign=sg, **kw) for st in (False, True) for sg in (1, -1)]
+    hps: list = []
+    lobes: list = []
+    for bu in branches[:2]:
+        for bs in branches[2:]:
+            found = manifolds.homoclinic_points(bu, bs)
+            hps += [h.point.tolist() for h in found]
+            if not lobes and found:
+                lobes = transport.lobes(bu, bs, points=found)
+    flux = abs(lobes[0].area) if lobes else None
+    ev = [complex(e) for e in orb.eigenvalues]
+    out = {"orbit": {"points": orb.points.tolist(), "period": int(orb.period),
+                     "eigenvalues": [[e.real, e.imag] if e.imag else e.real for e in ev]},
+           "branches": [{"kind": b.kind, "sign": b.sign, "points": b.points.tolist(), "arclength": b.arclength,
+                         "status": b.status} for b in branches],
+           "homoclinic_points": hps, "lobes": [{"area": abs(lb.area), "error": lb.error} for lb in lobes],
+           "flux": flux}
+    if args.json:
+        print(json.dumps(out))
+        return 0
+    print(f"orbit K={orb.period} point=({sd.point[0]:.10g},{sd.point[1]:.10g}) multiplier={sd.multiplier:.10g}")
+    for b in branches:
+        print(f"{b.kind} {b.sign:+d}: {len(b.points)} points, arclength {b.arclength:.6g} ({b.status})")
+    print(f"{len(hps)} homoclinic point(s)")
+    for lb in lobes:
+        print(f"lobe area {abs(lb.area):.10g} +- {lb.error:.2g}")
+    print(f"flux per iteration {flux!r}")
+    return 0

@@ -1,0 +1,39 @@
+"""The registry of the commands: name -> module, in the order ``explorer --help`` lists them.
+
+Each module has ``EXAMPLE``, ``add_parser(sub)`` and ``run(args) -> int`` (see
+:mod:`explorer.app.commands`); this is the only list of commands (:func:`explorer.app.cli.build_parser`
+and :func:`explorer.app.cli.main` read it).  A command's module imports only the standard
+library, the model and its option helpers at the top, so ``explorer --help`` stays fast; what
+it runs is imported inside ``run``.
+"""
+from __future__ import annotations
+
+import importlib
+
+#: command name -> its module, in the order of ``explorer --help``
+MODULES = {
+    "orbit": "explorer.app.commands.orbit",
+    "sweep": "explorer.app.commands.sweep",
+    "lyapunov": "explorer.app.commands.lyapunov",
+    "fixedpoint": "explorer.app.commands.fixedpoint",
+    "periodic": "explorer.app.commands.periodic",
+    "rotation": "explorer.app.commands.rotation",
+    "explore": "explorer.app.commands.explore",
+    "serve": "explorer.app.serve.command",       # beside the web page it serves (explorer.app.serve)
+    "melnikov": "explorer.app.commands.melnikov",
+    "trajectory": "explorer.app.commands.trajectory",
+    "figures": "explorer.app.commands.figures",
+    "manifold": "explorer.app.commands.manifold",
+}
+#: every command, in order
+COMMANDS = tuple(MODULES)
+
+
+def module(name):
+    """The module of command ``name`` (KeyError for an unknown name: argparse refuses those first)."""
+    return importlib.import_module(MODULES[name])
+
+
+def examples() -> dict[str, str]:
+    """name -> the example line of every command, in order."""
+    return {name: module(name).EXAMPLE for name in COMMANDS}

@@ -1,0 +1,66 @@
+"""``explorer rotation``: rotation numbers along a segment of the section (explorer.analysis.rotation).
+
+Its page: docs/commands/rotation.md.
+"""
+from __future__ import annotations
+
+import json
+
+from explorer import model
+from explorer.app.commands import options
+from explorer.integrate.methods import MAP_TOL
+from explorer.model import validation
+
+#: printed at the end of ``explorer rotation --help`` (tests/app/test_cli.py parses it)
+EXAMPLE = "python -m explorer rotation --from 1.5822,0 --to 1.0,0 --n 30 --mu 0.03"
+
+
+def add_parser(sub):
+    """Add ``rotation`` to the command line's subparsers."""
+    rt = sub.add_parser("rotation", help="rotation numbers along a segment of the section (weighted Birkhoff)",
+                        description="Rotation numbers (turns per return) of orbits started at --n points from "
+                        "--from to --to around the elliptic fixed point (Newton from --center, default "
+                        "--from), by weighted Birkhoff averages over N and 2N returns; 'converged' false "
+                        "flags a chaotic orbit. Plateaus at m/K mark island chains of period K.")
+    rt.add_argument("--from", dest="start", required=True, help="start of the segment p1,p2")
+    rt.add_argument("--to", dest="stop", required=True, help="end of the segment p1,p2")
+    rt.add_argument("--n", type=int, default=21, help="points on the segment [%(default)s]")
+    rt.add_argument("--iterates", type=int, default=2000, help="N: each orbit has 2N returns [%(default)s]")
+    rt.add_argument("--center", default=None, help="guess of the elliptic fixed point p1,p2 [--from]")
+    rt.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
+    rt.add_argument("--tol", type=float, default=MAP_TOL, help="Taylor tolerance [%(default)s]")
+    options.add_model_args(rt, model.FIGURE4, json="print JSON")
+    return rt
+
+
+def run(args) -> int:
+    from explorer.analysis import rotation
+
+    a, b = options.pair(args.start, "--from"), options.pair(args.stop, "--to")
+    if args.n < 2:
+        raise model.ParameterError(f"--n must be an integer >= 2, got {args.n}")
+    if args.iterates < 10:
+        raise model.ParameterError(f"--iterates must be an integer >= 10, got {args.iterates}")
+    from explorer.analysis.fixedpoints import find_fixed_point
+
+    # each point keeps its 2N returns (p1, p2: 16 bytes each)
+    validation.fits_in_memory("--n", args.n, 32 * args.iterates, "2 x --iterates returns of 16 bytes per point", lo=2)
+    params = options.section_map_args(args)
+    c_guess = options.pair(args.center, "--center") if args.center is not None else a
+    for name, x in (("--from", a), ("--to", b), ("--center", c_guess)):
+        if not model.is_admissible(params, x[0], x[1], args.h):
+            raise model.ParameterError(f"{name} ({x[0]:g}, {x[1]:g}) lies outside the allowed region; allowed: "
+                                       f"{model.describe_region(params, args.h)}")
+    center = find_fixed_point(params, args.h, c_guess, tol=args.tol)
+    prof = rotation.rotation_profile(params, args.h, a, b, args.n, center=center.point, iterates=args.iterates,
+                                     tol=args.tol)
+    out = dict(prof.as_dict(), params=params.as_dict(), h=args.h, center_stable=bool(center.stable))
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(f"center ({float(prof.center[0])!r}, {float(prof.center[1])!r}) {center.kind}; "
+              f"{prof.iterates} returns per orbit")
+        print("s,p1,p2,rotation,converged")
+        for r in out["profile"]:
+            print(f"{r['s']!r},{r['p1']!r},{r['p2']!r},{r['rotation']!r},{r['converged']}")
+    return 0

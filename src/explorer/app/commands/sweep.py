@@ -1,0 +1,53 @@
+"""``explorer sweep``: every panel of a scene into one HDF5 store, and its figure (explorer.app.runner).
+
+Its page: docs/commands/sweep.md.
+"""
+from __future__ import annotations
+
+from explorer import model
+from explorer.model import validation
+
+#: printed at the end of ``explorer sweep --help`` (tests/app/test_cli.py parses it)
+EXAMPLE = "python -m explorer sweep figure4 --out results/figure4.h5 --jobs 2"
+
+
+def add_parser(sub):
+    """Add ``sweep`` to the command line's subparsers."""
+    w = sub.add_parser("sweep", help="Poincaré sections of every panel of a scene (default: figure4)",
+                       description="Run every panel of a scene (a TOML file or a built-in preset), store all "
+                       "crossings in one HDF5 file and draw the figure. Panels already stored with the same "
+                       "settings are skipped; a killed run resumes where it stopped.")
+    w.add_argument("scene", nargs="?", default="figure4", help="scene file (.toml) or preset name [figure4]")
+    w.add_argument("--out", default=None, help="HDF5 file [results/<scene>.h5]")
+    w.add_argument("--figure", default=None,
+                   help="figure path without extension [the --out path without .h5: beside the store]")
+    w.add_argument("--no-figure", action="store_true", help="do not draw the figure")
+    w.add_argument("--jobs", type=int, default=1,
+                   help="joblib worker processes (1: this process with Numba threads over orbits) [1]")
+    w.add_argument("--backend", default=None, choices=["loky", "multiprocessing", "dask"],
+                   help="joblib backend for --jobs > 1 (dask: run on a dask.distributed cluster)")
+    w.add_argument("--scheduler", default=None,
+                   help="dask scheduler address (with --backend dask; default: a local cluster of --jobs workers)")
+    w.add_argument("--force", action="store_true", help="recompute every panel")
+    w.add_argument("--quiet", action="store_true", help="no progress bar")
+    return w
+
+
+def run(args) -> int:
+    from explorer.app.runner import format_report, run_sweep
+
+    if args.jobs < 1:  # the API says "jobs"; the command line names its option
+        raise model.ParameterError(f"--jobs must be >= 1, got {args.jobs}")
+    validation.integer("--jobs", args.jobs, 1, validation.MAX_JOBS)
+    if args.scheduler is not None and args.backend != "dask":
+        raise model.ParameterError("--scheduler needs --backend dask")
+    if args.scheduler is not None and not args.scheduler.strip():
+        raise model.ParameterError("--scheduler must be a dask scheduler address (host:port), got ''")
+    for option, path in (("--out", args.out), ("--figure", args.figure)):
+        if path is not None:
+            validation.output_path(option, path)
+    report = run_sweep(args.scene, args.out, figure=args.figure, draw=not args.no_figure, jobs=args.jobs,
+                       backend=args.backend, scheduler=args.scheduler, force=args.force,
+                       progress=not args.quiet)
+    print(format_report(report))
+    return 0
