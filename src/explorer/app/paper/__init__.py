@@ -1,7 +1,7 @@
 """The figures of the seed paper, regenerated: ``python -m explorer figures``.
 
 Borisov & Mamaev, *On the motion of a heavy rigid body in an ideal fluid with circulation*
-(``shared/seed``), with the equations of ``docs/model.md`` (labels R1-R11).  Each figure is
+(the seed paper), with the equations of ``docs/model.md`` (labels R1-R11).  Each figure is
 one module of this package with ``NAME``, ``DESCRIPTION`` and ``build(out_dir, ...)``; its
 builder returns a :class:`Drawn` (the matplotlib figure and the numbers it shows, so that tests
 can check what was drawn). :mod:`explorer.app.paper.registry` lists the modules in the order
