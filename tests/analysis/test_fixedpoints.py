@@ -8,6 +8,7 @@ import pytest
 import reference
 from explorer import model
 from explorer.analysis import fixedpoints as fpm
+from explorer.analysis.section_map import SectionMap
 from explorer.app import cli
 
 
@@ -33,7 +34,7 @@ def test_solution_I_outside_the_band_is_elliptic_with_the_analytic_rotation():
 
 @pytest.mark.parametrize("mu,x", [(0.5, (-0.1, 0.2)), (2.0, (-0.5, -0.3))])
 def test_section_map_jacobian_matches_finite_differences(mu, x):
-    smap = fpm.SectionMap(model.FIGURE4.with_(mu=mu, xi=0.1, chi=0.05), 2.0)
+    smap = SectionMap(model.FIGURE4.with_(mu=mu, xi=0.1, chi=0.05), 2.0)
     r = smap(np.array(x))
     eps = 1e-6
     fd = np.column_stack([(smap(np.array(x) + eps * e, jacobian=False).point
@@ -43,7 +44,7 @@ def test_section_map_jacobian_matches_finite_differences(mu, x):
 
 
 def test_backward_map_inverts_the_forward_map():
-    smap = fpm.SectionMap(model.FIGURE4.with_(mu=0.3), 2.0)
+    smap = SectionMap(model.FIGURE4.with_(mu=0.3), 2.0)
     x = np.array([0.4, -0.2])
     fwd = smap(x)
     back = smap(fwd.point, backward=True)
@@ -79,7 +80,7 @@ def test_manifolds_are_invariant(stable):
     """Images of points between the samples of a separatrix lie on the separatrix."""
     fp = fpm.find_fixed_point(model.FIGURE4.with_(mu=0.01), 2.0)
     curve = fpm.manifold(fp, stable=stable, iterations=5, n_domain=30, max_gap=0.01)
-    smap = fpm.SectionMap(fp.params, fp.h, tol=1e-14)
+    smap = SectionMap(fp.params, fp.h, tol=1e-14)
     n = len(curve)
     mids = 0.5 * (curve[1: n // 2: 7] + curve[2: n // 2 + 1: 7])
     imgs = np.array([smap(m, backward=stable, jacobian=False).point for m in mids])

@@ -13,6 +13,7 @@ import reference
 from explorer import model
 from explorer.analysis import fixedpoints as fpm
 from explorer.analysis import periodic as pm
+from explorer.analysis.section_map import SectionMap
 
 PRM = model.FIGURE4.with_(mu=0.03)   # the Figure 4 scene at mu = 0.03 (docs/model.md R9)
 H = 2.0
@@ -67,7 +68,7 @@ def test_multiple_shooting_orbit_of_period_6_returns_to_itself_under_scipy():
 
 
 def test_single_and_multiple_shooting_converge_to_the_same_orbit():
-    smap = fpm.SectionMap(PRM, H)
+    smap = SectionMap(PRM, H)
     a = pm._newton(smap, 6, np.array([1.0132, 0.0]), multiple=True)
     b = pm._newton(smap, 6, np.array([1.0132, 0.0]), multiple=False)
     np.testing.assert_allclose(a[0], b[0], atol=1e-10)
@@ -104,7 +105,7 @@ def test_search_of_period_four_reports_no_orbit_of_period_one_or_two(search2):
 
 
 def test_trace_matches_finite_differences_of_the_map_iterated_K_times(search3):
-    smap = fpm.SectionMap(PRM, H)
+    smap = SectionMap(PRM, H)
     orb = _elliptic(search3)[0]
 
     def PK(x):

@@ -22,14 +22,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from explorer import model
-from explorer.analysis.continuation import continuation_values, golden_section_max, secant_follower
-from explorer.analysis.section_map import DEFAULT_TOL, RETURN_TMAX, MapResult, SectionMap
+from explorer.analysis.section_map import DEFAULT_TOL, SectionMap
 from explorer.model import ParameterError, validation
 
-# names that lived here before the section map and the continuation helpers had their modules
-__all__ = ["DEFAULT_TOL", "RETURN_TMAX", "Branch", "FixedPoint", "MapResult", "SectionMap",
-           "analytic_eigenvalues_solution_I", "continuation_values", "continue_branch",
-           "find_fixed_point", "follow", "golden_section_max", "manifold", "secant_follower", "separatrices"]
+__all__ = ["Branch", "FixedPoint", "analytic_eigenvalues_solution_I", "continue_branch", "find_fixed_point", "follow",
+           "manifold", "separatrices"]
 
 
 @dataclass(frozen=True)

@@ -425,6 +425,7 @@ def measured_splitting(params, h, mu, g0, sign=1, *, s_local=1e-4, tol=MAP_TOL, 
     from scipy.optimize import brentq
 
     from explorer.analysis import fixedpoints
+    from explorer.analysis.section_map import SectionMap
 
     prm0 = _params(params).with_(mu=0.0)
     c = check_params(prm0, h)
@@ -437,7 +438,7 @@ def measured_splitting(params, h, mu, g0, sign=1, *, s_local=1e-4, tol=MAP_TOL, 
     fp = fixedpoints.follow(prm0, h, "mu", 0.0, mu, (0.0, 0.0), max_step=max(mu, 1e-12), tol=tol)
     if fp.stable:
         raise ParameterError(f"the fixed point is elliptic at mu = {mu:g}: no separatrices to split")
-    smap = fixedpoints.SectionMap(prm, h, tol=tol)
+    smap = SectionMap(prm, h, tol=tol)
     w, V = np.linalg.eig(fp.jacobian)
     w, V = np.real(w), np.real(V)
     iu = int(np.argmax(np.abs(w)))

@@ -1,7 +1,7 @@
 """Periodic orbits of any period K >= 1 of the section map, their stability and bifurcations.
 
 The section map P: (p1, p2) -> (p1', p2') of phi = phi0 at energy h (docs/model.md R9) is
-:class:`explorer.analysis.fixedpoints.SectionMap`: the image point and the 2x2 Jacobian DP
+:class:`explorer.analysis.section_map.SectionMap`: the image point and the 2x2 Jacobian DP
 from the tangent dynamics of R3.  A periodic orbit of period K is a point x with
 P^K(x) = x; its monodromy is the product DP(x_{K-1}) ... DP(x_0) of the K map Jacobians
 along the orbit x_i = P^i(x_0).

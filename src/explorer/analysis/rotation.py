@@ -53,7 +53,7 @@ one flags chaos.  On an island chain of period K around c, rho = m/K exactly (pl
 
 The orbit comes from :func:`explorer.analysis.sections.crossings` (the Taylor batch driver:
 2N crossings of one sub-section in one compiled call, ~4x faster per crossing than stepping
-:class:`~explorer.analysis.fixedpoints.SectionMap`, which pays a Python call and the tangent
+:class:`~explorer.analysis.section_map.SectionMap`, which pays a Python call and the tangent
 set-up per return), in parallel over the points of a profile; a rotation number costs m runs.
 """
 from __future__ import annotations
