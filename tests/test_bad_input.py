@@ -18,7 +18,7 @@ The tables below are the list of cases tried:
 
 Covered elsewhere (not repeated): two processes on one store (store locking, tests/io/test_store.py),
 kinds in tests/app/test_cli.py, tests/app/test_cli_periodic.py, tests/analysis/test_sweep.py,
-tests/io/test_scene.py (the same keys through parse_scene), tests/app/test_explore.py (no display).
+tests/io/test_scene.py (the same keys through parse_scene).
 
 Accepted on purpose (not bad input, documented): budgets with no memory cost (``--tmax``,
 ``--max-steps``, ``integration.tmax``, ``max_steps``, a huge ``--time``), any finite angle
@@ -49,7 +49,7 @@ BASE = {
     "fixedpoint": ["fixedpoint"],
     "periodic": ["periodic", "-K", "1", "--guess", "0,0"],
     "rotation": ["rotation", "--from", "0.1,0", "--to", "0.2,0", "--n", "2", "--iterates", "10"],
-    "explore": ["explore"],
+    "explore": ["explore", "--port", "0"],  # never starts either (explore is serve that opens a browser)
     "melnikov": ["melnikov"],
     "trajectory": ["trajectory", "--no-figure", "-T", "1", "--samples", "10"],
     "sweep": ["sweep", "{scene}", "--no-figure", "--quiet", "--out", "o.h5"],
@@ -77,7 +77,7 @@ INT_OPTIONS = {
     "lyapunov": (("--history", ("-1", BIG)),),
     "periodic": (("--period", ("0", BIG)), ("--grid", ("1", "-1", BIG)), ("--max-guesses", ("0",))),
     "rotation": (("--n", ("1", BIG)), ("--iterates", ("9", BIG))),
-    "explore": (("--panel", ("1",)), ("--crossings-per-chunk", ("0", BIG)), ("--max-crossings", ("0", BIG))),
+    "explore": (("--panel", ("-1", "1")), ("--port", ("-1", "65536")), ("--crossings", ("0", BIG))),
     "trajectory": (("--samples", ("1", BIG)), ("--glyphs", ("0", "-1"))),
     "sweep": (("--jobs", ("0", "-1", BIG)),),
     "manifold": (("--period", ("0", BIG)), ("--index", ("-1", BIG)), ("--max-points", ("0", BIG))),
@@ -134,6 +134,11 @@ def _cases():
         ("figures--only=empty", ["figures", "--only="], "figure"),
         ("figures--only=unknown", ["figures", "--only=figure44"], "figure"),
         ("explore--unknown_scene", ["explore", "nosuchscene"], "scene"),
+        ("explore--token=empty", BASE["explore"] + ["--token="], "--token"),
+        ("explore--token=space", BASE["explore"] + ["--token=a b"], "--token"),
+        ("explore--export-dir=missing", BASE["explore"] + ["--export-dir=/nonexistent/explorer"], "--export-dir"),
+        ("explore--host=empty", BASE["explore"] + ["--host="], "--host"),
+        ("explore--no-browser=value", BASE["explore"] + ["--no-browser=1"], "--no-browser"),
         ("serve--unknown_scene", ["serve", "nosuchscene"], "scene"),
         ("serve--method=bogus", BASE["serve"] + ["--method=bogus"], "method"),
         ("serve--token=empty", BASE["serve"] + ["--token="], "--token"),
@@ -227,7 +232,7 @@ def test_bad_option_gives_one_line_naming_it_and_status_2_and_writes_nothing(arg
     ended with status 0 for --dt nan with the taylor method, --grid/--max-guesses out of range
     without --search, melnikov --mus/--g0 nan without --splitting, rotation --center '',
     sweep --jobs 10**12 or --scheduler '', and model parameters of 1e300 (non-finite states,
-    numpy warnings on stderr); explore reported 'needs a display' instead of the bad option."""
+    numpy warnings on stderr)."""
     argv = [a.replace("{scene}", "good.toml") for a in argv]
     before = _listing(workdir)
     code, out, err = run_main(argv, capsys)
@@ -423,9 +428,10 @@ OUTPUT_TABLE = [
     ("figures_results_dir_is_a_file", ["figures", "--only=figure4", "--results-dir={file}"], "--results-dir", "other"),
     ("figures_benchmark_missing", ["figures", "--only=work_precision", "--benchmark=nosuch.json"], "--benchmark",
      None),
-    ("explore_out_dir_empty", ["explore", "--out-dir="], "--out-dir", None),
-    ("explore_out_dir_unwritable", ["explore", "--out-dir=/proc/explorer-test"], "--out-dir", None),
-    ("explore_out_dir_is_a_file", ["explore", "--out-dir={file}"], "--out-dir", "other"),
+    ("explore_export_dir_empty", ["explore", "--port=0", "--export-dir="], "--export-dir", None),
+    ("explore_export_dir_is_a_file", ["explore", "--port=0", "--export-dir={file}"], "--export-dir", "other"),
+    ("serve_export_dir_empty", ["serve", "--port=0", "--export-dir="], "--export-dir", None),
+    ("serve_export_dir_is_a_file", ["serve", "--port=0", "--export-dir={file}"], "--export-dir", "other"),
     ("sweep_scene_empty", ["sweep", ""], "scene", None),
     ("sweep_scene_is_a_directory", ["sweep", "{dir}"], "scene", None),
     ("explore_scene_empty", ["explore", ""], "scene", None),
@@ -438,8 +444,8 @@ def test_bad_output_place_gives_one_line_and_keeps_what_was_there(argv, name, se
     """A read-only file is made so with chmod; running as root (which may write anyway) the
     check's permission test (os.access) is told the file is read-only.  Formerly bugs:
     orbit --out '' ended in a FileNotFoundError traceback; sweep --out '' or --figure '' wrote to
-    the default place; a read-only store was replaced by os.replace; the figures and explore
-    directories were not checked."""
+    the default place; a read-only store was replaced by os.replace; the figures' directories were
+    not checked."""
     if any("/proc/" in a for a in argv) and not os.path.isdir("/proc/self"):
         pytest.skip("needs /proc")
     old = workdir / "old.h5"

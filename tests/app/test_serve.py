@@ -206,11 +206,11 @@ browser_needed = pytest.mark.skipif(_PROBLEM is not None, reason=str(_PROBLEM))
 
 
 class Served:
-    """``python -m explorer serve ...`` in a subprocess; ``url`` is its first line."""
+    """``python -m explorer serve ...`` (or ``command``) in a subprocess; ``url`` is its first line."""
 
-    def __init__(self, *args, timeout=120.0):
+    def __init__(self, *args, timeout=120.0, command="serve", extra=()):
         env = dict(os.environ, PYTHONUNBUFFERED="1")
-        self.proc = subprocess.Popen([sys.executable, "-m", "explorer", "serve", "--port", "0", *args],
+        self.proc = subprocess.Popen([sys.executable, "-m", "explorer", command, "--port", "0", *args, *extra],
                                      stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
                                      cwd=REPO)
         t0 = time.time()
@@ -510,9 +510,9 @@ def test_explore_in_a_notebook_renders_and_streams_the_clicked_orbit():
         ref = sections.section_crossings(page.settings.params, [0.3], [0.1], page.settings.h, 60)
         got = np.column_stack([np.asarray(page.crossings.data[k]) for k in ("t", "p1", "p2", "M", "dH")])
         np.testing.assert_array_equal(got, ref.orbit(0))
-        # the orbit's chaos indicators, as the Tk window computes them, colour its points on demand
+        # the orbit's chaos indicators colour its points on demand
         from explorer.analysis import lyapunov
-        from explorer.app.explore.state import INDICATOR_TIME
+        from explorer.app.serve.orbits import INDICATOR_TIME
 
         while not page.indicators and time.time() - t0 < 120:
             page.poll()
@@ -571,3 +571,122 @@ def test_rapid_clicks_undo_clear_and_export_keep_the_page_and_the_server_consist
     _wait(page, "() => /[?&]orbits=(&|$)/.test(window.location.search)", timeout=60_000)  # the link too
     page.close()
     assert urllib.request.urlopen(served.url, timeout=10).status == 200
+
+
+# ---------------------------------------------------------------- `explorer explore`: serve, then the browser
+class _FakeServer:
+    """What server.run needs of a Bokeh server, serving nothing (the loop returns at once)."""
+
+    def __init__(self):
+        self.io_loop = self
+        self.started = self.stopped = False
+
+    def start(self):
+        self.started = True
+
+    def stop(self):
+        self.stopped = True
+
+
+def _explore_in_process(monkeypatch, capsys, argv, browser):
+    """Run ``explorer <argv>`` with the Bokeh server replaced and ``webbrowser.get`` returning
+    ``browser`` (an exception class: raised instead); returns (status, stdout lines, stderr)."""
+    import webbrowser
+
+    from explorer.app import cli
+    from explorer.app.serve import orbits, server
+
+    fake = _FakeServer()
+    monkeypatch.setattr(server, "make_server", lambda base, **kw: (fake, server.url_of(kw["host"], 5999, kw["token"])))
+    monkeypatch.setattr(orbits, "warm_up", lambda settings: None)
+    monkeypatch.setenv("DISPLAY", ":0")
+
+    def get(*_a):
+        if isinstance(browser, type):
+            raise browser("no runnable browser")
+        return browser
+    monkeypatch.setattr(webbrowser, "get", get)
+    code = cli.main(argv)
+    time.sleep(0.2)                         # the browser is opened in a thread
+    out, err = capsys.readouterr()
+    assert fake.started and fake.stopped
+    return code, out.splitlines(), err
+
+
+class _Browser:
+    def __init__(self):
+        self.opened = []
+
+    def open(self, url, *a, **kw):
+        self.opened.append(url)
+        return True
+
+
+def test_explore_prints_the_url_first_and_opens_it_in_the_browser(monkeypatch, capsys):
+    b = _Browser()
+    code, out, err = _explore_in_process(monkeypatch, capsys, ["explore", "--mu", "0.03"], b)
+    assert code == 0 and out[0] == "http://127.0.0.1:5999/" and b.opened == [out[0]] and err == ""
+    b = _Browser()                                      # --no-browser: the URL only, as serve
+    code, out, err = _explore_in_process(monkeypatch, capsys, ["explore", "--no-browser"], b)
+    assert code == 0 and out == ["http://127.0.0.1:5999/"] and b.opened == [] and err == ""
+    code, out, _err = _explore_in_process(monkeypatch, capsys, ["serve"], b)       # serve opens nothing
+    assert code == 0 and out == ["http://127.0.0.1:5999/"] and b.opened == []
+
+
+def test_explore_without_a_browser_prints_the_url_like_serve(monkeypatch, capsys):
+    import webbrowser
+
+    code, out, err = _explore_in_process(monkeypatch, capsys, ["explore", "--token", "t0k"], webbrowser.Error)
+    assert code == 0 and out == ["http://127.0.0.1:5999/?token=t0k"] and "no web browser" in err
+    monkeypatch.delenv("DISPLAY")                        # a terminal without a display: no browser either
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    monkeypatch.delenv("BROWSER", raising=False)
+    from explorer.app.serve import server
+
+    if os.name == "posix" and sys.platform != "darwin":
+        assert server.web_browser() is None
+
+
+def test_explore_and_serve_share_one_definition_of_their_options():
+    import argparse
+
+    from explorer.app.commands import explore
+    from explorer.app.serve import command
+
+    def options(add):
+        p = argparse.ArgumentParser()
+        sub = p.add_subparsers()
+        return {a.dest: (a.default, a.type, a.option_strings) for a in add(sub)._actions if a.dest != "help"}
+    serve, expl = options(command.add_parser), options(explore.add_parser)
+    assert set(expl) - set(serve) == {"no_browser"}
+    assert {k: v for k, v in expl.items() if k != "no_browser"} == serve
+
+
+@pytest.mark.skipif(importlib.util.find_spec("panel") is None, reason="panel is not installed (pip install panel)")
+def test_explore_no_browser_serves_the_page_of_serve():
+    s = Served("--mu", "0.03", command="explore", extra=("--no-browser",))
+    try:
+        page = urllib.request.urlopen(s.url, timeout=30).read().decode("utf-8", "replace")
+        assert "bokeh" in page.lower() and "explorer" in page
+    finally:
+        code, err = s.interrupt()
+    assert code in (0, 130) and "Traceback" not in err, err[-2000:]
+
+
+def test_the_scene_seeds_button_starts_the_sweeps_seeds_at_the_current_settings():
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    from explorer.analysis.seeds import seed_points
+    from explorer.app.serve.page import SectionPage
+    from explorer.io import scene as scene_mod
+
+    sc = scene_mod.load_scene("figure4")
+    base, _label = settings_mod.settings_for(sc, 1, crossings=5)
+    page = SectionPage(base, {"mu": "0.5"}, seeds=sc.seeds)
+    try:
+        assert page.run_seeds() == len(page.starts) > 0
+        p1, p2, _ = seed_points(sc.seeds, page.settings.params, page.settings.h)
+        assert [(a, b) for _i, a, b, _c in page.starts] == list(zip(p1.tolist(), p2.tolist()))
+        assert page.settings.params.mu == 0.5 and "orbits started" in page.message.text
+        assert len(parse_starts(page.url_query()["orbits"])) == len(p1)           # kept in the link
+    finally:
+        page.close()

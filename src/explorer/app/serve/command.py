@@ -17,28 +17,22 @@ DEFAULT_PORT = 5006
 EXAMPLE = "python -m explorer serve figure4 --mu 0.03"
 
 
-def add_parser(sub):
-    """Add ``serve`` to the command line's subparsers."""
+def add_options(s) -> None:
+    """The options ``serve`` and ``explore`` share (one definition: explore is serve that also
+    opens the page in the browser, :mod:`explorer.app.commands.explore`)."""
     from explorer.analysis.sections import DEFAULT_DT, DEFAULT_TOL, METHODS
     from explorer.app.serve.settings import DEFAULT_CROSSINGS
 
-    s = sub.add_parser("serve", help="the explorer in the browser: click on the section, watch the orbits appear",
-                       description="Serve the explorer as a web page (HoloViz Panel on Bokeh). The first line "
-                       "printed is the URL to open (with the token when one is needed); runs until Ctrl-C. A "
-                       "click on the section starts an orbit whose crossings appear as they are computed "
-                       "(those of `explorer orbit` for the same start and settings); the fields set mu, h, "
-                       "lambda, a1, a2, b, the method, tol, dt and the crossings per click; the URL keeps "
-                       "the view. Binds 127.0.0.1 unless --host is given; another host needs a token.")
     s.add_argument("scene", nargs="?", default=None,
-                   help="scene file (.toml) or preset name: start from its panel's parameters, h and integration "
-                   "settings [none: Figure 4 with mu = 0, h = 2]")
+                   help="scene file (.toml) or preset name: start from its panel's parameters, h, integration "
+                   "settings and seeds [none: Figure 4 with mu = 0, h = 2]")
     s.add_argument("--panel", type=int, default=0, help="panel of the scene [0]")
     s.add_argument("--port", type=int, default=DEFAULT_PORT, help="TCP port (0: any free port) [%(default)s]")
     s.add_argument("--host", default=DEFAULT_HOST, help="address to bind [%(default)s]; not a loopback "
                    "address: a token is required (made and printed when --token is not given)")
     s.add_argument("--token", default=None, help="require ?token=T on every page request [none on loopback]")
-    s.add_argument("--export-dir", default=None, help="directory the page's 'Export scene' button writes "
-                   "into [none: the page offers the scene as a download only]")
+    s.add_argument("--export-dir", default=None, help="directory the page's 'Export scene' and 'Export figure' "
+                   "buttons write into [none: the page offers its files as downloads only]")
     s.add_argument("--h", type=float, default=None, help="energy level [the scene's, else 2]")
     s.add_argument("--method", default=None, help=f"one of {', '.join(METHODS)} [the scene's, else taylor]")
     s.add_argument("--tol", type=float, default=None,
@@ -48,6 +42,22 @@ def add_parser(sub):
     s.add_argument("--crossings", type=int, default=None,
                    help=f"crossings per click [the scene's, else {DEFAULT_CROSSINGS}]")
     options.add_model_args(s, None, title=options.SCENE_MODEL_GROUP)
+
+
+#: what the page does, said once for both commands' --help
+PAGE_DESCRIPTION = ("A click on the section starts an orbit whose crossings appear as they are computed (those of "
+                    "`explorer orbit` for the same start and settings); the fields set mu, h, lambda, a1, a2, b, "
+                    "the method, tol, dt and the crossings per click; the URL keeps the view. Binds 127.0.0.1 "
+                    "unless --host is given; another host needs a token.")
+
+
+def add_parser(sub):
+    """Add ``serve`` to the command line's subparsers."""
+    s = sub.add_parser("serve", help="the explorer in the browser: click on the section, watch the orbits appear",
+                       description="Serve the explorer as a web page (HoloViz Panel on Bokeh). The first line "
+                       "printed is the URL to open (with the token when one is needed); runs until Ctrl-C. "
+                       + PAGE_DESCRIPTION)
+    add_options(s)
     return s
 
 
@@ -60,7 +70,17 @@ def settings_from_args(args):
     return settings_for(args.scene, args.panel, **overrides)
 
 
-def run(args) -> int:
+def seeds_from_args(args):
+    """The ``[seeds]`` of the scene's panel (the page's *Scene seeds* button), or those of the
+    default scene when no scene is given."""
+    from explorer.app.serve.settings import seeds_for
+
+    return seeds_for(args.scene)
+
+
+def run(args, open_browser: bool = False) -> int:
+    """Serve the page until Ctrl-C (status 0); ``open_browser``: also open it in the user's web
+    browser (``explore``)."""
     from explorer.app.serve import server
 
     if not 0 <= args.port <= 65535:
@@ -80,12 +100,14 @@ def run(args) -> int:
     if args.export_dir is not None and not os.path.isdir(args.export_dir):
         raise ParameterError(f"--export-dir must be an existing directory, got {args.export_dir!r}")
     base, label = settings_from_args(args)
+    seeds = seeds_from_args(args)
     try:
         import panel  # noqa: F401
     except ImportError:
         raise ParameterError("serve needs the panel package (pip install panel)") from None
     try:
-        server.run(base, host=args.host, port=args.port, token=args.token, export_dir=args.export_dir, label=label)
+        server.run(base, host=args.host, port=args.port, token=args.token, export_dir=args.export_dir, label=label,
+                   seeds=seeds, open_browser=open_browser)
     except OSError as exc:          # the port is taken, the address is not ours, ...
         raise ParameterError(f"cannot serve on {args.host}:{args.port}: {exc.strerror or exc}") from None
     except KeyboardInterrupt:

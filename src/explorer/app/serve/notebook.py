@@ -11,7 +11,7 @@ from __future__ import annotations
 import panel as pn
 
 from explorer.app.serve.page import SectionPage
-from explorer.app.serve.settings import settings_for
+from explorer.app.serve.settings import seeds_for, settings_for
 
 #: how often the notebook page takes in new crossings and raster images (ms)
 POLL_MS = 50
@@ -58,4 +58,4 @@ def explore(scene=None, *, panel: int = 0, export_dir=None, **settings) -> Explo
     button writes (None: download only).  What the page does: docs/commands/serve.md.
     """
     base, label = settings_for(scene, panel, **settings)
-    return Explorer(SectionPage(base, {}, export_dir=export_dir, label=label))
+    return Explorer(SectionPage(base, {}, export_dir=export_dir, label=label, seeds=seeds_for(scene)))

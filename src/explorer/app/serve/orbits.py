@@ -14,9 +14,8 @@ gets its first block before older orbits continue), round robin after that.  ``c
 every orbit of an older generation (a parameter change, clear) at its next block boundary;
 ``remove`` stops one (undo).  Each block is handed to ``on_block(orbit_id, rows, done,
 status)`` in the worker thread; the page moves it onto its document's event loop.  After an
-orbit's first block, its mean MEGNO and finite-time mLCE over INDICATOR_TIME (the Tk window's
-indicators) go to ``on_indicators(orbit_id, megno, mlce)``.  No web
-library here.
+orbit's first block, its mean MEGNO and finite-time mLCE over INDICATOR_TIME go to
+``on_indicators(orbit_id, megno, mlce)``.  No web library here.
 """
 from __future__ import annotations
 
@@ -39,6 +38,13 @@ FIRST_BLOCK = 16
 BLOCK_SECONDS = 0.05
 MIN_BLOCK = 16
 MAX_BLOCK = 20_000
+#: time over which the chaos indicators (mean MEGNO, finite-time mLCE) of an orbit are computed
+INDICATOR_TIME = 1000.0
+#: mean MEGNO above this is called "chaotic-like" (quasi-periodic orbits: <Y> -> 2)
+CHAOTIC_MEGNO = 3.0
+#: one colour per orbit, in turn
+COLORS = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf",
+          "#bcbd22", "#393b79", "#637939", "#843c39", "#7b4173", "#3182bd", "#e6550d", "#31a354")
 
 
 @dataclass
@@ -104,11 +110,10 @@ def warm_up(settings: Settings) -> None:
 
 
 def orbit_indicators(settings: Settings, y0) -> tuple:
-    """(mean MEGNO <Y>, finite-time mLCE) over INDICATOR_TIME of the orbit from ``y0``, as the Tk
-    window computes them (:func:`explorer.analysis.lyapunov.indicators`, the orbit's method and
-    tolerance); NaN when the run stopped early."""
+    """(mean MEGNO <Y>, finite-time mLCE) over INDICATOR_TIME of the orbit from ``y0``
+    (:func:`explorer.analysis.lyapunov.indicators`, the orbit's method and tolerance); NaN when
+    the run stopped early."""
     from explorer.analysis import lyapunov
-    from explorer.app.explore.state import INDICATOR_TIME  # (the Tk window's package: loaded when used)
 
     res = lyapunov.indicators(settings.params, y0, INDICATOR_TIME, method=settings.method, tol=settings.tol,
                               dt=settings.dt)

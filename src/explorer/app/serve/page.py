@@ -37,11 +37,11 @@ from bokeh.models import ColumnDataSource, Div, LinearColorMapper
 from bokeh.palettes import Inferno256
 from bokeh.plotting import figure
 
-from explorer.app.explore.state import CHAOTIC_MEGNO, COLORS, INDICATOR_TIME
 from explorer.app.serve import export
 from explorer.app.serve import raster as raster_mod
 from explorer.app.serve import settings as settings_mod
-from explorer.app.serve.orbits import Worker
+from explorer.app.serve.orbits import CHAOTIC_MEGNO, COLORS, INDICATOR_TIME, Worker
+from explorer.app.serve.overlays import PERIODIC_MAX
 from explorer.app.serve.settings import FIELDS, Settings, format_starts, parse_fields, parse_starts
 from explorer.model import ParameterError
 
@@ -63,7 +63,6 @@ SAME_SPOT_PX = 4.0
 #: MEGNO_HIGH and above (chaotic, dark)
 MEGNO_LOW, MEGNO_HIGH = 0.0, 8.0
 #: periodic orbits of periods 1..PERIODIC_MAX are marked, filled with the colour of their period
-PERIODIC_MAX = 4
 PERIOD_COLORS = ("#ffffff", "#f4a582", "#92c5de", "#b8e186")
 #: colour of the separatrices
 SEPARATRIX_COLOR = "#303030"
@@ -99,10 +98,13 @@ class SectionPage:
     ``base``: the settings before any URL argument or field (from the scene and the command
     line); ``args``: the request's URL arguments ({name: text}); ``export_dir``: where the
     export button writes (None: the page offers the scene as a download only); ``doc``: the
-    session's Bokeh document (:meth:`attach`)."""
+    session's Bokeh document (:meth:`attach`); ``seeds``: the scene's ``[seeds]`` (a SeedSpec)
+    that *Scene seeds* starts (None: the default seeds of a scene)."""
 
-    def __init__(self, base: Settings, args: dict | None = None, export_dir=None, label: str = "", doc=None):
+    def __init__(self, base: Settings, args: dict | None = None, export_dir=None, label: str = "", doc=None,
+                 seeds=None):
         self.base = base
+        self.seeds = seeds
         self.settings = base
         self.export_dir = export_dir
         self.label = label
@@ -176,7 +178,9 @@ class SectionPage:
         clear.on_click(lambda _e: self._later(self.clear))
         undo = pn.widgets.Button(label="Undo", width=90)
         undo.on_click(lambda _e: self._later(self.undo))
-        buttons = [clear, undo]
+        seeds = pn.widgets.Button(label="Scene seeds", width=190)
+        seeds.on_click(lambda _e: self._later(self.run_seeds))
+        buttons = [clear, undo, seeds]
         self.layer = pn.widgets.Checkbox(label=f"MEGNO layer (T = {raster_mod.RASTER_TIME:g})", value=False)
         self.layer.param.watch(lambda _e: self._later(self._layer_changed), "value")
         self.overlay = pn.widgets.Checkbox(label="fixed points, separatrices", value=False)
@@ -415,6 +419,28 @@ class SectionPage:
         self._update_status()
         self._push_url()
 
+    def run_seeds(self) -> int:
+        """Start an orbit at each seed point of the scene's ``[seeds]`` at the current settings
+        (the starts ``explorer sweep`` runs for such a panel), as clicks there would; as many as
+        the session has room for.  Returns how many were started."""
+        try:
+            starts = settings_mod.seed_starts(self.seeds or settings_mod.seeds_for(None), self.settings)
+        except ParameterError as exc:
+            self.say(f"scene seeds: {exc}")
+            return 0
+        n = 0
+        for p1, p2 in starts:
+            if settings_mod.room_for(len(self.starts) + 1, self.settings.crossings):
+                break
+            n += self._start(p1, p2) is not None
+        if n < len(starts):
+            why = settings_mod.room_for(len(self.starts) + 1, self.settings.crossings)
+            self.say(f"scene seeds: {n} of {len(starts)} started ({why})")
+        else:
+            self.say(f"scene seeds: {n} orbits started")
+        self._push_url()
+        return n
+
     def _scene_text(self) -> str:
         return export.session_scene(self.settings, [(a, b) for _i, a, b, _c in self.starts]).to_toml()
 
@@ -504,7 +530,7 @@ class SectionPage:
                          name="explorer-serve-overlay", daemon=True).start()
 
     def _compute_overlay(self, generation, settings, fixed, periodic):
-        from explorer.app.explore.state import fixed_points_and_curves, periodic_orbits
+        from explorer.app.serve.overlays import fixed_points_and_curves, periodic_orbits
 
         texts = []
         if fixed:
@@ -613,10 +639,10 @@ class SectionPage:
         self._push_url()
 
 
-def session_app(base: Settings, export_dir=None, label: str = ""):
+def session_app(base: Settings, export_dir=None, label: str = "", seeds=None):
     """A Panel app function for ``pn.serve``: one :class:`SectionPage` per session, built from
     the session's URL arguments."""
     def app():
         args = {k: v[0].decode("utf-8", "replace") for k, v in (pn.state.session_args or {}).items() if v}
-        return SectionPage(base, args, export_dir=export_dir, label=label, doc=pn.state.curdoc).layout
+        return SectionPage(base, args, export_dir=export_dir, label=label, doc=pn.state.curdoc, seeds=seeds).layout
     return app

@@ -74,7 +74,7 @@ def _authorize(token: str):
 
 
 def make_server(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, token: str | None = None,
-                export_dir=None, label: str = ""):
+                export_dir=None, label: str = "", seeds=None):
     """The Bokeh server (not started) and its URL.  ``token`` None on a loopback host: no token;
     on another host one is made."""
     import panel as pn
@@ -92,21 +92,57 @@ def make_server(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT
     else:
         hosts = dict.fromkeys(("127.0.0.1", "localhost", host))
         kw["websocket_origin"] = [f"{h}:{port}" for h in hosts if ":" not in h]   # (Bokeh takes no IPv6 here)
-    server = pn.serve(session_app(base, export_dir=export_dir, label=label), port=port, address=host, show=False,
-                      start=False, verbose=False, title="explorer", location=True, **kw)
+    app = session_app(base, export_dir=export_dir, label=label, seeds=seeds)
+    server = pn.serve(app, port=port, address=host, show=False, start=False, verbose=False, title="explorer",
+                      location=True, **kw)
     return server, url_of(host, port, token)
 
 
+def web_browser():
+    """The user's web browser (:func:`webbrowser.get`), or None when there is none: ``get``
+    raises, or a Linux/BSD session has no display (neither DISPLAY nor WAYLAND_DISPLAY) and no
+    BROWSER chosen, where the only browsers are text ones that would take over the terminal (an
+    SSH session on a cluster node: forward the port and open the URL on the laptop)."""
+    import os
+    import webbrowser
+
+    if (os.name == "posix" and sys.platform != "darwin" and not os.environ.get("DISPLAY")
+            and not os.environ.get("WAYLAND_DISPLAY") and not os.environ.get("BROWSER")):
+        return None
+    try:
+        return webbrowser.get()
+    except webbrowser.Error:
+        return None
+
+
+def open_in_browser(url: str, err=None) -> threading.Thread | None:
+    """Open ``url`` in :func:`web_browser` (in a thread: a browser command may wait for its
+    window); without one, say so on ``err`` (the URL is already the first line printed)."""
+    err = sys.stderr if err is None else err
+    browser = web_browser()
+    if browser is None:
+        print("explorer: no web browser here: open the URL above (or forward the port: ssh -L)", file=err,
+              flush=True)
+        return None
+    t = threading.Thread(target=browser.open, args=(url,), name="explorer-open-browser", daemon=True)
+    t.start()
+    return t
+
+
 def run(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, token: str | None = None,
-        export_dir=None, label: str = "", out=None) -> None:
-    """Serve until interrupted: the URL is the first line printed."""
+        export_dir=None, label: str = "", seeds=None, open_browser: bool = False, out=None) -> None:
+    """Serve until interrupted: the URL is the first line printed; ``open_browser``: then open it
+    in the user's browser (:func:`open_in_browser`), once the server listens."""
     from explorer.app.serve.orbits import warm_up
 
     out = sys.stdout if out is None else out
-    server, url = make_server(base, host=host, port=port, token=token, export_dir=export_dir, label=label)
+    server, url = make_server(base, host=host, port=port, token=token, export_dir=export_dir, label=label,
+                              seeds=seeds)
     print(url, file=out, flush=True)
     threading.Thread(target=warm_up, args=(base,), name="explorer-serve-warm-up", daemon=True).start()
     server.start()
+    if open_browser:
+        open_in_browser(url)
     try:
         server.io_loop.start()
     finally:

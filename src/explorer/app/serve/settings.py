@@ -125,6 +125,27 @@ def settings_for(scene=None, panel: int = 0, **overrides) -> tuple:
     return replace(base, params=base.params.with_(**params) if params else base.params, **rest), label
 
 
+def seeds_for(scene=None):
+    """The ``[seeds]`` of ``scene`` (a TOML path, preset name or Scene), the page's *Scene seeds*;
+    None: the default seeds of a scene (a grid of DEFAULT_SEED_N points)."""
+    from explorer.io import scene as scene_mod
+
+    if scene is None:
+        return scene_mod.SeedSpec()
+    sc = scene if isinstance(scene, scene_mod.Scene) else scene_mod.load_scene(scene)
+    return sc.seeds
+
+
+def seed_starts(seeds, settings: Settings) -> list:
+    """The starts [(p1, p2), ...] of ``seeds`` at ``settings`` (those ``explorer sweep`` runs for
+    a panel with these parameters and energy; :func:`explorer.analysis.seeds.seed_points`);
+    ParameterError when the region is empty."""
+    from explorer.analysis.seeds import seed_points
+
+    p1, p2, _dropped = seed_points(seeds, settings.params, settings.h, settings.phi0)
+    return [(float(a), float(b)) for a, b in zip(p1, p2)]
+
+
 def _number(name: str, text) -> float:
     """A field's text as a finite float (ParameterError naming the field otherwise)."""
     if isinstance(text, str):

@@ -1,0 +1,78 @@
+"""The searches the page's check boxes run, in a thread of the page: the fixed points of the
+section map and the separatrices of the hyperbolic ones (:func:`fixed_points_and_curves`), and the
+periodic orbits of periods 1..PERIODIC_MAX (:func:`periodic_orbits`); also the elliptic fixed point
+an orbit's rotation number is measured around (:func:`elliptic_center`).  No web library here.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+#: the periodic orbits of periods 1..PERIODIC_MAX are marked (analysis/periodic.py)
+PERIODIC_MAX = 4
+
+
+def _num(x) -> str:
+    """Short form of a coordinate: 4 digits, round-off-sized values as 0."""
+    x = float(x)
+    return "0" if abs(x) < 1e-12 else f"{x:.4g}"
+
+
+def fixed_points_and_curves(view):
+    """(fixed points, curves, message) from :mod:`explorer.analysis.fixedpoints`: Newton's method
+    from p = 0, from the centre of the region and half-way to its edge along both axes; the
+    separatrices of the hyperbolic points.  ``view``: anything with ``params``, ``h``, ``phi0``,
+    ``region`` (c1, c2, r1, r2 or None) and ``admissible(p1, p2)`` (the page's
+    :class:`~explorer.app.serve.settings.Settings`)."""
+    from explorer.analysis.fixedpoints import find_fixed_point, separatrices
+
+    if view.region is None:
+        return [], [], "separatrices: the region is empty"
+    c1, c2, r1, r2 = view.region
+    guesses = [(0.0, 0.0), (c1, c2), (c1 - 0.5 * r1, c2), (c1 + 0.5 * r1, c2), (c1, c2 - 0.5 * r2),
+               (c1, c2 + 0.5 * r2)]
+    points = []
+    for g in guesses:
+        if not view.admissible(*g):
+            continue
+        try:
+            fp = find_fixed_point(view.params, view.h, g, phi0=view.phi0)
+        except Exception:  # noqa: BLE001 - no convergence from this guess
+            continue
+        if all(np.max(np.abs(np.asarray(fp.point) - np.asarray(q.point))) > 1e-7 for q in points):
+            points.append(fp)
+    if not points:
+        return [], [], ("separatrices: Newton's method found no fixed point from p = 0, the region's centre "
+                        "or half-way to its edge")
+    curves = []
+    try:
+        for fp in points:
+            if not fp.stable:
+                for c in separatrices(fp, phi0=view.phi0):
+                    a = np.asarray(c, dtype=np.float64)
+                    if a.ndim == 2 and a.shape[1] == 2 and len(a):
+                        curves.append(a)
+    except Exception as exc:  # noqa: BLE001 - reported in the status line
+        return points, [], f"separatrices: failed ({type(exc).__name__}: {' '.join(str(exc).split())})"
+    desc = ", ".join(f"({_num(fp.point[0])}, {_num(fp.point[1])}) {'elliptic' if fp.stable else 'hyperbolic'}"
+                     for fp in points)
+    return points, curves, f"fixed points {desc}; {len(curves)} separatrix branches"
+
+
+def periodic_orbits(view, max_period=None):
+    """(orbits, message): the periodic orbits of minimal periods 1..``max_period`` (default
+    PERIODIC_MAX) found by :func:`explorer.analysis.periodic.search_periodic_orbits` (a coarse
+    grid, 8 x 8, and the symmetry lines), each once.  ``view``: as for :func:`fixed_points_and_curves`."""
+    from explorer.analysis.periodic import search_periodic_orbits
+
+    K = PERIODIC_MAX if max_period is None else int(max_period)
+    if view.region is None:
+        return [], "periodic orbits: the region is empty"
+    orbits = []
+    for k in range(1, K + 1):
+        try:
+            orbits += search_periodic_orbits(view.params, view.h, k, grid=8, max_guesses=30, phi0=view.phi0)
+        except Exception:  # noqa: BLE001 - a failed search marks nothing for this period
+            continue
+    counts = ", ".join(f"K={k}: {sum(o.period == k for o in orbits)} "
+                       f"({sum(o.period == k and o.stable for o in orbits)} stable)" for k in range(1, K + 1))
+    return orbits, f"periodic orbits {counts}"
