@@ -690,3 +690,70 @@ def test_the_scene_seeds_button_starts_the_sweeps_seeds_at_the_current_settings(
         assert len(parse_starts(page.url_query()["orbits"])) == len(p1)           # kept in the link
     finally:
         page.close()
+
+
+def _poll_until(page, cond, timeout=240.0):
+    t0 = time.time()
+    while not cond() and time.time() - t0 < timeout:
+        page.poll()
+        time.sleep(0.02)
+    assert cond(), (page.message.text, page.status.text)
+
+
+def test_picking_an_orbits_crossing_shows_its_mlce_megno_and_rotation_number():
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    from explorer.analysis import lyapunov, rotation
+    from explorer.analysis.fixedpoints import find_fixed_point
+    from explorer.app.serve.orbits import INDICATOR_TIME
+    from explorer.app.serve.overlays import elliptic_center
+    from explorer.app.serve.page import SectionPage
+
+    s = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=40)
+    page = SectionPage(s)
+    try:
+        starts = [(0.3, 0.1), (1.3, 0.05)]             # the second in the island of the elliptic point (1.58, 0)
+        for p in starts:
+            page.click(*p)
+        _poll_until(page, lambda: len(page.crossings.data["t"]) == 2 * s.crossings)
+        d = page.crossings.data
+        second = np.asarray(d["orbit"]) == page.starts[1][0]
+        k = int(np.flatnonzero(second)[17])                     # a crossing of the second orbit, not its start
+        assert page.pick(float(d["p1"][k]) + 1e-9, float(d["p2"][k])) == page.starts[1][0]
+        _poll_until(page, lambda: "rotation number" in page.readout.text)
+        r = page.readouts[page.starts[1][0]]
+        y0 = model.section_state(s.params, [starts[1][0]], [starts[1][1]], s.h)
+        ind = lyapunov.indicators(s.params, y0, INDICATOR_TIME, method=s.method, tol=s.tol)
+        assert (r["megno"], r["mlce"]) == (float(ind.megno[0]), float(ind.mlce[0]))          # the same numbers
+        fp = elliptic_center(s, starts[1])
+        assert fp.stable and fp.point == pytest.approx(find_fixed_point(s.params, s.h, starts[1]).point, abs=0)
+        ref = rotation.rotation_number(s.params, s.h, starts[1], center=fp.point, tol=s.tol)
+        assert r["rotation"].value == ref.value and f"{ref.value:.10g}" in page.readout.text
+        assert f"{float(ind.mlce[0]):.4g}" in page.readout.text and "orbit 2" in page.readout.text
+        assert page.pick(50.0, 50.0) is None and "no crossing within" in page.message.text     # nowhere near
+        page.click_mode.value = "pick an orbit"                  # the switch: a tap picks instead of starting
+        from bokeh.events import Tap
+
+        page._on_tap(Tap(page.figure, sx=1.0, sy=1.0, x=float(d["p1"][0]), y=float(d["p2"][0])))
+        assert len(page.starts) == 2 and page.picked == int(d["orbit"][0])
+        page.undo()
+        page.undo()
+        assert page.readout.text == "" and page.readouts == {}
+    finally:
+        page.close()
+
+
+@browser_needed
+def test_shift_click_on_a_crossing_in_the_browser_shows_that_orbits_readout(served, browser):
+    page = _open(browser, served.url)
+    c1, c2, r1, r2 = SERVED.region
+    _click(page, c1 + 0.4 * r1, c2 + 0.1 * r2)
+    _wait_crossings(page, CROSSINGS)
+    data = page.evaluate(DATA, "crossings")
+    x, y = page.evaluate(TO_SCREEN, [data["p1"][CROSSINGS // 2], data["p2"][CROSSINGS // 2]])
+    page.keyboard.down("Shift")
+    page.mouse.click(x, y)
+    page.keyboard.up("Shift")
+    _wait(page, f"() => ({TEXT})('readout').includes('rotation number')", timeout=FIRST_ORBIT_TIMEOUT_MS)
+    assert len(page.evaluate(DATA, "starts")["orbit"]) == 1                   # picked, nothing started
+    assert f"orbit {data['orbit'][0]} from" in page.evaluate(TEXT, "readout")
+    page.close()

@@ -1,7 +1,8 @@
 """The searches the page's check boxes run, in a thread of the page: the fixed points of the
 section map and the separatrices of the hyperbolic ones (:func:`fixed_points_and_curves`), and the
-periodic orbits of periods 1..PERIODIC_MAX (:func:`periodic_orbits`); also the elliptic fixed point
-an orbit's rotation number is measured around (:func:`elliptic_center`).  No web library here.
+periodic orbits of periods 1..PERIODIC_MAX (:func:`periodic_orbits`); and the readout of a clicked
+orbit (:func:`orbit_readout`: its MEGNO, mLCE and rotation number around :func:`elliptic_center`).
+No web library here.
 """
 from __future__ import annotations
 
@@ -76,3 +77,64 @@ def periodic_orbits(view, max_period=None):
     counts = ", ".join(f"K={k}: {sum(o.period == k for o in orbits)} "
                        f"({sum(o.period == k and o.stable for o in orbits)} stable)" for k in range(1, K + 1))
     return orbits, f"periodic orbits {counts}"
+
+
+def elliptic_center(view, start):
+    """The elliptic fixed point an orbit from ``start`` is measured around (its rotation number):
+    the first elliptic one Newton's method (:func:`explorer.analysis.fixedpoints.find_fixed_point`)
+    reaches from ``start`` itself (the centre of the start's island), the region's centre, or
+    half-way to its edge along both axes; None when none is.  ``view``: as for
+    :func:`fixed_points_and_curves`."""
+    from explorer.analysis.fixedpoints import find_fixed_point
+
+    if view.region is None:
+        return None
+    c1, c2, r1, r2 = view.region
+    guesses = [tuple(start), (c1, c2), (c1 - 0.5 * r1, c2), (c1 + 0.5 * r1, c2), (c1, c2 - 0.5 * r2),
+               (c1, c2 + 0.5 * r2)]
+    for g in guesses:
+        if not view.admissible(*g):
+            continue
+        try:
+            fp = find_fixed_point(view.params, view.h, g, phi0=view.phi0)
+        except Exception:  # noqa: BLE001 - no convergence from this guess
+            continue
+        if fp.stable:
+            return fp
+    return None
+
+
+def orbit_readout(settings, start) -> dict:
+    """What the page shows of the orbit from ``start`` = (p1, p2) when one of its crossings is
+    clicked: its mean MEGNO and finite-time mLCE over INDICATOR_TIME
+    (:func:`explorer.app.serve.orbits.orbit_indicators`: ``lyapunov.indicators``, the page's
+    method and tolerance) and its rotation number around :func:`elliptic_center`
+    (:func:`explorer.analysis.rotation.rotation_number`, default iterates; Taylor at the page's
+    tol with the taylor method, else at the rotation's default tol).  Keys: megno, mlce,
+    rotation (a RotationNumber or None), center (a FixedPoint or None), rotation_error (text)."""
+    from explorer import model
+    from explorer.analysis import rotation
+    from explorer.app.serve.orbits import orbit_indicators
+
+    p1, p2 = float(start[0]), float(start[1])
+    y0 = model.section_state(settings.params, [p1], [p2], settings.h, settings.phi0, settings.direction or 1)
+    megno, mlce = orbit_indicators(settings, y0)
+    out = {"megno": megno, "mlce": mlce, "rotation": None, "center": None, "rotation_error": ""}
+    try:
+        fp = elliptic_center(settings, (p1, p2))
+        if fp is None:
+            out["rotation_error"] = "no elliptic fixed point found (Newton from the start and the region's centre)"
+            return out
+        out["center"] = fp
+        out["rotation"] = rotation.rotation_number(settings.params, settings.h, (p1, p2), center=fp.point,
+                                                   phi0=settings.phi0, tol=rotation_tol(settings))
+    except Exception as exc:  # noqa: BLE001 - shown in the readout
+        out["rotation_error"] = f"{type(exc).__name__}: {' '.join(str(exc).split())}"
+    return out
+
+
+def rotation_tol(settings) -> float:
+    """The Taylor tolerance of an orbit's rotation number (rotation numbers are Taylor only)."""
+    from explorer.analysis import rotation
+
+    return float(settings.tol) if settings.method == "taylor" else float(rotation.DEFAULT_TOL)

@@ -13,6 +13,7 @@ browser; the tests read them there):
 ``separatrices`` ColumnDataSource of the separatrix branches: xs, ys (one polyline per branch)
 ``periodic``   ColumnDataSource of the periodic orbits of periods 1..4: p1, p2, period, kind, marker
 ``overlay``    what the searches found
+``readout``    the picked orbit's mLCE, mean MEGNO and rotation number
 ``section``    the figure (a click on it starts an orbit)
 ``message``    the last message (a refused value, an export, a click outside the region)
 ``status``     one line: orbits running and crossings drawn
@@ -59,6 +60,10 @@ POINT_SIZE = 2.0
 VIEW_MARGIN = 0.08
 #: a double tap within this many pixels of the click before it is that click again
 SAME_SPOT_PX = 4.0
+#: a pick selects the orbit with a crossing within this many pixels of the click
+PICK_PX = 6.0
+#: what a click does: the choices of the page's switch (Shift + click always picks)
+CLICK_MODES = ("start an orbit", "pick an orbit")
 #: colour scale of the MEGNO layer: <Y> from 0 (stable periodic) over 2 (quasi-periodic, light) to
 #: MEGNO_HIGH and above (chaotic, dark)
 MEGNO_LOW, MEGNO_HIGH = 0.0, 8.0
@@ -121,6 +126,9 @@ class SectionPage:
         self._raster_generation = 0
         self.window: raster_mod.Window | None = None
         self._overlay_generation = 0
+        self._readout_generation = 0
+        self.picked: int | None = None          # the orbit whose readout is shown
+        self.readouts: dict = {}                # orbit id -> orbit_readout(...) of a picked orbit
         self._build()
         if doc is not None:
             self.attach(doc)
@@ -202,12 +210,17 @@ class SectionPage:
         self.status = Div(name="status", text="click in the white region to start an orbit", render_as_text=True,
                           width=FIGURE_WIDTH)
         self.overlay_text = Div(name="overlay", text="", render_as_text=True, width=FIGURE_WIDTH)
+        self.readout = Div(name="readout", text="", render_as_text=True, width=FIGURE_WIDTH,
+                           styles={"font-family": "monospace"})
+        self.click_mode = pn.widgets.RadioButtonGroup(options=list(CLICK_MODES),
+                                                      value=CLICK_MODES[0], width=220)
         title = "explorer: Poincaré section φ = π" + (f" ({self.label})" if self.label else "")
-        controls = pn.Column(pn.GridBox(*self.inputs.values(), ncols=2), self.colour_box, self.layer, self.overlay,
+        controls = pn.Column(pn.pane.Markdown("a click (Shift + click: pick):", margin=(0, 5)), self.click_mode,
+                             pn.GridBox(*self.inputs.values(), ncols=2), self.colour_box, self.layer, self.overlay,
                              self.periodic_box, pn.Row(*buttons[:2]), *buttons[2:], width=230)
         self.layout = pn.Row(controls, pn.Column(pn.pane.Markdown(f"### {title}"), pn.pane.Bokeh(fig),
-                                                 pn.pane.Bokeh(self.status), pn.pane.Bokeh(self.message),
-                                                 pn.pane.Bokeh(self.overlay_text)))
+                                                 pn.pane.Bokeh(self.status), pn.pane.Bokeh(self.readout),
+                                                 pn.pane.Bokeh(self.message), pn.pane.Bokeh(self.overlay_text)))
 
     def attach(self, doc) -> None:
         """The session's document: blocks are streamed into it; the worker ends with it."""
@@ -327,9 +340,93 @@ class SectionPage:
         if isinstance(event, DoubleTap) and last is not None and max(abs(here[0] - last[0]),
                                                                       abs(here[1] - last[1])) <= SAME_SPOT_PX:
             return
-        self.click(float(event.x), float(event.y))
+        shift = bool((getattr(event, "modifiers", None) or {}).get("shift"))
+        if shift or self.click_mode.value == CLICK_MODES[1]:
+            self.pick(float(event.x), float(event.y))
+        else:
+            self.click(float(event.x), float(event.y))
 
     _last_tap: tuple | None = None
+
+    def _pixel(self) -> tuple:
+        """The size of a screen pixel in p1 and p2 (from the visible window and the plot's frame)."""
+        w = self.window
+        if w is None:
+            return 0.0, 0.0
+        try:
+            width, height = float(self.figure.inner_width), float(self.figure.inner_height)
+        except Exception:  # noqa: BLE001 - not drawn in a browser yet: the figure's nominal size
+            width, height = FIGURE_WIDTH - 60.0, FIGURE_HEIGHT - 60.0
+        return (w.x1 - w.x0) / max(width, 1.0), (w.y1 - w.y0) / max(height, 1.0)
+
+    def pick(self, p1: float, p2: float, radius_px: float = PICK_PX) -> int | None:
+        """A pick at (p1, p2): the orbit with the crossing nearest to it (within ``radius_px``
+        screen pixels) is selected and its readout (mLCE, mean MEGNO, rotation number:
+        :func:`explorer.app.serve.overlays.orbit_readout`) is computed in a thread and shown in
+        ``readout``; returns the orbit's id (None: no crossing near)."""
+        d = self.crossings.data
+        if not (math.isfinite(p1) and math.isfinite(p2)) or not len(d["orbit"]):
+            self.say("pick: no orbit on the page yet")
+            return None
+        px, py = self._pixel()
+        dist = np.hypot((np.asarray(d["p1"]) - p1) / (px or 1.0), (np.asarray(d["p2"]) - p2) / (py or 1.0))
+        k = int(np.argmin(dist))
+        if not dist[k] <= radius_px:
+            self.say(f"pick: no crossing within {radius_px:g} pixels of ({p1:.4g}, {p2:.4g})")
+            return None
+        ident = int(np.asarray(d["orbit"])[k])
+        self.select(ident)
+        return ident
+
+    def select(self, ident: int) -> None:
+        """Show orbit ``ident``'s readout (computed once per orbit and settings, in a thread)."""
+        start = next(((a, b) for i, a, b, _c in self.starts if i == ident), None)
+        if start is None:
+            return
+        self.picked = ident
+        self._readout_generation += 1
+        self.say("")
+        if ident in self.readouts:
+            self._show_readout(self._readout_generation, ident, self.readouts[ident])
+            return
+        self.readout.text = f"orbit {ident} from ({start[0]:.6g}, {start[1]:.6g}): computing mLCE, MEGNO, rotation ..."
+        threading.Thread(target=self._compute_readout, args=(self._readout_generation, ident, start, self.settings),
+                         name="explorer-serve-readout", daemon=True).start()
+
+    def _compute_readout(self, generation, ident, start, settings):
+        from explorer.app.serve.overlays import orbit_readout
+
+        try:
+            r = orbit_readout(settings, start)
+        except Exception as exc:  # noqa: BLE001 - reported in the page
+            r = {"error": f"{type(exc).__name__}: {' '.join(str(exc).split())}"}
+        r["start"], r["settings"] = start, settings
+        self._post(partial(self._show_readout, generation, ident, r))
+
+    def _show_readout(self, generation, ident, r):
+        if r.get("settings") is not self.settings or not any(i == ident for i, *_ in self.starts):
+            return                           # the orbit or the values changed meanwhile
+        self.readouts[ident] = r
+        if generation != self._readout_generation:
+            return
+        p1, p2 = r["start"]
+        head = f"orbit {ident} from ({p1:.6g}, {p2:.6g}): "
+        if "error" in r:
+            self.readout.text = head + f"failed: {r['error']}"
+            return
+        kind = "chaotic-like" if r["megno"] > CHAOTIC_MEGNO else "regular-like"
+        text = (head + f"mLCE = {r['mlce']:.4g}, <Y> = {r['megno']:.4g} over t <= {INDICATOR_TIME:g}"
+                + (f" ({kind})" if math.isfinite(r["megno"]) else " (unknown: the run stopped early)"))
+        rot, fp = r["rotation"], r["center"]
+        if rot is None:
+            text += f"; rotation number: none ({r['rotation_error']})"
+        elif not math.isfinite(rot.value):
+            text += f"; rotation number: none ({rot.status})"
+        else:
+            text += (f"; rotation number {rot.value:.10g} around ({fp.point[0]:.6g}, {fp.point[1]:.6g}) over "
+                     f"{2 * rot.iterates} returns, " + ("converged" if rot.converged else
+                                                        f"not converged (|WB_N - WB_2N| = {rot.difference:.2g})"))
+        self.readout.text = text
 
     def _post(self, action) -> None:
         """From a worker thread: run ``action`` on the document's loop (a served page), or keep it
@@ -395,6 +492,9 @@ class SectionPage:
         self.worker.cancel()
         old, self.starts, self._running = self.starts, [], set()
         self.indicators = {}
+        self.readouts, self.picked = {}, None
+        self._readout_generation += 1
+        self.readout.text = ""
         self.crossings.data = _empty_crossings()
         self.start_source.data = _empty_starts()
         return old
@@ -411,6 +511,9 @@ class SectionPage:
         ident = self.starts.pop()[0]
         self.worker.remove(ident)
         self.indicators.pop(ident, None)
+        self.readouts.pop(ident, None)
+        if self.picked == ident:
+            self.picked, self.readout.text = None, ""
         self._running = self._running - {ident}
         keep = np.asarray(self.crossings.data["orbit"]) != ident
         self.crossings.data = {k: np.asarray(v)[keep] for k, v in self.crossings.data.items()}
