@@ -757,3 +757,124 @@ def test_shift_click_on_a_crossing_in_the_browser_shows_that_orbits_readout(serv
     assert len(page.evaluate(DATA, "starts")["orbit"]) == 1                   # picked, nothing started
     assert f"orbit {data['orbit'][0]} from" in page.evaluate(TEXT, "readout")
     page.close()
+
+
+# ---------------------------------------------------------------- faults: the server keeps serving, memory returns
+#: clicks of the memory test, crossings per click, and clicks between two Clears (a session holds
+#: at most settings.MAX_STARTS orbits, so the 1,000 clicks are 20 rounds of 50 clicks and a Clear)
+CLICKS, CLICK_CROSSINGS, ROUND = 1000, 20, 50
+#: growth of the Python heap (tracemalloc: numpy arrays included; after gc.collect, Bokeh's models
+#: hold reference cycles) allowed from the end of the second round to the end of the last, 18
+#: rounds = 900 clicks later: 32 kB, 36 bytes a click.  A round holds 50 x 20 rows x 8 columns x
+#: 8 bytes = 64 kB of crossings, all dropped by Clear; a leak of one crossing row per click (64 B)
+#: would show as 58 kB, of one orbit's rows (1.3 kB) as 1.1 MB, of its indicators' tuple as
+#: 900 x ~100 B: each past the bound.  Measured: 1 kB.
+HEAP_GROWTH_BOUND = 32 * 1024
+
+
+def test_a_thousand_clicks_leave_the_session_with_bounded_memory_and_threads(monkeypatch):
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    import gc
+    import threading
+    import tracemalloc
+
+    from explorer.app.serve import orbits
+    from explorer.app.serve.page import SectionPage
+
+    monkeypatch.setattr(orbits, "INDICATOR_TIME", 20.0)        # the indicators still run, shorter
+    s = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=CLICK_CROSSINGS)
+    c1, c2, r1, r2 = s.region
+    rng = np.random.default_rng(7)
+    page = SectionPage(s)
+    threads0 = threading.active_count()
+    tracemalloc.start()
+    try:
+        heap = []
+        for _round in range(CLICKS // ROUND):
+            for _ in range(ROUND):
+                u, v = rng.uniform(-0.9, 0.9, 2)
+                assert page.click(c1 + u * r1 * np.sqrt(1 - v * v), c2 + v * r2 * 0.9) is not None
+            _poll_until(page, lambda: len(page.crossings.data["t"]) == ROUND * CLICK_CROSSINGS
+                        and len(page.indicators) == ROUND and not page.worker.busy())
+            assert sorted(np.unique(page.crossings.data["orbit"])) == sorted(i for i, *_ in page.starts)
+            page.clear()
+            page.poll()
+            assert len(page.crossings.data["t"]) == 0 and page.starts == [] and page.indicators == {}
+            assert page._pending == [] and page._inbox == [] and page.worker._runs == []
+            gc.collect()                                            # (Bokeh's models hold reference cycles)
+            heap.append(tracemalloc.get_traced_memory()[0])
+        assert threading.active_count() <= threads0                # no thread per click
+        growth = heap[-1] - heap[1]
+        print(f"heap after each round (kB): {[h // 1024 for h in heap]}; growth {growth / 1024:.0f} kB")
+        assert growth < HEAP_GROWTH_BOUND, heap
+        page.close()                                               # the tab is gone: its threads end
+        page.worker._thread.join(10)
+        page.raster._thread.join(10)
+        assert not page.worker._thread.is_alive() and not page.raster._thread.is_alive()
+    finally:
+        tracemalloc.stop()
+        page.close()
+
+
+def test_a_value_changed_during_the_megno_raster_restarts_it_for_the_new_value():
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    from explorer.app.serve import raster
+    from explorer.app.serve.page import SectionPage
+
+    page = SectionPage(Settings(params=model.FIGURE4.with_(mu=0.03), tol=1e-10), {"megno": "1"})
+    shown = []
+    show = page._show_image
+    page._show_image = lambda g, im: (shown.append((g, im)), show(g, im))
+    try:
+        _poll_until(page, lambda: bool(page.raster_source.data["n"]))          # the old raster is on
+        page.inputs["mu"].value = "0.5"                                        # changed while it runs
+        new = page._raster_generation
+        assert page.settings.params.mu == 0.5
+        _poll_until(page, lambda: page.raster_source.data["n"] == [raster.RESOLUTIONS[0]]
+                    and page.raster_source.data["complete"] == [True] and shown[-1][0] == new)
+        ref = next(im for im in raster.rasters(page.settings, page.window) if im.complete)
+        np.testing.assert_array_equal(page.raster_source.data["image"][0], ref.values)   # the new value's raster
+        after = [im for g, im in shown if g == new]
+        assert after and all(im.window == page.window for im in after)
+        page.layer.value = False
+        assert page.raster_source.data["n"] == []
+    finally:
+        page.close()
+
+
+def test_bad_tokens_leave_the_server_serving_the_right_one():
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    s = Served("--token", "s3cret")
+    try:
+        bare = s.url.split("?")[0]
+        bad = ["", "wrong", "s3cre", "s3cret0", "S3CRET", "%00", "s3cret%20", "x" * 5000, "%E2%98%83"] * 4
+        for token in bad:
+            with pytest.raises(urllib.error.HTTPError) as exc:
+                urllib.request.urlopen(f"{bare}?token={token}", timeout=10)
+            assert exc.value.code in (403, 414, 431), token[:20]
+        body = urllib.request.urlopen(s.url, timeout=30).read().decode("utf-8", "replace")
+        assert s.proc.poll() is None and "bokeh" in body.lower()
+    finally:
+        code, err = s.interrupt()
+    assert code in (0, 130) and "Traceback" not in err, err[-2000:]
+
+
+@browser_needed
+def test_a_client_that_leaves_mid_orbit_leaves_the_server_serving_the_next(served, browser):
+    page = _open(browser, served.url)
+    _set_field(page, "crossings", "200000")                 # an orbit of several seconds
+    _wait(page, "() => window.location.search.includes('crossings=200000')", timeout=60_000)
+    c1, c2, r1, r2 = SERVED.region
+    _click(page, c1 + 0.3 * r1, c2)
+    _wait_crossings(page, 1)
+    assert page.evaluate(DATA, "crossings")["p1"].__len__() < 200000     # mid-orbit
+    page.close()                                            # the tab goes, its orbit still running
+    other = _open(browser, served.url)                      # a second client: a page and an orbit
+    _click(other, c1 - 0.3 * r1, c2 + 0.1 * r2)
+    _wait_crossings(other, CROSSINGS)
+    starts = other.evaluate(DATA, "starts")
+    data = other.evaluate(DATA, "crossings")
+    rows = np.column_stack([np.array(data[k]) for k in ("t", "p1", "p2", "M", "dH")])
+    np.testing.assert_array_equal(rows, _orbit_json(SERVED, starts["p1"][0], starts["p2"][0]))
+    other.close()
+    assert served.proc.poll() is None
