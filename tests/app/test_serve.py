@@ -878,3 +878,75 @@ def test_a_client_that_leaves_mid_orbit_leaves_the_server_serving_the_next(serve
     np.testing.assert_array_equal(rows, _orbit_json(SERVED, starts["p1"][0], starts["p2"][0]))
     other.close()
     assert served.proc.poll() is None
+
+
+# ---------------------------------------------------------------- the view as PNG and SVG
+def _svg_orbits(svg: bytes) -> dict:
+    """{orbit id: [fill colours of its points]} of an exported SVG (each orbit is one group)."""
+    import xml.etree.ElementTree as ET
+
+    root = ET.fromstring(svg)
+    out = {}
+    for g in root.iter("{http://www.w3.org/2000/svg}g"):
+        gid = g.get("id", "")
+        if gid.startswith("orbit-"):
+            styles = [u.get("style", "") for u in g.iter() if u.tag.endswith("use")]
+            out[int(gid.split("-")[1])] = [st.split("fill:")[1].split(";")[0].strip() for st in styles if "fill:" in st]
+    return out
+
+
+def test_the_view_exports_as_svg_with_one_group_per_orbit_and_as_png_in_the_orbits_colours(tmp_path):
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    import io
+
+    import matplotlib.colors
+    import matplotlib.image
+
+    from explorer.app.serve.orbits import COLORS
+    from explorer.app.serve.page import SectionPage
+
+    s = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=300)
+    c1, c2, r1, r2 = s.region
+    page = SectionPage(s, export_dir=str(tmp_path))
+    try:
+        for u in (0.5, -0.3, 0.1):
+            page.click(c1 + u * r1, c2 + 0.1 * r2)
+        _poll_until(page, lambda: len(page.crossings.data["t"]) == 3 * s.crossings)
+        svg = page.figure_bytes("svg")
+        groups = _svg_orbits(svg)                                        # parses as XML
+        assert sorted(groups) == sorted(i for i, *_ in page.starts)      # one group per orbit
+        for ident, _a, _b, c in page.starts:
+            n_inside = int(np.sum(np.asarray(page.crossings.data["orbit"]) == ident))
+            assert len(groups[ident]) == n_inside                       # a point per crossing
+            assert set(groups[ident]) == {COLORS[c]}                     # in the orbit's colour
+        img = matplotlib.image.imread(io.BytesIO(page.figure_bytes("png")))[..., :3]
+        for _i, _a, _b, c in page.starts:                                # each orbit's colour is on the picture
+            rgb = np.array(matplotlib.colors.to_rgb(COLORS[c]))
+            assert np.sum(np.abs(img - rgb).max(axis=2) < 0.05) > 50, COLORS[c]
+        gray = np.array(matplotlib.colors.to_rgb("0.8"))
+        assert np.sum(np.abs(img - gray).max(axis=2) < 0.02) > 1000        # the forbidden region
+        page.colour_box.value = True                                      # coloured by MEGNO: not the orbit colours
+        _poll_until(page, lambda: len(page.indicators) == 3)
+        assert all(set(v) != {COLORS[c]} for (_i, _a, _b, c), v in zip(page.starts, _svg_orbits(
+            page.figure_bytes("svg")).values()))
+        page.export_figure()                                              # into --export-dir, PNG and SVG
+        _poll_until(page, lambda: "figure written" in page.message.text, timeout=60)
+        assert sorted(p.suffix for p in tmp_path.iterdir()) == [".png", ".svg"]
+    finally:
+        page.close()
+
+
+@browser_needed
+def test_the_figure_downloads_from_the_page_as_svg(served, browser, tmp_path):
+    page = _open(browser, served.url)
+    c1, c2, r1, r2 = SERVED.region
+    _click(page, c1 + 0.6 * r1, c2)
+    _wait_crossings(page, CROSSINGS)
+    ident = page.evaluate(DATA, "starts")["orbit"][0]
+    with page.expect_download(timeout=120_000) as dl:
+        page.get_by_role("button", name="Figure (SVG)").click()
+    path = tmp_path / "view.svg"
+    dl.value.save_as(str(path))
+    groups = _svg_orbits(path.read_bytes())
+    assert list(groups) == [ident] and len(groups[ident]) == CROSSINGS
+    page.close()

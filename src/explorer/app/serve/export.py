@@ -47,6 +47,25 @@ def write_scene(directory, scene: scene_mod.Scene) -> str:
     return path
 
 
+def write_figure(directory, view, name: str = SCENE_NAME) -> list:
+    """Write the page's ``view`` (:class:`explorer.app.serve.image.View`) as
+    ``<name>-<UTC time>.png`` and ``.svg`` into ``directory`` (atomically); returns their paths."""
+    from explorer.app.serve.image import FORMATS, render
+    from explorer.io.store.atomic import write_bytes_atomic
+
+    stamp = time.strftime("%Y%m%dT%H%M%S", time.gmtime())
+    stem = os.path.join(os.fspath(directory), f"{name}-{stamp}")
+    n = 1
+    while any(os.path.exists(f"{stem}.{fmt}") for fmt in FORMATS):
+        n += 1
+        stem = os.path.join(os.fspath(directory), f"{name}-{stamp}-{n}")
+    paths = []
+    for fmt in FORMATS:
+        write_bytes_atomic(f"{stem}.{fmt}", render(view, fmt))
+        paths.append(f"{stem}.{fmt}")
+    return paths
+
+
 def write_store(scene_path) -> str:
     """Run the scene written by :func:`write_scene` into the store next to it (``.h5`` for
     ``.toml``; the sweep's own atomic commit); returns the store's path."""

@@ -35,7 +35,6 @@ import numpy as np
 import panel as pn
 from bokeh.events import DoubleTap, RangesUpdate, Tap
 from bokeh.models import ColumnDataSource, Div, LinearColorMapper
-from bokeh.palettes import Inferno256
 from bokeh.plotting import figure
 
 from explorer.app.serve import export
@@ -44,33 +43,30 @@ from explorer.app.serve import settings as settings_mod
 from explorer.app.serve.orbits import CHAOTIC_MEGNO, COLORS, INDICATOR_TIME, Worker
 from explorer.app.serve.overlays import PERIODIC_MAX
 from explorer.app.serve.settings import FIELDS, Settings, format_starts, parse_fields, parse_starts
+from explorer.app.serve.style import (
+    ALLOWED_COLOR,
+    BOUNDARY_COLOR,
+    FIELD_WIDTH,
+    FIGURE_HEIGHT,
+    FIGURE_WIDTH,
+    FORBIDDEN_COLOR,
+    MEGNO_HIGH,
+    MEGNO_LOW,
+    MEGNO_ORBIT_SKIP,
+    PERIOD_COLORS,
+    POINT_SIZE,
+    SEPARATRIX_COLOR,
+    VIEW_MARGIN,
+    megno_palette,
+)
 from explorer.model import ParameterError
 
-#: colours of the section (as the figures: forbidden region light gray, allowed region white)
-FORBIDDEN_COLOR = "#cccccc"
-ALLOWED_COLOR = "#ffffff"
-BOUNDARY_COLOR = "#262626"
-#: size of the figure in pixels, and of a crossing's dot
-FIGURE_WIDTH = 720
-FIGURE_HEIGHT = 560
-#: width of a field (two columns of them beside the figure)
-FIELD_WIDTH = 100
-POINT_SIZE = 2.0
-#: the view shows the region's bounding box and this margin around it (fraction of the semi-axes)
-VIEW_MARGIN = 0.08
 #: a double tap within this many pixels of the click before it is that click again
 SAME_SPOT_PX = 4.0
 #: a pick selects the orbit with a crossing within this many pixels of the click
 PICK_PX = 6.0
 #: what a click does: the choices of the page's switch (Shift + click always picks)
 CLICK_MODES = ("start an orbit", "pick an orbit")
-#: colour scale of the MEGNO layer: <Y> from 0 (stable periodic) over 2 (quasi-periodic, light) to
-#: MEGNO_HIGH and above (chaotic, dark)
-MEGNO_LOW, MEGNO_HIGH = 0.0, 8.0
-#: periodic orbits of periods 1..PERIODIC_MAX are marked, filled with the colour of their period
-PERIOD_COLORS = ("#ffffff", "#f4a582", "#92c5de", "#b8e186")
-#: colour of the separatrices
-SEPARATRIX_COLOR = "#303030"
 #: labels of the fields
 LABELS = {"mu": "μ", "h": "h", "lam": "λ", "a1": "a1", "a2": "a2", "b": "b", "chi": "χ", "zeta": "ζ", "xi": "ξ",
           "eta": "η", "method": "method",
@@ -148,7 +144,7 @@ class SectionPage:
         fig.ellipse("x", "y", width="width", height="height", source=self.region, fill_color=ALLOWED_COLOR,
                     line_color=BOUNDARY_COLOR, line_width=1.0)
         self.raster_source = ColumnDataSource(_empty_raster(), name="raster")
-        megno = LinearColorMapper(palette=list(reversed(Inferno256)), low=MEGNO_LOW, high=MEGNO_HIGH,
+        megno = LinearColorMapper(palette=megno_palette(), low=MEGNO_LOW, high=MEGNO_HIGH,
                                   nan_color=(0, 0, 0, 0))
         fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=self.raster_source, color_mapper=megno,
                   alpha=0.85)
@@ -158,7 +154,7 @@ class SectionPage:
         fig.multi_line("xs", "ys", source=self.curves, line_color=SEPARATRIX_COLOR, line_width=1.2)
         self._by_orbit = colors
         self._by_megno = {"field": "megno", "transform": LinearColorMapper(
-            palette=list(reversed(Inferno256))[32:], low=MEGNO_LOW, high=MEGNO_HIGH, nan_color="#9e9e9e")}
+            palette=megno_palette(MEGNO_ORBIT_SKIP), low=MEGNO_LOW, high=MEGNO_HIGH, nan_color="#9e9e9e")}
         self.points = fig.scatter("p1", "p2", source=self.crossings, color=colors, size=POINT_SIZE, line_width=0)
         fig.scatter("p1", "p2", source=self.start_source, marker="cross", color=colors, size=9, line_width=2)
         fig.scatter("p1", "p2", source=self.periodic, marker="marker", size=8, line_color="black",
@@ -200,10 +196,17 @@ class SectionPage:
         download = pn.widgets.FileDownload(callback=self._scene_file, filename=f"{export.SCENE_NAME}.toml",
                                            label="Scene (TOML)", color="primary", width=190)
         buttons.append(download)
+        buttons.append(pn.Row(*(pn.widgets.FileDownload(callback=partial(self._figure_file, fmt),
+                                                        filename=f"{export.SCENE_NAME}.{fmt}",
+                                                        label=f"Figure ({fmt.upper()})", width=92)
+                                for fmt in ("png", "svg"))))
         if self.export_dir is not None:
             save = pn.widgets.Button(label="Export scene", width=190)
             save.on_click(lambda _e: self._later(self.export))
             buttons.append(save)
+            figure_button = pn.widgets.Button(label="Export figure", width=190)
+            figure_button.on_click(lambda _e: self._later(self.export_figure))
+            buttons.append(figure_button)
         # text, never HTML: a message may quote what was typed into a field
         self.message = Div(name="message", text="", render_as_text=True, width=FIGURE_WIDTH,
                            styles={"color": "#b00020", "min-height": "1.2em"})
@@ -553,6 +556,61 @@ class SectionPage:
         except ParameterError as exc:
             self.say(str(exc))
             return io.StringIO("")
+
+    def view(self):
+        """What the page shows now, copied (:class:`explorer.app.serve.image.View`: drawn by
+        :func:`explorer.app.serve.image.render`, in any thread)."""
+        from explorer.app.serve.image import View
+
+        d = self.crossings.data
+        orbit = np.asarray(d["orbit"])
+        p = np.column_stack([np.asarray(d["p1"], float), np.asarray(d["p2"], float)])
+        orbits = [(i, COLORS[c], p[orbit == i], self.indicators.get(i, (math.nan,))[0]) for i, _a, _b, c in self.starts]
+        w = self.window
+        window = (w.x0, w.x1, w.y0, w.y1) if w is not None else (-1.0, 1.0, -1.0, 1.0)
+        r = self.raster_source.data
+        raster = None
+        if len(r["image"]):
+            x, y = r["x"][0], r["y"][0]
+            raster = (np.array(r["image"][0], float), (x, x + r["dw"][0], y, y + r["dh"][0]))
+        f, q = self.fixed.data, self.periodic.data
+        s = self.settings
+        title = f"mu = {s.params.mu:g}, h = {s.h:g}, {s.method}" + (f" ({self.label})" if self.label else "")
+        return View(window=window, region=s.region, orbits=orbits,
+                    starts=[(a, b, COLORS[c]) for _i, a, b, c in self.starts], raster=raster,
+                    fixed=[(a, b, k == "elliptic") for a, b, k in zip(f["p1"], f["p2"], f["kind"])],
+                    separatrices=[np.column_stack([x, y]) for x, y in zip(self.curves.data["xs"],
+                                                                          self.curves.data["ys"])],
+                    periodic=[(a, b, k, e == "elliptic") for a, b, k, e in zip(q["p1"], q["p2"], q["period"],
+                                                                               q["kind"])],
+                    by_megno=bool(self.colour_box.value), title=title)
+
+    def figure_bytes(self, fmt: str) -> bytes:
+        """The page's view as a PNG or SVG file (the *Figure* downloads)."""
+        from explorer.app.serve.image import render
+
+        return render(self.view(), fmt)
+
+    def _figure_file(self, fmt):
+        try:
+            return io.BytesIO(self.figure_bytes(fmt))
+        except Exception as exc:  # noqa: BLE001 - reported in the page; the download is empty
+            self.say(f"figure failed: {type(exc).__name__}: {' '.join(str(exc).split())}")
+            return io.BytesIO(b"")
+
+    def export_figure(self) -> None:
+        """Write the page's view as PNG and SVG into the export directory (drawn in a thread)."""
+        view = self.view()
+        self.say("writing the figure ...")
+        threading.Thread(target=self._write_figure, args=(view,), name="explorer-serve-figure", daemon=True).start()
+
+    def _write_figure(self, view):
+        try:
+            paths = export.write_figure(self.export_dir, view)
+            text = "figure written: " + " and ".join(os.path.basename(p) for p in paths)
+        except Exception as exc:  # noqa: BLE001 - reported in the page
+            text = f"figure export failed: {type(exc).__name__}: {' '.join(str(exc).split())}"
+        self._post(partial(self.say, text))
 
     def export(self) -> str | None:
         """Write the session's scene into the export directory; returns its path."""

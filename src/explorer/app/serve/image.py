@@ -1,0 +1,124 @@
+"""The page's view as a picture: PNG or SVG drawn with matplotlib (the *Figure (PNG)* and *Figure
+(SVG)* downloads and *Export figure*, docs/commands/serve.md).
+
+:class:`View` is a copy of what the page shows, taken on the page's event loop (plain arrays and
+tuples: it can be drawn in any thread); :func:`render` draws it in the style of the sweep's
+figures (:mod:`explorer.app.figures`: the forbidden region light gray, the allowed ellipse white
+with a thin dark edge): the visible window, the MEGNO layer if on, every orbit in its page colour
+(or coloured by its MEGNO), the clicked starts, the fixed points, separatrices and periodic orbits.
+Each orbit is one scatter collection with the SVG id ``orbit-<id>``.  No web library here.
+"""
+from __future__ import annotations
+
+import io
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+#: size of the picture (inches) and the PNG's resolution
+FIGSIZE = (7.0, 5.6)
+DPI = 150
+#: above this many crossings in all, the orbits are rasterized in the SVG (a vector point each
+#: would make a file of ~100 bytes a crossing)
+SVG_VECTOR_MAX = 200_000
+#: the formats render() writes
+FORMATS = ("png", "svg")
+
+
+@dataclass
+class View:
+    """What the page shows.  ``orbits``: [(id, colour, points (n, 2), megno)]; ``starts``:
+    [(p1, p2, colour)]; ``window``: (x0, x1, y0, y1); ``region``: (c1, c2, r1, r2) or None;
+    ``raster``: (values (n, n), window) or None; ``fixed``: [(p1, p2, elliptic)];
+    ``separatrices``: [(n, 2) arrays]; ``periodic``: [(p1, p2, period, elliptic)];
+    ``by_megno``: colour the orbits by their MEGNO; ``title``: one line."""
+
+    window: tuple
+    region: tuple | None
+    orbits: list = field(default_factory=list)
+    starts: list = field(default_factory=list)
+    raster: tuple | None = None
+    fixed: list = field(default_factory=list)
+    separatrices: list = field(default_factory=list)
+    periodic: list = field(default_factory=list)
+    by_megno: bool = False
+    title: str = ""
+
+
+def _megno_colormap(skip: int = 0):
+    from matplotlib.colors import ListedColormap
+
+    from explorer.app.serve.style import megno_palette
+
+    return ListedColormap(megno_palette(skip)).with_extremes(bad=(0, 0, 0, 0))
+
+
+def figure(view: View):
+    """The matplotlib Figure of ``view`` (not registered with pyplot)."""
+    from explorer.app import figures
+
+    figures._matplotlib()
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Ellipse
+
+    from explorer.app.serve.style import MEGNO_HIGH, MEGNO_LOW, MEGNO_ORBIT_SKIP, PERIOD_COLORS, SEPARATRIX_COLOR
+
+    fig = Figure(figsize=FIGSIZE, dpi=DPI, layout="constrained")
+    ax = fig.add_subplot()
+    x0, x1, y0, y1 = view.window
+    ax.set_facecolor(figures.FORBIDDEN_COLOR)
+    if view.region is not None:
+        c1, c2, r1, r2 = view.region
+        ax.add_patch(Ellipse((c1, c2), 2 * r1, 2 * r2, facecolor="white", edgecolor="none", zorder=0.5))
+        ax.add_patch(Ellipse((c1, c2), 2 * r1, 2 * r2, facecolor="none", edgecolor=figures.BOUNDARY_COLOR,
+                             linewidth=figures.BOUNDARY_WIDTH, zorder=3))
+    cmap = _megno_colormap()
+    orbit_cmap = _megno_colormap(MEGNO_ORBIT_SKIP)
+    if view.raster is not None:
+        values, (a0, a1, b0, b1) = view.raster
+        ax.imshow(np.asarray(values, float), extent=(a0, a1, b0, b1), origin="lower", cmap=cmap, vmin=MEGNO_LOW,
+                  vmax=MEGNO_HIGH, alpha=0.85, interpolation="nearest", zorder=1)
+    total = sum(len(pts) for _i, _c, pts, _m in view.orbits)
+    raster_points = total > SVG_VECTOR_MAX
+    size = 4.0 if total < 20_000 else 1.0
+    for ident, colour, pts, megno in view.orbits:
+        pts = np.asarray(pts, float).reshape(-1, 2)
+        if view.by_megno:
+            colour = "#9e9e9e" if not math.isfinite(megno) else orbit_cmap(min(max((megno - MEGNO_LOW) /
+                                                                             (MEGNO_HIGH - MEGNO_LOW), 0.0), 1.0))
+        ax.scatter(pts[:, 0], pts[:, 1], s=size, c=[colour], linewidths=0, marker="o", zorder=2,
+                   rasterized=raster_points, gid=f"orbit-{ident}")
+    if view.starts:
+        s = np.asarray([(a, b) for a, b, _c in view.starts], float)
+        ax.scatter(s[:, 0], s[:, 1], s=40, marker="+", c=[c for _a, _b, c in view.starts], linewidths=1.5,
+                   zorder=4, gid="starts")
+    for curve in view.separatrices:
+        c = np.asarray(curve, float)
+        ax.plot(c[:, 0], c[:, 1], color=SEPARATRIX_COLOR, linewidth=0.8, zorder=2.5)
+    for p1, p2, period, elliptic in view.periodic:
+        ax.scatter([p1], [p2], s=36, marker="o" if elliptic else "X", edgecolors="black", linewidths=1.0,
+                   c=[PERIOD_COLORS[(int(period) - 1) % len(PERIOD_COLORS)]], zorder=5)
+    for p1, p2, elliptic in view.fixed:
+        ax.scatter([p1], [p2], s=60, marker="o" if elliptic else "X", edgecolors="black", facecolors="white",
+                   linewidths=1.5, zorder=6)
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
+    ax.set_aspect("equal", adjustable="box")
+    ax.set_xlabel("$p_1$")
+    ax.set_ylabel("$p_2$")
+    if view.title:
+        ax.set_title(figures.mathtext_label(view.title), fontsize=9)
+    ax.tick_params(direction="in", top=True, right=True)
+    return fig
+
+
+def render(view: View, fmt: str) -> bytes:
+    """``view`` as a PNG or SVG file's bytes (SVG without a date: the same view, the same bytes)."""
+    if fmt not in FORMATS:
+        raise ValueError(f"format must be one of {FORMATS}, got {fmt!r}")
+    fig = figure(view)
+    buf = io.BytesIO()
+    meta = {"Date": None} if fmt == "svg" else {"Software": "explorer serve"}
+    fig.savefig(buf, format=fmt, dpi=DPI, facecolor="white", metadata=meta)
+    return buf.getvalue()

@@ -1,0 +1,36 @@
+"""How the page looks, in one place (no web library): the colours of the section, the sizes, the
+MEGNO colour scale and the colours of the overlays; :mod:`~explorer.app.serve.page` draws with
+them in the browser and :mod:`~explorer.app.serve.image` in the exported PNG and SVG."""
+from __future__ import annotations
+
+#: colours of the section (as the figures: forbidden region light gray, allowed region white)
+FORBIDDEN_COLOR = "#cccccc"
+ALLOWED_COLOR = "#ffffff"
+BOUNDARY_COLOR = "#262626"
+#: size of the figure in pixels, and of a crossing's dot
+FIGURE_WIDTH = 720
+FIGURE_HEIGHT = 560
+#: width of a field (two columns of them beside the figure)
+FIELD_WIDTH = 100
+POINT_SIZE = 2.0
+#: the view shows the region's bounding box and this margin around it (fraction of the semi-axes)
+VIEW_MARGIN = 0.08
+#: colour scale of the MEGNO layer: <Y> from 0 (stable periodic) over 2 (quasi-periodic, light) to
+#: MEGNO_HIGH and above (chaotic, dark)
+MEGNO_LOW, MEGNO_HIGH = 0.0, 8.0
+#: periodic orbits of periods 1..PERIODIC_MAX are marked, filled with the colour of their period
+PERIOD_COLORS = ("#ffffff", "#f4a582", "#92c5de", "#b8e186")
+#: colour of the separatrices
+SEPARATRIX_COLOR = "#303030"
+
+
+def megno_palette(skip: int = 0) -> list:
+    """The MEGNO colour scale, light (regular) to dark (chaotic): Inferno reversed, without its
+    ``skip`` lightest colours (256 - skip colours, "#rrggbb")."""
+    from bokeh.palettes import Inferno256  # (a table of colours: no server, no document)
+
+    return list(reversed(Inferno256))[skip:]
+
+
+#: the MEGNO layer's palette and the one of the orbits coloured by MEGNO (without its near-white end)
+MEGNO_ORBIT_SKIP = 32
