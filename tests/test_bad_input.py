@@ -65,11 +65,11 @@ REAL_OPTIONS = {
     "fixedpoint": ("--h", "--tol"),
     "periodic": ("--h", "--tol"),
     "rotation": ("--h", "--tol"),
-    "explore": ("--h", "--tol", "--dt"),
+    "explore": ("--h", "--tol", "--dt", "--megno-time"),
     "melnikov": ("--h", "--g0"),
     "trajectory": ("--p1", "--p2", "--M", "--phi", "--time", "--tol"),
     "manifold": ("--h", "--tol", "--arclength", "--max-time"),
-    "serve": ("--h", "--tol", "--dt"),
+    "serve": ("--h", "--tol", "--dt", "--megno-time"),
 }
 #: options taking an integer: (option, values out of range)
 INT_OPTIONS = {
@@ -77,11 +77,13 @@ INT_OPTIONS = {
     "lyapunov": (("--history", ("-1", BIG)),),
     "periodic": (("--period", ("0", BIG)), ("--grid", ("1", "-1", BIG)), ("--max-guesses", ("0",))),
     "rotation": (("--n", ("1", BIG)), ("--iterates", ("9", BIG))),
-    "explore": (("--panel", ("-1", "1")), ("--port", ("-1", "65536")), ("--crossings", ("0", BIG))),
+    "explore": (("--panel", ("-1", "1")), ("--port", ("-1", "65536")), ("--crossings", ("0", BIG)),
+                ("--megno-resolution", ("0", "8", "100", "1024", BIG))),
     "trajectory": (("--samples", ("1", BIG)), ("--glyphs", ("0", "-1"))),
     "sweep": (("--jobs", ("0", "-1", BIG)),),
     "manifold": (("--period", ("0", BIG)), ("--index", ("-1", BIG)), ("--max-points", ("0", BIG))),
-    "serve": (("--panel", ("-1", "1")), ("--port", ("-1", "65536")), ("--crossings", ("0", BIG))),
+    "serve": (("--panel", ("-1", "1")), ("--port", ("-1", "65536")), ("--crossings", ("0", BIG)),
+              ("--megno-resolution", ("0", "8", "100", "1024", BIG))),
 }
 #: options taking a point p1,p2
 PAIR_OPTIONS = {"manifold": ("--guess",), "fixedpoint": ("--guess",), "periodic": ("--guess",),
@@ -97,8 +99,10 @@ def _cases():
                 values.append("1e300")          # past MAX_MAGNITUDE (or outside the region)
             if opt in ("--tol",):
                 values += ["0", "1", "-1e-12"]
-            if opt in ("--dt", "--time", "--tmax", "--arclength", "--max-time"):
+            if opt in ("--dt", "--time", "--tmax", "--arclength", "--max-time", "--megno-time"):
                 values += ["0", "-1"]
+            if opt == "--megno-time":
+                values.append(BIG)
             for v in values:
                 rows.append((f"{cmd}{opt}={v or 'empty'}", BASE[cmd] + [f"{opt}={v}"], opt))
     for cmd, opts in INT_OPTIONS.items():

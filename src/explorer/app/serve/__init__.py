@@ -9,8 +9,13 @@ One concept per module:
 
 :mod:`~explorer.app.serve.settings`  what the page may set, validated (no web library)
 :mod:`~explorer.app.serve.orbits`    the session's orbits, block by block in a worker thread
-:mod:`~explorer.app.serve.export`    the session as a scene TOML
-:mod:`~explorer.app.serve.page`      the Panel/Bokeh page of one session
+:mod:`~explorer.app.serve.overlays`  the fixed point, periodic orbit and rotation searches
+:mod:`~explorer.app.serve.raster`    the MEGNO layer, coarse first, then refined
+:mod:`~explorer.app.serve.export`    the session as a scene TOML, its store, its figure files
+:mod:`~explorer.app.serve.style`     the page's colours and sizes
+:mod:`~explorer.app.serve.image`     the view as PNG/SVG (matplotlib)
+:mod:`~explorer.app.serve.page`      the Panel/Bokeh page of one session, with its parts
+                                      ``page_layers``, ``page_readout``, ``page_exports``
 :mod:`~explorer.app.serve.server`    the server: loopback by default, token, URL
 :mod:`~explorer.app.serve.command`   the command's options and entry point
 """

@@ -41,6 +41,11 @@ def add_options(s) -> None:
                    help=f"fixed step of the split* methods [the scene's, else {DEFAULT_DT}]")
     s.add_argument("--crossings", type=int, default=None,
                    help=f"crossings per click [the scene's, else {DEFAULT_CROSSINGS}]")
+    s.add_argument("--megno-resolution", type=int, default=None,
+                   help="finest raster of the MEGNO layer, n x n cells (a power of 2, 16 to 512; coarser ones "
+                   "first) [128]")
+    s.add_argument("--megno-time", type=float, default=None,
+                   help="integration time T of the MEGNO layer's <Y>(T) [200]")
     options.add_model_args(s, None, title=options.SCENE_MODEL_GROUP)
 
 
@@ -99,6 +104,12 @@ def run(args, open_browser: bool = False) -> int:
         validation.magnitude("--h", args.h)
     if args.export_dir is not None and not os.path.isdir(args.export_dir):
         raise ParameterError(f"--export-dir must be an existing directory, got {args.export_dir!r}")
+    from explorer.app.serve import raster
+
+    megno_resolution = raster.RESOLUTIONS[-1] if args.megno_resolution is None else args.megno_resolution
+    raster.resolutions_up_to(megno_resolution)
+    megno_time = raster.RASTER_TIME if args.megno_time is None else args.megno_time
+    validation.real("--megno-time", megno_time, 0.0, raster.MAX_RASTER_TIME, lo_open=True)
     base, label = settings_from_args(args)
     seeds = seeds_from_args(args)
     try:
@@ -107,7 +118,8 @@ def run(args, open_browser: bool = False) -> int:
         raise ParameterError("serve needs the panel package (pip install panel)") from None
     try:
         server.run(base, host=args.host, port=args.port, token=args.token, export_dir=args.export_dir, label=label,
-                   seeds=seeds, open_browser=open_browser)
+                   seeds=seeds, open_browser=open_browser, megno_resolution=megno_resolution,
+                   megno_time=megno_time)
     except OSError as exc:          # the port is taken, the address is not ours, ...
         raise ParameterError(f"cannot serve on {args.host}:{args.port}: {exc.strerror or exc}") from None
     except KeyboardInterrupt:

@@ -25,9 +25,7 @@ in its own event loop (``add_next_tick_callback``).
 """
 from __future__ import annotations
 
-import io
 import math
-import os
 import threading
 from functools import partial
 
@@ -42,6 +40,9 @@ from explorer.app.serve import raster as raster_mod
 from explorer.app.serve import settings as settings_mod
 from explorer.app.serve.orbits import CHAOTIC_MEGNO, COLORS, INDICATOR_TIME, Worker
 from explorer.app.serve.overlays import PERIODIC_MAX
+from explorer.app.serve.page_exports import ExportsMixin
+from explorer.app.serve.page_layers import LayersMixin, _empty_periodic, _empty_raster
+from explorer.app.serve.page_readout import ReadoutMixin
 from explorer.app.serve.settings import FIELDS, Settings, format_starts, parse_fields, parse_starts
 from explorer.app.serve.style import (
     ALLOWED_COLOR,
@@ -63,8 +64,6 @@ from explorer.model import ParameterError
 
 #: a double tap within this many pixels of the click before it is that click again
 SAME_SPOT_PX = 4.0
-#: a pick selects the orbit with a crossing within this many pixels of the click
-PICK_PX = 6.0
 #: what a click does: the choices of the page's switch (Shift + click always picks)
 CLICK_MODES = ("start an orbit", "pick an orbit")
 #: labels of the fields
@@ -81,29 +80,23 @@ def _empty_crossings() -> dict:
     return d
 
 
-def _empty_raster() -> dict:
-    return {"image": [], "x": [], "y": [], "dw": [], "dh": [], "n": [], "complete": []}
-
-
-def _empty_periodic() -> dict:
-    return {"p1": [], "p2": [], "period": [], "kind": [], "marker": []}
-
-
 def _empty_starts() -> dict:
     return {"orbit": [], "p1": [], "p2": [], "c": []}
 
 
-class SectionPage:
+class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
     """One browser session: settings, starts, orbits, the Bokeh models and their callbacks.
 
     ``base``: the settings before any URL argument or field (from the scene and the command
     line); ``args``: the request's URL arguments ({name: text}); ``export_dir``: where the
     export button writes (None: the page offers the scene as a download only); ``doc``: the
     session's Bokeh document (:meth:`attach`); ``seeds``: the scene's ``[seeds]`` (a SeedSpec)
-    that *Scene seeds* starts (None: the default seeds of a scene)."""
+    that *Scene seeds* starts (None: the default seeds of a scene); ``megno_resolution``,
+    ``megno_time``: the MEGNO layer's finest raster and its integration time."""
 
     def __init__(self, base: Settings, args: dict | None = None, export_dir=None, label: str = "", doc=None,
-                 seeds=None):
+                 seeds=None, megno_resolution: int = raster_mod.RESOLUTIONS[-1],
+                 megno_time: float = raster_mod.RASTER_TIME):
         self.base = base
         self.seeds = seeds
         self.settings = base
@@ -118,7 +111,8 @@ class SectionPage:
         self._inbox: list = []                 # notebook mode: what the workers handed in (poll)
         self.indicators: dict = {}             # orbit id -> (mean MEGNO, mLCE) over INDICATOR_TIME
         self.worker = Worker(self._on_block, self._on_error, self._on_indicators)
-        self.raster = raster_mod.RasterWorker(self._on_image, self._on_raster_error)
+        self.raster = raster_mod.RasterWorker(self._on_image, self._on_raster_error,
+                                              raster_mod.resolutions_up_to(megno_resolution), float(megno_time))
         self._raster_generation = 0
         self.window: raster_mod.Window | None = None
         self._overlay_generation = 0
@@ -185,7 +179,7 @@ class SectionPage:
         seeds = pn.widgets.Button(label="Scene seeds", width=190)
         seeds.on_click(lambda _e: self._later(self.run_seeds))
         buttons = [clear, undo, seeds]
-        self.layer = pn.widgets.Checkbox(label=f"MEGNO layer (T = {raster_mod.RASTER_TIME:g})", value=False)
+        self.layer = pn.widgets.Checkbox(label=f"MEGNO layer (T = {self.raster.time:g})", value=False)
         self.layer.param.watch(lambda _e: self._later(self._layer_changed), "value")
         self.overlay = pn.widgets.Checkbox(label="fixed points, separatrices", value=False)
         self.overlay.param.watch(lambda _e: self._later(self._overlay_changed), "value")
@@ -351,86 +345,6 @@ class SectionPage:
 
     _last_tap: tuple | None = None
 
-    def _pixel(self) -> tuple:
-        """The size of a screen pixel in p1 and p2 (from the visible window and the plot's frame)."""
-        w = self.window
-        if w is None:
-            return 0.0, 0.0
-        try:
-            width, height = float(self.figure.inner_width), float(self.figure.inner_height)
-        except Exception:  # noqa: BLE001 - not drawn in a browser yet: the figure's nominal size
-            width, height = FIGURE_WIDTH - 60.0, FIGURE_HEIGHT - 60.0
-        return (w.x1 - w.x0) / max(width, 1.0), (w.y1 - w.y0) / max(height, 1.0)
-
-    def pick(self, p1: float, p2: float, radius_px: float = PICK_PX) -> int | None:
-        """A pick at (p1, p2): the orbit with the crossing nearest to it (within ``radius_px``
-        screen pixels) is selected and its readout (mLCE, mean MEGNO, rotation number:
-        :func:`explorer.app.serve.overlays.orbit_readout`) is computed in a thread and shown in
-        ``readout``; returns the orbit's id (None: no crossing near)."""
-        d = self.crossings.data
-        if not (math.isfinite(p1) and math.isfinite(p2)) or not len(d["orbit"]):
-            self.say("pick: no orbit on the page yet")
-            return None
-        px, py = self._pixel()
-        dist = np.hypot((np.asarray(d["p1"]) - p1) / (px or 1.0), (np.asarray(d["p2"]) - p2) / (py or 1.0))
-        k = int(np.argmin(dist))
-        if not dist[k] <= radius_px:
-            self.say(f"pick: no crossing within {radius_px:g} pixels of ({p1:.4g}, {p2:.4g})")
-            return None
-        ident = int(np.asarray(d["orbit"])[k])
-        self.select(ident)
-        return ident
-
-    def select(self, ident: int) -> None:
-        """Show orbit ``ident``'s readout (computed once per orbit and settings, in a thread)."""
-        start = next(((a, b) for i, a, b, _c in self.starts if i == ident), None)
-        if start is None:
-            return
-        self.picked = ident
-        self._readout_generation += 1
-        self.say("")
-        if ident in self.readouts:
-            self._show_readout(self._readout_generation, ident, self.readouts[ident])
-            return
-        self.readout.text = f"orbit {ident} from ({start[0]:.6g}, {start[1]:.6g}): computing mLCE, MEGNO, rotation ..."
-        threading.Thread(target=self._compute_readout, args=(self._readout_generation, ident, start, self.settings),
-                         name="explorer-serve-readout", daemon=True).start()
-
-    def _compute_readout(self, generation, ident, start, settings):
-        from explorer.app.serve.overlays import orbit_readout
-
-        try:
-            r = orbit_readout(settings, start)
-        except Exception as exc:  # noqa: BLE001 - reported in the page
-            r = {"error": f"{type(exc).__name__}: {' '.join(str(exc).split())}"}
-        r["start"], r["settings"] = start, settings
-        self._post(partial(self._show_readout, generation, ident, r))
-
-    def _show_readout(self, generation, ident, r):
-        if r.get("settings") is not self.settings or not any(i == ident for i, *_ in self.starts):
-            return                           # the orbit or the values changed meanwhile
-        self.readouts[ident] = r
-        if generation != self._readout_generation:
-            return
-        p1, p2 = r["start"]
-        head = f"orbit {ident} from ({p1:.6g}, {p2:.6g}): "
-        if "error" in r:
-            self.readout.text = head + f"failed: {r['error']}"
-            return
-        kind = "chaotic-like" if r["megno"] > CHAOTIC_MEGNO else "regular-like"
-        text = (head + f"mLCE = {r['mlce']:.4g}, <Y> = {r['megno']:.4g} over t <= {INDICATOR_TIME:g}"
-                + (f" ({kind})" if math.isfinite(r["megno"]) else " (unknown: the run stopped early)"))
-        rot, fp = r["rotation"], r["center"]
-        if rot is None:
-            text += f"; rotation number: none ({r['rotation_error']})"
-        elif not math.isfinite(rot.value):
-            text += f"; rotation number: none ({rot.status})"
-        else:
-            text += (f"; rotation number {rot.value:.10g} around ({fp.point[0]:.6g}, {fp.point[1]:.6g}) over "
-                     f"{2 * rot.iterates} returns, " + ("converged" if rot.converged else
-                                                        f"not converged (|WB_N - WB_2N| = {rot.difference:.2g})"))
-        self.readout.text = text
-
     def _post(self, action) -> None:
         """From a worker thread: run ``action`` on the document's loop (a served page), or keep it
         for :meth:`poll` (a notebook, where no Bokeh server owns the document)."""
@@ -547,186 +461,6 @@ class SectionPage:
         self._push_url()
         return n
 
-    def _scene_text(self) -> str:
-        return export.session_scene(self.settings, [(a, b) for _i, a, b, _c in self.starts]).to_toml()
-
-    def _scene_file(self):
-        try:
-            return io.StringIO(self._scene_text())
-        except ParameterError as exc:
-            self.say(str(exc))
-            return io.StringIO("")
-
-    def view(self):
-        """What the page shows now, copied (:class:`explorer.app.serve.image.View`: drawn by
-        :func:`explorer.app.serve.image.render`, in any thread)."""
-        from explorer.app.serve.image import View
-
-        d = self.crossings.data
-        orbit = np.asarray(d["orbit"])
-        p = np.column_stack([np.asarray(d["p1"], float), np.asarray(d["p2"], float)])
-        orbits = [(i, COLORS[c], p[orbit == i], self.indicators.get(i, (math.nan,))[0]) for i, _a, _b, c in self.starts]
-        w = self.window
-        window = (w.x0, w.x1, w.y0, w.y1) if w is not None else (-1.0, 1.0, -1.0, 1.0)
-        r = self.raster_source.data
-        raster = None
-        if len(r["image"]):
-            x, y = r["x"][0], r["y"][0]
-            raster = (np.array(r["image"][0], float), (x, x + r["dw"][0], y, y + r["dh"][0]))
-        f, q = self.fixed.data, self.periodic.data
-        s = self.settings
-        title = f"mu = {s.params.mu:g}, h = {s.h:g}, {s.method}" + (f" ({self.label})" if self.label else "")
-        return View(window=window, region=s.region, orbits=orbits,
-                    starts=[(a, b, COLORS[c]) for _i, a, b, c in self.starts], raster=raster,
-                    fixed=[(a, b, k == "elliptic") for a, b, k in zip(f["p1"], f["p2"], f["kind"])],
-                    separatrices=[np.column_stack([x, y]) for x, y in zip(self.curves.data["xs"],
-                                                                          self.curves.data["ys"])],
-                    periodic=[(a, b, k, e == "elliptic") for a, b, k, e in zip(q["p1"], q["p2"], q["period"],
-                                                                               q["kind"])],
-                    by_megno=bool(self.colour_box.value), title=title)
-
-    def figure_bytes(self, fmt: str) -> bytes:
-        """The page's view as a PNG or SVG file (the *Figure* downloads)."""
-        from explorer.app.serve.image import render
-
-        return render(self.view(), fmt)
-
-    def _figure_file(self, fmt):
-        try:
-            return io.BytesIO(self.figure_bytes(fmt))
-        except Exception as exc:  # noqa: BLE001 - reported in the page; the download is empty
-            self.say(f"figure failed: {type(exc).__name__}: {' '.join(str(exc).split())}")
-            return io.BytesIO(b"")
-
-    def export_figure(self) -> None:
-        """Write the page's view as PNG and SVG into the export directory (drawn in a thread)."""
-        view = self.view()
-        self.say("writing the figure ...")
-        threading.Thread(target=self._write_figure, args=(view,), name="explorer-serve-figure", daemon=True).start()
-
-    def _write_figure(self, view):
-        try:
-            paths = export.write_figure(self.export_dir, view)
-            text = "figure written: " + " and ".join(os.path.basename(p) for p in paths)
-        except Exception as exc:  # noqa: BLE001 - reported in the page
-            text = f"figure export failed: {type(exc).__name__}: {' '.join(str(exc).split())}"
-        self._post(partial(self.say, text))
-
-    def export(self) -> str | None:
-        """Write the session's scene into the export directory; returns its path."""
-        try:
-            sc = export.session_scene(self.settings, [(a, b) for _i, a, b, _c in self.starts])
-            path = export.write_scene(self.export_dir, sc)
-        except (ParameterError, OSError) as exc:
-            self.say(f"export failed: {exc}")
-            return None
-        name = os.path.basename(path)
-        self.say(f"scene written: {name} (rerun: explorer sweep {name}); writing the orbits' store ...")
-        threading.Thread(target=self._write_store, args=(path,), name="explorer-serve-store", daemon=True).start()
-        return path
-
-    def _write_store(self, scene_path):
-        """In a thread: the exported scene's orbits as an HDF5 store next to it."""
-        try:
-            out = export.write_store(scene_path)
-            text = f"written: {os.path.basename(scene_path)} and {os.path.basename(out)} (the orbits, sweep format)"
-        except Exception as exc:  # noqa: BLE001 - reported in the page
-            text = f"store export failed: {type(exc).__name__}: {' '.join(str(exc).split())}"
-        self._post(partial(self.say, text))
-
-    # ------------------------------------------------------------ the MEGNO layer
-    def _on_ranges(self, event):
-        """The view moved (zoom, pan, reset): the layer follows the new window."""
-        try:
-            self.window = raster_mod.Window(float(event.x0), float(event.x1), float(event.y0), float(event.y1))
-        except (TypeError, ValueError):
-            return
-        if self.layer.value:
-            self._restart_raster()
-
-    def _layer_changed(self):
-        self._restart_raster()
-        self._push_url()
-
-    def _restart_raster(self):
-        if not self.layer.value or self.window is None or self.settings.region is None:
-            self.raster.cancel()
-            self._raster_generation = -1
-            self.raster_source.data = _empty_raster()
-            return
-        self._raster_generation = self.raster.start(self.settings, self.window)
-
-    def _on_image(self, generation, image):
-        self._post(partial(self._show_image, generation, image))
-
-    def _on_raster_error(self, exc):
-        self._post(partial(self.say, f"MEGNO layer failed: {type(exc).__name__}: {' '.join(str(exc).split())}"))
-
-    def _show_image(self, generation, image):
-        if generation != self._raster_generation:
-            return                          # an older window or older settings
-        w = image.window
-        self.raster_source.data = {"image": [image.values], "x": [w.x0], "y": [w.y0], "dw": [w.x1 - w.x0],
-                                   "dh": [w.y1 - w.y0], "n": [image.n], "complete": [image.complete]}
-
-    # ------------------------------------------------------------ fixed points and separatrices
-    def _overlay_changed(self):
-        self._restart_overlay()
-        self._push_url()
-
-    def _restart_overlay(self):
-        """Search the fixed points (and separatrices) and the periodic orbits the boxes ask for,
-        at the current settings, in a thread of its own (about 1 s and 5 s); a newer request
-        makes an older result stale."""
-        self._overlay_generation += 1
-        self.fixed.data = {"p1": [], "p2": [], "kind": [], "marker": []}
-        self.curves.data = {"xs": [], "ys": []}
-        self.periodic.data = _empty_periodic()
-        self.overlay_text.text = ""
-        wanted = (self.overlay.value, self.periodic_box.value)
-        if not any(wanted) or self.settings.region is None:
-            return
-        self.overlay_text.text = "searching ..."
-        threading.Thread(target=self._compute_overlay, args=(self._overlay_generation, self.settings, *wanted),
-                         name="explorer-serve-overlay", daemon=True).start()
-
-    def _compute_overlay(self, generation, settings, fixed, periodic):
-        from explorer.app.serve.overlays import fixed_points_and_curves, periodic_orbits
-
-        texts = []
-        if fixed:
-            try:
-                points, curves, text = fixed_points_and_curves(settings)
-            except Exception as exc:  # noqa: BLE001 - reported in the page
-                points, curves, text = [], [], f"fixed points: failed ({type(exc).__name__}: {exc})"
-            texts.append(text)
-            self._post(partial(self._show_fixed, generation, points, curves, "; ".join(texts)))
-        if periodic and generation == self._overlay_generation:
-            try:
-                orbits, text = periodic_orbits(settings, PERIODIC_MAX)
-            except Exception as exc:  # noqa: BLE001 - reported in the page
-                orbits, text = [], f"periodic orbits: failed ({type(exc).__name__}: {exc})"
-            texts.append(text)
-            self._post(partial(self._show_periodic, generation, orbits, "; ".join(texts)))
-
-    def _show_periodic(self, generation, orbits, text):
-        if generation != self._overlay_generation:
-            return
-        rows = [(float(p[0]), float(p[1]), int(o.period), o.stable) for o in orbits for p in np.asarray(o.points)]
-        self.periodic.data = {"p1": [r[0] for r in rows], "p2": [r[1] for r in rows], "period": [r[2] for r in rows],
-                              "kind": ["elliptic" if r[3] else "hyperbolic" for r in rows],
-                              "marker": ["circle" if r[3] else "x" for r in rows]}
-        self.overlay_text.text = text
-
-    def _show_fixed(self, generation, points, curves, text):
-        if generation != self._overlay_generation:
-            return
-        self.fixed.data = {"p1": [float(fp.point[0]) for fp in points], "p2": [float(fp.point[1]) for fp in points],
-                           "kind": ["elliptic" if fp.stable else "hyperbolic" for fp in points],
-                           "marker": ["circle" if fp.stable else "x" for fp in points]}
-        self.curves.data = {"xs": [c[:, 0] for c in curves], "ys": [c[:, 1] for c in curves]}
-        self.overlay_text.text = text
-
     # ------------------------------------------------------------ blocks from the worker
     def _on_block(self, ident, rows, done, status):
         """In the worker thread: queue the block for the document's loop; blocks that come while
@@ -780,30 +514,10 @@ class SectionPage:
                      + (f" ({kind})" if math.isfinite(megno) else " (unknown: the run stopped early)"))
         self.status.text = text
 
-    # ------------------------------------------------------------ chaos indicators of the orbits
-    def _on_indicators(self, ident, megno, mlce):
-        self._post(partial(self._show_indicators, ident, megno, mlce))
-
-    def _show_indicators(self, ident, megno, mlce):
-        if not any(i == ident for i, *_ in self.starts):
-            return
-        self.indicators[ident] = (megno, mlce)
-        rows = np.flatnonzero(np.asarray(self.crossings.data["orbit"]) == ident)
-        if rows.size:      # the rows streamed before the indicator was known
-            self.crossings.patch({"megno": [(int(r), megno) for r in rows]})
-        self._update_status()
-
-    def _colour_changed(self):
-        spec = self._by_megno if self.colour_box.value else self._by_orbit
-        self.points.glyph.fill_color = spec
-        self.points.glyph.line_color = spec
-        self._push_url()
-
-
-def session_app(base: Settings, export_dir=None, label: str = "", seeds=None):
+def session_app(base: Settings, export_dir=None, label: str = "", **page_options):
     """A Panel app function for ``pn.serve``: one :class:`SectionPage` per session, built from
-    the session's URL arguments."""
+    the session's URL arguments (``page_options``: seeds, megno_resolution, megno_time)."""
     def app():
         args = {k: v[0].decode("utf-8", "replace") for k, v in (pn.state.session_args or {}).items() if v}
-        return SectionPage(base, args, export_dir=export_dir, label=label, doc=pn.state.curdoc, seeds=seeds).layout
+        return SectionPage(base, args, export_dir=export_dir, label=label, doc=pn.state.curdoc, **page_options).layout
     return app

@@ -20,10 +20,14 @@ import numpy as np
 from explorer import model
 from explorer.app.serve.settings import Settings
 
-#: resolutions of the successive rasters of one window (each a refinement of the last)
+#: resolutions of the successive rasters of one window (each a refinement of the last), by default
 RESOLUTIONS = (16, 32, 64, 128)
-#: integration time of the MEGNO of a cell (quasi-periodic: <Y> -> 2, chaotic: grows ~ chi t / 2)
+#: the finest resolution the command accepts (--megno-resolution: a power of 2 in [16, MAX_RESOLUTION])
+MAX_RESOLUTION = 512
+#: integration time of the MEGNO of a cell (quasi-periodic: <Y> -> 2, chaotic: grows ~ chi t / 2), by
+#: default, and the longest the command accepts (--megno-time)
 RASTER_TIME = 200.0
+MAX_RASTER_TIME = 100_000.0
 #: seeds per call of the indicators (bounds the time until a cancel takes effect)
 BATCH = 512
 
@@ -58,20 +62,30 @@ class Image:
     complete: bool
 
 
-def megno_cells(settings: Settings, p1, p2) -> np.ndarray:
-    """Mean MEGNO <Y>(RASTER_TIME) of the orbits started at (p1, p2) on the section."""
+def resolutions_up_to(n: int) -> tuple:
+    """The resolutions 16, 32, ... up to ``n`` (a power of 2 in [16, MAX_RESOLUTION]: ParameterError)."""
+    from explorer.model import ParameterError
+
+    if not isinstance(n, int) or n < 16 or n > MAX_RESOLUTION or n & (n - 1):
+        raise ParameterError(f"--megno-resolution must be a power of 2 in [16, {MAX_RESOLUTION}], got {n!r}")
+    return tuple(16 << k for k in range(n.bit_length() - 4))
+
+
+def megno_cells(settings: Settings, p1, p2, time: float = RASTER_TIME) -> np.ndarray:
+    """Mean MEGNO <Y>(``time``) of the orbits started at (p1, p2) on the section."""
     from explorer.analysis import lyapunov
 
     y0 = model.section_state(settings.params, p1, p2, settings.h, settings.phi0, settings.direction or 1)
-    res = lyapunov.indicators(settings.params, y0, RASTER_TIME, method=settings.method, tol=settings.tol,
+    res = lyapunov.indicators(settings.params, y0, time, method=settings.method, tol=settings.tol,
                               dt=settings.dt, which=("megno",))
     return np.asarray(res.megno, dtype=np.float64)
 
 
-def rasters(settings: Settings, window: Window, stop: Callable[[], bool] = lambda: False):
+def rasters(settings: Settings, window: Window, stop: Callable[[], bool] = lambda: False,
+            resolutions: tuple = RESOLUTIONS, time: float = RASTER_TIME):
     """Yield the :class:`Image` after every batch of every resolution (until ``stop()``)."""
     previous = None
-    for n in RESOLUTIONS:
+    for n in resolutions:
         P1, P2 = window.centres(n)
         inside = model.section_M2(settings.params, P1, P2, settings.h, settings.phi0) > 0.0
         values = np.full((n, n), np.nan)
@@ -83,7 +97,7 @@ def rasters(settings: Settings, window: Window, stop: Callable[[], bool] = lambd
             if stop():
                 return
             r, c = rows[a:a + BATCH], cols[a:a + BATCH]
-            values[r, c] = megno_cells(settings, P1[r, c], P2[r, c])
+            values[r, c] = megno_cells(settings, P1[r, c], P2[r, c], time)
             yield Image(window, n, values.copy(), a + BATCH >= len(rows))
         if not len(rows):
             yield Image(window, n, values.copy(), True)
@@ -93,7 +107,10 @@ def rasters(settings: Settings, window: Window, stop: Callable[[], bool] = lambd
 class RasterWorker:
     """One thread that computes the rasters of the latest window (see the module docstring)."""
 
-    def __init__(self, on_image: Callable[[int, Image], None], on_error: Callable[[BaseException], None]):
+    def __init__(self, on_image: Callable[[int, Image], None], on_error: Callable[[BaseException], None],
+                 resolutions: tuple = RESOLUTIONS, time: float = RASTER_TIME):
+        self.resolutions = resolutions
+        self.time = time
         self._on_image = on_image
         self._on_error = on_error
         self._cond = threading.Condition()
@@ -137,7 +154,7 @@ class RasterWorker:
             def stale(g: int = generation) -> bool:
                 return g != self._generation
             try:
-                for image in rasters(settings, window, stop=stale):
+                for image in rasters(settings, window, stop=stale, resolutions=self.resolutions, time=self.time):
                     with self._cond:
                         if generation != self._generation:
                             break

@@ -74,9 +74,10 @@ def _authorize(token: str):
 
 
 def make_server(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, token: str | None = None,
-                export_dir=None, label: str = "", seeds=None):
+                export_dir=None, label: str = "", **page_options):
     """The Bokeh server (not started) and its URL.  ``token`` None on a loopback host: no token;
-    on another host one is made."""
+    on another host one is made.  ``page_options``: of every session's SectionPage (seeds,
+    megno_resolution, megno_time)."""
     import panel as pn
 
     from explorer.app.serve.page import session_app
@@ -92,7 +93,7 @@ def make_server(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT
     else:
         hosts = dict.fromkeys(("127.0.0.1", "localhost", host))
         kw["websocket_origin"] = [f"{h}:{port}" for h in hosts if ":" not in h]   # (Bokeh takes no IPv6 here)
-    app = session_app(base, export_dir=export_dir, label=label, seeds=seeds)
+    app = session_app(base, export_dir=export_dir, label=label, **page_options)
     server = pn.serve(app, port=port, address=host, show=False, start=False, verbose=False, title="explorer",
                       location=True, **kw)
     return server, url_of(host, port, token)
@@ -130,14 +131,14 @@ def open_in_browser(url: str, err=None) -> threading.Thread | None:
 
 
 def run(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, token: str | None = None,
-        export_dir=None, label: str = "", seeds=None, open_browser: bool = False, out=None) -> None:
+        export_dir=None, label: str = "", open_browser: bool = False, out=None, **page_options) -> None:
     """Serve until interrupted: the URL is the first line printed; ``open_browser``: then open it
     in the user's browser (:func:`open_in_browser`), once the server listens."""
     from explorer.app.serve.orbits import warm_up
 
     out = sys.stdout if out is None else out
     server, url = make_server(base, host=host, port=port, token=token, export_dir=export_dir, label=label,
-                              seeds=seeds)
+                              **page_options)
     print(url, file=out, flush=True)
     threading.Thread(target=warm_up, args=(base,), name="explorer-serve-warm-up", daemon=True).start()
     server.start()

@@ -1,0 +1,118 @@
+"""The page's layers under and over the orbits: the MEGNO raster of the visible window
+(:class:`explorer.app.serve.raster.RasterWorker`) and the fixed points, separatrices and periodic
+orbits (:mod:`explorer.app.serve.overlays`, in a thread).  A part of
+:class:`~explorer.app.serve.page.SectionPage` (a mixin)."""
+from __future__ import annotations
+
+import threading
+from functools import partial
+
+import numpy as np
+
+from explorer.app.serve import raster as raster_mod
+from explorer.app.serve.overlays import PERIODIC_MAX
+
+
+def _empty_raster() -> dict:
+    return {"image": [], "x": [], "y": [], "dw": [], "dh": [], "n": [], "complete": []}
+
+
+def _empty_periodic() -> dict:
+    return {"p1": [], "p2": [], "period": [], "kind": [], "marker": []}
+
+
+class LayersMixin:
+    """The MEGNO layer and the overlays of :class:`~explorer.app.serve.page.SectionPage`."""
+
+    # ------------------------------------------------------------ the MEGNO layer
+    def _on_ranges(self, event):
+        """The view moved (zoom, pan, reset): the layer follows the new window."""
+        try:
+            self.window = raster_mod.Window(float(event.x0), float(event.x1), float(event.y0), float(event.y1))
+        except (TypeError, ValueError):
+            return
+        if self.layer.value:
+            self._restart_raster()
+
+    def _layer_changed(self):
+        self._restart_raster()
+        self._push_url()
+
+    def _restart_raster(self):
+        if not self.layer.value or self.window is None or self.settings.region is None:
+            self.raster.cancel()
+            self._raster_generation = -1
+            self.raster_source.data = _empty_raster()
+            return
+        self._raster_generation = self.raster.start(self.settings, self.window)
+
+    def _on_image(self, generation, image):
+        self._post(partial(self._show_image, generation, image))
+
+    def _on_raster_error(self, exc):
+        self._post(partial(self.say, f"MEGNO layer failed: {type(exc).__name__}: {' '.join(str(exc).split())}"))
+
+    def _show_image(self, generation, image):
+        if generation != self._raster_generation:
+            return                          # an older window or older settings
+        w = image.window
+        self.raster_source.data = {"image": [image.values], "x": [w.x0], "y": [w.y0], "dw": [w.x1 - w.x0],
+                                   "dh": [w.y1 - w.y0], "n": [image.n], "complete": [image.complete]}
+
+    # ------------------------------------------------------------ fixed points and separatrices
+    def _overlay_changed(self):
+        self._restart_overlay()
+        self._push_url()
+
+    def _restart_overlay(self):
+        """Search the fixed points (and separatrices) and the periodic orbits the boxes ask for,
+        at the current settings, in a thread of its own (about 1 s and 5 s); a newer request
+        makes an older result stale."""
+        self._overlay_generation += 1
+        self.fixed.data = {"p1": [], "p2": [], "kind": [], "marker": []}
+        self.curves.data = {"xs": [], "ys": []}
+        self.periodic.data = _empty_periodic()
+        self.overlay_text.text = ""
+        wanted = (self.overlay.value, self.periodic_box.value)
+        if not any(wanted) or self.settings.region is None:
+            return
+        self.overlay_text.text = "searching ..."
+        threading.Thread(target=self._compute_overlay, args=(self._overlay_generation, self.settings, *wanted),
+                         name="explorer-serve-overlay", daemon=True).start()
+
+    def _compute_overlay(self, generation, settings, fixed, periodic):
+        from explorer.app.serve.overlays import fixed_points_and_curves, periodic_orbits
+
+        texts = []
+        if fixed:
+            try:
+                points, curves, text = fixed_points_and_curves(settings)
+            except Exception as exc:  # noqa: BLE001 - reported in the page
+                points, curves, text = [], [], f"fixed points: failed ({type(exc).__name__}: {exc})"
+            texts.append(text)
+            self._post(partial(self._show_fixed, generation, points, curves, "; ".join(texts)))
+        if periodic and generation == self._overlay_generation:
+            try:
+                orbits, text = periodic_orbits(settings, PERIODIC_MAX)
+            except Exception as exc:  # noqa: BLE001 - reported in the page
+                orbits, text = [], f"periodic orbits: failed ({type(exc).__name__}: {exc})"
+            texts.append(text)
+            self._post(partial(self._show_periodic, generation, orbits, "; ".join(texts)))
+
+    def _show_periodic(self, generation, orbits, text):
+        if generation != self._overlay_generation:
+            return
+        rows = [(float(p[0]), float(p[1]), int(o.period), o.stable) for o in orbits for p in np.asarray(o.points)]
+        self.periodic.data = {"p1": [r[0] for r in rows], "p2": [r[1] for r in rows], "period": [r[2] for r in rows],
+                              "kind": ["elliptic" if r[3] else "hyperbolic" for r in rows],
+                              "marker": ["circle" if r[3] else "x" for r in rows]}
+        self.overlay_text.text = text
+
+    def _show_fixed(self, generation, points, curves, text):
+        if generation != self._overlay_generation:
+            return
+        self.fixed.data = {"p1": [float(fp.point[0]) for fp in points], "p2": [float(fp.point[1]) for fp in points],
+                           "kind": ["elliptic" if fp.stable else "hyperbolic" for fp in points],
+                           "marker": ["circle" if fp.stable else "x" for fp in points]}
+        self.curves.data = {"xs": [c[:, 0] for c in curves], "ys": [c[:, 1] for c in curves]}
+        self.overlay_text.text = text
