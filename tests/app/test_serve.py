@@ -950,3 +950,52 @@ def test_the_figure_downloads_from_the_page_as_svg(served, browser, tmp_path):
     groups = _svg_orbits(path.read_bytes())
     assert list(groups) == [ident] and len(groups[ident]) == CROSSINGS
     page.close()
+
+
+def test_a_million_crossings_are_drawn_as_a_density_image_of_the_visible_window():
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    from explorer.app.serve import density, raster
+    from explorer.app.serve.orbits import COLORS
+    from explorer.app.serve.page import SectionPage
+
+    s = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=4000)
+    c1, c2, r1, r2 = s.region
+    page = SectionPage(s)
+    try:
+        for u in (-0.5, 0.5):
+            page.click(c1 + u * r1, c2)
+        _poll_until(page, lambda: not page.worker.busy() and len(page.crossings.data["t"]) == 2 * s.crossings)
+        assert not page.dense and page.points.visible and page.density.data["image"] == []
+        # 10^6 more crossings of the two orbits (points spread over the region), as the worker hands them in
+        rng = np.random.default_rng(3)
+        n = 500_000
+        for ident, _a, _b, _c in page.starts:
+            a, r = rng.uniform(0, 2 * np.pi, n), np.sqrt(rng.uniform(0, 1, n))
+            rows = np.column_stack([np.arange(n, dtype=float), c1 + r1 * r * np.cos(a), c2 + r2 * r * np.sin(a),
+                                    np.ones(n), np.zeros(n)])
+            page._on_block(ident, rows, n, "done")
+        page._running = set()
+        page.poll()
+        assert len(page.crossings.data["t"]) > density.THRESHOLD and page.dense and not page.points.visible
+        image = page.density.data["image"][0]
+        assert image.dtype == np.uint32 and page.density.data["n"] == [len(page.crossings.data["t"])]
+        rgba = image.view(np.uint8).reshape(*image.shape, 4)
+        drawn = {"#%02x%02x%02x" % tuple(px) for px in rgba[rgba[..., 3] > 0][:, :3]}
+        assert drawn == {COLORS[c] for *_x, c in page.starts}                    # the orbits' colours
+        assert (rgba[..., 3] > 0).mean() > 0.3                                   # the region is covered
+        # zoom: re-aggregated for the new window, in well under a second
+        class Ranges:
+            x0, x1, y0, y1 = c1 - 0.1 * r1, c1 + 0.1 * r1, c2 - 0.1 * r2, c2 + 0.1 * r2
+        t0 = time.perf_counter()
+        page._on_ranges(Ranges)
+        took = time.perf_counter() - t0
+        assert page.density.data["x"] == [Ranges.x0] and page.density.data["dw"] == [Ranges.x1 - Ranges.x0]
+        assert page.window == raster.Window(Ranges.x0, Ranges.x1, Ranges.y0, Ranges.y1)
+        print(f"density image of {len(page.crossings.data['t'])} crossings re-aggregated in {took * 1e3:.0f} ms")
+        assert took < 2.0
+        page.undo()                                                              # one orbit less: redrawn
+        assert page.dense and page.density.data["n"] == [len(page.crossings.data["t"])] == [n + s.crossings]
+        page.undo()                                                              # below the threshold: glyphs again
+        assert not page.dense and page.points.visible and page.density.data["image"] == []
+    finally:
+        page.close()

@@ -41,7 +41,7 @@ from explorer.app.serve import settings as settings_mod
 from explorer.app.serve.orbits import CHAOTIC_MEGNO, COLORS, INDICATOR_TIME, Worker
 from explorer.app.serve.overlays import PERIODIC_MAX
 from explorer.app.serve.page_exports import ExportsMixin
-from explorer.app.serve.page_layers import LayersMixin, _empty_periodic, _empty_raster
+from explorer.app.serve.page_layers import LayersMixin, _empty_density, _empty_periodic, _empty_raster
 from explorer.app.serve.page_readout import ReadoutMixin
 from explorer.app.serve.settings import FIELDS, Settings, format_starts, parse_fields, parse_starts
 from explorer.app.serve.style import (
@@ -117,6 +117,8 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.window: raster_mod.Window | None = None
         self._overlay_generation = 0
         self._readout_generation = 0
+        self.dense = False                      # the density image replaces the crossings' glyphs
+        self._density_at = 0.0
         self.picked: int | None = None          # the orbit whose readout is shown
         self.readouts: dict = {}                # orbit id -> orbit_readout(...) of a picked orbit
         self._build()
@@ -149,6 +151,8 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self._by_orbit = colors
         self._by_megno = {"field": "megno", "transform": LinearColorMapper(
             palette=megno_palette(MEGNO_ORBIT_SKIP), low=MEGNO_LOW, high=MEGNO_HIGH, nan_color="#9e9e9e")}
+        self.density = ColumnDataSource(_empty_density(), name="density")
+        fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.density)
         self.points = fig.scatter("p1", "p2", source=self.crossings, color=colors, size=POINT_SIZE, line_width=0)
         fig.scatter("p1", "p2", source=self.start_source, marker="cross", color=colors, size=9, line_width=2)
         fig.scatter("p1", "p2", source=self.periodic, marker="marker", size=8, line_color="black",
@@ -504,7 +508,9 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
     def _update_status(self):
         running = len(self._running)
         n = len(self.crossings.data["orbit"])
-        text = (f"{len(self.starts)} orbit(s), {running} running, {n} crossings drawn; "
+        self._refresh_density(force=not running)     # (redrawn at once when the last orbit is done)
+        text = (f"{len(self.starts)} orbit(s), {running} running, {n} crossings drawn"
+                + (" (as a density image)" if self.dense else "") + "; "
                 f"mu = {self.settings.params.mu:g}, h = {self.settings.h:g}, {self.settings.method}")
         known = [i for i, *_ in self.starts if i in self.indicators]
         if known:
@@ -513,6 +519,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
             text += (f"; orbit {known[-1]}: <Y> = {megno:.3g}, mLCE = {mlce:.3g} over t <= {INDICATOR_TIME:g}"
                      + (f" ({kind})" if math.isfinite(megno) else " (unknown: the run stopped early)"))
         self.status.text = text
+
 
 def session_app(base: Settings, export_dir=None, label: str = "", **page_options):
     """A Panel app function for ``pn.serve``: one :class:`SectionPage` per session, built from

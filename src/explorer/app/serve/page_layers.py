@@ -1,20 +1,32 @@
 """The page's layers under and over the orbits: the MEGNO raster of the visible window
-(:class:`explorer.app.serve.raster.RasterWorker`) and the fixed points, separatrices and periodic
+(:class:`explorer.app.serve.raster.RasterWorker`), the density image that replaces the crossings'
+glyphs past :data:`explorer.app.serve.density.THRESHOLD` crossings, and the fixed points, separatrices and periodic
 orbits (:mod:`explorer.app.serve.overlays`, in a thread).  A part of
 :class:`~explorer.app.serve.page.SectionPage` (a mixin)."""
 from __future__ import annotations
 
 import threading
+import time
 from functools import partial
 
 import numpy as np
 
+from explorer.app.serve import density
 from explorer.app.serve import raster as raster_mod
+from explorer.app.serve.orbits import COLORS
 from explorer.app.serve.overlays import PERIODIC_MAX
+from explorer.app.serve.style import MEGNO_HIGH, MEGNO_LOW, MEGNO_ORBIT_SKIP, megno_palette
 
 
 def _empty_raster() -> dict:
     return {"image": [], "x": [], "y": [], "dw": [], "dh": [], "n": [], "complete": []}
+
+#: while orbits stream in, the density image is redrawn at most this often (s)
+DENSITY_SECONDS = 0.5
+
+
+def _empty_density() -> dict:
+    return {"image": [], "x": [], "y": [], "dw": [], "dh": [], "n": []}
 
 
 def _empty_periodic() -> dict:
@@ -22,7 +34,8 @@ def _empty_periodic() -> dict:
 
 
 class LayersMixin:
-    """The MEGNO layer and the overlays of :class:`~explorer.app.serve.page.SectionPage`."""
+    """The MEGNO layer, the density image of many crossings and the overlays of
+    :class:`~explorer.app.serve.page.SectionPage`."""
 
     # ------------------------------------------------------------ the MEGNO layer
     def _on_ranges(self, event):
@@ -33,6 +46,40 @@ class LayersMixin:
             return
         if self.layer.value:
             self._restart_raster()
+        self._refresh_density(force=True)
+
+    def _refresh_density(self, force: bool = False) -> None:
+        """Past density.THRESHOLD crossings: hide the crossings' glyphs and draw the density image
+        of the visible window (at most every DENSITY_SECONDS while orbits stream in, at once when
+        ``force``: the view moved, the colouring changed, the last orbit finished); below it: the
+        glyphs again."""
+        n = len(self.crossings.data["orbit"])
+        dense = n > density.THRESHOLD
+        if dense != self.dense:
+            self.dense = dense
+            self.points.visible = not dense
+            force = True
+        if not dense:
+            if self.density.data["image"]:
+                self.density.data = _empty_density()
+            return
+        now = time.monotonic()
+        if not force and now - self._density_at < DENSITY_SECONDS:
+            return
+        self._density_at = now
+        w = self.window
+        if w is None:
+            return
+        px, py = self._frame_px()
+        nx, ny = max(int(px) // density.CELL_PX, 1), max(int(py) // density.CELL_PX, 1)
+        d = self.crossings.data
+        by_megno = bool(self.colour_box.value)
+        image = density.density_rgba(d["p1"], d["p2"], d["c"], (w.x0, w.x1, w.y0, w.y1), nx, ny, COLORS,
+                                     megno=d["megno"] if by_megno else None,
+                                     palette=megno_palette(MEGNO_ORBIT_SKIP) if by_megno else None,
+                                     lo=MEGNO_LOW, hi=MEGNO_HIGH)
+        self.density.data = {"image": [image], "x": [w.x0], "y": [w.y0], "dw": [w.x1 - w.x0], "dh": [w.y1 - w.y0],
+                             "n": [n]}
 
     def _layer_changed(self):
         self._restart_raster()

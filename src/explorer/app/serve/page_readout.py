@@ -21,15 +21,20 @@ PICK_PX = 6.0
 class ReadoutMixin:
     """Indicators, colour by MEGNO, pick and readout of :class:`~explorer.app.serve.page.SectionPage`."""
 
+    def _frame_px(self) -> tuple:
+        """Width and height of the plot's frame in screen pixels (as drawn in the browser; before
+        that, the figure's nominal size less its axes)."""
+        try:
+            return float(self.figure.inner_width), float(self.figure.inner_height)
+        except Exception:  # noqa: BLE001 - not drawn in a browser yet: the figure's nominal size
+            return FIGURE_WIDTH - 60.0, FIGURE_HEIGHT - 60.0
+
     def _pixel(self) -> tuple:
         """The size of a screen pixel in p1 and p2 (from the visible window and the plot's frame)."""
         w = self.window
         if w is None:
             return 0.0, 0.0
-        try:
-            width, height = float(self.figure.inner_width), float(self.figure.inner_height)
-        except Exception:  # noqa: BLE001 - not drawn in a browser yet: the figure's nominal size
-            width, height = FIGURE_WIDTH - 60.0, FIGURE_HEIGHT - 60.0
+        width, height = self._frame_px()
         return (w.x1 - w.x0) / max(width, 1.0), (w.y1 - w.y0) / max(height, 1.0)
 
     def pick(self, p1: float, p2: float, radius_px: float = PICK_PX) -> int | None:
@@ -118,4 +123,5 @@ class ReadoutMixin:
         spec = self._by_megno if self.colour_box.value else self._by_orbit
         self.points.glyph.fill_color = spec
         self.points.glyph.line_color = spec
+        self._refresh_density(force=True)
         self._push_url()

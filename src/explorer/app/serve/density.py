@@ -1,0 +1,69 @@
+"""Many crossings as one image: past ``THRESHOLD`` crossings on a page, the page stops drawing a
+glyph per crossing and shows this image of the visible window instead, aggregated in the server
+with numpy and redone when the view moves (docs/commands/serve.md, docs/architecture.md: why numpy
+and not Datashader).
+
+Each cell of an ``nx`` x ``ny`` grid over the window gets the colour of the orbit with the most
+crossings in it (the page's orbit colours), or, coloured by MEGNO, the mean MEGNO of its crossings
+through the page's MEGNO palette; its opacity grows with the logarithm of its count, so a dense
+chaotic sea and a thin invariant curve both show.  Returned as the packed RGBA image Bokeh's
+``image_rgba`` draws (uint32, row 0 at the bottom).  No web library here.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+#: crossings on a page above which the density image replaces the glyphs
+THRESHOLD = 200_000
+#: one cell of the image per this many screen pixels (each way)
+CELL_PX = 2
+#: opacity of a cell with one crossing; the densest cell of the window is opaque
+MIN_ALPHA = 0.45
+
+
+def _rgb(colour: str) -> tuple:
+    c = colour.lstrip("#")
+    return int(c[0:2], 16), int(c[2:4], 16), int(c[4:6], 16)
+
+
+def cells(p1, p2, window, nx: int, ny: int):
+    """(cell index, mask): the grid cell of every point (p1, p2) in the window (x0, x1, y0, y1)."""
+    x0, x1, y0, y1 = window
+    ix = np.floor((np.asarray(p1, float) - x0) * (nx / (x1 - x0)))
+    iy = np.floor((np.asarray(p2, float) - y0) * (ny / (y1 - y0)))
+    inside = (ix >= 0) & (ix < nx) & (iy >= 0) & (iy < ny)
+    return (iy[inside] * nx + ix[inside]).astype(np.int64), inside
+
+
+def density_rgba(p1, p2, colour_index, window, nx: int, ny: int, colors, megno=None, palette=None,
+                 lo: float = 0.0, hi: float = 8.0) -> np.ndarray:
+    """The (ny, nx) uint32 RGBA image of the points (p1, p2) in ``window``: each cell in the colour
+    ``colors[colour_index]`` of its most frequent orbit colour, or (``megno`` and ``palette``
+    given) the palette's colour of its points' mean MEGNO between ``lo`` and ``hi`` (NaN: gray)."""
+    ncell = nx * ny
+    cell, inside = cells(p1, p2, window, nx, ny)
+    count = np.bincount(cell, minlength=ncell)
+    rgb = np.zeros((ncell, 3), np.uint8)
+    if megno is None or palette is None:
+        k = np.asarray(colour_index, np.int64)[inside] % len(colors)
+        per = np.bincount(cell * len(colors) + k, minlength=ncell * len(colors)).reshape(ncell, len(colors))
+        table = np.array([_rgb(c) for c in colors], np.uint8)
+        rgb[:] = table[np.argmax(per, axis=1)]
+    else:
+        m = np.asarray(megno, float)[inside]
+        known = np.isfinite(m)
+        total = np.bincount(cell[known], weights=m[known], minlength=ncell)
+        n_known = np.bincount(cell[known], minlength=ncell)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            mean = total / n_known
+        table = np.array([_rgb(c) for c in palette], np.uint8)
+        u = np.clip((mean - lo) / (hi - lo), 0.0, 1.0)
+        idx = np.where(np.isfinite(u), np.round(np.nan_to_num(u) * (len(palette) - 1)), 0).astype(np.int64)
+        rgb[:] = table[idx]
+        rgb[n_known == 0] = (158, 158, 158)
+    top = max(int(count.max()) if count.size else 0, 1)
+    alpha = np.where(count > 0, 255 * (MIN_ALPHA + (1 - MIN_ALPHA) * np.log1p(count) / np.log1p(top)), 0)
+    rgba = np.empty((ncell, 4), np.uint8)
+    rgba[:, :3] = rgb
+    rgba[:, 3] = alpha.astype(np.uint8)
+    return rgba.view(np.uint32).reshape(ny, nx)
