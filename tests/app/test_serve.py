@@ -730,6 +730,14 @@ def test_picking_an_orbits_crossing_shows_its_mlce_megno_and_rotation_number():
         assert r["rotation"].value == ref.value and f"{ref.value:.10g}" in page.readout.text
         assert f"{float(ind.mlce[0]):.4g}" in page.readout.text and "orbit 2" in page.readout.text
         assert page.pick(50.0, 50.0) is None and "no crossing within" in page.message.text     # nowhere near
+        import threading
+
+        before = threading.active_count()
+        page.readouts.clear()
+        for _ in range(20):                                         # rapid picks: one readout thread, the last pick
+            page.pick(float(d["p1"][k]), float(d["p2"][k]))
+        assert threading.active_count() <= before
+        _poll_until(page, lambda: page.starts[1][0] in page.readouts)
         page.click_mode.value = "pick an orbit"                  # the switch: a tap picks instead of starting
         from bokeh.events import Tap
 

@@ -232,6 +232,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         """Stop the session's threads (the browser tab is gone)."""
         self.worker.stop(timeout=0)
         self.raster.stop()
+        self._stop_readouts()
 
     # ------------------------------------------------------------ state in the URL
     def _load_url(self, args: dict):

@@ -18,6 +18,39 @@ from explorer.app.serve.style import FIGURE_HEIGHT, FIGURE_WIDTH
 PICK_PX = 6.0
 
 
+class LatestJob:
+    """One daemon thread that runs ``work(*job)`` for the latest job :meth:`put` (a job put while
+    another runs replaces any job still waiting)."""
+
+    def __init__(self, work, name: str):
+        self._work = work
+        self._cond = threading.Condition()
+        self._job: tuple | None = None
+        self._stopped = False
+        self.thread = threading.Thread(target=self._loop, name=name, daemon=True)
+        self.thread.start()
+
+    def put(self, job: tuple) -> None:
+        with self._cond:
+            self._job = job
+            self._cond.notify()
+
+    def stop(self) -> None:
+        with self._cond:
+            self._stopped, self._job = True, None
+            self._cond.notify()
+
+    def _loop(self) -> None:
+        while True:
+            with self._cond:
+                while not self._stopped and self._job is None:
+                    self._cond.wait()
+                if self._stopped:
+                    return
+                job, self._job = self._job, None
+            self._work(*job)
+
+
 class ReadoutMixin:
     """Indicators, colour by MEGNO, pick and readout of :class:`~explorer.app.serve.page.SectionPage`."""
 
@@ -68,8 +101,21 @@ class ReadoutMixin:
             self._show_readout(self._readout_generation, ident, self.readouts[ident])
             return
         self.readout.text = f"orbit {ident} from ({start[0]:.6g}, {start[1]:.6g}): computing mLCE, MEGNO, rotation ..."
-        threading.Thread(target=self._compute_readout, args=(self._readout_generation, ident, start, self.settings),
-                         name="explorer-serve-readout", daemon=True).start()
+        self._readout_jobs.put((self._readout_generation, ident, start, self.settings))
+
+    @property
+    def _readout_jobs(self) -> LatestJob:
+        """The session's one readout thread (made at the first pick): it computes the latest pick
+        only, so rapid picks queue nothing and start no thread each."""
+        jobs = self.__dict__.get("_readout_worker")
+        if jobs is None:
+            jobs = self.__dict__["_readout_worker"] = LatestJob(self._compute_readout, "explorer-serve-readout")
+        return jobs
+
+    def _stop_readouts(self) -> None:
+        jobs = self.__dict__.get("_readout_worker")
+        if jobs is not None:
+            jobs.stop()
 
     def _compute_readout(self, generation, ident, start, settings):
         from explorer.app.serve.overlays import orbit_readout
