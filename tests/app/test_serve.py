@@ -1007,3 +1007,37 @@ def test_a_million_crossings_are_drawn_as_a_density_image_of_the_visible_window(
         assert not page.dense and page.points.visible and page.density.data["image"] == []
     finally:
         page.close()
+
+
+@browser_needed
+def test_past_the_threshold_the_browser_shows_a_density_image_that_follows_the_zoom(served, browser):
+    from explorer.app.serve import density
+
+    page = _open(browser, served.url)
+    per_orbit = density.THRESHOLD // 2 + 5000
+    _set_field(page, "crossings", str(per_orbit))
+    _wait(page, f"() => window.location.search.includes('crossings={per_orbit}')", timeout=60_000)
+    c1, c2, r1, r2 = SERVED.region
+    _click(page, c1 + 0.3 * r1, c2)
+    _click(page, c1 - 0.6 * r1, c2 + 0.2 * r2)
+    _wait_crossings(page, 2 * per_orbit)
+    dens = "() => { const d = Bokeh.documents[0].get_model_by_name('density').data; return d.n.length ? d.n[0] : 0 }"
+    _wait(page, f"() => ({dens})() === {2 * per_orbit}", timeout=120_000)
+    assert "(as a density image)" in page.evaluate(TEXT, "status")
+    x, y = page.evaluate(TO_SCREEN, [c1, c2])
+    ranges = ("() => { const f = Bokeh.documents[0].get_model_by_name('section');"
+              " return [f.x_range.start, f.x_range.end]; }")
+    times = []
+    for step in range(3):                                  # zoom in three times: a new image for each window
+        t0 = time.perf_counter()
+        page.mouse.move(x, y)
+        page.mouse.wheel(0, -300)
+        _wait(page, f"() => {{ const r = ({ranges})(); const d = Bokeh.documents[0].get_model_by_name('density')"
+                    ".data; return d.x.length && d.x[0] === r[0] && Math.abs(d.x[0] + d.dw[0] - r[1]) < 1e-12; }",
+              timeout=60_000)
+        times.append(time.perf_counter() - t0)
+    print(f"{2 * per_orbit} crossings as a density image: zoom -> new image on screen in "
+          f"{', '.join(f'{t * 1e3:.0f}' for t in times)} ms")
+    page.get_by_role("button", name="Clear").click()
+    _wait(page, "() => Bokeh.documents[0].get_model_by_name('density').data.n.length === 0", timeout=60_000)
+    page.close()
