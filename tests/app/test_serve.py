@@ -985,6 +985,7 @@ def test_a_million_crossings_are_drawn_as_a_density_image_of_the_visible_window(
         page._running = set()
         page.poll()
         assert len(page.crossings.data["t"]) > density.THRESHOLD and page.dense and not page.points.visible
+        assert len(page.shown.data["t"]) == 0                                   # nothing of it for the browser
         image = page.density.data["image"][0]
         assert image.dtype == np.uint32 and page.density.data["n"] == [len(page.crossings.data["t"])]
         rgba = image.view(np.uint8).reshape(*image.shape, 4)
@@ -1005,6 +1006,7 @@ def test_a_million_crossings_are_drawn_as_a_density_image_of_the_visible_window(
         assert page.dense and page.density.data["n"] == [len(page.crossings.data["t"])] == [n + s.crossings]
         page.undo()                                                              # below the threshold: glyphs again
         assert not page.dense and page.points.visible and page.density.data["image"] == []
+        np.testing.assert_array_equal(page.shown.data["p1"], page.crossings.data["p1"])   # the rows, back
     finally:
         page.close()
 
@@ -1020,10 +1022,10 @@ def test_past_the_threshold_the_browser_shows_a_density_image_that_follows_the_z
     c1, c2, r1, r2 = SERVED.region
     _click(page, c1 + 0.3 * r1, c2)
     _click(page, c1 - 0.6 * r1, c2 + 0.2 * r2)
-    _wait_crossings(page, 2 * per_orbit)
     dens = "() => { const d = Bokeh.documents[0].get_model_by_name('density').data; return d.n.length ? d.n[0] : 0 }"
     _wait(page, f"() => ({dens})() === {2 * per_orbit}", timeout=120_000)
     assert "(as a density image)" in page.evaluate(TEXT, "status")
+    assert page.evaluate(DATA, "crossings")["p1"] == []          # the rows stay in the server
     x, y = page.evaluate(TO_SCREEN, [c1, c2])
     ranges = ("() => { const f = Bokeh.documents[0].get_model_by_name('section');"
               " return [f.x_range.start, f.x_range.end]; }")

@@ -6,7 +6,10 @@ browser; the tests read them there):
 
 ``region``     ColumnDataSource of the allowed ellipse (x, y, width, height; empty: no region)
 ``crossings``  ColumnDataSource of every crossing on screen: orbit, t, p1, p2, M, dH, the
-               orbit's colour c (an index into COLORS) and its MEGNO (NaN until known)
+               orbit's colour c (an index into COLORS) and its MEGNO (NaN until known); empty
+               past density.THRESHOLD crossings (``SectionPage.crossings``, in the server
+               only, holds them all; ``SectionPage.shown`` is this one)
+``density``    ColumnDataSource of the density image drawn instead past the threshold
 ``starts``     ColumnDataSource of the clicked starts: orbit, p1, p2, c
 ``raster``     ColumnDataSource of the MEGNO layer: image, x, y, dw, dh (the window), n, complete
 ``fixed``      ColumnDataSource of the fixed points of the section map: p1, p2, kind, marker
@@ -41,7 +44,14 @@ from explorer.app.serve import settings as settings_mod
 from explorer.app.serve.orbits import CHAOTIC_MEGNO, COLORS, INDICATOR_TIME, Worker
 from explorer.app.serve.overlays import PERIODIC_MAX
 from explorer.app.serve.page_exports import ExportsMixin
-from explorer.app.serve.page_layers import LayersMixin, _empty_density, _empty_periodic, _empty_raster
+from explorer.app.serve.page_layers import (  # noqa: F401
+    CROSSING_COLUMNS,
+    LayersMixin,
+    _empty_crossings,
+    _empty_density,
+    _empty_periodic,
+    _empty_raster,
+)
 from explorer.app.serve.page_readout import ReadoutMixin
 from explorer.app.serve.settings import FIELDS, Settings, format_starts, parse_fields, parse_starts
 from explorer.app.serve.style import (
@@ -70,14 +80,6 @@ CLICK_MODES = ("start an orbit", "pick an orbit")
 LABELS = {"mu": "μ", "h": "h", "lam": "λ", "a1": "a1", "a2": "a2", "b": "b", "chi": "χ", "zeta": "ζ", "xi": "ξ",
           "eta": "η", "method": "method",
           "tol": "tol (taylor, dop853)", "dt": "dt (split*)", "crossings": "crossings per click"}
-CROSSING_COLUMNS = ("orbit", "t", "p1", "p2", "M", "dH", "megno")
-
-
-def _empty_crossings() -> dict:
-    d = {c: np.zeros(0) for c in CROSSING_COLUMNS}
-    d["orbit"] = np.zeros(0, np.int64)
-    d["c"] = np.zeros(0, np.int64)
-    return d
 
 
 def _empty_starts() -> dict:
@@ -129,7 +131,10 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
     # ------------------------------------------------------------ layout
     def _build(self):
         self.region = ColumnDataSource({"x": [], "y": [], "width": [], "height": []}, name="region")
-        self.crossings = ColumnDataSource(_empty_crossings(), name="crossings")
+        # every crossing of the session, in the server (never in the document: not sent to the browser) ...
+        self.crossings = ColumnDataSource(_empty_crossings())
+        # ... and what the browser draws: the same rows up to density.THRESHOLD, none past it
+        self.shown = ColumnDataSource(_empty_crossings(), name="crossings")
         self.start_source = ColumnDataSource(_empty_starts(), name="starts")
         colors = {"field": "c", "transform": LinearColorMapper(palette=list(COLORS), low=-0.5,
                                                                 high=len(COLORS) - 0.5)}
@@ -153,7 +158,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
             palette=megno_palette(MEGNO_ORBIT_SKIP), low=MEGNO_LOW, high=MEGNO_HIGH, nan_color="#9e9e9e")}
         self.density = ColumnDataSource(_empty_density(), name="density")
         fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.density)
-        self.points = fig.scatter("p1", "p2", source=self.crossings, color=colors, size=POINT_SIZE, line_width=0)
+        self.points = fig.scatter("p1", "p2", source=self.shown, color=colors, size=POINT_SIZE, line_width=0)
         fig.scatter("p1", "p2", source=self.start_source, marker="cross", color=colors, size=9, line_width=2)
         fig.scatter("p1", "p2", source=self.periodic, marker="marker", size=8, line_color="black",
                     fill_color={"field": "period", "transform": LinearColorMapper(
@@ -418,6 +423,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self._readout_generation += 1
         self.readout.text = ""
         self.crossings.data = _empty_crossings()
+        self.shown.data = _empty_crossings()
         self.start_source.data = _empty_starts()
         return old
 
@@ -439,6 +445,8 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self._running = self._running - {ident}
         keep = np.asarray(self.crossings.data["orbit"]) != ident
         self.crossings.data = {k: np.asarray(v)[keep] for k, v in self.crossings.data.items()}
+        if not self.dense:
+            self.shown.data = dict(self.crossings.data)
         keep = [o != ident for o in self.start_source.data["orbit"]]
         self.start_source.data = {k: [x for x, ok in zip(v, keep) if ok] for k, v in self.start_source.data.items()}
         self._update_status()
@@ -485,11 +493,13 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         if full:
             data = np.concatenate([b[1] for b in full])
             megno = [self.indicators.get(b[0], (math.nan,))[0] for b in full]
-            self.crossings.stream({"orbit": np.concatenate([np.full(len(b[1]), b[0], np.int64) for b in full]),
-                                   "megno": np.concatenate([np.full(len(b[1]), m) for b, m in zip(full, megno)]),
-                                   "t": data[:, 0], "p1": data[:, 1], "p2": data[:, 2], "M": data[:, 3],
-                                   "dH": data[:, 4],
-                                   "c": np.concatenate([np.full(len(b[1]), live[b[0]], np.int64) for b in full])})
+            new = {"orbit": np.concatenate([np.full(len(b[1]), b[0], np.int64) for b in full]),
+                   "megno": np.concatenate([np.full(len(b[1]), m) for b, m in zip(full, megno)]),
+                   "t": data[:, 0], "p1": data[:, 1], "p2": data[:, 2], "M": data[:, 3], "dH": data[:, 4],
+                   "c": np.concatenate([np.full(len(b[1]), live[b[0]], np.int64) for b in full])}
+            self.crossings.stream(new)
+            if not self.dense:
+                self.shown.stream(new)
         for ident, _rows, done, status in blocks:
             if status != "running":
                 self._running = self._running - {ident}

@@ -25,6 +25,17 @@ def _empty_raster() -> dict:
 DENSITY_SECONDS = 0.5
 
 
+#: the columns of the page's crossings (and c, the orbit's colour index)
+CROSSING_COLUMNS = ("orbit", "t", "p1", "p2", "M", "dH", "megno")
+
+
+def _empty_crossings() -> dict:
+    d = {c: np.zeros(0) for c in CROSSING_COLUMNS}
+    d["orbit"] = np.zeros(0, np.int64)
+    d["c"] = np.zeros(0, np.int64)
+    return d
+
+
 def _empty_density() -> dict:
     return {"image": [], "x": [], "y": [], "dw": [], "dh": [], "n": []}
 
@@ -58,6 +69,9 @@ class LayersMixin:
         if dense != self.dense:
             self.dense = dense
             self.points.visible = not dense
+            # past the threshold the browser holds no rows (one message empties them); below it again,
+            # every row goes back
+            self.shown.data = _empty_crossings() if dense else dict(self.crossings.data)
             force = True
         if not dense:
             if self.density.data["image"]:

@@ -163,6 +163,8 @@ class ReadoutMixin:
         rows = np.flatnonzero(np.asarray(self.crossings.data["orbit"]) == ident)
         if rows.size:      # the rows streamed before the indicator was known
             self.crossings.patch({"megno": [(int(r), megno) for r in rows]})
+            if not self.dense:
+                self.shown.patch({"megno": [(int(r), megno) for r in rows]})
         self._update_status()
 
     def _colour_changed(self):
