@@ -148,7 +148,7 @@ class ReadoutMixin:
             text += f"; rotation number: none ({rot.status})"
         else:
             text += (f"; rotation number {rot.value:.10g} around ({fp.point[0]:.6g}, {fp.point[1]:.6g}) over "
-                     f"{2 * rot.iterates} returns, " + ("converged" if rot.converged else
+                     f"{rot.iterates} returns, " + ("converged" if rot.converged else
                                                         f"not converged (|WB_N - WB_2N| = {rot.difference:.2g})"))
         self.readout.text = text
 
