@@ -227,7 +227,7 @@ def analytic_eigenvalues_solution_I(params, h):
     when alpha beta < 0 (lam b/a1 < c < lam b/a2: hyperbolic) and exp(+-i sqrt(alpha beta) T)
     otherwise."""
     P = params.as_array()
-    a1, a2, b, lam = P[0], P[1], P[2], P[3]
+    a1, a2, b, lam = P[model.A1], P[model.A2], P[model.B], P[model.LAM]
     c = math.sqrt(2 * b * h)
     alpha = c / b - lam / a2
     beta = c / b - lam / a1

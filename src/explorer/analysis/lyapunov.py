@@ -51,21 +51,11 @@ EARLY_NAMES = ("none", "sali", "megno")
 GENERIC_DIRECTION = np.array([0.8017, -0.3327, 0.4721, 0.1190, -0.0712])
 
 
-def energy_gradient(params, y):
-    """grad H of docs/model.md R3 (analytic)."""
-    P = params.as_array() if isinstance(params, model.Params) else np.asarray(params, float)
-    a1, a2, b, lam, chi, zeta, mu, xi, eta = P
-    p1, p2, m, g1, g2 = np.moveaxis(np.asarray(y, float), -1, 0)
-    k = mu / lam
-    return np.stack([p1 / a1 - k * g2, p2 / a2 + k * g1, m / b,
-                     k * (p2 - zeta) + mu * xi, -k * (p1 - chi) + mu * eta], axis=-1)
-
-
 def deviation_vector(params, y, direction=GENERIC_DIRECTION):
     """Unit vector(s) tangent to {H = H(y)} and {g1^2 + g2^2 = 1} at y: ``direction`` with its
     components along grad H and grad C removed (Gram-Schmidt)."""
     y = np.atleast_2d(np.asarray(y, float))
-    gH = energy_gradient(params, y)
+    gH = model.energy_gradient(params, y)
     gC = np.zeros_like(y)
     gC[:, 3] = 2 * y[:, 3]
     gC[:, 4] = 2 * y[:, 4]

@@ -25,7 +25,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from explorer import model
-from explorer.analysis.lyapunov import energy_gradient
 from explorer.integrate.methods import MAP_TOL, MAX_TOL, MIN_TOL
 from explorer.integrate.tangent import return_map_taylor
 from explorer.kernels import STATUS_DONE, STATUS_NAMES
@@ -83,7 +82,7 @@ class SectionMap:
 
     def lift(self, y):
         """Tangent vectors on the energy shell for dp1 = 1 and dp2 = 1 (dg = 0)."""
-        gH = energy_gradient(self.P, y)
+        gH = model.energy_gradient(self.P, y)
         V = np.zeros((2, 5))
         for r in range(2):
             V[r, r] = 1.0
