@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from explorer import model
-from explorer.analysis.section_map import DEFAULT_TOL, SectionMap
+from explorer.analysis.section_map import DEFAULT_TOL, SectionMap, takes_section_map
 from explorer.model import ParameterError, validation
 
 __all__ = ["Branch", "FixedPoint", "analytic_eigenvalues_solution_I", "continue_branch", "find_fixed_point", "follow",
@@ -83,6 +83,7 @@ class FixedPoint:
                 "residual": self.residual, "degenerate": bool(self.degenerate)}
 
 
+@takes_section_map
 def find_fixed_point(params, h, guess=(0.0, 0.0), *, phi0=math.pi, tol=DEFAULT_TOL) -> FixedPoint:
     """A fixed point of the section map P of phi = ``phi0`` at energy ``h`` (docs/model.md R9).
 
@@ -142,6 +143,7 @@ class Branch:
         return np.array([fp.trace for fp in self.points])
 
 
+@takes_section_map
 def continue_branch(params, h, parameter, start, stop, step, guess=(0.0, 0.0), *, phi0=math.pi,
                     tol=DEFAULT_TOL, bisect_tol=1e-8) -> Branch:
     """Natural-parameter continuation of a fixed point in any model parameter (or "h").
@@ -240,6 +242,7 @@ def analytic_eigenvalues_solution_I(params, h):
     return np.array([complex(math.cos(w), math.sin(w)), complex(math.cos(w), -math.sin(w))]), 2 * math.cos(w)
 
 
+@takes_section_map
 def follow(params, h, parameter, start, stop, guess, *, max_step=0.25, phi0=math.pi, tol=DEFAULT_TOL) -> FixedPoint:
     """The fixed point at ``parameter = stop`` on the branch through the point found near
     ``guess`` at ``parameter = start`` (continuation in steps of at most ``max_step``)."""

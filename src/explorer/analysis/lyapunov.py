@@ -28,6 +28,7 @@ import numpy as np
 
 from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
+from explorer.analysis.section_map import SectionMap
 from explorer.integrate import methods
 from explorer.integrate.methods import DEFAULT_DT, DEFAULT_TOL
 from explorer.kernels import STATUS_NAMES, Status
@@ -146,12 +147,19 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
     variational equations of R3 (started tangent to the energy shell and the Casimir surface,
     :func:`deviation_vector`), renormalised at every step (Benettin et al. 1980; Skokos 2010).
 
+    System first, in section coordinates: ``indicators(smap, points, T, ...)`` with a
+    :class:`~explorer.analysis.section_map.SectionMap` ``smap`` takes the start points
+    ``points`` = (p1, p2) or an (N, 2) array on its section phi = ``smap.phi0`` at energy
+    ``smap.h`` (M > 0 from the energy, :func:`explorer.model.section_state`); the map gives the
+    system only: ``method``, ``tol`` and ``dt`` stay this function's (the map's own tolerance is
+    that of Newton's method).
+
     Parameters
     ----------
-    params : Params or array
-        Model parameters (docs/model.md, table "Notation").
-    y0 : array (N, 5) or (5,)
-        Initial states (p1, p2, M, sin phi, cos phi).
+    params : Params or array, or SectionMap
+        Model parameters (docs/model.md, table "Notation"), or a SectionMap (see above).
+    y0 : array (N, 5) or (5,), or (N, 2) or (2,) with a SectionMap
+        Initial states (p1, p2, M, sin phi, cos phi), or section points (p1, p2).
     T : float
         Integration time (> 0).
     method : str
@@ -186,6 +194,11 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
         docs/commands/lyapunov.md), FLI (Froeschlé, Lega & Gonczi
         1997), per orbit, with a status code each.
     """
+    if isinstance(params, SectionMap):   # section coordinates on the map's section
+        pts = np.atleast_2d(np.asarray(y0, dtype=np.float64))
+        if pts.ndim != 2 or pts.shape[1] != 2:
+            raise ParameterError(f"with a SectionMap the start points are (p1, p2) pairs (N, 2); got {pts.shape}")
+        params, y0 = params.params, model.section_state(params.params, pts[:, 0], pts[:, 1], params.h, params.phi0)
     P = validation.packed_params(params)
     m = methods.get(method)
     T = validation.real("time", T, 0.0, lo_open=True)
