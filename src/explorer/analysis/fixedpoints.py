@@ -17,11 +17,12 @@ Algorithms for Chaotic Systems, 1989, Sec. 6; Krauskopf et al., Int. J. Bifurc. 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from explorer import model
+from explorer.analysis.periodic import PeriodicBranch
 from explorer.analysis.section_map import DEFAULT_TOL, SectionMap, takes_section_map
 from explorer.model import ParameterError, validation
 
@@ -122,25 +123,21 @@ def find_fixed_point(params, h, guess=(0.0, 0.0), *, phi0=math.pi, tol=DEFAULT_T
 
 
 @dataclass(frozen=True)
-class Branch:
-    """A branch of fixed points followed in one parameter by :func:`continue_branch`.
+class Branch(PeriodicBranch):
+    """A branch of fixed points followed in one parameter by :func:`continue_branch`: the
+    :class:`~explorer.analysis.periodic.PeriodicBranch` of period 1 whose orbits are
+    :class:`FixedPoint` s.
 
-    ``points[i]`` is the :class:`FixedPoint` at ``values[i]`` of ``parameter`` (a model
-    parameter or ``"h"``); ``bifurcations`` is the list of dicts of
+    ``points[i]`` (= ``orbits[i]``) is the :class:`FixedPoint` at ``values[i]`` of ``parameter`` (a
+    model parameter or ``"h"``); ``bifurcations`` is the list of dicts of
     :class:`explorer.analysis.periodic.PeriodicBranch` (``{"value", "type", "trace", "refined"}``,
     type "tangent", "period-doubling", "touch +2" or "touch -2"); ``stopped`` says why the
     branch ended before ``stop`` (None when it reached it).
     """
 
-    parameter: str
-    values: np.ndarray
-    points: list
-    bifurcations: list = field(default_factory=list)
-    stopped: str | None = None
-
     @property
-    def traces(self) -> np.ndarray:
-        return np.array([fp.trace for fp in self.points])
+    def points(self) -> list:
+        return self.orbits
 
 
 @takes_section_map
@@ -163,7 +160,7 @@ def continue_branch(params, h, parameter, start, stop, step, guess=(0.0, 0.0), *
 
     br = continue_periodic(params, h, 1, parameter, start, stop, step, guess, phi0=phi0, tol=tol,
                            bisect_tol=bisect_tol)
-    return Branch(parameter, br.values, [FixedPoint.from_orbit(o) for o in br.orbits], br.bifurcations,
+    return Branch(parameter, 1, br.values, [FixedPoint.from_orbit(o) for o in br.orbits], br.bifurcations,
                   br.stopped)
 
 
