@@ -24,7 +24,9 @@ With a second deviation vector (both renormalised every step, each to unit norm)
   their parallelogram); ~ SALI on chaotic orbits.
 
 A new indicator: its columns and entry in :mod:`explorer.kernels.indicator_table`, its update
-in :func:`accumulate` and :func:`result` (every tangent loop, scalar and lanes, calls these two).
+in :func:`accumulate` and :func:`result` (every tangent loop, scalar and lanes, calls these two),
+or, for one of two deviation vectors, its value in :func:`extra` (called at the end of the
+Taylor tangent loops, scalar and lanes).
 
 Early classification (:func:`megno_early`): an orbit whose <Y> has stayed above a level at
 every step end of [t/2, t], t >= tmin, is classified chaotic at t and stops.
@@ -126,6 +128,14 @@ def gali2(v, w, n):
             m = v[i] * w[j] - v[j] * w[i]
             s += m * m
     return math.sqrt(s)
+
+
+@njit
+def extra(v, w, n, ext):
+    """The indicators of two unit deviation vectors v[:n], w[:n] into their columns of the extra
+    row (EXT_SALI, EXT_GALI2; EXT_EARLY is the caller's)."""
+    ext[EXT_SALI] = sali(v, w, n)
+    ext[EXT_GALI2] = gali2(v, w, n)
 
 
 @njit
