@@ -44,3 +44,20 @@ def test_the_energy_gradient_is_the_derivative_of_the_energy():
     eps = 1e-6
     numeric = [(model.energy(prm, y + eps * e) - model.energy(prm, y - eps * e)) / (2 * eps) for e in np.eye(5)]
     np.testing.assert_allclose(model.energy_gradient(prm, y), numeric, rtol=1e-8, atol=1e-9)
+
+
+def test_the_notation_table_of_the_model_page_lists_every_parameter_with_its_constraint():
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[2] / "docs" / "model.md").read_text()
+    table = text[text.index("| here | code |"):text.index("State: the reduced state")]
+    rows = {}
+    for line in table.splitlines()[2:]:
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        if len(cells) == 4:
+            for name in cells[1].replace("`", "").split(","):
+                rows[name.strip()] = cells[3]
+    assert set(rows) == set(model.PARAM_NAMES)
+    allowed = {"positive": "> 0", "nonnegative": "≥ 0", "nonzero": "≠ 0", "": "finite"}
+    for p in model.PARAMETERS:
+        assert rows[p.name].startswith(allowed[p.constraint]), (p.name, rows[p.name])
