@@ -36,6 +36,7 @@ import sys
 
 import pytest
 
+from explorer import model
 from explorer.app import cli
 from explorer.model import validation
 
@@ -57,7 +58,7 @@ BASE = {
     "manifold": ["manifold", "--arclength", "0.5"],
     "serve": ["serve", "--port", "0"],     # never starts: the server is replaced (_no_server below)
 }
-MODEL_OPTIONS = ("--a1", "--a2", "--b", "--lam", "--chi", "--zeta", "--mu", "--xi", "--eta")
+MODEL_OPTIONS = tuple(f"--{name}" for name in model.PARAM_NAMES)
 #: options taking a real number, per command (the model parameters are added below)
 REAL_OPTIONS = {
     "orbit": ("--p1", "--p2", "--h", "--tol", "--dt", "--tmax", "--phi0"),
@@ -292,13 +293,11 @@ SCENE_KEYS = {
     "figure.own_scale": ("1", "'a'", "[-1]", "[0, 0]", "[5]"),
     "figure.marker_size": REAL + ("0",),
     "figure.dpi": INT + ("0", BIG),
-    "model.a1": REAL + ("0", "-1", "1e300"),
-    "model.lam": REAL + ("0", "1e300"),
-    "model.mu": REAL + ("-1", "1e300"),
-    "model.chi": REAL + ("1e300",),
 }
-for _p in ("a2", "b", "zeta", "xi", "eta"):
-    SCENE_KEYS[f"model.{_p}"] = REAL + ("1e300",)
+#: the values each constraint of model.PARAMETERS refuses (besides non-numbers and overflow)
+CONSTRAINT_BAD = {"": (), "positive": ("0", "-1"), "nonnegative": ("-1",), "nonzero": ("0",)}
+for _p in model.PARAMETERS:
+    SCENE_KEYS[f"model.{_p.name}"] = REAL + CONSTRAINT_BAD[_p.constraint] + ("1e300",)
 #: what a key needs around it to be checked at all (e.g. a sweep for sweep.values)
 SCENE_CONTEXT = {"sweep.values": {"sweep": {"parameter": "'mu'"}}, "sweep.parameter": {"sweep": {"values": "[1.0]"}},
                  "seeds.lines": {"seeds": {"kind": "'lines'"}}, "seeds.points": {"seeds": {"kind": "'points'"}},

@@ -81,7 +81,7 @@ def test_only_the_indicators_asked_for_are_computed():
         np.testing.assert_array_equal(getattr(one, name), getattr(two, name))
     with pytest.raises(ParameterError, match="indicators must be"):
         lyapunov.indicators(prm, y0, 100.0, which=("lyapunov",))
-    with pytest.raises(ParameterError, match="need method 'taylor'"):
+    with pytest.raises(ParameterError, match="needs method 'taylor'"):
         lyapunov.indicators(prm, y0, 100.0, method="split6", which=("sali",))
 
 

@@ -17,12 +17,13 @@ Algorithms for Chaotic Systems, 1989, Sec. 6; Krauskopf et al., Int. J. Bifurc. 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from explorer import model
-from explorer.analysis.section_map import DEFAULT_TOL, SectionMap
+from explorer.analysis.periodic import PeriodicBranch
+from explorer.analysis.section_map import DEFAULT_TOL, SectionMap, takes_section_map
 from explorer.model import ParameterError, validation
 
 __all__ = ["Branch", "FixedPoint", "analytic_eigenvalues_solution_I", "continue_branch", "find_fixed_point", "follow",
@@ -83,6 +84,7 @@ class FixedPoint:
                 "residual": self.residual, "degenerate": bool(self.degenerate)}
 
 
+@takes_section_map
 def find_fixed_point(params, h, guess=(0.0, 0.0), *, phi0=math.pi, tol=DEFAULT_TOL) -> FixedPoint:
     """A fixed point of the section map P of phi = ``phi0`` at energy ``h`` (docs/model.md R9).
 
@@ -121,27 +123,24 @@ def find_fixed_point(params, h, guess=(0.0, 0.0), *, phi0=math.pi, tol=DEFAULT_T
 
 
 @dataclass(frozen=True)
-class Branch:
-    """A branch of fixed points followed in one parameter by :func:`continue_branch`.
+class Branch(PeriodicBranch):
+    """A branch of fixed points followed in one parameter by :func:`continue_branch`: the
+    :class:`~explorer.analysis.periodic.PeriodicBranch` of period 1 whose orbits are
+    :class:`FixedPoint` s.
 
-    ``points[i]`` is the :class:`FixedPoint` at ``values[i]`` of ``parameter`` (a model
-    parameter or ``"h"``); ``bifurcations`` is the list of dicts of
+    ``points[i]`` (= ``orbits[i]``) is the :class:`FixedPoint` at ``values[i]`` of ``parameter`` (a
+    model parameter or ``"h"``); ``bifurcations`` is the list of dicts of
     :class:`explorer.analysis.periodic.PeriodicBranch` (``{"value", "type", "trace", "refined"}``,
     type "tangent", "period-doubling", "touch +2" or "touch -2"); ``stopped`` says why the
     branch ended before ``stop`` (None when it reached it).
     """
 
-    parameter: str
-    values: np.ndarray
-    points: list
-    bifurcations: list = field(default_factory=list)
-    stopped: str | None = None
-
     @property
-    def traces(self) -> np.ndarray:
-        return np.array([fp.trace for fp in self.points])
+    def points(self) -> list:
+        return self.orbits
 
 
+@takes_section_map
 def continue_branch(params, h, parameter, start, stop, step, guess=(0.0, 0.0), *, phi0=math.pi,
                     tol=DEFAULT_TOL, bisect_tol=1e-8) -> Branch:
     """Natural-parameter continuation of a fixed point in any model parameter (or "h").
@@ -161,7 +160,7 @@ def continue_branch(params, h, parameter, start, stop, step, guess=(0.0, 0.0), *
 
     br = continue_periodic(params, h, 1, parameter, start, stop, step, guess, phi0=phi0, tol=tol,
                            bisect_tol=bisect_tol)
-    return Branch(parameter, br.values, [FixedPoint.from_orbit(o) for o in br.orbits], br.bifurcations,
+    return Branch(parameter, 1, br.values, [FixedPoint.from_orbit(o) for o in br.orbits], br.bifurcations,
                   br.stopped)
 
 
@@ -227,7 +226,7 @@ def analytic_eigenvalues_solution_I(params, h):
     when alpha beta < 0 (lam b/a1 < c < lam b/a2: hyperbolic) and exp(+-i sqrt(alpha beta) T)
     otherwise."""
     P = params.as_array()
-    a1, a2, b, lam = P[0], P[1], P[2], P[3]
+    a1, a2, b, lam = P[model.A1], P[model.A2], P[model.B], P[model.LAM]
     c = math.sqrt(2 * b * h)
     alpha = c / b - lam / a2
     beta = c / b - lam / a1
@@ -240,6 +239,7 @@ def analytic_eigenvalues_solution_I(params, h):
     return np.array([complex(math.cos(w), math.sin(w)), complex(math.cos(w), -math.sin(w))]), 2 * math.cos(w)
 
 
+@takes_section_map
 def follow(params, h, parameter, start, stop, guess, *, max_step=0.25, phi0=math.pi, tol=DEFAULT_TOL) -> FixedPoint:
     """The fixed point at ``parameter = stop`` on the branch through the point found near
     ``guess`` at ``parameter = start`` (continuation in steps of at most ``max_step``)."""

@@ -28,16 +28,19 @@ import numpy as np
 
 from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
+from explorer.analysis.section_map import SectionMap
 from explorer.integrate import methods
 from explorer.integrate.methods import DEFAULT_DT, DEFAULT_TOL
 from explorer.kernels import STATUS_NAMES, Status
+from explorer.kernels import indicator_table as table
 from explorer.model import ParameterError, validation
 
 DEFAULT_TIME = 1000.0
-#: the indicators :func:`indicators` can compute (``which``)
-INDICATOR_NAMES = ("mlce", "megno", "fli", "sali", "gali2")
+#: the indicators :func:`indicators` can compute (``which``): the registry
+#: :data:`explorer.kernels.indicator_table.INDICATORS`
+INDICATOR_NAMES = table.NAMES
 #: computed unless ``which`` says otherwise (one deviation vector)
-DEFAULT_INDICATORS = ("mlce", "megno", "fli")
+DEFAULT_INDICATORS = table.DEFAULT_NAMES
 #: early classification (``early_stop``): SALI below EARLY_SALI, or <Y> above EARLY_MEGNO at
 #: every step end of [t/2, t] with t >= EARLY_TIME, classifies an orbit chaotic at t
 EARLY_SALI = 1e-8
@@ -49,21 +52,11 @@ EARLY_NAMES = ("none", "sali", "megno")
 GENERIC_DIRECTION = np.array([0.8017, -0.3327, 0.4721, 0.1190, -0.0712])
 
 
-def energy_gradient(params, y):
-    """grad H of docs/model.md R3 (analytic)."""
-    P = params.as_array() if isinstance(params, model.Params) else np.asarray(params, float)
-    a1, a2, b, lam, chi, zeta, mu, xi, eta = P
-    p1, p2, m, g1, g2 = np.moveaxis(np.asarray(y, float), -1, 0)
-    k = mu / lam
-    return np.stack([p1 / a1 - k * g2, p2 / a2 + k * g1, m / b,
-                     k * (p2 - zeta) + mu * xi, -k * (p1 - chi) + mu * eta], axis=-1)
-
-
 def deviation_vector(params, y, direction=GENERIC_DIRECTION):
     """Unit vector(s) tangent to {H = H(y)} and {g1^2 + g2^2 = 1} at y: ``direction`` with its
     components along grad H and grad C removed (Gram-Schmidt)."""
     y = np.atleast_2d(np.asarray(y, float))
-    gH = energy_gradient(params, y)
+    gH = model.energy_gradient(params, y)
     gC = np.zeros_like(y)
     gC[:, 3] = 2 * y[:, 3]
     gC[:, 4] = 2 * y[:, 4]
@@ -101,6 +94,9 @@ def second_deviation_vector(params, y, direction=SECOND_DIRECTION):
 class Indicators:
     """Per-orbit chaos indicators at time ``time`` and their history (:func:`indicators`).
 
+    Each indicator of the registry (:data:`INDICATOR_NAMES`) is an attribute, ``r.megno``, an
+    (N,) array (NaN where it was not computed), read from ``values``.
+
     mLCE: finite-time maximal Lyapunov exponent ``ln(|w(T)| / |w(0)|) / T`` of the deviation vector w
     (Benettin et al. 1980; renormalised, Skokos 2010); MEGNO <Y>: Cincotta & Simó 2000 (-> 2 on
     quasi-periodic orbits, grows like mLCE T/2 on chaotic ones); FLI: Froeschlé, Lega & Gonczi
@@ -108,22 +104,24 @@ class Indicators:
     """
 
     time: np.ndarray       # (N,) time reached
-    mlce: np.ndarray       # (N,) finite-time maximal Lyapunov exponent
-    megno: np.ndarray      # (N,) mean MEGNO <Y>
+    values: dict           # indicator name -> (N,) array, every name of INDICATOR_NAMES
     Y: np.ndarray          # (N,) MEGNO Y at the end
-    fli: np.ndarray        # (N,) fast Lyapunov indicator
     status: np.ndarray     # (N,) status codes (kernels.STATUS_*)
     steps: np.ndarray      # (N,)
     final: np.ndarray      # (N, 5) final states
     history_t: np.ndarray  # (H,) requested history times
-    history: np.ndarray    # (N, H, 5) rows (t, mlce, <Y>, Y, fli), NaN where not reached
+    history: np.ndarray    # (N, H, N_RES) result rows (t, mlce, <Y>, Y, fli), NaN where not reached
     method: str
     settings: dict
-    sali: np.ndarray | None = None       # (N,) SALI at the end (NaN unless asked for)
-    gali2: np.ndarray | None = None      # (N,) GALI_2 at the end (NaN unless asked for)
     early: np.ndarray | None = None      # (N,) 0: ran to T, 1: stopped by SALI, 2: by <Y> (EARLY_NAMES)
     deviation: np.ndarray | None = None  # (N, 2, 5) final unit deviation vectors (NaN if not computed)
     which: tuple = field(default=DEFAULT_INDICATORS)
+
+    def __getattr__(self, name: str) -> np.ndarray:
+        values = self.__dict__.get("values")
+        if values is None or name not in values:
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        return values[name]
 
     def chaotic(self, threshold: float) -> np.ndarray:
         """Orbits classified chaotic: <Y> > ``threshold`` or stopped early as chaotic."""
@@ -149,12 +147,19 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
     variational equations of R3 (started tangent to the energy shell and the Casimir surface,
     :func:`deviation_vector`), renormalised at every step (Benettin et al. 1980; Skokos 2010).
 
+    System first, in section coordinates: ``indicators(smap, points, T, ...)`` with a
+    :class:`~explorer.analysis.section_map.SectionMap` ``smap`` takes the start points
+    ``points`` = (p1, p2) or an (N, 2) array on its section phi = ``smap.phi0`` at energy
+    ``smap.h`` (M > 0 from the energy, :func:`explorer.model.section_state`); the map gives the
+    system only: ``method``, ``tol`` and ``dt`` stay this function's (the map's own tolerance is
+    that of Newton's method).
+
     Parameters
     ----------
-    params : Params or array
-        Model parameters (docs/model.md, table "Notation").
-    y0 : array (N, 5) or (5,)
-        Initial states (p1, p2, M, sin phi, cos phi).
+    params : Params or array, or SectionMap
+        Model parameters (docs/model.md, table "Notation"), or a SectionMap (see above).
+    y0 : array (N, 5) or (5,), or (N, 2) or (2,) with a SectionMap
+        Initial states (p1, p2, M, sin phi, cos phi), or section points (p1, p2).
     T : float
         Integration time (> 0).
     method : str
@@ -189,6 +194,11 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
         docs/commands/lyapunov.md), FLI (Froeschlé, Lega & Gonczi
         1997), per orbit, with a status code each.
     """
+    if isinstance(params, SectionMap):   # section coordinates on the map's section
+        pts = np.atleast_2d(np.asarray(y0, dtype=np.float64))
+        if pts.ndim != 2 or pts.shape[1] != 2:
+            raise ParameterError(f"with a SectionMap the start points are (p1, p2) pairs (N, 2); got {pts.shape}")
+        params, y0 = params.params, model.section_state(params.params, pts[:, 0], pts[:, 1], params.h, params.phi0)
     P = validation.packed_params(params)
     m = methods.get(method)
     T = validation.real("time", T, 0.0, lo_open=True)
@@ -196,15 +206,19 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
     if Y0.ndim != 2 or Y0.shape[1] != 5 or not np.all(np.isfinite(Y0)):
         raise ParameterError("y0 must be finite with shape (N, 5) = (p1, p2, M, g1, g2) per orbit")
     which = check_which(which)
-    nvec = 2 if ("sali" in which or "gali2" in which) else 1
-    if (nvec == 2 or early_stop) and m.kind != "taylor":
-        raise ParameterError(f"sali, gali2 and early_stop need method 'taylor'; got method {method!r}")
+    nvec = max(table.BY_NAME[w].vectors for w in which)
+    for w in which:
+        if not table.BY_NAME[w].supports(m.kind):
+            kinds = " or ".join(repr(k) for k in table.BY_NAME[w].methods or ())
+            raise ParameterError(f"indicator {w} needs method {kinds}; got method {method!r}")
+    if early_stop and m.kind != "taylor":
+        raise ParameterError(f"early_stop needs method 'taylor'; got method {method!r}")
     V0 = deviation_vector(P, Y0) if v0 is None else np.atleast_2d(np.asarray(v0, float))
     V0 = np.ascontiguousarray(np.broadcast_to(V0, Y0.shape), dtype=np.float64)
     W0 = second_deviation_vector(P, Y0) if w0 is None else np.atleast_2d(np.asarray(w0, float))
     W0 = np.ascontiguousarray(np.broadcast_to(W0, Y0.shape), dtype=np.float64)
-    history = validation.fits_in_memory("history", history, Y0.shape[0] * 5 * 8 + 8,
-                                        "a row of 5 float64 per orbit and history point")
+    history = validation.fits_in_memory("history", history, Y0.shape[0] * table.N_RES * 8 + 8,
+                                        f"a row of {table.N_RES} float64 per orbit and history point")
     early_stop = bool(early_stop)
     if early_stop:
         early_sali = validation.real("early_sali", early_sali, 0.0, 1.0)
@@ -212,12 +226,12 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
         early_time = validation.real("early_time", early_time, 0.0)
     N = Y0.shape[0]
     hist_t = (np.geomspace(min(1.0, T), T, history) if history else np.zeros(0))
-    hist = np.full((N, len(hist_t), 5), np.nan)
-    res = np.zeros((N, 5))
+    hist = np.full((N, len(hist_t), table.N_RES), np.nan)
+    res = np.zeros((N, table.N_RES))
     status = np.zeros(N, np.int64)
     final = np.zeros((N, 5))
     steps = np.zeros(N, np.int64)
-    ext = np.full((N, 3), np.nan)
+    ext = np.full((N, table.N_EXT), np.nan)
     dev = np.full((N, 2, 5), np.nan)
     settings = {"method": method, "time": T}
     if early_stop:
@@ -250,16 +264,23 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
                 for a, part in zip((hist, res, status, final, steps), parts[2:]):
                     a[ok] = part
                 res[slow] = np.nan
-                res[slow, 0] = 0.0
+                res[slow, table.RES_T] = 0.0
                 status[slow] = int(Status.UNRESOLVED)
                 final[slow] = Y0[slow]
-            ext[:, 2] = 0
+            ext[:, table.EXT_EARLY] = 0
     finally:
         if threads is not None:
             set_num_threads(old)
-    return Indicators(res[:, 0], res[:, 1], res[:, 2], res[:, 3], res[:, 4], status, steps, final, hist_t,
-                      hist, method, settings, sali=ext[:, 0], gali2=ext[:, 1], early=ext[:, 2].astype(np.int64),
-                      deviation=dev, which=which)
+    rows = {table.RESULT: res, table.EXTRA: ext}
+    values = {i.name: rows[i.row][:, i.column] for i in table.INDICATORS}
+    return Indicators(res[:, table.RES_T], values, res[:, table.RES_Y], status, steps, final, hist_t, hist, method,
+                      settings, early=ext[:, table.EXT_EARLY].astype(np.int64), deviation=dev, which=which)
+
+
+def available(method: str) -> tuple:
+    """The indicators ``method`` computes (names of :data:`INDICATOR_NAMES`, registry order)."""
+    kind = methods.get(method).kind
+    return tuple(i.name for i in table.INDICATORS if i.supports(kind))
 
 
 def check_which(which) -> tuple:

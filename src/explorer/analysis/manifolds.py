@@ -108,7 +108,15 @@ def _orient(v):
 def saddle(orbit, params=None, h=None, *, index=0, phi0=None, tol=DEFAULT_TOL, tmax=RETURN_TMAX) -> Saddle:
     """The :class:`Saddle` at point ``index`` of a hyperbolic ``orbit`` (a
     :class:`~explorer.analysis.periodic.PeriodicOrbit` or a
-    :class:`~explorer.analysis.fixedpoints.FixedPoint`; ``params``, ``h`` default to the orbit's)."""
+    :class:`~explorer.analysis.fixedpoints.FixedPoint`; ``params``, ``h`` default to the orbit's).
+    System first: ``saddle(smap, orbit)`` (or ``saddle(orbit, smap)``) with a :class:`SectionMap`
+    takes its params, h, phi0, tol and tmax."""
+    if isinstance(orbit, SectionMap):
+        orbit, params = params, orbit
+    if isinstance(params, SectionMap):
+        if h is not None or phi0 is not None or tol != DEFAULT_TOL or tmax != RETURN_TMAX:
+            raise ParameterError("saddle: h, phi0, tol and tmax belong to the SectionMap; do not give them beside it")
+        params, h, phi0, tol, tmax = params.params, params.h, params.phi0, params.tol, params.tmax
     if isinstance(orbit, PeriodicOrbit):
         pts, K, jacs = orbit.points, orbit.period, orbit.map_jacobians
         phi0 = orbit.phi0 if phi0 is None else phi0
@@ -382,7 +390,8 @@ def manifolds(orbit, params=None, h=None, *, arclength=5.0, kinds=("unstable", "
               index=0, phi0=None, tol=DEFAULT_TOL, **kw) -> list:
     """The branches of W^u and W^s of a hyperbolic ``orbit`` (PeriodicOrbit or FixedPoint) at its
     point ``index``, each grown to ``arclength`` (:func:`grow_branch`; ``kw`` its options).
-    Returns a list of :class:`ManifoldBranch`, unstable before stable, sign +1 before -1."""
+    Returns a list of :class:`ManifoldBranch`, unstable before stable, sign +1 before -1.
+    System first: ``manifolds(smap, orbit)`` with a :class:`SectionMap` (as :func:`saddle`)."""
     sd = saddle(orbit, params, h, index=index, phi0=phi0, tol=tol)
     for k in kinds:
         if k not in ("unstable", "stable"):

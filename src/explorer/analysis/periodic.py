@@ -80,7 +80,7 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis.continuation import continuation_values, golden_section_max, secant_follower
-from explorer.analysis.section_map import DEFAULT_TOL, RETURN_TMAX, SectionMap
+from explorer.analysis.section_map import DEFAULT_TOL, RETURN_TMAX, SectionMap, takes_section_map
 from explorer.model import ParameterError, symmetry, validation
 
 __all__ = ["DEGENERATE_RESIDUE", "ISOLATION_TOL", "KIND_TOL", "MULTIPLE_SHOOTING_FROM", "PeriodicBranch",
@@ -421,6 +421,7 @@ def _check_period(period) -> int:
     return int(period)
 
 
+@takes_section_map
 def find_periodic_orbit(params, h, guess, period, *, phi0=math.pi, tol=DEFAULT_TOL, max_iter=NEWTON_MAX_ITER,
                         tmax=RETURN_TMAX, reduce=True) -> PeriodicOrbit:
     """A periodic orbit of period ``period`` of the section map phi = ``phi0`` at energy ``h``.
@@ -492,6 +493,7 @@ def _line_p1(params, h, phi0, n):
     return c1 + half * np.linspace(-1.0, 1.0, n + 2)[1:-1]
 
 
+@takes_section_map
 def symmetry_line_points(params, h, period, n=200, *, phi0=math.pi, tol=DEFAULT_TOL, tmax=RETURN_TMAX,
                          threads=None):
     """Seeds of symmetric orbits of period ``period`` on the two symmetry lines (see the module).
@@ -620,6 +622,7 @@ def _half_turn_partners(prm, h, orbits, same_tol, *, tol, max_iter, tmax, thread
     return added
 
 
+@takes_section_map
 def periodic_guesses(params, h, period, *, grid=12, line=None, phi0=math.pi, tol=DEFAULT_TOL, tmax=SEARCH_TMAX,
                      threads=None) -> np.ndarray:
     """The Newton starts of :func:`search_periodic_orbits`, in the order it tries them: the seeds on
@@ -638,6 +641,7 @@ def periodic_guesses(params, h, period, *, grid=12, line=None, phi0=math.pi, tol
                            _grid_seeds(prm, h, K, grid, phi0, tol, tmax, threads)])
 
 
+@takes_section_map
 def search_periodic_orbits(params, h, period, *, grid=12, line=None, phi0=math.pi, tol=DEFAULT_TOL,
                            max_guesses=60, max_iter=NEWTON_MAX_ITER, tmax=SEARCH_TMAX, time_limit=None,
                            same_tol=SAME_ORBIT_TOL, threads=None, guesses=None) -> list:
@@ -751,6 +755,7 @@ class PeriodicBranch:
         return np.array([o.trace for o in self.orbits])
 
 
+@takes_section_map
 def continue_periodic(params, h, period, parameter, start, stop, step, guess, *, phi0=math.pi, tol=DEFAULT_TOL,
                       bisect_tol=1e-8, touch_window=0.05, touch_tol=1e-6) -> PeriodicBranch:
     """Natural-parameter continuation of a periodic orbit of period K in a model parameter or "h".

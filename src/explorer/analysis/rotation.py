@@ -64,6 +64,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from explorer import model
+from explorer.analysis.section_map import takes_section_map
 from explorer.integrate.methods import MAP_TOL
 from explorer.model import ParameterError, validation
 
@@ -281,6 +282,7 @@ def _rotations(params, h, starts, center, N, phi0, tol, threads, conv_tol):
     return out
 
 
+@takes_section_map
 def rotation_number(params, h, start, *, center=None, iterates=DEFAULT_ITERATES, phi0=math.pi, tol=DEFAULT_TOL,
                     conv_tol=CONVERGED_TOL, threads=None) -> RotationNumber:
     """Rotation number of the orbit of ``start`` around an elliptic fixed point (weighted Birkhoff).
@@ -340,6 +342,7 @@ class RotationProfile:
                                                          turns, status)]}
 
 
+@takes_section_map
 def rotation_profile(params, h, start, stop, n, *, center=None, iterates=DEFAULT_ITERATES, phi0=math.pi,
                      tol=DEFAULT_TOL, conv_tol=CONVERGED_TOL, threads=None) -> RotationProfile:
     """Rotation numbers of n orbits started on the segment from ``start`` to ``stop``.

@@ -16,16 +16,24 @@ coordinates up to a factor that cancels along a periodic orbit (det of a monodro
 :class:`SectionMap` is the object every analysis of the map takes (fixed points, periodic
 orbits, continuation, rotation numbers, separatrices), as DynamicalSystems.jl's
 ``PoincareMap`` is for its algorithms.
+
+One argument order for every analysis: the system first -- a :class:`SectionMap`, or the
+model parameters and the energy ``(params, h)`` with the section's ``phi0`` and ``tol`` as
+keywords -- then the point(s), then the budgets (keywords).  :func:`takes_section_map` gives
+a function written for ``(params, h, ...)`` the form ``(smap, ...)``: the map's ``params``,
+``h``, ``phi0``, ``tol`` (and ``tmax``, where the function's ``tmax`` is the map's return
+budget) are passed on, so both forms give the same numbers.
 """
 from __future__ import annotations
 
+import functools
+import inspect
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from explorer import model
-from explorer.analysis.lyapunov import energy_gradient
 from explorer.integrate.methods import MAP_TOL, MAX_TOL, MIN_TOL
 from explorer.integrate.tangent import return_map_taylor
 from explorer.kernels import STATUS_DONE, STATUS_NAMES
@@ -33,7 +41,7 @@ from explorer.kernels.taylor import order_for_tolerance
 from explorer.model import ParameterError, validation
 from explorer.model.equations import rhs
 
-__all__ = ["DEFAULT_TOL", "MAX_STEPS", "RETURN_TMAX", "MapResult", "SectionMap"]
+__all__ = ["DEFAULT_TOL", "MAX_STEPS", "RETURN_TMAX", "MapResult", "SectionMap", "takes_section_map"]
 
 #: Taylor tolerance of the section map in Newton's method and its relatives (fixed points,
 #: periodic orbits, continuation, separatrices): the map is evaluated a few hundred times,
@@ -83,7 +91,7 @@ class SectionMap:
 
     def lift(self, y):
         """Tangent vectors on the energy shell for dp1 = 1 and dp2 = 1 (dg = 0)."""
-        gH = energy_gradient(self.P, y)
+        gH = model.energy_gradient(self.P, y)
         V = np.zeros((2, 5))
         for r in range(2):
             V[r, r] = 1.0
@@ -125,3 +133,40 @@ class SectionMap:
         for k in range(n):
             out[k + 1] = self(out[k], backward=backward, jacobian=False).point
         return out
+
+
+#: the settings of a SectionMap that an analysis of the form (params, h, ...) takes as keywords
+MAP_SETTINGS = ("phi0", "tol", "tmax")
+
+
+def takes_section_map(fn):
+    """Let ``fn(params, h, *args, phi0=..., tol=..., **kw)`` also be called as
+    ``fn(smap, *args, **kw)`` with a :class:`SectionMap` ``smap`` (the system first): it runs
+    ``fn(smap.params, smap.h, *args, phi0=smap.phi0, tol=smap.tol, **kw)`` (and
+    ``tmax=smap.tmax`` when ``fn``'s ``tmax`` defaults to :data:`RETURN_TMAX`, the map's return
+    budget).  Those settings belong to the map: given beside it they raise ParameterError."""
+    sig = inspect.signature(fn)
+    taken = tuple(k for k in MAP_SETTINGS if k in sig.parameters
+                  and (k != "tmax" or sig.parameters[k].default == RETURN_TMAX))
+
+    @functools.wraps(fn)
+    def call(system, *args, **kw):
+        if not isinstance(system, SectionMap):
+            return fn(system, *args, **kw)
+        given = [k for k in taken if k in kw]
+        if given:
+            raise ParameterError(f"{fn.__name__}: {', '.join(given)} belong(s) to the SectionMap; "
+                                 f"do not give them beside it")
+        if "tmax" not in taken and system.tmax != RETURN_TMAX:
+            raise ParameterError(f"{fn.__name__} has no return budget of the map: use a SectionMap with the "
+                                 f"default tmax ({RETURN_TMAX:g}), got {system.tmax!r}")
+        kw.update({k: getattr(system, k) for k in taken})
+        return fn(system.params, system.h, *args, **kw)
+
+    note = (f"    System first: ``{fn.__name__}(smap, ...)`` with a "
+            f":class:`~explorer.analysis.section_map.SectionMap` in place of ``params, h`` uses the map's "
+            f"{', '.join(f'``{k}``' for k in taken)}.")
+    doc = fn.__doc__ or ""
+    head, sep, tail = doc.partition("\n\n")
+    call.__doc__ = head + "\n\n" + note + (sep + tail if sep else "\n")
+    return call

@@ -32,6 +32,7 @@ import numpy as np
 from explorer import model
 from explorer._jit import max_threads
 from explorer.analysis import sections
+from explorer.kernels import indicator_table
 from explorer.model import ParameterError
 
 #: orbits per chunk when joblib processes share the work
@@ -49,9 +50,10 @@ CHUNK_ORBITS_THREADS = 512
 STREAM_BYTES = int(os.environ.get("EXPLORER_STREAM_BYTES", 8 * 2**20))
 #: the smallest block (crossings per orbit and round) of a streamed panel
 MIN_BLOCK = 256
-#: per-orbit arrays of the chaos indicators that ``task`` returns (``lyapunov_dh``: |H - H0| at the
-#: end of each orbit's indicator integration, measured, not stored)
-INDICATOR_ARRAYS = ("megno", "mlce", "fli", "lyapunov_status", "sali", "gali2", "lyapunov_early", "lyapunov_dh")
+#: per-orbit arrays of the chaos indicators that ``task`` returns: one per indicator of the registry
+#: (explorer.kernels.indicator_table), its status, its early-classification code and ``lyapunov_dh``
+#: (|H - H0| at the end of each orbit's indicator integration, measured, not stored)
+INDICATOR_ARRAYS = indicator_table.NAMES + ("lyapunov_status", "lyapunov_early", "lyapunov_dh")
 
 
 @dataclass(frozen=True)
@@ -229,9 +231,10 @@ def task(spec: SweepSpec, i: int, threads: int | None = None) -> dict:
         y0 = panel.y0[a:b]
         with np.errstate(invalid="ignore", over="ignore"):   # |H - H0| where the indicator integration ended
             dh = np.abs(model.energy(panel.P, ind.final) - model.energy(panel.P, y0))
-        out.update(megno=ind.megno, mlce=ind.mlce, fli=ind.fli, lyapunov_status=ind.status, lyapunov_dh=dh)
-        if ly.second_vector:
-            out.update(sali=ind.sali, gali2=ind.gali2)
+        # every indicator of one deviation vector (computed anyway), those of two when asked for
+        out.update({i.name: ind.values[i.name] for i in indicator_table.INDICATORS
+                    if i.vectors == 1 or ly.second_vector})
+        out.update(lyapunov_status=ind.status, lyapunov_dh=dh)
         if ly.early_stop:
             out.update(lyapunov_early=ind.early)
     out["wall_time"] = time.perf_counter() - t0

@@ -226,7 +226,7 @@ def _check_run(t_end, n_samples, tol):
 # ====================================================================== integration
 def momentum_integrals(P, t, p1, p2, g1, g2, x, y):
     """docs/model.md R2: (p_x, p_y); p_x = c1, p_y = c2 - mu t along orbits."""
-    lam, chi, zeta = P[3], P[4], P[5]
+    lam, chi, zeta = P[model.LAM], P[model.CHI], P[model.ZETA]
     px = p1 * g2 - p2 * g1 + lam * y + zeta * g1 - chi * g2
     py = p1 * g1 + p2 * g2 - lam * x - zeta * g2 - chi * g1
     return px, py
@@ -272,8 +272,7 @@ def trajectory(params, y0_full, t_end, n_samples=2001, tol=DEFAULT_TOL, *, phi_s
         cap = nturn  # too many turning points for the buffer: run again with room for all
     nturn = min(nturn, cap)
     p1, p2, m, g1, g2, x, y = (out[:, i] for i in range(STATE_DIM))
-    kin = 0.5 * (p1 ** 2 / P[0] + p2 ** 2 / P[1] + m ** 2 / P[2])
-    H = kin + P[6] * (y + P[7] * g1 + P[8] * g2)
+    H = model.energy_full(P, out)
     px, py = momentum_integrals(P, t, p1, p2, g1, g2, x, y)
     return Trajectory(
         t=t, x=x, y=y, phi=out_phi, p1=p1, p2=p2, M=m, g1=g1, g2=g2, H=H, px=px, py=py,
@@ -296,11 +295,11 @@ def conservation(result) -> dict:
     ok = np.isfinite(result["x"])
     t = result["t"][ok]
     g = {k: result[k][ok] for k in ("p1", "p2", "M", "g1", "g2", "x", "y", "H", "px", "py")}
-    mu, lam = P[6], P[3]
+    mu, lam = P[model.MU], P[model.LAM]
     pn = np.hypot(g["p1"], g["p2"])
-    s = math.hypot(P[4], P[5])
-    kin = 0.5 * (g["p1"] ** 2 / P[0] + g["p2"] ** 2 / P[1] + g["M"] ** 2 / P[2])
-    scale_H = np.max(kin + mu * (np.abs(g["y"]) + np.abs(P[7] * g["g1"] + P[8] * g["g2"])))
+    s = math.hypot(P[model.CHI], P[model.ZETA])
+    kin = 0.5 * (g["p1"] ** 2 / P[model.A1] + g["p2"] ** 2 / P[model.A2] + g["M"] ** 2 / P[model.B])
+    scale_H = np.max(kin + mu * (np.abs(g["y"]) + np.abs(P[model.XI] * g["g1"] + P[model.ETA] * g["g2"])))
     scale_px = np.max(pn + s + abs(lam) * np.abs(g["y"]))
     scale_py = np.max(pn + s + abs(lam) * np.abs(g["x"]) + mu * t)
     eH = float(np.max(np.abs(g["H"] - g["H"][0])))
@@ -324,17 +323,17 @@ def energy_band_halfwidth(params, y0_full) -> float:
     |p - s| <= q + |s|."""
     prm = full_params(params)
     P = np.array([prm[n] for n in model.PARAM_NAMES])
-    lam = P[3]
+    lam = P[model.LAM]
     if lam == 0.0:
         return math.inf
     y0 = np.asarray(y0_full, dtype=np.float64)
     H = float(energy_full(y0, P))
     px, _ = momentum_integrals(P, 0.0, y0[P1], y0[P2], y0[G1], y0[G2], y0[X], y0[Y])
-    mu = P[6]
+    mu = P[model.MU]
     hr = H - mu * px / lam
-    a = max(P[0], P[1])
-    s = math.hypot(P[4], P[5])
-    r = math.hypot(P[7], P[8])
+    a = max(P[model.A1], P[model.A2])
+    s = math.hypot(P[model.CHI], P[model.ZETA])
+    r = math.hypot(P[model.XI], P[model.ETA])
     k = a * mu / abs(lam)
     q = k + math.sqrt(k * k + 2.0 * a * max(hr + mu * s / abs(lam) + mu * r, 0.0))
     return float((q + s) / abs(lam))
@@ -356,13 +355,13 @@ def drift(params, y0_full, T, n_samples=20001, tol=DEFAULT_TOL, *, result=None, 
         raise model.ParameterError("drift needs lam != 0 (for lam = 0 the body falls: use kozlov())")
     res = trajectory(prm, y0_full, T, n_samples, tol, phi_start=phi_start) if result is None else result
     P = res["P"]
-    lam, mu = P[3], P[6]
+    lam, mu = P[model.LAM], P[model.MU]
     ok = np.isfinite(res["x"])
     t, x, y = res["t"][ok], res["x"][ok], res["y"][ok]
     slope = float(np.polyfit(t, x, 1)[0])
     T_ = float(t[-1])
     endpoint = float((x[-1] - x[0]) / T_)
-    ps = np.hypot(res["p1"][ok] - P[4], res["p2"][ok] - P[5])
+    ps = np.hypot(res["p1"][ok] - P[model.CHI], res["p2"][ok] - P[model.ZETA])
     pred = float(mu / lam)
     c1 = float(res["px"][0])
     half = float(np.max(ps) / abs(lam))

@@ -22,15 +22,11 @@ from explorer.app.figures import (
     mathtext_label,
     panel_axes,
 )
+from explorer.kernels import indicator_table
 
-#: colour scale of each indicator: (label, log scale, vmin, vmax or None for the data's max)
-SCALES = {
-    "megno": (r"mean MEGNO $\langle Y\rangle$", True, 0.5, None),
-    "mlce": (r"finite-time mLCE $\chi(T)$", True, 1e-4, None),
-    "fli": ("FLI", False, 0.0, None),
-    "sali": ("SALI", True, 1e-16, 2.0),
-    "gali2": (r"GALI$_2$", True, 1e-16, 1.0),
-}
+#: colour scale of each indicator of the registry (explorer.kernels.indicator_table):
+#: (label, log scale, vmin, vmax or None for the data's max)
+SCALES = {i.name: (i.label, i.log, i.vmin, i.vmax) for i in indicator_table.INDICATORS}
 SEPARATRIX_COLOR = "#1f77b4"
 
 
@@ -53,7 +49,7 @@ def chaos_rasters(maps, *, indicator="megno", threshold=4.0, columns=None, dpi=2
         finite = [float(np.nanmax(m["values"])) for m in maps if np.isfinite(m["values"]).any()]
         vmax = max([vmin * 20 if log else 1.0] + finite)
     norm = LogNorm(vmin=vmin, vmax=vmax) if log else Normalize(vmin=vmin, vmax=vmax)
-    cmap = mpl.colormaps["inferno_r" if indicator in ("megno", "mlce", "fli") else "inferno"].with_extremes(
+    cmap = mpl.colormaps[indicator_table.BY_NAME[indicator].cmap].with_extremes(
         bad=FORBIDDEN_COLOR)
     ncols = min(n, 3 if columns is None else int(columns))
     nrows = -(-n // ncols)

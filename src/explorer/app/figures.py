@@ -83,10 +83,10 @@ def _matplotlib():
 
 
 # ---------------------------------------------------------------- labels
+#: mathtext symbols: the model parameters' (model.PARAMETERS) and the other quantities labels name
 _SYMBOLS = {
-    "mu": r"\mu", "lam": r"\lambda", "lambda": r"\lambda", "chi": r"\chi", "zeta": r"\zeta",
-    "xi": r"\xi", "eta": r"\eta", "phi": r"\varphi", "phi0": r"\varphi_0", "h": "h", "b": "b",
-    "c": "c", "a1": "a_1", "a2": "a_2", "p1": "p_1", "p2": "p_2", "M": "M", "t": "t",
+    **{p.name: p.latex for p in model.PARAMETERS}, "lambda": r"\lambda", "phi": r"\varphi",
+    "phi0": r"\varphi_0", "h": "h", "c": "c", "p1": "p_1", "p2": "p_2", "M": "M", "t": "t",
     "tol": r"\mathrm{tol}", "dt": r"\Delta t",
 }
 _NUMBER = r"[-+\u2212]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?"

@@ -119,11 +119,10 @@ def _finish_ext(acc, v, w, nvec, early, res, ext, wout):
         if nvec == 2:
             wout[1, i] = w[i]
     if nvec == 2:
-        ext[tg.EXT_SALI] = tg.sali(v, w, 5)
-        ext[tg.EXT_GALI2] = tg.gali2(v, w, 5)
+        tg.extra(v, w, 5, ext)
     else:
-        ext[tg.EXT_SALI] = np.nan
-        ext[tg.EXT_GALI2] = np.nan
+        for c in range(tg.N_EXT):
+            ext[c] = np.nan
     ext[tg.EXT_EARLY] = early
 
 

@@ -142,7 +142,8 @@ _FIGURE_KEYS = ("layout", "columns", "share_scale", "own_scale", "marker_size", 
 _LYAPUNOV_KEYS = ("time", "method", "tol", "dt", "threshold", "indicators", "early_stop", "early_sali", "early_megno",
                   "early_time", "map_resolution", "map_indicator")
 #: the indicators a scene can ask for (explorer.analysis.lyapunov.INDICATOR_NAMES)
-LYAPUNOV_INDICATORS = ("mlce", "megno", "fli", "sali", "gali2")
+from explorer.kernels.indicator_table import NAMES as LYAPUNOV_INDICATORS  # noqa: E402  (the registry)
+
 #: largest raster side of a chaos map ([lyapunov] map_resolution)
 MAX_MAP_RESOLUTION = 4096
 

@@ -23,6 +23,11 @@ With a second deviation vector (both renormalised every step, each to unit norm)
   wedge product of the unit vectors, sqrt(sum_{i<j} (w1_i w2_j - w1_j w2_i)^2) (the area of
   their parallelogram); ~ SALI on chaotic orbits.
 
+A new indicator: its columns and entry in :mod:`explorer.kernels.indicator_table`, its update
+in :func:`accumulate` and :func:`result` (every tangent loop, scalar and lanes, calls these two),
+or, for one of two deviation vectors, its value in :func:`extra` (called at the end of the
+Taylor tangent loops, scalar and lanes).
+
 Early classification (:func:`megno_early`): an orbit whose <Y> has stayed above a level at
 every step end of [t/2, t], t >= tmin, is classified chaotic at t and stops.
 """
@@ -30,12 +35,27 @@ import math
 
 from explorer._jit import njit
 
-#: layout of the accumulator vector
-ACC_LOG, ACC_W, ACC_YINT, ACC_FLI, ACC_Y, ACC_T = range(6)
-N_ACC = 6
-#: layout of the per-orbit result row (and of history rows)
-RES_T, RES_MLCE, RES_MEGNO, RES_Y, RES_FLI = range(5)
-N_RES = 5
+# the layout of the accumulator, result and extra rows: the indicator registry (pure Python),
+# re-exported here for the compiled loops (tg.RES_*, tg.EXT_*)
+from explorer.kernels.indicator_table import (  # noqa: F401
+    ACC_FLI,
+    ACC_LOG,
+    ACC_T,
+    ACC_W,
+    ACC_Y,
+    ACC_YINT,
+    EXT_EARLY,
+    EXT_GALI2,
+    EXT_SALI,
+    N_ACC,
+    N_EXT,
+    N_RES,
+    RES_FLI,
+    RES_MEGNO,
+    RES_MLCE,
+    RES_T,
+    RES_Y,
+)
 
 
 @njit
@@ -81,9 +101,6 @@ def result(acc, out):
     out[RES_FLI] = acc[ACC_FLI]
 
 
-#: layout of the extra result row of two deviation vectors and early classification
-EXT_SALI, EXT_GALI2, EXT_EARLY = range(3)
-N_EXT = 3
 #: why an orbit stopped before T (EXT_EARLY): it did not, SALI fell below its level, <Y> stayed high
 EARLY_NONE, EARLY_SALI, EARLY_MEGNO = 0, 1, 2
 
@@ -111,6 +128,14 @@ def gali2(v, w, n):
             m = v[i] * w[j] - v[j] * w[i]
             s += m * m
     return math.sqrt(s)
+
+
+@njit
+def extra(v, w, n, ext):
+    """The indicators of two unit deviation vectors v[:n], w[:n] into their columns of the extra
+    row (EXT_SALI, EXT_GALI2; EXT_EARLY is the caller's)."""
+    ext[EXT_SALI] = sali(v, w, n)
+    ext[EXT_GALI2] = gali2(v, w, n)
 
 
 @njit

@@ -1,12 +1,14 @@
 """Closed-form solutions of Chaplygin's equations (reference for tests).
 
-This module is deliberately independent of the project's own physics code
-(it does not import :mod:`explorer.model.equations` or :mod:`explorer.model`); it is
-plain numpy and cites the verified equations of ``docs/model.md`` (labels
+This module is deliberately independent of the project's own physics code: it
+takes only the layout of the packed parameter vector (the index constants ``A1 ..
+ETA`` and ``N_PARAMS`` of :mod:`explorer.model.parameters`, the one table of the
+parameters), none of its formulas (it does not import :mod:`explorer.model.equations`);
+it is plain numpy and cites the verified equations of ``docs/model.md`` (labels
 R1..R11).
 
-Parameters are a float64 array ``P`` of length 9,
-``P = [a1, a2, b, lam, chi, zeta, mu, xi, eta]`` (indices ``A1 .. ETA`` below).
+Parameters are a packed float64 array ``P``,
+``P = [a1, a2, b, lam, chi, zeta, mu, xi, eta]`` (indices ``A1 .. ETA``).
 The reduced state (R3) is ``y = [p1, p2, M, g1, g2]`` with
 ``(g1, g2) = (sin phi, cos phi)``.
 
@@ -28,6 +30,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from explorer.model.parameters import A1, A2, CHI, ETA, LAM, MU, N_PARAMS, XI, ZETA, B
+
 __all__ = [
     "A1", "A2", "B", "LAM", "CHI", "ZETA", "MU", "XI", "ETA",
     "uniform_rotation",
@@ -37,15 +41,13 @@ __all__ = [
     "chaplygin_F",
 ]
 
-A1, A2, B, LAM, CHI, ZETA, MU, XI, ETA = range(9)
-
 TWO_PI = 2.0 * np.pi
 
 
 def _params(P):
     P = np.asarray(P, dtype=np.float64)
-    if P.shape != (9,):
-        raise ValueError(f"P must have shape (9,), got {P.shape}")
+    if P.shape != (N_PARAMS,):
+        raise ValueError(f"P must have shape ({N_PARAMS},), got {P.shape}")
     return P
 
 

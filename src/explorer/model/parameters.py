@@ -5,7 +5,10 @@ Plain numpy, no numba: the compiled twin of the vector field lives in
 of a state ``y = (p1, p2, M, g1, g2)`` with ``(g1, g2) = (sin phi, cos phi)``
 (docs/model.md R3, the polynomial form of the reduced system).
 
-Parameters (docs/model.md, table "Notation"):
+Parameters (docs/model.md, table "Notation"): :data:`PARAMETERS` is their one table (name,
+index in the packed vector, symbols, meaning, help line, allowed values); every other place
+reads it (the index constants ``A1`` ... ``ETA``, :class:`Params` and its validation, the
+commands' options and help lines, figure labels, scenes, the browser's fields).
 
 =========  ================================================  =============
 symbol     meaning                                           constraint
@@ -27,8 +30,46 @@ import numpy as np
 
 from explorer.model.validation import ParameterError, magnitude, packed_params
 
-# Packed layout of the parameter vector handed to the kernels.
-A1, A2, B, LAM, CHI, ZETA, MU, XI, ETA = range(9)
+
+@dataclass(frozen=True)
+class Parameter:
+    """One model parameter: its row of the table "Notation" (docs/model.md) and everything the
+    layers show of it."""
+
+    name: str              # the key everywhere: Params field, --option, scene key, JSON key
+    symbol: str            # Unicode symbol (browser fields)
+    latex: str             # mathtext symbol (figure labels), without $
+    meaning: str           # what it is
+    help: str              # the commands' help line (the default is appended)
+    constraint: str = ""   # "" (any finite value), "positive", "nonnegative" or "nonzero"
+    why: str = ""          # the reason given when the constraint is violated
+
+
+#: the model parameters in the order of the packed vector ``P`` handed to the kernels
+PARAMETERS = (
+    Parameter("a1", "a1", "a_1", "added mass along body axis 1", "added mass along axis 1 (> 0)", "positive",
+              "a mass or moment of inertia"),
+    Parameter("a2", "a2", "a_2", "added mass along body axis 2", "added mass along axis 2 (> 0)", "positive",
+              "a mass or moment of inertia"),
+    Parameter("b", "b", "b", "added moment of inertia", "added moment of inertia (> 0)", "positive",
+              "a mass or moment of inertia"),
+    Parameter("lam", "λ", r"\lambda", "circulation x density (lambda = I rho)", "circulation x density (!= 0)",
+              "nonzero",
+              "the reduced system (docs/model.md R3) needs circulation (lam = 0 is the full system R1 only)"),
+    Parameter("chi", "χ", r"\chi", "circulation-asymmetry term, s = (chi, zeta)", "asymmetry term chi"),
+    Parameter("zeta", "ζ", r"\zeta", "circulation-asymmetry term, s = (chi, zeta)", "asymmetry term zeta"),
+    Parameter("mu", "μ", r"\mu", "weight", "weight (>= 0)", "nonnegative", "the weight"),
+    Parameter("xi", "ξ", r"\xi", "centre of mass in body axes, r = (xi, eta)", "centre of mass xi"),
+    Parameter("eta", "η", r"\eta", "centre of mass in body axes, r = (xi, eta)", "centre of mass eta"),
+)
+PARAM_NAMES = tuple(p.name for p in PARAMETERS)
+#: name -> Parameter
+PARAMETER = {p.name: p for p in PARAMETERS}
+#: number of model parameters (the length of the packed vector)
+N_PARAMS = len(PARAMETERS)
+# Packed layout of the parameter vector handed to the kernels (indices into PARAMETERS).
+A1, A2, B, LAM, CHI, ZETA, MU, XI, ETA = (PARAM_NAMES.index(n) for n in
+                                          ("a1", "a2", "b", "lam", "chi", "zeta", "mu", "xi", "eta"))
 __all__ = [
     "A1",
     "A2",
@@ -45,6 +86,10 @@ __all__ = [
     "G1",
     "G2",
     "PARAM_NAMES",
+    "PARAMETERS",
+    "PARAMETER",
+    "N_PARAMS",
+    "Parameter",
     "STATE_DIM",
     "ParameterError",
     "Params",
@@ -52,6 +97,8 @@ __all__ = [
     "FIGURE4_H",
     "params_array",
     "energy",
+    "energy_gradient",
+    "energy_full",
     "casimir",
     "rhs",
     "chaplygin_integral",
@@ -68,7 +115,6 @@ __all__ = [
     "max_rate",
 ]
 
-PARAM_NAMES = ("a1", "a2", "b", "lam", "chi", "zeta", "mu", "xi", "eta")
 # Layout of the reduced state (docs/model.md R3).
 P1, P2, M, G1, G2 = range(5)
 STATE_DIM = 5
@@ -78,8 +124,9 @@ STATE_DIM = 5
 class Params:
     """Model parameters of Chaplygin's equations (docs/model.md, R1/R3).
 
-    Validation (on construction): every value finite; a1, a2, b > 0;
-    mu >= 0; lam != 0 (the reduced system R3 divides by lambda).
+    Validation (on construction, from :data:`PARAMETERS`): every value finite; a1, a2, b > 0;
+    mu >= 0; lam != 0 (the reduced system R3 divides by lambda).  Its fields are the names of
+    :data:`PARAMETERS` in their order (checked on import).
     """
 
     a1: float = 1.0
@@ -95,14 +142,8 @@ class Params:
     def __post_init__(self):
         for f in fields(self):
             object.__setattr__(self, f.name, magnitude(f.name, getattr(self, f.name)))
-        for name in ("a1", "a2", "b"):
-            if getattr(self, name) <= 0.0:
-                raise ParameterError(f"{name} must be > 0 (a mass or moment of inertia), got {getattr(self, name)!r}")
-        if self.mu < 0.0:
-            raise ParameterError(f"mu must be >= 0 (the weight), got {self.mu!r}")
-        if self.lam == 0.0:
-            raise ParameterError("lam must be nonzero: the reduced system (docs/model.md R3) needs circulation "
-                                 "(lam = 0 is the full system R1 only)")
+        for p in PARAMETERS:
+            check_constraint(p, getattr(self, p.name))
 
     def as_array(self) -> np.ndarray:
         """Packed float64 vector [a1, a2, b, lam, chi, zeta, mu, xi, eta] for the kernels."""
@@ -118,6 +159,20 @@ class Params:
     @classmethod
     def from_array(cls, P) -> Params:
         return cls(**{n: float(P[i]) for i, n in enumerate(PARAM_NAMES)})
+
+
+if tuple(f.name for f in fields(Params)) != PARAM_NAMES:   # one table: the fields follow it
+    raise ImportError("explorer.model.parameters: the fields of Params must be PARAM_NAMES in order")
+
+
+def check_constraint(p: Parameter, value: float) -> None:
+    """Raise ParameterError naming ``p`` if the finite ``value`` violates its constraint."""
+    if p.constraint == "positive" and not value > 0.0:
+        raise ParameterError(f"{p.name} must be > 0 ({p.why}), got {value!r}")
+    if p.constraint == "nonnegative" and not value >= 0.0:
+        raise ParameterError(f"{p.name} must be >= 0 ({p.why}), got {value!r}")
+    if p.constraint == "nonzero" and value == 0.0:
+        raise ParameterError(f"{p.name} must be nonzero: {p.why}")
 
 
 #: docs/model.md R9: the scene of the seed's Figure 4 (xi, eta not given: 0).
@@ -142,6 +197,29 @@ def energy(params, y) -> np.ndarray:
     kinetic = 0.5 * (p1 * p1 / P[A1] + p2 * p2 / P[A2] + m * m / P[B])
     pJg = (p1 - P[CHI]) * g2 - (p2 - P[ZETA]) * g1
     return kinetic - (P[MU] / P[LAM]) * pJg + P[MU] * (P[XI] * g1 + P[ETA] * g2)
+
+
+def energy_gradient(params, y) -> np.ndarray:
+    """grad H of docs/model.md R3 (analytic), along the last axis of y = (p1, p2, M, g1, g2):
+    (p1/a1 - k g2, p2/a2 + k g1, M/b, k (p2 - zeta) + mu xi, -k (p1 - chi) + mu eta), k = mu/lam."""
+    P = _P(params)
+    y = np.asarray(y, dtype=np.float64)
+    p1, p2, m, g1, g2 = y[..., P1], y[..., P2], y[..., M], y[..., G1], y[..., G2]
+    k = P[MU] / P[LAM]
+    return np.stack([p1 / P[A1] - k * g2, p2 / P[A2] + k * g1, m / P[B],
+                     k * (p2 - P[ZETA]) + P[MU] * P[XI], -k * (p1 - P[CHI]) + P[MU] * P[ETA]], axis=-1)
+
+
+def energy_full(P, y) -> np.ndarray:
+    """docs/model.md R1 (numpy twin of :func:`explorer.model.equations.energy_full`):
+    H = 1/2(p1^2/a1 + p2^2/a2 + M^2/b) + mu (y + xi g1 + eta g2), along the last axis of the full
+    state (p1, p2, M, g1, g2, x, y).  ``P``: a packed vector, not validated here (R1 allows
+    lam = 0, which :class:`Params` refuses; explorer.analysis.trajectory.full_params checks it)."""
+    P = np.asarray(P, dtype=np.float64)
+    y = np.asarray(y, dtype=np.float64)
+    p1, p2, m, g1, g2, yy = y[..., P1], y[..., P2], y[..., M], y[..., G1], y[..., G2], y[..., 6]
+    kin = 0.5 * (p1 ** 2 / P[A1] + p2 ** 2 / P[A2] + m ** 2 / P[B])
+    return kin + P[MU] * (yy + P[XI] * g1 + P[ETA] * g2)
 
 
 def casimir(y) -> np.ndarray:

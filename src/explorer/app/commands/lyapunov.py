@@ -20,8 +20,10 @@ EXAMPLE = "python -m explorer lyapunov --p1 -0.2 --p2 0.1 --mu 1 -T 1000 --json"
 def add_parser(sub):
     """Add ``lyapunov`` to the command line's subparsers."""
     from explorer.analysis.sections import DEFAULT_DT, DEFAULT_TOL
+    from explorer.kernels.indicator_table import INDICATORS
 
-    ly = sub.add_parser("lyapunov", help="chaos indicators of one orbit: finite-time mLCE, MEGNO, FLI, SALI, GALI2",
+    titles = ", ".join(i.title for i in INDICATORS)
+    ly = sub.add_parser("lyapunov", help=f"chaos indicators of one orbit: {titles}",
                         description="Start on the section phi = pi at (p1, p2) with M from the energy h and "
                         "integrate the orbit with one deviation vector (tangent to the energy shell) for a "
                         "time T; print the finite-time maximal Lyapunov exponent, the mean MEGNO <Y> and the "
@@ -38,6 +40,7 @@ def add_parser(sub):
 def run(args) -> int:
     from explorer.analysis import lyapunov
     from explorer.analysis.sections import METHODS
+    from explorer.kernels.indicator_table import INDICATORS, RES_T
 
     params = options.params_from(args)
     if args.method not in METHODS:
@@ -46,11 +49,11 @@ def run(args) -> int:
         if not math.isfinite(getattr(args, name)):
             raise model.ParameterError(f"{name} must be finite, got {getattr(args, name)!r}")
     y0 = model.section_state(params, [args.p1], [args.p2], args.h)
-    # SALI and GALI_2 (a second deviation vector) with the Taylor method's tangent lanes
-    which = lyapunov.INDICATOR_NAMES if args.method == "taylor" else lyapunov.DEFAULT_INDICATORS
+    # every indicator of the registry the method computes (SALI and GALI_2: Taylor's tangent lanes)
     r = lyapunov.indicators(params, y0, args.time, method=args.method, tol=args.tol, dt=args.dt,
-                            history=args.history, which=which)
-    hist = [[float(v) for v in row[:3]] + [float(row[4])] for row in r.history[0] if np.isfinite(row[0])]
+                            history=args.history, which=lyapunov.available(args.method))
+    cols = [RES_T] + [i.column for i in INDICATORS if i.in_history]
+    hist = [[float(row[c]) for c in cols] for row in r.history[0] if np.isfinite(row[RES_T])]
     reached = float(r.time[0])
     status = r.status_name(0)
 
@@ -59,8 +62,7 @@ def run(args) -> int:
 
     out = {"params": params.as_dict(), "h": args.h, "p1": args.p1, "p2": args.p2, "method": args.method,
            "settings": r.settings, "status": status, "time": reached,
-           "mlce": estimate(r.mlce[0]), "megno": estimate(r.megno[0]), "fli": estimate(r.fli[0]),
-           "sali": estimate(r.sali[0]), "gali2": estimate(r.gali2[0]),
+           **{i.name: estimate(r.values[i.name][0]) for i in INDICATORS},
            "regular_bound": lyapunov.regular_bound(reached) if reached > 1 else None,
            "history": hist}
     if status != "done":
@@ -70,10 +72,10 @@ def run(args) -> int:
     if args.json:
         print(json.dumps(out))
     else:
-        print(f"time {out['time']!r}\nmlce {out['mlce']!r}\nmegno {out['megno']!r}\nfli {out['fli']!r}\n"
-              f"sali {out['sali']!r}\ngali2 {out['gali2']!r}\nstatus {out['status']}")
+        print("\n".join(f"{k} {out[k]!r}" for k in ("time",) + tuple(i.name for i in INDICATORS))
+              + f"\nstatus {out['status']}")
         if hist:
-            print("history: t, mlce, megno, fli")
+            print("history: " + ", ".join(["t"] + [i.name for i in INDICATORS if i.in_history]))
             for row in hist:
                 print(",".join(repr(v) for v in row))
     return 0

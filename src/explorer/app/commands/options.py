@@ -14,11 +14,9 @@ from explorer import model
 from explorer.integrate.methods import MAP_TOL
 from explorer.model import validation
 
-#: the help line of each model parameter (docs/model.md, table "Notation"); its default is appended
-PARAM_HELP = {"a1": "added mass along axis 1 (> 0)", "a2": "added mass along axis 2 (> 0)",
-              "b": "added moment of inertia (> 0)", "lam": "circulation x density (!= 0)",
-              "chi": "asymmetry term chi", "zeta": "asymmetry term zeta",
-              "mu": "weight (>= 0)", "xi": "centre of mass xi", "eta": "centre of mass eta"}
+#: the help line of each model parameter (model.PARAMETERS, the table "Notation" of docs/model.md);
+#: its default is appended
+PARAM_HELP = {p.name: p.help for p in model.PARAMETERS}
 #: the title of the model parameters' group in --help
 MODEL_GROUP = "model parameters (docs/model.md; defaults: Figure 4, R9)"
 #: the title of that group for the commands that start from a scene (explore, serve)

@@ -18,7 +18,7 @@ import h5py
 import numpy as np
 from h5py import h5l
 
-from explorer.kernels import STATUS_NAMES
+from explorer.kernels import STATUS_NAMES, indicator_table
 
 FORMAT = "explorer.sections"
 #: 2: one HDF5 file per panel in ``<store>.panels/``, joined by external links ``/panels/NNN`` in the
@@ -45,13 +45,9 @@ DATASETS = tuple(_PER_ORBIT) + ("offsets", "crossings")
 #: optional datasets, present when the scene computes them: chaos indicators per orbit and
 #: the separatrices of the panel's fixed point (ragged polylines: points[offsets[k]:offsets[k+1]])
 _OPTIONAL_PER_ORBIT = {
-    "megno": ((), np.float64),
-    "mlce": ((), np.float64),
-    "fli": ((), np.float64),
-    "lyapunov_status": ((), np.int8),
-    "sali": ((), np.float64),
-    "gali2": ((), np.float64),
-    "lyapunov_early": ((), np.int8),
+    **{i.name: ((), np.dtype(i.dtype)) for i in indicator_table.INDICATORS},   # the indicator registry
+    "lyapunov_status": ((), np.dtype(np.int8)),
+    "lyapunov_early": ((), np.dtype(np.int8)),
 }
 #: ``lyapunov_seeds`` (M, 2): the seeds of the indicators when they are not the panel's ``seeds``
 #: (a chaos map's grid beside sections of the [seeds]); the indicator datasets then have M rows

@@ -1,0 +1,96 @@
+"""The one registry of chaos indicators: the layout of the tangent loops' rows and a plain-data
+table that every other layer reads (pure Python: no numba, so scenes and the store can import it).
+
+The compiled accumulators (:mod:`explorer.kernels.tangent`) fill two rows per orbit:
+
+- the *result row* ``RES_*`` (t, mLCE, mean MEGNO <Y>, MEGNO Y, FLI), which is also the row of
+  the convergence history, from the log-stretches of one deviation vector;
+- the *extra row* ``EXT_*`` (SALI, GALI_2, early-classification code) from two deviation vectors.
+
+:data:`INDICATORS` names each user-facing indicator once, with the row and column it is read
+from, and everything the layers above need: the dataset's dtype in the store
+(:mod:`explorer.io.store.format`), the arrays a sweep task returns
+(:mod:`explorer.analysis.sweep`), the names scenes accept (``[lyapunov] indicators``), the
+:class:`~explorer.analysis.lyapunov.Indicators` attributes, the colour scale and map of a chaos
+raster (:mod:`explorer.app.chaos_raster`) and the lines of ``explorer lyapunov``.
+
+A new indicator accumulated from the log-stretch of the first deviation vector: a column
+``RES_*`` here (and ``N_RES``), its update in ``accumulate`` / ``result`` of
+:mod:`explorer.kernels.tangent` (every tangent loop calls those two), its entry in
+:data:`INDICATORS`, and its sentence in docs/commands/lyapunov.md (docs/contributing.md).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+#: layout of the accumulator vector
+ACC_LOG, ACC_W, ACC_YINT, ACC_FLI, ACC_Y, ACC_T = range(6)
+N_ACC = 6
+#: layout of the per-orbit result row (and of history rows)
+RES_T, RES_MLCE, RES_MEGNO, RES_Y, RES_FLI = range(5)
+N_RES = 5
+#: layout of the extra result row of two deviation vectors and early classification
+EXT_SALI, EXT_GALI2, EXT_EARLY = range(3)
+N_EXT = 3
+
+#: the row an indicator is read from
+RESULT, EXTRA = "result", "extra"
+
+
+@dataclass(frozen=True)
+class Indicator:
+    """One chaos indicator: where the tangent loops put it and how every layer shows it."""
+
+    name: str            # the key everywhere: Indicators attribute, scene name, store dataset, JSON key
+    row: str             # RESULT (one deviation vector; also in the history rows) or EXTRA (two)
+    column: int          # its column of that row (RES_* or EXT_*)
+    title: str           # plain-text name (help lines)
+    label: str           # matplotlib mathtext label (colour bars)
+    description: str     # one line: what it is and its reference
+    log: bool            # colour scale: logarithmic?
+    vmin: float          # colour scale: lower end
+    vmax: float | None   # colour scale: upper end (None: the data's maximum)
+    cmap: str            # colour map (chaotic orbits dark: inferno_r when the indicator grows with chaos)
+    default: bool = True           # computed unless ``which`` says otherwise
+    methods: tuple | None = None   # method kinds that compute it (None: every method)
+    dtype: str = "float64"         # its dataset's dtype in the store
+
+    @property
+    def vectors(self) -> int:
+        """Deviation vectors it needs (2 for the extra row)."""
+        return 2 if self.row == EXTRA else 1
+
+    @property
+    def in_history(self) -> bool:
+        """Whether the history rows (the result row at the history times) have its column."""
+        return self.row == RESULT
+
+    def supports(self, kind: str) -> bool:
+        """Whether a method of kind ``kind`` (explorer.integrate.methods.Method.kind) computes it."""
+        return self.methods is None or kind in self.methods
+
+
+#: every chaos indicator, in the order of output lines and JSON keys
+INDICATORS = (
+    Indicator("mlce", RESULT, RES_MLCE, "finite-time mLCE", r"finite-time mLCE $\chi(T)$",
+              "finite-time maximal Lyapunov exponent ln(|w(T)| / |w(0)|) / T (Benettin et al. 1980)",
+              True, 1e-4, None, "inferno_r"),
+    Indicator("megno", RESULT, RES_MEGNO, "MEGNO", r"mean MEGNO $\langle Y\rangle$",
+              "mean MEGNO <Y>(T) (Cincotta & Simó 2000): -> 0 stable periodic, -> 2 quasi-periodic, grows if chaotic",
+              True, 0.5, None, "inferno_r"),
+    Indicator("fli", RESULT, RES_FLI, "FLI", "FLI",
+              "fast Lyapunov indicator max_{t <= T} ln |w(t)| (Froeschlé, Lega & Gonczi 1997)",
+              False, 0.0, None, "inferno_r"),
+    Indicator("sali", EXTRA, EXT_SALI, "SALI", "SALI",
+              "smaller alignment index min(|w1 + w2|, |w1 - w2|) of two unit deviation vectors (Skokos 2001)",
+              True, 1e-16, 2.0, "inferno", default=False, methods=("taylor",)),
+    Indicator("gali2", EXTRA, EXT_GALI2, "GALI2", r"GALI$_2$",
+              "generalized alignment index |w1 ^ w2| of two unit deviation vectors (Skokos et al. 2007)",
+              True, 1e-16, 1.0, "inferno", default=False, methods=("taylor",)),
+)
+#: the names, in table order
+NAMES = tuple(i.name for i in INDICATORS)
+#: computed unless ``which`` says otherwise
+DEFAULT_NAMES = tuple(i.name for i in INDICATORS if i.default)
+#: name -> Indicator
+BY_NAME = {i.name: i for i in INDICATORS}
