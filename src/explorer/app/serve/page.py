@@ -38,6 +38,7 @@ from bokeh.events import DoubleTap, RangesUpdate, Tap
 from bokeh.models import ColumnDataSource, Div, LinearColorMapper
 from bokeh.plotting import figure
 
+from explorer import model
 from explorer.app.serve import export
 from explorer.app.serve import raster as raster_mod
 from explorer.app.serve import settings as settings_mod
@@ -77,9 +78,9 @@ SAME_SPOT_PX = 4.0
 #: what a click does: the choices of the page's switch (Shift + click always picks)
 CLICK_MODES = ("start an orbit", "pick an orbit")
 #: labels of the fields
-LABELS = {"mu": "μ", "h": "h", "lam": "λ", "a1": "a1", "a2": "a2", "b": "b", "chi": "χ", "zeta": "ζ", "xi": "ξ",
-          "eta": "η", "method": "method",
-          "tol": "tol (taylor, dop853)", "dt": "dt (split*)", "crossings": "crossings per click"}
+LABELS = {p.name: p.symbol for p in model.PARAMETERS} | {
+    "h": "h", "method": "method", "tol": "tol (taylor, dop853)", "dt": "dt (split*)",
+    "crossings": "crossings per click"}
 
 
 def _empty_starts() -> dict:

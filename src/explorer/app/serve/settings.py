@@ -16,10 +16,11 @@ from explorer import model
 from explorer.analysis import sections
 from explorer.model import ParameterError, validation
 
-#: the model parameters the page has a field for (all of docs/model.md R3's)
-PAGE_PARAMS = ("mu", "lam", "a1", "a2", "b", "chi", "zeta", "xi", "eta")
+#: the model parameters the page has a field for: every row of model.PARAMETERS, mu (the
+#: circulation, Figure 4's parameter, the one most often changed) first, then the table's order
+PAGE_PARAMS = ("mu",) + tuple(n for n in model.PARAM_NAMES if n != "mu")
 #: every field of the page, in the order they are shown (and written in the URL)
-FIELDS = ("mu", "h", "lam", "a1", "a2", "b", "chi", "zeta", "xi", "eta", "method", "tol", "dt", "crossings")
+FIELDS = ("mu", "h") + PAGE_PARAMS[1:] + ("method", "tol", "dt", "crossings")
 #: crossings per click: the page's default and its upper bound (bounded memory per orbit:
 #: 40 bytes a row in the server, about as much in the browser)
 DEFAULT_CROSSINGS = 2000
