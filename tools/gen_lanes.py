@@ -377,6 +377,43 @@ def generate_tangent():
                   lambda g: Translator("X", arrays, stride="NROWS", groups=g).stmts(pruned, 4)))
 
 
+# ----------------------------------------------------------------------------- operation counts
+def operation_counts(kernel, order, tangent=False, db=5):
+    """The vector operations one call of the generated ``kernel`` (G = 1) executes at ``order``:
+    {"vadd": n, "vsub": n, "vmul": n, "vneg": n}, each on one vector of LANES doubles (per lane:
+    that many scalar operations).  Counted by running the generated text itself, with
+    one-lane numpy stand-ins for the vector operations that count their calls (the roofline of
+    benchmarks/bench_roofline.py divides the flops of a step by these)."""
+    import re
+
+    import numpy as np
+
+    text = generate_tangent() if tangent else generate()
+    text = re.sub(r"from explorer\._jit import njit\nfrom explorer\.integrate\.simd import \(.*?\)\n", "", text,
+                  flags=re.S)
+    counts = dict.fromkeys(("vadd", "vsub", "vmul", "vneg"), 0)
+
+    def counted(name, fn):
+        def op(*args):
+            counts[name] += 1
+            return fn(*args)
+        return op
+
+    ns = {"njit": lambda f: f, "by_groups": lambda stub: (lambda typer: typer), "LANES": 1,
+          "vload": lambda a, i: a.reshape(-1)[i:i + 1].copy(),
+          "vstore": lambda a, i, v: a.reshape(-1).__setitem__(slice(i, i + 1), v),
+          "vzero": lambda: np.zeros(1), "vsplat": lambda x: np.full(1, x),
+          "vadd": counted("vadd", np.add), "vsub": counted("vsub", np.subtract),
+          "vmul": counted("vmul", np.multiply), "vneg": counted("vneg", np.negative)}
+    exec(compile(text, "<generated>", "exec"), ns)
+    rows = ns.get("NROWS", 5)
+    X = np.zeros((order + 1, rows, 1))
+    X[0] = 0.5
+    args = (X, order, db) if tangent else (X, order)
+    ns[kernel + "_1"](np.ones(9), *args)
+    return counts
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("-o", "--output", type=Path, default=OUTPUT)

@@ -1,0 +1,329 @@
+#!/usr/bin/env python
+"""Roofline of the Taylor lanes (issue 24): this machine's peak floating-point throughput, the
+work of a Taylor step as the generator counts it, and the fraction of that peak W4, the chaos map
+and one orbit reach.
+
+1. Peak: numba kernels that run C independent chains x = x * m + c on vectors of 4 doubles
+   (256 bit) or 8 doubles (512 bit; two 256-bit halves on an AVX2 machine), C = 1 (one
+   dependent chain: the latency) up to 16 (enough to fill every pipe), once as a fused
+   multiply-add (llvm.fma) and once as a multiply then an add (what the lanes do: the
+   recurrence's order of operations is fixed for bit-identity, so no contraction).  The chains
+   are explicit vector values (as in explorer.integrate.simd): without fast-math LLVM may not
+   reassociate a reduction, so its loop vectoriser cannot keep independent accumulators in
+   registers by itself.  Each kernel's loop is checked in its assembly (numba's inspect_asm):
+   the count of vfmadd / vmulpd / vaddpd per iteration, the register width, and whether
+   accumulators spill to the stack.
+2. Work per Taylor step (``tools/gen_lanes.operation_counts``: the generated recurrence run with
+   counting stand-ins), plus the Horner sums and the variation bound of a step.
+3. Achieved: the recurrence alone (a loop over one lane array), W4 (64 x 2000 crossings, tol
+   1e-12, order 15, 1 and 2 threads), the 400-orbit chaos map (mu = 1, T = 1000, MEGNO) and one
+   orbit (30,000 crossings): measured steps, steps per crossing, flops / s and the fraction of
+   the measured peak (per core used).
+
+    python benchmarks/bench_roofline.py            # prints the tables (~1-2 min warm)
+    python benchmarks/bench_roofline.py --quick    # shorter workloads
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(HERE.parent / "tools"))
+import _common as C  # noqa: E402
+import gen_lanes  # noqa: E402
+
+CHAINS = (1, 4, 8, 12, 16)
+WIDTHS = (4, 8)
+
+
+# ----------------------------------------------------------------------------- 1. peak kernels
+def _vector_ops(width):
+    """numba intrinsics on <width x double> values: splat, fma, mul, add, sum."""
+    from llvmlite import ir
+    from numba.core import cgutils, types
+    from numba.extending import intrinsic, models, register_model
+
+    class Vec(types.Type):
+        def __init__(self):
+            super().__init__(name=f"roofline_f64x{width}")
+
+    vec = Vec()
+    VT = ir.VectorType(ir.DoubleType(), width)
+
+    @register_model(Vec)
+    class _Model(models.PrimitiveModel):
+        def __init__(self, dmm, fe_type):
+            super().__init__(dmm, fe_type, VT)
+
+    @intrinsic
+    def splat(typingctx, x):
+        def codegen(context, builder, sig, args):
+            v = ir.Constant(VT, ir.Undefined)
+            for i in range(width):
+                v = builder.insert_element(v, args[0], ir.Constant(ir.IntType(32), i))
+            return v
+        return vec(types.float64), codegen
+
+    @intrinsic
+    def fma(typingctx, a, b, c):
+        def codegen(context, builder, sig, args):
+            fn = cgutils.get_or_insert_function(builder.module, ir.FunctionType(VT, [VT, VT, VT]),
+                                                f"llvm.fma.v{width}f64")
+            return builder.call(fn, list(args))
+        return vec(vec, vec, vec), codegen
+
+    @intrinsic
+    def mul(typingctx, a, b):
+        return vec(vec, vec), lambda context, builder, sig, args: builder.fmul(args[0], args[1])
+
+    @intrinsic
+    def add(typingctx, a, b):
+        return vec(vec, vec), lambda context, builder, sig, args: builder.fadd(args[0], args[1])
+
+    @intrinsic
+    def total(typingctx, a):
+        def codegen(context, builder, sig, args):
+            s = builder.extract_element(args[0], ir.Constant(ir.IntType(32), 0))
+            for i in range(1, width):
+                s = builder.fadd(s, builder.extract_element(args[0], ir.Constant(ir.IntType(32), i)))
+            return s
+        return types.float64(vec), codegen
+
+    return {"splat": splat, "fma": fma, "mul": mul, "add": add, "total": total}
+
+
+def _kernel(width, chains, op, ops):
+    """A compiled loop of ``reps`` iterations advancing ``chains`` independent vector chains."""
+    from explorer._jit import njit
+
+    step = "x{i} = fma(x{i}, m, c)" if op == "fma" else "x{i} = add(mul(x{i}, m), c)"
+    lines = ["def kernel(reps, a, b):", "    m = splat(a)", "    c = splat(b)"]
+    lines += [f"    x{i} = splat(1.0 + {i} * 1e-3)" for i in range(chains)]
+    lines += ["    for _ in range(reps):"] + ["        " + step.format(i=i) for i in range(chains)]
+    lines += ["    s = 0.0"] + [f"    s += total(x{i})" for i in range(chains)] + ["    return s"]
+    ns = dict(ops)
+    exec("\n".join(lines), ns)
+    return njit(cache=False)(ns["kernel"])
+
+
+def _loop_asm(kernel):
+    """Instruction counts in the innermost loop of the compiled kernel: the block that jumps to
+    itself (the chains' loop)."""
+    asm = next(iter(kernel.inspect_asm().values()))
+    lines = asm.splitlines()
+    best = None
+    for n, line in enumerate(lines):
+        m = re.match(r"^(\.LBB\d+_\d+):", line)
+        if not m:
+            continue
+        label = m.group(1)
+        body = []
+        for tail in lines[n + 1:]:
+            body.append(tail.strip())
+            if re.match(rf"\s*j\w+\s+{re.escape(label)}\b", tail):
+                if best is None or len(body) > len(best):
+                    best = body
+                break
+            if re.match(r"^\.LBB\d+_\d+:", tail):
+                break
+    best = best or []
+
+    def count(pat):
+        return sum(1 for x in best if re.search(pat, x))
+    return {"fma": count(r"^vfmadd"), "mul": count(r"^vmulpd"), "add": count(r"^vaddpd"),
+            "zmm": count(r"zmm"), "ymm": count(r"ymm"), "spill": count(r"rsp")}
+
+
+def peak_table(seconds_per_kernel=0.4):
+    rows = []
+    for width in WIDTHS:
+        ops = _vector_ops(width)
+        for op in ("fma", "muladd"):
+            for chains in CHAINS:
+                k = _kernel(width, chains, op, ops)
+                k(10, 0.999999, 1e-6)
+                reps = 1000
+                while True:
+                    t0 = time.perf_counter()
+                    k(reps, 0.999999, 1e-6)
+                    dt = time.perf_counter() - t0
+                    if dt > seconds_per_kernel / 4:
+                        break
+                    reps *= 4
+                times = []
+                for _ in range(3):
+                    t0 = time.perf_counter()
+                    k(reps, 0.999999, 1e-6)
+                    times.append(time.perf_counter() - t0)
+                dt = min(times)
+                flops = 2.0 * reps * chains * width
+                rows.append(dict(width=width * 64, op=op, chains=chains, gflops=flops / dt / 1e9,
+                                 ns_per_iter=dt / reps * 1e9, asm=_loop_asm(k)))
+    return rows
+
+
+# ----------------------------------------------------------------------------- 2. work per step
+def step_flops(order, tangent=False, nvec=1):
+    """Flops of the vector part of one Taylor step of one orbit (one lane): the recurrence
+    (generator's count), the Horner sums (5 rows per vector: order mul + add each) and, for the
+    crossings, the variation bound (order x (3 mul, 1 sub, 1 add))."""
+    if tangent:
+        c = gen_lanes.operation_counts("tangent_coefficients_lanes", order, tangent=True)
+        if nvec == 2:
+            d = gen_lanes.operation_counts("deviation_coefficients_lanes", order, tangent=True, db=10)
+            c = {k: c[k] + d[k] for k in c}
+        rec = c["vadd"] + c["vsub"] + c["vmul"]
+        return rec, rec + (1 + nvec) * 5 * 2 * order, c
+    c = gen_lanes.operation_counts("taylor_coefficients_lanes", order)
+    rec = c["vadd"] + c["vsub"] + c["vmul"]
+    return rec, rec + 5 * 2 * order + 5 * order, c
+
+
+# ----------------------------------------------------------------------------- 3. achieved
+def recurrence_alone(order, tangent, reps=20000):
+    """ns per orbit-step of the generated recurrence alone (G = 1, LANES lanes, one thread)."""
+    from explorer import model
+    from explorer._jit import njit
+    from explorer.integrate import _lanes_generated as LG
+    from explorer.integrate import _tangent_lanes_generated as TG
+    from explorer.integrate.simd import LANES
+
+    P = model.FIGURE4.with_(mu=0.5).as_array()
+    rng = np.random.default_rng(1)
+    if tangent:
+        @njit(cache=False)
+        def loop(P, Z, order, reps):
+            for _ in range(reps):
+                TG.tangent_coefficients_lanes(P, Z, order, TG.DEV1, (0,))
+        X = np.zeros((order + 1, TG.NROWS, LANES))
+        X[0, :10] = rng.uniform(-0.5, 0.5, (10, LANES))
+    else:
+        @njit(cache=False)
+        def loop(P, Z, order, reps):
+            for _ in range(reps):
+                LG.taylor_coefficients_lanes(P, Z, order, (0,))
+        X = np.zeros((order + 1, 5, LANES))
+        X[0] = rng.uniform(-0.5, 0.5, (5, LANES))
+    loop(P, X, order, 1)
+    times = []
+    for _ in range(5):
+        t0 = time.perf_counter()
+        loop(P, X, order, reps)
+        times.append(time.perf_counter() - t0)
+    return float(np.median(times)) / (reps * LANES)
+
+
+def workloads(quick):
+    from explorer import model
+    from explorer.analysis import lyapunov, sections
+    from explorer.kernels.taylor_order import order_for_tolerance
+
+    from bench_chaos import polar_seeds
+
+    out = []
+    prm4 = model.FIGURE4.with_(mu=0.5)
+    c1, c2, r1, r2 = model.allowed_ellipse(prm4, 2.0)
+    p1 = c1 + r1 * np.linspace(-0.95, 0.95, 64)
+    K = 200 if quick else 2000
+    order = order_for_tolerance(1e-12)
+    for threads in (1, 2):
+        sections.section_crossings(prm4, p1[:2], np.zeros(2), 2.0, 5, tol=1e-12, threads=threads)
+        best = None
+        for _ in range(3):
+            t0 = time.perf_counter()
+            r = sections.section_crossings(prm4, p1, np.zeros(64), 2.0, K, tol=1e-12, threads=threads)
+            dt = time.perf_counter() - t0
+            best = dt if best is None else min(best, dt)
+        out.append(dict(name=f"W4 64 x {K}, {threads} thread{'s' * (threads > 1)}", seconds=best, threads=threads,
+                        steps=float(r.info[:, 1].sum()), crossings=int(r.count.sum()), order=order,
+                        tangent=False, lanes_busy=1.0))
+    # one orbit: one of the LANES lanes does work
+    n1 = 3000 if quick else 30000
+    sections.section_crossings(prm4, p1[:1], np.zeros(1), 2.0, 5, tol=1e-12)
+    t0 = time.perf_counter()
+    r = sections.section_crossings(prm4, p1[:1], np.zeros(1), 2.0, n1, tol=1e-12)
+    out.append(dict(name=f"one orbit x {n1}", seconds=time.perf_counter() - t0, threads=1,
+                    steps=float(r.info[:, 1].sum()), crossings=int(r.count.sum()), order=order, tangent=False))
+    prm1 = model.FIGURE4.with_(mu=1.0)
+    Y = polar_seeds(prm1)
+    T = 100.0 if quick else 1000.0
+    lyapunov.indicators(prm1, Y[:8], 1.0, tol=1e-12, threads=2)
+    best = None
+    for _ in range(3):
+        t0 = time.perf_counter()
+        ind = lyapunov.indicators(prm1, Y, T, tol=1e-12, threads=2)
+        dt = time.perf_counter() - t0
+        best = dt if best is None else min(best, dt)
+    out.append(dict(name=f"chaos map 400 orbits, T = {T:g}, 2 threads", seconds=best, threads=2,
+                    steps=float(np.sum(ind.steps)), crossings=0, order=order, tangent=True))
+    return out
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="shorter workloads (W4 200 crossings, map T = 100)")
+    args = ap.parse_args(argv)
+    from explorer.kernels.taylor_order import order_for_tolerance
+
+    print(f"# roofline on {C.machine_line(C.machine())}; load average at start {os.getloadavg()}")
+    flags = open("/proc/cpuinfo").read().split("flags")[1].split("\n")[0].split() if os.path.exists("/proc/cpuinfo") else []
+    print(f"# vector flags: {' '.join(f for f in flags if f.startswith(('avx', 'fma')))}")
+    rows = peak_table()
+    print("\n## 1. Peak: C independent chains x = x * m + c, one thread\n")
+    print("| bits | op | chains | GFLOP/s | ns / iteration | the loop's assembly |")
+    print("|---:|---|---:|---:|---:|---|")
+    for r in rows:
+        a = r["asm"]
+        reg = "zmm" if a["zmm"] else "ymm"
+        unroll = max(a["fma"], a["mul"]) / (r["chains"] * r["width"] // (256 if reg == "ymm" else 512))
+        asm = (f"{a['fma']} vfmadd, {a['mul']} vmulpd, {a['add']} vaddpd on {reg} (loop unrolled x{unroll:g}); "
+               f"{a['spill']} stack accesses")
+        print(f"| {r['width']} | {r['op']} | {r['chains']} | {r['gflops']:.1f} | {r['ns_per_iter']:.2f} | {asm} |")
+    peak_fma = max(r["gflops"] for r in rows if r["op"] == "fma")
+    peak_unfused = max(r["gflops"] for r in rows if r["op"] == "muladd")
+    dep = min(r["ns_per_iter"] for r in rows if r["chains"] == 1 and r["op"] == "fma")
+    print(f"\nPeak per core: {peak_fma:.1f} GFLOP/s with FMA, {peak_unfused:.1f} GFLOP/s as mul + add; "
+          f"one dependent FMA chain: {dep:.2f} ns per FMA (its latency).")
+
+    order = order_for_tolerance(1e-12)
+    print(f"\n## 2. Work of one Taylor step of one orbit (order {order}, tol 1e-12)\n")
+    print("| kernel | vmul | vadd | vsub | vneg | recurrence flops | step flops (+ Horner, variation) |")
+    print("|---|---:|---:|---:|---:|---:|---:|")
+    work = {}
+    for name, tangent, nvec in (("crossings (orbit)", False, 1), ("tangent, 1 vector (MEGNO, mLCE)", True, 1),
+                                ("tangent, 2 vectors (SALI)", True, 2)):
+        rec, step, c = step_flops(order, tangent, nvec)
+        work[(tangent, nvec)] = (rec, step)
+        print(f"| {name} | {c['vmul']} | {c['vadd']} | {c['vsub']} | {c['vneg']} | {rec} | {step} |")
+
+    print("\n## 3. Achieved (fraction of the FMA peak per core used; of the mul + add peak in brackets)\n")
+    print("| workload | wall (s) | steps | steps / crossing | ns / orbit-step | GFLOP/s | of peak |")
+    print("|---|---:|---:|---:|---:|---:|---:|")
+    for tangent in (False, True):
+        ns = recurrence_alone(order, tangent)
+        rec = work[(tangent, 1)][0]
+        g = rec / ns / 1e9
+        print(f"| {'tangent' if tangent else 'orbit'} recurrence alone (8 lanes, 1 thread) | | | | {ns * 1e9:.1f} | "
+              f"{g:.1f} | {g / peak_fma:.0%} ({g / peak_unfused:.0%}) |")
+    for w in workloads(args.quick):
+        step = work[(w["tangent"], 1)][1]
+        g = w["steps"] * step / w["seconds"] / 1e9
+        per_core = g / w["threads"]
+        spc = f"{w['steps'] / w['crossings']:.1f}" if w["crossings"] else ""
+        print(f"| {w['name']} | {w['seconds']:.3f} | {w['steps']:.3g} | {spc} | "
+              f"{w['seconds'] * w['threads'] / w['steps'] * 1e9:.1f} | {g:.1f} | "
+              f"{per_core / peak_fma:.0%} ({per_core / peak_unfused:.0%}) |")
+    print(f"\n# load average at end {os.getloadavg()}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
