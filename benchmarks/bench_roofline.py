@@ -222,11 +222,11 @@ def recurrence_alone(order, tangent, reps=20000):
 
 
 def workloads(quick):
+    from bench_chaos import polar_seeds
+
     from explorer import model
     from explorer.analysis import lyapunov, sections
     from explorer.kernels.taylor_order import order_for_tolerance
-
-    from bench_chaos import polar_seeds
 
     out = []
     prm4 = model.FIGURE4.with_(mu=0.5)
