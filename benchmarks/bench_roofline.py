@@ -267,6 +267,33 @@ def workloads(quick):
     return out
 
 
+def steps_check(K=500, picks=(0, 16, 32, 48)):
+    """Steps per crossing of explorer (Jorba-Zou step size, kernels.taylor.step_size) and of
+    heyoka's scalar taylor_adaptive (its own Jorba-Zou rule) on the same W4 orbits, same tol,
+    each integrated to the time of explorer's K-th crossing; None if heyoka is not importable."""
+    if not C.have("heyoka"):
+        return None
+    import heyoka as hy
+
+    from bench_w4 import _hy_system
+    from explorer import model
+    from explorer.analysis import sections
+
+    prm = model.FIGURE4.with_(mu=0.5)
+    c1, c2, r1, r2 = model.allowed_ellipse(prm, 2.0)
+    p1 = (c1 + r1 * np.linspace(-0.95, 0.95, 64))[list(picks)]
+    r = sections.section_crossings(prm, p1, np.zeros(len(p1)), 2.0, K, tol=1e-12)
+    Y0 = model.section_state(prm, p1, np.zeros(len(p1)), 2.0)
+    eqs, _g1 = _hy_system(prm.as_array())
+    rows = []
+    for i in range(len(p1)):
+        ta = hy.taylor_adaptive(eqs, [float(v) for v in Y0[i]], tol=1e-12)
+        out = ta.propagate_until(float(r.info[i, 0]))
+        rows.append(dict(orbit=picks[i], t=float(r.info[i, 0]), crossings=int(r.count[i]),
+                         explorer=int(r.info[i, 1]), heyoka=int(out[3]), order=(r.settings["order"], ta.order)))
+    return rows
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="shorter workloads (W4 200 crossings, map T = 100)")
@@ -321,6 +348,20 @@ def main(argv=None):
         print(f"| {w['name']} | {w['seconds']:.3f} | {w['steps']:.3g} | {spc} | "
               f"{w['seconds'] * w['threads'] / w['steps'] * 1e9:.1f} | {g:.1f} | "
               f"{per_core / peak_fma:.0%} ({per_core / peak_unfused:.0%}) |")
+    rows = None
+    for K in (20, 100 if args.quick else 500):   # 20 crossings: before the chaotic paths part
+        got = steps_check(K)
+        rows = None if got is None else (rows or []) + got
+    if rows:
+        print("\n## 4. Steps per crossing: explorer against heyoka taylor_adaptive (scalar), tol 1e-12, same "
+              "orbits to the same time\n")
+        print("| W4 orbit | time | crossings | order (explorer, heyoka) | explorer steps / crossing | "
+              "heyoka steps / crossing | explorer / heyoka |")
+        print("|---:|---:|---:|---|---:|---:|---:|")
+        for r in rows:
+            print(f"| {r['orbit']} | {r['t']:.1f} | {r['crossings']} | {r['order'][0]}, {r['order'][1]} | "
+                  f"{r['explorer'] / r['crossings']:.1f} | {r['heyoka'] / r['crossings']:.1f} | "
+                  f"{r['explorer'] / r['heyoka']:.3f} |")
     print(f"\n# load average at end {os.getloadavg()}")
     return 0
 
