@@ -274,8 +274,8 @@ def steps_check(K=500, picks=(0, 16, 32, 48)):
     if not C.have("heyoka"):
         return None
     import heyoka as hy
-
     from bench_w4 import _hy_system
+
     from explorer import model
     from explorer.analysis import sections
 
