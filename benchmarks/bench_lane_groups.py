@@ -56,7 +56,14 @@ def main(argv=None):
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--groups", type=int, nargs="+", default=[1, 2, 4])
     ap.add_argument("--quick", action="store_true", help="W4 with 200 crossings, the map with T = 100")
+    ap.add_argument("--write", action="store_true", help="record the tables in RESULTS.md (section LANEGROUPS)")
     args = ap.parse_args(argv)
+    started, load0 = C.now(), C.loadavg()
+    lines = []
+
+    def emit(text=""):
+        print(text, flush=True)
+        lines.extend(str(text).split("\n"))
     from explorer._jit import set_num_threads
     set_num_threads(2)
     rows = workloads(args.quick)
@@ -78,16 +85,20 @@ def main(argv=None):
                 t0 = time.perf_counter()
                 fn()
                 times[(name, g)].append(time.perf_counter() - t0)
-    print(f"# lane groups A/B on {C.machine_line(C.machine())}; load average at the end {os.getloadavg()}")
-    print(f"# {args.rounds} rounds, G alternated; median (min-max) seconds, ratio of medians to G = {args.groups[0]}")
-    print("| workload | " + " | ".join(f"G = {g}" for g in args.groups) + " | "
+    emit(f"# lane groups A/B on {C.machine_line(C.machine())}; load average at the end {os.getloadavg()}")
+    emit(f"# {args.rounds} rounds, G alternated; median (min-max) seconds, ratio of medians to G = {args.groups[0]}")
+    emit("| workload | " + " | ".join(f"G = {g}" for g in args.groups) + " | "
           + " | ".join(f"G{g}/G{args.groups[0]}" for g in args.groups[1:]) + " |")
-    print("|---|" + "---:|" * (2 * len(args.groups) - 1))
+    emit("|---|" + "---:|" * (2 * len(args.groups) - 1))
     for name in rows:
         med = {g: float(np.median(times[(name, g)])) for g in args.groups}
         cells = [f"{med[g]:.3f} ({min(times[(name, g)]):.3f}-{max(times[(name, g)]):.3f})" for g in args.groups]
         ratios = [f"{med[g] / med[args.groups[0]]:.3f}" for g in args.groups[1:]]
-        print(f"| {name} | " + " | ".join(cells) + " | " + " | ".join(ratios) + " |")
+        emit(f"| {name} | " + " | ".join(cells) + " | " + " | ".join(ratios) + " |")
+    if args.write:
+        head, _ = C.header("Lane groups A/B (issue 24)", C.command_line("bench_lane_groups.py", argv), started,
+                           (C.now() - started).total_seconds(), load0)
+        C.update_section("LANEGROUPS", head + [""] + [x for x in lines if not x.startswith("# ")])
     return 0
 
 

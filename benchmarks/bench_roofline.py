@@ -294,50 +294,57 @@ def steps_check(K=500, picks=(0, 16, 32, 48)):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="shorter workloads (W4 200 crossings, map T = 100)")
+    ap.add_argument("--write", action="store_true", help="record the tables in RESULTS.md (section ROOFLINE)")
     args = ap.parse_args(argv)
+    started, load0 = C.now(), C.loadavg()
+    lines = []
+
+    def emit(text=""):
+        print(text, flush=True)
+        lines.extend(str(text).split("\n"))
     from explorer.kernels.taylor_order import order_for_tolerance
 
-    print(f"# roofline on {C.machine_line(C.machine())}; load average at start {os.getloadavg()}")
+    emit(f"# roofline on {C.machine_line(C.machine())}; load average at start {os.getloadavg()}")
     flags = open("/proc/cpuinfo").read().split("flags")[1].split("\n")[0].split() if os.path.exists("/proc/cpuinfo") else []
-    print(f"# vector flags: {' '.join(f for f in flags if f.startswith(('avx', 'fma')))}")
+    emit(f"# vector flags: {' '.join(f for f in flags if f.startswith(('avx', 'fma')))}")
     rows = peak_table()
-    print("\n## 1. Peak: C independent chains x = x * m + c, one thread\n")
-    print("| bits | op | chains | GFLOP/s | ns / iteration | the loop's assembly |")
-    print("|---:|---|---:|---:|---:|---|")
+    emit("\n### 1. Peak: C independent chains x = x * m + c, one thread\n")
+    emit("| bits | op | chains | GFLOP/s | ns / iteration | the loop's assembly |")
+    emit("|---:|---|---:|---:|---:|---|")
     for r in rows:
         a = r["asm"]
         reg = "zmm" if a["zmm"] else "ymm"
         unroll = max(a["fma"], a["mul"]) / (r["chains"] * r["width"] // (256 if reg == "ymm" else 512))
         asm = (f"{a['fma']} vfmadd, {a['mul']} vmulpd, {a['add']} vaddpd on {reg} (loop unrolled x{unroll:g}); "
                f"{a['spill']} stack accesses")
-        print(f"| {r['width']} | {r['op']} | {r['chains']} | {r['gflops']:.1f} | {r['ns_per_iter']:.2f} | {asm} |")
+        emit(f"| {r['width']} | {r['op']} | {r['chains']} | {r['gflops']:.1f} | {r['ns_per_iter']:.2f} | {asm} |")
     peak_fma = max(r["gflops"] for r in rows if r["op"] == "fma")
     peak_unfused = max(r["gflops"] for r in rows if r["op"] == "muladd")
     dep = min(r["ns_per_iter"] for r in rows if r["chains"] == 1 and r["op"] == "fma")
-    print(f"\nPeak per core: {peak_fma:.1f} GFLOP/s with FMA, {peak_unfused:.1f} GFLOP/s as mul + add; "
+    emit(f"\nPeak per core: {peak_fma:.1f} GFLOP/s with FMA, {peak_unfused:.1f} GFLOP/s as mul + add; "
           f"one dependent FMA chain: {dep:.2f} ns per FMA (its latency).")
 
     order = order_for_tolerance(1e-12)
-    print(f"\n## 2. Work of one Taylor step of one orbit (order {order}, tol 1e-12)\n")
-    print("| kernel | vmul | vadd | vsub | vneg | recurrence flops | step flops (+ Horner, variation) |")
-    print("|---|---:|---:|---:|---:|---:|---:|")
+    emit(f"\n### 2. Work of one Taylor step of one orbit (order {order}, tol 1e-12)\n")
+    emit("| kernel | vmul | vadd | vsub | vneg | recurrence flops | step flops (+ Horner, variation) |")
+    emit("|---|---:|---:|---:|---:|---:|---:|")
     work = {}
     for name, tangent, nvec in (("crossings (orbit)", False, 1), ("tangent, 1 vector (MEGNO, mLCE)", True, 1),
                                 ("tangent, 2 vectors (SALI)", True, 2)):
         rec, step, c = step_flops(order, tangent, nvec)
         work[(tangent, nvec)] = (rec, step)
-        print(f"| {name} | {c['vmul']} | {c['vadd']} | {c['vsub']} | {c['vneg']} | {rec} | {step} |")
+        emit(f"| {name} | {c['vmul']} | {c['vadd']} | {c['vsub']} | {c['vneg']} | {rec} | {step} |")
 
-    print("\n## 3. Achieved: flops of the vector part (section 2) per second of the thread's CPU time (one thread) "
+    emit("\n### 3. Achieved: flops of the vector part (section 2) per second of the thread's CPU time (one thread) "
           "or of wall time per core (two threads); fraction of the FMA peak per core, of the mul + add peak in "
           "brackets\n")
-    print("| workload | wall (s) | CPU of the thread (s) | steps | steps / crossing | ns / orbit-step | "
+    emit("| workload | wall (s) | CPU of the thread (s) | steps | steps / crossing | ns / orbit-step | "
           "GFLOP/s per core | of peak |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|")
+    emit("|---|---:|---:|---:|---:|---:|---:|---:|")
     for tangent in (False, True):
         ns = recurrence_alone(order, tangent)
         g = work[(tangent, 1)][0] / ns / 1e9
-        print(f"| {'tangent' if tangent else 'orbit'} recurrence alone (8 lanes, 1 thread) | | | | | {ns * 1e9:.1f} | "
+        emit(f"| {'tangent' if tangent else 'orbit'} recurrence alone (8 lanes, 1 thread) | | | | | {ns * 1e9:.1f} | "
               f"{g:.1f} | {g / peak_fma:.0%} ({g / peak_unfused:.0%}) |")
     for w in workloads(args.quick):
         seconds = w["cpu"] if w["threads"] == 1 else w["wall"] * w["threads"]
@@ -346,23 +353,27 @@ def main(argv=None):
         g = w["steps"] * work[(w["tangent"], 1)][1] / seconds / 1e9
         spc = f"{w['steps'] / w['crossings']:.1f}" if w["crossings"] else ""
         cpu = f"{w['cpu']:.3f}" if w["threads"] == 1 else ""
-        print(f"| {w['name']} | {w['wall']:.3f} | {cpu} | {w['steps']:.3g} | {spc} | "
+        emit(f"| {w['name']} | {w['wall']:.3f} | {cpu} | {w['steps']:.3g} | {spc} | "
               f"{seconds / w['steps'] * 1e9:.1f} | {g:.1f} | {g / peak_fma:.0%} ({g / peak_unfused:.0%}) |")
     rows = None
     for K in (20, 100 if args.quick else 500):   # 20 crossings: before the chaotic paths part
         got = steps_check(K)
         rows = None if got is None else (rows or []) + got
     if rows:
-        print("\n## 4. Steps per crossing: explorer against heyoka taylor_adaptive (scalar), tol 1e-12, same "
+        emit("\n### 4. Steps per crossing: explorer against heyoka taylor_adaptive (scalar), tol 1e-12, same "
               "orbits to the same time\n")
-        print("| W4 orbit | time | crossings | order (explorer, heyoka) | explorer steps / crossing | "
+        emit("| W4 orbit | time | crossings | order (explorer, heyoka) | explorer steps / crossing | "
               "heyoka steps / crossing | explorer / heyoka |")
-        print("|---:|---:|---:|---|---:|---:|---:|")
+        emit("|---:|---:|---:|---|---:|---:|---:|")
         for r in rows:
-            print(f"| {r['orbit']} | {r['t']:.1f} | {r['crossings']} | {r['order'][0]}, {r['order'][1]} | "
+            emit(f"| {r['orbit']} | {r['t']:.1f} | {r['crossings']} | {r['order'][0]}, {r['order'][1]} | "
                   f"{r['explorer'] / r['crossings']:.1f} | {r['heyoka'] / r['crossings']:.1f} | "
                   f"{r['explorer'] / r['heyoka']:.3f} |")
-    print(f"\n# load average at end {os.getloadavg()}")
+    emit(f"\n# load average at end {os.getloadavg()}")
+    if args.write:
+        head, _ = C.header("Roofline of the Taylor lanes (issue 24)", C.command_line("bench_roofline.py", argv), started,
+                           (C.now() - started).total_seconds(), load0)
+        C.update_section("ROOFLINE", head + [""] + [x for x in lines if not x.startswith("# ")])
     return 0
 
 
