@@ -61,11 +61,11 @@ def test_kernels_match_scalar_bitwise(name, order, ngroups):
     G.taylor_coefficients_lanes(P, X, order, (0,) * ngroups)
     h = rng.uniform(0.0, 0.5, W)
     out = np.empty((5, W))
-    lanes.evaluate_lanes(X, order, h, out, 0)
+    lanes.evaluate_lanes(X, order, h, out, 0, (0,) * ngroups)
     e_p, e_q = 1.0 / order, 1.0 / (order - 1)
     norms = np.empty((lanes.N_NORMS, W))
     vary = np.empty(W)
-    lanes.variation_lanes(X, order, h, 0.3, 0.8, vary)
+    lanes.variation_lanes(X, order, h, 0.3, 0.8, vary, (0,) * ngroups)
     with np.errstate(all="ignore"):
         for l in range(W):
             c = X[1:, 3, l] * 0.3 - X[1:, 4, l] * 0.8
@@ -74,7 +74,7 @@ def test_kernels_match_scalar_bitwise(name, order, ngroups):
                 want = (want + abs(c[k])) * h[l]
             assert vary[l] == want or (np.isnan(vary[l]) and np.isnan(want))
     with np.errstate(all="ignore"):
-        lanes.step_norms_lanes(X, order, e_p, e_q, norms)
+        lanes.step_norms_lanes(X, order, e_p, e_q, norms, (0,) * ngroups)
         for l in range(W):
             _check_lane(P, X, order, h, out, norms, l)
 

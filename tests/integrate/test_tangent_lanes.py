@@ -49,7 +49,7 @@ def test_tangent_lane_kernels_match_the_scalar_recurrence_bitwise(name, order, n
     h = rng.uniform(0.0, 0.5, W)
     out = np.empty((G.NROWS, W))
     for base in (0, G.DEV1, G.DEV2):
-        lanes.evaluate_lanes(Z, order, h, out, base)
+        lanes.evaluate_lanes(Z, order, h, out, base, (0,) * ngroups)
     for l in range(W):
         X = np.zeros((5, order + 1))
         D = np.zeros((5, order + 1))

@@ -115,12 +115,13 @@ def step_constants(order):
 
 
 @njit
-def evaluate_lanes(X, order, h, out, base):
+def evaluate_lanes(X, order, h, out, base, groups):
     """out[base + i, l] = sum_k X[k, base + i, l] h[l]^k for i = 0..4 per lane (Horner: per lane
     exactly kernels.taylor.evaluate), X of shape (order + 1, rows, W), h of shape (W,), out of
-    shape (rows', W), W = G * LANES: each group of LANES lanes in turn, its five chains
-    interleaved (independent)."""
-    w = X.shape[2]
+    shape (rows', W), W = G * LANES with G = len(groups) (a tuple of G zeros: W is a constant of
+    the compiled code): each group of LANES lanes in turn, its five chains interleaved
+    (independent)."""
+    w = len(groups) * LANES
     stride = X.shape[1] * w
     for g in range(0, w, LANES):
         hv = vload(h, g)
@@ -146,16 +147,17 @@ def evaluate_lanes(X, order, h, out, base):
 
 
 @njit
-def step_norms_lanes(X, order, e_p, e_q, out):
-    """Per lane, from the orbit's rows 0..4 of X (order + 1, rows, W), W = G * LANES, what the
-    checks and the step size of the Taylor step need (out of shape (N_NORMS, W)): out[0] = sum_i X[order, i]
+def step_norms_lanes(X, order, e_p, e_q, out, groups):
+    """Per lane, from the orbit's rows 0..4 of X (order + 1, rows, W), W = G * LANES, G =
+    len(groups), what the checks and the step size of the Taylor step need (out of shape
+    (N_NORMS, W)): out[0] = sum_i X[order, i]
     and out[1] = sum_i X[order - 1, i] (in the order of systems._finite_column: non-finite iff a
     coefficient is, or the sum overflows); with s = max(1, max_i |X[0, i]|), a = max_i
     |X[order, i]|, bm = max_i |X[order - 1, i]| (the norms of kernels.taylor.step_size, in its
     order): out[2] = a, out[3] = bm, out[4] = s / a, out[5] = s / bm (the arguments of its two
     pow) and out[6] = e_q log2(s / bm) - e_p log2(s / a) with vlog2_approx (its sign tells which
     pow is smaller when it is not too close to 0)."""
-    w = X.shape[2]
+    w = len(groups) * LANES
     stride = X.shape[1] * w
     for c in range(0, w, LANES):
         op = order * stride + c
@@ -223,10 +225,10 @@ def lane_step(l, norms, t, tend, e_p, e_q, margin, factor):
 
 
 @njit(inline="always")
-def step_lanes(orb, norms, L_t, tend, e_p, e_q, margin, factor, hv, L_last, L_status, L_stop):
-    """:func:`lane_step` for every lane that holds an orbit: its step in ``hv`` (0 for idle and
-    stopped lanes) and ``L_last``, or its stop in ``L_status``/``L_stop``."""
-    for l in range(orb.shape[0]):
+def step_lanes(orb, norms, L_t, tend, e_p, e_q, margin, factor, hv, L_last, L_status, L_stop, w):
+    """:func:`lane_step` for every lane (``w`` of them) that holds an orbit: its step in ``hv`` (0
+    for idle and stopped lanes) and ``L_last``, or its stop in ``L_status``/``L_stop``."""
+    for l in range(w):
         hv[l] = 0.0
         L_stop[l] = False
         if orb[l] == _IDLE:
@@ -241,12 +243,12 @@ def step_lanes(orb, norms, L_t, tend, e_p, e_q, margin, factor, hv, L_last, L_st
 
 
 @njit
-def variation_lanes(X, order, h, cphi, sphi, out):
+def variation_lanes(X, order, h, cphi, sphi, out, groups):
     """out[l] = sum_{k>=1} |X[k, G1, l] cos phi0 - X[k, G2, l] sin phi0| h[l]^k for every lane
     in one vector chain per group of LANES lanes (Horner): the bound of the variation of
     sin(phi - phi0) over the step that kernels.events.no_root_within uses (up to the rounding
-    its slack covers)."""
-    w = X.shape[2]
+    its slack covers); G = len(groups) groups."""
+    w = len(groups) * LANES
     cv = vsplat(cphi)
     sv = vsplat(sphi)
     for g in range(0, w, LANES):
@@ -425,7 +427,7 @@ def run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, o
     G = len(groups) groups of LANES lanes (W = G * LANES lanes: the last axis of X).  The work
     arrays (WORKSPACE_ND, then the flat buffers of :func:`workspace_views`) come zeroed from the
     caller: nothing is allocated here."""
-    w = X.shape[2]
+    w = len(groups) * LANES
     (hv, vary, yl, yc, gc, work, roots, L_t, L_tc, L_gprev, L_H0, orb, L_count, L_steps, L_target, L_room,
      L_status, L_last, L_stop) = workspace_views(order, w, wf, wi, wb)
     for l in range(w):
@@ -442,14 +444,14 @@ def run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, o
 
     while active > 0:
         taylor_coefficients_lanes(P, X, order, groups)
-        step_norms_lanes(X, order, e_p, e_q, norms)
+        step_norms_lanes(X, order, e_p, e_q, norms, groups)
         # ---- per lane: finiteness of the last two coefficients, step size, underflow
-        step_lanes(orb, norms, L_t, tmax, e_p, e_q, margin, factor, hv, L_last, L_status, L_stop)
-        evaluate_lanes(X, order, hv, ynew, 0)
+        step_lanes(orb, norms, L_t, tmax, e_p, e_q, margin, factor, hv, L_last, L_status, L_stop, w)
+        evaluate_lanes(X, order, hv, ynew, 0, groups)
         # ---- all lanes at once (vectorised): a bound of the variation of sin(phi - phi0) over
         # the step, sum_{k>=1} |c_k| h^k, so that steps far from the section skip the root
         # isolation (kernels.events.excluded_by_variation)
-        variation_lanes(X, order, hv, cphi, sphi, vary)
+        variation_lanes(X, order, hv, cphi, sphi, vary, groups)
         # ---- per lane: the new state's check, the crossings in the step, the clock and budgets
         for l in range(w):
             j = orb[l]

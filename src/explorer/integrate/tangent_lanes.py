@@ -143,15 +143,15 @@ def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_s
         tangent_coefficients_lanes(P, Z, order, DEV1, groups)
         if nvec == 2:
             deviation_coefficients_lanes(P, Z, order, DEV2, groups)
-        step_norms_lanes(Z, order, e_p, e_q, norms)
+        step_norms_lanes(Z, order, e_p, e_q, norms, groups)
         # ---- per lane: systems.taylor_step's checks and step size
         for l in range(nl):
             L_early[l] = tg.EARLY_NONE
-        step_lanes(orb, norms, L_t, T, e_p, e_q, margin, factor, hv, L_last, L_status, L_stop)
-        evaluate_lanes(Z, order, hv, znew, 0)
-        evaluate_lanes(Z, order, hv, znew, DEV1)
+        step_lanes(orb, norms, L_t, T, e_p, e_q, margin, factor, hv, L_last, L_status, L_stop, nl)
+        evaluate_lanes(Z, order, hv, znew, 0, groups)
+        evaluate_lanes(Z, order, hv, znew, DEV1, groups)
         if nvec == 2:
-            evaluate_lanes(Z, order, hv, znew, DEV2)
+            evaluate_lanes(Z, order, hv, znew, DEV2, groups)
         # ---- per lane: the rest of the step of the scalar loop
         for l in range(nl):
             j = orb[l]
