@@ -198,8 +198,9 @@ def step_flops(order, tangent=False, nvec=1):
 
 
 # ----------------------------------------------------------------------------- 3. achieved
-def recurrence_alone(order, tangent, reps=20000):
-    """ns per orbit-step of the generated recurrence alone (G = 1, LANES lanes, one thread)."""
+def recurrence_alone(order, tangent, reps=20000, groups=1):
+    """Seconds of CPU per orbit-step of the generated recurrence alone (``groups`` groups of LANES
+    lanes, one thread)."""
     from explorer import model
     from explorer._jit import njit
     from explorer.integrate import _lanes_generated as LG
@@ -210,21 +211,38 @@ def recurrence_alone(order, tangent, reps=20000):
     rng = np.random.default_rng(1)
     if tangent:
         @njit(cache=False)
-        def loop(P, Z, order, reps):
+        def loop(P, Z, order, reps, g):
             for _ in range(reps):
-                TG.tangent_coefficients_lanes(P, Z, order, TG.DEV1, (0,))
-        X = np.zeros((order + 1, TG.NROWS, LANES))
-        X[0, :10] = rng.uniform(-0.5, 0.5, (10, LANES))
+                TG.tangent_coefficients_lanes(P, Z, order, TG.DEV1, g)
+        X = np.zeros((order + 1, TG.NROWS, groups * LANES))
+        X[0, :10] = rng.uniform(-0.5, 0.5, (10, groups * LANES))
     else:
         @njit(cache=False)
-        def loop(P, Z, order, reps):
+        def loop(P, Z, order, reps, g):
             for _ in range(reps):
-                LG.taylor_coefficients_lanes(P, Z, order, (0,))
-        X = np.zeros((order + 1, 5, LANES))
-        X[0] = rng.uniform(-0.5, 0.5, (5, LANES))
-    loop(P, X, order, 1)
-    _wall, cpu = timed(lambda: loop(P, X, order, reps), 5)
-    return cpu / (reps * LANES)
+                LG.taylor_coefficients_lanes(P, Z, order, g)
+        X = np.zeros((order + 1, 5, groups * LANES))
+        X[0] = rng.uniform(-0.5, 0.5, (5, groups * LANES))
+    g = (0,) * groups
+    loop(P, X, order, 1, g)
+    _wall, cpu = timed(lambda: loop(P, X, order, reps, g), 5)
+    return cpu / (reps * groups * LANES)
+
+
+def recurrence_asm(groups, tangent):
+    """The Cauchy-product loop of the generated recurrence for ``groups`` groups (a fresh,
+    uncached compile of the kernel, so that numba can show its assembly)."""
+    from numba import types
+
+    from explorer._jit import njit
+    from explorer.integrate import _lanes_generated as LG
+    from explorer.integrate import _tangent_lanes_generated as TG
+
+    mod, name = (TG, "tangent_coefficients_lanes") if tangent else (LG, "taylor_coefficients_lanes")
+    k = njit(cache=False)(getattr(mod, f"{name}_{groups}").py_func)
+    arr1, arr3 = types.Array(types.float64, 1, "C"), types.Array(types.float64, 3, "C")
+    k.compile((arr1, arr3, types.int64, types.int64) if tangent else (arr1, arr3, types.int64))
+    return _loop_asm(k)
 
 
 def workloads(quick):
@@ -355,6 +373,18 @@ def main(argv=None):
         cpu = f"{w['cpu']:.3f}" if w["threads"] == 1 else ""
         emit(f"| {w['name']} | {w['wall']:.3f} | {cpu} | {w['steps']:.3g} | {spc} | "
               f"{seconds / w['steps'] * 1e9:.1f} | {g:.1f} | {g / peak_fma:.0%} ({g / peak_unfused:.0%}) |")
+    from explorer.integrate._lanes_generated import GROUPS
+    emit("\n### 5. The recurrence per number of lane groups G (one thread): CPU per orbit-step and its "
+         "Cauchy-product loop\n")
+    emit("| recurrence | G | ns / orbit-step | of FMA peak | loop: vmulpd, vaddpd, stack accesses |")
+    emit("|---|---:|---:|---:|---|")
+    for tangent in (False, True):
+        for g in GROUPS:
+            ns = recurrence_alone(order, tangent, groups=g)
+            a = recurrence_asm(g, tangent)
+            f = work[(tangent, 1)][0] / ns / 1e9
+            emit(f"| {'tangent' if tangent else 'orbit'} | {g} | {ns * 1e9:.1f} | {f / peak_fma:.0%} | "
+                 f"{a['mul']}, {a['add']}, {a['spill']} ({'zmm' if a['zmm'] else 'ymm'}) |")
     rows = None
     for K in (20, 100 if args.quick else 500):   # 20 crossings: before the chaotic paths part
         got = steps_check(K)
