@@ -19,6 +19,10 @@ and one orbit reach.
    1e-12, order 15, 1 and 2 threads), the 400-orbit chaos map (mu = 1, T = 1000, MEGNO) and one
    orbit (30,000 crossings): measured steps, steps per crossing, flops / s and the fraction of
    the measured peak (per core used).
+4. The recurrence for G = 1, 2, 4 lane groups: CPU per orbit-step and its Cauchy-product loop's
+   multiplies, adds and stack accesses (a fresh compile of each kernel, read with inspect_asm).
+5. Steps per crossing of explorer and of heyoka's taylor_adaptive on the same W4 orbits to the
+   same time (20 crossings, before the chaotic paths part, and 500), if heyoka is installed.
 
     python benchmarks/bench_roofline.py            # prints the tables (~1-2 min warm)
     python benchmarks/bench_roofline.py --quick    # shorter workloads
@@ -374,7 +378,7 @@ def main(argv=None):
         emit(f"| {w['name']} | {w['wall']:.3f} | {cpu} | {w['steps']:.3g} | {spc} | "
               f"{seconds / w['steps'] * 1e9:.1f} | {g:.1f} | {g / peak_fma:.0%} ({g / peak_unfused:.0%}) |")
     from explorer.integrate._lanes_generated import GROUPS
-    emit("\n### 5. The recurrence per number of lane groups G (one thread): CPU per orbit-step and its "
+    emit("\n### 4. The recurrence per number of lane groups G (one thread): CPU per orbit-step and its "
          "Cauchy-product loop\n")
     emit("| recurrence | G | ns / orbit-step | of FMA peak | loop: vmulpd, vaddpd, stack accesses |")
     emit("|---|---:|---:|---:|---|")
@@ -390,7 +394,7 @@ def main(argv=None):
         got = steps_check(K)
         rows = None if got is None else (rows or []) + got
     if rows:
-        emit("\n### 4. Steps per crossing: explorer against heyoka taylor_adaptive (scalar), tol 1e-12, same "
+        emit("\n### 5. Steps per crossing: explorer against heyoka taylor_adaptive (scalar), tol 1e-12, same "
               "orbits to the same time\n")
         emit("| W4 orbit | time | crossings | order (explorer, heyoka) | explorer steps / crossing | "
               "heyoka steps / crossing | explorer / heyoka |")
