@@ -30,10 +30,18 @@ The blocks, the carry and the outputs are those of every crossing driver
 Lanes never exchange values: a lane computes exactly what the scalar loop computes for its
 orbit, so which orbits share a vector, in which order they are taken and how many threads run
 cannot change any result.  The work is therefore distributed dynamically: one worker per thread
-(prange), each with up to LANES lanes; a lane whose orbit stops takes the next unstarted orbit of
+(prange), each with up to G x LANES lanes; a lane whose orbit stops takes the next unstarted orbit of
 the batch at once (an atomic counter), so lanes idle only when the whole batch is handed out
 (then on the zero state: all its coefficients are 0, harmless, and ignored), and a long orbit
 cannot leave a thread idle.
+
+Lane groups: a worker advances G = 1, 2 or 4 groups of LANES lanes (:func:`lane_groups`; the
+lane arrays are G x LANES wide).  The generated recurrence of G groups writes each vector
+statement once per group, in turn, so that the groups' independent chains can share the
+floating-point pipes; everything else runs group after group or lane by lane.  G is a
+compile-time constant (the length of the tuple ``groups`` of G zeros), so each G is compiled only
+when used.  Default 1: on AVX2 two groups' accumulators do not fit the vector registers, and
+G = 2 was slower (benchmarks/RESULTS.md, "Issue 24 (fourth session)").
 
 Step size: ``kernels.taylor.step_size`` takes the smaller of two ``pow``,
 rho_p = (s/a)^(1/p) and rho_{p-1} = (s/bm)^(1/(p-1)).  The lanes compute d = log2 rho_{p-1} -

@@ -22,7 +22,9 @@ whatever the grouping of orbits into lanes and the number of threads:
 
 Lanes never exchange values, so the work is distributed dynamically as in
 :mod:`explorer.integrate.lanes`: one worker per thread, a lane whose orbit stops takes the next
-unstarted orbit of the batch at once (an atomic counter); idle lanes run on the zero state.
+unstarted orbit of the batch at once (an atomic counter); idle lanes run on the zero state.  A
+worker advances G groups of LANES lanes (``lanes.lane_groups``, the generated kernels of G
+groups), bit for bit the same results for every G.
 
 Kernel contract: arrays are allocated per worker, never inside the step loop; no exceptions
 (status codes); no fastmath.
