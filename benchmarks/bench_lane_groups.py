@@ -67,6 +67,7 @@ def main(argv=None):
     from explorer._jit import set_num_threads
     set_num_threads(2)
     rows = workloads(args.quick)
+    env = os.environ.get("EXPLORER_LANE_GROUPS")
     times = {(name, g): [] for name in rows for g in args.groups}
     ref = {}
     for name, fn in rows.items():             # load or compile every G first (untimed)
@@ -85,6 +86,10 @@ def main(argv=None):
                 t0 = time.perf_counter()
                 fn()
                 times[(name, g)].append(time.perf_counter() - t0)
+    if env is None:       # the machine line names the G of the environment, not the last one tried
+        os.environ.pop("EXPLORER_LANE_GROUPS", None)
+    else:
+        os.environ["EXPLORER_LANE_GROUPS"] = env
     emit(f"# lane groups A/B on {C.machine_line(C.machine())}; load average at the end {os.getloadavg()}")
     emit(f"# {args.rounds} rounds, G alternated; median (min-max) seconds, ratio of medians to G = {args.groups[0]}")
     emit("| workload | " + " | ".join(f"G = {g}" for g in args.groups) + " | "
