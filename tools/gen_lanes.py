@@ -63,13 +63,15 @@ def {name}({args}):
 '''
 
 #: the names a generated file may import from explorer.integrate.simd (those its code uses)
-SIMD_NAMES = ("LANES", "vadd", "vload", "vmul", "vneg", "vsplat", "vstore", "vsub", "vzero")
+SIMD_NAMES = ("LANES", "by_groups", "vadd", "vload", "vmul", "vneg", "vsplat", "vstore", "vsub", "vzero")
 
 
-def module(source, doc, constants, kernels):
-    """A generated file from :data:`MODULE`; ``kernels`` are (name, args, docstring, body lines)."""
+def module(source, doc, constants, *groups):
+    """A generated file from :data:`MODULE`; ``groups`` are the results of :func:`grouped`: the
+    kernels (name, args, docstring, body lines) and the text of their dispatcher."""
     code = "".join(KERNEL.format(name=name, args=args, doc=kdoc, body="\n".join(body))
-                   for name, args, kdoc, body in kernels)
+                   for kernels, _ in groups for name, args, kdoc, body in kernels)
+    code += "".join(dispatch for _, dispatch in groups)
     ops = "\n".join(f"    {n}," for n in SIMD_NAMES if n == "LANES" or f"{n}(" in code)
     return MODULE.format(source=source, doc=doc, ops=ops, constants=constants, kernels=code)
 
@@ -88,13 +90,27 @@ class Translator:
 
     BINOPS = {ast.Add: "vadd", ast.Sub: "vsub", ast.Mult: "vmul"}
 
-    def __init__(self, array_name, arrays=None, stride="NVAR"):
+    def __init__(self, array_name, arrays=None, stride="NVAR", groups=1):
         """``arrays`` maps each scalar array name to (lane array, first row): several scalar
-        arrays (the state X and a deviation D) can live in one lane array of ``stride`` rows."""
+        arrays (the state X and a deviation D) can live in one lane array of ``stride`` rows.
+        ``groups``: G groups of LANES lanes side by side in each row (X[k, row, G * LANES]); every
+        vector statement is written G times in turn, once per group (its vector names get the
+        suffix _g), so the G groups' independent chains of one statement stand next to each
+        other for LLVM to interleave; scalar statements are written once."""
         self.X = array_name
         self.arrays = arrays if arrays is not None else {array_name: (array_name, None)}
         self.stride = stride
+        self.groups = groups
+        self.g = 0
         self.vectors = set()
+
+    def width(self):
+        """The lanes of one row: LANES, or G * LANES."""
+        return "LANES" if self.groups == 1 else f"{self.groups} * LANES"
+
+    def vname(self, name):
+        """The name of vector ``name`` in the current group."""
+        return name if self.groups == 1 else f"{name}_{self.g}"
 
     def is_x(self, node):
         return isinstance(node, ast.Subscript) and isinstance(node.value, ast.Name) and node.value.id in self.arrays
@@ -111,7 +127,9 @@ class Translator:
         first = self.arrays[node.value.id][1]
         if first is not None:
             row = f"{first} + ({row})"
-        return f"({ast.unparse(k)}) * ({self.stride} * LANES) + ({row}) * LANES"
+        w = self.width()
+        group = f" + {self.g} * LANES" if self.g else ""
+        return f"({ast.unparse(k)}) * ({self.stride} * {w}) + ({row}) * {w}{group}"
 
     def uses_vector(self, node):
         for sub in ast.walk(node):
@@ -126,7 +144,7 @@ class Translator:
         if not self.uses_vector(node):
             return ast.unparse(node), False
         if isinstance(node, ast.Name):
-            return node.id, True
+            return self.vname(node.id), True
         if isinstance(node, ast.BinOp) and type(node.op) in self.BINOPS:
             a, va = self.expr(node.left)
             b, vb = self.expr(node.right)
@@ -149,43 +167,56 @@ class Translator:
                     raise Untranslatable(ast.unparse(st))
                 out.append(f"{pad}for {ast.unparse(st.target)} in {ast.unparse(st.iter)}:")
                 out += self.stmts(st.body, indent + 4)
-            elif isinstance(st, ast.Assign) and len(st.targets) == 1:
-                tgt = st.targets[0]
-                if self.is_x(tgt):
-                    code, vec = self.expr(st.value)
-                    code = code if vec else f"vsplat({code})"
-                    out.append(f"{pad}vstore({self.lane_array(tgt)}, {self.offset(tgt)}, {code})")
-                elif isinstance(tgt, ast.Name) and isinstance(st.value, ast.Constant) and st.value.value == 0.0 \
-                        and isinstance(st.value.value, float):
-                    # an accumulator: a float zero in the lane loop is a zero vector
-                    self.vectors.add(tgt.id)
-                    out.append(f"{pad}{tgt.id} = vzero()")
-                elif isinstance(tgt, ast.Name):
-                    code, vec = self.expr(st.value)
-                    if vec:
-                        self.vectors.add(tgt.id)
-                    elif tgt.id in self.vectors:
-                        raise Untranslatable(f"{tgt.id} changes from vector to scalar: {ast.unparse(st)}")
-                    out.append(f"{pad}{tgt.id} = {code}")
-                else:  # tuple unpacking of scalars (the parameters)
-                    if self.uses_vector(st):
-                        raise Untranslatable(ast.unparse(st))
-                    out.append(pad + ast.unparse(st))
-            elif isinstance(st, ast.AugAssign) and isinstance(st.target, ast.Name) \
-                    and type(st.op) in self.BINOPS:
-                name = st.target.id
-                if name not in self.vectors:
-                    if self.uses_vector(st.value):
-                        raise Untranslatable(ast.unparse(st))
-                    out.append(pad + ast.unparse(st))
-                    continue
-                # numba evaluates  a op= e  as  a = a op e
-                code, vec = self.expr(st.value)
-                code = code if vec else f"vsplat({code})"
-                out.append(f"{pad}{name} = {self.BINOPS[type(st.op)]}({name}, {code})")
+            elif self.is_vector_statement(st):
+                for g in range(self.groups):   # the statement once per group, in turn
+                    self.g = g
+                    out.append(pad + self.vector_statement(st))
+                self.g = 0
             else:
-                raise Untranslatable(ast.unparse(st))
+                out.append(pad + self.scalar_statement(st))
         return out
+
+    def is_vector_statement(self, st):
+        """Whether ``st`` computes lane values (written once per group) or scalars (once)."""
+        if isinstance(st, ast.Assign) and len(st.targets) == 1:
+            tgt = st.targets[0]
+            if self.is_x(tgt):
+                return True
+            if isinstance(tgt, ast.Name) and isinstance(st.value, ast.Constant) and st.value.value == 0.0 \
+                    and isinstance(st.value.value, float):
+                return True   # an accumulator: a float zero in the lane loop is a zero vector
+            if isinstance(tgt, ast.Name):
+                return self.uses_vector(st.value)
+            return False
+        if isinstance(st, ast.AugAssign) and isinstance(st.target, ast.Name) and type(st.op) in self.BINOPS:
+            return st.target.id in self.vectors
+        raise Untranslatable(ast.unparse(st))
+
+    def vector_statement(self, st):
+        tgt = st.targets[0] if isinstance(st, ast.Assign) else st.target
+        if isinstance(st, ast.Assign) and self.is_x(tgt):
+            code, vec = self.expr(st.value)
+            code = code if vec else f"vsplat({code})"
+            return f"vstore({self.lane_array(tgt)}, {self.offset(tgt)}, {code})"
+        if isinstance(st, ast.Assign) and isinstance(st.value, ast.Constant):
+            self.vectors.add(tgt.id)
+            return f"{self.vname(tgt.id)} = vzero()"
+        if isinstance(st, ast.Assign):
+            code, _ = self.expr(st.value)
+            self.vectors.add(tgt.id)
+            return f"{self.vname(tgt.id)} = {code}"
+        # numba evaluates  a op= e  as  a = a op e
+        code, vec = self.expr(st.value)
+        code = code if vec else f"vsplat({code})"
+        name = self.vname(tgt.id)
+        return f"{name} = {self.BINOPS[type(st.op)]}({name}, {code})"
+
+    def scalar_statement(self, st):
+        if isinstance(st, ast.Assign) and isinstance(st.targets[0], ast.Name) and st.targets[0].id in self.vectors:
+            raise Untranslatable(f"{st.targets[0].id} changes from vector to scalar: {ast.unparse(st)}")
+        if self.uses_vector(st):
+            raise Untranslatable(ast.unparse(st))
+        return ast.unparse(st)
 
 
 def scalar_function(path, name):
@@ -197,23 +228,64 @@ def scalar_function(path, name):
 
 
 # ----------------------------------------------------------------------------- the two files
+#: the numbers G of lane groups a kernel is written for (one specialisation each: G is fixed
+#: when the code is written, so every offset is a constant and each group's chains are separate
+#: values); the lane arrays have G * LANES lanes
+GROUPS = (1, 2, 4)
+GROUPS_DOC = f"#: the numbers of lane groups the kernels are written for\nGROUPS = {GROUPS}"
+
+
+#: the function a caller calls: the kernel of its G, chosen when the caller is compiled
+DISPATCH = '''
+
+#: {name} for each G
+_{upper} = {{{table}}}
+
+
+def {name}({args}, groups):
+    """{doc}
+
+    ``groups``: a tuple of G zeros.  Its length is part of its type, so a compiled caller is
+    specialised to one G and compiles only that kernel."""
+    _{upper}[len(groups)]({args})
+
+
+@by_groups({name})
+def _{name}({args}, groups):
+    kernel = _{upper}[len(groups)]
+
+    def impl({args}, groups):
+        kernel({args})
+    return impl
+'''
+
+
+def grouped(name, args, doc, translate):
+    """The kernels ``name_G`` for every G of GROUPS (``translate(G)`` gives the body) and the
+    text of ``name(args, groups)``, which calls the kernel of G = len(groups)."""
+    kernels = [(f"{name}_{g}", args, f"{name} for G = {g} group{'s' if g > 1 else ''} of LANES lanes.", translate(g))
+               for g in GROUPS]
+    table = ", ".join(f"{g}: {name}_{g}" for g in GROUPS)
+    return kernels, DISPATCH.format(name=name, upper=name.upper(), table=table, args=args, doc=doc)
+
+
 def generate():
     """``_lanes_generated.py``: the orbit's recurrence on lanes."""
     fn = scalar_function(EQUATIONS, "taylor_coefficients")
     args = [a.arg for a in fn.args.args]
     if args != ["P", "X", "order"]:
         raise Untranslatable(f"unexpected signature {args}")
-    body = Translator("X").stmts(fn.body, 4)
     doc = ("Lane twin of equations.taylor_coefficients, translated from its source by\n"
            "    tools/gen_lanes.py: X[k, i, l] = y_i^(k)(0)/k! of lane l for k = 1..order, given\n"
-           "    X[0, :, :]; X has shape (order + 1, NVAR, LANES).")
+           "    X[0, :, :]; X has shape (order + 1, NVAR, G * LANES), G in GROUPS.")
     return module(
         "taylor_coefficients",
-        "Lane kernel of the Taylor method: the recurrence of R3 for LANES orbits per vector,\n"
-        "coefficient arrays X[k, var, lane] (C-contiguous, lanes contiguous).  Used by\n"
-        ":mod:`explorer.integrate.lanes`.",
-        "#: state variables (p1, p2, M, g1, g2): the rows of X\nNVAR = 5",
-        [("taylor_coefficients_lanes", "P, X, order", doc, body)])
+        "Lane kernel of the Taylor method: the recurrence of R3 for G groups of LANES orbits (one\n"
+        "vector per group), coefficient arrays X[k, var, lane] (C-contiguous, lanes contiguous).\n"
+        "Used by :mod:`explorer.integrate.lanes`.",
+        f"#: state variables (p1, p2, M, g1, g2): the rows of X\nNVAR = 5\n{GROUPS_DOC}",
+        grouped("taylor_coefficients_lanes", "P, X, order", doc,
+                lambda g: Translator("X", groups=g).stmts(fn.body, 4)))
 
 
 #: rows of the tangent lane array Z[k, row, lane]: the orbit, then up to two deviation vectors
@@ -283,8 +355,7 @@ def generate_tangent():
     if args != ["P", "X", "D", "order"]:
         raise Untranslatable(f"unexpected signature {args}")
     arrays = {"X": ("Z", None), "D": ("Z", "db")}
-    full = Translator("X", arrays, stride="NROWS").stmts(fn.body, 4)
-    dev = Translator("X", arrays, stride="NROWS").stmts(prune(fn.body, "D"), 4)
+    pruned = prune(fn.body, "D")
     doc_full = ("Lane twin of equations.taylor_coefficients_tangent, translated from its source by\n"
                 "    tools/gen_lanes.py: the orbit's coefficients in rows 0..4 and those of the deviation\n"
                 "    vector in rows db..db + 4 of Z[k, row, lane], k = 1..order, given Z[0].")
@@ -294,14 +365,53 @@ def generate_tangent():
                "    recurrence recomputes for them).")
     return module(
         "taylor_coefficients_tangent",
-        "Lane kernels of the tangent Taylor method: LANES orbits per vector, each with its state and\n"
-        "up to two deviation vectors in Z[k, row, lane] (C-contiguous, NROWS rows: 0..4 the orbit,\n"
-        "5..9 the first deviation vector, 10..14 the second).  Used by\n"
+        "Lane kernels of the tangent Taylor method: G groups of LANES orbits (one vector per group),\n"
+        "each orbit with its state and up to two deviation vectors in Z[k, row, lane] (C-contiguous,\n"
+        "NROWS rows: 0..4 the orbit, 5..9 the first deviation vector, 10..14 the second).  Used by\n"
         ":mod:`explorer.integrate.tangent_lanes`.",
         f"#: rows of the lane array: the orbit (5) and two deviation vectors (5 each)\nNROWS = {TANGENT_ROWS}\n"
-        "#: first row of each deviation vector\nDEV1 = 5\nDEV2 = 10",
-        [("tangent_coefficients_lanes", "P, Z, order, db", doc_full, full),
-         ("deviation_coefficients_lanes", "P, Z, order, db", doc_dev, dev)])
+        f"#: first row of each deviation vector\nDEV1 = 5\nDEV2 = 10\n{GROUPS_DOC}",
+        grouped("tangent_coefficients_lanes", "P, Z, order, db", doc_full,
+                lambda g: Translator("X", arrays, stride="NROWS", groups=g).stmts(fn.body, 4)),
+        grouped("deviation_coefficients_lanes", "P, Z, order, db", doc_dev,
+                  lambda g: Translator("X", arrays, stride="NROWS", groups=g).stmts(pruned, 4)))
+
+
+# ----------------------------------------------------------------------------- operation counts
+def operation_counts(kernel, order, tangent=False, db=5):
+    """The vector operations one call of the generated ``kernel`` (G = 1) executes at ``order``:
+    {"vadd": n, "vsub": n, "vmul": n, "vneg": n}, each on one vector of LANES doubles (per lane:
+    that many scalar operations).  Counted by running the generated text itself, with
+    one-lane numpy stand-ins for the vector operations that count their calls (the roofline of
+    benchmarks/bench_roofline.py divides the flops of a step by these)."""
+    import re
+
+    import numpy as np
+
+    text = generate_tangent() if tangent else generate()
+    text = re.sub(r"from explorer\._jit import njit\nfrom explorer\.integrate\.simd import \(.*?\)\n", "", text,
+                  flags=re.S)
+    counts = dict.fromkeys(("vadd", "vsub", "vmul", "vneg"), 0)
+
+    def counted(name, fn):
+        def op(*args):
+            counts[name] += 1
+            return fn(*args)
+        return op
+
+    ns = {"njit": lambda f: f, "by_groups": lambda stub: (lambda typer: typer), "LANES": 1,
+          "vload": lambda a, i: a.reshape(-1)[i:i + 1].copy(),
+          "vstore": lambda a, i, v: a.reshape(-1).__setitem__(slice(i, i + 1), v),
+          "vzero": lambda: np.zeros(1), "vsplat": lambda x: np.full(1, x),
+          "vadd": counted("vadd", np.add), "vsub": counted("vsub", np.subtract),
+          "vmul": counted("vmul", np.multiply), "vneg": counted("vneg", np.negative)}
+    exec(compile(text, "<generated>", "exec"), ns)
+    rows = ns.get("NROWS", 5)
+    X = np.zeros((order + 1, rows, 1))
+    X[0] = 0.5
+    args = (X, order, db) if tangent else (X, order)
+    ns[kernel + "_1"](np.ones(9), *args)
+    return counts
 
 
 def main(argv=None):

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import PARAM_SETS, random_states
+from conftest import PARAM_SETS, assert_groups_threads_and_order_keep_the_bits, random_states
 from taylor_oracle import run_taylor_batch
 
 from explorer import model
@@ -47,22 +47,35 @@ def test_gen_lanes_check_passes_on_the_repository_and_fails_on_a_stale_file(tmp_
 # ---------------------------------------------------------------- kernels
 @pytest.mark.parametrize("name", sorted(PARAM_SETS))
 @pytest.mark.parametrize("order", [4, 5, 15, 16, 19, 27])
-def test_kernels_match_scalar_bitwise(name, order):
+@pytest.mark.parametrize("ngroups", G.GROUPS)
+def test_kernels_match_scalar_bitwise(name, order, ngroups):
+    """Every lane of every group (G = 1, 2, 4 groups of LANES lanes) of the recurrence, the Horner
+    sums and the step norms is the scalar kernel's double."""
     P = PARAM_SETS[name].as_array()
     rng = np.random.default_rng(order)
-    X = np.zeros((order + 1, 5, L))
-    X[0] = random_states(PARAM_SETS[name], L, seed=order, scale=2.0).T
+    W = ngroups * L
+    X = np.zeros((order + 1, 5, W))
+    X[0] = random_states(PARAM_SETS[name], W, seed=order, scale=2.0).T
     X[0, :, 0] = 0.0      # an idle lane
-    X[0, 2, 1] = 1e150    # a lane whose coefficients overflow
-    G.taylor_coefficients_lanes(P, X, order)
-    h = rng.uniform(0.0, 0.5, L)
-    out = np.empty((5, L))
-    lanes.evaluate_lanes(X, order, h, out, 0)
+    X[0, 2, W - 1] = 1e150    # a lane whose coefficients overflow (in the last group)
+    G.taylor_coefficients_lanes(P, X, order, (0,) * ngroups)
+    h = rng.uniform(0.0, 0.5, W)
+    out = np.empty((5, W))
+    lanes.evaluate_lanes(X, order, h, out, 0, (0,) * ngroups)
     e_p, e_q = 1.0 / order, 1.0 / (order - 1)
-    norms = np.empty((lanes.N_NORMS, L))
+    norms = np.empty((lanes.N_NORMS, W))
+    vary = np.empty(W)
+    lanes.variation_lanes(X, order, h, 0.3, 0.8, vary, (0,) * ngroups)
     with np.errstate(all="ignore"):
-        lanes.step_norms_lanes(X, order, e_p, e_q, norms)
-        for l in range(L):
+        for l in range(W):
+            c = X[1:, 3, l] * 0.3 - X[1:, 4, l] * 0.8
+            want = 0.0
+            for k in range(order - 1, -1, -1):   # the Horner sum of variation_lanes, from k = order down
+                want = (want + abs(c[k])) * h[l]
+            assert vary[l] == want or (np.isnan(vary[l]) and np.isnan(want))
+    with np.errstate(all="ignore"):
+        lanes.step_norms_lanes(X, order, e_p, e_q, norms, (0,) * ngroups)
+        for l in range(W):
             _check_lane(P, X, order, h, out, norms, l)
 
 
@@ -242,6 +255,32 @@ def test_threads_do_not_change_results():
             _assert_identical(ref, _run(lanes.run_taylor_lanes_batch, Y0, P, 25, order=16))
     finally:
         set_num_threads(old)
+
+
+def test_lane_groups_threads_and_orbit_order_do_not_change_a_bit():
+    """G = 2 and 4 groups of lanes per worker, 1 and 2 threads, the orbits permuted: the raw
+    arrays (crossings, counts, statuses, final states, time and steps) equal those of G = 1 on
+    one thread bit for bit."""
+    prm = PARAM_SETS["figure4_mu0.5"]
+    P = prm.as_array()
+    Y0 = _mixed_states(prm, 53, seed=9)
+    assert_groups_threads_and_order_keep_the_bits(
+        lambda groups, order: _run(lanes.run_taylor_lanes_batch, Y0[order], P, 20, groups=groups), len(Y0), seed=4)
+
+
+def test_lane_groups_are_one_two_or_four():
+    """lanes.lane_groups: the argument, else EXPLORER_LANE_GROUPS, else the default; anything but
+    1, 2, 4 raises ParameterError naming the variable; worker_lanes runs a small batch on the
+    fewest groups that hold its lanes."""
+    assert lanes.lane_groups(2) == 2 and lanes.lane_groups("4") == 4
+    assert lanes.lane_groups() == lanes.DEFAULT_GROUPS or "EXPLORER_LANE_GROUPS" in __import__("os").environ
+    for bad in (0, 3, 8, "x"):
+        with pytest.raises(model.ParameterError, match="EXPLORER_LANE_GROUPS"):
+            lanes.lane_groups(bad)
+    assert lanes.worker_lanes(1, 1, None, 4) == (1, (0,))
+    assert lanes.worker_lanes(20, 2, None, 4) == (10, (0, 0))
+    assert lanes.worker_lanes(64, 2, None, 4) == (32, (0, 0, 0, 0))
+    assert lanes.worker_lanes(64, 2, 3, 4) == (3, (0,))
 
 
 def test_sections_taylor_uses_the_lanes_and_matches_the_scalar_oracle():

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import PARAM_SETS, random_states
+from conftest import PARAM_SETS, assert_groups_threads_and_order_keep_the_bits, random_states
 
 from explorer import model
 from explorer._jit import get_num_threads, set_num_threads
@@ -34,20 +34,23 @@ def test_generated_tangent_file_is_up_to_date(tmp_path):
 
 @pytest.mark.parametrize("name", sorted(PARAM_SETS))
 @pytest.mark.parametrize("order", [4, 15, 20])
-def test_tangent_lane_kernels_match_the_scalar_recurrence_bitwise(name, order):
+@pytest.mark.parametrize("ngroups", G.GROUPS)
+def test_tangent_lane_kernels_match_the_scalar_recurrence_bitwise(name, order, ngroups):
+    """Every lane of every group of the G-group kernels (G = 1, 2, 4) is the scalar recurrence."""
     P = PARAM_SETS[name].as_array()
     rng = np.random.default_rng(order)
-    Z = np.zeros((order + 1, G.NROWS, L))
-    Z[0, :5] = random_states(PARAM_SETS[name], L, seed=order, scale=2.0).T
-    Z[0, 5:] = rng.normal(size=(10, L))
+    W = ngroups * L
+    Z = np.zeros((order + 1, G.NROWS, W))
+    Z[0, :5] = random_states(PARAM_SETS[name], W, seed=order, scale=2.0).T
+    Z[0, 5:] = rng.normal(size=(10, W))
     Z[0, :, 0] = 0.0      # an idle lane
-    G.tangent_coefficients_lanes(P, Z, order, G.DEV1)
-    G.deviation_coefficients_lanes(P, Z, order, G.DEV2)
-    h = rng.uniform(0.0, 0.5, L)
-    out = np.empty((G.NROWS, L))
+    G.tangent_coefficients_lanes(P, Z, order, G.DEV1, (0,) * ngroups)
+    G.deviation_coefficients_lanes(P, Z, order, G.DEV2, (0,) * ngroups)
+    h = rng.uniform(0.0, 0.5, W)
+    out = np.empty((G.NROWS, W))
     for base in (0, G.DEV1, G.DEV2):
-        lanes.evaluate_lanes(Z, order, h, out, base)
-    for l in range(L):
+        lanes.evaluate_lanes(Z, order, h, out, base, (0,) * ngroups)
+    for l in range(W):
         X = np.zeros((5, order + 1))
         D = np.zeros((5, order + 1))
         D2 = np.zeros((5, order + 1))
@@ -113,6 +116,16 @@ def test_lane_batches_equal_the_scalar_reference_for_any_threads_lanes_and_order
         _assert_same([g[np.argsort(perm)] for g in got], ref)
     finally:
         set_num_threads(old)
+
+
+def test_lane_groups_threads_and_orbit_order_do_not_change_a_bit():
+    """G = 2 and 4 groups of lanes per worker, 1 and 2 threads, the orbits permuted: the raw
+    arrays (indicators, history, final states and vectors, status, steps) equal those of G = 1
+    on one thread bit for bit."""
+    P, Y0, V0, W0 = _orbits(45, seed=11)
+    assert_groups_threads_and_order_keep_the_bits(
+        lambda groups, o: _run(tangent_lanes.run_tangent_lanes_batch, P, Y0[o], V0[o], W0[o], 2, True, groups=groups),
+        len(Y0), seed=2)
 
 
 def test_one_vector_lanes_equal_orbit_tangent_taylor():

@@ -2,9 +2,9 @@
 # Written by tools/gen_lanes.py from explorer.model.equations.taylor_coefficients
 # (translated operation by operation).
 # Regenerate:  python tools/gen_lanes.py     (check: --check)
-"""Lane kernel of the Taylor method: the recurrence of R3 for LANES orbits per vector,
-coefficient arrays X[k, var, lane] (C-contiguous, lanes contiguous).  Used by
-:mod:`explorer.integrate.lanes`.
+"""Lane kernel of the Taylor method: the recurrence of R3 for G groups of LANES orbits (one
+vector per group), coefficient arrays X[k, var, lane] (C-contiguous, lanes contiguous).
+Used by :mod:`explorer.integrate.lanes`.
 
 Each lane computes bit for bit what the scalar recurrence computes (the same IEEE operations in
 the same order; the vector operations of :mod:`explorer.integrate.simd`: no fast-math, no FMA).
@@ -12,6 +12,7 @@ the same order; the vector operations of :mod:`explorer.integrate.simd`: no fast
 from explorer._jit import njit
 from explorer.integrate.simd import (
     LANES,
+    by_groups,
     vadd,
     vload,
     vmul,
@@ -24,13 +25,13 @@ from explorer.integrate.simd import (
 
 #: state variables (p1, p2, M, g1, g2): the rows of X
 NVAR = 5
+#: the numbers of lane groups the kernels are written for
+GROUPS = (1, 2, 4)
 
 
 @njit
-def taylor_coefficients_lanes(P, X, order):
-    """Lane twin of equations.taylor_coefficients, translated from its source by
-    tools/gen_lanes.py: X[k, i, l] = y_i^(k)(0)/k! of lane l for k = 1..order, given
-    X[0, :, :]; X has shape (order + 1, NVAR, LANES)."""
+def taylor_coefficients_lanes_1(P, X, order):
+    """taylor_coefficients_lanes for G = 1 group of LANES lanes."""
     a1, a2, b, lam, chi, zeta, mu, xi, eta = (P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8])
     inv_b = 1.0 / b
     c12 = 1.0 / a2 - 1.0 / a1
@@ -65,3 +66,188 @@ def taylor_coefficients_lanes(P, X, order):
         vstore(X, (k + 1) * (NVAR * LANES) + (2) * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12), vmul(vsplat(ca2), vload(X, (k) * (NVAR * LANES) + (1) * LANES))), vmul(vsplat(za1), vload(X, (k) * (NVAR * LANES) + (0) * LANES))), vmul(vsplat(mxi), vload(X, (k) * (NVAR * LANES) + (4) * LANES))), vmul(vsplat(meta), vload(X, (k) * (NVAR * LANES) + (3) * LANES))), vsplat(r)))
         vstore(X, (k + 1) * (NVAR * LANES) + (3) * LANES, vmul(wg2, vsplat(r)))
         vstore(X, (k + 1) * (NVAR * LANES) + (4) * LANES, vmul(vneg(wg1), vsplat(r)))
+
+
+@njit
+def taylor_coefficients_lanes_2(P, X, order):
+    """taylor_coefficients_lanes for G = 2 groups of LANES lanes."""
+    a1, a2, b, lam, chi, zeta, mu, xi, eta = (P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8])
+    inv_b = 1.0 / b
+    c12 = 1.0 / a2 - 1.0 / a1
+    la1 = lam / a1
+    la2 = lam / a2
+    ca2 = chi / a2
+    za1 = zeta / a1
+    mxi = mu * xi
+    meta = mu * eta
+    for k in range(order):
+        wp2_0 = vzero()
+        wp2_1 = vzero()
+        wp1_0 = vzero()
+        wp1_1 = vzero()
+        p12_0 = vzero()
+        p12_1 = vzero()
+        wg2_0 = vzero()
+        wg2_1 = vzero()
+        wg1_0 = vzero()
+        wg1_1 = vzero()
+        for j in range(k + 1):
+            wj_0 = vload(X, (j) * (NVAR * 2 * LANES) + (2) * 2 * LANES)
+            wj_1 = vload(X, (j) * (NVAR * 2 * LANES) + (2) * 2 * LANES + 1 * LANES)
+            i = k - j
+            wp2_0 = vadd(wp2_0, vmul(wj_0, vload(X, (i) * (NVAR * 2 * LANES) + (1) * 2 * LANES)))
+            wp2_1 = vadd(wp2_1, vmul(wj_1, vload(X, (i) * (NVAR * 2 * LANES) + (1) * 2 * LANES + 1 * LANES)))
+            wp1_0 = vadd(wp1_0, vmul(wj_0, vload(X, (i) * (NVAR * 2 * LANES) + (0) * 2 * LANES)))
+            wp1_1 = vadd(wp1_1, vmul(wj_1, vload(X, (i) * (NVAR * 2 * LANES) + (0) * 2 * LANES + 1 * LANES)))
+            p12_0 = vadd(p12_0, vmul(vload(X, (j) * (NVAR * 2 * LANES) + (0) * 2 * LANES), vload(X, (i) * (NVAR * 2 * LANES) + (1) * 2 * LANES)))
+            p12_1 = vadd(p12_1, vmul(vload(X, (j) * (NVAR * 2 * LANES) + (0) * 2 * LANES + 1 * LANES), vload(X, (i) * (NVAR * 2 * LANES) + (1) * 2 * LANES + 1 * LANES)))
+            wg2_0 = vadd(wg2_0, vmul(wj_0, vload(X, (i) * (NVAR * 2 * LANES) + (4) * 2 * LANES)))
+            wg2_1 = vadd(wg2_1, vmul(wj_1, vload(X, (i) * (NVAR * 2 * LANES) + (4) * 2 * LANES + 1 * LANES)))
+            wg1_0 = vadd(wg1_0, vmul(wj_0, vload(X, (i) * (NVAR * 2 * LANES) + (3) * 2 * LANES)))
+            wg1_1 = vadd(wg1_1, vmul(wj_1, vload(X, (i) * (NVAR * 2 * LANES) + (3) * 2 * LANES + 1 * LANES)))
+        wk_0 = vmul(vload(X, (k) * (NVAR * 2 * LANES) + (2) * 2 * LANES), vsplat(inv_b))
+        wk_1 = vmul(vload(X, (k) * (NVAR * 2 * LANES) + (2) * 2 * LANES + 1 * LANES), vsplat(inv_b))
+        wp2_0 = vmul(wp2_0, vsplat(inv_b))
+        wp2_1 = vmul(wp2_1, vsplat(inv_b))
+        wp1_0 = vmul(wp1_0, vsplat(inv_b))
+        wp1_1 = vmul(wp1_1, vsplat(inv_b))
+        wg2_0 = vmul(wg2_0, vsplat(inv_b))
+        wg2_1 = vmul(wg2_1, vsplat(inv_b))
+        wg1_0 = vmul(wg1_0, vsplat(inv_b))
+        wg1_1 = vmul(wg1_1, vsplat(inv_b))
+        r = 1.0 / (k + 1)
+        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (0) * 2 * LANES, vmul(vsub(vsub(vsub(wp2_0, vmul(vsplat(zeta), wk_0)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 2 * LANES) + (3) * 2 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 2 * LANES) + (1) * 2 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (0) * 2 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(wp2_1, vmul(vsplat(zeta), wk_1)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 2 * LANES) + (3) * 2 * LANES + 1 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 2 * LANES) + (1) * 2 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (1) * 2 * LANES, vmul(vadd(vsub(vadd(vneg(wp1_0), vmul(vsplat(chi), wk_0)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 2 * LANES) + (4) * 2 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 2 * LANES) + (0) * 2 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (1) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vneg(wp1_1), vmul(vsplat(chi), wk_1)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 2 * LANES) + (4) * 2 * LANES + 1 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 2 * LANES) + (0) * 2 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (2) * 2 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_0), vmul(vsplat(ca2), vload(X, (k) * (NVAR * 2 * LANES) + (1) * 2 * LANES))), vmul(vsplat(za1), vload(X, (k) * (NVAR * 2 * LANES) + (0) * 2 * LANES))), vmul(vsplat(mxi), vload(X, (k) * (NVAR * 2 * LANES) + (4) * 2 * LANES))), vmul(vsplat(meta), vload(X, (k) * (NVAR * 2 * LANES) + (3) * 2 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (2) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_1), vmul(vsplat(ca2), vload(X, (k) * (NVAR * 2 * LANES) + (1) * 2 * LANES + 1 * LANES))), vmul(vsplat(za1), vload(X, (k) * (NVAR * 2 * LANES) + (0) * 2 * LANES + 1 * LANES))), vmul(vsplat(mxi), vload(X, (k) * (NVAR * 2 * LANES) + (4) * 2 * LANES + 1 * LANES))), vmul(vsplat(meta), vload(X, (k) * (NVAR * 2 * LANES) + (3) * 2 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (3) * 2 * LANES, vmul(wg2_0, vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (3) * 2 * LANES + 1 * LANES, vmul(wg2_1, vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (4) * 2 * LANES, vmul(vneg(wg1_0), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (4) * 2 * LANES + 1 * LANES, vmul(vneg(wg1_1), vsplat(r)))
+
+
+@njit
+def taylor_coefficients_lanes_4(P, X, order):
+    """taylor_coefficients_lanes for G = 4 groups of LANES lanes."""
+    a1, a2, b, lam, chi, zeta, mu, xi, eta = (P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8])
+    inv_b = 1.0 / b
+    c12 = 1.0 / a2 - 1.0 / a1
+    la1 = lam / a1
+    la2 = lam / a2
+    ca2 = chi / a2
+    za1 = zeta / a1
+    mxi = mu * xi
+    meta = mu * eta
+    for k in range(order):
+        wp2_0 = vzero()
+        wp2_1 = vzero()
+        wp2_2 = vzero()
+        wp2_3 = vzero()
+        wp1_0 = vzero()
+        wp1_1 = vzero()
+        wp1_2 = vzero()
+        wp1_3 = vzero()
+        p12_0 = vzero()
+        p12_1 = vzero()
+        p12_2 = vzero()
+        p12_3 = vzero()
+        wg2_0 = vzero()
+        wg2_1 = vzero()
+        wg2_2 = vzero()
+        wg2_3 = vzero()
+        wg1_0 = vzero()
+        wg1_1 = vzero()
+        wg1_2 = vzero()
+        wg1_3 = vzero()
+        for j in range(k + 1):
+            wj_0 = vload(X, (j) * (NVAR * 4 * LANES) + (2) * 4 * LANES)
+            wj_1 = vload(X, (j) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 1 * LANES)
+            wj_2 = vload(X, (j) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 2 * LANES)
+            wj_3 = vload(X, (j) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 3 * LANES)
+            i = k - j
+            wp2_0 = vadd(wp2_0, vmul(wj_0, vload(X, (i) * (NVAR * 4 * LANES) + (1) * 4 * LANES)))
+            wp2_1 = vadd(wp2_1, vmul(wj_1, vload(X, (i) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 1 * LANES)))
+            wp2_2 = vadd(wp2_2, vmul(wj_2, vload(X, (i) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 2 * LANES)))
+            wp2_3 = vadd(wp2_3, vmul(wj_3, vload(X, (i) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 3 * LANES)))
+            wp1_0 = vadd(wp1_0, vmul(wj_0, vload(X, (i) * (NVAR * 4 * LANES) + (0) * 4 * LANES)))
+            wp1_1 = vadd(wp1_1, vmul(wj_1, vload(X, (i) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 1 * LANES)))
+            wp1_2 = vadd(wp1_2, vmul(wj_2, vload(X, (i) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 2 * LANES)))
+            wp1_3 = vadd(wp1_3, vmul(wj_3, vload(X, (i) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 3 * LANES)))
+            p12_0 = vadd(p12_0, vmul(vload(X, (j) * (NVAR * 4 * LANES) + (0) * 4 * LANES), vload(X, (i) * (NVAR * 4 * LANES) + (1) * 4 * LANES)))
+            p12_1 = vadd(p12_1, vmul(vload(X, (j) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 1 * LANES), vload(X, (i) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 1 * LANES)))
+            p12_2 = vadd(p12_2, vmul(vload(X, (j) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 2 * LANES), vload(X, (i) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 2 * LANES)))
+            p12_3 = vadd(p12_3, vmul(vload(X, (j) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 3 * LANES), vload(X, (i) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 3 * LANES)))
+            wg2_0 = vadd(wg2_0, vmul(wj_0, vload(X, (i) * (NVAR * 4 * LANES) + (4) * 4 * LANES)))
+            wg2_1 = vadd(wg2_1, vmul(wj_1, vload(X, (i) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 1 * LANES)))
+            wg2_2 = vadd(wg2_2, vmul(wj_2, vload(X, (i) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 2 * LANES)))
+            wg2_3 = vadd(wg2_3, vmul(wj_3, vload(X, (i) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 3 * LANES)))
+            wg1_0 = vadd(wg1_0, vmul(wj_0, vload(X, (i) * (NVAR * 4 * LANES) + (3) * 4 * LANES)))
+            wg1_1 = vadd(wg1_1, vmul(wj_1, vload(X, (i) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 1 * LANES)))
+            wg1_2 = vadd(wg1_2, vmul(wj_2, vload(X, (i) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 2 * LANES)))
+            wg1_3 = vadd(wg1_3, vmul(wj_3, vload(X, (i) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 3 * LANES)))
+        wk_0 = vmul(vload(X, (k) * (NVAR * 4 * LANES) + (2) * 4 * LANES), vsplat(inv_b))
+        wk_1 = vmul(vload(X, (k) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 1 * LANES), vsplat(inv_b))
+        wk_2 = vmul(vload(X, (k) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 2 * LANES), vsplat(inv_b))
+        wk_3 = vmul(vload(X, (k) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 3 * LANES), vsplat(inv_b))
+        wp2_0 = vmul(wp2_0, vsplat(inv_b))
+        wp2_1 = vmul(wp2_1, vsplat(inv_b))
+        wp2_2 = vmul(wp2_2, vsplat(inv_b))
+        wp2_3 = vmul(wp2_3, vsplat(inv_b))
+        wp1_0 = vmul(wp1_0, vsplat(inv_b))
+        wp1_1 = vmul(wp1_1, vsplat(inv_b))
+        wp1_2 = vmul(wp1_2, vsplat(inv_b))
+        wp1_3 = vmul(wp1_3, vsplat(inv_b))
+        wg2_0 = vmul(wg2_0, vsplat(inv_b))
+        wg2_1 = vmul(wg2_1, vsplat(inv_b))
+        wg2_2 = vmul(wg2_2, vsplat(inv_b))
+        wg2_3 = vmul(wg2_3, vsplat(inv_b))
+        wg1_0 = vmul(wg1_0, vsplat(inv_b))
+        wg1_1 = vmul(wg1_1, vsplat(inv_b))
+        wg1_2 = vmul(wg1_2, vsplat(inv_b))
+        wg1_3 = vmul(wg1_3, vsplat(inv_b))
+        r = 1.0 / (k + 1)
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (0) * 4 * LANES, vmul(vsub(vsub(vsub(wp2_0, vmul(vsplat(zeta), wk_0)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(wp2_1, vmul(vsplat(zeta), wk_1)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 1 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 2 * LANES, vmul(vsub(vsub(vsub(wp2_2, vmul(vsplat(zeta), wk_2)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 2 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 2 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 3 * LANES, vmul(vsub(vsub(vsub(wp2_3, vmul(vsplat(zeta), wk_3)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 3 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 3 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (1) * 4 * LANES, vmul(vadd(vsub(vadd(vneg(wp1_0), vmul(vsplat(chi), wk_0)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vneg(wp1_1), vmul(vsplat(chi), wk_1)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 1 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 2 * LANES, vmul(vadd(vsub(vadd(vneg(wp1_2), vmul(vsplat(chi), wk_2)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 2 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 2 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 3 * LANES, vmul(vadd(vsub(vadd(vneg(wp1_3), vmul(vsplat(chi), wk_3)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 3 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 3 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (2) * 4 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_0), vmul(vsplat(ca2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES))), vmul(vsplat(za1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES))), vmul(vsplat(mxi), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES))), vmul(vsplat(meta), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_1), vmul(vsplat(ca2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 1 * LANES))), vmul(vsplat(za1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 1 * LANES))), vmul(vsplat(mxi), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 1 * LANES))), vmul(vsplat(meta), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 2 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_2), vmul(vsplat(ca2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 2 * LANES))), vmul(vsplat(za1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 2 * LANES))), vmul(vsplat(mxi), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 2 * LANES))), vmul(vsplat(meta), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 2 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 3 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_3), vmul(vsplat(ca2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 3 * LANES))), vmul(vsplat(za1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 3 * LANES))), vmul(vsplat(mxi), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 3 * LANES))), vmul(vsplat(meta), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 3 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (3) * 4 * LANES, vmul(wg2_0, vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 1 * LANES, vmul(wg2_1, vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 2 * LANES, vmul(wg2_2, vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 3 * LANES, vmul(wg2_3, vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (4) * 4 * LANES, vmul(vneg(wg1_0), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 1 * LANES, vmul(vneg(wg1_1), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 2 * LANES, vmul(vneg(wg1_2), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 3 * LANES, vmul(vneg(wg1_3), vsplat(r)))
+
+
+#: taylor_coefficients_lanes for each G
+_TAYLOR_COEFFICIENTS_LANES = {1: taylor_coefficients_lanes_1, 2: taylor_coefficients_lanes_2, 4: taylor_coefficients_lanes_4}
+
+
+def taylor_coefficients_lanes(P, X, order, groups):
+    """Lane twin of equations.taylor_coefficients, translated from its source by
+    tools/gen_lanes.py: X[k, i, l] = y_i^(k)(0)/k! of lane l for k = 1..order, given
+    X[0, :, :]; X has shape (order + 1, NVAR, G * LANES), G in GROUPS.
+
+    ``groups``: a tuple of G zeros.  Its length is part of its type, so a compiled caller is
+    specialised to one G and compiles only that kernel."""
+    _TAYLOR_COEFFICIENTS_LANES[len(groups)](P, X, order)
+
+
+@by_groups(taylor_coefficients_lanes)
+def _taylor_coefficients_lanes(P, X, order, groups):
+    kernel = _TAYLOR_COEFFICIENTS_LANES[len(groups)]
+
+    def impl(P, X, order, groups):
+        kernel(P, X, order)
+    return impl

@@ -2,9 +2,9 @@
 # Written by tools/gen_lanes.py from explorer.model.equations.taylor_coefficients_tangent
 # (translated operation by operation).
 # Regenerate:  python tools/gen_lanes.py     (check: --check)
-"""Lane kernels of the tangent Taylor method: LANES orbits per vector, each with its state and
-up to two deviation vectors in Z[k, row, lane] (C-contiguous, NROWS rows: 0..4 the orbit,
-5..9 the first deviation vector, 10..14 the second).  Used by
+"""Lane kernels of the tangent Taylor method: G groups of LANES orbits (one vector per group),
+each orbit with its state and up to two deviation vectors in Z[k, row, lane] (C-contiguous,
+NROWS rows: 0..4 the orbit, 5..9 the first deviation vector, 10..14 the second).  Used by
 :mod:`explorer.integrate.tangent_lanes`.
 
 Each lane computes bit for bit what the scalar recurrence computes (the same IEEE operations in
@@ -13,6 +13,7 @@ the same order; the vector operations of :mod:`explorer.integrate.simd`: no fast
 from explorer._jit import njit
 from explorer.integrate.simd import (
     LANES,
+    by_groups,
     vadd,
     vload,
     vmul,
@@ -28,13 +29,13 @@ NROWS = 15
 #: first row of each deviation vector
 DEV1 = 5
 DEV2 = 10
+#: the numbers of lane groups the kernels are written for
+GROUPS = (1, 2, 4)
 
 
 @njit
-def tangent_coefficients_lanes(P, Z, order, db):
-    """Lane twin of equations.taylor_coefficients_tangent, translated from its source by
-    tools/gen_lanes.py: the orbit's coefficients in rows 0..4 and those of the deviation
-    vector in rows db..db + 4 of Z[k, row, lane], k = 1..order, given Z[0]."""
+def tangent_coefficients_lanes_1(P, Z, order, db):
+    """tangent_coefficients_lanes for G = 1 group of LANES lanes."""
     a1, a2, b, lam, chi, zeta, mu, xi, eta = (P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8])
     inv_b = 1.0 / b
     c12 = 1.0 / a2 - 1.0 / a1
@@ -85,11 +86,248 @@ def tangent_coefficients_lanes(P, Z, order, db):
 
 
 @njit
-def deviation_coefficients_lanes(P, Z, order, db):
-    """The deviation vector's part of taylor_coefficients_tangent only (its statements that
-    the stores into D need, unchanged; tools/gen_lanes.py prune): rows db..db + 4 of Z
-    from the orbit's coefficients already in rows 0..4 (the same numbers the full
-    recurrence recomputes for them)."""
+def tangent_coefficients_lanes_2(P, Z, order, db):
+    """tangent_coefficients_lanes for G = 2 groups of LANES lanes."""
+    a1, a2, b, lam, chi, zeta, mu, xi, eta = (P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8])
+    inv_b = 1.0 / b
+    c12 = 1.0 / a2 - 1.0 / a1
+    la1 = lam / a1
+    la2 = lam / a2
+    ca2 = chi / a2
+    za1 = zeta / a1
+    mxi = mu * xi
+    meta = mu * eta
+    for k in range(order):
+        wp2_0 = vzero()
+        wp2_1 = vzero()
+        wp1_0 = vzero()
+        wp1_1 = vzero()
+        p12_0 = vzero()
+        p12_1 = vzero()
+        wg2_0 = vzero()
+        wg2_1 = vzero()
+        wg1_0 = vzero()
+        wg1_1 = vzero()
+        dwp2_0 = vzero()
+        dwp2_1 = vzero()
+        dwp1_0 = vzero()
+        dwp1_1 = vzero()
+        dp12_0 = vzero()
+        dp12_1 = vzero()
+        dwg2_0 = vzero()
+        dwg2_1 = vzero()
+        dwg1_0 = vzero()
+        dwg1_1 = vzero()
+        for j in range(k + 1):
+            i = k - j
+            wj_0 = vload(Z, (j) * (NROWS * 2 * LANES) + (2) * 2 * LANES)
+            wj_1 = vload(Z, (j) * (NROWS * 2 * LANES) + (2) * 2 * LANES + 1 * LANES)
+            dwj_0 = vload(Z, (j) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES)
+            dwj_1 = vload(Z, (j) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES + 1 * LANES)
+            wp2_0 = vadd(wp2_0, vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES)))
+            wp2_1 = vadd(wp2_1, vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES + 1 * LANES)))
+            wp1_0 = vadd(wp1_0, vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (0) * 2 * LANES)))
+            wp1_1 = vadd(wp1_1, vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES)))
+            p12_0 = vadd(p12_0, vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (0) * 2 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES)))
+            p12_1 = vadd(p12_1, vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES + 1 * LANES)))
+            wg2_0 = vadd(wg2_0, vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (4) * 2 * LANES)))
+            wg2_1 = vadd(wg2_1, vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (4) * 2 * LANES + 1 * LANES)))
+            wg1_0 = vadd(wg1_0, vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (3) * 2 * LANES)))
+            wg1_1 = vadd(wg1_1, vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (3) * 2 * LANES + 1 * LANES)))
+            dwp2_0 = vadd(dwp2_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))))
+            dwp2_1 = vadd(dwp2_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))))
+            dwp1_0 = vadd(dwp1_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (0) * 2 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES))))
+            dwp1_1 = vadd(dwp1_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES))))
+            dp12_0 = vadd(dp12_0, vadd(vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES)), vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (0) * 2 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))))
+            dp12_1 = vadd(dp12_1, vadd(vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES + 1 * LANES)), vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))))
+            dwg2_0 = vadd(dwg2_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (4) * 2 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES))))
+            dwg2_1 = vadd(dwg2_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (4) * 2 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES))))
+            dwg1_0 = vadd(dwg1_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (3) * 2 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES))))
+            dwg1_1 = vadd(dwg1_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (3) * 2 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES))))
+        r = 1.0 / (k + 1)
+        wk_0 = vmul(vload(Z, (k) * (NROWS * 2 * LANES) + (2) * 2 * LANES), vsplat(inv_b))
+        wk_1 = vmul(vload(Z, (k) * (NROWS * 2 * LANES) + (2) * 2 * LANES + 1 * LANES), vsplat(inv_b))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (0) * 2 * LANES, vmul(vsub(vsub(vsub(vmul(wp2_0, vsplat(inv_b)), vmul(vsplat(zeta), wk_0)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (3) * 2 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 2 * LANES) + (1) * 2 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(vmul(wp2_1, vsplat(inv_b)), vmul(vsplat(zeta), wk_1)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (3) * 2 * LANES + 1 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 2 * LANES) + (1) * 2 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (1) * 2 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(wp1_0), vsplat(inv_b)), vmul(vsplat(chi), wk_0)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (4) * 2 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 2 * LANES) + (0) * 2 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (1) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(wp1_1), vsplat(inv_b)), vmul(vsplat(chi), wk_1)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (4) * 2 * LANES + 1 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (2) * 2 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_0), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 2 * LANES) + (1) * 2 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 2 * LANES) + (0) * 2 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 2 * LANES) + (4) * 2 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 2 * LANES) + (3) * 2 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (2) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_1), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 2 * LANES) + (1) * 2 * LANES + 1 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 2 * LANES) + (4) * 2 * LANES + 1 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 2 * LANES) + (3) * 2 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (3) * 2 * LANES, vmul(vmul(wg2_0, vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (3) * 2 * LANES + 1 * LANES, vmul(vmul(wg2_1, vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (4) * 2 * LANES, vmul(vmul(vneg(wg1_0), vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (4) * 2 * LANES + 1 * LANES, vmul(vmul(vneg(wg1_1), vsplat(inv_b)), vsplat(r)))
+        dwk_0 = vmul(vload(Z, (k) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES), vsplat(inv_b))
+        dwk_1 = vmul(vload(Z, (k) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES + 1 * LANES), vsplat(inv_b))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_0, vsplat(inv_b)), vmul(vsplat(zeta), dwk_0)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_1, vsplat(inv_b)), vmul(vsplat(zeta), dwk_1)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_0), vsplat(inv_b)), vmul(vsplat(chi), dwk_0)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_1), vsplat(inv_b)), vmul(vsplat(chi), dwk_1)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_0), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_1), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES, vmul(vmul(dwg2_0, vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES, vmul(vmul(dwg2_1, vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES, vmul(vmul(vneg(dwg1_0), vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES, vmul(vmul(vneg(dwg1_1), vsplat(inv_b)), vsplat(r)))
+
+
+@njit
+def tangent_coefficients_lanes_4(P, Z, order, db):
+    """tangent_coefficients_lanes for G = 4 groups of LANES lanes."""
+    a1, a2, b, lam, chi, zeta, mu, xi, eta = (P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8])
+    inv_b = 1.0 / b
+    c12 = 1.0 / a2 - 1.0 / a1
+    la1 = lam / a1
+    la2 = lam / a2
+    ca2 = chi / a2
+    za1 = zeta / a1
+    mxi = mu * xi
+    meta = mu * eta
+    for k in range(order):
+        wp2_0 = vzero()
+        wp2_1 = vzero()
+        wp2_2 = vzero()
+        wp2_3 = vzero()
+        wp1_0 = vzero()
+        wp1_1 = vzero()
+        wp1_2 = vzero()
+        wp1_3 = vzero()
+        p12_0 = vzero()
+        p12_1 = vzero()
+        p12_2 = vzero()
+        p12_3 = vzero()
+        wg2_0 = vzero()
+        wg2_1 = vzero()
+        wg2_2 = vzero()
+        wg2_3 = vzero()
+        wg1_0 = vzero()
+        wg1_1 = vzero()
+        wg1_2 = vzero()
+        wg1_3 = vzero()
+        dwp2_0 = vzero()
+        dwp2_1 = vzero()
+        dwp2_2 = vzero()
+        dwp2_3 = vzero()
+        dwp1_0 = vzero()
+        dwp1_1 = vzero()
+        dwp1_2 = vzero()
+        dwp1_3 = vzero()
+        dp12_0 = vzero()
+        dp12_1 = vzero()
+        dp12_2 = vzero()
+        dp12_3 = vzero()
+        dwg2_0 = vzero()
+        dwg2_1 = vzero()
+        dwg2_2 = vzero()
+        dwg2_3 = vzero()
+        dwg1_0 = vzero()
+        dwg1_1 = vzero()
+        dwg1_2 = vzero()
+        dwg1_3 = vzero()
+        for j in range(k + 1):
+            i = k - j
+            wj_0 = vload(Z, (j) * (NROWS * 4 * LANES) + (2) * 4 * LANES)
+            wj_1 = vload(Z, (j) * (NROWS * 4 * LANES) + (2) * 4 * LANES + 1 * LANES)
+            wj_2 = vload(Z, (j) * (NROWS * 4 * LANES) + (2) * 4 * LANES + 2 * LANES)
+            wj_3 = vload(Z, (j) * (NROWS * 4 * LANES) + (2) * 4 * LANES + 3 * LANES)
+            dwj_0 = vload(Z, (j) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES)
+            dwj_1 = vload(Z, (j) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 1 * LANES)
+            dwj_2 = vload(Z, (j) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 2 * LANES)
+            dwj_3 = vload(Z, (j) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 3 * LANES)
+            wp2_0 = vadd(wp2_0, vmul(wj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES)))
+            wp2_1 = vadd(wp2_1, vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 1 * LANES)))
+            wp2_2 = vadd(wp2_2, vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 2 * LANES)))
+            wp2_3 = vadd(wp2_3, vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 3 * LANES)))
+            wp1_0 = vadd(wp1_0, vmul(wj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES)))
+            wp1_1 = vadd(wp1_1, vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 1 * LANES)))
+            wp1_2 = vadd(wp1_2, vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 2 * LANES)))
+            wp1_3 = vadd(wp1_3, vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 3 * LANES)))
+            p12_0 = vadd(p12_0, vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES)))
+            p12_1 = vadd(p12_1, vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 1 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 1 * LANES)))
+            p12_2 = vadd(p12_2, vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 2 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 2 * LANES)))
+            p12_3 = vadd(p12_3, vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 3 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 3 * LANES)))
+            wg2_0 = vadd(wg2_0, vmul(wj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES)))
+            wg2_1 = vadd(wg2_1, vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 1 * LANES)))
+            wg2_2 = vadd(wg2_2, vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 2 * LANES)))
+            wg2_3 = vadd(wg2_3, vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 3 * LANES)))
+            wg1_0 = vadd(wg1_0, vmul(wj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES)))
+            wg1_1 = vadd(wg1_1, vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 1 * LANES)))
+            wg1_2 = vadd(wg1_2, vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 2 * LANES)))
+            wg1_3 = vadd(wg1_3, vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 3 * LANES)))
+            dwp2_0 = vadd(dwp2_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES))))
+            dwp2_1 = vadd(dwp2_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES))))
+            dwp2_2 = vadd(dwp2_2, vadd(vmul(dwj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 2 * LANES)), vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES))))
+            dwp2_3 = vadd(dwp2_3, vadd(vmul(dwj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 3 * LANES)), vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES))))
+            dwp1_0 = vadd(dwp1_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES))))
+            dwp1_1 = vadd(dwp1_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES))))
+            dwp1_2 = vadd(dwp1_2, vadd(vmul(dwj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 2 * LANES)), vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES))))
+            dwp1_3 = vadd(dwp1_3, vadd(vmul(dwj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 3 * LANES)), vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES))))
+            dp12_0 = vadd(dp12_0, vadd(vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES)), vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES))))
+            dp12_1 = vadd(dp12_1, vadd(vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 1 * LANES)), vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 1 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES))))
+            dp12_2 = vadd(dp12_2, vadd(vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 2 * LANES)), vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 2 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES))))
+            dp12_3 = vadd(dp12_3, vadd(vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 3 * LANES)), vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 3 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES))))
+            dwg2_0 = vadd(dwg2_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES))))
+            dwg2_1 = vadd(dwg2_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 1 * LANES))))
+            dwg2_2 = vadd(dwg2_2, vadd(vmul(dwj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 2 * LANES)), vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 2 * LANES))))
+            dwg2_3 = vadd(dwg2_3, vadd(vmul(dwj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 3 * LANES)), vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 3 * LANES))))
+            dwg1_0 = vadd(dwg1_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES))))
+            dwg1_1 = vadd(dwg1_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 1 * LANES))))
+            dwg1_2 = vadd(dwg1_2, vadd(vmul(dwj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 2 * LANES)), vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 2 * LANES))))
+            dwg1_3 = vadd(dwg1_3, vadd(vmul(dwj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 3 * LANES)), vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 3 * LANES))))
+        r = 1.0 / (k + 1)
+        wk_0 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (2) * 4 * LANES), vsplat(inv_b))
+        wk_1 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (2) * 4 * LANES + 1 * LANES), vsplat(inv_b))
+        wk_2 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (2) * 4 * LANES + 2 * LANES), vsplat(inv_b))
+        wk_3 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (2) * 4 * LANES + 3 * LANES), vsplat(inv_b))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (0) * 4 * LANES, vmul(vsub(vsub(vsub(vmul(wp2_0, vsplat(inv_b)), vmul(vsplat(zeta), wk_0)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (3) * 4 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 4 * LANES) + (1) * 4 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(vmul(wp2_1, vsplat(inv_b)), vmul(vsplat(zeta), wk_1)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 1 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 2 * LANES, vmul(vsub(vsub(vsub(vmul(wp2_2, vsplat(inv_b)), vmul(vsplat(zeta), wk_2)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 2 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 2 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 3 * LANES, vmul(vsub(vsub(vsub(vmul(wp2_3, vsplat(inv_b)), vmul(vsplat(zeta), wk_3)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 3 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 3 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (1) * 4 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(wp1_0), vsplat(inv_b)), vmul(vsplat(chi), wk_0)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (4) * 4 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 4 * LANES) + (0) * 4 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(wp1_1), vsplat(inv_b)), vmul(vsplat(chi), wk_1)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 1 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 2 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(wp1_2), vsplat(inv_b)), vmul(vsplat(chi), wk_2)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 2 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 2 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 3 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(wp1_3), vsplat(inv_b)), vmul(vsplat(chi), wk_3)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 3 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 3 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (2) * 4 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_0), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 4 * LANES) + (1) * 4 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 4 * LANES) + (0) * 4 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 4 * LANES) + (4) * 4 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 4 * LANES) + (3) * 4 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (2) * 4 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_1), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 1 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 1 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 1 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (2) * 4 * LANES + 2 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_2), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 2 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 2 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 2 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 2 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (2) * 4 * LANES + 3 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_3), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 3 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 3 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 3 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 3 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (3) * 4 * LANES, vmul(vmul(wg2_0, vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 1 * LANES, vmul(vmul(wg2_1, vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 2 * LANES, vmul(vmul(wg2_2, vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 3 * LANES, vmul(vmul(wg2_3, vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (4) * 4 * LANES, vmul(vmul(vneg(wg1_0), vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 1 * LANES, vmul(vmul(vneg(wg1_1), vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 2 * LANES, vmul(vmul(vneg(wg1_2), vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 3 * LANES, vmul(vmul(vneg(wg1_3), vsplat(inv_b)), vsplat(r)))
+        dwk_0 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES), vsplat(inv_b))
+        dwk_1 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 1 * LANES), vsplat(inv_b))
+        dwk_2 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 2 * LANES), vsplat(inv_b))
+        dwk_3 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 3 * LANES), vsplat(inv_b))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_0, vsplat(inv_b)), vmul(vsplat(zeta), dwk_0)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_1, vsplat(inv_b)), vmul(vsplat(zeta), dwk_1)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 1 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_2, vsplat(inv_b)), vmul(vsplat(zeta), dwk_2)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 2 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_3, vsplat(inv_b)), vmul(vsplat(zeta), dwk_3)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 3 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_0), vsplat(inv_b)), vmul(vsplat(chi), dwk_0)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_1), vsplat(inv_b)), vmul(vsplat(chi), dwk_1)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 1 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_2), vsplat(inv_b)), vmul(vsplat(chi), dwk_2)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 2 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_3), vsplat(inv_b)), vmul(vsplat(chi), dwk_3)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 3 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_0), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_1), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 1 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 2 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_2), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 2 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 2 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 3 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_3), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 3 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 3 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES, vmul(vmul(dwg2_0, vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 1 * LANES, vmul(vmul(dwg2_1, vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 2 * LANES, vmul(vmul(dwg2_2, vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 3 * LANES, vmul(vmul(dwg2_3, vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES, vmul(vmul(vneg(dwg1_0), vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 1 * LANES, vmul(vmul(vneg(dwg1_1), vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 2 * LANES, vmul(vmul(vneg(dwg1_2), vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 3 * LANES, vmul(vmul(vneg(dwg1_3), vsplat(inv_b)), vsplat(r)))
+
+
+@njit
+def deviation_coefficients_lanes_1(P, Z, order, db):
+    """deviation_coefficients_lanes for G = 1 group of LANES lanes."""
     a1, a2, b, lam, chi, zeta, mu, xi, eta = (P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8])
     inv_b = 1.0 / b
     c12 = 1.0 / a2 - 1.0 / a1
@@ -121,3 +359,194 @@ def deviation_coefficients_lanes(P, Z, order, db):
         vstore(Z, (k + 1) * (NROWS * LANES) + (db + (2)) * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * LANES) + (db + (1)) * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * LANES) + (db + (0)) * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * LANES) + (db + (4)) * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * LANES) + (db + (3)) * LANES))), vsplat(r)))
         vstore(Z, (k + 1) * (NROWS * LANES) + (db + (3)) * LANES, vmul(vmul(dwg2, vsplat(inv_b)), vsplat(r)))
         vstore(Z, (k + 1) * (NROWS * LANES) + (db + (4)) * LANES, vmul(vmul(vneg(dwg1), vsplat(inv_b)), vsplat(r)))
+
+
+@njit
+def deviation_coefficients_lanes_2(P, Z, order, db):
+    """deviation_coefficients_lanes for G = 2 groups of LANES lanes."""
+    a1, a2, b, lam, chi, zeta, mu, xi, eta = (P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8])
+    inv_b = 1.0 / b
+    c12 = 1.0 / a2 - 1.0 / a1
+    la1 = lam / a1
+    la2 = lam / a2
+    ca2 = chi / a2
+    za1 = zeta / a1
+    mxi = mu * xi
+    meta = mu * eta
+    for k in range(order):
+        dwp2_0 = vzero()
+        dwp2_1 = vzero()
+        dwp1_0 = vzero()
+        dwp1_1 = vzero()
+        dp12_0 = vzero()
+        dp12_1 = vzero()
+        dwg2_0 = vzero()
+        dwg2_1 = vzero()
+        dwg1_0 = vzero()
+        dwg1_1 = vzero()
+        for j in range(k + 1):
+            i = k - j
+            wj_0 = vload(Z, (j) * (NROWS * 2 * LANES) + (2) * 2 * LANES)
+            wj_1 = vload(Z, (j) * (NROWS * 2 * LANES) + (2) * 2 * LANES + 1 * LANES)
+            dwj_0 = vload(Z, (j) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES)
+            dwj_1 = vload(Z, (j) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES + 1 * LANES)
+            dwp2_0 = vadd(dwp2_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))))
+            dwp2_1 = vadd(dwp2_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))))
+            dwp1_0 = vadd(dwp1_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (0) * 2 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES))))
+            dwp1_1 = vadd(dwp1_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES))))
+            dp12_0 = vadd(dp12_0, vadd(vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES)), vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (0) * 2 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))))
+            dp12_1 = vadd(dp12_1, vadd(vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES + 1 * LANES)), vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))))
+            dwg2_0 = vadd(dwg2_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (4) * 2 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES))))
+            dwg2_1 = vadd(dwg2_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (4) * 2 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES))))
+            dwg1_0 = vadd(dwg1_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (3) * 2 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES))))
+            dwg1_1 = vadd(dwg1_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (3) * 2 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES))))
+        r = 1.0 / (k + 1)
+        dwk_0 = vmul(vload(Z, (k) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES), vsplat(inv_b))
+        dwk_1 = vmul(vload(Z, (k) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES + 1 * LANES), vsplat(inv_b))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_0, vsplat(inv_b)), vmul(vsplat(zeta), dwk_0)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_1, vsplat(inv_b)), vmul(vsplat(zeta), dwk_1)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_0), vsplat(inv_b)), vmul(vsplat(chi), dwk_0)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_1), vsplat(inv_b)), vmul(vsplat(chi), dwk_1)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_0), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_1), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES, vmul(vmul(dwg2_0, vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES, vmul(vmul(dwg2_1, vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES, vmul(vmul(vneg(dwg1_0), vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES, vmul(vmul(vneg(dwg1_1), vsplat(inv_b)), vsplat(r)))
+
+
+@njit
+def deviation_coefficients_lanes_4(P, Z, order, db):
+    """deviation_coefficients_lanes for G = 4 groups of LANES lanes."""
+    a1, a2, b, lam, chi, zeta, mu, xi, eta = (P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8])
+    inv_b = 1.0 / b
+    c12 = 1.0 / a2 - 1.0 / a1
+    la1 = lam / a1
+    la2 = lam / a2
+    ca2 = chi / a2
+    za1 = zeta / a1
+    mxi = mu * xi
+    meta = mu * eta
+    for k in range(order):
+        dwp2_0 = vzero()
+        dwp2_1 = vzero()
+        dwp2_2 = vzero()
+        dwp2_3 = vzero()
+        dwp1_0 = vzero()
+        dwp1_1 = vzero()
+        dwp1_2 = vzero()
+        dwp1_3 = vzero()
+        dp12_0 = vzero()
+        dp12_1 = vzero()
+        dp12_2 = vzero()
+        dp12_3 = vzero()
+        dwg2_0 = vzero()
+        dwg2_1 = vzero()
+        dwg2_2 = vzero()
+        dwg2_3 = vzero()
+        dwg1_0 = vzero()
+        dwg1_1 = vzero()
+        dwg1_2 = vzero()
+        dwg1_3 = vzero()
+        for j in range(k + 1):
+            i = k - j
+            wj_0 = vload(Z, (j) * (NROWS * 4 * LANES) + (2) * 4 * LANES)
+            wj_1 = vload(Z, (j) * (NROWS * 4 * LANES) + (2) * 4 * LANES + 1 * LANES)
+            wj_2 = vload(Z, (j) * (NROWS * 4 * LANES) + (2) * 4 * LANES + 2 * LANES)
+            wj_3 = vload(Z, (j) * (NROWS * 4 * LANES) + (2) * 4 * LANES + 3 * LANES)
+            dwj_0 = vload(Z, (j) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES)
+            dwj_1 = vload(Z, (j) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 1 * LANES)
+            dwj_2 = vload(Z, (j) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 2 * LANES)
+            dwj_3 = vload(Z, (j) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 3 * LANES)
+            dwp2_0 = vadd(dwp2_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES))))
+            dwp2_1 = vadd(dwp2_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES))))
+            dwp2_2 = vadd(dwp2_2, vadd(vmul(dwj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 2 * LANES)), vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES))))
+            dwp2_3 = vadd(dwp2_3, vadd(vmul(dwj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 3 * LANES)), vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES))))
+            dwp1_0 = vadd(dwp1_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES))))
+            dwp1_1 = vadd(dwp1_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES))))
+            dwp1_2 = vadd(dwp1_2, vadd(vmul(dwj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 2 * LANES)), vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES))))
+            dwp1_3 = vadd(dwp1_3, vadd(vmul(dwj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 3 * LANES)), vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES))))
+            dp12_0 = vadd(dp12_0, vadd(vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES)), vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES))))
+            dp12_1 = vadd(dp12_1, vadd(vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 1 * LANES)), vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 1 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES))))
+            dp12_2 = vadd(dp12_2, vadd(vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 2 * LANES)), vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 2 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES))))
+            dp12_3 = vadd(dp12_3, vadd(vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 3 * LANES)), vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 3 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES))))
+            dwg2_0 = vadd(dwg2_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES))))
+            dwg2_1 = vadd(dwg2_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 1 * LANES))))
+            dwg2_2 = vadd(dwg2_2, vadd(vmul(dwj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 2 * LANES)), vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 2 * LANES))))
+            dwg2_3 = vadd(dwg2_3, vadd(vmul(dwj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 3 * LANES)), vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 3 * LANES))))
+            dwg1_0 = vadd(dwg1_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES))))
+            dwg1_1 = vadd(dwg1_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 1 * LANES))))
+            dwg1_2 = vadd(dwg1_2, vadd(vmul(dwj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 2 * LANES)), vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 2 * LANES))))
+            dwg1_3 = vadd(dwg1_3, vadd(vmul(dwj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 3 * LANES)), vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 3 * LANES))))
+        r = 1.0 / (k + 1)
+        dwk_0 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES), vsplat(inv_b))
+        dwk_1 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 1 * LANES), vsplat(inv_b))
+        dwk_2 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 2 * LANES), vsplat(inv_b))
+        dwk_3 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 3 * LANES), vsplat(inv_b))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_0, vsplat(inv_b)), vmul(vsplat(zeta), dwk_0)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_1, vsplat(inv_b)), vmul(vsplat(zeta), dwk_1)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 1 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_2, vsplat(inv_b)), vmul(vsplat(zeta), dwk_2)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 2 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_3, vsplat(inv_b)), vmul(vsplat(zeta), dwk_3)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 3 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_0), vsplat(inv_b)), vmul(vsplat(chi), dwk_0)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_1), vsplat(inv_b)), vmul(vsplat(chi), dwk_1)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 1 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_2), vsplat(inv_b)), vmul(vsplat(chi), dwk_2)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 2 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_3), vsplat(inv_b)), vmul(vsplat(chi), dwk_3)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 3 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_0), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_1), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 1 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 2 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_2), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 2 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 2 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 3 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_3), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 3 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 3 * LANES))), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES, vmul(vmul(dwg2_0, vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 1 * LANES, vmul(vmul(dwg2_1, vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 2 * LANES, vmul(vmul(dwg2_2, vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 3 * LANES, vmul(vmul(dwg2_3, vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES, vmul(vmul(vneg(dwg1_0), vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 1 * LANES, vmul(vmul(vneg(dwg1_1), vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 2 * LANES, vmul(vmul(vneg(dwg1_2), vsplat(inv_b)), vsplat(r)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 3 * LANES, vmul(vmul(vneg(dwg1_3), vsplat(inv_b)), vsplat(r)))
+
+
+#: tangent_coefficients_lanes for each G
+_TANGENT_COEFFICIENTS_LANES = {1: tangent_coefficients_lanes_1, 2: tangent_coefficients_lanes_2, 4: tangent_coefficients_lanes_4}
+
+
+def tangent_coefficients_lanes(P, Z, order, db, groups):
+    """Lane twin of equations.taylor_coefficients_tangent, translated from its source by
+    tools/gen_lanes.py: the orbit's coefficients in rows 0..4 and those of the deviation
+    vector in rows db..db + 4 of Z[k, row, lane], k = 1..order, given Z[0].
+
+    ``groups``: a tuple of G zeros.  Its length is part of its type, so a compiled caller is
+    specialised to one G and compiles only that kernel."""
+    _TANGENT_COEFFICIENTS_LANES[len(groups)](P, Z, order, db)
+
+
+@by_groups(tangent_coefficients_lanes)
+def _tangent_coefficients_lanes(P, Z, order, db, groups):
+    kernel = _TANGENT_COEFFICIENTS_LANES[len(groups)]
+
+    def impl(P, Z, order, db, groups):
+        kernel(P, Z, order, db)
+    return impl
+
+
+#: deviation_coefficients_lanes for each G
+_DEVIATION_COEFFICIENTS_LANES = {1: deviation_coefficients_lanes_1, 2: deviation_coefficients_lanes_2, 4: deviation_coefficients_lanes_4}
+
+
+def deviation_coefficients_lanes(P, Z, order, db, groups):
+    """The deviation vector's part of taylor_coefficients_tangent only (its statements that
+    the stores into D need, unchanged; tools/gen_lanes.py prune): rows db..db + 4 of Z
+    from the orbit's coefficients already in rows 0..4 (the same numbers the full
+    recurrence recomputes for them).
+
+    ``groups``: a tuple of G zeros.  Its length is part of its type, so a compiled caller is
+    specialised to one G and compiles only that kernel."""
+    _DEVIATION_COEFFICIENTS_LANES[len(groups)](P, Z, order, db)
+
+
+@by_groups(deviation_coefficients_lanes)
+def _deviation_coefficients_lanes(P, Z, order, db, groups):
+    kernel = _DEVIATION_COEFFICIENTS_LANES[len(groups)]
+
+    def impl(P, Z, order, db, groups):
+        kernel(P, Z, order, db)
+    return impl

@@ -30,10 +30,18 @@ The blocks, the carry and the outputs are those of every crossing driver
 Lanes never exchange values: a lane computes exactly what the scalar loop computes for its
 orbit, so which orbits share a vector, in which order they are taken and how many threads run
 cannot change any result.  The work is therefore distributed dynamically: one worker per thread
-(prange), each with up to LANES lanes; a lane whose orbit stops takes the next unstarted orbit of
+(prange), each with up to G x LANES lanes; a lane whose orbit stops takes the next unstarted orbit of
 the batch at once (an atomic counter), so lanes idle only when the whole batch is handed out
 (then on the zero state: all its coefficients are 0, harmless, and ignored), and a long orbit
 cannot leave a thread idle.
+
+Lane groups: a worker advances G = 1, 2 or 4 groups of LANES lanes (:func:`lane_groups`; the
+lane arrays are G x LANES wide).  The generated recurrence of G groups writes each vector
+statement once per group, in turn, so that the groups' independent chains can share the
+floating-point pipes; everything else runs group after group or lane by lane.  G is a
+compile-time constant (the length of the tuple ``groups`` of G zeros), so each G is compiled only
+when used.  Default 1: on AVX2 two groups' accumulators do not fit the vector registers, and
+G = 2 was slower (benchmarks/RESULTS.md, "Issue 24 (fourth session)").
 
 Step size: ``kernels.taylor.step_size`` takes the smaller of two ``pow``,
 rho_p = (s/a)^(1/p) and rho_{p-1} = (s/bm)^(1/(p-1)).  The lanes compute d = log2 rho_{p-1} -
@@ -47,11 +55,12 @@ Kernel contract: arrays are allocated per worker, never inside the step loop; no
 exceptions (status codes); no fastmath.
 """
 import math
+import os
 
 import numpy as np
 
 from explorer._jit import get_num_threads, njit, prange
-from explorer.integrate._lanes_generated import NVAR, taylor_coefficients_lanes
+from explorer.integrate._lanes_generated import GROUPS, NVAR, taylor_coefficients_lanes
 from explorer.integrate.drivers import (
     EPS,
     LIMIT_ROOM,
@@ -81,6 +90,7 @@ from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, ST
 from explorer.kernels import taylor as tk
 from explorer.kernels.clock import advance_time, clip_step
 from explorer.kernels.events import ISOLATE_STACK, MAX_STEP_ROOTS, excluded_by_variation, poly_step_roots
+from explorer.model import ParameterError
 from explorer.model.equations import section_g
 
 _IDLE = -1
@@ -97,6 +107,10 @@ _G2 = 4
 #: slack added to the error bound of the log2 estimate (lane_step_size): pow's result
 #: differs from the exact power by < 1 ulp, far below this relative gap
 _POW_GAP = 1e-12
+#: the groups of LANES lanes a worker advances together, unless EXPLORER_LANE_GROUPS or the
+#: caller says otherwise (lane_groups): 1, the fastest measured (benchmarks/RESULTS.md, "Issue 24
+#: (fourth session)": on AVX2 the accumulators of two groups no longer fit the 16 vector registers)
+DEFAULT_GROUPS = 1
 
 
 @njit
@@ -109,68 +123,75 @@ def step_constants(order):
 
 
 @njit
-def evaluate_lanes(X, order, h, out, base):
+def evaluate_lanes(X, order, h, out, base, groups):
     """out[base + i, l] = sum_k X[k, base + i, l] h[l]^k for i = 0..4 per lane (Horner: per lane
-    exactly kernels.taylor.evaluate), X of shape (order + 1, rows, LANES), h of shape (LANES,), out
-    of shape (rows', LANES).  The five chains are interleaved (independent)."""
-    hv = vload(h, 0)
-    stride = X.shape[1] * LANES
-    o = order * stride + base * LANES
-    a0 = vload(X, o)
-    a1 = vload(X, o + LANES)
-    a2 = vload(X, o + 2 * LANES)
-    a3 = vload(X, o + 3 * LANES)
-    a4 = vload(X, o + 4 * LANES)
-    for k in range(order - 1, -1, -1):
-        o = k * stride + base * LANES
-        a0 = vadd(vmul(a0, hv), vload(X, o))
-        a1 = vadd(vmul(a1, hv), vload(X, o + LANES))
-        a2 = vadd(vmul(a2, hv), vload(X, o + 2 * LANES))
-        a3 = vadd(vmul(a3, hv), vload(X, o + 3 * LANES))
-        a4 = vadd(vmul(a4, hv), vload(X, o + 4 * LANES))
-    o = base * LANES
-    vstore(out, o, a0)
-    vstore(out, o + LANES, a1)
-    vstore(out, o + 2 * LANES, a2)
-    vstore(out, o + 3 * LANES, a3)
-    vstore(out, o + 4 * LANES, a4)
+    exactly kernels.taylor.evaluate), X of shape (order + 1, rows, W), h of shape (W,), out of
+    shape (rows', W), W = G * LANES with G = len(groups) (a tuple of G zeros: W is a constant of
+    the compiled code): each group of LANES lanes in turn, its five chains interleaved
+    (independent)."""
+    w = len(groups) * LANES
+    stride = X.shape[1] * w
+    for g in range(0, w, LANES):
+        hv = vload(h, g)
+        o = order * stride + base * w + g
+        a0 = vload(X, o)
+        a1 = vload(X, o + w)
+        a2 = vload(X, o + 2 * w)
+        a3 = vload(X, o + 3 * w)
+        a4 = vload(X, o + 4 * w)
+        for k in range(order - 1, -1, -1):
+            o = k * stride + base * w + g
+            a0 = vadd(vmul(a0, hv), vload(X, o))
+            a1 = vadd(vmul(a1, hv), vload(X, o + w))
+            a2 = vadd(vmul(a2, hv), vload(X, o + 2 * w))
+            a3 = vadd(vmul(a3, hv), vload(X, o + 3 * w))
+            a4 = vadd(vmul(a4, hv), vload(X, o + 4 * w))
+        o = base * w + g
+        vstore(out, o, a0)
+        vstore(out, o + w, a1)
+        vstore(out, o + 2 * w, a2)
+        vstore(out, o + 3 * w, a3)
+        vstore(out, o + 4 * w, a4)
 
 
 @njit
-def step_norms_lanes(X, order, e_p, e_q, out):
-    """Per lane, from the orbit's rows 0..4 of X (order + 1, rows, LANES), what the checks and the
-    step size of the Taylor step need (out of shape (N_NORMS, LANES)): out[0] = sum_i X[order, i]
+def step_norms_lanes(X, order, e_p, e_q, out, groups):
+    """Per lane, from the orbit's rows 0..4 of X (order + 1, rows, W), W = G * LANES, G =
+    len(groups), what the checks and the step size of the Taylor step need (out of shape
+    (N_NORMS, W)): out[0] = sum_i X[order, i]
     and out[1] = sum_i X[order - 1, i] (in the order of systems._finite_column: non-finite iff a
     coefficient is, or the sum overflows); with s = max(1, max_i |X[0, i]|), a = max_i
     |X[order, i]|, bm = max_i |X[order - 1, i]| (the norms of kernels.taylor.step_size, in its
     order): out[2] = a, out[3] = bm, out[4] = s / a, out[5] = s / bm (the arguments of its two
     pow) and out[6] = e_q log2(s / bm) - e_p log2(s / a) with vlog2_approx (its sign tells which
     pow is smaller when it is not too close to 0)."""
-    stride = X.shape[1] * LANES
-    op = order * stride
-    oq = (order - 1) * stride
-    f = vload(X, op)
-    g = vload(X, oq)
-    for i in range(1, N_ORBIT):
-        f = vadd(f, vload(X, op + i * LANES))
-        g = vadd(g, vload(X, oq + i * LANES))
-    s = vsplat(1.0)
-    a = vzero()
-    bm = vzero()
-    for i in range(N_ORBIT):
-        s = vmax_gt(vabs(vload(X, i * LANES)), s)
-        a = vmax_gt(vabs(vload(X, op + i * LANES)), a)
-        bm = vmax_gt(vabs(vload(X, oq + i * LANES)), bm)
-    u = vdiv(s, a)
-    v = vdiv(s, bm)
-    d = vsub(vmul(vsplat(e_q), vlog2_approx(v)), vmul(vsplat(e_p), vlog2_approx(u)))
-    vstore(out, 0, f)
-    vstore(out, LANES, g)
-    vstore(out, 2 * LANES, a)
-    vstore(out, 3 * LANES, bm)
-    vstore(out, 4 * LANES, u)
-    vstore(out, 5 * LANES, v)
-    vstore(out, 6 * LANES, d)
+    w = len(groups) * LANES
+    stride = X.shape[1] * w
+    for c in range(0, w, LANES):
+        op = order * stride + c
+        oq = (order - 1) * stride + c
+        f = vload(X, op)
+        g = vload(X, oq)
+        for i in range(1, N_ORBIT):
+            f = vadd(f, vload(X, op + i * w))
+            g = vadd(g, vload(X, oq + i * w))
+        s = vsplat(1.0)
+        a = vzero()
+        bm = vzero()
+        for i in range(N_ORBIT):
+            s = vmax_gt(vabs(vload(X, i * w + c)), s)
+            a = vmax_gt(vabs(vload(X, op + i * w)), a)
+            bm = vmax_gt(vabs(vload(X, oq + i * w)), bm)
+        u = vdiv(s, a)
+        v = vdiv(s, bm)
+        d = vsub(vmul(vsplat(e_q), vlog2_approx(v)), vmul(vsplat(e_p), vlog2_approx(u)))
+        vstore(out, c, f)
+        vstore(out, w + c, g)
+        vstore(out, 2 * w + c, a)
+        vstore(out, 3 * w + c, bm)
+        vstore(out, 4 * w + c, u)
+        vstore(out, 5 * w + c, v)
+        vstore(out, 6 * w + c, d)
 
 
 @njit
@@ -212,10 +233,10 @@ def lane_step(l, norms, t, tend, e_p, e_q, margin, factor):
 
 
 @njit(inline="always")
-def step_lanes(orb, norms, L_t, tend, e_p, e_q, margin, factor, hv, L_last, L_status, L_stop):
-    """:func:`lane_step` for every lane that holds an orbit: its step in ``hv`` (0 for idle and
-    stopped lanes) and ``L_last``, or its stop in ``L_status``/``L_stop``."""
-    for l in range(LANES):
+def step_lanes(orb, norms, L_t, tend, e_p, e_q, margin, factor, hv, L_last, L_status, L_stop, w):
+    """:func:`lane_step` for every lane (``w`` of them) that holds an orbit: its step in ``hv`` (0
+    for idle and stopped lanes) and ``L_last``, or its stop in ``L_status``/``L_stop``."""
+    for l in range(w):
         hv[l] = 0.0
         L_stop[l] = False
         if orb[l] == _IDLE:
@@ -230,19 +251,22 @@ def step_lanes(orb, norms, L_t, tend, e_p, e_q, margin, factor, hv, L_last, L_st
 
 
 @njit
-def variation_lanes(X, order, h, cphi, sphi, out):
+def variation_lanes(X, order, h, cphi, sphi, out, groups):
     """out[l] = sum_{k>=1} |X[k, G1, l] cos phi0 - X[k, G2, l] sin phi0| h[l]^k for every lane
-    in one vector chain (Horner): the bound of the variation of sin(phi - phi0) over the step
-    that kernels.events.no_root_within uses (up to the rounding its slack covers)."""
-    hv = vload(h, 0)
+    in one vector chain per group of LANES lanes (Horner): the bound of the variation of
+    sin(phi - phi0) over the step that kernels.events.no_root_within uses (up to the rounding
+    its slack covers); G = len(groups) groups."""
+    w = len(groups) * LANES
     cv = vsplat(cphi)
     sv = vsplat(sphi)
-    acc = vzero()
-    for k in range(order, 0, -1):
-        o = k * (NVAR * LANES)
-        ck = vsub(vmul(vload(X, o + _G1 * LANES), cv), vmul(vload(X, o + _G2 * LANES), sv))
-        acc = vmul(vadd(acc, vabs(ck)), hv)
-    vstore(out, 0, acc)
+    for g in range(0, w, LANES):
+        hv = vload(h, g)
+        acc = vzero()
+        for k in range(order, 0, -1):
+            o = k * (NVAR * w) + g
+            ck = vsub(vmul(vload(X, o + _G1 * w), cv), vmul(vload(X, o + _G2 * w), sv))
+            acc = vmul(vadd(acc, vabs(ck)), hv)
+        vstore(out, g, acc)
 
 
 @njit
@@ -321,12 +345,12 @@ def _start_lane(l, X, orb, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, L_target,
 
 #: the lane worker's work arrays: five of several dimensions, given one by one, and the 1-D ones
 #: that :func:`workspace_views` cuts from three flat buffers (float64, int64, bool); ``p`` is the
-#: order
-WORKSPACE_ND = (("X", "(p + 1, NVAR, LANES)"), ("norms", "(N_NORMS, LANES)"), ("ynew", "(NVAR, LANES)"),
+#: order, ``W`` = G * LANES the lanes of G groups
+WORKSPACE_ND = (("X", "(p + 1, NVAR, W)"), ("norms", "(N_NORMS, W)"), ("ynew", "(NVAR, W)"),
                 ("brackets", "(MAX_STEP_ROOTS, 4)"), ("stack", "(ISOLATE_STACK, 5)"))
-WORKSPACE_F = (("hv", "LANES"), ("vary", "LANES"), ("yl", "NVAR"), ("yc", "NVAR"), ("gc", "p + 1"),
-               ("work", "p + 1"), ("roots", "MAX_STEP_ROOTS"), ("L_t", "LANES"), ("L_tc", "LANES"),
-               ("L_gprev", "LANES"), ("L_H0", "LANES"))
+WORKSPACE_F = (("hv", "W"), ("vary", "W"), ("yl", "NVAR"), ("yc", "NVAR"), ("gc", "p + 1"),
+               ("work", "p + 1"), ("roots", "MAX_STEP_ROOTS"), ("L_t", "W"), ("L_tc", "W"),
+               ("L_gprev", "W"), ("L_H0", "W"))
 WORKSPACE_I = ("orb", "L_count", "L_steps", "L_target", "L_room", "L_status")
 WORKSPACE_B = ("L_last", "L_stop")
 #: length of the output of :func:`workspace_sizes`
@@ -336,33 +360,32 @@ ALIGN = 64
 
 
 @njit
-def workspace_sizes(order, out):
-    """Sizes of the worker's work arrays for ``order``: out[0:5] the elements of WORKSPACE_ND
-    (X, norms, ynew, brackets, stack), out[5:8] the lengths of the flat float64, int64 and bool
-    buffers of :func:`workspace_views`."""
+def workspace_sizes(order, w, out):
+    """Sizes of the worker's work arrays for ``order`` and ``w`` lanes: out[0:5] the elements of
+    WORKSPACE_ND (X, norms, ynew, brackets, stack), out[5:8] the lengths of the flat float64,
+    int64 and bool buffers of :func:`workspace_views`."""
     p1 = order + 1
-    out[0] = p1 * NVAR * LANES
-    out[1] = N_NORMS * LANES
-    out[2] = NVAR * LANES
+    out[0] = p1 * NVAR * w
+    out[1] = N_NORMS * w
+    out[2] = NVAR * w
     out[3] = MAX_STEP_ROOTS * 4
     out[4] = ISOLATE_STACK * 5
-    out[5] = 6 * LANES + 2 * NVAR + 2 * p1 + MAX_STEP_ROOTS
-    out[6] = 6 * LANES
-    out[7] = 2 * LANES
+    out[5] = 6 * w + 2 * NVAR + 2 * p1 + MAX_STEP_ROOTS
+    out[6] = 6 * w
+    out[7] = 2 * w
 
 
 @njit
-def workspace_views(order, wf, wi, wb):
-    """The 1-D work arrays (WORKSPACE_F, WORKSPACE_I, WORKSPACE_B) as views of the flat buffers
-    ``wf``, ``wi``, ``wb`` (slices: views that cost nothing)."""
+def workspace_views(order, w, wf, wi, wb):
+    """The 1-D work arrays (WORKSPACE_F, WORKSPACE_I, WORKSPACE_B) of ``w`` lanes as views of the
+    flat buffers ``wf``, ``wi``, ``wb`` (slices: views that cost nothing)."""
     p1 = order + 1
-    # six float and six int arrays of LANES each, then the float arrays of other lengths
-    hv, vary, L_t, L_tc, L_gprev, L_H0 = (wf[0:LANES], wf[LANES:2 * LANES], wf[2 * LANES:3 * LANES],
-                                          wf[3 * LANES:4 * LANES], wf[4 * LANES:5 * LANES], wf[5 * LANES:6 * LANES])
-    orb, L_count, L_steps, L_target, L_room, L_status = (wi[0:LANES], wi[LANES:2 * LANES], wi[2 * LANES:3 * LANES],
-                                                         wi[3 * LANES:4 * LANES], wi[4 * LANES:5 * LANES],
-                                                         wi[5 * LANES:6 * LANES])
-    a = 6 * LANES
+    # six float and six int arrays of w each, then the float arrays of other lengths
+    hv, vary, L_t, L_tc, L_gprev, L_H0 = (wf[0:w], wf[w:2 * w], wf[2 * w:3 * w], wf[3 * w:4 * w], wf[4 * w:5 * w],
+                                          wf[5 * w:6 * w])
+    orb, L_count, L_steps, L_target, L_room, L_status = (wi[0:w], wi[w:2 * w], wi[2 * w:3 * w], wi[3 * w:4 * w],
+                                                         wi[4 * w:5 * w], wi[5 * w:6 * w])
+    a = 6 * w
     yl = wf[a:a + NVAR]
     yc = wf[a + NVAR:a + 2 * NVAR]
     a += 2 * NVAR
@@ -370,22 +393,24 @@ def workspace_views(order, wf, wi, wb):
     work = wf[a + p1:a + 2 * p1]
     a += 2 * p1
     roots = wf[a:a + MAX_STEP_ROOTS]
-    L_last = wb[0:LANES]
-    L_stop = wb[LANES:2 * LANES]
+    L_last = wb[0:w]
+    L_stop = wb[w:2 * w]
     return (hv, vary, yl, yc, gc, work, roots, L_t, L_tc, L_gprev, L_H0, orb, L_count, L_steps, L_target, L_room,
             L_status, L_last, L_stop)
 
 
 @njit
-def _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
+def _run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
                 out_cross, out_count, out_status, out_final, out_info):
-    """:func:`run_worker` on work arrays of its own."""
+    """:func:`run_worker` on work arrays of its own: ``groups`` (a tuple of G zeros) groups of
+    LANES lanes."""
+    w = len(groups) * LANES
     n = np.zeros(N_WORKSPACE, np.int64)
-    workspace_sizes(order, n)
-    return run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
-                      out_cross, out_count, out_status, out_final, out_info,
-                      aligned_zeros(n[0]).reshape((order + 1, NVAR, LANES)),
-                      aligned_zeros(n[1]).reshape((N_NORMS, LANES)), aligned_zeros(n[2]).reshape((NVAR, LANES)),
+    workspace_sizes(order, w, n)
+    return run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry,
+                      limits, out_cross, out_count, out_status, out_final, out_info,
+                      aligned_zeros(n[0]).reshape((order + 1, NVAR, w)),
+                      aligned_zeros(n[1]).reshape((N_NORMS, w)), aligned_zeros(n[2]).reshape((NVAR, w)),
                       aligned_zeros(n[3]).reshape((MAX_STEP_ROOTS, 4)),
                       aligned_zeros(n[4]).reshape((ISOLATE_STACK, 5)), aligned_zeros(n[5]),
                       np.zeros(n[6], np.int64), np.zeros(n[7], np.bool_))
@@ -403,19 +428,21 @@ def aligned_zeros(n):
 
 
 @njit
-def run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
+def run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
                out_cross, out_count, out_status, out_final, out_info, X, norms, ynew, brackets, stack, wf, wi, wb):
     """Integrate orbits taken from the shared counter ``next_orbit`` on up to ``nlanes`` lanes
-    until none is left: the Taylor crossing loop (module docstring), each lane one orbit.  The work arrays
-    (WORKSPACE_ND, then the flat buffers of :func:`workspace_views`) come zeroed from the
+    until none is left: the Taylor crossing loop (module docstring), each lane one orbit, in
+    G = len(groups) groups of LANES lanes (W = G * LANES lanes: the last axis of X).  The work
+    arrays (WORKSPACE_ND, then the flat buffers of :func:`workspace_views`) come zeroed from the
     caller: nothing is allocated here."""
+    w = len(groups) * LANES
     (hv, vary, yl, yc, gc, work, roots, L_t, L_tc, L_gprev, L_H0, orb, L_count, L_steps, L_target, L_room,
-     L_status, L_last, L_stop) = workspace_views(order, wf, wi, wb)
-    for l in range(LANES):
+     L_status, L_last, L_stop) = workspace_views(order, w, wf, wi, wb)
+    for l in range(w):
         orb[l] = _IDLE
     factor, e_p, e_q, margin = step_constants(order)
     active = 0
-    for l in range(LANES):
+    for l in range(w):
         if l < nlanes:
             active += _start_lane(l, X, orb, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, L_target, L_room,
                                   next_orbit, Y0, tmax, max_steps, carry, limits,
@@ -424,17 +451,17 @@ def run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, ma
             orb[l] = _IDLE
 
     while active > 0:
-        taylor_coefficients_lanes(P, X, order)
-        step_norms_lanes(X, order, e_p, e_q, norms)
+        taylor_coefficients_lanes(P, X, order, groups)
+        step_norms_lanes(X, order, e_p, e_q, norms, groups)
         # ---- per lane: finiteness of the last two coefficients, step size, underflow
-        step_lanes(orb, norms, L_t, tmax, e_p, e_q, margin, factor, hv, L_last, L_status, L_stop)
-        evaluate_lanes(X, order, hv, ynew, 0)
+        step_lanes(orb, norms, L_t, tmax, e_p, e_q, margin, factor, hv, L_last, L_status, L_stop, w)
+        evaluate_lanes(X, order, hv, ynew, 0, groups)
         # ---- all lanes at once (vectorised): a bound of the variation of sin(phi - phi0) over
         # the step, sum_{k>=1} |c_k| h^k, so that steps far from the section skip the root
         # isolation (kernels.events.excluded_by_variation)
-        variation_lanes(X, order, hv, cphi, sphi, vary)
+        variation_lanes(X, order, hv, cphi, sphi, vary, groups)
         # ---- per lane: the new state's check, the crossings in the step, the clock and budgets
-        for l in range(LANES):
+        for l in range(w):
             j = orb[l]
             if j == _IDLE:
                 continue
@@ -500,31 +527,59 @@ def run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, ma
 
 
 @njit(parallel=True)
-def _run_lanes(nworkers, nlanes, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
+def _run_lanes(nworkers, nlanes, groups, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
                out_cross, out_count, out_status, out_final, out_info):
     """nworkers workers (prange) of nlanes lanes each, fed from one shared queue of orbits."""
     next_orbit = np.zeros(1, np.int64)
     for w in prange(nworkers):
-        _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
+        _run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
                     out_cross, out_count, out_status, out_final, out_info)
     return 0
 
 
 def run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
-                           out_cross, out_count, out_status, out_final, out_info, max_lanes=LANES):
+                           out_cross, out_count, out_status, out_final, out_info, max_lanes=None, groups=None):
     """Crossings of the section by the Taylor method of ``order`` for every orbit of Y0: the
     arguments and outputs of every batch driver (:mod:`explorer.integrate.drivers`: the carry, the
     limits of a block, the outputs).  One worker per numba thread (at most one per orbit), each with
-    min(max_lanes, LANES, ceil(N / workers)) lanes; the results do not depend on either.  A Python
-    function: the thread count is read here (numba's get_num_threads inside a kernel would defeat
-    the on-disk cache)."""
+    up to ``groups`` groups of LANES lanes (:func:`worker_lanes`); the results depend on none of
+    these.  A Python function: the thread count is read here (numba's get_num_threads inside a
+    kernel would defeat the on-disk cache)."""
     n = Y0.shape[0]
     # one orbit: one worker, run here without the parallel layer (numba's thread pool is neither
     # asked nor started: a lone orbit pays for no threads)
     nworkers = 1 if n <= 1 else max(1, min(get_num_threads(), n))
-    nlanes = max(1, min(int(max_lanes), LANES, -(-n // nworkers)))
+    nlanes, g = worker_lanes(n, nworkers, max_lanes, groups)
     if nworkers == 1:
-        return _run_worker(nlanes, np.zeros(1, np.int64), Y0, P, cphi, sphi, int(direction), float(tmax), int(order),
-                           int(max_steps), carry, limits, out_cross, out_count, out_status, out_final, out_info)
-    return _run_lanes(nworkers, nlanes, Y0, P, cphi, sphi, int(direction), float(tmax), int(order),
+        return _run_worker(nlanes, g, np.zeros(1, np.int64), Y0, P, cphi, sphi, int(direction), float(tmax),
+                           int(order), int(max_steps), carry, limits, out_cross, out_count, out_status, out_final,
+                           out_info)
+    return _run_lanes(nworkers, nlanes, g, Y0, P, cphi, sphi, int(direction), float(tmax), int(order),
                       int(max_steps), carry, limits, out_cross, out_count, out_status, out_final, out_info)
+
+
+def lane_groups(groups=None):
+    """The number G of groups of LANES lanes a lane worker advances together: ``groups`` if given,
+    else the environment variable ``EXPLORER_LANE_GROUPS``, else :data:`DEFAULT_GROUPS`; one of
+    GROUPS (1, 2, 4), else ParameterError."""
+    if groups is None:
+        groups = os.environ.get("EXPLORER_LANE_GROUPS", "") or DEFAULT_GROUPS
+    try:
+        g = int(groups)
+    except (TypeError, ValueError):
+        g = None
+    if g not in GROUPS:
+        raise ParameterError(f"lane groups (EXPLORER_LANE_GROUPS) must be one of {GROUPS}, got {groups!r}")
+    return g
+
+
+def worker_lanes(n, nworkers, max_lanes=None, groups=None):
+    """(nlanes, groups) of each of ``nworkers`` workers for a batch of ``n`` orbits: nlanes =
+    min(max_lanes, G * LANES, ceil(n / nworkers)) lanes with G = :func:`lane_groups` (groups), and
+    as the tuple of zeros the workers take, the fewest groups of GROUPS, up to G, that hold them
+    (a lone orbit runs on one group whatever G)."""
+    g = lane_groups(groups)
+    cap = g * LANES if max_lanes is None else min(int(max_lanes), g * LANES)
+    nlanes = max(1, min(cap, -(-n // nworkers)))
+    used = next(k for k in GROUPS if k * LANES >= nlanes or k == g)
+    return nlanes, (0,) * used

@@ -14,7 +14,9 @@ translates into ``_lanes_generated.py`` and ``_tangent_lanes_generated.py``.
   :func:`vneg`, :func:`vabs`, :func:`vmax_gt` (the scalar ``if v > s: s = v``);
 - :func:`vlog2_approx`: log2 within :data:`LOG2_APPROX_ERR` for positive normal values (used
   only to decide which of two ``pow`` is the smaller, :func:`explorer.integrate.lanes.lane_step_size`);
-- :func:`atomic_fetch_add`: the shared queue of orbits of the lane workers.
+- :func:`atomic_fetch_add`: the shared queue of orbits of the lane workers;
+- :func:`by_groups`: how a compiled caller of a generated recurrence gets the kernel of its
+  number of lane groups G (a tuple of G zeros; only that kernel is compiled).
 
 Why explicit vectors and not unrolled scalar lanes plus ``numba.config.SLP_VECTORIZE``: with
 lanes unrolled into scalar accumulators, LLVM's SLP vectorizer vectorizes the loop body but
@@ -87,6 +89,10 @@ if NOJIT:  # pragma: no cover - plain-Python twins (numpy elementwise = the same
         old = a[i]
         a[i] += v
         return old
+
+    def by_groups(stub):
+        """Nothing to register: the plain-Python ``stub`` runs as it is."""
+        return lambda typer: typer
 else:
     from llvmlite import ir as _ir
     from numba.core import cgutils as _cgutils
@@ -240,3 +246,14 @@ else:
             ary = context.make_array(sig.args[0])(context, builder, args[0])
             return builder.atomic_rmw("add", builder.gep(ary.data, [args[1]]), args[2], "seq_cst")
         return _types.int64(a, _types.intp, _types.int64), codegen
+
+
+    def by_groups(stub):
+        """Register the decorated typer as the compiled implementation of the plain-Python
+        ``stub(..., groups)`` of a generated file (numba's ``overload``): it is asked when a
+        caller is compiled, with the types of the arguments; the length of the tuple ``groups``
+        is part of its type, so it picks the kernel of that G and only that kernel is compiled
+        (each G a kernel of its own, compiled only when a caller uses it)."""
+        from numba.extending import overload
+
+        return overload(stub)

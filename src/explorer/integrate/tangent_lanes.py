@@ -22,7 +22,9 @@ whatever the grouping of orbits into lanes and the number of threads:
 
 Lanes never exchange values, so the work is distributed dynamically as in
 :mod:`explorer.integrate.lanes`: one worker per thread, a lane whose orbit stops takes the next
-unstarted orbit of the batch at once (an atomic counter); idle lanes run on the zero state.
+unstarted orbit of the batch at once (an atomic counter); idle lanes run on the zero state.  A
+worker advances G groups of LANES lanes (``lanes.lane_groups``, the generated kernels of G
+groups), bit for bit the same results for every G.
 
 Kernel contract: arrays are allocated per worker, never inside the step loop; no exceptions
 (status codes); no fastmath.
@@ -45,6 +47,7 @@ from explorer.integrate.lanes import (
     step_constants,
     step_lanes,
     step_norms_lanes,
+    worker_lanes,
 )
 from explorer.integrate.simd import LANES
 from explorer.integrate.tangent import _early, _finish_ext, _history
@@ -105,31 +108,33 @@ def _start_lane(l, Z, orb, acc, L_t, L_steps, L_hpos, L_since, next_orbit, Y0, V
 
 
 @njit
-def _run_worker(nlanes, next_orbit, Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop, megno_level,
-                early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w):
-    """Integrate orbits taken from the shared counter ``next_orbit`` on up to ``nlanes`` lanes
-    until none is left; each lane is tangent.orbit_tangent_taylor_ext step for step."""
+def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop,
+                megno_level, early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w):
+    """Integrate orbits taken from the shared counter ``next_orbit`` on up to ``nlanes`` lanes,
+    in G = len(groups) groups of LANES lanes, until none is left; each lane is
+    tangent.orbit_tangent_taylor_ext step for step."""
+    nl = len(groups) * LANES
     # the vector operands on cache lines (lanes.aligned_zeros: a straddling vector costs two accesses)
-    Z = aligned_zeros((order + 1) * NROWS * LANES).reshape((order + 1, NROWS, LANES))
-    znew = aligned_zeros(NROWS * LANES).reshape((NROWS, LANES))
-    norms = aligned_zeros(N_NORMS * LANES).reshape((N_NORMS, LANES))
-    hv = aligned_zeros(LANES)
+    Z = aligned_zeros((order + 1) * NROWS * nl).reshape((order + 1, NROWS, nl))
+    znew = aligned_zeros(NROWS * nl).reshape((NROWS, nl))
+    norms = aligned_zeros(N_NORMS * nl).reshape((N_NORMS, nl))
+    hv = aligned_zeros(nl)
     v = np.empty(5)
     w = np.zeros(5)
     row = np.empty(tg.N_RES)
-    acc = np.zeros((LANES, tg.N_ACC))
-    orb = np.full(LANES, _IDLE, np.int64)
-    L_t = np.zeros(LANES)
-    L_steps = np.zeros(LANES, np.int64)
-    L_hpos = np.zeros(LANES, np.int64)
-    L_since = np.zeros(LANES)
-    L_status = np.zeros(LANES, np.int64)
-    L_early = np.zeros(LANES, np.int64)
-    L_last = np.zeros(LANES, np.bool_)
-    L_stop = np.zeros(LANES, np.bool_)
+    acc = np.zeros((nl, tg.N_ACC))
+    orb = np.full(nl, _IDLE, np.int64)
+    L_t = np.zeros(nl)
+    L_steps = np.zeros(nl, np.int64)
+    L_hpos = np.zeros(nl, np.int64)
+    L_since = np.zeros(nl)
+    L_status = np.zeros(nl, np.int64)
+    L_early = np.zeros(nl, np.int64)
+    L_last = np.zeros(nl, np.bool_)
+    L_stop = np.zeros(nl, np.bool_)
     factor, e_p, e_q, margin = step_constants(order)
     active = 0
-    for l in range(LANES):
+    for l in range(nl):
         if l < nlanes:
             active += _start_lane(l, Z, orb, acc, L_t, L_steps, L_hpos, L_since, next_orbit, Y0, V0, W0, nvec, T,
                                   max_steps, v, w, out_res, out_ext, out_status, out_final, out_steps, out_w)
@@ -137,20 +142,20 @@ def _run_worker(nlanes, next_orbit, Y0, V0, W0, nvec, P, T, order, max_steps, ea
             orb[l] = _IDLE
 
     while active > 0:
-        tangent_coefficients_lanes(P, Z, order, DEV1)
+        tangent_coefficients_lanes(P, Z, order, DEV1, groups)
         if nvec == 2:
-            deviation_coefficients_lanes(P, Z, order, DEV2)
-        step_norms_lanes(Z, order, e_p, e_q, norms)
+            deviation_coefficients_lanes(P, Z, order, DEV2, groups)
+        step_norms_lanes(Z, order, e_p, e_q, norms, groups)
         # ---- per lane: systems.taylor_step's checks and step size
-        for l in range(LANES):
+        for l in range(nl):
             L_early[l] = tg.EARLY_NONE
-        step_lanes(orb, norms, L_t, T, e_p, e_q, margin, factor, hv, L_last, L_status, L_stop)
-        evaluate_lanes(Z, order, hv, znew, 0)
-        evaluate_lanes(Z, order, hv, znew, DEV1)
+        step_lanes(orb, norms, L_t, T, e_p, e_q, margin, factor, hv, L_last, L_status, L_stop, nl)
+        evaluate_lanes(Z, order, hv, znew, 0, groups)
+        evaluate_lanes(Z, order, hv, znew, DEV1, groups)
         if nvec == 2:
-            evaluate_lanes(Z, order, hv, znew, DEV2)
+            evaluate_lanes(Z, order, hv, znew, DEV2, groups)
         # ---- per lane: the rest of the step of the scalar loop
-        for l in range(LANES):
+        for l in range(nl):
             j = orb[l]
             if j == _IDLE:
                 continue
@@ -209,11 +214,11 @@ def _run_worker(nlanes, next_orbit, Y0, V0, W0, nvec, P, T, order, max_steps, ea
 
 
 @njit(parallel=True)
-def _run_lanes(nworkers, nlanes, Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop, megno_level,
-               early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w):
+def _run_lanes(nworkers, nlanes, groups, Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop,
+               megno_level, early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w):
     next_orbit = np.zeros(1, np.int64)
     for _w in prange(nworkers):
-        _run_worker(nlanes, next_orbit, Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop,
+        _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop,
                     megno_level, early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps,
                     out_w)
     return 0
@@ -221,16 +226,17 @@ def _run_lanes(nworkers, nlanes, Y0, V0, W0, nvec, P, T, order, max_steps, early
 
 def run_tangent_lanes_batch(Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop, megno_level,
                             early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w,
-                            max_lanes=LANES):
+                            max_lanes=None, groups=None):
     """Lane twin of :func:`explorer.integrate.tangent.run_tangent_taylor_ext_batch` (same
     arguments and outputs, bit for bit the same results).  One worker per numba thread (at
-    most one per orbit), each with min(max_lanes, LANES, ceil(N / workers)) lanes; the thread
-    count is read here, in Python (inside a kernel it would defeat the on-disk cache)."""
+    most one per orbit), each with up to ``groups`` groups of LANES lanes
+    (:func:`explorer.integrate.lanes.worker_lanes`); the thread count is read here, in Python
+    (inside a kernel it would defeat the on-disk cache)."""
     n = Y0.shape[0]
     if n == 0:
         return 0
     nworkers = max(1, min(get_num_threads(), n))
-    nlanes = max(1, min(int(max_lanes), LANES, -(-n // nworkers)))
-    return _run_lanes(nworkers, nlanes, Y0, V0, W0, int(nvec), P, float(T), int(order), int(max_steps),
+    nlanes, g = worker_lanes(n, nworkers, max_lanes, groups)
+    return _run_lanes(nworkers, nlanes, g, Y0, V0, W0, int(nvec), P, float(T), int(order), int(max_steps),
                       bool(early_stop), float(sali_stop), float(megno_level), float(early_tmin), hist_t, out_hist,
                       out_res, out_ext, out_status, out_final, out_steps, out_w)
