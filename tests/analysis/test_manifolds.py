@@ -262,3 +262,19 @@ def test_a_flux_needs_both_lobes_with_equal_areas(tangle):
     assert tr.turnstile_check(lb[:1], 6.0).startswith("no pair of lobes")
     wrong = tr.Lobe(lb[1].start, lb[1].end, 5.7, 1e-6, lb[1].boundary)
     assert tr.turnstile_check([lb[0], wrong], 6.0).startswith("the two lobes differ")
+
+
+def test_manifolds_of_a_point_are_those_of_the_orbit_newton_finds_from_it(saddle):
+    """ex.manifolds((p1, p2), params, h): the orbit is found from the point first; its branches
+    start at that orbit's point and coincide with the branches grown from the FixedPoint."""
+    prm = model.FIGURE4.with_(mu=MU)
+    got = mf.manifolds((0.05, 0.02), prm, H, arclength=1.0, signs=(1,))
+    assert [b.kind for b in got] == ["unstable", "stable"]
+    assert np.linalg.norm(got[0].points[0] - saddle.point) < 1e-10
+    ref = mf.grow_branch(saddle, sign=1, arclength=1.5)
+    for x in got[0].points[5::20]:
+        assert ref.distance(x) < 1e-9
+    with pytest.raises(model.ParameterError, match="point"):
+        mf.manifolds((0.0, 0.0, 0.0), prm, H)
+    with pytest.raises(model.ParameterError, match="h="):
+        mf.manifolds((0.0, 0.0), prm)

@@ -379,15 +379,42 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
 
 
 def manifolds(orbit, params=None, h=None, *, arclength=5.0, kinds=("unstable", "stable"), signs=(1, -1),
-              index=0, phi0=None, tol=DEFAULT_TOL, **kw) -> list:
-    """The branches of W^u and W^s of a hyperbolic ``orbit`` (PeriodicOrbit or FixedPoint) at its
-    point ``index``, each grown to ``arclength`` (:func:`grow_branch`; ``kw`` its options).
-    Returns a list of :class:`ManifoldBranch`, unstable before stable, sign +1 before -1."""
+              index=0, phi0=None, tol=DEFAULT_TOL, period=1, **kw) -> list:
+    """The branches of W^u and W^s of a hyperbolic ``orbit`` at its point ``index``, each grown to
+    ``arclength`` (:func:`grow_branch`; ``kw`` its options, e.g. ``max_points``, ``max_time``).
+
+    ``orbit``: a :class:`~explorer.analysis.periodic.PeriodicOrbit`, a
+    :class:`~explorer.analysis.fixedpoints.FixedPoint`, or a point (p1, p2) of the section: then the
+    orbit of period ``period`` is found from it by Newton's method
+    (:func:`~explorer.analysis.periodic.find_periodic_orbit` with ``params``, ``h``, ``phi0``, ``tol``),
+    e.g. ``manifolds((-0.011, 0.0), params, 2.0, arclength=10)``.  Returns a list of
+    :class:`ManifoldBranch` (``kind``, ``sign``, ``points``: an (M, 2) array from the orbit's point
+    outwards), unstable before stable, sign +1 before -1; ParameterError when the orbit is not
+    hyperbolic or not found."""
+    if not isinstance(orbit, PeriodicOrbit) and not hasattr(orbit, "jacobian"):
+        orbit = _orbit_from_point(orbit, params, h, period, phi0, tol)
     sd = saddle(orbit, params, h, index=index, phi0=phi0, tol=tol)
     for k in kinds:
         if k not in ("unstable", "stable"):
             raise ParameterError(f"kinds must be 'unstable' and/or 'stable', got {k!r}")
     return [grow_branch(sd, stable=(k == "stable"), sign=s, arclength=arclength, **kw) for k in kinds for s in signs]
+
+
+def _orbit_from_point(point, params, h, period, phi0, tol):
+    """The periodic orbit of period ``period`` found from the point (p1, p2) by Newton's method."""
+    from explorer.analysis.periodic import find_periodic_orbit
+
+    try:
+        x = np.asarray(point, float)
+    except (TypeError, ValueError):
+        x = np.empty(0)
+    if x.shape != (2,):
+        raise ParameterError(f"orbit must be a PeriodicOrbit, a FixedPoint or a point (p1, p2), got {point!r}")
+    if params is None or h is None:
+        raise ParameterError("a point (p1, p2) as orbit needs params= and h=")
+    period = validation.integer("period", period, 1, validation.MAX_PERIOD)
+    return find_periodic_orbit(params, h, (float(x[0]), float(x[1])), period,
+                               phi0=math.pi if phi0 is None else phi0, tol=tol)
 
 
 # ------------------------------------------------------------------ intersections

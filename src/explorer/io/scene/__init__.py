@@ -46,11 +46,18 @@ accepted with any kind/layout but only used with theirs)::
     own_scale = [4]                  # ... except these panel indices
     marker_size = 0.25               # > 0
     dpi = 200                        # integer in [10, 2400]
+    [manifolds]                      # drawing only: W^u and W^s over each panel (docs/manifolds.md)
+    draw = false                     # true: overlay the manifolds of the orbit below
+    arclength = 6.0                  # length of each branch, in (0, 1000]
+    guess = [0.0, 0.0]               # Newton's start for the orbit, [p1, p2]
+    period = 1                       # period K of the orbit, in [1, 64]
+    max_points = 20000               # points per branch at most, in [3, 1000000]
 
 Defaults of [seeds]: kind "grid", n 200, margin 0.98, seed 0.  Defaults of
 [integration]: taylor, tol ``sections.DEFAULT_TOL``, dt ``sections.DEFAULT_DT``,
 1000 crossings, max_steps ``sections.DEFAULT_MAX_STEPS``, phi0 = pi, direction 1.
 Defaults of [figure]: row, share_scale true, own_scale [], marker_size 0.25, dpi 200.
+Defaults of [manifolds]: draw false, arclength 6, guess [0, 0], period 1, max_points 20000.
 
 Validation: unknown tables or keys, wrong types (a string or a boolean for a
 number, a float for an integer; an integer is fine for a float) and values
@@ -82,7 +89,7 @@ numbers (its parameters, h, the seeding keys used by the kind, the
 integration keys used by the method with tmax resolved, compute) and
 :meth:`Scene.panel_hash` is the sha256 of its canonical JSON (sorted keys,
 floats by ``repr``) together with :data:`FORMAT_VERSION`.  Name,
-description, figure and the panel's position do not enter the hash.
+description, figure, manifolds and the panel's position do not enter the hash.
 The products of a panel, sections and indicators, have their own hashes
 (:meth:`Scene.product_hashes`): a sweep recomputes only the product whose
 settings changed.  :meth:`Scene.figure_settings` are the drawing settings.
@@ -91,7 +98,7 @@ Modules
 -------
 :mod:`~explorer.io.scene.schema` the keys, allowed values and defaults;
 :mod:`~explorer.io.scene.checks` the validators (:class:`SceneError` naming the dotted key);
-:mod:`~explorer.io.scene.specs` the [seeds], [integration], [lyapunov] and [figure] tables;
+:mod:`~explorer.io.scene.specs` the [seeds], [integration], [lyapunov], [figure] and [manifolds] tables;
 :mod:`~explorer.io.scene.core` the :class:`Scene` and its panels;
 :mod:`~explorer.io.scene.hashes` the panel, product, figure and atlas hashes;
 :mod:`~explorer.io.scene.atlas` the cells of an [atlas];
@@ -110,6 +117,7 @@ from explorer.io.scene.schema import (
     _FIGURE_KEYS,
     _INTEGRATION_KEYS,
     _LYAPUNOV_KEYS,
+    _MANIFOLD_KEYS,
     _NAME_RE,
     _SEED_KEYS,
     _SEED_USED,
@@ -118,6 +126,8 @@ from explorer.io.scene.schema import (
     COMPUTE_QUANTITIES,
     DEFAULT_CROSSINGS,
     DEFAULT_DPI,
+    DEFAULT_MANIFOLD_ARCLENGTH,
+    DEFAULT_MANIFOLD_POINTS,
     DEFAULT_MARGIN,
     DEFAULT_MARKER_SIZE,
     DEFAULT_RANDOM_SEED,
@@ -126,6 +136,9 @@ from explorer.io.scene.schema import (
     LAYOUTS,
     LYAPUNOV_INDICATORS,
     MAX_DPI,
+    MAX_MANIFOLD_ARCLENGTH,
+    MAX_MANIFOLD_PERIOD,
+    MAX_MANIFOLD_POINTS,
     MAX_MAP_RESOLUTION,
     MAX_NAME_LENGTH,
     MAX_SEEDS,
@@ -133,18 +146,20 @@ from explorer.io.scene.schema import (
     SEED_KINDS,
     SWEEP_PARAMETERS,
 )
-from explorer.io.scene.specs import FigureSpec, IntegrationSpec, LyapunovSpec, SeedSpec
+from explorer.io.scene.specs import FigureSpec, IntegrationSpec, LyapunovSpec, ManifoldSpec, SeedSpec
 from explorer.io.scene.writer import _toml_string, _toml_value
 from explorer.model import PARAM_NAMES
 
 __all__ = [
-    "COMPUTE_DEFAULTS", "COMPUTE_QUANTITIES", "DEFAULT_CROSSINGS", "DEFAULT_DPI", "DEFAULT_MARGIN",
-    "DEFAULT_MARKER_SIZE", "DEFAULT_RANDOM_SEED", "DEFAULT_SEED_N", "FORMAT_VERSION", "LAYOUTS",
-    "LYAPUNOV_INDICATORS", "MAX_DPI", "MAX_MAP_RESOLUTION", "MAX_NAME_LENGTH", "MAX_SEEDS", "MIN_DPI",
+    "COMPUTE_DEFAULTS", "COMPUTE_QUANTITIES", "DEFAULT_CROSSINGS", "DEFAULT_DPI", "DEFAULT_MANIFOLD_ARCLENGTH",
+    "DEFAULT_MANIFOLD_POINTS", "DEFAULT_MARGIN", "DEFAULT_MARKER_SIZE", "DEFAULT_RANDOM_SEED", "DEFAULT_SEED_N",
+    "FORMAT_VERSION", "LAYOUTS", "LYAPUNOV_INDICATORS", "MAX_DPI", "MAX_MANIFOLD_ARCLENGTH", "MAX_MANIFOLD_PERIOD",
+    "MAX_MANIFOLD_POINTS", "MAX_MAP_RESOLUTION", "MAX_NAME_LENGTH", "MAX_SEEDS", "MIN_DPI",
     "PARAM_NAMES", "PRESETS", "SEED_KINDS", "SWEEP_PARAMETERS", "FigureSpec", "IntegrationSpec",
-    "LyapunovSpec", "Scene", "SceneError", "SeedSpec", "grid_spacing", "load_scene", "parse_scene",
+    "LyapunovSpec", "ManifoldSpec", "Scene", "SceneError", "SeedSpec", "grid_spacing", "load_scene", "parse_scene",
     "scene_from_dict", "seed_points",
     # the schema's private tables and the writer's helpers, for the tests
-    "_FIGURE_KEYS", "_INTEGRATION_KEYS", "_LYAPUNOV_KEYS", "_NAME_RE", "_SEED_KEYS", "_SEED_USED", "_TOP_KEYS",
+    "_FIGURE_KEYS", "_INTEGRATION_KEYS", "_LYAPUNOV_KEYS", "_MANIFOLD_KEYS", "_NAME_RE", "_SEED_KEYS", "_SEED_USED",
+    "_TOP_KEYS",
     "_canonical_json", "_toml_string", "_toml_value",
 ]

@@ -13,7 +13,7 @@ from explorer.io.scene import atlas as _atlas
 from explorer.io.scene import hashes as _hashes
 from explorer.io.scene.checks import SceneError, _checked, _choice, _distinct_reals, _fail, _got, _list, _short, _str
 from explorer.io.scene.schema import _NAME_RE, COMPUTE_QUANTITIES, MAX_NAME_LENGTH, SWEEP_PARAMETERS
-from explorer.io.scene.specs import FigureSpec, IntegrationSpec, LyapunovSpec, SeedSpec
+from explorer.io.scene.specs import FigureSpec, IntegrationSpec, LyapunovSpec, ManifoldSpec, SeedSpec
 from explorer.io.scene.writer import scene_toml
 from explorer.model import PARAM_NAMES, ParameterError, validation
 
@@ -40,6 +40,7 @@ class Scene:
     text: str = ""
     atlas_parameter: str | None = None   # [atlas]: the second swept parameter (columns of the atlas)
     atlas_values: tuple = ()
+    manifolds: ManifoldSpec = field(default_factory=ManifoldSpec)   # [manifolds]: drawing only
 
     def __post_init__(self):
         name = _str("name", self.name)
@@ -52,7 +53,7 @@ class Scene:
             _fail("model", f"must be a model.Params, {_got(self.params)}")
         object.__setattr__(self, "h", _checked(validation.magnitude, "energy.h", self.h))
         for attr, cls, key in (("seeds", SeedSpec, "seeds"), ("integration", IntegrationSpec, "integration"),
-                               ("figure", FigureSpec, "figure")):
+                               ("figure", FigureSpec, "figure"), ("manifolds", ManifoldSpec, "manifolds")):
             if not isinstance(getattr(self, attr), cls):
                 _fail(key, f"must be a {cls.__name__}, {_got(getattr(self, attr))}")
         self._check_sweep()
@@ -67,6 +68,8 @@ class Scene:
             _fail("lyapunov.map_resolution", "needs compute.lyapunov = true")
         object.__setattr__(self, "compute", compute)
         self._check_atlas()
+        if self.is_atlas and self.manifolds.draw:
+            _fail("manifolds.draw", "is not used by an atlas scene (it draws a heat map, no sections)")
         self._check_panels()
         for j, idx in enumerate(self.figure.own_scale):
             if idx >= self.n_panels:
@@ -166,9 +169,9 @@ class Scene:
         return _hashes.product_hashes(self, i)
 
     def figure_settings(self) -> str:
-        """Canonical JSON of everything that changes the drawing but not the numbers ([figure], and
-        with [compute] lyapunov the MEGNO threshold and map_indicator): kept in the PNG, so a rerun
-        redraws the figure when they change, without recomputing."""
+        """Canonical JSON of everything that changes the drawing but not the numbers ([figure], with
+        [compute] lyapunov the MEGNO threshold and map_indicator, and [manifolds] when drawn): kept in
+        the PNG, so a rerun redraws the figure when they change, without recomputing."""
         return _hashes.figure_settings(self)
 
     def grid_shape(self) -> tuple:
@@ -221,6 +224,7 @@ class Scene:
         d["compute"] = {q: (q in self.compute) for q in COMPUTE_QUANTITIES}
         d["lyapunov"] = self.lyapunov.to_dict()
         d["figure"] = self.figure.to_dict()
+        d["manifolds"] = self.manifolds.to_dict()
         if self.atlas_parameter is not None:
             d["atlas"] = {"parameter": self.atlas_parameter, "values": list(self.atlas_values)}
         return d

@@ -71,12 +71,15 @@ def product_hashes(scene: Scene, i) -> dict:
 
 
 def figure_settings(scene: Scene) -> str:
-    """Canonical JSON of everything that changes the drawing but not the numbers ([figure], and
-    with [compute] lyapunov the MEGNO threshold and map_indicator): kept in the PNG, so a rerun
-    redraws the figure when they change, without recomputing."""
+    """Canonical JSON of everything that changes the drawing but not the numbers ([figure], with
+    [compute] lyapunov the MEGNO threshold and map_indicator, and [manifolds] when drawn): kept in
+    the PNG, so a rerun redraws the figure when they change, without recomputing.  [manifolds]
+    enters only with draw = true, so the figures of scenes without it keep their settings."""
     d: dict = {"figure": scene.figure.to_dict()}
     if "lyapunov" in scene.compute:
         d.update(threshold=scene.lyapunov.threshold, map_indicator=scene.lyapunov.map_indicator)
+    if scene.manifolds.draw:
+        d["manifolds"] = scene.manifolds.to_dict()
     return _canonical_json(d)
 
 

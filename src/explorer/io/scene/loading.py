@@ -17,12 +17,13 @@ from explorer.io.scene.schema import (
     _FIGURE_KEYS,
     _INTEGRATION_KEYS,
     _LYAPUNOV_KEYS,
+    _MANIFOLD_KEYS,
     _SEED_KEYS,
     _TOP_KEYS,
     COMPUTE_DEFAULTS,
     COMPUTE_QUANTITIES,
 )
-from explorer.io.scene.specs import FigureSpec, IntegrationSpec, LyapunovSpec, SeedSpec
+from explorer.io.scene.specs import FigureSpec, IntegrationSpec, LyapunovSpec, ManifoldSpec, SeedSpec
 from explorer.model import PARAM_NAMES, ParameterError, validation
 
 
@@ -76,6 +77,10 @@ def scene_from_dict(data: dict, text: str = "") -> Scene:
     if "own_scale" in fig:
         fig["own_scale"] = tuple(_list("figure.own_scale", fig["own_scale"], min_len=0))
     kw["figure"] = FigureSpec(**fig)
+    mf = dict(_table("manifolds", data.get("manifolds", {}), _MANIFOLD_KEYS))
+    if "guess" in mf:
+        mf["guess"] = tuple(_list("manifolds.guess", mf["guess"]))
+    kw["manifolds"] = ManifoldSpec(**mf)
     kw.update(_atlas_from_dict(data))
     return Scene(**kw)
 

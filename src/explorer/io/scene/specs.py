@@ -10,9 +10,12 @@ from explorer.io.scene.schema import (
     _FIGURE_KEYS,
     _INTEGRATION_KEYS,
     _LYAPUNOV_KEYS,
+    _MANIFOLD_KEYS,
     _SEED_USED,
     DEFAULT_CROSSINGS,
     DEFAULT_DPI,
+    DEFAULT_MANIFOLD_ARCLENGTH,
+    DEFAULT_MANIFOLD_POINTS,
     DEFAULT_MARGIN,
     DEFAULT_MARKER_SIZE,
     DEFAULT_RANDOM_SEED,
@@ -20,6 +23,9 @@ from explorer.io.scene.schema import (
     LAYOUTS,
     LYAPUNOV_INDICATORS,
     MAX_DPI,
+    MAX_MANIFOLD_ARCLENGTH,
+    MAX_MANIFOLD_PERIOD,
+    MAX_MANIFOLD_POINTS,
     MAX_MAP_RESOLUTION,
     MAX_SEEDS,
     MIN_DPI,
@@ -269,4 +275,39 @@ class FigureSpec:
         d["own_scale"] = list(self.own_scale)
         if self.columns is None:
             del d["columns"]
+        return d
+
+
+@dataclass(frozen=True)
+class ManifoldSpec:
+    """[manifolds]: draw the stable and unstable manifolds of a hyperbolic orbit over each panel's
+    section figure (W^u and W^s in two colours; docs/manifolds.md).  The orbit of period ``period``
+    is found by Newton's method from ``guess`` in each panel (as ``explorer manifold`` does;
+    default: the fixed point found from (0, 0)), and its four branches at each of its points are
+    grown to ``arclength`` with at most ``max_points`` points each.  Drawing only: the settings
+    enter the figure's settings (a rerun redraws), never a panel's numbers or hashes."""
+
+    draw: bool = False
+    arclength: float = DEFAULT_MANIFOLD_ARCLENGTH
+    guess: tuple = (0.0, 0.0)
+    period: int = 1
+    max_points: int = DEFAULT_MANIFOLD_POINTS
+
+    def __post_init__(self):
+        guess = _list("manifolds.guess", self.guess)
+        if len(guess) != 2:
+            _fail("manifolds.guess", f"must be [p1, p2] (2 numbers), got {len(guess)} items")
+        values = {
+            "draw": _bool("manifolds.draw", self.draw),
+            "arclength": _real("manifolds.arclength", self.arclength, 0.0, MAX_MANIFOLD_ARCLENGTH, lo_open=True),
+            "guess": tuple(_real(f"manifolds.guess[{i}]", x) for i, x in enumerate(guess)),
+            "period": _int("manifolds.period", self.period, 1, MAX_MANIFOLD_PERIOD),
+            "max_points": _int("manifolds.max_points", self.max_points, 3, MAX_MANIFOLD_POINTS),
+        }
+        for name, value in values.items():
+            object.__setattr__(self, name, value)
+
+    def to_dict(self) -> dict:
+        d = {k: getattr(self, k) for k in _MANIFOLD_KEYS}
+        d["guess"] = list(self.guess)
         return d
