@@ -278,3 +278,62 @@ def test_manifolds_of_a_point_are_those_of_the_orbit_newton_finds_from_it(saddle
         mf.manifolds((0.0, 0.0, 0.0), prm, H)
     with pytest.raises(model.ParameterError, match="h="):
         mf.manifolds((0.0, 0.0), prm)
+
+
+def test_heteroclinic_points_lie_on_both_manifolds_and_go_from_one_saddle_to_the_other():
+    """Period-2 saddle orbit x0 = (-1.84, 0), x1 = (-0.32, 0) (F = P^2): each point of W^u(x0) and
+    W^s(x1) is within 1e-10 of both branches, its backward F-iterates approach x0 and its forward
+    ones x1 (and not the other way round)."""
+    from explorer.analysis.periodic import find_periodic_orbit
+
+    orb = find_periodic_orbit(model.FIGURE4.with_(mu=MU), H, (-1.8408, 0.0), 2)
+    s0, s1 = mf.saddle(orb, index=0), mf.saddle(orb, index=1)
+    assert s0.maps == 2
+    bu = mf.grow_branch(s0, sign=1, arclength=3.0, start_tol=1e-8)
+    bs = mf.grow_branch(s1, stable=True, sign=-1, arclength=3.0, start_tol=1e-8)
+    hs = mf.heteroclinic_points(bu, bs)
+    assert len(hs) >= 2
+    x0, x1 = orb.points
+    for hp in hs:
+        assert hp.residual < 1e-10
+        assert bu.distance(hp.point) < 1e-10 and bs.distance(hp.point) < 1e-10
+        fwd = s0.smap.iterate(hp.point, 2 * 5)[2::2]              # F^1 ... F^5 (F = P^2)
+        back = s0.smap.iterate(hp.point, 2 * 5, backward=True)[2::2]
+        d_fwd, d_back = np.linalg.norm(fwd - x1, axis=1), np.linalg.norm(back - x0, axis=1)
+        assert d_fwd[-1] < 1e-3 and d_back[-1] < 1e-3
+        assert np.all(np.diff(d_fwd[-3:]) < 0) and np.all(np.diff(d_back[-3:]) < 0)
+        assert np.linalg.norm(fwd[-1] - x0) > 0.5 and np.linalg.norm(back[-1] - x1) > 0.5
+    with pytest.raises(model.ParameterError, match="two different saddle points"):
+        mf.heteroclinic_points(bu, mf.grow_branch(s0, stable=True, sign=1, arclength=0.5))
+
+
+def test_flux_curve_stops_where_the_followed_point_is_not_a_saddle_and_says_why():
+    """Followed from the left island's centre (elliptic): the first row says why there is no
+    flux, the curve stops there (the next mu is not computed) and reports it as the destruction."""
+    rows = tr.flux_curve(model.FIGURE4, H, [0.01, 0.02], guess=(-1.17, 0.0))
+    assert len(rows) == 1 and rows[0]["flux"] is None and rows[0]["trace"] < 2.0
+    assert rows[0]["reason"] == tr.REASON_NO_SADDLE and rows[0]["status"].startswith("elliptic")
+    assert rows.destruction == 0.01 and rows.stop_reason == rows[0]["status"]
+
+
+def test_a_turnstile_torn_by_the_section_edge_is_reported_with_the_eye_flux():
+    """mu = 0.5: W^u of the central saddle reaches the section's edge, where the first return
+    jumps (the orbit grazes phi = phi0 with M = 0): the branch is cut there, no pair of lobes has
+    unbroken arcs and the row says so, with the eye's entry-set flux instead."""
+    (row,) = tr.flux_curve(model.FIGURE4, H, [0.5], arclength=9.0, max_arclength=9.0, exit_samples=1500)
+    assert row["reason"] == tr.REASON_TORN and row["status"].startswith("torn") and row["flux"] is None
+    assert row["eye_flux"] > 5 * row["eye_error"] > 0
+    fp = fpm.follow(model.FIGURE4, H, "mu", 0.0, 0.5, (0.0, 0.0))
+    sd = mf.saddle(fp)
+    bu = mf.grow_branch(sd, sign=1, arclength=9.0)
+    st = bu.first_tear
+    assert math.isfinite(st)
+    k = int(np.searchsorted(bu.sigma, st))
+    a, b = bu.points[k], bu.points[k + 1]
+    assert np.linalg.norm(a - b) > 10 * mf.DEFAULT_MAX_GAP and bu.sigma[k + 1] - bu.sigma[k] <= 2 * mf.MIN_DSIGMA
+    pa, pb = bu.at([bu.sigma[k] - bu.curve.L, bu.sigma[k + 1] - bu.curve.L])   # one map before: the same point
+    assert np.linalg.norm(pa - pb) < 1e-8
+    ta, tb = (abs(sd.smap(x, jacobian=False).time) for x in (pa, pb))
+    assert abs(ta - tb) > 0.1                                    # ... whose return time jumps
+    ms = model.section_M2(fp.params, np.array([a[0], b[0]]), np.array([a[1], b[1]]), H, math.pi)
+    assert min(ms) < 1e-6                                        # one side lands on the section's edge
