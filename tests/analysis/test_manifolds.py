@@ -337,3 +337,16 @@ def test_a_turnstile_torn_by_the_section_edge_is_reported_with_the_eye_flux():
     assert abs(ta - tb) > 0.1                                    # ... whose return time jumps
     ms = model.section_M2(fp.params, np.array([a[0], b[0]]), np.array([a[1], b[1]]), H, math.pi)
     assert min(ms) < 1e-6                                        # one side lands on the section's edge
+
+
+@pytest.mark.slow
+def test_overlapping_lobes_are_not_the_flux_and_the_eye_flux_says_so():
+    """mu = 0.3: the turnstile's arcs cross again between their ends, the two lobes still have
+    equal signed areas but overlap, and the flux into the eye (Monte Carlo) differs from them
+    (at mu = 0.05 and 0.1, simple turnstiles, it equals the lobe area:
+    test_mean_transit_time_is_accessible_area_over_flux)."""
+    (over,) = tr.flux_curve(model.FIGURE4, H, [0.3], arclength=12.0, max_arclength=12.0, exit_samples=2000)
+    assert over["reason"] == tr.REASON_SECONDARY and over["flux"] is None
+    a, b = over["lobes"]
+    assert a["secondary"] > 0 and abs(a["area"] - b["area"]) < 1e-5
+    assert abs(over["eye_flux"] - a["area"]) > 5 * over["eye_error"]
