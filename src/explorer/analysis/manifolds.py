@@ -514,11 +514,25 @@ def homoclinic_points(unstable: ManifoldBranch, stable: ManifoldBranch, *, max_r
     the residual is below ``max_residual``; sorted by sigma_u (the order along W^u)."""
     if unstable.kind != "unstable" or stable.kind != "stable":
         raise ParameterError("homoclinic_points needs an unstable branch then a stable branch")
+    return _intersections(unstable, stable, max_residual, balance=False)
+
+
+def _intersections(unstable: ManifoldBranch, stable: ManifoldBranch, max_residual, balance) -> list:
+    """Crossings of the two polylines refined by Newton (:func:`_refine`), kept below
+    ``max_residual``, one per point, sorted by sigma_u; with ``balance`` each crossing is first
+    moved along its orbit to the point of the stored branches with balanced generations
+    (:func:`heteroclinic_points`)."""
+    cu, cs = unstable.curve, stable.curve
+    balance = balance and cu is not None and cs is not None and cu.sd.maps == cs.sd.maps
     found: list[Homoclinic] = []
     # skip the first segment of each (the saddle point itself is a trivial intersection)
     for i, j, ta, tb in _segment_crossings(unstable.points[1:], stable.points[1:]):
         su = unstable.sigma[i + 1] + ta * (unstable.sigma[i + 2] - unstable.sigma[i + 1])
         ss = stable.sigma[j + 1] + tb * (stable.sigma[j + 2] - stable.sigma[j + 1])
+        if balance:   # the generations n_u + k = n_s - k, staying on the stored branches
+            k = round(((ss - cs.sigma0) / cs.L - (su - cu.sigma0) / cu.L) / 2.0)
+            k = min(max(k, math.ceil((ss - stable.sigma[-1]) / cs.L)), math.floor((unstable.sigma[-1] - su) / cu.L))
+            su, ss = su + k * cu.L, ss - k * cs.L
         hp = _refine(unstable, stable, su, ss)
         if hp is None or hp.residual > max_residual:
             continue
@@ -553,23 +567,7 @@ def heteroclinic_points(unstable: ManifoldBranch, stable: ManifoldBranch, *, max
     if np.linalg.norm(unstable.points[0] - stable.points[0]) < SAME_POINT:
         raise ParameterError("heteroclinic_points needs branches of two different saddle points "
                              "(for one saddle: homoclinic_points)")
-    cu, cs = unstable.curve, stable.curve
-    same_map = cu.sd.maps == cs.sd.maps
-    found: list[Homoclinic] = []
-    for i, j, ta, tb in _segment_crossings(unstable.points[1:], stable.points[1:]):
-        su = unstable.sigma[i + 1] + ta * (unstable.sigma[i + 2] - unstable.sigma[i + 1])
-        ss = stable.sigma[j + 1] + tb * (stable.sigma[j + 2] - stable.sigma[j + 1])
-        if same_map:   # balance the generations, n_u + k = n_s - k, staying on the stored branches
-            k = round(((ss - cs.sigma0) / cs.L - (su - cu.sigma0) / cu.L) / 2.0)
-            k = min(max(k, math.ceil((ss - stable.sigma[-1]) / cs.L)), math.floor((unstable.sigma[-1] - su) / cu.L))
-            su, ss = su + k * cu.L, ss - k * cs.L
-        hp = _refine(unstable, stable, su, ss)
-        if hp is None or hp.residual > max_residual:
-            continue
-        if any(np.linalg.norm(hp.point - f.point) < SAME_POINT for f in found):
-            continue
-        found.append(hp)
-    return sorted(found, key=lambda hp: hp.sigma_u)
+    return _intersections(unstable, stable, max_residual, balance=True)
 
 
 def homoclinic_orbit(smap: SectionMap, point, n=8) -> np.ndarray:
