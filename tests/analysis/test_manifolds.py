@@ -314,6 +314,7 @@ def test_flux_curve_stops_where_the_followed_point_is_not_a_saddle_and_says_why(
     assert len(rows) == 1 and rows[0]["flux"] is None and rows[0]["trace"] < 2.0
     assert rows[0]["reason"] == tr.REASON_NO_SADDLE and rows[0]["status"].startswith("elliptic")
     assert rows.destruction == 0.01 and rows.stop_reason == rows[0]["status"]
+    assert rows.trace_two is None                   # no saddle before it to interpolate from
 
 
 def test_a_turnstile_torn_by_the_section_edge_is_reported_with_the_eye_flux():
@@ -350,3 +351,12 @@ def test_overlapping_lobes_are_not_the_flux_and_the_eye_flux_says_so():
     a, b = over["lobes"]
     assert a["secondary"] > 0 and abs(a["area"] - b["area"]) < 1e-5
     assert abs(over["eye_flux"] - a["area"]) > 5 * over["eye_error"]
+
+
+def test_flux_curve_stops_where_the_central_saddle_turns_elliptic_and_brackets_it():
+    """Figure 4: the central saddle turns elliptic between mu = 2.9 (trace > 2) and 3 (trace < 2);
+    the curve stops at 3 and interpolates the trace to 2 inside the bracket."""
+    rows = tr.flux_curve(model.FIGURE4, H, [2.9, 3.0, 3.1], arclength=0.5, max_arclength=0.5, exit_samples=0)
+    assert len(rows) == 2 and rows[0]["trace"] > 2.0 > rows[1]["trace"]
+    assert rows[1]["reason"] == tr.REASON_NO_SADDLE and rows.destruction == 3.0
+    assert 2.9 < rows.trace_two < 3.0

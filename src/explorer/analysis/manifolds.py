@@ -534,8 +534,11 @@ def _intersections(unstable: ManifoldBranch, stable: ManifoldBranch, max_residua
             k = min(max(k, math.ceil((ss - stable.sigma[-1]) / cs.L)), math.floor((unstable.sigma[-1] - su) / cu.L))
             su, ss = su + k * cu.L, ss - k * cs.L
         hp = _refine(unstable, stable, su, ss)
-        if hp is None or hp.residual > max_residual:
+        if hp is None or hp.residual > max_residual or not math.isfinite(hp.angle):
             continue
+        if min(np.linalg.norm(hp.point - unstable.points[0]), np.linalg.norm(hp.point - stable.points[0])) < \
+                min(unstable.start_distance, stable.start_distance):
+            continue    # Newton slid down both branches to the saddle point: the trivial intersection
         if any(np.linalg.norm(hp.point - f.point) < SAME_POINT for f in found):
             continue
         found.append(hp)

@@ -192,13 +192,14 @@ def torn(unstable: ManifoldBranch, stable: ManifoldBranch, points) -> bool:
     return unstable.first_tear + stable.first_tear < S0 + unstable.curve.L
 
 
-def turnstile(sd, *, arclength=6.0, sign=1, max_arclength=None, **kw):
+def turnstile(sd, *, arclength=6.0, sign=1, max_arclength=None, max_residual=1e-10, **kw):
     """The unstable branch ``sign`` of the saddle ``sd``, the stable branch it meets (the same
     sign first, then the other), their homoclinic points and the turnstile's lobes: a dict with
     keys "unstable", "stable", "homoclinic_points", "lobes", "arclength", "torn".  When no pair has
     both lobes within ``arclength``, the branches are grown again at twice the length, up to
     ``max_arclength`` (default: ``arclength``), unless the branches are torn (:func:`torn`: no
-    length helps); the pair with the most lobes is returned.  ``kw``: options of
+    length helps); the pair with the most lobes is returned.  ``max_residual``: of the homoclinic
+    points (:func:`~explorer.analysis.manifolds.homoclinic_points`); ``kw``: options of
     :func:`grow_branch`."""
     from explorer.analysis.manifolds import grow_branch
 
@@ -209,7 +210,7 @@ def turnstile(sd, *, arclength=6.0, sign=1, max_arclength=None, **kw):
         best = None
         for s in (sign, -sign):
             bs = grow_branch(sd, stable=True, sign=s, arclength=length, **kw)
-            hs = homoclinic_points(bu, bs)
+            hs = homoclinic_points(bu, bs, max_residual=max_residual)
             lb = lobes(bu, bs, points=hs)
             cut = torn(bu, bs, hs)
             rank = (len(lb), cut, len(hs))    # a torn pair is a definite answer: no length helps
@@ -268,6 +269,13 @@ def melnikov_lobe_area(params, h, mu) -> float:
 #: mu of :func:`flux_curve` when none are given: from 1e-3 up to the loss of the central saddle
 #: (Figure 4, h = 2: trace 2 at mu* ~ 2.98, docs/manifolds.md)
 DEFAULT_FLUX_MUS = (1e-3, 3e-3, 1e-2, 3e-2, 0.1, 0.2, 0.3, 0.4, 0.5, 0.75, 1.0, 1.5, 2.0, 2.5, 2.75, 3.0, 3.25, 3.5)
+#: largest continuation step in mu between two rows of a flux curve (a larger one may land on
+#: another fixed point: from mu = 0 to 1 in one step it found (-0.715, -0.631), trace 27.6)
+FOLLOW_STEP = 0.05
+#: the homoclinic points of a flux curve are kept to this residual: at mu >= 1 the rounding of the
+#: points a few generations out reaches 1e-10 (the primary point on p2 = 0 at mu = 1: 1.4e-10);
+#: at mu <= 0.3 they are found to 1e-12
+FLUX_RESIDUAL = 1e-9
 #: samples of the Monte Carlo exit flux of the eye (rows whose turnstile is torn)
 EXIT_SAMPLES = 4000
 
@@ -275,10 +283,14 @@ EXIT_SAMPLES = 4000
 class FluxCurve(list):
     """The rows of :func:`flux_curve` (a list of dicts), with ``destruction``: the mu where the
     curve stopped because the central saddle was lost (its estimate of the separatrix's
-    destruction; None when it never stopped) and ``stop_reason`` (why, "" when it never stopped)."""
+    destruction; None when it never stopped), ``stop_reason`` (why, "" when it never stopped)
+    and ``trace_two`` (a closer estimate when the saddle turned elliptic)."""
 
     destruction: float | None = None
     stop_reason: str = ""
+    #: where the trace of the followed point, interpolated linearly between the last saddle and
+    #: the first elliptic row, is 2 (the saddle turns elliptic); None unless it stopped so
+    trace_two: float | None = None
 
 
 def _eye_point(points, reversible):
@@ -315,8 +327,8 @@ def flux_curve(params, h, mus=None, *, guess=(0.0, 0.0), arclength=6.0, max_arcl
     simple, their signed area is not the flux; ``lobes`` still lists them),
     :data:`REASON_NO_PAIR` (no pair within the budget), :data:`REASON_LOBES_DIFFER`.
 
-    ``eye_flux`` (rows "ok", torn ones and those with secondary intersections, whenever the eye R
-    is bounded by unbroken arcs up to its primary point on p2 = 0): the flux into the eye per
+    ``eye_flux`` (any row whose eye R is bounded by unbroken arcs up to its primary point on
+    p2 = 0, also where no turnstile was found): the flux into the eye per
     iteration, the area of its entry set {x in R: P^-1(x) not in R} (= its exit set's, by area
     preservation) by Monte Carlo with ``exit_samples`` points (:func:`exit_times`, one
     iteration), ``eye_error`` its standard error: it equals the lobe area where the turnstile
@@ -343,7 +355,7 @@ def flux_curve(params, h, mus=None, *, guess=(0.0, 0.0), arclength=6.0, max_arcl
         except ParameterError:
             pass
         try:
-            fp = fixedpoints.follow(prm.with_(mu=prev), h, "mu", prev, mu, x, max_step=max(0.05, mu - prev))
+            fp = fixedpoints.follow(prm.with_(mu=prev), h, "mu", prev, mu, x, max_step=FOLLOW_STEP)
         except ParameterError as exc:
             row.update(status=f"the fixed point was not followed to this mu: {exc}", reason=REASON_NO_SADDLE)
         else:
@@ -355,10 +367,14 @@ def flux_curve(params, h, mus=None, *, guess=(0.0, 0.0), arclength=6.0, max_arcl
                            "central point is no longer a saddle", reason=REASON_NO_SADDLE)
         if row["reason"] == REASON_NO_SADDLE:
             rows.destruction, rows.stop_reason = mu, row["status"]
+            last = rows[-2] if len(rows) > 1 else None
+            if last is not None and last["trace"] is not None and row["trace"] is not None and row["trace"] < 2.0:
+                w = (last["trace"] - 2.0) / (last["trace"] - row["trace"])
+                rows.trace_two = last["mu"] + w * (mu - last["mu"])
             break
         prev, x = mu, tuple(fp.point)
         try:
-            t = turnstile(saddle(fp), arclength=arclength, sign=sign,
+            t = turnstile(saddle(fp), arclength=arclength, sign=sign, max_residual=FLUX_RESIDUAL,
                           max_arclength=4 * arclength if max_arclength is None else max_arclength, **kw)
         except ParameterError as exc:
             row.update(status=str(exc), reason=REASON_NO_PAIR)
@@ -369,7 +385,7 @@ def flux_curve(params, h, mus=None, *, guess=(0.0, 0.0), arclength=6.0, max_arcl
         bu, bs = t["unstable"], t["stable"]
         h0 = _eye_point(t["homoclinic_points"], reversible)
         eye = h0 is not None and bu.first_tear > h0.sigma_u and bs.first_tear > h0.sigma_s
-        if eye and exit_samples and (row["status"] == "ok" or t["torn"] or row["status"].startswith("secondary")):
+        if eye and exit_samples:
             ex = exit_times(bu, bs, h0, samples=exit_samples, max_iter=1, seed=seed)
             row.update(eye_flux=ex["flux_mc"], eye_error=ex["flux_mc_sem"])
         if row["status"] == "ok":
