@@ -293,6 +293,11 @@ SCENE_KEYS = {
     "figure.own_scale": ("1", "'a'", "[-1]", "[0, 0]", "[5]"),
     "figure.marker_size": REAL + ("0",),
     "figure.dpi": INT + ("0", BIG),
+    "manifolds.draw": BOOL,
+    "manifolds.arclength": REAL + ("0", "-1", "1e4"),
+    "manifolds.guess": LIST + ("[0]", "[0, 0, 0]", "[nan, 0]", "['a', 0]"),
+    "manifolds.period": INT + ("0", "65"),
+    "manifolds.max_points": INT + ("2", BIG),
 }
 #: the values each constraint of model.PARAMETERS refuses (besides non-numbers and overflow)
 CONSTRAINT_BAD = {"": (), "positive": ("0", "-1"), "nonnegative": ("-1",), "nonzero": ("0",)}
@@ -380,6 +385,7 @@ def test_every_scene_key_is_in_the_table():
     schema |= {f"seeds.{k}" for k in scene._SEED_KEYS} | {f"integration.{k}" for k in scene._INTEGRATION_KEYS}
     schema |= {f"compute.{k}" for k in scene.COMPUTE_QUANTITIES} | {f"lyapunov.{k}" for k in scene._LYAPUNOV_KEYS}
     schema |= {f"figure.{k}" for k in scene._FIGURE_KEYS} | {f"model.{k}" for k in scene.PARAM_NAMES}
+    schema |= {f"manifolds.{k}" for k in scene._MANIFOLD_KEYS}
     tried = set(SCENE_KEYS) | {key for _id, _text, key in SCENE_TABLE}
     assert schema <= tried, sorted(schema - tried)
 

@@ -63,6 +63,7 @@ _EXPORTS = {
     # invariant manifolds, homoclinic tangles and transport (docs/manifolds.md)
     "manifolds": "explorer.analysis.manifolds",
     "homoclinic_points": "explorer.analysis.manifolds",
+    "heteroclinic_points": "explorer.analysis.manifolds",
     "lobes": "explorer.analysis.transport",
     "flux_curve": "explorer.analysis.transport",
     "exit_times": "explorer.analysis.transport",

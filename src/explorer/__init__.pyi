@@ -28,6 +28,9 @@ from explorer.analysis.lyapunov import (
     indicators as indicators,
 )
 from explorer.analysis.manifolds import (
+    heteroclinic_points as heteroclinic_points,
+)
+from explorer.analysis.manifolds import (
     homoclinic_points as homoclinic_points,
 )
 from explorer.analysis.manifolds import (

@@ -262,3 +262,101 @@ def test_a_flux_needs_both_lobes_with_equal_areas(tangle):
     assert tr.turnstile_check(lb[:1], 6.0).startswith("no pair of lobes")
     wrong = tr.Lobe(lb[1].start, lb[1].end, 5.7, 1e-6, lb[1].boundary)
     assert tr.turnstile_check([lb[0], wrong], 6.0).startswith("the two lobes differ")
+
+
+def test_manifolds_of_a_point_are_those_of_the_orbit_newton_finds_from_it(saddle):
+    """ex.manifolds((p1, p2), params, h): the orbit is found from the point first; its branches
+    start at that orbit's point and coincide with the branches grown from the FixedPoint."""
+    prm = model.FIGURE4.with_(mu=MU)
+    got = mf.manifolds((0.05, 0.02), prm, H, arclength=1.0, signs=(1,))
+    assert [b.kind for b in got] == ["unstable", "stable"]
+    assert np.linalg.norm(got[0].points[0] - saddle.point) < 1e-10
+    ref = mf.grow_branch(saddle, sign=1, arclength=1.5)
+    for x in got[0].points[5::20]:
+        assert ref.distance(x) < 1e-9
+    with pytest.raises(model.ParameterError, match="point"):
+        mf.manifolds((0.0, 0.0, 0.0), prm, H)
+    with pytest.raises(model.ParameterError, match="h="):
+        mf.manifolds((0.0, 0.0), prm)
+
+
+def test_heteroclinic_points_lie_on_both_manifolds_and_go_from_one_saddle_to_the_other():
+    """Period-2 saddle orbit x0 = (-1.84, 0), x1 = (-0.32, 0) (F = P^2): each point of W^u(x0) and
+    W^s(x1) is within 1e-10 of both branches, its backward F-iterates approach x0 and its forward
+    ones x1 (and not the other way round)."""
+    from explorer.analysis.periodic import find_periodic_orbit
+
+    orb = find_periodic_orbit(model.FIGURE4.with_(mu=MU), H, (-1.8408, 0.0), 2)
+    s0, s1 = mf.saddle(orb, index=0), mf.saddle(orb, index=1)
+    assert s0.maps == 2
+    bu = mf.grow_branch(s0, sign=1, arclength=3.0, start_tol=1e-8)
+    bs = mf.grow_branch(s1, stable=True, sign=-1, arclength=3.0, start_tol=1e-8)
+    hs = mf.heteroclinic_points(bu, bs)
+    assert len(hs) >= 2
+    x0, x1 = orb.points
+    for hp in hs:
+        assert hp.residual < 1e-10
+        assert bu.distance(hp.point) < 1e-10 and bs.distance(hp.point) < 1e-10
+        fwd = s0.smap.iterate(hp.point, 2 * 5)[2::2]              # F^1 ... F^5 (F = P^2)
+        back = s0.smap.iterate(hp.point, 2 * 5, backward=True)[2::2]
+        d_fwd, d_back = np.linalg.norm(fwd - x1, axis=1), np.linalg.norm(back - x0, axis=1)
+        assert d_fwd[-1] < 1e-3 and d_back[-1] < 1e-3
+        assert np.all(np.diff(d_fwd[-3:]) < 0) and np.all(np.diff(d_back[-3:]) < 0)
+        assert np.linalg.norm(fwd[-1] - x0) > 0.5 and np.linalg.norm(back[-1] - x1) > 0.5
+    with pytest.raises(model.ParameterError, match="two different saddle points"):
+        mf.heteroclinic_points(bu, mf.grow_branch(s0, stable=True, sign=1, arclength=0.5))
+
+
+def test_flux_curve_stops_where_the_followed_point_is_not_a_saddle_and_says_why():
+    """Followed from the left island's centre (elliptic): the first row says why there is no
+    flux, the curve stops there (the next mu is not computed) and reports it as the destruction."""
+    rows = tr.flux_curve(model.FIGURE4, H, [0.01, 0.02], guess=(-1.17, 0.0))
+    assert len(rows) == 1 and rows[0]["flux"] is None and rows[0]["trace"] < 2.0
+    assert rows[0]["reason"] == tr.REASON_NO_SADDLE and rows[0]["status"].startswith("elliptic")
+    assert rows.destruction == 0.01 and rows.stop_reason == rows[0]["status"]
+    assert rows.trace_two is None                   # no saddle before it to interpolate from
+
+
+def test_a_turnstile_torn_by_the_section_edge_is_reported_with_the_eye_flux():
+    """mu = 0.5: W^u of the central saddle reaches the section's edge, where the first return
+    jumps (the orbit grazes phi = phi0 with M = 0): the branch is cut there, no pair of lobes has
+    unbroken arcs and the row says so, with the eye's entry-set flux instead."""
+    (row,) = tr.flux_curve(model.FIGURE4, H, [0.5], arclength=9.0, max_arclength=9.0, exit_samples=1500)
+    assert row["reason"] == tr.REASON_TORN and row["status"].startswith("torn") and row["flux"] is None
+    assert row["eye_flux"] > 5 * row["eye_error"] > 0
+    fp = fpm.follow(model.FIGURE4, H, "mu", 0.0, 0.5, (0.0, 0.0))
+    sd = mf.saddle(fp)
+    bu = mf.grow_branch(sd, sign=1, arclength=9.0)
+    st = bu.first_tear
+    assert math.isfinite(st)
+    k = int(np.searchsorted(bu.sigma, st))
+    a, b = bu.points[k], bu.points[k + 1]
+    assert np.linalg.norm(a - b) > 10 * mf.DEFAULT_MAX_GAP and bu.sigma[k + 1] - bu.sigma[k] <= 2 * mf.MIN_DSIGMA
+    pa, pb = bu.at([bu.sigma[k] - bu.curve.L, bu.sigma[k + 1] - bu.curve.L])   # one map before: the same point
+    assert np.linalg.norm(pa - pb) < 1e-8
+    ta, tb = (abs(sd.smap(x, jacobian=False).time) for x in (pa, pb))
+    assert abs(ta - tb) > 0.1                                    # ... whose return time jumps
+    ms = model.section_M2(fp.params, np.array([a[0], b[0]]), np.array([a[1], b[1]]), H, math.pi)
+    assert min(ms) < 1e-6                                        # one side lands on the section's edge
+
+
+@pytest.mark.slow
+def test_overlapping_lobes_are_not_the_flux_and_the_eye_flux_says_so():
+    """mu = 0.3: the turnstile's arcs cross again between their ends, the two lobes still have
+    equal signed areas but overlap, and the flux into the eye (Monte Carlo) differs from them
+    (at mu = 0.05 and 0.1, simple turnstiles, it equals the lobe area:
+    test_mean_transit_time_is_accessible_area_over_flux)."""
+    (over,) = tr.flux_curve(model.FIGURE4, H, [0.3], arclength=12.0, max_arclength=12.0, exit_samples=2000)
+    assert over["reason"] == tr.REASON_SECONDARY and over["flux"] is None
+    a, b = over["lobes"]
+    assert a["secondary"] > 0 and abs(a["area"] - b["area"]) < 1e-5
+    assert abs(over["eye_flux"] - a["area"]) > 5 * over["eye_error"]
+
+
+def test_flux_curve_stops_where_the_central_saddle_turns_elliptic_and_brackets_it():
+    """Figure 4: the central saddle turns elliptic between mu = 2.9 (trace > 2) and 3 (trace < 2);
+    the curve stops at 3 and interpolates the trace to 2 inside the bracket."""
+    rows = tr.flux_curve(model.FIGURE4, H, [2.9, 3.0, 3.1], arclength=0.5, max_arclength=0.5, exit_samples=0)
+    assert len(rows) == 2 and rows[0]["trace"] > 2.0 > rows[1]["trace"]
+    assert rows[1]["reason"] == tr.REASON_NO_SADDLE and rows.destruction == 3.0
+    assert 2.9 < rows.trace_two < 3.0

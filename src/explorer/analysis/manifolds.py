@@ -50,7 +50,8 @@ from explorer.analysis.section_map import DEFAULT_TOL, RETURN_TMAX, SectionMap
 from explorer.model import ParameterError, validation
 
 __all__ = ["DEFAULT_MAX_ANGLE", "DEFAULT_MAX_GAP", "DEFAULT_MAX_GAP_ANGLE", "DEFAULT_START_TOL", "Homoclinic",
-           "ManifoldBranch", "Saddle", "grow_branch", "homoclinic_orbit", "homoclinic_points", "manifolds",
+           "ManifoldBranch", "Saddle", "grow_branch", "heteroclinic_points", "homoclinic_orbit", "homoclinic_points",
+           "manifolds",
            "saddle"]
 
 #: transverse distance of the start points from the manifold (module docstring)
@@ -241,6 +242,24 @@ class ManifoldBranch:
     evaluations: int
     seconds: float
     curve: _Curve = field(repr=False, compare=False, default=None)
+    max_gap: float = DEFAULT_MAX_GAP
+
+    @property
+    def tears(self) -> np.ndarray:
+        """sigma at the start of each jump of the branch: neighbours farther apart than ``max_gap``
+        whose sigma differ by no more than the refinement's limit ``MIN_DSIGMA``, so that no
+        point between them lies between them on the plane.  The section map is discontinuous
+        there (an orbit grazes the section, M = 0 at phi = phi0: the first return time jumps,
+        docs/manifolds.md), and the branch beyond is not the continuation of the arc before."""
+        d = np.linalg.norm(np.diff(self.points[1:], axis=0), axis=1)
+        ds = np.diff(self.sigma[1:])
+        return self.sigma[1:-1][(d > self.max_gap) & (ds <= 1.5 * MIN_DSIGMA)]
+
+    @property
+    def first_tear(self) -> float:
+        """The smallest sigma of :attr:`tears` (inf when the branch is unbroken)."""
+        t = self.tears
+        return float(t[0]) if t.size else math.inf
 
     def at(self, sigma) -> np.ndarray:
         """Points of the branch at parameters ``sigma`` (computed afresh, no interpolation)."""
@@ -383,20 +402,47 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
     P = np.vstack([sd.point, pts])
     return ManifoldBranch("stable" if stable else "unstable", sign, P, np.concatenate([[-np.inf], sig]),
                           float(_arc(P)[-1]), float(arclength), status, cv.s0, float(start_tol), cv.curvature,
-                          evals, time.perf_counter() - t0, cv)
+                          evals, time.perf_counter() - t0, cv, float(max_gap))
 
 
 def manifolds(orbit, params=None, h=None, *, arclength=5.0, kinds=("unstable", "stable"), signs=(1, -1),
-              index=0, phi0=None, tol=DEFAULT_TOL, **kw) -> list:
-    """The branches of W^u and W^s of a hyperbolic ``orbit`` (PeriodicOrbit or FixedPoint) at its
-    point ``index``, each grown to ``arclength`` (:func:`grow_branch`; ``kw`` its options).
-    Returns a list of :class:`ManifoldBranch`, unstable before stable, sign +1 before -1.
-    System first: ``manifolds(smap, orbit)`` with a :class:`SectionMap` (as :func:`saddle`)."""
+              index=0, phi0=None, tol=DEFAULT_TOL, period=1, **kw) -> list:
+    """The branches of W^u and W^s of a hyperbolic ``orbit`` at its point ``index``, each grown to
+    ``arclength`` (:func:`grow_branch`; ``kw`` its options, e.g. ``max_points``, ``max_time``).
+
+    ``orbit``: a :class:`~explorer.analysis.periodic.PeriodicOrbit`, a
+    :class:`~explorer.analysis.fixedpoints.FixedPoint`, or a point (p1, p2) of the section: then the
+    orbit of period ``period`` is found from it by Newton's method
+    (:func:`~explorer.analysis.periodic.find_periodic_orbit` with ``params``, ``h``, ``phi0``, ``tol``),
+    e.g. ``manifolds((-0.011, 0.0), params, 2.0, arclength=10)``.  Returns a list of
+    :class:`ManifoldBranch` (``kind``, ``sign``, ``points``: an (M, 2) array from the orbit's point
+    outwards), unstable before stable, sign +1 before -1; ParameterError when the orbit is not
+    hyperbolic or not found.  System first: ``manifolds(smap, orbit)`` with a :class:`SectionMap`
+    (as :func:`saddle`)."""
+    if not isinstance(orbit, PeriodicOrbit) and not hasattr(orbit, "jacobian"):
+        orbit = _orbit_from_point(orbit, params, h, period, phi0, tol)
     sd = saddle(orbit, params, h, index=index, phi0=phi0, tol=tol)
     for k in kinds:
         if k not in ("unstable", "stable"):
             raise ParameterError(f"kinds must be 'unstable' and/or 'stable', got {k!r}")
     return [grow_branch(sd, stable=(k == "stable"), sign=s, arclength=arclength, **kw) for k in kinds for s in signs]
+
+
+def _orbit_from_point(point, params, h, period, phi0, tol):
+    """The periodic orbit of period ``period`` found from the point (p1, p2) by Newton's method."""
+    from explorer.analysis.periodic import find_periodic_orbit
+
+    try:
+        x = np.asarray(point, float)
+    except (TypeError, ValueError):
+        x = np.empty(0)
+    if x.shape != (2,):
+        raise ParameterError(f"orbit must be a PeriodicOrbit, a FixedPoint or a point (p1, p2), got {point!r}")
+    if params is None or h is None:
+        raise ParameterError("a point (p1, p2) as orbit needs params= and h=")
+    period = validation.integer("period", period, 1, validation.MAX_PERIOD)
+    return find_periodic_orbit(params, h, (float(x[0]), float(x[1])), period,
+                               phi0=math.pi if phi0 is None else phi0, tol=tol)
 
 
 # ------------------------------------------------------------------ intersections
@@ -477,18 +523,63 @@ def homoclinic_points(unstable: ManifoldBranch, stable: ManifoldBranch, *, max_r
     the residual is below ``max_residual``; sorted by sigma_u (the order along W^u)."""
     if unstable.kind != "unstable" or stable.kind != "stable":
         raise ParameterError("homoclinic_points needs an unstable branch then a stable branch")
+    return _intersections(unstable, stable, max_residual, balance=False)
+
+
+def _intersections(unstable: ManifoldBranch, stable: ManifoldBranch, max_residual, balance) -> list:
+    """Crossings of the two polylines refined by Newton (:func:`_refine`), kept below
+    ``max_residual``, one per point, sorted by sigma_u; with ``balance`` each crossing is first
+    moved along its orbit to the point of the stored branches with balanced generations
+    (:func:`heteroclinic_points`)."""
+    cu, cs = unstable.curve, stable.curve
+    balance = balance and cu is not None and cs is not None and cu.sd.maps == cs.sd.maps
     found: list[Homoclinic] = []
     # skip the first segment of each (the saddle point itself is a trivial intersection)
     for i, j, ta, tb in _segment_crossings(unstable.points[1:], stable.points[1:]):
         su = unstable.sigma[i + 1] + ta * (unstable.sigma[i + 2] - unstable.sigma[i + 1])
         ss = stable.sigma[j + 1] + tb * (stable.sigma[j + 2] - stable.sigma[j + 1])
+        if balance:   # the generations n_u + k = n_s - k, staying on the stored branches
+            k = round(((ss - cs.sigma0) / cs.L - (su - cu.sigma0) / cu.L) / 2.0)
+            k = min(max(k, math.ceil((ss - stable.sigma[-1]) / cs.L)), math.floor((unstable.sigma[-1] - su) / cu.L))
+            su, ss = su + k * cu.L, ss - k * cs.L
         hp = _refine(unstable, stable, su, ss)
-        if hp is None or hp.residual > max_residual:
+        if hp is None or hp.residual > max_residual or not math.isfinite(hp.angle):
             continue
+        if min(np.linalg.norm(hp.point - unstable.points[0]), np.linalg.norm(hp.point - stable.points[0])) < \
+                min(unstable.start_distance, stable.start_distance):
+            continue    # Newton slid down both branches to the saddle point: the trivial intersection
         if any(np.linalg.norm(hp.point - f.point) < SAME_POINT for f in found):
             continue
         found.append(hp)
     return sorted(found, key=lambda hp: hp.sigma_u)
+
+
+def heteroclinic_points(unstable: ManifoldBranch, stable: ManifoldBranch, *, max_residual=1e-10) -> list:
+    """Heteroclinic points: the intersections of a branch of W^u of one saddle point
+    (``unstable``) with a branch of W^s of another (``stable``): the two points of a hyperbolic
+    periodic orbit (e.g. period 2: W^u(x0) and W^s(x1)), or two hyperbolic orbits.  A point z of
+    both has F^-n(z) -> the first point and F^n(z) -> the second as n -> infinity.
+
+    Found as :func:`homoclinic_points` finds its points (crossings of the polylines, Newton's
+    method on x_u(sigma_u) = x_s(sigma_s) with points computed afresh, kept below
+    ``max_residual``), with one difference: when both saddles use the same map F (``maps``),
+    each crossing is first moved along its orbit, F^k shifting (sigma_u, sigma_s) by
+    (k L_u, -k L_s), to the point of the two branches (as stored) whose two generations (F-images
+    from each fundamental domain) are the most balanced; that point has the smallest rounding
+    error of its orbit (a point n generations out carries the map's error times Lambda^n), and
+    Newton reaches ~1e-11 there.
+    One point per heteroclinic orbit, sorted by sigma_u.  Branches grown with ``start_tol`` 1e-8
+    are accurate enough (their transverse start error shrinks by 1/Lambda per generation) and
+    carry less rounding error than with the default 1e-12 (docs/manifolds.md)."""
+    if unstable.kind != "unstable" or stable.kind != "stable":
+        raise ParameterError("heteroclinic_points needs an unstable branch then a stable branch")
+    if unstable.curve is None or stable.curve is None:
+        raise ParameterError("heteroclinic_points needs branches grown by grow_branch (they carry their "
+                             "parametrisation)")
+    if np.linalg.norm(unstable.points[0] - stable.points[0]) < SAME_POINT:
+        raise ParameterError("heteroclinic_points needs branches of two different saddle points "
+                             "(for one saddle: homoclinic_points)")
+    return _intersections(unstable, stable, max_residual, balance=True)
 
 
 def homoclinic_orbit(smap: SectionMap, point, n=8) -> np.ndarray:

@@ -32,8 +32,10 @@ import numpy as np
 from explorer.analysis.manifolds import Homoclinic, ManifoldBranch, homoclinic_points
 from explorer.model import ParameterError
 
-__all__ = ["Lobe", "flux_curve", "inside", "lobes", "melnikov_lobe_area", "polygon_area", "resonance_zone",
-           "richardson_area", "exit_times", "turnstile", "turnstile_check"]
+__all__ = ["DEFAULT_FLUX_MUS", "FluxCurve", "Lobe", "REASON_LOBES_DIFFER", "REASON_NO_EYE", "REASON_NO_PAIR",
+           "REASON_NO_SADDLE", "REASON_SECONDARY", "REASON_TORN", "exit_times", "flux_curve", "inside", "lobes",
+           "melnikov_lobe_area", "polygon_area", "resonance_zone", "richardson_area", "torn", "turnstile",
+           "turnstile_check"]
 
 #: two homoclinic points are on the same orbit when their sigma_u + sigma_s agree to this
 SAME_ORBIT_SUM = 1e-6
@@ -60,17 +62,21 @@ def richardson_area(coarse, fine):
 class Lobe:
     """A lobe bounded by the unstable arc from ``start`` to ``end`` (two adjacent primary
     homoclinic points) and the stable arc back: signed ``area`` (counterclockwise positive),
-    its ``error`` estimate, the boundary ``boundary`` (closed polygon, (m, 2))."""
+    its ``error`` estimate, the boundary ``boundary`` (closed polygon, (m, 2)) and ``secondary``:
+    the homoclinic points found inside the arcs of its turnstile (the unstable arc from a point
+    to its F-image and the stable arc back, which hold both lobes): 0 for a simple turnstile;
+    otherwise the lobes overlap and their signed area is not the flux."""
 
     start: Homoclinic
     end: Homoclinic
     area: float
     error: float
     boundary: np.ndarray
+    secondary: int = 0
 
     def as_dict(self):
         return {"area": abs(self.area), "signed_area": self.area, "error": self.error,
-                "start": self.start.point.tolist(), "end": self.end.point.tolist()}
+                "start": self.start.point.tolist(), "end": self.end.point.tolist(), "secondary": self.secondary}
 
 
 def _arc(branch: ManifoldBranch, a, b):
@@ -100,11 +106,37 @@ def _primary(hs, L):
     return [[h for h, s in zip(hs, sums) if abs(s - c) <= SAME_ORBIT_SUM] for c in classes[:2]]
 
 
+def _unbroken(branch: ManifoldBranch, a, b) -> bool:
+    """The arc of ``branch`` between sigma a and b holds no tear (ManifoldBranch.tears)."""
+    lo, hi = min(a, b), max(a, b)
+    t = branch.tears
+    return not np.any((t >= lo) & (t < hi))
+
+
+def _secondary(points, a, b, c, margin=1e-7) -> int:
+    """Homoclinic points other than b inside both arcs of the turnstile a -> b -> c = F(a): on the
+    unstable arc (sigma_u(a), sigma_u(c)) and the stable arc (sigma_s(c), sigma_s(a)).  The two
+    arcs bound the region between the eye R and its image P(R) (R's boundary from a, P(R)'s from
+    c); with such a point they cross again, the lobes overlap each other and the area of R minus P(R)
+    is not a lobe's signed area."""
+    ulo, uhi = sorted((a.sigma_u, c.sigma_u))
+    slo, shi = sorted((a.sigma_s, c.sigma_s))
+    return sum(1 for p in points if ulo + margin < p.sigma_u < uhi - margin and slo + margin < p.sigma_s < shi - margin
+               and abs(p.sigma_u - b.sigma_u) > margin)
+
+
 def lobes(unstable: ManifoldBranch, stable: ManifoldBranch, *, points=None) -> list:
     """The two lobes of the turnstile between the primary homoclinic orbits of the pair
     (``unstable``, ``stable``) (module docstring), as :class:`Lobe` s; [] when the branches are
-    too short to hold two primary orbits and the arcs between them.  ``points``: their
-    :func:`~explorer.analysis.manifolds.homoclinic_points` when already computed."""
+    too short to hold two primary orbits and the arcs between them, or when every such pair of
+    arcs is torn (:attr:`~explorer.analysis.manifolds.ManifoldBranch.tears`).  ``points``: their
+    :func:`~explorer.analysis.manifolds.homoclinic_points` when already computed.
+
+    From the point h0 of the first primary orbit farthest from the saddle and the point q0 of
+    the second with sigma_u(h0) < sigma_u(q0) < sigma_u(h0) + L, the pair is (h0, q0), (q0, F(h0))
+    when F(h0) is on the computed branches, else (F^-1(q0), h0), (h0, q0): two adjacent lobes of
+    the same turnstile (the second pair is the preimage of the first's second lobe and the first
+    lobe; their areas are equal by area preservation)."""
     hs = homoclinic_points(unstable, stable) if points is None else points
     if unstable.curve is None or stable.curve is None:
         raise ParameterError("lobes needs branches grown by grow_branch (they carry their parametrisation)")
@@ -114,7 +146,6 @@ def lobes(unstable: ManifoldBranch, stable: ManifoldBranch, *, points=None) -> l
     prim = _primary(hs, L)
     if prim is None:
         return []
-    out = []
     far = sorted(prim[0], key=lambda p: -np.linalg.norm(p.point - unstable.points[0]))
     for h0 in far:   # the lobe farthest from the saddle first (on p2 = 0 when reversible)
         q = [p for p in prim[1] if h0.sigma_u < p.sigma_u < h0.sigma_u + L]
@@ -122,26 +153,54 @@ def lobes(unstable: ManifoldBranch, stable: ManifoldBranch, *, points=None) -> l
             continue
         q0 = q[0]
         h1 = [p for p in prim[0] if abs(p.sigma_u - (h0.sigma_u + L)) < 1e-6]
-        for a, b in ((h0, q0),) + (((q0, h1[0]),) if h1 else ()):
-            uc, uf = _arc(unstable, a.sigma_u, b.sigma_u)
-            sc, sf = _arc(stable, b.sigma_s, a.sigma_s)
-            if not (np.all(np.isfinite(uf)) and np.all(np.isfinite(sf))):
-                continue
-            coarse, fine = np.vstack([uc, sc[1:-1]]), np.vstack([uf, sf[1:-1]])
-            area, err = richardson_area(coarse, fine)
-            out.append(Lobe(a, b, area, err, fine))
-        if out:
-            break
-    return out
+        qm = [p for p in prim[1] if abs(p.sigma_u - (q0.sigma_u - L)) < 1e-6]
+        pairs = ([((h0, q0), (q0, h1[0]))] if h1 else []) + ([((qm[0], h0), (h0, q0))] if qm else [])
+        for pair in pairs:
+            out = []
+            crossings = _secondary(hs, pair[0][0], pair[0][1], pair[1][1])
+            for a, b in pair:
+                if not (_unbroken(unstable, a.sigma_u, b.sigma_u) and _unbroken(stable, b.sigma_s, a.sigma_s)):
+                    break
+                uc, uf = _arc(unstable, a.sigma_u, b.sigma_u)
+                sc, sf = _arc(stable, b.sigma_s, a.sigma_s)
+                if not (np.all(np.isfinite(uf)) and np.all(np.isfinite(sf))):
+                    break
+                coarse, fine = np.vstack([uc, sc[1:-1]]), np.vstack([uf, sf[1:-1]])
+                area, err = richardson_area(coarse, fine)
+                out.append(Lobe(a, b, area, err, fine, crossings))
+            if len(out) == 2:
+                return out
+        # only one lobe: what the callers (turnstile_check) report as "no pair"
+        if not pairs and _unbroken(unstable, h0.sigma_u, q0.sigma_u) and _unbroken(stable, q0.sigma_s, h0.sigma_s):
+            uc, uf = _arc(unstable, h0.sigma_u, q0.sigma_u)
+            sc, sf = _arc(stable, q0.sigma_s, h0.sigma_s)
+            if np.all(np.isfinite(uf)) and np.all(np.isfinite(sf)):
+                area, err = richardson_area(np.vstack([uc, sc[1:-1]]), np.vstack([uf, sf[1:-1]]))
+                return [Lobe(h0, q0, area, err, np.vstack([uf, sf[1:-1]]))]
+    return []
 
 
-def turnstile(sd, *, arclength=6.0, sign=1, max_arclength=None, **kw):
+def torn(unstable: ManifoldBranch, stable: ManifoldBranch, points) -> bool:
+    """No turnstile with unbroken arcs can exist on these branches, however long they grow: two
+    adjacent lobes of the homoclinic orbit with the smallest sum S0 = sigma_u + sigma_s span a
+    range L of sigma_u and L of sigma_s, [a, a + L] and [S0 - a - L, S0 - a], so both
+    branches must be unbroken up to sigma_u_t + sigma_s_t >= S0 + L, where sigma_t is each
+    branch's first tear (the section map's discontinuity, ManifoldBranch.tears)."""
+    if not points:
+        return False
+    S0 = min(p.sigma_u + p.sigma_s for p in points)
+    return unstable.first_tear + stable.first_tear < S0 + unstable.curve.L
+
+
+def turnstile(sd, *, arclength=6.0, sign=1, max_arclength=None, max_residual=1e-10, **kw):
     """The unstable branch ``sign`` of the saddle ``sd``, the stable branch it meets (the same
     sign first, then the other), their homoclinic points and the turnstile's lobes: a dict with
-    keys "unstable", "stable", "homoclinic_points", "lobes", "arclength".  When no pair has
+    keys "unstable", "stable", "homoclinic_points", "lobes", "arclength", "torn".  When no pair has
     both lobes within ``arclength``, the branches are grown again at twice the length, up to
-    ``max_arclength`` (default: ``arclength``); the pair with the most lobes is returned.
-    ``kw``: options of :func:`grow_branch`."""
+    ``max_arclength`` (default: ``arclength``), unless the branches are torn (:func:`torn`: no
+    length helps); the pair with the most lobes is returned.  ``max_residual``: of the homoclinic
+    points (:func:`~explorer.analysis.manifolds.homoclinic_points`); ``kw``: options of
+    :func:`grow_branch`."""
     from explorer.analysis.manifolds import grow_branch
 
     length = float(arclength)
@@ -151,26 +210,47 @@ def turnstile(sd, *, arclength=6.0, sign=1, max_arclength=None, **kw):
         best = None
         for s in (sign, -sign):
             bs = grow_branch(sd, stable=True, sign=s, arclength=length, **kw)
-            hs = homoclinic_points(bu, bs)
+            hs = homoclinic_points(bu, bs, max_residual=max_residual)
             lb = lobes(bu, bs, points=hs)
-            if best is None or len(lb) > len(best["lobes"]):
-                best = {"unstable": bu, "stable": bs, "homoclinic_points": hs, "lobes": lb, "arclength": length}
+            cut = torn(bu, bs, hs)
+            rank = (len(lb), cut, len(hs))    # a torn pair is a definite answer: no length helps
+            if best is None or rank > (len(best["lobes"]), best["torn"], len(best["homoclinic_points"])):
+                best = {"unstable": bu, "stable": bs, "homoclinic_points": hs, "lobes": lb, "arclength": length,
+                        "torn": cut}
             if len(lb) == 2:
                 return best
-        if 2 * length > limit * (1 + 1e-12):
+        if best["torn"] or 2 * length > limit * (1 + 1e-12):
             return best
         length *= 2
 
 
-def turnstile_check(lobes_found, arclength) -> str:
+#: the reasons of a flux curve's row without a lobe flux (each row's "reason" is one of these; its
+#: "status" says more): no turnstile within the branches' length, its two lobes differ, the
+#: branches torn by the section map's discontinuity, no primary homoclinic point on the branches
+REASON_NO_PAIR = "no primary homoclinic pair within budget"
+REASON_LOBES_DIFFER = "lobes differ"
+REASON_TORN = "torn"
+REASON_NO_EYE = "the eye is gone"
+REASON_NO_SADDLE = "no hyperbolic fixed point"
+REASON_SECONDARY = "secondary intersections"
+
+
+def turnstile_check(lobes_found, arclength, *, torn_branches=False, points=()) -> str:
     """"ok" when both lobes of a turnstile were found and their areas agree (area preservation:
-    relative ``LOBE_AGREEMENT`` beyond three times their error estimates), else why not."""
+    relative ``LOBE_AGREEMENT`` beyond three times their error estimates), else why not: the
+    branches are torn (:func:`torn`), the two lobes differ, or no pair within ``arclength``."""
     lb = lobes_found
+    if len(lb) < 2 and torn_branches:
+        return ("torn: the section map's discontinuity (orbits grazing the section's edge, M = 0) cuts "
+                "the manifolds before a turnstile closes")
     if len(lb) < 2:
-        return f"no pair of lobes within arclength {arclength:g}"
+        return f"no pair of lobes within arclength {arclength:g}" + ("" if points else " (no homoclinic point)")
     if abs(abs(lb[0].area) - abs(lb[1].area)) > LOBE_AGREEMENT * abs(lb[0].area) + 3 * (lb[0].error + lb[1].error):
         return (f"the two lobes differ ({abs(lb[0].area):.6g}, {abs(lb[1].area):.6g}): the primary "
                 "intersections were not identified")
+    if any(lobe.secondary for lobe in lb):
+        return (f"secondary intersections on the turnstile's arcs ({lb[0].secondary}): the lobes overlap "
+                "and their signed area is not the flux")
     return "ok"
 
 
@@ -186,52 +266,147 @@ def melnikov_lobe_area(params, h, mu) -> float:
     return 2.0 * abs(prm0.lam) * float(mu) * math.hypot(A, B)
 
 
-def flux_curve(params, h, mus, *, guess=(0.0, 0.0), arclength=6.0, max_arclength=None, sign=1, **kw) -> list:
+#: mu of :func:`flux_curve` when none are given: from 1e-3 up to the loss of the central saddle
+#: (Figure 4, h = 2: trace 2 at mu* ~ 2.98, docs/manifolds.md)
+DEFAULT_FLUX_MUS = (1e-3, 3e-3, 1e-2, 3e-2, 0.1, 0.2, 0.3, 0.4, 0.5, 0.75, 1.0, 1.5, 2.0, 2.5, 2.75, 3.0, 3.25, 3.5)
+#: largest continuation step in mu between two rows of a flux curve (a larger one may land on
+#: another fixed point: from mu = 0 to 1 in one step it found (-0.715, -0.631), trace 27.6)
+FOLLOW_STEP = 0.05
+#: the homoclinic points of a flux curve are kept to this residual: at mu >= 1 the rounding of the
+#: points a few generations out reaches 1e-10 (the primary point on p2 = 0 at mu = 1: 1.4e-10);
+#: at mu <= 0.3 they are found to 1e-12
+FLUX_RESIDUAL = 1e-9
+#: samples of the Monte Carlo exit flux of the eye (rows whose turnstile is torn)
+EXIT_SAMPLES = 4000
+
+
+class FluxCurve(list):
+    """The rows of :func:`flux_curve` (a list of dicts), with ``destruction``: the mu where the
+    curve stopped because the central saddle was lost (its estimate of the separatrix's
+    destruction; None when it never stopped), ``stop_reason`` (why, "" when it never stopped)
+    and ``trace_two`` (a closer estimate when the saddle turned elliptic)."""
+
+    destruction: float | None = None
+    stop_reason: str = ""
+    #: where the trace of the followed point, interpolated linearly between the last saddle and
+    #: the first elliptic row, is 2 (the saddle turns elliptic); None unless it stopped so
+    trace_two: float | None = None
+
+
+def _eye_point(points, reversible):
+    """The primary homoclinic point that closes the eye: on the symmetry line p2 = 0 (sigma_u =
+    sigma_s) when the map is reversible, else the first of the orbit with the smallest sum."""
+    if not points:
+        return None
+    S0 = min(p.sigma_u + p.sigma_s for p in points)
+    first = [p for p in points if abs(p.sigma_u + p.sigma_s - S0) <= SAME_ORBIT_SUM]
+    if reversible:
+        on = [p for p in first if abs(p.sigma_u - p.sigma_s) < 1e-6]
+        return max(on, key=lambda p: p.sigma_u) if on else None
+    return min(first, key=lambda p: p.sigma_u)
+
+
+def flux_curve(params, h, mus=None, *, guess=(0.0, 0.0), arclength=6.0, max_arclength=None, sign=1,
+               exit_samples=EXIT_SAMPLES, seed=0, **kw) -> FluxCurve:
     """The flux across the broken separatrix of the central saddle (the fixed point followed
-    from ``guess`` at mu = 0 by continuation) for each mu of ``mus`` (increasing): one row per
-    mu, ``{"mu", "flux", "error", "lobes", "angle", "melnikov", "ratio", "arclength", "status"}``
-    (flux: area of one lobe of the turnstile per iteration, :func:`turnstile` with branches of
-    ``arclength`` doubled up to ``max_arclength``, default 4 ``arclength``; melnikov:
-    :func:`melnikov_lobe_area` or None; status "ok" (both lobes found, with equal areas), or
-    why there is no value: "elliptic", no pair of lobes, lobes that differ, a ParameterError's
-    text)."""
+    from ``guess`` at mu = 0 by continuation) for each mu of ``mus`` (increasing; default
+    :data:`DEFAULT_FLUX_MUS`, from 1e-3 to beyond the saddle's loss), stopping at the first mu
+    where the saddle is lost.  One row per mu: ``{"mu", "flux", "error", "lobes", "angle",
+    "melnikov", "ratio", "arclength", "status", "reason", "eye_flux", "eye_error", "trace"}``.
+
+    flux: the area of one lobe of the turnstile per iteration (:func:`turnstile` with branches
+    of ``arclength`` doubled up to ``max_arclength``, default 4 ``arclength``), with status "ok";
+    melnikov: :func:`melnikov_lobe_area` or None.  Otherwise ``flux`` is None, ``status`` says
+    why and ``reason`` is one of: :data:`REASON_NO_SADDLE` (the followed point is elliptic, left
+    the symmetry line of a reversible map, or was not found: the curve stops, and
+    ``FluxCurve.destruction`` is this mu), :data:`REASON_TORN` (the section map's discontinuity
+    cuts the branches so that no turnstile has unbroken arcs: :func:`torn`),
+    :data:`REASON_NO_EYE` (the
+    eye's boundary arcs are torn, or the branches meet nowhere on p2 = 0 while torn),
+    :data:`REASON_SECONDARY` (the lobes' arcs hold other homoclinic points: the lobes are not
+    simple, their signed area is not the flux; ``lobes`` still lists them),
+    :data:`REASON_NO_PAIR` (no pair within the budget), :data:`REASON_LOBES_DIFFER`.
+
+    ``eye_flux`` (any row whose eye R is bounded by unbroken arcs up to its primary point on
+    p2 = 0, also where no turnstile was found): the flux into the eye per
+    iteration, the area of its entry set {x in R: P^-1(x) not in R} (= its exit set's, by area
+    preservation) by Monte Carlo with ``exit_samples`` points (:func:`exit_times`, one
+    iteration), ``eye_error`` its standard error: it equals the lobe area where the turnstile
+    is simple and measures the flux through the eye's boundary where it is not (secondary
+    intersections) or torn; ``exit_samples=0`` skips it."""
     from explorer import model
     from explorer.analysis import fixedpoints
     from explorer.analysis.manifolds import saddle
+    from explorer.analysis.periodic import is_reversible
 
     prm = params if isinstance(params, model.Params) else model.Params.from_array(params)
-    mus = [float(m) for m in mus]
+    mus = [float(m) for m in (DEFAULT_FLUX_MUS if mus is None else mus)]
     if any(b <= a for a, b in zip(mus, mus[1:])) or not mus or mus[0] < 0:
         raise ParameterError(f"mus must be >= 0 and increasing, got {mus}")
-    rows = []
+    reversible = is_reversible(prm)
+    rows = FluxCurve()
     prev, x = 0.0, tuple(guess)
     for mu in mus:
         row = {"mu": mu, "flux": None, "error": None, "lobes": [], "angle": None, "melnikov": None, "ratio": None,
-               "arclength": None}
-        try:
-            fp = fixedpoints.follow(prm.with_(mu=prev), h, "mu", prev, mu, x, max_step=max(0.05, mu - prev))
-            prev, x = mu, tuple(fp.point)
-            try:
-                row["melnikov"] = melnikov_lobe_area(prm, h, mu)
-            except ParameterError:
-                pass
-            if fp.stable:
-                row["status"] = "elliptic"
-                rows.append(row)
-                continue
-            t = turnstile(saddle(fp), arclength=arclength, sign=sign,
-                          max_arclength=4 * arclength if max_arclength is None else max_arclength, **kw)
-            row["arclength"] = t["arclength"]
-            lb = t["lobes"]
-            row["status"] = turnstile_check(lb, t["arclength"])
-            if row["status"] == "ok":
-                row.update(flux=abs(lb[0].area), error=max(lobe.error for lobe in lb),
-                           lobes=[lobe.as_dict() for lobe in lb], angle=lb[0].start.angle)
-                if row["melnikov"]:
-                    row["ratio"] = row["flux"] / row["melnikov"]
-        except ParameterError as exc:
-            row["status"] = str(exc)
+               "arclength": None, "reason": "", "eye_flux": None, "eye_error": None, "trace": None}
         rows.append(row)
+        try:
+            row["melnikov"] = melnikov_lobe_area(prm, h, mu)
+        except ParameterError:
+            pass
+        try:
+            fp = fixedpoints.follow(prm.with_(mu=prev), h, "mu", prev, mu, x, max_step=FOLLOW_STEP)
+        except ParameterError as exc:
+            row.update(status=f"the fixed point was not followed to this mu: {exc}", reason=REASON_NO_SADDLE)
+        else:
+            row["trace"] = float(fp.trace)
+            if fp.stable:
+                row.update(status=f"elliptic (trace {fp.trace:.6g})", reason=REASON_NO_SADDLE)
+            elif reversible and abs(fp.point[1]) > 1e-8:
+                row.update(status=f"the followed point left the symmetry line p2 = 0 (at {fp.point.tolist()}): the "
+                           "central point is no longer a saddle", reason=REASON_NO_SADDLE)
+        if row["reason"] == REASON_NO_SADDLE:
+            rows.destruction, rows.stop_reason = mu, row["status"]
+            last = rows[-2] if len(rows) > 1 else None
+            if last is not None and last["trace"] is not None and row["trace"] is not None and row["trace"] < 2.0:
+                w = (last["trace"] - 2.0) / (last["trace"] - row["trace"])
+                rows.trace_two = last["mu"] + w * (mu - last["mu"])
+            break
+        prev, x = mu, tuple(fp.point)
+        try:
+            t = turnstile(saddle(fp), arclength=arclength, sign=sign, max_residual=FLUX_RESIDUAL,
+                          max_arclength=4 * arclength if max_arclength is None else max_arclength, **kw)
+        except ParameterError as exc:
+            row.update(status=str(exc), reason=REASON_NO_PAIR)
+            continue
+        row["arclength"] = t["arclength"]
+        lb = t["lobes"]
+        row["status"] = turnstile_check(lb, t["arclength"], torn_branches=t["torn"], points=t["homoclinic_points"])
+        bu, bs = t["unstable"], t["stable"]
+        h0 = _eye_point(t["homoclinic_points"], reversible)
+        eye = h0 is not None and bu.first_tear > h0.sigma_u and bs.first_tear > h0.sigma_s
+        if eye and exit_samples:
+            ex = exit_times(bu, bs, h0, samples=exit_samples, max_iter=1, seed=seed)
+            row.update(eye_flux=ex["flux_mc"], eye_error=ex["flux_mc_sem"])
+        if row["status"] == "ok":
+            row.update(flux=abs(lb[0].area), error=max(lobe.error for lobe in lb),
+                       lobes=[lobe.as_dict() for lobe in lb], angle=lb[0].start.angle)
+            if row["melnikov"]:
+                row["ratio"] = row["flux"] / row["melnikov"]
+            continue
+        if row["status"].startswith("the two lobes differ"):
+            row["reason"] = REASON_LOBES_DIFFER
+            continue
+        if row["status"].startswith("secondary"):
+            row.update(reason=REASON_SECONDARY, lobes=[lobe.as_dict() for lobe in lb])
+            continue
+        if t["torn"] and eye:
+            row["reason"] = REASON_TORN
+        elif t["torn"] or (h0 is None and (bu.tears.size or bs.tears.size)):
+            row.update(reason=REASON_NO_EYE, status=row["status"] + "; no eye: no primary homoclinic point closes "
+                       "an unbroken resonance zone")
+        else:
+            row["reason"] = REASON_NO_PAIR
     return rows
 
 

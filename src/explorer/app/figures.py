@@ -52,6 +52,9 @@ BOUNDARY_WIDTH = 0.6
 POINT_COLOR = "k"
 #: style of the optional curves (separatrices)
 CURVE_STYLE = {"color": "#b2182b", "linewidth": 0.7, "solid_capstyle": "round"}
+#: [manifolds] of a scene: W^u and W^s in two colours (as in the tangle figure)
+MANIFOLD_COLORS = {"unstable": "#b2182b", "stable": "#1f4e9c"}
+MANIFOLD_STYLE = {"linewidth": 0.6, "solid_capstyle": "round"}
 #: default width of one panel in inches
 PANEL_WIDTH = 3.0
 LAYOUTS = ("row", "grid")
@@ -206,6 +209,16 @@ def _as_curves(curves, i):
     return out
 
 
+def _as_manifolds(branches, i):
+    """[(kind, (K, 2) array)] with kind "unstable" or "stable"."""
+    out = []
+    for k, item in enumerate(branches or ()):
+        if not (isinstance(item, (tuple, list)) and len(item) == 2 and item[0] in MANIFOLD_COLORS):
+            raise ValueError(f"panel {i}: manifold {k} must be (kind, points) with kind 'unstable' or 'stable'")
+        out += [(item[0], c) for c in _as_curves([item[1]], i)]
+    return out
+
+
 def _prepare(panels, separatrices):
     if isinstance(panels, dict):
         panels = [panels]
@@ -241,6 +254,7 @@ def _prepare(panels, separatrices):
         out.append(dict(points=_as_points(p.get("points"), i), params=prm, h=h, phi0=phi0,
                         label=mathtext_label(label), note=p.get("note"),
                         curves=_as_curves(p.get("curves"), i) + _as_curves(sep, i),
+                        manifolds=_as_manifolds(p.get("manifolds"), i),
                         region=model.allowed_ellipse(prm, h, phi0)))
     return out
 
@@ -297,6 +311,8 @@ def _draw_panel(ax, p, box, marker_size):
                 zorder=2)
     for c in p["curves"]:
         ax.plot(c[:, 0], c[:, 1], zorder=2.5, **CURVE_STYLE)
+    for kind, c in p["manifolds"]:
+        ax.plot(c[:, 0], c[:, 1], zorder=2.6, color=MANIFOLD_COLORS[kind], gid=f"manifold-{kind}", **MANIFOLD_STYLE)
     if p["note"]:
         notes.append(str(p["note"]))
     if notes:
@@ -330,7 +346,10 @@ def section_panels(panels, *, layout="row", columns=None, share_scale=True, own_
                 default ``"mu = <params.mu>"``);
     ``note``    optional short text shown small in the lower-left corner;
     ``curves``  optional list of (K, 2) arrays drawn as thin lines (separatrices;
-                NaN rows break a curve).
+                NaN rows break a curve);
+    ``manifolds`` optional list of (kind, (K, 2) array), kind "unstable" or "stable":
+                branches of W^u and W^s drawn in :data:`MANIFOLD_COLORS` (lines with
+                gid "manifold-<kind>").
 
     Keyword arguments:
 

@@ -62,6 +62,29 @@ def panel_separatrices(scene, i):
     return info, curves
 
 
+def panel_manifolds(scene, i):
+    """[manifolds] draw = true: the branches of W^u and W^s of panel i's orbit (period
+    ``manifolds.period``, found by Newton's method from ``manifolds.guess``, as ``explorer manifold``
+    does) at each of its points, grown to ``manifolds.arclength``; computed here, in the parent,
+    when the figure is drawn (nothing is stored).  Returns (list of (kind, (M, 2) array), note):
+    the note says why there are none ("" when there are)."""
+    from explorer.analysis import manifolds as mf
+    from explorer.analysis import periodic
+
+    spec = scene.manifolds
+    prm, h, _label = scene.panel(i)
+    branches: list = []
+    try:
+        orb = periodic.find_periodic_orbit(prm, h, spec.guess, spec.period, phi0=scene.integration.phi0)
+        for j in range(orb.period):
+            branches += [(b.kind, b.points) for b in mf.manifolds(orb, index=j, arclength=spec.arclength,
+                                                                 max_points=spec.max_points)]
+    except ParameterError as exc:
+        msg = str(exc).split(" (")[0]
+        return [], "no manifolds: " + (msg if len(msg) <= 60 else msg[:57] + "...")
+    return branches, ""
+
+
 def classify_megno(arrays):
     """<Y> for classifying orbits: an orbit stopped early as chaotic (``lyapunov_early`` > 0,
     [lyapunov] early_stop) counts as above every threshold (the largest double; the stored <Y>
@@ -121,6 +144,11 @@ def draw_figure(scene, out_path, stem):
                 fp = json.loads(fpa)
                 if fp.get("stable"):
                     panels[-1]["note"] = f"fixed point stable (trace {fp['trace']:.3g})"
+    if scene.manifolds.draw:
+        for i, panel in enumerate(panels):
+            panel["manifolds"], note = panel_manifolds(scene, i)
+            if note:
+                panel["note"] = f"{panel['note']}\n{note}" if panel.get("note") else note
     fs = scene.figure
     text = {FIGURE_SETTINGS_KEY: scene.figure_settings()}
     fig = figures.section_panels(panels, layout=fs.layout, columns=fs.columns, share_scale=fs.share_scale,

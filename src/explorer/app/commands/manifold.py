@@ -31,7 +31,8 @@ def add_parser(sub):
     mf.add_argument("--max-time", type=float, default=None, help="seconds per branch at most [none]")
     mf.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
     mf.add_argument("--tol", type=float, default=MAP_TOL, help="Taylor tolerance of the section map [%(default)s]")
-    options.add_model_args(mf, model.FIGURE4, json="print JSON {orbit, branches, homoclinic_points, lobes, flux}")
+    options.add_model_args(mf, model.FIGURE4,
+                           json="print JSON {orbit, branches, homoclinic_points, heteroclinic_points, lobes, flux}")
     return mf
 
 
@@ -59,12 +60,14 @@ def run(args) -> int:
             if not lobes and found:
                 lobes = transport.lobes(bu, bs, points=found)
     flux = abs(lobes[0].area) if lobes else None
+    het = _heteroclinic(orb, args, kw)
     ev = [complex(e) for e in orb.eigenvalues]
     out = {"orbit": {"points": orb.points.tolist(), "period": int(orb.period),
                      "eigenvalues": [[e.real, e.imag] if e.imag else e.real for e in ev]},
            "branches": [{"kind": b.kind, "sign": b.sign, "points": b.points.tolist(), "arclength": b.arclength,
                          "status": b.status} for b in branches],
-           "homoclinic_points": hps, "lobes": [{"area": abs(lb.area), "error": lb.error} for lb in lobes],
+           "homoclinic_points": hps, "heteroclinic_points": het,
+           "lobes": [{"area": abs(lb.area), "error": lb.error} for lb in lobes],
            "flux": flux}
     if args.json:
         print(json.dumps(out))
@@ -73,7 +76,41 @@ def run(args) -> int:
     for b in branches:
         print(f"{b.kind} {b.sign:+d}: {len(b.points)} points, arclength {b.arclength:.6g} ({b.status})")
     print(f"{len(hps)} homoclinic point(s)")
+    if orb.period > 1:
+        print(f"{len(het)} heteroclinic point(s) between point {sd_index(args, orb)} of the orbit and its neighbours")
     for lb in lobes:
         print(f"lobe area {abs(lb.area):.10g} +- {lb.error:.2g}")
     print(f"flux per iteration {flux!r}")
     return 0
+
+
+#: start distance of the branches grown for heteroclinic points (fewer generations, less rounding error:
+#: explorer.analysis.manifolds.heteroclinic_points)
+HETEROCLINIC_START_TOL = 1e-8
+
+
+def sd_index(args, orb) -> int:
+    return args.index % orb.period
+
+
+def _heteroclinic(orb, args, kw) -> list:
+    """Heteroclinic points of a periodic orbit (period K >= 2): W^u at point --index meets W^s at
+    its neighbours index +- 1 (mod K); [] for a fixed point."""
+    from explorer.analysis import manifolds
+
+    K = orb.period
+    if K < 2:
+        return []
+    i = sd_index(args, orb)
+    grow = dict(kw, start_tol=HETEROCLINIC_START_TOL)
+    src = manifolds.saddle(orb, index=i, tol=args.tol)
+    wu = [manifolds.grow_branch(src, sign=sg, **grow) for sg in (1, -1)]
+    out = []
+    for j in sorted({(i + 1) % K, (i - 1) % K}):
+        dst = manifolds.saddle(orb, index=j, tol=args.tol)
+        for bs in (manifolds.grow_branch(dst, stable=True, sign=sg, **grow) for sg in (1, -1)):
+            for bu in wu:
+                out += [{"point": p.point.tolist(), "from": i, "to": j, "sign_u": bu.sign, "sign_s": bs.sign,
+                         "angle": p.angle, "residual": p.residual}
+                        for p in manifolds.heteroclinic_points(bu, bs)]
+    return out

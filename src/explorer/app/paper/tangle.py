@@ -10,8 +10,9 @@ NAME = "tangle"
 DESCRIPTION = "the homoclinic tangle of the central saddle (mu = 0.03) with its lobes, and the flux against Melnikov"
 #: the scene: Figure 4 (docs/model.md R9) at mu = 0.03, h = 2
 MU, H = 0.03, 2.0
-#: mu values of the flux curve (full run, --quick)
-FLUX_MUS = (1e-3, 3e-3, 1e-2, 3e-2, 0.1, 0.3)
+#: mu values of the flux curve (full run: from 1e-3 until the central saddle is lost,
+#: transport.DEFAULT_FLUX_MUS; --quick)
+FLUX_MUS = None
 QUICK_MUS = (1e-3, 1e-2)
 
 
@@ -29,7 +30,8 @@ def tangle_figure(*, quick=False, dpi=200) -> Drawn:
     h0 = max((p for p in hs if abs(p.point[1]) < 1e-9), key=lambda p: abs(p.point[0]))
     tt = transport.exit_times(draw[0], draw[2], h0, samples=1000 if quick else 4000, max_iter=100 if quick else 1000)
     e = model.allowed_ellipse(model.FIGURE4.with_(mu=MU), H)
-    data = {"lobes": [lb.as_dict() for lb in t["lobes"]], "flux": rows,
+    data = {"lobes": [lb.as_dict() for lb in t["lobes"]], "flux": list(rows), "destruction": rows.destruction,
+            "stop_reason": rows.stop_reason,
             "homoclinic_points": [h.point.tolist() for h in hs],
             "transit": {k: tt[k] for k in ("mean", "sem", "accessible_area", "accessible_sem", "entry", "capped")}}
     with _rc():
@@ -58,9 +60,20 @@ def tangle_figure(*, quick=False, dpi=200) -> Drawn:
         mus = np.array([r["mu"] for r in ok])
         ax = axs[1]
         ax.loglog(mus, [r["flux"] for r in ok], "o", mfc="none", color="k", label="lobe area (Green)")
-        mm = np.geomspace(mus.min(), mus.max(), 50)
+        eye = [r for r in rows if r["eye_flux"] is not None and r["eye_flux"] > 0]
+        if eye:   # the entry set of the eye (Monte Carlo): torn or non-simple turnstiles too
+            ax.errorbar([r["mu"] for r in eye], [r["eye_flux"] for r in eye], yerr=[r["eye_error"] for r in eye],
+                        fmt="^", ms=3, color="#2166ac", lw=0.6, label="entry set of the eye (Monte Carlo)")
+        every = [r["mu"] for r in rows]
+        mm = np.geomspace(min(every), max(every), 50)
         slope = ok[0]["melnikov"] / ok[0]["mu"]
         ax.loglog(mm, slope * mm, color="#b2182b", lw=0.9, label=r"Melnikov $2\lambda\mu|J|$")
+        torn = [r["mu"] for r in rows if r["reason"] == transport.REASON_TORN]
+        if torn:
+            ax.axvspan(min(torn), max(torn), color="0.9", lw=0, zorder=0, label="turnstile torn by the section edge")
+        if rows.destruction is not None:
+            ax.axvline(rows.destruction, color="0.3", lw=0.8, ls=":",
+                       label=rf"saddle lost, $\mu = {rows.destruction:g}$")
         ax.set_xlabel(r"$\mu$")
         ax.set_ylabel("flux per iteration")
         ax.set_title("(b) flux across the broken separatrix", fontsize=_FS)
@@ -92,4 +105,6 @@ def build(out_dir, *, results_dir="results", quick=False, benchmark=None, quiet=
     d = tangle_figure(quick=quick)
     ratios = [r["ratio"] for r in d.data["flux"] if r["ratio"] is not None]
     msg = f"flux / Melnikov from {ratios[0]:.8f} to {ratios[-1]:.8f}" if ratios else "no lobes"
+    if d.data["destruction"] is not None:
+        msg += f"; the central saddle is lost at mu = {d.data['destruction']:g}"
     return Outcome(NAME, "written", save(d, out_dir, NAME), msg, d.data)

@@ -1,0 +1,84 @@
+"""The scene's validators: each value checked under its dotted key, refusals as :class:`SceneError`."""
+from __future__ import annotations
+
+from explorer.model import ParameterError, validation
+
+
+class SceneError(ParameterError):
+    """Bad scene: a one-line message naming the dotted key and what is allowed."""
+
+
+# ---------------------------------------------------------------- validators
+def _short(v, limit=60) -> str:
+    r = repr(v)
+    return r if len(r) <= limit else r[: limit - 3] + "..."
+
+
+def _fail(key, msg):
+    raise SceneError(f"scene key '{key}' {msg}")
+
+
+def _got(v) -> str:
+    return f"got {_short(v)} ({type(v).__name__})"
+
+
+def _checked(check, key, *args, **kwargs):
+    """A value checked by :mod:`explorer.model.validation`, its refusal as a SceneError."""
+    try:
+        return check(f"scene key '{key}'", *args, **kwargs)
+    except ParameterError as exc:
+        raise SceneError(str(exc)) from None
+
+
+def _real(key, v, lo=None, hi=None, lo_open=False) -> float:
+    """A finite real number (int or float, not bool) in [lo, hi] (or (lo, hi] if lo_open)."""
+    return _checked(validation.real, key, v, lo, hi, lo_open=lo_open)
+
+
+def _int(key, v, lo=None, hi=None) -> int:
+    return _checked(validation.integer, key, v, lo, hi)
+
+
+def _bool(key, v) -> bool:
+    return _checked(validation.boolean, key, v)
+
+
+def _str(key, v) -> str:
+    if not isinstance(v, str):
+        _fail(key, f"must be a string, {_got(v)}")
+    return v
+
+
+def _choice(key, v, choices) -> str:
+    return _checked(validation.choice, key, v, choices)
+
+
+def _list(key, v, min_len=1) -> list:
+    if not isinstance(v, (list, tuple)):
+        _fail(key, f"must be a list, {_got(v)}")
+    if len(v) < min_len:
+        _fail(key, "must be a non-empty list" if min_len == 1 else f"must have at least {min_len} items")
+    return list(v)
+
+
+def _distinct_reals(key, seq) -> tuple:
+    """The finite reals of the list ``key``, each once (a repeated value names both places)."""
+    values: list = []
+    for i, v in enumerate(_list(key, seq)):
+        x = _real(f"{key}[{i}]", v)
+        if x in values:
+            _fail(f"{key}[{i}]", f"duplicates {key}[{values.index(x)}] = {x!r}")
+        values.append(x)
+    return tuple(values)
+
+
+def _table(key, v, allowed) -> dict:
+    """Check that ``v`` is a table whose keys are all in ``allowed``."""
+    if not isinstance(v, dict):
+        _fail(key, f"must be a table, {_got(v)}")
+    for k in v:
+        if k not in allowed:
+            raise SceneError(f"scene: unknown key '{key}.{k}'{validation.did_you_mean(k, allowed)} "
+                             f"(allowed: {', '.join(allowed)})")
+    return v
+

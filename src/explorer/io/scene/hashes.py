@@ -1,0 +1,93 @@
+"""What determines a scene's numbers and drawing, and their hashes: the whole panel
+(:func:`panel_hash`), each product of a panel (:func:`product_hashes`: sections, indicators), the
+drawing settings kept in the PNG (:func:`figure_settings`) and an atlas (:func:`atlas_hash`).
+Each hash is the sha256 of the canonical JSON (sorted keys, floats by ``repr``) of the settings
+together with :data:`~explorer.io.scene.schema.FORMAT_VERSION`.  The :class:`~explorer.io.scene.Scene`
+methods of the same names call these."""
+from __future__ import annotations
+
+import hashlib
+import json
+from typing import TYPE_CHECKING
+
+from explorer.io.scene.schema import FORMAT_VERSION
+
+if TYPE_CHECKING:
+    from explorer.io.scene.core import Scene
+
+
+def _canonical_json(obj) -> str:
+    """Sorted keys, no spaces, floats by repr (json's float formatting), no NaN."""
+    return json.dumps(obj, sort_keys=True, separators=(",", ":"), allow_nan=False, ensure_ascii=True)
+
+
+def _sha256(payload) -> str:
+    return hashlib.sha256(_canonical_json(payload).encode("ascii")).hexdigest()
+
+
+def panel_settings(scene: Scene, i) -> dict:
+    """Everything that determines panel i's numbers, as plain JSON-able values."""
+    prm, h, _label = scene.panel(i)
+    d = {"params": prm.as_dict(), "h": h, "seeds": scene.seeds.used_dict(),
+         "integration": scene.integration.used_dict(), "compute": {q: True for q in scene.compute}}
+    if "lyapunov" in scene.compute:
+        d["lyapunov"] = scene.lyapunov.used_dict()
+    return d
+
+
+def panel_hash(scene: Scene, i) -> str:
+    """sha256 hex of the canonical JSON of panel_settings(i) and FORMAT_VERSION: the whole
+    panel (every product); stored as the panel's ``hash``."""
+    return _sha256({"format_version": FORMAT_VERSION, "panel": panel_settings(scene, i)})
+
+
+def product_settings(scene: Scene, i) -> dict:
+    """What determines each product of panel i, {product: settings}: ``"sections"`` (when
+    [compute] sections: the crossings of the [seeds] and, with separatrices, the fixed point's
+    separatrices) and ``"indicators"`` (when [compute] lyapunov: the indicators of the [seeds],
+    or of the map's grid when [lyapunov] map_resolution > 0).  Each is recomputed only when
+    its own settings change (:func:`product_hashes`)."""
+    prm, h, _label = scene.panel(i)
+    base = {"params": prm.as_dict(), "h": h}
+    out = {}
+    if "sections" in scene.compute:
+        out["sections"] = dict(base, seeds=scene.seeds.used_dict(), integration=scene.integration.used_dict(),
+                               separatrices="separatrices" in scene.compute)
+    if "lyapunov" in scene.compute:
+        ly = scene.lyapunov.used_dict()
+        grid = ly.pop("map_resolution", 0)
+        d = dict(base, seeds={"map_resolution": grid} if grid else scene.seeds.used_dict(),
+                 phi0=scene.integration.phi0, direction=scene.integration.direction, lyapunov=ly)
+        if "sections" not in scene.compute:   # the indicators are the whole panel, separatrices included
+            d["alone"] = {"separatrices": "separatrices" in scene.compute}
+        out["indicators"] = d
+    return out
+
+
+def product_hashes(scene: Scene, i) -> dict:
+    """{product: sha256 hex of the canonical JSON of its settings and FORMAT_VERSION}
+    (:func:`product_settings`); stored as the panel's ``sections_hash`` / ``indicators_hash``."""
+    return {k: _sha256({"format_version": FORMAT_VERSION, k: v}) for k, v in product_settings(scene, i).items()}
+
+
+def figure_settings(scene: Scene) -> str:
+    """Canonical JSON of everything that changes the drawing but not the numbers ([figure], with
+    [compute] lyapunov the MEGNO threshold and map_indicator, and [manifolds] when drawn): kept in
+    the PNG, so a rerun redraws the figure when they change, without recomputing.  [manifolds]
+    enters only with draw = true, so the figures of scenes without it keep their settings."""
+    d: dict = {"figure": scene.figure.to_dict()}
+    if "lyapunov" in scene.compute:
+        d.update(threshold=scene.lyapunov.threshold, map_indicator=scene.lyapunov.map_indicator)
+    if scene.manifolds.draw:
+        d["manifolds"] = scene.manifolds.to_dict()
+    return _canonical_json(d)
+
+
+def atlas_hash(scene: Scene) -> str:
+    """sha256 of everything that determines an atlas's numbers (both axes, the model, h, seeds,
+    integration and [lyapunov] settings; not name, description or figure)."""
+    d = {"params": scene.params.as_dict(), "h": scene.h, "rows": [scene.sweep_parameter, list(scene.sweep_values)],
+         "columns": [scene.atlas_parameter, list(scene.atlas_values)], "seeds": scene.seeds.used_dict(),
+         "phi0": scene.integration.phi0, "direction": scene.integration.direction,
+         "lyapunov": scene.lyapunov.used_dict(), "threshold": scene.lyapunov.threshold}
+    return _sha256({"format_version": FORMAT_VERSION, "atlas": d})

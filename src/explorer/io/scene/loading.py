@@ -1,0 +1,133 @@
+"""Reading scenes: from nested tables, TOML text, a file or a built-in preset."""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python < 3.11
+    import tomli as tomllib
+
+from explorer import model
+from explorer.io.scene.atlas import _atlas_from_dict
+from explorer.io.scene.checks import SceneError, _bool, _fail, _got, _list, _real, _str, _table
+from explorer.io.scene.core import Scene
+from explorer.io.scene.schema import (
+    _FIGURE_KEYS,
+    _INTEGRATION_KEYS,
+    _LYAPUNOV_KEYS,
+    _MANIFOLD_KEYS,
+    _SEED_KEYS,
+    _TOP_KEYS,
+    COMPUTE_DEFAULTS,
+    COMPUTE_QUANTITIES,
+)
+from explorer.io.scene.specs import FigureSpec, IntegrationSpec, LyapunovSpec, ManifoldSpec, SeedSpec
+from explorer.model import PARAM_NAMES, ParameterError, validation
+
+
+# ---------------------------------------------------------------- loading
+def scene_from_dict(data: dict, text: str = "") -> Scene:
+    """A validated :class:`Scene` from nested tables (as produced by ``tomllib``)."""
+    if not isinstance(data, dict):
+        _fail("<top level>", f"must be a table, {_got(data)}")
+    for k, v in data.items():
+        if k not in _TOP_KEYS:
+            what = "table" if isinstance(v, dict) else "key"
+            raise SceneError(f"scene: unknown {what} '{k}'{validation.did_you_mean(k, _TOP_KEYS)} "
+                             f"(allowed: {', '.join(_TOP_KEYS)})")
+    if "name" not in data:
+        _fail("name", "is required (a string matching [A-Za-z0-9_.-]+)")
+    kw = {"name": data["name"], "description": data.get("description", ""), "text": text}
+
+    given = _table("model", data.get("model", {}), PARAM_NAMES)
+    values = {k: _real(f"model.{k}", v) for k, v in given.items()}
+    try:
+        kw["params"] = model.FIGURE4.with_(**values)
+    except ParameterError as e:
+        msg = str(e)
+        bad = next((k for k in values if msg.startswith(k + " ")), None)
+        raise SceneError(f"scene key 'model.{bad}': {msg}" if bad else f"scene key 'model': {msg}") from None
+
+    energy = _table("energy", data.get("energy", {}), ("h",))
+    if "h" in energy:
+        kw["h"] = energy["h"]
+
+    if "sweep" in data:
+        sweep = _table("sweep", data["sweep"], ("parameter", "values"))
+        for k in ("parameter", "values"):
+            if k not in sweep:
+                _fail(f"sweep.{k}", "is required in a [sweep] table")
+        kw["sweep_parameter"] = _str("sweep.parameter", sweep["parameter"])
+        kw["sweep_values"] = tuple(_list("sweep.values", sweep["values"]))
+
+    kw["seeds"] = SeedSpec(**_table("seeds", data.get("seeds", {}), _SEED_KEYS))
+    kw["integration"] = IntegrationSpec(**_table("integration", data.get("integration", {}), _INTEGRATION_KEYS))
+
+    comp = _table("compute", data.get("compute", {}), COMPUTE_QUANTITIES)
+    kw["compute"] = tuple(q for q in COMPUTE_QUANTITIES
+                          if _bool(f"compute.{q}", comp.get(q, COMPUTE_DEFAULTS[q])))
+    ly = dict(_table("lyapunov", data.get("lyapunov", {}), _LYAPUNOV_KEYS))
+    if "indicators" in ly:
+        ly["indicators"] = tuple(_list("lyapunov.indicators", ly["indicators"]))
+    kw["lyapunov"] = LyapunovSpec(**ly)
+
+    fig = dict(_table("figure", data.get("figure", {}), _FIGURE_KEYS))
+    if "own_scale" in fig:
+        fig["own_scale"] = tuple(_list("figure.own_scale", fig["own_scale"], min_len=0))
+    kw["figure"] = FigureSpec(**fig)
+    mf = dict(_table("manifolds", data.get("manifolds", {}), _MANIFOLD_KEYS))
+    if "guess" in mf:
+        mf["guess"] = tuple(_list("manifolds.guess", mf["guess"]))
+    kw["manifolds"] = ManifoldSpec(**mf)
+    kw.update(_atlas_from_dict(data))
+    return Scene(**kw)
+
+
+def parse_scene(text: str, source: str = "<string>") -> Scene:
+    """A validated :class:`Scene` from TOML text (``source`` names it in syntax errors)."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        msg = " ".join(str(e).split())
+        raise SceneError(f"scene: TOML syntax error in {source}: {msg}") from None
+    return scene_from_dict(data, text=text)
+
+
+def load_scene(spec) -> Scene:
+    """A scene: a built-in preset by name (``figure4``, ``chaos``, ``fraction``: :data:`PRESETS`,
+    the TOML files of ``explorer/io/presets``), else the path of a ``.toml`` file, validated
+    (every bad key or value raises :class:`SceneError` naming the dotted key).
+
+    Returns
+    -------
+    Scene
+        Parameters, energy, the swept parameter, seeds, integration and figure settings; each
+        panel's settings hash (:meth:`Scene.panel_hash`) decides what a sweep recomputes.
+    """
+    if isinstance(spec, str) and spec in PRESETS:
+        return parse_scene(PRESETS[spec], source=f"preset '{spec}'")
+    path = Path(os.fspath(spec))
+    if not path.is_file():
+        raise SceneError(f"scene: no built-in preset or file named '{path}' "
+                         f"(presets: {', '.join(sorted(PRESETS))})")
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except (OSError, UnicodeDecodeError) as e:
+        raise SceneError(f"scene: cannot read '{path}': {' '.join(str(e).split())}") from None
+    return parse_scene(text, source=str(path))
+
+
+# ---------------------------------------------------------------- presets
+def _read_presets() -> dict:
+    """Built-in scenes: name -> TOML text, from the files ``explorer/io/presets/*.toml``."""
+    from importlib.resources import files
+
+    folder = files("explorer.io").joinpath("presets")
+    return {f.name[:-5]: f.read_text(encoding="utf-8")
+            for f in sorted(folder.iterdir(), key=lambda f: f.name) if f.name.endswith(".toml")}
+
+
+#: Built-in scenes: name -> TOML text (``src/explorer/io/presets/<name>.toml``, each complete).
+PRESETS = _read_presets()

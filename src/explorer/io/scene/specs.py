@@ -1,0 +1,326 @@
+"""The validated tables of a scene: [seeds], [integration], [lyapunov], [figure]."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from explorer.analysis import sections
+from explorer.integrate import methods
+from explorer.io.scene.checks import _bool, _choice, _fail, _int, _list, _real
+from explorer.io.scene.schema import (
+    _FIGURE_KEYS,
+    _INTEGRATION_KEYS,
+    _LYAPUNOV_KEYS,
+    _MANIFOLD_KEYS,
+    _SEED_USED,
+    DEFAULT_CROSSINGS,
+    DEFAULT_DPI,
+    DEFAULT_MANIFOLD_ARCLENGTH,
+    DEFAULT_MANIFOLD_POINTS,
+    DEFAULT_MARGIN,
+    DEFAULT_MARKER_SIZE,
+    DEFAULT_RANDOM_SEED,
+    DEFAULT_SEED_N,
+    LAYOUTS,
+    LYAPUNOV_INDICATORS,
+    MAX_DPI,
+    MAX_MANIFOLD_ARCLENGTH,
+    MAX_MANIFOLD_PERIOD,
+    MAX_MANIFOLD_POINTS,
+    MAX_MAP_RESOLUTION,
+    MAX_SEEDS,
+    MIN_DPI,
+    SEED_KINDS,
+)
+from explorer.kernels.indicator_table import BY_NAME as INDICATOR_BY_NAME
+from explorer.kernels.indicator_table import DEFAULT_NAMES as INDICATOR_DEFAULTS
+
+
+@dataclass(frozen=True)
+class SeedSpec:
+    """How initial conditions are placed on the section (see the module docstring).
+
+    ``lines`` is a tuple of (u_a, v_a, u_b, v_b), ``points`` a tuple of (p1, p2);
+    keys not used by ``kind`` are validated and kept but do not affect the seeds.
+    """
+
+    kind: str = "grid"
+    n: int = DEFAULT_SEED_N
+    margin: float = DEFAULT_MARGIN
+    seed: int = DEFAULT_RANDOM_SEED
+    lines: tuple | None = None
+    points: tuple | None = None
+
+    def __post_init__(self):
+        kind = _choice("seeds.kind", self.kind, SEED_KINDS)
+        n = _int("seeds.n", self.n, 1, MAX_SEEDS)
+        margin = _real("seeds.margin", self.margin, 0.0, 1.0, lo_open=True)
+        seed = _int("seeds.seed", self.seed, 0)
+        lines = points = None
+        if self.lines is not None:
+            lines = []
+            for i, seg in enumerate(_list("seeds.lines", self.lines)):
+                k = f"seeds.lines[{i}]"
+                seg = _list(k, seg)
+                if len(seg) != 4:
+                    _fail(k, f"must be [u_a, v_a, u_b, v_b] (4 numbers), got {len(seg)} items")
+                lines.append(tuple(_real(k, x, -1.0, 1.0) for x in seg))
+            lines = tuple(lines)
+            if n * len(lines) > MAX_SEEDS:
+                _fail("seeds.n", f"times the number of lines must be <= {MAX_SEEDS}, got {n} * {len(lines)}")
+        if self.points is not None:
+            pts = _list("seeds.points", self.points)
+            if len(pts) > MAX_SEEDS:
+                _fail("seeds.points", f"must have at most {MAX_SEEDS} points, got {len(pts)}")
+            points = []
+            for i, pt in enumerate(pts):
+                k = f"seeds.points[{i}]"
+                pt = _list(k, pt)
+                if len(pt) != 2:
+                    _fail(k, f"must be [p1, p2] (2 numbers), got {len(pt)} items")
+                points.append((_real(k, pt[0]), _real(k, pt[1])))
+            points = tuple(points)
+        if kind == "lines" and lines is None:
+            _fail("seeds.lines", "is required with kind = 'lines'")
+        if kind == "points" and points is None:
+            _fail("seeds.points", "is required with kind = 'points'")
+        for name, value in (("kind", kind), ("n", n), ("margin", margin), ("seed", seed),
+                            ("lines", lines), ("points", points)):
+            object.__setattr__(self, name, value)
+
+    def to_dict(self) -> dict:
+        """All keys (as in the [seeds] table), JSON-able."""
+        d = {"kind": self.kind, "n": self.n, "margin": self.margin, "seed": self.seed}
+        if self.lines is not None:
+            d["lines"] = [list(s) for s in self.lines]
+        if self.points is not None:
+            d["points"] = [list(p) for p in self.points]
+        return d
+
+    def used_dict(self) -> dict:
+        """Only the keys that determine the points of this kind."""
+        d = self.to_dict()
+        return {k: d[k] for k in _SEED_USED[self.kind]}
+
+
+@dataclass(frozen=True)
+class IntegrationSpec:
+    """Settings handed to :func:`explorer.analysis.sections.section_crossings`.
+
+    ``tmax`` None means the default budget 100 * crossings (:attr:`effective_tmax`).
+    """
+
+    method: str = "taylor"
+    tol: float = sections.DEFAULT_TOL
+    dt: float = sections.DEFAULT_DT
+    crossings: int = DEFAULT_CROSSINGS
+    tmax: float | None = None
+    max_steps: int = sections.DEFAULT_MAX_STEPS
+    phi0: float = math.pi
+    direction: int = 1
+
+    def __post_init__(self):
+        values = {
+            "method": _choice("integration.method", self.method, sections.METHODS),
+            "tol": _real("integration.tol", self.tol, sections.MIN_TOL, sections.MAX_TOL),
+            "dt": _real("integration.dt", self.dt, 0.0, lo_open=True),
+            "crossings": _int("integration.crossings", self.crossings, 1),
+            "tmax": None if self.tmax is None else _real("integration.tmax", self.tmax, 0.0, lo_open=True),
+            "max_steps": _int("integration.max_steps", self.max_steps, 1),
+            "phi0": _real("integration.phi0", self.phi0),
+            "direction": _int("integration.direction", self.direction),
+        }
+        if values["direction"] not in (-1, 0, 1):
+            _fail("integration.direction", f"must be 1, -1 or 0 (both), got {values['direction']}")
+        for name, value in values.items():
+            object.__setattr__(self, name, value)
+
+    @property
+    def adaptive(self) -> bool:
+        return self.method in sections.ADAPTIVE_METHODS
+
+    @property
+    def effective_tmax(self) -> float:
+        return 100.0 * self.crossings if self.tmax is None else self.tmax
+
+    def to_dict(self) -> dict:
+        """All keys as in the [integration] table (tmax only when set)."""
+        d = {k: getattr(self, k) for k in _INTEGRATION_KEYS}
+        if self.tmax is None:
+            del d["tmax"]
+        return d
+
+    def used_dict(self) -> dict:
+        """The settings that determine the numbers: tol or dt by method, tmax resolved."""
+        d = {"method": self.method, "crossings": self.crossings, "tmax": self.effective_tmax,
+             "max_steps": self.max_steps, "phi0": self.phi0, "direction": self.direction}
+        if self.adaptive:
+            d["tol"] = self.tol
+        else:
+            d["dt"] = self.dt
+        return d
+
+    def section_kwargs(self) -> dict:
+        """Keywords for ``sections.section_crossings(params, p1, p2, h, self.crossings, **kw)``."""
+        d = self.used_dict()
+        del d["crossings"]
+        return d
+
+
+@dataclass(frozen=True)
+class LyapunovSpec:
+    """Chaos indicators of every seed (:func:`explorer.analysis.lyapunov.indicators`): integration time,
+    method and tolerance/step, and the MEGNO threshold above which an orbit counts as chaotic
+    (regular orbits have <Y> -> 2, chaotic ones <Y> ~ chi T / 2)."""
+
+    time: float = 1000.0
+    method: str = "taylor"
+    tol: float = sections.DEFAULT_TOL
+    dt: float = sections.DEFAULT_DT
+    threshold: float = 4.0
+    #: what to compute (explorer.kernels.indicator_table: those of two deviation vectors, SALI
+    #: and GALI_2, add a second one and need the methods their entry names)
+    indicators: tuple = INDICATOR_DEFAULTS
+    #: early classification (off by default; the rule: explorer.analysis.lyapunov.indicators)
+    early_stop: bool = False
+    early_sali: float = 1e-8
+    early_megno: float = 8.0
+    early_time: float = 100.0
+    #: > 0: the indicators' seeds are the cell centres of a map_resolution^2 raster over the allowed
+    #: region's bounding box (cells outside it are the forbidden region), drawn as an image of
+    #: map_indicator; the sections keep the [seeds]
+    map_resolution: int = 0
+    map_indicator: str = "megno"
+
+    def __post_init__(self):
+        object.__setattr__(self, "time", _real("lyapunov.time", self.time, 0.0, lo_open=True))
+        object.__setattr__(self, "method", _choice("lyapunov.method", self.method, sections.METHODS))
+        object.__setattr__(self, "tol", _real("lyapunov.tol", self.tol, sections.MIN_TOL, sections.MAX_TOL))
+        object.__setattr__(self, "dt", _real("lyapunov.dt", self.dt, 0.0, lo_open=True))
+        object.__setattr__(self, "threshold", _real("lyapunov.threshold", self.threshold, 2.0, lo_open=True))
+        ind = tuple(_choice(f"lyapunov.indicators[{i}]", q, LYAPUNOV_INDICATORS)
+                    for i, q in enumerate(_list("lyapunov.indicators", self.indicators)))
+        object.__setattr__(self, "indicators", tuple(dict.fromkeys(ind)))
+        object.__setattr__(self, "early_stop", _bool("lyapunov.early_stop", self.early_stop))
+        object.__setattr__(self, "early_sali", _real("lyapunov.early_sali", self.early_sali, 0.0, 1.0))
+        object.__setattr__(self, "early_megno", _real("lyapunov.early_megno", self.early_megno, 2.0, lo_open=True))
+        object.__setattr__(self, "early_time", _real("lyapunov.early_time", self.early_time, 0.0))
+        object.__setattr__(self, "map_resolution",
+                           _int("lyapunov.map_resolution", self.map_resolution, 0, MAX_MAP_RESOLUTION))
+        object.__setattr__(self, "map_indicator",
+                           _choice("lyapunov.map_indicator", self.map_indicator, LYAPUNOV_INDICATORS))
+        if self.early_stop and self.method != "taylor":
+            _fail("lyapunov.method", f"must be 'taylor' for early_stop; got {self.method!r}")
+        kind = methods.get(self.method).kind
+        for q in self.indicators:
+            if not INDICATOR_BY_NAME[q].supports(kind):
+                _fail("lyapunov.method", f"must be one of {list(INDICATOR_BY_NAME[q].methods)} for {q}; "
+                      f"got {self.method!r}")
+        if self.map_resolution and self.map_indicator not in self.indicators:
+            _fail("lyapunov.map_indicator", f"must be one of lyapunov.indicators {list(self.indicators)}; "
+                  f"got {self.map_indicator!r}")
+
+    @property
+    def second_vector(self) -> bool:
+        """SALI or GALI_2 asked for: two deviation vectors."""
+        return bool(self._two_vector_names())
+
+    def _two_vector_names(self) -> list:
+        """The indicators asked for that need two deviation vectors (the registry's EXTRA row)."""
+        return sorted(q for q in self.indicators if INDICATOR_BY_NAME[q].vectors == 2)
+
+    def to_dict(self) -> dict:
+        d = {k: getattr(self, k) for k in _LYAPUNOV_KEYS}
+        d["indicators"] = list(self.indicators)
+        return d
+
+    def used_dict(self) -> dict:
+        """The keys that determine the numbers (tol or dt by method; the threshold only
+        classifies, so it is left out of panel hashes)."""
+        d = {"time": self.time, "method": self.method}
+        if self.method in sections.ADAPTIVE_METHODS:
+            d["tol"] = self.tol
+        else:
+            d["dt"] = self.dt
+        # keys added by issue 10 enter only when they differ from what was computed before them,
+        # so the panels stored by earlier scenes keep their hashes
+        if self.second_vector:
+            d["indicators"] = self._two_vector_names()
+        if self.early_stop:
+            d.update(early_stop=True, early_sali=self.early_sali if self.second_vector else 0.0,
+                     early_megno=self.early_megno, early_time=self.early_time)
+        if self.map_resolution:
+            d["map_resolution"] = self.map_resolution
+        return d
+
+
+@dataclass(frozen=True)
+class FigureSpec:
+    """How the panels are drawn (never affects the numbers nor the panel hashes)."""
+
+    layout: str = "row"
+    columns: int | None = None
+    share_scale: bool = True
+    own_scale: tuple = ()
+    marker_size: float = DEFAULT_MARKER_SIZE
+    dpi: int = DEFAULT_DPI
+
+    def __post_init__(self):
+        own = []
+        for i, j in enumerate(_list("figure.own_scale", self.own_scale, min_len=0)):
+            j = _int(f"figure.own_scale[{i}]", j, 0)
+            if j in own:
+                _fail(f"figure.own_scale[{i}]", f"duplicates panel index {j}")
+            own.append(j)
+        values = {
+            "layout": _choice("figure.layout", self.layout, LAYOUTS),
+            "columns": None if self.columns is None else _int("figure.columns", self.columns, 1),
+            "share_scale": _bool("figure.share_scale", self.share_scale),
+            "own_scale": tuple(own),
+            "marker_size": _real("figure.marker_size", self.marker_size, 0.0, lo_open=True),
+            "dpi": _int("figure.dpi", self.dpi, MIN_DPI, MAX_DPI),
+        }
+        for name, value in values.items():
+            object.__setattr__(self, name, value)
+
+    def to_dict(self) -> dict:
+        d = {k: getattr(self, k) for k in _FIGURE_KEYS}
+        d["own_scale"] = list(self.own_scale)
+        if self.columns is None:
+            del d["columns"]
+        return d
+
+
+@dataclass(frozen=True)
+class ManifoldSpec:
+    """[manifolds]: draw the stable and unstable manifolds of a hyperbolic orbit over each panel's
+    section figure (W^u and W^s in two colours; docs/manifolds.md).  The orbit of period ``period``
+    is found by Newton's method from ``guess`` in each panel (as ``explorer manifold`` does;
+    default: the fixed point found from (0, 0)), and its four branches at each of its points are
+    grown to ``arclength`` with at most ``max_points`` points each.  Drawing only: the settings
+    enter the figure's settings (a rerun redraws), never a panel's numbers or hashes."""
+
+    draw: bool = False
+    arclength: float = DEFAULT_MANIFOLD_ARCLENGTH
+    guess: tuple = (0.0, 0.0)
+    period: int = 1
+    max_points: int = DEFAULT_MANIFOLD_POINTS
+
+    def __post_init__(self):
+        guess = _list("manifolds.guess", self.guess)
+        if len(guess) != 2:
+            _fail("manifolds.guess", f"must be [p1, p2] (2 numbers), got {len(guess)} items")
+        values = {
+            "draw": _bool("manifolds.draw", self.draw),
+            "arclength": _real("manifolds.arclength", self.arclength, 0.0, MAX_MANIFOLD_ARCLENGTH, lo_open=True),
+            "guess": tuple(_real(f"manifolds.guess[{i}]", x) for i, x in enumerate(guess)),
+            "period": _int("manifolds.period", self.period, 1, MAX_MANIFOLD_PERIOD),
+            "max_points": _int("manifolds.max_points", self.max_points, 3, MAX_MANIFOLD_POINTS),
+        }
+        for name, value in values.items():
+            object.__setattr__(self, name, value)
+
+    def to_dict(self) -> dict:
+        d = {k: getattr(self, k) for k in _MANIFOLD_KEYS}
+        d["guess"] = list(self.guess)
+        return d
