@@ -1043,3 +1043,34 @@ def test_past_the_threshold_the_browser_shows_a_density_image_that_follows_the_z
     page.get_by_role("button", name="Clear").click()
     _wait(page, "() => Bokeh.documents[0].get_model_by_name('density').data.n.length === 0", timeout=60_000)
     page.close()
+
+
+def test_picking_a_hyperbolic_fixed_point_draws_its_grown_stable_and_unstable_manifolds(tmp_path):
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    from explorer.analysis.manifolds import manifolds
+    from explorer.app.serve.overlays import MANIFOLD_ARCLENGTH
+    from explorer.app.serve.page import SectionPage
+    from explorer.app.serve.style import MANIFOLD_COLORS
+
+    page = SectionPage(Settings(params=model.FIGURE4.with_(mu=0.03)), {"separatrices": "1"})
+    try:
+        _poll_until(page, lambda: "hyperbolic" in page.fixed.data["kind"], timeout=120)
+        k = page.fixed.data["kind"].index("hyperbolic")
+        saddle = (page.fixed.data["p1"][k], page.fixed.data["p2"][k])
+        assert page.pick(saddle[0] + 1e-9, saddle[1]) is None          # a mark, not an orbit
+        _poll_until(page, lambda: len(page.manifold_source.data["xs"]) == 4, timeout=120)
+        m = page.manifold_source.data
+        ref = manifolds(saddle, page.settings.params, page.settings.h, arclength=MANIFOLD_ARCLENGTH)
+        assert m["kind"] == [b.kind for b in ref] == ["unstable", "unstable", "stable", "stable"]
+        assert m["color"] == [MANIFOLD_COLORS[b.kind] for b in ref]
+        for x, y, b in zip(m["xs"], m["ys"], ref):                     # the analysis' branches, point for point
+            np.testing.assert_array_equal(np.column_stack([x, y]), b.points)
+            assert np.hypot(x[0] - saddle[0], y[0] - saddle[1]) < 1e-3  # each grows out of the saddle
+            assert np.sum(np.hypot(np.diff(x), np.diff(y))) > 0.5 * MANIFOLD_ARCLENGTH
+        assert "W^u red, W^s blue" in page.overlay_text.text
+        svg = page.figure_bytes("svg").decode()
+        assert 'id="manifold-unstable' in svg and 'id="manifold-stable' in svg
+        page.inputs["mu"].value = "0.05"                                   # a new value: the manifolds go
+        _poll_until(page, lambda: page.manifold_source.data["xs"] == [])
+    finally:
+        page.close()

@@ -31,7 +31,8 @@ class View:
     """What the page shows.  ``orbits``: [(id, colour, points (n, 2), megno)]; ``starts``:
     [(p1, p2, colour)]; ``window``: (x0, x1, y0, y1); ``region``: (c1, c2, r1, r2) or None;
     ``raster``: (values (n, n), window) or None; ``fixed``: [(p1, p2, elliptic)];
-    ``separatrices``: [(n, 2) arrays]; ``periodic``: [(p1, p2, period, elliptic)];
+    ``separatrices``: [(n, 2) arrays]; ``manifolds``: [(kind, (n, 2) array)] of a picked saddle
+    (kind "unstable" or "stable"); ``periodic``: [(p1, p2, period, elliptic)];
     ``by_megno``: colour the orbits by their MEGNO; ``title``: one line."""
 
     window: tuple
@@ -41,6 +42,7 @@ class View:
     raster: tuple | None = None
     fixed: list = field(default_factory=list)
     separatrices: list = field(default_factory=list)
+    manifolds: list = field(default_factory=list)
     periodic: list = field(default_factory=list)
     by_megno: bool = False
     title: str = ""
@@ -62,7 +64,14 @@ def figure(view: View):
     from matplotlib.figure import Figure
     from matplotlib.patches import Ellipse
 
-    from explorer.app.serve.style import MEGNO_HIGH, MEGNO_LOW, MEGNO_ORBIT_SKIP, PERIOD_COLORS, SEPARATRIX_COLOR
+    from explorer.app.serve.style import (
+        MANIFOLD_COLORS,
+        MEGNO_HIGH,
+        MEGNO_LOW,
+        MEGNO_ORBIT_SKIP,
+        PERIOD_COLORS,
+        SEPARATRIX_COLOR,
+    )
 
     fig = Figure(figsize=FIGSIZE, dpi=DPI, layout="constrained")
     ax = fig.add_subplot()
@@ -96,6 +105,9 @@ def figure(view: View):
     for curve in view.separatrices:
         c = np.asarray(curve, float)
         ax.plot(c[:, 0], c[:, 1], color=SEPARATRIX_COLOR, linewidth=0.8, zorder=2.5)
+    for kind, curve in view.manifolds:
+        c = np.asarray(curve, float)
+        ax.plot(c[:, 0], c[:, 1], color=MANIFOLD_COLORS[kind], linewidth=0.8, zorder=2.6, gid=f"manifold-{kind}")
     for p1, p2, period, elliptic in view.periodic:
         ax.scatter([p1], [p2], s=36, marker="o" if elliptic else "X", edgecolors="black", linewidths=1.0,
                    c=[PERIOD_COLORS[(int(period) - 1) % len(PERIOD_COLORS)]], zorder=5)

@@ -18,27 +18,36 @@ def _num(x) -> str:
     return "0" if abs(x) < 1e-12 else f"{x:.4g}"
 
 
+def _fixed_points_from(view, first):
+    """The fixed points Newton's method (:func:`explorer.analysis.fixedpoints.find_fixed_point`)
+    reaches from ``first``, the region's centre and half-way to its edge along both axes, in that
+    order (one per guess that converges; guesses outside the region are skipped), lazily."""
+    from explorer.analysis.fixedpoints import find_fixed_point
+
+    c1, c2, r1, r2 = view.region
+    guesses = [first, (c1, c2), (c1 - 0.5 * r1, c2), (c1 + 0.5 * r1, c2), (c1, c2 - 0.5 * r2),
+               (c1, c2 + 0.5 * r2)]
+    for g in guesses:
+        if not view.admissible(*g):
+            continue
+        try:
+            yield find_fixed_point(view.params, view.h, g, phi0=view.phi0)
+        except Exception:  # noqa: BLE001 - no convergence from this guess
+            continue
+
+
 def fixed_points_and_curves(view):
     """(fixed points, curves, message) from :mod:`explorer.analysis.fixedpoints`: Newton's method
     from p = 0, from the centre of the region and half-way to its edge along both axes; the
     separatrices of the hyperbolic points.  ``view``: anything with ``params``, ``h``, ``phi0``,
     ``region`` (c1, c2, r1, r2 or None) and ``admissible(p1, p2)`` (the page's
     :class:`~explorer.app.serve.settings.Settings`)."""
-    from explorer.analysis.fixedpoints import find_fixed_point, separatrices
+    from explorer.analysis.fixedpoints import separatrices
 
     if view.region is None:
         return [], [], "separatrices: the region is empty"
-    c1, c2, r1, r2 = view.region
-    guesses = [(0.0, 0.0), (c1, c2), (c1 - 0.5 * r1, c2), (c1 + 0.5 * r1, c2), (c1, c2 - 0.5 * r2),
-               (c1, c2 + 0.5 * r2)]
     points = []
-    for g in guesses:
-        if not view.admissible(*g):
-            continue
-        try:
-            fp = find_fixed_point(view.params, view.h, g, phi0=view.phi0)
-        except Exception:  # noqa: BLE001 - no convergence from this guess
-            continue
+    for fp in _fixed_points_from(view, (0.0, 0.0)):
         if all(np.max(np.abs(np.asarray(fp.point) - np.asarray(q.point))) > 1e-7 for q in points):
             points.append(fp)
     if not points:
@@ -85,23 +94,10 @@ def elliptic_center(view, start):
     reaches from ``start`` itself (the centre of the start's island), the region's centre, or
     half-way to its edge along both axes; None when none is.  ``view``: as for
     :func:`fixed_points_and_curves`."""
-    from explorer.analysis.fixedpoints import find_fixed_point
 
     if view.region is None:
         return None
-    c1, c2, r1, r2 = view.region
-    guesses = [tuple(start), (c1, c2), (c1 - 0.5 * r1, c2), (c1 + 0.5 * r1, c2), (c1, c2 - 0.5 * r2),
-               (c1, c2 + 0.5 * r2)]
-    for g in guesses:
-        if not view.admissible(*g):
-            continue
-        try:
-            fp = find_fixed_point(view.params, view.h, g, phi0=view.phi0)
-        except Exception:  # noqa: BLE001 - no convergence from this guess
-            continue
-        if fp.stable:
-            return fp
-    return None
+    return next((fp for fp in _fixed_points_from(view, tuple(start)) if fp.stable), None)
 
 
 def orbit_readout(settings, start) -> dict:
@@ -138,3 +134,28 @@ def rotation_tol(settings) -> float:
     from explorer.analysis import rotation
 
     return float(settings.tol) if settings.method == "taylor" else float(rotation.DEFAULT_TOL)
+
+
+#: arclength each manifold branch of a picked saddle is grown to (explorer.analysis.manifolds;
+#: about 1.5 s for its four branches at mu = 0.03 on 2 cores)
+MANIFOLD_ARCLENGTH = 10.0
+#: wall-clock budget of each branch (s): growth stops there and the branch is drawn as far as it got
+MANIFOLD_MAX_TIME = 10.0
+
+
+def saddle_manifolds(settings, point, period=1):
+    """(branches, message): the unstable and stable manifolds of the hyperbolic periodic orbit of
+    ``period`` through ``point`` (a hyperbolic mark of the page), both branches of each, grown to
+    MANIFOLD_ARCLENGTH by :func:`explorer.analysis.manifolds.manifolds` (adaptive insertion;
+    docs/manifolds.md) at the page's parameters and energy.  ``branches``: the
+    :class:`~explorer.analysis.manifolds.ManifoldBranch` list (unstable first).  An orbit that
+    Newton's method does not find, or finds elliptic, raises ParameterError."""
+    from explorer.analysis.manifolds import manifolds
+
+    p1, p2 = float(point[0]), float(point[1])
+    branches = manifolds((p1, p2), settings.params, settings.h, arclength=MANIFOLD_ARCLENGTH, period=int(period),
+                         phi0=settings.phi0, max_time=MANIFOLD_MAX_TIME)
+    npts = sum(len(b.points) for b in branches)
+    text = (f"manifolds of the hyperbolic period-{int(period)} orbit at ({_num(p1)}, {_num(p2)}): "
+            f"{len(branches)} branches (W^u red, W^s blue) to arclength {MANIFOLD_ARCLENGTH:g}, {npts} points")
+    return branches, text

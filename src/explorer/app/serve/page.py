@@ -50,6 +50,7 @@ from explorer.app.serve.page_layers import (  # noqa: F401
     LayersMixin,
     _empty_crossings,
     _empty_density,
+    _empty_manifolds,
     _empty_periodic,
     _empty_raster,
 )
@@ -154,6 +155,8 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.curves = ColumnDataSource({"xs": [], "ys": []}, name="separatrices")
         self.periodic = ColumnDataSource(_empty_periodic(), name="periodic")
         fig.multi_line("xs", "ys", source=self.curves, line_color=SEPARATRIX_COLOR, line_width=1.2)
+        self.manifold_source = ColumnDataSource(_empty_manifolds(), name="manifolds")
+        fig.multi_line("xs", "ys", source=self.manifold_source, line_color="color", line_width=1.2)
         self._by_orbit = colors
         self._by_megno = {"field": "megno", "transform": LinearColorMapper(
             palette=megno_palette(MEGNO_ORBIT_SKIP), low=MEGNO_LOW, high=MEGNO_HIGH, nan_color="#9e9e9e")}
@@ -239,6 +242,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.worker.stop(timeout=0)
         self.raster.stop()
         self._stop_readouts()
+        self._stop_manifolds()
 
     # ------------------------------------------------------------ state in the URL
     def _load_url(self, args: dict):

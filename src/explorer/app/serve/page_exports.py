@@ -54,6 +54,9 @@ class ExportsMixin:
                     fixed=[(a, b, k == "elliptic") for a, b, k in zip(f["p1"], f["p2"], f["kind"])],
                     separatrices=[np.column_stack([x, y]) for x, y in zip(self.curves.data["xs"],
                                                                           self.curves.data["ys"])],
+                    manifolds=[(k, np.column_stack([x, y])) for k, x, y in zip(
+                        self.manifold_source.data["kind"], self.manifold_source.data["xs"],
+                        self.manifold_source.data["ys"])],
                     periodic=[(a, b, k, e == "elliptic") for a, b, k, e in zip(q["p1"], q["p2"], q["period"],
                                                                                q["kind"])],
                     by_megno=bool(self.colour_box.value), title=title)

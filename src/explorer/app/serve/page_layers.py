@@ -1,7 +1,8 @@
 """The page's layers under and over the orbits: the MEGNO raster of the visible window
 (:class:`explorer.app.serve.raster.RasterWorker`), the density image that replaces the crossings'
-glyphs past :data:`explorer.app.serve.density.THRESHOLD` crossings, and the fixed points, separatrices and periodic
-orbits (:mod:`explorer.app.serve.overlays`, in a thread).  A part of
+glyphs past :data:`explorer.app.serve.density.THRESHOLD` crossings, the fixed points, separatrices and periodic
+orbits (:mod:`explorer.app.serve.overlays`, in a thread), and the manifolds of a picked hyperbolic
+point (:func:`explorer.app.serve.overlays.saddle_manifolds`, in a thread).  A part of
 :class:`~explorer.app.serve.page.SectionPage` (a mixin)."""
 from __future__ import annotations
 
@@ -13,9 +14,10 @@ import numpy as np
 
 from explorer.app.serve import density
 from explorer.app.serve import raster as raster_mod
+from explorer.app.serve.jobs import LatestJob
 from explorer.app.serve.orbits import COLORS
 from explorer.app.serve.overlays import PERIODIC_MAX
-from explorer.app.serve.style import MEGNO_HIGH, MEGNO_LOW, MEGNO_ORBIT_SKIP, megno_palette
+from explorer.app.serve.style import MANIFOLD_COLORS, MEGNO_HIGH, MEGNO_LOW, MEGNO_ORBIT_SKIP, megno_palette
 
 
 def _empty_raster() -> dict:
@@ -38,6 +40,10 @@ def _empty_crossings() -> dict:
 
 def _empty_density() -> dict:
     return {"image": [], "x": [], "y": [], "dw": [], "dh": [], "n": []}
+
+
+def _empty_manifolds() -> dict:
+    return {"xs": [], "ys": [], "color": [], "kind": []}
 
 
 def _empty_periodic() -> dict:
@@ -130,6 +136,7 @@ class LayersMixin:
         at the current settings, in a thread of its own (about 1 s and 5 s); a newer request
         makes an older result stale."""
         self._overlay_generation += 1
+        self._clear_manifolds()
         self.fixed.data = {"p1": [], "p2": [], "kind": [], "marker": []}
         self.curves.data = {"xs": [], "ys": []}
         self.periodic.data = _empty_periodic()
@@ -176,4 +183,58 @@ class LayersMixin:
                            "kind": ["elliptic" if fp.stable else "hyperbolic" for fp in points],
                            "marker": ["circle" if fp.stable else "x" for fp in points]}
         self.curves.data = {"xs": [c[:, 0] for c in curves], "ys": [c[:, 1] for c in curves]}
+        self.overlay_text.text = text
+
+    # ------------------------------------------------------------ manifolds of a picked saddle
+    def saddle_near(self, p1: float, p2: float, radius_px: float) -> tuple | None:
+        """(point, period) of the hyperbolic mark (fixed point or point of a periodic orbit) within
+        ``radius_px`` screen pixels of (p1, p2), the nearest; None when there is none."""
+        px, py = self._pixel()
+        best = None
+        for src, period_of in ((self.fixed.data, lambda i: 1), (self.periodic.data, None)):
+            for i, (a, b, kind) in enumerate(zip(src["p1"], src["p2"], src["kind"])):
+                if kind != "hyperbolic":
+                    continue
+                d = float(np.hypot((a - p1) / (px or 1.0), (b - p2) / (py or 1.0)))
+                k = 1 if period_of else int(src["period"][i])
+                if d <= radius_px and (best is None or d < best[0]):
+                    best = (d, (float(a), float(b)), k)
+        return None if best is None else best[1:]
+
+    def show_manifolds(self, point, period: int = 1) -> None:
+        """Grow and draw W^u and W^s of the hyperbolic orbit of ``period`` through ``point`` (in
+        the session's manifold thread: the latest request only; a new value or overlay drops it)."""
+        self._manifold_generation = getattr(self, "_manifold_generation", 0) + 1
+        self.manifold_source.data = _empty_manifolds()
+        self.overlay_text.text = (f"growing the manifolds of the period-{period} orbit at "
+                                  f"({point[0]:.6g}, {point[1]:.6g}) ...")
+        self._manifold_jobs.put((self._manifold_generation, tuple(point), int(period), self.settings))
+
+    @property
+    def _manifold_jobs(self):
+        return LatestJob.of(self, "_manifold_worker", self._compute_manifolds, "explorer-serve-manifolds")
+
+    def _stop_manifolds(self) -> None:
+        LatestJob.stop_of(self, "_manifold_worker")
+
+    def _clear_manifolds(self) -> None:
+        self._manifold_generation = getattr(self, "_manifold_generation", 0) + 1
+        self.manifold_source.data = _empty_manifolds()
+
+    def _compute_manifolds(self, generation, point, period, settings):
+        from explorer.app.serve.overlays import saddle_manifolds
+
+        try:
+            branches, text = saddle_manifolds(settings, point, period)
+        except Exception as exc:  # noqa: BLE001 - reported in the page
+            branches, text = [], f"manifolds: failed ({type(exc).__name__}: {' '.join(str(exc).split())})"
+        self._post(partial(self._show_manifolds, generation, settings, branches, text))
+
+    def _show_manifolds(self, generation, settings, branches, text):
+        if generation != self._manifold_generation or settings is not self.settings:
+            return                           # a newer pick, a new value or the overlay changed meanwhile
+        pts = [np.asarray(b.points, float) for b in branches]
+        self.manifold_source.data = {"xs": [p[:, 0] for p in pts], "ys": [p[:, 1] for p in pts],
+                                     "color": [MANIFOLD_COLORS[b.kind] for b in branches],
+                                     "kind": [b.kind for b in branches]}
         self.overlay_text.text = text

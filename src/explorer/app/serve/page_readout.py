@@ -6,49 +6,16 @@ the page's models and :meth:`~explorer.app.serve.page.SectionPage._post`)."""
 from __future__ import annotations
 
 import math
-import threading
 from functools import partial
 
 import numpy as np
 
+from explorer.app.serve.jobs import LatestJob
 from explorer.app.serve.orbits import CHAOTIC_MEGNO, INDICATOR_TIME
 from explorer.app.serve.style import FIGURE_HEIGHT, FIGURE_WIDTH
 
 #: a pick selects the orbit with a crossing within this many pixels of the click
 PICK_PX = 6.0
-
-
-class LatestJob:
-    """One daemon thread that runs ``work(*job)`` for the latest job :meth:`put` (a job put while
-    another runs replaces any job still waiting)."""
-
-    def __init__(self, work, name: str):
-        self._work = work
-        self._cond = threading.Condition()
-        self._job: tuple | None = None
-        self._stopped = False
-        self.thread = threading.Thread(target=self._loop, name=name, daemon=True)
-        self.thread.start()
-
-    def put(self, job: tuple) -> None:
-        with self._cond:
-            self._job = job
-            self._cond.notify()
-
-    def stop(self) -> None:
-        with self._cond:
-            self._stopped, self._job = True, None
-            self._cond.notify()
-
-    def _loop(self) -> None:
-        while True:
-            with self._cond:
-                while not self._stopped and self._job is None:
-                    self._cond.wait()
-                if self._stopped:
-                    return
-                job, self._job = self._job, None
-            self._work(*job)
 
 
 class ReadoutMixin:
@@ -71,10 +38,17 @@ class ReadoutMixin:
         return (w.x1 - w.x0) / max(width, 1.0), (w.y1 - w.y0) / max(height, 1.0)
 
     def pick(self, p1: float, p2: float, radius_px: float = PICK_PX) -> int | None:
-        """A pick at (p1, p2): the orbit with the crossing nearest to it (within ``radius_px``
-        screen pixels) is selected and its readout (mLCE, mean MEGNO, rotation number:
-        :func:`explorer.app.serve.overlays.orbit_readout`) is computed in a thread and shown in
+        """A pick at (p1, p2).  Near a hyperbolic mark of the overlays (× of a fixed point or of a
+        periodic orbit, within ``radius_px`` screen pixels): its stable and unstable manifolds are
+        grown and drawn (:meth:`show_manifolds`) and None is returned.  Else the orbit with the
+        crossing nearest to it (within ``radius_px`` screen pixels) is selected and its readout
+        (mLCE, mean MEGNO, rotation number: :func:`explorer.app.serve.overlays.orbit_readout`) is
+        computed in a thread and shown in
         ``readout``; returns the orbit's id (None: no crossing near)."""
+        saddle = self.saddle_near(p1, p2, radius_px) if math.isfinite(p1) and math.isfinite(p2) else None
+        if saddle is not None:           # a hyperbolic mark of the overlays: its manifolds
+            self.show_manifolds(*saddle)
+            return None
         d = self.crossings.data
         if not (math.isfinite(p1) and math.isfinite(p2)) or not len(d["orbit"]):
             self.say("pick: no orbit on the page yet")
@@ -107,15 +81,10 @@ class ReadoutMixin:
     def _readout_jobs(self) -> LatestJob:
         """The session's one readout thread (made at the first pick): it computes the latest pick
         only, so rapid picks queue nothing and start no thread each."""
-        jobs = self.__dict__.get("_readout_worker")
-        if jobs is None:
-            jobs = self.__dict__["_readout_worker"] = LatestJob(self._compute_readout, "explorer-serve-readout")
-        return jobs
+        return LatestJob.of(self, "_readout_worker", self._compute_readout, "explorer-serve-readout")
 
     def _stop_readouts(self) -> None:
-        jobs = self.__dict__.get("_readout_worker")
-        if jobs is not None:
-            jobs.stop()
+        LatestJob.stop_of(self, "_readout_worker")
 
     def _compute_readout(self, generation, ident, start, settings):
         from explorer.app.serve.overlays import orbit_readout

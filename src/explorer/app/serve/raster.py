@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from explorer import model
+from explorer.app.serve.jobs import LatestJob
 from explorer.app.serve.settings import Settings
 
 #: resolutions of the successive rasters of one window (each a refinement of the last), by default
@@ -105,7 +106,9 @@ def rasters(settings: Settings, window: Window, stop: Callable[[], bool] = lambd
 
 
 class RasterWorker:
-    """One thread that computes the rasters of the latest window (see the module docstring)."""
+    """One thread that computes the rasters of the latest window (see the module docstring): a
+    :class:`~explorer.app.serve.jobs.LatestJob` whose images are handed out only while their
+    window is still the latest (checked under a lock, so a stale image never reaches the page)."""
 
     def __init__(self, on_image: Callable[[int, Image], None], on_error: Callable[[BaseException], None],
                  resolutions: tuple = RESOLUTIONS, time: float = RASTER_TIME):
@@ -113,51 +116,35 @@ class RasterWorker:
         self.time = time
         self._on_image = on_image
         self._on_error = on_error
-        self._cond = threading.Condition()
-        self._job: tuple | None = None
+        self._lock = threading.Lock()
         self._generation = 0
-        self._stopped = False
-        self._thread = threading.Thread(target=self._loop, name="explorer-serve-raster", daemon=True)
-        self._thread.start()
+        self._jobs = LatestJob(self._run, "explorer-serve-raster")
+        self._thread = self._jobs.thread
 
     def start(self, settings: Settings, window: Window) -> int:
         """Compute the rasters of ``window`` (the current one stops); returns its generation."""
-        with self._cond:
+        with self._lock:
             self._generation += 1
-            self._job = (self._generation, settings, window)
-            self._cond.notify()
-            return self._generation
+            generation = self._generation
+        self._jobs.put((generation, settings, window))
+        return generation
 
     def cancel(self) -> None:
-        with self._cond:
+        with self._lock:
             self._generation += 1
-            self._job = None
+        self._jobs.drop()
 
     def stop(self) -> None:
-        with self._cond:
-            self._stopped = True
-            self._job = None
-            self._cond.notify()
+        self._jobs.stop()
 
-    def _loop(self) -> None:
-        while True:
-            with self._cond:
-                while not self._stopped and self._job is None:
-                    self._cond.wait()
-                if self._stopped:
-                    return
-                job, self._job = self._job, None
-            if job is None:
-                continue
-            generation, settings, window = job
-
-            def stale(g: int = generation) -> bool:
-                return g != self._generation
-            try:
-                for image in rasters(settings, window, stop=stale, resolutions=self.resolutions, time=self.time):
-                    with self._cond:
-                        if generation != self._generation:
-                            break
-                        self._on_image(generation, image)
-            except Exception as exc:  # noqa: BLE001 - reported in the page; the server keeps serving
-                self._on_error(exc)
+    def _run(self, generation: int, settings: Settings, window: Window) -> None:
+        def stale(g: int = generation) -> bool:
+            return g != self._generation
+        try:
+            for image in rasters(settings, window, stop=stale, resolutions=self.resolutions, time=self.time):
+                with self._lock:
+                    if generation != self._generation:
+                        break
+                    self._on_image(generation, image)
+        except Exception as exc:  # noqa: BLE001 - reported in the page; the server keeps serving
+            self._on_error(exc)

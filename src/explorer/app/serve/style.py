@@ -3,6 +3,9 @@ MEGNO colour scale and the colours of the overlays; :mod:`~explorer.app.serve.pa
 them in the browser and :mod:`~explorer.app.serve.image` in the exported PNG and SVG."""
 from __future__ import annotations
 
+#: the manifolds of a picked saddle: W^u and W^s in the colours of a sweep's [manifolds]
+from explorer.app.figures import MANIFOLD_COLORS  # noqa: F401  (one definition, in figures.py)
+
 #: colours of the section (as the figures: forbidden region light gray, allowed region white)
 FORBIDDEN_COLOR = "#cccccc"
 ALLOWED_COLOR = "#ffffff"
