@@ -57,4 +57,5 @@ class LatestJob:
                 if self._stopped:
                     return
                 job, self._job = self._job, None
-            self._work(*job)
+            if job is not None:      # (always: the wait ends on a job or a stop; said for the type checker)
+                self._work(*job)
