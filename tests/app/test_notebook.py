@@ -43,7 +43,7 @@ MU, CROSSINGS, START = 0.03, 50, (0.3, 0.1)
 PANEL_MIME = "application/vnd.holoviews_exec.v0+json"
 
 CELLS = [
-    "import panel as pn\nimport explorer as ex\npn.extension()",
+    "import panel as pn\nimport explorer as ex\npn.extension()\nprint('explorer:', ex.__file__)",
     f"app = ex.explore(mu={MU}, crossings={CROSSINGS})\napp",
     # the kernel is busy while a cell runs, so the periodic callback cannot move the crossings onto
     # the page: the cell polls the page itself, as the callback would
@@ -85,6 +85,9 @@ def test_explore_in_a_live_kernel_displays_the_page_and_streams_the_clicked_orbi
     nbformat.validate(nb)
     for cell in nb.cells:
         assert not [o for o in cell.outputs if o.output_type == "error"], cell.outputs
+
+    printed = "".join(o.get("text", "") for o in nb.cells[0].outputs if o.output_type == "stream")
+    assert f"explorer: {explorer.__file__}" in printed.splitlines(), printed     # the package under test
 
     display = [o for o in nb.cells[1].outputs if o.output_type in ("execute_result", "display_data")]
     assert display, nb.cells[1].outputs
