@@ -177,6 +177,13 @@ def crossing_settings(params, y0, n_crossings: int, *, method: str = "taylor", t
                            None).settings)
 
 
+def _outputs(n: int, width: int):
+    """The arrays the drivers fill for n orbits of at most ``width`` rows: data (NaN where no
+    crossing), count, status, final state, info."""
+    return (np.full((n, width, 5), np.nan), np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros((n, 5)),
+            np.zeros((n, 3)))
+
+
 def _run_block(run: _Run, Y, carry, limits, data, count, status, final, info) -> None:
     """One block of the drivers for the orbits Y (arrays filled in place), with numba's thread
     count set for the call when ``run.threads`` says so.  An orbit whose motion the fixed step
@@ -232,11 +239,7 @@ def crossings(params, y0, n_crossings: int, *, method: str = "taylor", tol: floa
         raise ParameterError(f"crossings: {N} orbits x {K} crossings need {human_bytes(need)} in memory "
                              f"(this machine has {human_bytes(mem)}); stream them with iter_crossings() "
                              "or lower crossings")
-    data = np.full((N, K, 5), np.nan)
-    count = np.zeros(N, np.int64)
-    status = np.zeros(N, np.int64)
-    final = np.zeros((N, 5))
-    info = np.zeros((N, 3))
+    data, count, status, final, info = _outputs(N, K)
     carry = StreamState.initial(run.P, run.Y0, phi0=run.settings["phi0"]).carry
     limits = np.full((N, 2), K, np.int64)
     _run_block(run, run.Y0, carry, limits, data, count, status, final, info)
@@ -370,11 +373,7 @@ def iter_crossings(params, y0, n_crossings: int, *, block: int = DEFAULT_BLOCK, 
         limits[:, layout.LIMIT_ROOM] = np.minimum(remaining, width)
         Y = np.ascontiguousarray(st.y[idx])
         carry = np.ascontiguousarray(st.carry[idx])
-        data = np.full((n, width, 5), np.nan)
-        count = np.zeros(n, np.int64)
-        status = np.zeros(n, np.int64)
-        final = np.zeros((n, 5))
-        info = np.zeros((n, 3))
+        data, count, status, final, info = _outputs(n, width)
         _run_block(run, Y, carry, limits, data, count, status, final, info)
         start = st.done[idx].copy()
         st.y[idx] = final
