@@ -8,7 +8,7 @@ import pytest
 
 from explorer import model
 from explorer.analysis import fixedpoints as fpm
-from explorer.analysis import lyapunov
+from explorer.analysis import lyapunov, sections
 from explorer.analysis import manifolds as mf
 from explorer.analysis import periodic as pm
 from explorer.analysis import rotation as rm
@@ -93,3 +93,31 @@ def test_a_setting_of_the_map_beside_it_is_refused(smap):
         fpm.find_fixed_point(smap, (0.0, 0.0), tol=1e-12)
     with pytest.raises(model.ParameterError, match="return budget"):
         fpm.find_fixed_point(SectionMap(PRM, H, tmax=10.0), (0.0, 0.0))
+
+
+def test_section_crossings_from_a_section_map_are_those_of_the_older_form_and_the_maps_iterates(smap):
+    p1, p2 = [-0.2, 0.3], [0.1, 0.0]
+    new = sections.section_crossings(smap, p1, p2, 4)
+    old = sections.section_crossings(PRM, p1, p2, H, 4, phi0=PHI0, tol=TOL, method="taylor")
+    named = sections.section_crossings(PRM, p1, p2, h=H, n_crossings=4, phi0=PHI0, tol=TOL)
+    for res in (old, named):
+        same(new.data, res.data)
+        same(new.status, res.status)
+    assert new.settings == old.settings
+    blocks = list(sections.iter_section_crossings(smap, p1, p2, 4, block=2))
+    same(np.concatenate([b.rows(0) for b in blocks]), new.orbit(0))
+    # the rows are P's iterates: the same section, energy and tolerance as the map's own steps
+    it = smap.iterate((p1[0], p2[0]), 4)[1:]
+    np.testing.assert_allclose(new.orbit(0)[:, 1:3], it, rtol=0, atol=1e-9)
+
+
+def test_section_crossings_refuse_a_setting_of_the_map_beside_it(smap):
+    for kw in (dict(tol=1e-12), dict(phi0=0.0), dict(method="dop853"), dict(direction=-1)):
+        with pytest.raises(model.ParameterError, match="belong"):
+            sections.section_crossings(smap, [0.0], [0.0], 3, **kw)
+    with pytest.raises(model.ParameterError, match="belong"):
+        sections.section_crossings(smap, [0.0], [0.0], h=H, n_crossings=3)
+    with pytest.raises(model.ParameterError, match="return budget"):
+        sections.section_crossings(SectionMap(PRM, H, tmax=10.0), [0.0], [0.0], 3)
+    with pytest.raises(model.ParameterError, match="n_crossings is missing"):
+        sections.section_crossings(PRM, [0.0], [0.0], H)

@@ -27,6 +27,7 @@ import numpy as np
 
 from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
+from explorer.analysis.section_map import RETURN_TMAX, SectionMap
 from explorer.integrate import layout, methods
 from explorer.integrate.methods import (
     ADAPTIVE_METHODS,
@@ -176,6 +177,13 @@ def crossing_settings(params, y0, n_crossings: int, *, method: str = "taylor", t
                            None).settings)
 
 
+def _outputs(n: int, width: int):
+    """The arrays the drivers fill for n orbits of at most ``width`` rows: data (NaN where no
+    crossing), count, status, final state, info."""
+    return (np.full((n, width, 5), np.nan), np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros((n, 5)),
+            np.zeros((n, 3)))
+
+
 def _run_block(run: _Run, Y, carry, limits, data, count, status, final, info) -> None:
     """One block of the drivers for the orbits Y (arrays filled in place), with numba's thread
     count set for the call when ``run.threads`` says so.  An orbit whose motion the fixed step
@@ -231,11 +239,7 @@ def crossings(params, y0, n_crossings: int, *, method: str = "taylor", tol: floa
         raise ParameterError(f"crossings: {N} orbits x {K} crossings need {human_bytes(need)} in memory "
                              f"(this machine has {human_bytes(mem)}); stream them with iter_crossings() "
                              "or lower crossings")
-    data = np.full((N, K, 5), np.nan)
-    count = np.zeros(N, np.int64)
-    status = np.zeros(N, np.int64)
-    final = np.zeros((N, 5))
-    info = np.zeros((N, 3))
+    data, count, status, final, info = _outputs(N, K)
     carry = StreamState.initial(run.P, run.Y0, phi0=run.settings["phi0"]).carry
     limits = np.full((N, 2), K, np.int64)
     _run_block(run, run.Y0, carry, limits, data, count, status, final, info)
@@ -369,11 +373,7 @@ def iter_crossings(params, y0, n_crossings: int, *, block: int = DEFAULT_BLOCK, 
         limits[:, layout.LIMIT_ROOM] = np.minimum(remaining, width)
         Y = np.ascontiguousarray(st.y[idx])
         carry = np.ascontiguousarray(st.carry[idx])
-        data = np.full((n, width, 5), np.nan)
-        count = np.zeros(n, np.int64)
-        status = np.zeros(n, np.int64)
-        final = np.zeros((n, 5))
-        info = np.zeros((n, 3))
+        data, count, status, final, info = _outputs(n, width)
         _run_block(run, Y, carry, limits, data, count, status, final, info)
         start = st.done[idx].copy()
         st.y[idx] = final
@@ -386,22 +386,66 @@ def iter_crossings(params, y0, n_crossings: int, *, block: int = DEFAULT_BLOCK, 
         yield CrossingBlock(idx, start, data, count, st.copy())
 
 
-def section_crossings(params, p1, p2, h: float, n_crossings: int, *, phi0: float = math.pi,
-                      direction: int = 1, **kwargs) -> Crossings:
-    """Start orbits on the section phi = phi0 at energy h from the points (p1, p2) (M from the
-    energy, docs/model.md R9; sign of M from ``direction``) and return their next crossings."""
+#: what a :class:`~explorer.analysis.section_map.SectionMap` fixes in :func:`section_crossings`:
+#: its energy, section, tolerance and method (Taylor, as the map integrates) and direction (+1)
+MAP_FIXED = ("h", "phi0", "tol", "method", "dt", "direction")
+
+
+def _section_start(name, system, p1, p2, h, n_crossings, phi0, direction, kwargs):
+    """(params, Y0, n_crossings, phi0, direction, kwargs) of :func:`section_crossings` in either
+    of its forms: ``(params, p1, p2, h, n)`` or ``(smap, p1, p2, n)``."""
+    params = system
+    if isinstance(system, SectionMap):
+        if n_crossings is None:             # (smap, p1, p2, n): the fourth argument is the count
+            h, n_crossings = None, h
+        given = [k for k, v in (("h", h), ("phi0", phi0)) if v is not None]
+        given += [k for k in MAP_FIXED[2:] if k in kwargs or (k == "direction" and direction is not None)]
+        if given:
+            raise ParameterError(f"{name}: {', '.join(given)} belong(s) to the SectionMap; do not give them "
+                                 "beside it")
+        if system.tmax != RETURN_TMAX:
+            raise ParameterError(f"{name} has no return budget of the map (its tmax is the run's): use a "
+                                 f"SectionMap with the default tmax ({RETURN_TMAX:g}), got {system.tmax!r}")
+        if n_crossings is None:
+            raise ParameterError(f"{name}(smap, p1, p2, n_crossings): n_crossings is missing")
+        kwargs = dict(kwargs, tol=system.tol, method="taylor")
+        params, h, phi0, direction = system.params, system.h, system.phi0, 1
+    elif h is None or n_crossings is None:
+        raise ParameterError(f"{name}(params, p1, p2, h, n_crossings): "
+                             f"{'h' if h is None else 'n_crossings'} is missing")
+    phi0 = math.pi if phi0 is None else phi0
+    direction = 1 if direction is None else direction
     h = float(h)
     if not math.isfinite(h):
         raise ParameterError(f"h must be finite, got {h!r}")
     Y0 = model.section_state(params, p1, p2, h, phi0, direction if direction != 0 else 1)
+    return params, Y0, n_crossings, phi0, direction, kwargs
+
+
+def section_crossings(params, p1, p2, h: float | None = None, n_crossings: int | None = None, *,
+                      phi0: float | None = None, direction: int | None = None, **kwargs) -> Crossings:
+    """Start orbits on the section phi = phi0 (default pi) at energy h from the points (p1, p2)
+    (M from the energy, docs/model.md R9; sign of M from ``direction``, default +1) and return
+    their next crossings (the keywords of :func:`crossings`).
+
+    Two forms, the same numbers:
+
+    - ``section_crossings(params, p1, p2, h, n_crossings, ...)``, the energy after the points
+      (the older order, kept for its many callers; ``h=`` and ``n_crossings=`` may be named);
+    - ``section_crossings(smap, p1, p2, n_crossings, ...)`` with a
+      :class:`~explorer.analysis.section_map.SectionMap` first (the system first): its
+      ``params``, ``h``, ``phi0`` and ``tol``, the Taylor method and direction +1, so the rows
+      are the map's iterates.  Those settings given beside the map raise ParameterError;
+      ``tmax`` is this run's time budget (the map's must be the default).
+    """
+    params, Y0, n_crossings, phi0, direction, kwargs = _section_start(
+        "section_crossings", params, p1, p2, h, n_crossings, phi0, direction, kwargs)
     return crossings(params, Y0, n_crossings, phi0=phi0, direction=direction, **kwargs)
 
 
-def iter_section_crossings(params, p1, p2, h: float, n_crossings: int, *, phi0: float = math.pi,
-                           direction: int = 1, **kwargs):
-    """:func:`section_crossings` in blocks (:func:`iter_crossings`)."""
-    h = float(h)
-    if not math.isfinite(h):
-        raise ParameterError(f"h must be finite, got {h!r}")
-    Y0 = model.section_state(params, p1, p2, h, phi0, direction if direction != 0 else 1)
+def iter_section_crossings(params, p1, p2, h: float | None = None, n_crossings: int | None = None, *,
+                           phi0: float | None = None, direction: int | None = None, **kwargs):
+    """:func:`section_crossings` in blocks (:func:`iter_crossings`), in the same two forms."""
+    params, Y0, n_crossings, phi0, direction, kwargs = _section_start(
+        "iter_section_crossings", params, p1, p2, h, n_crossings, phi0, direction, kwargs)
     return iter_crossings(params, Y0, n_crossings, phi0=phi0, direction=direction, **kwargs)

@@ -7,7 +7,7 @@ import numbers
 from typing import TYPE_CHECKING
 
 from explorer import model
-from explorer.io.scene.checks import SceneError, _choice, _distinct_reals, _fail, _list, _str, _table
+from explorer.io.scene.checks import SceneError, _distinct_reals, _fail, _list, _str, _swept, _table
 from explorer.io.scene.schema import SWEEP_PARAMETERS
 from explorer.model import ParameterError
 
@@ -18,12 +18,8 @@ if TYPE_CHECKING:
 def check_atlas(scene: Scene) -> None:
     """[atlas]: a scene of two swept parameters, [sweep] (rows) x [atlas] (columns), storing
     only the chaotic fraction per cell (indicators only)."""
-    if scene.atlas_parameter is None:
-        if len(scene.atlas_values):
-            _fail("atlas.parameter", "is required when atlas values are given")
-        object.__setattr__(scene, "atlas_values", ())
+    if not _swept(scene, "atlas", SWEEP_PARAMETERS):
         return
-    _choice("atlas.parameter", scene.atlas_parameter, SWEEP_PARAMETERS)
     if scene.sweep_parameter is None:
         _fail("sweep.parameter", "is required in an atlas scene (the atlas sweeps [sweep] x [atlas])")
     if scene.atlas_parameter == scene.sweep_parameter:

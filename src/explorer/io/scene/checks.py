@@ -72,6 +72,19 @@ def _distinct_reals(key, seq) -> tuple:
     return tuple(values)
 
 
+def _swept(scene, table, choices) -> bool:
+    """The swept parameter of the scene's [sweep] or [atlas] ``table``: False, its values cleared,
+    when none is given (values without one are refused); True once it is one of ``choices``."""
+    parameter = getattr(scene, f"{table}_parameter")
+    if parameter is None:
+        if len(getattr(scene, f"{table}_values")):
+            _fail(f"{table}.parameter", f"is required when {table} values are given")
+        object.__setattr__(scene, f"{table}_values", ())
+        return False
+    _choice(f"{table}.parameter", parameter, choices)
+    return True
+
+
 def _table(key, v, allowed) -> dict:
     """Check that ``v`` is a table whose keys are all in ``allowed``."""
     if not isinstance(v, dict):

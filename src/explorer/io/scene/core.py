@@ -11,7 +11,18 @@ from explorer import model
 from explorer.analysis.seeds import seed_points
 from explorer.io.scene import atlas as _atlas
 from explorer.io.scene import hashes as _hashes
-from explorer.io.scene.checks import SceneError, _checked, _choice, _distinct_reals, _fail, _got, _list, _short, _str
+from explorer.io.scene.checks import (
+    SceneError,
+    _checked,
+    _choice,
+    _distinct_reals,
+    _fail,
+    _got,
+    _list,
+    _short,
+    _str,
+    _swept,
+)
 from explorer.io.scene.schema import _NAME_RE, COMPUTE_QUANTITIES, MAX_NAME_LENGTH, SWEEP_PARAMETERS
 from explorer.io.scene.specs import FigureSpec, IntegrationSpec, LyapunovSpec, ManifoldSpec, SeedSpec
 from explorer.io.scene.writer import scene_toml
@@ -76,13 +87,8 @@ class Scene:
                 _fail(f"figure.own_scale[{j}]", f"must be a panel index in [0, {self.n_panels - 1}], got {idx}")
 
     def _check_sweep(self):
-        if self.sweep_parameter is None:
-            if len(self.sweep_values):
-                _fail("sweep.parameter", "is required when sweep values are given")
-            object.__setattr__(self, "sweep_values", ())
-            return
-        _choice("sweep.parameter", self.sweep_parameter, SWEEP_PARAMETERS)
-        object.__setattr__(self, "sweep_values", _distinct_reals("sweep.values", self.sweep_values))
+        if _swept(self, "sweep", SWEEP_PARAMETERS):
+            object.__setattr__(self, "sweep_values", _distinct_reals("sweep.values", self.sweep_values))
 
     def _panel_key(self, i) -> str:
         return "energy.h" if self.sweep_parameter is None else f"sweep.values[{i}]"
