@@ -399,7 +399,7 @@ def workspace_views(order, w, wf, wi, wb):
             L_status, L_last, L_stop)
 
 
-@njit
+@njit(nogil=True)
 def _run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
                 out_cross, out_count, out_status, out_final, out_info):
     """:func:`run_worker` on work arrays of its own: ``groups`` (a tuple of G zeros) groups of
@@ -526,7 +526,7 @@ def run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, o
     return 0
 
 
-@njit(parallel=True)
+@njit(parallel=True, nogil=True)
 def _run_lanes(nworkers, nlanes, groups, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
                out_cross, out_count, out_status, out_final, out_info):
     """nworkers workers (prange) of nlanes lanes each, fed from one shared queue of orbits."""

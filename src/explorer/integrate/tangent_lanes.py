@@ -107,7 +107,7 @@ def _start_lane(l, Z, orb, acc, L_t, L_steps, L_hpos, L_since, next_orbit, Y0, V
         return 1
 
 
-@njit
+@njit(nogil=True)
 def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop,
                 megno_level, early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w):
     """Integrate orbits taken from the shared counter ``next_orbit`` on up to ``nlanes`` lanes,
@@ -213,7 +213,7 @@ def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_s
     return 0
 
 
-@njit(parallel=True)
+@njit(parallel=True, nogil=True)
 def _run_lanes(nworkers, nlanes, groups, Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop,
                megno_level, early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w):
     next_orbit = np.zeros(1, np.int64)

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 from functools import partial
 
 import numpy as np
@@ -76,6 +77,12 @@ from explorer.model import ParameterError
 
 #: a double tap within this many pixels of the click before it is that click again
 SAME_SPOT_PX = 4.0
+#: after an orbit's first block (sent at once), blocks go to the browser at most this often (s):
+#: each message makes the browser redraw every crossing on screen (benchmarks/bench_serve.py)
+FLUSH_SECONDS = 0.25
+#: a click's new link (the URL's orbits) is written this long after the click (ms), off the path
+#: from the click to its first crossings on screen; clicks meanwhile make one update
+URL_DELAY_MS = 1000
 #: what a click does: the choices of the page's switch (Shift + click always picks)
 CLICK_MODES = ("start an orbit", "pick an orbit")
 #: labels of the fields
@@ -107,11 +114,15 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.export_dir = export_dir
         self.label = label
         self.starts: list[tuple] = []          # (orbit id, p1, p2, colour) of every start, in click order
+        self._unmarked: list[tuple] = []        # starts whose cross is not yet in start_source
         self._color = 0
         self._running: set = set()             # ids of the orbits still computing
         self._doc = None
         self._pending: list = []               # blocks from the worker not yet on the page
         self._pending_lock = threading.Lock()
+        self._flush_at: float | None = None     # when the scheduled flush of _pending runs (monotonic)
+        self._flushed_at = -math.inf            # when the last one ran
+        self._url_due = False                   # a deferred _push_url is scheduled
         self._inbox: list = []                 # notebook mode: what the workers handed in (poll)
         self.indicators: dict = {}             # orbit id -> (mean MEGNO, mLCE) over INDICATOR_TIME
         self.worker = Worker(self._on_block, self._on_error, self._on_indicators)
@@ -275,6 +286,19 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         q["colour"] = "megno" if self.colour_box.value else "orbit"
         return q
 
+    def _push_url_soon(self):
+        """:meth:`_push_url` URL_DELAY_MS from now (one update for the clicks meanwhile); at once
+        without a served document."""
+        if self._doc is None:
+            self._push_url()
+        elif not self._url_due:
+            self._url_due = True
+            self._doc.add_timeout_callback(self._push_url_due, URL_DELAY_MS)
+
+    def _push_url_due(self):
+        self._url_due = False
+        self._push_url()
+
     def _push_url(self):
         loc = pn.state.location
         if loc is not None:
@@ -318,10 +342,21 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
             self._color += 1
         run = self.worker.submit(p1, p2, self.settings)
         self.starts.append((run.ident, p1, p2, color))
-        self.start_source.stream({"orbit": [run.ident], "p1": [p1], "p2": [p2], "c": [color]})
+        self._unmarked.append((run.ident, p1, p2, color))
+        if self._doc is None:
+            self._mark_starts()
         self._running = self._running | {run.ident}
         self._update_status()
         return run
+
+    def _mark_starts(self):
+        """Stream the crosses of the starts not yet marked.  On a served page this waits for the
+        next flush, so that a click's cross and its first crossings reach the browser together
+        (one redraw of every crossing on screen instead of two)."""
+        live = {i for i, *_ in self.starts}
+        marks, self._unmarked = [m for m in self._unmarked if m[0] in live], []
+        if marks:
+            self.start_source.stream({k: [m[j] for m in marks] for j, k in enumerate(("orbit", "p1", "p2", "c"))})
 
     def click(self, p1: float, p2: float):
         """A click at (p1, p2): a new orbit, or a message saying why not."""
@@ -340,7 +375,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
             return None
         run = self._start(p1, p2)
         self.say("")
-        self._push_url()
+        self._push_url_soon()
         return run
 
     def _on_tap(self, event):
@@ -430,6 +465,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.crossings.data = _empty_crossings()
         self.shown.data = _empty_crossings()
         self.start_source.data = _empty_starts()
+        self._unmarked = []
         return old
 
     def clear(self) -> None:
@@ -481,17 +517,48 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
 
     # ------------------------------------------------------------ blocks from the worker
     def _on_block(self, ident, rows, done, status):
-        """In the worker thread: queue the block for the document's loop; blocks that come while
-        the loop is busy go to the page together (one message)."""
+        """In the worker thread: queue the block for the document's loop.  An orbit's first block
+        and its last go at once; others at most every FLUSH_SECONDS after the last flush (each
+        message redraws every crossing in the browser).  Blocks queued meanwhile go to the page
+        together (one message)."""
+        urgent = done == len(rows) or status != "running"
         with self._pending_lock:
             self._pending.append((ident, rows, done, status))
-            if len(self._pending) > 1:
-                return                   # a flush is scheduled already
-        self._post(self._flush)
+            now = time.monotonic()
+            at = now if urgent else max(now, self._flushed_at + FLUSH_SECONDS)
+            if self._flush_at is not None and self._flush_at <= at:
+                return                   # a flush is scheduled already, soon enough
+            self._flush_at = at
+        self._post(partial(self._flush_when, at))       # (add_timeout_callback is not thread-safe)
+
+    def _flush_when(self, at: float) -> None:
+        """On the document's loop: :meth:`_flush` at ``at`` (time.monotonic), now if it is past."""
+        wait = at - time.monotonic()
+        if self._doc is None or wait < 0.001:
+            self._flush()
+        else:
+            self._doc.add_timeout_callback(self._flush, int(1000 * wait) + 1)
 
     def _flush(self):
+        """The queued blocks onto the page; on a served page every change of it (the crossings, the
+        starts' crosses, the status line) goes to the browser as one message (Panel's
+        ``unlocked``: Bokeh alone sends one per change, and the browser redraws every crossing on
+        screen after each)."""
+        if self._doc is None:
+            self._flush_blocks()
+            return
+        from panel.io.document import unlocked
+
+        with unlocked():
+            self._flush_blocks()
+
+    def _flush_blocks(self):
         with self._pending_lock:
             blocks, self._pending = self._pending, []
+            self._flush_at, self._flushed_at = None, time.monotonic()
+        self._mark_starts()
+        if not blocks:
+            return                       # (flushed already by an earlier callback)
         live = {i: c for i, _a, _b, c in self.starts}
         blocks = [b for b in blocks if b[0] in live]          # undone or cancelled meanwhile: dropped
         full = [b for b in blocks if len(b[1])]
@@ -517,6 +584,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
                                                f"{' '.join(str(exc).split())}"))
 
     def _fail(self, ident, msg):
+        self._mark_starts()
         self._running = self._running - {ident}
         self.say(msg)
         self._update_status()
