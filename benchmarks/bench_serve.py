@@ -9,14 +9,23 @@ section and measures, in the page (polled every animation frame):
 - click -> 10,000 crossings of the orbit in it.
 
 Times include Playwright's round trip (a few ms).  Usage: python benchmarks/bench_serve.py [REPEATS]
+[--breakdown]
+
+``--breakdown`` also runs the server through ``benchmarks/_serve_trace.py`` and prints where each
+click's time goes (medians), from the click's pointerdown in the page: to the server's Tap
+callback, to the worker's block, to the block streamed into the document, to the rows in the
+page's data source (the browser's side: the message, and the redraws it is busy with).  Server and
+page times are both wall-clock times of this machine (a few ms apart at most).
 """
 from __future__ import annotations
 
+import os
 import statistics
 import subprocess
 import sys
 import tempfile
 import time
+from pathlib import Path
 
 CHROMIUM = "/usr/bin/chromium"
 ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
@@ -28,22 +37,39 @@ TO_SCREEN = """([x, y]) => { const v = Bokeh.index.all_views().find(v => v.model
   const r = v.el.getBoundingClientRect();
   return [r.left + v.frame.x_scale.compute(x), r.top + v.frame.y_scale.compute(y)]; }"""
 COUNT = "() => Bokeh.documents[0].get_model_by_name('crossings').data.p1.length"
+#: --breakdown: the page notes its pointerdowns and, every animation frame, when the rows arrive
+CLICKS = ("window.__clicks = []; document.addEventListener('pointerdown', "
+          "() => window.__clicks.push(performance.timeOrigin + performance.now()), true);")
+WATCH = """([before, n]) => { const m = Bokeh.documents[0].get_model_by_name('crossings'); window.__seen = [0, 0];
+  function f() { const c = m.data.p1.length, t = performance.timeOrigin + performance.now();
+    if (!__seen[0] && c > before) __seen[0] = t;
+    if (c >= before + n) { __seen[1] = t; return; }
+    requestAnimationFrame(f); }
+  requestAnimationFrame(f); }"""
 
 
-def main(repeats: int = 5) -> None:
+def main(repeats: int = 5, breakdown: bool = False) -> None:
     from playwright.sync_api import sync_playwright
 
     from explorer import model
 
     c1, c2, r1, r2 = model.allowed_ellipse(model.FIGURE4.with_(mu=0.03), 2.0)
-    proc = subprocess.Popen([sys.executable, "-m", "explorer", "serve", "--port", "0", "--mu", "0.03",
-                             "--crossings", str(N)], stdout=subprocess.PIPE, text=True)
+    command, env = [sys.executable, "-m", "explorer", "serve"], None
+    if breakdown:
+        trace = tempfile.mktemp(suffix=".log")
+        command, env = [sys.executable, str(Path(__file__).with_name("_serve_trace.py"))], dict(os.environ,
+                                                                                              SERVE_TRACE=trace)
+    proc = subprocess.Popen([*command, "--port", "0", "--mu", "0.03", "--crossings", str(N)], stdout=subprocess.PIPE,
+                            text=True, env=env)
+    clicks, seen = [], []
     url = proc.stdout.readline().strip()
     try:
         with sync_playwright() as p:
             ctx = p.chromium.launch_persistent_context(tempfile.mkdtemp(), executable_path=CHROMIUM, args=ARGS,
                                                        headless=True, viewport={"width": 1100, "height": 800})
             page = ctx.new_page()
+            if breakdown:
+                page.add_init_script(CLICKS)
             page.goto(url)
             page.wait_for_function(READY, timeout=120_000)
             page.mouse.click(*page.evaluate(TO_SCREEN, [c1, c2 + 0.5 * r2]))        # warm up
@@ -55,12 +81,18 @@ def main(repeats: int = 5) -> None:
                 u = -0.8 + 1.6 * i / max(repeats - 1, 1)
                 xy = page.evaluate(TO_SCREEN, [c1 + u * r1, c2 + 0.1 * r2])
                 before = page.evaluate(COUNT)
+                if breakdown:
+                    page.evaluate(WATCH, [before, N])
                 t0 = time.perf_counter()
                 page.mouse.click(*xy)
                 page.wait_for_function(f"() => ({COUNT})() > {before}", polling="raf", timeout=120_000)
                 first.append(time.perf_counter() - t0)
                 page.wait_for_function(f"() => ({COUNT})() >= {before + N}", polling="raf", timeout=600_000)
                 full.append(time.perf_counter() - t0)
+                if breakdown:
+                    page.wait_for_function("() => window.__seen[1] > 0", timeout=60_000)
+                    clicks.append(page.evaluate("() => window.__clicks[window.__clicks.length - 1]") / 1e3)
+                    seen.append([t / 1e3 for t in page.evaluate("() => window.__seen")])
                 page.wait_for_timeout(400)           # the next click is not a double tap
             ctx.close()
     finally:
@@ -71,7 +103,44 @@ def main(repeats: int = 5) -> None:
           f"(min {1e3 * min(first):.0f}, max {1e3 * max(first):.0f})")
     print(f"  click -> {N} crossings on screen:  median {statistics.median(full):.2f} s "
           f"(min {min(full):.2f}, max {max(full):.2f})")
+    if breakdown:
+        print_breakdown(trace, clicks, seen)
+
+
+def print_breakdown(trace: str, clicks: list, seen: list) -> None:
+    """Medians (ms) of the steps of each click, from the server's trace and the page's times."""
+    events = []
+    for line in Path(trace).read_text().splitlines():
+        t, *what = line.split()
+        events.append((float(t), what))
+    steps: dict = {}
+
+    def note(name, value):
+        steps.setdefault(name, []).append(1e3 * value)
+
+    for i, (down, (first, full)) in enumerate(zip(clicks, seen)):
+        end = clicks[i + 1] if i + 1 < len(clicks) else float("inf")
+        mine = [(t, w) for t, w in events if down <= t < end]
+        tap = next(t for t, w in mine if w[0] == "tap")
+        block = next(t for t, w in mine if w[0] == "block" and t >= tap)
+        flush = next(t for t, w in mine if w[0] == "flush" and t >= block)
+        last = next(t for t, w in mine if w[0] == "block" and w[3] != "running" and t >= tap)
+        last_flush = next(t for t, w in mine if w[0] == "flush" and t >= last)
+        note("first: pointerdown -> server's Tap callback", tap - down)
+        note("first: Tap callback -> first block handed in", block - tap)
+        note("first: -> streamed into the document", flush - block)
+        note("first: -> in the page's data source", first - flush)
+        note("first: total (in the page)", first - down)
+        note(f"{N}: pointerdown -> last block handed in", last - down)
+        note(f"{N}: -> streamed into the document", last_flush - last)
+        note(f"{N}: -> in the page's data source", full - last_flush)
+        note(f"{N}: total (in the page)", full - down)
+        note(f"{N}: messages with crossings", sum(1 for t, w in mine if w[0] == "flush" and tap <= t <= last_flush))
+    print(f"  breakdown (medians of {len(clicks)} clicks, ms; load average {os.getloadavg()[0]:.1f}):")
+    for name, values in steps.items():
+        print(f"    {name:<52} {statistics.median(values):7.1f}  ({min(values):.1f}-{max(values):.1f})")
 
 
 if __name__ == "__main__":
-    main(int(sys.argv[1]) if len(sys.argv) > 1 else 5)
+    numbers = [a for a in sys.argv[1:] if a != "--breakdown"]
+    main(int(numbers[0]) if numbers else 5, breakdown="--breakdown" in sys.argv[1:])

@@ -334,7 +334,9 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.figure.y_range.start, self.figure.y_range.end = c2 - m2, c2 + m2
         self.window = raster_mod.Window(c1 - m1, c1 + m1, c2 - m2, c2 + m2)
 
-    def _start(self, p1: float, p2: float, color: int | None = None):
+    def _start(self, p1: float, p2: float, color: int | None = None, mark_later: bool = False):
+        """Queue the orbit from (p1, p2) and mark its start (``mark_later``, a click on a served
+        page: with its first crossings, :meth:`_mark_starts`); None outside the region."""
         if not self.settings.admissible(p1, p2):
             return None
         if color is None:
@@ -343,7 +345,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         run = self.worker.submit(p1, p2, self.settings)
         self.starts.append((run.ident, p1, p2, color))
         self._unmarked.append((run.ident, p1, p2, color))
-        if self._doc is None:
+        if not mark_later or self._doc is None:
             self._mark_starts()
         self._running = self._running | {run.ident}
         self._update_status()
@@ -373,7 +375,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
             self.say(f"({p1:.4g}, {p2:.4g}) is outside the allowed region (M^2 < 0 there): click in the white "
                      "ellipse")
             return None
-        run = self._start(p1, p2)
+        run = self._start(p1, p2, mark_later=True)
         self.say("")
         self._push_url_soon()
         return run

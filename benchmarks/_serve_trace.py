@@ -1,0 +1,50 @@
+"""``explorer serve`` with the times (time.time) of its click path written to the file named by
+SERVE_TRACE, one event a line, for ``bench_serve.py --breakdown`` (not a benchmark itself):
+
+- ``tap``: the page's Tap callback starts (SectionPage._on_tap);
+- ``block ROWS DONE STATUS``: the worker hands a block in (SectionPage._on_block, worker thread);
+- ``flush N``: the page has streamed queued blocks into the document (N crossings now); the
+  message to the browser is written right after.
+
+Usage: python benchmarks/_serve_trace.py SERVE-ARGUMENTS (with SERVE_TRACE set).
+"""
+from __future__ import annotations
+
+import functools
+import os
+import sys
+import threading
+import time
+
+from explorer.app.cli import main
+from explorer.app.serve import page as page_mod
+
+_LOG = open(os.environ["SERVE_TRACE"], "a", buffering=1)   # noqa: SIM115 - open for the process
+_LOCK = threading.Lock()
+
+
+def _log(text: str) -> None:
+    with _LOCK:
+        _LOG.write(f"{time.time():.6f} {text}\n")
+
+
+def _traced(name, before=None, after=None):
+    f = getattr(page_mod.SectionPage, name)
+
+    @functools.wraps(f)
+    def g(self, *args, **kwargs):
+        if before:
+            _log(before(self, *args))
+        out = f(self, *args, **kwargs)
+        if after:
+            _log(after(self, *args))
+        return out
+    setattr(page_mod.SectionPage, name, g)
+
+
+_traced("_on_tap", before=lambda self, _e: "tap")
+_traced("_on_block", before=lambda self, _i, rows, done, status: f"block {len(rows)} {done} {status}")
+_traced("_flush_blocks", after=lambda self: f"flush {len(self.crossings.data['p1'])}")
+
+if __name__ == "__main__":
+    sys.exit(main(["serve", *sys.argv[1:]]))
