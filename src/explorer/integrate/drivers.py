@@ -299,7 +299,8 @@ def orbit_split(y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max_ste
     return count, status, n * dt, n
 
 
-@njit(parallel=True)
+# nogil: the batch drivers Python calls release the GIL (docs/architecture.md, Parallelism)
+@njit(parallel=True, nogil=True)
 def run_split_batch(Y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max_steps, carry, limits,
                     out_cross, out_count, out_status, out_final, out_info):
     """Batch twin of :func:`orbit_split`, parallel over orbits (prange)."""
@@ -424,7 +425,7 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
     return count, code, t, steps
 
 
-@njit(parallel=True)
+@njit(parallel=True, nogil=True)
 def run_dop853_batch(Y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, carry, limits,
                      out_cross, out_count, out_status, out_final, out_info):
     """Batch twin of :func:`orbit_dop853`, parallel over orbits (prange)."""

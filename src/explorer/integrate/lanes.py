@@ -399,6 +399,7 @@ def workspace_views(order, w, wf, wi, wb):
             L_status, L_last, L_stop)
 
 
+# nogil: the batch drivers Python calls release the GIL (docs/architecture.md, Parallelism)
 @njit(nogil=True)
 def _run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
                 out_cross, out_count, out_status, out_final, out_info):

@@ -194,7 +194,8 @@ def orbit_tangent_taylor_ext(y0, v0, w0, nvec, P, T, order, max_steps, early_sto
     return code, steps
 
 
-@njit(parallel=True)
+# nogil: the batch drivers Python calls release the GIL (docs/architecture.md, Parallelism)
+@njit(parallel=True, nogil=True)
 def run_tangent_taylor_ext_batch(Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop, megno_level,
                                  early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps,
                                  out_w):
@@ -266,7 +267,7 @@ def orbit_tangent_split(y0, v0, P, T, dt, flow_ids, fracs, max_steps, hist_t, hi
 
 
 # ====================================================================== batches
-@njit(parallel=True)
+@njit(parallel=True, nogil=True)
 def run_tangent_taylor_batch(Y0, V0, P, T, order, max_steps, hist_t, out_hist, out_res, out_status,
                              out_final, out_steps):
     for j in prange(Y0.shape[0]):
@@ -275,7 +276,7 @@ def run_tangent_taylor_batch(Y0, V0, P, T, order, max_steps, hist_t, out_hist, o
     return 0
 
 
-@njit(parallel=True)
+@njit(parallel=True, nogil=True)
 def run_tangent_dop853_batch(Y0, V0, P, T, rtol, atol, max_steps, hist_t, out_hist, out_res, out_status,
                              out_final, out_steps):
     for j in prange(Y0.shape[0]):
@@ -284,7 +285,7 @@ def run_tangent_dop853_batch(Y0, V0, P, T, rtol, atol, max_steps, hist_t, out_hi
     return 0
 
 
-@njit(parallel=True)
+@njit(parallel=True, nogil=True)
 def run_tangent_split_batch(Y0, V0, P, T, dt, flow_ids, fracs, max_steps, hist_t, out_hist, out_res,
                             out_status, out_final, out_steps):
     for j in prange(Y0.shape[0]):

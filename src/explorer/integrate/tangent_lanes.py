@@ -107,6 +107,7 @@ def _start_lane(l, Z, orb, acc, L_t, L_steps, L_hpos, L_since, next_orbit, Y0, V
         return 1
 
 
+# nogil: the batch drivers Python calls release the GIL (docs/architecture.md, Parallelism)
 @njit(nogil=True)
 def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop,
                 megno_level, early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w):
