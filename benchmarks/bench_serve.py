@@ -135,7 +135,8 @@ def print_breakdown(trace: str, clicks: list, seen: list) -> None:
         note(f"{N}: -> streamed into the document", last_flush - last)
         note(f"{N}: -> in the page's data source", full - last_flush)
         note(f"{N}: total (in the page)", full - down)
-        note(f"{N}: messages with crossings", sum(1 for t, w in mine if w[0] == "flush" and tap <= t <= last_flush))
+        steps.setdefault(f"{N}: messages with crossings (count)", []).append(
+            sum(1 for t, w in mine if w[0] == "flush" and tap <= t <= last_flush))
     print(f"  breakdown (medians of {len(clicks)} clicks, ms; load average {os.getloadavg()[0]:.1f}):")
     for name, values in steps.items():
         print(f"    {name:<52} {statistics.median(values):7.1f}  ({min(values):.1f}-{max(values):.1f})")

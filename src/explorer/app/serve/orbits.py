@@ -13,9 +13,9 @@ A :class:`Worker` owns one thread per session and serves its orbits newest first
 gets its first block before older orbits continue), round robin after that.  ``cancel`` stops
 every orbit of an older generation (a parameter change, clear) at its next block boundary;
 ``remove`` stops one (undo).  Each block is handed to ``on_block(orbit_id, rows, done,
-status)`` in the worker thread; the page moves it onto its document's event loop.  After an
-orbit's first block, its mean MEGNO and finite-time mLCE over INDICATOR_TIME go to
-``on_indicators(orbit_id, megno, mlce)``.  No web library here.
+status)`` in the worker thread; the page moves it onto its document's event loop.  When an
+orbit is finished (or its blocks took INDICATOR_AFTER seconds), its mean MEGNO and finite-time
+mLCE over INDICATOR_TIME go to ``on_indicators(orbit_id, megno, mlce)``.  No web library here.
 """
 from __future__ import annotations
 
@@ -40,6 +40,9 @@ MIN_BLOCK = 16
 MAX_BLOCK = 20_000
 #: time over which the chaos indicators (mean MEGNO, finite-time mLCE) of an orbit are computed
 INDICATOR_TIME = 1000.0
+#: an orbit's indicators are computed when it is finished, or once its blocks took this long (s):
+#: not between its first blocks, where they would hold back its crossings (issue 22)
+INDICATOR_AFTER = 0.5
 #: mean MEGNO above this is called "chaotic-like" (quasi-periodic orbits: <Y> -> 2)
 CHAOTIC_MEGNO = 3.0
 #: one colour per orbit, in turn
@@ -216,8 +219,9 @@ class Worker:
                     continue
                 # handed out under the lock: cancel() cannot slip between the check and the hand-out
                 self._on_block(run.ident, rows, run.done, run.status)
-            if run.wants_indicators and self._on_indicators is not None:
-                # after the orbit's first block is out: its chaos indicators, once
+            if run.wants_indicators and (run.finished or run.wall >= INDICATOR_AFTER) and \
+                    self._on_indicators is not None:
+                # once the orbit is finished (or has run INDICATOR_AFTER): its chaos indicators, once
                 run.wants_indicators = False
                 try:
                     megno, mlce = orbit_indicators(run.settings, run.y0)

@@ -345,10 +345,10 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         run = self.worker.submit(p1, p2, self.settings)
         self.starts.append((run.ident, p1, p2, color))
         self._unmarked.append((run.ident, p1, p2, color))
+        self._running = self._running | {run.ident}
         if not mark_later or self._doc is None:
             self._mark_starts()
-        self._running = self._running | {run.ident}
-        self._update_status()
+            self._update_status()            # (else with the first crossings: one message)
         return run
 
     def _mark_starts(self):

@@ -130,10 +130,12 @@ class ReadoutMixin:
             return
         self.indicators[ident] = (megno, mlce)
         rows = np.flatnonzero(np.asarray(self.crossings.data["orbit"]) == ident)
-        if rows.size:      # the rows streamed before the indicator was known
-            self.crossings.patch({"megno": [(int(r), megno) for r in rows]})
+        if rows.size:      # the rows streamed before the indicator was known: one slice per run of them
+            runs = np.split(rows, np.flatnonzero(np.diff(rows) != 1) + 1)
+            patch = {"megno": [(slice(int(r[0]), int(r[-1]) + 1), [megno] * len(r)) for r in runs]}
+            self.crossings.patch(patch)
             if not self.dense:
-                self.shown.patch({"megno": [(int(r), megno) for r in rows]})
+                self.shown.patch(patch)
         self._update_status()
 
     def _colour_changed(self):
