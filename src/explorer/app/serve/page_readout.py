@@ -131,8 +131,9 @@ class ReadoutMixin:
         self.indicators[ident] = (megno, mlce)
         rows = np.flatnonzero(np.asarray(self.crossings.data["orbit"]) == ident)
         if rows.size:      # the rows streamed before the indicator was known: one slice per run of them
+            # (values as arrays: binary in the message, not a JSON list)
             runs = np.split(rows, np.flatnonzero(np.diff(rows) != 1) + 1)
-            patch = {"megno": [(slice(int(r[0]), int(r[-1]) + 1), [megno] * len(r)) for r in runs]}
+            patch = {"megno": [(slice(int(r[0]), int(r[-1]) + 1), np.full(len(r), megno)) for r in runs]}
             self.crossings.patch(patch)
             if not self.dense:
                 self.shown.patch(patch)
