@@ -46,6 +46,9 @@ DEFAULT_INDICATORS = table.DEFAULT_NAMES
 EARLY_SALI = 1e-8
 EARLY_MEGNO = 8.0
 EARLY_TIME = 100.0
+#: the methods that can stop early (their kind has a loop with early stopping,
+#: :attr:`explorer.integrate.methods.Kind.tangent_ext`)
+EARLY_STOP_METHODS = tuple(n for n, m in methods.REGISTRY.items() if m.loops.tangent_ext is not None)
 #: why an orbit stopped before T (``Indicators.early``)
 EARLY_NAMES = ("none", "sali", "megno")
 #: a generic start direction (no symmetry of the model), projected onto the shell
@@ -211,8 +214,9 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
         if not table.BY_NAME[w].supports(m.kind):
             kinds = " or ".join(repr(k) for k in table.BY_NAME[w].methods or ())
             raise ParameterError(f"indicator {w} needs method {kinds}; got method {method!r}")
-    if early_stop and m.kind != "taylor":
-        raise ParameterError(f"early_stop needs method 'taylor'; got method {method!r}")
+    if early_stop and m.loops.tangent_ext is None:
+        raise ParameterError(f"early_stop needs method {' or '.join(repr(n) for n in EARLY_STOP_METHODS)}; "
+                             f"got method {method!r}")
     V0 = deviation_vector(P, Y0) if v0 is None else np.atleast_2d(np.asarray(v0, float))
     V0 = np.ascontiguousarray(np.broadcast_to(V0, Y0.shape), dtype=np.float64)
     W0 = second_deviation_vector(P, Y0) if w0 is None else np.atleast_2d(np.asarray(w0, float))
@@ -243,11 +247,9 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
     try:
         prep = m.prepare(tol=tol, dt=dt)
         settings.update(prep.settings)
-        if m.kind == "taylor":
-            # the SIMD lanes, bit for bit tangent.orbit_tangent_taylor (its scalar reference)
-            from explorer.integrate import tangent_lanes
-
-            tangent_lanes.run_tangent_lanes_batch(
+        if m.loops.tangent_ext is not None:
+            # the loop of one or two deviation vectors with early stopping (Taylor: on SIMD lanes)
+            m.loops.loop("tangent_ext")(
                 Y0, V0, W0, nvec, P, T, prep.order, int(max_steps), early_stop,
                 float(early_sali) if nvec == 2 else 0.0, float(early_megno), float(early_time), hist_t, hist, res,
                 ext, status, final, steps, dev)
