@@ -81,6 +81,7 @@ import numpy as np
 from explorer import model
 from explorer.analysis.continuation import continuation_values, golden_section_max, secant_follower
 from explorer.analysis.section_map import DEFAULT_TOL, RETURN_TMAX, SectionMap, takes_section_map
+from explorer.integrate.methods import DEFAULT_TOL as SECTIONS_TOL
 from explorer.model import ParameterError, symmetry, validation
 
 __all__ = ["DEGENERATE_RESIDUE", "ISOLATION_TOL", "KIND_TOL", "MULTIPLE_SHOOTING_FROM", "PeriodicBranch",
@@ -565,7 +566,7 @@ def _grid_seeds(prm, h, K, grid, phi0, tol, tmax, threads):
     inside = model.section_M2(prm, U, V, h, phi0) > 0
     R = np.full(U.shape, np.inf)
     if inside.any():
-        c = section_crossings(prm, U[inside], V[inside], h, K, phi0=phi0, tol=max(tol, 1e-13), tmax=tmax * K,
+        c = section_crossings(prm, U[inside], V[inside], h, K, phi0=phi0, tol=max(tol, SECTIONS_TOL), tmax=tmax * K,
                               threads=threads)
         ok = c.count >= K
         r = np.full(ok.shape, np.inf)
