@@ -66,6 +66,7 @@ class Command:
     filled from ``fields`` when given, for text computed from a registry); ``example`` the
     arguments of the example printed at the end of ``--help`` after ``python -m explorer NAME``
     (it must parse: tests/app/test_cli.py); ``options`` the options in the order of ``--help``.
+    (``python -OO`` strips docstrings: the commands then parse as usual without help text.)
     """
 
     name: str
