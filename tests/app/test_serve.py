@@ -13,6 +13,7 @@ $EXPLORER_TEST_ARTEFACTS, else pytest's temporary directory) and its pixels chec
 """
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 import json
 import os
@@ -200,7 +201,7 @@ def test_a_click_pauses_the_running_orbit_and_resume_completes_it_bit_for_bit():
         assert len(_orbit_rows(page, first)) == held                               # and it stays there
         assert len(parse_starts(page.url_query()["orbits"])) == 2                  # both starts in the link
         assert page.resume() == 1 and page.worker.paused() == [] and "paused" not in page.status.text
-        _poll_until(page, lambda: len(_orbit_rows(page, first)) == s.crossings and not page.worker.busy())
+        _poll_until(page, lambda: first not in page._running and not page.worker.busy())
         for ident, (p1, p2) in ((first, a), (second, b)):        # as one uninterrupted run, bit for bit
             ref = sections.section_crossings(s.params, [p1], [p2], s.h, s.crossings, **s.section_kwargs())
             np.testing.assert_array_equal(_orbit_rows(page, ident), ref.orbit(0))
@@ -425,6 +426,8 @@ def test_clicked_orbits_in_the_page_equal_explorer_orbit_json(served, browser, t
     first = time.perf_counter() - t0
     for p in targets[1:]:
         _click(page, *p)
+    _wait(page, "() => Bokeh.documents[0].get_model_by_name('starts').data.orbit.length === 3")
+    page.get_by_role("button", name="Resume").click()           # (a click pauses the orbits still running)
     _wait_crossings(page, 3 * CROSSINGS)
     starts = page.evaluate(DATA, "starts")
     data = page.evaluate(DATA, "crossings")
@@ -632,6 +635,8 @@ def test_rapid_clicks_undo_clear_and_export_keep_the_page_and_the_server_consist
         x, y = page.evaluate(TO_SCREEN, [c1 + (-0.9 + 0.09 * i) * r1, c2 + 0.05 * r2])
         page.mouse.click(x, y)
         page.wait_for_timeout(50)
+    _wait(page, "() => Bokeh.documents[0].get_model_by_name('starts').data.orbit.length === 20")
+    page.get_by_role("button", name="Resume").click()           # each click paused the orbits still running
     _wait_crossings(page, 20 * CROSSINGS)
     starts = page.evaluate(DATA, "starts")
     assert len(starts["orbit"]) == 20 and len(set(starts["p1"])) == 20
@@ -661,6 +666,33 @@ def test_rapid_clicks_undo_clear_and_export_keep_the_page_and_the_server_consist
     _wait(page, "() => /[?&]orbits=(&|$)/.test(window.location.search)", timeout=60_000)  # the link too
     page.close()
     assert urllib.request.urlopen(served.url, timeout=10).status == 200
+
+
+@browser_needed
+def test_in_the_browser_a_click_elsewhere_pauses_the_running_orbit_and_resume_completes_it(served, browser):
+    n = 2 * PAUSE_CROSSINGS                                   # an orbit of a few seconds
+    page = _open(browser, served.url)
+    _set_field(page, "crossings", str(n))
+    _wait(page, f"() => window.location.search.includes('crossings={n}')", timeout=60_000)
+    c1, c2, r1, r2 = SERVED.region
+    _click(page, c1 + 0.3 * r1, c2)
+    _wait_crossings(page, 1)
+    _click(page, c1 - 0.5 * r1, c2 + 0.2 * r2)                # elsewhere: the first orbit pauses
+    _wait(page, f"() => ({TEXT})('status').includes('0 running, 1 paused')", timeout=120_000)
+    starts = page.evaluate(DATA, "starts")
+    orbit = np.array(page.evaluate(DATA, "crossings")["orbit"])
+    first, second = starts["orbit"]
+    assert 0 < np.sum(orbit == first) < n and np.sum(orbit == second) == n
+    page.get_by_role("button", name="Resume").click()
+    _wait_crossings(page, 2 * n, timeout=120_000)
+    assert "paused" not in page.evaluate(TEXT, "status")
+    data = page.evaluate(DATA, "crossings")
+    mine = np.array(data["orbit"]) == first
+    rows = np.column_stack([np.array(data[k])[mine] for k in ("t", "p1", "p2", "M", "dH")])
+    s = dataclasses.replace(SERVED, crossings=n)
+    ref = sections.section_crossings(s.params, [starts["p1"][0]], [starts["p2"][0]], s.h, n, **s.section_kwargs())
+    np.testing.assert_array_equal(rows, ref.orbit(0))          # paused and resumed: one uninterrupted run
+    page.close()
 
 
 # ---------------------------------------------------------------- `explorer explore`: serve, then the browser
@@ -1111,11 +1143,14 @@ def test_a_million_crossings_are_drawn_as_a_density_image_of_the_visible_window(
 @browser_needed
 def test_past_the_threshold_the_browser_shows_a_density_image_that_follows_the_zoom(served, browser):
     from explorer.app.serve import density
+    from explorer.app.serve.page import PAUSE_LABEL
 
     page = _open(browser, served.url)
     per_orbit = density.THRESHOLD // 2 + 5000
     _set_field(page, "crossings", str(per_orbit))
     _wait(page, f"() => window.location.search.includes('crossings={per_orbit}')", timeout=60_000)
+    page.evaluate(SET_BOX, [PAUSE_LABEL, False])                 # both orbits run together
+    _wait(page, "() => window.location.search.includes('pause=0')", timeout=60_000)
     c1, c2, r1, r2 = SERVED.region
     _click(page, c1 + 0.3 * r1, c2)
     _click(page, c1 - 0.6 * r1, c2 + 0.2 * r2)
