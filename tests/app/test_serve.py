@@ -1,13 +1,15 @@
 """`explorer serve`: the explorer in the browser (src/explorer/app/serve, docs/commands/serve.md).
 
 Without a browser: the page's values are validated, starts survive the URL exactly, the worker's
-blocks are those of one uninterrupted run and a cancelled orbit hands out nothing more, the
-exported scene reruns to the same crossings.
+blocks are those of one uninterrupted run and a cancelled orbit hands out nothing more, a click
+pauses the running orbit and Resume completes it as one uninterrupted run, the exported scene
+reruns to the same crossings.
 
 With a real browser (Debian's chromium driven by Playwright; skipped with the reason when either
 is missing): the served page is opened, three clicks on the section give orbits whose crossings in
 the page's data equal ``explorer orbit --json`` for the same starts, a change of mu redraws the
-region, a bad value shows a message and computes nothing, a link reopens the same view, a wrong
+region, a bad value shows a message and computes nothing, a click elsewhere pauses the running
+orbit and Resume completes it, a link reopens the same view, a wrong
 token gets no app, and Ctrl-C ends the server cleanly.  A screenshot is saved (in
 $EXPLORER_TEST_ARTEFACTS, else pytest's temporary directory) and its pixels checked.
 """

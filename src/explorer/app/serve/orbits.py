@@ -14,7 +14,7 @@ gets its first block before older orbits continue), round robin after that.  ``c
 every orbit of an older generation (a parameter change, clear) at its next block boundary;
 ``remove`` stops one (undo).  ``pause`` sets every running orbit aside at its next block boundary
 (a new click: the block in progress is still handed out, nothing after it), keeping its
-:class:`OrbitRun` (a few hundred bytes: the start, the settings and the StreamState, never its
+:class:`OrbitRun` (about 1.5 kB: the start, the settings and the StreamState, never its
 rows); ``resume`` queues them again, and each continues from its StreamState, so its rows are
 those of an uninterrupted run.  Each block is handed to ``on_block(orbit_id, rows, done,
 status)`` in the worker thread; the page moves it onto its document's event loop.  After an
