@@ -169,8 +169,7 @@ def test_the_registry_lists_every_command_module_once_with_its_page():
     for name in registry.COMMANDS:
         mod = registry.module(name)
         assert callable(mod.run) and registry.example(name).split()[3] == name
-        if hasattr(mod, "COMMAND"):   # declared as data (serve writes its add_parser itself)
-            assert mod.COMMAND.name == name and mod.COMMAND.help and mod.COMMAND.description
+        assert mod.COMMAND.name == name and mod.COMMAND.help and mod.COMMAND.description
         assert (docs / "commands" / f"{name}.md").is_file() and f"commands/{name}" in toctree, name
     sub = next(a for a in cli.build_parser()._actions if isinstance(a, __import__("argparse")._SubParsersAction))
     assert tuple(sub.choices) == registry.COMMANDS

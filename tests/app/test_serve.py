@@ -781,7 +781,7 @@ def test_explore_and_serve_share_one_definition_of_their_options():
         p = argparse.ArgumentParser()
         sub = p.add_subparsers()
         return {a.dest: (a.default, a.type, a.option_strings) for a in add(sub)._actions if a.dest != "help"}
-    serve, expl = options(command.add_parser), options(explore.COMMAND.add_parser)
+    serve, expl = options(command.COMMAND.add_parser), options(explore.COMMAND.add_parser)
     assert set(expl) - set(serve) == {"no_browser"}
     assert {k: v for k, v in expl.items() if k != "no_browser"} == serve
 

@@ -2,8 +2,7 @@
 
 Each module declares ``COMMAND`` (an :class:`explorer.app.commands.options.Command`: name,
 example, help, description, options) and ``run(args) -> int`` (see
-:mod:`explorer.app.commands`); ``serve`` still writes ``EXAMPLE`` and ``add_parser(sub)``
-itself (:mod:`explorer.app.serve.command`). This is the only list of commands
+:mod:`explorer.app.commands`). This is the only list of commands
 (:func:`explorer.app.cli.build_parser` and :func:`explorer.app.cli.main` read it).  A command's
 module imports only the standard library, the model and its option helpers at the top, so
 ``explorer --help`` stays fast; what it runs is imported inside ``run``.
@@ -11,8 +10,6 @@ module imports only the standard library, the model and its option helpers at th
 from __future__ import annotations
 
 import importlib
-
-from explorer.app.commands.options import with_example
 
 #: command name -> its module, in the order of ``explorer --help``
 MODULES = {
@@ -40,16 +37,12 @@ def module(name):
 
 def example(name) -> str:
     """The example line of command ``name`` (printed at the end of its ``--help``)."""
-    mod = module(name)
-    return mod.COMMAND.example_line if hasattr(mod, "COMMAND") else mod.EXAMPLE
+    return module(name).COMMAND.example_line
 
 
 def add_parser(name, sub):
     """Add command ``name`` to the subparsers ``sub``, its example at the end of its ``--help``."""
-    mod = module(name)
-    if hasattr(mod, "COMMAND"):
-        return mod.COMMAND.add_parser(sub)
-    return with_example(mod.add_parser(sub), mod.EXAMPLE)
+    return module(name).COMMAND.add_parser(sub)
 
 
 def examples() -> dict[str, str]:
