@@ -59,11 +59,8 @@ def main(argv=None):
     ap.add_argument("--write", action="store_true", help="record the tables in RESULTS.md (section LANEGROUPS)")
     args = ap.parse_args(argv)
     started, load0 = C.now(), C.loadavg()
-    lines = []
-
-    def emit(text=""):
-        print(text, flush=True)
-        lines.extend(str(text).split("\n"))
+    emit = C.Emitter()
+    lines = emit.lines
     from explorer._jit import set_num_threads
     set_num_threads(2)
     rows = workloads(args.quick)

@@ -165,12 +165,7 @@ def main(argv=None):
                      f"{', '.join(f'{k} {v:g}' for k, v in r['setting'].items())} | {C.fmt_e(r['max_dH'])} | "
                      f"{'-' if a is None else f'{a:.2f}'} | {C.fmt_e(r['final_casimir'])} | "
                      f"{'-' if ac is None else f'{ac:.2f}'} | {r['steps']:,} | {r['wall']:.1f} |")
-    print("\n".join(lines))
-    print(f"wrote {js} and {png}")
-    if not quick:
-        C.update_section(SECTION, lines)
-        print(f"updated {C.RESULTS_MD}")
-    return 0
+    return C.report(SECTION, lines, not quick, (js, png))
 
 
 def plot(results, path, T_end):
@@ -201,11 +196,7 @@ def plot(results, path, T_end):
             ax.set_xlabel("t")
             ax.grid(True, which="both", alpha=0.3)
             ax.legend(fontsize=7)
-    fig.suptitle(f"Energy and Casimir errors over T = {T_end:g} (benchmarks/bench_longtime.py)")
-    fig.tight_layout()
-    out = C.savefig(fig, path)
-    plt.close(fig)
-    return out
+    return C.savefig(fig, path, f"Energy and Casimir errors over T = {T_end:g} (benchmarks/bench_longtime.py)")
 
 
 if __name__ == "__main__":

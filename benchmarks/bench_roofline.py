@@ -319,11 +319,8 @@ def main(argv=None):
     ap.add_argument("--write", action="store_true", help="record the tables in RESULTS.md (section ROOFLINE)")
     args = ap.parse_args(argv)
     started, load0 = C.now(), C.loadavg()
-    lines = []
-
-    def emit(text=""):
-        print(text, flush=True)
-        lines.extend(str(text).split("\n"))
+    emit = C.Emitter()
+    lines = emit.lines
     from explorer.kernels.taylor_order import order_for_tolerance
 
     emit(f"# roofline on {C.machine_line(C.machine())}; load average at start {os.getloadavg()}")

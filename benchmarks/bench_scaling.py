@@ -183,12 +183,7 @@ def main(argv=None):
         lines.append(f"| {jobs} | {s['wall']:.2f} | {s['orbits']} | {s['crossings']} |")
     lines += ["", f"--jobs 2 / --jobs 1 speed-up: {analysis['sweep_speedup_jobs2']:.2f} (--jobs 1 already uses "
               f"{nthreads} numba threads over orbits; --jobs N runs N processes of one thread each)."]
-    print("\n".join(lines))
-    print(f"wrote {js} and {png}")
-    if not quick:
-        C.update_section(SECTION, lines)
-        print(f"updated {C.RESULTS_MD}")
-    return 0
+    return C.report(SECTION, lines, not quick, (js, png))
 
 
 def plot(out, analysis, path, nthreads):
@@ -227,11 +222,7 @@ def plot(out, analysis, path, nthreads):
     for ax in axes[:2]:
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=8)
-    fig.suptitle("Scaling (benchmarks/bench_scaling.py)")
-    fig.tight_layout()
-    res = C.savefig(fig, path)
-    plt.close(fig)
-    return res
+    return C.savefig(fig, path, "Scaling (benchmarks/bench_scaling.py)")
 
 
 if __name__ == "__main__":

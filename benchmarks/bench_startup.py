@@ -156,12 +156,7 @@ def main(argv=None):
     lines += ["", "| command | cold (s) | warm (s) |", "|---|---:|---:|"]
     for name, d in res["cli"].items():
         lines.append(f"| `{d['command']}` | {d['cold']:.2f} | {d['warm']:.2f} |")
-    print("\n".join(lines))
-    print(f"wrote {out}")
-    if not quick:
-        C.update_section(SECTION, lines)
-        print(f"updated {C.RESULTS_MD}")
-    return 0
+    return C.report(SECTION, lines, not quick, (out,))
 
 
 if __name__ == "__main__":

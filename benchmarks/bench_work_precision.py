@@ -216,12 +216,7 @@ def main(argv=None):
                results=results, figure=str(png.relative_to(C.ROOT)))
     js = C.write_json(stem.with_suffix(".json"), doc)
     lines = markdown(results, doc, N, K, seconds, started, load0, png)
-    print("\n".join(lines))
-    print(f"wrote {js} and {png}")
-    if not quick:
-        C.update_section(SECTION, lines)
-        print(f"updated {C.RESULTS_MD}")
-    return 0
+    return C.report(SECTION, lines, not quick, (js, png))
 
 
 def plot(results, path, N, K):
@@ -265,11 +260,8 @@ def plot(results, path, N, K):
                 handles.append(h_)
                 labels.append(l_)
     fig.legend(handles, labels, loc="lower center", ncol=min(4, len(labels)), fontsize=8)
-    fig.suptitle("Work-precision on the Figure-4 scene, h = 2 (benchmarks/bench_work_precision.py)")
-    fig.tight_layout(rect=(0, 0.07, 1, 1))
-    out = C.savefig(fig, path)
-    plt.close(fig)
-    return out
+    return C.savefig(fig, path, "Work-precision on the Figure-4 scene, h = 2 (benchmarks/bench_work_precision.py)",
+                     rect=(0, 0.07, 1, 1))
 
 
 #: an explorer row matches a comparator's accuracy when its median one-step error is at most

@@ -76,12 +76,19 @@ def test_saddles_and_manifolds_are_the_same_from_a_section_map():
     same(new_b.points, old_b.points)
 
 
-def test_indicators_from_section_coordinates_are_those_of_the_states(smap):
+def test_indicators_from_a_section_map_use_its_method_and_tolerance_unless_given(smap):
     pts = np.array([[-0.2, 0.1], [0.3, 0.0]])
+    states = model.section_state(PRM, pts[:, 0], pts[:, 1], H, PHI0)
     new = lyapunov.indicators(smap, pts, 20.0)
-    old = lyapunov.indicators(PRM, model.section_state(PRM, pts[:, 0], pts[:, 1], H, PHI0), 20.0)
+    old = lyapunov.indicators(PRM, states, 20.0, tol=smap.tol)
+    assert new.settings == old.settings and new.settings["tol"] == smap.tol
+    assert new.method == smap.method
     for name in lyapunov.DEFAULT_INDICATORS:
         same(getattr(new, name), getattr(old, name))
+    # a tolerance given explicitly is the indicators' own, as in the (params, states) form
+    own = lyapunov.indicators(smap, pts, 20.0, tol=1e-10)
+    same(own.megno, lyapunov.indicators(PRM, states, 20.0, tol=1e-10).megno)
+    assert own.settings["tol"] == 1e-10
     one = lyapunov.indicators(smap, (-0.2, 0.1), 20.0)
     same(one.megno, new.megno[:1])
     with pytest.raises(model.ParameterError, match=r"\(p1, p2\) pairs"):

@@ -152,7 +152,7 @@ def test_every_command_has_an_example():
 
 def test_the_registry_lists_every_command_module_once_with_its_page():
     """One module per command (app/commands/<name>.py, serve beside its web page): each is in the
-    registry, has its parser, its run and its example, a page docs/commands/<name>.md in the
+    registry, has its declaration (or parser), its run and its example, a page docs/commands/<name>.md in the
     toctree, and the parser lists the commands in the registry's order."""
     from pathlib import Path
 
@@ -168,7 +168,8 @@ def test_the_registry_lists_every_command_module_once_with_its_page():
     toctree = (docs / "index.md").read_text().split()
     for name in registry.COMMANDS:
         mod = registry.module(name)
-        assert callable(mod.add_parser) and callable(mod.run) and mod.EXAMPLE.split()[3] == name
+        assert callable(mod.run) and registry.example(name).split()[3] == name
+        assert mod.COMMAND.name == name and mod.COMMAND.help and mod.COMMAND.description
         assert (docs / "commands" / f"{name}.md").is_file() and f"commands/{name}" in toctree, name
     sub = next(a for a in cli.build_parser()._actions if isinstance(a, __import__("argparse")._SubParsersAction))
     assert tuple(sub.choices) == registry.COMMANDS

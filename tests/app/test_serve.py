@@ -1,18 +1,21 @@
 """`explorer serve`: the explorer in the browser (src/explorer/app/serve, docs/commands/serve.md).
 
 Without a browser: the page's values are validated, starts survive the URL exactly, the worker's
-blocks are those of one uninterrupted run and a cancelled orbit hands out nothing more, the
-exported scene reruns to the same crossings.
+blocks are those of one uninterrupted run and a cancelled orbit hands out nothing more, a click
+pauses the running orbit and Resume completes it as one uninterrupted run, the exported scene
+reruns to the same crossings.
 
 With a real browser (Debian's chromium driven by Playwright; skipped with the reason when either
 is missing): the served page is opened, three clicks on the section give orbits whose crossings in
 the page's data equal ``explorer orbit --json`` for the same starts, a change of mu redraws the
-region, a bad value shows a message and computes nothing, a link reopens the same view, a wrong
+region, a bad value shows a message and computes nothing, a click elsewhere pauses the running
+orbit and Resume completes it, a link reopens the same view, a wrong
 token gets no app, and Ctrl-C ends the server cleanly.  A screenshot is saved (in
 $EXPLORER_TEST_ARTEFACTS, else pytest's temporary directory) and its pixels checked.
 """
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 import json
 import os
@@ -160,6 +163,96 @@ def test_worker_blocks_are_one_uninterrupted_run_and_cancelled_orbits_hand_out_n
         w.stop()
     ref = sections.section_crossings(s.params, [-0.4], [0.2], s.h, s.crossings, **s.section_kwargs())
     np.testing.assert_array_equal(rows, ref.orbit(0))
+
+
+#: crossings per click of the pause tests: an orbit of about a second, so that a second click
+#: comes while the first still runs (the first block is ready in milliseconds)
+PAUSE_CROSSINGS = 30_000
+
+
+def _orbit_rows(page, ident) -> np.ndarray:
+    d = page.crossings.data
+    mine = np.asarray(d["orbit"]) == ident
+    return np.column_stack([np.asarray(d[k])[mine] for k in ("t", "p1", "p2", "M", "dH")])
+
+
+def _click_while_running(page, a, b):
+    """Click at a, then at b as soon as a's first crossings are on the page; returns both ids."""
+    first = page.click(*a).ident
+    _poll_until(page, lambda: len(_orbit_rows(page, first)) > 0)
+    return first, page.click(*b).ident
+
+
+def test_a_click_pauses_the_running_orbit_and_resume_completes_it_bit_for_bit():
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    from explorer.app.serve.page import SectionPage
+
+    s = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=PAUSE_CROSSINGS)
+    c1, c2, r1, r2 = s.region
+    a, b = (c1 + 0.3 * r1, c2), (c1 - 0.5 * r1, c2 + 0.2 * r2)
+    page = SectionPage(s)
+    try:
+        assert page.pause_box.value and page.url_query()["pause"] == "1"            # on by default
+        first, second = _click_while_running(page, a, b)
+        _poll_until(page, lambda: len(_orbit_rows(page, second)) == s.crossings and not page.worker.busy())
+        held = len(_orbit_rows(page, first))
+        assert 0 < held < s.crossings and page.worker.paused() == [first]          # paused mid-orbit
+        assert "1 running" not in page.status.text and "1 paused" in page.status.text
+        time.sleep(0.3)
+        page.poll()
+        assert len(_orbit_rows(page, first)) == held                               # and it stays there
+        assert len(parse_starts(page.url_query()["orbits"])) == 2                  # both starts in the link
+        assert page.resume() == 1 and page.worker.paused() == [] and "paused" not in page.status.text
+        _poll_until(page, lambda: first not in page._running and not page.worker.busy())
+        for ident, (p1, p2) in ((first, a), (second, b)):        # as one uninterrupted run, bit for bit
+            ref = sections.section_crossings(s.params, [p1], [p2], s.h, s.crossings, **s.section_kwargs())
+            np.testing.assert_array_equal(_orbit_rows(page, ident), ref.orbit(0))
+        assert page.resume() == 0                                                   # nothing left to resume
+
+        # a paused orbit is undone like any other
+        third, fourth = _click_while_running(page, a, b)
+        assert page.worker.paused() == [third]
+        page.undo()
+        page.undo()
+        assert page.worker.paused() == [] and not page.worker.busy() and len(page.starts) == 2
+        page.poll()
+        assert set(np.asarray(page.crossings.data["orbit"]).tolist()) == {first, second}
+        assert "paused" not in page.status.text
+
+        # Clear lets paused orbits go
+        _click_while_running(page, a, b)
+        page.clear()
+        assert page.worker.paused() == [] and page._paused == set() and "paused" not in page.status.text
+
+        # a new value restarts paused orbits with the other starts: all run, none paused
+        _click_while_running(page, a, b)
+        assert len(page.worker.paused()) == 1
+        page.inputs["crossings"].value = "300"
+        assert page.settings.crossings == 300 and page.worker.paused() == [] and len(page.starts) == 2
+        _poll_until(page, lambda: len(page.crossings.data["t"]) == 2 * 300 and not page.worker.busy())
+        assert "paused" not in page.status.text
+    finally:
+        page.close()
+
+
+def test_with_the_box_unticked_a_click_leaves_the_running_orbits_running():
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    from explorer.app.serve.page import SectionPage
+
+    s = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=PAUSE_CROSSINGS)
+    c1, c2, r1, r2 = s.region
+    a, b = (c1 + 0.3 * r1, c2), (c1 - 0.5 * r1, c2 + 0.2 * r2)
+    page = SectionPage(s, {"pause": "0"})                        # the box, off through the link
+    try:
+        assert not page.pause_box.value and page.url_query()["pause"] == "0"
+        first, second = _click_while_running(page, a, b)
+        assert page.worker.paused() == [] and "paused" not in page.status.text
+        _poll_until(page, lambda: len(page.crossings.data["t"]) == 2 * s.crossings and not page.worker.busy())
+        for ident, (p1, p2) in ((first, a), (second, b)):        # both complete, no Resume needed
+            ref = sections.section_crossings(s.params, [p1], [p2], s.h, s.crossings, **s.section_kwargs())
+            np.testing.assert_array_equal(_orbit_rows(page, ident), ref.orbit(0))
+    finally:
+        page.close()
 
 
 def test_the_exported_scene_reruns_the_sessions_orbits(tmp_path):
@@ -335,6 +428,8 @@ def test_clicked_orbits_in_the_page_equal_explorer_orbit_json(served, browser, t
     first = time.perf_counter() - t0
     for p in targets[1:]:
         _click(page, *p)
+    _wait(page, "() => Bokeh.documents[0].get_model_by_name('starts').data.orbit.length === 3")
+    page.get_by_role("button", name="Resume").click()           # (a click pauses the orbits still running)
     _wait_crossings(page, 3 * CROSSINGS)
     starts = page.evaluate(DATA, "starts")
     data = page.evaluate(DATA, "crossings")
@@ -542,6 +637,8 @@ def test_rapid_clicks_undo_clear_and_export_keep_the_page_and_the_server_consist
         x, y = page.evaluate(TO_SCREEN, [c1 + (-0.9 + 0.09 * i) * r1, c2 + 0.05 * r2])
         page.mouse.click(x, y)
         page.wait_for_timeout(50)
+    _wait(page, "() => Bokeh.documents[0].get_model_by_name('starts').data.orbit.length === 20")
+    page.get_by_role("button", name="Resume").click()           # each click paused the orbits still running
     _wait_crossings(page, 20 * CROSSINGS)
     starts = page.evaluate(DATA, "starts")
     assert len(starts["orbit"]) == 20 and len(set(starts["p1"])) == 20
@@ -571,6 +668,33 @@ def test_rapid_clicks_undo_clear_and_export_keep_the_page_and_the_server_consist
     _wait(page, "() => /[?&]orbits=(&|$)/.test(window.location.search)", timeout=60_000)  # the link too
     page.close()
     assert urllib.request.urlopen(served.url, timeout=10).status == 200
+
+
+@browser_needed
+def test_in_the_browser_a_click_elsewhere_pauses_the_running_orbit_and_resume_completes_it(served, browser):
+    n = 2 * PAUSE_CROSSINGS                                   # an orbit of a few seconds
+    page = _open(browser, served.url)
+    _set_field(page, "crossings", str(n))
+    _wait(page, f"() => window.location.search.includes('crossings={n}')", timeout=60_000)
+    c1, c2, r1, r2 = SERVED.region
+    _click(page, c1 + 0.3 * r1, c2)
+    _wait_crossings(page, 1)
+    _click(page, c1 - 0.5 * r1, c2 + 0.2 * r2)                # elsewhere: the first orbit pauses
+    _wait(page, f"() => ({TEXT})('status').includes('0 running, 1 paused')", timeout=120_000)
+    starts = page.evaluate(DATA, "starts")
+    orbit = np.array(page.evaluate(DATA, "crossings")["orbit"])
+    first, second = starts["orbit"]
+    assert 0 < np.sum(orbit == first) < n and np.sum(orbit == second) == n
+    page.get_by_role("button", name="Resume").click()
+    _wait_crossings(page, 2 * n, timeout=120_000)
+    assert "paused" not in page.evaluate(TEXT, "status")
+    data = page.evaluate(DATA, "crossings")
+    mine = np.array(data["orbit"]) == first
+    rows = np.column_stack([np.array(data[k])[mine] for k in ("t", "p1", "p2", "M", "dH")])
+    s = dataclasses.replace(SERVED, crossings=n)
+    ref = sections.section_crossings(s.params, [starts["p1"][0]], [starts["p2"][0]], s.h, n, **s.section_kwargs())
+    np.testing.assert_array_equal(rows, ref.orbit(0))          # paused and resumed: one uninterrupted run
+    page.close()
 
 
 # ---------------------------------------------------------------- `explorer explore`: serve, then the browser
@@ -657,7 +781,7 @@ def test_explore_and_serve_share_one_definition_of_their_options():
         p = argparse.ArgumentParser()
         sub = p.add_subparsers()
         return {a.dest: (a.default, a.type, a.option_strings) for a in add(sub)._actions if a.dest != "help"}
-    serve, expl = options(command.add_parser), options(explore.add_parser)
+    serve, expl = options(command.COMMAND.add_parser), options(explore.COMMAND.add_parser)
     assert set(expl) - set(serve) == {"no_browser"}
     assert {k: v for k, v in expl.items() if k != "no_browser"} == serve
 
@@ -714,6 +838,7 @@ def test_picking_an_orbits_crossing_shows_its_mlce_megno_and_rotation_number():
         starts = [(0.3, 0.1), (1.3, 0.05)]             # the second in the island of the elliptic point (1.58, 0)
         for p in starts:
             page.click(*p)
+        page.resume()                                  # (the second click paused the first if it still ran)
         _poll_until(page, lambda: len(page.crossings.data["t"]) == 2 * s.crossings)
         d = page.crossings.data
         second = np.asarray(d["orbit"]) == page.starts[1][0]
@@ -797,23 +922,27 @@ def test_a_thousand_clicks_leave_the_session_with_bounded_memory_and_threads(mon
     threads0 = threading.active_count()
     tracemalloc.start()
     try:
-        heap = []
+        heap, paused = [], 0
         for _round in range(CLICKS // ROUND):
             for _ in range(ROUND):
                 u, v = rng.uniform(-0.9, 0.9, 2)
                 assert page.click(c1 + u * r1 * np.sqrt(1 - v * v), c2 + v * r2 * 0.9) is not None
+            paused += len(page.worker.paused())                     # each click paused the orbits still running ...
+            page.resume()                                           # ... and Resume continues them
             _poll_until(page, lambda: len(page.crossings.data["t"]) == ROUND * CLICK_CROSSINGS
                         and len(page.indicators) == ROUND and not page.worker.busy())
             assert sorted(np.unique(page.crossings.data["orbit"])) == sorted(i for i, *_ in page.starts)
             page.clear()
             page.poll()
             assert len(page.crossings.data["t"]) == 0 and page.starts == [] and page.indicators == {}
-            assert page._pending == [] and page._inbox == [] and page.worker._runs == []
+            assert page._pending == [] and page._inbox == [] and page.worker._runs == page.worker._paused == []
             gc.collect()                                            # (Bokeh's models hold reference cycles)
             heap.append(tracemalloc.get_traced_memory()[0])
         assert threading.active_count() <= threads0                # no thread per click
+        assert paused > 0                                          # paused orbits were held, and let go
         growth = heap[-1] - heap[1]
-        print(f"heap after each round (kB): {[h // 1024 for h in heap]}; growth {growth / 1024:.0f} kB")
+        print(f"heap after each round (kB): {[h // 1024 for h in heap]}; growth {growth / 1024:.0f} kB; "
+              f"{paused} orbits paused in all")
         assert growth < HEAP_GROWTH_BOUND, heap
         page.close()                                               # the tab is gone: its threads end
         page.worker._thread.join(10)
@@ -919,6 +1048,7 @@ def test_the_view_exports_as_svg_with_one_group_per_orbit_and_as_png_in_the_orbi
     try:
         for u in (0.5, -0.3, 0.1):
             page.click(c1 + u * r1, c2 + 0.1 * r2)
+        page.resume()                                  # (each click paused the orbits still running)
         _poll_until(page, lambda: len(page.crossings.data["t"]) == 3 * s.crossings)
         svg = page.figure_bytes("svg")
         groups = _svg_orbits(svg)                                        # parses as XML
@@ -972,6 +1102,7 @@ def test_a_million_crossings_are_drawn_as_a_density_image_of_the_visible_window(
     try:
         for u in (-0.5, 0.5):
             page.click(c1 + u * r1, c2)
+        page.resume()                                  # (the second click paused the first if it still ran)
         _poll_until(page, lambda: not page.worker.busy() and len(page.crossings.data["t"]) == 2 * s.crossings)
         assert not page.dense and page.points.visible and page.density.data["image"] == []
         # 10^6 more crossings of the two orbits (points spread over the region), as the worker hands them in
@@ -1014,11 +1145,14 @@ def test_a_million_crossings_are_drawn_as_a_density_image_of_the_visible_window(
 @browser_needed
 def test_past_the_threshold_the_browser_shows_a_density_image_that_follows_the_zoom(served, browser):
     from explorer.app.serve import density
+    from explorer.app.serve.page import PAUSE_LABEL
 
     page = _open(browser, served.url)
     per_orbit = density.THRESHOLD // 2 + 5000
     _set_field(page, "crossings", str(per_orbit))
     _wait(page, f"() => window.location.search.includes('crossings={per_orbit}')", timeout=60_000)
+    page.evaluate(SET_BOX, [PAUSE_LABEL, False])                 # both orbits run together
+    _wait(page, "() => window.location.search.includes('pause=0')", timeout=60_000)
     c1, c2, r1, r2 = SERVED.region
     _click(page, c1 + 0.3 * r1, c2)
     _click(page, c1 - 0.6 * r1, c2 + 0.2 * r2)

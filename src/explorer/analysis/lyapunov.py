@@ -46,6 +46,9 @@ DEFAULT_INDICATORS = table.DEFAULT_NAMES
 EARLY_SALI = 1e-8
 EARLY_MEGNO = 8.0
 EARLY_TIME = 100.0
+#: the methods that can stop early (their kind has a loop with early stopping,
+#: :attr:`explorer.integrate.methods.Kind.tangent_ext`)
+EARLY_STOP_METHODS = tuple(n for n, m in methods.REGISTRY.items() if m.loops.tangent_ext is not None)
 #: why an orbit stopped before T (``Indicators.early``)
 EARLY_NAMES = ("none", "sali", "megno")
 #: a generic start direction (no symmetry of the model), projected onto the shell
@@ -136,7 +139,7 @@ class Indicators:
         return Status(int(self.status[i]))
 
 
-def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", tol: float = DEFAULT_TOL,
+def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str | None = None, tol: float | None = None,
                dt: float = DEFAULT_DT, history: int = 0, v0=None, max_steps: int = 10**9,
                threads: int | None = None, which=None, early_stop: bool = False,
                early_sali: float = EARLY_SALI, early_megno: float = EARLY_MEGNO,
@@ -150,9 +153,13 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
     System first, in section coordinates: ``indicators(smap, points, T, ...)`` with a
     :class:`~explorer.analysis.section_map.SectionMap` ``smap`` takes the start points
     ``points`` = (p1, p2) or an (N, 2) array on its section phi = ``smap.phi0`` at energy
-    ``smap.h`` (M > 0 from the energy, :func:`explorer.model.section_state`); the map gives the
-    system only: ``method``, ``tol`` and ``dt`` stay this function's (the map's own tolerance is
-    that of Newton's method).
+    ``smap.h`` (M > 0 from the energy, :func:`explorer.model.section_state`), integrated with
+    the map's method and tolerance (``smap.method``, ``smap.tol``) unless ``method=`` or
+    ``tol=`` is given: ``indicators(smap, points, T)`` is ``indicators(smap.params, states, T,
+    tol=smap.tol)``.  (Every method has its tangent loop, the map's Taylor method included, so
+    no fallback is needed.)  Unlike the analyses of the map (fixed points, ``section_crossings``
+    ...), which refuse a tolerance beside it, the indicators may take their own: they integrate
+    orbits for a time T, not the map itself.
 
     Parameters
     ----------
@@ -162,12 +169,16 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
         Initial states (p1, p2, M, sin phi, cos phi), or section points (p1, p2).
     T : float
         Integration time (> 0).
-    method : str
-        A method of :data:`explorer.integrate.methods.METHODS`; its tangent dynamics are the
+    method : str, optional
+        A method of :data:`explorer.integrate.methods.METHODS` (default ``taylor``, the
+        SectionMap's with a map); its tangent dynamics are the
         Taylor series of the variational equations (``taylor``), DOP853 on the 10-dimensional
         system (``dop853``) or the exact tangent maps of the sub-flows of R4 (``split*``).
-    tol, dt : float
-        Tolerance of the adaptive methods, step of the splitting methods.
+    tol : float, optional
+        Tolerance of the adaptive methods (default
+        :data:`~explorer.integrate.methods.DEFAULT_TOL`, ``smap.tol`` with a SectionMap).
+    dt : float
+        Step of the splitting methods.
     history : int
         Number of log-spaced times at which the indicators are also recorded.
     v0 : array, optional
@@ -194,11 +205,15 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
         docs/commands/lyapunov.md), FLI (Froeschlé, Lega & Gonczi
         1997), per orbit, with a status code each.
     """
-    if isinstance(params, SectionMap):   # section coordinates on the map's section
+    if isinstance(params, SectionMap):   # section coordinates on the map's section, its method and tol
         pts = np.atleast_2d(np.asarray(y0, dtype=np.float64))
         if pts.ndim != 2 or pts.shape[1] != 2:
             raise ParameterError(f"with a SectionMap the start points are (p1, p2) pairs (N, 2); got {pts.shape}")
+        method = params.method if method is None else method
+        tol = params.tol if tol is None else tol
         params, y0 = params.params, model.section_state(params.params, pts[:, 0], pts[:, 1], params.h, params.phi0)
+    method = "taylor" if method is None else method
+    tol = DEFAULT_TOL if tol is None else tol
     P = validation.packed_params(params)
     m = methods.get(method)
     T = validation.real("time", T, 0.0, lo_open=True)
@@ -211,8 +226,9 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
         if not table.BY_NAME[w].supports(m.kind):
             kinds = " or ".join(repr(k) for k in table.BY_NAME[w].methods or ())
             raise ParameterError(f"indicator {w} needs method {kinds}; got method {method!r}")
-    if early_stop and m.kind != "taylor":
-        raise ParameterError(f"early_stop needs method 'taylor'; got method {method!r}")
+    if early_stop and m.loops.tangent_ext is None:
+        raise ParameterError(f"early_stop needs method {' or '.join(repr(n) for n in EARLY_STOP_METHODS)}; "
+                             f"got method {method!r}")
     V0 = deviation_vector(P, Y0) if v0 is None else np.atleast_2d(np.asarray(v0, float))
     V0 = np.ascontiguousarray(np.broadcast_to(V0, Y0.shape), dtype=np.float64)
     W0 = second_deviation_vector(P, Y0) if w0 is None else np.atleast_2d(np.asarray(w0, float))
@@ -243,11 +259,9 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str = "taylor", t
     try:
         prep = m.prepare(tol=tol, dt=dt)
         settings.update(prep.settings)
-        if m.kind == "taylor":
-            # the SIMD lanes, bit for bit tangent.orbit_tangent_taylor (its scalar reference)
-            from explorer.integrate import tangent_lanes
-
-            tangent_lanes.run_tangent_lanes_batch(
+        if m.loops.tangent_ext is not None:
+            # the loop of one or two deviation vectors with early stopping (Taylor: on SIMD lanes)
+            m.loops.loop("tangent_ext")(
                 Y0, V0, W0, nvec, P, T, prep.order, int(max_steps), early_stop,
                 float(early_sali) if nvec == 2 else 0.0, float(early_megno), float(early_time), hist_t, hist, res,
                 ext, status, final, steps, dev)

@@ -81,6 +81,7 @@ import numpy as np
 from explorer import model
 from explorer.analysis.continuation import continuation_values, golden_section_max, secant_follower
 from explorer.analysis.section_map import DEFAULT_TOL, RETURN_TMAX, SectionMap, takes_section_map
+from explorer.integrate.methods import DEFAULT_TOL as SECTIONS_TOL
 from explorer.model import ParameterError, symmetry, validation
 
 __all__ = ["DEGENERATE_RESIDUE", "ISOLATION_TOL", "KIND_TOL", "MULTIPLE_SHOOTING_FROM", "PeriodicBranch",
@@ -89,6 +90,13 @@ __all__ = ["DEGENERATE_RESIDUE", "ISOLATION_TOL", "KIND_TOL", "MULTIPLE_SHOOTING
 
 #: Newton: converged when the step is below this (relative to max(1, |x|))
 NEWTON_TOL = 1e-12
+#: Newton: a start whose residual is below this (relative to max(1, |x|)) is already a solution
+#: (e.g. continued from an exact one): no step is taken
+SOLVED_RESIDUAL = 1e-15
+#: Newton: converged when the residual is below this, whatever the step
+CONVERGED_RESIDUAL = 1e-14
+#: Newton's line search: a damped step is taken when it lowers the residual or leaves it below this
+LINE_SEARCH_RESIDUAL = 1e-11
 NEWTON_MAX_ITER = 30
 #: residual max_i |P(x_i) - x_{i+1}| accepted at the end (near |trace| = 2 Newton is slow)
 ACCEPT_RESIDUAL = 1e-9
@@ -292,7 +300,7 @@ def _newton(smap, K, X0, max_iter=NEWTON_MAX_ITER, multiple=None):
     step = np.inf
     it = 0
     for it in range(1, max_iter + 1):
-        if res <= 1e-15 * max(1.0, float(np.max(np.abs(X)))):
+        if res <= SOLVED_RESIDUAL * max(1.0, float(np.max(np.abs(X)))):
             break   # already a solution (e.g. continued from an exact one): no step to take
         pts, imgs, jacs, _ = ev
         if multiple:
@@ -322,7 +330,7 @@ def _newton(smap, K, X0, max_iter=NEWTON_MAX_ITER, multiple=None):
             except ParameterError:
                 alpha *= 0.5
                 continue
-            if resn < res or resn < 1e-11:
+            if resn < res or resn < LINE_SEARCH_RESIDUAL:
                 break
             alpha *= 0.5
         else:
@@ -331,7 +339,7 @@ def _newton(smap, K, X0, max_iter=NEWTON_MAX_ITER, multiple=None):
             raise ParameterError(f"Newton's method stalled (residual {res:.3g})")
         X, ev, res = Xn, evn, resn
         step = alpha * float(np.max(np.abs(dx)))
-        if step < NEWTON_TOL * max(1.0, float(np.max(np.abs(X)))) or res < 1e-14:
+        if step < NEWTON_TOL * max(1.0, float(np.max(np.abs(X)))) or res < CONVERGED_RESIDUAL:
             break
     if not res < ACCEPT_RESIDUAL:
         raise ParameterError(f"Newton's method did not converge (residual {res:.3g}, last step {step:.3g})")
@@ -565,7 +573,7 @@ def _grid_seeds(prm, h, K, grid, phi0, tol, tmax, threads):
     inside = model.section_M2(prm, U, V, h, phi0) > 0
     R = np.full(U.shape, np.inf)
     if inside.any():
-        c = section_crossings(prm, U[inside], V[inside], h, K, phi0=phi0, tol=max(tol, 1e-13), tmax=tmax * K,
+        c = section_crossings(prm, U[inside], V[inside], h, K, phi0=phi0, tol=max(tol, SECTIONS_TOL), tmax=tmax * K,
                               threads=threads)
         ok = c.count >= K
         r = np.full(ok.shape, np.inf)

@@ -71,6 +71,10 @@ class SectionMap:
     A point with no return within ``tmax`` raises :class:`~explorer.model.ParameterError`.
     """
 
+    #: the integrator of the map (its Jacobian is the variational Taylor series); the analyses
+    #: given a map integrate with it (``section_crossings``, ``indicators``)
+    method = "taylor"
+
     def __init__(self, params, h, *, phi0=math.pi, tol=DEFAULT_TOL, tmax=RETURN_TMAX):
         self.params = params if isinstance(params, model.Params) else model.Params.from_array(params)
         self.P = self.params.as_array()

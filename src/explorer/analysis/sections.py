@@ -408,7 +408,7 @@ def _section_start(name, system, p1, p2, h, n_crossings, phi0, direction, kwargs
                                  f"SectionMap with the default tmax ({RETURN_TMAX:g}), got {system.tmax!r}")
         if n_crossings is None:
             raise ParameterError(f"{name}(smap, p1, p2, n_crossings): n_crossings is missing")
-        kwargs = dict(kwargs, tol=system.tol, method="taylor")
+        kwargs = dict(kwargs, tol=system.tol, method=system.method)
         params, h, phi0, direction = system.params, system.h, system.phi0, 1
     elif h is None or n_crossings is None:
         raise ParameterError(f"{name}(params, p1, p2, h, n_crossings): "

@@ -26,7 +26,7 @@ class UsageError(Exception):
 NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d|inf\b|nan\b)[\w.,+\-]*$")
 
 #: the example printed at the end of each command's --help (tests/app/test_cli.py parses each);
-#: each is written once, as ``EXAMPLE`` in the command's module
+#: each is written once, in the ``COMMAND`` of the command's module
 EXAMPLES = registry.examples()
 
 
@@ -59,8 +59,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"explorer {__version__}")
     sub = parser.add_subparsers(dest="command", parser_class=_Parser)
     for name in registry.COMMANDS:
-        cmd = registry.module(name)
-        cmd.add_parser(sub).epilog = f"example:\n  {cmd.EXAMPLE}"
+        registry.add_parser(name, sub)
     return parser
 
 

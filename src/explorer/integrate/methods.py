@@ -3,7 +3,10 @@
 :data:`REGISTRY` maps a method name (``taylor``, ``dop853``, ``split2`` ... ``split8_yoshida``)
 to a :class:`Method`. The user layer (:mod:`explorer.analysis.sections`,
 :mod:`explorer.analysis.lyapunov`, scenes, the CLI) validates a method's setting and runs it
-through this table only, so adding an integrator means adding its loops and one entry here.
+through this table only. What a method's ``kind`` selects (its setting, how it is prepared, its
+crossing and tangent loops) is one :class:`Kind` entry of :data:`KINDS`, so adding a
+composition is one entry of ``splitting.SCHEMES`` and adding a kind of integrator its loops, one
+entry of :data:`KINDS` and its method here.
 
 ================  ==============================================================  ===========
 kind              method                                                          setting
@@ -18,7 +21,9 @@ kind              method                                                        
 """
 from __future__ import annotations
 
+import importlib
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -66,10 +71,70 @@ class Prepared:
     fracs: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
+def _taylor(method: Method, tol: float) -> Prepared:
+    order = order_for_tolerance(tol)
+    return Prepared(method, {"tol": tol, "order": order}, tol=tol, order=order)
+
+
+def _dop853(method: Method, tol: float) -> Prepared:
+    return Prepared(method, {"rtol": tol, "atol": tol}, tol=tol)
+
+
+def _split(method: Method, dt: float) -> Prepared:
+    from explorer.model.equations import N_FLOWS
+
+    ids, fracs = splitting.flow_sequence(splitting.SCHEMES[method.name][0], N_FLOWS)
+    return Prepared(method, {"dt": dt, "order": method.order}, dt=dt,
+                    flow_ids=np.ascontiguousarray(ids, dtype=np.int64),
+                    fracs=np.ascontiguousarray(fracs, dtype=np.float64))
+
+
+@dataclass(frozen=True)
+class Kind:
+    """A kind of integrator: everything the user layer selects by a method's ``kind``.
+
+    ``setting`` is the accuracy knob (``tol`` or ``dt``), ``prepare(method, value)`` turns its
+    validated value into a :class:`Prepared`; ``crossings`` and ``tangent`` name the batch loops
+    (module, function), imported when first used so that a run loads only the compiled code of
+    the method it uses (start-up, benchmarks/bench_startup.py); ``args`` are the attributes of
+    the Prepared passed to both loops between their common leading arguments and ``max_steps``
+    (:func:`run_crossings`, :func:`run_tangent`); ``tangent_ext`` the loop of one or two
+    deviation vectors with early stopping (SALI, GALI_2, ``early_stop``), None if the kind has none.
+    """
+
+    name: str
+    setting: str
+    prepare: Callable[[Method, float], Prepared]
+    crossings: tuple[str, str]
+    tangent: tuple[str, str]
+    args: tuple[str, ...]
+    tangent_ext: tuple[str, str] | None = None
+
+    def loop(self, which: str):
+        """The compiled loop ``which`` (``crossings``, ``tangent`` or ``tangent_ext``)."""
+        module, name = getattr(self, which)
+        return getattr(importlib.import_module(module), name)
+
+
+#: every kind of integrator: a new kind is its loops and one entry here
+KINDS: dict[str, Kind] = {k.name: k for k in (
+    # the Taylor crossing loop on SIMD lanes (a lone orbit is one lane); its tangent loop of two
+    # vectors on lanes is bit for bit tangent.orbit_tangent_taylor (its scalar reference)
+    Kind("taylor", "tol", _taylor, ("explorer.integrate.lanes", "run_taylor_lanes_batch"),
+         ("explorer.integrate.tangent", "run_tangent_taylor_batch"), ("order",),
+         tangent_ext=("explorer.integrate.tangent_lanes", "run_tangent_lanes_batch")),
+    Kind("dop853", "tol", _dop853, ("explorer.integrate.drivers", "run_dop853_batch"),
+         ("explorer.integrate.tangent", "run_tangent_dop853_batch"), ("tol", "tol")),   # rtol = atol = tol
+    Kind("split", "dt", _split, ("explorer.integrate.drivers", "run_split_batch"),
+         ("explorer.integrate.tangent", "run_tangent_split_batch"), ("dt", "flow_ids", "fracs")),
+)}
+
+
 @dataclass(frozen=True)
 class Method:
-    """One integrator: ``kind`` is ``taylor``, ``dop853`` or ``split``; ``order`` the nominal order
-    (None: chosen from the tolerance); ``reference`` the paper it follows."""
+    """One integrator: ``kind`` names its :class:`Kind` in :data:`KINDS` (``taylor``, ``dop853``
+    or ``split``); ``order`` the nominal order (None: chosen from the tolerance); ``reference``
+    the paper it follows."""
 
     name: str
     kind: str
@@ -77,36 +142,35 @@ class Method:
     reference: str
 
     @property
+    def loops(self) -> Kind:
+        """Its kind's entry of :data:`KINDS`."""
+        return KINDS[self.kind]
+
+    @property
     def adaptive(self) -> bool:
-        return self.kind != "split"
+        return self.setting == "tol"
 
     @property
     def setting(self) -> str:
         """The accuracy knob: ``tol`` (adaptive methods) or ``dt`` (fixed step)."""
-        return "tol" if self.adaptive else "dt"
+        return self.loops.setting
 
     def prepare(self, *, tol=None, dt=None) -> Prepared:
         """Validate the method's setting (``tol`` in [MIN_TOL, MAX_TOL] or ``dt`` > 0; the other
         one is not used, but when given it is validated too: a NaN step is a mistake even for a
         method that ignores it) and derive what its drivers need."""
-        if self.kind in ("taylor", "dop853") and dt is not None:
-            validation.real("dt", dt, 0.0, lo_open=True)
-        if self.kind not in ("taylor", "dop853") and tol is not None:
-            validation.real("tol", tol, MIN_TOL, MAX_TOL)
-        if self.kind == "taylor":
-            tol = validation.real("tol", tol, MIN_TOL, MAX_TOL)
-            order = order_for_tolerance(tol)
-            return Prepared(self, {"tol": tol, "order": order}, tol=tol, order=order)
-        if self.kind == "dop853":
-            tol = validation.real("tol", tol, MIN_TOL, MAX_TOL)
-            return Prepared(self, {"rtol": tol, "atol": tol}, tol=tol)
-        dt = validation.real("dt", dt, 0.0, lo_open=True)
-        from explorer.model.equations import N_FLOWS
+        values = {"tol": tol, "dt": dt}
+        for name, value in values.items():
+            if name != self.setting and value is not None:
+                _validate(name, value)
+        return self.loops.prepare(self, _validate(self.setting, values[self.setting]))
 
-        ids, fracs = splitting.flow_sequence(splitting.SCHEMES[self.name][0], N_FLOWS)
-        return Prepared(self, {"dt": dt, "order": self.order}, dt=dt,
-                        flow_ids=np.ascontiguousarray(ids, dtype=np.int64),
-                        fracs=np.ascontiguousarray(fracs, dtype=np.float64))
+
+def _validate(name: str, value) -> float:
+    """A tolerance in [MIN_TOL, MAX_TOL] or a step > 0 (ParameterError naming it otherwise)."""
+    if name == "tol":
+        return validation.real("tol", value, MIN_TOL, MAX_TOL)
+    return validation.real("dt", value, 0.0, lo_open=True)
 
 
 def unresolved(prep: Prepared, P, Y) -> np.ndarray:
@@ -120,29 +184,16 @@ def unresolved(prep: Prepared, P, Y) -> np.ndarray:
         return ~(prep.dt * model.max_rate(P, Y) <= MAX_STEP_PHASE)
 
 
+def _args(prep: Prepared) -> tuple:
+    return tuple(getattr(prep, a) for a in prep.method.loops.args)
+
+
 def run_crossings(prep: Prepared, Y0, P, cphi, sphi, direction, tmax, max_steps, carry, limits, data, count,
                   status, final, info):
     """Crossings of the section for every orbit of ``Y0`` (arrays filled in place), a block
     continued from ``carry`` up to ``limits`` (:mod:`explorer.integrate.drivers`)."""
-    # each method's loops are imported when first used: a run loads only the compiled code of
-    # the method it uses (start-up, benchmarks/bench_startup.py)
-    kind = prep.method.kind
-    if kind == "taylor":
-        from explorer.integrate import lanes
-
-        # the Taylor crossing loop on SIMD lanes (a lone orbit is one lane)
-        lanes.run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, prep.order, max_steps, carry, limits,
-                                     data, count, status, final, info)
-    elif kind == "dop853":
-        from explorer.integrate import drivers
-
-        drivers.run_dop853_batch(Y0, P, cphi, sphi, direction, tmax, prep.tol, prep.tol, max_steps, carry,
-                                 limits, data, count, status, final, info)
-    else:
-        from explorer.integrate import drivers
-
-        drivers.run_split_batch(Y0, P, cphi, sphi, direction, tmax, prep.dt, prep.flow_ids, prep.fracs,
-                                max_steps, carry, limits, data, count, status, final, info)
+    prep.method.loops.loop("crossings")(Y0, P, cphi, sphi, direction, tmax, *_args(prep), max_steps, carry,
+                                        limits, data, count, status, final, info)
 
 
 def start_carry(Y0, P, cphi, sphi, carry):
@@ -155,18 +206,8 @@ def start_carry(Y0, P, cphi, sphi, carry):
 
 def run_tangent(prep: Prepared, Y0, V0, P, T, max_steps, hist_t, hist, res, status, final, steps):
     """Chaos indicators (one deviation vector) for every orbit of ``Y0`` over [0, T]."""
-    from explorer.integrate import tangent as tangent_drivers
-
-    kind = prep.method.kind
-    if kind == "taylor":
-        tangent_drivers.run_tangent_taylor_batch(Y0, V0, P, T, prep.order, max_steps, hist_t, hist, res,
-                                                 status, final, steps)
-    elif kind == "dop853":
-        tangent_drivers.run_tangent_dop853_batch(Y0, V0, P, T, prep.tol, prep.tol, max_steps, hist_t, hist,
-                                                 res, status, final, steps)
-    else:
-        tangent_drivers.run_tangent_split_batch(Y0, V0, P, T, prep.dt, prep.flow_ids, prep.fracs, max_steps,
-                                                hist_t, hist, res, status, final, steps)
+    prep.method.loops.loop("tangent")(Y0, V0, P, T, *_args(prep), max_steps, hist_t, hist, res, status,
+                                      final, steps)
 
 
 REGISTRY: dict[str, Method] = {

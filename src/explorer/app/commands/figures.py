@@ -1,32 +1,24 @@
-"""``explorer figures``: every figure of the seed paper (explorer.app.paper, its registry).
+"""regenerate every figure of the paper (PNG and PDF)
 
-Its page: docs/commands/figures.md.
+Regenerate the figures of the seed paper into --out-dir (PNG and PDF): {figures}. Sweeps reuse
+results/<scene>.h5 when complete with the same scene hash; --quick uses reduced settings where a
+store is incomplete.
 """
 from __future__ import annotations
 
+from explorer.app.commands.options import Command, opt
+from explorer.app.paper.registry import FIGURES
 from explorer.model import validation
 
-#: printed at the end of ``explorer figures --help`` (tests/app/test_cli.py parses it)
-EXAMPLE = "python -m explorer figures --only figure4 --quick"
-
-
-def add_parser(sub):
-    """Add ``figures`` to the command line's subparsers."""
-    from explorer.app.paper.registry import FIGURES
-
-    fg = sub.add_parser("figures", help="regenerate every figure of the paper (PNG and PDF)",
-                        description="Regenerate the figures of the seed paper into --out-dir (PNG and PDF): "
-                        f"{', '.join(FIGURES)}. Sweeps reuse results/<scene>.h5 when complete with "
-                        "the same scene hash; --quick uses reduced settings where a store is incomplete.")
-    fg.add_argument("--only", default=None, metavar="NAME", help="only this figure (one name)")
-    fg.add_argument("--out-dir", default="figures", help="where the figures go [%(default)s]")
-    fg.add_argument("--results-dir", default="results", help="HDF5 stores of the sweeps [%(default)s]")
-    fg.add_argument("--quick", action="store_true",
-                    help="reduced settings (sweeps whose store is incomplete, continuation step, curves)")
-    fg.add_argument("--benchmark", default=None,
-                    help="W4 results JSON for work_precision [benchmarks/results_w4.json]")
-    fg.add_argument("--quiet", action="store_true", help="no progress bar")
-    return fg
+COMMAND = Command("figures", __doc__, "--only figure4 --quick", (
+    opt("--only", default=None, metavar="NAME", help="only this figure (one name)"),
+    opt("--out-dir", default="figures", help="where the figures go [%(default)s]"),
+    opt("--results-dir", default="results", help="HDF5 stores of the sweeps [%(default)s]"),
+    opt("--quick", action="store_true", help="reduced settings (sweeps whose store is incomplete, continuation step, "
+        "curves)"),
+    opt("--benchmark", default=None, help="W4 results JSON for work_precision [benchmarks/results_w4.json]"),
+    opt("--quiet", action="store_true", help="no progress bar"),
+), fields={"figures": ", ".join(FIGURES)})
 
 
 def run(args) -> int:

@@ -1,28 +1,23 @@
-"""``explorer fixedpoint``: a fixed point of the section map, stability, continuation (explorer.analysis.fixedpoints).
+"""a fixed point of the section map, its stability, continuation
 
-Its page: docs/commands/fixedpoint.md.
+Newton's method on the section map phi = pi (Jacobian from the tangent dynamics); prints the
+point, the monodromy eigenvalues, trace and stability. With --continue PARAM START STOP STEP,
+follows the branch and reports where |trace| = 2.
 """
 from __future__ import annotations
 
 import json
 import math
+from functools import partial
 
 from explorer import model
 from explorer.app.commands import options
+from explorer.app.commands.options import Command, opt
 
-#: printed at the end of ``explorer fixedpoint --help`` (tests/app/test_cli.py parses it)
-EXAMPLE = "python -m explorer fixedpoint --guess -0.4,0 --mu 0.5 --continue mu 0.5 3.5 0.1"
-
-
-def add_parser(sub):
-    """Add ``fixedpoint`` to the command line's subparsers."""
-    fx = sub.add_parser("fixedpoint", help="a fixed point of the section map, its stability, continuation",
-                        description="Newton's method on the section map phi = pi (Jacobian from the tangent "
-                        "dynamics); prints the point, the monodromy eigenvalues, trace and stability. With "
-                        "--continue PARAM START STOP STEP, follows the branch and reports where |trace| = 2.")
-    fx.add_argument("--guess", default="0,0", help="start of Newton's method: p1,p2, e.g. --guess -0.4,0 [0,0]")
-    options.add_newton_args(fx, "continue the fixed point in PARAM (a model parameter or h)")
-    return fx
+COMMAND = Command("fixedpoint", __doc__, "--guess -0.4,0 --mu 0.5 --continue mu 0.5 3.5 0.1", (
+    opt("--guess", default="0,0", help="start of Newton's method: p1,p2, e.g. --guess -0.4,0 [0,0]"),
+    partial(options.add_newton_args, continue_help="continue the fixed point in PARAM (a model parameter or h)"),
+))
 
 
 def run(args) -> int:

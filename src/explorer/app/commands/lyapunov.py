@@ -1,40 +1,32 @@
-"""``explorer lyapunov``: chaos indicators of one orbit (explorer.analysis.lyapunov).
+"""chaos indicators of one orbit: {titles}
 
-Its page: docs/commands/lyapunov.md.
+Start on the section phi = pi at (p1, p2) with M from the energy h and integrate the orbit with
+one deviation vector (tangent to the energy shell) for a time T; print the finite-time maximal
+Lyapunov exponent, the mean MEGNO <Y> and the FLI, with their convergence history; with the
+Taylor method also SALI and GALI2 from a second deviation vector (null for other methods).
 """
 from __future__ import annotations
 
 import json
 import math
 import sys
+from functools import partial
 
 import numpy as np
 
 from explorer import model
 from explorer.app.commands import options
+from explorer.app.commands.options import Command, opt
+from explorer.integrate.methods import DEFAULT_DT, DEFAULT_TOL
+from explorer.kernels.indicator_table import INDICATORS
 
-#: printed at the end of ``explorer lyapunov --help`` (tests/app/test_cli.py parses it)
-EXAMPLE = "python -m explorer lyapunov --p1 -0.2 --p2 0.1 --mu 1 -T 1000 --json"
-
-
-def add_parser(sub):
-    """Add ``lyapunov`` to the command line's subparsers."""
-    from explorer.analysis.sections import DEFAULT_DT, DEFAULT_TOL
-    from explorer.kernels.indicator_table import INDICATORS
-
-    titles = ", ".join(i.title for i in INDICATORS)
-    ly = sub.add_parser("lyapunov", help=f"chaos indicators of one orbit: {titles}",
-                        description="Start on the section phi = pi at (p1, p2) with M from the energy h and "
-                        "integrate the orbit with one deviation vector (tangent to the energy shell) for a "
-                        "time T; print the finite-time maximal Lyapunov exponent, the mean MEGNO <Y> and the "
-                        "FLI, with their convergence history; with the Taylor method also SALI and GALI2 "
-                        "from a second deviation vector (null for other methods).")
-    options.add_start_args(ly)
-    ly.add_argument("--time", "-T", type=float, default=1000.0, help="integration time T [%(default)s]")
-    options.add_method_args(ly, DEFAULT_TOL, DEFAULT_DT)
-    ly.add_argument("--history", type=int, default=12, help="history points (log-spaced in time) [%(default)s]")
-    options.add_model_args(ly, model.FIGURE4, json="print JSON")
-    return ly
+COMMAND = Command("lyapunov", __doc__, "--p1 -0.2 --p2 0.1 --mu 1 -T 1000 --json", (
+    options.add_start_args,
+    opt("--time", "-T", type=float, default=1000.0, help="integration time T [%(default)s]"),
+    partial(options.add_method_args, tol=DEFAULT_TOL, dt=DEFAULT_DT),
+    opt("--history", type=int, default=12, help="history points (log-spaced in time) [%(default)s]"),
+    partial(options.add_model_args, json="print JSON"),
+), fields={"titles": ", ".join(i.title for i in INDICATORS)})
 
 
 def run(args) -> int:

@@ -1,39 +1,30 @@
-"""``explorer manifold``: invariant manifolds, homoclinic points, lobes (explorer.analysis.manifolds, transport).
+"""stable and unstable manifolds of a hyperbolic orbit, homoclinic points, lobes and flux
 
-Its page: docs/commands/manifold.md.
+Finds the periodic orbit of period --period from --guess (default: the central hyperbolic fixed
+point), grows both branches of W^u and W^s at its point --index to --arclength (adaptive
+insertion), locates their intersections (Newton, 1e-10) and the turnstile's lobes (Green's
+theorem); docs/manifolds.md.
 """
 from __future__ import annotations
 
 import json
+from functools import partial
 
 from explorer import model
 from explorer.app.commands import options
-from explorer.integrate.methods import MAP_TOL
+from explorer.app.commands.options import Command, opt
 from explorer.model import validation
 
-#: printed at the end of ``explorer manifold --help`` (tests/app/test_cli.py parses it)
-EXAMPLE = "python -m explorer manifold --mu 0.03 --arclength 6 --json"
-
-
-def add_parser(sub):
-    """Add ``manifold`` to the command line's subparsers."""
-    mf = sub.add_parser("manifold", help="stable and unstable manifolds of a hyperbolic orbit, homoclinic "
-                        "points, lobes and flux",
-                        description="Finds the periodic orbit of period --period from --guess (default: the "
-                        "central hyperbolic fixed point), grows both branches of W^u and W^s at its point "
-                        "--index to --arclength (adaptive insertion), locates their intersections (Newton, "
-                        "1e-10) and the turnstile's lobes (Green's theorem); docs/manifolds.md.")
-    mf.add_argument("--guess", default="0,0", help="start of Newton's method for the orbit: p1,p2 [0,0]")
-    mf.add_argument("--period", type=int, default=1, help="period K of the orbit [%(default)s]")
-    mf.add_argument("--index", type=int, default=0, help="which point of the orbit [%(default)s]")
-    mf.add_argument("--arclength", type=float, default=6.0, help="length of each branch [%(default)s]")
-    mf.add_argument("--max-points", type=int, default=20000, help="points per branch at most [%(default)s]")
-    mf.add_argument("--max-time", type=float, default=None, help="seconds per branch at most [none]")
-    mf.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
-    mf.add_argument("--tol", type=float, default=MAP_TOL, help="Taylor tolerance of the section map [%(default)s]")
-    options.add_model_args(mf, model.FIGURE4,
-                           json="print JSON {orbit, branches, homoclinic_points, heteroclinic_points, lobes, flux}")
-    return mf
+COMMAND = Command("manifold", __doc__, "--mu 0.03 --arclength 6 --json", (
+    opt("--guess", default="0,0", help="start of Newton's method for the orbit: p1,p2 [0,0]"),
+    opt("--period", type=int, default=1, help="period K of the orbit [%(default)s]"),
+    opt("--index", type=int, default=0, help="which point of the orbit [%(default)s]"),
+    opt("--arclength", type=float, default=6.0, help="length of each branch [%(default)s]"),
+    opt("--max-points", type=int, default=20000, help="points per branch at most [%(default)s]"),
+    opt("--max-time", type=float, default=None, help="seconds per branch at most [none]"),
+    partial(options.add_map_args, tol_help="Taylor tolerance of the section map [%(default)s]",
+            json="print JSON {orbit, branches, homoclinic_points, heteroclinic_points, lobes, flux}"),
+))
 
 
 def run(args) -> int:

@@ -1,35 +1,29 @@
-"""``explorer melnikov``: the Melnikov integral ur23 and the check of ur24 (explorer.analysis.melnikov).
+"""Melnikov integral ur23 along the homoclinic orbits R7; check of ur24
 
-Its page: docs/commands/melnikov.md.
+Quadrature of J(g0) = int {F0, H1} dt along both homoclinic orbits R7 of solution I at
+c = sqrt(2 b h) (g0: phi at the orbit's centre), fitted as J = A sin g0 + B cos g0 per unit mu,
+compared with ur24 as printed and with the corrected closed form. --splitting adds the splitting
+measured on the section phi = pi against mu J(g0). Needs lam > 0, a1 > a2, chi = zeta = 0,
+lam b/a1 < c < lam b/a2.
 """
 from __future__ import annotations
 
 import json
 import math
+from functools import partial
 
 from explorer import model
 from explorer.app.commands import options
+from explorer.app.commands.options import Command, opt
 
-#: printed at the end of ``explorer melnikov --help`` (tests/app/test_cli.py parses it)
-EXAMPLE = "python -m explorer melnikov --splitting --mus 1e-4,1e-3 --json"
-
-
-def add_parser(sub):
-    """Add ``melnikov`` to the command line's subparsers."""
-    mk = sub.add_parser("melnikov", help="Melnikov integral ur23 along the homoclinic orbits R7; check of ur24",
-                        description="Quadrature of J(g0) = int {F0, H1} dt along both homoclinic orbits R7 of "
-                        "solution I at c = sqrt(2 b h) (g0: phi at the orbit's centre), fitted as "
-                        "J = A sin g0 + B cos g0 per unit mu, compared with ur24 as printed and with the "
-                        "corrected closed form. --splitting adds the splitting measured on the section "
-                        "phi = pi against mu J(g0). Needs lam > 0, a1 > a2, chi = zeta = 0, "
-                        "lam b/a1 < c < lam b/a2.")
-    mk.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level h = c^2/(2b) [%(default)s]")
-    mk.add_argument("--splitting", action="store_true",
-                    help="also measure the splitting on the section for mu in --mus at phase --g0")
-    mk.add_argument("--mus", default="1e-4,3e-4,1e-3,3e-3", help="mu values of --splitting [%(default)s]")
-    mk.add_argument("--g0", type=float, default=0.5 * math.pi, help="phase g0 of --splitting [pi/2]")
-    options.add_model_args(mk, model.FIGURE4, json="print JSON")
-    return mk
+COMMAND = Command("melnikov", __doc__, "--splitting --mus 1e-4,1e-3 --json", (
+    partial(options.add_energy_arg, help="energy level h = c^2/(2b) [%(default)s]"),
+    opt("--splitting", action="store_true",
+        help="also measure the splitting on the section for mu in --mus at phase --g0"),
+    opt("--mus", default="1e-4,3e-4,1e-3,3e-3", help="mu values of --splitting [%(default)s]"),
+    opt("--g0", type=float, default=0.5 * math.pi, help="phase g0 of --splitting [pi/2]"),
+    partial(options.add_model_args, json="print JSON"),
+))
 
 
 def run(args) -> int:

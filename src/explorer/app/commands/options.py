@@ -1,14 +1,23 @@
-"""What several commands share: their option groups and the readers of those options.
+"""What several commands share: how a command is declared, its option groups and their readers.
+
+A command module declares its command line as data, ``COMMAND = Command(name, example=...,
+help=..., description=..., options=(...))``: each option is an :func:`opt` (the arguments of
+``add_argument``) or a group adder (a callable taking the parser: :func:`one_of`, or a
+``functools.partial`` of the ``add_*_args`` below); :meth:`Command.add_parser` is the one
+builder of every subparser.
 
 One copy each: the model parameters of every command come from :func:`add_model_args` (the
 help line of each parameter is written once, in :data:`PARAM_HELP`), a start point on the
 section from :func:`add_start_args`, the integration method from :func:`add_method_args`, the
-Newton commands' options from :func:`add_newton_args`; :func:`pair`, :func:`continuation`,
+Newton commands' options from :func:`add_newton_args`, the energy and Taylor tolerance of the
+section-map commands from :func:`add_map_args`; :func:`pair`, :func:`continuation`,
 :func:`section_map_args` and :func:`print_bifurcations` read and report them.
 """
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
 
 from explorer import model
 from explorer.integrate.methods import MAP_TOL
@@ -21,6 +30,80 @@ PARAM_HELP = {p.name: p.help for p in model.PARAMETERS}
 MODEL_GROUP = "model parameters (docs/model.md; defaults: Figure 4, R9)"
 #: the title of that group for the commands that start from a scene (explore, serve)
 SCENE_MODEL_GROUP = "model parameters (override the scene's; defaults: Figure 4, R9, mu = 0)"
+
+
+@dataclass(frozen=True)
+class Option:
+    """One option or positional argument: the arguments of ``parser.add_argument``."""
+
+    flags: tuple[str, ...]
+    kwargs: dict = field(default_factory=dict)
+
+    def __call__(self, parser) -> None:
+        parser.add_argument(*self.flags, **self.kwargs)
+
+
+def opt(*flags: str, **kwargs) -> Option:
+    """``opt("--n", type=int, default=21, help=...)``: an option as ``add_argument`` takes it."""
+    return Option(flags, kwargs)
+
+
+def one_of(*choices: Option, required: bool = False) -> Callable:
+    """The options ``choices`` as a mutually exclusive group (``required``: one must be given)."""
+    def add(parser) -> None:
+        group = parser.add_mutually_exclusive_group(required=required)
+        for choice in choices:
+            choice(group)
+    return add
+
+
+@dataclass(frozen=True)
+class Command:
+    """A command's line, declared once in its module as ``COMMAND``.
+
+    ``doc`` is the module's docstring: its first paragraph is the one-line help of
+    ``explorer --help``, the rest the description of ``explorer NAME --help`` (``{key}`` fields
+    filled from ``fields`` when given, for text computed from a registry); ``example`` the
+    arguments of the example printed at the end of ``--help`` after ``python -m explorer NAME``
+    (it must parse: tests/app/test_cli.py); ``options`` the options in the order of ``--help``.
+    (``python -OO`` strips docstrings: the commands then parse as usual without help text.)
+    """
+
+    name: str
+    doc: str | None
+    example: str
+    options: Sequence[Callable] = ()
+    fields: dict = field(default_factory=dict)
+
+    def _paragraphs(self) -> list[str]:
+        text = (self.doc or "").format(**self.fields) if self.fields else (self.doc or "")
+        return [" ".join(p.split()) for p in text.strip().split("\n\n")]
+
+    @property
+    def help(self) -> str:
+        return self._paragraphs()[0]
+
+    @property
+    def description(self) -> str:
+        return " ".join(self._paragraphs()[1:])
+
+    @property
+    def example_line(self) -> str:
+        return f"python -m explorer {self.name} {self.example}"
+
+    def add_parser(self, sub):
+        """Add the command to the command line's subparsers ``sub`` and return its parser."""
+        parser = sub.add_parser(self.name, help=self.help, description=self.description)
+        for add in self.options:
+            add(parser)
+        return with_example(parser, self.example_line)
+
+
+def with_example(parser, example: str):
+    """``parser`` with ``example`` printed at the end of its ``--help`` (cli's formatter keeps
+    the lines after ``example:`` as they are)."""
+    parser.epilog = f"example:\n  {example}"
+    return parser
 
 
 def add_model_args(p, defaults: model.Params | None = model.FIGURE4, json: str | None = None, *,
@@ -46,7 +129,7 @@ def add_start_args(p):
     """--p1 --p2 --h: a start point on the section and the energy level (M from R9)."""
     p.add_argument("--p1", type=float, required=True, help="start point p1 on the section")
     p.add_argument("--p2", type=float, required=True, help="start point p2 on the section")
-    p.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
+    add_energy_arg(p)
 
 
 def add_method_args(p, tol, dt):
@@ -63,10 +146,23 @@ def params_from(args) -> model.Params:
     return model.Params(**{n: getattr(args, n) for n in model.PARAM_NAMES})
 
 
+def add_energy_arg(p, help="energy level [%(default)s]"):
+    """--h: the energy level (default that of Figure 4)."""
+    p.add_argument("--h", type=float, default=model.FIGURE4_H, help=help)
+
+
+def add_map_args(p, tol_help="Taylor tolerance [%(default)s]", json="print JSON"):
+    """The options of a command on the section map (rotation, manifold): --h, the Taylor --tol
+    of the map (:data:`~explorer.integrate.methods.MAP_TOL`), the model with --json."""
+    add_energy_arg(p)
+    p.add_argument("--tol", type=float, default=MAP_TOL, help=tol_help)
+    add_model_args(p, model.FIGURE4, json=json)
+
+
 def add_newton_args(p, continue_help):
     """The options of the Newton commands (fixedpoint, periodic): energy, continuation, the Taylor
     tolerance of the section map, the model."""
-    p.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
+    add_energy_arg(p)
     p.add_argument("--continue", dest="cont", nargs=4, metavar=("PARAM", "START", "STOP", "STEP"), help=continue_help)
     p.add_argument("--tol", type=float, default=MAP_TOL, help="Taylor tolerance [%(default)s]")
     add_model_args(p, model.FIGURE4, json="print JSON")

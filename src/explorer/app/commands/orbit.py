@@ -1,44 +1,36 @@
-"""``explorer orbit``: the crossings of one orbit with the section (explorer.app.orbit prints or stores them).
+"""crossings of one orbit with the section phi = phi0
 
-Its page: docs/commands/orbit.md.
+Start on the section phi = phi0 at (p1, p2) with M from the energy h (docs/model.md R9) and
+print the next K crossings as CSV (k,t,p1,p2,M,dH) or JSON.
 """
 from __future__ import annotations
 
 import json
 import math
 import sys
+from functools import partial
 
 from explorer import model
 from explorer.app.commands import options
+from explorer.app.commands.options import Command, opt
+from explorer.integrate.methods import DEFAULT_DT, DEFAULT_TOL
 from explorer.model import validation
 
-#: printed at the end of ``explorer orbit --help`` (tests/app/test_cli.py parses it)
-EXAMPLE = "python -m explorer orbit --p1 -0.4 --p2 0 --mu 0.5 --crossings 20 --json"
-
-
-def add_parser(sub):
-    """Add ``orbit`` to the command line's subparsers."""
-    from explorer.analysis.sections import DEFAULT_DT, DEFAULT_TOL
-
-    o = sub.add_parser("orbit", help="crossings of one orbit with the section phi = phi0",
-                       description="Start on the section phi = phi0 at (p1, p2) with M from the energy h "
-                       "(docs/model.md R9) and print the next K crossings as CSV (k,t,p1,p2,M,dH) or JSON.")
-    options.add_start_args(o)
-    o.add_argument("--crossings", "-K", type=int, default=10, help="number of crossings K [%(default)s]")
-    options.add_method_args(o, DEFAULT_TOL, DEFAULT_DT)
-    o.add_argument("--tmax", type=float, default=None, help="time budget [100 K]")
-    o.add_argument("--max-steps", type=int, default=10**9, help="step budget [%(default)s]")
-    o.add_argument("--phi0", type=float, default=math.pi, help="section angle phi0 [pi]")
-    o.add_argument("--direction", default="+", help="crossing direction: + (dphi/dt > 0), - or both [+]")
-    o.add_argument("--out", default=None,
-                   help="stream the crossings into this HDF5 store, block by block (a rerun after a kill "
-                   "continues where it stopped) instead of printing them")
-    o.add_argument("--block", type=int, default=None,
-                   help="crossings computed (and printed or stored) per block; memory is O(block) "
-                   "[100000]")
-    o.add_argument("--force", action="store_true", help="with --out: overwrite a store of another run")
-    options.add_model_args(o, model.FIGURE4, json="print JSON instead of CSV (with --out: a summary)")
-    return o
+COMMAND = Command("orbit", __doc__, "--p1 -0.4 --p2 0 --mu 0.5 --crossings 20 --json", (
+    options.add_start_args,
+    opt("--crossings", "-K", type=int, default=10, help="number of crossings K [%(default)s]"),
+    partial(options.add_method_args, tol=DEFAULT_TOL, dt=DEFAULT_DT),
+    opt("--tmax", type=float, default=None, help="time budget [100 K]"),
+    opt("--max-steps", type=int, default=10**9, help="step budget [%(default)s]"),
+    opt("--phi0", type=float, default=math.pi, help="section angle phi0 [pi]"),
+    opt("--direction", default="+", help="crossing direction: + (dphi/dt > 0), - or both [+]"),
+    opt("--out", default=None, help="stream the crossings into this HDF5 store, block by block (a rerun after a "
+        "kill continues where it stopped) instead of printing them"),
+    opt("--block", type=int, default=None, help="crossings computed (and printed or stored) per block; memory is "
+        "O(block) [100000]"),
+    opt("--force", action="store_true", help="with --out: overwrite a store of another run"),
+    partial(options.add_model_args, json="print JSON instead of CSV (with --out: a summary)"),
+))
 
 
 def _direction(text: str) -> int:

@@ -1,36 +1,30 @@
-"""``explorer periodic``: periodic orbits of the section map, stability, continuation (explorer.analysis.periodic).
+"""periodic orbits of period K of the section map, stability, continuation
 
-Its page: docs/commands/periodic.md.
+Newton's method on P^K(x) = x for the section map phi = pi (Jacobian from the tangent dynamics;
+multiple shooting for K > 4), from --guess or by a --search covering the allowed region and the
+symmetry lines; prints each orbit once with its minimal period, points, trace, Greene's residue,
+eigenvalues, stability and symmetry. With --continue PARAM START STOP STEP (and --guess), follows
+the orbit and reports where |trace| crosses or touches 2.
 """
 from __future__ import annotations
 
 import json
+from functools import partial
 
 from explorer import model
 from explorer.app.commands import options
+from explorer.app.commands.options import Command, one_of, opt
 from explorer.model import validation
 
-#: printed at the end of ``explorer periodic --help`` (tests/app/test_cli.py parses it)
-EXAMPLE = "python -m explorer periodic --period 3 --search --grid 10 --mu 0.03 --json"
-
-
-def add_parser(sub):
-    """Add ``periodic`` to the command line's subparsers."""
-    pd = sub.add_parser("periodic", help="periodic orbits of period K of the section map, stability, continuation",
-                        description="Newton's method on P^K(x) = x for the section map phi = pi (Jacobian from "
-                        "the tangent dynamics; multiple shooting for K > 4), from --guess or by a --search "
-                        "covering the allowed region and the symmetry lines; prints each orbit once with its "
-                        "minimal period, points, trace, Greene's residue, eigenvalues, stability and symmetry. "
-                        "With --continue PARAM START STOP STEP (and --guess), follows the orbit and reports "
-                        "where |trace| crosses or touches 2.")
-    pd.add_argument("--period", "-K", type=int, required=True, help="period K >= 1")
-    pmode = pd.add_mutually_exclusive_group(required=True)
-    pmode.add_argument("--guess", default=None, help="start of Newton's method: p1,p2, e.g. --guess -0.4,0")
-    pmode.add_argument("--search", action="store_true", help="search the allowed region for all orbits")
-    pd.add_argument("--grid", type=int, default=12, help="grid points per axis of --search [%(default)s]")
-    pd.add_argument("--max-guesses", type=int, default=60, help="Newton starts of --search [%(default)s]")
-    options.add_newton_args(pd, "continue the orbit through --guess in PARAM (a model parameter or h)")
-    return pd
+COMMAND = Command("periodic", __doc__, "--period 3 --search --grid 10 --mu 0.03 --json", (
+    opt("--period", "-K", type=int, required=True, help="period K >= 1"),
+    one_of(opt("--guess", default=None, help="start of Newton's method: p1,p2, e.g. --guess -0.4,0"),
+           opt("--search", action="store_true", help="search the allowed region for all orbits"), required=True),
+    opt("--grid", type=int, default=12, help="grid points per axis of --search [%(default)s]"),
+    opt("--max-guesses", type=int, default=60, help="Newton starts of --search [%(default)s]"),
+    partial(options.add_newton_args, continue_help="continue the orbit through --guess in PARAM (a model parameter "
+            "or h)"),
+))
 
 
 def _orbit_line(o) -> str:

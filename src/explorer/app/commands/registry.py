@@ -1,10 +1,11 @@
 """The registry of the commands: name -> module, in the order ``explorer --help`` lists them.
 
-Each module has ``EXAMPLE``, ``add_parser(sub)`` and ``run(args) -> int`` (see
-:mod:`explorer.app.commands`); this is the only list of commands (:func:`explorer.app.cli.build_parser`
-and :func:`explorer.app.cli.main` read it).  A command's module imports only the standard
-library, the model and its option helpers at the top, so ``explorer --help`` stays fast; what
-it runs is imported inside ``run``.
+Each module declares ``COMMAND`` (an :class:`explorer.app.commands.options.Command`: name,
+example, help, description, options) and ``run(args) -> int`` (see
+:mod:`explorer.app.commands`). This is the only list of commands
+(:func:`explorer.app.cli.build_parser` and :func:`explorer.app.cli.main` read it).  A command's
+module imports only the standard library, the model and its option helpers at the top, so
+``explorer --help`` stays fast; what it runs is imported inside ``run``.
 """
 from __future__ import annotations
 
@@ -34,6 +35,16 @@ def module(name):
     return importlib.import_module(MODULES[name])
 
 
+def example(name) -> str:
+    """The example line of command ``name`` (printed at the end of its ``--help``)."""
+    return module(name).COMMAND.example_line
+
+
+def add_parser(name, sub):
+    """Add command ``name`` to the subparsers ``sub``, its example at the end of its ``--help``."""
+    return module(name).COMMAND.add_parser(sub)
+
+
 def examples() -> dict[str, str]:
     """name -> the example line of every command, in order."""
-    return {name: module(name).EXAMPLE for name in COMMANDS}
+    return {name: example(name) for name in COMMANDS}

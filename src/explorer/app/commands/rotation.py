@@ -1,6 +1,9 @@
-"""``explorer rotation``: rotation numbers along a segment of the section (explorer.analysis.rotation).
+"""rotation numbers along a segment of the section (weighted Birkhoff)
 
-Its page: docs/commands/rotation.md.
+Rotation numbers (turns per return) of orbits started at --n points from --from to --to around
+the elliptic fixed point (Newton from --center, default --from), by weighted Birkhoff averages
+over N and 2N returns; 'converged' false flags a chaotic orbit. Plateaus at m/K mark island
+chains of period K.
 """
 from __future__ import annotations
 
@@ -8,29 +11,17 @@ import json
 
 from explorer import model
 from explorer.app.commands import options
-from explorer.integrate.methods import MAP_TOL
+from explorer.app.commands.options import Command, opt
 from explorer.model import validation
 
-#: printed at the end of ``explorer rotation --help`` (tests/app/test_cli.py parses it)
-EXAMPLE = "python -m explorer rotation --from 1.5822,0 --to 1.0,0 --n 30 --mu 0.03"
-
-
-def add_parser(sub):
-    """Add ``rotation`` to the command line's subparsers."""
-    rt = sub.add_parser("rotation", help="rotation numbers along a segment of the section (weighted Birkhoff)",
-                        description="Rotation numbers (turns per return) of orbits started at --n points from "
-                        "--from to --to around the elliptic fixed point (Newton from --center, default "
-                        "--from), by weighted Birkhoff averages over N and 2N returns; 'converged' false "
-                        "flags a chaotic orbit. Plateaus at m/K mark island chains of period K.")
-    rt.add_argument("--from", dest="start", required=True, help="start of the segment p1,p2")
-    rt.add_argument("--to", dest="stop", required=True, help="end of the segment p1,p2")
-    rt.add_argument("--n", type=int, default=21, help="points on the segment [%(default)s]")
-    rt.add_argument("--iterates", type=int, default=2000, help="N: each orbit has 2N returns [%(default)s]")
-    rt.add_argument("--center", default=None, help="guess of the elliptic fixed point p1,p2 [--from]")
-    rt.add_argument("--h", type=float, default=model.FIGURE4_H, help="energy level [%(default)s]")
-    rt.add_argument("--tol", type=float, default=MAP_TOL, help="Taylor tolerance [%(default)s]")
-    options.add_model_args(rt, model.FIGURE4, json="print JSON")
-    return rt
+COMMAND = Command("rotation", __doc__, "--from 1.5822,0 --to 1.0,0 --n 30 --mu 0.03", (
+    opt("--from", dest="start", required=True, help="start of the segment p1,p2"),
+    opt("--to", dest="stop", required=True, help="end of the segment p1,p2"),
+    opt("--n", type=int, default=21, help="points on the segment [%(default)s]"),
+    opt("--iterates", type=int, default=2000, help="N: each orbit has 2N returns [%(default)s]"),
+    opt("--center", default=None, help="guess of the elliptic fixed point p1,p2 [--from]"),
+    options.add_map_args,
+))
 
 
 def run(args) -> int:

@@ -1,36 +1,29 @@
-"""``explorer sweep``: every panel of a scene into one HDF5 store, and its figure (explorer.app.runner).
+"""Poincaré sections of every panel of a scene (default: figure4)
 
-Its page: docs/commands/sweep.md.
+Run every panel of a scene (a TOML file or a built-in preset), store all crossings in one HDF5
+file and draw the figure. Panels already stored with the same settings are skipped; a killed run
+resumes where it stopped.
 """
 from __future__ import annotations
 
 from explorer import model
+from explorer.app.commands.options import Command, opt
 from explorer.model import validation
 
-#: printed at the end of ``explorer sweep --help`` (tests/app/test_cli.py parses it)
-EXAMPLE = "python -m explorer sweep figure4 --out results/figure4.h5 --jobs 2"
-
-
-def add_parser(sub):
-    """Add ``sweep`` to the command line's subparsers."""
-    w = sub.add_parser("sweep", help="Poincaré sections of every panel of a scene (default: figure4)",
-                       description="Run every panel of a scene (a TOML file or a built-in preset), store all "
-                       "crossings in one HDF5 file and draw the figure. Panels already stored with the same "
-                       "settings are skipped; a killed run resumes where it stopped.")
-    w.add_argument("scene", nargs="?", default="figure4", help="scene file (.toml) or preset name [figure4]")
-    w.add_argument("--out", default=None, help="HDF5 file [results/<scene>.h5]")
-    w.add_argument("--figure", default=None,
-                   help="figure path without extension [the --out path without .h5: beside the store]")
-    w.add_argument("--no-figure", action="store_true", help="do not draw the figure")
-    w.add_argument("--jobs", type=int, default=1,
-                   help="joblib worker processes (1: this process with Numba threads over orbits) [1]")
-    w.add_argument("--backend", default=None, choices=["loky", "multiprocessing", "dask"],
-                   help="joblib backend for --jobs > 1 (dask: run on a dask.distributed cluster)")
-    w.add_argument("--scheduler", default=None,
-                   help="dask scheduler address (with --backend dask; default: a local cluster of --jobs workers)")
-    w.add_argument("--force", action="store_true", help="recompute every panel")
-    w.add_argument("--quiet", action="store_true", help="no progress bar")
-    return w
+COMMAND = Command("sweep", __doc__, "figure4 --out results/figure4.h5 --jobs 2", (
+    opt("scene", nargs="?", default="figure4", help="scene file (.toml) or preset name [figure4]"),
+    opt("--out", default=None, help="HDF5 file [results/<scene>.h5]"),
+    opt("--figure", default=None, help="figure path without extension [the --out path without .h5: beside the store]"),
+    opt("--no-figure", action="store_true", help="do not draw the figure"),
+    opt("--jobs", type=int, default=1,
+        help="joblib worker processes (1: this process with Numba threads over orbits) [1]"),
+    opt("--backend", default=None, choices=["loky", "multiprocessing", "dask"],
+        help="joblib backend for --jobs > 1 (dask: run on a dask.distributed cluster)"),
+    opt("--scheduler", default=None,
+        help="dask scheduler address (with --backend dask; default: a local cluster of --jobs workers)"),
+    opt("--force", action="store_true", help="recompute every panel"),
+    opt("--quiet", action="store_true", help="no progress bar"),
+))
 
 
 def run(args) -> int:

@@ -1,44 +1,38 @@
-"""``explorer trajectory``: the body in the plane, full system R1 (explorer.analysis.trajectory).
+"""the body in the plane (full system R1, any lam): drift, band, falling body
 
-Its page: docs/commands/trajectory.md.
+Integrate the full system R1 (p1, p2, M, phi, x, y) with adaptive DOP853, check H and the
+momentum integrals R2, print the measured mean horizontal velocity against +mu/lam and the band
+in y (lam != 0) or, for lam = 0 (the falling body), the fitted exponents of the amplitude
+(Kozlov: -1/2) and frequency (Kozlov: 1) of the oscillation of phi; draw the path with the
+body's orientation (PNG and PDF).
 """
 from __future__ import annotations
 
 import json
+from functools import partial
 
 from explorer import model
 from explorer.app.commands import options
+from explorer.app.commands.options import Command, opt
 from explorer.integrate.methods import TRAJECTORY_TOL
 from explorer.model import validation
 
-#: printed at the end of ``explorer trajectory --help`` (tests/app/test_cli.py parses it)
-EXAMPLE = "python -m explorer trajectory --p1 0.5 --M 2 --mu 0.5 -T 300 --out figures/trajectory"
-
-
-def add_parser(sub):
-    """Add ``trajectory`` to the command line's subparsers."""
-    tj = sub.add_parser("trajectory", help="the body in the plane (full system R1, any lam): drift, band, "
-                        "falling body",
-                        description="Integrate the full system R1 (p1, p2, M, phi, x, y) with adaptive DOP853, "
-                        "check H and the momentum integrals R2, print the measured mean horizontal velocity "
-                        "against +mu/lam and the band in y (lam != 0) or, for lam = 0 (the falling body), "
-                        "the fitted exponents of the amplitude (Kozlov: -1/2) and frequency (Kozlov: 1) of "
-                        "the oscillation of phi; draw the path with the body's orientation (PNG and PDF).")
-    tj.add_argument("--p1", type=float, default=0.5, help="initial p1 [%(default)s]")
-    tj.add_argument("--p2", type=float, default=0.0, help="initial p2 [%(default)s]")
-    tj.add_argument("--M", type=float, default=2.0, help="initial M [%(default)s]")
-    tj.add_argument("--phi", type=float, default=0.0, help="initial angle phi [%(default)s]")
-    tj.add_argument("--time", "-T", type=float, default=300.0, help="integration time T [%(default)s]")
-    tj.add_argument("--samples", type=int, default=20001, help="samples on [0, T] [%(default)s]")
-    tj.add_argument("--tol", type=float, default=TRAJECTORY_TOL, help="DOP853 tolerance (rtol = atol) [%(default)s]")
-    tj.add_argument("--glyphs", type=int, default=40, help="orientation glyphs along the path [%(default)s]")
-    tj.add_argument("--out", default="figures/trajectory",
-                    help="figure path without extension (lam = 0 adds <out>_kozlov) [%(default)s]")
-    tj.add_argument("--no-figure", action="store_true", help="do not draw the figure")
-    options.add_model_args(tj, model.FIGURE4.with_(mu=0.5), json="print JSON",
-                           title="model parameters (docs/model.md; defaults: Figure 4 with mu = 0.5)",
-                           helps={"lam": "circulation x density (any; 0 = falling body)"})
-    return tj
+COMMAND = Command("trajectory", __doc__, "--p1 0.5 --M 2 --mu 0.5 -T 300 --out figures/trajectory", (
+    opt("--p1", type=float, default=0.5, help="initial p1 [%(default)s]"),
+    opt("--p2", type=float, default=0.0, help="initial p2 [%(default)s]"),
+    opt("--M", type=float, default=2.0, help="initial M [%(default)s]"),
+    opt("--phi", type=float, default=0.0, help="initial angle phi [%(default)s]"),
+    opt("--time", "-T", type=float, default=300.0, help="integration time T [%(default)s]"),
+    opt("--samples", type=int, default=20001, help="samples on [0, T] [%(default)s]"),
+    opt("--tol", type=float, default=TRAJECTORY_TOL, help="DOP853 tolerance (rtol = atol) [%(default)s]"),
+    opt("--glyphs", type=int, default=40, help="orientation glyphs along the path [%(default)s]"),
+    opt("--out", default="figures/trajectory", help="figure path without extension (lam = 0 adds <out>_kozlov) "
+        "[%(default)s]"),
+    opt("--no-figure", action="store_true", help="do not draw the figure"),
+    partial(options.add_model_args, defaults=model.FIGURE4.with_(mu=0.5), json="print JSON",
+            title="model parameters (docs/model.md; defaults: Figure 4 with mu = 0.5)",
+            helps={"lam": "circulation x density (any; 0 = falling body)"}),
+))
 
 
 def run(args) -> int:

@@ -12,10 +12,11 @@ DESCRIPTION = "the body's path in the plane (full system R1)"
 def trajectory_figure(*, quick=False) -> Drawn:
     from explorer.analysis.trajectory import full_params, initial_state, trajectory
     from explorer.app.trajectory_figure import path_figure
+    from explorer.integrate.methods import TRAJECTORY_TOL
 
     prm = full_params(None)
     T, n = (60.0, 4001) if quick else (300.0, 20001)
-    res = trajectory(prm, initial_state(prm, 0.5, 0.0, 2.0, 0.0), T, n, 1e-12, phi_start=0.0)
+    res = trajectory(prm, initial_state(prm, 0.5, 0.0, 2.0, 0.0), T, n, TRAJECTORY_TOL, phi_start=0.0)
     return Drawn(path_figure(res, prm), {"T": T, "status": res["status"]})
 
 

@@ -1,5 +1,5 @@
-"""The ``serve`` command: its options (:func:`add_parser`, imports no web library, so
-``explorer --help`` stays fast) and what it does (:func:`run`); listed in
+"""The ``serve`` command: its line (:data:`COMMAND`, whose options :func:`add_options` imports
+no web library, so ``explorer --help`` stays fast) and what it does (:func:`run`); listed in
 :mod:`explorer.app.commands.registry` like every command.  Its page: docs/commands/serve.md."""
 from __future__ import annotations
 
@@ -8,13 +8,12 @@ import os
 
 from explorer import model
 from explorer.app.commands import options
+from explorer.app.commands.options import Command
 from explorer.model import ParameterError, validation
 
 #: where the page is served unless told otherwise (loopback only: docs/commands/serve.md)
 DEFAULT_HOST = "127.0.0.1"
 DEFAULT_PORT = 5006
-#: printed at the end of ``explorer serve --help`` (tests/app/test_cli.py parses it)
-EXAMPLE = "python -m explorer serve figure4 --mu 0.03"
 
 
 def add_options(s) -> None:
@@ -56,14 +55,14 @@ PAGE_DESCRIPTION = ("A click on the section starts an orbit whose crossings appe
                     "unless --host is given; another host needs a token.")
 
 
-def add_parser(sub):
-    """Add ``serve`` to the command line's subparsers."""
-    s = sub.add_parser("serve", help="the explorer in the browser: click on the section, watch the orbits appear",
-                       description="Serve the explorer as a web page (HoloViz Panel on Bokeh). The first line "
-                       "printed is the URL to open (with the token when one is needed); runs until Ctrl-C. "
-                       + PAGE_DESCRIPTION)
-    add_options(s)
-    return s
+#: the command's help (first paragraph) and description (the rest), as the other commands' docstrings
+HELP = """the explorer in the browser: click on the section, watch the orbits appear
+
+Serve the explorer as a web page (HoloViz Panel on Bokeh). The first line printed is the URL to open
+(with the token when one is needed); runs until Ctrl-C. {page}
+"""
+
+COMMAND = Command("serve", HELP, "figure4 --mu 0.03", (add_options,), fields={"page": PAGE_DESCRIPTION})
 
 
 def settings_from_args(args):

@@ -12,7 +12,11 @@ orbit keeps the worker and how long the page waits between updates.
 A :class:`Worker` owns one thread per session and serves its orbits newest first (a new click
 gets its first block before older orbits continue), round robin after that.  ``cancel`` stops
 every orbit of an older generation (a parameter change, clear) at its next block boundary;
-``remove`` stops one (undo).  Each block is handed to ``on_block(orbit_id, rows, done,
+``remove`` stops one (undo).  ``pause`` sets every running orbit aside at its next block boundary
+(a new click: the block in progress is still handed out, nothing after it), keeping its
+:class:`OrbitRun` (about 1.5 kB: the start, the settings and the StreamState, never its
+rows); ``resume`` queues them again, and each continues from its StreamState, so its rows are
+those of an uninterrupted run.  Each block is handed to ``on_block(orbit_id, rows, done,
 status)`` in the worker thread; the page moves it onto its document's event loop.  When an
 orbit is finished (or its blocks took INDICATOR_AFTER seconds), its mean MEGNO and finite-time
 mLCE over INDICATOR_TIME go to ``on_indicators(orbit_id, megno, mlce)``.  No web library here.
@@ -137,6 +141,7 @@ class Worker:
         self._on_error = on_error
         self._on_indicators = on_indicators
         self._runs: list[OrbitRun] = []
+        self._paused: list[OrbitRun] = []     # set aside by pause(), in the order they had
         self._cond = threading.Condition()
         self._generation = 0
         self._next_id = 0
@@ -163,13 +168,36 @@ class Worker:
         generation (blocks of older generations are never handed out after this returns)."""
         with self._cond:
             self._generation += 1
-            self._runs = []
+            self._runs, self._paused = [], []
             return self._generation
 
     def remove(self, ident: int) -> None:
-        """Stop one orbit (undo)."""
+        """Stop one orbit, running or paused (undo)."""
         with self._cond:
             self._runs = [r for r in self._runs if r.ident != ident]
+            self._paused = [r for r in self._paused if r.ident != ident]
+
+    def pause(self) -> list[int]:
+        """Set every running orbit aside (at its next block boundary: a block in progress is
+        still handed out); returns their ids.  :meth:`resume` continues them."""
+        with self._cond:
+            moved, self._runs = self._runs, []
+            self._paused = self._paused + moved
+            return [r.ident for r in moved]
+
+    def resume(self) -> list[int]:
+        """Queue the paused orbits again, after the running ones; returns their ids."""
+        with self._cond:
+            moved, self._paused = self._paused, []
+            self._runs = self._runs + moved
+            if moved:
+                self._cond.notify()
+            return [r.ident for r in moved]
+
+    def paused(self) -> list[int]:
+        """The ids of the paused orbits."""
+        with self._cond:
+            return [r.ident for r in self._paused]
 
     def busy(self) -> bool:
         with self._cond:
@@ -179,7 +207,7 @@ class Worker:
         """End the thread (the session is gone)."""
         with self._cond:
             self._stopped = True
-            self._runs = []
+            self._runs, self._paused = [], []
             self._cond.notify()
         if threading.current_thread() is not self._thread:
             self._thread.join(timeout)
@@ -208,13 +236,16 @@ class Worker:
             except Exception as exc:  # noqa: BLE001 - reported in the page; the server keeps serving
                 with self._cond:
                     self._runs = [r for r in self._runs if r is not run]
+                    self._paused = [r for r in self._paused if r is not run]
                 if self._on_error is not None:
                     self._on_error(run.ident, exc)
                 continue
             with self._cond:
-                current = run.generation == self._generation and any(r is run for r in self._runs)
+                # a run paused while its block was computed still hands that block out
+                current = run.generation == self._generation and any(r is run for r in self._runs + self._paused)
                 if run.finished and current:
                     self._runs = [r for r in self._runs if r is not run]
+                    self._paused = [r for r in self._paused if r is not run]
                 if not current:
                     continue
                 # handed out under the lock: cancel() cannot slip between the check and the hand-out

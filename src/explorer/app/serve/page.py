@@ -19,7 +19,7 @@ browser; the tests read them there):
 ``readout``    the picked orbit's mLCE, mean MEGNO and rotation number
 ``section``    the figure (a click on it starts an orbit)
 ``message``    the last message (a refused value, an export, a click outside the region)
-``status``     one line: orbits running and crossings drawn
+``status``     one line: orbits running and paused, crossings drawn
 
 Values from the page are read by :func:`explorer.app.serve.settings.parse_fields`; a refused
 value leaves everything as it was and says why in ``message``.  Crossings arrive from the
@@ -85,6 +85,8 @@ FLUSH_SECONDS = 0.25
 URL_DELAY_MS = 1000
 #: what a click does: the choices of the page's switch (Shift + click always picks)
 CLICK_MODES = ("start an orbit", "pick an orbit")
+#: the check box: on, a new orbit pauses those still running (Resume continues them); off, they run together
+PAUSE_LABEL = "a click pauses running orbits"
 #: labels of the fields
 LABELS = {p.name: p.symbol for p in model.PARAMETERS} | {
     "h": "h", "method": "method", "tol": "tol (taylor, dop853)", "dt": "dt (split*)",
@@ -116,7 +118,8 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.starts: list[tuple] = []          # (orbit id, p1, p2, colour) of every start, in click order
         self._unmarked: list[tuple] = []        # starts whose cross is not yet in start_source
         self._color = 0
-        self._running: set = set()             # ids of the orbits still computing
+        self._running: set = set()             # ids of the orbits still computing (or paused)
+        self._paused: set = set()              # ids of the orbits a click paused (those still in _running are)
         self._doc = None
         self._pending: list = []               # blocks from the worker not yet on the page
         self._pending_lock = threading.Lock()
@@ -200,9 +203,11 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         clear.on_click(lambda _e: self._later(self.clear))
         undo = pn.widgets.Button(label="Undo", width=90)
         undo.on_click(lambda _e: self._later(self.undo))
+        resume = pn.widgets.Button(label="Resume", width=190)
+        resume.on_click(lambda _e: self._later(self.resume))
         seeds = pn.widgets.Button(label="Scene seeds", width=190)
         seeds.on_click(lambda _e: self._later(self.run_seeds))
-        buttons = [clear, undo, seeds]
+        buttons = [clear, undo, resume, seeds]
         self.layer = pn.widgets.Checkbox(label=f"MEGNO layer (T = {self.raster.time:g})", value=False)
         self.layer.param.watch(lambda _e: self._later(self._layer_changed), "value")
         self.overlay = pn.widgets.Checkbox(label="fixed points, separatrices", value=False)
@@ -211,6 +216,8 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.colour_box.param.watch(lambda _e: self._later(self._colour_changed), "value")
         self.periodic_box = pn.widgets.Checkbox(label=f"periodic orbits, periods 1-{PERIODIC_MAX}", value=False)
         self.periodic_box.param.watch(lambda _e: self._later(self._overlay_changed), "value")
+        self.pause_box = pn.widgets.Checkbox(label=PAUSE_LABEL, value=True)
+        self.pause_box.param.watch(lambda _e: self._later(self._push_url), "value")
         download = pn.widgets.FileDownload(callback=self._scene_file, filename=f"{export.SCENE_NAME}.toml",
                                            label="Scene (TOML)", color="primary", width=190)
         buttons.append(download)
@@ -237,8 +244,8 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
                                                       value=CLICK_MODES[0], width=220)
         title = "explorer: Poincaré section φ = π" + (f" ({self.label})" if self.label else "")
         controls = pn.Column(pn.pane.Markdown("a click (Shift + click: pick):", margin=(0, 5)), self.click_mode,
-                             pn.GridBox(*self.inputs.values(), ncols=2), self.colour_box, self.layer, self.overlay,
-                             self.periodic_box, pn.Row(*buttons[:2]), *buttons[2:], width=230)
+                             self.pause_box, pn.GridBox(*self.inputs.values(), ncols=2), self.colour_box, self.layer,
+                             self.overlay, self.periodic_box, pn.Row(*buttons[:2]), *buttons[2:], width=230)
         self.layout = pn.Row(controls, pn.Column(pn.pane.Markdown(f"### {title}"), pn.pane.Bokeh(fig),
                                                  pn.pane.Bokeh(self.status), pn.pane.Bokeh(self.readout),
                                                  pn.pane.Bokeh(self.message), pn.pane.Bokeh(self.overlay_text)))
@@ -273,6 +280,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.overlay.value = args.get("separatrices") == "1"
         self.periodic_box.value = args.get("periodic") == "1"
         self.colour_box.value = args.get("colour") == "megno"
+        self.pause_box.value = args.get("pause") != "0"
         for p1, p2 in starts:
             self._start(p1, p2)
 
@@ -284,6 +292,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         q["separatrices"] = "1" if self.overlay.value else "0"
         q["periodic"] = "1" if self.periodic_box.value else "0"
         q["colour"] = "megno" if self.colour_box.value else "orbit"
+        q["pause"] = "1" if self.pause_box.value else "0"
         return q
 
     def _push_url_soon(self):
@@ -375,10 +384,20 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
             self.say(f"({p1:.4g}, {p2:.4g}) is outside the allowed region (M^2 < 0 there): click in the white "
                      "ellipse")
             return None
+        if self.pause_box.value:
+            self._paused = self._paused | set(self.worker.pause())
         run = self._start(p1, p2, mark_later=True)
         self.say("")
         self._push_url_soon()
         return run
+
+    def resume(self) -> int:
+        """Continue the orbits a click paused, from where each stopped (its rows are those of an
+        uninterrupted run); returns how many."""
+        n = len(self.worker.resume())
+        self._paused = set()
+        self._update_status()
+        return n
 
     def _on_tap(self, event):
         """Tap or double tap: Bokeh reports a click that follows another within 300 ms as a double
@@ -459,7 +478,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
     def _drop_orbits(self) -> list:
         """Stop every orbit and take them off the page; returns their starts."""
         self.worker.cancel()
-        old, self.starts, self._running = self.starts, [], set()
+        old, self.starts, self._running, self._paused = self.starts, [], set(), set()
         self.indicators = {}
         self.readouts, self.picked = {}, None
         self._readout_generation += 1
@@ -476,7 +495,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self._push_url()
 
     def undo(self) -> None:
-        """Remove the last orbit (stopped if it runs)."""
+        """Remove the last orbit (stopped if it runs or is paused)."""
         if not self.starts:
             return
         ident = self.starts.pop()[0]
@@ -485,7 +504,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.readouts.pop(ident, None)
         if self.picked == ident:
             self.picked, self.readout.text = None, ""
-        self._running = self._running - {ident}
+        self._running, self._paused = self._running - {ident}, self._paused - {ident}
         keep = np.asarray(self.crossings.data["orbit"]) != ident
         self.crossings.data = {k: np.asarray(v)[keep] for k, v in self.crossings.data.items()}
         if not self.dense:
@@ -592,10 +611,13 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self._update_status()
 
     def _update_status(self):
-        running = len(self._running)
+        self._paused = self._paused & self._running       # (an orbit paused as its last block came is done)
+        paused = len(self._paused)
+        running = len(self._running) - paused
         n = len(self.crossings.data["orbit"])
         self._refresh_density(force=not running)     # (redrawn at once when the last orbit is done)
-        text = (f"{len(self.starts)} orbit(s), {running} running, {n} crossings drawn"
+        text = (f"{len(self.starts)} orbit(s), {running} running, "
+                + (f"{paused} paused (Resume continues them), " if paused else "") + f"{n} crossings drawn"
                 + (" (as a density image)" if self.dense else "") + "; "
                 f"mu = {self.settings.params.mu:g}, h = {self.settings.h:g}, {self.settings.method}")
         known = [i for i, *_ in self.starts if i in self.indicators]

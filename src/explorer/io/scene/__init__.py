@@ -109,57 +109,19 @@ Every public name is importable from ``explorer.io.scene``.
 from __future__ import annotations
 
 from explorer.analysis.seeds import grid_spacing, seed_points
+from explorer.io.scene import schema
 from explorer.io.scene.checks import SceneError
 from explorer.io.scene.core import Scene
 from explorer.io.scene.hashes import _canonical_json
 from explorer.io.scene.loading import PRESETS, load_scene, parse_scene, scene_from_dict
-from explorer.io.scene.schema import (
-    _FIGURE_KEYS,
-    _INTEGRATION_KEYS,
-    _LYAPUNOV_KEYS,
-    _MANIFOLD_KEYS,
-    _NAME_RE,
-    _SEED_KEYS,
-    _SEED_USED,
-    _TOP_KEYS,
-    COMPUTE_DEFAULTS,
-    COMPUTE_QUANTITIES,
-    DEFAULT_CROSSINGS,
-    DEFAULT_DPI,
-    DEFAULT_MANIFOLD_ARCLENGTH,
-    DEFAULT_MANIFOLD_POINTS,
-    DEFAULT_MARGIN,
-    DEFAULT_MARKER_SIZE,
-    DEFAULT_RANDOM_SEED,
-    DEFAULT_SEED_N,
-    FORMAT_VERSION,
-    LAYOUTS,
-    LYAPUNOV_INDICATORS,
-    MAX_DPI,
-    MAX_MANIFOLD_ARCLENGTH,
-    MAX_MANIFOLD_PERIOD,
-    MAX_MANIFOLD_POINTS,
-    MAX_MAP_RESOLUTION,
-    MAX_NAME_LENGTH,
-    MAX_SEEDS,
-    MIN_DPI,
-    SEED_KINDS,
-    SWEEP_PARAMETERS,
-)
+from explorer.io.scene.schema import *  # noqa: F403  (the names of schema.__all__)
 from explorer.io.scene.specs import FigureSpec, IntegrationSpec, LyapunovSpec, ManifoldSpec, SeedSpec
 from explorer.io.scene.writer import _toml_string, _toml_value
-from explorer.model import PARAM_NAMES
 
 __all__ = [
-    "COMPUTE_DEFAULTS", "COMPUTE_QUANTITIES", "DEFAULT_CROSSINGS", "DEFAULT_DPI", "DEFAULT_MANIFOLD_ARCLENGTH",
-    "DEFAULT_MANIFOLD_POINTS", "DEFAULT_MARGIN", "DEFAULT_MARKER_SIZE", "DEFAULT_RANDOM_SEED", "DEFAULT_SEED_N",
-    "FORMAT_VERSION", "LAYOUTS", "LYAPUNOV_INDICATORS", "MAX_DPI", "MAX_MANIFOLD_ARCLENGTH", "MAX_MANIFOLD_PERIOD",
-    "MAX_MANIFOLD_POINTS", "MAX_MAP_RESOLUTION", "MAX_NAME_LENGTH", "MAX_SEEDS", "MIN_DPI",
-    "PARAM_NAMES", "PRESETS", "SEED_KINDS", "SWEEP_PARAMETERS", "FigureSpec", "IntegrationSpec",
-    "LyapunovSpec", "ManifoldSpec", "Scene", "SceneError", "SeedSpec", "grid_spacing", "load_scene", "parse_scene",
-    "scene_from_dict", "seed_points",
-    # the schema's private tables and the writer's helpers, for the tests
-    "_FIGURE_KEYS", "_INTEGRATION_KEYS", "_LYAPUNOV_KEYS", "_MANIFOLD_KEYS", "_NAME_RE", "_SEED_KEYS", "_SEED_USED",
-    "_TOP_KEYS",
+    "PRESETS", "FigureSpec", "IntegrationSpec", "LyapunovSpec", "ManifoldSpec", "Scene", "SceneError", "SeedSpec",
+    "grid_spacing", "load_scene", "parse_scene", "scene_from_dict", "seed_points",
+    # the writer's helpers, for the tests
     "_canonical_json", "_toml_string", "_toml_value",
 ]
+__all__ += schema.__all__   # the keys, limits and defaults (explorer.io.scene.schema)

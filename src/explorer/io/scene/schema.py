@@ -50,3 +50,15 @@ DEFAULT_MANIFOLD_POINTS = 20000
 MAX_MANIFOLD_POINTS = 1_000_000
 #: largest period of the orbit whose manifolds are drawn (its K points each get four branches)
 MAX_MANIFOLD_PERIOD = 64
+
+#: re-exported by :mod:`explorer.io.scene` (its ``__all__`` extends this one): the limits and
+#: defaults, the model's parameter names, and the key tables (private: for the validators and tests)
+__all__ = [
+    "COMPUTE_DEFAULTS", "COMPUTE_QUANTITIES", "DEFAULT_CROSSINGS", "DEFAULT_DPI", "DEFAULT_MANIFOLD_ARCLENGTH",
+    "DEFAULT_MANIFOLD_POINTS", "DEFAULT_MARGIN", "DEFAULT_MARKER_SIZE", "DEFAULT_RANDOM_SEED", "DEFAULT_SEED_N",
+    "FORMAT_VERSION", "LAYOUTS", "LYAPUNOV_INDICATORS", "MAX_DPI", "MAX_MANIFOLD_ARCLENGTH", "MAX_MANIFOLD_PERIOD",
+    "MAX_MANIFOLD_POINTS", "MAX_MAP_RESOLUTION", "MAX_NAME_LENGTH", "MAX_SEEDS", "MIN_DPI", "PARAM_NAMES",
+    "SEED_KINDS", "SWEEP_PARAMETERS",
+    "_FIGURE_KEYS", "_INTEGRATION_KEYS", "_LYAPUNOV_KEYS", "_MANIFOLD_KEYS", "_NAME_RE", "_SEED_KEYS", "_SEED_USED",
+    "_TOP_KEYS",
+]

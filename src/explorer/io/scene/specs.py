@@ -5,6 +5,7 @@ import math
 from dataclasses import dataclass
 
 from explorer.analysis import sections
+from explorer.analysis.lyapunov import EARLY_STOP_METHODS
 from explorer.integrate import methods
 from explorer.io.scene.checks import _bool, _choice, _fail, _int, _list, _real
 from explorer.io.scene.schema import (
@@ -209,9 +210,11 @@ class LyapunovSpec:
                            _int("lyapunov.map_resolution", self.map_resolution, 0, MAX_MAP_RESOLUTION))
         object.__setattr__(self, "map_indicator",
                            _choice("lyapunov.map_indicator", self.map_indicator, LYAPUNOV_INDICATORS))
-        if self.early_stop and self.method != "taylor":
-            _fail("lyapunov.method", f"must be 'taylor' for early_stop; got {self.method!r}")
-        kind = methods.get(self.method).kind
+        method = methods.get(self.method)
+        if self.early_stop and method.loops.tangent_ext is None:
+            _fail("lyapunov.method", f"must be {' or '.join(repr(n) for n in EARLY_STOP_METHODS)} for early_stop; "
+                  f"got {self.method!r}")
+        kind = method.kind
         for q in self.indicators:
             if not INDICATOR_BY_NAME[q].supports(kind):
                 _fail("lyapunov.method", f"must be one of {list(INDICATOR_BY_NAME[q].methods)} for {q}; "
