@@ -1208,3 +1208,59 @@ def test_picking_a_hyperbolic_fixed_point_draws_its_grown_stable_and_unstable_ma
         _poll_until(page, lambda: page.manifold_source.data["xs"] == [])
     finally:
         page.close()
+
+
+class _FakeDoc:
+    """A served page's document without a server: the callbacks the page schedules, run by hand."""
+
+    def __init__(self):
+        self.soon: list = []        # add_next_tick_callback (thread-safe in Bokeh: the worker uses it)
+        self.later: list = []       # (delay ms, callback) of add_timeout_callback
+
+    def on_session_destroyed(self, _f):
+        pass
+
+    def add_next_tick_callback(self, f):
+        self.soon.append(f)
+
+    def add_timeout_callback(self, f, ms):
+        self.later.append((ms, f))
+
+    def run_soon(self):
+        todo, self.soon = self.soon, []
+        for f in todo:
+            f()
+        return len(todo)
+
+
+def test_a_served_click_sends_its_cross_with_its_first_crossings_and_later_blocks_at_most_every_flush_interval():
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    from explorer.app.serve import page as page_mod
+
+    s = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=20_000)
+    c1, c2, r1, _r2 = s.region
+    doc = _FakeDoc()
+    page = page_mod.SectionPage(s, doc=doc)
+    page.pause_box.value = False
+    try:
+        page.click(c1 + 0.3 * r1, c2)
+        # the cross waits for the first crossings (one message, one redraw in the browser)...
+        assert page.start_source.data["orbit"] == [] and len(page.shown.data["p1"]) == 0
+        # ... and the link is written later, off the path from the click to them
+        assert [ms for ms, f in doc.later if f == page._push_url_due] == [page_mod.URL_DELAY_MS]
+        t0 = time.time()
+        while not page.start_source.data["orbit"] and time.time() - t0 < 120:
+            doc.run_soon()
+            time.sleep(0.001)
+        assert len(page.start_source.data["orbit"]) == 1 and 0 < len(page.shown.data["p1"]) < s.crossings
+        # the blocks between the first and the last wait for a flush up to FLUSH_SECONDS later ...
+        while page.worker.busy() or doc.soon:
+            doc.run_soon()
+            time.sleep(0.001)
+        delays = [ms for ms, f in doc.later if f == page._flush]
+        assert delays and all(0 < ms <= 1000 * page_mod.FLUSH_SECONDS + 1 for ms in delays)
+        # ... the last block goes at once, with every block still queued (the delayed flushes, not run, find none)
+        assert len(page.shown.data["p1"]) == s.crossings
+        np.testing.assert_array_equal(np.asarray(page.crossings.data["p1"]), np.asarray(page.shown.data["p1"]))
+    finally:
+        page.close()
