@@ -1211,11 +1211,12 @@ def test_picking_a_hyperbolic_fixed_point_draws_its_grown_stable_and_unstable_ma
 
 
 class _FakeDoc:
-    """A served page's document without a server: the callbacks the page schedules, run by hand."""
+    """A served page's document without a server: the page's callbacks, run by :meth:`run` as a
+    server's event loop would (next-tick ones at once, timeouts when due)."""
 
     def __init__(self):
         self.soon: list = []        # add_next_tick_callback (thread-safe in Bokeh: the worker uses it)
-        self.later: list = []       # (delay ms, callback) of add_timeout_callback
+        self.later: list = []       # (due, delay ms, callback) of add_timeout_callback
 
     def on_session_destroyed(self, _f):
         pass
@@ -1224,43 +1225,52 @@ class _FakeDoc:
         self.soon.append(f)
 
     def add_timeout_callback(self, f, ms):
-        self.later.append((ms, f))
+        self.later.append((time.monotonic() + ms / 1000, ms, f))
 
-    def run_soon(self):
+    def run(self, skip=()):
         todo, self.soon = self.soon, []
-        for f in todo:
+        now = time.monotonic()
+        due = [x for x in self.later if x[0] <= now and x[2] not in skip]
+        self.later = [x for x in self.later if x not in due]
+        for f in todo + [x[2] for x in due]:
             f()
-        return len(todo)
 
 
 def test_a_served_click_sends_its_cross_with_its_first_crossings_and_later_blocks_at_most_every_flush_interval():
     pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
     from explorer.app.serve import page as page_mod
 
-    s = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=20_000)
+    s = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=40_000)
     c1, c2, r1, _r2 = s.region
     doc = _FakeDoc()
     page = page_mod.SectionPage(s, doc=doc)
     page.pause_box.value = False
+    flushes = []                                   # (time, crosses, crossings) after each flush that drew rows
+    flush_blocks = page._flush_blocks
+
+    def traced():
+        before = len(page.shown.data["p1"])
+        flush_blocks()
+        if len(page.shown.data["p1"]) > before:
+            flushes.append((time.monotonic(), len(page.start_source.data["orbit"]), len(page.shown.data["p1"])))
+    page._flush_blocks = traced
     try:
         page.click(c1 + 0.3 * r1, c2)
-        # the cross waits for the first crossings (one message, one redraw in the browser)...
+        # the cross waits for the first crossings (one message, one redraw in the browser) and the
+        # link is written later, off the path from the click to them
         assert page.start_source.data["orbit"] == [] and len(page.shown.data["p1"]) == 0
-        # ... and the link is written later, off the path from the click to them
-        assert [ms for ms, f in doc.later if f == page._push_url_due] == [page_mod.URL_DELAY_MS]
+        assert [ms for _t, ms, f in doc.later if f == page._push_url_due] == [page_mod.URL_DELAY_MS]
         t0 = time.time()
-        while not page.start_source.data["orbit"] and time.time() - t0 < 120:
-            doc.run_soon()
+        while (page.worker.busy() or doc.soon or any(f == page._flush for *_x, f in doc.later)) \
+                and time.time() - t0 < 240:
+            doc.run(skip=(page._push_url_due,))
             time.sleep(0.001)
-        assert len(page.start_source.data["orbit"]) == 1 and 0 < len(page.shown.data["p1"]) < s.crossings
-        # the blocks between the first and the last wait for a flush up to FLUSH_SECONDS later ...
-        while page.worker.busy() or doc.soon:
-            doc.run_soon()
-            time.sleep(0.001)
-        delays = [ms for ms, f in doc.later if f == page._flush]
-        assert delays and all(0 < ms <= 1000 * page_mod.FLUSH_SECONDS + 1 for ms in delays)
-        # ... the last block goes at once, with every block still queued (the delayed flushes, not run, find none)
         assert len(page.shown.data["p1"]) == s.crossings
         np.testing.assert_array_equal(np.asarray(page.crossings.data["p1"]), np.asarray(page.shown.data["p1"]))
+        assert flushes[0][1] == 1 and 0 < flushes[0][2] < s.crossings       # the cross with the first rows
+        # between the first flush and the last, FLUSH_SECONDS at least (the last block goes at once)
+        assert len(flushes) >= 3, flushes
+        gaps = np.diff([t for t, *_x in flushes])[:-1]
+        assert gaps.min() >= page_mod.FLUSH_SECONDS - 0.01, gaps
     finally:
         page.close()
