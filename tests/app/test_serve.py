@@ -1245,14 +1245,14 @@ def test_a_served_click_sends_its_cross_with_its_first_crossings_and_later_block
     doc = _FakeDoc()
     page = page_mod.SectionPage(s, doc=doc)
     page.pause_box.value = False
-    flushes = []                                   # (time, crosses, crossings) after each flush that drew rows
+    flushes = []                                   # (start, crosses, crossings after) of each flush that drew rows
     flush_blocks = page._flush_blocks
 
     def traced():
-        before = len(page.shown.data["p1"])
+        before, start = len(page.shown.data["p1"]), time.monotonic()       # (when it takes the queued blocks)
         flush_blocks()
         if len(page.shown.data["p1"]) > before:
-            flushes.append((time.monotonic(), len(page.start_source.data["orbit"]), len(page.shown.data["p1"])))
+            flushes.append((start, len(page.start_source.data["orbit"]), len(page.shown.data["p1"])))
     page._flush_blocks = traced
     try:
         page.click(c1 + 0.3 * r1, c2)
