@@ -64,24 +64,30 @@ def flow_hm(y, P, t):
     y[4] = -s * g1 + c * g2
 
 
+@njit(inline="always")
+def _flow_shear(y, i, j, a, c, lam, s, t):
+    """docs/model.md R4, the flow of H_1 = p1^2/(2 a1) (rows i, j = 0, 1, a = a1, c = zeta, s = 1)
+    or H_2 = p2^2/(2 a2) (i, j = 1, 0, a = a2, c = chi, s = -1) for time t: with u = p_i/a, p_i and
+    g fixed; p_j(t) = p_j + s lam u t; dM/dt = -s (p_j(t) - c) u, so
+    M(t) = M - s u t ((p_j - c) + s lam u t / 2).  (The factors s = +-1 are exact.)"""
+    u = y[i] / a
+    d = s * lam * u * t
+    y[2] -= s * u * t * ((y[j] - c) + 0.5 * d)
+    y[j] += d
+
+
 @njit
 def flow_h1(y, P, t):
     """docs/model.md R4, H_1 = p1^2/(2 a1): p1, g fixed; p2(t) = p2 + (lam p1/a1) t;
     dM/dt = -(p2(t) - zeta) p1/a1, so M(t) = M - (p1/a1)((p2 - zeta) t + lam p1 t^2/(2 a1))."""
-    u = y[0] / P[A1]
-    dp2 = P[LAM] * u * t
-    y[2] -= u * t * ((y[1] - P[ZETA]) + 0.5 * dp2)
-    y[1] += dp2
+    _flow_shear(y, 0, 1, P[A1], P[ZETA], P[LAM], 1.0, t)
 
 
 @njit
 def flow_h2(y, P, t):
     """docs/model.md R4, H_2 = p2^2/(2 a2): p2, g fixed; p1(t) = p1 - (lam p2/a2) t;
     dM/dt = (p1(t) - chi) p2/a2, so M(t) = M + (p2/a2)((p1 - chi) t - lam p2 t^2/(2 a2))."""
-    v = y[1] / P[A2]
-    dp1 = -P[LAM] * v * t
-    y[2] += v * t * ((y[0] - P[CHI]) + 0.5 * dp1)
-    y[0] += dp1
+    _flow_shear(y, 1, 0, P[A2], P[CHI], P[LAM], -1.0, t)
 
 
 @njit
@@ -213,14 +219,14 @@ def taylor_coefficients_tangent(P, X, D, order):
             wj = X[2, j]
             dwj = D[2, j]
             wp2 += wj * X[1, i]
-            wp1 += wj * X[0, i]
-            p12 += X[0, j] * X[1, i]
-            wg2 += wj * X[4, i]
-            wg1 += wj * X[3, i]
             dwp2 += dwj * X[1, i] + wj * D[1, i]
+            wp1 += wj * X[0, i]
             dwp1 += dwj * X[0, i] + wj * D[0, i]
+            p12 += X[0, j] * X[1, i]
             dp12 += D[0, j] * X[1, i] + X[0, j] * D[1, i]
+            wg2 += wj * X[4, i]
             dwg2 += dwj * X[4, i] + wj * D[4, i]
+            wg1 += wj * X[3, i]
             dwg1 += dwj * X[3, i] + wj * D[3, i]
         next_coefficients(C, X, k, wp2, wp1, p12, wg2, wg1)
         next_coefficients(C, D, k, dwp2, dwp1, dp12, dwg2, dwg1)
@@ -249,26 +255,29 @@ def tangent_flow_hm(y, v, P, t):
     v[4] = v4
 
 
+@njit(inline="always")
+def _tangent_flow_shear(y, v, i, j, a, c, lam, s, t):
+    """Tangent map of :func:`_flow_shear` (same arguments) at y, applied to v in place: with
+    u = p_i/a, M' = M - s u t (p_j - c) - lam u^2 t^2 / 2 and p_j' = p_j + s lam u t, so
+    dM' = dM - s t (p_j - c) du - s u t dp_j - lam u t^2 du and dp_j' = dp_j + s lam t du, du = dp_i/a."""
+    u = y[i] / a
+    du = v[i] / a
+    v[2] += -s * t * (y[j] - c) * du - s * u * t * v[j] - lam * u * t * t * du
+    v[j] += s * lam * t * du
+
+
 @njit
 def tangent_flow_h1(y, v, P, t):
     """Tangent map of the H_1 flow: M' = M - u t (p2 - zeta) - lam u^2 t^2 / 2, p2' = p2 + lam u t,
     u = p1/a1."""
-    u = y[0] / P[A1]
-    du = v[0] / P[A1]
-    lam = P[LAM]
-    v[2] += -t * (y[1] - P[ZETA]) * du - u * t * v[1] - lam * u * t * t * du
-    v[1] += lam * t * du
+    _tangent_flow_shear(y, v, 0, 1, P[A1], P[ZETA], P[LAM], 1.0, t)
 
 
 @njit
 def tangent_flow_h2(y, v, P, t):
     """Tangent map of the H_2 flow: M' = M + w t (p1 - chi) - lam w^2 t^2 / 2, p1' = p1 - lam w t,
     w = p2/a2."""
-    w = y[1] / P[A2]
-    dw = v[1] / P[A2]
-    lam = P[LAM]
-    v[2] += t * (y[0] - P[CHI]) * dw + w * t * v[0] - lam * w * t * t * dw
-    v[0] -= lam * t * dw
+    _tangent_flow_shear(y, v, 1, 0, P[A2], P[CHI], P[LAM], -1.0, t)
 
 
 @njit
