@@ -272,7 +272,8 @@ def stop_unless_finite(l, znew, first, last, L_status, L_stop):
 def count_step(l, znew, first, last, L_steps, L_status, L_stop):
     """After the vector step: unless lane l stopped in :func:`step_lanes`, its step is counted
     and its new state checked (:func:`stop_unless_finite` of rows first..last - 1), as at the end
-    of systems.taylor_step."""
+    of systems.taylor_step (the tangent lanes; :func:`run_worker`, the W4 hot loop, sums the
+    state as it copies it out of the lane, the same checks in one pass)."""
     if not L_stop[l]:
         L_steps[l] += 1
         stop_unless_finite(l, znew, first, last, L_status, L_stop)
@@ -493,10 +494,15 @@ def run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, o
             j = orb[l]
             if j == _IDLE:
                 continue
-            count_step(l, ynew, 0, NVAR, L_steps, L_status, L_stop)
             if not L_stop[l]:
-                for i in range(NVAR):
+                L_steps[l] += 1
+                s = 0.0    # kernels.checks.all_finite of the lane's new state, summed as it is copied
+                for i in range(NVAR):   # (a call to all_finite, a loop of unknown length here, costs ~1 %)
                     yl[i] = ynew[i, l]
+                    s += yl[i]
+                if not (s - s == 0.0):
+                    stop_lane(l, STATUS_NONFINITE, L_status, L_stop)
+            if not L_stop[l]:
                 h = hv[l]
                 t = L_t[l]
                 tc = L_tc[l]
