@@ -9,7 +9,10 @@ and kernels *translated* from the source (Python AST) of the scalar recurrences
 lane arrays have the layout ``X[k, row, lane]`` (lanes contiguous), and every binary operation of
 the scalar source becomes exactly one vector operation with the same operands in the same order,
 so each lane computes bit for bit what the scalar recurrence computes (no fast-math flag is ever
-set: no reassociation, no FMA contraction).  Only the recurrences are generated: the Horner sums
+set: no reassociation, no FMA contraction).  A call statement of another function of
+``equations.py`` (``next_coefficients``) is first replaced by that function's statements, its
+parameters by the call's arguments (:func:`expand`); a call inside an expression
+(``taylor_constants(P)``, scalars) is kept and imported.  Only the recurrences are generated: the Horner sums
 and step norms of ``kernels.taylor`` are a few lines, written once by hand in
 :mod:`explorer.integrate.lanes`.
 
@@ -24,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import ast
+import copy
 import sys
 from pathlib import Path
 
@@ -49,7 +53,7 @@ from explorer._jit import njit
 from explorer.integrate.simd import (
 {ops}
 )
-
+{imports}
 {constants}
 {kernels}'''
 
@@ -73,7 +77,9 @@ def module(source, doc, constants, *groups):
                    for kernels, _ in groups for name, args, kdoc, body in kernels)
     code += "".join(dispatch for _, dispatch in groups)
     ops = "\n".join(f"    {n}," for n in SIMD_NAMES if n == "LANES" or f"{n}(" in code)
-    return MODULE.format(source=source, doc=doc, ops=ops, constants=constants, kernels=code)
+    called = sorted(n for n in equations_functions() if f"{n}(" in code)
+    imports = f"from explorer.model.equations import {', '.join(called)}\n" if called else ""
+    return MODULE.format(source=source, doc=doc, ops=ops, imports=imports, constants=constants, kernels=code)
 
 
 # ----------------------------------------------------------------------------- translation
@@ -227,6 +233,80 @@ def scalar_function(path, name):
     raise SystemExit(f"{name} not found in {path}")
 
 
+def equations_functions():
+    """The functions defined in equations.py, by name."""
+    tree = ast.parse(EQUATIONS.read_text())
+    return {node.name: node for node in tree.body if isinstance(node, ast.FunctionDef)}
+
+
+def _assigned_names(stmts):
+    return {n.id for st in stmts for n in ast.walk(st) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store)}
+
+
+class _Rename(ast.NodeTransformer):
+    """Parameters -> the call's arguments (copies), locals -> their names at this call."""
+
+    def __init__(self, args, local):
+        self.args = args
+        self.local = local
+
+    def visit_Name(self, node):
+        if node.id in self.args:
+            return ast.copy_location(ast.parse(ast.unparse(self.args[node.id]), mode="eval").body, node)
+        if node.id in self.local:
+            return ast.copy_location(ast.Name(id=self.local[node.id], ctx=node.ctx), node)
+        return node
+
+
+def expand(body, functions=None):
+    """``body`` (statements of a scalar function) ready for :class:`Translator`: docstrings
+    dropped; a tuple assignment of constants (``a, b = 0.0, 0.0``) split into one assignment per
+    name; a call statement ``f(args)`` of a function ``f`` of equations.py replaced by the
+    statements of ``f`` (recursively expanded), each parameter replaced by its argument.  The
+    locals of ``f`` keep their names at its first call in ``body`` and get the suffix ``_n`` at
+    its n-th, so that a later call does not reuse an earlier one's values (prune() sees them
+    apart); ``f`` must not assign a parameter, return a value or use a name of the caller."""
+    functions = equations_functions() if functions is None else functions
+    calls = {}
+    caller_names = {n.id for st in body for n in ast.walk(st) if isinstance(n, ast.Name)}
+
+    def walk(stmts):
+        out = []
+        for st in stmts:
+            if isinstance(st, ast.Expr) and isinstance(st.value, ast.Constant):
+                continue  # docstring
+            if isinstance(st, ast.For):
+                out.append(ast.For(target=st.target, iter=st.iter, body=walk(st.body), orelse=st.orelse))
+            elif (isinstance(st, ast.Assign) and len(st.targets) == 1 and isinstance(st.targets[0], ast.Tuple)
+                  and isinstance(st.value, ast.Tuple) and len(st.targets[0].elts) == len(st.value.elts)
+                  and all(isinstance(v, ast.Constant) for v in st.value.elts)):
+                out += [ast.Assign(targets=[t], value=v, lineno=st.lineno)
+                        for t, v in zip(st.targets[0].elts, st.value.elts)]
+            elif (isinstance(st, ast.Expr) and isinstance(st.value, ast.Call)
+                  and isinstance(st.value.func, ast.Name) and st.value.func.id in functions):
+                out += inline(st.value)
+            else:
+                out.append(st)
+        return out
+
+    def inline(call):
+        fn = functions[call.func.id]
+        params = [a.arg for a in fn.args.args]
+        if call.keywords or len(call.args) != len(params):
+            raise Untranslatable(ast.unparse(call))
+        inner = expand(fn.body, functions)
+        local = _assigned_names(inner)
+        if local & set(params) or any(isinstance(n, ast.Return) for st in inner for n in ast.walk(st)):
+            raise Untranslatable(f"{fn.name} assigns a parameter or returns a value")
+        if local & caller_names:
+            raise Untranslatable(f"{fn.name} uses names of its caller: {sorted(local & caller_names)}")
+        n = calls[fn.name] = calls.get(fn.name, 0) + 1
+        rename = _Rename(dict(zip(params, call.args)), {x: x if n == 1 else f"{x}_{n}" for x in local})
+        return [ast.fix_missing_locations(rename.visit(copy.deepcopy(st))) for st in inner]
+
+    return walk(body)
+
+
 # ----------------------------------------------------------------------------- the two files
 #: the numbers G of lane groups a kernel is written for (one specialisation each: G is fixed
 #: when the code is written, so every offset is a constant and each group's chains are separate
@@ -285,7 +365,7 @@ def generate():
         "Used by :mod:`explorer.integrate.lanes`.",
         f"#: state variables (p1, p2, M, g1, g2): the rows of X\nNVAR = 5\n{GROUPS_DOC}",
         grouped("taylor_coefficients_lanes", "P, X, order", doc,
-                lambda g: Translator("X", groups=g).stmts(fn.body, 4)))
+                lambda g: Translator("X", groups=g).stmts(expand(fn.body), 4)))
 
 
 #: rows of the tangent lane array Z[k, row, lane]: the orbit, then up to two deviation vectors
@@ -355,7 +435,8 @@ def generate_tangent():
     if args != ["P", "X", "D", "order"]:
         raise Untranslatable(f"unexpected signature {args}")
     arrays = {"X": ("Z", None), "D": ("Z", "db")}
-    pruned = prune(fn.body, "D")
+    body = expand(fn.body)
+    pruned = prune(body, "D")
     doc_full = ("Lane twin of equations.taylor_coefficients_tangent, translated from its source by\n"
                 "    tools/gen_lanes.py: the orbit's coefficients in rows 0..4 and those of the deviation\n"
                 "    vector in rows db..db + 4 of Z[k, row, lane], k = 1..order, given Z[0].")
@@ -372,7 +453,7 @@ def generate_tangent():
         f"#: rows of the lane array: the orbit (5) and two deviation vectors (5 each)\nNROWS = {TANGENT_ROWS}\n"
         f"#: first row of each deviation vector\nDEV1 = 5\nDEV2 = 10\n{GROUPS_DOC}",
         grouped("tangent_coefficients_lanes", "P, Z, order, db", doc_full,
-                lambda g: Translator("X", arrays, stride="NROWS", groups=g).stmts(fn.body, 4)),
+                lambda g: Translator("X", arrays, stride="NROWS", groups=g).stmts(body, 4)),
         grouped("deviation_coefficients_lanes", "P, Z, order, db", doc_dev,
                   lambda g: Translator("X", arrays, stride="NROWS", groups=g).stmts(pruned, 4)))
 

@@ -44,6 +44,26 @@ def test_gen_lanes_check_passes_on_the_repository_and_fails_on_a_stale_file(tmp_
     assert r.returncode == 1 and "out of date" in r.stderr
 
 
+def test_gen_lanes_inlines_a_helper_with_its_arguments_and_refuses_one_that_reuses_a_callers_name():
+    """A call statement of a function of equations.py becomes its statements: parameters replaced
+    by the arguments, its locals kept apart at a second call (so prune() cannot confuse them)."""
+    import ast
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("gen_lanes", ROOT / "tools" / "gen_lanes.py")
+    gen = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(gen)
+    fns = {f.name: f for f in ast.parse(
+        "def helper(A, k, s):\n    r = s * 2.0\n    A[0, k + 1] = r\n"
+        "def twice(X, D, k, a, b):\n    a, b = 1.0, 2.0\n    helper(X, k, a)\n    helper(D, k, b)\n"
+        "def clash(X, k, r):\n    helper(X, k, r)\n").body}
+    body = gen.expand(fns["twice"].body, fns)
+    assert [ast.unparse(st) for st in body] == ["a = 1.0", "b = 2.0", "r = a * 2.0", "X[0, k + 1] = r",
+                                                 "r_2 = b * 2.0", "D[0, k + 1] = r_2"]
+    with pytest.raises(gen.Untranslatable, match="names of its caller"):
+        gen.expand(fns["clash"].body, fns)
+
+
 # ---------------------------------------------------------------- kernels
 @pytest.mark.parametrize("name", sorted(PARAM_SETS))
 @pytest.mark.parametrize("order", [4, 5, 15, 16, 19, 27])

@@ -22,6 +22,7 @@ from explorer.integrate.simd import (
     vsub,
     vzero,
 )
+from explorer.model.equations import taylor_constants
 
 #: state variables (p1, p2, M, g1, g2): the rows of X
 NVAR = 5
@@ -32,15 +33,7 @@ GROUPS = (1, 2, 4)
 @njit
 def taylor_coefficients_lanes_1(P, X, order):
     """taylor_coefficients_lanes for G = 1 group of LANES lanes."""
-    a1, a2, b, lam, chi, zeta, mu, xi, eta = (P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8])
-    inv_b = 1.0 / b
-    c12 = 1.0 / a2 - 1.0 / a1
-    la1 = lam / a1
-    la2 = lam / a2
-    ca2 = chi / a2
-    za1 = zeta / a1
-    mxi = mu * xi
-    meta = mu * eta
+    C = taylor_constants(P)
     for k in range(order):
         wp2 = vzero()
         wp1 = vzero()
@@ -48,38 +41,27 @@ def taylor_coefficients_lanes_1(P, X, order):
         wg2 = vzero()
         wg1 = vzero()
         for j in range(k + 1):
-            wj = vload(X, (j) * (NVAR * LANES) + (2) * LANES)
             i = k - j
+            wj = vload(X, (j) * (NVAR * LANES) + (2) * LANES)
             wp2 = vadd(wp2, vmul(wj, vload(X, (i) * (NVAR * LANES) + (1) * LANES)))
             wp1 = vadd(wp1, vmul(wj, vload(X, (i) * (NVAR * LANES) + (0) * LANES)))
             p12 = vadd(p12, vmul(vload(X, (j) * (NVAR * LANES) + (0) * LANES), vload(X, (i) * (NVAR * LANES) + (1) * LANES)))
             wg2 = vadd(wg2, vmul(wj, vload(X, (i) * (NVAR * LANES) + (4) * LANES)))
             wg1 = vadd(wg1, vmul(wj, vload(X, (i) * (NVAR * LANES) + (3) * LANES)))
-        wk = vmul(vload(X, (k) * (NVAR * LANES) + (2) * LANES), vsplat(inv_b))
-        wp2 = vmul(wp2, vsplat(inv_b))
-        wp1 = vmul(wp1, vsplat(inv_b))
-        wg2 = vmul(wg2, vsplat(inv_b))
-        wg1 = vmul(wg1, vsplat(inv_b))
+        inv_b, c12, la1, la2, ca2, za1, chi, zeta, mu, mxi, meta = C
         r = 1.0 / (k + 1)
-        vstore(X, (k + 1) * (NVAR * LANES) + (0) * LANES, vmul(vsub(vsub(vsub(wp2, vmul(vsplat(zeta), wk)), vmul(vsplat(mu), vload(X, (k) * (NVAR * LANES) + (3) * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * LANES) + (1) * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * LANES) + (1) * LANES, vmul(vadd(vsub(vadd(vneg(wp1), vmul(vsplat(chi), wk)), vmul(vsplat(mu), vload(X, (k) * (NVAR * LANES) + (4) * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * LANES) + (0) * LANES))), vsplat(r)))
+        wk = vmul(vload(X, (k) * (NVAR * LANES) + (2) * LANES), vsplat(inv_b))
+        vstore(X, (k + 1) * (NVAR * LANES) + (0) * LANES, vmul(vsub(vsub(vsub(vmul(wp2, vsplat(inv_b)), vmul(vsplat(zeta), wk)), vmul(vsplat(mu), vload(X, (k) * (NVAR * LANES) + (3) * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * LANES) + (1) * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * LANES) + (1) * LANES, vmul(vadd(vsub(vadd(vmul(vneg(wp1), vsplat(inv_b)), vmul(vsplat(chi), wk)), vmul(vsplat(mu), vload(X, (k) * (NVAR * LANES) + (4) * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * LANES) + (0) * LANES))), vsplat(r)))
         vstore(X, (k + 1) * (NVAR * LANES) + (2) * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12), vmul(vsplat(ca2), vload(X, (k) * (NVAR * LANES) + (1) * LANES))), vmul(vsplat(za1), vload(X, (k) * (NVAR * LANES) + (0) * LANES))), vmul(vsplat(mxi), vload(X, (k) * (NVAR * LANES) + (4) * LANES))), vmul(vsplat(meta), vload(X, (k) * (NVAR * LANES) + (3) * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * LANES) + (3) * LANES, vmul(wg2, vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * LANES) + (4) * LANES, vmul(vneg(wg1), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * LANES) + (3) * LANES, vmul(vmul(wg2, vsplat(inv_b)), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * LANES) + (4) * LANES, vmul(vmul(vneg(wg1), vsplat(inv_b)), vsplat(r)))
 
 
 @njit
 def taylor_coefficients_lanes_2(P, X, order):
     """taylor_coefficients_lanes for G = 2 groups of LANES lanes."""
-    a1, a2, b, lam, chi, zeta, mu, xi, eta = (P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8])
-    inv_b = 1.0 / b
-    c12 = 1.0 / a2 - 1.0 / a1
-    la1 = lam / a1
-    la2 = lam / a2
-    ca2 = chi / a2
-    za1 = zeta / a1
-    mxi = mu * xi
-    meta = mu * eta
+    C = taylor_constants(P)
     for k in range(order):
         wp2_0 = vzero()
         wp2_1 = vzero()
@@ -92,9 +74,9 @@ def taylor_coefficients_lanes_2(P, X, order):
         wg1_0 = vzero()
         wg1_1 = vzero()
         for j in range(k + 1):
+            i = k - j
             wj_0 = vload(X, (j) * (NVAR * 2 * LANES) + (2) * 2 * LANES)
             wj_1 = vload(X, (j) * (NVAR * 2 * LANES) + (2) * 2 * LANES + 1 * LANES)
-            i = k - j
             wp2_0 = vadd(wp2_0, vmul(wj_0, vload(X, (i) * (NVAR * 2 * LANES) + (1) * 2 * LANES)))
             wp2_1 = vadd(wp2_1, vmul(wj_1, vload(X, (i) * (NVAR * 2 * LANES) + (1) * 2 * LANES + 1 * LANES)))
             wp1_0 = vadd(wp1_0, vmul(wj_0, vload(X, (i) * (NVAR * 2 * LANES) + (0) * 2 * LANES)))
@@ -105,41 +87,26 @@ def taylor_coefficients_lanes_2(P, X, order):
             wg2_1 = vadd(wg2_1, vmul(wj_1, vload(X, (i) * (NVAR * 2 * LANES) + (4) * 2 * LANES + 1 * LANES)))
             wg1_0 = vadd(wg1_0, vmul(wj_0, vload(X, (i) * (NVAR * 2 * LANES) + (3) * 2 * LANES)))
             wg1_1 = vadd(wg1_1, vmul(wj_1, vload(X, (i) * (NVAR * 2 * LANES) + (3) * 2 * LANES + 1 * LANES)))
+        inv_b, c12, la1, la2, ca2, za1, chi, zeta, mu, mxi, meta = C
+        r = 1.0 / (k + 1)
         wk_0 = vmul(vload(X, (k) * (NVAR * 2 * LANES) + (2) * 2 * LANES), vsplat(inv_b))
         wk_1 = vmul(vload(X, (k) * (NVAR * 2 * LANES) + (2) * 2 * LANES + 1 * LANES), vsplat(inv_b))
-        wp2_0 = vmul(wp2_0, vsplat(inv_b))
-        wp2_1 = vmul(wp2_1, vsplat(inv_b))
-        wp1_0 = vmul(wp1_0, vsplat(inv_b))
-        wp1_1 = vmul(wp1_1, vsplat(inv_b))
-        wg2_0 = vmul(wg2_0, vsplat(inv_b))
-        wg2_1 = vmul(wg2_1, vsplat(inv_b))
-        wg1_0 = vmul(wg1_0, vsplat(inv_b))
-        wg1_1 = vmul(wg1_1, vsplat(inv_b))
-        r = 1.0 / (k + 1)
-        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (0) * 2 * LANES, vmul(vsub(vsub(vsub(wp2_0, vmul(vsplat(zeta), wk_0)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 2 * LANES) + (3) * 2 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 2 * LANES) + (1) * 2 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (0) * 2 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(wp2_1, vmul(vsplat(zeta), wk_1)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 2 * LANES) + (3) * 2 * LANES + 1 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 2 * LANES) + (1) * 2 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (1) * 2 * LANES, vmul(vadd(vsub(vadd(vneg(wp1_0), vmul(vsplat(chi), wk_0)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 2 * LANES) + (4) * 2 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 2 * LANES) + (0) * 2 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (1) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vneg(wp1_1), vmul(vsplat(chi), wk_1)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 2 * LANES) + (4) * 2 * LANES + 1 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 2 * LANES) + (0) * 2 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (0) * 2 * LANES, vmul(vsub(vsub(vsub(vmul(wp2_0, vsplat(inv_b)), vmul(vsplat(zeta), wk_0)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 2 * LANES) + (3) * 2 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 2 * LANES) + (1) * 2 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (0) * 2 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(vmul(wp2_1, vsplat(inv_b)), vmul(vsplat(zeta), wk_1)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 2 * LANES) + (3) * 2 * LANES + 1 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 2 * LANES) + (1) * 2 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (1) * 2 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(wp1_0), vsplat(inv_b)), vmul(vsplat(chi), wk_0)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 2 * LANES) + (4) * 2 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 2 * LANES) + (0) * 2 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (1) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(wp1_1), vsplat(inv_b)), vmul(vsplat(chi), wk_1)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 2 * LANES) + (4) * 2 * LANES + 1 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 2 * LANES) + (0) * 2 * LANES + 1 * LANES))), vsplat(r)))
         vstore(X, (k + 1) * (NVAR * 2 * LANES) + (2) * 2 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_0), vmul(vsplat(ca2), vload(X, (k) * (NVAR * 2 * LANES) + (1) * 2 * LANES))), vmul(vsplat(za1), vload(X, (k) * (NVAR * 2 * LANES) + (0) * 2 * LANES))), vmul(vsplat(mxi), vload(X, (k) * (NVAR * 2 * LANES) + (4) * 2 * LANES))), vmul(vsplat(meta), vload(X, (k) * (NVAR * 2 * LANES) + (3) * 2 * LANES))), vsplat(r)))
         vstore(X, (k + 1) * (NVAR * 2 * LANES) + (2) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_1), vmul(vsplat(ca2), vload(X, (k) * (NVAR * 2 * LANES) + (1) * 2 * LANES + 1 * LANES))), vmul(vsplat(za1), vload(X, (k) * (NVAR * 2 * LANES) + (0) * 2 * LANES + 1 * LANES))), vmul(vsplat(mxi), vload(X, (k) * (NVAR * 2 * LANES) + (4) * 2 * LANES + 1 * LANES))), vmul(vsplat(meta), vload(X, (k) * (NVAR * 2 * LANES) + (3) * 2 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (3) * 2 * LANES, vmul(wg2_0, vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (3) * 2 * LANES + 1 * LANES, vmul(wg2_1, vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (4) * 2 * LANES, vmul(vneg(wg1_0), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (4) * 2 * LANES + 1 * LANES, vmul(vneg(wg1_1), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (3) * 2 * LANES, vmul(vmul(wg2_0, vsplat(inv_b)), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (3) * 2 * LANES + 1 * LANES, vmul(vmul(wg2_1, vsplat(inv_b)), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (4) * 2 * LANES, vmul(vmul(vneg(wg1_0), vsplat(inv_b)), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (4) * 2 * LANES + 1 * LANES, vmul(vmul(vneg(wg1_1), vsplat(inv_b)), vsplat(r)))
 
 
 @njit
 def taylor_coefficients_lanes_4(P, X, order):
     """taylor_coefficients_lanes for G = 4 groups of LANES lanes."""
-    a1, a2, b, lam, chi, zeta, mu, xi, eta = (P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8])
-    inv_b = 1.0 / b
-    c12 = 1.0 / a2 - 1.0 / a1
-    la1 = lam / a1
-    la2 = lam / a2
-    ca2 = chi / a2
-    za1 = zeta / a1
-    mxi = mu * xi
-    meta = mu * eta
+    C = taylor_constants(P)
     for k in range(order):
         wp2_0 = vzero()
         wp2_1 = vzero()
@@ -162,11 +129,11 @@ def taylor_coefficients_lanes_4(P, X, order):
         wg1_2 = vzero()
         wg1_3 = vzero()
         for j in range(k + 1):
+            i = k - j
             wj_0 = vload(X, (j) * (NVAR * 4 * LANES) + (2) * 4 * LANES)
             wj_1 = vload(X, (j) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 1 * LANES)
             wj_2 = vload(X, (j) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 2 * LANES)
             wj_3 = vload(X, (j) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 3 * LANES)
-            i = k - j
             wp2_0 = vadd(wp2_0, vmul(wj_0, vload(X, (i) * (NVAR * 4 * LANES) + (1) * 4 * LANES)))
             wp2_1 = vadd(wp2_1, vmul(wj_1, vload(X, (i) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 1 * LANES)))
             wp2_2 = vadd(wp2_2, vmul(wj_2, vload(X, (i) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 2 * LANES)))
@@ -187,47 +154,32 @@ def taylor_coefficients_lanes_4(P, X, order):
             wg1_1 = vadd(wg1_1, vmul(wj_1, vload(X, (i) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 1 * LANES)))
             wg1_2 = vadd(wg1_2, vmul(wj_2, vload(X, (i) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 2 * LANES)))
             wg1_3 = vadd(wg1_3, vmul(wj_3, vload(X, (i) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 3 * LANES)))
+        inv_b, c12, la1, la2, ca2, za1, chi, zeta, mu, mxi, meta = C
+        r = 1.0 / (k + 1)
         wk_0 = vmul(vload(X, (k) * (NVAR * 4 * LANES) + (2) * 4 * LANES), vsplat(inv_b))
         wk_1 = vmul(vload(X, (k) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 1 * LANES), vsplat(inv_b))
         wk_2 = vmul(vload(X, (k) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 2 * LANES), vsplat(inv_b))
         wk_3 = vmul(vload(X, (k) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 3 * LANES), vsplat(inv_b))
-        wp2_0 = vmul(wp2_0, vsplat(inv_b))
-        wp2_1 = vmul(wp2_1, vsplat(inv_b))
-        wp2_2 = vmul(wp2_2, vsplat(inv_b))
-        wp2_3 = vmul(wp2_3, vsplat(inv_b))
-        wp1_0 = vmul(wp1_0, vsplat(inv_b))
-        wp1_1 = vmul(wp1_1, vsplat(inv_b))
-        wp1_2 = vmul(wp1_2, vsplat(inv_b))
-        wp1_3 = vmul(wp1_3, vsplat(inv_b))
-        wg2_0 = vmul(wg2_0, vsplat(inv_b))
-        wg2_1 = vmul(wg2_1, vsplat(inv_b))
-        wg2_2 = vmul(wg2_2, vsplat(inv_b))
-        wg2_3 = vmul(wg2_3, vsplat(inv_b))
-        wg1_0 = vmul(wg1_0, vsplat(inv_b))
-        wg1_1 = vmul(wg1_1, vsplat(inv_b))
-        wg1_2 = vmul(wg1_2, vsplat(inv_b))
-        wg1_3 = vmul(wg1_3, vsplat(inv_b))
-        r = 1.0 / (k + 1)
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (0) * 4 * LANES, vmul(vsub(vsub(vsub(wp2_0, vmul(vsplat(zeta), wk_0)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(wp2_1, vmul(vsplat(zeta), wk_1)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 1 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 2 * LANES, vmul(vsub(vsub(vsub(wp2_2, vmul(vsplat(zeta), wk_2)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 2 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 2 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 3 * LANES, vmul(vsub(vsub(vsub(wp2_3, vmul(vsplat(zeta), wk_3)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 3 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 3 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (1) * 4 * LANES, vmul(vadd(vsub(vadd(vneg(wp1_0), vmul(vsplat(chi), wk_0)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vneg(wp1_1), vmul(vsplat(chi), wk_1)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 1 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 2 * LANES, vmul(vadd(vsub(vadd(vneg(wp1_2), vmul(vsplat(chi), wk_2)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 2 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 2 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 3 * LANES, vmul(vadd(vsub(vadd(vneg(wp1_3), vmul(vsplat(chi), wk_3)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 3 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 3 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (0) * 4 * LANES, vmul(vsub(vsub(vsub(vmul(wp2_0, vsplat(inv_b)), vmul(vsplat(zeta), wk_0)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(vmul(wp2_1, vsplat(inv_b)), vmul(vsplat(zeta), wk_1)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 1 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 2 * LANES, vmul(vsub(vsub(vsub(vmul(wp2_2, vsplat(inv_b)), vmul(vsplat(zeta), wk_2)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 2 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 2 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 3 * LANES, vmul(vsub(vsub(vsub(vmul(wp2_3, vsplat(inv_b)), vmul(vsplat(zeta), wk_3)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 3 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 3 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (1) * 4 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(wp1_0), vsplat(inv_b)), vmul(vsplat(chi), wk_0)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(wp1_1), vsplat(inv_b)), vmul(vsplat(chi), wk_1)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 1 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 1 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 2 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(wp1_2), vsplat(inv_b)), vmul(vsplat(chi), wk_2)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 2 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 2 * LANES))), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 3 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(wp1_3), vsplat(inv_b)), vmul(vsplat(chi), wk_3)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 3 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 3 * LANES))), vsplat(r)))
         vstore(X, (k + 1) * (NVAR * 4 * LANES) + (2) * 4 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_0), vmul(vsplat(ca2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES))), vmul(vsplat(za1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES))), vmul(vsplat(mxi), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES))), vmul(vsplat(meta), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES))), vsplat(r)))
         vstore(X, (k + 1) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_1), vmul(vsplat(ca2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 1 * LANES))), vmul(vsplat(za1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 1 * LANES))), vmul(vsplat(mxi), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 1 * LANES))), vmul(vsplat(meta), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 1 * LANES))), vsplat(r)))
         vstore(X, (k + 1) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 2 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_2), vmul(vsplat(ca2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 2 * LANES))), vmul(vsplat(za1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 2 * LANES))), vmul(vsplat(mxi), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 2 * LANES))), vmul(vsplat(meta), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 2 * LANES))), vsplat(r)))
         vstore(X, (k + 1) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 3 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_3), vmul(vsplat(ca2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 3 * LANES))), vmul(vsplat(za1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 3 * LANES))), vmul(vsplat(mxi), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 3 * LANES))), vmul(vsplat(meta), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 3 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (3) * 4 * LANES, vmul(wg2_0, vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 1 * LANES, vmul(wg2_1, vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 2 * LANES, vmul(wg2_2, vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 3 * LANES, vmul(wg2_3, vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (4) * 4 * LANES, vmul(vneg(wg1_0), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 1 * LANES, vmul(vneg(wg1_1), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 2 * LANES, vmul(vneg(wg1_2), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 3 * LANES, vmul(vneg(wg1_3), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (3) * 4 * LANES, vmul(vmul(wg2_0, vsplat(inv_b)), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 1 * LANES, vmul(vmul(wg2_1, vsplat(inv_b)), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 2 * LANES, vmul(vmul(wg2_2, vsplat(inv_b)), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 3 * LANES, vmul(vmul(wg2_3, vsplat(inv_b)), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (4) * 4 * LANES, vmul(vmul(vneg(wg1_0), vsplat(inv_b)), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 1 * LANES, vmul(vmul(vneg(wg1_1), vsplat(inv_b)), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 2 * LANES, vmul(vmul(vneg(wg1_2), vsplat(inv_b)), vsplat(r)))
+        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 3 * LANES, vmul(vmul(vneg(wg1_3), vsplat(inv_b)), vsplat(r)))
 
 
 #: taylor_coefficients_lanes for each G

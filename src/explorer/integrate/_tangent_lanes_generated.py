@@ -23,6 +23,7 @@ from explorer.integrate.simd import (
     vsub,
     vzero,
 )
+from explorer.model.equations import taylor_constants
 
 #: rows of the lane array: the orbit (5) and two deviation vectors (5 each)
 NROWS = 15
@@ -36,15 +37,7 @@ GROUPS = (1, 2, 4)
 @njit
 def tangent_coefficients_lanes_1(P, Z, order, db):
     """tangent_coefficients_lanes for G = 1 group of LANES lanes."""
-    a1, a2, b, lam, chi, zeta, mu, xi, eta = (P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8])
-    inv_b = 1.0 / b
-    c12 = 1.0 / a2 - 1.0 / a1
-    la1 = lam / a1
-    la2 = lam / a2
-    ca2 = chi / a2
-    za1 = zeta / a1
-    mxi = mu * xi
-    meta = mu * eta
+    C = taylor_constants(P)
     for k in range(order):
         wp2 = vzero()
         wp1 = vzero()
@@ -61,15 +54,16 @@ def tangent_coefficients_lanes_1(P, Z, order, db):
             wj = vload(Z, (j) * (NROWS * LANES) + (2) * LANES)
             dwj = vload(Z, (j) * (NROWS * LANES) + (db + (2)) * LANES)
             wp2 = vadd(wp2, vmul(wj, vload(Z, (i) * (NROWS * LANES) + (1) * LANES)))
-            wp1 = vadd(wp1, vmul(wj, vload(Z, (i) * (NROWS * LANES) + (0) * LANES)))
-            p12 = vadd(p12, vmul(vload(Z, (j) * (NROWS * LANES) + (0) * LANES), vload(Z, (i) * (NROWS * LANES) + (1) * LANES)))
-            wg2 = vadd(wg2, vmul(wj, vload(Z, (i) * (NROWS * LANES) + (4) * LANES)))
-            wg1 = vadd(wg1, vmul(wj, vload(Z, (i) * (NROWS * LANES) + (3) * LANES)))
             dwp2 = vadd(dwp2, vadd(vmul(dwj, vload(Z, (i) * (NROWS * LANES) + (1) * LANES)), vmul(wj, vload(Z, (i) * (NROWS * LANES) + (db + (1)) * LANES))))
+            wp1 = vadd(wp1, vmul(wj, vload(Z, (i) * (NROWS * LANES) + (0) * LANES)))
             dwp1 = vadd(dwp1, vadd(vmul(dwj, vload(Z, (i) * (NROWS * LANES) + (0) * LANES)), vmul(wj, vload(Z, (i) * (NROWS * LANES) + (db + (0)) * LANES))))
+            p12 = vadd(p12, vmul(vload(Z, (j) * (NROWS * LANES) + (0) * LANES), vload(Z, (i) * (NROWS * LANES) + (1) * LANES)))
             dp12 = vadd(dp12, vadd(vmul(vload(Z, (j) * (NROWS * LANES) + (db + (0)) * LANES), vload(Z, (i) * (NROWS * LANES) + (1) * LANES)), vmul(vload(Z, (j) * (NROWS * LANES) + (0) * LANES), vload(Z, (i) * (NROWS * LANES) + (db + (1)) * LANES))))
+            wg2 = vadd(wg2, vmul(wj, vload(Z, (i) * (NROWS * LANES) + (4) * LANES)))
             dwg2 = vadd(dwg2, vadd(vmul(dwj, vload(Z, (i) * (NROWS * LANES) + (4) * LANES)), vmul(wj, vload(Z, (i) * (NROWS * LANES) + (db + (4)) * LANES))))
+            wg1 = vadd(wg1, vmul(wj, vload(Z, (i) * (NROWS * LANES) + (3) * LANES)))
             dwg1 = vadd(dwg1, vadd(vmul(dwj, vload(Z, (i) * (NROWS * LANES) + (3) * LANES)), vmul(wj, vload(Z, (i) * (NROWS * LANES) + (db + (3)) * LANES))))
+        inv_b, c12, la1, la2, ca2, za1, chi, zeta, mu, mxi, meta = C
         r = 1.0 / (k + 1)
         wk = vmul(vload(Z, (k) * (NROWS * LANES) + (2) * LANES), vsplat(inv_b))
         vstore(Z, (k + 1) * (NROWS * LANES) + (0) * LANES, vmul(vsub(vsub(vsub(vmul(wp2, vsplat(inv_b)), vmul(vsplat(zeta), wk)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * LANES) + (3) * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * LANES) + (1) * LANES))), vsplat(r)))
@@ -77,26 +71,20 @@ def tangent_coefficients_lanes_1(P, Z, order, db):
         vstore(Z, (k + 1) * (NROWS * LANES) + (2) * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * LANES) + (1) * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * LANES) + (0) * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * LANES) + (4) * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * LANES) + (3) * LANES))), vsplat(r)))
         vstore(Z, (k + 1) * (NROWS * LANES) + (3) * LANES, vmul(vmul(wg2, vsplat(inv_b)), vsplat(r)))
         vstore(Z, (k + 1) * (NROWS * LANES) + (4) * LANES, vmul(vmul(vneg(wg1), vsplat(inv_b)), vsplat(r)))
-        dwk = vmul(vload(Z, (k) * (NROWS * LANES) + (db + (2)) * LANES), vsplat(inv_b))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (0)) * LANES, vmul(vsub(vsub(vsub(vmul(dwp2, vsplat(inv_b)), vmul(vsplat(zeta), dwk)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * LANES) + (db + (3)) * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * LANES) + (db + (1)) * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (1)) * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1), vsplat(inv_b)), vmul(vsplat(chi), dwk)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * LANES) + (db + (4)) * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * LANES) + (db + (0)) * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (2)) * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * LANES) + (db + (1)) * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * LANES) + (db + (0)) * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * LANES) + (db + (4)) * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * LANES) + (db + (3)) * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (3)) * LANES, vmul(vmul(dwg2, vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (4)) * LANES, vmul(vmul(vneg(dwg1), vsplat(inv_b)), vsplat(r)))
+        inv_b_2, c12_2, la1_2, la2_2, ca2_2, za1_2, chi_2, zeta_2, mu_2, mxi_2, meta_2 = C
+        r_2 = 1.0 / (k + 1)
+        wk_2 = vmul(vload(Z, (k) * (NROWS * LANES) + (db + (2)) * LANES), vsplat(inv_b_2))
+        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (0)) * LANES, vmul(vsub(vsub(vsub(vmul(dwp2, vsplat(inv_b_2)), vmul(vsplat(zeta_2), wk_2)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * LANES) + (db + (3)) * LANES))), vmul(vsplat(la2_2), vload(Z, (k) * (NROWS * LANES) + (db + (1)) * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (1)) * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1), vsplat(inv_b_2)), vmul(vsplat(chi_2), wk_2)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * LANES) + (db + (4)) * LANES))), vmul(vsplat(la1_2), vload(Z, (k) * (NROWS * LANES) + (db + (0)) * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (2)) * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12_2), dp12), vmul(vsplat(ca2_2), vload(Z, (k) * (NROWS * LANES) + (db + (1)) * LANES))), vmul(vsplat(za1_2), vload(Z, (k) * (NROWS * LANES) + (db + (0)) * LANES))), vmul(vsplat(mxi_2), vload(Z, (k) * (NROWS * LANES) + (db + (4)) * LANES))), vmul(vsplat(meta_2), vload(Z, (k) * (NROWS * LANES) + (db + (3)) * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (3)) * LANES, vmul(vmul(dwg2, vsplat(inv_b_2)), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (4)) * LANES, vmul(vmul(vneg(dwg1), vsplat(inv_b_2)), vsplat(r_2)))
 
 
 @njit
 def tangent_coefficients_lanes_2(P, Z, order, db):
     """tangent_coefficients_lanes for G = 2 groups of LANES lanes."""
-    a1, a2, b, lam, chi, zeta, mu, xi, eta = (P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8])
-    inv_b = 1.0 / b
-    c12 = 1.0 / a2 - 1.0 / a1
-    la1 = lam / a1
-    la2 = lam / a2
-    ca2 = chi / a2
-    za1 = zeta / a1
-    mxi = mu * xi
-    meta = mu * eta
+    C = taylor_constants(P)
     for k in range(order):
         wp2_0 = vzero()
         wp2_1 = vzero()
@@ -126,24 +114,25 @@ def tangent_coefficients_lanes_2(P, Z, order, db):
             dwj_1 = vload(Z, (j) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES + 1 * LANES)
             wp2_0 = vadd(wp2_0, vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES)))
             wp2_1 = vadd(wp2_1, vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES + 1 * LANES)))
-            wp1_0 = vadd(wp1_0, vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (0) * 2 * LANES)))
-            wp1_1 = vadd(wp1_1, vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES)))
-            p12_0 = vadd(p12_0, vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (0) * 2 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES)))
-            p12_1 = vadd(p12_1, vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES + 1 * LANES)))
-            wg2_0 = vadd(wg2_0, vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (4) * 2 * LANES)))
-            wg2_1 = vadd(wg2_1, vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (4) * 2 * LANES + 1 * LANES)))
-            wg1_0 = vadd(wg1_0, vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (3) * 2 * LANES)))
-            wg1_1 = vadd(wg1_1, vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (3) * 2 * LANES + 1 * LANES)))
             dwp2_0 = vadd(dwp2_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))))
             dwp2_1 = vadd(dwp2_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))))
+            wp1_0 = vadd(wp1_0, vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (0) * 2 * LANES)))
+            wp1_1 = vadd(wp1_1, vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES)))
             dwp1_0 = vadd(dwp1_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (0) * 2 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES))))
             dwp1_1 = vadd(dwp1_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES))))
+            p12_0 = vadd(p12_0, vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (0) * 2 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES)))
+            p12_1 = vadd(p12_1, vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES + 1 * LANES)))
             dp12_0 = vadd(dp12_0, vadd(vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES)), vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (0) * 2 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))))
             dp12_1 = vadd(dp12_1, vadd(vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES + 1 * LANES)), vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))))
+            wg2_0 = vadd(wg2_0, vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (4) * 2 * LANES)))
+            wg2_1 = vadd(wg2_1, vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (4) * 2 * LANES + 1 * LANES)))
             dwg2_0 = vadd(dwg2_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (4) * 2 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES))))
             dwg2_1 = vadd(dwg2_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (4) * 2 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES))))
+            wg1_0 = vadd(wg1_0, vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (3) * 2 * LANES)))
+            wg1_1 = vadd(wg1_1, vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (3) * 2 * LANES + 1 * LANES)))
             dwg1_0 = vadd(dwg1_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (3) * 2 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES))))
             dwg1_1 = vadd(dwg1_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (3) * 2 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES))))
+        inv_b, c12, la1, la2, ca2, za1, chi, zeta, mu, mxi, meta = C
         r = 1.0 / (k + 1)
         wk_0 = vmul(vload(Z, (k) * (NROWS * 2 * LANES) + (2) * 2 * LANES), vsplat(inv_b))
         wk_1 = vmul(vload(Z, (k) * (NROWS * 2 * LANES) + (2) * 2 * LANES + 1 * LANES), vsplat(inv_b))
@@ -157,32 +146,26 @@ def tangent_coefficients_lanes_2(P, Z, order, db):
         vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (3) * 2 * LANES + 1 * LANES, vmul(vmul(wg2_1, vsplat(inv_b)), vsplat(r)))
         vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (4) * 2 * LANES, vmul(vmul(vneg(wg1_0), vsplat(inv_b)), vsplat(r)))
         vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (4) * 2 * LANES + 1 * LANES, vmul(vmul(vneg(wg1_1), vsplat(inv_b)), vsplat(r)))
-        dwk_0 = vmul(vload(Z, (k) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES), vsplat(inv_b))
-        dwk_1 = vmul(vload(Z, (k) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES + 1 * LANES), vsplat(inv_b))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_0, vsplat(inv_b)), vmul(vsplat(zeta), dwk_0)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_1, vsplat(inv_b)), vmul(vsplat(zeta), dwk_1)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_0), vsplat(inv_b)), vmul(vsplat(chi), dwk_0)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_1), vsplat(inv_b)), vmul(vsplat(chi), dwk_1)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_0), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_1), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES, vmul(vmul(dwg2_0, vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES, vmul(vmul(dwg2_1, vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES, vmul(vmul(vneg(dwg1_0), vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES, vmul(vmul(vneg(dwg1_1), vsplat(inv_b)), vsplat(r)))
+        inv_b_2, c12_2, la1_2, la2_2, ca2_2, za1_2, chi_2, zeta_2, mu_2, mxi_2, meta_2 = C
+        r_2 = 1.0 / (k + 1)
+        wk_2_0 = vmul(vload(Z, (k) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES), vsplat(inv_b_2))
+        wk_2_1 = vmul(vload(Z, (k) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES + 1 * LANES), vsplat(inv_b_2))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_0, vsplat(inv_b_2)), vmul(vsplat(zeta_2), wk_2_0)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES))), vmul(vsplat(la2_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_1, vsplat(inv_b_2)), vmul(vsplat(zeta_2), wk_2_1)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES))), vmul(vsplat(la2_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_0), vsplat(inv_b_2)), vmul(vsplat(chi_2), wk_2_0)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES))), vmul(vsplat(la1_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_1), vsplat(inv_b_2)), vmul(vsplat(chi_2), wk_2_1)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES))), vmul(vsplat(la1_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12_2), dp12_0), vmul(vsplat(ca2_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))), vmul(vsplat(za1_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES))), vmul(vsplat(mxi_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES))), vmul(vsplat(meta_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12_2), dp12_1), vmul(vsplat(ca2_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))), vmul(vsplat(za1_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES))), vmul(vsplat(mxi_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES))), vmul(vsplat(meta_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES, vmul(vmul(dwg2_0, vsplat(inv_b_2)), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES, vmul(vmul(dwg2_1, vsplat(inv_b_2)), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES, vmul(vmul(vneg(dwg1_0), vsplat(inv_b_2)), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES, vmul(vmul(vneg(dwg1_1), vsplat(inv_b_2)), vsplat(r_2)))
 
 
 @njit
 def tangent_coefficients_lanes_4(P, Z, order, db):
     """tangent_coefficients_lanes for G = 4 groups of LANES lanes."""
-    a1, a2, b, lam, chi, zeta, mu, xi, eta = (P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8])
-    inv_b = 1.0 / b
-    c12 = 1.0 / a2 - 1.0 / a1
-    la1 = lam / a1
-    la2 = lam / a2
-    ca2 = chi / a2
-    za1 = zeta / a1
-    mxi = mu * xi
-    meta = mu * eta
+    C = taylor_constants(P)
     for k in range(order):
         wp2_0 = vzero()
         wp2_1 = vzero()
@@ -238,42 +221,43 @@ def tangent_coefficients_lanes_4(P, Z, order, db):
             wp2_1 = vadd(wp2_1, vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 1 * LANES)))
             wp2_2 = vadd(wp2_2, vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 2 * LANES)))
             wp2_3 = vadd(wp2_3, vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 3 * LANES)))
-            wp1_0 = vadd(wp1_0, vmul(wj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES)))
-            wp1_1 = vadd(wp1_1, vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 1 * LANES)))
-            wp1_2 = vadd(wp1_2, vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 2 * LANES)))
-            wp1_3 = vadd(wp1_3, vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 3 * LANES)))
-            p12_0 = vadd(p12_0, vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES)))
-            p12_1 = vadd(p12_1, vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 1 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 1 * LANES)))
-            p12_2 = vadd(p12_2, vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 2 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 2 * LANES)))
-            p12_3 = vadd(p12_3, vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 3 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 3 * LANES)))
-            wg2_0 = vadd(wg2_0, vmul(wj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES)))
-            wg2_1 = vadd(wg2_1, vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 1 * LANES)))
-            wg2_2 = vadd(wg2_2, vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 2 * LANES)))
-            wg2_3 = vadd(wg2_3, vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 3 * LANES)))
-            wg1_0 = vadd(wg1_0, vmul(wj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES)))
-            wg1_1 = vadd(wg1_1, vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 1 * LANES)))
-            wg1_2 = vadd(wg1_2, vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 2 * LANES)))
-            wg1_3 = vadd(wg1_3, vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 3 * LANES)))
             dwp2_0 = vadd(dwp2_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES))))
             dwp2_1 = vadd(dwp2_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES))))
             dwp2_2 = vadd(dwp2_2, vadd(vmul(dwj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 2 * LANES)), vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES))))
             dwp2_3 = vadd(dwp2_3, vadd(vmul(dwj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 3 * LANES)), vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES))))
+            wp1_0 = vadd(wp1_0, vmul(wj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES)))
+            wp1_1 = vadd(wp1_1, vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 1 * LANES)))
+            wp1_2 = vadd(wp1_2, vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 2 * LANES)))
+            wp1_3 = vadd(wp1_3, vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 3 * LANES)))
             dwp1_0 = vadd(dwp1_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES))))
             dwp1_1 = vadd(dwp1_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES))))
             dwp1_2 = vadd(dwp1_2, vadd(vmul(dwj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 2 * LANES)), vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES))))
             dwp1_3 = vadd(dwp1_3, vadd(vmul(dwj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 3 * LANES)), vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES))))
+            p12_0 = vadd(p12_0, vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES)))
+            p12_1 = vadd(p12_1, vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 1 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 1 * LANES)))
+            p12_2 = vadd(p12_2, vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 2 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 2 * LANES)))
+            p12_3 = vadd(p12_3, vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 3 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 3 * LANES)))
             dp12_0 = vadd(dp12_0, vadd(vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES)), vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES))))
             dp12_1 = vadd(dp12_1, vadd(vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 1 * LANES)), vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 1 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES))))
             dp12_2 = vadd(dp12_2, vadd(vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 2 * LANES)), vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 2 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES))))
             dp12_3 = vadd(dp12_3, vadd(vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (1) * 4 * LANES + 3 * LANES)), vmul(vload(Z, (j) * (NROWS * 4 * LANES) + (0) * 4 * LANES + 3 * LANES), vload(Z, (i) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES))))
+            wg2_0 = vadd(wg2_0, vmul(wj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES)))
+            wg2_1 = vadd(wg2_1, vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 1 * LANES)))
+            wg2_2 = vadd(wg2_2, vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 2 * LANES)))
+            wg2_3 = vadd(wg2_3, vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 3 * LANES)))
             dwg2_0 = vadd(dwg2_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES))))
             dwg2_1 = vadd(dwg2_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 1 * LANES))))
             dwg2_2 = vadd(dwg2_2, vadd(vmul(dwj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 2 * LANES)), vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 2 * LANES))))
             dwg2_3 = vadd(dwg2_3, vadd(vmul(dwj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 3 * LANES)), vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 3 * LANES))))
+            wg1_0 = vadd(wg1_0, vmul(wj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES)))
+            wg1_1 = vadd(wg1_1, vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 1 * LANES)))
+            wg1_2 = vadd(wg1_2, vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 2 * LANES)))
+            wg1_3 = vadd(wg1_3, vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 3 * LANES)))
             dwg1_0 = vadd(dwg1_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES))))
             dwg1_1 = vadd(dwg1_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 1 * LANES))))
             dwg1_2 = vadd(dwg1_2, vadd(vmul(dwj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 2 * LANES)), vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 2 * LANES))))
             dwg1_3 = vadd(dwg1_3, vadd(vmul(dwj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 3 * LANES)), vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 3 * LANES))))
+        inv_b, c12, la1, la2, ca2, za1, chi, zeta, mu, mxi, meta = C
         r = 1.0 / (k + 1)
         wk_0 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (2) * 4 * LANES), vsplat(inv_b))
         wk_1 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (2) * 4 * LANES + 1 * LANES), vsplat(inv_b))
@@ -299,44 +283,38 @@ def tangent_coefficients_lanes_4(P, Z, order, db):
         vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 1 * LANES, vmul(vmul(vneg(wg1_1), vsplat(inv_b)), vsplat(r)))
         vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 2 * LANES, vmul(vmul(vneg(wg1_2), vsplat(inv_b)), vsplat(r)))
         vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (4) * 4 * LANES + 3 * LANES, vmul(vmul(vneg(wg1_3), vsplat(inv_b)), vsplat(r)))
-        dwk_0 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES), vsplat(inv_b))
-        dwk_1 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 1 * LANES), vsplat(inv_b))
-        dwk_2 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 2 * LANES), vsplat(inv_b))
-        dwk_3 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 3 * LANES), vsplat(inv_b))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_0, vsplat(inv_b)), vmul(vsplat(zeta), dwk_0)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_1, vsplat(inv_b)), vmul(vsplat(zeta), dwk_1)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 1 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_2, vsplat(inv_b)), vmul(vsplat(zeta), dwk_2)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 2 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_3, vsplat(inv_b)), vmul(vsplat(zeta), dwk_3)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 3 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_0), vsplat(inv_b)), vmul(vsplat(chi), dwk_0)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_1), vsplat(inv_b)), vmul(vsplat(chi), dwk_1)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 1 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_2), vsplat(inv_b)), vmul(vsplat(chi), dwk_2)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 2 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_3), vsplat(inv_b)), vmul(vsplat(chi), dwk_3)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 3 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_0), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_1), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 1 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 2 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_2), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 2 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 2 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 3 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_3), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 3 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 3 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES, vmul(vmul(dwg2_0, vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 1 * LANES, vmul(vmul(dwg2_1, vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 2 * LANES, vmul(vmul(dwg2_2, vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 3 * LANES, vmul(vmul(dwg2_3, vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES, vmul(vmul(vneg(dwg1_0), vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 1 * LANES, vmul(vmul(vneg(dwg1_1), vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 2 * LANES, vmul(vmul(vneg(dwg1_2), vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 3 * LANES, vmul(vmul(vneg(dwg1_3), vsplat(inv_b)), vsplat(r)))
+        inv_b_2, c12_2, la1_2, la2_2, ca2_2, za1_2, chi_2, zeta_2, mu_2, mxi_2, meta_2 = C
+        r_2 = 1.0 / (k + 1)
+        wk_2_0 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES), vsplat(inv_b_2))
+        wk_2_1 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 1 * LANES), vsplat(inv_b_2))
+        wk_2_2 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 2 * LANES), vsplat(inv_b_2))
+        wk_2_3 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 3 * LANES), vsplat(inv_b_2))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_0, vsplat(inv_b_2)), vmul(vsplat(zeta_2), wk_2_0)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES))), vmul(vsplat(la2_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_1, vsplat(inv_b_2)), vmul(vsplat(zeta_2), wk_2_1)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 1 * LANES))), vmul(vsplat(la2_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_2, vsplat(inv_b_2)), vmul(vsplat(zeta_2), wk_2_2)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 2 * LANES))), vmul(vsplat(la2_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_3, vsplat(inv_b_2)), vmul(vsplat(zeta_2), wk_2_3)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 3 * LANES))), vmul(vsplat(la2_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_0), vsplat(inv_b_2)), vmul(vsplat(chi_2), wk_2_0)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES))), vmul(vsplat(la1_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_1), vsplat(inv_b_2)), vmul(vsplat(chi_2), wk_2_1)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 1 * LANES))), vmul(vsplat(la1_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_2), vsplat(inv_b_2)), vmul(vsplat(chi_2), wk_2_2)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 2 * LANES))), vmul(vsplat(la1_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_3), vsplat(inv_b_2)), vmul(vsplat(chi_2), wk_2_3)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 3 * LANES))), vmul(vsplat(la1_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12_2), dp12_0), vmul(vsplat(ca2_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES))), vmul(vsplat(za1_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES))), vmul(vsplat(mxi_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES))), vmul(vsplat(meta_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12_2), dp12_1), vmul(vsplat(ca2_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES))), vmul(vsplat(za1_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES))), vmul(vsplat(mxi_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 1 * LANES))), vmul(vsplat(meta_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 1 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 2 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12_2), dp12_2), vmul(vsplat(ca2_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES))), vmul(vsplat(za1_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES))), vmul(vsplat(mxi_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 2 * LANES))), vmul(vsplat(meta_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 2 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 3 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12_2), dp12_3), vmul(vsplat(ca2_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES))), vmul(vsplat(za1_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES))), vmul(vsplat(mxi_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 3 * LANES))), vmul(vsplat(meta_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 3 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES, vmul(vmul(dwg2_0, vsplat(inv_b_2)), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 1 * LANES, vmul(vmul(dwg2_1, vsplat(inv_b_2)), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 2 * LANES, vmul(vmul(dwg2_2, vsplat(inv_b_2)), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 3 * LANES, vmul(vmul(dwg2_3, vsplat(inv_b_2)), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES, vmul(vmul(vneg(dwg1_0), vsplat(inv_b_2)), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 1 * LANES, vmul(vmul(vneg(dwg1_1), vsplat(inv_b_2)), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 2 * LANES, vmul(vmul(vneg(dwg1_2), vsplat(inv_b_2)), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 3 * LANES, vmul(vmul(vneg(dwg1_3), vsplat(inv_b_2)), vsplat(r_2)))
 
 
 @njit
 def deviation_coefficients_lanes_1(P, Z, order, db):
     """deviation_coefficients_lanes for G = 1 group of LANES lanes."""
-    a1, a2, b, lam, chi, zeta, mu, xi, eta = (P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8])
-    inv_b = 1.0 / b
-    c12 = 1.0 / a2 - 1.0 / a1
-    la1 = lam / a1
-    la2 = lam / a2
-    ca2 = chi / a2
-    za1 = zeta / a1
-    mxi = mu * xi
-    meta = mu * eta
+    C = taylor_constants(P)
     for k in range(order):
         dwp2 = vzero()
         dwp1 = vzero()
@@ -352,27 +330,20 @@ def deviation_coefficients_lanes_1(P, Z, order, db):
             dp12 = vadd(dp12, vadd(vmul(vload(Z, (j) * (NROWS * LANES) + (db + (0)) * LANES), vload(Z, (i) * (NROWS * LANES) + (1) * LANES)), vmul(vload(Z, (j) * (NROWS * LANES) + (0) * LANES), vload(Z, (i) * (NROWS * LANES) + (db + (1)) * LANES))))
             dwg2 = vadd(dwg2, vadd(vmul(dwj, vload(Z, (i) * (NROWS * LANES) + (4) * LANES)), vmul(wj, vload(Z, (i) * (NROWS * LANES) + (db + (4)) * LANES))))
             dwg1 = vadd(dwg1, vadd(vmul(dwj, vload(Z, (i) * (NROWS * LANES) + (3) * LANES)), vmul(wj, vload(Z, (i) * (NROWS * LANES) + (db + (3)) * LANES))))
-        r = 1.0 / (k + 1)
-        dwk = vmul(vload(Z, (k) * (NROWS * LANES) + (db + (2)) * LANES), vsplat(inv_b))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (0)) * LANES, vmul(vsub(vsub(vsub(vmul(dwp2, vsplat(inv_b)), vmul(vsplat(zeta), dwk)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * LANES) + (db + (3)) * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * LANES) + (db + (1)) * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (1)) * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1), vsplat(inv_b)), vmul(vsplat(chi), dwk)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * LANES) + (db + (4)) * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * LANES) + (db + (0)) * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (2)) * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * LANES) + (db + (1)) * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * LANES) + (db + (0)) * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * LANES) + (db + (4)) * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * LANES) + (db + (3)) * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (3)) * LANES, vmul(vmul(dwg2, vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (4)) * LANES, vmul(vmul(vneg(dwg1), vsplat(inv_b)), vsplat(r)))
+        inv_b_2, c12_2, la1_2, la2_2, ca2_2, za1_2, chi_2, zeta_2, mu_2, mxi_2, meta_2 = C
+        r_2 = 1.0 / (k + 1)
+        wk_2 = vmul(vload(Z, (k) * (NROWS * LANES) + (db + (2)) * LANES), vsplat(inv_b_2))
+        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (0)) * LANES, vmul(vsub(vsub(vsub(vmul(dwp2, vsplat(inv_b_2)), vmul(vsplat(zeta_2), wk_2)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * LANES) + (db + (3)) * LANES))), vmul(vsplat(la2_2), vload(Z, (k) * (NROWS * LANES) + (db + (1)) * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (1)) * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1), vsplat(inv_b_2)), vmul(vsplat(chi_2), wk_2)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * LANES) + (db + (4)) * LANES))), vmul(vsplat(la1_2), vload(Z, (k) * (NROWS * LANES) + (db + (0)) * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (2)) * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12_2), dp12), vmul(vsplat(ca2_2), vload(Z, (k) * (NROWS * LANES) + (db + (1)) * LANES))), vmul(vsplat(za1_2), vload(Z, (k) * (NROWS * LANES) + (db + (0)) * LANES))), vmul(vsplat(mxi_2), vload(Z, (k) * (NROWS * LANES) + (db + (4)) * LANES))), vmul(vsplat(meta_2), vload(Z, (k) * (NROWS * LANES) + (db + (3)) * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (3)) * LANES, vmul(vmul(dwg2, vsplat(inv_b_2)), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (4)) * LANES, vmul(vmul(vneg(dwg1), vsplat(inv_b_2)), vsplat(r_2)))
 
 
 @njit
 def deviation_coefficients_lanes_2(P, Z, order, db):
     """deviation_coefficients_lanes for G = 2 groups of LANES lanes."""
-    a1, a2, b, lam, chi, zeta, mu, xi, eta = (P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8])
-    inv_b = 1.0 / b
-    c12 = 1.0 / a2 - 1.0 / a1
-    la1 = lam / a1
-    la2 = lam / a2
-    ca2 = chi / a2
-    za1 = zeta / a1
-    mxi = mu * xi
-    meta = mu * eta
+    C = taylor_constants(P)
     for k in range(order):
         dwp2_0 = vzero()
         dwp2_1 = vzero()
@@ -400,33 +371,26 @@ def deviation_coefficients_lanes_2(P, Z, order, db):
             dwg2_1 = vadd(dwg2_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (4) * 2 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES))))
             dwg1_0 = vadd(dwg1_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (3) * 2 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES))))
             dwg1_1 = vadd(dwg1_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (3) * 2 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES))))
-        r = 1.0 / (k + 1)
-        dwk_0 = vmul(vload(Z, (k) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES), vsplat(inv_b))
-        dwk_1 = vmul(vload(Z, (k) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES + 1 * LANES), vsplat(inv_b))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_0, vsplat(inv_b)), vmul(vsplat(zeta), dwk_0)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_1, vsplat(inv_b)), vmul(vsplat(zeta), dwk_1)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_0), vsplat(inv_b)), vmul(vsplat(chi), dwk_0)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_1), vsplat(inv_b)), vmul(vsplat(chi), dwk_1)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_0), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_1), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES, vmul(vmul(dwg2_0, vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES, vmul(vmul(dwg2_1, vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES, vmul(vmul(vneg(dwg1_0), vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES, vmul(vmul(vneg(dwg1_1), vsplat(inv_b)), vsplat(r)))
+        inv_b_2, c12_2, la1_2, la2_2, ca2_2, za1_2, chi_2, zeta_2, mu_2, mxi_2, meta_2 = C
+        r_2 = 1.0 / (k + 1)
+        wk_2_0 = vmul(vload(Z, (k) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES), vsplat(inv_b_2))
+        wk_2_1 = vmul(vload(Z, (k) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES + 1 * LANES), vsplat(inv_b_2))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_0, vsplat(inv_b_2)), vmul(vsplat(zeta_2), wk_2_0)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES))), vmul(vsplat(la2_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_1, vsplat(inv_b_2)), vmul(vsplat(zeta_2), wk_2_1)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES))), vmul(vsplat(la2_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_0), vsplat(inv_b_2)), vmul(vsplat(chi_2), wk_2_0)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES))), vmul(vsplat(la1_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_1), vsplat(inv_b_2)), vmul(vsplat(chi_2), wk_2_1)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES))), vmul(vsplat(la1_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12_2), dp12_0), vmul(vsplat(ca2_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))), vmul(vsplat(za1_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES))), vmul(vsplat(mxi_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES))), vmul(vsplat(meta_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12_2), dp12_1), vmul(vsplat(ca2_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))), vmul(vsplat(za1_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES))), vmul(vsplat(mxi_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES))), vmul(vsplat(meta_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES, vmul(vmul(dwg2_0, vsplat(inv_b_2)), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES, vmul(vmul(dwg2_1, vsplat(inv_b_2)), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES, vmul(vmul(vneg(dwg1_0), vsplat(inv_b_2)), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES, vmul(vmul(vneg(dwg1_1), vsplat(inv_b_2)), vsplat(r_2)))
 
 
 @njit
 def deviation_coefficients_lanes_4(P, Z, order, db):
     """deviation_coefficients_lanes for G = 4 groups of LANES lanes."""
-    a1, a2, b, lam, chi, zeta, mu, xi, eta = (P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8])
-    inv_b = 1.0 / b
-    c12 = 1.0 / a2 - 1.0 / a1
-    la1 = lam / a1
-    la2 = lam / a2
-    ca2 = chi / a2
-    za1 = zeta / a1
-    mxi = mu * xi
-    meta = mu * eta
+    C = taylor_constants(P)
     for k in range(order):
         dwp2_0 = vzero()
         dwp2_1 = vzero()
@@ -478,31 +442,32 @@ def deviation_coefficients_lanes_4(P, Z, order, db):
             dwg1_1 = vadd(dwg1_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 1 * LANES))))
             dwg1_2 = vadd(dwg1_2, vadd(vmul(dwj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 2 * LANES)), vmul(wj_2, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 2 * LANES))))
             dwg1_3 = vadd(dwg1_3, vadd(vmul(dwj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (3) * 4 * LANES + 3 * LANES)), vmul(wj_3, vload(Z, (i) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 3 * LANES))))
-        r = 1.0 / (k + 1)
-        dwk_0 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES), vsplat(inv_b))
-        dwk_1 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 1 * LANES), vsplat(inv_b))
-        dwk_2 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 2 * LANES), vsplat(inv_b))
-        dwk_3 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 3 * LANES), vsplat(inv_b))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_0, vsplat(inv_b)), vmul(vsplat(zeta), dwk_0)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_1, vsplat(inv_b)), vmul(vsplat(zeta), dwk_1)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 1 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_2, vsplat(inv_b)), vmul(vsplat(zeta), dwk_2)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 2 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_3, vsplat(inv_b)), vmul(vsplat(zeta), dwk_3)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 3 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_0), vsplat(inv_b)), vmul(vsplat(chi), dwk_0)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_1), vsplat(inv_b)), vmul(vsplat(chi), dwk_1)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 1 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_2), vsplat(inv_b)), vmul(vsplat(chi), dwk_2)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 2 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_3), vsplat(inv_b)), vmul(vsplat(chi), dwk_3)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 3 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_0), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_1), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 1 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 2 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_2), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 2 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 2 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 3 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), dp12_3), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 3 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 3 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES, vmul(vmul(dwg2_0, vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 1 * LANES, vmul(vmul(dwg2_1, vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 2 * LANES, vmul(vmul(dwg2_2, vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 3 * LANES, vmul(vmul(dwg2_3, vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES, vmul(vmul(vneg(dwg1_0), vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 1 * LANES, vmul(vmul(vneg(dwg1_1), vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 2 * LANES, vmul(vmul(vneg(dwg1_2), vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 3 * LANES, vmul(vmul(vneg(dwg1_3), vsplat(inv_b)), vsplat(r)))
+        inv_b_2, c12_2, la1_2, la2_2, ca2_2, za1_2, chi_2, zeta_2, mu_2, mxi_2, meta_2 = C
+        r_2 = 1.0 / (k + 1)
+        wk_2_0 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES), vsplat(inv_b_2))
+        wk_2_1 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 1 * LANES), vsplat(inv_b_2))
+        wk_2_2 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 2 * LANES), vsplat(inv_b_2))
+        wk_2_3 = vmul(vload(Z, (k) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 3 * LANES), vsplat(inv_b_2))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_0, vsplat(inv_b_2)), vmul(vsplat(zeta_2), wk_2_0)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES))), vmul(vsplat(la2_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_1, vsplat(inv_b_2)), vmul(vsplat(zeta_2), wk_2_1)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 1 * LANES))), vmul(vsplat(la2_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_2, vsplat(inv_b_2)), vmul(vsplat(zeta_2), wk_2_2)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 2 * LANES))), vmul(vsplat(la2_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_3, vsplat(inv_b_2)), vmul(vsplat(zeta_2), wk_2_3)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 3 * LANES))), vmul(vsplat(la2_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_0), vsplat(inv_b_2)), vmul(vsplat(chi_2), wk_2_0)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES))), vmul(vsplat(la1_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_1), vsplat(inv_b_2)), vmul(vsplat(chi_2), wk_2_1)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 1 * LANES))), vmul(vsplat(la1_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_2), vsplat(inv_b_2)), vmul(vsplat(chi_2), wk_2_2)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 2 * LANES))), vmul(vsplat(la1_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_3), vsplat(inv_b_2)), vmul(vsplat(chi_2), wk_2_3)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 3 * LANES))), vmul(vsplat(la1_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12_2), dp12_0), vmul(vsplat(ca2_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES))), vmul(vsplat(za1_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES))), vmul(vsplat(mxi_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES))), vmul(vsplat(meta_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12_2), dp12_1), vmul(vsplat(ca2_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 1 * LANES))), vmul(vsplat(za1_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 1 * LANES))), vmul(vsplat(mxi_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 1 * LANES))), vmul(vsplat(meta_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 1 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 2 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12_2), dp12_2), vmul(vsplat(ca2_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 2 * LANES))), vmul(vsplat(za1_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 2 * LANES))), vmul(vsplat(mxi_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 2 * LANES))), vmul(vsplat(meta_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 2 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (2)) * 4 * LANES + 3 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12_2), dp12_3), vmul(vsplat(ca2_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (1)) * 4 * LANES + 3 * LANES))), vmul(vsplat(za1_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (0)) * 4 * LANES + 3 * LANES))), vmul(vsplat(mxi_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 3 * LANES))), vmul(vsplat(meta_2), vload(Z, (k) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 3 * LANES))), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES, vmul(vmul(dwg2_0, vsplat(inv_b_2)), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 1 * LANES, vmul(vmul(dwg2_1, vsplat(inv_b_2)), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 2 * LANES, vmul(vmul(dwg2_2, vsplat(inv_b_2)), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (3)) * 4 * LANES + 3 * LANES, vmul(vmul(dwg2_3, vsplat(inv_b_2)), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES, vmul(vmul(vneg(dwg1_0), vsplat(inv_b_2)), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 1 * LANES, vmul(vmul(vneg(dwg1_1), vsplat(inv_b_2)), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 2 * LANES, vmul(vmul(vneg(dwg1_2), vsplat(inv_b_2)), vsplat(r_2)))
+        vstore(Z, (k + 1) * (NROWS * 4 * LANES) + (db + (4)) * 4 * LANES + 3 * LANES, vmul(vmul(vneg(dwg1_3), vsplat(inv_b_2)), vsplat(r_2)))
 
 
 #: tangent_coefficients_lanes for each G

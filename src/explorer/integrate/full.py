@@ -62,9 +62,9 @@ def integrate_full(y0, phi0, P, t_samples, rtol, atol, max_steps, out, out_phi, 
     steps = 0
     if j >= ns:
         return STATUS_DONE, j, nturn, steps, 0.0
-    h_abs = sy.dop853_first_step(sy.FULL, ycur, P, K, rtol, atol, tmax, tmp)
     t = 0.0
     tc = 0.0
+    h_abs = sy.FIRST_STEP  # the first call evaluates K[0] = f(ycur) and picks the first step
     while True:
         code, h, last, h_abs, steps = sy.dop853_step(sy.FULL, ycur, P, K, t, tmax, STATUS_DONE, h_abs, steps,
                                                      max_steps, rtol, atol, tmp, ynew, True)

@@ -243,11 +243,40 @@ def step_lanes(orb, norms, L_t, tend, e_p, e_q, margin, factor, hv, L_last, L_st
             continue
         code, h, last = lane_step(l, norms, L_t[l], tend, e_p, e_q, margin, factor)
         if code >= 0:
-            L_status[l] = code
-            L_stop[l] = True
+            stop_lane(l, code, L_status, L_stop)
             continue
         hv[l] = h
         L_last[l] = last
+
+
+@njit(inline="always")
+def stop_lane(l, status, L_status, L_stop):
+    """Lane l's orbit stops with ``status`` (written out and replaced at the end of the step)."""
+    L_status[l] = status
+    L_stop[l] = True
+
+
+@njit(inline="always")
+def stop_unless_finite(l, znew, first, last, L_status, L_stop):
+    """Stop lane l (STATUS_NONFINITE) unless rows first..last - 1 of its new state znew[:, l] are
+    finite: kernels.checks.all_finite (their sum is finite), written out here (a call to
+    all_finite, a loop of unknown length, cost the crossing lanes ~1 %)."""
+    s = 0.0
+    for i in range(first, last):
+        s += znew[i, l]
+    if not (s - s == 0.0):
+        stop_lane(l, STATUS_NONFINITE, L_status, L_stop)
+
+
+@njit(inline="always")
+def count_step(l, znew, first, last, L_steps, L_status, L_stop):
+    """After the vector step: unless lane l stopped in :func:`step_lanes`, its step is counted
+    and its new state checked (:func:`stop_unless_finite` of rows first..last - 1), as at the end
+    of systems.taylor_step (the tangent lanes; :func:`run_worker`, the W4 hot loop, sums the
+    state as it copies it out of the lane, the same checks in one pass)."""
+    if not L_stop[l]:
+        L_steps[l] += 1
+        stop_unless_finite(l, znew, first, last, L_status, L_stop)
 
 
 @njit
@@ -473,8 +502,7 @@ def run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, o
                     yl[i] = ynew[i, l]
                     s += yl[i]
                 if not (s - s == 0.0):
-                    L_status[l] = STATUS_NONFINITE
-                    L_stop[l] = True
+                    stop_lane(l, STATUS_NONFINITE, L_status, L_stop)
             if not L_stop[l]:
                 h = hv[l]
                 t = L_t[l]
@@ -495,8 +523,7 @@ def run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, o
                     _evaluate_lane(X, order, l, tau, yc)
                     kept = keep_crossing(out_cross[j], count, (t - tc) + tau, yc, P, L_H0[l], cphi, sphi)
                     if kept < 0:
-                        L_status[l] = STATUS_NONFINITE
-                        L_stop[l] = True
+                        stop_lane(l, STATUS_NONFINITE, L_status, L_stop)
                         break
                     count = kept
                     L_count[l] = count
@@ -509,14 +536,11 @@ def run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, o
                     X[0, i, l] = yl[i]
                 L_gprev[l] = gnew
                 if count >= L_target[l]:
-                    L_status[l] = STATUS_DONE
-                    L_stop[l] = True
+                    stop_lane(l, STATUS_DONE, L_status, L_stop)
                 elif t >= tmax:          # the budgets, checked before the next step
-                    L_status[l] = STATUS_TMAX
-                    L_stop[l] = True
+                    stop_lane(l, STATUS_TMAX, L_status, L_stop)
                 elif L_steps[l] >= max_steps:
-                    L_status[l] = STATUS_MAX_STEPS
-                    L_stop[l] = True
+                    stop_lane(l, STATUS_MAX_STEPS, L_status, L_stop)
             if L_stop[l]:
                 # orbit j stopped: write it out and refill the lane
                 _finish(j, l, X, L_count[l], L_status[l], L_t[l], L_tc[l], L_gprev[l], L_steps[l], carry,

@@ -8,7 +8,7 @@ DOP853 and splitting), tangent dynamics (:mod:`explorer.integrate.tangent`) and 
 (:mod:`explorer.integrate.full`) -- differ only in what they observe after an accepted step;
 the step itself is written once here, per method:
 
-- :func:`dop853_step` (first step, the twelve stages, the solution, the error norm, the budget
+- :func:`dop853_step` (the first step, the twelve stages, the solution, the error norm, the budget
   and non-finite checks, retries; :func:`dop853_dense_stages` the three dense-output stages);
 - :func:`taylor_step` (the budgets, the Taylor coefficients of the system by its recurrence,
   their finiteness, the Jorba-Zou step from the orbit's own coefficients, the step clipped to
@@ -62,6 +62,8 @@ FULL = 2
 DIMENSION = {REDUCED: 5, TANGENT: 10, FULL: FULL_DIM}
 #: an accepted step (not a kernel status)
 STEP_OK = -1
+#: the ``h_abs`` a loop gives :func:`dop853_step` before its first step (no step proposed yet)
+FIRST_STEP = -1.0
 #: rows of the orbit itself in every system's state (the rest: deviation vector, position)
 N_ORBIT = 5
 EPS = 2.220446049250313e-16
@@ -107,9 +109,13 @@ def dop853_step(system, y, P, K, t, tend, end_code, h_abs, steps, max_steps, rto
     proposed), ``STATUS_MAX_STEPS`` or ``STATUS_STEP_UNDERFLOW`` (a budget ran out before an
     attempt) or ``STATUS_NONFINITE`` (the error or the solution is not finite).  ``steps`` counts
     attempts.  With ``fsal`` an accepted step also sets K[12] = f(ynew) (first same as last; the
-    tangent loop renormalises first, so it computes f itself)."""
+    tangent loop renormalises first, so it computes f itself).  With ``h_abs`` = FIRST_STEP
+    (a loop's first call) it starts the integration: K[0] = f(y) and scipy's initial step for
+    the span to ``tend`` (:func:`dop853_first_step`)."""
     if not (t < tend):
         return end_code, 0.0, False, h_abs, steps
+    if h_abs == FIRST_STEP:
+        h_abs = dop853_first_step(system, y, P, K, rtol, atol, tend - t, tmp)
     rejected = False
     while True:
         if steps >= max_steps:

@@ -218,11 +218,11 @@ def orbit_tangent_dop853(y0, v0, P, T, rtol, atol, max_steps, hist_t, hist, res,
     tmp = np.empty(n)
     acc = np.zeros(tg.N_ACC)
     row = np.empty(tg.N_RES)
-    _start(y0, v0, z)
-    h_abs = sy.dop853_first_step(sy.TANGENT, z, P, K, rtol, atol, T, tmp)
     t = 0.0
     steps = 0
     hpos = 0
+    h_abs = sy.FIRST_STEP
+    _start(y0, v0, z)
     while True:
         code, h, last, h_abs, steps = sy.dop853_step(sy.TANGENT, z, P, K, t, T, STATUS_DONE, h_abs, steps,
                                                      max_steps, rtol, atol, tmp, znew, False)

@@ -42,16 +42,19 @@ from explorer.integrate._tangent_lanes_generated import (
 from explorer.integrate.lanes import (
     N_NORMS,
     aligned_zeros,
+    count_step,
     evaluate_lanes,
     next_lane_orbit,
     step_constants,
     step_lanes,
     step_norms_lanes,
+    stop_lane,
+    stop_unless_finite,
     worker_lanes,
 )
 from explorer.integrate.simd import LANES
 from explorer.integrate.tangent import _early, _finish_ext, _history
-from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE
+from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS
 from explorer.kernels import tangent as tg
 
 _IDLE = -1
@@ -160,21 +163,9 @@ def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_s
             j = orb[l]
             if j == _IDLE:
                 continue
-            if not L_stop[l]:
-                L_steps[l] += 1
-                s = 0.0                      # kernels.checks.all_finite of the 10 rows
-                for i in range(10):
-                    s += znew[i, l]
-                if not (s - s == 0.0):
-                    L_status[l] = STATUS_NONFINITE
-                    L_stop[l] = True
-                elif nvec == 2:
-                    s = 0.0
-                    for i in range(5):
-                        s += znew[DEV2 + i, l]
-                    if not (s - s == 0.0):
-                        L_status[l] = STATUS_NONFINITE
-                        L_stop[l] = True
+            count_step(l, znew, 0, DEV1 + 5, L_steps, L_status, L_stop)   # the orbit and the first vector
+            if nvec == 2 and not L_stop[l]:
+                stop_unless_finite(l, znew, DEV2, DEV2 + 5, L_status, L_stop)
             if not L_stop[l]:
                 t = L_t[l]
                 t_new = T if L_last[l] else t + hv[l]
@@ -197,14 +188,11 @@ def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_s
                     early, L_since[l] = _early(acc[l], v, w, nvec, sali_stop, megno_level, early_tmin, L_since[l])
                 if early != tg.EARLY_NONE:
                     L_early[l] = early
-                    L_status[l] = STATUS_DONE
-                    L_stop[l] = True
+                    stop_lane(l, STATUS_DONE, L_status, L_stop)
                 elif not (t_new < T):        # the checks at the top of systems.taylor_step
-                    L_status[l] = STATUS_DONE
-                    L_stop[l] = True
+                    stop_lane(l, STATUS_DONE, L_status, L_stop)
                 elif L_steps[l] >= max_steps:
-                    L_status[l] = STATUS_MAX_STEPS
-                    L_stop[l] = True
+                    stop_lane(l, STATUS_MAX_STEPS, L_status, L_stop)
             if L_stop[l]:
                 _finish(j, l, Z, acc, v, w, nvec, L_early[l], L_status[l], L_steps[l], out_res, out_ext,
                         out_status, out_final, out_steps, out_w)

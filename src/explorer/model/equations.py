@@ -4,11 +4,13 @@ recurrence.  Only numbers and arrays; the numpy twin a reader checks is
 :mod:`explorer.model`.
 
 State ``y = (p1, p2, M, g1, g2)``, ``(g1, g2) = (sin phi, cos phi)``;
-parameters packed as ``P = (a1, a2, b, lam, chi, zeta, mu, xi, eta)``.
+parameters packed as ``P = (a1, a2, b, lam, chi, zeta, mu, xi, eta)``, read by the index
+constants of :mod:`explorer.model.parameters` (``P[MU]``).
 """
 import math
 
 from explorer._jit import njit
+from explorer.model.parameters import A1, A2, CHI, ETA, LAM, MU, XI, ZETA, B
 
 # Splitting H = U + H_2 + H_1 + H_M (docs/model.md R4). Flow ids, outermost first:
 # the Strang base method applies U, H_2, H_1 half steps around a full H_M step,
@@ -22,7 +24,7 @@ def rhs(y, P, dy):
     """docs/model.md R3 (ur12 corrected):
     dp/dt = (M/b) J (p - s) - mu g - lam J A p;  dM/dt = (p - s, J A p) - mu (r, J g);
     dg/dt = (M/b) J g, with J v = (v2, -v1)."""
-    a1, a2, b, lam, chi, zeta, mu, xi, eta = P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8]
+    a1, a2, b, lam, chi, zeta, mu, xi, eta = P[A1], P[A2], P[B], P[LAM], P[CHI], P[ZETA], P[MU], P[XI], P[ETA]
     p1, p2, m, g1, g2 = y[0], y[1], y[2], y[3], y[4]
     w = m / b
     dy[0] = w * (p2 - zeta) - mu * g1 - lam * p2 / a2
@@ -37,7 +39,7 @@ def rhs(y, P, dy):
 def energy(y, P):
     """docs/model.md R3:
     H = 1/2(p1^2/a1 + p2^2/a2 + M^2/b) - (mu/lam)((p1-chi) g2 - (p2-zeta) g1) + mu (xi g1 + eta g2)."""
-    a1, a2, b, lam, chi, zeta, mu, xi, eta = P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8]
+    a1, a2, b, lam, chi, zeta, mu, xi, eta = P[A1], P[A2], P[B], P[LAM], P[CHI], P[ZETA], P[MU], P[XI], P[ETA]
     p1, p2, m, g1, g2 = y[0], y[1], y[2], y[3], y[4]
     kin = 0.5 * (p1 * p1 / a1 + p2 * p2 / a2 + m * m / b)
     return kin - (mu / lam) * ((p1 - chi) * g2 - (p2 - zeta) * g1) + mu * (xi * g1 + eta * g2)
@@ -48,8 +50,8 @@ def energy(y, P):
 def flow_hm(y, P, t):
     """docs/model.md R4, H_M = M^2/(2b): M fixed; p - s and g rotate rigidly by the angle (M/b) t
     (d q/dt = (M/b) J q, J q = (q2, -q1))."""
-    chi, zeta = P[4], P[5]
-    th = y[2] / P[2] * t
+    chi, zeta = P[CHI], P[ZETA]
+    th = y[2] / P[B] * t
     c = math.cos(th)
     s = math.sin(th)
     q1 = y[0] - chi
@@ -62,34 +64,40 @@ def flow_hm(y, P, t):
     y[4] = -s * g1 + c * g2
 
 
+@njit(inline="always")
+def _flow_shear(y, i, j, a, c, lam, s, t):
+    """docs/model.md R4, the flow of H_1 = p1^2/(2 a1) (rows i, j = 0, 1, a = a1, c = zeta, s = 1)
+    or H_2 = p2^2/(2 a2) (i, j = 1, 0, a = a2, c = chi, s = -1) for time t: with u = p_i/a, p_i and
+    g fixed; p_j(t) = p_j + s lam u t; dM/dt = -s (p_j(t) - c) u, so
+    M(t) = M - s u t ((p_j - c) + s lam u t / 2).  (The factors s = +-1 are exact.)"""
+    u = y[i] / a
+    d = s * lam * u * t
+    y[2] -= s * u * t * ((y[j] - c) + 0.5 * d)
+    y[j] += d
+
+
 @njit
 def flow_h1(y, P, t):
     """docs/model.md R4, H_1 = p1^2/(2 a1): p1, g fixed; p2(t) = p2 + (lam p1/a1) t;
     dM/dt = -(p2(t) - zeta) p1/a1, so M(t) = M - (p1/a1)((p2 - zeta) t + lam p1 t^2/(2 a1))."""
-    u = y[0] / P[0]
-    dp2 = P[3] * u * t
-    y[2] -= u * t * ((y[1] - P[5]) + 0.5 * dp2)
-    y[1] += dp2
+    _flow_shear(y, 0, 1, P[A1], P[ZETA], P[LAM], 1.0, t)
 
 
 @njit
 def flow_h2(y, P, t):
     """docs/model.md R4, H_2 = p2^2/(2 a2): p2, g fixed; p1(t) = p1 - (lam p2/a2) t;
     dM/dt = (p1(t) - chi) p2/a2, so M(t) = M + (p2/a2)((p1 - chi) t - lam p2 t^2/(2 a2))."""
-    v = y[1] / P[1]
-    dp1 = -P[3] * v * t
-    y[2] += v * t * ((y[0] - P[4]) + 0.5 * dp1)
-    y[0] += dp1
+    _flow_shear(y, 1, 0, P[A2], P[CHI], P[LAM], -1.0, t)
 
 
 @njit
 def flow_u(y, P, t):
     """docs/model.md R4, U = -(mu/lam)(p - s, J g) + mu (r, g): g fixed; p(t) = p - mu g t;
     dM/dt = -mu (r, J g) = -mu (xi g2 - eta g1) (constant)."""
-    mu = P[6]
+    mu = P[MU]
     y[0] -= mu * y[3] * t
     y[1] -= mu * y[4] * t
-    y[2] -= mu * (P[7] * y[4] - P[8] * y[3]) * t
+    y[2] -= mu * (P[XI] * y[4] - P[ETA] * y[3]) * t
 
 
 @njit
@@ -106,6 +114,35 @@ def apply_flow(k, y, P, t):
 
 
 # ------------------------------------------------------------------ Taylor recurrence
+@njit(inline="always")
+def taylor_constants(P):
+    """The constants of the Taylor recurrence of R3 (:func:`taylor_coefficients`), read from P by
+    the model's parameter indices: (1/b, 1/a2 - 1/a1, lam/a1, lam/a2, chi/a2, zeta/a1, chi, zeta,
+    mu, mu xi, mu eta).  Called once per recurrence; ``tools/gen_lanes.py`` keeps the call."""
+    a1, a2, lam, chi, zeta, mu = P[A1], P[A2], P[LAM], P[CHI], P[ZETA], P[MU]
+    return (1.0 / P[B], 1.0 / a2 - 1.0 / a1, lam / a1, lam / a2, chi / a2, zeta / a1, chi, zeta, mu, mu * P[XI],
+            mu * P[ETA])
+
+
+@njit(inline="always")
+def next_coefficients(C, A, k, wp2, wp1, p12, wg2, wg1):
+    """A[:, k + 1] = f_k / (k + 1) from A[:, k] and the Cauchy sums of order k, C the
+    :func:`taylor_constants`.  The sums are (M p2)_k, (M p1)_k, (p1 p2)_k, (M g2)_k, (M g1)_k
+    (w = M/b: the 1/b is applied here).  The same for the state X and for a deviation vector D
+    (whose sums are the products' derivatives, docs/model.md R3 linearised): the terms of f_k
+    that are linear in the state are the same.  ``tools/gen_lanes.py`` inlines it statement by
+    statement."""
+    inv_b, c12, la1, la2, ca2, za1, chi, zeta, mu, mxi, meta = C
+    r = 1.0 / (k + 1)
+    wk = A[2, k] * inv_b
+    # docs/model.md R3: f1_k = (w p2)_k - zeta w_k - mu g1_k - (lam/a2) p2_k, and so on (taylor_coefficients)
+    A[0, k + 1] = (wp2 * inv_b - zeta * wk - mu * A[3, k] - la2 * A[1, k]) * r
+    A[1, k + 1] = (-wp1 * inv_b + chi * wk - mu * A[4, k] + la1 * A[0, k]) * r
+    A[2, k + 1] = (c12 * p12 - ca2 * A[1, k] + za1 * A[0, k] - mxi * A[4, k] + meta * A[3, k]) * r
+    A[3, k + 1] = wg2 * inv_b * r
+    A[4, k + 1] = -wg1 * inv_b * r
+
+
 @njit
 def taylor_coefficients(P, X, order):
     """Normalised Taylor coefficients X[i, k] = y_i^{(k)}(0)/k! for k = 0..order, given X[:, 0].
@@ -116,42 +153,21 @@ def taylor_coefficients(P, X, order):
       f3_k = (1/a2 - 1/a1)(p1 p2)_k - (chi/a2) p2_k + (zeta/a1) p1_k - mu xi g2_k + mu eta g1_k
       f4_k = (w g2)_k,   f5_k = -(w g1)_k
     with Cauchy products (u v)_k = sum_j u_j v_{k-j}, and X[:, k+1] = f_k/(k+1)
-    (automatic differentiation as in Jorba & Zou 2005, Exp. Math. 14, 99).
+    (automatic differentiation as in Jorba & Zou 2005, Exp. Math. 14, 99): the sums here, the
+    rest in :func:`next_coefficients`.
     """
-    a1, a2, b, lam, chi, zeta, mu, xi, eta = P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8]
-    inv_b = 1.0 / b
-    c12 = 1.0 / a2 - 1.0 / a1
-    la1 = lam / a1
-    la2 = lam / a2
-    ca2 = chi / a2
-    za1 = zeta / a1
-    mxi = mu * xi
-    meta = mu * eta
+    C = taylor_constants(P)
     for k in range(order):
-        wp2 = 0.0
-        wp1 = 0.0
-        p12 = 0.0
-        wg2 = 0.0
-        wg1 = 0.0
+        wp2, wp1, p12, wg2, wg1 = 0.0, 0.0, 0.0, 0.0, 0.0
         for j in range(k + 1):
-            wj = X[2, j]
             i = k - j
+            wj = X[2, j]
             wp2 += wj * X[1, i]
             wp1 += wj * X[0, i]
             p12 += X[0, j] * X[1, i]
             wg2 += wj * X[4, i]
             wg1 += wj * X[3, i]
-        wk = X[2, k] * inv_b
-        wp2 *= inv_b
-        wp1 *= inv_b
-        wg2 *= inv_b
-        wg1 *= inv_b
-        r = 1.0 / (k + 1)
-        X[0, k + 1] = (wp2 - zeta * wk - mu * X[3, k] - la2 * X[1, k]) * r
-        X[1, k + 1] = (-wp1 + chi * wk - mu * X[4, k] + la1 * X[0, k]) * r
-        X[2, k + 1] = (c12 * p12 - ca2 * X[1, k] + za1 * X[0, k] - mxi * X[4, k] + meta * X[3, k]) * r
-        X[3, k + 1] = wg2 * r
-        X[4, k + 1] = -wg1 * r
+        next_coefficients(C, X, k, wp2, wp1, p12, wg2, wg1)
 
 
 # ------------------------------------------------------------------ the section phi = phi0
@@ -170,14 +186,14 @@ def section_c(y, cphi, sphi):
 @njit
 def section_g_rate(y, P, cphi, sphi):
     """d/dt sin(phi - phi0) = (M/b) cos(phi - phi0) (docs/model.md R3: dphi/dt = M/b)."""
-    return y[2] / P[2] * (y[4] * cphi + y[3] * sphi)
+    return y[2] / P[B] * (y[4] * cphi + y[3] * sphi)
 
 
 # ------------------------------------------------------------------ tangent dynamics
 @njit
 def rhs_tangent(y, v, P, dv):
     """Variational field of R3: dv/dt = Df(y) v (the linearisation of :func:`rhs`)."""
-    a1, a2, b, lam, chi, zeta, mu, xi, eta = P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8]
+    a1, a2, b, lam, chi, zeta, mu, xi, eta = P[A1], P[A2], P[B], P[LAM], P[CHI], P[ZETA], P[MU], P[XI], P[ETA]
     p1, p2, m, g1, g2 = y[0], y[1], y[2], y[3], y[4]
     v1, v2, vm, vg1, vg2 = v[0], v[1], v[2], v[3], v[4]
     w = m / b
@@ -193,65 +209,38 @@ def rhs_tangent(y, v, P, dv):
 def taylor_coefficients_tangent(P, X, D, order):
     """Taylor coefficients of the state X (as :func:`taylor_coefficients`) and of a tangent
     vector D (D[:, 0] given) under dv/dt = Df(y) v: each Cauchy product (u v)_k gets its
-    derivative (du v)_k + (u dv)_k."""
-    a1, a2, b, lam, chi, zeta, mu, xi, eta = P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8]
-    inv_b = 1.0 / b
-    c12 = 1.0 / a2 - 1.0 / a1
-    la1 = lam / a1
-    la2 = lam / a2
-    ca2 = chi / a2
-    za1 = zeta / a1
-    mxi = mu * xi
-    meta = mu * eta
+    derivative (du v)_k + (u dv)_k, and :func:`next_coefficients` makes both columns k + 1."""
+    C = taylor_constants(P)
     for k in range(order):
-        wp2 = 0.0
-        wp1 = 0.0
-        p12 = 0.0
-        wg2 = 0.0
-        wg1 = 0.0
-        dwp2 = 0.0
-        dwp1 = 0.0
-        dp12 = 0.0
-        dwg2 = 0.0
-        dwg1 = 0.0
+        wp2, wp1, p12, wg2, wg1 = 0.0, 0.0, 0.0, 0.0, 0.0
+        dwp2, dwp1, dp12, dwg2, dwg1 = 0.0, 0.0, 0.0, 0.0, 0.0
         for j in range(k + 1):
             i = k - j
             wj = X[2, j]
             dwj = D[2, j]
             wp2 += wj * X[1, i]
-            wp1 += wj * X[0, i]
-            p12 += X[0, j] * X[1, i]
-            wg2 += wj * X[4, i]
-            wg1 += wj * X[3, i]
             dwp2 += dwj * X[1, i] + wj * D[1, i]
+            wp1 += wj * X[0, i]
             dwp1 += dwj * X[0, i] + wj * D[0, i]
+            p12 += X[0, j] * X[1, i]
             dp12 += D[0, j] * X[1, i] + X[0, j] * D[1, i]
+            wg2 += wj * X[4, i]
             dwg2 += dwj * X[4, i] + wj * D[4, i]
+            wg1 += wj * X[3, i]
             dwg1 += dwj * X[3, i] + wj * D[3, i]
-        r = 1.0 / (k + 1)
-        wk = X[2, k] * inv_b
-        X[0, k + 1] = (wp2 * inv_b - zeta * wk - mu * X[3, k] - la2 * X[1, k]) * r
-        X[1, k + 1] = (-wp1 * inv_b + chi * wk - mu * X[4, k] + la1 * X[0, k]) * r
-        X[2, k + 1] = (c12 * p12 - ca2 * X[1, k] + za1 * X[0, k] - mxi * X[4, k] + meta * X[3, k]) * r
-        X[3, k + 1] = wg2 * inv_b * r
-        X[4, k + 1] = -wg1 * inv_b * r
-        dwk = D[2, k] * inv_b
-        D[0, k + 1] = (dwp2 * inv_b - zeta * dwk - mu * D[3, k] - la2 * D[1, k]) * r
-        D[1, k + 1] = (-dwp1 * inv_b + chi * dwk - mu * D[4, k] + la1 * D[0, k]) * r
-        D[2, k + 1] = (c12 * dp12 - ca2 * D[1, k] + za1 * D[0, k] - mxi * D[4, k] + meta * D[3, k]) * r
-        D[3, k + 1] = dwg2 * inv_b * r
-        D[4, k + 1] = -dwg1 * inv_b * r
+        next_coefficients(C, X, k, wp2, wp1, p12, wg2, wg1)
+        next_coefficients(C, D, k, dwp2, dwp1, dp12, dwg2, dwg1)
 
 
 @njit
 def tangent_flow_hm(y, v, P, t):
     """Exact tangent map of the H_M flow (R4) at y (before the flow), applied to v in place:
     q' = R(theta) q with theta = (M/b) t, so dq' = R dq + R'(theta) q (t/b) dM."""
-    chi, zeta = P[4], P[5]
-    th = y[2] / P[2] * t
+    chi, zeta = P[CHI], P[ZETA]
+    th = y[2] / P[B] * t
     c = math.cos(th)
     s = math.sin(th)
-    dth = v[2] / P[2] * t
+    dth = v[2] / P[B] * t
     q1 = y[0] - chi
     q2 = y[1] - zeta
     v0 = c * v[0] + s * v[1] + (-s * q1 + c * q2) * dth
@@ -266,35 +255,38 @@ def tangent_flow_hm(y, v, P, t):
     v[4] = v4
 
 
+@njit(inline="always")
+def _tangent_flow_shear(y, v, i, j, a, c, lam, s, t):
+    """Tangent map of :func:`_flow_shear` (same arguments) at y, applied to v in place: with
+    u = p_i/a, M' = M - s u t (p_j - c) - lam u^2 t^2 / 2 and p_j' = p_j + s lam u t, so
+    dM' = dM - s t (p_j - c) du - s u t dp_j - lam u t^2 du and dp_j' = dp_j + s lam t du, du = dp_i/a."""
+    u = y[i] / a
+    du = v[i] / a
+    v[2] += -s * t * (y[j] - c) * du - s * u * t * v[j] - lam * u * t * t * du
+    v[j] += s * lam * t * du
+
+
 @njit
 def tangent_flow_h1(y, v, P, t):
     """Tangent map of the H_1 flow: M' = M - u t (p2 - zeta) - lam u^2 t^2 / 2, p2' = p2 + lam u t,
     u = p1/a1."""
-    u = y[0] / P[0]
-    du = v[0] / P[0]
-    lam = P[3]
-    v[2] += -t * (y[1] - P[5]) * du - u * t * v[1] - lam * u * t * t * du
-    v[1] += lam * t * du
+    _tangent_flow_shear(y, v, 0, 1, P[A1], P[ZETA], P[LAM], 1.0, t)
 
 
 @njit
 def tangent_flow_h2(y, v, P, t):
     """Tangent map of the H_2 flow: M' = M + w t (p1 - chi) - lam w^2 t^2 / 2, p1' = p1 - lam w t,
     w = p2/a2."""
-    w = y[1] / P[1]
-    dw = v[1] / P[1]
-    lam = P[3]
-    v[2] += t * (y[0] - P[4]) * dw + w * t * v[0] - lam * w * t * t * dw
-    v[0] -= lam * t * dw
+    _tangent_flow_shear(y, v, 1, 0, P[A2], P[CHI], P[LAM], -1.0, t)
 
 
 @njit
 def tangent_flow_u(y, v, P, t):
     """Tangent map of the U flow: p' = p - mu g t, M' = M - mu (xi g2 - eta g1) t."""
-    mu = P[6]
+    mu = P[MU]
     v[0] -= mu * t * v[3]
     v[1] -= mu * t * v[4]
-    v[2] -= mu * t * (P[7] * v[4] - P[8] * v[3])
+    v[2] -= mu * t * (P[XI] * v[4] - P[ETA] * v[3])
 
 
 @njit
@@ -322,7 +314,7 @@ FULL_DIM = 7
 @njit
 def rhs_full(y, P, dy):
     """docs/model.md R1 in the polynomial form (g1, g2) = (sin phi, cos phi)."""
-    a1, a2, b, lam, chi, zeta, mu, xi, eta = P[0], P[1], P[2], P[3], P[4], P[5], P[6], P[7], P[8]
+    a1, a2, b, lam, chi, zeta, mu, xi, eta = P[A1], P[A2], P[B], P[LAM], P[CHI], P[ZETA], P[MU], P[XI], P[ETA]
     p1, p2, m, g1, g2 = y[0], y[1], y[2], y[3], y[4]
     w = m / b
     u1 = p1 / a1
@@ -339,5 +331,5 @@ def rhs_full(y, P, dy):
 @njit
 def energy_full(y, P):
     """docs/model.md R1: H = 1/2(p1^2/a1 + p2^2/a2 + M^2/b) + mu (y + xi g1 + eta g2)."""
-    kin = 0.5 * (y[0] * y[0] / P[0] + y[1] * y[1] / P[1] + y[2] * y[2] / P[2])
-    return kin + P[6] * (y[6] + P[7] * y[3] + P[8] * y[4])
+    kin = 0.5 * (y[0] * y[0] / P[A1] + y[1] * y[1] / P[A2] + y[2] * y[2] / P[B])
+    return kin + P[MU] * (y[6] + P[XI] * y[3] + P[ETA] * y[4])
