@@ -9,7 +9,10 @@ browser; the tests read them there):
                orbit's colour c (an index into COLORS) and its MEGNO (NaN until known); empty
                past density.THRESHOLD crossings (``SectionPage.crossings``, in the server
                only, holds them all; ``SectionPage.shown`` is this one)
-``density``    ColumnDataSource of the density image drawn instead past the threshold
+``glyphs``     CustomJSFilter of the crossings drawn as glyphs: those of the orbits from
+               ``args.first`` on (0: all), the newest, at most density.GLYPH_BUDGET crossings
+``density``    ColumnDataSource of the density image of the other crossings (n: how many):
+               the older orbits past density.GLYPH_BUDGET, every orbit past the threshold
 ``starts``     ColumnDataSource of the clicked starts: orbit, p1, p2, c
 ``raster``     ColumnDataSource of the MEGNO layer: image, x, y, dw, dh (the window), n, complete
 ``fixed``      ColumnDataSource of the fixed points of the section map: p1, p2, kind, marker
@@ -36,7 +39,7 @@ from functools import partial
 import numpy as np
 import panel as pn
 from bokeh.events import DoubleTap, RangesUpdate, Tap
-from bokeh.models import ColumnDataSource, Div, LinearColorMapper
+from bokeh.models import CDSView, ColumnDataSource, CustomJSFilter, Div, LinearColorMapper
 from bokeh.plotting import figure
 
 from explorer import model
@@ -87,6 +90,10 @@ URL_DELAY_MS = 1000
 CLICK_MODES = ("start an orbit", "pick an orbit")
 #: the check box: on, a new orbit pauses those still running (Resume continues them); off, they run together
 PAUSE_LABEL = "a click pauses running orbits"
+#: the browser's filter of the drawn crossings: the rows of the orbits from ``first`` on (their indices)
+GLYPH_FILTER = ("const o = source.data.orbit, n = o.length, rows = [];\n"
+                "for (let i = 0; i < n; i++) if (o[i] >= first) rows.push(i);\n"
+                "return rows;")
 #: labels of the fields
 LABELS = {p.name: p.symbol for p in model.PARAMETERS} | {
     "h": "h", "method": "method", "tol": "tol (taylor, dop853)", "dt": "dt (split*)",
@@ -136,6 +143,8 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self._overlay_generation = 0
         self._readout_generation = 0
         self.dense = False                      # the density image replaces the crossings' glyphs
+        self.glyph_first = 0                    # orbits from this id on are glyphs, older ones in the image
+        self._density_key: tuple | None = None  # what the density image on the page shows
         self._density_at = 0.0
         self.picked: int | None = None          # the orbit whose readout is shown
         self.readouts: dict = {}                # orbit id -> orbit_readout(...) of a picked orbit
@@ -176,7 +185,12 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
             palette=megno_palette(MEGNO_ORBIT_SKIP), low=MEGNO_LOW, high=MEGNO_HIGH, nan_color="#9e9e9e")}
         self.density = ColumnDataSource(_empty_density(), name="density")
         fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.density)
-        self.points = fig.scatter("p1", "p2", source=self.shown, color=colors, size=POINT_SIZE, line_width=0)
+        # the glyphs: only the orbits from glyph_first on (the newest, at most density.GLYPH_BUDGET
+        # crossings), filtered in the browser from the rows it holds: a change of glyph_first sends
+        # one number, never the rows again; the older orbits are in the density image
+        self.glyph_filter = CustomJSFilter(name="glyphs", args={"first": 0}, code=GLYPH_FILTER)
+        self.points = fig.scatter("p1", "p2", source=self.shown, color=colors, size=POINT_SIZE, line_width=0,
+                                  view=CDSView(filter=self.glyph_filter))
         fig.scatter("p1", "p2", source=self.start_source, marker="cross", color=colors, size=9, line_width=2)
         fig.scatter("p1", "p2", source=self.periodic, marker="marker", size=8, line_color="black",
                     fill_color={"field": "period", "transform": LinearColorMapper(
@@ -487,6 +501,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.shown.data = _empty_crossings()
         self.start_source.data = _empty_starts()
         self._unmarked = []
+        self._refresh_density(force=True)       # no image left of them
         return old
 
     def clear(self) -> None:
