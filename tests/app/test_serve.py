@@ -1181,11 +1181,11 @@ def test_past_the_glyph_budget_the_newest_orbits_are_glyphs_and_the_older_ones_i
     page = SectionPage(s)
     rng = np.random.default_rng(5)
 
-    def more(ident, n):               # n more crossings of orbit ident (spread over the region), handed in
+    def more(ident, n, status="done", first=False):   # n more crossings of orbit ident (over the region)
         a, r = rng.uniform(0, 2 * np.pi, n), np.sqrt(rng.uniform(0, 1, n))
         rows = np.column_stack([np.arange(n, dtype=float), c1 + r1 * r * np.cos(a), c2 + r2 * r * np.sin(a),
                                 np.ones(n), np.zeros(n)])
-        page._on_block(ident, rows, n, "done")
+        page._on_block(ident, rows, n if first else 10 * n, status)      # (done == rows: its first block)
 
     try:
         page.pause_box.value = False
@@ -1194,12 +1194,18 @@ def test_past_the_glyph_budget_the_newest_orbits_are_glyphs_and_the_older_ones_i
         _poll_until(page, lambda: not page.worker.busy() and len(page.crossings.data["t"]) == 5 * s.crossings)
         ids = [i for i, *_ in page.starts]
         assert _glyphs_and_image(page) == (ids, [])                              # under the budget: as today
-        for ident, n in zip(ids, (9000, 6000, 8000, 5000, 7000)):
-            more(ident, n)
+        budget = density.GLYPH_BUDGET                  # (the orbits' sizes as parts of it)
+        for ident, part in zip(ids, (0.45, 0.3, 0.4, 0.25, 0.35)):
+            more(ident, int(part * budget))
         page.poll()
         assert len(page.crossings.data["t"]) > density.GLYPH_BUDGET
         assert _glyphs_and_image(page) == (ids[3:], ids[:3])
-        more(ids[-1], 9000)                                                      # the newest grows: one less
+        page._running = {ids[-1]}                       # as if the newest ran and this were its first block:
+        more(ids[-1], int(0.45 * budget), "running", first=True)
+        page.poll()                                     # its first crossings go alone, nothing moves yet
+        assert page.glyph_filter.args["first"] == ids[3]
+        assert page.density.data["n"] == [np.count_nonzero(np.asarray(page.crossings.data["orbit"]) < ids[3])]
+        more(ids[-1], 1)                                # the next message: one orbit more in the image
         page.poll()
         assert _glyphs_and_image(page) == (ids[4:], ids[:4])
         class Ranges:
@@ -1217,7 +1223,7 @@ def test_past_the_glyph_budget_the_newest_orbits_are_glyphs_and_the_older_ones_i
         page.undo()                                                              # under the budget again
         assert _glyphs_and_image(page) == (ids[:2], [])
         for ident in ids[:2]:
-            more(ident, 12_000)
+            more(ident, int(0.6 * budget))
         page.poll()
         assert _glyphs_and_image(page) == (ids[1:2], ids[:1])
         page.clear()

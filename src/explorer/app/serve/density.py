@@ -19,8 +19,9 @@ THRESHOLD = 200_000
 #: at most this many crossings are drawn as glyphs (the newest orbits, whole); older orbits go to the
 #: image.  After every message the browser redraws every glyph on screen, about 5 us per point in
 #: headless chromium (software canvas: 150-250 ms for 40,000 points, whatever the marker or colour
-#: mapping; docs/commands/serve.md "Latency"), so 20,000 glyphs bound that redraw to about 100 ms
-GLYPH_BUDGET = 20_000
+#: mapping; docs/commands/serve.md "Latency"): the 0.1 s from a click to its first crossings, less
+#: the server's ~25 ms, leave room for about 15,000; 10,000 keep a margin (~50 ms)
+GLYPH_BUDGET = 10_000
 #: one cell of the image per this many screen pixels (each way)
 CELL_PX = 2
 #: opacity of a cell with one crossing; the densest cell of the window is opaque

@@ -613,7 +613,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
                 self._running = self._running - {ident}
                 if status != "done":
                     self.say(f"orbit {ident} stopped after {done} crossings: {status}")
-        self._update_status()
+        self._update_status(first_rows=any(0 < len(rows) == done for _i, rows, done, _s in full))
 
     def _on_error(self, ident, exc):
         self._post(partial(self._fail, ident, f"orbit {ident} failed: {type(exc).__name__}: "
@@ -625,12 +625,15 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.say(msg)
         self._update_status()
 
-    def _update_status(self):
+    def _update_status(self, first_rows: bool = False):
+        """The status line (and the density image); ``first_rows``: the message carries an orbit's
+        first crossings (:meth:`_refresh_density` holds older orbits' move to the image until the
+        next message)."""
         self._paused = self._paused & self._running       # (an orbit paused as its last block came is done)
         paused = len(self._paused)
         running = len(self._running) - paused
         n = len(self.crossings.data["orbit"])
-        self._refresh_density(force=not running)     # (redrawn at once when the last orbit is done)
+        self._refresh_density(force=not running, hold=first_rows)   # (redrawn at once when the last orbit is done)
         text = (f"{len(self.starts)} orbit(s), {running} running, "
                 + (f"{paused} paused (Resume continues them), " if paused else "") + f"{n} crossings drawn"
                 + (" (as a density image)" if self.dense else "") + "; "
