@@ -5,8 +5,9 @@ What the page holds, by Bokeh model name (``Bokeh.documents[0].get_model_by_name
 browser; the tests read them there):
 
 ``region``     ColumnDataSource of the allowed ellipse (x, y, width, height; empty: no region)
-``crossings``  ColumnDataSource of every crossing on screen: orbit, t, p1, p2, M, dH, the
-               orbit's colour c (an index into COLORS) and its MEGNO (NaN until known); empty
+``crossings``  ColumnDataSource of every crossing on screen (a dot or in the density image):
+               orbit, t, p1, p2, M, dH, the orbit's colour c (an index into COLORS) and its
+               MEGNO (NaN until known); empty
                past density.THRESHOLD crossings (``SectionPage.crossings``, in the server
                only, holds them all; ``SectionPage.shown`` is this one)
 ``glyphs``     CustomJSFilter of the crossings drawn as glyphs: those of the orbits from
