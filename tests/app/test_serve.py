@@ -1232,6 +1232,35 @@ def test_past_the_glyph_budget_the_newest_orbits_are_glyphs_and_the_older_ones_i
         page.close()
 
 
+#: in the browser: (rows of the crossings source, rows its glyph renderer draws through its CDSView)
+DRAWN = """() => { const v = Bokeh.index.all_views().find(v => v.model.name === 'section');
+  const r = [...v.renderer_views.values()].find(r => r.model.data_source && r.model.data_source.name === 'crossings');
+  return [r.model.data_source.data.p1.length, r.model.view.indices.count]; }"""
+
+
+@browser_needed
+def test_past_the_glyph_budget_the_browser_draws_the_newest_orbit_and_the_image_the_older(served, browser):
+    from explorer.app.serve import density
+
+    page = _open(browser, served.url)
+    per_orbit = int(0.6 * density.GLYPH_BUDGET)
+    _set_field(page, "crossings", str(per_orbit))
+    _wait(page, f"() => window.location.search.includes('crossings={per_orbit}')", timeout=60_000)
+    c1, c2, r1, r2 = SERVED.region
+    _click(page, c1 + 0.3 * r1, c2)
+    _wait_crossings(page, per_orbit)
+    assert page.evaluate(DRAWN) == [per_orbit, per_orbit]                     # under the budget: all dots
+    page.wait_for_timeout(400)                                              # (not a double tap)
+    _click(page, c1 - 0.6 * r1, c2 + 0.2 * r2)
+    _wait_crossings(page, 2 * per_orbit)
+    dens = "() => { const d = Bokeh.documents[0].get_model_by_name('density').data; return d.n.length ? d.n[0] : 0 }"
+    _wait(page, f"() => ({dens})() === {per_orbit}", timeout=60_000)        # the older orbit: the image
+    assert page.evaluate(DRAWN) == [2 * per_orbit, per_orbit]                 # the newer: dots, the rows all there
+    page.get_by_role("button", name="Undo").click()                         # the older orbit: dots again
+    _wait(page, f"() => ({dens})() === 0 && ({DRAWN})()[1] === {per_orbit}", timeout=60_000)
+    page.close()
+
+
 @browser_needed
 def test_past_the_threshold_the_browser_shows_a_density_image_that_follows_the_zoom(served, browser):
     from explorer.app.serve import density
