@@ -108,8 +108,8 @@ class LayersMixin:
         keep = None if dense else np.asarray(orbit) < first           # the image's rows: the older orbits
         shown = n if keep is None else int(np.count_nonzero(keep))
         # the image's rows change only by growing, by leaving (undo, clear: first or their count
-        # changes) and by the MEGNO of an orbit becoming known
-        key = (dense, first, shown, len(self.indicators), by_megno, w, nx, ny)
+        # changes) and (coloured by MEGNO) by the MEGNO of an orbit becoming known
+        key = (dense, first, shown, len(self.indicators) if by_megno else -1, by_megno, w, nx, ny)
         if key == self._density_key:
             return
         now = time.monotonic()
