@@ -1142,6 +1142,125 @@ def test_a_million_crossings_are_drawn_as_a_density_image_of_the_visible_window(
         page.close()
 
 
+def _glyphs_and_image(page):
+    """(orbit ids drawn as glyphs, orbit ids in the density image), checking that every crossing is
+    in exactly one of the two: the glyphs at most GLYPH_BUDGET crossings of the newest orbits, whole
+    (the next older orbit would not fit), the image all the others (its n, its colours)."""
+    from explorer.app.serve import density
+    from explorer.app.serve.orbits import COLORS
+
+    orbit = np.asarray(page.shown.data["orbit"])
+    np.testing.assert_array_equal(orbit, page.crossings.data["orbit"])          # the browser holds every row
+    first = page.glyph_filter.args["first"]
+    drawn = orbit >= first                                                      # what the browser's filter keeps
+    ids = [i for i, *_ in page.starts]
+    glyphs, image = [i for i in ids if i >= first], [i for i in ids if i < first]
+    assert ids == sorted(ids) and glyphs == ids[len(image):]                    # the newest orbits
+    assert np.count_nonzero(drawn) <= density.GLYPH_BUDGET
+    if image:                                                                   # whole orbits, as many as fit
+        assert np.count_nonzero(orbit >= image[-1]) > density.GLYPH_BUDGET
+        assert page.density.data["n"] == [np.count_nonzero(~drawn)]            # every other crossing
+        assert np.count_nonzero(drawn) + page.density.data["n"][0] == len(orbit)
+        picture = page.density.data["image"][0]
+        rgba = picture.view(np.uint8).reshape(*picture.shape, 4)
+        if not page.colour_box.value:
+            colours = {"#%02x%02x%02x" % tuple(px) for px in rgba[rgba[..., 3] > 0][:, :3]}
+            assert colours == {COLORS[c] for i, _a, _b, c in page.starts if i in image}
+    else:
+        assert first == 0 and page.density.data["image"] == [] and len(orbit) <= density.GLYPH_BUDGET
+    return glyphs, image
+
+
+def test_past_the_glyph_budget_the_newest_orbits_are_glyphs_and_the_older_ones_in_the_density_image():
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    from explorer.app.serve import density
+    from explorer.app.serve.page import SectionPage
+
+    s = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=20)
+    c1, c2, r1, r2 = s.region
+    page = SectionPage(s)
+    rng = np.random.default_rng(5)
+
+    def more(ident, n, status="done", first=False):   # n more crossings of orbit ident (over the region)
+        a, r = rng.uniform(0, 2 * np.pi, n), np.sqrt(rng.uniform(0, 1, n))
+        rows = np.column_stack([np.arange(n, dtype=float), c1 + r1 * r * np.cos(a), c2 + r2 * r * np.sin(a),
+                                np.ones(n), np.zeros(n)])
+        page._on_block(ident, rows, n if first else 10 * n, status)      # (done == rows: its first block)
+
+    try:
+        page.pause_box.value = False
+        for u in (-0.6, -0.3, 0.0, 0.3, 0.6):
+            page.click(c1 + u * r1, c2)
+        _poll_until(page, lambda: not page.worker.busy() and len(page.crossings.data["t"]) == 5 * s.crossings)
+        ids = [i for i, *_ in page.starts]
+        assert _glyphs_and_image(page) == (ids, [])                              # under the budget: as today
+        budget = density.GLYPH_BUDGET                  # (the orbits' sizes as parts of it)
+        for ident, part in zip(ids, (0.45, 0.3, 0.4, 0.25, 0.35)):
+            more(ident, int(part * budget))
+        page.poll()
+        assert len(page.crossings.data["t"]) > density.GLYPH_BUDGET
+        assert _glyphs_and_image(page) == (ids[3:], ids[:3])
+        page._running = {ids[-1]}                       # as if the newest ran and this were its first block:
+        more(ids[-1], int(0.45 * budget), "running", first=True)
+        page.poll()                                     # its first crossings go alone, nothing moves yet
+        assert page.glyph_filter.args["first"] == ids[3]
+        assert page.density.data["n"] == [np.count_nonzero(np.asarray(page.crossings.data["orbit"]) < ids[3])]
+        more(ids[-1], 1)                                # the next message: one orbit more in the image
+        page.poll()
+        assert _glyphs_and_image(page) == (ids[4:], ids[:4])
+        class Ranges:
+            x0, x1, y0, y1 = c1 - 0.5 * r1, c1 + 0.5 * r1, c2 - 0.5 * r2, c2 + 0.5 * r2
+        page._on_ranges(Ranges)                                                  # zoom: a new image, same split
+        assert page.density.data["x"] == [Ranges.x0] and _glyphs_and_image(page) == (ids[4:], ids[:4])
+        page.colour_box.value = True                                             # by MEGNO: the image too
+        by_megno = page.density.data["image"][0]
+        assert _glyphs_and_image(page) == (ids[4:], ids[:4])
+        page.colour_box.value = False
+        assert not np.array_equal(page.density.data["image"][0], by_megno)
+        page.undo()                                                              # older orbits back to glyphs
+        assert _glyphs_and_image(page) == (ids[1:4], ids[:1])
+        page.undo()
+        page.undo()                                                              # under the budget again
+        assert _glyphs_and_image(page) == (ids[:2], [])
+        for ident in ids[:2]:
+            more(ident, int(0.6 * budget))
+        page.poll()
+        assert _glyphs_and_image(page) == (ids[1:2], ids[:1])
+        page.clear()
+        assert _glyphs_and_image(page) == ([], []) and page.density.data["image"] == []
+    finally:
+        page.close()
+
+
+#: in the browser: (rows of the crossings source, rows its glyph renderer draws through its CDSView)
+DRAWN = """() => { const v = Bokeh.index.all_views().find(v => v.model.name === 'section');
+  const r = [...v.renderer_views.values()].find(r => r.model.data_source && r.model.data_source.name === 'crossings');
+  return [r.model.data_source.data.p1.length, r.model.view.indices.count]; }"""
+
+
+@browser_needed
+def test_past_the_glyph_budget_the_browser_draws_the_newest_orbit_and_the_image_the_older(served, browser):
+    from explorer.app.serve import density
+
+    page = _open(browser, served.url)
+    per_orbit = int(0.6 * density.GLYPH_BUDGET)
+    _set_field(page, "crossings", str(per_orbit))
+    _wait(page, f"() => window.location.search.includes('crossings={per_orbit}')", timeout=60_000)
+    c1, c2, r1, r2 = SERVED.region
+    _click(page, c1 + 0.3 * r1, c2)
+    _wait_crossings(page, per_orbit)
+    assert page.evaluate(DRAWN) == [per_orbit, per_orbit]                     # under the budget: all dots
+    page.wait_for_timeout(400)                                              # (not a double tap)
+    _click(page, c1 - 0.6 * r1, c2 + 0.2 * r2)
+    _wait_crossings(page, 2 * per_orbit)
+    dens = "() => { const d = Bokeh.documents[0].get_model_by_name('density').data; return d.n.length ? d.n[0] : 0 }"
+    _wait(page, f"() => ({dens})() === {per_orbit}", timeout=60_000)        # the older orbit: the image
+    assert page.evaluate(DRAWN) == [2 * per_orbit, per_orbit]                 # the newer: dots, the rows all there
+    page.get_by_role("button", name="Undo").click()                         # the older orbit: dots again
+    _wait(page, f"() => ({dens})() === 0 && ({DRAWN})()[1] === {per_orbit}", timeout=60_000)
+    page.close()
+
+
 @browser_needed
 def test_past_the_threshold_the_browser_shows_a_density_image_that_follows_the_zoom(served, browser):
     from explorer.app.serve import density

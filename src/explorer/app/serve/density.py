@@ -1,7 +1,8 @@
-"""Many crossings as one image: past ``THRESHOLD`` crossings on a page, the page stops drawing a
-glyph per crossing and shows this image of the visible window instead, aggregated in the server
-with numpy and redone when the view moves (docs/commands/serve.md, docs/architecture.md: why numpy
-and not Datashader).
+"""Many crossings as one image: past ``GLYPH_BUDGET`` crossings on a page, the page draws a glyph
+per crossing only for its newest orbits (:func:`glyph_cutoff`) and the older ones in this image of
+the visible window; past ``THRESHOLD`` crossings, every orbit is in the image.  The image is
+aggregated in the server with numpy and redone when the view moves (docs/commands/serve.md,
+docs/architecture.md: why numpy and not Datashader).
 
 Each cell of an ``nx`` x ``ny`` grid over the window gets the colour of the orbit with the most
 crossings in it (the page's orbit colours), or, coloured by MEGNO, the mean MEGNO of its crossings
@@ -15,6 +16,12 @@ import numpy as np
 
 #: crossings on a page above which the density image replaces the glyphs
 THRESHOLD = 200_000
+#: at most this many crossings are drawn as glyphs (the newest orbits, whole); older orbits go to the
+#: image.  After every message the browser redraws every glyph on screen, about 5 us per point in
+#: headless chromium (software canvas: 150-250 ms for 40,000 points, whatever the marker or colour
+#: mapping; docs/commands/serve.md "Latency"): the 0.1 s from a click to its first crossings, less
+#: the server's ~25 ms, leave room for about 15,000; 10,000 keep a margin (~50 ms)
+GLYPH_BUDGET = 10_000
 #: one cell of the image per this many screen pixels (each way)
 CELL_PX = 2
 #: opacity of a cell with one crossing; the densest cell of the window is opaque
@@ -24,6 +31,20 @@ MIN_ALPHA = 0.45
 def _rgb(colour: str) -> tuple:
     c = colour.lstrip("#")
     return int(c[0:2], 16), int(c[2:4], 16), int(c[4:6], 16)
+
+
+def glyph_cutoff(orbit, budget: int = GLYPH_BUDGET) -> int:
+    """The first orbit id drawn as glyphs, given the orbit id of every crossing (ids grow with the
+    clicks): the newest orbits whose crossings add up to at most ``budget``, whole, newest first;
+    the orbits below it go to the image.  0 when every crossing fits (no image); one more than the
+    newest id when even the newest orbit alone has more than ``budget`` crossings."""
+    ids = np.asarray(orbit, np.int64)
+    if ids.size <= budget:
+        return 0
+    count = np.bincount(ids)
+    from_here = np.cumsum(count[::-1])[::-1]          # crossings of the orbits with id >= k
+    fits = np.flatnonzero(from_here <= budget)         # (from_here decreases: a tail of the ids)
+    return int(fits[0]) if fits.size else len(count)
 
 
 def cells(p1, p2, window, nx: int, ny: int):

@@ -5,11 +5,15 @@ What the page holds, by Bokeh model name (``Bokeh.documents[0].get_model_by_name
 browser; the tests read them there):
 
 ``region``     ColumnDataSource of the allowed ellipse (x, y, width, height; empty: no region)
-``crossings``  ColumnDataSource of every crossing on screen: orbit, t, p1, p2, M, dH, the
-               orbit's colour c (an index into COLORS) and its MEGNO (NaN until known); empty
+``crossings``  ColumnDataSource of every crossing on screen (a dot or in the density image):
+               orbit, t, p1, p2, M, dH, the orbit's colour c (an index into COLORS) and its
+               MEGNO (NaN until known); empty
                past density.THRESHOLD crossings (``SectionPage.crossings``, in the server
                only, holds them all; ``SectionPage.shown`` is this one)
-``density``    ColumnDataSource of the density image drawn instead past the threshold
+``glyphs``     CustomJSFilter of the crossings drawn as glyphs: those of the orbits from
+               ``args.first`` on (0: all), the newest, at most density.GLYPH_BUDGET crossings
+``density``    ColumnDataSource of the density image of the other crossings (n: how many):
+               the older orbits past density.GLYPH_BUDGET, every orbit past the threshold
 ``starts``     ColumnDataSource of the clicked starts: orbit, p1, p2, c
 ``raster``     ColumnDataSource of the MEGNO layer: image, x, y, dw, dh (the window), n, complete
 ``fixed``      ColumnDataSource of the fixed points of the section map: p1, p2, kind, marker
@@ -36,7 +40,7 @@ from functools import partial
 import numpy as np
 import panel as pn
 from bokeh.events import DoubleTap, RangesUpdate, Tap
-from bokeh.models import ColumnDataSource, Div, LinearColorMapper
+from bokeh.models import CDSView, ColumnDataSource, CustomJSFilter, Div, LinearColorMapper
 from bokeh.plotting import figure
 
 from explorer import model
@@ -87,6 +91,10 @@ URL_DELAY_MS = 1000
 CLICK_MODES = ("start an orbit", "pick an orbit")
 #: the check box: on, a new orbit pauses those still running (Resume continues them); off, they run together
 PAUSE_LABEL = "a click pauses running orbits"
+#: the browser's filter of the drawn crossings: the rows of the orbits from ``first`` on (their indices)
+GLYPH_FILTER = ("const o = source.data.orbit, n = o.length, rows = [];\n"
+                "for (let i = 0; i < n; i++) if (o[i] >= first) rows.push(i);\n"
+                "return rows;")
 #: labels of the fields
 LABELS = {p.name: p.symbol for p in model.PARAMETERS} | {
     "h": "h", "method": "method", "tol": "tol (taylor, dop853)", "dt": "dt (split*)",
@@ -136,6 +144,8 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self._overlay_generation = 0
         self._readout_generation = 0
         self.dense = False                      # the density image replaces the crossings' glyphs
+        self.glyph_first = 0                    # orbits from this id on are glyphs, older ones in the image
+        self._density_key: tuple | None = None  # what the density image on the page shows
         self._density_at = 0.0
         self.picked: int | None = None          # the orbit whose readout is shown
         self.readouts: dict = {}                # orbit id -> orbit_readout(...) of a picked orbit
@@ -176,7 +186,12 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
             palette=megno_palette(MEGNO_ORBIT_SKIP), low=MEGNO_LOW, high=MEGNO_HIGH, nan_color="#9e9e9e")}
         self.density = ColumnDataSource(_empty_density(), name="density")
         fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.density)
-        self.points = fig.scatter("p1", "p2", source=self.shown, color=colors, size=POINT_SIZE, line_width=0)
+        # the glyphs: only the orbits from glyph_first on (the newest, at most density.GLYPH_BUDGET
+        # crossings), filtered in the browser from the rows it holds: a change of glyph_first sends
+        # one number, never the rows again; the older orbits are in the density image
+        self.glyph_filter = CustomJSFilter(name="glyphs", args={"first": 0}, code=GLYPH_FILTER)
+        self.points = fig.scatter("p1", "p2", source=self.shown, color=colors, size=POINT_SIZE, line_width=0,
+                                  view=CDSView(filter=self.glyph_filter))
         fig.scatter("p1", "p2", source=self.start_source, marker="cross", color=colors, size=9, line_width=2)
         fig.scatter("p1", "p2", source=self.periodic, marker="marker", size=8, line_color="black",
                     fill_color={"field": "period", "transform": LinearColorMapper(
@@ -487,6 +502,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.shown.data = _empty_crossings()
         self.start_source.data = _empty_starts()
         self._unmarked = []
+        self._refresh_density(force=True)       # no image left of them
         return old
 
     def clear(self) -> None:
@@ -598,7 +614,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
                 self._running = self._running - {ident}
                 if status != "done":
                     self.say(f"orbit {ident} stopped after {done} crossings: {status}")
-        self._update_status()
+        self._update_status(first_rows=any(0 < len(rows) == done for _i, rows, done, _s in full))
 
     def _on_error(self, ident, exc):
         self._post(partial(self._fail, ident, f"orbit {ident} failed: {type(exc).__name__}: "
@@ -610,12 +626,15 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.say(msg)
         self._update_status()
 
-    def _update_status(self):
+    def _update_status(self, first_rows: bool = False):
+        """The status line (and the density image); ``first_rows``: the message carries an orbit's
+        first crossings (:meth:`_refresh_density` holds older orbits' move to the image until the
+        next message)."""
         self._paused = self._paused & self._running       # (an orbit paused as its last block came is done)
         paused = len(self._paused)
         running = len(self._running) - paused
         n = len(self.crossings.data["orbit"])
-        self._refresh_density(force=not running)     # (redrawn at once when the last orbit is done)
+        self._refresh_density(force=not running, hold=first_rows)   # (redrawn at once when the last orbit is done)
         text = (f"{len(self.starts)} orbit(s), {running} running, "
                 + (f"{paused} paused (Resume continues them), " if paused else "") + f"{n} crossings drawn"
                 + (" (as a density image)" if self.dense else "") + "; "

@@ -1,6 +1,7 @@
 """The page's layers under and over the orbits: the MEGNO raster of the visible window
-(:class:`explorer.app.serve.raster.RasterWorker`), the density image that replaces the crossings'
-glyphs past :data:`explorer.app.serve.density.THRESHOLD` crossings, the fixed points, separatrices and periodic
+(:class:`explorer.app.serve.raster.RasterWorker`), the density image of the crossings that are not
+drawn as glyphs (the older orbits past :data:`explorer.app.serve.density.GLYPH_BUDGET` crossings,
+all past :data:`explorer.app.serve.density.THRESHOLD`), the fixed points, separatrices and periodic
 orbits (:mod:`explorer.app.serve.overlays`, in a thread), and the manifolds of a picked hyperbolic
 point (:func:`explorer.app.serve.overlays.saddle_manifolds`, in a thread).  A part of
 :class:`~explorer.app.serve.page.SectionPage` (a mixin)."""
@@ -65,12 +66,19 @@ class LayersMixin:
             self._restart_raster()
         self._refresh_density(force=True)
 
-    def _refresh_density(self, force: bool = False) -> None:
-        """Past density.THRESHOLD crossings: hide the crossings' glyphs and draw the density image
-        of the visible window (at most every DENSITY_SECONDS while orbits stream in, at once when
-        ``force``: the view moved, the colouring changed, the last orbit finished); below it: the
-        glyphs again."""
-        n = len(self.crossings.data["orbit"])
+    def _refresh_density(self, force: bool = False, hold: bool = False) -> None:
+        """Draw the crossings that are not glyphs as the density image of the visible window: past
+        density.GLYPH_BUDGET crossings, those of the older orbits (the glyphs keep the newest,
+        :func:`~explorer.app.serve.density.glyph_cutoff`); past density.THRESHOLD, all of them
+        (the glyphs hidden, the browser holds no rows); below the budget, none (no image).  The
+        image is redrawn at most every DENSITY_SECONDS while orbits stream in, at once when
+        ``force`` (the view moved, the colouring changed, the last orbit finished) or when orbits
+        move between the glyphs and the image; never when what it shows is unchanged.  ``hold`` (the
+        message carries a click's first crossings, and orbits still run): orbits that should leave
+        the glyphs stay until the next message, so that the first crossings go alone (the glyphs
+        hold a first block, FIRST_BLOCK crossings, more than density.GLYPH_BUDGET meanwhile)."""
+        orbit = self.crossings.data["orbit"]
+        n = len(orbit)
         dense = n > density.THRESHOLD
         if dense != self.dense:
             self.dense = dense
@@ -79,27 +87,47 @@ class LayersMixin:
             # every row goes back
             self.shown.data = _empty_crossings() if dense else dict(self.crossings.data)
             force = True
-        if not dense:
+        first = 0 if dense else density.glyph_cutoff(orbit)
+        if hold and not force and first > self.glyph_first:
+            first = self.glyph_first
+        if first != self.glyph_first:
+            self.glyph_first = first
+            self.glyph_filter.args = {"first": first}
+            force = True
+        if not dense and first == 0:
             if self.density.data["image"]:
                 self.density.data = _empty_density()
+            self._density_key = None
             return
-        now = time.monotonic()
-        if not force and now - self._density_at < DENSITY_SECONDS:
-            return
-        self._density_at = now
         w = self.window
         if w is None:
             return
         px, py = self._frame_px()
         nx, ny = max(int(px) // density.CELL_PX, 1), max(int(py) // density.CELL_PX, 1)
-        d = self.crossings.data
         by_megno = bool(self.colour_box.value)
-        image = density.density_rgba(d["p1"], d["p2"], d["c"], (w.x0, w.x1, w.y0, w.y1), nx, ny, COLORS,
-                                     megno=d["megno"] if by_megno else None,
+        keep = None if dense else np.asarray(orbit) < first           # the image's rows: the older orbits
+        shown = n if keep is None else int(np.count_nonzero(keep))
+        # the image's rows change only by growing, by leaving (undo, clear: first or their count
+        # changes) and (coloured by MEGNO) by the MEGNO of an orbit becoming known
+        key = (dense, first, shown, len(self.indicators) if by_megno else -1, by_megno, w, nx, ny)
+        if key == self._density_key:
+            return
+        now = time.monotonic()
+        if not force and now - self._density_at < DENSITY_SECONDS:
+            return
+        self._density_at = now
+        self._density_key = key
+        d = self.crossings.data
+        if keep is None:
+            p1, p2, c, megno = d["p1"], d["p2"], d["c"], d["megno"]
+        else:
+            p1, p2, c, megno = (np.asarray(d[k])[keep] for k in ("p1", "p2", "c", "megno"))
+        image = density.density_rgba(p1, p2, c, (w.x0, w.x1, w.y0, w.y1), nx, ny, COLORS,
+                                     megno=megno if by_megno else None,
                                      palette=megno_palette(MEGNO_ORBIT_SKIP) if by_megno else None,
                                      lo=MEGNO_LOW, hi=MEGNO_HIGH)
         self.density.data = {"image": [image], "x": [w.x0], "y": [w.y0], "dw": [w.x1 - w.x0], "dh": [w.y1 - w.y0],
-                             "n": [n]}
+                             "n": [shown]}
 
     def _layer_changed(self):
         self._restart_raster()
