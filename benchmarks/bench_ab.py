@@ -8,6 +8,10 @@ first); the revisions alternate, ``--rounds`` times, and the best time per row i
 load change on the machine hits both.  Used when a refactor must not slow W4 down (issue 13:
 at most 5 %).
 
+``--cpu`` times each call by the process's CPU time with one Numba thread (NUMBA_NUM_THREADS=1):
+on a virtual machine whose wall times move by 20-30 % between processes minutes apart (steal
+time, a neighbour's load), this is the measurement that can resolve a few per cent.
+
     git worktree add /tmp/base <rev>
     python benchmarks/bench_ab.py /tmp/base .            # prints the table
     python benchmarks/bench_ab.py /tmp/base . --write    # and records it in RESULTS.md
@@ -25,8 +29,9 @@ from pathlib import Path
 import _common as C
 
 SNIPPET = r"""
-import json, sys, time
+import json, os, sys, time
 import numpy as np
+clock = time.process_time if os.environ.get("EXPLORER_AB_CPU") else time.perf_counter
 src = sys.argv[1]
 sys.path.insert(0, src)
 import explorer
@@ -42,21 +47,23 @@ rows = {"taylor": dict(method="taylor", tol=1e-12), "dop853": dict(method="dop85
 out = {}
 for name, kw in rows.items():
     sections.section_crossings(prm, p1[:2], p2[:2], 2.0, 5, **kw)   # load the compiled code
-    t0 = time.perf_counter()
+    t0 = clock()
     r = sections.section_crossings(prm, p1, p2, 2.0, 2000, **kw)
-    out[name] = (time.perf_counter() - t0, int(r.count.sum()))
+    out[name] = (clock() - t0, int(r.count.sum()))
 y0 = model.section_state(prm, p1, p2, 2.0)
 for m in ("taylor", "dop853"):
     lyapunov.indicators(prm, y0[:2], 10.0, method=m, tol=1e-12)
-    t0 = time.perf_counter()
+    t0 = clock()
     lyapunov.indicators(prm, y0, 1000.0, method=m, tol=1e-12)
-    out["megno_" + m] = (time.perf_counter() - t0, 64)
+    out["megno_" + m] = (clock() - t0, 64)
 print(json.dumps(out))
 """
 
 
-def run(rev: Path, cache: str) -> dict:
+def run(rev: Path, cache: str, cpu: bool = False) -> dict:
     env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+    if cpu:
+        env.update(NUMBA_NUM_THREADS="1", EXPLORER_AB_CPU="1")
     r = subprocess.run([sys.executable, "-c", SNIPPET, str(rev / "src")], capture_output=True, text=True,
                        env=env, check=True)
     return json.loads(r.stdout.strip().splitlines()[-1])
@@ -68,16 +75,17 @@ def main(argv=None):
     ap.add_argument("new", type=Path)
     ap.add_argument("--rounds", type=int, default=4)
     ap.add_argument("--write", action="store_true", help="record the table in RESULTS.md")
+    ap.add_argument("--cpu", action="store_true", help="CPU time of one Numba thread instead of wall time")
     args = ap.parse_args(argv)
     base, new = args.base.resolve(), args.new.resolve()
     started, load0 = C.now(), C.loadavg()
     caches = {k: tempfile.mkdtemp(prefix=f"nc-ab-{k}-") for k in ("base", "new")}
-    run(base, caches["base"])  # compile both once (not timed)
-    run(new, caches["new"])
+    run(base, caches["base"], args.cpu)  # compile both once (not timed)
+    run(new, caches["new"], args.cpu)
     best: dict = {"base": {}, "new": {}}
     for _ in range(args.rounds):
         for key, rev in (("base", base), ("new", new)):
-            for row, (sec, n) in run(rev, caches[key]).items():
+            for row, (sec, n) in run(rev, caches[key], args.cpu).items():
                 if row not in best[key] or sec < best[key][row][0]:
                     best[key][row] = (sec, n)
     lines = ["| row | base (s) | new (s) | new / base | crossings (base = new) |", "|---|---|---|---|---|"]
@@ -87,11 +95,12 @@ def main(argv=None):
     print("\n".join(lines))
     if args.write:
         rev = lambda p: subprocess.run(["git", "-C", str(p), "rev-parse", "--short", "HEAD"],  # noqa: E731
-                                       capture_output=True, text=True).stdout.strip()
+                                       capture_output=True, text=True).stdout.strip() or p.name
         seconds = (C.now() - started).total_seconds()
         head, _ = C.header("A/B of two revisions on W4 (explorer rows)", C.command_line("bench_ab.py", [
-            "<worktree of base>", ".", "--rounds", str(args.rounds)]), started, seconds, load0,
-            extra=[f"base {rev(base)}, new {rev(new)}; best of {args.rounds} alternating rounds, warm caches"])
+            "<worktree of base>", ".", "--rounds", str(args.rounds)] + (["--cpu"] if args.cpu else [])), started,
+            seconds, load0, extra=[f"base {rev(base)}, new {rev(new)}; best of {args.rounds} alternating rounds, warm "
+                                   "caches" + ("; CPU time of one Numba thread" if args.cpu else "; wall time")])
         C.update_section("AB", head + [""] + lines)
 
 
