@@ -127,7 +127,6 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self._unmarked: list[tuple] = []        # starts whose cross is not yet in start_source
         self._color = 0
         self._running: set = set()             # ids of the orbits still computing (or paused)
-        self._paused: set = set()              # ids of the orbits a click paused (those still in _running are)
         self._doc = None
         self._pending: list = []               # blocks from the worker not yet on the page
         self._pending_lock = threading.Lock()
@@ -400,7 +399,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
                      "ellipse")
             return None
         if self.pause_box.value:
-            self._paused = self._paused | set(self.worker.pause())
+            self.worker.pause()
         run = self._start(p1, p2, mark_later=True)
         self.say("")
         self._push_url_soon()
@@ -410,7 +409,6 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         """Continue the orbits a click paused, from where each stopped (its rows are those of an
         uninterrupted run); returns how many."""
         n = len(self.worker.resume())
-        self._paused = set()
         self._update_status()
         return n
 
@@ -493,7 +491,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
     def _drop_orbits(self) -> list:
         """Stop every orbit and take them off the page; returns their starts."""
         self.worker.cancel()
-        old, self.starts, self._running, self._paused = self.starts, [], set(), set()
+        old, self.starts, self._running = self.starts, [], set()
         self.indicators = {}
         self.readouts, self.picked = {}, None
         self._readout_generation += 1
@@ -520,7 +518,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.readouts.pop(ident, None)
         if self.picked == ident:
             self.picked, self.readout.text = None, ""
-        self._running, self._paused = self._running - {ident}, self._paused - {ident}
+        self._running = self._running - {ident}
         keep = np.asarray(self.crossings.data["orbit"]) != ident
         self.crossings.data = {k: np.asarray(v)[keep] for k, v in self.crossings.data.items()}
         if not self.dense:
@@ -630,8 +628,8 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         """The status line (and the density image); ``first_rows``: the message carries an orbit's
         first crossings (:meth:`_refresh_density` holds older orbits' move to the image until the
         next message)."""
-        self._paused = self._paused & self._running       # (an orbit paused as its last block came is done)
-        paused = len(self._paused)
+        # the worker's paused orbits still running here (one paused as its last block came is done)
+        paused = len(self._running.intersection(self.worker.paused()))
         running = len(self._running) - paused
         n = len(self.crossings.data["orbit"])
         self._refresh_density(force=not running, hold=first_rows)   # (redrawn at once when the last orbit is done)
