@@ -44,7 +44,7 @@ def _traced(name, before=None, after=None):
 
 _traced("_on_tap", before=lambda self, _e: "tap")
 _traced("_on_block", before=lambda self, _i, rows, done, status: f"block {len(rows)} {done} {status}")
-_traced("_flush_blocks", after=lambda self: f"flush {len(self.crossings.data['p1'])}")
+_traced("_flush", after=lambda self: f"flush {len(self.crossings.data['p1'])}")
 
 if __name__ == "__main__":
     sys.exit(main(["serve", *sys.argv[1:]]))

@@ -85,6 +85,19 @@ def test_only_the_indicators_asked_for_are_computed():
         lyapunov.indicators(prm, y0, 100.0, method="split6", which=("sali",))
 
 
+def test_the_methods_of_two_vector_indicators_are_those_with_the_loop_of_two_vectors():
+    from explorer.integrate import methods
+
+    two = tuple(n for n in methods.METHODS if methods.get(n).loops.tangent_ext is not None)
+    assert two == lyapunov.TWO_VECTOR_METHODS == ("taylor",)
+    for name in ("sali", "gali2"):
+        assert lyapunov.methods_for(name) == two
+    for name in ("mlce", "megno", "fli"):
+        assert lyapunov.methods_for(name) == methods.METHODS
+    assert "sali" in lyapunov.available("taylor") and "sali" not in lyapunov.available("dop853")
+    assert set(lyapunov.available("dop853")) == {"mlce", "megno", "fli"}
+
+
 def test_lyapunov_cli_json_reports_sali_and_gali2(capsys):
     code = cli.main(["lyapunov", "--p1", "-0.2", "--p2", "0.1", "--mu", "1", "--time", "500", "--json"])
     out, _ = capsys.readouterr()

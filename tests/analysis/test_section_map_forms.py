@@ -8,7 +8,7 @@ import pytest
 
 from explorer import model
 from explorer.analysis import fixedpoints as fpm
-from explorer.analysis import lyapunov, sections
+from explorer.analysis import halfturn, lyapunov, sections
 from explorer.analysis import manifolds as mf
 from explorer.analysis import periodic as pm
 from explorer.analysis import rotation as rm
@@ -60,6 +60,15 @@ def test_rotation_numbers_are_the_same_from_a_section_map(smap):
     new = rm.rotation_number(smap, (1.2, 0.0), **kw)
     old = rm.rotation_number(PRM, H, (1.2, 0.0), phi0=PHI0, tol=TOL, **kw)
     assert new.value == old.value or (math.isnan(new.value) and math.isnan(old.value))
+
+
+def test_half_turn_partners_are_the_same_from_a_section_map(smap):
+    pts = np.array([[0.3, 0.0], [-0.2, 0.1]])
+    new = halfturn.partner_points(smap, pts)
+    old = halfturn.partner_points(PRM, H, pts, phi0=PHI0, tol=TOL)
+    same(new.points, old.points)
+    same(new.times, old.times)
+    assert np.isfinite(new.points).all()
 
 
 def test_saddles_and_manifolds_are_the_same_from_a_section_map():

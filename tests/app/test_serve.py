@@ -299,11 +299,12 @@ browser_needed = pytest.mark.skipif(_PROBLEM is not None, reason=str(_PROBLEM))
 
 
 class Served:
-    """``python -m explorer serve ...`` (or ``command``) in a subprocess; ``url`` is its first line."""
+    """``python -m explorer serve ...`` (or ``command``; ``entry`` in place of ``-m explorer``) in a
+    subprocess; ``url`` is its first line."""
 
-    def __init__(self, *args, timeout=120.0, command="serve", extra=()):
+    def __init__(self, *args, timeout=120.0, command="serve", extra=(), entry=("-m", "explorer")):
         env = dict(os.environ, PYTHONUNBUFFERED="1")
-        self.proc = subprocess.Popen([sys.executable, "-m", "explorer", command, "--port", "0", *args, *extra],
+        self.proc = subprocess.Popen([sys.executable, *entry, command, "--port", "0", *args, *extra],
                                      stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
                                      cwd=REPO)
         t0 = time.time()
@@ -478,6 +479,46 @@ def test_a_change_of_mu_redraws_the_region_and_keeps_the_starts(served, browser)
     _wait_crossings(page, CROSSINGS)
     _wait(page, "() => window.location.search.includes('mu=0.5&')", timeout=60_000)
     page.close()
+
+
+@browser_needed
+def test_on_a_slow_connection_the_page_ends_with_every_row_of_the_server(browser):
+    """Every frame the server writes takes 30 ms (tests/app/slow_socket_serve.py): the page's
+    messages overlap its next callbacks.  After clicks and changes of mu made while orbits stream,
+    the page's rows are the server's, none lost (panel's ``unlocked`` lost an orbit's last rows
+    here, docs/commands/serve.md) and none twice."""
+    slow = Served("--crossings", str(CROSSINGS), "--mu", "0.03",
+                  entry=(str(Path(__file__).with_name("slow_socket_serve.py")),))
+    try:
+        page = _open(browser, slow.url)
+        c1, c2, r1, _r2 = SERVED.region
+        at_05 = Settings(params=model.FIGURE4.with_(mu=0.5), crossings=CROSSINGS)
+        for k in range(3):
+            starts = [(c1 + (0.15 + 0.05 * k) * r1, c2), (c1 - (0.15 + 0.05 * k) * r1, c2)]
+            assert all(SERVED.admissible(*p) and at_05.admissible(*p) for p in starts)
+            for p in starts:
+                _click(page, *p)
+                time.sleep(0.05)
+            _set_field(page, "mu", "0.5")                   # while they stream: both run again
+            time.sleep(0.2)
+            _set_field(page, "mu", "0.03")                  # and again, at mu = 0.03
+            n = len(starts) * CROSSINGS
+            _wait(page, f"() => ({TEXT})('status').includes('0 running, {n} crossings drawn; mu = 0.03')",
+                  timeout=FIRST_ORBIT_TIMEOUT_MS)
+            _wait_crossings(page, n, timeout=60_000)
+            time.sleep(1.0)                                  # nothing more arrives
+            rows = page.evaluate(DATA, "crossings")
+            assert len(rows["p1"]) == n and sorted(set(rows["orbit"])) == sorted(
+                page.evaluate(DATA, "starts")["orbit"]), (k, len(rows["p1"]))
+            for orbit in set(rows["orbit"]):                  # each orbit's rows once, in time order
+                t = np.array(rows["t"])[np.array(rows["orbit"]) == orbit]
+                assert t.size == CROSSINGS and np.all(np.diff(t) > 0)
+            page.get_by_role("button", name="Clear").click()
+            _wait(page, "() => Bokeh.documents[0].get_model_by_name('crossings').data.p1.length === 0")
+        page.close()
+    finally:
+        code, err = slow.interrupt()
+    assert code in (0, 130) and "Traceback" not in err, err[-2000:]
 
 
 @browser_needed
@@ -1365,18 +1406,18 @@ def test_a_served_click_sends_its_cross_with_its_first_crossings_and_later_block
     page = page_mod.SectionPage(s, doc=doc)
     page.pause_box.value = False
     flushes = []                                   # (start, crosses, crossings after) of each flush that drew rows
-    flush_blocks = page._flush_blocks
+    flush = page._flush
 
     def traced():
         before, start = len(page.shown.data["p1"]), time.monotonic()       # (when it takes the queued blocks)
-        flush_blocks()
+        flush()
         if len(page.shown.data["p1"]) > before:
             flushes.append((start, len(page.start_source.data["orbit"]), len(page.shown.data["p1"])))
-    page._flush_blocks = traced
+    page._flush = traced
     try:
         page.click(c1 + 0.3 * r1, c2)
-        # the cross waits for the first crossings (one message, one redraw in the browser) and the
-        # link is written later, off the path from the click to them
+        # the cross waits for the first crossings (sent in the same callback, just after them) and
+        # the link is written later, off the path from the click to them
         assert page.start_source.data["orbit"] == [] and len(page.shown.data["p1"]) == 0
         assert [ms for _t, ms, f in doc.later if f == page._push_url_due] == [page_mod.URL_DELAY_MS]
         t0 = time.time()

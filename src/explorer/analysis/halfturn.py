@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from explorer import model
+from explorer.analysis.section_map import takes_section_map
 from explorer.integrate.methods import MAP_TOL
 from explorer.model import ParameterError, symmetry
 
@@ -49,6 +50,7 @@ class Partners:
     status: tuple
 
 
+@takes_section_map
 def partner_points(params, h: float, points, *, phi0: float = math.pi, tol: float = DEFAULT_TOL,
                    threads: int | None = None) -> Partners:
     """The partners T(x) of the points x = (p1, p2) ((2,) or (n, 2)) of the section phi = phi0 at

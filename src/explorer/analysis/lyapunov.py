@@ -46,9 +46,11 @@ DEFAULT_INDICATORS = table.DEFAULT_NAMES
 EARLY_SALI = 1e-8
 EARLY_MEGNO = 8.0
 EARLY_TIME = 100.0
-#: the methods that can stop early (their kind has a loop with early stopping,
-#: :attr:`explorer.integrate.methods.Kind.tangent_ext`)
-EARLY_STOP_METHODS = tuple(n for n, m in methods.REGISTRY.items() if m.loops.tangent_ext is not None)
+#: the methods whose kind has the loop of two deviation vectors with early stopping
+#: (:attr:`explorer.integrate.methods.Kind.tangent_ext`): the only ones that compute the
+#: indicators of the registry's extra row (SALI, GALI_2) and can stop early
+TWO_VECTOR_METHODS = tuple(n for n, m in methods.REGISTRY.items() if m.loops.tangent_ext is not None)
+EARLY_STOP_METHODS = TWO_VECTOR_METHODS
 #: why an orbit stopped before T (``Indicators.early``)
 EARLY_NAMES = ("none", "sali", "megno")
 #: a generic start direction (no symmetry of the model), projected onto the shell
@@ -223,9 +225,9 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str | None = None
     which = check_which(which)
     nvec = max(table.BY_NAME[w].vectors for w in which)
     for w in which:
-        if not table.BY_NAME[w].supports(m.kind):
-            kinds = " or ".join(repr(k) for k in table.BY_NAME[w].methods or ())
-            raise ParameterError(f"indicator {w} needs method {kinds}; got method {method!r}")
+        if method not in methods_for(w):
+            raise ParameterError(f"indicator {w} needs method {' or '.join(repr(n) for n in methods_for(w))}; "
+                                 f"got method {method!r}")
     if early_stop and m.loops.tangent_ext is None:
         raise ParameterError(f"early_stop needs method {' or '.join(repr(n) for n in EARLY_STOP_METHODS)}; "
                              f"got method {method!r}")
@@ -291,10 +293,16 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str | None = None
                       settings, early=ext[:, table.EXT_EARLY].astype(np.int64), deviation=dev, which=which)
 
 
+def methods_for(name: str) -> tuple:
+    """The methods that compute the indicator ``name``: every method for one deviation vector,
+    :data:`TWO_VECTOR_METHODS` for two (the registry's extra row)."""
+    return methods.METHODS if table.BY_NAME[name].vectors == 1 else TWO_VECTOR_METHODS
+
+
 def available(method: str) -> tuple:
     """The indicators ``method`` computes (names of :data:`INDICATOR_NAMES`, registry order)."""
-    kind = methods.get(method).kind
-    return tuple(i.name for i in table.INDICATORS if i.supports(kind))
+    methods.get(method)
+    return tuple(i.name for i in table.INDICATORS if method in methods_for(i.name))
 
 
 def check_which(which) -> tuple:

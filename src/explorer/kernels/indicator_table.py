@@ -52,22 +52,18 @@ class Indicator:
     vmax: float | None   # colour scale: upper end (None: the data's maximum)
     cmap: str            # colour map (chaotic orbits dark: inferno_r when the indicator grows with chaos)
     default: bool = True           # computed unless ``which`` says otherwise
-    methods: tuple | None = None   # method kinds that compute it (None: every method)
     dtype: str = "float64"         # its dataset's dtype in the store
 
     @property
     def vectors(self) -> int:
-        """Deviation vectors it needs (2 for the extra row)."""
+        """Deviation vectors it needs (2 for the extra row: only the methods whose kind has the loop
+        of two vectors compute it, :func:`explorer.analysis.lyapunov.methods_for`)."""
         return 2 if self.row == EXTRA else 1
 
     @property
     def in_history(self) -> bool:
         """Whether the history rows (the result row at the history times) have its column."""
         return self.row == RESULT
-
-    def supports(self, kind: str) -> bool:
-        """Whether a method of kind ``kind`` (explorer.integrate.methods.Method.kind) computes it."""
-        return self.methods is None or kind in self.methods
 
 
 #: every chaos indicator, in the order of output lines and JSON keys
@@ -83,10 +79,10 @@ INDICATORS = (
               False, 0.0, None, "inferno_r"),
     Indicator("sali", EXTRA, EXT_SALI, "SALI", "SALI",
               "smaller alignment index min(|w1 + w2|, |w1 - w2|) of two unit deviation vectors (Skokos 2001)",
-              True, 1e-16, 2.0, "inferno", default=False, methods=("taylor",)),
+              True, 1e-16, 2.0, "inferno", default=False),
     Indicator("gali2", EXTRA, EXT_GALI2, "GALI2", r"GALI$_2$",
               "generalized alignment index |w1 ^ w2| of two unit deviation vectors (Skokos et al. 2007)",
-              True, 1e-16, 1.0, "inferno", default=False, methods=("taylor",)),
+              True, 1e-16, 1.0, "inferno", default=False),
 )
 #: the names, in table order
 NAMES = tuple(i.name for i in INDICATORS)

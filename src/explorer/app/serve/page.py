@@ -191,7 +191,8 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.glyph_filter = CustomJSFilter(name="glyphs", args={"first": 0}, code=GLYPH_FILTER)
         self.points = fig.scatter("p1", "p2", source=self.shown, color=colors, size=POINT_SIZE, line_width=0,
                                   view=CDSView(filter=self.glyph_filter))
-        fig.scatter("p1", "p2", source=self.start_source, marker="cross", color=colors, size=9, line_width=2)
+        fig.scatter("p1", "p2", source=self.start_source, marker="cross", color=colors, size=9, line_width=2,
+                    level="overlay")   # (above the crossings and the images)
         fig.scatter("p1", "p2", source=self.periodic, marker="marker", size=8, line_color="black",
                     fill_color={"field": "period", "transform": LinearColorMapper(
                         palette=list(PERIOD_COLORS), low=0.5, high=len(PERIOD_COLORS) + 0.5)}, line_width=1.5)
@@ -371,13 +372,13 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self._running = self._running | {run.ident}
         if not mark_later or self._doc is None:
             self._mark_starts()
-            self._update_status()            # (else with the first crossings: one message)
+            self._update_status()            # (else with the first crossings, in their flush)
         return run
 
     def _mark_starts(self):
         """Stream the crosses of the starts not yet marked.  On a served page this waits for the
-        next flush, so that a click's cross and its first crossings reach the browser together
-        (one redraw of every crossing on screen instead of two)."""
+        next flush, which sends a click's cross just after its first crossings (the cross's
+        redraw does not delay them)."""
         live = {i for i, *_ in self.starts}
         marks, self._unmarked = [m for m in self._unmarked if m[0] in live], []
         if marks:
@@ -555,7 +556,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         """In the worker thread: queue the block for the document's loop.  An orbit's first block
         and its last go at once; others at most every FLUSH_SECONDS after the last flush (each
         message redraws every crossing in the browser).  Blocks queued meanwhile go to the page
-        together (one message)."""
+        together (one stream of rows)."""
         urgent = done == len(rows) or status != "running"
         with self._pending_lock:
             self._pending.append((ident, rows, done, status))
@@ -575,24 +576,17 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
             self._doc.add_timeout_callback(self._flush, int(1000 * wait) + 1)
 
     def _flush(self):
-        """The queued blocks onto the page; on a served page every change of it (the crossings, the
-        starts' crosses, the status line) goes to the browser as one message (Panel's
-        ``unlocked``: Bokeh alone sends one per change, and the browser redraws every crossing on
-        screen after each)."""
-        if self._doc is None:
-            self._flush_blocks()
-            return
-        from panel.io.document import unlocked
-
-        with unlocked():
-            self._flush_blocks()
-
-    def _flush_blocks(self):
+        """The queued blocks onto the page.  Bokeh sends each change of a model as its own message,
+        in order, all written before the next callback runs: the crossings first (the browser draws
+        them at once), then the starts' crosses and the status line.  Not through Panel's
+        ``unlocked`` (one message per flush): when the socket was busy it queued the message for a
+        task that could return without sending it (panel 1.9), and an orbit's last rows never
+        reached the browser (tests/app/test_serve.py, the slow-connection test)."""
         with self._pending_lock:
             blocks, self._pending = self._pending, []
             self._flush_at, self._flushed_at = None, time.monotonic()
-        self._mark_starts()
         if not blocks:
+            self._mark_starts()
             return                       # (flushed already by an earlier callback)
         live = {i: c for i, _a, _b, c in self.starts}
         blocks = [b for b in blocks if b[0] in live]          # undone or cancelled meanwhile: dropped
@@ -606,7 +600,8 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
                    "c": np.concatenate([np.full(len(b[1]), live[b[0]], np.int64) for b in full])}
             self.crossings.stream(new)
             if not self.dense:
-                self.shown.stream(new)
+                self.shown.stream(new)   # the first message: the browser draws the crossings at once
+        self._mark_starts()              # (their starts' crosses in the next one)
         for ident, _rows, done, status in blocks:
             if status != "running":
                 self._running = self._running - {ident}

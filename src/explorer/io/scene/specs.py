@@ -5,7 +5,7 @@ import math
 from dataclasses import dataclass
 
 from explorer.analysis import sections
-from explorer.analysis.lyapunov import EARLY_STOP_METHODS
+from explorer.analysis.lyapunov import EARLY_STOP_METHODS, methods_for
 from explorer.integrate import methods
 from explorer.io.scene.checks import _bool, _choice, _fail, _int, _list, _real
 from explorer.io.scene.schema import (
@@ -214,11 +214,9 @@ class LyapunovSpec:
         if self.early_stop and method.loops.tangent_ext is None:
             _fail("lyapunov.method", f"must be {' or '.join(repr(n) for n in EARLY_STOP_METHODS)} for early_stop; "
                   f"got {self.method!r}")
-        kind = method.kind
         for q in self.indicators:
-            if not INDICATOR_BY_NAME[q].supports(kind):
-                _fail("lyapunov.method", f"must be one of {list(INDICATOR_BY_NAME[q].methods)} for {q}; "
-                      f"got {self.method!r}")
+            if self.method not in methods_for(q):
+                _fail("lyapunov.method", f"must be one of {list(methods_for(q))} for {q}; got {self.method!r}")
         if self.map_resolution and self.map_indicator not in self.indicators:
             _fail("lyapunov.map_indicator", f"must be one of lyapunov.indicators {list(self.indicators)}; "
                   f"got {self.map_indicator!r}")
