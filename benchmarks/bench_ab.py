@@ -11,6 +11,9 @@ at most 5 %).
 ``--cpu`` times each call by the process's CPU time with one Numba thread (NUMBA_NUM_THREADS=1):
 on a virtual machine whose wall times move by 20-30 % between processes minutes apart (steal
 time, a neighbour's load), this is the measurement that can resolve a few per cent.
+``--repeat K`` times each row K times in each process (best kept): one call of a process can
+take 30-40 % more CPU time than the next on such a machine, for either revision alike.
+``--rows`` picks rows (split8 alone takes 35 s a call).
 
     git worktree add /tmp/base <rev>
     python benchmarks/bench_ab.py /tmp/base .            # prints the table
@@ -44,28 +47,39 @@ p1 = c1 + r1 * np.linspace(-0.95, 0.95, 64)
 p2 = np.zeros(64)
 rows = {"taylor": dict(method="taylor", tol=1e-12), "dop853": dict(method="dop853", tol=1e-12),
         "split8": dict(method="split8", dt=0.05)}
+wanted, repeat = sys.argv[2].split(","), int(sys.argv[3])
 out = {}
 for name, kw in rows.items():
+    if name not in wanted:
+        continue
     sections.section_crossings(prm, p1[:2], p2[:2], 2.0, 5, **kw)   # load the compiled code
-    t0 = clock()
-    r = sections.section_crossings(prm, p1, p2, 2.0, 2000, **kw)
-    out[name] = (clock() - t0, int(r.count.sum()))
+    for _ in range(repeat):
+        t0 = clock()
+        r = sections.section_crossings(prm, p1, p2, 2.0, 2000, **kw)
+        out[name] = min(out.get(name, (float("inf"),)), (clock() - t0, int(r.count.sum())))
 y0 = model.section_state(prm, p1, p2, 2.0)
 for m in ("taylor", "dop853"):
+    if "megno_" + m not in wanted:
+        continue
     lyapunov.indicators(prm, y0[:2], 10.0, method=m, tol=1e-12)
-    t0 = clock()
-    lyapunov.indicators(prm, y0, 1000.0, method=m, tol=1e-12)
-    out["megno_" + m] = (clock() - t0, 64)
+    for _ in range(repeat):
+        t0 = clock()
+        lyapunov.indicators(prm, y0, 1000.0, method=m, tol=1e-12)
+        out["megno_" + m] = min(out.get("megno_" + m, (float("inf"),)), (clock() - t0, 64))
 print(json.dumps(out))
 """
 
 
-def run(rev: Path, cache: str, cpu: bool = False) -> dict:
+#: the rows, in the order each process runs them
+ROWS = ("taylor", "dop853", "split8", "megno_taylor", "megno_dop853")
+
+
+def run(rev: Path, cache: str, cpu: bool = False, rows=ROWS, repeat: int = 1) -> dict:
     env = dict(os.environ, NUMBA_CACHE_DIR=cache)
     if cpu:
         env.update(NUMBA_NUM_THREADS="1", EXPLORER_AB_CPU="1")
-    r = subprocess.run([sys.executable, "-c", SNIPPET, str(rev / "src")], capture_output=True, text=True,
-                       env=env, check=True)
+    r = subprocess.run([sys.executable, "-c", SNIPPET, str(rev / "src"), ",".join(rows), str(repeat)],
+                       capture_output=True, text=True, env=env, check=True)
     return json.loads(r.stdout.strip().splitlines()[-1])
 
 
@@ -76,16 +90,21 @@ def main(argv=None):
     ap.add_argument("--rounds", type=int, default=4)
     ap.add_argument("--write", action="store_true", help="record the table in RESULTS.md")
     ap.add_argument("--cpu", action="store_true", help="CPU time of one Numba thread instead of wall time")
+    ap.add_argument("--repeat", type=int, default=1, help="timed calls of each row per process (best kept)")
+    ap.add_argument("--rows", default=",".join(ROWS), help=f"comma-separated rows (default: all, {','.join(ROWS)})")
     args = ap.parse_args(argv)
+    rows = tuple(r for r in args.rows.split(",") if r)
+    if not rows or set(rows) - set(ROWS) or args.repeat < 1 or args.rounds < 1:
+        ap.error(f"--rows must name some of {', '.join(ROWS)}; --repeat and --rounds at least 1")
     base, new = args.base.resolve(), args.new.resolve()
     started, load0 = C.now(), C.loadavg()
     caches = {k: tempfile.mkdtemp(prefix=f"nc-ab-{k}-") for k in ("base", "new")}
-    run(base, caches["base"], args.cpu)  # compile both once (not timed)
-    run(new, caches["new"], args.cpu)
+    run(base, caches["base"], args.cpu, rows)  # compile both once (not timed)
+    run(new, caches["new"], args.cpu, rows)
     best: dict = {"base": {}, "new": {}}
     for _ in range(args.rounds):
         for key, rev in (("base", base), ("new", new)):
-            for row, (sec, n) in run(rev, caches[key], args.cpu).items():
+            for row, (sec, n) in run(rev, caches[key], args.cpu, rows, args.repeat).items():
                 if row not in best[key] or sec < best[key][row][0]:
                     best[key][row] = (sec, n)
     lines = ["| row | base (s) | new (s) | new / base | crossings (base = new) |", "|---|---|---|---|---|"]
@@ -98,9 +117,12 @@ def main(argv=None):
                                        capture_output=True, text=True).stdout.strip() or p.name
         seconds = (C.now() - started).total_seconds()
         head, _ = C.header("A/B of two revisions on W4 (explorer rows)", C.command_line("bench_ab.py", [
-            "<worktree of base>", ".", "--rounds", str(args.rounds)] + (["--cpu"] if args.cpu else [])), started,
-            seconds, load0, extra=[f"base {rev(base)}, new {rev(new)}; best of {args.rounds} alternating rounds, warm "
-                                   "caches" + ("; CPU time of one Numba thread" if args.cpu else "; wall time")])
+            "<worktree of base>", ".", "--rounds", str(args.rounds)] + (["--cpu"] if args.cpu else [])
+            + (["--repeat", str(args.repeat)] if args.repeat > 1 else [])
+            + (["--rows", ",".join(rows)] if rows != ROWS else [])), started,
+            seconds, load0, extra=[f"base {rev(base)}, new {rev(new)}; best of {args.rounds} alternating rounds"
+                                   + (f" x {args.repeat} calls" if args.repeat > 1 else "") + ", warm caches"
+                                   + ("; CPU time of one Numba thread" if args.cpu else "; wall time")])
         C.update_section("AB", head + [""] + lines)
 
 
