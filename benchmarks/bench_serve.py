@@ -12,12 +12,16 @@ section and measures, in the page (polled every animation frame):
 
 Times include Playwright's round trips (a few ms each; the painted times two of them, so they
 err on the slow side).  Usage: python benchmarks/bench_serve.py [REPEATS]
-[--breakdown]
+[--breakdown] [--empty]
+
+``--empty`` clears the page before each click: every orbit is clicked on an empty section
+(the latency of a first click), instead of beside the 0 to 40,000 crossings of the clicks before.
 
 ``--breakdown`` also runs the server through ``benchmarks/_serve_trace.py`` and prints where each
 click's time goes (medians), from the click's pointerdown in the page: to the server's Tap
 callback, to the worker's block, to the block streamed into the document, to the rows in the
-page's data source (the browser's side: the message, and the redraws it is busy with).  Server and
+page's data source (the browser's side: the message, and the redraws it is busy with), and to the
+first crossings painted (two animation frames after they are seen, as above).  Server and
 page times are both wall-clock times of this machine (a few ms apart at most).
 """
 from __future__ import annotations
@@ -45,15 +49,19 @@ COUNT = "() => Bokeh.documents[0].get_model_by_name('crossings').data.p1.length"
 #: --breakdown: the page notes its pointerdowns and, every animation frame, when the rows arrive
 CLICKS = ("window.__clicks = []; document.addEventListener('pointerdown', "
           "() => window.__clicks.push(performance.timeOrigin + performance.now()), true);")
-WATCH = """([before, n]) => { const m = Bokeh.documents[0].get_model_by_name('crossings'); window.__seen = [0, 0];
-  function f() { const c = m.data.p1.length, t = performance.timeOrigin + performance.now();
-    if (!__seen[0] && c > before) __seen[0] = t;
+WATCH = """([before, n]) => { const m = Bokeh.documents[0].get_model_by_name('crossings'); window.__seen = [0, 0, 0];
+  const now = () => performance.timeOrigin + performance.now();
+  function f() { const c = m.data.p1.length, t = now();
+    if (!__seen[0] && c > before) {
+      __seen[0] = t;      // painted: the start of the second frame after (the frame drawing them has ended)
+      requestAnimationFrame(() => requestAnimationFrame(() => { __seen[2] = now(); }));
+    }
     if (c >= before + n) { __seen[1] = t; return; }
     requestAnimationFrame(f); }
   requestAnimationFrame(f); }"""
 
 
-def main(repeats: int = 5, breakdown: bool = False) -> None:
+def main(repeats: int = 5, breakdown: bool = False, empty: bool = False) -> None:
     from playwright.sync_api import sync_playwright
 
     from explorer import model
@@ -83,6 +91,10 @@ def main(repeats: int = 5, breakdown: bool = False) -> None:
             page.wait_for_function(f"() => ({COUNT})() === 0", timeout=60_000)
             first, full, first_drawn, full_drawn = [], [], [], []
             for i in range(repeats):
+                if empty and i:
+                    page.get_by_role("button", name="Clear").click()
+                    page.wait_for_function(f"() => ({COUNT})() === 0", timeout=60_000)
+                    page.wait_for_timeout(400)
                 u = -0.8 + 1.6 * i / max(repeats - 1, 1)
                 xy = page.evaluate(TO_SCREEN, [c1 + u * r1, c2 + 0.1 * r2])
                 before = page.evaluate(COUNT)
@@ -99,7 +111,7 @@ def main(repeats: int = 5, breakdown: bool = False) -> None:
                 page.evaluate(FRAMES)
                 full_drawn.append(time.perf_counter() - t0)
                 if breakdown:
-                    page.wait_for_function("() => window.__seen[1] > 0", timeout=60_000)
+                    page.wait_for_function("() => window.__seen[1] > 0 && window.__seen[2] > 0", timeout=60_000)
                     clicks.append(page.evaluate("() => window.__clicks[window.__clicks.length - 1]") / 1e3)
                     seen.append([t / 1e3 for t in page.evaluate("() => window.__seen")])
                 page.wait_for_timeout(400)           # the next click is not a double tap
@@ -107,7 +119,8 @@ def main(repeats: int = 5, breakdown: bool = False) -> None:
     finally:
         proc.terminate()
         proc.wait()
-    print(f"SERVE ({repeats} clicks, mu = 0.03, taylor tol 1e-13, warm server)")
+    print(f"SERVE ({repeats} clicks, mu = 0.03, taylor tol 1e-13, warm server"
+          + (", each on an empty section)" if empty else ", each beside the orbits of the clicks before)"))
     print(f"  click -> first crossings in the page: median {1e3 * statistics.median(first):.0f} ms "
           f"(min {1e3 * min(first):.0f}, max {1e3 * max(first):.0f})")
     print(f"  click -> first crossings painted:    median {1e3 * statistics.median(first_drawn):.0f} ms "
@@ -131,7 +144,7 @@ def print_breakdown(trace: str, clicks: list, seen: list) -> None:
     def note(name, value):
         steps.setdefault(name, []).append(1e3 * value)
 
-    for i, (down, (first, full)) in enumerate(zip(clicks, seen)):
+    for i, (down, (first, full, painted)) in enumerate(zip(clicks, seen)):
         end = clicks[i + 1] if i + 1 < len(clicks) else float("inf")
         mine = [(t, w) for t, w in events if down <= t < end]
         tap = next(t for t, w in mine if w[0] == "tap")
@@ -144,6 +157,7 @@ def print_breakdown(trace: str, clicks: list, seen: list) -> None:
         note("first: -> streamed into the document", flush - block)
         note("first: -> in the page's data source", first - flush)
         note("first: total (in the page)", first - down)
+        note("first: total (painted, in the page's clock)", painted - down)
         note(f"{N}: pointerdown -> last block handed in", last - down)
         note(f"{N}: -> streamed into the document", last_flush - last)
         note(f"{N}: -> in the page's data source", full - last_flush)
@@ -156,5 +170,5 @@ def print_breakdown(trace: str, clicks: list, seen: list) -> None:
 
 
 if __name__ == "__main__":
-    numbers = [a for a in sys.argv[1:] if a != "--breakdown"]
-    main(int(numbers[0]) if numbers else 5, breakdown="--breakdown" in sys.argv[1:])
+    numbers = [a for a in sys.argv[1:] if not a.startswith("--")]
+    main(int(numbers[0]) if numbers else 5, breakdown="--breakdown" in sys.argv[1:], empty="--empty" in sys.argv[1:])
