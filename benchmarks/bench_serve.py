@@ -87,14 +87,12 @@ def main(repeats: int = 5, breakdown: bool = False, empty: bool = False) -> None
             page.wait_for_function(READY, timeout=120_000)
             page.mouse.click(*page.evaluate(TO_SCREEN, [c1, c2 + 0.5 * r2]))        # warm up
             page.wait_for_function(f"() => ({COUNT})() >= {N}", timeout=600_000)
-            page.get_by_role("button", name="Clear").click()
-            page.wait_for_function(f"() => ({COUNT})() === 0", timeout=60_000)
             first, full, first_drawn, full_drawn = [], [], [], []
             for i in range(repeats):
-                if empty and i:
+                if i == 0 or empty:                   # (after the warm-up: always)
                     page.get_by_role("button", name="Clear").click()
                     page.wait_for_function(f"() => ({COUNT})() === 0", timeout=60_000)
-                    page.wait_for_timeout(400)
+                    page.wait_for_timeout(400)        # (the click is not a double tap)
                 u = -0.8 + 1.6 * i / max(repeats - 1, 1)
                 xy = page.evaluate(TO_SCREEN, [c1 + u * r1, c2 + 0.1 * r2])
                 before = page.evaluate(COUNT)

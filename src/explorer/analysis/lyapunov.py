@@ -228,7 +228,7 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str | None = None
         if method not in methods_for(w):
             raise ParameterError(f"indicator {w} needs method {' or '.join(repr(n) for n in methods_for(w))}; "
                                  f"got method {method!r}")
-    if early_stop and m.loops.tangent_ext is None:
+    if early_stop and method not in EARLY_STOP_METHODS:
         raise ParameterError(f"early_stop needs method {' or '.join(repr(n) for n in EARLY_STOP_METHODS)}; "
                              f"got method {method!r}")
     V0 = deviation_vector(P, Y0) if v0 is None else np.atleast_2d(np.asarray(v0, float))

@@ -6,7 +6,6 @@ from dataclasses import dataclass
 
 from explorer.analysis import sections
 from explorer.analysis.lyapunov import EARLY_STOP_METHODS, methods_for
-from explorer.integrate import methods
 from explorer.io.scene.checks import _bool, _choice, _fail, _int, _list, _real
 from explorer.io.scene.schema import (
     _FIGURE_KEYS,
@@ -210,8 +209,7 @@ class LyapunovSpec:
                            _int("lyapunov.map_resolution", self.map_resolution, 0, MAX_MAP_RESOLUTION))
         object.__setattr__(self, "map_indicator",
                            _choice("lyapunov.map_indicator", self.map_indicator, LYAPUNOV_INDICATORS))
-        method = methods.get(self.method)
-        if self.early_stop and method.loops.tangent_ext is None:
+        if self.early_stop and self.method not in EARLY_STOP_METHODS:
             _fail("lyapunov.method", f"must be {' or '.join(repr(n) for n in EARLY_STOP_METHODS)} for early_stop; "
                   f"got {self.method!r}")
         for q in self.indicators:
