@@ -45,20 +45,22 @@ TO_SCREEN = """([x, y]) => { const v = Bokeh.index.all_views().find(v => v.model
   return [r.left + v.frame.x_scale.compute(x), r.top + v.frame.y_scale.compute(y)]; }"""
 #: resolves when two animation frames have begun: the frame painting the last change has ended
 FRAMES = "() => new Promise(r => requestAnimationFrame(() => requestAnimationFrame(() => r(0))))"
-COUNT = "() => Bokeh.documents[0].get_model_by_name('crossings').data.p1.length"
+#: rows of the page: in ``crossings``, and the newest in ``live`` (drawn on the overlay canvas)
+COUNT = ("() => { const d = Bokeh.documents[0];"
+        " return d.get_model_by_name('crossings').data.p1.length + d.get_model_by_name('live').data.p1.length; }")
 #: --breakdown: the page notes its pointerdowns and, every animation frame, when the rows arrive
 CLICKS = ("window.__clicks = []; document.addEventListener('pointerdown', "
           "() => window.__clicks.push(performance.timeOrigin + performance.now()), true);")
-WATCH = """([before, n]) => { const m = Bokeh.documents[0].get_model_by_name('crossings'); window.__seen = [0, 0, 0];
+WATCH = """([before, n]) => { const rows = %s; window.__seen = [0, 0, 0];
   const now = () => performance.timeOrigin + performance.now();
-  function f() { const c = m.data.p1.length, t = now();
+  function f() { const c = rows(), t = now();
     if (!__seen[0] && c > before) {
       __seen[0] = t;      // painted: the start of the second frame after (the frame drawing them has ended)
       requestAnimationFrame(() => requestAnimationFrame(() => { __seen[2] = now(); }));
     }
     if (c >= before + n) { __seen[1] = t; return; }
     requestAnimationFrame(f); }
-  requestAnimationFrame(f); }"""
+  requestAnimationFrame(f); }""" % COUNT
 
 
 def main(repeats: int = 5, breakdown: bool = False, empty: bool = False) -> None:

@@ -34,7 +34,7 @@ from explorer import model
 from explorer.analysis import sections
 from explorer.app.serve import export
 from explorer.app.serve import settings as settings_mod
-from explorer.app.serve.orbits import Worker
+from explorer.app.serve.orbits import FIRST_BLOCK, Worker
 from explorer.app.serve.settings import Settings, format_starts, parse_fields, parse_starts
 from explorer.model import ParameterError
 
@@ -484,7 +484,8 @@ def test_a_change_of_mu_redraws_the_region_and_keeps_the_starts(served, browser)
 @browser_needed
 def test_on_a_slow_connection_the_page_ends_with_every_row_of_the_server(browser):
     """Every frame the server writes takes 30 ms (tests/app/slow_socket_serve.py): the page's
-    messages overlap its next callbacks.  After clicks and changes of mu made while orbits stream,
+    messages overlap its next callbacks.  After clicks, a change of mu and one of the crossings per
+    click made while orbits stream,
     the page's rows are the server's, none lost (panel's ``unlocked`` lost an orbit's last rows
     here, docs/commands/serve.md) and none twice."""
     slow = Served("--crossings", str(CROSSINGS), "--mu", "0.03",
@@ -496,29 +497,74 @@ def test_on_a_slow_connection_the_page_ends_with_every_row_of_the_server(browser
         for k in range(3):
             starts = [(c1 + (0.15 + 0.05 * k) * r1, c2), (c1 - (0.15 + 0.05 * k) * r1, c2)]
             assert all(SERVED.admissible(*p) and at_05.admissible(*p) for p in starts)
+            mu = "0.5" if k % 2 == 0 else "0.03"
+            m = CROSSINGS + 10 * (k + 1)                    # (the round's final status is its own)
             for p in starts:
                 _click(page, *p)
                 time.sleep(0.05)
-            _set_field(page, "mu", "0.5")                   # while they stream: both run again
+            _set_field(page, "mu", mu)                      # while they stream: both run again
             time.sleep(0.2)
-            _set_field(page, "mu", "0.03")                  # and again, at mu = 0.03
-            n = len(starts) * CROSSINGS
-            _wait(page, f"() => ({TEXT})('status').includes('0 running, {n} crossings drawn; mu = 0.03')",
+            _set_field(page, "crossings", str(m))           # and again, with more crossings
+            n = len(starts) * m
+            # (the page lags the server by up to seconds here: only this status says it has caught up)
+            _wait(page, f"() => ({TEXT})('status').includes('0 running, {n} crossings drawn; mu = {mu},')",
                   timeout=FIRST_ORBIT_TIMEOUT_MS)
             _wait_crossings(page, n, timeout=60_000)
             time.sleep(1.0)                                  # nothing more arrives
             rows = page.evaluate(DATA, "crossings")
             assert len(rows["p1"]) == n and sorted(set(rows["orbit"])) == sorted(
                 page.evaluate(DATA, "starts")["orbit"]), (k, len(rows["p1"]))
+            assert page.evaluate(DATA, "live")["p1"] == []
             for orbit in set(rows["orbit"]):                  # each orbit's rows once, in time order
                 t = np.array(rows["t"])[np.array(rows["orbit"]) == orbit]
-                assert t.size == CROSSINGS and np.all(np.diff(t) > 0)
+                assert t.size == m and np.all(np.diff(t) > 0)
             page.get_by_role("button", name="Clear").click()
             _wait(page, "() => Bokeh.documents[0].get_model_by_name('crossings').data.p1.length === 0")
         page.close()
     finally:
         code, err = slow.interrupt()
     assert code in (0, 130) and "Traceback" not in err, err[-2000:]
+
+
+#: in the browser, from the page's start: which canvases the dots (arcs) are drawn on, while no row is
+#: live (the settled crossings) and while a click's first crossings are live and the crossings
+#: source still holds the ``window.__before`` rows of the clicks before
+CANVASES = """window.__before = -1;
+window.__canvases = {settled: new Set(), live: new Set(), live_dots: 0};
+const arc = CanvasRenderingContext2D.prototype.arc;
+CanvasRenderingContext2D.prototype.arc = function(...a) {
+  const d = window.Bokeh && Bokeh.documents.length ? Bokeh.documents[0] : null;
+  const live = d && d.get_model_by_name('live'), rows = d && d.get_model_by_name('crossings');
+  if (live && rows) {
+    const n = live.data.p1.length, m = rows.data.p1.length, c = window.__canvases;
+    if (n === 0 && m > 0) c.settled.add(this.canvas);
+    else if (n > 0 && m === window.__before) { c.live.add(this.canvas); c.live_dots++; }
+  }
+  return arc.apply(this, a); };"""
+
+
+@browser_needed
+def test_a_clicks_first_crossings_are_drawn_without_redrawing_the_older_orbits(served, browser):
+    """The first crossings of a click beside earlier orbits go to the live layer, on Bokeh's overlay
+    canvas: the browser draws them without redrawing the older orbits' dots (what made them take
+    150-250 ms to appear beside 10,000-40,000 crossings; benchmarks/bench_serve.py)."""
+    page = browser.new_page()
+    page.add_init_script(CANVASES)
+    page.goto(served.url)
+    _wait(page, READY)
+    c1, c2, r1, r2 = SERVED.region
+    _click(page, c1 + 0.3 * r1, c2)
+    _wait_crossings(page, CROSSINGS)
+    _wait(page, "() => Bokeh.documents[0].get_model_by_name('live').data.p1.length === 0")
+    page.wait_for_timeout(400)                                             # (not a double tap)
+    page.evaluate(f"() => {{ window.__before = {CROSSINGS}; }}")
+    _click(page, c1 - 0.5 * r1, c2 + 0.1 * r2)
+    _wait_crossings(page, 2 * CROSSINGS)
+    settled, live, dots = page.evaluate("() => { const c = window.__canvases;"
+                                        " return [[...c.settled].length, [...c.live].length, c.live_dots]; }")
+    shared = page.evaluate("() => [...window.__canvases.live].filter(x => window.__canvases.settled.has(x)).length")
+    assert settled == 1 and live == 1 and dots >= 1 and shared == 0, (settled, live, dots, shared)
+    page.close()
 
 
 @browser_needed
@@ -863,6 +909,9 @@ def _poll_until(page, cond, timeout=240.0):
         page.poll()
         time.sleep(0.02)
     assert cond(), (page.message.text, page.status.text)
+    for _ in range(10):          # then what the page scheduled meanwhile (the flush after a first block)
+        if not page.poll():
+            break
 
 
 def test_picking_an_orbits_crossing_shows_its_mlce_megno_and_rotation_number():
@@ -1153,7 +1202,7 @@ def test_a_million_crossings_are_drawn_as_a_density_image_of_the_visible_window(
             a, r = rng.uniform(0, 2 * np.pi, n), np.sqrt(rng.uniform(0, 1, n))
             rows = np.column_stack([np.arange(n, dtype=float), c1 + r1 * r * np.cos(a), c2 + r2 * r * np.sin(a),
                                     np.ones(n), np.zeros(n)])
-            page._on_block(ident, rows, n, "done")
+            page._on_block(ident, rows, s.crossings + n, "done")   # (done: the orbit's crossings so far)
         page._running = set()
         page.poll()
         assert len(page.crossings.data["t"]) > density.THRESHOLD and page.dense and not page.points.visible
@@ -1242,12 +1291,15 @@ def test_past_the_glyph_budget_the_newest_orbits_are_glyphs_and_the_older_ones_i
         assert len(page.crossings.data["t"]) > density.GLYPH_BUDGET
         assert _glyphs_and_image(page) == (ids[3:], ids[:3])
         page._running = {ids[-1]}                       # as if the newest ran and this were its first block:
+        shown, status = len(page.shown.data["t"]), page.status.text
         more(ids[-1], int(0.45 * budget), "running", first=True)
-        page.poll()                                     # its first crossings go alone, nothing moves yet
-        assert page.glyph_filter.args["first"] == ids[3]
+        page.poll()                                     # its first crossings go alone, to the live layer:
+        assert len(page.live.data["t"]) == int(0.45 * budget) and len(page.shown.data["t"]) == shown
+        np.testing.assert_array_equal(page.live.data["p1"], page.crossings.data["p1"][shown:])
+        assert page.glyph_filter.args["first"] == ids[3] and page.status.text == status   # nothing else moves
         assert page.density.data["n"] == [np.count_nonzero(np.asarray(page.crossings.data["orbit"]) < ids[3])]
-        more(ids[-1], 1)                                # the next message: one orbit more in the image
-        page.poll()
+        assert page.poll()                              # the next flush (scheduled): they settle, and
+        assert len(page.live.data["t"]) == 0            # one orbit more is in the image
         assert _glyphs_and_image(page) == (ids[4:], ids[:4])
         class Ranges:
             x0, x1, y0, y1 = c1 - 0.5 * r1, c1 + 0.5 * r1, c2 - 0.5 * r2, c2 + 0.5 * r2
@@ -1405,21 +1457,25 @@ def test_a_served_click_sends_its_cross_with_its_first_crossings_and_later_block
     doc = _FakeDoc()
     page = page_mod.SectionPage(s, doc=doc)
     page.pause_box.value = False
-    flushes = []                                   # (start, crosses, crossings after) of each flush that drew rows
+    flushes = []          # (start, crosses, rows in crossings, rows in live, status) after each flush with rows
     flush = page._flush
 
+    def rows():
+        return len(page.shown.data["p1"]), len(page.live.data["p1"])
+
     def traced():
-        before, start = len(page.shown.data["p1"]), time.monotonic()       # (when it takes the queued blocks)
+        before, start = rows(), time.monotonic()       # (when it takes the queued blocks)
         flush()
-        if len(page.shown.data["p1"]) > before:
-            flushes.append((start, len(page.start_source.data["orbit"]), len(page.shown.data["p1"])))
+        if rows() != before:
+            flushes.append((start, len(page.start_source.data["orbit"]), *rows(), page.status.text))
     page._flush = traced
     try:
         page.click(c1 + 0.3 * r1, c2)
         # the cross waits for the first crossings (sent in the same callback, just after them) and
         # the link is written later, off the path from the click to them
-        assert page.start_source.data["orbit"] == [] and len(page.shown.data["p1"]) == 0
+        assert page.start_source.data["orbit"] == [] and rows() == (0, 0)
         assert [ms for _t, ms, f in doc.later if f == page._push_url_due] == [page_mod.URL_DELAY_MS]
+        status = page.status.text
         t0 = time.time()
         while (page.worker.busy() or doc.soon or any(f == page._flush for *_x, f in doc.later)) \
                 and time.time() - t0 < 240:
@@ -1427,7 +1483,10 @@ def test_a_served_click_sends_its_cross_with_its_first_crossings_and_later_block
             time.sleep(0.001)
         assert len(page.shown.data["p1"]) == s.crossings
         np.testing.assert_array_equal(np.asarray(page.crossings.data["p1"]), np.asarray(page.shown.data["p1"]))
-        assert flushes[0][1] == 1 and 0 < flushes[0][2] < s.crossings       # the cross with the first rows
+        # the first rows alone on the live layer (the status line unchanged), with the cross; the
+        # next flush moves them to the crossings, with what came meanwhile
+        assert flushes[0][1:] == (1, 0, FIRST_BLOCK, status) and flushes[1][2] > FIRST_BLOCK
+        assert flushes[1][3] == 0 and flushes[1][4] != status
         # between the first flush and the last, FLUSH_SECONDS at least (the last block goes at once)
         assert len(flushes) >= 3, flushes
         gaps = np.diff([t for t, *_x in flushes])[:-1]

@@ -12,6 +12,10 @@ browser; the tests read them there):
                only, holds them all; ``SectionPage.shown`` is this one)
 ``glyphs``     CustomJSFilter of the crossings drawn as glyphs: those of the orbits from
                ``args.first`` on (0: all), the newest, at most density.GLYPH_BUDGET crossings
+``live``       ColumnDataSource of the crossings of a message that carried an orbit's first
+               crossings, drawn on Bokeh's overlay canvas (the older orbits are not repainted)
+               until the next message moves them to ``crossings`` (same columns; every row of the
+               page is in exactly one of the two)
 ``density``    ColumnDataSource of the density image of the other crossings (n: how many):
                the older orbits past density.GLYPH_BUDGET, every orbit past the threshold
 ``starts``     ColumnDataSource of the clicked starts: orbit, p1, p2, c
@@ -81,8 +85,8 @@ from explorer.model import ParameterError
 
 #: a double tap within this many pixels of the click before it is that click again
 SAME_SPOT_PX = 4.0
-#: after an orbit's first block (sent at once), blocks go to the browser at most this often (s):
-#: each message makes the browser redraw every crossing on screen (benchmarks/bench_serve.py)
+#: after an orbit's first block (sent at once, to the live layer), blocks go to the browser at most
+#: this often (s): each message makes the browser redraw every dot on screen (benchmarks/bench_serve.py)
 FLUSH_SECONDS = 0.25
 #: a click's new link (the URL's orbits) is written this long after the click (ms), off the path
 #: from the click to its first crossings on screen; clicks meanwhile make one update
@@ -99,6 +103,10 @@ GLYPH_FILTER = ("const o = source.data.orbit, n = o.length, rows = [];\n"
 LABELS = {p.name: p.symbol for p in model.PARAMETERS} | {
     "h": "h", "method": "method", "tol": "tol (taylor, dop853)", "dt": "dt (split*)",
     "crossings": "crossings per click"}
+
+
+def _empty_live() -> dict:
+    return {c: [] for c in _empty_crossings()}
 
 
 def _empty_starts() -> dict:
@@ -160,6 +168,11 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.crossings = ColumnDataSource(_empty_crossings())
         # ... and what the browser draws: the same rows up to density.THRESHOLD, none past it
         self.shown = ColumnDataSource(_empty_crossings(), name="crossings")
+        # ... and the rows of a message with an orbit's first crossings, until the next message
+        # (:meth:`_flush`): self.live holds self.crossings' rows from self._settled on
+        # (as lists: a few rows as JSON, one frame of the websocket, not a binary buffer per column)
+        self.live = ColumnDataSource(_empty_live(), name="live")
+        self._settled = 0
         self.start_source = ColumnDataSource(_empty_starts(), name="starts")
         colors = {"field": "c", "transform": LinearColorMapper(palette=list(COLORS), low=-0.5,
                                                                 high=len(COLORS) - 0.5)}
@@ -191,6 +204,10 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.glyph_filter = CustomJSFilter(name="glyphs", args={"first": 0}, code=GLYPH_FILTER)
         self.points = fig.scatter("p1", "p2", source=self.shown, color=colors, size=POINT_SIZE, line_width=0,
                                   view=CDSView(filter=self.glyph_filter))
+        # the newest rows on the overlay canvas: Bokeh repaints only that canvas when they change
+        # (not the primary one with every older crossing and the images; benchmarks/bench_serve.py)
+        self.live_points = fig.scatter("p1", "p2", source=self.live, color=colors, size=POINT_SIZE, line_width=0,
+                                       level="overlay")
         fig.scatter("p1", "p2", source=self.start_source, marker="cross", color=colors, size=9, line_width=2,
                     level="overlay")   # (above the crossings and the images)
         fig.scatter("p1", "p2", source=self.periodic, marker="marker", size=8, line_color="black",
@@ -498,7 +515,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self._readout_generation += 1
         self.readout.text = ""
         self.crossings.data = _empty_crossings()
-        self.shown.data = _empty_crossings()
+        self._show_all()
         self.start_source.data = _empty_starts()
         self._unmarked = []
         self._refresh_density(force=True)       # no image left of them
@@ -522,8 +539,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self._running = self._running - {ident}
         keep = np.asarray(self.crossings.data["orbit"]) != ident
         self.crossings.data = {k: np.asarray(v)[keep] for k, v in self.crossings.data.items()}
-        if not self.dense:
-            self.shown.data = dict(self.crossings.data)
+        self._show_all()
         keep = [o != ident for o in self.start_source.data["orbit"]]
         self.start_source.data = {k: [x for x, ok in zip(v, keep) if ok] for k, v in self.start_source.data.items()}
         self._update_status()
@@ -577,19 +593,27 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
 
     def _flush(self):
         """The queued blocks onto the page.  Bokeh sends each change of a model as its own message,
-        in order, all written before the next callback runs: the crossings first (the browser draws
-        them at once), then the starts' crosses and the status line.  Not through Panel's
-        ``unlocked`` (one message per flush): when the socket was busy it queued the message for a
-        task that could return without sending it (panel 1.9), and an orbit's last rows never
-        reached the browser (tests/app/test_serve.py, the slow-connection test)."""
+        in order, all written before the next callback runs.  Not through Panel's ``unlocked`` (one
+        message per flush): when the socket was busy it queued the message for a task that could
+        return without sending it (panel 1.9), and an orbit's last rows never reached the browser
+        (tests/app/test_serve.py, the slow-connection test).
+
+        A flush that carries an orbit's first crossings sends them to ``live`` (drawn on the
+        overlay canvas: the browser repaints that alone, not the older crossings and the images,
+        about 5 us per dot in headless chromium), then the starts' crosses (also on the overlay),
+        and nothing else: the status line and the density image, whose changes make the browser
+        lay out the page or repaint everything, wait for the next flush (:meth:`_settle_later`),
+        which moves the live rows to ``crossings``."""
         with self._pending_lock:
             blocks, self._pending = self._pending, []
             self._flush_at, self._flushed_at = None, time.monotonic()
-        if not blocks:
-            self._mark_starts()
-            return                       # (flushed already by an earlier callback)
         live = {i: c for i, _a, _b, c in self.starts}
         blocks = [b for b in blocks if b[0] in live]          # undone or cancelled meanwhile: dropped
+        first_rows = [b for b in blocks if 0 < len(b[1]) == b[2]]   # orbits' first blocks
+        if first_rows and len(first_rows) < len(blocks):
+            with self._pending_lock:     # the other blocks wait for the next flush: the first go alone
+                self._pending[:0] = [b for b in blocks if not 0 < len(b[1]) == b[2]]
+            blocks = first_rows
         full = [b for b in blocks if len(b[1])]
         if full:
             data = np.concatenate([b[1] for b in full])
@@ -599,15 +623,55 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
                    "t": data[:, 0], "p1": data[:, 1], "p2": data[:, 2], "M": data[:, 3], "dH": data[:, 4],
                    "c": np.concatenate([np.full(len(b[1]), live[b[0]], np.int64) for b in full])}
             self.crossings.stream(new)
-            if not self.dense:
-                self.shown.stream(new)   # the first message: the browser draws the crossings at once
-        self._mark_starts()              # (their starts' crosses in the next one)
+            if first_rows:
+                self.live.stream({k: v.tolist() for k, v in new.items()})   # drawn at once, alone
+        moved = False if first_rows else self._settle()
+        self._mark_starts()              # (their starts' crosses in the next message)
         for ident, _rows, done, status in blocks:
             if status != "running":
                 self._running = self._running - {ident}
                 if status != "done":
                     self.say(f"orbit {ident} stopped after {done} crossings: {status}")
-        self._update_status(first_rows=any(0 < len(rows) == done for _i, rows, done, _s in full))
+        if first_rows:
+            self._settle_later()
+        else:
+            self._update_status(force_density=self.dense and moved)
+
+    def _settle(self) -> bool:
+        """The live rows to ``crossings`` (past density.THRESHOLD, to the density image only: the
+        caller redraws it at once), streamed before ``live`` empties (never a frame without them);
+        returns whether there were live rows."""
+        moved = bool(len(self.live.data["orbit"]))
+        n = len(self.crossings.data["orbit"])
+        if n > self._settled:
+            if not self.dense:
+                self.shown.stream({k: np.asarray(v)[self._settled:] for k, v in self.crossings.data.items()})
+            self._settled = n
+        if moved:
+            self.live.data = _empty_live()
+        return moved
+
+    def _settle_later(self) -> None:
+        """A flush FLUSH_SECONDS after this one, whether blocks come or not (it settles the live
+        rows; blocks handed in meanwhile go with it); in a notebook, at the next :meth:`poll`."""
+        if self._doc is None:
+            with self._pending_lock:
+                self._inbox.append(self._flush)
+            return
+        with self._pending_lock:
+            at = self._flushed_at + FLUSH_SECONDS        # (the time _on_block gives a block)
+            if self._flush_at is not None and self._flush_at <= at:
+                return
+            self._flush_at = at
+        self._flush_when(at)
+
+    def _show_all(self) -> None:
+        """The browser's rows anew: every crossing in ``crossings`` (none past density.THRESHOLD),
+        none live (after an undo, a clear, a change of settings or of the threshold's side)."""
+        self.shown.data = _empty_crossings() if self.dense else dict(self.crossings.data)
+        if len(self.live.data["orbit"]):
+            self.live.data = _empty_live()
+        self._settled = len(self.crossings.data["orbit"])
 
     def _on_error(self, ident, exc):
         self._post(partial(self._fail, ident, f"orbit {ident} failed: {type(exc).__name__}: "
@@ -619,15 +683,13 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.say(msg)
         self._update_status()
 
-    def _update_status(self, first_rows: bool = False):
-        """The status line (and the density image); ``first_rows``: the message carries an orbit's
-        first crossings (:meth:`_refresh_density` holds older orbits' move to the image until the
-        next message)."""
+    def _update_status(self, force_density: bool = False):
+        """The status line (and the density image, at once if ``force_density``)."""
         # the worker's paused orbits still running here (one paused as its last block came is done)
         paused = len(self._running.intersection(self.worker.paused()))
         running = len(self._running) - paused
         n = len(self.crossings.data["orbit"])
-        self._refresh_density(force=not running, hold=first_rows)   # (redrawn at once when the last orbit is done)
+        self._refresh_density(force=force_density or not running)   # (at once when the last orbit is done)
         text = (f"{len(self.starts)} orbit(s), {running} running, "
                 + (f"{paused} paused (Resume continues them), " if paused else "") + f"{n} crossings drawn"
                 + (" (as a density image)" if self.dense else "") + "; "

@@ -66,17 +66,15 @@ class LayersMixin:
             self._restart_raster()
         self._refresh_density(force=True)
 
-    def _refresh_density(self, force: bool = False, hold: bool = False) -> None:
+    def _refresh_density(self, force: bool = False) -> None:
         """Draw the crossings that are not glyphs as the density image of the visible window: past
         density.GLYPH_BUDGET crossings, those of the older orbits (the glyphs keep the newest,
         :func:`~explorer.app.serve.density.glyph_cutoff`); past density.THRESHOLD, all of them
         (the glyphs hidden, the browser holds no rows); below the budget, none (no image).  The
         image is redrawn at most every DENSITY_SECONDS while orbits stream in, at once when
         ``force`` (the view moved, the colouring changed, the last orbit finished) or when orbits
-        move between the glyphs and the image; never when what it shows is unchanged.  ``hold`` (the
-        message carries a click's first crossings, and orbits still run): orbits that should leave
-        the glyphs stay until the next message, so that the first crossings go alone (the glyphs
-        hold a first block, FIRST_BLOCK crossings, more than density.GLYPH_BUDGET meanwhile)."""
+        move between the glyphs and the image; never when what it shows is unchanged.  (Not called
+        by a message carrying a click's first crossings: those go alone, SectionPage._flush.)"""
         orbit = self.crossings.data["orbit"]
         n = len(orbit)
         dense = n > density.THRESHOLD
@@ -85,11 +83,9 @@ class LayersMixin:
             self.points.visible = not dense
             # past the threshold the browser holds no rows (one message empties them); below it again,
             # every row goes back
-            self.shown.data = _empty_crossings() if dense else dict(self.crossings.data)
+            self._show_all()
             force = True
         first = 0 if dense else density.glyph_cutoff(orbit)
-        if hold and not force and first > self.glyph_first:
-            first = self.glyph_first
         if first != self.glyph_first:
             self.glyph_first = first
             self.glyph_filter.args = {"first": first}

@@ -130,18 +130,27 @@ class ReadoutMixin:
             return
         self.indicators[ident] = (megno, mlce)
         rows = np.flatnonzero(np.asarray(self.crossings.data["orbit"]) == ident)
-        if rows.size:      # the rows streamed before the indicator was known: one slice per run of them
-            # (values as arrays: binary in the message, not a JSON list)
-            runs = np.split(rows, np.flatnonzero(np.diff(rows) != 1) + 1)
-            patch = {"megno": [(slice(int(r[0]), int(r[-1]) + 1), np.full(len(r), megno)) for r in runs]}
-            self.crossings.patch(patch)
-            if not self.dense:
-                self.shown.patch(patch)
+        if rows.size:      # the rows streamed before the indicator was known
+            self.crossings.patch(_megno_patch(rows, megno))
+            settled = self._settled        # (the browser's: crossings up to it, live from it on)
+            if not self.dense and rows[0] < settled:
+                self.shown.patch(_megno_patch(rows[rows < settled], megno))
+            if rows[-1] >= settled:
+                self.live.patch(_megno_patch(rows[rows >= settled] - settled, megno, as_list=True))
         self._update_status()
 
     def _colour_changed(self):
         spec = self._by_megno if self.colour_box.value else self._by_orbit
-        self.points.glyph.fill_color = spec
-        self.points.glyph.line_color = spec
+        for r in (self.points, self.live_points):
+            r.glyph.fill_color = spec
+            r.glyph.line_color = spec
         self._refresh_density(force=True)
         self._push_url()
+
+
+def _megno_patch(rows, megno: float, as_list: bool = False) -> dict:
+    """A patch of the column megno to ``megno`` at ``rows`` (sorted indices): one slice per run of
+    them; values as arrays (binary in the message), or ``as_list`` (a column held as a list)."""
+    runs = np.split(rows, np.flatnonzero(np.diff(rows) != 1) + 1)
+    return {"megno": [(slice(int(r[0]), int(r[-1]) + 1), [megno] * len(r) if as_list else np.full(len(r), megno))
+                      for r in runs]}
