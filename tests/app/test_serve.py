@@ -914,6 +914,36 @@ def _poll_until(page, cond, timeout=240.0):
             break
 
 
+def test_an_orbits_megno_reaches_its_rows_whether_live_or_settled():
+    """The MEGNO of an orbit known while its first crossings are still on the live layer: the
+    server's rows, the live rows and, once they settle, the page's crossings all carry it (each
+    row in the browser is in one of the two sources, patched where it is)."""
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    from explorer.app.serve.page import SectionPage
+
+    s = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=40)
+    c1, c2, r1, _r2 = s.region
+    page = SectionPage(s)
+    try:
+        older = page.click(c1 + 0.3 * r1, c2).ident
+        _poll_until(page, lambda: len(page.shown.data["t"]) == s.crossings and older in page.indicators)
+        page._running = {older + 1}                         # a second orbit's first block, by hand
+        page.starts.append((older + 1, c1, c2, 1))
+        rows = np.column_stack([np.arange(1.0, 5.0), np.full(4, c1), np.full(4, c2), np.ones(4), np.zeros(4)])
+        page._on_block(older + 1, rows, 4, "running")
+        assert page.poll() and len(page.live.data["t"]) == 4      # live, not yet settled
+        page._show_indicators(older, 2.5, 0.01)             # the older orbit's rows: settled
+        page._show_indicators(older + 1, 7.0, 0.2)          # the newer one's: live
+        np.testing.assert_array_equal(page.shown.data["megno"], np.full(s.crossings, 2.5))
+        assert page.live.data["megno"] == [7.0] * 4
+        assert page.poll()                                  # the next flush settles them
+        assert page.live.data["megno"] == []
+        np.testing.assert_array_equal(page.shown.data["megno"], np.r_[np.full(s.crossings, 2.5), np.full(4, 7.0)])
+        np.testing.assert_array_equal(page.shown.data["megno"], page.crossings.data["megno"])
+    finally:
+        page.close()
+
+
 def test_picking_an_orbits_crossing_shows_its_mlce_megno_and_rotation_number():
     pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
     from explorer.analysis import lyapunov, rotation
