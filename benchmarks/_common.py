@@ -112,10 +112,13 @@ def command_line(script_name, argv=None):
     return " ".join(["python", f"benchmarks/{script_name}"] + [shlex.quote(a) for a in argv])
 
 
-def header(title, command, started, seconds, load_start, extra=(), stored=None):
+def header(title, command, started, seconds, load_start, extra=(), stored=None, numba_threads=None):
     """The common head of a RESULTS.md section.  ``stored``: a run's JSON document (machine,
-    versions, load_end) when a section is re-rendered from it rather than written by the run."""
+    versions, load_end) when a section is re-rendered from it rather than written by the run;
+    ``numba_threads``: the threads the measured processes ran with, when not this process's."""
     m = stored["machine"] if stored else machine()
+    if numba_threads is not None:
+        m = dict(m, numba_threads=numba_threads)
     v = stored["versions"] if stored else versions()
     load_end = stored["load_end"] if stored else loadavg()
     lines = [f"## {title}", "",

@@ -122,7 +122,8 @@ def main(argv=None):
             + (["--rows", ",".join(rows)] if rows != ROWS else [])), started,
             seconds, load0, extra=[f"base {rev(base)}, new {rev(new)}; best of {args.rounds} alternating rounds"
                                    + (f" x {args.repeat} calls" if args.repeat > 1 else "") + ", warm caches"
-                                   + ("; CPU time of one Numba thread" if args.cpu else "; wall time")])
+                                   + ("; CPU time of one Numba thread" if args.cpu else "; wall time")],
+            numba_threads=1 if args.cpu else None)   # (--cpu: the timed processes run one thread)
         C.update_section("AB", head + [""] + lines)
 
 
