@@ -15,6 +15,7 @@ Safe by default:
 """
 from __future__ import annotations
 
+import gc
 import hmac
 import ipaddress
 import secrets
@@ -130,17 +131,29 @@ def open_in_browser(url: str, err=None) -> threading.Thread | None:
     return t
 
 
+def warm_up_and_freeze(base: Settings) -> None:
+    """Load the crossing kernels (:func:`explorer.app.serve.orbits.warm_up`), then put every
+    object alive out of the cyclic garbage collector's sight (``gc.freeze``): the imported
+    modules and kernels, about 230,000 objects, which a full collection walked in 150-230 ms on
+    the server's event loop about once in ten clicks, in front of that click's first crossings
+    (benchmarks/bench_serve.py --breakdown; docs/commands/serve.md, *Latency*).  The objects of
+    a session opened before this ends are frozen too (kept until the server stops)."""
+    from explorer.app.serve.orbits import warm_up
+
+    warm_up(base)
+    gc.collect()
+    gc.freeze()
+
+
 def run(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, token: str | None = None,
         export_dir=None, label: str = "", open_browser: bool = False, out=None, **page_options) -> None:
     """Serve until interrupted: the URL is the first line printed; ``open_browser``: then open it
     in the user's browser (:func:`open_in_browser`), once the server listens."""
-    from explorer.app.serve.orbits import warm_up
-
     out = sys.stdout if out is None else out
     server, url = make_server(base, host=host, port=port, token=token, export_dir=export_dir, label=label,
                               **page_options)
     print(url, file=out, flush=True)
-    threading.Thread(target=warm_up, args=(base,), name="explorer-serve-warm-up", daemon=True).start()
+    threading.Thread(target=warm_up_and_freeze, args=(base,), name="explorer-serve-warm-up", daemon=True).start()
     server.start()
     if open_browser:
         open_in_browser(url)
