@@ -526,19 +526,23 @@ def test_on_a_slow_connection_the_page_ends_with_every_row_of_the_server(browser
     assert code in (0, 130) and "Traceback" not in err, err[-2000:]
 
 
-#: in the browser, from the page's start: which canvases the dots (arcs) are drawn on, while no row is
-#: live (the settled crossings) and while a click's first crossings are live and the crossings
-#: source still holds the ``window.__before`` rows of the clicks before
+#: in the browser, from the page's start: the dots (arcs) drawn while a click's first crossings are
+#: live and the crossings source still holds the ``window.__before`` rows of the clicks before, in
+#: all and on the section's primary canvas (Bokeh's layer of the glyphs and images, where the older
+#: orbits' dots are; the live layer is on the overlay canvas)
 CANVASES = """window.__before = -1;
-window.__canvases = {settled: new Set(), live: new Set(), live_dots: 0};
+window.__dots = {live: 0, live_on_primary: 0, primary: 0};
 const arc = CanvasRenderingContext2D.prototype.arc;
 CanvasRenderingContext2D.prototype.arc = function(...a) {
-  const d = window.Bokeh && Bokeh.documents.length ? Bokeh.documents[0] : null;
-  const live = d && d.get_model_by_name('live'), rows = d && d.get_model_by_name('crossings');
-  if (live && rows) {
-    const n = live.data.p1.length, m = rows.data.p1.length, c = window.__canvases;
-    if (n === 0 && m > 0) c.settled.add(this.canvas);
-    else if (n > 0 && m === window.__before) { c.live.add(this.canvas); c.live_dots++; }
+  const v = window.Bokeh ? Bokeh.index.all_views().find(v => v.model.name === 'section') : null;
+  if (v) {
+    const d = Bokeh.documents[0], live = d.get_model_by_name('live'), rows = d.get_model_by_name('crossings');
+    const primary = this.canvas === v.canvas_view.primary.canvas, c = window.__dots;
+    if (primary) c.primary++;
+    if (live.data.p1.length > 0 && rows.data.p1.length === window.__before) {
+      c.live++;
+      if (primary) c.live_on_primary++;
+    }
   }
   return arc.apply(this, a); };"""
 
@@ -547,7 +551,9 @@ CanvasRenderingContext2D.prototype.arc = function(...a) {
 def test_a_clicks_first_crossings_are_drawn_without_redrawing_the_older_orbits(served, browser):
     """The first crossings of a click beside earlier orbits go to the live layer, on Bokeh's overlay
     canvas: the browser draws them without redrawing the older orbits' dots (what made them take
-    150-250 ms to appear beside 10,000-40,000 crossings; benchmarks/bench_serve.py)."""
+    150-250 ms to appear beside 10,000-40,000 crossings; benchmarks/bench_serve.py).  An orbit of
+    CROSSINGS is done within the first 0.25 s: its last block goes to the live layer too.  With
+    the live renderer on the primary canvas this fails (every dot there counted)."""
     page = browser.new_page()
     page.add_init_script(CANVASES)
     page.goto(served.url)
@@ -556,14 +562,16 @@ def test_a_clicks_first_crossings_are_drawn_without_redrawing_the_older_orbits(s
     _click(page, c1 + 0.3 * r1, c2)
     _wait_crossings(page, CROSSINGS)
     _wait(page, "() => Bokeh.documents[0].get_model_by_name('live').data.p1.length === 0")
-    page.wait_for_timeout(400)                                             # (not a double tap)
-    page.evaluate(f"() => {{ window.__before = {CROSSINGS}; }}")
-    _click(page, c1 - 0.5 * r1, c2 + 0.1 * r2)
-    _wait_crossings(page, 2 * CROSSINGS)
-    settled, live, dots = page.evaluate("() => { const c = window.__canvases;"
-                                        " return [[...c.settled].length, [...c.live].length, c.live_dots]; }")
-    shared = page.evaluate("() => [...window.__canvases.live].filter(x => window.__canvases.settled.has(x)).length")
-    assert settled == 1 and live == 1 and dots >= 1 and shared == 0, (settled, live, dots, shared)
+    for k in range(1, 4):      # (a browser too busy to paint before the rows settle, 0.25 s: again)
+        page.wait_for_timeout(400)                                         # (not a double tap)
+        page.evaluate(f"() => {{ window.__before = {k * CROSSINGS}; }}")
+        _click(page, c1 - (0.2 * k) * r1, c2 + 0.1 * r2)
+        _wait_crossings(page, (k + 1) * CROSSINGS)
+        _wait(page, "() => Bokeh.documents[0].get_model_by_name('live').data.p1.length === 0")
+        if page.evaluate("() => window.__dots.live") > 0:
+            break
+    dots = page.evaluate("() => window.__dots")
+    assert dots["primary"] >= CROSSINGS and dots["live"] >= 1 and dots["live_on_primary"] == 0, dots
     page.close()
 
 

@@ -13,9 +13,9 @@ browser; the tests read them there):
 ``glyphs``     CustomJSFilter of the crossings drawn as glyphs: those of the orbits from
                ``args.first`` on (0: all), the newest, at most density.GLYPH_BUDGET crossings
 ``live``       ColumnDataSource of the crossings of a message that carried an orbit's first
-               crossings, drawn on Bokeh's overlay canvas (the older orbits are not repainted)
-               until the next message moves them to ``crossings`` (same columns; every row of the
-               page is in exactly one of the two)
+               crossings (and of those sent in the FLUSH_SECONDS after it), drawn on Bokeh's
+               overlay canvas (the older orbits are not repainted) until the flush then moves them
+               to ``crossings`` (same columns; every row of the page is in exactly one of the two)
 ``density``    ColumnDataSource of the density image of the other crossings (n: how many):
                the older orbits past density.GLYPH_BUDGET, every orbit past the threshold
 ``starts``     ColumnDataSource of the clicked starts: orbit, p1, p2, c
@@ -88,6 +88,8 @@ SAME_SPOT_PX = 4.0
 #: after an orbit's first block (sent at once, to the live layer), blocks go to the browser at most
 #: this often (s): each message makes the browser redraw every dot on screen (benchmarks/bench_serve.py)
 FLUSH_SECONDS = 0.25
+#: a flush this close to the time the live rows are due to settle (s) settles them
+SETTLE_SLACK = 0.01
 #: a click's new link (the URL's orbits) is written this long after the click (ms), off the path
 #: from the click to its first crossings on screen; clicks meanwhile make one update
 URL_DELAY_MS = 1000
@@ -173,6 +175,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         # (as lists: a few rows as JSON, one frame of the websocket, not a binary buffer per column)
         self.live = ColumnDataSource(_empty_live(), name="live")
         self._settled = 0
+        self._settle_at = -math.inf             # (monotonic) the flush due then moves the live rows
         self.start_source = ColumnDataSource(_empty_starts(), name="starts")
         colors = {"field": "c", "transform": LinearColorMapper(palette=list(COLORS), low=-0.5,
                                                                 high=len(COLORS) - 0.5)}
@@ -602,11 +605,14 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         overlay canvas: the browser repaints that alone, not the older crossings and the images,
         about 5 us per dot in headless chromium), then the starts' crosses (also on the overlay),
         and nothing else: the status line and the density image, whose changes make the browser
-        lay out the page or repaint everything, wait for the next flush (:meth:`_settle_later`),
-        which moves the live rows to ``crossings``."""
+        lay out the page or repaint everything, wait for the flush FLUSH_SECONDS later
+        (:meth:`_settle_later`), which moves the live rows to ``crossings``.  Rows that come
+        before it (a short orbit's last block, sent at once) go to ``live`` too: otherwise the
+        browser, taking both messages in one frame, would repaint everything for the first rows."""
         with self._pending_lock:
             blocks, self._pending = self._pending, []
-            self._flush_at, self._flushed_at = None, time.monotonic()
+            now = time.monotonic()
+            self._flush_at, self._flushed_at = None, now
         live = {i: c for i, _a, _b, c in self.starts}
         blocks = [b for b in blocks if b[0] in live]          # undone or cancelled meanwhile: dropped
         first_rows = [b for b in blocks if 0 < len(b[1]) == b[2]]   # orbits' first blocks
@@ -614,6 +620,8 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
             with self._pending_lock:     # the other blocks wait for the next flush: the first go alone
                 self._pending[:0] = [b for b in blocks if not 0 < len(b[1]) == b[2]]
             blocks = first_rows
+        # (SETTLE_SLACK: a timer is never early by more; a flush it runs must settle)
+        to_live = bool(first_rows) or (bool(len(self.live.data["orbit"])) and now < self._settle_at - SETTLE_SLACK)
         full = [b for b in blocks if len(b[1])]
         if full:
             data = np.concatenate([b[1] for b in full])
@@ -623,9 +631,9 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
                    "t": data[:, 0], "p1": data[:, 1], "p2": data[:, 2], "M": data[:, 3], "dH": data[:, 4],
                    "c": np.concatenate([np.full(len(b[1]), live[b[0]], np.int64) for b in full])}
             self.crossings.stream(new)
-            if first_rows:
+            if to_live:
                 self.live.stream({k: v.tolist() for k, v in new.items()})   # drawn at once, alone
-        moved = False if first_rows else self._settle()
+        moved = False if to_live else self._settle()
         self._mark_starts()              # (their starts' crosses in the next message)
         for ident, _rows, done, status in blocks:
             if status != "running":
@@ -634,7 +642,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
                     self.say(f"orbit {ident} stopped after {done} crossings: {status}")
         if first_rows:
             self._settle_later()
-        else:
+        elif not to_live:
             self._update_status(force_density=self.dense and moved)
 
     def _settle(self) -> bool:
@@ -660,10 +668,10 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
             return
         with self._pending_lock:
             at = self._flushed_at + FLUSH_SECONDS        # (the time _on_block gives a block)
-            if self._flush_at is not None and self._flush_at <= at:
-                return
-            self._flush_at = at
-        self._flush_when(at)
+            self._settle_at = at
+            if self._flush_at is None or self._flush_at > at:
+                self._flush_at = at
+        self._flush_when(at)     # (always: a flush scheduled sooner runs before the rows are due)
 
     def _show_all(self) -> None:
         """The browser's rows anew: every crossing in ``crossings`` (none past density.THRESHOLD),
