@@ -1557,3 +1557,41 @@ def test_a_served_click_sends_its_cross_with_its_first_crossings_and_later_block
         assert gaps.min() >= page_mod.FLUSH_SECONDS - 0.01, gaps
     finally:
         page.close()
+
+
+def test_a_short_orbit_joins_its_first_crossings_on_the_live_layer_until_they_settle():
+    """An orbit done within FLUSH_SECONDS of its first crossings (its last block is sent at once):
+    its rows go to the live layer too, and all of them move to the crossings together, once,
+    FLUSH_SECONDS after the first, with the status line; nothing is lost or doubled."""
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    from explorer.app.serve import page as page_mod
+
+    s = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=40)       # blocks of 16 and 24
+    c1, c2, r1, _r2 = s.region
+    doc = _FakeDoc()
+    page = page_mod.SectionPage(s, doc=doc)
+    seen = []             # (time, rows in crossings, rows in live, status) after each flush
+    flush = page._flush
+
+    def traced():
+        flush()
+        seen.append((time.monotonic(), len(page.shown.data["p1"]), len(page.live.data["p1"]), page.status.text))
+    page._flush = traced
+    try:
+        status = page.status.text
+        page.click(c1 + 0.3 * r1, c2)
+        t0 = time.time()
+        while (page.worker.busy() or doc.soon or any(f == page._flush for *_x, f in doc.later)
+               or len(page.live.data["p1"])) and time.time() - t0 < 240:
+            doc.run(skip=(page._push_url_due,))
+            time.sleep(0.001)
+        firsts = [x for x in seen if x[2] > 0]      # the first block (with the last if it was there)
+        assert firsts[0][1] == 0 and firsts[0][2] in (FIRST_BLOCK, s.crossings) and firsts[0][3] == status
+        assert any(x[1:3] == (0, s.crossings) for x in seen)                  # the last one joins it
+        settled = [x for x in seen if x[1] > 0]
+        assert settled[0][1:3] == (s.crossings, 0) and settled[0][3] != status  # all at once, with the status
+        assert settled[0][0] - firsts[0][0] >= page_mod.FLUSH_SECONDS - page_mod.SETTLE_SLACK
+        np.testing.assert_array_equal(page.shown.data["p1"], page.crossings.data["p1"])
+        assert len(page.crossings.data["p1"]) == s.crossings
+    finally:
+        page.close()

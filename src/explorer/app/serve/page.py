@@ -615,11 +615,11 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
             self._flush_at, self._flushed_at = None, now
         live = {i: c for i, _a, _b, c in self.starts}
         blocks = [b for b in blocks if b[0] in live]          # undone or cancelled meanwhile: dropped
-        first_rows = [b for b in blocks if 0 < len(b[1]) == b[2]]   # orbits' first blocks
-        if first_rows and len(first_rows) < len(blocks):
-            with self._pending_lock:     # the other blocks wait for the next flush: the first go alone
-                self._pending[:0] = [b for b in blocks if not 0 < len(b[1]) == b[2]]
-            blocks = first_rows
+        first_rows = {b[0] for b in blocks if 0 < len(b[1]) == b[2]}   # orbits at their first block
+        if first_rows and any(b[0] not in first_rows for b in blocks):
+            with self._pending_lock:     # other orbits' blocks wait for the next flush: these go alone
+                self._pending[:0] = [b for b in blocks if b[0] not in first_rows]
+            blocks = [b for b in blocks if b[0] in first_rows]
         # (SETTLE_SLACK: a timer is never early by more; a flush it runs must settle)
         to_live = bool(first_rows) or (bool(len(self.live.data["orbit"])) and now < self._settle_at - SETTLE_SLACK)
         full = [b for b in blocks if len(b[1])]
