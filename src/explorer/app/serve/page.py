@@ -90,6 +90,11 @@ SAME_SPOT_PX = 4.0
 FLUSH_SECONDS = 0.25
 #: a flush this close to the time the live rows are due to settle (s) settles them
 SETTLE_SLACK = 0.01
+#: rows sent before the live rows settle join them while the live layer stays within this many
+#: (a short orbit's last block; the overlay repaints them all, about 5 us a dot); a larger block
+#: took 50 ms or more to compute (orbits.BLOCK_SECONDS), the first rows are on screen by then,
+#: and it settles at once with them (one repaint of everything instead of two)
+LIVE_MAX_ROWS = 2_000
 #: a click's new link (the URL's orbits) is written this long after the click (ms), off the path
 #: from the click to its first crossings on screen; clicks meanwhile make one update
 URL_DELAY_MS = 1000
@@ -606,9 +611,10 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         about 5 us per dot in headless chromium), then the starts' crosses (also on the overlay),
         and nothing else: the status line and the density image, whose changes make the browser
         lay out the page or repaint everything, wait for the flush FLUSH_SECONDS later
-        (:meth:`_settle_later`), which moves the live rows to ``crossings``.  Rows that come
-        before it (a short orbit's last block, sent at once) go to ``live`` too: otherwise the
-        browser, taking both messages in one frame, would repaint everything for the first rows."""
+        (:meth:`_settle_later`), which moves the live rows to ``crossings``.  A few rows that come
+        before it (a short orbit's last block, sent at once; LIVE_MAX_ROWS) go to ``live`` too:
+        otherwise the browser, taking both messages in one frame, would repaint everything for
+        the first rows."""
         with self._pending_lock:
             blocks, self._pending = self._pending, []
             now = time.monotonic()
@@ -620,9 +626,11 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
             with self._pending_lock:     # other orbits' blocks wait for the next flush: these go alone
                 self._pending[:0] = [b for b in blocks if b[0] not in first_rows]
             blocks = [b for b in blocks if b[0] in first_rows]
-        # (SETTLE_SLACK: a timer is never early by more; a flush it runs must settle)
-        to_live = bool(first_rows) or (bool(len(self.live.data["orbit"])) and now < self._settle_at - SETTLE_SLACK)
         full = [b for b in blocks if len(b[1])]
+        held = len(self.live.data["orbit"])
+        # (SETTLE_SLACK: a timer is never early by more; a flush it runs must settle)
+        to_live = bool(first_rows) or (0 < held and now < self._settle_at - SETTLE_SLACK
+                                       and held + sum(len(b[1]) for b in full) <= LIVE_MAX_ROWS)
         if full:
             data = np.concatenate([b[1] for b in full])
             megno = [self.indicators.get(b[0], (math.nan,))[0] for b in full]
