@@ -1549,8 +1549,9 @@ def test_a_served_click_sends_its_cross_with_its_first_crossings_and_later_block
         np.testing.assert_array_equal(np.asarray(page.crossings.data["p1"]), np.asarray(page.shown.data["p1"]))
         # the first rows alone on the live layer (the status line unchanged), with the cross; the
         # next flush moves them to the crossings, with what came meanwhile
-        assert flushes[0][1:] == (1, 0, FIRST_BLOCK, status) and flushes[1][2] > FIRST_BLOCK
-        assert flushes[1][3] == 0 and flushes[1][4] != status
+        # (with the orbit's next blocks if they were there already when the flush ran)
+        assert flushes[0][1:3] == (1, 0) and flushes[0][3] >= FIRST_BLOCK and flushes[0][4] == status
+        assert flushes[1][2] > flushes[0][3] and flushes[1][3] == 0 and flushes[1][4] != status
         # between the first flush and the last, FLUSH_SECONDS at least (the last block goes at once)
         assert len(flushes) >= 3, flushes
         gaps = np.diff([t for t, *_x in flushes])[:-1]
