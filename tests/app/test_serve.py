@@ -532,11 +532,16 @@ def test_on_a_slow_connection_the_page_ends_with_every_row_of_the_server(browser
 #: orbits' dots are; the live layer is on the overlay canvas)
 CANVASES = """window.__before = -1;
 window.__dots = {live: 0, live_on_primary: 0, primary: 0};
+(() => {
 const arc = CanvasRenderingContext2D.prototype.arc;
+let v = null, live = null, rows = null;        // (looked up once the page is there, not per dot)
 CanvasRenderingContext2D.prototype.arc = function(...a) {
-  const v = window.Bokeh ? Bokeh.index.all_views().find(v => v.model.name === 'section') : null;
+  if (!v && window.Bokeh && Bokeh.documents.length) {
+    v = Bokeh.index.all_views().find(v => v.model.name === 'section') || null;
+    live = Bokeh.documents[0].get_model_by_name('live');
+    rows = Bokeh.documents[0].get_model_by_name('crossings');
+  }
   if (v) {
-    const d = Bokeh.documents[0], live = d.get_model_by_name('live'), rows = d.get_model_by_name('crossings');
     const primary = this.canvas === v.canvas_view.primary.canvas, c = window.__dots;
     if (primary) c.primary++;
     if (live.data.p1.length > 0 && rows.data.p1.length === window.__before) {
@@ -544,7 +549,8 @@ CanvasRenderingContext2D.prototype.arc = function(...a) {
       if (primary) c.live_on_primary++;
     }
   }
-  return arc.apply(this, a); };"""
+  return arc.apply(this, a); };
+})();"""
 
 
 @browser_needed
