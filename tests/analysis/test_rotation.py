@@ -113,7 +113,7 @@ def test_chaotic_orbit_does_not_converge_and_the_profile_has_the_plateaus():
     c = pm.find_periodic_orbit(PRM, H, CENTER, 1).points[0]
     r = rm.rotation_number(PRM, H, (0.5, 0.0), center=c, iterates=1000)
     assert not r.converged and r.difference > 1e-8
-    prof = rm.rotation_profile(PRM, H, (1.01, 0.0), (1.02, 0.0), 3, center=c, iterates=500)
+    prof = rm.rotation_profile(PRM, H, (1.01, 0.0), (1.02, 0.0), n=3, center=c, iterates=500)
     assert prof.points.shape == (3, 2) and prof.s[-1] == 1.0
     assert any(abs(v + 1 / 6) < 1e-8 for v in prof.rotation)       # the period-6 island
 
@@ -122,4 +122,4 @@ def test_rotation_refuses_points_outside_the_allowed_region():
     with pytest.raises(model.ParameterError, match="allowed region"):
         rm.rotation_number(PRM, H, (3.0, 0.0), center=CENTER)
     with pytest.raises(model.ParameterError, match="allowed region"):
-        rm.rotation_profile(PRM, H, (1.0, 0.0), (3.0, 0.0), 5, center=CENTER)
+        rm.rotation_profile(PRM, H, (1.0, 0.0), (3.0, 0.0), n=5, center=CENTER)

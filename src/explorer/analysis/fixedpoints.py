@@ -23,7 +23,7 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis.periodic import PeriodicBranch
-from explorer.analysis.section_map import DEFAULT_TOL, SectionMap, takes_section_map
+from explorer.analysis.section_map import DEFAULT_TOL, SectionMap, system_first
 from explorer.model import ParameterError, validation
 
 __all__ = ["Branch", "FixedPoint", "analytic_eigenvalues_solution_I", "continue_branch", "find_fixed_point", "follow",
@@ -84,8 +84,8 @@ class FixedPoint:
                 "residual": self.residual, "degenerate": bool(self.degenerate)}
 
 
-@takes_section_map
-def find_fixed_point(params, h, guess=(0.0, 0.0), *, phi0=math.pi, tol=DEFAULT_TOL) -> FixedPoint:
+@system_first
+def find_fixed_point(system, guess=(0.0, 0.0)) -> FixedPoint:
     """A fixed point of the section map P of phi = ``phi0`` at energy ``h`` (docs/model.md R9).
 
     Newton's method on P(x) - x = 0 in (p1, p2) (:func:`explorer.analysis.periodic.find_periodic_orbit`
@@ -96,16 +96,10 @@ def find_fixed_point(params, h, guess=(0.0, 0.0), *, phi0=math.pi, tol=DEFAULT_T
 
     Parameters
     ----------
-    params : Params
-        Model parameters.
-    h : float
-        Energy level.
+    system : SectionMap, or params, h
+        The section map (its energy, section angle, Taylor tolerance and return budget).
     guess : (float, float)
         Start of Newton's method, (p1, p2) inside the allowed region.
-    phi0 : float
-        Section angle (default pi, the seed's section).
-    tol : float
-        Taylor tolerance of the return map.
 
     Returns
     -------
@@ -119,7 +113,7 @@ def find_fixed_point(params, h, guess=(0.0, 0.0), *, phi0=math.pi, tol=DEFAULT_T
     """
     from explorer.analysis.periodic import find_periodic_orbit
 
-    return FixedPoint.from_orbit(find_periodic_orbit(params, h, guess, 1, phi0=phi0, tol=tol))
+    return FixedPoint.from_orbit(find_periodic_orbit(system, guess, 1))
 
 
 @dataclass(frozen=True)
@@ -140,9 +134,8 @@ class Branch(PeriodicBranch):
         return self.orbits
 
 
-@takes_section_map
-def continue_branch(params, h, parameter, start, stop, step, guess=(0.0, 0.0), *, phi0=math.pi,
-                    tol=DEFAULT_TOL, bisect_tol=1e-8) -> Branch:
+@system_first
+def continue_branch(system, parameter, start, stop, step, guess=(0.0, 0.0), *, bisect_tol=1e-8) -> Branch:
     """Natural-parameter continuation of a fixed point in any model parameter (or "h").
 
     :func:`explorer.analysis.periodic.continue_periodic` with K = 1: from ``start`` to ``stop``
@@ -158,8 +151,7 @@ def continue_branch(params, h, parameter, start, stop, step, guess=(0.0, 0.0), *
     """
     from explorer.analysis.periodic import continue_periodic
 
-    br = continue_periodic(params, h, 1, parameter, start, stop, step, guess, phi0=phi0, tol=tol,
-                           bisect_tol=bisect_tol)
+    br = continue_periodic(system, 1, parameter, start, stop, step, guess, bisect_tol=bisect_tol)
     return Branch(parameter, 1, br.values, [FixedPoint.from_orbit(o) for o in br.orbits], br.bifurcations,
                   br.stopped)
 
@@ -239,15 +231,14 @@ def analytic_eigenvalues_solution_I(params, h):
     return np.array([complex(math.cos(w), math.sin(w)), complex(math.cos(w), -math.sin(w))]), 2 * math.cos(w)
 
 
-@takes_section_map
-def follow(params, h, parameter, start, stop, guess, *, max_step=0.25, phi0=math.pi, tol=DEFAULT_TOL) -> FixedPoint:
+@system_first
+def follow(system, parameter, start, stop, guess, *, max_step=0.25) -> FixedPoint:
     """The fixed point at ``parameter = stop`` on the branch through the point found near
     ``guess`` at ``parameter = start`` (continuation in steps of at most ``max_step``)."""
     if start == stop:
-        prm, hh = validation.with_value(params, h, parameter, start)
-        return find_fixed_point(prm, hh, guess, phi0=phi0, tol=tol)
+        return find_fixed_point(system.with_value(parameter, start), guess)
     n = max(1, math.ceil(abs(stop - start) / max_step))
-    br = continue_branch(params, h, parameter, start, stop, (stop - start) / n, guess, phi0=phi0, tol=tol)
+    br = continue_branch(system, parameter, start, stop, (stop - start) / n, guess)
     if br.stopped is not None:
         raise ParameterError(f"the fixed point could not be followed to {parameter} = {stop:.10g}: {br.stopped}")
     return br.points[-1]

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from explorer import model
-from explorer.analysis.section_map import takes_section_map
+from explorer.analysis.section_map import system_first
 from explorer.integrate.methods import MAP_TOL
 from explorer.model import ParameterError, symmetry
 
@@ -50,9 +50,8 @@ class Partners:
     status: tuple
 
 
-@takes_section_map
-def partner_points(params, h: float, points, *, phi0: float = math.pi, tol: float = DEFAULT_TOL,
-                   threads: int | None = None) -> Partners:
+@system_first(settings=("phi0", "tol"))
+def partner_points(system, points, *, threads: int | None = None) -> Partners:
     """The partners T(x) of the points x = (p1, p2) ((2,) or (n, 2)) of the section phi = phi0 at
     energy h (crossed with dphi/dt > 0) under the half-turn reversor (module docstring).
 
@@ -62,15 +61,10 @@ def partner_points(params, h: float, points, *, phi0: float = math.pi, tol: floa
     """
     from explorer.analysis.sections import crossings
 
+    params, h, phi0, tol = system.params, system.h, system.phi0, system.tol
     bad = symmetry.half_turn_violations(params)
     if bad:
         raise ParameterError(f"the half-turn is a symmetry only when chi = 0 and mu eta = 0; here {', '.join(bad)}")
-    phi0 = float(phi0)
-    if not math.isfinite(phi0):
-        raise ParameterError(f"phi0 must be finite, got {phi0!r}")
-    h = float(h)
-    if not math.isfinite(h):
-        raise ParameterError(f"h must be finite, got {h!r}")
     x = np.atleast_2d(np.asarray(points, dtype=np.float64))
     if x.ndim != 2 or x.shape[1] != 2:
         raise ParameterError(f"points must be (p1, p2) or an (n, 2) array, got shape {np.shape(points)}")
@@ -79,5 +73,5 @@ def partner_points(params, h: float, points, *, phi0: float = math.pi, tol: floa
     if abs(math.remainder(image - phi0, 2.0 * math.pi)) < SAME_SECTION:
         # K maps the section to itself (phi0 = pi/2 or 3 pi/2): T = K
         return Partners(y[:, :2].copy(), np.zeros(len(x)), ("done",) * len(x))
-    c = crossings(params, y, 1, phi0=phi0, tol=tol, threads=threads, tmax=TMAX)
+    c = crossings(params, y, n_crossings=1, phi0=phi0, tol=tol, threads=threads, tmax=TMAX)
     return Partners(c.data[:, 0, 1:3].copy(), c.data[:, 0, 0].copy(), tuple(c.status_name(i) for i in range(len(x))))

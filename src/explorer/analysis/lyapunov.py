@@ -1,6 +1,6 @@
 """Chaos indicators of orbits (user level): finite-time maximal Lyapunov exponent, MEGNO, FLI.
 
-``indicators(params, y0, T, method=...)`` advances each orbit and one deviation vector for a
+``indicators(system, y0, tmax=T, method=...)`` advances each orbit and one deviation vector for a
 time T with tangent dynamics consistent with the integrator (variational equations for
 ``taylor`` and ``dop853``, exact tangent maps of the sub-flows for ``split*``; see
 :mod:`explorer.integrate.tangent`) and returns, per orbit,
@@ -21,6 +21,7 @@ it measures stretching within the dynamics' own invariant manifold.
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -28,7 +29,7 @@ import numpy as np
 
 from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
-from explorer.analysis.section_map import SectionMap
+from explorer.analysis.section_map import deprecated, is_params, system_first
 from explorer.integrate import methods
 from explorer.integrate.methods import DEFAULT_DT, DEFAULT_TOL
 from explorer.kernels import STATUS_NAMES, Status
@@ -141,44 +142,61 @@ class Indicators:
         return Status(int(self.status[i]))
 
 
-def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str | None = None, tol: float | None = None,
+def _renamed_time(fn):
+    """``T=`` became ``tmax=`` (one name for the time an orbit runs): still accepted, with a
+    DeprecationWarning."""
+
+    @functools.wraps(fn)
+    def call(*args, **kw):
+        if "T" in kw:
+            deprecated(f"{fn.__name__}(..., T=)", "tmax=")
+            kw["tmax"] = kw.pop("T")
+        return fn(*args, **kw)
+
+    return call
+
+
+@_renamed_time
+@system_first(settings=("phi0", "tol"), moved=("tmax",), defaults={"tol": DEFAULT_TOL}, flow=True)
+def indicators(system, y0, *, tmax: float = DEFAULT_TIME, method: str | None = None, tol: float | None = None,
                dt: float = DEFAULT_DT, history: int = 0, v0=None, max_steps: int = 10**9,
                threads: int | None = None, which=None, early_stop: bool = False,
                early_sali: float = EARLY_SALI, early_megno: float = EARLY_MEGNO,
                early_time: float = EARLY_TIME, w0=None) -> Indicators:
-    """Chaos indicators of the orbits starting at ``y0`` over the time ``T``.
+    """Chaos indicators of the orbits starting at ``y0`` over the time ``tmax``.
 
     Each orbit of docs/model.md R3 is integrated with one deviation vector ``w`` obeying the
     variational equations of R3 (started tangent to the energy shell and the Casimir surface,
     :func:`deviation_vector`), renormalised at every step (Benettin et al. 1980; Skokos 2010).
 
-    System first, in section coordinates: ``indicators(smap, points, T, ...)`` with a
-    :class:`~explorer.analysis.section_map.SectionMap` ``smap`` takes the start points
-    ``points`` = (p1, p2) or an (N, 2) array on its section phi = ``smap.phi0`` at energy
-    ``smap.h`` (M > 0 from the energy, :func:`explorer.model.section_state`), integrated with
-    the map's method and tolerance (``smap.method``, ``smap.tol``) unless ``method=`` or
-    ``tol=`` is given: ``indicators(smap, points, T)`` is ``indicators(smap.params, states, T,
-    tol=smap.tol)``.  (Every method has its tangent loop, the map's Taylor method included, so
-    no fallback is needed.)  Unlike the analyses of the map (fixed points, ``section_crossings``
-    ...), which refuse a tolerance beside it, the indicators may take their own: they integrate
-    orbits for a time T, not the map itself.
+    The system first (docs/api.md, "The system argument"): a
+    :class:`~explorer.analysis.section_map.SectionMap` (or ``params, h`` with ``phi0=`` and
+    ``tol=``, default :data:`~explorer.integrate.methods.DEFAULT_TOL`) takes the start points
+    ``y0`` = (p1, p2) or an (N, 2) array on its section phi = ``phi0`` at energy ``h`` (M > 0
+    from the energy, :func:`explorer.model.section_state`), integrated at the map's tolerance
+    (``tol`` beside a map is refused, as for every analysis); ``indicators(smap, points)`` is
+    ``indicators(smap.params, states, tol=smap.tol)``.  The model parameters alone, ``params``
+    followed by full states, are the flow: ``y0`` are states and ``tol=`` this call's own.
+    ``method`` (default Taylor, the map's) is this function's choice of integrator either way
+    (every method has its tangent loop).
 
     Parameters
     ----------
-    params : Params or array, or SectionMap
-        Model parameters (docs/model.md, table "Notation"), or a SectionMap (see above).
-    y0 : array (N, 5) or (5,), or (N, 2) or (2,) with a SectionMap
-        Initial states (p1, p2, M, sin phi, cos phi), or section points (p1, p2).
-    T : float
-        Integration time (> 0).
+    system : SectionMap, params, h, or params
+        The section map, or the model parameters (docs/model.md, table "Notation") for full
+        states (see above).
+    y0 : array (N, 2) or (2,) with a map, (N, 5) or (5,) with params
+        Section points (p1, p2), or initial states (p1, p2, M, sin phi, cos phi).
+    tmax : float
+        Integration time (> 0): every orbit runs to t = tmax unless it stops early.
     method : str, optional
-        A method of :data:`explorer.integrate.methods.METHODS` (default ``taylor``, the
-        SectionMap's with a map); its tangent dynamics are the
+        A method of :data:`explorer.integrate.methods.METHODS` (default ``taylor``); its
+        tangent dynamics are the
         Taylor series of the variational equations (``taylor``), DOP853 on the 10-dimensional
         system (``dop853``) or the exact tangent maps of the sub-flows of R4 (``split*``).
     tol : float, optional
-        Tolerance of the adaptive methods (default
-        :data:`~explorer.integrate.methods.DEFAULT_TOL`, ``smap.tol`` with a SectionMap).
+        Tolerance of the adaptive methods with ``params`` and full states (default
+        :data:`~explorer.integrate.methods.DEFAULT_TOL`); with a map, its ``tol``.
     dt : float
         Step of the splitting methods.
     history : int
@@ -207,18 +225,19 @@ def indicators(params, y0, T: float = DEFAULT_TIME, *, method: str | None = None
         docs/commands/lyapunov.md), FLI (Froeschlé, Lega & Gonczi
         1997), per orbit, with a status code each.
     """
-    if isinstance(params, SectionMap):   # section coordinates on the map's section, its method and tol
+    params = system
+    if not is_params(system):   # a map: section coordinates on its section, its tolerance
         pts = np.atleast_2d(np.asarray(y0, dtype=np.float64))
         if pts.ndim != 2 or pts.shape[1] != 2:
             raise ParameterError(f"with a SectionMap the start points are (p1, p2) pairs (N, 2); got {pts.shape}")
-        method = params.method if method is None else method
-        tol = params.tol if tol is None else tol
-        params, y0 = params.params, model.section_state(params.params, pts[:, 0], pts[:, 1], params.h, params.phi0)
+        method = system.method if method is None else method
+        tol = system.tol
+        params, y0 = system.params, model.section_state(system.params, pts[:, 0], pts[:, 1], system.h, system.phi0)
     method = "taylor" if method is None else method
     tol = DEFAULT_TOL if tol is None else tol
     P = validation.packed_params(params)
     m = methods.get(method)
-    T = validation.real("time", T, 0.0, lo_open=True)
+    T = validation.real("time", tmax, 0.0, lo_open=True)
     Y0 = np.ascontiguousarray(np.atleast_2d(np.asarray(y0, dtype=np.float64)))
     if Y0.ndim != 2 or Y0.shape[1] != 5 or not np.all(np.isfinite(Y0)):
         raise ParameterError("y0 must be finite with shape (N, 5) = (p1, p2, M, g1, g2) per orbit")

@@ -38,6 +38,7 @@ forward; otherwise each point is integrated backward in time by the section map
 """
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import dataclass, field
@@ -46,7 +47,7 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis.periodic import PeriodicOrbit, is_reversible, reversor
-from explorer.analysis.section_map import DEFAULT_TOL, RETURN_TMAX, SectionMap
+from explorer.analysis.section_map import SectionMap, deprecated, system_first
 from explorer.model import ParameterError, validation
 
 __all__ = ["DEFAULT_MAX_ANGLE", "DEFAULT_MAX_GAP", "DEFAULT_MAX_GAP_ANGLE", "DEFAULT_START_TOL", "Homoclinic",
@@ -106,30 +107,51 @@ def _orient(v):
     return -v if (v[0] < 0 or (v[0] == 0 and v[1] < 0)) else v
 
 
-def saddle(orbit, params=None, h=None, *, index=0, phi0=None, tol=DEFAULT_TOL, tmax=RETURN_TMAX) -> Saddle:
+def _is_orbit(x) -> bool:
+    """An orbit, or a point (p1, p2) to find one from: the first argument of the older forms."""
+    return isinstance(x, (PeriodicOrbit, tuple, list)) or (hasattr(x, "jacobian") and hasattr(x, "point")) or (
+        isinstance(x, np.ndarray) and x.shape == (2,))
+
+
+def _orbit_first(fn):
+    """Keep the older forms ``fn(orbit)``, ``fn(orbit, params, h)`` and ``fn(orbit, smap)`` (the
+    orbit first, its params, h and phi0 by default) working, with a DeprecationWarning: they
+    become ``fn(system, orbit, ...)``."""
+
+    @functools.wraps(fn)
+    def call(*args, **kw):
+        if not args or not _is_orbit(args[0]):
+            return fn(*args, **kw)
+        orbit, rest = args[0], list(args[1:])
+        deprecated(f"{fn.__name__}(orbit, ...)", f"{fn.__name__}(system, orbit, ...) with a SectionMap or params, h")
+        if rest and isinstance(rest[0], SectionMap):
+            return fn(rest[0], orbit, **kw)
+        params = rest.pop(0) if rest else kw.pop("params", None)
+        h = rest.pop(0) if rest else kw.pop("h", None)
+        params = getattr(orbit, "params", None) if params is None else params
+        h = getattr(orbit, "h", None) if h is None else h
+        if params is None or h is None or not math.isfinite(float(h)):
+            raise ParameterError(f"{fn.__name__}: the orbit carries no params, h; give the system first: "
+                                 f"{fn.__name__}(smap, orbit) or {fn.__name__}(params, h, orbit)")
+        if kw.get("phi0") is None:
+            kw["phi0"] = getattr(orbit, "phi0", math.pi)
+        return fn(params, h, orbit, **kw)
+
+    return call
+
+
+@_orbit_first
+@system_first
+def saddle(system, orbit, *, index=0) -> Saddle:
     """The :class:`Saddle` at point ``index`` of a hyperbolic ``orbit`` (a
     :class:`~explorer.analysis.periodic.PeriodicOrbit` or a
-    :class:`~explorer.analysis.fixedpoints.FixedPoint`; ``params``, ``h`` default to the orbit's).
-    System first: ``saddle(smap, orbit)`` (or ``saddle(orbit, smap)``) with a :class:`SectionMap`
-    takes its params, h, phi0, tol and tmax."""
-    if isinstance(orbit, SectionMap):
-        orbit, params = params, orbit
-    if isinstance(params, SectionMap):
-        if h is not None or phi0 is not None or tol != DEFAULT_TOL or tmax != RETURN_TMAX:
-            raise ParameterError("saddle: h, phi0, tol and tmax belong to the SectionMap; do not give them beside it")
-        params, h, phi0, tol, tmax = params.params, params.h, params.phi0, params.tol, params.tmax
+    :class:`~explorer.analysis.fixedpoints.FixedPoint`) of the map ``system``."""
     if isinstance(orbit, PeriodicOrbit):
         pts, K, jacs = orbit.points, orbit.period, orbit.map_jacobians
-        phi0 = orbit.phi0 if phi0 is None else phi0
     elif hasattr(orbit, "jacobian") and hasattr(orbit, "point"):
         pts, K, jacs = np.atleast_2d(orbit.point), 1, np.array([orbit.jacobian])
     else:
         raise ParameterError(f"orbit must be a PeriodicOrbit or a FixedPoint, got {type(orbit).__name__}")
-    prm = orbit.params if params is None else params
-    h = orbit.h if h is None else h
-    if prm is None or not math.isfinite(float(h)):
-        raise ParameterError("the orbit carries no params/h: pass params= and h=")
-    phi0 = math.pi if phi0 is None else phi0
     index = validation.integer("index", index, 0, K - 1)
     M = np.eye(2)   # monodromy at point `index`: DP(x_{index-1}) ... DP(x_index)
     for j in range(K):
@@ -143,9 +165,8 @@ def saddle(orbit, params=None, h=None, *, index=0, phi0=None, tol=DEFAULT_TOL, t
         raise ParameterError(f"the orbit is not hyperbolic (multipliers {w[0]:.6g}, {w[1]:.6g}): no manifolds")
     maps = K if w[iu] > 0 else 2 * K
     mult = abs(w[iu]) ** (maps // K)
-    smap = SectionMap(prm, h, phi0=phi0, tol=tol, tmax=tmax)
     return Saddle(np.array(pts[index], float), K, maps, float(mult), w, _orient(V[:, iu]), _orient(V[:, 1 - iu]),
-                  smap, np.array(pts, float))
+                  system, np.array(pts, float))
 
 
 # ------------------------------------------------------------------ images in batches
@@ -169,7 +190,7 @@ def _images(smap: SectionMap, X, n, backward, integrate_backward=False):
     Y = reversor(X) if backward else X
     ok = model.section_M2(smap.params, Y[:, 0], Y[:, 1], smap.h, smap.phi0) > 0
     if ok.any():
-        c = section_crossings(smap.params, Y[ok, 0], Y[ok, 1], smap.h, n, phi0=smap.phi0, tol=smap.tol,
+        c = section_crossings(smap.params, smap.h, Y[ok, 0], Y[ok, 1], n_crossings=n, phi0=smap.phi0, tol=smap.tol,
                               tmax=smap.tmax * n)
         img = np.where((c.count >= n)[:, None], c.data[:, n - 1, 1:3], np.nan)
         out[ok] = reversor(img) if backward else img
@@ -405,31 +426,37 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
                           evals, time.perf_counter() - t0, cv, float(max_gap))
 
 
-def manifolds(orbit, params=None, h=None, *, arclength=5.0, kinds=("unstable", "stable"), signs=(1, -1),
-              index=0, phi0=None, tol=DEFAULT_TOL, period=1, **kw) -> list:
-    """The branches of W^u and W^s of a hyperbolic ``orbit`` at its point ``index``, each grown to
-    ``arclength`` (:func:`grow_branch`; ``kw`` its options, e.g. ``max_points``, ``max_time``).
+@_orbit_first
+@system_first
+def manifolds(system, orbit, *, arclength=5.0, kinds=("unstable", "stable"), signs=(1, -1), index=0, period=1,
+              start_tol=DEFAULT_START_TOL, max_gap=DEFAULT_MAX_GAP, max_angle=DEFAULT_MAX_ANGLE,
+              max_gap_angle=DEFAULT_MAX_GAP_ANGLE, max_points=20000, max_time=None,
+              integrate_backward=False) -> list:
+    """The branches of W^u and W^s of a hyperbolic ``orbit`` of the map ``system`` at its point
+    ``index``, each grown to ``arclength`` (:func:`grow_branch`, whose options follow).
 
     ``orbit``: a :class:`~explorer.analysis.periodic.PeriodicOrbit`, a
     :class:`~explorer.analysis.fixedpoints.FixedPoint`, or a point (p1, p2) of the section: then the
     orbit of period ``period`` is found from it by Newton's method
-    (:func:`~explorer.analysis.periodic.find_periodic_orbit` with ``params``, ``h``, ``phi0``, ``tol``),
-    e.g. ``manifolds((-0.011, 0.0), params, 2.0, arclength=10)``.  Returns a list of
-    :class:`ManifoldBranch` (``kind``, ``sign``, ``points``: an (M, 2) array from the orbit's point
-    outwards), unstable before stable, sign +1 before -1; ParameterError when the orbit is not
-    hyperbolic or not found.  System first: ``manifolds(smap, orbit)`` with a :class:`SectionMap`
-    (as :func:`saddle`)."""
+    (:func:`~explorer.analysis.periodic.find_periodic_orbit`), e.g.
+    ``manifolds(smap, (-0.011, 0.0), arclength=10)``.  Returns a list of :class:`ManifoldBranch`
+    (``kind``, ``sign``, ``points``: an (M, 2) array from the orbit's point outwards), unstable
+    before stable, sign +1 before -1; ParameterError when the orbit is not hyperbolic or not
+    found."""
     if not isinstance(orbit, PeriodicOrbit) and not hasattr(orbit, "jacobian"):
-        orbit = _orbit_from_point(orbit, params, h, period, phi0, tol)
-    sd = saddle(orbit, params, h, index=index, phi0=phi0, tol=tol)
+        orbit = _orbit_from_point(system, orbit, period)
+    sd = saddle(system, orbit, index=index)
     for k in kinds:
         if k not in ("unstable", "stable"):
             raise ParameterError(f"kinds must be 'unstable' and/or 'stable', got {k!r}")
-    return [grow_branch(sd, stable=(k == "stable"), sign=s, arclength=arclength, **kw) for k in kinds for s in signs]
+    return [grow_branch(sd, stable=(k == "stable"), sign=s, arclength=arclength, start_tol=start_tol,
+                        max_gap=max_gap, max_angle=max_angle, max_gap_angle=max_gap_angle, max_points=max_points,
+                        max_time=max_time, integrate_backward=integrate_backward)
+            for k in kinds for s in signs]
 
 
-def _orbit_from_point(point, params, h, period, phi0, tol):
-    """The periodic orbit of period ``period`` found from the point (p1, p2) by Newton's method."""
+def _orbit_from_point(system, point, period):
+    """The periodic orbit of period ``period`` of ``system`` found from the point (p1, p2) by Newton's method."""
     from explorer.analysis.periodic import find_periodic_orbit
 
     try:
@@ -438,11 +465,8 @@ def _orbit_from_point(point, params, h, period, phi0, tol):
         x = np.empty(0)
     if x.shape != (2,):
         raise ParameterError(f"orbit must be a PeriodicOrbit, a FixedPoint or a point (p1, p2), got {point!r}")
-    if params is None or h is None:
-        raise ParameterError("a point (p1, p2) as orbit needs params= and h=")
     period = validation.integer("period", period, 1, validation.MAX_PERIOD)
-    return find_periodic_orbit(params, h, (float(x[0]), float(x[1])), period,
-                               phi0=math.pi if phi0 is None else phi0, tol=tol)
+    return find_periodic_orbit(system, (float(x[0]), float(x[1])), period)
 
 
 # ------------------------------------------------------------------ intersections

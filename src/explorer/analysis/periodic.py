@@ -80,7 +80,7 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis.continuation import continuation_values, golden_section_max, secant_follower
-from explorer.analysis.section_map import DEFAULT_TOL, RETURN_TMAX, SectionMap, takes_section_map
+from explorer.analysis.section_map import SectionMap, system_first
 from explorer.integrate.methods import DEFAULT_TOL as SECTIONS_TOL
 from explorer.model import ParameterError, symmetry, validation
 
@@ -429,9 +429,8 @@ def _check_period(period) -> int:
     return int(period)
 
 
-@takes_section_map
-def find_periodic_orbit(params, h, guess, period, *, phi0=math.pi, tol=DEFAULT_TOL, max_iter=NEWTON_MAX_ITER,
-                        tmax=RETURN_TMAX, reduce=True) -> PeriodicOrbit:
+@system_first
+def find_periodic_orbit(system, guess, period, *, max_iter=NEWTON_MAX_ITER, reduce=True) -> PeriodicOrbit:
     """A periodic orbit of period ``period`` of the section map phi = ``phi0`` at energy ``h``.
 
     Newton's method on P^K(x) = x (single shooting for K <= 4, multiple shooting over the K
@@ -441,22 +440,15 @@ def find_periodic_orbit(params, h, guess, period, *, phi0=math.pi, tol=DEFAULT_T
 
     Parameters
     ----------
-    params : Params
-        Model parameters (docs/model.md R3).
-    h : float
-        Energy level of the section (R9).
+    system : SectionMap, or params, h
+        The section map (docs/model.md R9): its energy, section angle, Taylor tolerance and the
+        time budget of one return.
     guess : (float, float) or array (K, 2)
         Start of Newton's method: a point in the allowed region, or K points (multiple shooting).
     period : int
         K >= 1.
-    phi0 : float
-        Section angle (default pi).
-    tol : float
-        Taylor tolerance of the return map.
     max_iter : int
         Budget of Newton iterations.
-    tmax : float
-        Time budget of one return of the map.
     reduce : bool
         Report the orbit with its minimal period (an orbit of period 2 found with K = 4 has
         period 2); with False, keep K points.
@@ -472,7 +464,7 @@ def find_periodic_orbit(params, h, guess, period, *, phi0=math.pi, tol=DEFAULT_T
         K < 1, a guess outside the allowed region, or Newton's method failing (the message says so).
     """
     K = _check_period(period)
-    smap = SectionMap(params, h, phi0=phi0, tol=tol, tmax=tmax)
+    smap, phi0 = system, system.phi0
     g = np.asarray(guess, dtype=float)
     if g.shape not in ((2,), (K, 2)) or not np.all(np.isfinite(g)):
         raise ParameterError(f"guess must be a finite point (p1, p2) or {K} points, got shape {g.shape}")
@@ -501,9 +493,8 @@ def _line_p1(params, h, phi0, n):
     return c1 + half * np.linspace(-1.0, 1.0, n + 2)[1:-1]
 
 
-@takes_section_map
-def symmetry_line_points(params, h, period, n=200, *, phi0=math.pi, tol=DEFAULT_TOL, tmax=RETURN_TMAX,
-                         threads=None):
+@system_first(moved=("n",))
+def symmetry_line_points(system, period, *, n=200, threads=None):
     """Seeds of symmetric orbits of period ``period`` on the two symmetry lines (see the module).
 
     Start points z on R's fixed set: p2 = 0 on the section phi = phi0 (line 0) and p2 = 0 on
@@ -515,7 +506,7 @@ def symmetry_line_points(params, h, period, n=200, *, phi0=math.pi, tol=DEFAULT_
     from explorer.analysis.sections import crossings
 
     K = _check_period(period)
-    prm = params if isinstance(params, model.Params) else model.Params.from_array(params)
+    prm, h, phi0, tol, tmax = system.params, system.h, system.phi0, system.tol, system.tmax
     if not is_reversible(prm, phi0):
         return np.empty((0, 2))
     other = phi0 + math.pi
@@ -528,12 +519,12 @@ def symmetry_line_points(params, h, period, n=200, *, phi0=math.pi, tol=DEFAULT_
         target = phi0 if (K % 2 == 0) == (line == 0) else other
         n_target = (K + line) // 2 if target == phi0 else (K + 1 - line) // 2
         n_target = max(n_target, 1)
-        c = crossings(prm, Y0, n_target, phi0=target, tol=tol, tmax=tmax * n_target, threads=threads)
+        c = crossings(prm, Y0, n_crossings=n_target, phi0=target, tol=tol, tmax=tmax * n_target, threads=threads)
         f = np.where(c.count >= n_target, c.data[:, n_target - 1, 2], np.nan)
         if line == 0:
             on = np.column_stack([p1, np.zeros_like(p1)])
         else:
-            c1 = crossings(prm, Y0, 1, phi0=phi0, tol=tol, tmax=tmax, threads=threads)
+            c1 = crossings(prm, Y0, n_crossings=1, phi0=phi0, tol=tol, tmax=tmax, threads=threads)
             on = np.where((c1.count >= 1)[:, None], c1.data[:, 0, 1:3], np.nan)
         return f, on
 
@@ -573,7 +564,7 @@ def _grid_seeds(prm, h, K, grid, phi0, tol, tmax, threads):
     inside = model.section_M2(prm, U, V, h, phi0) > 0
     R = np.full(U.shape, np.inf)
     if inside.any():
-        c = section_crossings(prm, U[inside], V[inside], h, K, phi0=phi0, tol=max(tol, SECTIONS_TOL), tmax=tmax * K,
+        c = section_crossings(prm, h, U[inside], V[inside], n_crossings=K, phi0=phi0, tol=max(tol, SECTIONS_TOL), tmax=tmax * K,
                               threads=threads)
         ok = c.count >= K
         r = np.full(ok.shape, np.inf)
@@ -630,29 +621,27 @@ def _half_turn_partners(prm, h, orbits, same_tol, *, tol, max_iter, tmax, thread
     return added
 
 
-@takes_section_map
-def periodic_guesses(params, h, period, *, grid=12, line=None, phi0=math.pi, tol=DEFAULT_TOL, tmax=SEARCH_TMAX,
-                     threads=None) -> np.ndarray:
+@system_first(settings=("phi0", "tol"))
+def periodic_guesses(system, period, *, grid=12, line=None, tmax=SEARCH_TMAX, threads=None) -> np.ndarray:
     """The Newton starts of :func:`search_periodic_orbits`, in the order it tries them: the seeds on
     the symmetry lines (:func:`symmetry_line_points`, ``line`` per line, default 8 ``grid``), then
     the points of a ``grid`` x ``grid`` grid of the allowed region where ``|P^K(x) - x|`` is a
     local minimum (best first).  An (m, 2) array."""
     K = _check_period(period)
-    prm = params if isinstance(params, model.Params) else model.Params.from_array(params)
-    h = validation.real("h", h)
+    prm, h, phi0, tol = system.params, system.h, system.phi0, system.tol
     grid = validation.integer("grid", grid, 2, 1000)
     line = 8 * grid if line is None else validation.integer("line", line, 2)
     if model.allowed_ellipse(prm, h, phi0) is None:
         raise ParameterError(f"the allowed region is empty at h = {h:g}; allowed: "
                              f"{model.describe_region(prm, h, phi0)}")
-    return np.concatenate([symmetry_line_points(prm, h, K, line, phi0=phi0, tol=tol, tmax=tmax, threads=threads),
+    return np.concatenate([symmetry_line_points(prm, h, K, n=line, phi0=phi0, tol=tol, tmax=tmax, threads=threads),
                            _grid_seeds(prm, h, K, grid, phi0, tol, tmax, threads)])
 
 
-@takes_section_map
-def search_periodic_orbits(params, h, period, *, grid=12, line=None, phi0=math.pi, tol=DEFAULT_TOL,
-                           max_guesses=60, max_iter=NEWTON_MAX_ITER, tmax=SEARCH_TMAX, time_limit=None,
-                           same_tol=SAME_ORBIT_TOL, threads=None, guesses=None) -> list:
+@system_first(settings=("phi0", "tol"))
+def search_periodic_orbits(system, period, *, grid=12, line=None, max_guesses=60, max_iter=NEWTON_MAX_ITER,
+                           tmax=SEARCH_TMAX, time_limit=None, same_tol=SAME_ORBIT_TOL, threads=None,
+                           guesses=None) -> list:
     """All periodic orbits of minimal period ``period`` found from guesses covering the section.
 
     Guesses: :func:`periodic_guesses` (the symmetry lines first, then the local minima of
@@ -672,8 +661,9 @@ def search_periodic_orbits(params, h, period, *, grid=12, line=None, phi0=math.p
 
     Parameters
     ----------
-    params, h : Params, float
-        Model parameters and energy level.
+    system : SectionMap, or params, h
+        The section map (its energy, section angle and Taylor tolerance; the time budget of one
+        return is ``tmax``).
     period : int
         K >= 1.
     grid : int
@@ -701,8 +691,7 @@ def search_periodic_orbits(params, h, period, *, grid=12, line=None, phi0=math.p
         nearest p2 = 0, sorted by that point's p1 within each group.
     """
     K = _check_period(period)
-    prm = params if isinstance(params, model.Params) else model.Params.from_array(params)
-    h = validation.real("h", h)
+    prm, h, phi0, tol = system.params, system.h, system.phi0, system.tol
     max_guesses = validation.integer("max_guesses", max_guesses, 1)
     if guesses is None:
         guesses = periodic_guesses(prm, h, K, grid=grid, line=line, phi0=phi0, tol=tol, tmax=tmax, threads=threads)
@@ -763,9 +752,9 @@ class PeriodicBranch:
         return np.array([o.trace for o in self.orbits])
 
 
-@takes_section_map
-def continue_periodic(params, h, period, parameter, start, stop, step, guess, *, phi0=math.pi, tol=DEFAULT_TOL,
-                      bisect_tol=1e-8, touch_window=0.05, touch_tol=1e-6) -> PeriodicBranch:
+@system_first
+def continue_periodic(system, period, parameter, start, stop, step, guess, *, bisect_tol=1e-8, touch_window=0.05,
+                      touch_tol=1e-6) -> PeriodicBranch:
     """Natural-parameter continuation of a periodic orbit of period K in a model parameter or "h".
 
     From ``start`` to ``stop`` by ``step``; each orbit from the previous one (secant predictor
@@ -779,8 +768,8 @@ def continue_periodic(params, h, period, parameter, start, stop, step, guess, *,
 
     Parameters
     ----------
-    params, h : Params, float
-        Model parameters and energy at which ``guess`` is an orbit (``parameter`` set to ``start``).
+    system : SectionMap, or params, h
+        The section map at which ``guess`` is an orbit (``parameter`` set to ``start``).
     period : int
         K >= 1.
     parameter : str
@@ -799,8 +788,7 @@ def continue_periodic(params, h, period, parameter, start, stop, step, guess, *,
     g0 = guess.points if isinstance(guess, PeriodicOrbit) else np.asarray(guess, float)
 
     def solve(v, X):
-        prm, hh = validation.with_value(params, h, parameter, v)
-        orb = find_periodic_orbit(prm, hh, X, K, phi0=phi0, tol=tol, reduce=False)
+        orb = find_periodic_orbit(system.with_value(parameter, v), X, K, reduce=False)
         if _minimal_period(orb.points) != K:
             raise ParameterError(f"the orbit collapsed to period {_minimal_period(orb.points)}")
         return orb

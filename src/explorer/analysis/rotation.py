@@ -64,7 +64,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from explorer import model
-from explorer.analysis.section_map import takes_section_map
+from explorer.analysis.section_map import system_first
 from explorer.integrate.methods import MAP_TOL
 from explorer.model import ParameterError, validation
 
@@ -180,7 +180,7 @@ class _Samples:
             from explorer.analysis.sections import crossings
 
             params, n_returns, phi0, tol, threads = self.args
-            c = crossings(params, self.Y0, n_returns, phi0=phi0 + 2.0 * math.pi * f, tol=tol, threads=threads,
+            c = crossings(params, self.Y0, n_crossings=n_returns, phi0=phi0 + 2.0 * math.pi * f, tol=tol, threads=threads,
                           tmax=TMAX_PER_RETURN * n_returns)
             if c.count[0] < 1:
                 raise ParameterError(f"center {tuple(self.center)} must be a point whose orbit crosses the "
@@ -282,23 +282,21 @@ def _rotations(params, h, starts, center, N, phi0, tol, threads, conv_tol):
     return out
 
 
-@takes_section_map
-def rotation_number(params, h, start, *, center=None, iterates=DEFAULT_ITERATES, phi0=math.pi, tol=DEFAULT_TOL,
-                    conv_tol=CONVERGED_TOL, threads=None) -> RotationNumber:
+@system_first(settings=("phi0", "tol"))
+def rotation_number(system, start, *, center=None, iterates=DEFAULT_ITERATES, conv_tol=CONVERGED_TOL,
+                    threads=None) -> RotationNumber:
     """Rotation number of the orbit of ``start`` around an elliptic fixed point (weighted Birkhoff).
 
     Parameters
     ----------
-    params, h : Params, float
-        Model parameters and energy level.
+    system : SectionMap, or params, h
+        The section map (its energy, section angle phi0 and Taylor tolerance, that of the orbits).
     start : (float, float)
         (p1, p2) of the orbit on the section phi = ``phi0``.
     center : (float, float), FixedPoint or None
         The fixed point; None: Newton's method (find_fixed_point) from ``start``.
     iterates : int
         N: the orbit has 2N returns; WB_N and WB_2N are compared.
-    tol : float
-        Taylor tolerance of the orbit.
     conv_tol : float
         ``|WB_N - WB_2N|`` (in turns) below which the orbit counts as regular.
 
@@ -307,6 +305,7 @@ def rotation_number(params, h, start, *, center=None, iterates=DEFAULT_ITERATES,
     RotationNumber
         The rotation number in turns per return, in (-1/2, 1/2], and the convergence flag.
     """
+    params, h, phi0, tol = system.params, system.h, system.phi0, system.tol
     N = validation.integer("iterates", iterates, 10)
     x = np.asarray(start, float)
     if x.shape != (2,) or not model.is_admissible(params, x[0], x[1], h, phi0):
@@ -342,9 +341,9 @@ class RotationProfile:
                                                          turns, status)]}
 
 
-@takes_section_map
-def rotation_profile(params, h, start, stop, n, *, center=None, iterates=DEFAULT_ITERATES, phi0=math.pi,
-                     tol=DEFAULT_TOL, conv_tol=CONVERGED_TOL, threads=None) -> RotationProfile:
+@system_first(settings=("phi0", "tol"), moved=("n",))
+def rotation_profile(system, start, stop, *, n, center=None, iterates=DEFAULT_ITERATES, conv_tol=CONVERGED_TOL,
+                     threads=None) -> RotationProfile:
     """Rotation numbers of n orbits started on the segment from ``start`` to ``stop``.
 
     ``center`` defaults to the fixed point found by Newton's method from ``start`` (start a
@@ -352,6 +351,7 @@ def rotation_profile(params, h, start, stop, n, *, center=None, iterates=DEFAULT
     at m/K mark island chains of period K (converged, rational); non-converged points flag
     chaotic orbits.  The orbits run in parallel (Numba threads, ``threads``).
     """
+    params, h, phi0, tol = system.params, system.h, system.phi0, system.tol
     n = validation.integer("n", n, 2)
     N = validation.integer("iterates", iterates, 10)
     a, b = np.asarray(start, float), np.asarray(stop, float)

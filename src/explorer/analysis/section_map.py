@@ -17,18 +17,21 @@ coordinates up to a factor that cancels along a periodic orbit (det of a monodro
 orbits, continuation, rotation numbers, separatrices), as DynamicalSystems.jl's
 ``PoincareMap`` is for its algorithms.
 
-One argument order for every analysis: the system first -- a :class:`SectionMap`, or the
-model parameters and the energy ``(params, h)`` with the section's ``phi0`` and ``tol`` as
-keywords -- then the point(s), then the budgets (keywords).  :func:`takes_section_map` gives
-a function written for ``(params, h, ...)`` the form ``(smap, ...)``: the map's ``params``,
-``h``, ``phi0``, ``tol`` (and ``tmax``, where the function's ``tmax`` is the map's return
-budget) are passed on, so both forms give the same numbers.
+One rule for the system argument of every analysis (:func:`system_first`): the system first --
+a :class:`SectionMap`, or the model parameters and the energy ``params, h`` with the map's
+``phi0=``, ``tol=`` and ``tmax=`` as keywords, which is ``SectionMap(params, h, phi0=, tol=,
+tmax=)`` -- then the point(s), then counts, times and options as keywords.  Both forms give the
+same numbers.  Any other map object (the map protocol of :mod:`explorer.analysis.maps`) is
+passed through unchanged.
 """
 from __future__ import annotations
 
 import functools
 import inspect
 import math
+import numbers
+import os
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -41,7 +44,8 @@ from explorer.kernels.taylor import order_for_tolerance
 from explorer.model import ParameterError, validation
 from explorer.model.equations import rhs
 
-__all__ = ["DEFAULT_TOL", "MAX_STEPS", "RETURN_TMAX", "MapResult", "SectionMap", "takes_section_map"]
+__all__ = ["DEFAULT_TOL", "MAP_SETTINGS", "MAX_STEPS", "RETURN_TMAX", "MapResult", "SectionMap", "as_system",
+           "deprecated", "is_params", "keyword_only", "keywords_moved", "system_first"]
 
 #: Taylor tolerance of the section map in Newton's method and its relatives (fixed points,
 #: periodic orbits, continuation, separatrices): the map is evaluated a few hundred times,
@@ -88,6 +92,12 @@ class SectionMap:
 
     def __repr__(self):
         return f"SectionMap({self.params!r}, h={self.h!r}, phi0={self.phi0!r}, tol={self.tol!r})"
+
+    def with_value(self, name: str, value) -> SectionMap:
+        """This map with one model parameter, or the energy (``name == "h"``), set to ``value``
+        (its ``phi0``, ``tol`` and ``tmax`` kept): a step of a continuation."""
+        prm, h = validation.with_value(self.params, self.h, name, value)
+        return SectionMap(prm, h, phi0=self.phi0, tol=self.tol, tmax=self.tmax)
 
     def state(self, x):
         """The full state (p1, p2, M, g1, g2) of the section point x (M > 0 from the energy)."""
@@ -139,38 +149,151 @@ class SectionMap:
         return out
 
 
-#: the settings of a SectionMap that an analysis of the form (params, h, ...) takes as keywords
+#: the settings a SectionMap holds, given as keywords in the form ``(params, h, ..., phi0=, tol=, tmax=)``
 MAP_SETTINGS = ("phi0", "tol", "tmax")
 
 
-def takes_section_map(fn):
-    """Let ``fn(params, h, *args, phi0=..., tol=..., **kw)`` also be called as
-    ``fn(smap, *args, **kw)`` with a :class:`SectionMap` ``smap`` (the system first): it runs
-    ``fn(smap.params, smap.h, *args, phi0=smap.phi0, tol=smap.tol, **kw)`` (and
-    ``tmax=smap.tmax`` when ``fn``'s ``tmax`` defaults to :data:`RETURN_TMAX`, the map's return
-    budget).  Those settings belong to the map: given beside it they raise ParameterError."""
-    sig = inspect.signature(fn)
-    taken = tuple(k for k in MAP_SETTINGS if k in sig.parameters
-                  and (k != "tmax" or sig.parameters[k].default == RETURN_TMAX))
+def is_params(system) -> bool:
+    """True for model parameters (a :class:`~explorer.model.Params` or the packed vector): the
+    system given as ``params, h``."""
+    return isinstance(system, model.Params) or (isinstance(system, np.ndarray) and system.shape == (model.N_PARAMS,))
 
-    @functools.wraps(fn)
-    def call(system, *args, **kw):
-        if not isinstance(system, SectionMap):
-            return fn(system, *args, **kw)
-        given = [k for k in taken if k in kw]
+
+def as_system(name: str, system, args: tuple, kw: dict, settings: tuple = MAP_SETTINGS, defaults=None,
+              flow: bool = False):
+    """The one rule for the system argument of an analysis ``name``: ``(system, args, kw)`` with
+    the system a map object.
+
+    - ``params, h`` (model parameters, then the energy: the first of ``args``, or ``h=``) is
+      ``SectionMap(params, h, phi0=, tol=, tmax=)`` with those of ``settings`` given in ``kw``
+      (taken out of it; ``defaults`` for those not given, else the SectionMap's own);
+    - a :class:`SectionMap` is used as it is; its ``settings`` given beside it raise
+      ParameterError (they belong to the map), and so does a map whose return budget differs
+      from the default for an analysis that does not use it (``"tmax"`` not in ``settings``);
+    - any other map object (one with the map protocol of :mod:`explorer.analysis.maps`) passes
+      through unchanged;
+    - with ``flow`` (a function that also integrates the flow from full states), ``params``
+      followed by the states rather than a number h is the flow itself: passed through, the
+      settings left to the function.
+    """
+    if flow and is_params(system) and "h" not in kw and not (args and isinstance(args[0], numbers.Real)):
+        return system, args, kw
+    if is_params(system):
+        if "h" in kw:
+            h = kw.pop("h")
+        elif args:
+            h, args = args[0], args[1:]
+        else:
+            raise ParameterError(f"{name}(params, h, ...): h is missing")
+        given = dict(defaults or {}, **{k: kw.pop(k) for k in settings if k in kw})
+        return SectionMap(system, h, **given), args, kw
+    if isinstance(system, SectionMap):
+        given = [k for k in ("h", *settings) if k in kw]
         if given:
-            raise ParameterError(f"{fn.__name__}: {', '.join(given)} belong(s) to the SectionMap; "
-                                 f"do not give them beside it")
-        if "tmax" not in taken and system.tmax != RETURN_TMAX:
-            raise ParameterError(f"{fn.__name__} has no return budget of the map: use a SectionMap with the "
-                                 f"default tmax ({RETURN_TMAX:g}), got {system.tmax!r}")
-        kw.update({k: getattr(system, k) for k in taken})
-        return fn(system.params, system.h, *args, **kw)
+            raise ParameterError(f"{name}: {', '.join(given)} belong(s) to the SectionMap; do not give them "
+                                 "beside it")
+        if "tmax" not in settings and system.tmax != RETURN_TMAX:
+            raise ParameterError(f"{name} has no return budget of the map: use a SectionMap with the default "
+                                 f"tmax ({RETURN_TMAX:g}), got {system.tmax!r}")
+    return system, args, kw
 
-    note = (f"    System first: ``{fn.__name__}(smap, ...)`` with a "
-            f":class:`~explorer.analysis.section_map.SectionMap` in place of ``params, h`` uses the map's "
-            f"{', '.join(f'``{k}``' for k in taken)}.")
-    doc = fn.__doc__ or ""
-    head, sep, tail = doc.partition("\n\n")
-    call.__doc__ = head + "\n\n" + note + (sep + tail if sep else "\n")
-    return call
+
+def _positional_count(fn) -> int:
+    """Positional parameters of ``fn`` after its first (the system)."""
+    kinds = (inspect.Parameter.POSITIONAL_ONLY, inspect.Parameter.POSITIONAL_OR_KEYWORD)
+    return sum(p.kind in kinds for p in inspect.signature(fn).parameters.values()) - 1
+
+
+def keywords_moved(name: str, n_positional: int, moved: tuple, args: tuple, kw: dict):
+    """``(args, kw)`` with the positional arguments past the first ``n_positional`` given to the
+    keywords ``moved`` in order (a DeprecationWarning: counts, times and tolerances after the
+    points are keyword-only)."""
+    if len(args) <= n_positional:
+        return args, kw
+    extra = args[n_positional:]
+    if len(extra) > len(moved):
+        raise TypeError(f"{name}() takes {n_positional + 1} positional arguments, got {len(args) + 1}")
+    names = moved[:len(extra)]
+    twice = [k for k in names if k in kw]
+    if twice:
+        raise TypeError(f"{name}() got multiple values for {', '.join(twice)}")
+    deprecated(f"{name}(..., {', '.join(names)}) given by position",
+               f"{', '.join(k + '=' for k in names)} (keyword-only)")
+    return args[:n_positional], dict(kw, **dict(zip(names, extra)))
+
+
+def keyword_only(*moved: str):
+    """Decorate ``fn`` whose ``moved`` parameters became keyword-only: a call that still gives
+    them by position works, with a DeprecationWarning (:func:`keywords_moved`)."""
+
+    def wrap(fn):
+        n = _positional_count(fn) + 1
+
+        @functools.wraps(fn)
+        def call(*args, **kw):
+            args, kw = keywords_moved(fn.__name__, n, moved, args, kw)
+            return fn(*args, **kw)
+
+        return call
+
+    return wrap
+
+
+def system_first(fn=None, *, settings: tuple = MAP_SETTINGS, moved: tuple = (), defaults=None, flow: bool = False):
+    """Decorate an analysis ``fn(system, *args, **kw)`` written for a map object (a
+    :class:`SectionMap`, or another map with the same protocol) so that it also takes the
+    system as ``params, h`` (with ``phi0=``, ``tol=``, ``tmax=`` among ``settings`` as
+    keywords): :func:`as_system`, the one rule.  ``settings``: the map's settings this function
+    uses (default all three; an analysis with a time budget of its own leaves out ``"tmax"``).
+    ``moved``: keyword-only parameters that older calls gave by position (after the points):
+    still accepted so, with a DeprecationWarning.  ``defaults``: settings of the map built from
+    ``params, h`` when not given, where this function's purpose has its own default (the
+    tolerance of crossings and indicators, :data:`~explorer.integrate.methods.DEFAULT_TOL`).
+    ``flow``: ``params`` followed by full states is the flow (:func:`as_system`).
+
+    The wrapped function's signature (``inspect.signature``, an IDE) is ``fn``'s, with those
+    settings added as keywords for the ``params, h`` form."""
+
+    def wrap(fn):
+        n = _positional_count(fn)
+
+        @functools.wraps(fn)
+        def call(system, *args, **kw):
+            system, args, kw = as_system(fn.__name__, system, args, kw, settings, defaults, flow)
+            args, kw = keywords_moved(fn.__name__, n, moved, args, kw)
+            return fn(system, *args, **kw)
+
+        sig = inspect.signature(fn)
+        ps = list(sig.parameters.values())
+        extra = [inspect.Parameter(k, inspect.Parameter.KEYWORD_ONLY, default=None) for k in settings
+                 if k not in sig.parameters]
+        tail = [p for p in ps if p.kind == inspect.Parameter.VAR_KEYWORD]
+        call.__signature__ = sig.replace(parameters=[p for p in ps if p not in tail] + extra + tail)
+        note = (f"    The system first (docs/api.md, \"The system argument\"): a SectionMap, or ``params, h`` "
+                f"with {', '.join(f'``{k}=``' for k in settings)} for its settings.")
+        doc = fn.__doc__ or ""
+        head, sep, rest = doc.partition("\n\n")
+        call.__doc__ = head + "\n\n" + note + (sep + rest if sep else "\n")
+        return call
+
+    return wrap if fn is None else wrap(fn)
+
+
+#: the frames of this module's wrappers, skipped so that a DeprecationWarning names the caller's line
+_WRAPPERS = ("call", "keywords_moved", "deprecated")
+
+
+def deprecated(old: str, new: str) -> None:
+    """Warn that the call form or name ``old`` goes away in the next release: use ``new``
+    (the list is in docs/api.md, "Deprecated names and forms").  The warning names the first
+    line outside the wrappers of the API (:func:`system_first`, :func:`keyword_only`)."""
+    import sys
+
+    package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    level, frame = 1, sys._getframe(0)
+    while frame is not None and frame.f_code.co_name in _WRAPPERS and frame.f_code.co_filename.startswith(package):
+        level, frame = level + 1, frame.f_back
+    warnings.warn(f"{old} is deprecated and will be removed in the next release; use {new}", DeprecationWarning,
+                  stacklevel=level)
+
+

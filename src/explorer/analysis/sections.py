@@ -19,6 +19,7 @@ Methods
 """
 from __future__ import annotations
 
+import functools
 import math
 import numbers
 from dataclasses import dataclass, field
@@ -27,7 +28,7 @@ import numpy as np
 
 from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
-from explorer.analysis.section_map import RETURN_TMAX, SectionMap
+from explorer.analysis.section_map import SectionMap, deprecated, is_params, keyword_only, system_first
 from explorer.integrate import layout, methods
 from explorer.integrate.methods import (
     ADAPTIVE_METHODS,
@@ -168,7 +169,7 @@ def _validated(params, y0, n_crossings, method, tol, dt, tmax, max_steps, phi0, 
     return _Run(P, Y0, K, prep, g2, g1, int(direction), tmax, int(max_steps), threads, settings)
 
 
-def crossing_settings(params, y0, n_crossings: int, *, method: str = "taylor", tol: float = DEFAULT_TOL,
+def crossing_settings(params, y0, *, n_crossings: int, method: str = "taylor", tol: float = DEFAULT_TOL,
                       dt: float | None = None, tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS,
                       phi0: float = math.pi, direction: int = 1) -> dict:
     """The settings that :func:`crossings` (or :func:`iter_crossings`) records for this request,
@@ -216,7 +217,8 @@ def _run_block(run: _Run, Y, carry, limits, data, count, status, final, info) ->
         set_num_threads(old_threads)
 
 
-def crossings(params, y0, n_crossings: int, *, method: str = "taylor", tol: float = DEFAULT_TOL,
+@keyword_only("n_crossings")
+def crossings(params, y0, *, n_crossings: int, method: str = "taylor", tol: float = DEFAULT_TOL,
               dt: float | None = None, tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS,
               phi0: float = math.pi, direction: int = 1, threads: int | None = None) -> Crossings:
     """Integrate each initial state of ``y0`` ((N, 5) or (5,)) until it has crossed the section
@@ -339,7 +341,8 @@ class CrossingBlock:
         return self.data[i, : self.count[i]]
 
 
-def iter_crossings(params, y0, n_crossings: int, *, block: int = DEFAULT_BLOCK, state: StreamState | None = None,
+@keyword_only("n_crossings")
+def iter_crossings(params, y0, *, n_crossings: int, block: int = DEFAULT_BLOCK, state: StreamState | None = None,
                    method: str = "taylor", tol: float = DEFAULT_TOL, dt: float | None = None,
                    tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS, phi0: float = math.pi,
                    direction: int = 1, threads: int | None = None):
@@ -386,66 +389,63 @@ def iter_crossings(params, y0, n_crossings: int, *, block: int = DEFAULT_BLOCK, 
         yield CrossingBlock(idx, start, data, count, st.copy())
 
 
-#: what a :class:`~explorer.analysis.section_map.SectionMap` fixes in :func:`section_crossings`:
-#: its energy, section, tolerance and method (Taylor, as the map integrates) and direction (+1)
-MAP_FIXED = ("h", "phi0", "tol", "method", "dt", "direction")
+def _older_order(fn):
+    """Keep the older order ``fn(params, p1, p2, h, n_crossings, ...)`` (the energy after the
+    points) working, with a DeprecationWarning: it becomes ``fn(params, h, p1, p2,
+    n_crossings=...)``.  Told apart from the system-first form ``(params, h, p1, p2)`` by
+    the count of positional arguments, or, with three after ``params``, by the first of them
+    being the points rather than the number h."""
+
+    @functools.wraps(fn)
+    def call(system, *args, **kw):
+        # (params, h, p1, p2, n) never existed: four after params are the older order
+        if is_params(system) and "h" not in kw and (
+                len(args) == 4 or (len(args) == 3 and not isinstance(args[0], numbers.Real))):
+            p1, p2, h, *n = args
+            deprecated(f"{fn.__name__}(params, p1, p2, h, n_crossings)",
+                       f"{fn.__name__}(params, h, p1, p2, n_crossings=...) or {fn.__name__}(smap, p1, p2, "
+                       "n_crossings=...)")
+            args, kw = (h, p1, p2), dict(kw, **({"n_crossings": n[0]} if n else {}))
+        return fn(system, *args, **kw)
+
+    return call
 
 
-def _section_start(name, system, p1, p2, h, n_crossings, phi0, direction, kwargs):
-    """(params, Y0, n_crossings, phi0, direction, kwargs) of :func:`section_crossings` in either
-    of its forms: ``(params, p1, p2, h, n)`` or ``(smap, p1, p2, n)``."""
-    params = system
-    if isinstance(system, SectionMap):
-        if n_crossings is None:             # (smap, p1, p2, n): the fourth argument is the count
-            h, n_crossings = None, h
-        given = [k for k, v in (("h", h), ("phi0", phi0)) if v is not None]
-        given += [k for k in MAP_FIXED[2:] if k in kwargs or (k == "direction" and direction is not None)]
-        if given:
-            raise ParameterError(f"{name}: {', '.join(given)} belong(s) to the SectionMap; do not give them "
-                                 "beside it")
-        if system.tmax != RETURN_TMAX:
-            raise ParameterError(f"{name} has no return budget of the map (its tmax is the run's): use a "
-                                 f"SectionMap with the default tmax ({RETURN_TMAX:g}), got {system.tmax!r}")
-        if n_crossings is None:
-            raise ParameterError(f"{name}(smap, p1, p2, n_crossings): n_crossings is missing")
-        kwargs = dict(kwargs, tol=system.tol, method=system.method)
-        params, h, phi0, direction = system.params, system.h, system.phi0, 1
-    elif h is None or n_crossings is None:
-        raise ParameterError(f"{name}(params, p1, p2, h, n_crossings): "
-                             f"{'h' if h is None else 'n_crossings'} is missing")
-    phi0 = math.pi if phi0 is None else phi0
-    direction = 1 if direction is None else direction
-    h = float(h)
-    if not math.isfinite(h):
-        raise ParameterError(f"h must be finite, got {h!r}")
-    Y0 = model.section_state(params, p1, p2, h, phi0, direction if direction != 0 else 1)
-    return params, Y0, n_crossings, phi0, direction, kwargs
+def _section_run(system, p1, p2, direction):
+    """(params, Y0, phi0, tol) of a run from the section points (p1, p2) of the map ``system``
+    (M from the energy, its sign from ``direction``; 0 starts with M > 0)."""
+    Y0 = model.section_state(system.params, p1, p2, system.h, system.phi0, direction if direction != 0 else 1)
+    return system.params, Y0
 
 
-def section_crossings(params, p1, p2, h: float | None = None, n_crossings: int | None = None, *,
-                      phi0: float | None = None, direction: int | None = None, **kwargs) -> Crossings:
-    """Start orbits on the section phi = phi0 (default pi) at energy h from the points (p1, p2)
-    (M from the energy, docs/model.md R9; sign of M from ``direction``, default +1) and return
-    their next crossings (the keywords of :func:`crossings`).
+@_older_order
+@system_first(settings=("phi0", "tol"), moved=("n_crossings",), defaults={"tol": DEFAULT_TOL})
+def section_crossings(system, p1, p2, *, n_crossings: int, method: str = SectionMap.method,
+                      direction: int = 1, dt: float | None = None, tmax: float | None = None,
+                      max_steps: int = DEFAULT_MAX_STEPS, threads: int | None = None) -> Crossings:
+    """Start orbits on the section of ``system`` from the points (p1, p2) (M from the energy,
+    docs/model.md R9; sign of M from ``direction``, default +1) and return their next
+    ``n_crossings`` crossings (:func:`crossings`, whose keywords these are).
 
-    Two forms, the same numbers:
-
-    - ``section_crossings(params, p1, p2, h, n_crossings, ...)``, the energy after the points
-      (the older order, kept for its many callers; ``h=`` and ``n_crossings=`` may be named);
-    - ``section_crossings(smap, p1, p2, n_crossings, ...)`` with a
-      :class:`~explorer.analysis.section_map.SectionMap` first (the system first): its
-      ``params``, ``h``, ``phi0`` and ``tol``, the Taylor method and direction +1, so the rows
-      are the map's iterates.  Those settings given beside the map raise ParameterError;
-      ``tmax`` is this run's time budget (the map's must be the default).
+    ``system``: a :class:`~explorer.analysis.section_map.SectionMap` (its ``params``, ``h``,
+    ``phi0`` and ``tol``; with the defaults ``method="taylor"`` and ``direction=+1`` the rows
+    are the map's iterates), or ``params, h`` with ``phi0=`` and ``tol=`` (default
+    :data:`~explorer.integrate.methods.DEFAULT_TOL`, that of crossings).  ``tmax`` is this run's
+    time budget (default 100 * n_crossings), not the map's return budget.
     """
-    params, Y0, n_crossings, phi0, direction, kwargs = _section_start(
-        "section_crossings", params, p1, p2, h, n_crossings, phi0, direction, kwargs)
-    return crossings(params, Y0, n_crossings, phi0=phi0, direction=direction, **kwargs)
+    params, Y0 = _section_run(system, p1, p2, direction)
+    return crossings(params, Y0, n_crossings=n_crossings, method=method, tol=system.tol, dt=dt, tmax=tmax,
+                     max_steps=max_steps, phi0=system.phi0, direction=direction, threads=threads)
 
 
-def iter_section_crossings(params, p1, p2, h: float | None = None, n_crossings: int | None = None, *,
-                           phi0: float | None = None, direction: int | None = None, **kwargs):
-    """:func:`section_crossings` in blocks (:func:`iter_crossings`), in the same two forms."""
-    params, Y0, n_crossings, phi0, direction, kwargs = _section_start(
-        "iter_section_crossings", params, p1, p2, h, n_crossings, phi0, direction, kwargs)
-    return iter_crossings(params, Y0, n_crossings, phi0=phi0, direction=direction, **kwargs)
+@_older_order
+@system_first(settings=("phi0", "tol"), moved=("n_crossings",), defaults={"tol": DEFAULT_TOL})
+def iter_section_crossings(system, p1, p2, *, n_crossings: int, block: int = DEFAULT_BLOCK,
+                           state: StreamState | None = None, method: str = SectionMap.method, direction: int = 1,
+                           dt: float | None = None, tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS,
+                           threads: int | None = None):
+    """:func:`section_crossings` in blocks (:func:`iter_crossings`), the same arguments."""
+    params, Y0 = _section_run(system, p1, p2, direction)
+    return iter_crossings(params, Y0, n_crossings=n_crossings, block=block, state=state, method=method,
+                          tol=system.tol, dt=dt, tmax=tmax, max_steps=max_steps, phi0=system.phi0,
+                          direction=direction, threads=threads)

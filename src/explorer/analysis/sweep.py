@@ -211,7 +211,7 @@ def task(spec: SweepSpec, i: int, threads: int | None = None) -> dict:
     panel = spec.panels[pos]
     t0 = time.perf_counter()
     if spec.sections:
-        res = sections.crossings(panel.P, panel.y0[a:b], spec.crossings, method=spec.method, tol=spec.tol,
+        res = sections.crossings(panel.P, panel.y0[a:b], n_crossings=spec.crossings, method=spec.method, tol=spec.tol,
                                  dt=spec.dt, tmax=spec.tmax, max_steps=spec.max_steps, phi0=spec.phi0,
                                  direction=spec.direction, threads=threads)
         out = {"chunk": i, "data": res.data, "count": res.count, "status": res.status, "final": res.final,
@@ -225,7 +225,7 @@ def task(spec: SweepSpec, i: int, threads: int | None = None) -> dict:
         from explorer.analysis.lyapunov import indicators
 
         ly = spec.lyapunov
-        ind = indicators(panel.P, panel.y0[a:b], ly.time, method=ly.method, tol=ly.tol, dt=ly.dt, threads=threads,
+        ind = indicators(panel.P, panel.y0[a:b], tmax=ly.time, method=ly.method, tol=ly.tol, dt=ly.dt, threads=threads,
                          which=ly.indicators, early_stop=ly.early_stop, early_sali=ly.early_sali,
                          early_megno=ly.early_megno, early_time=ly.early_time)
         y0 = panel.y0[a:b]
@@ -253,7 +253,7 @@ def task_block(spec: SweepSpec, i: int, state, threads: int | None = None) -> di
     pos, a, b = spec.chunks[i]
     panel = spec.panels[pos]
     t0 = time.perf_counter()
-    it = sections.iter_crossings(panel.P, panel.y0[a:b], spec.crossings, block=spec.blocks[pos], state=state,
+    it = sections.iter_crossings(panel.P, panel.y0[a:b], n_crossings=spec.crossings, block=spec.blocks[pos], state=state,
                                  method=spec.method, tol=spec.tol, dt=spec.dt, tmax=spec.tmax,
                                  max_steps=spec.max_steps, phi0=spec.phi0, direction=spec.direction, threads=threads)
     blk = next(it, None)

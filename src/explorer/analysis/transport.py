@@ -447,7 +447,7 @@ def _steps_inside(smap, polygon, X, max_iter, block):
     done = 0
     while alive.size and done < max_iter:
         n = min(block, max_iter - done)
-        c = section_crossings(smap.params, cur[alive, 0], cur[alive, 1], smap.h, n, phi0=smap.phi0, tol=smap.tol,
+        c = section_crossings(smap.params, smap.h, cur[alive, 0], cur[alive, 1], n_crossings=n, phi0=smap.phi0, tol=smap.tol,
                               tmax=smap.tmax * n)
         pts = c.data[:, :, 1:3]                           # NaN where no crossing
         ins = inside(polygon, pts.reshape(-1, 2)).reshape(len(alive), n)

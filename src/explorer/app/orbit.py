@@ -45,7 +45,7 @@ def _start(params, p1, p2, h, kw):
 def check_request(params, p1, p2, h, n_crossings, **kw) -> None:
     """Validate a request of :func:`print_rows` / :func:`to_store` without running it
     (ParameterError naming the parameter otherwise)."""
-    sections.crossing_settings(params, _start(params, p1, p2, h, kw), n_crossings, **kw)
+    sections.crossing_settings(params, _start(params, p1, p2, h, kw), n_crossings=n_crossings, **kw)
 
 
 def _identity(params, h, p1, p2, y0, settings) -> dict:
@@ -59,8 +59,8 @@ def print_rows(params, p1, p2, h, n_crossings, *, as_json=False, block=sections.
     or one JSON object (``{"params", "h", "method", "settings", "crossings": [...], "status"}``)."""
     out = sys.stdout if file is None else file
     y0 = _start(params, p1, p2, h, kw)
-    settings = sections.crossing_settings(params, y0, n_crossings, **kw)
-    it = sections.iter_crossings(params, y0, n_crossings, block=block, **kw)
+    settings = sections.crossing_settings(params, y0, n_crossings=n_crossings, **kw)
+    it = sections.iter_crossings(params, y0, n_crossings=n_crossings, block=block, **kw)
     if as_json:
         head = {"params": params.as_dict(), "h": h, "method": settings["method"], "settings": settings}
         out.write(json.dumps(head)[:-1] + ', "crossings": [')
@@ -114,7 +114,7 @@ def _to_store(path, params, p1, p2, h, n_crossings, block, force, on_block, stop
 
     phi0 = kw.get("phi0", np.pi)
     y0 = _start(params, p1, p2, h, kw)
-    settings = sections.crossing_settings(params, y0, n_crossings, **kw)
+    settings = sections.crossing_settings(params, y0, n_crossings=n_crossings, **kw)
     blocks = stream.BlockStream(path, _identity(params, h, p1, p2, y0, settings))
     if blocks.complete() and not force:
         blocks.discard()     # blocks of an interrupted --force rerun of a finished run: stale
@@ -140,7 +140,7 @@ def _to_store(path, params, p1, p2, h, n_crossings, block, force, on_block, stop
     state = sections.StreamState.from_arrays(dict(saved, blocks=resumed))
     t0 = time.perf_counter()
     st = state
-    for b in sections.iter_crossings(params, y0, n_crossings, block=block, state=state, **kw):
+    for b in sections.iter_crossings(params, y0, n_crossings=n_crossings, block=block, state=state, **kw):
         blocks.append(b.state.blocks, b.index, b.start, b.count, b.data, [0], b.state.as_arrays())
         st = b.state
         if on_block is not None:

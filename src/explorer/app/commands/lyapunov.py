@@ -42,7 +42,7 @@ def run(args) -> int:
             raise model.ParameterError(f"{name} must be finite, got {getattr(args, name)!r}")
     y0 = model.section_state(params, [args.p1], [args.p2], args.h)
     # every indicator of the registry the method computes (SALI and GALI_2: Taylor's tangent lanes)
-    r = lyapunov.indicators(params, y0, args.time, method=args.method, tol=args.tol, dt=args.dt,
+    r = lyapunov.indicators(params, y0, tmax=args.time, method=args.method, tol=args.tol, dt=args.dt,
                             history=args.history, which=lyapunov.available(args.method))
     cols = [RES_T] + [i.column for i in INDICATORS if i.in_history]
     hist = [[float(row[c]) for c in cols] for row in r.history[0] if np.isfinite(row[RES_T])]

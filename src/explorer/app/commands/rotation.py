@@ -43,7 +43,7 @@ def run(args) -> int:
             raise model.ParameterError(f"{name} ({x[0]:g}, {x[1]:g}) lies outside the allowed region; allowed: "
                                        f"{model.describe_region(params, args.h)}")
     center = find_fixed_point(params, args.h, c_guess, tol=args.tol)
-    prof = rotation.rotation_profile(params, args.h, a, b, args.n, center=center.point, iterates=args.iterates,
+    prof = rotation.rotation_profile(params, args.h, a, b, n=args.n, center=center.point, iterates=args.iterates,
                                      tol=args.tol)
     out = dict(prof.as_dict(), params=params.as_dict(), h=args.h, center_stable=bool(center.stable))
     if args.json:

@@ -17,7 +17,7 @@ def advance(params, Y, tau, *, tol=DENSE_TOL):
     from explorer.kernels import STATUS_TMAX
 
     Y = np.ascontiguousarray(np.atleast_2d(Y), dtype=float)
-    res = sections.crossings(params, Y, 16, tmax=float(tau), tol=tol, threads=1)
+    res = sections.crossings(params, Y, n_crossings=16, tmax=float(tau), tol=tol, threads=1)
     if not (np.all(res.status == STATUS_TMAX) and np.all(res.info[:, 0] == float(tau))):
         bad = int(np.flatnonzero((res.status != STATUS_TMAX) | (res.info[:, 0] != float(tau)))[0])
         raise RuntimeError(f"dense integration stopped early ({res.status_name(bad)} at t = {res.info[bad, 0]!r})")

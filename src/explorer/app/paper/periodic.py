@@ -32,12 +32,12 @@ def periodic_figure(params=None, h=None, *, periods=range(1, 9), seeds=40, cross
     h = model.FIGURE4_H if h is None else h
     c1, c2, r1, r2 = model.allowed_ellipse(prm, h)
     p1s = c1 + r1 * np.linspace(-0.97, 0.97, seeds)
-    cr = section_crossings(prm, p1s, np.zeros_like(p1s), h, crossings, tol=DEFAULT_TOL)
+    cr = section_crossings(prm, h, p1s, np.zeros_like(p1s), n_crossings=crossings, tol=DEFAULT_TOL)
     pts = cr.data[..., 1:3].reshape(-1, 2)
     pts = pts[np.isfinite(pts[:, 0])]
     orbits = {K: periodic.search_periodic_orbits(prm, h, K, grid=grid) for K in periods}
     center = find_fixed_point(prm, h, CENTER_GUESS)
-    prof = rotation.rotation_profile(prm, h, center.point, PROFILE_END, profile_n, center=center.point,
+    prof = rotation.rotation_profile(prm, h, center.point, PROFILE_END, n=profile_n, center=center.point,
                                      iterates=iterates)
     levels = {}   # m/K of the elliptic orbits found whose level the profile reaches (a plateau)
     reached = prof.rotation[prof.converged]

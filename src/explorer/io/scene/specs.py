@@ -161,7 +161,7 @@ class IntegrationSpec:
         return d
 
     def section_kwargs(self) -> dict:
-        """Keywords for ``sections.section_crossings(params, p1, p2, h, self.crossings, **kw)``."""
+        """Keywords for ``sections.section_crossings(params, h, p1, p2, n_crossings=self.crossings, **kw)``."""
         d = self.used_dict()
         del d["crossings"]
         return d
