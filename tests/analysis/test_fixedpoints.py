@@ -20,7 +20,7 @@ def test_fixed_point_at_mu0_is_solution_I_with_the_analytic_eigenvalues():
     np.testing.assert_allclose(np.sort(np.real(fp.eigenvalues)), np.sort(np.real(ev)), rtol=1e-9)
     assert fp.trace == pytest.approx(tr, rel=1e-10) and not fp.stable
     assert fp.det == pytest.approx(1.0, abs=1e-10)
-    assert fp.period_time == pytest.approx(2 * math.pi * 2.0 / math.sqrt(8.0), rel=1e-12)
+    assert fp.return_time == pytest.approx(2 * math.pi * 2.0 / math.sqrt(8.0), rel=1e-12)
 
 
 def test_solution_I_outside_the_band_is_elliptic_with_the_analytic_rotation():

@@ -83,7 +83,7 @@ def test_period_one_equals_find_fixed_point():
         assert orb.trace == pytest.approx(fp.trace, rel=1e-10, abs=1e-12)
         assert orb.det == pytest.approx(fp.det, abs=1e-12)
         assert orb.stable == fp.stable
-        assert orb.return_times[0] == pytest.approx(fp.period_time, rel=1e-12)
+        assert orb.return_times[0] == pytest.approx(fp.return_time, rel=1e-12)
 
 
 def test_a_period_two_orbit_found_with_period_four_is_reported_with_its_minimal_period(search2):

@@ -38,7 +38,9 @@ def test_fixed_points_and_their_continuation_are_the_same_from_a_section_map(sma
     old = fpm.find_fixed_point(PRM, H, (0.0, 0.0), phi0=PHI0, tol=TOL)
     same(new.point, old.point)
     same(new.jacobian, old.jacobian)
-    assert new.period_time == old.period_time
+    assert new.return_time == old.return_time
+    with pytest.warns(DeprecationWarning, match="return_time"):
+        assert new.period_time == new.return_time
     new_b = fpm.continue_branch(smap, "mu", 0.03, 0.05, 0.01, (0.0, 0.0))
     old_b = fpm.continue_branch(PRM, H, "mu", 0.03, 0.05, 0.01, (0.0, 0.0), phi0=PHI0, tol=TOL)
     assert len(new_b.points) == len(old_b.points) >= 2

@@ -23,7 +23,7 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis.periodic import PeriodicBranch
-from explorer.analysis.section_map import DEFAULT_TOL, SectionMap, system_first
+from explorer.analysis.section_map import deprecated, orbit_first, system_first
 from explorer.model import ParameterError, validation
 
 __all__ = ["Branch", "FixedPoint", "analytic_eigenvalues_solution_I", "continue_branch", "find_fixed_point", "follow",
@@ -44,8 +44,9 @@ class FixedPoint:
     eigenvalues : ndarray (2,)
         Eigenvalues of ``jacobian``; ``trace`` their sum. ``|trace| < 2``: elliptic (``stable``),
         ``|trace| > 2``: hyperbolic.
-    period_time : float
-        Return time of the periodic orbit through the point.
+    return_time : float
+        Return time of the periodic orbit through the point (``PeriodicOrbit.return_times[0]``;
+        ``period_time`` is its deprecated name).
     iterations : int
         Newton iterations taken.
     """
@@ -55,7 +56,7 @@ class FixedPoint:
     eigenvalues: np.ndarray
     trace: float
     det: float
-    period_time: float
+    return_time: float
     iterations: int
     residual: float
     params: model.Params = None
@@ -69,6 +70,12 @@ class FixedPoint:
                    float(orb.return_times[0]), orb.iterations, orb.residual, orb.params, orb.h, orb.degenerate)
 
     @property
+    def period_time(self) -> float:
+        """Deprecated name of :attr:`return_time`."""
+        deprecated("FixedPoint.period_time", "FixedPoint.return_time")
+        return self.return_time
+
+    @property
     def stable(self) -> bool:
         return abs(self.trace) < 2.0
 
@@ -80,7 +87,7 @@ class FixedPoint:
         ev = [complex(e) for e in self.eigenvalues]
         return {"p1": float(self.point[0]), "p2": float(self.point[1]), "trace": float(self.trace),
                 "det": float(self.det), "eigenvalues": [[e.real, e.imag] if e.imag else e.real for e in ev],
-                "stable": bool(self.stable), "return_time": self.period_time, "iterations": self.iterations,
+                "stable": bool(self.stable), "return_time": self.return_time, "iterations": self.iterations,
                 "residual": self.residual, "degenerate": bool(self.degenerate)}
 
 
@@ -157,17 +164,20 @@ def continue_branch(system, parameter, start, stop, step, guess=(0.0, 0.0), *, b
 
 
 # ---------------------------------------------------------------- separatrices
-def manifold(fp: FixedPoint, *, stable=False, branch=1, iterations=6, n_domain=60, first=1e-6,
-             max_gap=0.02, max_points=20000, phi0=math.pi, tol=DEFAULT_TOL):
+@orbit_first
+@system_first
+def manifold(system, fp: FixedPoint, *, stable=False, branch=1, iterations=6, n_domain=60, first=1e-6,
+             max_gap=0.02, max_points=20000):
     """One branch (+1 or -1 along the eigenvector) of the unstable (stable: backward in time)
-    manifold of a hyperbolic fixed point, as an (M, 2) polyline on the section.
+    manifold of a hyperbolic fixed point ``fp`` of the map ``system``, as an (M, 2) polyline on
+    the section.
 
     A fundamental domain x* + s e, s in [first, first |lambda|) (log-spaced), is iterated
     ``iterations`` times; wherever two consecutive images are more than ``max_gap`` apart the
     parameter interval is bisected (the new point iterated from scratch), up to max_points."""
     if fp.stable:
         raise ParameterError("the fixed point is elliptic: it has no separatrices")
-    smap = SectionMap(fp.params, fp.h, phi0=phi0, tol=tol)
+    smap = system
     w, V = np.linalg.eig(fp.jacobian)
     w = np.real(w)
     V = np.real(V)
@@ -205,9 +215,14 @@ def manifold(fp: FixedPoint, *, stable=False, branch=1, iterations=6, n_domain=6
     return curve
 
 
-def separatrices(fp: FixedPoint, **kw):
-    """The four branches (unstable +-, stable +-) as a list of polylines."""
-    return [manifold(fp, stable=s, branch=b, **kw) for s in (False, True) for b in (1, -1)]
+@orbit_first
+@system_first
+def separatrices(system, fp: FixedPoint, *, iterations=6, n_domain=60, first=1e-6, max_gap=0.02,
+                 max_points=20000):
+    """The four branches (unstable +-, stable +-) of the hyperbolic fixed point ``fp`` of the map
+    ``system`` as a list of polylines (:func:`manifold`, whose options these are)."""
+    return [manifold(system, fp, stable=s, branch=b, iterations=iterations, n_domain=n_domain, first=first,
+                     max_gap=max_gap, max_points=max_points) for s in (False, True) for b in (1, -1)]
 
 
 def analytic_eigenvalues_solution_I(params, h):

@@ -100,8 +100,9 @@ def second_deviation_vector(params, y, direction=SECOND_DIRECTION):
 class Indicators:
     """Per-orbit chaos indicators at time ``time`` and their history (:func:`indicators`).
 
-    Each indicator of the registry (:data:`INDICATOR_NAMES`) is an attribute, ``r.megno``, an
-    (N,) array (NaN where it was not computed), read from ``values``.
+    Each indicator of the registry (:data:`INDICATOR_NAMES`) is a property, ``r.megno``, an
+    (N,) array (NaN where it was not computed), read from ``values`` (a new indicator adds its
+    property here: ``tests/analysis/test_lyapunov.py`` checks every name has one).
 
     mLCE: finite-time maximal Lyapunov exponent ``ln(|w(T)| / |w(0)|) / T`` of the deviation vector w
     (Benettin et al. 1980; renormalised, Skokos 2010); MEGNO <Y>: Cincotta & Simó 2000 (-> 2 on
@@ -123,11 +124,30 @@ class Indicators:
     deviation: np.ndarray | None = None  # (N, 2, 5) final unit deviation vectors (NaN if not computed)
     which: tuple = field(default=DEFAULT_INDICATORS)
 
-    def __getattr__(self, name: str) -> np.ndarray:
-        values = self.__dict__.get("values")
-        if values is None or name not in values:
-            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
-        return values[name]
+    @property
+    def mlce(self) -> np.ndarray:
+        """Finite-time maximal Lyapunov exponent per orbit."""
+        return self.values["mlce"]
+
+    @property
+    def megno(self) -> np.ndarray:
+        """Mean MEGNO <Y> per orbit."""
+        return self.values["megno"]
+
+    @property
+    def fli(self) -> np.ndarray:
+        """Fast Lyapunov indicator per orbit."""
+        return self.values["fli"]
+
+    @property
+    def sali(self) -> np.ndarray:
+        """Smaller alignment index per orbit (NaN unless asked for)."""
+        return self.values["sali"]
+
+    @property
+    def gali2(self) -> np.ndarray:
+        """GALI_2 per orbit (NaN unless asked for)."""
+        return self.values["gali2"]
 
     def chaotic(self, threshold: float) -> np.ndarray:
         """Orbits classified chaotic: <Y> > ``threshold`` or stopped early as chaotic."""
@@ -227,12 +247,9 @@ def indicators(system, y0, *, tmax: float = DEFAULT_TIME, method: str | None = N
     """
     params = system
     if not is_params(system):   # a map: section coordinates on its section, its tolerance
-        pts = np.atleast_2d(np.asarray(y0, dtype=np.float64))
-        if pts.ndim != 2 or pts.shape[1] != 2:
-            raise ParameterError(f"with a SectionMap the start points are (p1, p2) pairs (N, 2); got {pts.shape}")
         method = system.method if method is None else method
         tol = system.tol
-        params, y0 = system.params, model.section_state(system.params, pts[:, 0], pts[:, 1], system.h, system.phi0)
+        params, y0 = system.params, system.states(y0)
     method = "taylor" if method is None else method
     tol = DEFAULT_TOL if tol is None else tol
     P = validation.packed_params(params)

@@ -27,7 +27,7 @@ Growth (Hobson 1993, J. Comput. Phys. 104, 14; Krauskopf & Osinga 1998, J. Compu
 the distance between neighbours exceeds ``max_gap``, the angle at a point exceeds
 ``max_angle``, or distance times angle exceeds ``max_gap_angle``, insert the point at the
 mid-value of sigma (computed from the fundamental domain, n maps); (ii) extend: map the last
-generation once (F, one batch of the Taylor lanes, :func:`explorer.analysis.sections.section_crossings`)
+generation once (F, one batch of the Taylor lanes, :func:`explorer.analysis.sections.crossings`)
 - until the branch has the requested arclength or a budget (points, wall time) runs out or a
 point has no return (the region's edge).  ``ManifoldBranch.status`` says which.
 
@@ -38,7 +38,6 @@ forward; otherwise each point is integrated backward in time by the section map
 """
 from __future__ import annotations
 
-import functools
 import math
 import time
 from dataclasses import dataclass, field
@@ -47,7 +46,7 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis.periodic import PeriodicOrbit, is_reversible, reversor
-from explorer.analysis.section_map import SectionMap, deprecated, system_first
+from explorer.analysis.section_map import SectionMap, orbit_first, system_first
 from explorer.model import ParameterError, validation
 
 __all__ = ["DEFAULT_MAX_ANGLE", "DEFAULT_MAX_GAP", "DEFAULT_MAX_GAP_ANGLE", "DEFAULT_START_TOL", "Homoclinic",
@@ -107,40 +106,7 @@ def _orient(v):
     return -v if (v[0] < 0 or (v[0] == 0 and v[1] < 0)) else v
 
 
-def _is_orbit(x) -> bool:
-    """An orbit, or a point (p1, p2) to find one from: the first argument of the older forms."""
-    return isinstance(x, (PeriodicOrbit, tuple, list)) or (hasattr(x, "jacobian") and hasattr(x, "point")) or (
-        isinstance(x, np.ndarray) and x.shape == (2,))
-
-
-def _orbit_first(fn):
-    """Keep the older forms ``fn(orbit)``, ``fn(orbit, params, h)`` and ``fn(orbit, smap)`` (the
-    orbit first, its params, h and phi0 by default) working, with a DeprecationWarning: they
-    become ``fn(system, orbit, ...)``."""
-
-    @functools.wraps(fn)
-    def call(*args, **kw):
-        if not args or not _is_orbit(args[0]):
-            return fn(*args, **kw)
-        orbit, rest = args[0], list(args[1:])
-        deprecated(f"{fn.__name__}(orbit, ...)", f"{fn.__name__}(system, orbit, ...) with a SectionMap or params, h")
-        if rest and isinstance(rest[0], SectionMap):
-            return fn(rest[0], orbit, **kw)
-        params = rest.pop(0) if rest else kw.pop("params", None)
-        h = rest.pop(0) if rest else kw.pop("h", None)
-        params = getattr(orbit, "params", None) if params is None else params
-        h = getattr(orbit, "h", None) if h is None else h
-        if params is None or h is None or not math.isfinite(float(h)):
-            raise ParameterError(f"{fn.__name__}: the orbit carries no params, h; give the system first: "
-                                 f"{fn.__name__}(smap, orbit) or {fn.__name__}(params, h, orbit)")
-        if kw.get("phi0") is None:
-            kw["phi0"] = getattr(orbit, "phi0", math.pi)
-        return fn(params, h, orbit, **kw)
-
-    return call
-
-
-@_orbit_first
+@orbit_first
 @system_first
 def saddle(system, orbit, *, index=0) -> Saddle:
     """The :class:`Saddle` at point ``index`` of a hyperbolic ``orbit`` (a
@@ -174,7 +140,7 @@ def _images(smap: SectionMap, X, n, backward, integrate_backward=False):
     """F-images: P^n (P^-n with ``backward``) of the points X (m, 2); rows that leave the region
     or have no return are NaN.  Forward: one batch of the Taylor lanes; backward: the same batch
     through the reversor G0 P^n G0 = P^-n when it applies, else the section map point by point."""
-    from explorer.analysis.sections import section_crossings
+    from explorer.analysis.sections import crossings
 
     X = np.asarray(X, float).reshape(-1, 2)
     out = np.full_like(X, np.nan)
@@ -190,7 +156,7 @@ def _images(smap: SectionMap, X, n, backward, integrate_backward=False):
     Y = reversor(X) if backward else X
     ok = model.section_M2(smap.params, Y[:, 0], Y[:, 1], smap.h, smap.phi0) > 0
     if ok.any():
-        c = section_crossings(smap.params, smap.h, Y[ok, 0], Y[ok, 1], n_crossings=n, phi0=smap.phi0, tol=smap.tol,
+        c = crossings(smap.params, smap.h, Y[ok], n_crossings=n, phi0=smap.phi0, tol=smap.tol,
                               tmax=smap.tmax * n)
         img = np.where((c.count >= n)[:, None], c.data[:, n - 1, 1:3], np.nan)
         out[ok] = reversor(img) if backward else img
@@ -426,7 +392,7 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
                           evals, time.perf_counter() - t0, cv, float(max_gap))
 
 
-@_orbit_first
+@orbit_first
 @system_first
 def manifolds(system, orbit, *, arclength=5.0, kinds=("unstable", "stable"), signs=(1, -1), index=0, period=1,
               start_tol=DEFAULT_START_TOL, max_gap=DEFAULT_MAX_GAP, max_angle=DEFAULT_MAX_ANGLE,

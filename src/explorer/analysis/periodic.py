@@ -553,7 +553,7 @@ def symmetry_line_points(system, period, *, n=200, threads=None):
 
 def _grid_seeds(prm, h, K, grid, phi0, tol, tmax, threads):
     """Grid points of the allowed region where |P^K(x) - x| has a local minimum, best first."""
-    from explorer.analysis.sections import section_crossings
+    from explorer.analysis.sections import crossings
 
     e = model.allowed_ellipse(prm, h, phi0)
     if e is None:
@@ -564,7 +564,7 @@ def _grid_seeds(prm, h, K, grid, phi0, tol, tmax, threads):
     inside = model.section_M2(prm, U, V, h, phi0) > 0
     R = np.full(U.shape, np.inf)
     if inside.any():
-        c = section_crossings(prm, h, U[inside], V[inside], n_crossings=K, phi0=phi0, tol=max(tol, SECTIONS_TOL), tmax=tmax * K,
+        c = crossings(prm, h, np.column_stack([U[inside], V[inside]]), n_crossings=K, phi0=phi0, tol=max(tol, SECTIONS_TOL), tmax=tmax * K,
                               threads=threads)
         ok = c.count >= K
         r = np.full(ok.shape, np.inf)

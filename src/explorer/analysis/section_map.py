@@ -45,7 +45,7 @@ from explorer.model import ParameterError, validation
 from explorer.model.equations import rhs
 
 __all__ = ["DEFAULT_TOL", "MAP_SETTINGS", "MAX_STEPS", "RETURN_TMAX", "MapResult", "SectionMap", "as_system",
-           "deprecated", "is_params", "keyword_only", "keywords_moved", "system_first"]
+           "deprecated", "is_params", "keyword_only", "keywords_moved", "orbit_first", "system_first"]
 
 #: Taylor tolerance of the section map in Newton's method and its relatives (fixed points,
 #: periodic orbits, continuation, separatrices): the map is evaluated a few hundred times,
@@ -76,7 +76,7 @@ class SectionMap:
     """
 
     #: the integrator of the map (its Jacobian is the variational Taylor series); the analyses
-    #: given a map integrate with it (``section_crossings``, ``indicators``)
+    #: given a map integrate with it (``crossings``, ``indicators``)
     method = "taylor"
 
     def __init__(self, params, h, *, phi0=math.pi, tol=DEFAULT_TOL, tmax=RETURN_TMAX):
@@ -98,6 +98,16 @@ class SectionMap:
         (its ``phi0``, ``tol`` and ``tmax`` kept): a step of a continuation."""
         prm, h = validation.with_value(self.params, self.h, name, value)
         return SectionMap(prm, h, phi0=self.phi0, tol=self.tol, tmax=self.tmax)
+
+    def states(self, points, direction: int = 1) -> np.ndarray:
+        """The full states (N, 5) of the section points ``points`` ((p1, p2) or an (N, 2) array),
+        M from the energy with the sign of ``direction`` (0: +), docs/model.md R9."""
+        pts = np.atleast_2d(np.asarray(points, dtype=np.float64))
+        if pts.ndim != 2 or pts.shape[1] != 2:
+            raise ParameterError(f"the start points on the section of a map are (p1, p2) pairs (N, 2); got shape "
+                                 f"{np.shape(points)}")
+        return model.section_state(self.params, pts[:, 0], pts[:, 1], self.h, self.phi0,
+                                   direction if direction != 0 else 1)
 
     def state(self, x):
         """The full state (p1, p2, M, g1, g2) of the section point x (M > 0 from the energy)."""
@@ -279,19 +289,48 @@ def system_first(fn=None, *, settings: tuple = MAP_SETTINGS, moved: tuple = (), 
     return wrap if fn is None else wrap(fn)
 
 
-#: the frames of this module's wrappers, skipped so that a DeprecationWarning names the caller's line
-_WRAPPERS = ("call", "keywords_moved", "deprecated")
+def _is_orbit(x) -> bool:
+    """An orbit, or a point (p1, p2) to find one from: the first argument of the older forms."""
+    return (isinstance(x, (tuple, list)) or (isinstance(x, np.ndarray) and x.shape == (2,))
+            or (hasattr(x, "points") and hasattr(x, "period")) or (hasattr(x, "jacobian") and hasattr(x, "point")))
+
+
+def orbit_first(fn):
+    """Keep the older forms ``fn(orbit)``, ``fn(orbit, params, h)`` and ``fn(orbit, smap)`` (the
+    orbit first, its params, h and phi0 by default) working, with a DeprecationWarning: they
+    become ``fn(system, orbit, ...)``."""
+
+    @functools.wraps(fn)
+    def call(*args, **kw):
+        if not args or not _is_orbit(args[0]):
+            return fn(*args, **kw)
+        orbit, rest = args[0], list(args[1:])
+        deprecated(f"{fn.__name__}(orbit, ...)", f"{fn.__name__}(system, orbit, ...) with a SectionMap or params, h")
+        if rest and isinstance(rest[0], SectionMap):
+            return fn(rest[0], orbit, **kw)
+        params = rest.pop(0) if rest else kw.pop("params", None)
+        h = rest.pop(0) if rest else kw.pop("h", None)
+        params = getattr(orbit, "params", None) if params is None else params
+        h = getattr(orbit, "h", None) if h is None else h
+        if params is None or h is None or not math.isfinite(float(h)):
+            raise ParameterError(f"{fn.__name__}: the orbit carries no params, h; give the system first: "
+                                 f"{fn.__name__}(smap, orbit) or {fn.__name__}(params, h, orbit)")
+        if kw.get("phi0") is None:
+            kw["phi0"] = getattr(orbit, "phi0", math.pi)
+        return fn(params, h, orbit, **kw)
+
+    return call
 
 
 def deprecated(old: str, new: str) -> None:
     """Warn that the call form or name ``old`` goes away in the next release: use ``new``
     (the list is in docs/api.md, "Deprecated names and forms").  The warning names the first
-    line outside the wrappers of the API (:func:`system_first`, :func:`keyword_only`)."""
+    line outside this package (as Python 3.12's ``skip_file_prefixes``): the caller's."""
     import sys
 
-    package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    package = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + os.sep
     level, frame = 1, sys._getframe(0)
-    while frame is not None and frame.f_code.co_name in _WRAPPERS and frame.f_code.co_filename.startswith(package):
+    while frame is not None and frame.f_code.co_filename.startswith(package):
         level, frame = level + 1, frame.f_back
     warnings.warn(f"{old} is deprecated and will be removed in the next release; use {new}", DeprecationWarning,
                   stacklevel=level)

@@ -28,7 +28,7 @@ import numpy as np
 
 from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
-from explorer.analysis.section_map import SectionMap, deprecated, is_params, keyword_only, system_first
+from explorer.analysis.section_map import deprecated, is_params, system_first
 from explorer.integrate import layout, methods
 from explorer.integrate.methods import (
     ADAPTIVE_METHODS,
@@ -169,6 +169,14 @@ def _validated(params, y0, n_crossings, method, tol, dt, tmax, max_steps, phi0, 
     return _Run(P, Y0, K, prep, g2, g1, int(direction), tmax, int(max_steps), threads, settings)
 
 
+def _start(system, y0, tol, phi0, direction):
+    """(params, states, tol, phi0) of a run of :func:`crossings`: a map's section points
+    lifted to states at its tolerance and section, or the flow's own."""
+    if is_params(system):
+        return system, y0, tol, phi0
+    return system.params, system.states(y0, direction), system.tol, system.phi0
+
+
 def crossing_settings(params, y0, *, n_crossings: int, method: str = "taylor", tol: float = DEFAULT_TOL,
                       dt: float | None = None, tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS,
                       phi0: float = math.pi, direction: int = 1) -> dict:
@@ -217,13 +225,21 @@ def _run_block(run: _Run, Y, carry, limits, data, count, status, final, info) ->
         set_num_threads(old_threads)
 
 
-@keyword_only("n_crossings")
-def crossings(params, y0, *, n_crossings: int, method: str = "taylor", tol: float = DEFAULT_TOL,
+@system_first(settings=("phi0", "tol"), moved=("n_crossings",), defaults={"tol": DEFAULT_TOL}, flow=True)
+def crossings(system, y0, *, n_crossings: int, method: str = "taylor", tol: float = DEFAULT_TOL,
               dt: float | None = None, tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS,
               phi0: float = math.pi, direction: int = 1, threads: int | None = None) -> Crossings:
-    """Integrate each initial state of ``y0`` ((N, 5) or (5,)) until it has crossed the section
-    phi = phi0 ``n_crossings`` times in ``direction`` (+1: dphi/dt > 0, -1: < 0, 0: both), or until
-    its time budget ``tmax`` (default 100 * n_crossings) or step budget ``max_steps`` runs out.
+    """Integrate each orbit from ``y0`` until it has crossed the section phi = phi0
+    ``n_crossings`` times in ``direction`` (+1: dphi/dt > 0, -1: < 0, 0: both), or until its time
+    budget ``tmax`` (default 100 * n_crossings) or step budget ``max_steps`` runs out.
+
+    The system first (docs/api.md, "The system argument"): a
+    :class:`~explorer.analysis.section_map.SectionMap` (or ``params, h`` with ``phi0=`` and
+    ``tol=``, default :data:`~explorer.integrate.methods.DEFAULT_TOL`) with ``y0`` its section
+    points ((p1, p2) or (N, 2); M from the energy with the sign of ``direction``, docs/model.md
+    R9): its ``params``, ``h``, ``phi0`` and ``tol``, and with the defaults (Taylor, direction
+    +1) the rows are the map's iterates; or the model parameters alone, ``params``, with ``y0``
+    full states ((N, 5) or (5,)) and ``phi0=``, ``tol=`` this call's own.
 
     ``tol`` is the tolerance of the adaptive methods, ``dt`` the fixed step of the splitting
     methods (default 0.05).  ``threads`` sets numba's thread count for this call (default: all).
@@ -233,6 +249,7 @@ def crossings(params, y0, *, n_crossings: int, method: str = "taylor", tol: floa
     machine's memory is refused (ParameterError naming its size); :func:`iter_crossings` streams
     the same rows in blocks of bounded size.
     """
+    params, y0, tol, phi0 = _start(system, y0, tol, phi0, direction)
     run = _validated(params, y0, n_crossings, method, tol, dt, tmax, max_steps, phi0, direction, threads)
     N, K = run.Y0.shape[0], run.K
     need = result_bytes(N, K)
@@ -341,8 +358,8 @@ class CrossingBlock:
         return self.data[i, : self.count[i]]
 
 
-@keyword_only("n_crossings")
-def iter_crossings(params, y0, *, n_crossings: int, block: int = DEFAULT_BLOCK, state: StreamState | None = None,
+@system_first(settings=("phi0", "tol"), moved=("n_crossings",), defaults={"tol": DEFAULT_TOL}, flow=True)
+def iter_crossings(system, y0, *, n_crossings: int, block: int = DEFAULT_BLOCK, state: StreamState | None = None,
                    method: str = "taylor", tol: float = DEFAULT_TOL, dt: float | None = None,
                    tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS, phi0: float = math.pi,
                    direction: int = 1, threads: int | None = None):
@@ -355,8 +372,9 @@ def iter_crossings(params, y0, *, n_crossings: int, block: int = DEFAULT_BLOCK, 
 
     ``state``: continue a run from the :class:`StreamState` of one of its blocks (e.g. read back
     from a checkpoint), with the same arguments otherwise.  The last block's state gives the
-    final ``status`` and ``info`` of every orbit.
+    final ``status`` and ``info`` of every orbit.  The system and ``y0`` as for :func:`crossings`.
     """
+    params, y0, tol, phi0 = _start(system, y0, tol, phi0, direction)
     run = _validated(params, y0, n_crossings, method, tol, dt, tmax, max_steps, phi0, direction, threads)
     if not isinstance(block, numbers.Integral) or block < 1:
         raise ParameterError(f"block must be an integer >= 1, got {block!r}")
@@ -411,41 +429,26 @@ def _older_order(fn):
     return call
 
 
-def _section_run(system, p1, p2, direction):
-    """(params, Y0, phi0, tol) of a run from the section points (p1, p2) of the map ``system``
-    (M from the energy, its sign from ``direction``; 0 starts with M > 0)."""
-    Y0 = model.section_state(system.params, p1, p2, system.h, system.phi0, direction if direction != 0 else 1)
-    return system.params, Y0
+def _points(p1, p2) -> np.ndarray:
+    """The section points (N, 2) of the coordinates p1, p2 (broadcast)."""
+    a, b = np.broadcast_arrays(np.atleast_1d(np.asarray(p1, dtype=np.float64)),
+                               np.atleast_1d(np.asarray(p2, dtype=np.float64)))
+    return np.column_stack([a.ravel(), b.ravel()])
 
 
 @_older_order
 @system_first(settings=("phi0", "tol"), moved=("n_crossings",), defaults={"tol": DEFAULT_TOL})
-def section_crossings(system, p1, p2, *, n_crossings: int, method: str = SectionMap.method,
-                      direction: int = 1, dt: float | None = None, tmax: float | None = None,
-                      max_steps: int = DEFAULT_MAX_STEPS, threads: int | None = None) -> Crossings:
-    """Start orbits on the section of ``system`` from the points (p1, p2) (M from the energy,
-    docs/model.md R9; sign of M from ``direction``, default +1) and return their next
-    ``n_crossings`` crossings (:func:`crossings`, whose keywords these are).
-
-    ``system``: a :class:`~explorer.analysis.section_map.SectionMap` (its ``params``, ``h``,
-    ``phi0`` and ``tol``; with the defaults ``method="taylor"`` and ``direction=+1`` the rows
-    are the map's iterates), or ``params, h`` with ``phi0=`` and ``tol=`` (default
-    :data:`~explorer.integrate.methods.DEFAULT_TOL`, that of crossings).  ``tmax`` is this run's
-    time budget (default 100 * n_crossings), not the map's return budget.
-    """
-    params, Y0 = _section_run(system, p1, p2, direction)
-    return crossings(params, Y0, n_crossings=n_crossings, method=method, tol=system.tol, dt=dt, tmax=tmax,
-                     max_steps=max_steps, phi0=system.phi0, direction=direction, threads=threads)
+def section_crossings(system, p1, p2, *, n_crossings: int, **kw) -> Crossings:
+    """Deprecated name of :func:`crossings` from section points: ``section_crossings(system,
+    p1, p2, n_crossings=K, ...)`` is ``crossings(system, points, n_crossings=K, ...)`` with the
+    points (p1, p2) as an (N, 2) array (the keywords of :func:`crossings`)."""
+    deprecated("section_crossings(system, p1, p2, ...)", "crossings(system, points, n_crossings=...)")
+    return crossings(system, _points(p1, p2), n_crossings=n_crossings, **kw)
 
 
 @_older_order
 @system_first(settings=("phi0", "tol"), moved=("n_crossings",), defaults={"tol": DEFAULT_TOL})
-def iter_section_crossings(system, p1, p2, *, n_crossings: int, block: int = DEFAULT_BLOCK,
-                           state: StreamState | None = None, method: str = SectionMap.method, direction: int = 1,
-                           dt: float | None = None, tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS,
-                           threads: int | None = None):
-    """:func:`section_crossings` in blocks (:func:`iter_crossings`), the same arguments."""
-    params, Y0 = _section_run(system, p1, p2, direction)
-    return iter_crossings(params, Y0, n_crossings=n_crossings, block=block, state=state, method=method,
-                          tol=system.tol, dt=dt, tmax=tmax, max_steps=max_steps, phi0=system.phi0,
-                          direction=direction, threads=threads)
+def iter_section_crossings(system, p1, p2, *, n_crossings: int, **kw):
+    """Deprecated name of :func:`iter_crossings` from section points (as :func:`section_crossings`)."""
+    deprecated("iter_section_crossings(system, p1, p2, ...)", "iter_crossings(system, points, n_crossings=...)")
+    return iter_crossings(system, _points(p1, p2), n_crossings=n_crossings, **kw)

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from explorer.analysis.manifolds import Homoclinic, ManifoldBranch, homoclinic_points
+from explorer.analysis.section_map import SectionMap, system_first
 from explorer.model import ParameterError
 
 __all__ = ["DEFAULT_FLUX_MUS", "FluxCurve", "Lobe", "REASON_LOBES_DIFFER", "REASON_NO_EYE", "REASON_NO_PAIR",
@@ -192,24 +193,24 @@ def torn(unstable: ManifoldBranch, stable: ManifoldBranch, points) -> bool:
     return unstable.first_tear + stable.first_tear < S0 + unstable.curve.L
 
 
-def turnstile(sd, *, arclength=6.0, sign=1, max_arclength=None, max_residual=1e-10, **kw):
+def turnstile(sd, *, arclength=6.0, sign=1, max_arclength=None, max_residual=1e-10):
     """The unstable branch ``sign`` of the saddle ``sd``, the stable branch it meets (the same
     sign first, then the other), their homoclinic points and the turnstile's lobes: a dict with
     keys "unstable", "stable", "homoclinic_points", "lobes", "arclength", "torn".  When no pair has
     both lobes within ``arclength``, the branches are grown again at twice the length, up to
     ``max_arclength`` (default: ``arclength``), unless the branches are torn (:func:`torn`: no
     length helps); the pair with the most lobes is returned.  ``max_residual``: of the homoclinic
-    points (:func:`~explorer.analysis.manifolds.homoclinic_points`); ``kw``: options of
-    :func:`grow_branch`."""
+    points (:func:`~explorer.analysis.manifolds.homoclinic_points`); the branches grow with the
+    defaults of :func:`~explorer.analysis.manifolds.grow_branch`."""
     from explorer.analysis.manifolds import grow_branch
 
     length = float(arclength)
     limit = length if max_arclength is None else float(max_arclength)
     while True:
-        bu = grow_branch(sd, sign=sign, arclength=length, **kw)
+        bu = grow_branch(sd, sign=sign, arclength=length)
         best = None
         for s in (sign, -sign):
-            bs = grow_branch(sd, stable=True, sign=s, arclength=length, **kw)
+            bs = grow_branch(sd, stable=True, sign=s, arclength=length)
             hs = homoclinic_points(bu, bs, max_residual=max_residual)
             lb = lobes(bu, bs, points=hs)
             cut = torn(bu, bs, hs)
@@ -306,8 +307,9 @@ def _eye_point(points, reversible):
     return min(first, key=lambda p: p.sigma_u)
 
 
-def flux_curve(params, h, mus=None, *, guess=(0.0, 0.0), arclength=6.0, max_arclength=None, sign=1,
-               exit_samples=EXIT_SAMPLES, seed=0, **kw) -> FluxCurve:
+@system_first
+def flux_curve(system, mus=None, *, guess=(0.0, 0.0), arclength=6.0, max_arclength=None, sign=1,
+               exit_samples=EXIT_SAMPLES, seed=0) -> FluxCurve:
     """The flux across the broken separatrix of the central saddle (the fixed point followed
     from ``guess`` at mu = 0 by continuation) for each mu of ``mus`` (increasing; default
     :data:`DEFAULT_FLUX_MUS`, from 1e-3 to beyond the saddle's loss), stopping at the first mu
@@ -334,12 +336,11 @@ def flux_curve(params, h, mus=None, *, guess=(0.0, 0.0), arclength=6.0, max_arcl
     iteration), ``eye_error`` its standard error: it equals the lobe area where the turnstile
     is simple and measures the flux through the eye's boundary where it is not (secondary
     intersections) or torn; ``exit_samples=0`` skips it."""
-    from explorer import model
     from explorer.analysis import fixedpoints
     from explorer.analysis.manifolds import saddle
     from explorer.analysis.periodic import is_reversible
 
-    prm = params if isinstance(params, model.Params) else model.Params.from_array(params)
+    prm, h = system.params, system.h
     mus = [float(m) for m in (DEFAULT_FLUX_MUS if mus is None else mus)]
     if any(b <= a for a, b in zip(mus, mus[1:])) or not mus or mus[0] < 0:
         raise ParameterError(f"mus must be >= 0 and increasing, got {mus}")
@@ -355,7 +356,7 @@ def flux_curve(params, h, mus=None, *, guess=(0.0, 0.0), arclength=6.0, max_arcl
         except ParameterError:
             pass
         try:
-            fp = fixedpoints.follow(prm.with_(mu=prev), h, "mu", prev, mu, x, max_step=FOLLOW_STEP)
+            fp = fixedpoints.follow(system.with_value("mu", prev), "mu", prev, mu, x, max_step=FOLLOW_STEP)
         except ParameterError as exc:
             row.update(status=f"the fixed point was not followed to this mu: {exc}", reason=REASON_NO_SADDLE)
         else:
@@ -374,8 +375,10 @@ def flux_curve(params, h, mus=None, *, guess=(0.0, 0.0), arclength=6.0, max_arcl
             break
         prev, x = mu, tuple(fp.point)
         try:
-            t = turnstile(saddle(fp), arclength=arclength, sign=sign, max_residual=FLUX_RESIDUAL,
-                          max_arclength=4 * arclength if max_arclength is None else max_arclength, **kw)
+            at_fp = SectionMap(fp.params, fp.h, phi0=system.phi0, tol=system.tol, tmax=system.tmax)
+            t = turnstile(saddle(at_fp, fp), arclength=arclength, sign=sign,
+                          max_residual=FLUX_RESIDUAL,
+                          max_arclength=4 * arclength if max_arclength is None else max_arclength)
         except ParameterError as exc:
             row.update(status=str(exc), reason=REASON_NO_PAIR)
             continue
@@ -439,7 +442,7 @@ def resonance_zone(unstable: ManifoldBranch, stable: ManifoldBranch, point: Homo
 def _steps_inside(smap, polygon, X, max_iter, block):
     """For each start x (inside the polygon), the first k >= 1 with P^k(x) outside (or leaving the
     allowed region, or with no return): max_iter + 1 when it stays max_iter iterations."""
-    from explorer.analysis.sections import section_crossings
+    from explorer.analysis.sections import crossings
 
     T = np.full(len(X), max_iter + 1, np.int64)
     alive = np.arange(len(X))
@@ -447,7 +450,7 @@ def _steps_inside(smap, polygon, X, max_iter, block):
     done = 0
     while alive.size and done < max_iter:
         n = min(block, max_iter - done)
-        c = section_crossings(smap.params, smap.h, cur[alive, 0], cur[alive, 1], n_crossings=n, phi0=smap.phi0, tol=smap.tol,
+        c = crossings(smap.params, smap.h, cur[alive], n_crossings=n, phi0=smap.phi0, tol=smap.tol,
                               tmax=smap.tmax * n)
         pts = c.data[:, :, 1:3]                           # NaN where no crossing
         ins = inside(polygon, pts.reshape(-1, 2)).reshape(len(alive), n)

@@ -2,7 +2,7 @@
 
 Arrays in, figures out: this module never integrates.  It draws the crossing
 points ``(p1, p2)`` of the section ``phi = phi0`` computed elsewhere (e.g. by
-:func:`explorer.analysis.sections.section_crossings`) on top of the allowed region of
+:func:`explorer.analysis.sections.crossings`) on top of the allowed region of
 the section, the ellipse ``M^2 >= 0`` of :func:`explorer.model.allowed_ellipse`
 (white, with a thin dark boundary), the forbidden region ``M^2 < 0`` being
 light gray as in the seed's Figure 4.

@@ -36,7 +36,7 @@ class OrbitReport:
 
 
 def _start(params, p1, p2, h, kw):
-    """The start state on the section, as sections.section_crossings makes it (M from the energy,
+    """The start state on the section, as sections.crossings makes it from a section point (M from the energy,
     its sign from the crossing direction)."""
     direction = kw.get("direction", 1)
     return model.section_state(params, [p1], [p2], h, kw.get("phi0", np.pi), direction if direction != 0 else 1)

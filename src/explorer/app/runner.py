@@ -58,7 +58,7 @@ def panel_separatrices(scene, i):
         target = scene.sweep_values[i]
         fp = fpm.follow(prm, h, name, start, target, (c1, c2), phi0=phi0)
     info = {k: v for k, v in fp.as_dict().items() if k != "eigenvalues"}
-    curves = [] if fp.stable else fpm.separatrices(fp, phi0=phi0, **SEPARATRIX_SETTINGS)
+    curves = [] if fp.stable else fpm.separatrices(fp.params, fp.h, fp, phi0=phi0, **SEPARATRIX_SETTINGS)
     return info, curves
 
 
@@ -70,14 +70,16 @@ def panel_manifolds(scene, i):
     the note says why there are none ("" when there are)."""
     from explorer.analysis import manifolds as mf
     from explorer.analysis import periodic
+    from explorer.analysis.section_map import SectionMap
 
     spec = scene.manifolds
     prm, h, _label = scene.panel(i)
     branches: list = []
     try:
-        orb = periodic.find_periodic_orbit(prm, h, spec.guess, spec.period, phi0=scene.integration.phi0)
+        smap = SectionMap(prm, h, phi0=scene.integration.phi0)
+        orb = periodic.find_periodic_orbit(smap, spec.guess, spec.period)
         for j in range(orb.period):
-            branches += [(b.kind, b.points) for b in mf.manifolds(orb, index=j, arclength=spec.arclength,
+            branches += [(b.kind, b.points) for b in mf.manifolds(smap, orb, index=j, arclength=spec.arclength,
                                                                  max_points=spec.max_points)]
     except ParameterError as exc:
         msg = str(exc).split(" (")[0]

@@ -29,6 +29,7 @@ COMMAND = Command("manifold", __doc__, "--mu 0.03 --arclength 6 --json", (
 
 def run(args) -> int:
     from explorer.analysis import manifolds, periodic, transport
+    from explorer.analysis.section_map import SectionMap
 
     params = options.section_map_args(args)
     if args.period < 1:
@@ -38,8 +39,9 @@ def run(args) -> int:
     validation.fits_in_memory("--max-points", args.max_points, 4 * 64, "4 branches of 64 bytes per point", lo=1)
     if args.max_time is not None:
         validation.real("--max-time", args.max_time, 0.0, lo_open=True)
-    orb = periodic.find_periodic_orbit(params, args.h, options.pair(args.guess, "--guess"), args.period, tol=args.tol)
-    sd = manifolds.saddle(orb, index=args.index, tol=args.tol)
+    smap = SectionMap(params, args.h, tol=args.tol)
+    orb = periodic.find_periodic_orbit(smap, options.pair(args.guess, "--guess"), args.period)
+    sd = manifolds.saddle(smap, orb, index=args.index)
     kw = {"arclength": args.arclength, "max_points": args.max_points, "max_time": args.max_time}
     branches = [manifolds.grow_branch(sd, stable=st, sign=sg, **kw) for st in (False, True) for sg in (1, -1)]
     hps: list = []
@@ -94,11 +96,12 @@ def _heteroclinic(orb, args, kw) -> list:
         return []
     i = sd_index(args, orb)
     grow = dict(kw, start_tol=HETEROCLINIC_START_TOL)
-    src = manifolds.saddle(orb, index=i, tol=args.tol)
+    smap = SectionMap(orb.params, orb.h, phi0=orb.phi0, tol=args.tol)
+    src = manifolds.saddle(smap, orb, index=i)
     wu = [manifolds.grow_branch(src, sign=sg, **grow) for sg in (1, -1)]
     out = []
     for j in sorted({(i + 1) % K, (i - 1) % K}):
-        dst = manifolds.saddle(orb, index=j, tol=args.tol)
+        dst = manifolds.saddle(smap, orb, index=j)
         for bs in (manifolds.grow_branch(dst, stable=True, sign=sg, **grow) for sg in (1, -1)):
             for bu in wu:
                 out += [{"point": p.point.tolist(), "from": i, "to": j, "sign_u": bu.sign, "sign_s": bs.sign,

@@ -24,15 +24,15 @@ def periodic_figure(params=None, h=None, *, periods=range(1, 9), seeds=40, cross
     number (:func:`explorer.analysis.rotation.rotation_profile`) along p2 = 0 from the elliptic
     fixed point, converged orbits dark, non-converged (chaotic) light, with the levels m/K of
     the elliptic orbits found (plateaus of the island chains)."""
-    from explorer.analysis import periodic, rotation
+    from explorer.analysis import periodic, rotation, sections
     from explorer.analysis.fixedpoints import find_fixed_point
-    from explorer.analysis.sections import section_crossings
 
     prm = model.FIGURE4.with_(mu=0.03) if params is None else params
     h = model.FIGURE4_H if h is None else h
     c1, c2, r1, r2 = model.allowed_ellipse(prm, h)
     p1s = c1 + r1 * np.linspace(-0.97, 0.97, seeds)
-    cr = section_crossings(prm, h, p1s, np.zeros_like(p1s), n_crossings=crossings, tol=DEFAULT_TOL)
+    cr = sections.crossings(prm, h, np.column_stack([p1s, np.zeros_like(p1s)]), n_crossings=crossings,
+                            tol=DEFAULT_TOL)
     pts = cr.data[..., 1:3].reshape(-1, 2)
     pts = pts[np.isfinite(pts[:, 0])]
     orbits = {K: periodic.search_periodic_orbits(prm, h, K, grid=grid) for K in periods}

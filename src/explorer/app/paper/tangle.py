@@ -18,11 +18,13 @@ QUICK_MUS = (1e-3, 1e-2)
 
 def tangle_figure(*, quick=False, dpi=200) -> Drawn:
     from explorer.analysis import fixedpoints, manifolds, transport
+    from explorer.analysis.section_map import SectionMap
 
-    fp = fixedpoints.find_fixed_point(model.FIGURE4.with_(mu=MU), H, (0.0, 0.0))
-    sd = manifolds.saddle(fp)
+    smap = SectionMap(model.FIGURE4.with_(mu=MU), H)
+    fp = fixedpoints.find_fixed_point(smap, (0.0, 0.0))
+    sd = manifolds.saddle(smap, fp)
     # W^u_+ meets W^s_+ here (transport.turnstile finds the pair in general)
-    draw = manifolds.manifolds(fp, arclength=6.0 if quick else 10.0)
+    draw = manifolds.manifolds(smap, fp, arclength=6.0 if quick else 10.0)
     hs = manifolds.homoclinic_points(draw[0], draw[2])
     t = {"lobes": transport.lobes(draw[0], draw[2], points=hs), "homoclinic_points": hs}
     rows = transport.flux_curve(model.FIGURE4, H, QUICK_MUS if quick else FLUX_MUS, max_arclength=24.0)

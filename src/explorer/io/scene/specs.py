@@ -105,7 +105,7 @@ class SeedSpec:
 
 @dataclass(frozen=True)
 class IntegrationSpec:
-    """Settings handed to :func:`explorer.analysis.sections.section_crossings`.
+    """Settings handed to :func:`explorer.analysis.sections.crossings`.
 
     ``tmax`` None means the default budget 100 * crossings (:attr:`effective_tmax`).
     """
@@ -161,7 +161,7 @@ class IntegrationSpec:
         return d
 
     def section_kwargs(self) -> dict:
-        """Keywords for ``sections.section_crossings(params, h, p1, p2, n_crossings=self.crossings, **kw)``."""
+        """Keywords for ``sections.crossings(params, h, points, n_crossings=self.crossings, **kw)``."""
         d = self.used_dict()
         del d["crossings"]
         return d
