@@ -291,7 +291,7 @@ def stability_change_mu(base, h, lo, hi, guess, xtol=1e-7):
 
     def g(mu):
         P = np.array(base, dtype=float)
-        P[6] = mu
+        P[MU] = mu
         x = symmetric_fixed_point(P, h, guess)
         if abs(section_map_p(P, x, 0.0, h)[0] - x) > 1e-9:
             raise ValueError(f"no symmetric fixed point near p1 = {guess} at mu = {mu}")

@@ -42,14 +42,14 @@ def test_an_unknown_name_is_an_attribute_error():
 def test_the_package_docstring_example_runs_and_conserves_energy():
     ex = explorer
     prm = ex.FIGURE4.with_(mu=0.5)
-    res = ex.section_crossings(prm, [0.1, 0.3], [0.0, 0.0], ex.FIGURE4_H, 50)
+    smap = ex.SectionMap(prm, ex.FIGURE4_H)
+    res = ex.crossings(smap, [(0.1, 0.0), (0.3, 0.0)], n_crossings=50)
     assert res.count.tolist() == [50, 50]
     assert np.nanmax(np.abs(res.data[..., 4])) < 1e-10          # H - H0 at every crossing
     assert res.status_of(0) is ex.Status.DONE
-    fp = ex.find_fixed_point(prm, ex.FIGURE4_H, (-0.2, 0.0))
+    fp = ex.find_fixed_point(smap, (-0.2, 0.0))
     assert abs(fp.point[1]) < 1e-12 and not fp.stable                  # solution I, hyperbolic at mu = 0.5
-    y0 = ex.section_state(prm, [0.1], [0.0], ex.FIGURE4_H)
-    ind = ex.indicators(prm, y0, 100.0)
+    ind = ex.indicators(smap, [(0.1, 0.0)], tmax=100.0)
     assert np.isfinite(ind.megno[0])
 
 

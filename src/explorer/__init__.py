@@ -7,9 +7,10 @@ The public Python API is the names in ``__all__``; each is loaded on first use
     import explorer as ex
 
     prm = ex.FIGURE4.with_(mu=0.5)                        # docs/model.md R9: the scene of Figure 4
-    res = ex.section_crossings(prm, [0.1, 0.3], [0.0, 0.0], ex.FIGURE4_H, 1000)
-    fp = ex.find_fixed_point(prm, ex.FIGURE4_H, (-0.2, 0.0))
-    ind = ex.indicators(prm, ex.section_state(prm, [0.1], [0.0], ex.FIGURE4_H), 1000.0)
+    smap = ex.SectionMap(prm, ex.FIGURE4_H)              # the system, given first
+    res = ex.crossings(smap, [(0.1, 0.0), (0.3, 0.0)], n_crossings=1000)
+    fp = ex.find_fixed_point(smap, (-0.2, 0.0))
+    ind = ex.indicators(smap, [(0.1, 0.0)], tmax=1000.0)
 
 The layers below (``explorer.kernels`` <- ``model`` <- ``integrate`` <- ``analysis``
 <- ``io`` <- ``app``) are importable for more; see the documentation's architecture
@@ -37,9 +38,9 @@ _EXPORTS = {
     "METHODS": "explorer.analysis.sections",
     "Crossings": "explorer.analysis.sections",
     "crossings": "explorer.analysis.sections",
-    "section_crossings": "explorer.analysis.sections",
+    "section_crossings": "explorer.analysis.sections",     # deprecated: crossings (docs/api.md)
     "iter_crossings": "explorer.analysis.sections",
-    "iter_section_crossings": "explorer.analysis.sections",
+    "iter_section_crossings": "explorer.analysis.sections",  # deprecated: iter_crossings
     "CrossingBlock": "explorer.analysis.sections",
     "StreamState": "explorer.analysis.sections",
     "Status": "explorer.kernels",

@@ -21,7 +21,7 @@ One rule for the system argument of every analysis (:func:`system_first`): the s
 a :class:`SectionMap`, or the model parameters and the energy ``params, h`` with the map's
 ``phi0=``, ``tol=`` and ``tmax=`` as keywords, which is ``SectionMap(params, h, phi0=, tol=,
 tmax=)`` -- then the point(s), then counts, times and options as keywords.  Both forms give the
-same numbers.  Any other map object (the map protocol of :mod:`explorer.analysis.maps`) is
+same numbers.  Any other map object (the map protocol of Greene's residues, issue 35) is
 passed through unchanged.
 """
 from __future__ import annotations
@@ -180,7 +180,7 @@ def as_system(name: str, system, args: tuple, kw: dict, settings: tuple = MAP_SE
     - a :class:`SectionMap` is used as it is; its ``settings`` given beside it raise
       ParameterError (they belong to the map), and so does a map whose return budget differs
       from the default for an analysis that does not use it (``"tmax"`` not in ``settings``);
-    - any other map object (one with the map protocol of :mod:`explorer.analysis.maps`) passes
+    - any other map object (one with the map protocol of Greene's residues, issue 35) passes
       through unchanged;
     - with ``flow`` (a function that also integrates the flow from full states), ``params``
       followed by the states rather than a number h is the flow itself: passed through, the

@@ -90,6 +90,7 @@ def _heteroclinic(orb, args, kw) -> list:
     """Heteroclinic points of a periodic orbit (period K >= 2): W^u at point --index meets W^s at
     its neighbours index +- 1 (mod K); [] for a fixed point."""
     from explorer.analysis import manifolds
+    from explorer.analysis.section_map import SectionMap
 
     K = orb.period
     if K < 2:
