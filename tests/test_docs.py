@@ -78,7 +78,7 @@ def test_the_site_builds_with_warnings_as_errors_and_has_a_page_per_command(tmp_
                  "architecture"] + [f"commands/{c}" for c in COMMANDS]:
         assert (out / f"{page}.html").is_file(), page
     api = (out / "api.html").read_text()
-    for name in ("section_crossings", "indicators", "find_fixed_point", "read_store", "run_sweep"):
+    for name in ("crossings", "indicators", "find_fixed_point", "read_store", "run_sweep"):
         assert f'id="explorer.{name}"' in api, name   # autodoc really documented it
 
 

@@ -11,11 +11,10 @@ import pytest
 
 from explorer import model
 from explorer.analysis import fixedpoints as fpm
-from explorer.analysis import halfturn, lyapunov, sections
+from explorer.analysis import halfturn, lyapunov, section_map, sections
 from explorer.analysis import manifolds as mf
 from explorer.analysis import periodic as pm
 from explorer.analysis import rotation as rm
-from explorer.analysis import section_map
 from explorer.analysis.section_map import SectionMap
 
 PRM = model.FIGURE4.with_(mu=0.03)   # the Figure 4 scene at mu = 0.03 (docs/model.md R9)

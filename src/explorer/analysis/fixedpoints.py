@@ -24,7 +24,7 @@ import numpy as np
 from explorer import model
 from explorer.analysis.periodic import PeriodicBranch
 from explorer.analysis.section_map import deprecated, orbit_first, system_first
-from explorer.model import ParameterError, validation
+from explorer.model import ParameterError
 
 __all__ = ["Branch", "FixedPoint", "analytic_eigenvalues_solution_I", "continue_branch", "find_fixed_point", "follow",
            "manifold", "separatrices"]
@@ -103,8 +103,9 @@ def find_fixed_point(system, guess=(0.0, 0.0)) -> FixedPoint:
 
     Parameters
     ----------
-    system : SectionMap, or params, h
-        The section map (its energy, section angle, Taylor tolerance and return budget).
+    system : SectionMap
+        The section map, or ``params, h`` (docs/api.md, "The system argument") (its energy,
+        section angle, Taylor tolerance and return budget).
     guess : (float, float)
         Start of Newton's method, (p1, p2) inside the allowed region.
 

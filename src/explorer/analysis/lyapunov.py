@@ -202,7 +202,7 @@ def indicators(system, y0, *, tmax: float = DEFAULT_TIME, method: str | None = N
 
     Parameters
     ----------
-    system : SectionMap, params, h, or params
+    system : SectionMap or Params
         The section map, or the model parameters (docs/model.md, table "Notation") for full
         states (see above).
     y0 : array (N, 2) or (2,) with a map, (N, 5) or (5,) with params

@@ -440,9 +440,9 @@ def find_periodic_orbit(system, guess, period, *, max_iter=NEWTON_MAX_ITER, redu
 
     Parameters
     ----------
-    system : SectionMap, or params, h
-        The section map (docs/model.md R9): its energy, section angle, Taylor tolerance and the
-        time budget of one return.
+    system : SectionMap
+        The section map, or ``params, h`` (docs/api.md, "The system argument"; docs/model.md
+        R9): its energy, section angle, Taylor tolerance and the time budget of one return.
     guess : (float, float) or array (K, 2)
         Start of Newton's method: a point in the allowed region, or K points (multiple shooting).
     period : int
@@ -564,8 +564,8 @@ def _grid_seeds(prm, h, K, grid, phi0, tol, tmax, threads):
     inside = model.section_M2(prm, U, V, h, phi0) > 0
     R = np.full(U.shape, np.inf)
     if inside.any():
-        c = crossings(prm, h, np.column_stack([U[inside], V[inside]]), n_crossings=K, phi0=phi0, tol=max(tol, SECTIONS_TOL), tmax=tmax * K,
-                              threads=threads)
+        c = crossings(prm, h, np.column_stack([U[inside], V[inside]]), n_crossings=K, phi0=phi0,
+                      tol=max(tol, SECTIONS_TOL), tmax=tmax * K, threads=threads)
         ok = c.count >= K
         r = np.full(ok.shape, np.inf)
         r[ok] = np.hypot(c.data[ok, K - 1, 1] - U[inside][ok], c.data[ok, K - 1, 2] - V[inside][ok])
@@ -661,8 +661,9 @@ def search_periodic_orbits(system, period, *, grid=12, line=None, max_guesses=60
 
     Parameters
     ----------
-    system : SectionMap, or params, h
-        The section map (its energy, section angle and Taylor tolerance; the time budget of one
+    system : SectionMap
+        The section map, or ``params, h`` (docs/api.md, "The system argument") (its energy,
+        section angle and Taylor tolerance; the time budget of one
         return is ``tmax``).
     period : int
         K >= 1.
@@ -768,8 +769,9 @@ def continue_periodic(system, period, parameter, start, stop, step, guess, *, bi
 
     Parameters
     ----------
-    system : SectionMap, or params, h
-        The section map at which ``guess`` is an orbit (``parameter`` set to ``start``).
+    system : SectionMap
+        The section map, or ``params, h`` (docs/api.md, "The system argument") at which
+        ``guess`` is an orbit (``parameter`` set to ``start``).
     period : int
         K >= 1.
     parameter : str

@@ -180,8 +180,8 @@ class _Samples:
             from explorer.analysis.sections import crossings
 
             params, n_returns, phi0, tol, threads = self.args
-            c = crossings(params, self.Y0, n_crossings=n_returns, phi0=phi0 + 2.0 * math.pi * f, tol=tol, threads=threads,
-                          tmax=TMAX_PER_RETURN * n_returns)
+            c = crossings(params, self.Y0, n_crossings=n_returns, phi0=phi0 + 2.0 * math.pi * f, tol=tol,
+                          threads=threads, tmax=TMAX_PER_RETURN * n_returns)
             if c.count[0] < 1:
                 raise ParameterError(f"center {tuple(self.center)} must be a point whose orbit crosses the "
                                      f"section; its orbit stopped ({c.status_name(0)})")
@@ -289,8 +289,9 @@ def rotation_number(system, start, *, center=None, iterates=DEFAULT_ITERATES, co
 
     Parameters
     ----------
-    system : SectionMap, or params, h
-        The section map (its energy, section angle phi0 and Taylor tolerance, that of the orbits).
+    system : SectionMap
+        The section map, or ``params, h`` (docs/api.md, "The system argument") (its energy,
+        section angle phi0 and Taylor tolerance, that of the orbits).
     start : (float, float)
         (p1, p2) of the orbit on the section phi = ``phi0``.
     center : (float, float), FixedPoint or None

@@ -253,8 +253,8 @@ def task_block(spec: SweepSpec, i: int, state, threads: int | None = None) -> di
     pos, a, b = spec.chunks[i]
     panel = spec.panels[pos]
     t0 = time.perf_counter()
-    it = sections.iter_crossings(panel.P, panel.y0[a:b], n_crossings=spec.crossings, block=spec.blocks[pos], state=state,
-                                 method=spec.method, tol=spec.tol, dt=spec.dt, tmax=spec.tmax,
+    it = sections.iter_crossings(panel.P, panel.y0[a:b], n_crossings=spec.crossings, block=spec.blocks[pos],
+                                 state=state, method=spec.method, tol=spec.tol, dt=spec.dt, tmax=spec.tmax,
                                  max_steps=spec.max_steps, phi0=spec.phi0, direction=spec.direction, threads=threads)
     blk = next(it, None)
     it.close()
