@@ -24,6 +24,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass, field
+from typing import overload
 
 import numpy as np
 
@@ -96,11 +97,30 @@ def second_deviation_vector(params, y, direction=SECOND_DIRECTION):
     return w / np.linalg.norm(w, axis=1, keepdims=True)
 
 
+class _Column:
+    """An indicator of the registry as a declared attribute of :class:`Indicators`: its (N,)
+    array, read from ``values``."""
+
+    def __init__(self, name: str):
+        self.name = name
+
+    @overload
+    def __get__(self, obj: None, owner: type | None = None) -> _Column: ...
+
+    @overload
+    def __get__(self, obj: Indicators, owner: type | None = None) -> np.ndarray: ...
+
+    def __get__(self, obj, owner=None):
+        if obj is None:
+            return self      # the class attribute (documentation, introspection)
+        return obj.values[self.name]
+
+
 @dataclass(frozen=True)
 class Indicators:
     """Per-orbit chaos indicators at time ``time`` and their history (:func:`indicators`).
 
-    Each indicator of the registry (:data:`INDICATOR_NAMES`) is a property, ``r.megno``, an
+    Each indicator of the registry (:data:`INDICATOR_NAMES`) is a declared attribute, ``r.megno``, an
     (N,) array (NaN where it was not computed), read from ``values`` (a new indicator adds its
     property here: ``tests/analysis/test_lyapunov.py`` checks every name has one).
 
@@ -124,30 +144,16 @@ class Indicators:
     deviation: np.ndarray | None = None  # (N, 2, 5) final unit deviation vectors (NaN if not computed)
     which: tuple = field(default=DEFAULT_INDICATORS)
 
-    @property
-    def mlce(self) -> np.ndarray:
-        """Finite-time maximal Lyapunov exponent per orbit."""
-        return self.values["mlce"]
-
-    @property
-    def megno(self) -> np.ndarray:
-        """Mean MEGNO <Y> per orbit."""
-        return self.values["megno"]
-
-    @property
-    def fli(self) -> np.ndarray:
-        """Fast Lyapunov indicator per orbit."""
-        return self.values["fli"]
-
-    @property
-    def sali(self) -> np.ndarray:
-        """Smaller alignment index per orbit (NaN unless asked for)."""
-        return self.values["sali"]
-
-    @property
-    def gali2(self) -> np.ndarray:
-        """GALI_2 per orbit (NaN unless asked for)."""
-        return self.values["gali2"]
+    #: finite-time maximal Lyapunov exponent per orbit
+    mlce = _Column("mlce")
+    #: mean MEGNO <Y> per orbit
+    megno = _Column("megno")
+    #: fast Lyapunov indicator per orbit
+    fli = _Column("fli")
+    #: smaller alignment index per orbit (NaN unless asked for)
+    sali = _Column("sali")
+    #: GALI_2 per orbit (NaN unless asked for)
+    gali2 = _Column("gali2")
 
     def chaotic(self, threshold: float) -> np.ndarray:
         """Orbits classified chaotic: <Y> > ``threshold`` or stopped early as chaotic."""
