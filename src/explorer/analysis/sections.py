@@ -43,7 +43,8 @@ from explorer.kernels import STATUS_NAMES, Status
 from explorer.model import ParameterError, validation
 
 __all__ = ["ADAPTIVE_METHODS", "DEFAULT_BLOCK", "DEFAULT_DT", "DEFAULT_MAX_STEPS", "DEFAULT_TOL", "MAX_TOL",
-           "METHODS", "MIN_TOL", "SPLIT_METHODS", "CrossingBlock", "Crossings", "StreamState", "crossing_settings",
+           "METHODS", "MIN_TOL", "SPLIT_METHODS", "CrossingBlock", "Crossings", "Integration", "StreamState",
+           "crossing_settings",
            "crossings", "energy_warning", "human_bytes", "iter_crossings", "iter_section_crossings",
            "max_energy_error", "result_bytes", "section_crossings"]
 
@@ -118,6 +119,68 @@ def result_bytes(n_orbits: int, n_crossings: int) -> int:
 
 
 @dataclass(frozen=True)
+class Integration:
+    """The settings of a run of :func:`crossings`, validated once, here (ParameterError naming
+    the setting): the method and its tolerance ``tol`` or step ``dt`` (both checked, as
+    :meth:`explorer.integrate.methods.Method.prepare` does), the number of ``crossings``, the
+    time budget ``tmax`` (None: 100 * crossings, :attr:`effective_tmax`), ``max_steps``, the
+    section angle ``phi0`` and the crossing ``direction`` (+1, -1 or 0: both).
+
+    A scene's ``[integration]`` table is this object
+    (:class:`explorer.io.scene.specs.IntegrationSpec`, which names a refused setting by its
+    scene key), and so can be any other front end's settings.
+    """
+
+    method: str = "taylor"
+    tol: float = DEFAULT_TOL
+    dt: float = DEFAULT_DT
+    crossings: int = 1
+    tmax: float | None = None
+    max_steps: int = DEFAULT_MAX_STEPS
+    phi0: float = math.pi
+    direction: int = 1
+
+    def _label(self, name: str) -> str:
+        """How a refused setting is named in the message (a scene gives its key)."""
+        return name
+
+    def _refusal(self, exc: ParameterError) -> ParameterError:
+        """The error raised for a refused setting (a scene raises its SceneError)."""
+        return exc
+
+    def __post_init__(self):
+        label = self._label
+        try:
+            values = {
+                "method": validation.choice(label("method"), self.method, METHODS),
+                "tol": methods.check_setting("tol", self.tol, label("tol")),
+                "dt": methods.check_setting("dt", self.dt, label("dt")),
+                "crossings": validation.integer(label("crossings"), self.crossings, 1),
+                "tmax": None if self.tmax is None else validation.real(label("tmax"), self.tmax, 0.0,
+                                                                       lo_open=True),
+                "max_steps": validation.integer(label("max_steps"), self.max_steps, 1),
+                "phi0": validation.real(label("phi0"), self.phi0),
+                "direction": validation.integer(label("direction"), self.direction),
+            }
+            if values["direction"] not in (-1, 0, 1):
+                raise ParameterError(f"{label('direction')} must be +1, -1 or 0 (both), got {values['direction']}")
+        except ParameterError as exc:
+            raise self._refusal(exc) from None
+        for name, value in values.items():
+            object.__setattr__(self, name, value)
+
+    @property
+    def adaptive(self) -> bool:
+        """The method's accuracy is ``tol`` (else the step ``dt``)."""
+        return self.method in ADAPTIVE_METHODS
+
+    @property
+    def effective_tmax(self) -> float:
+        """The time budget: ``tmax``, or 100 * crossings when it is None."""
+        return 100.0 * self.crossings if self.tmax is None else self.tmax
+
+
+@dataclass(frozen=True)
 class _Run:
     """A validated request: what every block of it shares."""
 
@@ -136,17 +199,10 @@ class _Run:
 
 def _validated(params, y0, n_crossings, method, tol, dt, tmax, max_steps, phi0, direction, threads) -> _Run:
     P = validation.packed_params(params)
-    m = methods.get(method)
-    if not isinstance(n_crossings, numbers.Integral) or n_crossings < 1:
-        raise ParameterError(f"crossings must be an integer >= 1, got {n_crossings!r}")
-    if direction not in (-1, 0, 1):
-        raise ParameterError(f"direction must be +1, -1 or 0 (both), got {direction!r}")
-    phi0 = float(phi0)
-    if not math.isfinite(phi0):
-        raise ParameterError(f"phi0 must be finite, got {phi0!r}")
-    tmax = 100.0 * n_crossings if tmax is None else validation.real("tmax", tmax, 0.0, lo_open=True)
-    if not isinstance(max_steps, numbers.Integral) or max_steps < 1:
-        raise ParameterError(f"max_steps must be an integer >= 1, got {max_steps!r}")
+    s = Integration(method=method, tol=tol, dt=DEFAULT_DT if dt is None else dt, crossings=n_crossings, tmax=tmax,
+                    max_steps=max_steps, phi0=phi0, direction=direction)
+    m = methods.get(s.method)
+    phi0, tmax, direction = s.phi0, s.effective_tmax, s.direction
     Y0 = np.ascontiguousarray(np.atleast_2d(np.asarray(y0, dtype=np.float64)))
     if Y0.ndim != 2 or Y0.shape[1] != model.STATE_DIM:
         raise ParameterError(f"y0 must have shape (N, 5) = (p1, p2, M, g1, g2) per orbit, got {np.shape(y0)}")
@@ -160,11 +216,11 @@ def _validated(params, y0, n_crossings, method, tol, dt, tmax, max_steps, phi0, 
         raise ParameterError(f"y0 must have a finite energy; orbit {i} has H = {H0[i]!r}")
     if threads is not None:
         threads = validation.threads(threads, max_threads())
-    prep = m.prepare(tol=tol, dt=DEFAULT_DT if dt is None else dt)
+    prep = m.prepare(tol=s.tol, dt=s.dt)
     g1, g2 = model.section_gamma(phi0)
-    K = int(n_crossings)
-    settings = {"method": method, "phi0": phi0, "direction": int(direction), "tmax": tmax,
-                "max_steps": int(max_steps), "n_crossings": K}
+    K = s.crossings
+    settings = {"method": method, "phi0": phi0, "direction": direction, "tmax": tmax,
+                "max_steps": s.max_steps, "n_crossings": K}
     settings.update(prep.settings)
     return _Run(P, Y0, K, prep, g2, g1, int(direction), tmax, int(max_steps), threads, settings)
 

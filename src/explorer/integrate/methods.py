@@ -166,11 +166,16 @@ class Method:
         return self.loops.prepare(self, _validate(self.setting, values[self.setting]))
 
 
-def _validate(name: str, value) -> float:
-    """A tolerance in [MIN_TOL, MAX_TOL] or a step > 0 (ParameterError naming it otherwise)."""
+def check_setting(name: str, value, label: str | None = None) -> float:
+    """A tolerance in [MIN_TOL, MAX_TOL] (``name`` "tol") or a step > 0 ("dt"); ParameterError
+    naming it as ``label`` (default ``name``) otherwise."""
+    label = name if label is None else label
     if name == "tol":
-        return validation.real("tol", value, MIN_TOL, MAX_TOL)
-    return validation.real("dt", value, 0.0, lo_open=True)
+        return validation.real(label, value, MIN_TOL, MAX_TOL)
+    return validation.real(label, value, 0.0, lo_open=True)
+
+
+_validate = check_setting
 
 
 def unresolved(prep: Prepared, P, Y) -> np.ndarray:

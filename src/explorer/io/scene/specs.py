@@ -1,12 +1,11 @@
 """The validated tables of a scene: [seeds], [integration], [lyapunov], [figure]."""
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 from explorer.analysis import sections
 from explorer.analysis.lyapunov import EARLY_STOP_METHODS, methods_for
-from explorer.io.scene.checks import _bool, _choice, _fail, _int, _list, _real
+from explorer.io.scene.checks import SceneError, _bool, _choice, _fail, _int, _list, _real
 from explorer.io.scene.schema import (
     _FIGURE_KEYS,
     _INTEGRATION_KEYS,
@@ -34,6 +33,7 @@ from explorer.io.scene.schema import (
 )
 from explorer.kernels.indicator_table import BY_NAME as INDICATOR_BY_NAME
 from explorer.kernels.indicator_table import DEFAULT_NAMES as INDICATOR_DEFAULTS
+from explorer.model import ParameterError
 
 
 @dataclass(frozen=True)
@@ -104,44 +104,20 @@ class SeedSpec:
 
 
 @dataclass(frozen=True)
-class IntegrationSpec:
-    """Settings handed to :func:`explorer.analysis.sections.crossings`.
-
+class IntegrationSpec(sections.Integration):
+    """The scene's ``[integration]`` table: the one settings object of a run of crossings
+    (:class:`explorer.analysis.sections.Integration`, validated there), a refused setting
+    named by its scene key; ``crossings`` defaults to the scene's DEFAULT_CROSSINGS.
     ``tmax`` None means the default budget 100 * crossings (:attr:`effective_tmax`).
     """
 
-    method: str = "taylor"
-    tol: float = sections.DEFAULT_TOL
-    dt: float = sections.DEFAULT_DT
     crossings: int = DEFAULT_CROSSINGS
-    tmax: float | None = None
-    max_steps: int = sections.DEFAULT_MAX_STEPS
-    phi0: float = math.pi
-    direction: int = 1
 
-    def __post_init__(self):
-        values = {
-            "method": _choice("integration.method", self.method, sections.METHODS),
-            "tol": _real("integration.tol", self.tol, sections.MIN_TOL, sections.MAX_TOL),
-            "dt": _real("integration.dt", self.dt, 0.0, lo_open=True),
-            "crossings": _int("integration.crossings", self.crossings, 1),
-            "tmax": None if self.tmax is None else _real("integration.tmax", self.tmax, 0.0, lo_open=True),
-            "max_steps": _int("integration.max_steps", self.max_steps, 1),
-            "phi0": _real("integration.phi0", self.phi0),
-            "direction": _int("integration.direction", self.direction),
-        }
-        if values["direction"] not in (-1, 0, 1):
-            _fail("integration.direction", f"must be 1, -1 or 0 (both), got {values['direction']}")
-        for name, value in values.items():
-            object.__setattr__(self, name, value)
+    def _label(self, name: str) -> str:
+        return f"scene key 'integration.{name}'"
 
-    @property
-    def adaptive(self) -> bool:
-        return self.method in sections.ADAPTIVE_METHODS
-
-    @property
-    def effective_tmax(self) -> float:
-        return 100.0 * self.crossings if self.tmax is None else self.tmax
+    def _refusal(self, exc: ParameterError) -> ParameterError:
+        return SceneError(str(exc))
 
     def to_dict(self) -> dict:
         """All keys as in the [integration] table (tmax only when set)."""
