@@ -58,11 +58,11 @@ def test_continuation_in_mu_finds_the_stability_change_of_the_central_point():
     assert [b["type"] for b in br.bifurcations] == ["tangent"]
     mu_b = br.bifurcations[0]["value"]
     assert 2.5 < mu_b < 3.5
-    below = fpm.find_fixed_point(model.FIGURE4.with_(mu=mu_b - 1e-3), 2.0, br.points[12].point)
-    above = fpm.find_fixed_point(model.FIGURE4.with_(mu=mu_b + 1e-3), 2.0, br.points[12].point)
+    below = fpm.find_fixed_point(model.FIGURE4.with_(mu=mu_b - 1e-3), 2.0, br.orbits[12].point)
+    above = fpm.find_fixed_point(model.FIGURE4.with_(mu=mu_b + 1e-3), 2.0, br.orbits[12].point)
     assert not below.stable and above.stable
     assert below.trace > 2 > above.trace
-    assert all(abs(p.det - 1) < 1e-8 for p in br.points)
+    assert all(abs(p.det - 1) < 1e-8 for p in br.orbits)
 
 
 def _distance_to_polyline(points, curve):

@@ -113,8 +113,9 @@ def test_growth_stops_where_points_have_no_return(saddle):
 def test_a_non_hyperbolic_orbit_is_refused():
     c, s = math.cos(0.3), math.sin(0.3)    # an elliptic monodromy (rotation by 0.3)
     J = np.array([[c, -s], [s, c]])
-    fp = fpm.FixedPoint(np.zeros(2), J, np.linalg.eigvals(J), 2 * c, 1.0, 6.0, 0, 0.0,
-                        model.FIGURE4.with_(mu=MU), H)
+    fp = fpm.FixedPoint(points=np.zeros((1, 2)), period=1, jacobian=J, eigenvalues=np.linalg.eigvals(J), trace=2 * c,
+                        det=1.0, return_times=np.array([6.0]), residual=0.0, iterations=0, symmetric=False,
+                        map_jacobians=np.array([J]), params=model.FIGURE4.with_(mu=MU), h=H)
     with pytest.raises(model.ParameterError, match="not hyperbolic"):
         mf.saddle(fp)
 

@@ -42,8 +42,8 @@ def test_fixed_points_and_their_continuation_are_the_same_from_a_section_map(sma
         assert new.period_time == new.return_time
     new_b = fpm.continue_branch(smap, "mu", 0.03, 0.05, 0.01, (0.0, 0.0))
     old_b = fpm.continue_branch(PRM, H, "mu", 0.03, 0.05, 0.01, (0.0, 0.0), phi0=PHI0, tol=TOL)
-    assert len(new_b.points) == len(old_b.points) >= 2
-    for a, b in zip(new_b.points, old_b.points):
+    assert len(new_b.orbits) == len(old_b.orbits) >= 2
+    for a, b in zip(new_b.orbits, old_b.orbits):
         same(a.point, b.point)
 
 
@@ -218,3 +218,20 @@ def test_a_deprecation_warning_names_the_callers_line():
     with pytest.warns(DeprecationWarning) as rec:
         sections.section_crossings(PRM, [0.1], [0.0], H, 2)
     assert {r.filename for r in rec} == {__file__}
+
+
+def test_a_fixed_point_is_the_periodic_orbit_of_period_one_and_a_branch_of_them_a_periodic_branch(smap):
+    """One type each: find_fixed_point gives the PeriodicOrbit find_periodic_orbit finds with
+    K = 1 (every field equal), with the point's shorthands; a branch's members are its
+    ``orbits`` (``points`` warns)."""
+    fp = fpm.find_fixed_point(smap, (0.0, 0.0))
+    orb = pm.find_periodic_orbit(smap, (0.0, 0.0), 1)
+    assert isinstance(fp, pm.PeriodicOrbit) and fp.period == 1
+    same(fp.points, orb.points)
+    same(fp.map_jacobians, orb.map_jacobians)
+    assert fp.return_time == orb.return_times[0] and fp.point is not None
+    same(fp.point, orb.points[0])
+    br = fpm.continue_branch(smap, "mu", 0.03, 0.04, 0.01, fp.point)
+    assert isinstance(br, pm.PeriodicBranch) and all(isinstance(o, fpm.FixedPoint) for o in br.orbits)
+    with pytest.warns(DeprecationWarning, match="orbits"):
+        assert br.points == br.orbits

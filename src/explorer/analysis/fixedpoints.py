@@ -17,12 +17,12 @@ Algorithms for Chaotic Systems, 1989, Sec. 6; Krauskopf et al., Int. J. Bifurc. 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
 from explorer import model
-from explorer.analysis.periodic import PeriodicBranch
+from explorer.analysis.periodic import PeriodicBranch, PeriodicOrbit
 from explorer.analysis.section_map import deprecated, orbit_first, system_first
 from explorer.model import ParameterError
 
@@ -31,13 +31,15 @@ __all__ = ["Branch", "FixedPoint", "analytic_eigenvalues_solution_I", "continue_
 
 
 @dataclass(frozen=True)
-class FixedPoint:
-    """A fixed point of the section map P (phi = phi0, docs/model.md R9) and its linear stability.
+class FixedPoint(PeriodicOrbit):
+    """A fixed point of the section map P (phi = phi0, docs/model.md R9): the
+    :class:`~explorer.analysis.periodic.PeriodicOrbit` of period 1 (one type, every attribute
+    of an orbit), with the shorthands of a point.
 
     Attributes
     ----------
     point : ndarray (2,)
-        (p1, p2) with P(point) = point (Newton residual ``residual``).
+        (p1, p2) with P(point) = point (``points[0]``; Newton residual ``residual``).
     jacobian : ndarray (2, 2)
         DP at the point, from the tangent dynamics (variational equations of R3) projected on
         the section; area-preserving, so ``det`` = 1 up to the integration error.
@@ -45,39 +47,32 @@ class FixedPoint:
         Eigenvalues of ``jacobian``; ``trace`` their sum. ``|trace| < 2``: elliptic (``stable``),
         ``|trace| > 2``: hyperbolic.
     return_time : float
-        Return time of the periodic orbit through the point (``PeriodicOrbit.return_times[0]``;
+        Return time of the periodic orbit through the point (``return_times[0]``;
         ``period_time`` is its deprecated name).
     iterations : int
         Newton iterations taken.
     """
 
-    point: np.ndarray
-    jacobian: np.ndarray
-    eigenvalues: np.ndarray
-    trace: float
-    det: float
-    return_time: float
-    iterations: int
-    residual: float
-    params: model.Params = None
-    h: float = float("nan")
-    degenerate: bool = False
-
     @classmethod
-    def from_orbit(cls, orb) -> FixedPoint:
+    def from_orbit(cls, orb: PeriodicOrbit) -> FixedPoint:
         """The fixed point of a period-1 :class:`~explorer.analysis.periodic.PeriodicOrbit`."""
-        return cls(orb.points[0].copy(), orb.jacobian, orb.eigenvalues, orb.trace, orb.det,
-                   float(orb.return_times[0]), orb.iterations, orb.residual, orb.params, orb.h, orb.degenerate)
+        if orb.period != 1:
+            raise ParameterError(f"a fixed point is an orbit of period 1, got period {orb.period}")
+        return cls(**{f.name: getattr(orb, f.name) for f in fields(PeriodicOrbit)})
+
+    @property
+    def point(self) -> np.ndarray:
+        return self.points[0]
+
+    @property
+    def return_time(self) -> float:
+        return float(self.return_times[0])
 
     @property
     def period_time(self) -> float:
         """Deprecated name of :attr:`return_time`."""
         deprecated("FixedPoint.period_time", "FixedPoint.return_time")
         return self.return_time
-
-    @property
-    def stable(self) -> bool:
-        return abs(self.trace) < 2.0
 
     @property
     def kind(self) -> str:
@@ -130,8 +125,8 @@ class Branch(PeriodicBranch):
     :class:`~explorer.analysis.periodic.PeriodicBranch` of period 1 whose orbits are
     :class:`FixedPoint` s.
 
-    ``points[i]`` (= ``orbits[i]``) is the :class:`FixedPoint` at ``values[i]`` of ``parameter`` (a
-    model parameter or ``"h"``); ``bifurcations`` is the list of dicts of
+    ``orbits[i]`` is the :class:`FixedPoint` at ``values[i]`` of ``parameter`` (a model parameter
+    or ``"h"``; ``points`` is the deprecated name of ``orbits``); ``bifurcations`` is the list of dicts of
     :class:`explorer.analysis.periodic.PeriodicBranch` (``{"value", "type", "trace", "refined"}``,
     type "tangent", "period-doubling", "touch +2" or "touch -2"); ``stopped`` says why the
     branch ended before ``stop`` (None when it reached it).
@@ -139,6 +134,8 @@ class Branch(PeriodicBranch):
 
     @property
     def points(self) -> list:
+        """Deprecated name of ``orbits``."""
+        deprecated("Branch.points", "Branch.orbits")
         return self.orbits
 
 
@@ -257,4 +254,4 @@ def follow(system, parameter, start, stop, guess, *, max_step=0.25) -> FixedPoin
     br = continue_branch(system, parameter, start, stop, (stop - start) / n, guess)
     if br.stopped is not None:
         raise ParameterError(f"the fixed point could not be followed to {parameter} = {stop:.10g}: {br.stopped}")
-    return br.points[-1]
+    return br.orbits[-1]

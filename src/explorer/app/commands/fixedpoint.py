@@ -30,7 +30,7 @@ def run(args) -> int:
     if args.cont:
         name, start, stop, step = options.continuation(args.cont)
         br = fixedpoints.continue_branch(params, args.h, name, start, stop, step, guess, tol=args.tol)
-        rows = [dict(fp.as_dict(), **{name: float(v)}) for v, fp in zip(br.values, br.points)]
+        rows = [dict(fp.as_dict(), **{name: float(v)}) for v, fp in zip(br.values, br.orbits)]
         if args.json:
             print(json.dumps({"parameter": name, "branch": rows, "bifurcations": br.bifurcations,
                               "stopped": br.stopped}))

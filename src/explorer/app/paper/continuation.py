@@ -24,9 +24,9 @@ def continuation_figure(params=None, h=None, *, start=0.0, stop=8.0, step=0.1, d
     h = model.FIGURE4_H if h is None else h
     br = fixedpoints.continue_branch(prm, h, "mu", start, stop, step)
     mu = np.asarray(br.values, float)
-    p1 = np.array([fp.point[0] for fp in br.points])
-    p2 = np.array([fp.point[1] for fp in br.points])
-    tr = np.array([fp.trace for fp in br.points])
+    p1 = np.array([fp.point[0] for fp in br.orbits])
+    p2 = np.array([fp.point[1] for fp in br.orbits])
+    tr = np.array([fp.trace for fp in br.orbits])
     _ev, tr0 = fixedpoints.analytic_eigenvalues_solution_I(prm.with_(mu=0.0), h)
     stable = np.abs(tr) < 2
     # the continuation's one bifurcation detector: crossings of |trace| = 2 (vertical lines) and
