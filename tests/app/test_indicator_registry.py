@@ -39,7 +39,9 @@ def test_every_layer_reads_the_registry(name):
     assert name in sweep.INDICATOR_ARRAYS
     assert name in store.INDICATOR_DATASETS and name in store.OPTIONAL_DATASETS
     assert store_format._OPTIONAL_PER_ORBIT[name] == ((), np.dtype(ind.dtype))
-    assert chaos_raster.SCALES[name] == (ind.label, ind.log, ind.vmin, ind.vmax)
+    style = chaos_raster.STYLES[name]      # how it is drawn: presentation, in the app
+    assert chaos_raster.SCALES[name] == (style.label, style.log, style.vmin, style.vmax)
+    assert set(chaos_raster.STYLES) == set(NAMES)
     assert name in (DOCS / "commands" / "lyapunov.md").read_text()
 
 

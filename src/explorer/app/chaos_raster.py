@@ -6,6 +6,7 @@ redrawn without recomputing."""
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -22,11 +23,32 @@ from explorer.app.figures import (
     mathtext_label,
     panel_axes,
 )
-from explorer.kernels import indicator_table
 
-#: colour scale of each indicator of the registry (explorer.kernels.indicator_table):
-#: (label, log scale, vmin, vmax or None for the data's max)
-SCALES = {i.name: (i.label, i.log, i.vmin, i.vmax) for i in indicator_table.INDICATORS}
+
+@dataclass(frozen=True)
+class Style:
+    """How a chaos indicator is drawn: its colour bar's label (matplotlib mathtext), colour
+    scale (logarithmic?, lower end, upper end or None for the data's maximum) and colour map
+    (chaotic orbits dark: ``inferno_r`` when the indicator grows with chaos)."""
+
+    label: str
+    log: bool
+    vmin: float
+    vmax: float | None
+    cmap: str
+
+
+#: the style of each indicator of the registry (explorer.kernels.indicator_table, by name;
+#: tests/app/test_indicator_registry.py checks every name has one)
+STYLES = {
+    "mlce": Style(r"finite-time mLCE $\chi(T)$", True, 1e-4, None, "inferno_r"),
+    "megno": Style(r"mean MEGNO $\langle Y\rangle$", True, 0.5, None, "inferno_r"),
+    "fli": Style("FLI", False, 0.0, None, "inferno_r"),
+    "sali": Style("SALI", True, 1e-16, 2.0, "inferno"),
+    "gali2": Style(r"GALI$_2$", True, 1e-16, 1.0, "inferno"),
+}
+#: colour scale of each indicator: (label, log scale, vmin, vmax or None for the data's max)
+SCALES = {name: (s.label, s.log, s.vmin, s.vmax) for name, s in STYLES.items()}
 SEPARATRIX_COLOR = "#1f77b4"
 
 
@@ -49,7 +71,7 @@ def chaos_rasters(maps, *, indicator="megno", threshold=4.0, columns=None, dpi=2
         finite = [float(np.nanmax(m["values"])) for m in maps if np.isfinite(m["values"]).any()]
         vmax = max([vmin * 20 if log else 1.0] + finite)
     norm = LogNorm(vmin=vmin, vmax=vmax) if log else Normalize(vmin=vmin, vmax=vmax)
-    cmap = mpl.colormaps[indicator_table.BY_NAME[indicator].cmap].with_extremes(
+    cmap = mpl.colormaps[STYLES[indicator].cmap].with_extremes(
         bad=FORBIDDEN_COLOR)
     ncols = min(n, 3 if columns is None else int(columns))
     nrows = -(-n // ncols)

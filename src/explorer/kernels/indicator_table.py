@@ -11,8 +11,9 @@ The compiled accumulators (:mod:`explorer.kernels.tangent`) fill two rows per or
 from, and everything the layers above need: the dataset's dtype in the store
 (:mod:`explorer.io.store.format`), the arrays a sweep task returns
 (:mod:`explorer.analysis.sweep`), the names scenes accept (``[lyapunov] indicators``), the
-:class:`~explorer.analysis.lyapunov.Indicators` attributes, the colour scale and map of a chaos
-raster (:mod:`explorer.app.chaos_raster`) and the lines of ``explorer lyapunov``.
+:class:`~explorer.analysis.lyapunov.Indicators` attributes and the lines of ``explorer
+lyapunov``.  How an indicator is drawn (its LaTeX label, colour scale and map) is presentation,
+and lives with the drawing: ``STYLES`` of :mod:`explorer.app.chaos_raster`.
 
 A new indicator accumulated from the log-stretch of the first deviation vector: a column
 ``RES_*`` here (and ``N_RES``), its update in ``accumulate`` / ``result`` of
@@ -45,12 +46,7 @@ class Indicator:
     row: str             # RESULT (one deviation vector; also in the history rows) or EXTRA (two)
     column: int          # its column of that row (RES_* or EXT_*)
     title: str           # plain-text name (help lines)
-    label: str           # matplotlib mathtext label (colour bars)
     description: str     # one line: what it is and its reference
-    log: bool            # colour scale: logarithmic?
-    vmin: float          # colour scale: lower end
-    vmax: float | None   # colour scale: upper end (None: the data's maximum)
-    cmap: str            # colour map (chaotic orbits dark: inferno_r when the indicator grows with chaos)
     default: bool = True           # computed unless ``which`` says otherwise
     dtype: str = "float64"         # its dataset's dtype in the store
 
@@ -68,21 +64,18 @@ class Indicator:
 
 #: every chaos indicator, in the order of output lines and JSON keys
 INDICATORS = (
-    Indicator("mlce", RESULT, RES_MLCE, "finite-time mLCE", r"finite-time mLCE $\chi(T)$",
-              "finite-time maximal Lyapunov exponent ln(|w(T)| / |w(0)|) / T (Benettin et al. 1980)",
-              True, 1e-4, None, "inferno_r"),
-    Indicator("megno", RESULT, RES_MEGNO, "MEGNO", r"mean MEGNO $\langle Y\rangle$",
-              "mean MEGNO <Y>(T) (Cincotta & Simó 2000): -> 0 stable periodic, -> 2 quasi-periodic, grows if chaotic",
-              True, 0.5, None, "inferno_r"),
-    Indicator("fli", RESULT, RES_FLI, "FLI", "FLI",
-              "fast Lyapunov indicator max_{t <= T} ln |w(t)| (Froeschlé, Lega & Gonczi 1997)",
-              False, 0.0, None, "inferno_r"),
-    Indicator("sali", EXTRA, EXT_SALI, "SALI", "SALI",
+    Indicator("mlce", RESULT, RES_MLCE, "finite-time mLCE",
+              "finite-time maximal Lyapunov exponent ln(|w(T)| / |w(0)|) / T (Benettin et al. 1980)"),
+    Indicator("megno", RESULT, RES_MEGNO, "MEGNO",
+              "mean MEGNO <Y>(T) (Cincotta & Simó 2000): -> 0 stable periodic, -> 2 quasi-periodic, grows if chaotic"),
+    Indicator("fli", RESULT, RES_FLI, "FLI",
+              "fast Lyapunov indicator max_{t <= T} ln |w(t)| (Froeschlé, Lega & Gonczi 1997)"),
+    Indicator("sali", EXTRA, EXT_SALI, "SALI",
               "smaller alignment index min(|w1 + w2|, |w1 - w2|) of two unit deviation vectors (Skokos 2001)",
-              True, 1e-16, 2.0, "inferno", default=False),
-    Indicator("gali2", EXTRA, EXT_GALI2, "GALI2", r"GALI$_2$",
+              default=False),
+    Indicator("gali2", EXTRA, EXT_GALI2, "GALI2",
               "generalized alignment index |w1 ^ w2| of two unit deviation vectors (Skokos et al. 2007)",
-              True, 1e-16, 1.0, "inferno", default=False),
+              default=False),
 )
 #: the names, in table order
 NAMES = tuple(i.name for i in INDICATORS)
