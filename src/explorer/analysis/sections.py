@@ -45,7 +45,7 @@ from explorer.model import ParameterError, validation
 __all__ = ["ADAPTIVE_METHODS", "DEFAULT_BLOCK", "DEFAULT_DT", "DEFAULT_MAX_STEPS", "DEFAULT_TOL", "MAX_TOL",
            "METHODS", "MIN_TOL", "SPLIT_METHODS", "CrossingBlock", "Crossings", "Integration", "StreamState",
            "crossing_settings",
-           "crossings", "energy_warning", "human_bytes", "iter_crossings", "iter_section_crossings",
+           "crossings", "propagate", "energy_warning", "human_bytes", "iter_crossings", "iter_section_crossings",
            "max_energy_error", "result_bytes", "section_crossings"]
 
 DEFAULT_MAX_STEPS = 10**9
@@ -319,6 +319,30 @@ def crossings(system, y0, *, n_crossings: int, method: str = "taylor", tol: floa
     limits = np.full((N, 2), K, np.int64)
     _run_block(run, run.Y0, carry, limits, data, count, status, final, info)
     return Crossings(data, count, status, final, info, method, run.settings)
+
+
+#: crossings a run of :func:`propagate` may pass on its way to t (its row buffer; more stop it)
+PROPAGATE_CROSSINGS = 16
+
+
+@system_first(settings=("phi0", "tol"), defaults={"tol": DEFAULT_TOL}, flow=True)
+def propagate(system, y0, *, t: float, method: str = "taylor", tol: float = DEFAULT_TOL, dt: float | None = None,
+              threads: int | None = None) -> np.ndarray:
+    """The states of the orbits from ``y0`` at time ``t`` > 0 (N, 5): the run of :func:`crossings`
+    (the same steps) stopped by its time budget, whose last step ends exactly at t.  The system
+    and ``y0`` as for :func:`crossings` (a map and its section points, or ``params`` and full
+    states).  An orbit that crosses the section more than :data:`PROPAGATE_CROSSINGS` times on
+    the way, or stops for another reason, raises ParameterError: propagate it in shorter times."""
+    t = validation.real("t", t, 0.0, lo_open=True)
+    params, y0, tol, phi0 = _start(system, y0, tol, math.pi, 1)
+    res = crossings(params, y0, n_crossings=PROPAGATE_CROSSINGS, tmax=t, method=method, tol=tol, dt=dt,
+                    phi0=phi0, threads=threads)
+    short = np.flatnonzero((res.status != int(Status.TMAX)) | (res.info[:, 0] != t))
+    if short.size:
+        i = int(short[0])
+        raise ParameterError(f"propagate: orbit {i} stopped at t = {res.info[i, 0]!r} before {t!r} "
+                             f"({res.status_name(i)}); propagate it in shorter times")
+    return res.final.copy()
 
 
 @dataclass

@@ -11,17 +11,11 @@ from explorer.app.paper.chaplygin import check_chaplygin
 # ====================================================================== dense integration
 def advance(params, Y, tau, *, tol=DENSE_TOL):
     """States Y (N, 5) advanced by the time tau > 0 with the project's Taylor integrator
-    (:func:`explorer.analysis.sections.crossings` stopped by its time budget, which ends the last step
-    exactly at tau).  One thread: the call is short."""
+    (:func:`explorer.analysis.sections.propagate`).  One thread: the call is short."""
     from explorer.analysis import sections
-    from explorer.kernels import STATUS_TMAX
 
     Y = np.ascontiguousarray(np.atleast_2d(Y), dtype=float)
-    res = sections.crossings(params, Y, n_crossings=16, tmax=float(tau), tol=tol, threads=1)
-    if not (np.all(res.status == STATUS_TMAX) and np.all(res.info[:, 0] == float(tau))):
-        bad = int(np.flatnonzero((res.status != STATUS_TMAX) | (res.info[:, 0] != float(tau)))[0])
-        raise RuntimeError(f"dense integration stopped early ({res.status_name(bad)} at t = {res.info[bad, 0]!r})")
-    return res.final.copy()
+    return sections.propagate(params, Y, t=float(tau), tol=tol, threads=1)
 
 
 def dense_orbits(params, Y0, t_end, dt, *, tol=DENSE_TOL, stop=None):
