@@ -132,12 +132,7 @@ def _to_store(path, params, p1, p2, h, n_crossings, block, force, on_block, stop
         raise ParameterError(f"crossings: {n_crossings} crossings may need {sections.human_bytes(need)} on disk "
                              f"({sections.human_bytes(need / 2)} of rows, twice while the store is written); "
                              f"{sections.human_bytes(free)} free in {directory}")
-    initial = sections.StreamState.initial(params, y0, phi0=phi0)
-    try:
-        saved, resumed = blocks.resume(initial.as_arrays(), force=force)
-    except store.StoreError as exc:
-        raise ParameterError(str(exc)) from None
-    state = sections.StreamState.from_arrays(dict(saved, blocks=resumed))
+    state, resumed = blocks.resume_state(params, y0, phi0=phi0, force=force)
     t0 = time.perf_counter()
     st = state
     for b in sections.iter_crossings(params, y0, n_crossings=n_crossings, block=block, state=state, **kw):

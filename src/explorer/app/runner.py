@@ -730,14 +730,11 @@ class _PanelStreams:
         bs = stream.BlockStream(self.out, {"panel_hash": self.hashes[panel.index]}, index=panel.index)
         if self.force:
             bs.discard()
-        initial = sections.StreamState.initial(panel.P, panel.y0, phi0=self.phi0)
-        try:
-            saved, n = bs.resume(initial.as_arrays(), force=True)   # blocks of another setting: stale
-        except store.StoreError as exc:
-            raise ParameterError(str(exc)) from None
+        # blocks of another setting are stale: force
+        state, n = bs.resume_state(panel.P, panel.y0, phi0=self.phi0, force=True)
         self.streams[panel.index] = bs
         self.resumed[panel.index] = n
-        return sections.StreamState.from_arrays(dict(saved, blocks=n))
+        return state
 
     def block(self, panel, number, index, start, count, data, orbits, state):
         self.streams[panel.index].append(number, index, start, count, data, orbits, state)

@@ -119,6 +119,22 @@ class BlockStream:
         except StoreError:
             return False
 
+    def resume_state(self, params, y0, *, phi0: float, force: bool = False):
+        """The one resume step of a streamed run (``sweep`` and ``orbit --out``): the
+        :class:`~explorer.analysis.sections.StreamState` the run of ``y0`` continues from (its
+        state before the first block with every stored block applied, :meth:`resume`) and the
+        number of blocks stored.  A StoreError (blocks of another run, without ``force``) is
+        raised as the ParameterError the commands print."""
+        from explorer.analysis import sections
+        from explorer.model import ParameterError
+
+        initial = sections.StreamState.initial(params, y0, phi0=phi0)
+        try:
+            saved, n = self.resume(initial.as_arrays(), force=force)
+        except StoreError as exc:
+            raise ParameterError(str(exc)) from None
+        return sections.StreamState.from_arrays(dict(saved, blocks=n)), n
+
     def resume(self, initial: dict, *, force: bool = False) -> tuple[dict, int]:
         """Prepare the blocks directory and return (state arrays, blocks stored): ``initial`` (the
         run's state before its first block, per-orbit arrays) with the state of every stored
