@@ -143,12 +143,11 @@ def _to_store(path, params, p1, p2, h, n_crossings, block, force, on_block, stop
         if stop.requested:
             raise Interrupted(f"{st.blocks} blocks stored in {blocks.dir}; the same command continues from there")
     wall = time.perf_counter() - t0
-    attrs = {"index": 0, "label": "orbit", "parameter": "", "value": float("nan"), "h": float(h),
-             "params": json.dumps(params.as_dict(), sort_keys=True), "settings": json.dumps(settings, sort_keys=True),
-             "method": settings["method"], "tol": float(settings.get("tol", np.nan)),
-             "dt": float(settings.get("dt", np.nan)), "phi0": float(settings["phi0"]),
-             "direction": int(settings["direction"]), "crossings_requested": int(n_crossings),
-             "wall_time": wall, "block": int(block), "blocks": int(st.blocks), "resumed_blocks": int(resumed)}
+    attrs = store.PanelAttrs(0, "orbit", float(h), params.as_dict(), settings, hash=blocks.hash).attrs()
+    attrs.update(store.PanelAttrs.section_run(method=settings["method"], tol=settings.get("tol", np.nan),
+                                              dt=settings.get("dt", np.nan), phi0=settings["phi0"],
+                                              direction=settings["direction"], crossings=n_crossings, wall_time=wall),
+                 block=int(block), blocks=int(st.blocks), resumed_blocks=int(resumed))
     prov = json.dumps(store.provenance({"command": "orbit"}), sort_keys=True)
     file_attrs = {"scene_name": "orbit", "scene": json.dumps(blocks.identity, sort_keys=True), "provenance": prov}
     arrays = {"seeds": np.array([[p1, p2]], float), "y0": y0, "count": st.done, "status": st.status,

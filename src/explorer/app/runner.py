@@ -333,10 +333,10 @@ def _sweep(scene, out, stem, *, draw, jobs, backend, scheduler, force, progress,
 
     def panel_attrs(panel, i, complete):
         settings = scene.panel_settings(i)
-        return {"index": i, "label": panel.label, "parameter": scene.sweep_parameter or "",
-                "value": float(scene.sweep_values[i]) if scene.sweep_values else float("nan"), "h": panel.h,
-                "params": json.dumps(settings.get("params", {}), sort_keys=True),
-                "settings": json.dumps(settings, sort_keys=True), "hash": hashes[i] if complete else None}
+        return store.PanelAttrs(i, panel.label, panel.h, settings.get("params", {}), settings,
+                                scene.sweep_parameter or "",
+                                float(scene.sweep_values[i]) if scene.sweep_values else float("nan"),
+                                hashes[i] if complete else None).attrs()
 
     def indicators_part(panel, i, arrays):
         payload = {k: arrays[k] for k in store.INDICATOR_DATASETS if k in arrays}
@@ -364,10 +364,10 @@ def _sweep(scene, out, stem, *, draw, jobs, backend, scheduler, force, progress,
             kept, old_attrs = store.read_panel_datasets(out, i, store.INDICATOR_DATASETS)
             keep = dict(kept, **{k: old_attrs[k] for k in INDICATOR_ATTRS if k in old_attrs})
         attrs = panel_attrs(panel, i, "indicators" not in want[i] or bool(keep))
-        attrs.update({"sections_hash": want[i]["sections"], "method": integ.method, "tol": float(integ.tol),
-                      "dt": float(integ.dt), "phi0": float(integ.phi0), "direction": int(integ.direction),
-                      "crossings_requested": int(integ.crossings), "wall_time": arrays["wall_time"],
-                      "seeds_dropped": int(panel.dropped)})
+        attrs.update(store.PanelAttrs.section_run(method=integ.method, tol=integ.tol, dt=integ.dt, phi0=integ.phi0,
+                                                  direction=integ.direction, crossings=integ.crossings,
+                                                  wall_time=arrays["wall_time"]),
+                     sections_hash=want[i]["sections"], seeds_dropped=int(panel.dropped))
         attrs.update({k: v for k, v in keep.items() if k in INDICATOR_ATTRS})
         payload = {"seeds": panel.seeds, "y0": panel.y0, "count": arrays["count"],
                    "status": arrays["status"], "final": arrays["final"], "info": arrays["info"]}

@@ -79,6 +79,38 @@ def _utcnow() -> str:
     return _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
+@dataclass(frozen=True)
+class PanelAttrs:
+    """The attributes of a stored panel (docs/store.md), for every writer (a sweep's panels and
+    ``orbit --out``): which panel it is, its model parameters and settings as JSON text (the
+    text whose hash is the panel's ``hash``; None: computed from ``settings`` when the panel is
+    written).  :meth:`attrs` gives them as the store writes them; :meth:`section_run` the
+    attributes of a panel's section run."""
+
+    index: int
+    label: str
+    h: float
+    params: dict
+    settings: dict
+    parameter: str = ""
+    value: float = float("nan")
+    hash: str | None = None
+
+    def attrs(self) -> dict:
+        """The attributes as the store writes them."""
+        return {"index": int(self.index), "label": self.label, "parameter": self.parameter,
+                "value": float(self.value), "h": self.h, "params": json.dumps(self.params, sort_keys=True),
+                "settings": json.dumps(self.settings, sort_keys=True), "hash": self.hash}
+
+    @staticmethod
+    def section_run(*, method: str, tol: float, dt: float, phi0: float, direction: int, crossings: int,
+                    wall_time: float) -> dict:
+        """The attributes of a panel's crossings: the integration settings, the crossings asked
+        for (``crossings_requested``) and the run's wall time."""
+        return {"method": method, "tol": float(tol), "dt": float(dt), "phi0": float(phi0), "direction": int(direction),
+                "crossings_requested": int(crossings), "wall_time": wall_time}
+
+
 def _canonical_json(obj) -> str:
     return json.dumps(obj, sort_keys=True, separators=(",", ":"), default=_json_default)
 
