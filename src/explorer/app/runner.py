@@ -243,9 +243,8 @@ def format_report(r: SweepReport) -> str:
     return "\n".join(lines)
 
 
-#: the panel attributes of the indicators product (kept with it, replaced with it)
-INDICATOR_ATTRS = ("indicators_hash", "chaotic_fraction", "chaotic_fraction_error", "megno_threshold",
-                   "map_resolution", "map_p1", "map_p2", "indicators_wall_time")
+#: the panel attributes of the indicators product (the store's schema, explorer.io.store)
+INDICATOR_ATTRS = store.INDICATOR_ATTRS
 
 
 def _stored_products(scene, i, stored: dict, want: dict) -> set:

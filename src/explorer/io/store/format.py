@@ -79,6 +79,11 @@ def _utcnow() -> str:
     return _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
+#: the panel attributes of the indicators product (kept with its datasets, replaced with them)
+INDICATOR_ATTRS = ("indicators_hash", "chaotic_fraction", "chaotic_fraction_error", "megno_threshold",
+                   "map_resolution", "map_p1", "map_p2", "indicators_wall_time")
+
+
 @dataclass(frozen=True)
 class PanelAttrs:
     """The attributes of a stored panel (docs/store.md), for every writer (a sweep's panels and
