@@ -166,8 +166,12 @@ MAP_SETTINGS = ("phi0", "tol", "tmax")
 def is_params(system) -> bool:
     """True for model parameters (a :class:`~explorer.model.Params` or the packed vector): the
     system given as ``params, h``."""
-    return isinstance(system, model.Params) or (isinstance(system, (np.ndarray, list, tuple))
-                                                and np.shape(system) == (model.N_PARAMS,))
+    if isinstance(system, model.Params):
+        return True
+    try:
+        return isinstance(system, (np.ndarray, list, tuple)) and np.shape(system) == (model.N_PARAMS,)
+    except ValueError:   # a ragged sequence: not a vector
+        return False
 
 
 def as_system(name: str, system, args: tuple, kw: dict, settings: tuple = MAP_SETTINGS, defaults=None,
