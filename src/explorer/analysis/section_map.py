@@ -45,7 +45,7 @@ from explorer.model import ParameterError, validation
 from explorer.model.equations import rhs
 
 __all__ = ["DEFAULT_TOL", "MAP_SETTINGS", "MAX_STEPS", "RETURN_TMAX", "MapResult", "SectionMap", "as_system",
-           "deprecated", "is_params", "keyword_only", "keywords_moved", "orbit_first", "system_first"]
+           "deprecated", "is_params", "keywords_moved", "orbit_first", "system_first"]
 
 #: Taylor tolerance of the section map in Newton's method and its relatives (fixed points,
 #: periodic orbits, continuation, separatrices): the map is evaluated a few hundred times,
@@ -235,23 +235,6 @@ def keywords_moved(name: str, n_positional: int, moved: tuple, args: tuple, kw: 
     deprecated(f"{name}(..., {', '.join(names)}) given by position",
                f"{', '.join(k + '=' for k in names)} (keyword-only)")
     return args[:n_positional], dict(kw, **dict(zip(names, extra)))
-
-
-def keyword_only(*moved: str):
-    """Decorate ``fn`` whose ``moved`` parameters became keyword-only: a call that still gives
-    them by position works, with a DeprecationWarning (:func:`keywords_moved`)."""
-
-    def wrap(fn):
-        n = _positional_count(fn) + 1
-
-        @functools.wraps(fn)
-        def call(*args, **kw):
-            args, kw = keywords_moved(fn.__name__, n, moved, args, kw)
-            return fn(*args, **kw)
-
-        return call
-
-    return wrap
 
 
 def system_first(fn=None, *, settings: tuple = MAP_SETTINGS, moved: tuple = (), defaults=None, flow: bool = False):
