@@ -249,11 +249,14 @@ def test_dict_and_toml_round_trips_give_the_same_scene():
         assert dataclasses.replace(parse_scene(s.to_toml()), text=s.text) == s
 
 
-def test_section_kwargs_fit_section_crossings():
+def test_section_kwargs_fit_crossings():
     for method in ("taylor", "split4"):
         spec = scene.IntegrationSpec(method=method, crossings=7, direction=0)
         kw = spec.section_kwargs()
-        inspect.signature(sections.section_crossings).bind(model.FIGURE4, [0.0], [0.0], 2.0, spec.crossings, **kw)
+        # the (params, h) form: phi0 and tol are the map's settings, the rest crossings' own keywords
+        inspect.signature(sections.crossings).bind(model.FIGURE4, [(0.0, 0.0)], n_crossings=spec.crossings, **kw)
+        res = sections.crossings(model.FIGURE4, 2.0, [(0.0, 0.0)], n_crossings=2, **dict(kw, tmax=None))
+        assert res.settings["method"] == method and res.settings["direction"] == 0
         assert ("tol" in kw) == (method == "taylor") and ("dt" in kw) == (method != "taylor")
         assert kw["tmax"] == 700.0
 
