@@ -70,7 +70,11 @@ def pytest_sessionstart(session):
     """Compile the main kernels once, in this process, before any test starts subprocesses or
     joblib workers: they then load the kernels from numba's on-disk cache instead of compiling
     the same functions concurrently (concurrent writers of one cache entry are a known numba
-    hazard, and a cold cache is what CI starts with)."""
+    hazard, and a cold cache is what CI starts with).  Under pytest-xdist (README's `-n 2`) this
+    runs in the controller before it starts the workers (xdist starts them in its own
+    `pytest_sessionstart`, which runs after this one), and the workers load from the cache."""
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        return
     from explorer.analysis import fixedpoints, lyapunov, sections
 
     prm = model.FIGURE4.with_(mu=0.1)
