@@ -85,21 +85,9 @@ def pytest_sessionstart(session):
     fixedpoints.find_fixed_point(model.FIGURE4, 2.0)
 
 
-#: Test modules whose outcome rests on a search, a threshold or a classification (periodic
-#: orbits, fixed points and continuation, rotation numbers, early stop, chaotic fractions, the
-#: atlas, the figures' pixel checks): results there may move in the last bits between CPUs,
-#: so the suite asserts properties and tolerances, and .ci/run runs these modules a second
-#: time with Numba compiling for NUMBA_CPU_NAME=generic (docs/tests.md, "Across machines").
-CPU_DEPENDENT_MODULES = (
-    "analysis/test_periodic.py", "analysis/test_fixedpoints.py", "analysis/test_rotation.py",
-    "analysis/test_early_stop.py", "analysis/test_melnikov.py", "analysis/test_manifolds.py",
-    "app/test_atlas.py", "app/test_chaos_paper.py",
-    "app/test_chaos_raster.py", "app/test_cli_periodic.py", "app/test_figures.py", "app/test_paper.py",
-)
-
-
-def pytest_collection_modifyitems(config, items):
-    for item in items:
-        path = str(item.path).replace(os.sep, "/")
-        if any(path.endswith("tests/" + m) for m in CPU_DEPENDENT_MODULES):
-            item.add_marker(pytest.mark.cpu_dependent)
+#: The tests whose outcome rests on a search, a threshold or a classification (periodic orbits,
+#: fixed points and continuation, rotation numbers, early stop, chaotic fractions, the atlas,
+#: homoclinic points and turnstiles, the figures' classifications) are marked
+#: ``@pytest.mark.cpu_dependent`` one by one: results may move in the last bits between CPUs,
+#: so the suite asserts properties and tolerances, and README's test command runs these tests a
+#: second time with Numba compiling for NUMBA_CPU_NAME=generic (docs/tests.md, "Across machines").
