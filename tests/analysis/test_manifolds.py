@@ -91,6 +91,18 @@ def test_branches_coincide_with_the_exact_separatrix_at_mu_0():
             assert min(b.distance(xc) for b in branches[2:]) < 1e-9
 
 
+def test_a_longer_branch_continued_from_a_shorter_one_is_the_branch_grown_from_the_start(saddle, wu):
+    """turnstile doubles a branch's length by continuing it: the same points, bit for bit, as a
+    growth from the start, with only the new part computed; another setting or saddle starts over."""
+    fresh = mf.grow_branch(saddle, sign=1, arclength=6.0)
+    longer = mf.grow_branch(saddle, sign=1, arclength=6.0, resume=wu)
+    assert wu.target == 3.0 and longer.status == fresh.status == "arclength"
+    assert np.array_equal(longer.points.view(np.uint8), fresh.points.view(np.uint8))
+    assert np.array_equal(longer.sigma, fresh.sigma) and longer.evaluations == fresh.evaluations
+    other = mf.grow_branch(saddle, sign=1, arclength=6.0, start_tol=1e-8, resume=wu)   # another setting
+    assert np.array_equal(other.points, mf.grow_branch(saddle, sign=1, arclength=6.0, start_tol=1e-8).points)
+
+
 @pytest.mark.cpu_dependent
 def test_growth_stops_at_budgets_with_a_status(saddle):
     b = mf.grow_branch(saddle, arclength=50.0, max_points=60)

@@ -205,11 +205,13 @@ def turnstile(sd, *, arclength=6.0, sign=1, max_arclength=None, max_residual=1e-
 
     length = float(arclength)
     limit = length if max_arclength is None else float(max_arclength)
+    bu, grown = None, {}
     while True:
-        bu = grow_branch(sd, sign=sign, arclength=length, **kw)
+        # a doubled length continues the shorter branches (the same points as growing afresh)
+        bu = grow_branch(sd, sign=sign, arclength=length, resume=bu, **kw)
         best = None
         for s in (sign, -sign):
-            bs = grow_branch(sd, stable=True, sign=s, arclength=length, **kw)
+            bs = grown[s] = grow_branch(sd, stable=True, sign=s, arclength=length, resume=grown.get(s), **kw)
             hs = homoclinic_points(bu, bs, max_residual=max_residual)
             lb = lobes(bu, bs, points=hs)
             cut = torn(bu, bs, hs)
