@@ -70,7 +70,11 @@ def pytest_sessionstart(session):
     """Compile the main kernels once, in this process, before any test starts subprocesses or
     joblib workers: they then load the kernels from numba's on-disk cache instead of compiling
     the same functions concurrently (concurrent writers of one cache entry are a known numba
-    hazard, and a cold cache is what CI starts with)."""
+    hazard, and a cold cache is what CI starts with).  Under pytest-xdist (README's `-n 2`) this
+    runs in the controller before it starts the workers (xdist starts them in its own
+    `pytest_sessionstart`, which runs after this one), and the workers load from the cache."""
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        return
     from explorer.analysis import fixedpoints, lyapunov, sections
 
     prm = model.FIGURE4.with_(mu=0.1)
@@ -81,21 +85,31 @@ def pytest_sessionstart(session):
     fixedpoints.find_fixed_point(model.FIGURE4, 2.0)
 
 
-#: Test modules whose outcome rests on a search, a threshold or a classification (periodic
-#: orbits, fixed points and continuation, rotation numbers, early stop, chaotic fractions, the
-#: atlas, the figures' pixel checks): results there may move in the last bits between CPUs,
-#: so the suite asserts properties and tolerances, and .ci/run runs these modules a second
-#: time with Numba compiling for NUMBA_CPU_NAME=generic (docs/tests.md, "Across machines").
-CPU_DEPENDENT_MODULES = (
-    "analysis/test_periodic.py", "analysis/test_fixedpoints.py", "analysis/test_rotation.py",
-    "analysis/test_early_stop.py", "analysis/test_melnikov.py", "analysis/test_manifolds.py",
-    "app/test_atlas.py", "app/test_chaos_paper.py",
-    "app/test_chaos_raster.py", "app/test_cli_periodic.py", "app/test_figures.py", "app/test_paper.py",
+#: The tests whose outcome rests on a search, a threshold or a classification (periodic orbits,
+#: fixed points and continuation, rotation numbers, early stop, chaotic fractions, the atlas,
+#: homoclinic points and turnstiles, the figures' classifications) are marked
+#: ``@pytest.mark.cpu_dependent`` one by one: results may move in the last bits between CPUs,
+#: so the suite asserts properties and tolerances, and README's test command runs these tests a
+#: second time with Numba compiling for NUMBA_CPU_NAME=generic (docs/tests.md, "Across machines").
+
+
+#: README's test command runs the suite on two xdist workers with ``--dist loadscope``: a module's
+#: tests go to one worker (its module-scoped fixtures run once), and the modules are handed out
+#: in collection order as workers free up.  The longest modules come first, so that none of them
+#: starts last and leaves one core idle at the end (docs/tests.md, "Time"); the others keep
+#: their order.  Measured with README's command (``--durations``), slowest first.
+SLOW_MODULES_FIRST = (
+    "test_plain_install.py", "app/test_serve.py", "app/test_paper.py", "analysis/test_manifolds.py",
+    "analysis/test_periodic.py", "app/test_interrupt.py", "app/test_notebook.py", "test_docs.py", "test_lint.py",
 )
 
 
 def pytest_collection_modifyitems(config, items):
-    for item in items:
-        path = str(item.path).replace(os.sep, "/")
-        if any(path.endswith("tests/" + m) for m in CPU_DEPENDENT_MODULES):
-            item.add_marker(pytest.mark.cpu_dependent)
+    rank = {m: i for i, m in enumerate(SLOW_MODULES_FIRST)}
+    root = os.path.dirname(__file__)
+
+    def module_rank(item):
+        rel = os.path.relpath(str(item.path), root).replace(os.sep, "/")
+        return rank.get(rel, len(rank))
+
+    items.sort(key=module_rank)   # stable: the order within a module and among the rest is kept

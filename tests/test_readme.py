@@ -14,9 +14,11 @@ def test_ci_runs_exactly_the_readme_test_command():
     blocks = fenced_bash((ROOT / "README.md").read_text())
     main_job, tests = blocks[0].strip(), blocks[1].strip()
     assert main_job.endswith("python -m explorer sweep") and "pip install ." in main_job
-    assert 'pip install -q ".[test]"' in tests and "&& python -m pytest -q &&" in tests
+    # both cores (pytest-xdist), a module's tests on one worker (its module-scoped fixtures once)
+    assert 'pip install -q ".[test]"' in tests and "&& python -m pytest -q -n 2 --dist loadscope &&" in tests
     # the second run: the CPU-dependent tests again with Numba compiling for a generic CPU, own cache
-    assert tests.endswith("NUMBA_CPU_NAME=generic NUMBA_CACHE_DIR=.numba-generic python -m pytest -q -m cpu_dependent")
+    assert tests.endswith("NUMBA_CPU_NAME=generic NUMBA_CACHE_DIR=.numba-generic "
+                          "python -m pytest -q -n 2 --dist loadscope -m cpu_dependent")
     for cmd in (main_job, tests):
         assert cmd.startswith("python3 -m venv .venv && . .venv/bin/activate && ")
     ci_lines = [ln.strip() for ln in (ROOT / ".ci" / "run").read_text().splitlines()]

@@ -4,6 +4,7 @@ the `fraction` preset agrees with the full-T run within its binomial error, in l
 import time
 
 import numpy as np
+import pytest
 
 from explorer import model
 from explorer.analysis import lyapunov
@@ -12,6 +13,7 @@ from explorer.analysis.seeds import seed_points
 from explorer.io.scene import load_scene
 
 
+@pytest.mark.cpu_dependent
 def test_early_stop_keeps_the_chaotic_fraction_of_the_fraction_preset():
     scene = load_scene("fraction")
     ly = scene.lyapunov

@@ -23,6 +23,7 @@ def test_fixed_point_at_mu0_is_solution_I_with_the_analytic_eigenvalues():
     assert fp.return_time == pytest.approx(2 * math.pi * 2.0 / math.sqrt(8.0), rel=1e-12)
 
 
+@pytest.mark.cpu_dependent
 def test_solution_I_outside_the_band_is_elliptic_with_the_analytic_rotation():
     h = 5.0  # c = sqrt(20) > lam b / a2 = 4: stable
     fp = fpm.find_fixed_point(model.FIGURE4, h, (0.01, 0.0))
@@ -53,6 +54,7 @@ def test_backward_map_inverts_the_forward_map():
     np.testing.assert_allclose(back.jacobian @ fwd.jacobian, np.eye(2), atol=1e-8)
 
 
+@pytest.mark.cpu_dependent
 def test_continuation_in_mu_finds_the_stability_change_of_the_central_point():
     br = fpm.continue_branch(model.FIGURE4, 2.0, "mu", 0.0, 4.0, 0.25)
     assert [b["type"] for b in br.bifurcations] == ["tangent"]
@@ -102,6 +104,7 @@ def test_manifolds_are_invariant(stable):
         assert abs(d[0] * v[1] - d[1] * v[0]) < 1e-5, (d, v)
 
 
+@pytest.mark.cpu_dependent
 def test_elliptic_point_has_no_separatrices():
     fp = fpm.find_fixed_point(model.FIGURE4.with_(mu=4.0), 2.0, (-2.16, 0.0))
     assert fp.stable
@@ -109,6 +112,7 @@ def test_elliptic_point_has_no_separatrices():
         fpm.manifold(fp)
 
 
+@pytest.mark.cpu_dependent
 def test_fixedpoint_cli_json_and_continuation(capsys):
     assert cli.main(["fixedpoint", "--json"]) == 0
     doc = json.loads(capsys.readouterr()[0])
@@ -132,6 +136,7 @@ def test_fixedpoint_cli_bad_input(args, fragment, capsys):
     assert code == 2 and len(err.strip().splitlines()) == 1 and fragment in err
 
 
+@pytest.mark.cpu_dependent
 def test_central_point_changes_stability_where_an_independent_bisection_says():
     """mu* of Figure 4's central fixed point from scipy's DOP853 alone (tests/reference.py:
     fixed point on the symmetry line by the secant method, trace by central differences of the
@@ -153,6 +158,7 @@ def test_trace_of_solution_I_equals_its_closed_form():
     assert abs(fp.trace - reference.trace_solution_I(1.0, 0.5, 2.0, 1.0, 2.0)) < 1e-8
 
 
+@pytest.mark.cpu_dependent
 def test_newton_converges_from_a_guess_near_the_regions_edge():
     """mu = 0.03: a guess on p2 = 0 at 0.9 of the allowed region's half-axis from its centre.
     The fixed-point Newton of before (no residual test in its line search) stopped there with
@@ -167,6 +173,7 @@ def test_newton_converges_from_a_guess_near_the_regions_edge():
     np.testing.assert_allclose(reference.section_map_p(prm.as_array(), p1, 0.0, 2.0), (p1, 0.0), atol=1e-9)
 
 
+@pytest.mark.cpu_dependent
 def test_fixedpoint_and_periodic_continuations_report_the_same_touch_of_minus_two(capsys):
     """One continuation for both commands: over mu = 3.5 .. 12 the central point's trace touches
     -2 (near mu = 5.59) without crossing; `fixedpoint --continue` reported 'none in range' where

@@ -91,6 +91,19 @@ def test_branches_coincide_with_the_exact_separatrix_at_mu_0():
             assert min(b.distance(xc) for b in branches[2:]) < 1e-9
 
 
+def test_a_longer_branch_continued_from_a_shorter_one_is_the_branch_grown_from_the_start(saddle, wu):
+    """turnstile doubles a branch's length by continuing it: the same points, bit for bit, as a
+    growth from the start, with only the new part computed; another setting or saddle starts over."""
+    fresh = mf.grow_branch(saddle, sign=1, arclength=6.0)
+    longer = mf.grow_branch(saddle, sign=1, arclength=6.0, resume=wu)
+    assert wu.target == 3.0 and longer.status == fresh.status == "arclength"
+    assert np.array_equal(longer.points.view(np.uint8), fresh.points.view(np.uint8))
+    assert np.array_equal(longer.sigma, fresh.sigma) and longer.evaluations == fresh.evaluations
+    other = mf.grow_branch(saddle, sign=1, arclength=6.0, start_tol=1e-8, resume=wu)   # another setting
+    assert np.array_equal(other.points, mf.grow_branch(saddle, sign=1, arclength=6.0, start_tol=1e-8).points)
+
+
+@pytest.mark.cpu_dependent
 def test_growth_stops_at_budgets_with_a_status(saddle):
     b = mf.grow_branch(saddle, arclength=50.0, max_points=60)
     assert b.status == "max_points" and len(b.points) <= 61
@@ -100,6 +113,7 @@ def test_growth_stops_at_budgets_with_a_status(saddle):
         mf.grow_branch(saddle, arclength=-1.0)
 
 
+@pytest.mark.cpu_dependent
 def test_growth_stops_where_points_have_no_return(saddle):
     """A time budget just above the saddle's return time: the branch ends at the first point
     that needs longer ("edge"), and every point kept has its image."""
@@ -110,6 +124,7 @@ def test_growth_stops_where_points_have_no_return(saddle):
     assert np.all(np.isfinite(b.points))
 
 
+@pytest.mark.cpu_dependent
 def test_a_non_hyperbolic_orbit_is_refused():
     c, s = math.cos(0.3), math.sin(0.3)    # an elliptic monodromy (rotation by 0.3)
     J = np.array([[c, -s], [s, c]])
@@ -127,6 +142,7 @@ def tangle(saddle, wu):
     return bu, bs, mf.homoclinic_points(bu, bs)
 
 
+@pytest.mark.cpu_dependent
 def test_primary_homoclinic_point_is_on_the_symmetry_line(saddle, tangle):
     bu, bs, hs = tangle
     assert hs
@@ -168,6 +184,7 @@ def test_green_area_of_an_ellipse_converges_and_its_error_estimate_holds():
     assert abs(area - exact) <= err and err < errs[2]
 
 
+@pytest.mark.cpu_dependent
 def test_turnstile_lobes_have_equal_areas_and_match_melnikov(saddle, tangle):
     """Flux = lobe area; at first order 2 lam mu |J| (docs/manifolds.md): within O(mu^2)."""
     bu, bs, hs = tangle
@@ -182,6 +199,7 @@ def test_turnstile_lobes_have_equal_areas_and_match_melnikov(saddle, tangle):
     assert abs(a1.area) / predicted == pytest.approx(1.0, abs=10 * MU ** 2)
 
 
+@pytest.mark.cpu_dependent
 def test_flux_curve_ratio_to_melnikov_tends_to_one(tangle):
     """At mu = 1e-3 (continued from mu = 0) the ratio is closer to 1 than at mu = 0.03."""
     (row,) = tr.flux_curve(model.FIGURE4, H, [1e-3])
@@ -197,6 +215,7 @@ def test_flux_curve_ratio_to_melnikov_tends_to_one(tangle):
         assert 0.0 < angle < 2.0 * mu   # the splitting angle at the primary point on p2 = 0 is O(mu)
 
 
+@pytest.mark.cpu_dependent
 @pytest.mark.parametrize("mu", [0.05, 0.1])
 def test_mean_transit_time_is_accessible_area_over_flux(mu):
     """Meiss 1992: <min(T, N)> over the entry set = A(points of R leaving within N) / flux, within
@@ -221,6 +240,7 @@ def test_inside_follows_the_even_odd_rule():
     assert got.tolist() == [True, False, False, False, False]
 
 
+@pytest.mark.cpu_dependent
 @pytest.mark.parametrize("guess, maps", [((-1.8408, 0.0), 2), ((0.2909, 0.0), 4)])
 def test_manifolds_of_a_period_2_orbit_are_mapped_onto_each_other(guess, maps):
     """Period 2 (trace 9.96, and -6.80: negative multipliers, so F = P^4 keeps each branch):
@@ -254,6 +274,7 @@ def test_stable_manifold_without_the_reversor_is_invariant():
         assert np.linalg.norm(y - ws.at([ws.sigma[i] - L])[0]) < 1e-9
 
 
+@pytest.mark.cpu_dependent
 def test_a_flux_needs_both_lobes_with_equal_areas(tangle):
     """At mu = 0.5 the smallest-sum rule once paired the wrong intersections and flux_curve
     reported one 'lobe' of area 5.7 as the flux; now both lobes must be found and agree."""
@@ -287,6 +308,7 @@ def test_manifolds_of_a_point_are_those_of_the_orbit_newton_finds_from_it(saddle
         mf.manifolds((0.0, 0.0), prm)
 
 
+@pytest.mark.cpu_dependent
 def test_heteroclinic_points_lie_on_both_manifolds_and_go_from_one_saddle_to_the_other():
     """Period-2 saddle orbit x0 = (-1.84, 0), x1 = (-0.32, 0) (F = P^2): each point of W^u(x0) and
     W^s(x1) is within 1e-10 of both branches, its backward F-iterates approach x0 and its forward
@@ -314,6 +336,7 @@ def test_heteroclinic_points_lie_on_both_manifolds_and_go_from_one_saddle_to_the
         mf.heteroclinic_points(bu, mf.grow_branch(s0, stable=True, sign=1, arclength=0.5))
 
 
+@pytest.mark.cpu_dependent
 def test_flux_curve_stops_where_the_followed_point_is_not_a_saddle_and_says_why():
     """Followed from the left island's centre (elliptic): the first row says why there is no
     flux, the curve stops there (the next mu is not computed) and reports it as the destruction."""
@@ -324,6 +347,7 @@ def test_flux_curve_stops_where_the_followed_point_is_not_a_saddle_and_says_why(
     assert rows.trace_two is None                   # no saddle before it to interpolate from
 
 
+@pytest.mark.cpu_dependent
 def test_a_turnstile_torn_by_the_section_edge_is_reported_with_the_eye_flux():
     """mu = 0.5: W^u of the central saddle reaches the section's edge, where the first return
     jumps (the orbit grazes phi = phi0 with M = 0): the branch is cut there, no pair of lobes has
@@ -347,6 +371,7 @@ def test_a_turnstile_torn_by_the_section_edge_is_reported_with_the_eye_flux():
     assert min(ms) < 1e-6                                        # one side lands on the section's edge
 
 
+@pytest.mark.cpu_dependent
 @pytest.mark.slow
 def test_overlapping_lobes_are_not_the_flux_and_the_eye_flux_says_so():
     """mu = 0.3: the turnstile's arcs cross again between their ends, the two lobes still have
@@ -360,6 +385,7 @@ def test_overlapping_lobes_are_not_the_flux_and_the_eye_flux_says_so():
     assert abs(over["eye_flux"] - a["area"]) > 5 * over["eye_error"]
 
 
+@pytest.mark.cpu_dependent
 def test_flux_curve_stops_where_the_central_saddle_turns_elliptic_and_brackets_it():
     """Figure 4: the central saddle turns elliptic between mu = 2.9 (trace > 2) and 3 (trace < 2);
     the curve stops at 3 and interpolates the trace to 2 inside the bracket."""

@@ -42,6 +42,7 @@ def _elliptic(orbits):
     return sorted([o for o in orbits if o.kind == "elliptic"], key=lambda o: np.min(np.abs(o.points[:, 0])))
 
 
+@pytest.mark.cpu_dependent
 @pytest.mark.parametrize("K", [2, 3])
 def test_every_orbit_found_returns_to_itself_under_an_independent_scipy_integration(K, search2, search3):
     orbits = {2: search2, 3: search3}[K]
@@ -86,6 +87,7 @@ def test_period_one_equals_find_fixed_point():
         assert orb.return_times[0] == pytest.approx(fp.return_time, rel=1e-12)
 
 
+@pytest.mark.cpu_dependent
 def test_a_period_two_orbit_found_with_period_four_is_reported_with_its_minimal_period(search2):
     o2 = _elliptic(search2)[0]
     o4 = pm.find_periodic_orbit(PRM, H, o2.points[0], 4)
@@ -96,6 +98,7 @@ def test_a_period_two_orbit_found_with_period_four_is_reported_with_its_minimal_
     assert kept.period == 4 and kept.trace == pytest.approx(o2.trace ** 2 - 2, abs=1e-7)  # tr(M^2) = tr^2 - 2
 
 
+@pytest.mark.cpu_dependent
 def test_search_of_period_four_reports_no_orbit_of_period_one_or_two(search2):
     orbits = pm.search_periodic_orbits(PRM, H, 4, grid=8, line=48)
     assert orbits and all(o.period == 4 for o in orbits)
@@ -123,6 +126,7 @@ def test_trace_matches_finite_differences_of_the_map_iterated_K_times(search3):
     assert (0 < orb.residue < 1) == (orb.kind == "elliptic")
 
 
+@pytest.mark.cpu_dependent
 def test_search_returns_each_orbit_once(search2, search3):
     for orbits in (search2, search3):
         for i, a in enumerate(orbits):
@@ -162,6 +166,7 @@ def test_mirror_image_is_an_orbit_of_the_map_with_the_same_trace_under_scipy(sea
 RESONANT_CURVE_POINT = (-1.45876674, 0.95369106)
 
 
+@pytest.mark.cpu_dependent
 def test_an_orbit_on_a_resonant_curve_is_flagged_degenerate_and_is_not_isolated():
     """Newton from a guess moved 1e-4 along the null direction of (monodromy - I) stops at
     another point, again with P^3(x) = x to round-off: the orbit is not isolated, and its flag
@@ -177,12 +182,14 @@ def test_an_orbit_on_a_resonant_curve_is_flagged_degenerate_and_is_not_isolated(
         np.testing.assert_allclose(pts[-1], o.points[0], atol=1e-8)    # both really return
 
 
+@pytest.mark.cpu_dependent
 def test_isolated_orbits_are_not_degenerate(search2, search3):
     for o in search2 + search3:
         if not o.degenerate:
             assert o.uncertainty < 1e-3 * pm.ISOLATION_TOL    # far from the threshold: no CPU can flip it
 
 
+@pytest.mark.cpu_dependent
 def test_degenerate_orbits_come_after_the_isolated_ones(search3):
     flags = [o.degenerate for o in search3]
     assert flags == sorted(flags)
@@ -224,6 +231,7 @@ def test_isolated_orbit_count_per_period_is_the_same_on_any_cpu(K, search2, sear
     assert all(o.period == K and o.residual < 1e-11 for o in iso)
 
 
+@pytest.mark.cpu_dependent
 def test_two_guesses_on_different_points_of_one_orbit_give_one_orbit(search3):
     o = _elliptic(search3)[0]
     a = pm.find_periodic_orbit(PRM, H, o.points[0] + 1e-4, 3)
@@ -271,6 +279,7 @@ def test_section_map_is_reversed_by_G0():
     np.testing.assert_allclose(z, pm.reversor(x), atol=1e-10)
 
 
+@pytest.mark.cpu_dependent
 def test_symmetric_orbits_are_found_from_the_symmetry_lines_and_are_G0_invariant(search3):
     seeds = pm.symmetry_line_points(PRM, H, 3, 96)
     assert len(seeds) >= 4
@@ -287,6 +296,7 @@ def test_symmetric_orbits_are_found_from_the_symmetry_lines_and_are_G0_invariant
         assert o.symmetric and o.period in (1, 3)
 
 
+@pytest.mark.cpu_dependent
 def test_continuation_of_solution_I_in_h_finds_the_tangent_and_the_touch_of_minus_two():
     """docs/model.md R6 at mu = 0: p = 0 is solution I for every h; with c = sqrt(2 b h) it is hyperbolic
     for lam b/a1 < c < lam b/a2 (c = 4: h = 4, trace +2) and beyond it the trace is 2 cos(w),
@@ -304,6 +314,7 @@ def test_continuation_of_solution_I_in_h_finds_the_tangent_and_the_touch_of_minu
         assert o.trace == pytest.approx(tr, abs=1e-8)
 
 
+@pytest.mark.cpu_dependent
 def test_continuation_reports_period_doubling_where_the_trace_crosses_minus_two():
     """The elliptic fixed point near (-1.155, 0) of the mu = 0.03 scene, followed in mu: its trace
     falls through -2; the bisected value is checked with find_fixed_point on either side."""
@@ -318,6 +329,7 @@ def test_continuation_reports_period_doubling_where_the_trace_crosses_minus_two(
     assert abs(before.trace + 2) < 1e-4 and abs(after.trace + 2) < 1e-4
 
 
+@pytest.mark.cpu_dependent
 def test_a_sampled_minimum_near_minus_two_is_refined_into_a_touch():
     """The fixed point near (-1.98, 0) followed in mu: the sampled trace has a minimum -1.989 near
     mu = 0.13; golden-section search finds that it touches -2 (to round-off) without crossing."""

@@ -66,6 +66,7 @@ def test_rotation_number_at_mu0_equals_the_period_quadrature_of_R6(p1):
     assert r.turns == pytest.approx(expected, abs=1e-11)
 
 
+@pytest.mark.cpu_dependent
 @pytest.mark.parametrize("p1", [1.8, 1.9, 1.97])
 def test_rotation_number_is_lifted_through_the_flow_out_to_the_edge_of_the_region(p1):
     """Beyond p1 ~ 1.75 (the region's edge is p1 = 2) single returns turn by more than half a
@@ -82,6 +83,7 @@ def test_rotation_number_is_lifted_through_the_flow_out_to_the_edge_of_the_regio
     assert r.turns == pytest.approx(expected, abs=1e-6)
 
 
+@pytest.mark.cpu_dependent
 def test_orbits_whose_angle_turns_back_get_no_rotation_number():
     """At mu = 0 the orbit through (0, 1.3) has F = c < 2 (R6) and reaches M = 0: phi turns back,
     the section map is not a flow in phi, and the rotation is refused with status "turned"."""
@@ -93,11 +95,13 @@ PRM = model.FIGURE4.with_(mu=0.03)
 CENTER = (1.582201141, 0.0)   # elliptic fixed point of the Figure 4 scene at mu = 0.03
 
 
+@pytest.mark.cpu_dependent
 def test_rotation_center_defaults_to_the_fixed_point_found_from_the_start():
     r = rm.rotation_number(PRM, H, (1.58, 0.0), iterates=200)
     np.testing.assert_allclose(r.center, pm.find_periodic_orbit(PRM, H, CENTER, 1).points[0], atol=1e-12)
 
 
+@pytest.mark.cpu_dependent
 @pytest.mark.parametrize("K,guess", [(6, (1.013197, 0.0)), (8, (1.154444, 0.0))])
 def test_island_chain_plateau_equals_m_over_K_of_the_periodic_orbit_found(K, guess):
     orb = pm.find_periodic_orbit(PRM, H, guess, K)
@@ -109,6 +113,7 @@ def test_island_chain_plateau_equals_m_over_K_of_the_periodic_orbit_found(K, gue
     assert r.converged and r.value == pytest.approx(m_over_K, abs=1e-9)
 
 
+@pytest.mark.cpu_dependent
 def test_chaotic_orbit_does_not_converge_and_the_profile_has_the_plateaus():
     c = pm.find_periodic_orbit(PRM, H, CENTER, 1).points[0]
     r = rm.rotation_number(PRM, H, (0.5, 0.0), center=c, iterates=1000)

@@ -71,6 +71,7 @@ def test_atlas_cells_are_the_task_map_of_their_indicators():
     np.testing.assert_array_equal(megno, ind.megno)
 
 
+@pytest.mark.cpu_dependent
 def test_run_atlas_stores_fractions_only_and_draws_a_heat_map(tmp_path):
     path = tmp_path / "a.toml"
     path.write_text(SCENE)

@@ -36,6 +36,7 @@ dpi = 60
 """
 
 
+@pytest.mark.cpu_dependent
 def test_an_indicator_only_map_stores_no_crossings_and_is_drawn_as_a_raster(tmp_path):
     path = tmp_path / "map_test.toml"
     path.write_text(SCENE)

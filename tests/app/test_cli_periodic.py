@@ -29,6 +29,7 @@ def test_periodic_guess_json_has_the_documented_shape_and_the_library_numbers(ca
     assert o["trace"] == pytest.approx(ref.trace) and o["residue"] == pytest.approx((2 - ref.trace) / 4)
 
 
+@pytest.mark.cpu_dependent
 def test_periodic_search_reports_each_orbit_once_with_minimal_period(capsys):
     code, out, _ = run_cli(["periodic", "-K", "2", "--search", "--grid", "8", "--mu", "0.03", "--json"], capsys)
     assert code == 0
@@ -39,6 +40,7 @@ def test_periodic_search_reports_each_orbit_once_with_minimal_period(capsys):
     assert d.min() > 1e-6
 
 
+@pytest.mark.cpu_dependent
 def test_periodic_continuation_prints_the_stability_changes(capsys):
     code, out, _ = run_cli(["periodic", "-K", "1", "--guess", "0,0", "--continue", "h", "3", "5", "0.5", "--json"],
                            capsys)
@@ -49,6 +51,7 @@ def test_periodic_continuation_prints_the_stability_changes(capsys):
     assert len(d["branch"]) == 5 and d["stopped"] is None
 
 
+@pytest.mark.cpu_dependent
 def test_rotation_profile_json_from_the_elliptic_point(capsys):
     code, out, _ = run_cli(["rotation", "--from", "1.5822,0", "--to", "1.45,0", "--n", "3", "--iterates", "500",
                             "--mu", "0.03", "--json"], capsys)
@@ -86,6 +89,7 @@ def test_negative_values_parse_without_equals():
     assert a.start == "-1.2,0" and a.stop == "-0.5,-0.1"
 
 
+@pytest.mark.cpu_dependent
 def test_figures_only_periodic_writes_the_panel_with_orbits_of_each_period(tmp_path, capsys):
     code = cli.main(["figures", "--only", "periodic", "--quick", "--quiet", "--out-dir", str(tmp_path)])
     out = capsys.readouterr().out

@@ -87,6 +87,7 @@ def test_figure2_critical_levels_and_curves_in_every_interval():
 
 
 # ---------------------------------------------------------------- Figure 3
+@pytest.mark.cpu_dependent
 def test_figure3_draws_the_branches_dashed_where_unstable():
     d = paper.figure3_figure(check=False)
     ax = d.fig.axes[0]
@@ -132,6 +133,7 @@ def test_admissible_region_is_the_minimum_of_H_on_F_equal_c():
             assert paper.branch_h("III", c, PRM) > want
 
 
+@pytest.mark.cpu_dependent
 def test_figure3_check_agrees_with_the_drawn_classification_in_every_region():
     recs = paper.figure3_check()
     assert all(r["agree"] is not False for r in recs)

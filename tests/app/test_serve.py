@@ -1127,10 +1127,14 @@ def test_a_value_changed_during_the_megno_raster_restarts_it_for_the_new_value()
         page.inputs["mu"].value = "0.5"                                        # changed while it runs
         new = page._raster_generation
         assert page.settings.params.mu == 0.5
-        _poll_until(page, lambda: page.raster_source.data["n"] == [raster.RESOLUTIONS[0]]
-                    and page.raster_source.data["complete"] == [True] and shown[-1][0] == new)
+        # the new value's first complete raster, as the page was handed it: the state the wait is
+        # for, read from the record of what was shown (the page may show a finer one by then)
+        def complete_at_first_resolution():
+            return [im for g, im in shown if g == new and im.complete and im.n == raster.RESOLUTIONS[0]]
+
+        _poll_until(page, lambda: bool(complete_at_first_resolution()))
         ref = next(im for im in raster.rasters(page.settings, page.window) if im.complete)
-        np.testing.assert_array_equal(page.raster_source.data["image"][0], ref.values)   # the new value's raster
+        np.testing.assert_array_equal(complete_at_first_resolution()[0].values, ref.values)  # the new value's
         after = [im for g, im in shown if g == new]
         assert after and all(im.window == page.window for im in after)
         page.layer.value = False

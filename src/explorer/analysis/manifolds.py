@@ -230,6 +230,9 @@ class ManifoldBranch:
     seconds: float
     curve: _Curve = field(repr=False, compare=False, default=None)
     max_gap: float = DEFAULT_MAX_GAP
+    #: where the growth stopped, before the cut at ``target``, with its settings: what
+    #: ``grow_branch(..., resume=branch)`` continues from (None when it cannot be continued)
+    grown: tuple | None = field(repr=False, compare=False, default=None)
 
     @property
     def tears(self) -> np.ndarray:
@@ -305,9 +308,17 @@ def _bad_intervals(P, max_gap, max_angle, max_gap_angle, lo):
 
 def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DEFAULT_START_TOL,
                 max_gap=DEFAULT_MAX_GAP, max_angle=DEFAULT_MAX_ANGLE, max_gap_angle=DEFAULT_MAX_GAP_ANGLE,
-                max_points=20000, max_time=None, integrate_backward=False) -> ManifoldBranch:
+                max_points=20000, max_time=None, integrate_backward=False,
+                resume: ManifoldBranch | None = None) -> ManifoldBranch:
     """One branch of W^u (W^s with ``stable``) of the saddle ``sd`` grown to ``arclength``
-    (module docstring: parametrisation, start distance, refinement, budgets)."""
+    (module docstring: parametrisation, start distance, refinement, budgets).
+
+    ``resume``: a branch of the same saddle, kind, sign and settings grown to a shorter
+    arclength; the growth continues from where that one stopped (before its cut at its target),
+    so the branch is the one a growth from the start gives, point for point, at the cost of
+    the new part only (:func:`explorer.analysis.transport.turnstile` doubles the length this
+    way).  A branch that cannot be continued (another saddle or setting, or stopped by a budget
+    or the region's edge) is grown from the start."""
     if sign not in (1, -1):
         raise ParameterError(f"sign must be +1 or -1, got {sign!r}")
     arclength = validation.real("arclength", arclength, 0.0, lo_open=True)
@@ -319,24 +330,33 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
     if max_time is not None:
         max_time = validation.real("max_time", max_time, 0.0)
     t0 = time.perf_counter()
-    cv = _Curve(sd, stable, sign, start_tol, integrate_backward)
-    sig = cv.sigma0 + cv.L * np.arange(INITIAL_POINTS + 1) / INITIAL_POINTS
-    pts = cv.points(sig)
-    evals = len(sig)
-    edge = None                  # smallest sigma known to fail
+    settings = (stable, sign, start_tol, max_gap, max_angle, max_gap_angle, max_points, integrate_backward)
     status = None
 
     def cut(sig, pts, bad_sigma):
         keep = sig < bad_sigma
         return sig[keep], pts[keep]
 
-    if not np.all(np.isfinite(pts)):
-        edge = float(sig[np.flatnonzero(~np.isfinite(pts[:, 0]))[0]])
-        sig, pts = cut(sig, pts, edge)
-    lo = 0                       # refinement starts here (earlier intervals are final)
+    if (resume is not None and resume.grown is not None and resume.curve is not None and resume.curve.sd is sd
+            and resume.grown[0] == settings and arclength >= resume.target):
+        _, sig, pts, lo, edge, evals = resume.grown
+        cv = resume.curve
+        refined = True           # the state after a refinement: go on at the arclength check
+    else:
+        cv = _Curve(sd, stable, sign, start_tol, integrate_backward)
+        sig = cv.sigma0 + cv.L * np.arange(INITIAL_POINTS + 1) / INITIAL_POINTS
+        pts = cv.points(sig)
+        evals = len(sig)
+        edge = None              # smallest sigma known to fail
+        if not np.all(np.isfinite(pts)):
+            edge = float(sig[np.flatnonzero(~np.isfinite(pts[:, 0]))[0]])
+            sig, pts = cut(sig, pts, edge)
+        lo = 0                   # refinement starts here (earlier intervals are final)
+        refined = False
+    grown = None
     while True:
         # (i) refine
-        while True:
+        while not refined:
             P = np.vstack([sd.point, pts])
             bad = _bad_intervals(P, max_gap, max_angle, max_gap_angle, lo + 1) - 1  # interval i of pts
             bad = bad[np.diff(sig)[bad] > MIN_DSIGMA]
@@ -361,8 +381,11 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
             if max_time is not None and time.perf_counter() - t0 > max_time:
                 status = STATUS_MAX_TIME
                 break
+        refined = False
         s = _arc(np.vstack([sd.point, pts]))
         if s[-1] >= arclength:
+            if status is None:   # a longer growth goes on from here (``resume``)
+                grown = (settings, sig, pts, lo, edge, evals)
             k = int(np.searchsorted(s, arclength))   # first point at or beyond the target
             sig, pts = sig[:k], pts[:k]
             status = STATUS_ARCLENGTH
@@ -389,7 +412,7 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
     P = np.vstack([sd.point, pts])
     return ManifoldBranch("stable" if stable else "unstable", sign, P, np.concatenate([[-np.inf], sig]),
                           float(_arc(P)[-1]), float(arclength), status, cv.s0, float(start_tol), cv.curvature,
-                          evals, time.perf_counter() - t0, cv, float(max_gap))
+                          evals, time.perf_counter() - t0, cv, float(max_gap), grown)
 
 
 @orbit_first
@@ -474,36 +497,53 @@ def _segment_crossings(A, B):
     return out
 
 
-def _refine(bu: ManifoldBranch, bs: ManifoldBranch, su, ss):
-    """Newton on x_u(su) - x_s(ss) = 0 with tangents by central differences in sigma; stops at
-    a residual below INTERSECTION_TOL or when two steps in a row fail to halve it (the map's
-    accuracy reached), and returns the best point evaluated."""
+def _refine(bu: ManifoldBranch, bs: ManifoldBranch, su, ss) -> list:
+    """Newton on x_u(su) - x_s(ss) = 0 from each start (su[k], ss[k]), with tangents by central
+    differences in sigma; a start stops at a residual below INTERSECTION_TOL or when two steps
+    in a row fail to halve it (the map's accuracy reached), and gives the best point evaluated
+    (None when none was finite).  The starts iterate in lockstep, each iteration's points of all
+    of them computed in one batch per branch: every point is computed alone in the lanes (the
+    same bits in any batch), so each start's iterates are those of a Newton run on its own."""
     hd = DIFF_STEP
-    best = None
-    stall = 0
+    su = [float(x) for x in su]
+    ss = [float(x) for x in ss]
+    n = len(su)
+    best: list = [None] * n
+    stall = [0] * n
+    alive = list(range(n))
     for _ in range(NEWTON_ITER):
-        U = bu.at([su, su - hd, su + hd])
-        S = bs.at([ss, ss - hd, ss + hd])
-        if not (np.all(np.isfinite(U)) and np.all(np.isfinite(S))):
+        if not alive:
             break
-        tu, ts = (U[2] - U[1]) / (2 * hd), (S[2] - S[1]) / (2 * hd)
-        F = U[0] - S[0]
-        nf = float(np.linalg.norm(F))
-        stall = stall + 1 if best is not None and nf > 0.5 * best[0] else 0
-        if best is None or nf < best[0]:
-            best = (nf, su, ss, U[0].copy(), tu, ts)
-        if nf < INTERSECTION_TOL or stall >= 2:
-            break
-        try:
-            d = np.linalg.solve(np.column_stack([tu, -ts]), -F)
-        except np.linalg.LinAlgError:
-            break
-        su, ss = su + d[0], ss + d[1]
-    if best is None:
-        return None
-    nf, su, ss, x, tu, ts = best
-    c = abs(tu[0] * ts[1] - tu[1] * ts[0]) / (np.linalg.norm(tu) * np.linalg.norm(ts))
-    return Homoclinic(x, float(su), float(ss), math.asin(min(1.0, c)), nf, bu.sign, bs.sign)
+        U = bu.at([x for k in alive for x in (su[k], su[k] - hd, su[k] + hd)]).reshape(len(alive), 3, 2)
+        S = bs.at([x for k in alive for x in (ss[k], ss[k] - hd, ss[k] + hd)]).reshape(len(alive), 3, 2)
+        still = []
+        for k, Uk, Sk in zip(alive, U, S):
+            if not (np.all(np.isfinite(Uk)) and np.all(np.isfinite(Sk))):
+                continue
+            tu, ts = (Uk[2] - Uk[1]) / (2 * hd), (Sk[2] - Sk[1]) / (2 * hd)
+            F = Uk[0] - Sk[0]
+            nf = float(np.linalg.norm(F))
+            stall[k] = stall[k] + 1 if best[k] is not None and nf > 0.5 * best[k][0] else 0
+            if best[k] is None or nf < best[k][0]:
+                best[k] = (nf, su[k], ss[k], Uk[0].copy(), tu, ts)
+            if nf < INTERSECTION_TOL or stall[k] >= 2:
+                continue
+            try:
+                d = np.linalg.solve(np.column_stack([tu, -ts]), -F)
+            except np.linalg.LinAlgError:
+                continue
+            su[k], ss[k] = su[k] + d[0], ss[k] + d[1]
+            still.append(k)
+        alive = still
+    out: list = []
+    for b in best:
+        if b is None:
+            out.append(None)
+            continue
+        nf, s_u, s_s, x, tu, ts = b
+        c = abs(tu[0] * ts[1] - tu[1] * ts[0]) / (np.linalg.norm(tu) * np.linalg.norm(ts))
+        out.append(Homoclinic(x, float(s_u), float(s_s), math.asin(min(1.0, c)), nf, bu.sign, bs.sign))
+    return out
 
 
 def homoclinic_points(unstable: ManifoldBranch, stable: ManifoldBranch, *, max_residual=1e-10) -> list:
@@ -525,6 +565,7 @@ def _intersections(unstable: ManifoldBranch, stable: ManifoldBranch, max_residua
     balance = balance and cu is not None and cs is not None and cu.sd.maps == cs.sd.maps
     found: list[Homoclinic] = []
     # skip the first segment of each (the saddle point itself is a trivial intersection)
+    starts = []
     for i, j, ta, tb in _segment_crossings(unstable.points[1:], stable.points[1:]):
         su = unstable.sigma[i + 1] + ta * (unstable.sigma[i + 2] - unstable.sigma[i + 1])
         ss = stable.sigma[j + 1] + tb * (stable.sigma[j + 2] - stable.sigma[j + 1])
@@ -532,7 +573,9 @@ def _intersections(unstable: ManifoldBranch, stable: ManifoldBranch, max_residua
             k = round(((ss - cs.sigma0) / cs.L - (su - cu.sigma0) / cu.L) / 2.0)
             k = min(max(k, math.ceil((ss - stable.sigma[-1]) / cs.L)), math.floor((unstable.sigma[-1] - su) / cu.L))
             su, ss = su + k * cu.L, ss - k * cs.L
-        hp = _refine(unstable, stable, su, ss)
+        starts.append((su, ss))
+    refined = _refine(unstable, stable, [a for a, _ in starts], [b for _, b in starts]) if starts else []
+    for hp in refined:
         if hp is None or hp.residual > max_residual or not math.isfinite(hp.angle):
             continue
         if min(np.linalg.norm(hp.point - unstable.points[0]), np.linalg.norm(hp.point - stable.points[0])) < \

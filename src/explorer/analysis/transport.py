@@ -206,11 +206,13 @@ def turnstile(sd, *, arclength=6.0, sign=1, max_arclength=None, max_residual=1e-
 
     length = float(arclength)
     limit = length if max_arclength is None else float(max_arclength)
+    bu, grown = None, {}
     while True:
-        bu = grow_branch(sd, sign=sign, arclength=length)
+        # a doubled length continues the shorter branches (the same points as growing afresh)
+        bu = grow_branch(sd, sign=sign, arclength=length, resume=bu)
         best = None
         for s in (sign, -sign):
-            bs = grow_branch(sd, stable=True, sign=s, arclength=length)
+            bs = grown[s] = grow_branch(sd, stable=True, sign=s, arclength=length, resume=grown.get(s))
             hs = homoclinic_points(bu, bs, max_residual=max_residual)
             lb = lobes(bu, bs, points=hs)
             cut = torn(bu, bs, hs)
@@ -414,20 +416,14 @@ def flux_curve(system, mus=None, *, guess=(0.0, 0.0), arclength=6.0, max_arcleng
 
 
 # ------------------------------------------------------------------ transit times
-def inside(polygon, X, chunk=4096) -> np.ndarray:
+def inside(polygon, X) -> np.ndarray:
     """Whether each point of X (m, 2) lies inside the closed ``polygon`` (k, 2) (even-odd rule:
-    a ray along +p1 crosses the boundary an odd number of times); NaN points are outside."""
-    P = np.asarray(polygon, float)
-    a, b = P, np.roll(P, -1, axis=0)
-    X = np.asarray(X, float).reshape(-1, 2)
-    out = np.zeros(len(X), bool)
-    for i in range(0, len(X), chunk):
-        x, y = X[i:i + chunk, 0:1], X[i:i + chunk, 1:2]
-        straddle = (a[None, :, 1] > y) != (b[None, :, 1] > y)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            xc = a[None, :, 0] + (y - a[None, :, 1]) * (b[None, :, 0] - a[None, :, 0]) / (b[None, :, 1] - a[None, :, 1])
-        out[i:i + chunk] = (np.count_nonzero(straddle & (x < xc), axis=1) % 2) == 1
-    return out
+    a ray along +p1 crosses the boundary an odd number of times); NaN points are outside.
+    Compiled (:func:`explorer.kernels.geometry.inside`): the transit times test millions of
+    points against zones of thousands of vertices."""
+    from explorer.kernels import geometry
+
+    return geometry.inside(polygon, X)
 
 
 def resonance_zone(unstable: ManifoldBranch, stable: ManifoldBranch, point: Homoclinic) -> np.ndarray:

@@ -1,0 +1,156 @@
+"""README's first command installs the package with no extras (`pip install .`): everything it
+offers must run from that install alone, not only from the test environment, which has the test
+extras (scipy, pytest, ...) besides.  One virtual environment with `pip install <repo>`, then,
+in it: every command's documented example (the `example:` line of each `--help`), `figures
+--quick` for every figure, and `serve` answering an HTTP request.  Each exits 0 with no
+traceback.
+
+This is the suite's most expensive test (a fresh install compiles every kernel it runs): about
+3-4 minutes of one core, run on its own xdist worker beside the rest (docs/tests.md, "Time").
+"""
+from __future__ import annotations
+
+import os
+import shlex
+import signal
+import subprocess
+import sys
+import time
+import urllib.request
+import venv
+from pathlib import Path
+
+import pytest
+
+from explorer.app.commands import registry
+
+ROOT = Path(__file__).resolve().parents[1]
+#: what a command may take at most in the plain install, compiling its kernels included (a
+#: bound on a hang, not a speed goal: the 2-core CI machine runs the suite beside it)
+COMMAND_TIMEOUT = 900.0
+#: commands that run until Ctrl-C: started, asked for their page over HTTP, then interrupted
+SERVERS = ("serve", "explore")
+#: extra arguments for an example where its own would reach outside the sandbox: explore's
+#: example opens the user's web browser
+EXTRA = {"explore": ["--no-browser"]}
+
+
+def _plain_venv(where: Path) -> Path:
+    """A virtual environment with `pip install ROOT` and nothing else; its python."""
+    venv.EnvBuilder(with_pip=True, clear=True).create(where)
+    py = where / "bin" / "python"
+    r = subprocess.run([str(py), "-m", "pip", "install", "-q", "--disable-pip-version-check", str(ROOT)],
+                       capture_output=True, text=True, timeout=COMMAND_TIMEOUT)
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    return py
+
+
+@pytest.fixture(scope="module")
+def plain(tmp_path_factory):
+    """(python of the plain install, a working directory, the environment to run commands in)."""
+    py = _plain_venv(tmp_path_factory.mktemp("plain-venv"))
+    cwd = tmp_path_factory.mktemp("plain-cwd")
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTEST", "COV_"))}
+    env.pop("PYTHONPATH", None)
+    env.update(NUMBA_CACHE_DIR=str(cwd / ".numba-cache"), PYTHONUNBUFFERED="1", MPLBACKEND="Agg")
+    return py, cwd, env
+
+
+def _run(plain, argv):
+    py, cwd, env = plain
+    r = subprocess.run([str(py), *argv], cwd=cwd, env=env, capture_output=True, text=True,
+                       timeout=COMMAND_TIMEOUT, stdin=subprocess.DEVNULL)
+    out = r.stdout + r.stderr
+    assert r.returncode == 0 and "Traceback" not in out, f"{shlex.join(argv)} -> {r.returncode}\n{out[-4000:]}"
+    return r
+
+
+def test_the_plain_install_has_no_test_extra_and_its_explorer_comes_from_it(plain):
+    py, _cwd, _env = plain
+    r = _run(plain, ["-c", "import explorer, importlib.util as u; print(explorer.__file__); "
+                           "print(u.find_spec('pytest') is None, u.find_spec('playwright') is None)"])
+    where, no_pytest, no_playwright = r.stdout.split()
+    assert Path(where).is_relative_to(py.parent.parent) and no_pytest == "True" and no_playwright == "True"
+
+
+def _example_argv(name):
+    argv = shlex.split(registry.example(name))
+    assert argv[:3] == ["python", "-m", "explorer"], argv
+    return ["-m", "explorer", *argv[3:], *EXTRA.get(name, [])]
+
+
+@pytest.mark.parametrize("name", [n for n in registry.COMMANDS if n not in SERVERS])
+def test_every_commands_example_runs_from_the_plain_install(plain, name):
+    _run(plain, _example_argv(name))
+
+
+def test_figures_quick_draws_every_figure_from_the_plain_install(plain):
+    from explorer.app.paper.registry import FIGURES
+
+    r = _run(plain, ["-m", "explorer", "figures", "--quick", "--quiet", "--out-dir", "all-figures",
+                     "--benchmark", str(ROOT / "benchmarks" / "results_w4.json")])
+    drawn = {line.split(":")[0] for line in r.stdout.splitlines() if ".png" in line}
+    assert drawn == set(FIGURES), r.stdout
+    for name in FIGURES:
+        assert (plain[1] / "all-figures" / f"{name}.png").stat().st_size > 10_000, name
+
+
+@pytest.mark.parametrize("name", SERVERS)
+def test_the_page_is_served_from_the_plain_install(plain, name):
+    py, cwd, env = plain
+    proc = subprocess.Popen([str(py), *_example_argv(name), "--port", "0"], cwd=cwd, env=env, text=True,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL)
+    try:
+        url = proc.stdout.readline().strip()
+        assert url.startswith("http://"), (url, proc.stderr.read()[-3000:] if proc.poll() is not None else "")
+        t0, body = time.monotonic(), ""
+        while time.monotonic() - t0 < COMMAND_TIMEOUT and not body:   # until it answers
+            try:
+                with urllib.request.urlopen(url, timeout=30) as r:
+                    body = r.read().decode("utf-8", "replace")
+            except OSError:
+                assert proc.poll() is None, proc.stderr.read()[-3000:]
+                time.sleep(0.2)
+        assert "bokeh" in body.lower()
+    finally:
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(60)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+    err = proc.stderr.read()
+    assert proc.returncode in (0, 130) and "Traceback" not in err, err[-3000:]
+
+
+def test_the_package_declares_every_module_it_imports_as_a_dependency():
+    """No module of src/explorer imports a distribution that pyproject.toml does not declare as a
+    run-time dependency (the cause of `melnikov --splitting` failing in a plain install): every
+    top-level import is the standard library, explorer itself, or a declared distribution's."""
+    import ast
+    import importlib.metadata as md
+
+    try:
+        import tomllib
+    except ImportError:  # python 3.10
+        import tomli as tomllib
+
+    declared = {d.split(";")[0].split("[")[0].split("<")[0].split(">")[0].split("=")[0].strip().lower()
+                for d in tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["dependencies"]}
+    provides = md.packages_distributions()
+    missing = set()
+    for path in (ROOT / "src" / "explorer").rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import)
+                     else [node.module] if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module
+                     else [])
+            for name in names:
+                top = name.split(".")[0]
+                if top in sys.stdlib_module_names or top in ("explorer", "__future__"):
+                    continue
+                dists = {d.lower() for d in provides.get(top, [top])}
+                if not dists & declared:
+                    missing.add((path.relative_to(ROOT).as_posix(), top))
+    # llvmlite is numba's own (pinned by it); dask is the optional extra `explorer[dask]` of
+    # `sweep --backend dask`, imported only there, with a ParameterError naming the extra
+    assert {t for _p, t in missing} <= {"llvmlite", "dask"}, sorted(missing)
