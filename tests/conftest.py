@@ -80,8 +80,8 @@ def pytest_sessionstart(session):
     prm = model.FIGURE4.with_(mu=0.1)
     y0 = model.section_state(prm, [0.2], [0.1], 2.0)
     for method in ("taylor", "dop853", "split4"):
-        sections.crossings(prm, y0, 1, method=method, tol=1e-10, dt=0.05)
-        lyapunov.indicators(prm, y0, 1.0, method=method, tol=1e-10, dt=0.05)
+        sections.crossings(prm, y0, n_crossings=1, method=method, tol=1e-10, dt=0.05)
+        lyapunov.indicators(prm, y0, tmax=1.0, method=method, tol=1e-10, dt=0.05)
     fixedpoints.find_fixed_point(model.FIGURE4, 2.0)
 
 
