@@ -49,6 +49,8 @@ _EXPORTS = {
     "chaotic_fraction": "explorer.analysis.lyapunov",
     # the section map and its fixed points
     "SectionMap": "explorer.analysis.section_map",
+    "StandardMap": "explorer.analysis.maps",
+    "AreaPreservingMap": "explorer.analysis.maps",
     "FixedPoint": "explorer.analysis.fixedpoints",
     "Branch": "explorer.analysis.fixedpoints",
     "find_fixed_point": "explorer.analysis.fixedpoints",

@@ -51,6 +51,12 @@ from explorer.analysis.periodic import (
 from explorer.analysis.periodic import (
     search_periodic_orbits as search_periodic_orbits,
 )
+from explorer.analysis.maps import (
+    AreaPreservingMap as AreaPreservingMap,
+)
+from explorer.analysis.maps import (
+    StandardMap as StandardMap,
+)
 from explorer.analysis.rotation import (
     rotation_number as rotation_number,
 )
