@@ -51,6 +51,8 @@ _EXPORTS = {
     "SectionMap": "explorer.analysis.section_map",
     "StandardMap": "explorer.analysis.maps",
     "AreaPreservingMap": "explorer.analysis.maps",
+    "greene": "explorer.analysis.greene",
+    "GreeneResult": "explorer.analysis.greene",
     "FixedPoint": "explorer.analysis.fixedpoints",
     "Branch": "explorer.analysis.fixedpoints",
     "find_fixed_point": "explorer.analysis.fixedpoints",

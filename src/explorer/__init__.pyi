@@ -51,6 +51,12 @@ from explorer.analysis.periodic import (
 from explorer.analysis.periodic import (
     search_periodic_orbits as search_periodic_orbits,
 )
+from explorer.analysis.greene import (
+    GreeneResult as GreeneResult,
+)
+from explorer.analysis.greene import (
+    greene as greene,
+)
 from explorer.analysis.maps import (
     AreaPreservingMap as AreaPreservingMap,
 )
