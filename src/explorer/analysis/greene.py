@@ -67,6 +67,11 @@ GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 CRITICAL_RESIDUE = 0.2500888
 #: the largest period of the convergents followed by default (the Fibonacci chain to 987)
 DEFAULT_QMAX = 987
+#: the largest period accepted: beyond ~1600 the half orbit's round-off (double precision) reaches the
+#: residues' differences (docs/greene.md, "Accuracy")
+MAX_QMAX = 4181
+#: the largest period followed by default on the section map (each orbit is Q integrations of the flow)
+SECTION_QMAX = 55
 #: the smallest period used: Q = 1 has no half-orbit equation of this form
 MIN_Q = 2
 #: Newton on the half-orbit: converged when the step in p is below this (relative to max(1, |p|))
@@ -102,7 +107,7 @@ def convergents(nu, qmax: int = DEFAULT_QMAX, qmin: int = MIN_Q) -> list:
     """The convergents P/Q of the continued fraction of ``nu`` with ``qmin`` <= Q <= ``qmax``, in order
     (for the golden mean: 1/2, 2/3, 3/5, 5/8, ..., the ratios of Fibonacci numbers)."""
     x = rotation_value(nu)
-    qmax = validation.integer("qmax", qmax, 2)
+    qmax = validation.integer("qmax", qmax, 2, MAX_QMAX)
     h0, h1, k0, k1 = 0, 1, 1, 0          # P_{-2}, P_{-1}, Q_{-2}, Q_{-1}
     out = []
     frac = x
@@ -271,7 +276,8 @@ def _aitken(x0, x1, x2) -> float:
     return x2 - d2 * d2 / (d2 - d1)
 
 
-def greene(system, nu="golden", *, qmax=DEFAULT_QMAX, residue=CRITICAL_RESIDUE, line=math.pi) -> GreeneResult:
+def greene(system, nu="golden", *, qmax=None, residue=CRITICAL_RESIDUE, line=math.pi, around=None,
+           param=None) -> GreeneResult:
     """The critical parameter at which the invariant curve of rotation number ``nu`` breaks (Greene's
     residue criterion; module docstring).
 
@@ -281,13 +287,15 @@ def greene(system, nu="golden", *, qmax=DEFAULT_QMAX, residue=CRITICAL_RESIDUE, 
         The map; its parameter value is the first guess of the critical one.
     nu : float or str
         The rotation number in (0, 1), or "golden" ((sqrt 5 - 1)/2) or "golden2".
-    qmax : int
+    qmax : int or None
         The largest period of the convergents (default 987; at least three convergents with
-        Q >= 2 are needed).
+        Q >= 2 are needed; at most :data:`MAX_QMAX`).
     residue : float
         The residue that defines k_n (default MacKay's R* = 0.2500888, :data:`CRITICAL_RESIDUE`).
     line : float
         The symmetry line theta = ``line`` of the orbits (default pi: positive residues).
+    around, param : None
+        For a section map (the elliptic fixed point's guess, the parameter): not implemented yet.
 
     Returns
     -------
@@ -297,7 +305,11 @@ def greene(system, nu="golden", *, qmax=DEFAULT_QMAX, residue=CRITICAL_RESIDUE, 
         [0, 2 pi), p) on the symmetry line and its ``residue``.
     """
     if not isinstance(system, StandardMap):
-        raise ParameterError(f"greene: implemented for the standard map (ex.StandardMap); got {type(system).__name__}")
+        raise ParameterError(f"greene: implemented for the standard map (ex.StandardMap) only so far; got "
+                             f"{type(system).__name__} (docs/greene.md, 'What is left')")
+    if around is not None or param not in (None, system.parameter):
+        raise ParameterError("greene: around= and param= belong to a section map; the standard map's parameter is k")
+    qmax = DEFAULT_QMAX if qmax is None else qmax
     x = rotation_value(nu)
     target = validation.real("residue", residue, 0.0, 1.0, lo_open=True, hi_open=True)
     conv = convergents(x, qmax)
