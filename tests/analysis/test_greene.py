@@ -83,9 +83,9 @@ def test_half_orbit_orbits_are_periodic_orbits_of_the_map_with_points_on_both_sy
         assert abs(x[0] - math.pi - 2 * math.pi * P) < 1e-9 and abs(x[1] - orb.points[0, 1]) < 1e-9
         n = Q // 2 if Q % 2 == 0 else (Q + 1) // 2
         zn = orb.points[n] if n < Q else x
-        if Q % 2 == 0:      # z_n on Fix(R0): theta = pi (P + 1)
+        if Q % 2 == 0:      # z_n on Fix(I0): theta = pi (P + 1)
             assert abs(zn[0] - math.pi * (P + 1)) < 1e-9
-        else:               # z_n on Fix(R1): 2 theta - p = 2 pi (P + 1)
+        else:               # z_n on Fix(I1): 2 theta - p = 2 pi (P + 1)
             assert abs(2 * zn[0] - zn[1] - 2 * math.pi * (P + 1)) < 1e-9
         assert abs(np.linalg.det(orb.monodromy) - 1.0) < 1e-9 * max(1.0, np.abs(orb.monodromy).max() ** 2)
 

@@ -1,8 +1,8 @@
 """Chirikov's standard map (explorer.analysis.maps.StandardMap) and the map protocol.
 
 Independent checks: the map (S1) written out in numpy, the Jacobian against central finite
-differences, det DT = 1 (area preservation), T^-1 T = id, the reversors R0, R1 are
-involutions with R T R = T^-1 and T = R1 R0, and both the standard map and the section map
+differences, det DT = 1 (area preservation), T^-1 T = id, the reversors I0, I1 are
+involutions with R T R = T^-1 and T = I1 I0, and both the standard map and the section map
 implement the protocol."""
 import math
 
@@ -59,18 +59,18 @@ def test_the_reversors_are_involutions_that_reverse_the_map(k):
         for x in POINTS:
             np.testing.assert_allclose(R(T(R(x))), m.inverse(x), atol=1e-12)     # R T R = T^-1
     for x in POINTS:
-        np.testing.assert_allclose(m.r1(m.r0(x)), T(x), atol=1e-13)               # T = R1 R0
+        np.testing.assert_allclose(m.i1(m.i0(x)), T(x), atol=1e-13)               # T = I1 I0
 
 
 @pytest.mark.parametrize("k", (0.4, 1.3))
 def test_the_symmetry_lines_are_the_reversors_fixed_sets(k):
     m = StandardMap(k)
     p = np.linspace(-3, 3, 13)
-    for theta0 in m.R0_LINES:
+    for theta0 in m.I0_LINES:
         line = np.column_stack([np.full_like(p, theta0), p])
-        assert np.allclose(StandardMap.wrap(m.r0(line)), StandardMap.wrap(line), atol=1e-13)
+        assert np.allclose(StandardMap.wrap(m.i0(line)), StandardMap.wrap(line), atol=1e-13)
     line1 = np.column_stack([p / 2, p])
-    np.testing.assert_allclose(m.r1(line1), line1, atol=1e-14)
+    np.testing.assert_allclose(m.i1(line1), line1, atol=1e-14)
 
 
 def test_fixed_points_elliptic_at_pi_hyperbolic_at_zero():

@@ -20,10 +20,10 @@ and q up to 233 gives k_c to 9 digits.
 
 The half-orbit (symmetry-line) method
 -------------------------------------
-With a reversible map T = R1 R0 (R0, R1 involutions, :class:`explorer.analysis.maps.StandardMap`),
-a point z on Fix(R0) whose n-th image lies on Fix(R0) again starts an orbit of period 2n
-(T^n z = R0 T^n z = T^-n R0 z = T^-n z), and one whose n-th image lies on Fix(R1) an orbit of
-period 2n - 1 (R1 = T R0 gives R0 T^n z = T^(n-1) z, so T^(2n-1) z = z); on the lifted
+With a reversible map T = I1 I0 (I0, I1 involutions, :class:`explorer.analysis.maps.StandardMap`),
+a point z on Fix(I0) whose n-th image lies on Fix(I0) again starts an orbit of period 2n
+(T^n z = I0 T^n z = T^-n I0 z = T^-n z), and one whose n-th image lies on Fix(I1) an orbit of
+period 2n - 1 (I1 = T I0 gives I0 T^n z = T^(n-1) z, so T^(2n-1) z = z); on the lifted
 cylinder the lines are theta = pi m and 2 theta - p = 2 pi m, and the difference of the m's
 is the orbit's P.  So a symmetric orbit of type P/Q is one unknown (p on the line theta =
 theta0) and one equation, after n = Q/2 (Q even: theta_n = theta0 + pi P) or n = (Q + 1)/2
@@ -173,12 +173,12 @@ def _shoot(k, P, Q, theta0, p0):
 
 
 def _half_orbit_monodromy(k, Q, theta0, p0) -> np.ndarray:
-    """The monodromy of the symmetric orbit from z_0 = (theta0, p0) on Fix(R0), from the half-orbit
+    """The monodromy of the symmetric orbit from z_0 = (theta0, p0) on Fix(I0), from the half-orbit
     Jacobian A = DT^n(z_0) alone (module docstring).  Differentiating T^m R = R T^-m (R a reversor)
     at the orbit's second symmetric point gives the second half's Jacobian from A^-1:
 
-    * Q = 2n (z_n on Fix(R0)): M = G(z_0) A^-1 G(z_n) A, with G = DR0 = [[-1, 0], [k cos theta, 1]];
-    * Q = 2n - 1 (z_n on Fix(R1)): M = H DT(z_0) A^-1 H A, with H = DR1 = [[-1, 1], [0, 1]].
+    * Q = 2n (z_n on Fix(I0)): M = G(z_0) A^-1 G(z_n) A, with G = DI0 = [[-1, 0], [k cos theta, 1]];
+    * Q = 2n - 1 (z_n on Fix(I1)): M = H DT(z_0) A^-1 H A, with H = DI1 = [[-1, 1], [0, 1]].
 
     The points of the second half are never computed, so their round-off (amplified along the
     orbit like the partial products of the Jacobians) does not enter: at Q = 987 and k = k_c the

@@ -35,13 +35,13 @@ determinant 1 (area preservation), and (theta, p) = (pi, 0) is the elliptic fixe
 (trace 2 - k), (0, 0) the hyperbolic one (trace 2 + k).  The inverse: theta = theta' - p',
 p = p' - k sin(theta).
 
-Reversors: T = R1 R0 with the two involutions (De Vogelaere 1958; Greene 1979)
+Reversors: T = I1 I0 with the two involutions (De Vogelaere 1958; Greene 1979)
 
-    R0(theta, p) = (-theta, p + k sin(theta)),    R1(theta, p) = (p - theta, p),
+    I0(theta, p) = (-theta, p + k sin(theta)),    I1(theta, p) = (p - theta, p),
 
 each with R T R = T^-1.  Their fixed sets, the symmetry lines, are theta = 0 and theta = pi
-(mod 2 pi) for R0, and 2 theta - p = 0 (mod 2 pi), i.e. theta = p/2 and theta = p/2 + pi
-(mod 2 pi), for R1.  A symmetric orbit has its points on these lines:
+(mod 2 pi) for I0, and 2 theta - p = 0 (mod 2 pi), i.e. theta = p/2 and theta = p/2 + pi
+(mod 2 pi), for I1.  A symmetric orbit has its points on these lines:
 :mod:`explorer.analysis.greene` finds them by shooting from one line to another over half
 the period.
 """
@@ -135,8 +135,8 @@ class StandardMap:
 
     #: the name of the continuation parameter
     parameter = "k"
-    #: the symmetry lines theta = const of R0 (theta = pi carries Greene's elliptic orbits)
-    R0_LINES = (0.0, math.pi)
+    #: the symmetry lines theta = const of I0 (theta = pi carries Greene's elliptic orbits)
+    I0_LINES = (0.0, math.pi)
 
     def __init__(self, k):
         self.k = validation.real("k", k)
@@ -196,16 +196,16 @@ class StandardMap:
         return out
 
     # -------------------------------------------------------------- reversing symmetries
-    def r0(self, x) -> np.ndarray:
-        """R0(theta, p) = (-theta, p + k sin theta): an involution with R0 T R0 = T^-1."""
+    def i0(self, x) -> np.ndarray:
+        """I0(theta, p) = (-theta, p + k sin theta): an involution with I0 T I0 = T^-1."""
         x = np.asarray(x, dtype=float)
         y = np.empty_like(x)
         y[..., 0] = -x[..., 0]
         y[..., 1] = x[..., 1] + self.k * np.sin(x[..., 0])
         return y
 
-    def r1(self, x) -> np.ndarray:
-        """R1(theta, p) = (p - theta, p): an involution with R1 T R1 = T^-1, and T = R1 R0."""
+    def i1(self, x) -> np.ndarray:
+        """I1(theta, p) = (p - theta, p): an involution with I1 T I1 = T^-1, and T = I1 I0."""
         x = np.asarray(x, dtype=float)
         y = np.empty_like(x)
         y[..., 0] = x[..., 1] - x[..., 0]
@@ -214,8 +214,8 @@ class StandardMap:
 
     @property
     def reversors(self) -> tuple:
-        """(R0, R1)."""
-        return (self.r0, self.r1)
+        """(I0, I1)."""
+        return (self.i0, self.i1)
 
     @staticmethod
     def wrap(x) -> np.ndarray:
