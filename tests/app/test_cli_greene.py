@@ -3,15 +3,10 @@ import json
 import math
 
 import pytest
+from test_cli_periodic import run_cli
 
 import explorer as ex
 from explorer.app import cli
-
-
-def run_cli(args, capsys):
-    code = cli.main(args)
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def test_greene_standard_json_has_the_documented_shape_and_greenes_k_c(capsys):
