@@ -151,3 +151,48 @@ def test_greene_bad_input_raises_parameter_error():
         ex.greene(ex.StandardMap(0.9), "platinum")
     with pytest.raises(ex.ParameterError, match="qmax"):
         ex.greene(ex.StandardMap(0.9), "golden", qmax=4)
+
+
+# ---------------------------------------------------------------- the section map (Figure 4's scene)
+def _section(mu):
+    from explorer import model
+
+    return ex.SectionMap(model.FIGURE4.with_(mu=mu), 2.0)
+
+
+@pytest.mark.cpu_dependent
+def test_section_half_orbit_orbits_are_newtons_periodic_orbits_with_the_same_residue():
+    """The half-turn shooting on p2 = 0 and the monodromy from the first half (greene_section) against
+    periodic.find_periodic_orbit (multiple shooting over all Q points, full product of Jacobians):
+    the 1/6 and 3/20 orbits of the right island at mu = 0.025."""
+    from explorer.analysis import greene_section as gs
+    from explorer.analysis import periodic
+
+    smap = _section(0.025)
+    centre = gm._centre(smap, (1.58, 0.0))
+    for P, Q in ((1, 6), (3, 20)):
+        orb = gs.first_orbit(smap, P, Q, centre)
+        assert abs(orb.rotation(smap, centre) * Q + P) < 1e-9          # turns clockwise, P/Q per return
+        newton = periodic.find_periodic_orbit(smap, orb.points, Q)
+        assert newton.period == Q
+        np.testing.assert_allclose(newton.points, orb.points, atol=1e-9)
+        assert orb.residue == pytest.approx(newton.residue, rel=1e-7, abs=1e-10)
+        full = np.eye(2)
+        for x in orb.points:
+            full = smap.jacobian(x) @ full
+        np.testing.assert_allclose(orb.monodromy, full, rtol=1e-7, atol=1e-9)
+
+
+@pytest.mark.slow
+@pytest.mark.cpu_dependent
+def test_section_greene_finds_the_breakup_of_a_noble_curve_of_the_right_island():
+    """nu = 1/(6 + gamma): the k_n converge geometrically (ratio near -0.3, as on the standard map)
+    and the residues at mu_c alternate around R*; the value itself is this project's own
+    (benchmarks/RESULTS.md GREENE-SECTION; no published reference)."""
+    nu = 1.0 / (6.0 + gm.GOLDEN)
+    r = ex.greene(_section(0.025), nu, qmax=60, around=(1.58, 0.0))
+    assert [c["q"] for c in r.convergents] == [6, 7, 13, 20, 33, 53]
+    assert r.critical == pytest.approx(0.0303398, abs=2e-6) and r.uncertainty < 2e-6
+    assert -0.5 < r.ratio < -0.2
+    dev = [c["residue"] - gm.CRITICAL_RESIDUE for c in r.convergents[-3:]]
+    assert dev[0] * dev[1] < 0 and dev[1] * dev[2] < 0 and max(map(abs, dev)) < 0.01

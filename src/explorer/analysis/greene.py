@@ -53,7 +53,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from explorer.analysis.maps import StandardMap, standard_half_orbit, standard_monodromy
-from explorer.model import ParameterError, validation
+from explorer.model import PARAM_NAMES, ParameterError, validation
 
 __all__ = ["CRITICAL_RESIDUE", "GOLDEN", "GreeneResult", "SymmetricOrbit", "convergents", "greene",
            "rotation_value", "symmetric_orbit"]
@@ -85,6 +85,10 @@ CLOSURE_TOL = 1e-9
 #: the secant solve of R_n(k) = R*: stop when the step in k is below this
 PARAM_TOL = 1e-14
 PARAM_MAX_ITER = 60
+#: an orbit of type P/Q turns P/Q per return around the island's centre to this (times Q)
+ROTATION_TOL = 1e-6
+#: the parameters a section map's curve can be broken by
+PARAM_NAMES_AND_H = (*PARAM_NAMES, "h")
 #: named rotation numbers accepted by :func:`rotation_value`
 NAMED = {"golden": GOLDEN, "golden2": 1.0 - GOLDEN}
 
@@ -304,47 +308,114 @@ def greene(system, nu="golden", *, qmax=None, residue=CRITICAL_RESIDUE, line=mat
         ``p``, ``q``, ``param_value`` (k_n), and at the critical value its ``point`` (theta in
         [0, 2 pi), p) on the symmetry line and its ``residue``.
     """
-    if not isinstance(system, StandardMap):
-        raise ParameterError(f"greene: implemented for the standard map (ex.StandardMap) only so far; got "
-                             f"{type(system).__name__} (docs/greene.md, 'What is left')")
-    if around is not None or param not in (None, system.parameter):
-        raise ParameterError("greene: around= and param= belong to a section map; the standard map's parameter is k")
-    qmax = DEFAULT_QMAX if qmax is None else qmax
+    from explorer.analysis.section_map import SectionMap
+
     x = rotation_value(nu)
     target = validation.real("residue", residue, 0.0, 1.0, lo_open=True, hi_open=True)
+    if isinstance(system, StandardMap):
+        if around is not None or param not in (None, system.parameter):
+            raise ParameterError("greene: around= and param= belong to a section map; the standard map's "
+                                 "parameter is k")
+        conv = _enough(x, DEFAULT_QMAX if qmax is None else qmax)
+
+        def orbit_at(k, P, Q, guess, check=False):
+            return symmetric_orbit(StandardMap(k), P, Q, line=line, guess=guess)
+
+        def start_of(orb):
+            return orb.points[0, 1]
+
+        def point_of(orb):
+            return StandardMap.wrap(orb.points[0])
+
+        name, pname, first = "standard", system.parameter, system.parameter_value
+    elif isinstance(system, SectionMap):
+        from explorer.analysis import greene_section as gs
+
+        if around is None:
+            raise ParameterError("greene on a section map needs around=(p1, p2), a guess of the island's elliptic "
+                                 "fixed point")
+        pname = "mu" if param is None else param
+        validation.choice("param", pname, PARAM_NAMES_AND_H)
+        conv = _enough(x, SECTION_QMAX if qmax is None else qmax)
+        first = system.h if pname == "h" else float(getattr(system.params, pname))
+        centre = _centre(system, around)
+
+        def orbit_at(value, P, Q, guess, check=False):
+            smap = system.with_parameter(value, pname)
+            if guess is None:
+                return gs.first_orbit(smap, P, Q, _centre(smap, centre))
+            orb = gs.section_symmetric_orbit(smap, Q, guess, param=pname)
+            if check:   # continued orbits stay on their branch; the final ones are checked once more
+                c = _centre(smap, centre)
+                rot = orb.rotation(smap, c)
+                if abs(abs(rot) * Q - P) > ROTATION_TOL:
+                    raise ParameterError(f"the symmetric orbit of period {Q} near p1 = {orb.points[0, 0]:.8g} "
+                                         f"turns {rot:.8g} per return around the centre, not {P}/{Q}")
+            return orb
+
+        def start_of(orb):
+            return orb.points[0, 0]
+
+        def point_of(orb):
+            return orb.points[0]
+
+        name = "section"
+    else:
+        raise ParameterError(f"greene takes a StandardMap or a SectionMap, got {type(system).__name__}")
+    ks, crit, uncertainty, ratio = _critical(conv, orbit_at, start_of, first, target)
+    rows = []
+    guess = None
+    for (P, Q), k_n in zip(conv, ks):
+        orb = orbit_at(crit, P, Q, guess, check=True)
+        guess = start_of(orb)
+        pt = point_of(orb)
+        rows.append({"p": P, "q": Q, "point": [float(pt[0]), float(pt[1])], "param_value": float(k_n),
+                     "residue": orb.residue})
+    return GreeneResult(name, pname, x, float(crit), float(uncertainty), rows, target, ratio)
+
+
+def _enough(x, qmax) -> list:
     conv = convergents(x, qmax)
     if len(conv) < 3:
         raise ParameterError(f"qmax = {qmax} gives {len(conv)} convergents of nu = {x:.10g} with q >= {MIN_Q}; "
                              f"at least 3 are needed: raise qmax")
+    return conv
+
+
+def _centre(smap, guess) -> np.ndarray:
+    """The elliptic fixed point of the section map near ``guess`` (Newton)."""
+    from explorer.analysis.fixedpoints import find_fixed_point
+
+    fp = find_fixed_point(smap, tuple(float(v) for v in guess))
+    if not fp.stable:
+        raise ParameterError(f"the fixed point near ({guess[0]:.6g}, {guess[1]:.6g}) is not elliptic "
+                             f"(trace {fp.trace:.6g}): Greene's curves surround an elliptic one")
+    return np.asarray(fp.point, float)
+
+
+def _critical(conv, orbit_at, start_of, first, target):
+    """k_n for each convergent (R_n(k_n) = target, each orbit continued from the last) and Aitken's
+    extrapolation: (k_n list, critical, uncertainty, last ratio)."""
     ks: list[float] = []
-    p_start: float | None = None
-    k_guess = system.parameter_value
+    start = None
+    k_guess = first
     for P, Q in conv:
-        state = {"p": p_start}
+        state = {"guess": start}
 
         def residue_at(k, P=P, Q=Q, state=state):
-            orb = symmetric_orbit(StandardMap(k), P, Q, line=line, guess=state["p"])
-            state["p"] = orb.points[0, 1]
+            orb = orbit_at(k, P, Q, state["guess"])
+            state["guess"] = start_of(orb)
             return orb
 
         if len(ks) >= 2:   # the geometric sequence's next term
             k_guess = ks[-1] + (ks[-1] - ks[-2]) * ((ks[-1] - ks[-2]) / (ks[-2] - ks[-3]) if len(ks) >= 3 else -0.4)
         k0 = ks[-1] if ks else k_guess
-        step = abs(ks[-1] - ks[-2]) * 1e-2 if len(ks) >= 2 else 1e-3 * max(1.0, abs(k_guess))
-        k_n, orb = _solve_param(residue_at, target, k0, k_guess if ks else k_guess + step)
+        step = 1e-3 * max(1.0, abs(k_guess)) if not ks else None
+        k_n, orb = _solve_param(residue_at, target, k0, k_guess + step if step is not None else k_guess)
         ks.append(k_n)
-        p_start = orb.points[0, 1]
+        start = start_of(orb)
     crit = _aitken(*ks[-3:])
     prev = _aitken(*ks[-4:-1]) if len(ks) >= 4 else ks[-1]
-    uncertainty = abs(crit - prev)
-    rows = []
-    p_guess = None
-    for (P, Q), k_n in zip(conv, ks):
-        orb = symmetric_orbit(StandardMap(crit), P, Q, line=line, guess=p_guess)
-        p_guess = orb.points[0, 1]
-        pt = StandardMap.wrap(orb.points[0])
-        rows.append({"p": P, "q": Q, "point": [float(pt[0]), float(pt[1])], "param_value": float(k_n),
-                     "residue": orb.residue})
     d = np.diff(ks)
-    return GreeneResult("standard", system.parameter, x, float(crit), float(uncertainty), rows, target,
-                        float(d[-1] / d[-2]) if len(d) >= 2 and d[-2] != 0 else math.nan)
+    ratio = float(d[-1] / d[-2]) if len(d) >= 2 and d[-2] != 0 else math.nan
+    return ks, float(crit), float(abs(crit - prev)), ratio
