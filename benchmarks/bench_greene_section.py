@@ -15,7 +15,6 @@ orbits, has a converged weighted-Birkhoff rotation number at 0.99 mu_c and not a
 from __future__ import annotations
 
 import argparse
-import json
 import time
 
 import _common as C

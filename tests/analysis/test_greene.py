@@ -196,3 +196,16 @@ def test_section_greene_finds_the_breakup_of_a_noble_curve_of_the_right_island()
     assert -0.5 < r.ratio < -0.2
     dev = [c["residue"] - gm.CRITICAL_RESIDUE for c in r.convergents[-3:]]
     assert dev[0] * dev[1] < 0 and dev[1] * dev[2] < 0 and max(map(abs, dev)) < 0.01
+    # the cross-check: the orbit of rotation number nu on p2 = 0 (between the last two convergents'
+    # orbits) has a converged weighted-Birkhoff average 1 % below mu_c, and none 1 % above
+    from explorer.analysis import greene_section as gs
+
+    smap = _section(0.025)
+    for factor, regular in ((0.99, True), (1.01, False)):
+        m = smap.with_parameter(factor * r.critical)
+        c = gm._centre(m, (1.58, 0.0))
+        ends = [gs.section_symmetric_orbit(m, cv["q"], cv["point"][0]).points[0, 0] for cv in r.convergents[-2:]]
+        rn = gs.curve_orbit(m, nu, c, *ends, iterates=5000)
+        assert rn.converged is regular, (factor, rn)
+        if regular:
+            assert abs(abs(rn.value) - nu) < 1e-8

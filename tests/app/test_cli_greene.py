@@ -32,6 +32,18 @@ def test_greene_standard_text_lists_the_convergents(capsys):
     assert lines[1] == "p,q,k_n,residue_at_critical,point_x,point_y" and len(lines) == 2 + 8
 
 
+def test_greene_section_json_gives_mu_c_of_a_noble_curve_of_the_right_island(capsys):
+    code, out, _ = run_cli(["greene", "--around", "1.58,0", "--nu", "noble:6", "--mu", "0.025", "--qmax", "20",
+                            "--json"], capsys)
+    assert code == 0
+    d = json.loads(out)
+    assert d["map"] == "section" and d["param"] == "mu" and d["nu"] == pytest.approx(1 / (6 + (math.sqrt(5) - 1) / 2))
+    assert [(c["p"], c["q"]) for c in d["convergents"]] == [(1, 6), (1, 7), (2, 13), (3, 20)]
+    assert all(c["point"][1] == 0.0 and 1.69 < c["point"][0] < 1.71 for c in d["convergents"])   # on p2 = 0
+    # the extrapolation of four convergents: mu_c = 0.03034 (q <= 139, benchmarks/RESULTS.md) within its error
+    assert abs(d["critical"] - 0.03034) < 2 * d["uncertainty"] + 1e-5
+
+
 def test_greene_help_ends_with_its_example(capsys):
     with pytest.raises(SystemExit):
         cli.main(["greene", "--help"])
@@ -45,6 +57,8 @@ def test_greene_help_ends_with_its_example(capsys):
     (["greene", "--map", "section"], "--map section needs --around"),
     (["greene", "--map", "standard", "--around", "1,0"], "--around is for --map section"),
     (["greene", "--around", "9,0"], "--around (9, 0) lies outside the allowed region"),
+    (["greene", "--around", "0,0", "--mu", "0.025"], "is not elliptic"),
+    (["greene", "--map", "standard", "--nu", "noble:0"], "noble:A needs an integer A >= 1"),
 ])
 def test_greene_bad_input_gives_one_line_and_status_2(args, fragment, capsys):
     code, out, err = run_cli(args, capsys)

@@ -42,8 +42,8 @@ slope of the shooting function, d theta_n / d p ~ n (the twist), stays of order 
 k.  The orbit is found to ~1e-15 in p, and the residue follows from the half orbit's
 Jacobian alone (:func:`_half_orbit_monodromy`), so round-off grows over Q/2 steps, not Q.
 
-Only the standard map is solved here for now (:func:`greene` of a
-:class:`~explorer.analysis.section_map.SectionMap` is the issue's item 3: docs/greene.md).
+A :class:`~explorer.analysis.section_map.SectionMap` is solved the same way, its symmetric orbits
+shot over Q half-turns of the flow from the line p2 = 0 (:mod:`explorer.analysis.greene_section`).
 """
 from __future__ import annotations
 
@@ -94,16 +94,26 @@ NAMED = {"golden": GOLDEN, "golden2": 1.0 - GOLDEN}
 
 
 def rotation_value(nu) -> float:
-    """The rotation number ``nu``: a number in (0, 1), or a name of :data:`NAMED` ("golden":
-    (sqrt 5 - 1)/2; "golden2": its complement (3 - sqrt 5)/2)."""
+    """The rotation number ``nu``: a number in (0, 1), a name of :data:`NAMED` ("golden":
+    (sqrt 5 - 1)/2; "golden2": its complement (3 - sqrt 5)/2), or "noble:A" (A >= 1): the noble
+    number 1/(A + golden) = [0; A, 1, 1, 1, ...], equivalent to the golden mean."""
     if isinstance(nu, str):
         key = nu.strip().lower()
         if key in NAMED:
             return NAMED[key]
+        if key.startswith("noble:"):
+            try:
+                a = int(key[len("noble:"):])
+            except ValueError:
+                a = 0
+            if a < 1:
+                raise ParameterError(f"nu = noble:A needs an integer A >= 1 (nu = 1/(A + golden)), got {nu!r}")
+            return 1.0 / (a + GOLDEN)
         try:
             nu = float(key)
         except ValueError:
-            raise ParameterError(f"nu must be a number in (0, 1) or one of {sorted(NAMED)}, got {nu!r}") from None
+            raise ParameterError(f"nu must be a number in (0, 1), one of {sorted(NAMED)} or noble:A, "
+                                 f"got {nu!r}") from None
     return validation.real("nu", nu, 0.0, 1.0, lo_open=True, hi_open=True)
 
 
@@ -113,7 +123,7 @@ def convergents(nu, qmax: int = DEFAULT_QMAX, qmin: int = MIN_Q) -> list:
     x = rotation_value(nu)
     qmax = validation.integer("qmax", qmax, 2, MAX_QMAX)
     h0, h1, k0, k1 = 0, 1, 1, 0          # P_{-2}, P_{-1}, Q_{-2}, Q_{-1}
-    out = []
+    out: list[tuple[int, int]] = []
     frac = x
     for _ in range(200):
         a = math.floor(frac)
@@ -287,26 +297,28 @@ def greene(system, nu="golden", *, qmax=None, residue=CRITICAL_RESIDUE, line=mat
 
     Parameters
     ----------
-    system : StandardMap
+    system : StandardMap or SectionMap
         The map; its parameter value is the first guess of the critical one.
     nu : float or str
         The rotation number in (0, 1), or "golden" ((sqrt 5 - 1)/2) or "golden2".
     qmax : int or None
-        The largest period of the convergents (default 987; at least three convergents with
-        Q >= 2 are needed; at most :data:`MAX_QMAX`).
+        The largest period of the convergents (default 987 for the standard map, 55 for a section
+        map; at least three convergents with Q >= 2 are needed; at most :data:`MAX_QMAX`).
     residue : float
         The residue that defines k_n (default MacKay's R* = 0.2500888, :data:`CRITICAL_RESIDUE`).
     line : float
         The symmetry line theta = ``line`` of the orbits (default pi: positive residues).
-    around, param : None
-        For a section map (the elliptic fixed point's guess, the parameter): not implemented yet.
+    around : (float, float)
+        Section map only: a guess of the elliptic fixed point the curves surround.
+    param : str
+        Section map only: the model parameter (or "h") that breaks the curve (default "mu").
 
     Returns
     -------
     GreeneResult
         ``critical`` (Aitken's extrapolation of the k_n), ``uncertainty``, and per convergent
         ``p``, ``q``, ``param_value`` (k_n), and at the critical value its ``point`` (theta in
-        [0, 2 pi), p) on the symmetry line and its ``residue``.
+        [0, 2 pi), p) on the symmetry line (section map: (p1, 0)) and its ``residue``.
     """
     from explorer.analysis.section_map import SectionMap
 

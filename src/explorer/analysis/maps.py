@@ -48,7 +48,7 @@ the period.
 from __future__ import annotations
 
 import math
-from typing import Protocol, runtime_checkable
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -170,9 +170,11 @@ class StandardMap:
         out = np.empty((2, 2))
         standard_orbit(th, p, self.k, 1, backward, out)
         y = out[1].copy()
-        J = self._jacobian(y if backward else np.array([th, p])) if jacobian else None
-        if jacobian and backward:
-            J = np.array([[J[1, 1], -J[0, 1]], [-J[1, 0], J[0, 0]]])   # DT^-1(x) = DT(T^-1 x)^-1, det 1
+        J: Any = None
+        if jacobian:
+            J = self._jacobian(y if backward else np.array([th, p]))
+            if backward:
+                J = np.array([[J[1, 1], -J[0, 1]], [-J[1, 0], J[0, 0]]])   # DT^-1(x) = DT(T^-1 x)^-1, det 1
         return MapResult(y, J, -1.0 if backward else 1.0, y.copy())
 
     def _jacobian(self, x) -> np.ndarray:

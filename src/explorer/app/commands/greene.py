@@ -21,7 +21,8 @@ MAPS = ("standard", "section")
 
 COMMAND = Command("greene", __doc__, "--map standard --nu golden --json", (
     opt("--map", dest="map_name", default="section", help=f"one of {', '.join(MAPS)} [%(default)s]"),
-    opt("--nu", default="golden", help="rotation number in (0, 1), or golden [%(default)s]"),
+    opt("--nu", default="golden",
+        help="rotation number in (0, 1), golden, golden2 or noble:A = 1/(A + golden) [%(default)s]"),
     opt("--around", default=None, help="(section map) the elliptic fixed point's guess p1,p2"),
     opt("--param", default="mu", help="(section map) the parameter that breaks the curve [%(default)s]"),
     opt("--k", type=float, default=0.9, help="(standard map) first guess of the critical k [%(default)s]"),
