@@ -192,7 +192,8 @@ def test_section_greene_finds_the_breakup_of_a_noble_curve_of_the_right_island()
     nu = 1.0 / (6.0 + gm.GOLDEN)
     r = ex.greene(_section(0.025), nu, qmax=60, around=(1.58, 0.0))
     assert [c["q"] for c in r.convergents] == [6, 7, 13, 20, 33, 53]
-    assert r.critical == pytest.approx(0.0303398, abs=2e-6) and r.uncertainty < 2e-6
+    # within its error bar of the value from q <= 139 (0.03033980 +- 4e-8, benchmarks/RESULTS.md)
+    assert r.uncertainty < 5e-6 and abs(r.critical - 0.0303398) < 2 * r.uncertainty
     assert -0.5 < r.ratio < -0.2
     dev = [c["residue"] - gm.CRITICAL_RESIDUE for c in r.convergents[-3:]]
     assert dev[0] * dev[1] < 0 and dev[1] * dev[2] < 0 and max(map(abs, dev)) < 0.01
@@ -207,5 +208,5 @@ def test_section_greene_finds_the_breakup_of_a_noble_curve_of_the_right_island()
         ends = [gs.section_symmetric_orbit(m, cv["q"], cv["point"][0]).points[0, 0] for cv in r.convergents[-2:]]
         rn = gs.curve_orbit(m, nu, c, *ends, iterates=5000)
         assert rn.converged is regular, (factor, rn)
-        if regular:
-            assert abs(abs(rn.value) - nu) < 1e-8
+        if regular:   # the bisection's 600-return averages place the start within ~1e-7 of nu
+            assert abs(abs(rn.value) - nu) < 1e-6

@@ -185,27 +185,28 @@ def first_orbit(smap: SectionMap, P: int, Q: int, centre) -> SectionSymmetricOrb
     return best
 
 
-def curve_orbit(smap: SectionMap, nu: float, centre, a: float, b: float, *, iterates: int, steps: int = 30):
+def curve_orbit(smap: SectionMap, nu: float, centre, a: float, b: float, *, iterates: int, steps: int = 24,
+                search_iterates: int = 300):
     """The rotation number (weighted Birkhoff, :func:`explorer.analysis.rotation.rotation_number`) of the
     orbit through the point of the line p2 = 0 between p1 = ``a`` and ``b`` where |rotation| = ``nu``:
-    bisection on p1 (``steps`` halvings; the twist makes |rotation| monotone across the bracket of two
-    consecutive convergents' orbits).  Below the breakup that orbit lies on the invariant curve and
-    its average converges (``converged``); above it the curve is a cantorus and it does not."""
+    bisection on p1 (``steps`` halvings, each orbit averaged over 2 ``search_iterates`` returns; the
+    twist makes |rotation| monotone across the bracket of two consecutive convergents' orbits), then
+    the orbit of the last midpoint averaged over 2 ``iterates`` returns.  Below the breakup that orbit
+    lies on the invariant curve and its average converges (``converged``); above it the curve is a
+    cantorus and it does not."""
     from explorer.analysis.rotation import rotation_number
 
-    def rot(x):
-        return rotation_number(smap, (x, 0.0), center=centre, iterates=iterates)
+    def rot(x, n):
+        return rotation_number(smap, (x, 0.0), center=centre, iterates=n)
 
-    ra = rot(a)
-    sign_a = math.copysign(1.0, abs(ra.value) - nu)
-    r = ra
+    sign_a = math.copysign(1.0, abs(rot(a, search_iterates).value) - nu)
     for _ in range(steps):
         m = 0.5 * (a + b)
-        r = rot(m)
+        r = rot(m, search_iterates)
         if not math.isfinite(r.value):
             break
         if math.copysign(1.0, abs(r.value) - nu) == sign_a:
             a = m
         else:
             b = m
-    return r
+    return rot(0.5 * (a + b), iterates)
