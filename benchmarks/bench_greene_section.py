@@ -1,8 +1,9 @@
 #!/usr/bin/env python
 """Greene's residue criterion on the section of Figure 4's scene (h = 2, phi = pi), parameter mu.
 
-For the noble rotation numbers nu = 1/(a + gamma), gamma = (sqrt 5 - 1)/2 (a = 4..8: numbers
-equivalent to the golden mean, [0; a, 1, 1, 1, ...]), the curves around the right island's
+For the noble rotation numbers nu = [0; a, (b,) 1, 1, 1, ...] ("noble:a[,b]", gamma = (sqrt 5 - 1)/2:
+1/(a + gamma), 1/(a + 1/(b + gamma)); numbers equivalent to the golden mean) 4, (5, 2), 5, (6, 2) and
+6, between the island's centre and its edge, the curves around the right island's
 elliptic fixed point (near (1.58, 0)): mu_c(nu) by :func:`explorer.greene` (convergents up to
 q = 150, half-orbit method on p2 = 0), then the cross-check of docs/greene.md: the orbit on the
 line p2 = 0 whose rotation number is nu, found by bisection between the last two convergents'
@@ -10,7 +11,7 @@ orbits, has a converged weighted-Birkhoff rotation number at 0.99 mu_c and not a
 
     python benchmarks/bench_greene_section.py           # ~5 min; GREENE-SECTION of RESULTS.md and
                                                           # results/greene_section.json (the breakup figure's data)
-    python benchmarks/bench_greene_section.py --quick   # a = 6 only, q <= 60, no RESULTS.md
+    python benchmarks/bench_greene_section.py --quick   # noble:6 only, q <= 60, no RESULTS.md
 """
 from __future__ import annotations
 
@@ -21,6 +22,7 @@ import _common as C
 
 SECTION = "GREENE-SECTION"
 MU0, H, AROUND = 0.025, 2.0, (1.58, 0.0)
+NOBLES = ("4", "5,2", "5", "6,2", "6")
 
 
 def main(argv=None):
@@ -37,8 +39,8 @@ def main(argv=None):
     started, load0, t_start = C.now(), C.loadavg(), time.perf_counter()
     smap = ex.SectionMap(model.FIGURE4.with_(mu=MU0), H)
     rows = []
-    for a in ((6,) if args.quick else (4, 5, 6, 7, 8)):
-        nu = 1.0 / (a + gm.GOLDEN)
+    for a in (("6",) if args.quick else NOBLES):
+        nu = gm.rotation_value(f"noble:{a}")
         t0 = time.perf_counter()
         r = gm.greene(smap, nu, qmax=60 if args.quick else 150, around=AROUND)
         wall = time.perf_counter() - t0
@@ -53,7 +55,7 @@ def main(argv=None):
             rn = gs.curve_orbit(m, nu, c, o1.points[0, 0], o2.points[0, 0], iterates=args.iterates)
             checks[f] = (rn, time.perf_counter() - t1)
         rows.append((a, nu, r, wall, checks))
-        print(f"a = {a}: nu = {nu:.6f} mu_c = {r.critical:.9f} +- {r.uncertainty:.1e} ({wall:.1f} s); "
+        print(f"noble:{a}: nu = {nu:.6f} mu_c = {r.critical:.9f} +- {r.uncertainty:.1e} ({wall:.1f} s); "
               + "; ".join(f"{f} mu_c: rotation {rn.value:.12f} converged {rn.converged} (|WB_N - WB_2N| "
                           f"{rn.difference:.1e})" for f, (rn, _) in checks.items()), flush=True)
     seconds = time.perf_counter() - t_start
@@ -62,7 +64,7 @@ def main(argv=None):
                         extra=[f"h = {H}, phi = pi, the elliptic fixed point near {AROUND}; first guess mu = {MU0}; "
                                f"weighted Birkhoff check with N = {args.iterates} (2N returns), converged when "
                                f"|WB_N - WB_2N| < 1e-10 turns"])
-    lines += ["", "| nu = 1/(a + gamma) | a | mu_c | uncertainty | last ratio | convergents | wall (s) | "
+    lines += ["", "| nu | noble: | mu_c | uncertainty | last ratio | convergents | wall (s) | "
               "0.99 mu_c: converged, abs(WB_N - WB_2N) | 1.01 mu_c: converged, abs(WB_N - WB_2N) |",
               "|---:|---:|---:|---:|---:|---|---:|---|---|"]
     doc = []

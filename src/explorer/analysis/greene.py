@@ -85,6 +85,8 @@ CLOSURE_TOL = 1e-9
 #: the secant solve of R_n(k) = R*: stop when the step in k is below this
 PARAM_TOL = 1e-14
 PARAM_MAX_ITER = 60
+#: a secant step in the parameter is at most this fraction of max(|k|, the last step)
+MAX_PARAM_STEP = 0.2
 #: an orbit of type P/Q turns P/Q per return around the island's centre to this (times Q)
 ROTATION_TOL = 1e-6
 #: the parameters a section map's curve can be broken by
@@ -103,12 +105,16 @@ def rotation_value(nu) -> float:
             return NAMED[key]
         if key.startswith("noble:"):
             try:
-                a = int(key[len("noble:"):])
+                terms = [int(t) for t in key[len("noble:"):].split(",")]
             except ValueError:
-                a = 0
-            if a < 1:
-                raise ParameterError(f"nu = noble:A needs an integer A >= 1 (nu = 1/(A + golden)), got {nu!r}")
-            return 1.0 / (a + GOLDEN)
+                terms = [0]
+            if not terms or min(terms) < 1:
+                raise ParameterError(f"nu = noble:A needs an integer A >= 1 (nu = 1/(A + golden); noble:A,B,... "
+                                     f"= [0; A, B, ..., 1, 1, ...]), got {nu!r}")
+            value = GOLDEN
+            for a in reversed(terms):
+                value = 1.0 / (a + value)
+            return value
         try:
             nu = float(key)
         except ValueError:
@@ -275,6 +281,8 @@ def _solve_param(residue_at, target, k0, k1):
         if fb == 0.0 or fb == fa:
             return kb, fb_orb
         kc = kb - fb * (kb - ka) / (fb - fa)
+        limit = MAX_PARAM_STEP * max(abs(kb), abs(kb - ka))
+        kc = min(max(kc, kb - limit), kb + limit)     # residues are steep in k: no leap past the orbit's life
         ka, fa = kb, fb
         if abs(kc - kb) <= PARAM_TOL * max(1.0, abs(kb)):
             kb = kc

@@ -149,7 +149,12 @@ def section_symmetric_orbit(smap: SectionMap, Q: int, guess, guess2=None, *, par
             B = A.copy()
     if Q % 2 == 0:
         B = A
-    M = G0 @ np.linalg.inv(B) @ G0 @ A
+    det = B[0, 0] * B[1, 1] - B[0, 1] * B[1, 0]
+    if not (np.all(np.isfinite(A)) and math.isfinite(det) and det != 0.0):
+        raise ParameterError(f"the half orbit's Jacobian of the orbit of period {Q} from p1 = {p1:.10g} is singular "
+                             f"or not finite")
+    B_inv = np.array([[B[1, 1], -B[0, 1]], [-B[1, 0], B[0, 0]]]) / det
+    M = G0 @ B_inv @ G0 @ A
     value = smap.parameter_value if param is None else float(getattr(smap.params, param)) if param != "h" else smap.h
     return SectionSymmetricOrbit(Q, pts[:Q].copy(), M, value)
 

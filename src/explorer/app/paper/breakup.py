@@ -10,14 +10,14 @@ from explorer.app.paper._common import _FS, _SMALL, Drawn, Outcome, _new_figure,
 #: the figure's name (``explorer figures --only breakup``) and what it shows
 NAME = "breakup"
 DESCRIPTION = "mu_c of the noble curves of the right island (Greene's criterion), sections at 0.99 and 1.01 mu_c"
-#: the noble rotation numbers nu = 1/(a + golden) of the figure (``noble:a``), and of its quick version
-NOBLES = (4, 5, 6, 7, 8)
-QUICK_NOBLES = (6,)
+#: the noble rotation numbers of the figure ("noble:a[,b]" = [0; a, (b,) 1, 1, ...]), and of its quick version
+NOBLES = ("4", "5,2", "5", "6,2", "6")
+QUICK_NOBLES = ("6",)
 #: the island's elliptic fixed point (a guess) and the first guess of mu_c
 AROUND = (1.58, 0.0)
 MU0 = 0.025
 #: the largest period of the convergents (quick: 20)
-QMAX = 89
+QMAX = 150
 
 
 def breakup_figure(*, nobles=NOBLES, qmax=QMAX, starts=40, crossings=600, dpi=200) -> Drawn:
@@ -52,8 +52,8 @@ def breakup_figure(*, nobles=NOBLES, qmax=QMAX, starts=40, crossings=600, dpi=20
         err = np.array([r.uncertainty for r in results])
         axes[0].errorbar(nu, mc, yerr=err, fmt="o", color="#1f4e9c", ms=4, capsize=2)
         for a, r in zip(nobles, results):
-            axes[0].annotate(rf"$1/({a}+\gamma)$", (r.nu, r.critical), textcoords="offset points", xytext=(4, 4),
-                             fontsize=_SMALL)
+            axes[0].annotate(f"[0; {a.replace(',', ', ')}, 1, 1, ...]", (r.nu, r.critical), textcoords="offset points",
+                             xytext=(4, 4), fontsize=_SMALL)
         axes[0].set_xlabel(r"rotation number $\nu$ around the centre (turns per return)")
         axes[0].set_ylabel(r"$\mu_c(\nu)$")
         axes[0].set_title("Greene's criterion, right island", fontsize=_FS)
