@@ -53,11 +53,7 @@ def main(argv=None):
     for c in r.convergents:
         lines.append(f"| {c['p']}/{c['q']} | {c['param_value']:.12f} | {c['residue']:.9f} | "
                      f"{c['residue'] - R_STAR:+.2e} |")
-    print("\n".join(lines))
-    if not args.quick:
-        C.update_section(SECTION, lines)
-        print(f"updated {C.RESULTS_MD}")
-    return 0
+    return C.report(SECTION, lines, not args.quick)
 
 
 if __name__ == "__main__":

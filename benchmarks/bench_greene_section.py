@@ -75,14 +75,9 @@ def main(argv=None):
                      f"{lo.converged}, {lo.difference:.1e} | {hi.converged}, {hi.difference:.1e} |")
         doc.append(dict(r.as_dict(), a=a, ratio=r.ratio, wall=wall,
                         birkhoff={str(f): dict(rn.as_dict(), wall=w) for f, (rn, w) in checks.items()}))
-    print("\n".join(lines))
     out = C.OUT_DIR / ("greene_section_quick.json" if args.quick else "greene_section.json")
     C.write_json(out, {"h": H, "around": AROUND, "mu0": MU0, "curves": doc})
-    print(f"wrote {out}")
-    if not args.quick:
-        C.update_section(SECTION, lines)
-        print(f"updated {C.RESULTS_MD}")
-    return 0
+    return C.report(SECTION, lines, not args.quick, written=(out,))
 
 
 if __name__ == "__main__":

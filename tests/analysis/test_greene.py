@@ -71,6 +71,16 @@ def test_the_convergents_of_the_golden_mean_are_the_fibonacci_ratios():
     assert gm.convergents(math.sqrt(2) - 1, 200) == [(1, 2), (2, 5), (5, 12), (12, 29), (29, 70), (70, 169)]
 
 
+def test_noble_numbers_are_continued_fractions_ending_in_ones():
+    g = gm.GOLDEN
+    assert gm.rotation_value("noble:6") == pytest.approx(1 / (6 + g), rel=1e-15)
+    assert gm.rotation_value("noble:5,2") == pytest.approx(1 / (5 + 1 / (2 + g)), rel=1e-15)
+    assert gm.rotation_value("noble:1") == pytest.approx(g, rel=1e-15)
+    assert gm.convergents("noble:6", 60) == [(1, 6), (1, 7), (2, 13), (3, 20), (5, 33), (8, 53)]
+    with pytest.raises(ex.ParameterError, match="noble:A"):
+        gm.rotation_value("noble:0")
+
+
 @pytest.mark.parametrize("k", (0.5, K_C_PUBLISHED, 1.0))
 def test_half_orbit_orbits_are_periodic_orbits_of_the_map_with_points_on_both_symmetry_lines(k):
     for orb in _chain(k, 89):

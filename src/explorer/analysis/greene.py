@@ -146,17 +146,10 @@ def convergents(nu, qmax: int = DEFAULT_QMAX, qmin: int = MIN_Q) -> list:
     return out
 
 
-@dataclass(frozen=True)
-class SymmetricOrbit:
-    """A symmetric periodic orbit of type P/Q found by the half-orbit method."""
+class Residue:
+    """The trace and Greene's residue of an orbit's ``monodromy``."""
 
-    p: int                  # turns (theta_Q - theta_0 = 2 pi P)
-    q: int                  # period
-    points: np.ndarray      # (Q, 2): the orbit from its point on the symmetry line, theta lifted
-    monodromy: np.ndarray   # 2x2 product of the Q Jacobians
-    param_value: float
-    line: float             # the symmetry line theta = line of the start
-    closure: float          # max |T^Q(x_0) - x_0 - (2 pi P, 0)|
+    monodromy: np.ndarray
 
     @property
     def trace(self) -> float:
@@ -166,6 +159,19 @@ class SymmetricOrbit:
     def residue(self) -> float:
         """Greene's residue R = (2 - tr M)/4 (0 < R < 1: elliptic)."""
         return (2.0 - self.trace) / 4.0
+
+
+@dataclass(frozen=True)
+class SymmetricOrbit(Residue):
+    """A symmetric periodic orbit of type P/Q found by the half-orbit method."""
+
+    p: int                  # turns (theta_Q - theta_0 = 2 pi P)
+    q: int                  # period
+    points: np.ndarray      # (Q, 2): the orbit from its point on the symmetry line, theta lifted
+    monodromy: np.ndarray   # 2x2 product of the Q Jacobians
+    param_value: float
+    line: float             # the symmetry line theta = line of the start
+    closure: float          # max |T^Q(x_0) - x_0 - (2 pi P, 0)|
 
 
 def _shoot(k, P, Q, theta0, p0):

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from explorer import model
+from explorer.analysis.greene import Residue
 from explorer.analysis.section_map import MAX_STEPS, SectionMap
 from explorer.integrate.tangent import return_map_taylor
 from explorer.kernels import STATUS_DONE
@@ -94,21 +95,13 @@ def _secant(smap, Q, x0, x1, f0=None, f1=None) -> float:
 
 
 @dataclass(frozen=True)
-class SectionSymmetricOrbit:
+class SectionSymmetricOrbit(Residue):
     """A symmetric periodic orbit of the section map from the half-orbit method."""
 
     q: int
     points: np.ndarray      # (Q, 2): x_0 = (p1, 0) on the symmetry line, x_{Q-j} = G0 x_j
     monodromy: np.ndarray
     param_value: float
-
-    @property
-    def trace(self) -> float:
-        return float(self.monodromy[0, 0] + self.monodromy[1, 1])
-
-    @property
-    def residue(self) -> float:
-        return (2.0 - self.trace) / 4.0
 
     def rotation(self, smap: SectionMap, centre) -> float:
         """Turns around ``centre`` per return, in (-1/2, 1/2]: the angle increments over the Q returns
