@@ -208,7 +208,8 @@ def test_section_greene_finds_the_breakup_of_a_noble_curve_of_the_right_island()
     dev = [c["residue"] - gm.CRITICAL_RESIDUE for c in r.convergents[-3:]]
     assert dev[0] * dev[1] < 0 and dev[1] * dev[2] < 0 and max(map(abs, dev)) < 0.01
     # the cross-check: the orbit of rotation number nu on p2 = 0 (between the last two convergents'
-    # orbits) has a converged weighted-Birkhoff average 1 % below mu_c, and none 1 % above
+    # orbits) has a converged weighted-Birkhoff average 1 % below mu_c; 1 % above, the orbit the
+    # bisection ends on is not regular with rotation nu (not converged, or an island's other number)
     from explorer.analysis import greene_section as gs
 
     smap = _section(0.025)
@@ -217,6 +218,6 @@ def test_section_greene_finds_the_breakup_of_a_noble_curve_of_the_right_island()
         c = gm._centre(m, (1.58, 0.0))
         ends = [gs.section_symmetric_orbit(m, cv["q"], cv["point"][0]).points[0, 0] for cv in r.convergents[-2:]]
         rn = gs.curve_orbit(m, nu, c, *ends, iterates=5000)
-        assert rn.converged is regular, (factor, rn)
-        if regular:   # the bisection's 600-return averages place the start within ~1e-7 of nu
-            assert abs(abs(rn.value) - nu) < 1e-6
+        # the bisection's 600-return averages place the start within ~1e-7 of nu
+        on_curve = rn.converged and abs(abs(rn.value) - nu) < 1e-6
+        assert on_curve is regular, (factor, rn)
