@@ -15,6 +15,7 @@ Benchmarks (script, RESULTS.md section):
   startup         bench_startup.py         STARTUP (import, cold compile, warm start, CLI)
   long_orbit      bench_long_orbit.py      LONGORBIT (one long orbit vs heyoka scalar, start-up, memory)
   early_stop      bench_early_stop.py      EARLYSTOP (time saved by early classification)
+  greene          bench_greene.py          GREENE (Greene's k_c of the standard map's golden curve)
 
 Each section of RESULTS.md carries its own command, date, machine and versions; a full run of
 this script also writes the RUN-ALL section (what ran, exit status, wall time).  Benchmarks are
@@ -39,6 +40,7 @@ BENCHMARKS = {
     "startup": "bench_startup.py",
     "long_orbit": "bench_long_orbit.py",
     "early_stop": "bench_early_stop.py",
+    "greene": "bench_greene.py",
 }
 
 

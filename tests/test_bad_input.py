@@ -56,6 +56,7 @@ BASE = {
     "sweep": ["sweep", "{scene}", "--no-figure", "--quiet", "--out", "o.h5"],
     "figures": ["figures", "--only", "figure4"],
     "manifold": ["manifold", "--arclength", "0.5"],
+    "greene": ["greene", "--map", "standard", "--qmax", "13"],
     "serve": ["serve", "--port", "0"],     # never starts: the server is replaced (_no_server below)
 }
 MODEL_OPTIONS = tuple(f"--{name}" for name in model.PARAM_NAMES)
@@ -70,6 +71,7 @@ REAL_OPTIONS = {
     "melnikov": ("--h", "--g0"),
     "trajectory": ("--p1", "--p2", "--M", "--phi", "--time", "--tol"),
     "manifold": ("--h", "--tol", "--arclength", "--max-time"),
+    "greene": ("--h", "--tol", "--k"),
     "serve": ("--h", "--tol", "--dt", "--megno-time"),
 }
 #: options taking an integer: (option, values out of range)
@@ -83,12 +85,13 @@ INT_OPTIONS = {
     "trajectory": (("--samples", ("1", BIG)), ("--glyphs", ("0", "-1"))),
     "sweep": (("--jobs", ("0", "-1", BIG)),),
     "manifold": (("--period", ("0", BIG)), ("--index", ("-1", BIG)), ("--max-points", ("0", BIG))),
+    "greene": (("--qmax", ("1", "-1", BIG)),),
     "serve": (("--panel", ("-1", "1")), ("--port", ("-1", "65536")), ("--crossings", ("0", BIG)),
               ("--megno-resolution", ("0", "8", "100", "1024", BIG))),
 }
 #: options taking a point p1,p2
 PAIR_OPTIONS = {"manifold": ("--guess",), "fixedpoint": ("--guess",), "periodic": ("--guess",),
-                "rotation": ("--from", "--to", "--center")}
+                "rotation": ("--from", "--to", "--center"), "greene": ("--around",)}
 
 
 def _cases():
@@ -144,6 +147,14 @@ def _cases():
         ("explore--export-dir=missing", BASE["explore"] + ["--export-dir=/nonexistent/explorer"], "--export-dir"),
         ("explore--host=empty", BASE["explore"] + ["--host="], "--host"),
         ("explore--no-browser=value", BASE["explore"] + ["--no-browser=1"], "--no-browser"),
+        ("greene--map=empty", BASE["greene"] + ["--map="], "--map"),
+        ("greene--map=henon", BASE["greene"] + ["--map=henon"], "--map"),
+        ("greene--nu=2", BASE["greene"] + ["--nu=2"], "nu"),
+        ("greene--nu=word", BASE["greene"] + ["--nu=silverish"], "nu"),
+        ("greene--nu=empty", BASE["greene"] + ["--nu="], "nu"),
+        ("greene--param=bogus", BASE["greene"] + ["--param=bogus"], "--param"),
+        ("greene--param=empty", BASE["greene"] + ["--param="], "--param"),
+        ("greene--around_with_standard", BASE["greene"] + ["--around=1.5,0"], "--around"),
         ("serve--unknown_scene", ["serve", "nosuchscene"], "scene"),
         ("serve--method=bogus", BASE["serve"] + ["--method=bogus"], "method"),
         ("serve--token=empty", BASE["serve"] + ["--token="], "--token"),

@@ -50,6 +50,10 @@ _EXPORTS = {
     "chaotic_fraction": "explorer.analysis.lyapunov",
     # the section map and its fixed points
     "SectionMap": "explorer.analysis.section_map",
+    "StandardMap": "explorer.analysis.maps",
+    "AreaPreservingMap": "explorer.analysis.maps",
+    "greene": "explorer.analysis.greene",
+    "GreeneResult": "explorer.analysis.greene",
     "FixedPoint": "explorer.analysis.fixedpoints",
     "Branch": "explorer.analysis.fixedpoints",
     "find_fixed_point": "explorer.analysis.fixedpoints",

@@ -18,6 +18,12 @@ from explorer.analysis.fixedpoints import (
 from explorer.analysis.fixedpoints import (
     separatrices as separatrices,
 )
+from explorer.analysis.greene import (
+    GreeneResult as GreeneResult,
+)
+from explorer.analysis.greene import (
+    greene as greene,
+)
 from explorer.analysis.lyapunov import (
     Indicators as Indicators,
 )
@@ -35,6 +41,12 @@ from explorer.analysis.manifolds import (
 )
 from explorer.analysis.manifolds import (
     manifolds as manifolds,
+)
+from explorer.analysis.maps import (
+    AreaPreservingMap as AreaPreservingMap,
+)
+from explorer.analysis.maps import (
+    StandardMap as StandardMap,
 )
 from explorer.analysis.periodic import (
     PeriodicOrbit as PeriodicOrbit,

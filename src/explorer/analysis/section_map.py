@@ -141,6 +141,21 @@ class SectionMap:
             J = W[:, :2].T.copy()
         return MapResult(yout[:2].copy(), J, float(t), yout.copy())
 
+    #: the continuation parameter of the map protocol (:class:`explorer.analysis.maps.AreaPreservingMap`)
+    parameter = "mu"
+
+    @property
+    def parameter_value(self) -> float:
+        """The value of :attr:`parameter` (the map protocol)."""
+        return float(getattr(self.params, self.parameter))
+
+    def with_parameter(self, value, name=None) -> SectionMap:
+        """The same section map with the model parameter ``name`` (default :attr:`parameter`;
+        or "h") set to ``value`` (the map protocol's continuation)."""
+        name = self.parameter if name is None else name
+        prm, h = validation.with_value(self.params, self.h, name, value)
+        return SectionMap(prm, h, phi0=self.phi0, tol=self.tol, tmax=self.tmax)
+
     def jacobian(self, x) -> np.ndarray:
         """DP(x), the 2x2 Jacobian of the map at x."""
         return self(x).jacobian

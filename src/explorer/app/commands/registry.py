@@ -19,6 +19,7 @@ MODULES = {
     "fixedpoint": "explorer.app.commands.fixedpoint",
     "periodic": "explorer.app.commands.periodic",
     "rotation": "explorer.app.commands.rotation",
+    "greene": "explorer.app.commands.greene",
     "explore": "explorer.app.commands.explore",
     "serve": "explorer.app.serve.command",       # beside the web page it serves (explorer.app.serve)
     "melnikov": "explorer.app.commands.melnikov",

@@ -30,6 +30,7 @@ MODULES = {
     "melnikov": "explorer.app.paper.melnikov",
     "tangle": "explorer.app.paper.tangle",
     "trajectory": "explorer.app.paper.trajectory",
+    "breakup": "explorer.app.paper.breakup",
 }
 #: every figure, in the order they are generated
 FIGURES = tuple(MODULES)

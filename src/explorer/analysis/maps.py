@@ -1,0 +1,227 @@
+"""Area-preserving maps of the plane: the protocol the map analyses take, and Chirikov's standard map.
+
+The protocol
+------------
+An analysis of a map needs the map, its inverse, its Jacobian, the reversors where they are
+known, and the parameter that continuation moves.  :class:`AreaPreservingMap` names them; two
+classes implement it:
+
+* :class:`~explorer.analysis.section_map.SectionMap` -- the section map of Chaplygin's
+  equations (docs/model.md R9), an integration per application, Jacobian from the tangent
+  dynamics; its continuation parameter is ``mu`` (any model parameter or ``h`` by name);
+* :class:`StandardMap` -- Chirikov's standard map, explicit and compiled (below), the
+  literature's benchmark (docs/greene.md).
+
+Both return a :class:`~explorer.analysis.section_map.MapResult` from ``m(x)`` (image point,
+2x2 Jacobian, ``time``: the return time of the flow, or 1 iteration), and have
+``m.jacobian(x)``, ``m.inverse(x)``, ``m.iterate(x, n)``, ``m.parameter`` (the name of the
+continuation parameter), ``m.parameter_value`` and ``m.with_parameter(value)``.
+
+The standard map
+----------------
+In the convention of the issue (and of Chirikov 1979, Phys. Rep. 52, 263, eq. 4.1 with K = k),
+
+    p' = p + k sin(theta),        theta' = theta + p'                              (S1)
+
+on the cylinder theta mod 2 pi (theta is kept lifted here, so that theta_q - theta_0 =
+2 pi P on an orbit of rotation number P/Q).  Greene (1979, J. Math. Phys. 20, 1183, eq. 1.1)
+and MacKay (1983, Physica D 7, 283) write x' = x + y', y' = y - (k / 2 pi) sin(2 pi x); with
+theta = 2 pi x + pi, p = 2 pi y this is (S1) exactly (sin(2 pi x + pi) = -sin(2 pi x)).
+So k_c, the residues and the rotation numbers are the same, and Greene's symmetry line
+x = 0 (where his elliptic orbits lie) is theta = pi here.
+
+Its Jacobian d(theta', p')/d(theta, p) = [[1 + k cos theta, 1], [k cos theta, 1]] has
+determinant 1 (area preservation), and (theta, p) = (pi, 0) is the elliptic fixed point
+(trace 2 - k), (0, 0) the hyperbolic one (trace 2 + k).  The inverse: theta = theta' - p',
+p = p' - k sin(theta).
+
+Reversors: T = I1 I0 with the two involutions (De Vogelaere 1958; Greene 1979)
+
+    I0(theta, p) = (-theta, p + k sin(theta)),    I1(theta, p) = (p - theta, p),
+
+each with R T R = T^-1.  Their fixed sets, the symmetry lines, are theta = 0 and theta = pi
+(mod 2 pi) for I0, and 2 theta - p = 0 (mod 2 pi), i.e. theta = p/2 and theta = p/2 + pi
+(mod 2 pi), for I1.  A symmetric orbit has its points on these lines:
+:mod:`explorer.analysis.greene` finds them by shooting from one line to another over half
+the period.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+
+from explorer._jit import njit
+from explorer.analysis.section_map import MapResult
+from explorer.model import ParameterError, validation
+
+__all__ = ["AreaPreservingMap", "StandardMap"]
+
+
+@runtime_checkable
+class AreaPreservingMap(Protocol):
+    """What an analysis of an area-preserving map of the plane uses (module docstring)."""
+
+    parameter: str
+
+    def __call__(self, x, *, backward: bool = False, jacobian: bool = True) -> MapResult: ...
+
+    def jacobian(self, x) -> np.ndarray: ...
+
+    def inverse(self, x) -> np.ndarray: ...
+
+    def iterate(self, x, n, *, backward: bool = False) -> np.ndarray: ...
+
+    @property
+    def parameter_value(self) -> float: ...
+
+    def with_parameter(self, value): ...
+
+
+# ------------------------------------------------------------------ compiled kernels of (S1)
+@njit
+def standard_orbit(theta, p, k, n, backward, out):
+    """The lifted orbit of (S1) from (theta, p): out[j] = T^j (T^-j with ``backward``), j = 0..n."""
+    out[0, 0] = theta
+    out[0, 1] = p
+    for j in range(n):
+        if backward:
+            theta_prev = theta - p
+            p = p - k * math.sin(theta_prev)
+            theta = theta_prev
+        else:
+            p = p + k * math.sin(theta)
+            theta = theta + p
+        out[j + 1, 0] = theta
+        out[j + 1, 1] = p
+
+
+@njit
+def standard_half_orbit(theta, p, k, n):
+    """T^n(theta, p) and its derivative with respect to the start p (theta fixed):
+    (theta_n, p_n, d theta_n / d p, d p_n / d p) -- the shooting function of the half-orbit
+    method and its slope (the tangent vector (0, 1) carried by the Jacobian of (S1))."""
+    dth = 0.0
+    dp = 1.0
+    for _ in range(n):
+        kc = k * math.cos(theta)
+        dp = dp + kc * dth
+        p = p + k * math.sin(theta)
+        dth = dth + dp
+        theta = theta + p
+    return theta, p, dth, dp
+
+
+@njit
+def standard_monodromy(theta, p, k, n):
+    """The product DT(x_{n-1}) ... DT(x_0) along n steps of (S1) from (theta, p), as
+    (a, b, c, d) = [[a, b], [c, d]], with the end point (theta_n, p_n)."""
+    a, b, c, d = 1.0, 0.0, 0.0, 1.0
+    for _ in range(n):
+        kc = k * math.cos(theta)
+        a, b, c, d = (1.0 + kc) * a + c, (1.0 + kc) * b + d, kc * a + c, kc * b + d
+        p = p + k * math.sin(theta)
+        theta = theta + p
+    return a, b, c, d, theta, p
+
+
+class StandardMap:
+    """Chirikov's standard map (S1) p' = p + k sin(theta), theta' = theta + p' (module docstring).
+
+    ``m(x)`` is T(x) with DT(x) (a :class:`MapResult`, ``time`` = 1 iteration); theta is
+    lifted (not reduced mod 2 pi).  ``k`` is the continuation parameter.
+    """
+
+    #: the name of the continuation parameter
+    parameter = "k"
+    #: the symmetry lines theta = const of I0 (theta = pi carries Greene's elliptic orbits)
+    I0_LINES = (0.0, math.pi)
+
+    def __init__(self, k):
+        self.k = validation.real("k", k)
+
+    def __repr__(self):
+        return f"StandardMap(k={self.k!r})"
+
+    def __eq__(self, other):
+        return isinstance(other, StandardMap) and other.k == self.k
+
+    def __hash__(self):
+        return hash(("StandardMap", self.k))
+
+    @property
+    def parameter_value(self) -> float:
+        return self.k
+
+    def with_parameter(self, value) -> StandardMap:
+        """The same map at k = ``value``."""
+        return StandardMap(value)
+
+    @staticmethod
+    def _point(x) -> np.ndarray:
+        x = np.asarray(x, dtype=float)
+        if x.shape != (2,) or not np.all(np.isfinite(x)):
+            raise ParameterError(f"a point of the standard map is (theta, p), two finite numbers; got {x!r}")
+        return x
+
+    def __call__(self, x, *, backward=False, jacobian=True) -> MapResult:
+        th, p = self._point(x)
+        out = np.empty((2, 2))
+        standard_orbit(th, p, self.k, 1, backward, out)
+        y = out[1].copy()
+        J: Any = None
+        if jacobian:
+            J = self._jacobian(y if backward else np.array([th, p]))
+            if backward:
+                J = np.array([[J[1, 1], -J[0, 1]], [-J[1, 0], J[0, 0]]])   # DT^-1(x) = DT(T^-1 x)^-1, det 1
+        return MapResult(y, J, -1.0 if backward else 1.0, y.copy())
+
+    def _jacobian(self, x) -> np.ndarray:
+        kc = self.k * math.cos(x[0])
+        return np.array([[1.0 + kc, 1.0], [kc, 1.0]])
+
+    def jacobian(self, x) -> np.ndarray:
+        """DT(x) = [[1 + k cos theta, 1], [k cos theta, 1]] (det 1)."""
+        return self._jacobian(self._point(x))
+
+    def inverse(self, x) -> np.ndarray:
+        """T^-1(x): theta = theta' - p', p = p' - k sin(theta)."""
+        return self(x, backward=True, jacobian=False).point
+
+    def iterate(self, x, n, *, backward=False) -> np.ndarray:
+        """x and its first ``n`` images (preimages with ``backward``): an (n + 1, 2) array."""
+        th, p = self._point(x)
+        n = validation.integer("n", n, 0)
+        out = np.empty((n + 1, 2))
+        standard_orbit(th, p, self.k, n, bool(backward), out)
+        return out
+
+    # -------------------------------------------------------------- reversing symmetries
+    def i0(self, x) -> np.ndarray:
+        """I0(theta, p) = (-theta, p + k sin theta): an involution with I0 T I0 = T^-1."""
+        x = np.asarray(x, dtype=float)
+        y = np.empty_like(x)
+        y[..., 0] = -x[..., 0]
+        y[..., 1] = x[..., 1] + self.k * np.sin(x[..., 0])
+        return y
+
+    def i1(self, x) -> np.ndarray:
+        """I1(theta, p) = (p - theta, p): an involution with I1 T I1 = T^-1, and T = I1 I0."""
+        x = np.asarray(x, dtype=float)
+        y = np.empty_like(x)
+        y[..., 0] = x[..., 1] - x[..., 0]
+        y[..., 1] = x[..., 1]
+        return y
+
+    @property
+    def reversors(self) -> tuple:
+        """(I0, I1)."""
+        return (self.i0, self.i1)
+
+    @staticmethod
+    def wrap(x) -> np.ndarray:
+        """Points with theta reduced to [0, 2 pi) (the cylinder's coordinates)."""
+        y = np.array(x, dtype=float, copy=True)
+        y[..., 0] = np.mod(y[..., 0], 2.0 * math.pi)
+        return y

@@ -1,0 +1,68 @@
+"""the parameter at which an invariant curve breaks (Greene's residue criterion)
+
+Greene's residue criterion for the invariant curve of rotation number --nu: symmetric periodic
+orbits of the convergents P/Q of --nu (half-orbit method on the symmetry line), the parameter
+k_n at which each one's residue reaches MacKay's critical R* = 0.2500888, extrapolated to the
+critical value. --map standard: Chirikov's standard map p' = p + k sin(theta), theta' = theta +
+p' (the golden-mean curve breaks at k_c = 0.971635406, Greene 1979); --map section with
+--around P1,P2: the curves around the elliptic fixed point of the section map near P1,P2, the
+parameter --param (docs/greene.md).
+"""
+from __future__ import annotations
+
+import json
+
+from explorer import model
+from explorer.app.commands import options
+from explorer.app.commands.options import Command, opt
+
+#: the maps --map names
+MAPS = ("standard", "section")
+
+COMMAND = Command("greene", __doc__, "--map standard --nu golden --json", (
+    opt("--map", dest="map_name", default="section", help=f"one of {', '.join(MAPS)} [%(default)s]"),
+    opt("--nu", default="golden",
+        help="rotation number in (0, 1), golden, golden2 or noble:A = 1/(A + golden) [%(default)s]"),
+    opt("--around", default=None, help="(section map) the elliptic fixed point's guess p1,p2"),
+    opt("--param", default="mu", help="(section map) the parameter that breaks the curve [%(default)s]"),
+    opt("--k", type=float, default=0.9, help="(standard map) first guess of the critical k [%(default)s]"),
+    opt("--qmax", type=int, default=None, help="largest period of the convergents [987 standard, 89 section]"),
+    options.add_map_args,
+))
+
+
+def run(args) -> int:
+    from explorer.analysis import greene as gm
+    from explorer.analysis.maps import StandardMap
+    from explorer.model import validation
+
+    validation.choice("--map", args.map_name, MAPS)
+    nu = gm.rotation_value(args.nu)
+    validation.choice("--param", args.param, model.PARAM_NAMES + ("h",))
+    params = options.section_map_args(args)     # the model options are checked whatever the map
+    centre = options.pair(args.around, "--around") if args.around is not None else None
+    k = validation.real("--k", args.k, 0.0, lo_open=True)
+    if args.map_name == "standard":
+        if centre is not None:
+            raise model.ParameterError("--around is for --map section (the standard map has no island centre to give)")
+        qmax = gm.DEFAULT_QMAX if args.qmax is None else validation.integer("--qmax", args.qmax, 2, gm.MAX_QMAX)
+        res = gm.greene(StandardMap(k), nu, qmax=qmax)
+    else:
+        if centre is None:
+            raise model.ParameterError("--map section needs --around P1,P2 (the elliptic fixed point's guess)")
+        if not model.is_admissible(params, centre[0], centre[1], args.h):
+            raise model.ParameterError(f"--around ({centre[0]:g}, {centre[1]:g}) lies outside the allowed region; "
+                                       f"allowed: {model.describe_region(params, args.h)}")
+        from explorer.analysis.section_map import SectionMap
+
+        qmax = gm.SECTION_QMAX if args.qmax is None else validation.integer("--qmax", args.qmax, 2, gm.MAX_QMAX)
+        res = gm.greene(SectionMap(params, args.h, tol=args.tol), nu, qmax=qmax, around=centre, param=args.param)
+    if args.json:
+        print(json.dumps(res.as_dict()))
+        return 0
+    print(f"{res.map} map, curve nu = {res.nu!r}: critical {res.param} = {res.critical!r} +- {res.uncertainty:.2g} "
+          f"(residues of the convergents reach R* = {res.critical_residue} at {res.param}_n)")
+    print(f"p,q,{res.param}_n,residue_at_critical,point_x,point_y")
+    for c in res.convergents:
+        print(f"{c['p']},{c['q']},{c['param_value']!r},{c['residue']!r},{c['point'][0]!r},{c['point'][1]!r}")
+    return 0

@@ -1,0 +1,223 @@
+"""Greene's residue criterion on the standard map (explorer.analysis.greene): the literature's numbers.
+
+Independent checks: the half-orbit orbits are periodic orbits of (S1) iterated by hand; their
+residues against a second method, Newton and the monodromy product over the whole orbit in
+80-bit long double (numpy.longdouble, written out here); the critical k of the golden-mean
+curve and the residues there against Greene 1979 and MacKay 1983."""
+import math
+
+import numpy as np
+import pytest
+
+import explorer as ex
+from explorer.analysis import greene as gm
+from explorer.analysis.maps import StandardMap
+
+#: Greene 1979 (J. Math. Phys. 20, 1183) and MacKay 1983 (Physica D 7, 283): the golden-mean
+#: circle of the standard map breaks at k_c = 0.971635406 (published to 9 digits)
+K_C_PUBLISHED = 0.971635406
+#: MacKay 1983: the residues of the golden convergents at k_c converge to R* = 0.2500888
+R_STAR_PUBLISHED = 0.2500888
+FIBONACCI = [1, 2, 3, 5, 8, 13, 21, 34, 55, 89, 144, 233, 377, 610, 987]
+
+LD = np.longdouble
+PI_LD = LD("3.14159265358979323846264338327950288")
+
+
+def _long_double_residue(k, P, Q, p0):
+    """The second method: Newton on the half orbit, then the product of all Q Jacobians along the
+    full orbit, every operation in 80-bit long double (64-bit mantissa, 2^-64 ~ 5e-20)."""
+    k = LD(k)
+    even = Q % 2 == 0
+    n = Q // 2 if even else (Q + 1) // 2
+    p = LD(p0)
+    for _ in range(40):
+        th, pp, dth, dp = PI_LD, p, LD(0), LD(1)
+        for _ in range(n):
+            kc = k * np.cos(th)
+            dp = dp + kc * dth
+            pp = pp + k * np.sin(th)
+            dth = dth + dp
+            th = th + pp
+        f, df = (th - PI_LD - PI_LD * P, dth) if even else (2 * th - pp - 2 * PI_LD - 2 * PI_LD * P, 2 * dth - dp)
+        step = -f / df
+        p += step
+        if abs(step) < LD(1e-18) * abs(p):
+            break
+    th, pp = PI_LD, p
+    a, b, c, d = LD(1), LD(0), LD(0), LD(1)
+    for _ in range(Q):
+        kc = k * np.cos(th)
+        a, b, c, d = (1 + kc) * a + c, (1 + kc) * b + d, kc * a + c, kc * b + d
+        pp = pp + k * np.sin(th)
+        th = th + pp
+    return float((2 - (a + d)) / 4), float(p)
+
+
+def _chain(k, qmax):
+    """The symmetric orbits on theta = pi of the golden convergents up to qmax, each from the last."""
+    out, guess = [], None
+    for P, Q in gm.convergents("golden", qmax):
+        orb = gm.symmetric_orbit(StandardMap(k), P, Q, guess=guess)
+        guess = orb.points[0, 1]
+        out.append(orb)
+    return out
+
+
+def test_the_convergents_of_the_golden_mean_are_the_fibonacci_ratios():
+    conv = gm.convergents("golden", 987)
+    assert conv == [(FIBONACCI[i - 1], FIBONACCI[i]) for i in range(1, len(FIBONACCI))]
+    assert gm.convergents(0.5 * (3 - math.sqrt(5)), 233) == [(Q - P, Q) for P, Q in conv if Q <= 233]
+    assert gm.convergents(math.sqrt(2) - 1, 200) == [(1, 2), (2, 5), (5, 12), (12, 29), (29, 70), (70, 169)]
+
+
+def test_noble_numbers_are_continued_fractions_ending_in_ones():
+    g = gm.GOLDEN
+    assert gm.rotation_value("noble:6") == pytest.approx(1 / (6 + g), rel=1e-15)
+    assert gm.rotation_value("noble:5,2") == pytest.approx(1 / (5 + 1 / (2 + g)), rel=1e-15)
+    assert gm.rotation_value("noble:1") == pytest.approx(g, rel=1e-15)
+    assert gm.convergents("noble:6", 60) == [(1, 6), (1, 7), (2, 13), (3, 20), (5, 33), (8, 53)]
+    with pytest.raises(ex.ParameterError, match="noble:A"):
+        gm.rotation_value("noble:0")
+
+
+@pytest.mark.parametrize("k", (0.5, K_C_PUBLISHED, 1.0))
+def test_half_orbit_orbits_are_periodic_orbits_of_the_map_with_points_on_both_symmetry_lines(k):
+    for orb in _chain(k, 89):
+        P, Q = orb.p, orb.q
+        x = orb.points[0].copy()
+        assert x[0] == math.pi
+        for _ in range(Q):          # (S1) by hand
+            x[1] += k * math.sin(x[0])
+            x[0] += x[1]
+        assert abs(x[0] - math.pi - 2 * math.pi * P) < 1e-9 and abs(x[1] - orb.points[0, 1]) < 1e-9
+        n = Q // 2 if Q % 2 == 0 else (Q + 1) // 2
+        zn = orb.points[n] if n < Q else x
+        if Q % 2 == 0:      # z_n on Fix(I0): theta = pi (P + 1)
+            assert abs(zn[0] - math.pi * (P + 1)) < 1e-9
+        else:               # z_n on Fix(I1): 2 theta - p = 2 pi (P + 1)
+            assert abs(2 * zn[0] - zn[1] - 2 * math.pi * (P + 1)) < 1e-9
+        assert abs(np.linalg.det(orb.monodromy) - 1.0) < 1e-9 * max(1.0, np.abs(orb.monodromy).max() ** 2)
+
+
+def test_the_half_orbit_monodromy_equals_the_full_product_of_jacobians():
+    m = StandardMap(0.9)
+    for orb in _chain(0.9, 55):
+        M = np.eye(2)
+        for x in orb.points:
+            M = m.jacobian(x) @ M
+        np.testing.assert_allclose(orb.monodromy, M, rtol=1e-10, atol=1e-10)
+
+
+@pytest.mark.cpu_dependent
+@pytest.mark.parametrize("k", (0.5, K_C_PUBLISHED, 1.0))
+def test_residues_up_to_period_233_agree_with_the_long_double_full_orbit_to_1e_8(k):
+    for orb in _chain(k, 233):
+        R_ld, p_ld = _long_double_residue(k, orb.p, orb.q, orb.points[0, 1])
+        assert abs(p_ld - orb.points[0, 1]) < 1e-13
+        assert abs(orb.residue - R_ld) <= 1e-8 * max(1.0, abs(R_ld)), (orb.q, orb.residue, R_ld)
+
+
+def test_residues_vanish_below_and_grow_without_bound_above_the_breakup():
+    below = {o.q: o.residue for o in _chain(0.5, 233)}
+    above = {o.q: o.residue for o in _chain(1.0, 233)}
+    assert all(abs(below[q]) < 1e-9 for q in (89, 144, 233))            # R -> 0: the curve exists
+    assert above[89] > 3 and above[144] > 20 and above[233] > 300         # R -> infinity: it is broken
+    assert below[2] == pytest.approx(0.25 ** 2, rel=1e-12)                # R = k^2/4 for 1/2 (k = 0.5)
+
+
+@pytest.mark.cpu_dependent
+def test_greene_reproduces_greenes_critical_k_to_seven_digits_from_periods_up_to_233():
+    r = ex.greene(ex.StandardMap(0.9), "golden", qmax=233)
+    assert [c["q"] for c in r.convergents] == FIBONACCI[1:12]
+    assert abs(r.critical - K_C_PUBLISHED) < 1e-8             # Greene 1979, MacKay 1983: 0.971635406
+    assert r.uncertainty < 5e-8
+    assert r.ratio == pytest.approx(-0.376, abs=0.01)          # k_n -> k_c geometrically
+
+
+@pytest.mark.cpu_dependent
+def test_greene_to_period_987_agrees_with_the_published_nine_digits():
+    r = ex.greene(ex.StandardMap(0.9), "golden", qmax=987)
+    assert abs(r.critical - K_C_PUBLISHED) < 1e-9             # 0.971635406 (MacKay 1983), 9 digits
+    assert abs(r.critical - K_C_PUBLISHED) <= r.uncertainty + 5e-10   # within our error bar + rounding
+    # the same curve seen as 1 - nu (the symmetry (theta, p) -> (-theta, -p) maps nu to 1 - nu)
+    r2 = ex.greene(ex.StandardMap(0.9), "golden2", qmax=987)
+    assert abs(r2.critical - r.critical) < 1e-10     # other orbits, other round-off: far below the error bar
+
+
+@pytest.mark.cpu_dependent
+def test_residues_at_the_critical_k_converge_to_mackays_limit():
+    r = ex.greene(ex.StandardMap(0.9), "golden", qmax=987)
+    dev = {c["q"]: abs(c["residue"] - R_STAR_PUBLISHED) for c in r.convergents}   # MacKay 1983: R* = 0.2500888
+    assert dev[233] < 3e-4 and dev[987] < 6e-5
+    assert dev[987] < dev[377] < dev[144] < dev[55]
+    assert all(c["point"][0] == pytest.approx(math.pi) for c in r.convergents)
+
+
+def test_greene_bad_input_raises_parameter_error():
+    with pytest.raises(ex.ParameterError, match="nu"):
+        ex.greene(ex.StandardMap(0.9), 1.5)
+    with pytest.raises(ex.ParameterError, match="nu"):
+        ex.greene(ex.StandardMap(0.9), "platinum")
+    with pytest.raises(ex.ParameterError, match="qmax"):
+        ex.greene(ex.StandardMap(0.9), "golden", qmax=4)
+
+
+# ---------------------------------------------------------------- the section map (Figure 4's scene)
+def _section(mu):
+    from explorer import model
+
+    return ex.SectionMap(model.FIGURE4.with_(mu=mu), 2.0)
+
+
+@pytest.mark.cpu_dependent
+def test_section_half_orbit_orbits_are_newtons_periodic_orbits_with_the_same_residue():
+    """The half-turn shooting on p2 = 0 and the monodromy from the first half (greene_section) against
+    periodic.find_periodic_orbit (multiple shooting over all Q points, full product of Jacobians):
+    the 1/6 and 3/20 orbits of the right island at mu = 0.025."""
+    from explorer.analysis import greene_section as gs
+    from explorer.analysis import periodic
+
+    smap = _section(0.025)
+    centre = gm._centre(smap, (1.58, 0.0))
+    for P, Q in ((1, 6), (3, 20)):
+        orb = gs.first_orbit(smap, P, Q, centre)
+        assert abs(orb.rotation(smap, centre) * Q + P) < 1e-9          # turns clockwise, P/Q per return
+        newton = periodic.find_periodic_orbit(smap, orb.points, Q)
+        assert newton.period == Q
+        np.testing.assert_allclose(newton.points, orb.points, atol=1e-9)
+        assert orb.residue == pytest.approx(newton.residue, rel=1e-7, abs=1e-10)
+        full = np.eye(2)
+        for x in orb.points:
+            full = smap.jacobian(x) @ full
+        np.testing.assert_allclose(orb.monodromy, full, rtol=1e-7, atol=1e-9)
+
+
+@pytest.mark.slow
+@pytest.mark.cpu_dependent
+def test_section_greene_finds_the_breakup_of_a_noble_curve_of_the_right_island():
+    """nu = 1/(6 + gamma): the k_n converge geometrically (ratio near -0.3, as on the standard map)
+    and the residues at mu_c alternate around R*; the value itself is this project's own
+    (benchmarks/RESULTS.md GREENE-SECTION; no published reference)."""
+    nu = 1.0 / (6.0 + gm.GOLDEN)
+    r = ex.greene(_section(0.025), nu, qmax=60, around=(1.58, 0.0))
+    assert [c["q"] for c in r.convergents] == [6, 7, 13, 20, 33, 53]
+    # within its error bar of the value from q <= 139 (0.03033980 +- 4e-8, benchmarks/RESULTS.md)
+    assert r.uncertainty < 5e-6 and abs(r.critical - 0.0303398) < 2 * r.uncertainty
+    assert -0.5 < r.ratio < -0.2
+    dev = [c["residue"] - gm.CRITICAL_RESIDUE for c in r.convergents[-3:]]
+    assert dev[0] * dev[1] < 0 and dev[1] * dev[2] < 0 and max(map(abs, dev)) < 0.01
+    # the cross-check: the orbit of rotation number nu on p2 = 0 (between the last two convergents'
+    # orbits) has a converged weighted-Birkhoff average 1 % below mu_c; 1 % above, the orbit the
+    # bisection ends on is not regular with rotation nu (not converged, or an island's other number)
+    from explorer.analysis import greene_section as gs
+
+    smap = _section(0.025)
+    for factor, regular in ((0.99, True), (1.01, False)):
+        m = smap.with_parameter(factor * r.critical)
+        c = gm._centre(m, (1.58, 0.0))
+        ends = [gs.section_symmetric_orbit(m, cv["q"], cv["point"][0]).points[0, 0] for cv in r.convergents[-2:]]
+        rn = gs.curve_orbit(m, nu, c, *ends, iterates=5000)
+        # the bisection's 600-return averages place the start within ~1e-7 of nu
+        on_curve = rn.converged and abs(abs(rn.value) - nu) < 1e-6
+        assert on_curve is regular, (factor, rn)
