@@ -256,4 +256,8 @@ else:
         (each G a kernel of its own, compiled only when a caller uses it)."""
         from numba.extending import overload
 
-        return overload(stub)
+        # inline="always": the kernel is inlined into its caller in numba's IR.  Without it the
+        # overload's implementation stayed a function of its own that LLVM did not inline into
+        # the lane worker (the plain njit call before lane groups was inlined), and W4 taylor
+        # lost 4-6 % (issue 34; benchmarks/RESULTS.md)
+        return overload(stub, inline="always")
