@@ -270,11 +270,13 @@ def test_lane_groups_threads_and_orbit_order_do_not_change_a_bit():
 
 
 def test_lane_groups_are_one_two_or_four():
-    """lanes.lane_groups: the argument, else EXPLORER_LANE_GROUPS, else the default; anything but
+    """lanes.lane_groups: the argument, else EXPLORER_LANE_GROUPS, else the default of the CPU's
+    vector width (default_groups); anything but
     1, 2, 4 raises ParameterError naming the variable; worker_lanes runs a small batch on the
     fewest groups that hold its lanes."""
     assert lanes.lane_groups(2) == 2 and lanes.lane_groups("4") == 4
-    assert lanes.lane_groups() == lanes.DEFAULT_GROUPS or "EXPLORER_LANE_GROUPS" in __import__("os").environ
+    assert lanes.lane_groups() == lanes.default_groups() or "EXPLORER_LANE_GROUPS" in __import__("os").environ
+    assert lanes.default_groups() in (lanes.DEFAULT_GROUPS, lanes.AVX512_GROUPS)
     for bad in (0, 3, 8, "x"):
         with pytest.raises(model.ParameterError, match="EXPLORER_LANE_GROUPS"):
             lanes.lane_groups(bad)

@@ -42,8 +42,9 @@ lane arrays are G x LANES wide).  The generated recurrence of G groups writes ea
 statement once per group, in turn, so that the groups' independent chains can share the
 floating-point pipes; everything else runs group after group or lane by lane.  G is a
 compile-time constant (the length of the tuple ``groups`` of G zeros), so each G is compiled only
-when used.  Default 1: on AVX2 two groups' accumulators do not fit the vector registers, and
-G = 2 was slower (benchmarks/RESULTS.md, "Issue 24 (fourth session)").
+when used.  Default by the vector width (:func:`default_groups`): 1 on AVX2, where two groups'
+accumulators do not fit the vector registers and G = 2 was slower (benchmarks/RESULTS.md,
+"Issue 24 (fourth session)"); 2 with AVX-512, where it was faster ("Issue 34").
 
 Step size: ``kernels.taylor.step_size`` takes the smaller of two powers, rho_p = (s/a)^(1/p)
 and rho_{p-1} = (s/bm)^(1/(p-1)), by ``kernels.power.radius_power`` (not libm's ``pow``, a call
@@ -55,11 +56,12 @@ in scalar code (:func:`lane_step_size`), as step_size does.
 Kernel contract: arrays are allocated per worker, never inside the step loop; no
 exceptions (status codes); no fastmath.
 """
+import functools
 import os
 
 import numpy as np
 
-from explorer._jit import get_num_threads, njit, prange
+from explorer._jit import NOJIT, get_num_threads, njit, prange
 from explorer.integrate._lanes_generated import GROUPS, NVAR, taylor_coefficients_lanes
 from explorer.integrate.drivers import (
     EPS,
@@ -103,9 +105,13 @@ N_ORBIT = 5
 _G1 = 3
 _G2 = 4
 #: the groups of LANES lanes a worker advances together, unless EXPLORER_LANE_GROUPS or the
-#: caller says otherwise (lane_groups): 1, the fastest measured (benchmarks/RESULTS.md, "Issue 24
-#: (fourth session)": on AVX2 the accumulators of two groups no longer fit the 16 vector registers)
+#: caller says otherwise (lane_groups), by the vector width the kernels are compiled for
+#: (default_groups): 1 on AVX2 and narrower, where one <8 x double> already takes two registers
+#: and two groups' accumulators no longer fit the 16 vector registers (benchmarks/RESULTS.md,
+#: "Issue 24 (fourth session)": G = 2 about 1.2x slower); 2 with AVX-512 (32 registers of 8
+#: doubles: G = 2 9 % faster on W4 on a Zen 4, 4 % on a Xeon, "Issue 34")
 DEFAULT_GROUPS = 1
+AVX512_GROUPS = 2
 
 
 @njit
@@ -570,10 +576,10 @@ def run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps,
 
 def lane_groups(groups=None):
     """The number G of groups of LANES lanes a lane worker advances together: ``groups`` if given,
-    else the environment variable ``EXPLORER_LANE_GROUPS``, else :data:`DEFAULT_GROUPS`; one of
+    else the environment variable ``EXPLORER_LANE_GROUPS``, else :func:`default_groups`; one of
     GROUPS (1, 2, 4), else ParameterError."""
     if groups is None:
-        groups = os.environ.get("EXPLORER_LANE_GROUPS", "") or DEFAULT_GROUPS
+        groups = os.environ.get("EXPLORER_LANE_GROUPS", "") or default_groups()
     try:
         g = int(groups)
     except (TypeError, ValueError):
@@ -581,6 +587,25 @@ def lane_groups(groups=None):
     if g not in GROUPS:
         raise ParameterError(f"lane groups (EXPLORER_LANE_GROUPS) must be one of {GROUPS}, got {groups!r}")
     return g
+
+
+@functools.cache
+def default_groups():
+    """G for this process when neither the caller nor EXPLORER_LANE_GROUPS says: AVX512_GROUPS
+    if the kernels are compiled for a CPU with AVX-512 (numba's NUMBA_CPU_NAME and
+    NUMBA_CPU_FEATURES when set, e.g. ``generic`` in the tests, else the host), else
+    DEFAULT_GROUPS.  The results do not depend on G (tests/integrate/test_lanes.py)."""
+    if NOJIT:
+        return DEFAULT_GROUPS
+    from numba.core import config
+
+    if config.CPU_NAME and config.CPU_NAME != "host":
+        avx512 = "+avx512f" in (config.CPU_FEATURES or "")
+    else:
+        import llvmlite.binding as ll
+
+        avx512 = bool(ll.get_host_cpu_features().get("avx512f", False))
+    return AVX512_GROUPS if avx512 else DEFAULT_GROUPS
 
 
 def worker_lanes(n, nworkers, max_lanes=None, groups=None):
