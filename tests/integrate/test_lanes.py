@@ -13,7 +13,7 @@ from conftest import PARAM_SETS, assert_groups_threads_and_order_keep_the_bits, 
 from taylor_oracle import run_taylor_batch
 
 from explorer import model
-from explorer._jit import NOJIT, get_num_threads, njit, set_num_threads
+from explorer._jit import get_num_threads, set_num_threads
 from explorer.analysis import sections
 from explorer.integrate import _lanes_generated as G
 from explorer.integrate import drivers, lanes, simd
@@ -117,66 +117,47 @@ def _check_lane(P, X, order, h, out, norms, l):
         s = max(1.0, np.abs(Xs[:, 0]).max())
         assert norms[2, l] == np.abs(Xs[:, order]).max()
         assert norms[3, l] == np.abs(Xs[:, order - 1]).max()
-        factor, e_p, e_q, margin = lanes.step_constants(order)
+        factor, e_p, e_q = lanes.step_constants(order)
         assert factor == tk.safety_factor(order)
         got = lanes.lane_step_size(norms[2, l], norms[3, l], norms[4, l], norms[5, l], norms[6, l],
-                                   e_p, e_q, margin, factor)
+                                   e_p, e_q, factor)
         assert got == tk.step_size(Xs, order, factor)
         assert norms[4, l] == s / norms[2, l] and norms[5, l] == s / norms[3, l]
 
 
-@pytest.mark.skipif(NOJIT, reason="the approximation is the compiled intrinsic")
-def test_log2_approx_error_bound():
-    @njit(cache=False)
-    def approx(v, out):
-        for i in range(0, v.shape[0], simd.LANES):
-            simd.vstore(out, i, simd.vlog2_approx(simd.vload(v, i)))
-
-    rng = np.random.default_rng(5)
-    n = 64 * 4096
-    m = np.concatenate([np.linspace(1.0, 2.0, n // 2, endpoint=False), rng.uniform(1.0, 2.0, n // 2)])
-    e = rng.integers(-1022, 1024, n)
-    v = np.ldexp(m, e)
-    v[:4] = [2.2250738585072014e-308, 1.7976931348623157e308, 1.0, np.nextafter(2.0, 0.0)]
-    out = np.empty(n)
-    approx(v, out)
-    err = np.abs(out - np.log2(v))
-    assert err.max() <= 0.6 * simd.LOG2_APPROX_ERR
-
-
 @pytest.mark.parametrize("order", [4, 15, 16, 25, 40])
-def test_lane_step_size_near_ties(order):
-    """The single-pow shortcut returns step_size's double even when the two radii are nearly
-    equal and the log2 estimate d is off by the whole error bound, either way."""
+def test_lane_step_size_is_step_size_near_ties_and_for_vanishing_or_subnormal_norms(order):
+    """The vector powers of step_norms_lanes and lane_step_size give step_size's double when the
+    two radii are nearly equal (either may be the minimum), far apart, and when a norm is 0 or
+    subnormal (the scalar path)."""
     rng = np.random.default_rng(order)
     e_p, e_q = 1.0 / order, 1.0 / (order - 1)
-    factor, _e_p, _e_q, margin = lanes.step_constants(order)
-    bound = (e_p + e_q) * simd.LOG2_APPROX_ERR
-    assert margin > bound
-    for _ in range(3000):
+    factor = tk.safety_factor(order)
+    W = L
+    cases = []
+    for _ in range(400):
         s = max(1.0, 10.0 ** rng.uniform(-1, 3))
         a = 10.0 ** rng.uniform(-300, 5)
         # bm such that (s/bm)^e_q = (s/a)^e_p (1 + rel), rel from exact ties to far apart
         rel = rng.choice([0.0, 1e-16, -1e-16, 1e-13, -1e-13, 1e-9, -1e-9, 1e-5, -1e-5, 0.1, -0.5])
         with np.errstate(all="ignore"):
             bm = s / ((s / a) ** (e_p / e_q) * (1.0 + rel) ** (1.0 / e_q))
-        if not (np.isfinite(bm) and bm > 0.0):
-            continue
-        X = np.zeros((5, order + 1))
-        X[2, 0], X[3, order], X[1, order - 1] = s, -a, bm
-        want = tk.step_size(X, order, factor)
-        u, v = s / a, s / bm
-        d = e_q * math.log2(v) - e_p * math.log2(u)
-        for dd in (d, d + bound, d - bound):
-            assert lanes.lane_step_size(a, bm, u, v, dd, e_p, e_q, margin, factor) == want
-    # zero, infinite and subnormal norms take the exact path
-    for a, bm in [(0.0, 0.0), (0.0, 1e-3), (1e-3, 0.0), (5e-324, 1e-3), (1e-3, 5e-324)]:
-        X = np.zeros((5, order + 1))
-        X[0, 0], X[0, order], X[0, order - 1] = 1.0, a, bm
+        if np.isfinite(bm) and bm > 0.0:
+            cases.append((s, a, bm))
+    cases += [(1.0, a, bm) for a, bm in [(0.0, 0.0), (0.0, 1e-3), (1e-3, 0.0), (5e-324, 1e-3), (1e-3, 5e-324)]]
+    for c0 in range(0, len(cases), W):
+        X = np.zeros((order + 1, 5, W))
+        chunk = cases[c0:c0 + W]
+        for l, (s, a, bm) in enumerate(chunk):
+            X[0, 2, l], X[order, 3, l], X[order - 1, 1, l] = s, -a, bm
+        norms = np.empty((lanes.N_NORMS, W))
         with np.errstate(all="ignore"):
-            u, v = np.float64(1.0) / a, np.float64(1.0) / bm
-        got = lanes.lane_step_size(a, bm, u, v, 0.0, e_p, e_q, margin, factor)
-        assert got == tk.step_size(X, order, factor)
+            lanes.step_norms_lanes(X, order, e_p, e_q, norms, (0,))
+        for l in range(len(chunk)):
+            want = tk.step_size(np.ascontiguousarray(X[:, :, l].T), order, factor)
+            got = lanes.lane_step_size(norms[2, l], norms[3, l], norms[4, l], norms[5, l], norms[6, l],
+                                       e_p, e_q, factor)
+            assert got == want
 
 
 # ---------------------------------------------------------------- whole batches
@@ -289,11 +270,13 @@ def test_lane_groups_threads_and_orbit_order_do_not_change_a_bit():
 
 
 def test_lane_groups_are_one_two_or_four():
-    """lanes.lane_groups: the argument, else EXPLORER_LANE_GROUPS, else the default; anything but
+    """lanes.lane_groups: the argument, else EXPLORER_LANE_GROUPS, else the default of the CPU's
+    vector width (default_groups); anything but
     1, 2, 4 raises ParameterError naming the variable; worker_lanes runs a small batch on the
     fewest groups that hold its lanes."""
     assert lanes.lane_groups(2) == 2 and lanes.lane_groups("4") == 4
-    assert lanes.lane_groups() == lanes.DEFAULT_GROUPS or "EXPLORER_LANE_GROUPS" in __import__("os").environ
+    assert lanes.lane_groups() == lanes.default_groups() or "EXPLORER_LANE_GROUPS" in __import__("os").environ
+    assert lanes.default_groups() in (lanes.DEFAULT_GROUPS, lanes.AVX512_GROUPS)
     for bad in (0, 3, 8, "x"):
         with pytest.raises(model.ParameterError, match="EXPLORER_LANE_GROUPS"):
             lanes.lane_groups(bad)

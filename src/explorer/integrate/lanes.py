@@ -12,9 +12,11 @@ A step of :func:`run_worker`, for all lanes at once:
   the Horner sum (:func:`evaluate_lanes`) as vector operations of :mod:`explorer.integrate.simd`
   (lane-wise the same IEEE operations, in the same order, as ``equations.taylor_coefficients``
   and ``kernels.taylor``);
-* per lane in scalar code, the step of the method (Jorba & Zou 2005): the finiteness of the last
-  two coefficients, the step size (:func:`lane_step_size`, the double of
-  ``kernels.taylor.step_size``) clipped to tmax, the underflow test (:func:`lane_step`), the
+* the step sizes' powers for all lanes at once (:func:`step_norms_lanes`:
+  ``simd.vradius_power_core``, the vector IR of ``kernels.power.radius_power_core``; the doubles
+  of ``kernels.taylor.step_size``);
+* per lane in scalar code, the rest of the step of the method (Jorba & Zou 2005): the finiteness
+  of the last two coefficients, the clip to tmax, the underflow test (:func:`lane_step`), the
   non-finite check of the new state; then the crossings: every root of the step's Taylor
   polynomial of sin(phi - phi0) (``kernels.events.poly_step_roots``: exact to the order of the
   method), each kept on the branch phi = phi0 (:func:`explorer.integrate.drivers.keep_crossing`);
@@ -40,26 +42,26 @@ lane arrays are G x LANES wide).  The generated recurrence of G groups writes ea
 statement once per group, in turn, so that the groups' independent chains can share the
 floating-point pipes; everything else runs group after group or lane by lane.  G is a
 compile-time constant (the length of the tuple ``groups`` of G zeros), so each G is compiled only
-when used.  Default 1: on AVX2 two groups' accumulators do not fit the vector registers, and
-G = 2 was slower (benchmarks/RESULTS.md, "Issue 24 (fourth session)").
+when used.  Default by the vector width (:func:`default_groups`): 1 on AVX2, where two groups'
+accumulators do not fit the vector registers and G = 2 was slower (benchmarks/RESULTS.md,
+"Issue 24 (fourth session)"); 2 with AVX-512, where it was faster ("Issue 34").
 
-Step size: ``kernels.taylor.step_size`` takes the smaller of two ``pow``,
-rho_p = (s/a)^(1/p) and rho_{p-1} = (s/bm)^(1/(p-1)).  The lanes compute d = log2 rho_{p-1} -
-log2 rho_p with a cheap approximation (error <= (1/p + 1/(p-1)) LOG2_APPROX_ERR) and, when
-|d| exceeds that bound by a wide margin, call ``pow`` for the smaller one only: ``pow`` is
-accurate to < 1 ulp, so the other, larger by a factor > 1 + 1e-12, can never be the
-minimum.  Otherwise (about 0.2 % of the steps) both are computed and compared as in
-step_size.  The result is the same double.
+Step size: ``kernels.taylor.step_size`` takes the smaller of two powers, rho_p = (s/a)^(1/p)
+and rho_{p-1} = (s/bm)^(1/(p-1)), by ``kernels.power.radius_power`` (not libm's ``pow``, a call
+per value): branch-free arithmetic that the lanes run for all lanes at once
+(:func:`step_norms_lanes`), the same doubles as the scalar loops.  A lane whose s/a or s/bm is
+not a positive normal double (a vanishing or subnormal norm) takes ``kernels.taylor.radius_min``
+in scalar code (:func:`lane_step_size`), as step_size does.
 
 Kernel contract: arrays are allocated per worker, never inside the step loop; no
 exceptions (status codes); no fastmath.
 """
-import math
+import functools
 import os
 
 import numpy as np
 
-from explorer._jit import get_num_threads, njit, prange
+from explorer._jit import NOJIT, get_num_threads, njit, prange
 from explorer.integrate._lanes_generated import GROUPS, NVAR, taylor_coefficients_lanes
 from explorer.integrate.drivers import (
     EPS,
@@ -72,15 +74,15 @@ from explorer.integrate.drivers import (
 )
 from explorer.integrate.simd import (
     LANES,
-    LOG2_APPROX_ERR,
     atomic_fetch_add,
     vabs,
     vadd,
     vdiv,
     vload,
-    vlog2_approx,
     vmax_gt,
+    vmin_lt,
     vmul,
+    vradius_power_core,
     vsplat,
     vstore,
     vsub,
@@ -90,13 +92,11 @@ from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, ST
 from explorer.kernels import taylor as tk
 from explorer.kernels.clock import advance_time, clip_step
 from explorer.kernels.events import ISOLATE_STACK, MAX_STEP_ROOTS, excluded_by_variation, poly_step_roots
+from explorer.kernels.power import is_normal
 from explorer.model import ParameterError
 from explorer.model.equations import section_g
 
 _IDLE = -1
-#: positive normal doubles: the range where vlog2_approx is valid
-_TINY = 2.2250738585072014e-308
-_HUGE = 1.7976931348623157e308
 #: rows of the step_norms_lanes output
 N_NORMS = 7
 #: rows of the orbit (p1, p2, M, g1, g2) in every lane array: the rows that choose the step
@@ -104,22 +104,21 @@ N_ORBIT = 5
 #: rows of sin(phi) = g1 and cos(phi) = g2 in the state (p1, p2, M, g1, g2)
 _G1 = 3
 _G2 = 4
-#: slack added to the error bound of the log2 estimate (lane_step_size): pow's result
-#: differs from the exact power by < 1 ulp, far below this relative gap
-_POW_GAP = 1e-12
 #: the groups of LANES lanes a worker advances together, unless EXPLORER_LANE_GROUPS or the
-#: caller says otherwise (lane_groups): 1, the fastest measured (benchmarks/RESULTS.md, "Issue 24
-#: (fourth session)": on AVX2 the accumulators of two groups no longer fit the 16 vector registers)
+#: caller says otherwise (lane_groups), by the vector width the kernels are compiled for
+#: (default_groups): 1 on AVX2 and narrower, where one <8 x double> already takes two registers
+#: and two groups' accumulators no longer fit the 16 vector registers (benchmarks/RESULTS.md,
+#: "Issue 24 (fourth session)": G = 2 about 1.2x slower); 2 with AVX-512 (32 registers of 8
+#: doubles: G = 2 9 % faster on W4 on a Zen 4, 4 % on a Xeon, "Issue 34")
 DEFAULT_GROUPS = 1
+AVX512_GROUPS = 2
 
 
 @njit
 def step_constants(order):
-    """(factor, e_p, e_q, margin) of the steps of ``order``: the safety factor and the exponents
-    1/p, 1/(p-1) of kernels.taylor.step_size, and the margin of :func:`lane_step_size`."""
-    e_p = 1.0 / order
-    e_q = 1.0 / (order - 1)
-    return tk.safety_factor(order), e_p, e_q, (e_p + e_q) * LOG2_APPROX_ERR + _POW_GAP
+    """(factor, e_p, e_q) of the steps of ``order``: the safety factor and the exponents 1/p,
+    1/(p-1) of kernels.taylor.step_size."""
+    return tk.safety_factor(order), 1.0 / order, 1.0 / (order - 1)
 
 
 @njit
@@ -163,8 +162,8 @@ def step_norms_lanes(X, order, e_p, e_q, out, groups):
     coefficient is, or the sum overflows); with s = max(1, max_i |X[0, i]|), a = max_i
     |X[order, i]|, bm = max_i |X[order - 1, i]| (the norms of kernels.taylor.step_size, in its
     order): out[2] = a, out[3] = bm, out[4] = s / a, out[5] = s / bm (the arguments of its two
-    pow) and out[6] = e_q log2(s / bm) - e_p log2(s / a) with vlog2_approx (its sign tells which
-    pow is smaller when it is not too close to 0)."""
+    powers) and out[6] = min((s/a)^e_p, (s/bm)^e_q) (simd.vradius_power_core: the doubles of
+    kernels.taylor.radius_min where both arguments are positive normal doubles)."""
     w = len(groups) * LANES
     stride = X.shape[1] * w
     for c in range(0, w, LANES):
@@ -184,39 +183,31 @@ def step_norms_lanes(X, order, e_p, e_q, out, groups):
             bm = vmax_gt(vabs(vload(X, oq + i * w)), bm)
         u = vdiv(s, a)
         v = vdiv(s, bm)
-        d = vsub(vmul(vsplat(e_q), vlog2_approx(v)), vmul(vsplat(e_p), vlog2_approx(u)))
+        # kernels.taylor.radius_min's rho = u^e_p; if v^e_q < rho: rho = v^e_q, for all lanes
+        pu = vradius_power_core(u, e_p)
+        pv = vradius_power_core(v, e_q)
+        vstore(out, 6 * w + c, vmin_lt(pv, pu))
         vstore(out, c, f)
         vstore(out, w + c, g)
         vstore(out, 2 * w + c, a)
         vstore(out, 3 * w + c, bm)
         vstore(out, 4 * w + c, u)
         vstore(out, 5 * w + c, v)
-        vstore(out, 6 * w + c, d)
 
 
 @njit
-def lane_step_size(a, bm, u, v, d, e_p, e_q, margin, factor):
-    """kernels.taylor.step_size from its norms: a, bm (> 0 tested as there), u = s/a, v = s/bm,
-    e_p = 1/p, e_q = 1/(p-1); d ~ e_q log2 v - e_p log2 u within ``margin`` (when u, v are
-    normal).  Returns min(u^e_p, v^e_q) * factor as step_size does (inf if a = bm = 0),
-    computing a single pow when d says which one is smaller."""
-    if a > 0.0 and bm > 0.0 and u >= _TINY and u <= _HUGE and v >= _TINY and v <= _HUGE:
-        if d > margin:        # v^e_q > u^e_p (1 + 1e-12): step_size keeps rho = u^e_p
-            return u ** e_p * factor
-        if d < -margin:       # v^e_q < u^e_p (1 - 1e-12): step_size takes r2 = v^e_q
-            return v ** e_q * factor
-    rho = math.inf
-    if a > 0.0:
-        rho = u ** e_p
-    if bm > 0.0:
-        r2 = v ** e_q
-        if r2 < rho:
-            rho = r2
-    return rho * factor
+def lane_step_size(a, bm, u, v, rho, e_p, e_q, factor):
+    """kernels.taylor.step_size from its norms: a, bm, u = s/a, v = s/bm, e_p = 1/p, e_q =
+    1/(p-1) and rho = min(u^e_p, v^e_q) from :func:`step_norms_lanes`, valid when u and v are
+    positive normal doubles (then a, bm > 0 and step_size takes the same minimum); otherwise
+    (a vanishing or subnormal norm) kernels.taylor.radius_min as step_size calls it."""
+    if is_normal(u) and is_normal(v):
+        return rho * factor
+    return tk.radius_min(a, bm, u, v, e_p, e_q) * factor
 
 
 @njit(inline="always")
-def lane_step(l, norms, t, tend, e_p, e_q, margin, factor):
+def lane_step(l, norms, t, tend, e_p, e_q, factor):
     """The checks and the step of :func:`explorer.integrate.systems.taylor_step` for lane l from
     its norms (step_norms_lanes): finiteness of the last two coefficients, the step size, clipped
     to ``tend``, and the underflow test.  Returns (code, h, last): code -1 (systems.STEP_OK) or
@@ -225,7 +216,7 @@ def lane_step(l, norms, t, tend, e_p, e_q, margin, factor):
     g = norms[1, l]
     if not (f - f == 0.0 and g - g == 0.0):
         return STATUS_NONFINITE, 0.0, False
-    h = lane_step_size(norms[2, l], norms[3, l], norms[4, l], norms[5, l], norms[6, l], e_p, e_q, margin, factor)
+    h = lane_step_size(norms[2, l], norms[3, l], norms[4, l], norms[5, l], norms[6, l], e_p, e_q, factor)
     h, last = clip_step(t, h, tend)
     if not (h > EPS * abs(t)):
         return STATUS_STEP_UNDERFLOW, 0.0, False
@@ -233,7 +224,7 @@ def lane_step(l, norms, t, tend, e_p, e_q, margin, factor):
 
 
 @njit(inline="always")
-def step_lanes(orb, norms, L_t, tend, e_p, e_q, margin, factor, hv, L_last, L_status, L_stop, w):
+def step_lanes(orb, norms, L_t, tend, e_p, e_q, factor, hv, L_last, L_status, L_stop, w):
     """:func:`lane_step` for every lane (``w`` of them) that holds an orbit: its step in ``hv`` (0
     for idle and stopped lanes) and ``L_last``, or its stop in ``L_status``/``L_stop``."""
     for l in range(w):
@@ -241,7 +232,7 @@ def step_lanes(orb, norms, L_t, tend, e_p, e_q, margin, factor, hv, L_last, L_st
         L_stop[l] = False
         if orb[l] == _IDLE:
             continue
-        code, h, last = lane_step(l, norms, L_t[l], tend, e_p, e_q, margin, factor)
+        code, h, last = lane_step(l, norms, L_t[l], tend, e_p, e_q, factor)
         if code >= 0:
             stop_lane(l, code, L_status, L_stop)
             continue
@@ -470,7 +461,7 @@ def run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, o
      L_status, L_last, L_stop) = workspace_views(order, w, wf, wi, wb)
     for l in range(w):
         orb[l] = _IDLE
-    factor, e_p, e_q, margin = step_constants(order)
+    factor, e_p, e_q = step_constants(order)
     active = 0
     for l in range(w):
         if l < nlanes:
@@ -484,7 +475,7 @@ def run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, o
         taylor_coefficients_lanes(P, X, order, groups)
         step_norms_lanes(X, order, e_p, e_q, norms, groups)
         # ---- per lane: finiteness of the last two coefficients, step size, underflow
-        step_lanes(orb, norms, L_t, tmax, e_p, e_q, margin, factor, hv, L_last, L_status, L_stop, w)
+        step_lanes(orb, norms, L_t, tmax, e_p, e_q, factor, hv, L_last, L_status, L_stop, w)
         evaluate_lanes(X, order, hv, ynew, 0, groups)
         # ---- all lanes at once (vectorised): a bound of the variation of sin(phi - phi0) over
         # the step, sum_{k>=1} |c_k| h^k, so that steps far from the section skip the root
@@ -585,10 +576,10 @@ def run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps,
 
 def lane_groups(groups=None):
     """The number G of groups of LANES lanes a lane worker advances together: ``groups`` if given,
-    else the environment variable ``EXPLORER_LANE_GROUPS``, else :data:`DEFAULT_GROUPS`; one of
+    else the environment variable ``EXPLORER_LANE_GROUPS``, else :func:`default_groups`; one of
     GROUPS (1, 2, 4), else ParameterError."""
     if groups is None:
-        groups = os.environ.get("EXPLORER_LANE_GROUPS", "") or DEFAULT_GROUPS
+        groups = os.environ.get("EXPLORER_LANE_GROUPS", "") or default_groups()
     try:
         g = int(groups)
     except (TypeError, ValueError):
@@ -596,6 +587,25 @@ def lane_groups(groups=None):
     if g not in GROUPS:
         raise ParameterError(f"lane groups (EXPLORER_LANE_GROUPS) must be one of {GROUPS}, got {groups!r}")
     return g
+
+
+@functools.cache
+def default_groups():
+    """G for this process when neither the caller nor EXPLORER_LANE_GROUPS says: AVX512_GROUPS
+    if the kernels are compiled for a CPU with AVX-512 (numba's NUMBA_CPU_NAME and
+    NUMBA_CPU_FEATURES when set, e.g. ``generic`` in the tests, else the host), else
+    DEFAULT_GROUPS.  The results do not depend on G (tests/integrate/test_lanes.py)."""
+    if NOJIT:
+        return DEFAULT_GROUPS
+    from numba.core import config
+
+    if config.CPU_NAME and config.CPU_NAME != "host":
+        avx512 = "+avx512f" in (config.CPU_FEATURES or "")
+    else:
+        import llvmlite.binding as ll
+
+        avx512 = bool(ll.get_host_cpu_features().get("avx512f", False))
+    return AVX512_GROUPS if avx512 else DEFAULT_GROUPS
 
 
 def worker_lanes(n, nworkers, max_lanes=None, groups=None):

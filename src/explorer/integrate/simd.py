@@ -11,9 +11,9 @@ translates into ``_lanes_generated.py`` and ``_tangent_lanes_generated.py``.
 - :func:`vload` / :func:`vstore`: LANES consecutive elements of a C-contiguous float64 array
   (addressed by the flat index of the first);
 - :func:`vzero`, :func:`vsplat`, :func:`vadd`, :func:`vsub`, :func:`vmul`, :func:`vdiv`,
-  :func:`vneg`, :func:`vabs`, :func:`vmax_gt` (the scalar ``if v > s: s = v``);
-- :func:`vlog2_approx`: log2 within :data:`LOG2_APPROX_ERR` for positive normal values (used
-  only to decide which of two ``pow`` is the smaller, :func:`explorer.integrate.lanes.lane_step_size`);
+  :func:`vneg`, :func:`vabs`, :func:`vmax_gt` (the scalar ``if v > s: s = v``), :func:`vmin_lt`;
+- :func:`vradius_power_core`: the step size's power ``kernels.power.radius_power_core`` on every
+  lane (the same IR, emitted for a vector: lane-wise the scalar's double);
 - :func:`atomic_fetch_add`: the shared queue of orbits of the lane workers;
 - :func:`by_groups`: how a compiled caller of a generated recurrence gets the kernel of its
   number of lane groups G (a tuple of G zeros; only that kernel is compiled).
@@ -31,16 +31,13 @@ same IEEE operations).
 import numpy as np
 
 from explorer._jit import NOJIT
+from explorer.kernels.power import emit_radius_power, radius_power_core
 
 #: orbits advanced in lockstep by one vector instruction: 8 doubles = one AVX-512 register (two
 #: AVX2 registers elsewhere).  Measured (order 15, coefficients per orbit-step): 4 lanes ~62 ns,
 #: 8 lanes ~42 ns, 16 lanes ~37 ns; 8 is chosen because whole-run throughput also pays for idle
 #: lanes at block ends.
 LANES = 8
-#: log2(1 + x) ~ sum_k LOG2_POLY[k] x^k on [0, 1) (max error 2.05e-4) and a bound of the
-#: error of vlog2_approx (tests/integrate/test_lanes.py checks it)
-LOG2_POLY = (2.0426737e-4, 1.4360970, -0.66951221, 0.31221131, -0.079149502)
-LOG2_APPROX_ERR = 4e-4
 
 
 # ---------------------------------------------------------------------------- vector values
@@ -77,13 +74,16 @@ if NOJIT:  # pragma: no cover - plain-Python twins (numpy elementwise = the same
     def vmax_gt(v, s):
         return np.where(v > s, v, s)
 
+    def vmin_lt(v, s):
+        return np.where(v < s, v, s)
+
+    def vradius_power_core(v, e):
+        with np.errstate(all="ignore"):
+            return np.array([radius_power_core(x, e) for x in v])
+
     def vdiv(a, b):
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             return a / b
-
-    def vlog2_approx(v):
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return np.log2(v)
 
     def atomic_fetch_add(a, i, v):
         old = a[i]
@@ -210,31 +210,25 @@ else:
         return f64vec(f64vec, f64vec), codegen
 
     @_intrinsic
-    def vlog2_approx(typingctx, v):
-        """log2(v) within LOG2_APPROX_ERR for positive normal finite v (exponent field plus a
-        degree-4 polynomial of the mantissa); garbage for other values."""
-        if v != f64vec:
+    def vmin_lt(typingctx, v, s):
+        """v where v < s else s (the scalar ``s = v if v < s else s``; fcmp olt + select)."""
+        if not (v == f64vec and s == f64vec):
             return None
 
         def codegen(context, builder, sig, args):
-            i64 = _ir.IntType(64)
-            IT = _ir.VectorType(i64, LANES)
+            return builder.select(builder.fcmp_ordered("<", args[0], args[1]), args[0], args[1])
+        return f64vec(f64vec, f64vec), codegen
 
-            def isplat(c):
-                return _ir.Constant(IT, [c] * LANES)
+    @_intrinsic
+    def vradius_power_core(typingctx, v, e):
+        """kernels.power.radius_power_core on every lane of v: the IR of
+        kernels.power.emit_radius_power for a vector (lane-wise the scalar's IEEE operations)."""
+        if not (v == f64vec and isinstance(e, _types.Float)):
+            return None
 
-            def fsplat(c):
-                return _ir.Constant(_VT, [c] * LANES)
-            bits = builder.bitcast(args[0], IT)
-            e = builder.sitofp(builder.sub(builder.lshr(bits, isplat(52)), isplat(1023)), _VT)
-            m = builder.bitcast(builder.or_(builder.and_(bits, isplat(0x000FFFFFFFFFFFFF)),
-                                            isplat(0x3FF0000000000000)), _VT)
-            x = builder.fsub(m, fsplat(1.0))
-            p = fsplat(LOG2_POLY[-1])
-            for c in LOG2_POLY[-2::-1]:
-                p = builder.fadd(builder.fmul(p, x), fsplat(c))
-            return builder.fadd(e, p)
-        return f64vec(f64vec), codegen
+        def codegen(context, builder, sig, args):
+            return emit_radius_power(builder, args[0], args[1], LANES)
+        return f64vec(f64vec, _types.float64), codegen
 
     @_intrinsic
     def atomic_fetch_add(typingctx, a, i, v):
@@ -256,4 +250,8 @@ else:
         (each G a kernel of its own, compiled only when a caller uses it)."""
         from numba.extending import overload
 
-        return overload(stub)
+        # inline="always": the kernel is inlined into its caller in numba's IR.  Without it the
+        # overload's implementation stayed a function of its own that LLVM did not inline into
+        # the lane worker (the plain njit call before lane groups was inlined), and W4 taylor
+        # lost 4-6 % (issue 34; benchmarks/RESULTS.md)
+        return overload(stub, inline="always")

@@ -14,8 +14,9 @@ whatever the grouping of orbits into lanes and the number of threads:
   the same IEEE operations in the same order; the second vector by the same recurrence's
   statements for the deviation only), the step norms and the Horner sums by those of the
   crossing lanes (``lanes.step_norms_lanes``, ``lanes.evaluate_lanes``);
-* everything else - the step size from the orbit's rows (``lanes.lane_step_size``, the same
-  double as ``kernels.taylor.step_size``), the clip to T, the step budget, the finiteness and
+* the step sizes of all lanes from the orbit's rows (``lanes.step_norms_lanes``: the powers
+  vectorized, the same doubles as ``kernels.taylor.step_size``);
+* everything else - the clip to T, the step budget, the finiteness and
   underflow checks, the renormalisation and the accumulators of ``kernels.tangent``, the
   history rows and the early classification - is the control flow of the scalar loop, run per
   lane in scalar code.
@@ -136,7 +137,7 @@ def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_s
     L_early = np.zeros(nl, np.int64)
     L_last = np.zeros(nl, np.bool_)
     L_stop = np.zeros(nl, np.bool_)
-    factor, e_p, e_q, margin = step_constants(order)
+    factor, e_p, e_q = step_constants(order)
     active = 0
     for l in range(nl):
         if l < nlanes:
@@ -153,7 +154,7 @@ def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_s
         # ---- per lane: systems.taylor_step's checks and step size
         for l in range(nl):
             L_early[l] = tg.EARLY_NONE
-        step_lanes(orb, norms, L_t, T, e_p, e_q, margin, factor, hv, L_last, L_status, L_stop, nl)
+        step_lanes(orb, norms, L_t, T, e_p, e_q, factor, hv, L_last, L_status, L_stop, nl)
         evaluate_lanes(Z, order, hv, znew, 0, groups)
         evaluate_lanes(Z, order, hv, znew, DEV1, groups)
         if nvec == 2:

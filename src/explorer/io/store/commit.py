@@ -72,13 +72,28 @@ def _version_of(name: str):
         return None
 
 
+def _lane_groups():
+    """The lane groups G of the Taylor lane workers in this process
+    (``explorer.integrate.lanes.lane_groups``: EXPLORER_LANE_GROUPS, else chosen by the CPU's
+    vector width), or EXPLORER_LANE_GROUPS as given if it is not a valid G.  Imported here, when
+    a result is written: the store module itself does not import numba."""
+    from explorer.integrate.lanes import lane_groups
+    from explorer.model import ParameterError
+
+    try:
+        return lane_groups()
+    except ParameterError:
+        return os.environ.get("EXPLORER_LANE_GROUPS")
+
+
 def provenance(extra: dict | None = None) -> dict:
     """Where a result comes from: ``versions`` (explorer, numpy, numba, llvmlite,
     h5py, joblib, matplotlib, scipy if installed; read from package metadata,
     nothing is imported), ``python``, ``platform``, ``git_revision`` (``git
     rev-parse HEAD`` in the explorer package directory, ``+dirty`` if ``git
     status --porcelain`` is non-empty, ``"unknown"`` outside a git checkout),
-    ``command_line`` (sys.argv), ``date`` (ISO 8601 UTC); plus ``extra``."""
+    ``command_line`` (sys.argv), ``date`` (ISO 8601 UTC), ``lane_groups`` (the Taylor lanes' G,
+    :func:`_lane_groups`: it does not change results, only their speed); plus ``extra``."""
     versions = {}
     for name in _DEPENDENCIES:
         v = _version_of(name)
@@ -93,6 +108,7 @@ def provenance(extra: dict | None = None) -> dict:
         "git_revision": _git_revision(os.path.dirname(os.path.abspath(__file__))),
         "command_line": list(sys.argv),
         "date": _utcnow(),
+        "lane_groups": _lane_groups(),
     }
     if extra:
         info.update(extra)
