@@ -299,6 +299,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         """Stop the session's threads (the browser tab is gone)."""
         self.worker.stop(timeout=0)
         self.raster.stop()
+        self._cancel_overlay()
         self._stop_readouts()
         self._stop_manifolds()
 
@@ -521,6 +522,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.indicators = {}
         self.readouts, self.picked = {}, None
         self._readout_generation += 1
+        self._cancel_readout()
         self.readout.text = ""
         self.crossings.data = _empty_crossings()
         self._show_all()

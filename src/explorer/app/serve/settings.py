@@ -64,7 +64,8 @@ class Settings:
         validation.real("tol", self.tol, sections.MIN_TOL, sections.MAX_TOL)
         validation.real("dt", self.dt, 0.0, lo_open=True)
         validation.integer("crossings", self.crossings, 1, MAX_CROSSINGS)
-        validation.real("h", self.h)
+        validation.magnitude("h", self.h)      # (as --h: the model's MAX_MAGNITUDE)
+        validation.real("phi0", self.phi0)
 
     def section_kwargs(self) -> dict:
         """Keywords of :func:`explorer.analysis.sections.iter_crossings` (with ``crossings``)."""
