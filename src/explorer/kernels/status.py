@@ -15,7 +15,7 @@ class Status(IntEnum):
     MAX_STEPS = 3       #: the step budget ran out first
     STEP_UNDERFLOW = 4  #: the adaptive step became negligible against t
     UNRESOLVED = 5      #: the fixed step does not resolve the orbit's motion: not integrated
-    CANCELLED = 6       #: the caller's stop switch was set (a wall-clock budget ran out, or the result is no longer wanted)
+    CANCELLED = 6       #: the caller's stop switch was set (a budget ran out, or the result is not wanted)
 
     @property
     def description(self) -> str:

@@ -482,12 +482,21 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         else:
             self._doc.add_next_tick_callback(action)
 
-    def _field_changed(self, _event):
+    def _field_changed(self, event):
         if not self._quiet:           # (a change made by _show_fields is not the user's)
-            self._later(self._on_field)
+            name = next((n for n, w in self.inputs.items() if w is event.obj), None)
+            self._later(partial(self._on_field, name))
 
-    def _on_field(self):
-        fields = {name: w.value for name, w in self.inputs.items()}
+    def _on_field(self, name: str | None = None):
+        """The field ``name`` was edited: the applied settings with its text (every field's text
+        when None), validated by :func:`~explorer.app.serve.settings.parse_fields` as the command
+        line's values are.  A refused value changes nothing and is said in the message; it stays in
+        its field, but a later edit of another field is read on top of the applied settings (it does
+        not quote the refused one again) and puts every field back to the applied values."""
+        if name is None:
+            fields = {n: w.value for n, w in self.inputs.items()}
+        else:
+            fields = {**self.settings.fields(), name: self.inputs[name].value}
         try:
             new = parse_fields(self.base, fields)
             full = settings_mod.room_for(len(self.starts), new.crossings)
@@ -497,6 +506,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
             self.say(f"not applied: {exc}")
             return
         self.say("")
+        self._show_fields()               # (a refused text in another field goes: the fields show what applies)
         self.apply(new)
 
     def apply(self, new: Settings) -> None:
@@ -726,5 +736,10 @@ def session_app(base: Settings, export_dir=None, label: str = "", **page_options
     the session's URL arguments (``page_options``: seeds, megno_resolution, megno_time)."""
     def app():
         args = {k: v[0].decode("utf-8", "replace") for k, v in (pn.state.session_args or {}).items() if v}
-        return SectionPage(base, args, export_dir=export_dir, label=label, doc=pn.state.curdoc, **page_options).layout
+        try:
+            page = SectionPage(base, args, export_dir=export_dir, label=label, doc=pn.state.curdoc, **page_options)
+        except Exception as exc:  # noqa: BLE001 - a link the checks let through: the page without it, and why
+            page = SectionPage(base, {}, export_dir=export_dir, label=label, doc=pn.state.curdoc, **page_options)
+            page.say(f"link ignored: {type(exc).__name__}: {' '.join(str(exc).split())}")
+        return page.layout
     return app

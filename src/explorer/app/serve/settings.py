@@ -66,6 +66,12 @@ class Settings:
         validation.integer("crossings", self.crossings, 1, MAX_CROSSINGS)
         validation.magnitude("h", self.h)      # (as --h: the model's MAX_MAGNITUDE)
         validation.real("phi0", self.phi0)
+        e = model.allowed_ellipse(self.params, self.h, self.phi0)
+        if e is not None and not all(math.isfinite(float(v)) for v in e):
+            # (e.g. lam = -1e-300: the ellipse's centre or radii overflow; nothing could be drawn or computed)
+            shown = ", ".join(f"{float(v):g}" for v in e)
+            raise ParameterError(f"the allowed region is not finite at these values (centre and radii {shown}): "
+                                 "a parameter is too far from 1 (lam, a1, a2, b)")
 
     def section_kwargs(self) -> dict:
         """Keywords of :func:`explorer.analysis.sections.iter_crossings` (with ``crossings``)."""
