@@ -16,7 +16,8 @@ import time
 import urllib.request
 
 import pytest
-from test_serve import (  # noqa: F401 - the browser fixture
+import test_serve
+from test_serve import (
     DATA,
     SERVED,
     SET_BOX,
@@ -27,9 +28,11 @@ from test_serve import (  # noqa: F401 - the browser fixture
     _set_field,
     _wait,
     _wait_crossings,
-    browser,
     browser_needed,
 )
+
+#: chromium, as in test_serve.py (its module-scoped fixture)
+browser = test_serve.browser
 
 #: the server must answer within this long (s) whatever a page asked it to compute
 LIVENESS_SECONDS = 1.0
