@@ -20,6 +20,8 @@ value cancels the older search, and no search outlives its seconds.
 """
 from __future__ import annotations
 
+import heapq
+import itertools
 import math
 import threading
 import time
@@ -43,7 +45,6 @@ class Budget:
         self.max_steps = max_steps
         self.switch = np.zeros(1, np.int64)        # nonzero: the compiled loops stop (STATUS_CANCELLED)
         self.cancelled = False                     # cancel() was called (not only the time)
-        self._timer: threading.Timer | None = None
         self._inner: list[Budget] = []             # budgets entered inside this one (stopped with it)
         self.started = math.nan
 
@@ -77,9 +78,7 @@ class Budget:
     def __enter__(self) -> Budget:
         self.started = time.monotonic()
         if self.seconds is not None:
-            self._timer = threading.Timer(self.seconds, self._expire)
-            self._timer.daemon = True
-            self._timer.start()
+            _watchdog.add(self.started + self.seconds, self)
         outer = current()
         if outer is not None:
             outer._inner.append(self)
@@ -93,10 +92,48 @@ class Budget:
         outer = current()
         if outer is not None and self in outer._inner:
             outer._inner.remove(self)
-        if self._timer is not None:
-            self._timer.cancel()
+        _watchdog.drop(self)
 
 
+class _Watchdog:
+    """One daemon thread (started at the first budget with seconds) that sets the switch of each
+    budget still entered when its deadline passes: no thread per budget."""
+
+    def __init__(self):
+        self._cond = threading.Condition()
+        self._heap: list = []                 # (deadline, n, budget)
+        self._live: set = set()               # the budgets still entered (by identity)
+        self._count = itertools.count()
+        self._thread: threading.Thread | None = None
+
+    def add(self, deadline: float, budget: Budget) -> None:
+        with self._cond:
+            self._live.add(budget)
+            heapq.heappush(self._heap, (deadline, next(self._count), budget))
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._loop, name="explorer-budget-watchdog", daemon=True)
+                self._thread.start()
+            self._cond.notify()
+
+    def drop(self, budget: Budget) -> None:
+        with self._cond:
+            self._live.discard(budget)
+            # (its heap entry goes when its deadline comes; a budget is small)
+            while self._heap and self._heap[0][2] not in self._live:
+                heapq.heappop(self._heap)
+
+    def _loop(self) -> None:
+        with self._cond:
+            while True:
+                now = time.monotonic()
+                while self._heap and self._heap[0][0] <= now:
+                    _deadline, _n, b = heapq.heappop(self._heap)
+                    if b in self._live:
+                        b._expire()
+                self._cond.wait(None if not self._heap else self._heap[0][0] - now)
+
+
+_watchdog = _Watchdog()
 _local = threading.local()
 #: the switch of a thread with no budget (never set)
 _NEVER = np.zeros(1, np.int64)
