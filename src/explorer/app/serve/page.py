@@ -44,7 +44,7 @@ from functools import partial
 import numpy as np
 import panel as pn
 from bokeh.events import DoubleTap, RangesUpdate, Tap
-from bokeh.models import CDSView, ColumnDataSource, CustomJSFilter, Div, LinearColorMapper
+from bokeh.models import CDSView, ColumnDataSource, CustomJSFilter, Div, LinearColorMapper, Range1d
 from bokeh.plotting import figure
 
 from explorer import model
@@ -75,6 +75,8 @@ from explorer.app.serve.style import (
     MEGNO_HIGH,
     MEGNO_LOW,
     MEGNO_ORBIT_SKIP,
+    MESSAGE_ERROR_COLOR,
+    MESSAGE_OK_COLOR,
     PERIOD_COLORS,
     POINT_SIZE,
     SEPARATRIX_COLOR,
@@ -184,7 +186,10 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.start_source = ColumnDataSource(_empty_starts(), name="starts")
         colors = {"field": "c", "transform": LinearColorMapper(palette=list(COLORS), low=-0.5,
                                                                 high=len(COLORS) - 0.5)}
-        fig = figure(name="section", width=FIGURE_WIDTH, height=FIGURE_HEIGHT, match_aspect=True,
+        # Range1d, set by the server (_fit_view): a DataRange1d kept the window it started with in the
+        # browser (its initial start and end) whatever the server set later, and Reset went back to it
+        fig = figure(name="section", width=FIGURE_WIDTH, height=FIGURE_HEIGHT,
+                     x_range=Range1d(-1.0, 1.0), y_range=Range1d(-1.0, 1.0),
                      tools="pan,wheel_zoom,box_zoom,reset,save", active_scroll="wheel_zoom",
                      x_axis_label="p1", y_axis_label="p2", background_fill_color=FORBIDDEN_COLOR,
                      toolbar_location="above")
@@ -274,7 +279,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
             buttons.append(figure_button)
         # text, never HTML: a message may quote what was typed into a field
         self.message = Div(name="message", text="", render_as_text=True, width=FIGURE_WIDTH,
-                           styles={"color": "#b00020", "min-height": "1.2em"})
+                           styles={"color": MESSAGE_ERROR_COLOR, "min-height": "1.2em"})
         self.status = Div(name="status", text="click in the white region to start an orbit", render_as_text=True,
                           width=FIGURE_WIDTH)
         self.overlay_text = Div(name="overlay", text="", render_as_text=True, width=FIGURE_WIDTH)
@@ -367,8 +372,20 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
     _quiet = False
 
     # ------------------------------------------------------------ actions
-    def say(self, text: str) -> None:
+    def say(self, text: str, ok: bool = False) -> None:
+        """The message under the figure: a refusal or a failure in the error colour, or (``ok``) what
+        went well in the success colour (:meth:`tell`)."""
+        self.message_ok = bool(ok)
+        color = MESSAGE_OK_COLOR if ok else MESSAGE_ERROR_COLOR
+        if self.message.styles.get("color") != color:
+            self.message.styles = {**self.message.styles, "color": color}
         self.message.text = text
+
+    def tell(self, text: str) -> None:
+        """A success (an export written, seeds started) under the figure, in the success colour."""
+        self.say(text, ok=True)
+
+    message_ok = False
 
     def _draw_region(self):
         r = self.settings.region
@@ -379,10 +396,17 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
             return
         c1, c2, r1, r2 = r
         self.region.data = {"x": [c1], "y": [c2], "width": [2 * r1], "height": [2 * r2]}
-        m1, m2 = (1 + VIEW_MARGIN) * r1, (1 + VIEW_MARGIN) * r2
-        self.figure.x_range.start, self.figure.x_range.end = c1 - m1, c1 + m1
-        self.figure.y_range.start, self.figure.y_range.end = c2 - m2, c2 + m2
-        self.window = raster_mod.Window(c1 - m1, c1 + m1, c2 - m2, c2 + m2)
+        self._fit_view(c1, c2, (1 + VIEW_MARGIN) * r1, (1 + VIEW_MARGIN) * r2)
+
+    def _fit_view(self, c1: float, c2: float, m1: float, m2: float) -> None:
+        """Show the box c1 +- m1, c2 +- m2, the same length per pixel along both axes (the frame's
+        size as drawn; before that, the nominal size), and make it the view Reset goes back to."""
+        px, py = self._frame_px()
+        scale = max(2.0 * m1 / max(px, 1.0), 2.0 * m2 / max(py, 1.0))     # p-units per pixel
+        h1, h2 = 0.5 * scale * max(px, 1.0), 0.5 * scale * max(py, 1.0)
+        for rng, lo, hi in ((self.figure.x_range, c1 - h1, c1 + h1), (self.figure.y_range, c2 - h2, c2 + h2)):
+            rng.update(start=lo, end=hi, reset_start=lo, reset_end=hi)
+        self.window = raster_mod.Window(c1 - h1, c1 + h1, c2 - h2, c2 + h2)
 
     def _start(self, p1: float, p2: float, color: int | None = None, mark_later: bool = False):
         """Queue the orbit from (p1, p2) and mark its start (``mark_later``, a click on a served
@@ -523,6 +547,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         dropped = sum(r is None for r in kept)
         if dropped:
             self.say(f"{dropped} start(s) outside the new allowed region dropped")
+        self._update_status()        # (the orbits and values now, also when every start was dropped)
         self._push_url()
 
     def _drop_orbits(self) -> list:
@@ -583,7 +608,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
             why = settings_mod.room_for(len(self.starts) + 1, self.settings.crossings)
             self.say(f"scene seeds: {n} of {len(starts)} started ({why})")
         else:
-            self.say(f"scene seeds: {n} orbits started")
+            self.tell(f"scene seeds: {n} orbits started")
         self._push_url()
         return n
 

@@ -77,16 +77,16 @@ class ExportsMixin:
     def export_figure(self) -> None:
         """Write the page's view as PNG and SVG into the export directory (drawn in a thread)."""
         view = self.view()
-        self.say("writing the figure ...")
+        self.tell("writing the figure ...")
         threading.Thread(target=self._write_figure, args=(view,), name="explorer-serve-figure", daemon=True).start()
 
     def _write_figure(self, view):
         try:
             paths = export.write_figure(self.export_dir, view)
-            text = "figure written: " + " and ".join(os.path.basename(p) for p in paths)
+            text, ok = "figure written: " + " and ".join(os.path.basename(p) for p in paths), True
         except Exception as exc:  # noqa: BLE001 - reported in the page
-            text = f"figure export failed: {type(exc).__name__}: {' '.join(str(exc).split())}"
-        self._post(partial(self.say, text))
+            text, ok = f"figure export failed: {type(exc).__name__}: {' '.join(str(exc).split())}", False
+        self._post(partial(self.say, text, ok))
 
     def export(self) -> str | None:
         """Write the session's scene into the export directory; returns its path."""
@@ -97,7 +97,7 @@ class ExportsMixin:
             self.say(f"export failed: {exc}")
             return None
         name = os.path.basename(path)
-        self.say(f"scene written: {name} (rerun: explorer sweep {name}); writing the orbits' store ...")
+        self.tell(f"scene written: {name} (rerun: explorer sweep {name}); writing the orbits' store ...")
         threading.Thread(target=self._write_store, args=(path,), name="explorer-serve-store", daemon=True).start()
         return path
 
@@ -106,6 +106,7 @@ class ExportsMixin:
         try:
             out = export.write_store(scene_path)
             text = f"written: {os.path.basename(scene_path)} and {os.path.basename(out)} (the orbits, sweep format)"
+            ok = True
         except Exception as exc:  # noqa: BLE001 - reported in the page
-            text = f"store export failed: {type(exc).__name__}: {' '.join(str(exc).split())}"
-        self._post(partial(self.say, text))
+            text, ok = f"store export failed: {type(exc).__name__}: {' '.join(str(exc).split())}", False
+        self._post(partial(self.say, text, ok))
