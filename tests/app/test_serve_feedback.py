@@ -120,3 +120,77 @@ def test_after_a_change_the_view_follows_the_new_region_and_reset_goes_back_to_i
         _wait(page, f"() => Math.abs(({RANGE})()[0] - {x0}) < 1e-9 && Math.abs(({RANGE})()[1] - {x1}) < 1e-9")
     finally:
         page.close()
+
+
+def _luminance(colour: str) -> float:
+    """WCAG relative luminance of "#rrggbb"."""
+    c = [int(colour[i:i + 2], 16) / 255.0 for i in (1, 3, 5)]
+    r, g, b = (v / 12.92 if v <= 0.03928 else ((v + 0.055) / 1.055) ** 2.4 for v in c)
+    return 0.2126 * r + 0.7152 * g + 0.0722 * b
+
+
+def _contrast(a: str, b: str) -> float:
+    la, lb = sorted((_luminance(a), _luminance(b)))
+    return (lb + 0.05) / (la + 0.05)
+
+
+def test_the_separatrices_stand_out_on_every_colour_of_the_megno_layer_and_it_has_a_colour_bar():
+    from explorer.app.serve.style import ALLOWED_COLOR, megno_palette
+
+    page = _page(SERVED)
+    try:
+        casing, line = (r.glyph.line_color for r in page.separatrix_lines)
+        for background in [*megno_palette(), ALLOWED_COLOR]:           # WCAG's 3:1 for graphics
+            assert max(_contrast(line, background), _contrast(casing, background)) >= 3.0, background
+        assert not page.colour_bar.visible
+        page.layer.value = True
+        assert page.colour_bar.visible and page.url_query()["megno"] == "1"
+        page.layer.value = False
+        assert not page.colour_bar.visible
+    finally:
+        page.close()
+
+
+def test_start_markers_can_be_hidden_and_shown_again():
+    page = _page(SERVED)
+    try:
+        c1, c2, r1, _r2 = SERVED.region
+        page.click(c1 + 0.3 * r1, c2)
+        assert page.start_marks.visible and len(page.start_source.data["p1"]) == 1
+        page.starts_box.value = False
+        assert not page.start_marks.visible and len(page.start_source.data["p1"]) == 1   # hidden, kept
+        page.starts_box.value = True
+        assert page.start_marks.visible
+    finally:
+        page.close()
+
+
+def test_the_exported_svg_names_each_element_once_and_the_scene_records_the_overlays_that_were_on():
+    import dataclasses
+    import xml.etree.ElementTree as ET
+
+    import numpy as np
+
+    from explorer.app.serve.image import render
+    from explorer.io.scene import parse_scene as load_scene_text
+
+    page = _page(SERVED, {"separatrices": "1", "periodic": "1"})
+    try:
+        c1, c2, r1, _r2 = SERVED.region
+        page.click(c1 + 0.3 * r1, c2)
+        page.click(c1 - 0.3 * r1, c2)
+        arc = np.column_stack([np.linspace(c1, c1 + 0.1, 5), np.full(5, c2)])
+        view = dataclasses.replace(page.view(), separatrices=[arc, arc + 0.01],
+                                   manifolds=[("unstable", arc), ("unstable", arc + 0.02), ("stable", arc + 0.03),
+                                              ("stable", arc + 0.04)])
+        ids = [e.get("id") for e in ET.fromstring(render(view, "svg")).iter() if e.get("id")]
+        assert len(ids) == len(set(ids)), sorted(i for i in ids if ids.count(i) > 1)
+        assert sum(i.startswith("manifold-unstable") for i in ids) == 2
+        scene = load_scene_text(page._scene_text())
+        assert "separatrices" in scene.compute and "periodic" in scene.description
+        plain = _page(SERVED)
+        plain.click(c1 + 0.3 * r1, c2)
+        assert "separatrices" not in load_scene_text(plain._scene_text()).compute
+        plain.close()
+    finally:
+        page.close()

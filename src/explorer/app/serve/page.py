@@ -44,7 +44,7 @@ from functools import partial
 import numpy as np
 import panel as pn
 from bokeh.events import DoubleTap, RangesUpdate, Tap
-from bokeh.models import CDSView, ColumnDataSource, CustomJSFilter, Div, LinearColorMapper, Range1d
+from bokeh.models import CDSView, ColorBar, ColumnDataSource, CustomJSFilter, Div, LinearColorMapper, Range1d
 from bokeh.plotting import figure
 
 from explorer import model
@@ -79,6 +79,7 @@ from explorer.app.serve.style import (
     MESSAGE_OK_COLOR,
     PERIOD_COLORS,
     POINT_SIZE,
+    SEPARATRIX_CASING,
     SEPARATRIX_COLOR,
     VIEW_MARGIN,
     megno_palette,
@@ -200,10 +201,17 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
                                   nan_color=(0, 0, 0, 0))
         fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=self.raster_source, color_mapper=megno,
                   alpha=0.85)
+        # the MEGNO layer's scale, shown with the layer
+        self.colour_bar = ColorBar(color_mapper=megno, title="⟨Y⟩ (MEGNO)", visible=False, width=12,
+                                   name="megno-colour-bar")
+        fig.add_layout(self.colour_bar, "right")
         self.fixed = ColumnDataSource({"p1": [], "p2": [], "kind": [], "marker": []}, name="fixed")
         self.curves = ColumnDataSource({"xs": [], "ys": []}, name="separatrices")
         self.periodic = ColumnDataSource(_empty_periodic(), name="periodic")
-        fig.multi_line("xs", "ys", source=self.curves, line_color=SEPARATRIX_COLOR, line_width=1.2)
+        # a dark casing under a bright line: visible on white and on every colour of the MEGNO layer
+        self.separatrix_lines = (
+            fig.multi_line("xs", "ys", source=self.curves, line_color=SEPARATRIX_CASING, line_width=3.0),
+            fig.multi_line("xs", "ys", source=self.curves, line_color=SEPARATRIX_COLOR, line_width=1.4))
         self.manifold_source = ColumnDataSource(_empty_manifolds(), name="manifolds")
         fig.multi_line("xs", "ys", source=self.manifold_source, line_color="color", line_width=1.2)
         self._by_orbit = colors
@@ -221,8 +229,8 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         # (not the primary one with every older crossing and the images; benchmarks/bench_serve.py)
         self.live_points = fig.scatter("p1", "p2", source=self.live, color=colors, size=POINT_SIZE, line_width=0,
                                        level="overlay")
-        fig.scatter("p1", "p2", source=self.start_source, marker="cross", color=colors, size=9, line_width=2,
-                    level="overlay")   # (above the crossings and the images)
+        self.start_marks = fig.scatter("p1", "p2", source=self.start_source, marker="cross", color=colors, size=9,
+                                       line_width=2, level="overlay")   # (above the crossings and the images)
         fig.scatter("p1", "p2", source=self.periodic, marker="marker", size=8, line_color="black",
                     fill_color={"field": "period", "transform": LinearColorMapper(
                         palette=list(PERIOD_COLORS), low=0.5, high=len(PERIOD_COLORS) + 0.5)}, line_width=1.5)
@@ -261,6 +269,8 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.colour_box.param.watch(lambda _e: self._later(self._colour_changed), "value")
         self.periodic_box = pn.widgets.Checkbox(label=f"periodic orbits, periods 1-{PERIODIC_MAX}", value=False)
         self.periodic_box.param.watch(lambda _e: self._later(self._overlay_changed), "value")
+        self.starts_box = pn.widgets.Checkbox(label="start markers (+)", value=True)
+        self.starts_box.param.watch(lambda _e: self._later(self._starts_box_changed), "value")
         self.pause_box = pn.widgets.Checkbox(label=PAUSE_LABEL, value=True)
         self.pause_box.param.watch(lambda _e: self._later(self._push_url), "value")
         download = pn.widgets.FileDownload(callback=self._scene_file, filename=f"{export.SCENE_NAME}.toml",
@@ -290,7 +300,8 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         title = "explorer: Poincaré section φ = π" + (f" ({self.label})" if self.label else "")
         controls = pn.Column(pn.pane.Markdown("a click (Shift + click: pick):", margin=(0, 5)), self.click_mode,
                              self.pause_box, pn.GridBox(*self.inputs.values(), ncols=2), self.colour_box, self.layer,
-                             self.overlay, self.periodic_box, pn.Row(*buttons[:2]), *buttons[2:], width=230)
+                             self.overlay, self.periodic_box, self.starts_box, pn.Row(*buttons[:2]), *buttons[2:],
+                             width=230)
         self.layout = pn.Row(controls, pn.Column(pn.pane.Markdown(f"### {title}"), pn.pane.Bokeh(fig),
                                                  pn.pane.Bokeh(self.status), pn.pane.Bokeh(self.readout),
                                                  pn.pane.Bokeh(self.message), pn.pane.Bokeh(self.overlay_text)))
@@ -372,6 +383,10 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
     _quiet = False
 
     # ------------------------------------------------------------ actions
+    def _starts_box_changed(self) -> None:
+        """Show or hide the clicked starts' crosses."""
+        self.start_marks.visible = bool(self.starts_box.value)
+
     def say(self, text: str, ok: bool = False) -> None:
         """The message under the figure: a refusal or a failure in the error colour, or (``ok``) what
         went well in the success colour (:meth:`tell`)."""

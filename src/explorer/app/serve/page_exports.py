@@ -21,7 +21,13 @@ class ExportsMixin:
     """Scene and figure exports of :class:`~explorer.app.serve.page.SectionPage`."""
 
     def _scene_text(self) -> str:
-        return export.session_scene(self.settings, [(a, b) for _i, a, b, _c in self.starts]).to_toml()
+        return export.session_scene(self.settings, [(a, b) for _i, a, b, _c in self.starts],
+                                    overlays=self.overlays_on()).to_toml()
+
+    def overlays_on(self) -> tuple:
+        """The names of the overlays that are on (separatrices, periodic, megno), as in the URL."""
+        q = self.url_query()
+        return tuple(n for n in ("separatrices", "periodic", "megno") if q.get(n) == "1")
 
     def _scene_file(self):
         try:
@@ -91,7 +97,8 @@ class ExportsMixin:
     def export(self) -> str | None:
         """Write the session's scene into the export directory; returns its path."""
         try:
-            sc = export.session_scene(self.settings, [(a, b) for _i, a, b, _c in self.starts])
+            sc = export.session_scene(self.settings, [(a, b) for _i, a, b, _c in self.starts],
+                                      overlays=self.overlays_on())
             path = export.write_scene(self.export_dir, sc)
         except (ParameterError, OSError) as exc:
             self.say(f"export failed: {exc}")

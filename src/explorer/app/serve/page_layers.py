@@ -126,6 +126,7 @@ class LayersMixin:
                              "n": [shown]}
 
     def _layer_changed(self):
+        self.colour_bar.visible = bool(self.layer.value)
         self._restart_raster()
         self._push_url()
 
