@@ -194,3 +194,34 @@ def test_the_exported_svg_names_each_element_once_and_the_scene_records_the_over
         plain.close()
     finally:
         page.close()
+
+
+def test_the_section_angle_is_a_field_and_the_zoom_window_is_in_the_link():
+    from explorer.app.serve.raster import Window
+    from explorer.app.serve.settings import format_window, parse_window
+
+    page = _page(SERVED)
+    try:
+        region0 = page.settings.region
+        page.inputs["phi0"].value = "0.5"                     # the section phi = 0.5
+        assert page.settings.phi0 == 0.5 and page.url_query()["phi0"] == "0.5"
+        assert "φ = 0.5" in page.title.object and page.settings.region != region0
+        assert page.settings.orbit_args(0.1, 0.0)[page.settings.orbit_args(0.1, 0.0).index("--phi0") + 1] == "0.5"
+        w = Window(-0.3, 0.2 / 3, -0.25, 0.1)
+        page._on_ranges(type("E", (), {"x0": w.x0, "x1": w.x1, "y0": w.y0, "y1": w.y1})())   # a zoom
+        link = page.url_query()
+        assert parse_window(link["view"]) == w and format_window(w) == link["view"]          # exactly
+        again = _page(SERVED, link)                            # the link reopens the same angle and window
+        try:
+            assert again.settings == page.settings and again.window == w
+            assert (again.figure.x_range.start, again.figure.x_range.end) == (w.x0, w.x1)
+        finally:
+            again.close()
+        for bad in ("1,2,3", "1,0,0,1", "nan,1,0,1", "0,1e300,0,1"):
+            with pytest.raises(model.ParameterError, match="view"):
+                parse_window(bad)
+        odd = _page(SERVED, {"view": "1,0,0,1", "mu": "0.5"})
+        assert odd.settings.params.mu == 0.5 and "view ignored" in odd.message.text       # the rest applies
+        odd.close()
+    finally:
+        page.close()

@@ -64,7 +64,15 @@ from explorer.app.serve.page_layers import (  # noqa: F401
     _empty_raster,
 )
 from explorer.app.serve.page_readout import ReadoutMixin
-from explorer.app.serve.settings import FIELDS, Settings, format_starts, parse_fields, parse_starts
+from explorer.app.serve.settings import (
+    FIELDS,
+    Settings,
+    format_starts,
+    format_window,
+    parse_fields,
+    parse_starts,
+    parse_window,
+)
 from explorer.app.serve.style import (
     ALLOWED_COLOR,
     BOUNDARY_COLOR,
@@ -112,7 +120,7 @@ GLYPH_FILTER = ("const o = source.data.orbit, n = o.length, rows = [];\n"
 #: labels of the fields
 LABELS = {p.name: p.symbol for p in model.PARAMETERS} | {
     "h": "h", "method": "method", "tol": "tol (taylor, dop853)", "dt": "dt (split*)",
-    "crossings": "crossings per click"}
+    "crossings": "crossings per click", "phi0": "φ0 (section φ = φ0)"}
 
 
 def _empty_live() -> dict:
@@ -297,12 +305,12 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
                            styles={"font-family": "monospace"})
         self.click_mode = pn.widgets.RadioButtonGroup(options=list(CLICK_MODES),
                                                       value=CLICK_MODES[0], width=220)
-        title = "explorer: Poincaré section φ = π" + (f" ({self.label})" if self.label else "")
+        self.title = pn.pane.Markdown(self._title())
         controls = pn.Column(pn.pane.Markdown("a click (Shift + click: pick):", margin=(0, 5)), self.click_mode,
                              self.pause_box, pn.GridBox(*self.inputs.values(), ncols=2), self.colour_box, self.layer,
                              self.overlay, self.periodic_box, self.starts_box, pn.Row(*buttons[:2]), *buttons[2:],
                              width=230)
-        self.layout = pn.Row(controls, pn.Column(pn.pane.Markdown(f"### {title}"), pn.pane.Bokeh(fig),
+        self.layout = pn.Row(controls, pn.Column(self.title, pn.pane.Bokeh(fig),
                                                  pn.pane.Bokeh(self.status), pn.pane.Bokeh(self.readout),
                                                  pn.pane.Bokeh(self.message), pn.pane.Bokeh(self.overlay_text)))
 
@@ -332,7 +340,14 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
             self.settings, starts = self.base, []
             self.say(f"link ignored: {exc}")
         self._show_fields()
+        if self.settings.phi0 != self.base.phi0:
+            self.title.object = self._title()
         self._draw_region()
+        if args.get("view"):
+            try:
+                self._show_window(parse_window(args["view"]))
+            except ParameterError as exc:
+                self.say(f"link's view ignored: {exc}")
         self.layer.value = args.get("megno") == "1"
         self.overlay.value = args.get("separatrices") == "1"
         self.periodic_box.value = args.get("periodic") == "1"
@@ -350,6 +365,9 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         q["periodic"] = "1" if self.periodic_box.value else "0"
         q["colour"] = "megno" if self.colour_box.value else "orbit"
         q["pause"] = "1" if self.pause_box.value else "0"
+        if self.window is not None:
+            w = self.window
+            q["view"] = format_window(w)
         return q
 
     def _push_url_soon(self):
@@ -383,6 +401,11 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
     _quiet = False
 
     # ------------------------------------------------------------ actions
+    def _title(self) -> str:
+        phi0 = self.settings.phi0
+        shown = "π" if phi0 == math.pi else f"{phi0:.6g}"
+        return f"### explorer: Poincaré section φ = {shown}" + (f" ({self.label})" if self.label else "")
+
     def _starts_box_changed(self) -> None:
         """Show or hide the clicked starts' crosses."""
         self.start_marks.visible = bool(self.starts_box.value)
@@ -412,6 +435,12 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         c1, c2, r1, r2 = r
         self.region.data = {"x": [c1], "y": [c2], "width": [2 * r1], "height": [2 * r2]}
         self._fit_view(c1, c2, (1 + VIEW_MARGIN) * r1, (1 + VIEW_MARGIN) * r2)
+
+    def _show_window(self, w) -> None:
+        """Show the window ``w`` (a link's zoom; Reset still goes to the region's view)."""
+        self.figure.x_range.update(start=w.x0, end=w.x1)
+        self.figure.y_range.update(start=w.y0, end=w.y1)
+        self.window = w
 
     def _fit_view(self, c1: float, c2: float, m1: float, m2: float) -> None:
         """Show the box c1 +- m1, c2 +- m2, the same length per pixel along both axes (the frame's
@@ -553,12 +582,17 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         if new == self.settings:
             return
         old = self._drop_orbits()
+        angle_changed = new.phi0 != self.settings.phi0
         self.settings = new
+        if angle_changed:                 # (only then: a change of the title is a message of its own)
+            self.title.object = self._title()
+        # the kept starts' crosses go before the region and the view (one message each, in order): a
+        # page that shows the new region shows the starts that run again in it
+        kept = [self._start(p1, p2, color) for _i, p1, p2, color in old]
         self._draw_region()
         self._show_fields()
         self._restart_raster()
         self._restart_overlay()
-        kept = [self._start(p1, p2, color) for _i, p1, p2, color in old]
         dropped = sum(r is None for r in kept)
         if dropped:
             self.say(f"{dropped} start(s) outside the new allowed region dropped")

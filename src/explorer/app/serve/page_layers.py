@@ -65,6 +65,7 @@ class LayersMixin:
         if self.layer.value:
             self._restart_raster()
         self._refresh_density(force=True)
+        self._push_url_soon()             # (the zoom window is in the link)
 
     def _refresh_density(self, force: bool = False) -> None:
         """Draw the crossings that are not glyphs as the density image of the visible window: past
