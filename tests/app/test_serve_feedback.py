@@ -3,8 +3,10 @@
 Without a browser (a SectionPage in-process): a refused value does not poison later edits of other
 fields; the status line follows a change that drops every start; successes and errors have their
 own colours; at mu = 1.5 the fixed-point overlay lists its hyperbolic points at once and draws
-their separatrices without a "no return" failure.  In chromium: after a change of mu the view
-follows the new region, and Reset goes back to it (not to the first window).
+their separatrices without a "no return" failure; readability (separatrices on the MEGNO layer, its
+colour bar, start markers, unique SVG ids, the exported scene's overlays); phi0 and the zoom window
+in the link.  In chromium: after a change of mu the view follows the new region, and Reset goes
+back to it (not to the first window); a page whose server stops says so.
 """
 from __future__ import annotations
 
@@ -225,3 +227,19 @@ def test_the_section_angle_is_a_field_and_the_zoom_window_is_in_the_link():
         odd.close()
     finally:
         page.close()
+
+
+@browser_needed
+def test_a_page_whose_server_stops_says_the_connection_is_lost(browser):
+    from explorer.app.serve.server import DISCONNECT_NOTICE
+
+    s = test_serve.Served("--crossings", "150", "--mu", "0.03")
+    page = None
+    try:
+        page = _open(browser, s.url)
+        assert DISCONNECT_NOTICE not in page.evaluate("() => document.body.innerText")
+    finally:
+        code, _err = s.interrupt()
+    assert code in (0, 130)
+    _wait(page, f"() => document.body.innerText.includes({DISCONNECT_NOTICE[:40]!r})", timeout=30_000)
+    page.close()

@@ -319,8 +319,11 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self._doc = doc
         doc.on_session_destroyed(lambda _ctx: self.close())
 
+    _closed = False
+
     def close(self) -> None:
         """Stop the session's threads (the browser tab is gone)."""
+        self._closed = True
         self.worker.stop(timeout=0)
         self.raster.stop()
         self._cancel_overlay()
@@ -528,7 +531,12 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         """From a worker thread: run ``action`` on the document's loop (a served page), or keep it
         for :meth:`poll` (a notebook, where no Bokeh server owns the document)."""
         if self._doc is not None:
-            self._doc.add_next_tick_callback(action)
+            if self._closed:
+                return                       # the session is gone: nothing to show it on
+            try:
+                self._doc.add_next_tick_callback(action)
+            except (AttributeError, RuntimeError, ValueError):
+                return                       # (destroyed meanwhile: Bokeh tore the document's callbacks down)
         else:
             with self._pending_lock:
                 self._inbox.append(action)

@@ -29,6 +29,8 @@ from explorer.app.serve.settings import Settings
 
 #: the URL argument that carries the token
 TOKEN_ARG = "token"
+#: what a page shows when its connection to the server is lost (the server stopped, the network went)
+DISCONNECT_NOTICE = "connection to the server lost: nothing on this page is computed any more; reload when it is back"
 
 
 def is_loopback(host: str) -> bool:
@@ -95,6 +97,8 @@ def make_server(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT
     else:
         hosts = dict.fromkeys(("127.0.0.1", "localhost", host))
         kw["websocket_origin"] = [f"{h}:{port}" for h in hosts if ":" not in h]   # (Bokeh takes no IPv6 here)
+    # a page whose server has gone says so (Panel's notification on a lost connection)
+    pn.config.disconnect_notification = DISCONNECT_NOTICE
     app = session_app(base, export_dir=export_dir, label=label, **page_options)
     # liveness: GET /liveness answers {"/liveness": true} from the event loop, nothing else (a health
     # check: a loop that a computation held would not answer; tests/app/test_serve_hostile.py)
