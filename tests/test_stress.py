@@ -271,13 +271,13 @@ def test_taylor_return_map_backward_retraces_five_crossings():
         y = y0
         for _ in range(5):
             out, Vout = np.empty(5), np.empty((0, 5))
-            st, t = return_map_taylor(y, V0, P, -1.0, 0.0, 1.0, 1e3, order, 10**7, out, Vout)
+            st, t = return_map_taylor(y, V0, P, -1.0, 0.0, 1.0, 1e3, order, 10**7, np.zeros(1, np.int64), out, Vout)
             assert st == STATUS_DONE and t > 0
             y = out.copy()
             path.append(y)
         for k in range(5, 0, -1):
             out, Vout = np.empty(5), np.empty((0, 5))
-            st, t = return_map_taylor(y, V0, P, -1.0, 0.0, -1.0, 1e3, order, 10**7, out, Vout)
+            st, t = return_map_taylor(y, V0, P, -1.0, 0.0, -1.0, 1e3, order, 10**7, np.zeros(1, np.int64), out, Vout)
             assert st == STATUS_DONE and t < 0
             assert np.abs(out - path[k - 1]).max() <= 1e-10, (k, np.abs(out - path[k - 1]).max())
             y = out.copy()

@@ -76,7 +76,7 @@ def test_the_overlay_marks_the_fixed_points_and_draws_their_separatrices():
     page = SectionPage(Settings(params=model.FIGURE4.with_(mu=0.5)), {"separatrices": "1"})
     try:
         t0 = time.time()
-        while not page.fixed.data["p1"] and time.time() - t0 < 120:
+        while "separatrix branches" not in page.overlay_text.text and time.time() - t0 < 120:   # (points first)
             page.poll()
             time.sleep(0.02)
         fp = find_fixed_point(page.settings.params, page.settings.h, (-0.2, 0.0))   # solution I, hyperbolic

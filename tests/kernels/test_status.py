@@ -9,9 +9,11 @@ from explorer.kernels import STATUS_NAMES, Status, status
 
 def test_status_values_are_the_stored_codes():
     # files written since the first release store these codes; renumbering would change old data
-    # (new codes are appended: UNRESOLVED, a fixed step that does not resolve the motion)
+    # (new codes are appended: UNRESOLVED, a fixed step that does not resolve the motion; CANCELLED,
+    # a caller's stop switch)
     assert [(s.name, int(s)) for s in Status] == [("DONE", 0), ("TMAX", 1), ("NONFINITE", 2),
-                                                  ("MAX_STEPS", 3), ("STEP_UNDERFLOW", 4), ("UNRESOLVED", 5)]
+                                                  ("MAX_STEPS", 3), ("STEP_UNDERFLOW", 4), ("UNRESOLVED", 5),
+                                                  ("CANCELLED", 6)]
     assert STATUS_NAMES == {int(s): s.description for s in Status}
     assert status.STATUS_TMAX == Status.TMAX and isinstance(status.STATUS_TMAX, int)
 

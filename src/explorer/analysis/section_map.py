@@ -37,9 +37,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from explorer import model
+from explorer.analysis import budget
 from explorer.integrate.methods import MAP_TOL, MAX_TOL, MIN_TOL
 from explorer.integrate.tangent import return_map_taylor
-from explorer.kernels import STATUS_DONE, STATUS_NAMES
+from explorer.kernels import STATUS_CANCELLED, STATUS_DONE, STATUS_NAMES
 from explorer.kernels.taylor import order_for_tolerance
 from explorer.model import ParameterError, validation
 from explorer.model.equations import rhs
@@ -73,6 +74,9 @@ class SectionMap:
     ``smap(x)`` is P(x) with DP(x) and the return time (a :class:`MapResult`);
     ``smap.jacobian(x)``, ``smap.iterate(x, n)`` and ``smap.inverse(x)`` are shorthands.
     A point with no return within ``tmax`` raises :class:`~explorer.model.ParameterError`.
+    Inside a :class:`~explorer.analysis.budget.Budget` (its thread's current one) a return stops
+    within a step of the budget's switch and raises
+    :class:`~explorer.analysis.budget.BudgetExceeded`.
     """
 
     #: the integrator of the map (its Jacobian is the variational Taylor series); the analyses
@@ -127,8 +131,11 @@ class SectionMap:
         V0 = self.lift(y0) if jacobian else np.zeros((0, 5))
         yout = np.empty(5)
         Vout = np.empty_like(V0)
+        stop = budget.stop_switch()
         status, t = return_map_taylor(y0, V0, self.P, self.cphi, self.sphi, -1.0 if backward else 1.0,
-                                      self.tmax, self.order, MAX_STEPS, yout, Vout)
+                                      self.tmax, self.order, MAX_STEPS, stop, yout, Vout)
+        if status == STATUS_CANCELLED:
+            budget.stop_switch()                      # raises BudgetExceeded with the budget's reason
         if status != STATUS_DONE:
             raise ParameterError(f"section map from (p1, p2) = ({x[0]:.6g}, {x[1]:.6g}): no return "
                                  f"({STATUS_NAMES[int(status)]})")

@@ -304,7 +304,15 @@ def crossings(system, y0, *, n_crossings: int, method: str = "taylor", tol: floa
     Every row is returned at once, (N, n_crossings, 5) float64: a request larger than half the
     machine's memory is refused (ParameterError naming its size); :func:`iter_crossings` streams
     the same rows in blocks of bounded size.
+
+    Inside a :class:`~explorer.analysis.budget.Budget` that has stopped nothing runs
+    (:class:`~explorer.analysis.budget.BudgetExceeded`), and the budget's step cap, if it has one,
+    bounds ``max_steps`` (a batch reads no stop switch).
     """
+    from explorer.analysis import budget
+
+    budget.checkpoint()
+    max_steps = budget.step_cap(max_steps)
     params, y0, tol, phi0 = _start(system, y0, tol, phi0, direction)
     run = _validated(params, y0, n_crossings, method, tol, dt, tmax, max_steps, phi0, direction, threads)
     N, K = run.Y0.shape[0], run.K

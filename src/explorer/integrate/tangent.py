@@ -18,7 +18,7 @@ import numpy as np
 
 from explorer._jit import njit, prange
 from explorer.integrate import systems as sy
-from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW
+from explorer.kernels import STATUS_CANCELLED, STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW
 from explorer.kernels import STATUS_TMAX as STATUS_TMAX_CODE
 from explorer.kernels import tangent as tg
 from explorer.kernels import taylor as tk
@@ -302,15 +302,21 @@ def _flip_odd(X, order):
             X[i, k] = -X[i, k]
 
 
-@njit
-def return_map_taylor(y0, V0, P, cphi, sphi, tsign, tmax, order, max_steps, yout, Vout):
+# nogil: Python calls it (the section map, :class:`explorer.analysis.section_map.SectionMap`) from
+# a page's thread while the server's event loop runs (issue 32: one return at mu = 1e6 held the
+# GIL for 40 s and froze the server)
+@njit(nogil=True)
+def return_map_taylor(y0, V0, P, cphi, sphi, tsign, tmax, order, max_steps, stop, yout, Vout):
     """The next crossing of the section phi = phi0 (phi increasing through phi0 in forward time)
     from y0, forward (tsign = +1) or backward (tsign = -1) in time, with the tangent map of the
     flow applied to the rows of V0 (m deviation vectors) up to the crossing time.
 
     Backward: the Taylor series of y(t - s) has coefficients (-1)^k X_k, so the same step, root
     and evaluation code runs in s = -t; a forward crossing with dphi/dt > 0 appears as a
-    decreasing sin(phi - phi0) in s.  Returns (status, signed time of the crossing)."""
+    decreasing sin(phi - phi0) in s.  Budgets: the time ``tmax`` (STATUS_TMAX), ``max_steps``
+    steps (STATUS_MAX_STEPS) and the stop switch ``stop`` (an int64 array of one element read
+    before every step: another thread sets it nonzero when a wall-clock budget runs out or the
+    result is no longer wanted; STATUS_CANCELLED).  Returns (status, signed time reached)."""
     m = V0.shape[0]
     X = np.empty((5, order + 1))
     Xs = np.empty((5, order + 1))
@@ -334,6 +340,8 @@ def return_map_taylor(y0, V0, P, cphi, sphi, tsign, tmax, order, max_steps, yout
             return STATUS_TMAX_CODE, tsign * s
         if steps >= max_steps:
             return STATUS_MAX_STEPS, tsign * s
+        if stop[0] != 0:
+            return STATUS_CANCELLED, tsign * s
         for r in range(m):
             for i in range(5):
                 Xs[i, 0] = y[i]

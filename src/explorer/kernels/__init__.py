@@ -23,6 +23,7 @@ refinement of event functions), ``status`` (the per-orbit status codes).
 """
 
 from explorer.kernels.status import (
+                                     STATUS_CANCELLED,
                                      STATUS_DONE,
                                      STATUS_MAX_STEPS,
                                      STATUS_NAMES,
@@ -34,4 +35,4 @@ from explorer.kernels.status import (
 )
 
 __all__ = ["Status", "STATUS_DONE", "STATUS_TMAX", "STATUS_NONFINITE", "STATUS_MAX_STEPS",
-           "STATUS_STEP_UNDERFLOW", "STATUS_UNRESOLVED", "STATUS_NAMES"]
+           "STATUS_STEP_UNDERFLOW", "STATUS_UNRESOLVED", "STATUS_CANCELLED", "STATUS_NAMES"]

@@ -15,6 +15,7 @@ class Status(IntEnum):
     MAX_STEPS = 3       #: the step budget ran out first
     STEP_UNDERFLOW = 4  #: the adaptive step became negligible against t
     UNRESOLVED = 5      #: the fixed step does not resolve the orbit's motion: not integrated
+    CANCELLED = 6       #: the caller's stop switch was set (a budget ran out, or the result is not wanted)
 
     @property
     def description(self) -> str:
@@ -28,6 +29,7 @@ _DESCRIPTIONS = {
     Status.MAX_STEPS: "step budget exhausted",
     Status.STEP_UNDERFLOW: "step size underflow",
     Status.UNRESOLVED: "step does not resolve the motion (dt x model.max_rate > pi: lower dt or use taylor, dop853)",
+    Status.CANCELLED: "cancelled (a wall-clock budget ran out or the result was no longer wanted)",
 }
 
 STATUS_DONE = int(Status.DONE)
@@ -36,6 +38,7 @@ STATUS_NONFINITE = int(Status.NONFINITE)
 STATUS_MAX_STEPS = int(Status.MAX_STEPS)
 STATUS_STEP_UNDERFLOW = int(Status.STEP_UNDERFLOW)
 STATUS_UNRESOLVED = int(Status.UNRESOLVED)
+STATUS_CANCELLED = int(Status.CANCELLED)
 
 #: {code: description}: stored with every panel of the HDF5 store (``status_names`` attribute)
 STATUS_NAMES = {int(s): s.description for s in Status}

@@ -19,9 +19,11 @@ from explorer.model import ParameterError
 SCENE_NAME = "browser-session"
 
 
-def session_scene(settings: Settings, starts, name: str = SCENE_NAME) -> scene_mod.Scene:
+def session_scene(settings: Settings, starts, name: str = SCENE_NAME, overlays: tuple = ()) -> scene_mod.Scene:
     """The scene of a session: one panel, the admissible ``starts`` [(p1, p2), ...] as points
-    (ParameterError when there is none)."""
+    (ParameterError when there is none).  ``overlays``: the page's overlays that are on (their URL names,
+    ``SectionPage.overlays_on``): "separatrices" becomes [compute] separatrices = true (a sweep draws them);
+    every one is named in the description (a scene has no field for the page's other layers)."""
     points = tuple((float(a), float(b)) for a, b in starts if settings.admissible(a, b))
     if not points:
         raise ParameterError("export: no orbit inside the allowed region yet; click on the section first")
@@ -29,8 +31,10 @@ def session_scene(settings: Settings, starts, name: str = SCENE_NAME) -> scene_m
     integ = scene_mod.IntegrationSpec(method=settings.method, tol=settings.tol, dt=settings.dt,
                                       crossings=settings.crossings, phi0=settings.phi0,
                                       direction=settings.direction)
+    compute = ("sections", "separatrices") if "separatrices" in overlays else ("sections",)
+    shown = f"; overlays on the page: {', '.join(overlays)}" if overlays else "; no overlay on the page"
     return scene_mod.Scene(name=name, params=settings.params, h=settings.h, seeds=seeds, integration=integ,
-                           description="orbits clicked in `explorer serve`")
+                           compute=compute, description="orbits clicked in `explorer serve`" + shown)
 
 
 def write_scene(directory, scene: scene_mod.Scene) -> str:

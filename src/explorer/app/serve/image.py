@@ -102,12 +102,14 @@ def figure(view: View):
         s = np.asarray([(a, b) for a, b, _c in view.starts], float)
         ax.scatter(s[:, 0], s[:, 1], s=40, marker="+", c=[c for _a, _b, c in view.starts], linewidths=1.5,
                    zorder=4, gid="starts")
-    for curve in view.separatrices:
+    # (every gid once in the SVG: an id names one element)
+    for n, curve in enumerate(view.separatrices):
         c = np.asarray(curve, float)
-        ax.plot(c[:, 0], c[:, 1], color=SEPARATRIX_COLOR, linewidth=0.8, zorder=2.5)
-    for kind, curve in view.manifolds:
+        ax.plot(c[:, 0], c[:, 1], color=SEPARATRIX_COLOR, linewidth=0.8, zorder=2.5, gid=f"separatrix-{n}")
+    for n, (kind, curve) in enumerate(view.manifolds):
         c = np.asarray(curve, float)
-        ax.plot(c[:, 0], c[:, 1], color=MANIFOLD_COLORS[kind], linewidth=0.8, zorder=2.6, gid=f"manifold-{kind}")
+        ax.plot(c[:, 0], c[:, 1], color=MANIFOLD_COLORS[kind], linewidth=0.8, zorder=2.6,
+                gid=f"manifold-{kind}-{n}")
     for p1, p2, period, elliptic in view.periodic:
         ax.scatter([p1], [p2], s=36, marker="o" if elliptic else "X", edgecolors="black", linewidths=1.0,
                    c=[PERIOD_COLORS[(int(period) - 1) % len(PERIOD_COLORS)]], zorder=5)

@@ -47,6 +47,10 @@ INDICATOR_TIME = 1000.0
 #: an orbit's indicators are computed when it is finished, or once its blocks took this long (s):
 #: not between its first blocks, where they would hold back its crossings (issue 22)
 INDICATOR_AFTER = 0.5
+#: steps of an orbit's indicators at most: a few thousand at Figure 4's parameters, but the time
+#: scale shrinks as the parameters grow (mu = 1e8 would run for hours, a compiled batch that no
+#: one can stop); past it the indicators are unknown (NaN)
+INDICATOR_MAX_STEPS = 1_000_000
 #: mean MEGNO above this is called "chaotic-like" (quasi-periodic orbits: <Y> -> 2)
 CHAOTIC_MEGNO = 3.0
 #: one colour per orbit, in turn
@@ -123,7 +127,7 @@ def orbit_indicators(settings: Settings, y0) -> tuple:
     from explorer.analysis import lyapunov
 
     res = lyapunov.indicators(settings.params, y0, INDICATOR_TIME, method=settings.method, tol=settings.tol,
-                              dt=settings.dt)
+                              dt=settings.dt, max_steps=INDICATOR_MAX_STEPS)
     if int(res.status[0]) != 0:
         return math.nan, math.nan
     return float(res.megno[0]), float(res.mlce[0])

@@ -22,6 +22,7 @@ def _fixed_points_from(view, first):
     """The fixed points Newton's method (:func:`explorer.analysis.fixedpoints.find_fixed_point`)
     reaches from ``first``, the region's centre and half-way to its edge along both axes, in that
     order (one per guess that converges; guesses outside the region are skipped), lazily."""
+    from explorer.analysis.budget import BudgetExceeded
     from explorer.analysis.fixedpoints import find_fixed_point
 
     c1, c2, r1, r2 = view.region
@@ -32,60 +33,139 @@ def _fixed_points_from(view, first):
             continue
         try:
             yield find_fixed_point(view.params, view.h, g, phi0=view.phi0)
+        except BudgetExceeded:
+            raise
         except Exception:  # noqa: BLE001 - no convergence from this guess
             continue
 
 
-def fixed_points_and_curves(view):
-    """(fixed points, curves, message) from :mod:`explorer.analysis.fixedpoints`: Newton's method
-    from p = 0, from the centre of the region and half-way to its edge along both axes; the
-    separatrices of the hyperbolic points.  ``view``: anything with ``params``, ``h``, ``phi0``,
-    ``region`` (c1, c2, r1, r2 or None) and ``admissible(p1, p2)`` (the page's
-    :class:`~explorer.app.serve.settings.Settings`)."""
-    from explorer.analysis.fixedpoints import separatrices
+#: wall-clock budget of the fixed points and their separatrices (s): the search stops there and
+#: shows what it found (explorer.analysis.budget; a page's search never outlives it)
+FIXED_SECONDS = 30.0
+#: wall-clock budget of the periodic orbits of periods 1..PERIODIC_MAX (s)
+PERIODIC_SECONDS = 60.0
+#: wall-clock budget of a pick's readout (its indicators and rotation number, s)
+READOUT_SECONDS = 30.0
+#: steps per orbit in a crossing batch of a page's search: an orbit that never comes back to the
+#: section (half the symmetry line at mu = 1e6) would otherwise run to 10^9 steps; a return at
+#: Figure 4's parameters takes about 65
+SEARCH_MAX_STEPS = 100_000
+#: arclength of each separatrix branch of the overlay (explorer.analysis.manifolds)
+SEPARATRIX_ARCLENGTH = 4.0
+#: wall-clock budget of each separatrix branch (s): drawn as far as it got
+SEPARATRIX_MAX_TIME = 4.0
 
-    if view.region is None:
-        return [], [], "separatrices: the region is empty"
-    points = []
-    for fp in _fixed_points_from(view, (0.0, 0.0)):
-        if all(np.max(np.abs(np.asarray(fp.point) - np.asarray(q.point))) > 1e-7 for q in points):
-            points.append(fp)
-    if not points:
-        return [], [], ("separatrices: Newton's method found no fixed point from p = 0, the region's centre "
-                        "or half-way to its edge")
-    curves = []
-    try:
-        for fp in points:
-            if not fp.stable:
-                for c in separatrices(fp, phi0=view.phi0):
-                    a = np.asarray(c, dtype=np.float64)
-                    if a.ndim == 2 and a.shape[1] == 2 and len(a):
-                        curves.append(a)
-    except Exception as exc:  # noqa: BLE001 - reported in the status line
-        return points, [], f"separatrices: failed ({type(exc).__name__}: {' '.join(str(exc).split())})"
-    desc = ", ".join(f"({_num(fp.point[0])}, {_num(fp.point[1])}) {'elliptic' if fp.stable else 'hyperbolic'}"
+
+def search_budget(seconds: float):
+    """The :class:`~explorer.analysis.budget.Budget` a page's search runs in: ``seconds`` and
+    SEARCH_MAX_STEPS."""
+    from explorer.analysis.budget import Budget
+
+    return Budget(seconds, max_steps=SEARCH_MAX_STEPS)
+
+
+def describe_points(points) -> str:
+    """``(p1, p2) elliptic, ...`` of fixed points."""
+    return ", ".join(f"({_num(fp.point[0])}, {_num(fp.point[1])}) {'elliptic' if fp.stable else 'hyperbolic'}"
                      for fp in points)
-    return points, curves, f"fixed points {desc}; {len(curves)} separatrix branches"
+
+
+def fixed_points(view) -> tuple:
+    """(points, message): the distinct fixed points Newton's method reaches from p = 0, the centre
+    of the region and half-way to its edge along both axes.  ``view``: anything with ``params``,
+    ``h``, ``phi0``, ``region`` (c1, c2, r1, r2 or None) and ``admissible(p1, p2)`` (the page's
+    :class:`~explorer.app.serve.settings.Settings`)."""
+    if view.region is None:
+        return [], "fixed points: the region is empty"
+    from explorer.analysis.budget import BudgetExceeded
+
+    points: list = []
+    try:
+        for fp in _fixed_points_from(view, (0.0, 0.0)):
+            if all(np.max(np.abs(np.asarray(fp.point) - np.asarray(q.point))) > 1e-7 for q in points):
+                points.append(fp)
+    except BudgetExceeded as exc:
+        return points, f"fixed points {describe_points(points) or 'none found'}: search {exc}"
+    if not points:
+        return [], ("fixed points: Newton's method found none from p = 0, the region's centre or half-way to "
+                    "its edge")
+    return points, f"fixed points {describe_points(points)}"
+
+
+def separatrix_branches(view, fp) -> tuple:
+    """(curves, note): the four separatrix branches of the hyperbolic fixed point ``fp``
+    (W^u and W^s, both signs), each grown to SEPARATRIX_ARCLENGTH by
+    :func:`explorer.analysis.manifolds.manifolds` (adaptive insertion, docs/manifolds.md; a branch
+    that meets the region's edge, where points have no return, ends there; SEPARATRIX_MAX_TIME
+    each): a list of (M, 2) arrays, and a note on branches that stopped short ("" when none)."""
+    from explorer.analysis.manifolds import manifolds
+
+    branches = manifolds(fp, view.params, view.h, arclength=SEPARATRIX_ARCLENGTH, phi0=view.phi0,
+                         max_time=SEPARATRIX_MAX_TIME)
+    curves = [np.asarray(b.points, dtype=np.float64) for b in branches if len(b.points)]
+    short = sorted({b.status for b in branches if b.status != "arclength"})
+    return curves, (f"some branches stopped short ({', '.join(short)})" if short else "")
+
+
+def fixed_points_and_curves(view, on_points=None):
+    """(fixed points, curves, message): :func:`fixed_points` and the separatrices of the hyperbolic
+    ones (:func:`separatrix_branches`).  ``on_points(points, message)``, when given, is called as
+    soon as the points are known (the page shows them before the curves).  A branch that fails or
+    a budget that runs out (:class:`~explorer.analysis.budget.BudgetExceeded`) ends the curves
+    there; the points are listed whatever happens to the curves."""
+    from explorer.analysis.budget import BudgetExceeded
+
+    points, text = fixed_points(view)
+    if on_points is not None:
+        on_points(points, text + ("; growing the separatrices ..." if any(not p.stable for p in points) else ""))
+    curves: list = []
+    notes = []
+    for fp in points:
+        if fp.stable:
+            continue
+        try:
+            c, note = separatrix_branches(view, fp)
+        except BudgetExceeded as exc:
+            notes.append(f"separatrices {exc}")
+            break
+        except Exception as exc:  # noqa: BLE001 - reported in the status line, the other points go on
+            notes.append(f"separatrices of ({_num(fp.point[0])}, {_num(fp.point[1])}) failed "
+                         f"({type(exc).__name__}: {' '.join(str(exc).split())})")
+            continue
+        curves += c
+        if note:
+            notes.append(f"({_num(fp.point[0])}, {_num(fp.point[1])}): {note}")
+    if points:
+        text += f"; {len(curves)} separatrix branches" + "".join(f"; {n}" for n in notes)
+    return points, curves, text
 
 
 def periodic_orbits(view, max_period=None):
     """(orbits, message): the periodic orbits of minimal periods 1..``max_period`` (default
     PERIODIC_MAX) found by :func:`explorer.analysis.periodic.search_periodic_orbits` (a coarse
-    grid, 8 x 8, and the symmetry lines), each once.  ``view``: as for :func:`fixed_points_and_curves`."""
+    grid, 8 x 8, and the symmetry lines), each once.  ``view``: as for :func:`fixed_points`.
+    A budget that runs out ends the search there (said in the message)."""
+    from explorer.analysis.budget import BudgetExceeded
     from explorer.analysis.periodic import search_periodic_orbits
 
     K = PERIODIC_MAX if max_period is None else int(max_period)
     if view.region is None:
         return [], "periodic orbits: the region is empty"
     orbits = []
+    stopped = ""
+    done = 0
     for k in range(1, K + 1):
         try:
             orbits += search_periodic_orbits(view.params, view.h, k, grid=8, max_guesses=30, phi0=view.phi0)
+        except BudgetExceeded as exc:
+            stopped = f"; periods {k}-{K} not searched: {exc}"
+            break
         except Exception:  # noqa: BLE001 - a failed search marks nothing for this period
-            continue
+            pass
+        done = k
     counts = ", ".join(f"K={k}: {sum(o.period == k for o in orbits)} "
-                       f"({sum(o.period == k and o.stable for o in orbits)} stable)" for k in range(1, K + 1))
-    return orbits, f"periodic orbits {counts}"
+                       f"({sum(o.period == k and o.stable for o in orbits)} stable)" for k in range(1, done + 1))
+    return orbits, f"periodic orbits {counts}{stopped}"
 
 
 def elliptic_center(view, start):
@@ -110,6 +190,7 @@ def orbit_readout(settings, start) -> dict:
     rotation (a RotationNumber or None), center (a FixedPoint or None), rotation_error (text)."""
     from explorer import model
     from explorer.analysis import rotation
+    from explorer.analysis.budget import BudgetExceeded
     from explorer.app.serve.orbits import orbit_indicators
 
     p1, p2 = float(start[0]), float(start[1])
@@ -124,6 +205,8 @@ def orbit_readout(settings, start) -> dict:
         out["center"] = fp
         out["rotation"] = rotation.rotation_number(settings.params, settings.h, (p1, p2), center=fp.point,
                                                    phi0=settings.phi0, tol=rotation_tol(settings))
+    except BudgetExceeded:
+        raise
     except Exception as exc:  # noqa: BLE001 - shown in the readout
         out["rotation_error"] = f"{type(exc).__name__}: {' '.join(str(exc).split())}"
     return out
@@ -141,6 +224,8 @@ def rotation_tol(settings) -> float:
 MANIFOLD_ARCLENGTH = 10.0
 #: wall-clock budget of each branch (s): growth stops there and the branch is drawn as far as it got
 MANIFOLD_MAX_TIME = 10.0
+#: wall-clock budget of a pick's manifolds, Newton's method and the four branches (s)
+MANIFOLD_SECONDS = 4 * MANIFOLD_MAX_TIME + 5.0
 
 
 def saddle_manifolds(settings, point, period=1):

@@ -44,7 +44,7 @@ from functools import partial
 import numpy as np
 import panel as pn
 from bokeh.events import DoubleTap, RangesUpdate, Tap
-from bokeh.models import CDSView, ColumnDataSource, CustomJSFilter, Div, LinearColorMapper
+from bokeh.models import CDSView, ColorBar, ColumnDataSource, CustomJSFilter, Div, LinearColorMapper, Range1d
 from bokeh.plotting import figure
 
 from explorer import model
@@ -64,7 +64,15 @@ from explorer.app.serve.page_layers import (  # noqa: F401
     _empty_raster,
 )
 from explorer.app.serve.page_readout import ReadoutMixin
-from explorer.app.serve.settings import FIELDS, Settings, format_starts, parse_fields, parse_starts
+from explorer.app.serve.settings import (
+    FIELDS,
+    Settings,
+    format_starts,
+    format_window,
+    parse_fields,
+    parse_starts,
+    parse_window,
+)
 from explorer.app.serve.style import (
     ALLOWED_COLOR,
     BOUNDARY_COLOR,
@@ -75,8 +83,11 @@ from explorer.app.serve.style import (
     MEGNO_HIGH,
     MEGNO_LOW,
     MEGNO_ORBIT_SKIP,
+    MESSAGE_ERROR_COLOR,
+    MESSAGE_OK_COLOR,
     PERIOD_COLORS,
     POINT_SIZE,
+    SEPARATRIX_CASING,
     SEPARATRIX_COLOR,
     VIEW_MARGIN,
     megno_palette,
@@ -109,7 +120,7 @@ GLYPH_FILTER = ("const o = source.data.orbit, n = o.length, rows = [];\n"
 #: labels of the fields
 LABELS = {p.name: p.symbol for p in model.PARAMETERS} | {
     "h": "h", "method": "method", "tol": "tol (taylor, dop853)", "dt": "dt (split*)",
-    "crossings": "crossings per click"}
+    "crossings": "crossings per click", "phi0": "φ0 (section φ = φ0)"}
 
 
 def _empty_live() -> dict:
@@ -184,7 +195,10 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.start_source = ColumnDataSource(_empty_starts(), name="starts")
         colors = {"field": "c", "transform": LinearColorMapper(palette=list(COLORS), low=-0.5,
                                                                 high=len(COLORS) - 0.5)}
-        fig = figure(name="section", width=FIGURE_WIDTH, height=FIGURE_HEIGHT, match_aspect=True,
+        # Range1d, set by the server (_fit_view): a DataRange1d kept the window it started with in the
+        # browser (its initial start and end) whatever the server set later, and Reset went back to it
+        fig = figure(name="section", width=FIGURE_WIDTH, height=FIGURE_HEIGHT,
+                     x_range=Range1d(-1.0, 1.0), y_range=Range1d(-1.0, 1.0),
                      tools="pan,wheel_zoom,box_zoom,reset,save", active_scroll="wheel_zoom",
                      x_axis_label="p1", y_axis_label="p2", background_fill_color=FORBIDDEN_COLOR,
                      toolbar_location="above")
@@ -195,10 +209,17 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
                                   nan_color=(0, 0, 0, 0))
         fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=self.raster_source, color_mapper=megno,
                   alpha=0.85)
+        # the MEGNO layer's scale, shown with the layer
+        self.colour_bar = ColorBar(color_mapper=megno, title="⟨Y⟩ (MEGNO)", visible=False, width=12,
+                                   name="megno-colour-bar")
+        fig.add_layout(self.colour_bar, "right")
         self.fixed = ColumnDataSource({"p1": [], "p2": [], "kind": [], "marker": []}, name="fixed")
         self.curves = ColumnDataSource({"xs": [], "ys": []}, name="separatrices")
         self.periodic = ColumnDataSource(_empty_periodic(), name="periodic")
-        fig.multi_line("xs", "ys", source=self.curves, line_color=SEPARATRIX_COLOR, line_width=1.2)
+        # a dark casing under a bright line: visible on white and on every colour of the MEGNO layer
+        self.separatrix_lines = (
+            fig.multi_line("xs", "ys", source=self.curves, line_color=SEPARATRIX_CASING, line_width=3.0),
+            fig.multi_line("xs", "ys", source=self.curves, line_color=SEPARATRIX_COLOR, line_width=1.4))
         self.manifold_source = ColumnDataSource(_empty_manifolds(), name="manifolds")
         fig.multi_line("xs", "ys", source=self.manifold_source, line_color="color", line_width=1.2)
         self._by_orbit = colors
@@ -216,8 +237,8 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         # (not the primary one with every older crossing and the images; benchmarks/bench_serve.py)
         self.live_points = fig.scatter("p1", "p2", source=self.live, color=colors, size=POINT_SIZE, line_width=0,
                                        level="overlay")
-        fig.scatter("p1", "p2", source=self.start_source, marker="cross", color=colors, size=9, line_width=2,
-                    level="overlay")   # (above the crossings and the images)
+        self.start_marks = fig.scatter("p1", "p2", source=self.start_source, marker="cross", color=colors, size=9,
+                                       line_width=2, level="overlay")   # (above the crossings and the images)
         fig.scatter("p1", "p2", source=self.periodic, marker="marker", size=8, line_color="black",
                     fill_color={"field": "period", "transform": LinearColorMapper(
                         palette=list(PERIOD_COLORS), low=0.5, high=len(PERIOD_COLORS) + 0.5)}, line_width=1.5)
@@ -256,6 +277,8 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.colour_box.param.watch(lambda _e: self._later(self._colour_changed), "value")
         self.periodic_box = pn.widgets.Checkbox(label=f"periodic orbits, periods 1-{PERIODIC_MAX}", value=False)
         self.periodic_box.param.watch(lambda _e: self._later(self._overlay_changed), "value")
+        self.starts_box = pn.widgets.Checkbox(label="start markers (+)", value=True)
+        self.starts_box.param.watch(lambda _e: self._later(self._starts_box_changed), "value")
         self.pause_box = pn.widgets.Checkbox(label=PAUSE_LABEL, value=True)
         self.pause_box.param.watch(lambda _e: self._later(self._push_url), "value")
         download = pn.widgets.FileDownload(callback=self._scene_file, filename=f"{export.SCENE_NAME}.toml",
@@ -274,7 +297,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
             buttons.append(figure_button)
         # text, never HTML: a message may quote what was typed into a field
         self.message = Div(name="message", text="", render_as_text=True, width=FIGURE_WIDTH,
-                           styles={"color": "#b00020", "min-height": "1.2em"})
+                           styles={"color": MESSAGE_ERROR_COLOR, "min-height": "1.2em"})
         self.status = Div(name="status", text="click in the white region to start an orbit", render_as_text=True,
                           width=FIGURE_WIDTH)
         self.overlay_text = Div(name="overlay", text="", render_as_text=True, width=FIGURE_WIDTH)
@@ -282,11 +305,12 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
                            styles={"font-family": "monospace"})
         self.click_mode = pn.widgets.RadioButtonGroup(options=list(CLICK_MODES),
                                                       value=CLICK_MODES[0], width=220)
-        title = "explorer: Poincaré section φ = π" + (f" ({self.label})" if self.label else "")
+        self.title = pn.pane.Markdown(self._title())
         controls = pn.Column(pn.pane.Markdown("a click (Shift + click: pick):", margin=(0, 5)), self.click_mode,
                              self.pause_box, pn.GridBox(*self.inputs.values(), ncols=2), self.colour_box, self.layer,
-                             self.overlay, self.periodic_box, pn.Row(*buttons[:2]), *buttons[2:], width=230)
-        self.layout = pn.Row(controls, pn.Column(pn.pane.Markdown(f"### {title}"), pn.pane.Bokeh(fig),
+                             self.overlay, self.periodic_box, self.starts_box, pn.Row(*buttons[:2]), *buttons[2:],
+                             width=230)
+        self.layout = pn.Row(controls, pn.Column(self.title, pn.pane.Bokeh(fig),
                                                  pn.pane.Bokeh(self.status), pn.pane.Bokeh(self.readout),
                                                  pn.pane.Bokeh(self.message), pn.pane.Bokeh(self.overlay_text)))
 
@@ -295,10 +319,14 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self._doc = doc
         doc.on_session_destroyed(lambda _ctx: self.close())
 
+    _closed = False
+
     def close(self) -> None:
         """Stop the session's threads (the browser tab is gone)."""
+        self._closed = True
         self.worker.stop(timeout=0)
         self.raster.stop()
+        self._cancel_overlay()
         self._stop_readouts()
         self._stop_manifolds()
 
@@ -315,7 +343,14 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
             self.settings, starts = self.base, []
             self.say(f"link ignored: {exc}")
         self._show_fields()
+        if self.settings.phi0 != self.base.phi0:
+            self.title.object = self._title()
         self._draw_region()
+        if args.get("view"):
+            try:
+                self._show_window(parse_window(args["view"]))
+            except ParameterError as exc:
+                self.say(f"link's view ignored: {exc}")
         self.layer.value = args.get("megno") == "1"
         self.overlay.value = args.get("separatrices") == "1"
         self.periodic_box.value = args.get("periodic") == "1"
@@ -333,6 +368,9 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         q["periodic"] = "1" if self.periodic_box.value else "0"
         q["colour"] = "megno" if self.colour_box.value else "orbit"
         q["pause"] = "1" if self.pause_box.value else "0"
+        if self.window is not None:
+            w = self.window
+            q["view"] = format_window(w)
         return q
 
     def _push_url_soon(self):
@@ -366,8 +404,29 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
     _quiet = False
 
     # ------------------------------------------------------------ actions
-    def say(self, text: str) -> None:
+    def _title(self) -> str:
+        phi0 = self.settings.phi0
+        shown = "π" if phi0 == math.pi else f"{phi0:.6g}"
+        return f"### explorer: Poincaré section φ = {shown}" + (f" ({self.label})" if self.label else "")
+
+    def _starts_box_changed(self) -> None:
+        """Show or hide the clicked starts' crosses."""
+        self.start_marks.visible = bool(self.starts_box.value)
+
+    def say(self, text: str, ok: bool = False) -> None:
+        """The message under the figure: a refusal or a failure in the error colour, or (``ok``) what
+        went well in the success colour (:meth:`tell`)."""
+        self.message_ok = bool(ok)
+        color = MESSAGE_OK_COLOR if ok else MESSAGE_ERROR_COLOR
+        if self.message.styles.get("color") != color:
+            self.message.styles = {**self.message.styles, "color": color}
         self.message.text = text
+
+    def tell(self, text: str) -> None:
+        """A success (an export written, seeds started) under the figure, in the success colour."""
+        self.say(text, ok=True)
+
+    message_ok = False
 
     def _draw_region(self):
         r = self.settings.region
@@ -378,10 +437,23 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
             return
         c1, c2, r1, r2 = r
         self.region.data = {"x": [c1], "y": [c2], "width": [2 * r1], "height": [2 * r2]}
-        m1, m2 = (1 + VIEW_MARGIN) * r1, (1 + VIEW_MARGIN) * r2
-        self.figure.x_range.start, self.figure.x_range.end = c1 - m1, c1 + m1
-        self.figure.y_range.start, self.figure.y_range.end = c2 - m2, c2 + m2
-        self.window = raster_mod.Window(c1 - m1, c1 + m1, c2 - m2, c2 + m2)
+        self._fit_view(c1, c2, (1 + VIEW_MARGIN) * r1, (1 + VIEW_MARGIN) * r2)
+
+    def _show_window(self, w) -> None:
+        """Show the window ``w`` (a link's zoom; Reset still goes to the region's view)."""
+        self.figure.x_range.update(start=w.x0, end=w.x1)
+        self.figure.y_range.update(start=w.y0, end=w.y1)
+        self.window = w
+
+    def _fit_view(self, c1: float, c2: float, m1: float, m2: float) -> None:
+        """Show the box c1 +- m1, c2 +- m2, the same length per pixel along both axes (the frame's
+        size as drawn; before that, the nominal size), and make it the view Reset goes back to."""
+        px, py = self._frame_px()
+        scale = max(2.0 * m1 / max(px, 1.0), 2.0 * m2 / max(py, 1.0))     # p-units per pixel
+        h1, h2 = 0.5 * scale * max(px, 1.0), 0.5 * scale * max(py, 1.0)
+        for rng, lo, hi in ((self.figure.x_range, c1 - h1, c1 + h1), (self.figure.y_range, c2 - h2, c2 + h2)):
+            rng.update(start=lo, end=hi, reset_start=lo, reset_end=hi)
+        self.window = raster_mod.Window(c1 - h1, c1 + h1, c2 - h2, c2 + h2)
 
     def _start(self, p1: float, p2: float, color: int | None = None, mark_later: bool = False):
         """Queue the orbit from (p1, p2) and mark its start (``mark_later``, a click on a served
@@ -459,7 +531,12 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         """From a worker thread: run ``action`` on the document's loop (a served page), or keep it
         for :meth:`poll` (a notebook, where no Bokeh server owns the document)."""
         if self._doc is not None:
-            self._doc.add_next_tick_callback(action)
+            if self._closed:
+                return                       # the session is gone: nothing to show it on
+            try:
+                self._doc.add_next_tick_callback(action)
+            except (AttributeError, RuntimeError, ValueError):
+                return                       # (destroyed meanwhile: Bokeh tore the document's callbacks down)
         else:
             with self._pending_lock:
                 self._inbox.append(action)
@@ -481,12 +558,21 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         else:
             self._doc.add_next_tick_callback(action)
 
-    def _field_changed(self, _event):
+    def _field_changed(self, event):
         if not self._quiet:           # (a change made by _show_fields is not the user's)
-            self._later(self._on_field)
+            name = next((n for n, w in self.inputs.items() if w is event.obj), None)
+            self._later(partial(self._on_field, name))
 
-    def _on_field(self):
-        fields = {name: w.value for name, w in self.inputs.items()}
+    def _on_field(self, name: str | None = None):
+        """The field ``name`` was edited: the applied settings with its text (every field's text
+        when None), validated by :func:`~explorer.app.serve.settings.parse_fields` as the command
+        line's values are.  A refused value changes nothing and is said in the message; it stays in
+        its field, but a later edit of another field is read on top of the applied settings (it does
+        not quote the refused one again) and puts every field back to the applied values."""
+        if name is None:
+            fields = {n: w.value for n, w in self.inputs.items()}
+        else:
+            fields = {**self.settings.fields(), name: self.inputs[name].value}
         try:
             new = parse_fields(self.base, fields)
             full = settings_mod.room_for(len(self.starts), new.crossings)
@@ -496,6 +582,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
             self.say(f"not applied: {exc}")
             return
         self.say("")
+        self._show_fields()               # (a refused text in another field goes: the fields show what applies)
         self.apply(new)
 
     def apply(self, new: Settings) -> None:
@@ -503,15 +590,21 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         if new == self.settings:
             return
         old = self._drop_orbits()
+        angle_changed = new.phi0 != self.settings.phi0
         self.settings = new
+        if angle_changed:                 # (only then: a change of the title is a message of its own)
+            self.title.object = self._title()
+        # the kept starts' crosses go before the region and the view (one message each, in order): a
+        # page that shows the new region shows the starts that run again in it
+        kept = [self._start(p1, p2, color) for _i, p1, p2, color in old]
         self._draw_region()
         self._show_fields()
         self._restart_raster()
         self._restart_overlay()
-        kept = [self._start(p1, p2, color) for _i, p1, p2, color in old]
         dropped = sum(r is None for r in kept)
         if dropped:
             self.say(f"{dropped} start(s) outside the new allowed region dropped")
+        self._update_status()        # (the orbits and values now, also when every start was dropped)
         self._push_url()
 
     def _drop_orbits(self) -> list:
@@ -521,6 +614,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
         self.indicators = {}
         self.readouts, self.picked = {}, None
         self._readout_generation += 1
+        self._cancel_readout()
         self.readout.text = ""
         self.crossings.data = _empty_crossings()
         self._show_all()
@@ -571,7 +665,7 @@ class SectionPage(ReadoutMixin, LayersMixin, ExportsMixin):
             why = settings_mod.room_for(len(self.starts) + 1, self.settings.crossings)
             self.say(f"scene seeds: {n} of {len(starts)} started ({why})")
         else:
-            self.say(f"scene seeds: {n} orbits started")
+            self.tell(f"scene seeds: {n} orbits started")
         self._push_url()
         return n
 
@@ -724,5 +818,10 @@ def session_app(base: Settings, export_dir=None, label: str = "", **page_options
     the session's URL arguments (``page_options``: seeds, megno_resolution, megno_time)."""
     def app():
         args = {k: v[0].decode("utf-8", "replace") for k, v in (pn.state.session_args or {}).items() if v}
-        return SectionPage(base, args, export_dir=export_dir, label=label, doc=pn.state.curdoc, **page_options).layout
+        try:
+            page = SectionPage(base, args, export_dir=export_dir, label=label, doc=pn.state.curdoc, **page_options)
+        except Exception as exc:  # noqa: BLE001 - a link the checks let through: the page without it, and why
+            page = SectionPage(base, {}, export_dir=export_dir, label=label, doc=pn.state.curdoc, **page_options)
+            page.say(f"link ignored: {type(exc).__name__}: {' '.join(str(exc).split())}")
+        return page.layout
     return app

@@ -21,7 +21,13 @@ class ExportsMixin:
     """Scene and figure exports of :class:`~explorer.app.serve.page.SectionPage`."""
 
     def _scene_text(self) -> str:
-        return export.session_scene(self.settings, [(a, b) for _i, a, b, _c in self.starts]).to_toml()
+        return export.session_scene(self.settings, [(a, b) for _i, a, b, _c in self.starts],
+                                    overlays=self.overlays_on()).to_toml()
+
+    def overlays_on(self) -> tuple:
+        """The names of the overlays that are on (separatrices, periodic, megno), as in the URL."""
+        q = self.url_query()
+        return tuple(n for n in ("separatrices", "periodic", "megno") if q.get(n) == "1")
 
     def _scene_file(self):
         try:
@@ -77,27 +83,28 @@ class ExportsMixin:
     def export_figure(self) -> None:
         """Write the page's view as PNG and SVG into the export directory (drawn in a thread)."""
         view = self.view()
-        self.say("writing the figure ...")
+        self.tell("writing the figure ...")
         threading.Thread(target=self._write_figure, args=(view,), name="explorer-serve-figure", daemon=True).start()
 
     def _write_figure(self, view):
         try:
             paths = export.write_figure(self.export_dir, view)
-            text = "figure written: " + " and ".join(os.path.basename(p) for p in paths)
+            text, ok = "figure written: " + " and ".join(os.path.basename(p) for p in paths), True
         except Exception as exc:  # noqa: BLE001 - reported in the page
-            text = f"figure export failed: {type(exc).__name__}: {' '.join(str(exc).split())}"
-        self._post(partial(self.say, text))
+            text, ok = f"figure export failed: {type(exc).__name__}: {' '.join(str(exc).split())}", False
+        self._post(partial(self.say, text, ok))
 
     def export(self) -> str | None:
         """Write the session's scene into the export directory; returns its path."""
         try:
-            sc = export.session_scene(self.settings, [(a, b) for _i, a, b, _c in self.starts])
+            sc = export.session_scene(self.settings, [(a, b) for _i, a, b, _c in self.starts],
+                                      overlays=self.overlays_on())
             path = export.write_scene(self.export_dir, sc)
         except (ParameterError, OSError) as exc:
             self.say(f"export failed: {exc}")
             return None
         name = os.path.basename(path)
-        self.say(f"scene written: {name} (rerun: explorer sweep {name}); writing the orbits' store ...")
+        self.tell(f"scene written: {name} (rerun: explorer sweep {name}); writing the orbits' store ...")
         threading.Thread(target=self._write_store, args=(path,), name="explorer-serve-store", daemon=True).start()
         return path
 
@@ -106,6 +113,7 @@ class ExportsMixin:
         try:
             out = export.write_store(scene_path)
             text = f"written: {os.path.basename(scene_path)} and {os.path.basename(out)} (the orbits, sweep format)"
+            ok = True
         except Exception as exc:  # noqa: BLE001 - reported in the page
-            text = f"store export failed: {type(exc).__name__}: {' '.join(str(exc).split())}"
-        self._post(partial(self.say, text))
+            text, ok = f"store export failed: {type(exc).__name__}: {' '.join(str(exc).split())}", False
+        self._post(partial(self.say, text, ok))

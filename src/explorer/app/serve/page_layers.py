@@ -65,6 +65,7 @@ class LayersMixin:
         if self.layer.value:
             self._restart_raster()
         self._refresh_density(force=True)
+        self._push_url_soon()             # (the zoom window is in the link)
 
     def _refresh_density(self, force: bool = False) -> None:
         """Draw the crossings that are not glyphs as the density image of the visible window: past
@@ -126,6 +127,7 @@ class LayersMixin:
                              "n": [shown]}
 
     def _layer_changed(self):
+        self.colour_bar.visible = bool(self.layer.value)
         self._restart_raster()
         self._push_url()
 
@@ -157,9 +159,12 @@ class LayersMixin:
 
     def _restart_overlay(self):
         """Search the fixed points (and separatrices) and the periodic orbits the boxes ask for,
-        at the current settings, in a thread of its own (about 1 s and 5 s); a newer request
-        makes an older result stale."""
+        at the current settings, in a thread of its own, under a budget
+        (:func:`explorer.app.serve.overlays.search_budget`: FIXED_SECONDS, PERIODIC_SECONDS); a
+        newer request cancels the older search (its compiled loops stop within a step) and makes
+        its result stale."""
         self._overlay_generation += 1
+        self._cancel_overlay()
         self._clear_manifolds()
         self.fixed.data = {"p1": [], "p2": [], "kind": [], "marker": []}
         self.curves.data = {"xs": [], "ys": []}
@@ -169,27 +174,51 @@ class LayersMixin:
         if not any(wanted) or self.settings.region is None:
             return
         self.overlay_text.text = "searching ..."
-        threading.Thread(target=self._compute_overlay, args=(self._overlay_generation, self.settings, *wanted),
+        from explorer.app.serve.overlays import FIXED_SECONDS, PERIODIC_SECONDS, search_budget
+
+        budget = search_budget(FIXED_SECONDS * wanted[0] + PERIODIC_SECONDS * wanted[1])
+        self._overlay_budget = budget
+        threading.Thread(target=self._compute_overlay, args=(self._overlay_generation, budget, self.settings, *wanted),
                          name="explorer-serve-overlay", daemon=True).start()
 
-    def _compute_overlay(self, generation, settings, fixed, periodic):
+    _overlay_budget = None
+
+    def _cancel_overlay(self) -> None:
+        """Stop the running overlay search, if any (a newer one replaces it, or the page closes)."""
+        if self._overlay_budget is not None:
+            self._overlay_budget.cancel()
+            self._overlay_budget = None
+
+    def _compute_overlay(self, generation, budget, settings, fixed, periodic):
         from explorer.app.serve.overlays import fixed_points_and_curves, periodic_orbits
 
-        texts = []
-        if fixed:
-            try:
-                points, curves, text = fixed_points_and_curves(settings)
-            except Exception as exc:  # noqa: BLE001 - reported in the page
-                points, curves, text = [], [], f"fixed points: failed ({type(exc).__name__}: {exc})"
-            texts.append(text)
-            self._post(partial(self._show_fixed, generation, points, curves, "; ".join(texts)))
-        if periodic and generation == self._overlay_generation:
-            try:
-                orbits, text = periodic_orbits(settings, PERIODIC_MAX)
-            except Exception as exc:  # noqa: BLE001 - reported in the page
-                orbits, text = [], f"periodic orbits: failed ({type(exc).__name__}: {exc})"
-            texts.append(text)
-            self._post(partial(self._show_periodic, generation, orbits, "; ".join(texts)))
+        texts: list = []
+
+        def on_points(points, text):
+            self._post(partial(self._show_fixed, generation, points, [], "; ".join([*texts, text])))
+
+        with budget:
+            if fixed:
+                try:
+                    points, curves, text = fixed_points_and_curves(settings, on_points)
+                except Exception as exc:  # noqa: BLE001 - reported in the page
+                    points, curves, text = [], [], f"fixed points: failed ({type(exc).__name__}: {exc})"
+                texts.append(text)
+                self._post(partial(self._show_fixed, generation, points, curves, "; ".join(texts)))
+            if periodic and generation == self._overlay_generation:
+                if fixed:
+                    self._post(partial(self._show_overlay_text, generation,
+                                       "; ".join([*texts, "searching the periodic orbits ..."])))
+                try:
+                    orbits, text = periodic_orbits(settings, PERIODIC_MAX)
+                except Exception as exc:  # noqa: BLE001 - reported in the page
+                    orbits, text = [], f"periodic orbits: failed ({type(exc).__name__}: {exc})"
+                texts.append(text)
+                self._post(partial(self._show_periodic, generation, orbits, "; ".join(texts)))
+
+    def _show_overlay_text(self, generation, text):
+        if generation == self._overlay_generation:
+            self.overlay_text.text = text
 
     def _show_periodic(self, generation, orbits, text):
         if generation != self._overlay_generation:
@@ -229,6 +258,7 @@ class LayersMixin:
         """Grow and draw W^u and W^s of the hyperbolic orbit of ``period`` through ``point`` (in
         the session's manifold thread: the latest request only; a new value or overlay drops it)."""
         self._manifold_generation = getattr(self, "_manifold_generation", 0) + 1
+        self._cancel_manifolds()
         self.manifold_source.data = _empty_manifolds()
         self.overlay_text.text = (f"growing the manifolds of the period-{period} orbit at "
                                   f"({point[0]:.6g}, {point[1]:.6g}) ...")
@@ -239,17 +269,31 @@ class LayersMixin:
         return LatestJob.of(self, "_manifold_worker", self._compute_manifolds, "explorer-serve-manifolds")
 
     def _stop_manifolds(self) -> None:
+        self._cancel_manifolds()
         LatestJob.stop_of(self, "_manifold_worker")
+
+    _manifold_budget = None
+
+    def _cancel_manifolds(self) -> None:
+        """Stop the manifolds being grown, if any (their result is no longer wanted)."""
+        if self._manifold_budget is not None:
+            self._manifold_budget.cancel()
 
     def _clear_manifolds(self) -> None:
         self._manifold_generation = getattr(self, "_manifold_generation", 0) + 1
+        self._cancel_manifolds()
         self.manifold_source.data = _empty_manifolds()
 
     def _compute_manifolds(self, generation, point, period, settings):
-        from explorer.app.serve.overlays import saddle_manifolds
+        from explorer.app.serve.overlays import MANIFOLD_SECONDS, saddle_manifolds, search_budget
 
+        budget = search_budget(MANIFOLD_SECONDS)
+        self._manifold_budget = budget
+        if generation != self._manifold_generation:
+            return                           # a newer pick or a new value came meanwhile
         try:
-            branches, text = saddle_manifolds(settings, point, period)
+            with budget:
+                branches, text = saddle_manifolds(settings, point, period)
         except Exception as exc:  # noqa: BLE001 - reported in the page
             branches, text = [], f"manifolds: failed ({type(exc).__name__}: {' '.join(str(exc).split())})"
         self._post(partial(self._show_manifolds, generation, settings, branches, text))

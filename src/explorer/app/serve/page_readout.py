@@ -70,6 +70,7 @@ class ReadoutMixin:
             return
         self.picked = ident
         self._readout_generation += 1
+        self._cancel_readout()
         self.say("")
         if ident in self.readouts:
             self._show_readout(self._readout_generation, ident, self.readouts[ident])
@@ -84,14 +85,29 @@ class ReadoutMixin:
         return LatestJob.of(self, "_readout_worker", self._compute_readout, "explorer-serve-readout")
 
     def _stop_readouts(self) -> None:
+        self._cancel_readout()
         LatestJob.stop_of(self, "_readout_worker")
 
-    def _compute_readout(self, generation, ident, start, settings):
-        from explorer.app.serve.overlays import orbit_readout
+    _readout_budget = None
 
+    def _cancel_readout(self) -> None:
+        """Stop the readout being computed, if any (a newer pick or value replaces it)."""
+        if self._readout_budget is not None:
+            self._readout_budget.cancel()
+
+    def _compute_readout(self, generation, ident, start, settings):
+        from explorer.app.serve.overlays import READOUT_SECONDS, orbit_readout, search_budget
+
+        budget = search_budget(READOUT_SECONDS)
+        self._readout_budget = budget
+        if generation != self._readout_generation:
+            return                           # a newer pick or a new value came meanwhile
         try:
-            r = orbit_readout(settings, start)
+            with budget:
+                r = orbit_readout(settings, start)
         except Exception as exc:  # noqa: BLE001 - reported in the page
+            if budget.cancelled:
+                return                       # replaced: nothing to show, nothing to keep
             r = {"error": f"{type(exc).__name__}: {' '.join(str(exc).split())}"}
         r["start"], r["settings"] = start, settings
         self._post(partial(self._show_readout, generation, ident, r))

@@ -29,6 +29,10 @@ MAX_RESOLUTION = 512
 #: default, and the longest the command accepts (--megno-time)
 RASTER_TIME = 200.0
 MAX_RASTER_TIME = 100_000.0
+#: steps per cell at most (a few thousand at Figure 4's parameters and RASTER_TIME; at extreme
+#: parameters the time scale shrinks and a batch no one can stop would run for hours); a cell past
+#: it is unknown (NaN, transparent)
+RASTER_MAX_STEPS = 100_000
 #: seeds per call of the indicators (bounds the time until a cancel takes effect)
 BATCH = 512
 
@@ -78,8 +82,8 @@ def megno_cells(settings: Settings, p1, p2, time: float = RASTER_TIME) -> np.nda
 
     y0 = model.section_state(settings.params, p1, p2, settings.h, settings.phi0, settings.direction or 1)
     res = lyapunov.indicators(settings.params, y0, time, method=settings.method, tol=settings.tol,
-                              dt=settings.dt, which=("megno",))
-    return np.asarray(res.megno, dtype=np.float64)
+                              dt=settings.dt, which=("megno",), max_steps=RASTER_MAX_STEPS)
+    return np.where(np.asarray(res.status) == 0, np.asarray(res.megno, dtype=np.float64), np.nan)
 
 
 def rasters(settings: Settings, window: Window, stop: Callable[[], bool] = lambda: False,

@@ -19,8 +19,9 @@ from explorer.model import ParameterError, validation
 #: the model parameters the page has a field for: every row of model.PARAMETERS, mu (the
 #: circulation, Figure 4's parameter, the one most often changed) first, then the table's order
 PAGE_PARAMS = ("mu",) + tuple(n for n in model.PARAM_NAMES if n != "mu")
-#: every field of the page, in the order they are shown (and written in the URL)
-FIELDS = ("mu", "h") + PAGE_PARAMS[1:] + ("method", "tol", "dt", "crossings")
+#: every field of the page, in the order they are shown (and written in the URL); phi0: the section
+#: phi = phi0 (any finite angle, as --phi0)
+FIELDS = ("mu", "h") + PAGE_PARAMS[1:] + ("method", "tol", "dt", "crossings", "phi0")
 #: crossings per click: the page's default and its upper bound (bounded memory per orbit:
 #: 40 bytes a row in the server, about as much in the browser)
 DEFAULT_CROSSINGS = 2000
@@ -64,7 +65,14 @@ class Settings:
         validation.real("tol", self.tol, sections.MIN_TOL, sections.MAX_TOL)
         validation.real("dt", self.dt, 0.0, lo_open=True)
         validation.integer("crossings", self.crossings, 1, MAX_CROSSINGS)
-        validation.real("h", self.h)
+        validation.magnitude("h", self.h)      # (as --h: the model's MAX_MAGNITUDE)
+        validation.real("phi0", self.phi0)
+        e = model.allowed_ellipse(self.params, self.h, self.phi0)
+        if e is not None and not all(math.isfinite(float(v)) for v in e):
+            # (e.g. lam = -1e-300: the ellipse's centre or radii overflow; nothing could be drawn or computed)
+            shown = ", ".join(f"{float(v):g}" for v in e)
+            raise ParameterError(f"the allowed region is not finite at these values (centre and radii {shown}): "
+                                 "a parameter is too far from 1 (lam, a1, a2, b)")
 
     def section_kwargs(self) -> dict:
         """Keywords of :func:`explorer.analysis.sections.iter_crossings` (with ``crossings``)."""
@@ -87,7 +95,7 @@ class Settings:
         """The page's fields as text (``repr`` of each float: read back, the same number)."""
         d = {n: repr(float(getattr(self.params, n))) for n in PAGE_PARAMS}
         d.update(h=repr(float(self.h)), method=self.method, tol=repr(float(self.tol)), dt=repr(float(self.dt)),
-                 crossings=str(self.crossings))
+                 crossings=str(self.crossings), phi0=repr(float(self.phi0)))
         return {n: d[n] for n in FIELDS}
 
     def orbit_args(self, p1: float, p2: float) -> list:
@@ -214,3 +222,23 @@ def parse_starts(text: str) -> list:
             raise ParameterError(f"orbits[{i}] must be p1,p2 (two numbers), got {piece[:MAX_FIELD_CHARS]!r}")
         starts.append((_number(f"orbits[{i}].p1", xy[0]), _number(f"orbits[{i}].p2", xy[1])))
     return starts
+
+
+def format_window(w) -> str:
+    """A view window (x0, x1, y0, y1) as URL text: ``x0,x1,y0,y1`` with each float's ``repr``."""
+    return ",".join(repr(float(v)) for v in (w.x0, w.x1, w.y0, w.y1))
+
+
+def parse_window(text: str):
+    """The window of :func:`format_window` (a :class:`~explorer.app.serve.raster.Window`: four
+    finite numbers, x0 < x1 and y0 < y1, each within MAX_MAGNITUDE); ParameterError otherwise."""
+    from explorer.app.serve.raster import Window
+
+    pieces = str(text).strip().split(",")
+    if len(pieces) != 4:
+        raise ParameterError(f"view must be x0,x1,y0,y1 (four numbers), got {str(text)[:MAX_FIELD_CHARS * 4]!r}")
+    x0, x1, y0, y1 = (validation.magnitude(f"view.{n}", _number(f"view.{n}", v))
+                      for n, v in zip(("x0", "x1", "y0", "y1"), pieces))
+    if not (x0 < x1 and y0 < y1):
+        raise ParameterError(f"view must have x0 < x1 and y0 < y1, got {x0!r},{x1!r},{y0!r},{y1!r}")
+    return Window(x0, x1, y0, y1)

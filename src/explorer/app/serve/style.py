@@ -23,8 +23,14 @@ VIEW_MARGIN = 0.08
 MEGNO_LOW, MEGNO_HIGH = 0.0, 8.0
 #: periodic orbits of periods 1..PERIODIC_MAX are marked, filled with the colour of their period
 PERIOD_COLORS = ("#ffffff", "#f4a582", "#92c5de", "#b8e186")
-#: colour of the separatrices
-SEPARATRIX_COLOR = "#303030"
+#: colours of the message under the figure: a refusal or failure, and a success
+MESSAGE_ERROR_COLOR = "#b00020"
+MESSAGE_OK_COLOR = "#1b5e20"
+#: colour of the separatrices, cyan, over a dark casing (a wider line under it): one of the two stands
+#: out from the white region and from every colour of the MEGNO layer (Inferno: black, purple,
+#: orange, yellow); #303030 alone vanished on its dark end
+SEPARATRIX_COLOR = "#00e5ff"
+SEPARATRIX_CASING = "#101010"
 
 
 def megno_palette(skip: int = 0) -> list:

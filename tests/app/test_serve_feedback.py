@@ -1,0 +1,245 @@
+"""`explorer serve`: what the page tells and shows after a change (issue 32, items 2-6).
+
+Without a browser (a SectionPage in-process): a refused value does not poison later edits of other
+fields; the status line follows a change that drops every start; successes and errors have their
+own colours; at mu = 1.5 the fixed-point overlay lists its hyperbolic points at once and draws
+their separatrices without a "no return" failure; readability (separatrices on the MEGNO layer, its
+colour bar, start markers, unique SVG ids, the exported scene's overlays); phi0 and the zoom window
+in the link.  In chromium: after a change of mu the view follows the new region, and Reset goes
+back to it (not to the first window); a page whose server stops says so.
+"""
+from __future__ import annotations
+
+import time
+
+import pytest
+import test_serve
+from test_serve import SERVED, _open, _set_field, _wait, browser_needed
+
+from explorer import model
+from explorer.app.serve.settings import Settings
+
+#: chromium and the served page (`--mu 0.03`), as in test_serve.py (its module-scoped fixtures)
+browser = test_serve.browser
+served = test_serve.served
+
+
+def _page(settings, args=None):
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    from explorer.app.serve.page import SectionPage
+
+    return SectionPage(settings, args or {})
+
+
+def _poll_until(page, cond, timeout=240.0):
+    t0 = time.time()
+    while time.time() - t0 < timeout:
+        page.poll()
+        if cond():
+            return
+        time.sleep(0.02)
+    raise AssertionError(f"timed out; overlay: {page.overlay_text.text!r}; message: {page.message.text!r}")
+
+
+def test_a_refused_value_does_not_poison_later_edits_of_other_fields():
+    page = _page(SERVED)
+    try:
+        page.inputs["h"].value = "1e300"
+        assert "not applied: h must be in" in page.message.text and page.settings.h == SERVED.h
+        page.inputs["mu"].value = "0.5"                       # another field: applied, not refused for h
+        assert page.settings.params.mu == 0.5 and page.settings.h == SERVED.h
+        assert page.message.text == "" and page.inputs["h"].value == repr(SERVED.h)   # the fields show what applies
+    finally:
+        page.close()
+
+
+def test_the_status_line_follows_a_change_that_drops_every_start():
+    page = _page(SERVED)
+    try:
+        c1, c2, r1, _r2 = SERVED.region
+        assert page.click(c1 + 0.9 * r1, c2) is not None
+        assert "1 orbit(s)" in page.status.text
+        page.inputs["h"].value = "0.7"                        # a smaller region: the start is outside it
+        assert page.settings.h == 0.7 and page.starts == []
+        assert "dropped" in page.message.text
+        assert page.status.text.startswith("0 orbit(s), 0 running") and "h = 0.7" in page.status.text
+    finally:
+        page.close()
+
+
+def test_successes_and_errors_are_shown_in_their_own_colours():
+    from explorer.app.serve.style import MESSAGE_ERROR_COLOR, MESSAGE_OK_COLOR
+
+    page = _page(Settings(params=model.FIGURE4.with_(mu=0.03), crossings=20))
+    try:
+        page.inputs["tol"].value = "0.5"
+        assert "not applied" in page.message.text and page.message.styles["color"] == MESSAGE_ERROR_COLOR
+        page.inputs["tol"].value = repr(page.settings.tol)
+        assert page.run_seeds() > 0
+        assert "orbits started" in page.message.text and page.message.styles["color"] == MESSAGE_OK_COLOR
+        page.click(50.0, 50.0)                                # outside the region: an error again
+        assert "outside" in page.message.text and page.message.styles["color"] == MESSAGE_ERROR_COLOR
+    finally:
+        page.close()
+
+
+def test_at_mu_1_5_the_overlay_lists_the_hyperbolic_fixed_points_at_once_and_draws_their_separatrices():
+    page = _page(Settings(params=model.FIGURE4.with_(mu=1.5)), {"separatrices": "1"})
+    try:
+        _poll_until(page, lambda: page.fixed.data["p1"] != [])
+        kinds = page.fixed.data["kind"]
+        assert kinds.count("hyperbolic") >= 5                  # the five saddles at mu = 1.5
+        assert page.overlay_text.text.count("hyperbolic") == kinds.count("hyperbolic")   # each listed
+        assert "growing the separatrices" in page.overlay_text.text         # ... while the curves grow
+        _poll_until(page, lambda: "separatrix branches" in page.overlay_text.text)
+        text = page.overlay_text.text
+        assert "failed" not in text and "no return" not in text, text
+        assert text.count("hyperbolic") == kinds.count("hyperbolic")                      # still listed
+        assert len(page.curves.data["xs"]) >= 4
+    finally:
+        page.close()
+
+
+RANGE = ("() => { const f = Bokeh.documents[0].get_model_by_name('section');"
+         " return [f.x_range.start, f.x_range.end, f.y_range.start, f.y_range.end]; }")
+
+
+@browser_needed
+def test_after_a_change_the_view_follows_the_new_region_and_reset_goes_back_to_it(served, browser):
+    page = _open(browser, served.url)
+    try:
+        _set_field(page, "mu", "1.5")
+        _wait(page, "() => window.location.search.includes('mu=1.5')")
+        c1, c2, r1, r2 = Settings(params=SERVED.params.with_(mu=1.5), crossings=SERVED.crossings).region
+        x0, x1, y0, y1 = page.evaluate(RANGE)
+        assert x0 < c1 - r1 and x1 > c1 + r1 and y0 < c2 - r2 and y1 > c2 + r2     # the whole new region
+        assert x1 - x0 < 1.5 * 2 * r1 or y1 - y0 < 1.5 * 2 * r2                    # and not much more
+        box = page.evaluate(test_serve.TO_SCREEN, [c1, c2])
+        page.mouse.move(*box)
+        page.mouse.wheel(0, -600)                              # zoom in
+        _wait(page, f"() => ({RANGE})()[1] - ({RANGE})()[0] < {0.9 * (x1 - x0)}")
+        page.locator(".bk-tool-icon-reset").first.click()
+        _wait(page, f"() => Math.abs(({RANGE})()[0] - {x0}) < 1e-9 && Math.abs(({RANGE})()[1] - {x1}) < 1e-9")
+    finally:
+        page.close()
+
+
+def _luminance(colour: str) -> float:
+    """WCAG relative luminance of "#rrggbb"."""
+    c = [int(colour[i:i + 2], 16) / 255.0 for i in (1, 3, 5)]
+    r, g, b = (v / 12.92 if v <= 0.03928 else ((v + 0.055) / 1.055) ** 2.4 for v in c)
+    return 0.2126 * r + 0.7152 * g + 0.0722 * b
+
+
+def _contrast(a: str, b: str) -> float:
+    la, lb = sorted((_luminance(a), _luminance(b)))
+    return (lb + 0.05) / (la + 0.05)
+
+
+def test_the_separatrices_stand_out_on_every_colour_of_the_megno_layer_and_it_has_a_colour_bar():
+    from explorer.app.serve.style import ALLOWED_COLOR, megno_palette
+
+    page = _page(SERVED)
+    try:
+        casing, line = (r.glyph.line_color for r in page.separatrix_lines)
+        for background in [*megno_palette(), ALLOWED_COLOR]:           # WCAG's 3:1 for graphics
+            assert max(_contrast(line, background), _contrast(casing, background)) >= 3.0, background
+        assert not page.colour_bar.visible
+        page.layer.value = True
+        assert page.colour_bar.visible and page.url_query()["megno"] == "1"
+        page.layer.value = False
+        assert not page.colour_bar.visible
+    finally:
+        page.close()
+
+
+def test_start_markers_can_be_hidden_and_shown_again():
+    page = _page(SERVED)
+    try:
+        c1, c2, r1, _r2 = SERVED.region
+        page.click(c1 + 0.3 * r1, c2)
+        assert page.start_marks.visible and len(page.start_source.data["p1"]) == 1
+        page.starts_box.value = False
+        assert not page.start_marks.visible and len(page.start_source.data["p1"]) == 1   # hidden, kept
+        page.starts_box.value = True
+        assert page.start_marks.visible
+    finally:
+        page.close()
+
+
+def test_the_exported_svg_names_each_element_once_and_the_scene_records_the_overlays_that_were_on():
+    import dataclasses
+    import xml.etree.ElementTree as ET
+
+    import numpy as np
+
+    from explorer.app.serve.image import render
+    from explorer.io.scene import parse_scene as load_scene_text
+
+    page = _page(SERVED, {"separatrices": "1", "periodic": "1"})
+    try:
+        c1, c2, r1, _r2 = SERVED.region
+        page.click(c1 + 0.3 * r1, c2)
+        page.click(c1 - 0.3 * r1, c2)
+        arc = np.column_stack([np.linspace(c1, c1 + 0.1, 5), np.full(5, c2)])
+        view = dataclasses.replace(page.view(), separatrices=[arc, arc + 0.01],
+                                   manifolds=[("unstable", arc), ("unstable", arc + 0.02), ("stable", arc + 0.03),
+                                              ("stable", arc + 0.04)])
+        ids = [e.get("id") for e in ET.fromstring(render(view, "svg")).iter() if e.get("id")]
+        assert len(ids) == len(set(ids)), sorted(i for i in ids if ids.count(i) > 1)
+        assert sum(i.startswith("manifold-unstable") for i in ids) == 2
+        scene = load_scene_text(page._scene_text())
+        assert "separatrices" in scene.compute and "periodic" in scene.description
+        plain = _page(SERVED)
+        plain.click(c1 + 0.3 * r1, c2)
+        assert "separatrices" not in load_scene_text(plain._scene_text()).compute
+        plain.close()
+    finally:
+        page.close()
+
+
+def test_the_section_angle_is_a_field_and_the_zoom_window_is_in_the_link():
+    from explorer.app.serve.raster import Window
+    from explorer.app.serve.settings import format_window, parse_window
+
+    page = _page(SERVED)
+    try:
+        region0 = page.settings.region
+        page.inputs["phi0"].value = "0.5"                     # the section phi = 0.5
+        assert page.settings.phi0 == 0.5 and page.url_query()["phi0"] == "0.5"
+        assert "φ = 0.5" in page.title.object and page.settings.region != region0
+        assert page.settings.orbit_args(0.1, 0.0)[page.settings.orbit_args(0.1, 0.0).index("--phi0") + 1] == "0.5"
+        w = Window(-0.3, 0.2 / 3, -0.25, 0.1)
+        page._on_ranges(type("E", (), {"x0": w.x0, "x1": w.x1, "y0": w.y0, "y1": w.y1})())   # a zoom
+        link = page.url_query()
+        assert parse_window(link["view"]) == w and format_window(w) == link["view"]          # exactly
+        again = _page(SERVED, link)                            # the link reopens the same angle and window
+        try:
+            assert again.settings == page.settings and again.window == w
+            assert (again.figure.x_range.start, again.figure.x_range.end) == (w.x0, w.x1)
+        finally:
+            again.close()
+        for bad in ("1,2,3", "1,0,0,1", "nan,1,0,1", "0,1e300,0,1"):
+            with pytest.raises(model.ParameterError, match="view"):
+                parse_window(bad)
+        odd = _page(SERVED, {"view": "1,0,0,1", "mu": "0.5"})
+        assert odd.settings.params.mu == 0.5 and "view ignored" in odd.message.text       # the rest applies
+        odd.close()
+    finally:
+        page.close()
+
+
+@browser_needed
+def test_a_page_whose_server_stops_says_the_connection_is_lost(browser):
+    from explorer.app.serve.server import DISCONNECT_NOTICE
+
+    s = test_serve.Served("--crossings", "150", "--mu", "0.03")
+    page = None
+    try:
+        page = _open(browser, s.url)
+        assert DISCONNECT_NOTICE not in page.evaluate("() => document.body.innerText")
+    finally:
+        code, _err = s.interrupt()
+    assert code in (0, 130)
+    _wait(page, f"() => document.body.innerText.includes({DISCONNECT_NOTICE[:40]!r})", timeout=30_000)
+    page.close()

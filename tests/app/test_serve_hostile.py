@@ -1,0 +1,158 @@
+"""`explorer serve` under hostile input (issue 32): no link and no typed value can freeze the server.
+
+Links and typed values with extreme mu, h, lam and b and every overlay ticked (fixed points and
+separatrices, periodic orbits, the MEGNO layer) are opened in Chromium; after each the server
+answers HTTP within LIVENESS_SECONDS (``GET /liveness``, answered by the event loop itself, several
+times while the page's searches run) and a second session still opens and draws a clicked orbit.
+A refused value (h = 1e300, as ``--h 1e300`` is) is said in the page.  Ctrl-C ends a server busy
+with such a page within SIGINT_SECONDS.
+"""
+from __future__ import annotations
+
+import json
+import signal
+import subprocess
+import time
+import urllib.request
+
+import pytest
+import test_serve
+from test_serve import (
+    DATA,
+    SERVED,
+    SET_BOX,
+    TEXT,
+    Served,
+    _click,
+    _open,
+    _set_field,
+    _wait,
+    _wait_crossings,
+    browser_needed,
+)
+
+#: chromium, as in test_serve.py (its module-scoped fixture)
+browser = test_serve.browser
+
+#: the server must answer within this long (s) whatever a page asked it to compute
+LIVENESS_SECONDS = 1.0
+#: probes of the server after each hostile action, PROBE_GAP apart (the searches run meanwhile)
+PROBES = 4
+PROBE_GAP = 0.5
+#: Ctrl-C must end the server within this long (s)
+SIGINT_SECONDS = 1.0
+#: every overlay of the page ticked, as URL arguments
+ALL_OVERLAYS = "separatrices=1&periodic=1&megno=1"
+#: hostile links: (query, text the page's message must contain, or None)
+LINKS = [
+    (f"mu=1e6&{ALL_OVERLAYS}", None),
+    (f"mu=1e8&{ALL_OVERLAYS}&orbits=0.0,0.0", None),
+    (f"mu=-1e8&{ALL_OVERLAYS}", None),
+    (f"h=1e300&{ALL_OVERLAYS}", "h must be in"),
+    (f"h=1e8&{ALL_OVERLAYS}", None),
+    (f"lam=1e8&{ALL_OVERLAYS}", None),
+    (f"lam=-1e-300&{ALL_OVERLAYS}", None),
+    (f"b=1e8&{ALL_OVERLAYS}", None),
+    (f"b=1e-300&{ALL_OVERLAYS}", None),
+    (f"mu=1e300&{ALL_OVERLAYS}", "mu must be in"),
+]
+#: hostile values typed into a page with every overlay ticked: (field, text, message or None)
+TYPED = [("mu", "1e6", None), ("h", "1e300", "h must be in"), ("lam", "1e8", None), ("b", "1e8", None),
+         ("mu", "1.5", None)]
+
+
+def _liveness(url: str) -> str:
+    return url.split("?")[0].rstrip("/") + "/liveness"
+
+
+def _answers_in_time(served) -> None:
+    """GET /liveness PROBES times, each answered within LIVENESS_SECONDS."""
+    for _ in range(PROBES):
+        t0 = time.perf_counter()
+        with urllib.request.urlopen(_liveness(served.url), timeout=10) as r:
+            body = json.loads(r.read())
+        took = time.perf_counter() - t0
+        assert body == {"/liveness": True}
+        assert took <= LIVENESS_SECONDS, f"the server took {took:.2f} s to answer"
+        time.sleep(PROBE_GAP)
+
+
+def _second_session_works(browser, served) -> None:
+    """A new session opens and draws a clicked orbit."""
+    other = _open(browser, served.url)
+    try:
+        c1, c2, r1, _r2 = SERVED.region
+        _click(other, c1 + 0.3 * r1, c2)
+        _wait_crossings(other, 10)
+    finally:
+        other.close()
+
+
+@pytest.fixture(scope="module")
+def hostile(tmp_path_factory):
+    s = Served("--crossings", "150", "--mu", "0.03")
+    yield s
+    code, err = s.interrupt()
+    assert code in (0, 130) and "Traceback" not in err, err[-2000:]
+
+
+@browser_needed
+@pytest.mark.parametrize("query,said", LINKS, ids=[q.split("&")[0] for q, _ in LINKS])
+def test_a_hostile_link_leaves_the_server_answering_and_a_second_session_working(hostile, browser, query, said):
+    page = _open(browser, f"{hostile.url}?{query}")
+    try:
+        if said is not None:                                   # refused as the command line refuses it
+            assert said in page.evaluate(TEXT, "message") and "link ignored" in page.evaluate(TEXT, "message")
+        _answers_in_time(hostile)
+        _second_session_works(browser, hostile)
+        _answers_in_time(hostile)
+    finally:
+        page.close()
+    assert hostile.proc.poll() is None
+
+
+@browser_needed
+def test_hostile_typed_values_with_every_overlay_leave_the_server_answering(hostile, browser):
+    page = _open(browser, hostile.url)
+    try:
+        for label in ("MEGNO layer", "fixed points", "periodic orbits"):
+            page.evaluate(SET_BOX, [label, True])
+        for field, text, said in TYPED:
+            _set_field(page, field, text)
+            if said is not None:
+                _wait(page, f"() => ({TEXT})('message').includes({json.dumps(said)})", timeout=60_000)
+            else:
+                applied = f"{field}={float(text)!r}"            # (the URL holds each value's repr)
+                _wait(page, f"() => window.location.search.includes({json.dumps(applied)})", timeout=60_000)
+            _answers_in_time(hostile)
+            _second_session_works(browser, hostile)
+        assert page.evaluate(DATA, "region")["x"]                # the page itself still has its region
+    finally:
+        page.close()
+
+
+@browser_needed
+def test_ctrl_c_ends_a_server_busy_with_hostile_searches_within_a_second(browser):
+    s = Served("--crossings", "1000000", "--mu", "0.03")
+    page = None
+    try:
+        page = _open(browser, f"{s.url}?mu=1e6&{ALL_OVERLAYS}")
+        c1, c2, r1, _r2 = SERVED.region
+        other = _open(browser, f"{s.url}?{ALL_OVERLAYS}")
+        _click(other, c1 + 0.3 * r1, c2)                    # a long orbit running too
+        _wait_crossings(other, 1)
+        _answers_in_time(s)
+    finally:
+        t0 = time.perf_counter()
+        s.proc.send_signal(signal.SIGINT)
+        try:
+            s.proc.wait(30)
+        except subprocess.TimeoutExpired:
+            s.proc.kill()
+            s.proc.wait()
+        took = time.perf_counter() - t0
+        if page is not None:
+            page.context.clear_cookies()
+    err = s.proc.stderr.read()
+    assert s.proc.returncode in (0, 130) and "Traceback" not in err, err[-2000:]
+    assert took <= SIGINT_SECONDS, f"Ctrl-C took {took:.2f} s"
