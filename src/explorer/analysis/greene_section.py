@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from explorer import model
+from explorer.analysis import budget
 from explorer.analysis.greene import Residue
 from explorer.analysis.section_map import MAX_STEPS, SectionMap
 from explorer.integrate.tangent import return_map_taylor
@@ -54,9 +55,10 @@ def half_turn_p2(smap: SectionMap, p1: float, Q: int) -> float:
     none = np.zeros((0, 5))
     out = np.empty(5)
     sections = (model.section_gamma(0.0), model.section_gamma(math.pi))
+    stop = budget.stop_switch()          # a budget's cancel reaches the half-turns too
     for j in range(Q):
         g1, g2 = sections[j % 2]
-        status, _ = return_map_taylor(y, none, smap.P, g2, g1, 1.0, smap.tmax, smap.order, MAX_STEPS, out,
+        status, _ = return_map_taylor(y, none, smap.P, g2, g1, 1.0, smap.tmax, smap.order, MAX_STEPS, stop, out,
                                       np.zeros((0, 5)))
         if status != STATUS_DONE:
             return math.nan

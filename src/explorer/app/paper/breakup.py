@@ -41,7 +41,7 @@ def breakup_figure(*, nobles=NOBLES, qmax=QMAX, starts=40, crossings=600, dpi=20
         # starts on p2 = 0 from the centre across the curve's far crossing (where the curves are spread)
         p1 = np.linspace(c[0] - 0.01, orb.points[:, 0].min() - 0.2 * (c[0] - orb.points[:, 0].min()), starts)
         ok = np.array([model.is_admissible(m.params, x, 0.0, h) for x in p1])
-        res = ex.section_crossings(m, p1[ok], np.zeros(int(ok.sum())), crossings)
+        res = ex.crossings(m, np.column_stack([p1[ok], np.zeros(int(ok.sum()))]), n_crossings=crossings)
         pts = [res.data[i, :res.count[i], 1:3] for i in range(len(res.count))]
         panels.append((factor, m.parameter_value, c, pts, orb.points))
     with _rc():

@@ -100,7 +100,7 @@ def separatrix_branches(view, fp) -> tuple:
     each): a list of (M, 2) arrays, and a note on branches that stopped short ("" when none)."""
     from explorer.analysis.manifolds import manifolds
 
-    branches = manifolds(fp, view.params, view.h, arclength=SEPARATRIX_ARCLENGTH, phi0=view.phi0,
+    branches = manifolds(view.params, view.h, fp, arclength=SEPARATRIX_ARCLENGTH, phi0=view.phi0,
                          max_time=SEPARATRIX_MAX_TIME)
     curves = [np.asarray(b.points, dtype=np.float64) for b in branches if len(b.points)]
     short = sorted({b.status for b in branches if b.status != "arclength"})
@@ -238,7 +238,7 @@ def saddle_manifolds(settings, point, period=1):
     from explorer.analysis.manifolds import manifolds
 
     p1, p2 = float(point[0]), float(point[1])
-    branches = manifolds((p1, p2), settings.params, settings.h, arclength=MANIFOLD_ARCLENGTH, period=int(period),
+    branches = manifolds(settings.params, settings.h, (p1, p2), arclength=MANIFOLD_ARCLENGTH, period=int(period),
                          phi0=settings.phi0, max_time=MANIFOLD_MAX_TIME)
     npts = sum(len(b.points) for b in branches)
     text = (f"manifolds of the hyperbolic period-{int(period)} orbit at ({_num(p1)}, {_num(p2)}): "
