@@ -75,6 +75,9 @@ def pytest_sessionstart(session):
     `pytest_sessionstart`, which runs after this one), and the workers load from the cache."""
     if os.environ.get("PYTEST_XDIST_WORKER"):
         return
+    import time
+
+    t0 = time.perf_counter()
     from explorer.analysis import fixedpoints, lyapunov, sections
 
     prm = model.FIGURE4.with_(mu=0.1)
@@ -83,6 +86,16 @@ def pytest_sessionstart(session):
         sections.crossings(prm, y0, n_crossings=1, method=method, tol=1e-10, dt=0.05)
         lyapunov.indicators(prm, y0, tmax=1.0, method=method, tol=1e-10, dt=0.05)
     fixedpoints.find_fixed_point(model.FIGURE4, 2.0)
+    _PHASES["kernels loaded or compiled before the tests"] = time.perf_counter() - t0
+
+
+#: seconds of the phases of a run that no test's duration shows (printed at the end, docs/tests.md)
+_PHASES: dict = {}
+
+
+def pytest_terminal_summary(terminalreporter):
+    for what, seconds in _PHASES.items():
+        terminalreporter.write_line(f"{what}: {seconds:.1f} s")
 
 
 #: The tests whose outcome rests on a search, a threshold or a classification (periodic orbits,

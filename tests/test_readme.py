@@ -23,3 +23,13 @@ def test_ci_runs_exactly_the_readme_test_command():
         assert cmd.startswith("python3 -m venv .venv && . .venv/bin/activate && ")
     ci_lines = [ln.strip() for ln in (ROOT / ".ci" / "run").read_text().splitlines()]
     assert tests in ci_lines
+
+
+def test_every_figure_of_explorer_figures_is_committed_and_linked_from_the_readme():
+    from explorer.app.paper.registry import FIGURES
+
+    text = (ROOT / "README.md").read_text()
+    for name in FIGURES:
+        for ext in ("png", "pdf"):
+            assert (ROOT / "figures" / f"{name}.{ext}").stat().st_size > 10_000, (name, ext)
+        assert f"](figures/{name}.png)" in text, name
