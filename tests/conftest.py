@@ -17,6 +17,19 @@ if int(os.environ.get("NUMBA_NUM_THREADS", "0") or 0) < 2:
 
 from explorer import model  # noqa: E402
 
+
+def pytest_configure(config):
+    """A test run started as a background job of a non-interactive shell (``cmd &``) inherits
+    SIGINT ignored, and so would every process it starts: the Ctrl-C tests (tests/app/
+    test_interrupt.py, the servers') would then test the launcher, not the program.  Python's own
+    SIGINT handler is put back in every pytest process (controller and xdist workers); the
+    programs the tests start inherit the default action."""
+    import signal
+    import threading
+
+    if threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
 #: Figure-4 scene (docs/model.md R9) and asymmetric sets (chi, zeta, xi, eta != 0, lam < 0).
 PARAM_SETS = {
     "figure4_mu0.5": model.FIGURE4.with_(mu=0.5),
