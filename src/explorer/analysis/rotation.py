@@ -64,6 +64,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from explorer import model
+from explorer.analysis.maps import is_section_map
 from explorer.analysis.section_map import system_first
 from explorer.integrate.methods import MAP_TOL
 from explorer.model import ParameterError, validation
@@ -282,6 +283,47 @@ def _rotations(params, h, starts, center, N, phi0, tol, threads, conv_tol):
     return out
 
 
+def _map_rotation(system, start, center, N, conv_tol) -> RotationNumber:
+    """:func:`rotation_number` on a map of the protocol other than a section map (no flow to lift
+    the angle through): its 2N iterates' angle increments around ``center``, each wrapped to
+    (-pi, pi].  The wrapped increments are the lifted ones less one constant 2 pi j when every one
+    of them stays within ``WRAP_SAFE`` of 0 (the module's argument), so the value mod 1 is right;
+    otherwise the orbit is "unresolved".  ``turns`` is the wrapped average (the lift with j = 0).
+    ``center=None`` on a map with an angle coordinate (``periods``, the standard map's theta): the
+    rotation number of the angle itself, (theta_2N - theta_0)/(2 pi 2N) weighted, lifted exactly
+    (the rotational invariant circles of the standard map: Greene's golden curve has 0.618...)."""
+    from explorer.analysis.maps import difference
+
+    x = np.asarray(start, float)
+    if x.shape != (2,) or not np.all(np.isfinite(x)):
+        raise ParameterError(f"start must be a finite point, got {start!r}")
+    pts = system.iterate(x, 2 * N)
+    per = getattr(system, "periods", None)
+    if center is None and per is not None and per[0] > 0:
+        inc = np.diff(pts[:, 0]) * (2.0 * np.pi / per[0])
+        c = (float("nan"), float("nan"))
+        status = "done"
+    else:
+        if center is None:
+            from explorer.analysis.fixedpoints import find_fixed_point
+
+            center = find_fixed_point(system, x)
+        c = np.asarray(getattr(center, "point", center), float)
+        if c.shape != (2,) or not np.all(np.isfinite(c)):
+            raise ParameterError(f"center must be a finite point, got {center!r}")
+        v = difference(system, pts, c)
+        inc = _increments(c + v, c)
+        status = "done" if np.all(np.abs(inc) <= WRAP_SAFE) else "unresolved"
+        c = tuple(float(t) for t in c)
+    if status != "done" or not np.all(np.isfinite(inc)):
+        return RotationNumber(float("nan"), False, float("nan"), 2 * N, tuple(x), tuple(c), status)
+    a, b = weighted_birkhoff(inc, N), weighted_birkhoff(inc, 2 * N)
+    diff = abs(a - b) / (2.0 * np.pi)
+    turns = b / (2.0 * np.pi)
+    return RotationNumber(turns - math.ceil(turns - 0.5), bool(diff < conv_tol), diff, 2 * N, tuple(x), tuple(c),
+                          turns=turns)
+
+
 @system_first(settings=("phi0", "tol"))
 def rotation_number(system, start, *, center=None, iterates=DEFAULT_ITERATES, conv_tol=CONVERGED_TOL,
                     threads=None) -> RotationNumber:
@@ -306,6 +348,8 @@ def rotation_number(system, start, *, center=None, iterates=DEFAULT_ITERATES, co
     RotationNumber
         The rotation number in turns per return, in (-1/2, 1/2], and the convergence flag.
     """
+    if not is_section_map(system):
+        return _map_rotation(system, start, center, validation.integer("iterates", iterates, 10), conv_tol)
     params, h, phi0, tol = system.params, system.h, system.phi0, system.tol
     N = validation.integer("iterates", iterates, 10)
     x = np.asarray(start, float)
