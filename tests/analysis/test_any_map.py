@@ -147,6 +147,30 @@ def test_a_multiple_shooting_orbit_of_period_5_returns_to_itself(case):
         assert o.det == pytest.approx(1.0, abs=1e-8)
 
 
+@pytest.mark.cpu_dependent
+def test_the_half_orbit_method_finds_newtons_orbit_with_the_residue_of_the_full_product(case):
+    """greene.symmetric_orbit (one unknown on a symmetry line, the monodromy from the first half
+    orbit and the reversor) against find_periodic_orbit (multiple shooting over all points, the
+    product of all Jacobians): a symmetric orbit of period 5 of each map."""
+    from explorer.analysis import greene as gm
+
+    m = case.system
+    if case.name == "standard":
+        half = gm.symmetric_orbit(m, 1, 5)
+    else:   # the search's symmetric orbit of period 5 with a point on p2 = 0
+        seed = next(o for o in pr.search_periodic_orbits(m, 5, grid=4, line=16, max_guesses=4)
+                    if o.symmetric and not o.degenerate and np.min(np.abs(o.points[:, 1])) < 1e-9)
+        half = gm.symmetric_orbit(m, 1, 5, guess=seed.points[np.argmin(np.abs(seed.points[:, 1])), 0])
+    newton = pr.find_periodic_orbit(m, half.points, 5)
+    assert newton.period == 5
+    np.testing.assert_allclose(difference(m, newton.points, half.points), 0.0, atol=1e-9)
+    assert half.residue == pytest.approx(newton.residue, rel=1e-7, abs=1e-10)
+    M = np.eye(2)
+    for x in half.points:
+        M = m.jacobian(x) @ M
+    assert half.residue == pytest.approx((2.0 - np.trace(M)) / 4.0, rel=1e-7, abs=1e-10)
+
+
 def test_continuation_follows_the_elliptic_point_and_finds_where_it_turns_hyperbolic(case):
     """Each continued orbit is a fixed point of the map at its own parameter value.  Standard map:
     (pi, 0) has trace 2 - k, so it period-doubles at k = 4 exactly."""
