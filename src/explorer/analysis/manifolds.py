@@ -44,7 +44,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from explorer import model
 from explorer.analysis.maps import images, is_section_map
 from explorer.analysis.periodic import PeriodicOrbit, is_reversible
 from explorer.analysis.section_map import SectionMap, orbit_first, system_first
