@@ -430,7 +430,7 @@ DIFFUSION_FLOOR = 1e-17
 
 @system_first(settings=("phi0", "tol"))
 def frequency_diffusion(system, starts, *, center, iterates=DEFAULT_ITERATES, threads=None) -> np.ndarray:
-    """Frequency diffusion log10 |nu1 - nu2| of the orbits of ``starts`` (Laskar 1990, Icarus 88, 266,
+    """Frequency diffusion ``log10 |nu1 - nu2|`` of the orbits of ``starts`` (Laskar 1990, Icarus 88, 266,
     with the weighted Birkhoff average of Das, Sander, Yorke & Meiss 2017 in place of frequency
     analysis): nu1 the weighted-Birkhoff rotation number (turns per return around ``center``) of the
     first N = ``iterates`` returns, nu2 that of the next N.  On a regular orbit both converge to
