@@ -186,6 +186,9 @@ def test_continuation_follows_the_elliptic_point_and_finds_where_it_turns_hyperb
     for v, o in zip(br.values, br.orbits):
         at = m.with_parameter(v)
         _returns(at, o, 1e-9)
+    # follow: the same fixed point at the end of the branch
+    end = fpm.follow(m, m.parameter, br.values[0], br.values[-1], br.orbits[0].points[0])
+    assert np.max(np.abs(difference(m, end.point, br.orbits[-1].points[0]))) < 1e-9
 
 
 # ------------------------------------------------------------------ rotation numbers
@@ -201,6 +204,12 @@ def test_rotation_number_near_the_elliptic_point_converges_to_its_linear_frequen
     assert abs(r.value) == pytest.approx(math.acos(tr_ / 2.0) / (2.0 * math.pi), abs=1e-5)
     if case.name == "standard":
         assert abs(r.value) == pytest.approx(math.acos(1.0 - K / 2.0) / (2.0 * math.pi), abs=1e-5)
+    # the profile's orbits are the same orbits: its first point's number is this one
+    prof = ro.rotation_profile(m, c + np.array([1e-3, 0.0]), c + np.array([2e-3, 0.0]), n=2, center=c,
+                               iterates=1000)
+    assert prof.rotation[0] == pytest.approx(r.value, abs=1e-13) and bool(np.all(prof.converged))
+    # farther from the centre the frequency moves away from the linear one by O(r^2): the twist
+    assert abs(abs(prof.rotation[1]) - abs(prof.rotation[0])) > 0.0
 
 
 # ------------------------------------------------------------------ manifolds, homoclinic points, lobes

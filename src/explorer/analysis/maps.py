@@ -56,7 +56,7 @@ from explorer._jit import njit
 from explorer.analysis.section_map import MapResult
 from explorer.model import ParameterError, validation
 
-__all__ = ["AreaPreservingMap", "StandardMap", "difference", "images", "is_section_map", "reduce"]
+__all__ = ["AreaPreservingMap", "StandardMap", "difference", "images", "is_section_map", "reduce", "with_value"]
 
 
 @runtime_checkable
@@ -85,6 +85,18 @@ def is_section_map(system) -> bool:
     from explorer.analysis.section_map import SectionMap
 
     return isinstance(system, SectionMap)
+
+
+def with_value(system, name: str, value):
+    """The map ``system`` with its parameter ``name`` set to ``value``: a section map's
+    ``with_value`` (any model parameter or "h"), another map's ``with_parameter`` (its one
+    continuation parameter, :attr:`AreaPreservingMap.parameter`)."""
+    if is_section_map(system):
+        return system.with_value(name, value)
+    if name != system.parameter:
+        raise ParameterError(f"{type(system).__name__} is continued in its parameter {system.parameter!r}, "
+                             f"got {name!r}")
+    return system.with_parameter(value)
 
 
 def _periods(system) -> np.ndarray | None:
@@ -128,8 +140,6 @@ def images(system, X, n: int, *, backward: bool = False) -> np.ndarray:
     of the Taylor lanes (:func:`explorer.analysis.sections.crossings`; backward through the reversor
     G0 P^n G0 = P^-n where it applies, else point by point); any other map iterates each point
     with its own ``iterate``."""
-    from explorer.model import ParameterError as _Error
-
     X = np.asarray(X, float).reshape(-1, 2)
     out = np.full((X.shape[0], n, 2), np.nan)
     if n == 0 or X.size == 0:
@@ -157,11 +167,11 @@ def images(system, X, n: int, *, backward: bool = False) -> np.ndarray:
             continue
         try:
             out[i] = system.iterate(x, n, backward=backward)[1:]
-        except _Error:     # a section map point by point: a failed return leaves the row NaN
+        except ParameterError:     # a section map point by point: a failed return leaves the row NaN
             for j in range(n):
                 try:
                     x = system(x, backward=backward, jacobian=False).point
-                except _Error:
+                except ParameterError:
                     break
                 out[i, j] = x
     return out

@@ -80,7 +80,7 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis.continuation import continuation_values, golden_section_max, secant_follower
-from explorer.analysis.maps import difference, is_section_map
+from explorer.analysis.maps import difference, is_section_map, with_value
 from explorer.analysis.maps import reduce as reduce_points
 from explorer.analysis.section_map import SectionMap, system_first
 from explorer.integrate.methods import DEFAULT_TOL as SECTIONS_TOL
@@ -877,8 +877,7 @@ def continue_periodic(system, period, parameter, start, stop, step, guess, *, bi
     g0 = guess.points if isinstance(guess, PeriodicOrbit) else np.asarray(guess, float)
 
     def solve(v, X):
-        at = system.with_value(parameter, v) if section else system.with_parameter(v)
-        orb = find_periodic_orbit(at, X, K, reduce=False)
+        orb = find_periodic_orbit(with_value(system, parameter, v), X, K, reduce=False)
         if _minimal_period(orb.points, system=system) != K:
             raise ParameterError(f"the orbit collapsed to period {_minimal_period(orb.points, system=system)}")
         return orb

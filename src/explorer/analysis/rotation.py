@@ -406,12 +406,23 @@ def rotation_profile(system, start, stop, *, n, center=None, iterates=DEFAULT_IT
     at m/K mark island chains of period K (converged, rational); non-converged points flag
     chaotic orbits.  The orbits run in parallel (Numba threads, ``threads``).
     """
-    params, h, phi0, tol = system.params, system.h, system.phi0, system.tol
     n = validation.integer("n", n, 2)
     N = validation.integer("iterates", iterates, 10)
     a, b = np.asarray(start, float), np.asarray(stop, float)
     s = np.linspace(0.0, 1.0, n)
     pts = a[None, :] + s[:, None] * (b - a)[None, :]
+    if not is_section_map(system):    # another map of the protocol: one orbit at a time
+        per = getattr(system, "periods", None)
+        if center is None and not (per is not None and per[0] > 0):
+            from explorer.analysis.fixedpoints import find_fixed_point
+
+            center = find_fixed_point(system, a)
+        rs = [_map_rotation(system, x, center, N, conv_tol) for x in pts]
+        c = np.full(2, np.nan) if center is None else np.asarray(getattr(center, "point", center), float)
+        return RotationProfile(pts, s, np.array([r.value for r in rs]), np.array([r.converged for r in rs]),
+                               np.array([r.difference for r in rs]), c, 2 * N, np.array([r.turns for r in rs]),
+                               tuple(r.status for r in rs))
+    params, h, phi0, tol = system.params, system.h, system.phi0, system.tol
     bad = ~model.is_admissible(params, pts[:, 0], pts[:, 1], h, phi0)
     if bad.any():
         raise ParameterError(f"the segment from {tuple(a)} to {tuple(b)} leaves the allowed region; allowed: "
