@@ -3,7 +3,7 @@
 Above the breakup of the invariant circle of rotation number nu (k > k_c, :mod:`explorer.analysis.greene`)
 the circle is a cantorus, and the area that crosses it per iteration (the turnstile's lobe area)
 is the difference of the actions of its two homoclinic orbits: MacKay, Meiss & Percival (1984,
-Physica D 13, 55), eq. (5.x) of their section on cantori: Delta W = W(minimax) - W(minimizing), the
+Physica D 13, 55): Delta W = W(minimax) - W(minimizing), the
 limit of the same difference for the periodic orbits of the convergents P_n/Q_n of nu,
 
     Delta W_n = W(x^minimax_{P/Q}) - W(x^min_{P/Q}) -> Delta W,     W = sum_{t=0}^{Q-1} F(theta_t, theta_{t+1}),
@@ -144,7 +144,8 @@ def cantorus_flux(system: StandardMap, nu="golden", *, qmax=DEFAULT_QMAX, qmin=5
     orbits are continued from the previous convergent's; the sequence stops at ``qmax`` or where
     double precision loses the orbits (``stopped`` says so)."""
     if not isinstance(system, StandardMap):
-        raise ParameterError(f"cantorus_flux needs a StandardMap (its generating function), got {type(system).__name__}")
+        raise ParameterError(f"cantorus_flux needs a StandardMap (its generating function), got "
+                             f"{type(system).__name__}")
     x = gm.rotation_value(nu)
     k = system.k
     qs: list[int] = []
