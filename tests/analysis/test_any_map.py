@@ -59,6 +59,20 @@ def case(request):
     return _standard() if request.param == "standard" else _section()
 
 
+def test_what_only_a_section_map_has_is_refused_or_answered_for_another_map(case):
+    """symmetry_line_points: the half-turn seeds of a section map, the line points of the standard
+    map (on Fix I0 and Fix I1); flux_curve (it follows a section map's saddle in mu) refuses another
+    map with a ParameterError naming what to use."""
+    m = case.system
+    seeds = pr.symmetry_line_points(m, 2, n=8)
+    assert seeds.ndim == 2 and seeds.shape[1] == 2 and len(seeds) >= 1
+    if case.name == "standard":
+        assert len(seeds) == 32 and all(
+            min(np.max(np.abs(difference(m, R(x), x))) for R in m.reversors) < 1e-12 for x in seeds)
+        with pytest.raises(model.ParameterError, match="grow_branch"):
+            tr.flux_curve(m, [0.1])
+
+
 def _fd_jacobian(system, x, step=1e-6):
     """DP(x) by central differences of the map's image (no tangent dynamics)."""
     J = np.empty((2, 2))

@@ -526,10 +526,16 @@ def symmetry_line_points(system, period, *, n=200, threads=None):
     changes sign between neighbours where a symmetric orbit of that period (or a divisor)
     passes; each bracket is refined by bisection (a few map evaluations) and the point on the
     section phi = phi0 of that orbit is returned.  Returns an (m, 2) array of seeds.
+
+    Another map of the protocol: its own ``symmetry_line_points(n)`` (n points on each of its
+    symmetry lines, unrefined: Newton starts), or none when it has no reversors.
     """
     from explorer.analysis.sections import crossings
 
     K = _check_period(period)
+    if not is_section_map(system):
+        seeds = getattr(system, "symmetry_line_points", None)
+        return np.empty((0, 2)) if seeds is None else np.asarray(seeds(validation.integer("n", n, 1)), float)
     prm, h, phi0, tol, tmax = system.params, system.h, system.phi0, system.tol, system.tmax
     if not is_reversible(prm, phi0):
         return np.empty((0, 2))
