@@ -178,13 +178,28 @@ def monotone_within(d, order, r):
 
 
 @njit
+def identically_zero(c, order):
+    """True if every coefficient c[0..order] is 0."""
+    for k in range(order + 1):
+        if c[k] != 0.0:
+            return False
+    return True
+
+
+@njit
 def isolate_crossings(gc, order, h, g_old, g_new, direction, brackets, work, stack):
     """Brackets of every crossing in (0, h] of the polynomial g(x) = sum_k gc[k] x^k in the
     given direction (as :func:`sign_change`), g_old and g_new its values at the ends as the
     caller's bookkeeping has them: rows (a, b, g(a), g(b)) of ``brackets``, each holding one
     sign change of the given direction, in increasing order; returns their number (at most
     len(brackets)).  Exclusion / monotonicity tests and bisection (module docstring).
-    work: (order + 1,) scratch; stack: (ISOLATE_STACK, 5) scratch."""
+    work: (order + 1,) scratch; stack: (ISOLATE_STACK, 5) scratch.
+
+    A polynomial that is identically zero (every coefficient 0: the orbit rests on the section,
+    an equilibrium at phi = phi0) crosses nothing; no test could exclude or bracket it, and
+    bisecting it to ISOLATE_MAX_DEPTH visited 2**25 intervals, 15 s for one step."""
+    if identically_zero(gc, order):
+        return 0
     if no_root_within(gc, order, h):        # |x| <= h covers the step [0, h]
         return 0
     if monotone_within(gc, order, h):
