@@ -646,7 +646,7 @@ def test_fixed_points_and_separatrices_identical_for_1_and_2_threads():
             set_num_threads(n)
             assert get_num_threads() == n
             fp = fixedpoints.find_fixed_point(model.FIGURE4.with_(mu=0.5), 2.0, (-0.2, 0.0))
-            curve = fixedpoints.manifold(fp, iterations=2, n_domain=10, max_points=200)
+            curve = fixedpoints.manifold(fp.params, fp.h, fp, iterations=2, max_points=200)
             br = fixedpoints.continue_branch(model.FIGURE4, 2.0, "mu", 0.0, 0.2, 0.1)
             out.append((fp.point, fp.jacobian, curve, np.array([p.point for p in br.orbits])))
     finally:

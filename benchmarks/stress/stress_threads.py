@@ -92,7 +92,7 @@ def main(argv=None):
             set_num_threads(min(n, old))
             fp = fixedpoints.find_fixed_point(model.FIGURE4.with_(mu=0.5), 2.0, (-0.2, 0.0))
             br = fixedpoints.continue_branch(model.FIGURE4, 2.0, "mu", 0.0, 1.0 if quick else 3.2, 0.2)
-            seps = fixedpoints.separatrices(fp, iterations=2 if quick else 4, n_domain=10, max_points=400)
+            seps = fixedpoints.separatrices(fp.params, fp.h, fp, iterations=2 if quick else 4, max_points=400)
             outs.append([fp.point, fp.jacobian, np.array([p.point for p in br.points]),
                          np.array(br.bifurcations)] + seps)
     finally:

@@ -34,8 +34,10 @@ def _panel_points(panel_data):
     return rows[:, 1:3] if len(rows) else np.zeros((0, 2))
 
 
-#: separatrices: iterations of the fundamental domain, its initial size, sampling
-SEPARATRIX_SETTINGS = dict(iterations=6, n_domain=40, max_gap=0.02, first=1e-6, max_points=6000)
+#: separatrices (explorer.analysis.manifolds.grow_branch): the arclength of each branch (the page's,
+#: explorer.app.serve.overlays.SEPARATRIX_ARCLENGTH), images of the fundamental domain at most,
+#: points at most
+SEPARATRIX_SETTINGS = dict(arclength=4.0, iterations=6, max_points=6000)
 
 
 def panel_separatrices(scene, i):
