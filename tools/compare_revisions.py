@@ -34,11 +34,11 @@ p1 = np.linspace(-0.5, 0.5, 12)
 p2 = np.zeros(12) + 0.1
 out = {}
 for m, kw in (("dop853", dict(tol=1e-12)), ("taylor", dict(tol=1e-13)), ("split4", dict(dt=0.05))):
-    r = sections.section_crossings(prm, p1, p2, 2.0, 200, method=m, **kw)
+    r = sections.crossings(prm, 2.0, np.column_stack([p1, p2]), n_crossings=200, method=m, **kw)
     out[m] = np.concatenate([r.data.ravel(), r.final.ravel(), r.info.ravel()])
 y0 = model.section_state(prm, p1[:6], p2[:6], 2.0)
 for m, kw in (("dop853", dict(tol=1e-12)), ("taylor", dict(tol=1e-13)), ("split6", dict(dt=0.05))):
-    r = lyapunov.indicators(prm, y0, 300.0, method=m, history=5, **kw)
+    r = lyapunov.indicators(prm, y0, tmax=300.0, method=m, history=5, **kw)
     out["ly_" + m] = np.concatenate([r.mlce, r.megno, r.fli, r.final.ravel(), r.history.ravel()])
 res = tr.trajectory(tr.full_params(), tr.initial_state(tr.full_params(), 0.5, 0.0, 2.0, 0.0), 200.0, 2001)
 out["traj"] = np.concatenate([np.asarray(res[k], float).ravel() for k in sorted(res)

@@ -79,12 +79,6 @@ NEWTON_ITER = 30
 #: two intersections closer than this are the same point
 SAME_POINT = 1e-9
 
-#: a batch of images with fewer returns than this (points x maps) runs on one thread: a parallel
-#: region's start and its threads' spin-wait cost more than the half of the work they save (four
-#: branches of Figure 4 at mu = 0.01 on a loaded machine: 0.19 s on one thread, 0.8-1.7 s on two;
-#: the results do not depend on the thread count)
-SERIAL_RETURNS = 4096
-
 STATUS_ARCLENGTH = "arclength"
 STATUS_GENERATIONS = "generations"
 STATUS_EDGE = "edge"
@@ -145,6 +139,12 @@ def saddle(system, orbit, *, index=0) -> Saddle:
 
 
 # ------------------------------------------------------------------ images in batches
+#: a batch of images with fewer returns than this (points x maps) runs on one thread: a parallel
+#: region's start and its threads' spin-wait cost more than the half of the work they save (four
+#: branches of Figure 4 at mu = 0.01 on a loaded machine: 0.19 s on one thread, 0.8-1.7 s on two;
+#: the results do not depend on the thread count)
+SERIAL_RETURNS = 4096
+
 def _images(smap: SectionMap, X, n, backward, integrate_backward=False):
     """F-images: P^n (P^-n with ``backward``) of the points X (m, 2); rows that leave the region
     or have no return are NaN.  Forward: one batch of the Taylor lanes; backward: the same batch
