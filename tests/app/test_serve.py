@@ -48,6 +48,9 @@ CROSSINGS = 150
 #: a cold numba cache compiles the crossing kernels at the first click: allow for it
 FIRST_ORBIT_TIMEOUT_MS = 240_000
 REPO = Path(__file__).resolve().parents[2]
+#: how long a started server may take to answer its first request (s): a bound on a hang, not a speed
+#: goal -- on a loaded 2-core machine with a cold kernel cache a start took over 120 s
+SERVER_START_TIMEOUT = 600.0
 #: the settings of the served page (`--mu 0.03 --crossings CROSSINGS`) and its region (c1, c2, r1, r2)
 SERVED = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=CROSSINGS)
 
@@ -302,7 +305,7 @@ class Served:
     """``python -m explorer serve ...`` (or ``command``; ``entry`` in place of ``-m explorer``) in a
     subprocess; ``url`` is its first line."""
 
-    def __init__(self, *args, timeout=120.0, command="serve", extra=(), entry=("-m", "explorer")):
+    def __init__(self, *args, timeout=SERVER_START_TIMEOUT, command="serve", extra=(), entry=("-m", "explorer")):
         env = dict(os.environ, PYTHONUNBUFFERED="1")
         self.proc = subprocess.Popen([sys.executable, *entry, command, "--port", "0", *args, *extra],
                                      stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,

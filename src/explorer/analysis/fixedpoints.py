@@ -245,7 +245,9 @@ def follow(system, parameter, start, stop, guess, *, max_step=0.25) -> FixedPoin
     """The fixed point at ``parameter = stop`` on the branch through the point found near
     ``guess`` at ``parameter = start`` (continuation in steps of at most ``max_step``)."""
     if start == stop:
-        return find_fixed_point(system.with_value(parameter, start), guess)
+        from explorer.analysis.maps import with_value
+
+        return find_fixed_point(with_value(system, parameter, start), guess)
     n = max(1, math.ceil(abs(stop - start) / max_step))
     br = continue_branch(system, parameter, start, stop, (stop - start) / n, guess)
     if br.stopped is not None:

@@ -31,7 +31,7 @@ generation once (F, one batch of the Taylor lanes, :func:`explorer.analysis.sect
 - until the branch has the requested arclength (or ``generations`` images of the fundamental
 domain) or a budget (points, wall time) runs out or a point has no return (the region's edge).
 ``ManifoldBranch.status`` says which.  The batches are small (tens to hundreds of points), so
-they run on one thread (``SERIAL_RETURNS``).
+they run on one thread (``explorer.analysis.maps.SERIAL_RETURNS``).
 
 Points of the stable manifold need F^{-1}: when the reversor applies
 (:func:`explorer.analysis.periodic.is_reversible`), F^{-1} = G0 F G0 and the batch runs
@@ -46,8 +46,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from explorer import model
-from explorer.analysis.periodic import PeriodicOrbit, is_reversible, reversor
+from explorer.analysis.maps import images, is_section_map
+from explorer.analysis.periodic import PeriodicOrbit, is_reversible
 from explorer.analysis.section_map import SectionMap, orbit_first, system_first
 from explorer.model import ParameterError, validation
 
@@ -139,37 +139,24 @@ def saddle(system, orbit, *, index=0) -> Saddle:
 
 
 # ------------------------------------------------------------------ images in batches
-#: a batch of images with fewer returns than this (points x maps) runs on one thread: a parallel
-#: region's start and its threads' spin-wait cost more than the half of the work they save (four
-#: branches of Figure 4 at mu = 0.01 on a loaded machine: 0.19 s on one thread, 0.8-1.7 s on two;
-#: the results do not depend on the thread count)
-SERIAL_RETURNS = 4096
-
-def _images(smap: SectionMap, X, n, backward, integrate_backward=False):
+def _images(smap, X, n, backward, integrate_backward=False):
     """F-images: P^n (P^-n with ``backward``) of the points X (m, 2); rows that leave the region
-    or have no return are NaN.  Forward: one batch of the Taylor lanes; backward: the same batch
-    through the reversor G0 P^n G0 = P^-n when it applies, else the section map point by point."""
-    from explorer.analysis.sections import crossings
-
+    or have no return are NaN.  :func:`explorer.analysis.maps.images` (a section map: one batch of
+    the Taylor lanes forward, and backward through the reversor G0 P^n G0 = P^-n when it applies;
+    any other map of the protocol: its own ``iterate``); ``integrate_backward`` (a section map):
+    each point integrated backward in time by the map itself."""
     X = np.asarray(X, float).reshape(-1, 2)
-    out = np.full_like(X, np.nan)
     if n == 0 or X.size == 0:
         return X.copy()
-    if backward and (integrate_backward or not is_reversible(smap.params, smap.phi0)):
+    if backward and is_section_map(smap) and (integrate_backward or not is_reversible(smap.params, smap.phi0)):
+        out = np.full_like(X, np.nan)
         for i, x in enumerate(X):
             try:    # outside the region or no return: ParameterError, the row stays NaN
                 out[i] = smap.iterate(x, n, backward=True)[-1]
             except ParameterError:
                 pass
         return out
-    Y = reversor(X) if backward else X
-    ok = model.section_M2(smap.params, Y[:, 0], Y[:, 1], smap.h, smap.phi0) > 0
-    if ok.any():
-        c = crossings(smap.params, smap.h, Y[ok], n_crossings=n, phi0=smap.phi0, tol=smap.tol,
-                      tmax=smap.tmax * n, threads=1 if int(ok.sum()) * n < SERIAL_RETURNS else None)
-        img = np.where((c.count >= n)[:, None], c.data[:, n - 1, 1:3], np.nan)
-        out[ok] = reversor(img) if backward else img
-    return out
+    return images(smap, X, n, backward=backward)[:, -1]
 
 
 class _Curve:
