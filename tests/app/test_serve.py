@@ -164,7 +164,7 @@ def test_worker_blocks_are_one_uninterrupted_run_and_cancelled_orbits_hand_out_n
         assert len(set(got["sizes"])) > 1          # the blocks had different sizes
     finally:
         w.stop()
-    ref = sections.section_crossings(s.params, [-0.4], [0.2], s.h, s.crossings, **s.section_kwargs())
+    ref = sections.crossings(s.params, s.h, [(-0.4, 0.2)], n_crossings=s.crossings, **s.section_kwargs())
     np.testing.assert_array_equal(rows, ref.orbit(0))
 
 
@@ -208,7 +208,7 @@ def test_a_click_pauses_the_running_orbit_and_resume_completes_it_bit_for_bit():
         assert page.resume() == 1 and page.worker.paused() == [] and "paused" not in page.status.text
         _poll_until(page, lambda: first not in page._running and not page.worker.busy())
         for ident, (p1, p2) in ((first, a), (second, b)):        # as one uninterrupted run, bit for bit
-            ref = sections.section_crossings(s.params, [p1], [p2], s.h, s.crossings, **s.section_kwargs())
+            ref = sections.crossings(s.params, s.h, [(p1, p2)], n_crossings=s.crossings, **s.section_kwargs())
             np.testing.assert_array_equal(_orbit_rows(page, ident), ref.orbit(0))
         assert page.resume() == 0                                                   # nothing left to resume
 
@@ -252,7 +252,7 @@ def test_with_the_box_unticked_a_click_leaves_the_running_orbits_running():
         assert page.worker.paused() == [] and "paused" not in page.status.text
         _poll_until(page, lambda: len(page.crossings.data["t"]) == 2 * s.crossings and not page.worker.busy())
         for ident, (p1, p2) in ((first, a), (second, b)):        # both complete, no Resume needed
-            ref = sections.section_crossings(s.params, [p1], [p2], s.h, s.crossings, **s.section_kwargs())
+            ref = sections.crossings(s.params, s.h, [(p1, p2)], n_crossings=s.crossings, **s.section_kwargs())
             np.testing.assert_array_equal(_orbit_rows(page, ident), ref.orbit(0))
     finally:
         page.close()
@@ -272,7 +272,7 @@ def test_the_exported_scene_reruns_the_sessions_orbits(tmp_path):
     run_sweep(sc, tmp_path / "out.h5", draw=False, progress=False)
     panel = read_store(tmp_path / "out.h5").panels[0]
     for i, (p1, p2) in enumerate(starts[:2]):
-        ref = sections.section_crossings(s.params, [p1], [p2], s.h, s.crossings, **s.section_kwargs())
+        ref = sections.crossings(s.params, s.h, [(p1, p2)], n_crossings=s.crossings, **s.section_kwargs())
         np.testing.assert_array_equal(panel.orbit(i), ref.orbit(0))
     with pytest.raises(ParameterError, match="no orbit"):
         export.session_scene(s, [(50.0, 0.0)])
@@ -706,7 +706,7 @@ def test_explore_in_a_notebook_renders_and_streams_the_clicked_orbit():
         while len(page.crossings.data["t"]) < 60 and time.time() - t0 < 120:
             page.poll()
             time.sleep(0.01)
-        ref = sections.section_crossings(page.settings.params, [0.3], [0.1], page.settings.h, 60)
+        ref = sections.crossings(page.settings.params, page.settings.h, [(0.3, 0.1)], n_crossings=60)
         got = np.column_stack([np.asarray(page.crossings.data[k]) for k in ("t", "p1", "p2", "M", "dH")])
         np.testing.assert_array_equal(got, ref.orbit(0))
         # the orbit's chaos indicators colour its points on demand
@@ -718,7 +718,7 @@ def test_explore_in_a_notebook_renders_and_streams_the_clicked_orbit():
             time.sleep(0.01)
         (megno, mlce), = page.indicators.values()
         ind = lyapunov.indicators(page.settings.params, ex.section_state(page.settings.params, [0.3], [0.1],
-                                                                         page.settings.h), INDICATOR_TIME)
+                                                                         page.settings.h), tmax=INDICATOR_TIME)
         assert (megno, mlce) == (float(ind.megno[0]), float(ind.mlce[0]))
         assert np.all(np.asarray(page.crossings.data["megno"]) == megno) and "<Y> =" in page.status.text
         page.colour_box.value = True
@@ -796,7 +796,7 @@ def test_in_the_browser_a_click_elsewhere_pauses_the_running_orbit_and_resume_co
     mine = np.array(data["orbit"]) == first
     rows = np.column_stack([np.array(data[k])[mine] for k in ("t", "p1", "p2", "M", "dH")])
     s = dataclasses.replace(SERVED, crossings=n)
-    ref = sections.section_crossings(s.params, [starts["p1"][0]], [starts["p2"][0]], s.h, n, **s.section_kwargs())
+    ref = sections.crossings(s.params, s.h, [(starts["p1"][0], starts["p2"][0])], n_crossings=n, **s.section_kwargs())
     np.testing.assert_array_equal(rows, ref.orbit(0))          # paused and resumed: one uninterrupted run
     page.close()
 
@@ -1010,7 +1010,7 @@ def test_picking_an_orbits_crossing_shows_its_mlce_megno_and_rotation_number():
         _poll_until(page, lambda: "rotation number" in page.readout.text)
         r = page.readouts[page.starts[1][0]]
         y0 = model.section_state(s.params, [starts[1][0]], [starts[1][1]], s.h)
-        ind = lyapunov.indicators(s.params, y0, INDICATOR_TIME, method=s.method, tol=s.tol)
+        ind = lyapunov.indicators(s.params, y0, tmax=INDICATOR_TIME, method=s.method, tol=s.tol)
         assert (r["megno"], r["mlce"]) == (float(ind.megno[0]), float(ind.mlce[0]))          # the same numbers
         fp = elliptic_center(s, starts[1])
         assert fp.stable and fp.point == pytest.approx(find_fixed_point(s.params, s.h, starts[1]).point, abs=0)

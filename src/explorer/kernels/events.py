@@ -28,9 +28,9 @@ comparison with scipy of benchmarks/stress/stress_crossings.py at dt <= 0.05).
 import numpy as np
 
 from explorer._jit import njit
+from explorer.kernels.checks import EPS
 from explorer.kernels.dop853 import dense_eval_scalar, dense_eval_scalar_derivative
 
-EPS = 2.220446049250313e-16
 #: stop when the Newton correction falls below this fraction of the step
 ROOT_XTOL = 4.0 * EPS
 ROOT_MAX_ITER = 100
@@ -44,6 +44,22 @@ MAX_STEP_ROOTS = 8
 #: relative slack of the exclusion and monotonicity bounds, for the rounding of the sums
 #: and of the shifted coefficients: an interval is never discarded on a margin of rounding
 BOUND_SLACK = 64.0 * EPS
+
+
+@njit(inline="always")
+def sin_diff(s, c, cphi, sphi):
+    """sin(phi - phi0) = sin phi cos phi0 - cos phi sin phi0 from s = sin phi, c = cos phi and
+    cphi, sphi = cos phi0, sin phi0: the event function of the section phi = phi0, written once.
+    Linear in (s, c), so it also maps the Taylor or dense-output coefficients of (sin phi, cos phi)
+    to those of the event function (the step searches)."""
+    return s * cphi - c * sphi
+
+
+@njit(inline="always")
+def cos_diff(s, c, cphi, sphi):
+    """cos(phi - phi0) = cos phi cos phi0 + sin phi sin phi0 (> 0 on the branch phi = phi0 of a
+    root of :func:`sin_diff`, < 0 on phi = phi0 + pi)."""
+    return c * cphi + s * sphi
 
 
 @njit
