@@ -243,3 +243,18 @@ def test_a_page_whose_server_stops_says_the_connection_is_lost(browser):
     assert code in (0, 130)
     _wait(page, f"() => document.body.innerText.includes({DISCONNECT_NOTICE[:40]!r})", timeout=30_000)
     page.close()
+
+
+def test_the_first_twenty_orbits_each_have_a_colour_of_their_own():
+    from explorer.app.serve.orbits import COLORS
+
+    page = _page(Settings(params=model.FIGURE4.with_(mu=0.03), crossings=1))
+    try:
+        c1, c2, r1, _r2 = page.settings.region
+        for k in range(20):
+            assert page.click(c1 + (-0.9 + 0.09 * k) * r1, c2) is not None
+        colours = [COLORS[c] for *_x, c in page.starts]
+        assert len(set(colours)) == 20, colours
+        assert page.start_source.data["c"] == [c for *_x, c in page.starts]   # the crosses carry them
+    finally:
+        page.close()

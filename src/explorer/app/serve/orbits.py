@@ -55,9 +55,11 @@ INDICATOR_AFTER = 0.5
 INDICATOR_MAX_STEPS = 1_000_000
 #: mean MEGNO above this is called "chaotic-like" (quasi-periodic orbits: <Y> -> 2)
 CHAOTIC_MEGNO = 3.0
-#: one colour per orbit, in turn
+#: one colour per orbit, in turn: 24 distinct (the first 20 orbits of a page never share one;
+#: Tableau 10 and the dark and mid rows of Vega's category20b/c, none near white or the region's gray)
 COLORS = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf",
-          "#bcbd22", "#393b79", "#637939", "#843c39", "#7b4173", "#3182bd", "#e6550d", "#31a354")
+          "#bcbd22", "#393b79", "#637939", "#843c39", "#7b4173", "#3182bd", "#e6550d", "#31a354",
+          "#5254a3", "#8ca252", "#bd9e39", "#ad494a", "#a55194", "#756bb1", "#636363", "#fd8d3c")
 
 
 @dataclass

@@ -32,17 +32,17 @@ import param
 from bokeh.events import DoubleTap, Tap
 from bokeh.models import Div
 
-from explorer import model
 from explorer.app.serve import export
 from explorer.app.serve import raster as raster_mod
 from explorer.app.serve import settings as settings_mod
 from explorer.app.serve.page_exports import Exports
+from explorer.app.serve.page_fields import LABELS, Fields  # noqa: F401
 from explorer.app.serve.page_layers import ChaosLayer, DensityImage
 from explorer.app.serve.page_orbits import FLUSH_SECONDS, LIVE_MAX_ROWS, SETTLE_SLACK, OrbitsLayer  # noqa: F401
 from explorer.app.serve.page_overlays import Overlays
 from explorer.app.serve.page_readout import Readout
 from explorer.app.serve.settings import FIELDS, Settings, format_starts, format_window, parse_fields
-from explorer.app.serve.style import FIELD_WIDTH, MESSAGE_ERROR_COLOR, MESSAGE_OK_COLOR
+from explorer.app.serve.style import MESSAGE_ERROR_COLOR, MESSAGE_OK_COLOR
 from explorer.app.serve.tasks import SessionLoop
 from explorer.app.serve.view import SectionView
 from explorer.model import ParameterError
@@ -53,10 +53,6 @@ SAME_SPOT_PX = 4.0
 URL_DELAY_SECONDS = 0.5
 #: what a click does: the choices of the page's switch (Shift + click always picks)
 CLICK_MODES = ("start an orbit", "pick an orbit")
-#: labels of the fields
-LABELS = {p.name: p.symbol for p in model.PARAMETERS} | {
-    "h": "h", "method": "method", "tol": "tol (taylor, dop853)", "dt": "dt (split*)",
-    "crossings": "crossings per click", "phi0": "φ0 (section φ = φ0)"}
 #: the URL's arguments besides the fields (what url_query writes)
 URL_EXTRAS = ("orbits", "megno", "separatrices", "periodic", "colour", "pause", "view")
 #: attributes of the page that are its components' (page.crossings is page.orbits.crossings, ...)
@@ -64,11 +60,11 @@ FACADE = {"orbits": ("crossings", "shown", "live", "start_source", "points", "li
                      "glyph_filter", "colour_box", "starts_box", "pause_box", "status", "worker", "starts",
                      "indicators", "_running", "_flush", "_on_block", "_on_indicators", "update_status"),
           "section": ("figure", "region", "window", "_on_ranges"),
-          "density": ("dense",), "chaos": ("layer", "colour_bar"),
+          "density_image": ("density", "dense"), "chaos": ("layer", "colour_bar", "raster_source"),
           "overlays": ("fixed", "curves", "periodic", "manifold_source", "overlay", "periodic_box",
                        "separatrix_lines", "show_manifolds", "saddle_near"),
           "readout_": ("pick", "select", "picked", "readouts"),
-          "exports": ("view", "figure_bytes", "export_figure", "export", "scene_text")}
+          "exports": ("view", "figure_bytes", "export_figure", "export", "scene_text", "_scene_text")}
 _FACADE = {a: c for c, names in FACADE.items() for a in names}
 
 
@@ -97,7 +93,7 @@ class SectionPage:
         self.url_state = UrlState()
         self.section = SectionView()
         self.orbits = OrbitsLayer(self, self.section, self.loop)
-        self.density = DensityImage(self.orbits, self.section)
+        self.density_image = DensityImage(self.orbits, self.section)
         self.chaos = ChaosLayer(self, self.section, self.loop, raster_mod.resolutions_up_to(megno_resolution),
                                 megno_time)
         self.overlays = Overlays(self, self.section, self.loop)
@@ -109,7 +105,7 @@ class SectionPage:
         fig = self.section.figure
         self.chaos.draw(fig)
         self.overlays.draw_lines(fig)
-        self.density.draw(fig)
+        self.density_image.draw(fig)
         self.orbits.draw(fig)
         self.overlays.draw_marks(fig)
         fig.on_event(Tap, self._on_tap)
@@ -131,17 +127,8 @@ class SectionPage:
 
     # ------------------------------------------------------------ layout
     def _build(self):
-        s = self.settings.fields()
-        self.inputs = {}
-        for name in FIELDS:
-            if name == "method":
-                from explorer.analysis.sections import METHODS
-
-                w = pn.widgets.Select(label=LABELS[name], options=list(METHODS), value=s[name], width=FIELD_WIDTH)
-            else:
-                w = pn.widgets.TextInput(label=LABELS[name], value=s[name], width=FIELD_WIDTH)
-            w.param.watch(self._field_changed, "value")
-            self.inputs[name] = w
+        self.fields = Fields(self.loop, self.settings, self._on_field)
+        self.inputs = self.fields.inputs
         buttons = []
         for label, action, width in (("Clear", self.clear, 90), ("Undo", self.undo, 90), ("Resume", self.resume, 190),
                                      ("Scene seeds", self.run_seeds, 190)):
@@ -166,7 +153,7 @@ class SectionPage:
         self.title = pn.pane.Markdown(self._title())
         o, ov = self.orbits, self.overlays
         controls = pn.Column(pn.pane.Markdown("a click (Shift + click: pick):", margin=(0, 5)), self.click_mode,
-                             o.pause_box, pn.GridBox(*self.inputs.values(), ncols=2), o.colour_box, self.chaos.layer,
+                             o.pause_box, self.fields.grid, o.colour_box, self.chaos.layer,
                              ov.overlay, ov.periodic_box, o.starts_box, pn.Row(*buttons[:2]), *buttons[2:], width=230)
         texts = (o.status, self.readout, self.message, self.overlay_text)
         for div in texts:
@@ -246,38 +233,17 @@ class SectionPage:
         return self.overlays.on() + (("megno",) if self.chaos.layer.value else ())
 
     def _show_fields(self):
-        s = self.settings.fields()
-        for name, w in self.inputs.items():
-            if w.value != s[name]:
-                self._quiet = True
-                try:
-                    w.value = s[name]
-                finally:
-                    self._quiet = False
-
-    _quiet = False
+        self.fields.show(self.settings)
 
     # ------------------------------------------------------------ values
-    def _field_changed(self, event):
-        if not self._quiet:           # (a change made by _show_fields is not the user's)
-            name = next((n for n, w in self.inputs.items() if w is event.obj), None)
-            self.loop.soon(lambda: self._on_field(name))
-
     def _on_field(self, name: str | None = None):
         """The field ``name`` was edited: the applied settings with its text (every field's text
-        when None), validated by :func:`~explorer.app.serve.settings.parse_fields` as the command
-        line's values are.  A refused value changes nothing and is said in the message; it stays in
-        its field, but a later edit of another field is read on top of the applied settings (it does
-        not quote the refused one again) and puts every field back to the applied values."""
-        if name is None:
-            fields = {n: w.value for n, w in self.inputs.items()}
-        else:
-            fields = {**self.settings.fields(), name: self.inputs[name].value}
+        when None), validated as the command line's values are (Fields.read).  A refused value
+        changes nothing and is said in the message; it stays in its field, but a later edit of
+        another field is read on top of the applied settings (it does not quote the refused one
+        again) and puts every field back to the applied values."""
         try:
-            new = parse_fields(self.base, fields)
-            full = settings_mod.room_for(len(self.orbits.starts), new.crossings)
-            if full:
-                raise ParameterError(f"crossings: {full}")
+            new = self.fields.read(self.base, self.settings, len(self.orbits.starts), name)
         except ParameterError as exc:
             self.say(f"not applied: {exc}")
             return
@@ -338,7 +304,7 @@ class SectionPage:
         """Stop every orbit and take them off the page; returns their starts."""
         self.readout_.forget()
         old = self.orbits.drop_all()
-        self.density.refresh(force=True)       # no image left of them
+        self.density_image.refresh(force=True)       # no image left of them
         return old
 
     def clear(self) -> None:

@@ -33,6 +33,8 @@ class Exports:
     def scene_text(self) -> str:
         return export.session_scene(self.host.settings, self._starts(), overlays=self.host.overlays_on()).to_toml()
 
+    _scene_text = scene_text
+
     def scene_file(self):
         try:
             return io.StringIO(self.scene_text())
@@ -54,7 +56,7 @@ class Exports:
                  for i, _a, _b, c in orbits.starts]
         w = host.section.window
         window = (w.x0, w.x1, w.y0, w.y1) if w is not None else (-1.0, 1.0, -1.0, 1.0)
-        r = host.chaos.source.data
+        r = host.chaos.raster_source.data
         raster = None
         if len(r["image"]):
             x, y = r["x"][0], r["y"][0]

@@ -41,14 +41,15 @@ class ChaosLayer:
         self.host, self.view = host, view
         self.resolutions, self.time = resolutions, float(time)
         self.task = loop.task("raster")
-        self.source = ColumnDataSource(_empty_raster(), name="raster")
+        self.raster_source = ColumnDataSource(_empty_raster(), name="raster")
         self.layer = pn.widgets.Checkbox(label=f"MEGNO layer (T = {self.time:g})", value=False)
         self.layer.param.watch(lambda _e: loop.soon(self._layer_changed), "value")
         view.on_window(self._window_moved)
 
     def draw(self, fig) -> None:
         megno = LinearColorMapper(palette=megno_palette(), low=MEGNO_LOW, high=MEGNO_HIGH, nan_color=(0, 0, 0, 0))
-        fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=self.source, color_mapper=megno, alpha=0.85)
+        fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=self.raster_source, color_mapper=megno,
+                  alpha=0.85)
         self.colour_bar = ColorBar(color_mapper=megno, title="⟨Y⟩ (MEGNO)", visible=False, width=12,
                                    name="megno-colour-bar")
         fig.add_layout(self.colour_bar, "right")
@@ -67,7 +68,7 @@ class ChaosLayer:
         window, settings = self.view.window, self.host.settings
         if not self.layer.value or window is None or settings.region is None:
             self.task.cancel()
-            self.source.data = _empty_raster()
+            self.raster_source.data = _empty_raster()
             return
         self.task.submit(self._compute, settings, window, on_error=self._failed)
 
@@ -81,7 +82,7 @@ class ChaosLayer:
 
     def show_image(self, image) -> None:
         w = image.window
-        self.source.data = {"image": [image.values], "x": [w.x0], "y": [w.y0], "dw": [w.x1 - w.x0],
+        self.raster_source.data = {"image": [image.values], "x": [w.x0], "y": [w.y0], "dw": [w.x1 - w.x0],
                             "dh": [w.y1 - w.y0], "n": [image.n], "complete": [image.complete]}
 
 
@@ -90,7 +91,7 @@ class DensityImage:
 
     def __init__(self, orbits, view):
         self.orbits, self.view = orbits, view
-        self.source = ColumnDataSource(_empty_density(), name="density")
+        self.density = ColumnDataSource(_empty_density(), name="density")
         self.dense = False                      # the density image replaces the crossings' glyphs
         self.glyph_first = 0                    # orbits from this id on are glyphs, older ones in the image
         self._key: tuple | None = None          # what the image on the page shows
@@ -98,7 +99,7 @@ class DensityImage:
         view.on_window(lambda: self.refresh(force=True))
 
     def draw(self, fig) -> None:
-        fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.source)
+        fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.density)
 
     def refresh(self, force: bool = False) -> None:
         """Draw the crossings that are not glyphs as the density image of the visible window: past
@@ -126,8 +127,8 @@ class DensityImage:
             orbits.glyph_filter.args = {"first": first}
             force = True
         if not dense and first == 0:
-            if self.source.data["image"]:
-                self.source.data = _empty_density()
+            if self.density.data["image"]:
+                self.density.data = _empty_density()
             self._key = None
             return
         w = self.view.window
@@ -156,5 +157,5 @@ class DensityImage:
                                      megno=megno if by_megno else None,
                                      palette=megno_palette(MEGNO_ORBIT_SKIP) if by_megno else None,
                                      lo=MEGNO_LOW, hi=MEGNO_HIGH)
-        self.source.data = {"image": [image], "x": [w.x0], "y": [w.y0], "dw": [w.x1 - w.x0], "dh": [w.y1 - w.y0],
+        self.density.data = {"image": [image], "x": [w.x0], "y": [w.y0], "dw": [w.x1 - w.x0], "dh": [w.y1 - w.y0],
                             "n": [shown]}

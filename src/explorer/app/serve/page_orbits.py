@@ -164,13 +164,14 @@ class OrbitsLayer:
 
     # ------------------------------------------------------------ blocks from the worker
     def _on_block(self, ident, rows, done, status):
-        """On the loop: queue the block.  An orbit's first block and its last go at once; others at
-        most every FLUSH_SECONDS after the last flush (each message redraws every crossing in the
-        browser).  Blocks queued meanwhile go to the page together (one stream of rows)."""
+        """On the loop: queue the block (the flush at the next tick at the earliest).  An orbit's
+        first block and its last go at once; others at most every FLUSH_SECONDS after the last
+        flush (each message redraws every crossing in the browser).  Blocks queued meanwhile go
+        to the page together (one stream of rows)."""
         urgent = done == len(rows) or status != "running"
         self._pending.append((ident, rows, done, status))
         now = time.monotonic()
-        self.flush_timer.at(now if urgent else max(now, self._flushed_at + FLUSH_SECONDS))
+        self.flush_timer.at(now if urgent else max(now, self._flushed_at + FLUSH_SECONDS), reentrant=False)
 
     def _flush(self):
         """The queued blocks onto the page.  Bokeh sends each change of a model as its own message,
@@ -220,13 +221,15 @@ class OrbitsLayer:
                 if status != "done":
                     self.host.say(f"orbit {ident} stopped after {done} crossings: {status}")
         if first_rows:
-            self._settle_at = now + FLUSH_SECONDS
+            # (in a notebook the next poll settles them: it pushes everything in one message anyway)
+            self._settle_at = now + FLUSH_SECONDS if self.loop.doc is not None else -math.inf
             self.host.push_url()         # (after the rows: a reload from now on has the click)
         elif not to_live:
-            self.update_status(force_density=self.host.density.dense and moved)
+            self.update_status(force_density=self.host.density_image.dense and moved)
         if self._pending or len(self.live.data["orbit"]):
             # what waits goes at the latest when the live rows are due to settle
-            self.flush_timer.at(max(self._settle_at, now + (FLUSH_SECONDS if self._pending else 0.0)))
+            self.flush_timer.at(max(self._settle_at, now + (FLUSH_SECONDS if self._pending else 0.0)),
+                                reentrant=False)
 
     def _settle(self) -> bool:
         """The live rows to ``crossings`` (past density.THRESHOLD, to the density image only: the
@@ -235,7 +238,7 @@ class OrbitsLayer:
         moved = bool(len(self.live.data["orbit"]))
         n = len(self.crossings.data["orbit"])
         if n > self._settled:
-            if not self.host.density.dense:
+            if not self.host.density_image.dense:
                 self.shown.stream({k: np.asarray(v)[self._settled:] for k, v in self.crossings.data.items()})
             self._settled = n
         if moved:
@@ -245,7 +248,7 @@ class OrbitsLayer:
     def show_all(self) -> None:
         """The browser's rows anew: every crossing in ``crossings`` (none past density.THRESHOLD),
         none live (after an undo, a clear, a change of settings or of the threshold's side)."""
-        self.shown.data = _empty_crossings() if self.host.density.dense else dict(self.crossings.data)
+        self.shown.data = _empty_crossings() if self.host.density_image.dense else dict(self.crossings.data)
         if len(self.live.data["orbit"]):
             self.live.data = _empty_live()
         self._settled = len(self.crossings.data["orbit"])
@@ -263,7 +266,7 @@ class OrbitsLayer:
         paused = len(self._running.intersection(self.worker.paused()))
         running = len(self._running) - paused
         n = len(self.crossings.data["orbit"])
-        density = self.host.density
+        density = self.host.density_image
         density.refresh(force=force_density or not running)   # (at once when the last orbit is done)
         s = self.host.settings
         text = (f"{len(self.starts)} orbit(s), {running} running, "
@@ -287,7 +290,7 @@ class OrbitsLayer:
         if rows.size:      # the rows streamed before the indicator was known
             self.crossings.patch(_megno_patch(rows, megno))
             settled = self._settled        # (the browser's: crossings up to it, live from it on)
-            if not self.host.density.dense and rows[0] < settled:
+            if not self.host.density_image.dense and rows[0] < settled:
                 self.shown.patch(_megno_patch(rows[rows < settled], megno))
             if rows[-1] >= settled:
                 self.live.patch(_megno_patch(rows[rows >= settled] - settled, megno, as_list=True))
@@ -298,7 +301,7 @@ class OrbitsLayer:
         for r in (self.points, self.live_points):
             r.glyph.fill_color = spec
             r.glyph.line_color = spec
-        self.host.density.refresh(force=True)
+        self.host.density_image.refresh(force=True)
         self.host.push_url()
 
     def _starts_box_changed(self) -> None:

@@ -98,7 +98,8 @@ class Overlays:
         texts: list = []
 
         def on_points(points, text):
-            job.post(lambda: self._show_fixed(points, [], "; ".join([*texts, text])))
+            shown = "; ".join([*texts, text])           # (now: texts grows before the post is delivered)
+            job.post(lambda: self._show_fixed(points, [], shown))
 
         if fixed:
             try:
@@ -106,7 +107,8 @@ class Overlays:
             except Exception as exc:  # noqa: BLE001 - reported in the page
                 points, curves, text = [], [], f"fixed points: failed ({type(exc).__name__}: {exc})"
             texts.append(text)
-            job.post(lambda: self._show_fixed(points, curves, "; ".join(texts)))
+            found = "; ".join(texts)
+            job.post(lambda: self._show_fixed(points, curves, found))
         if periodic and job.current:
             if fixed:
                 waiting = "; ".join([*texts, "searching the periodic orbits ..."])
@@ -116,7 +118,8 @@ class Overlays:
             except Exception as exc:  # noqa: BLE001 - reported in the page
                 orbits, text = [], f"periodic orbits: failed ({type(exc).__name__}: {exc})"
             texts.append(text)
-            job.post(lambda: self._show_periodic(orbits, "; ".join(texts)))
+            done = "; ".join(texts)
+            job.post(lambda: self._show_periodic(orbits, done))
 
     def _show_periodic(self, orbits, text):
         rows = [(p, int(o.period), o.stable) for o in orbits for p in np.asarray(o.points)]

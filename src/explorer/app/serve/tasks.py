@@ -183,21 +183,21 @@ class Timer:
     def pending(self) -> bool:
         return self.due is not None
 
-    def at(self, when: float) -> None:
-        """On the loop: run the action at ``when`` (time.monotonic), at once if it is past and no
-        server owns the document (a notebook: at the next poll otherwise)."""
+    def at(self, when: float, reentrant: bool = True) -> None:
+        """On the loop: run the action at ``when`` (time.monotonic): now if it is due and
+        ``reentrant``, else at the next tick once it is due (in a notebook: at the next poll)."""
         if self.due is not None and self.due <= when:
             return
         self.generation += 1
         g, self.due = self.generation, when
         wait = when - time.monotonic()
         doc = self.loop.doc
-        if wait < 0.001:
+        if wait < 0.001 and reentrant:
             self._fire(g)
-        elif doc is None:
+        elif doc is None or wait < 0.001:
             self.loop.post(lambda: self._fire(g))
         else:
-            doc.add_timeout_callback(lambda: self._fire(g), int(1000 * wait) + 1)
+            doc.add_timeout_callback(lambda: self._fire(g), max(int(1000 * wait) + 1, 1))
 
     def cancel(self) -> None:
         self.generation += 1
