@@ -38,7 +38,13 @@ from explorer.app.serve import settings as settings_mod
 from explorer.app.serve.page_exports import Exports
 from explorer.app.serve.page_fields import LABELS, Fields  # noqa: F401
 from explorer.app.serve.page_layers import ChaosLayer, DensityImage
-from explorer.app.serve.page_orbits import FLUSH_SECONDS, LIVE_MAX_ROWS, SETTLE_SLACK, OrbitsLayer  # noqa: F401
+from explorer.app.serve.page_orbits import (  # noqa: F401  (the page's constants, as before)
+    FLUSH_SECONDS,
+    LIVE_MAX_ROWS,
+    PAUSE_LABEL,
+    SETTLE_SLACK,
+    OrbitsLayer,
+)
 from explorer.app.serve.page_overlays import Overlays
 from explorer.app.serve.page_readout import Readout
 from explorer.app.serve.settings import FIELDS, Settings, format_starts, format_window, parse_fields
@@ -129,21 +135,22 @@ class SectionPage:
     def _build(self):
         self.fields = Fields(self.loop, self.settings, self._on_field)
         self.inputs = self.fields.inputs
+        # the buttons in rows above the figure: at 1280 x 720 every one is in view with the figure
+        # (in the controls' column, below the fields, the export buttons were below the fold)
         buttons = []
-        for label, action, width in (("Clear", self.clear, 90), ("Undo", self.undo, 90), ("Resume", self.resume, 190),
-                                     ("Scene seeds", self.run_seeds, 190)):
+        for label, action, width in (("Clear", self.clear, 70), ("Undo", self.undo, 70), ("Resume", self.resume, 80),
+                                     ("Scene seeds", self.run_seeds, 100)):
             b = pn.widgets.Button(label=label, width=width, color="warning" if label == "Clear" else "default")
             b.on_click(lambda _e, action=action: self.loop.soon(action))
             buttons.append(b)
         buttons.append(pn.widgets.FileDownload(callback=self.exports.scene_file, filename=f"{export.SCENE_NAME}.toml",
-                                               label="Scene (TOML)", color="primary", width=190))
-        buttons.append(pn.Row(*(pn.widgets.FileDownload(callback=lambda fmt=fmt: self.exports.figure_file(fmt),
-                                                        filename=f"{export.SCENE_NAME}.{fmt}",
-                                                        label=f"Figure ({fmt.upper()})", width=92)
-                                for fmt in ("png", "svg"))))
+                                               label="Scene (TOML)", color="primary", width=110))
+        buttons += [pn.widgets.FileDownload(callback=lambda fmt=fmt: self.exports.figure_file(fmt),
+                                            filename=f"{export.SCENE_NAME}.{fmt}", label=f"Figure ({fmt.upper()})",
+                                            width=100) for fmt in ("png", "svg")]
         if self.export_dir is not None:
             for label, action in (("Export scene", self.exports.export), ("Export figure", self.exports.export_figure)):
-                b = pn.widgets.Button(label=label, width=190)
+                b = pn.widgets.Button(label=label, width=110)
                 b.on_click(lambda _e, action=action: self.loop.soon(action))
                 buttons.append(b)
         # text, never HTML: a message may quote what was typed into a field
@@ -154,11 +161,12 @@ class SectionPage:
         o, ov = self.orbits, self.overlays
         controls = pn.Column(pn.pane.Markdown("a click (Shift + click: pick):", margin=(0, 5)), self.click_mode,
                              o.pause_box, self.fields.grid, o.colour_box, self.chaos.layer,
-                             ov.overlay, ov.periodic_box, o.starts_box, pn.Row(*buttons[:2]), *buttons[2:], width=230)
+                             ov.overlay, ov.periodic_box, o.starts_box, width=230)
         texts = (o.status, self.readout, self.message, self.overlay_text)
         for div in texts:
             div.width = self.section.figure.width
-        self.layout = pn.Row(controls, pn.Column(self.title, pn.pane.Bokeh(self.section.figure),
+        bar = pn.FlexBox(*buttons, flex_wrap="wrap", width=self.section.figure.width)
+        self.layout = pn.Row(controls, pn.Column(self.title, bar, pn.pane.Bokeh(self.section.figure),
                                                  *(pn.pane.Bokeh(d) for d in texts)))
 
     _closed = False
