@@ -1,4 +1,4 @@
-"""The orbits of one browser session, computed block by block in a worker thread.
+"""The orbits of one browser session, computed block by block (a job of the session's task helper).
 
 An :class:`OrbitRun` continues one clicked orbit with
 :func:`explorer.analysis.sections.iter_crossings`, one block at a time from the
