@@ -3,7 +3,7 @@
 
 Every background job of a page is a :class:`LatestTask`: the orbits' worker loop, the MEGNO
 raster, the overlay searches, a pick's readout, a saddle's manifolds, the figure and store
-exports.  :meth:`LatestTask.submit` runs ``work(job, *args)`` on the task's executor (one thread,
+exports.  :meth:`LatestTask.submit` runs ``work(job, *args)`` on the task's executor (one daemon thread,
 made at the first submit); a newer submit (or :meth:`LatestTask.cancel`) supersedes the older job:
 its :class:`~explorer.analysis.budget.Budget` is cancelled, so its compiled loops stop within a
 step, and whatever it still hands in (:meth:`Job.post`) is dropped on the loop.  Results reach the
@@ -14,12 +14,37 @@ generation counters of every job and timer are here, and only here.
 """
 from __future__ import annotations
 
+import queue
 import threading
 import time
-from concurrent.futures import ThreadPoolExecutor
 from functools import partial
 
 from explorer.analysis.budget import Budget, BudgetExceeded
+
+
+class Executor:
+    """One daemon thread that runs the calls :meth:`submit` hands it, in order.  (Not a
+    ``concurrent.futures.ThreadPoolExecutor``: the interpreter joins its threads at exit, so a
+    search no one waits for any more would hold the exit up.)"""
+
+    def __init__(self, name: str):
+        self._queue: queue.SimpleQueue = queue.SimpleQueue()
+        self.thread = threading.Thread(target=self._loop, name=name, daemon=True)
+        self.thread.start()
+
+    def submit(self, fn, *args) -> None:
+        self._queue.put((fn, args))
+
+    def shutdown(self, wait: bool = False) -> None:
+        """End the thread after the calls already handed in (``wait``: join it)."""
+        self._queue.put(None)
+        if wait and threading.current_thread() is not self.thread:
+            self.thread.join()
+
+    def _loop(self) -> None:
+        while (item := self._queue.get()) is not None:
+            fn, args = item
+            fn(*args)
 
 
 class SessionLoop:
@@ -107,7 +132,7 @@ class LatestTask:
         self.generation = 0
         self._lock = threading.Lock()
         self._budget: Budget | None = None
-        self._executor: ThreadPoolExecutor | None = None
+        self._executor: Executor | None = None
         self._stopped = False
 
     def submit(self, work, *args, budget: Budget | None = None, on_error=None) -> Job:
@@ -129,7 +154,7 @@ class LatestTask:
         job = Job(self, self.generation, budget)
         if not self._stopped:
             if self._executor is None:
-                self._executor = ThreadPoolExecutor(1, thread_name_prefix=f"explorer-serve-{self.name}")
+                self._executor = Executor(f"explorer-serve-{self.name}")
             self._executor.submit(self._run, job, work, args, on_error)
         return job
 
@@ -151,7 +176,7 @@ class LatestTask:
             self._supersede()
             executor = self._executor
         if executor is not None:
-            executor.shutdown(wait=wait, cancel_futures=True)
+            executor.shutdown(wait)           # (the jobs still queued are superseded: they return at once)
 
     @staticmethod
     def _run(job: Job, work, args, on_error) -> None:
