@@ -269,3 +269,22 @@ def test_the_first_twenty_orbits_each_have_a_colour_of_their_own():
         assert page.start_source.data["c"] == [c for *_x, c in page.starts]   # the crosses carry them
     finally:
         page.close()
+
+
+def test_the_mu_slider_applies_its_value_through_the_field_and_follows_the_field():
+    import param
+
+    page = _page(SERVED)
+    try:
+        slider = page.fields.mu_slider
+        assert slider.value == SERVED.params.mu
+        with param.parameterized.edit_constant(slider):
+            slider.value_throttled = 0.5                  # a drag released at 0.5
+        assert page.settings.params.mu == 0.5 and page.inputs["mu"].value == "0.5"
+        assert page.url_query()["mu"] == "0.5"
+        page.inputs["mu"].value = "0.25"                  # the field moves the slider
+        assert page.settings.params.mu == 0.25 and slider.value == 0.25
+        page.inputs["mu"].value = "7"                     # beyond its range: applied, the slider at its end
+        assert page.settings.params.mu == 7.0 and slider.value == slider.end
+    finally:
+        page.close()
