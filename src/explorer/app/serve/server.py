@@ -176,7 +176,7 @@ def run(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, t
         # Ctrl-C (or SIGTERM): the server is stopped; the process ends now, without the interpreter's
         # finalisation, which took up to a second more while sessions computed (issue 32: Ctrl-C ends
         # the server within 1 s in every state).  Nothing is lost: the server writes nothing at exit
-        # (an export in progress is a daemon thread, abandoned either way).
+        # (an export in progress runs in a daemon thread, abandoned either way).
         out.flush()
         sys.stderr.flush()
         os._exit(0)
