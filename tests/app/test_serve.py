@@ -819,6 +819,9 @@ class _FakeServer:
     def stop(self):
         self.stopped = True
 
+    def add_callback(self, callback):      # run on the loop, which never runs here
+        pass
+
 
 def _explore_in_process(monkeypatch, capsys, argv, browser):
     """Run ``explorer <argv>`` with the Bokeh server replaced and ``webbrowser.get`` returning
