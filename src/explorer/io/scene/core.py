@@ -77,6 +77,9 @@ class Scene:
             _fail("lyapunov", f"must be a LyapunovSpec, {_got(self.lyapunov)}")
         if self.lyapunov.map_resolution and "lyapunov" not in compute:
             _fail("lyapunov.map_resolution", "needs compute.lyapunov = true")
+        if self.lyapunov.frequency_diffusion is not None and self.integration.direction == -1:
+            _fail("integration.direction", "must be 0 or 1 with the indicator frequency_diffusion (the section map's "
+                  "returns cross with M > 0), got -1")
         object.__setattr__(self, "compute", compute)
         self._check_atlas()
         if self.is_atlas and self.manifolds.draw:
