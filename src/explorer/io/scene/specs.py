@@ -230,7 +230,7 @@ class LyapunovSpec:
     def frequency_diffusion(self) -> dict | None:
         """The settings of the indicator frequency_diffusion when asked for (None otherwise): its
         centre, N and the Taylor tolerance of its section returns (``tol``, whatever the method)."""
-        if not self._orbit_names():
+        if self.center is None or not self._orbit_names():   # (__post_init__ refuses it without a centre)
             return None
         return {"center": list(self.center), "iterates": self.diffusion_iterates, "tol": self.tol}
 
