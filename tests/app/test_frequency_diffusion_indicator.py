@@ -23,14 +23,8 @@ ITERATES = 10
 
 MAP_SCENE = f"""
 name = "fd_map"
-[model]
-a1 = 1.0
-a2 = 0.5
-b = 2.0
-lam = 1.0
+[model]                          # Figure 4's model and energy but mu
 mu = 0.1
-[energy]
-h = 2.0
 [compute]
 sections = false
 lyapunov = true

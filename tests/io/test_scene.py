@@ -244,7 +244,8 @@ def test_panel_index_out_of_range_raises_index_error():
 def test_dict_and_toml_round_trips_give_the_same_scene():
     for s in (load_scene("figure4"), parse_scene(_docstring_example()),
               parse_scene(BASE + 'description = "quote \\" tab\\t é"\n[seeds]\nkind = "lines"\n'
-                          "lines = [[-1.0, 0.0, 1.0, 0.0], [0.0, -1, 0.0, 1]]\n[integration]\nphi0 = 1.25\n")):
+                          "lines = [[-1.0, 0.0, 1.0, 0.0], [0.0, -1, 0.0, 1]]\n[integration]\nphi0 = 1.25\n"),
+              parse_scene(LYAP_FD + "diffusion_iterates = 40\n")):   # [lyapunov] center, a list in TOML
         assert scene.scene_from_dict(s.to_dict(), s.text) == s
         assert dataclasses.replace(parse_scene(s.to_toml()), text=s.text) == s
 
