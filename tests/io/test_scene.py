@@ -328,8 +328,8 @@ SPLIT_SCENE = SWEEP_SCENE.replace("tol = 1e-12", "method = 'split4'\ndt = 0.05")
 RANDOM_SCENE = SWEEP_SCENE + "[seeds]\nkind = 'random'\nn = 50\nseed = 1\n"
 LYAP_SCENE = SWEEP_SCENE + "[compute]\nlyapunov = true\n[lyapunov]\ntime = 500.0\nmethod = 'taylor'\ntol = 1e-12\n"
 LYAP_SPLIT = LYAP_SCENE.replace("method = 'taylor'\ntol = 1e-12", "method = 'split4'\ndt = 0.02")
-LYAP_FD = LYAP_SCENE + "indicators = ['megno', 'frequency_diffusion']\ncenter = [1.5, 0.0]\n"
-LYAP_FD_SPLIT = LYAP_SPLIT + "indicators = ['megno', 'frequency_diffusion']\ncenter = [1.5, 0.0]\n"
+LYAP_FD = LYAP_SCENE + "indicators = ['megno', 'frequency_diffusion']\ncenter = [0.0, 0.0]\n"
+LYAP_FD_SPLIT = LYAP_SPLIT + "indicators = ['megno', 'frequency_diffusion']\ncenter = [0.0, 0.0]\n"
 HASHED_CHANGES = {
     "tmax": (SWEEP_SCENE, SWEEP_SCENE.replace("tol = 1e-12", "tol = 1e-12\ntmax = 5000")),
     "max_steps": (SWEEP_SCENE, SWEEP_SCENE.replace("tol = 1e-12", "tol = 1e-12\nmax_steps = 1000")),
@@ -345,7 +345,7 @@ HASHED_CHANGES = {
     "compute_lyapunov": (SWEEP_SCENE, LYAP_SCENE),
     "compute_separatrices": (SWEEP_SCENE, SWEEP_SCENE + "[compute]\nseparatrices = true\n"),
     "frequency_diffusion": (LYAP_SCENE, LYAP_FD),
-    "diffusion_center": (LYAP_FD, LYAP_FD.replace("center = [1.5, 0.0]", "center = [1.5, 0.1]")),
+    "diffusion_center": (LYAP_FD, LYAP_FD.replace("center = [0.0, 0.0]", "center = [0.0, 0.1]")),
     "diffusion_iterates": (LYAP_FD, LYAP_FD + "diffusion_iterates = 200\n"),
     # the tolerance of its section returns, whatever the method of the tangent indicators
     "diffusion_tol": (LYAP_FD_SPLIT, LYAP_FD_SPLIT + "tol = 1e-11\n"),
@@ -385,6 +385,12 @@ def test_the_diffusion_settings_alone_keep_panel_hashes_unless_it_is_asked_for()
 def test_bad_diffusion_settings_name_the_key(edit, key):
     with pytest.raises(SceneError, match=re.escape(f"'{key}'")):
         parse_scene(LYAP_SCENE + edit)
+
+
+def test_the_diffusion_centre_must_lie_in_every_panels_allowed_region():
+    # the centre's own orbit is followed (explorer.analysis.rotation): (10, 0) is outside every panel's region
+    with pytest.raises(SceneError, match=re.escape("'lyapunov.center'")):
+        parse_scene(LYAP_FD.replace("center = [0.0, 0.0]", "center = [10.0, 0.0]"))
 
 
 def test_frequency_diffusion_refuses_the_negative_direction():
