@@ -74,17 +74,16 @@ MAX_QMAX = 4181
 SECTION_QMAX = 55
 #: the smallest period used: Q = 1 has no half-orbit equation of this form
 MIN_Q = 2
-#: Newton on the half-orbit: converged when the step in p is below this (relative to max(1, |p|))
-SHOOT_TOL = 1e-15
-SHOOT_MAX_ITER = 40
+#: Newton on the half-orbit: converged when the step in p is below this (relative to max(1, |p|)),
+#: in at most this many iterations
+SHOOT_TOL, SHOOT_MAX_ITER = 1e-15, 40
 #: ... or when the steps stop shrinking below this: the round-off floor of a long half orbit
 SHOOT_FLOOR = 1e-11
 #: an orbit is accepted when it closes after Q steps to this (theta_Q - theta_0 - 2 pi P and p_Q - p_0,
 #: relative to max(1, |M|): the closure error of a correct orbit grows with the monodromy)
 CLOSURE_TOL = 1e-9
-#: the secant solve of R_n(k) = R*: stop when the step in k is below this
-PARAM_TOL = 1e-14
-PARAM_MAX_ITER = 60
+#: the secant solve of R_n(k) = R*: stop when the step in k is below this, or after this many steps
+PARAM_TOL, PARAM_MAX_ITER = 1e-14, 60
 #: a secant step in the parameter is at most this fraction of max(|k|, the last step)
 MAX_PARAM_STEP = 0.2
 #: an orbit of type P/Q turns P/Q per return around the island's centre to this (times Q)

@@ -133,12 +133,21 @@ def difference(system, a, b) -> np.ndarray:
     return d
 
 
+#: a batch of a section map's images with fewer returns than this (points x n) runs on one thread:
+#: a parallel region's start and its threads' spin-wait cost more than the half of the work they
+#: save (the manifold growth's batches, tens to hundreds of points: four branches of Figure 4 at
+#: mu = 0.01 on a loaded machine, 0.19 s on one thread, 0.8-1.7 s on two; the results do not
+#: depend on the thread count)
+SERIAL_RETURNS = 4096
+
+
 def images(system, X, n: int, *, backward: bool = False) -> np.ndarray:
     """The first ``n`` images (preimages with ``backward``) of each point of X (m, 2): an (m, n, 2)
     array, NaN from the first iterate that fails (no return of a section map, a point outside its
     allowed region).  A :class:`~explorer.analysis.section_map.SectionMap` runs them as one batch
-    of the Taylor lanes (:func:`explorer.analysis.sections.crossings`; backward through the reversor
-    G0 P^n G0 = P^-n where it applies, else point by point); any other map iterates each point
+    of the Taylor lanes (:func:`explorer.analysis.sections.crossings`, on one thread below
+    ``SERIAL_RETURNS`` returns; backward through the reversor G0 P^n G0 = P^-n where it
+    applies, else point by point); any other map iterates each point
     with its own ``iterate``."""
     X = np.asarray(X, float).reshape(-1, 2)
     out = np.full((X.shape[0], n, 2), np.nan)
@@ -154,7 +163,7 @@ def images(system, X, n: int, *, backward: bool = False) -> np.ndarray:
             ok = model.section_M2(system.params, Y[:, 0], Y[:, 1], system.h, system.phi0) > 0
             if ok.any():
                 c = crossings(system.params, system.h, Y[ok], n_crossings=n, phi0=system.phi0, tol=system.tol,
-                              tmax=system.tmax * n)
+                              tmax=system.tmax * n, threads=1 if int(ok.sum()) * n < SERIAL_RETURNS else None)
                 img = np.array(c.data[:, :n, 1:3], float)
                 for i in range(len(img)):
                     img[i, c.count[i]:] = np.nan

@@ -138,8 +138,8 @@ class RotationNumber:
     converged: bool
     difference: float
     iterates: int
-    start: tuple
-    center: tuple
+    start: tuple[float, float]
+    center: tuple[float, float]
     status: str = "done"
     turns: float = float("nan")
 
