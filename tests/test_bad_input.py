@@ -298,6 +298,8 @@ SCENE_KEYS = {
     "lyapunov.early_time": REAL + ("-1",),
     "lyapunov.map_resolution": INT + ("-1", BIG),
     "lyapunov.map_indicator": WORD,
+    "lyapunov.center": LIST + ("[0]", "[0, 0, 0]", "[nan, 0]", "['a', 0]"),
+    "lyapunov.diffusion_iterates": INT + ("9", BIG),
     "figure.layout": WORD,
     "figure.columns": INT + ("0",),
     "figure.share_scale": BOOL,

@@ -26,10 +26,14 @@ def test_the_registry_names_each_indicator_once_in_a_column_of_its_row():
     for i in table.INDICATORS:
         if i.row == table.RESULT:   # not the time nor MEGNO's Y
             assert 0 <= i.column < table.N_RES and i.column not in (table.RES_T, table.RES_Y)
-        else:                       # not the early-classification code
-            assert i.row == table.EXTRA and 0 <= i.column < table.N_EXT and i.column != table.EXT_EARLY
-    assert lyapunov.INDICATOR_NAMES == table.NAMES
-    assert set(lyapunov.DEFAULT_INDICATORS) <= set(NAMES)
+        elif i.row == table.EXTRA:  # not the early-classification code
+            assert 0 <= i.column < table.N_EXT and i.column != table.EXT_EARLY
+        else:                       # of the section map's returns: not of the tangent loops, asked for only
+            assert i.row == table.ORBIT and not i.tangent and not i.default and not i.in_history
+    # the tangent loops compute every indicator but those of the orbit's returns
+    assert lyapunov.INDICATOR_NAMES == table.TANGENT_NAMES == tuple(n for n in NAMES if table.BY_NAME[n].tangent)
+    assert set(lyapunov.DEFAULT_INDICATORS) <= set(table.TANGENT_NAMES)
+    assert "frequency_diffusion" in NAMES and "frequency_diffusion" not in lyapunov.INDICATOR_NAMES
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -49,7 +53,7 @@ def test_indicators_are_read_from_the_registry_columns_and_the_command_prints_ea
     prm = model.FIGURE4.with_(mu=1.0)
     y0 = model.section_state(prm, [-0.2, 0.3], [0.1, 0.0], model.FIGURE4_H)
     r = lyapunov.indicators(prm, y0, tmax=20.0, history=3, which=lyapunov.available("taylor"))
-    for i in table.INDICATORS:
+    for i in table.TANGENT:
         values = getattr(r, i.name)
         assert values is r.values[i.name] and values.shape == (2,) and np.isfinite(values).all()
         if i.in_history:   # the last history row is the result row at T
@@ -58,9 +62,10 @@ def test_indicators_are_read_from_the_registry_columns_and_the_command_prints_ea
         r.not_an_indicator  # noqa: B018
     assert cli.main(["lyapunov", "--p1", "-0.2", "--p2", "0.1", "--mu", "1", "--time", "20", "--json"]) == 0
     doc = json.loads(capsys.readouterr()[0])
-    assert all(isinstance(doc[name], float) for name in NAMES)
+    tangent = list(table.TANGENT_NAMES)   # the command's one orbit has no centre: no frequency diffusion
+    assert all(isinstance(doc[name], float) for name in tangent) and "frequency_diffusion" not in doc
     assert cli.main(["lyapunov", "--p1", "-0.2", "--p2", "0.1", "--mu", "1", "--time", "20"]) == 0
     lines = capsys.readouterr()[0].splitlines()
-    assert [line.split()[0] for line in lines[1:1 + len(NAMES)]] == NAMES
+    assert [line.split()[0] for line in lines[1:1 + len(tangent)]] == tangent
     history = [i.name for i in table.INDICATORS if i.in_history]
     assert f"history: t, {', '.join(history)}" in lines

@@ -244,7 +244,8 @@ def test_panel_index_out_of_range_raises_index_error():
 def test_dict_and_toml_round_trips_give_the_same_scene():
     for s in (load_scene("figure4"), parse_scene(_docstring_example()),
               parse_scene(BASE + 'description = "quote \\" tab\\t é"\n[seeds]\nkind = "lines"\n'
-                          "lines = [[-1.0, 0.0, 1.0, 0.0], [0.0, -1, 0.0, 1]]\n[integration]\nphi0 = 1.25\n")):
+                          "lines = [[-1.0, 0.0, 1.0, 0.0], [0.0, -1, 0.0, 1]]\n[integration]\nphi0 = 1.25\n"),
+              parse_scene(LYAP_FD + "diffusion_iterates = 40\n")):   # [lyapunov] center, a list in TOML
         assert scene.scene_from_dict(s.to_dict(), s.text) == s
         assert dataclasses.replace(parse_scene(s.to_toml()), text=s.text) == s
 
@@ -327,6 +328,8 @@ SPLIT_SCENE = SWEEP_SCENE.replace("tol = 1e-12", "method = 'split4'\ndt = 0.05")
 RANDOM_SCENE = SWEEP_SCENE + "[seeds]\nkind = 'random'\nn = 50\nseed = 1\n"
 LYAP_SCENE = SWEEP_SCENE + "[compute]\nlyapunov = true\n[lyapunov]\ntime = 500.0\nmethod = 'taylor'\ntol = 1e-12\n"
 LYAP_SPLIT = LYAP_SCENE.replace("method = 'taylor'\ntol = 1e-12", "method = 'split4'\ndt = 0.02")
+LYAP_FD = LYAP_SCENE + "indicators = ['megno', 'frequency_diffusion']\ncenter = [0.0, 0.0]\n"
+LYAP_FD_SPLIT = LYAP_SPLIT + "indicators = ['megno', 'frequency_diffusion']\ncenter = [0.0, 0.0]\n"
 HASHED_CHANGES = {
     "tmax": (SWEEP_SCENE, SWEEP_SCENE.replace("tol = 1e-12", "tol = 1e-12\ntmax = 5000")),
     "max_steps": (SWEEP_SCENE, SWEEP_SCENE.replace("tol = 1e-12", "tol = 1e-12\nmax_steps = 1000")),
@@ -341,6 +344,11 @@ HASHED_CHANGES = {
     "lyapunov_split_dt": (LYAP_SPLIT, LYAP_SPLIT.replace("dt = 0.02", "dt = 0.01")),
     "compute_lyapunov": (SWEEP_SCENE, LYAP_SCENE),
     "compute_separatrices": (SWEEP_SCENE, SWEEP_SCENE + "[compute]\nseparatrices = true\n"),
+    "frequency_diffusion": (LYAP_SCENE, LYAP_FD),
+    "diffusion_center": (LYAP_FD, LYAP_FD.replace("center = [0.0, 0.0]", "center = [0.0, 0.1]")),
+    "diffusion_iterates": (LYAP_FD, LYAP_FD + "diffusion_iterates = 200\n"),
+    # the tolerance of its section returns, whatever the method of the tangent indicators
+    "diffusion_tol": (LYAP_FD_SPLIT, LYAP_FD_SPLIT + "tol = 1e-11\n"),
 }
 
 
@@ -357,6 +365,38 @@ def test_the_megno_threshold_alone_keeps_panel_hashes():
     changed = LYAP_SCENE.replace("[lyapunov]\n", "[lyapunov]\nthreshold = 6.0\n")
     assert parse_scene(changed).lyapunov.threshold == 6.0
     assert _hashes(changed) == _hashes(LYAP_SCENE)
+
+
+def test_the_diffusion_settings_alone_keep_panel_hashes_unless_it_is_asked_for():
+    """[lyapunov] center and diffusion_iterates determine only frequency_diffusion: a scene that
+    does not ask for it keeps its hashes (its panels are not recomputed)."""
+    changed = LYAP_SCENE + "center = [1.5, 0.0]\ndiffusion_iterates = 50\n"
+    assert parse_scene(changed).lyapunov.center == (1.5, 0.0)
+    assert _hashes(changed) == _hashes(LYAP_SCENE)
+
+
+@pytest.mark.parametrize("edit, key", [
+    ("indicators = ['megno', 'frequency_diffusion']\n", "lyapunov.center"),   # required with it
+    ("center = [1.5]\n", "lyapunov.center"),
+    ("center = [1.5, 'a']\n", "lyapunov.center[1]"),
+    ("center = 1.5\n", "lyapunov.center"),
+    ("diffusion_iterates = 5\n", "lyapunov.diffusion_iterates"),
+])
+def test_bad_diffusion_settings_name_the_key(edit, key):
+    with pytest.raises(SceneError, match=re.escape(f"'{key}'")):
+        parse_scene(LYAP_SCENE + edit)
+
+
+def test_the_diffusion_centre_must_lie_in_every_panels_allowed_region():
+    # the centre's own orbit is followed (explorer.analysis.rotation): (10, 0) is outside every panel's region
+    with pytest.raises(SceneError, match=re.escape("'lyapunov.center'")):
+        parse_scene(LYAP_FD.replace("center = [0.0, 0.0]", "center = [10.0, 0.0]"))
+
+
+def test_frequency_diffusion_refuses_the_negative_direction():
+    text = LYAP_FD.replace("tol = 1e-12", "tol = 1e-12\ndirection = -1", 1)
+    with pytest.raises(SceneError, match="'integration.direction'"):
+        parse_scene(text)
 
 
 def test_unused_settings_do_not_change_panel_hashes():

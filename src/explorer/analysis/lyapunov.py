@@ -38,9 +38,10 @@ from explorer.kernels import indicator_table as table
 from explorer.model import ParameterError, validation
 
 DEFAULT_TIME = 1000.0
-#: the indicators :func:`indicators` can compute (``which``): the registry
-#: :data:`explorer.kernels.indicator_table.INDICATORS`
-INDICATOR_NAMES = table.NAMES
+#: the indicators :func:`indicators` can compute (``which``): those of the registry
+#: :data:`explorer.kernels.indicator_table.INDICATORS` that the tangent loops compute (frequency
+#: diffusion is the sweep's, :func:`explorer.analysis.rotation.frequency_diffusion`)
+INDICATOR_NAMES = table.TANGENT_NAMES
 #: computed unless ``which`` says otherwise (one deviation vector)
 DEFAULT_INDICATORS = table.DEFAULT_NAMES
 #: early classification (``early_stop``): SALI below EARLY_SALI, or <Y> above EARLY_MEGNO at
@@ -330,21 +331,22 @@ def indicators(system, y0, *, tmax: float = DEFAULT_TIME, method: str | None = N
         if threads is not None:
             set_num_threads(old)
     rows = {table.RESULT: res, table.EXTRA: ext}
-    values = {i.name: rows[i.row][:, i.column] for i in table.INDICATORS}
+    values = {i.name: rows[i.row][:, i.column] for i in table.TANGENT}
     return Indicators(res[:, table.RES_T], values, res[:, table.RES_Y], status, steps, final, hist_t, hist, method,
                       settings, early=ext[:, table.EXT_EARLY].astype(np.int64), deviation=dev, which=which)
 
 
 def methods_for(name: str) -> tuple:
     """The methods that compute the indicator ``name``: every method for one deviation vector,
-    :data:`TWO_VECTOR_METHODS` for two (the registry's extra row)."""
-    return methods.METHODS if table.BY_NAME[name].vectors == 1 else TWO_VECTOR_METHODS
+    :data:`TWO_VECTOR_METHODS` for two (the registry's extra row); frequency diffusion, computed
+    from the section map's returns, does not depend on the method: every method."""
+    return TWO_VECTOR_METHODS if table.BY_NAME[name].vectors == 2 else methods.METHODS
 
 
 def available(method: str) -> tuple:
     """The indicators ``method`` computes (names of :data:`INDICATOR_NAMES`, registry order)."""
     methods.get(method)
-    return tuple(i.name for i in table.INDICATORS if method in methods_for(i.name))
+    return tuple(i.name for i in table.TANGENT if method in methods_for(i.name))
 
 
 def check_which(which) -> tuple:

@@ -475,7 +475,9 @@ def frequency_diffusion(system, starts, *, center, iterates=DEFAULT_ITERATES, th
             if r_inc is not None:
                 inc[i] = r_inc
     w = birkhoff_weights(N)
-    nu1 = inc[:, :N] @ w / (2.0 * np.pi)
-    nu2 = inc[:, N:] @ w / (2.0 * np.pi)
+    # row by row (numpy's pairwise sum of each row), not a BLAS product whose rounding depends on the
+    # number of rows: an orbit's value does not depend on the others (a sweep's chunks)
+    nu1 = (inc[:, :N] * w).sum(axis=1) / (2.0 * np.pi)
+    nu2 = (inc[:, N:] * w).sum(axis=1) / (2.0 * np.pi)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.log10(np.maximum(np.abs(nu1 - nu2), DIFFUSION_FLOOR))

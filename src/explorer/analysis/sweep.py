@@ -225,20 +225,35 @@ def task(spec: SweepSpec, i: int, threads: int | None = None) -> dict:
         from explorer.analysis.lyapunov import indicators
 
         ly = spec.lyapunov
+        which = tuple(q for q in ly.indicators if indicator_table.BY_NAME[q].tangent) or None
         ind = indicators(panel.P, panel.y0[a:b], tmax=ly.time, method=ly.method, tol=ly.tol, dt=ly.dt, threads=threads,
-                         which=ly.indicators, early_stop=ly.early_stop, early_sali=ly.early_sali,
+                         which=which, early_stop=ly.early_stop, early_sali=ly.early_sali,
                          early_megno=ly.early_megno, early_time=ly.early_time)
         y0 = panel.y0[a:b]
         with np.errstate(invalid="ignore", over="ignore"):   # |H - H0| where the indicator integration ended
             dh = np.abs(model.energy(panel.P, ind.final) - model.energy(panel.P, y0))
         # every indicator of one deviation vector (computed anyway), those of two when asked for
-        out.update({i.name: ind.values[i.name] for i in indicator_table.INDICATORS
+        out.update({i.name: ind.values[i.name] for i in indicator_table.TANGENT
                     if i.vectors == 1 or ly.second_vector})
         out.update(lyapunov_status=ind.status, lyapunov_dh=dh)
+        if ly.frequency_diffusion is not None:   # only when asked for: 2N section returns per orbit
+            out["frequency_diffusion"] = panel_frequency_diffusion(spec, panel, a, b, threads)
         if ly.early_stop:
             out.update(lyapunov_early=ind.early)
     out["wall_time"] = time.perf_counter() - t0
     return out
+
+
+def panel_frequency_diffusion(spec: SweepSpec, panel: PanelSpec, a: int, b: int, threads=None) -> np.ndarray:
+    """The indicator frequency_diffusion of the seeds a:b of ``panel``: :func:`explorer.analysis.
+    rotation.frequency_diffusion` on the panel's section map (phi0 of the sweep, Taylor tolerance
+    [lyapunov] tol) around [lyapunov] center, N = [lyapunov] diffusion_iterates."""
+    from explorer.analysis.rotation import frequency_diffusion
+    from explorer.analysis.section_map import SectionMap
+
+    fd = spec.lyapunov.frequency_diffusion
+    smap = SectionMap(panel.P, panel.h, phi0=spec.phi0, tol=fd["tol"])
+    return frequency_diffusion(smap, panel.seeds[a:b], center=fd["center"], iterates=fd["iterates"], threads=threads)
 
 
 def _worker_task(spec, i):

@@ -46,6 +46,8 @@ STYLES = {
     "fli": Style("FLI", False, 0.0, None, "inferno_r"),
     "sali": Style("SALI", True, 1e-16, 2.0, "inferno"),
     "gali2": Style(r"GALI$_2$", True, 1e-16, 1.0, "inferno"),
+    # log10 |nu1 - nu2|: tori below -10 (round-off of the weighted Birkhoff average), chaos -5 to 0
+    "frequency_diffusion": Style(r"frequency diffusion $\log_{10}|\nu_1 - \nu_2|$", False, -14.0, 0.0, "inferno_r"),
 }
 #: colour scale of each indicator: (label, log scale, vmin, vmax or None for the data's max)
 SCALES = {name: (s.label, s.log, s.vmin, s.vmax) for name, s in STYLES.items()}

@@ -7,6 +7,10 @@ The compiled accumulators (:mod:`explorer.kernels.tangent`) fill two rows per or
   the convergence history, from the log-stretches of one deviation vector;
 - the *extra row* ``EXT_*`` (SALI, GALI_2, early-classification code) from two deviation vectors.
 
+One indicator is not a column of the tangent loops: frequency diffusion (row ``ORBIT``) is
+computed from the section map's returns of the orbit (:func:`explorer.analysis.rotation.frequency_diffusion`,
+docs/greene.md), only when asked for, by the sweep after the tangent indicators.
+
 :data:`INDICATORS` names each user-facing indicator once, with the row and column it is read
 from, and everything the layers above need: the dataset's dtype in the store
 (:mod:`explorer.io.store.format`), the arrays a sweep task returns
@@ -34,8 +38,9 @@ N_RES = 5
 EXT_SALI, EXT_GALI2, EXT_EARLY = range(3)
 N_EXT = 3
 
-#: the row an indicator is read from
-RESULT, EXTRA = "result", "extra"
+#: the row an indicator is read from: the tangent loops' result row or extra row, or (ORBIT) none of
+#: them: computed from the orbit's section returns (frequency diffusion), one value per orbit
+RESULT, EXTRA, ORBIT = "result", "extra", "orbit"
 
 
 @dataclass(frozen=True)
@@ -43,8 +48,8 @@ class Indicator:
     """One chaos indicator: where the tangent loops put it and how every layer shows it."""
 
     name: str            # the key everywhere: Indicators attribute, scene name, store dataset, JSON key
-    row: str             # RESULT (one deviation vector; also in the history rows) or EXTRA (two)
-    column: int          # its column of that row (RES_* or EXT_*)
+    row: str             # RESULT (one deviation vector; also in the history rows), EXTRA (two) or ORBIT
+    column: int          # its column of that row (RES_* or EXT_*; 0 for ORBIT)
     title: str           # plain-text name (help lines)
     description: str     # one line: what it is and its reference
     default: bool = True           # computed unless ``which`` says otherwise
@@ -53,8 +58,13 @@ class Indicator:
     @property
     def vectors(self) -> int:
         """Deviation vectors it needs (2 for the extra row: only the methods whose kind has the loop
-        of two vectors compute it, :func:`explorer.analysis.lyapunov.methods_for`)."""
-        return 2 if self.row == EXTRA else 1
+        of two vectors compute it, :func:`explorer.analysis.lyapunov.methods_for`; 0 for ORBIT)."""
+        return {EXTRA: 2, ORBIT: 0}.get(self.row, 1)
+
+    @property
+    def tangent(self) -> bool:
+        """Whether the tangent loops compute it (:func:`explorer.analysis.lyapunov.indicators`)."""
+        return self.row != ORBIT
 
     @property
     def in_history(self) -> bool:
@@ -76,9 +86,15 @@ INDICATORS = (
     Indicator("gali2", EXTRA, EXT_GALI2, "GALI2",
               "generalized alignment index |w1 ^ w2| of two unit deviation vectors (Skokos et al. 2007)",
               default=False),
+    Indicator("frequency_diffusion", ORBIT, 0, "frequency diffusion",
+              "log10 |nu1 - nu2| of the weighted-Birkhoff rotation numbers around [lyapunov] center of the first "
+              "and second N returns (Laskar 1990; Das, Sander, Yorke & Meiss 2017)", default=False),
 )
 #: the names, in table order
 NAMES = tuple(i.name for i in INDICATORS)
+#: the indicators of the tangent loops (those :func:`explorer.analysis.lyapunov.indicators` computes)
+TANGENT = tuple(i for i in INDICATORS if i.tangent)
+TANGENT_NAMES = tuple(i.name for i in TANGENT)
 #: computed unless ``which`` says otherwise
 DEFAULT_NAMES = tuple(i.name for i in INDICATORS if i.default)
 #: name -> Indicator

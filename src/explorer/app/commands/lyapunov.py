@@ -18,7 +18,7 @@ from explorer import model
 from explorer.app.commands import options
 from explorer.app.commands.options import Command, opt
 from explorer.integrate.methods import DEFAULT_DT, DEFAULT_TOL
-from explorer.kernels.indicator_table import INDICATORS
+from explorer.kernels.indicator_table import TANGENT
 
 COMMAND = Command("lyapunov", __doc__, "--p1 -0.2 --p2 0.1 --mu 1 -T 1000 --json", (
     options.add_start_args,
@@ -26,13 +26,13 @@ COMMAND = Command("lyapunov", __doc__, "--p1 -0.2 --p2 0.1 --mu 1 -T 1000 --json
     partial(options.add_method_args, tol=DEFAULT_TOL, dt=DEFAULT_DT),
     opt("--history", type=int, default=12, help="history points (log-spaced in time) [%(default)s]"),
     partial(options.add_model_args, json="print JSON"),
-), fields={"titles": ", ".join(i.title for i in INDICATORS)})
+), fields={"titles": ", ".join(i.title for i in TANGENT)})
 
 
 def run(args) -> int:
     from explorer.analysis import lyapunov
     from explorer.analysis.sections import METHODS
-    from explorer.kernels.indicator_table import INDICATORS, RES_T
+    from explorer.kernels.indicator_table import RES_T
 
     params = options.params_from(args)
     if args.method not in METHODS:
@@ -41,10 +41,11 @@ def run(args) -> int:
         if not math.isfinite(getattr(args, name)):
             raise model.ParameterError(f"{name} must be finite, got {getattr(args, name)!r}")
     y0 = model.section_state(params, [args.p1], [args.p2], args.h)
-    # every indicator of the registry the method computes (SALI and GALI_2: Taylor's tangent lanes)
+    # every indicator of the tangent loops the method computes (SALI and GALI_2: Taylor's tangent lanes;
+    # frequency diffusion, of the section map's returns around a centre, is a sweep's: [lyapunov] center)
     r = lyapunov.indicators(params, y0, tmax=args.time, method=args.method, tol=args.tol, dt=args.dt,
                             history=args.history, which=lyapunov.available(args.method))
-    cols = [RES_T] + [i.column for i in INDICATORS if i.in_history]
+    cols = [RES_T] + [i.column for i in TANGENT if i.in_history]
     hist = [[float(row[c]) for c in cols] for row in r.history[0] if np.isfinite(row[RES_T])]
     reached = float(r.time[0])
     status = r.status_name(0)
@@ -54,7 +55,7 @@ def run(args) -> int:
 
     out = {"params": params.as_dict(), "h": args.h, "p1": args.p1, "p2": args.p2, "method": args.method,
            "settings": r.settings, "status": status, "time": reached,
-           **{i.name: estimate(r.values[i.name][0]) for i in INDICATORS},
+           **{i.name: estimate(r.values[i.name][0]) for i in TANGENT},
            "regular_bound": lyapunov.regular_bound(reached) if reached > 1 else None,
            "history": hist}
     if status != "done":
@@ -64,10 +65,10 @@ def run(args) -> int:
     if args.json:
         print(json.dumps(out))
     else:
-        print("\n".join(f"{k} {out[k]!r}" for k in ("time",) + tuple(i.name for i in INDICATORS))
+        print("\n".join(f"{k} {out[k]!r}" for k in ("time",) + tuple(i.name for i in TANGENT))
               + f"\nstatus {out['status']}")
         if hist:
-            print("history: " + ", ".join(["t"] + [i.name for i in INDICATORS if i.in_history]))
+            print("history: " + ", ".join(["t"] + [i.name for i in TANGENT if i.in_history]))
             for row in hist:
                 print(",".join(repr(v) for v in row))
     return 0

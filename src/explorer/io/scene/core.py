@@ -77,6 +77,9 @@ class Scene:
             _fail("lyapunov", f"must be a LyapunovSpec, {_got(self.lyapunov)}")
         if self.lyapunov.map_resolution and "lyapunov" not in compute:
             _fail("lyapunov.map_resolution", "needs compute.lyapunov = true")
+        if self.lyapunov.frequency_diffusion is not None and self.integration.direction == -1:
+            _fail("integration.direction", "must be 0 or 1 with the indicator frequency_diffusion (the section map's "
+                  "returns cross with M > 0), got -1")
         object.__setattr__(self, "compute", compute)
         self._check_atlas()
         if self.is_atlas and self.manifolds.draw:
@@ -119,6 +122,15 @@ class Scene:
                 if p1.size == 0:
                     where = f" of panel {i} ({self._label(i)})" if self.sweep_parameter is not None else ""
                     _fail(f"seeds.{self.seeds.kind}", f"gives no point inside the allowed region{where}")
+        fd = self.lyapunov.frequency_diffusion if "lyapunov" in self.compute else None
+        if fd is not None:   # the centre's orbit is followed too (explorer.analysis.rotation): a point of the section
+            c1, c2 = fd["center"]
+            places = [self.panel(i) for i in range(self.n_panels)] if not self.is_atlas else \
+                [self.cell(i) for i in range(self.n_cells) if self.cell_allowed(i)]
+            for prm, h, label in places:
+                if not model.section_M2(prm, c1, c2, h, phi0) > 0.0:
+                    _fail("lyapunov.center", f"= {[c1, c2]!r} must lie inside the allowed region of the section "
+                          f"(M^2 > 0) of every panel; it does not for {label}")
 
     # ------------------------------------------------------------ panels
     @property

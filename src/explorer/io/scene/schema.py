@@ -38,9 +38,15 @@ _INTEGRATION_KEYS = ("method", "tol", "dt", "crossings", "tmax", "max_steps", "p
 _FIGURE_KEYS = ("layout", "columns", "share_scale", "own_scale", "marker_size", "dpi")
 _MANIFOLD_KEYS = ("draw", "arclength", "guess", "period", "max_points")
 _LYAPUNOV_KEYS = ("time", "method", "tol", "dt", "threshold", "indicators", "early_stop", "early_sali", "early_megno",
-                  "early_time", "map_resolution", "map_indicator")
+                  "early_time", "map_resolution", "map_indicator", "center", "diffusion_iterates")
 #: the indicators a scene can ask for (explorer.analysis.lyapunov.INDICATOR_NAMES)
 LYAPUNOV_INDICATORS = INDICATOR_NAMES
+#: [lyapunov] diffusion_iterates: N of the indicator frequency_diffusion (2N section returns per
+#: orbit), by default and at most; fewer than explorer.analysis.rotation.DEFAULT_ITERATES because a
+#: sweep's or map's orbits are many (N = 200 to 300 separates Figure 4's tori from its chaotic
+#: sea by 1.5 decades, docs/greene.md "Frequency diffusion")
+DEFAULT_DIFFUSION_ITERATES = 300
+MAX_DIFFUSION_ITERATES = 100_000
 #: largest raster side of a chaos map ([lyapunov] map_resolution)
 MAX_MAP_RESOLUTION = 4096
 #: [manifolds]: defaults and limits of the branches drawn over each panel (docs/manifolds.md)
@@ -54,10 +60,11 @@ MAX_MANIFOLD_PERIOD = 64
 #: re-exported by :mod:`explorer.io.scene` (its ``__all__`` extends this one): the limits and
 #: defaults, the model's parameter names, and the key tables (private: for the validators and tests)
 __all__ = [
-    "COMPUTE_DEFAULTS", "COMPUTE_QUANTITIES", "DEFAULT_CROSSINGS", "DEFAULT_DPI", "DEFAULT_MANIFOLD_ARCLENGTH",
-    "DEFAULT_MANIFOLD_POINTS", "DEFAULT_MARGIN", "DEFAULT_MARKER_SIZE", "DEFAULT_RANDOM_SEED", "DEFAULT_SEED_N",
-    "FORMAT_VERSION", "LAYOUTS", "LYAPUNOV_INDICATORS", "MAX_DPI", "MAX_MANIFOLD_ARCLENGTH", "MAX_MANIFOLD_PERIOD",
-    "MAX_MANIFOLD_POINTS", "MAX_MAP_RESOLUTION", "MAX_NAME_LENGTH", "MAX_SEEDS", "MIN_DPI", "PARAM_NAMES",
+    "COMPUTE_DEFAULTS", "COMPUTE_QUANTITIES", "DEFAULT_CROSSINGS", "DEFAULT_DIFFUSION_ITERATES", "DEFAULT_DPI",
+    "DEFAULT_MANIFOLD_ARCLENGTH", "DEFAULT_MANIFOLD_POINTS", "DEFAULT_MARGIN", "DEFAULT_MARKER_SIZE",
+    "DEFAULT_RANDOM_SEED", "DEFAULT_SEED_N", "FORMAT_VERSION", "LAYOUTS", "LYAPUNOV_INDICATORS",
+    "MAX_DIFFUSION_ITERATES", "MAX_DPI", "MAX_MANIFOLD_ARCLENGTH", "MAX_MANIFOLD_PERIOD", "MAX_MANIFOLD_POINTS",
+    "MAX_MAP_RESOLUTION", "MAX_NAME_LENGTH", "MAX_SEEDS", "MIN_DPI", "PARAM_NAMES",
     "SEED_KINDS", "SWEEP_PARAMETERS",
     "_FIGURE_KEYS", "_INTEGRATION_KEYS", "_LYAPUNOV_KEYS", "_MANIFOLD_KEYS", "_NAME_RE", "_SEED_KEYS", "_SEED_USED",
     "_TOP_KEYS",

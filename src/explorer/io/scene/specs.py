@@ -13,6 +13,7 @@ from explorer.io.scene.schema import (
     _MANIFOLD_KEYS,
     _SEED_USED,
     DEFAULT_CROSSINGS,
+    DEFAULT_DIFFUSION_ITERATES,
     DEFAULT_DPI,
     DEFAULT_MANIFOLD_ARCLENGTH,
     DEFAULT_MANIFOLD_POINTS,
@@ -22,6 +23,7 @@ from explorer.io.scene.schema import (
     DEFAULT_SEED_N,
     LAYOUTS,
     LYAPUNOV_INDICATORS,
+    MAX_DIFFUSION_ITERATES,
     MAX_DPI,
     MAX_MANIFOLD_ARCLENGTH,
     MAX_MANIFOLD_PERIOD,
@@ -33,6 +35,7 @@ from explorer.io.scene.schema import (
 )
 from explorer.kernels.indicator_table import BY_NAME as INDICATOR_BY_NAME
 from explorer.kernels.indicator_table import DEFAULT_NAMES as INDICATOR_DEFAULTS
+from explorer.kernels.indicator_table import ORBIT
 from explorer.model import ParameterError
 
 
@@ -167,6 +170,11 @@ class LyapunovSpec:
     #: map_indicator; the sections keep the [seeds]
     map_resolution: int = 0
     map_indicator: str = "megno"
+    #: the indicator frequency_diffusion (explorer.analysis.rotation.frequency_diffusion): the point
+    #: (p1, p2) its rotation numbers turn around, required with it (docs/greene.md, "Frequency
+    #: diffusion": a decision, not found by Newton), and N (2N section returns per orbit)
+    center: tuple | None = None
+    diffusion_iterates: int = DEFAULT_DIFFUSION_ITERATES
 
     def __post_init__(self):
         object.__setattr__(self, "time", _real("lyapunov.time", self.time, 0.0, lo_open=True))
@@ -185,6 +193,16 @@ class LyapunovSpec:
                            _int("lyapunov.map_resolution", self.map_resolution, 0, MAX_MAP_RESOLUTION))
         object.__setattr__(self, "map_indicator",
                            _choice("lyapunov.map_indicator", self.map_indicator, LYAPUNOV_INDICATORS))
+        if self.center is not None:
+            c = _list("lyapunov.center", self.center)
+            if len(c) != 2:
+                _fail("lyapunov.center", f"must be a point [p1, p2] (two numbers), got {len(c)} items")
+            object.__setattr__(self, "center", (_real("lyapunov.center[0]", c[0]), _real("lyapunov.center[1]", c[1])))
+        object.__setattr__(self, "diffusion_iterates", _int("lyapunov.diffusion_iterates", self.diffusion_iterates,
+                                                            10, MAX_DIFFUSION_ITERATES))
+        if self.center is None and self._orbit_names():
+            _fail("lyapunov.center", "is required with the indicator frequency_diffusion: the point [p1, p2] its "
+                  "rotation numbers turn around, e.g. the elliptic fixed point of the island studied (docs/greene.md)")
         if self.early_stop and self.method not in EARLY_STOP_METHODS:
             _fail("lyapunov.method", f"must be {' or '.join(repr(n) for n in EARLY_STOP_METHODS)} for early_stop; "
                   f"got {self.method!r}")
@@ -204,9 +222,25 @@ class LyapunovSpec:
         """The indicators asked for that need two deviation vectors (the registry's EXTRA row)."""
         return sorted(q for q in self.indicators if INDICATOR_BY_NAME[q].vectors == 2)
 
+    def _orbit_names(self) -> list:
+        """The indicators asked for that the section map's returns give (frequency diffusion)."""
+        return [q for q in self.indicators if INDICATOR_BY_NAME[q].row == ORBIT]
+
+    @property
+    def frequency_diffusion(self) -> dict | None:
+        """The settings of the indicator frequency_diffusion when asked for (None otherwise): its
+        centre, N and the Taylor tolerance of its section returns (``tol``, whatever the method)."""
+        if self.center is None or not self._orbit_names():   # (__post_init__ refuses it without a centre)
+            return None
+        return {"center": list(self.center), "iterates": self.diffusion_iterates, "tol": self.tol}
+
     def to_dict(self) -> dict:
         d = {k: getattr(self, k) for k in _LYAPUNOV_KEYS}
         d["indicators"] = list(self.indicators)
+        if self.center is None:   # TOML has no null: no key
+            del d["center"]
+        else:
+            d["center"] = list(self.center)
         return d
 
     def used_dict(self) -> dict:
@@ -226,6 +260,8 @@ class LyapunovSpec:
                      early_megno=self.early_megno, early_time=self.early_time)
         if self.map_resolution:
             d["map_resolution"] = self.map_resolution
+        if self.frequency_diffusion is not None:
+            d["frequency_diffusion"] = self.frequency_diffusion
         return d
 
 
