@@ -5,8 +5,10 @@ in it: every command's documented example (the `example:` line of each `--help`)
 --quick` for every figure, and `serve` answering an HTTP request.  Each exits 0 with no
 traceback.
 
-This is the suite's most expensive test (a fresh install compiles every kernel it runs): about
-3-4 minutes of one core, run on its own xdist worker beside the rest (docs/tests.md, "Time").
+This is the suite's most expensive module (a fresh install compiles every kernel it runs): about
+6 minutes of one xdist worker, an install of about a minute, `figures --quick` of about 4
+(every kernel compiled cold, in one process), the examples after it about a minute in all
+(docs/tests.md, "Time").
 """
 from __future__ import annotations
 
