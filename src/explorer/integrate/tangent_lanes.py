@@ -75,14 +75,16 @@ def _finish(j, l, Z, acc, v, w, nvec, early, status, steps, out_res, out_ext, ou
 
 
 @njit
-def _start_lane(l, Z, orb, acc, L_t, L_steps, L_hpos, L_since, next_orbit, Y0, V0, W0, nvec, T, max_steps,
+def _start_lane(l, Z, orb, L_on, acc, L_t, L_steps, L_hpos, L_since, next_orbit, Y0, V0, W0, nvec, T, max_steps,
                 v, w, out_res, out_ext, out_status, out_final, out_steps, out_w):
     """Put the next unstarted orbit on lane l (the start of the scalar loop: the deviation
     vectors renormalised; orbits that stop before their first step are written out at once).
-    Returns 1 if the lane got an orbit, 0 if the batch is exhausted (the lane idles on 0)."""
+    Returns 1 if the lane got an orbit (``L_on[l]`` = 1.0), 0 if the batch is exhausted (the lane
+    idles on 0, ``L_on[l]`` = 0.0)."""
     while True:
         j = next_lane_orbit(next_orbit, Y0.shape[0], orb, l, Z, NROWS)
         if j < 0:
+            L_on[l] = 0.0
             return 0
         for i in range(5):
             Z[0, i, l] = Y0[j, i]
@@ -108,6 +110,7 @@ def _start_lane(l, Z, orb, acc, L_t, L_steps, L_hpos, L_since, next_orbit, Y0, V
         L_steps[l] = 0
         L_hpos[l] = 0
         L_since[l] = -1.0
+        L_on[l] = 1.0
         return 1
 
 
@@ -135,16 +138,15 @@ def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_s
     L_since = np.zeros(nl)
     L_status = np.zeros(nl, np.int64)
     L_early = np.zeros(nl, np.int64)
-    L_last = np.zeros(nl, np.bool_)
+    L_on = np.zeros(nl)
+    L_fast = np.zeros(nl)
+    L_last = np.zeros(nl)
     L_stop = np.zeros(nl, np.bool_)
     factor, e_p, e_q = step_constants(order)
     active = 0
-    for l in range(nl):
-        if l < nlanes:
-            active += _start_lane(l, Z, orb, acc, L_t, L_steps, L_hpos, L_since, next_orbit, Y0, V0, W0, nvec, T,
-                                  max_steps, v, w, out_res, out_ext, out_status, out_final, out_steps, out_w)
-        else:
-            orb[l] = _IDLE
+    for l in range(nlanes):
+        active += _start_lane(l, Z, orb, L_on, acc, L_t, L_steps, L_hpos, L_since, next_orbit, Y0, V0, W0, nvec, T,
+                              max_steps, v, w, out_res, out_ext, out_status, out_final, out_steps, out_w)
 
     while active > 0:
         tangent_coefficients_lanes(P, Z, order, DEV1, groups)
@@ -154,7 +156,7 @@ def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_s
         # ---- per lane: systems.taylor_step's checks and step size
         for l in range(nl):
             L_early[l] = tg.EARLY_NONE
-        step_lanes(orb, norms, L_t, T, e_p, e_q, factor, hv, L_last, L_status, L_stop, nl)
+        step_lanes(L_on, norms, L_t, T, e_p, e_q, factor, hv, L_last, L_fast, L_status, L_stop, nl)
         evaluate_lanes(Z, order, hv, znew, 0, groups)
         evaluate_lanes(Z, order, hv, znew, DEV1, groups)
         if nvec == 2:
@@ -169,7 +171,7 @@ def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_s
                 stop_unless_finite(l, znew, DEV2, DEV2 + 5, L_status, L_stop)
             if not L_stop[l]:
                 t = L_t[l]
-                t_new = T if L_last[l] else t + hv[l]
+                t_new = T if L_last[l] != 0.0 else t + hv[l]
                 for i in range(5):
                     v[i] = znew[DEV1 + i, l]
                 dlog = tg.renormalize(v, 5)
@@ -197,7 +199,7 @@ def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_s
             if L_stop[l]:
                 _finish(j, l, Z, acc, v, w, nvec, L_early[l], L_status[l], L_steps[l], out_res, out_ext,
                         out_status, out_final, out_steps, out_w)
-                active += _start_lane(l, Z, orb, acc, L_t, L_steps, L_hpos, L_since, next_orbit, Y0, V0, W0, nvec,
+                active += _start_lane(l, Z, orb, L_on, acc, L_t, L_steps, L_hpos, L_since, next_orbit, Y0, V0, W0, nvec,
                                       T, max_steps, v, w, out_res, out_ext, out_status, out_final, out_steps,
                                       out_w) - 1
     return 0
