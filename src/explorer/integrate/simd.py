@@ -11,7 +11,7 @@ translates into ``_lanes_generated.py`` and ``_tangent_lanes_generated.py``.
 - :func:`vload` / :func:`vstore`: LANES consecutive elements of a C-contiguous float64 array
   (addressed by the flat index of the first);
 - :func:`vzero`, :func:`vsplat`, :func:`vadd`, :func:`vsub`, :func:`vmul`, :func:`vdiv`,
-  :func:`vneg`, :func:`vabs`, :func:`vmax_gt` (the scalar ``if v > s: s = v``), :func:`vmin_lt`;
+  :func:`vneg`, :func:`vabs`, :func:`vsqrt`, :func:`vmax_gt` (the scalar ``if v > s: s = v``), :func:`vmin_lt`;
 - masks (``<LANES x i1>``, lane-wise booleans): the ordered comparisons :func:`vgt`,
   :func:`vge`, :func:`vlt`, :func:`veq` (lane-wise the scalar ``a > b`` ...: false where either is
   NaN), :func:`vand`, :func:`vandnot`, :func:`vor`, :func:`vselect` (``a if m else b`` per lane)
@@ -75,6 +75,10 @@ if NOJIT:  # pragma: no cover - plain-Python twins (numpy elementwise = the same
 
     def vabs(a):
         return np.abs(a)
+
+    def vsqrt(a):
+        with np.errstate(invalid="ignore"):
+            return np.sqrt(a)
 
     def vmax_gt(v, s):
         return np.where(v > s, v, s)
@@ -228,6 +232,18 @@ else:
         def codegen(context, builder, sig, args):
             fn = _cgutils.get_or_insert_function(builder.module, _ir.FunctionType(_VT, [_VT]),
                                                  "llvm.fabs.v%df64" % LANES)
+            return builder.call(fn, [args[0]])
+        return f64vec(f64vec), codegen
+
+    @_intrinsic
+    def vsqrt(typingctx, a):
+        """The square root of every lane (llvm.sqrt, correctly rounded as numba's scalar math.sqrt)."""
+        if a != f64vec:
+            return None
+
+        def codegen(context, builder, sig, args):
+            fn = _cgutils.get_or_insert_function(builder.module, _ir.FunctionType(_VT, [_VT]),
+                                                 "llvm.sqrt.v%df64" % LANES)
             return builder.call(fn, [args[0]])
         return f64vec(f64vec), codegen
 
