@@ -176,6 +176,25 @@ def _mask_bits(a, b, out):
     simd.vstore(a, 0, simd.vselect(gt, x, y))
 
 
+@njit(cache=False)
+def _visit(bits, out):
+    """The lanes next_bit visits in ``bits``, in order, into out; returns how many."""
+    n = 0
+    while bits != 0:
+        i, bits = simd.next_bit(bits)
+        out[n] = i
+        n += 1
+    return n
+
+
+def test_next_bit_visits_the_set_lanes_of_a_mask_once_in_increasing_order():
+    out = np.empty(64, np.int64)
+    for bits in (1, 2, 0b10110010, (1 << L) - 1, 1 << 63 - 1, 0x5555):
+        n = _visit(bits, out)
+        assert out[:n].tolist() == [i for i in range(64) if bits >> i & 1]
+    assert _visit(0, out) == 0
+
+
 def test_vector_masks_are_the_scalar_comparisons_lane_by_lane_nan_included():
     """vgt, vge, vlt, veq are the scalar >, >=, <, == of each lane (false where a NaN is
     compared), vand/vor/vandnot the logic of the lanes, vselect the scalar ``x if m else y`` and

@@ -84,6 +84,7 @@ from explorer.integrate.drivers import (
 from explorer.integrate.simd import (
     LANES,
     atomic_fetch_add,
+    next_bit,
     vabs,
     vadd,
     vand,
@@ -278,17 +279,15 @@ def step_lanes(L_on, norms, L_t, tend, e_p, e_q, factor, hv, L_last, L_fast, L_s
         vstore(L_last, c, vselect(last, one, zero))
         vstore(L_fast, c, vselect(ok, one, zero))
         bits = vbits(vandnot(live, ok))
-        l = c
         while bits != 0:
-            if bits & 1:
-                code, hl, lastl = lane_step(l, norms, L_t[l], tend, e_p, e_q, factor)
-                if code >= 0:
-                    stop_lane(l, code, L_status, L_stop)
-                else:
-                    hv[l] = hl
-                    L_last[l] = 1.0 if lastl else 0.0
-            bits >>= 1
-            l += 1
+            ib, bits = next_bit(bits)
+            l = c + ib
+            code, hl, lastl = lane_step(l, norms, L_t[l], tend, e_p, e_q, factor)
+            if code >= 0:
+                stop_lane(l, code, L_status, L_stop)
+            else:
+                hv[l] = hl
+                L_last[l] = 1.0 if lastl else 0.0
 
 
 @njit(inline="always")
@@ -597,13 +596,9 @@ def run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, o
                                    cphi, sphi, tmax, max_steps, c, w)
             # ---- lane by lane, the others: the new state's check, the crossings in the step,
             # the clock and the budgets, then the stops (the scalar loop's step end)
-            l = c - 1
             while bits != 0:
-                l += 1
-                take = bits & 1
-                bits >>= 1
-                if take == 0:
-                    continue
+                ib, bits = next_bit(bits)
+                l = c + ib
                 j = orb[l]
                 if not L_stop[l]:
                     L_steps[l] += 1.0

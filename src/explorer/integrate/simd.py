@@ -16,7 +16,7 @@ translates into ``_lanes_generated.py`` and ``_tangent_lanes_generated.py``.
   :func:`vge`, :func:`vlt`, :func:`veq` (lane-wise the scalar ``a > b`` ...: false where either is
   NaN), :func:`vand`, :func:`vandnot`, :func:`vor`, :func:`vselect` (``a if m else b`` per lane)
   and :func:`vbits` (the mask as the bits of an integer, lane i bit i: the lanes that a scalar
-  loop must visit);
+  loop must visit, one after the other by :func:`next_bit`);
 - :func:`vradius_power_core`: the step size's power ``kernels.power.radius_power_core`` on every
   lane (the same IR, emitted for a vector: lane-wise the scalar's double);
 - :func:`atomic_fetch_add`: the shared queue of orbits of the lane workers;
@@ -35,7 +35,7 @@ same IEEE operations).
 """
 import numpy as np
 
-from explorer._jit import NOJIT
+from explorer._jit import NOJIT, njit
 from explorer.kernels.power import emit_radius_power, radius_power_core
 
 #: orbits advanced in lockstep by one vector instruction: 8 doubles = one AVX-512 register (two
@@ -112,6 +112,9 @@ if NOJIT:  # pragma: no cover - plain-Python twins (numpy elementwise = the same
 
     def vbits(m):
         return int(sum(1 << i for i in range(LANES) if m[i]))
+
+    def _cttz(bits):
+        return (bits & -bits).bit_length() - 1
 
     def vradius_power_core(v, e):
         with np.errstate(all="ignore"):
@@ -333,6 +336,20 @@ else:
         return _types.int64(b1vec), codegen
 
     @_intrinsic
+    def _cttz(typingctx, bits):
+        """The index of the lowest set bit of bits > 0 (llvm.cttz)."""
+        if not isinstance(bits, _types.Integer):
+            return None
+
+        def codegen(context, builder, sig, args):
+            i64 = _ir.IntType(64)
+            fn = _cgutils.get_or_insert_function(builder.module, _ir.FunctionType(i64, [i64, _ir.IntType(1)]),
+                                                 "llvm.cttz.i64")
+            return builder.call(fn, [context.cast(builder, args[0], sig.args[0], _types.int64),
+                                     _ir.Constant(_ir.IntType(1), 1)])
+        return _types.int64(bits), codegen
+
+    @_intrinsic
     def vradius_power_core(typingctx, v, e):
         """kernels.power.radius_power_core on every lane of v: the IR of
         kernels.power.emit_radius_power for a vector (lane-wise the scalar's IEEE operations)."""
@@ -368,3 +385,10 @@ else:
         # the lane worker (the plain njit call before lane groups was inlined), and W4 taylor
         # lost 4-6 % (issue 34; benchmarks/RESULTS.md)
         return overload(stub, inline="always")
+
+
+@njit(inline="always")
+def next_bit(bits):
+    """(i, rest) for bits > 0: the index i of its lowest set bit and bits without it; a scalar
+    loop visits the lanes of a mask ``bits = vbits(m)`` as ``while bits: i, bits = next_bit(bits)``."""
+    return _cttz(bits), bits & (bits - 1)

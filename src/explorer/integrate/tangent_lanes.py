@@ -62,6 +62,7 @@ from explorer.integrate.lanes import (
 )
 from explorer.integrate.simd import (
     LANES,
+    next_bit,
     vadd,
     vand,
     vandnot,
@@ -297,13 +298,9 @@ def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_s
                     if L_on[c + i] != 0.0:
                         bits |= 1 << i
             # ---- lane by lane, the others: the rest of the step of the scalar loop
-            l = c - 1
             while bits != 0:
-                l += 1
-                take = bits & 1
-                bits >>= 1
-                if take == 0:
-                    continue
+                ib, bits = next_bit(bits)
+                l = c + ib
                 j = orb[l]
                 L_early[l] = tg.EARLY_NONE
                 count_step(l, znew, 0, DEV1 + 5, L_steps, L_status, L_stop)   # the orbit and the first vector
