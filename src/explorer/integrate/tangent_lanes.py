@@ -202,8 +202,9 @@ def end_steps_tangent_lanes(Z, znew, hv, nrm, acc, L_t, L_steps, L_hnext, L_on, 
     ok = vand(ok, vand(vand(vlt(tn, vsplat(T)), vlt(sn, vsplat(max_steps))), vlt(tn, vload(L_hnext, c))))
     v0, v1, v2, v3, v4, norm = _unit_lanes(znew, DEV1, c, nl)
     vstore(nrm, c, norm)
-    for l in range(c, c + LANES):       # ln |v| per lane: libm's log, as renormalize
-        nrm[l] = math.log(nrm[l])
+    for l in range(c, c + LANES):       # ln |v| per lane holding an orbit: libm's log, as renormalize
+        if L_on[l] != 0.0:
+            nrm[l] = math.log(nrm[l])
     dlog = vload(nrm, c)
     # kernels.tangent.accumulate(acc, t, tn, dlog), lane-wise
     lg = vadd(vload(acc, tg.ACC_LOG * nl + c), dlog)
