@@ -265,8 +265,9 @@ def test_vector_step_takes_lane_steps_double_and_leaves_the_rare_lanes_to_it(ngr
 def test_vector_step_end_is_the_scalar_one_and_leaves_roots_and_stops_to_the_scalar_loop(ngroups):
     """end_steps_lanes on every group: a lane holding an orbit is ended in vector form exactly
     when the scalar loop would have nothing to do but the bookkeeping (a step taken in vector
-    form, not the last, a finite new state, no root possible by the variation bound, no stop by
-    the clock, the step budget or the crossings wanted), and then its new state, sin(phi - phi0),
+    form, not the last, a finite new state, no root possible - by the variation bound, or by a
+    monotone polynomial without a sign change of the direction (isolate_crossings' two tests) -
+    no stop by the clock, the step budget or the crossings wanted), and then its new state, sin(phi - phi0),
     time, compensation and step count are the scalar loop's doubles; every other lane that holds
     an orbit is in the returned bits, untouched."""
     W = ngroups * L
@@ -278,6 +279,8 @@ def test_vector_step_end_is_the_scalar_one_and_leaves_roots_and_stops_to_the_sca
     for _ in range(60):
         X = np.zeros((order + 1, 5, W))
         X[0] = random_states(PARAM_SETS["figure4_mu0.5"], W, seed=int(rng.integers(1 << 30))).T
+        X[1:] = rng.normal(size=(order, 5, W)) * rng.choice([0.1, 1.0, 10.0], (order, 1, W))
+        direction = int(rng.choice([-1, 0, 1]))
         ynew = X[0] + rng.normal(scale=0.05, size=(5, W))
         ynew[rng.integers(0, 5), rng.integers(0, W)] = rng.choice([np.nan, np.inf])
         g0 = np.abs(X[0, 3] * cphi - X[0, 4] * sphi)
@@ -285,18 +288,18 @@ def test_vector_step_end_is_the_scalar_one_and_leaves_roots_and_stops_to_the_sca
         hv = rng.uniform(0.01, 0.2, W)
         L_t = rng.choice([1.0, 99.9, 100.0 - 1e-15], W, p=[0.8, 0.1, 0.1])
         L_tc = rng.normal(scale=1e-17, size=W)
-        L_gprev = rng.normal(size=W)
+        L_gprev = rng.normal(size=W) * rng.choice([0.0, 1.0], W, p=[0.1, 0.9])
         L_steps = rng.choice([3.0, 998.0, 999.0], W, p=[0.8, 0.1, 0.1])
         L_left = rng.choice([0.0, 1.0, 5.0], W, p=[0.1, 0.45, 0.45])
         L_on = rng.choice([0.0, 1.0], W, p=[0.1, 0.9])
-        L_fast = rng.choice([0.0, 1.0], W, p=[0.1, 0.9])
+        L_fast = rng.choice([0.0, 1.0], W, p=[0.1, 0.9]) * L_on    # step_lanes: idle lanes are not fast
         L_last = rng.choice([0.0, 1.0], W, p=[0.9, 0.1])
         before = [a.copy() for a in (X, L_t, L_tc, L_gprev, L_steps)]
         bits = 0
         for c in range(0, W, L):
             with np.errstate(all="ignore"):
-                bits |= lanes.end_steps_lanes(X, ynew, vary, hv, L_t, L_tc, L_gprev, L_steps, L_left, L_on, L_fast,
-                                              L_last, cphi, sphi, tmax, max_steps, c, W) << c
+                bits |= lanes.end_steps_lanes(X, order, ynew, vary, hv, L_t, L_tc, L_gprev, L_steps, L_left, L_on,
+                                              L_fast, L_last, cphi, sphi, direction, tmax, max_steps, c, W) << c
         for l in range(W):
             y = ynew[:, l].copy()
             t, tc = clock.advance_time(before[1][l], before[2][l], hv[l], False, tmax)
@@ -305,7 +308,12 @@ def test_vector_step_end_is_the_scalar_one_and_leaves_roots_and_stops_to_the_sca
                 s += y[i]
             with np.errstate(invalid="ignore"):
                 finite = s - s == 0.0
-            excluded = events.excluded_by_variation(before[0][0, 3, l] * cphi - before[0][0, 4, l] * sphi, vary[l])
+            gc = before[0][:, 3, l] * cphi - before[0][:, 4, l] * sphi
+            excluded = events.excluded_by_variation(gc[0], vary[l])
+            monotone = events.monotone_within(gc, order, hv[l])
+            sign = events.sign_change(before[3][l], equations.section_g(y, cphi, sphi), direction)
+            seen.add((excluded, monotone, sign))
+            excluded = excluded or (monotone and not sign)
             vector = (L_fast[l] == 1.0 and L_last[l] == 0.0 and finite and excluded
                       and not t >= tmax and not before[4][l] + 1 >= max_steps and L_left[l] > 0.0)
             seen.add((vector, excluded))
@@ -319,7 +327,9 @@ def test_vector_step_end_is_the_scalar_one_and_leaves_roots_and_stops_to_the_sca
             else:
                 assert np.array_equal(X[:, :, l], before[0][:, :, l])
                 assert (L_t[l], L_tc[l], L_gprev[l], L_steps[l]) == tuple(a[l] for a in before[1:])
-    assert seen == {(True, True), (False, True), (False, False)}   # both ends and both reasons seen
+    # both ends, and every answer of the three root tests, seen
+    assert {(True, True), (False, True), (False, False)} <= seen
+    assert {(e, m, c) for e in (False, True) for m in (False, True) for c in (False, True)} <= seen
 
 
 # ---------------------------------------------------------------- whole batches

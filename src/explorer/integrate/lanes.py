@@ -20,13 +20,15 @@ A step of :func:`run_worker`, for all lanes at once:
   size, the clip to tmax and the underflow test (:func:`step_lanes`); a bound of the variation of
   sin(phi - phi0) over the step (:func:`variation_lanes`); then, for the lanes whose step can hold
   no root (the bound proves it: ``kernels.events.excluded_by_variation``, so ``poly_step_roots``
-  would find none) and ends in no stop, the end of the step (:func:`end_steps_lanes`): the new
+  would find none; or the step's polynomial is monotone, :func:`monotone_lanes`, and its end
+  values make no sign change: ``kernels.events.isolate_crossings``' second test) and ends in no stop, the end of the step (:func:`end_steps_lanes`): the new
   state's non-finite check, sin(phi - phi0) at it, the compensated time sum (``kernels.clock``)
   and the time, step and crossing budgets;
 * per lane in scalar code, only the lanes that the masks leave to it (``simd.vbits``): a
   non-finite coefficient, a vanishing or subnormal norm, an underflow (:func:`lane_step`), and
-  the step ends with a possible root or a stop (in W4, 9 % of the lane-steps: the variation bound
-  does not exclude a root there): the
+  the step ends with a possible root or a stop (in W4, 2.2 % of the lane-steps: neither the
+  variation bound excludes a root there nor is the step's polynomial monotone without a sign
+  change; 9 % by the variation bound alone): the
   crossings - every root of the step's Taylor polynomial of sin(phi - phi0)
   (``kernels.events.poly_step_roots``: exact to the order of the method), each kept on the branch
   phi = phi0 (:func:`explorer.integrate.drivers.keep_crossing`) - the clock, the budgets, the
@@ -99,6 +101,7 @@ from explorer.integrate.simd import (
     vmax_gt,
     vmin_lt,
     vmul,
+    vor,
     vradius_power_core,
     vselect,
     vsplat,
@@ -340,20 +343,42 @@ def variation_lanes(X, order, h, cphi, sphi, out, groups):
 
 
 @njit(inline="always")
-def end_steps_lanes(X, ynew, vary, hv, L_t, L_tc, L_gprev, L_steps, L_left, L_on, L_fast, L_last, cphi, sphi, tmax,
-                    max_steps, c, w):
+def monotone_lanes(X, order, hv, cv, sv, c, w):
+    """kernels.events.monotone_within(gc, order, h) for the group of LANES lanes at ``c``, gc[k] =
+    X[k, G1] cos phi0 - X[k, G2] sin phi0 the step's polynomial of sin(phi - phi0) and h = hv:
+    |gc[1]| > s + BOUND_SLACK (|gc[1]| + s), s = sum_{k>=2} k |gc[k]| h^(k-1), with the
+    operations of events._tail_bound in its order (so the mask is the scalar test's answer)."""
+    stride = NVAR * w
+    h = vload(hv, c)
+    rk = vsplat(1.0)
+    s = vzero()
+    for k in range(2, order + 1):
+        o = k * stride + c
+        ck = vsub(vmul(vload(X, o + _G1 * w), cv), vmul(vload(X, o + _G2 * w), sv))
+        rk = vmul(rk, h)
+        s = vadd(s, vmul(vmul(vsplat(float(k)), vabs(ck)), rk))
+    d1 = vabs(vsub(vmul(vload(X, stride + _G1 * w + c), cv), vmul(vload(X, stride + _G2 * w + c), sv)))
+    return vgt(d1, vadd(s, vmul(vsplat(BOUND_SLACK), vadd(d1, s))))
+
+
+@njit(inline="always")
+def end_steps_lanes(X, order, ynew, vary, hv, L_t, L_tc, L_gprev, L_steps, L_left, L_on, L_fast, L_last, cphi, sphi,
+                    direction, tmax, max_steps, c, w):
     """The end of the step of the crossing loop for the group of LANES lanes at ``c``, in vector
     form, for every lane whose step ends with nothing to do but the bookkeeping: its step was
     taken in vector form (``L_fast``) and is not the last (``L_last``), its new state
     ``ynew[:, l]`` is finite (its sum, in the order of the scalar check), the variation bound
     ``vary`` excludes every root of sin(phi - phi0) in the step (kernels.events.excluded_by_variation,
-    the same IEEE operations: then the scalar loop would find none), and neither the clock nor
+    the same IEEE operations: then the scalar loop would find none) or, where it does not, the
+    step's polynomial is monotone (:func:`monotone_lanes`) and its end values make no sign change
+    in ``direction`` (kernels.events.sign_change: then kernels.events.isolate_crossings returns
+    no bracket), and neither the clock nor
     the step budget nor the crossings still wanted (``L_left``) stop it after the step.  Such a
     lane takes its new state (X[0]), sin(phi - phi0) at it (``equations.section_g``), the
     compensated time (``kernels.clock.advance_time``) and the step count here, exactly as the
     scalar loop would.  Returns the bits of the other lanes that hold an orbit (lane c + i bit i):
-    the scalar loop of :func:`run_worker` runs their step's end (the stops, and the steps whose
-    variation bound allows a root: 9 % of W4's lane-steps, measured at order 15)."""
+    the scalar loop of :func:`run_worker` runs their step's end (the stops, and the steps that
+    may hold a root: 2.2 % of W4's lane-steps, measured at order 15)."""
     zero = vzero()
     live = vgt(vload(L_on, c), zero)
     ok = vandnot(vgt(vload(L_fast, c), zero), vgt(vload(L_last, c), zero))
@@ -368,7 +393,16 @@ def end_steps_lanes(X, ynew, vary, hv, L_t, L_tc, L_gprev, L_steps, L_left, L_on
     # excluded_by_variation(g0, vary): |g0| > vary + BOUND_SLACK (|g0| + vary), g0 at the step's start
     ag = vabs(vsub(vmul(vload(X, _G1 * w + c), cv), vmul(vload(X, _G2 * w + c), sv)))
     vr = vload(vary, c)
-    ok = vand(ok, vgt(ag, vadd(vr, vmul(vsplat(BOUND_SLACK), vadd(ag, vr)))))
+    none = vgt(ag, vadd(vr, vmul(vsplat(BOUND_SLACK), vadd(ag, vr))))
+    gnew = vsub(vmul(y3, cv), vmul(y4, sv))
+    if vbits(vandnot(vand(live, ok), none)) != 0:
+        # isolate_crossings' second test: monotone on the step, and no sign change of the direction
+        gprev = vload(L_gprev, c)
+        cross = vand(vlt(gprev, zero), vge(gnew, zero)) if direction >= 0 else vlt(zero, zero)
+        if direction <= 0:
+            cross = vor(cross, vand(vgt(gprev, zero), vge(zero, gnew)))
+        none = vor(none, vandnot(monotone_lanes(X, order, hv, cv, sv, c, w), cross))
+    ok = vand(ok, none)
     # advance_time (not the last step): yk = h - tc, t' = t + yk, tc' = (t' - t) - yk
     t = vload(L_t, c)
     tc = vload(L_tc, c)
@@ -381,7 +415,7 @@ def end_steps_lanes(X, ynew, vary, hv, L_t, L_tc, L_gprev, L_steps, L_left, L_on
     vstore(L_t, c, vselect(ok, tn, t))
     vstore(L_tc, c, vselect(ok, vsub(vsub(tn, t), yk), tc))
     vstore(L_steps, c, vselect(ok, sn, steps))
-    vstore(L_gprev, c, vselect(ok, vsub(vmul(y3, cv), vmul(y4, sv)), vload(L_gprev, c)))
+    vstore(L_gprev, c, vselect(ok, gnew, vload(L_gprev, c)))
     vstore(X, c, vselect(ok, y0, vload(X, c)))
     vstore(X, w + c, vselect(ok, y1, vload(X, w + c)))
     vstore(X, 2 * w + c, vselect(ok, y2, vload(X, 2 * w + c)))
@@ -592,8 +626,8 @@ def run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, o
         variation_lanes(X, order, hv, cphi, sphi, vary, groups)
         for c in range(0, w, LANES):
             # ---- all lanes of the group at once: the steps that end with no root and no stop
-            bits = end_steps_lanes(X, ynew, vary, hv, L_t, L_tc, L_gprev, L_steps, L_left, L_on, L_fast, L_last,
-                                   cphi, sphi, tmax, max_steps, c, w)
+            bits = end_steps_lanes(X, order, ynew, vary, hv, L_t, L_tc, L_gprev, L_steps, L_left, L_on, L_fast,
+                                   L_last, cphi, sphi, direction, tmax, max_steps, c, w)
             # ---- lane by lane, the others: the new state's check, the crossings in the step,
             # the clock and the budgets, then the stops (the scalar loop's step end)
             while bits != 0:
