@@ -18,8 +18,7 @@ from explorer.analysis import sections
 from explorer.integrate import _lanes_generated as G
 from explorer.integrate import drivers, lanes, simd
 from explorer.integrate import systems as sy
-from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_TMAX
-from explorer.kernels import clock, events
+from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_TMAX, clock, events
 from explorer.kernels import taylor as tk
 from explorer.model import equations
 
@@ -172,7 +171,8 @@ def _mask_bits(a, b, out):
     y = simd.vload(b, 0)
     gt, ge, lt, eq = simd.vgt(x, y), simd.vge(x, y), simd.vlt(x, y), simd.veq(x, y)
     out[0], out[1], out[2], out[3] = simd.vbits(gt), simd.vbits(ge), simd.vbits(lt), simd.vbits(eq)
-    out[4], out[5], out[6] = simd.vbits(simd.vand(gt, eq)), simd.vbits(simd.vor(gt, eq)), simd.vbits(simd.vandnot(ge, eq))
+    out[4], out[5] = simd.vbits(simd.vand(gt, eq)), simd.vbits(simd.vor(gt, eq))
+    out[6] = simd.vbits(simd.vandnot(ge, eq))
     simd.vstore(a, 0, simd.vselect(gt, x, y))
 
 

@@ -21,7 +21,8 @@ A step of :func:`run_worker`, for all lanes at once:
   sin(phi - phi0) over the step (:func:`variation_lanes`); then, for the lanes whose step can hold
   no root (the bound proves it: ``kernels.events.excluded_by_variation``, so ``poly_step_roots``
   would find none; or the step's polynomial is monotone, :func:`monotone_lanes`, and its end
-  values make no sign change: ``kernels.events.isolate_crossings``' second test) and ends in no stop, the end of the step (:func:`end_steps_lanes`): the new
+  values make no sign change: ``kernels.events.isolate_crossings``' second test) and ends in no
+  stop, the end of the step (:func:`end_steps_lanes`): the new
   state's non-finite check, sin(phi - phi0) at it, the compensated time sum (``kernels.clock``)
   and the time, step and crossing budgets;
 * per lane in scalar code, only the lanes that the masks leave to it (``simd.vbits``): a
@@ -275,8 +276,11 @@ def step_lanes(L_on, norms, L_t, tend, e_p, e_q, factor, hv, L_last, L_fast, L_s
         last = vge(vadd(t, h), tv)
         h = vselect(last, vsub(tv, t), h)
         live = vgt(vload(L_on, c), zero)
-        ok = vand(vand(vfinite(vload(norms, c)), vfinite(vload(norms, w + c))),
-                  vand(vand(vge(u, vsplat(TINY)), vge(vsplat(HUGE), u)), vand(vge(v, vsplat(TINY)), vge(vsplat(HUGE), v))))
+        # kernels.power.is_normal of u and v: TINY <= x <= HUGE
+        tiny = vsplat(TINY)
+        huge = vsplat(HUGE)
+        normal = vand(vand(vge(u, tiny), vge(huge, u)), vand(vge(v, tiny), vge(huge, v)))
+        ok = vand(vand(vfinite(vload(norms, c)), vfinite(vload(norms, w + c))), normal)
         ok = vand(vand(live, ok), vgt(h, vmul(vsplat(EPS), vabs(t))))
         vstore(hv, c, vselect(ok, h, zero))
         vstore(L_last, c, vselect(last, one, zero))

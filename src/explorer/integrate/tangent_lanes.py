@@ -101,8 +101,8 @@ def _finish(j, l, Z, acc, v, w, nvec, early, status, steps, out_res, out_ext, ou
 
 
 @njit
-def _start_lane(l, Z, orb, L_on, acc, L_t, L_steps, L_hpos, L_hnext, L_since, hist_t, next_orbit, Y0, V0, W0, nvec, T, max_steps,
-                v, w, out_res, out_ext, out_status, out_final, out_steps, out_w):
+def _start_lane(l, Z, orb, L_on, acc, L_t, L_steps, L_hpos, L_hnext, L_since, hist_t, next_orbit, Y0, V0, W0, nvec, T,
+                max_steps, v, w, out_res, out_ext, out_status, out_final, out_steps, out_w):
     """Put the next unstarted orbit on lane l (the start of the scalar loop: the deviation
     vectors renormalised; orbits that stop before their first step are written out at once).
     Returns 1 if the lane got an orbit (``L_on[l]`` = 1.0), 0 if the batch is exhausted (the lane
