@@ -2,7 +2,8 @@
 SERVE_TRACE, one event a line, for ``bench_serve.py --breakdown`` (not a benchmark itself):
 
 - ``tap``: the page's Tap callback starts (SectionPage._on_tap);
-- ``block ROWS DONE STATUS``: the worker hands a block in (SectionPage._on_block, worker thread);
+- ``block ROWS DONE STATUS``: a block the worker computed reaches the page's event loop
+  (OrbitsLayer._on_block; the worker's job posts it there as soon as it is computed);
 - ``flush N``: the page has streamed queued blocks into the document (N crossings now); the
   message to the browser is written right after.
 
@@ -18,6 +19,7 @@ import time
 
 from explorer.app.cli import main
 from explorer.app.serve import page as page_mod
+from explorer.app.serve import page_orbits
 
 _LOG = open(os.environ["SERVE_TRACE"], "a", buffering=1)   # noqa: SIM115 - open for the process
 _LOCK = threading.Lock()
@@ -28,8 +30,8 @@ def _log(text: str) -> None:
         _LOG.write(f"{time.time():.6f} {text}\n")
 
 
-def _traced(name, before=None, after=None):
-    f = getattr(page_mod.SectionPage, name)
+def _traced(name, before=None, after=None, cls=page_mod.SectionPage):
+    f = getattr(cls, name)
 
     @functools.wraps(f)
     def g(self, *args, **kwargs):
@@ -39,12 +41,13 @@ def _traced(name, before=None, after=None):
         if after:
             _log(after(self, *args))
         return out
-    setattr(page_mod.SectionPage, name, g)
+    setattr(cls, name, g)
 
 
 _traced("_on_tap", before=lambda self, _e: "tap")
-_traced("_on_block", before=lambda self, _i, rows, done, status: f"block {len(rows)} {done} {status}")
-_traced("_flush", after=lambda self: f"flush {len(self.crossings.data['p1'])}")
+_traced("_on_block", before=lambda self, _i, rows, done, status: f"block {len(rows)} {done} {status}",
+        cls=page_orbits.OrbitsLayer)
+_traced("_flush", after=lambda self: f"flush {len(self.crossings.data['p1'])}", cls=page_orbits.OrbitsLayer)
 
 if __name__ == "__main__":
     sys.exit(main(["serve", *sys.argv[1:]]))

@@ -52,19 +52,19 @@ out = {}
 for name, kw in rows.items():
     if name not in wanted:
         continue
-    sections.section_crossings(prm, p1[:2], p2[:2], 2.0, 5, **kw)   # load the compiled code
+    sections.crossings(prm, 2.0, np.column_stack([p1[:2], p2[:2]]), n_crossings=5, **kw)   # load the compiled code
     for _ in range(repeat):
         t0 = clock()
-        r = sections.section_crossings(prm, p1, p2, 2.0, 2000, **kw)
+        r = sections.crossings(prm, 2.0, np.column_stack([p1, p2]), n_crossings=2000, **kw)
         out[name] = min(out.get(name, (float("inf"),)), (clock() - t0, int(r.count.sum())))
 y0 = model.section_state(prm, p1, p2, 2.0)
 for m in ("taylor", "dop853"):
     if "megno_" + m not in wanted:
         continue
-    lyapunov.indicators(prm, y0[:2], 10.0, method=m, tol=1e-12)
+    lyapunov.indicators(prm, y0[:2], tmax=10.0, method=m, tol=1e-12)
     for _ in range(repeat):
         t0 = clock()
-        lyapunov.indicators(prm, y0, 1000.0, method=m, tol=1e-12)
+        lyapunov.indicators(prm, y0, tmax=1000.0, method=m, tol=1e-12)
         out["megno_" + m] = min(out.get("megno_" + m, (float("inf"),)), (clock() - t0, 64))
 print(json.dumps(out))
 """

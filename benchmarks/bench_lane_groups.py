@@ -41,11 +41,11 @@ def workloads(quick):
     T = 100.0 if quick else 1000.0
 
     def w4():
-        r = sections.section_crossings(prm4, p1, p2, 2.0, K, method="taylor", tol=1e-12)
+        r = sections.crossings(prm4, 2.0, np.column_stack([p1, p2]), n_crossings=K, method="taylor", tol=1e-12)
         return (r.data, r.count, r.final)
 
     def chaos():
-        r = lyapunov.indicators(prm1, Y1, T, tol=1e-12, threads=2)
+        r = lyapunov.indicators(prm1, Y1, tmax=T, tol=1e-12, threads=2)
         return (r.megno, r.mlce, r.fli)
 
     return {f"W4 taylor 64 x {K}": w4, f"chaos map 400 orbits T = {T:g}": chaos}

@@ -35,10 +35,10 @@ def main(argv=None) -> int:
 
     prm = model.FIGURE4.with_(mu=MU)
     fp = fixedpoints.find_fixed_point(prm, H, (0.0, 0.0))
-    manifolds.manifolds(fp, arclength=0.5)          # compile / load the Numba caches outside the timing
+    manifolds.manifolds(prm, H, fp, arclength=0.5)        # compile / load the Numba caches outside the timing
     load0 = C.loadavg()
     t0, c0 = time.perf_counter(), time.process_time()
-    branches = manifolds.manifolds(fp, arclength=ARCLENGTH)
+    branches = manifolds.manifolds(prm, H, fp, arclength=ARCLENGTH)
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     out = {"started": C.now().isoformat(), "load": load0, "mu": MU, "h": H, "arclength": ARCLENGTH,
            "grow_seconds": wall, "grow_cpu_seconds": cpu,

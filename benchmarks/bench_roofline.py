@@ -261,17 +261,16 @@ def workloads(quick):
     p1 = c1 + r1 * np.linspace(-0.95, 0.95, 64)
     K = 200 if quick else 2000
     for threads in (1, 2):
-        sections.section_crossings(prm4, p1[:2], np.zeros(2), 2.0, 5, tol=1e-12, threads=threads)
-        wall, cpu = timed(lambda: sections.section_crossings(prm4, p1, np.zeros(64), 2.0, K, tol=1e-12,
-                                                             threads=threads), 3)
+        sections.crossings(prm4, 2.0, np.column_stack([p1[:2], np.zeros(2)]), n_crossings=5, tol=1e-12, threads=threads)
+        wall, cpu = timed(lambda: sections.crossings(prm4, 2.0, np.column_stack([p1, np.zeros(64)]), n_crossings=K, tol=1e-12, threads=threads), 3)
         r = timed.last
         out.append(dict(name=f"W4 64 x {K}, {threads} thread{'s' * (threads > 1)}", wall=wall, cpu=cpu,
                         threads=threads, steps=float(r.info[:, 1].sum()), crossings=int(r.count.sum()),
                         tangent=False))
     # one orbit: one of the LANES lanes does work
     n1 = 3000 if quick else 30000
-    sections.section_crossings(prm4, p1[:1], np.zeros(1), 2.0, 5, tol=1e-12)
-    wall, cpu = timed(lambda: sections.section_crossings(prm4, p1[:1], np.zeros(1), 2.0, n1, tol=1e-12), 3)
+    sections.crossings(prm4, 2.0, np.column_stack([p1[:1], np.zeros(1)]), n_crossings=5, tol=1e-12)
+    wall, cpu = timed(lambda: sections.crossings(prm4, 2.0, np.column_stack([p1[:1], np.zeros(1)]), n_crossings=n1, tol=1e-12), 3)
     r = timed.last
     out.append(dict(name=f"one orbit x {n1}", wall=wall, cpu=cpu, threads=1, steps=float(r.info[:, 1].sum()),
                     crossings=int(r.count.sum()), tangent=False))
@@ -279,8 +278,8 @@ def workloads(quick):
     Y = polar_seeds(prm1)
     T = 100.0 if quick else 1000.0
     for threads in (1, 2):
-        lyapunov.indicators(prm1, Y[:8], 1.0, tol=1e-12, threads=threads)
-        wall, cpu = timed(lambda: lyapunov.indicators(prm1, Y, T, tol=1e-12, threads=threads), 3)
+        lyapunov.indicators(prm1, Y[:8], tmax=1.0, tol=1e-12, threads=threads)
+        wall, cpu = timed(lambda: lyapunov.indicators(prm1, Y, tmax=T, tol=1e-12, threads=threads), 3)
         out.append(dict(name=f"chaos map 400 orbits, T = {T:g}, {threads} thread{'s' * (threads > 1)}", wall=wall,
                         cpu=cpu, threads=threads, steps=float(np.sum(timed.last.steps)), crossings=0, tangent=True))
     return out
@@ -301,7 +300,7 @@ def steps_check(K=500, picks=(0, 16, 32, 48)):
     prm = model.FIGURE4.with_(mu=0.5)
     c1, c2, r1, r2 = model.allowed_ellipse(prm, 2.0)
     p1 = (c1 + r1 * np.linspace(-0.95, 0.95, 64))[list(picks)]
-    r = sections.section_crossings(prm, p1, np.zeros(len(p1)), 2.0, K, tol=1e-12)
+    r = sections.crossings(prm, 2.0, np.column_stack([p1, np.zeros(len(p1))]), n_crossings=K, tol=1e-12)
     Y0 = model.section_state(prm, p1, np.zeros(len(p1)), 2.0)
     eqs, _g1 = _hy_system(prm.as_array())
     rows = []

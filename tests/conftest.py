@@ -91,6 +91,7 @@ def pytest_sessionstart(session):
     import time
 
     t0 = time.perf_counter()
+    _drop_a_stale_kernel_cache()
     from explorer.analysis import fixedpoints, lyapunov, sections
 
     prm = model.FIGURE4.with_(mu=0.1)
@@ -100,6 +101,43 @@ def pytest_sessionstart(session):
         lyapunov.indicators(prm, y0, tmax=1.0, method=method, tol=1e-10, dt=0.05)
     fixedpoints.find_fixed_point(model.FIGURE4, 2.0)
     _PHASES["kernels loaded or compiled before the tests"] = time.perf_counter() - t0
+
+
+def _drop_a_stale_kernel_cache() -> None:
+    """Numba invalidates a cached kernel only when its own source file changes: a kernel that
+    inlines or calls one from another file keeps the old callee (a developer's warm cache failed
+    19 tests of tests/integrate/test_lanes.py after kernels/taylor.py changed, while a fresh cache
+    passed).  So the tests start from a cache written by this tree's sources: a stamp (a hash of
+    every .py of the package) is kept beside the cached kernels, and when it differs they are
+    removed first.  Only the package's own entries go: numba's files beside the sources
+    (__pycache__/*.nbi, *.nbc) or, with NUMBA_CACHE_DIR, its per-directory subfolders there
+    (named ``<dir>_<sha1 of the directory's path>`` by numba).  CI and a fresh install start with
+    an empty cache and lose nothing."""
+    import hashlib
+    import shutil
+    from pathlib import Path
+
+    import explorer
+
+    pkg = Path(os.path.abspath(explorer.__file__)).parent
+    dirs = sorted({p.parent for p in pkg.rglob("*.py")})
+    digest = hashlib.sha256()
+    for p in sorted(pkg.rglob("*.py")):
+        digest.update(p.relative_to(pkg).as_posix().encode() + b"\0" + p.read_bytes())
+    key = digest.hexdigest()
+    cache = os.environ.get("NUMBA_CACHE_DIR")
+    stamp = Path(cache) / "explorer-sources.sha256" if cache else pkg / "__pycache__" / "explorer-sources.sha256"
+    if stamp.is_file() and stamp.read_text() == key:
+        return
+    for d in dirs:
+        if cache:
+            shutil.rmtree(Path(cache) / f"{d.name}_{hashlib.sha1(os.path.abspath(d).encode()).hexdigest()}",
+                          ignore_errors=True)
+        else:
+            for f in (d / "__pycache__").glob("*.nb[ic]"):
+                f.unlink(missing_ok=True)
+    stamp.parent.mkdir(parents=True, exist_ok=True)
+    stamp.write_text(key)
 
 
 #: seconds of the phases of a run that no test's duration shows (printed at the end, docs/tests.md)

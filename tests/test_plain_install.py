@@ -79,12 +79,10 @@ def _example_argv(name):
     return ["-m", "explorer", *argv[3:], *EXTRA.get(name, [])]
 
 
-@pytest.mark.parametrize("name", [n for n in registry.COMMANDS if n not in SERVERS])
-def test_every_commands_example_runs_from_the_plain_install(plain, name):
-    _run(plain, _example_argv(name))
-
-
 def test_figures_quick_draws_every_figure_from_the_plain_install(plain):
+    """First in the module: one process compiles nearly every kernel of the cold install, so the
+    examples after it load them from the cache (`sweep --jobs 2` compiled the Taylor lanes in both
+    of its workers at once when it came first)."""
     from explorer.app.paper.registry import FIGURES
 
     r = _run(plain, ["-m", "explorer", "figures", "--quick", "--quiet", "--out-dir", "all-figures",
@@ -93,6 +91,11 @@ def test_figures_quick_draws_every_figure_from_the_plain_install(plain):
     assert drawn == set(FIGURES), r.stdout
     for name in FIGURES:
         assert (plain[1] / "all-figures" / f"{name}.png").stat().st_size > 10_000, name
+
+
+@pytest.mark.parametrize("name", [n for n in registry.COMMANDS if n not in SERVERS])
+def test_every_commands_example_runs_from_the_plain_install(plain, name):
+    _run(plain, _example_argv(name))
 
 
 @pytest.mark.parametrize("name", SERVERS)

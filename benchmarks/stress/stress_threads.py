@@ -71,16 +71,16 @@ def main(argv=None):
         ang, rad = rng.uniform(0, 2 * np.pi, N), np.sqrt(rng.uniform(0, 0.9, N))
         y0 = model.section_state(prm, c1 + r1 * rad * np.cos(ang), c2 + r2 * rad * np.sin(ang), 2.0)
         for method, kw in methods:
-            a = sections.crossings(prm, y0, K, method=method, threads=1, **kw)
-            b = sections.crossings(prm, y0, K, method=method, threads=nmax, **kw)
+            a = sections.crossings(prm, y0, n_crossings=K, method=method, threads=1, **kw)
+            b = sections.crossings(prm, y0, n_crossings=K, method=method, threads=nmax, **kw)
             ok = all(equal(getattr(a, f), getattr(b, f)) for f in ("data", "count", "status", "final", "info"))
             ck.check(f"sections {name} {method} {kw}: {N} orbits x {K} crossings, 1 vs {nmax} threads", ok, ok,
                      "bit-identical")
         for method, kw in (("taylor", dict(tol=1e-12)), ("dop853", dict(tol=1e-12)), ("split4", dict(dt=0.02)),
                            ("split8", dict(dt=0.05))):
             T = 100.0 if quick else 500.0
-            a = lyapunov.indicators(prm, y0[: N // 2], T, method=method, history=8, threads=1, **kw)
-            b = lyapunov.indicators(prm, y0[: N // 2], T, method=method, history=8, threads=nmax, **kw)
+            a = lyapunov.indicators(prm, y0[: N // 2], tmax=T, method=method, history=8, threads=1, **kw)
+            b = lyapunov.indicators(prm, y0[: N // 2], tmax=T, method=method, history=8, threads=nmax, **kw)
             ok = all(equal(getattr(a, f), getattr(b, f)) for f in ("time", "mlce", "megno", "Y", "fli", "status",
                                                                  "steps", "final", "history"))
             ck.check(f"lyapunov {name} {method} {kw}: {N // 2} orbits, T = {T:g}, 1 vs {nmax} threads", ok, ok,
@@ -92,7 +92,7 @@ def main(argv=None):
             set_num_threads(min(n, old))
             fp = fixedpoints.find_fixed_point(model.FIGURE4.with_(mu=0.5), 2.0, (-0.2, 0.0))
             br = fixedpoints.continue_branch(model.FIGURE4, 2.0, "mu", 0.0, 1.0 if quick else 3.2, 0.2)
-            seps = fixedpoints.separatrices(fp, iterations=2 if quick else 4, n_domain=10, max_points=400)
+            seps = fixedpoints.separatrices(fp.params, fp.h, fp, iterations=2 if quick else 4, max_points=400)
             outs.append([fp.point, fp.jacobian, np.array([p.point for p in br.points]),
                          np.array(br.bifurcations)] + seps)
     finally:

@@ -74,6 +74,7 @@ _EXPORTS = {
     "exit_times": "explorer.analysis.transport",
     "rotation_number": "explorer.analysis.rotation",
     "rotation_profile": "explorer.analysis.rotation",
+    "frequency_diffusion": "explorer.analysis.rotation",
     # scenes, sweeps and stores
     "Scene": "explorer.io.scene",
     "load_scene": "explorer.io.scene",

@@ -64,6 +64,9 @@ from explorer.analysis.periodic import (
     search_periodic_orbits as search_periodic_orbits,
 )
 from explorer.analysis.rotation import (
+    frequency_diffusion as frequency_diffusion,
+)
+from explorer.analysis.rotation import (
     rotation_number as rotation_number,
 )
 from explorer.analysis.rotation import (

@@ -98,10 +98,10 @@ def test_a_budget_ends_a_search_at_its_seconds_and_caps_the_crossing_batches():
     with Budget(None, max_steps=10):
         assert step_cap(10**9) == 10
         prm = model.FIGURE4.with_(mu=0.3)
-        c = sections.section_crossings(prm, [0.2], [0.1], 2.0, 5)
+        c = sections.crossings(prm, 2.0, [(0.2, 0.1)], n_crossings=5)
         assert c.count[0] < 5                                             # 10 steps: not 5 returns
     assert step_cap(10**9) == 10**9
     b = Budget(None)
     b.cancel()
     with b, pytest.raises(BudgetExceeded):
-        sections.section_crossings(model.FIGURE4, [0.2], [0.1], 2.0, 5)
+        sections.crossings(model.FIGURE4, 2.0, [(0.2, 0.1)], n_crossings=5)

@@ -79,12 +79,16 @@ def _distance_to_polyline(points, curve):
 
 @pytest.mark.parametrize("stable", [False, True])
 def test_manifolds_are_invariant(stable):
-    """Images of points between the samples of a separatrix lie on the separatrix."""
+    """Images of points between the samples of a separatrix lie on the separatrix: the midpoints
+    of the segments of the branch to 4 images of the fundamental domain, mapped once (backward
+    for the stable one), lie on the branch to 5 images."""
     fp = fpm.find_fixed_point(model.FIGURE4.with_(mu=0.01), 2.0)
-    curve = fpm.manifold(fp, stable=stable, iterations=5, n_domain=30, max_gap=0.01)
+    short = fpm.manifold(fp.params, fp.h, fp, stable=stable, iterations=4, max_gap=0.01)
+    curve = fpm.manifold(fp.params, fp.h, fp, stable=stable, iterations=5, max_gap=0.01)
+    assert len(curve) > len(short) > 50
+    np.testing.assert_array_equal(curve[:len(short) - 1], short[:-1])    # the growth goes on from there
     smap = SectionMap(fp.params, fp.h, tol=1e-14)
-    n = len(curve)
-    mids = 0.5 * (curve[1: n // 2: 7] + curve[2: n // 2 + 1: 7])
+    mids = 0.5 * (short[1:-1:7] + short[2::7])
     imgs = np.array([smap(m, backward=stable, jacobian=False).point for m in mids])
     assert np.max(_distance_to_polyline(imgs, curve)) < 2e-3
     # and the curve leaves the fixed point along the eigenvector of the (un)stable eigenvalue,
@@ -104,12 +108,35 @@ def test_manifolds_are_invariant(stable):
         assert abs(d[0] * v[1] - d[1] * v[0]) < 1e-5, (d, v)
 
 
+def test_separatrices_are_the_branches_grow_branch_grows_to_their_images_of_the_fundamental_domain():
+    """One manifold algorithm: each separatrix is manifolds.grow_branch's branch of the saddle
+    (both signs of W^u, then of W^s), bit for bit, ending after ``iterations`` images of the
+    fundamental domain (or at ``arclength``); the old fundamental-domain keywords warn."""
+    from explorer.analysis import manifolds as mf
+
+    smap = SectionMap(model.FIGURE4.with_(mu=0.03), 2.0)
+    fp = fpm.find_fixed_point(smap, (0.0, 0.0))
+    seps = fpm.separatrices(smap, fp, iterations=2)
+    sd = mf.saddle(smap, fp)
+    for curve, (stable, sign) in zip(seps, ((False, 1), (False, -1), (True, 1), (True, -1))):
+        b = mf.grow_branch(sd, stable=stable, sign=sign, arclength=math.inf, generations=2)
+        assert b.status == "generations"
+        np.testing.assert_array_equal(curve, b.points)
+        assert (b.sigma[-1] - b.curve.sigma0) / b.curve.L == pytest.approx(3.0)   # domain + 2 images
+    short = fpm.separatrices(smap, fp, iterations=6, arclength=0.5)
+    assert all(0.5 <= np.sum(np.linalg.norm(np.diff(c, axis=0), axis=1)) < 0.5 + 0.02 for c in short)
+    with pytest.warns(DeprecationWarning, match="n_domain"):
+        old = fpm.separatrices(smap, fp, iterations=2, n_domain=40, first=1e-6)
+    for a, b in zip(old, seps):
+        np.testing.assert_array_equal(a, b)
+
+
 @pytest.mark.cpu_dependent
 def test_elliptic_point_has_no_separatrices():
     fp = fpm.find_fixed_point(model.FIGURE4.with_(mu=4.0), 2.0, (-2.16, 0.0))
     assert fp.stable
     with pytest.raises(model.ParameterError, match="elliptic"):
-        fpm.manifold(fp)
+        fpm.manifold(fp.params, fp.h, fp)
 
 
 @pytest.mark.cpu_dependent

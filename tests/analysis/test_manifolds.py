@@ -23,7 +23,7 @@ MU = 0.03                     # the central saddle near (-0.011, 0), trace 9.03
 @pytest.fixture(scope="module")
 def saddle():
     fp = fpm.find_fixed_point(model.FIGURE4.with_(mu=MU), H, (0.0, 0.0))
-    return mf.saddle(fp)
+    return mf.saddle(fp.params, fp.h, fp)
 
 
 @pytest.fixture(scope="module")
@@ -77,7 +77,7 @@ def test_the_reversor_maps_the_unstable_onto_the_stable_manifold(saddle, wu):
 def test_branches_coincide_with_the_exact_separatrix_at_mu_0():
     prm = model.FIGURE4.with_(mu=0.0)
     fp = fpm.find_fixed_point(prm, H, (0.0, 0.0))
-    sd = mf.saddle(fp)
+    sd = mf.saddle(fp.params, fp.h, fp)
     c = mk.check_params(prm, H)
     branches = [mf.grow_branch(sd, stable=s, sign=g, arclength=4.0) for s in (False, True) for g in (1, -1)]
     for b in branches:   # every point on the level F0 = c of R6/R7
@@ -118,7 +118,8 @@ def test_growth_stops_where_points_have_no_return(saddle):
     """A time budget just above the saddle's return time: the branch ends at the first point
     that needs longer ("edge"), and every point kept has its image."""
     T = abs(saddle.smap(saddle.point, jacobian=False).time)
-    short = mf.saddle(fpm.find_fixed_point(model.FIGURE4.with_(mu=MU), H, (0.0, 0.0)), tmax=1.05 * T)
+    short = mf.saddle(model.FIGURE4.with_(mu=MU), H, fpm.find_fixed_point(model.FIGURE4.with_(mu=MU), H, (0.0, 0.0)),
+                      tmax=1.05 * T)
     b = mf.grow_branch(short, sign=1, arclength=20.0)
     assert b.status == "edge" and b.arclength < 20.0 and len(b.points) > 20
     assert np.all(np.isfinite(b.points))
@@ -132,7 +133,7 @@ def test_a_non_hyperbolic_orbit_is_refused():
                         det=1.0, return_times=np.array([6.0]), residual=0.0, iterations=0, symmetric=False,
                         map_jacobians=np.array([J]), params=model.FIGURE4.with_(mu=MU), h=H)
     with pytest.raises(model.ParameterError, match="not hyperbolic"):
-        mf.saddle(fp)
+        mf.saddle(fp.params, fp.h, fp)
 
 
 @pytest.fixture(scope="module")
@@ -221,7 +222,7 @@ def test_mean_transit_time_is_accessible_area_over_flux(mu):
     """Meiss 1992: <min(T, N)> over the entry set = A(points of R leaving within N) / flux, within
     the sampling error; the entry set's Monte Carlo area is the lobe area."""
     fp = fpm.follow(model.FIGURE4, H, "mu", 0.0, mu, (0.0, 0.0))
-    t = tr.turnstile(mf.saddle(fp), arclength=6.0)
+    t = tr.turnstile(mf.saddle(fp.params, fp.h, fp), arclength=6.0)
     lb = t["lobes"]
     phi = abs(lb[0].area)
     h0 = min((lb[0].start, lb[0].end), key=lambda p: abs(p.point[1]))
@@ -248,7 +249,7 @@ def test_manifolds_of_a_period_2_orbit_are_mapped_onto_each_other(guess, maps):
     from explorer.analysis.periodic import find_periodic_orbit
 
     orb = find_periodic_orbit(model.FIGURE4.with_(mu=MU), H, guess, 2)
-    s0, s1 = mf.saddle(orb, index=0), mf.saddle(orb, index=1)
+    s0, s1 = mf.saddle(orb.params, orb.h, orb, index=0), mf.saddle(orb.params, orb.h, orb, index=1)
     assert s0.maps == s1.maps == maps
     assert s0.multiplier == pytest.approx(s1.multiplier, rel=1e-8)
     b0 = mf.grow_branch(s0, sign=1, arclength=0.3)
@@ -265,7 +266,7 @@ def test_stable_manifold_without_the_reversor_is_invariant():
     from explorer.analysis.periodic import is_reversible
 
     assert not is_reversible(prm)
-    sd = mf.saddle(fpm.find_fixed_point(prm, H, (0.0, 0.0)))
+    sd = mf.saddle(prm, H, fpm.find_fixed_point(prm, H, (0.0, 0.0)))
     ws = mf.grow_branch(sd, stable=True, sign=1, arclength=0.6)
     assert ws.status == "arclength"
     L = math.log(sd.multiplier)
@@ -316,7 +317,7 @@ def test_heteroclinic_points_lie_on_both_manifolds_and_go_from_one_saddle_to_the
     from explorer.analysis.periodic import find_periodic_orbit
 
     orb = find_periodic_orbit(model.FIGURE4.with_(mu=MU), H, (-1.8408, 0.0), 2)
-    s0, s1 = mf.saddle(orb, index=0), mf.saddle(orb, index=1)
+    s0, s1 = mf.saddle(orb.params, orb.h, orb, index=0), mf.saddle(orb.params, orb.h, orb, index=1)
     assert s0.maps == 2
     bu = mf.grow_branch(s0, sign=1, arclength=3.0, start_tol=1e-8)
     bs = mf.grow_branch(s1, stable=True, sign=-1, arclength=3.0, start_tol=1e-8)
@@ -356,7 +357,7 @@ def test_a_turnstile_torn_by_the_section_edge_is_reported_with_the_eye_flux():
     assert row["reason"] == tr.REASON_TORN and row["status"].startswith("torn") and row["flux"] is None
     assert row["eye_flux"] > 5 * row["eye_error"] > 0
     fp = fpm.follow(model.FIGURE4, H, "mu", 0.0, 0.5, (0.0, 0.0))
-    sd = mf.saddle(fp)
+    sd = mf.saddle(fp.params, fp.h, fp)
     bu = mf.grow_branch(sd, sign=1, arclength=9.0)
     st = bu.first_tear
     assert math.isfinite(st)

@@ -281,7 +281,7 @@ def test_section_map_is_reversed_by_G0():
 
 @pytest.mark.cpu_dependent
 def test_symmetric_orbits_are_found_from_the_symmetry_lines_and_are_G0_invariant(search3):
-    seeds = pm.symmetry_line_points(PRM, H, 3, 96)
+    seeds = pm.symmetry_line_points(PRM, H, 3, n=96)
     assert len(seeds) >= 4
     symmetric = [o for o in search3 if o.symmetric]
     assert len(symmetric) >= 4

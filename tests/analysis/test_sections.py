@@ -48,7 +48,7 @@ def test_crossing_time_matches_exact_uniform_rotation(method):
     prm = model.FIGURE4
     h = 2.0
     c = math.sqrt(2 * prm.b * h)
-    res = sections.section_crossings(prm, [0.0], [0.0], h, 20, method=method, **TIGHT[method])
+    res = sections.crossings(prm, h, [(0.0, 0.0)], n_crossings=20, method=method, **TIGHT[method])
     assert res.status[0] == STATUS_DONE
     t = res.orbit(0)[:, 0]
     expect = 2 * math.pi * prm.b / c * np.arange(1, 21)
@@ -69,7 +69,7 @@ def test_crossing_times_match_the_homoclinic_solution(method, sign):
     p1, p2, m, phi = exact.homoclinic(P, c, np.array([t_start]), sign=sign)
     y0 = np.array([p1[0], p2[0], m[0], math.sin(phi[0]), math.cos(phi[0])])
     expect = exact.homoclinic_crossing_times(P, c, math.pi, t_start, 20.0, sign=sign) - t_start
-    res = sections.crossings(prm, y0, len(expect), method=method, tmax=40.0, **TIGHT[method])
+    res = sections.crossings(prm, y0, n_crossings=len(expect), method=method, tmax=40.0, **TIGHT[method])
     got = res.orbit(0)[:, 0]
     assert len(got) == len(expect) >= 5
     # the orbit is exponentially unstable near the saddle: 1e-8 as in the reference test
@@ -84,7 +84,8 @@ def test_one_step_map_matches_scipy_reference(method, param_set):
     name, prm = param_set
     h = 2.0
     p1, p2 = fig4_seeds(prm, h, 6, p2_frac=0.2)
-    res = sections.section_crossings(prm, p1, p2, h, 1, method=method, tmax=30.0, **TIGHT[method])
+    res = sections.crossings(prm, h, np.column_stack([p1, p2]), n_crossings=1, method=method, tmax=30.0,
+                             **TIGHT[method])
     P = prm.as_array()
     checked = 0
     with warnings.catch_warnings():
@@ -105,8 +106,8 @@ def test_one_step_map_matches_scipy_reference(method, param_set):
 def test_dop853_and_taylor_agree_far_better_than_the_reference_tolerance():
     prm = PARAM_SETS["figure4_mu0.5"]
     p1, p2 = fig4_seeds(prm, 2.0, 8, p2_frac=0.1, span=0.8)
-    a = sections.section_crossings(prm, p1, p2, 2.0, 3, method="taylor", tol=1e-16)
-    b = sections.section_crossings(prm, p1, p2, 2.0, 3, method="dop853", tol=1e-15)
+    a = sections.crossings(prm, 2.0, np.column_stack([p1, p2]), n_crossings=3, method="taylor", tol=1e-16)
+    b = sections.crossings(prm, 2.0, np.column_stack([p1, p2]), n_crossings=3, method="dop853", tol=1e-15)
     assert np.abs(a.data[..., :4] - b.data[..., :4]).max() < 1e-11
 
 
@@ -115,7 +116,7 @@ def test_dop853_and_taylor_agree_far_better_than_the_reference_tolerance():
 def test_splitting_keeps_casimir_to_round_off_and_energy_bounded(method):
     prm = PARAM_SETS["asym_lam_neg"]
     p1, p2 = fig4_seeds(prm, 2.0, 4, p2_frac=0.1)
-    res = sections.section_crossings(prm, p1, p2, 2.0, 300, method=method, dt=0.02)
+    res = sections.crossings(prm, 2.0, np.column_stack([p1, p2]), n_crossings=300, method=method, dt=0.02)
     assert np.all(res.status == STATUS_DONE)
     # Casimir after ~1e5 steps (1.5e6 rotations): a random walk of round-off, ~eps sqrt(n)
     assert np.abs(res.info[:, 2]).max() < 2e-12
@@ -130,7 +131,7 @@ def test_splitting_keeps_casimir_to_round_off_and_energy_bounded(method):
 def test_adaptive_methods_keep_energy_to_tolerance(method, tol, bound):
     prm = PARAM_SETS["figure4_mu0.5"]
     p1, p2 = fig4_seeds(prm, 2.0, 4, p2_frac=0.1)
-    res = sections.section_crossings(prm, p1, p2, 2.0, 200, method=method, tol=tol)
+    res = sections.crossings(prm, 2.0, np.column_stack([p1, p2]), n_crossings=200, method=method, tol=tol)
     assert np.all(res.status == STATUS_DONE)
     assert np.abs(res.data[..., 4]).max() < bound
     assert np.abs(res.info[:, 2]).max() < bound  # Casimir monitored where not kept
@@ -146,7 +147,7 @@ def test_extra_integral_is_conserved_along_integrated_orbits(kw, F, method):
     prm = model.FIGURE4.with_(**kw)
     p1, p2 = fig4_seeds(prm, 2.0, 3, p2_frac=0.3, span=0.6)
     y0 = model.section_state(prm, p1, p2, 2.0)
-    res = sections.crossings(prm, y0, 100, method=method, tol=1e-14, dt=0.01)
+    res = sections.crossings(prm, y0, n_crossings=100, method=method, tol=1e-14, dt=0.01)
     F0 = F(prm, y0)
     for i in range(3):
         rows = res.orbit(i)
@@ -163,7 +164,7 @@ def test_hess_invariant_relation_f_equals_zero_is_kept():
     m = prm.lam * prm.b / prm.a2 - prm.eta * p1
     y0 = np.array([p1, p2, m, math.sin(phi), math.cos(phi)])
     assert abs(model.hess_function(prm, y0)) < 1e-15
-    res = sections.crossings(prm, y0, 20, method="taylor", tol=1e-15, tmax=400.0)
+    res = sections.crossings(prm, y0, n_crossings=20, method="taylor", tol=1e-15, tmax=400.0)
     final = res.final[0]
     assert res.count[0] >= 5
     assert abs(model.hess_function(prm, final)) < 1e-10
@@ -187,12 +188,12 @@ def test_observed_order_of_splitting_on_the_real_model(method, order, dts):
     y0 = model.section_state(prm, [0.2], [0.1], 2.0)
     T = 4.0
     # K = 50 crossings cannot happen before T: every run stops at its time budget T
-    ref = sections.crossings(prm, y0, 50, method="taylor", tol=1e-16, tmax=T)
+    ref = sections.crossings(prm, y0, n_crossings=50, method="taylor", tol=1e-16, tmax=T)
     assert ref.status[0] == STATUS_TMAX and ref.info[0, 0] == T
     ref = ref.final[0]
     errs = []
     for dt in dts:
-        run = sections.crossings(prm, y0, 50, method=method, dt=dt, tmax=T)
+        run = sections.crossings(prm, y0, n_crossings=50, method=method, dt=dt, tmax=T)
         assert run.info[0, 0] == T
         fin = run.final[0]
         errs.append(np.abs(fin - ref).max())
@@ -208,22 +209,23 @@ def test_direction_and_start_point(method):
     prm = PARAM_SETS["figure4_mu0.5"]
     p1, p2 = fig4_seeds(prm, 2.0, 3, p2_frac=0.1, span=0.5)
     kw = TIGHT[method]
-    up = sections.section_crossings(prm, p1, p2, 2.0, 4, method=method, **kw)
+    up = sections.crossings(prm, 2.0, np.column_stack([p1, p2]), n_crossings=4, method=method, **kw)
     # the start point (on the section) is not a crossing
     assert np.all(up.data[:, 0, 0] > 0.5)
-    # section_crossings with direction -1 starts the body turning backwards (M < 0 from the
+    # crossings with direction -1 starts the body turning backwards (M < 0 from the
     # energy) and finds its crossings with dphi/dt < 0
-    back = sections.section_crossings(prm, p1, p2, 2.0, 4, method=method, direction=-1, tmax=60.0, **kw)
+    back = sections.crossings(prm, 2.0, np.column_stack([p1, p2]), n_crossings=4, method=method, direction=-1,
+                              tmax=60.0, **kw)
     assert np.all(back.count == 4) and np.all(back.data[:, :, 3] < 0) and np.all(back.data[:, 0, 0] > 0.5)
     # with M > 0 the body never crosses backwards: direction -1 finds nothing
     y0 = model.section_state(prm, p1, p2, 2.0)
-    down = sections.crossings(prm, y0, 4, method=method, direction=-1, tmax=60.0, **kw)
+    down = sections.crossings(prm, y0, n_crossings=4, method=method, direction=-1, tmax=60.0, **kw)
     assert np.all(down.count == 0) and np.all(down.status == STATUS_TMAX)
-    both = sections.crossings(prm, y0, 4, method=method, direction=0, **kw)
+    both = sections.crossings(prm, y0, n_crossings=4, method=method, direction=0, **kw)
     np.testing.assert_allclose(both.data, up.data, atol=1e-12)
     # the reversed body (M < 0) crosses only with direction -1
     y0r = model.section_state(prm, p1, p2, 2.0, direction=-1)
-    rev = sections.crossings(prm, y0r, 2, method=method, direction=-1, **kw)
+    rev = sections.crossings(prm, y0r, n_crossings=2, method=method, direction=-1, **kw)
     assert np.all(rev.count == 2) and np.all(rev.data[:, :, 3] < 0)
 
 
@@ -234,7 +236,7 @@ def test_other_section_angle_matches_reference(method):
     h = 2.0
     c1, c2, r1, r2 = model.allowed_ellipse(prm, h, phi0)
     y0 = model.section_state(prm, [c1 + 0.3 * r1], [c2 - 0.2 * r2], h, phi0)
-    res = sections.crossings(prm, y0, 1, method=method, phi0=phi0, **TIGHT[method])
+    res = sections.crossings(prm, y0, n_crossings=1, method=method, phi0=phi0, **TIGHT[method])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         ref = reference.scipy_one_step_map(prm.as_array(), y0[0], phi0=phi0)
@@ -248,16 +250,16 @@ def test_orbit_that_never_crosses_is_reported(method):
     prm = model.FIGURE4.with_(mu=8.0, eta=-1.0)
     # near phi = 0 with a small spin: the body rocks and never reaches phi = pi
     y0 = np.array([4.0, 0.0, 0.05, math.sin(0.3), math.cos(0.3)])
-    res = sections.crossings(prm, y0, 3, method=method, tmax=50.0, tol=1e-12, dt=0.01)
+    res = sections.crossings(prm, y0, n_crossings=3, method=method, tmax=50.0, tol=1e-12, dt=0.01)
     assert res.count[0] == 0 and res.status[0] == STATUS_TMAX
     assert res.info[0, 0] == pytest.approx(50.0, abs=0.02)
 
 
 def test_step_budget_is_reported():
     prm = PARAM_SETS["figure4_mu0.5"]
-    res = sections.section_crossings(prm, [0.1], [0.0], 2.0, 100, method="split4", dt=0.01, max_steps=1000)
+    res = sections.crossings(prm, 2.0, [(0.1, 0.0)], n_crossings=100, method="split4", dt=0.01, max_steps=1000)
     assert res.status[0] == STATUS_MAX_STEPS and res.count[0] < 100
-    res = sections.section_crossings(prm, [0.1], [0.0], 2.0, 100, method="taylor", max_steps=50)
+    res = sections.crossings(prm, 2.0, [(0.1, 0.0)], n_crossings=100, method="taylor", max_steps=50)
     assert res.status[0] == STATUS_MAX_STEPS
 
 
@@ -282,8 +284,8 @@ def test_nonfinite_state_is_reported_per_orbit_and_the_rest_is_unaffected(method
     bad[0] = 1e150
     y0 = np.vstack([good[0], bad, good[1]])
     kw = dict(tol=1e-12, dt=0.01, tmax=20.0)
-    res = sections.crossings(prm, y0, 5, method=method, **kw)
-    ref = sections.crossings(prm, good, 5, method=method, **kw)
+    res = sections.crossings(prm, y0, n_crossings=5, method=method, **kw)
+    ref = sections.crossings(prm, good, n_crossings=5, method=method, **kw)
     np.testing.assert_array_equal(res.data[[0, 2]], ref.data)
     np.testing.assert_array_equal(res.status[[0, 2]], ref.status)
     assert res.count[1] == 0 and np.all(np.isnan(res.data[1]))
@@ -293,7 +295,7 @@ def test_nonfinite_state_is_reported_per_orbit_and_the_rest_is_unaffected(method
 def test_start_with_infinite_energy_is_refused():
     y0 = np.array([0.1, 0.0, 1e200, 0.0, -1.0])
     with pytest.raises(model.ParameterError, match="finite energy"):
-        sections.crossings(model.FIGURE4, y0, 2)
+        sections.crossings(model.FIGURE4, y0, n_crossings=2)
 
 
 # ---------------------------------------------------------------- determinism
@@ -301,8 +303,8 @@ def test_start_with_infinite_energy_is_refused():
 def test_results_are_identical_whatever_the_thread_count(method):
     prm = PARAM_SETS["figure4_mu0.5"]
     p1, p2 = fig4_seeds(prm, 2.0, 16, p2_frac=0.05)
-    a = sections.section_crossings(prm, p1, p2, 2.0, 30, method=method, threads=1)
-    b = sections.section_crossings(prm, p1, p2, 2.0, 30, method=method, threads=2)
+    a = sections.crossings(prm, 2.0, np.column_stack([p1, p2]), n_crossings=30, method=method, threads=1)
+    b = sections.crossings(prm, 2.0, np.column_stack([p1, p2]), n_crossings=30, method=method, threads=2)
     np.testing.assert_array_equal(a.data, b.data)
     np.testing.assert_array_equal(a.status, b.status)
     np.testing.assert_array_equal(a.final, b.final)
@@ -321,16 +323,16 @@ def test_bad_settings_are_refused_with_their_name(kw, fragment):
     prm = model.FIGURE4
     y0 = model.section_state(prm, [0.1], [0.0], 2.0)
     with pytest.raises(model.ParameterError, match=fragment):
-        sections.crossings(prm, y0, 3, **kw)
+        sections.crossings(prm, y0, n_crossings=3, **kw)
 
 
 def test_nonfinite_or_misshapen_start_is_refused():
     with pytest.raises(model.ParameterError, match="y0 must be finite"):
-        sections.crossings(model.FIGURE4, [0.0, np.nan, 1.0, 0.0, -1.0], 2)
+        sections.crossings(model.FIGURE4, [0.0, np.nan, 1.0, 0.0, -1.0], n_crossings=2)
     with pytest.raises(model.ParameterError, match="shape"):
-        sections.crossings(model.FIGURE4, [0.0, 1.0, 0.0, -1.0], 2)
+        sections.crossings(model.FIGURE4, [0.0, 1.0, 0.0, -1.0], n_crossings=2)
     with pytest.raises(model.ParameterError, match="crossings must be"):
-        sections.crossings(model.FIGURE4, [0.0, 0.0, 1.0, 0.0, -1.0], 0)
+        sections.crossings(model.FIGURE4, [0.0, 0.0, 1.0, 0.0, -1.0], n_crossings=0)
 
 
 def test_propagate_gives_the_state_at_t_as_scipys_reference_integration_and_from_a_map_the_same():

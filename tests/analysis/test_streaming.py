@@ -13,6 +13,7 @@ from explorer.model import ParameterError
 PRM = model.FIGURE4.with_(mu=0.5)
 P1 = np.linspace(-0.5, 0.5, 9)
 P2 = np.zeros(9) + 0.1
+PTS = np.column_stack([P1, P2])
 METHODS = {"taylor": dict(tol=1e-12), "dop853": dict(tol=1e-11), "split6": dict(dt=0.05)}
 
 
@@ -40,41 +41,41 @@ def _assert_same_run(ref, rows, st):
 @pytest.mark.parametrize("block", [1, 7, 100])
 def test_streamed_blocks_are_bit_identical_to_one_run(method, block):
     # direction 0 (both ways): steps holding two crossings fall on block boundaries too
-    ref = sections.section_crossings(PRM, P1, P2, 2.0, 250, method=method, direction=0, **METHODS[method])
-    rows, st = _gather(sections.iter_section_crossings(PRM, P1, P2, 2.0, 250, method=method, direction=0,
-                                                       block=block, **METHODS[method]), len(P1))
+    ref = sections.crossings(PRM, 2.0, PTS, n_crossings=250, method=method, direction=0, **METHODS[method])
+    rows, st = _gather(sections.iter_crossings(PRM, 2.0, PTS, n_crossings=250, method=method, direction=0, block=block,
+                                               **METHODS[method]), len(P1))
     _assert_same_run(ref, rows, st)
     assert st.blocks == -(-250 // block)
 
 
 @pytest.mark.parametrize("method", list(METHODS))
 def test_a_run_continued_from_a_blocks_state_ends_as_the_uninterrupted_run(method):
-    ref = sections.section_crossings(PRM, P1, P2, 2.0, 120, method=method, **METHODS[method])
-    it = sections.iter_section_crossings(PRM, P1, P2, 2.0, 120, method=method, block=25, **METHODS[method])
+    ref = sections.crossings(PRM, 2.0, PTS, n_crossings=120, method=method, **METHODS[method])
+    it = sections.iter_crossings(PRM, 2.0, PTS, n_crossings=120, method=method, block=25, **METHODS[method])
     first = [next(it), next(it)]          # "killed" after two blocks; their state was checkpointed
     saved = sections.StreamState.from_arrays(first[-1].state.as_arrays())
-    rest = list(sections.iter_section_crossings(PRM, P1, P2, 2.0, 120, method=method, block=25, state=saved,
-                                                **METHODS[method]))
+    rest = list(sections.iter_crossings(PRM, 2.0, PTS, n_crossings=120, method=method, block=25, state=saved,
+                                        **METHODS[method]))
     rows, st = _gather(first + rest, len(P1))
     _assert_same_run(ref, rows, st)
 
 
 def test_budgets_are_for_the_whole_run_not_the_block():
     # a time budget that ends the run inside the third block: same crossings and TMAX as one run
-    ref = sections.section_crossings(PRM, P1, P2, 2.0, 400, tmax=250.0, tol=1e-12)
+    ref = sections.crossings(PRM, 2.0, PTS, n_crossings=400, tmax=250.0, tol=1e-12)
     assert np.all(ref.status == int(Status.TMAX))
-    rows, st = _gather(sections.iter_section_crossings(PRM, P1, P2, 2.0, 400, tmax=250.0, tol=1e-12, block=10),
+    rows, st = _gather(sections.iter_crossings(PRM, 2.0, PTS, n_crossings=400, tmax=250.0, tol=1e-12, block=10),
                        len(P1))
     _assert_same_run(ref, rows, st)
-    ref = sections.section_crossings(PRM, P1, P2, 2.0, 400, max_steps=3000, method="dop853", tol=1e-11)
+    ref = sections.crossings(PRM, 2.0, PTS, n_crossings=400, max_steps=3000, method="dop853", tol=1e-11)
     assert np.all(ref.status == int(Status.MAX_STEPS))
-    rows, st = _gather(sections.iter_section_crossings(PRM, P1, P2, 2.0, 400, max_steps=3000, method="dop853",
-                                                       tol=1e-11, block=10), len(P1))
+    rows, st = _gather(sections.iter_crossings(PRM, 2.0, PTS, n_crossings=400, max_steps=3000, method="dop853",
+                                               tol=1e-11, block=10), len(P1))
     _assert_same_run(ref, rows, st)
 
 
 def test_block_memory_does_not_grow_with_the_requested_crossings():
-    it = sections.iter_section_crossings(PRM, P1[:2], P2[:2], 2.0, 10**12, tol=1e-12, block=50)
+    it = sections.iter_crossings(PRM, 2.0, PTS[:2], n_crossings=10**12, tol=1e-12, block=50)
     b = next(it)
     assert b.data.shape == (2, 50 + drivers.MAX_ROOTS_PER_STEP, 5)
     assert np.all(b.count >= 50)
@@ -83,6 +84,6 @@ def test_block_memory_does_not_grow_with_the_requested_crossings():
 
 def test_a_result_larger_than_memory_is_refused_up_front_with_its_size():
     with pytest.raises(ParameterError, match=r"crossings: 2 orbits x 100000000000 crossings need 8 TB"):
-        sections.section_crossings(PRM, P1[:2], P2[:2], 2.0, 10**11)
+        sections.crossings(PRM, 2.0, PTS[:2], n_crossings=10**11)
     with pytest.raises(ParameterError, match="block"):
-        next(sections.iter_section_crossings(PRM, P1[:2], P2[:2], 2.0, 10, block=0))
+        next(sections.iter_crossings(PRM, 2.0, PTS[:2], n_crossings=10, block=0))

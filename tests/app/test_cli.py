@@ -27,7 +27,7 @@ def test_orbit_csv_has_header_and_one_row_per_crossing(capsys):
     rows = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])
     assert rows.shape == (5, 6)
     np.testing.assert_array_equal(rows[:, 0], np.arange(1, 6))
-    lib = sections.section_crossings(model.FIGURE4.with_(mu=0.5), [0.3], [0.1], 2.0, 5).orbit(0)
+    lib = sections.crossings(model.FIGURE4.with_(mu=0.5), 2.0, [(0.3, 0.1)], n_crossings=5).orbit(0)
     np.testing.assert_array_equal(rows[:, 1:], lib)  # repr round-trips exactly
 
 

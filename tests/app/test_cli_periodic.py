@@ -87,11 +87,3 @@ def test_bad_input_gives_one_line_and_status_2(args, fragment, capsys):
 def test_negative_values_parse_without_equals():
     a = cli.build_parser().parse_args(["rotation", "--from", "-1.2,0", "--to", "-0.5,-0.1"])
     assert a.start == "-1.2,0" and a.stop == "-0.5,-0.1"
-
-
-@pytest.mark.cpu_dependent
-def test_figures_only_periodic_writes_the_panel_with_orbits_of_each_period(tmp_path, capsys):
-    code = cli.main(["figures", "--only", "periodic", "--quick", "--quiet", "--out-dir", str(tmp_path)])
-    out = capsys.readouterr().out
-    assert code == 0 and "periodic:" in out and "K=1:" in out and "K=3:" in out
-    assert (tmp_path / "periodic.png").stat().st_size > 10000 and (tmp_path / "periodic.pdf").is_file()

@@ -48,7 +48,7 @@ def test_every_layer_reads_the_registry(name):
 def test_indicators_are_read_from_the_registry_columns_and_the_command_prints_each(capsys):
     prm = model.FIGURE4.with_(mu=1.0)
     y0 = model.section_state(prm, [-0.2, 0.3], [0.1, 0.0], model.FIGURE4_H)
-    r = lyapunov.indicators(prm, y0, 20.0, history=3, which=lyapunov.available("taylor"))
+    r = lyapunov.indicators(prm, y0, tmax=20.0, history=3, which=lyapunov.available("taylor"))
     for i in table.INDICATORS:
         values = getattr(r, i.name)
         assert values is r.values[i.name] and values.shape == (2,) and np.isfinite(values).all()

@@ -100,5 +100,5 @@ def test_explore_in_a_live_kernel_displays_the_page_and_streams_the_clicked_orbi
     assert f"crossings: {CROSSINGS}" in printed.splitlines(), printed
 
     base, _ = settings_for(None, 0, mu=MU, crossings=CROSSINGS)
-    ref = sections.section_crossings(base.params, [START[0]], [START[1]], base.h, CROSSINGS)
+    ref = sections.crossings(base.params, base.h, [(START[0], START[1])], n_crossings=CROSSINGS)
     np.testing.assert_array_equal(np.load(tmp_path / "orbit.npy"), ref.orbit(0))

@@ -33,7 +33,7 @@ def _datasets(path):
 
 
 def test_stored_rows_are_the_rows_of_one_run_bit_for_bit(tmp_path):
-    ref = sections.section_crossings(PRM, [0.5], [0.0], 2.0, 3000, tol=1e-12)
+    ref = sections.crossings(PRM, 2.0, [(0.5, 0.0)], n_crossings=3000, tol=1e-12)
     rep = orbit.to_store(tmp_path / "o.h5", PRM, 0.5, 0.0, 2.0, 3000, block=700, tol=1e-12)
     assert rep.crossings == 3000 and rep.status == "done" and rep.blocks == 5
     p = store.read_store(tmp_path / "o.h5").panels[0]
@@ -48,7 +48,7 @@ def test_stored_rows_are_the_rows_of_one_run_bit_for_bit(tmp_path):
 
 
 def test_printed_rows_come_block_by_block_and_equal_one_run(capsys):
-    ref = sections.section_crossings(PRM, [0.5], [0.0], 2.0, 50, tol=1e-12)
+    ref = sections.crossings(PRM, 2.0, [(0.5, 0.0)], n_crossings=50, tol=1e-12)
     code = cli.main(ARGS + ["--crossings", "50", "--block", "7", "--json"])
     out, err = capsys.readouterr()
     assert code == 0, err
@@ -119,7 +119,7 @@ def test_huge_requests_and_other_runs_are_refused_up_front(tmp_path, capsys):
 
 @pytest.mark.parametrize("method,kw", [("dop853", ["--tol", "1e-11"]), ("split6", ["--dt", "0.05"])])
 def test_every_method_streams_to_a_store_bit_for_bit(tmp_path, method, kw):
-    ref = sections.section_crossings(PRM, [0.5], [0.0], 2.0, 400, method=method, tol=1e-11, dt=0.05)
+    ref = sections.crossings(PRM, 2.0, [(0.5, 0.0)], n_crossings=400, method=method, tol=1e-11, dt=0.05)
     p = tmp_path / "o.h5"
     args = ["orbit", "--p1", "0.5", "--p2", "0", "--mu", "0.5", "--method", method, "--crossings", "400",
             "--block", "64", "--out", str(p)] + kw

@@ -224,6 +224,24 @@ def test_work_precision_draws_every_row(quick, tmp_path):
     assert o.status == "not available" and "results_w4.json" in o.message
 
 
+# ---------------------------------------------------------------- the periodic-orbit figure
+def test_the_periodic_figure_draws_isolated_orbits_of_every_period_each_returning_to_itself(quick):
+    """The quick periodic figure (periods 1-3 at the Figure-4 scene, mu = 0.03) finds orbits of
+    every period, and each drawn orbit closes under the section map to its own residual.  (This
+    replaces a test of tests/app/test_cli_periodic.py that drew the figure a second time through
+    `figures --only periodic` and asserted only the labels "K=1:" and "K=3:" of its line; the
+    count per period on any CPU is proven by tests/analysis/test_periodic.py's cpu_dependent tests.)"""
+    _root, out = quick
+    o = out["periodic"]
+    assert "K=1:" in o.message and "K=3:" in o.message
+    d = o.data
+    assert sorted(d["counts"]) == [1, 2, 3] and all(d["counts"][K] >= 1 for K in (1, 3)), d["counts"]
+    for K, orbits in d["orbits"].items():
+        assert len(orbits) == d["counts"][K]
+        for orb in orbits:
+            assert orb["period"] == K and orb["residual"] < 1e-9, orb
+
+
 # ---------------------------------------------------------------- sweeps: reuse of stores
 def test_quick_sweeps_are_reused_on_a_second_run(quick):
     root, out = quick

@@ -36,6 +36,7 @@ from explorer.app.serve import export
 from explorer.app.serve import settings as settings_mod
 from explorer.app.serve.orbits import FIRST_BLOCK, Worker
 from explorer.app.serve.settings import Settings, format_starts, parse_fields, parse_starts
+from explorer.app.serve.tasks import SessionLoop
 from explorer.model import ParameterError
 
 #: the browser (Debian: apt-get install chromium); EXPLORER_CHROMIUM points elsewhere
@@ -48,6 +49,9 @@ CROSSINGS = 150
 #: a cold numba cache compiles the crossing kernels at the first click: allow for it
 FIRST_ORBIT_TIMEOUT_MS = 240_000
 REPO = Path(__file__).resolve().parents[2]
+#: how long a started server may take to answer its first request (s): a bound on a hang, not a speed
+#: goal -- on a loaded 2-core machine with a cold kernel cache a start took over 120 s
+SERVER_START_TIMEOUT = 600.0
 #: the settings of the served page (`--mu 0.03 --crossings CROSSINGS`) and its region (c1, c2, r1, r2)
 SERVED = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=CROSSINGS)
 
@@ -130,9 +134,10 @@ def test_starts_survive_the_url_bit_for_bit():
             parse_starts(text)
 
 
-def _collect(worker_blocks, timeout=120.0):
+def _collect(worker_blocks, loop, timeout=120.0):
     t0 = time.time()
     while time.time() - t0 < timeout:
+        loop.poll()
         if worker_blocks["finished"]:
             return
         time.sleep(0.01)
@@ -149,19 +154,21 @@ def test_worker_blocks_are_one_uninterrupted_run_and_cancelled_orbits_hand_out_n
         if status != "running" and ident == 2:
             got["finished"] = True
 
-    w = Worker(on_block)
+    loop = SessionLoop()                             # (blocks come on the session's loop: poll)
+    w = Worker(on_block, task=loop.task("orbits"))
     try:
         first = w.submit(0.3, 0.1, s)
         w.cancel()                                   # before or after its first block: nothing more comes
+        loop.poll()
         n_before = len(got["rows"].get(first.ident, []))
         second = w.submit(-0.4, 0.2, s)
-        _collect(got)
+        _collect(got, loop)
         assert len(got["rows"].get(first.ident, [])) == n_before <= 1
         rows = np.concatenate(got["rows"][second.ident])
         assert len(set(got["sizes"])) > 1          # the blocks had different sizes
     finally:
         w.stop()
-    ref = sections.section_crossings(s.params, [-0.4], [0.2], s.h, s.crossings, **s.section_kwargs())
+    ref = sections.crossings(s.params, s.h, [(-0.4, 0.2)], n_crossings=s.crossings, **s.section_kwargs())
     np.testing.assert_array_equal(rows, ref.orbit(0))
 
 
@@ -205,7 +212,7 @@ def test_a_click_pauses_the_running_orbit_and_resume_completes_it_bit_for_bit():
         assert page.resume() == 1 and page.worker.paused() == [] and "paused" not in page.status.text
         _poll_until(page, lambda: first not in page._running and not page.worker.busy())
         for ident, (p1, p2) in ((first, a), (second, b)):        # as one uninterrupted run, bit for bit
-            ref = sections.section_crossings(s.params, [p1], [p2], s.h, s.crossings, **s.section_kwargs())
+            ref = sections.crossings(s.params, s.h, [(p1, p2)], n_crossings=s.crossings, **s.section_kwargs())
             np.testing.assert_array_equal(_orbit_rows(page, ident), ref.orbit(0))
         assert page.resume() == 0                                                   # nothing left to resume
 
@@ -249,7 +256,7 @@ def test_with_the_box_unticked_a_click_leaves_the_running_orbits_running():
         assert page.worker.paused() == [] and "paused" not in page.status.text
         _poll_until(page, lambda: len(page.crossings.data["t"]) == 2 * s.crossings and not page.worker.busy())
         for ident, (p1, p2) in ((first, a), (second, b)):        # both complete, no Resume needed
-            ref = sections.section_crossings(s.params, [p1], [p2], s.h, s.crossings, **s.section_kwargs())
+            ref = sections.crossings(s.params, s.h, [(p1, p2)], n_crossings=s.crossings, **s.section_kwargs())
             np.testing.assert_array_equal(_orbit_rows(page, ident), ref.orbit(0))
     finally:
         page.close()
@@ -269,7 +276,7 @@ def test_the_exported_scene_reruns_the_sessions_orbits(tmp_path):
     run_sweep(sc, tmp_path / "out.h5", draw=False, progress=False)
     panel = read_store(tmp_path / "out.h5").panels[0]
     for i, (p1, p2) in enumerate(starts[:2]):
-        ref = sections.section_crossings(s.params, [p1], [p2], s.h, s.crossings, **s.section_kwargs())
+        ref = sections.crossings(s.params, s.h, [(p1, p2)], n_crossings=s.crossings, **s.section_kwargs())
         np.testing.assert_array_equal(panel.orbit(i), ref.orbit(0))
     with pytest.raises(ParameterError, match="no orbit"):
         export.session_scene(s, [(50.0, 0.0)])
@@ -302,7 +309,7 @@ class Served:
     """``python -m explorer serve ...`` (or ``command``; ``entry`` in place of ``-m explorer``) in a
     subprocess; ``url`` is its first line."""
 
-    def __init__(self, *args, timeout=120.0, command="serve", extra=(), entry=("-m", "explorer")):
+    def __init__(self, *args, timeout=SERVER_START_TIMEOUT, command="serve", extra=(), entry=("-m", "explorer")):
         env = dict(os.environ, PYTHONUNBUFFERED="1")
         self.proc = subprocess.Popen([sys.executable, *entry, command, "--port", "0", *args, *extra],
                                      stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
@@ -703,7 +710,7 @@ def test_explore_in_a_notebook_renders_and_streams_the_clicked_orbit():
         while len(page.crossings.data["t"]) < 60 and time.time() - t0 < 120:
             page.poll()
             time.sleep(0.01)
-        ref = sections.section_crossings(page.settings.params, [0.3], [0.1], page.settings.h, 60)
+        ref = sections.crossings(page.settings.params, page.settings.h, [(0.3, 0.1)], n_crossings=60)
         got = np.column_stack([np.asarray(page.crossings.data[k]) for k in ("t", "p1", "p2", "M", "dH")])
         np.testing.assert_array_equal(got, ref.orbit(0))
         # the orbit's chaos indicators colour its points on demand
@@ -715,7 +722,7 @@ def test_explore_in_a_notebook_renders_and_streams_the_clicked_orbit():
             time.sleep(0.01)
         (megno, mlce), = page.indicators.values()
         ind = lyapunov.indicators(page.settings.params, ex.section_state(page.settings.params, [0.3], [0.1],
-                                                                         page.settings.h), INDICATOR_TIME)
+                                                                         page.settings.h), tmax=INDICATOR_TIME)
         assert (megno, mlce) == (float(ind.megno[0]), float(ind.mlce[0]))
         assert np.all(np.asarray(page.crossings.data["megno"]) == megno) and "<Y> =" in page.status.text
         page.colour_box.value = True
@@ -793,7 +800,7 @@ def test_in_the_browser_a_click_elsewhere_pauses_the_running_orbit_and_resume_co
     mine = np.array(data["orbit"]) == first
     rows = np.column_stack([np.array(data[k])[mine] for k in ("t", "p1", "p2", "M", "dH")])
     s = dataclasses.replace(SERVED, crossings=n)
-    ref = sections.section_crossings(s.params, [starts["p1"][0]], [starts["p2"][0]], s.h, n, **s.section_kwargs())
+    ref = sections.crossings(s.params, s.h, [(starts["p1"][0], starts["p2"][0])], n_crossings=n, **s.section_kwargs())
     np.testing.assert_array_equal(rows, ref.orbit(0))          # paused and resumed: one uninterrupted run
     page.close()
 
@@ -811,6 +818,9 @@ class _FakeServer:
 
     def stop(self):
         self.stopped = True
+
+    def add_callback(self, callback):      # run on the loop, which never runs here
+        pass
 
 
 def _explore_in_process(monkeypatch, capsys, argv, browser):
@@ -972,8 +982,8 @@ def test_an_orbits_megno_reaches_its_rows_whether_live_or_settled():
         rows = np.column_stack([np.arange(1.0, 5.0), np.full(4, c1), np.full(4, c2), np.ones(4), np.zeros(4)])
         page._on_block(older + 1, rows, 4, "running")
         assert page.poll() and len(page.live.data["t"]) == 4      # live, not yet settled
-        page._show_indicators(older, 2.5, 0.01)             # the older orbit's rows: settled
-        page._show_indicators(older + 1, 7.0, 0.2)          # the newer one's: live
+        page._on_indicators(older, 2.5, 0.01)               # the older orbit's rows: settled
+        page._on_indicators(older + 1, 7.0, 0.2)            # the newer one's: live
         np.testing.assert_array_equal(page.shown.data["megno"], np.full(s.crossings, 2.5))
         assert page.live.data["megno"] == [7.0] * 4
         assert page.poll()                                  # the next flush settles them
@@ -1007,7 +1017,7 @@ def test_picking_an_orbits_crossing_shows_its_mlce_megno_and_rotation_number():
         _poll_until(page, lambda: "rotation number" in page.readout.text)
         r = page.readouts[page.starts[1][0]]
         y0 = model.section_state(s.params, [starts[1][0]], [starts[1][1]], s.h)
-        ind = lyapunov.indicators(s.params, y0, INDICATOR_TIME, method=s.method, tol=s.tol)
+        ind = lyapunov.indicators(s.params, y0, tmax=INDICATOR_TIME, method=s.method, tol=s.tol)
         assert (r["megno"], r["mlce"]) == (float(ind.megno[0]), float(ind.mlce[0]))          # the same numbers
         fp = elliptic_center(s, starts[1])
         assert fp.stable and fp.point == pytest.approx(find_fixed_point(s.params, s.h, starts[1]).point, abs=0)
@@ -1095,19 +1105,21 @@ def test_a_thousand_clicks_leave_the_session_with_bounded_memory_and_threads(mon
             page.clear()
             page.poll()
             assert len(page.crossings.data["t"]) == 0 and page.starts == [] and page.indicators == {}
-            assert page._pending == [] and page._inbox == [] and page.worker._runs == page.worker._paused == []
+            assert page.orbits._pending == [] and page.loop.pending() == 0
+            assert page.worker._runs == page.worker._paused == []
             gc.collect()                                            # (Bokeh's models hold reference cycles)
             heap.append(tracemalloc.get_traced_memory()[0])
-        assert threading.active_count() <= threads0                # no thread per click
+        # no thread per click: the session's orbits task made one at the first click (tasks.py), that is all
+        assert threading.active_count() <= threads0 + 1
+        assert [t.name for t in threading.enumerate() if t.name.startswith("explorer-serve-")] == \
+            ["explorer-serve-orbits"]
         assert paused > 0                                          # paused orbits were held, and let go
         growth = heap[-1] - heap[1]
         print(f"heap after each round (kB): {[h // 1024 for h in heap]}; growth {growth / 1024:.0f} kB; "
               f"{paused} orbits paused in all")
         assert growth < HEAP_GROWTH_BOUND, heap
-        page.close()                                               # the tab is gone: its threads end
-        page.worker._thread.join(10)
-        page.raster._thread.join(10)
-        assert not page.worker._thread.is_alive() and not page.raster._thread.is_alive()
+        page.loop.close(wait=True)                                 # the tab is gone: its threads end
+        assert not [t for t in threading.enumerate() if t.name.startswith("explorer-serve-")]
     finally:
         tracemalloc.stop()
         page.close()
@@ -1120,12 +1132,12 @@ def test_a_value_changed_during_the_megno_raster_restarts_it_for_the_new_value()
 
     page = SectionPage(Settings(params=model.FIGURE4.with_(mu=0.03), tol=1e-10), {"megno": "1"})
     shown = []
-    show = page._show_image
-    page._show_image = lambda g, im: (shown.append((g, im)), show(g, im))
+    show = page.chaos.show_image
+    page.chaos.show_image = lambda im: (shown.append((page.chaos.task.generation, im)), show(im))
     try:
         _poll_until(page, lambda: bool(page.raster_source.data["n"]))          # the old raster is on
         page.inputs["mu"].value = "0.5"                                        # changed while it runs
-        new = page._raster_generation
+        new = page.chaos.task.generation
         assert page.settings.params.mu == 0.5
         # the new value's first complete raster, as the page was handed it: the state the wait is
         # for, read from the record of what was shown (the page may show a finer one by then)
@@ -1541,19 +1553,18 @@ def test_a_served_click_sends_its_cross_with_its_first_crossings_and_later_block
         before, start = rows(), time.monotonic()       # (when it takes the queued blocks)
         flush()
         if rows() != before:
-            flushes.append((start, len(page.start_source.data["orbit"]), *rows(), page.status.text))
+            flushes.append((start, len(page.start_source.data["orbit"]), *rows(), page.status.text,
+                            page.url_state.orbits))
     page._flush = traced
     try:
         page.click(c1 + 0.3 * r1, c2)
-        # the cross waits for the first crossings (sent in the same callback, just after them) and
-        # the link is written later, off the path from the click to them
-        assert page.start_source.data["orbit"] == [] and rows() == (0, 0)
-        assert [ms for _t, ms, f in doc.later if f == page._push_url_due] == [page_mod.URL_DELAY_MS]
+        # the cross and the link wait for the first crossings (sent in the same callback, just after
+        # them: off the path from the click to them)
+        assert page.start_source.data["orbit"] == [] and rows() == (0, 0) and page.url_state.orbits == ""
         status = page.status.text
         t0 = time.time()
-        while (page.worker.busy() or doc.soon or any(f == page._flush for *_x, f in doc.later)) \
-                and time.time() - t0 < 240:
-            doc.run(skip=(page._push_url_due,))
+        while (page.worker.busy() or doc.soon or page.orbits.flush_timer.pending) and time.time() - t0 < 240:
+            doc.run()
             time.sleep(0.001)
         assert len(page.shown.data["p1"]) == s.crossings
         np.testing.assert_array_equal(np.asarray(page.crossings.data["p1"]), np.asarray(page.shown.data["p1"]))
@@ -1561,6 +1572,8 @@ def test_a_served_click_sends_its_cross_with_its_first_crossings_and_later_block
         # next flush moves them to the crossings, with what came meanwhile
         # (with the orbit's next blocks if they were there already when the flush ran)
         assert flushes[0][1:3] == (1, 0) and flushes[0][3] >= FIRST_BLOCK and flushes[0][4] == status
+        # the click's start is in the link with its first crossings: a reload from then on keeps it
+        assert settings_mod.parse_starts(flushes[0][5]) == [(c1 + 0.3 * r1, c2)]
         assert flushes[1][2] > flushes[0][3] and flushes[1][3] == 0 and flushes[1][4] != status
         # between the first flush and the last, FLUSH_SECONDS at least (the last block goes at once)
         assert len(flushes) >= 3, flushes
@@ -1592,9 +1605,9 @@ def test_a_short_orbit_joins_its_first_crossings_on_the_live_layer_until_they_se
         status = page.status.text
         page.click(c1 + 0.3 * r1, c2)
         t0 = time.time()
-        while (page.worker.busy() or doc.soon or any(f == page._flush for *_x, f in doc.later)
+        while (page.worker.busy() or doc.soon or page.orbits.flush_timer.pending
                or len(page.live.data["p1"])) and time.time() - t0 < 240:
-            doc.run(skip=(page._push_url_due,))
+            doc.run()
             time.sleep(0.001)
         firsts = [x for x in seen if x[2] > 0]      # the first block (with the last if it was there)
         assert firsts[0][1] == 0 and firsts[0][2] in (FIRST_BLOCK, s.crossings) and firsts[0][3] == status

@@ -5,7 +5,8 @@ fields; the status line follows a change that drops every start; successes and e
 own colours; at mu = 1.5 the fixed-point overlay lists its hyperbolic points at once and draws
 their separatrices without a "no return" failure; readability (separatrices on the MEGNO layer, its
 colour bar, start markers, unique SVG ids, the exported scene's overlays); phi0 and the zoom window
-in the link.  In chromium: after a change of mu the view follows the new region, and Reset goes
+in the link; the first 20 orbits have 20 colours.  In chromium: at 1280 x 720 the export buttons
+are in view; after a change of mu the view follows the new region, and Reset goes
 back to it (not to the first window); a page whose server stops says so.
 """
 from __future__ import annotations
@@ -104,10 +105,20 @@ RANGE = ("() => { const f = Bokeh.documents[0].get_model_by_name('section');"
          " return [f.x_range.start, f.x_range.end, f.y_range.start, f.y_range.end]; }")
 
 
+#: every button that exports, which must be in view at 1280 x 720 without scrolling
+EXPORT_BUTTONS = ("Scene (TOML)", "Figure (PNG)", "Figure (SVG)", "Export scene", "Export figure")
+
+
 @browser_needed
-def test_after_a_change_the_view_follows_the_new_region_and_reset_goes_back_to_it(served, browser):
+def test_at_1280_by_720_the_export_buttons_are_in_view_then_the_view_follows_a_new_region_and_reset_goes_back(
+        served, browser):
     page = _open(browser, served.url)
     try:
+        page.set_viewport_size({"width": 1280, "height": 720})
+        _wait(page, "() => window.innerWidth === 1280 && window.innerHeight === 720 && Bokeh.documents[0].is_idle")
+        for name in EXPORT_BUTTONS:                            # (the layout does not depend on timing)
+            box = page.get_by_role("button", name=name).bounding_box()
+            assert box is not None and box["y"] >= 0 and box["y"] + box["height"] <= 720, (name, box)
         _set_field(page, "mu", "1.5")
         _wait(page, "() => window.location.search.includes('mu=1.5')")
         c1, c2, r1, r2 = Settings(params=SERVED.params.with_(mu=1.5), crossings=SERVED.crossings).region
@@ -243,3 +254,37 @@ def test_a_page_whose_server_stops_says_the_connection_is_lost(browser):
     assert code in (0, 130)
     _wait(page, f"() => document.body.innerText.includes({DISCONNECT_NOTICE[:40]!r})", timeout=30_000)
     page.close()
+
+
+def test_the_first_twenty_orbits_each_have_a_colour_of_their_own():
+    from explorer.app.serve.orbits import COLORS
+
+    page = _page(Settings(params=model.FIGURE4.with_(mu=0.03), crossings=1))
+    try:
+        c1, c2, r1, _r2 = page.settings.region
+        for k in range(20):
+            assert page.click(c1 + (-0.9 + 0.09 * k) * r1, c2) is not None
+        colours = [COLORS[c] for *_x, c in page.starts]
+        assert len(set(colours)) == 20, colours
+        assert page.start_source.data["c"] == [c for *_x, c in page.starts]   # the crosses carry them
+    finally:
+        page.close()
+
+
+def test_the_mu_slider_applies_its_value_through_the_field_and_follows_the_field():
+    import param
+
+    page = _page(SERVED)
+    try:
+        slider = page.fields.mu_slider
+        assert slider.value == SERVED.params.mu
+        with param.parameterized.edit_constant(slider):
+            slider.value_throttled = 0.5                  # a drag released at 0.5
+        assert page.settings.params.mu == 0.5 and page.inputs["mu"].value == "0.5"
+        assert page.url_query()["mu"] == "0.5"
+        page.inputs["mu"].value = "0.25"                  # the field moves the slider
+        assert page.settings.params.mu == 0.25 and slider.value == 0.25
+        page.inputs["mu"].value = "7"                     # beyond its range: applied, the slider at its end
+        assert page.settings.params.mu == 7.0 and slider.value == slider.end
+    finally:
+        page.close()

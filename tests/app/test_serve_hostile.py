@@ -156,3 +156,30 @@ def test_ctrl_c_ends_a_server_busy_with_hostile_searches_within_a_second(browser
     err = s.proc.stderr.read()
     assert s.proc.returncode in (0, 130) and "Traceback" not in err, err[-2000:]
     assert took <= SIGINT_SECONDS, f"Ctrl-C took {took:.2f} s"
+
+
+def test_a_client_gone_mid_send_is_not_reported_as_an_error_and_other_task_errors_still_are(caplog):
+    """A browser that closes its websocket while Bokeh sends it a message leaves a task whose
+    WebSocketClosedError nobody retrieves; on a loaded machine its traceback reached the server's
+    stderr at Ctrl-C.  The server's loop handler drops exactly that (and a closed stream) and hands
+    every other exception to asyncio's default handler."""
+    import asyncio
+    import logging
+
+    from tornado.iostream import StreamClosedError
+    from tornado.websocket import WebSocketClosedError
+
+    from explorer.app.serve.server import _quiet_about_clients_gone
+
+    loop = asyncio.new_event_loop()
+    try:
+        loop.set_exception_handler(_quiet_about_clients_gone)
+        with caplog.at_level(logging.ERROR, logger="asyncio"):
+            for gone in (WebSocketClosedError(), StreamClosedError()):
+                loop.call_exception_handler({"message": "Task exception was never retrieved", "exception": gone})
+            assert not caplog.records
+            loop.call_exception_handler({"message": "Task exception was never retrieved", "exception": ValueError("x")})
+        assert [r.getMessage() for r in caplog.records] == ["Task exception was never retrieved"]
+        assert caplog.records[0].exc_info[0] is ValueError
+    finally:
+        loop.close()

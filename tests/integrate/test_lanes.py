@@ -462,7 +462,7 @@ def test_sections_taylor_uses_the_lanes_and_matches_the_scalar_oracle():
     prm = PARAM_SETS["figure4_mu0.5"]
     c1, c2, r1, r2 = model.allowed_ellipse(prm, 2.0)
     p1 = c1 + r1 * np.linspace(-0.95, 0.95, 11)
-    res = sections.section_crossings(prm, p1, np.zeros(11), 2.0, 30, method="taylor", tol=1e-12)
+    res = sections.crossings(prm, 2.0, np.column_stack([p1, np.zeros(11)]), n_crossings=30, method="taylor", tol=1e-12)
     Y0 = model.section_state(prm, p1, np.zeros(11), 2.0)
     ref = _run(run_taylor_batch, Y0, prm.as_array(), 30, order=res.settings["order"])
     _assert_identical(ref, (res.data, res.count, res.status, res.final, res.info))

@@ -18,7 +18,8 @@ P = PRM.as_array()
 def test_the_dispatched_field_is_each_systems_field():
     rng = np.random.default_rng(3)
     y = rng.normal(size=10)
-    for system, n, ref in ((sy.REDUCED, 5, None), (sy.TANGENT, 10, None), (sy.FULL, 7, None)):
+    for system, n, ref in ((sy.REDUCED, 5, None), (sy.TANGENT, 10, None), (sy.FULL, 7, None),
+                           (sy.REDUCED_BACKWARD, 5, None)):
         got = np.empty(n)
         sy.field(system, y[:n].copy(), P, got)
         want = np.empty(n)
@@ -27,8 +28,11 @@ def test_the_dispatched_field_is_each_systems_field():
         elif system == sy.TANGENT:
             equations.rhs(y[:5].copy(), P, want[:5])
             equations.rhs_tangent(y[:5].copy(), y[5:10].copy(), P, want[5:])
-        else:
+        elif system == sy.FULL:
             equations.rhs_full(y[:7].copy(), P, want)
+        else:
+            equations.rhs(y[:5].copy(), P, want)
+            want = -want
         np.testing.assert_array_equal(got, want)
         assert sy.DIMENSION[system] == n
 
@@ -125,6 +129,24 @@ def test_a_deviation_vector_never_changes_the_orbit_or_its_taylor_steps():
     np.testing.assert_array_equal(ty, tz)
     np.testing.assert_array_equal(z[:5], y)
     assert np.all(np.isfinite(z[5:])) and np.linalg.norm(z[5:]) > 0
+
+
+def test_the_backward_system_retraces_the_forward_orbit():
+    """REDUCED_BACKWARD is R3 in reversed time: its Taylor steps from the forward run's end state
+    over the same span come back to the start (to the tolerance of order 17), and its first
+    coefficients are the forward ones with the odd orders negated, exactly."""
+    y0 = model.section_state(PRM, [0.3], [0.1], 2.0)[0]
+    y, ns, _t, code = _plain_taylor(sy.REDUCED, y0, P, 7.3, 17, 10**5)
+    back, nb, _tb, code_b = _plain_taylor(sy.REDUCED_BACKWARD, y, P, 7.3, 17, 10**5)
+    assert code == code_b == 1 and ns > 10 and nb > 10
+    assert np.max(np.abs(back - y0)) < 1e-11
+    assert np.max(np.abs(y - y0)) > 0.1                          # the orbit did move
+    X = np.zeros((5, 8))
+    Xb = np.zeros((5, 8))
+    X[:, 0] = Xb[:, 0] = y0
+    sy.taylor_coefficients_of(sy.REDUCED, P, X, 7)
+    sy.taylor_coefficients_of(sy.REDUCED_BACKWARD, P, Xb, 7)
+    np.testing.assert_array_equal(Xb, X * (-1.0) ** np.arange(8))
 
 
 def test_the_taylor_steps_deviation_is_the_flows_derivative():

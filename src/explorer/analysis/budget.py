@@ -164,7 +164,7 @@ def stop_switch() -> np.ndarray:
 
 def checkpoint() -> None:
     """Raise :class:`BudgetExceeded` when this thread's current budget has stopped (called before
-    a compiled batch that reads no switch, e.g. :func:`explorer.analysis.sections.section_crossings`)."""
+    a compiled batch that reads no switch, e.g. :func:`explorer.analysis.sections.crossings`)."""
     b = current()
     if b is not None:
         b.check()

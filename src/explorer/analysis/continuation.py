@@ -18,11 +18,13 @@ from explorer.model import ParameterError
 __all__ = ["continuation_values", "golden_section_max", "secant_follower"]
 
 
-def continuation_values(parameter, start, stop, step) -> np.ndarray:
-    """The values start, start + step, ..., up to stop of a continuation in ``parameter`` (a model
-    parameter or "h"), validated (ParameterError naming what is allowed)."""
-    if parameter not in model.PARAM_NAMES + ("h",):
-        raise ParameterError(f"continuation parameter must be one of {', '.join(model.PARAM_NAMES + ('h',))}")
+def continuation_values(parameter, start, stop, step, allowed=None) -> np.ndarray:
+    """The values start, start + step, ..., up to stop of a continuation in ``parameter`` (one of
+    ``allowed``; default a model parameter or "h": a section map's), validated (ParameterError
+    naming what is allowed)."""
+    allowed = model.PARAM_NAMES + ("h",) if allowed is None else tuple(allowed)
+    if parameter not in allowed:
+        raise ParameterError(f"continuation parameter must be one of {', '.join(allowed)}")
     if step == 0 or not all(math.isfinite(v) for v in (start, stop, step)) or (stop - start) * step < 0:
         raise ParameterError("--continue needs finite START, STOP and a STEP of the sign of STOP - START")
     n = int(math.floor((stop - start) / step + 1e-9)) + 1

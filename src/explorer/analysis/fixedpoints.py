@@ -8,11 +8,11 @@ and :func:`continue_branch` is :func:`explorer.analysis.periodic.continue_period
 (one continuation, one bifurcation detector: |trace| crossing 2 and touching +-2).  At a
 fixed point det DP = 1; |trace| < 2 is stable (elliptic), > 2 unstable (hyperbolic).
 
-Separatrices of a hyperbolic point: a fundamental domain along the unstable (stable)
-eigenvector iterated forward (backward in time), with points inserted where consecutive
-images are far apart, so the curves stay smooth (Parker & Chua, Practical Numerical
-Algorithms for Chaotic Systems, 1989, Sec. 6; Krauskopf et al., Int. J. Bifurc. Chaos 15
-(2005) 763).
+Separatrices of a hyperbolic point: the branches of its stable and unstable manifolds grown by
+the one manifold algorithm, :func:`explorer.analysis.manifolds.grow_branch` (a fundamental
+domain along the eigenvector and its images, points inserted where the curve needs them;
+Krauskopf & Osinga 1998, J. Comput. Phys. 146, 404), to a number of images of the fundamental
+domain.
 """
 from __future__ import annotations
 
@@ -22,6 +22,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from explorer import model
+from explorer.analysis.manifolds import DEFAULT_MAX_GAP, DEFAULT_START_TOL
 from explorer.analysis.periodic import PeriodicBranch, PeriodicOrbit
 from explorer.analysis.section_map import deprecated, orbit_first, system_first
 from explorer.model import ParameterError
@@ -162,65 +163,60 @@ def continue_branch(system, parameter, start, stop, step, guess=(0.0, 0.0), *, b
 
 
 # ---------------------------------------------------------------- separatrices
-@orbit_first
-@system_first
-def manifold(system, fp: FixedPoint, *, stable=False, branch=1, iterations=6, n_domain=60, first=1e-6,
-             max_gap=0.02, max_points=20000):
-    """One branch (+1 or -1 along the eigenvector) of the unstable (stable: backward in time)
-    manifold of a hyperbolic fixed point ``fp`` of the map ``system``, as an (M, 2) polyline on
-    the section.
+#: the images of the fundamental domain a separatrix is drawn to, by default
+SEPARATRIX_GENERATIONS = 6
 
-    A fundamental domain x* + s e, s in [first, first |lambda|) (log-spaced), is iterated
-    ``iterations`` times; wherever two consecutive images are more than ``max_gap`` apart the
-    parameter interval is bisected (the new point iterated from scratch), up to max_points."""
+
+def _saddle_of(system, fp: FixedPoint, n_domain, first):
+    """The :class:`~explorer.analysis.manifolds.Saddle` of the hyperbolic fixed point ``fp``
+    (one eigen-decomposition for all four branches); the keywords of the old fundamental-domain
+    iteration are accepted with a DeprecationWarning."""
+    from explorer.analysis.manifolds import saddle
+
+    if n_domain is not None or first is not None:
+        deprecated("manifold/separatrices(..., n_domain=, first=)",
+                   "start_tol= (the start distance from it; the growth places the points itself, "
+                   "explorer.analysis.manifolds.grow_branch)")
     if fp.stable:
         raise ParameterError("the fixed point is elliptic: it has no separatrices")
-    smap = system
-    w, V = np.linalg.eig(fp.jacobian)
-    w = np.real(w)
-    V = np.real(V)
-    i = int(np.argmin(np.abs(w))) if stable else int(np.argmax(np.abs(w)))
-    lam = abs(w[i])
-    lam_u = max(lam, 1.0 / lam)
-    e = V[:, i] / np.linalg.norm(V[:, i]) * branch
-    x0 = fp.point
+    return saddle(system, fp)
 
-    def images(s):
-        """x* + s e and its first ``iterations`` images (n + 1, 2)."""
-        out = np.empty((iterations + 1, 2))
-        x = x0 + s * e
-        out[0] = x
-        for k in range(iterations):
-            x = smap(x, backward=stable, jacobian=False).point
-            out[k + 1] = x
-        return out
 
-    s_vals = list(first * np.geomspace(1.0, lam_u, n_domain))
-    orbits = [images(v) for v in s_vals]
-    # refine: wherever two consecutive points of any image of the fundamental domain are more
-    # than max_gap apart, insert the (geometric) midpoint of their parameters
-    k = 0
-    while k < len(s_vals) - 1 and len(s_vals) < max_points:
-        gap = np.max(np.linalg.norm(orbits[k + 1] - orbits[k], axis=1))
-        if gap > max_gap and s_vals[k + 1] - s_vals[k] > 1e-13 * s_vals[k]:
-            s_mid = math.sqrt(s_vals[k] * s_vals[k + 1])
-            s_vals.insert(k + 1, s_mid)
-            orbits.insert(k + 1, images(s_mid))
-        else:
-            k += 1
-    # the manifold from the fixed point outwards: image 0 of the domain, then image 1, ...
-    curve = np.concatenate([np.array([x0])] + [np.array([o[j] for o in orbits]) for j in range(iterations + 1)])
-    return curve
+def _grown(sd, stable, sign, iterations, arclength, max_gap, max_points, start_tol, max_time) -> np.ndarray:
+    from explorer.analysis.manifolds import grow_branch
+
+    return grow_branch(sd, stable=stable, sign=sign, arclength=math.inf if arclength is None else arclength,
+                       generations=iterations, max_gap=max_gap, max_points=max_points, start_tol=start_tol,
+                       max_time=max_time).points
 
 
 @orbit_first
 @system_first
-def separatrices(system, fp: FixedPoint, *, iterations=6, n_domain=60, first=1e-6, max_gap=0.02,
-                 max_points=20000):
+def manifold(system, fp: FixedPoint, *, stable=False, branch=1, iterations=SEPARATRIX_GENERATIONS,
+             arclength=None, max_gap=DEFAULT_MAX_GAP, max_points=20000, start_tol=DEFAULT_START_TOL,
+             max_time=None, n_domain=None, first=None) -> np.ndarray:
+    """One branch (``branch`` +1 or -1 along the eigenvector, oriented as
+    :class:`~explorer.analysis.manifolds.Saddle`) of the unstable (``stable``: stable, backward
+    in time) manifold of a hyperbolic fixed point ``fp`` of the map ``system``, as an (M, 2)
+    polyline on the section from the fixed point outwards: ``iterations`` images of the
+    fundamental domain, or less when ``arclength`` (default: none) comes first, grown by
+    :func:`explorer.analysis.manifolds.grow_branch` (its ``max_gap``, ``max_points``,
+    ``start_tol`` and ``max_time``)."""
+    return _grown(_saddle_of(system, fp, n_domain, first), stable, branch, iterations, arclength, max_gap,
+                  max_points, start_tol, max_time)
+
+
+@orbit_first
+@system_first
+def separatrices(system, fp: FixedPoint, *, iterations=SEPARATRIX_GENERATIONS, arclength=None,
+                 max_gap=DEFAULT_MAX_GAP, max_points=20000, start_tol=DEFAULT_START_TOL, max_time=None,
+                 n_domain=None, first=None) -> list:
     """The four branches (unstable +-, stable +-) of the hyperbolic fixed point ``fp`` of the map
-    ``system`` as a list of polylines (:func:`manifold`, whose options these are)."""
-    return [manifold(system, fp, stable=s, branch=b, iterations=iterations, n_domain=n_domain, first=first,
-                     max_gap=max_gap, max_points=max_points) for s in (False, True) for b in (1, -1)]
+    ``system`` as a list of (M, 2) polylines (:func:`manifold`, whose options these are; one
+    saddle, its eigen-decomposition shared by the four)."""
+    sd = _saddle_of(system, fp, n_domain, first)
+    return [_grown(sd, s, b, iterations, arclength, max_gap, max_points, start_tol, max_time)
+            for s in (False, True) for b in (1, -1)]
 
 
 def analytic_eigenvalues_solution_I(params, h):
@@ -249,7 +245,9 @@ def follow(system, parameter, start, stop, guess, *, max_step=0.25) -> FixedPoin
     """The fixed point at ``parameter = stop`` on the branch through the point found near
     ``guess`` at ``parameter = start`` (continuation in steps of at most ``max_step``)."""
     if start == stop:
-        return find_fixed_point(system.with_value(parameter, start), guess)
+        from explorer.analysis.maps import with_value
+
+        return find_fixed_point(with_value(system, parameter, start), guess)
     n = max(1, math.ceil(abs(stop - start) / max_step))
     br = continue_branch(system, parameter, start, stop, (stop - start) / n, guess)
     if br.stopped is not None:

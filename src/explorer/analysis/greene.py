@@ -74,17 +74,16 @@ MAX_QMAX = 4181
 SECTION_QMAX = 55
 #: the smallest period used: Q = 1 has no half-orbit equation of this form
 MIN_Q = 2
-#: Newton on the half-orbit: converged when the step in p is below this (relative to max(1, |p|))
-SHOOT_TOL = 1e-15
-SHOOT_MAX_ITER = 40
+#: Newton on the half-orbit: converged when the step in p is below this (relative to max(1, |p|)),
+#: in at most this many iterations
+SHOOT_TOL, SHOOT_MAX_ITER = 1e-15, 40
 #: ... or when the steps stop shrinking below this: the round-off floor of a long half orbit
 SHOOT_FLOOR = 1e-11
 #: an orbit is accepted when it closes after Q steps to this (theta_Q - theta_0 - 2 pi P and p_Q - p_0,
 #: relative to max(1, |M|): the closure error of a correct orbit grows with the monodromy)
 CLOSURE_TOL = 1e-9
-#: the secant solve of R_n(k) = R*: stop when the step in k is below this
-PARAM_TOL = 1e-14
-PARAM_MAX_ITER = 60
+#: the secant solve of R_n(k) = R*: stop when the step in k is below this, or after this many steps
+PARAM_TOL, PARAM_MAX_ITER = 1e-14, 60
 #: a secant step in the parameter is at most this fraction of max(|k|, the last step)
 MAX_PARAM_STEP = 0.2
 #: an orbit of type P/Q turns P/Q per return around the island's centre to this (times Q)
@@ -224,17 +223,34 @@ def _half_orbit_monodromy(k, Q, theta0, p0) -> np.ndarray:
     return H @ np.array([[1.0 + kc, 1.0], [kc, 1.0]]) @ A_inv @ H @ A
 
 
-def symmetric_orbit(system, p, q, *, line=math.pi, guess=None) -> SymmetricOrbit:
+def symmetric_orbit(system, p, q, *, line=math.pi, guess=None):
     """The symmetric orbit of type ``p``/``q`` with a point on the symmetry line theta = ``line``.
 
     Half-orbit shooting (module docstring) from the start momentum ``guess`` (default
     2 pi p/q, the orbit of the integrable map k = 0); the orbit is then run for the full
     period, its monodromy formed from the q Jacobians and its closure checked.  For the
     standard map (S1), theta = pi carries the orbits with positive residue (Greene's
-    "elliptic" sequence, his x = 0), theta = 0 those with negative residue when q is odd."""
+    "elliptic" sequence, his x = 0), theta = 0 those with negative residue when q is odd.
+
+    A :class:`~explorer.analysis.section_map.SectionMap`: the symmetric orbit of period ``q``
+    through (p1, 0) with p1 near ``guess`` (required; ``line`` does not apply: the line is
+    p2 = 0), by the half-turn shooting of :func:`explorer.analysis.greene_section.section_symmetric_orbit`;
+    ``p`` is not imposed there (the turns around a centre are the orbit's
+    ``rotation(smap, centre)``).  Returns a ``SymmetricOrbit`` (standard map) or a
+    ``SectionSymmetricOrbit``: both have ``q``, ``points``, ``monodromy`` and ``residue``."""
+    from explorer.analysis.maps import is_section_map
+
+    if is_section_map(system):
+        from explorer.analysis import greene_section as gs
+
+        if guess is None:
+            raise ParameterError("symmetric_orbit on a section map needs guess=p1, a point of the line p2 = 0 "
+                                 "near the orbit")
+        validation.integer("p", p, 0)
+        return gs.section_symmetric_orbit(system, validation.integer("q", q, 1), validation.real("guess", guess))
     if not isinstance(system, StandardMap):
-        raise ParameterError(f"symmetric_orbit: the half-orbit method is implemented for StandardMap; "
-                             f"got {type(system).__name__}")
+        raise ParameterError(f"symmetric_orbit: the half-orbit method is implemented for StandardMap and "
+                             f"SectionMap; got {type(system).__name__}")
     P = validation.integer("p", p, 0)
     Q = validation.integer("q", q, MIN_Q)
     theta0 = validation.real("line", line)

@@ -28,8 +28,10 @@ the distance between neighbours exceeds ``max_gap``, the angle at a point exceed
 ``max_angle``, or distance times angle exceeds ``max_gap_angle``, insert the point at the
 mid-value of sigma (computed from the fundamental domain, n maps); (ii) extend: map the last
 generation once (F, one batch of the Taylor lanes, :func:`explorer.analysis.sections.crossings`)
-- until the branch has the requested arclength or a budget (points, wall time) runs out or a
-point has no return (the region's edge).  ``ManifoldBranch.status`` says which.
+- until the branch has the requested arclength (or ``generations`` images of the fundamental
+domain) or a budget (points, wall time) runs out or a point has no return (the region's edge).
+``ManifoldBranch.status`` says which.  The batches are small (tens to hundreds of points), so
+they run on one thread (``explorer.analysis.maps.SERIAL_RETURNS``).
 
 Points of the stable manifold need F^{-1}: when the reversor applies
 (:func:`explorer.analysis.periodic.is_reversible`), F^{-1} = G0 F G0 and the batch runs
@@ -44,8 +46,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from explorer import model
-from explorer.analysis.periodic import PeriodicOrbit, is_reversible, reversor
+from explorer.analysis.maps import images, is_section_map
+from explorer.analysis.periodic import PeriodicOrbit, is_reversible
 from explorer.analysis.section_map import SectionMap, orbit_first, system_first
 from explorer.model import ParameterError, validation
 
@@ -78,6 +80,7 @@ NEWTON_ITER = 30
 SAME_POINT = 1e-9
 
 STATUS_ARCLENGTH = "arclength"
+STATUS_GENERATIONS = "generations"
 STATUS_EDGE = "edge"
 STATUS_MAX_POINTS = "max_points"
 STATUS_MAX_TIME = "max_time"
@@ -136,31 +139,24 @@ def saddle(system, orbit, *, index=0) -> Saddle:
 
 
 # ------------------------------------------------------------------ images in batches
-def _images(smap: SectionMap, X, n, backward, integrate_backward=False):
+def _images(smap, X, n, backward, integrate_backward=False):
     """F-images: P^n (P^-n with ``backward``) of the points X (m, 2); rows that leave the region
-    or have no return are NaN.  Forward: one batch of the Taylor lanes; backward: the same batch
-    through the reversor G0 P^n G0 = P^-n when it applies, else the section map point by point."""
-    from explorer.analysis.sections import crossings
-
+    or have no return are NaN.  :func:`explorer.analysis.maps.images` (a section map: one batch of
+    the Taylor lanes forward, and backward through the reversor G0 P^n G0 = P^-n when it applies;
+    any other map of the protocol: its own ``iterate``); ``integrate_backward`` (a section map):
+    each point integrated backward in time by the map itself."""
     X = np.asarray(X, float).reshape(-1, 2)
-    out = np.full_like(X, np.nan)
     if n == 0 or X.size == 0:
         return X.copy()
-    if backward and (integrate_backward or not is_reversible(smap.params, smap.phi0)):
+    if backward and is_section_map(smap) and (integrate_backward or not is_reversible(smap.params, smap.phi0)):
+        out = np.full_like(X, np.nan)
         for i, x in enumerate(X):
             try:    # outside the region or no return: ParameterError, the row stays NaN
                 out[i] = smap.iterate(x, n, backward=True)[-1]
             except ParameterError:
                 pass
         return out
-    Y = reversor(X) if backward else X
-    ok = model.section_M2(smap.params, Y[:, 0], Y[:, 1], smap.h, smap.phi0) > 0
-    if ok.any():
-        c = crossings(smap.params, smap.h, Y[ok], n_crossings=n, phi0=smap.phi0, tol=smap.tol,
-                              tmax=smap.tmax * n)
-        img = np.where((c.count >= n)[:, None], c.data[:, n - 1, 1:3], np.nan)
-        out[ok] = reversor(img) if backward else img
-    return out
+    return images(smap, X, n, backward=backward)[:, -1]
 
 
 class _Curve:
@@ -309,9 +305,14 @@ def _bad_intervals(P, max_gap, max_angle, max_gap_angle, lo):
 def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DEFAULT_START_TOL,
                 max_gap=DEFAULT_MAX_GAP, max_angle=DEFAULT_MAX_ANGLE, max_gap_angle=DEFAULT_MAX_GAP_ANGLE,
                 max_points=20000, max_time=None, integrate_backward=False,
-                resume: ManifoldBranch | None = None) -> ManifoldBranch:
+                resume: ManifoldBranch | None = None, generations: int | None = None) -> ManifoldBranch:
     """One branch of W^u (W^s with ``stable``) of the saddle ``sd`` grown to ``arclength``
     (module docstring: parametrisation, start distance, refinement, budgets).
+
+    ``generations``: grow no further than that many images of the fundamental domain (sigma
+    below sigma0 + (generations + 1) L; status "generations" when that comes before the
+    arclength, which may then be ``math.inf``), the extent
+    :func:`explorer.analysis.fixedpoints.separatrices` draws.
 
     ``resume``: a branch of the same saddle, kind, sign and settings grown to a shorter
     arclength; the growth continues from where that one stopped (before its cut at its target),
@@ -321,7 +322,10 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
     or the region's edge) is grown from the start."""
     if sign not in (1, -1):
         raise ParameterError(f"sign must be +1 or -1, got {sign!r}")
-    arclength = validation.real("arclength", arclength, 0.0, lo_open=True)
+    if generations is not None:
+        generations = validation.integer("generations", generations, 0)
+    if generations is None or arclength != math.inf:     # inf: the extent set by generations alone
+        arclength = validation.real("arclength", arclength, 0.0, lo_open=True)
     start_tol = validation.real("start_tol", start_tol, 0.0, lo_open=True)
     max_gap = validation.real("max_gap", max_gap, 0.0, lo_open=True)
     max_angle = validation.real("max_angle", max_angle, 0.0, lo_open=True)
@@ -330,7 +334,8 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
     if max_time is not None:
         max_time = validation.real("max_time", max_time, 0.0)
     t0 = time.perf_counter()
-    settings = (stable, sign, start_tol, max_gap, max_angle, max_gap_angle, max_points, integrate_backward)
+    settings = (stable, sign, start_tol, max_gap, max_angle, max_gap_angle, max_points, integrate_backward,
+                generations)
     status = None
 
     def cut(sig, pts, bad_sigma):
@@ -389,6 +394,10 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
             k = int(np.searchsorted(s, arclength))   # first point at or beyond the target
             sig, pts = sig[:k], pts[:k]
             status = STATUS_ARCLENGTH
+        # the last generation complete: its end sigma0 + (generations + 1) L reached (to rounding)
+        if (status is None and generations is not None
+                and sig[-1] >= cv.sigma0 + (generations + 1 - 0.5 / INITIAL_POINTS) * cv.L):
+            status = STATUS_GENERATIONS
         if status is None and edge is not None:
             status = STATUS_EDGE
         if status is None and len(sig) >= max_points:

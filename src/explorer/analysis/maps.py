@@ -56,7 +56,7 @@ from explorer._jit import njit
 from explorer.analysis.section_map import MapResult
 from explorer.model import ParameterError, validation
 
-__all__ = ["AreaPreservingMap", "StandardMap"]
+__all__ = ["AreaPreservingMap", "StandardMap", "difference", "images", "is_section_map", "reduce", "with_value"]
 
 
 @runtime_checkable
@@ -79,6 +79,113 @@ class AreaPreservingMap(Protocol):
     def with_parameter(self, value): ...
 
 
+def is_section_map(system) -> bool:
+    """True for a :class:`~explorer.analysis.section_map.SectionMap` (the analyses run its orbits
+    as batches of the Taylor lanes); False for any other map of the protocol."""
+    from explorer.analysis.section_map import SectionMap
+
+    return isinstance(system, SectionMap)
+
+
+def with_value(system, name: str, value):
+    """The map ``system`` with its parameter ``name`` set to ``value``: a section map's
+    ``with_value`` (any model parameter or "h"), another map's ``with_parameter`` (its one
+    continuation parameter, :attr:`AreaPreservingMap.parameter`)."""
+    if is_section_map(system):
+        return system.with_value(name, value)
+    if name != system.parameter:
+        raise ParameterError(f"{type(system).__name__} is continued in its parameter {system.parameter!r}, "
+                             f"got {name!r}")
+    return system.with_parameter(value)
+
+
+def _periods(system) -> np.ndarray | None:
+    """The periods of the map's coordinates (0: not periodic), or None: ``system.periods`` where
+    the map lives on a cylinder or torus (the standard map: theta mod 2 pi)."""
+    per = getattr(system, "periods", None)
+    return None if per is None else np.asarray(per, float)
+
+
+def reduce(system, x) -> np.ndarray:
+    """Points ``x`` (..., 2) with each periodic coordinate of ``system`` reduced to [0, period)
+    (unchanged for a map of the plane)."""
+    y = np.array(x, dtype=float, copy=True)
+    per = _periods(system)
+    if per is not None:
+        for i, L in enumerate(per):
+            if L > 0:
+                y[..., i] = np.mod(y[..., i], L)
+    return y
+
+
+def difference(system, a, b) -> np.ndarray:
+    """a - b with each periodic coordinate of ``system`` taken to (-period/2, period/2]: the
+    displacement between two points of the cylinder (a - b on the plane).  Newton's residuals of
+    periodic orbits and the distances between orbits use it, so that an orbit of the lifted
+    standard map of type P/Q closes: T^Q(x) - x = (2 pi P, 0) is 0 here."""
+    d = np.asarray(a, float) - np.asarray(b, float)
+    per = _periods(system)
+    if per is not None:
+        d = np.array(d, copy=True)
+        for i, L in enumerate(per):
+            if L > 0:
+                d[..., i] -= L * np.round(d[..., i] / L)
+    return d
+
+
+#: a batch of a section map's images with fewer returns than this (points x n) runs on one thread:
+#: a parallel region's start and its threads' spin-wait cost more than the half of the work they
+#: save (the manifold growth's batches, tens to hundreds of points: four branches of Figure 4 at
+#: mu = 0.01 on a loaded machine, 0.19 s on one thread, 0.8-1.7 s on two; the results do not
+#: depend on the thread count)
+SERIAL_RETURNS = 4096
+
+
+def images(system, X, n: int, *, backward: bool = False) -> np.ndarray:
+    """The first ``n`` images (preimages with ``backward``) of each point of X (m, 2): an (m, n, 2)
+    array, NaN from the first iterate that fails (no return of a section map, a point outside its
+    allowed region).  A :class:`~explorer.analysis.section_map.SectionMap` runs them as one batch
+    of the Taylor lanes (:func:`explorer.analysis.sections.crossings`, on one thread below
+    ``SERIAL_RETURNS`` returns; backward through the reversor G0 P^n G0 = P^-n where it
+    applies, else point by point); any other map iterates each point
+    with its own ``iterate``."""
+    X = np.asarray(X, float).reshape(-1, 2)
+    out = np.full((X.shape[0], n, 2), np.nan)
+    if n == 0 or X.size == 0:
+        return out
+    if is_section_map(system):
+        from explorer import model
+        from explorer.analysis.periodic import is_reversible, reversor
+        from explorer.analysis.sections import crossings
+
+        if not backward or is_reversible(system.params, system.phi0):
+            Y = reversor(X) if backward else X
+            ok = model.section_M2(system.params, Y[:, 0], Y[:, 1], system.h, system.phi0) > 0
+            if ok.any():
+                c = crossings(system.params, system.h, Y[ok], n_crossings=n, phi0=system.phi0, tol=system.tol,
+                              tmax=system.tmax * n, threads=1 if int(ok.sum()) * n < SERIAL_RETURNS else None)
+                img = np.array(c.data[:, :n, 1:3], float)
+                for i in range(len(img)):
+                    img[i, c.count[i]:] = np.nan
+                out[ok] = reversor(img) if backward else img
+            return out
+    if hasattr(system, "images"):          # the map's own batch (the standard map: compiled)
+        return system.images(X, n, backward=backward)
+    for i, x in enumerate(X):
+        if not np.all(np.isfinite(x)):
+            continue
+        try:
+            out[i] = system.iterate(x, n, backward=backward)[1:]
+        except ParameterError:     # a section map point by point: a failed return leaves the row NaN
+            for j in range(n):
+                try:
+                    x = system(x, backward=backward, jacobian=False).point
+                except ParameterError:
+                    break
+                out[i, j] = x
+    return out
+
+
 # ------------------------------------------------------------------ compiled kernels of (S1)
 @njit
 def standard_orbit(theta, p, k, n, backward, out):
@@ -95,6 +202,15 @@ def standard_orbit(theta, p, k, n, backward, out):
             theta = theta + p
         out[j + 1, 0] = theta
         out[j + 1, 1] = p
+
+
+@njit
+def standard_images(X, k, n, backward, out):
+    """out[i, j] = T^(j+1)(X[i]) (T^-(j+1) with ``backward``): the first n images of each point."""
+    buf = np.empty((n + 1, 2))
+    for i in range(X.shape[0]):
+        standard_orbit(X[i, 0], X[i, 1], k, n, backward, buf)
+        out[i] = buf[1:]
 
 
 @njit
@@ -137,6 +253,11 @@ class StandardMap:
     parameter = "k"
     #: the symmetry lines theta = const of I0 (theta = pi carries Greene's elliptic orbits)
     I0_LINES = (0.0, math.pi)
+    #: theta is an angle (the map lives on the cylinder): :func:`difference`, :func:`reduce`
+    periods = (2.0 * math.pi, 0.0)
+    #: the fundamental domain of the cylinder drawn and searched ((theta0, theta1), (p0, p1)):
+    #: one turn in theta, p over one period of the map's p -> p + 2 pi symmetry
+    domain = ((0.0, 2.0 * math.pi), (-math.pi, math.pi))
 
     def __init__(self, k):
         self.k = validation.real("k", k)
@@ -197,6 +318,16 @@ class StandardMap:
         standard_orbit(th, p, self.k, n, bool(backward), out)
         return out
 
+    def images(self, X, n, *, backward=False) -> np.ndarray:
+        """The first ``n`` images (preimages with ``backward``) of each point of X (m, 2): an
+        (m, n, 2) array, one compiled loop (:func:`images` of the protocol)."""
+        X = np.ascontiguousarray(np.asarray(X, float).reshape(-1, 2))
+        n = validation.integer("n", n, 0)
+        out = np.empty((X.shape[0], n, 2))
+        if n and X.shape[0]:
+            standard_images(X, self.k, n, bool(backward), out)
+        return out
+
     # -------------------------------------------------------------- reversing symmetries
     def i0(self, x) -> np.ndarray:
         """I0(theta, p) = (-theta, p + k sin theta): an involution with I0 T I0 = T^-1."""
@@ -218,6 +349,18 @@ class StandardMap:
     def reversors(self) -> tuple:
         """(I0, I1)."""
         return (self.i0, self.i1)
+
+    def symmetry_line_points(self, n) -> np.ndarray:
+        """``n`` points on each symmetry line crossing :attr:`domain`: theta = 0 and theta = pi
+        (Fix I0), theta = p/2 and theta = p/2 + pi (Fix I1), p evenly inside the domain's range;
+        the seeds of a search for symmetric orbits (every symmetric orbit has a point on one of
+        them, De Vogelaere 1958)."""
+        n = validation.integer("n", n, 1)
+        (_, _), (p0, p1) = self.domain
+        p = p0 + (p1 - p0) * (np.arange(n) + 0.5) / n
+        lines = [np.column_stack([np.full(n, th), p]) for th in self.I0_LINES]
+        lines += [np.column_stack([0.5 * p + shift, p]) for shift in self.I0_LINES]
+        return self.wrap(np.concatenate(lines))
 
     @staticmethod
     def wrap(x) -> np.ndarray:

@@ -80,6 +80,8 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis.continuation import continuation_values, golden_section_max, secant_follower
+from explorer.analysis.maps import difference, is_section_map, with_value
+from explorer.analysis.maps import reduce as reduce_points
 from explorer.analysis.section_map import SectionMap, system_first
 from explorer.integrate.methods import DEFAULT_TOL as SECTIONS_TOL
 from explorer.model import ParameterError, symmetry, validation
@@ -177,6 +179,9 @@ class PeriodicOrbit:
     phi0: float = math.pi
     uncertainty: float = 0.0
     degenerate: bool = False
+    #: the map of the protocol the orbit belongs to, when it is not a section map (None for one:
+    #: ``params``, ``h``, ``phi0`` name it)
+    system: object = field(default=None, repr=False, compare=False)
 
     @property
     def residue(self) -> float:
@@ -259,9 +264,10 @@ class _Shooting:
         jacs = np.empty((K, 2, 2))
         times = np.empty(K)
         x = np.asarray(x0, float)
+        section = is_section_map(self.smap)
         for i in range(K):
             xi = X[i] if multiple else x
-            if not model.section_M2(self.smap.params, xi[0], xi[1], self.smap.h, self.smap.phi0) > 0:
+            if section and not model.section_M2(self.smap.params, xi[0], xi[1], self.smap.h, self.smap.phi0) > 0:
                 raise ParameterError(f"point ({xi[0]:.6g}, {xi[1]:.6g}) left the allowed region")
             r = self.smap(xi)
             pts[i], imgs[i], jacs[i], times[i] = xi, r.point, r.jacobian, r.time
@@ -276,10 +282,12 @@ def _monodromy(jacs):
     return M
 
 
-def _residual(pts, imgs, multiple):
+def _residual(smap, pts, imgs, multiple):
+    """max |P(x_i) - x_{i+1}| (multiple shooting) or |P^K(x_0) - x_0|, on the map's cylinder
+    (:func:`explorer.analysis.maps.difference`)."""
     if multiple:
-        return float(np.max(np.abs(imgs - np.roll(pts, -1, axis=0))))
-    return float(np.max(np.abs(imgs[-1] - pts[0])))
+        return float(np.max(np.abs(difference(smap, imgs, np.roll(pts, -1, axis=0)))))
+    return float(np.max(np.abs(difference(smap, imgs[-1], pts[0]))))
 
 
 def _newton(smap, K, X0, max_iter=NEWTON_MAX_ITER, multiple=None):
@@ -296,7 +304,7 @@ def _newton(smap, K, X0, max_iter=NEWTON_MAX_ITER, multiple=None):
     else:
         X = (X0.reshape(-1, 2)[0]).copy()
         ev = sh.along(X, False)
-    res = _residual(ev[0], ev[1], multiple)
+    res = _residual(smap, ev[0], ev[1], multiple)
     step = np.inf
     it = 0
     for it in range(1, max_iter + 1):
@@ -304,14 +312,14 @@ def _newton(smap, K, X0, max_iter=NEWTON_MAX_ITER, multiple=None):
             break   # already a solution (e.g. continued from an exact one): no step to take
         pts, imgs, jacs, _ = ev
         if multiple:
-            F = (imgs - np.roll(pts, -1, axis=0)).ravel()
+            F = difference(smap, imgs, np.roll(pts, -1, axis=0)).ravel()
             A = np.zeros((2 * K, 2 * K))
             for i in range(K):
                 j = (i + 1) % K
                 A[2 * i:2 * i + 2, 2 * i:2 * i + 2] += jacs[i]
                 A[2 * i:2 * i + 2, 2 * j:2 * j + 2] -= np.eye(2)
         else:
-            F = imgs[-1] - pts[0]
+            F = difference(smap, imgs[-1], pts[0])
             A = _monodromy(jacs) - np.eye(2)
         if not (np.all(np.isfinite(A)) and np.all(np.isfinite(F))):
             raise ParameterError(_not_finite(smap, X.reshape(-1, 2)[0]))
@@ -326,7 +334,7 @@ def _newton(smap, K, X0, max_iter=NEWTON_MAX_ITER, multiple=None):
             Xn = (X.ravel() + alpha * dx).reshape(X.shape)
             try:
                 evn = sh.along(Xn[0] if multiple else Xn, multiple, Xn.reshape(-1, 2))
-                resn = _residual(evn[0], evn[1], multiple)
+                resn = _residual(smap, evn[0], evn[1], multiple)
             except ParameterError:
                 alpha *= 0.5
                 continue
@@ -347,11 +355,11 @@ def _newton(smap, K, X0, max_iter=NEWTON_MAX_ITER, multiple=None):
     return pts, imgs, jacs, times, it
 
 
-def _minimal_period(pts, tol=MINIMAL_PERIOD_TOL) -> int:
+def _minimal_period(pts, tol=MINIMAL_PERIOD_TOL, system=None) -> int:
     K = len(pts)
     scale = max(1.0, float(np.max(np.abs(pts))))
     for d in range(1, K):
-        if K % d == 0 and np.max(np.abs(np.roll(pts, -d, axis=0) - pts)) <= tol * scale:
+        if K % d == 0 and np.max(np.abs(difference(system, np.roll(pts, -d, axis=0), pts))) <= tol * scale:
             return d
     return K
 
@@ -367,6 +375,8 @@ def _isolation(M, residual):
 
 
 def _not_finite(smap, x) -> str:
+    if not is_section_map(smap):
+        return f"the map's Jacobian is not finite at ({x[0]:.6g}, {x[1]:.6g})"
     p = smap.params
     return (f"the section map's Jacobian is not finite at (p1, p2) = ({x[0]:.6g}, {x[1]:.6g}): the tangent "
             f"dynamics overflow at lam = {p.lam:g}, mu = {p.mu:g}, h = {smap.h:g} (the motion is too fast)")
@@ -378,20 +388,34 @@ def _orbit(smap, pts, jacs, times, resid, iters, symmetric=None) -> PeriodicOrbi
     M = _monodromy(jacs)
     if not np.all(np.isfinite(M)):
         raise ParameterError(_not_finite(smap, pts[0]))
-    if symmetric is None:
-        symmetric = is_reversible(smap.params, smap.phi0) and _is_symmetric(pts, 1e3 * MINIMAL_PERIOD_TOL)
     uncertainty, degenerate = _isolation(M, resid)
+    if isinstance(smap, (SectionMap, _MapInfo)):
+        if symmetric is None:
+            symmetric = is_reversible(smap.params, smap.phi0) and _is_symmetric(pts, 1e3 * MINIMAL_PERIOD_TOL)
+        return PeriodicOrbit(np.array(pts, float), len(pts), M, np.linalg.eigvals(M), float(np.trace(M)),
+                             float(np.linalg.det(M)), np.array(times, float), float(resid), int(iters),
+                             bool(symmetric), np.array(jacs, float), smap.params, smap.h, smap.phi0, uncertainty,
+                             degenerate)
+    if symmetric is None:     # another map of the protocol: symmetric under one of its reversors
+        symmetric = any(_maps_onto(smap, R(pts), pts, 1e3 * MINIMAL_PERIOD_TOL)
+                        for R in getattr(smap, "reversors", ()))
     return PeriodicOrbit(np.array(pts, float), len(pts), M, np.linalg.eigvals(M), float(np.trace(M)),
                          float(np.linalg.det(M)), np.array(times, float), float(resid), int(iters), bool(symmetric),
-                         np.array(jacs, float), smap.params, smap.h, smap.phi0, uncertainty, degenerate)
+                         np.array(jacs, float), uncertainty=uncertainty, degenerate=degenerate, system=smap)
+
+
+def _maps_onto(system, images, pts, tol) -> bool:
+    """Every point of ``images`` is within ``tol`` of a point of ``pts`` (on the map's cylinder)."""
+    d = np.linalg.norm(difference(system, np.asarray(images)[:, None, :], np.asarray(pts)[None, :, :]), axis=2)
+    return bool(np.all(np.min(d, axis=1) <= tol))
 
 
 def _make_orbit(smap, pts, imgs, jacs, times, iters, reduce=True) -> PeriodicOrbit:
     K = len(pts)
-    d = _minimal_period(pts) if reduce else K
+    d = _minimal_period(pts, system=smap) if reduce else K
     pts, imgs, jacs, times = pts[:d], imgs[:d], jacs[:d], times[:d]
-    resid = float(np.max(np.abs(imgs - np.roll(pts, -1, axis=0))))
-    return _orbit(smap, pts, jacs, times, resid, iters)
+    resid = float(np.max(np.abs(difference(smap, imgs, np.roll(pts, -1, axis=0)))))
+    return _orbit(smap, pts if is_section_map(smap) else reduce_points(smap, pts), jacs, times, resid, iters)
 
 
 def mirror_orbit(orb: PeriodicOrbit) -> PeriodicOrbit:
@@ -464,11 +488,11 @@ def find_periodic_orbit(system, guess, period, *, max_iter=NEWTON_MAX_ITER, redu
         K < 1, a guess outside the allowed region, or Newton's method failing (the message says so).
     """
     K = _check_period(period)
-    smap, phi0 = system, system.phi0
+    smap, phi0 = system, getattr(system, "phi0", math.pi)
     g = np.asarray(guess, dtype=float)
     if g.shape not in ((2,), (K, 2)) or not np.all(np.isfinite(g)):
         raise ParameterError(f"guess must be a finite point (p1, p2) or {K} points, got shape {g.shape}")
-    for x in g.reshape(-1, 2):
+    for x in g.reshape(-1, 2) if is_section_map(smap) else ():
         if not model.is_admissible(smap.params, x[0], x[1], smap.h, phi0):
             raise ParameterError(f"guess (p1, p2) = ({x[0]:g}, {x[1]:g}) lies outside the allowed region; "
                                  f"allowed: {model.describe_region(smap.params, smap.h, phi0)}")
@@ -502,10 +526,16 @@ def symmetry_line_points(system, period, *, n=200, threads=None):
     changes sign between neighbours where a symmetric orbit of that period (or a divisor)
     passes; each bracket is refined by bisection (a few map evaluations) and the point on the
     section phi = phi0 of that orbit is returned.  Returns an (m, 2) array of seeds.
+
+    Another map of the protocol: its own ``symmetry_line_points(n)`` (n points on each of its
+    symmetry lines, unrefined: Newton starts), or none when it has no reversors.
     """
     from explorer.analysis.sections import crossings
 
     K = _check_period(period)
+    if not is_section_map(system):
+        seeds = getattr(system, "symmetry_line_points", None)
+        return np.empty((0, 2)) if seeds is None else np.asarray(seeds(validation.integer("n", n, 1)), float)
     prm, h, phi0, tol, tmax = system.params, system.h, system.phi0, system.tol, system.tmax
     if not is_reversible(prm, phi0):
         return np.empty((0, 2))
@@ -579,6 +609,64 @@ def _grid_seeds(prm, h, K, grid, phi0, tol, tmax, threads):
     return np.column_stack([U.ravel()[idx], V.ravel()[idx]])
 
 
+def _map_guesses(system, K, grid, line) -> np.ndarray:
+    """:func:`periodic_guesses` for a map of the protocol other than a section map: ``line`` points
+    on each of its symmetry lines (``system.symmetry_line_points``, where it has reversors), then
+    the points of a ``grid`` x ``grid`` grid of ``system.domain`` where |P^K(x) - x| (on its
+    cylinder) is a local minimum, best first."""
+    from explorer.analysis.maps import images
+
+    seeds = [np.asarray(system.symmetry_line_points(line), float).reshape(-1, 2)] \
+        if hasattr(system, "symmetry_line_points") else []
+    domain = getattr(system, "domain", None)
+    if domain is None:
+        if not seeds:
+            raise ParameterError(f"{type(system).__name__} has no domain and no symmetry lines to search: give "
+                                 "guesses=")
+        return seeds[0]
+    (a0, a1), (b0, b1) = domain
+    u = (np.arange(grid) + 0.5) / grid
+    U, V = np.meshgrid(a0 + (a1 - a0) * u, b0 + (b1 - b0) * u, indexing="ij")
+    X = np.column_stack([U.ravel(), V.ravel()])
+    img = images(system, X, K)[:, -1]
+    R = np.linalg.norm(difference(system, img, X), axis=1).reshape(grid, grid)
+    R[~np.isfinite(R)] = np.inf
+    pad = np.pad(R, 1, constant_values=np.inf)
+    nb = np.stack([pad[1 + di:1 + di + grid, 1 + dj:1 + dj + grid]
+                   for di in (-1, 0, 1) for dj in (-1, 0, 1) if di or dj])
+    idx = np.flatnonzero((np.isfinite(R) & (R <= nb.min(axis=0))).ravel())
+    idx = idx[np.argsort(R.ravel()[idx])]
+    return np.concatenate(seeds + [X[idx]])
+
+
+def _map_search(system, K, grid, line, max_guesses, max_iter, same_tol, guesses) -> list:
+    """:func:`search_periodic_orbits` for a map of the protocol other than a section map: Newton
+    (:func:`find_periodic_orbit`) from the guesses (:func:`_map_guesses`), orbits of minimal period
+    K kept once (points compared on the map's cylinder), isolated before degenerate, each from its
+    point of smallest (reduced) first coordinate."""
+    G = _map_guesses(system, K, grid, line) if guesses is None else np.asarray(guesses, float).reshape(-1, 2)
+    found: list[PeriodicOrbit] = []
+    tried = 0
+    for g in G:
+        if tried >= max_guesses:
+            break
+        if any(not o.degenerate and _maps_onto(system, g[None, :], o.points, 1e-4) for o in found):
+            continue
+        tried += 1
+        try:
+            orb = find_periodic_orbit(system, g, K, max_iter=max_iter)
+        except ParameterError:
+            continue
+        if orb.period == K and not any(_maps_onto(system, orb.points[:1], o.points, same_tol) for o in found):
+            found.append(orb)
+    out = []
+    for o in found:
+        k = int(np.lexsort((o.points[:, 1], o.points[:, 0]))[0])
+        out.append(o if k == 0 else _orbit(system, np.roll(o.points, -k, axis=0), np.roll(o.map_jacobians, -k, axis=0),
+                                           np.roll(o.return_times, -k), o.residual, o.iterations, o.symmetric))
+    return sorted(out, key=lambda o: (o.degenerate, o.points[0, 0], o.points[0, 1]))
+
+
 def _canonical(orb: PeriodicOrbit) -> PeriodicOrbit:
     """The same orbit starting at its point nearest the symmetry line p2 = 0 (then smallest p1)."""
     k = int(np.lexsort((orb.points[:, 0], np.round(np.abs(orb.points[:, 1]), 9)))[0])
@@ -628,9 +716,11 @@ def periodic_guesses(system, period, *, grid=12, line=None, tmax=SEARCH_TMAX, th
     the points of a ``grid`` x ``grid`` grid of the allowed region where ``|P^K(x) - x|`` is a
     local minimum (best first).  An (m, 2) array."""
     K = _check_period(period)
-    prm, h, phi0, tol = system.params, system.h, system.phi0, system.tol
     grid = validation.integer("grid", grid, 2, 1000)
     line = 8 * grid if line is None else validation.integer("line", line, 2)
+    if not is_section_map(system):
+        return _map_guesses(system, K, grid, line)
+    prm, h, phi0, tol = system.params, system.h, system.phi0, system.tol
     if model.allowed_ellipse(prm, h, phi0) is None:
         raise ParameterError(f"the allowed region is empty at h = {h:g}; allowed: "
                              f"{model.describe_region(prm, h, phi0)}")
@@ -692,8 +782,10 @@ def search_periodic_orbits(system, period, *, grid=12, line=None, max_guesses=60
         nearest p2 = 0, sorted by that point's p1 within each group.
     """
     K = _check_period(period)
-    prm, h, phi0, tol = system.params, system.h, system.phi0, system.tol
     max_guesses = validation.integer("max_guesses", max_guesses, 1)
+    if not is_section_map(system):
+        return _map_search(system, K, grid, line, max_guesses, max_iter, same_tol, guesses)
+    prm, h, phi0, tol = system.params, system.h, system.phi0, system.tol
     if guesses is None:
         guesses = periodic_guesses(prm, h, K, grid=grid, line=line, phi0=phi0, tol=tol, tmax=tmax, threads=threads)
     else:
@@ -786,13 +878,14 @@ def continue_periodic(system, period, parameter, start, stop, step, guess, *, bi
     PeriodicBranch
     """
     K = _check_period(period)
-    values = continuation_values(parameter, start, stop, step)
+    section = is_section_map(system)
+    values = continuation_values(parameter, start, stop, step, None if section else (system.parameter,))
     g0 = guess.points if isinstance(guess, PeriodicOrbit) else np.asarray(guess, float)
 
     def solve(v, X):
-        orb = find_periodic_orbit(system.with_value(parameter, v), X, K, reduce=False)
-        if _minimal_period(orb.points) != K:
-            raise ParameterError(f"the orbit collapsed to period {_minimal_period(orb.points)}")
+        orb = find_periodic_orbit(with_value(system, parameter, v), X, K, reduce=False)
+        if _minimal_period(orb.points, system=system) != K:
+            raise ParameterError(f"the orbit collapsed to period {_minimal_period(orb.points, system=system)}")
         return orb
 
     orbits: list[PeriodicOrbit] = []

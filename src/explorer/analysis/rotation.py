@@ -64,12 +64,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from explorer import model
+from explorer.analysis.maps import is_section_map
 from explorer.analysis.section_map import system_first
 from explorer.integrate.methods import MAP_TOL
 from explorer.model import ParameterError, validation
 
-__all__ = ["CONVERGED_TOL", "DEFAULT_ITERATES", "RotationNumber", "RotationProfile", "birkhoff_weights",
-           "orbit_rotation", "rotation_number", "rotation_profile", "weighted_birkhoff"]
+__all__ = ["CONVERGED_TOL", "DEFAULT_ITERATES", "DIFFUSION_FLOOR", "RotationNumber", "RotationProfile",
+           "birkhoff_weights", "frequency_diffusion", "orbit_rotation", "rotation_number", "rotation_profile",
+           "weighted_birkhoff"]
 
 #: |WB_N - WB_2N| below this: the orbit is regular
 CONVERGED_TOL = 1e-10
@@ -136,8 +138,8 @@ class RotationNumber:
     converged: bool
     difference: float
     iterates: int
-    start: tuple
-    center: tuple
+    start: tuple[float, float]
+    center: tuple[float, float]
     status: str = "done"
     turns: float = float("nan")
 
@@ -282,6 +284,56 @@ def _rotations(params, h, starts, center, N, phi0, tol, threads, conv_tol):
     return out
 
 
+def _map_rotation(system, start, center, N, conv_tol) -> RotationNumber:
+    """:func:`rotation_number` on a map of the protocol other than a section map (no flow to lift
+    the angle through): its 2N iterates' angle increments around ``center``, each wrapped to
+    (-pi, pi].  The wrapped increments are the lifted ones less one constant 2 pi j when every one
+    of them stays within ``WRAP_SAFE`` of 0 (the module's argument), so the value mod 1 is right;
+    otherwise the orbit is "unresolved".  ``turns`` is the wrapped average (the lift with j = 0).
+    ``center=None`` on a map with an angle coordinate (``periods``, the standard map's theta): the
+    rotation number of the angle itself, (theta_2N - theta_0)/(2 pi 2N) weighted, lifted exactly
+    (the rotational invariant circles of the standard map: Greene's golden curve has 0.618...)."""
+    x = np.asarray(start, float)
+    if x.shape != (2,) or not np.all(np.isfinite(x)):
+        raise ParameterError(f"start must be a finite point, got {start!r}")
+    per = getattr(system, "periods", None)
+    if center is None and not (per is not None and per[0] > 0):
+        from explorer.analysis.fixedpoints import find_fixed_point
+
+        center = find_fixed_point(system, x)
+    inc = _map_increments(system, x, center, 2 * N)
+    status = "done" if inc is not None else "unresolved"
+    c = (float("nan"), float("nan")) if center is None else \
+        tuple(float(t) for t in np.asarray(getattr(center, "point", center), float))
+    if inc is None or not np.all(np.isfinite(inc)):
+        return RotationNumber(float("nan"), False, float("nan"), 2 * N, tuple(x), tuple(c), status)
+    a, b = weighted_birkhoff(inc, N), weighted_birkhoff(inc, 2 * N)
+    diff = abs(a - b) / (2.0 * np.pi)
+    turns = b / (2.0 * np.pi)
+    return RotationNumber(turns - math.ceil(turns - 0.5), bool(diff < conv_tol), diff, 2 * N, tuple(x), tuple(c),
+                          turns=turns)
+
+
+def _map_increments(system, x, center, n):
+    """The n angle increments of the orbit of x under a map of the protocol (:func:`_map_rotation`):
+    around ``center`` wrapped to (-pi, pi] (None when one comes within pi/4 of a half turn, where
+    the wrap may be wrong), or with ``center=None`` on a map with an angle coordinate, the angle's
+    own increments (exact)."""
+    from explorer.analysis.maps import difference
+
+    pts = system.iterate(x, n)
+    per = getattr(system, "periods", None)
+    if center is None:
+        if per is None or not per[0] > 0:
+            raise ParameterError("center=None needs a map with an angle coordinate (periods); give center=")
+        return np.diff(pts[:, 0]) * (2.0 * np.pi / per[0])
+    c = np.asarray(getattr(center, "point", center), float)
+    if c.shape != (2,) or not np.all(np.isfinite(c)):
+        raise ParameterError(f"center must be a finite point, got {center!r}")
+    inc = _increments(c + difference(system, pts, c), c)
+    return inc if np.all(np.abs(inc) <= WRAP_SAFE) else None
+
+
 @system_first(settings=("phi0", "tol"))
 def rotation_number(system, start, *, center=None, iterates=DEFAULT_ITERATES, conv_tol=CONVERGED_TOL,
                     threads=None) -> RotationNumber:
@@ -306,6 +358,8 @@ def rotation_number(system, start, *, center=None, iterates=DEFAULT_ITERATES, co
     RotationNumber
         The rotation number in turns per return, in (-1/2, 1/2], and the convergence flag.
     """
+    if not is_section_map(system):
+        return _map_rotation(system, start, center, validation.integer("iterates", iterates, 10), conv_tol)
     params, h, phi0, tol = system.params, system.h, system.phi0, system.tol
     N = validation.integer("iterates", iterates, 10)
     x = np.asarray(start, float)
@@ -352,12 +406,23 @@ def rotation_profile(system, start, stop, *, n, center=None, iterates=DEFAULT_IT
     at m/K mark island chains of period K (converged, rational); non-converged points flag
     chaotic orbits.  The orbits run in parallel (Numba threads, ``threads``).
     """
-    params, h, phi0, tol = system.params, system.h, system.phi0, system.tol
     n = validation.integer("n", n, 2)
     N = validation.integer("iterates", iterates, 10)
     a, b = np.asarray(start, float), np.asarray(stop, float)
     s = np.linspace(0.0, 1.0, n)
     pts = a[None, :] + s[:, None] * (b - a)[None, :]
+    if not is_section_map(system):    # another map of the protocol: one orbit at a time
+        per = getattr(system, "periods", None)
+        if center is None and not (per is not None and per[0] > 0):
+            from explorer.analysis.fixedpoints import find_fixed_point
+
+            center = find_fixed_point(system, a)
+        rs = [_map_rotation(system, x, center, N, conv_tol) for x in pts]
+        c = np.full(2, np.nan) if center is None else np.asarray(getattr(center, "point", center), float)
+        return RotationProfile(pts, s, np.array([r.value for r in rs]), np.array([r.converged for r in rs]),
+                               np.array([r.difference for r in rs]), c, 2 * N, np.array([r.turns for r in rs]),
+                               tuple(r.status for r in rs))
+    params, h, phi0, tol = system.params, system.h, system.phi0, system.tol
     bad = ~model.is_admissible(params, pts[:, 0], pts[:, 1], h, phi0)
     if bad.any():
         raise ParameterError(f"the segment from {tuple(a)} to {tuple(b)} leaves the allowed region; allowed: "
@@ -367,3 +432,50 @@ def rotation_profile(system, start, stop, *, n, center=None, iterates=DEFAULT_IT
     return RotationProfile(pts, s, np.array([r.value for r in rs]), np.array([r.converged for r in rs]),
                            np.array([r.difference for r in rs]), c, 2 * N, np.array([r.turns for r in rs]),
                            tuple(r.status for r in rs))
+
+
+#: log10 |nu1 - nu2| is reported no lower than log10 of this (a difference of exactly 0: a point at
+#: the centre, or halves equal to round-off)
+DIFFUSION_FLOOR = 1e-17
+
+
+@system_first(settings=("phi0", "tol"))
+def frequency_diffusion(system, starts, *, center, iterates=DEFAULT_ITERATES, threads=None) -> np.ndarray:
+    """Frequency diffusion ``log10 |nu1 - nu2|`` of the orbits of ``starts`` (Laskar 1990, Icarus 88, 266,
+    with the weighted Birkhoff average of Das, Sander, Yorke & Meiss 2017 in place of frequency
+    analysis): nu1 the weighted-Birkhoff rotation number (turns per return around ``center``) of the
+    first N = ``iterates`` returns, nu2 that of the next N.  On a regular orbit both converge to
+    the same number faster than any power of N (below 1e-12 at N ~ 1000); on a chaotic one they
+    differ by the drift of the frequency, 1e-8 to 1e-2.
+
+    ``center``: the point the angle turns around, required (docs/greene.md, "Frequency
+    diffusion": any point off the orbits gives a valid indicator, the rotation number of an orbit
+    that does not circle it being 0; the elliptic fixed point of the island studied gives its
+    rotation numbers).  A :class:`SectionMap` lifts the increments through the flow (module
+    docstring); another map of the protocol uses the wrapped increments (the fast path's
+    condition; NaN where an increment comes within pi/4 of a half turn) or, with
+    ``center=None`` on a map with an angle (the standard map), the angle's own increments.
+    Returns an array (n,) (NaN where an orbit stopped early)."""
+    X = np.atleast_2d(np.asarray(starts, float))
+    if X.ndim != 2 or X.shape[1] != 2:
+        raise ParameterError(f"starts must be points (n, 2), got shape {np.shape(starts)}")
+    N = validation.integer("iterates", iterates, 10)
+    if is_section_map(system):
+        if center is None:
+            raise ParameterError("frequency_diffusion on a section map needs center=(p1, p2): the point the "
+                                 "rotation numbers turn around (e.g. an elliptic fixed point)")
+        c = np.asarray(getattr(center, "point", center), float)
+        inc, count, status, _ = _lifted_increments(system.params, system.h, X, c, 2 * N, system.phi0, system.tol,
+                                                   threads)
+        inc[status != "done"] = np.nan
+    else:
+        inc = np.full((len(X), 2 * N), np.nan)
+        for i, x in enumerate(X):
+            r_inc = _map_increments(system, x, center, 2 * N)
+            if r_inc is not None:
+                inc[i] = r_inc
+    w = birkhoff_weights(N)
+    nu1 = inc[:, :N] @ w / (2.0 * np.pi)
+    nu2 = inc[:, N:] @ w / (2.0 * np.pi)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.log10(np.maximum(np.abs(nu1 - nu2), DIFFUSION_FLOOR))

@@ -163,6 +163,15 @@ class SectionMap:
         prm, h = validation.with_value(self.params, self.h, name, value)
         return SectionMap(prm, h, phi0=self.phi0, tol=self.tol, tmax=self.tmax)
 
+    @property
+    def reversors(self) -> tuple:
+        """The reversors of the map known here (the map protocol): (G0,), G0(p1, p2) = (p1, -p2),
+        when the system is reversible and the section is phi0 = 0 or pi
+        (:func:`explorer.analysis.periodic.is_reversible`); else ()."""
+        from explorer.analysis.periodic import is_reversible, reversor
+
+        return (reversor,) if is_reversible(self.params, self.phi0) else ()
+
     def jacobian(self, x) -> np.ndarray:
         """DP(x), the 2x2 Jacobian of the map at x."""
         return self(x).jacobian

@@ -340,8 +340,12 @@ def flux_curve(system, mus=None, *, guess=(0.0, 0.0), arclength=6.0, max_arcleng
     intersections) or torn; ``exit_samples=0`` skips it."""
     from explorer.analysis import fixedpoints
     from explorer.analysis.manifolds import saddle
+    from explorer.analysis.maps import is_section_map
     from explorer.analysis.periodic import is_reversible
 
+    if not is_section_map(system):
+        raise ParameterError(f"flux_curve follows the central saddle of a section map in mu; got "
+                             f"{type(system).__name__}: grow its branches (grow_branch) and use lobes and exit_times")
     prm, h = system.params, system.h
     mus = [float(m) for m in (DEFAULT_FLUX_MUS if mus is None else mus)]
     if any(b <= a for a, b in zip(mus, mus[1:])) or not mus or mus[0] < 0:
@@ -437,8 +441,10 @@ def resonance_zone(unstable: ManifoldBranch, stable: ManifoldBranch, point: Homo
 
 def _steps_inside(smap, polygon, X, max_iter, block):
     """For each start x (inside the polygon), the first k >= 1 with P^k(x) outside (or leaving the
-    allowed region, or with no return): max_iter + 1 when it stays max_iter iterations."""
-    from explorer.analysis.sections import crossings
+    allowed region, or with no return): max_iter + 1 when it stays max_iter iterations.  The
+    iterates: :func:`explorer.analysis.maps.images` (a section map's batch of the Taylor lanes, or
+    any map of the protocol)."""
+    from explorer.analysis.maps import images
 
     T = np.full(len(X), max_iter + 1, np.int64)
     alive = np.arange(len(X))
@@ -446,9 +452,7 @@ def _steps_inside(smap, polygon, X, max_iter, block):
     done = 0
     while alive.size and done < max_iter:
         n = min(block, max_iter - done)
-        c = crossings(smap.params, smap.h, cur[alive], n_crossings=n, phi0=smap.phi0, tol=smap.tol,
-                              tmax=smap.tmax * n)
-        pts = c.data[:, :, 1:3]                           # NaN where no crossing
+        pts = images(smap, cur[alive], n)                  # NaN where no crossing
         ins = inside(polygon, pts.reshape(-1, 2)).reshape(len(alive), n)
         left = ~ins
         first = np.where(left.any(axis=1), np.argmax(left, axis=1), -1)

@@ -14,7 +14,6 @@ import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -34,8 +33,10 @@ def _panel_points(panel_data):
     return rows[:, 1:3] if len(rows) else np.zeros((0, 2))
 
 
-#: separatrices: iterations of the fundamental domain, its initial size, sampling
-SEPARATRIX_SETTINGS = dict(iterations=6, n_domain=40, max_gap=0.02, first=1e-6, max_points=6000)
+#: separatrices (explorer.analysis.manifolds.grow_branch): the arclength of each branch (the page's,
+#: explorer.app.serve.overlays.SEPARATRIX_ARCLENGTH), images of the fundamental domain at most,
+#: points at most
+SEPARATRIX_SETTINGS = dict(arclength=4.0, iterations=6, max_points=6000)
 
 
 def panel_separatrices(scene, i):
@@ -289,147 +290,232 @@ def run_sweep(scene, out=None, *, figure=None, draw=None, jobs=1, backend=None, 
 
 
 def _sweep(scene, out, stem, *, draw, jobs, backend, scheduler, force, progress, stop, t_start) -> SweepReport:
-    """:func:`run_sweep` once the store is locked and Ctrl-C deferred to ``stop.check()``."""
+    """:func:`run_sweep` once the store is locked and Ctrl-C deferred to ``stop.check()``: plan what
+    to compute, compute each product panel by panel (each finished panel written by a
+    :class:`_PanelWriter`), draw the figure, report."""
     _check_same_scene(scene, out, force)
+    plan = _plan(scene, out, force)
+    client = _dask_client(scheduler, jobs) if backend == "dask" else None
+    if client is not None:
+        jobs = -1
+    specs = _specs(scene, plan, jobs, backend)
+    if "sections" in specs:
+        _check_disk(specs["sections"], out)
+    writer = _PanelWriter(scene, out, plan, specs, _streams(scene, out, plan, specs.get("sections"), force))
+    try:
+        for product, on_panel in (("sections", writer.sections), ("indicators", writer.indicators)):
+            if product in specs:
+                _map_with_progress(specs[product], on_panel, jobs, backend, None, progress,
+                                   f"sweep {scene.name} {product}", writer.streams, _checker(stop, client))
+    except KeyboardInterrupt:   # ours, or a worker's when Ctrl-C reached the whole process group
+        raise Interrupted(_kept(scene, out, plan.want)) from None
+    finally:
+        if client is not None:
+            client.close()
+    if stop.requested:      # every panel is stored; the figure is drawn by the next run
+        raise Interrupted(_kept(scene, out, plan.want))
+    figure_paths = ()
+    if draw and (plan.computed or plan.restamped or force or _figure_stale(stem, out, scene.figure_settings())):
+        figure_paths = tuple(draw_figure(scene, out, stem))
+    return writer.stats.report(scene, out, plan, figure_paths, time.perf_counter() - t_start)
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """What a sweep run computes: per panel the settings hash (``hashes``), the products' hashes
+    the scene wants (``want``) and those the store already holds with them (``have``); per
+    product the panels to compute (``todo``); the panels computed at all, and the stored panels
+    whose chaotic fraction was reclassified at a new MEGNO threshold (``restamped``)."""
+
+    hashes: list
+    want: list
+    have: list
+    todo: dict
+    computed: list
+    restamped: tuple
+
+    @property
+    def alone(self) -> bool:
+        """Indicators only: they are the whole panel (no sections)."""
+        return "sections" not in self.want[0]
+
+
+def _plan(scene, out, force) -> _Plan:
+    """The :class:`_Plan` of a sweep of ``scene`` into ``out`` (``force``: recompute all)."""
     try:
         on_disk = {} if force else store.panel_product_hashes(out)
     except store.StoreError as exc:
         raise ParameterError(str(exc)) from None
-    hashes = [scene.panel_hash(i) for i in range(scene.n_panels)]
-    want = [scene.product_hashes(i) for i in range(scene.n_panels)]
-    have = [_stored_products(scene, i, on_disk.get(i, {}), want[i]) for i in range(scene.n_panels)]
-    todo = {k: [i for i in range(scene.n_panels) if k in want[i] and k not in have[i]] for k in sweep.PRODUCTS
-            if k in want[0]}
+    n = scene.n_panels
+    hashes = [scene.panel_hash(i) for i in range(n)]
+    want = [scene.product_hashes(i) for i in range(n)]
+    have = [_stored_products(scene, i, on_disk.get(i, {}), want[i]) for i in range(n)]
+    todo = {k: [i for i in range(n) if k in want[i] and k not in have[i]] for k in sweep.PRODUCTS if k in want[0]}
     computed = sorted(set().union(*todo.values()))
-    restamped = _restamp_fractions(scene, out, [i for i in range(scene.n_panels)
-                                                if i not in todo.get("indicators", ())])
-    client = None
-    if backend == "dask":
-        client = _dask_client(scheduler, jobs)
-        jobs = -1
-    chunk_orbits = sweep.default_jobs_layout(1 if (jobs == 1 and backend is None) else 2)
-    specs = {k: sweep.build_spec(scene, v, chunk_orbits=chunk_orbits, product=k) for k, v in todo.items() if v}
+    restamped = _restamp_fractions(scene, out, [i for i in range(n) if i not in todo.get("indicators", ())])
+    return _Plan(hashes, want, have, todo, computed, restamped)
 
-    if "sections" in specs:
-        _check_disk(specs["sections"], out)
-    sec = specs.get("sections")
-    # block folders of finished, replaced or no longer streamed panels: nothing resumes from them
+
+def _specs(scene, plan: _Plan, jobs, backend) -> dict:
+    """The sweep spec of each product with panels to compute."""
+    chunk_orbits = sweep.default_jobs_layout(1 if (jobs == 1 and backend is None) else 2)
+    return {k: sweep.build_spec(scene, v, chunk_orbits=chunk_orbits, product=k) for k, v in plan.todo.items() if v}
+
+
+def _streams(scene, out, plan: _Plan, sec, force) -> _PanelStreams:
+    """The writer of the streamed sections panels, once the block folders of finished, replaced or
+    no longer streamed panels are removed (nothing resumes from them)."""
     stream.remove_stale_blocks(out, keep={p.index for k, p in enumerate(sec.panels) if sec.streamed(k)}
                                if sec is not None else ())
-    sec_hashes = [w.get("sections") for w in want]
-    streams = _PanelStreams(out, sec_hashes, scene.integration.phi0, force)
+    return _PanelStreams(out, [w.get("sections") for w in plan.want], scene.integration.phi0, force)
 
-    prov = json.dumps(store.provenance({"scene": scene.name}), sort_keys=True)
-    file_attrs = {"scene_name": scene.name, "scene": scene.text, "provenance": prov}
-    integ, ly = scene.integration, scene.lyapunov
-    stats: dict[str, Any] = {"orbits": 0, "crossings": 0, "stopped": 0, "statuses": {}, "max_dh": 0.0, "warning": None,
-                             "fractions": [], "dropped": {}, "ind_orbits": 0, "ind_dh": 0.0, "ind_warning": None,
-                             "ind_statuses": {}}
-    setting = (f"tol = {integ.tol:g}" if integ.method in ADAPTIVE_METHODS
-               else f"dt = {integ.dt:g}") + " ([integration])"
-    ly_setting = (f"tol = {ly.tol:g}" if ly.method in ADAPTIVE_METHODS else f"dt = {ly.dt:g}") + " ([lyapunov])"
-    alone = "sections" not in want[0]     # indicators only: they are the whole panel
 
-    def panel_attrs(panel, i, complete):
+@dataclass
+class _SweepStats:
+    """What the panels written so far measured: the totals of :class:`SweepReport`."""
+
+    orbits: int = 0
+    crossings: int = 0
+    stopped: int = 0
+    statuses: dict = field(default_factory=dict)
+    max_dh: float = 0.0
+    warning: str | None = None
+    fractions: list = field(default_factory=list)
+    dropped: dict = field(default_factory=dict)
+    ind_orbits: int = 0
+    ind_dh: float = 0.0
+    ind_warning: str | None = None
+    ind_statuses: dict = field(default_factory=dict)
+
+    def add_dropped(self, i, panel) -> None:
+        self.dropped[i] = max(self.dropped.get(i, 0), int(panel.dropped))
+
+    def add_sections(self, panel, arrays, dh, setting, crossings) -> None:
+        """A sections panel: its orbits, crossings, energy error (``dh``: against ``setting``),
+        orbits stopped by the time budget before ``crossings``, statuses."""
+        self.orbits += len(arrays["count"])
+        self.crossings += int(arrays["count"].sum())
+        self.add_dropped(panel.index, panel)
+        self.max_dh = max(self.max_dh, dh)
+        self.warning = self.warning or energy_warning(dh, panel.h, setting)  # each panel its own h
+        stopped = (arrays["status"] == STATUS_TMAX) & (arrays["count"] < crossings)
+        self.stopped += int(stopped.sum())
+        _count_statuses(self.statuses, arrays["status"])
+
+    def add_indicators(self, panel, arrays, fraction, setting) -> None:
+        """An indicators panel: its chaotic fraction (label, fraction, error), orbits, energy error
+        at the end (against ``setting``), statuses."""
+        self.fractions.append((panel.label,) + tuple(fraction))
+        dh = arrays["lyapunov_dh"]
+        dh = float(np.max(dh[np.isfinite(dh)])) if np.isfinite(dh).any() else 0.0
+        self.ind_orbits += len(arrays["megno"])
+        self.ind_dh = max(self.ind_dh, dh)
+        self.ind_warning = self.ind_warning or energy_warning(dh, panel.h, setting)
+        _count_statuses(self.ind_statuses, arrays["lyapunov_status"])
+
+    def report(self, scene, out, plan: _Plan, figure, wall_time) -> SweepReport:
+        return SweepReport(scene=scene.name, out=out, n_panels=scene.n_panels, computed=tuple(plan.computed),
+                           orbits=self.orbits, crossings=self.crossings, stopped=self.stopped,
+                           statuses=dict(self.statuses), max_dh=self.max_dh, warning=self.warning,
+                           fractions=tuple(self.fractions), threshold=float(scene.lyapunov.threshold),
+                           figure=figure, wall_time=wall_time, restamped=plan.restamped,
+                           dropped=sum(self.dropped.values()), products={k: tuple(v) for k, v in plan.todo.items()},
+                           indicator_orbits=self.ind_orbits, indicator_dh=self.ind_dh,
+                           indicator_warning=self.ind_warning, indicator_statuses=dict(self.ind_statuses))
+
+
+def _setting(section) -> str:
+    """The accuracy setting of an [integration] or [lyapunov] table, as an energy warning names it."""
+    return f"tol = {section.tol:g}" if section.method in ADAPTIVE_METHODS else f"dt = {section.dt:g}"
+
+
+class _PanelWriter:
+    """Writes each finished panel of a sweep into the store (``sweep.run``'s callbacks, in the
+    parent): :meth:`sections` and :meth:`indicators`, with the panel attributes of the store's
+    schema (:class:`explorer.io.store.PanelAttrs`), and adds what it measured to ``stats``."""
+
+    def __init__(self, scene, out, plan: _Plan, specs: dict, streams: _PanelStreams):
+        self.scene, self.out, self.plan, self.specs, self.streams = scene, out, plan, specs, streams
+        self.stats = _SweepStats()
+        prov = json.dumps(store.provenance({"scene": scene.name}), sort_keys=True)
+        self.file_attrs = {"scene_name": scene.name, "scene": scene.text, "provenance": prov}
+        self.setting = _setting(scene.integration) + " ([integration])"
+        self.ly_setting = _setting(scene.lyapunov) + " ([lyapunov])"
+
+    def panel_attrs(self, panel, i, complete) -> dict:
+        """The attributes every panel carries (its settings hash only when ``complete``)."""
+        scene = self.scene
         settings = scene.panel_settings(i)
         return store.PanelAttrs(i, panel.label, panel.h, settings.get("params", {}), settings,
                                 scene.sweep_parameter or "",
                                 float(scene.sweep_values[i]) if scene.sweep_values else float("nan"),
-                                hashes[i] if complete else None).attrs()
+                                self.plan.hashes[i] if complete else None).attrs()
 
-    def indicators_part(panel, i, arrays):
-        payload = {k: arrays[k] for k in store.INDICATOR_DATASETS if k in arrays}
-        attrs = {"indicators_hash": want[i]["indicators"], "indicators_wall_time": arrays["wall_time"]}
-        if panel.grid:
-            n, a1, b1, a2, b2 = panel.grid
-            attrs.update(map_resolution=int(n), map_p1=[float(a1), float(b1)], map_p2=[float(a2), float(b2)])
-            if not alone:
-                payload["lyapunov_seeds"] = panel.seeds
-        frac, err, _n_ok = chaotic_fraction(classify_megno(arrays), ly.threshold, arrays["lyapunov_status"] == 0)
-        attrs.update(chaotic_fraction=frac, chaotic_fraction_error=err, megno_threshold=ly.threshold)
-        stats["fractions"].append((panel.label, frac, err))
-        dh = arrays["lyapunov_dh"]
-        dh = float(np.max(dh[np.isfinite(dh)])) if np.isfinite(dh).any() else 0.0
-        stats["ind_orbits"] += len(arrays["megno"])
-        stats["ind_dh"] = max(stats["ind_dh"], dh)
-        stats["ind_warning"] = stats["ind_warning"] or energy_warning(dh, panel.h, ly_setting)
-        _count_statuses(stats["ind_statuses"], arrays["lyapunov_status"])
-        return payload, attrs
+    def _kept_indicators(self, i) -> dict:
+        """The stored indicators of panel i (datasets and attributes) that stay with its new sections."""
+        if not ("indicators" in self.plan.want[i] and "indicators" in self.plan.have[i]):
+            return {}
+        kept, old_attrs = store.read_panel_datasets(self.out, i, store.INDICATOR_DATASETS)
+        return dict(kept, **{k: old_attrs[k] for k in INDICATOR_ATTRS if k in old_attrs})
 
-    def on_sections(panel, arrays):
-        i = panel.index
-        keep = {}
-        if "indicators" in want[i] and "indicators" in have[i]:   # stored indicators stay with new sections
-            kept, old_attrs = store.read_panel_datasets(out, i, store.INDICATOR_DATASETS)
-            keep = dict(kept, **{k: old_attrs[k] for k in INDICATOR_ATTRS if k in old_attrs})
-        attrs = panel_attrs(panel, i, "indicators" not in want[i] or bool(keep))
+    def sections(self, panel, arrays) -> None:
+        """Write panel ``panel``'s sections (whole, or from its streamed blocks), with its stored
+        indicators kept and, with [compute] separatrices, its fixed point and separatrices."""
+        i, integ = panel.index, self.scene.integration
+        keep = self._kept_indicators(i)
+        attrs = self.panel_attrs(panel, i, "indicators" not in self.plan.want[i] or bool(keep))
         attrs.update(store.PanelAttrs.section_run(method=integ.method, tol=integ.tol, dt=integ.dt, phi0=integ.phi0,
                                                   direction=integ.direction, crossings=integ.crossings,
                                                   wall_time=arrays["wall_time"]),
-                     sections_hash=want[i]["sections"], seeds_dropped=int(panel.dropped))
+                     sections_hash=self.plan.want[i]["sections"], seeds_dropped=int(panel.dropped))
         attrs.update({k: v for k, v in keep.items() if k in INDICATOR_ATTRS})
         payload = {"seeds": panel.seeds, "y0": panel.y0, "count": arrays["count"],
                    "status": arrays["status"], "final": arrays["final"], "info": arrays["info"]}
         payload.update({k: v for k, v in keep.items() if k in store.INDICATOR_DATASETS})
         if not arrays.get("streamed"):
             payload["data"] = arrays["data"]
-        _separatrices(scene, i, payload, attrs)
+        _separatrices(self.scene, i, payload, attrs)
         if arrays.get("streamed"):   # rows stored block by block: the panel written from the blocks
-            attrs.update(block=int(specs["sections"].blocks[todo["sections"].index(i)]),
-                         resumed_blocks=streams.resumed.get(i, 0))
-            dh = streams.finish(i, payload, attrs, file_attrs)
+            attrs.update(block=int(self.specs["sections"].blocks[self.plan.todo["sections"].index(i)]),
+                         resumed_blocks=self.streams.resumed.get(i, 0))
+            dh = self.streams.finish(i, payload, attrs, self.file_attrs)
         else:
-            store.commit_panel(out, i, payload, attrs, file_attrs)
+            store.commit_panel(self.out, i, payload, attrs, self.file_attrs)
             dh = max_energy_error(arrays["data"])
-        stats["orbits"] += len(arrays["count"])
-        stats["crossings"] += int(arrays["count"].sum())
-        stats["dropped"][i] = max(stats["dropped"].get(i, 0), int(panel.dropped))
-        stats["max_dh"] = max(stats["max_dh"], dh)
-        stats["warning"] = stats["warning"] or energy_warning(dh, panel.h, setting)  # each panel its own h
-        stopped = (arrays["status"] == STATUS_TMAX) & (arrays["count"] < integ.crossings)
-        stats["stopped"] += int(stopped.sum())
-        _count_statuses(stats["statuses"], arrays["status"])
+        self.stats.add_sections(panel, arrays, dh, self.setting, integ.crossings)
 
-    def on_indicators(panel, arrays):
-        i = panel.index
-        payload, attrs = indicators_part(panel, i, arrays)
-        stats["dropped"][i] = max(stats["dropped"].get(i, 0), int(panel.dropped))   # 0 for a map grid
-        if alone:   # the panel is its seeds and their indicators (no crossings)
-            attrs.update(panel_attrs(panel, i, True), phi0=float(integ.phi0), direction=int(integ.direction),
+    def _indicators_part(self, panel, i, arrays) -> tuple:
+        """(payload, attrs) of panel i's indicators: the datasets, the map grid, the chaotic fraction."""
+        ly = self.scene.lyapunov
+        payload = {k: arrays[k] for k in store.INDICATOR_DATASETS if k in arrays}
+        attrs = {"indicators_hash": self.plan.want[i]["indicators"], "indicators_wall_time": arrays["wall_time"]}
+        if panel.grid:
+            n, a1, b1, a2, b2 = panel.grid
+            attrs.update(map_resolution=int(n), map_p1=[float(a1), float(b1)], map_p2=[float(a2), float(b2)])
+            if not self.plan.alone:
+                payload["lyapunov_seeds"] = panel.seeds
+        frac, err, _n_ok = chaotic_fraction(classify_megno(arrays), ly.threshold, arrays["lyapunov_status"] == 0)
+        attrs.update(chaotic_fraction=frac, chaotic_fraction_error=err, megno_threshold=ly.threshold)
+        self.stats.add_indicators(panel, arrays, (frac, err), self.ly_setting)
+        return payload, attrs
+
+    def indicators(self, panel, arrays) -> None:
+        """Write panel ``panel``'s indicators: the whole panel when there are no sections, else
+        beside its stored sections (which stay as they are)."""
+        i, integ = panel.index, self.scene.integration
+        payload, attrs = self._indicators_part(panel, i, arrays)
+        self.stats.add_dropped(i, panel)   # 0 for a map grid
+        if self.plan.alone:   # the panel is its seeds and their indicators (no crossings)
+            attrs.update(self.panel_attrs(panel, i, True), phi0=float(integ.phi0), direction=int(integ.direction),
                          wall_time=arrays["wall_time"], seeds_dropped=int(panel.dropped))
             payload.update(seeds=panel.seeds, y0=panel.y0, count=arrays["count"], status=arrays["status"],
                            final=arrays["final"], info=arrays["info"], data=arrays["data"])
-            _separatrices(scene, i, payload, attrs)
-            store.commit_panel(out, i, payload, attrs, file_attrs)
-        else:       # beside the stored sections of the panel, which stay as they are
-            attrs.update(panel_attrs(panel, i, True))
+            _separatrices(self.scene, i, payload, attrs)
+            store.commit_panel(self.out, i, payload, attrs, self.file_attrs)
+        else:
+            attrs.update(self.panel_attrs(panel, i, True))
             stale = [k for k in store.INDICATOR_DATASETS + INDICATOR_ATTRS if k not in payload and k not in attrs]
-            store.update_panel(out, i, payload, attrs, remove=stale)
-
-    try:
-        for product, on_panel in (("sections", on_sections), ("indicators", on_indicators)):
-            if product in specs:
-                _map_with_progress(specs[product], on_panel, jobs, backend, None, progress,
-                                   f"sweep {scene.name} {product}", streams, _checker(stop, client))
-    except KeyboardInterrupt:   # ours, or a worker's when Ctrl-C reached the whole process group
-        raise Interrupted(_kept(scene, out, want)) from None
-    finally:
-        if client is not None:
-            client.close()
-
-    figure_paths = ()
-    if stop.requested:      # every panel is stored; the figure is drawn by the next run
-        raise Interrupted(_kept(scene, out, want))
-    if draw and (computed or restamped or force or _figure_stale(stem, out, scene.figure_settings())):
-        figure_paths = tuple(draw_figure(scene, out, stem))
-    return SweepReport(scene=scene.name, out=out, n_panels=scene.n_panels, computed=tuple(computed),
-                       orbits=stats["orbits"], crossings=stats["crossings"], stopped=stats["stopped"],
-                       statuses=dict(stats["statuses"]), max_dh=stats["max_dh"], warning=stats["warning"],
-                       fractions=tuple(stats["fractions"]), threshold=float(ly.threshold),
-                       figure=figure_paths, wall_time=time.perf_counter() - t_start, restamped=restamped,
-                       dropped=sum(stats["dropped"].values()), products={k: tuple(v) for k, v in todo.items()},
-                       indicator_orbits=stats["ind_orbits"], indicator_dh=stats["ind_dh"],
-                       indicator_warning=stats["ind_warning"], indicator_statuses=dict(stats["ind_statuses"]))
+            store.update_panel(self.out, i, payload, attrs, remove=stale)
 
 
 def _count_statuses(counts: dict, status) -> None:

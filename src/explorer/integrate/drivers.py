@@ -59,7 +59,7 @@ from explorer.integrate.layout import (  # noqa: F401 (the carry and limits colu
 )
 from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_TMAX
 from explorer.kernels import dop853 as dp
-from explorer.kernels.checks import all_finite
+from explorer.kernels.checks import EPS, all_finite
 from explorer.kernels.clock import advance_time, clip_step
 from explorer.kernels.events import (
     ROOT_MAX_ITER,
@@ -69,17 +69,20 @@ from explorer.kernels.events import (
     root_workspace,
     secant_start,
     sign_change,
+    sin_diff,
     turns,
 )
 from explorer.model.equations import (
+    G1,
+    G2,
     energy,
     rhs,
     section_c,
     section_g,
     section_g_rate,
 )
+from explorer.model.parameters import B
 
-EPS = 2.220446049250313e-16
 #: A start point with |sin(phi - phi0)| below this is on the section (not a crossing).
 ON_SECTION = 8.0 * EPS
 
@@ -330,7 +333,7 @@ def _may_reach_section(y_old, y_new, K, P, h, g_old, g_new):
     searched rigorously (kernels.events.dense_step_roots)."""
     if turns(y_old[2], y_new[2]):
         return True
-    b = P[2]
+    b = P[B]
     reach = (h * (abs(y_old[2]) + abs(y_new[2])) + h * h * (abs(K[0, 2]) + abs(K[12, 2]))) / b
     return min(abs(g_old), abs(g_new)) <= NEAR_SECTION * reach
 
@@ -398,7 +401,7 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
             dp.dense_coefficients(yout, ynew, K, h, F)
             g_old = section_g(yout, cphi, sphi)
             for k in range(7):
-                Fg[k] = F[k, 3] * cphi - F[k, 4] * sphi
+                Fg[k] = sin_diff(F[k, G1], F[k, G2], cphi, sphi)
             nroots = dense_step_roots(Fg, g_old, gprev, gnew, direction, roots, brackets, coef,
                                       work, stack)
             kept = count

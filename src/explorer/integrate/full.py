@@ -17,6 +17,7 @@ from explorer.kernels import dop853 as dp
 from explorer.kernels.clock import advance_time
 from explorer.kernels.events import dense_root
 from explorer.model.equations import FULL_DIM
+from explorer.model.parameters import B
 
 TWO_PI = 2.0 * math.pi
 
@@ -49,7 +50,7 @@ def integrate_full(y0, phi0, P, t_samples, rtol, atol, max_steps, out, out_phi, 
     ycur = np.empty(n)
     for i in range(n):
         ycur[i] = y0[i]
-    b = P[2]
+    b = P[B]
     phi = phi0
     tmax = t_samples[ns - 1]
     j = 0

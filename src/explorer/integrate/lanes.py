@@ -113,7 +113,14 @@ from explorer.integrate.simd import (
 from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_TMAX
 from explorer.kernels import taylor as tk
 from explorer.kernels.clock import advance_time, clip_step
-from explorer.kernels.events import BOUND_SLACK, ISOLATE_STACK, MAX_STEP_ROOTS, excluded_by_variation, poly_step_roots
+from explorer.kernels.events import (
+    BOUND_SLACK,
+    ISOLATE_STACK,
+    MAX_STEP_ROOTS,
+    excluded_by_variation,
+    poly_step_roots,
+    sin_diff,
+)
 from explorer.kernels.power import HUGE, TINY, is_normal
 from explorer.model import ParameterError
 from explorer.model.equations import section_g
@@ -654,9 +661,9 @@ def run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, o
                     count = L_count[l]
                     gnew = section_g(yl, cphi, sphi)
                     nroots = 0
-                    if not excluded_by_variation(X[0, 3, l] * cphi - X[0, 4, l] * sphi, vary[l]):
+                    if not excluded_by_variation(sin_diff(X[0, _G1, l], X[0, _G2, l], cphi, sphi), vary[l]):
                         for k in range(order + 1):
-                            gc[k] = X[k, 3, l] * cphi - X[k, 4, l] * sphi
+                            gc[k] = sin_diff(X[k, _G1, l], X[k, _G2, l], cphi, sphi)
                         nroots = poly_step_roots(gc, order, h, gprev, gnew, direction, roots,
                                                  brackets, work, stack)
                     for r in range(nroots):

@@ -18,13 +18,14 @@ the step itself is written once here, per method:
 
 A loop is then: take a step, observe it (crossings, tangent accumulators, samples), advance.
 
-=============  ===  ========================================================================
-system          n   state and field
-=============  ===  ========================================================================
-``REDUCED``     5   (p1, p2, M, g1, g2), docs/model.md R3 (:func:`explorer.model.equations.rhs`)
-``TANGENT``    10   R3 and one deviation vector, the variational equations of R3
-``FULL``        7   R3 and the position (x, y), docs/model.md R1
-=============  ===  ========================================================================
+====================  ===  =================================================================
+system                 n   state and field
+====================  ===  =================================================================
+``REDUCED``            5   (p1, p2, M, g1, g2), docs/model.md R3 (:func:`explorer.model.equations.rhs`)
+``TANGENT``           10   R3 and one deviation vector, the variational equations of R3
+``FULL``               7   R3 and the position (x, y), docs/model.md R1
+``REDUCED_BACKWARD``   5   R3 in reversed time s = -t: the field -f, Taylor coefficients (-1)^k X_k
+====================  ===  =================================================================
 
 DOP853: Hairer, Nørsett & Wanner, *Solving ODEs I*, II.10 (tableau and continuous extension
 in :mod:`explorer.kernels.dop853`; controller and first step as scipy's ``DOP853``).
@@ -42,7 +43,7 @@ from explorer._jit import njit
 from explorer.kernels import STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW
 from explorer.kernels import dop853 as dp
 from explorer.kernels import taylor as tk
-from explorer.kernels.checks import all_finite
+from explorer.kernels.checks import EPS, all_finite
 from explorer.kernels.clock import clip_step
 from explorer.model.equations import (
     FULL_DIM,
@@ -58,15 +59,17 @@ from explorer.model.equations import (
 REDUCED = 0
 TANGENT = 1
 FULL = 2
+#: R3 backward in time, y(t0 - s) as a function of s (the section map's inverse,
+#: :func:`explorer.integrate.tangent.return_map_taylor`)
+REDUCED_BACKWARD = 3
 #: state dimension of each system
-DIMENSION = {REDUCED: 5, TANGENT: 10, FULL: FULL_DIM}
+DIMENSION = {REDUCED: 5, TANGENT: 10, FULL: FULL_DIM, REDUCED_BACKWARD: 5}
 #: an accepted step (not a kernel status)
 STEP_OK = -1
 #: the ``h_abs`` a loop gives :func:`dop853_step` before its first step (no step proposed yet)
 FIRST_STEP = -1.0
 #: rows of the orbit itself in every system's state (the rest: deviation vector, position)
 N_ORBIT = 5
-EPS = 2.220446049250313e-16
 
 
 @njit(inline="always")  # inlined at Numba IR level: the tangent loop ~10 % faster (bench_ab.py)
@@ -76,8 +79,12 @@ def field(system, y, P, dy):
         rhs(y, P, dy)                          # docs/model.md R3
     elif system == TANGENT:
         _rhs_augmented(y, P, dy)
-    else:
+    elif system == FULL:
         rhs_full(y, P, dy)                     # docs/model.md R1
+    else:
+        rhs(y, P, dy)                          # d/ds y(t0 - s) = -f
+        for i in range(dy.shape[0]):
+            dy[i] = -dy[i]
 
 
 @njit
@@ -153,11 +160,23 @@ def dop853_dense_stages(system, y, P, K, h, tmp):
 def taylor_coefficients_of(system, P, X, order):
     """The normalised Taylor coefficients X[i, k] = y_i^(k)/k!, k = 0..order, of ``system`` from
     X[:, 0] by its recurrence: R3 (``REDUCED``), or R3 and its variational equations
-    (``TANGENT``: rows 5..9 the deviation vector)."""
+    (``TANGENT``: rows 5..9 the deviation vector), or R3's in reversed time
+    (``REDUCED_BACKWARD``: y(t0 - s) has the coefficients (-1)^k X_k, exactly)."""
     if system == REDUCED:
         taylor_coefficients(P, X, order)
-    else:
+    elif system == TANGENT:
         taylor_coefficients_tangent(P, X[:N_ORBIT], X[N_ORBIT:], order)
+    else:
+        taylor_coefficients(P, X, order)
+        reverse_time(X, order)
+
+
+@njit
+def reverse_time(X, order):
+    """The Taylor coefficients of y(t0 - s) from those of y(t0 + t): X[i, k] -> (-1)^k X[i, k]."""
+    for k in range(1, order + 1, 2):
+        for i in range(X.shape[0]):
+            X[i, k] = -X[i, k]
 
 
 @njit

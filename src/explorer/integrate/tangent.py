@@ -18,25 +18,20 @@ import numpy as np
 
 from explorer._jit import njit, prange
 from explorer.integrate import systems as sy
-from explorer.kernels import STATUS_CANCELLED, STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW
+from explorer.integrate.drivers import ON_SECTION
+from explorer.kernels import STATUS_CANCELLED, STATUS_DONE, STATUS_NONFINITE
 from explorer.kernels import STATUS_TMAX as STATUS_TMAX_CODE
 from explorer.kernels import tangent as tg
 from explorer.kernels import taylor as tk
-from explorer.kernels.events import poly_step_roots, root_workspace
+from explorer.kernels.checks import all_finite
+from explorer.kernels.events import poly_step_roots, root_workspace, sin_diff
 from explorer.model.equations import (
-    taylor_coefficients,
+    G1,
+    G2,
+    section_c,
+    section_g,
     taylor_coefficients_tangent,
 )
-
-EPS = 2.220446049250313e-16
-
-
-@njit
-def _finite(v, n):
-    s = 0.0
-    for i in range(n):
-        s += v[i]
-    return s - s == 0.0
 
 
 @njit
@@ -171,7 +166,7 @@ def orbit_tangent_taylor_ext(y0, v0, w0, nvec, P, T, order, max_steps, early_sto
             # the orbit's rows are recomputed by the same recurrence: the same numbers
             taylor_coefficients_tangent(P, Z[:5], W, order)
             tk.evaluate(W, order, h, wnew)
-            if not _finite(wnew, 5):
+            if not all_finite(wnew):
                 code = STATUS_NONFINITE
                 break
         t_new = T if last else t + h
@@ -295,13 +290,6 @@ def run_tangent_split_batch(Y0, V0, P, T, dt, flow_ids, fracs, max_steps, hist_t
 
 
 # ====================================================================== section return map
-@njit
-def _flip_odd(X, order):
-    for k in range(1, order + 1, 2):
-        for i in range(X.shape[0]):
-            X[i, k] = -X[i, k]
-
-
 # nogil: Python calls it (the section map, :class:`explorer.analysis.section_map.SectionMap`) from
 # a page's thread while the server's event loop runs (issue 32: one return at mu = 1e6 held the
 # GIL for 40 s and froze the server)
@@ -311,12 +299,15 @@ def return_map_taylor(y0, V0, P, cphi, sphi, tsign, tmax, order, max_steps, stop
     from y0, forward (tsign = +1) or backward (tsign = -1) in time, with the tangent map of the
     flow applied to the rows of V0 (m deviation vectors) up to the crossing time.
 
-    Backward: the Taylor series of y(t - s) has coefficients (-1)^k X_k, so the same step, root
-    and evaluation code runs in s = -t; a forward crossing with dphi/dt > 0 appears as a
-    decreasing sin(phi - phi0) in s.  Budgets: the time ``tmax`` (STATUS_TMAX), ``max_steps``
-    steps (STATUS_MAX_STEPS) and the stop switch ``stop`` (an int64 array of one element read
-    before every step: another thread sets it nonzero when a wall-clock budget runs out or the
-    result is no longer wanted; STATUS_CANCELLED).  Returns (status, signed time reached)."""
+    The step is :func:`explorer.integrate.systems.taylor_step` of ``REDUCED`` (forward) or
+    ``REDUCED_BACKWARD`` (the series of y(t - s), coefficients (-1)^k X_k, in s = -t: a forward
+    crossing with dphi/dt > 0 appears as a decreasing sin(phi - phi0) in s); each deviation
+    vector's coefficients come from the variational recurrence on the same orbit
+    (``taylor_coefficients_tangent``: its orbit rows are R3's, bit for bit) and do not choose the
+    step.  Budgets: the stop switch ``stop`` (an int64 array of one element read before every
+    step: another thread sets it nonzero when a wall-clock budget runs out or the result is no
+    longer wanted; STATUS_CANCELLED), the time ``tmax`` (STATUS_TMAX) and ``max_steps`` steps
+    (STATUS_MAX_STEPS), then the step's own checks.  Returns (status, signed time reached)."""
     m = V0.shape[0]
     X = np.empty((5, order + 1))
     Xs = np.empty((5, order + 1))
@@ -325,60 +316,45 @@ def return_map_taylor(y0, V0, P, cphi, sphi, tsign, tmax, order, max_steps, stop
     ynew = np.empty(5)
     gc, work, roots, brackets, stack = root_workspace(order)
     factor = tk.safety_factor(order)
+    system = sy.REDUCED if tsign > 0 else sy.REDUCED_BACKWARD
     V = np.empty((m, 5))
     for i in range(5):
         y[i] = y0[i]
         for r in range(m):
             V[r, i] = V0[r, i]
     direction = 1 if tsign > 0 else -1
-    g0 = y[3] * cphi - y[4] * sphi
-    gprev = 0.0 if abs(g0) <= 8.0 * EPS else g0
+    g0 = section_g(y, cphi, sphi)
+    gprev = 0.0 if abs(g0) <= ON_SECTION else g0
     s = 0.0
     steps = 0
     while True:
-        if s >= tmax:
-            return STATUS_TMAX_CODE, tsign * s
-        if steps >= max_steps:
-            return STATUS_MAX_STEPS, tsign * s
         if stop[0] != 0:
             return STATUS_CANCELLED, tsign * s
+        for i in range(5):
+            X[i, 0] = y[i]
+        code, h, _last, steps = sy.taylor_step(system, X, P, s, tmax, STATUS_TMAX_CODE, order, factor, steps,
+                                               max_steps, ynew)
+        if code != sy.STEP_OK:
+            return code, tsign * s
         for r in range(m):
             for i in range(5):
                 Xs[i, 0] = y[i]
                 D[r, i, 0] = V[r, i]
             taylor_coefficients_tangent(P, Xs, D[r], order)
-        if m == 0:
-            X[:, 0] = y
-            taylor_coefficients(P, X, order)
-        else:
-            for i in range(5):
-                for k in range(order + 1):
-                    X[i, k] = Xs[i, k]
-        if tsign < 0:
-            _flip_odd(X, order)
-            for r in range(m):
-                _flip_odd(D[r], order)
-        h = tk.step_size(X, order, factor)
-        if s + h > tmax:
-            h = tmax - s
-        if not (h > EPS * s) or not (h == h):
-            return STATUS_STEP_UNDERFLOW, tsign * s
-        tk.evaluate(X, order, h, ynew)
-        steps += 1
-        if not _finite(ynew, 5):
-            return STATUS_NONFINITE, tsign * s
-        gnew = ynew[3] * cphi - ynew[4] * sphi
+            if tsign < 0:
+                sy.reverse_time(D[r], order)
+        gnew = section_g(ynew, cphi, sphi)
         found = False
         tau = h
         # every root of the step's polynomial (as the crossing loop, integrate.lanes)
         for k in range(order + 1):
-            gc[k] = X[3, k] * cphi - X[4, k] * sphi
+            gc[k] = sin_diff(X[G1, k], X[G2, k], cphi, sphi)
         nroots = poly_step_roots(gc, order, h, gprev, gnew, direction, roots, brackets, work,
                                  stack)
         for r in range(nroots):
             tau = roots[r]
             tk.evaluate(X, order, tau, yout)
-            if yout[4] * cphi + yout[3] * sphi > 0.0:
+            if section_c(yout, cphi, sphi) > 0.0:
                 found = True
                 break
         if found:

@@ -1,5 +1,10 @@
-"""Finiteness checks shared by every stepping loop (kernel contract: no exceptions, a status)."""
+"""Finiteness checks shared by every stepping loop (kernel contract: no exceptions, a status), and
+the machine epsilon they and the step and root controls are written in."""
 from explorer._jit import njit
+
+#: the float64 machine epsilon 2**-52 (numpy.finfo(float).eps), written once for every kernel and
+#: loop (a Numba global: a compile-time constant)
+EPS = 2.220446049250313e-16
 
 
 @njit

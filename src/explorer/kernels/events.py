@@ -28,9 +28,9 @@ comparison with scipy of benchmarks/stress/stress_crossings.py at dt <= 0.05).
 import numpy as np
 
 from explorer._jit import njit
+from explorer.kernels.checks import EPS
 from explorer.kernels.dop853 import dense_eval_scalar, dense_eval_scalar_derivative
 
-EPS = 2.220446049250313e-16
 #: stop when the Newton correction falls below this fraction of the step
 ROOT_XTOL = 4.0 * EPS
 ROOT_MAX_ITER = 100
@@ -44,6 +44,22 @@ MAX_STEP_ROOTS = 8
 #: relative slack of the exclusion and monotonicity bounds, for the rounding of the sums
 #: and of the shifted coefficients: an interval is never discarded on a margin of rounding
 BOUND_SLACK = 64.0 * EPS
+
+
+@njit(inline="always")
+def sin_diff(s, c, cphi, sphi):
+    """sin(phi - phi0) = sin phi cos phi0 - cos phi sin phi0 from s = sin phi, c = cos phi and
+    cphi, sphi = cos phi0, sin phi0: the event function of the section phi = phi0, written once.
+    Linear in (s, c), so it also maps the Taylor or dense-output coefficients of (sin phi, cos phi)
+    to those of the event function (the step searches)."""
+    return s * cphi - c * sphi
+
+
+@njit(inline="always")
+def cos_diff(s, c, cphi, sphi):
+    """cos(phi - phi0) = cos phi cos phi0 + sin phi sin phi0 (> 0 on the branch phi = phi0 of a
+    root of :func:`sin_diff`, < 0 on phi = phi0 + pi)."""
+    return c * cphi + s * sphi
 
 
 @njit
@@ -178,13 +194,28 @@ def monotone_within(d, order, r):
 
 
 @njit
+def identically_zero(c, order):
+    """True if every coefficient c[0..order] is 0."""
+    for k in range(order + 1):
+        if c[k] != 0.0:
+            return False
+    return True
+
+
+@njit
 def isolate_crossings(gc, order, h, g_old, g_new, direction, brackets, work, stack):
     """Brackets of every crossing in (0, h] of the polynomial g(x) = sum_k gc[k] x^k in the
     given direction (as :func:`sign_change`), g_old and g_new its values at the ends as the
     caller's bookkeeping has them: rows (a, b, g(a), g(b)) of ``brackets``, each holding one
     sign change of the given direction, in increasing order; returns their number (at most
     len(brackets)).  Exclusion / monotonicity tests and bisection (module docstring).
-    work: (order + 1,) scratch; stack: (ISOLATE_STACK, 5) scratch."""
+    work: (order + 1,) scratch; stack: (ISOLATE_STACK, 5) scratch.
+
+    A polynomial that is identically zero (every coefficient 0: the orbit rests on the section,
+    an equilibrium at phi = phi0) crosses nothing; no test could exclude or bracket it, and
+    bisecting it to ISOLATE_MAX_DEPTH visited 2**25 intervals, 15 s for one step."""
+    if identically_zero(gc, order):
+        return 0
     if no_root_within(gc, order, h):        # |x| <= h covers the step [0, h]
         return 0
     if monotone_within(gc, order, h):

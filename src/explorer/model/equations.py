@@ -10,6 +10,7 @@ constants of :mod:`explorer.model.parameters` (``P[MU]``).
 import math
 
 from explorer._jit import njit
+from explorer.kernels.events import cos_diff, sin_diff
 from explorer.model.parameters import A1, A2, CHI, ETA, LAM, MU, XI, ZETA, B
 
 # Splitting H = U + H_2 + H_1 + H_M (docs/model.md R4). Flow ids, outermost first:
@@ -171,22 +172,29 @@ def taylor_coefficients(P, X, order):
 
 
 # ------------------------------------------------------------------ the section phi = phi0
+#: rows of g1 = sin phi and g2 = cos phi in the state (p1, p2, M, g1, g2) and in its Taylor
+#: coefficients
+G1 = 3
+G2 = 4
+
+
 @njit
 def section_g(y, cphi, sphi):
-    """Event function sin(phi - phi0) = g1 cos phi0 - g2 sin phi0 (linear in the state)."""
-    return y[3] * cphi - y[4] * sphi
+    """Event function sin(phi - phi0) = g1 cos phi0 - g2 sin phi0 (linear in the state;
+    kernels.events.sin_diff)."""
+    return sin_diff(y[G1], y[G2], cphi, sphi)
 
 
 @njit
 def section_c(y, cphi, sphi):
     """cos(phi - phi0) = g2 cos phi0 + g1 sin phi0: > 0 on the branch phi = phi0 (not phi0 + pi)."""
-    return y[4] * cphi + y[3] * sphi
+    return cos_diff(y[G1], y[G2], cphi, sphi)
 
 
 @njit
 def section_g_rate(y, P, cphi, sphi):
     """d/dt sin(phi - phi0) = (M/b) cos(phi - phi0) (docs/model.md R3: dphi/dt = M/b)."""
-    return y[2] / P[B] * (y[4] * cphi + y[3] * sphi)
+    return y[2] / P[B] * cos_diff(y[G1], y[G2], cphi, sphi)
 
 
 # ------------------------------------------------------------------ tangent dynamics

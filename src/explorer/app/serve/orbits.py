@@ -1,4 +1,4 @@
-"""The orbits of one browser session, computed block by block in a worker thread.
+"""The orbits of one browser session, computed block by block (a job of the session's task helper).
 
 An :class:`OrbitRun` continues one clicked orbit with
 :func:`explorer.analysis.sections.iter_crossings`, one block at a time from the
@@ -9,15 +9,16 @@ first block is small (``FIRST_BLOCK`` crossings: something is on screen at once)
 are sized so that a block takes about ``BLOCK_SECONDS``, which bounds how long a cancelled
 orbit keeps the worker and how long the page waits between updates.
 
-A :class:`Worker` owns one thread per session and serves its orbits newest first (a new click
-gets its first block before older orbits continue), round robin after that.  ``cancel`` stops
-every orbit of an older generation (a parameter change, clear) at its next block boundary;
+A :class:`Worker` runs a session's orbits as one job of its task (explorer.app.serve.tasks, one
+thread) and serves them newest first (a new click gets its first block before older orbits
+continue), round robin after that.  ``cancel`` stops every orbit (a parameter change, clear) at
+its next block boundary, and what they handed in is dropped;
 ``remove`` stops one (undo).  ``pause`` sets every running orbit aside at its next block boundary
 (a new click: the block in progress is still handed out, nothing after it), keeping its
 :class:`OrbitRun` (about 1.5 kB: the start, the settings and the StreamState, never its
 rows); ``resume`` queues them again, and each continues from its StreamState, so its rows are
 those of an uninterrupted run.  Each block is handed to ``on_block(orbit_id, rows, done,
-status)`` in the worker thread; the page moves it onto its document's event loop.  When an
+status)`` on the session's loop.  When an
 orbit is finished (or its blocks took INDICATOR_AFTER seconds), its mean MEGNO and finite-time
 mLCE over INDICATOR_TIME go to ``on_indicators(orbit_id, megno, mlce)``.  No web library here.
 """
@@ -28,6 +29,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from functools import partial
 
 import numpy as np
 
@@ -53,9 +55,11 @@ INDICATOR_AFTER = 0.5
 INDICATOR_MAX_STEPS = 1_000_000
 #: mean MEGNO above this is called "chaotic-like" (quasi-periodic orbits: <Y> -> 2)
 CHAOTIC_MEGNO = 3.0
-#: one colour per orbit, in turn
+#: one colour per orbit, in turn: 24 distinct (the first 20 orbits of a page never share one;
+#: Tableau 10 and the dark and mid rows of Vega's category20b/c, none near white or the region's gray)
 COLORS = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf",
-          "#bcbd22", "#393b79", "#637939", "#843c39", "#7b4173", "#3182bd", "#e6550d", "#31a354")
+          "#bcbd22", "#393b79", "#637939", "#843c39", "#7b4173", "#3182bd", "#e6550d", "#31a354",
+          "#5254a3", "#8ca252", "#bd9e39", "#ad494a", "#a55194", "#756bb1", "#636363", "#fd8d3c")
 
 
 @dataclass
@@ -66,7 +70,6 @@ class OrbitRun:
     p1: float
     p2: float
     settings: Settings
-    generation: int
     y0: np.ndarray = field(init=False)
     state: sections.StreamState = field(init=False)
     block: int = FIRST_BLOCK
@@ -115,7 +118,7 @@ def warm_up(settings: Settings) -> None:
     if region is None:
         return
     try:
-        OrbitRun(0, region[0], region[1], replace(settings, crossings=1), 0).advance()
+        OrbitRun(0, region[0], region[1], replace(settings, crossings=1)).advance()
     except Exception:  # noqa: BLE001 - the click will report the same error with its orbit
         return
 
@@ -137,43 +140,44 @@ BlockCallback = Callable[[int, np.ndarray, int, str], None]
 
 
 class Worker:
-    """One thread that runs a session's orbits block by block (see the module docstring)."""
+    """A session's orbits, run block by block as one job of ``task`` (a
+    :class:`~explorer.app.serve.tasks.LatestTask`; see the module docstring).  Each block, error
+    and indicator is handed to the callbacks on the session's loop, and only while no
+    :meth:`cancel` came after it (the task's generation)."""
 
     def __init__(self, on_block: BlockCallback, on_error: Callable[[int, BaseException], None] | None = None,
-                 on_indicators: Callable[[int, float, float], None] | None = None):
+                 on_indicators: Callable[[int, float, float], None] | None = None, *, task):
         self._on_block = on_block
         self._on_error = on_error
         self._on_indicators = on_indicators
+        self.task = task
         self._runs: list[OrbitRun] = []
         self._paused: list[OrbitRun] = []     # set aside by pause(), in the order they had
         self._cond = threading.Condition()
-        self._generation = 0
+        self._job = None                      # the task's job running the orbits (None: none runs)
         self._next_id = 0
-        self._stopped = False
         self._rr = 0
-        self._thread = threading.Thread(target=self._loop, name="explorer-serve-worker", daemon=True)
-        self._thread.start()
 
-    @property
-    def generation(self) -> int:
-        return self._generation
+    def _ensure_running(self) -> None:
+        """(Under the lock) a job runs the queued orbits."""
+        if self._runs and (self._job is None or not self._job.current):
+            self._job = self.task.run(self._loop)
 
     def submit(self, p1: float, p2: float, settings: Settings) -> OrbitRun:
         """Queue an orbit from (p1, p2) (ParameterError, nothing queued, outside the region)."""
         with self._cond:
             self._next_id += 1
-            run = OrbitRun(self._next_id, float(p1), float(p2), settings, self._generation)
+            run = OrbitRun(self._next_id, float(p1), float(p2), settings)
             self._runs.insert(0, run)      # newest first: its first block comes next
-            self._cond.notify()
+            self._ensure_running()
         return run
 
     def cancel(self) -> int:
         """Stop every queued or running orbit (at its next block boundary); returns the new
-        generation (blocks of older generations are never handed out after this returns)."""
+        generation (what older ones handed in is dropped on the loop)."""
         with self._cond:
-            self._generation += 1
             self._runs, self._paused = [], []
-            return self._generation
+            return self.task.cancel()
 
     def remove(self, ident: int) -> None:
         """Stop one orbit, running or paused (undo)."""
@@ -194,8 +198,7 @@ class Worker:
         with self._cond:
             moved, self._paused = self._paused, []
             self._runs = self._runs + moved
-            if moved:
-                self._cond.notify()
+            self._ensure_running()
             return [r.ident for r in moved]
 
     def paused(self) -> list[int]:
@@ -207,14 +210,11 @@ class Worker:
         with self._cond:
             return bool(self._runs)
 
-    def stop(self, timeout: float = 5.0) -> None:
-        """End the thread (the session is gone)."""
+    def stop(self, wait: bool = False) -> None:
+        """End the orbits (the session is gone)."""
         with self._cond:
-            self._stopped = True
             self._runs, self._paused = [], []
-            self._cond.notify()
-        if threading.current_thread() is not self._thread:
-            self._thread.join(timeout)
+        self.task.stop(wait)
 
     def _pick(self) -> OrbitRun | None:
         fresh = [r for r in self._runs if r.done == 0]
@@ -225,16 +225,16 @@ class Worker:
         self._rr = (self._rr + 1) % len(self._runs)
         return self._runs[self._rr]
 
-    def _loop(self) -> None:
+    def _loop(self, job) -> None:
+        """The task's job: block after block of the queued orbits until none is left or a cancel
+        supersedes it."""
         while True:
             with self._cond:
-                while not self._stopped and not self._runs:
-                    self._cond.wait()
-                if self._stopped:
+                run = self._pick() if job.current else None
+                if run is None:
+                    if self._job is job:
+                        self._job = None
                     return
-                run = self._pick()
-            if run is None:
-                continue
             try:
                 rows = run.advance()
             except Exception as exc:  # noqa: BLE001 - reported in the page; the server keeps serving
@@ -242,18 +242,16 @@ class Worker:
                     self._runs = [r for r in self._runs if r is not run]
                     self._paused = [r for r in self._paused if r is not run]
                 if self._on_error is not None:
-                    self._on_error(run.ident, exc)
+                    job.post(partial(self._on_error, run.ident, exc))
                 continue
             with self._cond:
                 # a run paused while its block was computed still hands that block out
-                current = run.generation == self._generation and any(r is run for r in self._runs + self._paused)
-                if run.finished and current:
+                if not any(r is run for r in self._runs + self._paused):
+                    continue
+                if run.finished:
                     self._runs = [r for r in self._runs if r is not run]
                     self._paused = [r for r in self._paused if r is not run]
-                if not current:
-                    continue
-                # handed out under the lock: cancel() cannot slip between the check and the hand-out
-                self._on_block(run.ident, rows, run.done, run.status)
+            job.post(partial(self._on_block, run.ident, rows, run.done, run.status))
             if run.wants_indicators and (run.finished or run.wall >= INDICATOR_AFTER) and \
                     self._on_indicators is not None:
                 # once the orbit is finished (or has run INDICATOR_AFTER): its chaos indicators, once
@@ -262,6 +260,4 @@ class Worker:
                     megno, mlce = orbit_indicators(run.settings, run.y0)
                 except Exception:  # noqa: BLE001 - an indicator that fails is shown as unknown
                     megno = mlce = math.nan
-                with self._cond:
-                    if run.generation == self._generation:
-                        self._on_indicators(run.ident, megno, mlce)
+                job.post(partial(self._on_indicators, run.ident, megno, mlce))

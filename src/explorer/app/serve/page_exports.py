@@ -1,14 +1,12 @@
 """The page's exports: the session as a scene (download, and into --export-dir with its HDF5 store)
 and the view as PNG/SVG (downloads, and into --export-dir): :mod:`explorer.app.serve.export` and
-:mod:`explorer.app.serve.image` do the work.  A part of :class:`~explorer.app.serve.page.SectionPage`
-(a mixin)."""
+:mod:`explorer.app.serve.image` do the work, the files into --export-dir as jobs of the session's
+task helper.  A component of :class:`~explorer.app.serve.page.SectionPage`."""
 from __future__ import annotations
 
 import io
 import math
 import os
-import threading
-from functools import partial
 
 import numpy as np
 
@@ -17,23 +15,31 @@ from explorer.app.serve.orbits import COLORS
 from explorer.model import ParameterError
 
 
-class ExportsMixin:
-    """Scene and figure exports of :class:`~explorer.app.serve.page.SectionPage`."""
+def _why(exc: BaseException) -> str:
+    return f"{type(exc).__name__}: {' '.join(str(exc).split())}"
 
-    def _scene_text(self) -> str:
-        return export.session_scene(self.settings, [(a, b) for _i, a, b, _c in self.starts],
-                                    overlays=self.overlays_on()).to_toml()
 
-    def overlays_on(self) -> tuple:
-        """The names of the overlays that are on (separatrices, periodic, megno), as in the URL."""
-        q = self.url_query()
-        return tuple(n for n in ("separatrices", "periodic", "megno") if q.get(n) == "1")
+class Exports:
+    """Scene and figure exports of a page (``host``: its settings, components and messages)."""
 
-    def _scene_file(self):
+    def __init__(self, host, loop, export_dir=None, label: str = ""):
+        self.host, self.export_dir, self.label = host, export_dir, label
+        self.figure_task = loop.task("figure")
+        self.store_task = loop.task("store")
+
+    def _starts(self) -> list:
+        return [(a, b) for _i, a, b, _c in self.host.orbits.starts]
+
+    def scene_text(self) -> str:
+        return export.session_scene(self.host.settings, self._starts(), overlays=self.host.overlays_on()).to_toml()
+
+    _scene_text = scene_text
+
+    def scene_file(self):
         try:
-            return io.StringIO(self._scene_text())
+            return io.StringIO(self.scene_text())
         except ParameterError as exc:
-            self.say(str(exc))
+            self.host.say(str(exc))
             return io.StringIO("")
 
     def view(self):
@@ -41,31 +47,31 @@ class ExportsMixin:
         :func:`explorer.app.serve.image.render`, in any thread)."""
         from explorer.app.serve.image import View
 
-        d = self.crossings.data
+        host = self.host
+        orbits, ov = host.orbits, host.overlays
+        d = orbits.crossings.data
         orbit = np.asarray(d["orbit"])
         p = np.column_stack([np.asarray(d["p1"], float), np.asarray(d["p2"], float)])
-        orbits = [(i, COLORS[c], p[orbit == i], self.indicators.get(i, (math.nan,))[0]) for i, _a, _b, c in self.starts]
-        w = self.window
+        shown = [(i, COLORS[c], p[orbit == i], orbits.indicators.get(i, (math.nan,))[0])
+                 for i, _a, _b, c in orbits.starts]
+        w = host.section.window
         window = (w.x0, w.x1, w.y0, w.y1) if w is not None else (-1.0, 1.0, -1.0, 1.0)
-        r = self.raster_source.data
+        r = host.chaos.raster_source.data
         raster = None
         if len(r["image"]):
             x, y = r["x"][0], r["y"][0]
             raster = (np.array(r["image"][0], float), (x, x + r["dw"][0], y, y + r["dh"][0]))
-        f, q = self.fixed.data, self.periodic.data
-        s = self.settings
+        f, q, m = ov.fixed.data, ov.periodic.data, ov.manifold_source.data
+        s = host.settings
         title = f"mu = {s.params.mu:g}, h = {s.h:g}, {s.method}" + (f" ({self.label})" if self.label else "")
-        return View(window=window, region=s.region, orbits=orbits,
-                    starts=[(a, b, COLORS[c]) for _i, a, b, c in self.starts], raster=raster,
+        return View(window=window, region=s.region, orbits=shown,
+                    starts=[(a, b, COLORS[c]) for _i, a, b, c in orbits.starts], raster=raster,
                     fixed=[(a, b, k == "elliptic") for a, b, k in zip(f["p1"], f["p2"], f["kind"])],
-                    separatrices=[np.column_stack([x, y]) for x, y in zip(self.curves.data["xs"],
-                                                                          self.curves.data["ys"])],
-                    manifolds=[(k, np.column_stack([x, y])) for k, x, y in zip(
-                        self.manifold_source.data["kind"], self.manifold_source.data["xs"],
-                        self.manifold_source.data["ys"])],
+                    separatrices=[np.column_stack([x, y]) for x, y in zip(ov.curves.data["xs"], ov.curves.data["ys"])],
+                    manifolds=[(k, np.column_stack([x, y])) for k, x, y in zip(m["kind"], m["xs"], m["ys"])],
                     periodic=[(a, b, k, e == "elliptic") for a, b, k, e in zip(q["p1"], q["p2"], q["period"],
                                                                                q["kind"])],
-                    by_megno=bool(self.colour_box.value), title=title)
+                    by_megno=bool(orbits.colour_box.value), title=title)
 
     def figure_bytes(self, fmt: str) -> bytes:
         """The page's view as a PNG or SVG file (the *Figure* downloads)."""
@@ -73,47 +79,47 @@ class ExportsMixin:
 
         return render(self.view(), fmt)
 
-    def _figure_file(self, fmt):
+    def figure_file(self, fmt):
         try:
             return io.BytesIO(self.figure_bytes(fmt))
         except Exception as exc:  # noqa: BLE001 - reported in the page; the download is empty
-            self.say(f"figure failed: {type(exc).__name__}: {' '.join(str(exc).split())}")
+            self.host.say(f"figure failed: {_why(exc)}")
             return io.BytesIO(b"")
 
     def export_figure(self) -> None:
-        """Write the page's view as PNG and SVG into the export directory (drawn in a thread)."""
+        """Write the page's view as PNG and SVG into the export directory (drawn by a job)."""
         view = self.view()
-        self.tell("writing the figure ...")
-        threading.Thread(target=self._write_figure, args=(view,), name="explorer-serve-figure", daemon=True).start()
+        self.host.tell("writing the figure ...")
+        self.figure_task.submit(self._write_figure, view)
 
-    def _write_figure(self, view):
+    def _write_figure(self, job, view):
         try:
             paths = export.write_figure(self.export_dir, view)
             text, ok = "figure written: " + " and ".join(os.path.basename(p) for p in paths), True
         except Exception as exc:  # noqa: BLE001 - reported in the page
-            text, ok = f"figure export failed: {type(exc).__name__}: {' '.join(str(exc).split())}", False
-        self._post(partial(self.say, text, ok))
+            text, ok = f"figure export failed: {_why(exc)}", False
+        job.post(lambda: self.host.say(text, ok))
 
     def export(self) -> str | None:
-        """Write the session's scene into the export directory; returns its path."""
+        """Write the session's scene into the export directory; returns its path (its orbits'
+        store follows, written by a job)."""
         try:
-            sc = export.session_scene(self.settings, [(a, b) for _i, a, b, _c in self.starts],
-                                      overlays=self.overlays_on())
+            sc = export.session_scene(self.host.settings, self._starts(), overlays=self.host.overlays_on())
             path = export.write_scene(self.export_dir, sc)
         except (ParameterError, OSError) as exc:
-            self.say(f"export failed: {exc}")
+            self.host.say(f"export failed: {exc}")
             return None
         name = os.path.basename(path)
-        self.tell(f"scene written: {name} (rerun: explorer sweep {name}); writing the orbits' store ...")
-        threading.Thread(target=self._write_store, args=(path,), name="explorer-serve-store", daemon=True).start()
+        self.host.tell(f"scene written: {name} (rerun: explorer sweep {name}); writing the orbits' store ...")
+        self.store_task.submit(self._write_store, path)
         return path
 
-    def _write_store(self, scene_path):
-        """In a thread: the exported scene's orbits as an HDF5 store next to it."""
+    def _write_store(self, job, scene_path):
+        """The exported scene's orbits as an HDF5 store next to it."""
         try:
             out = export.write_store(scene_path)
             text = f"written: {os.path.basename(scene_path)} and {os.path.basename(out)} (the orbits, sweep format)"
             ok = True
         except Exception as exc:  # noqa: BLE001 - reported in the page
-            text, ok = f"store export failed: {type(exc).__name__}: {' '.join(str(exc).split())}", False
-        self._post(partial(self.say, text, ok))
+            text, ok = f"store export failed: {_why(exc)}", False
+        job.post(lambda: self.host.say(text, ok))

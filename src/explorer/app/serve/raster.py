@@ -5,20 +5,18 @@ inside the allowed region are started on the section (docs/model.md R9, M > 0) a
 <Y>(``RASTER_TIME``) is computed with :func:`explorer.analysis.lyapunov.indicators` (the tangent
 lanes, the page's method and tolerance), ``BATCH`` seeds per call; cells outside the region are
 NaN.  After each batch the partial image is handed out (``on_image(generation, image)``), so the
-page fills in while the next batch runs.  A new window or new settings (:meth:`RasterWorker.start`)
-or :meth:`RasterWorker.cancel` stops the current raster at its next batch (a stale image is never
-handed out after the call returns).  No web library here.
+page fills in while the next batch runs; its ``stop()`` ends the raster at the next batch (the page's
+ChaosLayer runs it as a job of the session's task helper: a new window or new settings supersede
+it).  No web library here.
 """
 from __future__ import annotations
 
-import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from explorer import model
-from explorer.app.serve.jobs import LatestJob
 from explorer.app.serve.settings import Settings
 
 #: resolutions of the successive rasters of one window (each a refinement of the last), by default
@@ -107,48 +105,3 @@ def rasters(settings: Settings, window: Window, stop: Callable[[], bool] = lambd
         if not len(rows):
             yield Image(window, n, values.copy(), True)
         previous = values
-
-
-class RasterWorker:
-    """One thread that computes the rasters of the latest window (see the module docstring): a
-    :class:`~explorer.app.serve.jobs.LatestJob` whose images are handed out only while their
-    window is still the latest (checked under a lock, so a stale image never reaches the page)."""
-
-    def __init__(self, on_image: Callable[[int, Image], None], on_error: Callable[[BaseException], None],
-                 resolutions: tuple = RESOLUTIONS, time: float = RASTER_TIME):
-        self.resolutions = resolutions
-        self.time = time
-        self._on_image = on_image
-        self._on_error = on_error
-        self._lock = threading.Lock()
-        self._generation = 0
-        self._jobs = LatestJob(self._run, "explorer-serve-raster")
-        self._thread = self._jobs.thread
-
-    def start(self, settings: Settings, window: Window) -> int:
-        """Compute the rasters of ``window`` (the current one stops); returns its generation."""
-        with self._lock:
-            self._generation += 1
-            generation = self._generation
-        self._jobs.put((generation, settings, window))
-        return generation
-
-    def cancel(self) -> None:
-        with self._lock:
-            self._generation += 1
-        self._jobs.drop()
-
-    def stop(self) -> None:
-        self._jobs.stop()
-
-    def _run(self, generation: int, settings: Settings, window: Window) -> None:
-        def stale(g: int = generation) -> bool:
-            return g != self._generation
-        try:
-            for image in rasters(settings, window, stop=stale, resolutions=self.resolutions, time=self.time):
-                with self._lock:
-                    if generation != self._generation:
-                        break
-                    self._on_image(generation, image)
-        except Exception as exc:  # noqa: BLE001 - reported in the page; the server keeps serving
-            self._on_error(exc)

@@ -15,6 +15,7 @@ Safe by default:
 """
 from __future__ import annotations
 
+import asyncio
 import gc
 import hmac
 import ipaddress
@@ -164,6 +165,7 @@ def run(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, t
     server.start()
     if open_browser:
         open_in_browser(url)
+    server.io_loop.add_callback(lambda: asyncio.get_running_loop().set_exception_handler(_quiet_about_clients_gone))
     stopped, restore = _stop_on_signals(server.io_loop)
     try:
         server.io_loop.start()
@@ -174,10 +176,25 @@ def run(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, t
         # Ctrl-C (or SIGTERM): the server is stopped; the process ends now, without the interpreter's
         # finalisation, which took up to a second more while sessions computed (issue 32: Ctrl-C ends
         # the server within 1 s in every state).  Nothing is lost: the server writes nothing at exit
-        # (an export in progress is a daemon thread, abandoned either way).
+        # (an export in progress runs in a daemon thread, abandoned either way).
         out.flush()
         sys.stderr.flush()
         os._exit(0)
+
+
+def _quiet_about_clients_gone(loop, context) -> None:
+    """The event loop's exception handler: a browser that closed its websocket while Bokeh was
+    sending it a message leaves a task whose ``WebSocketClosedError`` nobody retrieves (Tornado's
+    ``write_message`` wrapper), and asyncio's default handler prints its traceback when the task
+    is collected -- seen on a loaded machine when Ctrl-C stops a server whose page was busy.  A
+    client that went away is not an error of the server (Bokeh logs it once as a warning); every
+    other exception goes to asyncio's default handler, unchanged."""
+    from tornado.iostream import StreamClosedError
+    from tornado.websocket import WebSocketClosedError
+
+    if isinstance(context.get("exception"), (WebSocketClosedError, StreamClosedError)):
+        return
+    loop.default_exception_handler(context)
 
 
 def _stop_on_signals(loop) -> tuple:

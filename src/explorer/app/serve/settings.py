@@ -46,27 +46,24 @@ MAX_FIELD_CHARS = 64
 
 
 @dataclass(frozen=True)
-class Settings:
+class Settings(sections.Integration):
     """Everything that determines a clicked orbit's crossings: ``explorer orbit --p1 P1 --p2 P2
     --h H --method M --tol TOL --dt DT --crossings K`` with the model ``params`` gives the same
-    rows bit for bit (the section phi = ``phi0``, crossings in ``direction``)."""
+    rows bit for bit (the section phi = ``phi0``, crossings in ``direction``).
+
+    The integration settings are a :class:`explorer.analysis.sections.Integration` (the one
+    integration settings object, validated once, there, as the command line's and a scene's);
+    the page adds the model ``params`` (a validated :class:`explorer.model.Params`), the energy
+    ``h``, its own bound on the crossings per click (MAX_CROSSINGS) and a finite allowed region."""
 
     params: model.Params = model.FIGURE4
     h: float = model.FIGURE4_H
-    method: str = "taylor"
-    tol: float = sections.DEFAULT_TOL
-    dt: float = sections.DEFAULT_DT
     crossings: int = DEFAULT_CROSSINGS
-    phi0: float = math.pi
-    direction: int = 1
 
     def __post_init__(self):
-        validation.choice("method", self.method, sections.METHODS)
-        validation.real("tol", self.tol, sections.MIN_TOL, sections.MAX_TOL)
-        validation.real("dt", self.dt, 0.0, lo_open=True)
+        super().__post_init__()
         validation.integer("crossings", self.crossings, 1, MAX_CROSSINGS)
         validation.magnitude("h", self.h)      # (as --h: the model's MAX_MAGNITUDE)
-        validation.real("phi0", self.phi0)
         e = model.allowed_ellipse(self.params, self.h, self.phi0)
         if e is not None and not all(math.isfinite(float(v)) for v in e):
             # (e.g. lam = -1e-300: the ellipse's centre or radii overflow; nothing could be drawn or computed)

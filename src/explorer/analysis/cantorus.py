@@ -1,0 +1,183 @@
+"""The flux through a cantorus of the standard map: MacKay, Meiss & Percival's action difference.
+
+Above the breakup of the invariant circle of rotation number nu (k > k_c, :mod:`explorer.analysis.greene`)
+the circle is a cantorus, and the area that crosses it per iteration (the turnstile's lobe area)
+is the difference of the actions of its two homoclinic orbits: MacKay, Meiss & Percival (1984,
+Physica D 13, 55): Delta W = W(minimax) - W(minimizing), the
+limit of the same difference for the periodic orbits of the convergents P_n/Q_n of nu,
+
+    Delta W_n = W(x^minimax_{P/Q}) - W(x^min_{P/Q}) -> Delta W,     W = sum_{t=0}^{Q-1} F(theta_t, theta_{t+1}),
+
+with the generating function of (S1), F(theta, theta') = (theta' - theta)^2 / 2 - k cos(theta)
+(p = -dF/dtheta = theta' - theta - k sin(theta), p' = dF/dtheta' = theta' - theta: p' = p + k sin theta).
+Near k_c they found Delta W ~ (k - k_c)^eta with eta = 3.0117 from renormalisation.
+
+The two orbits of each convergent are the symmetric ones (Greene 1979): the minimax orbit
+(positive residue) on the line theta = pi, the minimizing one (negative residue) on theta = 0 for
+odd Q and on the line 2 theta - p = 0 (Fix I1, :class:`~explorer.analysis.maps.StandardMap`) for
+even Q, each found by shooting over half its period from its line to the other symmetry line
+(:mod:`explorer.analysis.greene`, "The half-orbit method").  Above k_c the residues of the
+convergents grow without bound and, beyond Q of a few hundred at k - k_c ~ 0.01, double precision
+loses the orbits (the closure error reaches the action difference): the sequence is cut at the
+first convergent whose orbit is not found, does not close, or whose Delta W_n stops decreasing,
+and the last three terms are extrapolated by Aitken's Delta^2 (the terms converge geometrically,
+ratio ~0.3).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from explorer.analysis import greene as gm
+from explorer.analysis.maps import StandardMap, standard_monodromy
+from explorer.model import ParameterError, validation
+
+__all__ = ["CantorusFlux", "action", "cantorus_flux", "minimizing_orbit"]
+
+#: the closure error |T^Q(x) - x - (2 pi P, 0)| of an orbit is accepted below this fraction of its
+#: action difference (beyond, the orbit's round-off is of the size of what is measured)
+CLOSURE_FRACTION = 1e-3
+#: the largest period followed by default
+DEFAULT_QMAX = 610
+
+
+def action(k: float, points, P: int) -> float:
+    """W = sum_{t=0}^{Q-1} F(theta_t, theta_{t+1}) of the orbit ``points`` ((Q, 2), theta lifted) of
+    type P/Q, with theta_Q = theta_0 + 2 pi P and F(theta, theta') = (theta' - theta)^2/2 - k cos(theta)."""
+    th = np.append(np.asarray(points, float)[:, 0], points[0][0] + 2.0 * math.pi * P)
+    d = np.diff(th)
+    return float(np.sum(0.5 * d * d - k * np.cos(th[:-1])))
+
+
+#: the even-period scan of the line 2 theta - p = 0: this many samples within SCAN_WIDTH of the guess
+SCAN_SAMPLES = 2000
+SCAN_WIDTH = 1.0
+#: halvings of a scan's bracket (2 / 2000 to below the spacing of doubles near p ~ 4)
+BISECTIONS = 60
+
+
+def _i1_function(k, P, Q, s) -> float:
+    n = Q // 2
+    _, _, _, _, th, p = standard_monodromy(0.5 * s, s, k, n)
+    return 2.0 * th - p - 2.0 * math.pi * P
+
+
+def _bisect(fn, a, b, fa) -> float:
+    """A root of fn in [a, b] (fn(a) = fa and fn(b) of opposite signs) by bisection to the spacing of
+    doubles: far above k_c the shooting function is too steep and curved for Newton from a bracket
+    of the scan's width."""
+    for _ in range(BISECTIONS):
+        m = 0.5 * (a + b)
+        if m in (a, b):
+            break
+        fm = fn(m)
+        if (fm < 0.0) == (fa < 0.0):
+            a, fa = m, fm
+        else:
+            b = m
+    return 0.5 * (a + b)
+
+
+def minimizing_orbit(system: StandardMap, p: int, q: int, *, guess=None) -> np.ndarray:
+    """The points (Q, 2) of the minimizing symmetric orbit of type ``p``/``q`` (module docstring):
+    from theta = 0 for odd q (:func:`explorer.analysis.greene.symmetric_orbit`, Newton from
+    ``guess``, default 2 pi p/q); for even q the orbit of least action among the roots of the
+    half-orbit equation on the line 2 theta - p = 0 within ``SCAN_WIDTH`` of ``guess`` (a scan of
+    ``SCAN_SAMPLES`` points, each sign change refined by bisection: far above k_c the shooting function
+    oscillates and Newton from a continued guess alone can land on the minimax orbit or fail; the
+    minimizing orbit is the one of least action among all of its type, Aubry-Mather theory)."""
+    P = validation.integer("p", p, 0)
+    Q = validation.integer("q", q, gm.MIN_Q)
+    k = system.k
+    g = 2.0 * math.pi * P / Q if guess is None else float(guess)
+    if Q % 2:
+        return gm.symmetric_orbit(system, P, Q, line=0.0, guess=g).points
+    s = g + SCAN_WIDTH * np.linspace(-1.0, 1.0, SCAN_SAMPLES + 1)
+    f = np.array([_i1_function(k, P, Q, x) for x in s])
+    best = None
+    for i in np.flatnonzero(np.isfinite(f[:-1]) & np.isfinite(f[1:]) & (np.sign(f[:-1]) != np.sign(f[1:]))):
+        p0 = _bisect(lambda x: _i1_function(k, P, Q, x), s[i], s[i + 1], f[i])
+        pts = system.iterate((0.5 * p0, p0), Q)[:Q]
+        w = action(k, pts, P)
+        if best is None or w < best[0]:
+            best = (w, pts)
+    if best is None:
+        raise ParameterError(f"no symmetric orbit of type {P}/{Q} on the line 2 theta - p = 0 near p = {g:.10g} at "
+                             f"k = {k:.12g}")
+    return best[1]
+
+
+@dataclass(frozen=True)
+class CantorusFlux:
+    """The action differences of the convergents and their limit (:func:`cantorus_flux`)."""
+
+    k: float
+    nu: float
+    q: list            # the periods used
+    delta_w: list      # Delta W_n per period
+    flux: float        # Aitken's limit of the last three (the last term when fewer)
+    stopped: str       # why the sequence ended before qmax ("" when it did not)
+
+
+def _first(solve, guess):
+    """solve(guess), or solve(None) (the integrable map's start 2 pi P/Q) when the continued guess
+    fails: Newton from the previous convergent's start can jump to another branch far above k_c."""
+    try:
+        return solve(guess)
+    except ParameterError:
+        if guess is None:
+            raise
+        return solve(None)
+
+
+def _closure(system, pts, P) -> float:
+    end = system.iterate(pts[0], len(pts))[-1]
+    return float(max(abs(end[0] - pts[0, 0] - 2.0 * math.pi * P), abs(end[1] - pts[0, 1])))
+
+
+def cantorus_flux(system: StandardMap, nu="golden", *, qmax=DEFAULT_QMAX, qmin=5) -> CantorusFlux:
+    """The flux Delta W through the cantorus of rotation number ``nu`` of the standard map above its
+    breakup (MacKay, Meiss & Percival 1984; module docstring), in the map's (theta, p) units (the
+    papers' (x, y) = (theta/2 pi, p/2 pi) units give Delta W / (2 pi)^2).  Each convergent's two
+    orbits are continued from the previous convergent's; the sequence stops at ``qmax`` or where
+    double precision loses the orbits (``stopped`` says so)."""
+    if not isinstance(system, StandardMap):
+        raise ParameterError(f"cantorus_flux needs a StandardMap (its generating function), got "
+                             f"{type(system).__name__}")
+    x = gm.rotation_value(nu)
+    k = system.k
+    qs: list[int] = []
+    dws: list[float] = []
+    g_max = g_min_odd = g_min_even = None
+    stopped = ""
+    for P, Q in gm.convergents(x, validation.integer("qmax", qmax, 3, gm.MAX_QMAX)):
+        try:
+            mx = _first(lambda g: gm.symmetric_orbit(system, P, Q, line=math.pi, guess=g), g_max)
+            mn = _first(lambda g: minimizing_orbit(system, P, Q, guess=g), g_min_odd if Q % 2 else g_min_even)
+        except ParameterError as exc:
+            stopped = f"q = {Q}: {exc}"
+            break
+        g_max = mx.points[0, 1]
+        if Q % 2:
+            g_min_odd = mn[0, 1]
+        else:
+            g_min_even = mn[0, 1]
+        if Q < qmin:
+            continue
+        dw = action(k, mx.points, P) - action(k, mn, P)
+        err = max(_closure(system, mx.points, P), _closure(system, mn, P))
+        if not err <= CLOSURE_FRACTION * abs(dw):
+            stopped = f"q = {Q}: the orbits close only to {err:.2g} (Delta W_n = {dw:.3g}): double precision's end"
+            break
+        if dws and not 0.0 < dw < dws[-1]:
+            stopped = f"q = {Q}: Delta W_n = {dw:.3g} after {dws[-1]:.3g} stopped decreasing: the orbits are lost"
+            break
+        qs.append(Q)
+        dws.append(dw)
+    if not dws:
+        raise ParameterError(f"no convergent of nu = {x:.10g} with q >= {qmin} gave an action difference at "
+                             f"k = {k:.12g} ({stopped})")
+    flux = gm._aitken(*dws[-3:]) if len(dws) >= 3 else dws[-1]
+    return CantorusFlux(float(k), x, qs, dws, float(flux), stopped)

@@ -1,0 +1,322 @@
+"""The orbits on the page: the clicked starts, their crossings as they arrive from the session's
+:class:`~explorer.app.serve.orbits.Worker` (a job of the session's task helper,
+:mod:`explorer.app.serve.tasks`), the live layer of a click's first crossings, the status line, and
+the colouring of the orbits (by orbit, or by their MEGNO once known).  A component of
+:class:`~explorer.app.serve.page.SectionPage`.
+
+What it holds, by Bokeh model name: ``crossings`` (every crossing the browser draws as a dot:
+orbit, t, p1, p2, M, dH, the orbit's colour index c and its MEGNO, NaN until known; empty past
+density.THRESHOLD, where :attr:`OrbitsLayer.crossings`, in the server only, holds them all),
+``glyphs`` (the CustomJSFilter of the rows drawn as glyphs: the orbits from ``args.first`` on),
+``live`` (the rows of a message that carried an orbit's first crossings, drawn on Bokeh's overlay
+canvas until the next flush moves them to ``crossings``; every row is in exactly one of the two),
+``starts`` (the clicked starts: orbit, p1, p2, c) and ``status``.
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import panel as pn
+from bokeh.models import CDSView, ColumnDataSource, CustomJSFilter, Div, LinearColorMapper
+
+from explorer.app.serve.orbits import CHAOTIC_MEGNO, COLORS, INDICATOR_TIME, Worker
+from explorer.app.serve.style import MEGNO_HIGH, MEGNO_LOW, MEGNO_ORBIT_SKIP, POINT_SIZE, megno_palette
+
+#: after an orbit's first block (sent at once, to the live layer), blocks go to the browser at most
+#: this often (s): each message makes the browser redraw every dot on screen (benchmarks/bench_serve.py)
+FLUSH_SECONDS = 0.25
+#: a flush this close to the time the live rows are due to settle (s) settles them
+SETTLE_SLACK = 0.01
+#: rows sent before the live rows settle join them while the live layer stays within this many
+#: (a short orbit's last block; the overlay repaints them all, about 5 us a dot); a larger block
+#: took 50 ms or more to compute (orbits.BLOCK_SECONDS), the first rows are on screen by then,
+#: and it settles at once with them (one repaint of everything instead of two)
+LIVE_MAX_ROWS = 2_000
+#: the check box: on, a new orbit pauses those still running (Resume continues them); off, they run together
+PAUSE_LABEL = "a click pauses running orbits"
+#: the browser's filter of the drawn crossings: the rows of the orbits from ``first`` on (their indices)
+GLYPH_FILTER = ("const o = source.data.orbit, n = o.length, rows = [];\n"
+                "for (let i = 0; i < n; i++) if (o[i] >= first) rows.push(i);\n"
+                "return rows;")
+#: the columns of the page's crossings (and c, the orbit's colour index)
+CROSSING_COLUMNS = ("orbit", "t", "p1", "p2", "M", "dH", "megno")
+
+
+def _empty_crossings() -> dict:
+    d = {c: np.zeros(0) for c in CROSSING_COLUMNS}
+    d["orbit"] = np.zeros(0, np.int64)
+    d["c"] = np.zeros(0, np.int64)
+    return d
+
+
+def _empty_live() -> dict:
+    return {c: [] for c in _empty_crossings()}
+
+
+def _empty_starts() -> dict:
+    return {"orbit": [], "p1": [], "p2": [], "c": []}
+
+
+class OrbitsLayer:
+    """The starts, crossings and status of a page (module docstring).  ``host``: the page (its
+    ``settings``, ``say``, ``push_url`` and ``density``)."""
+
+    def __init__(self, host, view, loop):
+        self.host, self.view, self.loop = host, view, loop
+        self.starts: list[tuple] = []          # (orbit id, p1, p2, colour) of every start, in click order
+        self._unmarked: list[tuple] = []       # starts whose cross is not yet in start_source
+        self._color = 0
+        self._running: set = set()             # ids of the orbits still computing (or paused)
+        self.indicators: dict = {}             # orbit id -> (mean MEGNO, mLCE) over INDICATOR_TIME
+        self._pending: list = []               # blocks handed in, not yet on the page
+        self._flushed_at = -math.inf           # when the last flush ran (monotonic)
+        self._settle_at = -math.inf            # the flush due then moves the live rows
+        self._settled = 0                      # crossings' rows up to here are in shown, from here on in live
+        self.flush_timer = loop.timer(lambda: self._flush())   # (looked up when due: a test may trace it)
+        self.worker = Worker(self._on_block, self._on_error, self._on_indicators, task=loop.task("orbits"))
+        # every crossing of the session, in the server (never in the document: not sent to the browser) ...
+        self.crossings = ColumnDataSource(_empty_crossings())
+        # ... what the browser draws: the same rows up to density.THRESHOLD, none past it ...
+        self.shown = ColumnDataSource(_empty_crossings(), name="crossings")
+        # ... and the rows of a message with an orbit's first crossings, until the next flush
+        # (as lists: a few rows as JSON, one frame of the websocket, not a binary buffer per column)
+        self.live = ColumnDataSource(_empty_live(), name="live")
+        self.start_source = ColumnDataSource(_empty_starts(), name="starts")
+        self.by_orbit = {"field": "c", "transform": LinearColorMapper(palette=list(COLORS), low=-0.5,
+                                                                       high=len(COLORS) - 0.5)}
+        self.by_megno = {"field": "megno", "transform": LinearColorMapper(
+            palette=megno_palette(MEGNO_ORBIT_SKIP), low=MEGNO_LOW, high=MEGNO_HIGH, nan_color="#9e9e9e")}
+        self.status = Div(name="status", text="click in the white region to start an orbit", render_as_text=True)
+        self.colour_box = pn.widgets.Checkbox(label="colour orbits by MEGNO", value=False)
+        self.colour_box.param.watch(lambda _e: loop.soon(self._colour_changed), "value")
+        self.starts_box = pn.widgets.Checkbox(label="start markers (+)", value=True)
+        self.starts_box.param.watch(lambda _e: loop.soon(self._starts_box_changed), "value")
+        self.pause_box = pn.widgets.Checkbox(label=PAUSE_LABEL, value=True)
+        self.pause_box.param.watch(lambda _e: loop.soon(host.push_url), "value")
+
+    def draw(self, fig) -> None:
+        """The crossings' glyphs (drawn over the images: call after them) and the starts' crosses."""
+        # the glyphs: only the orbits from glyph_first on (the newest, at most density.GLYPH_BUDGET
+        # crossings), filtered in the browser from the rows it holds: a change of glyph_first sends
+        # one number, never the rows again; the older orbits are in the density image
+        self.glyph_filter = CustomJSFilter(name="glyphs", args={"first": 0}, code=GLYPH_FILTER)
+        self.points = fig.scatter("p1", "p2", source=self.shown, color=self.by_orbit, size=POINT_SIZE, line_width=0,
+                                  view=CDSView(filter=self.glyph_filter))
+        # the newest rows on the overlay canvas: Bokeh repaints only that canvas when they change
+        # (not the primary one with every older crossing and the images; benchmarks/bench_serve.py)
+        self.live_points = fig.scatter("p1", "p2", source=self.live, color=self.by_orbit, size=POINT_SIZE,
+                                       line_width=0, level="overlay")
+        self.start_marks = fig.scatter("p1", "p2", source=self.start_source, marker="cross", color=self.by_orbit,
+                                       size=9, line_width=2, level="overlay")   # (above the crossings and images)
+
+    # ------------------------------------------------------------ starts
+    def start(self, p1: float, p2: float, color: int | None = None, mark_later: bool = False):
+        """Queue the orbit from (p1, p2) and mark its start (``mark_later``, a click on a served
+        page: with its first crossings, :meth:`_mark_starts`); None outside the region."""
+        settings = self.host.settings
+        if not settings.admissible(p1, p2):
+            return None
+        if color is None:
+            color = self._color % len(COLORS)
+            self._color += 1
+        run = self.worker.submit(p1, p2, settings)
+        self.starts.append((run.ident, p1, p2, color))
+        self._unmarked.append((run.ident, p1, p2, color))
+        self._running = self._running | {run.ident}
+        if not mark_later or self.loop.doc is None:
+            self._mark_starts()
+            self.update_status()             # (else with the first crossings, in their flush)
+        return run
+
+    def _mark_starts(self):
+        """Stream the crosses of the starts not yet marked (on a served page, a click's with its
+        first crossings, just after them: the cross's redraw does not delay them)."""
+        live = {i for i, *_ in self.starts}
+        marks, self._unmarked = [m for m in self._unmarked if m[0] in live], []
+        if marks:
+            self.start_source.stream({k: [m[j] for m in marks] for j, k in enumerate(("orbit", "p1", "p2", "c"))})
+
+    def drop_all(self) -> list:
+        """Stop every orbit and take them off the page; returns their starts."""
+        self.worker.cancel()
+        self.flush_timer.cancel()
+        old, self.starts, self._running, self._pending = self.starts, [], set(), []
+        self.indicators = {}
+        self.crossings.data = _empty_crossings()
+        self.show_all()
+        self.start_source.data = _empty_starts()
+        self._unmarked = []
+        return old
+
+    def remove(self, ident: int) -> None:
+        """Stop orbit ``ident`` (running or paused) and take it off the page."""
+        self.starts = [s for s in self.starts if s[0] != ident]
+        self.worker.remove(ident)
+        self.indicators.pop(ident, None)
+        self._running = self._running - {ident}
+        keep = np.asarray(self.crossings.data["orbit"]) != ident
+        self.crossings.data = {k: np.asarray(v)[keep] for k, v in self.crossings.data.items()}
+        self.show_all()
+        keep = [o != ident for o in self.start_source.data["orbit"]]
+        self.start_source.data = {k: [x for x, ok in zip(v, keep) if ok] for k, v in self.start_source.data.items()}
+
+    # ------------------------------------------------------------ blocks from the worker
+    def _on_block(self, ident, rows, done, status):
+        """On the loop: queue the block (the flush at the next tick at the earliest).  An orbit's
+        first block and its last go at once; others at most every FLUSH_SECONDS after the last
+        flush (each message redraws every crossing in the browser).  Blocks queued meanwhile go
+        to the page together (one stream of rows)."""
+        urgent = done == len(rows) or status != "running"
+        self._pending.append((ident, rows, done, status))
+        now = time.monotonic()
+        self.flush_timer.at(now if urgent else max(now, self._flushed_at + FLUSH_SECONDS), reentrant=False)
+
+    def _flush(self):
+        """The queued blocks onto the page.  Bokeh sends each change of a model as its own message,
+        in order, all written before the next callback runs.  Not through Panel's ``unlocked`` (one
+        message per flush): when the socket was busy it queued the message for a task that could
+        return without sending it (panel 1.9), and an orbit's last rows never reached the browser
+        (tests/app/test_serve.py, the slow-connection test).
+
+        A flush that carries an orbit's first crossings sends them to ``live`` (drawn on the
+        overlay canvas: the browser repaints that alone, not the older crossings and the images,
+        about 5 us per dot in headless chromium), then the starts' crosses (also on the overlay),
+        then the link with the new start (a reload from then on keeps it), and nothing else: the
+        status line and the density image, whose changes make the browser lay out the page or
+        repaint everything, wait for the flush FLUSH_SECONDS later, which moves the live rows to
+        ``crossings``.  A few rows that come before it (a short orbit's last block, sent at once;
+        LIVE_MAX_ROWS) go to ``live`` too: otherwise the browser, taking both messages in one
+        frame, would repaint everything for the first rows."""
+        blocks, self._pending = self._pending, []
+        now = self._flushed_at = time.monotonic()
+        live = {i: c for i, _a, _b, c in self.starts}
+        blocks = [b for b in blocks if b[0] in live]          # undone meanwhile: dropped
+        first_rows = {b[0] for b in blocks if 0 < len(b[1]) == b[2]}   # orbits at their first block
+        if first_rows and any(b[0] not in first_rows for b in blocks):
+            # other orbits' blocks wait for the next flush: these go alone
+            self._pending[:0] = [b for b in blocks if b[0] not in first_rows]
+            blocks = [b for b in blocks if b[0] in first_rows]
+        full = [b for b in blocks if len(b[1])]
+        held = len(self.live.data["orbit"])
+        # (SETTLE_SLACK: a timer is never early by more; a flush it runs must settle)
+        to_live = bool(first_rows) or (0 < held and now < self._settle_at - SETTLE_SLACK
+                                       and held + sum(len(b[1]) for b in full) <= LIVE_MAX_ROWS)
+        if full:
+            data = np.concatenate([b[1] for b in full])
+            megno = [self.indicators.get(b[0], (math.nan,))[0] for b in full]
+            new = {"orbit": np.concatenate([np.full(len(b[1]), b[0], np.int64) for b in full]),
+                   "megno": np.concatenate([np.full(len(b[1]), m) for b, m in zip(full, megno)]),
+                   "t": data[:, 0], "p1": data[:, 1], "p2": data[:, 2], "M": data[:, 3], "dH": data[:, 4],
+                   "c": np.concatenate([np.full(len(b[1]), live[b[0]], np.int64) for b in full])}
+            self.crossings.stream(new)
+            if to_live:
+                self.live.stream({k: v.tolist() for k, v in new.items()})   # drawn at once, alone
+        moved = False if to_live else self._settle()
+        self._mark_starts()              # (their starts' crosses in the next message)
+        for ident, _rows, done, status in blocks:
+            if status != "running":
+                self._running = self._running - {ident}
+                if status != "done":
+                    self.host.say(f"orbit {ident} stopped after {done} crossings: {status}")
+        if first_rows:
+            # (in a notebook the next poll settles them: it pushes everything in one message anyway)
+            self._settle_at = now + FLUSH_SECONDS if self.loop.doc is not None else -math.inf
+            self.host.push_url()         # (after the rows: a reload from now on has the click)
+        elif not to_live:
+            self.update_status(force_density=self.host.density_image.dense and moved)
+        if self._pending or len(self.live.data["orbit"]):
+            # what waits goes at the latest when the live rows are due to settle
+            self.flush_timer.at(max(self._settle_at, now + (FLUSH_SECONDS if self._pending else 0.0)),
+                                reentrant=False)
+
+    def _settle(self) -> bool:
+        """The live rows to ``crossings`` (past density.THRESHOLD, to the density image only: the
+        caller redraws it at once), streamed before ``live`` empties (never a frame without them);
+        returns whether there were live rows."""
+        moved = bool(len(self.live.data["orbit"]))
+        n = len(self.crossings.data["orbit"])
+        if n > self._settled:
+            if not self.host.density_image.dense:
+                self.shown.stream({k: np.asarray(v)[self._settled:] for k, v in self.crossings.data.items()})
+            self._settled = n
+        if moved:
+            self.live.data = _empty_live()
+        return moved
+
+    def show_all(self) -> None:
+        """The browser's rows anew: every crossing in ``crossings`` (none past density.THRESHOLD),
+        none live (after an undo, a clear, a change of settings or of the threshold's side)."""
+        self.shown.data = _empty_crossings() if self.host.density_image.dense else dict(self.crossings.data)
+        if len(self.live.data["orbit"]):
+            self.live.data = _empty_live()
+        self._settled = len(self.crossings.data["orbit"])
+
+    def _on_error(self, ident, exc):
+        self._mark_starts()
+        self._running = self._running - {ident}
+        self.host.say(f"orbit {ident} failed: {type(exc).__name__}: {' '.join(str(exc).split())}")
+        self.update_status()
+        self.host.push_url()
+
+    def update_status(self, force_density: bool = False):
+        """The status line (and the density image, at once if ``force_density``)."""
+        # the worker's paused orbits still running here (one paused as its last block came is done)
+        paused = len(self._running.intersection(self.worker.paused()))
+        running = len(self._running) - paused
+        n = len(self.crossings.data["orbit"])
+        density = self.host.density_image
+        density.refresh(force=force_density or not running)   # (at once when the last orbit is done)
+        s = self.host.settings
+        text = (f"{len(self.starts)} orbit(s), {running} running, "
+                + (f"{paused} paused (Resume continues them), " if paused else "") + f"{n} crossings drawn"
+                + (" (as a density image)" if density.dense else "") + "; "
+                f"mu = {s.params.mu:g}, h = {s.h:g}, {s.method}")
+        known = [i for i, *_ in self.starts if i in self.indicators]
+        if known:
+            megno, mlce = self.indicators[known[-1]]
+            kind = "chaotic-like" if megno > CHAOTIC_MEGNO else "regular-like"
+            text += (f"; orbit {known[-1]}: <Y> = {megno:.3g}, mLCE = {mlce:.3g} over t <= {INDICATOR_TIME:g}"
+                     + (f" ({kind})" if math.isfinite(megno) else " (unknown: the run stopped early)"))
+        self.status.text = text
+
+    # ------------------------------------------------------------ chaos indicators and colours
+    def _on_indicators(self, ident, megno, mlce):
+        if not any(i == ident for i, *_ in self.starts):
+            return
+        self.indicators[ident] = (megno, mlce)
+        rows = np.flatnonzero(np.asarray(self.crossings.data["orbit"]) == ident)
+        if rows.size:      # the rows streamed before the indicator was known
+            self.crossings.patch(_megno_patch(rows, megno))
+            settled = self._settled        # (the browser's: crossings up to it, live from it on)
+            if not self.host.density_image.dense and rows[0] < settled:
+                self.shown.patch(_megno_patch(rows[rows < settled], megno))
+            if rows[-1] >= settled:
+                self.live.patch(_megno_patch(rows[rows >= settled] - settled, megno, as_list=True))
+        self.update_status()
+
+    def _colour_changed(self):
+        spec = self.by_megno if self.colour_box.value else self.by_orbit
+        for r in (self.points, self.live_points):
+            r.glyph.fill_color = spec
+            r.glyph.line_color = spec
+        self.host.density_image.refresh(force=True)
+        self.host.push_url()
+
+    def _starts_box_changed(self) -> None:
+        """Show or hide the clicked starts' crosses."""
+        self.start_marks.visible = bool(self.starts_box.value)
+
+    def close(self) -> None:
+        self.flush_timer.cancel()
+        self.worker.stop()
+
+
+def _megno_patch(rows, megno: float, as_list: bool = False) -> dict:
+    """A patch of the column megno to ``megno`` at ``rows`` (sorted indices): one slice per run of
+    them; values as arrays (binary in the message), or ``as_list`` (a column held as a list)."""
+    runs = np.split(rows, np.flatnonzero(np.diff(rows) != 1) + 1)
+    return {"megno": [(slice(int(r[0]), int(r[-1]) + 1), [megno] * len(r) if as_list else np.full(len(r), megno))
+                      for r in runs]}
+

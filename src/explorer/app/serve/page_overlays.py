@@ -1,0 +1,177 @@
+"""The overlays of the page: the fixed points of the section map with the separatrices of the
+hyperbolic ones, the periodic orbits of periods 1..PERIODIC_MAX (:mod:`explorer.app.serve.overlays`,
+the searches its check boxes ask for, as one job of the session's task helper, under a budget) and
+the manifolds of a picked hyperbolic mark (another task).  A component of
+:class:`~explorer.app.serve.page.SectionPage`.
+
+By Bokeh model name: ``fixed`` (p1, p2, kind, marker), ``separatrices`` (xs, ys: one polyline per
+branch), ``periodic`` (p1, p2, period, kind, marker), ``manifolds`` (xs, ys, color, kind) and
+``overlay`` (what the searches found).
+"""
+from __future__ import annotations
+
+import numpy as np
+import panel as pn
+from bokeh.models import ColumnDataSource, Div, LinearColorMapper
+
+from explorer.app.serve import overlays as search
+from explorer.app.serve.style import MANIFOLD_COLORS, PERIOD_COLORS, SEPARATRIX_CASING, SEPARATRIX_COLOR
+
+
+def _empty_fixed() -> dict:
+    return {"p1": [], "p2": [], "kind": [], "marker": []}
+
+
+def _empty_manifolds() -> dict:
+    return {"xs": [], "ys": [], "color": [], "kind": []}
+
+
+def _empty_periodic() -> dict:
+    return {"p1": [], "p2": [], "period": [], "kind": [], "marker": []}
+
+
+def _marks(points, stable) -> dict:
+    return {"p1": [float(p[0]) for p in points], "p2": [float(p[1]) for p in points],
+            "kind": ["elliptic" if s else "hyperbolic" for s in stable],
+            "marker": ["circle" if s else "x" for s in stable]}
+
+
+class Overlays:
+    """Fixed points, separatrices, periodic orbits and a saddle's manifolds (module docstring)."""
+
+    def __init__(self, host, view, loop):
+        self.host, self.view = host, view
+        self.search_task = loop.task("overlay")
+        self.manifold_task = loop.task("manifolds")
+        self.fixed = ColumnDataSource(_empty_fixed(), name="fixed")
+        self.curves = ColumnDataSource({"xs": [], "ys": []}, name="separatrices")
+        self.periodic = ColumnDataSource(_empty_periodic(), name="periodic")
+        self.manifold_source = ColumnDataSource(_empty_manifolds(), name="manifolds")
+        self.text = Div(name="overlay", text="", render_as_text=True)
+        self.overlay = pn.widgets.Checkbox(label="fixed points, separatrices", value=False)
+        self.periodic_box = pn.widgets.Checkbox(label=f"periodic orbits, periods 1-{search.PERIODIC_MAX}", value=False)
+        for box in (self.overlay, self.periodic_box):
+            box.param.watch(lambda _e: loop.soon(self._boxes_changed), "value")
+
+    def draw_lines(self, fig) -> None:
+        """The separatrices and manifolds (under the crossings)."""
+        # a dark casing under a bright line: visible on white and on every colour of the MEGNO layer
+        self.separatrix_lines = (
+            fig.multi_line("xs", "ys", source=self.curves, line_color=SEPARATRIX_CASING, line_width=3.0),
+            fig.multi_line("xs", "ys", source=self.curves, line_color=SEPARATRIX_COLOR, line_width=1.4))
+        fig.multi_line("xs", "ys", source=self.manifold_source, line_color="color", line_width=1.2)
+
+    def draw_marks(self, fig) -> None:
+        """The marks of the periodic orbits and fixed points (over the crossings)."""
+        fig.scatter("p1", "p2", source=self.periodic, marker="marker", size=8, line_color="black",
+                    fill_color={"field": "period", "transform": LinearColorMapper(
+                        palette=list(PERIOD_COLORS), low=0.5, high=len(PERIOD_COLORS) + 0.5)}, line_width=1.5)
+        fig.scatter("p1", "p2", source=self.fixed, marker="marker", size=11, line_color="black",
+                    fill_color="white", line_width=2)
+
+    def on(self) -> tuple:
+        """The names of the overlays that are on, as in the URL."""
+        return tuple(n for n, box in (("separatrices", self.overlay), ("periodic", self.periodic_box)) if box.value)
+
+    def _boxes_changed(self):
+        self.restart()
+        self.host.push_url()
+
+    def restart(self):
+        """Search the fixed points (and separatrices) and the periodic orbits the boxes ask for, at
+        the current settings, under a budget (search_budget: FIXED_SECONDS, PERIODIC_SECONDS); a
+        newer request cancels the older search (its compiled loops stop within a step)."""
+        self.clear_manifolds()
+        self.fixed.data = _empty_fixed()
+        self.curves.data = {"xs": [], "ys": []}
+        self.periodic.data = _empty_periodic()
+        self.text.text = ""
+        wanted = (self.overlay.value, self.periodic_box.value)
+        if not any(wanted) or self.host.settings.region is None:
+            self.search_task.cancel()
+            return
+        self.text.text = "searching ..."
+        budget = search.search_budget(search.FIXED_SECONDS * wanted[0] + search.PERIODIC_SECONDS * wanted[1])
+        self.search_task.submit(self._compute, self.host.settings, *wanted, budget=budget)
+
+    def _compute(self, job, settings, fixed, periodic):
+        texts: list = []
+
+        def on_points(points, text):
+            shown = "; ".join([*texts, text])           # (now: texts grows before the post is delivered)
+            job.post(lambda: self._show_fixed(points, [], shown))
+
+        if fixed:
+            try:
+                points, curves, text = search.fixed_points_and_curves(settings, on_points)
+            except Exception as exc:  # noqa: BLE001 - reported in the page
+                points, curves, text = [], [], f"fixed points: failed ({type(exc).__name__}: {exc})"
+            texts.append(text)
+            found = "; ".join(texts)
+            job.post(lambda: self._show_fixed(points, curves, found))
+        if periodic and job.current:
+            if fixed:
+                waiting = "; ".join([*texts, "searching the periodic orbits ..."])
+                job.post(lambda: setattr(self.text, "text", waiting))
+            try:
+                orbits, text = search.periodic_orbits(settings, search.PERIODIC_MAX)
+            except Exception as exc:  # noqa: BLE001 - reported in the page
+                orbits, text = [], f"periodic orbits: failed ({type(exc).__name__}: {exc})"
+            texts.append(text)
+            done = "; ".join(texts)
+            job.post(lambda: self._show_periodic(orbits, done))
+
+    def _show_periodic(self, orbits, text):
+        rows = [(p, int(o.period), o.stable) for o in orbits for p in np.asarray(o.points)]
+        self.periodic.data = {**_marks([r[0] for r in rows], [r[2] for r in rows]), "period": [r[1] for r in rows]}
+        self.text.text = text
+
+    def _show_fixed(self, points, curves, text):
+        self.fixed.data = _marks([fp.point for fp in points], [fp.stable for fp in points])
+        self.curves.data = {"xs": [c[:, 0] for c in curves], "ys": [c[:, 1] for c in curves]}
+        self.text.text = text
+
+    # ------------------------------------------------------------ manifolds of a picked saddle
+    def saddle_near(self, p1: float, p2: float, radius_px: float) -> tuple | None:
+        """(point, period) of the hyperbolic mark (fixed point or point of a periodic orbit) within
+        ``radius_px`` screen pixels of (p1, p2), the nearest; None when there is none."""
+        px, py = self.view.pixel()
+        best = None
+        for src, fixed in ((self.fixed.data, True), (self.periodic.data, False)):
+            for i, (a, b, kind) in enumerate(zip(src["p1"], src["p2"], src["kind"])):
+                if kind != "hyperbolic":
+                    continue
+                d = float(np.hypot((a - p1) / (px or 1.0), (b - p2) / (py or 1.0)))
+                k = 1 if fixed else int(src["period"][i])
+                if d <= radius_px and (best is None or d < best[0]):
+                    best = (d, (float(a), float(b)), k)
+        return None if best is None else best[1:]
+
+    def show_manifolds(self, point, period: int = 1) -> None:
+        """Grow and draw W^u and W^s of the hyperbolic orbit of ``period`` through ``point`` (the
+        latest pick only; a new value or overlay drops it)."""
+        self.manifold_source.data = _empty_manifolds()
+        self.text.text = (f"growing the manifolds of the period-{period} orbit at "
+                          f"({point[0]:.6g}, {point[1]:.6g}) ...")
+        self.manifold_task.submit(self._compute_manifolds, tuple(point), int(period), self.host.settings,
+                                  budget=search.search_budget(search.MANIFOLD_SECONDS))
+
+    def clear_manifolds(self) -> None:
+        self.manifold_task.cancel()
+        self.manifold_source.data = _empty_manifolds()
+
+    def _compute_manifolds(self, job, point, period, settings):
+        try:
+            branches, text = search.saddle_manifolds(settings, point, period)
+        except Exception as exc:  # noqa: BLE001 - reported in the page
+            if job.budget is not None and job.budget.cancelled:
+                return
+            branches, text = [], f"manifolds: failed ({type(exc).__name__}: {' '.join(str(exc).split())})"
+        job.post(lambda: self._show_manifolds(branches, text))
+
+    def _show_manifolds(self, branches, text):
+        pts = [np.asarray(b.points, float) for b in branches]
+        self.manifold_source.data = {"xs": [p[:, 0] for p in pts], "ys": [p[:, 1] for p in pts],
+                                     "color": [MANIFOLD_COLORS[b.kind] for b in branches],
+                                     "kind": [b.kind for b in branches]}
+        self.text.text = text

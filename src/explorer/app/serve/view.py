@@ -1,0 +1,98 @@
+"""The section view of the page: the Bokeh figure, the allowed region drawn on it and the visible
+window (``window``, a :class:`~explorer.app.serve.raster.Window`), fitted to the region after every
+change of it (Reset goes back there) and followed through the browser's zoom and pan.  The layers
+draw onto :attr:`SectionView.figure`; they are told of a moved window through
+:meth:`SectionView.on_window`.  A component of :class:`~explorer.app.serve.page.SectionPage`."""
+from __future__ import annotations
+
+from bokeh.events import RangesUpdate
+from bokeh.models import ColumnDataSource, Range1d
+from bokeh.plotting import figure
+
+from explorer.app.serve import raster as raster_mod
+from explorer.app.serve.style import (
+    ALLOWED_COLOR,
+    BOUNDARY_COLOR,
+    FIGURE_HEIGHT,
+    FIGURE_WIDTH,
+    FORBIDDEN_COLOR,
+    VIEW_MARGIN,
+)
+
+
+def _empty_region() -> dict:
+    return {"x": [], "y": [], "width": [], "height": []}
+
+
+class SectionView:
+    """The figure, the ``region`` source (the allowed ellipse: x, y, width, height) and the window."""
+
+    def __init__(self):
+        self.region = ColumnDataSource(_empty_region(), name="region")
+        # Range1d, set by the server (fit): a DataRange1d kept the window it started with in the
+        # browser (its initial start and end) whatever the server set later, and Reset went back to it
+        fig = figure(name="section", width=FIGURE_WIDTH, height=FIGURE_HEIGHT,
+                     x_range=Range1d(-1.0, 1.0), y_range=Range1d(-1.0, 1.0),
+                     tools="pan,wheel_zoom,box_zoom,reset,save", active_scroll="wheel_zoom",
+                     x_axis_label="p1", y_axis_label="p2", background_fill_color=FORBIDDEN_COLOR,
+                     toolbar_location="above")
+        fig.ellipse("x", "y", width="width", height="height", source=self.region, fill_color=ALLOWED_COLOR,
+                    line_color=BOUNDARY_COLOR, line_width=1.0)
+        fig.grid.visible = False
+        fig.on_event(RangesUpdate, self._on_ranges)
+        self.figure = fig
+        self.window: raster_mod.Window | None = None
+        self._listeners: list = []
+
+    def on_window(self, listener) -> None:
+        """``listener()`` after the browser moved the window (zoom, pan, Reset)."""
+        self._listeners.append(listener)
+
+    def _on_ranges(self, event) -> None:
+        try:
+            self.window = raster_mod.Window(float(event.x0), float(event.x1), float(event.y0), float(event.y1))
+        except (TypeError, ValueError):
+            return
+        for listener in self._listeners:
+            listener()
+
+    def frame_px(self) -> tuple:
+        """Width and height of the plot's frame in screen pixels (as drawn in the browser; before
+        that, the figure's nominal size less its axes)."""
+        try:
+            return float(self.figure.inner_width), float(self.figure.inner_height)
+        except Exception:  # noqa: BLE001 - not drawn in a browser yet: the figure's nominal size
+            return FIGURE_WIDTH - 60.0, FIGURE_HEIGHT - 60.0
+
+    def pixel(self) -> tuple:
+        """The size of a screen pixel in p1 and p2 (from the visible window and the plot's frame)."""
+        w = self.window
+        if w is None:
+            return 0.0, 0.0
+        width, height = self.frame_px()
+        return (w.x1 - w.x0) / max(width, 1.0), (w.y1 - w.y0) / max(height, 1.0)
+
+    def draw_region(self, region) -> None:
+        """The allowed region (c1, c2, r1, r2; None: empty), and the view fitted to it."""
+        if region is None:
+            self.region.data = _empty_region()
+            return
+        c1, c2, r1, r2 = region
+        self.region.data = {"x": [c1], "y": [c2], "width": [2 * r1], "height": [2 * r2]}
+        self.fit(c1, c2, (1 + VIEW_MARGIN) * r1, (1 + VIEW_MARGIN) * r2)
+
+    def show_window(self, w) -> None:
+        """Show the window ``w`` (a link's zoom; Reset still goes to the region's view)."""
+        self.figure.x_range.update(start=w.x0, end=w.x1)
+        self.figure.y_range.update(start=w.y0, end=w.y1)
+        self.window = w
+
+    def fit(self, c1: float, c2: float, m1: float, m2: float) -> None:
+        """Show the box c1 +- m1, c2 +- m2, the same length per pixel along both axes (the frame's
+        size as drawn; before that, the nominal size), and make it the view Reset goes back to."""
+        px, py = self.frame_px()
+        scale = max(2.0 * m1 / max(px, 1.0), 2.0 * m2 / max(py, 1.0))     # p-units per pixel
+        h1, h2 = 0.5 * scale * max(px, 1.0), 0.5 * scale * max(py, 1.0)
+        for rng, lo, hi in ((self.figure.x_range, c1 - h1, c1 + h1), (self.figure.y_range, c2 - h2, c2 + h2)):
+            rng.update(start=lo, end=hi, reset_start=lo, reset_end=hi)
+        self.window = raster_mod.Window(c1 - h1, c1 + h1, c2 - h2, c2 + h2)

@@ -1,0 +1,67 @@
+"""The task helper of `explorer serve` (app/serve/tasks.py): a newer job supersedes the older one
+(its budget cancelled, what it hands in afterwards dropped), results reach the page only through
+the session's loop, and a timer keeps only its earliest due call.  No browser, no compiled code."""
+from __future__ import annotations
+
+import threading
+import time
+
+from explorer.analysis.budget import Budget
+from explorer.app.serve.tasks import SessionLoop
+
+
+def _until(cond, timeout=60.0):
+    t0 = time.monotonic()
+    while not cond():
+        assert time.monotonic() - t0 < timeout, "timed out"
+        time.sleep(0.005)
+
+
+def test_a_newer_job_cancels_the_older_ones_budget_and_only_its_results_reach_the_loop():
+    loop = SessionLoop()                  # (no document: what jobs hand in waits for poll)
+    task = loop.task("t")
+    shown: list = []
+    started = threading.Event()
+
+    def old(job):
+        started.set()
+        _until(lambda: job.budget.stopped)          # a long search, stopped by its switch
+        job.post(lambda: shown.append("old"))       # handed in after it was superseded: dropped
+
+    first = task.submit(old, budget=Budget())
+    started.wait(60)
+    second = task.submit(lambda job: job.post(lambda: shown.append("new")), budget=Budget())
+    assert first.budget.cancelled and not first.current and second.current
+    _until(lambda: loop.pending() >= 1 or shown)
+    _until(lambda: (loop.poll() or True) and shown == ["new"])
+    task.cancel()                                   # a cancel supersedes too: nothing current
+    assert not second.current
+    loop.close(wait=True)
+    assert not [t for t in threading.enumerate() if t.name == "explorer-serve-t"]
+
+
+def test_a_result_handed_in_before_a_cancel_is_dropped_on_the_loop():
+    loop = SessionLoop()
+    task = loop.task("t")
+    shown: list = []
+    job = task.submit(lambda job: job.post(lambda: shown.append(1)))
+    _until(lambda: loop.pending() == 1)             # handed in, not yet on the page ...
+    task.cancel()                                   # ... when the page cancels (on its loop)
+    assert loop.poll() and shown == [] and not job.current
+    loop.close()
+
+
+def test_a_timer_keeps_its_earliest_due_call_only():
+    loop = SessionLoop()
+    fired: list = []
+    timer = loop.timer(lambda: fired.append(time.monotonic()))
+    now = time.monotonic()
+    timer.at(now + 10.0)
+    timer.at(now + 20.0)                            # later than the one due: nothing changes
+    assert timer.due == now + 10.0
+    timer.at(now - 1.0, reentrant=False)            # due now, on the next tick (a notebook: the next poll)
+    # (a notebook's poll runs both calls handed in; the superseded one, due in 10 s, does nothing)
+    assert fired == [] and loop.poll() and len(fired) == 1 and not timer.pending
+    assert not loop.poll() and len(fired) == 1
+    timer.at(now - 1.0)                             # due and reentrant: at once
+    assert len(fired) == 2
