@@ -13,12 +13,12 @@ from conftest import PARAM_SETS, assert_groups_threads_and_order_keep_the_bits, 
 from taylor_oracle import run_taylor_batch
 
 from explorer import model
-from explorer._jit import get_num_threads, set_num_threads
+from explorer._jit import get_num_threads, njit, set_num_threads
 from explorer.analysis import sections
 from explorer.integrate import _lanes_generated as G
 from explorer.integrate import drivers, lanes, simd
 from explorer.integrate import systems as sy
-from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_TMAX
+from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_TMAX, clock, events
 from explorer.kernels import taylor as tk
 from explorer.model import equations
 
@@ -158,6 +158,178 @@ def test_lane_step_size_is_step_size_near_ties_and_for_vanishing_or_subnormal_no
             got = lanes.lane_step_size(norms[2, l], norms[3, l], norms[4, l], norms[5, l], norms[6, l],
                                        e_p, e_q, factor)
             assert got == want
+
+
+# ---------------------------------------------------------------- the step in vector form
+_SPECIAL = np.array([0.0, -0.0, 1.0, -1.0, np.nan, np.inf, -np.inf, 5e-324, 2.2250738585072014e-308, 1e308])
+
+
+@njit(cache=False)
+def _mask_bits(a, b, out):
+    """The bits of every vector comparison and mask operation of a[0:LANES] against b[0:LANES]."""
+    x = simd.vload(a, 0)
+    y = simd.vload(b, 0)
+    gt, ge, lt, eq = simd.vgt(x, y), simd.vge(x, y), simd.vlt(x, y), simd.veq(x, y)
+    out[0], out[1], out[2], out[3] = simd.vbits(gt), simd.vbits(ge), simd.vbits(lt), simd.vbits(eq)
+    out[4], out[5] = simd.vbits(simd.vand(gt, eq)), simd.vbits(simd.vor(gt, eq))
+    out[6] = simd.vbits(simd.vandnot(ge, eq))
+    simd.vstore(a, 0, simd.vselect(gt, x, y))
+
+
+@njit(cache=False)
+def _visit(bits, out):
+    """The lanes next_bit visits in ``bits``, in order, into out; returns how many."""
+    n = 0
+    while bits != 0:
+        i, bits = simd.next_bit(bits)
+        out[n] = i
+        n += 1
+    return n
+
+
+def test_next_bit_visits_the_set_lanes_of_a_mask_once_in_increasing_order():
+    out = np.empty(64, np.int64)
+    for bits in (1, 2, 0b10110010, (1 << L) - 1, 1 << 63 - 1, 0x5555):
+        n = _visit(bits, out)
+        assert out[:n].tolist() == [i for i in range(64) if bits >> i & 1]
+    assert _visit(0, out) == 0
+
+
+def test_vector_masks_are_the_scalar_comparisons_lane_by_lane_nan_included():
+    """vgt, vge, vlt, veq are the scalar >, >=, <, == of each lane (false where a NaN is
+    compared), vand/vor/vandnot the logic of the lanes, vselect the scalar ``x if m else y`` and
+    vbits puts lane i in bit i: what the vector step end decides is what the scalar code decides."""
+    rng = np.random.default_rng(5)
+    out = np.empty(7, np.int64)
+    for _ in range(200):
+        a = rng.choice(_SPECIAL, L)
+        b = rng.choice(_SPECIAL, L)
+        a0 = a.copy()
+        _mask_bits(a, b, out)
+        with np.errstate(invalid="ignore"):
+            want = [a0 > b, a0 >= b, a0 < b, a0 == b]
+        want += [want[0] & want[3], want[0] | want[3], want[1] & ~want[3]]
+        for got, m in zip(out, want):
+            assert got == sum(1 << i for i in range(L) if m[i])
+        sel = np.where(want[0], a0, b)
+        assert np.array_equal(a.view(np.uint64), sel.view(np.uint64))
+
+
+@pytest.mark.parametrize("ngroups", G.GROUPS)
+def test_vector_step_takes_lane_steps_double_and_leaves_the_rare_lanes_to_it(ngroups):
+    """step_lanes on norms of every kind (finite, non-finite, vanishing, subnormal, steps that
+    reach tend or underflow, idle lanes): for every lane the step, the flag of the last step and
+    the stop are those of the scalar lane_step, and the lanes whose step it took in vector form
+    (L_fast) are exactly those with finite coefficients, positive normal s/a, s/bm and no
+    underflow."""
+    W = ngroups * L
+    rng = np.random.default_rng(ngroups)
+    order = 15
+    factor, e_p, e_q = lanes.step_constants(order)
+    tend = 50.0
+    seen = set()
+    for _ in range(40):
+        norms = np.empty((lanes.N_NORMS, W))
+        norms[0] = rng.choice([1.0, -3.0, np.nan, np.inf], W, p=[0.7, 0.2, 0.05, 0.05])
+        norms[1] = rng.choice([1.0, np.nan, -np.inf], W, p=[0.9, 0.05, 0.05])
+        norms[2] = rng.choice([0.0, 5e-324, 1e-3, 2.0], W)
+        norms[3] = rng.choice([0.0, 5e-324, 1e-3, 2.0], W)
+        norms[4] = rng.choice([np.inf, 1e-320, 3.0, 1e5, 1e-310], W, p=[0.1, 0.05, 0.4, 0.4, 0.05])
+        norms[5] = rng.choice([np.inf, 1e-320, 3.0, 1e5], W, p=[0.1, 0.05, 0.45, 0.4])
+        norms[6] = np.minimum(norms[4] ** e_p, norms[5] ** e_q)
+        L_t = rng.choice([0.0, 10.0, 49.9, 50.0 - 1e-14, 1e17], W)
+        L_on = rng.choice([0.0, 1.0], W, p=[0.2, 0.8])
+        hv, L_last, L_fast = np.full(W, -1.0), np.full(W, -1.0), np.full(W, -1.0)
+        L_status = np.full(W, -7, np.int64)
+        L_stop = np.ones(W, np.bool_)
+        with np.errstate(all="ignore"):
+            lanes.step_lanes(L_on, norms, L_t, tend, e_p, e_q, factor, hv, L_last, L_fast, L_status, L_stop, W)
+        for l in range(W):
+            if L_on[l] == 0.0:
+                assert hv[l] == 0.0 and not L_stop[l] and L_fast[l] == 0.0
+                continue
+            code, h, last = lanes.lane_step(l, norms, L_t[l], tend, e_p, e_q, factor)
+            assert L_stop[l] == (code >= 0)
+            if code >= 0:
+                assert L_status[l] == code and hv[l] == 0.0
+            else:
+                assert hv[l] == h and L_last[l] == (1.0 if last else 0.0)
+            vector = (np.isfinite(norms[0, l]) and np.isfinite(norms[1, l]) and code < 0
+                      and all(2.2250738585072014e-308 <= x <= 1.7976931348623157e308 for x in norms[4:6, l]))
+            assert L_fast[l] == (1.0 if vector else 0.0)
+            seen.add((vector, code))
+    assert {(True, -1), (False, -1), (False, STATUS_NONFINITE), (False, lanes.STATUS_STEP_UNDERFLOW)} <= seen
+
+
+@pytest.mark.parametrize("ngroups", G.GROUPS)
+def test_vector_step_end_is_the_scalar_one_and_leaves_roots_and_stops_to_the_scalar_loop(ngroups):
+    """end_steps_lanes on every group: a lane holding an orbit is ended in vector form exactly
+    when the scalar loop would have nothing to do but the bookkeeping (a step taken in vector
+    form, not the last, a finite new state, no root possible - by the variation bound, or by a
+    monotone polynomial without a sign change of the direction (isolate_crossings' two tests) -
+    no stop by the clock, the step budget or the crossings wanted), and then its new state, sin(phi - phi0),
+    time, compensation and step count are the scalar loop's doubles; every other lane that holds
+    an orbit is in the returned bits, untouched."""
+    W = ngroups * L
+    rng = np.random.default_rng(10 + ngroups)
+    order = 6
+    cphi, sphi = math.cos(2.0), math.sin(2.0)
+    tmax, max_steps = 100.0, 1000
+    seen = set()
+    for _ in range(60):
+        X = np.zeros((order + 1, 5, W))
+        X[0] = random_states(PARAM_SETS["figure4_mu0.5"], W, seed=int(rng.integers(1 << 30))).T
+        X[1:] = rng.normal(size=(order, 5, W)) * rng.choice([0.1, 1.0, 10.0], (order, 1, W))
+        direction = int(rng.choice([-1, 0, 1]))
+        ynew = X[0] + rng.normal(scale=0.05, size=(5, W))
+        ynew[rng.integers(0, 5), rng.integers(0, W)] = rng.choice([np.nan, np.inf])
+        g0 = np.abs(X[0, 3] * cphi - X[0, 4] * sphi)
+        vary = g0 * rng.choice([0.5, 1.0, 1.0 - 1e-15, 1.0 - 1e-13, 2.0], W)   # near the slack too
+        hv = rng.uniform(0.01, 0.2, W)
+        L_t = rng.choice([1.0, 99.9, 100.0 - 1e-15], W, p=[0.8, 0.1, 0.1])
+        L_tc = rng.normal(scale=1e-17, size=W)
+        L_gprev = rng.normal(size=W) * rng.choice([0.0, 1.0], W, p=[0.1, 0.9])
+        L_steps = rng.choice([3.0, 998.0, 999.0], W, p=[0.8, 0.1, 0.1])
+        L_left = rng.choice([0.0, 1.0, 5.0], W, p=[0.1, 0.45, 0.45])
+        L_on = rng.choice([0.0, 1.0], W, p=[0.1, 0.9])
+        L_fast = rng.choice([0.0, 1.0], W, p=[0.1, 0.9]) * L_on    # step_lanes: idle lanes are not fast
+        L_last = rng.choice([0.0, 1.0], W, p=[0.9, 0.1])
+        before = [a.copy() for a in (X, L_t, L_tc, L_gprev, L_steps)]
+        bits = 0
+        for c in range(0, W, L):
+            with np.errstate(all="ignore"):
+                bits |= lanes.end_steps_lanes(X, order, ynew, vary, hv, L_t, L_tc, L_gprev, L_steps, L_left, L_on,
+                                              L_fast, L_last, cphi, sphi, direction, tmax, max_steps, c, W) << c
+        for l in range(W):
+            y = ynew[:, l].copy()
+            t, tc = clock.advance_time(before[1][l], before[2][l], hv[l], False, tmax)
+            s = 0.0
+            for i in range(5):
+                s += y[i]
+            with np.errstate(invalid="ignore"):
+                finite = s - s == 0.0
+            gc = before[0][:, 3, l] * cphi - before[0][:, 4, l] * sphi
+            excluded = events.excluded_by_variation(gc[0], vary[l])
+            monotone = events.monotone_within(gc, order, hv[l])
+            sign = events.sign_change(before[3][l], equations.section_g(y, cphi, sphi), direction)
+            seen.add((excluded, monotone, sign))
+            excluded = excluded or (monotone and not sign)
+            vector = (L_fast[l] == 1.0 and L_last[l] == 0.0 and finite and excluded
+                      and not t >= tmax and not before[4][l] + 1 >= max_steps and L_left[l] > 0.0)
+            seen.add((vector, excluded))
+            if L_on[l] == 1.0:
+                assert bool(bits >> l & 1) == (not vector)
+            else:
+                assert not bits >> l & 1
+            if vector:
+                assert np.array_equal(X[0, :, l], y) and L_gprev[l] == equations.section_g(y, cphi, sphi)
+                assert (L_t[l], L_tc[l], L_steps[l]) == (t, tc, before[4][l] + 1)
+            else:
+                assert np.array_equal(X[:, :, l], before[0][:, :, l])
+                assert (L_t[l], L_tc[l], L_gprev[l], L_steps[l]) == tuple(a[l] for a in before[1:])
+    # both ends, and every answer of the three root tests, seen
+    assert {(True, True), (False, True), (False, False)} <= seen
+    assert {(e, m, c) for e in (False, True) for m in (False, True) for c in (False, True)} <= seen
 
 
 # ---------------------------------------------------------------- whole batches

@@ -16,6 +16,7 @@ from explorer.analysis import lyapunov
 from explorer.integrate import _tangent_lanes_generated as G
 from explorer.integrate import lanes, tangent, tangent_lanes
 from explorer.kernels import STATUS_MAX_STEPS, STATUS_NONFINITE
+from explorer.kernels import tangent as tg
 from explorer.kernels import taylor as tk
 from explorer.model import equations
 
@@ -66,6 +67,70 @@ def test_tangent_lane_kernels_match_the_scalar_recurrence_bitwise(name, order, n
             y = np.empty(5)
             tk.evaluate(A, order, h[l], y)
             np.testing.assert_array_equal(y, out[rows, l])
+
+
+# ---------------------------------------------------------------- the step end in vector form
+@pytest.mark.parametrize("nvec", [1, 2])
+@pytest.mark.parametrize("ngroups", G.GROUPS)
+def test_vector_step_end_is_the_scalar_one_and_leaves_stops_and_history_rows_to_the_scalar_loop(ngroups, nvec):
+    """end_steps_tangent_lanes on every group: a lane holding an orbit is ended in vector form
+    exactly when the scalar loop has only the bookkeeping to do (a step taken in vector form, not
+    the last, a finite new state and vectors, no stop by T or the step budget, no history row due),
+    and then its state, unit deviation vectors (kernels.tangent.renormalize), accumulators
+    (kernels.tangent.accumulate), time and step count are the scalar loop's doubles; every other
+    lane that holds an orbit is in the returned bits, untouched."""
+    W = ngroups * L
+    rng = np.random.default_rng(20 + ngroups + nvec)
+    T, max_steps = 100.0, 1000
+    seen = set()
+    for _ in range(40):
+        Z = rng.normal(size=(3, G.NROWS, W))
+        znew = rng.normal(size=(G.NROWS, W)) * rng.choice([1e-3, 1.0, 1e3], (1, W))
+        znew[rng.integers(0, G.NROWS), rng.integers(0, W)] = rng.choice([np.nan, np.inf])
+        hv = rng.uniform(0.01, 0.2, W)
+        nrm = np.zeros(W)
+        acc = rng.normal(size=(tg.N_ACC, W))
+        acc[tg.ACC_T] = rng.choice([0.0, 1.0], W)
+        L_t = rng.choice([0.0, 5.0, 99.9, 100.0 - 1e-15], W, p=[0.2, 0.6, 0.1, 0.1])
+        L_steps = rng.choice([3.0, 998.0, 999.0], W, p=[0.8, 0.1, 0.1])
+        L_hnext = rng.choice([np.inf, 5.05, 50.0], W)
+        L_on = rng.choice([0.0, 1.0], W, p=[0.1, 0.9])
+        L_fast = rng.choice([0.0, 1.0], W, p=[0.1, 0.9]) * L_on    # step_lanes: idle lanes are not fast
+        L_last = rng.choice([0.0, 1.0], W, p=[0.9, 0.1])
+        before = [a.copy() for a in (Z, acc, L_t, L_steps)]
+        bits = 0
+        for c in range(0, W, L):
+            with np.errstate(all="ignore"):
+                bits |= tangent_lanes.end_steps_tangent_lanes(Z, znew, hv, nrm, acc, L_t, L_steps, L_hnext, L_on,
+                                                              L_fast, L_last, nvec, T, max_steps, c, W) << c
+        for l in range(W):
+            tn = before[2][l] + hv[l]
+            with np.errstate(all="ignore"):
+                finite = (np.isfinite(sum(znew[:10, l].tolist()))
+                          and (nvec == 1 or np.isfinite(sum(znew[10:, l].tolist()))))
+            vector = (L_fast[l] == 1.0 and L_last[l] == 0.0 and finite and tn < T and before[3][l] + 1 < max_steps
+                      and tn < L_hnext[l])
+            seen.add(vector)
+            if L_on[l] == 1.0:
+                assert bool(bits >> l & 1) == (not vector)
+            else:
+                assert not bits >> l & 1
+            if vector:
+                v = znew[5:10, l].copy()
+                dlog = tg.renormalize(v, 5)
+                a = before[1][:, l].copy()
+                tg.accumulate(a, before[2][l], tn, dlog)
+                w = znew[10:, l].copy()
+                if nvec == 2:
+                    tg.renormalize(w, 5)
+                else:
+                    w[:] = 0.0
+                assert np.array_equal(Z[0, :, l], np.concatenate([znew[:5, l], v, w]))
+                assert np.array_equal(acc[:, l], a) and (L_t[l], L_steps[l]) == (tn, before[3][l] + 1)
+            else:
+                assert np.array_equal(Z[:, :, l], before[0][:, :, l]) and np.array_equal(acc[:, l], before[1][:, l])
+                assert (L_t[l], L_steps[l]) == (before[2][l], before[3][l])
+    assert seen == {True, False}
 
 
 # ---------------------------------------------------------------- whole batches

@@ -15,16 +15,28 @@ A step of :func:`run_worker`, for all lanes at once:
 * the step sizes' powers for all lanes at once (:func:`step_norms_lanes`:
   ``simd.vradius_power_core``, the vector IR of ``kernels.power.radius_power_core``; the doubles
   of ``kernels.taylor.step_size``);
-* per lane in scalar code, the rest of the step of the method (Jorba & Zou 2005): the finiteness
-  of the last two coefficients, the clip to tmax, the underflow test (:func:`lane_step`), the
-  non-finite check of the new state; then the crossings: every root of the step's Taylor
-  polynomial of sin(phi - phi0) (``kernels.events.poly_step_roots``: exact to the order of the
-  method), each kept on the branch phi = phi0 (:func:`explorer.integrate.drivers.keep_crossing`);
-  the compensated time sum (``kernels.clock``); the target, time and step budgets.  The root
-  isolation is skipped for a lane when a bound of the variation of sin(phi - phi0) over the
-  step, computed for all lanes in one vectorised loop (:func:`variation_lanes`), proves it has
-  no root there (then ``poly_step_roots`` would find none either:
-  ``kernels.events.excluded_by_variation``).
+* the rest of the step of the method (Jorba & Zou 2005) in vector form with lane masks
+  (``simd.vgt`` ..., ``simd.vselect``): the finiteness of the last two coefficients, the step
+  size, the clip to tmax and the underflow test (:func:`step_lanes`); a bound of the variation of
+  sin(phi - phi0) over the step (:func:`variation_lanes`); then, for the lanes whose step can hold
+  no root (the bound proves it: ``kernels.events.excluded_by_variation``, so ``poly_step_roots``
+  would find none; or the step's polynomial is monotone, :func:`monotone_lanes`, and its end
+  values make no sign change: ``kernels.events.isolate_crossings``' second test) and ends in no
+  stop, the end of the step (:func:`end_steps_lanes`): the new
+  state's non-finite check, sin(phi - phi0) at it, the compensated time sum (``kernels.clock``)
+  and the time, step and crossing budgets;
+* per lane in scalar code, only the lanes that the masks leave to it (``simd.vbits``): a
+  non-finite coefficient, a vanishing or subnormal norm, an underflow (:func:`lane_step`), and
+  the step ends with a possible root or a stop (in W4, 2.2 % of the lane-steps: neither the
+  variation bound excludes a root there nor is the step's polynomial monotone without a sign
+  change; 9 % by the variation bound alone): the
+  crossings - every root of the step's Taylor polynomial of sin(phi - phi0)
+  (``kernels.events.poly_step_roots``: exact to the order of the method), each kept on the branch
+  phi = phi0 (:func:`explorer.integrate.drivers.keep_crossing`) - the clock, the budgets, the
+  stops and the refill.  The vector forms are written with the scalar code's operations in its
+  order, so a lane's doubles do not depend on which path ended its step (tests/integrate/
+  test_lanes.py: the vector step and step end against lane_step and the scalar step end, lane
+  by lane).
 
 The blocks, the carry and the outputs are those of every crossing driver
 (:mod:`explorer.integrate.drivers`: ``start_carry``, ``save_carry``, ``store_orbit``).
@@ -75,14 +87,24 @@ from explorer.integrate.drivers import (
 from explorer.integrate.simd import (
     LANES,
     atomic_fetch_add,
+    next_bit,
     vabs,
     vadd,
+    vand,
+    vandnot,
+    vbits,
     vdiv,
+    veq,
+    vge,
+    vgt,
     vload,
+    vlt,
     vmax_gt,
     vmin_lt,
     vmul,
+    vor,
     vradius_power_core,
+    vselect,
     vsplat,
     vstore,
     vsub,
@@ -91,8 +113,15 @@ from explorer.integrate.simd import (
 from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_TMAX
 from explorer.kernels import taylor as tk
 from explorer.kernels.clock import advance_time, clip_step
-from explorer.kernels.events import ISOLATE_STACK, MAX_STEP_ROOTS, excluded_by_variation, poly_step_roots, sin_diff
-from explorer.kernels.power import is_normal
+from explorer.kernels.events import (
+    BOUND_SLACK,
+    ISOLATE_STACK,
+    MAX_STEP_ROOTS,
+    excluded_by_variation,
+    poly_step_roots,
+    sin_diff,
+)
+from explorer.kernels.power import HUGE, TINY, is_normal
 from explorer.model import ParameterError
 from explorer.model.equations import section_g
 
@@ -224,20 +253,55 @@ def lane_step(l, norms, t, tend, e_p, e_q, factor):
 
 
 @njit(inline="always")
-def step_lanes(orb, norms, L_t, tend, e_p, e_q, factor, hv, L_last, L_status, L_stop, w):
-    """:func:`lane_step` for every lane (``w`` of them) that holds an orbit: its step in ``hv`` (0
-    for idle and stopped lanes) and ``L_last``, or its stop in ``L_status``/``L_stop``."""
+def vfinite(x):
+    """The lanes where x is finite (``x - x == 0.0``, as the scalar checks write it)."""
+    return veq(vsub(x, x), vzero())
+
+
+@njit(inline="always")
+def step_lanes(L_on, norms, L_t, tend, e_p, e_q, factor, hv, L_last, L_fast, L_status, L_stop, w):
+    """:func:`lane_step` for every lane (``w`` of them) that holds an orbit (``L_on[l]`` 1.0, else
+    0.0): its step in ``hv`` (0 for idle and stopped lanes) and ``L_last`` (1.0 for the step that
+    ends on ``tend``, else 0.0), or its stop in ``L_status``/``L_stop``.
+
+    In vector form, each group of LANES lanes at once: the lanes whose last two coefficients are
+    finite, whose s/a and s/bm are positive normal doubles and whose step does not underflow take
+    lane_step's double, rho * factor clipped to ``tend`` (the same IEEE operations), and
+    ``L_fast[l]`` = 1.0; only the others (a non-finite coefficient, a vanishing or subnormal norm,
+    an underflow: rare) run :func:`lane_step` in scalar code (``L_fast[l]`` = 0.0)."""
     for l in range(w):
-        hv[l] = 0.0
         L_stop[l] = False
-        if orb[l] == _IDLE:
-            continue
-        code, h, last = lane_step(l, norms, L_t[l], tend, e_p, e_q, factor)
-        if code >= 0:
-            stop_lane(l, code, L_status, L_stop)
-            continue
-        hv[l] = h
-        L_last[l] = last
+    zero = vzero()
+    one = vsplat(1.0)
+    tv = vsplat(tend)
+    for c in range(0, w, LANES):
+        t = vload(L_t, c)
+        u = vload(norms, 4 * w + c)
+        v = vload(norms, 5 * w + c)
+        # lane_step_size (both powers valid) and clock.clip_step
+        h = vmul(vload(norms, 6 * w + c), vsplat(factor))
+        last = vge(vadd(t, h), tv)
+        h = vselect(last, vsub(tv, t), h)
+        live = vgt(vload(L_on, c), zero)
+        # kernels.power.is_normal of u and v: TINY <= x <= HUGE
+        tiny = vsplat(TINY)
+        huge = vsplat(HUGE)
+        normal = vand(vand(vge(u, tiny), vge(huge, u)), vand(vge(v, tiny), vge(huge, v)))
+        ok = vand(vand(vfinite(vload(norms, c)), vfinite(vload(norms, w + c))), normal)
+        ok = vand(vand(live, ok), vgt(h, vmul(vsplat(EPS), vabs(t))))
+        vstore(hv, c, vselect(ok, h, zero))
+        vstore(L_last, c, vselect(last, one, zero))
+        vstore(L_fast, c, vselect(ok, one, zero))
+        bits = vbits(vandnot(live, ok))
+        while bits != 0:
+            ib, bits = next_bit(bits)
+            l = c + ib
+            code, hl, lastl = lane_step(l, norms, L_t[l], tend, e_p, e_q, factor)
+            if code >= 0:
+                stop_lane(l, code, L_status, L_stop)
+            else:
+                hv[l] = hl
+                L_last[l] = 1.0 if lastl else 0.0
 
 
 @njit(inline="always")
@@ -289,6 +353,88 @@ def variation_lanes(X, order, h, cphi, sphi, out, groups):
         vstore(out, g, acc)
 
 
+@njit(inline="always")
+def monotone_lanes(X, order, hv, cv, sv, c, w):
+    """kernels.events.monotone_within(gc, order, h) for the group of LANES lanes at ``c``, gc[k] =
+    X[k, G1] cos phi0 - X[k, G2] sin phi0 the step's polynomial of sin(phi - phi0) and h = hv:
+    |gc[1]| > s + BOUND_SLACK (|gc[1]| + s), s = sum_{k>=2} k |gc[k]| h^(k-1), with the
+    operations of events._tail_bound in its order (so the mask is the scalar test's answer)."""
+    stride = NVAR * w
+    h = vload(hv, c)
+    rk = vsplat(1.0)
+    s = vzero()
+    for k in range(2, order + 1):
+        o = k * stride + c
+        ck = vsub(vmul(vload(X, o + _G1 * w), cv), vmul(vload(X, o + _G2 * w), sv))
+        rk = vmul(rk, h)
+        s = vadd(s, vmul(vmul(vsplat(float(k)), vabs(ck)), rk))
+    d1 = vabs(vsub(vmul(vload(X, stride + _G1 * w + c), cv), vmul(vload(X, stride + _G2 * w + c), sv)))
+    return vgt(d1, vadd(s, vmul(vsplat(BOUND_SLACK), vadd(d1, s))))
+
+
+@njit(inline="always")
+def end_steps_lanes(X, order, ynew, vary, hv, L_t, L_tc, L_gprev, L_steps, L_left, L_on, L_fast, L_last, cphi, sphi,
+                    direction, tmax, max_steps, c, w):
+    """The end of the step of the crossing loop for the group of LANES lanes at ``c``, in vector
+    form, for every lane whose step ends with nothing to do but the bookkeeping: its step was
+    taken in vector form (``L_fast``) and is not the last (``L_last``), its new state
+    ``ynew[:, l]`` is finite (its sum, in the order of the scalar check), the variation bound
+    ``vary`` excludes every root of sin(phi - phi0) in the step (kernels.events.excluded_by_variation,
+    the same IEEE operations: then the scalar loop would find none) or, where it does not, the
+    step's polynomial is monotone (:func:`monotone_lanes`) and its end values make no sign change
+    in ``direction`` (kernels.events.sign_change: then kernels.events.isolate_crossings returns
+    no bracket), and neither the clock nor
+    the step budget nor the crossings still wanted (``L_left``) stop it after the step.  Such a
+    lane takes its new state (X[0]), sin(phi - phi0) at it (``equations.section_g``), the
+    compensated time (``kernels.clock.advance_time``) and the step count here, exactly as the
+    scalar loop would.  Returns the bits of the other lanes that hold an orbit (lane c + i bit i):
+    the scalar loop of :func:`run_worker` runs their step's end (the stops, and the steps that
+    may hold a root: 2.2 % of W4's lane-steps, measured at order 15)."""
+    zero = vzero()
+    live = vgt(vload(L_on, c), zero)
+    ok = vandnot(vgt(vload(L_fast, c), zero), vgt(vload(L_last, c), zero))
+    y0 = vload(ynew, c)
+    y1 = vload(ynew, w + c)
+    y2 = vload(ynew, 2 * w + c)
+    y3 = vload(ynew, 3 * w + c)
+    y4 = vload(ynew, 4 * w + c)
+    ok = vand(ok, vfinite(vadd(vadd(vadd(vadd(vadd(zero, y0), y1), y2), y3), y4)))
+    cv = vsplat(cphi)
+    sv = vsplat(sphi)
+    # excluded_by_variation(g0, vary): |g0| > vary + BOUND_SLACK (|g0| + vary), g0 at the step's start
+    ag = vabs(vsub(vmul(vload(X, _G1 * w + c), cv), vmul(vload(X, _G2 * w + c), sv)))
+    vr = vload(vary, c)
+    none = vgt(ag, vadd(vr, vmul(vsplat(BOUND_SLACK), vadd(ag, vr))))
+    gnew = vsub(vmul(y3, cv), vmul(y4, sv))
+    if vbits(vandnot(vand(live, ok), none)) != 0:
+        # isolate_crossings' second test: monotone on the step, and no sign change of the direction
+        gprev = vload(L_gprev, c)
+        cross = vand(vlt(gprev, zero), vge(gnew, zero)) if direction >= 0 else vlt(zero, zero)
+        if direction <= 0:
+            cross = vor(cross, vand(vgt(gprev, zero), vge(zero, gnew)))
+        none = vor(none, vandnot(monotone_lanes(X, order, hv, cv, sv, c, w), cross))
+    ok = vand(ok, none)
+    # advance_time (not the last step): yk = h - tc, t' = t + yk, tc' = (t' - t) - yk
+    t = vload(L_t, c)
+    tc = vload(L_tc, c)
+    yk = vsub(vload(hv, c), tc)
+    tn = vadd(t, yk)
+    steps = vload(L_steps, c)
+    sn = vadd(steps, vsplat(1.0))
+    # the budgets (checked before the next step) leave the lane running; a crossing is still wanted
+    ok = vand(ok, vand(vand(vlt(tn, vsplat(tmax)), vlt(sn, vsplat(max_steps))), vgt(vload(L_left, c), zero)))
+    vstore(L_t, c, vselect(ok, tn, t))
+    vstore(L_tc, c, vselect(ok, vsub(vsub(tn, t), yk), tc))
+    vstore(L_steps, c, vselect(ok, sn, steps))
+    vstore(L_gprev, c, vselect(ok, gnew, vload(L_gprev, c)))
+    vstore(X, c, vselect(ok, y0, vload(X, c)))
+    vstore(X, w + c, vselect(ok, y1, vload(X, w + c)))
+    vstore(X, 2 * w + c, vselect(ok, y2, vload(X, 2 * w + c)))
+    vstore(X, 3 * w + c, vselect(ok, y3, vload(X, 3 * w + c)))
+    vstore(X, 4 * w + c, vselect(ok, y4, vload(X, 4 * w + c)))
+    return vbits(vandnot(live, ok))
+
+
 @njit
 def _evaluate_lane(X, order, l, h, out):
     """out[i] = sum_k X[k, i, l] h^k: kernels.taylor.evaluate on lane l."""
@@ -325,16 +471,17 @@ def next_lane_orbit(next_orbit, n, orb, l, X, nrows):
 
 
 @njit
-def _start_lane(l, X, orb, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, L_target, L_room, next_orbit,
-                Y0, tmax, max_steps, carry, limits, out_count, out_status, out_final, out_info):
+def _start_lane(l, X, orb, L_on, L_left, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, L_target, L_room,
+                next_orbit, Y0, tmax, max_steps, carry, limits, out_count, out_status, out_final, out_info):
     """Put the next unstarted orbit that needs a step on lane l (its start from the orbit's carry:
     a block continued from ``carry`` takes the steps of an uninterrupted run; orbits that stop
     before their first step - target 0, time or steps spent - are written out at once).
-    Returns 1 if the lane got an orbit, 0 if the batch is exhausted (the lane then idles on
-    the zero state)."""
+    Returns 1 if the lane got an orbit (``L_on[l]`` = 1.0, ``L_left[l]`` the crossings it still
+    wants), 0 if the batch is exhausted (the lane then idles on the zero state, ``L_on[l]`` = 0.0)."""
     while True:
         j = next_lane_orbit(next_orbit, Y0.shape[0], orb, l, X, NVAR)
         if j < 0:
+            L_on[l] = 0.0
             return 0
         for i in range(NVAR):
             X[0, i, l] = Y0[j, i]
@@ -360,6 +507,8 @@ def _start_lane(l, X, orb, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, L_target,
         L_steps[l] = steps
         L_target[l] = limits[j, LIMIT_TARGET]
         L_room[l] = limits[j, LIMIT_ROOM]
+        L_on[l] = 1.0
+        L_left[l] = float(L_target[l])
         return 1
 
 
@@ -370,9 +519,13 @@ WORKSPACE_ND = (("X", "(p + 1, NVAR, W)"), ("norms", "(N_NORMS, W)"), ("ynew", "
                 ("brackets", "(MAX_STEP_ROOTS, 4)"), ("stack", "(ISOLATE_STACK, 5)"))
 WORKSPACE_F = (("hv", "W"), ("vary", "W"), ("yl", "NVAR"), ("yc", "NVAR"), ("gc", "p + 1"),
                ("work", "p + 1"), ("roots", "MAX_STEP_ROOTS"), ("L_t", "W"), ("L_tc", "W"),
-               ("L_gprev", "W"), ("L_H0", "W"))
-WORKSPACE_I = ("orb", "L_count", "L_steps", "L_target", "L_room", "L_status")
-WORKSPACE_B = ("L_last", "L_stop")
+               ("L_gprev", "W"), ("L_H0", "W"), ("L_steps", "W"), ("L_on", "W"), ("L_left", "W"),
+               ("L_fast", "W"), ("L_last", "W"))
+WORKSPACE_I = ("orb", "L_count", "L_target", "L_room", "L_status")
+WORKSPACE_B = ("L_stop",)
+#: the float work arrays of W lanes (the first of WORKSPACE_F's flat buffer), the int ones
+N_FLOAT_W = 11
+N_INT_W = 5
 #: length of the output of :func:`workspace_sizes`
 N_WORKSPACE = 8
 #: alignment (bytes) of the float work arrays: one cache line, one vector of LANES doubles
@@ -390,9 +543,9 @@ def workspace_sizes(order, w, out):
     out[2] = NVAR * w
     out[3] = MAX_STEP_ROOTS * 4
     out[4] = ISOLATE_STACK * 5
-    out[5] = 6 * w + 2 * NVAR + 2 * p1 + MAX_STEP_ROOTS
-    out[6] = 6 * w
-    out[7] = 2 * w
+    out[5] = N_FLOAT_W * w + 2 * NVAR + 2 * p1 + MAX_STEP_ROOTS
+    out[6] = N_INT_W * w
+    out[7] = w
 
 
 @njit
@@ -400,12 +553,16 @@ def workspace_views(order, w, wf, wi, wb):
     """The 1-D work arrays (WORKSPACE_F, WORKSPACE_I, WORKSPACE_B) of ``w`` lanes as views of the
     flat buffers ``wf``, ``wi``, ``wb`` (slices: views that cost nothing)."""
     p1 = order + 1
-    # six float and six int arrays of w each, then the float arrays of other lengths
+    # N_FLOAT_W float and N_INT_W int arrays of w each (the steps counted in a double, exact
+    # below 2**53, so that the budget is checked in vector form), then the float arrays of other
+    # lengths
     hv, vary, L_t, L_tc, L_gprev, L_H0 = (wf[0:w], wf[w:2 * w], wf[2 * w:3 * w], wf[3 * w:4 * w], wf[4 * w:5 * w],
                                           wf[5 * w:6 * w])
-    orb, L_count, L_steps, L_target, L_room, L_status = (wi[0:w], wi[w:2 * w], wi[2 * w:3 * w], wi[3 * w:4 * w],
-                                                         wi[4 * w:5 * w], wi[5 * w:6 * w])
-    a = 6 * w
+    L_steps, L_on, L_left, L_fast, L_last = (wf[6 * w:7 * w], wf[7 * w:8 * w], wf[8 * w:9 * w], wf[9 * w:10 * w],
+                                             wf[10 * w:11 * w])
+    orb, L_count, L_target, L_room, L_status = (wi[0:w], wi[w:2 * w], wi[2 * w:3 * w], wi[3 * w:4 * w],
+                                                wi[4 * w:5 * w])
+    a = N_FLOAT_W * w
     yl = wf[a:a + NVAR]
     yc = wf[a + NVAR:a + 2 * NVAR]
     a += 2 * NVAR
@@ -413,10 +570,9 @@ def workspace_views(order, w, wf, wi, wb):
     work = wf[a + p1:a + 2 * p1]
     a += 2 * p1
     roots = wf[a:a + MAX_STEP_ROOTS]
-    L_last = wb[0:w]
-    L_stop = wb[w:2 * w]
-    return (hv, vary, yl, yc, gc, work, roots, L_t, L_tc, L_gprev, L_H0, orb, L_count, L_steps, L_target, L_room,
-            L_status, L_last, L_stop)
+    L_stop = wb[0:w]
+    return (hv, vary, yl, yc, gc, work, roots, L_t, L_tc, L_gprev, L_H0, L_steps, L_on, L_left, L_fast, L_last, orb,
+            L_count, L_target, L_room, L_status, L_stop)
 
 
 # nogil: the batch drivers Python calls release the GIL (docs/architecture.md, Parallelism)
@@ -457,88 +613,92 @@ def run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, o
     arrays (WORKSPACE_ND, then the flat buffers of :func:`workspace_views`) come zeroed from the
     caller: nothing is allocated here."""
     w = len(groups) * LANES
-    (hv, vary, yl, yc, gc, work, roots, L_t, L_tc, L_gprev, L_H0, orb, L_count, L_steps, L_target, L_room,
-     L_status, L_last, L_stop) = workspace_views(order, w, wf, wi, wb)
+    (hv, vary, yl, yc, gc, work, roots, L_t, L_tc, L_gprev, L_H0, L_steps, L_on, L_left, L_fast, L_last, orb,
+     L_count, L_target, L_room, L_status, L_stop) = workspace_views(order, w, wf, wi, wb)
     for l in range(w):
         orb[l] = _IDLE
+        L_on[l] = 0.0
     factor, e_p, e_q = step_constants(order)
     active = 0
-    for l in range(w):
-        if l < nlanes:
-            active += _start_lane(l, X, orb, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, L_target, L_room,
-                                  next_orbit, Y0, tmax, max_steps, carry, limits,
-                                  out_count, out_status, out_final, out_info)
-        else:
-            orb[l] = _IDLE
+    for l in range(nlanes):
+        active += _start_lane(l, X, orb, L_on, L_left, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, L_target,
+                              L_room, next_orbit, Y0, tmax, max_steps, carry, limits,
+                              out_count, out_status, out_final, out_info)
 
     while active > 0:
         taylor_coefficients_lanes(P, X, order, groups)
         step_norms_lanes(X, order, e_p, e_q, norms, groups)
-        # ---- per lane: finiteness of the last two coefficients, step size, underflow
-        step_lanes(orb, norms, L_t, tmax, e_p, e_q, factor, hv, L_last, L_status, L_stop, w)
+        # ---- all lanes at once: finiteness of the last two coefficients, step size, underflow
+        step_lanes(L_on, norms, L_t, tmax, e_p, e_q, factor, hv, L_last, L_fast, L_status, L_stop, w)
         evaluate_lanes(X, order, hv, ynew, 0, groups)
         # ---- all lanes at once (vectorised): a bound of the variation of sin(phi - phi0) over
         # the step, sum_{k>=1} |c_k| h^k, so that steps far from the section skip the root
         # isolation (kernels.events.excluded_by_variation)
         variation_lanes(X, order, hv, cphi, sphi, vary, groups)
-        # ---- per lane: the new state's check, the crossings in the step, the clock and budgets
-        for l in range(w):
-            j = orb[l]
-            if j == _IDLE:
-                continue
-            if not L_stop[l]:
-                L_steps[l] += 1
-                s = 0.0    # kernels.checks.all_finite of the lane's new state, summed as it is copied
-                for i in range(NVAR):   # (a call to all_finite, a loop of unknown length here, costs ~1 %)
-                    yl[i] = ynew[i, l]
-                    s += yl[i]
-                if not (s - s == 0.0):
-                    stop_lane(l, STATUS_NONFINITE, L_status, L_stop)
-            if not L_stop[l]:
-                h = hv[l]
-                t = L_t[l]
-                tc = L_tc[l]
-                gprev = L_gprev[l]
-                count = L_count[l]
-                gnew = section_g(yl, cphi, sphi)
-                nroots = 0
-                if not excluded_by_variation(sin_diff(X[0, _G1, l], X[0, _G2, l], cphi, sphi), vary[l]):
-                    for k in range(order + 1):
-                        gc[k] = sin_diff(X[k, _G1, l], X[k, _G2, l], cphi, sphi)
-                    nroots = poly_step_roots(gc, order, h, gprev, gnew, direction, roots,
-                                             brackets, work, stack)
-                for r in range(nroots):
-                    if count >= L_room[l]:
-                        break
-                    tau = roots[r]
-                    _evaluate_lane(X, order, l, tau, yc)
-                    kept = keep_crossing(out_cross[j], count, (t - tc) + tau, yc, P, L_H0[l], cphi, sphi)
-                    if kept < 0:
+        for c in range(0, w, LANES):
+            # ---- all lanes of the group at once: the steps that end with no root and no stop
+            bits = end_steps_lanes(X, order, ynew, vary, hv, L_t, L_tc, L_gprev, L_steps, L_left, L_on, L_fast,
+                                   L_last, cphi, sphi, direction, tmax, max_steps, c, w)
+            # ---- lane by lane, the others: the new state's check, the crossings in the step,
+            # the clock and the budgets, then the stops (the scalar loop's step end)
+            while bits != 0:
+                ib, bits = next_bit(bits)
+                l = c + ib
+                j = orb[l]
+                if not L_stop[l]:
+                    L_steps[l] += 1.0
+                    s = 0.0    # kernels.checks.all_finite of the lane's new state, summed as it is copied
+                    for i in range(NVAR):   # (a call to all_finite, a loop of unknown length here, costs ~1 %)
+                        yl[i] = ynew[i, l]
+                        s += yl[i]
+                    if not (s - s == 0.0):
                         stop_lane(l, STATUS_NONFINITE, L_status, L_stop)
-                        break
-                    count = kept
-                    L_count[l] = count
-            if not L_stop[l]:
-                # compensated t += h
-                t, tc = advance_time(t, tc, h, L_last[l], tmax)
-                L_t[l] = t
-                L_tc[l] = tc
-                for i in range(NVAR):
-                    X[0, i, l] = yl[i]
-                L_gprev[l] = gnew
-                if count >= L_target[l]:
-                    stop_lane(l, STATUS_DONE, L_status, L_stop)
-                elif t >= tmax:          # the budgets, checked before the next step
-                    stop_lane(l, STATUS_TMAX, L_status, L_stop)
-                elif L_steps[l] >= max_steps:
-                    stop_lane(l, STATUS_MAX_STEPS, L_status, L_stop)
-            if L_stop[l]:
-                # orbit j stopped: write it out and refill the lane
-                _finish(j, l, X, L_count[l], L_status[l], L_t[l], L_tc[l], L_gprev[l], L_steps[l], carry,
-                        out_count, out_status, out_final, out_info)
-                active += _start_lane(l, X, orb, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, L_target, L_room,
-                                      next_orbit, Y0, tmax, max_steps, carry, limits,
-                                      out_count, out_status, out_final, out_info) - 1
+                if not L_stop[l]:
+                    h = hv[l]
+                    t = L_t[l]
+                    tc = L_tc[l]
+                    gprev = L_gprev[l]
+                    count = L_count[l]
+                    gnew = section_g(yl, cphi, sphi)
+                    nroots = 0
+                    if not excluded_by_variation(sin_diff(X[0, _G1, l], X[0, _G2, l], cphi, sphi), vary[l]):
+                        for k in range(order + 1):
+                            gc[k] = sin_diff(X[k, _G1, l], X[k, _G2, l], cphi, sphi)
+                        nroots = poly_step_roots(gc, order, h, gprev, gnew, direction, roots,
+                                                 brackets, work, stack)
+                    for r in range(nroots):
+                        if count >= L_room[l]:
+                            break
+                        tau = roots[r]
+                        _evaluate_lane(X, order, l, tau, yc)
+                        kept = keep_crossing(out_cross[j], count, (t - tc) + tau, yc, P, L_H0[l], cphi, sphi)
+                        if kept < 0:
+                            stop_lane(l, STATUS_NONFINITE, L_status, L_stop)
+                            break
+                        count = kept
+                        L_count[l] = count
+                        L_left[l] = float(L_target[l] - count)
+                if not L_stop[l]:
+                    # compensated t += h
+                    t, tc = advance_time(t, tc, h, L_last[l] != 0.0, tmax)
+                    L_t[l] = t
+                    L_tc[l] = tc
+                    for i in range(NVAR):
+                        X[0, i, l] = yl[i]
+                    L_gprev[l] = gnew
+                    if count >= L_target[l]:
+                        stop_lane(l, STATUS_DONE, L_status, L_stop)
+                    elif t >= tmax:          # the budgets, checked before the next step
+                        stop_lane(l, STATUS_TMAX, L_status, L_stop)
+                    elif L_steps[l] >= max_steps:
+                        stop_lane(l, STATUS_MAX_STEPS, L_status, L_stop)
+                if L_stop[l]:
+                    # orbit j stopped: write it out and refill the lane
+                    _finish(j, l, X, L_count[l], L_status[l], L_t[l], L_tc[l], L_gprev[l], L_steps[l], carry,
+                            out_count, out_status, out_final, out_info)
+                    active += _start_lane(l, X, orb, L_on, L_left, L_t, L_tc, L_gprev, L_H0, L_count, L_steps,
+                                          L_target, L_room, next_orbit, Y0, tmax, max_steps, carry, limits,
+                                          out_count, out_status, out_final, out_info) - 1
     return 0
 
 

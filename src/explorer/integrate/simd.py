@@ -11,7 +11,12 @@ translates into ``_lanes_generated.py`` and ``_tangent_lanes_generated.py``.
 - :func:`vload` / :func:`vstore`: LANES consecutive elements of a C-contiguous float64 array
   (addressed by the flat index of the first);
 - :func:`vzero`, :func:`vsplat`, :func:`vadd`, :func:`vsub`, :func:`vmul`, :func:`vdiv`,
-  :func:`vneg`, :func:`vabs`, :func:`vmax_gt` (the scalar ``if v > s: s = v``), :func:`vmin_lt`;
+  :func:`vneg`, :func:`vabs`, :func:`vsqrt`, :func:`vmax_gt` (the scalar ``if v > s: s = v``), :func:`vmin_lt`;
+- masks (``<LANES x i1>``, lane-wise booleans): the ordered comparisons :func:`vgt`,
+  :func:`vge`, :func:`vlt`, :func:`veq` (lane-wise the scalar ``a > b`` ...: false where either is
+  NaN), :func:`vand`, :func:`vandnot`, :func:`vor`, :func:`vselect` (``a if m else b`` per lane)
+  and :func:`vbits` (the mask as the bits of an integer, lane i bit i: the lanes that a scalar
+  loop must visit, one after the other by :func:`next_bit`);
 - :func:`vradius_power_core`: the step size's power ``kernels.power.radius_power_core`` on every
   lane (the same IR, emitted for a vector: lane-wise the scalar's double);
 - :func:`atomic_fetch_add`: the shared queue of orbits of the lane workers;
@@ -30,7 +35,7 @@ same IEEE operations).
 """
 import numpy as np
 
-from explorer._jit import NOJIT
+from explorer._jit import NOJIT, njit
 from explorer.kernels.power import emit_radius_power, radius_power_core
 
 #: orbits advanced in lockstep by one vector instruction: 8 doubles = one AVX-512 register (two
@@ -71,11 +76,45 @@ if NOJIT:  # pragma: no cover - plain-Python twins (numpy elementwise = the same
     def vabs(a):
         return np.abs(a)
 
+    def vsqrt(a):
+        with np.errstate(invalid="ignore"):
+            return np.sqrt(a)
+
     def vmax_gt(v, s):
         return np.where(v > s, v, s)
 
     def vmin_lt(v, s):
         return np.where(v < s, v, s)
+
+    def vgt(a, b):
+        return a > b
+
+    def vge(a, b):
+        return a >= b
+
+    def vlt(a, b):
+        return a < b
+
+    def veq(a, b):
+        return a == b
+
+    def vand(a, b):
+        return a & b
+
+    def vandnot(a, b):
+        return a & ~b
+
+    def vor(a, b):
+        return a | b
+
+    def vselect(m, a, b):
+        return np.where(m, a, b)
+
+    def vbits(m):
+        return int(sum(1 << i for i in range(LANES) if m[i]))
+
+    def _cttz(bits):
+        return (bits & -bits).bit_length() - 1
 
     def vradius_power_core(v, e):
         with np.errstate(all="ignore"):
@@ -200,6 +239,18 @@ else:
         return f64vec(f64vec), codegen
 
     @_intrinsic
+    def vsqrt(typingctx, a):
+        """The square root of every lane (llvm.sqrt, correctly rounded as numba's scalar math.sqrt)."""
+        if a != f64vec:
+            return None
+
+        def codegen(context, builder, sig, args):
+            fn = _cgutils.get_or_insert_function(builder.module, _ir.FunctionType(_VT, [_VT]),
+                                                 "llvm.sqrt.v%df64" % LANES)
+            return builder.call(fn, [args[0]])
+        return f64vec(f64vec), codegen
+
+    @_intrinsic
     def vmax_gt(typingctx, v, s):
         """v where v > s else s (the scalar ``if v > s: s = v``; fcmp ogt + select)."""
         if not (v == f64vec and s == f64vec):
@@ -218,6 +269,85 @@ else:
         def codegen(context, builder, sig, args):
             return builder.select(builder.fcmp_ordered("<", args[0], args[1]), args[0], args[1])
         return f64vec(f64vec, f64vec), codegen
+
+    class B1Vec(_types.Type):
+        """LANES booleans held as one LLVM ``<LANES x i1>`` value (a lane mask)."""
+
+        def __init__(self):
+            super().__init__(name="b1x%d" % LANES)
+
+    b1vec = B1Vec()
+    _MT = _ir.VectorType(_ir.IntType(1), LANES)
+
+    @_register_model(B1Vec)
+    class _B1VecModel(_models.PrimitiveModel):
+        def __init__(self, dmm, fe_type):
+            super().__init__(dmm, fe_type, _MT)
+
+    def _compare(op):
+        @_intrinsic
+        def f(typingctx, a, b):
+            if not (a == f64vec and b == f64vec):
+                return None
+
+            def codegen(context, builder, sig, args):
+                return builder.fcmp_ordered(op, args[0], args[1])
+            return b1vec(f64vec, f64vec), codegen
+        return f
+
+    vgt = _compare(">")
+    vge = _compare(">=")
+    vlt = _compare("<")
+    veq = _compare("==")
+
+    def _logic(emit):
+        @_intrinsic
+        def f(typingctx, a, b):
+            if not (a == b1vec and b == b1vec):
+                return None
+
+            def codegen(context, builder, sig, args):
+                return emit(builder, args[0], args[1])
+            return b1vec(b1vec, b1vec), codegen
+        return f
+
+    vand = _logic(lambda b, x, y: b.and_(x, y))
+    vor = _logic(lambda b, x, y: b.or_(x, y))
+    vandnot = _logic(lambda b, x, y: b.and_(x, b.not_(y)))
+
+    @_intrinsic
+    def vselect(typingctx, m, a, b):
+        """a where m else b, lane by lane."""
+        if not (m == b1vec and a == f64vec and b == f64vec):
+            return None
+
+        def codegen(context, builder, sig, args):
+            return builder.select(args[0], args[1], args[2])
+        return f64vec(b1vec, f64vec, f64vec), codegen
+
+    @_intrinsic
+    def vbits(typingctx, m):
+        """The mask as an int64: bit i set iff lane i is true."""
+        if m != b1vec:
+            return None
+
+        def codegen(context, builder, sig, args):
+            return builder.zext(builder.bitcast(args[0], _ir.IntType(LANES)), _ir.IntType(64))
+        return _types.int64(b1vec), codegen
+
+    @_intrinsic
+    def _cttz(typingctx, bits):
+        """The index of the lowest set bit of bits > 0 (llvm.cttz)."""
+        if not isinstance(bits, _types.Integer):
+            return None
+
+        def codegen(context, builder, sig, args):
+            i64 = _ir.IntType(64)
+            fn = _cgutils.get_or_insert_function(builder.module, _ir.FunctionType(i64, [i64, _ir.IntType(1)]),
+                                                 "llvm.cttz.i64")
+            return builder.call(fn, [context.cast(builder, args[0], sig.args[0], _types.int64),
+                                     _ir.Constant(_ir.IntType(1), 1)])
+        return _types.int64(bits), codegen
 
     @_intrinsic
     def vradius_power_core(typingctx, v, e):
@@ -255,3 +385,10 @@ else:
         # the lane worker (the plain njit call before lane groups was inlined), and W4 taylor
         # lost 4-6 % (issue 34; benchmarks/RESULTS.md)
         return overload(stub, inline="always")
+
+
+@njit(inline="always")
+def next_bit(bits):
+    """(i, rest) for bits > 0: the index i of its lowest set bit and bits without it; a scalar
+    loop visits the lanes of a mask ``bits = vbits(m)`` as ``while bits: i, bits = next_bit(bits)``."""
+    return _cttz(bits), bits & (bits - 1)

@@ -14,12 +14,16 @@ whatever the grouping of orbits into lanes and the number of threads:
   the same IEEE operations in the same order; the second vector by the same recurrence's
   statements for the deviation only), the step norms and the Horner sums by those of the
   crossing lanes (``lanes.step_norms_lanes``, ``lanes.evaluate_lanes``);
-* the step sizes of all lanes from the orbit's rows (``lanes.step_norms_lanes``: the powers
-  vectorized, the same doubles as ``kernels.taylor.step_size``);
-* everything else - the clip to T, the step budget, the finiteness and
-  underflow checks, the renormalisation and the accumulators of ``kernels.tangent``, the
-  history rows and the early classification - is the control flow of the scalar loop, run per
-  lane in scalar code.
+* the step sizes of all lanes from the orbit's rows and the step's checks (``lanes.step_norms_lanes``,
+  ``lanes.step_lanes``: the powers and the checks vectorized, the same doubles as
+  ``kernels.taylor.step_size`` and ``systems.taylor_step``);
+* the end of the step in vector form (:func:`end_steps_tangent_lanes`) for every lane that ends
+  it with no stop and no history row: the finiteness checks, the renormalisation of the
+  deviation vectors and the mLCE, MEGNO and FLI accumulators of ``kernels.tangent`` (their
+  operations lane-wise; ln of the norm by libm per lane), the clock and the step budget;
+* everything else - the last step, the stops, the history rows, and every step end when the
+  early classification is on - is the control flow of the scalar loop, run per lane in scalar
+  code.
 
 Lanes never exchange values, so the work is distributed dynamically as in
 :mod:`explorer.integrate.lanes`: one worker per thread, a lane whose orbit stops takes the next
@@ -30,6 +34,8 @@ groups), bit for bit the same results for every G.
 Kernel contract: arrays are allocated per worker, never inside the step loop; no exceptions
 (status codes); no fastmath.
 """
+import math
+
 import numpy as np
 
 from explorer._jit import get_num_threads, njit, prange
@@ -51,9 +57,29 @@ from explorer.integrate.lanes import (
     step_norms_lanes,
     stop_lane,
     stop_unless_finite,
+    vfinite,
     worker_lanes,
 )
-from explorer.integrate.simd import LANES
+from explorer.integrate.simd import (
+    LANES,
+    next_bit,
+    vadd,
+    vand,
+    vandnot,
+    vbits,
+    vdiv,
+    vgt,
+    vload,
+    vlt,
+    vmax_gt,
+    vmul,
+    vselect,
+    vsplat,
+    vsqrt,
+    vstore,
+    vsub,
+    vzero,
+)
 from explorer.integrate.tangent import _early, _finish_ext, _history
 from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS
 from explorer.kernels import tangent as tg
@@ -69,20 +95,22 @@ def _finish(j, l, Z, acc, v, w, nvec, early, status, steps, out_res, out_ext, ou
         v[i] = Z[0, DEV1 + i, l]
         w[i] = Z[0, DEV2 + i, l]
         out_final[j, i] = Z[0, i, l]
-    _finish_ext(acc[l], v, w, nvec, early, out_res[j], out_ext[j], out_w[j])
+    _finish_ext(acc[:, l], v, w, nvec, early, out_res[j], out_ext[j], out_w[j])
     out_status[j] = status
-    out_steps[j] = steps
+    out_steps[j] = int(steps)
 
 
 @njit
-def _start_lane(l, Z, orb, acc, L_t, L_steps, L_hpos, L_since, next_orbit, Y0, V0, W0, nvec, T, max_steps,
-                v, w, out_res, out_ext, out_status, out_final, out_steps, out_w):
+def _start_lane(l, Z, orb, L_on, acc, L_t, L_steps, L_hpos, L_hnext, L_since, hist_t, next_orbit, Y0, V0, W0, nvec, T,
+                max_steps, v, w, out_res, out_ext, out_status, out_final, out_steps, out_w):
     """Put the next unstarted orbit on lane l (the start of the scalar loop: the deviation
     vectors renormalised; orbits that stop before their first step are written out at once).
-    Returns 1 if the lane got an orbit, 0 if the batch is exhausted (the lane idles on 0)."""
+    Returns 1 if the lane got an orbit (``L_on[l]`` = 1.0), 0 if the batch is exhausted (the lane
+    idles on 0, ``L_on[l]`` = 0.0)."""
     while True:
         j = next_lane_orbit(next_orbit, Y0.shape[0], orb, l, Z, NROWS)
         if j < 0:
+            L_on[l] = 0.0
             return 0
         for i in range(5):
             Z[0, i, l] = Y0[j, i]
@@ -94,7 +122,7 @@ def _start_lane(l, Z, orb, acc, L_t, L_steps, L_hpos, L_since, next_orbit, Y0, V
         for i in range(5):
             Z[0, DEV1 + i, l] = v[i]
             Z[0, DEV2 + i, l] = w[i]
-        tg.reset(acc[l])
+        tg.reset(acc[:, l])
         if not (0.0 < T):
             _finish(j, l, Z, acc, v, w, nvec, tg.EARLY_NONE, STATUS_DONE, 0, out_res, out_ext, out_status,
                     out_final, out_steps, out_w)
@@ -105,10 +133,111 @@ def _start_lane(l, Z, orb, acc, L_t, L_steps, L_hpos, L_since, next_orbit, Y0, V
             continue
         orb[l] = j
         L_t[l] = 0.0
-        L_steps[l] = 0
+        L_steps[l] = 0.0
         L_hpos[l] = 0
+        L_hnext[l] = _next_history_time(hist_t, 0)
         L_since[l] = -1.0
+        L_on[l] = 1.0
         return 1
+
+
+@njit(inline="always")
+def _next_history_time(hist_t, hpos):
+    """The time of the next history row (tangent._history writes it when a step ends at or after
+    it), +inf when all are written."""
+    return hist_t[hpos] if hpos < hist_t.shape[0] else math.inf
+
+
+@njit(inline="always")
+def _unit_lanes(znew, first, c, nl):
+    """The five rows first.. of znew for the group at c as unit vectors, and their former norm:
+    kernels.tangent.renormalize's operations in its order (sum of squares, sqrt, 1 / norm, the
+    products), lane-wise."""
+    x0 = vload(znew, first * nl + c)
+    x1 = vload(znew, (first + 1) * nl + c)
+    x2 = vload(znew, (first + 2) * nl + c)
+    x3 = vload(znew, (first + 3) * nl + c)
+    x4 = vload(znew, (first + 4) * nl + c)
+    s = vadd(vadd(vadd(vadd(vadd(vzero(), vmul(x0, x0)), vmul(x1, x1)), vmul(x2, x2)), vmul(x3, x3)), vmul(x4, x4))
+    norm = vsqrt(s)
+    inv = vdiv(vsplat(1.0), norm)
+    return vmul(x0, inv), vmul(x1, inv), vmul(x2, inv), vmul(x3, inv), vmul(x4, inv), norm
+
+
+@njit(inline="always")
+def _keep(Z, row, ok, x):
+    """Z[0, row] = x in the lanes of ok (the group's offset in ``row``)."""
+    vstore(Z, row, vselect(ok, x, vload(Z, row)))
+
+
+@njit(inline="always")
+def end_steps_tangent_lanes(Z, znew, hv, nrm, acc, L_t, L_steps, L_hnext, L_on, L_fast, L_last, nvec, T, max_steps,
+                            c, nl):
+    """The end of the tangent step for the group of LANES lanes at ``c`` in vector form, for every
+    lane whose step ends with nothing to do but the bookkeeping: its step was taken in vector form
+    (``L_fast``) and is not the last, its new state and vectors are finite (count_step's and
+    stop_unless_finite's sums), and neither T, the step budget nor a history row (``L_hnext``)
+    comes at its end.  Such a lane takes, exactly as the scalar loop: the step count, the new time,
+    its deviation vectors renormalised (kernels.tangent.renormalize: the sums, sqrt and products
+    lane-wise, ln of the norm by libm per lane), the accumulators of kernels.tangent.accumulate
+    (mLCE, MEGNO, FLI: its operations lane-wise; ``acc`` holds one row per accumulator, one column
+    per lane) and the new state in Z[0].  Returns the bits of the other lanes that hold an orbit
+    (lane c + i bit i): the scalar loop ends their step."""
+    zero = vzero()
+    live = vgt(vload(L_on, c), zero)
+    ok = vandnot(vgt(vload(L_fast, c), zero), vgt(vload(L_last, c), zero))
+    s = zero
+    for i in range(DEV1 + 5):
+        s = vadd(s, vload(znew, i * nl + c))
+    ok = vand(ok, vfinite(s))
+    if nvec == 2:
+        s = zero
+        for i in range(DEV2, DEV2 + 5):
+            s = vadd(s, vload(znew, i * nl + c))
+        ok = vand(ok, vfinite(s))
+    t = vload(L_t, c)
+    tn = vadd(t, vload(hv, c))
+    steps = vload(L_steps, c)
+    sn = vadd(steps, vsplat(1.0))
+    ok = vand(ok, vand(vand(vlt(tn, vsplat(T)), vlt(sn, vsplat(max_steps))), vlt(tn, vload(L_hnext, c))))
+    v0, v1, v2, v3, v4, norm = _unit_lanes(znew, DEV1, c, nl)
+    vstore(nrm, c, norm)
+    for l in range(c, c + LANES):       # ln |v| per lane holding an orbit: libm's log, as renormalize
+        if L_on[l] != 0.0:
+            nrm[l] = math.log(nrm[l])
+    dlog = vload(nrm, c)
+    # kernels.tangent.accumulate(acc, t, tn, dlog), lane-wise
+    lg = vadd(vload(acc, tg.ACC_LOG * nl + c), dlog)
+    wv = vadd(vload(acc, tg.ACC_W * nl + c), vmul(vmul(vsplat(0.5), vadd(t, tn)), dlog))
+    y1 = vselect(vgt(tn, zero), vdiv(vmul(vsplat(2.0), wv), tn), zero)
+    yint = vadd(vload(acc, tg.ACC_YINT * nl + c),
+                vmul(vmul(vsplat(0.5), vadd(vload(acc, tg.ACC_Y * nl + c), y1)), vsub(tn, t)))
+    _keep(acc, tg.ACC_LOG * nl + c, ok, lg)
+    _keep(acc, tg.ACC_W * nl + c, ok, wv)
+    _keep(acc, tg.ACC_YINT * nl + c, ok, yint)
+    _keep(acc, tg.ACC_Y * nl + c, ok, y1)
+    _keep(acc, tg.ACC_T * nl + c, ok, tn)
+    _keep(acc, tg.ACC_FLI * nl + c, ok, vmax_gt(lg, vload(acc, tg.ACC_FLI * nl + c)))
+    vstore(L_t, c, vselect(ok, tn, t))
+    vstore(L_steps, c, vselect(ok, sn, steps))
+    for i in range(5):
+        _keep(Z, i * nl + c, ok, vload(znew, i * nl + c))
+    _keep(Z, DEV1 * nl + c, ok, v0)
+    _keep(Z, (DEV1 + 1) * nl + c, ok, v1)
+    _keep(Z, (DEV1 + 2) * nl + c, ok, v2)
+    _keep(Z, (DEV1 + 3) * nl + c, ok, v3)
+    _keep(Z, (DEV1 + 4) * nl + c, ok, v4)
+    if nvec == 2:
+        w0, w1, w2, w3, w4, _ = _unit_lanes(znew, DEV2, c, nl)
+        _keep(Z, DEV2 * nl + c, ok, w0)
+        _keep(Z, (DEV2 + 1) * nl + c, ok, w1)
+        _keep(Z, (DEV2 + 2) * nl + c, ok, w2)
+        _keep(Z, (DEV2 + 3) * nl + c, ok, w3)
+        _keep(Z, (DEV2 + 4) * nl + c, ok, w4)
+    else:
+        for i in range(DEV2, DEV2 + 5):
+            _keep(Z, i * nl + c, ok, zero)
+    return vbits(vandnot(live, ok))
 
 
 # nogil: the batch drivers Python calls release the GIL (docs/architecture.md, Parallelism)
@@ -124,82 +253,95 @@ def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_s
     znew = aligned_zeros(NROWS * nl).reshape((NROWS, nl))
     norms = aligned_zeros(N_NORMS * nl).reshape((N_NORMS, nl))
     hv = aligned_zeros(nl)
+    nrm = aligned_zeros(nl)
+    # the accumulators of kernels.tangent, one row each, one column per lane (vector rows)
+    acc = aligned_zeros(tg.N_ACC * nl).reshape((tg.N_ACC, nl))
     v = np.empty(5)
     w = np.zeros(5)
     row = np.empty(tg.N_RES)
-    acc = np.zeros((nl, tg.N_ACC))
     orb = np.full(nl, _IDLE, np.int64)
-    L_t = np.zeros(nl)
-    L_steps = np.zeros(nl, np.int64)
+    L_t = aligned_zeros(nl)
+    L_steps = aligned_zeros(nl)       # counted in a double (exact below 2**53): checked in vector form
+    L_hnext = aligned_zeros(nl)
+    L_on = aligned_zeros(nl)
+    L_fast = aligned_zeros(nl)
+    L_last = aligned_zeros(nl)
     L_hpos = np.zeros(nl, np.int64)
     L_since = np.zeros(nl)
     L_status = np.zeros(nl, np.int64)
     L_early = np.zeros(nl, np.int64)
-    L_last = np.zeros(nl, np.bool_)
     L_stop = np.zeros(nl, np.bool_)
     factor, e_p, e_q = step_constants(order)
     active = 0
-    for l in range(nl):
-        if l < nlanes:
-            active += _start_lane(l, Z, orb, acc, L_t, L_steps, L_hpos, L_since, next_orbit, Y0, V0, W0, nvec, T,
-                                  max_steps, v, w, out_res, out_ext, out_status, out_final, out_steps, out_w)
-        else:
-            orb[l] = _IDLE
+    for l in range(nlanes):
+        active += _start_lane(l, Z, orb, L_on, acc, L_t, L_steps, L_hpos, L_hnext, L_since, hist_t, next_orbit, Y0,
+                              V0, W0, nvec, T, max_steps, v, w, out_res, out_ext, out_status, out_final, out_steps,
+                              out_w)
 
     while active > 0:
         tangent_coefficients_lanes(P, Z, order, DEV1, groups)
         if nvec == 2:
             deviation_coefficients_lanes(P, Z, order, DEV2, groups)
         step_norms_lanes(Z, order, e_p, e_q, norms, groups)
-        # ---- per lane: systems.taylor_step's checks and step size
-        for l in range(nl):
-            L_early[l] = tg.EARLY_NONE
-        step_lanes(orb, norms, L_t, T, e_p, e_q, factor, hv, L_last, L_status, L_stop, nl)
+        # ---- all lanes at once: systems.taylor_step's checks and step size
+        step_lanes(L_on, norms, L_t, T, e_p, e_q, factor, hv, L_last, L_fast, L_status, L_stop, nl)
         evaluate_lanes(Z, order, hv, znew, 0, groups)
         evaluate_lanes(Z, order, hv, znew, DEV1, groups)
         if nvec == 2:
             evaluate_lanes(Z, order, hv, znew, DEV2, groups)
-        # ---- per lane: the rest of the step of the scalar loop
-        for l in range(nl):
-            j = orb[l]
-            if j == _IDLE:
-                continue
-            count_step(l, znew, 0, DEV1 + 5, L_steps, L_status, L_stop)   # the orbit and the first vector
-            if nvec == 2 and not L_stop[l]:
-                stop_unless_finite(l, znew, DEV2, DEV2 + 5, L_status, L_stop)
-            if not L_stop[l]:
-                t = L_t[l]
-                t_new = T if L_last[l] else t + hv[l]
-                for i in range(5):
-                    v[i] = znew[DEV1 + i, l]
-                dlog = tg.renormalize(v, 5)
-                tg.accumulate(acc[l], t, t_new, dlog)
-                L_hpos[l] = _history(acc[l], hist_t, out_hist[j], L_hpos[l], row)
-                if nvec == 2:
+        for c in range(0, nl, LANES):
+            # ---- all lanes of the group at once: the step ends with no stop and no history row
+            # (every lane to the scalar loop when the early classification is on)
+            bits = end_steps_tangent_lanes(Z, znew, hv, nrm, acc, L_t, L_steps, L_hnext, L_on, L_fast, L_last,
+                                           nvec, T, max_steps, c, nl) if not early_stop else 0
+            if early_stop:
+                for i in range(LANES):
+                    if L_on[c + i] != 0.0:
+                        bits |= 1 << i
+            # ---- lane by lane, the others: the rest of the step of the scalar loop
+            while bits != 0:
+                ib, bits = next_bit(bits)
+                l = c + ib
+                j = orb[l]
+                L_early[l] = tg.EARLY_NONE
+                count_step(l, znew, 0, DEV1 + 5, L_steps, L_status, L_stop)   # the orbit and the first vector
+                if nvec == 2 and not L_stop[l]:
+                    stop_unless_finite(l, znew, DEV2, DEV2 + 5, L_status, L_stop)
+                if not L_stop[l]:
+                    al = acc[:, l]
+                    t = L_t[l]
+                    t_new = T if L_last[l] != 0.0 else t + hv[l]
                     for i in range(5):
-                        w[i] = znew[DEV2 + i, l]
-                    tg.renormalize(w, 5)
-                L_t[l] = t_new
-                for i in range(5):
-                    Z[0, i, l] = znew[i, l]
-                    Z[0, DEV1 + i, l] = v[i]
-                    Z[0, DEV2 + i, l] = w[i] if nvec == 2 else 0.0
-                early = tg.EARLY_NONE
-                if early_stop:
-                    early, L_since[l] = _early(acc[l], v, w, nvec, sali_stop, megno_level, early_tmin, L_since[l])
-                if early != tg.EARLY_NONE:
-                    L_early[l] = early
-                    stop_lane(l, STATUS_DONE, L_status, L_stop)
-                elif not (t_new < T):        # the checks at the top of systems.taylor_step
-                    stop_lane(l, STATUS_DONE, L_status, L_stop)
-                elif L_steps[l] >= max_steps:
-                    stop_lane(l, STATUS_MAX_STEPS, L_status, L_stop)
-            if L_stop[l]:
-                _finish(j, l, Z, acc, v, w, nvec, L_early[l], L_status[l], L_steps[l], out_res, out_ext,
-                        out_status, out_final, out_steps, out_w)
-                active += _start_lane(l, Z, orb, acc, L_t, L_steps, L_hpos, L_since, next_orbit, Y0, V0, W0, nvec,
-                                      T, max_steps, v, w, out_res, out_ext, out_status, out_final, out_steps,
-                                      out_w) - 1
+                        v[i] = znew[DEV1 + i, l]
+                    dlog = tg.renormalize(v, 5)
+                    tg.accumulate(al, t, t_new, dlog)
+                    L_hpos[l] = _history(al, hist_t, out_hist[j], L_hpos[l], row)
+                    L_hnext[l] = _next_history_time(hist_t, L_hpos[l])
+                    if nvec == 2:
+                        for i in range(5):
+                            w[i] = znew[DEV2 + i, l]
+                        tg.renormalize(w, 5)
+                    L_t[l] = t_new
+                    for i in range(5):
+                        Z[0, i, l] = znew[i, l]
+                        Z[0, DEV1 + i, l] = v[i]
+                        Z[0, DEV2 + i, l] = w[i] if nvec == 2 else 0.0
+                    early = tg.EARLY_NONE
+                    if early_stop:
+                        early, L_since[l] = _early(al, v, w, nvec, sali_stop, megno_level, early_tmin, L_since[l])
+                    if early != tg.EARLY_NONE:
+                        L_early[l] = early
+                        stop_lane(l, STATUS_DONE, L_status, L_stop)
+                    elif not (t_new < T):        # the checks at the top of systems.taylor_step
+                        stop_lane(l, STATUS_DONE, L_status, L_stop)
+                    elif L_steps[l] >= max_steps:
+                        stop_lane(l, STATUS_MAX_STEPS, L_status, L_stop)
+                if L_stop[l]:
+                    _finish(j, l, Z, acc, v, w, nvec, L_early[l], L_status[l], L_steps[l], out_res, out_ext,
+                            out_status, out_final, out_steps, out_w)
+                    active += _start_lane(l, Z, orb, L_on, acc, L_t, L_steps, L_hpos, L_hnext, L_since, hist_t,
+                                          next_orbit, Y0, V0, W0, nvec, T, max_steps, v, w, out_res, out_ext,
+                                          out_status, out_final, out_steps, out_w) - 1
     return 0
 
 
