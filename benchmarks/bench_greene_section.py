@@ -32,7 +32,7 @@ ON_CURVE_TOL = 1e-6
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--iterates", type=int, default=5000, help="N of the weighted Birkhoff check [%(default)s]")
+    ap.add_argument("--iterates", type=int, default=10000, help="N of the weighted Birkhoff check [%(default)s]")
     args = ap.parse_args(argv)
     import explorer as ex
     from explorer import model

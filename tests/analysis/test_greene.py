@@ -221,3 +221,16 @@ def test_section_greene_finds_the_breakup_of_a_noble_curve_of_the_right_island()
         # the bisection's 600-return averages place the start within ~1e-7 of nu
         on_curve = rn.converged and abs(abs(rn.value) - nu) < 1e-6
         assert on_curve is regular, (factor, rn)
+
+
+@pytest.mark.slow
+@pytest.mark.cpu_dependent
+def test_an_orbit_whose_turns_around_the_centre_are_undefined_is_skipped_not_fatal():
+    """For [0; 6, 2, 1, ...] up to q = 150 the line scan meets, among the roots of the half-turn
+    equation, an orbit whose rotation around the centre is not defined (its lift is unresolved):
+    it is not an orbit of type P/Q around that centre and is passed over, and mu_c comes out as in
+    benchmarks/RESULTS.md GREENE-SECTION (0.029631211 +- 2.8e-7; the run stopped with a
+    ParameterError before)."""
+    r = ex.greene(_section(0.025), "noble:6,2", qmax=150, around=(1.58, 0.0))
+    assert [c["q"] for c in r.convergents][-1] == 134
+    assert r.uncertainty < 1e-6 and abs(r.critical - 0.029631211) < 2 * r.uncertainty + 1e-8

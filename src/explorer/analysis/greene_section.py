@@ -172,9 +172,10 @@ def first_orbit(smap: SectionMap, P: int, Q: int, centre) -> SectionSymmetricOrb
         for root in sorted(line_roots(smap, Q, x0, end, LINE_SAMPLES), key=lambda r: abs(r - x0)):
             try:
                 orb = section_symmetric_orbit(smap, Q, root)
-            except ParameterError:
-                continue
-            if abs(orb.rotation(smap, centre) * Q - turn * P) < 1e-6 and orb.residue > 0:
+                turns = orb.rotation(smap, centre)
+            except ParameterError:      # no orbit there, or one whose turns around the centre are
+                continue                # not defined (it passes the centre): not of type P/Q around it
+            if abs(turns * Q - turn * P) < 1e-6 and orb.residue > 0:
                 if best is None or abs(root - x0) < abs(best.points[0, 0] - x0):
                     best = orb
                 break
