@@ -374,8 +374,8 @@ DATA = "(name) => { const d = Bokeh.documents[0].get_model_by_name(name).data; c
        " for (const k of Object.keys(d)) o[k] = Array.from(d[k]); return o; }"
 TEXT = "(name) => Bokeh.documents[0].get_model_by_name(name).text"
 #: tick or untick the check box whose label starts with the text (its Bokeh model, as a click does)
-SET_BOX = "([text, on]) => { const m = [...Bokeh.documents[0].all_models].find(m => m.type === 'Checkbox' &&" \
-          " String(m.label).startsWith(text)); m.active = on; }"
+SET_BOX = "([text, on]) => { const m = [...Bokeh.documents[0].all_models].find(m => m.type === 'CheckboxGroup' &&" \
+          " String(m.labels[0]).startsWith(text)); m.active = on ? [0] : []; }"
 
 
 def _wait(page, expression, timeout=60_000, polling="raf"):

@@ -109,6 +109,14 @@ RANGE = ("() => { const f = Bokeh.documents[0].get_model_by_name('section');"
 EXPORT_BUTTONS = ("Scene (TOML)", "Figure (PNG)", "Figure (SVG)", "Export scene", "Export figure")
 
 
+#: the section's canvas in the page: width, height, top, bottom (CSS pixels)
+CANVAS = ("() => { const r = Bokeh.index.all_views().find(v => v.model.name === 'section').el"
+          ".getBoundingClientRect(); return [r.width, r.height, r.top, r.bottom]; }")
+#: whether the check box whose label is the text is ticked (its Bokeh model)
+BOX_ON = ("(text) => [...Bokeh.documents[0].all_models].find(m => m.type === 'CheckboxGroup' && "
+          "m.labels[0] === text).active.includes(0)")
+
+
 @browser_needed
 def test_at_1280_by_720_the_export_buttons_are_in_view_then_the_view_follows_a_new_region_and_reset_goes_back(
         served, browser):
@@ -119,6 +127,13 @@ def test_at_1280_by_720_the_export_buttons_are_in_view_then_the_view_follows_a_n
         for name in EXPORT_BUTTONS:                            # (the layout does not depend on timing)
             box = page.get_by_role("button", name=name).bounding_box()
             assert box is not None and box["y"] >= 0 and box["y"] + box["height"] <= 720, (name, box)
+        # the figure sized to the window: as wide as the controls leave it, bounded by its height
+        narrow = page.evaluate(CANVAS)
+        assert narrow[3] <= 720 and 0.9 * 660 <= narrow[0] <= 1280 - 230, narrow
+        # a check box's label is clickable: its text ticks it (the server has it: the link says so)
+        page.get_by_text("colour orbits by MEGNO", exact=True).click()
+        _wait(page, "() => window.location.search.includes('colour=megno')")
+        assert page.evaluate(BOX_ON, "colour orbits by MEGNO")
         _set_field(page, "mu", "1.5")
         _wait(page, "() => window.location.search.includes('mu=1.5')")
         c1, c2, r1, r2 = Settings(params=SERVED.params.with_(mu=1.5), crossings=SERVED.crossings).region
@@ -131,6 +146,10 @@ def test_at_1280_by_720_the_export_buttons_are_in_view_then_the_view_follows_a_n
         _wait(page, f"() => ({RANGE})()[1] - ({RANGE})()[0] < {0.9 * (x1 - x0)}")
         page.locator(".bk-tool-icon-reset").first.click()
         _wait(page, f"() => Math.abs(({RANGE})()[0] - {x0}) < 1e-9 && Math.abs(({RANGE})()[1] - {x1}) < 1e-9")
+        page.set_viewport_size({"width": 1800, "height": 1100})      # a larger window: a larger figure
+        _wait(page, f"() => window.innerWidth === 1800 && ({CANVAS})()[0] > {narrow[0] + 300}")
+        wide = page.evaluate(CANVAS)
+        assert wide[3] <= 1100 and abs(wide[0] / wide[1] - narrow[0] / narrow[1]) < 0.02, (narrow, wide)
     finally:
         page.close()
 

@@ -48,7 +48,14 @@ from explorer.app.serve.page_orbits import (  # noqa: F401  (the page's constant
 from explorer.app.serve.page_overlays import Overlays
 from explorer.app.serve.page_readout import Readout
 from explorer.app.serve.settings import FIELDS, Settings, format_starts, format_window, parse_fields
-from explorer.app.serve.style import MESSAGE_ERROR_COLOR, MESSAGE_OK_COLOR
+from explorer.app.serve.style import (
+    FIGURE_CHROME_PX,
+    FIGURE_HEIGHT,
+    FIGURE_MIN_WIDTH,
+    FIGURE_WIDTH,
+    MESSAGE_ERROR_COLOR,
+    MESSAGE_OK_COLOR,
+)
 from explorer.app.serve.tasks import SessionLoop
 from explorer.app.serve.view import SectionView
 from explorer.model import ParameterError
@@ -164,10 +171,16 @@ class SectionPage:
                              ov.overlay, ov.periodic_box, o.starts_box, width=230)
         texts = (o.status, self.readout, self.message, self.overlay_text)
         for div in texts:
-            div.width = self.section.figure.width
-        bar = pn.FlexBox(*buttons, flex_wrap="wrap", width=self.section.figure.width)
-        self.layout = pn.Row(controls, pn.Column(self.title, bar, pn.pane.Bokeh(self.section.figure),
-                                                 *(pn.pane.Bokeh(d) for d in texts)))
+            div.sizing_mode = "stretch_width"
+        bar = pn.FlexBox(*buttons, flex_wrap="wrap", sizing_mode="stretch_width")
+        # the figure as wide as the window leaves it, and no taller than the window less the lines
+        # above and below it (a CSS bound on its width: the figure keeps its aspect, view.py)
+        aspect = FIGURE_WIDTH / FIGURE_HEIGHT
+        self.section.figure.styles = {"max-width": f"max({FIGURE_MIN_WIDTH}px, calc((100vh - {FIGURE_CHROME_PX}px)"
+                                                   f" * {aspect:.6f}))"}
+        plot = pn.pane.Bokeh(self.section.figure, sizing_mode="stretch_width")
+        self.layout = pn.Row(controls, pn.Column(self.title, bar, plot, *(pn.pane.Bokeh(d) for d in texts),
+                                                 sizing_mode="stretch_width"), sizing_mode="stretch_width")
 
     _closed = False
 

@@ -13,11 +13,11 @@ from __future__ import annotations
 import time
 
 import numpy as np
-import panel as pn
 from bokeh.models import ColorBar, ColumnDataSource, LinearColorMapper
 
 from explorer.app.serve import density
 from explorer.app.serve import raster as raster_mod
+from explorer.app.serve.box import Box
 from explorer.app.serve.orbits import COLORS
 from explorer.app.serve.style import MEGNO_HIGH, MEGNO_LOW, MEGNO_ORBIT_SKIP, megno_palette
 
@@ -42,7 +42,7 @@ class ChaosLayer:
         self.resolutions, self.time = resolutions, float(time)
         self.task = loop.task("raster")
         self.raster_source = ColumnDataSource(_empty_raster(), name="raster")
-        self.layer = pn.widgets.Checkbox(label=f"MEGNO layer (T = {self.time:g})", value=False)
+        self.layer = Box(label=f"MEGNO layer (T = {self.time:g})", value=False)
         self.layer.param.watch(lambda _e: loop.soon(self._layer_changed), "value")
         view.on_window(self._window_moved)
 

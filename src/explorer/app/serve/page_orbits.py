@@ -18,9 +18,9 @@ import math
 import time
 
 import numpy as np
-import panel as pn
 from bokeh.models import CDSView, ColumnDataSource, CustomJSFilter, Div, LinearColorMapper
 
+from explorer.app.serve.box import Box
 from explorer.app.serve.orbits import CHAOTIC_MEGNO, COLORS, INDICATOR_TIME, Worker
 from explorer.app.serve.style import MEGNO_HIGH, MEGNO_LOW, MEGNO_ORBIT_SKIP, POINT_SIZE, megno_palette
 
@@ -89,11 +89,11 @@ class OrbitsLayer:
         self.by_megno = {"field": "megno", "transform": LinearColorMapper(
             palette=megno_palette(MEGNO_ORBIT_SKIP), low=MEGNO_LOW, high=MEGNO_HIGH, nan_color="#9e9e9e")}
         self.status = Div(name="status", text="click in the white region to start an orbit", render_as_text=True)
-        self.colour_box = pn.widgets.Checkbox(label="colour orbits by MEGNO", value=False)
+        self.colour_box = Box(label="colour orbits by MEGNO", value=False)
         self.colour_box.param.watch(lambda _e: loop.soon(self._colour_changed), "value")
-        self.starts_box = pn.widgets.Checkbox(label="start markers (+)", value=True)
+        self.starts_box = Box(label="start markers (+)", value=True)
         self.starts_box.param.watch(lambda _e: loop.soon(self._starts_box_changed), "value")
-        self.pause_box = pn.widgets.Checkbox(label=PAUSE_LABEL, value=True)
+        self.pause_box = Box(label=PAUSE_LABEL, value=True)
         self.pause_box.param.watch(lambda _e: loop.soon(host.push_url), "value")
 
     def draw(self, fig) -> None:

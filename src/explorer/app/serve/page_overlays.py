@@ -11,10 +11,10 @@ branch), ``periodic`` (p1, p2, period, kind, marker), ``manifolds`` (xs, ys, col
 from __future__ import annotations
 
 import numpy as np
-import panel as pn
 from bokeh.models import ColumnDataSource, Div, LinearColorMapper
 
 from explorer.app.serve import overlays as search
+from explorer.app.serve.box import Box
 from explorer.app.serve.style import MANIFOLD_COLORS, PERIOD_COLORS, SEPARATRIX_CASING, SEPARATRIX_COLOR
 
 
@@ -48,8 +48,8 @@ class Overlays:
         self.periodic = ColumnDataSource(_empty_periodic(), name="periodic")
         self.manifold_source = ColumnDataSource(_empty_manifolds(), name="manifolds")
         self.text = Div(name="overlay", text="", render_as_text=True)
-        self.overlay = pn.widgets.Checkbox(label="fixed points, separatrices", value=False)
-        self.periodic_box = pn.widgets.Checkbox(label=f"periodic orbits, periods 1-{search.PERIODIC_MAX}", value=False)
+        self.overlay = Box(label="fixed points, separatrices", value=False)
+        self.periodic_box = Box(label=f"periodic orbits, periods 1-{search.PERIODIC_MAX}", value=False)
         for box in (self.overlay, self.periodic_box):
             box.param.watch(lambda _e: loop.soon(self._boxes_changed), "value")
 

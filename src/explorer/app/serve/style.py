@@ -10,9 +10,14 @@ from explorer.app.figures import MANIFOLD_COLORS  # noqa: F401  (one definition,
 FORBIDDEN_COLOR = "#cccccc"
 ALLOWED_COLOR = "#ffffff"
 BOUNDARY_COLOR = "#262626"
-#: size of the figure in pixels, and of a crossing's dot
+#: size of the figure in pixels (nominal: in the browser its width follows the window's, its height
+#: keeps this aspect), its least width, the height of the page above and below it that stays in view
+#: (title, buttons, status lines: the figure's height is at most the window's less this), and the
+#: size of a crossing's dot
 FIGURE_WIDTH = 720
 FIGURE_HEIGHT = 560
+FIGURE_MIN_WIDTH = 360
+FIGURE_CHROME_PX = 200
 #: width of a field (two columns of them beside the figure)
 FIELD_WIDTH = 100
 POINT_SIZE = 2.0

@@ -14,6 +14,7 @@ from explorer.app.serve.style import (
     ALLOWED_COLOR,
     BOUNDARY_COLOR,
     FIGURE_HEIGHT,
+    FIGURE_MIN_WIDTH,
     FIGURE_WIDTH,
     FORBIDDEN_COLOR,
     VIEW_MARGIN,
@@ -31,7 +32,10 @@ class SectionView:
         self.region = ColumnDataSource(_empty_region(), name="region")
         # Range1d, set by the server (fit): a DataRange1d kept the window it started with in the
         # browser (its initial start and end) whatever the server set later, and Reset went back to it
-        fig = figure(name="section", width=FIGURE_WIDTH, height=FIGURE_HEIGHT,
+        # sized to the window: its width follows the page's, its height keeps the aspect of the
+        # nominal size (the same length per pixel along both axes stays so, fit), from FIGURE_MIN_WIDTH
+        fig = figure(name="section", width=FIGURE_WIDTH, height=FIGURE_HEIGHT, sizing_mode="scale_width",
+                     min_width=FIGURE_MIN_WIDTH,
                      x_range=Range1d(-1.0, 1.0), y_range=Range1d(-1.0, 1.0),
                      tools="pan,wheel_zoom,box_zoom,reset,save", active_scroll="wheel_zoom",
                      x_axis_label="p1", y_axis_label="p2", background_fill_color=FORBIDDEN_COLOR,
