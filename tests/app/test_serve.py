@@ -705,10 +705,12 @@ def test_the_megno_layer_appears_coarse_first_and_follows_the_zoom(served, brows
     page.close()
 
 
-def test_explore_in_a_notebook_renders_and_streams_the_clicked_orbit():
+def test_explore_in_a_notebook_renders_and_streams_the_clicked_orbit(monkeypatch):
     pn = pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
     import explorer as ex
+    from explorer.app.serve import overlays
 
+    monkeypatch.setattr(overlays, "READOUT_SECONDS", 3600.0)   # the readout whole on a loaded machine too
     app = ex.explore(mu=0.5, crossings=60)
     try:
         root = pn.panel(app).get_root()                 # what a notebook cell renders
