@@ -283,11 +283,11 @@ def melnikov_integral(params, c, g0, sign=1, *, window=DEFAULT_WINDOW, method="g
     return float(vals) if vals.ndim == 0 else vals
 
 
-def fit_harmonics(params, c, sign=1, n=16, **kw):
+def fit_harmonics(params, c, sign=1, n=16, *, window=DEFAULT_WINDOW, method="gauss"):
     """Least-squares fit J(g0) = A sin g0 + B cos g0 + C on n equispaced g0 (quadrature values).
     Returns (A, B, C, max |residual|); C and the residual vanish up to round-off."""
     g0 = 2.0 * math.pi * np.arange(n) / n
-    J = melnikov_integral(params, c, g0, sign, **kw)
+    J = melnikov_integral(params, c, g0, sign, window=window, method=method)
     X = np.stack([np.sin(g0), np.cos(g0), np.ones_like(g0)], axis=1)
     coef, *_ = np.linalg.lstsq(X, J, rcond=None)
     res = float(np.max(np.abs(X @ coef - J)))
@@ -505,7 +505,8 @@ def measured_splitting(params, h, mu, g0, sign=1, *, s_local=1e-4, tol=MAP_TOL, 
             "iterations_u": iters[False], "iterations_s": iters[True]}
 
 
-def melnikov_table(params=None, h=None, mus=DEFAULT_MUS, g0s=DEFAULT_G0S, signs=(1, -1), **kw):
+def melnikov_table(params=None, h=None, mus=DEFAULT_MUS, g0s=DEFAULT_G0S, signs=(1, -1), *, s_local=1e-4,
+                   tol=MAP_TOL):
     """Rows (dicts) of :func:`measured_splitting` for every sign, g0 and mu (mu innermost)."""
     prm = model.FIGURE4 if params is None else _params(params)
     h = model.FIGURE4_H if h is None else h
@@ -515,7 +516,7 @@ def melnikov_table(params=None, h=None, mus=DEFAULT_MUS, g0s=DEFAULT_G0S, signs=
         for g in g0s:
             J = melnikov_integral(prm.with_(mu=0.0), c, g, s)
             for mu in mus:
-                rows.append(measured_splitting(prm, h, mu, g, s, J=J, **kw))
+                rows.append(measured_splitting(prm, h, mu, g, s, J=J, s_local=s_local, tol=tol))
     return rows
 
 
