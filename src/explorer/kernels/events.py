@@ -214,8 +214,6 @@ def isolate_crossings(gc, order, h, g_old, g_new, direction, brackets, work, sta
     A polynomial that is identically zero (every coefficient 0: the orbit rests on the section,
     an equilibrium at phi = phi0) crosses nothing; no test could exclude or bracket it, and
     bisecting it to ISOLATE_MAX_DEPTH visited 2**25 intervals, 15 s for one step."""
-    if identically_zero(gc, order):
-        return 0
     if no_root_within(gc, order, h):        # |x| <= h covers the step [0, h]
         return 0
     if monotone_within(gc, order, h):
@@ -225,6 +223,8 @@ def isolate_crossings(gc, order, h, g_old, g_new, direction, brackets, work, sta
             brackets[0, 2] = g_old
             brackets[0, 3] = g_new
             return 1
+        return 0
+    if identically_zero(gc, order):          # (only where both tests failed: off the ordinary path)
         return 0
     n = 0
     top = 1
