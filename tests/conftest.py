@@ -57,8 +57,9 @@ def random_states(params, n, seed=0, scale=1.0):
 def assert_groups_threads_and_order_keep_the_bits(run, n, seed=0):
     """``run(groups, perm)`` runs the lane driver on the orbits in the order ``perm`` (an index
     array of n) with ``groups`` lane groups and returns its output arrays: for G = 2 (the other
-    G offered, lanes.GROUPS), 1 and 2 threads, in the given and in a permuted order, every array equals that of G = 1 on one
-    thread bit for bit (np.array_equal on the bytes, rows put back in order)."""
+    G offered, lanes.GROUPS), 1 and 2 threads, in the given and in a permuted order, every array
+    equals that of G = 1 on one thread bit for bit (np.array_equal on the bytes, rows put back in
+    order)."""
     from explorer._jit import get_num_threads, set_num_threads
     from explorer.integrate.lanes import GROUPS
 
