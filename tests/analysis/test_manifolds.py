@@ -74,6 +74,37 @@ def test_the_reversor_maps_the_unstable_onto_the_stable_manifold(saddle, wu):
         assert wu.distance(reversor(x)) < 1e-9
 
 
+def test_a_stable_branch_of_a_saddle_on_the_symmetry_line_is_the_reflection_of_the_unstable_one(saddle, wu):
+    """W^s = G0 W^u branch by branch for a fixed point on p2 = 0 of a reversible map: grow_branch's
+    stable branch is mirror_branch of its unstable one, bit for bit, and lies within 1e-9 of W^s
+    integrated backward in time (no reversor); its points away from the saddle are maps of its
+    own earlier points under P^-1 = G0 P G0 (its curve maps as the grown one would); a saddle
+    the reversor does not fix (xi != 0, or a point of a period-2 orbit) is not mirrored."""
+    assert mf.mirrors(saddle)
+    ws = mf.grow_branch(saddle, stable=True, sign=1, arclength=3.0)
+    mirror = mf.mirror_branch(wu)
+    assert ws.kind == mirror.kind == "stable" and ws.mirror_of is not None
+    assert np.array_equal(ws.points, mirror.points) and np.array_equal(ws.sigma, mirror.sigma)
+    assert np.array_equal(ws.points, reversor(wu.points))
+    back = mf.grow_branch(saddle, stable=True, sign=1, arclength=3.0, integrate_backward=True)
+    for x in back.points[5::25]:
+        assert ws.distance(x) < 1e-9
+    L = math.log(saddle.multiplier)
+    i = int(np.flatnonzero(ws.sigma > ws.sigma[1] + 2 * L)[0])
+    assert np.linalg.norm(saddle.smap.inverse(ws.at([ws.sigma[i] - L])[0]) - ws.points[i]) < 1e-9
+    # a longer branch continues from the mirrored one as from the grown one
+    longer = mf.grow_branch(saddle, stable=True, sign=1, arclength=4.0, resume=ws)
+    assert np.array_equal(longer.points, mf.mirror_branch(mf.grow_branch(saddle, sign=1, arclength=4.0)).points)
+    # manifolds() reflects the unstable branches it grew
+    branches = mf.manifolds(saddle.smap, saddle.point, arclength=1.0)
+    assert [(b.kind, b.sign) for b in branches] == [("unstable", 1), ("unstable", -1), ("stable", 1), ("stable", -1)]
+    assert all(np.array_equal(s.points, reversor(u.points)) for u, s in zip(branches[:2], branches[2:]))
+    skew = fpm.find_fixed_point(model.FIGURE4.with_(mu=MU, xi=0.01), H, (0.0, 0.0))
+    assert not mf.mirrors(mf.saddle(skew.params, skew.h, skew))
+    with pytest.raises(model.ParameterError, match="mirror_branch"):
+        mf.mirror_branch(ws)
+
+
 def test_branches_coincide_with_the_exact_separatrix_at_mu_0():
     prm = model.FIGURE4.with_(mu=0.0)
     fp = fpm.find_fixed_point(prm, H, (0.0, 0.0))

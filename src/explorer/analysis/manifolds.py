@@ -36,7 +36,11 @@ they run on one thread (``explorer.analysis.maps.SERIAL_RETURNS``).
 Points of the stable manifold need F^{-1}: when the reversor applies
 (:func:`explorer.analysis.periodic.is_reversible`), F^{-1} = G0 F G0 and the batch runs
 forward; otherwise each point is integrated backward in time by the section map
-(``backward="integrate"`` forces that path).
+(``backward="integrate"`` forces that path).  For a fixed point on the reversor's symmetry line
+(the central saddle of the Figure-4 scene) nothing needs computing at all: W^s = G0 W^u, branch
+by branch (G0 keeps the first component, so the orientation and the sign agree), and the stable
+branch is the reflection of the unstable one, point for point (:func:`mirror_branch`); the
+tangle and the flux curve grow half the points.
 """
 from __future__ import annotations
 
@@ -47,17 +51,20 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from explorer.analysis.maps import images, is_section_map
-from explorer.analysis.periodic import PeriodicOrbit, is_reversible
+from explorer.analysis.periodic import PeriodicOrbit, is_reversible, reversor
 from explorer.analysis.section_map import SectionMap, orbit_first, system_first
 from explorer.model import ParameterError, validation
 
 __all__ = ["DEFAULT_MAX_ANGLE", "DEFAULT_MAX_GAP", "DEFAULT_MAX_GAP_ANGLE", "DEFAULT_START_TOL", "Homoclinic",
            "ManifoldBranch", "Saddle", "grow_branch", "heteroclinic_points", "homoclinic_orbit", "homoclinic_points",
-           "manifolds",
+           "manifolds", "mirror_branch", "mirrors",
            "saddle"]
 
 #: transverse distance of the start points from the manifold (module docstring)
 DEFAULT_START_TOL = 1e-12
+#: a fixed point this close to the symmetry line p2 = 0 has W^s = G0 W^u (:func:`mirrors`): far
+#: below DEFAULT_START_TOL, so the reflection is as close to W^s as a grown branch
+MIRROR_TOL = 1e-14
 #: refinement bounds (Krauskopf & Osinga 1998): distance between neighbours, angle at a point
 #: (radians) and their product; the polyline deviates from the curve by about
 #: gap * angle / 8 <= DEFAULT_MAX_GAP_ANGLE / 8
@@ -200,6 +207,29 @@ class _Curve:
         return out
 
 
+
+class _MirroredCurve:
+    """sigma -> G0 x_u(sigma): the stable branch of a saddle on the symmetry line as the reversor's
+    image of its unstable branch (:func:`mirrors`); F^-1 = G0 F G0 maps it as the unstable curve's
+    F maps that one."""
+
+    def __init__(self, unstable: _Curve):
+        self.unstable = unstable
+        self.sd, self.stable, self.sign = unstable.sd, True, unstable.sign
+        self.backward_integrated = False
+        self.e = reversor(unstable.e)
+        self.L, self.curvature, self.s0, self.sigma0 = unstable.L, unstable.curvature, unstable.s0, unstable.sigma0
+
+    def map(self, X, generations):
+        return reversor(self.unstable.map(reversor(X), generations))
+
+    def generation(self, sigma):
+        return self.unstable.generation(sigma)
+
+    def points(self, sigma):
+        return reversor(self.unstable.points(sigma))
+
+
 @dataclass(frozen=True)
 class ManifoldBranch:
     """One branch of W^u (``kind`` "unstable") or W^s ("stable") of a saddle, as a polyline from
@@ -229,6 +259,8 @@ class ManifoldBranch:
     #: where the growth stopped, before the cut at ``target``, with its settings: what
     #: ``grow_branch(..., resume=branch)`` continues from (None when it cannot be continued)
     grown: tuple | None = field(repr=False, compare=False, default=None)
+    #: the unstable branch this stable one reflects (:func:`mirror_branch`), else None
+    mirror_of: ManifoldBranch | None = field(repr=False, compare=False, default=None)
 
     @property
     def tears(self) -> np.ndarray:
@@ -333,6 +365,11 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
     max_points = validation.integer("max_points", max_points, 3)
     if max_time is not None:
         max_time = validation.real("max_time", max_time, 0.0)
+    if stable and not integrate_backward and mirrors(sd):
+        source = resume.mirror_of if resume is not None else None
+        return mirror_branch(grow_branch(sd, sign=sign, arclength=arclength, start_tol=start_tol, max_gap=max_gap,
+                                         max_angle=max_angle, max_gap_angle=max_gap_angle, max_points=max_points,
+                                         max_time=max_time, resume=source, generations=generations))
     t0 = time.perf_counter()
     settings = (stable, sign, start_tol, max_gap, max_angle, max_gap_angle, max_points, integrate_backward,
                 generations)
@@ -424,6 +461,31 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
                           evals, time.perf_counter() - t0, cv, float(max_gap), grown)
 
 
+def mirrors(sd: Saddle) -> bool:
+    """True when the stable branches of ``sd`` are the reflections of its unstable ones, W^s_sign =
+    G0 W^u_sign (module docstring): a section map that the reversor R reverses
+    (:func:`explorer.analysis.periodic.is_reversible`) and a fixed point on its symmetry line p2 =
+    0 (within MIRROR_TOL).  A point of a longer orbit is not: G0 maps it to another point of
+    its orbit, or of another orbit."""
+    return (is_section_map(sd.smap) and is_reversible(sd.smap.params, sd.smap.phi0) and sd.period == 1
+            and abs(float(sd.point[1])) <= MIRROR_TOL)
+
+
+def mirror_branch(unstable: ManifoldBranch) -> ManifoldBranch:
+    """The stable branch of the same sign as the unstable branch ``unstable`` of a saddle that
+    :func:`mirrors`: every point reflected by G0 (p1, p2) -> (p1, -p2), the same parameters sigma,
+    status and budgets, and no map computed.  What :func:`grow_branch` returns for ``stable=True``
+    there (it grows the unstable branch and reflects it), so a caller holding the unstable branch
+    saves its growth."""
+    if unstable.kind != "unstable" or unstable.curve is None or not mirrors(unstable.curve.sd):
+        raise ParameterError("mirror_branch needs an unstable branch grown by grow_branch of a fixed point "
+                             "on the reversor's symmetry line (manifolds.mirrors)")
+    return ManifoldBranch("stable", unstable.sign, reversor(unstable.points), unstable.sigma.copy(),
+                          unstable.arclength, unstable.target, unstable.status, unstable.start_distance,
+                          unstable.start_tol, unstable.curvature, 0, 0.0, _MirroredCurve(unstable.curve),
+                          unstable.max_gap, None, unstable)
+
+
 @orbit_first
 @system_first
 def manifolds(system, orbit, *, arclength=5.0, kinds=("unstable", "stable"), signs=(1, -1), index=0, period=1,
@@ -447,10 +509,17 @@ def manifolds(system, orbit, *, arclength=5.0, kinds=("unstable", "stable"), sig
     for k in kinds:
         if k not in ("unstable", "stable"):
             raise ParameterError(f"kinds must be 'unstable' and/or 'stable', got {k!r}")
-    return [grow_branch(sd, stable=(k == "stable"), sign=s, arclength=arclength, start_tol=start_tol,
-                        max_gap=max_gap, max_angle=max_angle, max_gap_angle=max_gap_angle, max_points=max_points,
-                        max_time=max_time, integrate_backward=integrate_backward)
-            for k in kinds for s in signs]
+    grown: dict = {}
+    for k in kinds:
+        for s in signs:
+            if k == "stable" and ("unstable", s) in grown and not integrate_backward and mirrors(sd):
+                grown[k, s] = mirror_branch(grown["unstable", s])     # its reflection: nothing to map
+            else:
+                grown[k, s] = grow_branch(sd, stable=(k == "stable"), sign=s, arclength=arclength,
+                                          start_tol=start_tol, max_gap=max_gap, max_angle=max_angle,
+                                          max_gap_angle=max_gap_angle, max_points=max_points, max_time=max_time,
+                                          integrate_backward=integrate_backward)
+    return list(grown.values())
 
 
 def _orbit_from_point(system, point, period):
