@@ -700,9 +700,10 @@ def test_the_megno_layer_appears_coarse_first_and_follows_the_zoom(served, brows
     x0, x1, _y0, _y1 = page.evaluate(ranges)
     assert x1 - x0 < 4.0                                         # zoomed in: narrower than the region
     # the layer's other indicator: its colour bar's label and the link follow the choice
-    page.evaluate("() => { const m = [...Bokeh.documents[0].all_models].find(m => m.type === 'Select' && "
-                  "m.options.some(o => String(o).startsWith('frequency diffusion'))); "
-                  "m.value = m.options.find(o => String(o).startsWith('frequency diffusion')); }")
+    # (Panel's select: options are labels or [value, label] pairs, whatever its model's type)
+    page.evaluate("() => { const fd = o => String(Array.isArray(o) ? o[1] : o).startsWith('frequency diffusion'); "
+                  "const m = [...Bokeh.documents[0].all_models].find(m => Array.isArray(m.options) && "
+                  "m.options.some(fd)); const o = m.options.find(fd); m.value = Array.isArray(o) ? o[0] : o; }")
     _wait(page, "() => Bokeh.documents[0].get_model_by_name('megno-colour-bar').title.includes('ν1 − ν2') "
                 "&& window.location.search.includes('indicator=frequency_diffusion')", timeout=60_000)
     page.evaluate(SET_BOX, ["chaos layer", False])
