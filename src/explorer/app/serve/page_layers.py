@@ -1,13 +1,13 @@
 """The page's images under the orbits: the chaos raster of the visible window, MEGNO or frequency
 diffusion (:class:`ChaosLayer`, :func:`explorer.app.serve.raster.rasters` as a job of the session's
-task helper) and the density
-image of the crossings that are not drawn as glyphs (:class:`DensityImage`: the older orbits past
-:data:`explorer.app.serve.density.GLYPH_BUDGET` crossings, all past
-:data:`explorer.app.serve.density.THRESHOLD`).  Components of
+task helper) and the density image of the crossings that are not drawn as glyphs
+(:class:`DensityImage`: the older orbits past :data:`explorer.app.serve.density.GLYPH_BUDGET`
+crossings, all past :data:`explorer.app.serve.density.THRESHOLD`).  Components of
 :class:`~explorer.app.serve.page.SectionPage`.
 
 By Bokeh model name: ``raster`` (image, x, y, dw, dh: the window, n, complete), ``megno-colour-bar``
-(the layer's scale and its indicator's label, shown with it) and ``density`` (image, x, y, dw, dh, n: how many crossings).
+(the layer's scale and its indicator's label, shown with it) and ``density`` (image, x, y, dw, dh,
+n: how many crossings).
 """
 from __future__ import annotations
 
