@@ -1,7 +1,9 @@
 """Frequency diffusion as an indicator of the registry (row ORBIT, docs/greene.md "Frequency
 diffusion"): a sweep or a chaos map that asks for it stores, per seed, exactly the values of
 ``explorer.frequency_diffusion`` on the panel's section map around [lyapunov] center; a scene that
-does not ask for it neither computes nor stores it."""
+does not ask for it neither computes nor stores it.  The browser's chaos layer (``explorer serve``,
+in process: no browser) set to it shows exactly the function's values around the page's elliptic
+point, and the choice of indicator changes the layer's values, scale, label and link."""
 import matplotlib
 
 matplotlib.use("Agg")
@@ -11,6 +13,7 @@ import pytest
 from matplotlib.image import imread
 
 import explorer as ex
+from explorer import model
 from explorer.analysis import sweep
 from explorer.app import runner
 from explorer.io import store
@@ -79,3 +82,116 @@ def test_a_sweep_computes_frequency_diffusion_only_when_asked_and_as_the_functio
     not_asked = parse_scene(base.replace('"megno", "frequency_diffusion"', '"megno"'))
     spec = sweep.build_spec(not_asked, [0], chunk_orbits=0, product="indicators")
     assert "frequency_diffusion" not in sweep.task(spec, 0)
+
+
+# ---------------------------------------------------------------- the browser's chaos layer, in process
+#: the chaos layer's raster in these tests: 8 x 8 cells (two batches of frequency diffusion's)
+LAYER_N = 8
+
+
+def _poll_until(page, cond, timeout=600.0):
+    import time
+
+    t0 = time.time()
+    while not cond() and time.time() - t0 < timeout:
+        page.poll()
+        time.sleep(0.02)
+    assert cond(), page.message.text
+
+
+def _layer_page(args):
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    from explorer.app.serve.page import SectionPage
+    from explorer.app.serve.settings import Settings
+
+    # the link's layer box after the small raster is set (the page's own load_url, again: the box on)
+    page = SectionPage(Settings(params=model.FIGURE4.with_(mu=0.1)), {k: v for k, v in args.items() if k != "megno"})
+    page.chaos.resolutions, page.chaos.iterates = (LAYER_N,), ITERATES
+    page.chaos.load_url(args)
+    return page
+
+
+def _complete(page):
+    d = page.raster_source.data
+    return bool(d["n"]) and d["complete"][0] and d["n"][0] == LAYER_N
+
+
+def _inside_seeds(page):
+    """The cells of the layer's raster inside the allowed region: (mask (n, n), their centres (k, 2))."""
+    s = page.settings
+    P1, P2 = page.window.centres(LAYER_N)
+    inside = model.section_M2(s.params, P1, P2, s.h, s.phi0) > 0.0
+    return inside, np.column_stack([P1[inside], P2[inside]])
+
+
+def test_the_browsers_frequency_diffusion_layer_shows_the_functions_values_around_the_pages_elliptic_point():
+    """The page's chaos layer set to frequency diffusion (as a link sets it, off the event loop
+    through the layer's task): every cell inside the region holds exactly the value of
+    ``explorer.frequency_diffusion`` for the cell's centre on the page's section map, around the
+    elliptic fixed point of the page's settings, which the colour bar names; the link keeps the
+    choice."""
+    page = _layer_page({})
+    try:
+        page.chaos.indicator.value = "frequency_diffusion"
+        page.layer.value = True
+        _poll_until(page, lambda: _complete(page))
+        settings, point, elliptic = page.chaos.center
+        assert settings == page.settings and elliptic
+        sm = ex.SectionMap(page.settings.params, page.settings.h, phi0=page.settings.phi0, tol=page.settings.tol)
+        np.testing.assert_allclose(sm.iterate(point, 1)[-1], point, atol=1e-9)  # a fixed point of the map ...
+        assert abs(np.trace(sm.jacobian(point))) < 2.0                          # ... and elliptic
+        inside, seeds = _inside_seeds(page)
+        want = ex.frequency_diffusion(sm, seeds, center=point, iterates=ITERATES)
+        got = np.asarray(page.raster_source.data["image"][0])
+        assert len(seeds) > 32                                                  # more than one batch
+        np.testing.assert_array_equal(got[inside], want)                        # bit for bit
+        assert np.isnan(got[~inside]).all() and np.isfinite(got[inside]).mean() > 0.8
+        title = page.colour_bar.title
+        assert "ν1 − ν2" in title and f"{point[0]:.4g}" in title and "elliptic" in title
+        q = page.url_query()
+        assert q["indicator"] == "frequency_diffusion" and q["megno"] == "1"
+        again = _layer_page(q)                                   # the link reopens the same layer
+        try:
+            assert again.chaos.indicator.value == "frequency_diffusion" and again.layer.value
+        finally:
+            again.close()
+    finally:
+        page.close()
+
+
+@pytest.mark.cpu_dependent
+def test_choosing_the_chaos_layers_indicator_changes_its_values_scale_and_label():
+    from explorer.app.serve import raster
+    from explorer.app.serve.style import MEGNO_HIGH, MEGNO_LOW
+
+    page = _layer_page({"megno": "1"})
+    try:
+        _poll_until(page, lambda: _complete(page))
+        megno = np.asarray(page.raster_source.data["image"][0])
+        ref = list(raster.rasters(page.settings, page.window, resolutions=(LAYER_N,)))[-1]
+        np.testing.assert_array_equal(megno, ref.values)
+        assert page.colour_bar.title.startswith("⟨Y⟩") and (page.chaos.mapper.low, page.chaos.mapper.high) == (
+            MEGNO_LOW, MEGNO_HIGH)
+        assert page.url_query()["indicator"] == "megno"
+        page.chaos.indicator.value = "frequency_diffusion"               # the choice: a new raster
+        assert page.raster_source.data["n"] == []                       # (MEGNO's values gone at once)
+        _poll_until(page, lambda: _complete(page) and page.chaos.center is not None)
+        fd = np.asarray(page.raster_source.data["image"][0])
+        inside = np.isfinite(megno)
+        assert np.isfinite(fd[inside]).mean() > 0.8 and np.nanmax(fd) <= 0.5      # log10 |nu1 - nu2|, not <Y>
+        # the same orbits, another indicator: the cells MEGNO calls regular drift less in frequency
+        regular, chaotic = inside & (megno < 3.0), inside & (megno > 8.0)
+        assert regular.sum() >= 3 and chaotic.sum() >= 10
+        assert np.nanmedian(fd[regular]) < np.nanmedian(fd[chaotic]) - 1.0
+        assert "ν1 − ν2" in page.colour_bar.title and page.chaos.mapper.low < -10
+        assert page.url_query()["indicator"] == "frequency_diffusion"
+        page.chaos.indicator.value = "megno"                             # and back
+        _poll_until(page, lambda: _complete(page) and np.array_equal(page.raster_source.data["image"][0], megno,
+                                                                     equal_nan=True))
+    finally:
+        page.close()
+    bad = _layer_page({"indicator": "lyapunov"})                         # a link's unknown indicator
+    try:
+        assert "indicator ignored" in bad.message.text and bad.chaos.indicator.value == "megno"
+    finally:
+        bad.close()

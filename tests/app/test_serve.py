@@ -685,7 +685,7 @@ def test_the_megno_raster_is_refined_and_marks_chaos_and_order():
 @browser_needed
 def test_the_megno_layer_appears_coarse_first_and_follows_the_zoom(served, browser):
     page = _open(browser, served.url)
-    page.evaluate(SET_BOX, ["MEGNO layer", True])
+    page.evaluate(SET_BOX, ["chaos layer", True])
     raster_n = "() => { const d = Bokeh.documents[0].get_model_by_name('raster').data; return d.n.length ? d.n[0] : 0 }"
     _wait(page, f"() => ({raster_n})() >= 16", timeout=120_000)
     _wait(page, "() => window.location.search.includes('megno=1')", timeout=60_000)
@@ -699,7 +699,14 @@ def test_the_megno_layer_appears_coarse_first_and_follows_the_zoom(served, brows
                            "&& Math.abs(d.x[0] + d.dw[0] - r[1]) < 1e-12 && d.y[0] === r[2]; }", timeout=60_000)
     x0, x1, _y0, _y1 = page.evaluate(ranges)
     assert x1 - x0 < 4.0                                         # zoomed in: narrower than the region
-    page.evaluate(SET_BOX, ["MEGNO layer", False])
+    # the layer's other indicator: its colour bar's label and the link follow the choice
+    # (Panel's select: options are labels or [value, label] pairs, whatever its model's type)
+    page.evaluate("() => { const fd = o => String(Array.isArray(o) ? o[1] : o).startsWith('frequency diffusion'); "
+                  "const m = [...Bokeh.documents[0].all_models].find(m => Array.isArray(m.options) && "
+                  "m.options.some(fd)); const o = m.options.find(fd); m.value = Array.isArray(o) ? o[0] : o; }")
+    _wait(page, "() => Bokeh.documents[0].get_model_by_name('megno-colour-bar').title.includes('ν1 − ν2') "
+                "&& window.location.search.includes('indicator=frequency_diffusion')", timeout=60_000)
+    page.evaluate(SET_BOX, ["chaos layer", False])
     _wait(page, "() => Bokeh.documents[0].get_model_by_name('raster').data.x.length === 0",
                            timeout=60_000)
     page.close()

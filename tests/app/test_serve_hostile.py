@@ -115,7 +115,7 @@ def test_a_hostile_link_leaves_the_server_answering_and_a_second_session_working
 def test_hostile_typed_values_with_every_overlay_leave_the_server_answering(hostile, browser):
     page = _open(browser, hostile.url)
     try:
-        for label in ("MEGNO layer", "fixed points", "periodic orbits"):
+        for label in ("chaos layer", "fixed points", "periodic orbits"):
             page.evaluate(SET_BOX, [label, True])
         for field, text, said in TYPED:
             _set_field(page, field, text)

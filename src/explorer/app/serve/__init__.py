@@ -11,7 +11,7 @@ One concept per module:
 :mod:`~explorer.app.serve.orbits`    the session's orbits, block by block
 :mod:`~explorer.app.serve.tasks`     the one task helper of a session's background jobs
 :mod:`~explorer.app.serve.overlays`  the fixed point, periodic orbit and rotation searches
-:mod:`~explorer.app.serve.raster`    the MEGNO layer, coarse first, then refined
+:mod:`~explorer.app.serve.raster`    the chaos layer (MEGNO, frequency diffusion), coarse to fine
 :mod:`~explorer.app.serve.export`    the session as a scene TOML, its store, its figure files
 :mod:`~explorer.app.serve.style`     the page's colours and sizes
 :mod:`~explorer.app.serve.image`     the view as PNG/SVG (matplotlib)

@@ -30,7 +30,8 @@ FORMATS = ("png", "svg")
 class View:
     """What the page shows.  ``orbits``: [(id, colour, points (n, 2), megno)]; ``starts``:
     [(p1, p2, colour)]; ``window``: (x0, x1, y0, y1); ``region``: (c1, c2, r1, r2) or None;
-    ``raster``: (values (n, n), window) or None; ``fixed``: [(p1, p2, elliptic)];
+    ``raster``: (values (n, n), window) or None, on the colour scale ``raster_scale`` (low, high;
+    None: MEGNO's); ``fixed``: [(p1, p2, elliptic)];
     ``separatrices``: [(n, 2) arrays]; ``manifolds``: [(kind, (n, 2) array)] of a picked saddle
     (kind "unstable" or "stable"); ``periodic``: [(p1, p2, period, elliptic)];
     ``by_megno``: colour the orbits by their MEGNO; ``title``: one line."""
@@ -40,6 +41,7 @@ class View:
     orbits: list = field(default_factory=list)
     starts: list = field(default_factory=list)
     raster: tuple | None = None
+    raster_scale: tuple | None = None
     fixed: list = field(default_factory=list)
     separatrices: list = field(default_factory=list)
     manifolds: list = field(default_factory=list)
@@ -86,8 +88,9 @@ def figure(view: View):
     orbit_cmap = _megno_colormap(MEGNO_ORBIT_SKIP)
     if view.raster is not None:
         values, (a0, a1, b0, b1) = view.raster
-        ax.imshow(np.asarray(values, float), extent=(a0, a1, b0, b1), origin="lower", cmap=cmap, vmin=MEGNO_LOW,
-                  vmax=MEGNO_HIGH, alpha=0.85, interpolation="nearest", zorder=1)
+        low, high = view.raster_scale or (MEGNO_LOW, MEGNO_HIGH)
+        ax.imshow(np.asarray(values, float), extent=(a0, a1, b0, b1), origin="lower", cmap=cmap, vmin=low,
+                  vmax=high, alpha=0.85, interpolation="nearest", zorder=1)
     total = sum(len(pts) for _i, _c, pts, _m in view.orbits)
     raster_points = total > SVG_VECTOR_MAX
     size = 4.0 if total < 20_000 else 1.0

@@ -5,7 +5,7 @@ that each own their Bokeh models, widgets and state (docs/architecture.md, "The 
 :class:`~explorer.app.serve.view.SectionView`               the figure, the allowed region, the window
 :class:`~explorer.app.serve.page_orbits.OrbitsLayer`        starts, crossings, live layer, status
 :class:`~explorer.app.serve.page_layers.DensityImage`       many crossings as an image
-:class:`~explorer.app.serve.page_layers.ChaosLayer`         the MEGNO raster and its colour bar
+:class:`~explorer.app.serve.page_layers.ChaosLayer`         the chaos raster (MEGNO or frequency diffusion)
 :class:`~explorer.app.serve.page_overlays.Overlays`         fixed points, separatrices, periodic orbits
 :class:`~explorer.app.serve.page_readout.Readout`           a picked orbit's mLCE, MEGNO, rotation
 :class:`~explorer.app.serve.page_exports.Exports`           scene, store, figure files
@@ -67,7 +67,7 @@ URL_DELAY_SECONDS = 0.5
 #: what a click does: the choices of the page's switch (Shift + click always picks)
 CLICK_MODES = ("start an orbit", "pick an orbit")
 #: the URL's arguments besides the fields (what url_query writes)
-URL_EXTRAS = ("orbits", "megno", "separatrices", "periodic", "colour", "pause", "view")
+URL_EXTRAS = ("orbits", "megno", "indicator", "separatrices", "periodic", "colour", "pause", "view")
 #: attributes of the page that are its components' (page.crossings is page.orbits.crossings, ...)
 FACADE = {"orbits": ("crossings", "shown", "live", "start_source", "points", "live_points", "start_marks",
                      "glyph_filter", "colour_box", "starts_box", "pause_box", "status", "worker", "starts",
@@ -167,7 +167,7 @@ class SectionPage:
         self.title = pn.pane.Markdown(self._title())
         o, ov = self.orbits, self.overlays
         controls = pn.Column(pn.pane.Markdown("a click (Shift + click: pick):", margin=(0, 5)), self.click_mode,
-                             o.pause_box, self.fields.grid, o.colour_box, self.chaos.layer,
+                             o.pause_box, self.fields.grid, o.colour_box, self.chaos.layer, self.chaos.indicator,
                              ov.overlay, ov.periodic_box, o.starts_box, width=230)
         texts = (o.status, self.readout, self.message, self.overlay_text)
         for div in texts:
@@ -217,7 +217,7 @@ class SectionPage:
                 self.section.show_window(settings_mod.parse_window(args["view"]))
             except ParameterError as exc:
                 self.say(f"link's view ignored: {exc}")
-        self.chaos.layer.value = args.get("megno") == "1"
+        self.chaos.load_url(args)                 # (its indicator, then its box)
         self.overlays.overlay.value = args.get("separatrices") == "1"
         self.overlays.periodic_box.value = args.get("periodic") == "1"
         self.orbits.colour_box.value = args.get("colour") == "megno"
@@ -230,9 +230,10 @@ class SectionPage:
         """The view as URL arguments: every field, the starts, the boxes and the window."""
         q = self.settings.fields()
         q["orbits"] = format_starts((p1, p2) for _i, p1, p2, _c in self.orbits.starts)
-        for name, box in (("megno", self.chaos.layer), ("separatrices", self.overlays.overlay),
-                          ("periodic", self.overlays.periodic_box), ("pause", self.orbits.pause_box)):
+        for name, box in (("separatrices", self.overlays.overlay), ("periodic", self.overlays.periodic_box),
+                          ("pause", self.orbits.pause_box)):
             q[name] = "1" if box.value else "0"
+        q.update(self.chaos.url_query())
         q["colour"] = "megno" if self.orbits.colour_box.value else "orbit"
         w = self.section.window
         q["view"] = "" if w is None else format_window(w)

@@ -66,6 +66,7 @@ class Exports:
         title = f"mu = {s.params.mu:g}, h = {s.h:g}, {s.method}" + (f" ({self.label})" if self.label else "")
         return View(window=window, region=s.region, orbits=shown,
                     starts=[(a, b, COLORS[c]) for _i, a, b, c in orbits.starts], raster=raster,
+                    raster_scale=host.chaos.scale(),
                     fixed=[(a, b, k == "elliptic") for a, b, k in zip(f["p1"], f["p2"], f["kind"])],
                     separatrices=[np.column_stack([x, y]) for x, y in zip(ov.curves.data["xs"], ov.curves.data["ys"])],
                     manifolds=[(k, np.column_stack([x, y])) for k, x, y in zip(m["kind"], m["xs"], m["ys"])],

@@ -1,20 +1,24 @@
-"""The page's images under the orbits: the MEGNO raster of the visible window (:class:`ChaosLayer`,
-:func:`explorer.app.serve.raster.rasters` as a job of the session's task helper) and the density
-image of the crossings that are not drawn as glyphs (:class:`DensityImage`: the older orbits past
-:data:`explorer.app.serve.density.GLYPH_BUDGET` crossings, all past
-:data:`explorer.app.serve.density.THRESHOLD`).  Components of
+"""The page's images under the orbits: the chaos raster of the visible window, MEGNO or frequency
+diffusion (:class:`ChaosLayer`, :func:`explorer.app.serve.raster.rasters` as a job of the session's
+task helper) and the density image of the crossings that are not drawn as glyphs
+(:class:`DensityImage`: the older orbits past :data:`explorer.app.serve.density.GLYPH_BUDGET`
+crossings, all past :data:`explorer.app.serve.density.THRESHOLD`).  Components of
 :class:`~explorer.app.serve.page.SectionPage`.
 
 By Bokeh model name: ``raster`` (image, x, y, dw, dh: the window, n, complete), ``megno-colour-bar``
-(the layer's scale, shown with it) and ``density`` (image, x, y, dw, dh, n: how many crossings).
+(the layer's scale and its indicator's label, shown with it) and ``density`` (image, x, y, dw, dh,
+n: how many crossings).
 """
 from __future__ import annotations
 
 import time
 
 import numpy as np
+import panel as pn
 from bokeh.models import ColorBar, ColumnDataSource, LinearColorMapper
 
+from explorer.analysis.budget import Budget
+from explorer.app.chaos_raster import STYLES
 from explorer.app.serve import density
 from explorer.app.serve import raster as raster_mod
 from explorer.app.serve.box import Box
@@ -23,6 +27,9 @@ from explorer.app.serve.style import MEGNO_HIGH, MEGNO_LOW, MEGNO_ORBIT_SKIP, me
 
 #: while orbits stream in, the density image is redrawn at most this often (s)
 DENSITY_SECONDS = 0.5
+#: the chaos layer's colour bar labels
+MEGNO_TITLE = "⟨Y⟩ (MEGNO)"
+DIFFUSION_TITLE = "log10|ν1 − ν2| (frequency diffusion)"
 
 
 def _empty_raster() -> dict:
@@ -34,25 +41,74 @@ def _empty_density() -> dict:
 
 
 class ChaosLayer:
-    """The MEGNO layer: its check box ``layer``, its source and colour bar, and its task (the
-    rasters of the latest window and settings; a new one supersedes the older)."""
+    """The chaos layer: its check box ``layer``, its choice of ``indicator`` (MEGNO or frequency
+    diffusion, :data:`explorer.app.serve.raster.INDICATORS`), its source and colour bar, and its
+    task (the rasters of the latest window, indicator and settings; a new one supersedes the
+    older).  Frequency diffusion turns around :func:`~explorer.app.serve.raster.diffusion_center`
+    of the settings (``center``: (settings, point, elliptic) of the last one found)."""
 
     def __init__(self, host, view, loop, resolutions: tuple, time: float):
         self.host, self.view = host, view
         self.resolutions, self.time = resolutions, float(time)
+        self.iterates = raster_mod.DIFFUSION_ITERATES
         self.task = loop.task("raster")
         self.raster_source = ColumnDataSource(_empty_raster(), name="raster")
-        self.layer = Box(label=f"MEGNO layer (T = {self.time:g})", value=False)
+        self.center: tuple | None = None
+        self.layer = Box(label="chaos layer", value=False)
+        self.indicator = pn.widgets.Select(options={f"MEGNO ⟨Y⟩ (T = {self.time:g})": "megno",
+                                                    f"frequency diffusion (N = {self.iterates})":
+                                                    "frequency_diffusion"},
+                                           value="megno", width=210)
         self.layer.param.watch(lambda _e: loop.soon(self._layer_changed), "value")
+        self.indicator.param.watch(lambda _e: loop.soon(self._indicator_changed), "value")
         view.on_window(self._window_moved)
 
     def draw(self, fig) -> None:
-        megno = LinearColorMapper(palette=megno_palette(), low=MEGNO_LOW, high=MEGNO_HIGH, nan_color=(0, 0, 0, 0))
-        fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=self.raster_source, color_mapper=megno,
+        self.mapper = LinearColorMapper(palette=megno_palette(), low=MEGNO_LOW, high=MEGNO_HIGH,
+                                        nan_color=(0, 0, 0, 0))
+        fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=self.raster_source, color_mapper=self.mapper,
                   alpha=0.85)
-        self.colour_bar = ColorBar(color_mapper=megno, title="⟨Y⟩ (MEGNO)", visible=False, width=12,
+        self.colour_bar = ColorBar(color_mapper=self.mapper, title=MEGNO_TITLE, visible=False, width=12,
                                    name="megno-colour-bar")
         fig.add_layout(self.colour_bar, "right")
+        self._show_scale()
+
+    def scale(self) -> tuple:
+        """(low, high) of the colour scale of the layer's indicator."""
+        if self.indicator.value == "megno":
+            return MEGNO_LOW, MEGNO_HIGH
+        style = STYLES["frequency_diffusion"]        # the chaos maps' scale (one definition)
+        return style.vmin, style.vmax
+
+    def title(self) -> str:
+        """The colour bar's label: the indicator, and frequency diffusion's centre once known."""
+        if self.indicator.value == "megno":
+            return MEGNO_TITLE
+        c = self.center
+        if c is None or c[0] != self.host.settings:
+            return DIFFUSION_TITLE
+        (p1, p2), elliptic = c[1], c[2]
+        return f"{DIFFUSION_TITLE} around {'elliptic point' if elliptic else 'region centre'} ({p1:.4g}, {p2:.4g})"
+
+    def _show_scale(self) -> None:
+        low, high = self.scale()
+        self.mapper.update(low=low, high=high)
+        self.colour_bar.title = self.title()
+
+    def load_url(self, args: dict) -> None:
+        """The layer's state from a link: ``indicator`` (a name of raster.INDICATORS; another is
+        ignored and said) and ``megno`` (the box, "1": on)."""
+        name = args.get("indicator") or "megno"
+        if name not in raster_mod.INDICATORS:
+            self.host.say(f"link's indicator ignored: must be one of {', '.join(raster_mod.INDICATORS)}, got "
+                          f"{name[:40]!r}")
+            name = "megno"
+        self.indicator.value = name
+        self.layer.value = args.get("megno") == "1"
+
+    def url_query(self) -> dict:
+        """The layer's URL arguments: ``megno`` (the box) and ``indicator``."""
+        return {"megno": "1" if self.layer.value else "0", "indicator": self.indicator.value}
 
     def _window_moved(self) -> None:
         if self.layer.value:
@@ -63,22 +119,41 @@ class ChaosLayer:
         self.restart()
         self.host.push_url()
 
+    def _indicator_changed(self):
+        self._show_scale()
+        self.raster_source.data = _empty_raster()       # no value of the other indicator on its scale
+        self.restart()
+        self.host.push_url()
+
     def restart(self) -> None:
-        """The rasters of the current window and settings (none when the layer is off)."""
+        """The rasters of the current window, indicator and settings (none when the layer is off)."""
         window, settings = self.view.window, self.host.settings
+        self._show_scale()
         if not self.layer.value or window is None or settings.region is None:
             self.task.cancel()
             self.raster_source.data = _empty_raster()
             return
-        self.task.submit(self._compute, settings, window, on_error=self._failed)
+        # (a budget: cancelled by the next submit, it stops frequency diffusion's search for its centre
+        # and its runs between batches; its step cap bounds each orbit's steps in a crossing batch)
+        self.task.submit(self._compute, settings, window, self.indicator.value, on_error=self._failed,
+                         budget=Budget(None, max_steps=raster_mod.RASTER_MAX_STEPS))
 
-    def _compute(self, job, settings, window) -> None:
-        for image in raster_mod.rasters(settings, window, stop=lambda: not job.current,
-                                        resolutions=self.resolutions, time=self.time):
+    def _compute(self, job, settings, window, indicator) -> None:
+        center = None
+        if indicator == "frequency_diffusion":
+            c = self.center
+            if c is None or c[0] != settings:      # (this thread alone sets it: one search per settings)
+                point, elliptic = raster_mod.diffusion_center(settings)
+                self.center = c = (settings, point, elliptic)
+                job.post(self._show_scale)
+            center = c[1]
+        for image in raster_mod.rasters(settings, window, stop=lambda: not job.current, resolutions=self.resolutions,
+                                        time=self.time, indicator=indicator, center=center,
+                                        iterates=self.iterates):
             job.post(lambda image=image: self.show_image(image))
 
     def _failed(self, exc) -> None:
-        self.host.say(f"MEGNO layer failed: {type(exc).__name__}: {' '.join(str(exc).split())}")
+        self.host.say(f"chaos layer failed: {type(exc).__name__}: {' '.join(str(exc).split())}")
 
     def show_image(self, image) -> None:
         w = image.window

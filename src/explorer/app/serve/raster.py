@@ -1,13 +1,22 @@
-"""The chaos layer of the page: a MEGNO raster of the visible window, coarse first, then refined.
+"""The chaos layer of the page: a raster of a chaos indicator over the visible window, coarse first,
+then refined.
 
 For each resolution of ``RESOLUTIONS`` (n x n cells over the window), the centres of the cells
-inside the allowed region are started on the section (docs/model.md R9, M > 0) and their mean MEGNO
-<Y>(``RASTER_TIME``) is computed with :func:`explorer.analysis.lyapunov.indicators` (the tangent
-lanes, the page's method and tolerance), ``BATCH`` seeds per call; cells outside the region are
-NaN.  After each batch the partial image is handed out (``on_image(generation, image)``), so the
-page fills in while the next batch runs; its ``stop()`` ends the raster at the next batch (the page's
-ChaosLayer runs it as a job of the session's task helper: a new window or new settings supersede
-it).  No web library here.
+inside the allowed region are started on the section (docs/model.md R9, M > 0) and the layer's
+indicator (``INDICATORS``, by their names in the registry :mod:`explorer.kernels.indicator_table`)
+is computed for them, a batch of seeds per call; cells outside the region are NaN:
+
+- ``megno``: the mean MEGNO <Y>(``RASTER_TIME``) of :func:`explorer.analysis.lyapunov.indicators`
+  (the tangent lanes, the page's method and tolerance), ``BATCH`` seeds per call;
+- ``frequency_diffusion``: log10 |nu1 - nu2| of
+  :func:`explorer.analysis.rotation.frequency_diffusion` (the function a sweep's
+  ``frequency_diffusion`` calls) on the page's section map, N = ``DIFFUSION_ITERATES``, around
+  :func:`diffusion_center` (the elliptic fixed point reached from the allowed region's centre: the
+  same centre for every window of the same settings), ``DIFFUSION_BATCH`` seeds per call.
+
+After each batch the partial image is handed out, so the page fills in while the next batch runs;
+its ``stop()`` ends the raster at the next batch (the page's ChaosLayer runs it as a job of the
+session's task helper: a new window, indicator or settings supersede it).  No web library here.
 """
 from __future__ import annotations
 
@@ -33,6 +42,14 @@ MAX_RASTER_TIME = 100_000.0
 RASTER_MAX_STEPS = 100_000
 #: seeds per call of the indicators (bounds the time until a cancel takes effect)
 BATCH = 512
+#: the indicators the layer can show (names of the registry, explorer.kernels.indicator_table)
+INDICATORS = ("megno", "frequency_diffusion")
+#: N of the layer's frequency diffusion: nu1 from the first N returns, nu2 from the next N (2N = 200
+#: returns a cell; a torus reaches about 1e-6 there and 1e-12 at N ~ 1000, a chaotic orbit 1e-4 to 1)
+DIFFUSION_ITERATES = 100
+#: seeds per call of frequency_diffusion (2N returns each, about 0.1 s a seed at Figure 4's
+#: parameters: a cancel takes effect within a batch, and the budget stops it between its runs)
+DIFFUSION_BATCH = 32
 
 
 @dataclass(frozen=True)
@@ -56,13 +73,14 @@ class Window:
 
 @dataclass(frozen=True)
 class Image:
-    """One (partial) raster: ``values`` (n, n) mean MEGNO, NaN outside the region or not yet
-    computed; ``complete`` when every cell of this resolution is in."""
+    """One (partial) raster: ``values`` (n, n) of the ``indicator``, NaN outside the region or not
+    yet computed; ``complete`` when every cell of this resolution is in."""
 
     window: Window
     n: int
     values: np.ndarray
     complete: bool
+    indicator: str = "megno"
 
 
 def resolutions_up_to(n: int) -> tuple:
@@ -84,9 +102,60 @@ def megno_cells(settings: Settings, p1, p2, time: float = RASTER_TIME) -> np.nda
     return np.where(np.asarray(res.status) == 0, np.asarray(res.megno, dtype=np.float64), np.nan)
 
 
+def diffusion_center(settings: Settings) -> tuple:
+    """(point, elliptic): the point the layer's frequency diffusion turns around at ``settings``.
+    The first elliptic fixed point Newton's method reaches from the allowed region's centre, then
+    from half-way to its edge along both axes (:func:`explorer.app.serve.overlays.elliptic_center`,
+    the readout's search), ``elliptic`` True; when none is elliptic, the region's centre itself,
+    ``elliptic`` False.  It depends on the settings only, never on the window: a cell's value is
+    the same in every window (docs/greene.md, "Frequency diffusion": any centre off the orbits
+    gives a valid indicator, an elliptic point the rotation numbers of its island)."""
+    from explorer.app.serve.overlays import elliptic_center
+
+    c1, c2 = settings.region[:2]
+    fp = elliptic_center(settings, (c1, c2))
+    if fp is None:
+        return (float(c1), float(c2)), False
+    return (float(fp.point[0]), float(fp.point[1])), True
+
+
+def diffusion_cells(settings: Settings, p1, p2, center, iterates: int = DIFFUSION_ITERATES) -> np.ndarray:
+    """Frequency diffusion log10 |nu1 - nu2| of the orbits started at (p1, p2) on the section:
+    :func:`explorer.analysis.rotation.frequency_diffusion` (the sweep's indicator, one
+    implementation) on the page's section map (phi0; Taylor at the page's tol with the taylor
+    method, else at the rotation's default, as the readout's rotation number) around ``center``.
+    Crossings in direction -1 have no such map: ParameterError (as a scene's)."""
+    from explorer.analysis.rotation import frequency_diffusion
+    from explorer.analysis.section_map import SectionMap
+    from explorer.app.serve.overlays import rotation_tol
+    from explorer.model import ParameterError
+
+    if settings.direction == -1:
+        raise ParameterError("frequency diffusion needs crossings in direction + or both (the section map's "
+                             "returns); these settings count them in direction -")
+    smap = SectionMap(settings.params, settings.h, phi0=settings.phi0, tol=rotation_tol(settings))
+    return frequency_diffusion(smap, np.column_stack([np.ravel(p1), np.ravel(p2)]), center=center,
+                               iterates=iterates)
+
+
 def rasters(settings: Settings, window: Window, stop: Callable[[], bool] = lambda: False,
-            resolutions: tuple = RESOLUTIONS, time: float = RASTER_TIME):
-    """Yield the :class:`Image` after every batch of every resolution (until ``stop()``)."""
+            resolutions: tuple = RESOLUTIONS, time: float = RASTER_TIME, indicator: str = "megno",
+            center=None, iterates: int = DIFFUSION_ITERATES):
+    """Yield the :class:`Image` of ``indicator`` after every batch of every resolution (until
+    ``stop()``); ``time``: MEGNO's, ``center`` (None: :func:`diffusion_center`) and ``iterates``:
+    frequency diffusion's."""
+    from explorer.model import validation
+
+    validation.choice("indicator", indicator, INDICATORS)
+    if indicator == "megno":
+        batch = BATCH
+        def cells(a, b):
+            return megno_cells(settings, a, b, time)
+    else:
+        batch = DIFFUSION_BATCH
+        point = diffusion_center(settings)[0] if center is None else center
+        def cells(a, b):
+            return diffusion_cells(settings, a, b, point, iterates)
     previous = None
     for n in resolutions:
         P1, P2 = window.centres(n)
@@ -96,12 +165,12 @@ def rasters(settings: Settings, window: Window, stop: Callable[[], bool] = lambd
             k = n // previous.shape[0]
             values = np.where(inside, np.kron(previous, np.ones((k, k))), np.nan)
         rows, cols = np.nonzero(inside)
-        for a in range(0, len(rows), BATCH):
+        for a in range(0, len(rows), batch):
             if stop():
                 return
-            r, c = rows[a:a + BATCH], cols[a:a + BATCH]
-            values[r, c] = megno_cells(settings, P1[r, c], P2[r, c], time)
-            yield Image(window, n, values.copy(), a + BATCH >= len(rows))
+            r, c = rows[a:a + batch], cols[a:a + batch]
+            values[r, c] = cells(P1[r, c], P2[r, c])
+            yield Image(window, n, values.copy(), a + batch >= len(rows), indicator)
         if not len(rows):
-            yield Image(window, n, values.copy(), True)
+            yield Image(window, n, values.copy(), True, indicator)
         previous = values
