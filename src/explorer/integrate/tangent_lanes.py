@@ -20,7 +20,11 @@ whatever the grouping of orbits into lanes and the number of threads:
 * the end of the step in vector form (:func:`end_steps_tangent_lanes`) for every lane that ends
   it with no stop and no history row: the finiteness checks, the renormalisation of the
   deviation vectors and the mLCE, MEGNO and FLI accumulators of ``kernels.tangent`` (their
-  operations lane-wise; ln of the norm by libm per lane), the clock and the step budget;
+  operations lane-wise; ln of the norm by libm per lane), the clock and the step budget.  ln
+  stays libm's, per lane: it costs 4.4-6.1 ns per lane, 2.3-3.2 % of a one-vector orbit-step
+  (benchmarks/RESULTS.md, issue 34), and a vector log of our own would have to replace libm's
+  in kernels.tangent.renormalize too, which every tangent integrator calls, changing their
+  results at round-off against earlier revisions for at most that 3 %;
 * the early classification of those lanes in vector form (:func:`early_lanes`: SALI and the
   MEGNO rule of ``integrate.tangent._early``, lane-wise); only the lanes it stops are written
   out one by one;
