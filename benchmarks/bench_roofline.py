@@ -18,7 +18,9 @@ and one orbit reach.
 3. Achieved: the recurrence alone (a loop over one lane array), W4 (64 x 2000 crossings, tol
    1e-12, order 15, 1 and 2 threads), the 400-orbit chaos map (mu = 1, T = 1000, MEGNO) and one
    orbit (30,000 crossings): measured steps, steps per crossing, flops / s and the fraction of
-   the measured peak (per core used).
+   the measured peak (per core used).  3b: each vector stage of a step alone (recurrence, step
+   size, Horner, variation bound, the tangent step end) per orbit-step, so that what a
+   workload's step spends outside the recurrence is split into its parts (issue 34).
 4. The recurrence for G = 1, 2, 4 lane groups: CPU per orbit-step and its Cauchy-product loop's
    multiplies, adds and stack accesses (a fresh compile of each kernel, read with inspect_asm).
 5. Steps per crossing of explorer and of heyoka's taylor_adaptive on the same W4 orbits to the
@@ -52,14 +54,18 @@ def timed(fn, repeats):
     """(best wall seconds, best CPU seconds of this thread) over ``repeats`` calls.  On a machine
     shared with other jobs the wall time counts the time the thread waits for a core; the CPU
     time of the calling thread does not, and is what the one-thread rows divide by (the work of a
-    one-thread run, a lone orbit and the peak kernels runs on the calling thread)."""
-    wall, cpu = [], []
+    one-thread run, a lone orbit and the peak kernels runs on the calling thread).  ``timed.proc``
+    is the best CPU time of the whole process: the one-thread rows take it instead when the work
+    ran on another thread (the calling thread's CPU a small part of it)."""
+    wall, cpu, proc = [], [], []
     for _ in range(repeats):
-        t0, c0 = time.perf_counter(), time.thread_time()
+        t0, c0, p0 = time.perf_counter(), time.thread_time(), time.process_time()
         out = fn()
         cpu.append(time.thread_time() - c0)
+        proc.append(time.process_time() - p0)
         wall.append(time.perf_counter() - t0)
     timed.last = out
+    timed.proc = min(proc)
     return min(wall), min(cpu)
 
 
@@ -233,6 +239,113 @@ def recurrence_alone(order, tangent, reps=20000, groups=1):
     return cpu / (reps * groups * LANES)
 
 
+def stages_alone(order, tangent, groups, reps=20000):
+    """Seconds of CPU per orbit-step of each vector stage of a step alone, on ``groups`` groups of
+    LANES lanes holding W4's orbits (Figure 4, mu = 0.5) or the chaos map's (mu = 1, one deviation
+    vector), one thread: the recurrence, the step norms and the step size's two vector powers
+    (``lanes.step_norms_lanes``), the Horner sums (``lanes.evaluate_lanes``, once per vector) and,
+    for the crossings, the variation bound (``lanes.variation_lanes``).  What a workload's step
+    costs beyond their sum is the rest: the step's checks (``lanes.step_lanes``), the vector step
+    end, the lanes that take the scalar step end (the roots, the stops, the history rows) and the
+    loop.  (The inline helpers, ``step_lanes`` and the step ends, are not timed alone: in a loop of
+    their own numba counts references to each of their array arguments at every call, atomic
+    increments that cost more than the helper; in the lane workers those are pruned.)"""
+    from explorer import model
+    from explorer._jit import njit
+    from explorer.analysis import lyapunov
+    from explorer.integrate import _lanes_generated as LG
+    from explorer.integrate import _tangent_lanes_generated as TG
+    from explorer.integrate import lanes
+    from explorer.integrate.simd import LANES
+
+    w = groups * LANES
+    g = (0,) * groups
+    prm = model.FIGURE4.with_(mu=1.0 if tangent else 0.5)
+    c1, c2, r1, r2 = model.allowed_ellipse(prm, 2.0)
+    Y = model.section_state(prm, c1 + r1 * np.linspace(-0.9, 0.9, w), np.zeros(w), 2.0)
+    P = prm.as_array()
+    _factor, e_p, e_q = lanes.step_constants(order)
+    norms = np.zeros((lanes.N_NORMS, w))
+    if tangent:
+        X = np.zeros((order + 1, TG.NROWS, w))
+        X[0, :5] = Y.T
+        X[0, 5:10] = lyapunov.deviation_vector(P, Y).T
+        TG.tangent_coefficients_lanes(P, X, order, TG.DEV1, g)
+    else:
+        X = np.zeros((order + 1, 5, w))
+        X[0] = Y.T
+        LG.taylor_coefficients_lanes(P, X, order, g)
+    hv = np.full(w, 0.05)
+    out = np.zeros((X.shape[1], w))
+
+    @njit(cache=False)
+    def recurrence(reps, P, X, order, g):
+        for _ in range(reps):
+            if tangent:
+                TG.tangent_coefficients_lanes(P, X, order, TG.DEV1, g)
+            else:
+                LG.taylor_coefficients_lanes(P, X, order, g)
+
+    @njit(cache=False)
+    def step_norms(reps, X, order, g, norms):
+        for _ in range(reps):
+            lanes.step_norms_lanes(X, order, e_p, e_q, norms, g)
+
+    @njit(cache=False)
+    def horner(reps, X, order, g, hv, out, nvec):
+        for _ in range(reps):
+            for v in range(nvec):
+                lanes.evaluate_lanes(X, order, hv, out, 5 * v, g)
+
+    @njit(cache=False)
+    def variation(reps, X, order, g, hv, out):
+        for _ in range(reps):
+            lanes.variation_lanes(X, order, hv, -1.0, 0.0, out, g)
+
+    stages = [("recurrence", recurrence, (P, X, order, g)),
+              ("step norms and the step size's two powers", step_norms, (X, order, g, norms)),
+              ("Horner sums" + (" (orbit and vector)" if tangent else ""), horner,
+               (X, order, g, hv, out, 2 if tangent else 1))]
+    if not tangent:
+        stages.append(("variation bound", variation, (X, order, g, hv, out[0])))
+    rows = []
+    for name, fn, args in stages:
+        fn(1, *args)
+        rows.append((name, timed(lambda: fn(reps, *args), 5)[1] / (reps * w)))
+    return rows
+
+
+def libm_log_per_lane(reps=2_000_000):
+    """Seconds of CPU per lane of libm's log as ``tangent_lanes.end_steps_tangent_lanes`` calls
+    it (a loop over the LANES lanes of a group, arguments near 1 as the norms of a renormalised
+    deviation vector after a step), less the same loop without the log (issue 34: whether a vector
+    log is worth writing)."""
+    import math
+
+    from explorer._jit import njit
+    from explorer.integrate.simd import LANES
+
+    @njit(cache=False)
+    def loop(nrm, on, reps, take_log):
+        s = 0.0
+        for r in range(reps):
+            if take_log:
+                for l in range(LANES):
+                    if on[l] != 0.0:
+                        nrm[l] = math.log(nrm[l])
+            s += nrm[0]
+            for l in range(LANES):
+                nrm[l] = 1.0 + 1e-3 * (l + 1) + 1e-9 * r
+        return s
+
+    nrm, on = np.ones(LANES), np.ones(LANES)
+    loop(nrm, on, 10, True)
+    loop(nrm, on, 10, False)
+    with_log = timed(lambda: loop(nrm, on, reps, True), 5)[1]
+    without = timed(lambda: loop(nrm, on, reps, False), 5)[1]
+    return (with_log - without) / (reps * LANES)
+
+
 def recurrence_asm(groups, tangent):
     """The Cauchy-product loop of the generated recurrence for ``groups`` groups (a fresh,
     uncached compile of the kernel, so that numba can show its assembly)."""
@@ -264,7 +377,7 @@ def workloads(quick):
         sections.crossings(prm4, 2.0, np.column_stack([p1[:2], np.zeros(2)]), n_crossings=5, tol=1e-12, threads=threads)
         wall, cpu = timed(lambda: sections.crossings(prm4, 2.0, np.column_stack([p1, np.zeros(64)]), n_crossings=K, tol=1e-12, threads=threads), 3)
         r = timed.last
-        out.append(dict(name=f"W4 64 x {K}, {threads} thread{'s' * (threads > 1)}", wall=wall, cpu=cpu,
+        out.append(dict(name=f"W4 64 x {K}, {threads} thread{'s' * (threads > 1)}", wall=wall, cpu=cpu, proc=timed.proc,
                         threads=threads, steps=float(r.info[:, 1].sum()), crossings=int(r.count.sum()),
                         tangent=False))
     # one orbit: one of the LANES lanes does work
@@ -272,7 +385,7 @@ def workloads(quick):
     sections.crossings(prm4, 2.0, np.column_stack([p1[:1], np.zeros(1)]), n_crossings=5, tol=1e-12)
     wall, cpu = timed(lambda: sections.crossings(prm4, 2.0, np.column_stack([p1[:1], np.zeros(1)]), n_crossings=n1, tol=1e-12), 3)
     r = timed.last
-    out.append(dict(name=f"one orbit x {n1}", wall=wall, cpu=cpu, threads=1, steps=float(r.info[:, 1].sum()),
+    out.append(dict(name=f"one orbit x {n1}", wall=wall, cpu=cpu, proc=timed.proc, threads=1, steps=float(r.info[:, 1].sum()),
                     crossings=int(r.count.sum()), tangent=False))
     prm1 = model.FIGURE4.with_(mu=1.0)
     Y = polar_seeds(prm1)
@@ -281,7 +394,7 @@ def workloads(quick):
         lyapunov.indicators(prm1, Y[:8], tmax=1.0, tol=1e-12, threads=threads)
         wall, cpu = timed(lambda: lyapunov.indicators(prm1, Y, tmax=T, tol=1e-12, threads=threads), 3)
         out.append(dict(name=f"chaos map 400 orbits, T = {T:g}, {threads} thread{'s' * (threads > 1)}", wall=wall,
-                        cpu=cpu, threads=threads, steps=float(np.sum(timed.last.steps)), crossings=0, tangent=True))
+                        cpu=cpu, proc=timed.proc, threads=threads, steps=float(np.sum(timed.last.steps)), crossings=0, tangent=True))
     return out
 
 
@@ -366,13 +479,27 @@ def main(argv=None):
               f"{g:.1f} | {g / peak_fma:.0%} ({g / peak_unfused:.0%}) |")
     for w in workloads(args.quick):
         seconds = w["cpu"] if w["threads"] == 1 else w["wall"] * w["threads"]
-        if w["threads"] == 1 and w["cpu"] < 0.3 * w["wall"]:   # the work ran on another thread: wall time
-            seconds = w["wall"]
+        if w["threads"] == 1 and w["cpu"] < 0.3 * w["proc"]:   # the work ran on another thread: the process's CPU
+            seconds = w["proc"]     # (not the wall time: under load a thread waits for a core)
         g = w["steps"] * work[(w["tangent"], 1)][1] / seconds / 1e9
         spc = f"{w['steps'] / w['crossings']:.1f}" if w["crossings"] else ""
         cpu = f"{w['cpu']:.3f}" if w["threads"] == 1 else ""
         emit(f"| {w['name']} | {w['wall']:.3f} | {cpu} | {w['steps']:.3g} | {spc} | "
               f"{seconds / w['steps'] * 1e9:.1f} | {g:.1f} | {g / peak_fma:.0%} ({g / peak_unfused:.0%}) |")
+    from explorer.integrate.lanes import default_groups
+    G = default_groups()
+    emit(f"\n### 3b. The step's vector stages alone (one thread, G = {G} as the workloads; CPU per orbit-step): "
+         "what the rest of a workload's step costs is its ns / orbit-step above less their sum\n")
+    emit("| lanes | stage | ns / orbit-step |")
+    emit("|---|---|---:|")
+    for tangent in (False, True):
+        total = 0.0
+        for name, sec in stages_alone(order, tangent, G):
+            total += sec
+            emit(f"| {'tangent (1 vector)' if tangent else 'crossings'} | {name} | {sec * 1e9:.1f} |")
+        emit(f"| {'tangent (1 vector)' if tangent else 'crossings'} | sum of the stages | {total * 1e9:.1f} |")
+    emit(f"| tangent (1 vector) | libm's log, per lane, in the vector step end (not in the sum) | "
+         f"{libm_log_per_lane() * 1e9:.1f} |")
     from explorer.integrate._lanes_generated import GROUPS
     emit("\n### 4. The recurrence per number of lane groups G (one thread): CPU per orbit-step and its "
          "Cauchy-product loop\n")

@@ -133,6 +133,47 @@ def test_vector_step_end_is_the_scalar_one_and_leaves_stops_and_history_rows_to_
     assert seen == {True, False}
 
 
+
+@pytest.mark.parametrize("nvec", [1, 2])
+def test_vector_early_classification_stops_the_lanes_the_scalar_rule_stops(nvec):
+    """early_lanes on every lane of a group that the vector step end ended (holding an orbit, not
+    in the scalar loop's bits): it stops by SALI or by MEGNO exactly the lanes integrate.tangent._early
+    stops with that code, and leaves them and the other lanes' ``since`` as the scalar rule does
+    (the vectors near-aligned or not, <Y> above and below its level, since before and after t/2,
+    t before and after tmin); lanes left to the scalar loop and idle lanes are untouched."""
+    rng = np.random.default_rng(40 + nvec)
+    sali_stop, level, tmin = 1e-3, 6.0, 10.0
+    codes = set()
+    for _ in range(60):
+        Z = rng.normal(size=(1, G.NROWS, L))
+        Z[0, 5:10] /= np.linalg.norm(Z[0, 5:10], axis=0)
+        sign = rng.choice([-1.0, 1.0], L)
+        near = rng.choice([0.0, 1e-5, 1e-2], L)
+        Z[0, 10:] = sign * Z[0, 5:10] + near * rng.normal(size=(5, L))
+        Z[0, 10:] /= np.linalg.norm(Z[0, 10:], axis=0)
+        acc = rng.normal(size=(tg.N_ACC, L))
+        t = rng.choice([0.0, 5.0, 20.0, 40.0], L)
+        acc[tg.ACC_T] = t
+        acc[tg.ACC_YINT] = t * rng.choice([1.0, 5.9, 6.1, 30.0], L)
+        L_since = np.where(rng.random(L) < 0.3, -1.0, t * rng.choice([0.2, 0.5, 0.51, 1.0], L))
+        L_on = rng.choice([0.0, 1.0], L, p=[0.1, 0.9])
+        bits = int(rng.integers(0, 1 << L)) & int(rng.integers(0, 1 << L))
+        since0 = L_since.copy()
+        stop_sali, stop_megno = tangent_lanes.early_lanes(Z, acc, L_since, L_on, bits, nvec, sali_stop, level, tmin,
+                                                          0, L)
+        assert stop_sali & stop_megno == 0
+        for l in range(L):
+            got = tg.EARLY_SALI if stop_sali >> l & 1 else tg.EARLY_MEGNO if stop_megno >> l & 1 else tg.EARLY_NONE
+            if L_on[l] == 0.0 or bits >> l & 1:
+                assert got == tg.EARLY_NONE and L_since[l] == since0[l]
+                continue
+            code, since = tangent._early(acc[:, l], Z[0, 5:10, l].copy(), Z[0, 10:, l].copy(), nvec, sali_stop,
+                                         level, tmin, since0[l])
+            codes.add(code)
+            assert got == code and L_since[l] == since
+    assert codes == ({tg.EARLY_NONE, tg.EARLY_MEGNO} | ({tg.EARLY_SALI} if nvec == 2 else set()))
+
+
 # ---------------------------------------------------------------- whole batches
 def _orbits(n, seed=3):
     """Orbits of Figure 4 at mu = 1 (regular and chaotic) and asymmetric sets, with a few that

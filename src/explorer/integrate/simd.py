@@ -16,7 +16,7 @@ translates into ``_lanes_generated.py`` and ``_tangent_lanes_generated.py``.
   :func:`vge`, :func:`vlt`, :func:`veq` (lane-wise the scalar ``a > b`` ...: false where either is
   NaN), :func:`vand`, :func:`vandnot`, :func:`vor`, :func:`vselect` (``a if m else b`` per lane)
   and :func:`vbits` (the mask as the bits of an integer, lane i bit i: the lanes that a scalar
-  loop must visit, one after the other by :func:`next_bit`);
+  loop must visit, one after the other by :func:`next_bit`), :func:`vmask` (bits back to a mask);
 - :func:`vradius_power_core`: the step size's power ``kernels.power.radius_power_core`` on every
   lane (the same IR, emitted for a vector: lane-wise the scalar's double);
 - :func:`atomic_fetch_add`: the shared queue of orbits of the lane workers;
@@ -112,6 +112,9 @@ if NOJIT:  # pragma: no cover - plain-Python twins (numpy elementwise = the same
 
     def vbits(m):
         return int(sum(1 << i for i in range(LANES) if m[i]))
+
+    def vmask(bits):
+        return np.array([bool(bits >> i & 1) for i in range(LANES)])
 
     def _cttz(bits):
         return (bits & -bits).bit_length() - 1
@@ -334,6 +337,17 @@ else:
         def codegen(context, builder, sig, args):
             return builder.zext(builder.bitcast(args[0], _ir.IntType(LANES)), _ir.IntType(64))
         return _types.int64(b1vec), codegen
+
+    @_intrinsic
+    def vmask(typingctx, bits):
+        """The mask of the low LANES bits of an integer: lane i true iff bit i is set (vbits' inverse)."""
+        if not isinstance(bits, _types.Integer):
+            return None
+
+        def codegen(context, builder, sig, args):
+            x = context.cast(builder, args[0], sig.args[0], _types.int64)
+            return builder.bitcast(builder.trunc(x, _ir.IntType(LANES)), _MT)
+        return b1vec(bits), codegen
 
     @_intrinsic
     def _cttz(typingctx, bits):

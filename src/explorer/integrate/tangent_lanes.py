@@ -20,10 +20,16 @@ whatever the grouping of orbits into lanes and the number of threads:
 * the end of the step in vector form (:func:`end_steps_tangent_lanes`) for every lane that ends
   it with no stop and no history row: the finiteness checks, the renormalisation of the
   deviation vectors and the mLCE, MEGNO and FLI accumulators of ``kernels.tangent`` (their
-  operations lane-wise; ln of the norm by libm per lane), the clock and the step budget;
-* everything else - the last step, the stops, the history rows, and every step end when the
-  early classification is on - is the control flow of the scalar loop, run per lane in scalar
-  code.
+  operations lane-wise; ln of the norm by libm per lane), the clock and the step budget.  ln
+  stays libm's, per lane: it costs 4.4-6.1 ns per lane, 2.3-3.2 % of a one-vector orbit-step
+  (benchmarks/RESULTS.md, issue 34), and a vector log of our own would have to replace libm's
+  in kernels.tangent.renormalize too, which every tangent integrator calls, changing their
+  results at round-off against earlier revisions for at most that 3 %;
+* the early classification of those lanes in vector form (:func:`early_lanes`: SALI and the
+  MEGNO rule of ``integrate.tangent._early``, lane-wise); only the lanes it stops are written
+  out one by one;
+* everything else - the last step, the stops, the history rows - is the control flow of the
+  scalar loop, run per lane in scalar code.
 
 Lanes never exchange values, so the work is distributed dynamically as in
 :mod:`explorer.integrate.lanes`: one worker per thread, a lane whose orbit stops takes the next
@@ -68,10 +74,13 @@ from explorer.integrate.simd import (
     vandnot,
     vbits,
     vdiv,
+    vge,
     vgt,
     vload,
     vlt,
+    vmask,
     vmax_gt,
+    vmin_lt,
     vmul,
     vselect,
     vsplat,
@@ -240,6 +249,44 @@ def end_steps_tangent_lanes(Z, znew, hv, nrm, acc, L_t, L_steps, L_hnext, L_on, 
     return vbits(vandnot(live, ok))
 
 
+@njit(inline="always")
+def early_lanes(Z, acc, L_since, L_on, bits, nvec, sali_stop, megno_level, tmin, c, nl):
+    """The early classification rule (integrate.tangent._early) in vector form for the lanes of the
+    group at ``c`` whose step :func:`end_steps_tangent_lanes` ended (they hold an orbit and are not
+    in ``bits``, the lanes it left to the scalar loop): SALI of their unit deviation vectors in
+    Z[0] (kernels.tangent.sali: the sums in its order, numba's ``min(sp, sm)`` = sm if sm < sp
+    else sp, sqrt) below ``sali_stop`` (nvec == 2, sali_stop > 0), else the MEGNO rule
+    (kernels.tangent.megno_early on ``acc``: <Y> and ``L_since`` updated in these lanes; megno_level
+    > 0).  Lane-wise the scalar's IEEE operations and comparisons.  Returns (bits of the lanes
+    that stop by SALI, bits of those that stop by MEGNO): the caller writes them out."""
+    zero = vzero()
+    m = vandnot(vgt(vload(L_on, c), zero), vmask(bits))
+    stop_sali = 0
+    if nvec == 2 and sali_stop > 0.0:
+        sp = zero
+        sm = zero
+        for i in range(5):
+            v = vload(Z, (DEV1 + i) * nl + c)
+            w = vload(Z, (DEV2 + i) * nl + c)
+            a = vadd(v, w)
+            b = vsub(v, w)
+            sp = vadd(sp, vmul(a, a))
+            sm = vadd(sm, vmul(b, b))
+        low = vand(m, vlt(vsqrt(vmin_lt(sm, sp)), vsplat(sali_stop)))
+        stop_sali = vbits(low)
+        m = vandnot(m, low)
+    stop_megno = 0
+    if megno_level > 0.0:
+        t = vload(acc, tg.ACC_T * nl + c)
+        ym = vselect(vgt(t, zero), vdiv(vload(acc, tg.ACC_YINT * nl + c), t), zero)
+        since = vload(L_since, c)
+        since = vselect(vgt(ym, vsplat(megno_level)), vselect(vlt(since, zero), t, since), vsplat(-1.0))
+        _keep(L_since, c, m, since)
+        stop = vand(vand(vge(since, zero), vge(t, vsplat(tmin))), vge(t, vmul(vsplat(2.0), since)))
+        stop_megno = vbits(vand(m, stop))
+    return stop_sali, stop_megno
+
+
 # nogil: the batch drivers Python calls release the GIL (docs/architecture.md, Parallelism)
 @njit(nogil=True)
 def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop,
@@ -267,7 +314,7 @@ def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_s
     L_fast = aligned_zeros(nl)
     L_last = aligned_zeros(nl)
     L_hpos = np.zeros(nl, np.int64)
-    L_since = np.zeros(nl)
+    L_since = aligned_zeros(nl)
     L_status = np.zeros(nl, np.int64)
     L_early = np.zeros(nl, np.int64)
     L_stop = np.zeros(nl, np.bool_)
@@ -291,13 +338,22 @@ def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_s
             evaluate_lanes(Z, order, hv, znew, DEV2, groups)
         for c in range(0, nl, LANES):
             # ---- all lanes of the group at once: the step ends with no stop and no history row
-            # (every lane to the scalar loop when the early classification is on)
             bits = end_steps_tangent_lanes(Z, znew, hv, nrm, acc, L_t, L_steps, L_hnext, L_on, L_fast, L_last,
-                                           nvec, T, max_steps, c, nl) if not early_stop else 0
+                                           nvec, T, max_steps, c, nl)
             if early_stop:
-                for i in range(LANES):
-                    if L_on[c + i] != 0.0:
-                        bits |= 1 << i
+                # ... and their early classification; the few lanes it stops are written out here
+                stop_sali, stop_megno = early_lanes(Z, acc, L_since, L_on, bits, nvec, sali_stop, megno_level,
+                                                    early_tmin, c, nl)
+                stops = stop_sali | stop_megno
+                while stops != 0:
+                    ib, stops = next_bit(stops)
+                    l = c + ib
+                    early = tg.EARLY_SALI if stop_sali >> ib & 1 else tg.EARLY_MEGNO
+                    _finish(orb[l], l, Z, acc, v, w, nvec, early, STATUS_DONE, L_steps[l], out_res, out_ext,
+                            out_status, out_final, out_steps, out_w)
+                    active += _start_lane(l, Z, orb, L_on, acc, L_t, L_steps, L_hpos, L_hnext, L_since, hist_t,
+                                          next_orbit, Y0, V0, W0, nvec, T, max_steps, v, w, out_res, out_ext,
+                                          out_status, out_final, out_steps, out_w) - 1
             # ---- lane by lane, the others: the rest of the step of the scalar loop
             while bits != 0:
                 ib, bits = next_bit(bits)
