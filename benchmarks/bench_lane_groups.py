@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""A/B of the lane groups (issue 24): the same workloads with G = 1, 2, 4 groups of LANES lanes
+"""A/B of the lane groups (issue 24): the same workloads with G = 1, 2 groups of LANES lanes
 per worker (``EXPLORER_LANE_GROUPS``, read at each call), alternated in one process so that a
 load change on a shared machine hits every G alike; prints the median wall time of each G over
 the rounds and its ratio to G = 1.  The results are bit for bit the same for every G (checked
@@ -8,7 +8,7 @@ here on every row, and by tests/integrate/test_lanes.py, test_tangent_lanes.py).
 Rows: W4 (mu = 0.5, h = 2, 64 orbits x 2000 crossings, taylor tol 1e-12, 2 threads) and the
 400-orbit chaos map of benchmarks/bench_chaos.py (mu = 1, T = 1000, MEGNO, tol 1e-12, 2 threads).
 
-    python benchmarks/bench_lane_groups.py              # 5 rounds, G = 1 2 4
+    python benchmarks/bench_lane_groups.py              # 5 rounds, G = 1 2
     python benchmarks/bench_lane_groups.py --rounds 3 --groups 1 2 --quick
 """
 from __future__ import annotations
@@ -54,7 +54,7 @@ def workloads(quick):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--rounds", type=int, default=5)
-    ap.add_argument("--groups", type=int, nargs="+", default=[1, 2, 4])
+    ap.add_argument("--groups", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--quick", action="store_true", help="W4 with 200 crossings, the map with T = 100")
     ap.add_argument("--write", action="store_true", help="record the tables in RESULTS.md (section LANEGROUPS)")
     args = ap.parse_args(argv)

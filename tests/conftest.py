@@ -56,10 +56,12 @@ def random_states(params, n, seed=0, scale=1.0):
 
 def assert_groups_threads_and_order_keep_the_bits(run, n, seed=0):
     """``run(groups, perm)`` runs the lane driver on the orbits in the order ``perm`` (an index
-    array of n) with ``groups`` lane groups and returns its output arrays: for G = 2 and 4, 1 and
-    2 threads, in the given and in a permuted order, every array equals that of G = 1 on one
-    thread bit for bit (np.array_equal on the bytes, rows put back in order)."""
+    array of n) with ``groups`` lane groups and returns its output arrays: for G = 2 (the other
+    G offered, lanes.GROUPS), 1 and 2 threads, in the given and in a permuted order, every array
+    equals that of G = 1 on one thread bit for bit (np.array_equal on the bytes, rows put back in
+    order)."""
     from explorer._jit import get_num_threads, set_num_threads
+    from explorer.integrate.lanes import GROUPS
 
     ident = np.arange(n)
     perm = np.random.default_rng(seed).permutation(n)
@@ -67,7 +69,7 @@ def assert_groups_threads_and_order_keep_the_bits(run, n, seed=0):
     try:
         set_num_threads(1)
         ref = run(1, ident)
-        for groups in (2, 4):
+        for groups in GROUPS[1:]:
             for threads in (1, 2):
                 set_num_threads(threads)
                 for order in (ident, perm):
@@ -80,27 +82,58 @@ def assert_groups_threads_and_order_keep_the_bits(run, n, seed=0):
 
 
 def pytest_sessionstart(session):
-    """Compile the main kernels once, in this process, before any test starts subprocesses or
-    joblib workers: they then load the kernels from numba's on-disk cache instead of compiling
-    the same functions concurrently (concurrent writers of one cache entry are a known numba
-    hazard, and a cold cache is what CI starts with).  Under pytest-xdist (README's `-n 2`) this
-    runs in the controller before it starts the workers (xdist starts them in its own
-    `pytest_sessionstart`, which runs after this one), and the workers load from the cache."""
+    """Compile the kernels of the package's default paths once, before any test starts
+    subprocesses or joblib workers: they then load the kernels from numba's on-disk cache instead
+    of compiling the same functions concurrently (concurrent writers of one cache entry are a
+    known numba hazard, and a cold cache is what CI starts with).  Under pytest-xdist (README's
+    `-n 2`) this runs in the controller before it starts the workers (xdist starts them in its
+    own `pytest_sessionstart`, which runs after this one), and the workers load from the cache.
+
+    On two cores: the lone Taylor orbit first (it compiles the callees every kernel shares: the
+    field, the event roots, the clock), then the crossings here and the chaos indicators in a
+    second process at the same time (:func:`warm_kernels`), so neither core waits."""
     if os.environ.get("PYTEST_XDIST_WORKER"):
         return
+    import subprocess
     import time
 
     t0 = time.perf_counter()
     _drop_a_stale_kernel_cache()
+    warm_kernels("shared")
+    other = subprocess.Popen([sys.executable, "-c", "import conftest; conftest.warm_kernels('indicators')"],
+                             cwd=os.path.dirname(__file__), stdin=subprocess.DEVNULL)
+    try:
+        warm_kernels("crossings")
+    finally:
+        if other.wait() != 0:
+            raise RuntimeError("compiling the indicator kernels before the tests failed (see above)")
+    _PHASES["kernels loaded or compiled before the tests"] = time.perf_counter() - t0
+
+
+#: more orbits than one lane group of either worker holds: the batch then runs the parallel lane
+#: driver with the CPU's default lane groups (lanes.worker_lanes), as every sweep does
+WARM_BATCH = 40
+
+
+def warm_kernels(which: str) -> None:
+    """Run the default paths once on tiny problems, compiling (or loading) their kernels:
+    ``shared`` one Taylor orbit; ``crossings`` a Taylor batch and every other kind of method
+    (DOP853, a splitting) and a fixed point; ``indicators`` the same for the chaos indicators."""
     from explorer.analysis import fixedpoints, lyapunov, sections
 
     prm = model.FIGURE4.with_(mu=0.1)
-    y0 = model.section_state(prm, [0.2], [0.1], 2.0)
-    for method in ("taylor", "dop853", "split4"):
-        sections.crossings(prm, y0, n_crossings=1, method=method, tol=1e-10, dt=0.05)
-        lyapunov.indicators(prm, y0, tmax=1.0, method=method, tol=1e-10, dt=0.05)
-    fixedpoints.find_fixed_point(model.FIGURE4, 2.0)
-    _PHASES["kernels loaded or compiled before the tests"] = time.perf_counter() - t0
+    one = model.section_state(prm, [0.2], [0.1], 2.0)
+    batch = model.section_state(prm, np.linspace(-0.3, 0.3, WARM_BATCH), np.zeros(WARM_BATCH), 2.0)
+    if which == "shared":
+        sections.crossings(prm, one, n_crossings=1, method="taylor", tol=1e-10)
+        return
+    run = ((lambda y0, method: sections.crossings(prm, y0, n_crossings=1, method=method, tol=1e-10, dt=0.05))
+           if which == "crossings" else
+           (lambda y0, method: lyapunov.indicators(prm, y0, tmax=1.0, method=method, tol=1e-10, dt=0.05)))
+    for y0, method in ((one, "taylor"), (batch, "taylor"), (one, "dop853"), (one, "split4")):
+        run(y0, method)
+    if which == "crossings":
+        fixedpoints.find_fixed_point(model.FIGURE4, 2.0)
 
 
 def _drop_a_stale_kernel_cache() -> None:

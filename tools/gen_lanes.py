@@ -310,8 +310,11 @@ def expand(body, functions=None):
 # ----------------------------------------------------------------------------- the two files
 #: the numbers G of lane groups a kernel is written for (one specialisation each: G is fixed
 #: when the code is written, so every offset is a constant and each group's chains are separate
-#: values); the lane arrays have G * LANES lanes
-GROUPS = (1, 2, 4)
+#: values); the lane arrays have G * LANES lanes.  G = 4 was written too until it had been
+#: measured slower than G = 1 on every CPU tried (Zen 3: 1.5-2.3x; an AVX-512 EPYC: slower than
+#: G = 2; its accumulators spill, 86 stack accesses per iteration, benchmarks/RESULTS.md): its
+#: kernels only cost compile time, so they are no longer written
+GROUPS = (1, 2)
 GROUPS_DOC = f"#: the numbers of lane groups the kernels are written for\nGROUPS = {GROUPS}"
 
 

@@ -69,7 +69,7 @@ def test_gen_lanes_inlines_a_helper_with_its_arguments_and_refuses_one_that_reus
 @pytest.mark.parametrize("order", [4, 5, 15, 16, 19, 27])
 @pytest.mark.parametrize("ngroups", G.GROUPS)
 def test_kernels_match_scalar_bitwise(name, order, ngroups):
-    """Every lane of every group (G = 1, 2, 4 groups of LANES lanes) of the recurrence, the Horner
+    """Every lane of every group (G = 1, 2 groups of LANES lanes) of the recurrence, the Horner
     sums and the step norms is the scalar kernel's double."""
     P = PARAM_SETS[name].as_array()
     rng = np.random.default_rng(order)
@@ -431,7 +431,7 @@ def test_threads_do_not_change_results():
 
 
 def test_lane_groups_threads_and_orbit_order_do_not_change_a_bit():
-    """G = 2 and 4 groups of lanes per worker, 1 and 2 threads, the orbits permuted: the raw
+    """G = 2 groups of lanes per worker, 1 and 2 threads, the orbits permuted: the raw
     arrays (crossings, counts, statuses, final states, time and steps) equal those of G = 1 on
     one thread bit for bit."""
     prm = PARAM_SETS["figure4_mu0.5"]
@@ -441,21 +441,23 @@ def test_lane_groups_threads_and_orbit_order_do_not_change_a_bit():
         lambda groups, order: _run(lanes.run_taylor_lanes_batch, Y0[order], P, 20, groups=groups), len(Y0), seed=4)
 
 
-def test_lane_groups_are_one_two_or_four():
+def test_lane_groups_are_one_or_two():
     """lanes.lane_groups: the argument, else EXPLORER_LANE_GROUPS, else the default of the CPU's
-    vector width (default_groups); anything but
-    1, 2, 4 raises ParameterError naming the variable; worker_lanes runs a small batch on the
+    vector width (default_groups); anything but 1 or 2 (G = 4 was slower everywhere and is not
+    offered) raises ParameterError naming the variable; worker_lanes runs a small batch on the
     fewest groups that hold its lanes."""
-    assert lanes.lane_groups(2) == 2 and lanes.lane_groups("4") == 4
+    assert lanes.GROUPS == (1, 2)
+    assert lanes.lane_groups(2) == 2 and lanes.lane_groups("1") == 1
     assert lanes.lane_groups() == lanes.default_groups() or "EXPLORER_LANE_GROUPS" in __import__("os").environ
     assert lanes.default_groups() in (lanes.DEFAULT_GROUPS, lanes.AVX512_GROUPS)
-    for bad in (0, 3, 8, "x"):
+    for bad in (0, 3, 4, 8, "x"):
         with pytest.raises(model.ParameterError, match="EXPLORER_LANE_GROUPS"):
             lanes.lane_groups(bad)
-    assert lanes.worker_lanes(1, 1, None, 4) == (1, (0,))
-    assert lanes.worker_lanes(20, 2, None, 4) == (10, (0, 0))
-    assert lanes.worker_lanes(64, 2, None, 4) == (32, (0, 0, 0, 0))
-    assert lanes.worker_lanes(64, 2, 3, 4) == (3, (0,))
+    assert lanes.worker_lanes(1, 1, None, 2) == (1, (0,))
+    assert lanes.worker_lanes(20, 2, None, 2) == (10, (0, 0))
+    assert lanes.worker_lanes(64, 2, None, 2) == (16, (0, 0))
+    assert lanes.worker_lanes(64, 2, 3, 2) == (3, (0,))
+    assert lanes.worker_lanes(64, 2, None, 1) == (8, (0,))
 
 
 def test_sections_taylor_uses_the_lanes_and_matches_the_scalar_oracle():

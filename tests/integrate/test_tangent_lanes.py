@@ -37,7 +37,7 @@ def test_generated_tangent_file_is_up_to_date(tmp_path):
 @pytest.mark.parametrize("order", [4, 15, 20])
 @pytest.mark.parametrize("ngroups", G.GROUPS)
 def test_tangent_lane_kernels_match_the_scalar_recurrence_bitwise(name, order, ngroups):
-    """Every lane of every group of the G-group kernels (G = 1, 2, 4) is the scalar recurrence."""
+    """Every lane of every group of the G-group kernels (G = 1, 2) is the scalar recurrence."""
     P = PARAM_SETS[name].as_array()
     rng = np.random.default_rng(order)
     W = ngroups * L
@@ -184,7 +184,7 @@ def test_lane_batches_equal_the_scalar_reference_for_any_threads_lanes_and_order
 
 
 def test_lane_groups_threads_and_orbit_order_do_not_change_a_bit():
-    """G = 2 and 4 groups of lanes per worker, 1 and 2 threads, the orbits permuted: the raw
+    """G = 2 groups of lanes per worker, 1 and 2 threads, the orbits permuted: the raw
     arrays (indicators, history, final states and vectors, status, steps) equal those of G = 1
     on one thread bit for bit."""
     P, Y0, V0, W0 = _orbits(45, seed=11)

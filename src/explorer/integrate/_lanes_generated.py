@@ -27,7 +27,7 @@ from explorer.model.equations import taylor_constants
 #: state variables (p1, p2, M, g1, g2): the rows of X
 NVAR = 5
 #: the numbers of lane groups the kernels are written for
-GROUPS = (1, 2, 4)
+GROUPS = (1, 2)
 
 
 @njit
@@ -103,87 +103,8 @@ def taylor_coefficients_lanes_2(P, X, order):
         vstore(X, (k + 1) * (NVAR * 2 * LANES) + (4) * 2 * LANES + 1 * LANES, vmul(vmul(vneg(wg1_1), vsplat(inv_b)), vsplat(r)))
 
 
-@njit
-def taylor_coefficients_lanes_4(P, X, order):
-    """taylor_coefficients_lanes for G = 4 groups of LANES lanes."""
-    C = taylor_constants(P)
-    for k in range(order):
-        wp2_0 = vzero()
-        wp2_1 = vzero()
-        wp2_2 = vzero()
-        wp2_3 = vzero()
-        wp1_0 = vzero()
-        wp1_1 = vzero()
-        wp1_2 = vzero()
-        wp1_3 = vzero()
-        p12_0 = vzero()
-        p12_1 = vzero()
-        p12_2 = vzero()
-        p12_3 = vzero()
-        wg2_0 = vzero()
-        wg2_1 = vzero()
-        wg2_2 = vzero()
-        wg2_3 = vzero()
-        wg1_0 = vzero()
-        wg1_1 = vzero()
-        wg1_2 = vzero()
-        wg1_3 = vzero()
-        for j in range(k + 1):
-            i = k - j
-            wj_0 = vload(X, (j) * (NVAR * 4 * LANES) + (2) * 4 * LANES)
-            wj_1 = vload(X, (j) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 1 * LANES)
-            wj_2 = vload(X, (j) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 2 * LANES)
-            wj_3 = vload(X, (j) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 3 * LANES)
-            wp2_0 = vadd(wp2_0, vmul(wj_0, vload(X, (i) * (NVAR * 4 * LANES) + (1) * 4 * LANES)))
-            wp2_1 = vadd(wp2_1, vmul(wj_1, vload(X, (i) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 1 * LANES)))
-            wp2_2 = vadd(wp2_2, vmul(wj_2, vload(X, (i) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 2 * LANES)))
-            wp2_3 = vadd(wp2_3, vmul(wj_3, vload(X, (i) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 3 * LANES)))
-            wp1_0 = vadd(wp1_0, vmul(wj_0, vload(X, (i) * (NVAR * 4 * LANES) + (0) * 4 * LANES)))
-            wp1_1 = vadd(wp1_1, vmul(wj_1, vload(X, (i) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 1 * LANES)))
-            wp1_2 = vadd(wp1_2, vmul(wj_2, vload(X, (i) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 2 * LANES)))
-            wp1_3 = vadd(wp1_3, vmul(wj_3, vload(X, (i) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 3 * LANES)))
-            p12_0 = vadd(p12_0, vmul(vload(X, (j) * (NVAR * 4 * LANES) + (0) * 4 * LANES), vload(X, (i) * (NVAR * 4 * LANES) + (1) * 4 * LANES)))
-            p12_1 = vadd(p12_1, vmul(vload(X, (j) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 1 * LANES), vload(X, (i) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 1 * LANES)))
-            p12_2 = vadd(p12_2, vmul(vload(X, (j) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 2 * LANES), vload(X, (i) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 2 * LANES)))
-            p12_3 = vadd(p12_3, vmul(vload(X, (j) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 3 * LANES), vload(X, (i) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 3 * LANES)))
-            wg2_0 = vadd(wg2_0, vmul(wj_0, vload(X, (i) * (NVAR * 4 * LANES) + (4) * 4 * LANES)))
-            wg2_1 = vadd(wg2_1, vmul(wj_1, vload(X, (i) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 1 * LANES)))
-            wg2_2 = vadd(wg2_2, vmul(wj_2, vload(X, (i) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 2 * LANES)))
-            wg2_3 = vadd(wg2_3, vmul(wj_3, vload(X, (i) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 3 * LANES)))
-            wg1_0 = vadd(wg1_0, vmul(wj_0, vload(X, (i) * (NVAR * 4 * LANES) + (3) * 4 * LANES)))
-            wg1_1 = vadd(wg1_1, vmul(wj_1, vload(X, (i) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 1 * LANES)))
-            wg1_2 = vadd(wg1_2, vmul(wj_2, vload(X, (i) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 2 * LANES)))
-            wg1_3 = vadd(wg1_3, vmul(wj_3, vload(X, (i) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 3 * LANES)))
-        inv_b, c12, la1, la2, ca2, za1, chi, zeta, mu, mxi, meta = C
-        r = 1.0 / (k + 1)
-        wk_0 = vmul(vload(X, (k) * (NVAR * 4 * LANES) + (2) * 4 * LANES), vsplat(inv_b))
-        wk_1 = vmul(vload(X, (k) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 1 * LANES), vsplat(inv_b))
-        wk_2 = vmul(vload(X, (k) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 2 * LANES), vsplat(inv_b))
-        wk_3 = vmul(vload(X, (k) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 3 * LANES), vsplat(inv_b))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (0) * 4 * LANES, vmul(vsub(vsub(vsub(vmul(wp2_0, vsplat(inv_b)), vmul(vsplat(zeta), wk_0)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(vmul(wp2_1, vsplat(inv_b)), vmul(vsplat(zeta), wk_1)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 1 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 2 * LANES, vmul(vsub(vsub(vsub(vmul(wp2_2, vsplat(inv_b)), vmul(vsplat(zeta), wk_2)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 2 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 2 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 3 * LANES, vmul(vsub(vsub(vsub(vmul(wp2_3, vsplat(inv_b)), vmul(vsplat(zeta), wk_3)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 3 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 3 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (1) * 4 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(wp1_0), vsplat(inv_b)), vmul(vsplat(chi), wk_0)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(wp1_1), vsplat(inv_b)), vmul(vsplat(chi), wk_1)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 1 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 2 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(wp1_2), vsplat(inv_b)), vmul(vsplat(chi), wk_2)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 2 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 2 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 3 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(wp1_3), vsplat(inv_b)), vmul(vsplat(chi), wk_3)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 3 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 3 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (2) * 4 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_0), vmul(vsplat(ca2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES))), vmul(vsplat(za1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES))), vmul(vsplat(mxi), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES))), vmul(vsplat(meta), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_1), vmul(vsplat(ca2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 1 * LANES))), vmul(vsplat(za1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 1 * LANES))), vmul(vsplat(mxi), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 1 * LANES))), vmul(vsplat(meta), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 2 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_2), vmul(vsplat(ca2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 2 * LANES))), vmul(vsplat(za1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 2 * LANES))), vmul(vsplat(mxi), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 2 * LANES))), vmul(vsplat(meta), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 2 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (2) * 4 * LANES + 3 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_3), vmul(vsplat(ca2), vload(X, (k) * (NVAR * 4 * LANES) + (1) * 4 * LANES + 3 * LANES))), vmul(vsplat(za1), vload(X, (k) * (NVAR * 4 * LANES) + (0) * 4 * LANES + 3 * LANES))), vmul(vsplat(mxi), vload(X, (k) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 3 * LANES))), vmul(vsplat(meta), vload(X, (k) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 3 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (3) * 4 * LANES, vmul(vmul(wg2_0, vsplat(inv_b)), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 1 * LANES, vmul(vmul(wg2_1, vsplat(inv_b)), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 2 * LANES, vmul(vmul(wg2_2, vsplat(inv_b)), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (3) * 4 * LANES + 3 * LANES, vmul(vmul(wg2_3, vsplat(inv_b)), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (4) * 4 * LANES, vmul(vmul(vneg(wg1_0), vsplat(inv_b)), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 1 * LANES, vmul(vmul(vneg(wg1_1), vsplat(inv_b)), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 2 * LANES, vmul(vmul(vneg(wg1_2), vsplat(inv_b)), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 4 * LANES) + (4) * 4 * LANES + 3 * LANES, vmul(vmul(vneg(wg1_3), vsplat(inv_b)), vsplat(r)))
-
-
 #: taylor_coefficients_lanes for each G
-_TAYLOR_COEFFICIENTS_LANES = {1: taylor_coefficients_lanes_1, 2: taylor_coefficients_lanes_2, 4: taylor_coefficients_lanes_4}
+_TAYLOR_COEFFICIENTS_LANES = {1: taylor_coefficients_lanes_1, 2: taylor_coefficients_lanes_2}
 
 
 def taylor_coefficients_lanes(P, X, order, groups):

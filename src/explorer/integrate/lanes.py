@@ -53,14 +53,15 @@ the batch at once (an atomic counter), so lanes idle only when the whole batch i
 (then on the zero state: all its coefficients are 0, harmless, and ignored), and a long orbit
 cannot leave a thread idle.
 
-Lane groups: a worker advances G = 1, 2 or 4 groups of LANES lanes (:func:`lane_groups`; the
+Lane groups: a worker advances G = 1 or 2 groups of LANES lanes (:func:`lane_groups`; the
 lane arrays are G x LANES wide).  The generated recurrence of G groups writes each vector
 statement once per group, in turn, so that the groups' independent chains can share the
 floating-point pipes; everything else runs group after group or lane by lane.  G is a
 compile-time constant (the length of the tuple ``groups`` of G zeros), so each G is compiled only
 when used.  Default by the vector width (:func:`default_groups`): 1 on AVX2, where two groups'
 accumulators do not fit the vector registers and G = 2 was slower (benchmarks/RESULTS.md,
-"Issue 24 (fourth session)"); 2 with AVX-512, where it was faster ("Issue 34").
+"Issue 24 (fourth session)"); 2 with AVX-512, where it was faster ("Issue 34").  G = 4 is not
+offered: it was slower than G = 1 on every CPU measured (tools/gen_lanes.py GROUPS).
 
 Step size: ``kernels.taylor.step_size`` takes the smaller of two powers, rho_p = (s/a)^(1/p)
 and rho_{p-1} = (s/bm)^(1/(p-1)), by ``kernels.power.radius_power`` (not libm's ``pow``, a call
@@ -730,7 +731,7 @@ def run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps,
 def lane_groups(groups=None):
     """The number G of groups of LANES lanes a lane worker advances together: ``groups`` if given,
     else the environment variable ``EXPLORER_LANE_GROUPS``, else :func:`default_groups`; one of
-    GROUPS (1, 2, 4), else ParameterError."""
+    GROUPS (1, 2), else ParameterError."""
     if groups is None:
         groups = os.environ.get("EXPLORER_LANE_GROUPS", "") or default_groups()
     try:
