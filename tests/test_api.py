@@ -26,6 +26,35 @@ def test_every_public_name_resolves_and_is_documented(name):
     assert name in dir(explorer)
 
 
+#: public callables that take keywords of their own naming, not a pass-through: why
+KEYWORD_DATA = {
+    "Params.with_": "the changes are parameter names, each validated by Params",
+    "explore": "the page's settings on top of a scene (app/serve, validated there: ParameterError)",
+}
+
+
+def test_no_public_function_hides_its_keywords_behind_a_pass_through():
+    """Issue 33: every keyword of the public API is in its signature (an IDE shows it), so a
+    ``**kw`` forwarded to another function is gone; only the named keyword data remain."""
+    hidden = []
+    for name in explorer.__all__:
+        obj = getattr(explorer, name)
+        members = [(name, obj)]
+        if inspect.isclass(obj):
+            members = [(f"{name}.{k}", v) for k, v in vars(obj).items()
+                       if inspect.isfunction(v) and (not k.startswith("_") or k in ("__init__", "__call__"))]
+        for label, f in members:
+            if label in KEYWORD_DATA or not getattr(f, "__module__", "").startswith("explorer"):
+                continue
+            try:
+                sig = inspect.signature(f)
+            except (TypeError, ValueError):
+                continue
+            if any(p.kind == p.VAR_KEYWORD for p in sig.parameters.values()):
+                hidden.append(f"{label}{sig}")
+    assert not hidden, hidden
+
+
 def test_result_types_are_frozen():
     import dataclasses
 

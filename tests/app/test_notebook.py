@@ -5,7 +5,7 @@ A small notebook is built with nbformat and executed headless by nbclient in a r
 running this interpreter (its kernelspec installed into a temporary directory, the package on the
 kernel's PYTHONPATH): no cell raises, the cell that ends with the explorer displays a Panel/Bokeh
 bundle, and a click in the next cell streams the asked-for number of crossings, which equal
-``explorer.analysis.sections.section_crossings`` for that start bit for bit.  Skipped with the
+``explorer.crossings`` from that start bit for bit.  Skipped with the
 reason when nbclient, nbformat, ipykernel or panel is missing; under CI=true that is a failure.
 """
 from __future__ import annotations

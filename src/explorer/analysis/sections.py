@@ -526,17 +526,25 @@ def _points(p1, p2) -> np.ndarray:
 
 @_older_order
 @system_first(settings=("phi0", "tol"), moved=("n_crossings",), defaults={"tol": DEFAULT_TOL})
-def section_crossings(system, p1, p2, *, n_crossings: int, **kw) -> Crossings:
+def section_crossings(system, p1, p2, *, n_crossings: int, method: str = "taylor", dt: float | None = None,
+                      tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS, direction: int = 1,
+                      threads: int | None = None) -> Crossings:
     """Deprecated name of :func:`crossings` from section points: ``section_crossings(system,
     p1, p2, n_crossings=K, ...)`` is ``crossings(system, points, n_crossings=K, ...)`` with the
     points (p1, p2) as an (N, 2) array (the keywords of :func:`crossings`)."""
     deprecated("section_crossings(system, p1, p2, ...)", "crossings(system, points, n_crossings=...)")
-    return crossings(system, _points(p1, p2), n_crossings=n_crossings, **kw)
+    return crossings(system, _points(p1, p2), n_crossings=n_crossings, method=method, dt=dt, tmax=tmax,
+                     max_steps=max_steps, direction=direction, threads=threads)
 
 
 @_older_order
 @system_first(settings=("phi0", "tol"), moved=("n_crossings",), defaults={"tol": DEFAULT_TOL})
-def iter_section_crossings(system, p1, p2, *, n_crossings: int, **kw):
+def iter_section_crossings(system, p1, p2, *, n_crossings: int, block: int = DEFAULT_BLOCK,
+                           state: StreamState | None = None, method: str = "taylor", dt: float | None = None,
+                           tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS, direction: int = 1,
+                           threads: int | None = None):
     """Deprecated name of :func:`iter_crossings` from section points (as :func:`section_crossings`)."""
     deprecated("iter_section_crossings(system, p1, p2, ...)", "iter_crossings(system, points, n_crossings=...)")
-    return iter_crossings(system, _points(p1, p2), n_crossings=n_crossings, **kw)
+    return iter_crossings(system, _points(p1, p2), n_crossings=n_crossings, block=block, state=state,
+                          method=method, dt=dt, tmax=tmax, max_steps=max_steps, direction=direction,
+                          threads=threads)

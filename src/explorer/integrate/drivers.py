@@ -59,7 +59,7 @@ from explorer.integrate.layout import (  # noqa: F401 (the carry and limits colu
 )
 from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_TMAX
 from explorer.kernels import dop853 as dp
-from explorer.kernels.checks import EPS, all_finite
+from explorer.kernels.checks import EPS, all_finite, is_finite
 from explorer.kernels.clock import advance_time, clip_step
 from explorer.kernels.events import (
     ROOT_MAX_ITER,
@@ -91,7 +91,7 @@ def _record(cross, k, t, yc, H):
     """Store a crossing row; returns False (nothing stored) if any value is not finite,
     so that no NaN is ever stored as data."""
     s = t + yc[0] + yc[1] + yc[2] + H
-    if not (s - s == 0.0):
+    if not is_finite(s):
         return False
     cross[k, 0] = t
     cross[k, 1] = yc[0]

@@ -33,7 +33,11 @@ A step of :func:`run_worker`, for all lanes at once:
   crossings - every root of the step's Taylor polynomial of sin(phi - phi0)
   (``kernels.events.poly_step_roots``: exact to the order of the method), each kept on the branch
   phi = phi0 (:func:`explorer.integrate.drivers.keep_crossing`) - the clock, the budgets, the
-  stops and the refill.  The vector forms are written with the scalar code's operations in its
+  stops and the refill.  The vector forms call the scalar code's own functions on vectors
+  (``kernels.events.sin_diff``, ``excluded_by_variation``, ``tail_term``, ``sign_change``,
+  ``kernels.clock.compensated_add``, ``resolves``, ``kernels.checks.is_finite``,
+  ``kernels.power.is_normal``: written with operators, which :mod:`explorer.integrate.simd`
+  defines on its vectors; docs/architecture.md) and write the rest with its operations in its
   order, so a lane's doubles do not depend on which path ended its step (tests/integrate/
   test_lanes.py: the vector step and step end against lane_step and the scalar step end, lane
   by lane).
@@ -77,7 +81,6 @@ import numpy as np
 from explorer._jit import NOJIT, get_num_threads, njit, prange
 from explorer.integrate._lanes_generated import GROUPS, NVAR, taylor_coefficients_lanes
 from explorer.integrate.drivers import (
-    EPS,
     LIMIT_ROOM,
     LIMIT_TARGET,
     keep_crossing,
@@ -95,7 +98,6 @@ from explorer.integrate.simd import (
     vandnot,
     vbits,
     vdiv,
-    veq,
     vge,
     vgt,
     vload,
@@ -113,16 +115,18 @@ from explorer.integrate.simd import (
 )
 from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_TMAX
 from explorer.kernels import taylor as tk
-from explorer.kernels.clock import advance_time, clip_step
+from explorer.kernels.checks import is_finite
+from explorer.kernels.clock import advance_time, clip_step, compensated_add, resolves
 from explorer.kernels.events import (
-    BOUND_SLACK,
     ISOLATE_STACK,
     MAX_STEP_ROOTS,
     excluded_by_variation,
     poly_step_roots,
+    sign_change,
     sin_diff,
+    tail_term,
 )
-from explorer.kernels.power import HUGE, TINY, is_normal
+from explorer.kernels.power import is_normal
 from explorer.model import ParameterError
 from explorer.model.equations import section_g
 
@@ -242,21 +246,13 @@ def lane_step(l, norms, t, tend, e_p, e_q, factor):
     its norms (step_norms_lanes): finiteness of the last two coefficients, the step size, clipped
     to ``tend``, and the underflow test.  Returns (code, h, last): code -1 (systems.STEP_OK) or
     STATUS_NONFINITE / STATUS_STEP_UNDERFLOW.  Shared by the crossing and the tangent lanes."""
-    f = norms[0, l]
-    g = norms[1, l]
-    if not (f - f == 0.0 and g - g == 0.0):
+    if not (is_finite(norms[0, l]) and is_finite(norms[1, l])):
         return STATUS_NONFINITE, 0.0, False
     h = lane_step_size(norms[2, l], norms[3, l], norms[4, l], norms[5, l], norms[6, l], e_p, e_q, factor)
     h, last = clip_step(t, h, tend)
-    if not (h > EPS * abs(t)):
+    if not resolves(t, h):
         return STATUS_STEP_UNDERFLOW, 0.0, False
     return -1, h, last
-
-
-@njit(inline="always")
-def vfinite(x):
-    """The lanes where x is finite (``x - x == 0.0``, as the scalar checks write it)."""
-    return veq(vsub(x, x), vzero())
 
 
 @njit(inline="always")
@@ -269,7 +265,10 @@ def step_lanes(L_on, norms, L_t, tend, e_p, e_q, factor, hv, L_last, L_fast, L_s
     finite, whose s/a and s/bm are positive normal doubles and whose step does not underflow take
     lane_step's double, rho * factor clipped to ``tend`` (the same IEEE operations), and
     ``L_fast[l]`` = 1.0; only the others (a non-finite coefficient, a vanishing or subnormal norm,
-    an underflow: rare) run :func:`lane_step` in scalar code (``L_fast[l]`` = 0.0)."""
+    an underflow: rare) run :func:`lane_step` in scalar code (``L_fast[l]`` = 0.0).  The tests are
+    lane_step's own functions on vectors (``kernels.checks.is_finite``, ``kernels.power.is_normal``,
+    ``kernels.clock.resolves``); the clip is clock.clip_step's comparison and difference with a
+    lane select (a branch per lane in the scalar function)."""
     for l in range(w):
         L_stop[l] = False
     zero = vzero()
@@ -284,12 +283,8 @@ def step_lanes(L_on, norms, L_t, tend, e_p, e_q, factor, hv, L_last, L_fast, L_s
         last = vge(vadd(t, h), tv)
         h = vselect(last, vsub(tv, t), h)
         live = vgt(vload(L_on, c), zero)
-        # kernels.power.is_normal of u and v: TINY <= x <= HUGE
-        tiny = vsplat(TINY)
-        huge = vsplat(HUGE)
-        normal = vand(vand(vge(u, tiny), vge(huge, u)), vand(vge(v, tiny), vge(huge, v)))
-        ok = vand(vand(vfinite(vload(norms, c)), vfinite(vload(norms, w + c))), normal)
-        ok = vand(vand(live, ok), vgt(h, vmul(vsplat(EPS), vabs(t))))
+        ok = is_finite(vload(norms, c)) & is_finite(vload(norms, w + c)) & (is_normal(u) & is_normal(v))
+        ok = vand(vand(live, ok), resolves(t, h))
         vstore(hv, c, vselect(ok, h, zero))
         vstore(L_last, c, vselect(last, one, zero))
         vstore(L_fast, c, vselect(ok, one, zero))
@@ -320,7 +315,7 @@ def stop_unless_finite(l, znew, first, last, L_status, L_stop):
     s = 0.0
     for i in range(first, last):
         s += znew[i, l]
-    if not (s - s == 0.0):
+    if not is_finite(s):
         stop_lane(l, STATUS_NONFINITE, L_status, L_stop)
 
 
@@ -337,10 +332,11 @@ def count_step(l, znew, first, last, L_steps, L_status, L_stop):
 
 @njit
 def variation_lanes(X, order, h, cphi, sphi, out, groups):
-    """out[l] = sum_{k>=1} |X[k, G1, l] cos phi0 - X[k, G2, l] sin phi0| h[l]^k for every lane
-    in one vector chain per group of LANES lanes (Horner): the bound of the variation of
-    sin(phi - phi0) over the step that kernels.events.no_root_within uses (up to the rounding
-    its slack covers); G = len(groups) groups."""
+    """out[l] = sum_{k>=1} |c_k| h[l]^k, c_k = sin_diff(X[k, G1, l], X[k, G2, l]) the step's
+    Taylor coefficients of sin(phi - phi0), for every lane in one vector chain per group of LANES
+    lanes (Horner): the bound of the variation of sin(phi - phi0) over the step that
+    kernels.events.no_root_within uses (up to the rounding its slack covers); G = len(groups)
+    groups."""
     w = len(groups) * LANES
     cv = vsplat(cphi)
     sv = vsplat(sphi)
@@ -348,29 +344,32 @@ def variation_lanes(X, order, h, cphi, sphi, out, groups):
         hv = vload(h, g)
         acc = vzero()
         for k in range(order, 0, -1):
-            o = k * (NVAR * w) + g
-            ck = vsub(vmul(vload(X, o + _G1 * w), cv), vmul(vload(X, o + _G2 * w), sv))
-            acc = vmul(vadd(acc, vabs(ck)), hv)
+            acc = vmul(vadd(acc, vabs(_sin_diff_lanes(X, k, g, w, cv, sv))), hv)
         vstore(out, g, acc)
+
+
+@njit(inline="always")
+def _sin_diff_lanes(X, k, c, w, cv, sv):
+    """kernels.events.sin_diff of the coefficients X[k, G1] and X[k, G2] of the group of LANES
+    lanes at ``c`` (cv, sv: cos phi0 and sin phi0 splat): the k-th Taylor coefficient of
+    sin(phi - phi0)."""
+    o = k * (NVAR * w) + c
+    return sin_diff(vload(X, o + _G1 * w), vload(X, o + _G2 * w), cv, sv)
 
 
 @njit(inline="always")
 def monotone_lanes(X, order, hv, cv, sv, c, w):
     """kernels.events.monotone_within(gc, order, h) for the group of LANES lanes at ``c``, gc[k] =
-    X[k, G1] cos phi0 - X[k, G2] sin phi0 the step's polynomial of sin(phi - phi0) and h = hv:
-    |gc[1]| > s + BOUND_SLACK (|gc[1]| + s), s = sum_{k>=2} k |gc[k]| h^(k-1), with the
-    operations of events._tail_bound in its order (so the mask is the scalar test's answer)."""
-    stride = NVAR * w
+    sin_diff(X[k, G1], X[k, G2]) the step's polynomial of sin(phi - phi0) and h = hv:
+    excluded_by_variation(gc[1], s), s = sum_{k>=2} k |gc[k]| h^(k-1) term by term
+    (kernels.events.tail_term, the loop of events._tail_bound): the scalar functions on vectors,
+    so the mask is the scalar test's answer."""
     h = vload(hv, c)
     rk = vsplat(1.0)
     s = vzero()
     for k in range(2, order + 1):
-        o = k * stride + c
-        ck = vsub(vmul(vload(X, o + _G1 * w), cv), vmul(vload(X, o + _G2 * w), sv))
-        rk = vmul(rk, h)
-        s = vadd(s, vmul(vmul(vsplat(float(k)), vabs(ck)), rk))
-    d1 = vabs(vsub(vmul(vload(X, stride + _G1 * w + c), cv), vmul(vload(X, stride + _G2 * w + c), sv)))
-    return vgt(d1, vadd(s, vmul(vsplat(BOUND_SLACK), vadd(d1, s))))
+        s, rk = tail_term(s, rk, h, float(k), _sin_diff_lanes(X, k, c, w, cv, sv))
+    return excluded_by_variation(_sin_diff_lanes(X, 1, c, w, cv, sv), s)
 
 
 @njit(inline="always")
@@ -399,33 +398,27 @@ def end_steps_lanes(X, order, ynew, vary, hv, L_t, L_tc, L_gprev, L_steps, L_lef
     y2 = vload(ynew, 2 * w + c)
     y3 = vload(ynew, 3 * w + c)
     y4 = vload(ynew, 4 * w + c)
-    ok = vand(ok, vfinite(vadd(vadd(vadd(vadd(vadd(zero, y0), y1), y2), y3), y4)))
+    ok = vand(ok, is_finite(vadd(vadd(vadd(vadd(vadd(zero, y0), y1), y2), y3), y4)))
     cv = vsplat(cphi)
     sv = vsplat(sphi)
-    # excluded_by_variation(g0, vary): |g0| > vary + BOUND_SLACK (|g0| + vary), g0 at the step's start
-    ag = vabs(vsub(vmul(vload(X, _G1 * w + c), cv), vmul(vload(X, _G2 * w + c), sv)))
-    vr = vload(vary, c)
-    none = vgt(ag, vadd(vr, vmul(vsplat(BOUND_SLACK), vadd(ag, vr))))
-    gnew = vsub(vmul(y3, cv), vmul(y4, sv))
+    # no root: the variation bound excludes one about g0, sin(phi - phi0) at the step's start
+    none = excluded_by_variation(_sin_diff_lanes(X, 0, c, w, cv, sv), vload(vary, c))
+    gnew = sin_diff(y3, y4, cv, sv)            # equations.section_g of the new state
     if vbits(vandnot(vand(live, ok), none)) != 0:
         # isolate_crossings' second test: monotone on the step, and no sign change of the direction
-        gprev = vload(L_gprev, c)
-        cross = vand(vlt(gprev, zero), vge(gnew, zero)) if direction >= 0 else vlt(zero, zero)
-        if direction <= 0:
-            cross = vor(cross, vand(vgt(gprev, zero), vge(zero, gnew)))
+        cross = sign_change(vload(L_gprev, c), gnew, direction)
         none = vor(none, vandnot(monotone_lanes(X, order, hv, cv, sv, c, w), cross))
     ok = vand(ok, none)
-    # advance_time (not the last step): yk = h - tc, t' = t + yk, tc' = (t' - t) - yk
+    # advance_time (not the last step: L_last excluded it above)
     t = vload(L_t, c)
     tc = vload(L_tc, c)
-    yk = vsub(vload(hv, c), tc)
-    tn = vadd(t, yk)
+    tn, tcn = compensated_add(t, tc, vload(hv, c))
     steps = vload(L_steps, c)
     sn = vadd(steps, vsplat(1.0))
     # the budgets (checked before the next step) leave the lane running; a crossing is still wanted
     ok = vand(ok, vand(vand(vlt(tn, vsplat(tmax)), vlt(sn, vsplat(max_steps))), vgt(vload(L_left, c), zero)))
     vstore(L_t, c, vselect(ok, tn, t))
-    vstore(L_tc, c, vselect(ok, vsub(vsub(tn, t), yk), tc))
+    vstore(L_tc, c, vselect(ok, tcn, tc))
     vstore(L_steps, c, vselect(ok, sn, steps))
     vstore(L_gprev, c, vselect(ok, gnew, vload(L_gprev, c)))
     vstore(X, c, vselect(ok, y0, vload(X, c)))
@@ -652,7 +645,7 @@ def run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, o
                     for i in range(NVAR):   # (a call to all_finite, a loop of unknown length here, costs ~1 %)
                         yl[i] = ynew[i, l]
                         s += yl[i]
-                    if not (s - s == 0.0):
+                    if not is_finite(s):
                         stop_lane(l, STATUS_NONFINITE, L_status, L_stop)
                 if not L_stop[l]:
                     h = hv[l]

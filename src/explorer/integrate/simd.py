@@ -13,10 +13,16 @@ translates into ``_lanes_generated.py`` and ``_tangent_lanes_generated.py``.
 - :func:`vzero`, :func:`vsplat`, :func:`vadd`, :func:`vsub`, :func:`vmul`, :func:`vdiv`,
   :func:`vneg`, :func:`vabs`, :func:`vsqrt`, :func:`vmax_gt` (the scalar ``if v > s: s = v``), :func:`vmin_lt`;
 - masks (``<LANES x i1>``, lane-wise booleans): the ordered comparisons :func:`vgt`,
-  :func:`vge`, :func:`vlt`, :func:`veq` (lane-wise the scalar ``a > b`` ...: false where either is
+  :func:`vge`, :func:`vlt`, :func:`vle`, :func:`veq` (lane-wise the scalar ``a > b`` ...: false where either is
   NaN), :func:`vand`, :func:`vandnot`, :func:`vor`, :func:`vselect` (``a if m else b`` per lane)
   and :func:`vbits` (the mask as the bits of an integer, lane i bit i: the lanes that a scalar
   loop must visit, one after the other by :func:`next_bit`), :func:`vmask` (bits back to a mask);
+- Python's operators on vectors (``+ - * /``, unary ``-``, ``abs``, ``< <= > >= ==``, and ``&``,
+  ``|`` on masks; a scalar operand splat), the intrinsics above: a kernel function written with
+  operators compiles for vectors as well as for doubles, so the lane kernels call the one
+  definition of a formula or a test (``kernels.events.sin_diff``, ``excluded_by_variation``,
+  ``sign_change``, ``kernels.clock.compensated_add``, ``kernels.checks.is_finite``,
+  ``kernels.power.is_normal`` ...) instead of a vector copy of it;
 - :func:`vradius_power_core`: the step size's power ``kernels.power.radius_power_core`` on every
   lane (the same IR, emitted for a vector: lane-wise the scalar's double);
 - :func:`atomic_fetch_add`: the shared queue of orbits of the lane workers;
@@ -94,6 +100,9 @@ if NOJIT:  # pragma: no cover - plain-Python twins (numpy elementwise = the same
 
     def vlt(a, b):
         return a < b
+
+    def vle(a, b):
+        return a <= b
 
     def veq(a, b):
         return a == b
@@ -204,75 +213,6 @@ else:
                                           _ir.Constant(_ir.VectorType(i32, LANES), [0] * LANES))
         return f64vec(_types.float64), codegen
 
-    def _binary(op):
-        @_intrinsic
-        def f(typingctx, a, b):
-            if not (a == f64vec and b == f64vec):
-                return None
-
-            def codegen(context, builder, sig, args):
-                return getattr(builder, op)(args[0], args[1])
-            return f64vec(f64vec, f64vec), codegen
-        return f
-
-    vadd = _binary("fadd")
-    vsub = _binary("fsub")
-    vmul = _binary("fmul")
-    vdiv = _binary("fdiv")
-
-    @_intrinsic
-    def vneg(typingctx, a):
-        if a != f64vec:
-            return None
-
-        def codegen(context, builder, sig, args):
-            return builder.fneg(args[0])
-        return f64vec(f64vec), codegen
-
-    @_intrinsic
-    def vabs(typingctx, a):
-        """|a| (llvm.fabs, as numba's scalar abs)."""
-        if a != f64vec:
-            return None
-
-        def codegen(context, builder, sig, args):
-            fn = _cgutils.get_or_insert_function(builder.module, _ir.FunctionType(_VT, [_VT]),
-                                                 "llvm.fabs.v%df64" % LANES)
-            return builder.call(fn, [args[0]])
-        return f64vec(f64vec), codegen
-
-    @_intrinsic
-    def vsqrt(typingctx, a):
-        """The square root of every lane (llvm.sqrt, correctly rounded as numba's scalar math.sqrt)."""
-        if a != f64vec:
-            return None
-
-        def codegen(context, builder, sig, args):
-            fn = _cgutils.get_or_insert_function(builder.module, _ir.FunctionType(_VT, [_VT]),
-                                                 "llvm.sqrt.v%df64" % LANES)
-            return builder.call(fn, [args[0]])
-        return f64vec(f64vec), codegen
-
-    @_intrinsic
-    def vmax_gt(typingctx, v, s):
-        """v where v > s else s (the scalar ``if v > s: s = v``; fcmp ogt + select)."""
-        if not (v == f64vec and s == f64vec):
-            return None
-
-        def codegen(context, builder, sig, args):
-            return builder.select(builder.fcmp_ordered(">", args[0], args[1]), args[0], args[1])
-        return f64vec(f64vec, f64vec), codegen
-
-    @_intrinsic
-    def vmin_lt(typingctx, v, s):
-        """v where v < s else s (the scalar ``s = v if v < s else s``; fcmp olt + select)."""
-        if not (v == f64vec and s == f64vec):
-            return None
-
-        def codegen(context, builder, sig, args):
-            return builder.select(builder.fcmp_ordered("<", args[0], args[1]), args[0], args[1])
-        return f64vec(f64vec, f64vec), codegen
-
     class B1Vec(_types.Type):
         """LANES booleans held as one LLVM ``<LANES x i1>`` value (a lane mask)."""
 
@@ -287,46 +227,57 @@ else:
         def __init__(self, dmm, fe_type):
             super().__init__(dmm, fe_type, _MT)
 
-    def _compare(op):
-        @_intrinsic
-        def f(typingctx, a, b):
-            if not (a == f64vec and b == f64vec):
-                return None
-
-            def codegen(context, builder, sig, args):
-                return builder.fcmp_ordered(op, args[0], args[1])
-            return b1vec(f64vec, f64vec), codegen
-        return f
-
-    vgt = _compare(">")
-    vge = _compare(">=")
-    vlt = _compare("<")
-    veq = _compare("==")
-
-    def _logic(emit):
-        @_intrinsic
-        def f(typingctx, a, b):
-            if not (a == b1vec and b == b1vec):
-                return None
-
-            def codegen(context, builder, sig, args):
-                return emit(builder, args[0], args[1])
-            return b1vec(b1vec, b1vec), codegen
-        return f
-
-    vand = _logic(lambda b, x, y: b.and_(x, y))
-    vor = _logic(lambda b, x, y: b.or_(x, y))
-    vandnot = _logic(lambda b, x, y: b.and_(x, b.not_(y)))
-
-    @_intrinsic
-    def vselect(typingctx, m, a, b):
-        """a where m else b, lane by lane."""
-        if not (m == b1vec and a == f64vec and b == f64vec):
-            return None
+    def _lanewise(argtypes, restype, emit):
+        """The intrinsic of the operands ``argtypes`` (exactly those: f64vec or b1vec) whose value
+        is ``emit(builder, *operands)``, one LLVM instruction (or intrinsic) on whole vectors."""
+        sig = restype(*argtypes)
 
         def codegen(context, builder, sig, args):
-            return builder.select(args[0], args[1], args[2])
-        return f64vec(b1vec, f64vec, f64vec), codegen
+            return emit(builder, *args)
+
+        def typer(*operands):
+            return (sig, codegen) if operands == argtypes else None
+
+        if len(argtypes) == 1:
+            return _intrinsic(lambda typingctx, a: typer(a))
+        if len(argtypes) == 2:
+            return _intrinsic(lambda typingctx, a, b: typer(a, b))
+        return _intrinsic(lambda typingctx, m, a, b: typer(m, a, b))
+
+    def _llvm_call(name):
+        """``emit`` of the LLVM intrinsic ``llvm.<name>`` on a vector of doubles."""
+        def emit(builder, x):
+            fn = _cgutils.get_or_insert_function(builder.module, _ir.FunctionType(_VT, [_VT]),
+                                                 "llvm.%s.v%df64" % (name, LANES))
+            return builder.call(fn, [x])
+        return emit
+
+    _F1, _F2 = (f64vec,), (f64vec, f64vec)
+    vadd = _lanewise(_F2, f64vec, lambda b, x, y: b.fadd(x, y))
+    vsub = _lanewise(_F2, f64vec, lambda b, x, y: b.fsub(x, y))
+    vmul = _lanewise(_F2, f64vec, lambda b, x, y: b.fmul(x, y))
+    vdiv = _lanewise(_F2, f64vec, lambda b, x, y: b.fdiv(x, y))
+    vneg = _lanewise(_F1, f64vec, lambda b, x: b.fneg(x))
+    #: |a| (llvm.fabs, as numba's scalar abs)
+    vabs = _lanewise(_F1, f64vec, _llvm_call("fabs"))
+    #: the square root of every lane (llvm.sqrt, correctly rounded as numba's scalar math.sqrt)
+    vsqrt = _lanewise(_F1, f64vec, _llvm_call("sqrt"))
+    #: v where v > s else s: the scalar ``if v > s: s = v`` (fcmp ogt + select)
+    vmax_gt = _lanewise(_F2, f64vec, lambda b, v, s: b.select(b.fcmp_ordered(">", v, s), v, s))
+    #: v where v < s else s: the scalar ``s = v if v < s else s`` (fcmp olt + select)
+    vmin_lt = _lanewise(_F2, f64vec, lambda b, v, s: b.select(b.fcmp_ordered("<", v, s), v, s))
+    # the ordered comparisons (false where either operand is NaN, as the scalar ones)
+    vgt = _lanewise(_F2, b1vec, lambda b, x, y: b.fcmp_ordered(">", x, y))
+    vge = _lanewise(_F2, b1vec, lambda b, x, y: b.fcmp_ordered(">=", x, y))
+    vlt = _lanewise(_F2, b1vec, lambda b, x, y: b.fcmp_ordered("<", x, y))
+    vle = _lanewise(_F2, b1vec, lambda b, x, y: b.fcmp_ordered("<=", x, y))
+    veq = _lanewise(_F2, b1vec, lambda b, x, y: b.fcmp_ordered("==", x, y))
+    _M2 = (b1vec, b1vec)
+    vand = _lanewise(_M2, b1vec, lambda b, x, y: b.and_(x, y))
+    vor = _lanewise(_M2, b1vec, lambda b, x, y: b.or_(x, y))
+    vandnot = _lanewise(_M2, b1vec, lambda b, x, y: b.and_(x, b.not_(y)))
+    #: a where m else b, lane by lane
+    vselect = _lanewise((b1vec, f64vec, f64vec), f64vec, lambda b, m, x, y: b.select(m, x, y))
 
     @_intrinsic
     def vbits(typingctx, m):
@@ -385,6 +336,55 @@ else:
             return builder.atomic_rmw("add", builder.gep(ary.data, [args[1]]), args[2], "seq_cst")
         return _types.int64(a, _types.intp, _types.int64), codegen
 
+
+    # ------------------------------------------------------------ Python operators on vectors
+    # ``a + b``, ``a * 2.0``, ``abs(a)``, ``a < 0.0``, ``m & k`` ... on f64vec (and b1vec) are the
+    # intrinsics above (a scalar operand is splat first: lane-wise the scalar's IEEE operation), so
+    # a kernel function written with operators on scalars - kernels.events.sin_diff,
+    # excluded_by_variation, sign_change, kernels.clock.compensated_add ... - compiles for vectors
+    # too, and the lane kernels call that one definition (numba's public extension API:
+    # ``overload`` of the operator; the scalar types keep numba's own implementations).
+    import operator as _op
+
+    from numba.extending import overload as _overload
+
+    def _is_scalar(x):
+        return isinstance(x, (_types.Float, _types.Integer))
+
+    def _vector_operator(op, vop, mask=False):
+        """``op(a, b)`` as ``vop`` where an operand is a vector (f64vec; b1vec for ``mask``)."""
+        vt = b1vec if mask else f64vec
+
+        @_overload(op)
+        def ov(a, b):
+            if a == vt and b == vt:
+                return lambda a, b: vop(a, b)
+            if mask:
+                return None
+            if a == vt and _is_scalar(b):
+                return lambda a, b: vop(a, vsplat(b))
+            if _is_scalar(a) and b == vt:
+                return lambda a, b: vop(vsplat(a), b)
+            return None
+
+    for _o, _v in ((_op.add, vadd), (_op.sub, vsub), (_op.mul, vmul), (_op.truediv, vdiv),
+                   (_op.gt, vgt), (_op.ge, vge), (_op.lt, vlt), (_op.eq, veq)):
+        _vector_operator(_o, _v)
+    _vector_operator(_op.le, vle)
+    _vector_operator(_op.and_, vand, mask=True)
+    _vector_operator(_op.or_, vor, mask=True)
+
+    @_overload(_op.neg)
+    def _vector_neg(a):
+        if a == f64vec:
+            return lambda a: vneg(a)
+        return None
+
+    @_overload(abs)
+    def _vector_abs(a):
+        if a == f64vec:
+            return lambda a: vabs(a)
+        return None
 
     def by_groups(stub):
         """Register the decorated typer as the compiled implementation of the plain-Python

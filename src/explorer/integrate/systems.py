@@ -43,8 +43,8 @@ from explorer._jit import njit
 from explorer.kernels import STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW
 from explorer.kernels import dop853 as dp
 from explorer.kernels import taylor as tk
-from explorer.kernels.checks import EPS, all_finite
-from explorer.kernels.clock import clip_step
+from explorer.kernels.checks import all_finite, is_finite
+from explorer.kernels.clock import clip_step, resolves
 from explorer.model.equations import (
     FULL_DIM,
     apply_flow,
@@ -184,7 +184,7 @@ def _finite_column(X, k, n):
     s = 0.0
     for i in range(n):
         s += X[i, k]
-    return s - s == 0.0
+    return is_finite(s)
 
 
 @njit(inline="always")  # inlined into each loop, as dop853_step
@@ -208,7 +208,7 @@ def taylor_step(system, X, P, t, tend, end_code, order, factor, steps, max_steps
         return STATUS_NONFINITE, 0.0, False, steps
     h = tk.step_size(X[:N_ORBIT], order, factor)
     h, last = clip_step(t, h, tend)
-    if not (h > EPS * abs(t)):
+    if not resolves(t, h):
         return STATUS_STEP_UNDERFLOW, 0.0, False, steps
     tk.evaluate(X, order, h, ynew)
     steps += 1

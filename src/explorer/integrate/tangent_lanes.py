@@ -63,7 +63,6 @@ from explorer.integrate.lanes import (
     step_norms_lanes,
     stop_lane,
     stop_unless_finite,
-    vfinite,
     worker_lanes,
 )
 from explorer.integrate.simd import (
@@ -92,6 +91,7 @@ from explorer.integrate.simd import (
 from explorer.integrate.tangent import _early, _finish_ext, _history
 from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS
 from explorer.kernels import tangent as tg
+from explorer.kernels.checks import is_finite
 
 _IDLE = -1
 
@@ -198,12 +198,12 @@ def end_steps_tangent_lanes(Z, znew, hv, nrm, acc, L_t, L_steps, L_hnext, L_on, 
     s = zero
     for i in range(DEV1 + 5):
         s = vadd(s, vload(znew, i * nl + c))
-    ok = vand(ok, vfinite(s))
+    ok = vand(ok, is_finite(s))
     if nvec == 2:
         s = zero
         for i in range(DEV2, DEV2 + 5):
             s = vadd(s, vload(znew, i * nl + c))
-        ok = vand(ok, vfinite(s))
+        ok = vand(ok, is_finite(s))
     t = vload(L_t, c)
     tn = vadd(t, vload(hv, c))
     steps = vload(L_steps, c)
@@ -215,12 +215,11 @@ def end_steps_tangent_lanes(Z, znew, hv, nrm, acc, L_t, L_steps, L_hnext, L_on, 
         if L_on[l] != 0.0:
             nrm[l] = math.log(nrm[l])
     dlog = vload(nrm, c)
-    # kernels.tangent.accumulate(acc, t, tn, dlog), lane-wise
+    # kernels.tangent.accumulate(acc, t, tn, dlog), lane-wise: its MEGNO sums on vectors
     lg = vadd(vload(acc, tg.ACC_LOG * nl + c), dlog)
-    wv = vadd(vload(acc, tg.ACC_W * nl + c), vmul(vmul(vsplat(0.5), vadd(t, tn)), dlog))
-    y1 = vselect(vgt(tn, zero), vdiv(vmul(vsplat(2.0), wv), tn), zero)
-    yint = vadd(vload(acc, tg.ACC_YINT * nl + c),
-                vmul(vmul(vsplat(0.5), vadd(vload(acc, tg.ACC_Y * nl + c), y1)), vsub(tn, t)))
+    wv = tg.megno_weight(vload(acc, tg.ACC_W * nl + c), t, tn, dlog)
+    y1 = vselect(vgt(tn, zero), tg.megno_y(wv, tn), zero)
+    yint = tg.megno_mean_integral(vload(acc, tg.ACC_YINT * nl + c), vload(acc, tg.ACC_Y * nl + c), y1, t, tn)
     _keep(acc, tg.ACC_LOG * nl + c, ok, lg)
     _keep(acc, tg.ACC_W * nl + c, ok, wv)
     _keep(acc, tg.ACC_YINT * nl + c, ok, yint)

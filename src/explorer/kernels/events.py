@@ -23,6 +23,13 @@ polynomial; they split a step at the root of M when M changes sign between
 its ends (:func:`turns`, ``explorer.integrate.drivers._split_step_roots``), which misses
 only two turns of M inside one composition step (none in the 1,000-orbit
 comparison with scipy of benchmarks/stress/stress_crossings.py at dt <= 0.05).
+
+The event function and the tests a step end makes (:func:`sin_diff`, :func:`cos_diff`,
+:func:`excluded_by_variation`, :func:`tail_term`, :func:`sign_change`) are written with Python's
+operators only (``&``/``|`` where a test combines comparisons), so numba compiles the one
+definition for doubles and, through the operators of ``explorer.integrate.simd``, for vectors of
+lanes: the SIMD crossing loop (``explorer.integrate.lanes``) calls these functions, lane-wise the
+same IEEE operations.
 """
 
 import numpy as np
@@ -66,12 +73,16 @@ def cos_diff(s, c, cphi, sphi):
 def sign_change(g_prev, g_new, direction):
     """Half-open crossing test on (t_prev, t_new]: +1 means g goes from < 0 to >= 0,
     -1 from > 0 to <= 0, 0 either.  A root exactly at a step end fires once (in the
-    step that ends on it) and a start exactly on the section (g_prev = 0) never fires."""
-    if direction >= 0 and g_prev < 0.0 and g_new >= 0.0:
-        return True
-    if direction <= 0 and g_prev > 0.0 and g_new <= 0.0:
-        return True
-    return False
+    step that ends on it) and a start exactly on the section (g_prev = 0) never fires.
+    ``&`` and ``|``, not ``and``/``or``: the same test lane-wise on vectors of lanes (module
+    docstring)."""
+    up = (g_prev < 0.0) & (g_new >= 0.0)
+    down = (g_prev > 0.0) & (g_new <= 0.0)
+    if direction > 0:
+        return up
+    if direction < 0:
+        return down
+    return up | down
 
 
 @njit
@@ -168,6 +179,13 @@ def excluded_by_variation(g0, variation):
     return abs(g0) > variation + BOUND_SLACK * (abs(g0) + variation)
 
 
+@njit(inline="always")
+def tail_term(s, rk, r, weight, dk):
+    """One term of :func:`_tail_bound`'s sum: (s + weight |dk| rk r, rk r)."""
+    rk = rk * r
+    return s + weight * abs(dk) * rk, rk
+
+
 @njit
 def _tail_bound(d, order, r, derivative):
     """sum_{k>=1} |d_k| r^k, or with ``derivative`` sum_{k>=2} k |d_k| r^(k-1): the largest
@@ -175,8 +193,7 @@ def _tail_bound(d, order, r, derivative):
     s = 0.0
     rk = 1.0
     for k in range(2 if derivative else 1, order + 1):
-        rk *= r
-        s += (k if derivative else 1.0) * abs(d[k]) * rk
+        s, rk = tail_term(s, rk, r, float(k) if derivative else 1.0, d[k])
     return s
 
 

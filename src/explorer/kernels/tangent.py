@@ -24,7 +24,9 @@ With a second deviation vector (both renormalised every step, each to unit norm)
   their parallelogram); ~ SALI on chaotic orbits.
 
 A new indicator: its columns and entry in :mod:`explorer.kernels.indicator_table`, its update
-in :func:`accumulate` and :func:`result` (every tangent loop, scalar and lanes, calls these two),
+in :func:`accumulate` and :func:`result` (every scalar tangent loop calls these two; the tangent
+lanes' vector step end calls accumulate's pieces, :func:`megno_weight` ..., on vectors, and
+must learn a new accumulator too: tests/integrate/test_tangent_lanes.py compares them bit for bit),
 or, for one of two deviation vectors, its value in :func:`extra` (called at the end of the
 Taylor tangent loops, scalar and lanes).
 
@@ -77,13 +79,33 @@ def reset(acc):
         acc[i] = 0.0
 
 
+# MEGNO's sums over a step, written with operators: :func:`accumulate` calls them on doubles, the
+# tangent lanes (explorer.integrate.tangent_lanes) on vectors of lanes
+@njit(inline="always")
+def megno_weight(w, t0, t1, dlog):
+    """W = int_0^t s dell(s) after the step [t0, t1] of stretch dlog (trapezoid in time)."""
+    return w + 0.5 * (t0 + t1) * dlog
+
+
+@njit(inline="always")
+def megno_y(w, t1):
+    """Y(t1) = 2 W / t1 (for t1 > 0)."""
+    return 2.0 * w / t1
+
+
+@njit(inline="always")
+def megno_mean_integral(yint, y0, y1, t0, t1):
+    """int_0^t Y(s) ds after the step [t0, t1] (trapezoid: Y = y0 at t0, y1 at t1)."""
+    return yint + 0.5 * (y0 + y1) * (t1 - t0)
+
+
 @njit
 def accumulate(acc, t0, t1, dlog):
     """Add one step [t0, t1] with log-stretch dlog."""
     acc[ACC_LOG] += dlog
-    acc[ACC_W] += 0.5 * (t0 + t1) * dlog
-    y1 = 2.0 * acc[ACC_W] / t1 if t1 > 0.0 else 0.0
-    acc[ACC_YINT] += 0.5 * (acc[ACC_Y] + y1) * (t1 - t0)
+    acc[ACC_W] = megno_weight(acc[ACC_W], t0, t1, dlog)
+    y1 = megno_y(acc[ACC_W], t1) if t1 > 0.0 else 0.0
+    acc[ACC_YINT] = megno_mean_integral(acc[ACC_YINT], acc[ACC_Y], y1, t0, t1)
     acc[ACC_Y] = y1
     acc[ACC_T] = t1
     if acc[ACC_LOG] > acc[ACC_FLI]:
