@@ -8,6 +8,7 @@ that each own their Bokeh models, widgets and state (docs/architecture.md, "The 
 :class:`~explorer.app.serve.page_layers.ChaosLayer`         the MEGNO raster and its colour bar
 :class:`~explorer.app.serve.page_overlays.Overlays`         fixed points, separatrices, periodic orbits
 :class:`~explorer.app.serve.page_readout.Readout`           a picked orbit's mLCE, MEGNO, rotation
+:class:`~explorer.app.serve.page_orbit_list.OrbitList`      the orbit list: select, hide, delete
 :class:`~explorer.app.serve.page_exports.Exports`           scene, store, figure files
 :class:`UrlState`                                           the link (``pn.state.location.sync``)
 =====================  ==============================================================================
@@ -38,6 +39,7 @@ from explorer.app.serve import settings as settings_mod
 from explorer.app.serve.page_exports import Exports
 from explorer.app.serve.page_fields import LABELS, Fields  # noqa: F401
 from explorer.app.serve.page_layers import ChaosLayer, DensityImage
+from explorer.app.serve.page_orbit_list import OrbitList
 from explorer.app.serve.page_orbits import (  # noqa: F401  (the page's constants, as before)
     FLUSH_SECONDS,
     LIVE_MAX_ROWS,
@@ -111,6 +113,7 @@ class SectionPage:
                                 megno_time)
         self.overlays = Overlays(self, self.section, self.loop)
         self.readout_ = Readout(self, self.section, self.orbits, self.overlays, self.loop)
+        self.orbit_list = OrbitList(self.orbits, self.readout_, self.loop, self.push_url)
         self.exports = Exports(self, self.loop, export_dir, label)
         self.readout, self.overlay_text = self.readout_.text, self.overlays.text
         self._url_timer = self.loop.timer(self.push_url)
@@ -120,6 +123,7 @@ class SectionPage:
         self.overlays.draw_lines(fig)
         self.density_image.draw(fig)
         self.orbits.draw(fig)
+        self.orbit_list.draw(fig)
         self.overlays.draw_marks(fig)
         fig.on_event(Tap, self._on_tap)
         fig.on_event(DoubleTap, self._on_tap)   # a second click within 300 ms is a double tap
@@ -180,7 +184,8 @@ class SectionPage:
                                                    f" * {aspect:.6f}))"}
         plot = pn.pane.Bokeh(self.section.figure, sizing_mode="stretch_width")
         self.layout = pn.Row(controls, pn.Column(self.title, bar, plot, *(pn.pane.Bokeh(d) for d in texts),
-                                                 sizing_mode="stretch_width"), sizing_mode="stretch_width")
+                                                 self.orbit_list.panel, sizing_mode="stretch_width"),
+                             sizing_mode="stretch_width")
 
     _closed = False
 
@@ -276,6 +281,7 @@ class SectionPage:
         """New settings: the orbits stop, the region is redrawn, the starts inside it run again."""
         if new == self.settings:
             return
+        hidden = set(self.orbits.hidden)
         old = self._drop_orbits()
         angle_changed = new.phi0 != self.settings.phi0
         self.settings = new
@@ -284,6 +290,9 @@ class SectionPage:
         # the kept starts' crosses go before the region and the view (one message each, in order): a
         # page that shows the new region shows the starts that run again in it
         kept = [self.orbits.start(p1, p2, color) for _i, p1, p2, color in old]
+        for run, (i, *_s) in zip(kept, old):
+            if run is not None and i in hidden:
+                self.orbits.hide(run.ident)           # (a hidden orbit stays hidden)
         self._draw_region()
         self._show_fields()
         self.chaos.restart()
@@ -335,13 +344,8 @@ class SectionPage:
 
     def undo(self) -> None:
         """Remove the last orbit (stopped if it runs or is paused)."""
-        if not self.orbits.starts:
-            return
-        ident = self.orbits.starts[-1][0]
-        self.readout_.forget(ident)
-        self.orbits.remove(ident)
-        self.orbits.update_status()
-        self.push_url()
+        if self.orbits.starts:
+            self.orbit_list.delete(self.orbits.starts[-1][0])
 
     def run_seeds(self) -> int:
         """Start an orbit at each seed point of the scene's ``[seeds]`` at the current settings
