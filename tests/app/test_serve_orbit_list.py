@@ -12,12 +12,11 @@ choosing an orbit there highlights it, and *hide* takes its dots off.
 from __future__ import annotations
 
 import re
-import time
 
 import numpy as np
 import pytest
 import test_serve
-from test_serve import SERVED, _click, _open, _wait, _wait_crossings, browser_needed
+from test_serve import SERVED, _click, _open, _poll_until, _wait, _wait_crossings, browser_needed
 
 from explorer import model
 from explorer.analysis import sections
@@ -38,17 +37,6 @@ def _page(settings, args=None):
     from explorer.app.serve.page import SectionPage
 
     return SectionPage(settings, args or {})
-
-
-def _poll_until(page, cond, timeout=240.0):
-    t0 = time.time()
-    while not cond() and time.time() - t0 < timeout:
-        page.poll()
-        time.sleep(0.02)
-    assert cond(), (page.message.text, page.status.text)
-    for _ in range(10):          # then what the page scheduled meanwhile
-        if not page.poll():
-            break
 
 
 def _table(page) -> dict:
@@ -239,9 +227,10 @@ def test_in_the_browser_the_list_selects_and_hides_an_orbit(served, browser):
         _click(page, c1 + 0.3 * r1, c2)
         _wait_crossings(page, SERVED.crossings)
         _wait(page, "() => Bokeh.documents[0].get_model_by_name('orbit-list').text.includes(\"data-orbit='1'\")")
-        page.locator("select").filter(has_text="(none)").select_option(label=f"1: ({c1 + 0.3 * r1:.4g}, {c2:.4g})")
-        _wait(page, "() => Bokeh.documents[0].get_model_by_name('selected-orbit').args.get('orbit') === 1 && "
-                    "Bokeh.documents[0].get_model_by_name('readout').text.startsWith('orbit 1')")
+        page.locator("select").filter(has_text="(none)").select_option(index=1)
+        _wait(page, "() => { const a = Bokeh.documents[0].get_model_by_name('selected-orbit').args;"
+                    " return (a instanceof Map ? a.get('orbit') : a.orbit) === 1 && "
+                    "Bokeh.documents[0].get_model_by_name('readout').text.startsWith('orbit 1'); }")
         page.get_by_role("button", name="hide", exact=True).click()
         _wait(page, "() => Bokeh.documents[0].get_model_by_name('crossings').data.p1.length === 0 && "
                     "Bokeh.documents[0].get_model_by_name('starts').data.p1.length === 0 && "

@@ -58,7 +58,7 @@ class Fields:
                 w = pn.widgets.Select(label=LABELS[name], options=list(METHODS), value=s[name], width=FIELD_WIDTH)
             else:
                 w = pn.widgets.TextInput(label=LABELS[name], value=s[name], width=FIELD_WIDTH)
-            w.param.watch(lambda _e, name=name: self._quiet or self._edited(loop, on_edit, name), "value")
+            w.param.watch(lambda _e, name=name: self._edited(loop, on_edit, name), "value")
             self.inputs[name] = w
         lo, hi, step = MU_SLIDER
         self.mu_slider = pn.widgets.FloatSlider(name=f"{LABELS['mu']} (slider)", start=lo, end=hi, step=step,
@@ -80,6 +80,8 @@ class Fields:
                               pn.Row(self.step_field, self.step_size, *buttons))
 
     def _edited(self, loop, on_edit, name: str) -> None:
+        if self._quiet:
+            return
         if name in STEP_FIELDS and self.step_field.value != name:
             self.step_field.value = name          # (the stepper steps the field edited last)
         loop.soon(lambda: on_edit(name))
