@@ -10,6 +10,7 @@ that each own their Bokeh models, widgets and state (docs/architecture.md, "The 
 :class:`~explorer.app.serve.page_readout.Readout`           a picked orbit's mLCE, MEGNO, rotation
 :class:`~explorer.app.serve.page_orbit_list.OrbitList`      the orbit list: select, hide, delete
 :class:`~explorer.app.serve.page_exports.Exports`           scene, store, figure files
+:class:`~explorer.app.serve.page_message.Message`           the message line (refusals, successes)
 :class:`UrlState`                                           the link (``pn.state.location.sync``)
 =====================  ==============================================================================
 
@@ -31,7 +32,6 @@ import time
 import panel as pn
 import param
 from bokeh.events import DoubleTap, Tap
-from bokeh.models import Div
 
 from explorer.app.serve import export
 from explorer.app.serve import raster as raster_mod
@@ -39,6 +39,7 @@ from explorer.app.serve import settings as settings_mod
 from explorer.app.serve.page_exports import Exports
 from explorer.app.serve.page_fields import LABELS, Fields  # noqa: F401
 from explorer.app.serve.page_layers import ChaosLayer, DensityImage
+from explorer.app.serve.page_message import Message
 from explorer.app.serve.page_orbit_list import OrbitList
 from explorer.app.serve.page_orbits import (  # noqa: F401  (the page's constants, as before)
     FLUSH_SECONDS,
@@ -55,8 +56,6 @@ from explorer.app.serve.style import (
     FIGURE_HEIGHT,
     FIGURE_MIN_WIDTH,
     FIGURE_WIDTH,
-    MESSAGE_ERROR_COLOR,
-    MESSAGE_OK_COLOR,
 )
 from explorer.app.serve.tasks import SessionLoop
 from explorer.app.serve.view import SectionView
@@ -78,7 +77,8 @@ FACADE = {"orbits": ("crossings", "shown", "live", "start_source", "points", "li
           "density_image": ("density", "dense"), "chaos": ("layer", "colour_bar", "raster_source"),
           "overlays": ("fixed", "curves", "periodic", "manifold_source", "overlay", "periodic_box",
                        "separatrix_lines", "show_manifolds", "saddle_near"),
-          "readout_": ("pick", "select", "picked", "readouts"),
+          "readout_": ("pick", "select", "picked", "readouts"), "orbit_list": ("clear", "undo", "resume"),
+          "messages": ("message", "message_ok", "say", "tell"),
           "exports": ("view", "figure_bytes", "export_figure", "export", "scene_text", "_scene_text")}
 _FACADE = {a: c for c, names in FACADE.items() for a in names}
 
@@ -105,6 +105,7 @@ class SectionPage:
         self.base = self.settings = base
         self.seeds, self.export_dir, self.label = seeds, export_dir, label
         self.loop = SessionLoop(doc)
+        self.messages = Message()
         self.url_state = UrlState()
         self.section = SectionView()
         self.orbits = OrbitsLayer(self, self.section, self.loop)
@@ -149,7 +150,8 @@ class SectionPage:
         # the buttons in rows above the figure: at 1280 x 720 every one is in view with the figure
         # (in the controls' column, below the fields, the export buttons were below the fold)
         buttons = []
-        for label, action, width in (("Clear", self.clear, 70), ("Undo", self.undo, 70), ("Resume", self.resume, 80),
+        ol = self.orbit_list
+        for label, action, width in (("Clear", ol.clear, 70), ("Undo", ol.undo, 70), ("Resume", ol.resume, 80),
                                      ("Scene seeds", self.run_seeds, 100)):
             b = pn.widgets.Button(label=label, width=width, color="warning" if label == "Clear" else "default")
             b.on_click(lambda _e, action=action: self.loop.soon(action))
@@ -164,9 +166,6 @@ class SectionPage:
                 b = pn.widgets.Button(label=label, width=110)
                 b.on_click(lambda _e, action=action: self.loop.soon(action))
                 buttons.append(b)
-        # text, never HTML: a message may quote what was typed into a field
-        self.message = Div(name="message", text="", render_as_text=True,
-                           styles={"color": MESSAGE_ERROR_COLOR, "min-height": "1.2em"})
         self.click_mode = pn.widgets.RadioButtonGroup(options=list(CLICK_MODES), value=CLICK_MODES[0], width=220)
         self.title = pn.pane.Markdown(self._title())
         o, ov = self.orbits, self.overlays
@@ -314,21 +313,6 @@ class SectionPage:
         shown = "π" if phi0 == math.pi else f"{phi0:.6g}"
         return f"### explorer: Poincaré section φ = {shown}" + (f" ({self.label})" if self.label else "")
 
-    def say(self, text: str, ok: bool = False) -> None:
-        """The message under the figure: a refusal or a failure in the error colour, or (``ok``) what
-        went well in the success colour (:meth:`tell`)."""
-        self.message_ok = bool(ok)
-        color = MESSAGE_OK_COLOR if ok else MESSAGE_ERROR_COLOR
-        if self.message.styles.get("color") != color:
-            self.message.styles = {**self.message.styles, "color": color}
-        self.message.text = text
-
-    def tell(self, text: str) -> None:
-        """A success (an export written, seeds started) under the figure, in the success colour."""
-        self.say(text, ok=True)
-
-    message_ok = False
-
     # ------------------------------------------------------------ orbits
     def _drop_orbits(self) -> list:
         """Stop every orbit and take them off the page; returns their starts."""
@@ -336,16 +320,6 @@ class SectionPage:
         old = self.orbits.drop_all()
         self.density_image.refresh(force=True)       # no image left of them
         return old
-
-    def clear(self) -> None:
-        self._drop_orbits()
-        self.orbits.update_status()
-        self.push_url()
-
-    def undo(self) -> None:
-        """Remove the last orbit (stopped if it runs or is paused)."""
-        if self.orbits.starts:
-            self.orbit_list.delete(self.orbits.starts[-1][0])
 
     def run_seeds(self) -> int:
         """Start an orbit at each seed point of the scene's ``[seeds]`` at the current settings
@@ -392,13 +366,6 @@ class SectionPage:
         if self.loop.doc is None:
             self.push_url()
         return run
-
-    def resume(self) -> int:
-        """Continue the orbits a click paused, from where each stopped (its rows are those of an
-        uninterrupted run); returns how many."""
-        n = len(self.orbits.worker.resume())
-        self.orbits.update_status()
-        return n
 
     def _on_tap(self, event):
         """Tap or double tap: Bokeh reports a click that follows another within 300 ms as a double

@@ -16,6 +16,7 @@ JavaScript library to the page for a list of a few columns.
 
 By Bokeh model name: ``orbit-list`` (the table; each row ``<tr data-orbit="ID" ...>``) and
 ``selected-orbit`` (the CustomJSFilter of the highlight: the rows of orbit ``args.orbit``, 0: none).
+The page's *Clear*, *Undo* and *Resume* act on the list too (:meth:`OrbitList.clear`, ...).
 """
 from __future__ import annotations
 
@@ -88,6 +89,25 @@ class OrbitList:
         else:
             self.orbits.hide(ident)
         self.orbits.update_status(force_density=True)       # (the density image without it, at once)
+
+    def clear(self) -> None:
+        """Remove every orbit (running and paused ones stopped)."""
+        self.readout.forget()
+        self.orbits.drop_all()
+        self.orbits.update_status(force_density=True)      # (no image left of them)
+        self.on_removed()
+
+    def undo(self) -> None:
+        """Remove the newest orbit (stopped if it runs or is paused)."""
+        if self.orbits.starts:
+            self.delete(self.orbits.starts[-1][0])
+
+    def resume(self) -> int:
+        """Continue the orbits a click paused, from where each stopped (its rows are those of an
+        uninterrupted run); returns how many."""
+        n = len(self.orbits.worker.resume())
+        self.orbits.update_status()
+        return n
 
     def delete(self, ident: int | None) -> None:
         """Stop orbit ``ident`` (running or paused) and remove it from the page and the session."""
