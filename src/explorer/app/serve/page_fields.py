@@ -25,6 +25,8 @@ LABELS = {p.name: p.symbol for p in model.PARAMETERS} | {
     "crossings": "crossings per click", "phi0": "φ0 (section φ = φ0)"}
 #: the fields the stepper steps: every numeric one (the method is a choice)
 STEP_FIELDS = tuple(n for n in FIELDS if n != "method")
+#: the stepper's widgets' margins (px: top and bottom, left and right): its row fits the fields' 230 px
+STEP_MARGIN = (5, 3)
 
 
 def default_step(value: float) -> float:
@@ -67,12 +69,13 @@ class Fields:
         self.mu_slider.param.watch(self._slid, "value_throttled")
         # the stepper: which field (the last one edited), by how much (1 % of its value when chosen)
         self.step_field = pn.widgets.Select(label="step", options={LABELS[n]: n for n in STEP_FIELDS}, value="mu",
-                                            width=75)
-        self.step_size = pn.widgets.FloatInput(label="by", value=default_step(settings.params.mu), width=75)
+                                            width=62, margin=STEP_MARGIN)
+        self.step_size = pn.widgets.FloatInput(label="by", value=default_step(settings.params.mu), width=82,
+                                            margin=STEP_MARGIN)
         self.step_field.param.watch(lambda e: self._retarget(e.new), "value")
         buttons = []
         for label, k in (("−", -1), ("+", 1)):
-            b = pn.widgets.Button(label=label, width=30, align="end")
+            b = pn.widgets.Button(label=label, width=28, align="end", margin=STEP_MARGIN)
             b.on_click(lambda _e, k=k: loop.soon(lambda: self.step(k)))
             buttons.append(b)
         self.step_buttons = tuple(buttons)

@@ -54,11 +54,11 @@ class OrbitList:
                          sizing_mode="stretch_width")
         self.choice = pn.widgets.Select(label="orbit", options={NONE_LABEL: 0}, value=0, width=200)
         self.choice.param.watch(lambda e: self._quiet or loop.soon(lambda: self.choose(e.new)), "value")
-        self.hide_button = pn.widgets.Button(label="hide", width=70, disabled=True)
+        self.hide_button = pn.widgets.Button(label="hide", width=70, disabled=True, align="end")
         self.hide_button.on_click(lambda _e: loop.soon(self.toggle))
-        self.delete_button = pn.widgets.Button(label="delete", width=70, disabled=True)
+        self.delete_button = pn.widgets.Button(label="delete", width=70, disabled=True, align="end")
         self.delete_button.on_click(lambda _e: loop.soon(lambda: self.delete(self.readout.picked)))
-        self.panel = pn.Column(pn.Row(self.choice, self.hide_button, self.delete_button, align="end"),
+        self.panel = pn.Column(pn.Row(self.choice, self.hide_button, self.delete_button),
                                pn.pane.Bokeh(self.table, sizing_mode="stretch_width"), sizing_mode="stretch_width")
         orbits.on_change(self.refresh)
         readout.on_select(lambda _ident: self.refresh())
