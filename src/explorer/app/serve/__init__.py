@@ -17,7 +17,8 @@ One concept per module:
 :mod:`~explorer.app.serve.image`     the view as PNG/SVG (matplotlib)
 :mod:`~explorer.app.serve.page`      the Panel/Bokeh page of one session, made of the
                                       components ``view``, ``page_orbits``, ``page_layers``,
-                                      ``page_overlays``, ``page_readout``, ``page_exports``
+                                      ``page_overlays``, ``page_readout``, ``page_orbit_list``,
+                                      ``page_fields``, ``page_message``, ``page_exports``
 :mod:`~explorer.app.serve.server`    the server: loopback by default, token, URL
 :mod:`~explorer.app.serve.command`   the command's options and entry point
 """

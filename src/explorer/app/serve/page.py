@@ -8,7 +8,9 @@ that each own their Bokeh models, widgets and state (docs/architecture.md, "The 
 :class:`~explorer.app.serve.page_layers.ChaosLayer`         the chaos raster (MEGNO or frequency diffusion)
 :class:`~explorer.app.serve.page_overlays.Overlays`         fixed points, separatrices, periodic orbits
 :class:`~explorer.app.serve.page_readout.Readout`           a picked orbit's mLCE, MEGNO, rotation
+:class:`~explorer.app.serve.page_orbit_list.OrbitList`      the orbit list: select, hide, delete
 :class:`~explorer.app.serve.page_exports.Exports`           scene, store, figure files
+:class:`~explorer.app.serve.page_message.Message`           the message line (refusals, successes)
 :class:`UrlState`                                           the link (``pn.state.location.sync``)
 =====================  ==============================================================================
 
@@ -30,7 +32,6 @@ import time
 import panel as pn
 import param
 from bokeh.events import DoubleTap, Tap
-from bokeh.models import Div
 
 from explorer.app.serve import export
 from explorer.app.serve import raster as raster_mod
@@ -38,6 +39,8 @@ from explorer.app.serve import settings as settings_mod
 from explorer.app.serve.page_exports import Exports
 from explorer.app.serve.page_fields import LABELS, Fields  # noqa: F401
 from explorer.app.serve.page_layers import ChaosLayer, DensityImage
+from explorer.app.serve.page_message import Message
+from explorer.app.serve.page_orbit_list import OrbitList
 from explorer.app.serve.page_orbits import (  # noqa: F401  (the page's constants, as before)
     FLUSH_SECONDS,
     LIVE_MAX_ROWS,
@@ -53,8 +56,6 @@ from explorer.app.serve.style import (
     FIGURE_HEIGHT,
     FIGURE_MIN_WIDTH,
     FIGURE_WIDTH,
-    MESSAGE_ERROR_COLOR,
-    MESSAGE_OK_COLOR,
 )
 from explorer.app.serve.tasks import SessionLoop
 from explorer.app.serve.view import SectionView
@@ -76,7 +77,8 @@ FACADE = {"orbits": ("crossings", "shown", "live", "start_source", "points", "li
           "density_image": ("density", "dense"), "chaos": ("layer", "colour_bar", "raster_source"),
           "overlays": ("fixed", "curves", "periodic", "manifold_source", "overlay", "periodic_box",
                        "separatrix_lines", "show_manifolds", "saddle_near"),
-          "readout_": ("pick", "select", "picked", "readouts"),
+          "readout_": ("pick", "select", "picked", "readouts"), "orbit_list": ("clear", "undo", "resume"),
+          "messages": ("message", "message_ok", "say", "tell"),
           "exports": ("view", "figure_bytes", "export_figure", "export", "scene_text", "_scene_text")}
 _FACADE = {a: c for c, names in FACADE.items() for a in names}
 
@@ -103,6 +105,7 @@ class SectionPage:
         self.base = self.settings = base
         self.seeds, self.export_dir, self.label = seeds, export_dir, label
         self.loop = SessionLoop(doc)
+        self.messages = Message()
         self.url_state = UrlState()
         self.section = SectionView()
         self.orbits = OrbitsLayer(self, self.section, self.loop)
@@ -111,6 +114,7 @@ class SectionPage:
                                 megno_time)
         self.overlays = Overlays(self, self.section, self.loop)
         self.readout_ = Readout(self, self.section, self.orbits, self.overlays, self.loop)
+        self.orbit_list = OrbitList(self.orbits, self.readout_, self.loop, self.push_url)
         self.exports = Exports(self, self.loop, export_dir, label)
         self.readout, self.overlay_text = self.readout_.text, self.overlays.text
         self._url_timer = self.loop.timer(self.push_url)
@@ -120,6 +124,7 @@ class SectionPage:
         self.overlays.draw_lines(fig)
         self.density_image.draw(fig)
         self.orbits.draw(fig)
+        self.orbit_list.draw(fig)
         self.overlays.draw_marks(fig)
         fig.on_event(Tap, self._on_tap)
         fig.on_event(DoubleTap, self._on_tap)   # a second click within 300 ms is a double tap
@@ -145,7 +150,8 @@ class SectionPage:
         # the buttons in rows above the figure: at 1280 x 720 every one is in view with the figure
         # (in the controls' column, below the fields, the export buttons were below the fold)
         buttons = []
-        for label, action, width in (("Clear", self.clear, 70), ("Undo", self.undo, 70), ("Resume", self.resume, 80),
+        ol = self.orbit_list
+        for label, action, width in (("Clear", ol.clear, 70), ("Undo", ol.undo, 70), ("Resume", ol.resume, 80),
                                      ("Scene seeds", self.run_seeds, 100)):
             b = pn.widgets.Button(label=label, width=width, color="warning" if label == "Clear" else "default")
             b.on_click(lambda _e, action=action: self.loop.soon(action))
@@ -160,9 +166,6 @@ class SectionPage:
                 b = pn.widgets.Button(label=label, width=110)
                 b.on_click(lambda _e, action=action: self.loop.soon(action))
                 buttons.append(b)
-        # text, never HTML: a message may quote what was typed into a field
-        self.message = Div(name="message", text="", render_as_text=True,
-                           styles={"color": MESSAGE_ERROR_COLOR, "min-height": "1.2em"})
         self.click_mode = pn.widgets.RadioButtonGroup(options=list(CLICK_MODES), value=CLICK_MODES[0], width=220)
         self.title = pn.pane.Markdown(self._title())
         o, ov = self.orbits, self.overlays
@@ -180,7 +183,8 @@ class SectionPage:
                                                    f" * {aspect:.6f}))"}
         plot = pn.pane.Bokeh(self.section.figure, sizing_mode="stretch_width")
         self.layout = pn.Row(controls, pn.Column(self.title, bar, plot, *(pn.pane.Bokeh(d) for d in texts),
-                                                 sizing_mode="stretch_width"), sizing_mode="stretch_width")
+                                                 self.orbit_list.panel, sizing_mode="stretch_width"),
+                             sizing_mode="stretch_width")
 
     _closed = False
 
@@ -277,6 +281,7 @@ class SectionPage:
         """New settings: the orbits stop, the region is redrawn, the starts inside it run again."""
         if new == self.settings:
             return
+        hidden = set(self.orbits.hidden)
         old = self._drop_orbits()
         angle_changed = new.phi0 != self.settings.phi0
         self.settings = new
@@ -285,6 +290,9 @@ class SectionPage:
         # the kept starts' crosses go before the region and the view (one message each, in order): a
         # page that shows the new region shows the starts that run again in it
         kept = [self.orbits.start(p1, p2, color) for _i, p1, p2, color in old]
+        for run, (i, *_s) in zip(kept, old):
+            if run is not None and i in hidden:
+                self.orbits.hide(run.ident)           # (a hidden orbit stays hidden)
         self._draw_region()
         self._show_fields()
         self.chaos.restart()
@@ -306,21 +314,6 @@ class SectionPage:
         shown = "π" if phi0 == math.pi else f"{phi0:.6g}"
         return f"### explorer: Poincaré section φ = {shown}" + (f" ({self.label})" if self.label else "")
 
-    def say(self, text: str, ok: bool = False) -> None:
-        """The message under the figure: a refusal or a failure in the error colour, or (``ok``) what
-        went well in the success colour (:meth:`tell`)."""
-        self.message_ok = bool(ok)
-        color = MESSAGE_OK_COLOR if ok else MESSAGE_ERROR_COLOR
-        if self.message.styles.get("color") != color:
-            self.message.styles = {**self.message.styles, "color": color}
-        self.message.text = text
-
-    def tell(self, text: str) -> None:
-        """A success (an export written, seeds started) under the figure, in the success colour."""
-        self.say(text, ok=True)
-
-    message_ok = False
-
     # ------------------------------------------------------------ orbits
     def _drop_orbits(self) -> list:
         """Stop every orbit and take them off the page; returns their starts."""
@@ -328,21 +321,6 @@ class SectionPage:
         old = self.orbits.drop_all()
         self.density_image.refresh(force=True)       # no image left of them
         return old
-
-    def clear(self) -> None:
-        self._drop_orbits()
-        self.orbits.update_status()
-        self.push_url()
-
-    def undo(self) -> None:
-        """Remove the last orbit (stopped if it runs or is paused)."""
-        if not self.orbits.starts:
-            return
-        ident = self.orbits.starts[-1][0]
-        self.readout_.forget(ident)
-        self.orbits.remove(ident)
-        self.orbits.update_status()
-        self.push_url()
 
     def run_seeds(self) -> int:
         """Start an orbit at each seed point of the scene's ``[seeds]`` at the current settings
@@ -389,13 +367,6 @@ class SectionPage:
         if self.loop.doc is None:
             self.push_url()
         return run
-
-    def resume(self) -> int:
-        """Continue the orbits a click paused, from where each stopped (its rows are those of an
-        uninterrupted run); returns how many."""
-        n = len(self.orbits.worker.resume())
-        self.orbits.update_status()
-        return n
 
     def _on_tap(self, event):
         """Tap or double tap: Bokeh reports a click that follows another within 300 ms as a double

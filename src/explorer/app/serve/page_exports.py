@@ -1,7 +1,9 @@
 """The page's exports: the session as a scene (download, and into --export-dir with its HDF5 store)
 and the view as PNG/SVG (downloads, and into --export-dir): :mod:`explorer.app.serve.export` and
 :mod:`explorer.app.serve.image` do the work, the files into --export-dir as jobs of the session's
-task helper.  A component of :class:`~explorer.app.serve.page.SectionPage`."""
+task helper.  The figures are the view: a hidden orbit (the orbit list) is not in them; the scene
+and its store are the session: every orbit, hidden or not.  A component of
+:class:`~explorer.app.serve.page.SectionPage`."""
 from __future__ import annotations
 
 import io
@@ -44,7 +46,7 @@ class Exports:
 
     def view(self):
         """What the page shows now, copied (:class:`explorer.app.serve.image.View`: drawn by
-        :func:`explorer.app.serve.image.render`, in any thread)."""
+        :func:`explorer.app.serve.image.render`, in any thread): hidden orbits left out."""
         from explorer.app.serve.image import View
 
         host = self.host
@@ -52,8 +54,8 @@ class Exports:
         d = orbits.crossings.data
         orbit = np.asarray(d["orbit"])
         p = np.column_stack([np.asarray(d["p1"], float), np.asarray(d["p2"], float)])
-        shown = [(i, COLORS[c], p[orbit == i], orbits.indicators.get(i, (math.nan,))[0])
-                 for i, _a, _b, c in orbits.starts]
+        visible = [s for s in orbits.starts if s[0] not in orbits.hidden]
+        shown = [(i, COLORS[c], p[orbit == i], orbits.indicators.get(i, (math.nan,))[0]) for i, _a, _b, c in visible]
         w = host.section.window
         window = (w.x0, w.x1, w.y0, w.y1) if w is not None else (-1.0, 1.0, -1.0, 1.0)
         r = host.chaos.raster_source.data
@@ -65,7 +67,7 @@ class Exports:
         s = host.settings
         title = f"mu = {s.params.mu:g}, h = {s.h:g}, {s.method}" + (f" ({self.label})" if self.label else "")
         return View(window=window, region=s.region, orbits=shown,
-                    starts=[(a, b, COLORS[c]) for _i, a, b, c in orbits.starts], raster=raster,
+                    starts=[(a, b, COLORS[c]) for _i, a, b, c in visible], raster=raster,
                     raster_scale=host.chaos.scale(),
                     fixed=[(a, b, k == "elliptic") for a, b, k in zip(f["p1"], f["p2"], f["kind"])],
                     separatrices=[np.column_stack([x, y]) for x, y in zip(ov.curves.data["xs"], ov.curves.data["ys"])],

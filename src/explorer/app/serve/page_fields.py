@@ -1,8 +1,12 @@
 """The fields of the page's values (the model parameters, h, method, tol, dt, crossings per click,
 φ0): their widgets, the text they show, and the settings an edit gives
-(:func:`explorer.app.serve.settings.parse_fields`, the command line's checks).  A component of
+(:func:`explorer.app.serve.settings.parse_fields`, the command line's checks).  Beside them, the
+μ slider and a stepper (a field, a step, − and +) for every numeric field: both write their value
+into the field as text, and the field applies it as if typed (one validation).  A component of
 :class:`~explorer.app.serve.page.SectionPage`."""
 from __future__ import annotations
+
+import math
 
 import panel as pn
 
@@ -19,6 +23,26 @@ MU_SLIDER = (0.0, 2.0, 0.001)
 LABELS = {p.name: p.symbol for p in model.PARAMETERS} | {
     "h": "h", "method": "method", "tol": "tol (taylor, dop853)", "dt": "dt (split*)",
     "crossings": "crossings per click", "phi0": "φ0 (section φ = φ0)"}
+#: the fields the stepper steps: every numeric one (the method is a choice)
+STEP_FIELDS = tuple(n for n in FIELDS if n != "method")
+#: the stepper's widgets' margins (px: top and bottom, left and right): its row fits the fields' 230 px
+STEP_MARGIN = (5, 3)
+
+
+def default_step(value: float) -> float:
+    """The stepper's step for a field's value: the power of ten near 1 % of it (0.01 for 0)."""
+    value = abs(float(value))
+    if not (math.isfinite(value) and value > 0.0):
+        return 0.01
+    return 10.0 ** (math.floor(math.log10(value)) - 2)
+
+
+def stepped(name: str, text: str, step: float, k: int) -> str:
+    """The text of field ``name`` (now ``text``) moved by ``k`` steps of ``step`` (a whole number of
+    crossings, at least 1; a float written to 15 significant digits, so 0.03 + 0.0001 is 0.0301)."""
+    if name == "crossings":
+        return str(int(text) + k * max(1, round(step)))
+    return repr(float(f"{float(text) + k * step:.15g}"))
 
 
 class Fields:
@@ -28,6 +52,7 @@ class Fields:
         from explorer.analysis.sections import METHODS
 
         self._quiet = False
+        self.applied = settings
         s = settings.fields()
         self.inputs: dict = {}
         for name in FIELDS:
@@ -35,14 +60,52 @@ class Fields:
                 w = pn.widgets.Select(label=LABELS[name], options=list(METHODS), value=s[name], width=FIELD_WIDTH)
             else:
                 w = pn.widgets.TextInput(label=LABELS[name], value=s[name], width=FIELD_WIDTH)
-            w.param.watch(lambda _e, name=name: self._quiet or loop.soon(lambda: on_edit(name)), "value")
+            w.param.watch(lambda _e, name=name: self._edited(loop, on_edit, name), "value")
             self.inputs[name] = w
         lo, hi, step = MU_SLIDER
         self.mu_slider = pn.widgets.FloatSlider(name=f"{LABELS['mu']} (slider)", start=lo, end=hi, step=step,
                                                 value=min(max(settings.params.mu, lo), hi), width=220)
         # on release (value_throttled): one new value per drag, written into the field, which applies it
         self.mu_slider.param.watch(self._slid, "value_throttled")
-        self.grid = pn.Column(self.mu_slider, pn.GridBox(*self.inputs.values(), ncols=2))
+        # the stepper: which field (the last one edited), by how much (1 % of its value when chosen)
+        self.step_field = pn.widgets.Select(label="step", options={LABELS[n]: n for n in STEP_FIELDS}, value="mu",
+                                            width=62, margin=STEP_MARGIN)
+        self.step_size = pn.widgets.FloatInput(label="by", value=default_step(settings.params.mu), width=82,
+                                            margin=STEP_MARGIN)
+        self.step_field.param.watch(lambda e: self._retarget(e.new), "value")
+        buttons = []
+        for label, k in (("−", -1), ("+", 1)):
+            b = pn.widgets.Button(label=label, width=28, align="end", margin=STEP_MARGIN)
+            b.on_click(lambda _e, k=k: loop.soon(lambda: self.step(k)))
+            buttons.append(b)
+        self.step_buttons = tuple(buttons)
+        self.grid = pn.Column(self.mu_slider, pn.GridBox(*self.inputs.values(), ncols=2),
+                              pn.Row(self.step_field, self.step_size, *buttons))
+
+    def _edited(self, loop, on_edit, name: str) -> None:
+        if self._quiet:
+            return
+        if name in STEP_FIELDS and self.step_field.value != name:
+            self.step_field.value = name          # (the stepper steps the field edited last)
+        loop.soon(lambda: on_edit(name))
+
+    def _retarget(self, name: str) -> None:
+        self.step_size.value = default_step(float(self.applied.fields()[name]))
+
+    def step(self, k: int, name: str | None = None) -> None:
+        """Move field ``name`` (None: the stepper's) ``k`` steps of the stepper's size from the value
+        that applies: its new text goes into the field, which applies it as a typed value (refused
+        with the field's message when the command line would refuse it)."""
+        name = name or self.step_field.value
+        size = self.step_size.value
+        if size is None or not (math.isfinite(size) and size > 0.0):
+            self.step_size.value = default_step(float(self.applied.fields()[name]))
+            return
+        text = stepped(name, self.applied.fields()[name], float(size), k)
+        if self.inputs[name].value == text:       # (the same refused text again: said again)
+            self.inputs[name].param.trigger("value")
+        else:
+            self.inputs[name].value = text
 
     def _slid(self, event) -> None:
         if not self._quiet and event.new is not None:
@@ -51,6 +114,7 @@ class Fields:
     def show(self, settings: Settings) -> None:
         """The fields and the slider show ``settings`` (not an edit: nothing is called)."""
         lo, hi, _step = MU_SLIDER
+        self.applied = settings
         self._quiet = True
         try:
             for name, text in settings.fields().items():

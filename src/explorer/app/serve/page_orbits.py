@@ -11,6 +11,11 @@ density.THRESHOLD, where :attr:`OrbitsLayer.crossings`, in the server only, hold
 ``live`` (the rows of a message that carried an orbit's first crossings, drawn on Bokeh's overlay
 canvas until the next flush moves them to ``crossings``; every row is in exactly one of the two),
 ``starts`` (the clicked starts: orbit, p1, p2, c) and ``status``.
+
+A hidden orbit (:meth:`OrbitsLayer.hide`, the orbit list) keeps computing, but its rows and its
+start are in the server only (:attr:`OrbitsLayer.hidden`), off every source the page draws from
+(the dots, the live layer, the density image, a pick, the figure exports); :meth:`OrbitsLayer.show`
+puts them back.
 """
 from __future__ import annotations
 
@@ -70,6 +75,9 @@ class OrbitsLayer:
         self._color = 0
         self._running: set = set()             # ids of the orbits still computing (or paused)
         self.indicators: dict = {}             # orbit id -> (mean MEGNO, mLCE) over INDICATOR_TIME
+        self.progress: dict = {}               # orbit id -> (crossings on the page so far, status)
+        self.hidden: dict = {}                 # orbit id -> its rows (columns of crossings), hidden
+        self._listeners: list = []
         self._pending: list = []               # blocks handed in, not yet on the page
         self._flushed_at = -math.inf           # when the last flush ran (monotonic)
         self._settle_at = -math.inf            # the flush due then moves the live rows
@@ -133,7 +141,7 @@ class OrbitsLayer:
     def _mark_starts(self):
         """Stream the crosses of the starts not yet marked (on a served page, a click's with its
         first crossings, just after them: the cross's redraw does not delay them)."""
-        live = {i for i, *_ in self.starts}
+        live = {i for i, *_ in self.starts if i not in self.hidden}
         marks, self._unmarked = [m for m in self._unmarked if m[0] in live], []
         if marks:
             self.start_source.stream({k: [m[j] for m in marks] for j, k in enumerate(("orbit", "p1", "p2", "c"))})
@@ -143,7 +151,7 @@ class OrbitsLayer:
         self.worker.cancel()
         self.flush_timer.cancel()
         old, self.starts, self._running, self._pending = self.starts, [], set(), []
-        self.indicators = {}
+        self.indicators, self.progress, self.hidden = {}, {}, {}
         self.crossings.data = _empty_crossings()
         self.show_all()
         self.start_source.data = _empty_starts()
@@ -155,12 +163,53 @@ class OrbitsLayer:
         self.starts = [s for s in self.starts if s[0] != ident]
         self.worker.remove(ident)
         self.indicators.pop(ident, None)
+        self.progress.pop(ident, None)
         self._running = self._running - {ident}
-        keep = np.asarray(self.crossings.data["orbit"]) != ident
-        self.crossings.data = {k: np.asarray(v)[keep] for k, v in self.crossings.data.items()}
+        if self.hidden.pop(ident, None) is None:
+            self._take_rows(ident)
+            self._unmark(ident)
+
+    def _take_rows(self, ident: int) -> dict:
+        """Orbit ``ident``'s rows off ``crossings`` (and the browser's sources); returns them."""
+        orbit = np.asarray(self.crossings.data["orbit"])
+        mine = {k: np.asarray(v)[orbit == ident] for k, v in self.crossings.data.items()}
+        self.crossings.data = {k: np.asarray(v)[orbit != ident] for k, v in self.crossings.data.items()}
         self.show_all()
+        return mine
+
+    def _unmark(self, ident: int) -> None:
         keep = [o != ident for o in self.start_source.data["orbit"]]
         self.start_source.data = {k: [x for x, ok in zip(v, keep) if ok] for k, v in self.start_source.data.items()}
+
+    def hide(self, ident: int) -> None:
+        """Take orbit ``ident``'s crossings and start off the page, into :attr:`hidden` (it keeps
+        computing; later rows go there too)."""
+        if ident in self.hidden or not any(i == ident for i, *_ in self.starts):
+            return
+        self.hidden[ident] = self._take_rows(ident)
+        self._unmark(ident)
+        self._unmarked = [m for m in self._unmarked if m[0] != ident]
+
+    def show(self, ident: int) -> None:
+        """Put a hidden orbit's crossings and start back on the page."""
+        rows = self.hidden.pop(ident, None)
+        if rows is None:
+            return
+        d = self.crossings.data
+        self.crossings.data = {k: np.concatenate([np.asarray(d[k]), rows[k]]) for k in d}
+        self.show_all()
+        self._unmarked += [s for s in self.starts if s[0] == ident]
+        self._mark_starts()
+
+    def state(self, ident: int) -> str:
+        """running, paused, done, or why the orbit stopped."""
+        if ident in self._running:
+            return "paused" if ident in self.worker.paused() else "running"
+        return self.progress.get(ident, (0, "done"))[1]
+
+    def on_change(self, listener) -> None:
+        """``listener()`` after every update of the status line (orbits added, grown, stopped, removed)."""
+        self._listeners.append(listener)
 
     # ------------------------------------------------------------ blocks from the worker
     def _on_block(self, ident, rows, done, status):
@@ -193,6 +242,7 @@ class OrbitsLayer:
         now = self._flushed_at = time.monotonic()
         live = {i: c for i, _a, _b, c in self.starts}
         blocks = [b for b in blocks if b[0] in live]          # undone meanwhile: dropped
+        blocks = [self._keep_hidden(b, live) for b in blocks]  # (a hidden orbit's rows: to hidden)
         first_rows = {b[0] for b in blocks if 0 < len(b[1]) == b[2]}   # orbits at their first block
         if first_rows and any(b[0] not in first_rows for b in blocks):
             # other orbits' blocks wait for the next flush: these go alone
@@ -204,18 +254,14 @@ class OrbitsLayer:
         to_live = bool(first_rows) or (0 < held and now < self._settle_at - SETTLE_SLACK
                                        and held + sum(len(b[1]) for b in full) <= LIVE_MAX_ROWS)
         if full:
-            data = np.concatenate([b[1] for b in full])
-            megno = [self.indicators.get(b[0], (math.nan,))[0] for b in full]
-            new = {"orbit": np.concatenate([np.full(len(b[1]), b[0], np.int64) for b in full]),
-                   "megno": np.concatenate([np.full(len(b[1]), m) for b, m in zip(full, megno)]),
-                   "t": data[:, 0], "p1": data[:, 1], "p2": data[:, 2], "M": data[:, 3], "dH": data[:, 4],
-                   "c": np.concatenate([np.full(len(b[1]), live[b[0]], np.int64) for b in full])}
+            new = _columns(full, live, self.indicators)
             self.crossings.stream(new)
             if to_live:
                 self.live.stream({k: v.tolist() for k, v in new.items()})   # drawn at once, alone
         moved = False if to_live else self._settle()
         self._mark_starts()              # (their starts' crosses in the next message)
         for ident, _rows, done, status in blocks:
+            self.progress[ident] = (done, status)
             if status != "running":
                 self._running = self._running - {ident}
                 if status != "done":
@@ -230,6 +276,15 @@ class OrbitsLayer:
             # what waits goes at the latest when the live rows are due to settle
             self.flush_timer.at(max(self._settle_at, now + (FLUSH_SECONDS if self._pending else 0.0)),
                                 reentrant=False)
+
+    def _keep_hidden(self, block, colour: dict):
+        """A hidden orbit's block: its rows go to :attr:`hidden`, the block goes on without them."""
+        ident, rows, done, status = block
+        if ident not in self.hidden or not len(rows):
+            return block
+        new, old = _columns([block], colour, self.indicators), self.hidden[ident]
+        self.hidden[ident] = {k: np.concatenate([old[k], new[k]]) for k in new}
+        return ident, rows[:0], done, status
 
     def _settle(self) -> bool:
         """The live rows to ``crossings`` (past density.THRESHOLD, to the density image only: the
@@ -256,6 +311,7 @@ class OrbitsLayer:
     def _on_error(self, ident, exc):
         self._mark_starts()
         self._running = self._running - {ident}
+        self.progress[ident] = (self.progress.get(ident, (0,))[0], "failed")
         self.host.say(f"orbit {ident} failed: {type(exc).__name__}: {' '.join(str(exc).split())}")
         self.update_status()
         self.host.push_url()
@@ -280,12 +336,16 @@ class OrbitsLayer:
             text += (f"; orbit {known[-1]}: <Y> = {megno:.3g}, mLCE = {mlce:.3g} over t <= {INDICATOR_TIME:g}"
                      + (f" ({kind})" if math.isfinite(megno) else " (unknown: the run stopped early)"))
         self.status.text = text
+        for listener in self._listeners:
+            listener()
 
     # ------------------------------------------------------------ chaos indicators and colours
     def _on_indicators(self, ident, megno, mlce):
         if not any(i == ident for i, *_ in self.starts):
             return
         self.indicators[ident] = (megno, mlce)
+        if ident in self.hidden:
+            self.hidden[ident]["megno"] = np.full(len(self.hidden[ident]["megno"]), megno)
         rows = np.flatnonzero(np.asarray(self.crossings.data["orbit"]) == ident)
         if rows.size:      # the rows streamed before the indicator was known
             self.crossings.patch(_megno_patch(rows, megno))
@@ -311,6 +371,17 @@ class OrbitsLayer:
     def close(self) -> None:
         self.flush_timer.cancel()
         self.worker.stop()
+
+
+def _columns(blocks, colour: dict, indicators: dict) -> dict:
+    """The blocks' rows as the columns of ``crossings`` (``colour``: orbit id -> colour index;
+    ``indicators``: orbit id -> (MEGNO, mLCE) where known)."""
+    data = np.concatenate([b[1] for b in blocks])
+    megno = [indicators.get(b[0], (math.nan,))[0] for b in blocks]
+    return {"orbit": np.concatenate([np.full(len(b[1]), b[0], np.int64) for b in blocks]),
+            "megno": np.concatenate([np.full(len(b[1]), m) for b, m in zip(blocks, megno)]),
+            "t": data[:, 0], "p1": data[:, 1], "p2": data[:, 2], "M": data[:, 3], "dH": data[:, 4],
+            "c": np.concatenate([np.full(len(b[1]), colour[b[0]], np.int64) for b in blocks])}
 
 
 def _megno_patch(rows, megno: float, as_list: bool = False) -> dict:

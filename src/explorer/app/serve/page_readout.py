@@ -27,6 +27,16 @@ class Readout:
         self.text = Div(name="readout", text="", render_as_text=True, styles={"font-family": "monospace"})
         self.picked: int | None = None          # the orbit whose readout is shown
         self.readouts: dict = {}                # orbit id -> orbit_readout(...) of a picked orbit
+        self._listeners: list = []
+
+    def on_select(self, listener) -> None:
+        """``listener(ident)`` when the picked orbit changes (None: no orbit picked any more)."""
+        self._listeners.append(listener)
+
+    def _picked(self, ident) -> None:
+        self.picked = ident
+        for listener in self._listeners:
+            listener(ident)
 
     def pick(self, p1: float, p2: float, radius_px: float = PICK_PX) -> int | None:
         """A pick at (p1, p2).  Near a hyperbolic mark of the overlays (× of a fixed point or of a
@@ -58,7 +68,7 @@ class Readout:
         start = next(((a, b) for i, a, b, _c in self.orbits.starts if i == ident), None)
         if start is None:
             return
-        self.picked = ident
+        self._picked(ident)
         self.host.say("")
         if ident in self.readouts:
             self.task.cancel()
@@ -68,6 +78,12 @@ class Readout:
         self.task.submit(self._compute, ident, start, self.host.settings,
                          budget=search.search_budget(search.READOUT_SECONDS))
 
+    def unpick(self) -> None:
+        """No orbit picked (its readout stays known: picked again, it shows at once)."""
+        self.task.cancel()
+        self.text.text = ""
+        self._picked(None)
+
     def forget(self, ident: int | None = None) -> None:
         """Drop the readout of orbit ``ident`` (None: of every orbit) and stop computing it."""
         if ident is None:
@@ -75,8 +91,7 @@ class Readout:
         else:
             self.readouts.pop(ident, None)
         if ident is None or self.picked == ident:
-            self.task.cancel()
-            self.picked, self.text.text = None, ""
+            self.unpick()
 
     def _compute(self, job, ident, start, settings):
         try:

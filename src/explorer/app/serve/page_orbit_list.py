@@ -1,0 +1,167 @@
+"""The orbit list of the page (as DynamicalSystems.jl's interactive Poincaré tool has one): every
+orbit of the session in a table (its colour, start (p1, p2), crossings so far and state: running,
+paused, done or why it stopped; hidden ones marked), and the controls that act on one orbit: the
+chooser ``orbit`` (choosing one selects it: its crossings drawn larger and outlined on the
+section, its readout shown as a pick shows it), *hide*/*show* and *delete*.  The picked orbit
+(Shift + click) is the chosen one and its row is highlighted.  A component of
+:class:`~explorer.app.serve.page.SectionPage`, built on the public methods of
+:class:`~explorer.app.serve.page_orbits.OrbitsLayer` and
+:class:`~explorer.app.serve.page_readout.Readout`.
+
+Why a table in one Div and three widgets, not a row of widgets per orbit nor a Tabulator: a
+session holds up to 256 orbits (Scene seeds starts 200 at once); a row of widgets each would be
+about a thousand Bokeh models, and every update of the crossings a message per row, where one
+Div's text is one message per status update (at most every flush); Tabulator brings a large
+JavaScript library to the page for a list of a few columns.
+
+By Bokeh model name: ``orbit-list`` (the table; each row ``<tr data-orbit="ID" ...>``) and
+``selected-orbit`` (the CustomJSFilter of the highlight: the rows of orbit ``args.orbit``, 0: none).
+The page's *Clear*, *Undo* and *Resume* act on the list too (:meth:`OrbitList.clear`, ...).
+"""
+from __future__ import annotations
+
+import html
+
+import panel as pn
+from bokeh.models import CDSView, CustomJSFilter, Div
+
+from explorer.app.serve.orbits import COLORS
+
+#: the chooser's entry for "no orbit selected" (orbit ids start at 1)
+NONE_LABEL = "(none)"
+#: the browser's filter of the highlighted rows: those of orbit ``orbit``
+SELECTED_FILTER = ("const o = source.data.orbit, n = o.length, rows = [];\n"
+                   "for (let i = 0; i < n; i++) if (o[i] == orbit) rows.push(i);\n"
+                   "return rows;")
+#: the selected orbit's markers: this size (pixels; the dots are 2), outlined in this colour
+SELECTED_SIZE = 6.0
+SELECTED_LINE = "#000000"
+#: the table's height at most (then it scrolls) and the background of the selected row
+LIST_MAX_HEIGHT = "12em"
+SELECTED_BACKGROUND = "#fff3b0"
+
+
+class OrbitList:
+    """The list (module docstring).  ``orbits``: the page's OrbitsLayer; ``readout``: its Readout;
+    ``on_removed()``: after a delete (the page's link)."""
+
+    def __init__(self, orbits, readout, loop, on_removed):
+        self.orbits, self.readout, self.on_removed = orbits, readout, on_removed
+        self._quiet = False
+        self._idents: tuple = ()
+        self.filter: CustomJSFilter | None = None
+        self.table = Div(name="orbit-list", text="", styles={"max-height": LIST_MAX_HEIGHT, "overflow-y": "auto"},
+                         sizing_mode="stretch_width")
+        self.choice = pn.widgets.Select(label="orbit", options={NONE_LABEL: 0}, value=0, width=200)
+        self.choice.param.watch(lambda e: self._quiet or loop.soon(lambda: self.choose(e.new)), "value")
+        self.hide_button = pn.widgets.Button(label="hide", width=70, disabled=True, align="end")
+        self.hide_button.on_click(lambda _e: loop.soon(self.toggle))
+        self.delete_button = pn.widgets.Button(label="delete", width=70, disabled=True, align="end")
+        self.delete_button.on_click(lambda _e: loop.soon(lambda: self.delete(self.readout.picked)))
+        self.panel = pn.Column(pn.Row(self.choice, self.hide_button, self.delete_button),
+                               pn.pane.Bokeh(self.table, sizing_mode="stretch_width"), sizing_mode="stretch_width")
+        orbits.on_change(self.refresh)
+        readout.on_select(lambda _ident: self.refresh())
+
+    def draw(self, fig) -> None:
+        """The selected orbit's markers (over the dots: call after OrbitsLayer.draw), from the rows
+        the browser already holds (a selection sends one number, not the rows)."""
+        self.filter = CustomJSFilter(name="selected-orbit", args={"orbit": 0}, code=SELECTED_FILTER)
+        self.marks = fig.scatter("p1", "p2", source=self.orbits.shown, view=CDSView(filter=self.filter),
+                                 fill_color=self.orbits.by_orbit, line_color=SELECTED_LINE, line_width=1.0,
+                                 size=SELECTED_SIZE)
+
+    # ------------------------------------------------------------ actions
+    def choose(self, ident) -> None:
+        """Select orbit ``ident`` (0 or None: none), as a pick of it does: its readout and highlight."""
+        if ident and any(i == ident for i, *_ in self.orbits.starts):
+            self.readout.select(int(ident))
+        elif self.readout.picked is not None:
+            self.readout.unpick()
+
+    def toggle(self, ident: int | None = None) -> None:
+        """Hide orbit ``ident`` (None: the selected one), or show it again if hidden."""
+        ident = self.readout.picked if ident is None else ident
+        if ident is None:
+            return
+        if ident in self.orbits.hidden:
+            self.orbits.show(ident)
+        else:
+            self.orbits.hide(ident)
+        self.orbits.update_status(force_density=True)       # (the density image without it, at once)
+
+    def clear(self) -> None:
+        """Remove every orbit (running and paused ones stopped)."""
+        self.readout.forget()
+        self.orbits.drop_all()
+        self.orbits.update_status(force_density=True)      # (no image left of them)
+        self.on_removed()
+
+    def undo(self) -> None:
+        """Remove the newest orbit (stopped if it runs or is paused)."""
+        if self.orbits.starts:
+            self.delete(self.orbits.starts[-1][0])
+
+    def resume(self) -> int:
+        """Continue the orbits a click paused, from where each stopped (its rows are those of an
+        uninterrupted run); returns how many."""
+        n = len(self.orbits.worker.resume())
+        self.orbits.update_status()
+        return n
+
+    def delete(self, ident: int | None) -> None:
+        """Stop orbit ``ident`` (running or paused) and remove it from the page and the session."""
+        if ident is None or not any(i == ident for i, *_ in self.orbits.starts):
+            return
+        self.readout.forget(ident)
+        self.orbits.remove(ident)
+        self.orbits.update_status()
+        self.on_removed()
+
+    # ------------------------------------------------------------ what is shown
+    def rows(self) -> list:
+        """(id, colour, p1, p2, crossings so far, state, hidden) of every orbit, in click order."""
+        o = self.orbits
+        return [(i, COLORS[c], p1, p2, o.progress.get(i, (0,))[0], o.state(i), i in o.hidden)
+                for i, p1, p2, c in o.starts]
+
+    def refresh(self) -> None:
+        """The table, the chooser and the highlight anew (after a status update or a selection)."""
+        rows, picked = self.rows(), self.readout.picked
+        idents = tuple(r[0] for r in rows)
+        self._quiet = True
+        try:
+            if idents != self._idents:
+                self._idents = idents
+                self.choice.options = {NONE_LABEL: 0} | {f"{i}: ({p1:.4g}, {p2:.4g})": i for i, _c, p1, p2, *_ in rows}
+            value = picked if picked in idents else 0
+            if self.choice.value != value:
+                self.choice.value = value
+        finally:
+            self._quiet = False
+        hidden = picked is not None and picked in self.orbits.hidden
+        self.hide_button.label = "show" if hidden else "hide"
+        self.hide_button.disabled = self.delete_button.disabled = picked is None
+        if self.filter is not None and self.filter.args.get("orbit") != (picked or 0):
+            self.filter.args = {"orbit": picked or 0}
+        text = _table(rows, picked)
+        if self.table.text != text:
+            self.table.text = text
+
+
+def _table(rows, picked) -> str:
+    """The list as an HTML table (numbers and fixed words only, escaped all the same)."""
+    if not rows:
+        return ""
+    head = "".join(f"<th style='text-align:left;padding:0 6px'>{h}</th>"
+                   for h in ("", "orbit", "start (p1, p2)", "crossings", "state"))
+    body = []
+    for i, colour, p1, p2, n, state, hidden in rows:
+        style = "font-weight:bold;background:" + SELECTED_BACKGROUND if i == picked else ""
+        if hidden:
+            style += ";color:#808080"
+        cells = (f"<span style='display:inline-block;width:10px;height:10px;background:{colour}'></span>",
+                 str(i), f"({p1:.6g}, {p2:.6g})", str(n), html.escape(state) + (", hidden" if hidden else ""))
+        body.append(f"<tr data-orbit='{i}' style='{style}'>"
+                    + "".join(f"<td style='padding:0 6px'>{c}</td>" for c in cells) + "</tr>")
+    return f"<table style='border-collapse:collapse;font-size:12px'><tr>{head}</tr>{''.join(body)}</table>"
