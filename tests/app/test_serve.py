@@ -351,25 +351,17 @@ class Served:
 
 
 @pytest.fixture(scope="module")
-def served(tmp_path_factory):
-    export_dir = tmp_path_factory.mktemp("export")
-    s = Served("--crossings", str(CROSSINGS), "--mu", "0.03", "--export-dir", str(export_dir))
-    s.export_dir = export_dir
-    yield s
-    code, err = s.interrupt()
-    assert code in (0, 130) and "Traceback" not in err, err[-2000:]
+def served(default_server):
+    """The served page (SERVED; ``export_dir``: its --export-dir): one server for every module of
+    this pytest process that uses it (tests/app/conftest.py), stopped with Ctrl-C at the end."""
+    return default_server
 
 
 @pytest.fixture(scope="module")
-def browser(tmp_path_factory):
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as p:
-        ctx = p.chromium.launch_persistent_context(str(tmp_path_factory.mktemp("chromium-profile")),
-                                                   executable_path=CHROMIUM, args=CHROMIUM_ARGS, headless=True,
-                                                   viewport={"width": 1100, "height": 800})
-        yield ctx
-        ctx.close()
+def browser(launch_chromium):
+    """Chromium (a Playwright context): one for the consecutive browser modules of this pytest
+    process (tests/app/conftest.py)."""
+    return launch_chromium()
 
 
 READY = ("() => window.Bokeh && Bokeh.documents.length > 0 && Bokeh.documents[0].is_idle && "
@@ -616,9 +608,45 @@ def test_a_bad_value_shows_a_message_and_computes_nothing(served, browser):
     assert urllib.request.urlopen(served.url, timeout=10).status == 200
 
 
+@pytest.fixture(scope="module")
+def _token_server_box():
+    """Holds the module's ``serve --token s3cret`` (:func:`token_served`); Ctrl-C ends one still
+    running cleanly at the end of the module."""
+    box: dict = {}
+    yield box
+    s = box.get("server")
+    if s is not None and s.proc.poll() is None:
+        code, err = s.interrupt()
+        assert code in (0, 130) and "Traceback" not in err, err[-2000:]
+
+
+@pytest.fixture
+def token_served(_token_server_box):
+    """``explorer serve --token s3cret``: one server for the token tests, started again if a test
+    stopped it (test_a_bad_token_gets_no_app_and_ctrl_c_ends_the_server_cleanly, which comes last)."""
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    s = _token_server_box.get("server")
+    if s is None or s.proc.poll() is not None:
+        s = _token_server_box["server"] = Served("--token", "s3cret")
+    return s
+
+
+def test_bad_tokens_leave_the_server_serving_the_right_one(token_served):
+    s = token_served
+    bare = s.url.split("?")[0]
+    bad = ["", "wrong", "s3cre", "s3cret0", "S3CRET", "%00", "s3cret%20", "x" * 5000, "%E2%98%83"] * 4
+    for token in bad:
+        with pytest.raises(urllib.error.HTTPError) as exc:
+            urllib.request.urlopen(f"{bare}?token={token}", timeout=10)
+        assert exc.value.code in (403, 414, 431), token[:20]
+    body = urllib.request.urlopen(s.url, timeout=30).read().decode("utf-8", "replace")
+    assert s.proc.poll() is None and "bokeh" in body.lower()
+    # (Ctrl-C ends this server cleanly: the next test, or the module's end)
+
+
 @browser_needed
-def test_a_bad_token_gets_no_app_and_ctrl_c_ends_the_server_cleanly(browser):
-    s = Served("--token", "s3cret")
+def test_a_bad_token_gets_no_app_and_ctrl_c_ends_the_server_cleanly(browser, token_served):
+    s = token_served
     try:
         assert s.url.endswith("?token=s3cret")
         bare = s.url.split("?")[0]
@@ -1164,23 +1192,6 @@ def test_a_value_changed_during_the_megno_raster_restarts_it_for_the_new_value()
         assert page.raster_source.data["n"] == []
     finally:
         page.close()
-
-
-def test_bad_tokens_leave_the_server_serving_the_right_one():
-    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
-    s = Served("--token", "s3cret")
-    try:
-        bare = s.url.split("?")[0]
-        bad = ["", "wrong", "s3cre", "s3cret0", "S3CRET", "%00", "s3cret%20", "x" * 5000, "%E2%98%83"] * 4
-        for token in bad:
-            with pytest.raises(urllib.error.HTTPError) as exc:
-                urllib.request.urlopen(f"{bare}?token={token}", timeout=10)
-            assert exc.value.code in (403, 414, 431), token[:20]
-        body = urllib.request.urlopen(s.url, timeout=30).read().decode("utf-8", "replace")
-        assert s.proc.poll() is None and "bokeh" in body.lower()
-    finally:
-        code, err = s.interrupt()
-    assert code in (0, 130) and "Traceback" not in err, err[-2000:]
 
 
 @browser_needed
