@@ -52,6 +52,9 @@ REPO = Path(__file__).resolve().parents[2]
 #: how long a started server may take to answer its first request (s): a bound on a hang, not a speed
 #: goal -- on a loaded 2-core machine with a cold kernel cache a start took over 120 s
 SERVER_START_TIMEOUT = 600.0
+#: how long a request for the page may take (s): the server builds the session's page then (the
+#: first one of a server imports and builds more); a bound on a hang -- under load one took over 10 s
+PAGE_TIMEOUT = 120.0
 #: the settings of the served page (`--mu 0.03 --crossings CROSSINGS`) and its region (c1, c2, r1, r2)
 SERVED = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=CROSSINGS)
 
@@ -351,25 +354,17 @@ class Served:
 
 
 @pytest.fixture(scope="module")
-def served(tmp_path_factory):
-    export_dir = tmp_path_factory.mktemp("export")
-    s = Served("--crossings", str(CROSSINGS), "--mu", "0.03", "--export-dir", str(export_dir))
-    s.export_dir = export_dir
-    yield s
-    code, err = s.interrupt()
-    assert code in (0, 130) and "Traceback" not in err, err[-2000:]
+def served(default_server):
+    """The served page (SERVED; ``export_dir``: its --export-dir): one server for every module of
+    this pytest process that uses it (tests/app/conftest.py), stopped with Ctrl-C at the end."""
+    return default_server
 
 
 @pytest.fixture(scope="module")
-def browser(tmp_path_factory):
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as p:
-        ctx = p.chromium.launch_persistent_context(str(tmp_path_factory.mktemp("chromium-profile")),
-                                                   executable_path=CHROMIUM, args=CHROMIUM_ARGS, headless=True,
-                                                   viewport={"width": 1100, "height": 800})
-        yield ctx
-        ctx.close()
+def browser(launch_chromium):
+    """Chromium (a Playwright context): one for the consecutive browser modules of this pytest
+    process (tests/app/conftest.py)."""
+    return launch_chromium()
 
 
 READY = ("() => window.Bokeh && Bokeh.documents.length > 0 && Bokeh.documents[0].is_idle && "
@@ -613,12 +608,48 @@ def test_a_bad_value_shows_a_message_and_computes_nothing(served, browser):
         _wait(page, f"() => ({TEXT})('message') === ''", timeout=60_000)
     page.close()
     assert served.proc.poll() is None                       # the server keeps running
-    assert urllib.request.urlopen(served.url, timeout=10).status == 200
+    assert urllib.request.urlopen(served.url, timeout=PAGE_TIMEOUT).status == 200
+
+
+@pytest.fixture(scope="module")
+def _token_server_box():
+    """Holds the module's ``serve --token s3cret`` (:func:`token_served`); Ctrl-C ends one still
+    running cleanly at the end of the module."""
+    box: dict = {}
+    yield box
+    s = box.get("server")
+    if s is not None and s.proc.poll() is None:
+        code, err = s.interrupt()
+        assert code in (0, 130) and "Traceback" not in err, err[-2000:]
+
+
+@pytest.fixture
+def token_served(_token_server_box):
+    """``explorer serve --token s3cret``: one server for the token tests, started again if a test
+    stopped it (test_a_bad_token_gets_no_app_and_ctrl_c_ends_the_server_cleanly, which comes last)."""
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    s = _token_server_box.get("server")
+    if s is None or s.proc.poll() is not None:
+        s = _token_server_box["server"] = Served("--token", "s3cret")
+    return s
+
+
+def test_bad_tokens_leave_the_server_serving_the_right_one(token_served):
+    s = token_served
+    bare = s.url.split("?")[0]
+    bad = ["", "wrong", "s3cre", "s3cret0", "S3CRET", "%00", "s3cret%20", "x" * 5000, "%E2%98%83"] * 4
+    for token in bad:
+        with pytest.raises(urllib.error.HTTPError) as exc:
+            urllib.request.urlopen(f"{bare}?token={token}", timeout=10)
+        assert exc.value.code in (403, 414, 431), token[:20]
+    body = urllib.request.urlopen(s.url, timeout=PAGE_TIMEOUT).read().decode("utf-8", "replace")
+    assert s.proc.poll() is None and "bokeh" in body.lower()
+    # (Ctrl-C ends this server cleanly: the next test, or the module's end)
 
 
 @browser_needed
-def test_a_bad_token_gets_no_app_and_ctrl_c_ends_the_server_cleanly(browser):
-    s = Served("--token", "s3cret")
+def test_a_bad_token_gets_no_app_and_ctrl_c_ends_the_server_cleanly(browser, token_served):
+    s = token_served
     try:
         assert s.url.endswith("?token=s3cret")
         bare = s.url.split("?")[0]
@@ -631,7 +662,7 @@ def test_a_bad_token_gets_no_app_and_ctrl_c_ends_the_server_cleanly(browser):
         page.wait_for_timeout(500)
         assert page.evaluate("() => !window.Bokeh || Bokeh.documents.length === 0")
         page.close()
-        assert urllib.request.urlopen(s.url, timeout=10).status == 200
+        assert urllib.request.urlopen(s.url, timeout=PAGE_TIMEOUT).status == 200
     finally:
         code, err = s.interrupt()
     assert code in (0, 130) and "Traceback" not in err, err[-2000:]
@@ -650,7 +681,7 @@ def test_a_non_loopback_host_gets_a_token_that_every_page_request_needs():
         with pytest.raises(urllib.error.HTTPError) as exc:
             urllib.request.urlopen(local, timeout=10)
         assert exc.value.code == 403
-        assert urllib.request.urlopen(f"{local}?token={token}", timeout=10).status == 200
+        assert urllib.request.urlopen(f"{local}?token={token}", timeout=PAGE_TIMEOUT).status == 200
     finally:
         code, err = s.interrupt()
     assert code in (0, 130) and "Traceback" not in err, err[-2000:]
@@ -793,7 +824,7 @@ def test_rapid_clicks_undo_clear_and_export_keep_the_page_and_the_server_consist
                            timeout=60_000)
     _wait(page, "() => /[?&]orbits=(&|$)/.test(window.location.search)", timeout=60_000)  # the link too
     page.close()
-    assert urllib.request.urlopen(served.url, timeout=10).status == 200
+    assert urllib.request.urlopen(served.url, timeout=PAGE_TIMEOUT).status == 200
 
 
 @browser_needed
@@ -945,7 +976,7 @@ def test_explore_and_serve_share_one_definition_of_their_options():
 def test_explore_no_browser_serves_the_page_of_serve():
     s = Served("--mu", "0.03", command="explore", extra=("--no-browser",))
     try:
-        page = urllib.request.urlopen(s.url, timeout=30).read().decode("utf-8", "replace")
+        page = urllib.request.urlopen(s.url, timeout=PAGE_TIMEOUT).read().decode("utf-8", "replace")
         assert "bokeh" in page.lower() and "explorer" in page
     finally:
         code, err = s.interrupt()
@@ -1171,23 +1202,6 @@ def test_a_value_changed_during_the_megno_raster_restarts_it_for_the_new_value()
         assert page.raster_source.data["n"] == []
     finally:
         page.close()
-
-
-def test_bad_tokens_leave_the_server_serving_the_right_one():
-    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
-    s = Served("--token", "s3cret")
-    try:
-        bare = s.url.split("?")[0]
-        bad = ["", "wrong", "s3cre", "s3cret0", "S3CRET", "%00", "s3cret%20", "x" * 5000, "%E2%98%83"] * 4
-        for token in bad:
-            with pytest.raises(urllib.error.HTTPError) as exc:
-                urllib.request.urlopen(f"{bare}?token={token}", timeout=10)
-            assert exc.value.code in (403, 414, 431), token[:20]
-        body = urllib.request.urlopen(s.url, timeout=30).read().decode("utf-8", "replace")
-        assert s.proc.poll() is None and "bokeh" in body.lower()
-    finally:
-        code, err = s.interrupt()
-    assert code in (0, 130) and "Traceback" not in err, err[-2000:]
 
 
 @browser_needed
@@ -1535,6 +1549,9 @@ class _FakeDoc:
         self.later: list = []       # (due, delay ms, callback) of add_timeout_callback
 
     def on_session_destroyed(self, _f):
+        pass
+
+    def on_event(self, _event, *_callbacks):     # (the connection is never lost here)
         pass
 
     def add_next_tick_callback(self, f):

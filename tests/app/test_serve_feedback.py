@@ -20,7 +20,8 @@ from test_serve import SERVED, _open, _set_field, _wait, browser_needed
 from explorer import model
 from explorer.app.serve.settings import Settings
 
-#: chromium and the served page (`--mu 0.03`), as in test_serve.py (its module-scoped fixtures)
+#: chromium and the served page (`--mu 0.03`), as in test_serve.py (one per pytest process:
+#: tests/app/conftest.py)
 browser = test_serve.browser
 served = test_serve.served
 

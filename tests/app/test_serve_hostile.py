@@ -31,7 +31,7 @@ from test_serve import (
     browser_needed,
 )
 
-#: chromium, as in test_serve.py (its module-scoped fixture)
+#: chromium, as in test_serve.py (one per pytest process: tests/app/conftest.py)
 browser = test_serve.browser
 
 #: the server must answer within this long (s) whatever a page asked it to compute
@@ -89,11 +89,10 @@ def _second_session_works(browser, served) -> None:
 
 
 @pytest.fixture(scope="module")
-def hostile(tmp_path_factory):
-    s = Served("--crossings", "150", "--mu", "0.03")
-    yield s
-    code, err = s.interrupt()
-    assert code in (0, 130) and "Traceback" not in err, err[-2000:]
+def hostile(default_server):
+    """The served page of test_serve (``--crossings 150 --mu 0.03``; tests/app/conftest.py: Ctrl-C
+    ends it cleanly at the end)."""
+    return default_server
 
 
 @browser_needed
@@ -153,9 +152,47 @@ def test_ctrl_c_ends_a_server_busy_with_hostile_searches_within_a_second(browser
         took = time.perf_counter() - t0
         if page is not None:
             page.context.clear_cookies()
+            for p in page.context.pages:                    # (the browser is shared: tests/app/conftest.py)
+                p.close()
     err = s.proc.stderr.read()
     assert s.proc.returncode in (0, 130) and "Traceback" not in err, err[-2000:]
     assert took <= SIGINT_SECONDS, f"Ctrl-C took {took:.2f} s"
+
+
+def test_a_page_whose_connection_is_lost_stops_every_computation_it_started(monkeypatch):
+    """A tab that closes (its websocket: Bokeh's ConnectionLost) wants nothing more: its overlay
+    searches, MEGNO raster and orbits stop then, and their threads end, not when Bokeh discards
+    the session 15-30 s later (issue 32 item 1: a computation is cancelled when its result is no
+    longer wanted).  The searches' budgets are lifted here: the threads end because they were
+    cancelled."""
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    from bokeh.document import Document
+    from bokeh.events import ConnectionLost
+
+    from explorer.app.serve import overlays
+    from explorer.app.serve.page import SectionPage
+    from explorer.app.serve.settings import MAX_CROSSINGS, Settings
+
+    monkeypatch.setattr(overlays, "FIXED_SECONDS", 3600.0)
+    monkeypatch.setattr(overlays, "PERIODIC_SECONDS", 3600.0)
+    doc = Document()                 # a served page's document: its next-tick callbacks run here, as a server would
+    page = SectionPage(Settings(params=SERVED.params.with_(mu=0.5), crossings=MAX_CROSSINGS),
+                       {"separatrices": "1", "periodic": "1", "megno": "1"}, doc=doc)
+    c1, c2, r1, _r2 = page.settings.region
+    assert page.click(c1 + 0.3 * r1, c2) is not None                 # an orbit of a million crossings
+    t0 = time.time()
+    while not {"overlay", "raster", "orbits"} <= {t.name for t in page.loop._tasks if t._executor is not None}:
+        assert time.time() - t0 < 600, [t.name for t in page.loop._tasks if t._executor is not None]
+        for cb in [c for c in doc.session_callbacks if type(c).__name__ == "NextTickCallback"]:
+            doc.remove_next_tick_callback(cb)
+            cb.callback()
+        time.sleep(0.01)
+    tasks = [t for t in page.loop._tasks if t._executor is not None]
+    doc.callbacks.trigger_event(ConnectionLost())                    # the tab closed
+    assert page.loop.closed and all(t._stopped for t in tasks)
+    for t in tasks:
+        t._executor.thread.join(600)
+        assert not t._executor.thread.is_alive(), t.name
 
 
 def test_a_client_gone_mid_send_is_not_reported_as_an_error_and_other_task_errors_still_are(caplog):

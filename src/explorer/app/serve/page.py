@@ -31,7 +31,7 @@ import time
 
 import panel as pn
 import param
-from bokeh.events import DoubleTap, Tap
+from bokeh.events import ConnectionLost, DoubleTap, Tap
 
 from explorer.app.serve import export
 from explorer.app.serve import raster as raster_mod
@@ -130,6 +130,11 @@ class SectionPage:
         fig.on_event(DoubleTap, self._on_tap)   # a second click within 300 ms is a double tap
         self._build()
         if doc is not None:
+            # the tab is gone: its websocket closed (Bokeh's ConnectionLost; a session is not
+            # reconnected, Panel's reconnect is off) or, for a page never connected, the session
+            # expired.  Its searches, raster and orbits are not wanted any more: they stop now,
+            # not when Bokeh discards the session 15-30 s later (issue 32 item 1)
+            doc.on_event(ConnectionLost, lambda _e: self.close())
             doc.on_session_destroyed(lambda _ctx: self.close())
         self._load_url(args or {})
 
