@@ -196,11 +196,11 @@ def pytest_terminal_summary(terminalreporter):
 #: starts last and leaves one core idle at the end (docs/tests.md, "Time"); the others keep
 #: their order.  Measured with README's command (``--durations``), slowest first.
 SLOW_MODULES_FIRST = (
-    "test_plain_install.py", "app/test_serve.py", "app/test_serve_hostile.py", "test_stress.py",
-    "app/test_paper.py", "analysis/test_greene.py", "integrate/test_tangent_lanes.py", "test_lint.py",
-    "analysis/test_sweep.py", "analysis/test_sweep_stream.py", "app/test_interrupt.py",
-    "analysis/test_periodic.py", "app/test_serve_feedback.py", "analysis/test_manifolds.py",
-    "app/test_notebook.py", "test_docs.py",
+    "test_plain_install.py", "app/test_serve.py", "app/test_serve_hostile.py", "app/test_serve_feedback.py",
+    "app/test_serve_orbit_list.py", "test_stress.py", "app/test_paper.py", "analysis/test_greene.py",
+    "analysis/test_sections.py", "integrate/test_tangent_lanes.py", "analysis/test_sweep.py",
+    "app/test_interrupt.py", "integrate/test_lanes.py", "analysis/test_sweep_stream.py",
+    "analysis/test_periodic.py", "analysis/test_manifolds.py", "app/test_notebook.py", "test_docs.py",
 )
 
 
