@@ -17,6 +17,9 @@ if int(os.environ.get("NUMBA_NUM_THREADS", "0") or 0) < 2:
 
 from explorer import model  # noqa: E402
 
+#: the browser modules' shared Chromium and default server (tests/app/browser_session.py)
+pytest_plugins = ("app.browser_session",)
+
 
 def pytest_configure(config):
     """A test run started as a background job of a non-interactive shell (``cmd &``) inherits

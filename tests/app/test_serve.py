@@ -356,14 +356,14 @@ class Served:
 @pytest.fixture(scope="module")
 def served(default_server):
     """The served page (SERVED; ``export_dir``: its --export-dir): one server for every module of
-    this pytest process that uses it (tests/app/conftest.py), stopped with Ctrl-C at the end."""
+    this pytest process that uses it (tests/app/browser_session.py), stopped with Ctrl-C at the end."""
     return default_server
 
 
 @pytest.fixture(scope="module")
 def browser(launch_chromium):
     """Chromium (a Playwright context): one for the consecutive browser modules of this pytest
-    process (tests/app/conftest.py)."""
+    process (tests/app/browser_session.py)."""
     return launch_chromium()
 
 

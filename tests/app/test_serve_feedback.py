@@ -21,7 +21,7 @@ from explorer import model
 from explorer.app.serve.settings import Settings
 
 #: chromium and the served page (`--mu 0.03`), as in test_serve.py (one per pytest process:
-#: tests/app/conftest.py)
+#: tests/app/browser_session.py)
 browser = test_serve.browser
 served = test_serve.served
 

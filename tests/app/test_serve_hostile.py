@@ -31,7 +31,7 @@ from test_serve import (
     browser_needed,
 )
 
-#: chromium, as in test_serve.py (one per pytest process: tests/app/conftest.py)
+#: chromium, as in test_serve.py (one per pytest process: tests/app/browser_session.py)
 browser = test_serve.browser
 
 #: the server must answer within this long (s) whatever a page asked it to compute
@@ -90,7 +90,7 @@ def _second_session_works(browser, served) -> None:
 
 @pytest.fixture(scope="module")
 def hostile(default_server):
-    """The served page of test_serve (``--crossings 150 --mu 0.03``; tests/app/conftest.py: Ctrl-C
+    """The served page of test_serve (``--crossings 150 --mu 0.03``; tests/app/browser_session.py: Ctrl-C
     ends it cleanly at the end)."""
     return default_server
 
@@ -152,7 +152,7 @@ def test_ctrl_c_ends_a_server_busy_with_hostile_searches_within_a_second(browser
         took = time.perf_counter() - t0
         if page is not None:
             page.context.clear_cookies()
-            for p in page.context.pages:                    # (the browser is shared: tests/app/conftest.py)
+            for p in page.context.pages:                    # (the browser is shared: tests/app/browser_session.py)
                 p.close()
     err = s.proc.stderr.read()
     assert s.proc.returncode in (0, 130) and "Traceback" not in err, err[-2000:]

@@ -1,4 +1,6 @@
-"""What the browser modules (tests/app/test_serve*.py) share within one pytest process: one
+"""What the browser modules (tests/app/test_serve*.py) share within one pytest process (a plugin
+that tests/conftest.py loads: a second file named conftest.py would take the module name
+``conftest`` that the tests' ``from conftest import ...`` means): one
 Chromium, and one ``explorer serve --crossings 150 --mu 0.03`` for the tests that need only the
 default page (test_serve.SERVED).  Each start costs a process of its own (Chromium: a browser
 and its renderers; the server: Python, Panel and Bokeh imported and its kernels loaded), and
