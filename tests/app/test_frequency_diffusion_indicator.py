@@ -173,6 +173,7 @@ def test_choosing_the_chaos_layers_indicator_changes_its_values_scale_and_label(
         assert page.colour_bar.title.startswith("⟨Y⟩") and (page.chaos.mapper.low, page.chaos.mapper.high) == (
             MEGNO_LOW, MEGNO_HIGH)
         assert page.url_query()["indicator"] == "megno"
+        assert page.overlays_on()[-1] == "megno"
         page.chaos.indicator.value = "frequency_diffusion"               # the choice: a new raster
         assert page.raster_source.data["n"] == []                       # (MEGNO's values gone at once)
         _poll_until(page, lambda: _complete(page) and page.chaos.center is not None)
@@ -185,6 +186,7 @@ def test_choosing_the_chaos_layers_indicator_changes_its_values_scale_and_label(
         assert np.nanmedian(fd[regular]) < np.nanmedian(fd[chaotic]) - 1.0
         assert "ν1 − ν2" in page.colour_bar.title and page.chaos.mapper.low < -10
         assert page.url_query()["indicator"] == "frequency_diffusion"
+        assert page.overlays_on()[-1] == "frequency_diffusion"           # the exported scene says which
         page.chaos.indicator.value = "megno"                             # and back
         _poll_until(page, lambda: _complete(page) and np.array_equal(page.raster_source.data["image"][0], megno,
                                                                      equal_nan=True))

@@ -260,8 +260,9 @@ class SectionPage:
         self.url_state.param.update(**self.url_query())
 
     def overlays_on(self) -> tuple:
-        """The names of the overlays that are on (separatrices, periodic, megno), as in the URL."""
-        return self.overlays.on() + (("megno",) if self.chaos.layer.value else ())
+        """The names of the overlays that are on (separatrices, periodic, and the chaos layer by its
+        indicator: megno or frequency_diffusion), for the exported scene's description."""
+        return self.overlays.on() + ((self.chaos.indicator.value,) if self.chaos.layer.value else ())
 
     def _show_fields(self):
         self.fields.show(self.settings)
