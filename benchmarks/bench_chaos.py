@@ -67,8 +67,8 @@ def raster_seeds(prm, resolution):
 
 def explorer_run(prm, Y0, T, threads=2, repeats=3):
     from explorer.analysis import lyapunov
-    lyapunov.indicators(prm, Y0[:8], tmax=1.0, tol=TOL, threads=threads)      # compile / load the cache
-    best, _times, r = C.best_of(lambda: lyapunov.indicators(prm, Y0, tmax=T, tol=TOL, threads=threads), repeats,
+    lyapunov.indicators(prm, states=Y0[:8], tmax=1.0, tol=TOL, threads=threads)      # compile / load the cache
+    best, _times, r = C.best_of(lambda: lyapunov.indicators(prm, states=Y0, tmax=T, tol=TOL, threads=threads), repeats,
                                 budget=120.0)
     return best, r.megno, r.steps
 

@@ -38,8 +38,8 @@ def main(argv=None):
         y0 = model.section_state(prm, p1, p2, h)
         out = {}
         for early in (False, True):
-            lyapunov.indicators(prm, y0[:2], tmax=10.0, method=ly.method, tol=ly.tol, early_stop=early)
-            best, _times, r = C.best_of(lambda e=early: lyapunov.indicators(prm, y0, tmax=ly.time, method=ly.method, tol=ly.tol, early_stop=e),
+            lyapunov.indicators(prm, states=y0[:2], tmax=10.0, method=ly.method, tol=ly.tol, early_stop=early)
+            best, _times, r = C.best_of(lambda e=early: lyapunov.indicators(prm, states=y0, tmax=ly.time, method=ly.method, tol=ly.tol, early_stop=e),
                                         repeats=args.repeats)
             ch = r.chaotic(ly.threshold)
             valid = (r.status == 0) | (ch if early else False)

@@ -45,7 +45,7 @@ def workloads(quick):
         return (r.data, r.count, r.final)
 
     def chaos():
-        r = lyapunov.indicators(prm1, Y1, tmax=T, tol=1e-12, threads=2)
+        r = lyapunov.indicators(prm1, states=Y1, tmax=T, tol=1e-12, threads=2)
         return (r.megno, r.mlce, r.fli)
 
     return {f"W4 taylor 64 x {K}": w4, f"chaos map 400 orbits T = {T:g}": chaos}

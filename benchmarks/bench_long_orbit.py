@@ -138,8 +138,8 @@ def throughput(K):
 
     prm = model.FIGURE4.with_(mu=MU)
     y0 = model.section_state(prm, [P1], [P2], H)
-    sections.crossings(prm, y0, n_crossings=10, tol=TOL)
-    best = C.best_of(lambda: sections.crossings(prm, y0, n_crossings=K, tol=TOL), repeats=3)[0]
+    sections.crossings(prm, states=y0, n_crossings=10, tol=TOL)
+    best = C.best_of(lambda: sections.crossings(prm, states=y0, n_crossings=K, tol=TOL), repeats=3)[0]
     out = {"explorer": K / best}
     if C.have("heyoka"):
         sys.path.insert(0, str(HERE))

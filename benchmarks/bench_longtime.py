@@ -70,7 +70,7 @@ def run_method(prm, y0, method, kw, T_end):
         else:
             tmax = e - t_now
         K = int(tmax * 2) + 20            # more than the crossings a chunk can have (period > 0.5)
-        r = sections.crossings(prm, y, n_crossings=K, method=method, tmax=tmax, **kw)
+        r = sections.crossings(prm, states=y, n_crossings=K, method=method, tmax=tmax, **kw)
         assert np.all(r.count < K), "chunk stopped on its crossing count"
         off = model.energy(prm, y) - H0
         dHc = np.nanmax(np.abs(np.nan_to_num(r.data[..., 4], nan=0.0) + off[:, None])) if r.data.size else 0.0
@@ -124,7 +124,7 @@ def main(argv=None):
         c1, c2, r1, r2 = model.allowed_ellipse(prm, H)
         y0 = model.section_state(prm, c1 + r1 * np.array([-0.6, 0.5]), c2 + 0.1 * r2 * np.ones(2), H)
         for method, kw in METHODS:
-            sections.crossings(prm, y0, n_crossings=2, method=method, **kw)     # compile / load the cache
+            sections.crossings(prm, states=y0, n_crossings=2, method=method, **kw)     # compile / load the cache
             t0 = time.perf_counter()
             rows = run_method(prm, y0, method, kw, T_end)
             wall = time.perf_counter() - t0

@@ -391,8 +391,8 @@ def workloads(quick):
     Y = polar_seeds(prm1)
     T = 100.0 if quick else 1000.0
     for threads in (1, 2):
-        lyapunov.indicators(prm1, Y[:8], tmax=1.0, tol=1e-12, threads=threads)
-        wall, cpu = timed(lambda: lyapunov.indicators(prm1, Y, tmax=T, tol=1e-12, threads=threads), 3)
+        lyapunov.indicators(prm1, states=Y[:8], tmax=1.0, tol=1e-12, threads=threads)
+        wall, cpu = timed(lambda: lyapunov.indicators(prm1, states=Y, tmax=T, tol=1e-12, threads=threads), 3)
         out.append(dict(name=f"chaos map 400 orbits, T = {T:g}, {threads} thread{'s' * (threads > 1)}", wall=wall,
                         cpu=cpu, proc=timed.proc, threads=threads, steps=float(np.sum(timed.last.steps)), crossings=0, tangent=True))
     return out

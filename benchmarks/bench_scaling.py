@@ -83,13 +83,13 @@ def main(argv=None):
     out = dict(orbits={}, crossings={}, threads={}, sweep={})
 
     def timed(method, kw, Y, K, threads=None):
-        best, times, res = C.best_of(lambda: sections.crossings(prm, Y, n_crossings=K, method=method, threads=threads, **kw),
+        best, times, res = C.best_of(lambda: sections.crossings(prm, states=Y, n_crossings=K, method=method, threads=threads, **kw),
                                      repeats, budget=60.0)
         n = int(res.count.sum())
         return dict(wall=best, times=times, crossings=n, rate=n / best, t_integrated=float(res.info[:, 0].sum()))
 
     for method, kw in METHODS:
-        sections.crossings(prm, Ymax[:2], n_crossings=2, method=method, **kw)   # compile / load the cache
+        sections.crossings(prm, states=Ymax[:2], n_crossings=2, method=method, **kw)   # compile / load the cache
         # Orbits from the same seed set, spread over the ellipse: Y[:N] would take the left end only,
         # so every N uses an evenly spaced subset of the largest set.
         out["orbits"][method] = []

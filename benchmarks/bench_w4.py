@@ -64,7 +64,7 @@ def section_points(prm, Y0, per_orbit):
     """One-step test points: crossings 1..per_orbit of every W4 orbit from a tight explorer
     taylor run (tol 1e-15), put exactly on the section (g1, g2) = (0, -1)."""
     from explorer.analysis import sections
-    r = sections.crossings(prm, Y0, n_crossings=per_orbit, method="taylor", tol=1e-15)
+    r = sections.crossings(prm, states=Y0, n_crossings=per_orbit, method="taylor", tol=1e-15)
     assert np.all(r.count == per_orbit), "tight run did not produce the section points"
     rows = r.data[:, :per_orbit, :].reshape(-1, 5)
     P = np.zeros((rows.shape[0], 5))
@@ -489,7 +489,7 @@ Y0 = model.section_state(prm, c1 + r1 * np.array([-0.5, 0.5]), np.zeros(2), 2.0)
 out = {"import": t_import}
 for m, kw in METHODS:
     t = time.perf_counter()
-    sections.crossings(prm, Y0, n_crossings=2, method=m, **kw)
+    sections.crossings(prm, states=Y0, n_crossings=2, method=m, **kw)
     out[m] = time.perf_counter() - t
 print(json.dumps(out))
 """
@@ -502,7 +502,7 @@ from explorer import model
 from explorer.analysis import sections
 prm = model.FIGURE4.with_(mu=0.5)
 Y0 = model.section_state(prm, [0.0, 0.3], [0.0, 0.0], 2.0)
-r = sections.crossings(prm, Y0, n_crossings=5, method="taylor", tol=1e-13)
+r = sections.crossings(prm, states=Y0, n_crossings=5, method="taylor", tol=1e-13)
 assert r.count.min() == 5
 print(time.perf_counter() - t0)
 """
@@ -599,8 +599,8 @@ def main(argv=None):
     sub = np.arange(0, pts.shape[0], 8)
     q, q_tol, q_order = heyoka_reference(P, pts[sub], "real128", tol=1e-28)
     e_q = one_step_errors(ref[sub], q)
-    ex_t16 = sections.crossings(prm, pts, n_crossings=1, method="taylor", tol=1e-16).data[:, 0, :4]
-    ex_d15 = sections.crossings(prm, pts, n_crossings=1, method="dop853", tol=1e-15).data[:, 0, :4]
+    ex_t16 = sections.crossings(prm, states=pts, n_crossings=1, method="taylor", tol=1e-16).data[:, 0, :4]
+    ex_d15 = sections.crossings(prm, states=pts, n_crossings=1, method="dop853", tol=1e-15).data[:, 0, :4]
     refcheck = dict(
         reference=f"heyoka taylor_adaptive fp_type=numpy.longdouble, tol={ref_tol:.3g} (eps), order {ref_order}",
         seconds=t_ref, n_points=int(pts.shape[0]),
@@ -631,20 +631,20 @@ def main(argv=None):
     def explorer_job(method, kw):
         def job():
             t0 = time.perf_counter()
-            res = sections.crossings(prm, Y0, n_crossings=K, method=method, **kw)
+            res = sections.crossings(prm, states=Y0, n_crossings=K, method=method, **kw)
             sec = time.perf_counter() - t0
             return sec, sec, res
         return job
 
     for method, kw, setting in explorer_rows:
-        sections.crossings(prm, Y0[:2], n_crossings=2, method=method, **kw)       # compile / load cache
+        sections.crossings(prm, states=Y0[:2], n_crossings=2, method=method, **kw)       # compile / load cache
     log(f"explorer: {len(explorer_rows)} rows, up to {repeats} interleaved rounds")
     timings = round_robin([explorer_job(m, kw) for m, kw, _ in explorer_rows], repeats, budget)
     for (method, kw, setting), tm in zip(explorer_rows, timings):
         best, n, res = tm["best"], len(tm["times"]), tm["res"]
         row_threads = kw.get("threads", threads)
         ok = int(np.sum(res.count == K))
-        one = sections.crossings(prm, pts, n_crossings=1, method=method, **kw).data[:, 0, :4]
+        one = sections.crossings(prm, states=pts, n_crossings=1, method=method, **kw).data[:, 0, :4]
         es = err_stats(one_step_errors(one, ref))
         notes = f"{runs_note(tm['times'])}; {row_threads} thread{'s' if row_threads > 1 else ''}"
         if ok != N:

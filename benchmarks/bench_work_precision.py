@@ -57,7 +57,7 @@ def rows_config(quick):
 
 def one_step_points(prm, Y0, per_orbit):
     from explorer.analysis import sections
-    r = sections.crossings(prm, Y0, n_crossings=per_orbit, method="taylor", tol=1e-15)
+    r = sections.crossings(prm, states=Y0, n_crossings=per_orbit, method="taylor", tol=1e-15)
     ok = r.count == per_orbit
     rows = r.data[ok, :per_orbit, :].reshape(-1, 5)
     pts = np.zeros((rows.shape[0], 5))
@@ -112,8 +112,8 @@ def main(argv=None):
         pts = one_step_points(prm, Y0, per_orbit)
         # ---- reference
         t0 = time.perf_counter()
-        ex_t16 = sections.crossings(prm, pts, n_crossings=1, method="taylor", tol=1e-16).data[:, 0, :4]
-        ex_d15 = sections.crossings(prm, pts, n_crossings=1, method="dop853", tol=1e-15).data[:, 0, :4]
+        ex_t16 = sections.crossings(prm, states=pts, n_crossings=1, method="taylor", tol=1e-16).data[:, 0, :4]
+        ex_d15 = sections.crossings(prm, states=pts, n_crossings=1, method="dop853", tol=1e-15).data[:, 0, :4]
         if use_heyoka:
             ref, ref_tol, ref_order = w4.heyoka_reference(P, pts, "longdouble")
             keep = np.all(np.isfinite(ref), axis=1)
@@ -139,10 +139,10 @@ def main(argv=None):
                  + [("dop853", dict(tol=t), f"tol {t:.0e}") for t in cfg["dop853"]]
                  + [(m, dict(dt=d), f"dt {d:g}") for m in ("split4", "split6", "split8") for d in cfg[m]])
         for method, kw, setting in specs:
-            sections.crossings(prm, Y0[:2], n_crossings=2, method=method, **kw)          # compile / load the cache
-            best, times, res = C.best_of(lambda: sections.crossings(prm, Y0, n_crossings=K, method=method, **kw), repeats,
+            sections.crossings(prm, states=Y0[:2], n_crossings=2, method=method, **kw)          # compile / load the cache
+            best, times, res = C.best_of(lambda: sections.crossings(prm, states=Y0, n_crossings=K, method=method, **kw), repeats,
                                          budget=30.0)
-            one = sections.crossings(prm, pts, n_crossings=1, method=method, **kw).data[:, 0, :4]
+            one = sections.crossings(prm, states=pts, n_crossings=1, method=method, **kw).data[:, 0, :4]
             es = stats(errors(one, ref_for(method)))
             ncross = int(res.count.sum())
             row = dict(family=f"explorer {method}", method=method, setting=setting, wall=best, times=times,

@@ -62,9 +62,9 @@ def main():
     inside = u ** 2 + v ** 2 < 0.98 ** 2
     p1, p2 = (c1 + r1 * u[inside])[:n], (c2 + r2 * v[inside])[:n]
     y0 = model.section_state(prm, p1, p2, 2.0)
-    lyapunov.indicators(prm, y0[:2], tmax=10.0)  # compile
+    lyapunov.indicators(prm, states=y0[:2], tmax=10.0)  # compile
     t0 = time.perf_counter()
-    ind = lyapunov.indicators(prm, y0, tmax=1000.0, method="taylor", tol=1e-12)
+    ind = lyapunov.indicators(prm, states=y0, tmax=1000.0, method="taylor", tol=1e-12)
     t_map = time.perf_counter() - t0
     frac = float(np.mean(ind.megno > 4.0))
     rows.append((f"chaos map: {len(y0)} orbits, mu = 0.03, T = 1000 (MEGNO, mLCE, FLI)", t_map,

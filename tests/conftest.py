@@ -128,11 +128,11 @@ def warm_kernels(which: str) -> None:
     one = model.section_state(prm, [0.2], [0.1], 2.0)
     batch = model.section_state(prm, np.linspace(-0.3, 0.3, WARM_BATCH), np.zeros(WARM_BATCH), 2.0)
     if which == "shared":
-        sections.crossings(prm, one, n_crossings=1, method="taylor", tol=1e-10)
+        sections.crossings(prm, states=one, n_crossings=1, method="taylor", tol=1e-10)
         return
-    run = ((lambda y0, method: sections.crossings(prm, y0, n_crossings=1, method=method, tol=1e-10, dt=0.05))
+    run = ((lambda y0, method: sections.crossings(prm, states=y0, n_crossings=1, method=method, tol=1e-10, dt=0.05))
            if which == "crossings" else
-           (lambda y0, method: lyapunov.indicators(prm, y0, tmax=1.0, method=method, tol=1e-10, dt=0.05)))
+           (lambda y0, method: lyapunov.indicators(prm, states=y0, tmax=1.0, method=method, tol=1e-10, dt=0.05)))
     for y0, method in ((one, "taylor"), (batch, "taylor"), (one, "dop853"), (one, "split4")):
         run(y0, method)
     if which == "crossings":

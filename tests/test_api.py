@@ -29,7 +29,6 @@ def test_every_public_name_resolves_and_is_documented(name):
 #: public callables that take keywords of their own naming, not a pass-through: why
 KEYWORD_DATA = {
     "Params.with_": "the changes are parameter names, each validated by Params",
-    "explore": "the page's settings on top of a scene (app/serve, validated there: ParameterError)",
 }
 
 
@@ -53,6 +52,16 @@ def test_no_public_function_hides_its_keywords_behind_a_pass_through():
             if any(p.kind == p.VAR_KEYWORD for p in sig.parameters.values()):
                 hidden.append(f"{label}{sig}")
     assert not hidden, hidden
+
+
+def test_explore_names_every_model_parameter_and_setting_it_takes():
+    """``explore(**settings)`` is gone: each model parameter of docs/model.md and each setting of
+    the page is a keyword of its own (the count is ``n_crossings``, the API's one name)."""
+    from explorer import model
+
+    params = inspect.signature(explorer.explore).parameters
+    assert set(model.PARAM_NAMES) | {"h", "method", "tol", "dt", "n_crossings"} <= set(params)
+    assert all(params[k].kind == inspect.Parameter.KEYWORD_ONLY for k in model.PARAM_NAMES)
 
 
 def test_result_types_are_frozen():

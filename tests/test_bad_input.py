@@ -46,13 +46,13 @@ BIG = str(10**12)
 #: a valid, cheap invocation of each command (the bad option is appended; argparse keeps the last)
 BASE = {
     "orbit": ["orbit"] + P0 + ["-K", "2"],
-    "lyapunov": ["lyapunov"] + P0 + ["-T", "1"],
+    "lyapunov": ["lyapunov"] + P0 + ["--tmax", "1"],
     "fixedpoint": ["fixedpoint"],
     "periodic": ["periodic", "-K", "1", "--guess", "0,0"],
     "rotation": ["rotation", "--from", "0.1,0", "--to", "0.2,0", "--n", "2", "--iterates", "10"],
     "explore": ["explore", "--port", "0"],  # never starts either (explore is serve that opens a browser)
     "melnikov": ["melnikov"],
-    "trajectory": ["trajectory", "--no-figure", "-T", "1", "--samples", "10"],
+    "trajectory": ["trajectory", "--no-figure", "--tmax", "1", "--samples", "10"],
     "sweep": ["sweep", "{scene}", "--no-figure", "--quiet", "--out", "o.h5"],
     "figures": ["figures", "--only", "figure4"],
     "manifold": ["manifold", "--arclength", "0.5"],
@@ -63,13 +63,13 @@ MODEL_OPTIONS = tuple(f"--{name}" for name in model.PARAM_NAMES)
 #: options taking a real number, per command (the model parameters are added below)
 REAL_OPTIONS = {
     "orbit": ("--p1", "--p2", "--h", "--tol", "--dt", "--tmax", "--phi0"),
-    "lyapunov": ("--p1", "--p2", "--h", "--time", "--tol", "--dt"),
+    "lyapunov": ("--p1", "--p2", "--h", "--tmax", "--tol", "--dt"),
     "fixedpoint": ("--h", "--tol"),
     "periodic": ("--h", "--tol"),
     "rotation": ("--h", "--tol"),
     "explore": ("--h", "--tol", "--dt", "--megno-time"),
     "melnikov": ("--h", "--g0"),
-    "trajectory": ("--p1", "--p2", "--M", "--phi", "--time", "--tol"),
+    "trajectory": ("--p1", "--p2", "--M", "--phi", "--tmax", "--tol"),
     "manifold": ("--h", "--tol", "--arclength", "--max-time"),
     "greene": ("--h", "--tol", "--k"),
     "serve": ("--h", "--tol", "--dt", "--megno-time"),
@@ -103,7 +103,7 @@ def _cases():
                 values.append("1e300")          # past MAX_MAGNITUDE (or outside the region)
             if opt in ("--tol",):
                 values += ["0", "1", "-1e-12"]
-            if opt in ("--dt", "--time", "--tmax", "--arclength", "--max-time", "--megno-time"):
+            if opt in ("--dt", "--tmax", "--arclength", "--max-time", "--megno-time"):
                 values += ["0", "-1"]
             if opt == "--megno-time":
                 values.append(BIG)

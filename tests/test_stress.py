@@ -49,7 +49,7 @@ def on_section(prm, u, v, h=2.0):
 
 def final_state(prm, y0, T, method, **kw):
     """State at time T (the run stops at its time budget: K is never reached)."""
-    r = sections.crossings(prm, y0, n_crossings=BIG_K, method=method, tmax=T, **kw)
+    r = sections.crossings(prm, states=y0, n_crossings=BIG_K, method=method, tmax=T, **kw)
     assert np.all(r.status == STATUS_TMAX) and np.all(r.info[:, 0] == T)
     return r.final
 
@@ -183,7 +183,7 @@ def test_splitting_energy_bounded_and_casimir_after_1e6_steps(method):
     dt = 0.05
     y, n, ends, peaks = y0.copy(), 0, [10**3, 10**4, 10**5, 10**6], []
     for end in ends:
-        r = sections.crossings(prm, y, n_crossings=100000, method=method, dt=dt, tmax=(end - n) * dt)
+        r = sections.crossings(prm, states=y, n_crossings=100000, method=method, dt=dt, tmax=(end - n) * dt)
         assert np.all(r.status == STATUS_TMAX)
         offset = model.energy(prm, y) - H0           # chunk start relative to the true start
         dH = np.abs(np.nan_to_num(r.data[..., 4], nan=0.0) + offset[:, None])
@@ -350,8 +350,8 @@ def test_grazing_pair_of_crossings_inside_one_step_is_found(method, kw, sep, ato
     ref_up = scipy_times(GRAZE_PRM, y0, 1.4, 1, max_step=2e-4, t_fine=(0.9, 1.3))
     ref_both = scipy_times(GRAZE_PRM, y0, 1.4, 0, max_step=2e-4, t_fine=(0.9, 1.3))
     assert len(ref_up) == 1 and len(ref_both) == 2 and abs(ref_both[1] - ref_both[0] - sep) < 0.1 * sep
-    up = sections.crossings(GRAZE_PRM, y0, n_crossings=5, method=method, tmax=1.4, **kw)
-    both = sections.crossings(GRAZE_PRM, y0, n_crossings=5, method=method, tmax=1.4, direction=0, **kw)
+    up = sections.crossings(GRAZE_PRM, states=y0, n_crossings=5, method=method, tmax=1.4, **kw)
+    both = sections.crossings(GRAZE_PRM, states=y0, n_crossings=5, method=method, tmax=1.4, direction=0, **kw)
     assert up.count[0] == 1 and both.count[0] == 2, (up.orbit(0)[:, 0], both.orbit(0)[:, 0], ref_both)
     assert abs(up.orbit(0)[0, 0] - ref_up[0]) < atol
     np.testing.assert_allclose(both.orbit(0)[:, 0], ref_both, atol=atol)
@@ -373,7 +373,7 @@ def compare_with_scipy(prm, y0, methods, window, K=6, margin=0.05, t_atol=None):
         refs = [reference.scipy_crossings(P, y, K, t_max=window)[:, 0] for y in y0]
     bad = []
     for method, kw in methods:
-        r = sections.crossings(prm, y0, n_crossings=K, method=method, tmax=window, **kw)
+        r = sections.crossings(prm, states=y0, n_crossings=K, method=method, tmax=window, **kw)
         for i, ref in enumerate(refs):
             got = r.orbit(i)[:, 0]
             assert np.all(np.isfinite(r.orbit(i)))
@@ -441,7 +441,7 @@ def test_orbits_that_stop_crossing_and_long_returns_match_scipy():
     rock = np.array([[4.0, 0.0, 0.05, math.sin(0.3), math.cos(0.3)],
                      [3.0, 0.5, 0.2, math.sin(-0.5), math.cos(-0.5)]])
     for method, kw in (("taylor", dict(tol=1e-13)), ("dop853", dict(tol=1e-13)), ("split8", dict(dt=0.01))):
-        r = sections.crossings(prm, rock, n_crossings=3, method=method, tmax=60.0, **kw)
+        r = sections.crossings(prm, states=rock, n_crossings=3, method=method, tmax=60.0, **kw)
         assert np.all(r.count == 0) and np.all(r.status == STATUS_TMAX)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -470,7 +470,7 @@ def test_crossings_at_step_ends_are_counted_once(method):
         t1 = (math.pi - math.atan2(y0[3], y0[4]) % (2 * math.pi)) * prm.b / c
         expect = t1 + period * np.arange(3)
         for direction in (1, 0):
-            r = sections.crossings(prm, y0, n_crossings=3, method=method, dt=dt, direction=direction)
+            r = sections.crossings(prm, states=y0, n_crossings=3, method=method, dt=dt, direction=direction)
             assert r.count[0] == 3
             np.testing.assert_allclose(r.orbit(0)[:, 0], expect, atol=1e-12)
 
@@ -489,7 +489,8 @@ def test_crossings_at_taylor_step_ends_are_counted_once():
         return np.array([0.0, 0.0, c, math.sin(phi), math.cos(phi)])
 
     def gap(t):   # end of step 3 minus the crossing time
-        return sections.crossings(prm, start(t), n_crossings=3, method="taylor", tol=1e-13, max_steps=3).info[0, 0] - t
+        res = sections.crossings(prm, states=start(t), n_crossings=3, method="taylor", tol=1e-13, max_steps=3)
+        return res.info[0, 0] - t
 
     a, b = 1.0, 3.0
     assert gap(a) > 0 > gap(b)
@@ -501,7 +502,7 @@ def test_crossings_at_taylor_step_ends_are_counted_once():
         y0 = start(a + shift)
         t1 = (math.pi - math.atan2(y0[3], y0[4]) % (2 * math.pi)) * prm.b / c
         for direction in (1, 0):
-            r = sections.crossings(prm, y0, n_crossings=3, method="taylor", tol=1e-13, direction=direction)
+            r = sections.crossings(prm, states=y0, n_crossings=3, method="taylor", tol=1e-13, direction=direction)
             assert r.count[0] == 3
             np.testing.assert_allclose(r.orbit(0)[:, 0], t1 + period * np.arange(3), atol=1e-12)
 
@@ -518,7 +519,7 @@ def test_crossing_at_the_end_of_the_time_budget_is_counted_at_most_once(method):
         phi = math.pi - c * (tmax + shift) / prm.b
         y0 = np.array([0.0, 0.0, c, math.sin(phi), math.cos(phi)])
         t1 = (math.pi - math.atan2(y0[3], y0[4]) % (2 * math.pi)) * prm.b / c
-        r = sections.crossings(prm, y0, n_crossings=3, method=method, tol=1e-13, dt=0.05, tmax=tmax, direction=0)
+        r = sections.crossings(prm, states=y0, n_crossings=3, method=method, tol=1e-13, dt=0.05, tmax=tmax, direction=0)
         assert r.count[0] <= 1
         if r.count[0]:
             assert abs(r.orbit(0)[0, 0] - t1) < 1e-12 and t1 <= tmax + 1e-12
@@ -565,15 +566,15 @@ def test_extreme_parameters_give_correct_numbers_or_a_refusal(name):
     v = np.array([0.1, -0.4, 0.0, 0.2, 0.0])
     y0 = model.section_state(prm, c1 + r1 * u, c2 + r2 * v, h)
     scale = energy_scale(prm, y0)
-    tay = sections.crossings(prm, y0, n_crossings=20, method="taylor", tol=1e-13, tmax=200.0, max_steps=10**6)
+    tay = sections.crossings(prm, states=y0, n_crossings=20, method="taylor", tol=1e-13, tmax=200.0, max_steps=10**6)
     dt = float(np.min(tay.info[:, 0] / np.maximum(tay.info[:, 1], 1))) / 10
     runs = {"taylor": (tay, 1e-11)}
     refused = {}
     for method, kw, bound in (("dop853", dict(tol=1e-12), 1e-9), ("split8", dict(dt=dt), 1e-8),
                               ("split4", dict(dt=dt), 1e-4)):
         try:
-            runs[method] = (sections.crossings(prm, y0, n_crossings=20, method=method, tmax=200.0, max_steps=10**6,
-                                               **kw),
+            runs[method] = (sections.crossings(prm, states=y0, n_crossings=20, method=method, tmax=200.0,
+                                               max_steps=10**6, **kw),
                             bound)
         except ParameterError as exc:
             refused[method] = str(exc)
@@ -609,8 +610,8 @@ def test_lyapunov_indicators_identical_for_1_and_2_threads(method, kw):
     prm = model.FIGURE4.with_(mu=0.5)
     c1, c2, r1, r2 = model.allowed_ellipse(prm, 2.0)
     y0 = model.section_state(prm, c1 + r1 * np.linspace(-0.9, 0.9, 12), c2 + 0.1 * r2, 2.0)
-    a = lyapunov.indicators(prm, y0, tmax=200.0, method=method, history=5, threads=1, **kw)
-    b = lyapunov.indicators(prm, y0, tmax=200.0, method=method, history=5, threads=2, **kw)
+    a = lyapunov.indicators(prm, states=y0, tmax=200.0, method=method, history=5, threads=1, **kw)
+    b = lyapunov.indicators(prm, states=y0, tmax=200.0, method=method, history=5, threads=2, **kw)
     for name in ("time", "mlce", "megno", "Y", "fli", "status", "steps", "final", "history"):
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
 

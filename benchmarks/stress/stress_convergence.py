@@ -56,7 +56,7 @@ def heyoka_state(P, y0, t):
 
 def final(prm, y0, t, method, **kw):
     from explorer.analysis import sections
-    r = sections.crossings(prm, y0, n_crossings=10**4, method=method, tmax=t, **kw)
+    r = sections.crossings(prm, states=y0, n_crossings=10**4, method=method, tmax=t, **kw)
     assert r.info[0, 0] == t
     return r.final[0]
 

@@ -95,7 +95,7 @@ def part_a(ck, quick):
         t_ref = time.perf_counter() - t0
         n_orbits += len(y0)
         for method, kw, tol in METHODS_A:
-            r = sections.crossings(prm, y0, n_crossings=K, method=method, tmax=window, **kw)
+            r = sections.crossings(prm, states=y0, n_crossings=K, method=method, tmax=window, **kw)
             bad, scipy_missed = [], 0
             for i in range(len(y0)):
                 assert np.all(np.isfinite(r.orbit(i)))
@@ -135,7 +135,7 @@ def part_b(ck):
         ref = scipy_times(prm, y0, 1.4, direction=0, max_step=2e-4)
         found = {}
         for method, kw in settings:
-            r = sections.crossings(prm, y0, n_crossings=5, method=method, tmax=1.4, direction=0, **kw)
+            r = sections.crossings(prm, states=y0, n_crossings=5, method=method, tmax=1.4, direction=0, **kw)
             found[f"{method} {kw}"] = int(r.count[0])
         table[sep] = dict(scipy_fine=ref.tolist(), found=found)
         missed = [k for k, v in found.items() if v != len(ref)]
@@ -159,12 +159,12 @@ def part_c(ck, quick):
         y = model.section_state(prm, c1 + r1 * u[ok], c2 + r2 * v[ok], 2.0)
         states = []
         for _ in range(10 if quick else 50):
-            y = sections.crossings(prm, y, n_crossings=10000, method="taylor", tol=1e-13, tmax=7.0).final.copy()
+            y = sections.crossings(prm, states=y, n_crossings=10000, method="taylor", tol=1e-13, tmax=7.0).final.copy()
             states.append(y)
         S = np.concatenate(states)
-        dense = sections.crossings(prm, S, n_crossings=1000, method="split8", dt=0.002, tmax=W)
+        dense = sections.crossings(prm, states=S, n_crossings=1000, method="split8", dt=0.002, tmax=W)
         for method, kw in (("taylor", dict(tol=1e-13)), ("dop853", dict(tol=1e-13)), ("split8", dict(dt=0.05))):
-            r = sections.crossings(prm, S, n_crossings=1000, method=method, tmax=W, **kw)
+            r = sections.crossings(prm, states=S, n_crossings=1000, method=method, tmax=W, **kw)
             missed = extra = 0
             examples = []
             n_ref = 0
@@ -205,7 +205,7 @@ def part_d(ck):
             y0 = np.array([0.0, 0.0, c, math.sin(ph), math.cos(ph)])
             t1 = (math.pi - math.atan2(y0[3], y0[4]) % (2 * math.pi)) * prm.b / c
             for direction in (1, 0):
-                r = sections.crossings(prm, y0, n_crossings=3, method=method, dt=dt, direction=direction)
+                r = sections.crossings(prm, states=y0, n_crossings=3, method=method, dt=dt, direction=direction)
                 err = np.abs(r.orbit(0)[:, 0] - (t1 + period * np.arange(3))).max() if r.count[0] == 3 else np.inf
                 worst = max(worst, err)
                 if r.count[0] != 3 or err > 1e-12:

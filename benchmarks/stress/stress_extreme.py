@@ -88,12 +88,12 @@ def run_case(prm, h):
     except (TypeError, ParameterError) as exc:
         return {"refused": f"start: {exc}"}, None, None
     out = {}
-    tay = sections.crossings(prm, y0, n_crossings=20, method="taylor", tol=1e-13, tmax=200.0, max_steps=10**6)
+    tay = sections.crossings(prm, states=y0, n_crossings=20, method="taylor", tol=1e-13, tmax=200.0, max_steps=10**6)
     out["taylor"] = tay
     dt = float(np.min(tay.info[:, 0] / np.maximum(tay.info[:, 1], 1))) / 10
     for method, kw in (("dop853", dict(tol=1e-12)), ("split8", dict(dt=dt)), ("split4", dict(dt=dt))):
         try:
-            out[method] = sections.crossings(prm, y0, n_crossings=20, method=method, tmax=200.0, max_steps=10**6, **kw)
+            out[method] = sections.crossings(prm, states=y0, n_crossings=20, method=method, tmax=200.0, max_steps=10**6, **kw)
         except ParameterError as exc:
             out[method] = f"refused: {exc}"
     return out, y0, dt
@@ -153,7 +153,7 @@ def main(argv=None):
     from explorer import model
     prm = model.FIGURE4.with_(mu=0.5)
     y0 = model.section_state(prm, [0.0, 500.0], [0.0, 300.0], 1e6)
-    r = sections.crossings(prm, y0, n_crossings=20, method="split8", dt=0.05, tmax=10.0)
+    r = sections.crossings(prm, states=y0, n_crossings=20, method="split8", dt=0.05, tmax=10.0)
     rel = float(np.nanmax(np.abs(r.data[..., 4])) / energy_scale(prm, y0).min())
     ck.note(f"split8 with the default dt = 0.05 at h = 1e6 (the orbit's time scale is ~1e-3): relative energy "
             f"error {rel:.2g}, statuses {[r.status_name(i) for i in range(2)]}: no warning that dt does not resolve "

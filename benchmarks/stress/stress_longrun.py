@@ -52,7 +52,7 @@ def run(prm, y0, method, n_total):
         steps = b - n
         tmax = steps * DT
         K = int(tmax * 2) + 20
-        r = sections.crossings(prm, y, n_crossings=K, method=method, dt=DT, tmax=tmax)
+        r = sections.crossings(prm, states=y, n_crossings=K, method=method, dt=DT, tmax=tmax)
         assert np.all(r.count < K) and np.all(r.status == 1), (r.count, r.status)   # ran to its time budget
         off = model.energy(prm, y) - H0
         dH = np.nanmax(np.abs(np.nan_to_num(r.data[..., 4], nan=0.0) + off[:, None]))

@@ -93,8 +93,8 @@ def main(argv=None):
             prmR = prm.with_(lam=-prm.lam, xi=-prm.xi, eta=-prm.eta)
             y0 = seeds(prm, n_orb)
             for tol in (1e-10, 1e-13):
-                a = sections.crossings(prm, y0, n_crossings=10**4, method=method, tol=tol, tmax=T)
-                b = sections.crossings(prmR, R(a.final), n_crossings=10**4, method=method, tol=tol, tmax=T)
+                a = sections.crossings(prm, states=y0, n_crossings=10**4, method=method, tol=tol, tmax=T)
+                b = sections.crossings(prmR, states=R(a.final), n_crossings=10**4, method=method, tol=tol, tmax=T)
                 assert np.all(a.info[:, 0] == T) and np.all(b.info[:, 0] == T)
                 err = np.abs(R(b.final) - y0).max(axis=1)
                 worst = float(err.max() / (tol * T))

@@ -71,16 +71,16 @@ def main(argv=None):
         ang, rad = rng.uniform(0, 2 * np.pi, N), np.sqrt(rng.uniform(0, 0.9, N))
         y0 = model.section_state(prm, c1 + r1 * rad * np.cos(ang), c2 + r2 * rad * np.sin(ang), 2.0)
         for method, kw in methods:
-            a = sections.crossings(prm, y0, n_crossings=K, method=method, threads=1, **kw)
-            b = sections.crossings(prm, y0, n_crossings=K, method=method, threads=nmax, **kw)
+            a = sections.crossings(prm, states=y0, n_crossings=K, method=method, threads=1, **kw)
+            b = sections.crossings(prm, states=y0, n_crossings=K, method=method, threads=nmax, **kw)
             ok = all(equal(getattr(a, f), getattr(b, f)) for f in ("data", "count", "status", "final", "info"))
             ck.check(f"sections {name} {method} {kw}: {N} orbits x {K} crossings, 1 vs {nmax} threads", ok, ok,
                      "bit-identical")
         for method, kw in (("taylor", dict(tol=1e-12)), ("dop853", dict(tol=1e-12)), ("split4", dict(dt=0.02)),
                            ("split8", dict(dt=0.05))):
             T = 100.0 if quick else 500.0
-            a = lyapunov.indicators(prm, y0[: N // 2], tmax=T, method=method, history=8, threads=1, **kw)
-            b = lyapunov.indicators(prm, y0[: N // 2], tmax=T, method=method, history=8, threads=nmax, **kw)
+            a = lyapunov.indicators(prm, states=y0[: N // 2], tmax=T, method=method, history=8, threads=1, **kw)
+            b = lyapunov.indicators(prm, states=y0[: N // 2], tmax=T, method=method, history=8, threads=nmax, **kw)
             ok = all(equal(getattr(a, f), getattr(b, f)) for f in ("time", "mlce", "megno", "Y", "fli", "status",
                                                                  "steps", "final", "history"))
             ck.check(f"lyapunov {name} {method} {kw}: {N // 2} orbits, T = {T:g}, 1 vs {nmax} threads", ok, ok,

@@ -97,6 +97,9 @@ from explorer.analysis.sections import (
     iter_section_crossings as iter_section_crossings,
 )
 from explorer.analysis.sections import (
+    propagate as propagate,
+)
+from explorer.analysis.sections import (
     section_crossings as section_crossings,
 )
 from explorer.analysis.transport import (

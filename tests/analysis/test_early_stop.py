@@ -23,9 +23,9 @@ def test_early_stop_keeps_the_chaotic_fraction_of_the_fraction_preset():
         p1, p2, _ = seed_points(scene.seeds, params, h, scene.integration.phi0)
         y0 = model.section_state(params, p1, p2, h, scene.integration.phi0)
         t0 = time.perf_counter()
-        full = lyapunov.indicators(params, y0, tmax=ly.time, tol=ly.tol)
+        full = lyapunov.indicators(params, states=y0, tmax=ly.time, tol=ly.tol)
         t1 = time.perf_counter()
-        early = lyapunov.indicators(params, y0, tmax=ly.time, tol=ly.tol, early_stop=True)
+        early = lyapunov.indicators(params, states=y0, tmax=ly.time, tol=ly.tol, early_stop=True)
         t2 = time.perf_counter()
         full_time += t1 - t0
         early_time += t2 - t1

@@ -91,11 +91,11 @@ def test_stretch_over_a_time_unit_matches_finite_differences_of_the_flow(method,
     y0 = model.section_state(prm, [0.2], [0.3], 2.0)
     v0 = lyapunov.deviation_vector(prm, y0)
     T = 2.0
-    r = lyapunov.indicators(prm, y0, tmax=T, method=method, **kw)
+    r = lyapunov.indicators(prm, states=y0, tmax=T, method=method, **kw)
     ends = []
     for sgn in (1, -1):
-        c = sections.crossings(prm, y0 + sgn * FD * v0, n_crossings=50, method=method, tmax=T, direction=0, phi0=0.123,
-                               **kw)
+        c = sections.crossings(prm, states=y0 + sgn * FD * v0, n_crossings=50, method=method, tmax=T, direction=0,
+                               phi0=0.123, **kw)
         assert c.info[0, 0] == pytest.approx(T)
         ends.append(c.final[0])
     growth = np.linalg.norm((ends[0] - ends[1]) / (2 * FD))
@@ -124,7 +124,7 @@ def test_regular_orbits_of_the_integrable_case_have_small_exponent_and_megno_2(m
     prm = model.FIGURE4
     y0 = model.section_state(prm, *REGULAR, 2.0)
     T = 1e4
-    r = lyapunov.indicators(prm, y0, tmax=T, method=method, **kw)
+    r = lyapunov.indicators(prm, states=y0, tmax=T, method=method, **kw)
     assert np.all(r.status == STATUS_DONE)
     assert np.all(r.mlce <= lyapunov.regular_bound(T))
     np.testing.assert_allclose(r.megno, 2.0, atol=0.2)
@@ -134,7 +134,7 @@ def test_kozlov_case_is_regular_too():
     prm = model.Params(a1=0.7, a2=0.7, b=1.7, lam=1.3, mu=0.9, xi=0.3, eta=-0.25)
     c1, c2, r1, r2 = model.allowed_ellipse(prm, 2.0)
     y0 = model.section_state(prm, [c1 + 0.3 * r1, c1 - 0.4 * r1], [c2 + 0.2 * r2, c2 - 0.1 * r2], 2.0)
-    r = lyapunov.indicators(prm, y0, tmax=1e4, method="taylor", tol=1e-12)
+    r = lyapunov.indicators(prm, states=y0, tmax=1e4, method="taylor", tol=1e-12)
     assert np.all(r.mlce <= lyapunov.regular_bound(1e4))
     # quasi-periodic orbits: <Y> -> 2 from either side (measured 1.998, 1.999); a stable
     # periodic orbit would give 0, a chaotic one grows like chi T / 2
@@ -152,11 +152,12 @@ def test_megno_tends_to_0_on_a_stable_periodic_orbit_and_to_2_on_the_tori_around
     weaker the shear and the longer <Y> stays near 0 (as the 0.29 reported inside an island)."""
     prm = model.FIGURE4
     y0 = model.section_state(prm, [math.sqrt(2.0), 1.7], [0.0, 0.0], 2.0)
-    r = lyapunov.indicators(prm, y0, tmax=16000.0, method="taylor", tol=1e-13)
+    r = lyapunov.indicators(prm, states=y0, tmax=16000.0, method="taylor", tol=1e-13)
     assert abs(r.megno[0]) < 1e-3 and abs(r.megno[1] - 2.0) < 0.05, r.megno
     prm = model.FIGURE4.with_(mu=0.03)
     y0 = model.section_state(prm, [1.582201141, 1.5, 1.4], [0.0, 0.0, 0.0], 2.0)
-    Y = np.array([lyapunov.indicators(prm, y0, tmax=T, method="taylor", tol=1e-13).megno for T in (4000.0, 64000.0)])
+    Y = np.array([lyapunov.indicators(prm, states=y0, tmax=T, method="taylor", tol=1e-13).megno
+                  for T in (4000.0, 64000.0)])
     assert np.all(np.abs(Y[:, 0]) < 0.01) and abs(Y[1, 0]) < abs(Y[0, 0]), Y[:, 0]    # the periodic orbit
     assert np.all(Y[1, 1:] > Y[0, 1:]) and np.all(Y[:, 1] < Y[:, 2]), Y                # the tori, inner slower
     assert Y[0, 1] < 0.1 and Y[1, 2] > 1.5, Y
@@ -174,15 +175,15 @@ def test_chaotic_orbits_have_a_positive_converged_exponent_that_integrators_agre
     prm = PARAM_SETS["figure4_mu0.5"]
     y0 = model.section_state(prm, *CHAOTIC, 2.0)
     T = 2e4
-    d = lyapunov.indicators(prm, y0, tmax=T, method="dop853", tol=1e-12, history=8)
-    s = lyapunov.indicators(prm, y0, tmax=T, method="split8", dt=0.05)
+    d = lyapunov.indicators(prm, states=y0, tmax=T, method="dop853", tol=1e-12, history=8)
+    s = lyapunov.indicators(prm, states=y0, tmax=T, method="split8", dt=0.05)
     assert np.all(d.mlce > 0.1)
     # the history ends at T with the final values
     np.testing.assert_allclose(d.history[:, -1, 1], d.mlce)
     mean_d, mean_s = d.mlce.mean(), s.mlce.mean()
     assert abs(mean_d - mean_s) < 0.1 * mean_d
     assert np.all(np.abs(d.mlce - s.mlce) < 0.2 * d.mlce), (d.mlce, s.mlce)
-    d_half = lyapunov.indicators(prm, y0, tmax=T / 2, method="dop853", tol=1e-12)
+    d_half = lyapunov.indicators(prm, states=y0, tmax=T / 2, method="dop853", tol=1e-12)
     assert abs(d_half.mlce.mean() - mean_d) < 0.1 * mean_d
     assert np.all(np.abs(d_half.mlce - d.mlce) < 0.1 * d.mlce), (d_half.mlce, d.mlce)
     np.testing.assert_allclose(d.megno, d.mlce * T / 2, rtol=0.15)
@@ -214,7 +215,7 @@ def test_indicator_kernels_give_the_standard_map_exponent():
 
 
 def test_lyapunov_cli_json(capsys):
-    code = cli.main(["lyapunov", "--p1", "0", "--p2", "0.3", "--mu", "0.5", "--time", "500", "--json"])
+    code = cli.main(["lyapunov", "--p1", "0", "--p2", "0.3", "--mu", "0.5", "--tmax", "500", "--json"])
     out, _ = capsys.readouterr()
     assert code == 0
     doc = json.loads(out)
@@ -223,7 +224,7 @@ def test_lyapunov_cli_json(capsys):
 
 
 @pytest.mark.parametrize("args,fragment", [
-    (["--p1", "0", "--p2", "0", "--time", "-1"], "time must be"),
+    (["--p1", "0", "--p2", "0", "--tmax", "-1"], "tmax must be"),
     (["--p1", "9", "--p2", "0"], "outside the allowed region"),
     (["--p1", "0", "--p2", "0", "--method", "rk4"], "method must be"),
     (["--p1", "0", "--p2", "0", "--lam", "0"], "lam must be nonzero"),
@@ -247,14 +248,14 @@ def test_lyapunov_cli_reports_an_orbit_that_stopped_without_inventing_numbers(ca
         return run
 
     monkeypatch.setattr(lyapunov, "indicators", budget(0))
-    code = cli.main(["lyapunov", "--p1", "0", "--p2", "0.3", "--mu", "0.5", "--time", "50", "--json"])
+    code = cli.main(["lyapunov", "--p1", "0", "--p2", "0.3", "--mu", "0.5", "--tmax", "50", "--json"])
     out, err = capsys.readouterr()
     doc = json.loads(out)
     assert code == 0 and doc["status"] == "step budget exhausted" and doc["time"] == 0.0
     assert doc["mlce"] is None and doc["megno"] is None and doc["fli"] is None
     assert len(err.strip().splitlines()) == 1 and "no estimate" in err
     monkeypatch.setattr(lyapunov, "indicators", budget(200))
-    code = cli.main(["lyapunov", "--p1", "0", "--p2", "0.3", "--mu", "0.5", "--time", "1e4", "--json"])
+    code = cli.main(["lyapunov", "--p1", "0", "--p2", "0.3", "--mu", "0.5", "--tmax", "1e4", "--json"])
     out, err = capsys.readouterr()
     doc = json.loads(out)
     assert 0 < doc["time"] < 1e4 and math.isfinite(doc["mlce"])
@@ -265,7 +266,7 @@ def test_every_indicator_of_the_registry_is_a_declared_attribute_of_the_result_r
     """No attribute magic: each registry name is declared on the class (visible to an IDE) and
     returns that indicator's column, and an unknown name is an AttributeError."""
     prm = model.FIGURE4.with_(mu=0.5)
-    res = lyapunov.indicators(prm, model.section_state(prm, [0.1], [0.0], 2.0), tmax=5.0)
+    res = lyapunov.indicators(prm, states=model.section_state(prm, [0.1], [0.0], 2.0), tmax=5.0)
     for name in lyapunov.INDICATOR_NAMES:
         assert name in vars(lyapunov.Indicators), name
         assert getattr(res, name) is res.values[name]

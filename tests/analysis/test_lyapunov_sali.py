@@ -31,8 +31,8 @@ def test_sali_stays_away_from_zero_on_regular_orbits_of_the_integrable_cases(cas
     ~ 1/T (5e-4 at 1e4); a chaotic orbit reaches 1e-8 within T = 100.  Held: SALI(1e4) > 1e-4
     and the decay from 1e3 to 1e4 no faster than T^-2 (a power law, not an exponential)."""
     prm, y0 = _integrable_cases()[case]
-    a = lyapunov.indicators(prm, y0, tmax=1e3, tol=1e-12, which=BOTH)
-    b = lyapunov.indicators(prm, y0, tmax=1e4, tol=1e-12, which=BOTH)
+    a = lyapunov.indicators(prm, states=y0, tmax=1e3, tol=1e-12, which=BOTH)
+    b = lyapunov.indicators(prm, states=y0, tmax=1e4, tol=1e-12, which=BOTH)
     assert np.all(b.sali > 1e-4), b.sali
     assert np.all(b.sali >= a.sali * 1e-2), (a.sali, b.sali)
     assert np.all(b.gali2 > 1e-4)
@@ -41,7 +41,7 @@ def test_sali_stays_away_from_zero_on_regular_orbits_of_the_integrable_cases(cas
 def test_sali_falls_below_1e_8_on_a_chaotic_orbit_of_figure4_at_mu_1():
     prm = model.FIGURE4.with_(mu=1.0)
     y0 = model.section_state(prm, [-0.2, 0.0], [0.1, 0.3], 2.0)
-    r = lyapunov.indicators(prm, y0, tmax=1000.0, tol=1e-12, which=BOTH)
+    r = lyapunov.indicators(prm, states=y0, tmax=1000.0, tol=1e-12, which=BOTH)
     assert np.all(r.sali < 1e-8), r.sali
     assert np.all(r.megno > 20)
 
@@ -52,7 +52,7 @@ def test_gali2_is_the_wedge_norm_of_the_two_final_unit_vectors():
     rng = np.random.default_rng(2)
     y0 = model.section_state(prm, c1 + 0.5 * r1 * rng.uniform(-1, 1, 12), c2 + 0.5 * r2 * rng.uniform(-1, 1, 12),
                              2.0)
-    r = lyapunov.indicators(prm, y0, tmax=200.0, tol=1e-12, which=("sali", "gali2"))
+    r = lyapunov.indicators(prm, states=y0, tmax=200.0, tol=1e-12, which=("sali", "gali2"))
     w1, w2 = r.deviation[:, 0], r.deviation[:, 1]
     np.testing.assert_allclose(np.linalg.norm(w1, axis=1), 1.0, rtol=1e-14)
     np.testing.assert_allclose(np.linalg.norm(w2, axis=1), 1.0, rtol=1e-14)
@@ -72,17 +72,17 @@ def test_gali2_is_the_wedge_norm_of_the_two_final_unit_vectors():
 def test_only_the_indicators_asked_for_are_computed():
     prm = model.FIGURE4.with_(mu=1.0)
     y0 = model.section_state(prm, [-0.2], [0.1], 2.0)
-    one = lyapunov.indicators(prm, y0, tmax=100.0, tol=1e-12)
-    two = lyapunov.indicators(prm, y0, tmax=100.0, tol=1e-12, which=("megno", "sali"))
+    one = lyapunov.indicators(prm, states=y0, tmax=100.0, tol=1e-12)
+    two = lyapunov.indicators(prm, states=y0, tmax=100.0, tol=1e-12, which=("megno", "sali"))
     assert np.isnan(one.sali).all() and np.isnan(one.deviation[:, 1]).all()
     assert np.isfinite(two.sali).all()
     # the second vector changes nothing of the first one's indicators
     for name in ("time", "mlce", "megno", "fli", "steps", "final"):
         np.testing.assert_array_equal(getattr(one, name), getattr(two, name))
     with pytest.raises(ParameterError, match="indicators must be"):
-        lyapunov.indicators(prm, y0, tmax=100.0, which=("lyapunov",))
+        lyapunov.indicators(prm, states=y0, tmax=100.0, which=("lyapunov",))
     with pytest.raises(ParameterError, match="needs method 'taylor'"):
-        lyapunov.indicators(prm, y0, tmax=100.0, method="split6", which=("sali",))
+        lyapunov.indicators(prm, states=y0, tmax=100.0, method="split6", which=("sali",))
 
 
 def test_the_methods_of_two_vector_indicators_are_those_with_the_loop_of_two_vectors():
@@ -99,12 +99,12 @@ def test_the_methods_of_two_vector_indicators_are_those_with_the_loop_of_two_vec
 
 
 def test_lyapunov_cli_json_reports_sali_and_gali2(capsys):
-    code = cli.main(["lyapunov", "--p1", "-0.2", "--p2", "0.1", "--mu", "1", "--time", "500", "--json"])
+    code = cli.main(["lyapunov", "--p1", "-0.2", "--p2", "0.1", "--mu", "1", "--tmax", "500", "--json"])
     out, _ = capsys.readouterr()
     assert code == 0
     doc = json.loads(out)
     assert doc["sali"] < 1e-8 and doc["gali2"] < 1e-8
-    code = cli.main(["lyapunov", "--p1", "-0.2", "--p2", "0.1", "--mu", "1", "--time", "50", "--json",
+    code = cli.main(["lyapunov", "--p1", "-0.2", "--p2", "0.1", "--mu", "1", "--tmax", "50", "--json",
                      "--method", "split6"])
     doc = json.loads(capsys.readouterr()[0])
     assert doc["sali"] is None and doc["gali2"] is None

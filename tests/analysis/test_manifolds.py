@@ -99,6 +99,16 @@ def test_a_stable_branch_of_a_saddle_on_the_symmetry_line_is_the_reflection_of_t
     branches = mf.manifolds(saddle.smap, saddle.point, arclength=1.0)
     assert [(b.kind, b.sign) for b in branches] == [("unstable", 1), ("unstable", -1), ("stable", 1), ("stable", -1)]
     assert all(np.array_equal(s.points, reversor(u.points)) for u, s in zip(branches[:2], branches[2:]))
+    # ... each stable branch reflects the very unstable branch returned beside it (grown once), in
+    # whichever order the kinds are asked for; a held branch of other settings is refused
+    swapped = mf.manifolds(saddle.smap, saddle.point, arclength=1.0, kinds=("stable", "unstable"))
+    assert [(b.kind, b.sign) for b in swapped] == [("stable", 1), ("stable", -1), ("unstable", 1), ("unstable", -1)]
+    assert all(s.mirror_of is u and np.array_equal(s.points, t.points) for s, u, t in
+               zip(swapped[:2], swapped[2:], branches[2:]))
+    held = mf.grow_branch(saddle, stable=True, sign=1, arclength=3.0, unstable=wu)
+    assert held.mirror_of is wu and np.array_equal(held.points, ws.points)
+    with pytest.raises(model.ParameterError, match="unstable"):
+        mf.grow_branch(saddle, stable=True, sign=-1, arclength=3.0, unstable=wu)
     skew = fpm.find_fixed_point(model.FIGURE4.with_(mu=MU, xi=0.01), H, (0.0, 0.0))
     assert not mf.mirrors(mf.saddle(skew.params, skew.h, skew))
     with pytest.raises(model.ParameterError, match="mirror_branch"):

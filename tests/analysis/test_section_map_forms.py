@@ -102,7 +102,7 @@ def test_indicators_from_a_map_use_its_tolerance_and_refuse_one_beside_it(smap):
     pts = np.array([[-0.2, 0.1], [0.3, 0.0]])
     states = model.section_state(PRM, pts[:, 0], pts[:, 1], H, PHI0)
     new = lyapunov.indicators(smap, pts, tmax=20.0)
-    old = lyapunov.indicators(PRM, states, tmax=20.0, tol=smap.tol)
+    old = lyapunov.indicators(PRM, states=states, tmax=20.0, tol=smap.tol)
     pair = lyapunov.indicators(PRM, H, pts, tmax=20.0, tol=TOL, phi0=PHI0)
     for res in (old, pair):
         assert new.settings == res.settings and res.settings["tol"] == smap.tol
@@ -121,10 +121,10 @@ def test_indicators_from_a_map_use_its_tolerance_and_refuse_one_beside_it(smap):
 
 def test_the_older_indicator_forms_warn_and_give_the_same_numbers():
     states = model.section_state(PRM, [-0.2], [0.1], H)
-    ref = lyapunov.indicators(PRM, states, tmax=20.0)
+    ref = lyapunov.indicators(PRM, states=states, tmax=20.0)
     for kw in ({"T": 20.0}, {}):
         with pytest.warns(DeprecationWarning, match="tmax"):
-            old = lyapunov.indicators(PRM, states, **kw) if kw else lyapunov.indicators(PRM, states, 20.0)
+            old = lyapunov.indicators(PRM, states=states, **kw) if kw else lyapunov.indicators(PRM, states, 20.0)
         same(old.megno, ref.megno)
 
 
@@ -186,13 +186,41 @@ def test_section_crossings_refuse_a_setting_of_the_map_beside_it(smap):
 
 def test_crossings_take_the_count_by_keyword_and_warn_when_given_by_position():
     y0 = model.section_state(PRM, [0.1], [0.0], H)
-    ref = sections.crossings(PRM, y0, n_crossings=3)
+    ref = sections.crossings(PRM, states=y0, n_crossings=3)
     with pytest.warns(DeprecationWarning, match="n_crossings="):
         old = sections.crossings(PRM, y0, 3)
     same(old.data, ref.data)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        sections.crossings(PRM, y0, n_crossings=1)
+        sections.crossings(PRM, states=y0, n_crossings=1)
+
+
+@pytest.mark.parametrize("name", ["crossings", "iter_crossings", "propagate", "indicators"])
+def test_the_flows_states_are_a_keyword_and_the_older_positional_form_warns_with_the_same_numbers(name):
+    """After params the next positional is always h: the flow's full states are only ever
+    ``states=`` (docs/api.md, "The system argument"); ``f(params, states)`` still works, warned."""
+    fn = {"crossings": sections.crossings, "iter_crossings": sections.iter_crossings,
+          "propagate": sections.propagate, "indicators": lyapunov.indicators}[name]
+    kw = {"crossings": {"n_crossings": 2}, "iter_crossings": {"n_crossings": 2}, "propagate": {"t": 3.0},
+          "indicators": {"tmax": 5.0}}[name]
+    y0 = model.section_state(PRM, [0.1, -0.2], [0.0, 0.1], H)
+
+    def numbers(res):
+        res = list(res)[-1] if name == "iter_crossings" else res
+        return res if name == "propagate" else (res.megno if name == "indicators" else res.data)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        new = numbers(fn(PRM, states=y0, **kw))
+    with pytest.warns(DeprecationWarning, match=r"states=states"):
+        old = numbers(fn(PRM, y0, **kw))
+    same(old, new)
+    # the energy next to params makes a map; states= beside a map, or beside h, is refused by name
+    with pytest.raises(model.ParameterError, match="states"):
+        fn(section_map.SectionMap(PRM, H), states=y0, **kw)
+    with pytest.raises(model.ParameterError, match="states"):
+        fn(PRM, H, states=y0, **kw)
+    assert "states" in inspect.signature(fn).parameters
 
 
 def test_any_other_map_object_passes_through_the_rule_unchanged():

@@ -72,7 +72,7 @@ def test_crossing_times_match_the_homoclinic_solution(method, sign):
     p1, p2, m, phi = exact.homoclinic(P, c, np.array([t_start]), sign=sign)
     y0 = np.array([p1[0], p2[0], m[0], math.sin(phi[0]), math.cos(phi[0])])
     expect = exact.homoclinic_crossing_times(P, c, math.pi, t_start, 20.0, sign=sign) - t_start
-    res = sections.crossings(prm, y0, n_crossings=len(expect), method=method, tmax=40.0, **TIGHT[method])
+    res = sections.crossings(prm, states=y0, n_crossings=len(expect), method=method, tmax=40.0, **TIGHT[method])
     got = res.orbit(0)[:, 0]
     assert len(got) == len(expect) >= 5
     # the orbit is exponentially unstable near the saddle: 1e-8 as in the reference test
@@ -150,7 +150,7 @@ def test_extra_integral_is_conserved_along_integrated_orbits(kw, F, method):
     prm = model.FIGURE4.with_(**kw)
     p1, p2 = fig4_seeds(prm, 2.0, 3, p2_frac=0.3, span=0.6)
     y0 = model.section_state(prm, p1, p2, 2.0)
-    res = sections.crossings(prm, y0, n_crossings=100, method=method, tol=1e-14, dt=0.01)
+    res = sections.crossings(prm, states=y0, n_crossings=100, method=method, tol=1e-14, dt=0.01)
     F0 = F(prm, y0)
     for i in range(3):
         rows = res.orbit(i)
@@ -167,7 +167,7 @@ def test_hess_invariant_relation_f_equals_zero_is_kept():
     m = prm.lam * prm.b / prm.a2 - prm.eta * p1
     y0 = np.array([p1, p2, m, math.sin(phi), math.cos(phi)])
     assert abs(model.hess_function(prm, y0)) < 1e-15
-    res = sections.crossings(prm, y0, n_crossings=20, method="taylor", tol=1e-15, tmax=400.0)
+    res = sections.crossings(prm, states=y0, n_crossings=20, method="taylor", tol=1e-15, tmax=400.0)
     final = res.final[0]
     assert res.count[0] >= 5
     assert abs(model.hess_function(prm, final)) < 1e-10
@@ -191,12 +191,12 @@ def test_observed_order_of_splitting_on_the_real_model(method, order, dts):
     y0 = model.section_state(prm, [0.2], [0.1], 2.0)
     T = 4.0
     # K = 50 crossings cannot happen before T: every run stops at its time budget T
-    ref = sections.crossings(prm, y0, n_crossings=50, method="taylor", tol=1e-16, tmax=T)
+    ref = sections.crossings(prm, states=y0, n_crossings=50, method="taylor", tol=1e-16, tmax=T)
     assert ref.status[0] == STATUS_TMAX and ref.info[0, 0] == T
     ref = ref.final[0]
     errs = []
     for dt in dts:
-        run = sections.crossings(prm, y0, n_crossings=50, method=method, dt=dt, tmax=T)
+        run = sections.crossings(prm, states=y0, n_crossings=50, method=method, dt=dt, tmax=T)
         assert run.info[0, 0] == T
         fin = run.final[0]
         errs.append(np.abs(fin - ref).max())
@@ -222,13 +222,13 @@ def test_direction_and_start_point(method):
     assert np.all(back.count == 4) and np.all(back.data[:, :, 3] < 0) and np.all(back.data[:, 0, 0] > 0.5)
     # with M > 0 the body never crosses backwards: direction -1 finds nothing
     y0 = model.section_state(prm, p1, p2, 2.0)
-    down = sections.crossings(prm, y0, n_crossings=4, method=method, direction=-1, tmax=60.0, **kw)
+    down = sections.crossings(prm, states=y0, n_crossings=4, method=method, direction=-1, tmax=60.0, **kw)
     assert np.all(down.count == 0) and np.all(down.status == STATUS_TMAX)
-    both = sections.crossings(prm, y0, n_crossings=4, method=method, direction=0, **kw)
+    both = sections.crossings(prm, states=y0, n_crossings=4, method=method, direction=0, **kw)
     np.testing.assert_allclose(both.data, up.data, atol=1e-12)
     # the reversed body (M < 0) crosses only with direction -1
     y0r = model.section_state(prm, p1, p2, 2.0, direction=-1)
-    rev = sections.crossings(prm, y0r, n_crossings=2, method=method, direction=-1, **kw)
+    rev = sections.crossings(prm, states=y0r, n_crossings=2, method=method, direction=-1, **kw)
     assert np.all(rev.count == 2) and np.all(rev.data[:, :, 3] < 0)
 
 
@@ -239,7 +239,7 @@ def test_other_section_angle_matches_reference(method):
     h = 2.0
     c1, c2, r1, r2 = model.allowed_ellipse(prm, h, phi0)
     y0 = model.section_state(prm, [c1 + 0.3 * r1], [c2 - 0.2 * r2], h, phi0)
-    res = sections.crossings(prm, y0, n_crossings=1, method=method, phi0=phi0, **TIGHT[method])
+    res = sections.crossings(prm, states=y0, n_crossings=1, method=method, phi0=phi0, **TIGHT[method])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         ref = reference.scipy_one_step_map(prm.as_array(), y0[0], phi0=phi0)
@@ -253,7 +253,7 @@ def test_orbit_that_never_crosses_is_reported(method):
     prm = model.FIGURE4.with_(mu=8.0, eta=-1.0)
     # near phi = 0 with a small spin: the body rocks and never reaches phi = pi
     y0 = np.array([4.0, 0.0, 0.05, math.sin(0.3), math.cos(0.3)])
-    res = sections.crossings(prm, y0, n_crossings=3, method=method, tmax=50.0, tol=1e-12, dt=0.01)
+    res = sections.crossings(prm, states=y0, n_crossings=3, method=method, tmax=50.0, tol=1e-12, dt=0.01)
     assert res.count[0] == 0 and res.status[0] == STATUS_TMAX
     assert res.info[0, 0] == pytest.approx(50.0, abs=0.02)
 
@@ -287,8 +287,8 @@ def test_nonfinite_state_is_reported_per_orbit_and_the_rest_is_unaffected(method
     bad[0] = 1e150
     y0 = np.vstack([good[0], bad, good[1]])
     kw = dict(tol=1e-12, dt=0.01, tmax=20.0)
-    res = sections.crossings(prm, y0, n_crossings=5, method=method, **kw)
-    ref = sections.crossings(prm, good, n_crossings=5, method=method, **kw)
+    res = sections.crossings(prm, states=y0, n_crossings=5, method=method, **kw)
+    ref = sections.crossings(prm, states=good, n_crossings=5, method=method, **kw)
     np.testing.assert_array_equal(res.data[[0, 2]], ref.data)
     np.testing.assert_array_equal(res.status[[0, 2]], ref.status)
     assert res.count[1] == 0 and np.all(np.isnan(res.data[1]))
@@ -298,7 +298,7 @@ def test_nonfinite_state_is_reported_per_orbit_and_the_rest_is_unaffected(method
 def test_start_with_infinite_energy_is_refused():
     y0 = np.array([0.1, 0.0, 1e200, 0.0, -1.0])
     with pytest.raises(model.ParameterError, match="finite energy"):
-        sections.crossings(model.FIGURE4, y0, n_crossings=2)
+        sections.crossings(model.FIGURE4, states=y0, n_crossings=2)
 
 
 # ---------------------------------------------------------------- determinism
@@ -326,20 +326,20 @@ def test_bad_settings_are_refused_with_their_name(kw, fragment):
     prm = model.FIGURE4
     y0 = model.section_state(prm, [0.1], [0.0], 2.0)
     with pytest.raises(model.ParameterError, match=fragment):
-        sections.crossings(prm, y0, n_crossings=3, **kw)
+        sections.crossings(prm, states=y0, n_crossings=3, **kw)
 
 
 def test_nonfinite_or_misshapen_start_is_refused():
     with pytest.raises(model.ParameterError, match="y0 must be finite"):
-        sections.crossings(model.FIGURE4, [0.0, np.nan, 1.0, 0.0, -1.0], n_crossings=2)
+        sections.crossings(model.FIGURE4, states=[0.0, np.nan, 1.0, 0.0, -1.0], n_crossings=2)
     with pytest.raises(model.ParameterError, match="shape"):
-        sections.crossings(model.FIGURE4, [0.0, 1.0, 0.0, -1.0], n_crossings=2)
+        sections.crossings(model.FIGURE4, states=[0.0, 1.0, 0.0, -1.0], n_crossings=2)
     with pytest.raises(model.ParameterError, match="crossings must be"):
-        sections.crossings(model.FIGURE4, [0.0, 0.0, 1.0, 0.0, -1.0], n_crossings=0)
+        sections.crossings(model.FIGURE4, states=[0.0, 0.0, 1.0, 0.0, -1.0], n_crossings=0)
 
 
 def test_propagate_gives_the_state_at_t_as_scipys_reference_integration_and_from_a_map_the_same():
-    """propagate(params, y0, t=...) is the flow at exactly t: equal to scipy's DOP853 at rtol
+    """propagate(params, states=y0, t=...) is the flow at exactly t: equal to scipy's DOP853 at rtol
     1e-12 on R3 (tests/reference.py, independent of the project's code) within 1e-9; from a
     SectionMap and its section points the same states; an orbit that would pass more than
     PROPAGATE_CROSSINGS crossings is refused, not truncated."""
@@ -349,11 +349,11 @@ def test_propagate_gives_the_state_at_t_as_scipys_reference_integration_and_from
     smap = SectionMap(prm, 2.0, tol=1e-14)
     pts = np.array([[0.1, 0.0], [-0.3, 0.2]])
     y0 = smap.states(pts)
-    got = sections.propagate(prm, y0, t=7.5, tol=1e-14)
+    got = sections.propagate(prm, states=y0, t=7.5, tol=1e-14)
     for i in range(2):
         ref = solve_ivp(reference.rhs_numpy, (0.0, 7.5), y0[i], args=(prm.as_array(),), method="DOP853",
                         rtol=1e-12, atol=1e-12).y[:, -1]
         np.testing.assert_allclose(got[i], ref, rtol=0, atol=1e-9)
     np.testing.assert_array_equal(sections.propagate(smap, pts, t=7.5), got)
     with pytest.raises(model.ParameterError, match="shorter times"):
-        sections.propagate(prm, y0, t=100.0 * sections.PROPAGATE_CROSSINGS)
+        sections.propagate(prm, states=y0, t=100.0 * sections.PROPAGATE_CROSSINGS)

@@ -288,7 +288,7 @@ def run_cli(args, capsys):
 
 
 def test_cli_json_drift_and_band(capsys):
-    code, out, err = run_cli(["trajectory", "--time", "300", "--samples", "3001", "--no-figure", "--json"], capsys)
+    code, out, err = run_cli(["trajectory", "--tmax", "300", "--samples", "3001", "--no-figure", "--json"], capsys)
     assert code == 0, err
     doc = json.loads(out)
     assert doc["params"] == FIG4 and doc["status"] == "done"
@@ -301,7 +301,7 @@ def test_cli_json_drift_and_band(capsys):
 
 def test_cli_lam_zero_text_and_figures(tmp_path, capsys):
     stem = tmp_path / "fall"
-    code, out, err = run_cli(["trajectory", "--lam", "0", "--time", "100", "--samples", "2001",
+    code, out, err = run_cli(["trajectory", "--lam", "0", "--tmax", "100", "--samples", "2001",
                               "--out", str(stem)], capsys)
     assert code == 0, err
     assert "amplitude ~ t^-0.5" in out and "frequency ~ t^1.0" in out
@@ -318,8 +318,8 @@ def test_cli_lam_zero_text_and_figures(tmp_path, capsys):
     (["--p1", "nan"], "p1 must be finite"),
     (["--M", "inf"], "M must be finite"),
     (["--lam", "nan"], "lam must be finite"),
-    (["--time", "0"], "must be > 0"),
-    (["--time", "-5"], "must be > 0"),
+    (["--tmax", "0"], "must be > 0"),
+    (["--tmax", "-5"], "must be > 0"),
     (["--samples", "1"], "samples must be"),
     (["--tol", "0"], "tol must be"),
     (["--phi", "abc"], "--phi"),

@@ -67,7 +67,7 @@ def test_atlas_cells_are_the_task_map_of_their_indicators():
     parts = [sweep.task(spec, k) for k, c in enumerate(spec.chunks) if c[0] == pos]
     megno = np.concatenate([p["megno"] for p in parts])
     prm, h, _ = s.cell(i)
-    ind = lyapunov.indicators(prm, spec.panels[pos].y0, tmax=60.0, tol=s.lyapunov.tol, which=("megno",))
+    ind = lyapunov.indicators(prm, states=spec.panels[pos].y0, tmax=60.0, tol=s.lyapunov.tol, which=("megno",))
     np.testing.assert_array_equal(megno, ind.megno)
 
 
@@ -85,7 +85,7 @@ def test_run_atlas_stores_fractions_only_and_draws_a_heat_map(tmp_path):
     s = load_scene(str(path))
     spec = sweep.build_atlas_spec(s, chunk_orbits=0)
     prm, h, _ = s.cell(4)
-    m = lyapunov.indicators(prm, spec.panels[4].y0, tmax=60.0, tol=s.lyapunov.tol, which=("megno",)).megno
+    m = lyapunov.indicators(prm, states=spec.panels[4].y0, tmax=60.0, tol=s.lyapunov.tol, which=("megno",)).megno
     assert a.fraction[1, 1] == chaotic_fraction(m, 4.0)[0]
     img = imread(tmp_path / "a.png")
     assert img.shape[1] > img.shape[0]

@@ -173,3 +173,18 @@ def test_the_registry_lists_every_command_module_once_with_its_page():
         assert (docs / "commands" / f"{name}.md").is_file() and f"commands/{name}" in toctree, name
     sub = next(a for a in cli.build_parser()._actions if isinstance(a, __import__("argparse")._SubParsersAction))
     assert tuple(sub.choices) == registry.COMMANDS
+
+
+@pytest.mark.parametrize("old", ["--time", "-T"])
+def test_the_older_time_options_give_the_same_run_as_tmax_and_say_they_go_away(old, capsys):
+    """One name per thing: the time an orbit runs is --tmax (the API's tmax=, orbit's --tmax);
+    lyapunov's --time and -T still set it, with one line on stderr naming the new option."""
+    base = ["lyapunov", "--p1", "-0.2", "--p2", "0.1", "--mu", "1", "--json", "--history", "2"]
+    assert cli.main(base + ["--tmax", "5"]) == 0
+    new, err = capsys.readouterr()
+    assert "deprecated" not in err
+    assert cli.main(base + [old, "5"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out) == json.loads(new) and json.loads(out)["time"] == 5.0
+    assert f"{old} is deprecated" in err and "use --tmax" in err
+    assert cli.build_parser().parse_args(["trajectory", old, "7"]).tmax == 7.0

@@ -52,7 +52,7 @@ def test_every_layer_reads_the_registry(name):
 def test_indicators_are_read_from_the_registry_columns_and_the_command_prints_each(capsys):
     prm = model.FIGURE4.with_(mu=1.0)
     y0 = model.section_state(prm, [-0.2, 0.3], [0.1, 0.0], model.FIGURE4_H)
-    r = lyapunov.indicators(prm, y0, tmax=20.0, history=3, which=lyapunov.available("taylor"))
+    r = lyapunov.indicators(prm, states=y0, tmax=20.0, history=3, which=lyapunov.available("taylor"))
     for i in table.TANGENT:
         values = getattr(r, i.name)
         assert values is r.values[i.name] and values.shape == (2,) and np.isfinite(values).all()
@@ -60,11 +60,11 @@ def test_indicators_are_read_from_the_registry_columns_and_the_command_prints_ea
             np.testing.assert_array_equal(r.history[:, -1, i.column], values)
     with pytest.raises(AttributeError):
         r.not_an_indicator  # noqa: B018
-    assert cli.main(["lyapunov", "--p1", "-0.2", "--p2", "0.1", "--mu", "1", "--time", "20", "--json"]) == 0
+    assert cli.main(["lyapunov", "--p1", "-0.2", "--p2", "0.1", "--mu", "1", "--tmax", "20", "--json"]) == 0
     doc = json.loads(capsys.readouterr()[0])
     tangent = list(table.TANGENT_NAMES)   # the command's one orbit has no centre: no frequency diffusion
     assert all(isinstance(doc[name], float) for name in tangent) and "frequency_diffusion" not in doc
-    assert cli.main(["lyapunov", "--p1", "-0.2", "--p2", "0.1", "--mu", "1", "--time", "20"]) == 0
+    assert cli.main(["lyapunov", "--p1", "-0.2", "--p2", "0.1", "--mu", "1", "--tmax", "20"]) == 0
     lines = capsys.readouterr()[0].splitlines()
     assert [line.split()[0] for line in lines[1:1 + len(tangent)]] == tangent
     history = [i.name for i in table.INDICATORS if i.in_history]

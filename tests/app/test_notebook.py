@@ -44,7 +44,7 @@ PANEL_MIME = "application/vnd.holoviews_exec.v0+json"
 
 CELLS = [
     "import panel as pn\nimport explorer as ex\npn.extension()\nprint('explorer:', ex.__file__)",
-    f"app = ex.explore(mu={MU}, crossings={CROSSINGS})\napp",
+    f"app = ex.explore(mu={MU}, n_crossings={CROSSINGS})\napp",
     # the kernel is busy while a cell runs, so the periodic callback cannot move the crossings onto
     # the page: the cell polls the page itself, as the callback would
     "import time\nimport numpy as np\n"

@@ -749,7 +749,7 @@ def test_explore_in_a_notebook_renders_and_streams_the_clicked_orbit(monkeypatch
     from explorer.app.serve import overlays
 
     monkeypatch.setattr(overlays, "READOUT_SECONDS", 3600.0)   # the readout whole on a loaded machine too
-    app = ex.explore(mu=0.5, crossings=60)
+    app = ex.explore(mu=0.5, n_crossings=60)
     try:
         root = pn.panel(app).get_root()                 # what a notebook cell renders
         assert root.select_one({"name": "section"}) is not None
@@ -770,7 +770,7 @@ def test_explore_in_a_notebook_renders_and_streams_the_clicked_orbit(monkeypatch
             page.poll()
             time.sleep(0.01)
         (megno, mlce), = page.indicators.values()
-        ind = lyapunov.indicators(page.settings.params, ex.section_state(page.settings.params, [0.3], [0.1],
+        ind = lyapunov.indicators(page.settings.params, states=ex.section_state(page.settings.params, [0.3], [0.1],
                                                                          page.settings.h), tmax=INDICATOR_TIME)
         assert (megno, mlce) == (float(ind.megno[0]), float(ind.mlce[0]))
         assert np.all(np.asarray(page.crossings.data["megno"]) == megno) and "<Y> =" in page.status.text
@@ -780,6 +780,8 @@ def test_explore_in_a_notebook_renders_and_streams_the_clicked_orbit(monkeypatch
         assert len(page.crossings.data["t"]) == 0 and page.url_query()["orbits"] == ""
         with pytest.raises(ParameterError, match="a1"):
             ex.explore(a1=-1.0)
+        with pytest.warns(DeprecationWarning, match="n_crossings"), pytest.raises(ParameterError, match="a1"):
+            ex.explore(a1=-1.0, crossings=5)        # the older name still reaches the settings, warned
     finally:
         app.close()
 
@@ -1066,7 +1068,7 @@ def test_picking_an_orbits_crossing_shows_its_mlce_megno_and_rotation_number():
         _poll_until(page, lambda: "rotation number" in page.readout.text)
         r = page.readouts[page.starts[1][0]]
         y0 = model.section_state(s.params, [starts[1][0]], [starts[1][1]], s.h)
-        ind = lyapunov.indicators(s.params, y0, tmax=INDICATOR_TIME, method=s.method, tol=s.tol)
+        ind = lyapunov.indicators(s.params, states=y0, tmax=INDICATOR_TIME, method=s.method, tol=s.tol)
         assert (r["megno"], r["mlce"]) == (float(ind.megno[0]), float(ind.mlce[0]))          # the same numbers
         fp = elliptic_center(s, starts[1])
         assert fp.stable and fp.point == pytest.approx(find_fixed_point(s.params, s.h, starts[1]).point, abs=0)
@@ -1524,7 +1526,7 @@ def test_picking_a_hyperbolic_fixed_point_draws_its_grown_stable_and_unstable_ma
         assert page.pick(saddle[0] + 1e-9, saddle[1]) is None          # a mark, not an orbit
         _poll_until(page, lambda: len(page.manifold_source.data["xs"]) == 4, timeout=120)
         m = page.manifold_source.data
-        ref = manifolds(saddle, page.settings.params, page.settings.h, arclength=MANIFOLD_ARCLENGTH)
+        ref = manifolds(page.settings.params, page.settings.h, saddle, arclength=MANIFOLD_ARCLENGTH)
         assert m["kind"] == [b.kind for b in ref] == ["unstable", "unstable", "stable", "stable"]
         assert m["color"] == [MANIFOLD_COLORS[b.kind] for b in ref]
         for x, y, b in zip(m["xs"], m["ys"], ref):                     # the analysis' branches, point for point

@@ -38,10 +38,10 @@ def test_a_driver_running_in_a_thread_leaves_the_main_thread_running(what):
     y0 = model.section_state(params, [0.3], [0.1], 2.0)
     if what == "crossings":
         def work(n):
-            sections.crossings(params, y0, n_crossings=n)
+            sections.crossings(params, states=y0, n_crossings=n)
     else:
         def work(n):
-            lyapunov.indicators(params, y0, tmax=2.0 * n)
+            lyapunov.indicators(params, states=y0, tmax=2.0 * n)
     work(10)                                   # compiled (or loaded) first
     n = 5_000
     for _ in range(6):                         # a call long enough to tell (x4 until it takes 0.3 s)

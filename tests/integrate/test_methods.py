@@ -40,9 +40,9 @@ def test_prepared_settings_are_what_the_results_record():
     assert p.flow_ids.dtype == np.int64 and len(p.flow_ids) == len(p.fracs) > 0
     prm = model.FIGURE4.with_(mu=0.5)
     y0 = model.section_state(prm, [0.1], [0.0], 2.0)
-    res = sections.crossings(prm, y0, n_crossings=3, method="split6", dt=0.02)
+    res = sections.crossings(prm, states=y0, n_crossings=3, method="split6", dt=0.02)
     assert {k: res.settings[k] for k in ("dt", "order")} == p.settings
-    ind = lyapunov.indicators(prm, y0, tmax=10.0, method="split6", dt=0.02)
+    ind = lyapunov.indicators(prm, states=y0, tmax=10.0, method="split6", dt=0.02)
     assert {k: ind.settings[k] for k in ("dt", "order")} == p.settings
 
 
@@ -68,22 +68,23 @@ def test_an_orbit_whose_motion_the_fixed_step_does_not_resolve_is_flagged_not_in
     give alone; a step that resolves it integrates it (M = 1e4: crossings every 2 pi b/M, as
     Taylor finds them)."""
     prm = model.FIGURE4.with_(mu=0.1)
-    r = sections.crossings(prm, SPINNING, n_crossings=5, method=method, dt=0.05, tmax=100.0)
+    r = sections.crossings(prm, states=SPINNING, n_crossings=5, method=method, dt=0.05, tmax=100.0)
     assert list(r.status) == [STATUS_UNRESOLVED, STATUS_UNRESOLVED, STATUS_DONE]
     assert list(r.count) == [0, 0, 5] and np.all(np.isnan(r.data[:2]))
     assert "does not resolve the motion" in r.status_name(0)
     np.testing.assert_array_equal(r.final[:2], SPINNING[:2])
-    alone = sections.crossings(prm, SPINNING[2:], n_crossings=5, method=method, dt=0.05, tmax=100.0)
+    alone = sections.crossings(prm, states=SPINNING[2:], n_crossings=5, method=method, dt=0.05, tmax=100.0)
     np.testing.assert_array_equal(r.data[2], alone.data[0])
-    blocks = list(sections.iter_crossings(prm, SPINNING, n_crossings=5, block=2, method=method, dt=0.05, tmax=100.0))
+    blocks = list(sections.iter_crossings(prm, states=SPINNING, n_crossings=5, block=2, method=method, dt=0.05,
+                                          tmax=100.0))
     np.testing.assert_array_equal(blocks[-1].state.status, r.status)
-    ind = lyapunov.indicators(prm, SPINNING, tmax=10.0, method=method, dt=0.05)
+    ind = lyapunov.indicators(prm, states=SPINNING, tmax=10.0, method=method, dt=0.05)
     assert list(ind.status) == [STATUS_UNRESOLVED, STATUS_UNRESOLVED, STATUS_DONE]
     assert np.all(np.isnan(ind.mlce[:2])) and np.isfinite(ind.mlce[2])
     fine = 0.5 * methods.MAX_STEP_PHASE / float(model.max_rate(prm, SPINNING[1]))
-    r = sections.crossings(prm, SPINNING[1:], n_crossings=5, method=method, dt=fine, tmax=100.0)
+    r = sections.crossings(prm, states=SPINNING[1:], n_crossings=5, method=method, dt=fine, tmax=100.0)
     assert list(r.count) == [5, 5]
-    t = sections.crossings(prm, SPINNING[1:], n_crossings=5, method="taylor", tmax=100.0)
+    t = sections.crossings(prm, states=SPINNING[1:], n_crossings=5, method="taylor", tmax=100.0)
     np.testing.assert_allclose(np.diff(t.orbit(0)[:, 0]), 2 * np.pi * prm.b / 1e4, rtol=1e-3)
     np.testing.assert_allclose(r.orbit(0)[:, 0], t.orbit(0)[:, 0], rtol=1e-6)
 
@@ -96,7 +97,7 @@ def test_max_rate_bounds_the_spin_along_the_whole_orbit():
     c1, c2, r1, r2 = model.allowed_ellipse(prm, 2.0)
     y0 = model.section_state(prm, c1 + r1 * np.array([0.1, 0.5, -0.8]), c2 + r2 * np.array([0.0, 0.2, -0.1]), 2.0)
     bound = model.max_rate(prm, y0)
-    r = sections.crossings(prm, y0, n_crossings=30, method="taylor", tmax=300.0)
+    r = sections.crossings(prm, states=y0, n_crossings=30, method="taylor", tmax=300.0)
     for i in range(3):
         assert np.abs(r.orbit(i)[:, 3]).max() / prm.b <= bound[i]
         assert np.abs(r.orbit(i)[:, 3]).max() / prm.b > 0.2 * bound[i]     # and not a vast over-estimate

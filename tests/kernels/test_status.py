@@ -21,7 +21,7 @@ def test_status_values_are_the_stored_codes():
 def test_a_driver_status_reads_back_as_the_enum():
     prm = model.FIGURE4.with_(mu=0.5)
     y0 = model.section_state(prm, np.array([0.1, 0.1]), np.zeros(2), 2.0)
-    done = sections.crossings(prm, y0, n_crossings=5, tmax=1e3, threads=1)
-    res = sections.crossings(prm, y0, n_crossings=5, tmax=1.0, threads=1)  # a crossing takes about 4.4
+    done = sections.crossings(prm, states=y0, n_crossings=5, tmax=1e3, threads=1)
+    res = sections.crossings(prm, states=y0, n_crossings=5, tmax=1.0, threads=1)  # a crossing takes about 4.4
     assert done.status_of(0) is Status.DONE and res.status_of(1) is Status.TMAX
     assert res.status_name(1) == Status.TMAX.description == "time budget exhausted"

@@ -73,5 +73,5 @@ def partner_points(system, points, *, threads: int | None = None) -> Partners:
     if abs(math.remainder(image - phi0, 2.0 * math.pi)) < SAME_SECTION:
         # K maps the section to itself (phi0 = pi/2 or 3 pi/2): T = K
         return Partners(y[:, :2].copy(), np.zeros(len(x)), ("done",) * len(x))
-    c = crossings(params, y, n_crossings=1, phi0=phi0, tol=tol, threads=threads, tmax=TMAX)
+    c = crossings(params, states=y, n_crossings=1, phi0=phi0, tol=tol, threads=threads, tmax=TMAX)
     return Partners(c.data[:, 0, 1:3].copy(), c.data[:, 0, 0].copy(), tuple(c.status_name(i) for i in range(len(x))))

@@ -202,8 +202,8 @@ def indicators(system, y0, *, tmax: float = DEFAULT_TIME, method: str | None = N
     ``y0`` = (p1, p2) or an (N, 2) array on its section phi = ``phi0`` at energy ``h`` (M > 0
     from the energy, :func:`explorer.model.section_state`), integrated at the map's tolerance
     (``tol`` beside a map is refused, as for every analysis); ``indicators(smap, points)`` is
-    ``indicators(smap.params, states, tol=smap.tol)``.  The model parameters alone, ``params``
-    followed by full states, are the flow: ``y0`` are states and ``tol=`` this call's own.
+    ``indicators(smap.params, states=states, tol=smap.tol)``.  The model parameters alone with the
+    keyword ``states=`` full states are the flow, ``tol=`` this call's own.
     ``method`` (default Taylor, the map's) is this function's choice of integrator either way
     (every method has its tangent loop).
 
@@ -212,8 +212,9 @@ def indicators(system, y0, *, tmax: float = DEFAULT_TIME, method: str | None = N
     system : SectionMap or Params
         The section map, or the model parameters (docs/model.md, table "Notation") for full
         states (see above).
-    y0 : array (N, 2) or (2,) with a map, (N, 5) or (5,) with params
-        Section points (p1, p2), or initial states (p1, p2, M, sin phi, cos phi).
+    y0 : array (N, 2) or (2,), with a map
+        Section points (p1, p2).  The flow's initial states (p1, p2, M, sin phi, cos phi),
+        (N, 5) or (5,), are given as ``states=`` with ``params`` instead.
     tmax : float
         Integration time (> 0): every orbit runs to t = tmax unless it stops early.
     method : str, optional
@@ -261,7 +262,7 @@ def indicators(system, y0, *, tmax: float = DEFAULT_TIME, method: str | None = N
     tol = DEFAULT_TOL if tol is None else tol
     P = validation.packed_params(params)
     m = methods.get(method)
-    T = validation.real("time", tmax, 0.0, lo_open=True)
+    T = validation.real("tmax", tmax, 0.0, lo_open=True)
     Y0 = np.ascontiguousarray(np.atleast_2d(np.asarray(y0, dtype=np.float64)))
     if Y0.ndim != 2 or Y0.shape[1] != 5 or not np.all(np.isfinite(Y0)):
         raise ParameterError("y0 must be finite with shape (N, 5) = (p1, p2, M, g1, g2) per orbit")

@@ -337,9 +337,15 @@ def _bad_intervals(P, max_gap, max_angle, max_gap_angle, lo):
 def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DEFAULT_START_TOL,
                 max_gap=DEFAULT_MAX_GAP, max_angle=DEFAULT_MAX_ANGLE, max_gap_angle=DEFAULT_MAX_GAP_ANGLE,
                 max_points=20000, max_time=None, integrate_backward=False,
-                resume: ManifoldBranch | None = None, generations: int | None = None) -> ManifoldBranch:
+                resume: ManifoldBranch | None = None, generations: int | None = None,
+                unstable: ManifoldBranch | None = None) -> ManifoldBranch:
     """One branch of W^u (W^s with ``stable``) of the saddle ``sd`` grown to ``arclength``
     (module docstring: parametrisation, start distance, refinement, budgets).
+
+    A stable branch of a saddle that :func:`mirrors` is the reflection of the unstable branch of
+    its sign (:func:`mirror_branch`; the one place this is decided): that branch is grown here and
+    reflected, or, given as ``unstable`` (grown by this function for ``sd`` with this sign and
+    these settings, as :func:`manifolds` and the turnstile hold it), reflected without growing.
 
     ``generations``: grow no further than that many images of the fundamental domain (sigma
     below sigma0 + (generations + 1) L; status "generations" when that comes before the
@@ -366,6 +372,13 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
     if max_time is not None:
         max_time = validation.real("max_time", max_time, 0.0)
     if stable and not integrate_backward and mirrors(sd):
+        if unstable is not None:
+            held = (unstable.kind, unstable.sign, unstable.target, unstable.start_tol, unstable.max_gap)
+            if unstable.curve is None or unstable.curve.sd is not sd or held != ("unstable", sign, arclength,
+                                                                                   start_tol, max_gap):
+                raise ParameterError("unstable: the unstable branch of this saddle and sign, grown by grow_branch "
+                                     "with the same arclength and settings")
+            return mirror_branch(unstable)
         source = resume.mirror_of if resume is not None else None
         return mirror_branch(grow_branch(sd, sign=sign, arclength=arclength, start_tol=start_tol, max_gap=max_gap,
                                          max_angle=max_angle, max_gap_angle=max_gap_angle, max_points=max_points,
@@ -510,16 +523,15 @@ def manifolds(system, orbit, *, arclength=5.0, kinds=("unstable", "stable"), sig
         if k not in ("unstable", "stable"):
             raise ParameterError(f"kinds must be 'unstable' and/or 'stable', got {k!r}")
     grown: dict = {}
-    for k in kinds:
+    for k in ("unstable", "stable"):      # the unstable first: a mirrored stable branch reflects it (grow_branch)
+        if k not in kinds:
+            continue
         for s in signs:
-            if k == "stable" and ("unstable", s) in grown and not integrate_backward and mirrors(sd):
-                grown[k, s] = mirror_branch(grown["unstable", s])     # its reflection: nothing to map
-            else:
-                grown[k, s] = grow_branch(sd, stable=(k == "stable"), sign=s, arclength=arclength,
-                                          start_tol=start_tol, max_gap=max_gap, max_angle=max_angle,
-                                          max_gap_angle=max_gap_angle, max_points=max_points, max_time=max_time,
-                                          integrate_backward=integrate_backward)
-    return list(grown.values())
+            grown[k, s] = grow_branch(sd, stable=(k == "stable"), sign=s, arclength=arclength,
+                                      start_tol=start_tol, max_gap=max_gap, max_angle=max_angle,
+                                      max_gap_angle=max_gap_angle, max_points=max_points, max_time=max_time,
+                                      integrate_backward=integrate_backward, unstable=grown.get(("unstable", s)))
+    return [grown[k, s] for k in dict.fromkeys(kinds) for s in signs]
 
 
 def _orbit_from_point(system, point, period):

@@ -549,12 +549,12 @@ def symmetry_line_points(system, period, *, n=200, threads=None):
         target = phi0 if (K % 2 == 0) == (line == 0) else other
         n_target = (K + line) // 2 if target == phi0 else (K + 1 - line) // 2
         n_target = max(n_target, 1)
-        c = crossings(prm, Y0, n_crossings=n_target, phi0=target, tol=tol, tmax=tmax * n_target, threads=threads)
+        c = crossings(prm, states=Y0, n_crossings=n_target, phi0=target, tol=tol, tmax=tmax * n_target, threads=threads)
         f = np.where(c.count >= n_target, c.data[:, n_target - 1, 2], np.nan)
         if line == 0:
             on = np.column_stack([p1, np.zeros_like(p1)])
         else:
-            c1 = crossings(prm, Y0, n_crossings=1, phi0=phi0, tol=tol, tmax=tmax, threads=threads)
+            c1 = crossings(prm, states=Y0, n_crossings=1, phi0=phi0, tol=tol, tmax=tmax, threads=threads)
             on = np.where((c1.count >= 1)[:, None], c1.data[:, 0, 1:3], np.nan)
         return f, on
 

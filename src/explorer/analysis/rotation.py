@@ -182,7 +182,7 @@ class _Samples:
             from explorer.analysis.sections import crossings
 
             params, n_returns, phi0, tol, threads = self.args
-            c = crossings(params, self.Y0, n_crossings=n_returns, phi0=phi0 + 2.0 * math.pi * f, tol=tol,
+            c = crossings(params, states=self.Y0, n_crossings=n_returns, phi0=phi0 + 2.0 * math.pi * f, tol=tol,
                           threads=threads, tmax=TMAX_PER_RETURN * n_returns)
             if c.count[0] < 1:
                 raise ParameterError(f"center {tuple(self.center)} must be a point whose orbit crosses the "

@@ -218,12 +218,26 @@ def as_system(name: str, system, args: tuple, kw: dict, settings: tuple = MAP_SE
       from the default for an analysis that does not use it (``"tmax"`` not in ``settings``);
     - any other map object (one with the map protocol of Greene's residues, issue 35) passes
       through unchanged;
-    - with ``flow`` (a function that also integrates the flow from full states), ``params``
-      followed by the states rather than a number h is the flow itself: passed through, the
-      settings left to the function.
+    - with ``flow`` (a function that also integrates the flow from full states), the model
+      parameters alone with the keyword ``states=`` are the flow itself: passed through with the
+      states as the points, the settings left to the function.  No positional argument changes
+      meaning with the type of another: after ``params`` the next positional is always h.  The
+      older form ``params, states`` (states by position) still works, with a DeprecationWarning.
     """
-    if flow and is_params(system) and "h" not in kw and not (args and isinstance(args[0], numbers.Real)):
-        return system, args, kw
+    if flow:
+        states = kw.pop("states", None)
+        if states is not None:
+            if not is_params(system):
+                raise ParameterError(f"{name}: states= are the flow's start, given with the model parameters alone "
+                                     f"({name}(params, states=...)); a map takes section points (p1, p2)")
+            if args or "h" in kw:
+                raise ParameterError(f"{name}(params, states=...): the flow has no energy h and no section points; "
+                                     "give either states= or h and points")
+            return system, (states,), kw
+        if is_params(system) and "h" not in kw and args and not isinstance(args[0], numbers.Real):
+            deprecated(f"{name}(params, states, ...) with the states by position",
+                       f"{name}(params, states=states, ...)")
+            return system, args, kw
     if is_params(system):
         if "h" in kw:
             h = kw.pop("h")
@@ -278,7 +292,7 @@ def system_first(fn=None, *, settings: tuple = MAP_SETTINGS, moved: tuple = (), 
     still accepted so, with a DeprecationWarning.  ``defaults``: settings of the map built from
     ``params, h`` when not given, where this function's purpose has its own default (the
     tolerance of crossings and indicators, :data:`~explorer.integrate.methods.DEFAULT_TOL`).
-    ``flow``: ``params`` followed by full states is the flow (:func:`as_system`).
+    ``flow``: ``params`` with ``states=`` full states is the flow (:func:`as_system`).
 
     The wrapped function's signature (``inspect.signature``, an IDE) is ``fn``'s, with those
     settings added as keywords for the ``params, h`` form."""
@@ -296,10 +310,14 @@ def system_first(fn=None, *, settings: tuple = MAP_SETTINGS, moved: tuple = (), 
         ps = list(sig.parameters.values())
         extra = [inspect.Parameter(k, inspect.Parameter.KEYWORD_ONLY, default=None) for k in settings
                  if k not in sig.parameters]
+        if flow:   # the points are optional in the display: the flow gives states= instead
+            ps = [ps[0], ps[1].replace(default=None), *ps[2:]]
+            extra.append(inspect.Parameter("states", inspect.Parameter.KEYWORD_ONLY, default=None))
         tail = [p for p in ps if p.kind == inspect.Parameter.VAR_KEYWORD]
         call.__signature__ = sig.replace(parameters=[p for p in ps if p not in tail] + extra + tail)
         note = (f"    The system first (docs/api.md, \"The system argument\"): a SectionMap, or ``params, h`` "
-                f"with {', '.join(f'``{k}=``' for k in settings)} for its settings.")
+                f"with {', '.join(f'``{k}=``' for k in settings)} for its settings"
+                + (", or the flow: ``params, states=`` full states." if flow else "."))
         doc = fn.__doc__ or ""
         head, sep, rest = doc.partition("\n\n")
         call.__doc__ = head + "\n\n" + note + (sep + rest if sep else "\n")

@@ -294,8 +294,9 @@ def crossings(system, y0, *, n_crossings: int, method: str = "taylor", tol: floa
     ``tol=``, default :data:`~explorer.integrate.methods.DEFAULT_TOL`) with ``y0`` its section
     points ((p1, p2) or (N, 2); M from the energy with the sign of ``direction``, docs/model.md
     R9): its ``params``, ``h``, ``phi0`` and ``tol``, and with the defaults (Taylor, direction
-    +1) the rows are the map's iterates; or the model parameters alone, ``params``, with ``y0``
-    full states ((N, 5) or (5,)) and ``phi0=``, ``tol=`` this call's own.
+    +1) the rows are the map's iterates; or the flow, the model parameters alone with the
+    keyword ``states=`` full states ((N, 5) or (5,)) and ``phi0=``, ``tol=`` this call's own:
+    ``crossings(params, states=Y, n_crossings=K)``.
 
     ``tol`` is the tolerance of the adaptive methods, ``dt`` the fixed step of the splitting
     methods (default 0.05).  ``threads`` sets numba's thread count for this call (default: all).
@@ -338,12 +339,12 @@ def propagate(system, y0, *, t: float, method: str = "taylor", tol: float = DEFA
               threads: int | None = None) -> np.ndarray:
     """The states of the orbits from ``y0`` at time ``t`` > 0 (N, 5): the run of :func:`crossings`
     (the same steps) stopped by its time budget, whose last step ends exactly at t.  The system
-    and ``y0`` as for :func:`crossings` (a map and its section points, or ``params`` and full
-    states).  An orbit that crosses the section more than :data:`PROPAGATE_CROSSINGS` times on
+    and ``y0`` as for :func:`crossings` (a map and its section points, or ``params`` and
+    ``states=`` full states).  An orbit that crosses the section more than :data:`PROPAGATE_CROSSINGS` times on
     the way, or stops for another reason, raises ParameterError: propagate it in shorter times."""
     t = validation.real("t", t, 0.0, lo_open=True)
     params, y0, tol, phi0 = _start(system, y0, tol, math.pi, 1)
-    res = crossings(params, y0, n_crossings=PROPAGATE_CROSSINGS, tmax=t, method=method, tol=tol, dt=dt,
+    res = crossings(params, states=y0, n_crossings=PROPAGATE_CROSSINGS, tmax=t, method=method, tol=tol, dt=dt,
                     phi0=phi0, threads=threads)
     short = np.flatnonzero((res.status != int(Status.TMAX)) | (res.info[:, 0] != t))
     if short.size:

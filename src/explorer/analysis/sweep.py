@@ -211,8 +211,8 @@ def task(spec: SweepSpec, i: int, threads: int | None = None) -> dict:
     panel = spec.panels[pos]
     t0 = time.perf_counter()
     if spec.sections:
-        res = sections.crossings(panel.P, panel.y0[a:b], n_crossings=spec.crossings, method=spec.method, tol=spec.tol,
-                                 dt=spec.dt, tmax=spec.tmax, max_steps=spec.max_steps, phi0=spec.phi0,
+        res = sections.crossings(panel.P, states=panel.y0[a:b], n_crossings=spec.crossings, method=spec.method,
+                                 tol=spec.tol, dt=spec.dt, tmax=spec.tmax, max_steps=spec.max_steps, phi0=spec.phi0,
                                  direction=spec.direction, threads=threads)
         out = {"chunk": i, "data": res.data, "count": res.count, "status": res.status, "final": res.final,
                "info": res.info, "settings": res.settings}
@@ -226,8 +226,8 @@ def task(spec: SweepSpec, i: int, threads: int | None = None) -> dict:
 
         ly = spec.lyapunov
         which = tuple(q for q in ly.indicators if indicator_table.BY_NAME[q].tangent) or None
-        ind = indicators(panel.P, panel.y0[a:b], tmax=ly.time, method=ly.method, tol=ly.tol, dt=ly.dt, threads=threads,
-                         which=which, early_stop=ly.early_stop, early_sali=ly.early_sali,
+        ind = indicators(panel.P, states=panel.y0[a:b], tmax=ly.time, method=ly.method, tol=ly.tol, dt=ly.dt,
+                         threads=threads, which=which, early_stop=ly.early_stop, early_sali=ly.early_sali,
                          early_megno=ly.early_megno, early_time=ly.early_time)
         y0 = panel.y0[a:b]
         with np.errstate(invalid="ignore", over="ignore"):   # |H - H0| where the indicator integration ended
@@ -268,7 +268,7 @@ def task_block(spec: SweepSpec, i: int, state, threads: int | None = None) -> di
     pos, a, b = spec.chunks[i]
     panel = spec.panels[pos]
     t0 = time.perf_counter()
-    it = sections.iter_crossings(panel.P, panel.y0[a:b], n_crossings=spec.crossings, block=spec.blocks[pos],
+    it = sections.iter_crossings(panel.P, states=panel.y0[a:b], n_crossings=spec.crossings, block=spec.blocks[pos],
                                  state=state, method=spec.method, tol=spec.tol, dt=spec.dt, tmax=spec.tmax,
                                  max_steps=spec.max_steps, phi0=spec.phi0, direction=spec.direction, threads=threads)
     blk = next(it, None)

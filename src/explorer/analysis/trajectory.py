@@ -63,7 +63,7 @@ API
 ---
 ``full_params(params=None, **changes) -> dict``      validated parameters (lam = 0 allowed)
 ``initial_state(params, p1, p2, M, phi, x=0, y=0) -> (7,) array``
-``trajectory(params, y0_full, t_end, n_samples=2001, tol=1e-12) -> dict``
+``trajectory(params, y0_full, tmax, n_samples=2001, tol=1e-12) -> dict``
     samples ``t, x, y, phi, p1, p2, M, H, px, py`` (+ ``g1, g2``, the turning points, status)
 ``conservation(result) -> dict``                      errors of H, p_x, p_y + mu t (abs and rel)
 ``drift(params, y0_full, T, ...) -> dict``            measured mean velocity vs +mu/lam; the band
@@ -105,7 +105,7 @@ class Trajectory:
     Attributes
     ----------
     t : ndarray (n,)
-        Sample times, both ends of [0, t_end] included.
+        Sample times, both ends of [0, tmax] included.
     x, y, phi : ndarray (n,)
         Position of the body and its angle (unwrapped), docs/model.md R1.
     p1, p2, M, g1, g2 : ndarray (n,)
@@ -206,10 +206,10 @@ def initial_state(params, p1, p2, M, phi, x=0.0, y=0.0) -> np.ndarray:
     return np.array([p1, p2, M_, math.sin(phi), math.cos(phi), x, y], dtype=np.float64)
 
 
-def _check_run(t_end, n_samples, tol):
-    t_end = validation.real("T (time)", t_end)
-    if not t_end > 0.0:
-        raise model.ParameterError(f"T (time) must be > 0, got {t_end!r}")
+def _check_run(tmax, n_samples, tol):
+    tmax = validation.real("tmax", tmax)
+    if not tmax > 0.0:
+        raise model.ParameterError(f"tmax (the time the orbit runs) must be > 0, got {tmax!r}")
     try:
         ns = int(n_samples)
     except (TypeError, ValueError):
@@ -220,7 +220,7 @@ def _check_run(t_end, n_samples, tol):
     tol = validation.real("tol", tol)
     if not (0.0 < tol < 1.0):
         raise model.ParameterError(f"tol must be in (0, 1), got {tol!r}")
-    return t_end, ns, tol
+    return tmax, ns, tol
 
 
 # ====================================================================== integration
@@ -232,9 +232,9 @@ def momentum_integrals(P, t, p1, p2, g1, g2, x, y):
     return px, py
 
 
-def trajectory(params, y0_full, t_end, n_samples=2001, tol=DEFAULT_TOL, *, phi_start=None,
+def trajectory(params, y0_full, tmax, n_samples=2001, tol=DEFAULT_TOL, *, phi_start=None,
                max_steps=DEFAULT_MAX_STEPS, max_turns=None) -> Trajectory:
-    """Integrate R1 from ``y0_full`` (:func:`initial_state`) over [0, t_end] and sample it at
+    """Integrate R1 from ``y0_full`` (:func:`initial_state`) over [0, tmax] and sample it at
     ``n_samples`` equally spaced times (both ends included).
 
     Returns a frozen :class:`Trajectory`: arrays ``t, x, y, phi (unwrapped), p1, p2, M, g1, g2,
@@ -245,7 +245,7 @@ def trajectory(params, y0_full, t_end, n_samples=2001, tol=DEFAULT_TOL, *, phi_s
     """
     prm = full_params(params)
     P = np.array([prm[n] for n in model.PARAM_NAMES], dtype=np.float64)
-    t_end, ns, tol = _check_run(t_end, n_samples, tol)
+    tmax, ns, tol = _check_run(tmax, n_samples, tol)
     y0 = np.ascontiguousarray(np.asarray(y0_full, dtype=np.float64).ravel())
     if y0.shape != (STATE_DIM,):
         raise model.ParameterError(f"the full state has {STATE_DIM} components (p1, p2, M, g1, g2, x, y), "
@@ -259,7 +259,7 @@ def trajectory(params, y0_full, t_end, n_samples=2001, tol=DEFAULT_TOL, *, phi_s
     if phi_start is not None:
         ps = validation.real("phi", phi_start)
         phi0 = phi0 + TWO_PI * math.floor((ps - phi0) / TWO_PI + 0.5)
-    t = np.linspace(0.0, t_end, ns)
+    t = np.linspace(0.0, tmax, ns)
     out = np.full((ns, STATE_DIM), np.nan)
     out_phi = np.full(ns, np.nan)
     cap = 1024 if max_turns is None else int(max_turns)

@@ -202,7 +202,7 @@ def turnstile(sd, *, arclength=6.0, sign=1, max_arclength=None, max_residual=1e-
     length helps); the pair with the most lobes is returned.  ``max_residual``: of the homoclinic
     points (:func:`~explorer.analysis.manifolds.homoclinic_points`); the branches grow with the
     defaults of :func:`~explorer.analysis.manifolds.grow_branch`."""
-    from explorer.analysis.manifolds import grow_branch, mirror_branch, mirrors
+    from explorer.analysis.manifolds import grow_branch
 
     length = float(arclength)
     limit = length if max_arclength is None else float(max_arclength)
@@ -211,11 +211,9 @@ def turnstile(sd, *, arclength=6.0, sign=1, max_arclength=None, max_residual=1e-
         # a doubled length continues the shorter branches (the same points as growing afresh)
         bu = grow_branch(sd, sign=sign, arclength=length, resume=bu)
         best = None
-        for s in (sign, -sign):
-            if s == sign and mirrors(sd):     # W^s_sign = G0 W^u_sign: the reflection of bu (grow_branch's)
-                bs = mirror_branch(bu)
-            else:
-                bs = grown[s] = grow_branch(sd, stable=True, sign=s, arclength=length, resume=grown.get(s))
+        for s in (sign, -sign):   # W^s_sign may be the reflection of bu: grow_branch decides (manifolds.mirrors)
+            bs = grown[s] = grow_branch(sd, stable=True, sign=s, arclength=length, resume=grown.get(s),
+                                        unstable=bu if s == sign else None)
             hs = homoclinic_points(bu, bs, max_residual=max_residual)
             lb = lobes(bu, bs, points=hs)
             cut = torn(bu, bs, hs)

@@ -60,7 +60,7 @@ def print_rows(params, p1, p2, h, n_crossings, *, as_json=False, block=sections.
     out = sys.stdout if file is None else file
     y0 = _start(params, p1, p2, h, kw)
     settings = sections.crossing_settings(params, y0, n_crossings=n_crossings, **kw)
-    it = sections.iter_crossings(params, y0, n_crossings=n_crossings, block=block, **kw)
+    it = sections.iter_crossings(params, states=y0, n_crossings=n_crossings, block=block, **kw)
     if as_json:
         head = {"params": params.as_dict(), "h": h, "method": settings["method"], "settings": settings}
         out.write(json.dumps(head)[:-1] + ', "crossings": [')
@@ -135,7 +135,7 @@ def _to_store(path, params, p1, p2, h, n_crossings, block, force, on_block, stop
     state, resumed = blocks.resume_state(params, y0, phi0=phi0, force=force)
     t0 = time.perf_counter()
     st = state
-    for b in sections.iter_crossings(params, y0, n_crossings=n_crossings, block=block, state=state, **kw):
+    for b in sections.iter_crossings(params, states=y0, n_crossings=n_crossings, block=block, state=state, **kw):
         blocks.append(b.state.blocks, b.index, b.start, b.count, b.data, [0], b.state.as_arrays())
         st = b.state
         if on_block is not None:

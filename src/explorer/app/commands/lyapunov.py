@@ -16,13 +16,14 @@ import numpy as np
 
 from explorer import model
 from explorer.app.commands import options
-from explorer.app.commands.options import Command, opt
+from explorer.app.commands.options import Command, opt, renamed
 from explorer.integrate.methods import DEFAULT_DT, DEFAULT_TOL
 from explorer.kernels.indicator_table import TANGENT
 
-COMMAND = Command("lyapunov", __doc__, "--p1 -0.2 --p2 0.1 --mu 1 -T 1000 --json", (
+COMMAND = Command("lyapunov", __doc__, "--p1 -0.2 --p2 0.1 --mu 1 --tmax 1000 --json", (
     options.add_start_args,
-    opt("--time", "-T", type=float, default=1000.0, help="integration time T [%(default)s]"),
+    renamed("--tmax", "--time", "-T", type=float, default=1000.0, help="integration time: the time the orbit runs "
+            "to [%(default)s] (--time, -T: older names)"),
     partial(options.add_method_args, tol=DEFAULT_TOL, dt=DEFAULT_DT),
     opt("--history", type=int, default=12, help="history points (log-spaced in time) [%(default)s]"),
     partial(options.add_model_args, json="print JSON"),
@@ -43,7 +44,7 @@ def run(args) -> int:
     y0 = model.section_state(params, [args.p1], [args.p2], args.h)
     # every indicator of the tangent loops the method computes (SALI and GALI_2: Taylor's tangent lanes;
     # frequency diffusion, of the section map's returns around a centre, is a sweep's: [lyapunov] center)
-    r = lyapunov.indicators(params, y0, tmax=args.time, method=args.method, tol=args.tol, dt=args.dt,
+    r = lyapunov.indicators(params, states=y0, tmax=args.tmax, method=args.method, tol=args.tol, dt=args.dt,
                             history=args.history, which=lyapunov.available(args.method))
     cols = [RES_T] + [i.column for i in TANGENT if i.in_history]
     hist = [[float(row[c]) for c in cols] for row in r.history[0] if np.isfinite(row[RES_T])]
@@ -60,7 +61,7 @@ def run(args) -> int:
            "history": hist}
     if status != "done":
         cover = f"the estimates cover [0, {reached:g}]" if reached > 0 else "no estimate"
-        print(f"explorer: the orbit stopped at t = {reached:g} of {args.time:g} ({status}); {cover}",
+        print(f"explorer: the orbit stopped at t = {reached:g} of {args.tmax:g} ({status}); {cover}",
               file=sys.stderr)
     if args.json:
         print(json.dumps(out))

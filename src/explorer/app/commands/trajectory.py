@@ -13,16 +13,17 @@ from functools import partial
 
 from explorer import model
 from explorer.app.commands import options
-from explorer.app.commands.options import Command, opt
+from explorer.app.commands.options import Command, opt, renamed
 from explorer.integrate.methods import TRAJECTORY_TOL
 from explorer.model import validation
 
-COMMAND = Command("trajectory", __doc__, "--p1 0.5 --M 2 --mu 0.5 -T 300 --out figures/trajectory", (
+COMMAND = Command("trajectory", __doc__, "--p1 0.5 --M 2 --mu 0.5 --tmax 300 --out figures/trajectory", (
     opt("--p1", type=float, default=0.5, help="initial p1 [%(default)s]"),
     opt("--p2", type=float, default=0.0, help="initial p2 [%(default)s]"),
     opt("--M", type=float, default=2.0, help="initial M [%(default)s]"),
     opt("--phi", type=float, default=0.0, help="initial angle phi [%(default)s]"),
-    opt("--time", "-T", type=float, default=300.0, help="integration time T [%(default)s]"),
+    renamed("--tmax", "--time", "-T", type=float, default=300.0, help="integration time: the time the orbit runs "
+            "to [%(default)s] (--time, -T: older names)"),
     opt("--samples", type=int, default=20001, help="samples on [0, T] [%(default)s]"),
     opt("--tol", type=float, default=TRAJECTORY_TOL, help="DOP853 tolerance (rtol = atol) [%(default)s]"),
     opt("--glyphs", type=int, default=40, help="orientation glyphs along the path [%(default)s]"),
@@ -46,15 +47,15 @@ def run(args) -> int:
         raise model.ParameterError(f"glyphs must be >= 1, got {args.glyphs!r}")
     if not args.no_figure:
         validation.output_path("--out", args.out)
-    res = tr.trajectory(prm, y0, args.time, args.samples, args.tol, phi_start=args.phi)
+    res = tr.trajectory(prm, y0, args.tmax, args.samples, args.tol, phi_start=args.phi)
     cons = tr.conservation(res)
     d = k = None
     if prm["lam"] != 0.0:
-        d = tr.drift(prm, y0, args.time, result=res)
+        d = tr.drift(prm, y0, args.tmax, result=res)
     elif prm["mu"] > 0.0 and prm["a1"] != prm["a2"]:
-        k = tr.kozlov(prm, y0, args.time, result=res)
+        k = tr.kozlov(prm, y0, args.tmax, result=res)
     out = {"params": prm, "initial": {"p1": args.p1, "p2": args.p2, "M": args.M, "phi": args.phi},
-           "time": args.time, "samples": args.samples, "tol": args.tol, "status": res.status,
+           "time": args.tmax, "samples": args.samples, "tol": args.tol, "status": res.status,
            "steps": res.steps}
     out.update(tr.summary(d, k, cons))
     if not args.no_figure:
@@ -69,7 +70,7 @@ def run(args) -> int:
     if args.json:
         print(json.dumps(out))
         return 0
-    print(f"status {res.status}  (T {args.time:g}, {res.steps} steps, tol {args.tol:g})")
+    print(f"status {res.status}  (T {args.tmax:g}, {res.steps} steps, tol {args.tol:g})")
     print(f"conservation: |dH| {cons['H']:.3g} (rel {cons['H_rel']:.3g}), |d p_x| {cons['px']:.3g} "
           f"(rel {cons['px_rel']:.3g}), |d(p_y + mu t)| {cons['py']:.3g} (rel {cons['py_rel']:.3g})")
     if d is not None:

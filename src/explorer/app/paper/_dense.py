@@ -15,7 +15,7 @@ def advance(params, Y, tau, *, tol=DENSE_TOL):
     from explorer.analysis import sections
 
     Y = np.ascontiguousarray(np.atleast_2d(Y), dtype=float)
-    return sections.propagate(params, Y, t=float(tau), tol=tol, threads=1)
+    return sections.propagate(params, states=Y, t=float(tau), tol=tol, threads=1)
 
 
 def dense_orbits(params, Y0, t_end, dt, *, tol=DENSE_TOL, stop=None):

@@ -39,7 +39,7 @@ def homoclinic_figure(params=CHAPLYGIN, h=2.0, *, T0=20.0, dt=0.02, tol=MAP_TOL,
     t = t - T0
     for i, s in enumerate((1, -1)):
         expect = exact.homoclinic_crossing_times(P, c, math.pi, -T0, T0, sign=s)
-        res = sections.crossings(prm, Y0[i], n_crossings=len(expect), tmax=2 * T0, tol=tol, threads=1)
+        res = sections.crossings(prm, states=Y0[i], n_crossings=len(expect), tmax=2 * T0, tol=tol, threads=1)
         got = res.orbit(0)[:, 0] - T0
         n = min(len(got), len(expect))
         diff = np.abs(got[:n] - expect[:n]) if n else np.array([np.inf])

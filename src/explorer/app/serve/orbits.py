@@ -91,8 +91,8 @@ class OrbitRun:
         """Compute the next block; returns its rows (n, 5): t, p1, p2, M, H - H0."""
         s = self.settings
         t0 = time.perf_counter()
-        it = sections.iter_crossings(s.params, self.y0, n_crossings=s.crossings, block=self.block, state=self.state,
-                                     **s.section_kwargs())
+        it = sections.iter_crossings(s.params, states=self.y0, n_crossings=s.crossings, block=self.block,
+                                     state=self.state, **s.section_kwargs())
         b = next(it, None)
         elapsed = time.perf_counter() - t0
         self.wall += elapsed
@@ -129,7 +129,7 @@ def orbit_indicators(settings: Settings, y0) -> tuple:
     the run stopped early."""
     from explorer.analysis import lyapunov
 
-    res = lyapunov.indicators(settings.params, y0, tmax=INDICATOR_TIME, method=settings.method, tol=settings.tol,
+    res = lyapunov.indicators(settings.params, states=y0, tmax=INDICATOR_TIME, method=settings.method, tol=settings.tol,
                               dt=settings.dt, max_steps=INDICATOR_MAX_STEPS)
     if int(res.status[0]) != 0:
         return math.nan, math.nan

@@ -97,7 +97,7 @@ def megno_cells(settings: Settings, p1, p2, time: float = RASTER_TIME) -> np.nda
     from explorer.analysis import lyapunov
 
     y0 = model.section_state(settings.params, p1, p2, settings.h, settings.phi0, settings.direction or 1)
-    res = lyapunov.indicators(settings.params, y0, tmax=time, method=settings.method, tol=settings.tol,
+    res = lyapunov.indicators(settings.params, states=y0, tmax=time, method=settings.method, tol=settings.tol,
                               dt=settings.dt, which=("megno",), max_steps=RASTER_MAX_STEPS)
     return np.where(np.asarray(res.status) == 0, np.asarray(res.megno, dtype=np.float64), np.nan)
 
