@@ -219,6 +219,9 @@ def main(argv=None):
     ap.add_argument("--skip-512", action="store_true", help="do not run the 512 x 512 preset (reuse the last number)")
     ap.add_argument("--quick", action="store_true", help="T = 100 and fewer repeats (a smoke test; not recorded)")
     ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--heyoka-batch", type=int, nargs="+", default=None, metavar="N",
+                    help="heyoka batch sizes to time (default: heyoka.recommended_simd_size()); the ratio takes "
+                         "the fastest")
     args = ap.parse_args(argv)
     from explorer import model
     from explorer.analysis import lyapunov
@@ -234,13 +237,16 @@ def main(argv=None):
     te, me, se = explorer_run(prm, Y0, T, args.threads, repeats)
     fe = float(np.mean(me > THRESHOLD))
     hy_runs = []
+    batches = args.heyoka_batch or (None,)     # None: heyoka.recommended_simd_size()
     if C.have("heyoka"):
         for _ in range(1 if args.quick else 2):
-            hy_runs.append(heyoka_processes(prm.as_array(), Y0, V0, T, TOL, nproc=2))
+            for b in batches:
+                hy_runs.append(heyoka_processes(prm.as_array(), Y0, V0, T, TOL, nproc=2, simd=b))
         hy = min(hy_runs, key=lambda r: r["wall"])
+        hy_runs = [r for r in hy_runs if r["simd"] == hy["simd"]]
         fh = float(np.mean(hy["megno"] > THRESHOLD))
         agree = float(np.mean((me > THRESHOLD) == (hy["megno"] > THRESHOLD)))
-        doc["heyoka"] = dict(wall=[r["wall"] for r in hy_runs], fraction=fh, agree=agree, order=hy["order"],
+        doc["heyoka"] = dict(wall=[r["wall"] for r in hy_runs], fraction=fh, batches=[b for b in batches if b], agree=agree, order=hy["order"],
                              simd=hy["simd"],
                              propagate_share=hy["propagate_share"])
     doc["explorer400"] = dict(n=len(Y0), wall=te, fraction=fe, steps_mean=float(np.mean(se)))
@@ -256,8 +262,8 @@ def main(argv=None):
         Y3 = polar_seeds(p3)
         V3 = lyapunov.deviation_vector(p3, Y3)
         t3, m3, _ = explorer_run(p3, Y3, T, args.threads, repeats)
-        h3 = min((heyoka_processes(p3.as_array(), Y3, V3, T, TOL, nproc=2) for _ in range(1 if args.quick else 2)),
-                 key=lambda r: r["wall"])
+        h3 = min((heyoka_processes(p3.as_array(), Y3, V3, T, TOL, nproc=2, simd=b)
+                  for _ in range(1 if args.quick else 2) for b in batches), key=lambda r: r["wall"])
         doc["compare003"] = dict(n=len(Y3), wall=t3, fraction=float(np.mean(m3 > THRESHOLD)), hy_wall=h3["wall"],
                                  hy_fraction=float(np.mean(h3["megno"] > THRESHOLD)),
                                  agree=float(np.mean((m3 > THRESHOLD) == (h3["megno"] > THRESHOLD))))
@@ -310,7 +316,8 @@ def render(doc, started, seconds, load0, argv):
                               "on the ellipse (equal-area radii, 0.98 of the semi-axes); the 316-cell raster is "
                               "timed too.",
                               "heyoka: taylor_adaptive_batch of state + one deviation vector (Jacobian by hy.diff), "
-                              "batch = recommended SIMD size, 2 spawned processes (orbit j to process j % 2), "
+                              "batch = recommended SIMD size (or the fastest of the sizes --heyoka-batch names), "
+                              "2 spawned processes (orbit j to process j % 2), "
                               "deviation renormalised every time unit and MEGNO accumulated with the explorer's "
                               "formulas over those units; wall = latest end - earliest start after a barrier "
                               "(no JIT build). Explorer: lyapunov.indicators, 2 Numba threads, renormalised and "
@@ -322,7 +329,8 @@ def render(doc, started, seconds, load0, argv):
     if doc.get("heyoka"):
         h = doc["heyoka"]
         w = min(h["wall"])
-        lines.append(f"| heyoka batch (simd {h['simd']}, order {h['order']}), 2 processes | {e['n']} | {w:.2f} s "
+        tried = f" (fastest of batch sizes {', '.join(map(str, h['batches']))})" if h.get("batches") else ""
+        lines.append(f"| heyoka batch (simd {h['simd']}, order {h['order']}){tried}, 2 processes | {e['n']} | {w:.2f} s "
                      f"(runs {', '.join(f'{x:.2f}' for x in h['wall'])}) | {e['n'] / w:.0f} orbits/s | "
                      f"{h['fraction']:.4f} |")
     c3 = doc.get("compare003")
