@@ -265,3 +265,27 @@ def test_the_left_island_is_the_half_turn_image_of_the_right_one_with_the_same_r
     assert abs(l7.rotation(smap, left) + 1 / 7) < 1e-9 and abs(r7.rotation(smap, right) + 1 / 7) < 1e-9
     assert abs(l7.points[0, 0] + r7.points[0, 0]) > 0.01                  # not the mirror point
     assert l7.residue == pytest.approx(r7.residue, rel=1e-8)
+
+
+@pytest.mark.cpu_dependent
+def test_greene_around_the_left_island_uses_the_other_symmetry_line_and_finds_the_right_islands_mu_c():
+    """Around the left island's elliptic point the elliptic orbits of even period sit on p2 = 0 of
+    phi = 0 (island_line decides it from the 1/6 orbit nearest the centre on phi = pi, a hyperbolic
+    one); there the curve 1/(6 + gamma) breaks at the right island's mu_c, as the half-turn pairing
+    demands, with the same residues; its points are on the section phi = pi in the left island."""
+    from explorer.analysis import greene_section as gs
+
+    left = ex.greene(_section(0.025), "noble:6", qmax=20, around=(-1.16, 0.0))
+    right = ex.greene(_section(0.025), "noble:6", qmax=20, around=(1.58, 0.0))
+    assert (left.line, right.line) == (0.0, math.pi)
+    assert [c["q"] for c in left.convergents] == [c["q"] for c in right.convergents] == [6, 7, 13, 20]
+    assert abs(left.critical - right.critical) < 1e-10 and left.uncertainty < 1e-3
+    for cl, cr in zip(left.convergents, right.convergents):
+        assert cl["residue"] == pytest.approx(cr["residue"], abs=1e-8)
+        assert cl["line_start"] == pytest.approx(-cr["line_start"], abs=1e-8)
+    m = _section(left.critical)
+    centre = gm._centre(m, (-1.16, 0.0))
+    cv = left.convergents[-1]
+    orb = gs.section_symmetric_orbit(m, cv["q"], cv["line_start"], line=left.line)
+    np.testing.assert_allclose(orb.points[0], cv["point"], atol=1e-9)      # the JSON point: on phi = pi
+    assert abs(orb.rotation(m, centre) * 20 + 3) < 1e-6 and np.all(orb.points[:, 0] < 0)

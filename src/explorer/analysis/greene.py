@@ -386,11 +386,13 @@ def greene(system, nu="golden", *, qmax=None, residue=CRITICAL_RESIDUE, line=Non
         conv = _enough(x, SECTION_QMAX if qmax is None else qmax)
         first = system.h if pname == "h" else float(getattr(system.params, pname))
         centre = _centre(system, around)
-        line = _section_line(system, conv, centre, line)
+        line, seed = _section_line(system, conv, centre, line)
 
         def orbit_at(value, P, Q, guess, check=False):
             smap = system.with_parameter(value, pname)
             if guess is None:
+                if seed is not None and value == first and (P, Q) == conv[0]:
+                    return seed         # the line's decision found the first orbit already (no second scan)
                 return gs.first_orbit(smap, P, Q, _centre(smap, centre), line)
             orb = gs.section_symmetric_orbit(smap, Q, guess, param=pname, line=line)
             if check:   # continued orbits stay on their branch; the final ones are checked once more
@@ -430,11 +432,12 @@ def _enough(x, qmax) -> list:
     return conv
 
 
-def _section_line(smap, conv, centre, line) -> float:
+def _section_line(smap, conv, centre, line):
     """The section's symmetry line of Greene's orbits around ``centre``: ``line`` when given (phi0 or
     phi0 + pi), else the line of the island's elliptic orbits of even period, decided by the first even
     convergent (:func:`explorer.analysis.greene_section.island_line`; phi0 when every convergent is odd:
-    an orbit of odd period meets both lines)."""
+    an orbit of odd period meets both lines).  Returns (line, the first convergent's orbit when the
+    decision found it, else None)."""
     from explorer.analysis import greene_section as gs
 
     if line is not None:
@@ -442,9 +445,12 @@ def _section_line(smap, conv, centre, line) -> float:
         if not any(abs(math.remainder(value - phi, 2.0 * math.pi)) < 1e-12 for phi in (smap.phi0, smap.phi0 + math.pi)):
             raise ParameterError(f"line must be the section's phi0 = {smap.phi0:g} or phi0 + pi (the reversor's "
                                  f"two symmetry lines), got {line!r}")
-        return value % (2.0 * math.pi)
+        return value % (2.0 * math.pi), None
     even = [(P, Q) for P, Q in conv if Q % 2 == 0]
-    return gs.island_line(smap, *even[0], centre) if even else smap.phi0
+    if not even:
+        return smap.phi0, None
+    value, orb = gs.nearest_line_orbit(smap, *even[0], centre)
+    return value, (orb if value == smap.phi0 and even[0] == conv[0] else None)
 
 
 def _centre(smap, guess) -> np.ndarray:

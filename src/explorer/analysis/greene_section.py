@@ -34,7 +34,7 @@ from explorer.kernels import STATUS_DONE
 from explorer.model import ParameterError
 
 __all__ = ["SectionSymmetricOrbit", "first_orbit", "half_turn_p2", "island_line", "line_map", "line_point", "line_roots",
-           "section_symmetric_orbit"]
+           "nearest_line_orbit", "section_symmetric_orbit"]
 
 #: the reversor G0 on the section phi = pi
 G0 = np.diag([1.0, -1.0])
@@ -263,10 +263,16 @@ def island_line(smap: SectionMap, P: int, Q: int, centre) -> float:
     """The symmetry line (phi = phi0 or phi0 + pi) that carries the elliptic orbits of even period around
     ``centre``: an orbit of even period Q meets one line only, twice, and of the island chain P/Q the
     elliptic orbit (positive residue, Greene's sequence) sits on one line, the hyperbolic one on the
-    other (docs/greene.md, "Two symmetry lines").  ``Q`` must be even: the orbit of type P/Q nearest to
+    other (docs/greene.md, "The left island").  ``Q`` must be even: the orbit of type P/Q nearest to
     the centre on the section's own line decides: phi0 when its residue is positive, else phi0 + pi.
     (For the two islands of Figure 4's scene: phi = pi for the right one, phi = 0 for the left one,
-    its image under the half-turn reversor.)"""
+    its image under the half-turn.)"""
+    return nearest_line_orbit(smap, P, Q, centre)[0]
+
+
+def nearest_line_orbit(smap: SectionMap, P: int, Q: int, centre):
+    """(:func:`island_line`, the orbit that decided it): that orbit is :func:`first_orbit`'s on the
+    section's own line when the line is phi0 (the nearest orbit of type P/Q, with a positive residue)."""
     if Q % 2:
         raise ParameterError(f"island_line needs an even period (an orbit of odd period meets both lines), got {Q}")
     found = [next(_typed_orbits(smap, P, Q, centre, smap.phi0, side), None) for side in (0, 1)]
@@ -275,7 +281,8 @@ def island_line(smap: SectionMap, P: int, Q: int, centre) -> float:
         raise ParameterError(f"no symmetric orbit of type {P}/{Q} around ({centre[0]:.6g}, {centre[1]:.6g}) on "
                              f"the line p2 = 0 of phi = {smap.phi0:.6g}: the line of the island's elliptic orbits "
                              f"is not decided")
-    return smap.phi0 if nearest[1].residue > 0 else (smap.phi0 + math.pi) % (2.0 * math.pi)
+    orb = nearest[1]
+    return (smap.phi0 if orb.residue > 0 else (smap.phi0 + math.pi) % (2.0 * math.pi)), orb
 
 
 def curve_orbit(smap: SectionMap, nu: float, centre, a: float, b: float, *, iterates: int, steps: int = 24,
