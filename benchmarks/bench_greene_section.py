@@ -7,7 +7,7 @@ For the noble rotation numbers nu = [0; a, (b,) 1, 1, 1, ...] ("noble:a[,b]", ga
 island (the right one near (1.58, 0), the left one near (-1.16, 0)): mu_c(nu) by
 :func:`explorer.greene` (convergents up to q = 150, half-orbit method on the symmetry line that
 carries the island's elliptic orbits: p2 = 0 of phi = pi for the right island, of phi = 0 for the
-left one, docs/greene.md "Two symmetry lines"), then the cross-check of docs/greene.md: the orbit
+left one, docs/greene.md "The left island"), then the cross-check of docs/greene.md: the orbit
 on that line whose rotation number is nu, found by bisection between the last two convergents'
 orbits, has (carried to the section phi = pi, averaged there around the island's centre) a
 converged weighted-Birkhoff rotation number equal to nu at 0.99 mu_c; at 1.01 mu_c the orbit the

@@ -43,7 +43,8 @@ k.  The orbit is found to ~1e-15 in p, and the residue follows from the half orb
 Jacobian alone (:func:`_half_orbit_monodromy`), so round-off grows over Q/2 steps, not Q.
 
 A :class:`~explorer.analysis.section_map.SectionMap` is solved the same way, its symmetric orbits
-shot over Q half-turns of the flow from the line p2 = 0 (:mod:`explorer.analysis.greene_section`).
+shot over Q half-turns of the flow from the line p2 = 0 of phi = pi or of phi = 0, whichever carries
+the island's elliptic orbits (:mod:`explorer.analysis.greene_section`).
 """
 from __future__ import annotations
 

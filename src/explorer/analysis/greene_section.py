@@ -8,6 +8,13 @@ after Q half-turns of phi (the crossings of phi = 0, pi, 0, ... with dphi/dt > 0
 again starts an orbit of the section map P of period Q: one unknown (p1 on the line p2 = 0),
 one equation after Q/2 returns, solved by the secant method.
 
+The reversor's fixed set is two lines, p2 = 0 on phi = pi and p2 = 0 on phi = 0: an orbit of even
+period meets only one of them, and of an island chain's symmetric orbits the elliptic one is on
+one line, the hyperbolic one on the other.  The right island of Figure 4's scene has its elliptic
+orbits on phi = pi, the left one (its image under the half-turn) on phi = 0 (:func:`island_line`
+decides; docs/greene.md, "The left island").  An orbit of the other line is shot on that line's
+own section (:func:`line_map`) and reported on the map's section.
+
 On the section, G0(p1, p2) = (p1, -p2) satisfies G0 P G0 = P^-1, so the orbit's points are
 x_{Q-j} = G0 x_j (j = 0..Q) and its monodromy needs the Jacobians of the first half only:
 differentiating P G0 = G0 P^-1 gives DP(x_{Q-j}) = G0 DP(x_{j-1})^-1 G0, hence
@@ -33,8 +40,8 @@ from explorer.integrate.tangent import return_map_taylor
 from explorer.kernels import STATUS_DONE
 from explorer.model import ParameterError
 
-__all__ = ["SectionSymmetricOrbit", "first_orbit", "half_turn_p2", "island_line", "line_map", "line_point", "line_roots",
-           "nearest_line_orbit", "section_symmetric_orbit"]
+__all__ = ["SectionSymmetricOrbit", "first_orbit", "half_turn_p2", "island_line", "line_map", "line_point",
+           "line_roots", "nearest_line_orbit", "section_symmetric_orbit"]
 
 #: the reversor G0 on the section phi = pi
 G0 = np.diag([1.0, -1.0])
@@ -172,7 +179,7 @@ def section_symmetric_orbit(smap: SectionMap, Q: int, guess, guess2=None, *, par
     the first half (module docstring).
 
     The reversor's fixed set has two lines, p2 = 0 on phi = phi0 and on phi = phi0 + pi (docs/greene.md,
-    "Two symmetry lines"): an orbit of even period meets only one of them (twice), so each island chain's
+    "The left island"): an orbit of even period meets only one of them (twice), so each island chain's
     elliptic and hyperbolic orbits sit on different lines.  For ``line`` = phi0 + pi the orbit is solved
     on that line's own section (the same flow orbit), its monodromy is taken there (conjugate by the
     half-turn flow, so the same trace and residue), and its ``points`` are its crossings of ``smap``'s
