@@ -271,18 +271,21 @@ def test_the_left_island_is_the_half_turn_image_of_the_right_one_with_the_same_r
 def test_greene_around_the_left_island_uses_the_other_symmetry_line_and_finds_the_right_islands_mu_c():
     """Around the left island's elliptic point the elliptic orbits of even period sit on p2 = 0 of
     phi = 0 (island_line decides it from the 1/6 orbit nearest the centre on phi = pi, a hyperbolic
-    one); there the curve 1/(6 + gamma) breaks at the right island's mu_c, as the half-turn pairing
-    demands, with the same residues; its points are on the section phi = pi in the left island."""
+    one).  There the curve 1/(6 + gamma) breaks at the right island's mu_c, as the half-turn pairing
+    demands: at the left island's mu_n and mu_c every convergent's orbit of the right island (shot
+    from p2 = 0 of phi = pi, at the mirror point) has the left one's residue, so the right island's
+    mu_n, hence mu_c, are the same (the right island's own greene: the CLI test and
+    benchmarks/RESULTS.md, where the two agree to 1e-14).  The JSON points are on phi = pi in the
+    left island."""
     from explorer.analysis import greene_section as gs
 
     left = ex.greene(_section(0.025), "noble:6", qmax=20, around=(-1.16, 0.0))
-    right = ex.greene(_section(0.025), "noble:6", qmax=20, around=(1.58, 0.0))
-    assert (left.line, right.line) == (0.0, math.pi)
-    assert [c["q"] for c in left.convergents] == [c["q"] for c in right.convergents] == [6, 7, 13, 20]
-    assert abs(left.critical - right.critical) < 1e-10 and left.uncertainty < 1e-3
-    for cl, cr in zip(left.convergents, right.convergents):
-        assert cl["residue"] == pytest.approx(cr["residue"], abs=1e-8)
-        assert cl["line_start"] == pytest.approx(-cr["line_start"], abs=1e-8)
+    assert left.line == 0.0 and [c["q"] for c in left.convergents] == [6, 7, 13, 20]
+    assert left.uncertainty < 1e-3 and abs(left.critical - 0.0303398) < 2 * left.uncertainty
+    for c in left.convergents:
+        for mu, residue in ((c["param_value"], gm.CRITICAL_RESIDUE), (left.critical, c["residue"])):
+            right = gs.section_symmetric_orbit(_section(mu), c["q"], -c["line_start"])
+            assert right.line == math.pi and right.residue == pytest.approx(residue, abs=1e-8)
     m = _section(left.critical)
     centre = gm._centre(m, (-1.16, 0.0))
     cv = left.convergents[-1]
