@@ -234,3 +234,61 @@ def test_an_orbit_whose_turns_around_the_centre_are_undefined_is_skipped_not_fat
     r = ex.greene(_section(0.025), "noble:6,2", qmax=150, around=(1.58, 0.0))
     assert [c["q"] for c in r.convergents][-1] == 134
     assert r.uncertainty < 1e-6 and abs(r.critical - 0.029631211) < 2 * r.uncertainty + 1e-8
+
+
+@pytest.mark.cpu_dependent
+def test_the_left_island_is_the_half_turn_image_of_the_right_one_with_the_same_residues():
+    """docs/greene.md, "The left island": the partner map T of the half-turn reversor (docs/model.md,
+    "Symmetries") takes the right island's centre to the left one's and the right island's elliptic
+    1/6 orbit (symmetric on p2 = 0 of phi = pi) onto the left island's (symmetric on p2 = 0 of phi = 0,
+    the reversor's other line), with the same residue; the 1/7 orbits (odd period: a point on each
+    line) are shot independently from the line p2 = 0 of phi = pi on both sides and have the same
+    residue too.  Equal residues of every convergent give equal mu_c (benchmarks/RESULTS.md)."""
+    from explorer.analysis import greene_section as gs
+    from explorer.analysis.halfturn import partner_points
+
+    smap = _section(0.025)
+    right, left = gm._centre(smap, (1.58, 0.0)), gm._centre(smap, (-1.16, 0.0))
+    np.testing.assert_allclose(partner_points(smap, right).points[0], left, atol=1e-9)
+    # 1/6: the right island's orbit from its line, the left island's from the other line
+    r6 = gs.section_symmetric_orbit(smap, 6, 1.7107)
+    l6 = gs.section_symmetric_orbit(smap, 6, -1.7107, line=0.0)
+    assert (r6.line, l6.line) == (math.pi, 0.0)
+    assert abs(r6.rotation(smap, right) + 1 / 6) < 1e-9 and abs(l6.rotation(smap, left) + 1 / 6) < 1e-9
+    assert 0 < r6.residue < 1 and l6.residue == pytest.approx(r6.residue, rel=1e-9)
+    assert l6.line_start == pytest.approx(-r6.line_start, abs=1e-10)     # S(p1, 0, phi = pi) = (-p1, 0, phi = 0)
+    images = partner_points(smap, r6.points).points                      # T maps the orbit onto the orbit
+    assert max(np.min(np.linalg.norm(l6.points - y, axis=1)) for y in images) < 1e-8
+    # 1/7: both orbits from the line p2 = 0 of phi = pi, different points of the two islands
+    r7 = gs.section_symmetric_orbit(smap, 7, 1.7022)
+    l7 = gs.section_symmetric_orbit(smap, 7, -1.6722)
+    assert abs(l7.rotation(smap, left) + 1 / 7) < 1e-9 and abs(r7.rotation(smap, right) + 1 / 7) < 1e-9
+    assert abs(l7.points[0, 0] + r7.points[0, 0]) > 0.01                  # not the mirror point
+    assert l7.residue == pytest.approx(r7.residue, rel=1e-8)
+
+
+@pytest.mark.cpu_dependent
+def test_greene_around_the_left_island_uses_the_other_symmetry_line_and_finds_the_right_islands_mu_c():
+    """Around the left island's elliptic point the elliptic orbits of even period sit on p2 = 0 of
+    phi = 0 (island_line decides it from the 1/6 orbit nearest the centre on phi = pi, a hyperbolic
+    one).  There the curve 1/(6 + gamma) breaks at the right island's mu_c, as the half-turn pairing
+    demands: at the left island's mu_n and mu_c every convergent's orbit of the right island (shot
+    from p2 = 0 of phi = pi, at the mirror point) has the left one's residue, so the right island's
+    mu_n, hence mu_c, are the same (the right island's own greene: the CLI test and
+    benchmarks/RESULTS.md, where the two agree to 1e-14).  The JSON points are on phi = pi in the
+    left island."""
+    from explorer.analysis import greene_section as gs
+
+    left = ex.greene(_section(0.025), "noble:6", qmax=20, around=(-1.16, 0.0))
+    assert left.line == 0.0 and [c["q"] for c in left.convergents] == [6, 7, 13, 20]
+    assert left.uncertainty < 1e-3 and abs(left.critical - 0.0303398) < 2 * left.uncertainty
+    for c in left.convergents:
+        for mu, residue in ((c["param_value"], gm.CRITICAL_RESIDUE), (left.critical, c["residue"])):
+            right = gs.section_symmetric_orbit(_section(mu), c["q"], -c["line_start"])
+            assert right.line == math.pi and right.residue == pytest.approx(residue, abs=1e-8)
+    m = _section(left.critical)
+    centre = gm._centre(m, (-1.16, 0.0))
+    cv = left.convergents[-1]
+    orb = gs.section_symmetric_orbit(m, cv["q"], cv["line_start"], line=left.line)
+    np.testing.assert_allclose(orb.points[0], cv["point"], atol=1e-9)      # the JSON point: on phi = pi
+    assert abs(orb.rotation(m, centre) * 20 + 3) < 1e-6 and np.all(orb.points[:, 0] < 0)

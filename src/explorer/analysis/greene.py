@@ -43,7 +43,8 @@ k.  The orbit is found to ~1e-15 in p, and the residue follows from the half orb
 Jacobian alone (:func:`_half_orbit_monodromy`), so round-off grows over Q/2 steps, not Q.
 
 A :class:`~explorer.analysis.section_map.SectionMap` is solved the same way, its symmetric orbits
-shot over Q half-turns of the flow from the line p2 = 0 (:mod:`explorer.analysis.greene_section`).
+shot over Q half-turns of the flow from the line p2 = 0 of phi = pi or of phi = 0, whichever carries
+the island's elliptic orbits (:mod:`explorer.analysis.greene_section`).
 """
 from __future__ import annotations
 
@@ -277,6 +278,7 @@ class GreeneResult:
     convergents: list = field(default_factory=list)   # dicts: p, q, point, param_value, residue
     critical_residue: float = CRITICAL_RESIDUE
     ratio: float = math.nan        # the last (k_{n+1} - k_n)/(k_n - k_{n-1})
+    line: float = math.pi          # the orbits' symmetry line: theta (standard map), phi of p2 = 0 (section)
 
     def as_dict(self) -> dict:
         """The JSON form of ``python -m explorer greene --json``."""
@@ -320,7 +322,7 @@ def _aitken(x0, x1, x2) -> float:
     return x2 - d2 * d2 / (d2 - d1)
 
 
-def greene(system, nu="golden", *, qmax=None, residue=CRITICAL_RESIDUE, line=math.pi, around=None,
+def greene(system, nu="golden", *, qmax=None, residue=CRITICAL_RESIDUE, line=None, around=None,
            param=None) -> GreeneResult:
     """The critical parameter at which the invariant curve of rotation number ``nu`` breaks (Greene's
     residue criterion; module docstring).
@@ -336,8 +338,11 @@ def greene(system, nu="golden", *, qmax=None, residue=CRITICAL_RESIDUE, line=mat
         map; at least three convergents with Q >= 2 are needed; at most :data:`MAX_QMAX`).
     residue : float
         The residue that defines k_n (default MacKay's R* = 0.2500888, :data:`CRITICAL_RESIDUE`).
-    line : float
-        The symmetry line theta = ``line`` of the orbits (default pi: positive residues).
+    line : float or None
+        The symmetry line of the orbits.  Standard map: theta = ``line`` (default pi: positive
+        residues).  Section map: the line p2 = 0 of phi = ``line``, the section's phi0 or phi0 + pi
+        (default: the one that carries the island's elliptic orbits of even period,
+        :func:`explorer.analysis.greene_section.island_line`).
     around : (float, float)
         Section map only: a guess of the elliptic fixed point the curves surround.
     param : str
@@ -359,6 +364,7 @@ def greene(system, nu="golden", *, qmax=None, residue=CRITICAL_RESIDUE, line=mat
             raise ParameterError("greene: around= and param= belong to a section map; the standard map's "
                                  "parameter is k")
         conv = _enough(x, DEFAULT_QMAX if qmax is None else qmax)
+        line = math.pi if line is None else validation.real("line", line)
 
         def orbit_at(k, P, Q, guess, check=False):
             return symmetric_orbit(StandardMap(k), P, Q, line=line, guess=guess)
@@ -381,12 +387,15 @@ def greene(system, nu="golden", *, qmax=None, residue=CRITICAL_RESIDUE, line=mat
         conv = _enough(x, SECTION_QMAX if qmax is None else qmax)
         first = system.h if pname == "h" else float(getattr(system.params, pname))
         centre = _centre(system, around)
+        line, seed = _section_line(system, conv, centre, line)
 
         def orbit_at(value, P, Q, guess, check=False):
             smap = system.with_parameter(value, pname)
             if guess is None:
-                return gs.first_orbit(smap, P, Q, _centre(smap, centre))
-            orb = gs.section_symmetric_orbit(smap, Q, guess, param=pname)
+                if seed is not None and value == first and (P, Q) == conv[0]:
+                    return seed         # the line's decision found the first orbit already (no second scan)
+                return gs.first_orbit(smap, P, Q, _centre(smap, centre), line)
+            orb = gs.section_symmetric_orbit(smap, Q, guess, param=pname, line=line)
             if check:   # continued orbits stay on their branch; the final ones are checked once more
                 c = _centre(smap, centre)
                 rot = orb.rotation(smap, c)
@@ -396,7 +405,7 @@ def greene(system, nu="golden", *, qmax=None, residue=CRITICAL_RESIDUE, line=mat
             return orb
 
         def start_of(orb):
-            return orb.points[0, 0]
+            return orb.line_start
 
         def point_of(orb):
             return orb.points[0]
@@ -412,8 +421,8 @@ def greene(system, nu="golden", *, qmax=None, residue=CRITICAL_RESIDUE, line=mat
         guess = start_of(orb)
         pt = point_of(orb)
         rows.append({"p": P, "q": Q, "point": [float(pt[0]), float(pt[1])], "param_value": float(k_n),
-                     "residue": orb.residue})
-    return GreeneResult(name, pname, x, float(crit), float(uncertainty), rows, target, ratio)
+                     "residue": orb.residue, "line_start": float(guess)})
+    return GreeneResult(name, pname, x, float(crit), float(uncertainty), rows, target, ratio, float(line))
 
 
 def _enough(x, qmax) -> list:
@@ -422,6 +431,27 @@ def _enough(x, qmax) -> list:
         raise ParameterError(f"qmax = {qmax} gives {len(conv)} convergents of nu = {x:.10g} with q >= {MIN_Q}; "
                              f"at least 3 are needed: raise qmax")
     return conv
+
+
+def _section_line(smap, conv, centre, line):
+    """The section's symmetry line of Greene's orbits around ``centre``: ``line`` when given (phi0 or
+    phi0 + pi), else the line of the island's elliptic orbits of even period, decided by the first even
+    convergent (:func:`explorer.analysis.greene_section.island_line`; phi0 when every convergent is odd:
+    an orbit of odd period meets both lines).  Returns (line, the first convergent's orbit when the
+    decision found it, else None)."""
+    from explorer.analysis import greene_section as gs
+
+    if line is not None:
+        value = validation.real("line", line)
+        if not any(abs(math.remainder(value - phi, 2.0 * math.pi)) < 1e-12 for phi in (smap.phi0, smap.phi0 + math.pi)):
+            raise ParameterError(f"line must be the section's phi0 = {smap.phi0:g} or phi0 + pi (the reversor's "
+                                 f"two symmetry lines), got {line!r}")
+        return value % (2.0 * math.pi), None
+    even = [(P, Q) for P, Q in conv if Q % 2 == 0]
+    if not even:
+        return smap.phi0, None
+    value, orb = gs.nearest_line_orbit(smap, *even[0], centre)
+    return value, (orb if value == smap.phi0 and even[0] == conv[0] else None)
 
 
 def _centre(smap, guess) -> np.ndarray:
