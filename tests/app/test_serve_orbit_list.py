@@ -258,17 +258,23 @@ def test_a_step_applies_its_value_through_the_field_refused_as_the_command_line_
 
 # ---------------------------------------------------------------- in chromium
 @browser_needed
+def _click_and_choose_the_orbit(page) -> None:
+    """Click an orbit on the served page, wait for its crossings, choose it in the list and wait
+    until it is selected (highlighted, its readout shown)."""
+    c1, c2, r1, _r2 = SERVED.region
+    _click(page, c1 + 0.3 * r1, c2)
+    _wait_crossings(page, SERVED.crossings)
+    _wait(page, "() => Bokeh.documents[0].get_model_by_name('orbit-list').text.includes(\"data-orbit='1'\")")
+    page.locator("select").filter(has_text="(none)").select_option(index=1)
+    _wait(page, "() => { const a = Bokeh.documents[0].get_model_by_name('selected-orbit').args;"
+                " return (a instanceof Map ? a.get('orbit') : a.orbit) === 1 && "
+                "Bokeh.documents[0].get_model_by_name('readout').text.startsWith('orbit 1'); }")
+
+
 def test_in_the_browser_the_list_selects_and_hides_an_orbit(served, browser):
     page = _open(browser, served.url)
     try:
-        c1, c2, r1, _r2 = SERVED.region
-        _click(page, c1 + 0.3 * r1, c2)
-        _wait_crossings(page, SERVED.crossings)
-        _wait(page, "() => Bokeh.documents[0].get_model_by_name('orbit-list').text.includes(\"data-orbit='1'\")")
-        page.locator("select").filter(has_text="(none)").select_option(index=1)
-        _wait(page, "() => { const a = Bokeh.documents[0].get_model_by_name('selected-orbit').args;"
-                    " return (a instanceof Map ? a.get('orbit') : a.orbit) === 1 && "
-                    "Bokeh.documents[0].get_model_by_name('readout').text.startsWith('orbit 1'); }")
+        _click_and_choose_the_orbit(page)
         page.get_by_role("button", name="hide", exact=True).click()
         _wait(page, "() => Bokeh.documents[0].get_model_by_name('crossings').data.p1.length === 0 && "
                     "Bokeh.documents[0].get_model_by_name('starts').data.p1.length === 0 && "
@@ -283,13 +289,7 @@ def test_in_the_browser_the_list_selects_and_hides_an_orbit(served, browser):
 def test_in_the_browser_a_hidden_orbit_stays_hidden_after_a_reload(served, browser):
     page = _open(browser, served.url)
     try:
-        c1, c2, r1, _r2 = SERVED.region
-        _click(page, c1 + 0.3 * r1, c2)
-        _wait_crossings(page, SERVED.crossings)
-        _wait(page, "() => Bokeh.documents[0].get_model_by_name('orbit-list').text.includes(\"data-orbit='1'\")")
-        page.locator("select").filter(has_text="(none)").select_option(index=1)
-        _wait(page, "() => { const a = Bokeh.documents[0].get_model_by_name('selected-orbit').args;"
-                    " return (a instanceof Map ? a.get('orbit') : a.orbit) === 1; }")
+        _click_and_choose_the_orbit(page)
         page.get_by_role("button", name="hide", exact=True).click()
         # the link with the orbit hidden, and the page without its dots: one state, read where it was waited for
         link = _wait(page, "() => { const d = Bokeh.documents[0], q = new URLSearchParams(location.search);"
