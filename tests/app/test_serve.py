@@ -383,9 +383,10 @@ SET_BOX = "([text, on]) => { const m = [...Bokeh.documents[0].all_models].find(m
 
 
 def _wait(page, expression, timeout=60_000, polling="raf"):
-    """page.wait_for_function, failing with what the page says (its message and status lines)."""
+    """page.wait_for_function, failing with what the page says (its message and status lines);
+    returns the expression's truthy value (as JSON): the state waited for, read in the same call."""
     try:
-        page.wait_for_function(expression, timeout=timeout, polling=polling)
+        return page.wait_for_function(expression, timeout=timeout, polling=polling).json_value()
     except Exception as exc:
         try:
             said = page.evaluate("() => [Bokeh.documents[0].get_model_by_name('message').text, "

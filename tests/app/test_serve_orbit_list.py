@@ -183,6 +183,44 @@ def test_delete_removes_one_orbit_from_the_page_the_session_and_the_link():
         page.close()
 
 
+def test_the_hidden_orbits_are_in_the_link_and_a_page_from_it_keeps_them_hidden():
+    """Which orbits are hidden is in the link (``hidden``: their positions among its ``orbits``),
+    so a reload keeps them hidden; a malformed ``hidden`` is ignored and said, the rest applies."""
+    s = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=40)
+    starts = [(0.3, 0.1), (1.3, 0.05), (0.5, -0.2)]
+    page = _page(s, {"pause": "0"})
+    try:
+        for p in starts:
+            page.click(*p)
+        one, two, three = (i for i, *_ in page.starts)
+        assert page.url_query()["hidden"] == ""
+        page.orbit_list.toggle(two)
+        page.orbit_list.toggle(three)
+        assert page.url_state.hidden == "2,3"                                     # the link follows at once
+        page.orbit_list.toggle(three)
+        assert page.url_state.hidden == "2" == page.url_query()["hidden"]
+        link = page.url_query()
+    finally:
+        page.close()
+    again = _page(s, link)                                                        # a reload of that link
+    try:
+        _poll_until(again, lambda: not again.worker.busy() and not again._running)
+        ids = [i for i, *_ in again.starts]
+        assert again.orbits.hidden.keys() == {ids[1]} and _drawn(again, ids[1]) == 0
+        assert len(again.orbits.hidden[ids[1]]["t"]) == s.crossings                 # computed all the same
+        assert [_drawn(again, i) for i in (ids[0], ids[2])] == [s.crossings + 1] * 2
+        assert "done, hidden" in _table(again)[ids[1]][1][4] and again.url_query()["hidden"] == "2"
+    finally:
+        again.close()
+    for bad in ("4", "x", "0", "1,,2"):
+        page = _page(s, {**link, "hidden": bad})
+        try:
+            assert page.message.text.startswith("link's hidden ignored: hidden"), (bad, page.message.text)
+            assert len(page.starts) == 3 and not page.orbits.hidden and page.url_query()["hidden"] == ""
+        finally:
+            page.close()
+
+
 def test_a_step_applies_its_value_through_the_field_refused_as_the_command_line_refuses_it():
     page = _page(SERVED)
     f = page.fields
@@ -220,22 +258,54 @@ def test_a_step_applies_its_value_through_the_field_refused_as_the_command_line_
 
 # ---------------------------------------------------------------- in chromium
 @browser_needed
+def _click_and_choose_the_orbit(page) -> None:
+    """Click an orbit on the served page, wait for its crossings, choose it in the list and wait
+    until it is selected (highlighted, its readout shown)."""
+    c1, c2, r1, _r2 = SERVED.region
+    _click(page, c1 + 0.3 * r1, c2)
+    _wait_crossings(page, SERVED.crossings)
+    _wait(page, "() => Bokeh.documents[0].get_model_by_name('orbit-list').text.includes(\"data-orbit='1'\")")
+    page.locator("select").filter(has_text="(none)").select_option(index=1)
+    _wait(page, "() => { const a = Bokeh.documents[0].get_model_by_name('selected-orbit').args;"
+                " return (a instanceof Map ? a.get('orbit') : a.orbit) === 1 && "
+                "Bokeh.documents[0].get_model_by_name('readout').text.startsWith('orbit 1'); }")
+
+
 def test_in_the_browser_the_list_selects_and_hides_an_orbit(served, browser):
     page = _open(browser, served.url)
     try:
-        c1, c2, r1, _r2 = SERVED.region
-        _click(page, c1 + 0.3 * r1, c2)
-        _wait_crossings(page, SERVED.crossings)
-        _wait(page, "() => Bokeh.documents[0].get_model_by_name('orbit-list').text.includes(\"data-orbit='1'\")")
-        page.locator("select").filter(has_text="(none)").select_option(index=1)
-        _wait(page, "() => { const a = Bokeh.documents[0].get_model_by_name('selected-orbit').args;"
-                    " return (a instanceof Map ? a.get('orbit') : a.orbit) === 1 && "
-                    "Bokeh.documents[0].get_model_by_name('readout').text.startsWith('orbit 1'); }")
+        _click_and_choose_the_orbit(page)
         page.get_by_role("button", name="hide", exact=True).click()
         _wait(page, "() => Bokeh.documents[0].get_model_by_name('crossings').data.p1.length === 0 && "
                     "Bokeh.documents[0].get_model_by_name('starts').data.p1.length === 0 && "
                     "Bokeh.documents[0].get_model_by_name('orbit-list').text.includes('hidden')")
         page.get_by_role("button", name="show", exact=True).click()
         _wait_crossings(page, SERVED.crossings)
+    finally:
+        page.close()
+
+
+@browser_needed
+def test_in_the_browser_a_hidden_orbit_stays_hidden_after_a_reload(served, browser):
+    page = _open(browser, served.url)
+    try:
+        _click_and_choose_the_orbit(page)
+        page.get_by_role("button", name="hide", exact=True).click()
+        # the link with the orbit hidden, and the page without its dots: one state, read where it was waited for
+        link = _wait(page, "() => { const d = Bokeh.documents[0], q = new URLSearchParams(location.search);"
+                           " return q.get('hidden') === '1' && d.get_model_by_name('crossings').data.p1.length === 0"
+                           " && d.get_model_by_name('orbit-list').text.includes('hidden') && location.href; }")
+        page.goto(link)                                                 # a reload of that link
+        # the orbit computed to its end on the server (the list says so) and not one dot of it drawn
+        seen = _wait(page, "() => { const d = window.Bokeh && Bokeh.documents[0]; if (!d) return false;"
+                           " const list = d.get_model_by_name('orbit-list'); if (!list) return false;"
+                           " return list.text.includes('done, hidden') && {crossings:"
+                           " d.get_model_by_name('crossings').data.p1.length, live:"
+                           " d.get_model_by_name('live').data.p1.length, starts:"
+                           " d.get_model_by_name('starts').data.p1.length, list: list.text,"
+                           " hidden: new URLSearchParams(location.search).get('hidden')}; }",
+                     timeout=test_serve.FIRST_ORBIT_TIMEOUT_MS)
+        assert (seen["crossings"], seen["live"], seen["starts"], seen["hidden"]) == (0, 0, 0, "1"), seen
+        assert f"<td style='padding:0 6px'>{SERVED.crossings}</td>" in seen["list"]
     finally:
         page.close()

@@ -65,3 +65,36 @@ def test_a_timer_keeps_its_earliest_due_call_only():
     assert not loop.poll() and len(fired) == 1
     timer.at(now - 1.0)                             # due and reentrant: at once
     assert len(fired) == 2
+
+
+class _SetOrderDoc:
+    """A document whose next-tick callbacks start in an order of their own, as Bokeh starts those
+    added before a session is attached (kept in a set): here the reverse of the order added."""
+
+    def __init__(self):
+        self.callbacks: list = []
+
+    def add_next_tick_callback(self, f):
+        self.callbacks.append(f)
+
+    def run(self):
+        todo, self.callbacks = self.callbacks[::-1], []
+        for f in todo:
+            f()
+
+
+def test_actions_reach_the_loop_in_the_order_they_were_handed_in_whatever_order_bokeh_starts_callbacks():
+    doc = _SetOrderDoc()
+    loop = SessionLoop(doc)
+    task = loop.task("t")
+    shown: list = []
+
+    def blocks(job):
+        for k in range(5):                           # an orbit's blocks, the first one first
+            job.post(lambda k=k: shown.append(k))
+
+    task.submit(blocks)
+    _until(lambda: len(doc.callbacks) == 5)
+    doc.run()
+    assert shown == [0, 1, 2, 3, 4] and loop.pending() == 0
+    loop.close(wait=True)

@@ -1,31 +1,38 @@
-"""The page's check box: Panel's ``Checkbox`` (a boolean ``value``) drawn as Bokeh's
-``CheckboxGroup`` of one option, whose input is inside a ``<label>``: a click on the label's text
-toggles it.  (Bokeh's ``Checkbox`` draws its label as a ``<div>`` beside the input: its text did
-nothing, issue 32.)"""
+"""The page's check box: a boolean ``value`` drawn as Panel's ``CheckBoxGroup`` of one option
+(Bokeh's ``CheckboxGroup``), whose input is inside a ``<label>``: a click on the label's text
+toggles it.  (Panel's ``Checkbox`` draws Bokeh's ``Checkbox``, its label a ``<div>`` beside the
+input: its text did nothing, issue 32.)
+
+Built from public API only (issue 32 item 4): a :class:`panel.viewable.Viewer` with two
+parameters, kept equal to the group's ``value`` (``[label]`` or ``[]``) by two watchers; no
+override of a widget's private hooks (tests/app/test_public_api.py)."""
 from __future__ import annotations
 
 import panel as pn
-from bokeh.models import CheckboxGroup
+import param
 
 
-class Box(pn.widgets.Checkbox):
-    """A check box with a clickable label (module docstring); ``value`` is a bool, as Checkbox's."""
+class Box(pn.viewable.Viewer):
+    """A check box with a clickable label (module docstring): ``value`` is a bool, watched and set
+    like a widget's (``box.param.watch(fn, "value")``, ``box.value = True``); ``widget`` is the
+    ``CheckBoxGroup`` drawn."""
 
-    _widget_type = CheckboxGroup
-    _rename = {**pn.widgets.Checkbox._rename, "value": "active", "label": "labels"}
+    value = param.Boolean(default=False, doc="ticked")
+    label = param.String(default="", constant=True, doc="the text beside the box (a click on it ticks it)")
 
-    def _process_param_change(self, params):
-        props = super()._process_param_change(params)
-        if "active" in props:
-            props["active"] = [0] if props["active"] else []
-        if "labels" in props:
-            props["labels"] = [props["labels"]]
-        return props
+    def __init__(self, **params):
+        super().__init__(**params)
+        self.widget = pn.widgets.CheckBoxGroup(options=[self.label], value=self._group_value(self.value))
+        self.widget.param.watch(lambda e: setattr(self, "value", self.label in e.new), "value")
+        self.param.watch(lambda e: self._show(e.new), "value")
 
-    def _process_property_change(self, props):
-        if "active" in props:
-            props = {**props, "active": 0 in props["active"]}
-        return super()._process_property_change(props)
+    def _group_value(self, ticked: bool) -> list:
+        return [self.label] if ticked else []
 
-    def _get_embed_state(self, root, values=None, max_opts=3):
-        raise NotImplementedError("a Box is not embedded (the page runs on a server or in a notebook)")
+    def _show(self, ticked: bool) -> None:
+        want = self._group_value(ticked)
+        if self.widget.value != want:
+            self.widget.value = want
+
+    def __panel__(self):
+        return self.widget

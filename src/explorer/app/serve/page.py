@@ -50,7 +50,7 @@ from explorer.app.serve.page_orbits import (  # noqa: F401  (the page's constant
 )
 from explorer.app.serve.page_overlays import Overlays
 from explorer.app.serve.page_readout import Readout
-from explorer.app.serve.settings import FIELDS, Settings, format_starts, format_window, parse_fields
+from explorer.app.serve.settings import FIELDS, Settings, format_window, parse_fields
 from explorer.app.serve.style import (
     FIGURE_CHROME_PX,
     FIGURE_HEIGHT,
@@ -68,7 +68,7 @@ URL_DELAY_SECONDS = 0.5
 #: what a click does: the choices of the page's switch (Shift + click always picks)
 CLICK_MODES = ("start an orbit", "pick an orbit")
 #: the URL's arguments besides the fields (what url_query writes)
-URL_EXTRAS = ("orbits", "megno", "indicator", "separatrices", "periodic", "colour", "pause", "view")
+URL_EXTRAS = ("orbits", "hidden", "megno", "indicator", "separatrices", "periodic", "colour", "pause", "view")
 #: attributes of the page that are its components' (page.crossings is page.orbits.crossings, ...)
 FACADE = {"orbits": ("crossings", "shown", "live", "start_source", "points", "live_points", "start_marks",
                      "glyph_filter", "colour_box", "starts_box", "pause_box", "status", "worker", "starts",
@@ -114,7 +114,7 @@ class SectionPage:
                                 megno_time)
         self.overlays = Overlays(self, self.section, self.loop)
         self.readout_ = Readout(self, self.section, self.orbits, self.overlays, self.loop)
-        self.orbit_list = OrbitList(self.orbits, self.readout_, self.loop, self.push_url)
+        self.orbit_list = OrbitList(self.orbits, self.readout_, self.loop, on_changed=self.push_url)
         self.exports = Exports(self, self.loop, export_dir, label)
         self.readout, self.overlay_text = self.readout_.text, self.overlays.text
         self._url_timer = self.loop.timer(self.push_url)
@@ -215,7 +215,8 @@ class SectionPage:
             if full:
                 raise ParameterError(full)
         except ParameterError as exc:
-            self.settings, starts = self.base, []
+            # (no starts: their ``hidden`` goes with them)
+            self.settings, starts, args = self.base, [], {k: v for k, v in args.items() if k != "hidden"}
             self.say(f"link ignored: {exc}")
         self._show_fields()
         if self.settings.phi0 != self.base.phi0:
@@ -231,14 +232,14 @@ class SectionPage:
         self.overlays.periodic_box.value = args.get("periodic") == "1"
         self.orbits.colour_box.value = args.get("colour") == "megno"
         self.orbits.pause_box.value = args.get("pause") != "0"
-        for p1, p2 in starts:
-            self.orbits.start(p1, p2)
+        self.orbit_list.load_url(starts, args.get("hidden", ""))
         self.push_url()
 
     def url_query(self) -> dict:
-        """The view as URL arguments: every field, the starts, the boxes and the window."""
+        """The view as URL arguments: every field, the starts (and which are hidden), the boxes and
+        the window."""
         q = self.settings.fields()
-        q["orbits"] = format_starts((p1, p2) for _i, p1, p2, _c in self.orbits.starts)
+        q.update(self.orbit_list.url_query())
         for name, box in (("separatrices", self.overlays.overlay), ("periodic", self.overlays.periodic_box),
                           ("pause", self.orbits.pause_box)):
             q[name] = "1" if box.value else "0"

@@ -63,7 +63,7 @@ class Fields:
             w.param.watch(lambda _e, name=name: self._edited(loop, on_edit, name), "value")
             self.inputs[name] = w
         lo, hi, step = MU_SLIDER
-        self.mu_slider = pn.widgets.FloatSlider(name=f"{LABELS['mu']} (slider)", start=lo, end=hi, step=step,
+        self.mu_slider = pn.widgets.FloatSlider(label=f"{LABELS['mu']} (slider)", start=lo, end=hi, step=step,
                                                 value=min(max(settings.params.mu, lo), hi), width=220)
         # on release (value_throttled): one new value per drag, written into the field, which applies it
         self.mu_slider.param.watch(self._slid, "value_throttled")

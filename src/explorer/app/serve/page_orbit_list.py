@@ -3,7 +3,8 @@ orbit of the session in a table (its colour, start (p1, p2), crossings so far an
 paused, done or why it stopped; hidden ones marked), and the controls that act on one orbit: the
 chooser ``orbit`` (choosing one selects it: its crossings drawn larger and outlined on the
 section, its readout shown as a pick shows it), *hide*/*show* and *delete*.  The picked orbit
-(Shift + click) is the chosen one and its row is highlighted.  A component of
+(Shift + click) is the chosen one and its row is highlighted.  The list writes the link's
+``orbits`` and ``hidden`` (which are hidden: a reload keeps them hidden).  A component of
 :class:`~explorer.app.serve.page.SectionPage`, built on the public methods of
 :class:`~explorer.app.serve.page_orbits.OrbitsLayer` and
 :class:`~explorer.app.serve.page_readout.Readout`.
@@ -25,7 +26,9 @@ import html
 import panel as pn
 from bokeh.models import CDSView, CustomJSFilter, Div
 
+from explorer.app.serve import settings as settings_mod
 from explorer.app.serve.orbits import COLORS
+from explorer.model import ParameterError
 
 #: the chooser's entry for "no orbit selected" (orbit ids start at 1)
 NONE_LABEL = "(none)"
@@ -43,10 +46,10 @@ SELECTED_BACKGROUND = "#fff3b0"
 
 class OrbitList:
     """The list (module docstring).  ``orbits``: the page's OrbitsLayer; ``readout``: its Readout;
-    ``on_removed()``: after a delete (the page's link)."""
+    ``on_changed()``: after a hide, show, delete or clear (the page's link)."""
 
-    def __init__(self, orbits, readout, loop, on_removed):
-        self.orbits, self.readout, self.on_removed = orbits, readout, on_removed
+    def __init__(self, orbits, readout, loop, on_changed):
+        self.orbits, self.readout, self.on_changed = orbits, readout, on_changed
         self._quiet = False
         self._idents: tuple = ()
         self.filter: CustomJSFilter | None = None
@@ -89,13 +92,14 @@ class OrbitList:
         else:
             self.orbits.hide(ident)
         self.orbits.update_status(force_density=True)       # (the density image without it, at once)
+        self.on_changed()                                   # (which orbits are hidden is in the link)
 
     def clear(self) -> None:
         """Remove every orbit (running and paused ones stopped)."""
         self.readout.forget()
         self.orbits.drop_all()
         self.orbits.update_status(force_density=True)      # (no image left of them)
-        self.on_removed()
+        self.on_changed()
 
     def undo(self) -> None:
         """Remove the newest orbit (stopped if it runs or is paused)."""
@@ -116,7 +120,28 @@ class OrbitList:
         self.readout.forget(ident)
         self.orbits.remove(ident)
         self.orbits.update_status()
-        self.on_removed()
+        self.on_changed()
+
+    # ------------------------------------------------------------ the link
+    def load_url(self, starts, hidden: str) -> None:
+        """Start a link's orbits (``starts``, its ``orbits``) and hide those its ``hidden`` names
+        (their positions, :func:`~explorer.app.serve.settings.parse_hidden`; a malformed one is
+        ignored and said, every orbit shown)."""
+        try:
+            positions = settings_mod.parse_hidden(hidden, len(starts))
+        except ParameterError as exc:
+            positions = set()
+            self.orbits.host.say(f"link's hidden ignored: {exc}")
+        for k, (p1, p2) in enumerate(starts, 1):
+            run = self.orbits.start(p1, p2)
+            if run is not None and k in positions:
+                self.orbits.hide(run.ident)
+
+    def url_query(self) -> dict:
+        """The link's ``orbits`` (every start) and ``hidden`` (the positions of the hidden ones)."""
+        starts, hidden = self.orbits.starts, self.orbits.hidden
+        return {"orbits": settings_mod.format_starts((p1, p2) for _i, p1, p2, _c in starts),
+                "hidden": settings_mod.format_hidden(k for k, (i, *_s) in enumerate(starts, 1) if i in hidden)}
 
     # ------------------------------------------------------------ what is shown
     def rows(self) -> list:

@@ -221,6 +221,29 @@ def parse_starts(text: str) -> list:
     return starts
 
 
+def format_hidden(positions) -> str:
+    """Which of a link's starts are hidden, as URL text: their positions among its ``orbits``
+    (1 for the first), ``2,5``."""
+    return ",".join(str(int(k)) for k in sorted(positions))
+
+
+def parse_hidden(text: str, n_starts: int) -> set:
+    """The positions of :func:`format_hidden` among a link's ``n_starts`` starts (ParameterError
+    for anything else: not a whole number, out of 1..n_starts)."""
+    text = str(text).strip()
+    if not text:
+        return set()
+    positions = set()
+    for i, piece in enumerate(text.split(",")[:MAX_STARTS + 1]):
+        piece = piece.strip()
+        k = int(piece) if piece.isascii() and piece.isdigit() and len(piece) <= 4 else 0
+        if not 1 <= k <= n_starts:
+            raise ParameterError(f"hidden[{i}] must be the position of one of the link's {n_starts} orbits "
+                                 f"(1 to {n_starts}), got {piece[:MAX_FIELD_CHARS]!r}")
+        positions.add(k)
+    return positions
+
+
 def format_window(w) -> str:
     """A view window (x0, x1, y0, y1) as URL text: ``x0,x1,y0,y1`` with each float's ``repr``."""
     return ",".join(repr(float(v)) for v in (w.x0, w.x1, w.y0, w.y1))

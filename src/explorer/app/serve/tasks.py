@@ -8,7 +8,8 @@ made at the first submit); a newer submit (or :meth:`LatestTask.cancel`) superse
 its :class:`~explorer.analysis.budget.Budget` is cancelled, so its compiled loops stop within a
 step, and whatever it still hands in (:meth:`Job.post`) is dropped on the loop.  Results reach the
 page only on the session's event loop, through Bokeh's ``Document.add_next_tick_callback`` and
-``add_timeout_callback`` (the document's lock held, as Panel's own callbacks run); in a notebook,
+``add_timeout_callback`` (the document's lock held, as Panel's own callbacks run), in the order
+they were handed in (:meth:`SessionLoop.post`); in a notebook,
 where no server owns the document, they wait in an inbox for :meth:`SessionLoop.poll`.  The
 generation counters of every job and timer are here, and only here.
 """
@@ -58,17 +59,30 @@ class SessionLoop:
         self._tasks: list[LatestTask] = []
 
     def post(self, action) -> None:
-        """From any thread: run ``action()`` on the loop (dropped once the session is closed)."""
+        """From any thread: run ``action()`` on the loop (dropped once the session is closed), after
+        every action posted before it.  The order is kept here, in the inbox: each next-tick
+        callback runs the oldest action waiting, one per callback (one per tick, as before).
+        Bokeh's own order is not enough: the callbacks added before the session is attached (the
+        blocks of a link's orbits, computed while the page is being built) are kept in a set and
+        started in its order, and an orbit's first block reached the page after its last one
+        (tests/app/test_serve_orbit_list.py, a hidden orbit's reload)."""
         if self.closed:
             return
+        with self._lock:
+            self._inbox.append(action)
         if self.doc is None:
-            with self._lock:
-                self._inbox.append(action)
-            return
+            return                      # (a notebook: poll runs them)
         try:
-            self.doc.add_next_tick_callback(action)
+            self.doc.add_next_tick_callback(self._run_oldest)
         except (AttributeError, RuntimeError, ValueError):
             return                      # (destroyed meanwhile: Bokeh tore the document's callbacks down)
+
+    def _run_oldest(self) -> None:
+        with self._lock:
+            if not self._inbox:
+                return
+            action = self._inbox.pop(0)
+        action()
 
     def soon(self, action) -> None:
         """From a widget watcher (Panel calls them outside the document's lock): ``action()`` on the
