@@ -83,6 +83,31 @@ class _SetOrderDoc:
             f()
 
 
+class _LosingDoc(_SetOrderDoc):
+    """A document that refuses its first next-tick callback (torn down for a moment)."""
+
+    def __init__(self):
+        super().__init__()
+        self.refused = 0
+
+    def add_next_tick_callback(self, f):
+        if not self.refused:
+            self.refused += 1
+            raise RuntimeError("no callbacks now")
+        super().add_next_tick_callback(f)
+
+
+def test_an_action_whose_callback_was_lost_is_not_stranded_behind_the_later_ones():
+    doc = _LosingDoc()
+    loop = SessionLoop(doc)
+    shown: list = []
+    for k in range(3):
+        loop.post(lambda k=k: shown.append(k))
+    while doc.callbacks:
+        doc.run()
+    assert doc.refused == 1 and shown == [0, 1, 2] and loop.pending() == 0
+
+
 def test_actions_reach_the_loop_in_the_order_they_were_handed_in_whatever_order_bokeh_starts_callbacks():
     doc = _SetOrderDoc()
     loop = SessionLoop(doc)

@@ -55,6 +55,7 @@ class SessionLoop:
         self.doc = doc
         self.closed = False
         self._inbox: list = []
+        self._scheduled = 0             # next-tick callbacks added and not yet run
         self._lock = threading.Lock()
         self._tasks: list[LatestTask] = []
 
@@ -70,19 +71,32 @@ class SessionLoop:
             return
         with self._lock:
             self._inbox.append(action)
-        if self.doc is None:
-            return                      # (a notebook: poll runs them)
+        if self.doc is not None:        # (a notebook: poll runs them)
+            self._schedule()
+
+    def _schedule(self) -> None:
+        """One next-tick callback more, unless as many are waiting as actions: a callback lost
+        (a document torn down meanwhile, or actions handed in before the document was there)
+        is made up by the next one, so no action is ever stranded behind the others.  Each
+        callback is a callable of its own (Bokeh files callbacks by their callable)."""
+        with self._lock:
+            if self._scheduled >= len(self._inbox):
+                return
+            self._scheduled += 1
         try:
-            self.doc.add_next_tick_callback(self._run_oldest)
+            self.doc.add_next_tick_callback(lambda: self._run_oldest())
         except (AttributeError, RuntimeError, ValueError):
-            return                      # (destroyed meanwhile: Bokeh tore the document's callbacks down)
+            with self._lock:            # (destroyed meanwhile: Bokeh tore the document's callbacks down)
+                self._scheduled -= 1
 
     def _run_oldest(self) -> None:
         with self._lock:
-            if not self._inbox:
-                return
-            action = self._inbox.pop(0)
-        action()
+            self._scheduled = max(self._scheduled - 1, 0)
+            action = self._inbox.pop(0) if self._inbox else None
+        if action is not None:
+            action()
+        if self.doc is not None and not self.closed:
+            self._schedule()
 
     def soon(self, action) -> None:
         """From a widget watcher (Panel calls them outside the document's lock): ``action()`` on the
