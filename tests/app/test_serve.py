@@ -383,14 +383,15 @@ SET_BOX = "([text, on]) => { const m = [...Bokeh.documents[0].all_models].find(m
 
 
 def _wait(page, expression, timeout=60_000, polling="raf"):
-    """page.wait_for_function, failing with what the page says (its message and status lines);
-    returns the expression's truthy value (as JSON): the state waited for, read in the same call."""
+    """page.wait_for_function, failing with what the page says (its message, status and readout
+    lines); returns the expression's truthy value (as JSON): the state waited for, read in the
+    same call."""
     try:
         return page.wait_for_function(expression, timeout=timeout, polling=polling).json_value()
     except Exception as exc:
         try:
-            said = page.evaluate("() => [Bokeh.documents[0].get_model_by_name('message').text, "
-                                 "Bokeh.documents[0].get_model_by_name('status').text]")
+            said = page.evaluate("() => ['message', 'status', 'readout'].map(n => "
+                                 "(m => m ? m.text : null)(Bokeh.documents[0].get_model_by_name(n)))")
         except Exception:  # noqa: BLE001 - the page has no app (e.g. a refused token)
             said = None
         raise AssertionError(f"waited {timeout} ms for {expression[:200]}; the page says {said}") from exc
