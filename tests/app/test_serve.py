@@ -382,6 +382,14 @@ SET_BOX = "([text, on]) => { const m = [...Bokeh.documents[0].all_models].find(m
           " String(m.labels[0]).startsWith(text)); m.active = on ? [0] : []; }"
 
 
+#: what a page says, for a failed wait: its message, status and readout lines, then its address as
+#: Panel's location model holds it and as the browser shows it, and whether BokehJS calls the
+#: document idle (Panel 1.9 writes the address only once it is)
+SAID = ("() => { const d = Bokeh.documents[0], loc = d.get_model_by_name('location');"
+        " return ['message', 'status', 'readout'].map(n => (m => m ? m.text : null)(d.get_model_by_name(n)))"
+        ".concat([loc ? loc.search : null, window.location.search, d.is_idle]); }")
+
+
 def _wait(page, expression, timeout=60_000, polling="raf"):
     """page.wait_for_function, failing with what the page says (its message, status and readout
     lines); returns the expression's truthy value (as JSON): the state waited for, read in the
@@ -390,8 +398,7 @@ def _wait(page, expression, timeout=60_000, polling="raf"):
         return page.wait_for_function(expression, timeout=timeout, polling=polling).json_value()
     except Exception as exc:
         try:
-            said = page.evaluate("() => ['message', 'status', 'readout'].map(n => "
-                                 "(m => m ? m.text : null)(Bokeh.documents[0].get_model_by_name(n)))")
+            said = page.evaluate(SAID)
         except Exception:  # noqa: BLE001 - the page has no app (e.g. a refused token)
             said = None
         raise AssertionError(f"waited {timeout} ms for {expression[:200]}; the page says {said}") from exc
