@@ -249,15 +249,22 @@ def _run(code, **env_changes):
     return out.stdout.strip()
 
 
-def test_import_is_light_and_agg_selected_headless(tmp_path):
+def test_import_is_light_and_figures_are_drawn_headless_leaving_matplotlibs_settings_alone(tmp_path):
+    """No display, no backend configured: a figure is drawn and saved as PNG and PDF without
+    pyplot and without choosing a backend, every rcParam (the backend's included) as before;
+    a user's pyplot afterwards gets what it would have got without us (the configured svg)."""
     code = (
         "import sys\n"
         "import explorer.app.figures as f, explorer.model as m\n"
         "assert 'matplotlib' not in sys.modules and 'numba' not in sys.modules\n"
-        "fig = f.section_panels([dict(points=None, params=m.FIGURE4, h=2.0)], dpi=50)\n"
         "import matplotlib\n"
+        "before = matplotlib.rcParams.copy()\n"
+        "fig = f.section_panels([dict(points=None, params=m.FIGURE4, h=2.0)], dpi=50)\n"
+        f"png, pdf = f.save_figure(fig, {str(tmp_path / 'fig')!r})\n"
+        "assert png.stat().st_size > 1000 and pdf.stat().st_size > 1000\n"
         "assert 'numba' not in sys.modules and 'matplotlib.pyplot' not in sys.modules\n"
-        "print(matplotlib.rcParams._get('backend'))\n")
-    assert _run(code, MPLCONFIGDIR=str(tmp_path)).lower() == "agg"
-    # a configured backend is left alone
+        "assert matplotlib.rcParams.copy() == before\n"
+        "import matplotlib.pyplot as plt\n"
+        "print(plt.get_backend())\n")
+    assert _run(code, MPLCONFIGDIR=str(tmp_path)).lower() == "agg"        # matplotlib's own headless choice
     assert _run(code, MPLCONFIGDIR=str(tmp_path), MPLBACKEND="svg").lower() == "svg"

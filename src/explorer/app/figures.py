@@ -8,12 +8,12 @@ the section, the ellipse ``M^2 >= 0`` of :func:`explorer.model.allowed_ellipse`
 light gray as in the seed's Figure 4.
 
 matplotlib is imported lazily inside the functions (importing this module is
-cheap and pulls in neither matplotlib nor numba).  When no matplotlib backend
-is configured (no ``MPLBACKEND``, no ``backend`` in a matplotlibrc) and pyplot
-has not been imported yet, the Agg backend is selected, so everything works
-headless.  Figures are built with :class:`matplotlib.figure.Figure` directly,
-not with pyplot: nothing is registered in pyplot's global figure list, so
-making many figures in a loop does not leak memory.
+cheap and pulls in neither matplotlib nor numba).  Figures are built with
+:class:`matplotlib.figure.Figure` directly, not with pyplot: nothing is
+registered in pyplot's global figure list, so making many figures in a loop
+does not leak memory, and no backend is needed or chosen (the format of the
+file picks the canvas), so everything works headless and the matplotlib
+settings of the process are left as they were.
 
 API
 ---
@@ -35,7 +35,6 @@ from __future__ import annotations
 import math
 import os
 import re
-import sys
 import tempfile
 from pathlib import Path
 
@@ -66,22 +65,14 @@ _NOTE_SIZE = 7
 
 # ---------------------------------------------------------------- matplotlib, lazily
 def _matplotlib():
-    """Import matplotlib; select Agg when no backend is configured (headless use).
-
-    A backend configured by the user (``MPLBACKEND``, matplotlibrc, an earlier
-    ``matplotlib.use``) or already in use by pyplot is never changed.
-    """
+    """Import matplotlib (lazily: importing this module stays cheap).  No backend is chosen:
+    the figures are :class:`matplotlib.figure.Figure` objects saved by format (``savefig``
+    picks Agg for PNG, the PDF and SVG backends for theirs) or drawn on a
+    :class:`~matplotlib.backends.backend_agg.FigureCanvasAgg` of their own, so they need none,
+    headless included, and a user's pyplot later in the same process gets the backend
+    matplotlib would have chosen without us (tests/app/test_figures.py)."""
     import matplotlib
 
-    if "matplotlib.pyplot" not in sys.modules and not os.environ.get("MPLBACKEND"):
-        try:
-            from matplotlib import rcsetup
-
-            unset = matplotlib.rcParams._get("backend") is rcsetup._auto_backend_sentinel
-        except Exception:  # private API moved: leave the backend alone
-            unset = False
-        if unset:
-            matplotlib.use("Agg")
     return matplotlib
 
 
