@@ -73,6 +73,22 @@ def test_figure2_curves_are_integrated_closed_and_keep_H_and_F(quick):
             assert np.abs(paper.chaplygin_F(PRM, s) - c_sep).max() < 1e-10
 
 
+def test_figure2_draws_its_3d_grid_light_and_thin(quick):
+    """The 3D axes' grid in the colour and width the figure names (set through rcParams when each
+    axis is made, matplotlib's public way for 3D axes), on every axis of every panel."""
+    from explorer.app.paper import figure2
+
+    _root, out = quick
+    fig = figure2._draw_figure2(PRM, out["figure2"].data["panels"], paper.critical_h(PRM), dpi=50,
+                                elev=24.0, azim=-55.0)
+    fig.draw_without_rendering()
+    grids = [axis.gridlines for ax in fig.axes if ax.name == "3d" for axis in (ax.xaxis, ax.yaxis, ax.zaxis)]
+    assert len(grids) == 3 * len(paper.FIGURE2_ENERGIES)
+    for g in grids:
+        np.testing.assert_array_equal(g.get_color(), [figure2.GRID_COLOR])
+        assert list(g.get_linewidth()) == [figure2.GRID_WIDTH]
+
+
 def test_figure2_critical_levels_and_curves_in_every_interval():
     """Critical values of F on the ellipsoid: the poles I for every h, II above b lam^2/(2 a1^2),
     III above b lam^2/(2 a2^2), in the order of Figure 3 (I- < I+ < III < II at h = 6)."""

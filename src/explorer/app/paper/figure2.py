@@ -31,6 +31,8 @@ from explorer.app.paper.chaplygin import (
 #: the figure's name (``explorer figures --only figure2``) and what it shows
 NAME = "figure2"
 DESCRIPTION = "Chaplygin's case: closed curves {H = h} n {F = c} in (p1, p2, M), one panel per energy interval"
+#: the 3D axes' grid: light and thin, under the curves
+GRID_COLOR, GRID_WIDTH = (0.88, 0.88, 0.88, 1.0), 0.3
 
 
 def _figure2_levels(prm, h, n_levels, min_per_interval=2):
@@ -172,6 +174,7 @@ def _split_visible(y, R, eye):
 
 
 def _draw_figure2(prm, panels, hcrit, *, dpi, elev, azim):
+    import matplotlib as mpl
     import mpl_toolkits.mplot3d  # noqa: F401  (registers the 3d projection)
     from matplotlib.ticker import MaxNLocator
 
@@ -184,7 +187,9 @@ def _draw_figure2(prm, panels, hcrit, *, dpi, elev, azim):
         for k, p in enumerate(panels):
             h = p["h"]
             R = np.array([math.sqrt(2 * prm.a1 * h), math.sqrt(2 * prm.a2 * h), math.sqrt(2 * prm.b * h)])
-            ax = fig.add_axes([k / n + 0.005, 0.085, 1.0 / n - 0.01, 0.79], projection="3d", proj_type="ortho")
+            # a 3D axis takes its grid's colour and width from rcParams when it is made
+            with mpl.rc_context({"grid.color": GRID_COLOR, "grid.linewidth": GRID_WIDTH}):
+                ax = fig.add_axes([k / n + 0.005, 0.085, 1.0 / n - 0.01, 0.79], projection="3d", proj_type="ortho")
             ax.view_init(elev=elev, azim=azim)
             # faint ellipsoid and its outline
             uu, vv = np.meshgrid(np.linspace(0, 2 * math.pi, 60), np.linspace(0, math.pi, 30))
@@ -221,8 +226,6 @@ def _draw_figure2(prm, panels, hcrit, *, dpi, elev, azim):
             ax.tick_params(labelsize=6, pad=-2.5)
             for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
                 axis.set_pane_color((1, 1, 1, 0))
-                axis._axinfo["grid"]["color"] = (0.88, 0.88, 0.88, 1)
-                axis._axinfo["grid"]["linewidth"] = 0.3
                 axis.set_major_locator(MaxNLocator(3, symmetric=True))
             fig.text((k + 0.5) / n, 0.905, _interval_title(h, h1, h2, k), ha="center", va="center", fontsize=_FS)
         fig.text(0.5, 0.985, r"$\lambda = %g,\ b = %g,\ a_1 = %g,\ a_2 = %g,\ \chi = \zeta = \mu = 0$.  "
