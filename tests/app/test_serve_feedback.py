@@ -15,7 +15,7 @@ import time
 
 import pytest
 import test_serve
-from test_serve import SERVED, _open, _set_field, _wait, browser_needed
+from test_serve import SERVED, _click, _open, _set_field, _wait, browser_needed
 
 from explorer import model
 from explorer.app.serve.settings import Settings
@@ -306,5 +306,30 @@ def test_the_mu_slider_applies_its_value_through_the_field_and_follows_the_field
         assert page.settings.params.mu == 0.25 and slider.value == 0.25
         page.inputs["mu"].value = "7"                     # beyond its range: applied, the slider at its end
         assert page.settings.params.mu == 7.0 and slider.value == slider.end
+    finally:
+        page.close()
+
+
+@browser_needed
+def test_a_page_opened_at_a_bare_address_writes_the_whole_link_with_the_first_click(served, browser):
+    """Opened with no query, the first click puts every field and the start in the address, not
+    the start alone (at load the browser gives Panel's location its own, empty, query; before the
+    fix the address became ``?orbits=...``, and a link copied from it reopened the orbit at
+    whatever the receiving server's defaults are)."""
+    import json
+    from urllib.parse import parse_qs
+
+    from explorer.app.serve.settings import FIELDS
+
+    page = _open(browser, served.url)
+    try:
+        c1, c2, r1, _r2 = SERVED.region
+        _click(page, c1 + 0.5 * r1, c2)
+        query = _wait(page, "() => { const q = new URLSearchParams(window.location.search);"
+                            f" return q.get('orbits') && {json.dumps(list(FIELDS))}.every(n => q.has(n))"
+                            " ? window.location.search : null; }")
+        link = {k: v[0] for k, v in parse_qs(query.lstrip("?")).items()}
+        assert link["mu"] == repr(SERVED.params.mu) and link["crossings"] == str(SERVED.crossings)
+        assert len(link["orbits"].split(";")) == 1
     finally:
         page.close()

@@ -252,13 +252,26 @@ class SectionPage:
     def sync_url(self, location) -> None:
         """Keep the browser's address (Panel's ``location``) the page's link from now on."""
         # (the address first: sync reads it into the link, and a link the page ignored is not the page's)
-        location.update_query(**{n: getattr(self.url_state, n) for n in FIELDS + URL_EXTRAS})
+        location.update_query(**self._link())
         location.sync(self.url_state, on_error=lambda _values: None)
+        self._location = location
+
+    def _link(self) -> dict:
+        return {n: getattr(self.url_state, n) for n in FIELDS + URL_EXTRAS}
 
     def push_url(self):
-        """The link anew (its text; the browser's address follows it once synced)."""
+        """The link anew (its text; the browser's address follows it once synced).  The whole
+        link: when the page loads, the browser gives Panel's location the address it was opened
+        at (a bare address: no query at all), and ``sync`` writes only the values that change
+        after that, so the address held only those (``?orbits=...`` without the fields)."""
         self._url_timer.cancel()
         self.url_state.param.update(**self.url_query())
+        if self._location is not None:
+            link = self._link()
+            if any(self._location.query_params.get(k) != v for k, v in link.items()):
+                self._location.update_query(**link)
+
+    _location = None            # Panel's location of a served page (sync_url), else None
 
     def overlays_on(self) -> tuple:
         """The names of the overlays that are on (separatrices, periodic, and the chaos layer by its
