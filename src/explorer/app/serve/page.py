@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 import time
+from urllib.parse import parse_qsl
 
 import panel as pn
 import param
@@ -267,8 +268,11 @@ class SectionPage:
         self._url_timer.cancel()
         self.url_state.param.update(**self.url_query())
         if self._location is not None:
+            # (compared as the address's text: Panel's query_params turns numbers into floats and
+            # drops empty values, which its own updates leave out too, and which mean "none")
+            have = dict(parse_qsl(self._location.search.lstrip("?"), keep_blank_values=True))
             link = self._link()
-            if any(self._location.query_params.get(k) != v for k, v in link.items()):
+            if any(v and have.get(k) != v for k, v in link.items()):
                 self._location.update_query(**link)
 
     _location = None            # Panel's location of a served page (sync_url), else None
