@@ -253,12 +253,9 @@ class SectionPage:
     def sync_url(self, location) -> None:
         """Keep the browser's address (Panel's ``location``) the page's link from now on."""
         # (the address first: sync reads it into the link, and a link the page ignored is not the page's)
-        location.update_query(**self._link())
+        location.update_query(**{n: getattr(self.url_state, n) for n in FIELDS + URL_EXTRAS})
         location.sync(self.url_state, on_error=lambda _values: None)
         self._location = location
-
-    def _link(self) -> dict:
-        return {n: getattr(self.url_state, n) for n in FIELDS + URL_EXTRAS}
 
     def push_url(self):
         """The link anew (its text; the browser's address follows it once synced).  The whole
@@ -266,12 +263,12 @@ class SectionPage:
         at (a bare address: no query at all), and ``sync`` writes only the values that change
         after that, so the address held only those (``?orbits=...`` without the fields)."""
         self._url_timer.cancel()
-        self.url_state.param.update(**self.url_query())
+        link = self.url_query()
+        self.url_state.param.update(**link)
         if self._location is not None:
             # (compared as the address's text: Panel's query_params turns numbers into floats and
             # drops empty values, which its own updates leave out too, and which mean "none")
             have = dict(parse_qsl(self._location.search.lstrip("?"), keep_blank_values=True))
-            link = self._link()
             if any(v and have.get(k) != v for k, v in link.items()):
                 self._location.update_query(**link)
 
