@@ -32,7 +32,7 @@ from urllib.parse import parse_qsl
 
 import panel as pn
 import param
-from bokeh.events import ConnectionLost, DoubleTap, Tap
+from bokeh.events import ConnectionLost, DoubleTap, PressUp, Tap
 
 from explorer.app.serve import export
 from explorer.app.serve import raster as raster_mod
@@ -129,6 +129,7 @@ class SectionPage:
         self.overlays.draw_marks(fig)
         fig.on_event(Tap, self._on_tap)
         fig.on_event(DoubleTap, self._on_tap)   # a second click within 300 ms is a double tap
+        fig.on_event(PressUp, self._on_tap)     # a click held 300 ms or more is a press
         self._build()
         if doc is not None:
             # the tab is gone: its websocket closed (Bokeh's ConnectionLost; a session is not
@@ -390,9 +391,11 @@ class SectionPage:
         return run
 
     def _on_tap(self, event):
-        """Tap or double tap: Bokeh reports a click that follows another within 300 ms as a double
-        tap instead of a tap; one at the place of the previous click is that click again (ignored),
-        one elsewhere is a new click."""
+        """Tap, double tap or the end of a press: Bokeh reports a click that follows another within
+        300 ms as a double tap instead of a tap; one at the place of the previous click is that
+        click again (ignored), one elsewhere is a new click.  A button held 300 ms or more without
+        moving is a press, and its release a click too (a slow click, or a quick one whose button
+        up reaches a busy browser late: Bokeh's press timer fires first, and the click was lost)."""
         here = (float(event.sx), float(event.sy))
         last, self._last_tap = self._last_tap, here
         if isinstance(event, DoubleTap) and last is not None and max(abs(here[0] - last[0]),
