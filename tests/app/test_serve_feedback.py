@@ -15,7 +15,7 @@ import time
 
 import pytest
 import test_serve
-from test_serve import SERVED, _click, _open, _set_field, _wait, browser_needed
+from test_serve import DATA, SERVED, TO_SCREEN, _click, _open, _set_field, _wait, browser_needed
 
 from explorer import model
 from explorer.app.serve.settings import Settings
@@ -346,8 +346,6 @@ def test_a_click_held_past_bokehs_press_threshold_starts_an_orbit_too(served, br
     or a quick one whose button-up reaches a busy browser after Bokeh's press timer (one of three
     rapid clicks was lost so at load 9-11).  Its release starts an orbit at the place of the click
     like a tap; before the fix nothing started."""
-    from test_serve import DATA, TO_SCREEN
-
     page = _open(browser, served.url)
     try:
         c1, c2, r1, r2 = SERVED.region
