@@ -85,8 +85,31 @@ _FACADE = {a: c for c, names in FACADE.items() for a in names}
 
 
 class UrlState(param.Parameterized):
-    """The link of a page: every field and :data:`URL_EXTRAS`, as text (synced with the browser's
-    address by ``pn.state.location.sync``)."""
+    """The link of a page: every field and :data:`URL_EXTRAS`, as text, kept in the browser's
+    address by ``pn.state.location.sync`` once :meth:`attach` ed (a notebook's page has none)."""
+
+    def attach(self, location) -> None:
+        """Keep the browser's address (Panel's ``location``) this link from now on."""
+        # (the address first: sync reads it into the link, and a link the page ignored is not the page's)
+        location.update_query(**{n: getattr(self, n) for n in FIELDS + URL_EXTRAS})
+        location.sync(self, on_error=lambda _values: None)
+        self._location = location
+
+    def write(self, link: dict) -> None:
+        """The link anew ({name: text}).  The address holds the whole link: when the page loads,
+        the browser gives Panel's location the address it was opened at (a bare address: no query
+        at all), and ``sync`` writes only the values that change after that, so the address would
+        hold only those (``?orbits=...`` without the fields); it is written whole when any
+        non-empty value of the link is missing from it."""
+        self.param.update(**link)
+        if self._location is not None:
+            # (compared as the address's text: Panel's query_params turns numbers into floats and
+            # drops empty values, which its own updates leave out too, and which mean "none")
+            have = dict(parse_qsl(self._location.search.lstrip("?"), keep_blank_values=True))
+            if any(v and have.get(k) != v for k, v in link.items()):
+                self._location.update_query(**link)
+
+    _location = None            # Panel's location of a served page (attach), else None
 
 
 for _name in FIELDS + URL_EXTRAS:
@@ -251,29 +274,10 @@ class SectionPage:
         q["view"] = "" if w is None else format_window(w)
         return q
 
-    def sync_url(self, location) -> None:
-        """Keep the browser's address (Panel's ``location``) the page's link from now on."""
-        # (the address first: sync reads it into the link, and a link the page ignored is not the page's)
-        location.update_query(**{n: getattr(self.url_state, n) for n in FIELDS + URL_EXTRAS})
-        location.sync(self.url_state, on_error=lambda _values: None)
-        self._location = location
-
     def push_url(self):
-        """The link anew (its text; the browser's address follows it once synced).  The whole
-        link: when the page loads, the browser gives Panel's location the address it was opened
-        at (a bare address: no query at all), and ``sync`` writes only the values that change
-        after that, so the address held only those (``?orbits=...`` without the fields)."""
+        """The link anew (UrlState.write; the browser's address follows it once attached)."""
         self._url_timer.cancel()
-        link = self.url_query()
-        self.url_state.param.update(**link)
-        if self._location is not None:
-            # (compared as the address's text: Panel's query_params turns numbers into floats and
-            # drops empty values, which its own updates leave out too, and which mean "none")
-            have = dict(parse_qsl(self._location.search.lstrip("?"), keep_blank_values=True))
-            if any(v and have.get(k) != v for k, v in link.items()):
-                self._location.update_query(**link)
-
-    _location = None            # Panel's location of a served page (sync_url), else None
+        self.url_state.write(self.url_query())
 
     def overlays_on(self) -> tuple:
         """The names of the overlays that are on (separatrices, periodic, and the chaos layer by its
@@ -421,6 +425,6 @@ def session_app(base: Settings, export_dir=None, label: str = "", **page_options
             page = SectionPage(base, {}, export_dir=export_dir, label=label, doc=pn.state.curdoc, **page_options)
             page.say(f"link ignored: {type(exc).__name__}: {' '.join(str(exc).split())}")
         if pn.state.location is not None:
-            page.sync_url(pn.state.location)
+            page.url_state.attach(pn.state.location)
         return page.layout
     return app
