@@ -1,18 +1,28 @@
 """README's first command installs the package with no extras (`pip install .`): everything it
 offers must run from that install alone, not only from the test environment, which has the test
-extras (scipy, pytest, ...) besides.  One virtual environment with `pip install <repo>`, then,
-in it: every command's documented example (the `example:` line of each `--help`), `figures
+extras (scipy, pytest, ...) besides.  One virtual environment with the package and nothing else,
+then, in it: every command's documented example (the `example:` line of each `--help`), `figures
 --quick` for every figure, and `serve` answering an HTTP request.  Each exits 0 with no
 traceback.
 
-This is the suite's most expensive module (a fresh install compiles every kernel it runs): about
-3.2 minutes alone on 2 cores, 6 beside the other xdist worker: the install, then `figures
---quick` (every kernel compiled cold, in one process, 96 s alone), the examples after it about
-half a minute in all (docs/tests.md, "Time").
+What a plain install is made of, proved in two parts (docs/tests.md, "The plain install"):
+
+- the distribution: the sdist and the wheel built from it (what `pip install .` installs) hold
+  every file of ``src/explorer`` and nothing else, and declare pyproject's dependencies;
+- the environment: a venv with the package installed in editable mode and **no extra**, at the
+  test environment's versions of the distributions they share, runs every command.  Editable,
+  because its kernels are then the test environment's files, so numba's on-disk cache (keyed by
+  each source file's path) serves both: the plain venv loads what the suite compiled and the
+  suite loads what the plain venv compiled, where a wheel's copy of the package recompiled every
+  kernel cold (about 100 CPU-seconds, the suite's largest single item; README's test command
+  installs the test environment editable for this).  A dependency missing from pyproject fails
+  here exactly as in a wheel's install: the venv has only what the package declares.
 """
 from __future__ import annotations
 
+import importlib.metadata as md
 import os
+import re
 import shlex
 import shutil
 import signal
@@ -21,6 +31,7 @@ import sys
 import time
 import urllib.request
 import venv
+import zipfile
 from pathlib import Path
 
 import pytest
@@ -49,28 +60,35 @@ def _uv() -> str | None:
 
 
 def _plain_venv(where: Path) -> Path:
-    """A virtual environment with `pip install ROOT` and nothing else; its python.  The installer
-    is uv where the test environment has it (README's test command: it builds the same wheel with
-    the same build backend and resolves the same declared dependencies, in about 5 s where pip
-    takes about 50 s), else the venv's own pip: either way ROOT goes in with no extra."""
+    """A virtual environment with the package (editable, at ROOT) and its declared dependencies,
+    and nothing else; its python.  Each distribution it shares with the test environment is
+    pinned to the test environment's version (a constraint, so nothing is added by it): the two
+    run the same numba on the same files and share its cache.  The installer is uv where the test
+    environment has it (README's test command: the same build backend and the same declared
+    dependencies, in seconds where pip takes about 50 s), else the venv's own pip."""
     uv = _uv()
     venv.EnvBuilder(with_pip=uv is None, clear=True).create(where)
     py = where / "bin" / "python"
+    constraints = where / "test-environment.txt"
+    constraints.write_text("".join(f"{d.metadata['Name']}=={d.version}\n" for d in md.distributions()
+                                   if d.metadata["Name"] and d.metadata["Name"].lower() != "explorer"))
     install = ([uv, "pip", "install", "-q", "--python", str(py)] if uv is not None
                else [str(py), "-m", "pip", "install", "-q", "--disable-pip-version-check"])
-    r = subprocess.run([*install, str(ROOT)], capture_output=True, text=True, timeout=COMMAND_TIMEOUT)
+    r = subprocess.run([*install, "-c", str(constraints), "-e", str(ROOT)], capture_output=True, text=True,
+                       timeout=COMMAND_TIMEOUT)
     assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
     return py
 
 
 @pytest.fixture(scope="module")
 def plain(tmp_path_factory):
-    """(python of the plain install, a working directory, the environment to run commands in)."""
+    """(python of the plain install, a working directory, the environment to run commands in: the
+    test run's own, NUMBA_CACHE_DIR included, so that the kernels are shared)."""
     py = _plain_venv(tmp_path_factory.mktemp("plain-venv"))
     cwd = tmp_path_factory.mktemp("plain-cwd")
     env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTEST", "COV_"))}
     env.pop("PYTHONPATH", None)
-    env.update(NUMBA_CACHE_DIR=str(cwd / ".numba-cache"), PYTHONUNBUFFERED="1", MPLBACKEND="Agg")
+    env.update(PYTHONUNBUFFERED="1", MPLBACKEND="Agg")
     return py, cwd, env
 
 
@@ -83,12 +101,44 @@ def _run(plain, argv):
     return r
 
 
-def test_the_plain_install_has_no_test_extra_and_its_explorer_comes_from_it(plain):
+def test_the_plain_install_has_no_test_extra_and_its_explorer_is_the_packages(plain):
+    """The venv has the package and its declared dependencies only: none of the test extras, and
+    its explorer is this tree's (what the cache sharing rests on)."""
     py, _cwd, _env = plain
     r = _run(plain, ["-c", "import explorer, importlib.util as u; print(explorer.__file__); "
-                           "print(u.find_spec('pytest') is None, u.find_spec('playwright') is None)"])
-    where, no_pytest, no_playwright = r.stdout.split()
-    assert Path(where).is_relative_to(py.parent.parent) and no_pytest == "True" and no_playwright == "True"
+                           "print(*(u.find_spec(m) is None for m in ('pytest', 'playwright', 'xdist', 'mypy')))"])
+    where, *absent = r.stdout.split()
+    assert Path(where) == ROOT / "src" / "explorer" / "__init__.py" and absent == ["True"] * 4, r.stdout
+
+
+def test_the_wheel_that_pip_install_builds_holds_every_file_of_the_package_and_its_dependencies(tmp_path):
+    """What `pip install .` installs: the wheel built from the sdist (uv's default, or pip's
+    wheel of the tree) holds exactly the package's files (the presets and the type stubs
+    included: the commands read them) and declares pyproject's dependencies."""
+    try:
+        import tomllib
+    except ImportError:  # python 3.10
+        import tomli as tomllib
+
+    uv = _uv()
+    build = ([uv, "build", "-q", "--out-dir", str(tmp_path), str(ROOT)] if uv is not None
+             else [sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w", str(tmp_path), str(ROOT)])
+    r = subprocess.run(build, capture_output=True, text=True, timeout=COMMAND_TIMEOUT)
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    (wheel,) = tmp_path.glob("explorer-*.whl")
+    src = ROOT / "src"
+    files = {p.relative_to(src).as_posix() for p in (src / "explorer").rglob("*")
+             if p.is_file() and "__pycache__" not in p.parts and p.suffix not in (".nbi", ".nbc", ".pyc")}
+    with zipfile.ZipFile(wheel) as z:
+        names = z.namelist()
+        meta = z.read(next(n for n in names if n.endswith(".dist-info/METADATA"))).decode()
+    assert {n for n in names if n.startswith("explorer/")} == files
+    declared = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["dependencies"]
+    requires = [line.split(":", 1)[1].strip() for line in meta.splitlines() if line.startswith("Requires-Dist:")]
+    def name(requirement):
+        return re.match(r"[A-Za-z0-9._-]+", requirement).group().lower()
+
+    assert {name(d) for d in declared} == {name(q) for q in requires if "extra ==" not in q}, requires
 
 
 def _example_argv(name):

@@ -15,9 +15,10 @@ def test_ci_runs_exactly_the_readme_test_command():
     main_job, tests = blocks[0].strip(), blocks[1].strip()
     assert main_job.endswith("python -m explorer sweep") and "pip install ." in main_job
     # both cores (pytest-xdist), a module's tests on one worker (its module-scoped fixtures once)
-    # the test environment installed by uv (seconds, where pip took a minute or more); README's
-    # first command, the user's, stays a plain pip install (tests/test_plain_install.py runs it)
-    assert 'python -m pip install -q uv && uv pip install -q ".[test]"' in tests
+    # the test environment installed by uv (seconds, where pip took a minute or more), editable: the
+    # plain install's venv is editable too, and the two share numba's cache of the same files
+    # (tests/test_plain_install.py); README's first command, the user's, stays a plain pip install
+    assert 'python -m pip install -q uv && uv pip install -q -e ".[test]"' in tests
     assert "&& python -m pytest -q -n 2 --dist loadscope &&" in tests
     # the second run: the CPU-dependent tests again with Numba compiling for a generic CPU, own cache
     assert tests.endswith("NUMBA_CPU_NAME=generic NUMBA_CACHE_DIR=.numba-generic "
