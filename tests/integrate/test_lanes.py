@@ -460,6 +460,26 @@ def test_lane_groups_are_one_or_two():
     assert lanes.worker_lanes(64, 2, None, 1) == (8, (0,))
 
 
+def test_a_batch_that_one_group_of_lanes_holds_runs_on_one_worker_and_a_larger_one_on_every_thread():
+    """lanes.lane_workers: a group steps all LANES lanes whether they hold an orbit or not, so a
+    second worker on a batch one group holds would step a second group for nothing (the same wall
+    time, up to twice the CPU); from LANES + 1 orbits on, one worker per thread.  max_lanes below
+    LANES makes the groups that narrow."""
+    from explorer._jit import get_num_threads, set_num_threads
+
+    L = lanes.LANES
+    old = get_num_threads()
+    try:
+        set_num_threads(2)
+        assert [lanes.lane_workers(n) for n in (0, 1, 2, L, L + 1, 10 * L)] == [1, 1, 1, 1, 2, 2]
+        assert [lanes.lane_workers(n, 3) for n in (1, 3, 4, 37)] == [1, 1, 2, 2]
+        assert lanes.lane_workers(L + 1, 1) == 2 and lanes.lane_workers(2, 1) == 2
+        set_num_threads(1)
+        assert lanes.lane_workers(10 * L) == 1
+    finally:
+        set_num_threads(old)
+
+
 def test_sections_taylor_uses_the_lanes_and_matches_the_scalar_oracle():
     prm = PARAM_SETS["figure4_mu0.5"]
     c1, c2, r1, r2 = model.allowed_ellipse(prm, 2.0)

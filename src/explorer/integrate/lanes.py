@@ -48,7 +48,8 @@ The blocks, the carry and the outputs are those of every crossing driver
 Lanes never exchange values: a lane computes exactly what the scalar loop computes for its
 orbit, so which orbits share a vector, in which order they are taken and how many threads run
 cannot change any result.  The work is therefore distributed dynamically: one worker per thread
-(prange), each with up to G x LANES lanes; a lane whose orbit stops takes the next unstarted orbit of
+(prange; but no more workers than the batch fills groups of LANES lanes, :func:`lane_workers`),
+each with up to G x LANES lanes; a lane whose orbit stops takes the next unstarted orbit of
 the batch at once (an atomic counter), so lanes idle only when the whole batch is handed out
 (then on the zero state: all its coefficients are 0, harmless, and ignored), and a long orbit
 cannot leave a thread idle.
@@ -711,14 +712,15 @@ def run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps,
                            out_cross, out_count, out_status, out_final, out_info, max_lanes=None, groups=None):
     """Crossings of the section by the Taylor method of ``order`` for every orbit of Y0: the
     arguments and outputs of every batch driver (:mod:`explorer.integrate.drivers`: the carry, the
-    limits of a block, the outputs).  One worker per numba thread (at most one per orbit), each with
+    limits of a block, the outputs).  :func:`lane_workers` workers (one per numba thread, at most one per
+    group of LANES orbits), each with
     up to ``groups`` groups of LANES lanes (:func:`worker_lanes`); the results depend on none of
     these.  A Python function: the thread count is read here (numba's get_num_threads inside a
     kernel would defeat the on-disk cache)."""
     n = Y0.shape[0]
-    # one orbit: one worker, run here without the parallel layer (numba's thread pool is neither
-    # asked nor started: a lone orbit pays for no threads)
-    nworkers = 1 if n <= 1 else max(1, min(get_num_threads(), n))
+    # one worker (a lone orbit, or a batch that one group of lanes holds): run here without the
+    # parallel layer (numba's thread pool is neither asked nor started)
+    nworkers = lane_workers(n, max_lanes)
     nlanes, g = worker_lanes(n, nworkers, max_lanes, groups)
     if nworkers == 1:
         return _run_worker(nlanes, g, np.zeros(1, np.int64), Y0, P, cphi, sphi, int(direction), float(tmax),
@@ -726,6 +728,20 @@ def run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps,
                            out_info)
     return _run_lanes(nworkers, nlanes, g, Y0, P, cphi, sphi, int(direction), float(tmax), int(order),
                       int(max_steps), carry, limits, out_cross, out_count, out_status, out_final, out_info)
+
+
+def lane_workers(n, max_lanes=None):
+    """How many lane workers a batch of ``n`` orbits runs on: one per numba thread, but no more
+    than the batch fills groups of LANES lanes (of ``max_lanes`` when that is fewer), and at least
+    one.  A group steps all its LANES lanes whether they hold an orbit or not, so two workers
+    on a batch that one group holds step two groups where one does: the same wall time within
+    about 10 %, up to twice the CPU (2 to 8 orbits on the Xeon of benchmarks/RESULTS.md: 2
+    orbits 0.26 s either way, 0.26 against 0.48 CPU-seconds; 8 orbits 0.39 s and 0.40 CPU-s on
+    one worker, 0.42 s and 0.68 on two; 9 orbits 0.64 s on one, 0.36 s on two).  The second
+    core stays free for whatever else runs (the other orbits of a page, the other pytest
+    worker).  The results do not depend on it (tests/integrate/test_lanes.py)."""
+    per = LANES if max_lanes is None else max(1, min(int(max_lanes), LANES))
+    return max(1, min(get_num_threads(), -(-int(n) // per)))
 
 
 def lane_groups(groups=None):

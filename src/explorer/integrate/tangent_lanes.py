@@ -44,7 +44,7 @@ import math
 
 import numpy as np
 
-from explorer._jit import get_num_threads, njit, prange
+from explorer._jit import njit, prange
 from explorer.integrate._tangent_lanes_generated import (
     DEV1,
     DEV2,
@@ -57,6 +57,7 @@ from explorer.integrate.lanes import (
     aligned_zeros,
     count_step,
     evaluate_lanes,
+    lane_workers,
     next_lane_orbit,
     step_constants,
     step_lanes,
@@ -415,14 +416,15 @@ def run_tangent_lanes_batch(Y0, V0, W0, nvec, P, T, order, max_steps, early_stop
                             early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w,
                             max_lanes=None, groups=None):
     """Lane twin of :func:`explorer.integrate.tangent.run_tangent_taylor_ext_batch` (same
-    arguments and outputs, bit for bit the same results).  One worker per numba thread (at
-    most one per orbit), each with up to ``groups`` groups of LANES lanes
+    arguments and outputs, bit for bit the same results).  One worker per numba thread, at
+    most one per group of LANES orbits (:func:`explorer.integrate.lanes.lane_workers`), each with up to
+    ``groups`` groups of LANES lanes
     (:func:`explorer.integrate.lanes.worker_lanes`); the thread count is read here, in Python
     (inside a kernel it would defeat the on-disk cache)."""
     n = Y0.shape[0]
     if n == 0:
         return 0
-    nworkers = max(1, min(get_num_threads(), n))
+    nworkers = lane_workers(n, max_lanes)
     nlanes, g = worker_lanes(n, nworkers, max_lanes, groups)
     return _run_lanes(nworkers, nlanes, g, Y0, V0, W0, int(nvec), P, float(T), int(order), int(max_steps),
                       bool(early_stop), float(sali_stop), float(megno_level), float(early_tmin), hist_t, out_hist,
