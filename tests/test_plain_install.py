@@ -5,7 +5,7 @@ then, in it: every command's documented example (the `example:` line of each `--
 --quick` for every figure, and `serve` answering an HTTP request.  Each exits 0 with no
 traceback.
 
-What a plain install is made of, proved in two parts (docs/tests.md, "The plain install"):
+What a plain install is made of, proved in two parts (docs/tests.md, "What the tests prove"):
 
 - the distribution: the sdist and the wheel built from it (what `pip install .` installs) hold
   every file of ``src/explorer`` and nothing else, and declare pyproject's dependencies;
@@ -101,6 +101,22 @@ def _run(plain, argv):
     return r
 
 
+def _requirement_name(requirement: str) -> str:
+    """The distribution's name of a requirement string (``numba>=0.59``, ``tomli>=1.1; ...``)."""
+    return re.match(r"[A-Za-z0-9._-]+", requirement.strip()).group().lower()
+
+
+def _declared() -> set:
+    """The names of pyproject.toml's run-time dependencies."""
+    try:
+        import tomllib
+    except ImportError:  # python 3.10
+        import tomli as tomllib
+
+    deps = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["dependencies"]
+    return {_requirement_name(d) for d in deps}
+
+
 def test_the_plain_install_has_no_test_extra_and_its_explorer_is_the_packages(plain):
     """The venv has the package and its declared dependencies only: none of the test extras, and
     its explorer is this tree's (what the cache sharing rests on)."""
@@ -115,11 +131,6 @@ def test_the_wheel_that_pip_install_builds_holds_every_file_of_the_package_and_i
     """What `pip install .` installs: the wheel built from the sdist (uv's default, or pip's
     wheel of the tree) holds exactly the package's files (the presets and the type stubs
     included: the commands read them) and declares pyproject's dependencies."""
-    try:
-        import tomllib
-    except ImportError:  # python 3.10
-        import tomli as tomllib
-
     uv = _uv()
     build = ([uv, "build", "-q", "--out-dir", str(tmp_path), str(ROOT)] if uv is not None
              else [sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w", str(tmp_path), str(ROOT)])
@@ -133,12 +144,8 @@ def test_the_wheel_that_pip_install_builds_holds_every_file_of_the_package_and_i
         names = z.namelist()
         meta = z.read(next(n for n in names if n.endswith(".dist-info/METADATA"))).decode()
     assert {n for n in names if n.startswith("explorer/")} == files
-    declared = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["dependencies"]
-    requires = [line.split(":", 1)[1].strip() for line in meta.splitlines() if line.startswith("Requires-Dist:")]
-    def name(requirement):
-        return re.match(r"[A-Za-z0-9._-]+", requirement).group().lower()
-
-    assert {name(d) for d in declared} == {name(q) for q in requires if "extra ==" not in q}, requires
+    requires = [line.split(":", 1)[1] for line in meta.splitlines() if line.startswith("Requires-Dist:")]
+    assert _declared() == {_requirement_name(q) for q in requires if "extra ==" not in q}, requires
 
 
 def _example_argv(name):
@@ -199,15 +206,8 @@ def test_the_package_declares_every_module_it_imports_as_a_dependency():
     run-time dependency (the cause of `melnikov --splitting` failing in a plain install): every
     top-level import is the standard library, explorer itself, or a declared distribution's."""
     import ast
-    import importlib.metadata as md
 
-    try:
-        import tomllib
-    except ImportError:  # python 3.10
-        import tomli as tomllib
-
-    declared = {d.split(";")[0].split("[")[0].split("<")[0].split(">")[0].split("=")[0].strip().lower()
-                for d in tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["dependencies"]}
+    declared = _declared()
     provides = md.packages_distributions()
     missing = set()
     for path in (ROOT / "src" / "explorer").rglob("*.py"):

@@ -712,11 +712,10 @@ def run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps,
                            out_cross, out_count, out_status, out_final, out_info, max_lanes=None, groups=None):
     """Crossings of the section by the Taylor method of ``order`` for every orbit of Y0: the
     arguments and outputs of every batch driver (:mod:`explorer.integrate.drivers`: the carry, the
-    limits of a block, the outputs).  :func:`lane_workers` workers (one per numba thread, at most one per
-    group of LANES orbits), each with
-    up to ``groups`` groups of LANES lanes (:func:`worker_lanes`); the results depend on none of
-    these.  A Python function: the thread count is read here (numba's get_num_threads inside a
-    kernel would defeat the on-disk cache)."""
+    limits of a block, the outputs).  :func:`lane_workers` workers (one per numba thread, at most
+    one per group of LANES orbits), each with up to ``groups`` groups of LANES lanes
+    (:func:`worker_lanes`); the results depend on none of these.  A Python function: the thread
+    count is read here (numba's get_num_threads inside a kernel would defeat the on-disk cache)."""
     n = Y0.shape[0]
     # one worker (a lone orbit, or a batch that one group of lanes holds): run here without the
     # parallel layer (numba's thread pool is neither asked nor started)
