@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 import time
-from urllib.parse import parse_qsl
+from urllib.parse import parse_qsl, urlsplit
 
 import panel as pn
 import param
@@ -86,14 +86,25 @@ _FACADE = {a: c for c, names in FACADE.items() for a in names}
 
 class UrlState(param.Parameterized):
     """The link of a page: every field and :data:`URL_EXTRAS`, as text, kept in the browser's
-    address by ``pn.state.location.sync`` once :meth:`attach` ed (a notebook's page has none)."""
+    address by ``pn.state.location.sync`` once :meth:`attach` ed (a notebook's page has none).
 
-    def attach(self, location) -> None:
-        """Keep the browser's address (Panel's ``location``) this link from now on."""
+    The page's link is the truth, and the address heals to it: Panel's location is written from
+    both ends (the page's writes, and the browser reporting its address), and its model is updated
+    now or on the next tick, so a write can be overtaken by an older value.  Twice a served page's
+    address held two of three clicked starts for good while the page held three (docs/tests.md,
+    the loops).  So the page does not trust one write: whenever Panel's location reports an
+    address (``search``) or the browser reports what it shows (``href``, which Panel's location
+    sets after every address it writes) that lacks a value of the page's link, the link is written
+    again (:meth:`_heal`)."""
+
+    def attach(self, location, loop) -> None:
+        """Keep the browser's address (Panel's ``location``) this link from now on; ``loop``: the
+        session's :class:`~explorer.app.serve.tasks.SessionLoop`, where a stale address is healed."""
         # (the address first: sync reads it into the link, and a link the page ignored is not the page's)
         location.update_query(**{n: getattr(self, n) for n in FIELDS + URL_EXTRAS})
         location.sync(self, on_error=lambda _values: None)
-        self._location = location
+        self._location, self._loop = location, loop
+        location.param.watch(self._on_address, ["search", "href"])
 
     def write(self, link: dict) -> None:
         """The link anew ({name: text}).  The address holds the whole link: when the page loads,
@@ -101,15 +112,44 @@ class UrlState(param.Parameterized):
         at all), and ``sync`` writes only the values that change after that, so the address would
         hold only those (``?orbits=...`` without the fields); it is written whole when any
         non-empty value of the link is missing from it."""
+        self._link = dict(link)
         self.param.update(**link)
-        if self._location is not None:
-            # (compared as the address's text: Panel's query_params turns numbers into floats and
-            # drops empty values, which its own updates leave out too, and which mean "none")
-            have = dict(parse_qsl(self._location.search.lstrip("?"), keep_blank_values=True))
-            if any(v and have.get(k) != v for k, v in link.items()):
-                self._location.update_query(**link)
+        if self._location is not None and self._lacks(self._location.search):
+            self._location.update_query(**link)
+
+    def _lacks(self, query: str) -> bool:
+        """Whether the address's query text lacks a non-empty value of the page's link (compared as
+        text: Panel's query_params turns numbers into floats and drops empty values, which its own
+        updates leave out too, and which mean "none")."""
+        have = dict(parse_qsl(query.lstrip("?"), keep_blank_values=True))
+        return any(v and have.get(k) != v for k, v in self._link.items())
+
+    def _on_address(self, event) -> None:
+        """A watcher of the location's ``search`` and ``href``: a changed address that lacks the
+        link is healed on the session's loop (not inside Panel's own update that reported it)."""
+        if event.new != event.old and self._lacks(self._query(event.name, event.new)):
+            self._loop.soon(self._heal)
+
+    @staticmethod
+    def _query(name: str, address: str) -> str:
+        return urlsplit(address).query if name == "href" else address
+
+    def _heal(self) -> None:
+        """The link written again, whole: into Panel's location when its ``search`` lacks it (the
+        link and the address both take it, as :meth:`write` does), else sent to the browser again
+        (``param.trigger``: Panel updates its model with the value it holds, which reaches the
+        browser only when the model held another, an older write that landed last).  Once the
+        browser shows the link, its ``href`` matches and nothing more is sent."""
+        location = self._location
+        if self._lacks(location.search):
+            self.param.update(**self._link)
+            location.update_query(**self._link)
+        elif self._lacks(self._query("href", location.href or "")):
+            location.param.trigger("search")
 
     _location = None            # Panel's location of a served page (attach), else None
+    _loop = None                # the session's loop (attach)
+    _link: dict = {}            # the page's link as last written ({name: text})
 
 
 for _name in FIELDS + URL_EXTRAS:
@@ -425,6 +465,6 @@ def session_app(base: Settings, export_dir=None, label: str = "", **page_options
             page = SectionPage(base, {}, export_dir=export_dir, label=label, doc=pn.state.curdoc, **page_options)
             page.say(f"link ignored: {type(exc).__name__}: {' '.join(str(exc).split())}")
         if pn.state.location is not None:
-            page.url_state.attach(pn.state.location)
+            page.url_state.attach(pn.state.location, page.loop)
         return page.layout
     return app
