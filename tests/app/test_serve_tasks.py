@@ -7,6 +7,7 @@ import threading
 import time
 
 from explorer.analysis.budget import Budget
+from explorer.app.serve import tasks
 from explorer.app.serve.tasks import SessionLoop
 
 
@@ -106,6 +107,72 @@ def test_an_action_whose_callback_was_lost_is_not_stranded_behind_the_later_ones
     while doc.callbacks:
         doc.run()
     assert doc.refused == 1 and shown == [0, 1, 2] and loop.pending() == 0
+
+
+class _SilentlyLosingDoc(_SetOrderDoc):
+    """A document that takes every callback and, while ``lose``, keeps some apart without running
+    them and without an error (as Bokeh lost callbacks in the browser loops: docs/tests.md); its
+    one periodic callback is the loop's watch."""
+
+    def __init__(self):
+        super().__init__()
+        self.lose, self.lost, self.timeouts, self.periodic = False, [], [], []
+
+    def add_next_tick_callback(self, f):
+        (self.lost if self.lose else self.callbacks).append(f)
+
+    def add_timeout_callback(self, f, ms):
+        (self.lost if self.lose else self.timeouts).append(f)
+
+    def add_periodic_callback(self, f, ms):
+        self.periodic.append(f)
+        return f
+
+    def remove_periodic_callback(self, f):
+        self.periodic.remove(f)
+
+
+def test_a_callback_that_bokeh_silently_lost_is_made_up_by_the_watch_once_and_not_before(monkeypatch):
+    monkeypatch.setattr(tasks, "LOST_AFTER_SECONDS", 0.05)
+    doc = _SilentlyLosingDoc()
+    loop = SessionLoop(doc)
+    (watch,) = doc.periodic
+    shown: list = []
+    doc.lose = True
+    loop.post(lambda: shown.append("a"))            # its next-tick callback lost ...
+    doc.lose = False
+    loop.post(lambda: shown.append("b"))            # ... so one callback runs "a", and "b" waits
+    while doc.callbacks:
+        doc.run()
+    assert shown == ["a"] and loop.pending() == 1
+    watch()                                         # not lost yet: a callback ran just now
+    assert not doc.callbacks and loop.made_up == 0
+    time.sleep(0.1)
+    watch()                                         # none ran for LOST_AFTER_SECONDS: made up
+    while doc.callbacks:
+        doc.run()
+    assert shown == ["a", "b"] and loop.pending() == 0 and loop.made_up == 1
+
+    fired: list = []
+    timer = loop.timer(lambda: fired.append(1))
+    doc.lose = True
+    timer.at(time.monotonic() + 0.01)              # its timeout callback lost
+    doc.lose = False
+    watch()
+    assert fired == []                              # not yet due
+    time.sleep(0.1)
+    watch()
+    assert fired == [1] and not timer.pending and loop.made_up == 2
+    for f in doc.lost:                              # the lost callbacks come after all: stale, nothing twice
+        f()
+    assert fired == [1] and shown == ["a", "b"]
+    timer.at(time.monotonic() + 0.01)               # a timer whose callback runs is left alone
+    time.sleep(0.1)
+    doc.timeouts.pop()()
+    watch()
+    assert fired == [1, 1] and loop.made_up == 2
+    loop.close()
+    assert doc.periodic == []                       # the watch ends with the session
 
 
 def test_actions_reach_the_loop_in_the_order_they_were_handed_in_whatever_order_bokeh_starts_callbacks():
