@@ -92,9 +92,8 @@ def pytest_sessionstart(session):
     `-n 2`) this runs in the controller before it starts the workers (xdist starts them in its
     own `pytest_sessionstart`, which runs after this one), and the workers load from the cache.
 
-    On two cores: the lone Taylor orbit first (it compiles the callees every kernel shares: the
-    field, the event roots, the clock), then the crossings here and the chaos indicators in a
-    second process at the same time (:func:`warm_kernels`), so neither core waits."""
+    Two processes at once (this one and a second), each running a list of WARM_JOBS, so that
+    neither core waits (:data:`WARM_PLAN`)."""
     if os.environ.get("PYTEST_XDIST_WORKER"):
         return
     import subprocess
@@ -102,14 +101,15 @@ def pytest_sessionstart(session):
 
     t0 = time.perf_counter()
     _drop_a_stale_kernel_cache()
-    warm_kernels("shared")
-    other = subprocess.Popen([sys.executable, "-c", "import conftest; conftest.warm_kernels('indicators')"],
+    first, here, there = WARM_PLAN["taylor" if session.config.option.markexpr.strip() == "cpu_dependent" else "all"]
+    warm_kernels(*first)
+    other = subprocess.Popen([sys.executable, "-c", f"import conftest; conftest.warm_kernels(*{there!r})"],
                              cwd=os.path.dirname(__file__), stdin=subprocess.DEVNULL)
     try:
-        warm_kernels("crossings")
+        warm_kernels(*here)
     finally:
         if other.wait() != 0:
-            raise RuntimeError("compiling the indicator kernels before the tests failed (see above)")
+            raise RuntimeError(f"compiling the kernels {there} before the tests failed (see above)")
     _PHASES["kernels loaded or compiled before the tests"] = time.perf_counter() - t0
 
 
@@ -117,26 +117,62 @@ def pytest_sessionstart(session):
 #: driver with the CPU's default lane groups (lanes.worker_lanes), as every sweep does
 WARM_BATCH = 40
 
+#: The warm-up's jobs, each one call of a default path on a tiny problem (:func:`warm_kernels`).
+#: ``taylor orbit`` compiles the callees that every Taylor kernel shares (the field's Taylor
+#: coefficients, the event roots, the clock), so the other Taylor jobs come after it in either
+#: process; the DOP853 and splitting paths share little with it.
+WARM_JOBS = ("taylor orbit", "taylor batch", "fixed point", "taylor indicators", "other methods")
 
-def warm_kernels(which: str) -> None:
-    """Run the default paths once on tiny problems, compiling (or loading) their kernels:
-    ``shared`` one Taylor orbit; ``crossings`` a Taylor batch and every other kind of method
-    (DOP853, a splitting) and a fixed point; ``indicators`` the same for the chaos indicators."""
+#: (the jobs run first, alone; then the jobs of this process, while a second process runs the
+#: last ones).  Compile times measured one by one on 2 cores
+#: (AMD EPYC, cold cache): taylor orbit 9-13 s, taylor batch 9, fixed point 3, taylor indicators
+#: 22, other methods (DOP853 and split4, crossings and indicators, one orbit each) 20.
+#:
+#: - the whole suite (``all``): the taylor orbit here while the other methods compile there
+#:   (20 s, so the orbit's callees are in the cache before the second process reaches its Taylor
+#:   batch; were they not, it would compile them once more, which costs time, not correctness),
+#:   then the Taylor indicators here: about 33 s each, where the orbit first and then two
+#:   processes took 48-53 s.
+#: - the generic-CPU rerun (``-m cpu_dependent``, README's second pytest): its tests run only
+#:   Taylor paths (a run of them with no warm-up compiled no DOP853 or splitting kernel), so the
+#:   taylor orbit alone first, then the rest in two processes: 26 s against 39 s.
+WARM_PLAN = {
+    "all": ((), ("taylor orbit", "taylor indicators"), ("other methods", "taylor batch", "fixed point")),
+    "taylor": (("taylor orbit",), ("taylor batch", "fixed point"), ("taylor indicators",)),
+}
+
+
+def warm_kernels(*jobs: str) -> None:
+    """Run the default paths once on tiny problems, compiling (or loading) their kernels: each of
+    ``jobs`` one of WARM_JOBS."""
     from explorer.analysis import fixedpoints, lyapunov, sections
 
     prm = model.FIGURE4.with_(mu=0.1)
     one = model.section_state(prm, [0.2], [0.1], 2.0)
     batch = model.section_state(prm, np.linspace(-0.3, 0.3, WARM_BATCH), np.zeros(WARM_BATCH), 2.0)
-    if which == "shared":
-        sections.crossings(prm, states=one, n_crossings=1, method="taylor", tol=1e-10)
-        return
-    run = ((lambda y0, method: sections.crossings(prm, states=y0, n_crossings=1, method=method, tol=1e-10, dt=0.05))
-           if which == "crossings" else
-           (lambda y0, method: lyapunov.indicators(prm, states=y0, tmax=1.0, method=method, tol=1e-10, dt=0.05)))
-    for y0, method in ((one, "taylor"), (batch, "taylor"), (one, "dop853"), (one, "split4")):
-        run(y0, method)
-    if which == "crossings":
-        fixedpoints.find_fixed_point(model.FIGURE4, 2.0)
+
+    def crossings(y0, method):
+        sections.crossings(prm, states=y0, n_crossings=1, method=method, tol=1e-10, dt=0.05)
+
+    def indicators(y0, method):
+        lyapunov.indicators(prm, states=y0, tmax=1.0, method=method, tol=1e-10, dt=0.05)
+
+    for job in jobs:
+        if job == "taylor orbit":
+            crossings(one, "taylor")
+        elif job == "taylor batch":
+            crossings(batch, "taylor")
+        elif job == "fixed point":
+            fixedpoints.find_fixed_point(model.FIGURE4, 2.0)
+        elif job == "taylor indicators":
+            indicators(one, "taylor")
+            indicators(batch, "taylor")
+        elif job == "other methods":
+            for method in ("dop853", "split4"):
+                crossings(one, method)
+                indicators(one, method)
+        else:
+            raise ValueError(f"warm-up job must be one of {WARM_JOBS}, got {job!r}")
 
 
 def _drop_a_stale_kernel_cache() -> None:
