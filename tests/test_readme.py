@@ -17,8 +17,11 @@ def test_ci_runs_exactly_the_readme_test_command():
     # both cores (pytest-xdist), a module's tests on one worker (its module-scoped fixtures once)
     # the test environment installed by uv (seconds, where pip took a minute or more), editable: the
     # plain install's venv is editable too, and the two share numba's cache of the same files
-    # (tests/test_plain_install.py); README's first command, the user's, stays a plain pip install
-    assert 'python -m pip install -q uv && uv pip install -q -e ".[test]"' in tests
+    # (tests/test_plain_install.py); README's first command, the user's, stays a plain pip install.
+    # uv compiles the installed modules to bytecode as pip does (pip's default, not uv's): a
+    # machine with PYTHONDONTWRITEBYTECODE set (this one) otherwise compiles numpy, scipy, Bokeh,
+    # Panel, matplotlib... from source in every Python process the suite starts (docs/tests.md, "Time")
+    assert 'python -m pip install -q uv && uv pip install -q --compile-bytecode -e ".[test]"' in tests
     assert "&& python -m pytest -q -n 2 --dist loadscope &&" in tests
     # the second run: the CPU-dependent tests again with Numba compiling for a generic CPU, own cache
     assert tests.endswith("NUMBA_CPU_NAME=generic NUMBA_CACHE_DIR=.numba-generic "
