@@ -65,15 +65,14 @@ def _plain_venv(where: Path) -> Path:
     pinned to the test environment's version (a constraint, so nothing is added by it): the two
     run the same numba on the same files and share its cache.  The installer is uv where the test
     environment has it (README's test command: the same build backend and the same declared
-    dependencies, in seconds where pip takes about 50 s, compiling the modules to bytecode as pip
-    does), else the venv's own pip."""
+    dependencies, in seconds where pip takes about 50 s), else the venv's own pip."""
     uv = _uv()
     venv.EnvBuilder(with_pip=uv is None, clear=True).create(where)
     py = where / "bin" / "python"
     constraints = where / "test-environment.txt"
     constraints.write_text("".join(f"{d.metadata['Name']}=={d.version}\n" for d in md.distributions()
                                    if d.metadata["Name"] and d.metadata["Name"].lower() != "explorer"))
-    install = ([uv, "pip", "install", "-q", "--compile-bytecode", "--python", str(py)] if uv is not None
+    install = ([uv, "pip", "install", "-q", "--python", str(py)] if uv is not None
                else [str(py), "-m", "pip", "install", "-q", "--disable-pip-version-check"])
     r = subprocess.run([*install, "-c", str(constraints), "-e", str(ROOT)], capture_output=True, text=True,
                        timeout=COMMAND_TIMEOUT)
@@ -89,6 +88,12 @@ def plain(tmp_path_factory):
     cwd = tmp_path_factory.mktemp("plain-cwd")
     env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTEST", "COV_"))}
     env.pop("PYTHONPATH", None)
+    # pip compiles what it installs to bytecode; uv does not.  So that the commands run as after a
+    # pip install, they may write the bytecode of what they import (the first one does, the others
+    # read it), whatever the test run's PYTHONDONTWRITEBYTECODE: every process compiled numpy,
+    # scipy, numba, matplotlib, Bokeh and Panel from source when this machine set it, and uv's
+    # --compile-bytecode, which compiles every installed module, cost more (24 s) than it saved
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
     env.update(PYTHONUNBUFFERED="1", MPLBACKEND="Agg")
     return py, cwd, env
 
