@@ -92,8 +92,8 @@ def pytest_sessionstart(session):
     `-n 2`) this runs in the controller before it starts the workers (xdist starts them in its
     own `pytest_sessionstart`, which runs after this one), and the workers load from the cache.
 
-    Two processes at once (this one and a second), each running a list of WARM_JOBS, so that
-    neither core waits (:data:`WARM_PLAN`)."""
+    Two processes at once (this one and a second), each running its jobs of :data:`WARM_PLAN`,
+    so that neither core waits."""
     if os.environ.get("PYTEST_XDIST_WORKER"):
         return
     import subprocess
@@ -117,25 +117,23 @@ def pytest_sessionstart(session):
 #: driver with the CPU's default lane groups (lanes.worker_lanes), as every sweep does
 WARM_BATCH = 40
 
-#: The warm-up's jobs, each one call of a default path on a tiny problem (:func:`warm_kernels`).
-#: ``taylor orbit`` compiles the callees that every Taylor kernel shares (the field's Taylor
-#: coefficients, the event roots, the clock), so the other Taylor jobs come after it in either
-#: process; the DOP853 and splitting paths share little with it.
-WARM_JOBS = ("taylor orbit", "taylor batch", "fixed point", "taylor indicators", "other methods")
-
-#: (the jobs run first, alone; then the jobs of this process, while a second process runs the
-#: last ones).  Compile times measured one by one on 2 cores
-#: (AMD EPYC, cold cache): taylor orbit 9-13 s, taylor batch 9, fixed point 3, taylor indicators
-#: 22, other methods (DOP853 and split4, crossings and indicators, one orbit each) 20.
+#: The warm-up's plan: (the jobs run first, alone; then the jobs of this process, while a second
+#: process runs the last ones), each job one call of a default path on a tiny problem
+#: (:func:`warm_kernels`).  ``taylor orbit`` compiles the callees that every Taylor kernel shares
+#: (the field's Taylor coefficients, the event roots, the clock), so the other Taylor jobs come
+#: after it in either process; the DOP853 and splitting paths share little with it.  Compile
+#: times measured one by one on 2 cores (AMD EPYC, cold cache): taylor orbit 9-13 s, taylor
+#: batch 9, fixed point 3, taylor indicators 22, other methods (DOP853 and split4, crossings and
+#: indicators, one orbit each) 20.
 #:
 #: - the whole suite (``all``): the taylor orbit here while the other methods compile there
 #:   (20 s, so the orbit's callees are in the cache before the second process reaches its Taylor
 #:   batch; were they not, it would compile them once more, which costs time, not correctness),
-#:   then the Taylor indicators here: about 33 s each, where the orbit first and then two
-#:   processes took 48-53 s.
+#:   then the Taylor indicators here: 34-35 s in all, where the orbit alone first and then two
+#:   processes took 40-42 s (cold, on an idle machine).
 #: - the generic-CPU rerun (``-m cpu_dependent``, README's second pytest): its tests run only
 #:   Taylor paths (a run of them with no warm-up compiled no DOP853 or splitting kernel), so the
-#:   taylor orbit alone first, then the rest in two processes: 26 s against 39 s.
+#:   taylor orbit alone first, then the rest in two processes: 24-27 s against 32.
 WARM_PLAN = {
     "all": ((), ("taylor orbit", "taylor indicators"), ("other methods", "taylor batch", "fixed point")),
     "taylor": (("taylor orbit",), ("taylor batch", "fixed point"), ("taylor indicators",)),
@@ -144,35 +142,33 @@ WARM_PLAN = {
 
 def warm_kernels(*jobs: str) -> None:
     """Run the default paths once on tiny problems, compiling (or loading) their kernels: each of
-    ``jobs`` one of WARM_JOBS."""
+    ``jobs`` a name of WARM_PLAN's jobs."""
     from explorer.analysis import fixedpoints, lyapunov, sections
 
     prm = model.FIGURE4.with_(mu=0.1)
     one = model.section_state(prm, [0.2], [0.1], 2.0)
     batch = model.section_state(prm, np.linspace(-0.3, 0.3, WARM_BATCH), np.zeros(WARM_BATCH), 2.0)
 
-    def crossings(y0, method):
-        sections.crossings(prm, states=y0, n_crossings=1, method=method, tol=1e-10, dt=0.05)
+    def crossings(*runs):
+        for y0, method in runs:
+            sections.crossings(prm, states=y0, n_crossings=1, method=method, tol=1e-10, dt=0.05)
 
-    def indicators(y0, method):
-        lyapunov.indicators(prm, states=y0, tmax=1.0, method=method, tol=1e-10, dt=0.05)
+    def indicators(*runs):
+        for y0, method in runs:
+            lyapunov.indicators(prm, states=y0, tmax=1.0, method=method, tol=1e-10, dt=0.05)
 
+    table = {
+        "taylor orbit": lambda: crossings((one, "taylor")),
+        "taylor batch": lambda: crossings((batch, "taylor")),
+        "fixed point": lambda: fixedpoints.find_fixed_point(model.FIGURE4, 2.0),
+        "taylor indicators": lambda: indicators((one, "taylor"), (batch, "taylor")),
+        "other methods": lambda: (crossings((one, "dop853"), (one, "split4")),
+                                  indicators((one, "dop853"), (one, "split4"))),
+    }
     for job in jobs:
-        if job == "taylor orbit":
-            crossings(one, "taylor")
-        elif job == "taylor batch":
-            crossings(batch, "taylor")
-        elif job == "fixed point":
-            fixedpoints.find_fixed_point(model.FIGURE4, 2.0)
-        elif job == "taylor indicators":
-            indicators(one, "taylor")
-            indicators(batch, "taylor")
-        elif job == "other methods":
-            for method in ("dop853", "split4"):
-                crossings(one, method)
-                indicators(one, method)
-        else:
-            raise ValueError(f"warm-up job must be one of {WARM_JOBS}, got {job!r}")
+        if job not in table:
+            raise ValueError(f"warm-up job must be one of {tuple(table)}, got {job!r}")
+        table[job]()
 
 
 def _drop_a_stale_kernel_cache() -> None:
