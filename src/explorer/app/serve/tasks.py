@@ -17,6 +17,7 @@ and timer are here, and only here.
 """
 from __future__ import annotations
 
+import contextlib
 import logging
 import queue
 import threading
@@ -112,6 +113,31 @@ class SessionLoop:
         except (AttributeError, RuntimeError, ValueError):
             with self._lock:            # (destroyed meanwhile: Bokeh tore the document's callbacks down)
                 self._scheduled -= 1
+
+    @contextlib.contextmanager
+    def bokeh_sends(self):
+        """On the loop (a Bokeh callback of the session: the document's lock held): the changes
+        made within go to the browser through Bokeh's own dispatch, one message per change, in
+        order, written before the next callback runs (the document held, Bokeh's
+        ``Document.hold("collect")``, until the block ends).  For changes of Panel components
+        (the address): without the hold, one made in such a callback goes through Panel's own
+        writer (``panel.io.document.unlocked``), whose queue for a busy socket (panel 1.9) can end
+        its write task before it sends a message queued meanwhile, and the message then waits
+        for Panel's next write, which may never come.  Twice in the browser loops a served page's
+        address kept two of three clicked starts so for good (docs/tests.md;
+        tests/app/test_serve.py, with a Panel that loses all its own writes).  Not for a block
+        that replaces a source's data and then streams to it: a held change of a value is
+        serialized when it is sent, with the rows streamed after it, which then arrive twice.
+        Without a document (a notebook), or within a hold already active, the block just runs."""
+        doc = self.doc
+        if doc is None or doc.callbacks.hold_value is not None:
+            yield
+            return
+        doc.hold("collect")
+        try:
+            yield
+        finally:
+            doc.unhold()
 
     def _run_oldest(self) -> None:
         with self._lock:
