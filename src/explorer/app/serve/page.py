@@ -149,11 +149,10 @@ class UrlState(param.Parameterized):
         browser only when the model held another, an older write that landed last).  Once the
         browser shows the link, its ``href`` matches and nothing more is sent."""
         location = self._location
-        with self._sent_by_bokeh():
-            if self._lacks(location.search):
-                self.param.update(**self._link)
-                location.update_query(**self._link)
-            elif self._lacks(self._query("href", location.href or "")):
+        if self._lacks(location.search):
+            self.write(self._link)
+        elif self._lacks(self._query("href", location.href or "")):
+            with self._sent_by_bokeh():
                 location.param.trigger("search")
 
     _location = None            # Panel's location of a served page (attach), else None
