@@ -258,6 +258,25 @@ def test_the_periodic_figure_draws_isolated_orbits_of_every_period_each_returnin
             assert orb["period"] == K and orb["residual"] < 1e-9, orb
 
 
+def test_the_periodic_legend_lies_below_its_panel_with_a_colour_per_period_and_a_marker_per_kind_drawn():
+    """The legend hides no orbit: it is drawn below the section's axes, inside the figure (the
+    constrained layout makes room for it), and lists the periods and only the kinds drawn."""
+    from explorer.app.paper._common import _new_figure, _rc
+    from explorer.app.paper.periodic import period_legend
+
+    with _rc():
+        fig = _new_figure((9.0, 4.7), dpi=100)
+        ax, _bx = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.35, 1]})
+        ax.plot([0.0, 1.0], [0.0, 1.0], "o")
+        ax.set_xlabel("$p_1$")
+        leg = period_legend(ax, {K: f"C{K}" for K in range(1, 9)}, {"elliptic", "degenerate"})
+        fig.canvas.draw()
+    box, panel, page = leg.get_window_extent(), ax.get_window_extent(), fig.bbox
+    assert box.y1 <= panel.y0 and box.y0 >= page.y0 and page.x0 <= box.x0 < box.x1 <= page.x1, (box, panel)
+    assert [t.get_text() for t in leg.get_texts()] == [f"K = {K}" for K in range(1, 9)] + [
+        "elliptic", "degenerate (not isolated)"]
+
+
 # ---------------------------------------------------------------- sweeps: reuse of stores
 def test_quick_sweeps_are_reused_on_a_second_run(quick):
     root, out = quick

@@ -15,12 +15,39 @@ CENTER_GUESS = (1.5822, 0.0)
 PROFILE_END = (0.9, 0.0)
 
 
+#: how an orbit's kind is drawn (:attr:`explorer.analysis.periodic.PeriodicOrbit.kind`, or degenerate:
+#: not isolated at the map's accuracy): elliptic filled circles, hyperbolic crosses, parabolic
+#: plus signs, degenerate open squares; the colour is the period's
+_KINDS = {
+    "elliptic": dict(marker="o", ms=3.2, mew=0.7, filled=True, label="elliptic"),
+    "hyperbolic": dict(marker="x", ms=2.8, mew=0.7, filled=False, label="hyperbolic"),
+    "parabolic": dict(marker="+", ms=3.4, mew=0.7, filled=False, label="parabolic"),
+    "degenerate": dict(marker="s", ms=3.4, mew=0.5, filled=False, label="degenerate (not isolated)"),
+}
+
+
+def period_legend(ax, colours, kinds):
+    """The left panel's legend, below the axes so that it hides no orbit: one colour per period
+    (``colours``: {K: colour}) and one marker, in black, per kind drawn (``kinds``, keys of
+    :data:`_KINDS`, listed in that table's order)."""
+    from matplotlib.lines import Line2D
+
+    handles = [Line2D([], [], ls="none", marker="o", ms=4, color=col, label=f"K = {K}")
+               for K, col in colours.items()]
+    handles += [Line2D([], [], ls="none", marker=st["marker"], ms=st["ms"] + 0.8, mew=st["mew"], color="k",
+                       mfc="k" if st["filled"] else "none", label=st["label"])
+                for kind, st in _KINDS.items() if kind in kinds]
+    return ax.legend(handles=handles, fontsize=6, frameon=False, loc="upper center", bbox_to_anchor=(0.5, -0.13),
+                     ncol=6, title="period (colour) and kind (marker)", title_fontsize=6, handletextpad=0.2,
+                     columnspacing=1.0)
+
+
 def periodic_figure(params=None, h=None, *, periods=range(1, 9), seeds=40, crossings=400, profile_n=120,
                     iterates=2000, grid=12, dpi=200) -> Drawn:
     """Left: crossings of ``seeds`` orbits started on p2 = 0 (gray) and the periodic orbits of
     minimal period K in ``periods`` found by :func:`explorer.analysis.periodic.search_periodic_orbits`
-    (filled markers elliptic, crosses hyperbolic, open squares degenerate orbits, one colour per
-    period).  Right: the rotation
+    (one colour per period, one marker per kind: :data:`_KINDS`; the legend below the panel, where
+    it hides no orbit).  Right: the rotation
     number (:func:`explorer.analysis.rotation.rotation_profile`) along p2 = 0 from the elliptic
     fixed point, converged orbits dark, non-converged (chaotic) light, with the levels m/K of
     the elliptic orbits found (plateaus of the island chains)."""
@@ -50,33 +77,28 @@ def periodic_figure(params=None, h=None, *, periods=range(1, 9), seeds=40, cross
     colours = ["#000000", "#1f4e9c", "#b2182b", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2",
                "#17becf", "#7f7f7f"]
     with _rc():
-        fig = _new_figure((9.0, 4.2), dpi=dpi)
+        fig = _new_figure((9.0, 4.7), dpi=dpi)
         ax, bx = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.35, 1]})
         t = np.linspace(0, 2 * np.pi, 400)
         ax.set_facecolor("0.85")            # outside the allowed region: gray (as in Figure 4)
         ax.fill(c1 + r1 * np.cos(t), c2 + r2 * np.sin(t), color="white", lw=0, zorder=0)
         ax.plot(pts[:, 0], pts[:, 1], ",", color="0.55", zorder=1, rasterized=True)
-        degenerate_labelled = False
+        kinds = set()
         for K, obs in orbits.items():
             col = colours[(K - 1) % len(colours)]
-            isolated = [o for o in obs if not o.degenerate]
-            for i, o in enumerate(isolated):
-                ell = o.kind == "elliptic"
-                ax.plot(o.points[:, 0], o.points[:, 1], "o" if ell else "x", ms=3.2 if ell else 2.8,
-                        color=col, mfc=col if ell else "none", mew=0.7, zorder=3,
-                        label=f"K = {K}" if i == 0 else None)
             for o in obs:
-                if o.degenerate:   # not isolated at the map's accuracy: a point of a resonant curve
-                    ax.plot(o.points[:, 0], o.points[:, 1], "s", ms=3.4, color=col, mfc="none", mew=0.5,
-                            zorder=3, label=None if degenerate_labelled else "degenerate (not isolated)")
-                    degenerate_labelled = True
+                # degenerate: not isolated at the map's accuracy (a point of a resonant curve)
+                kind = "degenerate" if o.degenerate else o.kind
+                kinds.add(kind)
+                style = _KINDS[kind]
+                ax.plot(o.points[:, 0], o.points[:, 1], style["marker"], ms=style["ms"], color=col,
+                        mfc=col if style["filled"] else "none", mew=style["mew"], zorder=3)
         ax.plot(*np.array([center.point, PROFILE_END]).T, "-", color="k", lw=0.5, zorder=2)
         ax.set_xlim(c1 - 1.05 * r1, c1 + 1.05 * r1)
         ax.set_ylim(c2 - 1.05 * r2, c2 + 1.05 * r2)
         ax.set_xlabel("$p_1$")
         ax.set_ylabel("$p_2$")
-        ax.legend(fontsize=6, frameon=False, loc="upper right", ncol=2,
-                  title="period (o elliptic, x hyperbolic, square degenerate)", title_fontsize=6)
+        period_legend(ax, {K: colours[(K - 1) % len(colours)] for K in orbits}, kinds)
         ax.set_title(rf"$\varphi = \pi$, $\mu = {prm.mu:g}$, $h = {h:g}$: periodic orbits", fontsize=_FS)
         conv = prof.converged
         x = prof.points[:, 0]
