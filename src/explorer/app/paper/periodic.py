@@ -26,16 +26,20 @@ _KINDS = {
 }
 
 
+#: the kinds' markers in the legend: grey, a colour no period has (K = 1 is black)
+_KIND_GREY = "0.5"
+
+
 def period_legend(ax, colours, kinds):
     """The left panel's legend, below the axes so that it hides no orbit: one colour per period
-    (``colours``: {K: colour}) and one marker, in black, per kind drawn (``kinds``, keys of
+    (``colours``: {K: colour}) and one marker, in grey, per kind drawn (``kinds``, keys of
     :data:`_KINDS`, listed in that table's order)."""
     from matplotlib.lines import Line2D
 
     handles = [Line2D([], [], ls="none", marker="o", ms=4, color=col, label=f"K = {K}")
                for K, col in colours.items()]
-    handles += [Line2D([], [], ls="none", marker=st["marker"], ms=st["ms"] + 0.8, mew=st["mew"], color="k",
-                       mfc="k" if st["filled"] else "none", label=st["label"])
+    handles += [Line2D([], [], ls="none", marker=st["marker"], ms=st["ms"] + 0.8, mew=st["mew"], color=_KIND_GREY,
+                       mfc=_KIND_GREY if st["filled"] else "none", label=st["label"])
                 for kind, st in _KINDS.items() if kind in kinds]
     return ax.legend(handles=handles, fontsize=6, frameon=False, loc="upper center", bbox_to_anchor=(0.5, -0.13),
                      ncol=6, title="period (colour) and kind (marker)", title_fontsize=6, handletextpad=0.2,
@@ -109,8 +113,10 @@ def periodic_figure(params=None, h=None, *, periods=range(1, 9), seeds=40, cross
         bx.plot(x[conv], prof.rotation[conv], ".", color="k", ms=2.5, label="converged to 1e-10")
         for lev, (m, K) in sorted(levels.items()):
             bx.axhline(lev, color=colours[(K - 1) % len(colours)], lw=0.6, ls="--")
-            bx.text(x.min(), lev, f" {m:d}/{K}: island chain of period {K}", fontsize=_SMALL, va="bottom",
-                    color=colours[(K - 1) % len(colours)])
+            # at the panel's left edge (the centre's side, where the profile lies above every
+            # plateau), below its line, inside the axes
+            bx.text(0.01, lev, f"{m:d}/{K}: island chain of period {K}", fontsize=_SMALL, va="top", ha="left",
+                    color=colours[(K - 1) % len(colours)], transform=bx.get_yaxis_transform())
         bx.set_xlabel("$p_1$ on $p_2 = 0$ (from the elliptic fixed point)")
         bx.set_ylabel("rotation number (turns per return)")
         bx.invert_xaxis()
