@@ -262,11 +262,11 @@ def test_the_periodic_legend_lies_below_its_panel_with_a_colour_per_period_and_a
     """The legend hides no orbit: it is drawn below the section's axes, inside the figure (the
     constrained layout makes room for it), and lists the periods and only the kinds drawn."""
     from explorer.app.paper._common import _new_figure, _rc
-    from explorer.app.paper.periodic import period_legend
+    from explorer.app.paper.periodic import FIGSIZE, WIDTH_RATIOS, period_legend
 
     with _rc():
-        fig = _new_figure((9.0, 4.7), dpi=100)
-        ax, _bx = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.35, 1]})
+        fig = _new_figure(FIGSIZE, dpi=100)
+        ax, _bx = fig.subplots(1, 2, gridspec_kw={"width_ratios": WIDTH_RATIOS})
         ax.plot([0.0, 1.0], [0.0, 1.0], "o")
         ax.set_xlabel("$p_1$")
         leg = period_legend(ax, {K: f"C{K}" for K in range(1, 9)}, {"elliptic", "degenerate"})

@@ -15,6 +15,13 @@ CENTER_GUESS = (1.5822, 0.0)
 PROFILE_END = (0.9, 0.0)
 
 
+#: the figure's size (inches) and its panels' widths: the section, the rotation profile
+FIGSIZE = (9.0, 4.7)
+WIDTH_RATIOS = (1.35, 1)
+#: one colour per period K (cycled)
+PERIOD_COLOURS = ("#000000", "#1f4e9c", "#b2182b", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2",
+                  "#17becf", "#7f7f7f")
+
 #: how an orbit's kind is drawn (:attr:`explorer.analysis.periodic.PeriodicOrbit.kind`, or degenerate:
 #: not isolated at the map's accuracy): elliptic filled circles, hyperbolic crosses, parabolic
 #: plus signs, degenerate open squares; the colour is the period's
@@ -78,18 +85,17 @@ def periodic_figure(params=None, h=None, *, periods=range(1, 9), seeds=40, cross
                 r = rotation.orbit_rotation(o.points, center.point)
                 if np.any(np.abs(reached - r) < 1e-8):
                     levels.setdefault(round(r * K) / K, (round(r * K), K))
-    colours = ["#000000", "#1f4e9c", "#b2182b", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2",
-               "#17becf", "#7f7f7f"]
+    colour = {K: PERIOD_COLOURS[(K - 1) % len(PERIOD_COLOURS)] for K in orbits}   # the levels' K are among them
     with _rc():
-        fig = _new_figure((9.0, 4.7), dpi=dpi)
-        ax, bx = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.35, 1]})
+        fig = _new_figure(FIGSIZE, dpi=dpi)
+        ax, bx = fig.subplots(1, 2, gridspec_kw={"width_ratios": WIDTH_RATIOS})
         t = np.linspace(0, 2 * np.pi, 400)
         ax.set_facecolor("0.85")            # outside the allowed region: gray (as in Figure 4)
         ax.fill(c1 + r1 * np.cos(t), c2 + r2 * np.sin(t), color="white", lw=0, zorder=0)
         ax.plot(pts[:, 0], pts[:, 1], ",", color="0.55", zorder=1, rasterized=True)
         kinds = set()
         for K, obs in orbits.items():
-            col = colours[(K - 1) % len(colours)]
+            col = colour[K]
             for o in obs:
                 # degenerate: not isolated at the map's accuracy (a point of a resonant curve)
                 kind = "degenerate" if o.degenerate else o.kind
@@ -102,7 +108,7 @@ def periodic_figure(params=None, h=None, *, periods=range(1, 9), seeds=40, cross
         ax.set_ylim(c2 - 1.05 * r2, c2 + 1.05 * r2)
         ax.set_xlabel("$p_1$")
         ax.set_ylabel("$p_2$")
-        period_legend(ax, {K: colours[(K - 1) % len(colours)] for K in orbits}, kinds)
+        period_legend(ax, colour, kinds)
         ax.set_title(rf"$\varphi = \pi$, $\mu = {prm.mu:g}$, $h = {h:g}$: periodic orbits", fontsize=_FS)
         conv = prof.converged
         x = prof.points[:, 0]
@@ -112,11 +118,11 @@ def periodic_figure(params=None, h=None, *, periods=range(1, 9), seeds=40, cross
                 label=f"not converged in {iterates} returns (chaotic, or too few returns)")
         bx.plot(x[conv], prof.rotation[conv], ".", color="k", ms=2.5, label="converged to 1e-10")
         for lev, (m, K) in sorted(levels.items()):
-            bx.axhline(lev, color=colours[(K - 1) % len(colours)], lw=0.6, ls="--")
+            bx.axhline(lev, color=colour[K], lw=0.6, ls="--")
             # at the panel's left edge (the centre's side, where the profile lies above every
             # plateau), below its line, inside the axes
             bx.text(0.01, lev, f"{m:d}/{K}: island chain of period {K}", fontsize=_SMALL, va="top", ha="left",
-                    color=colours[(K - 1) % len(colours)], transform=bx.get_yaxis_transform())
+                    color=colour[K], transform=bx.get_yaxis_transform())
         bx.set_xlabel("$p_1$ on $p_2 = 0$ (from the elliptic fixed point)")
         bx.set_ylabel("rotation number (turns per return)")
         bx.invert_xaxis()
