@@ -17,8 +17,9 @@ if int(os.environ.get("NUMBA_NUM_THREADS", "0") or 0) < 2:
 
 from explorer import model  # noqa: E402
 
-#: the browser modules' shared Chromium and default server (tests/app/browser_session.py)
-pytest_plugins = ("app.browser_session",)
+#: the browser modules' shared Chromium and default server (tests/app/browser_session.py), and the
+#: generic-CPU rerun that README's test command runs beside the suite (tests/generic_cpu.py, --generic-cpu)
+pytest_plugins = ("app.browser_session", "generic_cpu")
 
 
 def pytest_configure(config):

@@ -22,10 +22,9 @@ def test_ci_runs_exactly_the_readme_test_command():
     # machine with PYTHONDONTWRITEBYTECODE set (this one) otherwise compiles numpy, scipy, Bokeh,
     # Panel, matplotlib... from source in every Python process the suite starts (docs/tests.md, "Time")
     assert 'python -m pip install -q uv && uv pip install -q --compile-bytecode -e ".[test]"' in tests
-    assert "&& python -m pytest -q -n 2 --dist loadscope &&" in tests
-    # the second run: the CPU-dependent tests again with Numba compiling for a generic CPU, own cache
-    assert tests.endswith("NUMBA_CPU_NAME=generic NUMBA_CACHE_DIR=.numba-generic "
-                          "python -m pytest -q -n 2 --dist loadscope -m cpu_dependent")
+    # with the CPU-dependent tests run again beside the suite, Numba compiling for a generic CPU in
+    # a cache of its own, at the lowest priority (tests/generic_cpu.py)
+    assert tests.endswith("&& python -m pytest -q -n 2 --dist loadscope --generic-cpu")
     for cmd in (main_job, tests):
         assert cmd.startswith("python3 -m venv .venv && . .venv/bin/activate && ")
     ci_lines = [ln.strip() for ln in (ROOT / ".ci" / "run").read_text().splitlines()]

@@ -1,7 +1,6 @@
 """Early classification ([lyapunov] early_stop): an orbit stops as chaotic when SALI < 1e-8 or
 when <Y> has stayed above 8 over [t/2, t] with t >= 100; the chaotic fraction of every panel of
-the `fraction` preset agrees with the full-T run within its binomial error, in less time."""
-import time
+the `fraction` preset agrees with the full-T run within its binomial error, in fewer steps."""
 
 import numpy as np
 import pytest
@@ -17,18 +16,15 @@ from explorer.io.scene import load_scene
 def test_early_stop_keeps_the_chaotic_fraction_of_the_fraction_preset():
     scene = load_scene("fraction")
     ly = scene.lyapunov
-    full_time = early_time = 0.0
+    full_steps = early_steps = 0
     for i in range(scene.n_panels):
         params, h, _label = scene.panel(i)
         p1, p2, _ = seed_points(scene.seeds, params, h, scene.integration.phi0)
         y0 = model.section_state(params, p1, p2, h, scene.integration.phi0)
-        t0 = time.perf_counter()
         full = lyapunov.indicators(params, states=y0, tmax=ly.time, tol=ly.tol)
-        t1 = time.perf_counter()
         early = lyapunov.indicators(params, states=y0, tmax=ly.time, tol=ly.tol, early_stop=True)
-        t2 = time.perf_counter()
-        full_time += t1 - t0
-        early_time += t2 - t1
+        full_steps += int(full.steps.sum())
+        early_steps += int(early.steps.sum())
         ok = full.status == 0
         f_full, err, n = chaotic_fraction(full.megno, ly.threshold, ok)
         f_early = float(np.mean(early.chaotic(ly.threshold)[ok]))
@@ -37,4 +33,6 @@ def test_early_stop_keeps_the_chaotic_fraction_of_the_fraction_preset():
         stopped = early.early > 0
         assert np.all(early.time[~stopped] == ly.time)
         assert np.mean(full.megno[stopped] > ly.threshold) >= 0.98 if stopped.any() else True
-    assert early_time < full_time
+    # early stop saves work: counted in steps, not in seconds (the generic-CPU rerun runs this
+    # test at the lowest priority beside the suite, tests/generic_cpu.py: its clock says nothing)
+    assert early_steps < full_steps

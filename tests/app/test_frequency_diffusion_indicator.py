@@ -89,7 +89,12 @@ def test_a_sweep_computes_frequency_diffusion_only_when_asked_and_as_the_functio
 LAYER_N = 8
 
 
-def _poll_until(page, cond, timeout=600.0):
+#: the longest a page's computation may take here (s): a bound on a hang, not a speed; long, as
+#: the generic-CPU rerun runs these tests at the lowest priority beside the suite (tests/generic_cpu.py)
+POLL_TIMEOUT = 1800.0
+
+
+def _poll_until(page, cond, timeout=POLL_TIMEOUT):
     import time
 
     t0 = time.time()

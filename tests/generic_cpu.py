@@ -1,0 +1,148 @@
+"""The generic-CPU rerun beside the suite: ``python -m pytest ... --generic-cpu`` (README's test command).
+
+The tests marked ``cpu_dependent`` (tests/conftest.py) are run a second time with Numba compiling
+for a generic x86-64 CPU (``NUMBA_CPU_NAME=generic``, in a kernel cache of its own), so that the
+suite proves their searches, thresholds and classifications on a CPU without AVX or FMA too
+(docs/tests.md, "Across machines").  That rerun is an ordinary pytest run:
+
+    NUMBA_CPU_NAME=generic NUMBA_CACHE_DIR=.numba-generic python -m pytest -q -n 2 --dist loadscope -m cpu_dependent
+
+With ``--generic-cpu`` the suite starts it itself, at its own start, as a child process at the
+lowest CPU priority (niceness :data:`NICENESS`): it then runs on the CPU time the suite leaves
+idle (about a tenth of both cores: tests that wait for a browser, a throttled socket, a server's
+start or a killed process), and the suite's processes, the servers and the browser the timing
+tests measure included, are served first whenever they want a core.  At the suite's end its
+controller waits for the rerun, fails the session if the rerun failed, and prints the rerun's
+output under a header of its own after the suite's last line.  Run after the suite, the rerun
+added about 110 s to README's command on 2 cores; beside it, about 50 (docs/tests.md, "Time").
+
+A test marked ``cpu_dependent`` therefore runs starved of CPU for minutes at a time: none may
+assert on wall-clock time (a budget of seconds, a speed).  Its outcome rests on the numbers only.
+"""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+import pytest
+
+OPTION = "--generic-cpu"
+#: the rerun's environment: Numba's target CPU, and its own on-disk cache (relative to the rootdir)
+ENV = {"NUMBA_CPU_NAME": "generic", "NUMBA_CACHE_DIR": ".numba-generic"}
+#: the rerun's niceness (POSIX: 19 is the lowest priority): it takes only the CPU the suite leaves idle
+NICENESS = 19
+#: the marker of the tests it runs
+MARKER = "cpu_dependent"
+#: the longest the suite's end waits for the rerun (s): a bound on a hang, not a speed goal
+TIMEOUT = 3600.0
+#: pytest's exit code when no test was selected: the paths given hold no cpu_dependent test
+NO_TESTS = 5
+
+_RERUN: dict = {}
+
+
+def pytest_addoption(parser):
+    parser.addoption(OPTION, action="store_true", default=False,
+                     help=f"also run the tests marked {MARKER} with Numba compiling for a generic x86-64 CPU, "
+                          "in a process of the lowest priority beside the suite (tests/generic_cpu.py)")
+
+
+def _argv(config) -> list:
+    """The rerun's command line: this run's paths and workers, the tests marked MARKER only."""
+    mark = config.option.markexpr.strip()
+    argv = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
+            "-m", f"{MARKER} and ({mark})" if mark else MARKER]
+    workers = getattr(config.option, "numprocesses", None)
+    if workers:
+        argv += ["-n", str(workers), "--dist", config.option.dist]
+    return argv + [str(a) for a in config.args]
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_sessionstart(session):
+    """Start the rerun before the suite's own warm-up, so that it compiles its kernels on whatever
+    CPU that warm-up leaves (not on xdist's workers: only the controller, or a run without -n)."""
+    config = session.config
+    if not config.getoption(OPTION) or os.environ.get("PYTEST_XDIST_WORKER"):
+        return
+    env = dict(os.environ, **ENV)
+    env["NUMBA_CACHE_DIR"] = str(config.rootpath / ENV["NUMBA_CACHE_DIR"])
+    out = tempfile.TemporaryFile("w+", encoding="utf-8", errors="replace")
+    proc = subprocess.Popen(_argv(config), cwd=config.rootpath, env=env, stdout=out, stderr=subprocess.STDOUT,
+                            stdin=subprocess.DEVNULL, start_new_session=True)
+    # (set from here, right after it starts: the child spends its first fraction of a second
+    # importing pytest, before it starts any process of its own, which inherit the niceness)
+    if hasattr(os, "setpriority"):
+        os.setpriority(os.PRIO_PROCESS, proc.pid, NICENESS)
+    _RERUN.update(proc=proc, out=out, started=time.perf_counter(), argv=_argv(config))
+
+
+def _stop(proc) -> None:
+    """End the rerun and every process it started (its own session)."""
+    if proc.poll() is None:
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)
+        except (ProcessLookupError, PermissionError):
+            proc.kill()
+        proc.wait()
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_sessionfinish(session, exitstatus):
+    """Wait for the rerun (stop it if the suite was interrupted) and fail the session if it failed."""
+    proc = _RERUN.get("proc")
+    if proc is None:
+        return
+    if exitstatus == pytest.ExitCode.INTERRUPTED:
+        _stop(proc)
+        _RERUN["code"] = "stopped: the suite was interrupted"
+        return
+    waited = time.perf_counter()
+    try:
+        proc.wait(TIMEOUT)
+    except subprocess.TimeoutExpired:
+        _stop(proc)
+        _RERUN["code"] = f"stopped after {TIMEOUT:.0f} s"
+        session.exitstatus = pytest.ExitCode.TESTS_FAILED
+        return
+    now = time.perf_counter()
+    _RERUN.update(code=proc.returncode, waited=now - waited, took=now - _RERUN["started"])
+    if proc.returncode not in (0, NO_TESTS) and session.exitstatus == pytest.ExitCode.OK:
+        session.exitstatus = pytest.ExitCode.TESTS_FAILED
+
+
+def _report(config) -> None:
+    """The rerun's output under a header, and its exit code: after the suite's own last line, so
+    that a run's last lines say how the rerun ended."""
+    tr = config.pluginmanager.get_plugin("terminalreporter")
+    if tr is None:
+        return
+    code = _RERUN.get("code")
+    env = " ".join(f"{k}={v}" for k, v in ENV.items())
+    tr.write_sep("=", f"generic-CPU rerun ({env} {' '.join(_RERUN['argv'][1:])})")
+    out = _RERUN["out"]
+    out.seek(0)
+    tr.write(out.read())
+    if isinstance(code, int):
+        tr.write_line(f"generic-CPU rerun: exit code {code}, {_RERUN['took']:.1f} s from the suite's start, "
+                      f"{_RERUN['waited']:.1f} s of them after the suite's end")
+    else:
+        tr.write_line(f"generic-CPU rerun: {code}")
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_unconfigure(config):
+    """Report the rerun; an internal error or a crash of the session still ends it."""
+    proc = _RERUN.get("proc")
+    if proc is None:
+        return
+    _stop(proc)
+    if "code" not in _RERUN:
+        _RERUN["code"] = "stopped: the session ended before it"
+    _report(config)
+    _RERUN["out"].close()
+    _RERUN.clear()

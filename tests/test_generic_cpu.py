@@ -1,0 +1,63 @@
+"""README's test command runs the tests marked cpu_dependent a second time, for a generic CPU, beside
+the suite (tests/generic_cpu.py, ``--generic-cpu``): that rerun must run those tests and only them,
+with Numba's generic target and a cache of its own, at the lowest priority, and a failure in it
+must fail the command.  Proved on a throwaway suite of three tests in a pytest of its own."""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import generic_cpu
+import pytest
+
+TESTS = Path(__file__).resolve().parent
+
+SUITE = '''
+import os, pytest
+
+def _record(name):
+    with open(os.environ["RECORD"], "a") as f:
+        f.write(f"{name} {os.environ.get('NUMBA_CPU_NAME', '-')} {os.environ.get('NUMBA_CACHE_DIR', '-')} "
+                f"{os.getpriority(os.PRIO_PROCESS, 0)}\\n")
+
+@pytest.mark.cpu_dependent
+def test_marked():
+    _record("marked")
+    assert not (os.environ.get("FAIL_ON_GENERIC") and os.environ.get("NUMBA_CPU_NAME") == "generic")
+
+def test_not_marked():
+    _record("not_marked")
+'''
+
+
+def _run(tmp_path, fail_on_generic):
+    (tmp_path / "conftest.py").write_text('pytest_plugins = ("generic_cpu",)\n')
+    (tmp_path / "pytest.ini").write_text("[pytest]\nmarkers =\n    cpu_dependent: marked\n")
+    (tmp_path / "test_throwaway.py").write_text(SUITE)
+    record = tmp_path / "record.txt"
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTEST", "NUMBA_CPU"))}
+    env.update(PYTHONPATH=str(TESTS), RECORD=str(record), FAIL_ON_GENERIC="1" if fail_on_generic else "")
+    r = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--generic-cpu"],
+                       cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300)
+    return r, sorted(record.read_text().splitlines())
+
+
+@pytest.mark.skipif(not hasattr(os, "setpriority"), reason="niceness is POSIX")
+def test_the_rerun_runs_the_marked_tests_for_the_generic_cpu_at_the_lowest_priority(tmp_path):
+    r, runs = _run(tmp_path, fail_on_generic=False)
+    assert r.returncode == 0, r.stdout + r.stderr
+    own = os.getpriority(os.PRIO_PROCESS, 0)
+    cache = str(tmp_path / generic_cpu.ENV["NUMBA_CACHE_DIR"])
+    assert runs == sorted([f"marked - - {own}", f"not_marked - - {own}",
+                           f"marked generic {cache} {max(own, generic_cpu.NICENESS)}"]), runs
+    assert "generic-CPU rerun (NUMBA_CPU_NAME=generic" in r.stdout and "generic-CPU rerun: exit code 0" in r.stdout
+
+
+def test_a_marked_test_failing_only_for_the_generic_cpu_fails_the_command(tmp_path):
+    r, runs = _run(tmp_path, fail_on_generic=True)
+    assert r.returncode == pytest.ExitCode.TESTS_FAILED, r.stdout + r.stderr
+    suite, rerun = r.stdout.split("generic-CPU rerun (", 1)
+    assert "2 passed" in suite and "1 failed" in rerun and "test_marked" in rerun
+    assert "generic-CPU rerun: exit code 1" in rerun
