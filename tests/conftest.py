@@ -132,7 +132,7 @@ WARM_BATCH = 40
 #:   batch; were they not, it would compile them once more, which costs time, not correctness),
 #:   then the Taylor indicators here: 34-35 s in all, where the orbit alone first and then two
 #:   processes took 40-42 s (cold, on an idle machine).
-#: - the generic-CPU rerun (``-m cpu_dependent``, README's second pytest): its tests run only
+#: - the generic-CPU rerun (``-m cpu_dependent``, tests/generic_cpu.py): its tests run only
 #:   Taylor paths (a run of them with no warm-up compiled no DOP853 or splitting kernel), so the
 #:   taylor orbit alone first, then the rest in two processes: 24-27 s against 32.
 WARM_PLAN = {
