@@ -275,10 +275,14 @@ def indicators(system, y0, *, tmax: float = DEFAULT_TIME, method: str | None = N
     if early_stop and method not in EARLY_STOP_METHODS:
         raise ParameterError(f"early_stop needs method {' or '.join(repr(n) for n in EARLY_STOP_METHODS)}; "
                              f"got method {method!r}")
+    # writable C-contiguous copies, whatever was given: numba compiles a kernel once per kind of
+    # array, read-only or not, and a broadcast of an (N, 5) array is a read-only view, which gave
+    # the default vectors a compiled kernel of their own beside that of vectors passed in (and of
+    # the lane tests' arrays: about 7 s of compiling each, tests/integrate/test_tangent_lanes.py)
     V0 = deviation_vector(P, Y0) if v0 is None else np.atleast_2d(np.asarray(v0, float))
-    V0 = np.ascontiguousarray(np.broadcast_to(V0, Y0.shape), dtype=np.float64)
+    V0 = np.array(np.broadcast_to(V0, Y0.shape), dtype=np.float64, order="C")
     W0 = second_deviation_vector(P, Y0) if w0 is None else np.atleast_2d(np.asarray(w0, float))
-    W0 = np.ascontiguousarray(np.broadcast_to(W0, Y0.shape), dtype=np.float64)
+    W0 = np.array(np.broadcast_to(W0, Y0.shape), dtype=np.float64, order="C")
     history = validation.fits_in_memory("history", history, Y0.shape[0] * table.N_RES * 8 + 8,
                                         f"a row of {table.N_RES} float64 per orbit and history point")
     early_stop = bool(early_stop)
