@@ -21,12 +21,15 @@ assert on wall-clock time (a budget of seconds, a speed).  Its outcome rests on 
 """
 from __future__ import annotations
 
+import fnmatch
+import functools
 import os
 import signal
 import subprocess
 import sys
 import tempfile
 import time
+from pathlib import Path
 
 import pytest
 
@@ -51,15 +54,47 @@ def pytest_addoption(parser):
                           "in a process of the lowest priority beside the suite (tests/generic_cpu.py)")
 
 
-def _argv(config) -> list:
-    """The rerun's command line: this run's paths and workers, the tests marked MARKER only."""
+@functools.cache
+def _names_the_marker(path: Path) -> bool:
+    return MARKER in path.read_text(encoding="utf-8", errors="replace")
+
+
+def _marked_files(config) -> list:
+    """This run's paths, narrowed to the test files that name MARKER: the rerun collects only these
+    (collecting all the suite's modules, to deselect all but 93 of 3310 tests, took about 5
+    CPU-s in each of its workers).  A test is marked in its own file, by a decorator or
+    ``pytestmark``; :func:`pytest_collection_modifyitems` holds every run to that."""
+    patterns = config.getini("python_files")
+    out = []
+    for arg in config.args:
+        path = Path(str(arg).split("::")[0])
+        if path.is_file():
+            files = [path]
+        else:
+            files = sorted(f for f in path.rglob("*.py") if any(fnmatch.fnmatch(f.name, p) for p in patterns))
+        out += [str(arg) if path.is_file() else str(f) for f in files if _names_the_marker(f)]
+    return out
+
+
+def _argv(config, files) -> list:
+    """The rerun's command line: the files given, this run's workers, the tests marked MARKER only."""
     mark = config.option.markexpr.strip()
     argv = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
             "-m", f"{MARKER} and ({mark})" if mark else MARKER]
     workers = getattr(config.option, "numprocesses", None)
     if workers:
         argv += ["-n", str(workers), "--dist", config.option.dist]
-    return argv + [str(a) for a in config.args]
+    return argv + files
+
+
+def pytest_collection_modifyitems(config, items):
+    """Every test marked MARKER is in a file that names it, where the rerun looks for it (a mark
+    given by a hook elsewhere would be missed by the rerun without a word)."""
+    missed = sorted({str(item.path) for item in items
+                     if item.get_closest_marker(MARKER) is not None and not _names_the_marker(Path(item.path))})
+    if missed:
+        raise pytest.UsageError(f"tests marked {MARKER} outside a file that names the marker (the generic-CPU "
+                                f"rerun, tests/generic_cpu.py, would not run them): {missed}")
 
 
 @pytest.hookimpl(tryfirst=True)
@@ -69,6 +104,10 @@ def pytest_sessionstart(session):
     config = session.config
     if not config.getoption(OPTION) or os.environ.get("PYTEST_XDIST_WORKER"):
         return
+    files = _marked_files(config)
+    if not files:
+        _RERUN.update(code="not run: no file under the paths given names the marker")
+        return
     env = dict(os.environ, **ENV)
     env["NUMBA_CACHE_DIR"] = str(config.rootpath / ENV["NUMBA_CACHE_DIR"])
     out = tempfile.TemporaryFile("w+", encoding="utf-8", errors="replace")
@@ -77,13 +116,14 @@ def pytest_sessionstart(session):
     # only against the processes of its session (in a session of its own, the rerun took half the
     # CPU: the suite's warm-up 80 s against 35)
     group = {"process_group": 0} if sys.version_info >= (3, 11) else {"preexec_fn": os.setpgrp}
-    proc = subprocess.Popen(_argv(config), cwd=config.rootpath, env=env, stdout=out, stderr=subprocess.STDOUT,
+    argv = _argv(config, files)
+    proc = subprocess.Popen(argv, cwd=config.rootpath, env=env, stdout=out, stderr=subprocess.STDOUT,
                             stdin=subprocess.DEVNULL, **group)
     # (set from here, right after it starts: the child spends its first fraction of a second
     # importing pytest, before it starts any process of its own, which inherit the niceness)
     if hasattr(os, "setpriority"):
         os.setpriority(os.PRIO_PROCESS, proc.pid, NICENESS)
-    _RERUN.update(proc=proc, out=out, started=time.perf_counter(), argv=_argv(config))
+    _RERUN.update(proc=proc, out=out, started=time.perf_counter(), argv=argv)
 
 
 def _stop(proc) -> None:
@@ -128,7 +168,10 @@ def _report(config) -> None:
         return
     code = _RERUN.get("code")
     env = " ".join(f"{k}={v}" for k, v in ENV.items())
-    tr.write_sep("=", f"generic-CPU rerun ({env} {' '.join(_RERUN['argv'][1:])})")
+    argv = _RERUN["argv"]
+    files = sum(1 for a in argv if a.endswith(".py") or ".py::" in a)
+    tr.write_sep("=", f"generic-CPU rerun ({env} {' '.join(a for a in argv[1:] if not a.endswith('.py'))}, "
+                      f"{files} test files)")
     out = _RERUN["out"]
     out.seek(0)
     tr.write(out.read())
@@ -144,6 +187,9 @@ def pytest_unconfigure(config):
     """Report the rerun; an internal error or a crash of the session still ends it."""
     proc = _RERUN.get("proc")
     if proc is None:
+        tr = config.pluginmanager.get_plugin("terminalreporter")
+        if "code" in _RERUN and tr is not None:
+            tr.write_line(f"generic-CPU rerun: {_RERUN.pop('code')}")
         return
     _stop(proc)
     if "code" not in _RERUN:

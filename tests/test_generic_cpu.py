@@ -32,16 +32,28 @@ def test_not_marked():
 '''
 
 
-def _run(tmp_path, fail_on_generic):
-    (tmp_path / "conftest.py").write_text('pytest_plugins = ("generic_cpu",)\n')
+#: a file with no marked test: the rerun must not even import it (it collects the files that name the marker)
+UNMARKED = """
+import os
+with open(os.environ["RECORD"], "a") as f:
+    f.write(f"imported {os.environ.get('NUMBA_CPU_NAME', '-')}\\n")
+
+def test_elsewhere():
+    pass
+"""
+
+
+def _run(tmp_path, fail_on_generic, conftest='pytest_plugins = ("generic_cpu",)\n'):
+    (tmp_path / "conftest.py").write_text(conftest)
     (tmp_path / "pytest.ini").write_text("[pytest]\nmarkers =\n    cpu_dependent: marked\n")
     (tmp_path / "test_throwaway.py").write_text(SUITE)
+    (tmp_path / "test_unmarked.py").write_text(UNMARKED)
     record = tmp_path / "record.txt"
     env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTEST", "NUMBA_CPU", "NUMBA_CACHE"))}
     env.update(PYTHONPATH=str(TESTS), RECORD=str(record), FAIL_ON_GENERIC="1" if fail_on_generic else "")
     r = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--generic-cpu"],
                        cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300)
-    return r, sorted(record.read_text().splitlines())
+    return r, sorted(record.read_text().splitlines()) if record.exists() else []
 
 
 @pytest.mark.skipif(not hasattr(os, "setpriority"), reason="niceness is POSIX")
@@ -51,7 +63,7 @@ def test_the_rerun_runs_the_marked_tests_for_the_generic_cpu_at_the_lowest_prior
     # the rerun in this session (Linux weighs each session as one: a niceness counts only within it)
     own, sid = os.getpriority(os.PRIO_PROCESS, 0), os.getsid(0)
     cache = str(tmp_path / generic_cpu.ENV["NUMBA_CACHE_DIR"])
-    assert runs == sorted([f"marked - - {own} {sid}", f"not_marked - - {own} {sid}",
+    assert runs == sorted([f"marked - - {own} {sid}", f"not_marked - - {own} {sid}", "imported -",
                            f"marked generic {cache} {max(own, generic_cpu.NICENESS)} {sid}"]), runs
     assert "generic-CPU rerun (NUMBA_CPU_NAME=generic" in r.stdout and "generic-CPU rerun: exit code 0" in r.stdout
 
@@ -60,5 +72,17 @@ def test_a_marked_test_failing_only_for_the_generic_cpu_fails_the_command(tmp_pa
     r, runs = _run(tmp_path, fail_on_generic=True)
     assert r.returncode == pytest.ExitCode.TESTS_FAILED, r.stdout + r.stderr
     suite, rerun = r.stdout.split("generic-CPU rerun (", 1)
-    assert "2 passed" in suite and "1 failed" in rerun and "test_marked" in rerun
+    assert "3 passed" in suite and "1 failed" in rerun and "test_marked" in rerun
     assert "generic-CPU rerun: exit code 1" in rerun
+
+
+def test_a_test_marked_from_outside_its_file_is_refused_where_the_rerun_would_miss_it(tmp_path):
+    """The rerun collects the files that name the marker; a mark given by a hook elsewhere (here
+    conftest.py marking test_unmarked.py's test) would escape it, so every run refuses it."""
+    hook = ('import pytest\npytest_plugins = ("generic_cpu",)\n\n'
+            '@pytest.hookimpl(tryfirst=True)\ndef pytest_collection_modifyitems(items):\n'
+            '    for item in items:\n        if item.name == "test_elsewhere":\n'
+            '            item.add_marker("cpu_dependent")\n')
+    r, _runs = _run(tmp_path, fail_on_generic=False, conftest=hook)
+    assert r.returncode == pytest.ExitCode.USAGE_ERROR, r.stdout + r.stderr
+    assert "test_unmarked.py" in r.stderr and "generic-CPU rerun" in r.stderr
