@@ -115,7 +115,8 @@ def pytest_sessionstart(session):
     # of its own: Linux's autogroup scheduling weighs each session as one, and a niceness counts
     # only against the processes of its session (in a session of its own, the rerun took half the
     # CPU: the suite's warm-up 80 s against 35)
-    group = {"process_group": 0} if sys.version_info >= (3, 11) else {"preexec_fn": os.setpgrp}
+    group = ({} if not hasattr(os, "setpgrp") else {"process_group": 0} if sys.version_info >= (3, 11)
+             else {"preexec_fn": os.setpgrp})
     argv = _argv(config, files)
     proc = subprocess.Popen(argv, cwd=config.rootpath, env=env, stdout=out, stderr=subprocess.STDOUT,
                             stdin=subprocess.DEVNULL, **group)
@@ -131,7 +132,7 @@ def _stop(proc) -> None:
     if proc.poll() is None:
         try:
             os.killpg(proc.pid, signal.SIGKILL)
-        except (ProcessLookupError, PermissionError):
+        except (AttributeError, ProcessLookupError, PermissionError):    # (no process groups off POSIX)
             proc.kill()
         proc.wait()
 
