@@ -18,7 +18,7 @@ if int(os.environ.get("NUMBA_NUM_THREADS", "0") or 0) < 2:
 from explorer import model  # noqa: E402
 
 #: the browser modules' shared Chromium and default server (tests/app/browser_session.py), and the
-#: generic-CPU rerun that README's test command runs beside the suite (tests/generic_cpu.py, --generic-cpu)
+#: generic-CPU rerun that README's test command runs beside the suite (tests/generic_cpu.py, --rerun-cpu-dependent)
 pytest_plugins = ("app.browser_session", "generic_cpu")
 
 

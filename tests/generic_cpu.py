@@ -1,20 +1,25 @@
-"""The generic-CPU rerun beside the suite: ``python -m pytest ... --generic-cpu`` (README's test command).
+"""The rerun of the tests marked ``cpu_dependent`` beside the suite (README's test command).
 
 The tests marked ``cpu_dependent`` (tests/conftest.py) are run a second time with Numba compiling
-for a generic x86-64 CPU (``NUMBA_CPU_NAME=generic``, in a kernel cache of its own), so that the
-suite proves their searches, thresholds and classifications on a CPU without AVX or FMA too
-(docs/tests.md, "Across machines").  That rerun is an ordinary pytest run:
+for a generic x86-64 CPU, in a kernel cache of its own, so that the suite proves their searches,
+thresholds and classifications on a CPU without AVX or FMA too (docs/tests.md, "Across
+machines").  README's command asks for it with the rerun's environment::
+
+    python -m pytest -q -n 2 --dist loadscope \
+        --rerun-cpu-dependent "NUMBA_CPU_NAME=generic NUMBA_CACHE_DIR=.numba-generic"
+
+which runs, beside the suite, what was run after it before (the same command, alone)::
 
     NUMBA_CPU_NAME=generic NUMBA_CACHE_DIR=.numba-generic python -m pytest -q -n 2 --dist loadscope -m cpu_dependent
 
-With ``--generic-cpu`` the suite starts it itself, at its own start, as a child process at the
-lowest CPU priority (niceness :data:`NICENESS`): it then runs on the CPU time the suite leaves
-idle (about a tenth of both cores: tests that wait for a browser, a throttled socket, a server's
-start or a killed process), and the suite's processes, the servers and the browser the timing
-tests measure included, are served first whenever they want a core.  At the suite's end its
-controller waits for the rerun, fails the session if the rerun failed, and prints the rerun's
-output under a header of its own after the suite's last line.  Run after the suite, the rerun
-added about 110 s to README's command on 2 cores; beside it, about 50 (docs/tests.md, "Time").
+The suite starts it itself, at its own start, as a child process at the lowest CPU priority
+(niceness :data:`NICENESS`): it then runs on the CPU time the suite leaves idle (about a tenth
+of both cores: tests that wait for a browser, a throttled socket, a server's start or a killed
+process), and the suite's processes, the servers and the browser the timing tests measure
+included, are served first whenever they want a core.  At the suite's end its controller waits
+for the rerun, fails the session if the rerun failed, and prints the rerun's output under a
+header of its own after the suite's last line.  Run after the suite, the rerun added about 110 s
+to README's command on 2 cores; beside it, about 50 (docs/tests.md, "Time").
 
 A test marked ``cpu_dependent`` therefore runs starved of CPU for minutes at a time: none may
 assert on wall-clock time (a budget of seconds, a speed).  Its outcome rests on the numbers only.
@@ -24,6 +29,8 @@ from __future__ import annotations
 import fnmatch
 import functools
 import os
+import re
+import shlex
 import signal
 import subprocess
 import sys
@@ -33,9 +40,10 @@ from pathlib import Path
 
 import pytest
 
-OPTION = "--generic-cpu"
-#: the rerun's environment: Numba's target CPU, and its own on-disk cache (relative to the rootdir)
-ENV = {"NUMBA_CPU_NAME": "generic", "NUMBA_CACHE_DIR": ".numba-generic"}
+#: the option that asks for the rerun; its value: the rerun's environment, ``NAME=VALUE`` assignments
+#: separated by spaces (README: Numba's target CPU and an on-disk cache of its own; a relative path
+#: is the rootdir's, where the rerun runs)
+OPTION = "--rerun-cpu-dependent"
 #: the rerun's niceness (POSIX: 19 is the lowest priority): it takes only the CPU the suite leaves idle
 NICENESS = 19
 #: the marker of the tests it runs
@@ -49,9 +57,21 @@ _RERUN: dict = {}
 
 
 def pytest_addoption(parser):
-    parser.addoption(OPTION, action="store_true", default=False,
-                     help=f"also run the tests marked {MARKER} with Numba compiling for a generic x86-64 CPU, "
-                          "in a process of the lowest priority beside the suite (tests/generic_cpu.py)")
+    parser.addoption(OPTION, metavar="ASSIGNMENTS", default=None,
+                     help=f"also run the tests marked {MARKER}, beside the suite at the lowest CPU priority, with "
+                          'these environment variables, e.g. "NUMBA_CPU_NAME=generic NUMBA_CACHE_DIR=.numba-generic" '
+                          "(tests/generic_cpu.py)")
+
+
+def _environment(value: str) -> dict:
+    """The rerun's environment variables from the option's value; a clear error for anything but
+    NAME=VALUE assignments."""
+    words = shlex.split(value)
+    bad = [w for w in words if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*=.*", w)]
+    if not words or bad:
+        raise pytest.UsageError(f"{OPTION} takes NAME=VALUE environment assignments separated by spaces, "
+                                f'e.g. "NUMBA_CPU_NAME=generic NUMBA_CACHE_DIR=.numba-generic"; got {value!r}')
+    return dict(w.split("=", 1) for w in words)
 
 
 @functools.cache
@@ -72,7 +92,7 @@ def _marked_files(config) -> list:
             files = [path]
         else:
             files = sorted(f for f in path.rglob("*.py") if any(fnmatch.fnmatch(f.name, p) for p in patterns))
-        out += [str(arg) if path.is_file() else str(f) for f in files if _names_the_marker(f)]
+        out += [str(arg) if f == path else str(f) for f in files if _names_the_marker(f)]   # (a node id kept)
     return out
 
 
@@ -93,8 +113,8 @@ def pytest_collection_modifyitems(config, items):
     missed = sorted({str(item.path) for item in items
                      if item.get_closest_marker(MARKER) is not None and not _names_the_marker(Path(item.path))})
     if missed:
-        raise pytest.UsageError(f"tests marked {MARKER} outside a file that names the marker (the generic-CPU "
-                                f"rerun, tests/generic_cpu.py, would not run them): {missed}")
+        raise pytest.UsageError(f"tests marked {MARKER} outside a file that names the marker (the rerun of "
+                                f"{OPTION}, tests/generic_cpu.py, would not run them): {missed}")
 
 
 @pytest.hookimpl(tryfirst=True)
@@ -102,14 +122,15 @@ def pytest_sessionstart(session):
     """Start the rerun before the suite's own warm-up, so that it compiles its kernels on whatever
     CPU that warm-up leaves (not on xdist's workers: only the controller, or a run without -n)."""
     config = session.config
-    if not config.getoption(OPTION) or os.environ.get("PYTEST_XDIST_WORKER"):
+    value = config.getoption(OPTION)
+    if value is None or os.environ.get("PYTEST_XDIST_WORKER"):
         return
+    assignments = _environment(value)
+    _RERUN["title"] = f"rerun of the {MARKER} tests with {' '.join(f'{k}={v}' for k, v in assignments.items())}"
     files = _marked_files(config)
     if not files:
-        _RERUN.update(code="not run: no file under the paths given names the marker")
+        _RERUN["status"] = "not run: no file under the paths given names the marker"
         return
-    env = dict(os.environ, **ENV)
-    env["NUMBA_CACHE_DIR"] = str(config.rootpath / ENV["NUMBA_CACHE_DIR"])
     out = tempfile.TemporaryFile("w+", encoding="utf-8", errors="replace")
     # a process group of its own, so that its end ends every process it started, but not a session
     # of its own: Linux's autogroup scheduling weighs each session as one, and a niceness counts
@@ -117,14 +138,13 @@ def pytest_sessionstart(session):
     # CPU: the suite's warm-up 80 s against 35)
     group = ({} if not hasattr(os, "setpgrp") else {"process_group": 0} if sys.version_info >= (3, 11)
              else {"preexec_fn": os.setpgrp})
-    argv = _argv(config, files)
-    proc = subprocess.Popen(argv, cwd=config.rootpath, env=env, stdout=out, stderr=subprocess.STDOUT,
-                            stdin=subprocess.DEVNULL, **group)
+    proc = subprocess.Popen(_argv(config, files), cwd=config.rootpath, env=dict(os.environ, **assignments),
+                            stdout=out, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, **group)
     # (set from here, right after it starts: the child spends its first fraction of a second
     # importing pytest, before it starts any process of its own, which inherit the niceness)
     if hasattr(os, "setpriority"):
         os.setpriority(os.PRIO_PROCESS, proc.pid, NICENESS)
-    _RERUN.update(proc=proc, out=out, started=time.perf_counter(), argv=argv)
+    _RERUN.update(proc=proc, out=out, started=time.perf_counter(), files=len(files))
 
 
 def _stop(proc) -> None:
@@ -145,56 +165,41 @@ def pytest_sessionfinish(session, exitstatus):
         return
     if exitstatus == pytest.ExitCode.INTERRUPTED:
         _stop(proc)
-        _RERUN["code"] = "stopped: the suite was interrupted"
+        _RERUN["status"] = "stopped: the suite was interrupted"
         return
     waited = time.perf_counter()
     try:
         proc.wait(TIMEOUT)
     except subprocess.TimeoutExpired:
         _stop(proc)
-        _RERUN["code"] = f"stopped after {TIMEOUT:.0f} s"
+        _RERUN["status"] = f"stopped after {TIMEOUT:.0f} s"
         session.exitstatus = pytest.ExitCode.TESTS_FAILED
         return
     now = time.perf_counter()
-    _RERUN.update(code=proc.returncode, waited=now - waited, took=now - _RERUN["started"])
+    _RERUN["status"] = (f"exit code {proc.returncode}, {now - _RERUN['started']:.1f} s from the suite's start, "
+                        f"{now - waited:.1f} s of them after the suite's end")
     if proc.returncode not in (0, NO_TESTS) and session.exitstatus == pytest.ExitCode.OK:
         session.exitstatus = pytest.ExitCode.TESTS_FAILED
 
 
-def _report(config) -> None:
-    """The rerun's output under a header, and its exit code: after the suite's own last line, so
-    that a run's last lines say how the rerun ended."""
-    tr = config.pluginmanager.get_plugin("terminalreporter")
-    if tr is None:
-        return
-    code = _RERUN.get("code")
-    env = " ".join(f"{k}={v}" for k, v in ENV.items())
-    argv = _RERUN["argv"]
-    files = sum(1 for a in argv if a.endswith(".py") or ".py::" in a)
-    tr.write_sep("=", f"generic-CPU rerun ({env} {' '.join(a for a in argv[1:] if not a.endswith('.py'))}, "
-                      f"{files} test files)")
-    out = _RERUN["out"]
-    out.seek(0)
-    tr.write(out.read())
-    if isinstance(code, int):
-        tr.write_line(f"generic-CPU rerun: exit code {code}, {_RERUN['took']:.1f} s from the suite's start, "
-                      f"{_RERUN['waited']:.1f} s of them after the suite's end")
-    else:
-        tr.write_line(f"generic-CPU rerun: {code}")
-
-
 @pytest.hookimpl(tryfirst=True)
 def pytest_unconfigure(config):
-    """Report the rerun; an internal error or a crash of the session still ends it."""
-    proc = _RERUN.get("proc")
-    if proc is None:
-        tr = config.pluginmanager.get_plugin("terminalreporter")
-        if "code" in _RERUN and tr is not None:
-            tr.write_line(f"generic-CPU rerun: {_RERUN.pop('code')}")
+    """Report the rerun after the suite's own last line (so that a run's last lines say how it
+    ended): its output under a header, then its status.  An internal error or a crash of the
+    session still ends it."""
+    if "title" not in _RERUN:
         return
-    _stop(proc)
-    if "code" not in _RERUN:
-        _RERUN["code"] = "stopped: the session ended before it"
-    _report(config)
-    _RERUN["out"].close()
+    proc, out = _RERUN.get("proc"), _RERUN.get("out")
+    if proc is not None:
+        _stop(proc)
+    status = _RERUN.get("status", "stopped: the session ended before it")
+    tr = config.pluginmanager.get_plugin("terminalreporter")
+    if tr is not None:
+        if out is not None:
+            tr.write_sep("=", f"{_RERUN['title']} ({_RERUN['files']} test files)")
+            out.seek(0)
+            tr.write(out.read())
+        tr.write_line(f"{_RERUN['title']}: {status}")
+    if out is not None:
+        out.close()
     _RERUN.clear()

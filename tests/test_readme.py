@@ -24,7 +24,8 @@ def test_ci_runs_exactly_the_readme_test_command():
     assert 'python -m pip install -q uv && uv pip install -q --compile-bytecode -e ".[test]"' in tests
     # with the CPU-dependent tests run again beside the suite, Numba compiling for a generic CPU in
     # a cache of its own, at the lowest priority (tests/generic_cpu.py)
-    assert tests.endswith("&& python -m pytest -q -n 2 --dist loadscope --generic-cpu")
+    assert tests.endswith("&& python -m pytest -q -n 2 --dist loadscope --rerun-cpu-dependent "
+                          '"NUMBA_CPU_NAME=generic NUMBA_CACHE_DIR=.numba-generic"')
     for cmd in (main_job, tests):
         assert cmd.startswith("python3 -m venv .venv && . .venv/bin/activate && ")
     ci_lines = [ln.strip() for ln in (ROOT / ".ci" / "run").read_text().splitlines()]
