@@ -188,3 +188,13 @@ def test_the_older_time_options_give_the_same_run_as_tmax_and_say_they_go_away(o
     assert json.loads(out) == json.loads(new) and json.loads(out)["time"] == 5.0
     assert f"{old} is deprecated" in err and "use --tmax" in err
     assert cli.build_parser().parse_args(["trajectory", old, "7"]).tmax == 7.0
+
+
+def test_sweep_backend_dask_without_distributed_says_which_extra_to_install(monkeypatch, tmp_path, capsys):
+    """A plain `pip install .` has no dask: `sweep --backend dask` then exits 2 with one line that
+    names the extra (pyproject's `explorer[dask]`), not a traceback."""
+    monkeypatch.setitem(sys.modules, "dask.distributed", None)           # (an import of it fails)
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run_cli(["sweep", "--backend", "dask", "--jobs", "2"], capsys)
+    assert code == 2 and "explorer[dask]" in err and "Traceback" not in err, err
+    assert not [f for f in tmp_path.rglob("*") if f.is_file()]           # and no result half-written
