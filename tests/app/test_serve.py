@@ -814,8 +814,6 @@ def test_explore_in_a_notebook_renders_and_streams_the_clicked_orbit(monkeypatch
         assert len(page.crossings.data["t"]) == 0 and page.url_query()["orbits"] == ""
         with pytest.raises(ParameterError, match="a1"):
             ex.explore(a1=-1.0)
-        with pytest.warns(DeprecationWarning, match="n_crossings"), pytest.raises(ParameterError, match="a1"):
-            ex.explore(a1=-1.0, crossings=5)        # the older name still reaches the settings, warned
     finally:
         app.close()
 

@@ -396,7 +396,7 @@ class RotationProfile:
                                                          turns, status)]}
 
 
-@system_first(settings=("phi0", "tol"), moved=("n",))
+@system_first(settings=("phi0", "tol"))
 def rotation_profile(system, start, stop, *, n, center=None, iterates=DEFAULT_ITERATES, conv_tol=CONVERGED_TOL,
                      threads=None) -> RotationProfile:
     """Rotation numbers of n orbits started on the segment from ``start`` to ``stop``.

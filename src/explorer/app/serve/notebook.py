@@ -49,7 +49,7 @@ def explore(scene=None, *, panel: int = 0, export_dir=None, h: float | None = No
             tol: float | None = None, dt: float | None = None, n_crossings: int | None = None,
             a1: float | None = None, a2: float | None = None, b: float | None = None, lam: float | None = None,
             chi: float | None = None, zeta: float | None = None, mu: float | None = None, xi: float | None = None,
-            eta: float | None = None, crossings: int | None = None) -> Explorer:
+            eta: float | None = None) -> Explorer:
     """The explorer as a Panel object for a notebook cell::
 
         import panel as pn, explorer as ex
@@ -59,15 +59,9 @@ def explore(scene=None, *, panel: int = 0, export_dir=None, h: float | None = No
     ``scene``: a scene (TOML path, preset name or :class:`explorer.Scene`; None: Figure 4 with
     mu = 0, h = 2) and its ``panel``; on top of it, each given: the model parameters (``a1`` ...
     ``eta``, docs/model.md), the energy ``h``, the integrator ``method``, ``tol``, ``dt`` and the
-    crossings per orbit ``n_crossings`` (validated: ParameterError).  ``crossings=`` is the older
-    name of ``n_crossings`` (a DeprecationWarning).  ``export_dir``: where the page's *Export
+    crossings per orbit ``n_crossings`` (validated: ParameterError).  ``export_dir``: where the page's *Export
     scene* button writes (None: download only).  What the page does: docs/commands/serve.md.
     """
-    from explorer.analysis.section_map import deprecated
-
-    if crossings is not None:
-        deprecated("explore(..., crossings=)", "n_crossings=")
-        n_crossings = crossings if n_crossings is None else n_crossings
     given = {"a1": a1, "a2": a2, "b": b, "lam": lam, "chi": chi, "zeta": zeta, "mu": mu, "xi": xi, "eta": eta}
     given.update(h=h, method=method, tol=tol, dt=dt, crossings=n_crossings)
     base, label = settings_for(scene, panel, **{k: v for k, v in given.items() if v is not None})
