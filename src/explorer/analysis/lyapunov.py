@@ -21,7 +21,6 @@ it measures stretching within the dynamics' own invariant manifold.
 """
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass, field
 from typing import overload
@@ -30,12 +29,12 @@ import numpy as np
 
 from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
-from explorer.analysis.section_map import deprecated, is_params, system_first
+from explorer.analysis.section_map import is_params, system_first
 from explorer.integrate import methods
 from explorer.integrate.methods import DEFAULT_DT, DEFAULT_TOL
 from explorer.kernels import STATUS_NAMES, Status
 from explorer.kernels import indicator_table as table
-from explorer.model import ParameterError, validation
+from explorer.model import ParameterError, packed_params, validation
 
 DEFAULT_TIME = 1000.0
 #: the indicators :func:`indicators` can compute (``which``): those of the registry
@@ -169,22 +168,7 @@ class Indicators:
         return Status(int(self.status[i]))
 
 
-def _renamed_time(fn):
-    """``T=`` became ``tmax=`` (one name for the time an orbit runs): still accepted, with a
-    DeprecationWarning."""
-
-    @functools.wraps(fn)
-    def call(*args, **kw):
-        if "T" in kw:
-            deprecated(f"{fn.__name__}(..., T=)", "tmax=")
-            kw["tmax"] = kw.pop("T")
-        return fn(*args, **kw)
-
-    return call
-
-
-@_renamed_time
-@system_first(settings=("phi0", "tol"), moved=("tmax",), defaults={"tol": DEFAULT_TOL}, flow=True)
+@system_first(settings=("phi0", "tol"), defaults={"tol": DEFAULT_TOL}, flow=True)
 def indicators(system, y0, *, tmax: float = DEFAULT_TIME, method: str | None = None, tol: float | None = None,
                dt: float = DEFAULT_DT, history: int = 0, v0=None, max_steps: int = 10**9,
                threads: int | None = None, which=None, early_stop: bool = False,
@@ -260,7 +244,7 @@ def indicators(system, y0, *, tmax: float = DEFAULT_TIME, method: str | None = N
         params, y0 = system.params, system.states(y0)
     method = "taylor" if method is None else method
     tol = DEFAULT_TOL if tol is None else tol
-    P = validation.packed_params(params)
+    P = packed_params(params)
     m = methods.get(method)
     T = validation.real("tmax", tmax, 0.0, lo_open=True)
     Y0 = np.ascontiguousarray(np.atleast_2d(np.asarray(y0, dtype=np.float64)))

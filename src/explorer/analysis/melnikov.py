@@ -84,7 +84,7 @@ import numpy as np
 
 from explorer import model
 from explorer.integrate.methods import MAP_TOL
-from explorer.model import ParameterError, exact, params_array
+from explorer.model import ParameterError, exact, packed_params
 
 #: mu values of the measured-splitting table
 DEFAULT_MUS = (1e-4, 3e-4, 1e-3, 3e-3)
@@ -101,7 +101,7 @@ UR24_RTOL = 1e-6
 # ---------------------------------------------------------------- bracket (R8)
 def F0(params, y):
     """Chaplygin's integral (R6) F0 = M + |p - s|^2/(2 lam) on states y (..., 5)."""
-    P = params_array(params)
+    P = packed_params(params)
     y = np.asarray(y, dtype=np.float64)
     return y[..., model.M] + ((y[..., model.P1] - P[model.CHI]) ** 2
                               + (y[..., model.P2] - P[model.ZETA]) ** 2) / (2.0 * P[model.LAM])
@@ -109,14 +109,14 @@ def F0(params, y):
 
 def F0_seed_typo(params, y):
     """The seed's ``F0 = M^2 + |p|^2/(2 lam)`` (text before ur24): NOT an integral of R6."""
-    P = params_array(params)
+    P = packed_params(params)
     y = np.asarray(y, dtype=np.float64)
     return y[..., model.M] ** 2 + (y[..., model.P1] ** 2 + y[..., model.P2] ** 2) / (2.0 * P[model.LAM])
 
 
 def grad_F0(params, y, *, seed_typo=False):
     """Gradient of F0 (or of the seed's M^2 + ...) with respect to (p1, p2, M, g1, g2)."""
-    P = params_array(params)
+    P = packed_params(params)
     y = np.asarray(y, dtype=np.float64)
     g = np.zeros_like(y)
     g[..., model.P1] = (y[..., model.P1] - (0.0 if seed_typo else P[model.CHI])) / P[model.LAM]
@@ -128,7 +128,7 @@ def grad_F0(params, y, *, seed_typo=False):
 def bracket_F0_H1(params, y):
     """R8: {F0, H1} = -(p1 sin phi + p2 cos phi)/lam - (xi cos phi - eta sin phi), (g1, g2) =
     (sin phi, cos phi).  Written for chi = zeta = 0 (general s: replace p by p - s)."""
-    P = params_array(params)
+    P = packed_params(params)
     y = np.asarray(y, dtype=np.float64)
     p1 = y[..., model.P1] - P[model.CHI]
     p2 = y[..., model.P2] - P[model.ZETA]

@@ -30,8 +30,6 @@ import functools
 import inspect
 import math
 import numbers
-import os
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -42,11 +40,11 @@ from explorer.integrate.methods import MAP_TOL, MAX_TOL, MIN_TOL
 from explorer.integrate.tangent import return_map_taylor
 from explorer.kernels import STATUS_CANCELLED, STATUS_DONE, STATUS_NAMES
 from explorer.kernels.taylor import order_for_tolerance
-from explorer.model import ParameterError, validation
+from explorer.model import ParameterError, validation, with_value
 from explorer.model.equations import rhs
 
 __all__ = ["DEFAULT_TOL", "MAP_SETTINGS", "MAX_STEPS", "RETURN_TMAX", "MapResult", "SectionMap", "as_system",
-           "deprecated", "is_params", "keywords_moved", "orbit_first", "system_first"]
+           "is_params", "system_first"]
 
 #: Taylor tolerance of the section map in Newton's method and its relatives (fixed points,
 #: periodic orbits, continuation, separatrices): the map is evaluated a few hundred times,
@@ -100,7 +98,7 @@ class SectionMap:
     def with_value(self, name: str, value) -> SectionMap:
         """This map with one model parameter, or the energy (``name == "h"``), set to ``value``
         (its ``phi0``, ``tol`` and ``tmax`` kept): a step of a continuation."""
-        prm, h = validation.with_value(self.params, self.h, name, value)
+        prm, h = with_value(self.params, self.h, name, value)
         return SectionMap(prm, h, phi0=self.phi0, tol=self.tol, tmax=self.tmax)
 
     def states(self, points, direction: int = 1) -> np.ndarray:
@@ -160,7 +158,7 @@ class SectionMap:
         """The same section map with the model parameter ``name`` (default :attr:`parameter`;
         or "h") set to ``value`` (the map protocol's continuation)."""
         name = self.parameter if name is None else name
-        prm, h = validation.with_value(self.params, self.h, name, value)
+        prm, h = with_value(self.params, self.h, name, value)
         return SectionMap(prm, h, phi0=self.phi0, tol=self.tol, tmax=self.tmax)
 
     @property
@@ -221,8 +219,7 @@ def as_system(name: str, system, args: tuple, kw: dict, settings: tuple = MAP_SE
     - with ``flow`` (a function that also integrates the flow from full states), the model
       parameters alone with the keyword ``states=`` are the flow itself: passed through with the
       states as the points, the settings left to the function.  No positional argument changes
-      meaning with the type of another: after ``params`` the next positional is always h.  The
-      older form ``params, states`` (states by position) still works, with a DeprecationWarning.
+      meaning with the type of another: after ``params`` the next positional is always h.
     """
     if flow:
         states = kw.pop("states", None)
@@ -235,9 +232,8 @@ def as_system(name: str, system, args: tuple, kw: dict, settings: tuple = MAP_SE
                                      "give either states= or h and points")
             return system, (states,), kw
         if is_params(system) and "h" not in kw and args and not isinstance(args[0], numbers.Real):
-            deprecated(f"{name}(params, states, ...) with the states by position",
-                       f"{name}(params, states=states, ...)")
-            return system, args, kw
+            raise ParameterError(f"{name}(params, ...): the next positional argument is the energy h; give the "
+                                 f"flow's full states as states= ({name}(params, states=...))")
     if is_params(system):
         if "h" in kw:
             h = kw.pop("h")
@@ -258,38 +254,13 @@ def as_system(name: str, system, args: tuple, kw: dict, settings: tuple = MAP_SE
     return system, args, kw
 
 
-def _positional_count(fn) -> int:
-    """Positional parameters of ``fn`` after its first (the system)."""
-    kinds = (inspect.Parameter.POSITIONAL_ONLY, inspect.Parameter.POSITIONAL_OR_KEYWORD)
-    return sum(p.kind in kinds for p in inspect.signature(fn).parameters.values()) - 1
-
-
-def keywords_moved(name: str, n_positional: int, moved: tuple, args: tuple, kw: dict):
-    """``(args, kw)`` with the positional arguments past the first ``n_positional`` given to the
-    keywords ``moved`` in order (a DeprecationWarning: counts, times and tolerances after the
-    points are keyword-only)."""
-    if len(args) <= n_positional:
-        return args, kw
-    extra = args[n_positional:]
-    if len(extra) > len(moved):
-        raise TypeError(f"{name}() takes {n_positional + 1} positional arguments, got {len(args) + 1}")
-    names = moved[:len(extra)]
-    twice = [k for k in names if k in kw]
-    if twice:
-        raise TypeError(f"{name}() got multiple values for {', '.join(twice)}")
-    deprecated(f"{name}(..., {', '.join(names)}) given by position",
-               f"{', '.join(k + '=' for k in names)} (keyword-only)")
-    return args[:n_positional], dict(kw, **dict(zip(names, extra)))
-
-
-def system_first(fn=None, *, settings: tuple = MAP_SETTINGS, moved: tuple = (), defaults=None, flow: bool = False):
+def system_first(fn=None, *, settings: tuple = MAP_SETTINGS, defaults=None, flow: bool = False):
     """Decorate an analysis ``fn(system, *args, **kw)`` written for a map object (a
     :class:`SectionMap`, or another map with the same protocol) so that it also takes the
     system as ``params, h`` (with ``phi0=``, ``tol=``, ``tmax=`` among ``settings`` as
     keywords): :func:`as_system`, the one rule.  ``settings``: the map's settings this function
     uses (default all three; an analysis with a time budget of its own leaves out ``"tmax"``).
-    ``moved``: keyword-only parameters that older calls gave by position (after the points):
-    still accepted so, with a DeprecationWarning.  ``defaults``: settings of the map built from
+    ``defaults``: settings of the map built from
     ``params, h`` when not given, where this function's purpose has its own default (the
     tolerance of crossings and indicators, :data:`~explorer.integrate.methods.DEFAULT_TOL`).
     ``flow``: ``params`` with ``states=`` full states is the flow (:func:`as_system`).
@@ -298,12 +269,9 @@ def system_first(fn=None, *, settings: tuple = MAP_SETTINGS, moved: tuple = (), 
     settings added as keywords for the ``params, h`` form."""
 
     def wrap(fn):
-        n = _positional_count(fn)
-
         @functools.wraps(fn)
         def call(system, *args, **kw):
             system, args, kw = as_system(fn.__name__, system, args, kw, settings, defaults, flow)
-            args, kw = keywords_moved(fn.__name__, n, moved, args, kw)
             return fn(system, *args, **kw)
 
         sig = inspect.signature(fn)
@@ -324,52 +292,3 @@ def system_first(fn=None, *, settings: tuple = MAP_SETTINGS, moved: tuple = (), 
         return call
 
     return wrap if fn is None else wrap(fn)
-
-
-def _is_orbit(x) -> bool:
-    """An orbit, or a point (p1, p2) to find one from: the first argument of the older forms."""
-    return (isinstance(x, (tuple, list)) or (isinstance(x, np.ndarray) and x.shape == (2,))
-            or (hasattr(x, "points") and hasattr(x, "period")) or (hasattr(x, "jacobian") and hasattr(x, "point")))
-
-
-def orbit_first(fn):
-    """Keep the older forms ``fn(orbit)``, ``fn(orbit, params, h)`` and ``fn(orbit, smap)`` (the
-    orbit first, its params, h and phi0 by default) working, with a DeprecationWarning: they
-    become ``fn(system, orbit, ...)``."""
-
-    @functools.wraps(fn)
-    def call(*args, **kw):
-        if not args or not _is_orbit(args[0]):
-            return fn(*args, **kw)
-        orbit, rest = args[0], list(args[1:])
-        deprecated(f"{fn.__name__}(orbit, ...)", f"{fn.__name__}(system, orbit, ...) with a SectionMap or params, h")
-        if rest and isinstance(rest[0], SectionMap):
-            return fn(rest[0], orbit, **kw)
-        params = rest.pop(0) if rest else kw.pop("params", None)
-        h = rest.pop(0) if rest else kw.pop("h", None)
-        params = getattr(orbit, "params", None) if params is None else params
-        h = getattr(orbit, "h", None) if h is None else h
-        if params is None or h is None or not math.isfinite(float(h)):
-            raise ParameterError(f"{fn.__name__}: the orbit carries no params, h; give the system first: "
-                                 f"{fn.__name__}(smap, orbit) or {fn.__name__}(params, h, orbit)")
-        if kw.get("phi0") is None:
-            kw["phi0"] = getattr(orbit, "phi0", math.pi)
-        return fn(params, h, orbit, **kw)
-
-    return call
-
-
-def deprecated(old: str, new: str) -> None:
-    """Warn that the call form or name ``old`` goes away in the next release: use ``new``
-    (the list is in docs/api.md, "Deprecated names and forms").  The warning names the first
-    line outside this package (as Python 3.12's ``skip_file_prefixes``): the caller's."""
-    import sys
-
-    package = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + os.sep
-    level, frame = 1, sys._getframe(0)
-    while frame is not None and frame.f_code.co_filename.startswith(package):
-        level, frame = level + 1, frame.f_back
-    warnings.warn(f"{old} is deprecated and will be removed in the next release; use {new}", DeprecationWarning,
-                  stacklevel=level)
-
-

@@ -19,7 +19,6 @@ Methods
 """
 from __future__ import annotations
 
-import functools
 import math
 import numbers
 from dataclasses import dataclass, field
@@ -28,7 +27,7 @@ import numpy as np
 
 from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
-from explorer.analysis.section_map import deprecated, is_params, system_first
+from explorer.analysis.section_map import is_params, system_first
 from explorer.integrate import layout, methods
 from explorer.integrate.methods import (
     ADAPTIVE_METHODS,
@@ -40,13 +39,13 @@ from explorer.integrate.methods import (
     SPLIT_METHODS,
 )
 from explorer.kernels import STATUS_NAMES, Status
-from explorer.model import ParameterError, validation
+from explorer.model import ParameterError, packed_params, validation
 
 __all__ = ["ADAPTIVE_METHODS", "DEFAULT_BLOCK", "DEFAULT_DT", "DEFAULT_MAX_STEPS", "DEFAULT_TOL", "MAX_TOL",
            "METHODS", "MIN_TOL", "SPLIT_METHODS", "CrossingBlock", "Crossings", "Integration", "StreamState",
            "crossing_settings",
-           "crossings", "propagate", "energy_warning", "human_bytes", "iter_crossings", "iter_section_crossings",
-           "max_energy_error", "result_bytes", "section_crossings"]
+           "crossings", "propagate", "energy_warning", "human_bytes", "iter_crossings",
+           "max_energy_error", "result_bytes"]
 
 DEFAULT_MAX_STEPS = 10**9
 #: a run whose energy error exceeds this fraction of max(|h|, 1) gets a warning: its step
@@ -198,7 +197,7 @@ class _Run:
 
 
 def _validated(params, y0, n_crossings, method, tol, dt, tmax, max_steps, phi0, direction, threads) -> _Run:
-    P = validation.packed_params(params)
+    P = packed_params(params)
     s = Integration(method=method, tol=tol, dt=DEFAULT_DT if dt is None else dt, crossings=n_crossings, tmax=tmax,
                     max_steps=max_steps, phi0=phi0, direction=direction)
     m = methods.get(s.method)
@@ -281,7 +280,7 @@ def _run_block(run: _Run, Y, carry, limits, data, count, status, final, info) ->
         set_num_threads(old_threads)
 
 
-@system_first(settings=("phi0", "tol"), moved=("n_crossings",), defaults={"tol": DEFAULT_TOL}, flow=True)
+@system_first(settings=("phi0", "tol"), defaults={"tol": DEFAULT_TOL}, flow=True)
 def crossings(system, y0, *, n_crossings: int, method: str = "taylor", tol: float = DEFAULT_TOL,
               dt: float | None = None, tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS,
               phi0: float = math.pi, direction: int = 1, threads: int | None = None) -> Crossings:
@@ -394,7 +393,7 @@ class StreamState:
     def initial(cls, params, y0, *, phi0: float = math.pi) -> StreamState:
         """The state of a run from ``y0`` before its first block (where :func:`iter_crossings`
         starts when given no state)."""
-        P = validation.packed_params(params)
+        P = packed_params(params)
         Y0 = np.ascontiguousarray(np.atleast_2d(np.asarray(y0, dtype=np.float64)))
         g1, g2 = model.section_gamma(float(phi0))
         N = Y0.shape[0]
@@ -447,7 +446,7 @@ class CrossingBlock:
         return self.data[i, : self.count[i]]
 
 
-@system_first(settings=("phi0", "tol"), moved=("n_crossings",), defaults={"tol": DEFAULT_TOL}, flow=True)
+@system_first(settings=("phi0", "tol"), defaults={"tol": DEFAULT_TOL}, flow=True)
 def iter_crossings(system, y0, *, n_crossings: int, block: int = DEFAULT_BLOCK, state: StreamState | None = None,
                    method: str = "taylor", tol: float = DEFAULT_TOL, dt: float | None = None,
                    tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS, phi0: float = math.pi,
@@ -494,58 +493,3 @@ def iter_crossings(system, y0, *, n_crossings: int, block: int = DEFAULT_BLOCK, 
         st.finished[idx] = (status != int(Status.DONE)) | (st.done[idx] >= K)
         st.blocks += 1
         yield CrossingBlock(idx, start, data, count, st.copy())
-
-
-def _older_order(fn):
-    """Keep the older order ``fn(params, p1, p2, h, n_crossings, ...)`` (the energy after the
-    points) working, with a DeprecationWarning: it becomes ``fn(params, h, p1, p2,
-    n_crossings=...)``.  Told apart from the system-first form ``(params, h, p1, p2)`` by
-    the count of positional arguments, or, with three after ``params``, by the first of them
-    being the points rather than the number h."""
-
-    @functools.wraps(fn)
-    def call(system, *args, **kw):
-        # (params, h, p1, p2, n) never existed: four after params are the older order
-        if is_params(system) and "h" not in kw and (
-                len(args) == 4 or (len(args) == 3 and not isinstance(args[0], numbers.Real))):
-            p1, p2, h, *n = args
-            deprecated(f"{fn.__name__}(params, p1, p2, h, n_crossings)",
-                       f"{fn.__name__}(params, h, p1, p2, n_crossings=...) or {fn.__name__}(smap, p1, p2, "
-                       "n_crossings=...)")
-            args, kw = (h, p1, p2), dict(kw, **({"n_crossings": n[0]} if n else {}))
-        return fn(system, *args, **kw)
-
-    return call
-
-
-def _points(p1, p2) -> np.ndarray:
-    """The section points (N, 2) of the coordinates p1, p2 (broadcast)."""
-    a, b = np.broadcast_arrays(np.atleast_1d(np.asarray(p1, dtype=np.float64)),
-                               np.atleast_1d(np.asarray(p2, dtype=np.float64)))
-    return np.column_stack([a.ravel(), b.ravel()])
-
-
-@_older_order
-@system_first(settings=("phi0", "tol"), moved=("n_crossings",), defaults={"tol": DEFAULT_TOL})
-def section_crossings(system, p1, p2, *, n_crossings: int, method: str = "taylor", dt: float | None = None,
-                      tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS, direction: int = 1,
-                      threads: int | None = None) -> Crossings:
-    """Deprecated name of :func:`crossings` from section points: ``section_crossings(system,
-    p1, p2, n_crossings=K, ...)`` is ``crossings(system, points, n_crossings=K, ...)`` with the
-    points (p1, p2) as an (N, 2) array (the keywords of :func:`crossings`)."""
-    deprecated("section_crossings(system, p1, p2, ...)", "crossings(system, points, n_crossings=...)")
-    return crossings(system, _points(p1, p2), n_crossings=n_crossings, method=method, dt=dt, tmax=tmax,
-                     max_steps=max_steps, direction=direction, threads=threads)
-
-
-@_older_order
-@system_first(settings=("phi0", "tol"), moved=("n_crossings",), defaults={"tol": DEFAULT_TOL})
-def iter_section_crossings(system, p1, p2, *, n_crossings: int, block: int = DEFAULT_BLOCK,
-                           state: StreamState | None = None, method: str = "taylor", dt: float | None = None,
-                           tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS, direction: int = 1,
-                           threads: int | None = None):
-    """Deprecated name of :func:`iter_crossings` from section points (as :func:`section_crossings`)."""
-    deprecated("iter_section_crossings(system, p1, p2, ...)", "iter_crossings(system, points, n_crossings=...)")
-    return iter_crossings(system, _points(p1, p2), n_crossings=n_crossings, block=block, state=state,
-                          method=method, dt=dt, tmax=tmax, max_steps=max_steps, direction=direction,
-                          threads=threads)

@@ -25,7 +25,7 @@ from explorer.app.interrupt import Interrupted
 from explorer.io import store
 from explorer.io.store import stream
 from explorer.kernels import STATUS_NAMES, STATUS_TMAX
-from explorer.model import ParameterError, validation
+from explorer.model import ParameterError, validation, with_value
 
 
 def _panel_points(panel_data):
@@ -54,7 +54,7 @@ def panel_separatrices(scene, i):
         fp = fpm.find_fixed_point(prm, h, (c1, c2), phi0=phi0)
     else:
         start = 0.0 if name == "mu" else scene.sweep_values[0]
-        sprm, sh = validation.with_value(prm, h, name, start)
+        sprm, sh = with_value(prm, h, name, start)
         c1, c2, _r1, _r2 = mdl.allowed_ellipse(sprm, sh, phi0)
         target = scene.sweep_values[i]
         fp = fpm.follow(prm, h, name, start, target, (c1, c2), phi0=phi0)

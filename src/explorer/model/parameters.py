@@ -28,7 +28,7 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
-from explorer.model.validation import ParameterError, magnitude, packed_params
+from explorer.model.validation import ParameterError, magnitude, real
 
 
 @dataclass(frozen=True)
@@ -95,7 +95,8 @@ __all__ = [
     "Params",
     "FIGURE4",
     "FIGURE4_H",
-    "params_array",
+    "packed_params",
+    "with_value",
     "energy",
     "energy_gradient",
     "energy_full",
@@ -181,17 +182,31 @@ FIGURE4 = Params(a1=1.0, a2=0.5, b=2.0, lam=1.0, chi=0.0, zeta=0.0, mu=0.0, xi=0
 FIGURE4_H = 2.0
 
 
+def packed_params(params) -> np.ndarray:
+    """The packed float64 vector (a1, a2, b, lam, chi, zeta, mu, xi, eta) of a parameter set,
+    validated (docs/model.md R3: a1, a2, b > 0, lam != 0, all finite).
+
+    ``params``: a :class:`Params`, a mapping of parameter names (missing ones from Figure 4),
+    or a sequence of 9 numbers.
+    """
+    if isinstance(params, Params):
+        return params.as_array()
+    if isinstance(params, dict):
+        return Params(**params).as_array()
+    return Params.from_array(params).as_array()
 
 
-#: the packed float64 parameter vector of a Params, mapping or sequence (validated)
-params_array = packed_params
-_P = packed_params
+def with_value(params, h: float, name: str, value):
+    """``(params, h)`` with one model parameter or the energy ``h`` (``name == "h"``) replaced."""
+    if name == "h":
+        return params, real("h", value)
+    return params.with_(**{name: real(name, value)}), h
 
 
 def energy(params, y) -> np.ndarray:
     """docs/model.md R3: H = 1/2(p1^2/a1 + p2^2/a2 + M^2/b) - (mu/lam)(p - s, J g) + mu (r, g),
     with (p - s, J g) = (p1 - chi) g2 - (p2 - zeta) g1."""
-    P = _P(params)
+    P = packed_params(params)
     y = np.asarray(y, dtype=np.float64)
     p1, p2, m, g1, g2 = y[..., P1], y[..., P2], y[..., M], y[..., G1], y[..., G2]
     kinetic = 0.5 * (p1 * p1 / P[A1] + p2 * p2 / P[A2] + m * m / P[B])
@@ -202,7 +217,7 @@ def energy(params, y) -> np.ndarray:
 def energy_gradient(params, y) -> np.ndarray:
     """grad H of docs/model.md R3 (analytic), along the last axis of y = (p1, p2, M, g1, g2):
     (p1/a1 - k g2, p2/a2 + k g1, M/b, k (p2 - zeta) + mu xi, -k (p1 - chi) + mu eta), k = mu/lam."""
-    P = _P(params)
+    P = packed_params(params)
     y = np.asarray(y, dtype=np.float64)
     p1, p2, m, g1, g2 = y[..., P1], y[..., P2], y[..., M], y[..., G1], y[..., G2]
     k = P[MU] / P[LAM]
@@ -232,7 +247,7 @@ def rhs(params, y) -> np.ndarray:
     """docs/model.md R3 (numpy twin of :func:`explorer.model.equations.rhs`):
     dp/dt = (M/b) J (p - s) - mu g - lam J A p;  dM/dt = (p - s, J A p) - mu (r, J g);
     dg/dt = (M/b) J g, with J v = (v2, -v1)."""
-    P = _P(params)
+    P = packed_params(params)
     y = np.asarray(y, dtype=np.float64)
     p1, p2, m, g1, g2 = y[..., P1], y[..., P2], y[..., M], y[..., G1], y[..., G2]
     w = m / P[B]
@@ -248,14 +263,14 @@ def rhs(params, y) -> np.ndarray:
 # ---------------------------------------------------------------- integrals (R5, R6)
 def chaplygin_integral(params, y):
     """docs/model.md R5 case 1 (mu = 0): F = 1/2 |p - s|^2 + lam M."""
-    P = _P(params)
+    P = packed_params(params)
     y = np.asarray(y, dtype=np.float64)
     return 0.5 * ((y[..., P1] - P[CHI]) ** 2 + (y[..., P2] - P[ZETA]) ** 2) + P[LAM] * y[..., M]
 
 
 def kozlov_integral(params, y):
     """docs/model.md R5 case 2 (chi = zeta = 0, a1 = a2): F = M^2/(2b) + mu (r, g)."""
-    P = _P(params)
+    P = packed_params(params)
     y = np.asarray(y, dtype=np.float64)
     return y[..., M] ** 2 / (2 * P[B]) + P[MU] * (P[XI] * y[..., G1] + P[ETA] * y[..., G2])
 
@@ -263,7 +278,7 @@ def kozlov_integral(params, y):
 def case3_integral(params, y):
     """docs/model.md R5 case 3 (chi = -lam eta, zeta = lam xi, a1 = a2 = 1):
     F = 1/2 M^2 - lam b (M + (p, J r)) + mu b (r, g), with (p, J r) = p1 eta - p2 xi."""
-    P = _P(params)
+    P = packed_params(params)
     y = np.asarray(y, dtype=np.float64)
     pJr = y[..., P1] * P[ETA] - y[..., P2] * P[XI]
     return (0.5 * y[..., M] ** 2 - P[LAM] * P[B] * (y[..., M] + pJr)
@@ -272,7 +287,7 @@ def case3_integral(params, y):
 
 def hess_eta(params) -> float:
     """docs/model.md R5 case 4: the positive eta = sqrt(b (1/a2 - 1/a1)) of the Hess relation (a1 > a2)."""
-    P = _P(params)
+    P = packed_params(params)
     if not P[A1] > P[A2]:
         raise ParameterError("the Hess relation needs a1 > a2")
     return math.sqrt(P[B] * (1.0 / P[A2] - 1.0 / P[A1]))
@@ -281,7 +296,7 @@ def hess_eta(params) -> float:
 def hess_function(params, y):
     """docs/model.md R5 case 4 (chi = zeta = xi = 0, eta^2 = b(1/a2 - 1/a1)):
     F = M + eta p1 - lam b / a2, with dF/dt = (eta/b) p2 F."""
-    P = _P(params)
+    P = packed_params(params)
     y = np.asarray(y, dtype=np.float64)
     return y[..., M] + P[ETA] * y[..., P1] - P[LAM] * P[B] / P[A2]
 
@@ -303,7 +318,7 @@ def max_rate(params, y) -> np.ndarray:
     - sqrt(mu |r| / b): the pendulum of the weight (dM/dt = -mu (r, J g), dg/dt = (M/b) J g);
 
     and the largest of the four is returned (one value per state)."""
-    P = _P(params)
+    P = packed_params(params)
     y = np.asarray(y, dtype=np.float64)
     k = P[MU] / abs(P[LAM]) if P[MU] != 0.0 else 0.0
     s = math.hypot(P[CHI], P[ZETA])
@@ -330,7 +345,7 @@ def section_M2(params, p1, p2, h, phi0=math.pi):
     """M^2 on the section phi = phi0 at energy h (docs/model.md R9, generalised to any phi0):
     M^2 = 2b (h - 1/2(p1^2/a1 + p2^2/a2) + (mu/lam)(p - s, J g) - mu (r, g)).
     At phi0 = pi this is 2b (h - 1/2(...) - (mu/lam)(p1 - chi) + mu eta)."""
-    P = _P(params)
+    P = packed_params(params)
     g1, g2 = section_gamma(phi0)
     p1 = np.asarray(p1, dtype=np.float64)
     p2 = np.asarray(p2, dtype=np.float64)
@@ -352,7 +367,7 @@ def allowed_ellipse(params, h, phi0=math.pi):
     region being ((p1-c1)/r1)^2 + ((p2-c2)/r2)^2 <= 1.  Returns ``None`` when
     the region is empty (h below the minimum of the energy on the section).
     """
-    P = _P(params)
+    P = packed_params(params)
     h = magnitude("h", h)
     g1, g2 = section_gamma(phi0)
     k1 = (P[MU] / P[LAM]) * g2

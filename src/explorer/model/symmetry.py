@@ -35,8 +35,8 @@ import math
 
 import numpy as np
 
-from explorer.model.parameters import CHI, ETA, MU
-from explorer.model.validation import ParameterError, packed_params
+from explorer.model.parameters import CHI, ETA, MU, packed_params
+from explorer.model.validation import ParameterError
 
 __all__ = ["half_turn", "half_turn_reversor", "half_turn_section", "half_turn_violations", "has_half_turn_symmetry"]
 

@@ -31,8 +31,8 @@ import numpy as np
 
 __all__ = ["MAX_CONTINUATION_STEPS", "MAX_JOBS", "MAX_MAGNITUDE", "MAX_MEMORY_FRACTION", "MAX_PERIOD",
            "ParameterError", "boolean", "choice", "continuation_steps", "did_you_mean", "fits_in_memory",
-           "human_bytes", "input_file", "integer", "magnitude", "output_path", "packed_params", "physical_memory",
-           "real", "threads", "with_value", "writable_directory"]
+           "human_bytes", "input_file", "integer", "magnitude", "output_path", "physical_memory",
+           "real", "threads", "writable_directory"]
 
 #: largest absolute value of a model parameter, the energy h or a start coordinate.  The equations are
 #: written for parameters of order one (Figure 4: 0.5 to 2): every method integrates h = 1e6
@@ -248,26 +248,3 @@ def threads(value, available: int) -> int:
         raise ParameterError(f"threads must be <= {available} (NUMBA_NUM_THREADS, read when Numba "
                              f"starts; set it in the environment for more), got {n}")
     return n
-
-
-def packed_params(params) -> np.ndarray:
-    """The packed float64 vector (a1, a2, b, lam, chi, zeta, mu, xi, eta) of a parameter set,
-    validated (docs/model.md R3: a1, a2, b > 0, lam != 0, all finite).
-
-    ``params``: a :class:`explorer.model.Params`, a mapping of parameter names (missing
-    ones from Figure 4), or a sequence of 9 numbers.
-    """
-    from explorer.model.parameters import Params
-
-    if isinstance(params, Params):
-        return params.as_array()
-    if isinstance(params, dict):
-        return Params(**params).as_array()
-    return Params.from_array(params).as_array()
-
-
-def with_value(params, h: float, name: str, value):
-    """``(params, h)`` with one model parameter or the energy ``h`` (``name == "h"``) replaced."""
-    if name == "h":
-        return params, real("h", value)
-    return params.with_(**{name: real(name, value)}), h
