@@ -38,10 +38,8 @@ _EXPORTS = {
     "METHODS": "explorer.analysis.sections",
     "Crossings": "explorer.analysis.sections",
     "crossings": "explorer.analysis.sections",
-    "section_crossings": "explorer.analysis.sections",     # deprecated: crossings (docs/api.md)
     "iter_crossings": "explorer.analysis.sections",
     "propagate": "explorer.analysis.sections",
-    "iter_section_crossings": "explorer.analysis.sections",  # deprecated: iter_crossings
     "CrossingBlock": "explorer.analysis.sections",
     "StreamState": "explorer.analysis.sections",
     "Status": "explorer.kernels",

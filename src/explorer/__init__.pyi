@@ -94,13 +94,7 @@ from explorer.analysis.sections import (
     iter_crossings as iter_crossings,
 )
 from explorer.analysis.sections import (
-    iter_section_crossings as iter_section_crossings,
-)
-from explorer.analysis.sections import (
     propagate as propagate,
-)
-from explorer.analysis.sections import (
-    section_crossings as section_crossings,
 )
 from explorer.analysis.transport import (
     exit_times as exit_times,

@@ -111,7 +111,7 @@ def test_manifolds_are_invariant(stable):
 def test_separatrices_are_the_branches_grow_branch_grows_to_their_images_of_the_fundamental_domain():
     """One manifold algorithm: each separatrix is manifolds.grow_branch's branch of the saddle
     (both signs of W^u, then of W^s), bit for bit, ending after ``iterations`` images of the
-    fundamental domain (or at ``arclength``); the old fundamental-domain keywords warn."""
+    fundamental domain (or at ``arclength``)."""
     from explorer.analysis import manifolds as mf
 
     smap = SectionMap(model.FIGURE4.with_(mu=0.03), 2.0)
@@ -125,10 +125,6 @@ def test_separatrices_are_the_branches_grow_branch_grows_to_their_images_of_the_
         assert (b.sigma[-1] - b.curve.sigma0) / b.curve.L == pytest.approx(3.0)   # domain + 2 images
     short = fpm.separatrices(smap, fp, iterations=6, arclength=0.5)
     assert all(0.5 <= np.sum(np.linalg.norm(np.diff(c, axis=0), axis=1)) < 0.5 + 0.02 for c in short)
-    with pytest.warns(DeprecationWarning, match="n_domain"):
-        old = fpm.separatrices(smap, fp, iterations=2, n_domain=40, first=1e-6)
-    for a, b in zip(old, seps):
-        np.testing.assert_array_equal(a, b)
 
 
 @pytest.mark.cpu_dependent

@@ -330,13 +330,9 @@ def test_a_flux_needs_both_lobes_with_equal_areas(tangle):
 
 def test_manifolds_of_a_point_are_those_of_the_orbit_newton_finds_from_it(saddle):
     """ex.manifolds(params, h, (p1, p2)): the orbit is found from the point first; its branches
-    start at that orbit's point and coincide with the branches grown from the FixedPoint (the
-    older form (point, params, h) gives the same, with a DeprecationWarning)."""
+    start at that orbit's point and coincide with the branches grown from the FixedPoint."""
     prm = model.FIGURE4.with_(mu=MU)
     got = mf.manifolds(prm, H, (0.05, 0.02), arclength=1.0, signs=(1,))
-    with pytest.warns(DeprecationWarning):
-        old = mf.manifolds((0.05, 0.02), prm, H, arclength=1.0, signs=(1,))
-    np.testing.assert_array_equal(old[0].points, got[0].points)
     assert [b.kind for b in got] == ["unstable", "stable"]
     assert np.linalg.norm(got[0].points[0] - saddle.point) < 1e-10
     ref = mf.grow_branch(saddle, sign=1, arclength=1.5)
@@ -346,8 +342,6 @@ def test_manifolds_of_a_point_are_those_of_the_orbit_newton_finds_from_it(saddle
         mf.manifolds(prm, H, (0.0, 0.0, 0.0))
     with pytest.raises(model.ParameterError, match="h is missing"):
         mf.manifolds(prm, orbit=(0.0, 0.0))
-    with pytest.raises(model.ParameterError, match="params, h"), pytest.warns(DeprecationWarning):
-        mf.manifolds((0.0, 0.0), prm)
 
 
 @pytest.mark.cpu_dependent

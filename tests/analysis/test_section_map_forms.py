@@ -1,7 +1,6 @@
 """One rule for the system argument: every analysis takes the system first, a SectionMap or
 (params, h), and gives the same numbers either way; a setting of the map given beside it is
-refused; counts and times after the points are keyword-only; the older call forms still work,
-with a DeprecationWarning, and give the same numbers."""
+refused; counts and times after the points are keyword-only."""
 import inspect
 import math
 import warnings
@@ -38,8 +37,6 @@ def test_fixed_points_and_their_continuation_are_the_same_from_a_section_map(sma
     same(new.point, old.point)
     same(new.jacobian, old.jacobian)
     assert new.return_time == old.return_time
-    with pytest.warns(DeprecationWarning, match="return_time"):
-        assert new.period_time == new.return_time
     new_b = fpm.continue_branch(smap, "mu", 0.03, 0.05, 0.01, (0.0, 0.0))
     old_b = fpm.continue_branch(PRM, H, "mu", 0.03, 0.05, 0.01, (0.0, 0.0), phi0=PHI0, tol=TOL)
     assert len(new_b.orbits) == len(old_b.orbits) >= 2
@@ -76,21 +73,18 @@ def test_half_turn_partners_are_the_same_from_a_section_map(smap):
     assert np.isfinite(new.points).all()
 
 
-def test_saddles_and_manifolds_are_the_same_from_a_section_map_and_from_the_older_orbit_first_forms():
+def test_saddles_and_manifolds_are_the_same_from_a_section_map_and_from_params_h():
     smap = SectionMap(PRM, H)
     fp = fpm.find_fixed_point(smap, (0.0, 0.0))
     new = mf.saddle(smap, fp)
-    for old_args in ((fp,), (fp, smap), (fp, PRM, H)):
-        with pytest.warns(DeprecationWarning, match=r"saddle\(system, orbit"):
-            old = mf.saddle(*old_args)
-        same(new.point, old.point)
-        same(new.e_unstable, old.e_unstable)
-        assert new.multiplier == old.multiplier
-        assert (new.smap.tol, new.smap.h, new.smap.phi0) == (old.smap.tol, old.smap.h, old.smap.phi0)
-    same(mf.saddle(PRM, H, fp).e_stable, new.e_stable)
+    old = mf.saddle(PRM, H, fp)
+    same(new.point, old.point)
+    same(new.e_unstable, old.e_unstable)
+    same(new.e_stable, old.e_stable)
+    assert new.multiplier == old.multiplier
+    assert (new.smap.tol, new.smap.h, new.smap.phi0) == (old.smap.tol, old.smap.h, old.smap.phi0)
     new_b = mf.manifolds(smap, fp, arclength=0.2, kinds=("unstable",), signs=(1,))[0]
-    with pytest.warns(DeprecationWarning, match="manifolds"):
-        old_b = mf.manifolds(fp, arclength=0.2, kinds=("unstable",), signs=(1,))[0]
+    old_b = mf.manifolds(PRM, H, fp, arclength=0.2, kinds=("unstable",), signs=(1,))[0]
     same(new_b.points, old_b.points)
     # the options of grow_branch are manifolds' own keywords (visible, no **kw)
     assert "max_points" in inspect.signature(mf.manifolds).parameters
@@ -119,18 +113,6 @@ def test_indicators_from_a_map_use_its_tolerance_and_refuse_one_beside_it(smap):
         lyapunov.indicators(smap, np.zeros((2, 5)), tmax=20.0)
 
 
-def test_the_older_indicator_forms_warn_and_give_the_same_numbers():
-    states = model.section_state(PRM, [-0.2], [0.1], H)
-    ref = lyapunov.indicators(PRM, states=states, tmax=20.0)
-    with pytest.warns(DeprecationWarning, match="tmax"):
-        old = lyapunov.indicators(PRM, states=states, T=20.0)
-    same(old.megno, ref.megno)
-    with pytest.warns(DeprecationWarning, match="tmax"), \
-            pytest.warns(DeprecationWarning, match="with the states by position is deprecated"):
-        old = lyapunov.indicators(PRM, states, 20.0)
-    same(old.megno, ref.megno)
-
-
 def test_a_setting_of_the_map_beside_it_is_refused(smap):
     with pytest.raises(model.ParameterError, match="belong"):
         fpm.find_fixed_point(smap, (0.0, 0.0), tol=1e-12)
@@ -145,71 +127,58 @@ def test_a_setting_of_the_map_beside_it_is_refused(smap):
         pm.search_periodic_orbits(SectionMap(PRM, H, tmax=10.0), 1)
 
 
-#: what every call of the (p1, p2) forms says: they go in the next release (docs/api.md)
-GOING = r"section_crossings\(system, p1, p2, \.\.\.\) is deprecated and will be removed"
-
-
-def test_section_crossings_from_a_section_map_are_those_of_the_params_h_forms_and_the_maps_iterates(smap):
-    p1, p2 = [-0.2, 0.3], [0.1, 0.0]
-    with pytest.warns(DeprecationWarning, match=GOING):
-        new = sections.section_crossings(smap, p1, p2, n_crossings=4)
-        pair = sections.section_crossings(PRM, H, p1, p2, n_crossings=4, phi0=PHI0, tol=TOL)
-        named = sections.section_crossings(PRM, p1, p2, h=H, n_crossings=4, phi0=PHI0, tol=TOL)
-        with pytest.warns(DeprecationWarning, match=r"section_crossings\(params, p1, p2, h, n_crossings\)"):
-            old = sections.section_crossings(PRM, p1, p2, H, 4, phi0=PHI0, tol=TOL, method="taylor")
-        with pytest.warns(DeprecationWarning, match="given by position"):
-            positional = sections.section_crossings(smap, p1, p2, 4)
-    for res in (pair, named, old, positional):
+def test_crossings_from_a_section_map_are_those_of_the_params_h_forms_and_the_maps_iterates(smap):
+    pts = np.array([[-0.2, 0.1], [0.3, 0.0]])
+    new = sections.crossings(smap, pts, n_crossings=4)
+    pair = sections.crossings(PRM, H, pts, n_crossings=4, phi0=PHI0, tol=TOL)
+    named = sections.crossings(PRM, pts, h=H, n_crossings=4, phi0=PHI0, tol=TOL)
+    for res in (pair, named):
         same(new.data, res.data)
         same(new.status, res.status)
         assert new.settings == res.settings
-    with pytest.warns(DeprecationWarning, match="iter_" + GOING):
-        blocks = list(sections.iter_section_crossings(smap, p1, p2, n_crossings=4, block=2))
-    same(np.concatenate([b.rows(0) for b in blocks]), new.orbit(0))
-    with pytest.warns(DeprecationWarning):
-        old_blocks = list(sections.iter_section_crossings(PRM, p1, p2, H, 4, block=2, phi0=PHI0, tol=TOL))
-    same(np.concatenate([b.rows(0) for b in old_blocks]), new.orbit(0))
+    blocks = list(sections.iter_crossings(smap, pts, n_crossings=4, block=2))
+    same(np.concatenate([b.rows(0) for b in blocks if 0 in b.index]), new.orbit(0))
     # the rows are P's iterates: the same section, energy and tolerance as the map's own steps
-    it = smap.iterate((p1[0], p2[0]), 4)[1:]
+    it = smap.iterate(pts[0], 4)[1:]
     np.testing.assert_allclose(new.orbit(0)[:, 1:3], it, rtol=0, atol=1e-9)
 
 
-def test_the_params_h_form_of_section_crossings_defaults_to_the_crossings_tolerance():
+def test_the_params_h_form_of_crossings_defaults_to_the_crossings_tolerance():
     """(params, h) builds the map at the default of crossings (DEFAULT_TOL), not the map's own:
     one default per purpose (docs/api.md)."""
-    with pytest.warns(DeprecationWarning, match=GOING):
-        res = sections.section_crossings(PRM, H, [0.1], [0.0], n_crossings=2)
+    res = sections.crossings(PRM, H, [(0.1, 0.0)], n_crossings=2)
     assert res.settings["tol"] == sections.DEFAULT_TOL != SectionMap.__init__.__kwdefaults__["tol"]
 
 
-def test_section_crossings_refuse_a_setting_of_the_map_beside_it(smap):
+def test_crossings_refuse_a_setting_of_the_map_beside_it(smap):
     for kw in (dict(tol=1e-12), dict(phi0=0.0), dict(h=H)):
         with pytest.raises(model.ParameterError, match="belong"):
-            sections.section_crossings(smap, [0.0], [0.0], n_crossings=3, **kw)
+            sections.crossings(smap, [(0.0, 0.0)], n_crossings=3, **kw)
     with pytest.raises(model.ParameterError, match="return budget"):
-        sections.section_crossings(SectionMap(PRM, H, tmax=10.0), [0.0], [0.0], n_crossings=3)
+        sections.crossings(SectionMap(PRM, H, tmax=10.0), [(0.0, 0.0)], n_crossings=3)
     with pytest.raises(TypeError, match="n_crossings"):
-        sections.section_crossings(PRM, H, [0.0], [0.0])
+        sections.crossings(PRM, H, [(0.0, 0.0)])
     with pytest.raises(model.ParameterError, match="h is missing"):
         fpm.find_fixed_point(PRM)
 
 
-def test_crossings_take_the_count_by_keyword_and_warn_when_given_by_position():
+def test_counts_and_times_after_the_points_are_keyword_only(smap):
     y0 = model.section_state(PRM, [0.1], [0.0], H)
-    ref = sections.crossings(PRM, states=y0, n_crossings=3)
-    with pytest.warns(DeprecationWarning, match="n_crossings="), \
-            pytest.warns(DeprecationWarning, match="with the states by position is deprecated"):
-        old = sections.crossings(PRM, y0, 3)
-    same(old.data, ref.data)
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        sections.crossings(PRM, states=y0, n_crossings=1)
+    with pytest.raises(TypeError):
+        sections.crossings(PRM, H, [(0.1, 0.0)], 3)
+    with pytest.raises(TypeError):
+        lyapunov.indicators(smap, [(0.1, 0.0)], 20.0)
+    with pytest.raises(TypeError):
+        lyapunov.indicators(PRM, states=y0, T=20.0)
+    with pytest.raises(TypeError):
+        pm.symmetry_line_points(smap, 2, 8)
 
 
 @pytest.mark.parametrize("name", ["crossings", "iter_crossings", "propagate", "indicators"])
-def test_the_flows_states_are_a_keyword_and_the_older_positional_form_warns_with_the_same_numbers(name):
+def test_the_flows_states_are_a_keyword_and_states_by_position_are_refused_by_name(name):
     """After params the next positional is always h: the flow's full states are only ever
-    ``states=`` (docs/api.md, "The system argument"); ``f(params, states)`` still works, warned."""
+    ``states=`` (docs/api.md, "The system argument"); ``f(params, states)`` is refused, naming
+    ``states=``."""
     fn = {"crossings": sections.crossings, "iter_crossings": sections.iter_crossings,
           "propagate": sections.propagate, "indicators": lyapunov.indicators}[name]
     kw = {"crossings": {"n_crossings": 2}, "iter_crossings": {"n_crossings": 2}, "propagate": {"t": 3.0},
@@ -223,9 +192,9 @@ def test_the_flows_states_are_a_keyword_and_the_older_positional_form_warns_with
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         new = numbers(fn(PRM, states=y0, **kw))
-    with pytest.warns(DeprecationWarning, match=r"states=states"):
-        old = numbers(fn(PRM, y0, **kw))
-    same(old, new)
+    assert np.all(np.isfinite(new))
+    with pytest.raises(model.ParameterError, match="states="):
+        numbers(fn(PRM, y0, **kw))
     # the energy next to params makes a map; states= beside a map, or beside h, is refused by name
     with pytest.raises(model.ParameterError, match="states"):
         fn(section_map.SectionMap(PRM, H), states=y0, **kw)
@@ -253,16 +222,10 @@ def test_any_other_map_object_passes_through_the_rule_unchanged():
     assert isinstance(seen[-1], SectionMap) and seen[-1].tol == 1e-13 and seen[-1].h == H
 
 
-def test_a_deprecation_warning_names_the_callers_line():
-    with pytest.warns(DeprecationWarning) as rec:
-        sections.section_crossings(PRM, [0.1], [0.0], H, 2)
-    assert {r.filename for r in rec} == {__file__}
-
-
 def test_a_fixed_point_is_the_periodic_orbit_of_period_one_and_a_branch_of_them_a_periodic_branch(smap):
     """One type each: find_fixed_point gives the PeriodicOrbit find_periodic_orbit finds with
     K = 1 (every field equal), with the point's shorthands; a branch's members are its
-    ``orbits`` (``points`` warns)."""
+    ``orbits``."""
     fp = fpm.find_fixed_point(smap, (0.0, 0.0))
     orb = pm.find_periodic_orbit(smap, (0.0, 0.0), 1)
     assert isinstance(fp, pm.PeriodicOrbit) and fp.period == 1
@@ -272,5 +235,3 @@ def test_a_fixed_point_is_the_periodic_orbit_of_period_one_and_a_branch_of_them_
     same(fp.point, orb.points[0])
     br = fpm.continue_branch(smap, "mu", 0.03, 0.04, 0.01, fp.point)
     assert isinstance(br, pm.PeriodicBranch) and all(isinstance(o, fpm.FixedPoint) for o in br.orbits)
-    with pytest.warns(DeprecationWarning, match="orbits"):
-        assert br.points == br.orbits

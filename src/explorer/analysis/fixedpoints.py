@@ -24,7 +24,7 @@ import numpy as np
 from explorer import model
 from explorer.analysis.manifolds import DEFAULT_MAX_GAP, DEFAULT_START_TOL
 from explorer.analysis.periodic import PeriodicBranch, PeriodicOrbit
-from explorer.analysis.section_map import deprecated, orbit_first, system_first
+from explorer.analysis.section_map import system_first
 from explorer.model import ParameterError
 
 __all__ = ["Branch", "FixedPoint", "analytic_eigenvalues_solution_I", "continue_branch", "find_fixed_point", "follow",
@@ -48,8 +48,7 @@ class FixedPoint(PeriodicOrbit):
         Eigenvalues of ``jacobian``; ``trace`` their sum. ``|trace| < 2``: elliptic (``stable``),
         ``|trace| > 2``: hyperbolic.
     return_time : float
-        Return time of the periodic orbit through the point (``return_times[0]``;
-        ``period_time`` is its deprecated name).
+        Return time of the periodic orbit through the point (``return_times[0]``).
     iterations : int
         Newton iterations taken.
     """
@@ -68,12 +67,6 @@ class FixedPoint(PeriodicOrbit):
     @property
     def return_time(self) -> float:
         return float(self.return_times[0])
-
-    @property
-    def period_time(self) -> float:
-        """Deprecated name of :attr:`return_time`."""
-        deprecated("FixedPoint.period_time", "FixedPoint.return_time")
-        return self.return_time
 
     @property
     def kind(self) -> str:
@@ -127,17 +120,11 @@ class Branch(PeriodicBranch):
     :class:`FixedPoint` s.
 
     ``orbits[i]`` is the :class:`FixedPoint` at ``values[i]`` of ``parameter`` (a model parameter
-    or ``"h"``; ``points`` is the deprecated name of ``orbits``); ``bifurcations`` is the list of dicts of
+    or ``"h"``); ``bifurcations`` is the list of dicts of
     :class:`explorer.analysis.periodic.PeriodicBranch` (``{"value", "type", "trace", "refined"}``,
     type "tangent", "period-doubling", "touch +2" or "touch -2"); ``stopped`` says why the
     branch ended before ``stop`` (None when it reached it).
     """
-
-    @property
-    def points(self) -> list:
-        """Deprecated name of ``orbits``."""
-        deprecated("Branch.points", "Branch.orbits")
-        return self.orbits
 
 
 @system_first
@@ -167,16 +154,11 @@ def continue_branch(system, parameter, start, stop, step, guess=(0.0, 0.0), *, b
 SEPARATRIX_GENERATIONS = 6
 
 
-def _saddle_of(system, fp: FixedPoint, n_domain, first):
+def _saddle_of(system, fp: FixedPoint):
     """The :class:`~explorer.analysis.manifolds.Saddle` of the hyperbolic fixed point ``fp``
-    (one eigen-decomposition for all four branches); the keywords of the old fundamental-domain
-    iteration are accepted with a DeprecationWarning."""
+    (one eigen-decomposition for all four branches)."""
     from explorer.analysis.manifolds import saddle
 
-    if n_domain is not None or first is not None:
-        deprecated("manifold/separatrices(..., n_domain=, first=)",
-                   "start_tol= (the start distance from it; the growth places the points itself, "
-                   "explorer.analysis.manifolds.grow_branch)")
     if fp.stable:
         raise ParameterError("the fixed point is elliptic: it has no separatrices")
     return saddle(system, fp)
@@ -190,11 +172,10 @@ def _grown(sd, stable, sign, iterations, arclength, max_gap, max_points, start_t
                        max_time=max_time).points
 
 
-@orbit_first
 @system_first
 def manifold(system, fp: FixedPoint, *, stable=False, branch=1, iterations=SEPARATRIX_GENERATIONS,
              arclength=None, max_gap=DEFAULT_MAX_GAP, max_points=20000, start_tol=DEFAULT_START_TOL,
-             max_time=None, n_domain=None, first=None) -> np.ndarray:
+             max_time=None) -> np.ndarray:
     """One branch (``branch`` +1 or -1 along the eigenvector, oriented as
     :class:`~explorer.analysis.manifolds.Saddle`) of the unstable (``stable``: stable, backward
     in time) manifold of a hyperbolic fixed point ``fp`` of the map ``system``, as an (M, 2)
@@ -202,19 +183,18 @@ def manifold(system, fp: FixedPoint, *, stable=False, branch=1, iterations=SEPAR
     fundamental domain, or less when ``arclength`` (default: none) comes first, grown by
     :func:`explorer.analysis.manifolds.grow_branch` (its ``max_gap``, ``max_points``,
     ``start_tol`` and ``max_time``)."""
-    return _grown(_saddle_of(system, fp, n_domain, first), stable, branch, iterations, arclength, max_gap,
+    return _grown(_saddle_of(system, fp), stable, branch, iterations, arclength, max_gap,
                   max_points, start_tol, max_time)
 
 
-@orbit_first
 @system_first
 def separatrices(system, fp: FixedPoint, *, iterations=SEPARATRIX_GENERATIONS, arclength=None,
-                 max_gap=DEFAULT_MAX_GAP, max_points=20000, start_tol=DEFAULT_START_TOL, max_time=None,
-                 n_domain=None, first=None) -> list:
+                 max_gap=DEFAULT_MAX_GAP, max_points=20000, start_tol=DEFAULT_START_TOL,
+                 max_time=None) -> list:
     """The four branches (unstable +-, stable +-) of the hyperbolic fixed point ``fp`` of the map
     ``system`` as a list of (M, 2) polylines (:func:`manifold`, whose options these are; one
     saddle, its eigen-decomposition shared by the four)."""
-    sd = _saddle_of(system, fp, n_domain, first)
+    sd = _saddle_of(system, fp)
     return [_grown(sd, s, b, iterations, arclength, max_gap, max_points, start_tol, max_time)
             for s in (False, True) for b in (1, -1)]
 

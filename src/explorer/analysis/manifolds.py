@@ -52,7 +52,7 @@ import numpy as np
 
 from explorer.analysis.maps import images, is_section_map
 from explorer.analysis.periodic import PeriodicOrbit, is_reversible, reversor
-from explorer.analysis.section_map import SectionMap, orbit_first, system_first
+from explorer.analysis.section_map import SectionMap, system_first
 from explorer.model import ParameterError, validation
 
 __all__ = ["DEFAULT_MAX_ANGLE", "DEFAULT_MAX_GAP", "DEFAULT_MAX_GAP_ANGLE", "DEFAULT_START_TOL", "Homoclinic",
@@ -116,7 +116,6 @@ def _orient(v):
     return -v if (v[0] < 0 or (v[0] == 0 and v[1] < 0)) else v
 
 
-@orbit_first
 @system_first
 def saddle(system, orbit, *, index=0) -> Saddle:
     """The :class:`Saddle` at point ``index`` of a hyperbolic ``orbit`` (a
@@ -499,7 +498,6 @@ def mirror_branch(unstable: ManifoldBranch) -> ManifoldBranch:
                           unstable.max_gap, None, unstable)
 
 
-@orbit_first
 @system_first
 def manifolds(system, orbit, *, arclength=5.0, kinds=("unstable", "stable"), signs=(1, -1), index=0, period=1,
               start_tol=DEFAULT_START_TOL, max_gap=DEFAULT_MAX_GAP, max_angle=DEFAULT_MAX_ANGLE,

@@ -517,7 +517,7 @@ def _line_p1(params, h, phi0, n):
     return c1 + half * np.linspace(-1.0, 1.0, n + 2)[1:-1]
 
 
-@system_first(moved=("n",))
+@system_first
 def symmetry_line_points(system, period, *, n=200, threads=None):
     """Seeds of symmetric orbits of period ``period`` on the two symmetry lines (see the module).
 
