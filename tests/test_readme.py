@@ -14,16 +14,11 @@ def test_ci_runs_exactly_the_readme_test_command():
     blocks = fenced_bash((ROOT / "README.md").read_text())
     main_job, tests = blocks[0].strip(), blocks[1].strip()
     assert main_job.endswith("python -m explorer sweep") and "pip install ." in main_job
-    # both cores (pytest-xdist), a module's tests on one worker (its module-scoped fixtures once)
-    # the test environment installed by uv (seconds, where pip took a minute or more), editable: the
-    # plain install's venv is editable too, and the two share numba's cache of the same files
-    # (tests/test_plain_install.py); README's first command, the user's, stays a plain pip install.
-    # uv compiles the installed modules to bytecode as pip does (pip's default, not uv's): a
-    # machine with PYTHONDONTWRITEBYTECODE set (this one) otherwise compiles numpy, scipy, Bokeh,
-    # Panel, matplotlib... from source in every Python process the suite starts (docs/tests.md, "Time")
+    # both cores, a module's tests on one worker (its module-scoped fixtures once); the test
+    # environment installed by uv, editable (the plain-install test shares numba's cache of the same
+    # files, tests/test_plain_install.py), compiling bytecode as pip does
     assert 'python -m pip install -q uv && uv pip install -q --compile-bytecode -e ".[test]"' in tests
-    # with the CPU-dependent tests run again beside the suite, Numba compiling for a generic CPU in
-    # a cache of its own, at the lowest priority (tests/generic_cpu.py)
+    # the CPU-dependent tests rerun beside the suite for a generic CPU (tests/generic_cpu.py)
     assert tests.endswith("&& python -m pytest -q -n 2 --dist loadscope --rerun-cpu-dependent "
                           '"NUMBA_CPU_NAME=generic NUMBA_CACHE_DIR=.numba-generic"')
     for cmd in (main_job, tests):
