@@ -1,0 +1,184 @@
+"""A dynamical system from its equations, written with SymPy (docs/systems.md).
+
+:class:`System` holds the right-hand sides of ``dx/dt = f(x; p)`` as SymPy expressions, one per
+state variable in the order of the dictionary given, the parameters ``p`` with their values, and
+optionally the energy (a conserved function of the state) and a name::
+
+    x, y, px, py, lam = sympy.symbols("x y px py lam")
+    hh = System({x: px, y: py, px: -x - 2*lam*x*y, py: -y - lam*(x**2 - y**2)},
+                parameters={lam: 1.0},
+                energy=(px**2 + py**2)/2 + (x**2 + y**2)/2 + lam*(x**2*y - y**3/3),
+                name="henon_heiles")
+
+Parameters are runtime values: :meth:`System.with_` gives the same equations with other values,
+and :attr:`System.content_hash` (which keys the generated code of
+:mod:`explorer.integrate.codegen`) depends on the equations and on which symbols are parameters,
+not on their values, so a sweep over a parameter compiles once.
+
+The right-hand sides may use numbers, parameters, ``+ - * /``, powers (integer, rational, real or
+a parameter as exponent), ``sqrt``, ``exp``, ``log``, ``sin``, ``cos`` and ``tan``
+(:data:`SUPPORTED_FUNCTIONS`); anything else is refused with a :class:`ParameterError` naming it.
+"""
+from __future__ import annotations
+
+import hashlib
+import math
+import numbers
+
+import numpy as np
+import sympy as sp
+
+from explorer.model.validation import ParameterError, did_you_mean
+
+__all__ = ["SUPPORTED_FUNCTIONS", "System"]
+
+#: the functions a right-hand side may call (besides +, -, *, / and powers): the elementary
+#: operations whose Taylor recurrences explorer.integrate.codegen knows (Jorba & Zou 2005)
+SUPPORTED_FUNCTIONS = (sp.exp, sp.log, sp.sin, sp.cos, sp.tan)
+
+#: version of the symbolic form hashed by :attr:`System.content_hash`
+HASH_FORMAT = 1
+
+
+def _symbol(label, s):
+    """``s`` if it is a SymPy Symbol, else a ParameterError naming ``label``."""
+    if not isinstance(s, sp.Symbol):
+        raise ParameterError(f"{label} must be a sympy Symbol, got {s!r} ({type(s).__name__})")
+    return s
+
+
+def _expression(label, e):
+    """``e`` as a SymPy expression (numbers allowed), else a ParameterError naming ``label``."""
+    if e is None:
+        raise ParameterError(f"{label} has no equation (None): give its derivative as a sympy expression")
+    if isinstance(e, bool):
+        raise ParameterError(f"{label} must be a sympy expression or a number, got {e!r}")
+    try:
+        e = sp.sympify(e, strict=True)
+    except (sp.SympifyError, TypeError) as err:
+        raise ParameterError(f"{label} must be a sympy expression or a number, got {e!r}") from err
+    if not isinstance(e, sp.Expr):
+        raise ParameterError(f"{label} must be a sympy expression, got {e!r} ({type(e).__name__})")
+    if e.has(sp.I) or e.has(sp.zoo, sp.oo, -sp.oo, sp.nan):
+        raise ParameterError(f"{label} must be real and finite, got {e}")
+    return e
+
+
+def _value(name, v):
+    """A parameter value: a finite real Python or numpy number (not a bool, not a string)."""
+    if isinstance(v, bool) or not isinstance(v, numbers.Real):
+        raise ParameterError(f"parameter {name} must be a real number, got {v!r} ({type(v).__name__})")
+    v = float(v)
+    if not math.isfinite(v):
+        raise ParameterError(f"parameter {name} must be finite, got {v!r}")
+    return v
+
+
+def _names(symbols):
+    return ", ".join(s.name for s in symbols) or "none"
+
+
+class System:
+    """``dx/dt = f(x; p)`` from a dict {state symbol: derivative expression} (state order = dict
+    order), ``parameters`` {symbol: value}, an optional ``energy`` (an expression of the state
+    and the parameters) and a ``name``.  Immutable; :meth:`with_` changes parameter values.
+
+    Raises :class:`ParameterError` naming what is wrong: a key that is not a Symbol, a state
+    without an equation, a symbol that is neither a state variable nor a parameter, a parameter
+    that is also a state, two symbols with one name, a value that is not a finite real number,
+    an unsupported function.
+    """
+
+    def __init__(self, equations, parameters=None, energy=None, name=None):
+        if not isinstance(equations, dict) or not equations:
+            raise ParameterError("equations must be a non-empty dict {state symbol: derivative expression}, "
+                                 f"got {equations!r}")
+        states = tuple(_symbol("a state variable (a key of equations)", s) for s in equations)
+        rhs = tuple(_expression(f"d{s.name}/dt", equations[s]) for s in states)
+        if parameters is None:
+            parameters = {}
+        if not isinstance(parameters, dict):
+            raise ParameterError(f"parameters must be a dict {{symbol: value}}, got {parameters!r}")
+        params = tuple(_symbol("a parameter (a key of parameters)", p) for p in parameters)
+        values = tuple(_value(p.name, parameters[p]) for p in params)
+        both = [p.name for p in params if p in states]
+        if both:
+            raise ParameterError(f"{', '.join(both)} is both a state variable and a parameter")
+        seen = {}
+        for s in states + params:
+            if s.name in seen and seen[s.name] != s:
+                raise ParameterError(f"two different symbols are named {s.name} (their assumptions differ): "
+                                     "use one symbol for each name")
+            seen[s.name] = s
+        if name is not None and not isinstance(name, str):
+            raise ParameterError(f"name must be a string, got {name!r}")
+        self.states = states
+        self.rhs = rhs
+        self.parameters = dict(zip(params, values))
+        self.name = name if name is not None else "system"
+        for s, e in zip(states, rhs):
+            self._check_expression(f"the equation of d{s.name}/dt", e)
+        self.energy = None
+        if energy is not None:
+            self.energy = _expression("energy", energy)
+            self._check_expression("the energy", self.energy)
+
+    def _check_expression(self, where, e):
+        """Every symbol of ``e`` a state or a parameter; every function a supported one."""
+        known = set(self.states) | set(self.parameters)
+        unknown = sorted((s for s in e.free_symbols if s not in known), key=lambda s: s.name)
+        if unknown:
+            u = unknown[0]
+            if u.name in {s.name for s in known}:
+                raise ParameterError(f"{where} uses a symbol {u.name} that differs from the state variable or "
+                                     f"parameter {u.name} (two different symbols are named {u.name}: their "
+                                     "assumptions differ): use one symbol for each name")
+            hint = did_you_mean(u.name, [s.name for s in known])
+            raise ParameterError(
+                f"{where} uses {u.name}, which is neither a state variable ({_names(self.states)}) nor a parameter "
+                f"({_names(self.parameters)}){hint}: a state variable needs an equation, a parameter a value")
+        for f in e.atoms(sp.Function):
+            if not isinstance(f, SUPPORTED_FUNCTIONS):
+                allowed = ", ".join(g.__name__ for g in SUPPORTED_FUNCTIONS)
+                raise ParameterError(f"{where} uses {type(f).__name__}, which is not supported "
+                                     f"(+, -, *, /, powers, sqrt, {allowed})")
+        for a in sp.preorder_traversal(e):
+            if not isinstance(a, (sp.Symbol, sp.Number, sp.Add, sp.Mul, sp.Pow, sp.NumberSymbol)
+                              + SUPPORTED_FUNCTIONS):
+                raise ParameterError(f"{where} contains {a} ({type(a).__name__}), which is not supported")
+
+    # ------------------------------------------------------------------ values
+    @property
+    def dimension(self) -> int:
+        """The number of state variables."""
+        return len(self.states)
+
+    def parameter_array(self) -> np.ndarray:
+        """The parameter values in the order of ``parameters`` (the array the generated code reads)."""
+        return np.array(list(self.parameters.values()), dtype=np.float64)
+
+    def with_(self, **changes) -> System:
+        """The same equations with other parameter values, by name: ``system.with_(lam=0.5)``."""
+        by_name = {p.name: p for p in self.parameters}
+        values = dict(self.parameters)
+        for key, v in changes.items():
+            if key not in by_name:
+                raise ParameterError(f"{self.name} has no parameter {key}{did_you_mean(key, by_name)} "
+                                     f"(its parameters: {_names(self.parameters)})")
+            values[by_name[key]] = _value(key, v)
+        return System(dict(zip(self.states, self.rhs)), parameters=values, energy=self.energy, name=self.name)
+
+    # ------------------------------------------------------------------ identity
+    @property
+    def content_hash(self) -> str:
+        """SHA-256 (hex) of the symbolic content: ``srepr`` of the states, right-hand sides,
+        parameter symbols (in order) and energy, and :data:`HASH_FORMAT`.  Not of the parameter
+        values (runtime data) nor the name."""
+        text = "\n".join([f"format {HASH_FORMAT}", sp.srepr(self.states), sp.srepr(self.rhs),
+                          sp.srepr(tuple(self.parameters)), sp.srepr(self.energy)])
+        return hashlib.sha256(text.encode()).hexdigest()
+
+    def __repr__(self):
+        eqs = ", ".join(f"d{s.name}/dt = {e}" for s, e in zip(self.states, self.rhs))
+        pars = ", ".join(f"{p.name}={v!r}" for p, v in self.parameters.items())
+        return f"System({self.name!r}: {eqs}; {pars})"

@@ -1,0 +1,86 @@
+"""explorer.model.system.System: a system from its SymPy equations (docs/systems.md): what it
+holds, what it refuses (a ParameterError naming the problem), and the content hash that keys its
+generated code."""
+import numpy as np
+import pytest
+import sympy as sp
+
+from explorer.model.system import System
+from explorer.model.validation import ParameterError
+
+x, y, px, py, lam = sp.symbols("x y px py lam")
+HH = {x: px, y: py, px: -x - 2 * lam * x * y, py: -y - lam * (x**2 - y**2)}
+HH_ENERGY = (px**2 + py**2) / 2 + (x**2 + y**2) / 2 + lam * (x**2 * y - y**3 / 3)
+
+
+def henon_heiles(value=1.0):
+    return System(HH, parameters={lam: value}, energy=HH_ENERGY, name="henon_heiles")
+
+
+def test_states_follow_the_order_of_the_equations_and_parameters_are_an_array():
+    s = henon_heiles(0.75)
+    assert s.states == (x, y, px, py)
+    assert s.rhs[2] == -x - 2 * lam * x * y
+    assert s.dimension == 4
+    np.testing.assert_array_equal(s.parameter_array(), [0.75])
+    assert s.name == "henon_heiles"
+    reordered = System({y: py, x: px, px: HH[px], py: HH[py]}, parameters={lam: 1.0})
+    assert reordered.states == (y, x, px, py)
+
+
+def test_with_changes_a_value_and_keeps_the_content_hash():
+    s = henon_heiles(1.0)
+    t = s.with_(lam=0.5)
+    np.testing.assert_array_equal(t.parameter_array(), [0.5])
+    np.testing.assert_array_equal(s.parameter_array(), [1.0])   # the original is unchanged
+    assert t.content_hash == s.content_hash                       # a value is runtime data: same code
+    assert t.energy == s.energy and t.name == s.name
+
+
+def test_content_hash_changes_with_the_equations_the_parameters_and_the_energy():
+    base = henon_heiles().content_hash
+    assert System(HH, parameters={lam: 1.0}, energy=HH_ENERGY, name="other").content_hash == base
+    changed = dict(HH)
+    changed[px] = -x - 3 * lam * x * y
+    assert System(changed, parameters={lam: 1.0}, energy=HH_ENERGY).content_hash != base
+    assert System(HH, parameters={lam: 1.0}).content_hash != base                    # no energy
+    mu = sp.Symbol("mu")
+    assert System(HH, parameters={lam: 1.0, mu: 2.0}, energy=HH_ENERGY).content_hash != base
+    swapped = {y: py, x: px, px: HH[px], py: HH[py]}
+    assert System(swapped, parameters={lam: 1.0}, energy=HH_ENERGY).content_hash != base   # state order
+
+
+@pytest.mark.parametrize("make, words", [
+    (lambda: System({x: px + sp.Symbol("z"), px: -x}), ["dx/dt", "z", "neither a state variable", "nor a parameter"]),
+    (lambda: System({x: px, px: -lam * x}), ["dpx/dt", "lam", "neither"]),
+    (lambda: System({x: px, px: None}), ["dpx/dt", "no equation"]),
+    (lambda: System({x: y}), ["y", "neither a state variable (x)"]),
+    (lambda: System({x: px, px: -x}, energy=px**2 + y), ["energy", "y"]),
+    (lambda: System({x: px, px: -lam * x}, parameters={lam: "1"}), ["parameter lam", "real number", "'1'"]),
+    (lambda: System({x: px, px: -lam * x}, parameters={lam: float("nan")}), ["parameter lam", "finite"]),
+    (lambda: System({x: px, px: -lam * x}, parameters={lam: True}), ["parameter lam", "real number"]),
+    (lambda: System({x: px, px: -lam * x}, parameters={"lam": 1.0}), ["parameter", "sympy Symbol", "'lam'"]),
+    (lambda: System({"x": px, px: -x}), ["state variable", "sympy Symbol"]),
+    (lambda: System({x + 1: px, px: -x}), ["state variable", "sympy Symbol"]),
+    (lambda: System({}), ["non-empty dict"]),
+    (lambda: System([(x, px)]), ["dict"]),
+    (lambda: System({x: px, px: -x}, parameters={x: 1.0}), ["x is both a state variable and a parameter"]),
+    (lambda: System({x: px, px: -sp.Symbol("x", positive=True)}), ["two different symbols are named x"]),
+    (lambda: System({x: px, px: -sp.Abs(x)}), ["dpx/dt", "Abs", "not supported"]),
+    (lambda: System({x: px, px: -sp.Function("f")(x)}), ["dpx/dt", "f", "not supported"]),
+    (lambda: System({x: px, px: sp.I * x}), ["dpx/dt", "real"]),
+    (lambda: System({x: px, px: -x}, name=3), ["name", "string"]),
+    (lambda: henon_heiles().with_(lamb=0.5), ["no parameter lamb", "did you mean 'lam'"]),
+    (lambda: henon_heiles().with_(lam="big"), ["parameter lam", "real number"]),
+])
+def test_a_bad_system_is_refused_with_a_message_naming_the_problem(make, words):
+    with pytest.raises(ParameterError) as err:
+        make()
+    for w in words:
+        assert w in str(err.value), (w, str(err.value))
+
+
+def test_numbers_and_numpy_scalars_are_accepted():
+    s = System({x: 1, px: sp.Rational(1, 3) * x}, parameters={lam: np.float32(0.5)})
+    assert s.rhs[0] == 1
+    np.testing.assert_array_equal(s.parameter_array(), [0.5])
