@@ -22,31 +22,66 @@ OTHER_H = OTHER_C ** 2 / (2 * OTHER.b)
 
 
 # ---------------------------------------------------------------- the bracket R8
+def _bracket_R8(prm, y):
+    """docs/model.md R8: {F0, H1} = -((p - s), gamma)/lam - (xi g2 - eta g1), gamma = (g1, g2)."""
+    p1, p2 = y[..., model.P1] - prm.chi, y[..., model.P2] - prm.zeta
+    g1, g2 = y[..., model.G1], y[..., model.G2]
+    return -(p1 * g1 + p2 * g2) / prm.lam - (prm.xi * g2 - prm.eta * g1)
+
+
+def _grad_F0(prm, y, seed_typo=False):
+    """grad of F0 = M + |p - s|^2/(2 lam) (R6), or of the seed's M^2 + |p|^2/(2 lam)."""
+    g = np.zeros_like(y)
+    s = (0.0, 0.0) if seed_typo else (prm.chi, prm.zeta)
+    g[..., model.P1] = (y[..., model.P1] - s[0]) / prm.lam
+    g[..., model.P2] = (y[..., model.P2] - s[1]) / prm.lam
+    g[..., model.M] = 2.0 * y[..., model.M] if seed_typo else 1.0
+    return g
+
+
+def _homoclinic_states(prm, c, t, g0, sign=1):
+    """States (..., 5) of the orbit (sign, g0) of R7, centred at t = 0 with phi(0) = g0."""
+    p1, p2, M, phi = exact.homoclinic(prm.with_(mu=0.0).as_array(), c, t, sign, 0.0, g0)
+    return np.stack([p1, p2, M, np.sin(phi), np.cos(phi)], axis=-1)
+
+
 @pytest.mark.parametrize("name", sorted(PARAM_SETS))
 def test_bracket_formula_equals_first_order_rate_of_F0_along_the_field(name):
+    """R8 against grad F0 . (f(mu) - f(0))/mu from the field model.rhs (R3, affine in mu)."""
     prm = PARAM_SETS[name]
     y = random_states(prm, 200, seed=3)
-    formula = melnikov.bracket_F0_H1(prm, y)
+    formula = _bracket_R8(prm, y)
     for mu in (1.0, 0.37, 1e-3):
-        field = melnikov.bracket_from_field(prm, y, mu=mu)
+        df = (model.rhs(prm.with_(mu=mu), y) - model.rhs(prm.with_(mu=0.0), y)) / mu
+        field = np.sum(_grad_F0(prm, y) * df, axis=-1)
         np.testing.assert_allclose(field, formula, rtol=1e-9, atol=1e-9 * (1 + np.abs(formula).max()))
     # F0 is conserved by the unperturbed field (mu = 0), so dF0/dt = mu {F0, H1} exactly
     f0 = model.rhs(prm.with_(mu=0.0), y)
-    assert np.max(np.abs(np.sum(melnikov.grad_F0(prm, y) * f0, axis=-1))) < 1e-12
+    assert np.max(np.abs(np.sum(_grad_F0(prm, y) * f0, axis=-1))) < 1e-12
     f = model.rhs(prm, y)
-    np.testing.assert_allclose(np.sum(melnikov.grad_F0(prm, y) * f, axis=-1), prm.mu * formula,
+    np.testing.assert_allclose(np.sum(_grad_F0(prm, y) * f, axis=-1), prm.mu * formula,
                                rtol=1e-12, atol=1e-12)
+
+
+def test_integrand_is_the_bracket_along_the_orbit_when_xi_eta_vanish():
+    """Without the (xi, eta)-term the regularised integrand is the bare bracket R8 on R7."""
+    t = np.linspace(-20, 20, 81)
+    for s in (1, -1):
+        y = _homoclinic_states(FIG4, C, t, 0.3, s)
+        np.testing.assert_allclose(melnikov.integrand(FIG4, C, t, 0.3, s), _bracket_R8(FIG4, y),
+                                   rtol=1e-12, atol=1e-14)
 
 
 def test_seed_F0_with_M_squared_is_not_an_integral():
     prm = FIG4
     y = random_states(prm, 50, seed=5)
-    rate = np.sum(melnikov.grad_F0(prm, y, seed_typo=True) * model.rhs(prm, y), axis=-1)
+    rate = np.sum(_grad_F0(prm, y, seed_typo=True) * model.rhs(prm, y), axis=-1)
     assert np.max(np.abs(rate)) > 0.1
-    # and along the homoclinic orbit it changes by O(1)
+    # and along the homoclinic orbit it changes by O(1), while F0 (R6) stays
     t = np.linspace(-20, 20, 401)
-    Fs = melnikov.F0_seed_typo(prm, melnikov.homoclinic_states(prm, C, t, 0.3))
-    F = melnikov.F0(prm, melnikov.homoclinic_states(prm, C, t, 0.3))
+    y = _homoclinic_states(prm, C, t, 0.3)
+    Fs = y[..., model.M] ** 2 + (y[..., model.P1] ** 2 + y[..., model.P2] ** 2) / (2.0 * prm.lam)
+    F = melnikov.F0(prm, y)
     assert np.ptp(F) < 1e-12 and np.ptp(Fs) > 1.0
 
 
@@ -86,7 +121,7 @@ def test_regularised_integrand_equals_limit_between_section_crossings():
     assert lo < -80 and hi > 80
 
     def bare(t):
-        return float(melnikov.bracket_F0_H1(prm, melnikov.homoclinic_states(prm, C, t, g0, s)))
+        return float(_bracket_R8(prm, _homoclinic_states(prm, C, t, g0, s)))
 
     total = _quad_sum(bare, np.linspace(lo, hi, 200))
     J = melnikov.melnikov_integral(prm, C, g0, s)

@@ -1,79 +1,12 @@
-"""The Poincaré–Melnikov integral of the seed's ur23/ur24 (docs/model.md R6, R7, R8), and the
-splitting of the separatrices it predicts, measured on the section phi = pi.
+"""The Poincaré–Melnikov integral ur23/ur24 (docs/model.md R6, R7, R8) and the splitting of the
+separatrices it predicts, measured on the section phi = pi; derivation, conventions and numbers
+in docs/commands/melnikov.md.
 
-Setting (docs/model.md R8)
----------------------
-H = H0 + mu H1 with H0 the Chaplygin Hamiltonian (mu = 0, chi = zeta = 0, R6) and
-
-    H1 = -(1/lam) (p - s, J gamma) + (r, gamma),      F0 = M + |p|^2 / (2 lam)
-
-(F0 is Chaplygin's integral R6; the seed's text before ur24 prints ``F0 = M^2 + ...``, which is
-not an integral of R6: see :func:`F0_seed_typo`).  Along any solution of the full field
-dF0/dt = mu {F0, H1} exactly (the field R3 is affine in mu and F0 is conserved at mu = 0), with
-
-    {F0, H1} = -(p1 sin phi + p2 cos phi)/lam - (xi cos phi - eta sin phi)        (R8)
-
-:func:`bracket_F0_H1` is this formula, :func:`bracket_from_field` the independent value
-grad F0 . (f(mu) - f(0)) / mu from :func:`explorer.model.rhs`; the tests compare them.
-
-The homoclinic orbits and the phase g0
---------------------------------------
-For lam > 0, a1 > a2 and lam b/a1 < c < lam b/a2 the relative equilibrium I (p = 0, M = c,
-energy h = c^2/(2b)) is hyperbolic and has the two families of homoclinic orbits R7
-(:func:`explorer.model.exact.homoclinic`), ``sign = +1`` (p1 > 0 at the centre) and ``sign = -1``
-(p -> -p; README "Errata found").  Both are centred at t = 0 (p2 = 0, |p1| maximal, M minimal)
-and
-
-    phi(t) = g0 + (c/b) t - 2 arctan( (d1/d2) tanh(tau) ),   tau = sqrt(b1 b2) t / (2b),
-
-so **g0 is the angle phi at the orbit's centre** (``phi_at_t0`` of :func:`exact.homoclinic`).
-g0 and g0 + 2 pi are the same orbit; the crossing of the section phi = phi0 nearest the centre of
-the orbit g0 has psi(t_c) = phi0 - g0 (mod 2 pi, in [-pi, pi)), psi(t) = phi(t) - g0
-(:func:`separatrix_point`).
-
-The Melnikov integral
----------------------
-J_sign(g0) = lim_{n -> inf} int_{t_-n}^{t_n} {F0, H1} dt along the orbit (sign, g0), t_{+-n} the
-crossings of any fixed section angle.  The p-term decays like exp(-|tau|); the (xi, eta)-term
-does not decay, but since dphi = (M/b) dt and the endpoints have the same phi mod 2 pi,
-int (xi cos phi - eta sin phi) (M/c) dt = 0 over [t_-n, t_n], so
-
-    J = int_{-inf}^{inf} [ -(p1 sin phi + p2 cos phi)/lam - (xi cos phi - eta sin phi)(1 - M/c) ] dt
-
-(absolutely convergent, 1 - M/c ~ exp(-2|tau|)).  With this sign, the measured splitting is
-
-    F0(W^u) - F0(W^s) = mu J(g0) + O(mu^2)
-
-between the points where the unstable and the stable manifold of the perturbed fixed point cross
-a transversal through the crossing point of the orbit g0 (:func:`measured_splitting`).
-
-Closed form (residues; :func:`closed_form`).  With z = d2 cosh tau + i d1 sinh tau =
-cosh(tau + i beta), beta = arctan(d1/d2) = pi/2 - alpha (cos alpha = d1, sin alpha = d2), one finds
-(p1 + i p2) e^{i phi} = sqrt(2 lam B) d1 d2 e^{i(g0 + c t/b)} / z and
-(1 - M/c) e^{i phi} = (B d1^2 d2^2/c) e^{i(g0 + c t/b)} / z^2; shifting the contour by i beta,
-
-    J_sign(g0) = -sign * 2 pi sqrt(2) b / sqrt(lam B) * exp((pi/2 - alpha) S) / cosh(pi S/2) * sin g0
-                 - 4 pi b / B * exp((pi/2 - alpha) S) / sinh(pi S/2) * (xi cos g0 - eta sin g0)
-
-with S = 2c/sqrt(b1 b2).  ur24 as printed (divided by mu) has the same prefactors and angular
-dependence but the factors e^{pi S/2} sinh((pi/2 - alpha) S)/sinh(pi S) and
-e^{pi S/2} cosh((pi/2 - alpha) S)/sinh(pi S): about one half of the correct values
-(:func:`ur24`; ratio 0.491 for J_Q and 0.509 for J_R at Figure 4, h = 2).
-
-API
----
-bracket_F0_H1, bracket_from_field, F0, F0_seed_typo
-homoclinic_constants(params, c) -> HomoclinicConstants
-check_params(params, h) -> c                      ParameterError (one line) if R7 does not apply
-integrand(params, c, t, g0, sign)
-melnikov_integral(params, c, g0, sign=1, window=40, method="gauss"|"quad")
-fit_harmonics(params, c, sign, n=16) -> (A_sin, B_cos, C_const, residual)
-closed_form(params, c), ur24(params, c)           coefficients of sin g0 and cos g0 (per unit mu)
-amplitudes(params, h) -> dict                     what ``python -m explorer melnikov`` prints
-separatrix_point(params, h, g0, sign) -> (x_c, t_c, normal)
-measured_splitting(params, h, mu, g0, sign) -> dict
-melnikov_table(params, h, mus, g0s, signs) -> list of dict rows
-(The figure of these numbers is :func:`explorer.app.melnikov_figure.melnikov_figure`.)
+H = H0 + mu H1 (R8), F0 = M + |p - s|^2/(2 lam) (R6).  ``g0`` is the angle phi at the centre of
+the homoclinic orbit R7 (:func:`explorer.model.exact.homoclinic`), ``sign`` its branch (+1: p1 > 0
+at the centre, -1: p -> -p).  Per unit mu, J_sign(g0) = int {F0, H1} dt along the orbit, taken as
+the regularised integral of :func:`integrand`; F0(W^u) - F0(W^s) = mu J(g0) + O(mu^2)
+(:func:`measured_splitting`).
 """
 from __future__ import annotations
 
@@ -98,51 +31,13 @@ GAUSS_NODES = 20
 UR24_RTOL = 1e-6
 
 
-# ---------------------------------------------------------------- bracket (R8)
+# ---------------------------------------------------------------- Chaplygin's integral (R6)
 def F0(params, y):
     """Chaplygin's integral (R6) F0 = M + |p - s|^2/(2 lam) on states y (..., 5)."""
     P = packed_params(params)
     y = np.asarray(y, dtype=np.float64)
     return y[..., model.M] + ((y[..., model.P1] - P[model.CHI]) ** 2
                               + (y[..., model.P2] - P[model.ZETA]) ** 2) / (2.0 * P[model.LAM])
-
-
-def F0_seed_typo(params, y):
-    """The seed's ``F0 = M^2 + |p|^2/(2 lam)`` (text before ur24): NOT an integral of R6."""
-    P = packed_params(params)
-    y = np.asarray(y, dtype=np.float64)
-    return y[..., model.M] ** 2 + (y[..., model.P1] ** 2 + y[..., model.P2] ** 2) / (2.0 * P[model.LAM])
-
-
-def grad_F0(params, y, *, seed_typo=False):
-    """Gradient of F0 (or of the seed's M^2 + ...) with respect to (p1, p2, M, g1, g2)."""
-    P = packed_params(params)
-    y = np.asarray(y, dtype=np.float64)
-    g = np.zeros_like(y)
-    g[..., model.P1] = (y[..., model.P1] - (0.0 if seed_typo else P[model.CHI])) / P[model.LAM]
-    g[..., model.P2] = (y[..., model.P2] - (0.0 if seed_typo else P[model.ZETA])) / P[model.LAM]
-    g[..., model.M] = 2.0 * y[..., model.M] if seed_typo else 1.0
-    return g
-
-
-def bracket_F0_H1(params, y):
-    """R8: {F0, H1} = -(p1 sin phi + p2 cos phi)/lam - (xi cos phi - eta sin phi), (g1, g2) =
-    (sin phi, cos phi).  Written for chi = zeta = 0 (general s: replace p by p - s)."""
-    P = packed_params(params)
-    y = np.asarray(y, dtype=np.float64)
-    p1 = y[..., model.P1] - P[model.CHI]
-    p2 = y[..., model.P2] - P[model.ZETA]
-    g1, g2 = y[..., model.G1], y[..., model.G2]
-    return -(p1 * g1 + p2 * g2) / P[model.LAM] - (P[model.XI] * g2 - P[model.ETA] * g1)
-
-
-def bracket_from_field(params, y, mu=1.0):
-    """grad F0 . (f(y; mu) - f(y; 0)) / mu with f = :func:`explorer.model.rhs` (the field R3):
-    the first-order rate of change of F0, independent of the formula R8."""
-    prm = params if isinstance(params, model.Params) else model.Params.from_array(params)
-    y = np.asarray(y, dtype=np.float64)
-    df = (model.rhs(prm.with_(mu=mu), y) - model.rhs(prm.with_(mu=0.0), y)) / mu
-    return np.sum(grad_F0(prm, y) * df, axis=-1)
 
 
 # ---------------------------------------------------------------- the homoclinic orbit R7
@@ -219,16 +114,10 @@ def _P0(prm: model.Params) -> np.ndarray:
     return prm.with_(mu=0.0).as_array()
 
 
-def homoclinic_states(params, c, t, g0, sign=1):
-    """States (..., 5) of the orbit (sign, g0) of R7 at times t (centre at t = 0, phi(0) = g0)."""
-    prm = _params(params)
-    p1, p2, M, phi = exact.homoclinic(_P0(prm), c, t, sign, 0.0, g0)
-    return np.stack([p1, p2, M, np.sin(phi), np.cos(phi)], axis=-1)
-
-
 def integrand(params, c, t, g0, sign=1):
-    """The regularised Melnikov integrand {F0, H1} with the (xi, eta)-term weighted by (1 - M/c)
-    (module docstring), along the orbit (sign, g0) at times t (broadcast with g0)."""
+    """The regularised Melnikov integrand -(p1 sin phi + p2 cos phi)/lam - (xi cos phi - eta sin phi)
+    (1 - M/c) (docs/commands/melnikov.md, step 3) along the orbit (sign, g0) at times t (broadcast
+    with g0)."""
     prm = _params(params)
     t, g0 = np.broadcast_arrays(np.asarray(t, float), np.asarray(g0, float))
     p1, p2, M, phi0 = exact.homoclinic(_P0(prm), c, t, sign, 0.0, 0.0)
@@ -295,7 +184,7 @@ def fit_harmonics(params, c, sign=1, n=16, *, window=DEFAULT_WINDOW, method="gau
 
 
 def closed_form(params, c) -> dict:
-    """The corrected residue formula (module docstring), per unit mu: J_sign(g0) =
+    """The corrected residue formula (docs/commands/melnikov.md, step 6), per unit mu: J_sign(g0) =
     sin_plus|sin_minus * sin g0 + cos * cos g0 (sign = +1 | -1), with its parts J_Q, J_R."""
     prm = _params(params)
     hc = homoclinic_constants(prm, c)
