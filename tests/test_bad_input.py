@@ -21,7 +21,7 @@ kinds in tests/app/test_cli.py, tests/app/test_cli_periodic.py, tests/analysis/t
 tests/io/test_scene.py (the same keys through parse_scene).
 
 Accepted on purpose (not bad input, documented): budgets with no memory cost (``--tmax``,
-``--max-steps``, ``integration.tmax``, ``max_steps``, a huge ``--time``), any finite angle
+``--max-steps``, ``integration.tmax``, ``max_steps``, a huge ``--tmax``), any finite angle
 (``--phi0``, ``--phi``, ``--g0``), ``trajectory --glyphs 10**12`` (at most one glyph per sample is
 drawn), ``orbit --crossings 10**12`` (streamed in blocks of bounded
 memory until interrupted; with ``--out`` the disk it may need is checked first).

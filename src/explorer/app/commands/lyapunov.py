@@ -16,14 +16,14 @@ import numpy as np
 
 from explorer import model
 from explorer.app.commands import options
-from explorer.app.commands.options import Command, opt, renamed
+from explorer.app.commands.options import Command, opt
 from explorer.integrate.methods import DEFAULT_DT, DEFAULT_TOL
 from explorer.kernels.indicator_table import TANGENT
 
 COMMAND = Command("lyapunov", __doc__, "--p1 -0.2 --p2 0.1 --mu 1 --tmax 1000 --json", (
     options.add_start_args,
-    renamed("--tmax", "--time", "-T", type=float, default=1000.0, help="integration time: the time the orbit runs "
-            "to [%(default)s] (--time, -T: older names)"),
+    opt("--tmax", type=float, default=1000.0, help="integration time: the time the orbit runs to "
+        "[%(default)s]"),
     partial(options.add_method_args, tol=DEFAULT_TOL, dt=DEFAULT_DT),
     opt("--history", type=int, default=12, help="history points (log-spaced in time) [%(default)s]"),
     partial(options.add_model_args, json="print JSON"),

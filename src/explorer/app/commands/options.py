@@ -15,9 +15,7 @@ section-map commands from :func:`add_map_args`; :func:`pair`, :func:`continuatio
 """
 from __future__ import annotations
 
-import argparse
 import math
-import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
@@ -48,28 +46,6 @@ class Option:
 def opt(*flags: str, **kwargs) -> Option:
     """``opt("--n", type=int, default=21, help=...)``: an option as ``add_argument`` takes it."""
     return Option(flags, kwargs)
-
-
-class _Renamed(argparse.Action):
-    """Store the value; when the option was spelt with an older name, say on stderr that the
-    name goes away (docs/api.md, "Deprecated names and forms")."""
-
-    def __init__(self, option_strings, dest, old=(), **kwargs):
-        self.old = tuple(old)
-        super().__init__(option_strings, dest, **kwargs)
-
-    def __call__(self, parser, namespace, values, option_string=None):
-        if option_string in self.old:
-            sys.stderr.write(f"{parser.prog}: {option_string} is deprecated and will be removed in the next "
-                             f"release; use {self.option_strings[0]}\n")
-        setattr(namespace, self.dest, values)
-
-
-def renamed(new: str, *old: str, **kwargs) -> Option:
-    """An option ``new`` that the older spellings ``old`` still set, each with a note on stderr
-    (one name per thing: e.g. ``--tmax``, the time an orbit runs, once ``--time``/``-T``); the
-    help shows ``new`` only."""
-    return Option((new, *old), dict(kwargs, action=_Renamed, old=old))
 
 
 def one_of(*choices: Option, required: bool = False) -> Callable:

@@ -13,7 +13,7 @@ from functools import partial
 
 from explorer import model
 from explorer.app.commands import options
-from explorer.app.commands.options import Command, opt, renamed
+from explorer.app.commands.options import Command, opt
 from explorer.integrate.methods import TRAJECTORY_TOL
 from explorer.model import validation
 
@@ -22,8 +22,8 @@ COMMAND = Command("trajectory", __doc__, "--p1 0.5 --M 2 --mu 0.5 --tmax 300 --o
     opt("--p2", type=float, default=0.0, help="initial p2 [%(default)s]"),
     opt("--M", type=float, default=2.0, help="initial M [%(default)s]"),
     opt("--phi", type=float, default=0.0, help="initial angle phi [%(default)s]"),
-    renamed("--tmax", "--time", "-T", type=float, default=300.0, help="integration time: the time the orbit runs "
-            "to [%(default)s] (--time, -T: older names)"),
+    opt("--tmax", type=float, default=300.0, help="integration time: the time the orbit runs to "
+        "[%(default)s]"),
     opt("--samples", type=int, default=20001, help="samples on [0, T] [%(default)s]"),
     opt("--tol", type=float, default=TRAJECTORY_TOL, help="DOP853 tolerance (rtol = atol) [%(default)s]"),
     opt("--glyphs", type=int, default=40, help="orientation glyphs along the path [%(default)s]"),
