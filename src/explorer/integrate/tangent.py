@@ -189,20 +189,6 @@ def orbit_tangent_taylor_ext(y0, v0, w0, nvec, P, T, order, max_steps, early_sto
     return code, steps
 
 
-# nogil: the batch drivers Python calls release the GIL (docs/architecture.md, Parallelism)
-@njit(parallel=True, nogil=True)
-def run_tangent_taylor_ext_batch(Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop, megno_level,
-                                 early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps,
-                                 out_w):
-    """:func:`orbit_tangent_taylor_ext` over the orbits (prange); the signature of
-    :func:`explorer.integrate.tangent_lanes.run_tangent_lanes_batch`."""
-    for j in prange(Y0.shape[0]):
-        _store(j, orbit_tangent_taylor_ext(Y0[j], V0[j], W0[j], nvec, P, T, order, max_steps, early_stop, sali_stop,
-                                           megno_level, early_tmin, hist_t, out_hist[j], out_res[j], out_ext[j],
-                                           out_w[j], out_final[j]), out_status, out_steps)
-    return 0
-
-
 # ====================================================================== DOP853
 @njit
 def orbit_tangent_dop853(y0, v0, P, T, rtol, atol, max_steps, hist_t, hist, res, yout):

@@ -1,11 +1,10 @@
 """Lane (SIMD) batch driver of tangent dynamics by the Taylor method: LANES orbits, each with
 one or two deviation vectors, advance in lockstep.
 
-:func:`run_tangent_lanes_batch` has the signature and the outputs of
-:func:`explorer.integrate.tangent.run_tangent_taylor_ext_batch` (the scalar reference; with one
-deviation vector and no early stop that is :func:`explorer.integrate.tangent.orbit_tangent_taylor`,
-the step of ``systems.taylor_step`` of ``TANGENT``) and gives bit for bit the same results for
-every orbit (indicators, history, SALI, GALI_2, final state and vectors, status, step count),
+:func:`run_tangent_lanes_batch` gives for every orbit ``j`` what the scalar
+:func:`explorer.integrate.tangent.orbit_tangent_taylor_ext` gives (with one deviation vector and no
+early stop that is :func:`explorer.integrate.tangent.orbit_tangent_taylor`, the step of
+``systems.taylor_step`` of ``TANGENT``), bit for bit (indicators, history, SALI, GALI_2, final state and vectors, status, step count),
 whatever the grouping of orbits into lanes and the number of threads:
 
 * the Taylor coefficients of the orbit and its deviation vectors of LANES orbits are computed
@@ -415,8 +414,8 @@ def _run_lanes(nworkers, nlanes, groups, Y0, V0, W0, nvec, P, T, order, max_step
 def run_tangent_lanes_batch(Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop, megno_level,
                             early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w,
                             max_lanes=None, groups=None):
-    """Lane twin of :func:`explorer.integrate.tangent.run_tangent_taylor_ext_batch` (same
-    arguments and outputs, bit for bit the same results).  One worker per numba thread, at
+    """Lane twin of :func:`explorer.integrate.tangent.orbit_tangent_taylor_ext` over the orbits:
+    out_*[j] is what it gives for orbit j (out_status, out_steps its return), bit for bit.  One worker per numba thread, at
     most one per group of LANES orbits (:func:`explorer.integrate.lanes.lane_workers`), each with up to
     ``groups`` groups of LANES lanes
     (:func:`explorer.integrate.lanes.worker_lanes`); the thread count is read here, in Python

@@ -79,13 +79,3 @@ def evaluate(X, order, h, out):
             acc = acc * h + X[i, k]
         out[i] = acc
 
-
-@njit
-def evaluate_derivative(X, order, h, out):
-    """out[i] = sum_k k X[i, k] h^(k-1) (Horner)."""
-    n = X.shape[0]
-    for i in range(n):
-        acc = order * X[i, order]
-        for k in range(order - 1, 0, -1):
-            acc = acc * h + k * X[i, k]
-        out[i] = acc
