@@ -1,22 +1,7 @@
-"""A wall-clock budget and a stop switch for the analyses of the section map run in one thread.
-
-The section map's compiled return (:func:`explorer.integrate.tangent.return_map_taylor`) reads a
-stop switch, a one-element int64 array, before every step.  :class:`Budget` owns one: a timer sets
-it when the budget's seconds are spent, :meth:`Budget.cancel` sets it at once (from any thread:
-the result is no longer wanted).  Entered with ``with``, a budget is the current one of its thread:
-every :class:`~explorer.analysis.section_map.SectionMap` evaluated there passes its switch to the
-compiled loop and raises :class:`BudgetExceeded` once it is set, so Newton's method, the
-separatrices, the manifolds and the periodic-orbit search all stop within one step of the
-switch, however many guesses their loops have left.  Outside a budget nothing changes (a switch
-that is never set).
-
-The compiled crossing batches (:func:`explorer.analysis.sections.crossings`) read no switch: inside
-a budget they do not start once it has stopped, and its ``max_steps``, if given, caps each orbit's
-steps in them (an orbit that never reaches the section would otherwise run to its time budget,
-10^9 steps at mu = 1e6).
-
-``explorer serve`` runs every search a page starts under one (docs/commands/serve.md): a new
-value cancels the older search, and no search outlives its seconds.
+"""A wall-clock budget and stop switch for the section-map analyses of one thread
+(docs/commands/serve.md, Budgets): inside ``with Budget(...)``, every
+:class:`~explorer.analysis.section_map.SectionMap` passes the switch to the compiled return, which
+stops within one step, and raises :class:`BudgetExceeded`; outside a budget nothing changes.
 """
 from __future__ import annotations
 
@@ -43,9 +28,9 @@ class Budget:
     def __init__(self, seconds: float | None = None, max_steps: int | None = None):
         self.seconds = None if seconds is None else float(seconds)
         self.max_steps = max_steps
-        self.switch = np.zeros(1, np.int64)        # nonzero: the compiled loops stop (STATUS_CANCELLED)
-        self.cancelled = False                     # cancel() was called (not only the time)
-        self._inner: list[Budget] = []             # budgets entered inside this one (stopped with it)
+        self.switch = np.zeros(1, np.int64)
+        self.cancelled = False
+        self._inner: list[Budget] = []
         self.started = math.nan
 
     def cancel(self) -> None:
@@ -96,13 +81,11 @@ class Budget:
 
 
 class _Watchdog:
-    """One daemon thread (started at the first budget with seconds) that sets the switch of each
-    budget still entered when its deadline passes: no thread per budget."""
 
     def __init__(self):
         self._cond = threading.Condition()
-        self._heap: list = []                 # (deadline, n, budget)
-        self._live: set = set()               # the budgets still entered (by identity)
+        self._heap: list = []
+        self._live: set = set()
         self._count = itertools.count()
         self._thread: threading.Thread | None = None
 
@@ -118,7 +101,6 @@ class _Watchdog:
     def drop(self, budget: Budget) -> None:
         with self._cond:
             self._live.discard(budget)
-            # (its heap entry goes when its deadline comes; a budget is small)
             while self._heap and self._heap[0][2] not in self._live:
                 heapq.heappop(self._heap)
 

@@ -1,27 +1,7 @@
-"""The flux through a cantorus of the standard map: MacKay, Meiss & Percival's action difference.
-
-Above the breakup of the invariant circle of rotation number nu (k > k_c, :mod:`explorer.analysis.greene`)
-the circle is a cantorus, and the area that crosses it per iteration (the turnstile's lobe area)
-is the difference of the actions of its two homoclinic orbits: MacKay, Meiss & Percival (1984,
-Physica D 13, 55): Delta W = W(minimax) - W(minimizing), the
-limit of the same difference for the periodic orbits of the convergents P_n/Q_n of nu,
-
-    Delta W_n = W(x^minimax_{P/Q}) - W(x^min_{P/Q}) -> Delta W,     W = sum_{t=0}^{Q-1} F(theta_t, theta_{t+1}),
-
-with the generating function of (S1), F(theta, theta') = (theta' - theta)^2 / 2 - k cos(theta)
-(p = -dF/dtheta = theta' - theta - k sin(theta), p' = dF/dtheta' = theta' - theta: p' = p + k sin theta).
-Near k_c they found Delta W ~ (k - k_c)^eta with eta = 3.0117 from renormalisation.
-
-The two orbits of each convergent are the symmetric ones (Greene 1979): the minimax orbit
-(positive residue) on the line theta = pi, the minimizing one (negative residue) on theta = 0 for
-odd Q and on the line 2 theta - p = 0 (Fix I1, :class:`~explorer.analysis.maps.StandardMap`) for
-even Q, each found by shooting over half its period from its line to the other symmetry line
-(:mod:`explorer.analysis.greene`, "The half-orbit method").  Above k_c the residues of the
-convergents grow without bound and, beyond Q of a few hundred at k - k_c ~ 0.01, double precision
-loses the orbits (the closure error reaches the action difference): the sequence is cut at the
-first convergent whose orbit is not found, does not close, or whose Delta W_n stops decreasing,
-and the last three terms are extrapolated by Aitken's Delta^2 (the terms converge geometrically,
-ratio ~0.3).
+"""The flux through a cantorus of the standard map (docs/greene.md, The cantorus flux): MacKay,
+Meiss & Percival's action difference Delta W = W(minimax) - W(minimizing) of the symmetric orbits
+of the convergents P/Q of nu, W = sum F(theta_t, theta_{t+1}), F = (theta' - theta)^2/2 - k cos
+theta, cut where the orbits are lost and extrapolated by Aitken's Delta^2.
 """
 from __future__ import annotations
 
@@ -65,9 +45,6 @@ def _i1_function(k, P, Q, s) -> float:
 
 
 def _bisect(fn, a, b, fa) -> float:
-    """A root of fn in [a, b] (fn(a) = fa and fn(b) of opposite signs) by bisection to the spacing of
-    doubles: far above k_c the shooting function is too steep and curved for Newton from a bracket
-    of the scan's width."""
     for _ in range(BISECTIONS):
         m = 0.5 * (a + b)
         if m in (a, b):
@@ -81,7 +58,7 @@ def _bisect(fn, a, b, fa) -> float:
 
 
 def minimizing_orbit(system: StandardMap, p: int, q: int, *, guess=None) -> np.ndarray:
-    """The points (Q, 2) of the minimizing symmetric orbit of type ``p``/``q`` (module docstring):
+    """The points (Q, 2) of the minimizing symmetric orbit of type ``p``/``q`` (docs/greene.md):
     from theta = 0 for odd q (:func:`explorer.analysis.greene.symmetric_orbit`, Newton from
     ``guess``, default 2 pi p/q); for even q the orbit of least action among the roots of the
     half-orbit equation on the line 2 theta - p = 0 within ``SCAN_WIDTH`` of ``guess`` (a scan of
@@ -115,15 +92,13 @@ class CantorusFlux:
 
     k: float
     nu: float
-    q: list            # the periods used
-    delta_w: list      # Delta W_n per period
-    flux: float        # Aitken's limit of the last three (the last term when fewer)
-    stopped: str       # why the sequence ended before qmax ("" when it did not)
+    q: list
+    delta_w: list
+    flux: float
+    stopped: str
 
 
 def _first(solve, guess):
-    """solve(guess), or solve(None) (the integrable map's start 2 pi P/Q) when the continued guess
-    fails: Newton from the previous convergent's start can jump to another branch far above k_c."""
     try:
         return solve(guess)
     except ParameterError:
@@ -139,10 +114,8 @@ def _closure(system, pts, P) -> float:
 
 def cantorus_flux(system: StandardMap, nu="golden", *, qmax=DEFAULT_QMAX, qmin=5) -> CantorusFlux:
     """The flux Delta W through the cantorus of rotation number ``nu`` of the standard map above its
-    breakup (MacKay, Meiss & Percival 1984; module docstring), in the map's (theta, p) units (the
-    papers' (x, y) = (theta/2 pi, p/2 pi) units give Delta W / (2 pi)^2).  Each convergent's two
-    orbits are continued from the previous convergent's; the sequence stops at ``qmax`` or where
-    double precision loses the orbits (``stopped`` says so)."""
+    breakup (MacKay, Meiss & Percival 1984; docs/greene.md), in the map's (theta, p) units (the
+    papers' (x, y) = (theta/2 pi, p/2 pi) units give Delta W / (2 pi)^2)."""
     if not isinstance(system, StandardMap):
         raise ParameterError(f"cantorus_flux needs a StandardMap (its generating function), got "
                              f"{type(system).__name__}")

@@ -50,7 +50,7 @@ class HomoclinicConstants:
     d1: float
     d2: float
     rate: float      # tau = rate * t, rate = sqrt(b1 b2)/(2b)
-    S: float         # 2c/sqrt(b1 b2) = (c/b)/rate
+    S: float
     alpha: float     # cos alpha = d1, sin alpha = d2
     beta: float      # pi/2 - alpha = arctan(d1/d2)
 
@@ -72,9 +72,7 @@ def c_of_h(params, h) -> float:
 
 
 def check_params(params, h=None, *, c=None) -> float:
-    """Validate that the homoclinic orbit R7 exists and return c; ParameterError (one line) else.
-
-    Needs lam > 0, a1 > a2, chi = zeta = 0 and lam b/a1 < c < lam b/a2 (c = sqrt(2 b h))."""
+    """Validate that the homoclinic orbit R7 exists and return c; ParameterError (one line) else."""
     prm = _params(params)
     if c is None:
         c = c_of_h(prm, h)
@@ -127,9 +125,7 @@ def integrand(params, c, t, g0, sign=1):
 
 
 def _gauss_grid(hc: HomoclinicConstants, window):
-    """Composite Gauss-Legendre nodes/weights in t over |tau| <= window.  Panel half-width in tau
-    at most alpha/2 (the integrand's singularities, zeros of cosh(tau +- i beta), lie at distance
-    alpha = pi/2 - beta from the real tau axis), 1/S (oscillation e^{i S tau}) and 1/2."""
+    """Composite Gauss-Legendre nodes/weights in t over |tau| <= window."""
     w = min(0.5, 0.5 * hc.alpha, 1.0 / hc.S)
     w = max(w, 1e-4)
     n_pan = int(math.ceil(window / w))
@@ -143,10 +139,7 @@ def _gauss_grid(hc: HomoclinicConstants, window):
 
 
 def melnikov_integral(params, c, g0, sign=1, *, window=DEFAULT_WINDOW, method="gauss"):
-    """J_sign(g0) by quadrature over |tau| <= window (tau = rate t).
-
-    method "gauss": composite Gauss-Legendre (vectorised over g0); "quad": scipy.integrate.quad
-    (adaptive, one g0 at a time) as an independent check.  Returns a float for scalar g0."""
+    """J_sign(g0) by quadrature over |tau| <= window (tau = rate t)."""
     if sign not in (1, -1):
         raise ParameterError(f"sign must be +1 or -1, got {sign!r}")
     prm = _params(params)
@@ -161,7 +154,7 @@ def melnikov_integral(params, c, g0, sign=1, *, window=DEFAULT_WINDOW, method="g
         from scipy import integrate
 
         T = float(window) / hc.rate
-        with warnings.catch_warnings():  # "roundoff error detected" once at the requested 1e-14
+        with warnings.catch_warnings():
             warnings.simplefilter("ignore", integrate.IntegrationWarning)
             vals = np.array([integrate.quad(lambda tt: float(integrand(prm, hc.c, tt, gg, sign)), -T, T,
                                             limit=2000, epsabs=1e-14, epsrel=1e-13)[0]
@@ -198,8 +191,7 @@ def closed_form(params, c) -> dict:
 
 def ur24(params, c) -> dict:
     """ur24 exactly as printed, divided by mu: J = J_Q + J_R with S = 2c (b1 b2)^(-1/2),
-    cos alpha = d1, sin alpha = d2.  Returns the coefficients of sin g0 and cos g0 (and the
-    amplitudes AQ, AR of J_Q = -AQ sin g0, J_R = -AR (xi cos g0 - eta sin g0))."""
+    cos alpha = d1, sin alpha = d2."""
     prm = _params(params)
     hc = homoclinic_constants(prm, c)
     b, lam, S, al = prm.b, prm.lam, hc.S, hc.alpha
@@ -214,12 +206,7 @@ def _close(a, b, scale):
 
 
 def amplitudes(params=None, h=None, *, window=DEFAULT_WINDOW) -> dict:
-    """Everything ``python -m explorer melnikov`` reports (per unit mu; mu itself is ignored).
-
-    J_sign(g0) = sin_sign sin g0 + cos_sign cos g0 from quadrature fits on both branches;
-    amplitude_plus/minus are the xi = eta = 0 parts (the coefficient of sin g0 of the
-    p-term), ur24 the same coefficient from ur24 as printed; ur24_holds says whether ur24 as
-    printed reproduces both fitted coefficients of one of the branches (rtol 1e-6)."""
+    """Everything ``python -m explorer melnikov`` reports (per unit mu; mu itself is ignored)."""
     prm = model.FIGURE4 if params is None else _params(params)
     h = model.FIGURE4_H if h is None else h
     c = check_params(prm, h)
@@ -248,7 +235,6 @@ def amplitudes(params=None, h=None, *, window=DEFAULT_WINDOW) -> dict:
     return out
 
 
-# ---------------------------------------------------------------- measured splitting
 def _psi(hc: HomoclinicConstants, b, t):
     """phi(t) - g0 along R7 (increasing when M > 0)."""
     return (hc.c / b) * t - 2.0 * math.atan((hc.d1 / hc.d2) * math.tanh(hc.rate * t))
@@ -283,10 +269,7 @@ def _section_F0_normal(prm, h, x, phi0=math.pi):
 
 def separatrix_point(params, h, g0, sign=1, phi0=math.pi):
     """The crossing with phi = phi0 (mod 2 pi) of the unperturbed homoclinic orbit (sign, g0)
-    nearest its centre (psi(t_c) = phi0 - g0 reduced to [-pi, pi)).
-
-    Returns (x_c, t_c, normal): the point (p1, p2), its time from the orbit's centre, and the unit
-    normal of the separatrix there (gradient of F0 on the section at mu = 0)."""
+    nearest its centre (psi(t_c) = phi0 - g0 reduced to [-pi, pi))."""
     prm = _params(params).with_(mu=0.0)
     c = check_params(prm, h)
     _require_monotone(prm, c)
@@ -299,18 +282,7 @@ def separatrix_point(params, h, g0, sign=1, phi0=math.pi):
 
 
 def measured_splitting(params, h, mu, g0, sign=1, *, s_local=1e-4, tol=MAP_TOL, J=None) -> dict:
-    """Splitting of the separatrices measured in F0 on the section phi = pi at weight mu.
-
-    1. The hyperbolic fixed point at mu by continuation from p = 0 at mu = 0
-       (:func:`fixedpoints.follow`), its eigenvectors e_u, e_s (oriented along the branch sign).
-    2. The transversal: the line through the crossing point x_c of the unperturbed orbit
-       (sign, g0) along the normal of the separatrix (:func:`separatrix_point`).
-    3. W^u: points x* + s e_u iterated k times forward, s solved (brentq in log s within a
-       quarter of a fundamental domain around the unperturbed value, |p| ~ s_local) so that the
-       image lies on the transversal; W^s likewise backward in time.  The linear local manifold's
-       error O(s^2) is contracted by the k iterations (about s^3 at the end).
-    4. measured = F0(x_u) - F0(x_s), F0 = M + |p|^2/(2 lam) with M from the energy at mu.
-    Compared with predicted = mu J_sign(g0) (quadrature).  Returns a dict."""
+    """Splitting of the separatrices measured in F0 on the section phi = pi at weight mu."""
     from scipy.optimize import brentq
 
     from explorer.analysis import fixedpoints
@@ -340,7 +312,6 @@ def measured_splitting(params, h, mu, g0, sign=1, *, s_local=1e-4, tol=MAP_TOL, 
     for stable in (False, True):
         idx = 1 - iu if stable else iu
         e = V[:, idx] / np.linalg.norm(V[:, idx])
-        # the unperturbed crossings k revolutions before (W^u) / after (W^s) x_c, until |p| < s_local
         k = 0
         while True:
             k += 1

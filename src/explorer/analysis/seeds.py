@@ -1,32 +1,9 @@
-"""Initial conditions on the section: where a sweep's orbits start (docs/model.md R9).
-
-Arrays in, arrays out: the scene layer (:mod:`explorer.io.scene`) validates a ``[seeds]``
-table into a ``SeedSpec``; this module turns it into points of the allowed region.
-
-Rules
------
-Let the allowed region be the ellipse ((p1-c1)/r1)^2 + ((p2-c2)/r2)^2 <= 1
-(:func:`model.allowed_ellipse`) and s = margin.  Seeds are placed in units
-(u, v) of the scaled ellipse, p1 = c1 + s r1 u, p2 = c2 + s r2 v, and kept
-where u^2 + v^2 <= 1 (< 1 for grid and random) and M^2 = ``model.section_M2``
-> 0; points failing the second test are dropped and counted (possible only at
-margin 1, e.g. line ends on the boundary, or for ``points``).
-
-* ``grid``: the square lattice u = i d, v = j d (i, j integers; equal
-  spacing d in units of r1, r2, lattice centred on the ellipse centre),
-  ordered row-major (v ascending, then u ascending).  d is chosen among
-  d0 * 1.001^k, |k| <= 150, d0 = sqrt(pi / n), as the one whose number of
-  lattice points inside the unit disc is closest to n (ties: smallest |k|,
-  then negative k).  The count is within 10 % of n for n >= 50.
-* ``random``: n points uniform in the area of the scaled ellipse:
-  rng = numpy.random.default_rng(seed), rho = sqrt(rng.random(n)),
-  theta = 2 pi rng.random(n), (u, v) = rho (cos theta, sin theta).
-* ``lines``: n equally spaced points on each segment from (u_a, v_a) to
-  (u_b, v_b) (both ends included; the midpoint when n = 1), segments in
-  order; points outside the scaled ellipse (u^2 + v^2 > 1) are dropped and
-  counted.  With margin < 1 a segment [-1, 0, 1, 0] keeps both ends.
-* ``points``: the given absolute (p1, p2), in order; margin is not used;
-  points with M^2 <= 0 are dropped and counted.
+"""Initial conditions on the section (docs/model.md R9, docs/scenes.md ``[seeds]``), in units
+(u, v) of the allowed ellipse scaled by the margin s: p1 = c1 + s r1 u, p2 = c2 + s r2 v, kept
+where u^2 + v^2 <= 1 (< 1 for grid and random) and M^2 > 0 (dropped points are counted).  ``grid``:
+the square lattice of spacing d0 * 1.001^k (d0 = sqrt(pi/n), |k| <= 150) whose count is closest
+to n, row-major; ``random``: uniform in the area from ``default_rng(seed)``; ``lines``: n points
+per segment, ends included (the midpoint when n = 1); ``points``: absolute (p1, p2), no margin.
 """
 from __future__ import annotations
 
@@ -54,7 +31,6 @@ def _grid_count(d: float) -> int:
 def grid_spacing(n: int) -> float:
     """Lattice spacing d (in units of the scaled semi-axes) of a grid of about n points."""
     d0 = math.sqrt(math.pi / n)
-    # the spacing whose count is closest to n; ties go to the smaller |k|, then the smaller k
     keyed = ((abs(_grid_count(d0 * GRID_SCAN_RATIO ** k) - n), abs(k), k) for k in
              range(-GRID_SCAN_HALF, GRID_SCAN_HALF + 1))
     return d0 * GRID_SCAN_RATIO ** min(keyed)[2]
@@ -66,32 +42,13 @@ def _unit_grid(n: int):
     u = np.arange(-k, k + 1) * d
     uu = u * u
     inside = uu[None, :] + uu[:, None] < 1.0     # [j, i]: row j is v = u[j]
-    U, V = np.meshgrid(u, u)                     # U[j, i] = u[i], V[j, i] = u[j]
-    return U[inside], V[inside]                  # C order: v ascending, then u ascending
+    U, V = np.meshgrid(u, u)
+    return U[inside], V[inside]
 
 
 def seed_points(seeds, params, h: float, phi0: float = math.pi):
     """Initial points (p1, p2) strictly inside the allowed region of the section phi = phi0
-    at energy h (docs/model.md R9), following ``seeds`` (rules in the module docstring).
-
-    Parameters
-    ----------
-    seeds : explorer.io.scene.SeedSpec
-        Or any object with the attributes ``kind``, ``n``, ``margin``, ``seed``, ``lines``,
-        ``points`` (already validated: the scene layer checks them).
-    params : explorer.model.Params
-    h, phi0 : float
-        Energy and section angle.
-
-    Returns
-    -------
-    p1, p2 : ndarray of float64
-        ``model.section_M2 > 0`` at every point.
-    n_dropped : int
-        Candidate points dropped (outside the scaled ellipse or with M^2 <= 0).
-
-    Deterministic.  Raises ParameterError if the region is empty.
-    """
+    at energy h (docs/model.md R9), following ``seeds`` (rules in the module docstring)."""
     missing = [k for k in SEED_ATTRIBUTES if not hasattr(seeds, k)]
     if missing:
         raise TypeError(f"seeds must have the attributes {', '.join(SEED_ATTRIBUTES)} (a SeedSpec); "
@@ -116,7 +73,7 @@ def seed_points(seeds, params, h: float, phi0: float = math.pi):
             rho = np.sqrt(rng.random(seeds.n))
             theta = 2.0 * math.pi * rng.random(seeds.n)
             u, v = rho * np.cos(theta), rho * np.sin(theta)
-        else:  # lines
+        else:
             t = np.linspace(0.0, 1.0, seeds.n) if seeds.n > 1 else np.array([0.5])
             seg = np.array(seeds.lines, dtype=np.float64).reshape(-1, 4)
             u = (seg[:, 0:1] + t[None, :] * (seg[:, 2:3] - seg[:, 0:1])).ravel()

@@ -1,23 +1,8 @@
-"""A sweep over the panels of a scene as a pure map (orchestration layer).
-
-A :class:`SweepSpec` is small and picklable: for each panel to compute, the
-packed parameters, the energy, the seeds on the section and the integration
-settings.  ``task(spec, i)`` integrates chunk ``i`` (a slice of one panel's
-orbits) and returns arrays; it has no side effects, so the results cannot
-depend on the number of jobs, the backend or the chunking (each orbit's
-arithmetic is independent of the others).  ``run`` maps ``task`` over the
-chunks with joblib (processes, one Numba thread each) or in this process
-(Numba threads over orbits), never both at once, and hands each finished
-panel to a callback in panel order; only that callback (in the parent) writes
-files.  Compare heyoka's ensemble ``gen(template, i)``.
-
-Streamed panels: a panel whose crossing rows would exceed :data:`STREAM_BYTES` is computed in
-rounds of at most ``spec.blocks[pos]`` crossings per orbit: each round maps the pure
-``task_block(spec, i, state)`` over the panel's unfinished chunks, each continuing its orbits from
-their :class:`~explorer.analysis.sections.StreamState` (bit for bit one uninterrupted run), and
-hands every chunk's block to ``streamer.block`` in the parent, which stores it; memory stays
-O(STREAM_BYTES) whatever the number of crossings, and a killed sweep resumes from the stored
-blocks (``streamer.resume``).
+"""A sweep over the panels of a scene as a pure map (docs/architecture.md, Parallelism and
+Streaming): ``task(spec, i)`` integrates chunk i of a picklable :class:`SweepSpec` with no side
+effects, so results do not depend on jobs, backend or chunking; ``run`` maps it with joblib or in
+this process and hands finished panels, in order, to the parent's callback.  Panels above
+:data:`STREAM_BYTES` are computed in resumable blocks (``task_block``).
 """
 from __future__ import annotations
 
@@ -60,12 +45,12 @@ INDICATOR_ARRAYS = indicator_table.NAMES + ("lyapunov_status", "lyapunov_early",
 class PanelSpec:
     index: int
     label: str
-    P: np.ndarray          # packed parameters (9,)
+    P: np.ndarray
     h: float
-    y0: np.ndarray         # (N, 5) initial states on the section
-    seeds: np.ndarray      # (N, 2) p1, p2
-    grid: tuple = ()       # chaos map raster: (resolution, p1_lo, p1_hi, p2_lo, p2_hi); () otherwise
-    dropped: int = 0       # [seeds] candidates outside the allowed region, not integrated (seeds.seed_points)
+    y0: np.ndarray
+    seeds: np.ndarray
+    grid: tuple = ()
+    dropped: int = 0
 
 
 @dataclass(frozen=True)
@@ -79,10 +64,10 @@ class SweepSpec:
     max_steps: int
     phi0: float
     direction: int
-    chunks: tuple = field(default=())   # (panel position, start, stop) for each task
-    lyapunov: Any = None                # scene.LyapunovSpec when chaos indicators are asked for
-    sections: bool = True               # False: indicators only, no crossings are computed or stored
-    blocks: tuple = ()                  # crossings per orbit and round of each panel (crossings: not streamed)
+    chunks: tuple = field(default=())
+    lyapunov: Any = None
+    sections: bool = True
+    blocks: tuple = ()
 
     def streamed(self, pos: int) -> bool:
         """Panel ``pos`` is computed in rounds of blocks and streamed to the store."""
@@ -101,12 +86,7 @@ PRODUCTS = ("sections", "indicators")
 
 
 def build_spec(scene, panel_indices, *, chunk_orbits: int, product: str | None = None) -> SweepSpec:
-    """Seeds every panel to compute (inside the allowed region only, R9) and cuts it into chunks.
-
-    ``product``: ``"sections"`` (the crossings of the [seeds]), ``"indicators"`` (the chaos
-    indicators of the [seeds], or of the map's grid with [lyapunov] map_resolution) or None (what
-    the scene computes, in one pass: the indicators then use the sections' seeds, so a scene with
-    both sections and a map grid needs two specs)."""
+    """Seeds every panel to compute (inside the allowed region only, R9) and cuts it into chunks."""
     from explorer.analysis.seeds import seed_points
 
     if product is not None and product not in PRODUCTS:
@@ -141,10 +121,6 @@ def build_spec(scene, panel_indices, *, chunk_orbits: int, product: str | None =
 
 
 def _chunks(pos: int, n: int, chunk_orbits: int, parts: int = CHUNKS_PER_PANEL_THREADS) -> list:
-    """The chunks (pos, start, stop) of a panel of ``n`` orbits: ``chunk_orbits`` orbits each
-    (joblib workers), or (0: threads over orbits) ``parts`` chunks of at most CHUNK_ORBITS_THREADS
-    orbits, but never fewer orbits than threads per chunk (a 2-orbit panel is one chunk that both
-    threads share, not two chunks run one after the other)."""
     part = min(math.ceil(n / parts), CHUNK_ORBITS_THREADS)
     step = max(1, chunk_orbits if chunk_orbits > 0 else max(part, max_threads()))
     return [(pos, a, min(n, a + step)) for a in range(0, n, step)]
@@ -179,9 +155,7 @@ def build_atlas_spec(scene, *, chunk_orbits: int, cells=None) -> SweepSpec:
 def map_seeds(params, h: float, phi0: float, resolution: int):
     """The seeds of a chaos map: the centres of the cells of a resolution x resolution raster over
     the bounding box of the allowed ellipse of the section (docs/model.md R9) that lie inside the
-    allowed region (section_M2 > 0), in raster order (p2 rows ascending, then p1).  Returns
-    (p1, p2, grid) with grid = (resolution, p1_lo, p1_hi, p2_lo, p2_hi): cell (r, c) has centre
-    (p1_lo + (c + 1/2) d1, p2_lo + (r + 1/2) d2), d = (hi - lo) / resolution."""
+    allowed region (section_M2 > 0), in raster order (p2 rows ascending, then p1)."""
     ell = model.allowed_ellipse(params, h, phi0)
     if ell is None or not (ell[2] > 0.0 and ell[3] > 0.0):
         raise ParameterError(f"energy h = {h!r}: the allowed region of the section is empty; no chaos map")
@@ -216,7 +190,7 @@ def task(spec: SweepSpec, i: int, threads: int | None = None) -> dict:
                                  direction=spec.direction, threads=threads)
         out = {"chunk": i, "data": res.data, "count": res.count, "status": res.status, "final": res.final,
                "info": res.info, "settings": res.settings}
-    else:   # indicators only: no crossings computed or stored
+    else:
         n = b - a
         out = {"chunk": i, "data": np.zeros((n, 0, 5)), "count": np.zeros(n, np.int64),
                "status": np.zeros(n, np.int64), "final": panel.y0[a:b].copy(), "info": np.zeros((n, 3)),
@@ -230,13 +204,12 @@ def task(spec: SweepSpec, i: int, threads: int | None = None) -> dict:
                          threads=threads, which=which, early_stop=ly.early_stop, early_sali=ly.early_sali,
                          early_megno=ly.early_megno, early_time=ly.early_time)
         y0 = panel.y0[a:b]
-        with np.errstate(invalid="ignore", over="ignore"):   # |H - H0| where the indicator integration ended
+        with np.errstate(invalid="ignore", over="ignore"):
             dh = np.abs(model.energy(panel.P, ind.final) - model.energy(panel.P, y0))
-        # every indicator of one deviation vector (computed anyway), those of two when asked for
         out.update({i.name: ind.values[i.name] for i in indicator_table.TANGENT
                     if i.vectors == 1 or ly.second_vector})
         out.update(lyapunov_status=ind.status, lyapunov_dh=dh)
-        if ly.frequency_diffusion is not None:   # only when asked for: 2N section returns per orbit
+        if ly.frequency_diffusion is not None:
             out["frequency_diffusion"] = panel_frequency_diffusion(spec, panel, a, b, threads)
         if ly.early_stop:
             out.update(lyapunov_early=ind.early)
@@ -257,14 +230,12 @@ def panel_frequency_diffusion(spec: SweepSpec, panel: PanelSpec, a: int, b: int,
 
 
 def _worker_task(spec, i):
-    # one level of parallelism: a joblib worker uses one Numba thread
     return task(spec, i, threads=1)
 
 
 def task_block(spec: SweepSpec, i: int, state, threads: int | None = None) -> dict:
     """Pure map of a streamed panel: the next block of chunk i's orbits, continued from ``state``
-    (their :class:`~explorer.analysis.sections.StreamState`).  Returns the block's rows
-    (``index`` of the orbits in the panel, ``start``, ``count``, ``data``) and the new state."""
+    (their :class:`~explorer.analysis.sections.StreamState`)."""
     pos, a, b = spec.chunks[i]
     panel = spec.panels[pos]
     t0 = time.perf_counter()
@@ -273,7 +244,7 @@ def task_block(spec: SweepSpec, i: int, state, threads: int | None = None) -> di
                                  max_steps=spec.max_steps, phi0=spec.phi0, direction=spec.direction, threads=threads)
     blk = next(it, None)
     it.close()
-    if blk is None:   # every orbit of the chunk had finished
+    if blk is None:
         return {"chunk": i, "index": np.zeros(0, np.int64), "start": np.zeros(0, np.int64),
                 "count": np.zeros(0, np.int64), "data": np.zeros((0, 0, 5)), "state": state,
                 "wall_time": time.perf_counter() - t0}
@@ -286,11 +257,7 @@ def _worker_task_block(spec, i, state):
 
 
 def _map(fn_local, fn_worker, args, jobs, backend, check=None):
-    """fn(*a) for every a of ``args``, results as they come: in this process, or with joblib.
-
-    ``check()`` (it may raise, e.g. on Ctrl-C) runs before each call in this process and after each
-    result has been used; an exception it raises is thrown into joblib's generator, which cancels
-    the workers' tasks (loky, dask) before the exception propagates."""
+    """fn(*a) for every a of ``args``, results as they come: in this process, or with joblib."""
     if jobs == 1 and backend is None:
         for a in args:
             if check is not None:
@@ -314,8 +281,6 @@ def _map(fn_local, fn_worker, args, jobs, backend, check=None):
 
 
 def _stream_panel(spec: SweepSpec, pos: int, chunk_ids, streamer, jobs, backend, progress, check=None) -> dict:
-    """Rounds of blocks over the chunks of panel ``pos`` until every orbit has finished; each chunk's
-    block goes to ``streamer.block`` as it comes.  Returns the panel's per-orbit arrays (no rows)."""
     import dataclasses
 
     panel = spec.panels[pos]
@@ -336,7 +301,7 @@ def _stream_panel(spec: SweepSpec, pos: int, chunk_ids, streamer, jobs, backend,
                 progress(1.0 / rounds)
     out = {"count": state.done.copy(), "status": state.status.copy(), "final": state.y.copy(),
            "info": state.info.copy(), "streamed": True, "settings": {}}
-    if spec.lyapunov is not None:   # indicators do not depend on the crossings: one pass, no rows
+    if spec.lyapunov is not None:
         ly_spec = dataclasses.replace(spec, sections=False)
         parts = sorted(_map(task, _worker_task, [(ly_spec, i) for i in chunk_ids], jobs, backend, check),
                        key=lambda p: p["chunk"])
@@ -352,17 +317,7 @@ def _stream_panel(spec: SweepSpec, pos: int, chunk_ids, streamer, jobs, backend,
 def run(spec: SweepSpec, on_panel, *, jobs: int = 1, backend: str | None = None, progress=None, streamer=None,
         check=None):
     """Map ``task`` over the chunks and call ``on_panel(panel_spec, arrays)`` for each completed panel,
-    in panel order, in this (the parent) process.  ``jobs == 1`` runs in this process with Numba
-    threads over orbits; otherwise joblib runs ``jobs`` workers (``backend`` as joblib names it:
-    "loky" by default, "dask" with a dask.distributed Client active).  ``check()`` runs between
-    chunks, blocks and panels (never inside ``on_panel`` or a block's storing) and may raise to
-    stop the run there (Ctrl-C: :class:`explorer.app.interrupt.deferred_interrupt`); the joblib
-    workers' tasks are then cancelled.
-
-    A streamed panel (``spec.streamed(pos)``) is computed in rounds of blocks (module docstring):
-    ``streamer.resume(panel_spec)`` gives the StreamState to start from (the stored blocks of a
-    killed run applied) and ``streamer.block(panel_spec, number, index, start, count, data, orbits,
-    state_arrays)`` stores each block; its ``arrays`` then hold no rows (``streamed``: True)."""
+    in panel order, in this (the parent) process."""
     checked = check if check is not None else (lambda: None)
     if any(spec.streamed(pos) for pos in range(len(spec.panels))):
         if streamer is None:
@@ -394,7 +349,6 @@ def run(spec: SweepSpec, on_panel, *, jobs: int = 1, backend: str | None = None,
             on_panel(spec.panels[next_pos], _assemble(parts))
             next_pos += 1
 
-    # joblib.parallel_config (in _map) registers external backends such as "dask" on first use
     for r in _map(task, _worker_task, [(spec, i) for i in range(len(spec.chunks))], jobs, backend, check):
         done[r["chunk"]] = r
         if progress is not None:

@@ -1,73 +1,6 @@
-"""The body in the plane: the full system R1 with the position (x, y), for every lam
-(including lam = 0, the falling body of Chaplygin, Steklov and Kozlov).
-
-State and equations (docs/model.md R1, polynomial form)
---------------------------------------------------
-``y = (p1, p2, M, g1, g2, x, y)`` with ``(g1, g2) = (sin phi, cos phi)``::
-
-    dp1/dt = (M/b)(p2 - zeta) - mu g1 - lam p2/a2
-    dp2/dt = -(M/b)(p1 - chi) - mu g2 + lam p1/a1
-    dM/dt  = (p1 - chi) p2/a2 - (p2 - zeta) p1/a1 - mu (xi g2 - eta g1)
-    dg1/dt = (M/b) g2,   dg2/dt = -(M/b) g1
-    dx/dt  = (p1/a1) g2 - (p2/a2) g1
-    dy/dt  = (p1/a1) g1 + (p2/a2) g2
-
-a quadratic 7-dimensional system (the first five equations are the reduced field R3, which
-does not involve x, y and does not divide by lam).  Integrals checked along every orbit:
-
-    H   = 1/2 (p1^2/a1 + p2^2/a2 + M^2/b) + mu (y + xi g1 + eta g2)                (R1)
-    p_x = p1 g2 - p2 g1 + lam y + zeta g1 - chi g2 = c1                            (R2)
-    p_y = p1 g1 + p2 g2 - lam x - zeta g2 - chi g1 = c2 - mu t                     (R2)
-
-Integrator
-----------
-Adaptive DOP853 (Hairer-Norsett-Wanner; the project's kernels :mod:`explorer.kernels.dop853`,
-controller and first step as scipy's) with ``rtol = atol = tol``, on the 7-dim polynomial
-state.  DOP853 rather than the Taylor recurrence because its 7th-order continuous extension
-gives the samples at the requested times and the turning points of phi (roots of M, found
-with :func:`explorer.kernels.events.dense_root` on the interpolant) at no extra cost of
-step-size control; the 3 extra dense-output stages are evaluated only in steps that contain
-a sample time or a sign change of M.  The time is summed with Kahan compensation.
-
-The angle is unwrapped in the compiled loop: at the end of every accepted step (and at every
-sample or turning point) phi is atan2(g1, g2) + 2 pi k with the branch k closest to the
-previous phi plus the trapezoidal increment h (M_old + M_new)/(2b); the trapezoid is wrong by
-O(h^3) while a wrong branch would need an error of pi, so the winding is never lost.
-
-The drift and the band (ur25 with the corrected R2)
----------------------------------------------------
-Solving the two momentum integrals R2 for x and y (lam != 0)::
-
-    x = (mu/lam) t + ((p1 - chi) sin phi + (p2 - zeta) cos phi - c2) / lam
-    y = c1/lam - ((p1 - chi) cos phi - (p2 - zeta) sin phi) / lam
-
-The bracketed terms are the components of p - s rotated by phi, so
-``|y - c1/lam| <= |p - s|/|lam|`` pointwise (the band) and
-``x(t) - x(0) - (mu/lam) t`` is bounded by ``2 max|p - s|/|lam|``: the mean horizontal velocity
-is **+mu/lam**.  The seed's ur25 prints -mu/lam because its ur10 prints ``p_y = mu t + c2``;
-with R1 (and the bracket ur8) dp_y/dt = -mu (docs/model.md R2), and the simulation confirms +mu/lam
-(:func:`drift`).  |p - s| is bounded a priori by the energy: with a = max(a1, a2),
-h_r = H - mu c1/lam (the reduced energy R3) and q = |p|,
-q^2/(2a) <= h_r + (mu/|lam|)(q + |s|) + mu |r|  (kinetic energy >= q^2/(2a), M^2/b >= 0).
-
-The falling body (lam = 0, Kozlov)
-----------------------------------
-With lam = 0 the momentum (c1, c2 - mu t) in the fixed frame grows linearly; eliminating p
-(ur17) the leading term is ``phi'' = (mu^2 t^2 / 2b)(1/a2 - 1/a1) sin 2 phi``, so phi
-oscillates about phi_inf (pi/2 mod pi when a1 > a2, 0 mod pi when a1 < a2) with
-angular frequency ``Omega(t) = mu t sqrt(|1/a2 - 1/a1|/b)`` (frequency ~ t) and, by the
-adiabatic invariant E/Omega, amplitude ~ Omega^(-1/2) ~ t^(-1/2) (Kozlov 1989).
-:func:`kozlov` measures both exponents from the turning points of phi (M = 0).
-
-API
----
-``full_params(params=None, **changes) -> dict``      validated parameters (lam = 0 allowed)
-``initial_state(params, p1, p2, M, phi, x=0, y=0) -> (7,) array``
-``trajectory(params, y0_full, tmax, n_samples=2001, tol=1e-12) -> dict``
-    samples ``t, x, y, phi, p1, p2, M, H, px, py`` (+ ``g1, g2``, the turning points, status)
-``conservation(result) -> dict``                      errors of H, p_x, p_y + mu t (abs and rel)
-``drift(params, y0_full, T, ...) -> dict``            measured mean velocity vs +mu/lam; the band
-``kozlov(params, y0_full, T, ...) -> dict``           lam = 0: fitted exponents of amplitude, frequency
+"""The body in the plane: the full system R1 with the position (x, y), any lam including 0
+(docs/model.md R1, R2; docs/commands/trajectory.md has the equations, the drift +mu/lam and the
+band (ur25 corrected), the falling body of Kozlov, and the API).
 """
 from __future__ import annotations
 
@@ -97,33 +30,9 @@ DEFAULT_MAX_STEPS = 10 ** 8
 SAMPLE_BYTES = 160
 
 
-# ====================================================================== parameters, states
 @dataclass(frozen=True)
 class Trajectory:
-    """The body in the plane sampled at equally spaced times (:func:`trajectory`).
-
-    Attributes
-    ----------
-    t : ndarray (n,)
-        Sample times, both ends of [0, tmax] included.
-    x, y, phi : ndarray (n,)
-        Position of the body and its angle (unwrapped), docs/model.md R1.
-    p1, p2, M, g1, g2 : ndarray (n,)
-        The reduced state (R3) at the samples.
-    H, px, py : ndarray (n,)
-        Energy and the momentum integrals of R1 (p_y + mu t is conserved).
-    turn_t, turn_phi, turn_dir : ndarray (m,)
-        Turning points of phi (M = 0) and the sign of dM/dt there.
-    status : str
-        ``'done'``, or why the integration stopped (samples after the stop are NaN).
-    steps, t_reached, n_filled : int, float, int
-        DOP853 steps taken, time reached, samples filled.
-    params : dict
-        Parameters (with ``lam``); ``P`` packed; ``tol`` DOP853's tolerance; ``y0`` the start.
-
-    The fields are also readable by name, ``res["x"]`` (the JSON-shaped access that the command
-    line and older code use).
-    """
+    """The body in the plane sampled at equally spaced times (:func:`trajectory`)."""
 
     t: np.ndarray
     x: np.ndarray
@@ -162,13 +71,7 @@ class Trajectory:
 
 
 def full_params(params=None, **changes) -> dict:
-    """Validated parameters of the full system R1 as a dict (keys ``model.PARAM_NAMES``).
-
-    ``params``: a :class:`model.Params`, a mapping (missing keys from :data:`DEFAULT_PARAMS`:
-    Figure 4 with mu = 0.5), a packed sequence of 9 numbers, or None (the defaults).
-    Unlike the reduced system, R1 is valid for lam = 0.  ``model.Params`` refuses lam = 0, so
-    everything except lam is validated by ``model.Params`` with lam replaced by 1 (a1, a2, b > 0,
-    mu >= 0, all finite); lam is checked here (finite, any sign, 0 allowed)."""
+    """Validated parameters of the full system R1 as a dict (keys ``model.PARAM_NAMES``)."""
     if params is None:
         d = dict(DEFAULT_PARAMS)
     elif isinstance(params, model.Params):
@@ -223,7 +126,6 @@ def _check_run(tmax, n_samples, tol):
     return tmax, ns, tol
 
 
-# ====================================================================== integration
 def momentum_integrals(P, t, p1, p2, g1, g2, x, y):
     """docs/model.md R2: (p_x, p_y); p_x = c1, p_y = c2 - mu t along orbits."""
     lam, chi, zeta = P[model.LAM], P[model.CHI], P[model.ZETA]
@@ -235,14 +137,7 @@ def momentum_integrals(P, t, p1, p2, g1, g2, x, y):
 def trajectory(params, y0_full, tmax, n_samples=2001, tol=DEFAULT_TOL, *, phi_start=None,
                max_steps=DEFAULT_MAX_STEPS, max_turns=None) -> Trajectory:
     """Integrate R1 from ``y0_full`` (:func:`initial_state`) over [0, tmax] and sample it at
-    ``n_samples`` equally spaced times (both ends included).
-
-    Returns a frozen :class:`Trajectory`: arrays ``t, x, y, phi (unwrapped), p1, p2, M, g1, g2,
-    H, px, py`` and ``turn_t, turn_phi, turn_dir`` (turning points of phi, M = 0; dir = sign of
-    dM/dt), ``status`` ('done' or why it stopped; samples after the stop are NaN), ``steps``,
-    ``params`` (dict), ``tol``, ``P`` (packed), ``y0``.  ``phi_start`` fixes the branch of the
-    initial angle (default atan2(sin phi, cos phi) in (-pi, pi]).
-    """
+    ``n_samples`` equally spaced times (both ends included)."""
     prm = full_params(params)
     P = np.array([prm[n] for n in model.PARAM_NAMES], dtype=np.float64)
     tmax, ns, tol = _check_run(tmax, n_samples, tol)
@@ -269,7 +164,7 @@ def trajectory(params, y0_full, tmax, n_samples=2001, tol=DEFAULT_TOL, *, phi_st
             y0, phi0, P, t, tol, tol, int(max_steps), out, out_phi, turns)
         if nturn <= cap or max_turns is not None:
             break
-        cap = nturn  # too many turning points for the buffer: run again with room for all
+        cap = nturn
     nturn = min(nturn, cap)
     p1, p2, m, g1, g2, x, y = (out[:, i] for i in range(STATE_DIM))
     H = model.energy_full(P, out)
@@ -285,12 +180,7 @@ def trajectory(params, y0_full, tmax, n_samples=2001, tol=DEFAULT_TOL, *, phi_st
 
 
 def conservation(result) -> dict:
-    """Errors of the integrals along a :func:`trajectory` result (finite samples only).
-
-    ``H``: max |H - H(0)|; ``px``: max |p_x - c1|; ``py``: max |p_y + mu t - c2|; each also
-    relative to the size of its terms (``*_rel``): the maximum over the orbit of
-    T + mu(|y| + |xi g1 + eta g2|) for H, |p| + |s| + |lam y| for p_x and
-    |p| + |s| + |lam x| + mu t for p_y.  ``casimir``: max |g1^2 + g2^2 - 1|."""
+    """Errors of the integrals along a :func:`trajectory` result (finite samples only)."""
     P = result["P"]
     ok = np.isfinite(result["x"])
     t = result["t"][ok]
@@ -315,12 +205,7 @@ def conservation(result) -> dict:
 
 # ====================================================================== drift and band (ur25)
 def energy_band_halfwidth(params, y0_full) -> float:
-    """A priori bound on |p - s|/|lam| from the energy (lam != 0), hence on |y - c1/lam|.
-
-    With a = max(a1, a2), q = |p|, h_r = H - mu c1/lam (reduced energy R3):
-    q^2/(2a) <= h_r + (mu/|lam|)(q + |s|) + mu |r|, so
-    q <= a mu/|lam| + sqrt((a mu/lam)^2 + 2a (h_r + mu |s|/|lam| + mu |r|)), and
-    |p - s| <= q + |s|."""
+    """A priori bound on |p - s|/|lam| from the energy (lam != 0), hence on |y - c1/lam|."""
     prm = full_params(params)
     P = np.array([prm[n] for n in model.PARAM_NAMES])
     lam = P[model.LAM]
@@ -341,15 +226,7 @@ def energy_band_halfwidth(params, y0_full) -> float:
 
 def drift(params, y0_full, T, n_samples=20001, tol=DEFAULT_TOL, *, result=None, phi_start=None) -> dict:
     """Mean horizontal velocity over [0, T] vs the prediction +mu/lam (R2, ur25), and the band
-    in y.  Needs lam != 0.
-
-    ``measured``: least-squares slope of x(t) over the samples; ``endpoint``: (x(T) - x(0))/T,
-    whose distance to mu/lam is at most ``remainder_bound`` = 2 max|p - s| / (|lam| T) (ur25);
-    ``predicted`` = +mu/lam; ``seed`` = -mu/lam (ur25 as printed); ``rel_error`` of the slope.
-    ``band``: measured y_min, y_max; centre c1/lam; ``halfwidth_orbit`` = max|p - s|/|lam|
-    (|y - c1/lam| <= |p - s|/|lam| at every instant); ``halfwidth_energy`` the a priori
-    bound of :func:`energy_band_halfwidth`; ``inside``: the samples lie in the orbit band.
-    ``result``: an existing :func:`trajectory` result to reuse."""
+    in y.  Needs lam != 0."""
     prm = full_params(params)
     if prm["lam"] == 0.0:
         raise model.ParameterError("drift needs lam != 0 (for lam = 0 the body falls: use kozlov())")
@@ -392,14 +269,7 @@ def kozlov_omega_rate(params) -> float:
 def kozlov(params, y0_full, T, tol=DEFAULT_TOL, *, fit_from=0.3, n_samples=4001, result=None,
            phi_start=None) -> dict:
     """lam = 0: fit amplitude ~ t^alpha and frequency ~ t^beta of the oscillation of phi about
-    phi_inf (Kozlov: alpha = -1/2, beta = 1) over t in [fit_from T, T].
-
-    From consecutive turning points (t_k, phi_k), (t_{k+1}, phi_{k+1}) (roots of M, one max and
-    one min): amplitude |phi_{k+1} - phi_k|/2 and frequency 1/(2 (t_{k+1} - t_k)) at
-    (t_k + t_{k+1})/2 (both independent of phi_inf and of its slow O(1/t) drift).
-    ``phi_inf``: mean of the midpoints (phi_k + phi_{k+1})/2 over the last 20 half-periods.
-    Also ``freq_rate`` (measured frequency/t, median over the window) vs ``freq_rate_predicted``
-    = Omega'/(2 pi) of the linearisation.  Needs lam = 0, mu > 0, a1 != a2."""
+    phi_inf (Kozlov: alpha = -1/2, beta = 1) over t in [fit_from T, T]."""
     prm = full_params(params)
     if prm["lam"] != 0.0:
         raise model.ParameterError("kozlov needs lam = 0 (the falling body without circulation)")
@@ -429,7 +299,7 @@ def kozlov(params, y0_full, T, tol=DEFAULT_TOL, *, fit_from=0.3, n_samples=4001,
     beta, cf = np.polyfit(lt, lf, 1)
     phi_inf = float(np.mean(mid[-20:]))
     a1_gt = prm["a1"] > prm["a2"]
-    period = math.pi  # equilibria of sin 2 phi repeat every pi
+    period = math.pi
     base = 0.5 * math.pi if a1_gt else 0.0
     phi_inf_mod = float((phi_inf - base + 0.5 * period) % period - 0.5 * period + base)
     return {

@@ -1,26 +1,6 @@
-"""Lobes of a homoclinic tangle and the flux across a broken separatrix (MacKay, Meiss &
-Percival 1984, Physica D 13, 55; Rom-Kedar & Wiggins 1990, Arch. Rat. Mech. Anal. 109, 239).
-docs/manifolds.md has the method, the error estimate and the Melnikov conversion.
-
-The section map P preserves dp1 dp2 (docs/model.md R11: (l, L') with p - s = sqrt(2 lam L')(cos l,
-sin l) is canonical, dp1 ^ dp2 = lam dL' ^ dl; tests/analysis/test_manifolds.py checks det DP = 1),
-so areas in the (p1, p2) plane are invariant and the flux is an area per iteration.
-
-Primary intersections: along a pair (W^u, W^s) of branches every homoclinic point x has
-parameters (sigma_u, sigma_s) (:mod:`explorer.analysis.manifolds`) and F = P^m maps it to
-(sigma_u + L, sigma_s - L): sigma_u + sigma_s is constant on a homoclinic orbit.  The two
-orbits with the smallest sums are the primary ones (they leave the saddle and come back
-soonest).  A point h0 of the first and the point q0 of the second with sigma_u(h0) <
-sigma_u(q0) < sigma_u(h0) + L bound a lobe: the unstable arc [sigma_u(h0), sigma_u(q0)] and the
-stable arc [sigma_s(q0), sigma_s(h0)]; the arcs from q0 to F(h0) bound the second lobe of the
-turnstile.  The flux across the broken separatrix per iteration of F is the area of one lobe
-(MacKay, Meiss & Percival 1984: the two lobes have equal areas, which the tests check).
-
-Area: Green's theorem, A = (1/2) closed-integral (p1 dp2 - p2 dp1), along the polygon of
-exactly computed points of the arcs (the shoelace sum) at the branch's spacing and at half that
-spacing (midpoints in sigma); the polygon's error is O(spacing^2), so the Richardson value
-A = A_fine + (A_fine - A_coarse)/3 is reported with the error estimate |A_fine - A_coarse|/3
-(conservative: the extrapolated value is better than that).
+"""Lobes of a homoclinic tangle and the flux across a broken separatrix (MacKay, Meiss & Percival
+1984; Rom-Kedar & Wiggins 1990): primary intersections, lobe areas by Green's theorem with a
+Richardson error estimate, transit times (docs/manifolds.md, Lobes and flux).
 """
 from __future__ import annotations
 
@@ -54,19 +34,17 @@ def polygon_area(points) -> float:
 
 
 def richardson_area(coarse, fine):
-    """(area, error) from the polygon areas at a spacing and at half of it (module docstring)."""
+    """(area, error) from the polygon areas at a spacing and at half of it: Richardson
+    A_fine + (A_fine - A_coarse)/3, error |A_fine - A_coarse|/3 (docs/manifolds.md)."""
     a, b = polygon_area(coarse), polygon_area(fine)
     return b + (b - a) / 3.0, abs(b - a) / 3.0
 
 
 @dataclass(frozen=True)
 class Lobe:
-    """A lobe bounded by the unstable arc from ``start`` to ``end`` (two adjacent primary
-    homoclinic points) and the stable arc back: signed ``area`` (counterclockwise positive),
-    its ``error`` estimate, the boundary ``boundary`` (closed polygon, (m, 2)) and ``secondary``:
-    the homoclinic points found inside the arcs of its turnstile (the unstable arc from a point
-    to its F-image and the stable arc back, which hold both lobes): 0 for a simple turnstile;
-    otherwise the lobes overlap and their signed area is not the flux."""
+    """A lobe bounded by the unstable arc from ``start`` to ``end`` (adjacent primary homoclinic
+    points) and the stable arc back: signed ``area``, ``error``, closed ``boundary`` (m, 2), and
+    ``secondary`` homoclinic points on its turnstile's arcs (0: simple; else the area is not the flux)."""
 
     start: Homoclinic
     end: Homoclinic
@@ -81,8 +59,6 @@ class Lobe:
 
 
 def _arc(branch: ManifoldBranch, a, b):
-    """Points of ``branch`` with sigma from a to b (either order): the stored ones inside and the
-    two ends computed afresh; and the same with the midpoints in sigma inserted."""
     lo, hi = min(a, b), max(a, b)
     inner = branch.sigma[(branch.sigma > lo) & (branch.sigma < hi)]
     sig = np.concatenate([[lo], inner, [hi]])
@@ -115,11 +91,6 @@ def _unbroken(branch: ManifoldBranch, a, b) -> bool:
 
 
 def _secondary(points, a, b, c, margin=1e-7) -> int:
-    """Homoclinic points other than b inside both arcs of the turnstile a -> b -> c = F(a): on the
-    unstable arc (sigma_u(a), sigma_u(c)) and the stable arc (sigma_s(c), sigma_s(a)).  The two
-    arcs bound the region between the eye R and its image P(R) (R's boundary from a, P(R)'s from
-    c); with such a point they cross again, the lobes overlap each other and the area of R minus P(R)
-    is not a lobe's signed area."""
     ulo, uhi = sorted((a.sigma_u, c.sigma_u))
     slo, shi = sorted((a.sigma_s, c.sigma_s))
     return sum(1 for p in points if ulo + margin < p.sigma_u < uhi - margin and slo + margin < p.sigma_s < shi - margin
@@ -127,17 +98,9 @@ def _secondary(points, a, b, c, margin=1e-7) -> int:
 
 
 def lobes(unstable: ManifoldBranch, stable: ManifoldBranch, *, points=None) -> list:
-    """The two lobes of the turnstile between the primary homoclinic orbits of the pair
-    (``unstable``, ``stable``) (module docstring), as :class:`Lobe` s; [] when the branches are
-    too short to hold two primary orbits and the arcs between them, or when every such pair of
-    arcs is torn (:attr:`~explorer.analysis.manifolds.ManifoldBranch.tears`).  ``points``: their
-    :func:`~explorer.analysis.manifolds.homoclinic_points` when already computed.
-
-    From the point h0 of the first primary orbit farthest from the saddle and the point q0 of
-    the second with sigma_u(h0) < sigma_u(q0) < sigma_u(h0) + L, the pair is (h0, q0), (q0, F(h0))
-    when F(h0) is on the computed branches, else (F^-1(q0), h0), (h0, q0): two adjacent lobes of
-    the same turnstile (the second pair is the preimage of the first's second lobe and the first
-    lobe; their areas are equal by area preservation)."""
+    """The two lobes (:class:`Lobe`) of the turnstile between the primary homoclinic orbits of
+    (``unstable``, ``stable``) (docs/manifolds.md, Lobes and flux); [] when the branches are too
+    short or every pair of arcs is torn.  ``points``: their homoclinic points, if computed."""
     hs = homoclinic_points(unstable, stable) if points is None else points
     if unstable.curve is None or stable.curve is None:
         raise ParameterError("lobes needs branches grown by grow_branch (they carry their parametrisation)")
@@ -171,7 +134,6 @@ def lobes(unstable: ManifoldBranch, stable: ManifoldBranch, *, points=None) -> l
                 out.append(Lobe(a, b, area, err, fine, crossings))
             if len(out) == 2:
                 return out
-        # only one lobe: what the callers (turnstile_check) report as "no pair"
         if not pairs and _unbroken(unstable, h0.sigma_u, q0.sigma_u) and _unbroken(stable, q0.sigma_s, h0.sigma_s):
             uc, uf = _arc(unstable, h0.sigma_u, q0.sigma_u)
             sc, sf = _arc(stable, q0.sigma_s, h0.sigma_s)
@@ -182,11 +144,8 @@ def lobes(unstable: ManifoldBranch, stable: ManifoldBranch, *, points=None) -> l
 
 
 def torn(unstable: ManifoldBranch, stable: ManifoldBranch, points) -> bool:
-    """No turnstile with unbroken arcs can exist on these branches, however long they grow: two
-    adjacent lobes of the homoclinic orbit with the smallest sum S0 = sigma_u + sigma_s span a
-    range L of sigma_u and L of sigma_s, [a, a + L] and [S0 - a - L, S0 - a], so both
-    branches must be unbroken up to sigma_u_t + sigma_s_t >= S0 + L, where sigma_t is each
-    branch's first tear (the section map's discontinuity, ManifoldBranch.tears)."""
+    """No turnstile with unbroken arcs can exist on these branches however long they grow: the
+    first tears sigma_u_t + sigma_s_t < S0 + L (S0 the smallest homoclinic sum, L its lobe span)."""
     if not points:
         return False
     S0 = min(p.sigma_u + p.sigma_s for p in points)
@@ -196,28 +155,22 @@ def torn(unstable: ManifoldBranch, stable: ManifoldBranch, points) -> bool:
 def turnstile(sd, *, arclength=6.0, sign=1, max_arclength=None, max_residual=1e-10):
     """The unstable branch ``sign`` of the saddle ``sd``, the stable branch it meets (the same
     sign first, then the other), their homoclinic points and the turnstile's lobes: a dict with
-    keys "unstable", "stable", "homoclinic_points", "lobes", "arclength", "torn".  When no pair has
-    both lobes within ``arclength``, the branches are grown again at twice the length, up to
-    ``max_arclength`` (default: ``arclength``), unless the branches are torn (:func:`torn`: no
-    length helps); the pair with the most lobes is returned.  ``max_residual``: of the homoclinic
-    points (:func:`~explorer.analysis.manifolds.homoclinic_points`); the branches grow with the
-    defaults of :func:`~explorer.analysis.manifolds.grow_branch`."""
+    keys "unstable", "stable", "homoclinic_points", "lobes", "arclength", "torn"."""
     from explorer.analysis.manifolds import grow_branch
 
     length = float(arclength)
     limit = length if max_arclength is None else float(max_arclength)
     bu, grown = None, {}
     while True:
-        # a doubled length continues the shorter branches (the same points as growing afresh)
         bu = grow_branch(sd, sign=sign, arclength=length, resume=bu)
         best = None
-        for s in (sign, -sign):   # W^s_sign may be the reflection of bu: grow_branch decides (manifolds.mirrors)
+        for s in (sign, -sign):
             bs = grown[s] = grow_branch(sd, stable=True, sign=s, arclength=length, resume=grown.get(s),
                                         unstable=bu if s == sign else None)
             hs = homoclinic_points(bu, bs, max_residual=max_residual)
             lb = lobes(bu, bs, points=hs)
             cut = torn(bu, bs, hs)
-            rank = (len(lb), cut, len(hs))    # a torn pair is a definite answer: no length helps
+            rank = (len(lb), cut, len(hs))
             if best is None or rank > (len(best["lobes"]), best["torn"], len(best["homoclinic_points"])):
                 best = {"unstable": bu, "stable": bs, "homoclinic_points": hs, "lobes": lb, "arclength": length,
                         "torn": cut}
@@ -228,9 +181,7 @@ def turnstile(sd, *, arclength=6.0, sign=1, max_arclength=None, max_residual=1e-
         length *= 2
 
 
-#: the reasons of a flux curve's row without a lobe flux (each row's "reason" is one of these; its
-#: "status" says more): no turnstile within the branches' length, its two lobes differ, the
-#: branches torn by the section map's discontinuity, no primary homoclinic point on the branches
+#: the reasons of a flux curve's row without a lobe flux (its "status" says more)
 REASON_NO_PAIR = "no primary homoclinic pair within budget"
 REASON_LOBES_DIFFER = "lobes differ"
 REASON_TORN = "torn"
@@ -273,33 +224,26 @@ def melnikov_lobe_area(params, h, mu) -> float:
 #: mu of :func:`flux_curve` when none are given: from 1e-3 up to the loss of the central saddle
 #: (Figure 4, h = 2: trace 2 at mu* ~ 2.98, docs/manifolds.md)
 DEFAULT_FLUX_MUS = (1e-3, 3e-3, 1e-2, 3e-2, 0.1, 0.2, 0.3, 0.4, 0.5, 0.75, 1.0, 1.5, 2.0, 2.5, 2.75, 3.0, 3.25, 3.5)
-#: largest continuation step in mu between two rows of a flux curve (a larger one may land on
-#: another fixed point: from mu = 0 to 1 in one step it found (-0.715, -0.631), trace 27.6)
+#: largest continuation step in mu between two rows of a flux curve (a larger one may jump to
+#: another fixed point)
 FOLLOW_STEP = 0.05
-#: the homoclinic points of a flux curve are kept to this residual: at mu >= 1 the rounding of the
-#: points a few generations out reaches 1e-10 (the primary point on p2 = 0 at mu = 1: 1.4e-10);
-#: at mu <= 0.3 they are found to 1e-12
+#: the homoclinic points of a flux curve are kept to this residual (rounding reaches 1e-10 at mu = 1)
 FLUX_RESIDUAL = 1e-9
 #: samples of the Monte Carlo exit flux of the eye (rows whose turnstile is torn)
 EXIT_SAMPLES = 4000
 
 
 class FluxCurve(list):
-    """The rows of :func:`flux_curve` (a list of dicts), with ``destruction``: the mu where the
-    curve stopped because the central saddle was lost (its estimate of the separatrix's
-    destruction; None when it never stopped), ``stop_reason`` (why, "" when it never stopped)
-    and ``trace_two`` (a closer estimate when the saddle turned elliptic)."""
+    """The rows of :func:`flux_curve` (a list of dicts), with ``destruction`` (the mu where the
+    central saddle was lost, or None), ``stop_reason`` and ``trace_two``."""
 
     destruction: float | None = None
     stop_reason: str = ""
-    #: where the trace of the followed point, interpolated linearly between the last saddle and
-    #: the first elliptic row, is 2 (the saddle turns elliptic); None unless it stopped so
+    #: the mu where the followed point's trace, interpolated linearly, is 2; None unless it stopped so
     trace_two: float | None = None
 
 
 def _eye_point(points, reversible):
-    """The primary homoclinic point that closes the eye: on the symmetry line p2 = 0 (sigma_u =
-    sigma_s) when the map is reversible, else the first of the orbit with the smallest sum."""
     if not points:
         return None
     S0 = min(p.sigma_u + p.sigma_s for p in points)
@@ -317,28 +261,7 @@ def flux_curve(system, mus=None, *, guess=(0.0, 0.0), arclength=6.0, max_arcleng
     from ``guess`` at mu = 0 by continuation) for each mu of ``mus`` (increasing; default
     :data:`DEFAULT_FLUX_MUS`, from 1e-3 to beyond the saddle's loss), stopping at the first mu
     where the saddle is lost.  One row per mu: ``{"mu", "flux", "error", "lobes", "angle",
-    "melnikov", "ratio", "arclength", "status", "reason", "eye_flux", "eye_error", "trace"}``.
-
-    flux: the area of one lobe of the turnstile per iteration (:func:`turnstile` with branches
-    of ``arclength`` doubled up to ``max_arclength``, default 4 ``arclength``), with status "ok";
-    melnikov: :func:`melnikov_lobe_area` or None.  Otherwise ``flux`` is None, ``status`` says
-    why and ``reason`` is one of: :data:`REASON_NO_SADDLE` (the followed point is elliptic, left
-    the symmetry line of a reversible map, or was not found: the curve stops, and
-    ``FluxCurve.destruction`` is this mu), :data:`REASON_TORN` (the section map's discontinuity
-    cuts the branches so that no turnstile has unbroken arcs: :func:`torn`),
-    :data:`REASON_NO_EYE` (the
-    eye's boundary arcs are torn, or the branches meet nowhere on p2 = 0 while torn),
-    :data:`REASON_SECONDARY` (the lobes' arcs hold other homoclinic points: the lobes are not
-    simple, their signed area is not the flux; ``lobes`` still lists them),
-    :data:`REASON_NO_PAIR` (no pair within the budget), :data:`REASON_LOBES_DIFFER`.
-
-    ``eye_flux`` (any row whose eye R is bounded by unbroken arcs up to its primary point on
-    p2 = 0, also where no turnstile was found): the flux into the eye per
-    iteration, the area of its entry set {x in R: P^-1(x) not in R} (= its exit set's, by area
-    preservation) by Monte Carlo with ``exit_samples`` points (:func:`exit_times`, one
-    iteration), ``eye_error`` its standard error: it equals the lobe area where the turnstile
-    is simple and measures the flux through the eye's boundary where it is not (secondary
-    intersections) or torn; ``exit_samples=0`` skips it."""
+    "melnikov", "ratio", "arclength", "status", "reason", "eye_flux", "eye_error", "trace"}``."""
     from explorer.analysis import fixedpoints
     from explorer.analysis.manifolds import saddle
     from explorer.analysis.maps import is_section_map
@@ -420,12 +343,9 @@ def flux_curve(system, mus=None, *, guess=(0.0, 0.0), arclength=6.0, max_arcleng
     return rows
 
 
-# ------------------------------------------------------------------ transit times
 def inside(polygon, X) -> np.ndarray:
     """Whether each point of X (m, 2) lies inside the closed ``polygon`` (k, 2) (even-odd rule:
-    a ray along +p1 crosses the boundary an odd number of times); NaN points are outside.
-    Compiled (:func:`explorer.kernels.geometry.inside`): the transit times test millions of
-    points against zones of thousands of vertices."""
+    a ray along +p1 crosses the boundary an odd number of times); NaN points are outside."""
     from explorer.kernels import geometry
 
     return geometry.inside(polygon, X)
@@ -441,10 +361,6 @@ def resonance_zone(unstable: ManifoldBranch, stable: ManifoldBranch, point: Homo
 
 
 def _steps_inside(smap, polygon, X, max_iter, block):
-    """For each start x (inside the polygon), the first k >= 1 with P^k(x) outside (or leaving the
-    allowed region, or with no return): max_iter + 1 when it stays max_iter iterations.  The
-    iterates: :func:`explorer.analysis.maps.images` (a section map's batch of the Taylor lanes, or
-    any map of the protocol)."""
     from explorer.analysis.maps import images
 
     T = np.full(len(X), max_iter + 1, np.int64)
@@ -453,7 +369,7 @@ def _steps_inside(smap, polygon, X, max_iter, block):
     done = 0
     while alive.size and done < max_iter:
         n = min(block, max_iter - done)
-        pts = images(smap, cur[alive], n)                  # NaN where no crossing
+        pts = images(smap, cur[alive], n)
         ins = inside(polygon, pts.reshape(-1, 2)).reshape(len(alive), n)
         left = ~ins
         first = np.where(left.any(axis=1), np.argmax(left, axis=1), -1)
@@ -470,18 +386,7 @@ def exit_times(unstable: ManifoldBranch, stable: ManifoldBranch, point: Homoclin
     """Transit times through the resonance zone R (:func:`resonance_zone`) and the mean-exit-time
     identity (Meiss 1992, Rev. Mod. Phys. 64, 795): for an area-preserving map, the points of the
     entry set I = {x in R: P^-1(x) not in R} (area = flux Phi) stay T(x) iterations in R, and
-    int_I T dA = A_acc, the area of R's accessible part, so <T>_I = A_acc / Phi.
-
-    ``samples`` points uniform in R (seeded): those whose preimage is outside form a uniform
-    sample of I (their fraction times A(R) estimates Phi independently of the lobes); each is
-    iterated until it leaves R (at most N = ``max_iter`` iterations); A_acc is A(R) times the
-    fraction of all samples that leave within N.  Truncated consistently: a point x = P^j(y) of
-    the transit orbit of an entry point y leaves within N iterations iff j >= T(y) - N, so
-    A(points leaving within N) = Phi <min(T, N)>_I exactly, and ``mean`` is <min(T, N)>_I (it
-    tends to <T>_I as N grows).  Returns a dict: area (of R, Green), flux_mc (and flux_mc_sem),
-    entry (the number of entry points), times (their T; N + 1 when capped), mean, sem (standard
-    error), capped (entry points still inside after N), accessible_area, accessible_sem,
-    survival (t, P(T > t)), all_times (T of all samples) and zone (the polygon R)."""
+    int_I T dA = A_acc, the area of R's accessible part, so <T>_I = A_acc / Phi."""
     from explorer.analysis.manifolds import _images
 
     smap = unstable.curve.sd.smap
