@@ -1,11 +1,6 @@
-"""Compiled physics of the reduced system (docs/model.md R3, R4): the vector field,
-the energy, the exact sub-flows of the splitting and the Taylor-coefficient
-recurrence.  Only numbers and arrays; the numpy twin a reader checks is
-:mod:`explorer.model`.
-
-State ``y = (p1, p2, M, g1, g2)``, ``(g1, g2) = (sin phi, cos phi)``;
-parameters packed as ``P = (a1, a2, b, lam, chi, zeta, mu, xi, eta)``, read by the index
-constants of :mod:`explorer.model.parameters` (``P[MU]``).
+"""Compiled physics of the reduced system (docs/model.md R3, R4): the vector field, the energy,
+the exact sub-flows of the splitting and the Taylor recurrences; the numpy twin is
+:mod:`explorer.model.parameters`.  y = (p1, p2, M, g1, g2); P packed, read by the index constants.
 """
 import math
 
@@ -67,10 +62,8 @@ def flow_hm(y, P, t):
 
 @njit(inline="always")
 def _flow_shear(y, i, j, a, c, lam, s, t):
-    """docs/model.md R4, the flow of H_1 = p1^2/(2 a1) (rows i, j = 0, 1, a = a1, c = zeta, s = 1)
-    or H_2 = p2^2/(2 a2) (i, j = 1, 0, a = a2, c = chi, s = -1) for time t: with u = p_i/a, p_i and
-    g fixed; p_j(t) = p_j + s lam u t; dM/dt = -s (p_j(t) - c) u, so
-    M(t) = M - s u t ((p_j - c) + s lam u t / 2).  (The factors s = +-1 are exact.)"""
+    """docs/model.md R4, the flow of H_1 (i, j = 0, 1, a = a1, c = zeta, s = 1) or H_2 (i, j = 1, 0,
+    a = a2, c = chi, s = -1): u = p_i/a, p_j += s lam u t, M -= s u t ((p_j - c) + s lam u t / 2)."""
     u = y[i] / a
     d = s * lam * u * t
     y[2] -= s * u * t * ((y[j] - c) + 0.5 * d)
@@ -114,7 +107,6 @@ def apply_flow(k, y, P, t):
         flow_hm(y, P, t)
 
 
-# ------------------------------------------------------------------ Taylor recurrence
 @njit(inline="always")
 def taylor_constants(P):
     """The constants of the Taylor recurrence of R3 (:func:`taylor_coefficients`), read from P by
@@ -128,11 +120,7 @@ def taylor_constants(P):
 @njit(inline="always")
 def next_coefficients(C, A, k, wp2, wp1, p12, wg2, wg1):
     """A[:, k + 1] = f_k / (k + 1) from A[:, k] and the Cauchy sums of order k, C the
-    :func:`taylor_constants`.  The sums are (M p2)_k, (M p1)_k, (p1 p2)_k, (M g2)_k, (M g1)_k
-    (w = M/b: the 1/b is applied here).  The same for the state X and for a deviation vector D
-    (whose sums are the products' derivatives, docs/model.md R3 linearised): the terms of f_k
-    that are linear in the state are the same.  ``tools/gen_lanes.py`` inlines it statement by
-    statement."""
+    :func:`taylor_constants`."""
     inv_b, c12, la1, la2, ca2, za1, chi, zeta, mu, mxi, meta = C
     r = 1.0 / (k + 1)
     wk = A[2, k] * inv_b
@@ -146,17 +134,12 @@ def next_coefficients(C, A, k, wp2, wp1, p12, wg2, wg1):
 
 @njit
 def taylor_coefficients(P, X, order):
-    """Normalised Taylor coefficients X[i, k] = y_i^{(k)}(0)/k! for k = 0..order, given X[:, 0].
-
-    The field of R3 is quadratic; with w = M/b its k-th coefficient is
+    """Normalised Taylor coefficients X[i, k] = y_i^{(k)}(0)/k! for k = 0..order, given X[:, 0]
+    (Jorba & Zou 2005).  With w = M/b and Cauchy products (u v)_k, R3 gives
       f1_k = (w p2)_k - zeta w_k - mu g1_k - (lam/a2) p2_k
       f2_k = -(w p1)_k + chi w_k - mu g2_k + (lam/a1) p1_k
       f3_k = (1/a2 - 1/a1)(p1 p2)_k - (chi/a2) p2_k + (zeta/a1) p1_k - mu xi g2_k + mu eta g1_k
-      f4_k = (w g2)_k,   f5_k = -(w g1)_k
-    with Cauchy products (u v)_k = sum_j u_j v_{k-j}, and X[:, k+1] = f_k/(k+1)
-    (automatic differentiation as in Jorba & Zou 2005, Exp. Math. 14, 99): the sums here, the
-    rest in :func:`next_coefficients`.
-    """
+      f4_k = (w g2)_k,   f5_k = -(w g1)_k,   X[:, k+1] = f_k/(k+1)."""
     C = taylor_constants(P)
     for k in range(order):
         wp2, wp1, p12, wg2, wg1 = 0.0, 0.0, 0.0, 0.0, 0.0
@@ -197,7 +180,6 @@ def section_g_rate(y, P, cphi, sphi):
     return y[2] / P[B] * cos_diff(y[G1], y[G2], cphi, sphi)
 
 
-# ------------------------------------------------------------------ tangent dynamics
 @njit
 def rhs_tangent(y, v, P, dv):
     """Variational field of R3: dv/dt = Df(y) v (the linearisation of :func:`rhs`)."""
@@ -265,9 +247,8 @@ def tangent_flow_hm(y, v, P, t):
 
 @njit(inline="always")
 def _tangent_flow_shear(y, v, i, j, a, c, lam, s, t):
-    """Tangent map of :func:`_flow_shear` (same arguments) at y, applied to v in place: with
-    u = p_i/a, M' = M - s u t (p_j - c) - lam u^2 t^2 / 2 and p_j' = p_j + s lam u t, so
-    dM' = dM - s t (p_j - c) du - s u t dp_j - lam u t^2 du and dp_j' = dp_j + s lam t du, du = dp_i/a."""
+    """Tangent map of :func:`_flow_shear` at y applied to v in place: du = dv_i/a,
+    dM' = dM - s t (p_j - c) du - s u t dp_j - lam u t^2 du, dp_j' = dp_j + s lam t du."""
     u = y[i] / a
     du = v[i] / a
     v[2] += -s * t * (y[j] - c) * du - s * u * t * v[j] - lam * u * t * t * du

@@ -1,30 +1,6 @@
-"""Closed-form solutions of Chaplygin's equations (reference for tests).
-
-This module is deliberately independent of the project's own physics code: it
-takes only the layout of the packed parameter vector (the index constants ``A1 ..
-ETA`` and ``N_PARAMS`` of :mod:`explorer.model.parameters`, the one table of the
-parameters), none of its formulas (it does not import :mod:`explorer.model.equations`);
-it is plain numpy and cites the verified equations of ``docs/model.md`` (labels
-R1..R11).
-
-Parameters are a packed float64 array ``P``,
-``P = [a1, a2, b, lam, chi, zeta, mu, xi, eta]`` (indices ``A1 .. ETA``).
-The reduced state (R3) is ``y = [p1, p2, M, g1, g2]`` with
-``(g1, g2) = (sin phi, cos phi)``.
-
-Public functions
-----------------
-uniform_rotation(P, c, t, phi0=pi)
-    Relative equilibrium of the case mu = 0 (R3, R6 solution I): p constant,
-    M = c, phi = phi0 + (c/b) t.
-uniform_rotation_crossing_times(P, c, n)
-    Its section crossing times t_k = 2 pi b k / c, k = 1..n.
-homoclinic(P, c, t, sign=+1, t0=0.0, phi_at_t0=0.0)
-    The homoclinic orbit R7 of solution I (mu = 0, chi = zeta = 0).
-homoclinic_crossing_times(P, c, phi_section, t_min, t_max, ...)
-    Times where the homoclinic phi(t) crosses phi_section (mod 2 pi).
-chaplygin_F(P, y)
-    Chaplygin's integral of the case mu = 0 (R5.1, R6).
+"""Closed-form solutions of Chaplygin's equations, the tests' references (docs/model.md R3, R6,
+R7).  Independent of the project's physics: plain numpy, only the layout of the packed ``P``
+(index constants of :mod:`explorer.model.parameters`); states y = (p1, p2, M, g1, g2).
 """
 from __future__ import annotations
 
@@ -51,40 +27,10 @@ def _params(P):
     return P
 
 
-# ---------------------------------------------------------------------------
 # Uniform rotation (relative equilibrium) for mu = 0
-# ---------------------------------------------------------------------------
 def uniform_rotation(P, c, t, phi0=np.pi):
-    """Uniform rotation of the body for mu = 0 (R3 with mu = 0; R6 solution I).
-
-    With mu = 0 the reduced equations R3 read
-    ``dp/dt = (M/b) J (p - s) - lam J A p``, ``dM/dt = (p - s, J A p)``,
-    ``dphi/dt = M/b``.  For ``M = c`` constant, dp/dt = 0 requires
-    ``(c/b)(p_i - s_i) = lam p_i / a_i``, i.e.
-
-        p_i = c s_i / (c - lam b / a_i),     s = (chi, zeta),
-
-    and then ``dM/dt = (lam b / c)(p1 p2 - p2 p1)/(a1 a2) = 0`` as well.  For
-    chi = zeta = 0 this is p = 0 (solution I of R6).  If ``c = lam b / a_i``
-    and ``s_i = 0`` the component is taken as 0; if ``c = lam = 0`` then
-    p = s.  A singular case ``c = lam b / a_i`` with ``s_i != 0`` raises.
-
-    Parameters
-    ----------
-    P : array (9,)
-        Parameters; ``P[MU]`` must be 0.
-    c : float
-        The constant value of M.
-    t : array_like
-        Times.
-    phi0 : float
-        phi at t = 0 (default pi, the section of R9).
-
-    Returns
-    -------
-    p1, p2, M, phi : ndarrays with the shape of ``t``;
-        ``phi = phi0 + (c/b) t`` (not reduced mod 2 pi).
-    """
+    """Uniform rotation of the body for mu = 0 (R3 with mu = 0; R6 solution I): M = c,
+    p_i = c s_i / (c - lam b / a_i), phi = phi0 + (c/b) t.  Returns p1, p2, M, phi shaped as t."""
     P = _params(P)
     if P[MU] != 0.0:
         raise ValueError(f"uniform_rotation needs mu = 0, got mu = {P[MU]}")
@@ -110,15 +56,7 @@ def uniform_rotation(P, c, t, phi0=np.pi):
 
 
 def uniform_rotation_crossing_times(P, c, n):
-    """Crossing times of the uniform rotation with its starting section.
-
-    Starting on the section phi = phi0 at t = 0 (see :func:`uniform_rotation`),
-    phi = phi0 + (c/b) t returns to phi0 (mod 2 pi) at
-
-        t_k = 2 pi b k / |c|,   k = 1 .. n,
-
-    crossing with phi increasing if c > 0 and decreasing if c < 0.
-    """
+    """Crossing times t_k = 2 pi b k / |c| (k = 1..n) of the uniform rotation with its starting section."""
     P = _params(P)
     if c == 0.0:
         raise ValueError("c must be nonzero for the body to turn")
@@ -126,9 +64,7 @@ def uniform_rotation_crossing_times(P, c, n):
     return TWO_PI * P[B] * k / abs(float(c))
 
 
-# ---------------------------------------------------------------------------
 # Homoclinic orbit R7
-# ---------------------------------------------------------------------------
 def _homoclinic_constants(P, c):
     """Validate the range of R7 and return (b, lam, b1, b2, Bsum, d1, d2)."""
     P = _params(P)
@@ -167,51 +103,9 @@ def _homoclinic_phi(c, b, rate, d1, d2, t, t0, phi_at_t0):
 
 
 def homoclinic(P, c, t, sign=+1, t0=0.0, phi_at_t0=0.0):
-    """Homoclinic orbit of the uniform rotation I (R7), case R6.
-
-    Valid for mu = 0, chi = zeta = 0, lam > 0, a1 > a2 and
-    ``lam b/a1 < c < lam b/a2`` (the band where solution I, p = 0, M = c, is
-    unstable); otherwise ``ValueError`` naming the offending parameter.
-    (xi, eta do not enter since mu = 0.)
-
-    With ``b1 = 2(c - lam b/a1)``, ``b2 = 2(lam b/a2 - c)``, ``B = b1 + b2``,
-    ``d1^2 = b1/B``, ``d2^2 = b2/B``, ``tau = sqrt(b1 b2) (t - t0) / (2 b)``,
-    ``E = cosh 2tau - d1^2 + d2^2`` (R7, corrected):
-
-        M   = c - 2 B d1^2 d2^2 / E
-        p1  = sign * sqrt(8 lam B) d1 d2^2 cosh(tau) / E
-        p2  = sign * sqrt(8 lam B) d1^2 d2 sinh(tau) / E
-        phi = phi_at_t0 + (c/b)(t - t0) - 2 arctan( (d1/d2) tanh(tau) )
-
-    Note ``(1 + d1^2 - d2^2)/(2 d1 d2) = d1/d2`` since ``d1^2 + d2^2 = 1``.
-
-    Conventions
-    -----------
-    * The orbit is centred at ``t0``: p2 = 0 and |p1|, the distance from
-      solution I, are maximal and M is minimal (``M = 2 lam b/a1 - c``) at
-      ``t = t0``.  ``p -> 0``, ``M -> c`` as ``|t| -> inf``.
-    * phi's additive constant: ``phi(t0) = phi_at_t0`` exactly.  phi is not
-      reduced mod 2 pi and is continuous (arctan of tanh stays in
-      (-pi/2, pi/2)); ``dphi/dt = M/b`` (R1).  Asymptotically
-      ``phi ~ phi_at_t0 + (c/b)(t - t0) -+ 2 arctan(d1/d2)`` as
-      ``t -> +-inf``.
-    * ``sign = +1`` / ``-1`` selects the two separatrices (p1 > 0 / p1 < 0);
-      phi and M do not depend on it.  NOTE (erratum to R7): the sign multiplies
-      p2 as well.  R6 is invariant under p -> -p, and the branch of R7 is
-      itself invariant under the time reversal (p1, p2, M, t) ->
-      (p1, -p2, M, -t), so flipping p1 alone (R7's "p1 = +-...") is not a
-      solution of R6 (residual O(1)); the second separatrix is p -> -p,
-      equivalently p1 -> -p1 together with t - t0 -> -(t - t0).
-
-    The hyperbolic functions are evaluated in the overflow-free form
-    ``v = exp(-|tau|)``, ``D = 1 + v^4 - 2 (d1^2 - d2^2) v^2``:
-    ``cosh tau / E = v (1 + v^2)/D``, ``sinh tau / E = sgn(tau) v (1 - v^2)/D``,
-    ``1/E = 2 v^2 / D``.
-
-    Returns
-    -------
-    p1, p2, M, phi : ndarrays with the shape of ``t``.
-    """
+    """The homoclinic orbit R7 of solution I (docs/model.md R7, corrected), centred at t0 with
+    phi(t0) = phi_at_t0; sign = +-1 the separatrices (p -> -p).  Needs mu = chi = zeta = 0, lam > 0,
+    a1 > a2, lam b/a1 < c < lam b/a2 (else ValueError).  Returns p1, p2, M, phi shaped as t."""
     if sign not in (1, -1):
         raise ValueError(f"sign must be +1 or -1, got sign = {sign}")
     b, lam, b1, b2, Bs, d1, d2 = _homoclinic_constants(P, c)
@@ -236,24 +130,8 @@ def homoclinic(P, c, t, sign=+1, t0=0.0, phi_at_t0=0.0):
 def homoclinic_crossing_times(P, c, phi_section, t_min, t_max, sign=+1,
                               t0=0.0, phi_at_t0=0.0):
     """Times in [t_min, t_max] where the homoclinic phi(t) of R7 crosses
-    ``phi_section`` (mod 2 pi) with phi increasing.
-
-    Same orbit and conventions as :func:`homoclinic` (in particular
-    ``phi(t0) = phi_at_t0``).  ``dphi/dt = M/b`` and along R7
-    ``min M = M(t0) = 2 lam b/a1 - c``; this function checks that this is
-    > 0, so that phi is strictly increasing along the whole orbit and every
-    crossing is a crossing with phi increasing (M > 0).  If
-    ``c >= 2 lam b/a1`` (M changes sign near t0) a ``ValueError`` is raised.
-
-    Each target value ``phi_section + 2 pi k`` in ``[phi(t_min), phi(t_max)]``
-    is bracketed on a fine grid, then solved by safeguarded Newton (exact
-    derivative M/b) with bisection fallback, to about 1e-15 relative in t.
-    ``sign`` does not change phi; it is only validated.
-
-    Returns
-    -------
-    times : sorted 1-D ndarray (possibly empty).
-    """
+    ``phi_section`` (mod 2 pi) with phi increasing, sorted; ValueError unless M > 0 on the whole
+    orbit (c < 2 lam b/a1)."""
     if sign not in (1, -1):
         raise ValueError(f"sign must be +1 or -1, got sign = {sign}")
     b, lam, b1, b2, Bs, d1, d2 = _homoclinic_constants(P, c)
@@ -283,7 +161,6 @@ def homoclinic_crossing_times(P, c, phi_section, t_min, t_max, sign=+1,
         return np.empty(0)
     targets = phi_section + TWO_PI * np.arange(k_lo, k_hi + 1, dtype=np.float64)
 
-    # bracket on a fine grid (phi is increasing)
     n_grid = max(2001, 20 * targets.size + 1)
     grid = np.linspace(t_min, t_max, n_grid)
     phg = phi(grid)
@@ -294,7 +171,6 @@ def homoclinic_crossing_times(P, c, phi_section, t_min, t_max, sign=+1,
     t = 0.5 * (lo + hi)
     for _ in range(200):
         f = phi(t) - targets
-        # shrink the bracket
         lo = np.where(f < 0.0, t, lo)
         hi = np.where(f > 0.0, t, hi)
         done = f == 0.0
@@ -312,21 +188,9 @@ def homoclinic_crossing_times(P, c, phi_section, t_min, t_max, sign=+1,
     return np.sort(t)
 
 
-# ---------------------------------------------------------------------------
-# Chaplygin's integral
-# ---------------------------------------------------------------------------
 def chaplygin_F(P, y):
-    """Chaplygin's integral for mu = 0 (R5 case 1 divided by lam; R6).
-
-        F = M + ((p1 - chi)^2 + (p2 - zeta)^2) / (2 lam)
-
-    which for chi = zeta = 0 is ``F = M + (p1^2 + p2^2)/(2 lam)`` of R6
-    (R5.1 writes ``lam F = |p - s|^2/2 + lam M``).  F is an integral only
-    when mu = 0; it is evaluated for any P (e.g. to measure its drift).
-
-    ``y`` is ``[p1, p2, M, ...]`` along its first axis (shape (5,) or (5, n)
-    as ``solve_ivp(...).y``); returns a float or an array of shape ``y.shape[1:]``.
-    """
+    """Chaplygin's integral F = M + |p - s|^2/(2 lam) (R5 case 1 divided by lam; R6) of
+    y = [p1, p2, M, ...] along its first axis."""
     P = _params(P)
     if P[LAM] == 0.0:
         raise ValueError("chaplygin_F needs lam != 0")

@@ -1,25 +1,7 @@
-"""The physics a reader checks against docs/model.md (labels R1-R11).
-
-Plain numpy, no numba: the compiled twin of the vector field lives in
-:mod:`explorer.model.equations`.  Everything here is vectorised over the last axis
-of a state ``y = (p1, p2, M, g1, g2)`` with ``(g1, g2) = (sin phi, cos phi)``
-(docs/model.md R3, the polynomial form of the reduced system).
-
-Parameters (docs/model.md, table "Notation"): :data:`PARAMETERS` is their one table (name,
-index in the packed vector, symbols, meaning, help line, allowed values); every other place
-reads it (the index constants ``A1`` ... ``ETA``, :class:`Params` and its validation, the
-commands' options and help lines, figure labels, scenes, the browser's fields).
-
-=========  ================================================  =============
-symbol     meaning                                           constraint
-=========  ================================================  =============
-a1, a2     added masses along the body axes                  > 0
-b          added moment of inertia                           > 0
-lam        circulation x density (lambda = I rho)            != 0 (reduced)
-chi, zeta  circulation-asymmetry terms, s = (chi, zeta)      any
-mu         weight                                            >= 0
-xi, eta    centre of mass in body axes, r = (xi, eta)        any
-=========  ================================================  =============
+"""The physics a reader checks against docs/model.md (R1-R11), in plain numpy, vectorised over
+the last axis of y = (p1, p2, M, g1, g2), (g1, g2) = (sin phi, cos phi) (R3).  :data:`PARAMETERS`
+is the one table of the model parameters (docs/model.md, "Notation"); the compiled field is
+:mod:`explorer.model.equations`.
 """
 from __future__ import annotations
 
@@ -36,13 +18,13 @@ class Parameter:
     """One model parameter: its row of the table "Notation" (docs/model.md) and everything the
     layers show of it."""
 
-    name: str              # the key everywhere: Params field, --option, scene key, JSON key
-    symbol: str            # Unicode symbol (browser fields)
-    latex: str             # mathtext symbol (figure labels), without $
-    meaning: str           # what it is
-    help: str              # the commands' help line (the default is appended)
-    constraint: str = ""   # "" (any finite value), "positive", "nonnegative" or "nonzero"
-    why: str = ""          # the reason given when the constraint is violated
+    name: str
+    symbol: str
+    latex: str
+    meaning: str
+    help: str
+    constraint: str = ""
+    why: str = ""
 
 
 #: the model parameters in the order of the packed vector ``P`` handed to the kernels
@@ -67,7 +49,6 @@ PARAM_NAMES = tuple(p.name for p in PARAMETERS)
 PARAMETER = {p.name: p for p in PARAMETERS}
 #: number of model parameters (the length of the packed vector)
 N_PARAMS = len(PARAMETERS)
-# Packed layout of the parameter vector handed to the kernels (indices into PARAMETERS).
 A1, A2, B, LAM, CHI, ZETA, MU, XI, ETA = (PARAM_NAMES.index(n) for n in
                                           ("a1", "a2", "b", "lam", "chi", "zeta", "mu", "xi", "eta"))
 __all__ = [
@@ -123,12 +104,8 @@ STATE_DIM = 5
 
 @dataclass(frozen=True)
 class Params:
-    """Model parameters of Chaplygin's equations (docs/model.md, R1/R3).
-
-    Validation (on construction, from :data:`PARAMETERS`): every value finite; a1, a2, b > 0;
-    mu >= 0; lam != 0 (the reduced system R3 divides by lambda).  Its fields are the names of
-    :data:`PARAMETERS` in their order (checked on import).
-    """
+    """Model parameters of Chaplygin's equations (docs/model.md, R1/R3), validated on construction
+    from :data:`PARAMETERS` (finite; a1, a2, b > 0; mu >= 0; lam != 0)."""
 
     a1: float = 1.0
     a2: float = 0.5
@@ -162,7 +139,7 @@ class Params:
         return cls(**{n: float(P[i]) for i, n in enumerate(PARAM_NAMES)})
 
 
-if tuple(f.name for f in fields(Params)) != PARAM_NAMES:   # one table: the fields follow it
+if tuple(f.name for f in fields(Params)) != PARAM_NAMES:
     raise ImportError("explorer.model.parameters: the fields of Params must be PARAM_NAMES in order")
 
 
@@ -184,11 +161,8 @@ FIGURE4_H = 2.0
 
 def packed_params(params) -> np.ndarray:
     """The packed float64 vector (a1, a2, b, lam, chi, zeta, mu, xi, eta) of a parameter set,
-    validated (docs/model.md R3: a1, a2, b > 0, lam != 0, all finite).
-
-    ``params``: a :class:`Params`, a mapping of parameter names (missing ones from Figure 4),
-    or a sequence of 9 numbers.
-    """
+    validated (docs/model.md R3: a1, a2, b > 0, lam != 0, all finite), of a :class:`Params`, a
+    mapping of names (the others from Figure 4) or a sequence of 9 numbers."""
     if isinstance(params, Params):
         return params.as_array()
     if isinstance(params, dict):
@@ -228,8 +202,7 @@ def energy_gradient(params, y) -> np.ndarray:
 def energy_full(P, y) -> np.ndarray:
     """docs/model.md R1 (numpy twin of :func:`explorer.model.equations.energy_full`):
     H = 1/2(p1^2/a1 + p2^2/a2 + M^2/b) + mu (y + xi g1 + eta g2), along the last axis of the full
-    state (p1, p2, M, g1, g2, x, y).  ``P``: a packed vector, not validated here (R1 allows
-    lam = 0, which :class:`Params` refuses; explorer.analysis.trajectory.full_params checks it)."""
+    state (p1, p2, M, g1, g2, x, y); ``P`` is not validated (R1 allows lam = 0)."""
     P = np.asarray(P, dtype=np.float64)
     y = np.asarray(y, dtype=np.float64)
     p1, p2, m, g1, g2, yy = y[..., P1], y[..., P2], y[..., M], y[..., G1], y[..., G2], y[..., 6]
@@ -305,19 +278,7 @@ def hess_function(params, y):
 def max_rate(params, y) -> np.ndarray:
     """An a-priori bound of the fastest rate (1/time) of the motion on the energy level of ``y``,
     for the whole orbit: the step of a fixed-step method resolves the motion only if
-    dt * max_rate is small.
-
-    With k = mu/|lam|, E = H(y) + k |s| + mu |r| and a = max(a1, a2), the energy R3 gives
-    |p|^2/(2a) + M^2/(2b) <= E + k |p| (from (p - s, J g) <= |p| + |s|, (r, g) >= -|r|), so on
-    the whole orbit |p| <= q = a (k + sqrt(k^2 + 2E/a)) and |M| <= m = sqrt(2b (E + a k^2/2)).
-    The rates of the sub-flows of R4 and of their coupling are then at most
-
-    - m/b: dphi/dt, the rotation of p - s and gamma by H_M;
-    - |lam|/min(a1, a2): the shears of p by H_1, H_2;
-    - sqrt((q + |s|) q / (min(a1, a2) b)): the exchange of M and p (dM/dp ~ |p|/a, dp/dM = J(p - s)/b);
-    - sqrt(mu |r| / b): the pendulum of the weight (dM/dt = -mu (r, J g), dg/dt = (M/b) J g);
-
-    and the largest of the four is returned (one value per state)."""
+    dt * max_rate is small (the bound: docs/methods.md)."""
     P = packed_params(params)
     y = np.asarray(y, dtype=np.float64)
     k = P[MU] / abs(P[LAM]) if P[MU] != 0.0 else 0.0
@@ -343,13 +304,12 @@ def section_gamma(phi0: float):
 
 def section_M2(params, p1, p2, h, phi0=math.pi):
     """M^2 on the section phi = phi0 at energy h (docs/model.md R9, generalised to any phi0):
-    M^2 = 2b (h - 1/2(p1^2/a1 + p2^2/a2) + (mu/lam)(p - s, J g) - mu (r, g)).
-    At phi0 = pi this is 2b (h - 1/2(...) - (mu/lam)(p1 - chi) + mu eta)."""
+    M^2 = 2b (h - 1/2(p1^2/a1 + p2^2/a2) + (mu/lam)(p - s, J g) - mu (r, g))."""
     P = packed_params(params)
     g1, g2 = section_gamma(phi0)
     p1 = np.asarray(p1, dtype=np.float64)
     p2 = np.asarray(p2, dtype=np.float64)
-    with np.errstate(over="ignore", invalid="ignore"):  # huge inputs give inf: refused by the callers
+    with np.errstate(over="ignore", invalid="ignore"):
         kinetic = 0.5 * (p1 * p1 / P[A1] + p2 * p2 / P[A2])
         pJg = (p1 - P[CHI]) * g2 - (p2 - P[ZETA]) * g1
         return 2.0 * P[B] * (h - kinetic + (P[MU] / P[LAM]) * pJg - P[MU] * (P[XI] * g1 + P[ETA] * g2))
@@ -361,12 +321,8 @@ def is_admissible(params, p1, p2, h, phi0=math.pi):
 
 
 def allowed_ellipse(params, h, phi0=math.pi):
-    """The allowed region of the section as an ellipse (docs/model.md R9, completing squares).
-
-    Returns ``(c1, c2, r1, r2)``: centre and semi-axes along p1 and p2, the
-    region being ((p1-c1)/r1)^2 + ((p2-c2)/r2)^2 <= 1.  Returns ``None`` when
-    the region is empty (h below the minimum of the energy on the section).
-    """
+    """The allowed region of the section (docs/model.md R9) as ``(c1, c2, r1, r2)``, the ellipse
+    ((p1-c1)/r1)^2 + ((p2-c2)/r2)^2 <= 1, or ``None`` when it is empty."""
     P = packed_params(params)
     h = magnitude("h", h)
     g1, g2 = section_gamma(phi0)
@@ -381,11 +337,8 @@ def allowed_ellipse(params, h, phi0=math.pi):
 
 
 def section_state(params, p1, p2, h, phi0=math.pi, direction=1):
-    """Full states y = (p1, p2, M, g1, g2) on phi = phi0 at energy h.
-
-    M = +sqrt(M^2) for direction +1 (phi increasing), -sqrt for -1.
-    Raises ParameterError naming the point if any lies outside the allowed region.
-    """
+    """Full states y = (p1, p2, M, g1, g2) on phi = phi0 at energy h, M = +-sqrt(M^2) by
+    ``direction``; ParameterError naming the first point outside the allowed region."""
     h = magnitude("h", h)
     p1 = np.atleast_1d(np.asarray(p1, dtype=np.float64))
     p2 = np.atleast_1d(np.asarray(p2, dtype=np.float64))
