@@ -1,5 +1,4 @@
-"""Finiteness checks shared by every stepping loop (kernel contract: no exceptions, a status), and
-the machine epsilon they and the step and root controls are written in."""
+"""Finiteness checks of the stepping loops and the machine epsilon of their controls."""
 from explorer._jit import njit
 
 #: the float64 machine epsilon 2**-52 (numpy.finfo(float).eps), written once for every kernel and
@@ -10,8 +9,7 @@ EPS = 2.220446049250313e-16
 @njit(inline="always")
 def is_finite(x):
     """True when x is finite: x - x == 0 only for finite x (inf - inf and NaN - NaN are NaN; no
-    NaN test of its own, so it must never be compiled with fastmath).  Written with operators, so
-    it is also the lane-wise test on a vector of lanes (explorer.integrate.simd)."""
+    NaN test of its own, so it must never be compiled with fastmath)."""
     return x - x == 0.0
 
 

@@ -1,10 +1,5 @@
-"""The integration clock shared by every adaptive driver.
-
-- :func:`clip_step`: the last step of a run is shortened to end exactly at ``tend``;
-- :func:`resolves`: a step too small to advance the clock (h <= eps |t|) is an underflow;
-- :func:`advance_time`: compensated (Kahan) summation (:func:`compensated_add`) of the step sizes, so the clock does not
-  drift over 1e7 steps (compare FMPy #106, preCICE #1933); the true time is ``t - tc``, and the
-  last step lands exactly on ``tend``.
+"""The integration clock of every adaptive driver: the last step clipped to ``tend``, the
+underflow test, and Kahan-compensated time (the true time is t - tc).
 """
 from explorer._jit import njit
 from explorer.kernels.checks import EPS

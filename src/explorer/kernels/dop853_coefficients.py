@@ -1,33 +1,7 @@
-"""Butcher tableau, error estimators and dense-output coefficients of DOP853.
-
-Tables only (no code): the explicit Runge-Kutta method of order 8 with the
-embedded 5th/3rd-order error estimators and the 7th-degree continuous
-extension of Dormand & Prince, as given in
-
-    E. Hairer, S. P. Norsett, G. Wanner, "Solving Ordinary Differential
-    Equations I: Nonstiff Problems", 2nd ed., Springer 1993, Sec. II.4-II.6,
-    and Hairer's Fortran code ``dop853.f``
-    (http://www.unige.ch/~hairer/software.html).
-
-The decimal literals are copied verbatim from SciPy's
-``scipy/integrate/_ivp/dop853_coefficients.py`` (BSD-3-Clause), which
-transcribes ``dop853.f``, so the parsed float64 values are bitwise equal to
-SciPy's arrays (checked in ``tests/kernels/test_dop853.py``).  This module
-does not import SciPy.
-
-Layout (all arrays C-contiguous float64):
-
-``C``  (16,)     nodes c_s of the 12 main stages, the FSAL stage 12 (c = 1)
-                 and the 3 extra dense-output stages 13..15.
-``A``  (16, 16)  strictly lower-triangular stage coefficients a_{s,j};
-                 row 12 equals ``B`` (stage 12 is f(y_new), "first same as
-                 last").
-``B``  (12,)     weights of the 8th-order solution.
-``E3`` (13,)     B minus the weights of the embedded 3rd-order formula
-                 (index 12 = FSAL stage, zero).
-``E5`` (13,)     coefficients of the embedded 5th-order error estimate.
-``D``  (4, 16)   rows 3..6 of the dense-output polynomial coefficients
-                 (rows 0..2 are formed from y_old, y_new, f_old, f_new).
+"""Butcher tableau, error estimators and dense-output coefficients of DOP853 (Hairer, Norsett &
+Wanner II.4-II.6), copied verbatim from SciPy's ``dop853_coefficients.py`` (BSD-3-Clause): bitwise
+SciPy's doubles.  C (16,) nodes; A (16, 16) stage coefficients (row 12 = B, FSAL); B (12,);
+E3, E5 (13,) error estimators; D (4, 16) rows 3..6 of the dense output.
 """
 import numpy as np
 
@@ -156,14 +130,12 @@ _A[15, 14] = -9.15095847217987001081870187138
 # Weights of the 8th-order solution = row 12 of A (FSAL stage at c = 1).
 _B = _A[N_STAGES, :N_STAGES].copy()
 
-# B minus the weights of the embedded 3rd-order formula.
 _E3 = np.zeros(N_STAGES + 1, dtype=np.float64)
 _E3[:-1] = _B.copy()
 _E3[0] -= 0.244094488188976377952755905512
 _E3[8] -= 0.733846688281611857341361741547
 _E3[11] -= 0.220588235294117647058823529412e-1
 
-# Embedded 5th-order error estimator.
 _E5 = np.zeros(N_STAGES + 1, dtype=np.float64)
 _E5[0] = 0.1312004499419488073250102996e-1
 _E5[5] = -0.1225156446376204440720569753e+1
@@ -174,8 +146,6 @@ _E5[9] = 0.3341791187130174790297318841
 _E5[10] = 0.8192320648511571246570742613e-1
 _E5[11] = -0.2235530786388629525884427845e-1
 
-# Dense output: rows 3..6 of F; rows 0..2 (F[0], F[1], F[2]) are formed
-# from y_old, y_new, f_old and f_new in the dense-output kernel.
 _D = np.zeros((INTERPOLATOR_POWER - 3, N_STAGES_EXTENDED), dtype=np.float64)
 _D[0, 0] = -0.84289382761090128651353491142e+1
 _D[0, 5] = 0.56671495351937776962531783590

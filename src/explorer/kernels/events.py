@@ -1,35 +1,8 @@
-"""Root refinement of event functions inside one step.
-
-An event function linear in the state (such as sin(phi - phi0) =
-g1 cos phi0 - g2 sin phi0) evaluated on the step's interpolant is a scalar
-polynomial in the step fraction, so the crossing is located to the order of
-the integrator, never by linear interpolation.  The root finder is a
-safeguarded Newton iteration on a sign-changing bracket (Newton step when it
-stays inside the bracket, bisection otherwise), stopped at ROOT_XTOL of the
-step length.  Compare scipy's event handling (brentq, xtol = 4 eps).
-
-A step can hold roots while the end values keep one sign: for the section
-phi = phi0 the body passes phi0 and turns back inside the step (dphi/dt =
-M/b changes sign), or turns twice.  The step searches therefore isolate every
-root of the step's polynomial (:func:`poly_step_roots`; the DOP853 continuous
-extension is converted to the power basis first, :func:`dense_step_roots`):
-an interval is discarded when the polynomial's Taylor expansion about its
-midpoint proves |g| > 0 on it (exclusion test), searched by its end values
-when the expansion proves g' != 0 (monotonicity test), and bisected
-otherwise, down to ISOLATE_MAX_DEPTH levels.  Both tests are tried on the
-whole step first, with the expansion at its start, so an ordinary step costs
-two short sums and no shift.  The splitting methods' step map is not a
-polynomial; they split a step at the root of M when M changes sign between
-its ends (:func:`turns`, ``explorer.integrate.drivers._split_step_roots``), which misses
-only two turns of M inside one composition step (none in the 1,000-orbit
-comparison with scipy of benchmarks/stress/stress_crossings.py at dt <= 0.05).
-
-The event function and the tests a step end makes (:func:`sin_diff`, :func:`cos_diff`,
-:func:`excluded_by_variation`, :func:`tail_term`, :func:`sign_change`) are written with Python's
-operators only (``&``/``|`` where a test combines comparisons), so numba compiles the one
-definition for doubles and, through the operators of ``explorer.integrate.simd``, for vectors of
-lanes: the SIMD crossing loop (``explorer.integrate.lanes``) calls these functions, lane-wise the
-same IEEE operations.
+"""Roots of event functions inside one step (docs/methods.md, crossing rules): every root of the
+step's polynomial of sin(phi - phi0) is isolated (exclusion and monotonicity tests on Taylor
+expansions, bisection otherwise) and refined by safeguarded Newton to ROOT_XTOL of the step.
+The tests a step end makes are written with operators only, so the SIMD lanes compile the same
+definitions (docs/architecture.md, Scalar and vector forms from one definition).
 """
 
 import numpy as np
@@ -49,16 +22,13 @@ ISOLATE_STACK = ISOLATE_MAX_DEPTH + 2
 #: roots a step search can return (more than 2 needs several turns inside one step)
 MAX_STEP_ROOTS = 8
 #: relative slack of the exclusion and monotonicity bounds, for the rounding of the sums
-#: and of the shifted coefficients: an interval is never discarded on a margin of rounding
 BOUND_SLACK = 64.0 * EPS
 
 
 @njit(inline="always")
 def sin_diff(s, c, cphi, sphi):
     """sin(phi - phi0) = sin phi cos phi0 - cos phi sin phi0 from s = sin phi, c = cos phi and
-    cphi, sphi = cos phi0, sin phi0: the event function of the section phi = phi0, written once.
-    Linear in (s, c), so it also maps the Taylor or dense-output coefficients of (sin phi, cos phi)
-    to those of the event function (the step searches)."""
+    cphi, sphi = cos phi0, sin phi0: the event function of the section phi = phi0, written once."""
     return s * cphi - c * sphi
 
 
@@ -72,10 +42,7 @@ def cos_diff(s, c, cphi, sphi):
 @njit
 def sign_change(g_prev, g_new, direction):
     """Half-open crossing test on (t_prev, t_new]: +1 means g goes from < 0 to >= 0,
-    -1 from > 0 to <= 0, 0 either.  A root exactly at a step end fires once (in the
-    step that ends on it) and a start exactly on the section (g_prev = 0) never fires.
-    ``&`` and ``|``, not ``and``/``or``: the same test lane-wise on vectors of lanes (module
-    docstring)."""
+    -1 from > 0 to <= 0, 0 either."""
     up = (g_prev < 0.0) & (g_new >= 0.0)
     down = (g_prev > 0.0) & (g_new <= 0.0)
     if direction > 0:
@@ -141,8 +108,7 @@ def newton_in_bracket(x, g, d, a, b, ga):
 @njit
 def poly_root_in(c, order, a, b, ga, gb):
     """Root in (a, b] of the polynomial sum_k c_k x^k, given its values ga at a and gb at b of
-    opposite signs (or gb == 0).  Safeguarded Newton on the bracket; stops at ROOT_XTOL of
-    max(|a|, |b|) (the step length for a = 0)."""
+    opposite signs (or gb == 0)."""
     if gb == 0.0:
         return b
     x = secant_start(a, b, ga, gb)
@@ -172,10 +138,7 @@ def taylor_shift(c, order, m, out):
 @njit
 def excluded_by_variation(g0, variation):
     """True if g cannot vanish where g = g0 + (terms whose sum is at most ``variation`` in
-    size): |g0| > variation, with BOUND_SLACK.  The test of :func:`no_root_within` and
-    :func:`monotone_within`; a driver may also call it with a cheaper upper bound computed for
-    many orbits at once (``explorer.integrate.lanes``): it then implies that :func:`isolate_crossings`
-    finds nothing."""
+    size): |g0| > variation, with BOUND_SLACK."""
     return abs(g0) > variation + BOUND_SLACK * (abs(g0) + variation)
 
 
@@ -188,8 +151,6 @@ def tail_term(s, rk, r, weight, dk):
 
 @njit
 def _tail_bound(d, order, r, derivative):
-    """sum_{k>=1} |d_k| r^k, or with ``derivative`` sum_{k>=2} k |d_k| r^(k-1): the largest
-    change of p(x) = sum_k d[k] x^k (or of p') over |x| <= r."""
     s = 0.0
     rk = 1.0
     for k in range(2 if derivative else 1, order + 1):
@@ -221,17 +182,10 @@ def identically_zero(c, order):
 
 @njit
 def isolate_crossings(gc, order, h, g_old, g_new, direction, brackets, work, stack):
-    """Brackets of every crossing in (0, h] of the polynomial g(x) = sum_k gc[k] x^k in the
-    given direction (as :func:`sign_change`), g_old and g_new its values at the ends as the
-    caller's bookkeeping has them: rows (a, b, g(a), g(b)) of ``brackets``, each holding one
-    sign change of the given direction, in increasing order; returns their number (at most
-    len(brackets)).  Exclusion / monotonicity tests and bisection (module docstring).
-    work: (order + 1,) scratch; stack: (ISOLATE_STACK, 5) scratch.
-
-    A polynomial that is identically zero (every coefficient 0: the orbit rests on the section,
-    an equilibrium at phi = phi0) crosses nothing; no test could exclude or bracket it, and
-    bisecting it to ISOLATE_MAX_DEPTH visited 2**25 intervals, 15 s for one step."""
-    if no_root_within(gc, order, h):        # |x| <= h covers the step [0, h]
+    """Brackets (a, b, g(a), g(b)) of every crossing in (0, h] of g(x) = sum_k gc[k] x^k in the given
+    direction (:func:`sign_change`; g_old, g_new the caller's end values), increasing, in
+    ``brackets``; returns their number.  work (order + 1,), stack (ISOLATE_STACK, 5): scratch."""
+    if no_root_within(gc, order, h):
         return 0
     if monotone_within(gc, order, h):
         if sign_change(g_old, g_new, direction):
@@ -241,7 +195,7 @@ def isolate_crossings(gc, order, h, g_old, g_new, direction, brackets, work, sta
             brackets[0, 3] = g_new
             return 1
         return 0
-    if identically_zero(gc, order):          # (only where both tests failed: off the ordinary path)
+    if identically_zero(gc, order):
         return 0
     n = 0
     top = 1
@@ -271,7 +225,6 @@ def isolate_crossings(gc, order, h, g_old, g_new, direction, brackets, work, sta
                 n += 1
             continue
         gm = work[0]
-        # right half below the left one: the left is searched first, brackets come out sorted
         stack[top, 0] = m
         stack[top, 1] = b
         stack[top, 2] = gm
@@ -300,9 +253,8 @@ def poly_step_roots(gc, order, h, g_old, g_new, direction, roots, brackets, work
 
 @njit
 def dense_root_in(Fg, g_old, a, b, ga, gb):
-    """Root theta in (a, b] of the DOP853 continuous extension of a linear event functional
-    (Fg = F @ w, g_old = w . y_old), given its values ga at a and gb at b of opposite signs
-    (or gb == 0), 0 <= a < b <= 1.  Safeguarded Newton on the 7th-order interpolant."""
+    """Root theta in (a, b] (0 <= a < b <= 1) of the DOP853 continuous extension of a linear event
+    functional (Fg = F @ w, g_old = w . y_old), ga, gb of opposite signs: safeguarded Newton."""
     if gb == 0.0:
         return b
     x = secant_start(a, b, ga, gb)
@@ -320,24 +272,20 @@ def dense_root_in(Fg, g_old, a, b, ga, gb):
 
 @njit
 def dense_root(Fg, g_old, g_new):
-    """Root theta in (0, 1] of the DOP853 continuous extension of a linear event
-    functional (Fg = F @ w, g_old = w . y_old), given its end values of opposite signs
-    (or g_new == 0).  Safeguarded Newton on the 7th-order interpolant."""
+    """:func:`dense_root_in` on (0, 1], given end values of opposite signs (or g_new == 0)."""
     return dense_root_in(Fg, g_old, 0.0, 1.0, g_old, g_new)
 
 
 @njit
 def dense_power_basis(Fg, g_old, out):
     """Coefficients out[0:8] in powers of theta of the DOP853 continuous extension of a linear
-    functional, g_old + th (F0 + (1-th) (F1 + th (F2 + (1-th) (F3 + th (F4 + (1-th) (F5
-    + th F6)))))) (the nesting of :func:`dense_eval_scalar`)."""
-    npow = Fg.shape[0]          # 7 = INTERPOLATOR_POWER
+    functional (the nesting of :func:`dense_eval_scalar`)."""
+    npow = Fg.shape[0]
     for k in range(npow + 1):
         out[k] = 0.0
     out[0] = Fg[npow - 1]
     deg = 0
     for k in range(1, npow):
-        # multiply by theta (k odd) or by (1 - theta) (k even), counting from the inside
         if k % 2 == 1:
             for j in range(deg + 1, 0, -1):
                 out[j] = out[j - 1]
@@ -347,19 +295,16 @@ def dense_power_basis(Fg, g_old, out):
                 out[j] = out[j] - out[j - 1]
         deg += 1
         out[0] += Fg[npow - 1 - k]
-    for j in range(deg + 1, 0, -1):   # the outer factor theta
+    for j in range(deg + 1, 0, -1):
         out[j] = out[j - 1]
     out[0] = g_old
 
 
 @njit
 def dense_step_roots(Fg, g_old, g_prev, g_new, direction, roots, brackets, coef, work, stack):
-    """:func:`poly_step_roots` on the DOP853 continuous extension of a linear event
-    functional (Fg = F @ w, g_old = w . y_old): every crossing theta in (0, 1] in the given
-    direction, isolated on the power basis (:func:`dense_power_basis`) and refined on the
-    nested form (:func:`dense_root_in`).  g_prev, g_new: the end values as the caller's
-    bookkeeping has them (g_prev = 0 for a start on the section, which never fires).
-    coef, work: (8,) scratch.  Returns n, roots[0:n]."""
+    """:func:`poly_step_roots` on the DOP853 continuous extension of a linear event functional
+    (Fg = F @ w, g_old = w . y_old): every crossing theta in (0, 1] in the given direction
+    (g_prev = 0, a start on the section, never fires).  coef, work: (8,) scratch.  Returns n."""
     dense_power_basis(Fg, g_old, coef)
     n = isolate_crossings(coef, Fg.shape[0], 1.0, g_prev, g_new, direction, brackets, work, stack)
     for i in range(n):

@@ -1,12 +1,5 @@
-"""Plane geometry of the section: which points lie inside a closed polygon.
-
-The even-odd rule (a ray along +p1 from the point crosses the boundary an odd number of times),
-the test :func:`explorer.analysis.transport.inside` applies to millions of iterated points
-against resonance zones of thousands of vertices (the transit times of ``explorer figures
---only tangle``).  Compiled, it walks the edges once per point with no temporaries; the
-arithmetic per edge is that of the numpy formulation it replaced (the same operations in the
-same order), so the answers are the same bit for bit (tests/analysis/test_manifolds.py).
-"""
+"""Which points lie inside a closed polygon of the section (even-odd rule), compiled, the
+arithmetic of the numpy formulation bit for bit."""
 import numpy as np
 
 from explorer._jit import njit, prange

@@ -1,28 +1,6 @@
-"""The one registry of chaos indicators: the layout of the tangent loops' rows and a plain-data
-table that every other layer reads (pure Python: no numba, so scenes and the store can import it).
-
-The compiled accumulators (:mod:`explorer.kernels.tangent`) fill two rows per orbit:
-
-- the *result row* ``RES_*`` (t, mLCE, mean MEGNO <Y>, MEGNO Y, FLI), which is also the row of
-  the convergence history, from the log-stretches of one deviation vector;
-- the *extra row* ``EXT_*`` (SALI, GALI_2, early-classification code) from two deviation vectors.
-
-One indicator is not a column of the tangent loops: frequency diffusion (row ``ORBIT``) is
-computed from the section map's returns of the orbit (:func:`explorer.analysis.rotation.frequency_diffusion`,
-docs/greene.md), only when asked for, by the sweep after the tangent indicators.
-
-:data:`INDICATORS` names each user-facing indicator once, with the row and column it is read
-from, and everything the layers above need: the dataset's dtype in the store
-(:mod:`explorer.io.store.format`), the arrays a sweep task returns
-(:mod:`explorer.analysis.sweep`), the names scenes accept (``[lyapunov] indicators``), the
-:class:`~explorer.analysis.lyapunov.Indicators` attributes and the lines of ``explorer
-lyapunov``.  How an indicator is drawn (its LaTeX label, colour scale and map) is presentation,
-and lives with the drawing: ``STYLES`` of :mod:`explorer.app.chaos_raster`.
-
-A new indicator accumulated from the log-stretch of the first deviation vector: a column
-``RES_*`` here (and ``N_RES``), its update in ``accumulate`` / ``result`` of
-:mod:`explorer.kernels.tangent` (every tangent loop calls those two), its entry in
-:data:`INDICATORS`, and its sentence in docs/commands/lyapunov.md (docs/contributing.md).
+"""The one registry of chaos indicators (docs/commands/lyapunov.md): the columns of the tangent
+loops' result row ``RES_*`` and extra row ``EXT_*``, and :data:`INDICATORS`, the plain-data table
+every layer reads (pure Python).  A new indicator: docs/contributing.md.
 """
 from __future__ import annotations
 
@@ -47,13 +25,13 @@ RESULT, EXTRA, ORBIT = "result", "extra", "orbit"
 class Indicator:
     """One chaos indicator: where the tangent loops put it and how every layer shows it."""
 
-    name: str            # the key everywhere: Indicators attribute, scene name, store dataset, JSON key
-    row: str             # RESULT (one deviation vector; also in the history rows), EXTRA (two) or ORBIT
-    column: int          # its column of that row (RES_* or EXT_*; 0 for ORBIT)
-    title: str           # plain-text name (help lines)
-    description: str     # one line: what it is and its reference
-    default: bool = True           # computed unless ``which`` says otherwise
-    dtype: str = "float64"         # its dataset's dtype in the store
+    name: str
+    row: str
+    column: int
+    title: str
+    description: str
+    default: bool = True
+    dtype: str = "float64"
 
     @property
     def vectors(self) -> int:

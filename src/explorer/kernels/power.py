@@ -1,18 +1,6 @@
-"""The power x^e of the Taylor step size (``kernels.taylor.step_size``), written once for the
-scalar loops and the lanes.
-
-libm's ``pow`` is a call per value (about 20 ns per lane-step in the lanes, issue 34): it
-cannot run across the lanes of a vector.  :func:`radius_power_core` is branch-free arithmetic
-(exponent and mantissa by bit casts, a polynomial of log2 on [sqrt(1/2), sqrt(2)), a polynomial
-of 2^f on [-1/2, 1/2]) written once as LLVM IR (:func:`emit_radius_power`), for a double here
-and for a vector of lanes in :func:`explorer.integrate.simd.vradius_power_core`.  Without
-fast-math each lane computes, IEEE operation by IEEE operation, the double a scalar call
-computes: the lanes and every scalar Taylor loop take the same step sizes bit for bit.
-
-Accuracy: relative error below :data:`POWER_REL_ERR` for every positive normal x and 0 < e <= 1/3
-(tests/kernels/test_power.py; the step size is a heuristic of Jorba & Zou 2005 with a safety
-factor e^-2, so any error far below 1 changes no accuracy, only which double is taken).  Values
-outside the normal range (0, subnormal, inf, nan) go to ``x ** e`` in :func:`radius_power`.
+"""The power x^e of the Taylor step size, branch-free and written once as LLVM IR for doubles and
+for vectors of lanes, so every Taylor loop takes the same steps bit for bit; relative error
+below :data:`POWER_REL_ERR` for positive normal x, 0 < e <= 1/3 (docs/architecture.md).
 """
 import math
 
@@ -37,15 +25,11 @@ _MANTISSA = 0x000FFFFFFFFFFFFF
 _ONE = 0x3FF0000000000000
 
 
-
 def emit_radius_power(builder, x, e, width=None):
     """LLVM IR of :func:`radius_power_core` (x a double, or a vector of ``width`` doubles; e a
     double): the one text of the algorithm, emitted for a scalar here and for a vector of lanes
     by :func:`explorer.integrate.simd.vradius_power_core`.  Plain IEEE operations with no
-    fast-math flag (no FMA contraction): a lane of the vector computes the scalar's double.
-
-    x = 2^k m, m in [sqrt(1/2), sqrt(2)); log2 m = (2/ln 2) atanh((m - 1)/(m + 1)) by its
-    series; y = e (k + log2 m) = n + f, n = round(y), |f| <= 1/2; x^e = 2^n exp(f ln 2)."""
+    fast-math flag (no FMA contraction): a lane of the vector computes the scalar's double."""
     from llvmlite import ir
     from numba.core import cgutils
 
@@ -68,7 +52,7 @@ def emit_radius_power(builder, x, e, width=None):
                                     ir.Constant(ir.VectorType(i32, width), [0] * width))
     b = builder.bitcast(x, it)
     k = builder.sub(builder.ashr(b, ic(52)), ic(1023))
-    m = builder.bitcast(builder.or_(builder.and_(b, ic(_MANTISSA)), ic(_ONE)), ft)     # [1, 2)
+    m = builder.bitcast(builder.or_(builder.and_(b, ic(_MANTISSA)), ic(_ONE)), ft)
     big = builder.fcmp_ordered(">", m, fc(SQRT2))
     m = builder.select(big, builder.fmul(m, fc(0.5)), m)
     kf = builder.sitofp(builder.select(big, builder.add(k, ic(1)), k), ft)

@@ -1,61 +1,9 @@
-"""Symmetric composition (splitting) methods of orders 2, 4, 6 and 8.
-
-Model-agnostic tables.  The physics splits ``H = H_0 + ... + H_{m-1}`` into
-``m`` exactly solvable flows ``phi_k(t)``; this module only says *which* flow
-to apply for *what fraction of the step* ``h``.
-
-Basic method (Strang, order 2, symmetric)::
-
-    S(h) = phi_0(h/2) phi_1(h/2) ... phi_{m-2}(h/2) phi_{m-1}(h)
-           phi_{m-2}(h/2) ... phi_1(h/2) phi_0(h/2)
-
-Higher orders are symmetric compositions ``Psi(h) = S(g_s h) ... S(g_1 h)``
-with palindromic weights ``g`` (``g_i = g_{s+1-i}``, ``sum g = 1``).  Because
-every sequence here is a palindrome, reading it left-to-right (operator
-order) or right-to-left (application order) gives the same list; the arrays
-returned by :func:`flow_sequence` are in application order.
-
-Weights
--------
-Every weight array below is float64, palindromic *exactly* (built by
-mirroring one half), read-only, and exact to double precision:
-
-* closed forms (triple jump, Suzuki fractal) are evaluated at import time in
-  50-digit ``decimal`` arithmetic and rounded once to float64 (plain float64
-  ``1/(2 - 2**(1/3))`` is one ulp off);
-* Kahan & Li tables are the 26-digit values (as tabulated in SeLaLib
-  ``src/time_integration/splitting_methods/sll_m_time_composition.F90``
-  and choreo ``choreo/segm/precomputed_tables.py``; s9odr6a and s15odr8 agree
-  with the independently typed 20-digit copies in REBOUND
-  ``src/integrator_janus.c``);
-* Yoshida's 1990 tables have only 15 digits and those digits do not satisfy
-  the order conditions better than ~5e-14 (solution A) and ~3e-12 (solution
-  D).  The values below are the same solutions refined by Newton's method on
-  the order conditions (truncated BCH expansion in 80-digit decimal
-  arithmetic; residual < 1e-70) and stored to 26 digits.  They differ from
-  Yoshida's printed digits by <= 3e-15 (A) and <= 2.4e-13 (D), i.e. his last
-  one to three digits were not converged.  The solution-A values agree with
-  the 26-digit ones in SeLaLib ``sll_m_time_composition.F90`` (whose centre
-  weight has a sign typo there) and the 34-digit ones in BeamTracking.jl
-  (whose centre weight is 5e-17 off).  Solution D has large weights and is
-  ill-conditioned: even its correctly rounded doubles leave order-condition
-  residuals of ~6e-14 (harmless: they multiply h^3..h^7).
-
-Verification: ``tests/kernels/test_splitting.py`` checks the order
-conditions algebraically (truncated BCH in 50-digit decimal arithmetic on
-the exact stored doubles: every residual is within what rounding the exact
-weights to float64 can cause) and measures the observed order on a
-three-way split of the free rigid body.
-
-Dispatch
---------
-``SCHEMES[name] = (weights, order, reference)``; the defaults per order are
-``split2``, ``split4`` (Yoshida triple jump), ``split6`` (Kahan-Li s9odr6a),
-``split8`` (Kahan-Li s15odr8).
-
-This is a set-up time module (plain Python/numpy, called once per run); the
-returned arrays are C-contiguous int64/float64 and can be passed straight to
-njit kernels.
+"""Symmetric composition (splitting) methods of orders 2 to 8 (docs/methods.md): which exact
+flow phi_k of ``H = H_0 + ... + H_{m-1}`` to apply for what fraction of the step.  Strang's
+S(h) is phi_0(h/2) ... phi_{m-1}(h) ... phi_0(h/2); higher orders are S(g_s h) ... S(g_1 h) with
+palindromic weights g (sum g = 1), float64, read-only, exact to double precision (Yoshida's 1990
+solutions refined by Newton on the order conditions; tests/kernels/test_splitting.py).
+``SCHEMES[name] = (weights, order, reference)``.
 """
 from __future__ import annotations
 
@@ -71,8 +19,6 @@ __all__ = [
 
 
 def _palindrome(half):
-    """Mirror ``half = [g_1, ..., g_c]`` (outermost ... centre) into the full
-    palindrome ``[g_1, ..., g_c, ..., g_1]`` (odd length, exact mirror)."""
     h = np.asarray(half, dtype=np.float64)
     w = np.ascontiguousarray(np.concatenate([h, h[-2::-1]]))
     w.setflags(write=False)
@@ -80,8 +26,6 @@ def _palindrome(half):
 
 
 def _closed_form(kind):
-    """Float64 values (outer, centre) of the closed-form 4th-order weights,
-    computed in 50-digit decimal arithmetic and rounded once."""
     with localcontext() as ctx:
         ctx.prec = 50
         if kind == "triple":        # g1 = 1/(2 - 2^(1/3)), g0 = 1 - 2 g1
@@ -97,10 +41,8 @@ def _closed_form(kind):
         return float(outer), float(centre)
 
 
-# --- order 2 ---------------------------------------------------------------
 W_STRANG = _palindrome([1.0])
 
-# --- order 4 ---------------------------------------------------------------
 _tj_outer, _tj_centre = _closed_form("triple")
 #: Yoshida (1990) / Forest-Ruth / Suzuki triple jump, 3 stages.
 W_YOSHIDA4 = _palindrome([_tj_outer, _tj_centre])
@@ -109,7 +51,6 @@ _sz_outer, _sz_centre = _closed_form("suzuki")
 #: Suzuki (1990) fractal, 5 stages: [p, p, 1 - 4p, p, p].
 W_SUZUKI4 = _palindrome([_sz_outer, _sz_outer, _sz_centre])
 
-# --- order 6 ---------------------------------------------------------------
 #: Kahan & Li (1997) s9odr6a, 9 stages (outermost ... centre).
 W_KAHANLI6_S9 = _palindrome([
     0.39216144400731413927925056,
@@ -123,13 +64,12 @@ W_KAHANLI6_S9 = _palindrome([
 #: Published: w3 = 0.784513610477560, w2 = 0.235573213359357,
 #: w1 = -1.17767998417887.
 W_YOSHIDA6A = _palindrome([
-    0.78451361047755726381949763,     # w3
-    0.23557321335935813368479318,     # w2
-    -1.17767998417887100694641568,    # w1
+    0.78451361047755726381949763,
+    0.23557321335935813368479318,
+    -1.17767998417887100694641568,
     1.31518632068391121888424973,     # w0 = 1 - 2 (w1 + w2 + w3)
 ])
 
-# --- order 8 ---------------------------------------------------------------
 #: Kahan & Li (1997) s15odr8, 15 stages (choreo labels the same digits
 #: McLachlan 1995).
 W_KAHANLI8_S15 = _palindrome([
@@ -163,13 +103,13 @@ W_KAHANLI8_S17 = _palindrome([
 #: -1.44485223686048, -0.158240635368243, 1.93813913762276,
 #: -1.96061023297549, 0.102799849391985.
 W_YOSHIDA8D = _palindrome([
-    0.91484424622979156674879349,     # w7
-    0.25369333656621135414614602,     # w6
-    -1.44485223686060515769473066,    # w5
-    -0.15824063536805017520406678,    # w4
-    1.93813913762252598657918649,     # w3
-    -1.96061023297531080760763338,    # w2
-    0.10279984939179644069811513,     # w1
+    0.91484424622979156674879349,
+    0.25369333656621135414614602,
+    -1.44485223686060515769473066,
+    -0.15824063536805017520406678,
+    1.93813913762252598657918649,
+    -1.96061023297531080760763338,
+    0.10279984939179644069811513,
     1.70845307078728158466837936,     # w0 = 1 - 2 (w1 + ... + w7)
 ])
 
@@ -225,68 +165,11 @@ def _check(weights, n_flows):
 
 
 def flow_sequence(weights, n_flows, fsal=False):
-    """Flattened sub-flow applications of one step of ``Psi(h)``.
-
-    Parameters
-    ----------
-    weights : 1-D float array ``g`` (e.g. ``SCHEMES["split6"][0]``); the
-        composition is ``S(g_s h) ... S(g_1 h)`` with ``S`` the Strang step
-        over ``n_flows`` flows (flow 0 outermost with half steps, flow
-        ``n_flows - 1`` in the middle with a full step).
-    n_flows : number ``m >= 1`` of exactly solvable flows.
-    fsal : see below.
-
-    Returns
-    -------
-    (flow_ids, fractions) : C-contiguous ``int64`` and ``float64`` arrays of
-    equal length, in application order.  Entry ``j`` means "apply
-    ``phi_{flow_ids[j]}`` for time ``fractions[j] * h``".
-
-    Contract (``fsal=False``)
-    -------------------------
-    * Stage ``i`` contributes ``phi_0(g_i/2) phi_1(g_i/2) ...
-      phi_{m-2}(g_i/2) phi_{m-1}(g_i) phi_{m-2}(g_i/2) ... phi_0(g_i/2)``;
-      stages are concatenated for ``i = 1 .. s``.
-    * Adjacent applications of the same flow are merged into one whose
-      fraction is the float64 sum, e.g. the trailing ``phi_0(g_i/2)`` and
-      the leading ``phi_0(g_{i+1}/2)`` become ``phi_0((g_i + g_{i+1})/2)``.
-      After merging no two consecutive entries have the same flow id.
-      (Flows are exact, so ``phi_k(a) phi_k(b) = phi_k(a + b)``.)
-      Nothing else is dropped or reordered; a merged fraction that happens
-      to be 0.0 is kept.
-    * For every flow ``k`` the fractions with ``flow_ids == k`` sum to
-      ``sum(g) = 1`` up to rounding.  For ``m >= 2`` the sequence starts and
-      ends with flow 0 (fraction ``g_1/2`` and ``g_s/2``) and has length
-      ``s (2m - 2) + 1``; for ``m == 1`` it is the single entry
-      ``(0, sum(g))``.
-    * A palindromic ``g`` gives a palindromic sequence, so one step with
-      ``h`` followed by one with ``-h`` is the identity (up to rounding).
-
-    Contract (``fsal=True``, requires ``n_flows >= 2``)
-    ---------------------------------------------------
-    First-same-as-last: the leading ``phi_0(g_1 h/2)`` of each step is
-    carried by the previous step.  The returned sequence is the
-    ``fsal=False`` one with its first entry removed and its last entry
-    ``phi_0(g_s/2)`` replaced by ``phi_0((g_s + g_1)/2)`` (``= g_1`` for a
-    palindrome).  This saves one flow evaluation per step.  The caller must:
-
-    1. at the start of a run (and after every re-synchronisation, and
-       whenever ``h`` changes) apply ``phi_0(lead * h)`` once, with
-       ``lead = fsal_lead_fraction(weights) = g_1/2``;
-    2. per step, apply the returned sequence with the same ``h``;
-    3. to read a synchronised state (end of run, output, event check, or
-       before changing ``h``) apply ``phi_0(-lead * h)``, or equivalently
-       replace the last fraction of the final step by ``g_s/2``; then
-       resume with step 1.
-
-    Between steps 2 and 3 the stored state is ``phi_0(lead h)`` applied to
-    the true numerical solution, NOT the solution itself.
-    """
+    """Flattened sub-flow applications of one step of ``Psi(h)``."""
     w, m = _check(weights, n_flows)
     if fsal and m < 2:
         raise ValueError("fsal=True needs n_flows >= 2")
 
-    # Raw (unmerged) list of one step.
     ids = []
     fr = []
     for g in w:
@@ -300,7 +183,6 @@ def flow_sequence(weights, n_flows, fsal=False):
             ids.append(k)
             fr.append(half)
 
-    # Merge adjacent applications of the same flow.
     out_ids = [ids[0]]
     out_fr = [fr[0]]
     for k, f in zip(ids[1:], fr[1:]):

@@ -1,8 +1,5 @@
-"""Per-orbit status codes: what every driver returns for each orbit (kernel contract, rule 3).
-
-:class:`Status` is the typed view for Python code; the kernels compare and store the plain
-``int`` constants below (Numba-compiled code and int32 status arrays), which are the same values.
-"""
+"""Per-orbit status codes (kernel contract rule 3): int constants for compiled code, :class:`Status`
+their typed view."""
 from enum import IntEnum
 
 

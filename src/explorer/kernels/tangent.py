@@ -1,44 +1,12 @@
-"""Model-agnostic accumulators of chaos indicators along a tangent vector.
-
-After every step the caller renormalises the deviation vector (:func:`renormalize`, which
-returns ln of its norm, the log-stretch of the step) and hands the stretch to
-:func:`accumulate`.  From ell(t) = ln |delta(t)| / |delta(0)| accumulated over the steps:
-
-- maximal Lyapunov exponent, finite-time:  chi(t) = ell(t) / t  (Benettin et al. 1980);
-- MEGNO (Cincotta & Simó 2000, A&AS 147, 205):  Y(t) = (2/t) int_0^t s dell(s),
-  mean <Y>(t) = (1/t) int_0^t Y(s) ds; <Y> -> 2 for quasi-periodic orbits, ~ chi t / 2 for
-  chaotic ones, -> 0 for stable periodic ones;
-- FLI (Froeschlé, Lega & Gonczi 1997):  max_{s <= t} ell(s).
-
-The integrals over a step use the trapezoid rule in time on the step's stretch; renormalising
-every step keeps the vector O(1) (the tangent equations are linear, so this changes nothing
-but round-off; Skokos 2010, Lect. Notes Phys. 790, 63).
-
-With a second deviation vector (both renormalised every step, each to unit norm):
-
-- SALI (Skokos 2001, J. Phys. A 34, 10029):  min(|w1 + w2|, |w1 - w2|) of the unit vectors;
-  stays away from 0 on regular orbits of two degrees of freedom, -> 0 exponentially fast
-  on chaotic ones (the two vectors align with the most unstable direction);
-- GALI_2 (Skokos, Bountis & Antonopoulos 2007, Physica D 231, 30):  |w1 ^ w2|, the norm of the
-  wedge product of the unit vectors, sqrt(sum_{i<j} (w1_i w2_j - w1_j w2_i)^2) (the area of
-  their parallelogram); ~ SALI on chaotic orbits.
-
-A new indicator: its columns and entry in :mod:`explorer.kernels.indicator_table`, its update
-in :func:`accumulate` and :func:`result` (every scalar tangent loop calls these two; the tangent
-lanes' vector step end calls accumulate's pieces, :func:`megno_weight` ..., on vectors, and
-must learn a new accumulator too: tests/integrate/test_tangent_lanes.py compares them bit for bit),
-or, for one of two deviation vectors, its value in :func:`extra` (called at the end of the
-Taylor tangent loops, scalar and lanes).
-
-Early classification (:func:`megno_early`): an orbit whose <Y> has stayed above a level at
-every step end of [t/2, t], t >= tmin, is classified chaotic at t and stops.
+"""Model-agnostic accumulators of chaos indicators along deviation vectors renormalised every step
+(docs/commands/lyapunov.md): mLCE (Benettin et al. 1980), MEGNO (Cincotta & Simo 2000), FLI
+(Froeschle, Lega & Gonczi 1997) from the log-stretches; SALI (Skokos 2001) and GALI_2 (Skokos,
+Bountis & Antonopoulos 2007) from two vectors; the early classification.  A new indicator:
+docs/contributing.md.
 """
 import math
 
 from explorer._jit import njit
-
-# the layout of the accumulator, result and extra rows: the indicator registry (pure Python),
-# re-exported here for the compiled loops (tg.RES_*, tg.EXT_*)
 from explorer.kernels.indicator_table import (  # noqa: F401
     ACC_FLI,
     ACC_LOG,
@@ -79,8 +47,6 @@ def reset(acc):
         acc[i] = 0.0
 
 
-# MEGNO's sums over a step, written with operators: :func:`accumulate` calls them on doubles, the
-# tangent lanes (explorer.integrate.tangent_lanes) on vectors of lanes
 @njit(inline="always")
 def megno_weight(w, t0, t1, dlog):
     """W = int_0^t s dell(s) after the step [t0, t1] of stretch dlog (trapezoid in time)."""
@@ -163,9 +129,7 @@ def extra(v, w, n, ext):
 @njit
 def megno_early(acc, since, level, tmin):
     """The MEGNO rule of early classification after a step: ``since`` is the first step end of the
-    current run of step ends with <Y> > ``level`` (-1 when <Y> <= level at the last one).  Returns
-    (stop, since): stop when <Y> has stayed above ``level`` at every step end of [t/2, t] (since
-    <= t/2) and t >= ``tmin``."""
+    current run of step ends with <Y> > ``level`` (-1 when <Y> <= level at the last one)."""
     t = acc[ACC_T]
     ym = acc[ACC_YINT] / t if t > 0.0 else 0.0
     if ym > level:

@@ -1,15 +1,6 @@
-"""Model-agnostic pieces of an adaptive Taylor-series integrator.
-
-The caller fills the normalised Taylor coefficients ``X[i, k] = y_i^(k)/k!``
-(for this project: ``explorer.model.equations.taylor_coefficients``); these kernels
-choose the order from the tolerance, the step from the decay of the last two
-coefficients, and evaluate the series.
-
-References: A. Jorba, M. Zou, "A software package for the numerical
-integration of ODEs by means of high-order Taylor methods", Exp. Math. 14
-(2005) 99-117 (order and step-size rules); F. Biscani, D. Izzo, "Revisiting
-high-order Taylor methods for astrodynamics and celestial mechanics", MNRAS
-504 (2021) 2614 (the same rules as used by heyoka).
+"""Model-agnostic pieces of the adaptive Taylor method (Jorba & Zou, Exp. Math. 14 (2005) 99):
+order from the tolerance, step from the last two normalised coefficients X[i, k] = y_i^(k)/k!,
+Horner evaluation.
 """
 import math
 
@@ -56,9 +47,7 @@ def step_size(X, order, factor):
 @njit
 def radius_min(a, bm, u, v, e_p, e_q):
     """min(rho_p, rho_{p-1}) of :func:`step_size` from its norms a, bm, u = s/a, v = s/bm (for
-    a, bm > 0) and e_p = 1/p, e_q = 1/(p-1): +inf for a vanishing norm.  The powers are
-    kernels.power.radius_power (not libm's pow: the lanes compute the same doubles in vector code,
-    explorer.integrate.lanes.step_radii_lanes)."""
+    a, bm > 0) and e_p = 1/p, e_q = 1/(p-1): +inf for a vanishing norm."""
     rho = math.inf
     if a > 0.0:
         rho = radius_power(u, e_p)

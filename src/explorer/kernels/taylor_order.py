@@ -1,10 +1,4 @@
-"""The order rule of the Taylor method (Jorba & Zou 2005), in plain Python: validation and the
-method registry read it without loading any compiled kernel (:mod:`explorer.kernels.taylor`
-re-exports it).
-
-Reference: A. Jorba, M. Zou, "A software package for the numerical integration of ODEs by
-means of high-order Taylor methods", Exp. Math. 14 (2005) 99-117, section 3.2.
-"""
+"""The order rule of the Taylor method (Jorba & Zou 2005, section 3.2) in plain Python."""
 import math
 
 MIN_ORDER = 4
