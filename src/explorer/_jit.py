@@ -1,10 +1,5 @@
-"""The only place that imports numba, and only when a kernel is defined or a thread count is
-asked for: importing :mod:`explorer` (or validating input) does not load numba.
-
-``njit`` compiles with ``cache=True`` and never with ``fastmath`` (fastmath
-reassociation deletes compensated sums and ``nnan`` deletes NaN checks).
-Set ``EXPLORER_NOJIT=1`` to run every kernel as plain Python (debugging,
-coverage); ``prange`` then falls back to ``range``.
+"""The only place that imports numba, lazily.  ``njit`` compiles with ``cache=True`` and never
+``fastmath``; ``EXPLORER_NOJIT=1`` runs every kernel as plain Python.
 """
 import os
 
@@ -55,7 +50,6 @@ else:
         return numba.config.NUMBA_NUM_THREADS
 
     def __getattr__(name):
-        # ``from explorer._jit import prange`` in a kernel module (which imports numba anyway)
         if name == "prange":
             import numba
 

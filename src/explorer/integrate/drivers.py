@@ -1,44 +1,13 @@
-"""Compiled loops that join the physics (``equations``) and the numerics
-(``kernels``): many orbits in parallel, each integrated until it has crossed
-the section phi = phi0 K times, or its time or step budget runs out.
+"""Compiled crossing loops of DOP853 and the splitting methods, many orbits in parallel, each until
+it has crossed phi = phi0 K times or a budget runs out; and what every crossing loop shares
+(:func:`start_carry`, :func:`keep_crossing`, :func:`save_carry`, :func:`store_orbit`).  No
+validation (that is :mod:`explorer.analysis.sections`).
 
-Low-level twins of :mod:`explorer.analysis.sections` (which validates and maps the
-status codes); no validation here.  One batch function per method so that a
-run compiles (or loads from the cache) only what it uses: :func:`run_dop853_batch` and
-:func:`run_split_batch` here, the Taylor method's in :mod:`explorer.integrate.lanes` (its loop on
-SIMD lanes; a lone orbit is one lane).  What every crossing loop shares is here too: the first
-block's carry (:func:`start_carry`), a crossing kept and recorded (:func:`keep_crossing`), an
-orbit's carry and outputs at the end of its block (:func:`save_carry`, :func:`store_orbit`).
-
-Common arguments
-----------------
-Y0 : (N, 5) initial states (p1, p2, M, g1, g2)
-P : (9,) packed parameters (see ``explorer.model``)
-cphi, sphi : cos phi0, sin phi0 of the section angle
-direction : +1 (phi increasing through phi0), -1 (decreasing), 0 (both)
-tmax : time budget per orbit;  max_steps : step budget per orbit
-
-Resumable blocks
-----------------
-carry : (N, N_CARRY) in/out, the state of each orbit between blocks of crossings besides its
-    point in phase space: time reached, its Kahan compensation, sin(phi - phi0) at the state,
-    steps taken, the energy H0 of the first initial state (the reference of H - H0), DOP853's
-    proposed next step (0: not started).  :func:`start_carry` fills it for a first block;
-    each driver reads it at the start and writes it back at the end, so a run continued from
-    ``out_final`` and ``carry`` takes exactly the steps of an uninterrupted run (bit for bit:
-    times, states and H - H0 included).
-limits : (N, 2) int64, per orbit the block's ``target`` (the block ends after the step in
-    which the orbit's crossings reach it) and ``room`` (crossings recorded at most; roots of
-    that last step beyond the target are kept up to the room, as an uninterrupted run keeps
-    them).  One block of everything: target = room = K.  Budgets (``tmax``, ``max_steps``)
-    are for the whole run, not the block.
-
-Outputs (preallocated by the caller)
-------------------------------------
-out_cross : (N, K, 5) rows (t, p1, p2, M, H - H0) of the crossings (K >= room)
-out_count : (N,) int64 crossings found;  out_status : (N,) int64 (kernels.STATUS_*)
-out_final : (N, 5) state where the orbit stopped
-out_info : (N, 3) final time, steps taken, final Casimir error g1^2 + g2^2 - 1
+Arguments: Y0 (N, 5) states; P (9,) packed parameters; cphi, sphi of phi0; direction +1, -1 or
+0 (both); tmax, max_steps per orbit and for the whole run.  ``carry`` (N, N_CARRY) and
+``limits`` (N, 2) make blocks continue bit for bit (docs/architecture.md, Streaming).  Outputs:
+out_cross (N, K, 5) rows (t, p1, p2, M, H - H0); out_count, out_status (kernels.STATUS_*);
+out_final (N, 5); out_info (N, 3) final time, steps, Casimir error.
 """
 
 import numpy as np
@@ -88,8 +57,6 @@ ON_SECTION = 8.0 * EPS
 
 @njit
 def _record(cross, k, t, yc, H):
-    """Store a crossing row; returns False (nothing stored) if any value is not finite,
-    so that no NaN is ever stored as data."""
     s = t + yc[0] + yc[1] + yc[2] + H
     if not is_finite(s):
         return False
@@ -105,8 +72,7 @@ def _record(cross, k, t, yc, H):
 def keep_crossing(cross, count, t, yc, P, H0, cphi, sphi):
     """Record the root of sin(phi - phi0) at state yc, time t as crossing number ``count`` if it
     lies on the branch phi = phi0 (cos(phi - phi0) > 0; the root at phi0 + pi is not a crossing):
-    the row (t, p1, p2, M, H - H0).  Returns the new count, or -1 if a value is not finite
-    (nothing stored).  Every crossing loop (Taylor lanes, DOP853, splitting) keeps its roots here."""
+    the row (t, p1, p2, M, H - H0)."""
     if section_c(yc, cphi, sphi) <= 0.0:
         return count
     if not _record(cross, count, t, yc, energy(yc, P) - H0):
@@ -164,7 +130,6 @@ def store_orbit(j, count, status, t, steps, out_count, out_status, out_final, ou
     out_info[j, 2] = out_final[j, 3] ** 2 + out_final[j, 4] ** 2 - 1.0
 
 
-# ====================================================================== splitting
 @njit
 def split_step(y, P, dt, flow_ids, fracs):
     """One step of a composition of exact sub-flows (docs/model.md R4), in place
@@ -188,15 +153,6 @@ def _split_value_rate(yc, P, which, cphi, sphi, f):
 
 @njit
 def _split_root(y, P, dt, flow_ids, fracs, which, cphi, sphi, a, b, ga, gb, yc, f):
-    """tau in (a, b] with the functional ``which`` (sin(phi - phi0) or M) zero at Psi_tau(y),
-    Psi the composition step, given its values ga, gb at a, b of opposite signs (or gb = 0);
-    yc is left at Psi_tau(y).
-
-    The step map Psi_tau is itself a method of the scheme's order for every tau,
-    so its root is located at that order (an "equally accurate" alternative to
-    Henon's trick).  Newton with the derivative of the exact flow
-    (d/dtau sin(phi - phi0) = (M/b) cos(phi - phi0); dM/dt from R3), safeguarded by
-    bisection."""
     if gb == 0.0:
         for i in range(5):
             yc[i] = y[i]
@@ -224,9 +180,6 @@ def _split_root(y, P, dt, flow_ids, fracs, which, cphi, sphi, a, b, ga, gb, yc, 
 @njit
 def _split_step_roots(y, P, dt, flow_ids, fracs, cphi, sphi, gprev, gnew, mnew, direction,
                       roots, yc, f):
-    """kernels.events.poly_step_roots for a composition step from y: the crossings tau in
-    (0, dt] in the given direction, the step split at the root of M when M changes sign.
-    Returns n, roots[0:n] increasing (yc is scratch)."""
     if turns(y[2], mnew):
         tm = _split_root(y, P, dt, flow_ids, fracs, _SPLIT_M, cphi, sphi, 0.0, dt, y[2], mnew,
                          yc, f)
@@ -283,7 +236,7 @@ def orbit_split(y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max_ste
                 tau = roots[r]
                 if kept < 0 or kept >= room or t + tau > tmax:
                     break
-                if nroots > 1:   # yc holds the state at the last root searched
+                if nroots > 1:
                     for i in range(5):
                         yc[i] = yout[i]
                     split_step(yc, P, tau, flow_ids, fracs)
@@ -316,7 +269,6 @@ def run_split_batch(Y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max
     return 0
 
 
-# ====================================================================== DOP853
 #: a DOP853 step whose ends are within NEAR_SECTION times the reach of the step (below) of
 #: the section gets its dense output searched even without a sign change at its ends
 NEAR_SECTION = 2.0
@@ -324,13 +276,6 @@ NEAR_SECTION = 2.0
 
 @njit
 def _may_reach_section(y_old, y_new, K, P, h, g_old, g_new):
-    """Whether sin(phi - phi0) might vanish inside a DOP853 step whose end values have one sign
-    (a crossing and the turn back, or M turning twice): |d/dt sin(phi - phi0)| <= |M|/b and
-    |M| <= |M_end| + t |dM/dt|, so the step reaches at most
-    h (|M_old| + |M_new|) / b + h^2 (|dM/dt|_old + |dM/dt|_new) / b from its ends (docs/model.md R3,
-    dphi/dt = M/b; dM/dt taken at the ends, K[0] and K[12]).  A screen that decides whether
-    the three extra stages of the dense output are worth computing; the dense output is then
-    searched rigorously (kernels.events.dense_step_roots)."""
     if turns(y_old[2], y_new[2]):
         return True
     b = P[B]
@@ -341,13 +286,11 @@ def _may_reach_section(y_old, y_new, K, P, h, g_old, g_new):
 @njit
 def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cross, yout, carry, target, room):
     """One orbit with adaptive DOP853 (Hairer-Nørsett-Wanner; controller and first step as
-    scipy's).  The three extra stages of the dense output are computed only in steps that
-    bracket a crossing.  Returns (count, status, t, steps); steps counts attempts.  A continued
-    run starts from the step its carry proposes (the FSAL stage recomputed: the same value)."""
+    scipy's)."""
     K = np.empty((16, 5))
     F = np.empty((7, 5))
     Fg = np.empty(7)
-    coef, work, roots, brackets, stack = root_workspace(7)  # the dense output is of degree 7
+    coef, work, roots, brackets, stack = root_workspace(7)
     tmp = np.empty(5)
     ynew = np.empty(5)
     yc = np.empty(5)
@@ -363,10 +306,6 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
         h_abs = sy.dop853_first_step(sy.REDUCED, yout, P, K, rtol, atol, tmax, tmp)
     count = 0
     rejected = False
-    # The step of systems.dop853_step written out here: this loop is the W4 hot path, and even
-    # inlined the shared step costs it ~12 % (benchmarks/bench_ab.py); the tangent and
-    # full-system loops use dop853_step. tests/integrate/test_systems.py holds the two to the
-    # same steps and numbers, bit for bit.
     while True:
         if t >= tmax:
             code = STATUS_TMAX

@@ -1,10 +1,6 @@
-"""The body in the plane: adaptive DOP853 of the full system R1 (state (p1, p2, M, g1, g2, x, y),
-:func:`explorer.model.equations.rhs_full`) with samples at requested times and the turning points
-of phi, both from the 7th-order continuous extension (Hairer, Nørsett & Wanner II.10).
-
-The step is :mod:`explorer.integrate.systems`' (system ``FULL``); this loop observes samples and
-turns. The 3 extra dense-output stages are evaluated only in steps that contain a sample time
-or a sign change of M.  The time is summed with Kahan compensation.
+"""The body in the plane (docs/model.md R1, docs/commands/trajectory.md): adaptive DOP853 of the
+system ``FULL`` with samples at requested times and the turning points of phi from the
+continuous extension.
 """
 import math
 
@@ -32,12 +28,7 @@ def _branch(phi_guess, g1, g2):
 
 @njit
 def integrate_full(y0, phi0, P, t_samples, rtol, atol, max_steps, out, out_phi, turns):
-    """Adaptive DOP853 of R1 from t = 0 to t_samples[-1] (sorted, >= 0).
-
-    Fills out[j] (7,) and out_phi[j] (unwrapped angle) at every t_samples[j] reached, and
-    the turning points of phi (roots of M) into turns[k] = (t, phi, dM/dt sign) for
-    k < turns.shape[0] (more are counted, not stored).
-    Returns (status, n_samples_filled, n_turns, steps, t_reached)."""
+    """Adaptive DOP853 of R1 from t = 0 to t_samples[-1] (sorted, >= 0)."""
     n = FULL_DIM
     ns = t_samples.shape[0]
     cap = turns.shape[0]
@@ -65,13 +56,13 @@ def integrate_full(y0, phi0, P, t_samples, rtol, atol, max_steps, out, out_phi, 
         return STATUS_DONE, j, nturn, steps, 0.0
     t = 0.0
     tc = 0.0
-    h_abs = sy.FIRST_STEP  # the first call evaluates K[0] = f(ycur) and picks the first step
+    h_abs = sy.FIRST_STEP
     while True:
         code, h, last, h_abs, steps = sy.dop853_step(sy.FULL, ycur, P, K, t, tmax, STATUS_DONE, h_abs, steps,
                                                      max_steps, rtol, atol, tmp, ynew, True)
         if code != sy.STEP_OK:
             break
-        t_old = t - tc  # compensated start of the step
+        t_old = t - tc
         t_new = tmax if last else t_old + h
         m_old = ycur[2]
         m_new = ynew[2]

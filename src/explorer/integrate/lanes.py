@@ -1,78 +1,8 @@
-"""The Taylor crossing loop: LANES orbits advance in lockstep on SIMD vectors; one lane is the
-case of a lone orbit.  This is the only implementation of the Taylor method's crossings (the
-method registry runs it for every batch and every lone orbit); the scalar loop it was checked
-against lives in the tests as an oracle (tests/integrate/taylor_oracle.py), equal to it bit for
-bit for every orbit (crossings, final state, status, time, step count), whatever the grouping of
-orbits into lanes and the number of threads.
-
-A step of :func:`run_worker`, for all lanes at once:
-
-* the Taylor coefficients (the recurrence of R3 translated lane-wise by ``tools/gen_lanes.py``
-  into :mod:`explorer.integrate._lanes_generated`), the step norms (:func:`step_norms_lanes`) and
-  the Horner sum (:func:`evaluate_lanes`) as vector operations of :mod:`explorer.integrate.simd`
-  (lane-wise the same IEEE operations, in the same order, as ``equations.taylor_coefficients``
-  and ``kernels.taylor``);
-* the step sizes' powers for all lanes at once (:func:`step_norms_lanes`:
-  ``simd.vradius_power_core``, the vector IR of ``kernels.power.radius_power_core``; the doubles
-  of ``kernels.taylor.step_size``);
-* the rest of the step of the method (Jorba & Zou 2005) in vector form with lane masks
-  (``simd.vgt`` ..., ``simd.vselect``): the finiteness of the last two coefficients, the step
-  size, the clip to tmax and the underflow test (:func:`step_lanes`); a bound of the variation of
-  sin(phi - phi0) over the step (:func:`variation_lanes`); then, for the lanes whose step can hold
-  no root (the bound proves it: ``kernels.events.excluded_by_variation``, so ``poly_step_roots``
-  would find none; or the step's polynomial is monotone, :func:`monotone_lanes`, and its end
-  values make no sign change: ``kernels.events.isolate_crossings``' second test) and ends in no
-  stop, the end of the step (:func:`end_steps_lanes`): the new
-  state's non-finite check, sin(phi - phi0) at it, the compensated time sum (``kernels.clock``)
-  and the time, step and crossing budgets;
-* per lane in scalar code, only the lanes that the masks leave to it (``simd.vbits``): a
-  non-finite coefficient, a vanishing or subnormal norm, an underflow (:func:`lane_step`), and
-  the step ends with a possible root or a stop (in W4, 2.2 % of the lane-steps: neither the
-  variation bound excludes a root there nor is the step's polynomial monotone without a sign
-  change; 9 % by the variation bound alone): the
-  crossings - every root of the step's Taylor polynomial of sin(phi - phi0)
-  (``kernels.events.poly_step_roots``: exact to the order of the method), each kept on the branch
-  phi = phi0 (:func:`explorer.integrate.drivers.keep_crossing`) - the clock, the budgets, the
-  stops and the refill.  The vector forms call the scalar code's own functions on vectors
-  (``kernels.events.sin_diff``, ``excluded_by_variation``, ``tail_term``, ``sign_change``,
-  ``kernels.clock.compensated_add``, ``resolves``, ``kernels.checks.is_finite``,
-  ``kernels.power.is_normal``: written with operators, which :mod:`explorer.integrate.simd`
-  defines on its vectors; docs/architecture.md) and write the rest with its operations in its
-  order, so a lane's doubles do not depend on which path ended its step (tests/integrate/
-  test_lanes.py: the vector step and step end against lane_step and the scalar step end, lane
-  by lane).
-
-The blocks, the carry and the outputs are those of every crossing driver
-(:mod:`explorer.integrate.drivers`: ``start_carry``, ``save_carry``, ``store_orbit``).
-
-Lanes never exchange values: a lane computes exactly what the scalar loop computes for its
-orbit, so which orbits share a vector, in which order they are taken and how many threads run
-cannot change any result.  The work is therefore distributed dynamically: one worker per thread
-(prange; but no more workers than the batch fills groups of LANES lanes, :func:`lane_workers`),
-each with up to G x LANES lanes; a lane whose orbit stops takes the next unstarted orbit of
-the batch at once (an atomic counter), so lanes idle only when the whole batch is handed out
-(then on the zero state: all its coefficients are 0, harmless, and ignored), and a long orbit
-cannot leave a thread idle.
-
-Lane groups: a worker advances G = 1 or 2 groups of LANES lanes (:func:`lane_groups`; the
-lane arrays are G x LANES wide).  The generated recurrence of G groups writes each vector
-statement once per group, in turn, so that the groups' independent chains can share the
-floating-point pipes; everything else runs group after group or lane by lane.  G is a
-compile-time constant (the length of the tuple ``groups`` of G zeros), so each G is compiled only
-when used.  Default by the vector width (:func:`default_groups`): 1 on AVX2, where two groups'
-accumulators do not fit the vector registers and G = 2 was slower (benchmarks/RESULTS.md,
-"Issue 24 (fourth session)"); 2 with AVX-512, where it was faster ("Issue 34").  G = 4 is not
-offered: it was slower than G = 1 on every CPU measured (tools/gen_lanes.py GROUPS).
-
-Step size: ``kernels.taylor.step_size`` takes the smaller of two powers, rho_p = (s/a)^(1/p)
-and rho_{p-1} = (s/bm)^(1/(p-1)), by ``kernels.power.radius_power`` (not libm's ``pow``, a call
-per value): branch-free arithmetic that the lanes run for all lanes at once
-(:func:`step_norms_lanes`), the same doubles as the scalar loops.  A lane whose s/a or s/bm is
-not a positive normal double (a vanishing or subnormal norm) takes ``kernels.taylor.radius_min``
-in scalar code (:func:`lane_step_size`), as step_size does.
-
-Kernel contract: arrays are allocated per worker, never inside the step loop; no
-exceptions (status codes); no fastmath.
+"""The Taylor crossing loop on SIMD lanes, the method's only implementation: LANES orbits advance
+in lockstep (a lone orbit is one lane), each lane bit for bit the scalar oracle
+tests/integrate/taylor_oracle.py whatever the lane grouping and thread count.  Design, lane
+groups and the scalar/vector split: docs/methods.md (Parallelism), docs/architecture.md (The
+system seam).  Kernel contract: explorer/kernels/__init__.py.
 """
 import functools
 import os
@@ -139,12 +69,8 @@ N_ORBIT = 5
 #: rows of sin(phi) = g1 and cos(phi) = g2 in the state (p1, p2, M, g1, g2)
 _G1 = 3
 _G2 = 4
-#: the groups of LANES lanes a worker advances together, unless EXPLORER_LANE_GROUPS or the
-#: caller says otherwise (lane_groups), by the vector width the kernels are compiled for
-#: (default_groups): 1 on AVX2 and narrower, where one <8 x double> already takes two registers
-#: and two groups' accumulators no longer fit the 16 vector registers (benchmarks/RESULTS.md,
-#: "Issue 24 (fourth session)": G = 2 about 1.2x slower); 2 with AVX-512 (32 registers of 8
-#: doubles: G = 2 9 % faster on W4 on a Zen 4, 4 % on a Xeon, "Issue 34")
+#: the groups of LANES lanes a worker advances together by default (default_groups): 1 on AVX2
+#: and narrower, 2 with AVX-512 (docs/methods.md, lane groups)
 DEFAULT_GROUPS = 1
 AVX512_GROUPS = 2
 
@@ -159,10 +85,7 @@ def step_constants(order):
 @njit
 def evaluate_lanes(X, order, h, out, base, groups):
     """out[base + i, l] = sum_k X[k, base + i, l] h[l]^k for i = 0..4 per lane (Horner: per lane
-    exactly kernels.taylor.evaluate), X of shape (order + 1, rows, W), h of shape (W,), out of
-    shape (rows', W), W = G * LANES with G = len(groups) (a tuple of G zeros: W is a constant of
-    the compiled code): each group of LANES lanes in turn, its five chains interleaved
-    (independent)."""
+    exactly kernels.taylor.evaluate); W = G * LANES lanes, G = len(groups)."""
     w = len(groups) * LANES
     stride = X.shape[1] * w
     for g in range(0, w, LANES):
@@ -190,15 +113,9 @@ def evaluate_lanes(X, order, h, out, base, groups):
 
 @njit
 def step_norms_lanes(X, order, e_p, e_q, out, groups):
-    """Per lane, from the orbit's rows 0..4 of X (order + 1, rows, W), W = G * LANES, G =
-    len(groups), what the checks and the step size of the Taylor step need (out of shape
-    (N_NORMS, W)): out[0] = sum_i X[order, i]
-    and out[1] = sum_i X[order - 1, i] (in the order of systems._finite_column: non-finite iff a
-    coefficient is, or the sum overflows); with s = max(1, max_i |X[0, i]|), a = max_i
-    |X[order, i]|, bm = max_i |X[order - 1, i]| (the norms of kernels.taylor.step_size, in its
-    order): out[2] = a, out[3] = bm, out[4] = s / a, out[5] = s / bm (the arguments of its two
-    powers) and out[6] = min((s/a)^e_p, (s/bm)^e_q) (simd.vradius_power_core: the doubles of
-    kernels.taylor.radius_min where both arguments are positive normal doubles)."""
+    """Per lane, the norms of kernels.taylor.step_size in its order (out (N_NORMS, W)): out[0], out[1]
+    the sums of X[order] and X[order - 1] (finiteness), out[2] = a, out[3] = bm, out[4] = s/a,
+    out[5] = s/bm, out[6] = min((s/a)^e_p, (s/bm)^e_q) (valid where both are positive normal)."""
     w = len(groups) * LANES
     stride = X.shape[1] * w
     for c in range(0, w, LANES):
@@ -232,10 +149,8 @@ def step_norms_lanes(X, order, e_p, e_q, out, groups):
 
 @njit
 def lane_step_size(a, bm, u, v, rho, e_p, e_q, factor):
-    """kernels.taylor.step_size from its norms: a, bm, u = s/a, v = s/bm, e_p = 1/p, e_q =
-    1/(p-1) and rho = min(u^e_p, v^e_q) from :func:`step_norms_lanes`, valid when u and v are
-    positive normal doubles (then a, bm > 0 and step_size takes the same minimum); otherwise
-    (a vanishing or subnormal norm) kernels.taylor.radius_min as step_size calls it."""
+    """kernels.taylor.step_size of lane l from its norms (:func:`step_norms_lanes`); a vanishing or
+    subnormal norm takes kernels.taylor.radius_min, as step_size does."""
     if is_normal(u) and is_normal(v):
         return rho * factor
     return tk.radius_min(a, bm, u, v, e_p, e_q) * factor
@@ -245,8 +160,7 @@ def lane_step_size(a, bm, u, v, rho, e_p, e_q, factor):
 def lane_step(l, norms, t, tend, e_p, e_q, factor):
     """The checks and the step of :func:`explorer.integrate.systems.taylor_step` for lane l from
     its norms (step_norms_lanes): finiteness of the last two coefficients, the step size, clipped
-    to ``tend``, and the underflow test.  Returns (code, h, last): code -1 (systems.STEP_OK) or
-    STATUS_NONFINITE / STATUS_STEP_UNDERFLOW.  Shared by the crossing and the tangent lanes."""
+    to ``tend``, and the underflow test."""
     if not (is_finite(norms[0, l]) and is_finite(norms[1, l])):
         return STATUS_NONFINITE, 0.0, False
     h = lane_step_size(norms[2, l], norms[3, l], norms[4, l], norms[5, l], norms[6, l], e_p, e_q, factor)
@@ -260,16 +174,7 @@ def lane_step(l, norms, t, tend, e_p, e_q, factor):
 def step_lanes(L_on, norms, L_t, tend, e_p, e_q, factor, hv, L_last, L_fast, L_status, L_stop, w):
     """:func:`lane_step` for every lane (``w`` of them) that holds an orbit (``L_on[l]`` 1.0, else
     0.0): its step in ``hv`` (0 for idle and stopped lanes) and ``L_last`` (1.0 for the step that
-    ends on ``tend``, else 0.0), or its stop in ``L_status``/``L_stop``.
-
-    In vector form, each group of LANES lanes at once: the lanes whose last two coefficients are
-    finite, whose s/a and s/bm are positive normal doubles and whose step does not underflow take
-    lane_step's double, rho * factor clipped to ``tend`` (the same IEEE operations), and
-    ``L_fast[l]`` = 1.0; only the others (a non-finite coefficient, a vanishing or subnormal norm,
-    an underflow: rare) run :func:`lane_step` in scalar code (``L_fast[l]`` = 0.0).  The tests are
-    lane_step's own functions on vectors (``kernels.checks.is_finite``, ``kernels.power.is_normal``,
-    ``kernels.clock.resolves``); the clip is clock.clip_step's comparison and difference with a
-    lane select (a branch per lane in the scalar function)."""
+    ends on ``tend``, else 0.0), or its stop in ``L_status``/``L_stop``."""
     for l in range(w):
         L_stop[l] = False
     zero = vzero()
@@ -279,7 +184,6 @@ def step_lanes(L_on, norms, L_t, tend, e_p, e_q, factor, hv, L_last, L_fast, L_s
         t = vload(L_t, c)
         u = vload(norms, 4 * w + c)
         v = vload(norms, 5 * w + c)
-        # lane_step_size (both powers valid) and clock.clip_step
         h = vmul(vload(norms, 6 * w + c), vsplat(factor))
         last = vge(vadd(t, h), tv)
         h = vselect(last, vsub(tv, t), h)
@@ -310,9 +214,8 @@ def stop_lane(l, status, L_status, L_stop):
 
 @njit(inline="always")
 def stop_unless_finite(l, znew, first, last, L_status, L_stop):
-    """Stop lane l (STATUS_NONFINITE) unless rows first..last - 1 of its new state znew[:, l] are
-    finite: kernels.checks.all_finite (their sum is finite), written out here (a call to
-    all_finite, a loop of unknown length, cost the crossing lanes ~1 %)."""
+    """Stop lane l (STATUS_NONFINITE) unless rows first..last - 1 of znew[:, l] are finite
+    (kernels.checks.all_finite, written out)."""
     s = 0.0
     for i in range(first, last):
         s += znew[i, l]
@@ -322,10 +225,8 @@ def stop_unless_finite(l, znew, first, last, L_status, L_stop):
 
 @njit(inline="always")
 def count_step(l, znew, first, last, L_steps, L_status, L_stop):
-    """After the vector step: unless lane l stopped in :func:`step_lanes`, its step is counted
-    and its new state checked (:func:`stop_unless_finite` of rows first..last - 1), as at the end
-    of systems.taylor_step (the tangent lanes; :func:`run_worker`, the W4 hot loop, sums the
-    state as it copies it out of the lane, the same checks in one pass)."""
+    """After the vector step: unless lane l stopped in :func:`step_lanes`, count its step and check
+    its new state, as at the end of systems.taylor_step."""
     if not L_stop[l]:
         L_steps[l] += 1
         stop_unless_finite(l, znew, first, last, L_status, L_stop)
@@ -333,11 +234,8 @@ def count_step(l, znew, first, last, L_steps, L_status, L_stop):
 
 @njit
 def variation_lanes(X, order, h, cphi, sphi, out, groups):
-    """out[l] = sum_{k>=1} |c_k| h[l]^k, c_k = sin_diff(X[k, G1, l], X[k, G2, l]) the step's
-    Taylor coefficients of sin(phi - phi0), for every lane in one vector chain per group of LANES
-    lanes (Horner): the bound of the variation of sin(phi - phi0) over the step that
-    kernels.events.no_root_within uses (up to the rounding its slack covers); G = len(groups)
-    groups."""
+    """out[l] = sum_{k>=1} |c_k| h[l]^k, c_k the step's Taylor coefficients of sin(phi - phi0): the
+    variation bound of kernels.events.excluded_by_variation, per lane."""
     w = len(groups) * LANES
     cv = vsplat(cphi)
     sv = vsplat(sphi)
@@ -351,20 +249,14 @@ def variation_lanes(X, order, h, cphi, sphi, out, groups):
 
 @njit(inline="always")
 def _sin_diff_lanes(X, k, c, w, cv, sv):
-    """kernels.events.sin_diff of the coefficients X[k, G1] and X[k, G2] of the group of LANES
-    lanes at ``c`` (cv, sv: cos phi0 and sin phi0 splat): the k-th Taylor coefficient of
-    sin(phi - phi0)."""
     o = k * (NVAR * w) + c
     return sin_diff(vload(X, o + _G1 * w), vload(X, o + _G2 * w), cv, sv)
 
 
 @njit(inline="always")
 def monotone_lanes(X, order, hv, cv, sv, c, w):
-    """kernels.events.monotone_within(gc, order, h) for the group of LANES lanes at ``c``, gc[k] =
-    sin_diff(X[k, G1], X[k, G2]) the step's polynomial of sin(phi - phi0) and h = hv:
-    excluded_by_variation(gc[1], s), s = sum_{k>=2} k |gc[k]| h^(k-1) term by term
-    (kernels.events.tail_term, the loop of events._tail_bound): the scalar functions on vectors,
-    so the mask is the scalar test's answer."""
+    """kernels.events.monotone_within(gc, order, h) for the group of LANES lanes at ``c``, built
+    from the scalar functions on vectors, so the mask is the scalar test's answer."""
     h = vload(hv, c)
     rk = vsplat(1.0)
     s = vzero()
@@ -376,21 +268,11 @@ def monotone_lanes(X, order, hv, cv, sv, c, w):
 @njit(inline="always")
 def end_steps_lanes(X, order, ynew, vary, hv, L_t, L_tc, L_gprev, L_steps, L_left, L_on, L_fast, L_last, cphi, sphi,
                     direction, tmax, max_steps, c, w):
-    """The end of the step of the crossing loop for the group of LANES lanes at ``c``, in vector
-    form, for every lane whose step ends with nothing to do but the bookkeeping: its step was
-    taken in vector form (``L_fast``) and is not the last (``L_last``), its new state
-    ``ynew[:, l]`` is finite (its sum, in the order of the scalar check), the variation bound
-    ``vary`` excludes every root of sin(phi - phi0) in the step (kernels.events.excluded_by_variation,
-    the same IEEE operations: then the scalar loop would find none) or, where it does not, the
-    step's polynomial is monotone (:func:`monotone_lanes`) and its end values make no sign change
-    in ``direction`` (kernels.events.sign_change: then kernels.events.isolate_crossings returns
-    no bracket), and neither the clock nor
-    the step budget nor the crossings still wanted (``L_left``) stop it after the step.  Such a
-    lane takes its new state (X[0]), sin(phi - phi0) at it (``equations.section_g``), the
-    compensated time (``kernels.clock.advance_time``) and the step count here, exactly as the
-    scalar loop would.  Returns the bits of the other lanes that hold an orbit (lane c + i bit i):
-    the scalar loop of :func:`run_worker` runs their step's end (the stops, and the steps that
-    may hold a root: 2.2 % of W4's lane-steps, measured at order 15)."""
+    """The end of the step, in vector form, for the lanes of the group at ``c`` whose step needs only
+    bookkeeping: taken in vector form, not the last, finite, no root possible (variation bound, or
+    monotone without a sign change) and no stop; they take the new state, sin(phi - phi0), the
+    compensated time and the step count as the scalar loop would.  Returns the bits of the other
+    lanes holding an orbit (lane c + i bit i), whose step end :func:`run_worker` runs per lane."""
     zero = vzero()
     live = vgt(vload(L_on, c), zero)
     ok = vandnot(vgt(vload(L_fast, c), zero), vgt(vload(L_last, c), zero))
@@ -402,21 +284,17 @@ def end_steps_lanes(X, order, ynew, vary, hv, L_t, L_tc, L_gprev, L_steps, L_lef
     ok = vand(ok, is_finite(vadd(vadd(vadd(vadd(vadd(zero, y0), y1), y2), y3), y4)))
     cv = vsplat(cphi)
     sv = vsplat(sphi)
-    # no root: the variation bound excludes one about g0, sin(phi - phi0) at the step's start
     none = excluded_by_variation(_sin_diff_lanes(X, 0, c, w, cv, sv), vload(vary, c))
-    gnew = sin_diff(y3, y4, cv, sv)            # equations.section_g of the new state
+    gnew = sin_diff(y3, y4, cv, sv)
     if vbits(vandnot(vand(live, ok), none)) != 0:
-        # isolate_crossings' second test: monotone on the step, and no sign change of the direction
         cross = sign_change(vload(L_gprev, c), gnew, direction)
         none = vor(none, vandnot(monotone_lanes(X, order, hv, cv, sv, c, w), cross))
     ok = vand(ok, none)
-    # advance_time (not the last step: L_last excluded it above)
     t = vload(L_t, c)
     tc = vload(L_tc, c)
     tn, tcn = compensated_add(t, tc, vload(hv, c))
     steps = vload(L_steps, c)
     sn = vadd(steps, vsplat(1.0))
-    # the budgets (checked before the next step) leave the lane running; a crossing is still wanted
     ok = vand(ok, vand(vand(vlt(tn, vsplat(tmax)), vlt(sn, vsplat(max_steps))), vgt(vload(L_left, c), zero)))
     vstore(L_t, c, vselect(ok, tn, t))
     vstore(L_tc, c, vselect(ok, tcn, tc))
@@ -443,8 +321,6 @@ def _evaluate_lane(X, order, l, h, out):
 @njit
 def _finish(j, l, X, count, status, t, tc, gprev, steps, carry, out_count, out_status, out_final,
             out_info):
-    """Write the outputs of orbit j from lane l (its state is X[0, :, l]) and its carry (the
-    block's end: drivers.save_carry, drivers.store_orbit)."""
     for i in range(NVAR):
         out_final[j, i] = X[0, i, l]
     save_carry(carry[j], t, tc, gprev, steps)
@@ -468,11 +344,6 @@ def next_lane_orbit(next_orbit, n, orb, l, X, nrows):
 @njit
 def _start_lane(l, X, orb, L_on, L_left, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, L_target, L_room,
                 next_orbit, Y0, tmax, max_steps, carry, limits, out_count, out_status, out_final, out_info):
-    """Put the next unstarted orbit that needs a step on lane l (its start from the orbit's carry:
-    a block continued from ``carry`` takes the steps of an uninterrupted run; orbits that stop
-    before their first step - target 0, time or steps spent - are written out at once).
-    Returns 1 if the lane got an orbit (``L_on[l]`` = 1.0, ``L_left[l]`` the crossings it still
-    wants), 0 if the batch is exhausted (the lane then idles on the zero state, ``L_on[l]`` = 0.0)."""
     while True:
         j = next_lane_orbit(next_orbit, Y0.shape[0], orb, l, X, NVAR)
         if j < 0:
@@ -507,9 +378,7 @@ def _start_lane(l, X, orb, L_on, L_left, L_t, L_tc, L_gprev, L_H0, L_count, L_st
         return 1
 
 
-#: the lane worker's work arrays: five of several dimensions, given one by one, and the 1-D ones
-#: that :func:`workspace_views` cuts from three flat buffers (float64, int64, bool); ``p`` is the
-#: order, ``W`` = G * LANES the lanes of G groups
+#: the lane worker's work arrays: five n-dimensional ones, then the 1-D ones of workspace_views
 WORKSPACE_ND = (("X", "(p + 1, NVAR, W)"), ("norms", "(N_NORMS, W)"), ("ynew", "(NVAR, W)"),
                 ("brackets", "(MAX_STEP_ROOTS, 4)"), ("stack", "(ISOLATE_STACK, 5)"))
 WORKSPACE_F = (("hv", "W"), ("vary", "W"), ("yl", "NVAR"), ("yc", "NVAR"), ("gc", "p + 1"),
@@ -548,9 +417,6 @@ def workspace_views(order, w, wf, wi, wb):
     """The 1-D work arrays (WORKSPACE_F, WORKSPACE_I, WORKSPACE_B) of ``w`` lanes as views of the
     flat buffers ``wf``, ``wi``, ``wb`` (slices: views that cost nothing)."""
     p1 = order + 1
-    # N_FLOAT_W float and N_INT_W int arrays of w each (the steps counted in a double, exact
-    # below 2**53, so that the budget is checked in vector form), then the float arrays of other
-    # lengths
     hv, vary, L_t, L_tc, L_gprev, L_H0 = (wf[0:w], wf[w:2 * w], wf[2 * w:3 * w], wf[3 * w:4 * w], wf[4 * w:5 * w],
                                           wf[5 * w:6 * w])
     L_steps, L_on, L_left, L_fast, L_last = (wf[6 * w:7 * w], wf[7 * w:8 * w], wf[8 * w:9 * w], wf[9 * w:10 * w],
@@ -574,8 +440,6 @@ def workspace_views(order, w, wf, wi, wb):
 @njit(nogil=True)
 def _run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
                 out_cross, out_count, out_status, out_final, out_info):
-    """:func:`run_worker` on work arrays of its own: ``groups`` (a tuple of G zeros) groups of
-    LANES lanes."""
     w = len(groups) * LANES
     n = np.zeros(N_WORKSPACE, np.int64)
     workspace_sizes(order, w, n)
@@ -590,10 +454,7 @@ def _run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, 
 
 @njit
 def aligned_zeros(n):
-    """n float64 zeros starting on a cache line (ALIGN bytes).  The lanes load and store whole
-    vectors of LANES doubles (64 bytes): a vector that straddles two lines costs two accesses,
-    and numba's allocator aligns to 32 bytes only, so an unaligned X made a lone orbit up to 20 %
-    slower in one run than in the next (benchmarks/RESULTS.md, LONGORBIT)."""
+    """n float64 zeros starting on a cache line (ALIGN bytes)."""
     buf = np.zeros(n + ALIGN // 8)
     skip = ((ALIGN - buf.ctypes.data % ALIGN) % ALIGN) // 8
     return buf[skip:skip + n]
@@ -603,10 +464,8 @@ def aligned_zeros(n):
 def run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
                out_cross, out_count, out_status, out_final, out_info, X, norms, ynew, brackets, stack, wf, wi, wb):
     """Integrate orbits taken from the shared counter ``next_orbit`` on up to ``nlanes`` lanes
-    until none is left: the Taylor crossing loop (module docstring), each lane one orbit, in
-    G = len(groups) groups of LANES lanes (W = G * LANES lanes: the last axis of X).  The work
-    arrays (WORKSPACE_ND, then the flat buffers of :func:`workspace_views`) come zeroed from the
-    caller: nothing is allocated here."""
+    until none is left: the Taylor crossing loop, each lane one orbit, in
+    G = len(groups) groups of LANES lanes (W = G * LANES lanes: the last axis of X)."""
     w = len(groups) * LANES
     (hv, vary, yl, yc, gc, work, roots, L_t, L_tc, L_gprev, L_H0, L_steps, L_on, L_left, L_fast, L_last, orb,
      L_count, L_target, L_room, L_status, L_stop) = workspace_views(order, w, wf, wi, wb)
@@ -623,27 +482,20 @@ def run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, o
     while active > 0:
         taylor_coefficients_lanes(P, X, order, groups)
         step_norms_lanes(X, order, e_p, e_q, norms, groups)
-        # ---- all lanes at once: finiteness of the last two coefficients, step size, underflow
         step_lanes(L_on, norms, L_t, tmax, e_p, e_q, factor, hv, L_last, L_fast, L_status, L_stop, w)
         evaluate_lanes(X, order, hv, ynew, 0, groups)
-        # ---- all lanes at once (vectorised): a bound of the variation of sin(phi - phi0) over
-        # the step, sum_{k>=1} |c_k| h^k, so that steps far from the section skip the root
-        # isolation (kernels.events.excluded_by_variation)
         variation_lanes(X, order, hv, cphi, sphi, vary, groups)
         for c in range(0, w, LANES):
-            # ---- all lanes of the group at once: the steps that end with no root and no stop
             bits = end_steps_lanes(X, order, ynew, vary, hv, L_t, L_tc, L_gprev, L_steps, L_left, L_on, L_fast,
                                    L_last, cphi, sphi, direction, tmax, max_steps, c, w)
-            # ---- lane by lane, the others: the new state's check, the crossings in the step,
-            # the clock and the budgets, then the stops (the scalar loop's step end)
             while bits != 0:
                 ib, bits = next_bit(bits)
                 l = c + ib
                 j = orb[l]
                 if not L_stop[l]:
                     L_steps[l] += 1.0
-                    s = 0.0    # kernels.checks.all_finite of the lane's new state, summed as it is copied
-                    for i in range(NVAR):   # (a call to all_finite, a loop of unknown length here, costs ~1 %)
+                    s = 0.0
+                    for i in range(NVAR):
                         yl[i] = ynew[i, l]
                         s += yl[i]
                     if not is_finite(s):
@@ -674,7 +526,6 @@ def run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, o
                         L_count[l] = count
                         L_left[l] = float(L_target[l] - count)
                 if not L_stop[l]:
-                    # compensated t += h
                     t, tc = advance_time(t, tc, h, L_last[l] != 0.0, tmax)
                     L_t[l] = t
                     L_tc[l] = tc
@@ -683,12 +534,11 @@ def run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, o
                     L_gprev[l] = gnew
                     if count >= L_target[l]:
                         stop_lane(l, STATUS_DONE, L_status, L_stop)
-                    elif t >= tmax:          # the budgets, checked before the next step
+                    elif t >= tmax:
                         stop_lane(l, STATUS_TMAX, L_status, L_stop)
                     elif L_steps[l] >= max_steps:
                         stop_lane(l, STATUS_MAX_STEPS, L_status, L_stop)
                 if L_stop[l]:
-                    # orbit j stopped: write it out and refill the lane
                     _finish(j, l, X, L_count[l], L_status[l], L_t[l], L_tc[l], L_gprev[l], L_steps[l], carry,
                             out_count, out_status, out_final, out_info)
                     active += _start_lane(l, X, orb, L_on, L_left, L_t, L_tc, L_gprev, L_H0, L_count, L_steps,
@@ -712,13 +562,8 @@ def run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps,
                            out_cross, out_count, out_status, out_final, out_info, max_lanes=None, groups=None):
     """Crossings of the section by the Taylor method of ``order`` for every orbit of Y0: the
     arguments and outputs of every batch driver (:mod:`explorer.integrate.drivers`: the carry, the
-    limits of a block, the outputs).  :func:`lane_workers` workers (one per numba thread, at most
-    one per group of LANES orbits), each with up to ``groups`` groups of LANES lanes
-    (:func:`worker_lanes`); the results depend on none of these.  A Python function: the thread
-    count is read here (numba's get_num_threads inside a kernel would defeat the on-disk cache)."""
+    limits of a block, the outputs)."""
     n = Y0.shape[0]
-    # one worker (a lone orbit, or a batch that one group of lanes holds): run here without the
-    # parallel layer (numba's thread pool is neither asked nor started)
     nworkers = lane_workers(n, max_lanes)
     nlanes, g = worker_lanes(n, nworkers, max_lanes, groups)
     if nworkers == 1:
@@ -732,13 +577,7 @@ def run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps,
 def lane_workers(n, max_lanes=None):
     """How many lane workers a batch of ``n`` orbits runs on: one per numba thread, but no more
     than the batch fills groups of LANES lanes (of ``max_lanes`` when that is fewer), and at least
-    one.  A group steps all its LANES lanes whether they hold an orbit or not, so two workers
-    on a batch that one group holds step two groups where one does: the same wall time within
-    about 10 %, up to twice the CPU (2 to 8 orbits on the Xeon of benchmarks/RESULTS.md: 2
-    orbits 0.26 s either way, 0.26 against 0.48 CPU-seconds; 8 orbits 0.39 s and 0.40 CPU-s on
-    one worker, 0.42 s and 0.68 on two; 9 orbits 0.64 s on one, 0.36 s on two).  The second
-    core stays free for whatever else runs (the other orbits of a page, the other pytest
-    worker).  The results do not depend on it (tests/integrate/test_lanes.py)."""
+    one."""
     per = LANES if max_lanes is None else max(1, min(int(max_lanes), LANES))
     return max(1, min(get_num_threads(), -(-int(n) // per)))
 
@@ -760,10 +599,8 @@ def lane_groups(groups=None):
 
 @functools.cache
 def default_groups():
-    """G for this process when neither the caller nor EXPLORER_LANE_GROUPS says: AVX512_GROUPS
-    if the kernels are compiled for a CPU with AVX-512 (numba's NUMBA_CPU_NAME and
-    NUMBA_CPU_FEATURES when set, e.g. ``generic`` in the tests, else the host), else
-    DEFAULT_GROUPS.  The results do not depend on G (tests/integrate/test_lanes.py)."""
+    """G when neither the caller nor EXPLORER_LANE_GROUPS says: AVX512_GROUPS if the kernels are
+    compiled for AVX-512 (NUMBA_CPU_NAME/NUMBA_CPU_FEATURES, else the host), else DEFAULT_GROUPS."""
     if NOJIT:
         return DEFAULT_GROUPS
     from numba.core import config
@@ -778,10 +615,8 @@ def default_groups():
 
 
 def worker_lanes(n, nworkers, max_lanes=None, groups=None):
-    """(nlanes, groups) of each of ``nworkers`` workers for a batch of ``n`` orbits: nlanes =
-    min(max_lanes, G * LANES, ceil(n / nworkers)) lanes with G = :func:`lane_groups` (groups), and
-    as the tuple of zeros the workers take, the fewest groups of GROUPS, up to G, that hold them
-    (a lone orbit runs on one group whatever G)."""
+    """(nlanes, groups) of each of ``nworkers`` workers for ``n`` orbits: nlanes = min(max_lanes,
+    G * LANES, ceil(n / nworkers)), groups the fewest (up to G) that hold them."""
     g = lane_groups(groups)
     cap = g * LANES if max_lanes is None else min(int(max_lanes), g * LANES)
     nlanes = max(1, min(cap, -(-n // nworkers)))

@@ -1,7 +1,5 @@
-"""The layout of the arrays that the crossing drivers share with their callers (the columns of
-``carry`` and ``limits``, the extra room of a block), in plain Python: the user layer reads it
-without loading compiled code.  :mod:`explorer.integrate.drivers` documents what each column
-holds and re-exports these names."""
+"""The columns of the crossing drivers' ``carry`` and ``limits``, in plain Python (re-exported by
+:mod:`explorer.integrate.drivers`)."""
 from explorer.kernels.taylor_order import MAX_ORDER
 
 #: columns of ``carry``

@@ -1,23 +1,6 @@
-"""The method registry: every integrator by name, its accuracy setting and its batch drivers.
-
-:data:`REGISTRY` maps a method name (``taylor``, ``dop853``, ``split2`` ... ``split8_yoshida``)
-to a :class:`Method`. The user layer (:mod:`explorer.analysis.sections`,
-:mod:`explorer.analysis.lyapunov`, scenes, the CLI) validates a method's setting and runs it
-through this table only. What a method's ``kind`` selects (its setting, how it is prepared, its
-crossing and tangent loops) is one :class:`Kind` entry of :data:`KINDS`, so adding a
-composition is one entry of ``splitting.SCHEMES`` and adding a kind of integrator its loops, one
-entry of :data:`KINDS` and its method here.
-
-================  ==============================================================  ===========
-kind              method                                                          setting
-================  ==============================================================  ===========
-``taylor``        adaptive Taylor series, order from the tolerance (Jorba & Zou    ``tol``
-                  2005), coefficients by the recurrence of R3
-``dop853``        Dormand-Prince 8(5,3) (Hairer, Nørsett & Wanner), scipy's        ``tol``
-                  controller (rtol = atol = tol)
-``split``         symmetric compositions of the exact sub-flows of R4              ``dt``
-                  (:data:`explorer.kernels.splitting.SCHEMES`)
-================  ==============================================================  ===========
+"""The method registry (docs/architecture.md, docs/methods.md): :data:`REGISTRY` maps a method
+name to its :class:`Method`; what a method's kind selects (setting, preparation, loops) is one
+:class:`Kind` of :data:`KINDS`.
 """
 from __future__ import annotations
 
@@ -38,23 +21,16 @@ from explorer.model import validation
 MIN_TOL = 1e-16
 MAX_TOL = 1e-2
 # ---- default tolerances: one per purpose, named here once (docs/methods.md, "Default tolerances")
-#: crossings of the section and chaos indicators (sections, lyapunov, the orbit and lyapunov
-#: commands, a scene's [integration] and [lyapunov] tables; the presets set their own)
+#: crossings of the section and chaos indicators
 DEFAULT_TOL = 1e-13
-#: the section map where it is evaluated hundreds of times, not millions: Newton for fixed points
-#: and periodic orbits, continuation, rotation numbers, half-turn partners, manifolds, the
-#: measured splitting; the tightest tolerance the order rule is built for
+#: the section map, evaluated hundreds of times (Newton, continuation, manifolds, rotation numbers)
 MAP_TOL = 1e-15
 #: the full system R1 with the body's position (trajectory; DOP853's rtol = atol)
 TRAJECTORY_TOL = 1e-12
-#: the step of the splitting methods when none is given: sections (orbit, sweep) and chaos
-#: indicators (lyapunov, [lyapunov] dt) alike, one default for every command
+#: the step of the splitting methods when none is given, for every command
 DEFAULT_DT = 0.05
-#: a fixed step may turn the fastest motion of the orbit (model.max_rate, a bound over the whole
-#: orbit) by at most this angle, half a turn (Nyquist): beyond it the step cannot tell the motion
-#: from its alias (phi may advance by more than pi per step, a crossing be skipped or invented)
-#: and the orbit is not integrated (status UNRESOLVED, :func:`unresolved`).  Below it the
-#: accuracy is judged by the energy error (explorer.analysis.sections.energy_warning)
+#: a fixed step may turn the fastest motion of the orbit (model.max_rate) by at most half a turn
+#: (Nyquist), else the orbit is not integrated (status UNRESOLVED; docs/methods.md)
 MAX_STEP_PHASE = math.pi
 
 
@@ -63,7 +39,7 @@ class Prepared:
     """A method with its setting validated: what its drivers need and what is recorded."""
 
     method: Method
-    settings: dict                       # recorded with the results (tol, order / rtol, atol / dt)
+    settings: dict
     tol: float = 0.0
     order: int = 0
     dt: float = 0.0
@@ -91,16 +67,7 @@ def _split(method: Method, dt: float) -> Prepared:
 
 @dataclass(frozen=True)
 class Kind:
-    """A kind of integrator: everything the user layer selects by a method's ``kind``.
-
-    ``setting`` is the accuracy knob (``tol`` or ``dt``), ``prepare(method, value)`` turns its
-    validated value into a :class:`Prepared`; ``crossings`` and ``tangent`` name the batch loops
-    (module, function), imported when first used so that a run loads only the compiled code of
-    the method it uses (start-up, benchmarks/bench_startup.py); ``args`` are the attributes of
-    the Prepared passed to both loops between their common leading arguments and ``max_steps``
-    (:func:`run_crossings`, :func:`run_tangent`); ``tangent_ext`` the loop of one or two
-    deviation vectors with early stopping (SALI, GALI_2, ``early_stop``), None if the kind has none.
-    """
+    """A kind of integrator: everything the user layer selects by a method's ``kind``."""
 
     name: str
     setting: str
@@ -118,8 +85,6 @@ class Kind:
 
 #: every kind of integrator: a new kind is its loops and one entry here
 KINDS: dict[str, Kind] = {k.name: k for k in (
-    # the Taylor crossing loop on SIMD lanes (a lone orbit is one lane); its tangent loop of two
-    # vectors on lanes is bit for bit tangent.orbit_tangent_taylor (its scalar reference)
     Kind("taylor", "tol", _taylor, ("explorer.integrate.lanes", "run_taylor_lanes_batch"),
          ("explorer.integrate.tangent", "run_tangent_taylor_batch"), ("order",),
          tangent_ext=("explorer.integrate.tangent_lanes", "run_tangent_lanes_batch")),
@@ -156,9 +121,8 @@ class Method:
         return self.loops.setting
 
     def prepare(self, *, tol=None, dt=None) -> Prepared:
-        """Validate the method's setting (``tol`` in [MIN_TOL, MAX_TOL] or ``dt`` > 0; the other
-        one is not used, but when given it is validated too: a NaN step is a mistake even for a
-        method that ignores it) and derive what its drivers need."""
+        """Validate the method's setting (``tol`` in [MIN_TOL, MAX_TOL] or ``dt`` > 0; the other one
+        too when given) and derive what its drivers need."""
         values = {"tol": tol, "dt": dt}
         for name, value in values.items():
             if name != self.setting and value is not None:
@@ -180,9 +144,7 @@ _validate = check_setting
 
 def unresolved(prep: Prepared, P, Y) -> np.ndarray:
     """Mask (N,) of the orbits of ``Y`` (N, 5) whose motion the fixed step of ``prep`` does not
-    resolve: dt * model.max_rate(y) > ``MAX_STEP_PHASE``.  The callers do not integrate them and
-    give them the status ``Status.UNRESOLVED``; the adaptive methods choose their own steps (all
-    False)."""
+    resolve: dt * model.max_rate(y) > ``MAX_STEP_PHASE``."""
     if prep.method.adaptive:
         return np.zeros(len(Y), bool)
     with np.errstate(over="ignore", invalid="ignore"):

@@ -1,43 +1,8 @@
-"""Vector values for the lane (SIMD) kernels: ``f64vec``, LANES float64 values held as one LLVM
-``<LANES x double>`` value, and its operations as numba intrinsics.
-
-Every operation is one LLVM vector instruction with no fast-math flag (no reassociation, no FMA
-contraction): IEEE fadd/fsub/fmul/fdiv/fneg on a vector are lane-wise the same operations as on
-a scalar, so a lane computes bit for bit what scalar code with the same expression tree
-computes.  Used by the Taylor lane kernels (:mod:`explorer.integrate.lanes`,
-:mod:`explorer.integrate.tangent_lanes`) and by the recurrences that ``tools/gen_lanes.py``
-translates into ``_lanes_generated.py`` and ``_tangent_lanes_generated.py``.
-
-- :func:`vload` / :func:`vstore`: LANES consecutive elements of a C-contiguous float64 array
-  (addressed by the flat index of the first);
-- :func:`vzero`, :func:`vsplat`, :func:`vadd`, :func:`vsub`, :func:`vmul`, :func:`vdiv`,
-  :func:`vneg`, :func:`vabs`, :func:`vsqrt`, :func:`vmax_gt` (the scalar ``if v > s: s = v``), :func:`vmin_lt`;
-- masks (``<LANES x i1>``, lane-wise booleans): the ordered comparisons :func:`vgt`,
-  :func:`vge`, :func:`vlt`, :func:`vle`, :func:`veq` (lane-wise the scalar ``a > b`` ...: false where either is
-  NaN), :func:`vand`, :func:`vandnot`, :func:`vor`, :func:`vselect` (``a if m else b`` per lane)
-  and :func:`vbits` (the mask as the bits of an integer, lane i bit i: the lanes that a scalar
-  loop must visit, one after the other by :func:`next_bit`), :func:`vmask` (bits back to a mask);
-- Python's operators on vectors (``+ - * /``, unary ``-``, ``abs``, ``< <= > >= ==``, and ``&``,
-  ``|`` on masks; a scalar operand splat), the intrinsics above: a kernel function written with
-  operators compiles for vectors as well as for doubles, so the lane kernels call the one
-  definition of a formula or a test (``kernels.events.sin_diff``, ``excluded_by_variation``,
-  ``sign_change``, ``kernels.clock.compensated_add``, ``kernels.checks.is_finite``,
-  ``kernels.power.is_normal`` ...) instead of a vector copy of it;
-- :func:`vradius_power_core`: the step size's power ``kernels.power.radius_power_core`` on every
-  lane (the same IR, emitted for a vector: lane-wise the scalar's double);
-- :func:`atomic_fetch_add`: the shared queue of orbits of the lane workers;
-- :func:`by_groups`: how a compiled caller of a generated recurrence gets the kernel of its
-  number of lane groups G (a tuple of G zeros; only that kernel is compiled).
-
-Why explicit vectors and not unrolled scalar lanes plus ``numba.config.SLP_VECTORIZE``: with
-lanes unrolled into scalar accumulators, LLVM's SLP vectorizer vectorizes the loop body but
-keeps the 5 x LANES accumulators as scalar phi nodes (a shuffle storm every iteration) and
-only runs when the flag is on at the moment of compilation (which on-disk caching does not
-record).  Explicit vector values need no flag: order 15, ~42 ns per orbit-step at LANES = 8
-on AVX-512 (vs ~150 ns with SLP, ~225 ns scalar).
-
-With ``EXPLORER_NOJIT=1`` the operations are numpy twins on arrays of LANES (elementwise: the
-same IEEE operations).
+"""Vector values for the lane kernels: ``f64vec``, LANES float64 in one LLVM ``<LANES x double>``,
+its operations as numba intrinsics (one vector instruction each, no fast-math: lane-wise the
+scalar IEEE operations) and Python's operators on it, so a kernel written with operators compiles
+for vectors as for doubles (docs/architecture.md, Scalar and vector forms from one definition).
+With ``EXPLORER_NOJIT=1`` they are numpy twins.
 """
 import numpy as np
 
@@ -45,15 +10,10 @@ from explorer._jit import NOJIT, njit
 from explorer.kernels.power import emit_radius_power, radius_power_core
 
 #: orbits advanced in lockstep by one vector instruction: 8 doubles = one AVX-512 register (two
-#: AVX2 registers elsewhere).  Measured (order 15, coefficients per orbit-step): 4 lanes ~62 ns,
-#: 8 lanes ~42 ns, 16 lanes ~37 ns; 8 is chosen because whole-run throughput also pays for idle
-#: lanes at block ends.
+#: AVX2 registers elsewhere).
 LANES = 8
 
 
-# ---------------------------------------------------------------------------- vector values
-# f64vec is <LANES x double> in LLVM.  vload/vstore address a C-contiguous float64 array by
-# its flat element index; the arithmetic is plain fadd/fsub/fmul/fneg (no fast-math flags).
 if NOJIT:  # pragma: no cover - plain-Python twins (numpy elementwise = the same IEEE ops)
     def vload(a, i):
         return a.reshape(-1)[i:i + LANES].copy()
@@ -228,8 +188,6 @@ else:
             super().__init__(dmm, fe_type, _MT)
 
     def _lanewise(argtypes, restype, emit):
-        """The intrinsic of the operands ``argtypes`` (exactly those: f64vec or b1vec) whose value
-        is ``emit(builder, *operands)``, one LLVM instruction (or intrinsic) on whole vectors."""
         sig = restype(*argtypes)
 
         def codegen(context, builder, sig, args):
@@ -266,7 +224,6 @@ else:
     vmax_gt = _lanewise(_F2, f64vec, lambda b, v, s: b.select(b.fcmp_ordered(">", v, s), v, s))
     #: v where v < s else s: the scalar ``s = v if v < s else s`` (fcmp olt + select)
     vmin_lt = _lanewise(_F2, f64vec, lambda b, v, s: b.select(b.fcmp_ordered("<", v, s), v, s))
-    # the ordered comparisons (false where either operand is NaN, as the scalar ones)
     vgt = _lanewise(_F2, b1vec, lambda b, x, y: b.fcmp_ordered(">", x, y))
     vge = _lanewise(_F2, b1vec, lambda b, x, y: b.fcmp_ordered(">=", x, y))
     vlt = _lanewise(_F2, b1vec, lambda b, x, y: b.fcmp_ordered("<", x, y))
@@ -337,13 +294,6 @@ else:
         return _types.int64(a, _types.intp, _types.int64), codegen
 
 
-    # ------------------------------------------------------------ Python operators on vectors
-    # ``a + b``, ``a * 2.0``, ``abs(a)``, ``a < 0.0``, ``m & k`` ... on f64vec (and b1vec) are the
-    # intrinsics above (a scalar operand is splat first: lane-wise the scalar's IEEE operation), so
-    # a kernel function written with operators on scalars - kernels.events.sin_diff,
-    # excluded_by_variation, sign_change, kernels.clock.compensated_add ... - compiles for vectors
-    # too, and the lane kernels call that one definition (numba's public extension API:
-    # ``overload`` of the operator; the scalar types keep numba's own implementations).
     import operator as _op
 
     from numba.extending import overload as _overload
@@ -387,17 +337,11 @@ else:
         return None
 
     def by_groups(stub):
-        """Register the decorated typer as the compiled implementation of the plain-Python
-        ``stub(..., groups)`` of a generated file (numba's ``overload``): it is asked when a
-        caller is compiled, with the types of the arguments; the length of the tuple ``groups``
-        is part of its type, so it picks the kernel of that G and only that kernel is compiled
-        (each G a kernel of its own, compiled only when a caller uses it)."""
+        """Register the decorated typer as the compiled implementation (numba ``overload``) of the
+        plain-Python ``stub(..., groups)``: the length of ``groups`` picks the kernel of that G."""
         from numba.extending import overload
 
-        # inline="always": the kernel is inlined into its caller in numba's IR.  Without it the
-        # overload's implementation stayed a function of its own that LLVM did not inline into
-        # the lane worker (the plain njit call before lane groups was inlined), and W4 taylor
-        # lost 4-6 % (issue 34; benchmarks/RESULTS.md)
+        # inline="always": otherwise LLVM keeps the overload a separate call in the lane worker
         return overload(stub, inline="always")
 
 

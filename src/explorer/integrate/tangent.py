@@ -1,17 +1,7 @@
-"""Compiled loops for chaos indicators: the orbit and one deviation vector advanced together
-by tangent dynamics consistent with each integrator (low-level twins of
-:mod:`explorer.analysis.lyapunov`).
-
-- ``taylor``: the variational equations' Taylor series (``taylor_coefficients_tangent``), the
-  step chosen from the orbit's own coefficients;
-- ``dop853``: DOP853 on the 10-dimensional system (y, v) with v' = Df(y) v;
-- ``split*``: the exact tangent maps of the sub-flows (the symplectic tangent map method,
-  Skokos & Gerlach 2010, Phys. Rev. E 82, 036704), so the indicator is that of the map the
-  scheme actually computes.
-
-The deviation vector is renormalised every step; the indicators are accumulated by
-:mod:`explorer.kernels.tangent`.  Outputs per orbit: a result row (t, mLCE, <Y>, Y, FLI), a
-history of such rows at the requested times (first step end at or after each), the status.
+"""Compiled loops of the orbit and one deviation vector under the tangent dynamics of each
+integrator (the Taylor variational series, DOP853 on (y, v), the exact tangent maps of the
+sub-flows: Skokos & Gerlach 2010), the indicators of :mod:`explorer.kernels.tangent`, and the
+section return map with its Jacobian (docs/commands/lyapunov.md, docs/architecture.md).
 """
 
 import numpy as np
@@ -68,12 +58,8 @@ def _store(j, result, out_status, out_steps):
     out_steps[j] = result[1]
 
 
-# ====================================================================== Taylor
 @njit
 def _observe(acc, v, t_old, t_new, hist_t, hist, hpos, row):
-    """What every tangent loop does after a step from t_old to t_new: renormalise the deviation
-    vector v (Skokos 2010), add the step to the mLCE / MEGNO / FLI accumulators and record the
-    history rows passed. Returns the new history position."""
     dlog = tg.renormalize(v, 5)
     tg.accumulate(acc, t_old, t_new, dlog)
     return _history(acc, hist_t, hist, hpos, row)
@@ -92,10 +78,6 @@ def orbit_tangent_taylor(y0, v0, P, T, order, max_steps, hist_t, hist, res, yout
 
 @njit
 def _early(acc, v, w, nvec, sali_stop, megno_level, tmin, since):
-    """The early classification rule after a step (kernels.tangent): SALI of the two unit
-    deviation vectors below ``sali_stop`` (when nvec == 2 and sali_stop > 0), or <Y> above
-    ``megno_level`` over [t/2, t] with t >= ``tmin`` (when megno_level > 0).  Returns
-    (EARLY_* code, since)."""
     if nvec == 2 and sali_stop > 0.0 and tg.sali(v, w, 5) < sali_stop:
         return tg.EARLY_SALI, since
     if megno_level > 0.0:
@@ -163,7 +145,6 @@ def orbit_tangent_taylor_ext(y0, v0, w0, nvec, P, T, order, max_steps, early_sto
         if nvec == 2:
             for i in range(5):
                 W[i, 0] = w[i]
-            # the orbit's rows are recomputed by the same recurrence: the same numbers
             taylor_coefficients_tangent(P, Z[:5], W, order)
             tk.evaluate(W, order, h, wnew)
             if not all_finite(wnew):
@@ -189,7 +170,6 @@ def orbit_tangent_taylor_ext(y0, v0, w0, nvec, P, T, order, max_steps, early_sto
     return code, steps
 
 
-# ====================================================================== DOP853
 @njit
 def orbit_tangent_dop853(y0, v0, P, T, rtol, atol, max_steps, hist_t, hist, res, yout):
     n = 10
@@ -212,7 +192,6 @@ def orbit_tangent_dop853(y0, v0, P, T, rtol, atol, max_steps, hist_t, hist, res,
         t_new = T if last else t + h
         hpos = _observe(acc, znew[5:], t, t_new, hist_t, hist, hpos, row)
         t = t_new
-        # the deviation was renormalised, so the FSAL stage is recomputed for the scaled vector
         for i in range(n):
             z[i] = znew[i]
         sy.field(sy.TANGENT, z, P, K[0])
@@ -220,7 +199,6 @@ def orbit_tangent_dop853(y0, v0, P, T, rtol, atol, max_steps, hist_t, hist, res,
     return code, steps
 
 
-# ====================================================================== splitting
 @njit
 def orbit_tangent_split(y0, v0, P, T, dt, flow_ids, fracs, max_steps, hist_t, hist, res, yout):
     """The orbit and one deviation vector by the splitting method's own tangent map (the step:
@@ -247,7 +225,6 @@ def orbit_tangent_split(y0, v0, P, T, dt, flow_ids, fracs, max_steps, hist_t, hi
     return code, steps
 
 
-# ====================================================================== batches
 @njit(parallel=True, nogil=True)
 def run_tangent_taylor_batch(Y0, V0, P, T, order, max_steps, hist_t, out_hist, out_res, out_status,
                              out_final, out_steps):
@@ -275,25 +252,13 @@ def run_tangent_split_batch(Y0, V0, P, T, dt, flow_ids, fracs, max_steps, hist_t
     return 0
 
 
-# ====================================================================== section return map
-# nogil: Python calls it (the section map, :class:`explorer.analysis.section_map.SectionMap`) from
-# a page's thread while the server's event loop runs (issue 32: one return at mu = 1e6 held the
-# GIL for 40 s and froze the server)
+# nogil: the section map calls it from a page's thread while the server's event loop runs
 @njit(nogil=True)
 def return_map_taylor(y0, V0, P, cphi, sphi, tsign, tmax, order, max_steps, stop, yout, Vout):
     """The next crossing of the section phi = phi0 (phi increasing through phi0 in forward time)
     from y0, forward (tsign = +1) or backward (tsign = -1) in time, with the tangent map of the
-    flow applied to the rows of V0 (m deviation vectors) up to the crossing time.
-
-    The step is :func:`explorer.integrate.systems.taylor_step` of ``REDUCED`` (forward) or
-    ``REDUCED_BACKWARD`` (the series of y(t - s), coefficients (-1)^k X_k, in s = -t: a forward
-    crossing with dphi/dt > 0 appears as a decreasing sin(phi - phi0) in s); each deviation
-    vector's coefficients come from the variational recurrence on the same orbit
-    (``taylor_coefficients_tangent``: its orbit rows are R3's, bit for bit) and do not choose the
-    step.  Budgets: the stop switch ``stop`` (an int64 array of one element read before every
-    step: another thread sets it nonzero when a wall-clock budget runs out or the result is no
-    longer wanted; STATUS_CANCELLED), the time ``tmax`` (STATUS_TMAX) and ``max_steps`` steps
-    (STATUS_MAX_STEPS), then the step's own checks.  Returns (status, signed time reached)."""
+    flow applied to the rows of V0 (m deviation vectors) up to the crossing time.  Stops on the
+    switch ``stop[0]`` != 0 (STATUS_CANCELLED), ``tmax`` or ``max_steps``; returns (status, signed time)."""
     m = V0.shape[0]
     X = np.empty((5, order + 1))
     Xs = np.empty((5, order + 1))
@@ -332,7 +297,6 @@ def return_map_taylor(y0, V0, P, cphi, sphi, tsign, tmax, order, max_steps, stop
         gnew = section_g(ynew, cphi, sphi)
         found = False
         tau = h
-        # every root of the step's polynomial (as the crossing loop, integrate.lanes)
         for k in range(order + 1):
             gc[k] = sin_diff(X[G1, k], X[G2, k], cphi, sphi)
         nroots = poly_step_roots(gc, order, h, gprev, gnew, direction, roots, brackets, work,

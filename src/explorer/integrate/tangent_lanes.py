@@ -1,43 +1,7 @@
-"""Lane (SIMD) batch driver of tangent dynamics by the Taylor method: LANES orbits, each with
-one or two deviation vectors, advance in lockstep.
-
-:func:`run_tangent_lanes_batch` gives for every orbit ``j`` what the scalar
-:func:`explorer.integrate.tangent.orbit_tangent_taylor_ext` gives (with one deviation vector and no
-early stop that is :func:`explorer.integrate.tangent.orbit_tangent_taylor`, the step of
-``systems.taylor_step`` of ``TANGENT``), bit for bit (indicators, history, SALI, GALI_2, final state and vectors, status, step count),
-whatever the grouping of orbits into lanes and the number of threads:
-
-* the Taylor coefficients of the orbit and its deviation vectors of LANES orbits are computed
-  together by the generated vector kernels of :mod:`explorer.integrate._tangent_lanes_generated`
-  (translated by ``tools/gen_lanes.py`` from ``equations.taylor_coefficients_tangent``: lane-wise
-  the same IEEE operations in the same order; the second vector by the same recurrence's
-  statements for the deviation only), the step norms and the Horner sums by those of the
-  crossing lanes (``lanes.step_norms_lanes``, ``lanes.evaluate_lanes``);
-* the step sizes of all lanes from the orbit's rows and the step's checks (``lanes.step_norms_lanes``,
-  ``lanes.step_lanes``: the powers and the checks vectorized, the same doubles as
-  ``kernels.taylor.step_size`` and ``systems.taylor_step``);
-* the end of the step in vector form (:func:`end_steps_tangent_lanes`) for every lane that ends
-  it with no stop and no history row: the finiteness checks, the renormalisation of the
-  deviation vectors and the mLCE, MEGNO and FLI accumulators of ``kernels.tangent`` (their
-  operations lane-wise; ln of the norm by libm per lane), the clock and the step budget.  ln
-  stays libm's, per lane: it costs 4.4-6.1 ns per lane, 2.3-3.2 % of a one-vector orbit-step
-  (benchmarks/RESULTS.md, issue 34), and a vector log of our own would have to replace libm's
-  in kernels.tangent.renormalize too, which every tangent integrator calls, changing their
-  results at round-off against earlier revisions for at most that 3 %;
-* the early classification of those lanes in vector form (:func:`early_lanes`: SALI and the
-  MEGNO rule of ``integrate.tangent._early``, lane-wise); only the lanes it stops are written
-  out one by one;
-* everything else - the last step, the stops, the history rows - is the control flow of the
-  scalar loop, run per lane in scalar code.
-
-Lanes never exchange values, so the work is distributed dynamically as in
-:mod:`explorer.integrate.lanes`: one worker per thread, a lane whose orbit stops takes the next
-unstarted orbit of the batch at once (an atomic counter); idle lanes run on the zero state.  A
-worker advances G groups of LANES lanes (``lanes.lane_groups``, the generated kernels of G
-groups), bit for bit the same results for every G.
-
-Kernel contract: arrays are allocated per worker, never inside the step loop; no exceptions
-(status codes); no fastmath.
+"""Tangent dynamics by the Taylor method on SIMD lanes (docs/methods.md, Parallelism): LANES
+orbits with one or two deviation vectors in lockstep, each lane bit for bit what
+:func:`explorer.integrate.tangent.orbit_tangent_taylor_ext` gives for its orbit, whatever the
+grouping of orbits and the thread count.  Kernel contract: explorer/kernels/__init__.py.
 """
 import math
 
@@ -112,10 +76,6 @@ def _finish(j, l, Z, acc, v, w, nvec, early, status, steps, out_res, out_ext, ou
 @njit
 def _start_lane(l, Z, orb, L_on, acc, L_t, L_steps, L_hpos, L_hnext, L_since, hist_t, next_orbit, Y0, V0, W0, nvec, T,
                 max_steps, v, w, out_res, out_ext, out_status, out_final, out_steps, out_w):
-    """Put the next unstarted orbit on lane l (the start of the scalar loop: the deviation
-    vectors renormalised; orbits that stop before their first step are written out at once).
-    Returns 1 if the lane got an orbit (``L_on[l]`` = 1.0), 0 if the batch is exhausted (the lane
-    idles on 0, ``L_on[l]`` = 0.0)."""
     while True:
         j = next_lane_orbit(next_orbit, Y0.shape[0], orb, l, Z, NROWS)
         if j < 0:
@@ -152,16 +112,11 @@ def _start_lane(l, Z, orb, L_on, acc, L_t, L_steps, L_hpos, L_hnext, L_since, hi
 
 @njit(inline="always")
 def _next_history_time(hist_t, hpos):
-    """The time of the next history row (tangent._history writes it when a step ends at or after
-    it), +inf when all are written."""
     return hist_t[hpos] if hpos < hist_t.shape[0] else math.inf
 
 
 @njit(inline="always")
 def _unit_lanes(znew, first, c, nl):
-    """The five rows first.. of znew for the group at c as unit vectors, and their former norm:
-    kernels.tangent.renormalize's operations in its order (sum of squares, sqrt, 1 / norm, the
-    products), lane-wise."""
     x0 = vload(znew, first * nl + c)
     x1 = vload(znew, (first + 1) * nl + c)
     x2 = vload(znew, (first + 2) * nl + c)
@@ -182,16 +137,10 @@ def _keep(Z, row, ok, x):
 @njit(inline="always")
 def end_steps_tangent_lanes(Z, znew, hv, nrm, acc, L_t, L_steps, L_hnext, L_on, L_fast, L_last, nvec, T, max_steps,
                             c, nl):
-    """The end of the tangent step for the group of LANES lanes at ``c`` in vector form, for every
-    lane whose step ends with nothing to do but the bookkeeping: its step was taken in vector form
-    (``L_fast``) and is not the last, its new state and vectors are finite (count_step's and
-    stop_unless_finite's sums), and neither T, the step budget nor a history row (``L_hnext``)
-    comes at its end.  Such a lane takes, exactly as the scalar loop: the step count, the new time,
-    its deviation vectors renormalised (kernels.tangent.renormalize: the sums, sqrt and products
-    lane-wise, ln of the norm by libm per lane), the accumulators of kernels.tangent.accumulate
-    (mLCE, MEGNO, FLI: its operations lane-wise; ``acc`` holds one row per accumulator, one column
-    per lane) and the new state in Z[0].  Returns the bits of the other lanes that hold an orbit
-    (lane c + i bit i): the scalar loop ends their step."""
+    """The end of the tangent step, in vector form, for the lanes of the group at ``c`` whose step
+    needs only bookkeeping (taken in vector form, not the last, finite, no history row): step
+    count, time, renormalised deviation vectors and kernels.tangent.accumulate, lane-wise as the
+    scalar loop.  Returns the bits of the other lanes holding an orbit (lane c + i bit i)."""
     zero = vzero()
     live = vgt(vload(L_on, c), zero)
     ok = vandnot(vgt(vload(L_fast, c), zero), vgt(vload(L_last, c), zero))
@@ -211,11 +160,10 @@ def end_steps_tangent_lanes(Z, znew, hv, nrm, acc, L_t, L_steps, L_hnext, L_on, 
     ok = vand(ok, vand(vand(vlt(tn, vsplat(T)), vlt(sn, vsplat(max_steps))), vlt(tn, vload(L_hnext, c))))
     v0, v1, v2, v3, v4, norm = _unit_lanes(znew, DEV1, c, nl)
     vstore(nrm, c, norm)
-    for l in range(c, c + LANES):       # ln |v| per lane holding an orbit: libm's log, as renormalize
+    for l in range(c, c + LANES):
         if L_on[l] != 0.0:
             nrm[l] = math.log(nrm[l])
     dlog = vload(nrm, c)
-    # kernels.tangent.accumulate(acc, t, tn, dlog), lane-wise: its MEGNO sums on vectors
     lg = vadd(vload(acc, tg.ACC_LOG * nl + c), dlog)
     wv = tg.megno_weight(vload(acc, tg.ACC_W * nl + c), t, tn, dlog)
     y1 = vselect(vgt(tn, zero), tg.megno_y(wv, tn), zero)
@@ -250,14 +198,9 @@ def end_steps_tangent_lanes(Z, znew, hv, nrm, acc, L_t, L_steps, L_hnext, L_on, 
 
 @njit(inline="always")
 def early_lanes(Z, acc, L_since, L_on, bits, nvec, sali_stop, megno_level, tmin, c, nl):
-    """The early classification rule (integrate.tangent._early) in vector form for the lanes of the
-    group at ``c`` whose step :func:`end_steps_tangent_lanes` ended (they hold an orbit and are not
-    in ``bits``, the lanes it left to the scalar loop): SALI of their unit deviation vectors in
-    Z[0] (kernels.tangent.sali: the sums in its order, numba's ``min(sp, sm)`` = sm if sm < sp
-    else sp, sqrt) below ``sali_stop`` (nvec == 2, sali_stop > 0), else the MEGNO rule
-    (kernels.tangent.megno_early on ``acc``: <Y> and ``L_since`` updated in these lanes; megno_level
-    > 0).  Lane-wise the scalar's IEEE operations and comparisons.  Returns (bits of the lanes
-    that stop by SALI, bits of those that stop by MEGNO): the caller writes them out."""
+    """The early classification (integrate.tangent._early) in vector form for the lanes that
+    :func:`end_steps_tangent_lanes` ended: SALI below ``sali_stop`` (nvec == 2), else the MEGNO rule
+    (kernels.tangent.megno_early).  Returns (bits stopping by SALI, bits stopping by MEGNO)."""
     zero = vzero()
     m = vandnot(vgt(vload(L_on, c), zero), vmask(bits))
     stop_sali = 0
@@ -290,24 +233,19 @@ def early_lanes(Z, acc, L_since, L_on, bits, nvec, sali_stop, megno_level, tmin,
 @njit(nogil=True)
 def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop,
                 megno_level, early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w):
-    """Integrate orbits taken from the shared counter ``next_orbit`` on up to ``nlanes`` lanes,
-    in G = len(groups) groups of LANES lanes, until none is left; each lane is
-    tangent.orbit_tangent_taylor_ext step for step."""
     nl = len(groups) * LANES
-    # the vector operands on cache lines (lanes.aligned_zeros: a straddling vector costs two accesses)
     Z = aligned_zeros((order + 1) * NROWS * nl).reshape((order + 1, NROWS, nl))
     znew = aligned_zeros(NROWS * nl).reshape((NROWS, nl))
     norms = aligned_zeros(N_NORMS * nl).reshape((N_NORMS, nl))
     hv = aligned_zeros(nl)
     nrm = aligned_zeros(nl)
-    # the accumulators of kernels.tangent, one row each, one column per lane (vector rows)
     acc = aligned_zeros(tg.N_ACC * nl).reshape((tg.N_ACC, nl))
     v = np.empty(5)
     w = np.zeros(5)
     row = np.empty(tg.N_RES)
     orb = np.full(nl, _IDLE, np.int64)
     L_t = aligned_zeros(nl)
-    L_steps = aligned_zeros(nl)       # counted in a double (exact below 2**53): checked in vector form
+    L_steps = aligned_zeros(nl)
     L_hnext = aligned_zeros(nl)
     L_on = aligned_zeros(nl)
     L_fast = aligned_zeros(nl)
@@ -329,18 +267,15 @@ def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_s
         if nvec == 2:
             deviation_coefficients_lanes(P, Z, order, DEV2, groups)
         step_norms_lanes(Z, order, e_p, e_q, norms, groups)
-        # ---- all lanes at once: systems.taylor_step's checks and step size
         step_lanes(L_on, norms, L_t, T, e_p, e_q, factor, hv, L_last, L_fast, L_status, L_stop, nl)
         evaluate_lanes(Z, order, hv, znew, 0, groups)
         evaluate_lanes(Z, order, hv, znew, DEV1, groups)
         if nvec == 2:
             evaluate_lanes(Z, order, hv, znew, DEV2, groups)
         for c in range(0, nl, LANES):
-            # ---- all lanes of the group at once: the step ends with no stop and no history row
             bits = end_steps_tangent_lanes(Z, znew, hv, nrm, acc, L_t, L_steps, L_hnext, L_on, L_fast, L_last,
                                            nvec, T, max_steps, c, nl)
             if early_stop:
-                # ... and their early classification; the few lanes it stops are written out here
                 stop_sali, stop_megno = early_lanes(Z, acc, L_since, L_on, bits, nvec, sali_stop, megno_level,
                                                     early_tmin, c, nl)
                 stops = stop_sali | stop_megno
@@ -353,13 +288,12 @@ def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_s
                     active += _start_lane(l, Z, orb, L_on, acc, L_t, L_steps, L_hpos, L_hnext, L_since, hist_t,
                                           next_orbit, Y0, V0, W0, nvec, T, max_steps, v, w, out_res, out_ext,
                                           out_status, out_final, out_steps, out_w) - 1
-            # ---- lane by lane, the others: the rest of the step of the scalar loop
             while bits != 0:
                 ib, bits = next_bit(bits)
                 l = c + ib
                 j = orb[l]
                 L_early[l] = tg.EARLY_NONE
-                count_step(l, znew, 0, DEV1 + 5, L_steps, L_status, L_stop)   # the orbit and the first vector
+                count_step(l, znew, 0, DEV1 + 5, L_steps, L_status, L_stop)
                 if nvec == 2 and not L_stop[l]:
                     stop_unless_finite(l, znew, DEV2, DEV2 + 5, L_status, L_stop)
                 if not L_stop[l]:
@@ -387,7 +321,7 @@ def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_s
                     if early != tg.EARLY_NONE:
                         L_early[l] = early
                         stop_lane(l, STATUS_DONE, L_status, L_stop)
-                    elif not (t_new < T):        # the checks at the top of systems.taylor_step
+                    elif not (t_new < T):
                         stop_lane(l, STATUS_DONE, L_status, L_stop)
                     elif L_steps[l] >= max_steps:
                         stop_lane(l, STATUS_MAX_STEPS, L_status, L_stop)
@@ -415,11 +349,7 @@ def run_tangent_lanes_batch(Y0, V0, W0, nvec, P, T, order, max_steps, early_stop
                             early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w,
                             max_lanes=None, groups=None):
     """Lane twin of :func:`explorer.integrate.tangent.orbit_tangent_taylor_ext` over the orbits:
-    out_*[j] is what it gives for orbit j (out_status, out_steps its return), bit for bit.  One worker per numba thread, at
-    most one per group of LANES orbits (:func:`explorer.integrate.lanes.lane_workers`), each with up to
-    ``groups`` groups of LANES lanes
-    (:func:`explorer.integrate.lanes.worker_lanes`); the thread count is read here, in Python
-    (inside a kernel it would defeat the on-disk cache)."""
+    out_*[j] is what it gives for orbit j (out_status, out_steps its return), bit for bit."""
     n = Y0.shape[0]
     if n == 0:
         return 0
