@@ -13,8 +13,8 @@ from explorer.analysis import fixedpoints as fpm
 from explorer.analysis import manifolds as mf
 from explorer.analysis import melnikov as mk
 from explorer.analysis import transport as tr
-from explorer.analysis.periodic import reversor
 from explorer.analysis.section_map import SectionMap
+from explorer.model.symmetry import reversor
 
 H = model.FIGURE4_H           # docs/model.md R9: Figure 4, h = 2
 MU = 0.03                     # the central saddle near (-0.011, 0), trace 9.03
@@ -304,7 +304,7 @@ def test_stable_manifold_without_the_reversor_is_invariant():
     """xi != 0: no reversor, W^s by backward integration point by point; its forward images
     move down the branch by one generation, x(sigma) -> x(sigma - L)."""
     prm = model.FIGURE4.with_(mu=MU, xi=0.05)
-    from explorer.analysis.periodic import is_reversible
+    from explorer.model.symmetry import is_reversible
 
     assert not is_reversible(prm)
     sd = mf.saddle(prm, H, fpm.find_fixed_point(prm, H, (0.0, 0.0)))

@@ -14,6 +14,7 @@ from explorer import model
 from explorer.analysis import fixedpoints as fpm
 from explorer.analysis import periodic as pm
 from explorer.analysis.section_map import SectionMap
+from explorer.model import symmetry
 
 PRM = model.FIGURE4.with_(mu=0.03)   # the Figure 4 scene at mu = 0.03 (docs/model.md R9)
 H = 2.0
@@ -141,7 +142,7 @@ def test_asymmetric_orbits_come_with_their_mirror_image(search2, search3):
         assert any(not o.symmetric for o in orbits)
         for o in orbits:
             if not o.symmetric:
-                assert sum(b.same_orbit(pm.reversor(o.points)) for b in orbits) == 1
+                assert sum(b.same_orbit(symmetry.reversor(o.points)) for b in orbits) == 1
 
 
 def test_mirror_image_is_an_orbit_of_the_map_with_the_same_trace_under_scipy(search3):
@@ -267,7 +268,7 @@ def test_the_reversor_fails_when_xi_is_not_zero():
     y1 = solve_ivp(f, (0, 5.0), y0, method="DOP853", rtol=1e-12, atol=1e-12).y[:, -1]
     y2 = solve_ivp(f, (0, 5.0), _R(y1), method="DOP853", rtol=1e-12, atol=1e-12).y[:, -1]
     assert np.max(np.abs(y2 - _R(y0))) > 1e-3
-    assert not pm.is_reversible(model.Params.from_array(P))
+    assert not symmetry.is_reversible(model.Params.from_array(P))
 
 
 def test_section_map_is_reversed_by_G0():
@@ -276,7 +277,7 @@ def test_section_map_is_reversed_by_G0():
     x = np.array([0.4, 0.3])
     y = reference.section_map_p(P, x[0], x[1], H)
     z = reference.section_map_p(P, y[0], -y[1], H)
-    np.testing.assert_allclose(z, pm.reversor(x), atol=1e-10)
+    np.testing.assert_allclose(z, symmetry.reversor(x), atol=1e-10)
 
 
 @pytest.mark.cpu_dependent
@@ -286,7 +287,7 @@ def test_symmetric_orbits_are_found_from_the_symmetry_lines_and_are_G0_invariant
     symmetric = [o for o in search3 if o.symmetric]
     assert len(symmetric) >= 4
     for o in symmetric:
-        g = pm.reversor(o.points)
+        g = symmetry.reversor(o.points)
         assert all(o.distance_to(p) < 1e-8 for p in g)
         # one of the K points is on p2 = 0 or the orbit has a seed from the second line
         assert np.min(np.abs(o.points[:, 1])) < 1e-9 or any(o.distance_to(s) < 1e-5 for s in seeds)

@@ -50,8 +50,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from explorer.analysis.maps import images, is_section_map
-from explorer.analysis.periodic import PeriodicOrbit, is_reversible, reversor
+from explorer.analysis.maps import images
+from explorer.analysis.periodic import PeriodicOrbit, find_periodic_orbit
 from explorer.analysis.section_map import SectionMap, system_first
 from explorer.model import ParameterError, validation
 
@@ -146,22 +146,14 @@ def saddle(system, orbit, *, index=0) -> Saddle:
 
 # ------------------------------------------------------------------ images in batches
 def _images(smap, X, n, backward, integrate_backward=False):
-    """F-images: P^n (P^-n with ``backward``) of the points X (m, 2); rows that leave the region
-    or have no return are NaN.  :func:`explorer.analysis.maps.images` (a section map: one batch of
-    the Taylor lanes forward, and backward through the reversor G0 P^n G0 = P^-n when it applies;
-    any other map of the protocol: its own ``iterate``); ``integrate_backward`` (a section map):
-    each point integrated backward in time by the map itself."""
+    """P^n (P^-n with ``backward``) of the points X (m, 2), NaN where a return fails:
+    :func:`explorer.analysis.maps.images`, or with ``integrate_backward`` the map's own
+    point-by-point preimages (no reversor)."""
     X = np.asarray(X, float).reshape(-1, 2)
     if n == 0 or X.size == 0:
         return X.copy()
-    if backward and is_section_map(smap) and (integrate_backward or not is_reversible(smap.params, smap.phi0)):
-        out = np.full_like(X, np.nan)
-        for i, x in enumerate(X):
-            try:    # outside the region or no return: ParameterError, the row stays NaN
-                out[i] = smap.iterate(x, n, backward=True)[-1]
-            except ParameterError:
-                pass
-        return out
+    if backward and integrate_backward:
+        return smap.images(X, n, backward=True)[:, -1]
     return images(smap, X, n, backward=backward)[:, -1]
 
 
@@ -215,18 +207,19 @@ class _MirroredCurve:
     def __init__(self, unstable: _Curve):
         self.unstable = unstable
         self.sd, self.stable, self.sign = unstable.sd, True, unstable.sign
+        self.G = unstable.sd.smap.reflection
         self.backward_integrated = False
-        self.e = reversor(unstable.e)
+        self.e = self.G(unstable.e)
         self.L, self.curvature, self.s0, self.sigma0 = unstable.L, unstable.curvature, unstable.s0, unstable.sigma0
 
     def map(self, X, generations):
-        return reversor(self.unstable.map(reversor(X), generations))
+        return self.G(self.unstable.map(self.G(X), generations))
 
     def generation(self, sigma):
         return self.unstable.generation(sigma)
 
     def points(self, sigma):
-        return reversor(self.unstable.points(sigma))
+        return self.G(self.unstable.points(sigma))
 
 
 @dataclass(frozen=True)
@@ -479,8 +472,9 @@ def mirrors(sd: Saddle) -> bool:
     (:func:`explorer.analysis.periodic.is_reversible`) and a fixed point on its symmetry line p2 =
     0 (within MIRROR_TOL).  A point of a longer orbit is not: G0 maps it to another point of
     its orbit, or of another orbit."""
-    return (is_section_map(sd.smap) and is_reversible(sd.smap.params, sd.smap.phi0) and sd.period == 1
-            and abs(float(sd.point[1])) <= MIRROR_TOL)
+    G = sd.smap.reflection
+    # |G0 x - x| = 2 |p2|: x within MIRROR_TOL of the line p2 = 0
+    return G is not None and sd.period == 1 and float(np.max(np.abs(G(sd.point) - sd.point))) <= 2 * MIRROR_TOL
 
 
 def mirror_branch(unstable: ManifoldBranch) -> ManifoldBranch:
@@ -492,7 +486,8 @@ def mirror_branch(unstable: ManifoldBranch) -> ManifoldBranch:
     if unstable.kind != "unstable" or unstable.curve is None or not mirrors(unstable.curve.sd):
         raise ParameterError("mirror_branch needs an unstable branch grown by grow_branch of a fixed point "
                              "on the reversor's symmetry line (manifolds.mirrors)")
-    return ManifoldBranch("stable", unstable.sign, reversor(unstable.points), unstable.sigma.copy(),
+    G = unstable.curve.sd.smap.reflection
+    return ManifoldBranch("stable", unstable.sign, G(unstable.points), unstable.sigma.copy(),
                           unstable.arclength, unstable.target, unstable.status, unstable.start_distance,
                           unstable.start_tol, unstable.curvature, 0, 0.0, _MirroredCurve(unstable.curve),
                           unstable.max_gap, None, unstable)
@@ -534,8 +529,6 @@ def manifolds(system, orbit, *, arclength=5.0, kinds=("unstable", "stable"), sig
 
 def _orbit_from_point(system, point, period):
     """The periodic orbit of period ``period`` of ``system`` found from the point (p1, p2) by Newton's method."""
-    from explorer.analysis.periodic import find_periodic_orbit
-
     try:
         x = np.asarray(point, float)
     except (TypeError, ValueError):

@@ -52,8 +52,10 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from explorer import model
 from explorer._jit import njit
-from explorer.analysis.section_map import MapResult
+from explorer.analysis.section_map import MapResult, SectionMap
+from explorer.analysis.sections import crossings
 from explorer.model import ParameterError, validation
 
 __all__ = ["AreaPreservingMap", "StandardMap", "difference", "images", "is_section_map", "reduce", "with_value"]
@@ -61,9 +63,14 @@ __all__ = ["AreaPreservingMap", "StandardMap", "difference", "images", "is_secti
 
 @runtime_checkable
 class AreaPreservingMap(Protocol):
-    """What an analysis of an area-preserving map of the plane uses (module docstring)."""
+    """What an analysis of an area-preserving map asks of it (docs/greene.md, "The map protocol"): the
+    analyses ask the map, they do not test its type."""
 
+    #: the parameter continuation moves by default, and every parameter it may move
     parameter: str
+    parameters: tuple
+    #: the period of each coordinate (0: not periodic)
+    periods: tuple
 
     def __call__(self, x, *, backward: bool = False, jacobian: bool = True) -> MapResult: ...
 
@@ -78,43 +85,47 @@ class AreaPreservingMap(Protocol):
 
     def with_parameter(self, value): ...
 
+    def with_value(self, name: str, value): ...
+
+    def images(self, X, n, *, backward: bool = False) -> np.ndarray: ...
+
+    @property
+    def reversors(self) -> tuple: ...
+
+    @property
+    def reflection(self): ...
+
+    def in_domain(self, x) -> bool: ...
+
+    def describe_domain(self) -> str: ...
+
+    def not_finite(self, x) -> str: ...
+
+    def orbit_fields(self) -> dict: ...
+
 
 def is_section_map(system) -> bool:
     """True for a :class:`~explorer.analysis.section_map.SectionMap` (the analyses run its orbits
     as batches of the Taylor lanes); False for any other map of the protocol."""
-    from explorer.analysis.section_map import SectionMap
-
     return isinstance(system, SectionMap)
 
 
 def with_value(system, name: str, value):
-    """The map ``system`` with its parameter ``name`` set to ``value``: a section map's
-    ``with_value`` (any model parameter or "h"), another map's ``with_parameter`` (its one
-    continuation parameter, :attr:`AreaPreservingMap.parameter`)."""
-    if is_section_map(system):
-        return system.with_value(name, value)
-    if name != system.parameter:
-        raise ParameterError(f"{type(system).__name__} is continued in its parameter {system.parameter!r}, "
-                             f"got {name!r}")
-    return system.with_parameter(value)
+    """The map ``system`` with its parameter ``name`` (one of ``system.parameters``) set to ``value``."""
+    return system.with_value(name, value)
 
 
-def _periods(system) -> np.ndarray | None:
-    """The periods of the map's coordinates (0: not periodic), or None: ``system.periods`` where
-    the map lives on a cylinder or torus (the standard map: theta mod 2 pi)."""
-    per = getattr(system, "periods", None)
-    return None if per is None else np.asarray(per, float)
+def _periods(system) -> np.ndarray:
+    return np.asarray(system.periods, float)
 
 
 def reduce(system, x) -> np.ndarray:
     """Points ``x`` (..., 2) with each periodic coordinate of ``system`` reduced to [0, period)
     (unchanged for a map of the plane)."""
     y = np.array(x, dtype=float, copy=True)
-    per = _periods(system)
-    if per is not None:
-        for i, L in enumerate(per):
-            if L > 0:
-                y[..., i] = np.mod(y[..., i], L)
+    for i, L in enumerate(_periods(system)):
+        if L > 0:
+            y[..., i] = np.mod(y[..., i], L)
     return y
 
 
@@ -124,66 +135,41 @@ def difference(system, a, b) -> np.ndarray:
     periodic orbits and the distances between orbits use it, so that an orbit of the lifted
     standard map of type P/Q closes: T^Q(x) - x = (2 pi P, 0) is 0 here."""
     d = np.asarray(a, float) - np.asarray(b, float)
-    per = _periods(system)
-    if per is not None:
-        d = np.array(d, copy=True)
-        for i, L in enumerate(per):
-            if L > 0:
-                d[..., i] -= L * np.round(d[..., i] / L)
+    for i, L in enumerate(_periods(system)):
+        if L > 0:
+            d[..., i] -= L * np.round(d[..., i] / L)
     return d
 
 
 #: a batch of a section map's images with fewer returns than this (points x n) runs on one thread:
-#: a parallel region's start and its threads' spin-wait cost more than the half of the work they
-#: save (the manifold growth's batches, tens to hundreds of points: four branches of Figure 4 at
-#: mu = 0.01 on a loaded machine, 0.19 s on one thread, 0.8-1.7 s on two; the results do not
-#: depend on the thread count)
+#: a parallel region's start costs more than it saves on small batches (results do not depend on
+#: the thread count)
 SERIAL_RETURNS = 4096
 
 
 def images(system, X, n: int, *, backward: bool = False) -> np.ndarray:
     """The first ``n`` images (preimages with ``backward``) of each point of X (m, 2): an (m, n, 2)
-    array, NaN from the first iterate that fails (no return of a section map, a point outside its
-    allowed region).  A :class:`~explorer.analysis.section_map.SectionMap` runs them as one batch
-    of the Taylor lanes (:func:`explorer.analysis.sections.crossings`, on one thread below
-    ``SERIAL_RETURNS`` returns; backward through the reversor G0 P^n G0 = P^-n where it
-    applies, else point by point); any other map iterates each point
-    with its own ``iterate``."""
+    array, NaN from the first iterate that fails.  A section map's images run as one batch of the
+    Taylor lanes (:func:`explorer.analysis.sections.crossings`; backward through its reflection,
+    G0 P^n G0 = P^-n, where it has one); otherwise the map's own ``images``."""
     X = np.asarray(X, float).reshape(-1, 2)
-    out = np.full((X.shape[0], n, 2), np.nan)
     if n == 0 or X.size == 0:
+        return np.full((X.shape[0], n, 2), np.nan)
+    # the batch of the lanes lives above the section map (sections imports section_map)
+    if isinstance(system, SectionMap) and (not backward or system.reflection is not None):
+        out = np.full((X.shape[0], n, 2), np.nan)
+        G = system.reflection
+        Y = G(X) if backward else X
+        ok = model.section_M2(system.params, Y[:, 0], Y[:, 1], system.h, system.phi0) > 0
+        if ok.any():
+            c = crossings(system.params, system.h, Y[ok], n_crossings=n, phi0=system.phi0, tol=system.tol,
+                          tmax=system.tmax * n, threads=1 if int(ok.sum()) * n < SERIAL_RETURNS else None)
+            img = np.array(c.data[:, :n, 1:3], float)
+            for i in range(len(img)):
+                img[i, c.count[i]:] = np.nan
+            out[ok] = G(img) if backward else img
         return out
-    if is_section_map(system):
-        from explorer import model
-        from explorer.analysis.periodic import is_reversible, reversor
-        from explorer.analysis.sections import crossings
-
-        if not backward or is_reversible(system.params, system.phi0):
-            Y = reversor(X) if backward else X
-            ok = model.section_M2(system.params, Y[:, 0], Y[:, 1], system.h, system.phi0) > 0
-            if ok.any():
-                c = crossings(system.params, system.h, Y[ok], n_crossings=n, phi0=system.phi0, tol=system.tol,
-                              tmax=system.tmax * n, threads=1 if int(ok.sum()) * n < SERIAL_RETURNS else None)
-                img = np.array(c.data[:, :n, 1:3], float)
-                for i in range(len(img)):
-                    img[i, c.count[i]:] = np.nan
-                out[ok] = reversor(img) if backward else img
-            return out
-    if hasattr(system, "images"):          # the map's own batch (the standard map: compiled)
-        return system.images(X, n, backward=backward)
-    for i, x in enumerate(X):
-        if not np.all(np.isfinite(x)):
-            continue
-        try:
-            out[i] = system.iterate(x, n, backward=backward)[1:]
-        except ParameterError:     # a section map point by point: a failed return leaves the row NaN
-            for j in range(n):
-                try:
-                    x = system(x, backward=backward, jacobian=False).point
-                except ParameterError:
-                    break
-                out[i, j] = x
-    return out
+    return system.images(X, n, backward=backward)
 
 
 # ------------------------------------------------------------------ compiled kernels of (S1)
@@ -249,8 +235,11 @@ class StandardMap:
     lifted (not reduced mod 2 pi).  ``k`` is the continuation parameter.
     """
 
-    #: the name of the continuation parameter
+    #: the name of the continuation parameter, its only one
     parameter = "k"
+    parameters = ("k",)
+    #: no linear reversor (I0 and I1 depend on k): :attr:`reversors`
+    reflection = None
     #: the symmetry lines theta = const of I0 (theta = pi carries Greene's elliptic orbits)
     I0_LINES = (0.0, math.pi)
     #: theta is an angle (the map lives on the cylinder): :func:`difference`, :func:`reduce`
@@ -278,6 +267,26 @@ class StandardMap:
     def with_parameter(self, value) -> StandardMap:
         """The same map at k = ``value``."""
         return StandardMap(value)
+
+    def with_value(self, name: str, value) -> StandardMap:
+        """The same map at k = ``value`` (``name`` must be "k")."""
+        if name != self.parameter:
+            raise ParameterError(f"StandardMap is continued in its parameter {self.parameter!r}, got {name!r}")
+        return StandardMap(value)
+
+    def in_domain(self, x) -> bool:
+        """Every point of the cylinder is one."""
+        return True
+
+    def describe_domain(self) -> str:
+        return "the cylinder theta mod 2 pi"
+
+    def not_finite(self, x) -> str:
+        return f"the map's Jacobian is not finite at ({x[0]:.6g}, {x[1]:.6g})"
+
+    def orbit_fields(self) -> dict:
+        """What names this map in a :class:`~explorer.analysis.periodic.PeriodicOrbit`: itself."""
+        return {"system": self}
 
     @staticmethod
     def _point(x) -> np.ndarray:

@@ -80,15 +80,18 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis.continuation import continuation_values, golden_section_max, secant_follower
-from explorer.analysis.maps import difference, is_section_map, with_value
+from explorer.analysis.halfturn import partner_points
+from explorer.analysis.maps import difference, images, is_section_map
 from explorer.analysis.maps import reduce as reduce_points
 from explorer.analysis.section_map import SectionMap, system_first
+from explorer.analysis.sections import crossings
 from explorer.integrate.methods import DEFAULT_TOL as SECTIONS_TOL
 from explorer.model import ParameterError, symmetry, validation
+from explorer.model.symmetry import is_reversible, reversor
 
 __all__ = ["DEGENERATE_RESIDUE", "ISOLATION_TOL", "KIND_TOL", "MULTIPLE_SHOOTING_FROM", "PeriodicBranch",
-           "PeriodicOrbit", "continue_periodic", "find_periodic_orbit", "is_reversible", "mirror_orbit",
-           "periodic_guesses", "reversor", "search_periodic_orbits", "symmetry_line_points"]
+           "PeriodicOrbit", "continue_periodic", "find_periodic_orbit", "mirror_orbit", "periodic_guesses",
+           "search_periodic_orbits", "symmetry_line_points"]
 
 #: Newton: converged when the step is below this (relative to max(1, |x|))
 NEWTON_TOL = 1e-12
@@ -226,28 +229,6 @@ class PeriodicOrbit:
                 "uncertainty": float(self.uncertainty)}
 
 
-# ------------------------------------------------------------------ symmetry
-def is_reversible(params, phi0=math.pi) -> bool:
-    """True when R: (p1, p2, M, phi) -> (p1, -p2, M, -phi), t -> -t reverses R3 (zeta = xi = 0)
-    and maps the section phi = phi0 to itself (phi0 = 0 or pi mod 2 pi)."""
-    prm = params if isinstance(params, model.Params) else model.Params.from_array(params)
-    on_line = abs(math.sin(phi0)) < 1e-15 or phi0 == math.pi
-    return prm.zeta == 0.0 and prm.xi == 0.0 and on_line
-
-
-def reversor(x):
-    """The involution G0(p1, p2) = (p1, -p2) that R induces on the section (points (..., 2))."""
-    y = np.array(x, dtype=float, copy=True)
-    y[..., 1] = -y[..., 1]
-    return y
-
-
-def _is_symmetric(points, tol) -> bool:
-    g = reversor(points)
-    d = np.linalg.norm(g[:, None, :] - points[None, :, :], axis=2)
-    return bool(np.all(np.min(d, axis=1) <= tol))
-
-
 # ------------------------------------------------------------------ Newton
 class _Shooting:
     """Evaluations of the K maps along a set of points (one call of the Taylor return map each)."""
@@ -264,10 +245,9 @@ class _Shooting:
         jacs = np.empty((K, 2, 2))
         times = np.empty(K)
         x = np.asarray(x0, float)
-        section = is_section_map(self.smap)
         for i in range(K):
             xi = X[i] if multiple else x
-            if section and not model.section_M2(self.smap.params, xi[0], xi[1], self.smap.h, self.smap.phi0) > 0:
+            if not self.smap.in_domain(xi):
                 raise ParameterError(f"point ({xi[0]:.6g}, {xi[1]:.6g}) left the allowed region")
             r = self.smap(xi)
             pts[i], imgs[i], jacs[i], times[i] = xi, r.point, r.jacobian, r.time
@@ -322,7 +302,7 @@ def _newton(smap, K, X0, max_iter=NEWTON_MAX_ITER, multiple=None):
             F = difference(smap, imgs[-1], pts[0])
             A = _monodromy(jacs) - np.eye(2)
         if not (np.all(np.isfinite(A)) and np.all(np.isfinite(F))):
-            raise ParameterError(_not_finite(smap, X.reshape(-1, 2)[0]))
+            raise ParameterError(smap.not_finite(X.reshape(-1, 2)[0]))
         try:
             dx = np.linalg.solve(A, -F)
         except np.linalg.LinAlgError:   # trace exactly 2: the least-squares step
@@ -374,34 +354,19 @@ def _isolation(M, residual):
     return uncertainty, bool(uncertainty > ISOLATION_TOL or abs(residue) < DEGENERATE_RESIDUE)
 
 
-def _not_finite(smap, x) -> str:
-    if not is_section_map(smap):
-        return f"the map's Jacobian is not finite at ({x[0]:.6g}, {x[1]:.6g})"
-    p = smap.params
-    return (f"the section map's Jacobian is not finite at (p1, p2) = ({x[0]:.6g}, {x[1]:.6g}): the tangent "
-            f"dynamics overflow at lam = {p.lam:g}, mu = {p.mu:g}, h = {smap.h:g} (the motion is too fast)")
-
-
 def _orbit(smap, pts, jacs, times, resid, iters, symmetric=None) -> PeriodicOrbit:
     """The PeriodicOrbit through ``pts`` with map Jacobians ``jacs`` (monodromy, eigenvalues,
     symmetry and isolation derived from them)."""
     M = _monodromy(jacs)
     if not np.all(np.isfinite(M)):
-        raise ParameterError(_not_finite(smap, pts[0]))
+        raise ParameterError(smap.not_finite(pts[0]))
     uncertainty, degenerate = _isolation(M, resid)
-    if isinstance(smap, (SectionMap, _MapInfo)):
-        if symmetric is None:
-            symmetric = is_reversible(smap.params, smap.phi0) and _is_symmetric(pts, 1e3 * MINIMAL_PERIOD_TOL)
-        return PeriodicOrbit(np.array(pts, float), len(pts), M, np.linalg.eigvals(M), float(np.trace(M)),
-                             float(np.linalg.det(M)), np.array(times, float), float(resid), int(iters),
-                             bool(symmetric), np.array(jacs, float), smap.params, smap.h, smap.phi0, uncertainty,
-                             degenerate)
-    if symmetric is None:     # another map of the protocol: symmetric under one of its reversors
-        symmetric = any(_maps_onto(smap, R(pts), pts, 1e3 * MINIMAL_PERIOD_TOL)
-                        for R in getattr(smap, "reversors", ()))
+    if symmetric is None:     # symmetric under one of the map's reversors
+        symmetric = any(_maps_onto(smap, R(pts), pts, 1e3 * MINIMAL_PERIOD_TOL) for R in smap.reversors)
     return PeriodicOrbit(np.array(pts, float), len(pts), M, np.linalg.eigvals(M), float(np.trace(M)),
                          float(np.linalg.det(M)), np.array(times, float), float(resid), int(iters), bool(symmetric),
-                         np.array(jacs, float), uncertainty=uncertainty, degenerate=degenerate, system=smap)
+                         np.array(jacs, float), uncertainty=uncertainty, degenerate=degenerate,
+                         **smap.orbit_fields())
 
 
 def _maps_onto(system, images, pts, tol) -> bool:
@@ -415,7 +380,7 @@ def _make_orbit(smap, pts, imgs, jacs, times, iters, reduce=True) -> PeriodicOrb
     d = _minimal_period(pts, system=smap) if reduce else K
     pts, imgs, jacs, times = pts[:d], imgs[:d], jacs[:d], times[:d]
     resid = float(np.max(np.abs(difference(smap, imgs, np.roll(pts, -1, axis=0)))))
-    return _orbit(smap, pts if is_section_map(smap) else reduce_points(smap, pts), jacs, times, resid, iters)
+    return _orbit(smap, reduce_points(smap, pts), jacs, times, resid, iters)
 
 
 def mirror_orbit(orb: PeriodicOrbit) -> PeriodicOrbit:
@@ -434,17 +399,13 @@ def mirror_orbit(orb: PeriodicOrbit) -> PeriodicOrbit:
     prev = (-np.arange(K) - 1) % K                 # x_{-j-1}
     pts = reversor(orb.points[idx])
     jacs = np.array([G @ np.linalg.inv(orb.map_jacobians[i]) @ G for i in prev])
-    smap = _MapInfo(orb.params, orb.h, orb.phi0)
-    return _orbit(smap, pts, jacs, orb.return_times[prev], orb.residual, orb.iterations, orb.symmetric)
+    return _orbit(_section_map_of(orb), pts, jacs, orb.return_times[prev], orb.residual, orb.iterations,
+                  orb.symmetric)
 
 
-@dataclass(frozen=True)
-class _MapInfo:
-    """What :func:`_orbit` needs of a section map (no integrator)."""
-
-    params: model.Params
-    h: float
-    phi0: float
+def _section_map_of(orb: PeriodicOrbit) -> SectionMap:
+    """The section map an orbit names (``params``, ``h``, ``phi0``), to build orbits of it."""
+    return SectionMap(orb.params, orb.h, phi0=orb.phi0)
 
 
 def _check_period(period) -> int:
@@ -488,14 +449,14 @@ def find_periodic_orbit(system, guess, period, *, max_iter=NEWTON_MAX_ITER, redu
         K < 1, a guess outside the allowed region, or Newton's method failing (the message says so).
     """
     K = _check_period(period)
-    smap, phi0 = system, getattr(system, "phi0", math.pi)
+    smap = system
     g = np.asarray(guess, dtype=float)
     if g.shape not in ((2,), (K, 2)) or not np.all(np.isfinite(g)):
         raise ParameterError(f"guess must be a finite point (p1, p2) or {K} points, got shape {g.shape}")
-    for x in g.reshape(-1, 2) if is_section_map(smap) else ():
-        if not model.is_admissible(smap.params, x[0], x[1], smap.h, phi0):
+    for x in g.reshape(-1, 2):
+        if not smap.in_domain(x):
             raise ParameterError(f"guess (p1, p2) = ({x[0]:g}, {x[1]:g}) lies outside the allowed region; "
-                                 f"allowed: {model.describe_region(smap.params, smap.h, phi0)}")
+                                 f"{smap.describe_domain()}")
     max_iter = validation.integer("max_iter", max_iter, 1)
     try:
         pts, imgs, jacs, times, it = _newton(smap, K, g, max_iter)
@@ -530,8 +491,6 @@ def symmetry_line_points(system, period, *, n=200, threads=None):
     Another map of the protocol: its own ``symmetry_line_points(n)`` (n points on each of its
     symmetry lines, unrefined: Newton starts), or none when it has no reversors.
     """
-    from explorer.analysis.sections import crossings
-
     K = _check_period(period)
     if not is_section_map(system):
         seeds = getattr(system, "symmetry_line_points", None)
@@ -583,8 +542,6 @@ def symmetry_line_points(system, period, *, n=200, threads=None):
 
 def _grid_seeds(prm, h, K, grid, phi0, tol, tmax, threads):
     """Grid points of the allowed region where |P^K(x) - x| has a local minimum, best first."""
-    from explorer.analysis.sections import crossings
-
     e = model.allowed_ellipse(prm, h, phi0)
     if e is None:
         return np.empty((0, 2))
@@ -614,8 +571,6 @@ def _map_guesses(system, K, grid, line) -> np.ndarray:
     on each of its symmetry lines (``system.symmetry_line_points``, where it has reversors), then
     the points of a ``grid`` x ``grid`` grid of ``system.domain`` where |P^K(x) - x| (on its
     cylinder) is a local minimum, best first."""
-    from explorer.analysis.maps import images
-
     seeds = [np.asarray(system.symmetry_line_points(line), float).reshape(-1, 2)] \
         if hasattr(system, "symmetry_line_points") else []
     domain = getattr(system, "domain", None)
@@ -672,7 +627,7 @@ def _canonical(orb: PeriodicOrbit) -> PeriodicOrbit:
     k = int(np.lexsort((orb.points[:, 0], np.round(np.abs(orb.points[:, 1]), 9)))[0])
     if k == 0:
         return orb
-    return _orbit(_MapInfo(orb.params, orb.h, orb.phi0), np.roll(orb.points, -k, axis=0),
+    return _orbit(_section_map_of(orb), np.roll(orb.points, -k, axis=0),
                   np.roll(orb.map_jacobians, -k, axis=0), np.roll(orb.return_times, -k), orb.residual,
                   orb.iterations, orb.symmetric)
 
@@ -685,8 +640,6 @@ def _half_turn_partners(prm, h, orbits, same_tol, *, tol, max_iter, tmax, thread
     same trace and period.  The T-images of every point of every orbit are one batch of half-turn
     flows; only an orbit whose image matches no orbit found gets a Newton polish (from a start
     that is the orbit to the flow's accuracy: one or two iterations)."""
-    from explorer.analysis.halfturn import partner_points
-
     isolated = [o for o in orbits if not o.degenerate]
     if not isolated:
         return []
@@ -878,12 +831,11 @@ def continue_periodic(system, period, parameter, start, stop, step, guess, *, bi
     PeriodicBranch
     """
     K = _check_period(period)
-    section = is_section_map(system)
-    values = continuation_values(parameter, start, stop, step, None if section else (system.parameter,))
+    values = continuation_values(parameter, start, stop, step, system.parameters)
     g0 = guess.points if isinstance(guess, PeriodicOrbit) else np.asarray(guess, float)
 
     def solve(v, X):
-        orb = find_periodic_orbit(with_value(system, parameter, v), X, K, reduce=False)
+        orb = find_periodic_orbit(system.with_value(parameter, v), X, K, reduce=False)
         if _minimal_period(orb.points, system=system) != K:
             raise ParameterError(f"the orbit collapsed to period {_minimal_period(orb.points, system=system)}")
         return orb

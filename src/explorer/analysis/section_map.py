@@ -40,7 +40,7 @@ from explorer.integrate.methods import MAP_TOL, MAX_TOL, MIN_TOL
 from explorer.integrate.tangent import return_map_taylor
 from explorer.kernels import STATUS_CANCELLED, STATUS_DONE, STATUS_NAMES
 from explorer.kernels.taylor import order_for_tolerance
-from explorer.model import ParameterError, validation, with_value
+from explorer.model import ParameterError, symmetry, validation, with_value
 from explorer.model.equations import rhs
 
 __all__ = ["DEFAULT_TOL", "MAP_SETTINGS", "MAX_STEPS", "RETURN_TMAX", "MapResult", "SectionMap", "as_system",
@@ -161,14 +161,61 @@ class SectionMap:
         prm, h = with_value(self.params, self.h, name, value)
         return SectionMap(prm, h, phi0=self.phi0, tol=self.tol, tmax=self.tmax)
 
+    #: the continuation parameters (the map protocol): every model parameter and the energy
+    parameters = model.PARAM_NAMES + ("h",)
+    #: no coordinate is periodic: a map of the plane (the map protocol)
+    periods = (0.0, 0.0)
+
+    @property
+    def reflection(self):
+        """G0(p1, p2) = (p1, -p2), the linear reversor G0 P G0 = P^-1, where it applies
+        (:func:`explorer.model.symmetry.is_reversible`), else None (the map protocol)."""
+        return symmetry.reversor if symmetry.is_reversible(self.params, self.phi0) else None
+
     @property
     def reversors(self) -> tuple:
-        """The reversors of the map known here (the map protocol): (G0,), G0(p1, p2) = (p1, -p2),
-        when the system is reversible and the section is phi0 = 0 or pi
-        (:func:`explorer.analysis.periodic.is_reversible`); else ()."""
-        from explorer.analysis.periodic import is_reversible, reversor
+        """The reversors of the map known here (the map protocol): (G0,) or ()."""
+        R = self.reflection
+        return () if R is None else (R,)
 
-        return (reversor,) if is_reversible(self.params, self.phi0) else ()
+    def in_domain(self, x) -> bool:
+        """x lies inside the allowed region, M^2 > 0 (docs/model.md R9; the map protocol)."""
+        return bool(model.section_M2(self.params, x[0], x[1], self.h, self.phi0) > 0)
+
+    def describe_domain(self) -> str:
+        """The allowed region in words, for a message (the map protocol)."""
+        return f"allowed: {model.describe_region(self.params, self.h, self.phi0)}"
+
+    def not_finite(self, x) -> str:
+        """Why DP is not finite at x, for a message (the map protocol)."""
+        p = self.params
+        return (f"the section map's Jacobian is not finite at (p1, p2) = ({x[0]:.6g}, {x[1]:.6g}): the tangent "
+                f"dynamics overflow at lam = {p.lam:g}, mu = {p.mu:g}, h = {self.h:g} (the motion is too fast)")
+
+    def orbit_fields(self) -> dict:
+        """What names this map in a :class:`~explorer.analysis.periodic.PeriodicOrbit` (the map
+        protocol): its ``params``, ``h`` and ``phi0``."""
+        return {"params": self.params, "h": self.h, "phi0": self.phi0}
+
+    def images(self, X, n, *, backward=False) -> np.ndarray:
+        """The first ``n`` images (preimages with ``backward``) of each point of X (m, 2), point by
+        point: an (m, n, 2) array, NaN from the first return that fails.
+        :func:`explorer.analysis.maps.images` runs them as a batch where it can."""
+        X = np.asarray(X, float).reshape(-1, 2)
+        out = np.full((X.shape[0], n, 2), np.nan)
+        for i, x in enumerate(X):
+            if not np.all(np.isfinite(x)):
+                continue
+            try:
+                out[i] = self.iterate(x, n, backward=backward)[1:]
+            except ParameterError:     # a failed return leaves the rest of the row NaN
+                for j in range(n):
+                    try:
+                        x = self(x, backward=backward, jacobian=False).point
+                    except ParameterError:
+                        break
+                    out[i, j] = x
+        return out
 
     def jacobian(self, x) -> np.ndarray:
         """DP(x), the 2x2 Jacobian of the map at x."""

@@ -265,7 +265,7 @@ def flux_curve(system, mus=None, *, guess=(0.0, 0.0), arclength=6.0, max_arcleng
     from explorer.analysis import fixedpoints
     from explorer.analysis.manifolds import saddle
     from explorer.analysis.maps import is_section_map
-    from explorer.analysis.periodic import is_reversible
+    from explorer.model.symmetry import is_reversible
 
     if not is_section_map(system):
         raise ParameterError(f"flux_curve follows the central saddle of a section map in mu; got "
