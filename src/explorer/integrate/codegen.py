@@ -1,0 +1,514 @@
+"""The Taylor recurrence of a :class:`explorer.model.system.System`, derived from its equations
+and emitted as compiled Python source (docs/systems.md).
+
+1. **Decomposition** (:func:`decompose`): the right-hand sides, after SymPy's common-subexpression
+   elimination (``sympy.cse``), become a list of elementary operations in dependency order (a DAG;
+   equal subtrees are one node): ``u + v``, ``u - v``, ``-u``, ``u v``, ``u / v``, ``u^2``,
+   ``u^alpha`` (alpha a constant or a parameter), ``sqrt u``, ``exp u``, ``log u``, ``sin u`` and
+   ``cos u`` (a pair).  Integer powers are products and squares (exact at u_0 = 0), a negative one a
+   division; ``tan u = sin u / cos u``; ``a^b`` with b not constant is ``exp(b log a)``.  A node whose
+   operands do not depend on the state (numbers, parameters and operations on them) is a *scalar*,
+   computed once per call.
+2. **Automatic differentiation** (Jorba & Zou 2005, Exp. Math. 14, 99, Sec. 2; the table of
+   /work/shared/TAYLOR_AD.md): each series node w has normalised coefficients w_k = w^(k)(0)/k!;
+   order 0 is the operation itself, order k >= 1 follows from the operands' coefficients up to k
+   (the rules at :data:`RULES`), and x_{k+1} = f_k / (k + 1).
+3. **Emission** (:func:`source`): a module with ``@njit`` functions (cache=True)
+   ``taylor_coefficients(P, X, order)`` (same contract as
+   :func:`explorer.model.equations.taylor_coefficients`: X[i, k] for k = 0..order from X[:, 0]),
+   ``taylor_coefficients_into(P, X, order, W)`` (with a work array of ``N_WORK`` rows), ``rhs(y, P, dy)``
+   and, when the system has one, ``energy(y, P)``.  P holds the parameter values in the order of
+   ``system.parameters`` (:meth:`System.parameter_array`): another value compiles nothing new.
+4. **Cache** (:func:`load`): the module is written to ``<cache>/<name>_<key>.py``, with ``key`` the
+   SHA-256 of the system's :attr:`~System.content_hash` and :data:`GENERATOR_VERSION`, and imported from that
+   file with importlib, so numba's on-disk cache (``cache=True``) applies to it; a second run finds
+   the file and does not rewrite it.  The cache directory is ``$EXPLORER_SYSTEMS_CACHE``, else
+   ``$XDG_CACHE_HOME/explorer/systems``, else ``~/.cache/explorer/systems``.
+
+Division by a series whose value reaches zero gives inf or nan (``error_model="numpy"``), not an
+exception: the integrators' non-finite status reports it.
+"""
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import os
+import re
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import sympy as sp
+
+from explorer.model.system import System
+from explorer.model.validation import ParameterError
+
+__all__ = ["GENERATOR_VERSION", "Decomposition", "cache_directory", "decompose", "load", "module_key", "source"]
+
+#: changes whenever the emitted code changes, so that a cached module of an older generator is not used
+GENERATOR_VERSION = 1
+
+#: the elementary operations and their recurrence at order k >= 1 (Jorba & Zou 2005, Sec. 2)
+RULES = {
+    "add": "w_k = u_k + v_k",
+    "sub": "w_k = u_k - v_k",
+    "neg": "w_k = -u_k",
+    "mul": "w_k = sum_{j=0..k} u_j v_{k-j}  (c u: w_k = c u_k)",
+    "div": "w_k = (u_k - sum_{j=1..k} v_j w_{k-j}) / v_0",
+    "square": "w_k = 2 sum_{j<k/2} u_j u_{k-j} + [k even] u_{k/2}^2",
+    "pow": "w_k = sum_{j=0..k-1} (alpha (k-j) - j) u_{k-j} w_j / (k u_0)",
+    "sqrt": "w_k = (u_k - sum_{j=1..k-1} w_j w_{k-j}) / (2 w_0)",
+    "exp": "w_k = sum_{j=1..k} j u_j w_{k-j} / k",
+    "log": "w_k = (u_k - sum_{j=1..k-1} j w_j u_{k-j} / k) / u_0",
+    "sin": "s_k = sum_{j=1..k} j u_j c_{k-j} / k",
+    "cos": "c_k = -sum_{j=1..k} j u_j s_{k-j} / k",
+}
+
+#: the order-0 value of each operation, from its operands' values a, b (alpha for pow)
+_VALUE = {
+    "add": "{a} + {b}", "sub": "{a} - {b}", "neg": "-{a}", "mul": "{a} * {b}", "div": "{a} / {b}",
+    "square": "{a} * {a}", "pow": "{a} ** {b}", "sqrt": "math.sqrt({a})", "exp": "math.exp({a})",
+    "log": "math.log({a})", "sin": "math.sin({a})", "cos": "math.cos({a})",
+}
+
+
+@dataclass(frozen=True)
+class Node:
+    """One quantity of the decomposition: ``kind`` is "state" (``index`` its row of X), "param"
+    (``index`` its entry of P), "const" (``value``), or an operation of :data:`RULES` on the nodes
+    ``args``.  ``scalar``: constant in time (no state among its operands)."""
+    kind: str
+    args: tuple = ()
+    index: int = -1
+    value: float = 0.0
+    scalar: bool = False
+
+
+@dataclass
+class Decomposition:
+    """The nodes in dependency order and, for each output expression, its node."""
+    nodes: list = field(default_factory=list)
+    outputs: list = field(default_factory=list)
+    _index: dict = field(default_factory=dict)
+
+    def add(self, node: Node) -> int:
+        """The id of ``node``, appended unless an equal node exists (hash-consing)."""
+        if node not in self._index:
+            self._index[node] = len(self.nodes)
+            self.nodes.append(node)
+        return self._index[node]
+
+    def count(self, kind):
+        return sum(1 for n in self.nodes if n.kind == kind and not n.scalar)
+
+
+class _Builder:
+    """SymPy expression -> nodes of a :class:`Decomposition`."""
+
+    def __init__(self, system: System, d: Decomposition):
+        self.d = d
+        self.states = {s: i for i, s in enumerate(system.states)}
+        self.params = {p: j for j, p in enumerate(system.parameters)}
+        self.memo: dict = {}
+
+    def node(self, kind, *args):
+        scalar = all(self.d.nodes[a].scalar for a in args)
+        return self.d.add(Node(kind, tuple(args), scalar=scalar))
+
+    def const(self, value):
+        return self.d.add(Node("const", value=float(value), scalar=True))
+
+    def visit(self, e):
+        if e in self.memo:
+            return self.memo[e]
+        r = self._visit(e)
+        self.memo[e] = r
+        return r
+
+    def _visit(self, e):
+        if e in self.states:
+            return self.d.add(Node("state", index=self.states[e]))
+        if e in self.params:
+            return self.d.add(Node("param", index=self.params[e], scalar=True))
+        if e.is_Number or isinstance(e, sp.NumberSymbol):
+            return self.const(e)
+        if isinstance(e, sp.Add):
+            return self._add(e)
+        if isinstance(e, sp.Mul):
+            return self._mul(e)
+        if isinstance(e, sp.Pow):
+            return self._pow(e.base, e.exp)
+        if isinstance(e, sp.tan):
+            u = self.visit(e.args[0])
+            return self.node("div", self._sincos(u)[0], self._sincos(u)[1])
+        if isinstance(e, (sp.sin, sp.cos)):
+            s, c = self._sincos(self.visit(e.args[0]))
+            return s if isinstance(e, sp.sin) else c
+        if isinstance(e, sp.exp):
+            return self.node("exp", self.visit(e.args[0]))
+        if isinstance(e, sp.log):
+            return self.node("log", self.visit(e.args[0]))
+        raise ParameterError(f"{e} ({type(e).__name__}) is not an operation the Taylor generator knows")
+
+    def _sincos(self, u):
+        """sin u and cos u, always together (each one's recurrence needs the other)."""
+        return self.node("sin", u), self.node("cos", u)
+
+    def _add(self, e):
+        """A sum, terms with a negative coefficient subtracted: a - 2b is sub(a, 2b)."""
+        plus, minus = [], []
+        for t in e.args:
+            c, _ = t.as_coeff_Mul()
+            (minus if c.is_negative else plus).append(-t if c.is_negative else t)
+        if plus:
+            acc = self.visit(plus[0])
+            rest = plus[1:]
+        else:
+            acc = self.node("neg", self.visit(minus[0]))
+            minus = minus[1:]
+            rest = []
+        for t in rest:
+            acc = self.node("add", acc, self.visit(t))
+        for t in minus:
+            acc = self.node("sub", acc, self.visit(t))
+        return acc
+
+    def _mul(self, e):
+        """A product: -1 * u is neg(u); factors with a negative numeric exponent divide."""
+        c, rest = e.as_coeff_Mul()
+        if c == -1:
+            return self.node("neg", self.visit(rest))
+        num, den = [], []
+        for f in e.args:
+            if isinstance(f, sp.Pow) and f.exp.is_Number and f.exp.is_negative:
+                den.append(sp.Pow(f.base, -f.exp))
+            elif f.is_Rational and not f.is_Integer and f.p == 1:
+                den.append(sp.Integer(f.q))   # u/2 as a division by 2, not a product with 0.5
+            else:
+                num.append(f)
+        acc = self._product(num) if num else self.const(1)
+        if den:
+            acc = self.node("div", acc, self._product(den))
+        return acc
+
+    def _product(self, factors):
+        # scalars first: c (u v) is one scaling of a Cauchy product
+        ids = [self.visit(f) for f in factors]
+        ids.sort(key=lambda i: not self.d.nodes[i].scalar)
+        acc = ids[0]
+        for i in ids[1:]:
+            acc = self.node("mul", acc, i)
+        return acc
+
+    def _pow(self, base, ex):
+        if ex.is_Integer:
+            n = int(ex)
+            if n < 0:
+                return self.node("div", self.const(1), self._pow(base, -ex))
+            if n == 0:
+                return self.const(1)
+            u = self.visit(base)
+            return self._int_pow(u, n)
+        if ex == sp.Rational(1, 2):
+            return self.node("sqrt", self.visit(base))
+        if ex.is_Number:
+            return self.node("pow", self.visit(base), self.const(ex))
+        alpha = self.visit(ex)
+        if self.d.nodes[alpha].scalar:
+            return self.node("pow", self.visit(base), alpha)
+        # a^b with b a series: exp(b log a)
+        return self.node("exp", self.node("mul", alpha, self.node("log", self.visit(base))))
+
+    def _int_pow(self, u, n):
+        """u^n, n >= 1, by squaring: exact where u_0 = 0 (unlike the u^alpha rule)."""
+        if n == 1:
+            return u
+        half = self._int_pow(u, n // 2)
+        sq = self.node("square", half)
+        return self.node("mul", sq, u) if n % 2 else sq
+
+
+def decompose(system: System, expressions=None) -> Decomposition:
+    """The elementary operations of ``expressions`` (default: the right-hand sides), common
+    subexpressions shared (``sympy.cse``, then equal subtrees are one node)."""
+    exprs = list(system.rhs if expressions is None else expressions)
+    replacements, reduced = sp.cse(exprs, order="none")
+    d = Decomposition()
+    b = _Builder(system, d)
+    for sym, e in replacements:
+        b.memo[sym] = b.visit(e)
+    d.outputs = [b.visit(e) for e in reduced]
+    return d
+
+
+# ---------------------------------------------------------------------- emission
+class _Emitter:
+    """Source lines of one decomposition: scalars once, order 0, then orders k >= 1."""
+
+    def __init__(self, d: Decomposition):
+        self.d = d
+        self.row = {}
+        for i, n in enumerate(d.nodes):
+            if not n.scalar and n.kind != "state":
+                self.row[i] = len(self.row)
+
+    def coef(self, i, k):
+        """The coefficient of series node i at order ``k`` (a code string)."""
+        n = self.d.nodes[i]
+        if n.kind == "state":
+            return f"X[{n.index}, {k}]"
+        return f"W[{self.row[i]}, {k}]"
+
+    def value(self, i):
+        """The order-0 value of node i."""
+        n = self.d.nodes[i]
+        if n.scalar:
+            return f"s{i}"
+        return self.coef(i, 0)
+
+    def scalar_lines(self):
+        out = []
+        for i, n in enumerate(self.d.nodes):
+            if not n.scalar:
+                continue
+            if n.kind == "param":
+                code = f"P[{n.index}]"
+            elif n.kind == "const":
+                code = repr(n.value)
+            else:
+                code = self.op_value(n)
+            out.append(f"s{i} = {code}")
+        return out
+
+    def op_value(self, n):
+        a = self.value(n.args[0])
+        b = self.value(n.args[1]) if len(n.args) > 1 else ""
+        return _VALUE[n.kind].format(a=a, b=b)
+
+    def order0_lines(self):
+        out = []
+        for i, n in enumerate(self.d.nodes):
+            if n.scalar or n.kind == "state":
+                continue
+            out.append(f"{self.coef(i, 0)} = {self.op_value(n)}")
+        return out
+
+    def orderk_lines(self):
+        """Statements for the coefficient k >= 1 of every series node (``k`` a loop variable)."""
+        out = []
+        nodes = self.d.nodes
+        for i, n in enumerate(nodes):
+            if n.scalar or n.kind == "state":
+                continue
+            w = self.row[i]
+            a = n.args[0]
+            sa = nodes[a].scalar
+            if len(n.args) > 1:
+                b = n.args[1]
+                sb = nodes[b].scalar
+            U = (lambda j, a=a: self.coef(a, j))  # noqa: E731
+            V = (lambda j, b=n.args[-1]: self.coef(b, j))  # noqa: E731
+            if n.kind in ("add", "sub"):
+                op = "+" if n.kind == "add" else "-"
+                if sa:
+                    rhs = f"-{V('k')}" if n.kind == "sub" else V("k")
+                elif sb:
+                    rhs = U("k")
+                else:
+                    rhs = f"{U('k')} {op} {V('k')}"
+                out.append(f"W[{w}, k] = {rhs}")
+            elif n.kind == "neg":
+                out.append(f"W[{w}, k] = -{U('k')}")
+            elif n.kind == "mul":
+                if sa:
+                    out.append(f"W[{w}, k] = s{a} * {V('k')}")
+                elif sb:
+                    out.append(f"W[{w}, k] = {U('k')} * s{b}")
+                else:
+                    out += ["acc = 0.0", "for j in range(k + 1):", f"    acc += {U('j')} * {V('k - j')}",
+                            f"W[{w}, k] = acc"]
+            elif n.kind == "div":
+                if sb:
+                    out.append(f"W[{w}, k] = {U('k')} / s{b}")
+                else:
+                    out += [f"acc = {'0.0' if sa else U('k')}", "for j in range(1, k + 1):",
+                            f"    acc -= {V('j')} * W[{w}, k - j]", f"W[{w}, k] = acc / {V(0)}"]
+            elif n.kind == "square":
+                out += ["acc = 0.0", "for j in range((k + 1) // 2):", f"    acc += {U('j')} * {U('k - j')}",
+                        "acc = 2.0 * acc", "if k % 2 == 0:", f"    acc += {U('k // 2')} * {U('k // 2')}",
+                        f"W[{w}, k] = acc"]
+            elif n.kind == "pow":
+                alpha = f"s{b}"
+                out += ["acc = 0.0", "for j in range(k):",
+                        f"    acc += ({alpha} * (k - j) - j) * {U('k - j')} * W[{w}, j]",
+                        f"W[{w}, k] = acc / (k * {U(0)})"]
+            elif n.kind == "sqrt":
+                out += [f"acc = {U('k')}", "for j in range(1, k):", f"    acc -= W[{w}, j] * W[{w}, k - j]",
+                        f"W[{w}, k] = acc / (2.0 * W[{w}, 0])"]
+            elif n.kind == "exp":
+                out += ["acc = 0.0", "for j in range(1, k + 1):", f"    acc += j * {U('j')} * W[{w}, k - j]",
+                        f"W[{w}, k] = acc / k"]
+            elif n.kind == "log":
+                out += ["acc = 0.0", "for j in range(1, k):", f"    acc += j * W[{w}, j] * {U('k - j')}",
+                        f"W[{w}, k] = ({U('k')} - acc / k) / {U(0)}"]
+            elif n.kind == "sin":
+                c = self.row[self.d._index[Node("cos", n.args)]]
+                out += ["acc = 0.0", "acc2 = 0.0", "for j in range(1, k + 1):", f"    t = j * {U('j')}",
+                        f"    acc += t * W[{c}, k - j]", f"    acc2 += t * W[{w}, k - j]",
+                        f"W[{w}, k] = acc / k", f"W[{c}, k] = -acc2 / k"]
+            elif n.kind == "cos":
+                pass  # with its sine
+            else:  # pragma: no cover - every kind of _Builder is above
+                raise AssertionError(n.kind)
+        return out
+
+    def output(self, i, k):
+        """Coefficient ``k`` of output node i, zero for k >= 1 of a scalar."""
+        n = self.d.nodes[i]
+        if n.scalar:
+            return f"s{i}" if k == 0 else "0.0"
+        return self.coef(i, k)
+
+
+def _indent(lines, n):
+    return "\n".join(" " * n + line for line in lines)
+
+
+MODULE = '''\
+# GENERATED FILE - DO NOT EDIT. Written by explorer.integrate.codegen (generator version {version})
+# from the system {name!r}; the key {key} is of its content (explorer.model.system.System.content_hash).
+#
+{equations}
+"""The Taylor recurrence, right-hand side{and_energy} of the system {name!r} (explorer.integrate.codegen)."""
+import math
+
+import numpy as np
+
+from explorer._jit import njit
+
+#: state dimension, number of parameters, rows of the work array of taylor_coefficients_into
+DIM = {dim}
+N_PARAMS = {n_params}
+N_WORK = {n_work}
+
+
+# error_model="numpy": a division by zero gives inf/nan (the integrators' non-finite status), not an exception
+@njit(error_model="numpy")
+def taylor_coefficients_into(P, X, order, W):
+    """X[i, k] = x_i^(k)(0)/k! for k = 0..order (order >= 1) from X[:, 0], with the parameters P and the
+    work array W[N_WORK, >= order] (automatic differentiation, Jorba & Zou 2005)."""
+{scalars}
+{order0}
+{first}
+    for k in range(1, order):
+{orderk}
+{next_}
+
+
+@njit(error_model="numpy")
+def taylor_coefficients(P, X, order):
+    """:func:`taylor_coefficients_into` with its own work array."""
+    W = np.empty((max(N_WORK, 1), order + 1))
+    taylor_coefficients_into(P, X, order, W)
+
+
+@njit(error_model="numpy")
+def rhs(y, P, dy):
+    """dy = f(y) (the order-0 part of the recurrence)."""
+    X = np.empty((DIM, 1))
+    for i in range(DIM):
+        X[i, 0] = y[i]
+    W = np.empty((max(N_WORK, 1), 1))
+{scalars}
+{order0}
+{rhs_out}
+'''
+
+ENERGY = '''
+
+@njit(error_model="numpy")
+def energy(y, P):
+    """The energy at the state y."""
+    X = np.empty((DIM, 1))
+    for i in range(DIM):
+        X[i, 0] = y[i]
+    W = np.empty((max(N_ENERGY_WORK, 1), 1))
+{scalars}
+{order0}
+    return {out}
+
+
+N_ENERGY_WORK = {n_work}
+'''
+
+
+def source(system: System, key: str = "") -> str:
+    """The Python source of the generated module (see the module docstring)."""
+    d = decompose(system)
+    e = _Emitter(d)
+    dim = system.dimension
+    scalars = _indent(e.scalar_lines(), 4)
+    order0 = _indent(e.order0_lines(), 4)
+    first = _indent([f"X[{i}, 1] = {e.output(o, 0)}" for i, o in enumerate(d.outputs)], 4)
+    next_ = _indent([f"X[{i}, k + 1] = {e.output(o, 'k')} / (k + 1)" for i, o in enumerate(d.outputs)], 8)
+    orderk = _indent(e.orderk_lines() or ["pass"], 8)
+    rhs_out = _indent([f"dy[{i}] = {e.output(o, 0)}" for i, o in enumerate(d.outputs)], 4)
+    equations = "\n".join(f"#   d{s.name}/dt = {f}" for s, f in zip(system.states, system.rhs))
+    equations += "\n#   parameters: " + (", ".join(p.name for p in system.parameters) or "none")
+    text = MODULE.format(version=GENERATOR_VERSION, name=system.name, key=key, equations=equations,
+                         and_energy=" and energy" if system.energy is not None else "", dim=dim,
+                         n_params=len(system.parameters), n_work=len(e.row), scalars=scalars, order0=order0,
+                         first=first, orderk=orderk, next_=next_, rhs_out=rhs_out)
+    if system.energy is not None:
+        de = decompose(system, [system.energy])
+        ee = _Emitter(de)
+        text += ENERGY.format(scalars=_indent(ee.scalar_lines(), 4), order0=_indent(ee.order0_lines(), 4),
+                              out=ee.output(de.outputs[0], 0), n_work=len(ee.row))
+    return text
+
+
+# ---------------------------------------------------------------------- cache
+def cache_directory() -> Path:
+    """Where generated modules live: $EXPLORER_SYSTEMS_CACHE, else $XDG_CACHE_HOME/explorer/systems,
+    else ~/.cache/explorer/systems."""
+    env = os.environ.get("EXPLORER_SYSTEMS_CACHE")
+    if env:
+        return Path(env)
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    base = Path(xdg) if xdg else Path.home() / ".cache"
+    return base / "explorer" / "systems"
+
+
+def module_key(system: System) -> str:
+    """The cache key: SHA-256 of the system's content hash and :data:`GENERATOR_VERSION`."""
+    return hashlib.sha256(f"{system.content_hash} generator {GENERATOR_VERSION}".encode()).hexdigest()[:32]
+
+
+def _module_path(system: System, key: str) -> Path:
+    stem = re.sub(r"\W", "_", system.name)[:40] or "system"
+    return cache_directory() / f"{stem}_{key}.py"
+
+
+def load(system: System):
+    """The generated module of ``system``: imported once per process (``sys.modules``), written to
+    the cache directory only if its file is missing (a rewrite would invalidate numba's cache)."""
+    key = module_key(system)
+    path = _module_path(system, key)
+    mod_name = f"explorer_system_{path.stem}"
+    mod = sys.modules.get(mod_name)
+    if mod is not None and Path(mod.__file__) == path:
+        return mod
+    if not path.exists():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(source(system, key))
+        os.replace(tmp, path)   # atomic: a concurrent process sees the whole file or none
+    spec = importlib.util.spec_from_file_location(mod_name, path)
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[mod_name] = mod
+    try:
+        spec.loader.exec_module(mod)
+    except BaseException:
+        del sys.modules[mod_name]
+        raise
+    return mod

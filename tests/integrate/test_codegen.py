@@ -1,0 +1,289 @@
+"""explorer.integrate.codegen: the Taylor recurrence derived from a System's SymPy equations
+(docs/systems.md).  Each automatic-differentiation rule against high-precision derivatives, the
+generated Chaplygin recurrence against the hand-written one (docs/model.md R3), a Hénon–Heiles
+Taylor integration against DOP853, and the on-disk cache of the generated module.
+
+The rule systems are one System (one module to compile): the states t (dt/dt = 1) and e
+(de/dt = e), so t(s) = T0 + s and e(s) = E0 exp(s), and one state x_r per rule with
+dx_r/dt = g_r(t, e): its coefficients are x_{r,k+1} = g_k / (k + 1) with g_k the Taylor
+coefficients of g_r(T0 + s, E0 exp(s)) at s = 0, computed by ``mpmath.taylor`` (SymPy's
+arbitrary-precision library) at 60 digits, for the rules with a closed-form reference also by
+``sympy.series``.  A second group of states feeds a rule its own output (dy/dt = sin y, ...),
+checked against the series of the exact solution.
+"""
+import math
+
+import mpmath
+import numpy as np
+import pytest
+import sympy as sp
+
+from explorer.integrate import codegen
+from explorer.model import parameters as mp_
+from explorer.model.system import System
+from explorer.model.validation import ParameterError
+
+ORDER = 14              # coefficients up to x_14 (g_13)
+T0, E0, LAM = 0.25, 1.5, 0.75   # exact in binary: the references use the same numbers
+t, e, lam, s = sp.symbols("t e lam s")
+
+#: rule -> g(t, e, lam)
+RULES = {
+    "add": e + t,
+    "sub": t - e,
+    "neg": -e,
+    "add a parameter": e + lam,
+    "parameter minus series": lam - e,
+    "mul": t * e,
+    "mul by a parameter": lam * e * e,
+    "div": (t + 2) / (e + t),
+    "parameter over series": lam / (e + t),
+    "series over parameter": e / lam,
+    "square": (e - t) ** 2,
+    "integer power 5": (e - t) ** 5,
+    "integer power -3": (e - t) ** -3,
+    "real power 2.5": (e + t) ** 2.5,
+    "rational power -1/3": (e + t) ** sp.Rational(-1, 3),
+    "parameter power": (e + t) ** lam,
+    "sqrt": sp.sqrt(e + t),
+    "exp": sp.exp(e - t),
+    "log": sp.log(e + t),
+    "sin": sp.sin(e - t),
+    "cos": sp.cos(e * t),
+    "tan": sp.tan(e - t),
+    "series power": e ** t,
+    "shared subexpressions": sp.sin(e * t) * sp.exp(e * t) + sp.cos(e * t) / (1 + (e * t) ** 2),
+}
+#: state y -> (dy/dt, y(0), exact solution y(tau) as a SymPy expression of tau)
+tau = sp.Symbol("tau")
+SELF = {
+    "sin y": (lambda y: sp.sin(y), 0.5, 2 * sp.atan(sp.tan(sp.Rational(1, 4)) * sp.exp(tau))),
+    "-y^3": (lambda y: -y**3, 0.75, sp.Rational(3, 4) / sp.sqrt(1 + 2 * sp.Rational(9, 16) * tau)),
+    "exp(-y)": (lambda y: sp.exp(-y), 0.5, sp.log(tau + sp.exp(sp.Rational(1, 2)))),
+    "1/y": (lambda y: 1 / y, 1.25, sp.sqrt(sp.Rational(25, 16) + 2 * tau)),
+    "y log y": (lambda y: y * sp.log(y), 2.0, sp.exp(sp.log(2) * sp.exp(tau))),
+    "y^1.5": (lambda y: y ** sp.Float(1.5), 0.5, (sp.sqrt(2) - tau / 2) ** -2),
+}
+
+XS = [sp.Symbol(f"x{i}") for i in range(len(RULES))]
+YS = [sp.Symbol(f"y{i}") for i in range(len(SELF))]
+
+
+@pytest.fixture(scope="module")
+def rules_module():
+    eqs = {t: 1, e: e}
+    eqs.update({xr: g for xr, g in zip(XS, RULES.values())})
+    eqs.update({yr: f(yr) for yr, (f, _, _) in zip(YS, SELF.values())})
+    system = System(eqs, parameters={lam: LAM}, name="ad_rules")
+    return system, codegen.load(system)
+
+
+@pytest.fixture(scope="module")
+def rules_coefficients(rules_module):
+    system, mod = rules_module
+    X = np.zeros((system.dimension, ORDER + 1))
+    X[0, 0], X[1, 0] = T0, E0
+    X[2 + len(RULES):, 0] = [y0 for _, y0, _ in SELF.values()]
+    mod.taylor_coefficients(system.parameter_array(), X, ORDER)
+    return X
+
+
+def reference(expr, var, n):
+    """Taylor coefficients c_0..c_{n-1} of expr(var) at var = 0, at 60 digits (mpmath.taylor:
+    high-order derivatives by arbitrary-precision differences)."""
+    f = sp.lambdify(var, expr, "mpmath")
+    with mpmath.workdps(60):
+        return np.array([float(c) for c in mpmath.taylor(f, 0, n - 1)])
+
+
+def g_reference(g):
+    return reference(g.subs({t: sp.Rational(T0) + s, e: sp.Rational(E0) * sp.exp(s), lam: sp.Rational(LAM)}), s, ORDER)
+
+
+def rel_err(got, want):
+    return np.max(np.abs(got - want) / np.abs(want))
+
+
+@pytest.mark.parametrize("rule", list(RULES))
+def test_each_rule_gives_the_taylor_coefficients_of_its_operation_to_1e_13(rules_coefficients, rule):
+    i = 2 + list(RULES).index(rule)
+    got = rules_coefficients[i, 1:] * np.arange(1, ORDER + 1)   # g_k = (k + 1) x_{k+1}
+    want = g_reference(RULES[rule])
+    assert np.all(np.abs(want) > 1e-12), "a reference coefficient near zero makes a relative test meaningless"
+    assert rel_err(got, want) <= 1e-13, (rule, rel_err(got, want))
+
+
+@pytest.mark.parametrize("rule", ["div", "rational power -1/3", "sqrt", "parameter power"])
+def test_the_high_precision_reference_equals_sympys_own_series(rule):
+    g = RULES[rule].subs({t: sp.Rational(T0) + s, e: sp.Rational(E0) * sp.exp(s), lam: sp.Rational(LAM)})
+    series = sp.series(g, s, 0, ORDER).removeO()
+    exact = np.array([float(sp.N(series.coeff(s, k), 30)) for k in range(ORDER)])
+    assert rel_err(g_reference(RULES[rule]), exact) <= 1e-15
+
+
+@pytest.mark.parametrize("name", list(SELF))
+def test_a_rule_fed_its_own_output_gives_the_series_of_the_exact_solution(rules_coefficients, name):
+    i = 2 + len(RULES) + list(SELF).index(name)
+    want = reference(SELF[name][2], tau, ORDER + 1)
+    assert want[0] == SELF[name][1]
+    assert rel_err(rules_coefficients[i], want) <= 1e-13, (name, rel_err(rules_coefficients[i], want))
+
+
+def test_rhs_is_the_equations_evaluated_and_a_zero_denominator_gives_inf_not_an_exception(rules_module):
+    system, mod = rules_module
+    rng = np.random.default_rng(5)
+    y = rng.uniform(0.3, 0.9, system.dimension)
+    dy = np.empty(system.dimension)
+    mod.rhs(y, system.parameter_array(), dy)
+    f = sp.lambdify([system.states, lam], list(system.rhs))
+    np.testing.assert_allclose(dy, f(y, LAM), rtol=1e-14)
+    y[2 + len(RULES) + list(SELF).index("1/y")] = 0.0
+    mod.rhs(y, system.parameter_array(), dy)
+    assert math.isinf(dy[2 + len(RULES) + list(SELF).index("1/y")])
+
+
+def test_common_subexpressions_are_one_node():
+    x, y = sp.symbols("x y")
+    system = System({x: sp.sin(x * y) + sp.cos(x * y), y: sp.exp(x * y) * sp.sin(x * y)})
+    d = codegen.decompose(system)
+    kinds = [n.kind for n in d.nodes]
+    assert kinds.count("mul") == 2      # x y once, and exp(.) sin(.)
+    assert kinds.count("sin") == 1 and kinds.count("cos") == 1 and kinds.count("exp") == 1
+
+
+# ---------------------------------------------------------------------- Chaplygin (docs/model.md R3)
+def chaplygin():
+    """docs/model.md R3, state (p1, p2, M, g1, g2), parameters in the order of
+    explorer.model.parameters' index constants (the packed array P)."""
+    p1, p2, M, g1, g2 = sp.symbols("p1 p2 M g1 g2")
+    a1, a2, b, la, chi, zeta, mu, xi, eta = sp.symbols("a1 a2 b lam chi zeta mu xi eta")
+    w = M / b
+    eqs = {p1: w * (p2 - zeta) - mu * g1 - la * p2 / a2,
+           p2: -w * (p1 - chi) - mu * g2 + la * p1 / a1,
+           M: (p1 - chi) * p2 / a2 - (p2 - zeta) * p1 / a1 - mu * (xi * g2 - eta * g1),
+           g1: w * g2,
+           g2: -w * g1}
+    order = sorted([(mp_.A1, a1), (mp_.A2, a2), (mp_.B, b), (mp_.LAM, la), (mp_.CHI, chi), (mp_.ZETA, zeta),
+                    (mp_.MU, mu), (mp_.XI, xi), (mp_.ETA, eta)], key=lambda p: p[0])
+    return System(eqs, parameters={sym: 1.0 for _, sym in order}, name="chaplygin_r3")
+
+
+@pytest.mark.parametrize("params", [mp_.FIGURE4.with_(mu=0.5),
+                                    mp_.Params(a1=1.3, a2=0.6, b=1.7, lam=-0.8, chi=0.2, zeta=-0.15, mu=0.7,
+                                               xi=0.3, eta=-0.25)])
+def test_generated_chaplygin_coefficients_equal_the_hand_written_recurrence(params):
+    from explorer.model.equations import taylor_coefficients
+
+    system = chaplygin()
+    P = mp_.packed_params(params)
+    assert [p.name for p in system.parameters] == ["a1", "a2", "b", "lam", "chi", "zeta", "mu", "xi", "eta"]
+    mod = codegen.load(system)
+    rng = np.random.default_rng(12)
+    order = 24
+    worst = 0.0
+    for _ in range(4):
+        X0 = rng.uniform(-1, 1, 5)
+        X0[3:] /= np.hypot(X0[3], X0[4])      # (g1, g2) = (sin phi, cos phi)
+        gen = np.zeros((5, order + 1))
+        hand = np.zeros((5, order + 1))
+        gen[:, 0] = hand[:, 0] = X0
+        mod.taylor_coefficients(P, gen, order)
+        taylor_coefficients(P, hand, order)
+        # relative to each order's largest coefficient (a single one may cancel to near zero)
+        scale = np.max(np.abs(hand), axis=0)
+        worst = max(worst, np.max(np.abs(gen - hand) / scale))
+    assert worst <= 1e-14, worst
+
+
+# ---------------------------------------------------------------------- Hénon–Heiles against DOP853
+def henon_heiles():
+    x, y, px, py, la = sp.symbols("x y px py lam")
+    return System({x: px, y: py, px: -x - 2 * la * x * y, py: -y - la * (x**2 - y**2)},
+                  parameters={la: 1.0},
+                  energy=(px**2 + py**2) / 2 + (x**2 + y**2) / 2 + la * (x**2 * y - y**3 / 3),
+                  name="henon_heiles")
+
+
+def taylor_orbit(mod, P, y0, dt, steps, order=20):
+    from explorer.kernels.taylor import evaluate
+
+    X = np.zeros((len(y0), order + 1))
+    W = np.empty((max(mod.N_WORK, 1), order + 1))
+    y = np.array(y0, dtype=float)
+    out = [y.copy()]
+    for _ in range(steps):
+        X[:, 0] = y
+        mod.taylor_coefficients_into(P, X, order, W)
+        evaluate(X, order, dt, y)
+        out.append(y.copy())
+    return np.array(out)
+
+
+@pytest.mark.parametrize("value", [1.0, 0.5])
+def test_henon_heiles_taylor_steps_agree_with_dop853_and_conserve_the_energy(value):
+    from scipy.integrate import solve_ivp
+
+    system = henon_heiles().with_(lam=value)
+    mod = codegen.load(system)
+    P = system.parameter_array()
+    y0 = np.array([0.1, -0.2, 0.35, 0.1])
+    dt, steps = 0.05, 200
+    orbit = taylor_orbit(mod, P, y0, dt, steps)
+
+    def f(_, y):
+        dy = np.empty(4)
+        mod.rhs(y, P, dy)
+        return dy
+
+    ref = solve_ivp(f, (0, dt * steps), y0, method="DOP853", rtol=1e-13, atol=1e-13,
+                    t_eval=dt * np.arange(steps + 1))
+    assert np.max(np.abs(orbit - ref.y.T)) <= 2e-12
+    h0 = mod.energy(y0, P)
+    lam_ = list(system.parameters)[0]
+    exact_h0 = float(system.energy.subs(dict(zip(system.states, y0))).subs(lam_, value))
+    assert abs(h0 - exact_h0) <= 1e-16
+    drift = max(abs(mod.energy(y, P) - h0) for y in orbit)
+    assert drift <= 1e-13, drift
+
+
+def test_another_parameter_value_uses_the_same_generated_module():
+    a = henon_heiles()
+    b = a.with_(lam=0.25)
+    assert codegen.load(a) is codegen.load(b)
+    dy = np.empty(4)
+    codegen.load(b).rhs(np.array([0.5, 0.5, 0.0, 0.0]), b.parameter_array(), dy)
+    # dpx/dt = -x - 2 lam x y = -0.5 - 0.125
+    assert dy[2] == -0.625 and dy[3] == -0.5
+
+
+# ---------------------------------------------------------------------- the on-disk cache
+def test_the_module_is_written_once_under_its_content_key_and_reused(tmp_path, monkeypatch):
+    monkeypatch.setenv("EXPLORER_SYSTEMS_CACHE", str(tmp_path / "systems"))
+    x, v = sp.symbols("x v")
+    system = System({x: v, v: -x}, name="oscillator")
+    mod = codegen.load(system)
+    path = tmp_path / "systems" / f"oscillator_{codegen.module_key(system)}.py"
+    assert mod.__file__ == str(path) and path.exists()
+    stamp = path.stat().st_mtime_ns
+    import sys
+
+    del sys.modules[mod.__name__]       # as a new process would: found on disk, not rewritten
+    again = codegen.load(system)
+    assert again is not mod and again.__file__ == str(path) and path.stat().st_mtime_ns == stamp
+    assert "taylor_coefficients" in path.read_text()
+    other = System({x: v, v: -2 * x}, name="oscillator")
+    assert codegen.module_key(other) != codegen.module_key(system)
+
+
+def test_cache_directory_follows_the_environment(monkeypatch, tmp_path):
+    monkeypatch.delenv("EXPLORER_SYSTEMS_CACHE", raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    assert codegen.cache_directory() == tmp_path / "explorer" / "systems"
+    monkeypatch.setenv("EXPLORER_SYSTEMS_CACHE", str(tmp_path / "mine"))
+    assert codegen.cache_directory() == tmp_path / "mine"
+
+
+def test_an_operation_the_generator_does_not_know_is_refused():
+    x = sp.Symbol("x")
+    with pytest.raises(ParameterError, match="Abs"):
+        System({x: sp.Abs(x)})
