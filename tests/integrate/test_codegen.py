@@ -287,3 +287,51 @@ def test_an_operation_the_generator_does_not_know_is_refused():
     x = sp.Symbol("x")
     with pytest.raises(ParameterError, match="Abs"):
         System({x: sp.Abs(x)})
+
+
+# ---------------------------------------------------------------------- variational equations
+def test_generated_chaplygin_variational_coefficients_equal_the_hand_written_tangent_recurrence():
+    from explorer.model.equations import taylor_coefficients_tangent
+
+    system = chaplygin().variational(2)
+    mod = codegen.load(system)
+    P = mp_.packed_params(mp_.Params(a1=1.3, a2=0.6, b=1.7, lam=-0.8, chi=0.2, zeta=-0.15, mu=0.7, xi=0.3, eta=-0.25))
+    rng = np.random.default_rng(3)
+    order = 20
+    worst = 0.0
+    for _ in range(3):
+        X0 = rng.uniform(-1, 1, 5)
+        X0[3:] /= np.hypot(X0[3], X0[4])
+        D0 = rng.uniform(-1, 1, (2, 5))
+        Z = np.zeros((15, order + 1))
+        Z[:5, 0], Z[5:10, 0], Z[10:, 0] = X0, D0[0], D0[1]
+        mod.taylor_coefficients(P, Z, order)
+        for v in range(2):
+            X = np.zeros((5, order + 1))
+            D = np.zeros((5, order + 1))
+            X[:, 0], D[:, 0] = X0, D0[v]
+            taylor_coefficients_tangent(P, X, D, order)
+            for gen, hand in ((Z[:5], X), (Z[5 + 5 * v:10 + 5 * v], D)):
+                worst = max(worst, np.max(np.abs(gen - hand) / np.max(np.abs(hand), axis=0)))
+    assert worst <= 1e-14, worst
+
+
+def test_variational_coefficients_are_the_derivative_of_the_state_coefficients():
+    """D_k = d X_k / d x0 . d0: against a central difference of the generated state coefficients."""
+    base = henon_heiles()
+    var = codegen.load(base.variational(1))
+    mod = codegen.load(base)
+    P = base.parameter_array()
+    order = 16
+    x0 = np.array([0.1, -0.2, 0.35, 0.1])
+    d0 = np.array([0.3, -0.5, 0.2, 0.7])
+    Z = np.zeros((8, order + 1))
+    Z[:4, 0], Z[4:, 0] = x0, d0
+    var.taylor_coefficients(P, Z, order)
+    eps = 1e-6
+    plus, minus = np.zeros((4, order + 1)), np.zeros((4, order + 1))
+    plus[:, 0], minus[:, 0] = x0 + eps * d0, x0 - eps * d0
+    mod.taylor_coefficients(P, plus, order)
+    mod.taylor_coefficients(P, minus, order)
+    fd = (plus - minus) / (2 * eps)
+    assert np.max(np.abs(Z[4:] - fd)) <= 1e-8 * np.max(np.abs(fd))

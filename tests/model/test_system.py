@@ -84,3 +84,27 @@ def test_numbers_and_numpy_scalars_are_accepted():
     s = System({x: 1, px: sp.Rational(1, 3) * x}, parameters={lam: np.float32(0.5)})
     assert s.rhs[0] == 1
     np.testing.assert_array_equal(s.parameter_array(), [0.5])
+
+
+def test_variational_system_appends_deviation_vectors_under_the_jacobian():
+    s = henon_heiles(0.5).variational(2)
+    assert s.dimension == 12
+    names = [v.name for v in s.states]
+    assert names[4:8] == ["d1_x", "d1_y", "d1_px", "d1_py"] and names[8] == "d2_x"
+    d1 = s.states[4:8]
+    # d(dpx/dt) = (-1 - 2 lam y) dx - 2 lam x dy
+    assert sp.expand(s.rhs[6] - ((-1 - 2 * lam * y) * d1[0] - 2 * lam * x * d1[1])) == 0
+    np.testing.assert_array_equal(s.parameter_array(), [0.5])
+    assert s.energy is None
+
+
+def test_variational_names_avoid_the_users_symbols():
+    d1_x = sp.Symbol("d1_x")
+    s = System({x: d1_x, d1_x: -x}).variational(1)
+    assert len({v.name for v in s.states}) == 4
+
+
+@pytest.mark.parametrize("bad", [0, -1, 1.5, True, "2"])
+def test_variational_needs_a_positive_integer_count(bad):
+    with pytest.raises(ParameterError, match="vectors must be an integer >= 1"):
+        henon_heiles().variational(bad)

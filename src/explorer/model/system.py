@@ -168,6 +168,24 @@ class System:
             values[by_name[key]] = _value(key, v)
         return System(dict(zip(self.states, self.rhs)), parameters=values, energy=self.energy, name=self.name)
 
+    def variational(self, vectors: int = 1) -> System:
+        """The system with ``vectors`` deviation vectors: states x, then d1_x..., d2_x..., with
+        dd/dt = J(x) d, J the symbolic Jacobian of the right-hand sides (its entries
+        ``sympy.diff``).  Same parameters (same order and values); no energy."""
+        if isinstance(vectors, bool) or not isinstance(vectors, numbers.Integral) or vectors < 1:
+            raise ParameterError(f"vectors must be an integer >= 1, got {vectors!r}")
+        taken = {s.name for s in self.states} | {p.name for p in self.parameters}
+        prefix = "d"
+        while any(n.startswith(prefix) for n in taken):
+            prefix = "_" + prefix
+        jac = [[sp.diff(f, x) for x in self.states] for f in self.rhs]
+        equations = dict(zip(self.states, self.rhs))
+        for v in range(1, vectors + 1):
+            dev = [sp.Symbol(f"{prefix}{v}_{x.name}") for x in self.states]
+            for i, d in enumerate(dev):
+                equations[d] = sum((jac[i][j] * dev[j] for j in range(self.dimension) if jac[i][j] != 0), sp.Integer(0))
+        return System(equations, parameters=dict(self.parameters), name=f"{self.name}_variational{vectors}")
+
     # ------------------------------------------------------------------ identity
     @property
     def content_hash(self) -> str:
