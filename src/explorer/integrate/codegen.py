@@ -9,8 +9,8 @@ and emitted as compiled Python source (docs/systems.md).
    division; ``tan u = sin u / cos u``; ``a^b`` with b not constant is ``exp(b log a)``.  A node whose
    operands do not depend on the state (numbers, parameters and operations on them) is a *scalar*,
    computed once per call.
-2. **Automatic differentiation** (Jorba & Zou 2005, Exp. Math. 14, 99, Sec. 2; the table of
-   /work/shared/TAYLOR_AD.md): each series node w has normalised coefficients w_k = w^(k)(0)/k!;
+2. **Automatic differentiation** (Jorba & Zou 2005, Exp. Math. 14, 99, Sec. 2; the table in
+   docs/systems.md): each series node w has normalised coefficients w_k = w^(k)(0)/k!;
    order 0 is the operation itself, order k >= 1 follows from the operands' coefficients up to k
    (the rules at :data:`RULES`), and x_{k+1} = f_k / (k + 1).
 3. **Emission** (:func:`source`): a module with ``@njit`` functions (cache=True)
