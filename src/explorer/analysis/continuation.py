@@ -1,11 +1,5 @@
-"""Natural-parameter continuation, shared by fixed points and periodic orbits.
-
-:func:`continuation_values` validates and lays out the parameter values, :func:`secant_follower`
-steps a solver along them (secant predictor, steps halved on failure), and
-:func:`golden_section_max` refines an extremum of a sampled quantity (the trace of a monodromy
-touching +-2, the fraction of a curve).  The solver itself and the bifurcation detector are
-:func:`explorer.analysis.periodic.continue_periodic`'s (one for every period, K = 1 included).
-"""
+"""Natural-parameter continuation shared by fixed points and periodic orbits: the parameter
+values, a secant follower and golden-section refinement (docs/commands/periodic.md)."""
 from __future__ import annotations
 
 import math

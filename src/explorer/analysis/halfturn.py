@@ -1,22 +1,5 @@
-"""Partner points of the section under the half-turn reversor (docs/model.md, "Symmetries").
-
-When chi = 0 and mu eta = 0 (:func:`explorer.model.symmetry.has_half_turn_symmetry`) the map
-K: (p1, p2, M, phi, t) -> (-p1, p2, M, pi - phi, -t) reverses R3.  The partner of a point x of
-the section phi = phi0 is T(x): K(x), on the section phi = pi - phi0, carried by the flow forward
-to its next crossing of phi = phi0 (half a turn of phi for phi0 = pi).  T is an involution and
-reverses the section map P (T P = P^{-1} T), so
-
-- a fixed point x of P has the fixed point T(x) as partner, with the same trace of DP and the same
-  return time (the orbit of T(x) is the orbit of x run backwards and turned by K);
-- a periodic orbit x_0, ..., x_{K-1} (x_{i+1} = P(x_i)) has the partner orbit
-  T(x_{K-1}), ..., T(x_0) (P T(x_i) = T(x_{i-1})), with the same trace of DP^K and the same period
-  (sum of the return times; each single return time of the partner is a time between two
-  crossings of phi = pi - phi0 of the original, in reverse order);
-- an orbit with T(x) on itself is half-turn symmetric (its own partner).
-
-``partner_points`` integrates with the Taylor method (tol 1e-15 by default) through
-:func:`explorer.analysis.sections.crossings`.
-"""
+"""Partner points of the section under the half-turn reversor T (docs/model.md, "Symmetries";
+docs/commands/periodic.md, "Half-turn partners")."""
 from __future__ import annotations
 
 import math
@@ -53,12 +36,7 @@ class Partners:
 @system_first(settings=("phi0", "tol"))
 def partner_points(system, points, *, threads: int | None = None) -> Partners:
     """The partners T(x) of the points x = (p1, p2) ((2,) or (n, 2)) of the section phi = phi0 at
-    energy h (crossed with dphi/dt > 0) under the half-turn reversor (module docstring).
-
-    Raises ParameterError naming the parameters when the half-turn is not a symmetry
-    (chi != 0, or eta != 0 with mu != 0), or the point when it is outside the allowed region.
-    A point whose flow does not reach the section within the time budget gets NaN and its status.
-    """
+    energy h (crossed with dphi/dt > 0) under the half-turn reversor (module docstring)."""
     from explorer.analysis.sections import crossings
 
     params, h, phi0, tol = system.params, system.h, system.phi0, system.tol

@@ -1,47 +1,5 @@
-"""Stable and unstable manifolds of hyperbolic periodic orbits of the section map, and their
-intersections (homoclinic points).  docs/manifolds.md has the method and its accuracy.
-
-Parametrisation
----------------
-Let x* be a point of a hyperbolic orbit of period K of the section map P
-(:class:`~explorer.analysis.section_map.SectionMap`, docs/model.md R9), F = P^m with m = K (m = 2K
-when the multiplier is negative, so that F keeps each branch), Lambda > 1 the multiplier of F
-along the branch (F^{-1} for a stable manifold) and e the unit eigenvector (``sign`` = +1: the
-orientation with e[0] > 0, or e[1] > 0 when e[0] = 0).  Every point of the branch is
-
-    x(sigma) = F^n(x* + exp(sigma - n L) e),   L = log Lambda,   n = floor((sigma - sigma0) / L),
-
-with exp(sigma0) = s0 the start distance: the fundamental domain [s0, s0 Lambda) of the linear
-manifold and its n-th images.  sigma is continuous along the branch (F moves sigma by L), so
-the branch is the curve sigma -> x(sigma), computed exactly (to the map's accuracy) at any
-sigma, with no interpolation.
-
-Start distance: on the manifold, in the eigenbasis (u along e, v along the other eigenvector),
-v = a u^2 / 2 + O(u^3), so x* + s e is off the manifold by |a| s^2 / 2.  a is measured from one
-image of a trial point (the v-component of F(x* + s e) is a s^2 (Lambda^2 - 1/Lambda) / 2, the
-invariance of the graph), and s0 = sqrt(2 ``tol`` / |a|): the start points are within ``tol``
-of the manifold, and F contracts that transverse error by 1/Lambda per generation.
-
-Growth (Hobson 1993, J. Comput. Phys. 104, 14; Krauskopf & Osinga 1998, J. Comput. Phys. 146,
-404): start with ``INITIAL_POINTS`` points of the fundamental domain; repeat (i) refine: where
-the distance between neighbours exceeds ``max_gap``, the angle at a point exceeds
-``max_angle``, or distance times angle exceeds ``max_gap_angle``, insert the point at the
-mid-value of sigma (computed from the fundamental domain, n maps); (ii) extend: map the last
-generation once (F, one batch of the Taylor lanes, :func:`explorer.analysis.sections.crossings`)
-- until the branch has the requested arclength (or ``generations`` images of the fundamental
-domain) or a budget (points, wall time) runs out or a point has no return (the region's edge).
-``ManifoldBranch.status`` says which.  The batches are small (tens to hundreds of points), so
-they run on one thread (``explorer.analysis.maps.SERIAL_RETURNS``).
-
-Points of the stable manifold need F^{-1}: when the reversor applies
-(:func:`explorer.analysis.periodic.is_reversible`), F^{-1} = G0 F G0 and the batch runs
-forward; otherwise each point is integrated backward in time by the section map
-(``backward="integrate"`` forces that path).  For a fixed point on the reversor's symmetry line
-(the central saddle of the Figure-4 scene) nothing needs computing at all: W^s = G0 W^u, branch
-by branch (G0 keeps the first component, so the orientation and the sign agree), and the stable
-branch is the reflection of the unstable one, point for point (:func:`mirror_branch`); the
-tangle and the flux curve grow half the points.
-"""
+"""Stable and unstable manifolds of hyperbolic periodic orbits of a map, grown along their
+parametrisation sigma, and their intersections (docs/manifolds.md, "Branches of W^u and W^s")."""
 from __future__ import annotations
 
 import math
@@ -60,30 +18,22 @@ __all__ = ["DEFAULT_MAX_ANGLE", "DEFAULT_MAX_GAP", "DEFAULT_MAX_GAP_ANGLE", "DEF
            "manifolds", "mirror_branch", "mirrors",
            "saddle"]
 
-#: transverse distance of the start points from the manifold (module docstring)
+#: transverse distance of the start points from the manifold
 DEFAULT_START_TOL = 1e-12
-#: a fixed point this close to the symmetry line p2 = 0 has W^s = G0 W^u (:func:`mirrors`): far
-#: below DEFAULT_START_TOL, so the reflection is as close to W^s as a grown branch
+#: a fixed point this close to p2 = 0 has W^s = G0 W^u (:func:`mirrors`)
 MIRROR_TOL = 1e-14
-#: refinement bounds (Krauskopf & Osinga 1998): distance between neighbours, angle at a point
-#: (radians) and their product; the polyline deviates from the curve by about
-#: gap * angle / 8 <= DEFAULT_MAX_GAP_ANGLE / 8
+#: refinement bounds: gap, angle (radians) and their product (docs/manifolds.md, "Growth")
 DEFAULT_MAX_GAP = 0.02
 DEFAULT_MAX_ANGLE = 0.2
 DEFAULT_MAX_GAP_ANGLE = 2e-4
-#: points of the first fundamental domain
 INITIAL_POINTS = 16
-#: trial distance along the eigenvector for the curvature estimate
 TRIAL_DISTANCE = 1e-4
-#: limits of the start distance
 MIN_START, MAX_START = 1e-9, 1e-3
-#: an interval of sigma narrower than this is not split further
 MIN_DSIGMA = 1e-11
-#: Newton for intersections: step of the central differences in sigma, tolerance, iterations
+#: Newton for intersections: difference step in sigma, tolerance, iterations
 DIFF_STEP = 1e-6
 INTERSECTION_TOL = 1e-12
 NEWTON_ITER = 30
-#: two intersections closer than this are the same point
 SAME_POINT = 1e-9
 
 STATUS_ARCLENGTH = "arclength"
@@ -93,12 +43,9 @@ STATUS_MAX_POINTS = "max_points"
 STATUS_MAX_TIME = "max_time"
 
 
-# ------------------------------------------------------------------ the saddle
 @dataclass(frozen=True)
 class Saddle:
-    """A point x* of a hyperbolic orbit of period K, F = P^m (m = K, or 2K when the multiplier
-    is negative), the multiplier of F along the unstable direction (> 1) and the unit
-    eigenvectors of DF (unstable, stable) with the orientation of ``sign = +1``."""
+    """A point x* of a hyperbolic orbit, F = P^m and its eigen-decomposition (docs/manifolds.md)."""
 
     point: np.ndarray
     period: int
@@ -118,9 +65,7 @@ def _orient(v):
 
 @system_first
 def saddle(system, orbit, *, index=0) -> Saddle:
-    """The :class:`Saddle` at point ``index`` of a hyperbolic ``orbit`` (a
-    :class:`~explorer.analysis.periodic.PeriodicOrbit` or a
-    :class:`~explorer.analysis.fixedpoints.FixedPoint`) of the map ``system``."""
+    """The :class:`Saddle` at point ``index`` of a hyperbolic ``orbit`` of the map ``system``."""
     if isinstance(orbit, PeriodicOrbit):
         pts, K, jacs = orbit.points, orbit.period, orbit.map_jacobians
     elif hasattr(orbit, "jacobian") and hasattr(orbit, "point"):
@@ -128,7 +73,7 @@ def saddle(system, orbit, *, index=0) -> Saddle:
     else:
         raise ParameterError(f"orbit must be a PeriodicOrbit or a FixedPoint, got {type(orbit).__name__}")
     index = validation.integer("index", index, 0, K - 1)
-    M = np.eye(2)   # monodromy at point `index`: DP(x_{index-1}) ... DP(x_index)
+    M = np.eye(2)
     for j in range(K):
         M = jacs[(index + j) % K] @ M
     w, V = np.linalg.eig(M)
@@ -144,11 +89,8 @@ def saddle(system, orbit, *, index=0) -> Saddle:
                   system, np.array(pts, float))
 
 
-# ------------------------------------------------------------------ images in batches
 def _images(smap, X, n, backward, integrate_backward=False):
-    """P^n (P^-n with ``backward``) of the points X (m, 2), NaN where a return fails:
-    :func:`explorer.analysis.maps.images`, or with ``integrate_backward`` the map's own
-    point-by-point preimages (no reversor)."""
+    """P^n (P^-n with ``backward``) of the points X (m, 2), NaN where a return fails."""
     X = np.asarray(X, float).reshape(-1, 2)
     if n == 0 or X.size == 0:
         return X.copy()
@@ -158,14 +100,14 @@ def _images(smap, X, n, backward, integrate_backward=False):
 
 
 class _Curve:
-    """sigma -> x(sigma) of one branch (module docstring)."""
+    """sigma -> x(sigma) of one branch (docs/manifolds.md)."""
 
     def __init__(self, sd: Saddle, stable: bool, sign: int, start_tol: float, integrate_backward: bool):
         self.sd, self.stable, self.sign = sd, stable, sign
         self.backward_integrated = integrate_backward
         self.e = sign * (sd.e_stable if stable else sd.e_unstable)
         self.L = math.log(sd.multiplier)
-        # curvature a of the graph v = a u^2 / 2 from one image of a trial point
+        # the graph v = a u^2 / 2 (docs/manifolds.md, "Start distance")
         s = TRIAL_DISTANCE
         y = self.map(sd.point + s * self.e, 1)[0]
         B = np.column_stack([sd.e_stable if stable else sd.e_unstable, sd.e_unstable if stable else sd.e_stable])
@@ -187,7 +129,7 @@ class _Curve:
         return np.maximum(np.floor((np.asarray(sigma, float) - self.sigma0) / self.L), 0).astype(int)
 
     def points(self, sigma):
-        """x(sigma) for an array of sigma (NaN where a map fails), each from the fundamental domain."""
+        """x(sigma) for an array of sigma, NaN where a map fails."""
         sigma = np.atleast_1d(np.asarray(sigma, float))
         n = self.generation(sigma)
         out = np.empty((sigma.size, 2))
@@ -200,9 +142,7 @@ class _Curve:
 
 
 class _MirroredCurve:
-    """sigma -> G0 x_u(sigma): the stable branch of a saddle on the symmetry line as the reversor's
-    image of its unstable branch (:func:`mirrors`); F^-1 = G0 F G0 maps it as the unstable curve's
-    F maps that one."""
+    """sigma -> G0 x_u(sigma): a stable branch that :func:`mirrors` its unstable one."""
 
     def __init__(self, unstable: _Curve):
         self.unstable = unstable
@@ -224,15 +164,9 @@ class _MirroredCurve:
 
 @dataclass(frozen=True)
 class ManifoldBranch:
-    """One branch of W^u (``kind`` "unstable") or W^s ("stable") of a saddle, as a polyline from
-    the orbit's point outwards.
-
-    ``points[0]`` is the saddle point; ``points[1:]`` are points x(sigma) of the manifold at the
-    parameters ``sigma[1:]`` (``sigma[0]`` = -inf), within ``start_tol`` of the manifold
-    (transversally; module docstring).  ``status``: "arclength" (grown to ``target``),
-    "edge" (a point further on has no return of the map or left the allowed region),
-    "max_points" or "max_time" (budgets).
-    """
+    """One branch of W^u or W^s (``kind``) as a polyline from the saddle outwards: ``points`` at
+    parameters ``sigma``, within ``start_tol`` of the manifold; ``status`` says why it stopped
+    ("arclength", "generations", "edge", "max_points", "max_time")."""
 
     kind: str
     sign: int
@@ -248,19 +182,13 @@ class ManifoldBranch:
     seconds: float
     curve: _Curve = field(repr=False, compare=False, default=None)
     max_gap: float = DEFAULT_MAX_GAP
-    #: where the growth stopped, before the cut at ``target``, with its settings: what
-    #: ``grow_branch(..., resume=branch)`` continues from (None when it cannot be continued)
+    #: the growth's state before the cut at ``target``: what ``resume=`` continues
     grown: tuple | None = field(repr=False, compare=False, default=None)
-    #: the unstable branch this stable one reflects (:func:`mirror_branch`), else None
     mirror_of: ManifoldBranch | None = field(repr=False, compare=False, default=None)
 
     @property
     def tears(self) -> np.ndarray:
-        """sigma at the start of each jump of the branch: neighbours farther apart than ``max_gap``
-        whose sigma differ by no more than the refinement's limit ``MIN_DSIGMA``, so that no
-        point between them lies between them on the plane.  The section map is discontinuous
-        there (an orbit grazes the section, M = 0 at phi = phi0: the first return time jumps,
-        docs/manifolds.md), and the branch beyond is not the continuation of the arc before."""
+        """sigma at each jump of the branch, where the map is discontinuous (docs/manifolds.md)."""
         d = np.linalg.norm(np.diff(self.points[1:], axis=0), axis=1)
         ds = np.diff(self.sigma[1:])
         return self.sigma[1:-1][(d > self.max_gap) & (ds <= 1.5 * MIN_DSIGMA)]
@@ -272,13 +200,11 @@ class ManifoldBranch:
         return float(t[0]) if t.size else math.inf
 
     def at(self, sigma) -> np.ndarray:
-        """Points of the branch at parameters ``sigma`` (computed afresh, no interpolation)."""
+        """Points of the branch at parameters ``sigma``, computed afresh."""
         return self.curve.points(sigma)
 
     def distance(self, x, *, rounds=4, samples=24) -> float:
-        """Distance from the point x to the branch, from points computed afresh: the nearest
-        stored point's neighbourhood in sigma is sampled ``samples`` times and narrowed to the
-        best sample's neighbours ``rounds`` times (no chord error of the polyline)."""
+        """Distance from x to the branch, from points computed afresh near the nearest stored one."""
         x = np.asarray(x, float)
         i = int(np.argmin(np.linalg.norm(self.points[1:] - x, axis=1))) + 1
         lo = self.sigma[max(i - 1, 1)]
@@ -288,7 +214,6 @@ class ManifoldBranch:
             pts = self.at(s)
             k = int(np.nanargmin(np.linalg.norm(pts - x, axis=1)))
             lo, hi = s[max(k - 1, 0)], s[min(k + 1, samples - 1)]
-        # the first segment (saddle to the first point) is the linear manifold, off by <= start_tol
         return min(_polyline_distance(pts[max(k - 1, 0):k + 2], x), _polyline_distance(self.points[:2], x))
 
     def as_dict(self):
@@ -322,7 +247,7 @@ def _bad_intervals(P, max_gap, max_angle, max_gap_angle, lo):
         worst = (ang > max_angle) | (ang * np.minimum(d[:-1], d[1:]) > max_gap_angle)
         bad[:-1] |= worst
         bad[1:] |= worst
-    bad[:max(lo, 1)] = False     # never split the linear segment from the saddle point
+    bad[:max(lo, 1)] = False
     return np.flatnonzero(bad)
 
 
@@ -331,30 +256,12 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
                 max_points=20000, max_time=None, integrate_backward=False,
                 resume: ManifoldBranch | None = None, generations: int | None = None,
                 unstable: ManifoldBranch | None = None) -> ManifoldBranch:
-    """One branch of W^u (W^s with ``stable``) of the saddle ``sd`` grown to ``arclength``
-    (module docstring: parametrisation, start distance, refinement, budgets).
-
-    A stable branch of a saddle that :func:`mirrors` is the reflection of the unstable branch of
-    its sign (:func:`mirror_branch`; the one place this is decided): that branch is grown here and
-    reflected, or, given as ``unstable`` (grown by this function for ``sd`` with this sign and
-    these settings, as :func:`manifolds` and the turnstile hold it), reflected without growing.
-
-    ``generations``: grow no further than that many images of the fundamental domain (sigma
-    below sigma0 + (generations + 1) L; status "generations" when that comes before the
-    arclength, which may then be ``math.inf``), the extent
-    :func:`explorer.analysis.fixedpoints.separatrices` draws.
-
-    ``resume``: a branch of the same saddle, kind, sign and settings grown to a shorter
-    arclength; the growth continues from where that one stopped (before its cut at its target),
-    so the branch is the one a growth from the start gives, point for point, at the cost of
-    the new part only (:func:`explorer.analysis.transport.turnstile` doubles the length this
-    way).  A branch that cannot be continued (another saddle or setting, or stopped by a budget
-    or the region's edge) is grown from the start."""
+    """One branch of W^u (W^s with ``stable``) of ``sd`` grown to ``arclength`` (docs/manifolds.md)."""
     if sign not in (1, -1):
         raise ParameterError(f"sign must be +1 or -1, got {sign!r}")
     if generations is not None:
         generations = validation.integer("generations", generations, 0)
-    if generations is None or arclength != math.inf:     # inf: the extent set by generations alone
+    if generations is None or arclength != math.inf:
         arclength = validation.real("arclength", arclength, 0.0, lo_open=True)
     start_tol = validation.real("start_tol", start_tol, 0.0, lo_open=True)
     max_gap = validation.real("max_gap", max_gap, 0.0, lo_open=True)
@@ -388,7 +295,7 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
             and resume.grown[0] == settings and arclength >= resume.target):
         _, sig, pts, lo, edge, evals = resume.grown
         cv = resume.curve
-        refined = True           # the state after a refinement: go on at the arclength check
+        refined = True
     else:
         cv = _Curve(sd, stable, sign, start_tol, integrate_backward)
         sig = cv.sigma0 + cv.L * np.arange(INITIAL_POINTS + 1) / INITIAL_POINTS
@@ -398,14 +305,13 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
         if not np.all(np.isfinite(pts)):
             edge = float(sig[np.flatnonzero(~np.isfinite(pts[:, 0]))[0]])
             sig, pts = cut(sig, pts, edge)
-        lo = 0                   # refinement starts here (earlier intervals are final)
+        lo = 0                   # earlier intervals are final
         refined = False
     grown = None
     while True:
-        # (i) refine
         while not refined:
             P = np.vstack([sd.point, pts])
-            bad = _bad_intervals(P, max_gap, max_angle, max_gap_angle, lo + 1) - 1  # interval i of pts
+            bad = _bad_intervals(P, max_gap, max_angle, max_gap_angle, lo + 1) - 1
             bad = bad[np.diff(sig)[bad] > MIN_DSIGMA]
             if bad.size == 0:
                 break
@@ -431,12 +337,11 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
         refined = False
         s = _arc(np.vstack([sd.point, pts]))
         if s[-1] >= arclength:
-            if status is None:   # a longer growth goes on from here (``resume``)
+            if status is None:
                 grown = (settings, sig, pts, lo, edge, evals)
-            k = int(np.searchsorted(s, arclength))   # first point at or beyond the target
+            k = int(np.searchsorted(s, arclength))
             sig, pts = sig[:k], pts[:k]
             status = STATUS_ARCLENGTH
-        # the last generation complete: its end sigma0 + (generations + 1) L reached (to rounding)
         if (status is None and generations is not None
                 and sig[-1] >= cv.sigma0 + (generations + 1 - 0.5 / INITIAL_POINTS) * cv.L):
             status = STATUS_GENERATIONS
@@ -448,8 +353,7 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
             status = STATUS_MAX_TIME
         if status is not None:
             break
-        # (ii) extend: the last generation mapped once
-        last = np.flatnonzero(sig > sig[-1] - cv.L)[:max_points - len(sig)]   # within the budget
+        last = np.flatnonzero(sig > sig[-1] - cv.L)[:max_points - len(sig)]
         nsig = sig[last] + cv.L
         new = cv.map(pts[last], 1)
         evals += len(last)
@@ -467,22 +371,14 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
 
 
 def mirrors(sd: Saddle) -> bool:
-    """True when the stable branches of ``sd`` are the reflections of its unstable ones, W^s_sign =
-    G0 W^u_sign (module docstring): a section map that the reversor R reverses
-    (:func:`explorer.analysis.periodic.is_reversible`) and a fixed point on its symmetry line p2 =
-    0 (within MIRROR_TOL).  A point of a longer orbit is not: G0 maps it to another point of
-    its orbit, or of another orbit."""
+    """W^s = G0 W^u branch by branch: a map with a reflection G0 and a fixed point on its line."""
     G = sd.smap.reflection
     # |G0 x - x| = 2 |p2|: x within MIRROR_TOL of the line p2 = 0
     return G is not None and sd.period == 1 and float(np.max(np.abs(G(sd.point) - sd.point))) <= 2 * MIRROR_TOL
 
 
 def mirror_branch(unstable: ManifoldBranch) -> ManifoldBranch:
-    """The stable branch of the same sign as the unstable branch ``unstable`` of a saddle that
-    :func:`mirrors`: every point reflected by G0 (p1, p2) -> (p1, -p2), the same parameters sigma,
-    status and budgets, and no map computed.  What :func:`grow_branch` returns for ``stable=True``
-    there (it grows the unstable branch and reflects it), so a caller holding the unstable branch
-    saves its growth."""
+    """The stable branch reflecting ``unstable`` of a saddle that :func:`mirrors`: no map computed."""
     if unstable.kind != "unstable" or unstable.curve is None or not mirrors(unstable.curve.sd):
         raise ParameterError("mirror_branch needs an unstable branch grown by grow_branch of a fixed point "
                              "on the reversor's symmetry line (manifolds.mirrors)")
@@ -498,17 +394,8 @@ def manifolds(system, orbit, *, arclength=5.0, kinds=("unstable", "stable"), sig
               start_tol=DEFAULT_START_TOL, max_gap=DEFAULT_MAX_GAP, max_angle=DEFAULT_MAX_ANGLE,
               max_gap_angle=DEFAULT_MAX_GAP_ANGLE, max_points=20000, max_time=None,
               integrate_backward=False) -> list:
-    """The branches of W^u and W^s of a hyperbolic ``orbit`` of the map ``system`` at its point
-    ``index``, each grown to ``arclength`` (:func:`grow_branch`, whose options follow).
-
-    ``orbit``: a :class:`~explorer.analysis.periodic.PeriodicOrbit`, a
-    :class:`~explorer.analysis.fixedpoints.FixedPoint`, or a point (p1, p2) of the section: then the
-    orbit of period ``period`` is found from it by Newton's method
-    (:func:`~explorer.analysis.periodic.find_periodic_orbit`), e.g.
-    ``manifolds(smap, (-0.011, 0.0), arclength=10)``.  Returns a list of :class:`ManifoldBranch`
-    (``kind``, ``sign``, ``points``: an (M, 2) array from the orbit's point outwards), unstable
-    before stable, sign +1 before -1; ParameterError when the orbit is not hyperbolic or not
-    found."""
+    """The branches of W^u and W^s of a hyperbolic ``orbit`` (or the orbit of ``period`` found from a
+    point) at its point ``index``, each grown to ``arclength`` by :func:`grow_branch`."""
     if not isinstance(orbit, PeriodicOrbit) and not hasattr(orbit, "jacobian"):
         orbit = _orbit_from_point(system, orbit, period)
     sd = saddle(system, orbit, index=index)
@@ -516,7 +403,7 @@ def manifolds(system, orbit, *, arclength=5.0, kinds=("unstable", "stable"), sig
         if k not in ("unstable", "stable"):
             raise ParameterError(f"kinds must be 'unstable' and/or 'stable', got {k!r}")
     grown: dict = {}
-    for k in ("unstable", "stable"):      # the unstable first: a mirrored stable branch reflects it (grow_branch)
+    for k in ("unstable", "stable"):      # a mirrored stable branch reflects the unstable one
         if k not in kinds:
             continue
         for s in signs:
@@ -528,7 +415,7 @@ def manifolds(system, orbit, *, arclength=5.0, kinds=("unstable", "stable"), sig
 
 
 def _orbit_from_point(system, point, period):
-    """The periodic orbit of period ``period`` of ``system`` found from the point (p1, p2) by Newton's method."""
+    """The orbit of period ``period`` Newton finds from the point (p1, p2)."""
     try:
         x = np.asarray(point, float)
     except (TypeError, ValueError):
@@ -539,12 +426,9 @@ def _orbit_from_point(system, point, period):
     return find_periodic_orbit(system, (float(x[0]), float(x[1])), period)
 
 
-# ------------------------------------------------------------------ intersections
 @dataclass(frozen=True)
 class Homoclinic:
-    """A point where an unstable and a stable branch meet: ``point``, the parameters
-    ``sigma_u``, ``sigma_s`` on the branches, the angle between them (radians, in (0, pi/2]),
-    the residual |x_u(sigma_u) - x_s(sigma_s)| and the signs of the two branches."""
+    """Where an unstable and a stable branch meet: the point, its sigma on each, the angle, the residual."""
 
     point: np.ndarray
     sigma_u: float
@@ -579,12 +463,8 @@ def _segment_crossings(A, B):
 
 
 def _refine(bu: ManifoldBranch, bs: ManifoldBranch, su, ss) -> list:
-    """Newton on x_u(su) - x_s(ss) = 0 from each start (su[k], ss[k]), with tangents by central
-    differences in sigma; a start stops at a residual below INTERSECTION_TOL or when two steps
-    in a row fail to halve it (the map's accuracy reached), and gives the best point evaluated
-    (None when none was finite).  The starts iterate in lockstep, each iteration's points of all
-    of them computed in one batch per branch: every point is computed alone in the lanes (the
-    same bits in any batch), so each start's iterates are those of a Newton run on its own."""
+    """Newton on x_u(su) = x_s(ss) from each start, in lockstep (one batch per branch and step;
+    each point is computed alone in the lanes), the best point of each (None if none finite)."""
     hd = DIFF_STEP
     su = [float(x) for x in su]
     ss = [float(x) for x in ss]
@@ -628,24 +508,19 @@ def _refine(bu: ManifoldBranch, bs: ManifoldBranch, su, ss) -> list:
 
 
 def homoclinic_points(unstable: ManifoldBranch, stable: ManifoldBranch, *, max_residual=1e-10) -> list:
-    """The intersections of an unstable and a stable branch (of the same saddle: homoclinic; of
-    two saddles: heteroclinic): crossings of the two polylines, each refined by Newton's method
-    on x_u(sigma_u) = x_s(sigma_s) with the points computed afresh (no interpolation), kept when
-    the residual is below ``max_residual``; sorted by sigma_u (the order along W^u)."""
+    """The intersections of an unstable and a stable branch below ``max_residual``, sorted by
+    sigma_u (docs/manifolds.md, "Homoclinic points and the splitting angle")."""
     if unstable.kind != "unstable" or stable.kind != "stable":
         raise ParameterError("homoclinic_points needs an unstable branch then a stable branch")
     return _intersections(unstable, stable, max_residual, balance=False)
 
 
 def _intersections(unstable: ManifoldBranch, stable: ManifoldBranch, max_residual, balance) -> list:
-    """Crossings of the two polylines refined by Newton (:func:`_refine`), kept below
-    ``max_residual``, one per point, sorted by sigma_u; with ``balance`` each crossing is first
-    moved along its orbit to the point of the stored branches with balanced generations
-    (:func:`heteroclinic_points`)."""
+    """Crossings of the polylines refined by :func:`_refine`; ``balance``: see :func:`heteroclinic_points`."""
     cu, cs = unstable.curve, stable.curve
     balance = balance and cu is not None and cs is not None and cu.sd.maps == cs.sd.maps
     found: list[Homoclinic] = []
-    # skip the first segment of each (the saddle point itself is a trivial intersection)
+    # not the first segments: the saddle point is a trivial intersection
     starts = []
     for i, j, ta, tb in _segment_crossings(unstable.points[1:], stable.points[1:]):
         su = unstable.sigma[i + 1] + ta * (unstable.sigma[i + 2] - unstable.sigma[i + 1])
@@ -661,7 +536,7 @@ def _intersections(unstable: ManifoldBranch, stable: ManifoldBranch, max_residua
             continue
         if min(np.linalg.norm(hp.point - unstable.points[0]), np.linalg.norm(hp.point - stable.points[0])) < \
                 min(unstable.start_distance, stable.start_distance):
-            continue    # Newton slid down both branches to the saddle point: the trivial intersection
+            continue    # the saddle point itself
         if any(np.linalg.norm(hp.point - f.point) < SAME_POINT for f in found):
             continue
         found.append(hp)
@@ -669,22 +544,8 @@ def _intersections(unstable: ManifoldBranch, stable: ManifoldBranch, max_residua
 
 
 def heteroclinic_points(unstable: ManifoldBranch, stable: ManifoldBranch, *, max_residual=1e-10) -> list:
-    """Heteroclinic points: the intersections of a branch of W^u of one saddle point
-    (``unstable``) with a branch of W^s of another (``stable``): the two points of a hyperbolic
-    periodic orbit (e.g. period 2: W^u(x0) and W^s(x1)), or two hyperbolic orbits.  A point z of
-    both has F^-n(z) -> the first point and F^n(z) -> the second as n -> infinity.
-
-    Found as :func:`homoclinic_points` finds its points (crossings of the polylines, Newton's
-    method on x_u(sigma_u) = x_s(sigma_s) with points computed afresh, kept below
-    ``max_residual``), with one difference: when both saddles use the same map F (``maps``),
-    each crossing is first moved along its orbit, F^k shifting (sigma_u, sigma_s) by
-    (k L_u, -k L_s), to the point of the two branches (as stored) whose two generations (F-images
-    from each fundamental domain) are the most balanced; that point has the smallest rounding
-    error of its orbit (a point n generations out carries the map's error times Lambda^n), and
-    Newton reaches ~1e-11 there.
-    One point per heteroclinic orbit, sorted by sigma_u.  Branches grown with ``start_tol`` 1e-8
-    are accurate enough (their transverse start error shrinks by 1/Lambda per generation) and
-    carry less rounding error than with the default 1e-12 (docs/manifolds.md)."""
+    """The intersections of W^u of one saddle point with W^s of another, each moved along its
+    orbit to balanced generations before Newton (docs/manifolds.md, "Heteroclinic points")."""
     if unstable.kind != "unstable" or stable.kind != "stable":
         raise ParameterError("heteroclinic_points needs an unstable branch then a stable branch")
     if unstable.curve is None or stable.curve is None:
@@ -697,8 +558,7 @@ def heteroclinic_points(unstable: ManifoldBranch, stable: ManifoldBranch, *, max
 
 
 def homoclinic_orbit(smap: SectionMap, point, n=8) -> np.ndarray:
-    """The orbit of a homoclinic point: P^-n(x), ..., x, ..., P^n(x) as a (2n + 1, 2) array
-    (it tends to the saddle at both ends)."""
+    """P^-n(x), ..., x, ..., P^n(x) of a homoclinic point x: a (2n + 1, 2) array."""
     n = validation.integer("n", n, 0)
     back = smap.iterate(point, n, backward=True)[::-1]
     fwd = smap.iterate(point, n)

@@ -1,50 +1,6 @@
-"""Area-preserving maps of the plane: the protocol the map analyses take, and Chirikov's standard map.
-
-The protocol
-------------
-An analysis of a map needs the map, its inverse, its Jacobian, the reversors where they are
-known, and the parameter that continuation moves.  :class:`AreaPreservingMap` names them; two
-classes implement it:
-
-* :class:`~explorer.analysis.section_map.SectionMap` -- the section map of Chaplygin's
-  equations (docs/model.md R9), an integration per application, Jacobian from the tangent
-  dynamics; its continuation parameter is ``mu`` (any model parameter or ``h`` by name);
-* :class:`StandardMap` -- Chirikov's standard map, explicit and compiled (below), the
-  literature's benchmark (docs/greene.md).
-
-Both return a :class:`~explorer.analysis.section_map.MapResult` from ``m(x)`` (image point,
-2x2 Jacobian, ``time``: the return time of the flow, or 1 iteration), and have
-``m.jacobian(x)``, ``m.inverse(x)``, ``m.iterate(x, n)``, ``m.parameter`` (the name of the
-continuation parameter), ``m.parameter_value`` and ``m.with_parameter(value)``.
-
-The standard map
-----------------
-In the convention of the issue (and of Chirikov 1979, Phys. Rep. 52, 263, eq. 4.1 with K = k),
-
-    p' = p + k sin(theta),        theta' = theta + p'                              (S1)
-
-on the cylinder theta mod 2 pi (theta is kept lifted here, so that theta_q - theta_0 =
-2 pi P on an orbit of rotation number P/Q).  Greene (1979, J. Math. Phys. 20, 1183, eq. 1.1)
-and MacKay (1983, Physica D 7, 283) write x' = x + y', y' = y - (k / 2 pi) sin(2 pi x); with
-theta = 2 pi x + pi, p = 2 pi y this is (S1) exactly (sin(2 pi x + pi) = -sin(2 pi x)).
-So k_c, the residues and the rotation numbers are the same, and Greene's symmetry line
-x = 0 (where his elliptic orbits lie) is theta = pi here.
-
-Its Jacobian d(theta', p')/d(theta, p) = [[1 + k cos theta, 1], [k cos theta, 1]] has
-determinant 1 (area preservation), and (theta, p) = (pi, 0) is the elliptic fixed point
-(trace 2 - k), (0, 0) the hyperbolic one (trace 2 + k).  The inverse: theta = theta' - p',
-p = p' - k sin(theta).
-
-Reversors: T = I1 I0 with the two involutions (De Vogelaere 1958; Greene 1979)
-
-    I0(theta, p) = (-theta, p + k sin(theta)),    I1(theta, p) = (p - theta, p),
-
-each with R T R = T^-1.  Their fixed sets, the symmetry lines, are theta = 0 and theta = pi
-(mod 2 pi) for I0, and 2 theta - p = 0 (mod 2 pi), i.e. theta = p/2 and theta = p/2 + pi
-(mod 2 pi), for I1.  A symmetric orbit has its points on these lines:
-:mod:`explorer.analysis.greene` finds them by shooting from one line to another over half
-the period.
-"""
+"""Area-preserving maps: the protocol the map analyses ask (docs/greene.md, "The map protocol")
+and Chirikov's standard map (S1) with its reversors (docs/greene.md, "The standard map and its
+sign convention")."""
 from __future__ import annotations
 
 import math
@@ -63,14 +19,11 @@ __all__ = ["AreaPreservingMap", "StandardMap", "difference", "images", "is_secti
 
 @runtime_checkable
 class AreaPreservingMap(Protocol):
-    """What an analysis of an area-preserving map asks of it (docs/greene.md, "The map protocol"): the
-    analyses ask the map, they do not test its type."""
+    """What an analysis of an area-preserving map asks of it (docs/greene.md, "The map protocol")."""
 
-    #: the parameter continuation moves by default, and every parameter it may move
     parameter: str
     parameters: tuple
-    #: the period of each coordinate (0: not periodic)
-    periods: tuple
+    periods: tuple         # of each coordinate, 0: not periodic
 
     def __call__(self, x, *, backward: bool = False, jacobian: bool = True) -> MapResult: ...
 
@@ -105,13 +58,12 @@ class AreaPreservingMap(Protocol):
 
 
 def is_section_map(system) -> bool:
-    """True for a :class:`~explorer.analysis.section_map.SectionMap` (the analyses run its orbits
-    as batches of the Taylor lanes); False for any other map of the protocol."""
+    """True for a :class:`~explorer.analysis.section_map.SectionMap`."""
     return isinstance(system, SectionMap)
 
 
 def with_value(system, name: str, value):
-    """The map ``system`` with its parameter ``name`` (one of ``system.parameters``) set to ``value``."""
+    """The map with its parameter ``name`` set to ``value``."""
     return system.with_value(name, value)
 
 
@@ -120,8 +72,7 @@ def _periods(system) -> np.ndarray:
 
 
 def reduce(system, x) -> np.ndarray:
-    """Points ``x`` (..., 2) with each periodic coordinate of ``system`` reduced to [0, period)
-    (unchanged for a map of the plane)."""
+    """Points ``x`` (..., 2) with each periodic coordinate reduced to [0, period)."""
     y = np.array(x, dtype=float, copy=True)
     for i, L in enumerate(_periods(system)):
         if L > 0:
@@ -130,10 +81,7 @@ def reduce(system, x) -> np.ndarray:
 
 
 def difference(system, a, b) -> np.ndarray:
-    """a - b with each periodic coordinate of ``system`` taken to (-period/2, period/2]: the
-    displacement between two points of the cylinder (a - b on the plane).  Newton's residuals of
-    periodic orbits and the distances between orbits use it, so that an orbit of the lifted
-    standard map of type P/Q closes: T^Q(x) - x = (2 pi P, 0) is 0 here."""
+    """a - b with each periodic coordinate taken to (-period/2, period/2]."""
     d = np.asarray(a, float) - np.asarray(b, float)
     for i, L in enumerate(_periods(system)):
         if L > 0:
@@ -141,17 +89,13 @@ def difference(system, a, b) -> np.ndarray:
     return d
 
 
-#: a batch of a section map's images with fewer returns than this (points x n) runs on one thread:
-#: a parallel region's start costs more than it saves on small batches (results do not depend on
-#: the thread count)
+#: a batch of a section map with fewer returns (points x n) runs on one thread
 SERIAL_RETURNS = 4096
 
 
 def images(system, X, n: int, *, backward: bool = False) -> np.ndarray:
-    """The first ``n`` images (preimages with ``backward``) of each point of X (m, 2): an (m, n, 2)
-    array, NaN from the first iterate that fails.  A section map's images run as one batch of the
-    Taylor lanes (:func:`explorer.analysis.sections.crossings`; backward through its reflection,
-    G0 P^n G0 = P^-n, where it has one); otherwise the map's own ``images``."""
+    """The first ``n`` images (preimages with ``backward``) of each point of X (m, 2): (m, n, 2),
+    NaN from a failure; a section map's as one batch of the lanes (backward through G0)."""
     X = np.asarray(X, float).reshape(-1, 2)
     if n == 0 or X.size == 0:
         return np.full((X.shape[0], n, 2), np.nan)
@@ -172,7 +116,6 @@ def images(system, X, n: int, *, backward: bool = False) -> np.ndarray:
     return system.images(X, n, backward=backward)
 
 
-# ------------------------------------------------------------------ compiled kernels of (S1)
 @njit
 def standard_orbit(theta, p, k, n, backward, out):
     """The lifted orbit of (S1) from (theta, p): out[j] = T^j (T^-j with ``backward``), j = 0..n."""
@@ -201,9 +144,7 @@ def standard_images(X, k, n, backward, out):
 
 @njit
 def standard_half_orbit(theta, p, k, n):
-    """T^n(theta, p) and its derivative with respect to the start p (theta fixed):
-    (theta_n, p_n, d theta_n / d p, d p_n / d p) -- the shooting function of the half-orbit
-    method and its slope (the tangent vector (0, 1) carried by the Jacobian of (S1))."""
+    """(theta_n, p_n, d theta_n / d p, d p_n / d p) of T^n(theta, p): the half-orbit shooting."""
     dth = 0.0
     dp = 1.0
     for _ in range(n):
@@ -217,8 +158,7 @@ def standard_half_orbit(theta, p, k, n):
 
 @njit
 def standard_monodromy(theta, p, k, n):
-    """The product DT(x_{n-1}) ... DT(x_0) along n steps of (S1) from (theta, p), as
-    (a, b, c, d) = [[a, b], [c, d]], with the end point (theta_n, p_n)."""
+    """DT(x_{n-1}) ... DT(x_0) as (a, b, c, d) = [[a, b], [c, d]], and (theta_n, p_n)."""
     a, b, c, d = 1.0, 0.0, 0.0, 1.0
     for _ in range(n):
         kc = k * math.cos(theta)
@@ -229,23 +169,15 @@ def standard_monodromy(theta, p, k, n):
 
 
 class StandardMap:
-    """Chirikov's standard map (S1) p' = p + k sin(theta), theta' = theta + p' (module docstring).
+    """Chirikov's standard map (S1) p' = p + k sin(theta), theta' = theta + p', theta lifted."""
 
-    ``m(x)`` is T(x) with DT(x) (a :class:`MapResult`, ``time`` = 1 iteration); theta is
-    lifted (not reduced mod 2 pi).  ``k`` is the continuation parameter.
-    """
-
-    #: the name of the continuation parameter, its only one
     parameter = "k"
     parameters = ("k",)
-    #: no linear reversor (I0 and I1 depend on k): :attr:`reversors`
     reflection = None
-    #: the symmetry lines theta = const of I0 (theta = pi carries Greene's elliptic orbits)
+    #: the lines theta = const of Fix I0
     I0_LINES = (0.0, math.pi)
-    #: theta is an angle (the map lives on the cylinder): :func:`difference`, :func:`reduce`
     periods = (2.0 * math.pi, 0.0)
-    #: the fundamental domain of the cylinder drawn and searched ((theta0, theta1), (p0, p1)):
-    #: one turn in theta, p over one period of the map's p -> p + 2 pi symmetry
+    #: the fundamental domain drawn and searched ((theta0, theta1), (p0, p1))
     domain = ((0.0, 2.0 * math.pi), (-math.pi, math.pi))
 
     def __init__(self, k):
@@ -275,7 +207,7 @@ class StandardMap:
         return StandardMap(value)
 
     def in_domain(self, x) -> bool:
-        """Every point of the cylinder is one."""
+        """True: the cylinder."""
         return True
 
     def describe_domain(self) -> str:
@@ -285,7 +217,7 @@ class StandardMap:
         return f"the map's Jacobian is not finite at ({x[0]:.6g}, {x[1]:.6g})"
 
     def orbit_fields(self) -> dict:
-        """What names this map in a :class:`~explorer.analysis.periodic.PeriodicOrbit`: itself."""
+        """What names the map in a PeriodicOrbit: itself."""
         return {"system": self}
 
     @staticmethod
@@ -304,7 +236,7 @@ class StandardMap:
         if jacobian:
             J = self._jacobian(y if backward else np.array([th, p]))
             if backward:
-                J = np.array([[J[1, 1], -J[0, 1]], [-J[1, 0], J[0, 0]]])   # DT^-1(x) = DT(T^-1 x)^-1, det 1
+                J = np.array([[J[1, 1], -J[0, 1]], [-J[1, 0], J[0, 0]]])   # DT(T^-1 x)^-1, det 1
         return MapResult(y, J, -1.0 if backward else 1.0, y.copy())
 
     def _jacobian(self, x) -> np.ndarray:
@@ -328,8 +260,7 @@ class StandardMap:
         return out
 
     def images(self, X, n, *, backward=False) -> np.ndarray:
-        """The first ``n`` images (preimages with ``backward``) of each point of X (m, 2): an
-        (m, n, 2) array, one compiled loop (:func:`images` of the protocol)."""
+        """The first ``n`` images of each point of X (m, 2): (m, n, 2), one compiled loop."""
         X = np.ascontiguousarray(np.asarray(X, float).reshape(-1, 2))
         n = validation.integer("n", n, 0)
         out = np.empty((X.shape[0], n, 2))
@@ -337,7 +268,6 @@ class StandardMap:
             standard_images(X, self.k, n, bool(backward), out)
         return out
 
-    # -------------------------------------------------------------- reversing symmetries
     def i0(self, x) -> np.ndarray:
         """I0(theta, p) = (-theta, p + k sin theta): an involution with I0 T I0 = T^-1."""
         x = np.asarray(x, dtype=float)
@@ -360,10 +290,7 @@ class StandardMap:
         return (self.i0, self.i1)
 
     def symmetry_line_points(self, n) -> np.ndarray:
-        """``n`` points on each symmetry line crossing :attr:`domain`: theta = 0 and theta = pi
-        (Fix I0), theta = p/2 and theta = p/2 + pi (Fix I1), p evenly inside the domain's range;
-        the seeds of a search for symmetric orbits (every symmetric orbit has a point on one of
-        them, De Vogelaere 1958)."""
+        """``n`` points on each symmetry line (Fix I0, Fix I1) across :attr:`domain`."""
         n = validation.integer("n", n, 1)
         (_, _), (p0, p1) = self.domain
         p = p0 + (p1 - p0) * (np.arange(n) + 0.5) / n
@@ -373,7 +300,7 @@ class StandardMap:
 
     @staticmethod
     def wrap(x) -> np.ndarray:
-        """Points with theta reduced to [0, 2 pi) (the cylinder's coordinates)."""
+        """Points with theta reduced to [0, 2 pi)."""
         y = np.array(x, dtype=float, copy=True)
         y[..., 0] = np.mod(y[..., 0], 2.0 * math.pi)
         return y

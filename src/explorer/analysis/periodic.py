@@ -1,75 +1,6 @@
-"""Periodic orbits of any period K >= 1 of the section map, their stability and bifurcations.
-
-The section map P: (p1, p2) -> (p1', p2') of phi = phi0 at energy h (docs/model.md R9) is
-:class:`explorer.analysis.section_map.SectionMap`: the image point and the 2x2 Jacobian DP
-from the tangent dynamics of R3.  A periodic orbit of period K is a point x with
-P^K(x) = x; its monodromy is the product DP(x_{K-1}) ... DP(x_0) of the K map Jacobians
-along the orbit x_i = P^i(x_0).
-
-Newton's method
----------------
-* K <= ``MULTIPLE_SHOOTING_FROM - 1`` = 4: single shooting, Newton on P^K(x) - x = 0 with the
-  matrix (monodromy - I) (the period-1 case is :func:`explorer.analysis.fixedpoints.find_fixed_point`
-  written for K = 1, and gives its numbers);
-* K >= ``MULTIPLE_SHOOTING_FROM`` = 5: multiple shooting over the K points, unknowns
-  X = (x_0, ..., x_{K-1}) and residuals F_i = P(x_i) - x_{i+1 mod K}, a 2K x 2K Newton system
-  with DP(x_i) on the block diagonal and -I on the cyclic block superdiagonal.  The iterates of
-  P^K grow like |lambda|^K near a hyperbolic orbit; the K short maps do not.
-
-Steps are damped (halved) so that every point stays in the allowed region and the residual
-decreases.  A converged orbit is reduced to its minimal period: if x_{i+d} = x_i for a divisor
-d of K (within ``MINIMAL_PERIOD_TOL``) it is an orbit of period d, reported as such.
-
-Degenerate orbits
------------------
-Newton's answer is an isolated orbit only if the map's accuracy pins it down.  Near a
-resonant curve (a torus of rotation number m/K that the perturbation barely breaks) P^K is
-the identity along the curve to round-off: ``|P^K(x) - x|`` stays at its noise floor over a
-whole arc, and Newton stops anywhere on it, at a point that depends on rounding and so on the
-CPU.  The rule: with M the monodromy, the noise floor of the residual is
-eps = max(residual, ``MAP_NOISE`` max(1, |M|)) and the position is determined to
-eps / s_min(M - I), the smallest singular value of M - I.  An orbit is **degenerate** when that
-``uncertainty`` exceeds ``ISOLATION_TOL`` (the distance below which two orbits are the same),
-or when |residue| < ``DEGENERATE_RESIDUE`` (|trace - 2| <= ``KIND_TOL``).  Degenerate orbits are
-flagged (``PeriodicOrbit.degenerate``), listed after the isolated ones by the search, never
-counted with them, and drawn apart in the figures; isolated orbits (s_min of order 1e-3 and
-more, uncertainty 1e-12 .. 1e-9) come out the same on every CPU.
-
-Reversing symmetry
-------------------
-With zeta = xi = 0 (chi, eta, mu, lam any), the reduced system R3 in (p1, p2, M, phi) is
-reversible under
-
-    R: (p1, p2, M, phi) -> (p1, -p2, M, -phi),   t -> -t,
-
-i.e. (p1, p2, M, g1, g2) -> (p1, -p2, M, -g1, g2).  Derivation: let y(t) solve R3 and
-z(t) = R y(-t).  Then dphi_z/dt = phi'(-t) = M/b = M_z/b; dp1_z/dt = -p1'(-t) =
--(M/b) p2 + mu sin phi + lam p2/a2, which is R3's right-hand side at z,
-(M/b)(-p2) - mu sin(-phi) - lam(-p2)/a2 (this needs zeta = 0); dp2_z/dt = -d(-p2)/dt(-t)
-= p2'(-t) = -(M/b)(p1 - chi) - mu cos phi + lam p1/a1, the right-hand side at z since
-cos(-phi) = cos phi; dM_z/dt = -M'(-t) = -(p1 - chi) p2/a2 + (p2 - zeta) p1/a1
-+ mu(xi cos phi - eta sin phi), and the right-hand side at z is (p1 - chi)(-p2)/a2
-- (-p2 - zeta) p1/a1 - mu(xi cos phi + eta sin phi): equal when zeta = xi = 0.  R keeps M
-(so dphi/dt > 0) and maps phi = pi (and phi = 0) to itself, so on the section phi0 = pi
-(or 0) it induces the involution G0(p1, p2) = (p1, -p2) with G0 P G0 = P^{-1}.  The
-symmetry line Fix(G0) is p2 = 0; the second one, Fix(P G0), is the image on phi = pi of the
-line p2 = 0 of the section phi = 0 (the other set of R's fixed points) after half a turn.  A
-symmetric orbit of period K has two of its points on R's fixed set {p2 = 0, phi = 0 or pi},
-K half-turns apart; :func:`search_periodic_orbits` seeds Newton on both lines, where it
-finds the roots of p2 after K half-turns (tests/analysis/test_periodic.py proves the symmetry
-with an independent scipy integration).  The image G0(orbit) of an orbit is an orbit with the
-same trace, computed exactly by :func:`mirror_orbit`: the search completes its set with it.
-
-Bifurcations
-------------
-:func:`continue_periodic` steps a parameter and reports (i) where |trace| crosses 2 between
-samples (bisection): at trace = +2 a tangent (saddle-node or, for symmetric orbits, pitchfork)
-bifurcation, at trace = -2 a period doubling; (ii) where the trace only touches +-2: at an
-interior sample where the sampled trace has a local extremum within ``touch_window`` of +-2,
-the extremum is refined by golden-section search over the two neighbouring intervals; if the
-refined trace passes +-2 the two crossings on either side are located by bisection, and if it
-comes within ``touch_tol`` of +-2 without passing it is reported as a touch.
-"""
+"""Periodic orbits of any period K of a map of the protocol: Newton's method (single shooting
+for K <= 4, multiple shooting above), the search seeded on the symmetry lines, isolation,
+continuation and bifurcations (docs/commands/periodic.md; the reversor: docs/model.md, "Symmetries")."""
 from __future__ import annotations
 
 import math
@@ -93,78 +24,35 @@ __all__ = ["DEGENERATE_RESIDUE", "ISOLATION_TOL", "KIND_TOL", "MULTIPLE_SHOOTING
            "PeriodicOrbit", "continue_periodic", "find_periodic_orbit", "mirror_orbit", "periodic_guesses",
            "search_periodic_orbits", "symmetry_line_points"]
 
-#: Newton: converged when the step is below this (relative to max(1, |x|))
+#: Newton (relative to max(1, |x|)): a step below NEWTON_TOL converges; a start below
+#: SOLVED_RESIDUAL takes no step; a residual below CONVERGED_RESIDUAL converges
 NEWTON_TOL = 1e-12
-#: Newton: a start whose residual is below this (relative to max(1, |x|)) is already a solution
-#: (e.g. continued from an exact one): no step is taken
 SOLVED_RESIDUAL = 1e-15
-#: Newton: converged when the residual is below this, whatever the step
 CONVERGED_RESIDUAL = 1e-14
-#: Newton's line search: a damped step is taken when it lowers the residual or leaves it below this
+#: a damped step is taken when it lowers the residual or leaves it below this
 LINE_SEARCH_RESIDUAL = 1e-11
 NEWTON_MAX_ITER = 30
-#: residual max_i |P(x_i) - x_{i+1}| accepted at the end (near |trace| = 2 Newton is slow)
+#: residual max_i |P(x_i) - x_{i+1}| accepted at the end
 ACCEPT_RESIDUAL = 1e-9
-#: periods from which Newton uses multiple shooting (K > 4); single shooting below
 MULTIPLE_SHOOTING_FROM = 5
-#: |trace| within KIND_TOL of 2: "parabolic"
 KIND_TOL = 1e-6
-#: two points of an orbit closer than this are the same point (minimal period)
 MINIMAL_PERIOD_TOL = 1e-7
-#: two orbits are the same if a point of one is within this of a point of the other
 SAME_ORBIT_TOL = 1e-6
-#: isolation (module docstring, "Degenerate orbits"): an orbit whose position is determined only
-#: to worse than this by the map's accuracy is not isolated at the search's tolerance
+#: isolation and the map's relative noise floor (docs/commands/periodic.md, "Degenerate orbits")
 ISOLATION_TOL = SAME_ORBIT_TOL
-#: accuracy of one evaluation of P^K at the map's default tolerance, relative to the size of
-#: its Jacobian: the noise floor of |P^K(x) - x| is MAP_NOISE * max(1, |D(P^K)|).  Measured at
-#: the Figure-4 scene (mu = 0.03, K <= 4, |D(P^K)| from 5 to 4e3): P^K at tol 1e-15 against
-#: tol 1e-16 differs by 5e-17 .. 1e-16 times |D(P^K)|; the constant is ten times that.
 MAP_NOISE = 1e-15
-#: |residue| below this (|trace - 2| <= KIND_TOL) is degenerate whatever the conditioning
 DEGENERATE_RESIDUE = KIND_TOL / 4
-#: time budget of one return of the map in a search (typical returns take ~6 at Figure 4's
-#: scene; orbits near the boundary of the region that hardly turn would cost up to RETURN_TMAX)
+#: time budget of one return of the map in a search
 SEARCH_TMAX = 50.0
-#: continuation: a failed step is split in two at most this many times
 MAX_HALVINGS = 6
 
 
 @dataclass(frozen=True)
 class PeriodicOrbit:
-    """A periodic orbit of minimal period ``period`` of the section map P (phi = phi0).
-
-    Attributes
-    ----------
-    points : ndarray (K, 2)
-        (p1, p2) of the orbit, ``points[i + 1] = P(points[i])``.
-    period : int
-        Minimal period K.
-    jacobian : ndarray (2, 2)
-        Monodromy D(P^K) at ``points[0]``: the product of the K map Jacobians.
-    eigenvalues : ndarray (2,)
-        Eigenvalues of ``jacobian`` (multipliers).
-    trace, det : float
-        Trace and determinant of ``jacobian`` (det = 1: the map preserves area).
-    return_times : ndarray (K,)
-        Time from ``points[i]`` to ``points[i + 1]``.
-    residual : float
-        ``max_i |P(points[i]) - points[i + 1 mod K]|``.
-    iterations : int
-        Newton iterations taken.
-    symmetric : bool
-        The set of points is invariant under the reversor G0(p1, p2) = (p1, -p2) (only when
-        :func:`is_reversible`; else False).
-    map_jacobians : ndarray (K, 2, 2)
-        DP at each point.
-    uncertainty : float
-        How well the map's accuracy determines the orbit's position: the noise floor of
-        ``|P^K(x) - x|`` over the smallest singular value of ``jacobian - I`` (module docstring).
-    degenerate : bool
-        Not isolated at the search's tolerance: ``uncertainty > ISOLATION_TOL`` or
-        ``|residue| < DEGENERATE_RESIDUE`` (a near-parabolic orbit on a resonant curve, where
-        Newton lands anywhere along the curve: the point reported is one of a continuum).
-    """
+    """A periodic orbit of minimal period K: ``points`` (K, 2) with points[i + 1] = P(points[i]),
+    the monodromy ``jacobian`` at points[0], its ``eigenvalues``, ``trace``, ``det``, the K
+    ``map_jacobians`` and ``return_times``, Newton's ``residual`` and ``iterations``, ``symmetric``
+    under a reversor, and the isolation (``uncertainty``, ``degenerate``; docs/commands/periodic.md)."""
 
     points: np.ndarray
     period: int
@@ -182,8 +70,7 @@ class PeriodicOrbit:
     phi0: float = math.pi
     uncertainty: float = 0.0
     degenerate: bool = False
-    #: the map of the protocol the orbit belongs to, when it is not a section map (None for one:
-    #: ``params``, ``h``, ``phi0`` name it)
+    #: the map, when ``params``, ``h``, ``phi0`` do not name it
     system: object = field(default=None, repr=False, compare=False)
 
     @property
@@ -198,8 +85,7 @@ class PeriodicOrbit:
 
     @property
     def kind(self) -> str:
-        """``"parabolic"`` if ``||trace| - 2| <= KIND_TOL``, else ``"elliptic"`` (``|trace| < 2``) or
-        ``"hyperbolic"``."""
+        """"parabolic" within KIND_TOL of ``|trace| = 2``, else "elliptic" or "hyperbolic"."""
         if abs(abs(self.trace) - 2.0) <= KIND_TOL:
             return "parabolic"
         return "elliptic" if abs(self.trace) < 2.0 else "hyperbolic"
@@ -229,16 +115,14 @@ class PeriodicOrbit:
                 "uncertainty": float(self.uncertainty)}
 
 
-# ------------------------------------------------------------------ Newton
 class _Shooting:
-    """Evaluations of the K maps along a set of points (one call of the Taylor return map each)."""
+    """Evaluations of the K maps along a set of points."""
 
     def __init__(self, smap: SectionMap, K: int):
         self.smap, self.K = smap, K
 
     def along(self, x0, multiple, X=None):
-        """Images, Jacobians and times of the K maps: from the points X (multiple shooting) or
-        along the orbit of x0 (single shooting).  Raises ParameterError if a map fails."""
+        """Points, images, Jacobians and times of the K maps from X (multiple) or along x0's orbit."""
         K = self.K
         pts = np.empty((K, 2))
         imgs = np.empty((K, 2))
@@ -263,21 +147,19 @@ def _monodromy(jacs):
 
 
 def _residual(smap, pts, imgs, multiple):
-    """max |P(x_i) - x_{i+1}| (multiple shooting) or |P^K(x_0) - x_0|, on the map's cylinder
-    (:func:`explorer.analysis.maps.difference`)."""
+    """max |P(x_i) - x_{i+1}| (multiple shooting) or |P^K(x_0) - x_0|, on the map's cylinder."""
     if multiple:
         return float(np.max(np.abs(difference(smap, imgs, np.roll(pts, -1, axis=0)))))
     return float(np.max(np.abs(difference(smap, imgs[-1], pts[0]))))
 
 
 def _newton(smap, K, X0, max_iter=NEWTON_MAX_ITER, multiple=None):
-    """Newton's method for a K-periodic orbit from the points X0 ((K, 2), or (2,) for single
-    shooting).  Returns (points, images, jacobians, times, iterations); ParameterError on failure."""
+    """Damped Newton for a K-periodic orbit from X0: (points, images, jacobians, times, iterations)."""
     multiple = K >= MULTIPLE_SHOOTING_FROM if multiple is None else multiple
     sh = _Shooting(smap, K)
     X0 = np.asarray(X0, float)
     if multiple:
-        if X0.shape == (2,):  # start from the orbit of the guess
+        if X0.shape == (2,):
             X0 = sh.along(X0, False)[0]
         X = X0.reshape(K, 2).copy()
         ev = sh.along(None, True, X)
@@ -289,7 +171,7 @@ def _newton(smap, K, X0, max_iter=NEWTON_MAX_ITER, multiple=None):
     it = 0
     for it in range(1, max_iter + 1):
         if res <= SOLVED_RESIDUAL * max(1.0, float(np.max(np.abs(X)))):
-            break   # already a solution (e.g. continued from an exact one): no step to take
+            break
         pts, imgs, jacs, _ = ev
         if multiple:
             F = difference(smap, imgs, np.roll(pts, -1, axis=0)).ravel()
@@ -310,7 +192,7 @@ def _newton(smap, K, X0, max_iter=NEWTON_MAX_ITER, multiple=None):
         if not np.all(np.isfinite(dx)):
             raise ParameterError("Newton's step is not finite")
         alpha = 1.0
-        for _ in range(30):   # damped step: stay in the allowed region, do not let the residual grow
+        for _ in range(30):   # stay in the domain, do not let the residual grow
             Xn = (X.ravel() + alpha * dx).reshape(X.shape)
             try:
                 evn = sh.along(Xn[0] if multiple else Xn, multiple, Xn.reshape(-1, 2))
@@ -323,7 +205,7 @@ def _newton(smap, K, X0, max_iter=NEWTON_MAX_ITER, multiple=None):
             alpha *= 0.5
         else:
             if res < ACCEPT_RESIDUAL:
-                break    # at the residual's noise floor: no step can lower it (near-parabolic orbits)
+                break    # at the residual's noise floor
             raise ParameterError(f"Newton's method stalled (residual {res:.3g})")
         X, ev, res = Xn, evn, resn
         step = alpha * float(np.max(np.abs(dx)))
@@ -345,8 +227,7 @@ def _minimal_period(pts, tol=MINIMAL_PERIOD_TOL, system=None) -> int:
 
 
 def _isolation(M, residual):
-    """(uncertainty, degenerate) of an orbit with monodromy M and Newton residual (module
-    docstring, "Degenerate orbits")."""
+    """(uncertainty, degenerate) of an orbit (docs/commands/periodic.md, "Degenerate orbits")."""
     smin = float(np.linalg.svd(M - np.eye(2), compute_uv=False)[-1])
     noise = max(float(residual), MAP_NOISE * max(1.0, float(np.linalg.norm(M, 2))))
     uncertainty = noise / smin if smin > 0 else math.inf
@@ -355,13 +236,12 @@ def _isolation(M, residual):
 
 
 def _orbit(smap, pts, jacs, times, resid, iters, symmetric=None) -> PeriodicOrbit:
-    """The PeriodicOrbit through ``pts`` with map Jacobians ``jacs`` (monodromy, eigenvalues,
-    symmetry and isolation derived from them)."""
+    """The PeriodicOrbit through ``pts`` with map Jacobians ``jacs``."""
     M = _monodromy(jacs)
     if not np.all(np.isfinite(M)):
         raise ParameterError(smap.not_finite(pts[0]))
     uncertainty, degenerate = _isolation(M, resid)
-    if symmetric is None:     # symmetric under one of the map's reversors
+    if symmetric is None:
         symmetric = any(_maps_onto(smap, R(pts), pts, 1e3 * MINIMAL_PERIOD_TOL) for R in smap.reversors)
     return PeriodicOrbit(np.array(pts, float), len(pts), M, np.linalg.eigvals(M), float(np.trace(M)),
                          float(np.linalg.det(M)), np.array(times, float), float(resid), int(iters), bool(symmetric),
@@ -370,7 +250,7 @@ def _orbit(smap, pts, jacs, times, resid, iters, symmetric=None) -> PeriodicOrbi
 
 
 def _maps_onto(system, images, pts, tol) -> bool:
-    """Every point of ``images`` is within ``tol`` of a point of ``pts`` (on the map's cylinder)."""
+    """Every point of ``images`` is within ``tol`` of a point of ``pts``."""
     d = np.linalg.norm(difference(system, np.asarray(images)[:, None, :], np.asarray(pts)[None, :, :]), axis=2)
     return bool(np.all(np.min(d, axis=1) <= tol))
 
@@ -384,13 +264,8 @@ def _make_orbit(smap, pts, imgs, jacs, times, iters, reduce=True) -> PeriodicOrb
 
 
 def mirror_orbit(orb: PeriodicOrbit) -> PeriodicOrbit:
-    """The image G0(orbit) of a periodic orbit under the reversor, computed exactly (no search).
-
-    With G0 P G0 = P^-1 (module docstring), the points z_j = G0 x_{-j} (indices mod K) form an
-    orbit: P(z_j) = G0 P^-1(x_{-j}) = G0 x_{-j-1} = z_{j+1}.  Differentiating P = G0 P^-1 G0
-    gives DP(z_j) = G0 DP(x_{-j-1})^-1 G0, so the monodromy at z_0 is G0 M^-1 G0 (same
-    trace, det 1), and the return time from z_j to z_{j+1} is the time from x_{-j-1} to x_{-j}.
-    Raises ParameterError when the reversor does not apply (``is_reversible`` is False)."""
+    """G0(orbit): z_j = G0 x_{-j}, DP(z_j) = G0 DP(x_{-j-1})^-1 G0, computed exactly (no search);
+    ParameterError when the system is not reversible."""
     if not is_reversible(orb.params, orb.phi0):
         raise ParameterError("the mirror image needs a reversible system (zeta = xi = 0) and phi0 = 0 or pi")
     K = orb.period
@@ -404,7 +279,7 @@ def mirror_orbit(orb: PeriodicOrbit) -> PeriodicOrbit:
 
 
 def _section_map_of(orb: PeriodicOrbit) -> SectionMap:
-    """The section map an orbit names (``params``, ``h``, ``phi0``), to build orbits of it."""
+    """The section map an orbit names (``params``, ``h``, ``phi0``)."""
     return SectionMap(orb.params, orb.h, phi0=orb.phi0)
 
 
@@ -416,38 +291,9 @@ def _check_period(period) -> int:
 
 @system_first
 def find_periodic_orbit(system, guess, period, *, max_iter=NEWTON_MAX_ITER, reduce=True) -> PeriodicOrbit:
-    """A periodic orbit of period ``period`` of the section map phi = ``phi0`` at energy ``h``.
-
-    Newton's method on P^K(x) = x (single shooting for K <= 4, multiple shooting over the K
-    points for K >= 5), the Jacobian from the tangent dynamics of docs/model.md R3 (the product of
-    the K map Jacobians).  For K = 1 it gives the numbers of
-    :func:`explorer.analysis.fixedpoints.find_fixed_point`.
-
-    Parameters
-    ----------
-    system : SectionMap
-        The section map, or ``params, h`` (docs/api.md, "The system argument"; docs/model.md
-        R9): its energy, section angle, Taylor tolerance and the time budget of one return.
-    guess : (float, float) or array (K, 2)
-        Start of Newton's method: a point in the allowed region, or K points (multiple shooting).
-    period : int
-        K >= 1.
-    max_iter : int
-        Budget of Newton iterations.
-    reduce : bool
-        Report the orbit with its minimal period (an orbit of period 2 found with K = 4 has
-        period 2); with False, keep K points.
-
-    Returns
-    -------
-    PeriodicOrbit
-        The points, monodromy, eigenvalues, trace, residue, symmetry, return times.
-
-    Raises
-    ------
-    ParameterError
-        K < 1, a guess outside the allowed region, or Newton's method failing (the message says so).
-    """
+    """The periodic orbit of period ``period`` Newton's method finds from ``guess`` (a point or
+    K points), reduced to its minimal period unless ``reduce`` is False; ParameterError when
+    the guess is outside the map's domain or Newton fails."""
     K = _check_period(period)
     smap = system
     g = np.asarray(guess, dtype=float)
@@ -466,7 +312,6 @@ def find_periodic_orbit(system, guess, period, *, max_iter=NEWTON_MAX_ITER, redu
     return _make_orbit(smap, pts, imgs, jacs, times, it, reduce)
 
 
-# ------------------------------------------------------------------ search
 def _line_p1(params, h, phi0, n):
     e = model.allowed_ellipse(params, h, phi0)
     if e is None:
@@ -480,17 +325,8 @@ def _line_p1(params, h, phi0, n):
 
 @system_first
 def symmetry_line_points(system, period, *, n=200, threads=None):
-    """Seeds of symmetric orbits of period ``period`` on the two symmetry lines (see the module).
-
-    Start points z on R's fixed set: p2 = 0 on the section phi = phi0 (line 0) and p2 = 0 on
-    phi = phi0 + pi (line 1), n each across the allowed region; p2 after ``period`` half-turns
-    changes sign between neighbours where a symmetric orbit of that period (or a divisor)
-    passes; each bracket is refined by bisection (a few map evaluations) and the point on the
-    section phi = phi0 of that orbit is returned.  Returns an (m, 2) array of seeds.
-
-    Another map of the protocol: its own ``symmetry_line_points(n)`` (n points on each of its
-    symmetry lines, unrefined: Newton starts), or none when it has no reversors.
-    """
+    """Seeds (m, 2) of symmetric orbits of period ``period`` on the symmetry lines, ``n`` per line
+    (docs/commands/periodic.md); another map's own ``symmetry_line_points(n)``."""
     K = _check_period(period)
     if not is_section_map(system):
         seeds = getattr(system, "symmetry_line_points", None)
@@ -504,7 +340,6 @@ def symmetry_line_points(system, period, *, n=200, threads=None):
         """(p2 after K half-turns, point on phi0) for starts p1 on line 0 or 1 (NaN when stopped)."""
         start_phi = phi0 if line == 0 else other
         Y0 = model.section_state(prm, p1, np.zeros_like(p1), h, start_phi)
-        # half-turn K lands on phi0 if (K even) == (line 0)
         target = phi0 if (K % 2 == 0) == (line == 0) else other
         n_target = (K + line) // 2 if target == phi0 else (K + 1 - line) // 2
         n_target = max(n_target, 1)
@@ -525,7 +360,7 @@ def symmetry_line_points(system, period, *, n=200, threads=None):
         f, _ = run(p1, line)
         for i in np.flatnonzero(np.isfinite(f[:-1]) & np.isfinite(f[1:]) & (np.sign(f[:-1]) != np.sign(f[1:]))):
             a, b, fa = p1[i], p1[i + 1], f[i]
-            for _ in range(16):   # bisection to 2^-16 of the bracket (Newton does the rest)
+            for _ in range(16):   # Newton does the rest
                 m = 0.5 * (a + b)
                 fm, _ = run(np.array([m]), line, 1)
                 if not np.isfinite(fm[0]):
@@ -567,10 +402,7 @@ def _grid_seeds(prm, h, K, grid, phi0, tol, tmax, threads):
 
 
 def _map_guesses(system, K, grid, line) -> np.ndarray:
-    """:func:`periodic_guesses` for a map of the protocol other than a section map: ``line`` points
-    on each of its symmetry lines (``system.symmetry_line_points``, where it has reversors), then
-    the points of a ``grid`` x ``grid`` grid of ``system.domain`` where |P^K(x) - x| (on its
-    cylinder) is a local minimum, best first."""
+    """:func:`periodic_guesses` of a map other than a section map."""
     seeds = [np.asarray(system.symmetry_line_points(line), float).reshape(-1, 2)] \
         if hasattr(system, "symmetry_line_points") else []
     domain = getattr(system, "domain", None)
@@ -595,10 +427,7 @@ def _map_guesses(system, K, grid, line) -> np.ndarray:
 
 
 def _map_search(system, K, grid, line, max_guesses, max_iter, same_tol, guesses) -> list:
-    """:func:`search_periodic_orbits` for a map of the protocol other than a section map: Newton
-    (:func:`find_periodic_orbit`) from the guesses (:func:`_map_guesses`), orbits of minimal period
-    K kept once (points compared on the map's cylinder), isolated before degenerate, each from its
-    point of smallest (reduced) first coordinate."""
+    """:func:`search_periodic_orbits` of a map other than a section map."""
     G = _map_guesses(system, K, grid, line) if guesses is None else np.asarray(guesses, float).reshape(-1, 2)
     found: list[PeriodicOrbit] = []
     tried = 0
@@ -623,7 +452,7 @@ def _map_search(system, K, grid, line, max_guesses, max_iter, same_tol, guesses)
 
 
 def _canonical(orb: PeriodicOrbit) -> PeriodicOrbit:
-    """The same orbit starting at its point nearest the symmetry line p2 = 0 (then smallest p1)."""
+    """The same orbit from its point nearest p2 = 0 (then smallest p1)."""
     k = int(np.lexsort((orb.points[:, 0], np.round(np.abs(orb.points[:, 1]), 9)))[0])
     if k == 0:
         return orb
@@ -633,13 +462,7 @@ def _canonical(orb: PeriodicOrbit) -> PeriodicOrbit:
 
 
 def _half_turn_partners(prm, h, orbits, same_tol, *, tol, max_iter, tmax, threads) -> list:
-    """The partners under the half-turn reversor T (docs/model.md, "Symmetries";
-    :mod:`explorer.analysis.halfturn`) of the isolated ``orbits`` that are not among them yet.
-
-    T P = P^-1 T, so the partner of x_0, ..., x_{K-1} is the orbit T(x_{K-1}), ..., T(x_0), with the
-    same trace and period.  The T-images of every point of every orbit are one batch of half-turn
-    flows; only an orbit whose image matches no orbit found gets a Newton polish (from a start
-    that is the orbit to the flow's accuracy: one or two iterations)."""
+    """The half-turn partners of the isolated ``orbits`` not among them yet."""
     isolated = [o for o in orbits if not o.degenerate]
     if not isolated:
         return []
@@ -664,10 +487,8 @@ def _half_turn_partners(prm, h, orbits, same_tol, *, tol, max_iter, tmax, thread
 
 @system_first(settings=("phi0", "tol"))
 def periodic_guesses(system, period, *, grid=12, line=None, tmax=SEARCH_TMAX, threads=None) -> np.ndarray:
-    """The Newton starts of :func:`search_periodic_orbits`, in the order it tries them: the seeds on
-    the symmetry lines (:func:`symmetry_line_points`, ``line`` per line, default 8 ``grid``), then
-    the points of a ``grid`` x ``grid`` grid of the allowed region where ``|P^K(x) - x|`` is a
-    local minimum (best first).  An (m, 2) array."""
+    """The Newton starts of :func:`search_periodic_orbits` in order: the symmetry-line seeds, then
+    the local minima of ``|P^K(x) - x|`` on a ``grid`` x ``grid`` grid, best first."""
     K = _check_period(period)
     grid = validation.integer("grid", grid, 2, 1000)
     line = 8 * grid if line is None else validation.integer("line", line, 2)
@@ -685,55 +506,9 @@ def periodic_guesses(system, period, *, grid=12, line=None, tmax=SEARCH_TMAX, th
 def search_periodic_orbits(system, period, *, grid=12, line=None, max_guesses=60, max_iter=NEWTON_MAX_ITER,
                            tmax=SEARCH_TMAX, time_limit=None, same_tol=SAME_ORBIT_TOL, threads=None,
                            guesses=None) -> list:
-    """All periodic orbits of minimal period ``period`` found from guesses covering the section.
-
-    Guesses: :func:`periodic_guesses` (the symmetry lines first, then the local minima of
-    ``|P^K(x) - x|`` on a grid), or the (m, 2) array ``guesses``.  Newton's method
-    (:func:`find_periodic_orbit`) runs from at most ``max_guesses`` of them, skipping a guess
-    within 1e-4 of an isolated orbit already found (never near a degenerate one: where those
-    land depends on rounding, and what is tried must not); orbits are reduced to their minimal
-    period (those of a smaller period are dropped) and deduplicated (two orbits are the same if
-    a point of one lies within ``same_tol`` of a point of the other).  When the reversor
-    applies, the set is completed by symmetry: every asymmetric orbit comes with its mirror
-    image :func:`mirror_orbit`, computed exactly, and an orbit Newton also found as the mirror
-    of an earlier one is replaced by that exact image.
-
-    Degenerate orbits (``orbit.degenerate``: not isolated at the map's accuracy, module
-    docstring) are reported after the isolated ones and never counted with them; their number
-    and points may differ between CPUs, the isolated orbits may not.
-
-    Parameters
-    ----------
-    system : SectionMap
-        The section map, or ``params, h`` (docs/api.md, "The system argument") (its energy,
-        section angle and Taylor tolerance; the time budget of one
-        return is ``tmax``).
-    period : int
-        K >= 1.
-    grid : int
-        Grid points per axis (>= 2).
-    line : int or None
-        Start points per symmetry line.
-    max_guesses : int
-        Budget of Newton starts.
-    max_iter : int
-        Budget of Newton iterations per start.
-    tmax : float
-        Time budget of one return of the map (``SEARCH_TMAX``).
-    time_limit : float or None
-        Wall-clock budget in seconds of the Newton phase (None: none; a limit makes the
-        result depend on the machine's speed).
-    threads : int or None
-        Numba threads of the batch integrations.
-    guesses : array (m, 2) or None
-        Newton starts to use instead of :func:`periodic_guesses`.
-
-    Returns
-    -------
-    list of PeriodicOrbit
-        The isolated orbits, then the degenerate ones; each orbit once, starting at its point
-        nearest p2 = 0, sorted by that point's p1 within each group.
-    """
+    """The periodic orbits of minimal period ``period`` found from :func:`periodic_guesses` (or
+    ``guesses``), each once, completed by symmetry, isolated before degenerate
+    (docs/commands/periodic.md)."""
     K = _check_period(period)
     max_guesses = validation.integer("max_guesses", max_guesses, 1)
     if not is_section_map(system):
@@ -752,7 +527,7 @@ def search_periodic_orbits(system, period, *, grid=12, line=None, max_guesses=60
             break
         if any(not o.degenerate and (o.distance_to(g) < 1e-4 or (reversible and o.distance_to(reversor(g)) < 1e-4))
                for o in newton):
-            continue   # on an isolated orbit found already, or on its mirror image
+            continue
         tried += 1
         try:
             orb = find_periodic_orbit(prm, h, g, K, phi0=phi0, tol=tol, max_iter=max_iter, tmax=tmax)
@@ -764,7 +539,7 @@ def search_periodic_orbits(system, period, *, grid=12, line=None, max_guesses=60
         newton += _half_turn_partners(prm, h, newton, same_tol, tol=tol, max_iter=max_iter, tmax=tmax,
                                       threads=threads)
     found: list[PeriodicOrbit] = []
-    for o in newton:   # completed by symmetry: an orbit, then its exact mirror image
+    for o in newton:
         if any(f.same_orbit(o, same_tol) for f in found):
             continue
         found.append(o)
@@ -774,17 +549,10 @@ def search_periodic_orbits(system, period, *, grid=12, line=None, max_guesses=60
     return sorted(found, key=lambda o: (o.degenerate, o.points[0, 0], o.points[0, 1]))
 
 
-# ------------------------------------------------------------------ continuation
 @dataclass(frozen=True)
 class PeriodicBranch:
-    """A periodic orbit followed in one parameter by :func:`continue_periodic`.
-
-    ``orbits[i]`` is the orbit at ``values[i]``; ``bifurcations`` is a list of dicts
-    ``{"value", "type", "trace", "refined"}`` with type "tangent" (trace = +2), "period-doubling"
-    (trace = -2), "touch +2" or "touch -2" (``refined`` False: the bisection stopped where
-    Newton failed, ``bracket`` gives the interval reached); ``stopped`` says why the branch
-    ended early (None when it reached ``stop``).
-    """
+    """An orbit followed by :func:`continue_periodic`: ``orbits`` at ``values``, the ``bifurcations``
+    (dicts: value, type, trace, refined) and why it ``stopped`` early (None if it did not)."""
 
     parameter: str
     period: int
@@ -801,35 +569,9 @@ class PeriodicBranch:
 @system_first
 def continue_periodic(system, period, parameter, start, stop, step, guess, *, bisect_tol=1e-8, touch_window=0.05,
                       touch_tol=1e-6) -> PeriodicBranch:
-    """Natural-parameter continuation of a periodic orbit of period K in a model parameter or "h".
-
-    From ``start`` to ``stop`` by ``step``; each orbit from the previous one (secant predictor
-    on all K points, steps halved on failure); the branch ends early (``stopped``) where
-    Newton fails, e.g. at a fold (trace -> +2), or where the orbit collapses to a smaller
-    period.  Stability changes (rule in the module docstring): ``|trace|`` crossing 2 located by
-    bisection to ``bisect_tol`` (relative), "tangent" at trace = +2, "period-doubling" at
-    trace = -2; a local extremum of the sampled trace within ``touch_window`` of +-2 is
-    refined by golden-section search and reported as a touch when it comes within
-    ``touch_tol`` of +-2 (or as two crossings when it passes it).
-
-    Parameters
-    ----------
-    system : SectionMap
-        The section map, or ``params, h`` (docs/api.md, "The system argument") at which
-        ``guess`` is an orbit (``parameter`` set to ``start``).
-    period : int
-        K >= 1.
-    parameter : str
-        A model parameter name or "h".
-    start, stop, step : float
-        The parameter values.
-    guess : (float, float), array (K, 2) or PeriodicOrbit
-        A point of the orbit at ``start``.
-
-    Returns
-    -------
-    PeriodicBranch
-    """
+    """Natural-parameter continuation of an orbit of period K in ``parameter`` (one of the map's
+    ``parameters``) from ``start`` to ``stop`` by ``step``, with its bifurcations: ``|trace|`` crossing
+    2 bisected to ``bisect_tol``, touches of +-2 refined (docs/commands/periodic.md)."""
     K = _check_period(period)
     values = continuation_values(parameter, start, stop, step, system.parameters)
     g0 = guess.points if isinstance(guess, PeriodicOrbit) else np.asarray(guess, float)
@@ -866,8 +608,7 @@ def continue_periodic(system, period, parameter, start, stop, step, guess, *, bi
     bif: list = []
 
     def crossing(a, b, oa, ob):
-        """Bisection for the value where |trace| = 2 between a (orbit oa) and b (orbit ob), each
-        new orbit from the points interpolated between the bracket's orbits."""
+        """Bisection for |trace| = 2 between a (orbit oa) and b (orbit ob)."""
         lo, hi, olo, ohi = a, b, oa, ob
         kind = "tangent" if oa.trace + ob.trace > 0 else "period-doubling"
         try:
@@ -878,7 +619,7 @@ def continue_periodic(system, period, parameter, start, stop, step, guess, *, bi
                     lo, olo = mid, om
                 else:
                     hi, ohi = mid, om
-        except ParameterError as exc:   # reported with the bracket reached, not dropped
+        except ParameterError as exc:   # reported with the bracket reached
             return {"value": 0.5 * (lo + hi), "type": kind, "trace": 2.0 if kind == "tangent" else -2.0,
                     "refined": False, "bracket": [float(lo), float(hi)], "note": str(exc)}
         return {"value": 0.5 * (lo + hi), "type": kind, "trace": 2.0 if kind == "tangent" else -2.0,
@@ -894,8 +635,8 @@ def continue_periodic(system, period, parameter, start, stop, step, guess, *, bi
         if d0 * d1 >= 0 or abs(tr[i] - s) > touch_window:
             continue
         if (abs(tr[i - 1]) < 2) != (abs(tr[i + 1]) < 2) or (abs(tr[i]) < 2) != (abs(tr[i - 1]) < 2):
-            continue      # crossings already reported
-        sign = 1.0 if d0 > 0 else -1.0    # maximum or minimum of the trace
+            continue
+        sign = 1.0 if d0 > 0 else -1.0
         try:
             v_ext, f_ext = golden_section_max(lambda v: sign * solve(v, nearest(v)).trace, vals[i - 1], vals[i + 1],
                                    bisect_tol)

@@ -1,29 +1,6 @@
-"""The section map P of phi = phi0 at energy h, with its Jacobian from the tangent dynamics.
-
-P: (p1, p2) -> (p1', p2') sends a point of the section phi = phi0 on the energy level h
-(M > 0 from the energy, docs/model.md R9) to the next crossing with dphi/dt > 0 (backward in
-time: the previous one, P^{-1}).  Its Jacobian comes from the tangent dynamics (the
-variational Taylor series of R3, :func:`explorer.integrate.tangent.return_map_taylor`), not
-from finite differences:
-
-    DP = Pi (I - f grad(g)^T / (grad(g) . f)) DPhi_T L
-
-where L lifts (dp1, dp2) to the energy shell (dM = -(H_p1 dp1 + H_p2 dp2) / H_M, dg = 0),
-DPhi_T is the flow's tangent map up to the crossing time T, the bracket corrects for the
-change of T (g = sin(phi - phi0)), and Pi keeps (p1, p2).  P preserves area in these
-coordinates up to a factor that cancels along a periodic orbit (det of a monodromy = 1).
-
-:class:`SectionMap` is the object every analysis of the map takes (fixed points, periodic
-orbits, continuation, rotation numbers, separatrices), as DynamicalSystems.jl's
-``PoincareMap`` is for its algorithms.
-
-One rule for the system argument of every analysis (:func:`system_first`): the system first --
-a :class:`SectionMap`, or the model parameters and the energy ``params, h`` with the map's
-``phi0=``, ``tol=`` and ``tmax=`` as keywords, which is ``SectionMap(params, h, phi0=, tol=,
-tmax=)`` -- then the point(s), then counts, times and options as keywords.  Both forms give the
-same numbers.  Any other map object (the map protocol of Greene's residues, issue 35) is
-passed through unchanged.
-"""
+"""The section map P of phi = phi0 at energy h with its Jacobian from the tangent dynamics
+(docs/model.md R9), and the one rule for the system argument of every analysis (docs/api.md,
+"The system argument")."""
 from __future__ import annotations
 
 import functools
@@ -46,13 +23,10 @@ from explorer.model.equations import rhs
 __all__ = ["DEFAULT_TOL", "MAP_SETTINGS", "MAX_STEPS", "RETURN_TMAX", "MapResult", "SectionMap", "as_system",
            "is_params", "system_first"]
 
-#: Taylor tolerance of the section map in Newton's method and its relatives (fixed points,
-#: periodic orbits, continuation, separatrices): the map is evaluated a few hundred times,
-#: never millions, so it is taken at the tightest tolerance the order rule allows
+#: Taylor tolerance of the section map: the tightest the order rule allows
 DEFAULT_TOL = MAP_TOL
-#: time budget of one return of the map
+#: time and step budgets of one return of the map
 RETURN_TMAX = 1e3
-#: step budget of one return of the map
 MAX_STEPS = 10**8
 
 
@@ -60,25 +34,17 @@ MAX_STEPS = 10**8
 class MapResult:
     """One application of the section map."""
 
-    point: np.ndarray      # (p1, p2) image
-    jacobian: np.ndarray   # 2x2 DP at the start point (None when not asked for)
+    point: np.ndarray
+    jacobian: np.ndarray   # None when not asked for
     time: float            # signed return time
-    state: np.ndarray      # full state (p1, p2, M, g1, g2) at the crossing
+    state: np.ndarray      # (p1, p2, M, g1, g2) at the crossing
 
 
 class SectionMap:
-    """The section map P of phi = ``phi0`` at energy ``h`` (Taylor method, order from ``tol``).
+    """The section map P of phi = ``phi0`` at energy ``h``: ``smap(x)`` is a :class:`MapResult`
+    (P(x), DP(x), the return time); ParameterError for no return within ``tmax``."""
 
-    ``smap(x)`` is P(x) with DP(x) and the return time (a :class:`MapResult`);
-    ``smap.jacobian(x)``, ``smap.iterate(x, n)`` and ``smap.inverse(x)`` are shorthands.
-    A point with no return within ``tmax`` raises :class:`~explorer.model.ParameterError`.
-    Inside a :class:`~explorer.analysis.budget.Budget` (its thread's current one) a return stops
-    within a step of the budget's switch and raises
-    :class:`~explorer.analysis.budget.BudgetExceeded`.
-    """
-
-    #: the integrator of the map (its Jacobian is the variational Taylor series); the analyses
-    #: given a map integrate with it (``crossings``, ``indicators``)
+    #: the integrator of the map, which the analyses given a map use
     method = "taylor"
 
     def __init__(self, params, h, *, phi0=math.pi, tol=DEFAULT_TOL, tmax=RETURN_TMAX):
@@ -96,14 +62,12 @@ class SectionMap:
         return f"SectionMap({self.params!r}, h={self.h!r}, phi0={self.phi0!r}, tol={self.tol!r})"
 
     def with_value(self, name: str, value) -> SectionMap:
-        """This map with one model parameter, or the energy (``name == "h"``), set to ``value``
-        (its ``phi0``, ``tol`` and ``tmax`` kept): a step of a continuation."""
+        """This map with one model parameter, or "h", set to ``value``."""
         prm, h = with_value(self.params, self.h, name, value)
         return SectionMap(prm, h, phi0=self.phi0, tol=self.tol, tmax=self.tmax)
 
     def states(self, points, direction: int = 1) -> np.ndarray:
-        """The full states (N, 5) of the section points ``points`` ((p1, p2) or an (N, 2) array),
-        M from the energy with the sign of ``direction`` (0: +), docs/model.md R9."""
+        """The states (N, 5) of the section points, M's sign from ``direction`` (docs/model.md R9)."""
         pts = np.atleast_2d(np.asarray(points, dtype=np.float64))
         if pts.ndim != 2 or pts.shape[1] != 2:
             raise ParameterError(f"the start points on the section of a map are (p1, p2) pairs (N, 2); got shape "
@@ -112,7 +76,7 @@ class SectionMap:
                                    direction if direction != 0 else 1)
 
     def state(self, x):
-        """The full state (p1, p2, M, g1, g2) of the section point x (M > 0 from the energy)."""
+        """The state (p1, p2, M, g1, g2) of the section point x, M > 0."""
         return model.section_state(self.params, [x[0]], [x[1]], self.h, self.phi0)[0]
 
     def lift(self, y):
@@ -133,7 +97,7 @@ class SectionMap:
         status, t = return_map_taylor(y0, V0, self.P, self.cphi, self.sphi, -1.0 if backward else 1.0,
                                       self.tmax, self.order, MAX_STEPS, stop, yout, Vout)
         if status == STATUS_CANCELLED:
-            budget.stop_switch()                      # raises BudgetExceeded with the budget's reason
+            budget.stop_switch()                      # raises BudgetExceeded
         if status != STATUS_DONE:
             raise ParameterError(f"section map from (p1, p2) = ({x[0]:.6g}, {x[1]:.6g}): no return "
                                  f"({STATUS_NAMES[int(status)]})")
@@ -146,61 +110,53 @@ class SectionMap:
             J = W[:, :2].T.copy()
         return MapResult(yout[:2].copy(), J, float(t), yout.copy())
 
-    #: the continuation parameter of the map protocol (:class:`explorer.analysis.maps.AreaPreservingMap`)
     parameter = "mu"
 
     @property
     def parameter_value(self) -> float:
-        """The value of :attr:`parameter` (the map protocol)."""
+        """The value of :attr:`parameter`."""
         return float(getattr(self.params, self.parameter))
 
     def with_parameter(self, value, name=None) -> SectionMap:
-        """The same section map with the model parameter ``name`` (default :attr:`parameter`;
-        or "h") set to ``value`` (the map protocol's continuation)."""
+        """:meth:`with_value` of ``name``, default :attr:`parameter`."""
         name = self.parameter if name is None else name
         prm, h = with_value(self.params, self.h, name, value)
         return SectionMap(prm, h, phi0=self.phi0, tol=self.tol, tmax=self.tmax)
 
-    #: the continuation parameters (the map protocol): every model parameter and the energy
     parameters = model.PARAM_NAMES + ("h",)
-    #: no coordinate is periodic: a map of the plane (the map protocol)
     periods = (0.0, 0.0)
 
     @property
     def reflection(self):
-        """G0(p1, p2) = (p1, -p2), the linear reversor G0 P G0 = P^-1, where it applies
-        (:func:`explorer.model.symmetry.is_reversible`), else None (the map protocol)."""
+        """G0, the linear reversor G0 P G0 = P^-1, where it applies; else None."""
         return symmetry.reversor if symmetry.is_reversible(self.params, self.phi0) else None
 
     @property
     def reversors(self) -> tuple:
-        """The reversors of the map known here (the map protocol): (G0,) or ()."""
+        """(G0,) or ()."""
         R = self.reflection
         return () if R is None else (R,)
 
     def in_domain(self, x) -> bool:
-        """x lies inside the allowed region, M^2 > 0 (docs/model.md R9; the map protocol)."""
+        """x lies inside the allowed region, M^2 > 0 (docs/model.md R9)."""
         return bool(model.section_M2(self.params, x[0], x[1], self.h, self.phi0) > 0)
 
     def describe_domain(self) -> str:
-        """The allowed region in words, for a message (the map protocol)."""
+        """The allowed region in words."""
         return f"allowed: {model.describe_region(self.params, self.h, self.phi0)}"
 
     def not_finite(self, x) -> str:
-        """Why DP is not finite at x, for a message (the map protocol)."""
+        """Why DP is not finite at x."""
         p = self.params
         return (f"the section map's Jacobian is not finite at (p1, p2) = ({x[0]:.6g}, {x[1]:.6g}): the tangent "
                 f"dynamics overflow at lam = {p.lam:g}, mu = {p.mu:g}, h = {self.h:g} (the motion is too fast)")
 
     def orbit_fields(self) -> dict:
-        """What names this map in a :class:`~explorer.analysis.periodic.PeriodicOrbit` (the map
-        protocol): its ``params``, ``h`` and ``phi0``."""
+        """What names the map in a PeriodicOrbit: ``params``, ``h``, ``phi0``."""
         return {"params": self.params, "h": self.h, "phi0": self.phi0}
 
     def images(self, X, n, *, backward=False) -> np.ndarray:
-        """The first ``n`` images (preimages with ``backward``) of each point of X (m, 2), point by
-        point: an (m, n, 2) array, NaN from the first return that fails.
-        :func:`explorer.analysis.maps.images` runs them as a batch where it can."""
+        """The first ``n`` images of each point of X, point by point: (m, n, 2), NaN from a failure."""
         X = np.asarray(X, float).reshape(-1, 2)
         out = np.full((X.shape[0], n, 2), np.nan)
         for i, x in enumerate(X):
@@ -208,7 +164,7 @@ class SectionMap:
                 continue
             try:
                 out[i] = self.iterate(x, n, backward=backward)[1:]
-            except ParameterError:     # a failed return leaves the rest of the row NaN
+            except ParameterError:
                 for j in range(n):
                     try:
                         x = self(x, backward=backward, jacobian=False).point
@@ -235,39 +191,23 @@ class SectionMap:
         return out
 
 
-#: the settings a SectionMap holds, given as keywords in the form ``(params, h, ..., phi0=, tol=, tmax=)``
 MAP_SETTINGS = ("phi0", "tol", "tmax")
 
 
 def is_params(system) -> bool:
-    """True for model parameters (a :class:`~explorer.model.Params` or the packed vector): the
-    system given as ``params, h``."""
+    """True for model parameters (Params or the packed vector)."""
     if isinstance(system, model.Params):
         return True
     try:
         return isinstance(system, (np.ndarray, list, tuple)) and np.shape(system) == (model.N_PARAMS,)
-    except ValueError:   # a ragged sequence: not a vector
+    except ValueError:   # a ragged sequence
         return False
 
 
 def as_system(name: str, system, args: tuple, kw: dict, settings: tuple = MAP_SETTINGS, defaults=None,
               flow: bool = False):
     """The one rule for the system argument of an analysis ``name``: ``(system, args, kw)`` with
-    the system a map object.
-
-    - ``params, h`` (model parameters, then the energy: the first of ``args``, or ``h=``) is
-      ``SectionMap(params, h, phi0=, tol=, tmax=)`` with those of ``settings`` given in ``kw``
-      (taken out of it; ``defaults`` for those not given, else the SectionMap's own);
-    - a :class:`SectionMap` is used as it is; its ``settings`` given beside it raise
-      ParameterError (they belong to the map), and so does a map whose return budget differs
-      from the default for an analysis that does not use it (``"tmax"`` not in ``settings``);
-    - any other map object (one with the map protocol of Greene's residues, issue 35) passes
-      through unchanged;
-    - with ``flow`` (a function that also integrates the flow from full states), the model
-      parameters alone with the keyword ``states=`` are the flow itself: passed through with the
-      states as the points, the settings left to the function.  No positional argument changes
-      meaning with the type of another: after ``params`` the next positional is always h.
-    """
+    the system a map object."""
     if flow:
         states = kw.pop("states", None)
         if states is not None:
@@ -302,18 +242,9 @@ def as_system(name: str, system, args: tuple, kw: dict, settings: tuple = MAP_SE
 
 
 def system_first(fn=None, *, settings: tuple = MAP_SETTINGS, defaults=None, flow: bool = False):
-    """Decorate an analysis ``fn(system, *args, **kw)`` written for a map object (a
-    :class:`SectionMap`, or another map with the same protocol) so that it also takes the
-    system as ``params, h`` (with ``phi0=``, ``tol=``, ``tmax=`` among ``settings`` as
-    keywords): :func:`as_system`, the one rule.  ``settings``: the map's settings this function
-    uses (default all three; an analysis with a time budget of its own leaves out ``"tmax"``).
-    ``defaults``: settings of the map built from
-    ``params, h`` when not given, where this function's purpose has its own default (the
-    tolerance of crossings and indicators, :data:`~explorer.integrate.methods.DEFAULT_TOL`).
-    ``flow``: ``params`` with ``states=`` full states is the flow (:func:`as_system`).
-
-    The wrapped function's signature (``inspect.signature``, an IDE) is ``fn``'s, with those
-    settings added as keywords for the ``params, h`` form."""
+    """Let an analysis ``fn(system, ...)`` of a map also take ``params, h`` with the map's
+    ``settings`` as keywords (``defaults`` where its purpose has its own; ``flow``: ``params,
+    states=``): :func:`as_system`."""
 
     def wrap(fn):
         @functools.wraps(fn)
@@ -325,7 +256,7 @@ def system_first(fn=None, *, settings: tuple = MAP_SETTINGS, defaults=None, flow
         ps = list(sig.parameters.values())
         extra = [inspect.Parameter(k, inspect.Parameter.KEYWORD_ONLY, default=None) for k in settings
                  if k not in sig.parameters]
-        if flow:   # the points are optional in the display: the flow gives states= instead
+        if flow:   # the flow gives states= instead of the points
             ps = [ps[0], ps[1].replace(default=None), *ps[2:]]
             extra.append(inspect.Parameter("states", inspect.Parameter.KEYWORD_ONLY, default=None))
         tail = [p for p in ps if p.kind == inspect.Parameter.VAR_KEYWORD]

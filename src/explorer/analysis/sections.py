@@ -1,22 +1,5 @@
-"""Crossings of the Poincaré section phi = phi0 for many orbits at once (user level).
-
-:func:`crossings` validates its input, picks the compiled batch driver of the
-method (:mod:`explorer.integrate.drivers`), runs it in parallel over orbits with numba
-threads and returns a :class:`Crossings` whose status codes are already
-named.  Arrays in, arrays out: no I/O here.
-
-Methods
--------
-``taylor``  adaptive Taylor series, order from ``tol`` (Jorba & Zou 2005);
-            crossings are roots of the step's Taylor polynomial.
-``dop853``  adaptive Dormand-Prince 8(5,3) (Hairer, Nørsett & Wanner, Solving
-            ODEs I, II.5); crossings are roots of its 7th-order dense output.
-``split2`` ... ``split8`` (and the variants in ``kernels.splitting.SCHEMES``)
-            fixed-step symmetric compositions of the exact sub-flows of
-            docs/model.md R4 (Strang; Yoshida 1990; Kahan & Li 1997); they keep the
-            Casimir to round-off and the energy error bounded; crossings are
-            roots in tau of g(Psi_tau(y)), Psi the composition step itself.
-"""
+"""Crossings of the section phi = phi0 for many orbits at once, with any method of
+:mod:`explorer.integrate.methods`, in one batch or streamed in blocks (docs/commands/orbit.md)."""
 from __future__ import annotations
 
 import math
@@ -48,16 +31,12 @@ __all__ = ["ADAPTIVE_METHODS", "DEFAULT_BLOCK", "DEFAULT_DT", "DEFAULT_MAX_STEPS
            "max_energy_error", "result_bytes"]
 
 DEFAULT_MAX_STEPS = 10**9
-#: a run whose energy error exceeds this fraction of max(|h|, 1) gets a warning: its step
-#: (splitting) or tolerance is too coarse for the scene to trust the section's fine structure
+#: an energy error above this fraction of max(|h|, 1) is warned about (:func:`energy_warning`)
 ENERGY_WARN_REL = 1e-6
-#: crossings per orbit and block of a streamed run (:func:`iter_crossings`): 40 bytes a row,
-#: so 1e5 rows = 4 MB per orbit in flight
+#: crossings per orbit and block of :func:`iter_crossings`
 DEFAULT_BLOCK = 100_000
-#: bytes of one stored crossing row (t, p1, p2, M, dH as float64)
 ROW_BYTES = 40
-#: :func:`crossings` returns every row at once: it refuses a result larger than
-#: MAX_MEMORY_FRACTION of the machine's memory (stream it with :func:`iter_crossings` instead)
+#: :func:`crossings` refuses a result larger than this fraction of the machine's memory
 MAX_MEMORY_FRACTION = validation.MAX_MEMORY_FRACTION
 physical_memory = validation.physical_memory
 human_bytes = validation.human_bytes
@@ -65,12 +44,9 @@ human_bytes = validation.human_bytes
 
 @dataclass(frozen=True)
 class Crossings:
-    """Result of :func:`crossings` for N orbits and up to K crossings each.
-
-    data[i, k] = (t, p1, p2, M, H - H0) for k < count[i]; rows beyond are NaN.
-    status[i] is a code of ``kernels.STATUS_*``; ``status_name(i)`` names it.
-    final[i] is the state where orbit i stopped; info[i] = (t_end, steps, Casimir error).
-    """
+    """Result of :func:`crossings` for N orbits and up to K crossings each: data[i, k] =
+    (t, p1, p2, M, H - H0) for k < count[i], NaN beyond; ``status[i]`` a Status code;
+    ``final[i]`` the last state; info[i] = (t_end, steps, Casimir error)."""
 
     data: np.ndarray
     count: np.ndarray
@@ -93,16 +69,14 @@ class Crossings:
 
 
 def max_energy_error(data) -> float:
-    """max |H - H0| over the crossings in ``data`` (rows (t, p1, p2, M, H - H0), NaN padding
-    ignored); 0.0 if there are none."""
+    """max |H - H0| over the rows in ``data``, NaN ignored; 0.0 if there are none."""
     dh = np.abs(np.asarray(data, dtype=np.float64)[..., 4])
     dh = dh[np.isfinite(dh)]
     return float(dh.max()) if dh.size else 0.0
 
 
 def energy_warning(max_dh: float, h: float, setting: str) -> str | None:
-    """A one-line warning when the energy error max_dh exceeds ENERGY_WARN_REL * max(|h|, 1),
-    naming the setting to refine; None otherwise."""
+    """A warning naming ``setting`` when max_dh > ENERGY_WARN_REL * max(|h|, 1), else None."""
     limit = ENERGY_WARN_REL * max(abs(h), 1.0)
     if max_dh <= limit:
         return None
@@ -111,24 +85,14 @@ def energy_warning(max_dh: float, h: float, setting: str) -> str | None:
 
 
 def result_bytes(n_orbits: int, n_crossings: int) -> int:
-    """Bytes of the crossing rows of ``n_orbits`` orbits with ``n_crossings`` crossings each
-    (the size of :attr:`Crossings.data`, and an upper bound of the rows a store holds before
-    compression)."""
+    """Bytes of :attr:`Crossings.data` for ``n_orbits`` x ``n_crossings`` rows."""
     return int(n_orbits) * int(n_crossings) * ROW_BYTES
 
 
 @dataclass(frozen=True)
 class Integration:
-    """The settings of a run of :func:`crossings`, validated once, here (ParameterError naming
-    the setting): the method and its tolerance ``tol`` or step ``dt`` (both checked, as
-    :meth:`explorer.integrate.methods.Method.prepare` does), the number of ``crossings``, the
-    time budget ``tmax`` (None: 100 * crossings, :attr:`effective_tmax`), ``max_steps``, the
-    section angle ``phi0`` and the crossing ``direction`` (+1, -1 or 0: both).
-
-    A scene's ``[integration]`` table is this object
-    (:class:`explorer.io.scene.specs.IntegrationSpec`, which names a refused setting by its
-    scene key), and so can be any other front end's settings.
-    """
+    """The settings of a run of :func:`crossings`, validated here (ParameterError naming the
+    setting); a scene's ``[integration]`` table is one (docs/scenes.md)."""
 
     method: str = "taylor"
     tol: float = DEFAULT_TOL
@@ -140,11 +104,11 @@ class Integration:
     direction: int = 1
 
     def _label(self, name: str) -> str:
-        """How a refused setting is named in the message (a scene gives its key)."""
+        """How a refused setting is named in the message."""
         return name
 
     def _refusal(self, exc: ParameterError) -> ParameterError:
-        """The error raised for a refused setting (a scene raises its SceneError)."""
+        """The error raised for a refused setting."""
         return exc
 
     def __post_init__(self):
@@ -225,8 +189,7 @@ def _validated(params, y0, n_crossings, method, tol, dt, tmax, max_steps, phi0, 
 
 
 def _start(system, y0, tol, phi0, direction):
-    """(params, states, tol, phi0) of a run of :func:`crossings`: a map's section points
-    lifted to states at its tolerance and section, or the flow's own."""
+    """(params, states, tol, phi0) of a run: a map's points lifted to states, or the flow's own."""
     if is_params(system):
         return system, y0, tol, phi0
     return system.params, system.states(y0, direction), system.tol, system.phi0
@@ -235,24 +198,20 @@ def _start(system, y0, tol, phi0, direction):
 def crossing_settings(params, y0, *, n_crossings: int, method: str = "taylor", tol: float = DEFAULT_TOL,
                       dt: float | None = None, tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS,
                       phi0: float = math.pi, direction: int = 1) -> dict:
-    """The settings that :func:`crossings` (or :func:`iter_crossings`) records for this request,
-    validated as there (ParameterError otherwise), without running it."""
+    """The settings :func:`crossings` records for this request, validated, without running it."""
     return dict(_validated(params, y0, n_crossings, method, tol, dt, tmax, max_steps, phi0, direction,
                            None).settings)
 
 
 def _outputs(n: int, width: int):
-    """The arrays the drivers fill for n orbits of at most ``width`` rows: data (NaN where no
-    crossing), count, status, final state, info."""
+    """The arrays the drivers fill: data (NaN), count, status, final state, info."""
     return (np.full((n, width, 5), np.nan), np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros((n, 5)),
             np.zeros((n, 3)))
 
 
 def _run_block(run: _Run, Y, carry, limits, data, count, status, final, info) -> None:
-    """One block of the drivers for the orbits Y (arrays filled in place), with numba's thread
-    count set for the call when ``run.threads`` says so.  An orbit whose motion the fixed step
-    does not resolve (:func:`explorer.integrate.methods.unresolved`) is not integrated: no
-    crossing, status UNRESOLVED, its state kept."""
+    """One block of the drivers for the orbits Y, in place; an orbit the fixed step does not
+    resolve is not integrated (status UNRESOLVED)."""
     slow = methods.unresolved(run.prep, run.P, Y)
     if slow.any():
         count[slow] = 0
@@ -267,7 +226,7 @@ def _run_block(run: _Run, Y, carry, limits, data, count, status, final, info) ->
             for a, part in zip((carry, data, count, status, final, info), parts[1:2] + parts[3:]):
                 a[ok] = part
         return
-    if run.threads is None:   # (numba's thread pool is started only when a batch asks for it)
+    if run.threads is None:
         methods.run_crossings(run.prep, Y, run.P, run.cphi, run.sphi, run.direction, run.tmax, run.max_steps,
                               carry, limits, data, count, status, final, info)
         return
@@ -285,30 +244,10 @@ def crossings(system, y0, *, n_crossings: int, method: str = "taylor", tol: floa
               dt: float | None = None, tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS,
               phi0: float = math.pi, direction: int = 1, threads: int | None = None) -> Crossings:
     """Integrate each orbit from ``y0`` until it has crossed the section phi = phi0
-    ``n_crossings`` times in ``direction`` (+1: dphi/dt > 0, -1: < 0, 0: both), or until its time
-    budget ``tmax`` (default 100 * n_crossings) or step budget ``max_steps`` runs out.
-
-    The system first (docs/api.md, "The system argument"): a
-    :class:`~explorer.analysis.section_map.SectionMap` (or ``params, h`` with ``phi0=`` and
-    ``tol=``, default :data:`~explorer.integrate.methods.DEFAULT_TOL`) with ``y0`` its section
-    points ((p1, p2) or (N, 2); M from the energy with the sign of ``direction``, docs/model.md
-    R9): its ``params``, ``h``, ``phi0`` and ``tol``, and with the defaults (Taylor, direction
-    +1) the rows are the map's iterates; or the flow, the model parameters alone with the
-    keyword ``states=`` full states ((N, 5) or (5,)) and ``phi0=``, ``tol=`` this call's own:
-    ``crossings(params, states=Y, n_crossings=K)``.
-
-    ``tol`` is the tolerance of the adaptive methods, ``dt`` the fixed step of the splitting
-    methods (default 0.05).  ``threads`` sets numba's thread count for this call (default: all).
-    A start point lying on the section is not reported as a crossing.
-
-    Every row is returned at once, (N, n_crossings, 5) float64: a request larger than half the
-    machine's memory is refused (ParameterError naming its size); :func:`iter_crossings` streams
-    the same rows in blocks of bounded size.
-
-    Inside a :class:`~explorer.analysis.budget.Budget` that has stopped nothing runs
-    (:class:`~explorer.analysis.budget.BudgetExceeded`), and the budget's step cap, if it has one,
-    bounds ``max_steps`` (a batch reads no stop switch).
-    """
+    ``n_crossings`` times in ``direction`` (+1: dphi/dt > 0, -1: < 0, 0: both), or its time
+    budget ``tmax`` (default 100 * n_crossings) or ``max_steps`` runs out.  ``y0``: a map's
+    section points, or the flow's ``states=``; ``tol`` or ``dt`` per method; a result larger
+    than half the memory is refused (stream it with :func:`iter_crossings`)."""
     from explorer.analysis import budget
 
     budget.checkpoint()
@@ -329,18 +268,16 @@ def crossings(system, y0, *, n_crossings: int, method: str = "taylor", tol: floa
     return Crossings(data, count, status, final, info, method, run.settings)
 
 
-#: crossings a run of :func:`propagate` may pass on its way to t (its row buffer; more stop it)
+#: crossings a run of :func:`propagate` may pass on its way to t
 PROPAGATE_CROSSINGS = 16
 
 
 @system_first(settings=("phi0", "tol"), defaults={"tol": DEFAULT_TOL}, flow=True)
 def propagate(system, y0, *, t: float, method: str = "taylor", tol: float = DEFAULT_TOL, dt: float | None = None,
               threads: int | None = None) -> np.ndarray:
-    """The states of the orbits from ``y0`` at time ``t`` > 0 (N, 5): the run of :func:`crossings`
-    (the same steps) stopped by its time budget, whose last step ends exactly at t.  The system
-    and ``y0`` as for :func:`crossings` (a map and its section points, or ``params`` and
-    ``states=`` full states).  An orbit that crosses the section more than :data:`PROPAGATE_CROSSINGS` times on
-    the way, or stops for another reason, raises ParameterError: propagate it in shorter times."""
+    """The states (N, 5) at time ``t`` > 0 of the orbits from ``y0``: :func:`crossings`'s steps,
+    the last ending at t; ParameterError for an orbit that stops sooner or crosses more than
+    :data:`PROPAGATE_CROSSINGS` times."""
     t = validation.real("t", t, 0.0, lo_open=True)
     params, y0, tol, phi0 = _start(system, y0, tol, math.pi, 1)
     res = crossings(params, states=y0, n_crossings=PROPAGATE_CROSSINGS, tmax=t, method=method, tol=tol, dt=dt,
@@ -355,29 +292,7 @@ def propagate(system, y0, *, t: float, method: str = "taylor", tol: float = DEFA
 
 @dataclass
 class StreamState:
-    """Where a streamed run stands between two blocks: everything but the crossings themselves.
-
-    A run continued from it (``iter_crossings(..., state=...)``) takes exactly the steps of an
-    uninterrupted run, so its rows are bit for bit the same.  Small: O(N) numbers.
-
-    Attributes
-    ----------
-    y : ndarray (N, 5)
-        The state of every orbit where its last block ended.
-    carry : ndarray (N, N_CARRY)
-        The drivers' carry (time, its Kahan compensation, sin(phi - phi0), steps, H0, DOP853's
-        next step: :mod:`explorer.integrate.drivers`).
-    done : ndarray (N,) int64
-        Crossings found so far.
-    finished : ndarray (N,) bool
-        The orbit has stopped (its ``status`` is final).
-    status : ndarray (N,) int64
-        Status of the last block (final when ``finished``).
-    info : ndarray (N, 3)
-        Time reached, steps, Casimir error of ``y``.
-    blocks : int
-        Blocks computed so far.
-    """
+    """Where a streamed run stands between two blocks: everything but the crossings themselves."""
 
     y: np.ndarray
     carry: np.ndarray
@@ -391,8 +306,7 @@ class StreamState:
 
     @classmethod
     def initial(cls, params, y0, *, phi0: float = math.pi) -> StreamState:
-        """The state of a run from ``y0`` before its first block (where :func:`iter_crossings`
-        starts when given no state)."""
+        """The state of a run from ``y0`` before its first block."""
         P = packed_params(params)
         Y0 = np.ascontiguousarray(np.atleast_2d(np.asarray(y0, dtype=np.float64)))
         g1, g2 = model.section_gamma(float(phi0))
@@ -416,7 +330,7 @@ class StreamState:
         return StreamState(*(getattr(self, a).copy() for a in self.ARRAYS), self.blocks)
 
     def as_arrays(self) -> dict:
-        """The state as plain arrays (for a checkpoint); :meth:`from_arrays` reads them back."""
+        """The state as plain arrays; :meth:`from_arrays` reads them back."""
         out = {a: getattr(self, a) for a in self.ARRAYS}
         out["blocks"] = np.array(self.blocks, np.int64)
         return out
@@ -428,12 +342,8 @@ class StreamState:
 
 @dataclass(frozen=True)
 class CrossingBlock:
-    """One block of a streamed run (:func:`iter_crossings`).
-
-    ``index[i]`` is the orbit (row of ``y0``) whose next ``count[i]`` crossings are
-    ``data[i, :count[i]]``; they follow the ``start[i]`` it had before this block.  ``state`` is
-    the run's :class:`StreamState` after this block (a copy: store it to resume from here).
-    """
+    """One block of :func:`iter_crossings`: orbit ``index[i]``'s next ``count[i]`` crossings, after
+    its ``start[i]`` earlier ones, and the run's ``state`` after the block (resume from it)."""
 
     index: np.ndarray
     start: np.ndarray
@@ -451,17 +361,9 @@ def iter_crossings(system, y0, *, n_crossings: int, block: int = DEFAULT_BLOCK, 
                    method: str = "taylor", tol: float = DEFAULT_TOL, dt: float | None = None,
                    tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS, phi0: float = math.pi,
                    direction: int = 1, threads: int | None = None):
-    """:func:`crossings` in blocks: yields a :class:`CrossingBlock` of at most about ``block``
-    crossings per orbit (at most ``block`` + the roots of one step, MAX_ROOTS_PER_STEP), until
-    every orbit has its ``n_crossings`` or has stopped; memory is O(N x block), whatever
-    ``n_crossings``.  The rows, final states and statuses are bit for bit those of
-    :func:`crossings` (each block continues the drivers from the previous one's carry: the same
-    steps, the same time sum).
-
-    ``state``: continue a run from the :class:`StreamState` of one of its blocks (e.g. read back
-    from a checkpoint), with the same arguments otherwise.  The last block's state gives the
-    final ``status`` and ``info`` of every orbit.  The system and ``y0`` as for :func:`crossings`.
-    """
+    """:func:`crossings` in blocks of about ``block`` crossings per orbit (:class:`CrossingBlock`),
+    bit for bit the same rows, in O(N x block) memory; ``state`` resumes a run
+    (docs/commands/orbit.md, "Long orbits")."""
     params, y0, tol, phi0 = _start(system, y0, tol, phi0, direction)
     run = _validated(params, y0, n_crossings, method, tol, dt, tmax, max_steps, phi0, direction, threads)
     if not isinstance(block, numbers.Integral) or block < 1:
