@@ -33,7 +33,7 @@ KEYWORD_DATA = {
 
 
 def test_no_public_function_hides_its_keywords_behind_a_pass_through():
-    """Issue 33: every keyword of the public API is in its signature (an IDE shows it), so a
+    """Every keyword of the public API is in its signature (an IDE shows it), so a
     ``**kw`` forwarded to another function is gone; only the named keyword data remain."""
     hidden = []
     for name in explorer.__all__:

@@ -1,4 +1,4 @@
-"""The analyses of a map run on any area-preserving map of the protocol (issue 35, item 1).
+"""The analyses of a map run on any area-preserving map of the protocol (docs/greene.md).
 
 Every test function here runs twice, on Chirikov's standard map ``StandardMap(k)`` (explicit,
 compiled) and on the section map of Figure 4's scene (``SectionMap``, an integration per

@@ -318,8 +318,8 @@ def test_stable_manifold_without_the_reversor_is_invariant():
 
 @pytest.mark.cpu_dependent
 def test_a_flux_needs_both_lobes_with_equal_areas(tangle):
-    """At mu = 0.5 the smallest-sum rule once paired the wrong intersections and flux_curve
-    reported one 'lobe' of area 5.7 as the flux; now both lobes must be found and agree."""
+    """At mu = 0.5 the flux is a pair of lobes of equal area: one lobe alone, or two of different
+    areas, is refused with the reason."""
     bu, bs, hs = tangle
     lb = tr.lobes(bu, bs, points=hs)
     assert tr.turnstile_check(lb, 6.0) == "ok"

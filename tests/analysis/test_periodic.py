@@ -214,11 +214,8 @@ def test_the_same_isolated_orbits_come_out_when_the_seeds_move_by_1e_12(K):
 
 
 #: isolated orbits of minimal period K at the Figure-4 scene, mu = 0.03, h = 2, with the default
-#: search: the issue's requirement is that these counts are the same on any x86-64 CPU (.ci/run
-#: runs this test with Numba compiling for the host and for NUMBA_CPU_NAME=generic); the
-#: structure is checked too: symmetric orbits plus mirror pairs of asymmetric ones (period 4
-#: had 11 before the half-turn partners completed the set: the partner of the symmetric orbit
-#: through (-1.8617, 0), trace -125.1, was missed)
+#: search: the same on any x86-64 CPU (.ci/run runs this test with Numba compiling for the host
+#: and for NUMBA_CPU_NAME=generic); symmetric orbits plus mirror pairs of asymmetric ones
 ISOLATED_COUNTS = {1: 5, 2: 8, 3: 14, 4: 12}
 
 
