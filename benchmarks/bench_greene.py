@@ -51,8 +51,8 @@ def main(argv=None):
     r = rows[-1][1]
     lines += ["", "| p/q | k_n (R_n = R*) | residue at the critical k | minus R* = 0.2500888 |", "|---|---:|---:|---:|"]
     for c in r.convergents:
-        lines.append(f"| {c['p']}/{c['q']} | {c['param_value']:.12f} | {c['residue']:.9f} | "
-                     f"{c['residue'] - R_STAR:+.2e} |")
+        lines.append(f"| {c['p']}/{c['q']} | {c['param_n']:.12f} | {c['residue_at_critical']:.9f} | "
+                     f"{c['residue_at_critical'] - R_STAR:+.2e} |")
     return C.report(SECTION, lines, not args.quick)
 
 

@@ -63,7 +63,7 @@ def main(argv=None):
             checks = {}
             for f in (0.99, 1.01):
                 m = smap.with_parameter(f * r.critical)
-                c = gm._centre(m, around)
+                c = gs.island_centre(m, around)
                 ends = [gs.section_symmetric_orbit(m, cv["q"], cv["line_start"], line=r.line).line_start
                         for cv in r.convergents[-2:]]
                 t1 = time.perf_counter()
@@ -107,7 +107,7 @@ def main(argv=None):
                   "|---:|---:|---:|---:|---:|"]
         for a in (("6",) if args.quick else NOBLES):
             rr, rl = by[("right", a)], by[("left", a)]
-            dres = max(abs(x["residue"] - y["residue"]) for x, y in zip(rl.convergents, rr.convergents))
+            dres = max(abs(x["residue_at_critical"] - y["residue_at_critical"]) for x, y in zip(rl.convergents, rr.convergents))
             lines.append(f"| {a} | {rr.critical:.12f} | {rl.critical:.12f} | {rl.critical - rr.critical:.1e} | "
                          f"{dres:.1e} |")
     out = C.OUT_DIR / ("greene_section_quick.json" if args.quick else "greene_section.json" if len(islands) > 1

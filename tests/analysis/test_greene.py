@@ -148,10 +148,11 @@ def test_greene_to_period_987_agrees_with_the_published_nine_digits():
 @pytest.mark.cpu_dependent
 def test_residues_at_the_critical_k_converge_to_mackays_limit():
     r = ex.greene(ex.StandardMap(0.9), "golden", qmax=987)
-    dev = {c["q"]: abs(c["residue"] - R_STAR_PUBLISHED) for c in r.convergents}   # MacKay 1983: R* = 0.2500888
+    # MacKay 1983: R* = 0.2500888
+    dev = {c["q"]: abs(c["residue_at_critical"] - R_STAR_PUBLISHED) for c in r.convergents}
     assert dev[233] < 3e-4 and dev[987] < 6e-5
     assert dev[987] < dev[377] < dev[144] < dev[55]
-    assert all(c["point"][0] == pytest.approx(math.pi) for c in r.convergents)
+    assert all(c["point_at_critical"][0] == pytest.approx(math.pi) for c in r.convergents)
 
 
 def test_greene_bad_input_raises_parameter_error():
@@ -179,7 +180,7 @@ def test_section_half_orbit_orbits_are_newtons_periodic_orbits_with_the_same_res
     from explorer.analysis import periodic
 
     smap = _section(0.025)
-    centre = gm._centre(smap, (1.58, 0.0))
+    centre = gs.island_centre(smap, (1.58, 0.0))
     for P, Q in ((1, 6), (3, 20)):
         orb = gs.first_orbit(smap, P, Q, centre)
         assert abs(orb.rotation(smap, centre) * Q + P) < 1e-9          # turns clockwise, P/Q per return
@@ -212,7 +213,7 @@ def test_section_greene_finds_the_breakup_of_a_noble_curve_of_the_right_island(n
     # within its error bar of the value from q <= 139 (0.03033980 +- 4e-8, benchmarks/RESULTS.md)
     assert r.uncertainty < 5e-6 and abs(r.critical - 0.0303398) < 2 * r.uncertainty
     assert -0.5 < r.ratio < -0.2
-    dev = [c["residue"] - gm.CRITICAL_RESIDUE for c in r.convergents[-3:]]
+    dev = [c["residue_at_critical"] - gm.CRITICAL_RESIDUE for c in r.convergents[-3:]]
     assert dev[0] * dev[1] < 0 and dev[1] * dev[2] < 0 and max(map(abs, dev)) < 0.01
 
 
@@ -231,8 +232,9 @@ def test_the_noble_curve_is_regular_just_below_greenes_breakup_and_not_just_abov
     smap = _section(0.025)
     for factor, regular in ((0.99, True), (1.01, False)):
         m = smap.with_parameter(factor * r.critical)
-        c = gm._centre(m, NOBLE_SECTION["around"])
-        ends = [gs.section_symmetric_orbit(m, cv["q"], cv["point"][0]).points[0, 0] for cv in r.convergents[-2:]]
+        c = gs.island_centre(m, NOBLE_SECTION["around"])
+        ends = [gs.section_symmetric_orbit(m, cv["q"], cv["point_at_critical"][0]).points[0, 0]
+                for cv in r.convergents[-2:]]
         rn = gs.curve_orbit(m, nu, c, *ends, iterates=5000)
         # the bisection's 600-return averages place the start within ~1e-7 of nu
         on_curve = rn.converged and abs(abs(rn.value) - nu) < 1e-6
@@ -264,7 +266,7 @@ def test_the_left_island_is_the_half_turn_image_of_the_right_one_with_the_same_r
     from explorer.analysis.halfturn import partner_points
 
     smap = _section(0.025)
-    right, left = gm._centre(smap, (1.58, 0.0)), gm._centre(smap, (-1.16, 0.0))
+    right, left = gs.island_centre(smap, (1.58, 0.0)), gs.island_centre(smap, (-1.16, 0.0))
     np.testing.assert_allclose(partner_points(smap, right).points[0], left, atol=1e-9)
     # 1/6: the right island's orbit from its line, the left island's from the other line
     r6 = gs.section_symmetric_orbit(smap, 6, 1.7107)
@@ -299,12 +301,12 @@ def test_greene_around_the_left_island_uses_the_other_symmetry_line_and_finds_th
     assert left.line == 0.0 and [c["q"] for c in left.convergents] == [6, 7, 13, 20]
     assert left.uncertainty < 1e-3 and abs(left.critical - 0.0303398) < 2 * left.uncertainty
     for c in left.convergents:
-        for mu, residue in ((c["param_value"], gm.CRITICAL_RESIDUE), (left.critical, c["residue"])):
+        for mu, residue in ((c["param_n"], gm.CRITICAL_RESIDUE), (left.critical, c["residue_at_critical"])):
             right = gs.section_symmetric_orbit(_section(mu), c["q"], -c["line_start"])
             assert right.line == math.pi and right.residue == pytest.approx(residue, abs=1e-8)
     m = _section(left.critical)
-    centre = gm._centre(m, (-1.16, 0.0))
+    centre = gs.island_centre(m, (-1.16, 0.0))
     cv = left.convergents[-1]
     orb = gs.section_symmetric_orbit(m, cv["q"], cv["line_start"], line=left.line)
-    np.testing.assert_allclose(orb.points[0], cv["point"], atol=1e-9)      # the JSON point: on phi = pi
+    np.testing.assert_allclose(orb.points[0], cv["point_at_critical"], atol=1e-9)      # the JSON point: on phi = pi
     assert abs(orb.rotation(m, centre) * 20 + 3) < 1e-6 and np.all(orb.points[:, 0] < 0)

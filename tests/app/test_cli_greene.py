@@ -18,8 +18,9 @@ def test_greene_standard_json_has_the_documented_shape_and_greenes_k_c(capsys):
     assert abs(d["critical"] - 0.971635406) < 1e-8          # Greene 1979 / MacKay 1983
     assert [c["q"] for c in d["convergents"]] == [2, 3, 5, 8, 13, 21, 34, 55, 89, 144, 233]
     for c in d["convergents"]:
-        assert set(c) == {"p", "q", "point", "param_value", "residue"} and len(c["point"]) == 2
-        assert c["point"][0] == pytest.approx(math.pi)       # on Greene's symmetry line (theta = pi here)
+        assert set(c) == {"p", "q", "param_n", "residue_at_critical", "point_at_critical"}
+        assert len(c["point_at_critical"]) == 2
+        assert c["point_at_critical"][0] == pytest.approx(math.pi)       # on Greene's symmetry line (theta = pi here)
     ref = ex.greene(ex.StandardMap(0.9), "golden", qmax=233)
     assert d["critical"] == ref.critical and d["convergents"] == json.loads(json.dumps(ref.as_dict()))["convergents"]
 
@@ -39,7 +40,8 @@ def test_greene_section_json_gives_mu_c_of_a_noble_curve_of_the_right_island(cap
     d = json.loads(out)
     assert d["map"] == "section" and d["param"] == "mu" and d["nu"] == pytest.approx(1 / (6 + (math.sqrt(5) - 1) / 2))
     assert [(c["p"], c["q"]) for c in d["convergents"]] == [(1, 6), (1, 7), (2, 13), (3, 20)]
-    assert all(c["point"][1] == 0.0 and 1.69 < c["point"][0] < 1.71 for c in d["convergents"])   # on p2 = 0
+    points = [c["point_at_critical"] for c in d["convergents"]]
+    assert all(p2 == 0.0 and 1.69 < p1 < 1.71 for p1, p2 in points)     # on p2 = 0
     # the extrapolation of four convergents: mu_c = 0.03034 (q <= 139, benchmarks/RESULTS.md) within its error
     assert abs(d["critical"] - 0.03034) < 2 * d["uncertainty"] + 1e-5
 

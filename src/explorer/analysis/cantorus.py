@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from explorer.analysis import greene as gm
+from explorer.analysis.greene_core import MAX_QMAX, MIN_Q, aitken
 from explorer.analysis.maps import StandardMap, standard_monodromy
 from explorer.model import ParameterError, validation
 
@@ -66,7 +67,7 @@ def minimizing_orbit(system: StandardMap, p: int, q: int, *, guess=None) -> np.n
     oscillates and Newton from a continued guess alone can land on the minimax orbit or fail; the
     minimizing orbit is the one of least action among all of its type, Aubry-Mather theory)."""
     P = validation.integer("p", p, 0)
-    Q = validation.integer("q", q, gm.MIN_Q)
+    Q = validation.integer("q", q, MIN_Q)
     k = system.k
     g = 2.0 * math.pi * P / Q if guess is None else float(guess)
     if Q % 2:
@@ -125,7 +126,7 @@ def cantorus_flux(system: StandardMap, nu="golden", *, qmax=DEFAULT_QMAX, qmin=5
     dws: list[float] = []
     g_max = g_min_odd = g_min_even = None
     stopped = ""
-    for P, Q in gm.convergents(x, validation.integer("qmax", qmax, 3, gm.MAX_QMAX)):
+    for P, Q in gm.convergents(x, validation.integer("qmax", qmax, 3, MAX_QMAX)):
         try:
             mx = _first(lambda g: gm.symmetric_orbit(system, P, Q, line=math.pi, guess=g), g_max)
             mn = _first(lambda g: minimizing_orbit(system, P, Q, guess=g), g_min_odd if Q % 2 else g_min_even)
@@ -152,5 +153,5 @@ def cantorus_flux(system: StandardMap, nu="golden", *, qmax=DEFAULT_QMAX, qmin=5
     if not dws:
         raise ParameterError(f"no convergent of nu = {x:.10g} with q >= {qmin} gave an action difference at "
                              f"k = {k:.12g} ({stopped})")
-    flux = gm._aitken(*dws[-3:]) if len(dws) >= 3 else dws[-1]
+    flux = aitken(*dws[-3:]) if len(dws) >= 3 else dws[-1]
     return CantorusFlux(float(k), x, qs, dws, float(flux), stopped)

@@ -34,14 +34,22 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis import budget
-from explorer.analysis.greene import Residue
+from explorer.analysis.fixedpoints import find_fixed_point
+from explorer.analysis.greene_core import GreeneResult, Residue, critical_parameter, enough_convergents
 from explorer.analysis.section_map import MAX_STEPS, SectionMap
 from explorer.integrate.tangent import return_map_taylor
 from explorer.kernels import STATUS_DONE
-from explorer.model import ParameterError
+from explorer.model import ParameterError, validation
 
-__all__ = ["SectionSymmetricOrbit", "first_orbit", "half_turn_p2", "island_line", "line_map", "line_point",
-           "line_roots", "nearest_line_orbit", "section_symmetric_orbit"]
+__all__ = ["SECTION_QMAX", "SectionSymmetricOrbit", "first_orbit", "half_turn_p2", "island_centre", "island_line",
+           "line_map", "line_point", "line_roots", "nearest_line_orbit", "section_greene", "section_symmetric_orbit"]
+
+#: the largest period of the convergents followed by default (each orbit is Q integrations of the flow)
+SECTION_QMAX = 55
+#: an orbit of type P/Q turns P/Q per return around the island's centre to this (times Q)
+ROTATION_TOL = 1e-6
+#: the parameters a section map's curve can be broken by
+PARAM_NAMES_AND_H = (*model.PARAM_NAMES, "h")
 
 #: the reversor G0 on the section phi = pi
 G0 = np.diag([1.0, -1.0])
@@ -325,3 +333,65 @@ def curve_orbit(smap: SectionMap, nu: float, centre, a: float, b: float, *, iter
     if other is not smap:
         x = tuple(_flow_to(other, other.state(x), smap.phi0)[:2])
     return rotation_number(smap, x, center=centre, iterates=iterates)
+
+
+def island_centre(smap: SectionMap, guess) -> np.ndarray:
+    """The elliptic fixed point of ``smap`` near ``guess`` (Newton), the centre of Greene's curves."""
+    fp = find_fixed_point(smap, tuple(float(v) for v in guess))
+    if not fp.stable:
+        raise ParameterError(f"the fixed point near ({guess[0]:.6g}, {guess[1]:.6g}) is not elliptic "
+                             f"(trace {fp.trace:.6g}) at {smap.parameter} = {smap.parameter_value:.6g}: Greene's "
+                             f"curves surround an elliptic one; start from a parameter where it is")
+    return np.asarray(fp.point, float)
+
+
+def _section_line(smap, conv, centre, line):
+    """The symmetry line of Greene's orbits around ``centre``: ``line`` when given (phi0 or phi0 + pi),
+    else :func:`island_line` of the first even convergent (phi0 when every convergent is odd).
+    Returns (line, the first convergent's orbit when the decision found it, else None)."""
+    if line is not None:
+        value = validation.real("line", line)
+        if not any(_same_phi(value, phi) for phi in (smap.phi0, smap.phi0 + math.pi)):
+            raise ParameterError(f"line must be the section's phi0 = {smap.phi0:g} or phi0 + pi (the reversor's "
+                                 f"two symmetry lines), got {line!r}")
+        return value % (2.0 * math.pi), None
+    even = [(P, Q) for P, Q in conv if Q % 2 == 0]
+    if not even:
+        return smap.phi0, None
+    value, orb = nearest_line_orbit(smap, *even[0], centre)
+    return value, (orb if value == smap.phi0 and even[0] == conv[0] else None)
+
+
+def section_greene(smap: SectionMap, nu: float, *, qmax=None, target, line=None, around=None, param=None):
+    """:func:`explorer.greene` on a section map (docs/greene.md, "Greene on the section of Figure 4's
+    scene"): the curves of rotation number ``nu`` around the elliptic fixed point near ``around``,
+    broken by the model parameter ``param`` (or "h"; default "mu"), whose value in ``smap`` is the
+    first guess.  ``line``: phi0 or phi0 + pi, default the line of the island's elliptic orbits
+    (:func:`island_line`).  The points reported are on ``smap``'s section."""
+    if around is None:
+        raise ParameterError("greene on a section map needs around=(p1, p2), a guess of the island's elliptic "
+                             "fixed point")
+    pname = "mu" if param is None else param
+    validation.choice("param", pname, PARAM_NAMES_AND_H)
+    conv = enough_convergents(nu, SECTION_QMAX if qmax is None else qmax)
+    first = smap.h if pname == "h" else float(getattr(smap.params, pname))
+    centre = island_centre(smap, around)
+    line, seed = _section_line(smap, conv, centre, line)
+
+    def orbit_at(value, P, Q, guess, check):
+        m = smap.with_parameter(value, pname)
+        if guess is None:
+            if seed is not None and value == first and (P, Q) == conv[0]:
+                return seed         # the line's decision found the first orbit already
+            return first_orbit(m, P, Q, island_centre(m, centre), line)
+        orb = section_symmetric_orbit(m, Q, guess, param=pname, line=line)
+        if check:   # continued orbits stay on their branch; the final ones are checked once more
+            rot = orb.rotation(m, island_centre(m, centre))
+            if abs(abs(rot) * Q - P) > ROTATION_TOL:
+                raise ParameterError(f"the symmetric orbit of period {Q} near p1 = {orb.points[0, 0]:.8g} "
+                                     f"turns {rot:.8g} per return around the centre, not {P}/{Q}")
+        return orb
+
+    rows, crit, uncertainty, ratio = critical_parameter(conv, orbit_at, lambda orb: orb.line_start,
+                                                        lambda orb: orb.points[0], first, target)
+    return GreeneResult("section", pname, nu, crit, uncertainty, rows, target, ratio, float(line))

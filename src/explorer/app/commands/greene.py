@@ -33,6 +33,8 @@ COMMAND = Command("greene", __doc__, "--map standard --nu golden --json", (
 
 def run(args) -> int:
     from explorer.analysis import greene as gm
+    from explorer.analysis import greene_section as gs
+    from explorer.analysis.greene_core import MAX_QMAX
     from explorer.analysis.maps import StandardMap
     from explorer.model import validation
 
@@ -45,7 +47,7 @@ def run(args) -> int:
     if args.map_name == "standard":
         if centre is not None:
             raise model.ParameterError("--around is for --map section (the standard map has no island centre to give)")
-        qmax = gm.DEFAULT_QMAX if args.qmax is None else validation.integer("--qmax", args.qmax, 2, gm.MAX_QMAX)
+        qmax = gm.DEFAULT_QMAX if args.qmax is None else validation.integer("--qmax", args.qmax, 2, MAX_QMAX)
         res = gm.greene(StandardMap(k), nu, qmax=qmax)
     else:
         if centre is None:
@@ -55,7 +57,7 @@ def run(args) -> int:
                                        f"allowed: {model.describe_region(params, args.h)}")
         from explorer.analysis.section_map import SectionMap
 
-        qmax = gm.SECTION_QMAX if args.qmax is None else validation.integer("--qmax", args.qmax, 2, gm.MAX_QMAX)
+        qmax = gs.SECTION_QMAX if args.qmax is None else validation.integer("--qmax", args.qmax, 2, MAX_QMAX)
         res = gm.greene(SectionMap(params, args.h, tol=args.tol), nu, qmax=qmax, around=centre, param=args.param)
     if args.json:
         print(json.dumps(res.as_dict()))
@@ -64,5 +66,6 @@ def run(args) -> int:
           f"(residues of the convergents reach R* = {res.critical_residue} at {res.param}_n)")
     print(f"p,q,{res.param}_n,residue_at_critical,point_x,point_y")
     for c in res.convergents:
-        print(f"{c['p']},{c['q']},{c['param_value']!r},{c['residue']!r},{c['point'][0]!r},{c['point'][1]!r}")
+        print(f"{c['p']},{c['q']},{c['param_n']!r},{c['residue_at_critical']!r},{c['point_at_critical'][0]!r},"
+              f"{c['point_at_critical'][1]!r}")
     return 0

@@ -25,7 +25,6 @@ def breakup_figure(*, nobles=NOBLES, qmax=QMAX, starts=40, crossings=600, dpi=20
     uncertainty; the section at 0.99 and 1.01 mu_c of the curve that breaks last (``starts`` orbits
     on p2 = 0 from the centre outward, ``crossings`` each), its convergents' orbit points marked."""
     import explorer as ex
-    from explorer.analysis import greene as gm
     from explorer.analysis import greene_section as gs
 
     h = model.FIGURE4_H
@@ -35,9 +34,9 @@ def breakup_figure(*, nobles=NOBLES, qmax=QMAX, starts=40, crossings=600, dpi=20
     panels = []
     for factor in (0.99, 1.01):
         m = smap.with_parameter(factor * last.critical)
-        c = gm._centre(m, AROUND)
+        c = gs.island_centre(m, AROUND)
         cv = last.convergents[-1]
-        orb = gs.section_symmetric_orbit(m, cv["q"], cv["point"][0])
+        orb = gs.section_symmetric_orbit(m, cv["q"], cv["point_at_critical"][0])
         # starts on p2 = 0 from the centre across the curve's far crossing (where the curves are spread)
         p1 = np.linspace(c[0] - 0.01, orb.points[:, 0].min() - 0.2 * (c[0] - orb.points[:, 0].min()), starts)
         ok = np.array([model.is_admissible(m.params, x, 0.0, h) for x in p1])

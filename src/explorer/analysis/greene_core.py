@@ -1,0 +1,219 @@
+"""Greene's residue criterion, the part every map shares: rotation numbers and their convergents,
+the residue of a monodromy, the secant solve of R_n(k_n) = R* and the extrapolation of the k_n
+to the critical parameter (docs/greene.md, "The criterion").  The families of orbits are
+:mod:`explorer.analysis.greene` (the standard map) and :mod:`explorer.analysis.greene_section`
+(the section map)."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from explorer.model import ParameterError, validation
+
+__all__ = ["CRITICAL_RESIDUE", "GOLDEN", "GreeneResult", "Residue", "aitken", "convergents", "critical_parameter",
+           "enough_convergents", "extrapolate", "rotation_value"]
+
+#: (sqrt 5 - 1)/2 = [0; 1, 1, 1, ...], the rotation number of the standard map's last invariant circle
+GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
+#: MacKay 1983 (Physica D 7, 283): the limit of the positive residues of a noble curve's convergents
+#: at the critical parameter, the residue at the fixed point of renormalisation
+CRITICAL_RESIDUE = 0.2500888
+#: the largest period accepted (docs/greene.md, "Accuracy": double precision's limit)
+MAX_QMAX = 4181
+#: the smallest period used: Q = 1 has no half-orbit equation
+MIN_Q = 2
+#: the secant solve of R_n(k) = R*: stop when the step in k is below this, or after this many steps
+PARAM_TOL, PARAM_MAX_ITER = 1e-14, 60
+#: a secant step in the parameter is at most this fraction of max(|k|, the last step)
+MAX_PARAM_STEP = 0.2
+#: named rotation numbers accepted by :func:`rotation_value`
+NAMED = {"golden": GOLDEN, "golden2": 1.0 - GOLDEN}
+#: the forms of a rotation number, for error messages and help lines
+NU_FORMS = "a number in (0, 1), golden, golden2, noble:A = 1/(A + golden) or noble:A,B,... = [0; A, B, ..., 1, 1, ...]"
+
+
+def rotation_value(nu) -> float:
+    """The rotation number ``nu``: a number in (0, 1), a name of :data:`NAMED`, "noble:A" (A >= 1, the
+    noble number 1/(A + golden)) or "noble:A,B,..." = [0; A, B, ..., 1, 1, ...]."""
+    if isinstance(nu, str):
+        key = nu.strip().lower()
+        if key in NAMED:
+            return NAMED[key]
+        if key.startswith("noble:"):
+            try:
+                terms = [int(t) for t in key[len("noble:"):].split(",")]
+            except ValueError:
+                terms = [0]
+            if not terms or min(terms) < 1:
+                raise ParameterError(f"nu = noble:A needs an integer A >= 1 (nu = 1/(A + golden); noble:A,B,... "
+                                     f"= [0; A, B, ..., 1, 1, ...]), got {nu!r}")
+            value = GOLDEN
+            for a in reversed(terms):
+                value = 1.0 / (a + value)
+            return value
+        try:
+            nu = float(key)
+        except ValueError:
+            raise ParameterError(f"nu must be {NU_FORMS}, got {nu!r}") from None
+    return validation.real("nu", nu, 0.0, 1.0, lo_open=True, hi_open=True)
+
+
+def convergents(nu, qmax: int, qmin: int = MIN_Q) -> list:
+    """The convergents P/Q of the continued fraction of ``nu`` with ``qmin`` <= Q <= ``qmax``, in order."""
+    x = rotation_value(nu)
+    qmax = validation.integer("qmax", qmax, 2, MAX_QMAX)
+    h0, h1, k0, k1 = 0, 1, 1, 0          # P_{-2}, P_{-1}, Q_{-2}, Q_{-1}
+    out: list[tuple[int, int]] = []
+    frac = x
+    for _ in range(200):
+        a = math.floor(frac)
+        h0, h1 = h1, a * h1 + h0
+        k0, k1 = k1, a * k1 + k0
+        if k1 > qmax:
+            break
+        if k1 >= qmin and (not out or out[-1][1] != k1):
+            out.append((int(h1), int(k1)))
+        r = frac - a
+        if r < 1e-15 or abs(h1 / k1 - x) < 1e-16:
+            break
+        frac = 1.0 / r
+    return out
+
+
+def enough_convergents(x: float, qmax) -> list:
+    """:func:`convergents` of ``x`` up to ``qmax``, at least three of them."""
+    conv = convergents(x, qmax)
+    if len(conv) < 3:
+        raise ParameterError(f"qmax = {qmax} gives {len(conv)} convergents of nu = {x:.10g} with q >= {MIN_Q}; "
+                             f"at least 3 are needed: raise qmax")
+    return conv
+
+
+class Residue:
+    """The trace and Greene's residue of an orbit's ``monodromy``."""
+
+    monodromy: np.ndarray
+
+    @property
+    def trace(self) -> float:
+        return float(self.monodromy[0, 0] + self.monodromy[1, 1])
+
+    @property
+    def residue(self) -> float:
+        """Greene's residue R = (2 - tr M)/4 (0 < R < 1: elliptic)."""
+        return (2.0 - self.trace) / 4.0
+
+
+@dataclass(frozen=True)
+class GreeneResult:
+    """The critical parameter of the curve of rotation number ``nu`` (:func:`explorer.greene`).
+
+    ``convergents``: one dict per convergent, with ``p``, ``q``, ``param_n`` (the parameter where
+    its residue is R*), and at ``critical`` its ``residue_at_critical``, ``point_at_critical`` and
+    ``line_start`` (its coordinate on the symmetry line)."""
+
+    map: str
+    param: str
+    nu: float
+    critical: float
+    uncertainty: float
+    convergents: list = field(default_factory=list)
+    critical_residue: float = CRITICAL_RESIDUE
+    ratio: float = math.nan        # the last (k_{n+1} - k_n)/(k_n - k_{n-1})
+    line: float = math.pi          # the orbits' symmetry line: theta (standard map), phi of p2 = 0 (section)
+
+    #: the keys of each convergent in :meth:`as_dict` (docs/commands/greene.md)
+    JSON_KEYS = ("p", "q", "param_n", "residue_at_critical", "point_at_critical")
+
+    def as_dict(self) -> dict:
+        """The JSON form of ``python -m explorer greene --json`` (docs/commands/greene.md)."""
+        return {"map": self.map, "param": self.param, "nu": self.nu, "critical": self.critical,
+                "uncertainty": self.uncertainty,
+                "convergents": [{key: c[key] for key in self.JSON_KEYS} for c in self.convergents]}
+
+
+def solve_param(residue_at, target, k0, k1):
+    """The secant solve of residue_at(k).residue = target from k0, k1; a trial without an orbit is
+    pulled halfway back to the last good value.  Returns (k, orbit)."""
+    fa = residue_at(k0).residue - target
+    ka, kb = k0, k1
+    for _ in range(PARAM_MAX_ITER):
+        try:
+            fb_orb = residue_at(kb)
+        except ParameterError:
+            kb = 0.5 * (ka + kb)
+            continue
+        fb = fb_orb.residue - target
+        if fb == 0.0 or fb == fa:
+            return kb, fb_orb
+        kc = kb - fb * (kb - ka) / (fb - fa)
+        limit = MAX_PARAM_STEP * max(abs(kb), abs(kb - ka))
+        kc = min(max(kc, kb - limit), kb + limit)     # residues are steep in k: no leap past the orbit's life
+        ka, fa = kb, fb
+        if abs(kc - kb) <= PARAM_TOL * max(1.0, abs(kb)):
+            return kc, residue_at(kc)
+        kb = kc
+    raise ParameterError(f"the residue did not reach {target:g} (last parameter {kb:.12g})")
+
+
+def aitken(x0, x1, x2) -> float:
+    """Aitken's Delta^2 extrapolation of three terms of a geometric sequence."""
+    d1, d2 = x1 - x0, x2 - x1
+    if d2 == d1:
+        return x2
+    return x2 - d2 * d2 / (d2 - d1)
+
+
+def extrapolate(ks) -> tuple:
+    """(critical, uncertainty, ratio) of the sequence k_n (at least three terms; docs/greene.md,
+    "The criterion"): Aitken's Delta^2 of the last three k_n, its change from the previous triple's,
+    and the last ratio (k_n - k_{n-1})/(k_{n-1} - k_{n-2})."""
+    ks = [float(k) for k in ks]
+    if len(ks) < 3:
+        raise ParameterError(f"extrapolate needs at least 3 values, got {len(ks)}")
+    crit = aitken(*ks[-3:])
+    prev = aitken(*ks[-4:-1]) if len(ks) >= 4 else ks[-1]
+    d = np.diff(ks)
+    ratio = float(d[-1] / d[-2]) if d[-2] != 0 else math.nan
+    return crit, abs(crit - prev), ratio
+
+
+def critical_parameter(conv, orbit_at, start_of, point_of, first, target):
+    """k_n for each convergent (P, Q) of ``conv`` (R_n(k_n) = ``target``, each orbit continued from the
+    last, the first solve from ``first``), their extrapolation, and each orbit at the critical value.
+
+    ``orbit_at(k, P, Q, guess, check)`` is the family's orbit (``guess`` None: found from scratch;
+    ``check``: verify its type), ``start_of(orbit)`` its coordinate on the symmetry line (the next
+    guess), ``point_of(orbit)`` its reported point.  Returns (rows, critical, uncertainty, ratio), the
+    rows of :attr:`GreeneResult.convergents`."""
+    ks: list[float] = []
+    start = None
+    k_guess = first
+    for P, Q in conv:
+        state = {"guess": start}
+
+        def residue_at(k, P=P, Q=Q, state=state):
+            orb = orbit_at(k, P, Q, state["guess"], False)
+            state["guess"] = start_of(orb)
+            return orb
+
+        if len(ks) >= 2:   # the geometric sequence's next term
+            k_guess = ks[-1] + (ks[-1] - ks[-2]) * ((ks[-1] - ks[-2]) / (ks[-2] - ks[-3]) if len(ks) >= 3 else -0.4)
+        if ks:
+            k_n, orb = solve_param(residue_at, target, ks[-1], k_guess)
+        else:
+            k_n, orb = solve_param(residue_at, target, k_guess, k_guess + 1e-3 * max(1.0, abs(k_guess)))
+        ks.append(k_n)
+        start = start_of(orb)
+    crit, uncertainty, ratio = extrapolate(ks)
+    rows = []
+    guess = None
+    for (P, Q), k_n in zip(conv, ks):
+        orb = orbit_at(crit, P, Q, guess, True)
+        guess = start_of(orb)
+        pt = point_of(orb)
+        rows.append({"p": P, "q": Q, "param_n": float(k_n), "residue_at_critical": orb.residue,
+                     "point_at_critical": [float(pt[0]), float(pt[1])], "line_start": float(guess)})
+    return rows, float(crit), float(uncertainty), ratio
