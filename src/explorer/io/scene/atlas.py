@@ -4,18 +4,14 @@ chaotic fraction per cell (indicators only).  The :class:`~explorer.io.scene.Sce
 from __future__ import annotations
 
 import numbers
-from typing import TYPE_CHECKING
 
 from explorer import model
 from explorer.io.scene.checks import SceneError, _distinct_reals, _fail, _list, _str, _swept, _table
 from explorer.io.scene.schema import SWEEP_PARAMETERS
 from explorer.model import ParameterError
 
-if TYPE_CHECKING:
-    from explorer.io.scene.core import Scene
 
-
-def check_atlas(scene: Scene) -> None:
+def check_atlas(scene) -> None:
     """[atlas]: a scene of two swept parameters, [sweep] (rows) x [atlas] (columns), storing
     only the chaotic fraction per cell (indicators only)."""
     if not _swept(scene, "atlas", SWEEP_PARAMETERS):
@@ -38,17 +34,17 @@ def check_atlas(scene: Scene) -> None:
             raise SceneError(f"scene key 'atlas.values[{c}]' ({cell_label(scene, r, c)}): {e}") from None
 
 
-def n_cells(scene: Scene) -> int:
+def n_cells(scene) -> int:
     """Cells of an atlas: len(sweep.values) x len(atlas.values) (0 for other scenes)."""
     return len(scene.sweep_values) * len(scene.atlas_values) if scene.is_atlas else 0
 
 
-def cell_label(scene: Scene, r, c) -> str:
+def cell_label(scene, r, c) -> str:
     return (f"{scene.sweep_parameter} = {scene.sweep_values[r]!r}, "
             f"{scene.atlas_parameter} = {scene.atlas_values[c]!r}")
 
 
-def cell(scene: Scene, i):
+def cell(scene, i):
     """(Params, h, label) of atlas cell i = row * len(atlas.values) + column (row: sweep value,
     column: atlas value)."""
     if not scene.is_atlas or isinstance(i, bool) or not isinstance(i, numbers.Integral) \
@@ -65,7 +61,7 @@ def cell(scene: Scene, i):
     return scene.params.with_(**upd), h, cell_label(scene, r, c)
 
 
-def cell_allowed(scene: Scene, i) -> bool:
+def cell_allowed(scene, i) -> bool:
     """The allowed region of the section of cell i is non-empty (else the cell is drawn gray)."""
     prm, h, _label = scene.cell(i)
     ell = model.allowed_ellipse(prm, h, scene.integration.phi0)

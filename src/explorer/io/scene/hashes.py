@@ -8,12 +8,8 @@ from __future__ import annotations
 
 import hashlib
 import json
-from typing import TYPE_CHECKING
 
 from explorer.io.scene.schema import FORMAT_VERSION
-
-if TYPE_CHECKING:
-    from explorer.io.scene.core import Scene
 
 
 def _canonical_json(obj) -> str:
@@ -25,7 +21,7 @@ def _sha256(payload) -> str:
     return hashlib.sha256(_canonical_json(payload).encode("ascii")).hexdigest()
 
 
-def panel_settings(scene: Scene, i) -> dict:
+def panel_settings(scene, i) -> dict:
     """Everything that determines panel i's numbers, as plain JSON-able values."""
     prm, h, _label = scene.panel(i)
     d = {"params": prm.as_dict(), "h": h, "seeds": scene.seeds.used_dict(),
@@ -35,13 +31,13 @@ def panel_settings(scene: Scene, i) -> dict:
     return d
 
 
-def panel_hash(scene: Scene, i) -> str:
+def panel_hash(scene, i) -> str:
     """sha256 hex of the canonical JSON of panel_settings(i) and FORMAT_VERSION: the whole
     panel (every product); stored as the panel's ``hash``."""
     return _sha256({"format_version": FORMAT_VERSION, "panel": panel_settings(scene, i)})
 
 
-def product_settings(scene: Scene, i) -> dict:
+def product_settings(scene, i) -> dict:
     """What determines each product of panel i, {product: settings}: ``"sections"`` (when
     [compute] sections: the crossings of the [seeds] and, with separatrices, the fixed point's
     separatrices) and ``"indicators"`` (when [compute] lyapunov: the indicators of the [seeds],
@@ -64,13 +60,13 @@ def product_settings(scene: Scene, i) -> dict:
     return out
 
 
-def product_hashes(scene: Scene, i) -> dict:
+def product_hashes(scene, i) -> dict:
     """{product: sha256 hex of the canonical JSON of its settings and FORMAT_VERSION}
     (:func:`product_settings`); stored as the panel's ``sections_hash`` / ``indicators_hash``."""
     return {k: _sha256({"format_version": FORMAT_VERSION, k: v}) for k, v in product_settings(scene, i).items()}
 
 
-def figure_settings(scene: Scene) -> str:
+def figure_settings(scene) -> str:
     """Canonical JSON of everything that changes the drawing but not the numbers ([figure], with
     [compute] lyapunov the MEGNO threshold and map_indicator, and [manifolds] when drawn): kept in
     the PNG, so a rerun redraws the figure when they change, without recomputing.  [manifolds]
@@ -83,7 +79,7 @@ def figure_settings(scene: Scene) -> str:
     return _canonical_json(d)
 
 
-def atlas_hash(scene: Scene) -> str:
+def atlas_hash(scene) -> str:
     """sha256 of everything that determines an atlas's numbers (both axes, the model, h, seeds,
     integration and [lyapunov] settings; not name, description or figure)."""
     d = {"params": scene.params.as_dict(), "h": scene.h, "rows": [scene.sweep_parameter, list(scene.sweep_values)],
