@@ -151,12 +151,13 @@ def add_energy_arg(p, help="energy level [%(default)s]"):
     p.add_argument("--h", type=float, default=model.FIGURE4_H, help=help)
 
 
-def add_map_args(p, tol_help="Taylor tolerance [%(default)s]", json="print JSON"):
+def add_map_args(p, tol_help="Taylor tolerance [%(default)s]", json="print JSON", helps=None):
     """The options of a command on the section map (rotation, manifold): --h, the Taylor --tol
-    of the map (:data:`~explorer.integrate.methods.MAP_TOL`), the model with --json."""
+    of the map (:data:`~explorer.integrate.methods.MAP_TOL`), the model with --json (``helps``: as
+    :func:`add_model_args`)."""
     add_energy_arg(p)
     p.add_argument("--tol", type=float, default=MAP_TOL, help=tol_help)
-    add_model_args(p, model.FIGURE4, json=json)
+    add_model_args(p, model.FIGURE4, json=json, helps=helps)
 
 
 def add_newton_args(p, continue_help):
