@@ -335,3 +335,40 @@ def test_variational_coefficients_are_the_derivative_of_the_state_coefficients()
     mod.taylor_coefficients(P, minus, order)
     fd = (plus - minus) / (2 * eps)
     assert np.max(np.abs(Z[4:] - fd)) <= 1e-8 * np.max(np.abs(fd))
+
+
+# ---------------------------------------------------------------------- the SIMD form
+def lane_states(system, rng):
+    """LANES states of ``system`` (rows of X[0]) in the domain of its operations."""
+    from explorer.integrate.simd import LANES
+
+    if system.name == "ad_rules":
+        X0 = np.empty((system.dimension, LANES))
+        X0[0] = rng.uniform(0.1, 0.4, LANES)
+        X0[1] = rng.uniform(1.2, 1.6, LANES)
+        X0[2:] = rng.uniform(0.4, 0.8, (system.dimension - 2, LANES))
+        return X0
+    return rng.uniform(-0.5, 0.5, (system.dimension, LANES))
+
+
+@pytest.mark.parametrize("which", ["ad_rules", "henon_heiles", "chaplygin_r3_variational2"])
+def test_each_lane_of_the_simd_form_equals_the_scalar_recurrence_bit_for_bit(rules_module, which):
+    from explorer.integrate.simd import LANES
+
+    system = {"ad_rules": rules_module[0], "henon_heiles": henon_heiles(),
+              "chaplygin_r3_variational2": chaplygin().variational(2)}[which]
+    mod = codegen.load(system)
+    P = system.parameter_array() if which != "chaplygin_r3_variational2" else mp_.packed_params(
+        mp_.FIGURE4.with_(mu=0.5))
+    order = 18
+    X0 = lane_states(system, np.random.default_rng(8))
+    XL = np.zeros((order + 1, system.dimension, LANES))
+    XL[0] = X0
+    WL = np.zeros((order + 1, max(mod.N_WORK, 1), LANES))
+    mod.taylor_coefficients_lanes(P, XL, order, WL)
+    for lane in range(LANES):
+        X = np.zeros((system.dimension, order + 1))
+        X[:, 0] = X0[:, lane]
+        mod.taylor_coefficients(P, X, order)
+        assert np.all(np.isfinite(X))
+        assert np.array_equal(XL[:, :, lane].T.view(np.uint64), X.view(np.uint64)), lane

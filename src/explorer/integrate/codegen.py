@@ -16,9 +16,11 @@ and emitted as compiled Python source (docs/systems.md).
 3. **Emission** (:func:`source`): a module with ``@njit`` functions (cache=True)
    ``taylor_coefficients(P, X, order)`` (same contract as
    :func:`explorer.model.equations.taylor_coefficients`: X[i, k] for k = 0..order from X[:, 0]),
-   ``taylor_coefficients_into(P, X, order, W)`` (with a work array of ``N_WORK`` rows), ``rhs(y, P, dy)``
-   and, when the system has one, ``energy(y, P)``.  P holds the parameter values in the order of
-   ``system.parameters`` (:meth:`System.parameter_array`): another value compiles nothing new.
+   ``taylor_coefficients_into(P, X, order, W)`` (with a work array of ``N_WORK`` rows),
+   ``taylor_coefficients_lanes(P, X, order, W)`` (the SIMD form, LANES orbits at once, each lane bit
+   for bit the scalar form), ``rhs(y, P, dy)`` and, when the system has one, ``energy(y, P)``.
+   P holds the parameter values in the order of ``system.parameters`` (:meth:`System.parameter_array`):
+   another value compiles nothing new.
 4. **Cache** (:func:`load`): the module is written to ``<cache>/<name>_<key>.py``, with ``key`` the
    SHA-256 of the system's :attr:`~System.content_hash` and :data:`GENERATOR_VERSION`, and imported from that
    file with importlib, so numba's on-disk cache (``cache=True``) applies to it; a second run finds
@@ -46,7 +48,7 @@ from explorer.model.validation import ParameterError
 __all__ = ["GENERATOR_VERSION", "Decomposition", "cache_directory", "decompose", "load", "module_key", "source"]
 
 #: changes whenever the emitted code changes, so that a cached module of an older generator is not used
-GENERATOR_VERSION = 1
+GENERATOR_VERSION = 3
 
 #: the elementary operations and their recurrence at order k >= 1 (Jorba & Zou 2005, Sec. 2)
 RULES = {
@@ -243,21 +245,46 @@ def decompose(system: System, expressions=None) -> Decomposition:
 
 # ---------------------------------------------------------------------- emission
 class _Emitter:
-    """Source lines of one decomposition: scalars once, order 0, then orders k >= 1."""
+    """Source lines of one decomposition: scalars once, order 0, then orders k >= 1.
 
-    def __init__(self, d: Decomposition):
+    ``lanes``: the SIMD form (:mod:`explorer.integrate.simd`): X[k, i, l] and W[k, r, l] with
+    LANES lanes contiguous, each coefficient a vector (vload/vstore), the same operations in the
+    same order as the scalar form (so each lane equals the scalar recurrence bit for bit); the
+    order-0 values of exp, log, sin, cos and real powers lane by lane with :mod:`math`."""
+
+    def __init__(self, d: Decomposition, lanes: bool = False):
         self.d = d
+        self.lanes = lanes
         self.row = {}
         for i, n in enumerate(d.nodes):
             if not n.scalar and n.kind != "state":
                 self.row[i] = len(self.row)
 
+    # -- access to one coefficient (a code string), scalar or vector
+    def load(self, array, r, k):
+        if self.lanes:
+            stride = "XS" if array == "X" else "WS"
+            return f"vload({array}, ({k}) * {stride} + {r} * LANES)"
+        return f"{array}[{r}, {k}]"
+
+    def store(self, array, r, k, code):
+        if self.lanes:
+            stride = "XS" if array == "X" else "WS"
+            return f"vstore({array}, ({k}) * {stride} + {r} * LANES, {code})"
+        return f"{array}[{r}, {k}] = {code}"
+
+    def zero(self):
+        return "vzero()" if self.lanes else "0.0"
+
     def coef(self, i, k):
-        """The coefficient of series node i at order ``k`` (a code string)."""
+        """The coefficient of series node i at order ``k``."""
         n = self.d.nodes[i]
         if n.kind == "state":
-            return f"X[{n.index}, {k}]"
-        return f"W[{self.row[i]}, {k}]"
+            return self.load("X", n.index, k)
+        return self.load("W", self.row[i], k)
+
+    def w(self, r, k):
+        return self.load("W", r, k)
 
     def value(self, i):
         """The order-0 value of node i."""
@@ -265,6 +292,15 @@ class _Emitter:
         if n.scalar:
             return f"s{i}"
         return self.coef(i, 0)
+
+    def lane_value(self, i):
+        """The order-0 value of node i in lane ``l`` (a float)."""
+        n = self.d.nodes[i]
+        if n.scalar:
+            return f"s{i}"
+        if n.kind == "state":
+            return f"X[0, {n.index}, l]"
+        return f"W[0, {self.row[i]}, l]"
 
     def scalar_lines(self):
         out = []
@@ -276,13 +312,13 @@ class _Emitter:
             elif n.kind == "const":
                 code = repr(n.value)
             else:
-                code = self.op_value(n)
+                code = self.op_value(n, self.value)
             out.append(f"s{i} = {code}")
         return out
 
-    def op_value(self, n):
-        a = self.value(n.args[0])
-        b = self.value(n.args[1]) if len(n.args) > 1 else ""
+    def op_value(self, n, value):
+        a = value(n.args[0])
+        b = value(n.args[1]) if len(n.args) > 1 else ""
         return _VALUE[n.kind].format(a=a, b=b)
 
     def order0_lines(self):
@@ -290,84 +326,98 @@ class _Emitter:
         for i, n in enumerate(self.d.nodes):
             if n.scalar or n.kind == "state":
                 continue
-            out.append(f"{self.coef(i, 0)} = {self.op_value(n)}")
+            if not self.lanes:
+                out.append(self.store("W", self.row[i], 0, self.op_value(n, self.value)))
+            elif n.kind == "sqrt":   # IEEE sqrt, correctly rounded: the vector one equals math.sqrt
+                out.append(self.store("W", self.row[i], 0, f"vsqrt({self.value(n.args[0])})"))
+            elif n.kind in ("pow", "exp", "log", "sin", "cos"):
+                out += ["for l in range(LANES):",
+                        f"    W[0, {self.row[i]}, l] = {self.op_value(n, self.lane_value)}"]
+            else:
+                out.append(self.store("W", self.row[i], 0, self.op_value(n, self.value)))
         return out
 
     def orderk_lines(self):
-        """Statements for the coefficient k >= 1 of every series node (``k`` a loop variable)."""
+        """Statements for the coefficient k >= 1 of every series node (``k`` a loop variable);
+        the rules of :data:`RULES`."""
         out = []
         nodes = self.d.nodes
+        z = self.zero()
         for i, n in enumerate(nodes):
             if n.scalar or n.kind == "state":
                 continue
             w = self.row[i]
             a = n.args[0]
             sa = nodes[a].scalar
-            if len(n.args) > 1:
-                b = n.args[1]
-                sb = nodes[b].scalar
+            b = n.args[-1]
+            sb = nodes[b].scalar
             U = (lambda j, a=a: self.coef(a, j))  # noqa: E731
-            V = (lambda j, b=n.args[-1]: self.coef(b, j))  # noqa: E731
+            V = (lambda j, b=b: self.coef(b, j))  # noqa: E731
+            W = self.w
+            put = (lambda code, w=w: self.store("W", w, "k", code))  # noqa: E731
             if n.kind in ("add", "sub"):
-                op = "+" if n.kind == "add" else "-"
                 if sa:
-                    rhs = f"-{V('k')}" if n.kind == "sub" else V("k")
+                    code = f"-{V('k')}" if n.kind == "sub" else V("k")
                 elif sb:
-                    rhs = U("k")
+                    code = U("k")
                 else:
-                    rhs = f"{U('k')} {op} {V('k')}"
-                out.append(f"W[{w}, k] = {rhs}")
+                    code = f"{U('k')} {'+' if n.kind == 'add' else '-'} {V('k')}"
+                out.append(put(code))
             elif n.kind == "neg":
-                out.append(f"W[{w}, k] = -{U('k')}")
+                out.append(put(f"-{U('k')}"))
             elif n.kind == "mul":
                 if sa:
-                    out.append(f"W[{w}, k] = s{a} * {V('k')}")
+                    out.append(put(f"s{a} * {V('k')}"))
                 elif sb:
-                    out.append(f"W[{w}, k] = {U('k')} * s{b}")
+                    out.append(put(f"{U('k')} * s{b}"))
                 else:
-                    out += ["acc = 0.0", "for j in range(k + 1):", f"    acc += {U('j')} * {V('k - j')}",
-                            f"W[{w}, k] = acc"]
+                    out += [f"acc = {z}", "for j in range(k + 1):", f"    acc += {U('j')} * {V('k - j')}", put("acc")]
             elif n.kind == "div":
                 if sb:
-                    out.append(f"W[{w}, k] = {U('k')} / s{b}")
+                    out.append(put(f"{U('k')} / s{b}"))
                 else:
-                    out += [f"acc = {'0.0' if sa else U('k')}", "for j in range(1, k + 1):",
-                            f"    acc -= {V('j')} * W[{w}, k - j]", f"W[{w}, k] = acc / {V(0)}"]
+                    out += [f"acc = {z if sa else U('k')}", "for j in range(1, k + 1):",
+                            f"    acc -= {V('j')} * {W(w, 'k - j')}", put(f"acc / {V(0)}")]
             elif n.kind == "square":
-                out += ["acc = 0.0", "for j in range((k + 1) // 2):", f"    acc += {U('j')} * {U('k - j')}",
-                        "acc = 2.0 * acc", "if k % 2 == 0:", f"    acc += {U('k // 2')} * {U('k // 2')}",
-                        f"W[{w}, k] = acc"]
+                out += [f"acc = {z}", "for j in range((k + 1) // 2):", f"    acc += {U('j')} * {U('k - j')}",
+                        "acc = 2.0 * acc", "if k % 2 == 0:", f"    acc += {U('k // 2')} * {U('k // 2')}", put("acc")]
             elif n.kind == "pow":
-                alpha = f"s{b}"
-                out += ["acc = 0.0", "for j in range(k):",
-                        f"    acc += ({alpha} * (k - j) - j) * {U('k - j')} * W[{w}, j]",
-                        f"W[{w}, k] = acc / (k * {U(0)})"]
+                out += [f"acc = {z}", "for j in range(k):",
+                        f"    acc += (s{b} * (k - j) - j) * {U('k - j')} * {W(w, 'j')}", put(f"acc / (k * {U(0)})")]
             elif n.kind == "sqrt":
-                out += [f"acc = {U('k')}", "for j in range(1, k):", f"    acc -= W[{w}, j] * W[{w}, k - j]",
-                        f"W[{w}, k] = acc / (2.0 * W[{w}, 0])"]
+                out += [f"acc = {U('k')}", "for j in range(1, k):", f"    acc -= {W(w, 'j')} * {W(w, 'k - j')}",
+                        put(f"acc / (2.0 * {W(w, 0)})")]
             elif n.kind == "exp":
-                out += ["acc = 0.0", "for j in range(1, k + 1):", f"    acc += j * {U('j')} * W[{w}, k - j]",
-                        f"W[{w}, k] = acc / k"]
+                out += [f"acc = {z}", "for j in range(1, k + 1):", f"    acc += j * {U('j')} * {W(w, 'k - j')}",
+                        put("acc / k")]
             elif n.kind == "log":
-                out += ["acc = 0.0", "for j in range(1, k):", f"    acc += j * W[{w}, j] * {U('k - j')}",
-                        f"W[{w}, k] = ({U('k')} - acc / k) / {U(0)}"]
+                out += [f"acc = {z}", "for j in range(1, k):", f"    acc += j * {W(w, 'j')} * {U('k - j')}",
+                        put(f"({U('k')} - acc / k) / {U(0)}")]
             elif n.kind == "sin":
                 c = self.row[self.d._index[Node("cos", n.args)]]
-                out += ["acc = 0.0", "acc2 = 0.0", "for j in range(1, k + 1):", f"    t = j * {U('j')}",
-                        f"    acc += t * W[{c}, k - j]", f"    acc2 += t * W[{w}, k - j]",
-                        f"W[{w}, k] = acc / k", f"W[{c}, k] = -acc2 / k"]
+                out += [f"acc = {z}", f"acc2 = {z}", "for j in range(1, k + 1):", f"    t = j * {U('j')}",
+                        f"    acc += t * {W(c, 'k - j')}", f"    acc2 += t * {W(w, 'k - j')}",
+                        put("acc / k"), self.store("W", c, "k", "-acc2 / k")]
             elif n.kind == "cos":
                 pass  # with its sine
             else:  # pragma: no cover - every kind of _Builder is above
                 raise AssertionError(n.kind)
-        return out
+        # acc = acc + x, not acc += x: the vector type has + but no in-place +
+        return [re.sub(r"^(\s*)(acc2?) ([+-])= ", r"\1\2 = \2 \3 ", line) for line in out]
 
     def output(self, i, k):
         """Coefficient ``k`` of output node i, zero for k >= 1 of a scalar."""
         n = self.d.nodes[i]
         if n.scalar:
-            return f"s{i}" if k == 0 else "0.0"
+            code = f"s{i}" if k == 0 else "0.0"
+            return f"vsplat({code})" if self.lanes else code
         return self.coef(i, k)
+
+    def next_lines(self):
+        """x_1 = f_0 and x_{k+1} = f_k / (k + 1)."""
+        first = [self.store("X", i, 1, self.output(o, 0)) for i, o in enumerate(self.d.outputs)]
+        nxt = [self.store("X", i, "k + 1", f"{self.output(o, 'k')} / (k + 1)") for i, o in enumerate(self.d.outputs)]
+        return first, nxt
 
 
 def _indent(lines, n):
@@ -422,6 +472,27 @@ def rhs(y, P, dy):
 {scalars}
 {order0}
 {rhs_out}
+
+
+# ---- the SIMD form (explorer.integrate.simd): LANES orbits at once
+from explorer.integrate.simd import LANES, vload, vsplat, vsqrt, vstore, vzero  # noqa: E402
+
+#: flat strides of one order in the lane arrays X[k, i, l] and W[k, r, l]
+XS = DIM * LANES
+WS = max(N_WORK, 1) * LANES
+
+
+@njit(error_model="numpy")
+def taylor_coefficients_lanes(P, X, order, W):
+    """LANES orbits at once: X[k, i, l] for k = 1..order from X[0] (X of shape (order + 1, DIM, LANES),
+    W of shape (order + 1, max(N_WORK, 1), LANES), both C-contiguous).  Each lane equals
+    taylor_coefficients_into bit for bit (the same operations in the same order)."""
+{scalars}
+{order0_lanes}
+{first_lanes}
+    for k in range(1, order):
+{orderk_lanes}
+{next_lanes}
 '''
 
 ENERGY = '''
@@ -449,16 +520,20 @@ def source(system: System, key: str = "") -> str:
     dim = system.dimension
     scalars = _indent(e.scalar_lines(), 4)
     order0 = _indent(e.order0_lines(), 4)
-    first = _indent([f"X[{i}, 1] = {e.output(o, 0)}" for i, o in enumerate(d.outputs)], 4)
-    next_ = _indent([f"X[{i}, k + 1] = {e.output(o, 'k')} / (k + 1)" for i, o in enumerate(d.outputs)], 8)
+    first, next_ = e.next_lines()
+    first, next_ = _indent(first, 4), _indent(next_, 8)
     orderk = _indent(e.orderk_lines() or ["pass"], 8)
+    v = _Emitter(d, lanes=True)
+    first_lanes, next_lanes = v.next_lines()
+    lanes = dict(order0_lanes=_indent(v.order0_lines(), 4), first_lanes=_indent(first_lanes, 4),
+                 next_lanes=_indent(next_lanes, 8), orderk_lanes=_indent(v.orderk_lines() or ["pass"], 8))
     rhs_out = _indent([f"dy[{i}] = {e.output(o, 0)}" for i, o in enumerate(d.outputs)], 4)
     equations = "\n".join(f"#   d{s.name}/dt = {f}" for s, f in zip(system.states, system.rhs))
     equations += "\n#   parameters: " + (", ".join(p.name for p in system.parameters) or "none")
     text = MODULE.format(version=GENERATOR_VERSION, name=system.name, key=key, equations=equations,
                          and_energy=" and energy" if system.energy is not None else "", dim=dim,
                          n_params=len(system.parameters), n_work=len(e.row), scalars=scalars, order0=order0,
-                         first=first, orderk=orderk, next_=next_, rhs_out=rhs_out)
+                         first=first, orderk=orderk, next_=next_, rhs_out=rhs_out, **lanes)
     if system.energy is not None:
         de = decompose(system, [system.energy])
         ee = _Emitter(de)
