@@ -37,6 +37,7 @@ import importlib.util
 import os
 import re
 import sys
+import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -575,9 +576,10 @@ def load(system: System):
         return mod
     if not path.exists():
         path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(source(system, key))
-        os.replace(tmp, path)   # atomic: a concurrent process sees the whole file or none
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.stem, suffix=".tmp")
+        with os.fdopen(fd, "w") as f:
+            f.write(source(system, key))
+        os.replace(tmp, path)   # atomic: a concurrent process or thread sees the whole file or none
     spec = importlib.util.spec_from_file_location(mod_name, path)
     mod = importlib.util.module_from_spec(spec)
     sys.modules[mod_name] = mod
