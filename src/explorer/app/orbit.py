@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import sys
 import time
 from dataclasses import dataclass
@@ -98,13 +97,8 @@ def to_store(path, params, p1, p2, h, n_crossings, *, block=sections.DEFAULT_BLO
 
     path = os.fspath(path)
     store.check_writable(os.path.dirname(os.path.abspath(path)), "--out", path)
-    with deferred_interrupt() as stop:
-        try:
-            with store.store_lock(path):
-                store.clean_stale_temporaries(path)
-                return _to_store(path, params, p1, p2, h, n_crossings, block, force, on_block, stop, kw)
-        except store.StoreBusy as exc:
-            raise ParameterError(str(exc)) from None
+    with deferred_interrupt() as stop, store.writing(path):
+        return _to_store(path, params, p1, p2, h, n_crossings, block, force, on_block, stop, kw)
 
 
 def _to_store(path, params, p1, p2, h, n_crossings, block, force, on_block, stop, kw) -> OrbitReport:
@@ -125,13 +119,10 @@ def _to_store(path, params, p1, p2, h, n_crossings, block, force, on_block, stop
     if os.path.exists(path) and not force and not os.path.isdir(stream.blocks_dir(path)):
         raise ParameterError(f"{path} exists and holds another run; use --force to overwrite it or choose "
                              "another --out")
-    directory = os.path.dirname(os.path.abspath(path))
     need = stream.disk_needed(1, n_crossings)
-    free = shutil.disk_usage(directory).free
-    if need > free:
-        raise ParameterError(f"crossings: {n_crossings} crossings may need {sections.human_bytes(need)} on disk "
-                             f"({sections.human_bytes(need / 2)} of rows, twice while the store is written); "
-                             f"{sections.human_bytes(free)} free in {directory}")
+    store.check_disk(os.path.dirname(os.path.abspath(path)), need,
+                     f"crossings: {n_crossings} crossings ({sections.human_bytes(need / 2)} of rows, twice while "
+                     "the store is written)")
     state, resumed = blocks.resume_state(params, y0, phi0=phi0, force=force)
     t0 = time.perf_counter()
     st = state
@@ -148,12 +139,9 @@ def _to_store(path, params, p1, p2, h, n_crossings, block, force, on_block, stop
                                               dt=settings.get("dt", np.nan), phi0=settings["phi0"],
                                               direction=settings["direction"], crossings=n_crossings, wall_time=wall),
                  block=int(block), blocks=int(st.blocks), resumed_blocks=int(resumed))
-    prov = json.dumps(store.provenance({"command": "orbit"}), sort_keys=True)
-    file_attrs = {"scene_name": "orbit", "scene": json.dumps(blocks.identity, sort_keys=True), "provenance": prov}
-    arrays = {"seeds": np.array([[p1, p2]], float), "y0": y0, "count": st.done, "status": st.status,
-              "final": st.y, "info": st.info}
-    if force and os.path.exists(path):
-        store.remove_store(path)
-    blocks.finish(arrays, attrs, file_attrs)
+    result = {"count": st.done, "status": st.status, "final": st.y, "info": st.info}
+    store.write_panel(path, 0, attrs, [[p1, p2]], y0, result, blocks=blocks, fresh=force,
+                      file_attrs=store.file_attrs("orbit", json.dumps(blocks.identity, sort_keys=True),
+                                                  {"command": "orbit"}))
     return OrbitReport(int(st.done[0]), STATUS_NAMES[int(st.status[0])], blocks.max_dh, int(st.blocks), resumed, path,
                        settings)

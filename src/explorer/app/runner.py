@@ -19,7 +19,7 @@ import numpy as np
 
 from explorer.analysis import sections, sweep
 from explorer.analysis.lyapunov import chaotic_fraction
-from explorer.analysis.sections import ADAPTIVE_METHODS, energy_warning, max_energy_error
+from explorer.analysis.sections import ADAPTIVE_METHODS, energy_warning
 from explorer.app import interrupt
 from explorer.app.interrupt import Interrupted
 from explorer.io import store
@@ -362,12 +362,12 @@ def _specs(scene, plan: _Plan, jobs, backend) -> dict:
     return {k: sweep.build_spec(scene, v, chunk_orbits=chunk_orbits, product=k) for k, v in plan.todo.items() if v}
 
 
-def _streams(scene, out, plan: _Plan, sec, force) -> _PanelStreams:
+def _streams(scene, out, plan: _Plan, sec, force) -> stream.PanelStreams:
     """The writer of the streamed sections panels, once the block folders of finished, replaced or
     no longer streamed panels are removed (nothing resumes from them)."""
     stream.remove_stale_blocks(out, keep={p.index for k, p in enumerate(sec.panels) if sec.streamed(k)}
                                if sec is not None else ())
-    return _PanelStreams(out, [w.get("sections") for w in plan.want], scene.integration.phi0, force)
+    return stream.PanelStreams(out, [w.get("sections") for w in plan.want], scene.integration.phi0, force)
 
 
 @dataclass
@@ -434,11 +434,10 @@ class _PanelWriter:
     parent): :meth:`sections` and :meth:`indicators`, with the panel attributes of the store's
     schema (:class:`explorer.io.store.PanelAttrs`), and adds what it measured to ``stats``."""
 
-    def __init__(self, scene, out, plan: _Plan, specs: dict, streams: _PanelStreams):
+    def __init__(self, scene, out, plan: _Plan, specs: dict, streams: stream.PanelStreams):
         self.scene, self.out, self.plan, self.specs, self.streams = scene, out, plan, specs, streams
         self.stats = _SweepStats()
-        prov = json.dumps(store.provenance({"scene": scene.name}), sort_keys=True)
-        self.file_attrs = {"scene_name": scene.name, "scene": scene.text, "provenance": prov}
+        self.file_attrs = store.file_attrs(scene.name, scene.text, {"scene": scene.name})
         self.setting = _setting(scene.integration) + " ([integration])"
         self.ly_setting = _setting(scene.lyapunov) + " ([lyapunov])"
 
@@ -469,19 +468,15 @@ class _PanelWriter:
                                                   wall_time=arrays["wall_time"]),
                      sections_hash=self.plan.want[i]["sections"], seeds_dropped=int(panel.dropped))
         attrs.update({k: v for k, v in keep.items() if k in INDICATOR_ATTRS})
-        payload = {"seeds": panel.seeds, "y0": panel.y0, "count": arrays["count"],
-                   "status": arrays["status"], "final": arrays["final"], "info": arrays["info"]}
-        payload.update({k: v for k, v in keep.items() if k in store.INDICATOR_DATASETS})
-        if not arrays.get("streamed"):
-            payload["data"] = arrays["data"]
-        _separatrices(self.scene, i, payload, attrs)
+        extra = {k: v for k, v in keep.items() if k in store.INDICATOR_DATASETS}
+        _separatrices(self.scene, i, extra, attrs)
+        blocks = None
         if arrays.get("streamed"):   # rows stored block by block: the panel written from the blocks
             attrs.update(block=int(self.specs["sections"].blocks[self.plan.todo["sections"].index(i)]),
                          resumed_blocks=self.streams.resumed.get(i, 0))
-            dh = self.streams.finish(i, payload, attrs, self.file_attrs)
-        else:
-            store.commit_panel(self.out, i, payload, attrs, self.file_attrs)
-            dh = max_energy_error(arrays["data"])
+            blocks = self.streams.take(i)
+        dh = store.write_panel(self.out, i, attrs, panel.seeds, panel.y0, arrays, rows=arrays.get("data"),
+                               blocks=blocks, extra=extra, file_attrs=self.file_attrs)
         self.stats.add_sections(panel, arrays, dh, self.setting, integ.crossings)
 
     def _indicators_part(self, panel, i, arrays) -> tuple:
@@ -508,10 +503,9 @@ class _PanelWriter:
         if self.plan.alone:   # the panel is its seeds and their indicators (no crossings)
             attrs.update(self.panel_attrs(panel, i, True), phi0=float(integ.phi0), direction=int(integ.direction),
                          wall_time=arrays["wall_time"], seeds_dropped=int(panel.dropped))
-            payload.update(seeds=panel.seeds, y0=panel.y0, count=arrays["count"], status=arrays["status"],
-                           final=arrays["final"], info=arrays["info"], data=arrays["data"])
             _separatrices(self.scene, i, payload, attrs)
-            store.commit_panel(self.out, i, payload, attrs, self.file_attrs)
+            store.write_panel(self.out, i, attrs, panel.seeds, panel.y0, arrays, rows=arrays["data"], extra=payload,
+                              file_attrs=self.file_attrs)
         else:
             attrs.update(self.panel_attrs(panel, i, True))
             stale = [k for k in store.INDICATOR_DATASETS + INDICATOR_ATTRS if k not in payload and k not in attrs]
@@ -742,13 +736,8 @@ def _guarded(out: Path):
     """While a run writes the store ``out``: its lock held (a second process is refused with the
     holder named, exit 2) and Ctrl-C deferred to ``stop.check()`` (:mod:`explorer.app.interrupt`).
     Temporaries of killed runs next to the store are removed once the lock is ours."""
-    with interrupt.deferred_interrupt() as stop:
-        try:
-            with store.store_lock(out):
-                store.clean_stale_temporaries(out)
-                yield stop
-        except store.StoreBusy as exc:
-            raise ParameterError(str(exc)) from None
+    with interrupt.deferred_interrupt() as stop, store.writing(out):
+        yield stop
 
 
 def _check_same_scene(scene, out: Path, force: bool) -> None:
@@ -783,52 +772,15 @@ def _kept(scene, out: Path, want) -> str:
 
 
 def _check_disk(spec, out: Path) -> None:
-    """Refuse up front a sweep whose rows may not fit on the disk of ``out`` (40 bytes a crossing;
-    a streamed panel needs its rows twice while its store is written)."""
-    import shutil
-
+    """Refuse up front a sweep whose rows may not fit on the disk of ``out`` (a streamed panel
+    needs its rows twice while its store is written)."""
     need = 0
     for pos, panel in enumerate(spec.panels):
         if spec.sections:
             rows = sections.result_bytes(len(panel.y0), spec.crossings)
             need += 2 * rows if spec.streamed(pos) else rows
-    directory = out.resolve().parent
-    directory.mkdir(parents=True, exist_ok=True)
-    free = shutil.disk_usage(directory).free
-    if need > free:
-        raise ParameterError(f"scene: crossings = {spec.crossings} for {sum(len(p.y0) for p in spec.panels)} orbits "
-                             f"may need {sections.human_bytes(need)} on disk; {sections.human_bytes(free)} free in "
-                             f"{directory}; lower [integration] crossings or the seeds")
-
-
-class _PanelStreams:
-    """The sweep's writer of streamed panels (``sweep.run``'s ``streamer``): one
-    :class:`~explorer.io.store.stream.BlockStream` per panel, its identity the panel's settings
-    hash, so a killed sweep resumes a streamed panel from its stored blocks."""
-
-    def __init__(self, out, hashes, phi0, force):
-        self.out, self.hashes, self.phi0, self.force = out, hashes, phi0, force
-        self.streams: dict = {}
-        self.resumed: dict = {}
-
-    def resume(self, panel):
-        bs = stream.BlockStream(self.out, {"panel_hash": self.hashes[panel.index]}, index=panel.index)
-        if self.force:
-            bs.discard()
-        # blocks of another setting are stale: force
-        state, n = bs.resume_state(panel.P, panel.y0, phi0=self.phi0, force=True)
-        self.streams[panel.index] = bs
-        self.resumed[panel.index] = n
-        return state
-
-    def block(self, panel, number, index, start, count, data, orbits, state):
-        self.streams[panel.index].append(number, index, start, count, data, orbits, state)
-
-    def finish(self, i, payload, attrs, file_attrs) -> float:
-        """Write panel i from its blocks; returns the largest |H - H0| of its rows."""
-        bs = self.streams.pop(i)
-        bs.finish(payload, attrs, file_attrs)
-        return bs.max_dh
+    store.check_disk(out.resolve().parent, need, f"scene: crossings = {spec.crossings} for "
+                     f"{sum(len(p.y0) for p in spec.panels)} orbits", "lower [integration] crossings or the seeds")
 
 
 def _progress(total, quiet, desc):

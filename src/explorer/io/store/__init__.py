@@ -116,6 +116,7 @@ from explorer.io.store.format import (
                                       stored_scene_name,
 )
 from explorer.io.store.lock import StoreBusy, check_writable, store_lock
+from explorer.io.store.panel import ORBIT_DATASETS, check_disk, file_attrs, write_panel, writing
 
 __all__ = [
     "FORMAT",
@@ -128,6 +129,11 @@ __all__ = [
     "PanelData",
     "StoreData",
     "commit_panel",
+    "write_panel",
+    "writing",
+    "check_disk",
+    "file_attrs",
+    "ORBIT_DATASETS",
     "RowSource",
     "update_panel",
     "update_panel_attrs",

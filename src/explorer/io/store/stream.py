@@ -210,20 +210,52 @@ class BlockStream:
                     pos += c
         return fill
 
-    def finish(self, arrays: dict, attrs: dict, file_attrs: dict | None = None) -> None:
+    def finish(self, arrays: dict, attrs: dict, file_attrs: dict | None = None, *, fresh: bool = False) -> None:
         """Write the panel of the store from the blocks, atomically, and remove them.
 
         ``arrays``: the per-orbit datasets (seeds, y0, count, status, final, info, and optional
-        ones); the rows come from the blocks.  ``attrs['hash']`` defaults to this run's hash."""
+        ones); the rows come from the blocks.  ``attrs['hash']`` defaults to this run's hash;
+        ``fresh``: the store becomes this one panel."""
         count = np.asarray(arrays["count"], np.int64)
         offsets = np.zeros(count.size + 1, np.int64)
         np.cumsum(count, out=offsets[1:])
         payload = dict(arrays, offsets=offsets, crossings=RowSource(int(offsets[-1]), self._fill(offsets)))
         attrs = dict(attrs)
         attrs.setdefault("hash", self.hash)
-        commit_panel(self.path, self.index, payload, attrs, file_attrs)
+        commit_panel(self.path, self.index, payload, attrs, file_attrs, fresh=fresh)
         self.discard()
 
     def discard(self) -> None:
         """Remove the blocks directory (after the store holds the run, or to start again)."""
         shutil.rmtree(self.dir, ignore_errors=True)
+
+
+class PanelStreams:
+    """The block streams of the streamed panels of a sweep's store at ``out`` (the ``streamer`` of
+    :func:`explorer.analysis.sweep.run`): one :class:`BlockStream` per panel, whose identity is the
+    panel's settings hash (``hashes[index]``), so a killed sweep resumes a streamed panel from its
+    stored blocks; ``force``: stored blocks are discarded."""
+
+    def __init__(self, out, hashes, phi0: float, force: bool):
+        self.out, self.hashes, self.phi0, self.force = out, hashes, phi0, force
+        self.streams: dict = {}
+        #: {panel index: blocks stored by an earlier run}
+        self.resumed: dict = {}
+
+    def resume(self, panel):
+        """The state ``panel`` continues from (blocks of another setting are stale: removed)."""
+        bs = BlockStream(self.out, {"panel_hash": self.hashes[panel.index]}, index=panel.index)
+        if self.force:
+            bs.discard()
+        state, n = bs.resume_state(panel.P, panel.y0, phi0=self.phi0, force=True)
+        self.streams[panel.index] = bs
+        self.resumed[panel.index] = n
+        return state
+
+    def block(self, panel, number, index, start, count, data, orbits, state):
+        """Store block ``number`` of ``panel`` (:meth:`BlockStream.append`)."""
+        self.streams[panel.index].append(number, index, start, count, data, orbits, state)
+
+    def take(self, index: int) -> BlockStream:
+        """The stream of panel ``index``, finished by the caller (:func:`~explorer.io.store.write_panel`)."""
+        return self.streams.pop(index)
