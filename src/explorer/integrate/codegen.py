@@ -49,7 +49,7 @@ from explorer.model.validation import ParameterError
 __all__ = ["GENERATOR_VERSION", "Decomposition", "cache_directory", "decompose", "load", "module_key", "source"]
 
 #: changes whenever the emitted code changes, so that a cached module of an older generator is not used
-GENERATOR_VERSION = 3
+GENERATOR_VERSION = 4
 
 #: the elementary operations and their recurrence at order k >= 1 (Jorba & Zou 2005, Sec. 2)
 RULES = {
@@ -338,73 +338,108 @@ class _Emitter:
                 out.append(self.store("W", self.row[i], 0, self.op_value(n, self.value)))
         return out
 
+    def is_product(self, i):
+        """A Cauchy product of two series (the nodes whose loops are fused)."""
+        n = self.d.nodes[i]
+        return n.kind == "mul" and not any(self.d.nodes[a].scalar for a in n.args)
+
+    def depths(self):
+        """Depth of each node in the DAG: 0 for states and scalars, else 1 + its operands' largest.
+        Nodes of one depth do not depend on each other at any order."""
+        depth = []
+        for n in self.d.nodes:
+            if n.scalar or n.kind == "state":
+                depth.append(0)
+            else:
+                depth.append(1 + max(depth[a] for a in n.args))
+        return depth
+
     def orderk_lines(self):
         """Statements for the coefficient k >= 1 of every series node (``k`` a loop variable);
-        the rules of :data:`RULES`."""
+        the rules of :data:`RULES`.  Depth by depth; the Cauchy products of one depth share one
+        loop over j, each with its own sum (independent chains of additions, which the CPU
+        overlaps; each sum is the same sequence of operations as alone)."""
+        depth = self.depths()
+        out = []
+        for level in range(1, max(depth, default=0) + 1):
+            here = [i for i, n in enumerate(self.d.nodes) if depth[i] == level]
+            products = [i for i in here if self.is_product(i)]
+            if products:
+                z = self.zero()
+                out += [f"m{self.row[i]} = {z}" for i in products]
+                out.append("for j in range(k + 1):")
+                for i in products:
+                    a, b = self.d.nodes[i].args
+                    r = self.row[i]
+                    out.append(f"    m{r} = m{r} + {self.coef(a, 'j')} * {self.coef(b, 'k - j')}")
+                out += [self.store("W", self.row[i], "k", f"m{self.row[i]}") for i in products]
+            for i in here:
+                if not self.is_product(i):
+                    out += self.node_lines(i)
+        # acc = acc + x, not acc += x: the vector type has + but no in-place +
+        return [re.sub(r"^(\s*)(acc2?) ([+-])= ", r"\1\2 = \2 \3 ", line) for line in out]
+
+    def node_lines(self, i):
+        """Statements for the coefficient k >= 1 of series node i (not a fused product)."""
         out = []
         nodes = self.d.nodes
         z = self.zero()
-        for i, n in enumerate(nodes):
-            if n.scalar or n.kind == "state":
-                continue
-            w = self.row[i]
-            a = n.args[0]
-            sa = nodes[a].scalar
-            b = n.args[-1]
-            sb = nodes[b].scalar
-            U = (lambda j, a=a: self.coef(a, j))  # noqa: E731
-            V = (lambda j, b=b: self.coef(b, j))  # noqa: E731
-            W = self.w
-            put = (lambda code, w=w: self.store("W", w, "k", code))  # noqa: E731
-            if n.kind in ("add", "sub"):
-                if sa:
-                    code = f"-{V('k')}" if n.kind == "sub" else V("k")
-                elif sb:
-                    code = U("k")
-                else:
-                    code = f"{U('k')} {'+' if n.kind == 'add' else '-'} {V('k')}"
-                out.append(put(code))
-            elif n.kind == "neg":
-                out.append(put(f"-{U('k')}"))
-            elif n.kind == "mul":
-                if sa:
-                    out.append(put(f"s{a} * {V('k')}"))
-                elif sb:
-                    out.append(put(f"{U('k')} * s{b}"))
-                else:
-                    out += [f"acc = {z}", "for j in range(k + 1):", f"    acc += {U('j')} * {V('k - j')}", put("acc")]
-            elif n.kind == "div":
-                if sb:
-                    out.append(put(f"{U('k')} / s{b}"))
-                else:
-                    out += [f"acc = {z if sa else U('k')}", "for j in range(1, k + 1):",
-                            f"    acc -= {V('j')} * {W(w, 'k - j')}", put(f"acc / {V(0)}")]
-            elif n.kind == "square":
-                out += [f"acc = {z}", "for j in range((k + 1) // 2):", f"    acc += {U('j')} * {U('k - j')}",
-                        "acc = 2.0 * acc", "if k % 2 == 0:", f"    acc += {U('k // 2')} * {U('k // 2')}", put("acc")]
-            elif n.kind == "pow":
-                out += [f"acc = {z}", "for j in range(k):",
-                        f"    acc += (s{b} * (k - j) - j) * {U('k - j')} * {W(w, 'j')}", put(f"acc / (k * {U(0)})")]
-            elif n.kind == "sqrt":
-                out += [f"acc = {U('k')}", "for j in range(1, k):", f"    acc -= {W(w, 'j')} * {W(w, 'k - j')}",
-                        put(f"acc / (2.0 * {W(w, 0)})")]
-            elif n.kind == "exp":
-                out += [f"acc = {z}", "for j in range(1, k + 1):", f"    acc += j * {U('j')} * {W(w, 'k - j')}",
-                        put("acc / k")]
-            elif n.kind == "log":
-                out += [f"acc = {z}", "for j in range(1, k):", f"    acc += j * {W(w, 'j')} * {U('k - j')}",
-                        put(f"({U('k')} - acc / k) / {U(0)}")]
-            elif n.kind == "sin":
-                c = self.row[self.d._index[Node("cos", n.args)]]
-                out += [f"acc = {z}", f"acc2 = {z}", "for j in range(1, k + 1):", f"    t = j * {U('j')}",
-                        f"    acc += t * {W(c, 'k - j')}", f"    acc2 += t * {W(w, 'k - j')}",
-                        put("acc / k"), self.store("W", c, "k", "-acc2 / k")]
-            elif n.kind == "cos":
-                pass  # with its sine
-            else:  # pragma: no cover - every kind of _Builder is above
-                raise AssertionError(n.kind)
-        # acc = acc + x, not acc += x: the vector type has + but no in-place +
-        return [re.sub(r"^(\s*)(acc2?) ([+-])= ", r"\1\2 = \2 \3 ", line) for line in out]
+        n = nodes[i]
+        w = self.row[i]
+        a = n.args[0]
+        sa = nodes[a].scalar
+        b = n.args[-1]
+        sb = nodes[b].scalar
+        U = (lambda j, a=a: self.coef(a, j))  # noqa: E731
+        V = (lambda j, b=b: self.coef(b, j))  # noqa: E731
+        W = self.w
+        put = (lambda code, w=w: self.store("W", w, "k", code))  # noqa: E731
+        if n.kind in ("add", "sub"):
+            if sa:
+                code = f"-{V('k')}" if n.kind == "sub" else V("k")
+            elif sb:
+                code = U("k")
+            else:
+                code = f"{U('k')} {'+' if n.kind == 'add' else '-'} {V('k')}"
+            out.append(put(code))
+        elif n.kind == "neg":
+            out.append(put(f"-{U('k')}"))
+        elif n.kind == "mul":
+            if sa:
+                out.append(put(f"s{a} * {V('k')}"))
+            else:   # a product of two series: fused in orderk_lines
+                out.append(put(f"{U('k')} * s{b}"))
+        elif n.kind == "div":
+            if sb:
+                out.append(put(f"{U('k')} / s{b}"))
+            else:
+                out += [f"acc = {z if sa else U('k')}", "for j in range(1, k + 1):",
+                        f"    acc -= {V('j')} * {W(w, 'k - j')}", put(f"acc / {V(0)}")]
+        elif n.kind == "square":
+            out += [f"acc = {z}", "for j in range((k + 1) // 2):", f"    acc += {U('j')} * {U('k - j')}",
+                    "acc = 2.0 * acc", "if k % 2 == 0:", f"    acc += {U('k // 2')} * {U('k // 2')}", put("acc")]
+        elif n.kind == "pow":
+            out += [f"acc = {z}", "for j in range(k):",
+                    f"    acc += (s{b} * (k - j) - j) * {U('k - j')} * {W(w, 'j')}", put(f"acc / (k * {U(0)})")]
+        elif n.kind == "sqrt":
+            out += [f"acc = {U('k')}", "for j in range(1, k):", f"    acc -= {W(w, 'j')} * {W(w, 'k - j')}",
+                    put(f"acc / (2.0 * {W(w, 0)})")]
+        elif n.kind == "exp":
+            out += [f"acc = {z}", "for j in range(1, k + 1):", f"    acc += j * {U('j')} * {W(w, 'k - j')}",
+                    put("acc / k")]
+        elif n.kind == "log":
+            out += [f"acc = {z}", "for j in range(1, k):", f"    acc += j * {W(w, 'j')} * {U('k - j')}",
+                    put(f"({U('k')} - acc / k) / {U(0)}")]
+        elif n.kind == "sin":
+            c = self.row[self.d._index[Node("cos", n.args)]]
+            out += [f"acc = {z}", f"acc2 = {z}", "for j in range(1, k + 1):", f"    t = j * {U('j')}",
+                    f"    acc += t * {W(c, 'k - j')}", f"    acc2 += t * {W(w, 'k - j')}",
+                    put("acc / k"), self.store("W", c, "k", "-acc2 / k")]
+        elif n.kind == "cos":
+            pass  # with its sine
+        else:  # pragma: no cover - every kind of _Builder is above
+            raise AssertionError(n.kind)
+        return out
 
     def output(self, i, k):
         """Coefficient ``k`` of output node i, zero for k >= 1 of a scalar."""
