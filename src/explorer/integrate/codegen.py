@@ -49,7 +49,7 @@ from explorer.model.validation import ParameterError
 __all__ = ["GENERATOR_VERSION", "Decomposition", "cache_directory", "decompose", "load", "module_key", "source"]
 
 #: changes whenever the emitted code changes, so that a cached module of an older generator is not used
-GENERATOR_VERSION = 4
+GENERATOR_VERSION = 5
 
 #: the elementary operations and their recurrence at order k >= 1 (Jorba & Zou 2005, Sec. 2)
 RULES = {
@@ -256,10 +256,35 @@ class _Emitter:
     def __init__(self, d: Decomposition, lanes: bool = False):
         self.d = d
         self.lanes = lanes
+        # a homogeneous linear node (-u, c u, u / c, u +- v) whose operands are stored is not
+        # stored: its coefficient of any order is written where it is used (the same operations,
+        # so the same values; fewer rows of W to load)
+        self.inline = set()
+        for i, n in enumerate(d.nodes):
+            if n.scalar or n.kind == "state" or any(a in self.inline for a in n.args):
+                continue
+            scal = [d.nodes[a].scalar for a in n.args]
+            if (n.kind == "neg" or (n.kind == "mul" and scal[0] != scal[1])
+                    or (n.kind == "div" and scal == [False, True])
+                    or (n.kind in ("add", "sub") and scal == [False, False])):
+                self.inline.add(i)
         self.row = {}
         for i, n in enumerate(d.nodes):
-            if not n.scalar and n.kind != "state":
+            if not n.scalar and n.kind != "state" and i not in self.inline:
                 self.row[i] = len(self.row)
+
+    def linear(self, i, leaf):
+        """The expression of inlined node i from its operands' ``leaf(a)``."""
+        n = self.d.nodes[i]
+        a = n.args[0]
+        if n.kind == "neg":
+            return f"(-{leaf(a)})"
+        b = n.args[1]
+        if n.kind == "mul":
+            return f"(s{a} * {leaf(b)})" if self.d.nodes[a].scalar else f"({leaf(a)} * s{b})"
+        if n.kind == "div":
+            return f"({leaf(a)} / s{b})"
+        return f"({leaf(a)} {'+' if n.kind == 'add' else '-'} {leaf(b)})"
 
     # -- access to one coefficient (a code string), scalar or vector
     def load(self, array, r, k):
@@ -282,6 +307,8 @@ class _Emitter:
         n = self.d.nodes[i]
         if n.kind == "state":
             return self.load("X", n.index, k)
+        if i in self.inline:
+            return self.linear(i, lambda a: self.coef(a, k))
         return self.load("W", self.row[i], k)
 
     def w(self, r, k):
@@ -301,6 +328,8 @@ class _Emitter:
             return f"s{i}"
         if n.kind == "state":
             return f"X[0, {n.index}, l]"
+        if i in self.inline:
+            return self.linear(i, self.lane_value)
         return f"W[0, {self.row[i]}, l]"
 
     def scalar_lines(self):
@@ -325,7 +354,7 @@ class _Emitter:
     def order0_lines(self):
         out = []
         for i, n in enumerate(self.d.nodes):
-            if n.scalar or n.kind == "state":
+            if n.scalar or n.kind == "state" or i in self.inline:
                 continue
             if not self.lanes:
                 out.append(self.store("W", self.row[i], 0, self.op_value(n, self.value)))
@@ -362,7 +391,7 @@ class _Emitter:
         depth = self.depths()
         out = []
         for level in range(1, max(depth, default=0) + 1):
-            here = [i for i, n in enumerate(self.d.nodes) if depth[i] == level]
+            here = [i for i, n in enumerate(self.d.nodes) if depth[i] == level and i not in self.inline]
             products = [i for i in here if self.is_product(i)]
             if products:
                 z = self.zero()
