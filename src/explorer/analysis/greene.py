@@ -14,6 +14,7 @@ import numpy as np
 from explorer.analysis import greene_section
 from explorer.analysis.greene_core import (
     CRITICAL_RESIDUE,
+    DEFAULT_QMAX,
     GOLDEN,
     MIN_Q,
     GreeneResult,
@@ -30,8 +31,6 @@ from explorer.model import ParameterError, validation
 __all__ = ["CRITICAL_RESIDUE", "GOLDEN", "GreeneResult", "SymmetricOrbit", "convergents", "greene",
            "rotation_value", "symmetric_orbit"]
 
-#: the largest period of the convergents followed by default on the standard map
-DEFAULT_QMAX = 987
 #: Newton on the half orbit: converged when the step in p is below this (relative to max(1, |p|)),
 #: in at most this many iterations
 SHOOT_TOL, SHOOT_MAX_ITER = 1e-15, 40
@@ -134,8 +133,8 @@ def greene(system, nu="golden", *, qmax=None, residue=CRITICAL_RESIDUE, line=Non
 
     ``system``: a ``StandardMap`` or a ``SectionMap``, whose parameter value is the first guess of the
     critical one.  ``nu``: :func:`~explorer.analysis.greene_core.rotation_value`'s forms.  ``qmax``:
-    the largest period of the convergents (default :data:`DEFAULT_QMAX`, section map
-    :data:`~explorer.analysis.greene_section.SECTION_QMAX`; at least three convergents).
+    the largest period of the convergents (default :data:`~explorer.analysis.greene_core.DEFAULT_QMAX`, section map
+    :data:`~explorer.analysis.greene_core.SECTION_QMAX`; at least three convergents).
     ``residue``: the residue that defines k_n (default R*).  ``line``: the orbits' symmetry line
     (standard map: theta, default pi; section map: :func:`~explorer.analysis.greene_section.section_greene`).
     ``around``, ``param``: section map only, the guess of the island's elliptic fixed point and

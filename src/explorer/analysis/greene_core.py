@@ -20,6 +20,9 @@ GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 #: MacKay 1983 (Physica D 7, 283): the limit of the positive residues of a noble curve's convergents
 #: at the critical parameter, the residue at the fixed point of renormalisation
 CRITICAL_RESIDUE = 0.2500888
+#: the largest period of the convergents followed by default: standard map, section map (each orbit
+#: of the section is Q integrations of the flow)
+DEFAULT_QMAX, SECTION_QMAX = 987, 55
 #: the largest period accepted (docs/greene.md, "Accuracy": double precision's limit)
 MAX_QMAX = 4181
 #: the smallest period used: Q = 1 has no half-orbit equation
@@ -28,6 +31,8 @@ MIN_Q = 2
 PARAM_TOL, PARAM_MAX_ITER = 1e-14, 60
 #: a secant step in the parameter is at most this fraction of max(|k|, the last step)
 MAX_PARAM_STEP = 0.2
+#: the extrapolations whose spread is the uncertainty of the critical value
+SPREAD_OF = 3
 #: named rotation numbers accepted by :func:`rotation_value`
 NAMED = {"golden": GOLDEN, "golden2": 1.0 - GOLDEN}
 #: the forms of a rotation number, for error messages and help lines
@@ -168,16 +173,19 @@ def aitken(x0, x1, x2) -> float:
 
 def extrapolate(ks) -> tuple:
     """(critical, uncertainty, ratio) of the sequence k_n (at least three terms; docs/greene.md,
-    "The criterion"): Aitken's Delta^2 of the last three k_n, its change from the previous triple's,
-    and the last ratio (k_n - k_{n-1})/(k_{n-1} - k_{n-2})."""
+    "The criterion"): Aitken's Delta^2 of the last three k_n; the spread (max - min) of the last
+    :data:`SPREAD_OF` Aitken extrapolations, the last k_n joining them when there are fewer; the
+    last ratio (k_n - k_{n-1})/(k_{n-1} - k_{n-2})."""
     ks = [float(k) for k in ks]
     if len(ks) < 3:
         raise ParameterError(f"extrapolate needs at least 3 values, got {len(ks)}")
-    crit = aitken(*ks[-3:])
-    prev = aitken(*ks[-4:-1]) if len(ks) >= 4 else ks[-1]
+    estimates = [aitken(*ks[i - 2:i + 1]) for i in range(2, len(ks))]
+    if len(estimates) < SPREAD_OF:
+        estimates.insert(0, ks[-1])
+    last = estimates[-SPREAD_OF:]
     d = np.diff(ks)
     ratio = float(d[-1] / d[-2]) if d[-2] != 0 else math.nan
-    return crit, abs(crit - prev), ratio
+    return estimates[-1], max(last) - min(last), ratio
 
 
 def critical_parameter(conv, orbit_at, start_of, point_of, first, target):

@@ -35,17 +35,15 @@ import numpy as np
 from explorer import model
 from explorer.analysis import budget
 from explorer.analysis.fixedpoints import find_fixed_point
-from explorer.analysis.greene_core import GreeneResult, Residue, critical_parameter, enough_convergents
+from explorer.analysis.greene_core import SECTION_QMAX, GreeneResult, Residue, critical_parameter, enough_convergents
 from explorer.analysis.section_map import MAX_STEPS, SectionMap
 from explorer.integrate.tangent import return_map_taylor
 from explorer.kernels import STATUS_DONE
 from explorer.model import ParameterError, validation
 
-__all__ = ["SECTION_QMAX", "SectionSymmetricOrbit", "first_orbit", "half_turn_p2", "island_centre", "island_line",
-           "line_map", "line_point", "line_roots", "nearest_line_orbit", "section_greene", "section_symmetric_orbit"]
+__all__ = ["SectionSymmetricOrbit", "first_orbit", "half_turn_p2", "island_centre", "island_line",
+           "line_map", "line_point", "line_roots", "section_greene", "section_symmetric_orbit"]
 
-#: the largest period of the convergents followed by default (each orbit is Q integrations of the flow)
-SECTION_QMAX = 55
 #: an orbit of type P/Q turns P/Q per return around the island's centre to this (times Q)
 ROTATION_TOL = 1e-6
 #: the parameters a section map's curve can be broken by
@@ -274,20 +272,11 @@ def first_orbit(smap: SectionMap, P: int, Q: int, centre, line=None) -> SectionS
     return best[1]
 
 
-def island_line(smap: SectionMap, P: int, Q: int, centre) -> float:
-    """The symmetry line (phi = phi0 or phi0 + pi) that carries the elliptic orbits of even period around
-    ``centre``: an orbit of even period Q meets one line only, twice, and of the island chain P/Q the
-    elliptic orbit (positive residue, Greene's sequence) sits on one line, the hyperbolic one on the
-    other (docs/greene.md, "The left island").  ``Q`` must be even: the orbit of type P/Q nearest to
-    the centre on the section's own line decides: phi0 when its residue is positive, else phi0 + pi.
-    (For the two islands of Figure 4's scene: phi = pi for the right one, phi = 0 for the left one,
-    its image under the half-turn.)"""
-    return nearest_line_orbit(smap, P, Q, centre)[0]
-
-
-def nearest_line_orbit(smap: SectionMap, P: int, Q: int, centre):
-    """(:func:`island_line`, the orbit that decided it): that orbit is :func:`first_orbit`'s on the
-    section's own line when the line is phi0 (the nearest orbit of type P/Q, with a positive residue)."""
+def island_line(smap: SectionMap, P: int, Q: int, centre):
+    """The symmetry line (phi0 or phi0 + pi) that carries the island's elliptic orbits of even period
+    around ``centre``, and the orbit that decided it (docs/greene.md, "Two symmetry lines"): the
+    orbit of type P/Q (``Q`` even) nearest to the centre on the section's own line is on it when its
+    residue is positive, else the line is phi0 + pi."""
     if Q % 2:
         raise ParameterError(f"island_line needs an even period (an orbit of odd period meets both lines), got {Q}")
     found = [next(_typed_orbits(smap, P, Q, centre, smap.phi0, side), None) for side in (0, 1)]
@@ -298,41 +287,6 @@ def nearest_line_orbit(smap: SectionMap, P: int, Q: int, centre):
                              f"is not decided")
     orb = nearest[1]
     return (smap.phi0 if orb.residue > 0 else (smap.phi0 + math.pi) % (2.0 * math.pi)), orb
-
-
-def curve_orbit(smap: SectionMap, nu: float, centre, a: float, b: float, *, iterates: int, steps: int = 24,
-                search_iterates: int = 300, line=None):
-    """The rotation number (weighted Birkhoff, :func:`explorer.analysis.rotation.rotation_number`) of the
-    orbit through the point of the symmetry line p2 = 0 of phi = ``line`` (default the section's own)
-    between p1 = ``a`` and ``b`` where |rotation| = ``nu`` around ``centre`` (the elliptic fixed point of
-    ``smap``): bisection on p1 (``steps`` halvings, each orbit averaged over 2 ``search_iterates``
-    returns on the line's section, around the centre's crossing of it; the twist makes |rotation|
-    monotone across the bracket of two consecutive convergents' orbits), then the orbit of the last
-    midpoint, carried to ``smap``'s section, averaged there over 2 ``iterates`` returns around
-    ``centre``.  Below the breakup that orbit lies on the invariant curve and its average converges
-    (``converged``); above it the curve is a cantorus and it does not."""
-    from explorer.analysis.rotation import rotation_number
-
-    other = line_map(smap, line)
-    around = line_point(smap, centre, other.phi0) if other is not smap else np.asarray(centre, float)
-
-    def rot(x, n):
-        return rotation_number(other, (x, 0.0), center=around, iterates=n)
-
-    sign_a = math.copysign(1.0, abs(rot(a, search_iterates).value) - nu)
-    for _ in range(steps):
-        m = 0.5 * (a + b)
-        r = rot(m, search_iterates)
-        if not math.isfinite(r.value):
-            break
-        if math.copysign(1.0, abs(r.value) - nu) == sign_a:
-            a = m
-        else:
-            b = m
-    x = (0.5 * (a + b), 0.0)
-    if other is not smap:
-        x = tuple(_flow_to(other, other.state(x), smap.phi0)[:2])
-    return rotation_number(smap, x, center=centre, iterates=iterates)
 
 
 def island_centre(smap: SectionMap, guess) -> np.ndarray:
@@ -358,7 +312,7 @@ def _section_line(smap, conv, centre, line):
     even = [(P, Q) for P, Q in conv if Q % 2 == 0]
     if not even:
         return smap.phi0, None
-    value, orb = nearest_line_orbit(smap, *even[0], centre)
+    value, orb = island_line(smap, *even[0], centre)
     return value, (orb if value == smap.phi0 and even[0] == conv[0] else None)
 
 
