@@ -34,7 +34,7 @@ from explorer import model
 from explorer.analysis import sections
 from explorer.app.serve import export
 from explorer.app.serve import settings as settings_mod
-from explorer.app.serve.orbits import FIRST_BLOCK, Worker
+from explorer.app.serve.orbits import FIRST_BLOCK, OrbitRun, Worker
 from explorer.app.serve.settings import Settings, format_starts, parse_fields, parse_starts
 from explorer.app.serve.tasks import SessionLoop
 from explorer.model import ParameterError
@@ -184,9 +184,61 @@ def test_worker_blocks_are_one_uninterrupted_run_and_cancelled_orbits_hand_out_n
     np.testing.assert_array_equal(rows, ref.orbit(0))
 
 
+def test_a_fixed_step_orbit_cut_into_step_blocks_gives_the_rows_of_one_uninterrupted_run():
+    s = Settings(params=model.FIGURE4.with_(mu=0.5), method="split4", crossings=40)
+    run = OrbitRun(1, 0.3, 0.1, s)
+    parts, cut = [], 0
+    while not run.finished:
+        run.steps = 37                               # blocks end at 37 steps, mostly before a crossing
+        rows = run.advance()
+        cut += len(rows) == 0
+        parts.append(rows)
+    assert cut > 0 and run.status == "done"
+    ref = sections.crossings(s.params, s.h, [(0.3, 0.1)], n_crossings=s.crossings, **s.section_kwargs())
+    np.testing.assert_array_equal(np.concatenate(parts), ref.orbit(0))
+
+
+def _cpu_over(seconds: float) -> float:
+    """The cores this process used over the next ``seconds``."""
+    c0, t0 = time.process_time(), time.monotonic()
+    time.sleep(seconds)
+    return (time.process_time() - c0) / (time.monotonic() - t0)
+
+
+#: a fixed step that finds no crossing in the 10^9 steps of an orbit's step budget
+TINY_DT = Settings(params=model.FIGURE4.with_(mu=0.03), method="split2", dt=1e-12)
+
+
+def test_a_cancelled_fixed_step_orbit_stops_within_a_block_and_was_said_with_its_estimate_up_front():
+    notices, blocks = [], []
+    loop = SessionLoop()
+    w = Worker(lambda *b: blocks.append(b), task=loop.task("orbits"),
+               on_notice=lambda ident, text: notices.append((ident, text)))
+    try:
+        run = w.submit(0.5, 0.0, TINY_DT)
+        t0 = time.monotonic()
+        while not notices:
+            assert time.monotonic() - t0 < 240, "no estimate was said"
+            loop.poll()
+            time.sleep(0.01)
+        assert notices[0][0] == run.ident and "1e+09 steps" in notices[0][1]
+        w.cancel()
+        t0 = time.monotonic()
+        while _cpu_over(0.5) > 0.2:                  # (this process's cores, over half a second)
+            assert time.monotonic() - t0 < 5.0, "the cancelled orbit kept a core busy"
+        assert not blocks                            # no crossing: nothing handed out
+    finally:
+        w.stop()
+
+
 #: crossings per click of the pause tests: an orbit of about a second, so that a second click
 #: comes while the first still runs (the first block is ready in milliseconds)
 PAUSE_CROSSINGS = 30_000
+
+
+def _idle(page) -> bool:
+    """The page's status line counts no orbit running."""
+    return " 0 running" in page.status.text
 
 
 def _orbit_rows(page, ident) -> np.ndarray:
@@ -213,7 +265,7 @@ def test_a_click_pauses_the_running_orbit_and_resume_completes_it_bit_for_bit():
     try:
         assert page.pause_box.value and page.url_query()["pause"] == "1"            # on by default
         first, second = _click_while_running(page, a, b)
-        _poll_until(page, lambda: len(_orbit_rows(page, second)) == s.crossings and not page.worker.busy())
+        _poll_until(page, lambda: len(_orbit_rows(page, second)) == s.crossings and _idle(page))
         held = len(_orbit_rows(page, first))
         assert 0 < held < s.crossings and page.worker.paused() == [first]          # paused mid-orbit
         assert "1 running" not in page.status.text and "1 paused" in page.status.text
@@ -222,7 +274,7 @@ def test_a_click_pauses_the_running_orbit_and_resume_completes_it_bit_for_bit():
         assert len(_orbit_rows(page, first)) == held                               # and it stays there
         assert len(parse_starts(page.url_query()["orbits"])) == 2                  # both starts in the link
         assert page.resume() == 1 and page.worker.paused() == [] and "paused" not in page.status.text
-        _poll_until(page, lambda: first not in page._running and not page.worker.busy())
+        _poll_until(page, lambda: first not in page._running and _idle(page))
         for ident, (p1, p2) in ((first, a), (second, b)):        # as one uninterrupted run, bit for bit
             ref = sections.crossings(s.params, s.h, [(p1, p2)], n_crossings=s.crossings, **s.section_kwargs())
             np.testing.assert_array_equal(_orbit_rows(page, ident), ref.orbit(0))
@@ -233,7 +285,7 @@ def test_a_click_pauses_the_running_orbit_and_resume_completes_it_bit_for_bit():
         assert page.worker.paused() == [third]
         page.undo()
         page.undo()
-        assert page.worker.paused() == [] and not page.worker.busy() and len(page.starts) == 2
+        assert page.worker.paused() == [] and _idle(page) and len(page.starts) == 2
         page.poll()
         assert set(np.asarray(page.crossings.data["orbit"]).tolist()) == {first, second}
         assert "paused" not in page.status.text
@@ -248,7 +300,7 @@ def test_a_click_pauses_the_running_orbit_and_resume_completes_it_bit_for_bit():
         assert len(page.worker.paused()) == 1
         page.inputs["crossings"].value = "300"
         assert page.settings.crossings == 300 and page.worker.paused() == [] and len(page.starts) == 2
-        _poll_until(page, lambda: len(page.crossings.data["t"]) == 2 * 300 and not page.worker.busy())
+        _poll_until(page, lambda: len(page.crossings.data["t"]) == 2 * 300 and _idle(page))
         assert "paused" not in page.status.text
     finally:
         page.close()
@@ -266,7 +318,7 @@ def test_with_the_box_unticked_a_click_leaves_the_running_orbits_running():
         assert not page.pause_box.value and page.url_query()["pause"] == "0"
         first, second = _click_while_running(page, a, b)
         assert page.worker.paused() == [] and "paused" not in page.status.text
-        _poll_until(page, lambda: len(page.crossings.data["t"]) == 2 * s.crossings and not page.worker.busy())
+        _poll_until(page, lambda: len(page.crossings.data["t"]) == 2 * s.crossings and _idle(page))
         for ident, (p1, p2) in ((first, a), (second, b)):        # both complete, no Resume needed
             ref = sections.crossings(s.params, s.h, [(p1, p2)], n_crossings=s.crossings, **s.section_kwargs())
             np.testing.assert_array_equal(_orbit_rows(page, ident), ref.orbit(0))
@@ -421,8 +473,16 @@ def _wait_crossings(page, n, timeout=FIRST_ORBIT_TIMEOUT_MS):
                            timeout=timeout, polling=20)
 
 
+def _orbit_args(s: Settings, p1, p2) -> list:
+    """The ``explorer orbit`` arguments of the start (p1, p2) at the page's settings ``s``."""
+    args = ["orbit", "--p1", repr(float(p1)), "--p2", repr(float(p2)), "--h", repr(float(s.h)), "--method", s.method,
+            "--tol", repr(float(s.tol)), "--dt", repr(float(s.dt)), "--crossings", str(s.crossings),
+            "--phi0", repr(float(s.phi0)), "--direction", {1: "+", -1: "-", 0: "both"}[s.direction]]
+    return args + [a for n in model.PARAM_NAMES for a in (f"--{n}", repr(float(getattr(s.params, n))))]
+
+
 def _orbit_json(settings: Settings, p1, p2) -> np.ndarray:
-    out = subprocess.run([sys.executable, "-m", "explorer", *settings.orbit_args(p1, p2), "--json"],
+    out = subprocess.run([sys.executable, "-m", "explorer", *_orbit_args(settings, p1, p2), "--json"],
                          capture_output=True, text=True, check=True, cwd=REPO).stdout
     return np.array(json.loads(out)["crossings"], dtype=np.float64).reshape(-1, 5)
 
@@ -730,7 +790,7 @@ def test_the_megno_raster_is_refined_and_marks_chaos_and_order():
 
     s = Settings(params=model.FIGURE4.with_(mu=0.03), tol=1e-10)
     c1, c2, r1, r2 = s.region
-    w = raster.Window(c1 - r1, c1 + r1, c2 - r2, c2 + r2)
+    w = settings_mod.Window(c1 - r1, c1 + r1, c2 - r2, c2 + r2)
     images = []
     for im in raster.rasters(s, w):
         images.append(im)
@@ -1183,12 +1243,12 @@ def test_a_thousand_clicks_leave_the_session_with_bounded_memory_and_threads(mon
             paused += len(page.worker.paused())                     # each click paused the orbits still running ...
             page.resume()                                           # ... and Resume continues them
             _poll_until(page, lambda: len(page.crossings.data["t"]) == ROUND * CLICK_CROSSINGS
-                        and len(page.indicators) == ROUND and not page.worker.busy())
+                        and len(page.indicators) == ROUND and _idle(page))
             assert sorted(np.unique(page.crossings.data["orbit"])) == sorted(i for i, *_ in page.starts)
             page.clear()
             page.poll()
             assert len(page.crossings.data["t"]) == 0 and page.starts == [] and page.indicators == {}
-            assert page.orbits._pending == [] and page.loop.pending() == 0
+            assert page.orbits._pending == []
             assert page.worker._runs == page.worker._paused == []
             gc.collect()                                            # (Bokeh's models hold reference cycles)
             heap.append(tracemalloc.get_traced_memory()[0])
@@ -1334,7 +1394,7 @@ def test_the_figure_downloads_from_the_page_as_svg(served, browser, tmp_path):
 
 def test_a_million_crossings_are_drawn_as_a_density_image_of_the_visible_window():
     pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
-    from explorer.app.serve import density, raster
+    from explorer.app.serve import density
     from explorer.app.serve.orbits import COLORS
     from explorer.app.serve.page import SectionPage
 
@@ -1345,7 +1405,7 @@ def test_a_million_crossings_are_drawn_as_a_density_image_of_the_visible_window(
         for u in (-0.5, 0.5):
             page.click(c1 + u * r1, c2)
         page.resume()                                  # (the second click paused the first if it still ran)
-        _poll_until(page, lambda: not page.worker.busy() and len(page.crossings.data["t"]) == 2 * s.crossings)
+        _poll_until(page, lambda: _idle(page) and len(page.crossings.data["t"]) == 2 * s.crossings)
         assert not page.dense and page.points.visible and page.density.data["image"] == []
         # 10^6 more crossings of the two orbits (points spread over the region), as the worker hands them in
         rng = np.random.default_rng(3)
@@ -1372,7 +1432,7 @@ def test_a_million_crossings_are_drawn_as_a_density_image_of_the_visible_window(
         page._on_ranges(Ranges)
         took = time.perf_counter() - t0
         assert page.density.data["x"] == [Ranges.x0] and page.density.data["dw"] == [Ranges.x1 - Ranges.x0]
-        assert page.window == raster.Window(Ranges.x0, Ranges.x1, Ranges.y0, Ranges.y1)
+        assert page.window == settings_mod.Window(Ranges.x0, Ranges.x1, Ranges.y0, Ranges.y1)
         print(f"density image of {len(page.crossings.data['t'])} crossings re-aggregated in {took * 1e3:.0f} ms")
         assert took < 2.0
         page.undo()                                                              # one orbit less: redrawn
@@ -1433,7 +1493,7 @@ def test_past_the_glyph_budget_the_newest_orbits_are_glyphs_and_the_older_ones_i
         page.pause_box.value = False
         for u in (-0.6, -0.3, 0.0, 0.3, 0.6):
             page.click(c1 + u * r1, c2)
-        _poll_until(page, lambda: not page.worker.busy() and len(page.crossings.data["t"]) == 5 * s.crossings)
+        _poll_until(page, lambda: _idle(page) and len(page.crossings.data["t"]) == 5 * s.crossings)
         ids = [i for i, *_ in page.starts]
         assert _glyphs_and_image(page) == (ids, [])                              # under the budget: as today
         budget = density.GLYPH_BUDGET                  # (the orbits' sizes as parts of it)

@@ -254,3 +254,36 @@ def test_a_client_gone_mid_send_is_not_reported_as_an_error_and_other_task_error
         assert caplog.records[0].exc_info[0] is ValueError
     finally:
         loop.close()
+
+
+#: the server's cores, measured over this long (s) from CLOSED_SECONDS after a tab closed, must stay below IDLE_CORES
+CLOSED_SECONDS = 5.0
+IDLE_WINDOW = 3.0
+IDLE_CORES = 0.2
+
+
+def _cores(proc, seconds: float) -> float:
+    """The cores that process ``proc`` (a psutil.Process) used over the next ``seconds``."""
+    c0, t0 = sum(proc.cpu_times()[:2]), time.monotonic()
+    time.sleep(seconds)
+    return (sum(proc.cpu_times()[:2]) - c0) / (time.monotonic() - t0)
+
+
+@browser_needed
+def test_a_link_with_a_tiny_fixed_step_is_said_up_front_and_stops_when_its_tab_closes(browser):
+    """``?method=split2&dt=1e-12&orbits=...``: an orbit of 10^9 steps, said in the page with its
+    estimate; once the tab closes the server is idle within CLOSED_SECONDS."""
+    psutil = pytest.importorskip("psutil")
+    s = Served("--crossings", "150", "--mu", "0.03")
+    try:
+        proc = psutil.Process(s.proc.pid)
+        c1, c2, r1, _r2 = SERVED.region
+        page = _open(browser, f"{s.url}?method=split2&dt=1e-12&orbits={c1 + 0.3 * r1!r},{c2!r}")
+        _wait(page, f"() => ({TEXT})('message').includes('1e+09 steps')", timeout=240_000)
+        page.close()                           # (the estimate is said after the orbit's first block: it runs)
+        closed = time.monotonic()
+        time.sleep(max(0.0, closed + CLOSED_SECONDS - time.monotonic()))
+        used = _cores(proc, IDLE_WINDOW)
+        assert used < IDLE_CORES, f"{used:.2f} cores busy {CLOSED_SECONDS:g} s after the tab closed"
+    finally:
+        s.interrupt()

@@ -11,15 +11,12 @@ from explorer.app.commands import options
 from explorer.app.commands.options import Command
 from explorer.model import ParameterError, validation
 
-#: where the page is served unless told otherwise (loopback only: docs/commands/serve.md)
-DEFAULT_HOST = "127.0.0.1"
-DEFAULT_PORT = 5006
-
 
 def add_options(s) -> None:
     """The options ``serve`` and ``explore`` share (one definition: explore is serve that also
     opens the page in the browser, :mod:`explorer.app.commands.explore`)."""
     from explorer.analysis.sections import DEFAULT_DT, DEFAULT_TOL, METHODS
+    from explorer.app.serve.server import DEFAULT_HOST, DEFAULT_PORT
     from explorer.app.serve.settings import DEFAULT_CROSSINGS
 
     s.add_argument("scene", nargs="?", default=None,

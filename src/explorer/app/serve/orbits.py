@@ -36,10 +36,20 @@ import numpy as np
 from explorer import model
 from explorer.analysis import sections
 from explorer.app.serve.settings import Settings
-from explorer.kernels import STATUS_NAMES
+from explorer.integrate import layout
+from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NAMES
 
 #: crossings of an orbit's first block (the first points on screen, milliseconds after a click)
 FIRST_BLOCK = 16
+#: steps of an orbit's first block at most; later blocks at most about BLOCK_SECONDS of steps.  A
+#: block ends at its crossings or at its steps, whichever comes first: a cancel takes effect within
+#: a block whatever the method and step (dt = 1e-12 finds no crossing in 10^9 steps)
+FIRST_STEPS = 20_000
+MAX_STEPS_PER_BLOCK = 50_000_000
+#: an orbit whose estimated steps (:func:`step_estimate`) exceed this is said in the page up front
+STEP_BUDGET = 50_000_000
+#: steps of the probe that measures the time between crossings for the estimate
+PROBE_STEPS = 20_000
 #: later blocks are sized to take about this long (s), between MIN_BLOCK and MAX_BLOCK crossings
 BLOCK_SECONDS = 0.05
 MIN_BLOCK = 16
@@ -73,10 +83,13 @@ class OrbitRun:
     y0: np.ndarray = field(init=False)
     state: sections.StreamState = field(init=False)
     block: int = FIRST_BLOCK
+    steps: int = FIRST_STEPS
     done: int = 0
     status: str = "running"
     wall: float = 0.0
     wants_indicators: bool = True
+    estimated: bool = False
+    step_rate: float = 0.0
 
     def __post_init__(self):
         s = self.settings
@@ -88,11 +101,15 @@ class OrbitRun:
         return bool(self.state.finished[0])
 
     def advance(self) -> np.ndarray:
-        """Compute the next block; returns its rows (n, 5): t, p1, p2, M, H - H0."""
+        """Compute the next block (at most ``block`` crossings and ``steps`` steps); returns its
+        rows (n, 5): t, p1, p2, M, H - H0.  A block cut at its steps is continued by the next one
+        exactly (the drivers check the step cap before a step, and the carry holds the count)."""
         s = self.settings
+        taken = int(self.state.carry[0, layout.CARRY_STEPS])
+        cap = min(s.max_steps, taken + self.steps)
         t0 = time.perf_counter()
         it = sections.iter_crossings(s.params, states=self.y0, n_crossings=s.crossings, block=self.block,
-                                     state=self.state, **s.section_kwargs())
+                                     state=self.state, max_steps=cap, **s.section_kwargs())
         b = next(it, None)
         elapsed = time.perf_counter() - t0
         self.wall += elapsed
@@ -100,14 +117,41 @@ class OrbitRun:
             return np.zeros((0, 5))
         rows = b.rows(0).copy() if b.count.size else np.zeros((0, 5))
         self.state = b.state
+        if self.state.status[0] == STATUS_MAX_STEPS and cap < s.max_steps:
+            self.state.finished[0], self.state.status[0] = False, STATUS_DONE     # (cut at this block's steps)
         self.done = int(self.state.done[0])
         if self.finished:
             self.status = STATUS_NAMES[int(self.state.status[0])]
-        # the next block: about BLOCK_SECONDS at this block's rate
+        # the next block: about BLOCK_SECONDS at this block's rates
         rate = len(rows) / elapsed if elapsed > 0 and len(rows) else 0.0
         target = int(rate * BLOCK_SECONDS) if rate else 2 * self.block
         self.block = max(MIN_BLOCK, min(MAX_BLOCK, target, 4 * self.block))
+        self.step_rate = (int(self.state.carry[0, layout.CARRY_STEPS]) - taken) / elapsed if elapsed > 0 else 0.0
+        self.steps = max(FIRST_STEPS, min(MAX_STEPS_PER_BLOCK, int(self.step_rate * BLOCK_SECONDS)))
         return rows
+
+
+def _duration(seconds: float) -> str:
+    for unit, size in (("h", 3600.0), ("min", 60.0)):
+        if seconds >= size:
+            return f"{seconds / size:.2g} {unit}"
+    return f"{seconds:.2g} s"
+
+
+def step_estimate(settings: Settings, y0) -> int | None:
+    """Steps that an orbit of a fixed-step method from ``y0`` is expected to take: its crossings
+    times the time between two crossings (of a Taylor probe of two crossings) over ``dt``, within
+    its time and step budgets; None for an adaptive method or when the probe finds no crossing."""
+    if settings.adaptive:
+        return None
+    probe = sections.crossings(settings.params, states=y0, n_crossings=2, max_steps=PROBE_STEPS,
+                               phi0=settings.phi0, direction=settings.direction)
+    n = int(probe.count[0])
+    if n == 0:
+        return None
+    period = float(probe.orbit(0)[n - 1, 0]) / n
+    need = min(settings.crossings * period, settings.effective_tmax) / settings.dt
+    return int(min(need, settings.max_steps))
 
 
 def warm_up(settings: Settings) -> None:
@@ -129,6 +173,8 @@ def orbit_indicators(settings: Settings, y0) -> tuple:
     the run stopped early."""
     from explorer.analysis import lyapunov
 
+    if not settings.adaptive and INDICATOR_TIME / settings.dt > INDICATOR_MAX_STEPS:
+        return math.nan, math.nan         # (the run would stop at its step cap)
     res = lyapunov.indicators(settings.params, states=y0, tmax=INDICATOR_TIME, method=settings.method, tol=settings.tol,
                               dt=settings.dt, max_steps=INDICATOR_MAX_STEPS)
     if int(res.status[0]) != 0:
@@ -146,8 +192,10 @@ class Worker:
     :meth:`cancel` came after it (the task's generation)."""
 
     def __init__(self, on_block: BlockCallback, on_error: Callable[[int, BaseException], None] | None = None,
-                 on_indicators: Callable[[int, float, float], None] | None = None, *, task):
+                 on_indicators: Callable[[int, float, float], None] | None = None, *, task,
+                 on_notice: Callable[[int, str], None] | None = None):
         self._on_block = on_block
+        self._on_notice = on_notice
         self._on_error = on_error
         self._on_indicators = on_indicators
         self.task = task
@@ -206,15 +254,25 @@ class Worker:
         with self._cond:
             return [r.ident for r in self._paused]
 
-    def busy(self) -> bool:
-        with self._cond:
-            return bool(self._runs)
-
     def stop(self, wait: bool = False) -> None:
         """End the orbits (the session is gone)."""
         with self._cond:
             self._runs, self._paused = [], []
         self.task.stop(wait)
+
+    def _say_estimate(self, job, run: OrbitRun) -> None:
+        """An orbit expected to take more than STEP_BUDGET steps is said before it runs."""
+        if run.finished or self._on_notice is None:
+            return
+        steps = step_estimate(run.settings, run.y0)
+        if steps is None or steps <= STEP_BUDGET:
+            return
+        s, rate = run.settings, run.step_rate
+        took = f", about {_duration(steps / rate)} at {rate:.2g} steps/s" if rate > 0 else ""
+        job.post(partial(self._on_notice, run.ident,
+                         f"orbit {run.ident} needs about {steps:.2g} steps ({s.crossings} crossings of {s.method} "
+                         f"at dt = {s.dt:g}{took}); it runs until Clear, Undo, a new value or closing the tab "
+                         "stops it; a larger dt or fewer crossings is quicker"))
 
     def _pick(self) -> OrbitRun | None:
         fresh = [r for r in self._runs if r.done == 0]
@@ -237,6 +295,9 @@ class Worker:
                     return
             try:
                 rows = run.advance()
+                if not run.estimated:
+                    run.estimated = True
+                    self._say_estimate(job, run)
             except Exception as exc:  # noqa: BLE001 - reported in the page; the server keeps serving
                 with self._cond:
                     self._runs = [r for r in self._runs if r is not run]
@@ -251,7 +312,8 @@ class Worker:
                 if run.finished:
                     self._runs = [r for r in self._runs if r is not run]
                     self._paused = [r for r in self._paused if r is not run]
-            job.post(partial(self._on_block, run.ident, rows, run.done, run.status))
+            if len(rows) or run.finished:   # (a block cut at its steps before a crossing: nothing to show)
+                job.post(partial(self._on_block, run.ident, rows, run.done, run.status))
             if run.wants_indicators and (run.finished or run.wall >= INDICATOR_AFTER) and \
                     self._on_indicators is not None:
                 # once the orbit is finished (or has run INDICATOR_AFTER): its chaos indicators, once

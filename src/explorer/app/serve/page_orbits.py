@@ -83,7 +83,8 @@ class OrbitsLayer:
         self._settle_at = -math.inf            # the flush due then moves the live rows
         self._settled = 0                      # crossings' rows up to here are in shown, from here on in live
         self.flush_timer = loop.timer(lambda: self._flush())   # (looked up when due: a test may trace it)
-        self.worker = Worker(self._on_block, self._on_error, self._on_indicators, task=loop.task("orbits"))
+        self.worker = Worker(self._on_block, self._on_error, self._on_indicators, task=loop.task("orbits"),
+                             on_notice=self._on_notice)
         # every crossing of the session, in the server (never in the document: not sent to the browser) ...
         self.crossings = ColumnDataSource(_empty_crossings())
         # ... what the browser draws: the same rows up to density.THRESHOLD, none past it ...
@@ -307,6 +308,10 @@ class OrbitsLayer:
         if len(self.live.data["orbit"]):
             self.live.data = _empty_live()
         self._settled = len(self.crossings.data["orbit"])
+
+    def _on_notice(self, _ident, text):
+        self._mark_starts()
+        self.host.say(text)
 
     def _on_error(self, ident, exc):
         self._mark_starts()

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from explorer import model
-from explorer.app.serve.settings import Settings
+from explorer.app.serve.settings import Settings, Window
 
 #: resolutions of the successive rasters of one window (each a refinement of the last), by default
 RESOLUTIONS = (16, 32, 64, 128)
@@ -50,25 +50,6 @@ DIFFUSION_ITERATES = 100
 #: seeds per call of frequency_diffusion (2N returns each, about 0.1 s a seed at Figure 4's
 #: parameters: a cancel takes effect within a batch, and the budget stops it between its runs)
 DIFFUSION_BATCH = 32
-
-
-@dataclass(frozen=True)
-class Window:
-    """The visible part of the section: p1 in [x0, x1], p2 in [y0, y1]."""
-
-    x0: float
-    x1: float
-    y0: float
-    y1: float
-
-    def __post_init__(self):
-        if not all(np.isfinite([self.x0, self.x1, self.y0, self.y1])) or not (self.x1 > self.x0 and self.y1 > self.y0):
-            raise ValueError(f"not a window: {self}")
-
-    def centres(self, n: int):
-        """Cell centres of an n x n raster, (n, n) arrays P1, P2 (row = p2 index)."""
-        u = (np.arange(n) + 0.5) / n
-        return np.meshgrid(self.x0 + (self.x1 - self.x0) * u, self.y0 + (self.y1 - self.y0) * u)
 
 
 @dataclass(frozen=True)
@@ -96,6 +77,8 @@ def megno_cells(settings: Settings, p1, p2, time: float = RASTER_TIME) -> np.nda
     """Mean MEGNO <Y>(``time``) of the orbits started at (p1, p2) on the section."""
     from explorer.analysis import lyapunov
 
+    if not settings.adaptive and time / settings.dt > RASTER_MAX_STEPS:
+        return np.full(np.shape(p1), np.nan)      # (every cell would stop at its step cap)
     y0 = model.section_state(settings.params, p1, p2, settings.h, settings.phi0, settings.direction or 1)
     res = lyapunov.indicators(settings.params, states=y0, tmax=time, method=settings.method, tol=settings.tol,
                               dt=settings.dt, which=("megno",), max_steps=RASTER_MAX_STEPS)

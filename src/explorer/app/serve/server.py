@@ -26,9 +26,11 @@ import sys
 import threading
 from collections.abc import Callable
 
-from explorer.app.serve.command import DEFAULT_HOST, DEFAULT_PORT
 from explorer.app.serve.settings import Settings
 
+#: where the page is served unless told otherwise (loopback only: docs/commands/serve.md)
+DEFAULT_HOST = "127.0.0.1"
+DEFAULT_PORT = 5006
 #: the URL argument that carries the token
 TOKEN_ARG = "token"
 #: what a page shows when its connection to the server is lost (the server stopped, the network went)

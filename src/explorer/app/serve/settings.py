@@ -12,6 +12,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
+import numpy as np
+
 from explorer import model
 from explorer.analysis import sections
 from explorer.model import ParameterError, validation
@@ -94,16 +96,6 @@ class Settings(sections.Integration):
         d.update(h=repr(float(self.h)), method=self.method, tol=repr(float(self.tol)), dt=repr(float(self.dt)),
                  crossings=str(self.crossings), phi0=repr(float(self.phi0)))
         return {n: d[n] for n in FIELDS}
-
-    def orbit_args(self, p1: float, p2: float) -> list:
-        """The ``explorer orbit`` arguments that give this start's crossings (``--json`` rows)."""
-        args = ["orbit", "--p1", repr(float(p1)), "--p2", repr(float(p2)), "--h", repr(float(self.h)),
-                "--method", self.method, "--tol", repr(float(self.tol)), "--dt", repr(float(self.dt)),
-                "--crossings", str(self.crossings), "--phi0", repr(float(self.phi0)),
-                "--direction", {1: "+", -1: "-", 0: "both"}[self.direction]]
-        for n in model.PARAM_NAMES:
-            args += [f"--{n}", repr(float(getattr(self.params, n)))]
-        return args
 
 
 def settings_for(scene=None, panel: int = 0, **overrides) -> tuple:
@@ -244,16 +236,33 @@ def parse_hidden(text: str, n_starts: int) -> set:
     return positions
 
 
+@dataclass(frozen=True)
+class Window:
+    """The visible part of the section: p1 in [x0, x1], p2 in [y0, y1]."""
+
+    x0: float
+    x1: float
+    y0: float
+    y1: float
+
+    def __post_init__(self):
+        if not all(np.isfinite([self.x0, self.x1, self.y0, self.y1])) or not (self.x1 > self.x0 and self.y1 > self.y0):
+            raise ValueError(f"not a window: {self}")
+
+    def centres(self, n: int):
+        """Cell centres of an n x n raster, (n, n) arrays P1, P2 (row = p2 index)."""
+        u = (np.arange(n) + 0.5) / n
+        return np.meshgrid(self.x0 + (self.x1 - self.x0) * u, self.y0 + (self.y1 - self.y0) * u)
+
+
 def format_window(w) -> str:
     """A view window (x0, x1, y0, y1) as URL text: ``x0,x1,y0,y1`` with each float's ``repr``."""
     return ",".join(repr(float(v)) for v in (w.x0, w.x1, w.y0, w.y1))
 
 
 def parse_window(text: str):
-    """The window of :func:`format_window` (a :class:`~explorer.app.serve.raster.Window`: four
+    """The window of :func:`format_window` (a :class:`Window`: four
     finite numbers, x0 < x1 and y0 < y1, each within MAX_MAGNITUDE); ParameterError otherwise."""
-    from explorer.app.serve.raster import Window
-
     pieces = str(text).strip().split(",")
     if len(pieces) != 4:
         raise ParameterError(f"view must be x0,x1,y0,y1 (four numbers), got {str(text)[:MAX_FIELD_CHARS * 4]!r}")

@@ -192,11 +192,6 @@ class SessionLoop:
             action()
         return bool(actions)
 
-    def pending(self) -> int:
-        """How many handed-in actions wait for :meth:`poll`."""
-        with self._lock:
-            return len(self._inbox)
-
     def task(self, name: str) -> LatestTask:
         t = LatestTask(self, name)
         self._tasks.append(t)

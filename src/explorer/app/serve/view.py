@@ -1,5 +1,5 @@
 """The section view of the page: the Bokeh figure, the allowed region drawn on it and the visible
-window (``window``, a :class:`~explorer.app.serve.raster.Window`), fitted to the region after every
+window (``window``, a :class:`~explorer.app.serve.settings.Window`), fitted to the region after every
 change of it (Reset goes back there) and followed through the browser's zoom and pan.  The layers
 draw onto :attr:`SectionView.figure`; they are told of a moved window through
 :meth:`SectionView.on_window`.  A component of :class:`~explorer.app.serve.page.SectionPage`."""
@@ -9,7 +9,7 @@ from bokeh.events import RangesUpdate
 from bokeh.models import ColumnDataSource, Range1d
 from bokeh.plotting import figure
 
-from explorer.app.serve import raster as raster_mod
+from explorer.app.serve.settings import Window
 from explorer.app.serve.style import (
     ALLOWED_COLOR,
     BOUNDARY_COLOR,
@@ -45,7 +45,7 @@ class SectionView:
         fig.grid.visible = False
         fig.on_event(RangesUpdate, self._on_ranges)
         self.figure = fig
-        self.window: raster_mod.Window | None = None
+        self.window: Window | None = None
         self._listeners: list = []
 
     def on_window(self, listener) -> None:
@@ -54,7 +54,7 @@ class SectionView:
 
     def _on_ranges(self, event) -> None:
         try:
-            self.window = raster_mod.Window(float(event.x0), float(event.x1), float(event.y0), float(event.y1))
+            self.window = Window(float(event.x0), float(event.x1), float(event.y0), float(event.y1))
         except (TypeError, ValueError):
             return
         for listener in self._listeners:
@@ -99,4 +99,4 @@ class SectionView:
         h1, h2 = 0.5 * scale * max(px, 1.0), 0.5 * scale * max(py, 1.0)
         for rng, lo, hi in ((self.figure.x_range, c1 - h1, c1 + h1), (self.figure.y_range, c2 - h2, c2 + h2)):
             rng.update(start=lo, end=hi, reset_start=lo, reset_end=hi)
-        self.window = raster_mod.Window(c1 - h1, c1 + h1, c2 - h2, c2 + h2)
+        self.window = Window(c1 - h1, c1 + h1, c2 - h2, c2 + h2)
