@@ -104,7 +104,7 @@ def test_gray_is_exactly_the_forbidden_region(rendered):
         inside = {}
         for dx, dy in [(0, 0), (3, 0), (-3, 0), (0, 3), (0, -3)]:
             d = inv.transform(np.column_stack([xs.ravel() + dx, ys.ravel() + dy]))
-            inside[dx, dy] = figures.region_mask(p["params"], p["h"], math.pi, d[:, 0], d[:, 1]).reshape(xs.shape)
+            inside[dx, dy] = (model.section_M2(p["params"], d[:, 0], d[:, 1], p["h"], math.pi) >= 0.0).reshape(xs.shape)
         surely_in = np.logical_and.reduce(list(inside.values()))
         surely_out = ~np.logical_or.reduce(list(inside.values()))
         assert surely_in.sum() > 1000 and surely_out.sum() > 1000

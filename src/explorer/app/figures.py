@@ -1,34 +1,8 @@
 """Paper-style figures of Poincaré sections (the seed's Figure 4, docs/model.md R9).
 
-Arrays in, figures out: this module never integrates.  It draws the crossing
-points ``(p1, p2)`` of the section ``phi = phi0`` computed elsewhere (e.g. by
-:func:`explorer.analysis.sections.crossings`) on top of the allowed region of
-the section, the ellipse ``M^2 >= 0`` of :func:`explorer.model.allowed_ellipse`
-(white, with a thin dark boundary), the forbidden region ``M^2 < 0`` being
-light gray as in the seed's Figure 4.
-
-matplotlib is imported lazily inside the functions (importing this module is
-cheap and pulls in neither matplotlib nor numba).  Figures are built with
-:class:`matplotlib.figure.Figure` directly, not with pyplot: nothing is
-registered in pyplot's global figure list, so making many figures in a loop
-does not leak memory, and no backend is needed or chosen (the format of the
-file picks the canvas), so everything works headless and the matplotlib
-settings of the process are left as they were.
-
-API
----
-``section_panels(panels, ...) -> Figure``
-    one panel per section (dict with ``points``, ``params``, ``h``, optional
-    ``phi0``, ``label``, ``note``, ``curves``), in a row or a grid, with shared
-    or individual scales.
-``save_figure(fig, stem, dpi=None) -> (png_path, pdf_path)``
-    atomic writes of ``<stem>.png`` and ``<stem>.pdf``.
-``region_mask(params, h, phi0, p1, p2)``
-    boolean mask of the allowed region (``M^2 >= 0``) on any grid.
-``region_limits(params, h, phi0, margin=0.05)``
-    bounding box of the allowed region plus a margin, or None.
-``mathtext_label(text)``
-    ``"mu = 0.5, h = 2"`` -> ``"$\\mu = 0.5$, $h = 2$"``.
+Arrays in, figures out: the crossings ``(p1, p2)`` over the allowed region ``M^2 >= 0`` (white)
+and the forbidden one (light gray).  matplotlib is imported lazily and figures are made with
+:class:`matplotlib.figure.Figure`, not pyplot: no global figure list, no backend chosen.
 """
 from __future__ import annotations
 
@@ -148,12 +122,6 @@ def symbol_label(name) -> str:
 
 
 # ---------------------------------------------------------------- region of the section
-def region_mask(params, h, phi0, p1, p2) -> np.ndarray:
-    """True where ``(p1, p2)`` lies in the allowed region ``M^2 >= 0`` of the
-    section ``phi = phi0`` at energy ``h`` (docs/model.md R9); broadcasts p1, p2."""
-    return np.asarray(model.section_M2(params, p1, p2, h, phi0) >= 0.0)
-
-
 def region_limits(params, h, phi0=math.pi, margin=0.05):
     """``((x0, x1), (y0, y1))``: bounding box of the allowed region plus
     ``margin`` times its width (height) on each side; None if the region is

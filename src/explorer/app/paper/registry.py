@@ -46,11 +46,6 @@ def module(name):
     return importlib.import_module(MODULES[name])
 
 
-def describe() -> list[tuple[str, str]]:
-    """(name, description) of every figure, in order."""
-    return [(name, module(name).DESCRIPTION) for name in FIGURES]
-
-
 def make(name, *, out_dir="figures", results_dir="results", quick=False, benchmark=None, quiet=True) -> Outcome:
     """Generate one figure; raises on error (FigureUnavailable for a missing input)."""
     return module(name).build(out_dir, results_dir=results_dir, quick=quick, benchmark=benchmark, quiet=quiet)

@@ -3,7 +3,6 @@
 its hashes, atlas cells and TOML text."""
 from __future__ import annotations
 
-import math
 import numbers
 from dataclasses import dataclass, field
 
@@ -191,16 +190,6 @@ class Scene:
         [compute] lyapunov the MEGNO threshold and map_indicator, and [manifolds] when drawn): kept in
         the PNG, so a rerun redraws the figure when they change, without recomputing."""
         return _hashes.figure_settings(self)
-
-    def grid_shape(self) -> tuple:
-        """(rows, columns) of the figure: (1, n) for "row"; for "grid" ``columns``
-        (default ceil(sqrt(n))) and as many rows as needed."""
-        n = self.n_panels
-        if self.figure.layout == "row":
-            return 1, n
-        cols = self.figure.columns if self.figure.columns is not None else math.ceil(math.sqrt(n))
-        cols = min(cols, n)
-        return -(-n // cols), cols
 
     # ------------------------------------------------------------ atlas
     def _check_atlas(self):

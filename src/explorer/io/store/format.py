@@ -250,19 +250,6 @@ class PanelData:
         """All (p1, p2) crossing points of the panel, shape (total, 2)."""
         return self.crossings[:, 1:3]
 
-    def orbit_index(self) -> np.ndarray:
-        """For each crossing row, the orbit it belongs to (total,)."""
-        return np.repeat(np.arange(self.n_orbits), np.diff(self.offsets))
-
-    def padded(self, fill: float = np.nan) -> np.ndarray:
-        """Crossings as (N, max count, 5), padded with ``fill``."""
-        k = int(self.count.max()) if self.n_orbits else 0
-        out = np.full((self.n_orbits, k, 5), fill)
-        if self.crossings.shape[0]:
-            rows = np.arange(self.crossings.shape[0]) - np.repeat(self.offsets[:-1], np.diff(self.offsets))
-            out[self.orbit_index(), rows] = self.crossings
-        return out
-
 
 def _json_attr(text):
     if text is None:
