@@ -4,6 +4,7 @@ import dataclasses
 import inspect
 import math
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,39 +15,37 @@ from explorer.io import scene
 from explorer.io.scene import SceneError, SeedSpec, load_scene, parse_scene, seed_points
 
 
-def _docstring_example() -> str:
-    """The full example of the module docstring (the indented block after 'Format')."""
-    doc = scene.__doc__
-    block = doc.split("shows every key", 1)[1].split("::\n\n", 1)[1]
-    lines = []
-    for line in block.splitlines():
-        if line.strip() and not line.startswith("    "):
-            break
-        lines.append(line[4:])
-    return "\n".join(lines)
+def _docs_example() -> str:
+    """The full example of docs/scenes.md (its first TOML block)."""
+    text = (Path(__file__).resolve().parents[2] / "docs" / "scenes.md").read_text()
+    return text.split("```toml\n", 1)[1].split("```", 1)[0]
 
 
 BASE = 'name = "t"\n'
 
 
 # ---------------------------------------------------------------- parsing
-def test_full_docstring_example_parses_with_every_key():
-    text = _docstring_example()
+def test_the_full_example_of_docs_scenes_parses_with_every_key():
+    text = _docs_example()
     s = parse_scene(text)
-    assert s.name == "figure4" and s.text == text
-    assert s.params == model.FIGURE4
+    assert s.name == "myscene" and s.text == text
+    assert s.params == model.FIGURE4.with_(a1=1.0)
     assert s.h == 2.0
-    assert s.sweep_parameter == "mu" and s.sweep_values == (0.05, 0.2, 0.5, 1.0, 2.0)
-    assert s.seeds == SeedSpec(kind="grid", n=200, margin=0.98, seed=12345,
-                               lines=((-1.0, 0.0, 1.0, 0.0),), points=((0.1, 0.0), (0.3, 0.2)))
+    assert s.sweep_parameter == "mu" and s.sweep_values == (0.002, 0.01, 0.03, 4.0, 8.0)
+    assert s.seeds == SeedSpec(kind="grid", n=200, margin=0.98, seed=1,
+                               lines=((-1.0, 0.0, 1.0, 0.0),), points=((0.1, 0.0),))
     i = s.integration
     assert (i.method, i.tol, i.dt, i.crossings, i.tmax, i.max_steps, i.direction) == \
-        ("taylor", 1e-13, 0.05, 1000, 2e4, 10**9, 1)
+        ("taylor", 1e-13, 0.05, 1000, 1e4, 10**9, 1)
     assert i.phi0 == math.pi
     assert s.compute == ("sections",)
+    ly = s.lyapunov
+    assert (ly.time, ly.threshold, ly.indicators, ly.center, ly.diffusion_iterates) == \
+        (1000.0, 4.0, ("mlce", "megno", "fli"), (1.571, 0.0), 300)
     f = s.figure
     assert (f.layout, f.columns, f.share_scale, f.own_scale, f.marker_size, f.dpi) == \
-        ("row", 3, True, (4,), 0.25, 200)
+        ("row", 3, True, (3, 4), 0.25, 200)
+    assert (s.manifolds.draw, s.manifolds.period) == (False, 1)
     assert s.n_panels == 5
 
 
@@ -73,7 +72,6 @@ def test_preset_figure4_loads_with_the_figure4_scene():
     assert (s.integration.method, s.integration.tol, s.integration.crossings) == ("taylor", 1e-13, 1000)
     assert (s.figure.layout, s.figure.share_scale, s.figure.own_scale) == ("row", True, (3, 4))
     assert s.integration.tmax == 10000.0
-    assert s.grid_shape() == (1, 5)
 
 
 def test_load_scene_reads_a_toml_file(tmp_path):
@@ -242,7 +240,7 @@ def test_panel_index_out_of_range_raises_index_error():
 
 
 def test_dict_and_toml_round_trips_give_the_same_scene():
-    for s in (load_scene("figure4"), parse_scene(_docstring_example()),
+    for s in (load_scene("figure4"), parse_scene(_docs_example()),
               parse_scene(BASE + 'description = "quote \\" tab\\t é"\n[seeds]\nkind = "lines"\n'
                           "lines = [[-1.0, 0.0, 1.0, 0.0], [0.0, -1, 0.0, 1]]\n[integration]\nphi0 = 1.25\n"),
               parse_scene(LYAP_FD + "diffusion_iterates = 40\n")):   # [lyapunov] center, a list in TOML
