@@ -53,6 +53,7 @@ RULES = {
     "tan": sp.tan(e - t),
     "series power": e ** t,
     "shared subexpressions": sp.sin(e * t) * sp.exp(e * t) + sp.cos(e * t) / (1 + (e * t) ** 2),
+    "functions of parameters only": e * sp.exp(lam) + t * sp.sqrt(lam) * sp.pi + sp.cos(lam) * sp.log(lam + 2) * t * e,
 }
 #: state y -> (dy/dt, y(0), exact solution y(tau) as a SymPy expression of tau)
 tau = sp.Symbol("tau")
