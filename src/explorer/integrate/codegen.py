@@ -9,7 +9,7 @@ and emitted as compiled Python source (docs/systems.md).
    division; ``tan u = sin u / cos u``; ``a^b`` with b not constant is ``exp(b log a)``.  A node whose
    operands do not depend on the state (numbers, parameters and operations on them) is a *scalar*,
    computed once per call.
-2. **Automatic differentiation** (Jorba & Zou 2005, Exp. Math. 14, 99, Sec. 2; the table in
+2. **Automatic differentiation** (Jorba & Zou 2005, Exp. Math. 14, 99; the table in
    docs/systems.md): each series node w has normalised coefficients w_k = w^(k)(0)/k!;
    order 0 is the operation itself, order k >= 1 follows from the operands' coefficients up to k
    (the rules at :data:`RULES`), and x_{k+1} = f_k / (k + 1).
@@ -20,7 +20,9 @@ and emitted as compiled Python source (docs/systems.md).
    ``taylor_coefficients_lanes(P, X, order, W)`` (the SIMD form, LANES orbits at once, each lane bit
    for bit the scalar form), ``rhs(y, P, dy)`` and, when the system has one, ``energy(y, P)``.
    P holds the parameter values in the order of ``system.parameters`` (:meth:`System.parameter_array`):
-   another value compiles nothing new.
+   another value compiles nothing new.  At each order, the Cauchy products of one depth of the DAG
+   share one loop over j, and homogeneous linear nodes are written where they are used (neither
+   changes a value: each is the same sequence of operations).
 4. **Cache** (:func:`load`): the module is written to ``<cache>/<name>_<key>.py``, with ``key`` the
    SHA-256 of the system's :attr:`~System.content_hash` and :data:`GENERATOR_VERSION`, and imported from that
    file with importlib, so numba's on-disk cache (``cache=True``) applies to it; a second run finds
@@ -51,7 +53,7 @@ __all__ = ["GENERATOR_VERSION", "Decomposition", "cache_directory", "decompose",
 #: changes whenever the emitted code changes, so that a cached module of an older generator is not used
 GENERATOR_VERSION = 5
 
-#: the elementary operations and their recurrence at order k >= 1 (Jorba & Zou 2005, Sec. 2)
+#: the elementary operations and their recurrence at order k >= 1 (Jorba & Zou 2005)
 RULES = {
     "add": "w_k = u_k + v_k",
     "sub": "w_k = u_k - v_k",
@@ -100,9 +102,6 @@ class Decomposition:
             self._index[node] = len(self.nodes)
             self.nodes.append(node)
         return self._index[node]
-
-    def count(self, kind):
-        return sum(1 for n in self.nodes if n.kind == kind and not n.scalar)
 
 
 class _Builder:
