@@ -6,6 +6,8 @@ import pytest
 from test_cli_periodic import run_cli
 
 import explorer as ex
+from explorer.analysis import greene as gm
+from explorer.analysis import greene_core
 from explorer.app import cli
 
 
@@ -23,6 +25,13 @@ def test_greene_standard_json_has_the_documented_shape_and_greenes_k_c(capsys):
         assert c["point_at_critical"][0] == pytest.approx(math.pi)       # on Greene's symmetry line (theta = pi here)
     ref = ex.greene(ex.StandardMap(0.9), "golden", qmax=233)
     assert d["critical"] == ref.critical and d["convergents"] == json.loads(json.dumps(ref.as_dict()))["convergents"]
+    for c in d["convergents"][-3:]:     # param_n: where the residue is R*; the rest: the orbit at the critical k
+        theta, p = c["point_at_critical"]
+        at_n = gm.symmetric_orbit(ex.StandardMap(c["param_n"]), c["p"], c["q"], guess=p)
+        at_critical = gm.symmetric_orbit(ex.StandardMap(d["critical"]), c["p"], c["q"], guess=p)
+        assert at_n.residue == pytest.approx(gm.CRITICAL_RESIDUE, abs=1e-9)
+        assert at_critical.residue == pytest.approx(c["residue_at_critical"], abs=1e-9)
+        assert at_critical.points[0, 1] == pytest.approx(p, abs=1e-12) and c["param_n"] != d["critical"]
 
 
 def test_greene_standard_text_lists_the_convergents(capsys):
@@ -42,8 +51,27 @@ def test_greene_section_json_gives_mu_c_of_a_noble_curve_of_the_right_island(cap
     assert [(c["p"], c["q"]) for c in d["convergents"]] == [(1, 6), (1, 7), (2, 13), (3, 20)]
     points = [c["point_at_critical"] for c in d["convergents"]]
     assert all(p2 == 0.0 and 1.69 < p1 < 1.71 for p1, p2 in points)     # on p2 = 0
-    # the extrapolation of four convergents: mu_c = 0.03034 (q <= 139, benchmarks/RESULTS.md) within its error
-    assert abs(d["critical"] - 0.03034) < 2 * d["uncertainty"] + 1e-5
+    # the extrapolation of four convergents: mu_c = 0.030339798 (q <= 139, benchmarks/RESULTS.md) within its error
+    assert abs(d["critical"] - 0.030339798) <= d["uncertainty"] < 1e-3
+
+
+def test_greene_help_names_the_qmax_defaults_the_command_uses_and_every_form_of_nu(capsys, monkeypatch):
+    with pytest.raises(SystemExit):
+        cli.main(["greene", "--help"])
+    out = " ".join(capsys.readouterr().out.split())
+    assert f"[{greene_core.DEFAULT_QMAX} standard, {greene_core.SECTION_QMAX} section]" in out
+    assert "noble:A,B,... = [0; A, B, ..., 1, 1, ...]" in out and "golden2" in out
+    assert "the first guess of mu_c" in out
+    calls = []
+
+    def record(system, nu, **kw):
+        calls.append((type(system).__name__, kw["qmax"]))
+        return greene_core.GreeneResult("x", "mu", nu, 0.0, 0.0)
+
+    monkeypatch.setattr(gm, "greene", record)
+    assert run_cli(["greene", "--map", "standard", "--json"], capsys)[0] == 0
+    assert run_cli(["greene", "--around", "1.58,0", "--mu", "0.025", "--nu", "noble:6", "--json"], capsys)[0] == 0
+    assert calls == [("StandardMap", greene_core.DEFAULT_QMAX), ("SectionMap", greene_core.SECTION_QMAX)]
 
 
 def test_greene_help_ends_with_its_example(capsys):
@@ -60,6 +88,8 @@ def test_greene_help_ends_with_its_example(capsys):
     (["greene", "--map", "standard", "--around", "1,0"], "--around is for --map section"),
     (["greene", "--around", "9,0"], "--around (9, 0) lies outside the allowed region"),
     (["greene", "--around", "0,0", "--mu", "0.025"], "is not elliptic"),
+    (["greene", "--around", "1.58,0", "--nu", "noble:6"], "--map section needs --mu, the first guess of mu_c"),
+    (["greene", "--around", "1.58,0", "--nu", "noble:6", "--param", "h", "--qmax", "20"], "is not elliptic (trace 2)"),
     (["greene", "--map", "standard", "--nu", "noble:0"], "noble:A needs an integer A >= 1"),
 ])
 def test_greene_bad_input_gives_one_line_and_status_2(args, fragment, capsys):
