@@ -94,3 +94,75 @@ def test_heavy_io_packages_only_in_upper_layers(package, lowest):
             if mod.split(".")[0] == package:
                 bad.append(f"{path.relative_to(SRC.parent)}:{line}")
     assert not bad, f"{package} imported below {lowest}: {bad}"
+
+
+def module_graph():
+    """Each module's set of explorer modules it imports (``from pkg import submodule`` included)."""
+    mods = dict(modules())
+    graph = {}
+    for dotted, path in mods.items():
+        deps = set()
+        tree = ast.parse(path.read_text())
+        pkg = dotted if path.name == "__init__.py" else dotted.rpartition(".")[0]
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                targets = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                if node.level:
+                    base = pkg.split(".")[: len(pkg.split(".")) - (node.level - 1)]
+                    mod = ".".join(base + ([node.module] if node.module else []))
+                else:
+                    mod = node.module
+                targets = [f"{mod}.{a.name}" if f"{mod}.{a.name}" in mods else mod for a in node.names]
+            else:
+                continue
+            for target in targets:
+                while target and target not in mods:
+                    target = target.rpartition(".")[0]
+                if target and target != dotted and target != "explorer":
+                    deps.add(target)
+        graph[dotted] = deps
+    return graph
+
+
+def import_circles(graph):
+    """The strongly connected components of more than one module (Tarjan's algorithm)."""
+    index, low, stack, on_stack, circles = {}, {}, [], set(), []
+
+    def visit(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in graph[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                circles.append(sorted(component))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return circles
+
+
+def test_import_circles_are_found_by_the_check():
+    assert import_circles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert import_circles({"a": {"b"}, "b": set()}) == []
+
+
+def test_no_module_imports_itself_through_a_circle():
+    """Runtime, lazy and ``TYPE_CHECKING`` imports all count; a package's ``__init__`` counts as the
+    package, so re-exporting a submodule's names is no circle unless that submodule imports the package."""
+    circles = import_circles(module_graph())
+    assert not circles, "import circles:\n" + "\n".join(" <-> ".join(c) for c in circles)
