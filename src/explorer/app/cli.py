@@ -1,10 +1,5 @@
-"""Command line: ``python -m explorer COMMAND ...``: the parser and the dispatch.
-
-Each command is a module listed in :mod:`explorer.app.commands.registry` (its options, its
-example and what it runs); this module builds the parser from them and handles the errors:
-bad input prints one line ``explorer: error: ...`` naming the parameter and what is allowed,
-and exits with status 2 (no traceback).
-"""
+"""Command line ``python -m explorer COMMAND ...``: the parser, built from the commands' registry,
+and the dispatch; bad input is one line ``explorer: error: ...`` and status 2 (docs/bad_input.md)."""
 from __future__ import annotations
 
 import argparse

@@ -293,45 +293,16 @@ def _draw_panel(ax, p, box, marker_size):
 
 def section_panels(panels, *, layout="row", columns=None, share_scale=True, own_scale=(), marker_size=0.25,
                    dpi=200, title=None, separatrices=None, panel_width=PANEL_WIDTH):
-    """A paper-style figure of Poincaré sections, one panel per entry of ``panels``.
+    """A paper-style figure of Poincaré sections, one panel per dict of ``panels``: ``points`` ((M, 2)
+    or None), ``params``, ``h``, optional ``phi0`` [pi], ``label`` (through :func:`mathtext_label`),
+    ``note``, ``curves`` (list of (K, 2), NaN rows break a curve), ``manifolds`` (list of (kind,
+    (K, 2)), drawn in :data:`MANIFOLD_COLORS`).
 
-    Each panel is a dict with keys
-
-    ``points``  (M, 2) array of crossing points (p1, p2); may be empty or None;
-    ``params``  :class:`explorer.model.Params` (or a dict of them);
-    ``h``       energy level;
-    ``phi0``    section angle (default pi, docs/model.md R9);
-    ``label``   panel title, e.g. ``"mu = 0.5"`` (converted by :func:`mathtext_label`;
-                default ``"mu = <params.mu>"``);
-    ``note``    optional short text shown small in the lower-left corner;
-    ``curves``  optional list of (K, 2) arrays drawn as thin lines (separatrices;
-                NaN rows break a curve);
-    ``manifolds`` optional list of (kind, (K, 2) array), kind "unstable" or "stable":
-                branches of W^u and W^s drawn in :data:`MANIFOLD_COLORS` (lines with
-                gid "manifold-<kind>").
-
-    Keyword arguments:
-
-    ``layout``        "row" (one row) or "grid" (``columns`` panels per row, default 3);
-    ``share_scale``   all panels not in ``own_scale`` get the same limits, the union of
-                      the bounding boxes of their allowed regions (+5% margin); without
-                      it every panel fits its own region;
-    ``own_scale``     indices of panels with their own limits (negative indices allowed;
-                      the seed's Figure 4: "the scale of the last figure differs");
-    ``marker_size``   area of one point in pt^2 (as ``s`` of scatter): 0.25 is a dot of
-                      0.5 pt, about 1.4 pixels at 200 dpi;
-    ``dpi``           resolution of the figure (PNG, and of the rasterized points in PDF);
-    ``title``         optional figure title (converted by :func:`mathtext_label`);
-    ``separatrices``  optional curves per panel: a list with one entry (list of (K, 2)
-                      arrays or None) per panel, or a dict {panel index: curves}; added
-                      to the panel's own ``curves``;
-    ``panel_width``   width of one panel in inches (default 3).
-
-    The forbidden region (M^2 < 0) is light gray, the allowed region white with a thin
-    dark boundary, the points tiny black dots rasterized so that a PDF with 10^6 points
-    stays small.  A panel whose region is empty is all gray with the note "no allowed
-    region".  ``fig.axes[i]`` is the panel of ``panels[i]``.
-    """
+    ``layout`` "row" or "grid" (``columns`` per row [3]); ``share_scale``: the panels not in
+    ``own_scale`` share the union of their allowed regions (+5 %); ``marker_size`` in pt^2 (as
+    scatter's ``s``); ``separatrices``: more curves per panel (list, or {index: curves});
+    ``panel_width`` in inches.  Forbidden region light gray, allowed white, points rasterized;
+    ``fig.axes[i]`` is the panel of ``panels[i]``."""
     mpl = _matplotlib()
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure

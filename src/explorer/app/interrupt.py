@@ -1,14 +1,6 @@
-"""Ctrl-C during a long run: stop at the next safe point, never in the middle of anything.
-
-Python's own SIGINT handler raises ``KeyboardInterrupt`` at whatever bytecode runs next, which
-after a long Numba call may be a weakref callback of numba's caches: the exception is then
-printed as "Exception ignored in: <function WeakValueDictionary...>" and lost, and the run goes
-on.  Inside :class:`deferred_interrupt` the first SIGINT only sets a flag; the run calls
-:meth:`deferred_interrupt.check` between chunks, blocks and commits (each kernel call is bounded,
-see :data:`explorer.analysis.sweep.CHUNK_ORBITS_THREADS`) and stops there with
-:class:`Interrupted`, after the last commit is whole.  A second SIGINT raises at once.  Outside
-the main thread, or when SIGINT is ignored (a background job), nothing is changed.
-"""
+"""Ctrl-C during a long run: the first SIGINT sets a flag that the run checks between chunks,
+blocks and commits (:meth:`deferred_interrupt.check`), so it stops with :class:`Interrupted` after
+a whole commit, never inside a Numba call's cleanup; a second SIGINT raises at once."""
 from __future__ import annotations
 
 import signal

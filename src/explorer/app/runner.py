@@ -1,10 +1,6 @@
-"""`python -m explorer sweep`: scene -> sweep -> HDF5 store -> figure (interface layer).
-
-Only this module (in the parent process) writes the store and the figure.
-Skips panels whose stored settings hash equals the scene's; each finished
-panel is committed atomically (see :mod:`explorer.io.store`), so a run killed at
-any moment leaves a readable file and the rerun computes only what is missing.
-"""
+"""``python -m explorer sweep``: scene -> sweep -> HDF5 store -> figure (docs/commands/sweep.md).
+Only the parent process writes; a panel whose stored hash is the scene's is skipped, so a rerun
+after a kill computes only what is missing."""
 from __future__ import annotations
 
 import contextlib

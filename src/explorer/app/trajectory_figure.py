@@ -17,20 +17,10 @@ def _param_title(prm) -> str:
 
 
 def path_figure(result, params=None, *, glyphs=40, band=None, title=None, dpi=200, width=7.0):
-    """The path (x, y) of the body with its orientation every few samples, and the band in y.
-
-    ``result``: a :func:`trajectory` result; ``params``: defaults to ``result['params']``;
-    ``glyphs``: number of orientation glyphs along the path; ``band``: the ``band`` dict of
-    :func:`drift` (computed here when lam != 0 and not given).
-
-    Glyph: an ellipse with semi-axes proportional to sqrt(a2) along the body axis e1 =
-    (cos phi, sin phi) and sqrt(a1) along e2 = (-sin phi, cos phi) (an elliptic cylinder of that
-    shape has added masses in the ratio a1 : a2), with a segment along e1; drawn in screen units
-    (not to scale) at the body's true angle phi (x to the right, y up).  The axes have equal
-    aspect when the extents of x and y differ by less than a factor 4; otherwise the title says
-    "axes not to scale" (the glyph angles stay true).  Colour: time.  The orbit band
-    c1/lam +- max|p - s|/|lam| is shaded, the a priori energy band dashed, the measured y range
-    dotted."""
+    """The path (x, y) of the body, coloured by time, with ``glyphs`` orientation glyphs (an ellipse
+    of semi-axes ~ sqrt(a2) along e1 and sqrt(a1) along e2, at the true angle phi, not to scale), the
+    orbit band shaded, the energy band dashed and the measured y range dotted.  ``result``: a
+    :func:`trajectory` result; ``band``: the ``band`` of :func:`drift` (computed when lam != 0)."""
     mpl = _matplotlib()
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.collections import EllipseCollection, LineCollection

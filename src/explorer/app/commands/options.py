@@ -1,18 +1,7 @@
-"""What several commands share: how a command is declared, its option groups and their readers.
-
-A command module declares its command line as data, ``COMMAND = Command(name, example=...,
-help=..., description=..., options=(...))``: each option is an :func:`opt` (the arguments of
-``add_argument``) or a group adder (a callable taking the parser: :func:`one_of`, or a
-``functools.partial`` of the ``add_*_args`` below); :meth:`Command.add_parser` is the one
-builder of every subparser.
-
-One copy each: the model parameters of every command come from :func:`add_model_args` (the
-help line of each parameter is written once, in :data:`PARAM_HELP`), a start point on the
-section from :func:`add_start_args`, the integration method from :func:`add_method_args`, the
-Newton commands' options from :func:`add_newton_args`, the energy and Taylor tolerance of the
-section-map commands from :func:`add_map_args`; :func:`pair`, :func:`continuation`,
-:func:`section_map_args` and :func:`print_bifurcations` read and report them.
-"""
+"""What several commands share: :class:`Command` (a command line declared as data, one builder of
+every subparser), :func:`opt`, :func:`one_of`, and one copy of each option group
+(``add_model_args``, ``add_start_args``, ``add_method_args``, ``add_newton_args``,
+``add_map_args``) with their readers."""
 from __future__ import annotations
 
 import math

@@ -1,12 +1,6 @@
-"""The registry of the commands: name -> module, in the order ``explorer --help`` lists them.
-
-Each module declares ``COMMAND`` (an :class:`explorer.app.commands.options.Command`: name,
-example, help, description, options) and ``run(args) -> int`` (see
-:mod:`explorer.app.commands`). This is the only list of commands
-(:func:`explorer.app.cli.build_parser` and :func:`explorer.app.cli.main` read it).  A command's
-module imports only the standard library, the model and its option helpers at the top, so
-``explorer --help`` stays fast; what it runs is imported inside ``run``.
-"""
+"""The registry of the commands, name -> module, in the order of ``explorer --help``: the one list
+of commands.  A module declares ``COMMAND`` and ``run(args) -> int`` and imports at the top only
+what ``--help`` needs."""
 from __future__ import annotations
 
 import importlib

@@ -151,21 +151,12 @@ class CheckError(AssertionError):
 
 
 def figure3_check(params=CHAPLYGIN, samples=None, *, tol=MAP_TOL):
-    """Numerical stability at sample points of every branch of Figure 3, against the
-    dashed/solid classification of :func:`branch_stable`.
-
-    * I (p = 0, M = c) is a fixed point of the section map phi = pi at h = c^2/(2b) when c > 0:
-      :func:`explorer.analysis.fixedpoints.find_fixed_point` (Newton, monodromy from the tangent dynamics)
-      and its ``stable`` (|trace| < 2); traces within TRACE_MARGIN of +-2 (resonances of the
-      rotation, e.g. c = 4 + 4/sqrt(3)) are not classified.  The found point must be p = 0 and
-      the trace that of :func:`fixedpoints.analytic_eigenvalues_solution_I`.
-    * Every branch (I included, also c <= 0): eigenvalues of the Jacobian of R6 at the relative
-      equilibrium (:func:`r6_jacobian`); stable when every eigenvalue is on the imaginary axis.
-      For II/III they must be 0, +-i P kappa (II) and 0, +-P kappa (III), kappa =
-      sqrt((a1 - a2)/(a1 a2 b)) (R6), and the point must be an equilibrium of R6.
-
-    Returns a list of records (dicts: branch, c, h, method, value, stable, expected, agree);
-    raises :class:`CheckError` if any record disagrees."""
+    """Numerical stability at sample points of every branch of Figure 3, against :func:`branch_stable`:
+    solution I as a fixed point of the section map (Newton and monodromy, trace against
+    :func:`fixedpoints.analytic_eigenvalues_solution_I`; traces within TRACE_MARGIN of +-2 are not
+    classified) and every branch by the eigenvalues of the R6 Jacobian (:func:`r6_jacobian`).
+    Returns the records (branch, c, h, method, value, stable, expected, agree); raises
+    :class:`CheckError` if one disagrees."""
     from explorer.analysis import fixedpoints
 
     prm = check_chaplygin(params)

@@ -1,25 +1,5 @@
-"""HDF5 file of a two-parameter atlas (a scene with an [atlas] table): the chaotic fraction per
-cell only, no orbits, no crossings.  Written whole and atomically (:func:`atomic_path`), again
-after every group of finished cells while the atlas runs: ``done`` says which cells it holds, so
-an interrupted atlas is resumed from its cells (``complete`` once every cell is done).
-
-Layout (``format = "explorer.atlas"``, ``format_version = 1``)
-----------------------------------------------------------------
-::
-
-    /   attrs: format, format_version, scene_name, scene (TOML text), hash (Scene.atlas_hash),
-               row_parameter, column_parameter, threshold (MEGNO), created, provenance (JSON),
-               complete (every cell done)
-        row_values     (R,)    float64   the [sweep] values (rows)
-        column_values  (C,)    float64   the [atlas] values (columns)
-        fraction       (R, C)  float64   chaotic fraction (NaN: empty allowed region)
-        error          (R, C)  float64   binomial standard error of the fraction
-        orbits         (R, C)  int64     orbits with a valid indicator (0: empty region)
-        wall_time      (R, C)  float64   seconds of integration per cell
-        done           (R, C)  int8      1: the cell is stored (computed, or without an allowed region);
-                                         0: not computed yet (its fraction NaN). Absent: all done
-                                         (files written before atlases were resumable)
-"""
+"""The HDF5 file of a two-parameter atlas: the chaotic fraction per cell, written whole and
+atomically, resumable from its ``done`` cells (docs/store.md, "Atlas files")."""
 from __future__ import annotations
 
 import datetime as _dt

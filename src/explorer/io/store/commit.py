@@ -381,30 +381,16 @@ def _transaction(path, index: int, write, file_attrs: dict | None = None, *, fre
 
 def commit_panel(path, index: int, arrays: dict, attrs: dict, file_attrs: dict | None = None, *,
                  replace_corrupt: bool = False, status_names: dict | None = None, fresh: bool = False) -> None:
-    """Atomically add or replace panel ``index`` of the store at ``path``.
+    """Atomically add or replace panel ``index`` of the store at ``path`` (docs/store.md, "Committing
+    a panel"): the panel goes into a new file of the panel folder, then a new store file linking it
+    replaces ``path``; the cost is the panel plus the small store file.
 
-    ``arrays`` holds seeds, y0, count, status, final, info and either
-    ``offsets`` + ``crossings`` or ``data`` (N, K, 5, NaN-padded) + ``count``
-    (the ragged arrays are then built, padding dropped); ``crossings`` may be a
-    :class:`RowSource` that writes the rows into the dataset piece by piece.  ``attrs`` are the
-    panel attrs (``params``/``settings`` may be dicts: stored as JSON text;
-    ``hash`` defaults to :func:`settings_hash` of the settings; ``index`` and
-    ``complete = True`` are set here).  ``file_attrs`` (scene_name, scene,
-    provenance, extras) are merged into the root attrs; ``format``,
-    ``format_version``, ``created`` (kept from the existing file) and
-    ``updated`` are managed here, and ``provenance`` is computed if neither the
-    caller nor the existing file gives one.  ``status_names`` ({code: name})
-    defaults to ``explorer.kernels.STATUS_NAMES``.  ``fresh``: the store becomes this one panel
-    (whatever ``path`` held is replaced).
-
-    Cost: the panel's bytes plus the small store file, not the whole store.  The panel is written
-    into a new file ``<path>.panels/NNN-<pid>-<random>.h5``, fsynced; then a new store file linking
-    it is built as ``<path>.tmp-<pid>-<random>.h5``, fsynced and ``os.replace``'d onto ``path``
-    (the directory is then fsynced); the panel file it replaces is removed last.
-
-    Raises StoreError if ``path`` exists but is not a readable explorer store,
-    unless ``replace_corrupt=True`` (a fresh store then replaces it).
-    """
+    ``arrays``: seeds, y0, count, status, final, info and either ``offsets`` + ``crossings`` (maybe a
+    :class:`RowSource`) or ``data`` ((N, K, 5), NaN-padded); ``attrs``: the panel's attributes
+    (``hash`` defaults to :func:`settings_hash` of ``settings``); ``file_attrs``: merged into the
+    root's (``format``, ``created``, ``updated`` are managed here, ``provenance`` computed when
+    absent); ``fresh``: the store becomes this one panel.  A ``path`` that is not a store is a
+    StoreError unless ``replace_corrupt``."""
     index = int(index)
     if index < 0:
         raise ValueError(f"panel index must be >= 0, got {index}")

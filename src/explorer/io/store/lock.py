@@ -1,17 +1,6 @@
-"""Guards of a store: its directory must be writable, and one process at a time writes it.
-
-:func:`check_writable` refuses, before anything is computed, an output place that cannot be
-created or written (one line naming the option and the directory).
-
-:func:`store_lock` holds an OS file lock (``fcntl.flock``, exclusive, not waiting) on
-``<store>.lock`` beside the store for as long as a run writes the store, its block folders or its
-temporaries; the lock file says who holds it (pid, host, command line, since when).  A second
-process that asks for the same store gets :class:`StoreBusy` at once, naming the holder.  The
-kernel releases the lock when its holder dies, even by SIGKILL, so a lock file left behind by a
-killed run locks nothing: the next run takes it over.  The holder removes the file when it is done
-(after checking, under the lock, that the file it locked is still the one at that path, so two
-processes can never both believe they hold the lock).
-"""
+"""Guards of a store: its directory must be writable (:func:`check_writable`) and one process at
+a time writes it (:func:`store_lock`, an OS lock that dies with its holder; docs/store.md,
+"Beside the store")."""
 from __future__ import annotations
 
 import contextlib

@@ -1,31 +1,6 @@
-"""Streamed panels: the crossings of a long run written block by block, resumable after a kill.
-
-While a run streams, its blocks live beside the store, in the directory ``<path>.blocks/``::
-
-    run.json        the run's identity (everything that determines its numbers) and its sha256
-    000001.npz ...  one file per block: the orbits it advanced (``index``), the crossings each had
-                    before it (``start``), how many it added (``count``) and those rows
-                    (``rows``, concatenated orbit after orbit), their largest |dH| (``max_dh``), and the state
-                    after the block of
-                    the orbits it covers (``orbits``: the arrays of
-                    :class:`explorer.analysis.sections.StreamState` -- ``y``, ``carry``, ``done``,
-                    ``finished``, ``status``, ``info`` -- for those orbits, and ``blocks``)
-
-Each block file is written whole under a temporary name, fsynced and renamed
-(:func:`~explorer.io.store.atomic.write_bytes_atomic`), so after a SIGKILL at any instant the
-directory holds complete blocks only: the block being computed is lost, nothing else.
-:meth:`BlockStream.resume` applies the blocks' states in order to the run's initial state (block
-numbers must follow each other and the identity must match), from which the caller continues the run
-(``sections.iter_crossings(..., state=...)``: bit for bit the uninterrupted run).
-:meth:`BlockStream.finish` writes the panel into the store in one atomic transaction
-(:func:`~explorer.io.store.commit.commit_panel`): offsets from each orbit's total, rows copied
-block after block into the ``crossings`` dataset (a :class:`~explorer.io.store.commit.RowSource`),
-so memory stays O(one block); then the blocks directory is removed.  The finished store has the
-layout of every store (:mod:`explorer.io.store`), one panel.
-
-Disk: blocks hold rows uncompressed (40 bytes a row) until the panel is written, compressed, so a
-run needs up to about twice the size of its rows while it finishes (:func:`disk_needed`).
-"""
+"""Streamed panels: the crossings of a long run written block by block into ``<path>.blocks/``,
+each block atomically, resumable after a kill to the numbers of an uninterrupted run, then
+committed as one panel (docs/store.md, "Streamed panels").  Memory is O(one block)."""
 from __future__ import annotations
 
 import json
