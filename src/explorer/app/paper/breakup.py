@@ -1,29 +1,33 @@
-"""When the noble curves of the right island of Figure 4's scene break: mu_c against nu (Greene's
-residue criterion, docs/greene.md), and the island's section just below and just above mu_c of
-the last curve to break."""
+"""Figure ``breakup``: mu_c of the noble curves of Figure 4's right island, and its section at 0.99 and
+1.01 mu_c of the last curve to break (docs/greene.md, "The noble curves of the right island")."""
 
 import numpy as np
 
 from explorer import model
 from explorer.app.paper._common import _FS, _SMALL, Drawn, Outcome, _new_figure, _rc, save
 
-#: the figure's name (``explorer figures --only breakup``) and what it shows
 NAME = "breakup"
 DESCRIPTION = "mu_c of the noble curves of the right island (Greene's criterion), sections at 0.99 and 1.01 mu_c"
-#: the noble rotation numbers of the figure ("noble:a[,b]" = [0; a, (b,) 1, 1, ...]), and of its quick version
 NOBLES = ("4", "5,2", "5", "6,2", "6")
 QUICK_NOBLES = ("6",)
-#: the island's elliptic fixed point (a guess) and the first guess of mu_c
 AROUND = (1.58, 0.0)
 MU0 = 0.025
-#: the largest period of the convergents (quick: 20)
 QMAX = 150
 
 
+def _window(panel, margin=0.05):
+    """((p1 min, max), (p2 min, max)) of a panel's points, widened by ``margin`` of each span."""
+    _, _, _, pts, conv_pts = panel
+    xy = np.concatenate([*pts, conv_pts])
+    xy = xy[np.all(np.isfinite(xy), axis=1)]
+    lo, hi = xy.min(axis=0), xy.max(axis=0)
+    pad = margin * (hi - lo)
+    return tuple((float(a), float(b)) for a, b in zip(lo - pad, hi + pad))
+
+
 def breakup_figure(*, nobles=NOBLES, qmax=QMAX, starts=40, crossings=600, dpi=200) -> Drawn:
-    """mu_c(nu) of each noble curve (:func:`explorer.greene`, convergents up to ``qmax``) with its
-    uncertainty; the section at 0.99 and 1.01 mu_c of the curve that breaks last (``starts`` orbits
-    on p2 = 0 from the centre outward, ``crossings`` each), its convergents' orbit points marked."""
+    """mu_c(nu) of each noble curve (convergents up to ``qmax``); the sections at 0.99 and 1.01 mu_c of
+    the last to break (``starts`` orbits on p2 = 0, ``crossings`` each), both in the window of the first."""
     import explorer as ex
     from explorer.analysis import greene_section as gs
 
@@ -56,6 +60,7 @@ def breakup_figure(*, nobles=NOBLES, qmax=QMAX, starts=40, crossings=600, dpi=20
         axes[0].set_xlabel(r"rotation number $\nu$ around the centre (turns per return)")
         axes[0].set_ylabel(r"$\mu_c(\nu)$")
         axes[0].set_title("Greene's criterion, right island", fontsize=_FS)
+        window = _window(panels[0])
         for ax, (factor, mu, c, pts, conv_pts) in zip(axes[1:], panels):
             for p in pts:
                 ax.plot(p[:, 0], p[:, 1], ",", color="k", alpha=0.6, rasterized=True)
@@ -66,7 +71,9 @@ def breakup_figure(*, nobles=NOBLES, qmax=QMAX, starts=40, crossings=600, dpi=20
             ax.set_xlabel("$p_1$")
             ax.set_ylabel("$p_2$")
             ax.legend(fontsize=6, frameon=False, loc="upper left")
-    data = {"nu": nu, "mu_c": mc, "uncertainty": err, "last": last.as_dict(),
+            ax.set_xlim(window[0])
+            ax.set_ylim(window[1])
+    data = {"nu": nu, "mu_c": mc, "uncertainty": err, "last": last.as_dict(), "window": window,
             "curves": [r.as_dict() for r in results]}
     return Drawn(fig, data)
 
