@@ -241,7 +241,7 @@ def test_henon_heiles_taylor_steps_agree_with_dop853_and_conserve_the_energy(val
     assert np.max(np.abs(orbit - ref.y.T)) <= 2e-12
     h0 = mod.energy(y0, P)
     lam_ = list(system.parameters)[0]
-    exact_h0 = float(system.energy.subs(dict(zip(system.states, y0))).subs(lam_, value))
+    exact_h0 = float(system.energy.subs(dict(zip(system.states, y0.tolist()))).subs(lam_, value))
     assert abs(h0 - exact_h0) <= 1e-16
     drift = max(abs(mod.energy(y, P) - h0) for y in orbit)
     assert drift <= 1e-13, drift
