@@ -5,7 +5,7 @@
 q = 987 (half-orbit method, docs/greene.md): the critical k, its uncertainty and its distance to
 the published k_c = 0.971635406 (Greene 1979; MacKay 1983), the residues at the critical k
 against MacKay's R* = 0.2500888, and the wall time (cold: compiling or loading the Numba cache
-included; warm: a second run).  The goal of issue 35: 7 digits in <= 60 s on 2 cores.
+included; warm: a second run).
 
     python benchmarks/bench_greene.py           # a few seconds; writes the GREENE section of RESULTS.md
     python benchmarks/bench_greene.py --quick   # no RESULTS.md

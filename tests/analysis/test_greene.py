@@ -328,8 +328,7 @@ def test_an_orbit_whose_turns_around_the_centre_are_undefined_is_skipped_not_fat
     """For [0; 6, 2, 1, ...] up to q = 150 the line scan meets, among the roots of the half-turn
     equation, an orbit whose rotation around the centre is not defined (its lift is unresolved):
     it is not an orbit of type P/Q around that centre and is passed over, and mu_c comes out as in
-    benchmarks/RESULTS.md GREENE-SECTION (0.029631211 +- 2.8e-7; the run stopped with a
-    ParameterError before)."""
+    the benchmark (0.0296312106, benchmarks/results/greene_section.json) within its uncertainty."""
     r = ex.greene(_section(0.025), "noble:6,2", qmax=150, around=(1.58, 0.0))
     assert [c["q"] for c in r.convergents][-1] == 134
     assert abs(r.critical - 0.0296312106) <= r.uncertainty < 2e-6

@@ -1,9 +1,5 @@
-"""Greene's residue criterion (docs/greene.md): :func:`greene`, the parameter at which the invariant
-curve of rotation number nu breaks, on the standard map or a section map, and the standard map's
-family of orbits: the symmetric orbits of type P/Q by the half-orbit (symmetry-line) method,
-their residues from the half orbit's Jacobian (docs/greene.md, "The half-orbit (symmetry-line)
-method").  The shared machinery is :mod:`explorer.analysis.greene_core`, the section map's family
-:mod:`explorer.analysis.greene_section`."""
+"""Greene's residue criterion (docs/greene.md): :func:`greene`, and the standard map's symmetric orbits
+by the half-orbit method ("The half-orbit (symmetry-line) method")."""
 from __future__ import annotations
 
 import math
@@ -31,26 +27,25 @@ from explorer.model import ParameterError, validation
 __all__ = ["CRITICAL_RESIDUE", "GOLDEN", "GreeneResult", "SymmetricOrbit", "convergents", "greene",
            "rotation_value", "symmetric_orbit"]
 
-#: Newton on the half orbit: converged when the step in p is below this (relative to max(1, |p|)),
-#: in at most this many iterations
-SHOOT_TOL, SHOOT_MAX_ITER = 1e-15, 40
-#: ... or when the steps stop shrinking below this: the round-off floor of a long half orbit
-SHOOT_FLOOR = 1e-11
-#: an orbit is accepted when it closes after Q steps to this, relative to max(1, |M|)
+#: Newton on the half orbit: the step in p relative to max(1, |p|) at convergence, or below the floor
+#: once the steps stop shrinking (round-off)
+SHOOT_TOL, SHOOT_MAX_ITER, SHOOT_FLOOR = 1e-15, 40, 1e-11
+#: the closure after Q steps, relative to max(1, |M|)
 CLOSURE_TOL = 1e-9
 
 
 @dataclass(frozen=True)
 class SymmetricOrbit(Residue):
-    """A symmetric periodic orbit of type P/Q of the standard map found by the half-orbit method."""
+    """A symmetric orbit of type P/Q of the standard map: ``points`` (Q, 2) from theta = ``line``,
+    theta lifted; ``closure`` = max |T^Q(x_0) - x_0 - (2 pi P, 0)|."""
 
-    p: int                  # turns (theta_Q - theta_0 = 2 pi P)
-    q: int                  # period
-    points: np.ndarray      # (Q, 2): the orbit from its point on the symmetry line, theta lifted
-    monodromy: np.ndarray   # 2x2 product of the Q Jacobians
+    p: int
+    q: int
+    points: np.ndarray
+    monodromy: np.ndarray
     param_value: float
-    line: float             # the symmetry line theta = line of the start
-    closure: float          # max |T^Q(x_0) - x_0 - (2 pi P, 0)|
+    line: float
+    closure: float
 
 
 def _shoot(k, P, Q, theta0, p0):
@@ -71,21 +66,20 @@ def _shoot(k, P, Q, theta0, p0):
         p += step
         scale = max(1.0, abs(p))
         if abs(step) <= SHOOT_TOL * scale or (abs(step) <= SHOOT_FLOOR * scale and abs(step) >= 0.5 * abs(prev)):
-            return p       # converged, or at the noise floor of the shooting function (steps stop shrinking)
+            return p
         prev = step
     raise ParameterError(f"no symmetric orbit of type {P}/{Q} on theta = {theta0:g} at k = {k:.12g} "
                          f"(Newton on the half orbit did not converge from p = {p0:.12g})")
 
 
 def _half_orbit_monodromy(k, Q, theta0, p0) -> np.ndarray:
-    """The monodromy of the symmetric orbit from (theta0, p0) on Fix(I0), from the half orbit's
-    Jacobian A = DT^n alone (docs/greene.md, "The half-orbit (symmetry-line) method"): Q = 2n:
-    M = G(z_0) A^-1 G(z_n) A, G = DI0; Q = 2n - 1: M = H DT(z_0) A^-1 H A, H = DI1."""
+    """The monodromy from the half orbit's Jacobian A (docs/greene.md): Q = 2n: M = G(z_0) A^-1 G(z_n) A;
+    Q = 2n - 1: M = H DT(z_0) A^-1 H A."""
     even = Q % 2 == 0
     n = Q // 2 if even else (Q + 1) // 2
     a, b, c, d, theta_n, _ = standard_monodromy(theta0, p0, k, n)
     A = np.array([[a, b], [c, d]])
-    A_inv = np.array([[d, -b], [-c, a]])           # det A = 1
+    A_inv = np.array([[d, -b], [-c, a]])
     if even:
         G0 = np.array([[-1.0, 0.0], [k * math.cos(theta0), 1.0]])
         Gn = np.array([[-1.0, 0.0], [k * math.cos(theta_n), 1.0]])
@@ -96,12 +90,9 @@ def _half_orbit_monodromy(k, Q, theta0, p0) -> np.ndarray:
 
 
 def symmetric_orbit(system, p, q, *, line=math.pi, guess=None):
-    """The symmetric orbit of type ``p``/``q`` with a point on the symmetry line theta = ``line``
-    (default pi: Greene's positive residues), by Newton on the half orbit from the momentum ``guess``
-    (default 2 pi p/q), closure checked (docs/greene.md).  On a section map: the symmetric orbit of
-    period ``q`` through (p1, 0), p1 near ``guess`` (required; ``p`` and ``line`` are not imposed),
-    :func:`explorer.analysis.greene_section.section_symmetric_orbit`.  Returns a ``SymmetricOrbit`` or a
-    ``SectionSymmetricOrbit``: both have ``q``, ``points``, ``monodromy`` and ``residue``."""
+    """The symmetric orbit of type ``p``/``q`` through theta = ``line``, Newton from p = ``guess``
+    (default 2 pi p/q).  A section map: :func:`~explorer.analysis.greene_section.section_symmetric_orbit`
+    of period ``q`` from p1 = ``guess`` (required)."""
     if isinstance(system, SectionMap):
         if guess is None:
             raise ParameterError("symmetric_orbit on a section map needs guess=p1, a point of the line p2 = 0 "
@@ -128,21 +119,11 @@ def symmetric_orbit(system, p, q, *, line=math.pi, guess=None):
 
 def greene(system, nu="golden", *, qmax=None, residue=CRITICAL_RESIDUE, line=None, around=None,
            param=None) -> GreeneResult:
-    """The critical parameter at which the invariant curve of rotation number ``nu`` breaks, by
-    Greene's residue criterion (docs/greene.md, "The criterion").
-
-    ``system``: a ``StandardMap`` or a ``SectionMap``, whose parameter value is the first guess of the
-    critical one.  ``nu``: :func:`~explorer.analysis.greene_core.rotation_value`'s forms.  ``qmax``:
-    the largest period of the convergents (default :data:`~explorer.analysis.greene_core.DEFAULT_QMAX`, section map
-    :data:`~explorer.analysis.greene_core.SECTION_QMAX`; at least three convergents).
-    ``residue``: the residue that defines k_n (default R*).  ``line``: the orbits' symmetry line
-    (standard map: theta, default pi; section map: :func:`~explorer.analysis.greene_section.section_greene`).
-    ``around``, ``param``: section map only, the guess of the island's elliptic fixed point and
-    the parameter (or "h") that breaks the curve (default "mu").
-
-    Returns a :class:`~explorer.analysis.greene_core.GreeneResult`: ``critical`` (Aitken's
-    extrapolation of the k_n), ``uncertainty`` (the spread of the last extrapolations), ``ratio``,
-    and per convergent its k_n and, at the critical value, its residue and point."""
+    """The parameter at which the curve of rotation number ``nu`` breaks (docs/greene.md, "The
+    criterion"), from ``system``'s parameter value as first guess, the convergents up to ``qmax``
+    (default :data:`~explorer.analysis.greene_core.DEFAULT_QMAX` or ``SECTION_QMAX``) and the
+    symmetry line ``line``; ``around`` and ``param``: a section map's island and parameter
+    (:func:`~explorer.analysis.greene_section.section_greene`)."""
     x = rotation_value(nu)
     target = validation.real("residue", residue, 0.0, 1.0, lo_open=True, hi_open=True)
     if isinstance(system, SectionMap):

@@ -1,8 +1,5 @@
-"""Greene's residue criterion, the part every map shares: rotation numbers and their convergents,
-the residue of a monodromy, the secant solve of R_n(k_n) = R* and the extrapolation of the k_n
-to the critical parameter (docs/greene.md, "The criterion").  The families of orbits are
-:mod:`explorer.analysis.greene` (the standard map) and :mod:`explorer.analysis.greene_section`
-(the section map)."""
+"""Greene's residue criterion, what both families of orbits share (docs/greene.md, "The criterion"):
+convergents, residues, the secant solve of R_n(k_n) = R* and the extrapolation of the k_n."""
 from __future__ import annotations
 
 import math
@@ -15,33 +12,22 @@ from explorer.model import ParameterError, validation
 __all__ = ["CRITICAL_RESIDUE", "GOLDEN", "GreeneResult", "Residue", "aitken", "convergents", "critical_parameter",
            "enough_convergents", "extrapolate", "rotation_value"]
 
-#: (sqrt 5 - 1)/2 = [0; 1, 1, 1, ...], the rotation number of the standard map's last invariant circle
 GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
-#: MacKay 1983 (Physica D 7, 283): the limit of the positive residues of a noble curve's convergents
-#: at the critical parameter, the residue at the fixed point of renormalisation
+#: MacKay 1983 (Physica D 7, 283): R* of noble curves
 CRITICAL_RESIDUE = 0.2500888
-#: the largest period of the convergents followed by default: standard map, section map (each orbit
-#: of the section is Q integrations of the flow)
+#: the default largest period: standard map, section map
 DEFAULT_QMAX, SECTION_QMAX = 987, 55
-#: the largest period accepted (docs/greene.md, "Accuracy": double precision's limit)
-MAX_QMAX = 4181
-#: the smallest period used: Q = 1 has no half-orbit equation
-MIN_Q = 2
-#: the secant solve of R_n(k) = R*: stop when the step in k is below this, or after this many steps
-PARAM_TOL, PARAM_MAX_ITER = 1e-14, 60
-#: a secant step in the parameter is at most this fraction of max(|k|, the last step)
-MAX_PARAM_STEP = 0.2
-#: the extrapolations whose spread is the uncertainty of the critical value
+MAX_QMAX, MIN_Q = 4181, 2
+#: the secant in the parameter: tolerance, iterations, largest step (fraction of max(|k|, last step))
+PARAM_TOL, PARAM_MAX_ITER, MAX_PARAM_STEP = 1e-14, 60, 0.2
+#: the extrapolations whose spread is the uncertainty
 SPREAD_OF = 3
-#: named rotation numbers accepted by :func:`rotation_value`
 NAMED = {"golden": GOLDEN, "golden2": 1.0 - GOLDEN}
-#: the forms of a rotation number, for error messages and help lines
 NU_FORMS = "a number in (0, 1), golden, golden2, noble:A = 1/(A + golden) or noble:A,B,... = [0; A, B, ..., 1, 1, ...]"
 
 
 def rotation_value(nu) -> float:
-    """The rotation number ``nu``: a number in (0, 1), a name of :data:`NAMED`, "noble:A" (A >= 1, the
-    noble number 1/(A + golden)) or "noble:A,B,..." = [0; A, B, ..., 1, 1, ...]."""
+    """The rotation number ``nu`` in one of :data:`NU_FORMS`."""
     if isinstance(nu, str):
         key = nu.strip().lower()
         if key in NAMED:
@@ -69,7 +55,7 @@ def convergents(nu, qmax: int, qmin: int = MIN_Q) -> list:
     """The convergents P/Q of the continued fraction of ``nu`` with ``qmin`` <= Q <= ``qmax``, in order."""
     x = rotation_value(nu)
     qmax = validation.integer("qmax", qmax, 2, MAX_QMAX)
-    h0, h1, k0, k1 = 0, 1, 1, 0          # P_{-2}, P_{-1}, Q_{-2}, Q_{-1}
+    h0, h1, k0, k1 = 0, 1, 1, 0
     out: list[tuple[int, int]] = []
     frac = x
     for _ in range(200):
@@ -113,11 +99,8 @@ class Residue:
 
 @dataclass(frozen=True)
 class GreeneResult:
-    """The critical parameter of the curve of rotation number ``nu`` (:func:`explorer.greene`).
-
-    ``convergents``: one dict per convergent, with ``p``, ``q``, ``param_n`` (the parameter where
-    its residue is R*), and at ``critical`` its ``residue_at_critical``, ``point_at_critical`` and
-    ``line_start`` (its coordinate on the symmetry line)."""
+    """:func:`explorer.greene`'s result; ``convergents``: dicts of :data:`JSON_KEYS` and ``line_start``
+    (docs/commands/greene.md)."""
 
     map: str
     param: str
@@ -126,10 +109,9 @@ class GreeneResult:
     uncertainty: float
     convergents: list = field(default_factory=list)
     critical_residue: float = CRITICAL_RESIDUE
-    ratio: float = math.nan        # the last (k_{n+1} - k_n)/(k_n - k_{n-1})
-    line: float = math.pi          # the orbits' symmetry line: theta (standard map), phi of p2 = 0 (section)
+    ratio: float = math.nan
+    line: float = math.pi
 
-    #: the keys of each convergent in :meth:`as_dict` (docs/commands/greene.md)
     JSON_KEYS = ("p", "q", "param_n", "residue_at_critical", "point_at_critical")
 
     def as_dict(self) -> dict:
@@ -140,8 +122,7 @@ class GreeneResult:
 
 
 def solve_param(residue_at, target, k0, k1):
-    """The secant solve of residue_at(k).residue = target from k0, k1; a trial without an orbit is
-    pulled halfway back to the last good value.  Returns (k, orbit)."""
+    """(k, orbit) with residue_at(k).residue = target, by the secant from k0, k1."""
     fa = residue_at(k0).residue - target
     ka, kb = k0, k1
     for _ in range(PARAM_MAX_ITER):
@@ -155,7 +136,7 @@ def solve_param(residue_at, target, k0, k1):
             return kb, fb_orb
         kc = kb - fb * (kb - ka) / (fb - fa)
         limit = MAX_PARAM_STEP * max(abs(kb), abs(kb - ka))
-        kc = min(max(kc, kb - limit), kb + limit)     # residues are steep in k: no leap past the orbit's life
+        kc = min(max(kc, kb - limit), kb + limit)
         ka, fa = kb, fb
         if abs(kc - kb) <= PARAM_TOL * max(1.0, abs(kb)):
             return kc, residue_at(kc)
@@ -172,10 +153,8 @@ def aitken(x0, x1, x2) -> float:
 
 
 def extrapolate(ks) -> tuple:
-    """(critical, uncertainty, ratio) of the sequence k_n (at least three terms; docs/greene.md,
-    "The criterion"): Aitken's Delta^2 of the last three k_n; the spread (max - min) of the last
-    :data:`SPREAD_OF` Aitken extrapolations, the last k_n joining them when there are fewer; the
-    last ratio (k_n - k_{n-1})/(k_{n-1} - k_{n-2})."""
+    """(critical, uncertainty, last ratio) of k_n, n >= 3 (docs/greene.md, "The criterion"): Aitken's
+    Delta^2 of the last three; the spread of the last :data:`SPREAD_OF` extrapolations (with k_n if fewer)."""
     ks = [float(k) for k in ks]
     if len(ks) < 3:
         raise ParameterError(f"extrapolate needs at least 3 values, got {len(ks)}")
@@ -189,13 +168,9 @@ def extrapolate(ks) -> tuple:
 
 
 def critical_parameter(conv, orbit_at, start_of, point_of, first, target):
-    """k_n for each convergent (P, Q) of ``conv`` (R_n(k_n) = ``target``, each orbit continued from the
-    last, the first solve from ``first``), their extrapolation, and each orbit at the critical value.
-
-    ``orbit_at(k, P, Q, guess, check)`` is the family's orbit (``guess`` None: found from scratch;
-    ``check``: verify its type), ``start_of(orbit)`` its coordinate on the symmetry line (the next
-    guess), ``point_of(orbit)`` its reported point.  Returns (rows, critical, uncertainty, ratio), the
-    rows of :attr:`GreeneResult.convergents`."""
+    """(rows of :attr:`GreeneResult.convergents`, critical, uncertainty, ratio): k_n of each convergent
+    from ``first``, each orbit ``orbit_at(k, P, Q, guess, check)`` continued from ``start_of`` the
+    last, and ``point_of`` each orbit at the critical value."""
     ks: list[float] = []
     start = None
     k_guess = first
@@ -207,7 +182,7 @@ def critical_parameter(conv, orbit_at, start_of, point_of, first, target):
             state["guess"] = start_of(orb)
             return orb
 
-        if len(ks) >= 2:   # the geometric sequence's next term
+        if len(ks) >= 2:
             k_guess = ks[-1] + (ks[-1] - ks[-2]) * ((ks[-1] - ks[-2]) / (ks[-2] - ks[-3]) if len(ks) >= 3 else -0.4)
         if ks:
             k_n, orb = solve_param(residue_at, target, ks[-1], k_guess)

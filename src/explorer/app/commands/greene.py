@@ -1,13 +1,9 @@
 """the parameter at which an invariant curve breaks (Greene's residue criterion)
 
-Greene's residue criterion for the invariant curve of rotation number --nu: symmetric periodic
-orbits of the convergents P/Q of --nu (half-orbit method on the symmetry line), the parameter
-k_n at which each one's residue reaches MacKay's critical R* = 0.2500888, extrapolated to the
-critical value. --map standard: Chirikov's standard map p' = p + k sin(theta), theta' = theta +
-p' (the golden-mean curve breaks at k_c = 0.971635406, Greene 1979), --k the first guess of k_c;
---map section with --around P1,P2: the curves around the elliptic fixed point of the section map
-near P1,P2, broken by --param, whose value (--mu by default) is the first guess of the critical
-one (docs/commands/greene.md).
+The parameter k_n at which the residue of each convergent P/Q of --nu reaches R* = 0.2500888,
+extrapolated to the critical value. --map standard: Chirikov's standard map, --k the first
+guess; --map section: the curves around the elliptic fixed point near --around, broken by
+--param, whose value (--mu by default) is the first guess (docs/commands/greene.md).
 """
 from __future__ import annotations
 
@@ -18,9 +14,7 @@ from explorer.analysis.greene_core import DEFAULT_QMAX, MAX_QMAX, NU_FORMS, SECT
 from explorer.app.commands import options
 from explorer.app.commands.options import Command, opt
 
-#: the maps --map names
 MAPS = ("standard", "section")
-#: --mu's help line: with --param mu it is the first guess of mu_c
 MU_HELP = "weight (>= 0); with --param mu (the default), the first guess of mu_c, > 0"
 
 COMMAND = Command("greene", __doc__, "--map standard --nu golden --json", (
@@ -44,7 +38,7 @@ def run(args) -> int:
     validation.choice("--map", args.map_name, MAPS)
     nu = gm.rotation_value(args.nu)
     validation.choice("--param", args.param, model.PARAM_NAMES + ("h",))
-    params = options.section_map_args(args)     # the model options are checked whatever the map
+    params = options.section_map_args(args)
     centre = options.pair(args.around, "--around") if args.around is not None else None
     k = validation.real("--k", args.k, 0.0, lo_open=True)
     default_qmax = DEFAULT_QMAX if args.map_name == "standard" else SECTION_QMAX
