@@ -104,7 +104,7 @@ def test_search_of_period_four_reports_no_orbit_of_period_one_or_two(search2):
     orbits = pm.search_periodic_orbits(PRM, H, 4, grid=8, line=48)
     assert orbits and all(o.period == 4 for o in orbits)
     for o in orbits:
-        assert pm._minimal_period(o.points) == 4
+        assert pm._minimal_period(o.points, SectionMap(PRM, H)) == 4
         assert not any(o.same_orbit(o2) for o2 in search2)
 
 

@@ -217,7 +217,7 @@ def _newton(smap, K, X0, max_iter=NEWTON_MAX_ITER, multiple=None):
     return pts, imgs, jacs, times, it
 
 
-def _minimal_period(pts, tol=MINIMAL_PERIOD_TOL, system=None) -> int:
+def _minimal_period(pts, system, tol=MINIMAL_PERIOD_TOL) -> int:
     K = len(pts)
     scale = max(1.0, float(np.max(np.abs(pts))))
     for d in range(1, K):
@@ -257,7 +257,7 @@ def _maps_onto(system, images, pts, tol) -> bool:
 
 def _make_orbit(smap, pts, imgs, jacs, times, iters, reduce=True) -> PeriodicOrbit:
     K = len(pts)
-    d = _minimal_period(pts, system=smap) if reduce else K
+    d = _minimal_period(pts, smap) if reduce else K
     pts, imgs, jacs, times = pts[:d], imgs[:d], jacs[:d], times[:d]
     resid = float(np.max(np.abs(difference(smap, imgs, np.roll(pts, -1, axis=0)))))
     return _orbit(smap, reduce_points(smap, pts), jacs, times, resid, iters)
@@ -428,7 +428,8 @@ def _map_guesses(system, K, grid, line) -> np.ndarray:
 
 def _map_search(system, K, grid, line, max_guesses, max_iter, same_tol, guesses) -> list:
     """:func:`search_periodic_orbits` of a map other than a section map."""
-    G = _map_guesses(system, K, grid, line) if guesses is None else np.asarray(guesses, float).reshape(-1, 2)
+    G = periodic_guesses(system, K, grid=grid, line=line) if guesses is None else \
+        np.asarray(guesses, float).reshape(-1, 2)
     found: list[PeriodicOrbit] = []
     tried = 0
     for g in G:
@@ -578,8 +579,8 @@ def continue_periodic(system, period, parameter, start, stop, step, guess, *, bi
 
     def solve(v, X):
         orb = find_periodic_orbit(system.with_value(parameter, v), X, K, reduce=False)
-        if _minimal_period(orb.points, system=system) != K:
-            raise ParameterError(f"the orbit collapsed to period {_minimal_period(orb.points, system=system)}")
+        if _minimal_period(orb.points, system) != K:
+            raise ParameterError(f"the orbit collapsed to period {_minimal_period(orb.points, system)}")
         return orb
 
     orbits: list[PeriodicOrbit] = []
