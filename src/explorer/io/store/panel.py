@@ -62,7 +62,7 @@ def write_panel(path, index: int, attrs: dict, seeds, y0, result: dict, *, rows=
     count) or the stored blocks of ``blocks`` (a :class:`~explorer.io.store.stream.BlockStream`,
     removed once committed); ``extra``: further
     datasets (indicators, separatrices); ``attrs``: the panel's attributes (:class:`PanelAttrs`);
-    ``fresh``: the store becomes this one panel.  Returns the largest |H - H0| of the rows."""
+    ``fresh``: the store becomes this one panel.  Returns the largest ``|H - H0|`` of the rows."""
     payload = {"seeds": np.asarray(seeds, float), "y0": np.asarray(y0, float)}
     payload.update({k: result[k] for k in ORBIT_DATASETS})
     payload.update(extra or {})
