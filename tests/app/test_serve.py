@@ -1252,19 +1252,46 @@ def test_a_thousand_clicks_leave_the_session_with_bounded_memory_and_threads(mon
             assert page.worker._runs == page.worker._paused == []
             gc.collect()                                            # (Bokeh's models hold reference cycles)
             heap.append(tracemalloc.get_traced_memory()[0])
-        # no thread per click: the session's orbits task made one at the first click (tasks.py), that is all
+        # no thread per click: the orbits run on one shared thread (tasks.py), that is all
         assert threading.active_count() <= threads0 + 1
-        assert [t.name for t in threading.enumerate() if t.name.startswith("explorer-serve-")] == \
-            ["explorer-serve-orbits"]
         assert paused > 0                                          # paused orbits were held, and let go
         growth = heap[-1] - heap[1]
         print(f"heap after each round (kB): {[h // 1024 for h in heap]}; growth {growth / 1024:.0f} kB; "
               f"{paused} orbits paused in all")
         assert growth < HEAP_GROWTH_BOUND, heap
-        page.loop.close(wait=True)                                 # the tab is gone: its threads end
-        assert not [t for t in threading.enumerate() if t.name.startswith("explorer-serve-")]
+        page.loop.close(wait=True)                                 # the tab is gone: its jobs end
+        assert page.worker.task.join(0)
     finally:
         tracemalloc.stop()
+        page.close()
+
+
+def test_fifty_clicks_and_five_megno_toggles_start_no_thread_of_their_own():
+    """The page's jobs run on threads shared by every session (tasks.py): the count of threads
+    stays within those of the jobs that run at once (the orbits and the raster), whatever the
+    number of clicks and toggles."""
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    import threading
+
+    from explorer.app.serve.page import SectionPage
+
+    s = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=CLICK_CROSSINGS)
+    c1, c2, r1, r2 = s.region
+    rng = np.random.default_rng(3)
+    page = SectionPage(s, megno_resolution=16, megno_time=5.0)
+    try:
+        threads0, most = threading.active_count(), 0
+        for k in range(50):
+            u, v = rng.uniform(-0.9, 0.9, 2)
+            assert page.click(c1 + u * r1 * np.sqrt(1 - v * v), c2 + v * r2 * 0.9) is not None
+            if k % 10 == 0:
+                page.layer.value = not page.layer.value               # the MEGNO layer on, then off, ...
+            page.poll()
+            most = max(most, threading.active_count())
+        page.resume()
+        _poll_until(page, lambda: len(page.crossings.data["t"]) == 50 * CLICK_CROSSINGS and _idle(page))
+        assert most <= threads0 + 2, (threads0, most)
+    finally:
         page.close()
 
 

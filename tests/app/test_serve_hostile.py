@@ -215,18 +215,20 @@ def test_a_page_whose_connection_is_lost_stops_every_computation_it_started(monk
     c1, c2, r1, _r2 = page.settings.region
     assert page.click(c1 + 0.3 * r1, c2) is not None                 # an orbit of a million crossings
     t0 = time.time()
-    while not {"overlay", "raster", "orbits"} <= {t.name for t in page.loop._tasks if t._executor is not None}:
-        assert time.time() - t0 < 600, [t.name for t in page.loop._tasks if t._executor is not None]
+    def started():
+        return [t for t in page.loop._tasks if t.generation > 0 or not t.join(0)]
+
+    while not {"overlay", "raster", "orbits"} <= {t.name for t in started()}:
+        assert time.time() - t0 < 600, [t.name for t in started()]
         for cb in [c for c in doc.session_callbacks if type(c).__name__ == "NextTickCallback"]:
             doc.remove_next_tick_callback(cb)
             cb.callback()
         time.sleep(0.01)
-    tasks = [t for t in page.loop._tasks if t._executor is not None]
+    tasks = started()
     doc.callbacks.trigger_event(ConnectionLost())                    # the tab closed
     assert page.loop.closed and all(t._stopped for t in tasks)
     for t in tasks:
-        t._executor.thread.join(600)
-        assert not t._executor.thread.is_alive(), t.name
+        assert t.join(600), t.name
 
 
 def test_a_client_gone_mid_send_is_not_reported_as_an_error_and_other_task_errors_still_are(caplog):

@@ -37,7 +37,7 @@ def test_a_newer_job_cancels_the_older_ones_budget_and_only_its_results_reach_th
     task.cancel()                                   # a cancel supersedes too: nothing current
     assert not second.current
     loop.close(wait=True)
-    assert not [t for t in threading.enumerate() if t.name == "explorer-serve-t"]
+    assert task.join(0)                             # no job of the task queued or running
 
 
 def test_a_result_handed_in_before_a_cancel_is_dropped_on_the_loop():

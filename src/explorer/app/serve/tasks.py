@@ -3,8 +3,8 @@
 
 Every background job of a page is a :class:`LatestTask`: the orbits' worker loop, the MEGNO
 raster, the overlay searches, a pick's readout, a saddle's manifolds, the figure and store
-exports.  :meth:`LatestTask.submit` runs ``work(job, *args)`` on the task's executor (one daemon thread,
-made at the first submit); a newer submit (or :meth:`LatestTask.cancel`) supersedes the older job:
+exports.  :meth:`LatestTask.submit` runs ``work(job, *args)`` on a background thread shared by every
+session (:class:`_Threads`); a newer submit (or :meth:`LatestTask.cancel`) supersedes the older job:
 its :class:`~explorer.analysis.budget.Budget` is cancelled, so its compiled loops stop within a
 step, and whatever it still hands in (:meth:`Job.post`) is dropped on the loop.  Results reach the
 page only on the session's event loop, through Bokeh's ``Document.add_next_tick_callback`` and
@@ -17,9 +17,9 @@ and timer are here, and only here.
 """
 from __future__ import annotations
 
+import collections
 import contextlib
 import logging
-import queue
 import threading
 import time
 from functools import partial
@@ -37,29 +37,42 @@ WATCH_MS = 1000
 _log = logging.getLogger("explorer.serve")
 
 
-class Executor:
-    """One daemon thread that runs the calls :meth:`submit` hands it, in order.  (Not a
-    ``concurrent.futures.ThreadPoolExecutor``: the interpreter joins its threads at exit, so a
-    search no one waits for any more would hold the exit up.)"""
+class _Threads:
+    """The background threads of every session, shared: a call takes an idle thread or starts one,
+    and a thread idle for IDLE_SECONDS ends.  So a server holds as many threads as calls run at
+    once (a session's orbits, its raster, a search), never one per kind of task and session.
+    Daemon threads (not ``ThreadPoolExecutor``'s, which the interpreter joins at exit: a search no
+    one waits for would hold the exit up)."""
 
-    def __init__(self, name: str):
-        self._queue: queue.SimpleQueue = queue.SimpleQueue()
-        self.thread = threading.Thread(target=self._loop, name=name, daemon=True)
-        self.thread.start()
+    def __init__(self):
+        self._cond = threading.Condition()
+        self._calls: collections.deque = collections.deque()
+        self._idle = 0
 
-    def submit(self, fn, *args) -> None:
-        self._queue.put((fn, args))
-
-    def shutdown(self, wait: bool = False) -> None:
-        """End the thread after the calls already handed in (``wait``: join it)."""
-        self._queue.put(None)
-        if wait and threading.current_thread() is not self.thread:
-            self.thread.join()
+    def submit(self, fn) -> None:
+        with self._cond:
+            self._calls.append(fn)
+            if self._idle >= len(self._calls):
+                self._cond.notify()
+                return
+        threading.Thread(target=self._loop, name="explorer-serve-worker", daemon=True).start()
 
     def _loop(self) -> None:
-        while (item := self._queue.get()) is not None:
-            fn, args = item
-            fn(*args)
+        while True:
+            with self._cond:
+                self._idle += 1
+                while not self._calls:
+                    if not self._cond.wait(IDLE_SECONDS) and not self._calls:
+                        self._idle -= 1
+                        return
+                fn = self._calls.popleft()
+                self._idle -= 1
+            fn()
+
+
+#: a shared background thread with nothing to run this long ends (s)
+IDLE_SECONDS = 10.0
+_threads = _Threads()
 
 
 class SessionLoop:
@@ -233,18 +246,21 @@ class Job:
 
 
 class LatestTask:
-    """One kind of background job of a session: the latest request only (module docstring)."""
+    """One kind of background job of a session: the latest request only (module docstring).  Its
+    jobs run one after the other, each on a shared thread (:class:`_Threads`)."""
 
     def __init__(self, loop: SessionLoop, name: str):
         self.loop, self.name = loop, name
         self.generation = 0
         self._lock = threading.Lock()
         self._budget: Budget | None = None
-        self._executor: Executor | None = None
+        self._queue: collections.deque = collections.deque()
+        self._idle = threading.Event()        # no job queued or running
+        self._idle.set()
         self._stopped = False
 
     def submit(self, work, *args, budget: Budget | None = None, on_error=None) -> Job:
-        """Supersede the current job and run ``work(job, *args)`` on the executor, inside ``budget``
+        """Supersede the current job and run ``work(job, *args)`` in the background, inside ``budget``
         if given.  An exception of a current job goes to ``on_error(exc)`` on the loop; a budget
         that ran out or was cancelled ends the job quietly."""
         with self._lock:
@@ -253,18 +269,28 @@ class LatestTask:
             return self._start(work, args, budget, on_error)
 
     def run(self, work, *args, on_error=None) -> Job:
-        """Run ``work(job, *args)`` on the executor as a job of the current generation: it goes with
-        the jobs already running (after them: one thread), and a cancel stops them all."""
+        """Run ``work(job, *args)`` as a job of the current generation, after the jobs already
+        queued; a cancel stops them all."""
         with self._lock:
             return self._start(work, args, None, on_error)
 
     def _start(self, work, args, budget, on_error) -> Job:
         job = Job(self, self.generation, budget)
         if not self._stopped:
-            if self._executor is None:
-                self._executor = Executor(f"explorer-serve-{self.name}")
-            self._executor.submit(self._run, job, work, args, on_error)
+            self._queue.append((job, work, args, on_error))
+            if self._idle.is_set():
+                self._idle.clear()
+                _threads.submit(self._drain)
         return job
+
+    def _drain(self) -> None:
+        while True:
+            with self._lock:
+                if not self._queue:
+                    self._idle.set()
+                    return
+                item = self._queue.popleft()
+            self._run(*item)
 
     def _supersede(self) -> None:
         self.generation += 1
@@ -279,12 +305,16 @@ class LatestTask:
             return self.generation
 
     def stop(self, wait: bool = False) -> None:
+        """No job any more (the queued ones return at once); ``wait``: until the running one has."""
         with self._lock:
             self._stopped = True
             self._supersede()
-            executor = self._executor
-        if executor is not None:
-            executor.shutdown(wait)           # (the jobs still queued are superseded: they return at once)
+        if wait:
+            self.join()
+
+    def join(self, timeout: float | None = None) -> bool:
+        """Wait until no job of this task is queued or running; returns whether none is."""
+        return self._idle.wait(timeout)
 
     @staticmethod
     def _run(job: Job, work, args, on_error) -> None:
