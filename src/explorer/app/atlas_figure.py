@@ -1,7 +1,5 @@
-"""The heat map of a two-parameter atlas (a scene with [atlas]): the chaotic fraction of the
-allowed section per cell, rows = the [sweep] parameter, columns = the [atlas] parameter; cells
-without an allowed region are gray.  Cells are drawn at equal size, labelled with their values
-(the values need not be evenly spaced: log-spaced mu with 0 is the usual case)."""
+"""The heat map of a two-parameter atlas: the chaotic fraction per cell, rows the [sweep]
+values, columns the [atlas] values, equal-size labelled cells, gray without an allowed region."""
 from __future__ import annotations
 
 import numpy as np

@@ -1,8 +1,5 @@
-"""High-resolution chaos maps drawn as rasters on their grid (issue 10): one image cell per seed
-of a ``[lyapunov] map_resolution`` scene (explorer.analysis.sweep.map_seeds), coloured by the
-chosen indicator, the forbidden region gray, the separatrices of the panel's fixed point on
-top, one colour bar.  Arrays in, figure out: the geometry comes from the store, so a map is
-redrawn without recomputing."""
+"""Chaos maps drawn as rasters on their grid: one image cell per seed of a ``[lyapunov]
+map_resolution`` scene, coloured by the chosen indicator, redrawn from the store alone."""
 from __future__ import annotations
 
 import math

@@ -37,20 +37,14 @@ _TICK_SIZE = 8
 _NOTE_SIZE = 7
 
 
-# ---------------------------------------------------------------- matplotlib, lazily
 def _matplotlib():
-    """Import matplotlib (lazily: importing this module stays cheap).  No backend is chosen:
-    the figures are :class:`matplotlib.figure.Figure` objects saved by format (``savefig``
-    picks Agg for PNG, the PDF and SVG backends for theirs) or drawn on a
-    :class:`~matplotlib.backends.backend_agg.FigureCanvasAgg` of their own, so they need none,
-    headless included, and a user's pyplot later in the same process gets the backend
-    matplotlib would have chosen without us (tests/app/test_figures.py)."""
+    """Import matplotlib lazily.  No backend is chosen: figures are saved by format or drawn on a
+    canvas of their own, so a user's pyplot later in the process is unaffected."""
     import matplotlib
 
     return matplotlib
 
 
-# ---------------------------------------------------------------- labels
 #: mathtext symbols: the model parameters' (model.PARAMETERS) and the other quantities labels name
 _SYMBOLS = {
     **{p.name: p.latex for p in model.PARAMETERS}, "lambda": r"\lambda", "phi": r"\varphi",
@@ -66,9 +60,8 @@ _RELATIONS = {"=": "=", "<=": r"\leq", ">=": r"\geq", "<": "<", ">": ">"}
 
 
 def panel_axes(n, ncols, size, dpi):
-    """A headless figure (constrained layout, an Agg canvas: ``fig.canvas.draw()`` works without
-    pyplot) of ``size`` inches with ``n`` axes on a grid of ``ncols`` columns, the unused cells
-    removed.  Call inside the rc context of the figure.  Returns (fig, axes[:n])."""
+    """A headless figure (constrained layout, Agg canvas) of ``size`` inches with ``n`` axes on
+    ``ncols`` columns, unused cells removed; call inside its rc context.  Returns (fig, axes[:n])."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -95,15 +88,8 @@ def _math_value(v: str) -> str:
 
 
 def mathtext_label(text) -> str:
-    """Turn ``"name = value"`` pieces of a label into matplotlib mathtext.
-
-    ``"mu = 0.5"`` -> ``"$\\mu = 0.5$"``, ``"lam = 1"`` -> ``"$\\lambda = 1$"``,
-    ``"h = 2"`` -> ``"$h = 2$"``; several pieces are converted one by one
-    (``"mu = 0.5, h = 2"`` -> ``"$\\mu = 0.5$, $h = 2$"``), the rest of the
-    text is kept (``"mu = 2 (stable)"`` -> ``"$\\mu = 2$ (stable)"``).  Known
-    names: mu, lam/lambda, chi, zeta, xi, eta, phi, phi0, h, b, c, a1, a2, p1,
-    p2, M, t, tol, dt.  Text that already contains ``$`` is returned unchanged.
-    """
+    """Each ``"name = value"`` piece of a label as mathtext: ``"mu = 0.5, h = 2"`` ->
+    ``"$\\mu = 0.5$, $h = 2$"``; the rest of the text, unknown names and text with ``$`` are kept."""
     text = "" if text is None else str(text)
     if "$" in text:
         return text
@@ -121,11 +107,9 @@ def symbol_label(name) -> str:
     return f"${_SYMBOLS[name]}$" if name in _SYMBOLS else name
 
 
-# ---------------------------------------------------------------- region of the section
 def region_limits(params, h, phi0=math.pi, margin=0.05):
-    """``((x0, x1), (y0, y1))``: bounding box of the allowed region plus
-    ``margin`` times its width (height) on each side; None if the region is
-    empty.  A region reduced to a point gets a small box around it."""
+    """``((x0, x1), (y0, y1))``: the allowed region's bounding box plus ``margin`` on each side (a
+    small box around a point region); None when it is empty."""
     e = model.allowed_ellipse(params, h, phi0)
     if e is None:
         return None
@@ -144,7 +128,6 @@ def _union(boxes):
             (min(b[1][0] for b in boxes), max(b[1][1] for b in boxes)))
 
 
-# ---------------------------------------------------------------- input checking
 def _as_points(points, i):
     if points is None:
         return np.empty((0, 2))
@@ -249,7 +232,6 @@ def _limits(prepared, share_scale, own):
     return out
 
 
-# ---------------------------------------------------------------- the figure
 def _draw_panel(ax, p, box, marker_size):
     from matplotlib.patches import Ellipse
 
@@ -359,9 +341,7 @@ def _whole_pixels(fig):
 
 
 def _trim_height(fig, keep=0.04):
-    """Remove the empty vertical space left by the estimate of the figure height (the
-    panels have equal aspect and are limited by their width, so constrained layout
-    leaves the surplus height empty)."""
+    """Remove the empty height that constrained layout leaves below equal-aspect panels."""
     try:
         fig.draw_without_rendering()
         tight = fig.get_tightbbox()
@@ -374,7 +354,6 @@ def _trim_height(fig, keep=0.04):
         fig.set_size_inches(W, H - slack + keep)
 
 
-# ---------------------------------------------------------------- output
 def _atomic_savefig(fig, path: Path, fmt: str, **kwargs):
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     os.close(fd)
@@ -391,15 +370,9 @@ def _atomic_savefig(fig, path: Path, fmt: str, **kwargs):
 
 
 def save_figure(fig, stem, dpi=None, *, text=None):
-    """Write ``<stem>.png`` and ``<stem>.pdf`` atomically (temporary file in the same
-    directory, then :func:`os.replace`), creating parent directories.
-
-    ``dpi`` defaults to the figure's dpi (PNG resolution and resolution of the
-    rasterized points in the PDF).  A ``stem`` ending in ``.png`` or ``.pdf`` is
-    stripped of it.  The PDF carries no creation date.  ``text``: {key: value} written into the
-    PNG as text chunks (:func:`png_text` reads them; the PNG is written last, so its text
-    describes both files).  Returns ``(png_path, pdf_path)`` as :class:`pathlib.Path`.
-    """
+    """Write ``<stem>.png`` and ``<stem>.pdf`` atomically (parents created; a ``.png``/``.pdf`` suffix
+    of ``stem`` is dropped), at ``dpi`` [the figure's], the PDF without a creation date; ``text``:
+    {key: value} chunks of the PNG (:func:`png_text`), written last.  Returns (png, pdf) paths."""
     _matplotlib()
     stem = os.fspath(stem)
     if stem.lower().endswith((".png", ".pdf")):
@@ -428,11 +401,9 @@ def png_text(path, key):
 
 
 def chaos_maps(maps, *, layout="row", columns=None, threshold=4.0, dpi=200, panel_width=PANEL_WIDTH):
-    """Chaos maps: each seed of a panel coloured by its mean MEGNO <Y> (log scale; 2 =
-    quasi-periodic, ~0 = near a stable periodic orbit, large = chaotic), the forbidden region
-    gray.  ``maps``: dicts with ``seeds`` (N, 2), ``megno`` (N,), optional ``valid`` (N,) bool,
-    ``params``, ``h``, ``phi0``, ``label``.  Every panel fits its own region; one shared colour
-    bar; the title of each panel gives the chaotic fraction (<Y> > threshold)."""
+    """Chaos maps: each seed coloured by its MEGNO <Y> (log scale), the forbidden region gray, one
+    colour bar, each title with the chaotic fraction (<Y> > ``threshold``).  ``maps``: dicts of
+    ``seeds``, ``megno``, optional ``valid``, ``params``, ``h``, ``phi0``, ``label``."""
     mpl = _matplotlib()
     from matplotlib.colors import LogNorm
     from matplotlib.patches import Ellipse

@@ -88,11 +88,10 @@ def print_rows(params, p1, p2, h, n_crossings, *, as_json=False, block=sections.
 
 def to_store(path, params, p1, p2, h, n_crossings, *, block=sections.DEFAULT_BLOCK, force=False,
              on_block=None, **kw) -> OrbitReport:
-    """Stream the crossings of one orbit into the store at ``path`` (one panel), block by block
-    (:mod:`explorer.io.store.stream`).  Rerunning the same request after a kill continues from the
-    last stored block, to the same file as an uninterrupted run; a store that already holds this
-    run is left alone (``already_complete``).  Refused up front (ParameterError) when the run may
-    need more disk than is free, or ``path`` holds something else (without ``force``)."""
+    """Stream the crossings of one orbit into the one-panel store at ``path``, block by block; a
+    rerun after a kill continues to the file of an uninterrupted run, and a store that holds this
+    run is left alone (docs/commands/orbit.md).  ParameterError when the disk may not suffice or
+    ``path`` holds another run (without ``force``)."""
     from explorer.io import store  # h5py only for a run that writes a store
 
     path = os.fspath(path)

@@ -36,9 +36,8 @@ SEPARATRIX_SETTINGS = dict(arclength=4.0, iterations=6, max_points=6000)
 
 
 def panel_separatrices(scene, i):
-    """The central fixed point of panel i, followed by continuation from mu = 0 (where it is
-    solution I, R6) or from the first sweep value, and its four separatrix branches when it is
-    hyperbolic.  Returns (fixed point attrs dict, list of (M, 2) curves)."""
+    """The central fixed point of panel i, continued from mu = 0 (solution I, R6) or the first sweep
+    value, and its separatrix branches when hyperbolic.  Returns (fixed point attrs, curves)."""
     from explorer import model as mdl
     from explorer.analysis import fixedpoints as fpm
 
@@ -60,11 +59,9 @@ def panel_separatrices(scene, i):
 
 
 def panel_manifolds(scene, i):
-    """[manifolds] draw = true: the branches of W^u and W^s of panel i's orbit (period
-    ``manifolds.period``, found by Newton's method from ``manifolds.guess``, as ``explorer manifold``
-    does) at each of its points, grown to ``manifolds.arclength``; computed here, in the parent,
-    when the figure is drawn (nothing is stored).  Returns (list of (kind, (M, 2) array), note):
-    the note says why there are none ("" when there are)."""
+    """[manifolds] draw = true: the branches of W^u and W^s at each point of panel i's orbit (as
+    ``explorer manifold`` finds and grows them), computed when the figure is drawn, never stored.
+    Returns (list of (kind, (M, 2) array), note saying why there are none or "")."""
     from explorer.analysis import manifolds as mf
     from explorer.analysis import periodic
     from explorer.analysis.section_map import SectionMap
@@ -85,9 +82,8 @@ def panel_manifolds(scene, i):
 
 
 def classify_megno(arrays):
-    """<Y> for classifying orbits: an orbit stopped early as chaotic (``lyapunov_early`` > 0,
-    [lyapunov] early_stop) counts as above every threshold (the largest double; the stored <Y>
-    is the one it reached)."""
+    """<Y> for classifying orbits: an orbit stopped early as chaotic (``lyapunov_early`` > 0) counts
+    as above every threshold."""
     m = np.asarray(arrays["megno"], float)
     early = arrays.get("lyapunov_early")
     if early is None:
@@ -96,9 +92,8 @@ def classify_megno(arrays):
 
 
 def lyapunov_panels(scene, data):
-    """The chaos maps of the stored panels of ``scene`` (seeds, MEGNO, valid, parameters) and the
-    chaotic fraction per panel as rows (swept value, fraction, binomial error) at the scene's
-    MEGNO threshold."""
+    """The chaos maps of the stored panels of ``scene`` and the chaotic fraction per panel as rows
+    (swept value, fraction, binomial error) at the scene's threshold."""
     maps, fractions = [], []
     for i in range(scene.n_panels):
         params, h, label = scene.panel(i)
@@ -240,14 +235,9 @@ def format_report(r: SweepReport) -> str:
     return "\n".join(lines)
 
 
-#: the panel attributes of the indicators product (the store's schema, explorer.io.store)
-INDICATOR_ATTRS = store.INDICATOR_ATTRS
-
-
 def _stored_products(scene, i, stored: dict, want: dict) -> set:
-    """The products of panel i that the store holds with the scene's settings.  A panel written
-    before products had their own hashes (only ``hash``) counts as whole when that hash is the
-    scene's, except with sections and a map grid (its sections were then of the grid's seeds)."""
+    """The products of panel i that the store holds with the scene's hashes (a panel with ``hash``
+    only counts as whole when it is the scene's, unless sections beside a map grid)."""
     if any(a in stored for a in store.PRODUCT_HASH_ATTRS.values()):
         return {k for k, h in want.items() if stored.get(store.PRODUCT_HASH_ATTRS[k]) == h}
     if stored.get("hash") == scene.panel_hash(i) and not ("sections" in want and scene.lyapunov.map_resolution):
@@ -257,18 +247,12 @@ def _stored_products(scene, i, stored: dict, want: dict) -> set:
 
 def run_sweep(scene, out=None, *, figure=None, draw=None, jobs=1, backend=None, scheduler=None,
               force=False, progress=True) -> SweepReport:
-    """Compute every product of every panel of ``scene`` (sections, indicators) that ``out`` does
-    not hold with the same settings hash, commit each atomically and (``draw``) redraw the figure
-    when data or drawing settings changed or files are missing.
-
-    ``scene``: a :class:`~explorer.io.scene.Scene`, a TOML path or a preset name;
-    ``out``: HDF5 path [results/<scene>.h5]; ``figure``: figure stem [``out`` without .h5: beside the store];
-    ``draw``: draw the figure [only when ``figure`` is given: from Python a sweep computes and
-    stores, and writes no picture unless asked; the command line draws unless --no-figure];
-    ``jobs``/``backend``/``scheduler``: joblib processes (dask: a cluster); ``force``: recompute all;
-    ``progress``: a progress bar on stderr. Returns a :class:`SweepReport`; bad settings raise
-    :class:`~explorer.model.ParameterError`.
-    """
+    """Compute the products (sections, indicators) of every panel of ``scene`` that ``out`` lacks
+    with the scene's hashes, commit each panel atomically and, with ``draw``, redraw a stale figure
+    (docs/commands/sweep.md).  ``scene``: a Scene, TOML path or preset name; ``out`` [results/<scene>.h5];
+    ``figure``: the figure's stem [``out`` without .h5]; ``draw`` [only when ``figure`` is given];
+    ``jobs``/``backend``/``scheduler``: joblib processes or a dask cluster; ``force``: recompute all.
+    Returns a :class:`SweepReport`; bad settings raise ParameterError."""
     from explorer.io.scene import Scene, load_scene
 
     t_start = time.perf_counter()
@@ -286,9 +270,8 @@ def run_sweep(scene, out=None, *, figure=None, draw=None, jobs=1, backend=None, 
 
 
 def _sweep(scene, out, stem, *, draw, jobs, backend, scheduler, force, progress, stop, t_start) -> SweepReport:
-    """:func:`run_sweep` once the store is locked and Ctrl-C deferred to ``stop.check()``: plan what
-    to compute, compute each product panel by panel (each finished panel written by a
-    :class:`_PanelWriter`), draw the figure, report."""
+    """:func:`run_sweep` with the store held and Ctrl-C deferred: plan, compute and write each
+    product panel by panel, draw, report."""
     _check_same_scene(scene, out, force)
     plan = _plan(scene, out, force)
     client = _dask_client(scheduler, jobs) if backend == "dask" else None
@@ -318,10 +301,8 @@ def _sweep(scene, out, stem, *, draw, jobs, backend, scheduler, force, progress,
 
 @dataclass(frozen=True)
 class _Plan:
-    """What a sweep run computes: per panel the settings hash (``hashes``), the products' hashes
-    the scene wants (``want``) and those the store already holds with them (``have``); per
-    product the panels to compute (``todo``); the panels computed at all, and the stored panels
-    whose chaotic fraction was reclassified at a new MEGNO threshold (``restamped``)."""
+    """What a sweep run computes: per panel its hash, the products' hashes wanted and held
+    (``want``, ``have``); per product the panels ``todo``; ``computed``; ``restamped``."""
 
     hashes: list
     want: list
@@ -426,9 +407,8 @@ def _setting(section) -> str:
 
 
 class _PanelWriter:
-    """Writes each finished panel of a sweep into the store (``sweep.run``'s callbacks, in the
-    parent): :meth:`sections` and :meth:`indicators`, with the panel attributes of the store's
-    schema (:class:`explorer.io.store.PanelAttrs`), and adds what it measured to ``stats``."""
+    """Writes each finished panel of a sweep (``sweep.run``'s callbacks, in the parent) through
+    :func:`explorer.io.store.write_panel`, and adds what it measured to ``stats``."""
 
     def __init__(self, scene, out, plan: _Plan, specs: dict, streams: stream.PanelStreams):
         self.scene, self.out, self.plan, self.specs, self.streams = scene, out, plan, specs, streams
@@ -451,7 +431,7 @@ class _PanelWriter:
         if not ("indicators" in self.plan.want[i] and "indicators" in self.plan.have[i]):
             return {}
         kept, old_attrs = store.read_panel_datasets(self.out, i, store.INDICATOR_DATASETS)
-        return dict(kept, **{k: old_attrs[k] for k in INDICATOR_ATTRS if k in old_attrs})
+        return dict(kept, **{k: old_attrs[k] for k in store.INDICATOR_ATTRS if k in old_attrs})
 
     def sections(self, panel, arrays) -> None:
         """Write panel ``panel``'s sections (whole, or from its streamed blocks), with its stored
@@ -463,7 +443,7 @@ class _PanelWriter:
                                                   direction=integ.direction, crossings=integ.crossings,
                                                   wall_time=arrays["wall_time"]),
                      sections_hash=self.plan.want[i]["sections"], seeds_dropped=int(panel.dropped))
-        attrs.update({k: v for k, v in keep.items() if k in INDICATOR_ATTRS})
+        attrs.update({k: v for k, v in keep.items() if k in store.INDICATOR_ATTRS})
         extra = {k: v for k, v in keep.items() if k in store.INDICATOR_DATASETS}
         _separatrices(self.scene, i, extra, attrs)
         blocks = None
@@ -504,7 +484,7 @@ class _PanelWriter:
                               file_attrs=self.file_attrs)
         else:
             attrs.update(self.panel_attrs(panel, i, True))
-            stale = [k for k in store.INDICATOR_DATASETS + INDICATOR_ATTRS if k not in payload and k not in attrs]
+            stale = [k for k in store.INDICATOR_DATASETS + store.INDICATOR_ATTRS if k not in payload and k not in attrs]
             store.update_panel(self.out, i, payload, attrs, remove=stale)
 
 
@@ -548,14 +528,10 @@ ATLAS_COMMIT_SECONDS = 2.0
 
 def run_atlas(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, scheduler=None, force=False,
               progress=True) -> SweepReport:
-    """A two-parameter atlas (a scene with [atlas]): the chaotic fraction of every cell
-    ([sweep] value x [atlas] value) from the indicators of its seeds, mapped by the same
-    ``task(spec, i)`` as a sweep (:func:`explorer.analysis.sweep.build_atlas_spec`), stored as one
-    small HDF5 file (:mod:`explorer.io.store.atlas`: fractions only, no orbits) and drawn as a
-    heat map.  The file is rewritten atomically with the cells finished so far every
-    :data:`ATLAS_COMMIT_SECONDS` (and when the run ends or is interrupted), so a rerun with the same
-    :meth:`~explorer.io.scene.Scene.atlas_hash` computes only the cells it lacks, and nothing when
-    it is complete."""
+    """A two-parameter atlas (a scene with [atlas]): the chaotic fraction of every cell ([sweep] x
+    [atlas] value), mapped as a sweep is and stored in one small file (:mod:`explorer.io.store.atlas`)
+    rewritten atomically every :data:`ATLAS_COMMIT_SECONDS`, so a rerun with the same atlas hash
+    computes only the cells it lacks; drawn as a heat map."""
     from explorer.app.atlas_figure import atlas_heatmap
     from explorer.app.figures import save_figure
     from explorer.io.store import atlas as atlas_store
@@ -654,10 +630,9 @@ def _stored_atlas(out: Path, force: bool):
 
 
 def _restamp_fractions(scene, out, stored) -> tuple:
-    """The MEGNO threshold only classifies orbits, so it is outside the panel hash (changing it
-    recomputes nothing); the stored ``chaotic_fraction`` depends on it, so a stored panel whose
-    ``megno_threshold`` differs from the scene's gets its fraction recomputed from the stored
-    MEGNO values (atomic attribute update).  Returns the indices restamped."""
+    """The MEGNO threshold is outside the panel hash: a stored panel whose ``megno_threshold``
+    differs from the scene's gets its chaotic fraction recomputed from its stored MEGNO (an atomic
+    attribute update).  Returns the panels restamped."""
     if "lyapunov" not in scene.compute or not stored:
         return ()
     threshold = float(scene.lyapunov.threshold)
@@ -729,9 +704,8 @@ def _outputs(scene, out, figure, draw) -> tuple[Path, Path]:
 
 @contextlib.contextmanager
 def _guarded(out: Path):
-    """While a run writes the store ``out``: its lock held (a second process is refused with the
-    holder named, exit 2) and Ctrl-C deferred to ``stop.check()`` (:mod:`explorer.app.interrupt`).
-    Temporaries of killed runs next to the store are removed once the lock is ours."""
+    """While a run writes ``out``: the store held (:func:`explorer.io.store.writing`) and Ctrl-C
+    deferred to ``stop.check()``."""
     with interrupt.deferred_interrupt() as stop, store.writing(out):
         yield stop
 

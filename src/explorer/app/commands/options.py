@@ -48,15 +48,10 @@ def one_of(*choices: Option, required: bool = False) -> Callable:
 
 @dataclass(frozen=True)
 class Command:
-    """A command's line, declared once in its module as ``COMMAND``.
-
-    ``doc`` is the module's docstring: its first paragraph is the one-line help of
-    ``explorer --help``, the rest the description of ``explorer NAME --help`` (``{key}`` fields
-    filled from ``fields`` when given, for text computed from a registry); ``example`` the
-    arguments of the example printed at the end of ``--help`` after ``python -m explorer NAME``
-    (it must parse: tests/app/test_cli.py); ``options`` the options in the order of ``--help``.
-    (``python -OO`` strips docstrings: the commands then parse as usual without help text.)
-    """
+    """A command's line, declared once in its module as ``COMMAND``: ``doc`` its docstring (first
+    paragraph: ``explorer --help``'s line, the rest the description, ``{key}`` filled from
+    ``fields``), ``example`` the arguments of the example in ``--help`` (it must parse), ``options``
+    in the order of ``--help``."""
 
     name: str
     doc: str | None

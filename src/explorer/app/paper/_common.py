@@ -51,7 +51,6 @@ class Outcome:
         return f"{self.name}: {self.status}" + (f" ({self.message})" if self.message else "")
 
 
-# ====================================================================== matplotlib
 def _new_figure(figsize, dpi=200, layout="constrained"):
     from explorer.app.figures import _matplotlib
 

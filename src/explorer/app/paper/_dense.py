@@ -8,7 +8,6 @@ from explorer.app.paper._common import DENSE_TOL
 from explorer.app.paper.chaplygin import check_chaplygin
 
 
-# ====================================================================== dense integration
 def advance(params, Y, tau, *, tol=DENSE_TOL):
     """States Y (N, 5) advanced by the time tau > 0 with the project's Taylor integrator
     (:func:`explorer.analysis.sections.propagate`).  One thread: the call is short."""
@@ -103,13 +102,9 @@ def meridian_points(params, h, c, n_grid=4001):
 
 
 def closed_curves(params, h, c_levels, *, dt=0.02, t_max=400.0, tol=DENSE_TOL):
-    """The closed curves of {H = h} n {F = c} for each c of ``c_levels``, integrated with the
-    Taylor method from their points on the meridian p2 = 0 over one period (until p2 has
-    changed sign twice; the return point is located by regula falsi on the integrated p2).
-    Duplicates (the second meridian point of a curve already drawn) are dropped.
-
-    Returns a list of dicts: c, start (3,), y (n, 3) samples (last = located return point),
-    t (n,), period, half (the other meridian point), closure (|return - start|)."""
+    """The closed curve of {H = h} n {F = c} for each c of ``c_levels``, integrated (Taylor) from
+    its point on p2 = 0 over one period, duplicates dropped.  Returns dicts: c, start, y (samples,
+    the last the located return), t, period, half (the other meridian point), closure."""
     prm = check_chaplygin(params)
     starts, levels = [], []
     for c in c_levels:

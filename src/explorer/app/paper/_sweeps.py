@@ -14,7 +14,6 @@ QUICK_SCENES = {
     "atlas": {("seeds", "n"): 24, ("lyapunov", "time"): 100.0},
 }
 
-# ====================================================================== sweeps
 def _quick_scene(name, results_dir):
     """A reduced copy of a preset scene (QUICK_SCENES), written as a TOML file; returns its path."""
     from explorer.io import scene as sc

@@ -1,7 +1,6 @@
 """MEGNO maps of the Figure-4 panels (scene preset ``chaos``)."""
 
 
-
 from explorer.app.paper._common import Drawn, Outcome, save
 from explorer.app.paper._sweeps import _lyapunov_panels, _quick_note, ensure_sweep
 

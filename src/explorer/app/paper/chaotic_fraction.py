@@ -1,7 +1,6 @@
 """The chaotic fraction against mu (scene preset ``fraction``)."""
 
 
-
 from explorer.app.paper._common import Drawn, Outcome, save
 from explorer.app.paper._sweeps import _lyapunov_panels, _quick_note, ensure_sweep
 

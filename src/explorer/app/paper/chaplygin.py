@@ -11,7 +11,6 @@ from explorer.integrate.methods import MAP_TOL
 from explorer.model import ParameterError
 
 
-# ====================================================================== Chaplygin's case (R6)
 def check_chaplygin(params) -> model.Params:
     """The setting of the seed's bifurcation analysis: mu = 0, chi = zeta = 0, lam > 0, a1 > a2."""
     prm = params if isinstance(params, model.Params) else model.Params(**params)

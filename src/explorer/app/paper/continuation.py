@@ -11,7 +11,6 @@ NAME = "continuation"
 DESCRIPTION = "the central fixed point continued in mu, its trace and stability changes"
 
 
-# ====================================================================== continuation
 def continuation_figure(params=None, h=None, *, start=0.0, stop=8.0, step=0.1, dpi=200,
                         marks=(0.002, 0.01, 0.03, 4.0, 8.0), refine_min=True) -> Drawn:
     """The central fixed point of the section map phi = pi at h = 2 continued in mu

@@ -92,15 +92,9 @@ def _separatrix_III(prm, h, c, *, dt, tol, t_max=60.0):
 
 def figure2_figure(params=CHAPLYGIN, energies=FIGURE2_ENERGIES, *, n_levels=9, dt=0.02, tol=DENSE_TOL, dpi=200,
             elev=24.0, azim=-55.0) -> Drawn:
-    """The seed's Figure 2: trajectories of R6 in (p1, p2, M), the curves where the energy
-    ellipsoid H = h meets the paraboloid F = c, one panel per energy (the seed's three
-    intervals).  Closed curves integrated over one period (:func:`closed_curves`); the
-    separatrices in red: R7 for the saddle I (exact, both branches p -> -p) and the integrated
-    heteroclinic curves of the saddles III; permanent rotations marked (filled: stable, open:
-    unstable).  Curves in front of the ellipsoid are dark, behind it light.
-
-    data["panels"][i]: h, curves (list of closed_curves dicts), separatrices (list of (n, 3)),
-    equilibria (list of (branch, state, stable)), levels, critical."""
+    """The seed's Figure 2: curves {H = h} n {F = c} in (p1, p2, M), one panel per energy interval,
+    separatrices in red (R7 for I, integrated for III), permanent rotations marked (filled: stable).
+    data["panels"][i]: h, curves, separatrices, equilibria, levels, critical."""
     from explorer.model import exact
 
     prm = check_chaplygin(params)

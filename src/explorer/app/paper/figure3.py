@@ -11,19 +11,12 @@ NAME = "figure3"
 DESCRIPTION = "the bifurcation diagram in the (c, h) plane, checked numerically"
 
 
-# ====================================================================== Figure 3
 def figure3_figure(params=cm.CHAPLYGIN, *, check=True, c_range=(-1.5, 6.6), h_max=8.0, energies=cm.FIGURE2_ENERGIES,
             dpi=200) -> cm.Drawn:
-    """The seed's Figure 3, the bifurcation diagram of Chaplygin's case in the (c, h) plane:
-    the parabola of I (h = c^2/(2b)) and the lines of II and III tangent to it at
-    c = lam b/a_j, unstable parts dashed (I for lam b/a1 < c < lam b/a2; III), the admissible
-    region {h >= :func:`~explorer.app.paper.chaplygin.admissible_hmin` (c)} in gray, the marks lam b/a_j
-    and b lam^2/(2 a_j^2),
-    the energies of Figure 2, and the points checked by :func:`~explorer.app.paper.chaplygin.figure3_check` (filled:
-    numerically stable, open: unstable).
-
-    Artists carry gids: "admissible", "I-stable", "I-unstable", "II", "III", "checked".
-    data: segments {gid: (c array, h array, dashed)}, checks (the records)."""
+    """The seed's Figure 3: the bifurcation diagram of Chaplygin's case in the (c, h) plane, unstable
+    parts dashed, the admissible region gray (docs/errata.md), the energies of Figure 2 and the points
+    of :func:`~explorer.app.paper.chaplygin.figure3_check` (filled: stable).  Artists' gids:
+    "admissible", "I-stable", "I-unstable", "II", "III", "checked"; data: segments, checks."""
     prm = ch.check_chaplygin(params)
     c1, c2 = ch.critical_c(prm)
     hc1, hc2 = ch.critical_h(prm)

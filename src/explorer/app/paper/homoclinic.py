@@ -13,16 +13,10 @@ NAME = "homoclinic"
 DESCRIPTION = "R7 against the integrated flow, with its crossings of phi = pi"
 
 
-# ====================================================================== homoclinic (R7)
 def homoclinic_figure(params=CHAPLYGIN, h=2.0, *, T0=20.0, dt=0.02, tol=MAP_TOL, dpi=200) -> Drawn:
-    """R7 (both separatrices, sign = +1 and the p -> -p branch sign = -1) against the
-    integrated flow: the exact state at t = -T0 is integrated with the Taylor method (dense
-    samples every dt, and the crossings of phi = pi by :func:`explorer.analysis.sections.crossings`),
-    drawn in (p1, p2) and (t, M); the crossing times of
-    :func:`explorer.model.exact.homoclinic_crossing_times` against the integrator's.
-
-    data[sign]: t_exact, t_integrated (crossing times), max_dt (their largest difference),
-    t (samples), y (integrated samples (n, 5)), exact (p1, p2, M at the samples)."""
+    """R7 (both separatrices, sign = +-1) against the flow integrated from the exact state at
+    t = -T0, in (p1, p2) and (t, M), with the crossing times of phi = pi exact and integrated.
+    data[sign]: t_exact, t_integrated, max_dt, t, y, exact."""
     from explorer.analysis import sections
     from explorer.model import exact
 

@@ -1,7 +1,6 @@
 """The Melnikov figure (:func:`explorer.app.melnikov_figure.melnikov_figure`)."""
 
 
-
 from explorer.app.paper._common import Drawn, Outcome, save
 
 #: the figure's name (``explorer figures --only melnikov``) and what it shows
@@ -9,7 +8,6 @@ NAME = "melnikov"
 DESCRIPTION = "the Melnikov integral against ur24 and the measured splitting"
 
 
-# ====================================================================== Melnikov, the body in the plane
 def melnikov_figure(*, quick=False) -> Drawn:
     from explorer.app.melnikov_figure import melnikov_figure as mf
 

@@ -55,13 +55,9 @@ def period_legend(ax, colours, kinds):
 
 def periodic_figure(params=None, h=None, *, periods=range(1, 9), seeds=40, crossings=400, profile_n=120,
                     iterates=2000, grid=12, dpi=200) -> Drawn:
-    """Left: crossings of ``seeds`` orbits started on p2 = 0 (gray) and the periodic orbits of
-    minimal period K in ``periods`` found by :func:`explorer.analysis.periodic.search_periodic_orbits`
-    (one colour per period, one marker per kind: :data:`_KINDS`; the legend below the panel, where
-    it hides no orbit).  Right: the rotation
-    number (:func:`explorer.analysis.rotation.rotation_profile`) along p2 = 0 from the elliptic
-    fixed point, converged orbits dark, non-converged (chaotic) light, with the levels m/K of
-    the elliptic orbits found (plateaus of the island chains)."""
+    """Left: the crossings of ``seeds`` orbits and the periodic orbits of each period in ``periods``
+    (one colour per period, one marker per kind).  Right: the rotation number along p2 = 0 from the
+    elliptic fixed point, with the levels m/K of the elliptic orbits found."""
     from explorer.analysis import periodic, rotation, sections
     from explorer.analysis.fixedpoints import find_fixed_point
 
@@ -112,15 +108,13 @@ def periodic_figure(params=None, h=None, *, periods=range(1, 9), seeds=40, cross
         ax.set_title(rf"$\varphi = \pi$, $\mu = {prm.mu:g}$, $h = {h:g}$: periodic orbits", fontsize=_FS)
         conv = prof.converged
         x = prof.points[:, 0]
-        # (not converged: chaotic, or a regular orbit whose weighted average needs more returns;
-        # the quick version's 300 converge nowhere, the figure's 2000 on most of the island)
+        # not converged: chaotic, or a regular orbit that needs more returns
         bx.plot(x[~conv], prof.rotation[~conv], ".", color="0.7", ms=2.5,
                 label=f"not converged in {iterates} returns (chaotic, or too few returns)")
         bx.plot(x[conv], prof.rotation[conv], ".", color="k", ms=2.5, label="converged to 1e-10")
         for lev, (m, K) in sorted(levels.items()):
             bx.axhline(lev, color=colour[K], lw=0.6, ls="--")
-            # at the panel's left edge (the centre's side, where the profile lies above every
-            # plateau), below its line, inside the axes
+            # at the left edge, where the profile lies above every plateau
             bx.text(0.01, lev, f"{m:d}/{K}: island chain of period {K}", fontsize=_SMALL, va="top", ha="left",
                     color=colour[K], transform=bx.get_yaxis_transform())
         bx.set_xlabel("$p_1$ on $p_2 = 0$ (from the elliptic fixed point)")
@@ -135,8 +129,7 @@ def periodic_figure(params=None, h=None, *, periods=range(1, 9), seeds=40, cross
 
 
 def build(out_dir, *, results_dir="results", quick=False, benchmark=None, quiet=True) -> Outcome:
-    # (quick: the profile's orbits near the island's edge are lifted through the flow on sub-sections,
-    # most of the figure's time; 16 orbits of 300 returns take 10 s of CPU where 30 of 500 took 24)
+    # quick: fewer profile orbits and returns (those near the island's edge cost the most)
     kw = dict(periods=range(1, 4), seeds=16, crossings=150, profile_n=16, iterates=300, grid=6) if quick else {}
     d = periodic_figure(**kw)
     counts = ", ".join(f"K={K}: {n}" for K, n in d.data["counts"].items())

@@ -1,8 +1,5 @@
-"""The registry of the paper's figures: name -> module, in the order ``explorer figures`` makes them.
-
-Each module has ``NAME``, ``DESCRIPTION`` and ``build(out_dir, *, results_dir, quick, benchmark,
-quiet) -> Outcome``; this is the only list of figures (the CLI's help and :func:`generate` read it).
-"""
+"""The registry of the paper's figures, name -> module, in the order ``explorer figures`` makes
+them: the one list of figures."""
 from __future__ import annotations
 
 import importlib

@@ -1,7 +1,6 @@
 """The body's path in the plane (:func:`explorer.app.trajectory_figure.path_figure`)."""
 
 
-
 from explorer.app.paper._common import Drawn, Outcome, save
 
 #: the figure's name (``explorer figures --only trajectory``) and what it shows

@@ -11,7 +11,6 @@ NAME = "work_precision"
 DESCRIPTION = "one-step error against throughput (benchmarks/results_w4.json)"
 
 
-# ====================================================================== work-precision
 def _method_group(row):
     m = row["method"]
     setting = row.get("setting", "")
@@ -43,12 +42,8 @@ WP_STYLE = {
 
 
 def work_precision_figure(path, *, dpi=200) -> Drawn:
-    """One-step error of the section map (median, with a bar up to the max) against the
-    throughput (crossings per second) of every method and setting of the W4 benchmark,
-    scipy and heyoka included (log-log).  Points of one method are joined in the order of
-    their median error; scipy's rate is extrapolated from a few orbits (open marker).
-
-    data: groups {name: number of rows}, n_rows, points {name: [(rate, median, max, setting)]}."""
+    """One-step error of the section map against throughput for every method of the W4 benchmark
+    (log-log).  data: groups, n_rows, points {name: [(rate, median, max, setting)]}."""
     path = Path(path)
     doc = json.loads(path.read_text())
     rows = doc["rows"]

@@ -8,7 +8,6 @@ class SceneError(ParameterError):
     """Bad scene: a one-line message naming the dotted key and what is allowed."""
 
 
-# ---------------------------------------------------------------- validators
 def _short(v, limit=60) -> str:
     r = repr(v)
     return r if len(r) <= limit else r[: limit - 3] + "..."

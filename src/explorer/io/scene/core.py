@@ -30,11 +30,8 @@ from explorer.model import PARAM_NAMES, ParameterError, validation
 
 @dataclass(frozen=True)
 class Scene:
-    """A Poincaré-section sweep: one panel per sweep value (one panel without a sweep).
-
-    Validated on construction (every panel's parameters and allowed region);
-    ``text`` is the TOML source ("" for a scene built in Python; see :meth:`to_toml`).
-    """
+    """A Poincaré-section sweep, one panel per sweep value, validated on construction; ``text`` is
+    its TOML source ("" when built in Python)."""
 
     name: str
     params: model.Params = model.FIGURE4
@@ -131,7 +128,6 @@ class Scene:
                     _fail("lyapunov.center", f"= {[c1, c2]!r} must lie inside the allowed region of the section "
                           f"(M^2 > 0) of every panel; it does not for {label}")
 
-    # ------------------------------------------------------------ panels
     @property
     def n_panels(self) -> int:
         return max(1, len(self.sweep_values))
@@ -173,11 +169,7 @@ class Scene:
         return _hashes.panel_hash(self, i)
 
     def product_settings(self, i) -> dict:
-        """What determines each product of panel i, {product: settings}: ``"sections"`` (when
-        [compute] sections: the crossings of the [seeds] and, with separatrices, the fixed point's
-        separatrices) and ``"indicators"`` (when [compute] lyapunov: the indicators of the [seeds],
-        or of the map's grid when [lyapunov] map_resolution > 0).  Each is recomputed only when
-        its own settings change (:meth:`product_hashes`)."""
+        """{product: settings} of panel i (:func:`explorer.io.scene.hashes.product_settings`)."""
         return _hashes.product_settings(self, i)
 
     def product_hashes(self, i) -> dict:
@@ -186,12 +178,10 @@ class Scene:
         return _hashes.product_hashes(self, i)
 
     def figure_settings(self) -> str:
-        """Canonical JSON of everything that changes the drawing but not the numbers ([figure], with
-        [compute] lyapunov the MEGNO threshold and map_indicator, and [manifolds] when drawn): kept in
-        the PNG, so a rerun redraws the figure when they change, without recomputing."""
+        """Canonical JSON of what changes the drawing but not the numbers, kept in the PNG
+        (:func:`explorer.io.scene.hashes.figure_settings`)."""
         return _hashes.figure_settings(self)
 
-    # ------------------------------------------------------------ atlas
     def _check_atlas(self):
         _atlas.check_atlas(self)
 
@@ -218,7 +208,6 @@ class Scene:
         integration and [lyapunov] settings; not name, description or figure)."""
         return _hashes.atlas_hash(self)
 
-    # ------------------------------------------------------------ export
     def to_dict(self) -> dict:
         """The scene as nested plain values in the layout of the TOML tables
         (``scene_from_dict(s.to_dict(), s.text) == s``)."""

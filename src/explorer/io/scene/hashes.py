@@ -1,9 +1,5 @@
-"""What determines a scene's numbers and drawing, and their hashes: the whole panel
-(:func:`panel_hash`), each product of a panel (:func:`product_hashes`: sections, indicators), the
-drawing settings kept in the PNG (:func:`figure_settings`) and an atlas (:func:`atlas_hash`).
-Each hash is the sha256 of the canonical JSON (sorted keys, floats by ``repr``) of the settings
-together with :data:`~explorer.io.scene.schema.FORMAT_VERSION`.  The :class:`~explorer.io.scene.Scene`
-methods of the same names call these."""
+"""What determines a scene's numbers and drawing, and their hashes (panel, products, figure,
+atlas): sha256 of the canonical JSON of the settings with FORMAT_VERSION (docs/store.md)."""
 from __future__ import annotations
 
 import hashlib
@@ -38,11 +34,9 @@ def panel_hash(scene, i) -> str:
 
 
 def product_settings(scene, i) -> dict:
-    """What determines each product of panel i, {product: settings}: ``"sections"`` (when
-    [compute] sections: the crossings of the [seeds] and, with separatrices, the fixed point's
-    separatrices) and ``"indicators"`` (when [compute] lyapunov: the indicators of the [seeds],
-    or of the map's grid when [lyapunov] map_resolution > 0).  Each is recomputed only when
-    its own settings change (:func:`product_hashes`)."""
+    """{product: settings} of panel i: ``"sections"`` (the crossings of the [seeds], separatrices)
+    and ``"indicators"`` (of the [seeds] or the map's grid); each recomputed only when its own
+    settings change (docs/store.md, "Products of a panel")."""
     prm, h, _label = scene.panel(i)
     base = {"params": prm.as_dict(), "h": h}
     out = {}

@@ -27,7 +27,6 @@ from explorer.io.scene.specs import FigureSpec, IntegrationSpec, LyapunovSpec, M
 from explorer.model import PARAM_NAMES, ParameterError, validation
 
 
-# ---------------------------------------------------------------- loading
 def scene_from_dict(data: dict, text: str = "") -> Scene:
     """A validated :class:`Scene` from nested tables (as produced by ``tomllib``)."""
     if not isinstance(data, dict):
@@ -96,16 +95,8 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
 
 
 def load_scene(spec) -> Scene:
-    """A scene: a built-in preset by name (``figure4``, ``chaos``, ``fraction``: :data:`PRESETS`,
-    the TOML files of ``explorer/io/presets``), else the path of a ``.toml`` file, validated
-    (every bad key or value raises :class:`SceneError` naming the dotted key).
-
-    Returns
-    -------
-    Scene
-        Parameters, energy, the swept parameter, seeds, integration and figure settings; each
-        panel's settings hash (:meth:`Scene.panel_hash`) decides what a sweep recomputes.
-    """
+    """A scene: a preset by name (:data:`PRESETS`), else the path of a ``.toml`` file, validated
+    (:class:`SceneError` names the dotted key; docs/scenes.md)."""
     if isinstance(spec, str) and spec in PRESETS:
         return parse_scene(PRESETS[spec], source=f"preset '{spec}'")
     path = Path(os.fspath(spec))
@@ -119,7 +110,6 @@ def load_scene(spec) -> Scene:
     return parse_scene(text, source=str(path))
 
 
-# ---------------------------------------------------------------- presets
 def _read_presets() -> dict:
     """Built-in scenes: name -> TOML text, from the files ``explorer/io/presets/*.toml``."""
     from importlib.resources import files

@@ -41,10 +41,8 @@ _LYAPUNOV_KEYS = ("time", "method", "tol", "dt", "threshold", "indicators", "ear
                   "early_time", "map_resolution", "map_indicator", "center", "diffusion_iterates")
 #: the indicators a scene can ask for (explorer.analysis.lyapunov.INDICATOR_NAMES)
 LYAPUNOV_INDICATORS = INDICATOR_NAMES
-#: [lyapunov] diffusion_iterates: N of the indicator frequency_diffusion (2N section returns per
-#: orbit), by default and at most; fewer than explorer.analysis.rotation.DEFAULT_ITERATES because a
-#: sweep's or map's orbits are many (N = 200 to 300 separates Figure 4's tori from its chaotic
-#: sea by 1.5 decades, docs/greene.md "Frequency diffusion")
+#: [lyapunov] diffusion_iterates: N of frequency_diffusion (2N section returns per orbit), by
+#: default and at most (docs/greene.md, "Frequency diffusion")
 DEFAULT_DIFFUSION_ITERATES = 300
 MAX_DIFFUSION_ITERATES = 100_000
 #: largest raster side of a chaos map ([lyapunov] map_resolution)

@@ -41,11 +41,8 @@ from explorer.model import ParameterError
 
 @dataclass(frozen=True)
 class SeedSpec:
-    """How initial conditions are placed on the section (see the module docstring).
-
-    ``lines`` is a tuple of (u_a, v_a, u_b, v_b), ``points`` a tuple of (p1, p2);
-    keys not used by ``kind`` are validated and kept but do not affect the seeds.
-    """
+    """[seeds]: how initial conditions are placed on the section (docs/scenes.md); keys that
+    ``kind`` does not use are validated and kept."""
 
     kind: str = "grid"
     n: int = DEFAULT_SEED_N
@@ -108,11 +105,9 @@ class SeedSpec:
 
 @dataclass(frozen=True)
 class IntegrationSpec(sections.Integration):
-    """The scene's ``[integration]`` table: the one settings object of a run of crossings
-    (:class:`explorer.analysis.sections.Integration`, validated there), a refused setting
-    named by its scene key; ``crossings`` defaults to the scene's DEFAULT_CROSSINGS.
-    ``tmax`` None means the default budget 100 * crossings (:attr:`effective_tmax`).
-    """
+    """[integration]: the settings of a run of crossings (validated by
+    :class:`explorer.analysis.sections.Integration`, refusals named by scene key); ``tmax`` None:
+    100 * crossings (:attr:`effective_tmax`)."""
 
     crossings: int = DEFAULT_CROSSINGS
 
@@ -148,9 +143,8 @@ class IntegrationSpec(sections.Integration):
 
 @dataclass(frozen=True)
 class LyapunovSpec:
-    """Chaos indicators of every seed (:func:`explorer.analysis.lyapunov.indicators`): integration time,
-    method and tolerance/step, and the MEGNO threshold above which an orbit counts as chaotic
-    (regular orbits have <Y> -> 2, chaotic ones <Y> ~ chi T / 2)."""
+    """[lyapunov]: the chaos indicators of every seed (docs/scenes.md): integration settings and the
+    MEGNO threshold above which an orbit counts as chaotic."""
 
     time: float = 1000.0
     method: str = "taylor"
@@ -251,8 +245,7 @@ class LyapunovSpec:
             d["tol"] = self.tol
         else:
             d["dt"] = self.dt
-        # keys added by issue 10 enter only when they differ from what was computed before them,
-        # so the panels stored by earlier scenes keep their hashes
+        # optional keys enter only when set, so a scene without them keeps its panels' hashes
         if self.second_vector:
             d["indicators"] = self._two_vector_names()
         if self.early_stop:
@@ -304,12 +297,8 @@ class FigureSpec:
 
 @dataclass(frozen=True)
 class ManifoldSpec:
-    """[manifolds]: draw the stable and unstable manifolds of a hyperbolic orbit over each panel's
-    section figure (W^u and W^s in two colours; docs/manifolds.md).  The orbit of period ``period``
-    is found by Newton's method from ``guess`` in each panel (as ``explorer manifold`` does;
-    default: the fixed point found from (0, 0)), and its four branches at each of its points are
-    grown to ``arclength`` with at most ``max_points`` points each.  Drawing only: the settings
-    enter the figure's settings (a rerun redraws), never a panel's numbers or hashes."""
+    """[manifolds]: draw W^u and W^s of the orbit of ``period`` found by Newton from ``guess`` over
+    each panel (docs/manifolds.md).  Drawing only: never in a panel's numbers or hashes."""
 
     draw: bool = False
     arclength: float = DEFAULT_MANIFOLD_ARCLENGTH

@@ -1,8 +1,5 @@
-"""Atomic files: write a whole file to a temporary name in the same directory, fsync it,
-``os.replace`` it onto the target and fsync the directory, so that a crash at any instant
-leaves the old file or the new one, never a mixture (:func:`write_bytes_atomic`,
-:func:`atomic_path`); stale temporaries of dead processes are removed by
-:func:`clean_stale_temporaries`."""
+"""Atomic files: a whole file written to a temporary name beside the target, fsynced and
+``os.replace``'d onto it, so a crash leaves the old file or the new one."""
 from __future__ import annotations
 
 import contextlib
@@ -45,8 +42,6 @@ def _remove_quietly(path: str) -> None:
         pass
 
 
-# --------------------------------------------------------------------------- atomic files
-
 def write_bytes_atomic(path, data: bytes) -> None:
     """Write ``data`` to ``path`` atomically: temp file in the same directory,
     fsync, ``os.replace``, fsync of the directory."""
@@ -66,15 +61,8 @@ def write_bytes_atomic(path, data: bytes) -> None:
 
 @contextlib.contextmanager
 def atomic_path(path) -> Iterator[str]:
-    """Context manager yielding a temporary path next to ``path``; if the block
-    succeeds the temporary file is fsynced and ``os.replace``'d onto ``path``,
-    otherwise it is removed and ``path`` is untouched.  The temporary name keeps
-    the extension of ``path`` (``fig.png.tmp-<pid>-<rand>.png``) so that tools
-    inferring the format from it (matplotlib ``savefig``) work::
-
-        with atomic_path("fig.png") as tmp:
-            fig.savefig(tmp)
-    """
+    """Yield a temporary path beside ``path`` (same extension); when the block succeeds it is
+    fsynced and ``os.replace``'d onto ``path``, otherwise removed and ``path`` untouched."""
     path = os.fspath(path)
     tmp = _tmp_name(path, os.path.splitext(path)[1])
     try:

@@ -1,7 +1,5 @@
 """Writing the store: provenance, and :func:`commit_panel`, the transaction that adds or
-replaces one panel (the panel is written into a file of its own, then a new small store file
-linking every panel file is fsynced and ``os.replace``'d onto the old one: a commit costs the
-panel, not the store)."""
+replaces one panel at the cost of that panel (docs/store.md, "Committing a panel")."""
 from __future__ import annotations
 
 import os
@@ -42,7 +40,6 @@ from explorer.io.store.format import (
 )
 from explorer.kernels import STATUS_NAMES
 
-# --------------------------------------------------------------------------- provenance
 
 def _git_revision(directory: str) -> str:
     env = dict(os.environ, GIT_OPTIONAL_LOCKS="0", LC_ALL="C")
@@ -73,10 +70,8 @@ def _version_of(name: str):
 
 
 def _lane_groups():
-    """The lane groups G of the Taylor lane workers in this process
-    (``explorer.integrate.lanes.lane_groups``: EXPLORER_LANE_GROUPS, else chosen by the CPU's
-    vector width), or EXPLORER_LANE_GROUPS as given if it is not a valid G.  Imported here, when
-    a result is written: the store module itself does not import numba."""
+    """The lane groups G of this process's Taylor lanes (or EXPLORER_LANE_GROUPS as given when it
+    is not a valid G); imported only when a result is written."""
     from explorer.integrate.lanes import lane_groups
     from explorer.model import ParameterError
 
@@ -87,13 +82,9 @@ def _lane_groups():
 
 
 def provenance(extra: dict | None = None) -> dict:
-    """Where a result comes from: ``versions`` (explorer, numpy, numba, llvmlite,
-    h5py, joblib, matplotlib, scipy if installed; read from package metadata,
-    nothing is imported), ``python``, ``platform``, ``git_revision`` (``git
-    rev-parse HEAD`` in the explorer package directory, ``+dirty`` if ``git
-    status --porcelain`` is non-empty, ``"unknown"`` outside a git checkout),
-    ``command_line`` (sys.argv), ``date`` (ISO 8601 UTC), ``lane_groups`` (the Taylor lanes' G,
-    :func:`_lane_groups`: it does not change results, only their speed); plus ``extra``."""
+    """Where a result comes from: package ``versions`` (from metadata), ``python``, ``platform``,
+    ``git_revision`` (``+dirty`` when modified), ``command_line``, ``date``, ``lane_groups``; plus
+    ``extra``."""
     versions = {}
     for name in _DEPENDENCIES:
         v = _version_of(name)
@@ -115,12 +106,9 @@ def provenance(extra: dict | None = None) -> dict:
     return info
 
 
-# --------------------------------------------------------------------------- writing
-
 class RowSource:
-    """Crossing rows that are written into the panel's ``crossings`` dataset piece by piece
-    instead of being held in memory (a streamed panel, :mod:`explorer.io.store.stream`):
-    ``fill(dataset)`` writes all ``total`` rows into the (total, 5) dataset created for them."""
+    """Crossing rows written into the ``crossings`` dataset piece by piece, not held in memory:
+    ``fill(dataset)`` writes all ``total`` rows."""
 
     def __init__(self, total: int, fill):
         self.shape = (int(total), len(COLUMNS))
@@ -129,10 +117,8 @@ class RowSource:
 
 
 def _ragged_from_padded(data, count):
-    """(N, K, 5) NaN-padded rows + count -> (count, offsets, crossings).
-
-    Rows k < count[i] are kept unless they contain NaN (padding); the returned
-    count is the number of rows kept, so count == diff(offsets)."""
+    """(N, K, 5) NaN-padded rows + count -> (count, offsets, crossings); rows with NaN are dropped,
+    so count == diff(offsets)."""
     data = np.asarray(data, dtype=np.float64)
     count = np.asarray(count).astype(np.int64, copy=False)
     if data.ndim != 3 or data.shape[2] != len(COLUMNS):
@@ -254,9 +240,8 @@ def _fill_panel(grp, index: int, arrays: dict, attrs: dict, status_names: dict) 
 
 
 def _copy_panel(src, dst, *, skip=(), attrs: dict | None = None) -> None:
-    """Copy the panel group ``src`` into the empty group ``dst`` (another file): its datasets (with
-    their chunking, filters and attributes, via HDF5's object copy; the rows are not read into
-    memory) except ``skip``, and its attributes except ``skip``, then set ``attrs``; ``complete`` last."""
+    """Copy the panel group ``src`` into the empty group ``dst`` by HDF5's object copy (rows not
+    read), datasets and attributes except ``skip``, then set ``attrs``; ``complete`` last."""
     for d in src:
         if d not in skip:
             src.copy(src[d], dst, name=d)
@@ -267,16 +252,13 @@ def _copy_panel(src, dst, *, skip=(), attrs: dict | None = None) -> None:
     dst.attrs["complete"] = True  # last: the panel is whole
 
 
-# --------------------------------------------------------------------------- the transaction
-
 def _store_dir(path: str) -> str:
     return os.path.dirname(os.path.abspath(path))
 
 
 def _new_panel_file(path: str, index: int, write, written: list) -> str:
-    """Write a new panel file for panel ``index`` (``write(root group)``), fsynced; returns its name
-    relative to the store's directory (the external link's target), also appended to ``written``.
-    The name is unique (``NNN-<pid>-<random>.h5``), so no file that a store links is ever changed."""
+    """Write a new, uniquely named panel file for panel ``index`` (``write(root group)``), fsynced;
+    returns its name relative to the store's directory, also appended to ``written``."""
     name = f"{os.path.basename(path)}{PANELS_SUFFIX}/{index:03d}-{os.getpid()}-{secrets.token_hex(4)}.h5"
     full = os.path.join(_store_dir(path), name)
     written.append(full)
@@ -324,13 +306,10 @@ def _linked_files(path: str) -> dict:
 
 def _transaction(path, index: int, write, file_attrs: dict | None = None, *, fresh: bool = False,
                  replace_corrupt: bool = False, existing_panel: bool = False) -> None:
-    """The one way a store changes: panel ``index`` is written into a new panel file by
-    ``write(new group, old group or None)``, then a new store file linking it and the other panels
-    is written under a temporary name, fsynced and ``os.replace``'d onto ``path`` (the commit
-    point), then the panel file it replaces is removed.  Bytes written: the panel and the small store
-    file, whatever the number of panels.  The panels of a format-1 store are first moved into
-    files of their own (once).  ``fresh``: the store becomes this one panel.  ``existing_panel``:
-    the panel must be stored already (StoreError otherwise)."""
+    """The one way a store changes (docs/store.md): ``write(new group, old group or None)`` fills a
+    new panel file, then a new store file linking it replaces ``path`` (the commit point) and the
+    superseded panel file is removed.  ``fresh``: the store becomes this one panel;
+    ``existing_panel``: the panel must be stored already."""
     path = os.fspath(path)
     superseded = _linked_files(path) if fresh else {}
     old = None
@@ -406,17 +385,14 @@ def commit_panel(path, index: int, arrays: dict, attrs: dict, file_attrs: dict |
 
 
 def update_panel_attrs(path, index: int, attrs: dict) -> None:
-    """Atomically set attributes of an existing panel (its datasets are copied unchanged into the
-    panel's new file, as in :func:`commit_panel`).  Used when a setting outside the panel hash
-    changes a derived attribute (the MEGNO threshold -> ``chaotic_fraction``)."""
+    """Atomically set attributes of an existing panel (its datasets copied unchanged, as in
+    :func:`commit_panel`)."""
     _transaction(path, int(index), lambda grp, old: _copy_panel(old, grp, attrs=attrs), existing_panel=True)
 
 
 def update_panel(path, index: int, arrays: dict, attrs: dict, *, remove=()) -> None:
-    """Atomically replace or add indicator datasets (``megno``, ..., ``lyapunov_seeds``: the
-    indicators product) and attributes of the stored panel ``index``, keeping its other datasets
-    (the crossings are copied by HDF5, not read into memory); ``remove``: datasets and attributes to
-    delete.  As :func:`commit_panel`, the panel gets a new file and the store file is replaced."""
+    """Atomically replace or add the indicator datasets and attributes of stored panel ``index``,
+    its other datasets copied by HDF5 (not read); ``remove``: datasets and attributes to delete."""
     path = os.fspath(path)
     index = int(index)
     unknown = sorted(set(arrays) - set(INDICATOR_DATASETS))
@@ -446,12 +422,9 @@ def remove_store(path) -> None:
 
 
 def clean_stale_temporaries(path) -> list[str]:
-    """Remove what killed runs left beside the store at ``path``: ``<path>.tmp-*`` files
-    (:func:`explorer.io.store.atomic.clean_stale_temporaries`) and the files in ``<path>.panels/``
-    that the store does not link (a panel written, or replaced, by a run killed before or after its
-    commit point); returns the removed paths.  Files of another process that is still alive are
-    kept (its commit may be in flight); nothing is removed from the panel folder of a store that
-    cannot be read.  Call it while holding the store's lock."""
+    """Remove what killed runs left beside the store at ``path`` (``<path>.tmp-*`` and panel files
+    the store does not link), except the files of a live process; returns them.  Call it under the
+    store's lock."""
     path = os.fspath(path)
     removed = _clean_temporaries(path)
     folder = panels_dir(path)

@@ -1,9 +1,5 @@
-"""The store's format: layout constants, attribute encoding, the settings hash, and reading.
-
-The layout is described in :mod:`explorer.io.store`; this module reads it
-(:func:`read_store`, :func:`panel_hashes`) and defines what the writer
-(:mod:`explorer.io.store.commit`) must produce.
-"""
+"""The store's format (docs/store.md): layout constants, attribute encoding, the settings hash,
+and reading; the writer (:mod:`explorer.io.store.commit`) produces this layout."""
 from __future__ import annotations
 
 import contextlib
@@ -73,8 +69,6 @@ class PanelFileMissing(StoreError):
 READ_ATTEMPTS = 3
 
 
-# --------------------------------------------------------------------------- helpers
-
 def _utcnow() -> str:
     return _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
 
@@ -86,11 +80,9 @@ INDICATOR_ATTRS = ("indicators_hash", "chaotic_fraction", "chaotic_fraction_erro
 
 @dataclass(frozen=True)
 class PanelAttrs:
-    """The attributes of a stored panel (docs/store.md), for every writer (a sweep's panels and
-    ``orbit --out``): which panel it is, its model parameters and settings as JSON text (the
-    text whose hash is the panel's ``hash``; None: computed from ``settings`` when the panel is
-    written).  :meth:`attrs` gives them as the store writes them; :meth:`section_run` the
-    attributes of a panel's section run."""
+    """The attributes of a stored panel (docs/store.md) for every writer: :meth:`attrs` as the store
+    writes them (``hash`` None: computed from ``settings``), :meth:`section_run` those of a run of
+    crossings."""
 
     index: int
     label: str
@@ -184,8 +176,6 @@ def _set_attrs(obj, attrs: dict) -> None:
 def _read_attrs(obj) -> dict:
     return {k: _from_h5_attr(v) for k, v in obj.attrs.items()}
 
-
-# --------------------------------------------------------------------------- reading
 
 @dataclass(frozen=True)
 class PanelData:
@@ -327,9 +317,8 @@ def panels_dir(path) -> str:
 
 
 def panel_links(f) -> dict:
-    """{index: where panel ``index`` of the open store ``f`` lives}: the file name of its external
-    link, relative to the store's directory (format 2), or None for a group inside the store file
-    (format 1)."""
+    """{index: the file of panel ``index``'s external link (format 2), or None for a group inside
+    the store file (format 1)} of the open store ``f``."""
     if "panels" not in f:
         return {}
     panels = f["panels"]
@@ -377,10 +366,9 @@ def _panel_group(f, path: str, idx: int, *, missing: str = "raise", links: dict 
 
 
 def panel_file(path, target: str) -> str | None:
-    """The panel file that the link ``target`` of the store at ``path`` names: the file of that name
-    in the store's own folder (:func:`panels_dir`; the link's target itself unless the store and its
-    folder were renamed or copied together), else the target relative to the store's directory;
-    None if neither exists."""
+    """The panel file that the link ``target`` of the store at ``path`` names: in the store's own
+    folder (after a move of store and folder), else relative to the store's directory; None if
+    neither exists."""
     path = os.path.abspath(os.fspath(path))
     for candidate in (os.path.join(panels_dir(path), os.path.basename(target)),
                       os.path.join(os.path.dirname(path), target)):
@@ -433,10 +421,8 @@ def _reading(path):
 
 
 def read_store(path) -> StoreData:
-    """Read a whole store (every panel group; see ``PanelData.complete``).
-
-    Raises StoreError naming ``path`` if the file is missing, not HDF5, not an
-    explorer store, or damaged (including fletcher32 checksum failures)."""
+    """Read a whole store; StoreError naming ``path`` if it is missing, not an explorer store or
+    damaged (fletcher32 checksums included)."""
     path = os.fspath(path)
     for attempt in range(READ_ATTEMPTS):
         before = _inode(path)
@@ -459,9 +445,8 @@ def _inode(path: str):
 
 
 def iter_rows(path, index: int, rows: int = 1 << 18):
-    """The crossing rows of panel ``index`` in pieces of at most ``rows`` rows (t, p1, p2, M, dH),
-    in stored order (orbit after orbit, ``offsets`` tell where each starts): a panel too large
-    for memory can be read this way.  StoreError as :func:`read_store`."""
+    """The crossing rows of panel ``index`` in stored order, in pieces of at most ``rows``: a panel
+    too large for memory.  StoreError as :func:`read_store`."""
     path = os.fspath(path)
     with _reading(path) as f:
         dset = _panel_group(f, path, int(index))["crossings"]
@@ -496,9 +481,8 @@ def stored_scene_name(path) -> str | None:
 
 
 def panel_product_hashes(path) -> dict:
-    """{index: {"hash": ..., "sections_hash": ..., "indicators_hash": ...}} of the complete panels
-    (the attributes present; a store written before products had their own hashes has ``hash``
-    only); {} if ``path`` does not exist; StoreError as :func:`panel_hashes`."""
+    """{index: the hash attributes present} of the complete panels; {} when ``path`` does not exist;
+    StoreError as :func:`panel_hashes`."""
     path = os.fspath(path)
     if not os.path.exists(path):
         return {}

@@ -44,11 +44,9 @@ def _holder_text() -> str:
 
 @contextlib.contextmanager
 def store_lock(path) -> Iterator[str]:
-    """Hold the lock of the store at ``path`` for the ``with`` block (yields the lock file's path).
-
-    Raises :class:`StoreBusy` ("<store> is being written by pid N on HOST since ...") when another
-    process holds it; an ``OSError`` when the lock file cannot be created (check the directory
-    with :func:`check_writable` first).  Where there is no ``fcntl`` (not POSIX) nothing is locked."""
+    """Hold the lock of the store at ``path`` for the ``with`` block (yields the lock file's path);
+    StoreBusy, naming the holder, when another process holds it.  Nothing is locked without
+    ``fcntl``."""
     try:
         import fcntl
     except ImportError:

@@ -61,10 +61,8 @@ def disk_needed(n_orbits: int, n_crossings: int) -> int:
 
 
 class BlockStream:
-    """The blocks of one streamed panel of the store at ``path``; ``identity`` (JSON-able) is
-    everything that determines the run's numbers (parameters, start points, method and
-    settings, crossings requested), so a rerun of the same command continues the same run and
-    a different one is refused."""
+    """The blocks of one streamed panel of the store at ``path``; ``identity`` is everything that
+    determines the run's numbers, so the same command continues the run and another is refused."""
 
     def __init__(self, path, identity: dict, *, index: int | None = None):
         self.path = os.fspath(path)
@@ -76,7 +74,6 @@ class BlockStream:
         #: knows it without reading the rows again)
         self.max_dh = 0.0
 
-    # ------------------------------------------------------------------ state on disk
     def _block_files(self) -> list[tuple[int, str]]:
         if not os.path.isdir(self.dir):
             return []
@@ -95,11 +92,8 @@ class BlockStream:
             return False
 
     def resume_state(self, params, y0, *, phi0: float, force: bool = False):
-        """The one resume step of a streamed run (``sweep`` and ``orbit --out``): the
-        :class:`~explorer.analysis.sections.StreamState` the run of ``y0`` continues from (its
-        state before the first block with every stored block applied, :meth:`resume`) and the
-        number of blocks stored.  A StoreError (blocks of another run, without ``force``) is
-        raised as the ParameterError the commands print."""
+        """The StreamState the run of ``y0`` continues from (:meth:`resume`) and the number of blocks
+        stored; blocks of another run (without ``force``) are a ParameterError."""
         from explorer.analysis import sections
         from explorer.model import ParameterError
 
@@ -111,12 +105,9 @@ class BlockStream:
         return sections.StreamState.from_arrays(dict(saved, blocks=n)), n
 
     def resume(self, initial: dict, *, force: bool = False) -> tuple[dict, int]:
-        """Prepare the blocks directory and return (state arrays, blocks stored): ``initial`` (the
-        run's state before its first block, per-orbit arrays) with the state of every stored
-        block applied in order (0 blocks: ``initial`` itself).
-
-        A blocks directory of another run (another identity) is a StoreError naming both, unless
-        ``force`` (then it is removed).  Block numbers must run 1, 2, ... without a gap."""
+        """Prepare the blocks directory and return (state arrays, blocks stored): ``initial`` with every
+        stored block's state applied in order.  Blocks of another run are a StoreError unless ``force``
+        (then removed); block numbers must run 1, 2, ... without a gap."""
         run_file = os.path.join(self.dir, "run.json")
         if os.path.isdir(self.dir):
             try:
@@ -206,10 +197,9 @@ class BlockStream:
 
 
 class PanelStreams:
-    """The block streams of the streamed panels of a sweep's store at ``out`` (the ``streamer`` of
-    :func:`explorer.analysis.sweep.run`): one :class:`BlockStream` per panel, whose identity is the
-    panel's settings hash (``hashes[index]``), so a killed sweep resumes a streamed panel from its
-    stored blocks; ``force``: stored blocks are discarded."""
+    """The sweep's ``streamer`` (:func:`explorer.analysis.sweep.run`): one :class:`BlockStream` per
+    streamed panel, identified by the panel's hash so a killed sweep resumes it; ``force``: stored
+    blocks are discarded."""
 
     def __init__(self, out, hashes, phi0: float, force: bool):
         self.out, self.hashes, self.phi0, self.force = out, hashes, phi0, force
