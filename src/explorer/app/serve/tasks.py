@@ -1,19 +1,14 @@
-"""The one way a page's work runs in the background and comes back: the session's loop
-(:class:`SessionLoop`) and its latest-only tasks (:class:`LatestTask`) and timers (:class:`Timer`).
+"""How a page's work runs in the background and comes back: the session's loop
+(:class:`SessionLoop`), its latest-only tasks (:class:`LatestTask`) and timers (:class:`Timer`).
 
-Every background job of a page is a :class:`LatestTask`: the orbits' worker loop, the MEGNO
-raster, the overlay searches, a pick's readout, a saddle's manifolds, the figure and store
-exports.  :meth:`LatestTask.submit` runs ``work(job, *args)`` on a background thread shared by every
-session (:class:`_Threads`); a newer submit (or :meth:`LatestTask.cancel`) supersedes the older job:
-its :class:`~explorer.analysis.budget.Budget` is cancelled, so its compiled loops stop within a
-step, and whatever it still hands in (:meth:`Job.post`) is dropped on the loop.  Results reach the
-page only on the session's event loop, through Bokeh's ``Document.add_next_tick_callback`` and
-``add_timeout_callback`` (the document's lock held, as Panel's own callbacks run), in the order
-they were handed in (:meth:`SessionLoop.post`); in a notebook,
-where no server owns the document, they wait in an inbox for :meth:`SessionLoop.poll`.  A served
-session's loop also keeps a watch (a Bokeh periodic callback): a next-tick or timeout callback that
-Bokeh lost is made up (:meth:`SessionLoop._look_for_lost`).  The generation counters of every job
-and timer are here, and only here.
+Every background job of a page (orbits, raster, searches, readout, manifolds, exports) is a
+:class:`LatestTask` job on a thread shared by every session (:class:`_Threads`).  A newer submit or
+a cancel supersedes the older job: its :class:`~explorer.analysis.budget.Budget` is cancelled and
+what it still hands in (:meth:`Job.post`) is dropped.  Results reach the page on the session's
+loop (Bokeh's next-tick and timeout callbacks, the document's lock held) in the order handed in;
+in a notebook they wait for :meth:`SessionLoop.poll`.  A served session's watch makes up a Bokeh
+callback that never ran (:meth:`SessionLoop._look_for_lost`; docs/commands/serve.md, "Lost
+callbacks").
 """
 from __future__ import annotations
 
@@ -26,10 +21,8 @@ from functools import partial
 
 from explorer.analysis.budget import Budget, BudgetExceeded
 
-#: a next-tick or timeout callback of Bokeh's that has not run this long after it was due is taken
-#: as lost (s).  When the watch runs (with the document's lock, after every callback that was ready
-#: before it: Bokeh's lock serves its waiters in order) a callback due that long ago cannot merely
-#: be late: it is gone, and what it would have run is run now.
+#: a Bokeh callback not run this long after it was due is taken as lost (s): the watch runs after
+#: every callback ready before it (Bokeh's lock serves its waiters in order)
 LOST_AFTER_SECONDS = 2.0
 #: how often a served session looks for lost callbacks (ms; a Bokeh periodic callback)
 WATCH_MS = 1000
@@ -96,13 +89,10 @@ class SessionLoop:
                 pass                    # (a document torn down already)
 
     def post(self, action) -> None:
-        """From any thread: run ``action()`` on the loop (dropped once the session is closed), after
-        every action posted before it.  The order is kept here, in the inbox: each next-tick
-        callback runs the oldest action waiting, one per callback (one per tick, as before).
-        Bokeh's own order is not enough: the callbacks added before the session is attached (the
-        blocks of a link's orbits, computed while the page is being built) are kept in a set and
-        started in its order, and an orbit's first block reached the page after its last one
-        (tests/app/test_serve_orbit_list.py, a hidden orbit's reload)."""
+        """From any thread: run ``action()`` on the loop after every action posted before it
+        (dropped once the session is closed).  The order is kept in the inbox, one action per
+        next-tick callback: Bokeh starts the callbacks added before a session is attached in a
+        set's order."""
         if self.closed:
             return
         with self._lock:
@@ -111,10 +101,8 @@ class SessionLoop:
             self._schedule()
 
     def _schedule(self) -> None:
-        """One next-tick callback more, unless as many are waiting as actions: a callback lost
-        (a document torn down meanwhile, or actions handed in before the document was there)
-        is made up by the next one, so no action is ever stranded behind the others.  Each
-        callback is a callable of its own (Bokeh files callbacks by their callable)."""
+        """One next-tick callback more, unless as many wait as actions (a refused one is made up
+        by the next)."""
         with self._lock:
             if self._scheduled >= len(self._inbox):
                 return
@@ -129,19 +117,12 @@ class SessionLoop:
 
     @contextlib.contextmanager
     def bokeh_sends(self):
-        """On the loop (a Bokeh callback of the session: the document's lock held): the changes
-        made within go to the browser through Bokeh's own dispatch, one message per change, in
-        order, written before the next callback runs (the document held, Bokeh's
-        ``Document.hold("collect")``, until the block ends).  For changes of Panel components
-        (the address): without the hold, one made in such a callback goes through Panel's own
-        writer (``panel.io.document.unlocked``), whose queue for a busy socket (panel 1.9) can end
-        its write task before it sends a message queued meanwhile, and the message then waits
-        for Panel's next write, which may never come.  Twice in the browser loops a served page's
-        address kept two of three clicked starts so for good (docs/tests.md;
-        tests/app/test_serve.py, with a Panel that loses all its own writes).  Not for a block
-        that replaces a source's data and then streams to it: a held change of a value is
-        serialized when it is sent, with the rows streamed after it, which then arrive twice.
-        Without a document (a notebook), or within a hold already active, the block just runs."""
+        """On the loop: the changes made within go to the browser through Bokeh's own dispatch
+        (the document held, ``Document.hold("collect")``, until the block ends), not Panel's
+        writer, which may leave a message queued for a busy socket unsent (panel 1.9;
+        tests/app/test_serve.py, a Panel that loses its own writes).  Not for a block that
+        replaces a source's data and then streams to it (the rows would arrive twice).  Without
+        a document, or within a hold, the block just runs."""
         doc = self.doc
         if doc is None or doc.callbacks.hold_value is not None:
             yield
@@ -171,14 +152,9 @@ class SessionLoop:
             self.post(action)
 
     def _look_for_lost(self) -> None:
-        """The watch (a Bokeh periodic callback of a served session, every WATCH_MS): a next-tick
-        callback counted as waiting while none has run for LOST_AFTER_SECONDS, or a timer
-        LOST_AFTER_SECONDS past due, was lost, and is made up now.  Bokeh has lost next-tick
-        callbacks in the browser loops (the actions behind one were stranded: docs/tests.md), and
-        once a timer's: a link's three orbits computed, their first rows drawn, and the flush that
-        moves them into the drawn crossings never ran ("3 running, 0 crossings drawn" for
-        minutes).  The cause is not known; this makes the page whole again within about
-        LOST_AFTER_SECONDS + WATCH_MS, and says so in the server's log."""
+        """The watch (every WATCH_MS): a next-tick callback waiting while none has run for
+        LOST_AFTER_SECONDS, or a timer that long past due, was lost and is made up now, with a
+        warning in the server's log."""
         if self.closed:
             return
         now = time.monotonic()
