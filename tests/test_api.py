@@ -29,6 +29,7 @@ def test_every_public_name_resolves_and_is_documented(name):
 #: public callables that take keywords of their own naming, not a pass-through: why
 KEYWORD_DATA = {
     "Params.with_": "the changes are parameter names, each validated by Params",
+    "System.with_": "the changes are parameter names, each validated by System",
 }
 
 

@@ -34,6 +34,8 @@ _EXPORTS = {
     "casimir": "explorer.model",
     "allowed_ellipse": "explorer.model",
     "section_state": "explorer.model",
+    # a system from its equations (docs/systems.md)
+    "System": "explorer.model.system",
     # crossings of the section
     "METHODS": "explorer.analysis.sections",
     "Crossings": "explorer.analysis.sections",

@@ -156,5 +156,8 @@ from explorer.model import (
 from explorer.model import (
     section_state as section_state,
 )
+from explorer.model.system import (
+    System as System,
+)
 
 __all__: list[str]

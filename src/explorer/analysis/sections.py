@@ -2,6 +2,7 @@
 :mod:`explorer.integrate.methods`, in one batch or streamed in blocks (docs/commands/orbit.md)."""
 from __future__ import annotations
 
+import functools
 import math
 import numbers
 from dataclasses import dataclass, field
@@ -10,6 +11,7 @@ import numpy as np
 
 from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
+from explorer.analysis import system_sections
 from explorer.analysis.section_map import is_params, system_first
 from explorer.integrate import layout, methods
 from explorer.integrate.methods import (
@@ -239,6 +241,20 @@ def _run_block(run: _Run, Y, carry, limits, data, count, status, final, info) ->
         set_num_threads(old_threads)
 
 
+def _or_a_system(fn):
+    """``fn`` for the engine's model; a :class:`explorer.model.system.System` goes to
+    :func:`explorer.analysis.system_sections.system_crossings` (docs/systems.md, "Crossings")."""
+
+    @functools.wraps(fn)
+    def call(system, *args, **kw):
+        if system_sections.is_system(system):
+            return Crossings(*system_sections.system_crossings(system, *args, **kw))
+        return fn(system, *args, **kw)
+
+    return call
+
+
+@_or_a_system
 @system_first(settings=("phi0", "tol"), defaults={"tol": DEFAULT_TOL}, flow=True)
 def crossings(system, y0, *, n_crossings: int, method: str = "taylor", tol: float = DEFAULT_TOL,
               dt: float | None = None, tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS,

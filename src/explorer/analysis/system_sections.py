@@ -1,0 +1,184 @@
+"""Crossings of a section ``EXPR = 0`` (EXPR linear in the state) for a
+:class:`explorer.model.system.System`, many orbits at once (docs/systems.md, "Crossings").
+
+:func:`explorer.analysis.sections.crossings` hands a System here (:func:`is_system`); the result
+is the same :class:`~explorer.analysis.sections.Crossings`, with the rows of a system:
+``data[i, k] = (t, x_1 .. x_n, E - E0)`` (the last column only when the system has an energy),
+``final[i]`` the state where orbit i stopped and ``info[i] = (t_end, steps, nan)``.
+
+The integrator is the adaptive Taylor method (Jorba & Zou 2005, Exp. Math. 14, 99), generated
+into the system's module by :mod:`explorer.integrate.codegen` (``crossings_taylor``): the order
+from ``tol`` (:func:`explorer.kernels.taylor_order.order_for_tolerance`), the step from the last
+two coefficients, the crossings the roots of each step's polynomial of the section function,
+isolated and refined as the engine's (kernels/events.py).
+
+This module imports neither SymPy nor numba at import time: :func:`is_system` is asked about
+every argument of ``crossings``.
+"""
+from __future__ import annotations
+
+import math
+import numbers
+import sys
+
+import numpy as np
+
+from explorer._jit import get_num_threads, max_threads, set_num_threads
+from explorer.integrate.methods import DEFAULT_TOL, check_setting
+from explorer.kernels.taylor_order import order_for_tolerance
+from explorer.model import ParameterError, validation
+
+__all__ = ["Section", "is_system", "linear_section", "system_crossings"]
+
+DEFAULT_MAX_STEPS = 10**9
+#: the settings of the engine's crossings that have no meaning for a System
+_NOT_FOR_A_SYSTEM = ("h", "phi0", "dt", "block", "state")
+
+
+def is_system(obj) -> bool:
+    """True if ``obj`` is an :class:`explorer.model.system.System` (without importing SymPy: no
+    System exists before its module is imported)."""
+    mod = sys.modules.get("explorer.model.system")
+    return mod is not None and isinstance(obj, mod.System)
+
+
+class Section:
+    """The hyperplane s(x) = a . x + b = 0 of a system's state, with its expression."""
+
+    def __init__(self, expr, a: np.ndarray, b: float):
+        self.expr = expr
+        self.a = a
+        self.b = b
+
+    def __call__(self, y) -> np.ndarray:
+        """s at the states ``y`` (..., n)."""
+        return np.asarray(y, dtype=np.float64) @ self.a + self.b
+
+
+def linear_section(system, section) -> Section:
+    """The section ``section = 0`` of ``system``: a SymPy expression (or a state symbol) linear in
+    the state, with numbers and the system's parameters (at their values) as coefficients.
+    ParameterError naming ``section`` otherwise: not an expression, a symbol that is neither a
+    state variable nor a parameter, a term that is not linear in the state, no state at all."""
+    import sympy as sp
+
+    from explorer.model.validation import did_you_mean
+
+    if section is None:
+        raise ParameterError("section is missing: give EXPR of the section EXPR = 0, linear in the state "
+                             f"({', '.join(s.name for s in system.states)}), e.g. section={system.states[0].name}")
+    if isinstance(section, bool):
+        raise ParameterError(f"section must be a sympy expression linear in the state, got {section!r}")
+    try:
+        expr = sp.sympify(section, strict=True)
+    except (sp.SympifyError, TypeError):
+        raise ParameterError(f"section must be a sympy expression linear in the state, got {section!r} "
+                             f"({type(section).__name__})") from None
+    if not isinstance(expr, sp.Expr):
+        raise ParameterError(f"section must be a sympy expression linear in the state, got {section!r}")
+    states = system.states
+    known = set(states) | set(system.parameters)
+    unknown = sorted((s for s in expr.free_symbols if s not in known), key=lambda s: s.name)
+    if unknown:
+        u = unknown[0]
+        hint = did_you_mean(u.name, [s.name for s in known])
+        raise ParameterError(f"section {expr} uses {u.name}, which is neither a state variable "
+                             f"({', '.join(s.name for s in states)}) nor a parameter of {system.name}{hint}")
+    coefficients = []
+    for s in states:
+        d = sp.diff(expr, s)
+        if d.free_symbols & set(states):
+            raise ParameterError(f"section {expr} is not linear in the state: its derivative by {s.name} is {d}; "
+                                 "give a sum of numbers (or parameters) times state variables, plus a constant")
+        coefficients.append(d)
+    offset = sp.expand(expr - sum(c * s for c, s in zip(coefficients, states)))
+    if offset.free_symbols & set(states):
+        raise ParameterError(f"section {expr} is not linear in the state")
+    values = {p: v for p, v in system.parameters.items()}
+    try:
+        a = np.array([float(sp.sympify(c).subs(values)) for c in coefficients], dtype=np.float64)
+        b = float(sp.sympify(offset).subs(values))
+    except TypeError:
+        raise ParameterError(f"section {expr} must have real coefficients") from None
+    if not (np.all(np.isfinite(a)) and math.isfinite(b)):
+        raise ParameterError(f"section {expr} must have finite coefficients, got {a.tolist()} and {b}")
+    if not np.any(a != 0.0):
+        raise ParameterError(f"section {expr} does not depend on the state: give EXPR of EXPR = 0 with at least "
+                             f"one state variable ({', '.join(s.name for s in states)})")
+    return Section(expr, a, b)
+
+
+def _states(system, states) -> np.ndarray:
+    n = system.dimension
+    names = ", ".join(s.name for s in system.states)
+    if states is None:
+        raise ParameterError(f"states is missing: give the start of each orbit, shape (N, {n}) = ({names})")
+    try:
+        Y0 = np.atleast_2d(np.asarray(states, dtype=np.float64))
+    except (TypeError, ValueError):
+        raise ParameterError(f"states must be an array of shape (N, {n}) = ({names}) per orbit, got {states!r}") \
+            from None
+    if Y0.ndim != 2 or Y0.shape[1] != n or Y0.shape[0] < 1:
+        raise ParameterError(f"states must have shape (N, {n}) = ({names}) per orbit, got {np.shape(states)}")
+    if not np.all(np.isfinite(Y0)):
+        i = int(np.flatnonzero(~np.all(np.isfinite(Y0), axis=1))[0])
+        raise ParameterError(f"states must be finite; orbit {i} has {Y0[i].tolist()}")
+    return np.ascontiguousarray(Y0)
+
+
+def system_crossings(system, states=None, *, n_crossings: int, section=None, direction: int = 1,
+                     method: str = "taylor", tol: float = DEFAULT_TOL, tmax: float | None = None,
+                     max_steps: int = DEFAULT_MAX_STEPS, threads: int | None = None, **other):
+    """Integrate each orbit of ``system`` from ``states`` (N, n) until it has crossed the section
+    ``section = 0`` ``n_crossings`` times in ``direction`` (+1: ds/dt > 0, -1: ds/dt < 0), or its
+    time budget ``tmax`` (default 100 * n_crossings) or ``max_steps`` runs out.  Returns the
+    arguments of :class:`~explorer.analysis.sections.Crossings` (data, count, status, final,
+    info, method, settings); the rows and statuses as in the module docstring.  ``tol``: the
+    Taylor method's, as the engine's (docs/methods.md)."""
+    from explorer.analysis import budget
+    from explorer.integrate import codegen
+
+    given = [k for k in _NOT_FOR_A_SYSTEM if k in other]
+    if given:
+        raise ParameterError(f"crossings of a System: {', '.join(given)} do(es) not apply (the section is "
+                             "section=EXPR, the start states=)")
+    if other:
+        raise ParameterError(f"crossings of a System has no setting {', '.join(sorted(other))}")
+    if method != "taylor":
+        raise ParameterError(f"method must be 'taylor' for a System (the generated Taylor integrator), got {method!r}")
+    budget.checkpoint()
+    max_steps = budget.step_cap(max_steps)
+    K = validation.integer("n_crossings", n_crossings, 1)
+    if isinstance(direction, bool) or not isinstance(direction, numbers.Integral) or direction not in (-1, 1):
+        raise ParameterError(f"direction must be +1 (ds/dt > 0) or -1 (ds/dt < 0), got {direction!r}")
+    tol = check_setting("tol", tol)
+    tmax = 100.0 * K if tmax is None else validation.real("tmax", tmax, 0.0, lo_open=True)
+    max_steps = validation.integer("max_steps", max_steps, 1)
+    if threads is not None:
+        threads = validation.threads(threads, max_threads())
+    sec = linear_section(system, section)
+    Y0 = _states(system, states)
+    order = order_for_tolerance(tol)
+    mod = codegen.load(system)
+    P = system.parameter_array()
+    N = Y0.shape[0]
+    width = 1 + system.dimension + (system.energy is not None)
+    data = np.full((N, K, width), np.nan)
+    count = np.zeros(N, np.int64)
+    status = np.zeros(N, np.int64)
+    final = np.zeros((N, system.dimension))
+    info = np.zeros((N, 3))
+    old = get_num_threads()
+    if threads is not None:
+        set_num_threads(threads)
+    try:
+        mod.crossings_taylor(Y0, P, sec.a, float(sec.b), int(direction), float(tmax), int(order), int(max_steps),
+                             int(K), data, count, status, final, info)
+    finally:
+        if threads is not None:
+            set_num_threads(old)
+    columns = ["t", *(s.name for s in system.states)] + (["E - E0"] if system.energy is not None else [])
+    settings = {"method": "taylor", "tol": tol, "order": order, "system": system.name, "section": str(sec.expr),
+                "direction": int(direction), "tmax": tmax, "max_steps": max_steps, "n_crossings": K,
+                "columns": columns}
+    return data, count, status, final, info, "taylor", settings
