@@ -1,11 +1,7 @@
 """The page's check box: a boolean ``value`` drawn as Panel's ``CheckBoxGroup`` of one option
 (Bokeh's ``CheckboxGroup``), whose input is inside a ``<label>``: a click on the label's text
-toggles it.  (Panel's ``Checkbox`` draws Bokeh's ``Checkbox``, its label a ``<div>`` beside the
-input: its text did nothing, issue 32.)
-
-Built from public API only (issue 32 item 4): a :class:`panel.viewable.Viewer` with two
-parameters, kept equal to the group's ``value`` (``[label]`` or ``[]``) by two watchers; no
-override of a widget's private hooks (tests/app/test_public_api.py)."""
+toggles it (Panel's ``Checkbox`` puts its label in a ``<div>`` beside the input).  Public API
+only: a :class:`panel.viewable.Viewer` whose ``value`` two watchers keep equal to the group's."""
 from __future__ import annotations
 
 import panel as pn

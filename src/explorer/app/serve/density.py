@@ -17,11 +17,8 @@ import numpy as np
 #: crossings on a page above which the density image replaces the glyphs
 THRESHOLD = 200_000
 #: at most this many crossings are drawn as glyphs (the newest orbits, whole); older orbits go to the
-#: image.  After every message with crossings the browser redraws every glyph on screen, about 5 us
-#: per point in headless chromium (software canvas: 150-250 ms for 40,000 points, whatever the
-#: marker or colour mapping; docs/commands/serve.md "Latency"): 10,000 keep that redraw near 50 ms,
-#: so that an orbit's 10,000 crossings are on screen well within 1 s and pan and zoom stay smooth.
-#: (A click's first crossings are not behind it: they are drawn alone, SectionPage._flush.)
+#: image.  The browser redraws every glyph on screen after each message with crossings: this
+#: bounds that redraw (docs/commands/serve.md, "Latency")
 GLYPH_BUDGET = 10_000
 #: one cell of the image per this many screen pixels (each way)
 CELL_PX = 2

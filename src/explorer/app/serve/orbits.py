@@ -57,7 +57,7 @@ MAX_BLOCK = 20_000
 #: time over which the chaos indicators (mean MEGNO, finite-time mLCE) of an orbit are computed
 INDICATOR_TIME = 1000.0
 #: an orbit's indicators are computed when it is finished, or once its blocks took this long (s):
-#: not between its first blocks, where they would hold back its crossings (issue 22)
+#: not between its first blocks, where they would hold back its crossings
 INDICATOR_AFTER = 0.5
 #: steps of an orbit's indicators at most: a few thousand at Figure 4's parameters, but the time
 #: scale shrinks as the parameters grow (mu = 1e8 would run for hours, a compiled batch that no

@@ -219,8 +219,7 @@ def rotation_tol(settings) -> float:
     return float(settings.tol) if settings.method == "taylor" else float(rotation.DEFAULT_TOL)
 
 
-#: arclength each manifold branch of a picked saddle is grown to (explorer.analysis.manifolds;
-#: about 1.5 s for its four branches at mu = 0.03 on 2 cores)
+#: arclength each manifold branch of a picked saddle is grown to (explorer.analysis.manifolds)
 MANIFOLD_ARCLENGTH = 10.0
 #: wall-clock budget of each branch (s): growth stops there and the branch is drawn as far as it got
 MANIFOLD_MAX_TIME = 10.0

@@ -43,7 +43,7 @@ from explorer.app.serve.page_fields import LABELS, Fields  # noqa: F401
 from explorer.app.serve.page_layers import ChaosLayer, DensityImage
 from explorer.app.serve.page_message import Message
 from explorer.app.serve.page_orbit_list import OrbitList
-from explorer.app.serve.page_orbits import (  # noqa: F401  (the page's constants, as before)
+from explorer.app.serve.page_orbits import (  # noqa: F401  (the page's constants)
     FLUSH_SECONDS,
     LIVE_MAX_ROWS,
     PAUSE_LABEL,
@@ -90,14 +90,9 @@ class UrlState(param.Parameterized):
     address by ``pn.state.location.sync`` once :meth:`attach` ed (a notebook's page has none).
 
     The page's link is the truth, and the address heals to it: Panel's location is written from
-    both ends (the page's writes, and the browser reporting its address), so a write can be
-    overtaken by an older value.  (Twice a served page's address held two of three clicked starts
-    for good while the page held three: a message lost in Panel's own writer, which the address
-    no longer goes through, :meth:`~explorer.app.serve.tasks.SessionLoop.bokeh_sends`.)  So the page does
-    not trust one write: whenever Panel's location reports an
-    address (``search``) or the browser reports what it shows (``href``, which Panel's location
-    sets after every address it writes) that lacks a value of the page's link, the link is written
-    again (:meth:`_heal`)."""
+    both ends, so a write can be overtaken by an older value.  Whenever the location reports an
+    address (``search``, or ``href``: what the browser shows) that lacks a value of the link, the
+    link is written again (:meth:`_heal`)."""
 
     def attach(self, location, loop) -> None:
         """Keep the browser's address (Panel's ``location``) this link from now on; ``loop``: the
@@ -203,10 +198,8 @@ class SectionPage:
         fig.on_event(PressUp, self._on_tap)     # a click held 300 ms or more is a press
         self._build()
         if doc is not None:
-            # the tab is gone: its websocket closed (Bokeh's ConnectionLost; a session is not
-            # reconnected, Panel's reconnect is off) or, for a page never connected, the session
-            # expired.  Its searches, raster and orbits are not wanted any more: they stop now,
-            # not when Bokeh discards the session 15-30 s later (issue 32 item 1)
+            # the tab is gone (its websocket closed, or a page never connected expired): its jobs
+            # stop now, not when Bokeh discards the session
             doc.on_event(ConnectionLost, lambda _e: self.close())
             doc.on_session_destroyed(lambda _ctx: self.close())
         self._load_url(args or {})

@@ -35,9 +35,7 @@ FLUSH_SECONDS = 0.25
 #: a flush this close to the time the live rows are due to settle (s) settles them
 SETTLE_SLACK = 0.01
 #: rows sent before the live rows settle join them while the live layer stays within this many
-#: (a short orbit's last block; the overlay repaints them all, about 5 us a dot); a larger block
-#: took 50 ms or more to compute (orbits.BLOCK_SECONDS), the first rows are on screen by then,
-#: and it settles at once with them (one repaint of everything instead of two)
+#: (a short orbit's last block); a larger block settles at once with them (one repaint, not two)
 LIVE_MAX_ROWS = 2_000
 #: the check box: on, a new orbit pauses those still running (Resume continues them); off, they run together
 PAUSE_LABEL = "a click pauses running orbits"
@@ -224,15 +222,11 @@ class OrbitsLayer:
         self.flush_timer.at(now if urgent else max(now, self._flushed_at + FLUSH_SECONDS), reentrant=False)
 
     def _flush(self):
-        """The queued blocks onto the page.  Bokeh sends each change of a model as its own message,
-        in order, all written before the next callback runs.  Not through Panel's ``unlocked`` (one
-        message per flush): when the socket was busy it queued the message for a task that could
-        return without sending it (panel 1.9), and an orbit's last rows never reached the browser
-        (tests/app/test_serve.py, the slow-connection test).
+        """The queued blocks onto the page, each change of a model a message of Bokeh's own, in
+        order (not Panel's ``unlocked``: SessionLoop.bokeh_sends).
 
         A flush that carries an orbit's first crossings sends them to ``live`` (drawn on the
-        overlay canvas: the browser repaints that alone, not the older crossings and the images,
-        about 5 us per dot in headless chromium), then the starts' crosses (also on the overlay),
+        overlay canvas: the browser repaints that alone), then the starts' crosses (also on the overlay),
         then the link with the new start (a reload from then on keeps it), and nothing else: the
         status line and the density image, whose changes make the browser lay out the page or
         repaint everything, wait for the flush FLUSH_SECONDS later, which moves the live rows to

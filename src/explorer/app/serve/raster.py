@@ -47,8 +47,8 @@ INDICATORS = ("megno", "frequency_diffusion")
 #: N of the layer's frequency diffusion: nu1 from the first N returns, nu2 from the next N (2N = 200
 #: returns a cell; a torus reaches about 1e-6 there and 1e-12 at N ~ 1000, a chaotic orbit 1e-4 to 1)
 DIFFUSION_ITERATES = 100
-#: seeds per call of frequency_diffusion (2N returns each, about 0.1 s a seed at Figure 4's
-#: parameters: a cancel takes effect within a batch, and the budget stops it between its runs)
+#: seeds per call of frequency_diffusion (a cancel takes effect within a batch, and the budget
+#: stops it between its runs)
 DIFFUSION_BATCH = 32
 
 

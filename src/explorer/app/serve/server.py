@@ -144,11 +144,10 @@ def open_in_browser(url: str, err=None) -> threading.Thread | None:
 
 def warm_up_and_freeze(base: Settings) -> None:
     """Load the crossing kernels (:func:`explorer.app.serve.orbits.warm_up`), then put every
-    object alive out of the cyclic garbage collector's sight (``gc.freeze``): the imported
-    modules and kernels, about 230,000 objects, which a full collection walked in 150-230 ms on
-    the server's event loop about once in ten clicks, in front of that click's first crossings
-    (benchmarks/bench_serve.py --breakdown; docs/commands/serve.md, *Latency*).  The objects of
-    a session opened before this ends are frozen too (kept until the server stops)."""
+    object alive out of the cyclic garbage collector's sight (``gc.freeze``): a full collection
+    walks the imported modules and kernels on the event loop, in front of a click's first
+    crossings (docs/commands/serve.md, *Latency*).  A session opened before this ends is frozen
+    too (kept until the server stops)."""
     from explorer.app.serve.orbits import warm_up
 
     warm_up(base)
@@ -181,8 +180,7 @@ def _quiet_about_clients_gone(loop, context) -> None:
     """The event loop's exception handler: a browser that closed its websocket while Bokeh was
     sending it a message leaves a task whose ``WebSocketClosedError`` nobody retrieves (Tornado's
     ``write_message`` wrapper), and asyncio's default handler prints its traceback when the task
-    is collected -- seen on a loaded machine when Ctrl-C stops a server whose page was busy.  A
-    client that went away is not an error of the server (Bokeh logs it once as a warning); every
+    is collected.  A client that went away is not an error of the server (Bokeh logs it once as a warning); every
     other exception goes to asyncio's default handler, unchanged."""
     from tornado.iostream import StreamClosedError
     from tornado.websocket import WebSocketClosedError
@@ -198,15 +196,11 @@ def _end_on_signals(out) -> Callable[[], None]:
     nothing changes.
 
     The handler runs in the main thread between two bytecodes, whatever the event loop is doing,
-    and ends the process at once (``os._exit(0)`` after flushing the two streams), without stopping
-    the loop first, nor the server, nor the interpreter's finalisation: each of those waited for
-    work the process is about to drop anyway (the loop's current round of callbacks, Bokeh's
-    teardown of every session; the finalisation took up to a second while sessions computed, and
-    one Ctrl-C took 8 s, at a load of 8 on 2 cores, when the loop was stopped first, against
-    0.08-0.18 s in three reruns there).  Nothing is lost: the server
-    writes nothing at exit (an export in progress runs in a daemon thread, abandoned either way;
-    the files it writes appear whole or not at all).  Issue 32: Ctrl-C ends the server within 1 s
-    in every state."""
+    and ends the process at once (``os._exit(0)`` after flushing the two streams), without
+    stopping the loop, the server or the interpreter's finalisation, which wait for work the
+    process drops anyway.  Nothing is lost: the server writes nothing at exit (an export's files
+    appear whole or not at all).  Ctrl-C ends the server within 1 s in every state
+    (docs/commands/serve.md)."""
     import signal
 
     if threading.current_thread() is not threading.main_thread():
