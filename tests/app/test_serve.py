@@ -75,6 +75,30 @@ def test_page_values_are_validated_like_the_command_line():
         parse_fields(base, {"crossings": str(settings_mod.MAX_CROSSINGS + 1)})
 
 
+def test_the_section_angle_accepts_multiples_of_pi():
+    base = Settings()
+    for text, value in (("pi", np.pi), (" -pi ", -np.pi), ("2pi", 2 * np.pi), ("pi/2", np.pi / 2),
+                        ("0.5*π", 0.5 * np.pi), ("1.25", 1.25)):
+        assert parse_fields(base, {"phi0": text}).phi0 == value, text
+    for text in ("pix", "pi/0", "two pi"):
+        with pytest.raises(ParameterError, match="phi0"):
+            parse_fields(base, {"phi0": text})
+
+
+def test_a_link_with_a_refused_value_applies_the_rest_and_names_what_it_refused():
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    from explorer.app.serve.page import SectionPage
+
+    page = SectionPage(Settings(), {"mu": "0.5", "h": "1e300", "crossings": "300", "orbits": "0.1,0.0"})
+    try:
+        assert page.settings.params.mu == 0.5 and page.settings.crossings == 300 and page.settings.h == Settings().h
+        assert [s[1:3] for s in page.starts] == [(0.1, 0.0)]                 # the start runs
+        said = page.message.text
+        assert "h must be in" in said and "mu" not in said.split("h must be in")[0]
+    finally:
+        page.close()
+
+
 def test_the_overlay_marks_the_fixed_points_and_draws_their_separatrices(monkeypatch):
     """What the overlay draws once its searches are done.  Their wall-clock budgets (30 s and 60 s,
     which keep a hostile page from holding the server: tests/app/test_serve_hostile.py) are lifted

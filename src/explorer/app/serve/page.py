@@ -52,7 +52,7 @@ from explorer.app.serve.page_orbits import (  # noqa: F401  (the page's constant
 )
 from explorer.app.serve.page_overlays import Overlays
 from explorer.app.serve.page_readout import Readout
-from explorer.app.serve.settings import FIELDS, Settings, format_window, parse_fields
+from explorer.app.serve.settings import FIELDS, Settings, format_window
 from explorer.app.serve.style import (
     FIGURE_CHROME_PX,
     FIGURE_HEIGHT,
@@ -274,16 +274,18 @@ class SectionPage:
     # ------------------------------------------------------------ state in the URL
     def _load_url(self, args: dict):
         fields = {k: v for k, v in args.items() if k in FIELDS}
+        self.settings, refused = settings_mod.parse_link_fields(self.base, fields)
         try:
-            self.settings = parse_fields(self.base, fields)
             starts = settings_mod.parse_starts(args.get("orbits", ""))
             full = settings_mod.room_for(len(starts), self.settings.crossings)
             if full:
                 raise ParameterError(full)
         except ParameterError as exc:
             # (no starts: their ``hidden`` goes with them)
-            self.settings, starts, args = self.base, [], {k: v for k, v in args.items() if k != "hidden"}
-            self.say(f"link ignored: {exc}")
+            starts, args = [], {k: v for k, v in args.items() if k != "hidden"}
+            refused.append(str(exc))
+        if refused:
+            self.say(f"link ignored in part (the rest applies): {'; '.join(refused)}")
         self._show_fields()
         if self.settings.phi0 != self.base.phi0:
             self.title.object = self._title()

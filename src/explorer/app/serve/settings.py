@@ -158,6 +158,27 @@ def _number(name: str, text) -> float:
     return validation.real(name, text)
 
 
+def _angle(name: str, text) -> float:
+    """An angle's text: a number, or ``pi`` (or ``π``) times or over a number (``-pi``, ``2pi``,
+    ``pi/2``, ``0.5*pi``)."""
+    if isinstance(text, str):
+        s = text.strip().lower().replace("π", "pi").replace(" ", "")
+        if "pi" in s and len(s) <= MAX_FIELD_CHARS:
+            before, _, after = s.partition("pi")
+            before = before[:-1] if before.endswith("*") else before
+            factor = {"": 1.0, "+": 1.0, "-": -1.0}.get(before)
+            try:
+                factor = float(before) if factor is None else factor
+                divisor = float(after[1:]) if after.startswith("/") else (1.0 if not after else None)
+            except ValueError:
+                divisor = None
+            if divisor is not None and divisor != 0.0:
+                return validation.real(name, factor * math.pi / divisor)
+            raise ParameterError(f"{name} must be a number or a multiple of pi (pi, -pi, 2pi, pi/2), "
+                                 f"got {text.strip()[:MAX_FIELD_CHARS]!r}")
+    return _number(name, text)
+
+
 def _whole(name: str, text) -> int:
     if isinstance(text, str):
         s = text.strip()
@@ -185,10 +206,28 @@ def parse_fields(base: Settings, fields: dict) -> Settings:
             other["method"] = validation.choice("method", str(text).strip(), sections.METHODS)
         elif name == "crossings":
             other["crossings"] = validation.integer("crossings", _whole("crossings", text), 1, MAX_CROSSINGS)
+        elif name == "phi0":
+            other["phi0"] = _angle("phi0", text)
         else:
             other[name] = _number(name, text)
     prm = base.params.with_(**params) if params else base.params   # Params checks a1, a2, b > 0, lam != 0
     return replace(base, params=prm, h=h, **other)  # type: ignore[arg-type]
+
+
+def parse_link_fields(base: Settings, fields: dict) -> tuple:
+    """(settings, refusals): ``base`` with every field of a link that applies (all at once, else
+    one after the other) and the message of each field refused."""
+    try:
+        return parse_fields(base, fields), []
+    except ParameterError:
+        pass
+    settings, refused = base, []
+    for name, text in fields.items():
+        try:
+            settings = parse_fields(settings, {name: text})
+        except ParameterError as exc:
+            refused.append(str(exc))
+    return settings, refused
 
 
 def format_starts(starts) -> str:
