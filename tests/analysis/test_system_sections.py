@@ -166,3 +166,14 @@ def test_a_bad_request_is_refused_with_a_message_naming_the_parameter(kw, match)
     args.update(kw)
     with pytest.raises(ParameterError, match=match):
         ex.crossings(henon_heiles(), **args)
+
+
+def test_the_example_of_docs_systems_md_runs():
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[2] / "docs" / "systems.md").read_text()
+    block = page.split("## Crossings of a section", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
+    namespace = {}
+    exec(compile(block, "docs/systems.md", "exec"), namespace)   # its own asserts check the result
+    assert namespace["res"].data.shape == (3, 500, 6)
+    assert namespace["other"].settings["section"] == "x + y - 0.1"

@@ -163,6 +163,11 @@ def system_crossings(system, states=None, *, n_crossings: int, section=None, dir
     P = system.parameter_array()
     N = Y0.shape[0]
     width = 1 + system.dimension + (system.energy is not None)
+    need = N * K * width * 8
+    mem = validation.physical_memory()
+    if mem and need > validation.MAX_MEMORY_FRACTION * mem:
+        raise ParameterError(f"crossings: {N} orbits x {K} crossings need {validation.human_bytes(need)} in memory "
+                             f"(this machine has {validation.human_bytes(mem)}); lower n_crossings or the orbits")
     data = np.full((N, K, width), np.nan)
     count = np.zeros(N, np.int64)
     status = np.zeros(N, np.int64)
