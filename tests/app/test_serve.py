@@ -85,6 +85,23 @@ def test_the_section_angle_accepts_multiples_of_pi():
             parse_fields(base, {"phi0": text})
 
 
+def test_the_mu_slider_writes_its_value_without_float_noise():
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    from explorer.app.serve.page import SectionPage
+
+    import param
+
+    page = SectionPage(Settings())
+    try:
+        slider = page.fields.mu_slider
+        with param.edit_constant(slider):
+            slider.value_throttled = 0.49800000000000005                          # a drag's end, as sent
+        assert page.inputs["mu"].value == "0.498" and page.settings.params.mu == 0.498
+        assert page.url_query()["mu"] == "0.498"
+    finally:
+        page.close()
+
+
 def test_a_link_with_a_refused_value_applies_the_rest_and_names_what_it_refused():
     pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
     from explorer.app.serve.page import SectionPage

@@ -109,7 +109,9 @@ class Fields:
 
     def _slid(self, event) -> None:
         if not self._quiet and event.new is not None:
-            self.inputs["mu"].value = repr(float(event.new))
+            # (rounded to the slider's step: the browser's sums of steps carry float noise, 0.49800000000000005)
+            digits = max(0, -math.floor(math.log10(MU_SLIDER[2])))
+            self.inputs["mu"].value = repr(round(float(event.new), digits))
 
     def show(self, settings: Settings) -> None:
         """The fields and the slider show ``settings`` (not an edit: nothing is called)."""
