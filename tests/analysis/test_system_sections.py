@@ -177,3 +177,8 @@ def test_the_example_of_docs_systems_md_runs():
     exec(compile(block, "docs/systems.md", "exec"), namespace)   # its own asserts check the result
     assert namespace["res"].data.shape == (3, 500, 6)
     assert namespace["other"].settings["section"] == "x + y - 0.1"
+
+
+def test_section_is_refused_for_chaplygins_model_which_takes_phi0():
+    with pytest.raises(ParameterError, match="section= is the hyperplane EXPR = 0 of a System"):
+        ex.crossings(ex.FIGURE4, ex.FIGURE4_H, [(0.1, 0.0)], n_crossings=2, section=x)

@@ -2,7 +2,6 @@
 :mod:`explorer.integrate.methods`, in one batch or streamed in blocks (docs/commands/orbit.md)."""
 from __future__ import annotations
 
-import functools
 import math
 import numbers
 from dataclasses import dataclass, field
@@ -245,13 +244,7 @@ def _or_a_system(fn):
     """``fn`` for the engine's model; a :class:`explorer.model.system.System` goes to
     :func:`explorer.analysis.system_sections.system_crossings` (docs/systems.md, "Crossings")."""
 
-    @functools.wraps(fn)
-    def call(system, *args, **kw):
-        if system_sections.is_system(system):
-            return Crossings(*system_sections.system_crossings(system, *args, **kw))
-        return fn(system, *args, **kw)
-
-    return call
+    return system_sections.or_a_system(fn, Crossings)
 
 
 @_or_a_system

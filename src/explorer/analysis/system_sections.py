@@ -17,6 +17,8 @@ every argument of ``crossings``.
 """
 from __future__ import annotations
 
+import functools
+import inspect
 import math
 import numbers
 import sys
@@ -28,7 +30,7 @@ from explorer.integrate.methods import DEFAULT_TOL, check_setting
 from explorer.kernels.taylor_order import order_for_tolerance
 from explorer.model import ParameterError, validation
 
-__all__ = ["Section", "is_system", "linear_section", "system_crossings"]
+__all__ = ["Section", "is_system", "linear_section", "or_a_system", "system_crossings"]
 
 DEFAULT_MAX_STEPS = 10**9
 #: the settings of the engine's crossings that have no meaning for a System
@@ -40,6 +42,31 @@ def is_system(obj) -> bool:
     System exists before its module is imported)."""
     mod = sys.modules.get("explorer.model.system")
     return mod is not None and isinstance(obj, mod.System)
+
+
+def or_a_system(fn, result):
+    """``fn`` (the engine's crossings) with a System path: a System as first argument goes to
+    :func:`system_crossings`, its arrays made into ``result`` (the Crossings type); ``section=``
+    is added to the signature and refused for the engine's model."""
+
+    @functools.wraps(fn)
+    def call(system, *args, section=None, **kw):
+        if is_system(system):
+            return result(*system_crossings(system, *args, section=section, **kw))
+        if section is not None:
+            raise ParameterError("section= is the hyperplane EXPR = 0 of a System (docs/systems.md); the section of "
+                                 "Chaplygin's model is phi = phi0 (phi0=)")
+        return fn(system, *args, **kw)
+
+    sig = inspect.signature(fn)
+    call.__signature__ = sig.replace(parameters=[*sig.parameters.values(),
+                                                 inspect.Parameter("section", inspect.Parameter.KEYWORD_ONLY,
+                                                                   default=None)])
+    call.__doc__ = (fn.__doc__ or "") + (
+        "\n    A System (docs/systems.md, \"Crossings of a section\"): ``crossings(system, states=Y0, "
+        "n_crossings=K, section=EXPR, direction=+1 or -1)``, the section EXPR = 0 with EXPR linear in the "
+        "state; rows (t, state, E - E0).\n")
+    return call
 
 
 class Section:
