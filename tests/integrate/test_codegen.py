@@ -271,9 +271,35 @@ def test_the_module_is_written_once_under_its_content_key_and_reused(tmp_path, m
     del sys.modules[mod.__name__]       # as a new process would: found on disk, not rewritten
     again = codegen.load(system)
     assert again is not mod and again.__file__ == str(path) and path.stat().st_mtime_ns == stamp
-    assert "taylor_coefficients" in path.read_text()
+    assert "taylor_coefficients" in path.read_text() and "def crossings_taylor" in path.read_text()
     other = System({x: v, v: -2 * x}, name="oscillator")
     assert codegen.module_key(other) != codegen.module_key(system)
+
+
+def test_a_change_of_a_kernel_the_generated_code_calls_changes_the_module_key(tmp_path, monkeypatch):
+    """numba's cache of the generated crossings integrator does not follow its callees in
+    explorer.kernels: the key does, so a changed kernel gives a new module file."""
+    x, v = sp.symbols("x v")
+    system = System({x: v, v: -x}, name="oscillator")
+    key = codegen.module_key(system)
+    kernels = tmp_path / "explorer"
+    (kernels / "kernels").mkdir(parents=True)
+    (kernels / "integrate").mkdir()
+    (kernels / "kernels" / "taylor.py").write_text("a")
+    (kernels / "integrate" / "simd.py").write_text("b")
+    (kernels / "_jit.py").write_text("c")
+    monkeypatch.setattr(codegen, "__file__", str(kernels / "integrate" / "codegen.py"))
+    codegen._callee_digest.cache_clear()
+    try:
+        first = codegen.module_key(system)
+        assert first != key
+        (kernels / "kernels" / "taylor.py").write_text("a changed")
+        codegen._callee_digest.cache_clear()
+        assert codegen.module_key(system) not in (first, key)
+    finally:
+        monkeypatch.undo()
+        codegen._callee_digest.cache_clear()
+    assert codegen.module_key(system) == key
 
 
 def test_cache_directory_follows_the_environment(monkeypatch, tmp_path):
