@@ -166,3 +166,38 @@ def test_no_module_imports_itself_through_a_circle():
     package, so re-exporting a submodule's names is no circle unless that submodule imports the package."""
     circles = import_circles(module_graph())
     assert not circles, "import circles:\n" + "\n".join(" <-> ".join(c) for c in circles)
+
+
+#: docs/contributing.md: docstrings state the contract and cite the docs; the reference is docs/
+MAX_PROSE_SHARE = 0.15
+
+
+def prose_lines(text: str) -> tuple[int, int]:
+    """(docstring and comment lines, all lines) of one module's source."""
+    import io
+    import tokenize
+    marked = {tok.start[0] for tok in tokenize.generate_tokens(io.StringIO(text).readline)
+              if tok.type == tokenize.COMMENT}
+    for node in ast.walk(ast.parse(text)):
+        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) and node.body:
+            first = node.body[0]
+            if isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant) \
+                    and isinstance(first.value.value, str):
+                marked.update(range(first.lineno, first.end_lineno + 1))
+    return len(marked), len(text.splitlines())
+
+
+def test_prose_lines_are_counted_as_docstrings_and_comments():
+    text = '"""Module.\n\nMore."""\nx = 1  # why\n\n\ndef f():\n    """One."""\n    return "not a docstring"\n'
+    assert prose_lines(text) == (5, 9)
+
+
+def test_docstrings_and_comments_are_at_most_15_percent_of_src():
+    """Docstrings and comments over all lines of src (generated files aside) stay within
+    MAX_PROSE_SHARE: the contract and a citation at the line, the rest in docs/."""
+    prose = total = 0
+    for _, path in modules():
+        if "_generated" not in path.name:
+            p, n = prose_lines(path.read_text())
+            prose, total = prose + p, total + n
+    assert prose / total <= MAX_PROSE_SHARE, f"{prose} of {total} lines are prose ({prose / total:.1%})"
