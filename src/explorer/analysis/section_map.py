@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from explorer import model
-from explorer.analysis import budget
+from explorer.analysis import budget, system_sections
 from explorer.integrate.methods import MAP_TOL, MAX_TOL, MIN_TOL
 from explorer.integrate.tangent import return_map_taylor
 from explorer.kernels import STATUS_CANCELLED, STATUS_DONE, STATUS_NAMES
@@ -46,6 +46,14 @@ class SectionMap:
 
     #: the integrator of the map, which the analyses given a map use
     method = "taylor"
+
+    def __new__(cls, *args, **kw):
+        """A System first gives its section map on an energy level (docs/systems.md, "Section map")."""
+        if args and system_sections.is_system(args[0]):
+            from explorer.analysis.system_section_map import SystemSectionMap
+
+            return SystemSectionMap(*args, **kw)
+        return super().__new__(cls)
 
     def __init__(self, params, h, *, phi0=math.pi, tol=DEFAULT_TOL, tmax=RETURN_TMAX):
         self.params = params if isinstance(params, model.Params) else model.Params.from_array(params)
@@ -208,6 +216,7 @@ def as_system(name: str, system, args: tuple, kw: dict, settings: tuple = MAP_SE
               flow: bool = False):
     """The one rule for the system argument of an analysis ``name``: ``(system, args, kw)`` with
     the system a map object."""
+    system_sections.refuse_a_system(name, system)
     if flow:
         states = kw.pop("states", None)
         if states is not None:

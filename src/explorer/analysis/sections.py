@@ -70,8 +70,19 @@ class Crossings:
 
 
 def max_energy_error(data) -> float:
-    """max |H - H0| over the rows in ``data``, NaN ignored; 0.0 if there are none."""
-    dh = np.abs(np.asarray(data, dtype=np.float64)[..., 4])
+    """max |H - H0| over the rows in ``data``, NaN ignored; 0.0 if there are none.  ``data``: rows
+    of Chaplygin's model (H - H0 in column 4), or a :class:`Crossings` (a System's energy column
+    is its last, ``settings["columns"]``; ParameterError for a System without an energy)."""
+    column = 4
+    if isinstance(data, Crossings):
+        columns = data.settings.get("columns")
+        if columns is not None:
+            if columns[-1] != "E - E0":
+                raise ParameterError(f"max_energy_error: the crossings of {data.settings.get('system')} have no "
+                                     "energy column (the System has no energy)")
+            column = len(columns) - 1
+        data = data.data
+    dh = np.abs(np.asarray(data, dtype=np.float64)[..., column])
     dh = dh[np.isfinite(dh)]
     return float(dh.max()) if dh.size else 0.0
 

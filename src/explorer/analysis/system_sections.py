@@ -30,7 +30,8 @@ from explorer.integrate.methods import DEFAULT_TOL, check_setting
 from explorer.kernels.taylor_order import order_for_tolerance
 from explorer.model import ParameterError, validation
 
-__all__ = ["Section", "is_system", "linear_section", "or_a_system", "system_crossings"]
+__all__ = ["Section", "is_system", "is_system_map", "linear_section", "or_a_system", "refuse_a_system",
+           "system_crossings"]
 
 DEFAULT_MAX_STEPS = 10**9
 #: the settings of the engine's crossings that have no meaning for a System
@@ -44,6 +45,21 @@ def is_system(obj) -> bool:
     return mod is not None and isinstance(obj, mod.System)
 
 
+def is_system_map(obj) -> bool:
+    """True for a System's section map (an object whose ``system`` is a System)."""
+    return is_system(getattr(obj, "system", None))
+
+
+def refuse_a_system(name: str, obj) -> None:
+    """ParameterError if ``obj`` is a System or a System's section map: analysis ``name`` takes
+    Chaplygin's model and the maps of the plane only (docs/systems.md, "What is next")."""
+    if is_system(obj) or is_system_map(obj):
+        what = "a System" if is_system(obj) else "a System's SectionMap"
+        raise ParameterError(f"{name} does not take a System yet (got {what}): of a System, explorer computes "
+                             "crossings (explorer.crossings(system, states=..., section=...) or "
+                             "explorer.crossings(SectionMap(system, ...), points, ...)) (docs/systems.md)")
+
+
 def or_a_system(fn, result):
     """``fn`` (the engine's crossings) with a System path: a System as first argument goes to
     :func:`system_crossings`, its arrays made into ``result`` (the Crossings type); ``section=``
@@ -53,6 +69,8 @@ def or_a_system(fn, result):
     def call(system, *args, section=None, **kw):
         if is_system(system):
             return result(*system_crossings(system, *args, section=section, **kw))
+        if is_system_map(system):   # its points lifted to states, its section and direction
+            return result(*system.crossings(*args, section=section, **kw))
         if section is not None:
             raise ParameterError("section= is the hyperplane EXPR = 0 of a System (docs/systems.md); the section of "
                                  "Chaplygin's model is phi = phi0 (phi0=)")

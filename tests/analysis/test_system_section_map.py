@@ -1,0 +1,137 @@
+"""The section map of a System on an energy level (docs/systems.md, "Section map"): the lifted
+state, the branch the direction selects, the refusal outside the energy surface, its crossings
+against the flow's, the analyses that refuse a System, and the energy column of a result."""
+import numpy as np
+import pytest
+import sympy as sp
+
+import explorer as ex
+from explorer.analysis import sections
+from explorer.model import ParameterError
+
+x, y, px, py, lam = sp.symbols("x y px py lam")
+E = 1.0 / 8.0
+POINTS = [(0.1, 0.1), (-0.1, 0.2), (0.3, 0.0)]
+
+
+def henon_heiles():
+    return ex.System({x: px, y: py, px: -x - 2*lam*x*y, py: -y - lam*(x**2 - y**2)}, parameters={lam: 1.0},
+                     energy=(px**2 + py**2)/2 + (x**2 + y**2)/2 + lam*(x**2*y - y**3/3), name="henon_heiles")
+
+
+def energy(Y):
+    """Hénon–Heiles' H (lam = 1) at the states Y (N, 4), in Python floats' order of docs/systems.md."""
+    X, Yv, PX, PY = Y.T
+    return (PX**2 + PY**2)/2 + (X**2 + Yv**2)/2 + (X**2*Yv - Yv**3/3)
+
+
+def by_hand(points):
+    """States on x = 0 at energy E with px > 0 from (y, py)."""
+    return np.array([[0.0, yy, np.sqrt(2*E - pyy**2 - yy**2 + 2*yy**3/3), pyy] for yy, pyy in points])
+
+
+def test_the_lifted_state_lies_on_the_section_at_the_energy_with_px_of_the_directions_sign():
+    hh = henon_heiles()
+    up = ex.SectionMap(hh, E, section=x, direction=+1, coords=(y, py), solve=px)
+    down = ex.SectionMap(hh, E, section=x, direction=-1, coords=(y, py), solve=px)
+    Y, Z = up.states(POINTS), down.states(POINTS)
+    assert np.all(Y[:, 0] == 0.0) and np.all(Y[:, 2] > 0.0) and np.all(Z[:, 2] < 0.0)
+    assert np.max(np.abs(energy(Y) - E)) <= 1e-15 and np.max(np.abs(energy(Z) - E)) <= 1e-15
+    assert np.array_equal(Y[:, [1, 3]], np.array(POINTS))
+    assert np.max(np.abs(Y - by_hand(POINTS))) <= 1e-15
+    assert np.array_equal(Z[:, 2], -Y[:, 2])
+
+
+def test_a_tilted_section_fixes_its_own_variable_and_keeps_the_energy():
+    # x + y - 0.1 = 0 crossed downwards: x = 0.1 - y, px from the energy with d(x + y)/dt = px + py < 0
+    smap = ex.SectionMap(henon_heiles(), E, section=x + y - 0.1, direction=-1, coords=(y, py), solve=px)
+    Y = smap.states([(0.0, 0.1), (0.2, -0.1)])
+    assert np.max(np.abs(Y[:, 0] + Y[:, 1] - 0.1)) <= 1e-16
+    assert np.max(np.abs(energy(Y) - E)) <= 1e-15
+    assert np.all(Y[:, 2] + Y[:, 3] < 0.0)
+
+
+def test_a_point_outside_the_energy_surface_is_refused_naming_the_point_and_the_energy():
+    smap = ex.SectionMap(henon_heiles(), E, section=x, direction=+1, coords=(y, py), solve=px)
+    # py**2 = 0.36 > 2E: no real px
+    with pytest.raises(ParameterError, match=r"energy level E = 0.125 has no solution for px at \(y, py\) = "
+                                             r"\(0.1, 0.6\)"):
+        smap.states([(0.1, 0.1), (0.1, 0.6)])
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(coords=(y, y), solve=px), "two different state variables"),
+    (dict(coords=(y, py), solve=py), "solve must not be one of coords"),
+    (dict(coords=(y, lam), solve=px), "coords must be a state variable"),
+    (dict(coords=(y, py), solve=px, direction=0), "direction must be"),
+    (dict(coords=(x, py), solve=px), "must involve y"),
+])
+def test_a_bad_map_is_refused_with_a_message_naming_the_parameter(kw, match):
+    args = dict(section=x, direction=+1)
+    args.update(kw)
+    with pytest.raises(ParameterError, match=match):
+        ex.SectionMap(henon_heiles(), E, **args)
+
+
+def test_a_system_without_an_energy_has_no_section_map():
+    hh = henon_heiles()
+    bare = ex.System(dict(zip(hh.states, hh.rhs)), parameters={lam: 1.0})
+    with pytest.raises(ParameterError, match="has no energy"):
+        ex.SectionMap(bare, E, section=x, direction=+1, coords=(y, py), solve=px)
+
+
+def test_crossings_of_the_map_equal_the_flows_crossings_from_the_states_built_by_hand():
+    hh = henon_heiles()
+    smap = ex.SectionMap(hh, E, section=x, direction=+1, coords=(y, py), solve=px)
+    res = ex.crossings(smap, POINTS, n_crossings=30)
+    flow = ex.crossings(hh, states=by_hand(POINTS), n_crossings=30, section=x, direction=+1)
+    assert isinstance(res, ex.Crossings) and np.all(res.count == 30)
+    for name in ("data", "count", "status", "final", "info"):
+        assert np.array_equal(getattr(res, name), getattr(flow, name), equal_nan=True), name
+    assert res.settings["energy"] == E and res.settings["solve"] == "px" and res.settings["section"] == "x"
+    # the map's iterates are the (y, py) columns of the crossings
+    it = smap.iterate(POINTS[0], 30)
+    assert np.array_equal(it[0], POINTS[0]) and np.array_equal(it[1:], res.orbit(0)[:, [2, 4]])
+    with pytest.raises(ParameterError, match="belong\\(s\\) to the map"):
+        ex.crossings(smap, POINTS, n_crossings=3, direction=-1)
+
+
+def test_analyses_that_do_not_take_a_system_say_so_naming_the_function():
+    hh = henon_heiles()
+    smap = ex.SectionMap(hh, E, section=x, direction=+1, coords=(y, py), solve=px)
+    Y0 = by_hand(POINTS[:1])
+    calls = {
+        "iter_crossings": lambda: next(ex.iter_crossings(hh, states=Y0, n_crossings=2)),
+        "propagate": lambda: ex.propagate(hh, states=Y0, t=1.0),
+        "indicators": lambda: ex.indicators(hh, states=Y0, tmax=1.0),
+        "find_fixed_point": lambda: ex.find_fixed_point(smap, (0.1, 0.1)),
+        "rotation_number": lambda: ex.rotation_number(smap, (0.1, 0.1)),
+    }
+    for name, call in calls.items():
+        with pytest.raises(ParameterError, match=f"^{name} does not take a System yet"):
+            call()
+    with pytest.raises(ParameterError, match="^indicators does not take a System yet \\(got a System's SectionMap"):
+        ex.indicators(smap, POINTS[:1], tmax=1.0)
+
+
+def test_max_energy_error_reads_the_energy_column_of_a_system_and_of_chaplygins_rows():
+    hh = henon_heiles()
+    res = ex.crossings(hh, states=by_hand(POINTS), n_crossings=5, section=x, direction=+1)
+    assert sections.max_energy_error(res) == np.nanmax(np.abs(res.data[..., 5]))
+    assert sections.max_energy_error(res) <= 1e-14       # column 4 (py) would be of order 0.1
+    rows = np.zeros((2, 3, 5))
+    rows[1, 2, 4] = -3e-9
+    assert sections.max_energy_error(rows) == 3e-9
+    bare = ex.System(dict(zip(hh.states, hh.rhs)), parameters={lam: 1.0})
+    plain = ex.crossings(bare, states=by_hand(POINTS[:1]), n_crossings=2, section=x, direction=+1)
+    with pytest.raises(ParameterError, match="no energy column"):
+        sections.max_energy_error(plain)
+
+
+def test_chaplygins_section_map_is_unchanged_and_pickles():
+    import pickle
+
+    smap = ex.SectionMap(ex.FIGURE4, ex.FIGURE4_H)
+    assert type(smap) is ex.SectionMap and smap.h == ex.FIGURE4_H
+    back = pickle.loads(pickle.dumps(smap))
+    assert type(back) is ex.SectionMap and back.h == smap.h and back.params == smap.params
