@@ -87,9 +87,9 @@ def test_the_section_angle_accepts_multiples_of_pi():
 
 def test_the_mu_slider_writes_its_value_without_float_noise():
     pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
-    from explorer.app.serve.page import SectionPage
-
     import param
+
+    from explorer.app.serve.page import SectionPage
 
     page = SectionPage(Settings())
     try:
@@ -1760,7 +1760,7 @@ def test_a_served_click_sends_its_cross_with_its_first_crossings_and_later_block
         assert page.start_source.data["orbit"] == [] and rows() == (0, 0) and page.url_state.orbits == ""
         status = page.status.text
         t0 = time.time()
-        while (page.worker.busy() or doc.soon or page.orbits.flush_timer.pending) and time.time() - t0 < 240:
+        while (page._running or doc.soon or page.orbits.flush_timer.pending) and time.time() - t0 < 240:
             doc.run()
             time.sleep(0.001)
         assert len(page.shown.data["p1"]) == s.crossings
@@ -1802,7 +1802,7 @@ def test_a_short_orbit_joins_its_first_crossings_on_the_live_layer_until_they_se
         status = page.status.text
         page.click(c1 + 0.3 * r1, c2)
         t0 = time.time()
-        while (page.worker.busy() or doc.soon or page.orbits.flush_timer.pending
+        while (page._running or doc.soon or page.orbits.flush_timer.pending
                or len(page.live.data["p1"])) and time.time() - t0 < 240:
             doc.run()
             time.sleep(0.001)

@@ -67,7 +67,7 @@ def test_the_list_shows_every_orbit_with_its_colour_start_crossings_and_state():
         first = page.click(c1 + 0.3 * r1, c2).ident
         _poll_until(page, lambda: len(_rows(page, first)) > 0)
         second = page.click(c1 - 0.5 * r1, c2 + 0.2 * r2).ident                    # pauses the first
-        _poll_until(page, lambda: len(_rows(page, second)) == LONG and not page.worker.busy())
+        _poll_until(page, lambda: len(_rows(page, second)) == LONG and " 0 running" in page.status.text)
         table = _table(page)
         assert list(table) == [first, second]                                     # every orbit, in click order
         for ident, p1, p2, c in page.starts:
@@ -79,7 +79,7 @@ def test_the_list_shows_every_orbit_with_its_colour_start_crossings_and_state():
         assert table[second][1][4] == "done"
         page.resume()
         assert _table(page)[first][1][4] == "running"
-        _poll_until(page, lambda: not page.worker.busy() and first not in page._running)
+        _poll_until(page, lambda: not page._running)
         assert _table(page)[first][1][3:] == [str(LONG), "done"]
     finally:
         page.close()
@@ -137,7 +137,7 @@ def test_a_hidden_orbit_leaves_every_drawn_source_keeps_computing_and_comes_back
         assert _drawn(page, first) == 0 and len(_rows(page, first)) == 0
         assert "hidden" in _table(page)[first][1][4]
         second = page.click(*b).ident
-        _poll_until(page, lambda: not page.worker.busy() and not page._running)
+        _poll_until(page, lambda: not page._running and not page._running)
         assert _drawn(page, first) == 0 and len(_rows(page, first)) == 0         # its later rows: hidden too
         assert set(np.asarray(page.shown.data["orbit"]).tolist()) == {second}
         assert _table(page)[first][1][3:] == [str(LONG), "done, hidden"]         # it went on computing
@@ -153,7 +153,7 @@ def test_a_hidden_orbit_leaves_every_drawn_source_keeps_computing_and_comes_back
         page.orbit_list.toggle(second)
         page.inputs["crossings"].value = "50"                                     # a new value: still hidden
         hidden_again = page.starts[1][0]
-        _poll_until(page, lambda: not page.worker.busy() and not page._running)
+        _poll_until(page, lambda: not page._running and not page._running)
         assert page.orbits.hidden.keys() == {hidden_again} and _drawn(page, hidden_again) == 0
         assert len(page.orbits.hidden[hidden_again]["t"]) == 50
     finally:
@@ -204,7 +204,7 @@ def test_the_hidden_orbits_are_in_the_link_and_a_page_from_it_keeps_them_hidden(
         page.close()
     again = _page(s, link)                                                        # a reload of that link
     try:
-        _poll_until(again, lambda: not again.worker.busy() and not again._running)
+        _poll_until(again, lambda: not again._running and not again._running)
         ids = [i for i, *_ in again.starts]
         assert again.orbits.hidden.keys() == {ids[1]} and _drawn(again, ids[1]) == 0
         assert len(again.orbits.hidden[ids[1]]["t"]) == s.crossings                 # computed all the same
