@@ -135,3 +135,14 @@ def test_chaplygins_section_map_is_unchanged_and_pickles():
     assert type(smap) is ex.SectionMap and smap.h == ex.FIGURE4_H
     back = pickle.loads(pickle.dumps(smap))
     assert type(back) is ex.SectionMap and back.h == smap.h and back.params == smap.params
+
+
+def test_the_example_of_docs_systems_md_section_map_runs():
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[2] / "docs" / "systems.md").read_text()
+    block = page.split("## Section map", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
+    namespace = {}
+    exec(compile(block, "docs/systems.md", "exec"), namespace)   # its own asserts check the result
+    assert namespace["points"].shape == (2, 200, 2)
+    assert "E = 0.125 has no solution for px at (y, py) = (0.1, 0.6)" in namespace["refused"]

@@ -10,7 +10,7 @@ section point ``(a, b)`` becomes a full state on ``EXPR = 0`` with energy ``E``:
 - ``solve`` comes from ``energy = E`` with ``fixed`` put in: ``sympy.solve`` gives the roots as
   expressions (cached per system, section, coords and solve; E and the parameters stay symbols),
   evaluated in complex arithmetic and kept where real; each root gets one Newton step on the
-  energy where that lowers |H - E|;
+  energy where that lowers ``|H - E|``;
 - of the real roots, the one where ``d(EXPR)/dt`` has the sign of ``direction``.
 
 A point where no real root has that sign is refused (ParameterError naming the point and E). A
@@ -174,7 +174,7 @@ class SystemSectionMap:
         return Y
 
     def _polish(self, A, B, C, P) -> np.ndarray:
-        """One Newton step on energy(solve) = E where it lowers |H - E| (a root's closed form may
+        """One Newton step on energy(solve) = E where it lowers ``|H - E|`` (a root's closed form may
         lose digits)."""
         _, _, energy, dH, _ = self._lift
         with np.errstate(all="ignore"):
