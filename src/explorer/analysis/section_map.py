@@ -42,7 +42,10 @@ class MapResult:
 
 class SectionMap:
     """The section map P of phi = ``phi0`` at energy ``h``: ``smap(x)`` is a :class:`MapResult`
-    (P(x), DP(x), the return time); ParameterError for no return within ``tmax``."""
+    (P(x), DP(x), the return time); ParameterError for no return within ``tmax``.
+    ``SectionMap(system, E, section=, direction=, coords=, solve=)`` with a System is that
+    system's map on its energy level E, a :class:`~explorer.analysis.system_section_map.SystemSectionMap`
+    (docs/systems.md, "Section map")."""
 
     #: the integrator of the map, which the analyses given a map use
     method = "taylor"
