@@ -102,6 +102,24 @@ def test_the_mu_slider_writes_its_value_without_float_noise():
         page.close()
 
 
+def test_a_value_change_reruns_the_orbits_under_their_own_ids():
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    from explorer.app.serve.page import SectionPage
+
+    s = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=50)
+    c1, c2, r1, _r2 = s.region
+    page = SectionPage(s)
+    try:
+        ids = [page.click(c1 + f * r1, c2).ident for f in (0.3, -0.3)]
+        page.inputs["mu"].value = "0.031"
+        assert [i for i, *_ in page.starts] == ids
+        _poll_until(page, lambda: len(page.crossings.data["t"]) == 2 * s.crossings and not page._running)
+        assert sorted(set(np.asarray(page.crossings.data["orbit"]).tolist())) == sorted(ids)
+        assert page.click(c1, c2).ident == max(ids) + 1                        # a new click: a new id
+    finally:
+        page.close()
+
+
 def test_a_link_with_a_refused_value_applies_the_rest_and_names_what_it_refused():
     pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
     from explorer.app.serve.page import SectionPage

@@ -211,11 +211,14 @@ class Worker:
         if self._runs and (self._job is None or not self._job.current):
             self._job = self.task.run(self._loop)
 
-    def submit(self, p1: float, p2: float, settings: Settings) -> OrbitRun:
-        """Queue an orbit from (p1, p2) (ParameterError, nothing queued, outside the region)."""
+    def submit(self, p1: float, p2: float, settings: Settings, ident: int | None = None) -> OrbitRun:
+        """Queue an orbit from (p1, p2) (ParameterError, nothing queued, outside the region), as
+        orbit ``ident`` (None: a new id; an id of an orbit cancelled before, rerun at new settings)."""
         with self._cond:
-            self._next_id += 1
-            run = OrbitRun(self._next_id, float(p1), float(p2), settings)
+            if ident is None:
+                self._next_id += 1
+                ident = self._next_id
+            run = OrbitRun(ident, float(p1), float(p2), settings)
             self._runs.insert(0, run)      # newest first: its first block comes next
             self._ensure_running()
         return run

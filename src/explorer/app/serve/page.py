@@ -358,7 +358,7 @@ class SectionPage:
             self.title.object = self._title()
         # the kept starts' crosses go before the region and the view (one message each, in order): a
         # page that shows the new region shows the starts that run again in it
-        kept = [self.orbits.start(p1, p2, color) for _i, p1, p2, color in old]
+        kept = [self.orbits.start(p1, p2, color, ident=i) for i, p1, p2, color in old]   # (their ids kept)
         for run, (i, *_s) in zip(kept, old):
             if run is not None and i in hidden:
                 self.orbits.hide(run.ident)           # (a hidden orbit stays hidden)

@@ -119,7 +119,8 @@ class OrbitsLayer:
                                        size=9, line_width=2, level="overlay")   # (above the crossings and images)
 
     # ------------------------------------------------------------ starts
-    def start(self, p1: float, p2: float, color: int | None = None, mark_later: bool = False):
+    def start(self, p1: float, p2: float, color: int | None = None, mark_later: bool = False,
+              ident: int | None = None):
         """Queue the orbit from (p1, p2) and mark its start (``mark_later``, a click on a served
         page: with its first crossings, :meth:`_mark_starts`); None outside the region."""
         settings = self.host.settings
@@ -128,7 +129,7 @@ class OrbitsLayer:
         if color is None:
             color = self._color % len(COLORS)
             self._color += 1
-        run = self.worker.submit(p1, p2, settings)
+        run = self.worker.submit(p1, p2, settings, ident)
         self.starts.append((run.ident, p1, p2, color))
         self._unmarked.append((run.ident, p1, p2, color))
         self._running = self._running | {run.ident}
