@@ -146,3 +146,15 @@ def test_the_example_of_docs_systems_md_section_map_runs():
     exec(compile(block, "docs/systems.md", "exec"), namespace)   # its own asserts check the result
     assert namespace["points"].shape == (2, 200, 2)
     assert "E = 0.125 has no solution for px at (y, py) = (0.1, 0.6)" in namespace["refused"]
+
+
+def test_another_parameter_value_lifts_onto_its_own_energy_surface():
+    # the roots are cached with lam as a symbol: lam = 0.5 must use its value, not the first map's
+    hh = henon_heiles()
+    ex.SectionMap(hh, E, section=x, direction=+1, coords=(y, py), solve=px).states(POINTS)
+    half = ex.SectionMap(hh.with_(lam=0.5), E, section=x, direction=+1, coords=(y, py), solve=px)
+    Y = half.states(POINTS)
+    X, Yv, PX, PY = Y.T
+    H = (PX**2 + PY**2)/2 + (X**2 + Yv**2)/2 + 0.5*(X**2*Yv - Yv**3/3)
+    assert np.max(np.abs(H - E)) <= 1e-15 and np.all(PX > 0.0)
+    assert np.max(np.abs(energy(Y) - E)) > 1e-4          # not on lam = 1's surface
