@@ -18,8 +18,8 @@ of both cores: tests that wait for a browser, a throttled socket, a server's sta
 process), and the suite's processes, the servers and the browser the timing tests measure
 included, are served first whenever they want a core.  At the suite's end its controller waits
 for the rerun, fails the session if the rerun failed, and prints the rerun's output under a
-header of its own after the suite's last line.  Run after the suite, the rerun added about 110 s
-to README's command on 2 cores; beside it, about 50 (docs/tests.md, "Time").
+header of its own after the suite's last line (benchmarks/RESULTS.md: what it adds to README's
+command).
 
 A test marked ``cpu_dependent`` therefore runs starved of CPU for minutes at a time: none may
 assert on wall-clock time (a budget of seconds, a speed).  Its outcome rests on the numbers only.

@@ -46,8 +46,9 @@ human_bytes = validation.human_bytes
 @dataclass(frozen=True)
 class Crossings:
     """Result of :func:`crossings` for N orbits and up to K crossings each: data[i, k] =
-    (t, p1, p2, M, H - H0) for k < count[i], NaN beyond; ``status[i]`` a Status code;
-    ``final[i]`` the last state; info[i] = (t_end, steps, Casimir error)."""
+    (t, p1, p2, M, H - H0) for k < count[i], NaN beyond (a System's rows: t, its state, E - E0 if
+    it has an energy, named by ``settings["columns"]``, docs/systems.md); ``status[i]`` a Status
+    code; ``final[i]`` the last state; info[i] = (t_end, steps, Casimir error or NaN)."""
 
     data: np.ndarray
     count: np.ndarray
@@ -58,7 +59,7 @@ class Crossings:
     settings: dict = field(default_factory=dict)
 
     def orbit(self, i: int) -> np.ndarray:
-        """The crossings of orbit i as an array (count_i, 5)."""
+        """The crossings of orbit i as an array (count_i, columns)."""
         return self.data[i, : self.count[i]]
 
     def status_name(self, i: int) -> str:
