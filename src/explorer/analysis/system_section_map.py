@@ -161,8 +161,8 @@ class SystemSectionMap:
             i = int(bad[0])
             raise ParameterError(
                 f"the energy level E = {E!r} has no solution for {self.solve.name} at ({a.name}, {b.name}) = "
-                f"({float(A[i])!r}, {float(B[i])!r}) with d({self.section.expr})/dt of sign {self.direction:+d}: the point lies "
-                "outside the energy surface on the section (or on its boundary)")
+                f"({float(A[i])!r}, {float(B[i])!r}) with d({self.section.expr})/dt of sign {self.direction:+d}: "
+                "the point lies outside the energy surface on the section (or on its boundary)")
         return Y
 
     def _assemble(self, A, B, C, P) -> np.ndarray:

@@ -166,9 +166,8 @@ def _angle(name: str, text) -> float:
         if "pi" in s and len(s) <= MAX_FIELD_CHARS:
             before, _, after = s.partition("pi")
             before = before[:-1] if before.endswith("*") else before
-            factor = {"": 1.0, "+": 1.0, "-": -1.0}.get(before)
             try:
-                factor = float(before) if factor is None else factor
+                factor = float(before + "1" if before in ("", "+", "-") else before)
                 divisor = float(after[1:]) if after.startswith("/") else (1.0 if not after else None)
             except ValueError:
                 divisor = None
