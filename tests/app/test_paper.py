@@ -44,6 +44,14 @@ def test_every_figure_is_written_as_png_and_pdf(quick):
         assert pdf.read_bytes()[:5] == b"%PDF-" and pdf.stat().st_size > 5000
 
 
+def test_the_breakup_figures_two_sections_share_one_window(quick):
+    """The sections just below and just above mu_c are drawn on the same axes limits (the first
+    panel's window), so the eye compares like with like."""
+    _root, out = quick
+    below, above = out["breakup"].data["section_limits"]
+    assert below == above == tuple(out["breakup"].data["window"])
+
+
 # ---------------------------------------------------------------- Figure 2
 def test_figure2_curves_are_integrated_closed_and_keep_H_and_F(quick):
     _root, out = quick

@@ -74,6 +74,7 @@ def breakup_figure(*, nobles=NOBLES, qmax=QMAX, starts=40, crossings=600, dpi=20
             ax.set_xlim(window[0])
             ax.set_ylim(window[1])
     data = {"nu": nu, "mu_c": mc, "uncertainty": err, "last": last.as_dict(), "window": window,
+            "section_limits": [(ax.get_xlim(), ax.get_ylim()) for ax in axes[1:]],
             "curves": [r.as_dict() for r in results]}
     return Drawn(fig, data)
 
