@@ -6,7 +6,7 @@ import pytest
 
 from explorer import model
 from explorer.analysis import sections
-from explorer.integrate import drivers
+from explorer.integrate import drivers, layout
 from explorer.kernels import Status
 from explorer.model import ParameterError
 
@@ -58,6 +58,37 @@ def test_a_run_continued_from_a_blocks_state_ends_as_the_uninterrupted_run(metho
                                         **METHODS[method]))
     rows, st = _gather(first + rest, len(P1))
     _assert_same_run(ref, rows, st)
+
+
+@pytest.mark.parametrize("method", ["taylor", "split6"])
+def test_blocks_cut_at_their_steps_are_bit_identical_to_one_run_and_keep_the_runs_step_budget(method):
+    """step_block ends a block after that many steps of the least advanced orbit: the rows, states,
+    statuses and the run's own step budget are those of one run, and no block lets an orbit
+    take more than step_block steps beyond the least advanced one."""
+    for max_steps in (10**6, 2500):
+        ref = sections.crossings(PRM, 2.0, PTS, n_crossings=60, method=method, max_steps=max_steps, **METHODS[method])
+        blocks = list(sections.iter_crossings(PRM, 2.0, PTS, n_crossings=60, method=method, max_steps=max_steps,
+                                              block=40, step_block=300, **METHODS[method]))
+        rows, st = _gather(blocks, len(P1))
+        _assert_same_run(ref, rows, st)
+        steps = [b.state.carry[:, layout.CARRY_STEPS] for b in blocks]
+        assert all(np.max(b - a) <= 300 + np.ptp(a) for a, b in zip(steps, steps[1:]))
+        assert len(blocks) > -(-60 // 40)      # the step cap, not only the crossing count, cut blocks
+    assert np.any(ref.status == int(Status.MAX_STEPS))   # 2500 steps end the run, not a block's cap
+
+
+def test_step_block_is_refused_for_dop853_whose_rows_a_cut_would_change():
+    """DOP853 continued from a step cap does not give the uninterrupted rows (its kind says
+    resumes_at_any_step=False); step_block names the methods it allows."""
+    from explorer.integrate import methods
+    assert not methods.get("dop853").loops.resumes_at_any_step
+    with pytest.raises(ParameterError, match="step_block.*taylor"):
+        next(sections.iter_crossings(PRM, 2.0, PTS, n_crossings=5, method="dop853", tol=1e-11, step_block=300))
+
+
+def test_step_block_must_be_a_positive_integer():
+    with pytest.raises(ParameterError, match="step_block"):
+        next(sections.iter_crossings(PRM, 2.0, PTS, n_crossings=5, step_block=0))
 
 
 def test_budgets_are_for_the_whole_run_not_the_block():

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 import numbers
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -381,14 +381,24 @@ class CrossingBlock:
 def iter_crossings(system, y0, *, n_crossings: int, block: int = DEFAULT_BLOCK, state: StreamState | None = None,
                    method: str = "taylor", tol: float = DEFAULT_TOL, dt: float | None = None,
                    tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS, phi0: float = math.pi,
-                   direction: int = 1, threads: int | None = None):
+                   direction: int = 1, threads: int | None = None, step_block: int | None = None):
     """:func:`crossings` in blocks of about ``block`` crossings per orbit (:class:`CrossingBlock`),
     bit for bit the same rows, in O(N x block) memory; ``state`` resumes a run
-    (docs/commands/orbit.md, "Long orbits")."""
+    (docs/commands/orbit.md, "Long orbits").  With ``step_block`` a block also ends once no orbit
+    may take more than that many steps in it (a block of a fixed-step orbit that finds no crossing
+    for a long time stays short, so a caller can stop between blocks); such a cut is no budget's
+    end: the next block continues the orbit exactly, for the methods whose kind
+    ``resumes_at_any_step`` (integrate.methods.Kind; not DOP853)."""
     params, y0, tol, phi0 = _start(system, y0, tol, phi0, direction)
     run = _validated(params, y0, n_crossings, method, tol, dt, tmax, max_steps, phi0, direction, threads)
     if not isinstance(block, numbers.Integral) or block < 1:
         raise ParameterError(f"block must be an integer >= 1, got {block!r}")
+    if step_block is not None and (not isinstance(step_block, numbers.Integral) or step_block < 1):
+        raise ParameterError(f"step_block must be an integer >= 1 or None, got {step_block!r}")
+    if step_block is not None and not run.prep.method.loops.resumes_at_any_step:
+        raise ParameterError(f"step_block is for the methods a step cap does not change "
+                             f"({', '.join(n for n, m in methods.REGISTRY.items() if m.loops.resumes_at_any_step)}), "
+                             f"got method {method!r}")
     N, K = run.Y0.shape[0], run.K
     st = StreamState.initial(run.P, run.Y0, phi0=run.settings["phi0"]) if state is None else state.copy()
     if st.y.shape != (N, 5) or st.carry.shape != (N, layout.N_CARRY):
@@ -406,7 +416,14 @@ def iter_crossings(system, y0, *, n_crossings: int, block: int = DEFAULT_BLOCK, 
         Y = np.ascontiguousarray(st.y[idx])
         carry = np.ascontiguousarray(st.carry[idx])
         data, count, status, final, info = _outputs(n, width)
-        _run_block(run, Y, carry, limits, data, count, status, final, info)
+        block_run = run
+        if step_block is not None:   # the step cap of this block: the orbit least advanced takes step_block
+            cap = int(carry[:, layout.CARRY_STEPS].min()) + int(step_block)
+            block_run = replace(run, max_steps=min(run.max_steps, cap))
+        _run_block(block_run, Y, carry, limits, data, count, status, final, info)
+        if block_run is not run:     # stopped at this block's cap, not at the run's budget: not finished
+            cut = (status == int(Status.MAX_STEPS)) & (carry[:, layout.CARRY_STEPS] < run.max_steps)
+            status[cut] = int(Status.DONE)
         start = st.done[idx].copy()
         st.y[idx] = final
         st.carry[idx] = carry

@@ -76,6 +76,10 @@ class Kind:
     tangent: tuple[str, str]
     args: tuple[str, ...]
     tangent_ext: tuple[str, str] | None = None
+    #: a run stopped at a step cap and continued from its carry gives the uninterrupted run's
+    #: numbers (false for DOP853, whose continued rows differ in the last digits:
+    #: tests/analysis/test_streaming.py)
+    resumes_at_any_step: bool = True
 
     def loop(self, which: str):
         """The compiled loop ``which`` (``crossings``, ``tangent`` or ``tangent_ext``)."""
@@ -89,7 +93,8 @@ KINDS: dict[str, Kind] = {k.name: k for k in (
          ("explorer.integrate.tangent", "run_tangent_taylor_batch"), ("order",),
          tangent_ext=("explorer.integrate.tangent_lanes", "run_tangent_lanes_batch")),
     Kind("dop853", "tol", _dop853, ("explorer.integrate.drivers", "run_dop853_batch"),
-         ("explorer.integrate.tangent", "run_tangent_dop853_batch"), ("tol", "tol")),   # rtol = atol = tol
+         ("explorer.integrate.tangent", "run_tangent_dop853_batch"), ("tol", "tol"),   # rtol = atol = tol
+         resumes_at_any_step=False),
     Kind("split", "dt", _split, ("explorer.integrate.drivers", "run_split_batch"),
          ("explorer.integrate.tangent", "run_tangent_split_batch"), ("dt", "flow_ids", "fracs")),
 )}

@@ -36,8 +36,8 @@ import numpy as np
 from explorer import model
 from explorer.analysis import sections
 from explorer.app.serve.settings import Settings
-from explorer.integrate import layout
-from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NAMES
+from explorer.integrate import layout, methods
+from explorer.kernels import STATUS_NAMES
 
 #: crossings of an orbit's first block (the first points on screen, milliseconds after a click)
 FIRST_BLOCK = 16
@@ -97,6 +97,11 @@ class OrbitRun:
         self.state = sections.StreamState.initial(s.params, self.y0, phi0=s.phi0)
 
     @property
+    def cut_at_steps(self) -> bool:
+        """Blocks end at ``steps`` too where that leaves the rows exact (integrate.methods.Kind)."""
+        return methods.get(self.settings.method).loops.resumes_at_any_step
+
+    @property
     def finished(self) -> bool:
         return bool(self.state.finished[0])
 
@@ -106,10 +111,11 @@ class OrbitRun:
         exactly (the drivers check the step cap before a step, and the carry holds the count)."""
         s = self.settings
         taken = int(self.state.carry[0, layout.CARRY_STEPS])
-        cap = min(s.max_steps, taken + self.steps)
         t0 = time.perf_counter()
         it = sections.iter_crossings(s.params, states=self.y0, n_crossings=s.crossings, block=self.block,
-                                     state=self.state, max_steps=cap, **s.section_kwargs())
+                                     state=self.state, max_steps=s.max_steps,
+                                     step_block=self.steps if self.cut_at_steps else None,
+                                     **s.section_kwargs())
         b = next(it, None)
         elapsed = time.perf_counter() - t0
         self.wall += elapsed
@@ -117,8 +123,6 @@ class OrbitRun:
             return np.zeros((0, 5))
         rows = b.rows(0).copy() if b.count.size else np.zeros((0, 5))
         self.state = b.state
-        if self.state.status[0] == STATUS_MAX_STEPS and cap < s.max_steps:
-            self.state.finished[0], self.state.status[0] = False, STATUS_DONE     # (cut at this block's steps)
         self.done = int(self.state.done[0])
         if self.finished:
             self.status = STATUS_NAMES[int(self.state.status[0])]
