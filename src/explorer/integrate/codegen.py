@@ -46,6 +46,7 @@ from pathlib import Path
 
 import sympy as sp
 
+from explorer.integrate import codegen_crossings
 from explorer.model.system import System
 from explorer.model.validation import ParameterError
 
@@ -53,6 +54,11 @@ __all__ = ["GENERATOR_VERSION", "Decomposition", "cache_directory", "decompose",
 
 #: changes whenever the emitted code changes, so that a cached module of an older generator is not used
 GENERATOR_VERSION = 6
+
+#: the modules that append drivers to the generated source: each has ``render(system) -> str``, code
+#: that calls the recurrence (``taylor_coefficients_into``, ``taylor_coefficients_lanes``, ``energy``)
+#: and is compiled beside it, so that numba's cache of it follows the recurrence
+TEMPLATES = (codegen_crossings,)
 
 #: the elementary operations and their recurrence at order k >= 1 (Jorba & Zou 2005)
 RULES = {
@@ -578,128 +584,6 @@ N_ENERGY_WORK = {n_work}
 '''
 
 
-CROSSINGS = '''
-
-# ---- crossings of a section a . x + b = 0 (explorer.analysis.system_sections): generated here, beside
-# the recurrence they call, so that numba's cache of them follows the recurrence (docs/systems.md)
-from explorer._jit import prange  # noqa: E402
-from explorer.kernels.checks import all_finite, is_finite  # noqa: E402
-from explorer.kernels.clock import advance_time, clip_step, resolves  # noqa: E402
-from explorer.kernels.events import poly_step_roots, root_workspace  # noqa: E402
-from explorer.kernels.status import (  # noqa: E402
-    STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_TMAX)
-from explorer.kernels.taylor import evaluate, safety_factor, step_size  # noqa: E402
-
-#: columns of a crossing row: t, the state, and E - E0 when the system has an energy
-N_COLUMNS = 1 + DIM + {has_energy}
-
-
-@njit(error_model="numpy")
-def _section_value(a, b, y):
-    """s(y) = a . y + b."""
-    s = b
-    for i in range(DIM):
-        s += a[i] * y[i]
-    return s
-
-
-@njit(error_model="numpy")
-def _finite_column(X, k):
-    for i in range(DIM):
-        if not is_finite(X[i, k]):
-            return False
-    return True
-
-
-@njit(error_model="numpy")
-def crossings_orbit(j, y0, P, a, b, direction, tmax, order, max_steps, limit, data, final, info):
-    """Orbit j from y0 with the adaptive Taylor method of ``order`` (Jorba & Zou 2005: the order
-    from the tolerance, the step from the last two coefficients, kernels.taylor.step_size) until
-    ``limit`` crossings of s = a . y + b = 0 in ``direction`` (+1: ds/dt > 0, -1: < 0), the time
-    ``tmax`` or ``max_steps`` steps.  Each step's polynomial s(t + tau) = a . X[:, k] tau^k (+ b)
-    has its roots in (0, h] isolated and refined by kernels.events.poly_step_roots; a crossing's
-    row data[j, n] = (t, y, E - E0) with y the step's polynomial at the root.  Returns (count,
-    status); final[j] the state and info[j] = (t, steps, nan) where the orbit stopped."""
-    X = np.empty((DIM, order + 1))
-    W = np.empty((max(N_WORK, 1), order + 1))
-    ynew = np.empty(DIM)
-    yc = np.empty(DIM)
-    gc, work, roots, brackets, stack = root_workspace(order)
-    factor = safety_factor(order)
-    for i in range(DIM):
-        X[i, 0] = y0[i]
-{energy_start}
-    gprev = _section_value(a, b, y0)
-    t = 0.0
-    tc = 0.0
-    steps = 0
-    n = 0
-    status = STATUS_DONE
-    while True:
-        if not (t < tmax):
-            status = STATUS_TMAX
-            break
-        if steps >= max_steps:
-            status = STATUS_MAX_STEPS
-            break
-        taylor_coefficients_into(P, X, order, W)
-        if not (_finite_column(X, order) and _finite_column(X, order - 1)):
-            status = STATUS_NONFINITE
-            break
-        h = step_size(X, order, factor)
-        h, last = clip_step(t, h, tmax)
-        if not resolves(t, h):
-            status = STATUS_STEP_UNDERFLOW
-            break
-        evaluate(X, order, h, ynew)
-        steps += 1
-        if not all_finite(ynew):
-            status = STATUS_NONFINITE
-            break
-        gnew = _section_value(a, b, ynew)
-        for k in range(order + 1):
-            s = 0.0
-            for i in range(DIM):
-                s += a[i] * X[i, k]
-            gc[k] = s
-        gc[0] += b
-        nroots = poly_step_roots(gc, order, h, gprev, gnew, direction, roots, brackets, work, stack)
-        for r in range(nroots):
-            if n >= limit:
-                break
-            tau = roots[r]
-            evaluate(X, order, tau, yc)
-            data[j, n, 0] = (t - tc) + tau
-            for i in range(DIM):
-                data[j, n, 1 + i] = yc[i]
-{energy_column}
-            n += 1
-        t, tc = advance_time(t, tc, h, last, tmax)
-        for i in range(DIM):
-            X[i, 0] = ynew[i]
-        gprev = gnew
-        if n >= limit:
-            status = STATUS_DONE
-            break
-    for i in range(DIM):
-        final[j, i] = X[i, 0]
-    info[j, 0] = t - tc
-    info[j, 1] = steps
-    info[j, 2] = np.nan
-    return n, status
-
-
-@njit(parallel=True, error_model="numpy")
-def crossings_taylor(Y0, P, a, b, direction, tmax, order, max_steps, limit, data, count, status, final, info):
-    """:func:`crossings_orbit` for every orbit (row of Y0), in parallel over orbits: each orbit
-    is computed alone, so the result does not depend on the number of threads."""
-    for j in prange(Y0.shape[0]):
-        c, s = crossings_orbit(j, Y0[j], P, a, b, direction, tmax, order, max_steps, limit, data, final, info)
-        count[j] = c
-        status[j] = s
-'''
-
-
 def source(system: System, key: str = "") -> str:
     """The Python source of the generated module (see the module docstring)."""
     d = decompose(system)
@@ -726,11 +610,8 @@ def source(system: System, key: str = "") -> str:
         ee = _Emitter(de)
         text += ENERGY.format(scalars=_indent(ee.scalar_lines(), 4), order0=_indent(ee.order0_lines(), 4),
                               out=ee.output(de.outputs[0], 0), n_work=len(ee.row))
-    has_energy = system.energy is not None
-    text += CROSSINGS.format(
-        has_energy=int(has_energy),
-        energy_start="    E0 = energy(y0, P)" if has_energy else "",
-        energy_column="            data[j, n, 1 + DIM] = energy(yc, P) - E0" if has_energy else "")
+    for template in TEMPLATES:
+        text += template.render(system)
     return text
 
 
@@ -749,10 +630,11 @@ def cache_directory() -> Path:
 @functools.lru_cache(maxsize=1)
 def _callee_digest() -> str:
     """SHA-256 of the sources the generated code calls (explorer.kernels, explorer.integrate.simd,
-    explorer._jit): numba's cache of a function does not follow a change of a callee in another
-    file, so such a change gives the generated module another key (a new file, compiled afresh)."""
+    explorer._jit) and of the templates (:data:`TEMPLATES`): numba's cache of a function does not
+    follow a change of a callee in another file, so such a change gives the generated module another key (a new file, compiled afresh)."""
     root = Path(__file__).resolve().parent.parent
-    files = sorted((root / "kernels").glob("*.py")) + [root / "integrate" / "simd.py", root / "_jit.py"]
+    files = (sorted((root / "kernels").glob("*.py")) + [root / "integrate" / "simd.py", root / "_jit.py"]
+             + [Path(t.__file__) for t in TEMPLATES])
     h = hashlib.sha256()
     for f in files:
         h.update(f.name.encode())
