@@ -631,7 +631,8 @@ def cache_directory() -> Path:
 def _callee_digest() -> str:
     """SHA-256 of the sources the generated code calls (explorer.kernels, explorer.integrate.simd,
     explorer._jit) and of the templates (:data:`TEMPLATES`): numba's cache of a function does not
-    follow a change of a callee in another file, so such a change gives the generated module another key (a new file, compiled afresh)."""
+    follow a change of a callee in another file, so such a change gives the generated module another
+    key (a new file, compiled afresh)."""
     root = Path(__file__).resolve().parent.parent
     files = (sorted((root / "kernels").glob("*.py")) + [root / "integrate" / "simd.py", root / "_jit.py"]
              + [Path(t.__file__) for t in TEMPLATES])
