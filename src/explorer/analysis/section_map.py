@@ -216,9 +216,12 @@ def is_params(system) -> bool:
 
 
 def as_system(name: str, system, args: tuple, kw: dict, settings: tuple = MAP_SETTINGS, defaults=None,
-              flow: bool = False):
+              flow: bool = False, systems: bool = False):
     """The one rule for the system argument of an analysis ``name``: ``(system, args, kw)`` with
-    the system a map object."""
+    the system a map object.  A System or a System's map is refused unless ``systems`` (the
+    analysis takes them: they pass unchanged)."""
+    if systems and (system_sections.is_system(system) or system_sections.is_system_map(system)):
+        return system, args, kw
     system_sections.refuse_a_system(name, system)
     if flow:
         states = kw.pop("states", None)
@@ -253,15 +256,16 @@ def as_system(name: str, system, args: tuple, kw: dict, settings: tuple = MAP_SE
     return system, args, kw
 
 
-def system_first(fn=None, *, settings: tuple = MAP_SETTINGS, defaults=None, flow: bool = False):
+def system_first(fn=None, *, settings: tuple = MAP_SETTINGS, defaults=None, flow: bool = False,
+                 systems: bool = False):
     """Let an analysis ``fn(system, ...)`` of a map also take ``params, h`` with the map's
     ``settings`` as keywords (``defaults`` where its purpose has its own; ``flow``: ``params,
-    states=``): :func:`as_system`."""
+    states=``; ``systems``: a System or its map passes unchanged): :func:`as_system`."""
 
     def wrap(fn):
         @functools.wraps(fn)
         def call(system, *args, **kw):
-            system, args, kw = as_system(fn.__name__, system, args, kw, settings, defaults, flow)
+            system, args, kw = as_system(fn.__name__, system, args, kw, settings, defaults, flow, systems)
             return fn(system, *args, **kw)
 
         sig = inspect.signature(fn)
