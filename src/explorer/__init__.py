@@ -36,6 +36,7 @@ _EXPORTS = {
     "section_state": "explorer.model",
     # a system from its equations (docs/systems.md)
     "System": "explorer.model.system",
+    "classic": "explorer.model",            # the module explorer.model.classic (docs/classic.md)
     # crossings of the section
     "METHODS": "explorer.analysis.sections",
     "Crossings": "explorer.analysis.sections",
@@ -94,7 +95,8 @@ def __getattr__(name: str):
     module = _EXPORTS.get(name)
     if module is None:
         raise AttributeError(f"module 'explorer' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
+    mod = importlib.import_module(module)
+    value = getattr(mod, name) if hasattr(mod, name) else importlib.import_module(f"{module}.{name}")
     globals()[name] = value  # later lookups skip this function
     return value
 

@@ -151,6 +151,9 @@ from explorer.model import (
     casimir as casimir,
 )
 from explorer.model import (
+    classic as classic,
+)
+from explorer.model import (
     energy as energy,
 )
 from explorer.model import (
