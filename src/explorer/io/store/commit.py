@@ -156,8 +156,8 @@ def _prepare_arrays(arrays: dict) -> dict:
     out = {}
     for name, (tail, dtype) in _PER_ORBIT.items():
         a = np.asarray(arrays[name])
-        if a.shape != (n,) + tail:
-            raise ValueError(f"{name} must have shape {(n,) + tail}, got {a.shape}")
+        if a.ndim != 1 + len(tail) or a.shape[0] != n or any(t >= 0 and s != t for s, t in zip(a.shape[1:], tail)):
+            raise ValueError(f"{name} must have shape {(n,) + tail} (-1: any width), got {a.shape}")
         if dtype is np.int8 and a.size and (a.min() < -128 or a.max() > 127):
             raise ValueError("status codes must fit in int8")
         out[name] = np.ascontiguousarray(a, dtype=dtype)

@@ -28,13 +28,14 @@ COLUMNS = ("t", "p1", "p2", "M", "dH")
 COMPRESS_ROWS = 10_000
 GZIP_LEVEL = 4
 
-#: dataset name -> (trailing shape, dtype); N = number of orbits
+#: dataset name -> (trailing shape, dtype); N = number of orbits; -1: the state's width (5 for
+#: Chaplygin's model, n for a System's panel, docs/store.md)
 _PER_ORBIT = {
     "seeds": ((2,), np.float64),
-    "y0": ((5,), np.float64),
+    "y0": ((-1,), np.float64),
     "count": ((), np.int64),
     "status": ((), np.int8),
-    "final": ((5,), np.float64),
+    "final": ((-1,), np.float64),
     "info": ((3,), np.float64),
 }
 DATASETS = tuple(_PER_ORBIT) + ("offsets", "crossings")
