@@ -1,0 +1,279 @@
+"""The SIMD crossings driver appended to every generated module (:data:`explorer.integrate.codegen.TEMPLATES`):
+``crossings_lanes``, the crossings of ``crossings_orbit`` (:mod:`explorer.integrate.codegen_crossings`) for
+LANES orbits at once with ``taylor_coefficients_lanes`` (docs/systems.md, "Crossings").
+
+Each lane is the scalar driver bit for bit: the recurrence, the step size's norms and power, the
+Horner evaluation, the section's value and coefficients and the no-root test of
+kernels.events.no_root_within are written with the vectors of :mod:`explorer.integrate.simd`, the
+same operations in the same order as the scalar kernels; the rest (step clipping, root isolation
+and refinement, rows, clock) calls the scalar kernels lane by lane.  A lane whose orbit stops takes
+the next one from a queue shared by the workers (``prange`` over groups of LANES lanes, as
+:mod:`explorer.integrate.lanes`); an orbit's rows do not depend on its lane, so neither on the
+thread count.
+"""
+from __future__ import annotations
+
+__all__ = ["render"]
+
+SOURCE = '''
+
+# ---- crossings on SIMD lanes (explorer.analysis.system_sections): each lane crossings_orbit bit for bit
+from explorer.integrate.simd import atomic_fetch_add, vbits, vmax_gt, vmin_lt, vradius_power_core  # noqa: E402
+from explorer.kernels.events import excluded_by_variation, tail_term  # noqa: E402
+from explorer.kernels.power import is_normal  # noqa: E402
+from explorer.kernels.taylor import radius_min  # noqa: E402
+
+#: all lanes' bits
+_ALL_LANES = (1 << LANES) - 1
+
+
+@njit(error_model="numpy")
+def _norms_lanes(X, order, e_p, e_q, NORM):
+    """kernels.taylor.step_size per lane: NORM = (a, bm, s/a, s/bm, min((s/a)^e_p, (s/bm)^e_q)), the
+    last valid where s/a and s/bm are positive normal.  Returns the bits of the lanes whose
+    coefficients of orders order - 1 and order are finite, and of those with s/a, s/bm normal."""
+    op = order * XS
+    oq = (order - 1) * XS
+    s = vsplat(1.0)
+    a = vzero()
+    bm = vzero()
+{norms}
+    u = s / a
+    v = s / bm
+    vstore(NORM, 0, a)
+    vstore(NORM, LANES, bm)
+    vstore(NORM, 2 * LANES, u)
+    vstore(NORM, 3 * LANES, v)
+    vstore(NORM, 4 * LANES, vmin_lt(vradius_power_core(v, e_q), vradius_power_core(u, e_p)))
+    return vbits(fin), vbits(is_normal(u) & is_normal(v))
+
+
+@njit(error_model="numpy")
+def _evaluate_lanes(X, order, hv, Y):
+    """Y[i, l] = sum_k X[k, i, l] hv[l]^k: kernels.taylor.evaluate (Horner) per lane."""
+    h = vload(hv, 0)
+    o = order * XS
+{eval_start}
+    for k in range(order - 1, -1, -1):
+        o = k * XS
+{eval_step}
+{eval_store}
+
+
+@njit(error_model="numpy")
+def _section_lanes(X, order, hv, Y, a, b, GC, G):
+    """Per lane, as crossings_orbit: G = _section_value(a, b, y) of the new state y = Y, GC[k] = a . X[k]
+    (+ b at k = 0).  Returns the bits of the lanes whose new state is finite (kernels.checks.all_finite)
+    and of those where kernels.events.no_root_within(GC, order, h) is false (a root is possible)."""
+    h = vload(hv, 0)
+    sy = vzero()
+    g = vsplat(b)
+{section_y}
+    vstore(G, 0, g)
+    tail = vzero()
+    rk = vsplat(1.0)
+    for k in range(order + 1):
+        o = k * XS
+        c = vzero()
+{section_c}
+        if k == 0:
+            c = c + b
+        else:
+            tail, rk = tail_term(tail, rk, h, 1.0, c)
+        vstore(GC, k * LANES, c)
+    excluded = excluded_by_variation(vload(GC, 0), tail)
+    return vbits(is_finite(sy)), _ALL_LANES & ~vbits(excluded)
+
+
+@njit(error_model="numpy")
+def _lane_status(n, limit, t, tmax, steps, max_steps):
+    """Why crossings_orbit stops after a step (its checks in its order), or -1 to go on."""
+    if n >= limit:
+        return STATUS_DONE
+    if not (t < tmax):
+        return STATUS_TMAX
+    if steps >= max_steps:
+        return STATUS_MAX_STEPS
+    return -1
+
+
+@njit(error_model="numpy")
+def _lane_start(l, next_orbit, Y0, P, a, b, tmax, max_steps, limit, X, orb, L_t, L_tc, L_g, L_E0, L_n, L_steps,
+                count, status, final, info):
+    """Lane l takes the next orbit of the queue ``next_orbit`` at its start, as crossings_orbit does (an
+    orbit stopped before its first step is written out and the next one taken).  Returns 1, or 0 when the
+    queue is empty: the lane then idles on the zero state (its coefficients all 0)."""
+    while True:
+        j = atomic_fetch_add(next_orbit, 0, 1)
+        if j >= Y0.shape[0]:
+            orb[l] = -1
+            for i in range(DIM):
+                X[0, i, l] = 0.0
+            return 0
+        y0 = Y0[j]
+        for i in range(DIM):
+            X[0, i, l] = y0[i]
+        orb[l] = j
+        L_t[l] = 0.0
+        L_tc[l] = 0.0
+        L_n[l] = 0
+        L_steps[l] = 0
+{energy_start}
+        L_g[l] = _section_value(a, b, y0)
+        st = _lane_status(0, limit, 0.0, tmax, 0, max_steps)
+        if st < 0:
+            return 1
+        _lane_finish(l, st, X, orb, L_t, L_tc, L_n, L_steps, count, status, final, info)
+
+
+@njit(error_model="numpy")
+def _lane_finish(l, st, X, orb, L_t, L_tc, L_n, L_steps, count, status, final, info):
+    """Write out lane l's orbit, stopped with status ``st`` (crossings_orbit's final, info, count)."""
+    j = orb[l]
+    for i in range(DIM):
+        final[j, i] = X[0, i, l]
+    info[j, 0] = L_t[l] - L_tc[l]
+    info[j, 1] = L_steps[l]
+    info[j, 2] = np.nan
+    count[j] = L_n[l]
+    status[j] = st
+
+
+@njit(error_model="numpy")
+def _crossings_lanes_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_steps, limit, data, count, status,
+                            final, info):
+    """One group of LANES lanes: orbits from the queue ``next_orbit`` until it is empty, each lane
+    crossings_orbit's loop (its arguments and outputs)."""
+    X = np.zeros((order + 1, DIM, LANES))
+    W = np.zeros((order + 1, max(N_WORK, 1), LANES))
+    Y = np.zeros((DIM, LANES))
+    GC = np.zeros((order + 1, LANES))
+    NORM = np.zeros((5, LANES))
+    hv = np.zeros(LANES)
+    G = np.zeros(LANES)
+    L_t = np.zeros(LANES)
+    L_tc = np.zeros(LANES)
+    L_g = np.zeros(LANES)
+    L_E0 = np.zeros(LANES)
+    orb = np.full(LANES, -1, np.int64)
+    L_n = np.zeros(LANES, np.int64)
+    L_steps = np.zeros(LANES, np.int64)
+    L_last = np.zeros(LANES, np.bool_)
+    L_go = np.zeros(LANES, np.bool_)
+    yc = np.empty(DIM)
+    gc, work, roots, brackets, stack = root_workspace(order)
+    factor = safety_factor(order)
+    e_p = 1.0 / order
+    e_q = 1.0 / (order - 1)
+    active = 0
+    for l in range(LANES):
+        active += _lane_start(l, next_orbit, Y0, P, a, b, tmax, max_steps, limit, X, orb, L_t, L_tc, L_g, L_E0,
+                              L_n, L_steps, count, status, final, info)
+    while active > 0:
+        taylor_coefficients_lanes(P, X, order, W)
+        fin, normal = _norms_lanes(X, order, e_p, e_q, NORM)
+        for l in range(LANES):
+            hv[l] = 0.0
+            L_go[l] = False
+            if orb[l] < 0:
+                continue
+            st = -1
+            if not (fin >> l) & 1:
+                st = STATUS_NONFINITE
+            else:
+                if (normal >> l) & 1:
+                    h = NORM[4, l] * factor
+                else:
+                    h = radius_min(NORM[0, l], NORM[1, l], NORM[2, l], NORM[3, l], e_p, e_q) * factor
+                h, last = clip_step(L_t[l], h, tmax)
+                if not resolves(L_t[l], h):
+                    st = STATUS_STEP_UNDERFLOW
+                else:
+                    hv[l] = h
+                    L_last[l] = last
+                    L_go[l] = True
+            if st >= 0:
+                _lane_finish(l, st, X, orb, L_t, L_tc, L_n, L_steps, count, status, final, info)
+                active += _lane_start(l, next_orbit, Y0, P, a, b, tmax, max_steps, limit, X, orb, L_t, L_tc, L_g,
+                                      L_E0, L_n, L_steps, count, status, final, info) - 1
+        _evaluate_lanes(X, order, hv, Y)
+        finite, maybe = _section_lanes(X, order, hv, Y, a, b, GC, G)
+        for l in range(LANES):
+            if not L_go[l]:
+                continue
+            L_steps[l] += 1
+            st = STATUS_NONFINITE
+            if (finite >> l) & 1:
+                j = orb[l]
+                t = L_t[l]
+                tc = L_tc[l]
+                h = hv[l]
+                n = L_n[l]
+                nroots = 0
+                if (maybe >> l) & 1:
+                    for k in range(order + 1):
+                        gc[k] = GC[k, l]
+                    nroots = poly_step_roots(gc, order, h, L_g[l], G[l], direction, roots, brackets, work, stack)
+                Xl = X[:, :, l].T
+                for r in range(nroots):
+                    if n >= limit:
+                        break
+                    tau = roots[r]
+                    evaluate(Xl, order, tau, yc)
+                    data[j, n, 0] = (t - tc) + tau
+                    for i in range(DIM):
+                        data[j, n, 1 + i] = yc[i]
+{energy_column}
+                    n += 1
+                L_n[l] = n
+                t, tc = advance_time(t, tc, h, L_last[l], tmax)
+                L_t[l] = t
+                L_tc[l] = tc
+                for i in range(DIM):
+                    X[0, i, l] = Y[i, l]
+                L_g[l] = G[l]
+                st = _lane_status(n, limit, t, tmax, L_steps[l], max_steps)
+            if st >= 0:
+                _lane_finish(l, st, X, orb, L_t, L_tc, L_n, L_steps, count, status, final, info)
+                active += _lane_start(l, next_orbit, Y0, P, a, b, tmax, max_steps, limit, X, orb, L_t, L_tc, L_g,
+                                      L_E0, L_n, L_steps, count, status, final, info) - 1
+
+
+@njit(parallel=True, error_model="numpy")
+def crossings_lanes(Y0, P, a, b, direction, tmax, order, max_steps, limit, data, count, status, final, info,
+                    workers):
+    """crossings_taylor's arguments and outputs, on ``workers`` groups of LANES lanes (prange) fed from
+    one queue of orbits; each orbit's results are crossings_orbit's bit for bit."""
+    next_orbit = np.zeros(1, np.int64)
+    for w in prange(workers):
+        _crossings_lanes_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_steps, limit, data, count,
+                                status, final, info)
+'''
+
+
+def _lines(template, dim, indent):
+    return "\n".join(" " * indent + template.format(i=i) for i in range(dim))
+
+
+def render(system) -> str:
+    """The driver's source for ``system``: the loops over the state written out, one vector each."""
+    n = system.dimension
+    has_energy = system.energy is not None
+    norms = "\n".join([
+        _lines("x{i} = vload(X, {i} * LANES)", n, 4), _lines("p{i} = vload(X, op + {i} * LANES)", n, 4),
+        _lines("q{i} = vload(X, oq + {i} * LANES)", n, 4),
+        # step_size's order: per row, s, then a, then bm (each a running maximum)
+        "\n".join(f"    s = vmax_gt(abs(x{i}), s)\n    a = vmax_gt(abs(p{i}), a)\n    bm = vmax_gt(abs(q{i}), bm)"
+                  for i in range(n)),
+        "    fin = " + " & ".join(f"is_finite(p{i}) & is_finite(q{i})" for i in range(n))])
+    section_y = "\n".join(f"    y{i} = vload(Y, {i} * LANES)\n    sy = sy + y{i}\n    g = g + a[{i}] * y{i}"
+                          for i in range(n))
+    return SOURCE.format(
+        norms=norms,
+        eval_start=_lines("y{i} = vload(X, o + {i} * LANES)", n, 4),
+        eval_step=_lines("y{i} = y{i} * h + vload(X, o + {i} * LANES)", n, 8),
+        eval_store=_lines("vstore(Y, {i} * LANES, y{i})", n, 4),
+        section_y=section_y,
+        section_c=_lines("c = c + a[{i}] * vload(X, o + {i} * LANES)", n, 8),
+        energy_start="        L_E0[l] = energy(y0, P)" if has_energy else "",
+        energy_column="                    data[j, n, 1 + DIM] = energy(yc, P) - L_E0[l]" if has_energy else "")
