@@ -53,7 +53,7 @@ from explorer.model.validation import ParameterError
 __all__ = ["GENERATOR_VERSION", "Decomposition", "cache_directory", "decompose", "load", "module_key", "source"]
 
 #: changes whenever the emitted code changes, so that a cached module of an older generator is not used
-GENERATOR_VERSION = 6
+GENERATOR_VERSION = 7
 
 #: the modules that append drivers to the generated source: each has ``render(system) -> str``, code
 #: that calls the recurrence (``taylor_coefficients_into``, ``taylor_coefficients_lanes``, ``energy``)
@@ -201,13 +201,27 @@ class _Builder:
         return acc
 
     def _product(self, factors):
-        # scalars first: c (u v) is one scaling of a Cauchy product
-        ids = [self.visit(f) for f in factors]
-        ids.sort(key=lambda i: not self.d.nodes[i].scalar)
-        acc = ids[0]
-        for i in ids[1:]:
-            acc = self.node("mul", acc, i)
-        return acc
+        # c (u v) / d: the series' Cauchy product, then one scaling by the scalars, a factor c u or
+        # u / d giving its scalar to the scaling (not a scaled operand in every term of the sum)
+        acc = c = d = None
+        for f in factors:
+            i = self.visit(f)
+            n = self.d.nodes[i]
+            parts = [(i, False)]
+            if n.kind in ("mul", "div") and not n.scalar and self.d.nodes[n.args[-1]].scalar:
+                parts = [(n.args[0], False), (n.args[1], n.kind == "div")]
+            elif n.kind == "mul" and not n.scalar and self.d.nodes[n.args[0]].scalar:
+                parts = [(n.args[0], False), (n.args[1], False)]
+            for j, den in parts:
+                if den:
+                    d = j if d is None else self.node("mul", d, j)
+                elif self.d.nodes[j].scalar:
+                    c = j if c is None else self.node("mul", c, j)
+                else:
+                    acc = j if acc is None else self.node("mul", acc, j)
+        if d is not None:
+            c = self.node("div", self.const(1) if c is None else c, d)
+        return c if acc is None else acc if c is None else self.node("mul", c, acc)
 
     def _pow(self, base, ex):
         if ex.is_Integer:
@@ -485,9 +499,11 @@ class _Emitter:
         return self.coef(i, k)
 
     def next_lines(self):
-        """x_1 = f_0 and x_{k+1} = f_k / (k + 1)."""
+        """x_1 = f_0 and x_{k+1} = f_k (1 / (k + 1))."""
         first = [self.store("X", i, 1, self.output(o, 0)) for i, o in enumerate(self.d.outputs)]
-        nxt = [self.store("X", i, "k + 1", f"{self.output(o, 'k')} / (k + 1)") for i, o in enumerate(self.d.outputs)]
+        # one reciprocal per order: a product per row, not a division
+        nxt = ["r = 1.0 / (k + 1)"] + [self.store("X", i, "k + 1", f"{self.output(o, 'k')} * r")
+                                       for i, o in enumerate(self.d.outputs)]
         return first, nxt
 
 
