@@ -10,6 +10,7 @@ import numpy as np
 
 from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
+from explorer.analysis import system_sections
 from explorer.analysis.section_map import is_params, system_first
 from explorer.integrate import methods
 from explorer.integrate.methods import DEFAULT_DT, DEFAULT_TOL
@@ -102,6 +103,7 @@ class Indicators:
     early: np.ndarray | None = None      # index of EARLY_NAMES
     deviation: np.ndarray | None = None  # (N, 2, 5) final unit deviation vectors
     which: tuple = field(default=DEFAULT_INDICATORS)
+    energy_error: np.ndarray | None = None   # (N,) |H(final) - H(start)|, NaN for a System without an energy
 
     mlce = _Column("mlce")
     megno = _Column("megno")
@@ -122,16 +124,26 @@ class Indicators:
         return Status(int(self.status[i]))
 
 
-@system_first(settings=("phi0", "tol"), defaults={"tol": DEFAULT_TOL}, flow=True)
-def indicators(system, y0, *, tmax: float = DEFAULT_TIME, method: str | None = None, tol: float | None = None,
-               dt: float = DEFAULT_DT, history: int = 0, v0=None, max_steps: int = 10**9,
+@system_first(settings=("phi0", "tol"), defaults={"tol": DEFAULT_TOL}, flow=True, systems=True)
+def indicators(system, y0=None, *, tmax: float = DEFAULT_TIME, method: str | None = None, tol: float | None = None,
+               dt: float | None = None, history: int = 0, v0=None, max_steps: int = 10**9,
                threads: int | None = None, which=None, early_stop: bool = False,
                early_sali: float = EARLY_SALI, early_megno: float = EARLY_MEGNO,
-               early_time: float = EARLY_TIME, w0=None) -> Indicators:
+               early_time: float = EARLY_TIME, w0=None, **system_settings) -> Indicators:
     """Chaos indicators (``which`` of :data:`INDICATOR_NAMES`) of the orbits from ``y0`` over the
     time ``tmax``, each with one deviation vector (two for SALI, GALI_2) renormalised at every step,
     with ``method``'s tangent dynamics; ``early_stop`` ends an orbit classified chaotic by SALI or
-    <Y>; ``history`` log-spaced records (docs/commands/lyapunov.md)."""
+    <Y>; ``history`` log-spaced records (docs/commands/lyapunov.md).  A System or its section map:
+    :func:`explorer.analysis.system_indicators.system_indicators` (``states=`` the flow's start)."""
+    if system_sections.is_system(system) or system_sections.is_system_map(system):
+        from explorer.analysis.system_indicators import system_indicators
+        return system_indicators(system, y0, tmax=tmax, method=method, tol=tol, dt=dt, history=history, v0=v0,
+                                 w0=w0, max_steps=max_steps, threads=threads, which=which, early_stop=early_stop,
+                                 early_sali=early_sali, early_megno=early_megno, early_time=early_time,
+                                 **system_settings)
+    if system_settings:
+        raise ParameterError(f"indicators has no setting {', '.join(sorted(system_settings))}")
+    dt = DEFAULT_DT if dt is None else dt
     params = system
     if not is_params(system):   # a map: its section points, its tolerance
         method = system.method if method is None else method
@@ -212,8 +224,11 @@ def indicators(system, y0, *, tmax: float = DEFAULT_TIME, method: str | None = N
             set_num_threads(old)
     rows = {table.RESULT: res, table.EXTRA: ext}
     values = {i.name: rows[i.row][:, i.column] for i in table.TANGENT}
+    with np.errstate(invalid="ignore", over="ignore"):
+        dh = np.abs(model.energy(P, final) - model.energy(P, Y0))
     return Indicators(res[:, table.RES_T], values, res[:, table.RES_Y], status, steps, final, hist_t, hist, method,
-                      settings, early=ext[:, table.EXT_EARLY].astype(np.int64), deviation=dev, which=which)
+                      settings, early=ext[:, table.EXT_EARLY].astype(np.int64), deviation=dev, which=which,
+                      energy_error=dh)
 
 
 def methods_for(name: str) -> tuple:

@@ -1,0 +1,174 @@
+"""Chaos indicators (mLCE, MEGNO, FLI, SALI, GALI_2) of the orbits of a
+:class:`explorer.model.system.System` or of its section map (docs/systems.md, "Chaos indicators").
+
+:func:`explorer.analysis.lyapunov.indicators` hands a System or a System's map here; the result is
+the engine's :class:`~explorer.analysis.lyapunov.Indicators` (the same attributes, columns and
+statuses), ``final`` and ``deviation`` in the system's dimension n, ``energy_error`` = |H(final) - H(start)|
+(NaN without an energy).
+
+The tangent dynamics are the variational equations of :meth:`System.variational` (the symbolic
+Jacobian times the deviation vectors), whose Taylor recurrence is generated with the state's
+(:mod:`explorer.integrate.codegen`); the driver ``indicators_taylor`` (integrate/codegen_indicators.py)
+renormalises the vectors after every step and accumulates the indicators by
+:mod:`explorer.kernels.tangent`, the engine's formulas.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from explorer._jit import get_num_threads, max_threads, set_num_threads
+from explorer.analysis import lyapunov
+from explorer.analysis.system_sections import _states, is_system
+from explorer.integrate.methods import DEFAULT_TOL, check_setting
+from explorer.kernels import indicator_table as table
+from explorer.kernels.taylor_order import order_for_tolerance
+from explorer.model import ParameterError, validation
+
+__all__ = ["GENERIC_SEEDS", "default_vectors", "system_indicators"]
+
+DEFAULT_MAX_STEPS = 10**9
+#: the engine's settings that have no meaning for a System (Chaplygin's section, energy and fixed step)
+_NOT_FOR_A_SYSTEM = ("phi0", "h", "dt")
+#: the irrationals whose multiples make the default deviation vectors (:func:`default_vectors`)
+GENERIC_SEEDS = (0.6180339887498949, 0.4142135623730951)
+
+
+def default_vectors(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The default start of the two deviation vectors in dimension n: v_i = frac((i + 1) a) - 1/2 with
+    a of :data:`GENERIC_SEEDS` (a fixed direction with no symmetry of a model: no zero or equal
+    entries), w the same with the second seed, made orthogonal to v; both unit.  Two generic
+    vectors, not both on the energy shell: on a torus their shears differ, so SALI stays away
+    from 0 (two on-shell vectors of a 2-degree-of-freedom torus would align, as the engine's note
+    says, docs/commands/lyapunov.md)."""
+    i = np.arange(1, n + 1)
+    v, w = ((i * a) % 1.0 - 0.5 for a in GENERIC_SEEDS)
+    v = v / np.linalg.norm(v)
+    w = w - (w @ v) * v
+    return v, w / np.linalg.norm(w)
+
+
+def _vectors(label: str, given, default: np.ndarray, N: int) -> np.ndarray:
+    n = default.shape[0]
+    if given is None:
+        return np.array(np.broadcast_to(default, (N, n)), dtype=np.float64, order="C")
+    try:
+        V = np.atleast_2d(np.asarray(given, dtype=np.float64))
+        V = np.array(np.broadcast_to(V, (N, n)), dtype=np.float64, order="C")
+    except (TypeError, ValueError):
+        raise ParameterError(f"{label} must be a deviation vector of shape ({n},) or ({N}, {n}), got "
+                             f"shape {np.shape(given)}") from None
+    norms = np.linalg.norm(V, axis=1)
+    if not np.all(np.isfinite(V)) or not np.all(norms > 0):
+        raise ParameterError(f"{label} must be finite and non-zero (it is made unit)")
+    return V
+
+
+def _energy_error(system, Y0, final) -> np.ndarray:
+    """|H(final) - H(Y0)| per orbit with the generated energy, NaN without one."""
+    if system.energy is None:
+        return np.full(Y0.shape[0], np.nan)
+    from explorer.integrate import codegen
+
+    mod = codegen.load(system)
+    P = system.parameter_array()
+    with np.errstate(invalid="ignore", over="ignore"):
+        return np.array([abs(mod.energy(f, P) - mod.energy(y, P)) for f, y in zip(final, Y0)])
+
+
+def system_indicators(system, y0=None, *, states=None, tmax: float = lyapunov.DEFAULT_TIME, method=None,
+                      tol: float | None = None, history: int = 0, v0=None, w0=None,
+                      max_steps: int = DEFAULT_MAX_STEPS, threads: int | None = None, which=None,
+                      early_stop: bool = False, early_sali: float = lyapunov.EARLY_SALI,
+                      early_megno: float = lyapunov.EARLY_MEGNO, early_time: float = lyapunov.EARLY_TIME,
+                      **other) -> lyapunov.Indicators:
+    """The indicators ``which`` of the orbits of ``system`` (a System: full states ``states=``, shape
+    (N, n) in its state order; a System's section map: section points, lifted by its ``states``)
+    over the time ``tmax``, by the adaptive Taylor method of ``tol`` (the only method for a System)
+    on the variational equations, with the engine's meaning of ``history``, ``v0``, ``w0``
+    (default :func:`default_vectors`), ``early_stop`` and its levels, ``max_steps`` and ``threads``
+    (docs/commands/lyapunov.md).  ParameterError for the engine's settings of Chaplygin's model
+    (phi0, h, dt), a method other than "taylor" and frequency_diffusion (not a tangent indicator)."""
+    from explorer.analysis import budget
+    from explorer.integrate import codegen
+
+    given = [k for k in _NOT_FOR_A_SYSTEM if other.get(k) is not None]
+    if given:
+        raise ParameterError(f"indicators of a System: {', '.join(given)} belong(s) to Chaplygin's model and "
+                             "do(es) not apply (a System's start is states=, its method the Taylor method of tol=)")
+    other = {k: v for k, v in other.items() if k not in _NOT_FOR_A_SYSTEM}
+    if other:
+        raise ParameterError(f"indicators of a System has no setting {', '.join(sorted(other))}")
+    if method not in (None, "taylor"):
+        raise ParameterError(f"method must be 'taylor' for a System (the generated Taylor integrator of the "
+                             f"variational equations), got {method!r}")
+    names = (which,) if isinstance(which, str) else which
+    if names is not None and "frequency_diffusion" in tuple(names):
+        raise ParameterError("indicator frequency_diffusion is not computed along deviation vectors: it needs the "
+                             "rotation numbers of a section map around a centre (explorer.frequency_diffusion), "
+                             "which does not take a System; ask for mlce, megno, fli, sali or gali2")
+    which = lyapunov.check_which(which)
+    nvec = max(table.BY_NAME[w].vectors for w in which)
+    if is_system(system):
+        if y0 is not None and states is not None:
+            raise ParameterError("indicators of a System: give the start states once (states=)")
+        Y0 = _states(system, states if states is not None else y0)
+        smap, system = None, system
+    else:
+        if states is not None:
+            raise ParameterError("indicators of a System's SectionMap takes section points, not states=; "
+                                 "the flow takes indicators(system, states=...)")
+        if y0 is None:
+            raise ParameterError("indicators of a System's SectionMap: the section points are missing")
+        smap, system = system, system.system
+        Y0 = np.ascontiguousarray(smap.states(y0), dtype=np.float64)
+    budget.checkpoint()
+    max_steps = validation.integer("max_steps", budget.step_cap(max_steps), 1)
+    T = validation.real("tmax", tmax, 0.0, lo_open=True)
+    tol = check_setting("tol", DEFAULT_TOL if tol is None else tol)
+    order = order_for_tolerance(tol)
+    N, n = Y0.shape
+    dv, dw = default_vectors(n)
+    V0 = _vectors("v0", v0, dv, N)
+    W0 = _vectors("w0", w0, dw, N)
+    history = validation.fits_in_memory("history", history, N * table.N_RES * 8 + 8,
+                                        f"a row of {table.N_RES} float64 per orbit and history point")
+    early_stop = bool(early_stop)
+    if early_stop:
+        early_sali = validation.real("early_sali", early_sali, 0.0, 1.0)
+        early_megno = validation.real("early_megno", early_megno, 2.0, lo_open=True)
+        early_time = validation.real("early_time", early_time, 0.0)
+    if threads is not None:
+        threads = validation.threads(threads, max_threads())
+    # the variational system of nvec vectors: one recurrence, the Jacobian's subexpressions shared with f
+    mod = codegen.load(system.variational(nvec))
+    hist_t = np.geomspace(min(1.0, T), T, history) if history else np.zeros(0)
+    hist = np.full((N, len(hist_t), table.N_RES), np.nan)
+    res = np.zeros((N, table.N_RES))
+    ext = np.full((N, table.N_EXT), np.nan)
+    status = np.zeros(N, np.int64)
+    final = np.zeros((N, n))
+    steps = np.zeros(N, np.int64)
+    dev = np.full((N, 2, n), np.nan)
+    old = get_num_threads()
+    if threads is not None:
+        set_num_threads(threads)
+    try:
+        mod.indicators_taylor(Y0, V0, W0, n, nvec, system.parameter_array(), T, order, max_steps, early_stop,
+                              float(early_sali) if nvec == 2 else 0.0, float(early_megno), float(early_time), hist_t,
+                              hist, res, ext, status, final, steps, dev)
+    finally:
+        if threads is not None:
+            set_num_threads(old)
+    settings = {"method": "taylor", "time": T, "tol": tol, "order": order, "system": system.name,
+                "states": [s.name for s in system.states], "vectors": nvec}
+    if smap is not None:
+        settings.update(energy=smap.energy_value, section=str(smap.section.expr), direction=smap.direction,
+                        coords=[s.name for s in smap.coords], solve=smap.solve.name)
+    if early_stop:
+        settings.update(early_stop=True, early_sali=early_sali if nvec == 2 else 0.0, early_megno=early_megno,
+                        early_time=early_time)
+    rows = {table.RESULT: res, table.EXTRA: ext}
+    values = {i.name: rows[i.row][:, i.column] for i in table.TANGENT}
+    return lyapunov.Indicators(res[:, table.RES_T], values, res[:, table.RES_Y], status, steps, final, hist_t, hist,
+                               "taylor", settings, early=ext[:, table.EXT_EARLY].astype(np.int64), deviation=dev,
+                               which=which, energy_error=_energy_error(system, Y0, final))
