@@ -13,25 +13,46 @@ section point ``(a, b)`` becomes a full state on ``EXPR = 0`` with energy ``E``:
   energy where that lowers ``|H - E|``;
 - of the real roots, the one where ``d(EXPR)/dt`` has the sign of ``direction``.
 
-A point where no real root has that sign is refused (ParameterError naming the point and E). A
-System's map has 4 state variables (2 degrees of freedom): coords, solve and fixed.
+A point where no real root has that sign is refused (ParameterError naming the point and E): the
+map's domain is where one has.  A System's map has 4 state variables (2 degrees of freedom):
+coords, solve and fixed.
+
+The map is an :class:`explorer.analysis.maps.AreaPreservingMap`: ``smap(x)`` is a
+:class:`~explorer.analysis.section_map.MapResult` with the Jacobian of the 2-D map, from the
+variational equations (``System.variational(2)``) integrated to the next crossing: the monodromy
+Phi applied to the lift of the unit vectors of coords (tangent to the section and the energy level,
+by the implicit function theorem), corrected for the crossing time, ``(I - f a^T/(a . f)) Phi``
+(``a`` the section's normal, ``f`` the vector field at the crossing), read in coords.  Backward is
+the flow of ``-f``, crossing the section in the opposite direction.  A reversor of the System
+(``System(..., reversor=...)``) that maps the section and its direction to themselves induces an
+involution of the map (:attr:`SystemSectionMap.reversors`).
 
 :meth:`SystemSectionMap.crossings` is what ``explorer.crossings(smap, points, n_crossings=K)``
 runs: the points lifted to states, then the System's crossings of the map's section and direction.
 """
 from __future__ import annotations
 
+import functools
 import numbers
 
 import numpy as np
 
+from explorer.analysis.section_map import RETURN_TMAX, MapResult
 from explorer.analysis.system_sections import is_system, linear_section, system_crossings
+from explorer.integrate.methods import MAP_TOL, MAX_TOL, MIN_TOL
+from explorer.kernels import STATUS_NAMES
 from explorer.model import ParameterError, validation
 
-__all__ = ["SystemSectionMap"]
+__all__ = ["ENERGY", "SystemSectionMap"]
 
-#: (content hash, section, coords, solve, fixed) -> the lambdified roots, fixed, energy, dH/dsolve, ds/dt
+#: the name of the energy level among a System map's parameters (``with_value("energy", E)``)
+ENERGY = "energy"
+
+#: (content hash, section, coords, solve, fixed) -> the lambdified roots, fixed, energy, dH/dsolve, ds/dt,
+#: grad H, f, and per reversor (images, ds/dt at the image over ds/dt, on the section)
 _SOLUTIONS: dict = {}
+#: (content hash, backward, jacobian) -> the System integrated by the map (values of the first map)
+_FLOWS: dict = {}
 #: a root is real where its imaginary part is at most this times max(1, |root|)
 REAL_TOL = 1e-12
 
@@ -48,7 +69,9 @@ def _symbol_of(system, label, s):
 
 def _solutions(system, section, coords, solve, fixed):
     """The lambdified pieces of the lift (cached): roots(a, b, E, *P) -> list of complex values of
-    ``solve``; fixed(a, b, c, *P); energy(*state, *P); dH/dsolve(*state, *P); ds/dt(*state, *P)."""
+    ``solve``; fixed(a, b, c, *P); energy, dH/dsolve, ds/dt, grad H and f of (*state, *P); per
+    reversor R its images and the ratio of ds/dt at R x to ds/dt at x on the section, of (*state, *P)
+    (None where the section is not mapped to itself)."""
     import sympy as sp
 
     key = (system.content_hash, sp.srepr(section), coords, solve, fixed)
@@ -69,22 +92,78 @@ def _solutions(system, section, coords, solve, fixed):
     sdot = sum(sp.diff(section, s) * f for s, f in zip(system.states, system.rhs))
     args_point = [a, b, E, *pars]
     args_state = [*system.states, *pars]
+    reversors = []
+    for images in system.reversors:
+        R = dict(zip(system.states, images))
+        on = {fixed: fixed_expr}
+        # R maps the section to itself; the orbit R x(-t) crosses it at R x with rate -d(s o R)/dt
+        if sp.simplify(section.subs(R, simultaneous=True).subs(on)) != 0:
+            reversors.append((sp.lambdify(args_state, list(images), modules="numpy"), None, None))
+            continue
+        rate = -sum(sp.diff(section.subs(R, simultaneous=True), s) * f for s, f in zip(system.states, system.rhs))
+        ratio = sp.simplify((rate / sdot).subs(on))
+        ratio = ratio if not (ratio.free_symbols & set(system.states)) else None
+        # linear in coords: the images of a and b are c_a a + c_b b, with no other state
+        ia, ib = system.states.index(a), system.states.index(b)
+        M = [[sp.diff(images[i], v) for v in (a, b)] for i in (ia, ib)]
+        linear = all(not (c.free_symbols & set(system.states)) for row in M for c in row) and all(
+            sp.expand(images[i] - row[0] * a - row[1] * b) == 0 for i, row in zip((ia, ib), M))
+        reversors.append((sp.lambdify(args_state, list(images), modules="numpy"),
+                          None if ratio is None else sp.lambdify(pars, ratio, modules="numpy"),
+                          sp.lambdify(pars, M, modules="numpy") if linear else None))
     out = (sp.lambdify(args_point, roots, modules="numpy"),
            sp.lambdify([a, b, solve, *pars], fixed_expr, modules="numpy"),
            sp.lambdify(args_state, system.energy, modules="numpy"),
            sp.lambdify(args_state, sp.diff(system.energy, solve), modules="numpy"),
-           sp.lambdify(args_state, sdot, modules="numpy"))
+           sp.lambdify(args_state, sdot, modules="numpy"),
+           sp.lambdify(args_state, [sp.diff(system.energy, s) for s in system.states], modules="numpy"),
+           sp.lambdify(args_state, list(system.rhs), modules="numpy"),
+           tuple(reversors))
     _SOLUTIONS[key] = out
     return out
+
+
+def _flow(system, backward: bool, jacobian: bool):
+    """The System the map integrates: ``system`` or its time reversal (``-f``, the same energy),
+    with two deviation vectors for the Jacobian; at ``system``'s parameter values."""
+    from explorer.model.system import System
+
+    key = (system.content_hash, backward, jacobian)
+    if key not in _FLOWS:
+        base = system
+        if backward:
+            base = System({s: -f for s, f in zip(system.states, system.rhs)}, parameters=dict(system.parameters),
+                          energy=system.energy, name=f"{system.name}_reversed")
+        _FLOWS[key] = base.variational(2) if jacobian else base
+    flow = _FLOWS[key]
+    return flow if flow is system else flow.with_(**{p.name: v for p, v in system.parameters.items()})
+
+
+class _Linear:
+    """x -> M x on points (..., 2): a reversor of the map that is linear in coords."""
+
+    def __init__(self, M):
+        self.M = np.asarray(M, dtype=np.float64)
+
+    def __call__(self, x):
+        return np.asarray(x, dtype=np.float64) @ self.M.T
+
+    def __repr__(self):
+        return f"_Linear({self.M.tolist()})"
 
 
 class SystemSectionMap:
     """The section map of ``system`` on its energy level ``energy_value``: points ``(a, b)`` of
     ``coords`` on ``section = 0``, crossed in ``direction``; ``solve`` from the energy (module
     docstring).  ``states(points)`` lifts points; ``explorer.crossings(smap, points,
-    n_crossings=K)`` iterates the map."""
+    n_crossings=K)`` iterates the map; ``smap(x)`` is one application with its Jacobian.  ``tol``:
+    the Taylor tolerance of the map's returns; ``tmax``: the time budget of one return."""
 
-    def __init__(self, system, energy_value, *, section=None, direction=1, coords=None, solve=None):
+    method = "taylor"
+    periods = (0.0, 0.0)
+
+    def __init__(self, system, energy_value, *, section=None, direction=1, coords=None, solve=None, tol=MAP_TOL,
+                 tmax=RETURN_TMAX):
         if not is_system(system):
             raise ParameterError(f"SystemSectionMap takes a System, got {type(system).__name__}")
         if system.energy is None:
@@ -98,6 +177,8 @@ class SystemSectionMap:
         if isinstance(direction, bool) or not isinstance(direction, numbers.Integral) or direction not in (-1, 1):
             raise ParameterError(f"direction must be +1 (ds/dt > 0) or -1 (ds/dt < 0), got {direction!r}")
         self.direction = int(direction)
+        self.tol = validation.real("tol", tol, MIN_TOL, MAX_TOL)
+        self.tmax = validation.real("tmax", tmax, 0.0, lo_open=True)
         self.section = linear_section(system, section)
         if not isinstance(coords, (tuple, list)) or len(coords) != 2:
             raise ParameterError(f"coords must be two state variables (a, b) of {system.name}, got {coords!r}")
@@ -119,14 +200,49 @@ class SystemSectionMap:
         self._index = [system.states.index(s) for s in (a, b, c, self.fixed)]
         self._lift = _solutions(system, self.section.expr, self.coords, c, self.fixed)
 
+    def _settings(self) -> dict:
+        return dict(section=self.section.expr, direction=self.direction, coords=self.coords, solve=self.solve,
+                    tol=self.tol, tmax=self.tmax)
+
+    def __getstate__(self):
+        """Pickled without the lambdified functions (rebuilt from the cache on unpickling)."""
+        state = dict(self.__dict__)
+        del state["_lift"]
+        return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._lift = _solutions(self.system, self.section.expr, self.coords, self.solve, self.fixed)
+
     def __repr__(self):
         a, b = self.coords
         return (f"SectionMap({self.system.name}, {self.energy_value!r}, section={self.section.expr}, "
                 f"direction={self.direction:+d}, coords=({a.name}, {b.name}), solve={self.solve.name})")
 
-    def states(self, points) -> np.ndarray:
-        """The states (N, 4) of the section points (N, 2), in the system's state order; ParameterError
-        for a point where the energy level has no solution on the direction's branch."""
+    # ------------------------------------------------------------------ points and states
+    def _lifted(self, pts) -> np.ndarray:
+        """The states (N, 4) of the points (N, 2); NaN rows where the energy level has no solution
+        on the direction's branch."""
+        roots_of, fixed_of, energy, dH, sdot = self._lift[:5]
+        P = list(self.system.parameter_array())
+        A, B = pts[:, 0], pts[:, 1]
+        with np.errstate(all="ignore"):
+            roots = [np.broadcast_to(np.asarray(r, dtype=np.complex128), A.shape)
+                     for r in roots_of(A.astype(np.complex128), B.astype(np.complex128), self.energy_value, *P)]
+        Y = np.full((pts.shape[0], self.system.dimension), np.nan)
+        done = np.zeros(pts.shape[0], bool)
+        for r in roots:
+            real = np.isfinite(r) & (np.abs(r.imag) <= REAL_TOL * np.maximum(1.0, np.abs(r.real)))
+            C = self._polish(A, B, np.where(real, r.real, 0.0), P)
+            state = self._assemble(A, B, C, P)
+            with np.errstate(all="ignore"):
+                s = np.broadcast_to(np.asarray(sdot(*state.T, *P), dtype=np.float64), A.shape)
+            take = real & (np.sign(s) == self.direction) & ~done & np.all(np.isfinite(state), axis=1)
+            Y[take] = state[take]
+            done |= take
+        return Y
+
+    def _points(self, points) -> np.ndarray:
         try:
             pts = np.atleast_2d(np.asarray(points, dtype=np.float64))
         except (TypeError, ValueError):
@@ -135,34 +251,28 @@ class SystemSectionMap:
         if pts.ndim != 2 or pts.shape[1] != 2 or pts.shape[0] < 1 or not np.all(np.isfinite(pts)):
             raise ParameterError(f"the points of a System's section map are finite ({a.name}, {b.name}) pairs "
                                  f"(N, 2); got {points!r}")
-        roots_of, fixed_of, energy, dH, sdot = self._lift
-        P = list(self.system.parameter_array())
-        E = self.energy_value
-        A, B = pts[:, 0], pts[:, 1]
-        with np.errstate(all="ignore"):
-            roots = [np.broadcast_to(np.asarray(r, dtype=np.complex128), A.shape)
-                     for r in roots_of(A.astype(np.complex128), B.astype(np.complex128), E, *P)]
-        out = np.full(pts.shape[0], np.nan)
-        rate = np.zeros(pts.shape[0])
-        n = self.system.dimension
-        Y = np.empty((pts.shape[0], n))
-        for r in roots:
-            real = np.isfinite(r) & (np.abs(r.imag) <= REAL_TOL * np.maximum(1.0, np.abs(r.real)))
-            C = self._polish(A, B, np.where(real, r.real, 0.0), P)
-            state = self._assemble(A, B, C, P)
-            with np.errstate(all="ignore"):
-                s = np.broadcast_to(np.asarray(sdot(*state.T, *P), dtype=np.float64), A.shape)
-            take = real & (np.sign(s) == self.direction) & np.isnan(out)
-            out[take] = C[take]
-            rate[take] = s[take]
-            Y[take] = state[take]
-        bad = np.flatnonzero(np.isnan(out))
+        return pts
+
+    def _point(self, x) -> np.ndarray:
+        x = np.asarray(x, dtype=np.float64) if np.shape(x) == (2,) else None
+        if x is None or not np.all(np.isfinite(x)):
+            a, b = self.coords
+            raise ParameterError(f"a point of the section map is ({a.name}, {b.name}), two finite numbers")
+        return x
+
+    def states(self, points) -> np.ndarray:
+        """The states (N, 4) of the section points (N, 2), in the system's state order; ParameterError
+        for a point where the energy level has no solution on the direction's branch."""
+        pts = self._points(points)
+        Y = self._lifted(pts)
+        bad = np.flatnonzero(np.isnan(Y[:, 0]))
         if bad.size:
             i = int(bad[0])
+            a, b = self.coords
             raise ParameterError(
-                f"the energy level E = {E!r} has no solution for {self.solve.name} at ({a.name}, {b.name}) = "
-                f"({float(A[i])!r}, {float(B[i])!r}) with d({self.section.expr})/dt of sign {self.direction:+d}: "
-                "the point lies outside the energy surface on the section (or on its boundary)")
+                f"the energy level E = {self.energy_value!r} has no solution for {self.solve.name} at ({a.name}, "
+                f"{b.name}) = ({float(pts[i, 0])!r}, {float(pts[i, 1])!r}) with d({self.section.expr})/dt of sign "
+                f"{self.direction:+d}: the point lies outside the energy surface on the section (or on its boundary)")
         return Y
 
     def _assemble(self, A, B, C, P) -> np.ndarray:
@@ -170,13 +280,14 @@ class SystemSectionMap:
         ia, ib, ic, jf = self._index
         Y = np.empty((A.shape[0], self.system.dimension))
         Y[:, ia], Y[:, ib], Y[:, ic] = A, B, C
-        Y[:, jf] = np.broadcast_to(np.asarray(self._lift[1](A, B, C, *P), dtype=np.float64), A.shape)
+        with np.errstate(all="ignore"):
+            Y[:, jf] = np.broadcast_to(np.asarray(self._lift[1](A, B, C, *P), dtype=np.float64), A.shape)
         return Y
 
     def _polish(self, A, B, C, P) -> np.ndarray:
         """One Newton step on energy(solve) = E where it lowers ``|H - E|`` (a root's closed form may
         lose digits)."""
-        _, _, energy, dH, _ = self._lift
+        energy, dH = self._lift[2], self._lift[3]
         with np.errstate(all="ignore"):
             Y = self._assemble(A, B, C, P)
             r0 = np.asarray(energy(*Y.T, *P), dtype=np.float64) - self.energy_value
@@ -190,6 +301,211 @@ class SystemSectionMap:
         """The state of one section point x = (a, b)."""
         return self.states([x])[0]
 
+    def _starts(self, Y, backward: bool) -> np.ndarray:
+        """The states Y moved by ulps of the fixed variable to the side of the section the flow
+        leaves (a start a rounding error behind it would count as a crossing)."""
+        Y = np.array(Y, dtype=np.float64)
+        jf = self._index[3]
+        sign = -self.direction if backward else self.direction      # ds/dt along the integrated flow
+        up = np.inf if sign * self.section.a[jf] > 0 else -np.inf
+        for _ in range(8):
+            behind = sign * self.section(Y) < 0.0
+            if not behind.any():
+                break
+            Y[behind, jf] = np.nextafter(Y[behind, jf], up)
+        return Y
+
+    # ------------------------------------------------------------------ the domain
+    def in_domain(self, x) -> bool:
+        """x is a point of the section where the energy level has a solution on the direction's branch."""
+        x = np.asarray(x, dtype=np.float64)
+        return bool(x.shape == (2,) and np.all(np.isfinite(x)) and np.isfinite(self._lifted(x[None, :])[0, 0]))
+
+    def describe_domain(self) -> str:
+        """The domain in words."""
+        a, b = self.coords
+        return (f"allowed: the points ({a.name}, {b.name}) of the section {self.section.expr} = 0 where the energy "
+                f"level E = {self.energy_value:g} of {self.system.name} has a real {self.solve.name} with "
+                f"d({self.section.expr})/dt of sign {self.direction:+d}")
+
+    def not_finite(self, x) -> str:
+        """Why DP is not finite at x."""
+        a, b = self.coords
+        return (f"the section map's Jacobian is not finite at ({a.name}, {b.name}) = ({x[0]:.6g}, {x[1]:.6g}): the "
+                f"variational equations of {self.system.name} overflow at E = {self.energy_value:g}")
+
+    def orbit_fields(self) -> dict:
+        """What names the map in a PeriodicOrbit: itself."""
+        return {"system": self}
+
+    # ------------------------------------------------------------------ the map
+    def _tangent(self, y) -> np.ndarray:
+        """The lift (2, 4) of the unit vectors of coords at the state y: tangent to the section and to
+        the energy level (the solve and fixed components from the implicit function theorem)."""
+        ia, ib, ic, jf = self._index
+        gH = np.asarray(self._lift[5](*y, *self.system.parameter_array()), dtype=np.float64)
+        s = self.section.a
+        A = np.array([[s[ic], s[jf]], [gH[ic], gH[jf]]])
+        V = np.zeros((2, 4))
+        for r, j in enumerate((ia, ib)):
+            V[r, j] = 1.0
+            V[r, [ic, jf]] = np.linalg.solve(A, -np.array([s[j], gH[j]]))
+        return V
+
+    def _returns(self, Y, n: int, backward: bool, jacobian: bool):
+        """The crossings of the flow (backward: reversed) from the states Y: (data, count, status)."""
+        flow = _flow(self.system, backward, jacobian)
+        direction = -self.direction if backward else self.direction
+        data, count, status, *_ = system_crossings(flow, Y, n_crossings=n, section=self.section.expr,
+                                                   direction=direction, tol=self.tol, tmax=self.tmax * n)
+        return data, count, status
+
+    def __call__(self, x, *, backward=False, jacobian=True) -> MapResult:
+        """P(x) (P^-1(x) with ``backward``) with its Jacobian; ParameterError outside the domain or
+        for no return within ``tmax``."""
+        x = self._point(x)
+        y0 = self._starts(self.states(x[None, :]), backward)[0]
+        start = np.concatenate([y0, self._tangent(y0).ravel()]) if jacobian else y0
+        data, count, status = self._returns(start[None, :], 1, backward, jacobian)
+        if count[0] < 1:
+            a, b = self.coords
+            raise ParameterError(f"section map of {self.system.name} from ({a.name}, {b.name}) = ({x[0]:.6g}, "
+                                 f"{x[1]:.6g}): no return ({STATUS_NAMES[int(status[0])]})")
+        row = data[0, 0]
+        y = row[1:5].copy()
+        ia, ib = self._index[:2]
+        J = None
+        if jacobian:
+            D = row[5:13].reshape(2, 4)
+            f = np.asarray(self._lift[6](*y, *self.system.parameter_array()), dtype=np.float64)
+            n = self.section.a
+            W = D - np.outer(D @ n, f) / (n @ f)      # the crossing-time correction
+            J = W[:, [ia, ib]].T.copy()
+        t = float(row[0])
+        return MapResult(y[[ia, ib]], J, -t if backward else t, y)
+
+    def jacobian(self, x) -> np.ndarray:
+        """DP(x), the 2x2 Jacobian of the map at x."""
+        return self(x).jacobian
+
+    def inverse(self, x) -> np.ndarray:
+        """P^-1(x): the previous crossing (the flow backward in time)."""
+        return self(x, backward=True, jacobian=False).point
+
+    def images(self, X, n, *, backward=False) -> np.ndarray:
+        """The first ``n`` images (preimages with ``backward``) of each point of X: (m, n, 2), NaN for a
+        point outside the domain and after a failed return; one batch of crossings."""
+        X = np.asarray(X, float).reshape(-1, 2)
+        n = validation.integer("n", n, 0)
+        out = np.full((X.shape[0], n, 2), np.nan)
+        ok = np.all(np.isfinite(X), axis=1)
+        if n == 0 or not ok.any():
+            return out
+        Y = self._lifted(X[ok])
+        inside = np.flatnonzero(ok)[np.isfinite(Y[:, 0])]
+        if inside.size:
+            data, count, _ = self._returns(self._starts(Y[np.isfinite(Y[:, 0])], backward), n, backward, False)
+            cols = [1 + j for j in self._index[:2]]
+            img = data[:, :, cols]
+            for i in range(len(img)):
+                img[i, count[i]:] = np.nan
+            out[inside] = img
+        return out
+
+    def iterate(self, x, n, *, backward=False) -> np.ndarray:
+        """x and its first ``n`` images (preimages with ``backward``): an (n + 1, 2) array
+        (ParameterError when the orbit stops sooner)."""
+        n = validation.integer("n", n, 0)
+        x = self._point(x)
+        if n == 0:
+            return x[None, :].copy()
+        data, count, status = self._returns(self._starts(self.states(x[None, :]), backward), n, backward, False)
+        if count[0] < n:
+            raise ParameterError(f"section map of {self.system.name} from {tuple(x)}: {int(count[0])} of {n} "
+                                 f"returns ({STATUS_NAMES[int(status[0])]})")
+        cols = [1 + j for j in self._index[:2]]
+        return np.vstack([x[None, :], data[0][:, cols]])
+
+    # ------------------------------------------------------------------ parameters
+    @property
+    def parameters(self) -> tuple:
+        """The names :meth:`with_value` takes: the system's parameters and ``"energy"``."""
+        names = tuple(p.name for p in self.system.parameters)
+        return names if ENERGY in names else (*names, ENERGY)
+
+    @property
+    def parameter(self) -> str:
+        """The default parameter of a continuation: the system's first, else the energy."""
+        return self.parameters[0]
+
+    @property
+    def parameter_value(self) -> float:
+        """The value of :attr:`parameter`."""
+        return self._value(self.parameter)
+
+    def _value(self, name) -> float:
+        for p, v in self.system.parameters.items():
+            if p.name == name:
+                return float(v)
+        return self.energy_value
+
+    def with_value(self, name: str, value) -> SystemSectionMap:
+        """This map with the system's parameter ``name``, or the energy level (``"energy"``), set to ``value``."""
+        if name not in self.parameters:
+            raise ParameterError(f"the section map of {self.system.name} has no parameter {name!r} (its "
+                                 f"parameters: {', '.join(self.parameters)})")
+        if name == ENERGY and ENERGY not in {p.name for p in self.system.parameters}:
+            return SystemSectionMap(self.system, value, **self._settings())
+        return SystemSectionMap(self.system.with_(**{name: value}), self.energy_value, **self._settings())
+
+    def with_parameter(self, value, name=None) -> SystemSectionMap:
+        """:meth:`with_value` of ``name``, default :attr:`parameter`."""
+        return self.with_value(self.parameter if name is None else name, value)
+
+    # ------------------------------------------------------------------ reversors
+    def _involution(self, k, x) -> np.ndarray:
+        """The involution of the map that reversor k of the system induces, at the points x (..., 2):
+        the state of x, its image, its coords; NaN outside the domain."""
+        x = np.asarray(x, dtype=np.float64)
+        pts = x.reshape(-1, 2)
+        out = np.full(pts.shape, np.nan)
+        ok = np.all(np.isfinite(pts), axis=1)
+        if ok.any():
+            Y = self._lifted(pts[ok])
+            with np.errstate(all="ignore"):
+                Z = np.column_stack([np.broadcast_to(np.asarray(v, dtype=np.float64), (len(Y),)) for v in
+                                     self._lift[7][k][0](*Y.T, *self.system.parameter_array())])
+            out[ok] = Z[:, self._index[:2]]
+        return out.reshape(x.shape)
+
+    @property
+    def reversors(self) -> tuple:
+        """The involutions R of the map with R P R = P^-1 that the system's reversors induce: those
+        that map the section, with its direction, to itself (a callable on points (..., 2); linear in
+        coords: the matrix's action, defined everywhere)."""
+        out = []
+        P = self.system.parameter_array()
+        for k, (_, ratio, M) in enumerate(self._lift[7]):
+            if ratio is None or not float(ratio(*P)) > 0.0:
+                continue
+            out.append(_Linear(M(*P)) if M is not None else functools.partial(self._involution, k))
+        return tuple(out)
+
+    @property
+    def reflection(self):
+        """A reversor of :attr:`reversors` linear in coords (its fixed line through the origin), else None."""
+        return next((R for R in self.reversors if isinstance(R, _Linear)), None)
+
+    def require_reversor(self, what: str):
+        """The first of :attr:`reversors`; ParameterError naming ``what`` needs it when there is none."""
+        if self.reversors:
+            return self.reversors[0]
+        why = ("declares no reversor (System(..., reversor={...}))" if not self.system.reversors else
+               f"has no reversor that maps the section {self.section.expr} = 0, crossed with direction "
+               f"{self.direction:+d}, to itself")
+        raise ParameterError(f"{what} needs a reversor of the map: {self.system.name} {why}")
+
+    # ------------------------------------------------------------------ crossings
     def crossings(self, points, *, n_crossings: int, section=None, **kw):
         """The arguments of the Crossings of the orbits from ``points``: the System's crossings of
         this map's section and direction from :meth:`states`; settings add the energy, coords and
@@ -204,16 +520,3 @@ class SystemSectionMap:
         settings = dict(out[-1], energy=self.energy_value, coords=[s.name for s in self.coords],
                         solve=self.solve.name)
         return (*out[:-1], settings)
-
-    def iterate(self, x, n: int) -> np.ndarray:
-        """x and its first ``n`` images under the map: an (n + 1, 2) array (ParameterError when the
-        orbit stops sooner)."""
-        n = validation.integer("n", n, 1)
-        data, count, status, *_ = self.crossings([x], n_crossings=n)
-        if count[0] < n:
-            from explorer.kernels import STATUS_NAMES
-
-            raise ParameterError(f"section map of {self.system.name} from {tuple(x)}: {int(count[0])} of {n} "
-                                 f"returns ({STATUS_NAMES[int(status[0])]})")
-        cols = [1 + self.system.states.index(s) for s in self.coords]
-        return np.vstack([np.asarray(x, dtype=np.float64)[None, :], data[0][:, cols]])

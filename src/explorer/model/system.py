@@ -18,6 +18,10 @@ not on their values, so a sweep over a parameter compiles once.
 The right-hand sides may use numbers, parameters, ``+ - * /``, powers (integer, rational, real or
 a parameter as exponent), ``sqrt``, ``exp``, ``log``, ``sin``, ``cos`` and ``tan``
 (:data:`SUPPORTED_FUNCTIONS`); anything else is refused with a :class:`ParameterError` naming it.
+
+A ``reversor`` (a dict {state symbol: image}, or a list of them) declares an involution R of the
+state with ``f(R x) = -DR(x) f(x)`` (and ``H(R x) = H(x)``): ``R x(-t)`` is an orbit whenever
+``x(t)`` is (docs/systems.md, "Reversors").
 """
 from __future__ import annotations
 
@@ -74,6 +78,13 @@ def _value(name, v):
     return v
 
 
+def _vanishes(e) -> bool:
+    """False only when SymPy shows ``e`` is not identically zero (``equals`` decides numerically
+    where simplification does not)."""
+    e = sp.expand(e)
+    return e == 0 or e.equals(0) is not False
+
+
 def _names(symbols):
     return ", ".join(s.name for s in symbols) or "none"
 
@@ -86,10 +97,11 @@ class System:
     Raises :class:`ParameterError` naming what is wrong: a key that is not a Symbol, a state
     without an equation, a symbol that is neither a state variable nor a parameter, a parameter
     that is also a state, two symbols with one name, a value that is not a finite real number,
-    an unsupported function.
+    an unsupported function, a ``reversor`` that is not an involution of the state reversing the
+    equations (and keeping the energy).
     """
 
-    def __init__(self, equations, parameters=None, energy=None, name=None):
+    def __init__(self, equations, parameters=None, energy=None, name=None, reversor=None):
         if not isinstance(equations, dict) or not equations:
             raise ParameterError("equations must be a non-empty dict {state symbol: derivative expression}, "
                                  f"got {equations!r}")
@@ -122,6 +134,45 @@ class System:
         if energy is not None:
             self.energy = _expression("energy", energy)
             self._check_expression("the energy", self.energy)
+        self.reversors = self._reversors(reversor)
+
+    def _reversors(self, reversor) -> tuple:
+        """The reversors as tuples of images in state order, each checked: every state variable
+        mapped, an involution, ``f(R x) + DR f(x) = 0``, ``H(R x) = H(x)``."""
+        if reversor is None:
+            return ()
+        given = [reversor] if isinstance(reversor, dict) else reversor
+        if not isinstance(given, (list, tuple)) or not given or not all(isinstance(r, dict) for r in given):
+            raise ParameterError(f"reversor must be a dict {{state symbol: image}} (or a list of them), "
+                                 f"got {reversor!r}")
+        out = []
+        for r in given:
+            for k in r:
+                if k not in self.states:
+                    raise ParameterError(f"reversor maps {k!r}, which is not a state variable of {self.name} "
+                                         f"({_names(self.states)}): a reversor is a map of states")
+            missing = [s for s in self.states if s not in r]
+            if missing:
+                raise ParameterError(f"reversor gives no image of {_names(missing)}: a reversor maps every state "
+                                     f"variable ({_names(self.states)})")
+            images = tuple(_expression(f"the reversor's image of {s.name}", r[s]) for s in self.states)
+            for s, e in zip(self.states, images):
+                self._check_expression(f"the reversor's image of {s.name}", e)
+            R = dict(zip(self.states, images))
+            for s, e in zip(self.states, images):
+                if not _vanishes(e.subs(R, simultaneous=True) - s):
+                    raise ParameterError(f"reversor is not an involution: it maps {s.name} to {e}, and that back to "
+                                         f"{sp.expand(e.subs(R, simultaneous=True))}, not {s.name}")
+            for i, (s, e) in enumerate(zip(self.states, images)):
+                flow = sum((sp.diff(e, v) * f for v, f in zip(self.states, self.rhs)), sp.Integer(0))
+                if not _vanishes(self.rhs[i].subs(R, simultaneous=True) + flow):
+                    raise ParameterError(f"reversor does not reverse the equations: d{s.name}/dt at the image is "
+                                         f"{self.rhs[i].subs(R, simultaneous=True)}, but reversing needs "
+                                         f"{sp.expand(-flow)} (minus the rate of its image {e})")
+            if self.energy is not None and not _vanishes(self.energy.subs(R, simultaneous=True) - self.energy):
+                raise ParameterError("reversor does not keep the energy: H(R x) differs from H(x)")
+            out.append(images)
+        return tuple(out)
 
     def _check_expression(self, where, e):
         """Every symbol of ``e`` a state or a parameter; every function a supported one."""
@@ -166,7 +217,9 @@ class System:
                 raise ParameterError(f"{self.name} has no parameter {key}{did_you_mean(key, by_name)} "
                                      f"(its parameters: {_names(self.parameters)})")
             values[by_name[key]] = _value(key, v)
-        return System(dict(zip(self.states, self.rhs)), parameters=values, energy=self.energy, name=self.name)
+        out = object.__new__(System)      # the same checked content, other values
+        out.__dict__.update(self.__dict__, parameters=values)
+        return out
 
     def variational(self, vectors: int = 1) -> System:
         """The system with ``vectors`` deviation vectors: states x, then d1_x..., d2_x..., with
@@ -190,10 +243,13 @@ class System:
     @property
     def content_hash(self) -> str:
         """SHA-256 (hex) of the symbolic content: ``srepr`` of the states, right-hand sides,
-        parameter symbols (in order) and energy, and :data:`HASH_FORMAT`.  Not of the parameter
-        values (runtime data) nor the name."""
-        text = "\n".join([f"format {HASH_FORMAT}", sp.srepr(self.states), sp.srepr(self.rhs),
-                          sp.srepr(tuple(self.parameters)), sp.srepr(self.energy)])
+        parameter symbols (in order), energy and reversors (when there are any), and
+        :data:`HASH_FORMAT`.  Not of the parameter values (runtime data) nor the name."""
+        parts = [f"format {HASH_FORMAT}", sp.srepr(self.states), sp.srepr(self.rhs),
+                 sp.srepr(tuple(self.parameters)), sp.srepr(self.energy)]
+        if self.reversors:
+            parts.append("reversors " + sp.srepr(self.reversors))
+        text = "\n".join(parts)
         return hashlib.sha256(text.encode()).hexdigest()
 
     def __repr__(self):
