@@ -219,8 +219,11 @@ def as_system(name: str, system, args: tuple, kw: dict, settings: tuple = MAP_SE
               flow: bool = False, systems: bool = False):
     """The one rule for the system argument of an analysis ``name``: ``(system, args, kw)`` with
     the system a map object.  A System or a System's map is refused unless ``systems`` (the
-    analysis takes them: they pass unchanged)."""
+    analysis takes them: they pass unchanged; ``systems="map"``: a System's map only)."""
     if systems and (system_sections.is_system(system) or system_sections.is_system_map(system)):
+        if systems == "map" and system_sections.is_system(system):
+            raise ParameterError(f"{name} takes a map: give the System's section map, SectionMap(system, E, "
+                                 "section=..., direction=..., coords=..., solve=...) (docs/systems.md)")
         return system, args, kw
     system_sections.refuse_a_system(name, system)
     if flow:
