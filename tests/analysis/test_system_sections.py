@@ -105,6 +105,20 @@ def test_crossings_of_a_system_are_identical_with_one_and_two_threads():
     np.testing.assert_array_equal(one.info, two.info)
 
 
+def test_the_rows_do_not_depend_on_the_driver():
+    from explorer.analysis.system_sections import LANES_FROM, driver_for
+
+    hh = henon_heiles()
+    Y0 = starts(POINTS + [(0.0, 0.35), (-0.2, -0.1)])
+    runs = [ex.crossings(hh, states=Y0[:n], n_crossings=20, section=x, direction=+1, driver=d)
+            for n in (1, 5) for d in ("auto", "lanes", "scalar")]
+    for first, other in ((runs[0], runs[1]), (runs[0], runs[2]), (runs[3], runs[4]), (runs[3], runs[5])):
+        for name in ("data", "count", "status", "final", "info"):
+            np.testing.assert_array_equal(getattr(first, name), getattr(other, name), strict=True)
+    # auto: the scalar driver for a lone orbit, lanes from LANES_FROM orbits on
+    assert driver_for(LANES_FROM - 1) == 0 and driver_for(LANES_FROM) >= 1 and driver_for(40, "scalar") == 0
+
+
 def test_a_parameter_in_the_section_takes_its_value():
     hh = henon_heiles()
     res = ex.crossings(hh.with_(lam=0.5), states=starts(POINTS[:1]), n_crossings=5, section=x - lam / 10,
@@ -160,6 +174,7 @@ def test_a_division_by_a_zero_denominator_gives_the_non_finite_status():
     (dict(section=x, method="dop853"), "method must be 'taylor' for a System"),
     (dict(section=x, phi0=1.0), "phi0 do\\(es\\) not apply"),
     (dict(section=x, tol=0.5), "tol must be"),
+    (dict(section=x, driver="simd"), "driver must be one of 'auto', 'lanes', 'scalar', got 'simd'"),
 ])
 def test_a_bad_request_is_refused_with_a_message_naming_the_parameter(kw, match):
     args = dict(states=starts(POINTS[:1]), n_crossings=5, direction=+1)

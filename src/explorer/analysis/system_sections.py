@@ -10,7 +10,9 @@ The integrator is the adaptive Taylor method (Jorba & Zou 2005, Exp. Math. 14, 9
 into the system's module by :mod:`explorer.integrate.codegen` (``crossings_taylor``): the order
 from ``tol`` (:func:`explorer.kernels.taylor_order.order_for_tolerance`), the step from the last
 two coefficients, the crossings the roots of each step's polynomial of the section function,
-isolated and refined as the engine's (kernels/events.py).
+isolated and refined as the engine's (kernels/events.py).  From :data:`LANES_FROM` orbits on, the
+SIMD form (``crossings_lanes``, :mod:`explorer.integrate.codegen_lanes`) runs them, each orbit
+with the same rows bit for bit (:func:`driver_for`).
 
 This module imports neither SymPy nor numba at import time: :func:`is_system` is asked about
 every argument of ``crossings``.
@@ -34,6 +36,11 @@ __all__ = ["Section", "is_system", "is_system_map", "linear_section", "or_a_syst
            "system_crossings"]
 
 DEFAULT_MAX_STEPS = 10**9
+#: the drivers of ``system_crossings(driver=)``; every one gives the same rows bit for bit
+DRIVERS = ("auto", "lanes", "scalar")
+#: ``auto`` takes the SIMD lanes from this many orbits on: one orbit costs the same CPU either way,
+#: two or more less on lanes (benchmarks/RESULTS.md, SYSTEMS)
+LANES_FROM = 2
 #: the settings of the engine's crossings that have no meaning for a System
 _NOT_FOR_A_SYSTEM = ("h", "phi0", "dt", "block", "state")
 
@@ -173,13 +180,15 @@ def _states(system, states) -> np.ndarray:
 
 def system_crossings(system, states=None, *, n_crossings: int, section=None, direction: int = 1,
                      method: str = "taylor", tol: float = DEFAULT_TOL, tmax: float | None = None,
-                     max_steps: int = DEFAULT_MAX_STEPS, threads: int | None = None, **other):
+                     max_steps: int = DEFAULT_MAX_STEPS, threads: int | None = None, driver: str = "auto",
+                     **other):
     """Integrate each orbit of ``system`` from ``states`` (N, n) until it has crossed the section
     ``section = 0`` ``n_crossings`` times in ``direction`` (+1: ds/dt > 0, -1: ds/dt < 0), or its
     time budget ``tmax`` (default 100 * n_crossings) or ``max_steps`` runs out.  Returns the
     arguments of :class:`~explorer.analysis.sections.Crossings` (data, count, status, final,
     info, method, settings); the rows and statuses as in the module docstring.  ``tol``: the
-    Taylor method's, as the engine's (docs/methods.md)."""
+    Taylor method's, as the engine's (docs/methods.md).  ``driver``: one of :data:`DRIVERS`
+    (:func:`driver_for`); the rows do not depend on it."""
     from explorer.analysis import budget
     from explorer.integrate import codegen
 
@@ -201,6 +210,8 @@ def system_crossings(system, states=None, *, n_crossings: int, section=None, dir
     max_steps = validation.integer("max_steps", max_steps, 1)
     if threads is not None:
         threads = validation.threads(threads, max_threads())
+    if driver not in DRIVERS:
+        raise ParameterError(f"driver must be one of {', '.join(map(repr, DRIVERS))}, got {driver!r}")
     sec = linear_section(system, section)
     Y0 = _states(system, states)
     order = order_for_tolerance(tol)
@@ -222,8 +233,15 @@ def system_crossings(system, states=None, *, n_crossings: int, section=None, dir
     if threads is not None:
         set_num_threads(threads)
     try:
-        mod.crossings_taylor(Y0, P, sec.a, float(sec.b), int(direction), float(tmax), int(order), int(max_steps),
-                             int(K), data, count, status, final, info)
+        args = (Y0, P, sec.a, float(sec.b), int(direction), float(tmax), int(order), int(max_steps), int(K), data,
+                count, status, final, info)
+        workers = driver_for(N, driver)
+        if workers == 0:
+            mod.crossings_taylor(*args)
+        elif workers == 1:   # one group of lanes: no parallel region
+            mod.crossings_lanes_worker(np.zeros(1, np.int64), *args)
+        else:
+            mod.crossings_lanes(*args, workers)
     finally:
         if threads is not None:
             set_num_threads(old)
@@ -232,3 +250,14 @@ def system_crossings(system, states=None, *, n_crossings: int, section=None, dir
                 "direction": int(direction), "tmax": tmax, "max_steps": max_steps, "n_crossings": K,
                 "columns": columns}
     return data, count, status, final, info, "taylor", settings
+
+
+def driver_for(n: int, driver: str = "auto") -> int:
+    """How ``n`` orbits run: 0 on the scalar driver (one orbit per thread), else on that many groups of
+    LANES SIMD lanes (one per thread, no more than ceil(n / LANES)).  ``auto``: lanes from
+    :data:`LANES_FROM` orbits on."""
+    from explorer.integrate.simd import LANES
+
+    if driver == "scalar" or (driver == "auto" and n < LANES_FROM):
+        return 0
+    return max(1, min(get_num_threads(), -(-n // LANES)))

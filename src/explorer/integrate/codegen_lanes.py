@@ -140,7 +140,7 @@ def _lane_finish(l, st, X, orb, L_t, L_tc, L_n, L_steps, count, status, final, i
 
 
 @njit(error_model="numpy")
-def _crossings_lanes_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_steps, limit, data, count, status,
+def crossings_lanes_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_steps, limit, data, count, status,
                             final, info):
     """One group of LANES lanes: orbits from the queue ``next_orbit`` until it is empty, each lane
     crossings_orbit's loop (its arguments and outputs)."""
@@ -246,7 +246,7 @@ def crossings_lanes(Y0, P, a, b, direction, tmax, order, max_steps, limit, data,
     one queue of orbits; each orbit's results are crossings_orbit's bit for bit."""
     next_orbit = np.zeros(1, np.int64)
     for w in prange(workers):
-        _crossings_lanes_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_steps, limit, data, count,
+        crossings_lanes_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_steps, limit, data, count,
                                 status, final, info)
 '''
 

@@ -1,0 +1,76 @@
+"""The SIMD crossings driver of a System (explorer.integrate.codegen_lanes, docs/systems.md "Crossings"):
+every orbit's rows, counts, statuses, final states and step counts equal the scalar driver's bit for
+bit, in a full group of lanes, a partial one, on any hyperplane and direction, for every way an orbit
+stops, and whatever the number of threads."""
+import numpy as np
+import pytest
+import sympy as sp
+
+import explorer as ex
+from explorer.integrate.simd import LANES
+from explorer.kernels import Status
+
+x, y, px, py, lam = sp.symbols("x y px py lam")
+E = 1.0 / 8.0
+
+
+@pytest.fixture(scope="module")
+def hh():
+    return ex.System({x: px, y: py, px: -x - 2*lam*x*y, py: -y - lam*(x**2 - y**2)}, parameters={lam: 1.0},
+                     energy=(px**2 + py**2)/2 + (x**2 + y**2)/2 + lam*(x**2*y - y**3/3), name="henon_heiles")
+
+
+def starts(n):
+    """n states on x = 0 at E = 1/8 with px > 0, (y, py) spread over the section: regular and chaotic."""
+    yy = np.linspace(-0.35, 0.45, n)
+    pyy = 0.15 * np.sin(np.arange(n))
+    return np.column_stack([np.zeros(n), yy, np.sqrt(2*E - pyy**2 - yy**2 + 2*yy**3/3), pyy])
+
+
+def assert_same(a, b):
+    for name in ("data", "count", "status", "final", "info"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name, strict=True)
+    assert a.settings == b.settings
+
+
+def both(system, **kw):
+    return (ex.crossings(system, driver="lanes", **kw), ex.crossings(system, driver="scalar", **kw))
+
+
+@pytest.mark.parametrize("n", [LANES, 13])
+def test_each_lane_gives_the_scalar_drivers_rows_bit_for_bit(hh, n):
+    lanes, scalar = both(hh, states=starts(n), n_crossings=60, section=x, direction=+1, threads=1)
+    assert_same(lanes, scalar)
+    assert np.all(lanes.count == 60) and np.all(lanes.status == Status.DONE)
+    assert np.nanmax(np.abs(lanes.data[..., 5])) <= 1e-12          # E - E0: a physical row, not NaN
+
+
+def test_orbits_cut_by_the_time_or_the_step_budget_stop_as_on_the_scalar_driver(hh):
+    Y0 = starts(13)
+    for kw in (dict(tmax=385.0), dict(max_steps=1110)):
+        lanes, scalar = both(hh, states=Y0, n_crossings=60, section=x, direction=+1, threads=1, **kw)
+        assert_same(lanes, scalar)
+        status = set(lanes.status.tolist())
+        assert Status.DONE in status and (Status.TMAX if "tmax" in kw else Status.MAX_STEPS) in status
+
+
+def test_a_tilted_section_crossed_downwards_gives_the_scalar_rows(hh):
+    lanes, scalar = both(hh, states=starts(11), n_crossings=30, section=x + y - 0.1, direction=-1, threads=1)
+    assert_same(lanes, scalar)
+    assert np.nanmax(np.abs(lanes.data[..., 1] + lanes.data[..., 2] - 0.1)) <= 1e-14
+
+
+def test_orbits_stopped_by_a_pole_give_the_scalar_statuses():
+    s, w = sp.symbols("s w")
+    pole = ex.System({s: 1, w: 1 / s}, name="pole")
+    Y0 = np.array([[0.0, 0.0], [-1.0, 0.0], [-0.5, 1.0], [1.0, 0.0], [-2.0, 0.0]])
+    lanes, scalar = both(pole, states=Y0, n_crossings=1, section=w - 1, direction=+1, tmax=5.0, threads=1)
+    assert_same(lanes, scalar)
+    assert {Status.NONFINITE, Status.STEP_UNDERFLOW, Status.DONE} <= set(lanes.status.tolist())
+
+
+def test_the_lanes_rows_do_not_depend_on_the_number_of_threads(hh):
+    Y0 = starts(13)
+    one = ex.crossings(hh, states=Y0, n_crossings=40, section=x, direction=+1, driver="lanes", threads=1)
+    two = ex.crossings(hh, states=Y0, n_crossings=40, section=x, direction=+1, driver="lanes", threads=2)
+    assert_same(one, two)
