@@ -1,0 +1,385 @@
+#!/usr/bin/env python
+"""Benchmark SYSTEMS: a System's section crossings against heyoka on the same equations.
+
+Workload: Hénon–Heiles (lam = 1) as an ``explorer.System``; 64 orbits started on the section
+x = 0 at E = 1/8 with py = 0, y across 95 % of the allowed interval and px > 0 from the energy;
+2000 crossings of x = 0 with px > 0 (direction +1) each, tol 1e-12.
+
+Rows: ``ex.crossings(system, ...)`` (numba threads = default, and 1 thread; ``driver`` of
+explorer.analysis.system_sections: the automatic choice, the SIMD lanes and the scalar
+integrator) and heyoka ``taylor_adaptive_batch`` (batch = recommended SIMD width, the equations
+converted from the same SymPy expressions with ``heyoka.from_sympy``, the section a terminal
+``t_event_batch`` on x, direction positive, whose callback records each crossing; bench_w4's
+harness: :class:`bench_w4.HeyokaSections`' queue of orbits over the batch lanes) in 1 and 2
+processes.  Agreement: max |explorer - heyoka| over the crossing rows (t and the state) of the
+first 100 crossings of the regular orbits (those where explorer at tol 1e-12 and at tol 1e-15
+agree to 1e-9 over those crossings).  First use: a fresh process with an empty
+``EXPLORER_SYSTEMS_CACHE`` (generation and compilation), then a second fresh process (rerun).
+
+    python benchmarks/bench_systems.py            # full run (~3 min on 2 cores)
+    python benchmarks/bench_systems.py --quick    # smoke test (16 orbits x 200 crossings)
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import multiprocessing as mp
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+import _common as C
+import numpy as np
+from bench_w4 import round_robin, runs_note
+
+E_LEVEL = 1.0 / 8.0
+TOL = 1e-12
+TMAX_PER_CROSSING = 100.0       # the default time budget of ex.crossings (100 * K)
+START_EPS = 1e-9                # an event this close to t = 0 is the start point on the section
+AGREE_K = 100                   # crossings compared with heyoka
+REGULAR = 1e-9                  # explorer tol 1e-12 vs 1e-15 within this over AGREE_K crossings: regular
+
+HH_SOURCE = """
+import sympy as sp
+import explorer as ex
+x, y, px, py, lam = sp.symbols("x y px py lam")
+hh = ex.System({x: px, y: py, px: -x - 2*lam*x*y, py: -y - lam*(x**2 - y**2)}, parameters={lam: 1.0},
+               energy=(px**2 + py**2)/2 + (x**2 + y**2)/2 + lam*(x**2*y - y**3/3), name="henon_heiles")
+"""
+
+
+def henon_heiles():
+    ns = {}
+    exec(HH_SOURCE, ns)
+    return ns["hh"], ns["x"]
+
+
+def starts(n):
+    """(n, 4) states on x = 0 at E = 1/8, py = 0, px > 0, y across 95 % of the allowed interval."""
+    roots = np.roots([-1.0 / 3.0, 0.5, 0.0, -E_LEVEL])        # y^2/2 - y^3/3 = E on x = 0, py = 0
+    real = np.sort(roots[np.abs(roots.imag) < 1e-12].real)
+    lo, hi = real[0], real[1]                                   # the bounded interval around y = 0
+    mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+    yy = mid + 0.95 * half * np.linspace(-1.0, 1.0, n)
+    px = np.sqrt(2 * E_LEVEL - yy**2 + 2 * yy**3 / 3)
+    return np.column_stack([np.zeros(n), yy, px, np.zeros(n)])
+
+
+# ----------------------------------------------------------------------------- heyoka
+class HeyokaSystemSections:
+    """Crossings of a System's section with heyoka's batch mode: the harness of
+    bench_w4.HeyokaSections (a queue of orbits over the lanes of one ``taylor_adaptive_batch``,
+    a terminal event whose callback records the crossing and stops the lane after K), for the
+    System's equations (``heyoka.from_sympy``) and its section EXPR = 0 in ``direction``."""
+
+    def __init__(self, tol, simd):
+        import heyoka as hy
+        import sympy as sp
+        t0 = time.perf_counter()
+        system, xs = henon_heiles()
+        self.simd = int(simd)
+        vals = dict(system.parameters)
+        hv = {s: hy.make_vars(s.name) for s in system.states}
+        smap = {s: hv[s] for s in system.states}
+        eqs = [(hv[s], hy.from_sympy(sp.sympify(f).subs(vals), smap)) for s, f in zip(system.states, system.rhs)]
+        ev_expr = hy.from_sympy(xs, smap)
+        self.dim = system.dimension
+        rec = self.rec = _Recorder(self.dim)
+
+        def cb(ta, d_sgn, i):
+            o = rec.lane[i]
+            if o < 0:
+                return True
+            t = ta.time[i]
+            if t < START_EPS:
+                return True
+            return rec.record(o, t, ta.state[:, i])
+
+        ev = hy.t_event_batch(ev_expr, callback=cb, direction=hy.event_direction.positive)
+        self.ta = hy.taylor_adaptive_batch(eqs, np.zeros((self.dim, self.simd)), t_events=[ev], tol=float(tol))
+        self.order = int(self.ta.order)
+        self.build_time = time.perf_counter() - t0
+
+    def run(self, Y0, K, tmax):
+        ta, S, rec = self.ta, self.simd, self.rec
+        N = Y0.shape[0]
+        rec.reset(N, K)
+        steps = np.zeros(N, np.int64)
+        nxt = 0
+        rec.lane = np.full(S, -1, np.int64)
+        limit = np.zeros(S)
+
+        def refill(lanes):
+            nonlocal nxt
+            tt = np.array(ta.time, dtype=np.float64)
+            st = ta.state
+            for i in lanes:
+                if nxt < N:
+                    rec.lane[i] = nxt
+                    st[:, i] = Y0[nxt]
+                    tt[i] = 0.0
+                    limit[i] = tmax
+                    nxt += 1
+                else:
+                    rec.lane[i] = -1
+                    limit[i] = tt[i]
+            ta.set_time(tt)
+            for i in lanes:
+                ta.reset_cooldowns(i)
+
+        t0 = time.perf_counter()
+        refill(range(S))
+        while np.any(rec.lane >= 0):
+            ta.propagate_until(limit)
+            res = ta.propagate_res
+            tt = ta.time
+            done = []
+            for i in range(S):
+                o = rec.lane[i]
+                if o < 0:
+                    continue
+                steps[o] += int(res[i][3])
+                if rec.count[o] >= K or not np.all(np.isfinite(ta.state[:, i])) or tt[i] >= limit[i]:
+                    done.append(i)
+            if done:
+                refill(done)
+        return dict(ts=rec.ts, ys=rec.ys, count=rec.count, steps=steps, elapsed=time.perf_counter() - t0)
+
+
+class _Recorder:
+    def __init__(self, dim):
+        self.dim = dim
+        self.lane = np.full(1, -1, np.int64)
+        self.reset(0, 1)
+
+    def reset(self, N, K):
+        self.K = K
+        self.ts = np.full((N, K), np.nan)
+        self.ys = np.full((N, K, self.dim), np.nan)
+        self.count = np.zeros(N, np.int64)
+
+    def record(self, o, t, y):
+        k = self.count[o]
+        self.ts[o, k] = t
+        self.ys[o, k] = y
+        self.count[o] = k + 1
+        return k + 1 < self.K
+
+
+def _hy_worker(Y0, K, tol, simd, tmax, barrier, queue, tag):
+    runner = HeyokaSystemSections(tol, simd)
+    barrier.wait()
+    start = time.monotonic()
+    out = runner.run(Y0, K, tmax)
+    end = time.monotonic()
+    queue.put(dict(tag=tag, ts=out["ts"], ys=out["ys"], count=out["count"], steps=out["steps"], start=start,
+                   end=end, build=runner.build_time, order=runner.order))
+
+
+def heyoka_processes(Y0, K, tol, simd, nproc, tmax):
+    """Y0 over nproc spawned processes (orbit j to process j % nproc); wall = integration only
+    (latest end - earliest start after a barrier), as bench_w4.heyoka_processes."""
+    ctx = mp.get_context("spawn")
+    barrier, queue = ctx.Barrier(nproc), ctx.Queue()
+    parts = [np.arange(r, Y0.shape[0], nproc) for r in range(nproc)]
+    T0 = time.monotonic()
+    procs = [ctx.Process(target=_hy_worker, args=(Y0[idx], K, tol, simd, tmax, barrier, queue, r))
+             for r, idx in enumerate(parts)]
+    for p in procs:
+        p.start()
+    outs = [queue.get() for _ in procs]
+    for p in procs:
+        p.join()
+    N, dim = Y0.shape
+    merged = dict(ts=np.full((N, K), np.nan), ys=np.full((N, K, dim), np.nan), count=np.zeros(N, np.int64),
+                  steps=np.zeros(N, np.int64))
+    for o in outs:
+        for key in ("ts", "ys", "count", "steps"):
+            merged[key][parts[o["tag"]]] = o[key]
+    merged.update(wall=max(o["end"] for o in outs) - min(o["start"] for o in outs), total=time.monotonic() - T0,
+                  build=max(o["build"] for o in outs), order=outs[0]["order"])
+    return merged
+
+
+# ----------------------------------------------------------------------------- first use
+FIRST_USE = HH_SOURCE + r"""
+import json, time, numpy as np
+t1 = time.perf_counter()
+Y0 = np.array(STARTS)
+r = ex.crossings(hh, states=Y0, n_crossings=5, section=x, direction=+1, tol=TOL)
+assert (r.count == 5).all()
+print(json.dumps({"define": t1 - T0, "first_crossings": time.perf_counter() - t1,
+                  "in_process": time.perf_counter() - T0}))
+"""
+
+
+def first_use(n_orbits, repeats):
+    """Process wall time to the first crossings (n_orbits x 5) of Hénon–Heiles: with an empty
+    EXPLORER_SYSTEMS_CACHE (generation and compilation), then reruns with it filled."""
+    script = "import time\nT0 = time.perf_counter()\n" + FIRST_USE.replace("STARTS", repr(starts(n_orbits).tolist()))
+    script = script.replace("TOL", repr(TOL))
+    tmp = tempfile.mkdtemp(prefix="bench_systems_cache_")
+    env = dict(os.environ, EXPLORER_SYSTEMS_CACHE=tmp)
+    out = {}
+    try:
+        for name, runs in (("first", 1), ("rerun", repeats)):
+            walls, inner = [], []
+            for _ in range(runs):
+                T0 = time.perf_counter()
+                p = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True,
+                                   timeout=1800, cwd=C.ROOT)
+                walls.append(time.perf_counter() - T0)
+                if p.returncode != 0:
+                    raise RuntimeError(f"{name} subprocess failed:\n{p.stderr}")
+                inner.append(json.loads(p.stdout.strip().splitlines()[-1]))
+            b = int(np.argmin(walls))
+            out[name] = dict(process=walls[b], runs=walls, **inner[b])
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return out
+
+
+# ----------------------------------------------------------------------------- main
+def regular_orbits(ex, hh, x, Y0, k):
+    a = ex.crossings(hh, states=Y0, n_crossings=k, section=x, direction=+1, tol=TOL).data[..., :5]
+    b = ex.crossings(hh, states=Y0, n_crossings=k, section=x, direction=+1, tol=1e-15).data[..., :5]
+    return np.max(np.abs(a - b), axis=(1, 2)) <= REGULAR
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="16 orbits x 200 crossings, 1 run; RESULTS.md untouched")
+    ap.add_argument("--repeats", type=int, default=None, help="max timing runs per row (default 5)")
+    ap.add_argument("--row-budget", type=float, default=None, help="cumulative seconds per row (default 30)")
+    ap.add_argument("--skip-first-use", action="store_true", help="no first-use / rerun subprocesses")
+    ap.add_argument("--no-write", action="store_true", help="print only")
+    args = ap.parse_args(argv)
+    quick = args.quick
+    N, K = (16, 200) if quick else (64, 2000)
+    repeats = args.repeats or (1 if quick else 5)
+    budget = args.row_budget if args.row_budget is not None else (5.0 if quick else 30.0)
+    import heyoka
+    import numba
+
+    import explorer as ex
+    from explorer.analysis import system_sections as ss
+
+    started, load0, T_START = C.now(), C.loadavg(), time.perf_counter()
+    hh, x = henon_heiles()
+    Y0 = starts(N)
+    tmax = TMAX_PER_CROSSING * K
+    simd = int(heyoka.recommended_simd_size())
+    threads = numba.get_num_threads()
+    drivers = [d for d in ("auto", "lanes", "scalar") if d == "auto" or d in getattr(ss, "DRIVERS", ())]
+    ex_rows = [(d, threads) for d in drivers] + [(d, 1) for d in drivers]
+
+    def explorer_job(driver, th):
+        kw = {} if driver == "auto" else {"driver": driver}
+
+        def job():
+            t0 = time.perf_counter()
+            r = ss.system_crossings(hh, Y0, n_crossings=K, section=x, direction=+1, tol=TOL, threads=th, **kw)
+            sec = time.perf_counter() - t0
+            return sec, sec, r
+        return job
+
+    jobs = [explorer_job(d, th) for d, th in ex_rows]
+    for j in jobs[:len(drivers)]:
+        j()                                                    # compile / load the cache
+    hy_cfgs = [(1,), (2,)]
+
+    def heyoka_job(nproc):
+        def job():
+            r = heyoka_processes(Y0, K, TOL, simd, nproc, tmax)
+            return r["wall"], r["total"], r
+        return job
+
+    jobs += [heyoka_job(*c) for c in hy_cfgs]
+    print(f"SYSTEMS: {N} orbits x {K} crossings, {len(jobs)} rows, up to {repeats} interleaved rounds", flush=True)
+    timings = round_robin(jobs, repeats, budget)
+    rows = []
+    for (driver, th), tm in zip(ex_rows, timings):
+        data, count, status, final, info, _, settings = tm["res"]
+        rows.append(dict(name=f"explorer ex.crossings, driver {driver}", setting=f"tol {TOL:.0e}, order "
+                         f"{settings['order']}, {th} thread{'s' if th > 1 else ''}", wall=tm["best"],
+                         times=tm["times"], crossings=int(count.sum()), steps=int(info[:, 1].sum()),
+                         max_dE=float(np.nanmax(np.abs(data[..., 5]))), threads=th, driver=driver,
+                         rows=data if (driver == "auto" and th == threads) else None))
+    for (nproc,), tm in zip(hy_cfgs, timings[len(ex_rows):]):
+        r = tm["res"]
+        E0 = hh_energy(Y0)
+        dE = hh_energy(r["ys"]) - E0[:, None]
+        rows.append(dict(name=f"heyoka taylor_adaptive_batch (batch {simd})",
+                         setting=f"tol {TOL:.0e}, order {r['order']}, {nproc} process{'es' if nproc > 1 else ''}",
+                         wall=tm["best"], times=tm["times"], crossings=int(r["count"].sum()),
+                         steps=int(r["steps"].sum()), max_dE=float(np.nanmax(np.abs(dE))), processes=nproc,
+                         build=r["build"], total=r["total"], rows=np.concatenate([r["ts"][..., None], r["ys"]], axis=2)))
+
+    # agreement on the regular orbits
+    ref = next(r for r in rows if r["name"].startswith("explorer") and r["rows"] is not None)["rows"]
+    hy2 = next(r for r in rows if r.get("processes") == 2)["rows"]
+    k = min(AGREE_K, K)
+    reg = regular_orbits(ex, hh, x, Y0, k)
+    diff = np.abs(ref[:, :k, :5] - hy2[:, :k, :5])
+    agree_reg = float(np.max(diff[reg])) if reg.any() else float("nan")
+    agree_all_first = float(np.max(diff[:, :10]))
+
+    startup = None if args.skip_first_use else first_use(N, 1 if quick else 3)
+    best_ex = min((r for r in rows if r["name"].startswith("explorer") and r["threads"] == threads),
+                  key=lambda r: r["wall"])
+    hyb = {r["processes"]: r for r in rows if r.get("processes")}
+    elapsed = time.perf_counter() - T_START
+    command = C.command_line("bench_systems.py", argv)
+    lines, meta = C.header("SYSTEMS: Hénon–Heiles sections against heyoka", command, started, elapsed, load0,
+                           extra=[f"Workload: Hénon–Heiles (lam = 1) as an explorer.System, {N} orbits on x = 0 at "
+                                  f"E = 1/8 (py = 0, y across 95 % of the allowed interval, px > 0), {K} crossings "
+                                  f"of x = 0 with px > 0 each, tol {TOL:.0e} for both.",
+                                  "explorer: `explorer.analysis.system_sections.system_crossings` (what "
+                                  "`ex.crossings(system, ...)` calls) with each driver; warm (module and numba "
+                                  "cache loaded); best of up to "
+                                  f"{repeats} interleaved runs within {budget:.0f} s a row.",
+                                  f"heyoka {heyoka.__version__}: `taylor_adaptive_batch`, batch "
+                                  f"{simd} (`recommended_simd_size()`), the equations from the System's SymPy "
+                                  "expressions (`heyoka.from_sympy`), the section a terminal `t_event_batch` on x "
+                                  "(direction positive) whose Python callback records the crossing (bench_w4's "
+                                  "harness); wall = integration only, after a barrier; 2 processes: "
+                                  "`multiprocessing` 'spawn', orbits interleaved."])
+    lines += ["", "| row | setting | wall (s) | crossings/s | steps/crossing | max abs E - E0 | runs |",
+              "|---|---|---:|---:|---:|---:|---|"]
+    for r in rows:
+        lines.append(f"| {r['name']} | {r['setting']} | {r['wall']:.3f} | {r['crossings'] / r['wall']:,.0f} | "
+                     f"{r['steps'] / max(1, r['crossings']):.1f} | {C.fmt_e(r['max_dE'])} | {runs_note(r['times'])}"
+                     + (f"; heyoka build {r['build']:.1f} s, process total {r['total']:.1f} s" if "build" in r else "")
+                     + " |")
+    lines += ["", f"- explorer ({best_ex['name'].split(', ')[1]}, {threads} threads) / heyoka batch, 2 processes: "
+              f"**{hyb[2]['wall'] / best_ex['wall']:.2f}x**; / 1 process: {hyb[1]['wall'] / best_ex['wall']:.2f}x "
+              f"(wall-time ratios).",
+              f"- Agreement with heyoka (2 processes): max |difference| of (t, x, y, px, py) over the first {k} "
+              f"crossings of the {int(reg.sum())} regular orbits (explorer tol 1e-12 and 1e-15 within "
+              f"{REGULAR:g}): {C.fmt_e(agree_reg)}; over the first 10 crossings of all {N} orbits: "
+              f"{C.fmt_e(agree_all_first)}."]
+    if startup:
+        f, rr = startup["first"], startup["rerun"]
+        lines += [f"- First use (a fresh process, empty EXPLORER_SYSTEMS_CACHE: the module generated and compiled), "
+                  f"to the first crossings of {N} orbits: **{f['process']:.1f} s** of process wall (define the "
+                  f"System {f['define']:.1f} s from the start, first crossings {f['first_crossings']:.1f} s); "
+                  f"rerun (a fresh process, the cache filled): **{rr['process']:.1f} s** (best of "
+                  f"{len(rr['runs'])}: {', '.join(f'{v:.1f}' for v in rr['runs'])}; first crossings "
+                  f"{rr['first_crossings']:.2f} s)."]
+    record = not (quick or args.no_write)
+    C.write_json(C.OUT_DIR / ("systems_quick.json" if quick else "systems.json"),
+                 dict(meta, rows=[{k2: v for k2, v in r.items() if k2 != "rows"} for r in rows], startup=startup,
+                      agreement=dict(regular=agree_reg, n_regular=int(reg.sum()), first10=agree_all_first)))
+    return C.report("SYSTEMS", lines, record)
+
+
+def hh_energy(y):
+    x, yy, px, py = (y[..., i] for i in range(4))
+    return (px**2 + py**2) / 2 + (x**2 + yy**2) / 2 + (x**2 * yy - yy**3 / 3)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
