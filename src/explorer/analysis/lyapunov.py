@@ -137,10 +137,10 @@ def indicators(system, y0=None, *, tmax: float = DEFAULT_TIME, method: str | Non
     :func:`explorer.analysis.system_indicators.system_indicators` (``states=`` the flow's start)."""
     if system_sections.is_system(system) or system_sections.is_system_map(system):
         from explorer.analysis.system_indicators import system_indicators
-        return system_indicators(system, y0, tmax=tmax, method=method, tol=tol, dt=dt, history=history, v0=v0,
-                                 w0=w0, max_steps=max_steps, threads=threads, which=which, early_stop=early_stop,
-                                 early_sali=early_sali, early_megno=early_megno, early_time=early_time,
-                                 **system_settings)
+        return Indicators(**system_indicators(
+            system, y0, tmax=tmax, method=method, tol=tol, dt=dt, history=history, v0=v0, w0=w0, max_steps=max_steps,
+            threads=threads, which=check_which(which), early_stop=early_stop, early_sali=early_sali,
+            early_megno=early_megno, early_time=early_time, **system_settings))
     if system_settings:
         raise ParameterError(f"indicators has no setting {', '.join(sorted(system_settings))}")
     dt = DEFAULT_DT if dt is None else dt
@@ -250,6 +250,11 @@ def check_which(which) -> tuple:
         which = (which,)
     which = tuple(which)
     bad = [w for w in which if w not in INDICATOR_NAMES]
+    orbit = [w for w in bad if w in table.BY_NAME]
+    if orbit:
+        raise ParameterError(f"indicator {orbit[0]} is not computed along deviation vectors: it comes from a section "
+                             f"map's returns around a centre (explorer.{orbit[0]}, for Chaplygin's model); ask for "
+                             f"{', '.join(INDICATOR_NAMES)}")
     if bad or not which:
         raise ParameterError(f"indicators must be a non-empty list of {', '.join(INDICATOR_NAMES)}; got {which!r}")
     return tuple(dict.fromkeys(which))

@@ -1,10 +1,10 @@
 """Chaos indicators (mLCE, MEGNO, FLI, SALI, GALI_2) of the orbits of a
 :class:`explorer.model.system.System` or of its section map (docs/systems.md, "Chaos indicators").
 
-:func:`explorer.analysis.lyapunov.indicators` hands a System or a System's map here; the result is
-the engine's :class:`~explorer.analysis.lyapunov.Indicators` (the same attributes, columns and
-statuses), ``final`` and ``deviation`` in the system's dimension n, ``energy_error`` = |H(final) - H(start)|
-(NaN without an energy).
+:func:`explorer.analysis.lyapunov.indicators` hands a System or a System's map here and makes the
+fields returned into the engine's :class:`~explorer.analysis.lyapunov.Indicators` (the same attributes,
+columns and statuses), ``final`` and ``deviation`` in the system's dimension n, ``energy_error`` =
+|H(final) - H(start)| (NaN without an energy).
 
 The tangent dynamics are the variational equations of :meth:`System.variational` (the symbolic
 Jacobian times the deviation vectors), whose Taylor recurrence is generated with the state's
@@ -17,7 +17,6 @@ from __future__ import annotations
 import numpy as np
 
 from explorer._jit import get_num_threads, max_threads, set_num_threads
-from explorer.analysis import lyapunov
 from explorer.analysis.system_sections import _states, is_system
 from explorer.integrate.methods import DEFAULT_TOL, check_setting
 from explorer.kernels import indicator_table as table
@@ -26,7 +25,6 @@ from explorer.model import ParameterError, validation
 
 __all__ = ["GENERIC_SEEDS", "default_vectors", "system_indicators"]
 
-DEFAULT_MAX_STEPS = 10**9
 #: the engine's settings that have no meaning for a System (Chaplygin's section, energy and fixed step)
 _NOT_FOR_A_SYSTEM = ("phi0", "h", "dt")
 #: the irrationals whose multiples make the default deviation vectors (:func:`default_vectors`)
@@ -75,19 +73,17 @@ def _energy_error(system, Y0, final) -> np.ndarray:
         return np.array([abs(mod.energy(f, P) - mod.energy(y, P)) for f, y in zip(final, Y0)])
 
 
-def system_indicators(system, y0=None, *, states=None, tmax: float = lyapunov.DEFAULT_TIME, method=None,
-                      tol: float | None = None, history: int = 0, v0=None, w0=None,
-                      max_steps: int = DEFAULT_MAX_STEPS, threads: int | None = None, which=None,
-                      early_stop: bool = False, early_sali: float = lyapunov.EARLY_SALI,
-                      early_megno: float = lyapunov.EARLY_MEGNO, early_time: float = lyapunov.EARLY_TIME,
-                      **other) -> lyapunov.Indicators:
-    """The indicators ``which`` of the orbits of ``system`` (a System: full states ``states=``, shape
-    (N, n) in its state order; a System's section map: section points, lifted by its ``states``)
-    over the time ``tmax``, by the adaptive Taylor method of ``tol`` (the only method for a System)
-    on the variational equations, with the engine's meaning of ``history``, ``v0``, ``w0``
-    (default :func:`default_vectors`), ``early_stop`` and its levels, ``max_steps`` and ``threads``
+def system_indicators(system, y0=None, *, states=None, tmax: float, method, tol: float | None, history: int, v0,
+                      w0, max_steps: int, threads: int | None, which: tuple, early_stop: bool, early_sali: float,
+                      early_megno: float, early_time: float, **other) -> dict:
+    """The fields of :class:`~explorer.analysis.lyapunov.Indicators` for the indicators ``which``
+    (checked names) of the orbits of ``system`` (a System: full states ``states=``, shape (N, n) in
+    its state order; a System's section map: section points, lifted by its ``states``) over the time
+    ``tmax``, by the adaptive Taylor method of ``tol`` (the only method for a System) on the
+    variational equations, with the engine's meaning of ``history``, ``v0``, ``w0`` (default
+    :func:`default_vectors`), ``early_stop`` and its levels, ``max_steps`` and ``threads``
     (docs/commands/lyapunov.md).  ParameterError for the engine's settings of Chaplygin's model
-    (phi0, h, dt), a method other than "taylor" and frequency_diffusion (not a tangent indicator)."""
+    (phi0, h, dt) and a method other than "taylor"."""
     from explorer.analysis import budget
     from explorer.integrate import codegen
 
@@ -101,12 +97,6 @@ def system_indicators(system, y0=None, *, states=None, tmax: float = lyapunov.DE
     if method not in (None, "taylor"):
         raise ParameterError(f"method must be 'taylor' for a System (the generated Taylor integrator of the "
                              f"variational equations), got {method!r}")
-    names = (which,) if isinstance(which, str) else which
-    if names is not None and "frequency_diffusion" in tuple(names):
-        raise ParameterError("indicator frequency_diffusion is not computed along deviation vectors: it needs the "
-                             "rotation numbers of a section map around a centre (explorer.frequency_diffusion), "
-                             "which does not take a System; ask for mlce, megno, fli, sali or gali2")
-    which = lyapunov.check_which(which)
     nvec = max(table.BY_NAME[w].vectors for w in which)
     if is_system(system):
         if y0 is not None and states is not None:
@@ -169,6 +159,7 @@ def system_indicators(system, y0=None, *, states=None, tmax: float = lyapunov.DE
                         early_time=early_time)
     rows = {table.RESULT: res, table.EXTRA: ext}
     values = {i.name: rows[i.row][:, i.column] for i in table.TANGENT}
-    return lyapunov.Indicators(res[:, table.RES_T], values, res[:, table.RES_Y], status, steps, final, hist_t, hist,
-                               "taylor", settings, early=ext[:, table.EXT_EARLY].astype(np.int64), deviation=dev,
-                               which=which, energy_error=_energy_error(system, Y0, final))
+    return dict(time=res[:, table.RES_T], values=values, Y=res[:, table.RES_Y], status=status, steps=steps,
+                final=final, history_t=hist_t, history=hist, method="taylor", settings=settings,
+                early=ext[:, table.EXT_EARLY].astype(np.int64), deviation=dev, which=which,
+                energy_error=_energy_error(system, Y0, final))
