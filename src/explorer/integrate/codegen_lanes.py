@@ -18,8 +18,10 @@ __all__ = ["render"]
 SOURCE = '''
 
 # ---- crossings on SIMD lanes (explorer.analysis.system_sections): each lane crossings_orbit bit for bit
-from explorer.integrate.simd import atomic_fetch_add, vbits, vmax_gt, vmin_lt, vradius_power_core  # noqa: E402
-from explorer.kernels.events import excluded_by_variation, tail_term  # noqa: E402
+from explorer.integrate.simd import (  # noqa: E402
+    atomic_fetch_add, next_bit, vbits, vmask, vmax_gt, vmin_lt, vradius_power_core, vselect)
+from explorer.kernels.clock import compensated_add  # noqa: E402
+from explorer.kernels.events import excluded_by_variation, sign_change, tail_term  # noqa: E402
 from explorer.kernels.power import is_normal  # noqa: E402
 from explorer.kernels.taylor import radius_min  # noqa: E402
 
@@ -61,10 +63,11 @@ def _evaluate_lanes(X, order, hv, Y):
 
 
 @njit(error_model="numpy")
-def _section_lanes(X, order, hv, Y, a, b, GC, G):
+def _section_lanes(X, order, hv, Y, a, b, direction, L_g, GC, G):
     """Per lane, as crossings_orbit: G = _section_value(a, b, y) of the new state y = Y, GC[k] = a . X[k]
     (+ b at k = 0).  Returns the bits of the lanes whose new state is finite (kernels.checks.all_finite)
-    and of those where kernels.events.no_root_within(GC, order, h) is false (a root is possible)."""
+    and of those where kernels.events.isolate_crossings(GC, order, h, L_g, G, direction, ...) may find a
+    root: its first two tests (no_root_within; monotone_within without a sign change) in vector form."""
     h = vload(hv, 0)
     sy = vzero()
     g = vsplat(b)
@@ -72,6 +75,8 @@ def _section_lanes(X, order, hv, Y, a, b, GC, G):
     vstore(G, 0, g)
     tail = vzero()
     rk = vsplat(1.0)
+    dtail = vzero()
+    drk = vsplat(1.0)
     for k in range(order + 1):
         o = k * XS
         c = vzero()
@@ -80,9 +85,54 @@ def _section_lanes(X, order, hv, Y, a, b, GC, G):
             c = c + b
         else:
             tail, rk = tail_term(tail, rk, h, 1.0, c)
+            if k >= 2:
+                dtail, drk = tail_term(dtail, drk, h, float(k), c)
         vstore(GC, k * LANES, c)
-    excluded = excluded_by_variation(vload(GC, 0), tail)
-    return vbits(is_finite(sy)), _ALL_LANES & ~vbits(excluded)
+    excluded = vbits(excluded_by_variation(vload(GC, 0), tail))
+    monotone = vbits(excluded_by_variation(vload(GC, LANES), dtail))
+    cross = vbits(sign_change(vload(L_g, 0), g, direction))
+    return vbits(is_finite(sy)), _ALL_LANES & ~excluded & (~monotone | cross)
+
+
+@njit(error_model="numpy")
+def _steps_lanes(NORM, fin, normal, L_on, L_t, tmax, factor, hv, L_last, L_go):
+    """crossings_orbit's step (step_size, clip_step, resolves) in vector form for the lanes holding an orbit
+    whose norms are finite and normal: their hv, L_last and L_go (1.0: the step goes on; 0.0 and hv = 0 for
+    the others).  Returns the bits of the other lanes holding an orbit: their step is taken per lane."""
+    t = vload(L_t, 0)
+    tv = vsplat(tmax)
+    h = vload(NORM, 4 * LANES) * factor
+    last = (t + h) >= tv
+    h = vselect(last, tv - t, h)
+    live = vbits(vload(L_on, 0) > 0.0)
+    ok = live & fin & normal & vbits(resolves(t, h))
+    go = vmask(ok)
+    zero = vzero()
+    one = vsplat(1.0)
+    vstore(hv, 0, vselect(go, h, zero))
+    vstore(L_last, 0, vselect(last, one, zero))
+    vstore(L_go, 0, vselect(go, one, zero))
+    return live & ~ok
+
+
+@njit(error_model="numpy")
+def _ends_lanes(X, Y, G, hv, L_go, L_last, finite, maybe, L_t, L_tc, L_steps, L_g, tmax, max_steps):
+    """The end of crossings_orbit's step in vector form for the lanes whose step went on, is not the last,
+    ends finite, cannot hold a root and leaves the orbit running: the compensated clock
+    (kernels.clock.compensated_add), the step count, the state and the section's value.  Returns the bits
+    of the other lanes whose step went on: their end is taken per lane."""
+    go = vbits(vload(L_go, 0) > 0.0)
+    t, tc = compensated_add(vload(L_t, 0), vload(L_tc, 0), vload(hv, 0))
+    steps = vload(L_steps, 0) + 1.0
+    ok = go & finite & ~maybe & ~vbits(vload(L_last, 0) > 0.0) & vbits((t < tmax) & (steps < float(max_steps)))
+    m = vmask(ok)
+    vstore(L_t, 0, vselect(m, t, vload(L_t, 0)))
+    vstore(L_tc, 0, vselect(m, tc, vload(L_tc, 0)))
+    vstore(L_steps, 0, vselect(m, steps, vload(L_steps, 0)))
+    vstore(L_g, 0, vselect(m, vload(G, 0), vload(L_g, 0)))
+    for i in range(DIM):
+        vstore(X, i * LANES, vselect(m, vload(Y, i * LANES), vload(X, i * LANES)))
+    return go & ~ok
 
 
 @njit(error_model="numpy")
@@ -98,8 +148,8 @@ def _lane_status(n, limit, t, tmax, steps, max_steps):
 
 
 @njit(error_model="numpy")
-def _lane_start(l, next_orbit, Y0, P, a, b, tmax, max_steps, limit, X, orb, L_t, L_tc, L_g, L_E0, L_n, L_steps,
-                count, status, final, info):
+def _lane_start(l, next_orbit, Y0, P, a, b, tmax, max_steps, limit, X, orb, L_on, L_t, L_tc, L_g, L_E0, L_n,
+                L_steps, count, status, final, info):
     """Lane l takes the next orbit of the queue ``next_orbit`` at its start, as crossings_orbit does (an
     orbit stopped before its first step is written out and the next one taken).  Returns 1, or 0 when the
     queue is empty: the lane then idles on the zero state (its coefficients all 0)."""
@@ -107,6 +157,7 @@ def _lane_start(l, next_orbit, Y0, P, a, b, tmax, max_steps, limit, X, orb, L_t,
         j = atomic_fetch_add(next_orbit, 0, 1)
         if j >= Y0.shape[0]:
             orb[l] = -1
+            L_on[l] = 0.0
             for i in range(DIM):
                 X[0, i, l] = 0.0
             return 0
@@ -114,10 +165,11 @@ def _lane_start(l, next_orbit, Y0, P, a, b, tmax, max_steps, limit, X, orb, L_t,
         for i in range(DIM):
             X[0, i, l] = y0[i]
         orb[l] = j
+        L_on[l] = 1.0
         L_t[l] = 0.0
         L_tc[l] = 0.0
         L_n[l] = 0
-        L_steps[l] = 0
+        L_steps[l] = 0.0
 {energy_start}
         L_g[l] = _section_value(a, b, y0)
         st = _lane_status(0, limit, 0.0, tmax, 0, max_steps)
@@ -141,7 +193,7 @@ def _lane_finish(l, st, X, orb, L_t, L_tc, L_n, L_steps, count, status, final, i
 
 @njit(error_model="numpy")
 def crossings_lanes_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_steps, limit, data, count, status,
-                            final, info):
+                           final, info):
     """One group of LANES lanes: orbits from the queue ``next_orbit`` until it is empty, each lane
     crossings_orbit's loop (its arguments and outputs)."""
     X = np.zeros((order + 1, DIM, LANES))
@@ -149,17 +201,19 @@ def crossings_lanes_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_
     Y = np.zeros((DIM, LANES))
     GC = np.zeros((order + 1, LANES))
     NORM = np.zeros((5, LANES))
+    # per lane: the step, the clock, the section's values, E0, the step count, and flags as 1.0 / 0.0
     hv = np.zeros(LANES)
     G = np.zeros(LANES)
     L_t = np.zeros(LANES)
     L_tc = np.zeros(LANES)
     L_g = np.zeros(LANES)
     L_E0 = np.zeros(LANES)
+    L_steps = np.zeros(LANES)
+    L_on = np.zeros(LANES)
+    L_last = np.zeros(LANES)
+    L_go = np.zeros(LANES)
     orb = np.full(LANES, -1, np.int64)
     L_n = np.zeros(LANES, np.int64)
-    L_steps = np.zeros(LANES, np.int64)
-    L_last = np.zeros(LANES, np.bool_)
-    L_go = np.zeros(LANES, np.bool_)
     yc = np.empty(DIM)
     gc, work, roots, brackets, stack = root_workspace(order)
     factor = safety_factor(order)
@@ -167,41 +221,37 @@ def crossings_lanes_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_
     e_q = 1.0 / (order - 1)
     active = 0
     for l in range(LANES):
-        active += _lane_start(l, next_orbit, Y0, P, a, b, tmax, max_steps, limit, X, orb, L_t, L_tc, L_g, L_E0,
-                              L_n, L_steps, count, status, final, info)
+        active += _lane_start(l, next_orbit, Y0, P, a, b, tmax, max_steps, limit, X, orb, L_on, L_t, L_tc, L_g,
+                              L_E0, L_n, L_steps, count, status, final, info)
     while active > 0:
         taylor_coefficients_lanes(P, X, order, W)
         fin, normal = _norms_lanes(X, order, e_p, e_q, NORM)
-        for l in range(LANES):
-            hv[l] = 0.0
-            L_go[l] = False
-            if orb[l] < 0:
-                continue
-            st = -1
-            if not (fin >> l) & 1:
-                st = STATUS_NONFINITE
-            else:
+        bits = _steps_lanes(NORM, fin, normal, L_on, L_t, tmax, factor, hv, L_last, L_go)
+        while bits != 0:
+            l, bits = next_bit(bits)
+            st = STATUS_NONFINITE
+            if (fin >> l) & 1:
                 if (normal >> l) & 1:
                     h = NORM[4, l] * factor
                 else:
                     h = radius_min(NORM[0, l], NORM[1, l], NORM[2, l], NORM[3, l], e_p, e_q) * factor
                 h, last = clip_step(L_t[l], h, tmax)
-                if not resolves(L_t[l], h):
-                    st = STATUS_STEP_UNDERFLOW
-                else:
+                st = STATUS_STEP_UNDERFLOW
+                if resolves(L_t[l], h):
+                    st = -1
                     hv[l] = h
-                    L_last[l] = last
-                    L_go[l] = True
+                    L_last[l] = 1.0 if last else 0.0
+                    L_go[l] = 1.0
             if st >= 0:
                 _lane_finish(l, st, X, orb, L_t, L_tc, L_n, L_steps, count, status, final, info)
-                active += _lane_start(l, next_orbit, Y0, P, a, b, tmax, max_steps, limit, X, orb, L_t, L_tc, L_g,
-                                      L_E0, L_n, L_steps, count, status, final, info) - 1
+                active += _lane_start(l, next_orbit, Y0, P, a, b, tmax, max_steps, limit, X, orb, L_on, L_t, L_tc,
+                                      L_g, L_E0, L_n, L_steps, count, status, final, info) - 1
         _evaluate_lanes(X, order, hv, Y)
-        finite, maybe = _section_lanes(X, order, hv, Y, a, b, GC, G)
-        for l in range(LANES):
-            if not L_go[l]:
-                continue
-            L_steps[l] += 1
+        finite, maybe = _section_lanes(X, order, hv, Y, a, b, direction, L_g, GC, G)
+        bits = _ends_lanes(X, Y, G, hv, L_go, L_last, finite, maybe, L_t, L_tc, L_steps, L_g, tmax, max_steps)
+        while bits != 0:
+            l, bits = next_bit(bits)
+            L_steps[l] += 1.0
             st = STATUS_NONFINITE
             if (finite >> l) & 1:
                 j = orb[l]
@@ -214,19 +264,18 @@ def crossings_lanes_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_
                     for k in range(order + 1):
                         gc[k] = GC[k, l]
                     nroots = poly_step_roots(gc, order, h, L_g[l], G[l], direction, roots, brackets, work, stack)
-                Xl = X[:, :, l].T
                 for r in range(nroots):
                     if n >= limit:
                         break
                     tau = roots[r]
-                    evaluate(Xl, order, tau, yc)
+                    evaluate(X[:, :, l].T, order, tau, yc)
                     data[j, n, 0] = (t - tc) + tau
                     for i in range(DIM):
                         data[j, n, 1 + i] = yc[i]
 {energy_column}
                     n += 1
                 L_n[l] = n
-                t, tc = advance_time(t, tc, h, L_last[l], tmax)
+                t, tc = advance_time(t, tc, h, L_last[l] != 0.0, tmax)
                 L_t[l] = t
                 L_tc[l] = tc
                 for i in range(DIM):
@@ -235,8 +284,8 @@ def crossings_lanes_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_
                 st = _lane_status(n, limit, t, tmax, L_steps[l], max_steps)
             if st >= 0:
                 _lane_finish(l, st, X, orb, L_t, L_tc, L_n, L_steps, count, status, final, info)
-                active += _lane_start(l, next_orbit, Y0, P, a, b, tmax, max_steps, limit, X, orb, L_t, L_tc, L_g,
-                                      L_E0, L_n, L_steps, count, status, final, info) - 1
+                active += _lane_start(l, next_orbit, Y0, P, a, b, tmax, max_steps, limit, X, orb, L_on, L_t, L_tc,
+                                      L_g, L_E0, L_n, L_steps, count, status, final, info) - 1
 
 
 @njit(parallel=True, error_model="numpy")
