@@ -16,6 +16,7 @@ Benchmarks (script, RESULTS.md section):
   long_orbit      bench_long_orbit.py      LONGORBIT (one long orbit vs heyoka scalar, start-up, memory)
   early_stop      bench_early_stop.py      EARLYSTOP (time saved by early classification)
   greene          bench_greene.py          GREENE (Greene's k_c of the standard map's golden curve)
+  systems         bench_systems.py         SYSTEMS (a System's crossings vs heyoka: Hénon–Heiles sections)
 
 Each section of RESULTS.md carries its own command, date, machine and versions; a full run of
 this script also writes the RUN-ALL section (what ran, exit status, wall time).  Benchmarks are
@@ -41,6 +42,7 @@ BENCHMARKS = {
     "long_orbit": "bench_long_orbit.py",
     "early_stop": "bench_early_stop.py",
     "greene": "bench_greene.py",
+    "systems": "bench_systems.py",
 }
 
 
