@@ -78,6 +78,35 @@ def test_henon_heiles_scales_with_lam_as_its_hamiltonian(hh):
     np.testing.assert_allclose(half.data[..., 1:5], 2 * one.data[..., 1:5], rtol=0, atol=1e-11)
 
 
+def _section_grid(E, n):
+    """The points of an n x n grid over the box of the section x = 0 at energy E that lie inside its
+    energy curve (uniform in area, as the relative areas of Hénon & Heiles 1964)."""
+    lo, hi = _energy_curve_ends(E)
+    top = math.sqrt(2 * E)                              # the largest |py|, at y = 0
+    Y, P = np.meshgrid(np.linspace(lo, hi, n + 2)[1:-1], np.linspace(-top, top, n + 2)[1:-1])
+    inside = P**2 + Y**2 - 2 * Y**3 / 3 < 0.999 * 2 * E
+    return np.column_stack([Y[inside], P[inside]])
+
+
+def test_henon_heiles_chaotic_fraction_grows_with_the_energy_as_henon_and_heiles_found():
+    """MEGNO <Y> > 4 at t = 1000 on a 20 x 20 grid of each section (about 300 orbits), against Hénon &
+    Heiles 1964: at E = 1/12 the section is covered by invariant curves (relative area of curves ~1),
+    at E = 1/8 an ergodic sea surrounds the islands, at E = 1/6 the motion is predominantly ergodic with
+    small islands left.  The bounds are the precision of those statements (a fraction read off their
+    figure of the relative area, not a table): <= 0.05, between 0.3 and 0.7, >= 0.85."""
+    hh = classic.henon_heiles()
+    x, y, px, py = hh.states
+    fraction = {}
+    for E in classic.HENON_HEILES_ENERGIES:
+        smap = ex.SectionMap(hh, E, section=x, direction=+1, coords=(y, py), solve=px)
+        ind = ex.indicators(smap, _section_grid(E, 20), tmax=1000.0, which=("megno",))
+        fraction[E], _, n = ex.chaotic_fraction(ind.megno, 4.0)
+        assert n > 250
+    f12, f8, f6 = (fraction[E] for E in classic.HENON_HEILES_ENERGIES)
+    assert f12 <= 0.05 and 0.3 <= f8 <= 0.7 and f6 >= 0.85, fraction
+    assert f12 < f8 < f6
+
+
 # ---------------------------------------------------------------------------------------------- PCR3BP
 @pytest.fixture(scope="module")
 def pcr():
