@@ -86,8 +86,12 @@ PRODUCTS = ("sections", "indicators")
 
 
 def build_spec(scene, panel_indices, *, chunk_orbits: int, product: str | None = None) -> SweepSpec:
-    """Seeds every panel to compute (inside the allowed region only, R9) and cuts it into chunks."""
+    """Seeds every panel to compute (inside the allowed region only, R9) and cuts it into chunks; a
+    System's scene (one with a ``system``): :func:`build_system_spec`."""
     from explorer.analysis.seeds import seed_points
+
+    if getattr(scene, "system", None) is not None:
+        return build_system_spec(scene, panel_indices, chunk_orbits=chunk_orbits, product=product)
 
     if product is not None and product not in PRODUCTS:
         raise ValueError(f"product must be one of {PRODUCTS} or None, got {product!r}")
@@ -181,6 +185,8 @@ def map_raster(seeds, values, grid):
 
 def task(spec: SweepSpec, i: int, threads: int | None = None) -> dict:
     """Pure map: integrate chunk i of the sweep and return its arrays."""
+    if isinstance(spec, SystemSweepSpec):
+        return system_task(spec, i, threads)
     pos, a, b = spec.chunks[i]
     panel = spec.panels[pos]
     t0 = time.perf_counter()
@@ -373,3 +379,176 @@ def default_jobs_layout(jobs: int) -> int:
 
 def cpu_count() -> int:
     return os.cpu_count() or 1
+
+
+@dataclass(frozen=True)
+class SystemPanelSpec:
+    """A panel of a System's sweep: its System (parameter values), energy ``h``, seeds (N, 2) in
+    the map's coords and their states ``y0`` (N, n); ``grid`` the raster of a chaos map."""
+
+    index: int
+    label: str
+    system: Any
+    h: float
+    y0: np.ndarray
+    seeds: np.ndarray
+    grid: tuple = ()
+    dropped: int = 0
+
+
+@dataclass(frozen=True)
+class SystemSweepSpec:
+    """The panels of a System's sweep and the section map they share (docs/scenes.md, "A scene of
+    your own system"); ``task`` maps it as a :class:`SweepSpec`.  Not streamed."""
+
+    panels: tuple
+    section: Any
+    direction: int
+    coords: tuple
+    solve: str
+    crossings: int
+    tol: float
+    tmax: float
+    max_steps: int
+    chunks: tuple = ()
+    lyapunov: Any = None
+    sections: bool = True
+    blocks: tuple = ()
+
+    def streamed(self, pos: int) -> bool:
+        return False
+
+    def section_map(self, panel):
+        from explorer.analysis.system_section_map import SystemSectionMap
+
+        return SystemSectionMap(panel.system, panel.h, section=self.section, direction=self.direction,
+                                coords=self.coords, solve=self.solve)
+
+    def columns(self, system) -> list:
+        """The columns of a System's crossing row (t, x_1..x_n, E - E0) stored as the panel's rows:
+        (t, a, b, solve, E - E0), the store's (t, p1, p2, M, dH) (docs/store.md)."""
+        index = [s.name for s in system.states]
+        return [0] + [1 + index.index(c) for c in (*self.coords, self.solve)] + [1 + len(index)]
+
+
+def allowed_points(smap, points) -> np.ndarray:
+    """Mask of the points (N, 2) that the System's section map ``smap`` lifts onto its energy
+    surface on the direction's branch (its ``states`` refuses the others): ranges bisected until
+    each is lifted whole or is one refused point."""
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    ok = np.zeros(len(pts), dtype=bool)
+    todo = [(0, len(pts))] if len(pts) else []
+    while todo:
+        lo, hi = todo.pop()
+        try:
+            smap.states(pts[lo:hi])
+            ok[lo:hi] = True
+        except ParameterError:
+            if hi - lo > 1:
+                mid = (lo + hi) // 2
+                todo += [(lo, mid), (mid, hi)]
+    return ok
+
+
+def _window_grid(window, na: int, nb: int) -> np.ndarray:
+    """Cell centres of an na x nb raster of ``window`` (a_lo, a_hi, b_lo, b_hi), b rows ascending, then a."""
+    a0, a1, b0, b1 = window
+    A, B = np.meshgrid(a0 + (a1 - a0) * (np.arange(na) + 0.5) / na, b0 + (b1 - b0) * (np.arange(nb) + 0.5) / nb)
+    return np.column_stack([A.ravel(), B.ravel()])
+
+
+def system_seed_points(seeds, smap):
+    """(points (M, 2), dropped) of a System scene's [seeds] on ``smap``'s energy surface: ``grid``
+    about n cell centres of the window, ``random`` n uniform points of it (``seed``), ``points``
+    as given; candidates off the surface are left out (``dropped`` counts them for ``points``)."""
+    if seeds.kind == "points":
+        cand = np.array(seeds.points, dtype=np.float64).reshape(-1, 2)
+    elif seeds.kind == "grid":
+        a0, a1, b0, b1 = seeds.window
+        na = max(1, round(math.sqrt(seeds.n * (a1 - a0) / (b1 - b0))))
+        cand = _window_grid(seeds.window, na, max(1, round(seeds.n / na)))
+    else:
+        a0, a1, b0, b1 = seeds.window
+        u = np.random.default_rng(seeds.seed).random((seeds.n, 2))
+        cand = np.column_stack([a0 + (a1 - a0) * u[:, 0], b0 + (b1 - b0) * u[:, 1]])
+    ok = allowed_points(smap, cand)
+    return cand[ok], int((~ok).sum()) if seeds.kind == "points" else 0
+
+
+def system_map_seeds(smap, window, resolution: int):
+    """The seeds of a System's chaos map: the cell centres of a resolution^2 raster of ``window``
+    on the energy surface, in raster order, and the grid (resolution, a_lo, a_hi, b_lo, b_hi) of
+    :func:`map_raster`."""
+    n = int(resolution)
+    pts = _window_grid(window, n, n)
+    return pts[allowed_points(smap, pts)], (n, *(float(w) for w in window))
+
+
+def build_system_spec(scene, panel_indices, *, chunk_orbits: int, product: str | None = None) -> SystemSweepSpec:
+    """The panels of a System's scene to compute (seeds on each panel's energy surface), in chunks."""
+    if product is not None and product not in PRODUCTS:
+        raise ValueError(f"product must be one of {PRODUCTS} or None, got {product!r}")
+    ly = scene.lyapunov if "lyapunov" in scene.compute and product != "sections" else None
+    with_sections = "sections" in scene.compute and product != "indicators"
+    if product is None and with_sections and ly is not None and ly.map_resolution:
+        raise ValueError("sections with a map grid are two products: build one spec for each")
+    integ = scene.integration
+    panels, chunks = [], []
+    for pos, i in enumerate(panel_indices):
+        smap = scene.section_map(i)
+        grid: tuple = ()
+        dropped = 0
+        if ly is not None and ly.map_resolution:
+            pts, grid = system_map_seeds(smap, scene.seeds.window, ly.map_resolution)
+        else:
+            pts, dropped = system_seed_points(scene.seeds, smap)
+        system, energy, label = scene.panel(i)
+        if len(pts) == 0:
+            raise ParameterError(f"scene panel {i} ({label or system.name}): no seed lies on the energy surface "
+                                 f"E = {energy!r}")
+        panels.append(SystemPanelSpec(i, label, system, float(energy), np.ascontiguousarray(smap.states(pts)),
+                                      pts, grid, dropped))
+        chunks += _chunks(pos, len(pts), chunk_orbits)
+    return SystemSweepSpec(tuple(panels), scene.section, scene.direction, tuple(scene.coords), scene.solve,
+                           integ.crossings, integ.tol, integ.effective_tmax, integ.max_steps, tuple(chunks), ly,
+                           with_sections)
+
+
+def _system_energy(system, states) -> np.ndarray:
+    """The energy of ``system`` at each state (N, >= n), with its generated ``energy(y, P)``."""
+    from explorer.integrate import codegen
+
+    energy, P = codegen.load(system).energy, system.parameter_array()
+    n = system.dimension
+    with np.errstate(invalid="ignore", over="ignore"):
+        return np.array([energy(np.ascontiguousarray(y[:n]), P) for y in np.asarray(states, dtype=np.float64)])
+
+
+def system_task(spec: SystemSweepSpec, i: int, threads: int | None = None) -> dict:
+    """Pure map of a System's sweep: chunk i's crossings of the panel's section map (rows
+    :meth:`SystemSweepSpec.columns`) and, with [lyapunov], the orbits' MEGNO."""
+    pos, a, b = spec.chunks[i]
+    panel = spec.panels[pos]
+    t0 = time.perf_counter()
+    smap = spec.section_map(panel)
+    pts = panel.seeds[a:b]
+    if spec.sections:
+        res = sections.crossings(smap, pts, n_crossings=spec.crossings, tol=spec.tol, tmax=spec.tmax,
+                                 max_steps=spec.max_steps, threads=threads)
+        out = {"chunk": i, "data": res.data[..., spec.columns(panel.system)], "count": res.count,
+               "status": res.status, "final": res.final, "info": res.info, "settings": res.settings}
+    else:
+        n = b - a
+        out = {"chunk": i, "data": np.zeros((n, 0, 5)), "count": np.zeros(n, np.int64),
+               "status": np.zeros(n, np.int64), "final": panel.y0[a:b].copy(), "info": np.zeros((n, 3)),
+               "settings": {"sections": False}}
+    if spec.lyapunov is not None:
+        from explorer.analysis.lyapunov import indicators
+
+        ly = spec.lyapunov
+        ind = indicators(smap, pts, tmax=ly.time, tol=ly.tol, which=tuple(ly.indicators), threads=threads)
+        dh = np.abs(_system_energy(panel.system, ind.final) - panel.h)
+        out.update({k: ind.values[k] for k in ly.indicators})
+        out.update(lyapunov_status=ind.status, lyapunov_dh=dh)
+    out["wall_time"] = time.perf_counter() - t0
+    return out

@@ -19,6 +19,7 @@ from explorer.app.figures import (
     _matplotlib,
     mathtext_label,
     panel_axes,
+    symbol_label,
 )
 
 
@@ -51,11 +52,27 @@ SCALES = {name: (s.label, s.log, s.vmin, s.vmax) for name, s in STYLES.items()}
 SEPARATRIX_COLOR = "#1f77b4"
 
 
+def axis_label(name) -> str:
+    """The mathtext of a coordinate's name: the model's symbols (``p1`` -> ``$p_1$``), else the name
+    in italics with a trailing number, or the letter after a momentum's ``p``, as subscript (``q2`` ->
+    ``$q_{2}$``, ``py`` -> ``$p_{y}$``)."""
+    label = symbol_label(name)
+    if label != str(name):
+        return label
+    if len(str(name)) == 2 and str(name)[0] == "p" and str(name).isalpha():
+        return f"$p_{{{name[1]}}}$"
+    head = str(name).rstrip("0123456789")
+    tail = str(name)[len(head):]
+    return f"${head}_{{{tail}}}$" if head and tail and head.isalpha() else \
+        (f"${name}$" if str(name).isalpha() else str(name))
+
+
 def chaos_rasters(maps, *, indicator="megno", threshold=4.0, columns=None, dpi=200, panel_width=PANEL_WIDTH):
     """One raster per map: dicts with ``seeds`` (N, 2), ``values`` (N,) of ``indicator``,
     ``grid`` (resolution, p1_lo, p1_hi, p2_lo, p2_hi), ``params``, ``h``, ``phi0``, ``label``,
     optional ``curves`` (separatrix polylines (p1, p2)) and ``fraction`` (chaotic fraction).
-    Cells without a seed (outside the allowed region) are drawn gray."""
+    Cells without a seed (outside the allowed region) are drawn gray.  A System's map (docs/systems.md):
+    ``params`` None (no ellipse of Chaplygin's model) and ``axes``, the names of its coords."""
     mpl = _matplotlib()
     from matplotlib.colors import LogNorm, Normalize
     from matplotlib.patches import Ellipse
@@ -78,7 +95,6 @@ def chaos_rasters(maps, *, indicator="megno", threshold=4.0, columns=None, dpi=2
         fig, axes = panel_axes(n, ncols, (panel_width * ncols + 0.9, 0.9 * panel_width * nrows + 0.3), dpi)
         im = None
         for ax, m in zip(axes, maps):
-            prm = m["params"] if isinstance(m["params"], model.Params) else model.Params(**m["params"])
             res, a1, b1, a2, b2 = m["grid"]
             vals = np.asarray(m["values"], float)
             if log:
@@ -87,7 +103,10 @@ def chaos_rasters(maps, *, indicator="megno", threshold=4.0, columns=None, dpi=2
             ax.set_facecolor(FORBIDDEN_COLOR)
             im = ax.imshow(np.ma.masked_invalid(img), origin="lower", extent=(a1, b1, a2, b2), cmap=cmap, norm=norm,
                            interpolation="nearest", aspect="equal", zorder=1)
-            region = model.allowed_ellipse(prm, m["h"], m.get("phi0", math.pi))
+            prm = m.get("params")
+            if isinstance(prm, dict):
+                prm = model.Params(**prm)
+            region = None if prm is None else model.allowed_ellipse(prm, m["h"], m.get("phi0", math.pi))
             if region is not None:
                 c1, c2, r1, r2 = region
                 ax.add_patch(Ellipse((c1, c2), 2 * r1, 2 * r2, facecolor="none", edgecolor=BOUNDARY_COLOR,
@@ -102,8 +121,9 @@ def chaos_rasters(maps, *, indicator="megno", threshold=4.0, columns=None, dpi=2
             if m.get("fraction") is not None and math.isfinite(m["fraction"]):
                 title += f"   chaotic {m['fraction']:.1%} (MEGNO > {threshold:g})"
             ax.set_title(title, fontsize=_FONT_SIZE, pad=4)
-            ax.set_xlabel("$p_1$", fontsize=_FONT_SIZE)
-            ax.set_ylabel("$p_2$", fontsize=_FONT_SIZE)
+            xlabel, ylabel = (axis_label(a) for a in m.get("axes", ("p1", "p2")))
+            ax.set_xlabel(xlabel, fontsize=_FONT_SIZE)
+            ax.set_ylabel(ylabel, fontsize=_FONT_SIZE)
             ax.tick_params(direction="in", top=True, right=True, labelsize=_TICK_SIZE)
             ax.text(0.01, 0.01, f"{int(res)}$\\times${int(res)}", transform=ax.transAxes, fontsize=_TICK_SIZE - 1,
                     va="bottom", ha="left", zorder=4)

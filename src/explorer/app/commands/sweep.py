@@ -12,6 +12,9 @@ from explorer.model import validation
 
 COMMAND = Command("sweep", __doc__, "figure4 --out results/figure4.h5 --jobs 2", (
     opt("scene", nargs="?", default="figure4", help="scene file (.toml) or preset name [figure4]"),
+    opt("--system", default=None,
+        help="module:attribute of an explorer System (imported from the current directory or sys.path): gives or "
+             "replaces the scene's system (docs/scenes.md)"),
     opt("--out", default=None, help="HDF5 file [results/<scene>.h5]"),
     opt("--figure", default=None, help="figure path without extension [the --out path without .h5: beside the store]"),
     opt("--no-figure", action="store_true", help="do not draw the figure"),
@@ -39,7 +42,12 @@ def run(args) -> int:
     for option, path in (("--out", args.out), ("--figure", args.figure)):
         if path is not None:
             validation.output_path(option, path)
-    report = run_sweep(args.scene, args.out, figure=args.figure, draw=not args.no_figure, jobs=args.jobs,
+    scene = args.scene
+    if args.system is not None:
+        from explorer.io.scene import load_scene
+
+        scene = load_scene(args.scene, system=args.system)
+    report = run_sweep(scene, args.out, figure=args.figure, draw=not args.no_figure, jobs=args.jobs,
                        backend=args.backend, scheduler=args.scheduler, force=args.force,
                        progress=not args.quiet)
     print(format_report(report))

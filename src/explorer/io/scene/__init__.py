@@ -13,11 +13,12 @@ from explorer.io.scene.hashes import _canonical_json
 from explorer.io.scene.loading import PRESETS, load_scene, parse_scene, scene_from_dict
 from explorer.io.scene.schema import *  # noqa: F403  (the names of schema.__all__)
 from explorer.io.scene.specs import FigureSpec, IntegrationSpec, LyapunovSpec, ManifoldSpec, SeedSpec
+from explorer.io.scene.system import SystemScene, resolve_system
 from explorer.io.scene.writer import _toml_string, _toml_value
 
 __all__ = [
     "PRESETS", "FigureSpec", "IntegrationSpec", "LyapunovSpec", "ManifoldSpec", "Scene", "SceneError", "SeedSpec",
-    "grid_spacing", "load_scene", "parse_scene", "scene_from_dict", "seed_points",
+    "SystemScene", "grid_spacing", "load_scene", "parse_scene", "resolve_system", "scene_from_dict", "seed_points",
     # the writer's helpers, for the tests
     "_canonical_json", "_toml_string", "_toml_value",
 ]

@@ -24,11 +24,16 @@ from explorer.io.scene.schema import (
     COMPUTE_QUANTITIES,
 )
 from explorer.io.scene.specs import FigureSpec, IntegrationSpec, LyapunovSpec, ManifoldSpec, SeedSpec
+from explorer.io.scene.system import SystemScene, is_system_scene, system_scene_from_dict
 from explorer.model import PARAM_NAMES, ParameterError, validation
 
 
-def scene_from_dict(data: dict, text: str = "") -> Scene:
-    """A validated :class:`Scene` from nested tables (as produced by ``tomllib``)."""
+def scene_from_dict(data: dict, text: str = "", system=None):
+    """A validated :class:`Scene` from nested tables (as produced by ``tomllib``); a
+    :class:`~explorer.io.scene.system.SystemScene` when they name a ``system`` or ``system`` (a
+    System or 'module:attribute') is given."""
+    if is_system_scene(data, system):
+        return system_scene_from_dict(data, text, system)
     if not isinstance(data, dict):
         _fail("<top level>", f"must be a table, {_got(data)}")
     for k, v in data.items():
@@ -84,21 +89,25 @@ def scene_from_dict(data: dict, text: str = "") -> Scene:
     return Scene(**kw)
 
 
-def parse_scene(text: str, source: str = "<string>") -> Scene:
-    """A validated :class:`Scene` from TOML text (``source`` names it in syntax errors)."""
+def parse_scene(text: str, source: str = "<string>", system=None):
+    """A validated scene from TOML text (``source`` names it in syntax errors; ``system``: as
+    :func:`scene_from_dict`)."""
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         msg = " ".join(str(e).split())
         raise SceneError(f"scene: TOML syntax error in {source}: {msg}") from None
-    return scene_from_dict(data, text=text)
+    return scene_from_dict(data, text=text, system=system)
 
 
-def load_scene(spec) -> Scene:
+def load_scene(spec, system=None):
     """A scene: a preset by name (:data:`PRESETS`), else the path of a ``.toml`` file, validated
-    (:class:`SceneError` names the dotted key; docs/scenes.md)."""
+    (:class:`SceneError` names the dotted key; docs/scenes.md); ``system`` (a System or
+    'module:attribute') gives or replaces a System's scene's ``system``.  A scene object is returned as it is."""
+    if isinstance(spec, (Scene, SystemScene)) and system is None:
+        return spec
     if isinstance(spec, str) and spec in PRESETS:
-        return parse_scene(PRESETS[spec], source=f"preset '{spec}'")
+        return parse_scene(PRESETS[spec], source=f"preset '{spec}'", system=system)
     path = Path(os.fspath(spec))
     if not path.is_file():
         raise SceneError(f"scene: no built-in preset or file named '{path}' "
@@ -107,7 +116,7 @@ def load_scene(spec) -> Scene:
         text = path.read_bytes().decode("utf-8")
     except (OSError, UnicodeDecodeError) as e:
         raise SceneError(f"scene: cannot read '{path}': {' '.join(str(e).split())}") from None
-    return parse_scene(text, source=str(path))
+    return parse_scene(text, source=str(path), system=system)
 
 
 def _read_presets() -> dict:

@@ -1,0 +1,153 @@
+"""Scenes of a System (docs/scenes.md, "A scene of your own system"): `system = "module:attribute"`,
+the section parsed against the system's symbols only, what is refused and how it is named."""
+import textwrap
+
+import pytest
+import sympy as sp
+
+from explorer.io.scene import Scene, SceneError, SystemScene, load_scene, parse_scene, resolve_system
+from explorer.model import ParameterError
+
+MODULE = "h4_scene_systems"
+
+SOURCE = '''
+import sympy as sp
+import explorer as ex
+
+x, y, px, py, lam = sp.symbols("x y px py lam")
+hh = ex.System({x: px, y: py, px: -x - 2*lam*x*y, py: -y - lam*(x**2 - y**2)}, parameters={lam: 1.0},
+               energy=(px**2 + py**2)/2 + (x**2 + y**2)/2 + lam*(x**2*y - y**3/3), name="henon_heiles")
+no_energy = ex.System({x: px, y: py, px: -x, py: -y}, name="oscillators")
+
+
+def make_hh():
+    return hh.with_(lam=0.75)
+
+
+not_a_system = 42
+'''
+
+SCENE = textwrap.dedent(f"""\
+    name = "hh"
+    system = "{MODULE}:hh"
+    section = "x"
+    direction = 1
+    coords = ["y", "py"]
+    solve = "px"
+    [energy]
+    value = 0.125
+    [sweep]
+    parameter = "lam"
+    values = [0.5, 1.0]
+    [seeds]
+    kind = "points"
+    points = [[0.1, 0.1], [-0.1, 0.2], [0.1, 0.9]]
+    """)
+
+
+@pytest.fixture(autouse=True)
+def systems_module(tmp_path_factory, monkeypatch):
+    folder = tmp_path_factory.getbasetemp() / "h4_scene_systems_dir"
+    folder.mkdir(exist_ok=True)
+    (folder / f"{MODULE}.py").write_text(SOURCE)
+    (folder / "h4_raises.py").write_text("raise RuntimeError('broken on purpose')\n")
+    monkeypatch.syspath_prepend(str(folder))
+    return folder
+
+
+def test_a_scene_naming_module_attribute_sweeps_that_systems_parameter_on_its_section_map():
+    scene = parse_scene(SCENE)
+    assert isinstance(scene, SystemScene) and scene.system.name == "henon_heiles"
+    x = sp.Symbol("x")
+    assert scene.section == x and scene.coords == ("y", "py") and scene.solve == "px" and scene.direction == 1
+    assert scene.n_panels == 2
+    for i, lam in enumerate((0.5, 1.0)):
+        system, energy, label = scene.panel(i)
+        assert energy == 0.125 and label == f"lam = {lam!r}"
+        assert list(system.parameters.values()) == [lam]
+        smap = scene.section_map(i)
+        assert smap.energy_value == 0.125 and smap.system.parameters == system.parameters
+    # the point (0.1, 0.9) lies outside the energy surface: counted, not seeded
+    from explorer.analysis.sweep import system_seed_points
+
+    pts, dropped = system_seed_points(scene.seeds, scene.section_map(0))
+    assert pts.tolist() == [[0.1, 0.1], [-0.1, 0.2]] and dropped == 1
+
+
+def test_the_energy_can_be_the_swept_value_and_parameters_set_the_systems_values():
+    text = SCENE.replace('parameter = "lam"', 'parameter = "energy"').replace("[0.5, 1.0]", "[0.1, 0.125]")
+    scene = parse_scene(text + "[parameters]\nlam = 0.8\n")
+    assert [scene.panel(i)[1] for i in range(2)] == [0.1, 0.125]
+    assert all(list(scene.panel(i)[0].parameters.values()) == [0.8] for i in range(2))
+
+
+def test_system_given_beside_the_scene_replaces_its_system_as_a_callable_or_an_object(tmp_path):
+    path = tmp_path / "hh.toml"
+    path.write_text(SCENE.replace(f"{MODULE}:hh", "nowhere:at_all"))
+    scene = load_scene(path, system=f"{MODULE}:make_hh")    # a callable returning a System
+    assert scene.system.name == "henon_heiles" and list(scene.system.parameters.values()) == [0.75]
+    obj = resolve_system(f"{MODULE}:hh")
+    assert load_scene(path, system=obj).system is obj
+
+
+def test_a_chaplygin_scene_is_unchanged_and_refuses_a_system_beside_it():
+    assert isinstance(load_scene("figure4"), Scene)
+    with pytest.raises(SceneError, match="--system needs a scene of a System"):
+        load_scene("figure4", system=f"{MODULE}:hh")
+
+
+@pytest.mark.parametrize("value, message", [
+    ("hh", "must be 'module:attribute'"),
+    ("a:b:c", "must be 'module:attribute'"),
+    ("not a module:hh", "must be 'module:attribute'"),
+    ("h4_no_such_module:hh", "no module named 'h4_no_such_module'"),
+    (f"{MODULE}:missing", f"module {MODULE} has no attribute 'missing'"),
+    (f"{MODULE}:not_a_system", "is a int, not an explorer System"),
+    ("h4_raises:hh", "importing h4_raises failed: RuntimeError: broken on purpose"),
+])
+def test_a_bad_module_attribute_is_refused_naming_the_value(value, message):
+    with pytest.raises(ParameterError, match="--system") as err:
+        parse_scene(SCENE, system=value)
+    assert message in str(err.value) and value in str(err.value) and "\n" not in str(err.value)
+    with pytest.raises(SceneError, match="scene key 'system'"):
+        parse_scene(SCENE.replace(f"{MODULE}:hh", value))
+
+
+def test_the_section_is_read_as_arithmetic_of_the_systems_symbols_and_nothing_is_evaluated(tmp_path):
+    marker = tmp_path / "evaluated"
+    for section in (f"__import__('pathlib').Path('{marker}').touch()", "x + z", "x**2", "lambda: x", "x +"):
+        with pytest.raises(SceneError, match="scene key 'section'"):
+            parse_scene(SCENE.replace('section = "x"', f'section = "{section}"'))
+    assert not marker.exists()
+    scene = parse_scene(SCENE.replace('section = "x"', 'section = "2*x - 0.0*lam"'))
+    assert scene.section_map(0).section.a.tolist() == [2.0, 0.0, 0.0, 0.0]
+
+
+@pytest.mark.parametrize("edit, key", [
+    (('parameter = "lam"', 'parameter = "mu"'), "sweep.parameter"),
+    (("value = 0.125", "h = 0.125"), "energy.h"),
+    (('coords = ["y", "py"]', 'coords = ["y", "q"]'), "coords"),
+    (('solve = "px"', 'solve = "y"'), "solve"),
+    (("direction = 1", "direction = 0"), "direction"),
+    (('kind = "points"', 'kind = "grid"'), "seeds.window"),
+    (("[seeds]", "[model]\nmu = 1.0\n[seeds]"), "model"),
+    (("[0.5, 1.0]", "[0.5, 0.5]"), "sweep.values[1]"),
+])
+def test_a_bad_system_scene_is_refused_naming_the_key(edit, key):
+    with pytest.raises(SceneError, match=key.replace("[", r"\[").replace(".", r"\.")):
+        parse_scene(SCENE.replace(*edit))
+
+
+def test_a_system_without_an_energy_is_refused_naming_what_is_missing():
+    text = SCENE.replace(f"{MODULE}:hh", f"{MODULE}:no_energy").replace('[sweep]\nparameter = "lam"\n'
+                                                                        'values = [0.5, 1.0]\n', "")
+    with pytest.raises(SceneError, match="has no energy"):
+        parse_scene(text)
+
+
+def test_the_panel_hash_follows_the_numbers_not_the_drawing():
+    base = parse_scene(SCENE)
+    assert base.panel_hash(0) != base.panel_hash(1)      # lam differs
+    assert parse_scene(SCENE + "[figure]\ndpi = 100\n").panel_hash(0) == base.panel_hash(0)
+    assert parse_scene(SCENE.replace("value = 0.125", "value = 0.12")).panel_hash(0) != base.panel_hash(0)
+    assert parse_scene(SCENE.replace("direction = 1", "direction = -1")).panel_hash(0) != base.panel_hash(0)
