@@ -123,6 +123,11 @@ def draw_figure(scene, out_path, stem):
     """Read the store and draw the scene's figure (PNG and PDF). Returns the paths."""
     from explorer.app import figures
 
+    if getattr(scene, "system", None) is not None:   # a System's scene (docs/scenes.md)
+        from explorer.app.system_sweep import draw_system_figure
+
+        return draw_system_figure(scene, out_path, stem, text={FIGURE_SETTINGS_KEY: scene.figure_settings()})
+
     data = store.read_store(out_path)
     panels = []
     for i in range(scene.n_panels):
