@@ -172,11 +172,11 @@ class _Recorder:
 def _hy_worker(Y0, K, tol, simd, tmax, barrier, queue, tag):
     runner = HeyokaSystemSections(tol, simd)
     barrier.wait()
-    start = time.monotonic()
+    start, c0 = time.monotonic(), time.process_time()
     out = runner.run(Y0, K, tmax)
-    end = time.monotonic()
+    end, cpu = time.monotonic(), time.process_time() - c0
     queue.put(dict(tag=tag, ts=out["ts"], ys=out["ys"], count=out["count"], steps=out["steps"], start=start,
-                   end=end, build=runner.build_time, order=runner.order))
+                   end=end, cpu=cpu, build=runner.build_time, order=runner.order))
 
 
 def heyoka_processes(Y0, K, tol, simd, nproc, tmax):
@@ -200,7 +200,7 @@ def heyoka_processes(Y0, K, tol, simd, nproc, tmax):
         for key in ("ts", "ys", "count", "steps"):
             merged[key][parts[o["tag"]]] = o[key]
     merged.update(wall=max(o["end"] for o in outs) - min(o["start"] for o in outs), total=time.monotonic() - T0,
-                  build=max(o["build"] for o in outs), order=outs[0]["order"])
+                  build=max(o["build"] for o in outs), order=outs[0]["order"], cpu=sum(o["cpu"] for o in outs))
     return merged
 
 
@@ -280,10 +280,10 @@ def main(argv=None):
         kw = {} if driver == "auto" else {"driver": driver}
 
         def job():
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             r = ss.system_crossings(hh, Y0, n_crossings=K, section=x, direction=+1, tol=TOL, threads=th, **kw)
             sec = time.perf_counter() - t0
-            return sec, sec, r
+            return sec, sec, (r, time.process_time() - c0)
         return job
 
     jobs = [explorer_job(d, th) for d, th in ex_rows]
@@ -302,10 +302,10 @@ def main(argv=None):
     timings = round_robin(jobs, repeats, budget)
     rows = []
     for (driver, th), tm in zip(ex_rows, timings):
-        data, count, status, final, info, _, settings = tm["res"]
+        (data, count, status, final, info, _, settings), cpu = tm["res"]
         rows.append(dict(name=f"explorer ex.crossings, driver {driver}", setting=f"tol {TOL:.0e}, order "
                          f"{settings['order']}, {th} thread{'s' if th > 1 else ''}", wall=tm["best"],
-                         times=tm["times"], crossings=int(count.sum()), steps=int(info[:, 1].sum()),
+                         times=tm["times"], cpu=cpu, crossings=int(count.sum()), steps=int(info[:, 1].sum()),
                          max_dE=float(np.nanmax(np.abs(data[..., 5]))), threads=th, driver=driver,
                          rows=data if (driver == "auto" and th == threads) else None))
     for (nproc,), tm in zip(hy_cfgs, timings[len(ex_rows):]):
@@ -314,7 +314,7 @@ def main(argv=None):
         dE = hh_energy(r["ys"]) - E0[:, None]
         rows.append(dict(name=f"heyoka taylor_adaptive_batch (batch {simd})",
                          setting=f"tol {TOL:.0e}, order {r['order']}, {nproc} process{'es' if nproc > 1 else ''}",
-                         wall=tm["best"], times=tm["times"], crossings=int(r["count"].sum()),
+                         wall=tm["best"], times=tm["times"], cpu=r["cpu"], crossings=int(r["count"].sum()),
                          steps=int(r["steps"].sum()), max_dE=float(np.nanmax(np.abs(dE))), processes=nproc,
                          build=r["build"], total=r["total"], rows=np.concatenate([r["ts"][..., None], r["ys"]], axis=2)))
 
@@ -328,8 +328,7 @@ def main(argv=None):
     agree_all_first = float(np.max(diff[:, :10]))
 
     startup = None if args.skip_first_use else first_use(N, 1 if quick else 3)
-    best_ex = min((r for r in rows if r["name"].startswith("explorer") and r["threads"] == threads),
-                  key=lambda r: r["wall"])
+    exr = {(r["driver"], r["threads"]): r for r in rows if r["name"].startswith("explorer")}
     hyb = {r["processes"]: r for r in rows if r.get("processes")}
     elapsed = time.perf_counter() - T_START
     command = C.command_line("bench_systems.py", argv)
@@ -347,16 +346,23 @@ def main(argv=None):
                                   "(direction positive) whose Python callback records the crossing (bench_w4's "
                                   "harness); wall = integration only, after a barrier; 2 processes: "
                                   "`multiprocessing` 'spawn', orbits interleaved."])
-    lines += ["", "| row | setting | wall (s) | crossings/s | steps/crossing | max abs E - E0 | runs |",
-              "|---|---|---:|---:|---:|---:|---|"]
+    lines += ["", "| row | setting | wall (s) | CPU (s) | crossings/s | steps/crossing | max abs E - E0 | runs |",
+              "|---|---|---:|---:|---:|---:|---:|---|"]
     for r in rows:
-        lines.append(f"| {r['name']} | {r['setting']} | {r['wall']:.3f} | {r['crossings'] / r['wall']:,.0f} | "
+        lines.append(f"| {r['name']} | {r['setting']} | {r['wall']:.3f} | {r['cpu']:.3f} | {r['crossings'] / r['wall']:,.0f} | "
                      f"{r['steps'] / max(1, r['crossings']):.1f} | {C.fmt_e(r['max_dE'])} | {runs_note(r['times'])}"
                      + (f"; heyoka build {r['build']:.1f} s, process total {r['total']:.1f} s" if "build" in r else "")
                      + " |")
-    lines += ["", f"- explorer ({best_ex['name'].split(', ')[1]}, {threads} threads) / heyoka batch, 2 processes: "
-              f"**{hyb[2]['wall'] / best_ex['wall']:.2f}x**; / 1 process: {hyb[1]['wall'] / best_ex['wall']:.2f}x "
-              f"(wall-time ratios).",
+    auto, auto1 = exr[("auto", threads)], exr[("auto", 1)]
+    lines += ["", f"- Speed-up (wall-time ratios): explorer `ex.crossings` ({threads} threads) against heyoka batch in "
+              f"2 processes **{hyb[2]['wall'] / auto['wall']:.2f}x**, in 1 process {hyb[1]['wall'] / auto['wall']:.2f}x; "
+              f"explorer on 1 thread against heyoka in 1 process {hyb[1]['wall'] / auto1['wall']:.2f}x"
+              + (f"; the SIMD lanes against the scalar driver {exr[('scalar', threads)]['wall'] / exr[('lanes', threads)]['wall']:.2f}x "
+                 f"({threads} threads), {exr[('scalar', 1)]['wall'] / exr[('lanes', 1)]['wall']:.2f}x (1 thread)"
+                 if ("lanes", 1) in exr else "") + ".",
+              f"- CPU time (all threads or processes of the best run; less sensitive to other jobs on the machine): "
+              f"heyoka 2 processes / explorer {threads} threads **{hyb[2]['cpu'] / auto['cpu']:.2f}**, heyoka 1 process / "
+              f"explorer 1 thread {hyb[1]['cpu'] / auto1['cpu']:.2f}.",
               f"- Agreement with heyoka (2 processes): max |difference| of (t, x, y, px, py) over the first {k} "
               f"crossings of the {int(reg.sum())} regular orbits (explorer tol 1e-12 and 1e-15 within "
               f"{REGULAR:g}): {C.fmt_e(agree_reg)}; over the first 10 crossings of all {N} orbits: "
@@ -370,9 +376,10 @@ def main(argv=None):
                   f"{len(rr['runs'])}: {', '.join(f'{v:.1f}' for v in rr['runs'])}; first crossings "
                   f"{rr['first_crossings']:.2f} s)."]
     record = not (quick or args.no_write)
-    C.write_json(C.OUT_DIR / ("systems_quick.json" if quick else "systems.json"),
-                 dict(meta, rows=[{k2: v for k2, v in r.items() if k2 != "rows"} for r in rows], startup=startup,
-                      agreement=dict(regular=agree_reg, n_regular=int(reg.sum()), first10=agree_all_first)))
+    if not args.no_write:
+        C.write_json(C.OUT_DIR / ("systems_quick.json" if quick else "systems.json"),
+                     dict(meta, rows=[{k2: v for k2, v in r.items() if k2 != "rows"} for r in rows], startup=startup,
+                          agreement=dict(regular=agree_reg, n_regular=int(reg.sum()), first10=agree_all_first)))
     return C.report("SYSTEMS", lines, record)
 
 
