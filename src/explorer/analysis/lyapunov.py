@@ -101,7 +101,7 @@ class Indicators:
     method: str
     settings: dict
     early: np.ndarray | None = None      # index of EARLY_NAMES
-    deviation: np.ndarray | None = None  # (N, 2, 5) final unit deviation vectors
+    deviation: np.ndarray | None = None  # (N, 2, n) final unit deviation vectors (n = 5 for the model)
     which: tuple = field(default=DEFAULT_INDICATORS)
     energy_error: np.ndarray | None = None   # (N,) |H(final) - H(start)|, NaN for a System without an energy
 
