@@ -53,7 +53,7 @@ from explorer.model.validation import ParameterError
 __all__ = ["GENERATOR_VERSION", "Decomposition", "cache_directory", "decompose", "load", "module_key", "source"]
 
 #: changes whenever the emitted code changes, so that a cached module of an older generator is not used
-GENERATOR_VERSION = 7
+GENERATOR_VERSION = 8
 
 #: the modules that append drivers to the generated source: each has ``render(system) -> str``, code
 #: that calls the recurrence (``taylor_coefficients_into``, ``taylor_coefficients_lanes``, ``energy``)
@@ -288,10 +288,32 @@ class _Emitter:
                     or (n.kind == "div" and scal == [False, True])
                     or (n.kind in ("add", "sub") and scal == [False, False])):
                 self.inline.add(i)
+        # a row of W only for a node whose lower orders a rule reads (an operand of a nonlinear
+        # node, or a rule on its own past: division, powers, functions); any other node is a local
+        # value of the order being computed (the same operations, no store and load)
+        history = set()
+
+        def need(i):
+            if not (d.nodes[i].scalar or d.nodes[i].kind == "state" or i in history):
+                history.add(i)
+                for a in d.nodes[i].args if i in self.inline else ():
+                    need(a)
+        for i, n in enumerate(d.nodes):
+            if not (n.scalar or n.kind == "state" or i in self.inline or self.is_linear(i)):
+                for a in n.args:
+                    need(a)
+                if not self.is_product(i):
+                    need(i)
         self.row = {}
         for i, n in enumerate(d.nodes):
-            if not n.scalar and n.kind != "state" and i not in self.inline:
+            if i in history and i not in self.inline:
                 self.row[i] = len(self.row)
+
+    def is_linear(self, i):
+        """w_k from its operands' coefficients of order k alone: +, -, neg, a scaling."""
+        n = self.d.nodes[i]
+        return n.kind in ("add", "sub", "neg") or (n.kind in ("mul", "div") and self.d.nodes[n.args[1]].scalar) \
+            or (n.kind == "mul" and self.d.nodes[n.args[0]].scalar)
 
     def linear(self, i, leaf):
         """The expression of inlined node i from its operands' ``leaf(a)``."""
@@ -329,7 +351,9 @@ class _Emitter:
             return self.load("X", n.index, k)
         if i in self.inline:
             return self.linear(i, lambda a: self.coef(a, k))
-        return self.load("W", self.row[i], k)
+        if i in self.row:
+            return self.load("W", self.row[i], k)
+        return f"v{i}"   # a local: read at the order being computed only
 
     def w(self, r, k):
         return self.load("W", r, k)
@@ -371,12 +395,18 @@ class _Emitter:
         b = value(n.args[1]) if len(n.args) > 1 else ""
         return _VALUE[n.kind].format(a=a, b=b)
 
+    def put(self, i, k, code):
+        """Node i's coefficient ``k`` (the order being computed) := code."""
+        return self.store("W", self.row[i], k, code) if i in self.row else f"v{i} = {code}"
+
     def order0_lines(self):
         out = []
         for i, n in enumerate(self.d.nodes):
             if n.scalar or n.kind == "state" or i in self.inline:
                 continue
-            if not self.lanes:
+            if i not in self.row:
+                out.append(self.put(i, 0, self.op_value(n, self.value)))
+            elif not self.lanes:
                 out.append(self.store("W", self.row[i], 0, self.op_value(n, self.value)))
             elif n.kind == "sqrt":   # IEEE sqrt, correctly rounded: the vector one equals math.sqrt
                 out.append(self.store("W", self.row[i], 0, f"vsqrt({self.value(n.args[0])})"))
@@ -415,13 +445,12 @@ class _Emitter:
             products = [i for i in here if self.is_product(i)]
             if products:
                 z = self.zero()
-                out += [f"m{self.row[i]} = {z}" for i in products]
+                out += [f"m{i} = {z}" for i in products]
                 out.append("for j in range(k + 1):")
                 for i in products:
                     a, b = self.d.nodes[i].args
-                    r = self.row[i]
-                    out.append(f"    m{r} = m{r} + {self.coef(a, 'j')} * {self.coef(b, 'k - j')}")
-                out += [self.store("W", self.row[i], "k", f"m{self.row[i]}") for i in products]
+                    out.append(f"    m{i} = m{i} + {self.coef(a, 'j')} * {self.coef(b, 'k - j')}")
+                out += [self.put(i, "k", f"m{i}") for i in products]
             for i in here:
                 if not self.is_product(i):
                     out += self.node_lines(i)
@@ -434,7 +463,7 @@ class _Emitter:
         nodes = self.d.nodes
         z = self.zero()
         n = nodes[i]
-        w = self.row[i]
+        w = self.row.get(i)
         a = n.args[0]
         sa = nodes[a].scalar
         b = n.args[-1]
@@ -442,7 +471,7 @@ class _Emitter:
         U = (lambda j, a=a: self.coef(a, j))  # noqa: E731
         V = (lambda j, b=b: self.coef(b, j))  # noqa: E731
         W = self.w
-        put = (lambda code, w=w: self.store("W", w, "k", code))  # noqa: E731
+        put = (lambda code, i=i: self.put(i, "k", code))  # noqa: E731
         if n.kind in ("add", "sub"):
             if sa:
                 code = f"-{V('k')}" if n.kind == "sub" else V("k")
