@@ -106,3 +106,52 @@ def test_a_bad_system_name_exits_2_with_one_line(workdir, capsys, value):
 def test_a_system_scene_without_a_system_exits_2_naming_the_key(workdir, capsys):
     code, _, err = run(["sweep", "hh.toml", "--out", "res/x.h5", "--quiet"], capsys)
     assert code == 2 and "scene key 'system'" in err and len(err.strip().splitlines()) == 1
+
+
+MAP_SCENE = textwrap.dedent(f"""\
+    name = "hh_map"
+    system = "{MODULE}:hh"
+    section = "x"
+    coords = ["y", "py"]
+    solve = "px"
+    [energy]
+    value = {E}
+    [seeds]
+    kind = "grid"
+    n = 4
+    window = [-0.45, 0.65, -0.52, 0.52]
+    [compute]
+    sections = false
+    lyapunov = true
+    [lyapunov]
+    time = 40.0
+    tol = 1e-12
+    map_resolution = 6
+    """)
+
+
+def test_a_megno_map_stores_the_indicators_of_the_raster_cells_on_the_energy_surface_and_draws_them(workdir, capsys):
+    (workdir / "map.toml").write_text(MAP_SCENE)
+    code, out, err = run(["sweep", "map.toml", "--out", "res/map.h5", "--quiet"], capsys)
+    assert code == 0, err
+    pd = store.read_store(workdir / "res" / "map.h5").panels[0]
+    scene = load_scene(workdir / "map.toml")
+    smap = scene.section_map(0)
+    cells = (np.arange(6) + 0.5) / 6
+    A, B = np.meshgrid(-0.45 + 1.1 * cells, -0.52 + 1.04 * cells)
+    on_surface = [p for p in zip(A.ravel(), B.ravel()) if 0.5 * p[1] ** 2 + 0.5 * p[0] ** 2 - p[0] ** 3 / 3 < E]
+    np.testing.assert_allclose(pd.seeds, np.array(on_surface), rtol=0, atol=1e-15)   # the cells with H(0, y, 0, py) < E
+    ref = ex.indicators(smap, pd.seeds, tmax=40.0, tol=1e-12, which=("megno",))
+    np.testing.assert_array_equal(pd.extra["megno"], ref.values["megno"])
+    assert pd.attrs["map_resolution"] == 6 and np.all(pd.extra["lyapunov_status"] == 0)
+    assert (workdir / "res" / "map_map.png").exists()
+
+
+def test_a_systems_chaos_raster_names_its_axes_by_the_coords_and_draws_no_ellipse():
+    from explorer.app.chaos_raster import chaos_rasters
+
+    grid = (2, -1.0, 1.0, -1.0, 1.0)
+    m = {"seeds": np.array([[-0.5, -0.5], [0.5, 0.5]]), "values": np.array([2.0, 8.0]), "grid": grid,
+         "params": None, "h": E, "axes": ("y", "py"), "label": "lam = 1.0"}
+    ax = chaos_rasters([m]).axes[0]
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("$y$", "$p_{y}$") and not ax.patches
