@@ -25,6 +25,7 @@ import argparse
 import json
 import multiprocessing as mp
 import os
+import resource
 import shutil
 import subprocess
 import sys
@@ -226,17 +227,19 @@ def first_use(n_orbits, repeats):
     out = {}
     try:
         for name, runs in (("first", 1), ("rerun", repeats)):
-            walls, inner = [], []
+            walls, cpus, inner = [], [], []
             for _ in range(runs):
-                T0 = time.perf_counter()
+                T0, r0 = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
                 p = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True,
                                    timeout=1800, cwd=C.ROOT)
                 walls.append(time.perf_counter() - T0)
+                r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+                cpus.append(r1.ru_utime - r0.ru_utime + r1.ru_stime - r0.ru_stime)
                 if p.returncode != 0:
                     raise RuntimeError(f"{name} subprocess failed:\n{p.stderr}")
                 inner.append(json.loads(p.stdout.strip().splitlines()[-1]))
             b = int(np.argmin(walls))
-            out[name] = dict(process=walls[b], runs=walls, **inner[b])
+            out[name] = dict(process=walls[b], cpu=cpus[b], runs=walls, **inner[b])
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return out
@@ -256,6 +259,7 @@ def main(argv=None):
     ap.add_argument("--row-budget", type=float, default=None, help="cumulative seconds per row (default 30)")
     ap.add_argument("--skip-first-use", action="store_true", help="no first-use / rerun subprocesses")
     ap.add_argument("--no-write", action="store_true", help="print only")
+    ap.add_argument("--note", default=None, help="a line about the run's conditions for the RESULTS.md section")
     args = ap.parse_args(argv)
     quick = args.quick
     N, K = (16, 200) if quick else (64, 2000)
@@ -345,7 +349,7 @@ def main(argv=None):
                                   "expressions (`heyoka.from_sympy`), the section a terminal `t_event_batch` on x "
                                   "(direction positive) whose Python callback records the crossing (bench_w4's "
                                   "harness); wall = integration only, after a barrier; 2 processes: "
-                                  "`multiprocessing` 'spawn', orbits interleaved."])
+                                  "`multiprocessing` 'spawn', orbits interleaved."] + ([args.note] if args.note else []))
     lines += ["", "| row | setting | wall (s) | CPU (s) | crossings/s | steps/crossing | max abs E - E0 | runs |",
               "|---|---|---:|---:|---:|---:|---:|---|"]
     for r in rows:
@@ -370,11 +374,11 @@ def main(argv=None):
     if startup:
         f, rr = startup["first"], startup["rerun"]
         lines += [f"- First use (a fresh process, empty EXPLORER_SYSTEMS_CACHE: the module generated and compiled), "
-                  f"to the first crossings of {N} orbits: **{f['process']:.1f} s** of process wall (define the "
-                  f"System {f['define']:.1f} s from the start, first crossings {f['first_crossings']:.1f} s); "
-                  f"rerun (a fresh process, the cache filled): **{rr['process']:.1f} s** (best of "
-                  f"{len(rr['runs'])}: {', '.join(f'{v:.1f}' for v in rr['runs'])}; first crossings "
-                  f"{rr['first_crossings']:.2f} s)."]
+                  f"to the first crossings of {N} orbits: **{f['process']:.1f} s** of process wall, {f['cpu']:.1f} "
+                  f"CPU-s (define the System {f['define']:.1f} s from the start, first crossings "
+                  f"{f['first_crossings']:.1f} s); rerun (a fresh process, the cache filled): **{rr['process']:.1f} s**, "
+                  f"{rr['cpu']:.1f} CPU-s (best of {len(rr['runs'])}: {', '.join(f'{v:.1f}' for v in rr['runs'])}; "
+                  f"first crossings {rr['first_crossings']:.2f} s)."]
     record = not (quick or args.no_write)
     if not args.no_write:
         C.write_json(C.OUT_DIR / ("systems_quick.json" if quick else "systems.json"),
