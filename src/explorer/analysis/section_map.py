@@ -277,7 +277,8 @@ def system_first(fn=None, *, settings: tuple = MAP_SETTINGS, defaults=None, flow
                  if k not in sig.parameters]
         if flow:   # the flow gives states= instead of the points
             ps = [ps[0], ps[1].replace(default=None), *ps[2:]]
-            extra.append(inspect.Parameter("states", inspect.Parameter.KEYWORD_ONLY, default=None))
+            if "states" not in sig.parameters:   # fn names it when a System's states reach it (systems=True)
+                extra.append(inspect.Parameter("states", inspect.Parameter.KEYWORD_ONLY, default=None))
         tail = [p for p in ps if p.kind == inspect.Parameter.VAR_KEYWORD]
         call.__signature__ = sig.replace(parameters=[p for p in ps if p not in tail] + extra + tail)
         note = (f"    The system first (docs/api.md, \"The system argument\"): a SectionMap, or ``params, h`` "
