@@ -148,6 +148,21 @@ def test_the_section_map_lifts_its_points_to_the_states_of_the_flow(hh):
     assert np.all(np.isnan(a.sali))
 
 
+def test_one_deviation_vector_gives_the_first_vector_of_two_to_rounding(hh, four):
+    # which without sali, gali2: System.variational(1), another generated recurrence of the same equations
+    one = ex.indicators(hh, states=[REGULAR, REGULAR_CT], tmax=1000.0, which=("mlce", "megno", "fli"))
+    for name in ("mlce", "megno", "fli"):
+        np.testing.assert_allclose(one.values[name], four.values[name][[0, 3]], rtol=1e-9)
+    np.testing.assert_allclose(one.final, four.final[[0, 3]], atol=1e-11)
+    assert np.all(np.isnan(one.deviation[:, 1]))
+
+
+def test_an_orbit_out_of_steps_ends_with_max_steps_at_the_time_it_reached(hh):
+    res = ex.indicators(hh, states=[REGULAR], tmax=1000.0, which=("megno",), max_steps=50)
+    assert res.status_of(0) == Status.MAX_STEPS and res.steps[0] == 50 and 0.0 < res.time[0] < 1000.0
+    assert np.isfinite(res.megno[0])
+
+
 def test_early_stop_ends_a_chaotic_orbit_by_sali_and_not_a_regular_one(hh):
     res = ex.indicators(hh, states=[CHAOTIC_CT, REGULAR], tmax=2000.0, which=("megno", "sali"), early_stop=True)
     assert res.early[0] > 0 and res.time[0] < 2000.0
@@ -165,11 +180,16 @@ def test_the_default_deviation_vectors_are_unit_orthogonal_and_generic():
     (dict(phi0=0.1), "phi0"), (dict(dt=0.05), "dt"), (dict(h=2.0), "h"), (dict(method="dop853"), "method"),
     (dict(which=("megno", "lyapunov")), "mlce, megno"), (dict(which="frequency_diffusion"), "frequency_diffusion"),
     (dict(v0=[1.0, 0.0]), "v0"), (dict(w0=[0.0, 0.0, 0.0, 0.0]), "w0"), (dict(tmax=-1.0), "tmax"),
-    (dict(tol=1.0), "tol"), (dict(colour=1), "colour"),
+    (dict(tol=1.0), "tol"),
 ])
 def test_a_bad_request_is_refused_with_a_message_naming_the_parameter(hh, kw, words):
     with pytest.raises(ParameterError, match=words):
         ex.indicators(hh, states=[REGULAR], **kw)
+
+
+def test_an_unknown_keyword_is_a_type_error_as_for_any_function(hh):
+    with pytest.raises(TypeError, match="colour"):
+        ex.indicators(hh, states=[REGULAR], colour=1)
 
 
 def test_states_of_the_wrong_shape_and_states_beside_a_map_are_refused(hh):

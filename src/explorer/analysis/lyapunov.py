@@ -129,20 +129,20 @@ def indicators(system, y0=None, *, tmax: float = DEFAULT_TIME, method: str | Non
                dt: float | None = None, history: int = 0, v0=None, max_steps: int = 10**9,
                threads: int | None = None, which=None, early_stop: bool = False,
                early_sali: float = EARLY_SALI, early_megno: float = EARLY_MEGNO,
-               early_time: float = EARLY_TIME, w0=None, **system_settings) -> Indicators:
+               early_time: float = EARLY_TIME, w0=None, states=None, phi0=None, h=None) -> Indicators:
     """Chaos indicators (``which`` of :data:`INDICATOR_NAMES`) of the orbits from ``y0`` over the
     time ``tmax``, each with one deviation vector (two for SALI, GALI_2) renormalised at every step,
     with ``method``'s tangent dynamics; ``early_stop`` ends an orbit classified chaotic by SALI or
     <Y>; ``history`` log-spaced records (docs/commands/lyapunov.md).  A System or its section map:
-    :func:`explorer.analysis.system_indicators.system_indicators` (``states=`` the flow's start)."""
+    :func:`explorer.analysis.system_indicators.system_indicators` (``states=`` the flow's start;
+    ``phi0``, ``h`` and ``dt`` are refused).  For the model, ``states``, ``phi0`` and ``h`` are the
+    system argument's (:func:`~explorer.analysis.section_map.system_first`)."""
     if system_sections.is_system(system) or system_sections.is_system_map(system):
         from explorer.analysis.system_indicators import system_indicators
         return Indicators(**system_indicators(
             system, y0, tmax=tmax, method=method, tol=tol, dt=dt, history=history, v0=v0, w0=w0, max_steps=max_steps,
             threads=threads, which=check_which(which), early_stop=early_stop, early_sali=early_sali,
-            early_megno=early_megno, early_time=early_time, **system_settings))
-    if system_settings:
-        raise ParameterError(f"indicators has no setting {', '.join(sorted(system_settings))}")
+            early_megno=early_megno, early_time=early_time, states=states, phi0=phi0, h=h))
     dt = DEFAULT_DT if dt is None else dt
     params = system
     if not is_params(system):   # a map: its section points, its tolerance
@@ -253,7 +253,7 @@ def check_which(which) -> tuple:
     orbit = [w for w in bad if w in table.BY_NAME]
     if orbit:
         raise ParameterError(f"indicator {orbit[0]} is not computed along deviation vectors: it comes from a section "
-                             f"map's returns around a centre (explorer.{orbit[0]}, for Chaplygin's model); ask for "
+                             f"map's returns around a centre (explorer.{orbit[0]}(map, points, center=...)); ask for "
                              f"{', '.join(INDICATOR_NAMES)}")
     if bad or not which:
         raise ParameterError(f"indicators must be a non-empty list of {', '.join(INDICATOR_NAMES)}; got {which!r}")

@@ -75,7 +75,7 @@ def _energy_error(system, Y0, final) -> np.ndarray:
 
 def system_indicators(system, y0=None, *, states=None, tmax: float, method, tol: float | None, history: int, v0,
                       w0, max_steps: int, threads: int | None, which: tuple, early_stop: bool, early_sali: float,
-                      early_megno: float, early_time: float, **other) -> dict:
+                      early_megno: float, early_time: float, dt=None, phi0=None, h=None) -> dict:
     """The fields of :class:`~explorer.analysis.lyapunov.Indicators` for the indicators ``which``
     (checked names) of the orbits of ``system`` (a System: full states ``states=``, shape (N, n) in
     its state order; a System's section map: section points, lifted by its ``states``) over the time
@@ -87,13 +87,10 @@ def system_indicators(system, y0=None, *, states=None, tmax: float, method, tol:
     from explorer.analysis import budget
     from explorer.integrate import codegen
 
-    given = [k for k in _NOT_FOR_A_SYSTEM if other.get(k) is not None]
+    given = [k for k, v in zip(_NOT_FOR_A_SYSTEM, (phi0, h, dt)) if v is not None]
     if given:
         raise ParameterError(f"indicators of a System: {', '.join(given)} belong(s) to Chaplygin's model and "
                              "do(es) not apply (a System's start is states=, its method the Taylor method of tol=)")
-    other = {k: v for k, v in other.items() if k not in _NOT_FOR_A_SYSTEM}
-    if other:
-        raise ParameterError(f"indicators of a System has no setting {', '.join(sorted(other))}")
     if method not in (None, "taylor"):
         raise ParameterError(f"method must be 'taylor' for a System (the generated Taylor integrator of the "
                              f"variational equations), got {method!r}")
