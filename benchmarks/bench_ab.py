@@ -18,12 +18,23 @@ take 30-40 % more CPU time than the next on such a machine, for either revision 
     git worktree add /tmp/base <rev>
     python benchmarks/bench_ab.py /tmp/base .            # prints the table
     python benchmarks/bench_ab.py /tmp/base . --write    # and records it in RESULTS.md
+
+``--generated``: base is a snapshot of ``new``'s src/ with the hand-written recurrences, new the same
+snapshot whose engine takes the recurrences generated from :mod:`explorer.model.chaplygin` by
+:mod:`explorer.integrate.codegen` (:func:`generated_tree`: the W4 Taylor lanes from ``system()``,
+the chaos map's from ``variational(1)`` and ``variational(2)``; G = 1 lane group, the only form the
+generator writes).  Every round is kept: the table gives the median ratio new/base and its spread,
+and the largest difference of the W4 taylor crossings (first, untimed call) per orbit::
+
+    python benchmarks/bench_ab.py . . --generated --cpu --rounds 15 --rows taylor,megno_taylor
 """
 from __future__ import annotations
 
 import argparse
 import json
 import os
+import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -57,15 +68,19 @@ for name, kw in rows.items():
         t0 = clock()
         r = sections.crossings(prm, 2.0, np.column_stack([p1, p2]), n_crossings=2000, **kw)
         out[name] = min(out.get(name, (float("inf"),)), (clock() - t0, int(r.count.sum())))
+    if os.environ.get("EXPLORER_AB_SAVE"):
+        np.save(os.path.join(os.environ["EXPLORER_AB_SAVE"], name + ".npy"), r.data)
 y0 = model.section_state(prm, p1, p2, 2.0)
 for m in ("taylor", "dop853"):
     if "megno_" + m not in wanted:
         continue
-    lyapunov.indicators(prm, y0[:2], tmax=10.0, method=m, tol=1e-12)
+    lyapunov.indicators(prm, states=y0[:2], tmax=10.0, method=m, tol=1e-12)
     for _ in range(repeat):
         t0 = clock()
-        lyapunov.indicators(prm, y0, tmax=1000.0, method=m, tol=1e-12)
+        res = lyapunov.indicators(prm, states=y0, tmax=1000.0, method=m, tol=1e-12)
         out["megno_" + m] = min(out.get("megno_" + m, (float("inf"),)), (clock() - t0, 64))
+    if os.environ.get("EXPLORER_AB_SAVE"):
+        np.save(os.path.join(os.environ["EXPLORER_AB_SAVE"], "megno_" + m + ".npy"), res.values["megno"])
 print(json.dumps(out))
 """
 
@@ -74,13 +89,105 @@ print(json.dumps(out))
 ROWS = ("taylor", "dop853", "split8", "megno_taylor", "megno_dop853")
 
 
-def run(rev: Path, cache: str, cpu: bool = False, rows=ROWS, repeat: int = 1) -> dict:
-    env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+def run(rev: Path, cache: str, cpu: bool = False, rows=ROWS, repeat: int = 1, env_extra=None) -> dict:
+    env = dict(os.environ, NUMBA_CACHE_DIR=cache, **(env_extra or {}))
     if cpu:
         env.update(NUMBA_NUM_THREADS="1", EXPLORER_AB_CPU="1")
     r = subprocess.run([sys.executable, "-c", SNIPPET, str(rev / "src"), ",".join(rows), str(repeat)],
-                       capture_output=True, text=True, env=env, check=True)
+                       capture_output=True, text=True, env=env)
+    if r.returncode:
+        raise SystemExit(f"the measured process of {rev} failed:\n{r.stderr}")
     return json.loads(r.stdout.strip().splitlines()[-1])
+
+
+#: generates the module source of a Chaplygin System in the tree on sys.path[0]
+GENERATE = r"""
+import sys
+sys.path.insert(0, sys.argv[1])
+from explorer.integrate import codegen
+from explorer.model import chaplygin
+which = sys.argv[2]
+s = chaplygin.system() if which == "orbit" else chaplygin.variational(vectors=int(which[-1]))
+sys.stdout.write(codegen.source(s))
+"""
+
+
+def _replace(path: Path, old: str, new: str) -> None:
+    text = path.read_text()
+    if text.count(old) != 1:
+        raise SystemExit(f"{path}: expected one {old!r}")
+    path.write_text(text.replace(old, new))
+
+
+def snapshot(tree: Path, prefix: str) -> Path:
+    """A copy of ``tree``'s src/ (the revision measured, fixed while the rounds run)."""
+    out = Path(tempfile.mkdtemp(prefix=prefix))
+    shutil.copytree(tree / "src", out / "src", ignore=shutil.ignore_patterns("__pycache__"))
+    return out
+
+
+def generated_tree(tree: Path) -> Path:
+    """A snapshot of ``tree``'s src/ whose lane engine calls the recurrences that codegen generates
+    from explorer.model.chaplygin instead of the hand-written ones: ``_lanes_generated`` and
+    ``_tangent_lanes_generated`` become imports of generated modules (the tangent ones with the row
+    stride of the engine's 15-row array), and lanes.py / tangent_lanes.py pass a work array where
+    they passed the lane groups (G = 1 only)."""
+    out = snapshot(tree, "ab-generated-")
+    pkg = out / "src" / "explorer" / "integrate"
+    for which in ("orbit", "tangent1", "tangent2"):
+        text = subprocess.run([sys.executable, "-c", GENERATE, str(tree / "src"), which], capture_output=True,
+                              text=True, check=True).stdout
+        if which != "orbit":
+            text = text.replace("XS = DIM * LANES", "XS = 15 * LANES")   # rows of the engine's Z array
+        (pkg / f"_ab_{which}.py").write_text(text)
+    (pkg / "_lanes_generated.py").write_text(
+        "from explorer.integrate._ab_orbit import N_WORK, taylor_coefficients_lanes  # noqa: F401\n"
+        "NVAR = 5\nGROUPS = (1,)\n")
+    (pkg / "_tangent_lanes_generated.py").write_text(
+        "from explorer.integrate._ab_tangent1 import N_WORK as N_WORK1  # noqa: F401\n"
+        "from explorer.integrate._ab_tangent1 import taylor_coefficients_lanes as tangent_coefficients_lanes  # noqa\n"
+        "from explorer.integrate._ab_tangent2 import N_WORK as N_WORK2  # noqa: F401\n"
+        "from explorer.integrate._ab_tangent2 import taylor_coefficients_lanes as deviation_coefficients_lanes  # noqa\n"
+        "NROWS = 15\nDEV1 = 5\nDEV2 = 10\nGROUPS = (1,)\n")
+    _replace(pkg / "lanes.py", "import GROUPS, NVAR, taylor_coefficients_lanes",
+             "import GROUPS, N_WORK, NVAR, taylor_coefficients_lanes")
+    _replace(pkg / "lanes.py", "    while active > 0:\n        taylor_coefficients_lanes(P, X, order, groups)",
+             "    Wg = aligned_zeros((order + 1) * max(N_WORK, 1) * LANES).reshape((order + 1, max(N_WORK, 1), LANES))\n"
+             "    while active > 0:\n        taylor_coefficients_lanes(P, X, order, Wg)")
+    _replace(pkg / "tangent_lanes.py", "    tangent_coefficients_lanes,\n)",
+             "    tangent_coefficients_lanes,\n    N_WORK1,\n    N_WORK2,\n)")
+    _replace(pkg / "tangent_lanes.py", "    while active > 0:\n        tangent_coefficients_lanes(P, Z, order, DEV1, groups)",
+             "    W1 = aligned_zeros((order + 1) * max(N_WORK1, 1) * LANES).reshape((order + 1, max(N_WORK1, 1), LANES))\n"
+             "    W2 = aligned_zeros((order + 1) * max(N_WORK2, 1) * LANES).reshape((order + 1, max(N_WORK2, 1), LANES))\n"
+             "    while active > 0:\n        tangent_coefficients_lanes(P, Z, order, W1)")
+    _replace(pkg / "tangent_lanes.py", "deviation_coefficients_lanes(P, Z, order, DEV2, groups)",
+             "deviation_coefficients_lanes(P, Z, order, W2)")
+    return out
+
+
+def compare_saved(base_dir: str, new_dir: str) -> list:
+    """Lines on the difference of the saved results: the W4 taylor crossings (per orbit, the largest
+    difference over its crossings; the orbits within 1e-13; the first crossing beyond it) and MEGNO."""
+    import numpy as np
+    lines = []
+    for name in ("taylor", "megno_taylor"):
+        fb, fn = Path(base_dir) / f"{name}.npy", Path(new_dir) / f"{name}.npy"
+        if not (fb.exists() and fn.exists()):
+            continue
+        a, b = np.load(fb), np.load(fn)
+        if name == "taylor":
+            d = np.abs(a - b)
+            d = np.where(np.isnan(a) & np.isnan(b), 0.0, d).reshape(a.shape[0], a.shape[1], -1).max(axis=2)
+            per_orbit = d.max(axis=1)
+            close = per_orbit <= 1e-13
+            first = [int(np.argmax(row > 1e-13)) for row in d[~close]]
+            lines.append(f"W4 taylor crossings: {int(close.sum())} of {len(close)} orbits within 1e-13 over all "
+                         f"{a.shape[1]} crossings (largest {per_orbit[close].max() if close.any() else 0:.1e}); "
+                         f"the others first differ by > 1e-13 at crossing {sorted(first)}")
+        else:
+            lines.append(f"MEGNO, T = 1000: largest |difference| {np.max(np.abs(a - b)):.1e} "
+                         f"(values {np.min(a):.3g}..{np.max(a):.3g})")
+    return lines
 
 
 def main(argv=None):
@@ -92,39 +199,64 @@ def main(argv=None):
     ap.add_argument("--cpu", action="store_true", help="CPU time of one Numba thread instead of wall time")
     ap.add_argument("--repeat", type=int, default=1, help="timed calls of each row per process (best kept)")
     ap.add_argument("--rows", default=",".join(ROWS), help=f"comma-separated rows (default: all, {','.join(ROWS)})")
+    ap.add_argument("--generated", action="store_true",
+                    help="base: new's hand-written recurrences; new: the same tree on the generated ones (G = 1)")
+    ap.add_argument("--base-groups", default="1", help="with --generated: the lane groups of base (1, 2, or "
+                    "'default' for the engine's choice); new always runs G = 1")
     args = ap.parse_args(argv)
     rows = tuple(r for r in args.rows.split(",") if r)
     if not rows or set(rows) - set(ROWS) or args.repeat < 1 or args.rounds < 1:
         ap.error(f"--rows must name some of {', '.join(ROWS)}; --repeat and --rounds at least 1")
     base, new = args.base.resolve(), args.new.resolve()
+    env = {"base": {}, "new": {}}
+    if args.generated:
+        base, new = snapshot(new, "ab-hand-"), generated_tree(new)
+        env["new"] = {"EXPLORER_LANE_GROUPS": "1"}
+        if args.base_groups != "default":
+            env["base"] = {"EXPLORER_LANE_GROUPS": args.base_groups}
     started, load0 = C.now(), C.loadavg()
     caches = {k: tempfile.mkdtemp(prefix=f"nc-ab-{k}-") for k in ("base", "new")}
-    run(base, caches["base"], args.cpu, rows)  # compile both once (not timed)
-    run(new, caches["new"], args.cpu, rows)
+    saved = {k: tempfile.mkdtemp(prefix=f"ab-out-{k}-") for k in ("base", "new")}
+    for key, rev in (("base", base), ("new", new)):   # compile both once (not timed); keep the results
+        run(rev, caches[key], args.cpu, rows, env_extra=dict(env[key], EXPLORER_AB_SAVE=saved[key]))
     best: dict = {"base": {}, "new": {}}
+    ratios: dict = {}
     for _ in range(args.rounds):
-        for key, rev in (("base", base), ("new", new)):
-            for row, (sec, n) in run(rev, caches[key], args.cpu, rows, args.repeat).items():
+        got = {key: run(rev, caches[key], args.cpu, rows, args.repeat, env[key])
+               for key, rev in (("base", base), ("new", new))}
+        for key in got:
+            for row, (sec, n) in got[key].items():
                 if row not in best[key] or sec < best[key][row][0]:
                     best[key][row] = (sec, n)
-    lines = ["| row | base (s) | new (s) | new / base | crossings (base = new) |", "|---|---|---|---|---|"]
+        for row in got["base"]:
+            ratios.setdefault(row, []).append(got["new"][row][0] / got["base"][row][0])
+    lines = ["| row | base (s) | new (s) | new / base (best) | new / base (median of rounds) | spread "
+             "(min..max) | crossings (base = new) |", "|---|---|---|---|---|---|---|"]
     for row in best["base"]:
         b, n = best["base"][row], best["new"][row]
-        lines.append(f"| {row} | {b[0]:.3f} | {n[0]:.3f} | {n[0] / b[0]:.3f} | {b[1]} = {n[1]} |")
+        r = ratios[row]
+        lines.append(f"| {row} | {b[0]:.3f} | {n[0]:.3f} | {n[0] / b[0]:.3f} | {statistics.median(r):.3f} | "
+                     f"{min(r):.3f}..{max(r):.3f} | {b[1]} = {n[1]} |")
+    lines += [""] + [f"- {line}" for line in compare_saved(saved["base"], saved["new"])]
     print("\n".join(lines))
     if args.write:
         rev = lambda p: subprocess.run(["git", "-C", str(p), "rev-parse", "--short", "HEAD"],  # noqa: E731
                                        capture_output=True, text=True).stdout.strip() or p.name
         seconds = (C.now() - started).total_seconds()
-        head, _ = C.header("A/B of two revisions on W4 (explorer rows)", C.command_line("bench_ab.py", [
-            "<worktree of base>", ".", "--rounds", str(args.rounds)] + (["--cpu"] if args.cpu else [])
-            + (["--repeat", str(args.repeat)] if args.repeat > 1 else [])
-            + (["--rows", ",".join(rows)] if rows != ROWS else [])), started,
-            seconds, load0, extra=[f"base {rev(base)}, new {rev(new)}; best of {args.rounds} alternating rounds"
+        what = (f"base: hand-written recurrences (G = {args.base_groups}), new: generated (G = 1), of "
+                f"{rev(args.new.resolve())}" if args.generated else f"base {rev(base)}, new {rev(new)}")
+        head, _ = C.header("Chaplygin generated: the engine on the generated recurrences (W4 rows)" if args.generated
+                           else "A/B of two revisions on W4 (explorer rows)", C.command_line("bench_ab.py", (
+                               [".", ".", "--generated", "--base-groups", args.base_groups] if args.generated
+                               else ["<worktree of base>", "."]) + ["--rounds", str(args.rounds)]
+                               + (["--cpu"] if args.cpu else [])
+                               + (["--repeat", str(args.repeat)] if args.repeat > 1 else [])
+                               + (["--rows", ",".join(rows)] if rows != ROWS else [])), started,
+            seconds, load0, extra=[f"{what}; {args.rounds} alternating rounds"
                                    + (f" x {args.repeat} calls" if args.repeat > 1 else "") + ", warm caches"
                                    + ("; CPU time of one Numba thread" if args.cpu else "; wall time")],
             numba_threads=1 if args.cpu else None)   # (--cpu: the timed processes run one thread)
-        C.update_section("AB", head + [""] + lines)
+        C.update_section("CHAPLYGIN GENERATED" if args.generated else "AB", head + [""] + lines)
 
 
 if __name__ == "__main__":
