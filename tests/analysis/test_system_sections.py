@@ -106,7 +106,7 @@ def test_crossings_of_a_system_are_identical_with_one_and_two_threads():
 
 
 def test_the_rows_do_not_depend_on_the_driver():
-    from explorer.analysis.system_sections import LANES_FROM, driver_for
+    from explorer.analysis.system_sections import driver_for
 
     hh = henon_heiles()
     Y0 = starts(POINTS + [(0.0, 0.35), (-0.2, -0.1)])
@@ -115,8 +115,8 @@ def test_the_rows_do_not_depend_on_the_driver():
     for first, other in ((runs[0], runs[1]), (runs[0], runs[2]), (runs[3], runs[4]), (runs[3], runs[5])):
         for name in ("data", "count", "status", "final", "info"):
             np.testing.assert_array_equal(getattr(first, name), getattr(other, name), strict=True)
-    # auto: the scalar driver for a lone orbit, lanes from LANES_FROM orbits on
-    assert driver_for(LANES_FROM - 1) == 0 and driver_for(LANES_FROM) >= 1 and driver_for(40, "scalar") == 0
+    # auto is the lanes, for any number of orbits (one group of lanes per thread, at most ceil(n / LANES))
+    assert driver_for(1) == 1 and driver_for(40, "lanes") >= 1 and driver_for(40, "scalar") == 0
 
 
 def test_a_parameter_in_the_section_takes_its_value():

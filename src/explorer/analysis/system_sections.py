@@ -10,9 +10,9 @@ The integrator is the adaptive Taylor method (Jorba & Zou 2005, Exp. Math. 14, 9
 into the system's module by :mod:`explorer.integrate.codegen` (``crossings_taylor``): the order
 from ``tol`` (:func:`explorer.kernels.taylor_order.order_for_tolerance`), the step from the last
 two coefficients, the crossings the roots of each step's polynomial of the section function,
-isolated and refined as the engine's (kernels/events.py).  From :data:`LANES_FROM` orbits on, the
-SIMD form (``crossings_lanes``, :mod:`explorer.integrate.codegen_lanes`) runs them, each orbit
-with the same rows bit for bit (:func:`driver_for`).
+isolated and refined as the engine's (kernels/events.py).  By default its SIMD form
+(``crossings_lanes``, :mod:`explorer.integrate.codegen_lanes`) runs the orbits, each with the
+scalar driver's rows bit for bit (:func:`driver_for`).
 
 This module imports neither SymPy nor numba at import time: :func:`is_system` is asked about
 every argument of ``crossings``.
@@ -36,11 +36,10 @@ __all__ = ["Section", "is_system", "is_system_map", "linear_section", "or_a_syst
            "system_crossings"]
 
 DEFAULT_MAX_STEPS = 10**9
-#: the drivers of ``system_crossings(driver=)``; every one gives the same rows bit for bit
+#: the drivers of ``system_crossings(driver=)``; every one gives the same rows bit for bit.  ``auto``
+#: is the lanes: a lone orbit costs as much CPU on them as on the scalar driver, 2 orbits half,
+#: 64 a sixth (benchmarks/RESULTS.md, SYSTEMS)
 DRIVERS = ("auto", "lanes", "scalar")
-#: ``auto`` takes the SIMD lanes from this many orbits on: one orbit costs the same CPU either way,
-#: two or more less on lanes (benchmarks/RESULTS.md, SYSTEMS)
-LANES_FROM = 2
 #: the settings of the engine's crossings that have no meaning for a System
 _NOT_FOR_A_SYSTEM = ("h", "phi0", "dt", "block", "state")
 
@@ -254,10 +253,9 @@ def system_crossings(system, states=None, *, n_crossings: int, section=None, dir
 
 def driver_for(n: int, driver: str = "auto") -> int:
     """How ``n`` orbits run: 0 on the scalar driver (one orbit per thread), else on that many groups of
-    LANES SIMD lanes (one per thread, no more than ceil(n / LANES)).  ``auto``: lanes from
-    :data:`LANES_FROM` orbits on."""
+    LANES SIMD lanes (one per thread, no more than ceil(n / LANES)); ``auto`` is the lanes."""
     from explorer.integrate.simd import LANES
 
-    if driver == "scalar" or (driver == "auto" and n < LANES_FROM):
+    if driver == "scalar":
         return 0
     return max(1, min(get_num_threads(), -(-n // LANES)))
