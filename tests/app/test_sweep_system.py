@@ -155,3 +155,24 @@ def test_a_systems_chaos_raster_names_its_axes_by_the_coords_and_draws_no_ellips
          "params": None, "h": E, "axes": ("y", "py"), "label": "lam = 1.0"}
     ax = chaos_rasters([m]).axes[0]
     assert (ax.get_xlabel(), ax.get_ylabel()) == ("$y$", "$p_{y}$") and not ax.patches
+
+
+def test_the_notebook_walk_through_sweeps_a_system_object_and_draws_its_megno_map(tmp_path):
+    """docs/systems.md's walk-through: a System defined in Python (no module), the scene's system
+    replaced by it, sections and a MEGNO map over two values of lam, every figure drawn."""
+    import sympy as sp
+
+    x, y, px, py, lam = sp.symbols("x y px py lam")
+    hh = ex.System({x: px, y: py, px: -x - 2*lam*x*y, py: -y - lam*(x**2 - y**2)}, parameters={lam: 1.0},
+                   energy=(px**2 + py**2)/2 + (x**2 + y**2)/2 + lam*(x**2*y - y**3/3), name="henon_heiles")
+    text = SCENE.replace("[integration]", "[compute]\nlyapunov = true\n[lyapunov]\ntime = 20.0\nmap_resolution = 4\n"
+                         "[integration]")
+    text = text.replace('kind = "points"', 'kind = "points"\nwindow = [-0.45, 0.65, -0.52, 0.52]')
+    (tmp_path / "hh.toml").write_text('system = "not_imported:hh"\n' + text)
+    scene = ex.load_scene(tmp_path / "hh.toml", system=hh)
+    assert scene.system is hh
+    report = ex.run_sweep(scene, tmp_path / "hh.h5", figure=tmp_path / "hh", progress=False)
+    assert report.computed == (0, 1) and len(report.fractions) == 2 and report.max_dh < 1e-12
+    assert {p.name for p in report.figure} >= {"hh.png", "hh_map.png", "hh_fraction.png"}
+    data = ex.read_store(tmp_path / "hh.h5")
+    assert all(len(data.panels[i].extra["lyapunov_seeds"]) == len(data.panels[i].extra["megno"]) for i in (0, 1))

@@ -17,6 +17,7 @@ import numpy as np
 from explorer.io.scene.checks import (
     SceneError,
     _bool,
+    _choice,
     _distinct_reals,
     _fail,
     _got,
@@ -154,8 +155,6 @@ class SystemSeeds:
     window: tuple | None = None
 
     def __post_init__(self):
-        from explorer.io.scene.checks import _choice
-
         object.__setattr__(self, "kind", _choice("seeds.kind", self.kind, SYSTEM_SEED_KINDS))
         object.__setattr__(self, "n", _int("seeds.n", self.n, 1, MAX_SEEDS))
         object.__setattr__(self, "seed", _int("seeds.seed", self.seed, 0))
