@@ -108,3 +108,41 @@ def test_variational_names_avoid_the_users_symbols():
 def test_variational_needs_a_positive_integer_count(bad):
     with pytest.raises(ParameterError, match="vectors must be an integer >= 1"):
         henon_heiles().variational(bad)
+
+
+#: Hénon–Heiles is even in x: (x, y, px, py) -> (-x, y, px, -py) reverses its flow
+HH_REVERSOR = {x: -x, y: y, px: px, py: -py}
+
+
+def test_a_reversor_is_kept_in_state_order_through_with_and_in_the_content_hash():
+    s = System(HH, parameters={lam: 1.0}, energy=HH_ENERGY, reversor=HH_REVERSOR)
+    assert s.reversors == ((-x, y, px, -py),)
+    assert s.with_(lam=0.5).reversors == s.reversors and s.with_(lam=0.5).content_hash == s.content_hash
+    assert s.content_hash != henon_heiles().content_hash
+    assert henon_heiles().reversors == ()
+    both = System(HH, parameters={lam: 1.0}, energy=HH_ENERGY, reversor=[HH_REVERSOR, {x: x, y: y, px: -px, py: -py}])
+    assert len(both.reversors) == 2 and both.content_hash != s.content_hash
+
+
+@pytest.mark.parametrize("reversor, words", [
+    ({x: 2 * x, y: y, px: -px, py: -py}, ["not an involution", "2*x", "4*x"]),
+    ({x: x, y: -y, px: -px, py: py}, ["does not reverse the equations", "dpx/dt"]),
+    ({x: -x, y: y, px: px}, ["no image of py", "maps every state variable"]),
+    ({x: -x, y: y, px: px, py: -py, lam: lam}, ["maps lam", "not a state variable", "map of states"]),
+    ({x: -x, y: y, px: px, py: -py + sp.Symbol("q")}, ["image of py", "q", "neither a state variable"]),
+    ({x: -x, y: y, px: px, py: -py, sp.Symbol("z"): 1}, ["maps z", "not a state variable"]),
+    ("x -> -x", ["reversor must be a dict"]),
+    ([], ["reversor must be a dict"]),
+])
+def test_a_bad_reversor_is_refused_naming_what_is_wrong(reversor, words):
+    with pytest.raises(ParameterError) as err:
+        System(HH, parameters={lam: 1.0}, energy=HH_ENERGY, reversor=reversor)
+    for w in words:
+        assert w in str(err.value), (w, str(err.value))
+
+
+def test_a_reversor_that_changes_the_energy_is_refused():
+    # a free particle: px -> -px reverses dx/dt = px, dpx/dt = 0, but the conserved px is odd under it
+    with pytest.raises(ParameterError, match="does not keep the energy"):
+        System({x: px, px: 0}, energy=px, reversor={x: x, px: -px})
+    assert System({x: px, px: 0}, energy=px**2 / 2, reversor={x: x, px: -px}).reversors == ((x, -px),)

@@ -48,7 +48,7 @@ class FixedPoint(PeriodicOrbit):
                 "residual": self.residual, "degenerate": bool(self.degenerate)}
 
 
-@system_first
+@system_first(systems="map")
 def find_fixed_point(system, guess=(0.0, 0.0)) -> FixedPoint:
     """The fixed point Newton's method finds from ``guess``: :func:`~explorer.analysis.periodic.find_periodic_orbit`
     with K = 1 (docs/commands/fixedpoint.md)."""
@@ -62,7 +62,7 @@ class Branch(PeriodicBranch):
     """The :class:`~explorer.analysis.periodic.PeriodicBranch` of period 1, its orbits :class:`FixedPoint` s."""
 
 
-@system_first
+@system_first(systems="map")
 def continue_branch(system, parameter, start, stop, step, guess=(0.0, 0.0), *, bisect_tol=1e-8) -> Branch:
     """:func:`~explorer.analysis.periodic.continue_periodic` with K = 1."""
     from explorer.analysis.periodic import continue_periodic
@@ -93,7 +93,7 @@ def _grown(sd, stable, sign, iterations, arclength, max_gap, max_points, start_t
                        max_time=max_time).points
 
 
-@system_first
+@system_first(systems="map")
 def manifold(system, fp: FixedPoint, *, stable=False, branch=1, iterations=SEPARATRIX_GENERATIONS,
              arclength=None, max_gap=DEFAULT_MAX_GAP, max_points=20000, start_tol=DEFAULT_START_TOL,
              max_time=None) -> np.ndarray:
@@ -104,7 +104,7 @@ def manifold(system, fp: FixedPoint, *, stable=False, branch=1, iterations=SEPAR
                   max_points, start_tol, max_time)
 
 
-@system_first
+@system_first(systems="map")
 def separatrices(system, fp: FixedPoint, *, iterations=SEPARATRIX_GENERATIONS, arclength=None,
                  max_gap=DEFAULT_MAX_GAP, max_points=20000, start_tol=DEFAULT_START_TOL,
                  max_time=None) -> list:
@@ -130,7 +130,7 @@ def analytic_eigenvalues_solution_I(params, h):
     return np.array([complex(math.cos(w), math.sin(w)), complex(math.cos(w), -math.sin(w))]), 2 * math.cos(w)
 
 
-@system_first
+@system_first(systems="map")
 def follow(system, parameter, start, stop, guess, *, max_step=0.25) -> FixedPoint:
     """The fixed point at ``parameter = stop`` on the branch through ``guess`` at ``start``."""
     if start == stop:

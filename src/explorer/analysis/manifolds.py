@@ -63,7 +63,7 @@ def _orient(v):
     return -v if (v[0] < 0 or (v[0] == 0 and v[1] < 0)) else v
 
 
-@system_first
+@system_first(systems="map")
 def saddle(system, orbit, *, index=0) -> Saddle:
     """The :class:`Saddle` at point ``index`` of a hyperbolic ``orbit`` of the map ``system``."""
     if isinstance(orbit, PeriodicOrbit):
@@ -389,7 +389,7 @@ def mirror_branch(unstable: ManifoldBranch) -> ManifoldBranch:
                           unstable.max_gap, None, unstable)
 
 
-@system_first
+@system_first(systems="map")
 def manifolds(system, orbit, *, arclength=5.0, kinds=("unstable", "stable"), signs=(1, -1), index=0, period=1,
               start_tol=DEFAULT_START_TOL, max_gap=DEFAULT_MAX_GAP, max_angle=DEFAULT_MAX_ANGLE,
               max_gap_angle=DEFAULT_MAX_GAP_ANGLE, max_points=20000, max_time=None,

@@ -289,7 +289,7 @@ def _check_period(period) -> int:
     return int(period)
 
 
-@system_first
+@system_first(systems="map")
 def find_periodic_orbit(system, guess, period, *, max_iter=NEWTON_MAX_ITER, reduce=True) -> PeriodicOrbit:
     """The periodic orbit of period ``period`` Newton's method finds from ``guess`` (a point or
     K points), reduced to its minimal period unless ``reduce`` is False; ParameterError when
@@ -323,7 +323,7 @@ def _line_p1(params, h, phi0, n):
     return c1 + half * np.linspace(-1.0, 1.0, n + 2)[1:-1]
 
 
-@system_first
+@system_first(systems="map")
 def symmetry_line_points(system, period, *, n=200, threads=None):
     """Seeds (m, 2) of symmetric orbits of period ``period`` on the symmetry lines, ``n`` per line
     (docs/commands/periodic.md); another map's own ``symmetry_line_points(n)``."""
@@ -486,7 +486,7 @@ def _half_turn_partners(prm, h, orbits, same_tol, *, tol, max_iter, tmax, thread
     return added
 
 
-@system_first(settings=("phi0", "tol"))
+@system_first(systems="map", settings=("phi0", "tol"))
 def periodic_guesses(system, period, *, grid=12, line=None, tmax=SEARCH_TMAX, threads=None) -> np.ndarray:
     """The Newton starts of :func:`search_periodic_orbits` in order: the symmetry-line seeds, then
     the local minima of ``|P^K(x) - x|`` on a ``grid`` x ``grid`` grid, best first."""
@@ -503,7 +503,7 @@ def periodic_guesses(system, period, *, grid=12, line=None, tmax=SEARCH_TMAX, th
                            _grid_seeds(prm, h, K, grid, phi0, tol, tmax, threads)])
 
 
-@system_first(settings=("phi0", "tol"))
+@system_first(systems="map", settings=("phi0", "tol"))
 def search_periodic_orbits(system, period, *, grid=12, line=None, max_guesses=60, max_iter=NEWTON_MAX_ITER,
                            tmax=SEARCH_TMAX, time_limit=None, same_tol=SAME_ORBIT_TOL, threads=None,
                            guesses=None) -> list:
@@ -567,7 +567,7 @@ class PeriodicBranch:
         return np.array([o.trace for o in self.orbits])
 
 
-@system_first
+@system_first(systems="map")
 def continue_periodic(system, period, parameter, start, stop, step, guess, *, bisect_tol=1e-8, touch_window=0.05,
                       touch_tol=1e-6) -> PeriodicBranch:
     """Natural-parameter continuation of an orbit of period K in ``parameter`` (one of the map's

@@ -1,6 +1,7 @@
 """Rotation numbers of orbits of the section map around an elliptic fixed point
 (docs/commands/rotation.md): the increments lifted through the flow on sub-sections (or wrapped,
-when every wrapped increment is within ``WRAP_SAFE`` of 0), averaged by the weighted Birkhoff
+when every wrapped increment is within ``WRAP_SAFE`` of 0; for another map, the returns' increments
+wrapped so, or lifted through the largest gap of their values mod 2 pi), averaged by the weighted Birkhoff
 average of Das, Sander, Yorke & Meiss (Nonlinearity 30 (2017) 4111); ``converged`` when the
 averages over N and 2N returns agree to ``CONVERGED_TOL``.
 """
@@ -250,10 +251,23 @@ def _map_increments(system, x, center, n):
     if c.shape != (2,) or not np.all(np.isfinite(c)):
         raise ParameterError(f"center must be a finite point, got {center!r}")
     inc = _increments(c + difference(system, pts, c), c)
-    return inc if np.all(np.abs(inc) <= WRAP_SAFE) else None
+    return inc if np.all(np.abs(inc) <= WRAP_SAFE) else _lifted_through_gap(inc)
 
 
-@system_first(settings=("phi0", "tol"))
+def _lifted_through_gap(inc):
+    """The increments lifted into one window of 2 pi cut in the middle of the largest gap of their
+    values mod 2 pi (an invariant circle's increments span less than a turn), when that gap is at
+    least the fast path's margin 2 pi - 2 WRAP_SAFE; else None."""
+    v = np.sort(np.mod(inc, 2.0 * np.pi))
+    gaps = np.diff(np.concatenate([v, [v[0] + 2.0 * np.pi]]))
+    k = int(np.argmax(gaps))
+    if not gaps[k] >= 2.0 * np.pi - 2.0 * WRAP_SAFE:
+        return None
+    cut = v[k] + 0.5 * gaps[k]
+    return np.mod(inc - cut, 2.0 * np.pi) + cut - 2.0 * np.pi
+
+
+@system_first(systems="map", settings=("phi0", "tol"))
 def rotation_number(system, start, *, center=None, iterates=DEFAULT_ITERATES, conv_tol=CONVERGED_TOL,
                     threads=None) -> RotationNumber:
     """Rotation number of the orbit of ``start`` around an elliptic fixed point (weighted Birkhoff)."""
@@ -295,7 +309,7 @@ class RotationProfile:
                                                          turns, status)]}
 
 
-@system_first(settings=("phi0", "tol"))
+@system_first(systems="map", settings=("phi0", "tol"))
 def rotation_profile(system, start, stop, *, n, center=None, iterates=DEFAULT_ITERATES, conv_tol=CONVERGED_TOL,
                      threads=None) -> RotationProfile:
     """Rotation numbers of n orbits started on the segment from ``start`` to ``stop``."""
@@ -332,7 +346,7 @@ def rotation_profile(system, start, stop, *, n, center=None, iterates=DEFAULT_IT
 DIFFUSION_FLOOR = 1e-17
 
 
-@system_first(settings=("phi0", "tol"))
+@system_first(systems="map", settings=("phi0", "tol"))
 def frequency_diffusion(system, starts, *, center, iterates=DEFAULT_ITERATES, threads=None) -> np.ndarray:
     """Frequency diffusion ``log10 |nu1 - nu2|`` of the orbits of ``starts`` (Laskar 1990, Icarus 88, 266,
     with the weighted Birkhoff average of Das, Sander, Yorke & Meiss 2017 in place of frequency

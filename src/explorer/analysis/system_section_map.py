@@ -321,6 +321,21 @@ class SystemSectionMap:
         x = np.asarray(x, dtype=np.float64)
         return bool(x.shape == (2,) and np.all(np.isfinite(x)) and np.isfinite(self._lifted(x[None, :])[0, 0]))
 
+    @functools.cached_property
+    def domain(self) -> tuple:
+        """((a0, a1), (b0, b1)): a box holding the domain, from a 101 x 101 grid of |a|, |b| <= 2^k,
+        k = 0..20, the first that holds it inside (one cell of margin); what a grid search covers."""
+        u = np.linspace(-1.0, 1.0, 101)
+        for k in range(21):
+            A, B = np.meshgrid(u * 2.0 ** k, u * 2.0 ** k, indexing="ij")
+            inside = np.isfinite(self._lifted(np.column_stack([A.ravel(), B.ravel()]))[:, 0]).reshape(A.shape)
+            i, j = np.flatnonzero(inside.any(axis=1)), np.flatnonzero(inside.any(axis=0))
+            if i.size and i[0] > 0 and j[0] > 0 and i[-1] < 100 and j[-1] < 100:
+                a, b = A[:, 0], B[0]
+                return (float(a[i[0] - 1]), float(a[i[-1] + 1])), (float(b[j[0] - 1]), float(b[j[-1] + 1]))
+        raise ParameterError(f"the domain of the section map of {self.system.name} is empty or unbounded within "
+                             f"|a|, |b| <= 2^20 ({self.describe_domain()})")
+
     def describe_domain(self) -> str:
         """The domain in words."""
         a, b = self.coords
@@ -495,6 +510,31 @@ class SystemSectionMap:
     def reflection(self):
         """A reversor of :attr:`reversors` linear in coords (its fixed line through the origin), else None."""
         return next((R for R in self.reversors if isinstance(R, _Linear)), None)
+
+    def symmetry_line_points(self, n) -> np.ndarray:
+        """``n`` points on the fixed line of each linear reversor (where R x = x), spread over the
+        part of the line in the domain (found on a grid of 2001 points of |t| <= 2^k, k = 0..20)."""
+        n = validation.integer("n", n, 1)
+        lines = []
+        for R in self.reversors:
+            if not isinstance(R, _Linear):
+                continue
+            w, V = np.linalg.eig(R.M)
+            fixed = np.flatnonzero(np.abs(w - 1.0) < 1e-12)
+            if fixed.size != 1:
+                continue
+            v = np.real(V[:, fixed[0]])
+            for k in range(21):
+                t = np.linspace(-(2.0 ** k), 2.0 ** k, 2001)
+                inside = np.flatnonzero(np.isfinite(self._lifted(t[:, None] * v)[:, 0]))
+                if inside.size and inside[0] > 0 and inside[-1] < t.size - 1:
+                    break
+            if not inside.size:
+                continue
+            lo, hi = t[max(inside[0] - 1, 0)], t[min(inside[-1] + 1, t.size - 1)]
+            pts = (lo + (hi - lo) * (np.arange(n) + 0.5) / n)[:, None] * v
+            lines.append(pts[np.isfinite(self._lifted(pts)[:, 0])])
+        return np.concatenate(lines) if lines else np.empty((0, 2))
 
     def require_reversor(self, what: str):
         """The first of :attr:`reversors`; ParameterError naming ``what`` needs it when there is none."""
