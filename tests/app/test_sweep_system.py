@@ -94,6 +94,19 @@ def test_a_rerun_finds_every_panel_stored(swept, capsys):
     assert "2 panels (0 computed, 2 already stored)" in out
 
 
+@pytest.mark.slow
+def test_two_worker_processes_store_the_same_panels(swept, capsys):
+    """The System's panels travel to joblib workers (pickled with the System) and come back the same."""
+    workdir, _ = swept
+    code, _, err = run(["sweep", "hh.toml", "--system", f"{MODULE}:hh", "--out", "res/j2.h5", "--quiet", "--jobs", "2",
+                        "--no-figure"], capsys)
+    assert code == 0, err
+    one, two = (store.read_store(workdir / "res" / name) for name in ("hh.h5", "j2.h5"))
+    for i in (0, 1):
+        for k in ("seeds", "y0", "count", "status", "final", "info", "offsets", "crossings"):
+            np.testing.assert_array_equal(getattr(one.panels[i], k), getattr(two.panels[i], k), err_msg=k)
+
+
 @pytest.mark.parametrize("value", ["nocolon", "h4_not_a_module:hh", f"{MODULE}:nothing"])
 def test_a_bad_system_name_exits_2_with_one_line(workdir, capsys, value):
     code, out, err = run(["sweep", "hh.toml", "--system", value, "--out", "res/x.h5", "--quiet"], capsys)
