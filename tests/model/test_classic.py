@@ -107,6 +107,19 @@ def test_henon_heiles_chaotic_fraction_grows_with_the_energy_as_henon_and_heiles
     assert f12 < f8 < f6
 
 
+def test_henon_heiles_largest_lyapunov_exponents_are_the_printed_ones_of_two_chaotic_orbits(hh):
+    """Kallrath, Schlöder & Bock 1993 (Celest. Mech. Dyn. Astron. 56, 353), Tables I and II: the
+    Hénon–Heiles orbits from (x, y, px, py) = (0, 0, sqrt(0.1275), -0.35) (E = 0.125) and
+    (0, 0, 0.3, -0.41) (E = 0.12905) have the largest Lyapunov exponents 0.044 and 0.053, printed to
+    two figures and finite-time values; the finite-time scatter at t = 10^4 is about 0.01, hence the
+    tolerance 0.015.  MEGNO grows as lambda t / 2 on them (Cincotta & Simó 2000)."""
+    starts = np.array([(0.0, 0.0, math.sqrt(0.1275), -0.35), (0.0, 0.0, 0.3, -0.41)])
+    T = 1e4
+    ind = ex.indicators(hh, states=starts, tmax=T, which=("mlce", "megno"))
+    assert np.all(np.abs(ind.mlce - np.array([0.044, 0.053])) <= 0.015), ind.mlce
+    np.testing.assert_allclose(ind.megno, ind.mlce * T / 2, rtol=0.25)
+
+
 # ---------------------------------------------------------------------------------------------- PCR3BP
 @pytest.fixture(scope="module")
 def pcr():
