@@ -18,7 +18,7 @@ from explorer.model.system import System
 __all__ = ["ARENSTORF_MU", "ARENSTORF_PERIOD", "ARENSTORF_STATE", "HENON_HEILES_ENERGIES", "double_pendulum",
            "henon_heiles", "pcr3bp"]
 
-#: the energies of Hénon & Heiles 1964, Fig. 7 (their sections x = 0 in the plane (y, py))
+#: the energies of the sections of Hénon & Heiles 1964 (x = 0 in the plane (y, py))
 HENON_HEILES_ENERGIES = (1 / 12, 1 / 8, 1 / 6)
 
 #: Arenstorf's periodic orbit of the restricted three-body problem, the test problem of Hairer,
