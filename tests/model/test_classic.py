@@ -158,6 +158,15 @@ def test_jacobi_constant_is_conserved_to_1e_12_relative_over_ten_periods(pcr):
     np.testing.assert_allclose(C, C0, rtol=1e-12)
 
 
+def test_a_section_map_on_the_jacobi_level_lifts_arenstorfs_start(pcr):
+    """The energy of pcr3bp is C itself: SectionMap(pcr, C0, section=y, direction=-1 (vy < 0),
+    coords=(x, vx), solve=vy) lifts (0.994, 0) to Arenstorf's printed vy0 = -2.0015851063790825..."""
+    x, y, vx, vy = pcr.states
+    C0 = _jacobi(classic.ARENSTORF_STATE, classic.ARENSTORF_MU)
+    smap = ex.SectionMap(pcr, C0, section=y, direction=-1, coords=(x, vx), solve=vy)
+    np.testing.assert_allclose(smap.states([(0.994, 0.0)])[0], classic.ARENSTORF_STATE, rtol=0, atol=1e-14)
+
+
 # ---------------------------------------------------------------------------------------------- double pendulum
 def _lagrangian_rhs(m1, m2, l1, l2, g):
     """d(th1, th2, w1, w2)/dt from the Lagrangian L = T - V of two pendula, written here from the
