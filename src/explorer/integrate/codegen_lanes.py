@@ -2,14 +2,14 @@
 ``crossings_lanes``, the crossings of ``crossings_orbit`` (:mod:`explorer.integrate.codegen_crossings`) for
 LANES orbits at once with ``taylor_coefficients_lanes`` (docs/systems.md, "Crossings").
 
-Each lane is the scalar driver bit for bit: the recurrence, the step size's norms and power, the
-Horner evaluation, the section's value and coefficients and the no-root test of
-kernels.events.no_root_within are written with the vectors of :mod:`explorer.integrate.simd`, the
-same operations in the same order as the scalar kernels; the rest (step clipping, root isolation
-and refinement, rows, clock) calls the scalar kernels lane by lane.  A lane whose orbit stops takes
-the next one from a queue shared by the workers (``prange`` over groups of LANES lanes, as
-:mod:`explorer.integrate.lanes`); an orbit's rows do not depend on its lane, so neither on the
-thread count.
+Each lane is the scalar driver bit for bit.  Written with the vectors of :mod:`explorer.integrate.simd`,
+the same operations in the same order as the scalar kernels: the recurrence, the step size (norms,
+power, clipping, underflow test), the Horner evaluation, the section's value and coefficients, the
+first two tests of kernels.events.isolate_crossings, and the step's end of a lane with no root
+possible.  A lane that may hold a root, or stops, is finished lane by lane with the scalar kernels.
+A lane whose orbit stops takes the next one from a queue shared by the workers (``prange`` over
+groups of LANES lanes, as :mod:`explorer.integrate.lanes`); an orbit's rows depend neither on its
+lane nor on the thread count.
 """
 from __future__ import annotations
 
