@@ -36,7 +36,7 @@ from explorer.app.serve import export
 from explorer.app.serve import settings as settings_mod
 from explorer.app.serve.orbits import FIRST_BLOCK, OrbitRun, Worker
 from explorer.app.serve.settings import Settings, format_starts, parse_fields, parse_starts
-from explorer.app.serve.tasks import SessionLoop
+from explorer.app.serve.tasks import Session
 from explorer.model import ParameterError
 
 #: the browser (Debian: apt-get install chromium); EXPLORER_CHROMIUM points elsewhere
@@ -112,9 +112,9 @@ def test_a_value_change_reruns_the_orbits_under_their_own_ids():
     try:
         ids = [page.click(c1 + f * r1, c2).ident for f in (0.3, -0.3)]
         page.inputs["mu"].value = "0.031"
-        assert [i for i, *_ in page.starts] == ids
-        _poll_until(page, lambda: len(page.crossings.data["t"]) == 2 * s.crossings and not page._running)
-        assert sorted(set(np.asarray(page.crossings.data["orbit"]).tolist())) == sorted(ids)
+        assert [i for i, *_ in page.orbits.starts] == ids
+        _poll_until(page, lambda: len(page.orbits.crossings.data["t"]) == 2 * s.crossings and not page.orbits.running)
+        assert sorted(set(np.asarray(page.orbits.crossings.data["orbit"]).tolist())) == sorted(ids)
         assert page.click(c1, c2).ident == max(ids) + 1                        # a new click: a new id
     finally:
         page.close()
@@ -127,7 +127,7 @@ def test_a_link_with_a_refused_value_applies_the_rest_and_names_what_it_refused(
     page = SectionPage(Settings(), {"mu": "0.5", "h": "1e300", "crossings": "300", "orbits": "0.1,0.0"})
     try:
         assert page.settings.params.mu == 0.5 and page.settings.crossings == 300 and page.settings.h == Settings().h
-        assert [s[1:3] for s in page.starts] == [(0.1, 0.0)]                 # the start runs
+        assert [s[1:3] for s in page.orbits.starts] == [(0.1, 0.0)]                 # the start runs
         said = page.message.text
         assert "h must be in" in said and "mu" not in said.split("h must be in")[0]
     finally:
@@ -149,26 +149,27 @@ def test_the_overlay_marks_the_fixed_points_and_draws_their_separatrices(monkeyp
     page = SectionPage(Settings(params=model.FIGURE4.with_(mu=0.5)), {"separatrices": "1"})
     try:
         t0 = time.time()
-        while "separatrix branches" not in page.overlay_text.text:   # (points first)
-            assert time.time() - t0 < 1200, page.overlay_text.text
+        while "separatrix branches" not in page.overlays.text.text:   # (points first)
+            assert time.time() - t0 < 1200, page.overlays.text.text
             page.poll()
             time.sleep(0.02)
         fp = find_fixed_point(page.settings.params, page.settings.h, (-0.2, 0.0))   # solution I, hyperbolic
-        found = list(zip(page.fixed.data["p1"], page.fixed.data["p2"], page.fixed.data["kind"]))
+        fixed = page.overlays.fixed.data
+        found = list(zip(fixed["p1"], fixed["p2"], fixed["kind"]))
         assert any(abs(a - fp.point[0]) < 1e-8 and abs(b - fp.point[1]) < 1e-8 and k == "hyperbolic"
                    for a, b, k in found)
-        assert len(page.curves.data["xs"]) >= 2 and "separatrix" in page.overlay_text.text
+        assert len(page.overlays.curves.data["xs"]) >= 2 and "separatrix" in page.overlays.text.text
         assert page.url_query()["separatrices"] == "1"
-        page.overlay.value = False                         # off: the overlay goes
-        assert page.fixed.data["p1"] == [] and page.curves.data["xs"] == []
-        page.periodic_box.value = True                     # periodic orbits: each period's points, K of them
+        page.overlays.overlay.value = False                         # off: the overlay goes
+        assert page.overlays.fixed.data["p1"] == [] and page.overlays.curves.data["xs"] == []
+        page.overlays.periodic_box.value = True                     # periodic orbits: each period's points, K of them
         t0 = time.time()
-        while not page.periodic.data["p1"]:
-            assert time.time() - t0 < 1200, page.overlay_text.text
+        while not page.overlays.periodic.data["p1"]:
+            assert time.time() - t0 < 1200, page.overlays.text.text
             page.poll()
             time.sleep(0.05)
-        periods = np.array(page.periodic.data["period"])
-        assert periods.size and set(periods) <= {1, 2, 3, 4} and "periodic orbits K=1" in page.overlay_text.text
+        periods = np.array(page.overlays.periodic.data["period"])
+        assert periods.size and set(periods) <= {1, 2, 3, 4} and "periodic orbits K=1" in page.overlays.text.text
         for k in set(periods.tolist()):
             assert (periods == k).sum() % k == 0
     finally:
@@ -188,7 +189,7 @@ def test_a_session_holds_a_bounded_number_of_crossings(monkeypatch):
         page.inputs["crossings"].value = str(big + 1)                                 # nor more per click
         assert "not applied" in page.message.text and page.settings.crossings == big
         link = SectionPage(Settings(), {"crossings": str(big), "orbits": "0.1,0;0.2,0;0.3,0"})
-        assert link.starts == [] and "link ignored" in link.message.text               # nor a link
+        assert link.orbits.starts == [] and "link ignored" in link.message.text               # nor a link
         link.close()
     finally:
         page.close()
@@ -225,8 +226,8 @@ def test_worker_blocks_are_one_uninterrupted_run_and_cancelled_orbits_hand_out_n
         if status != "running" and ident == 2:
             got["finished"] = True
 
-    loop = SessionLoop()                             # (blocks come on the session's loop: poll)
-    w = Worker(on_block, task=loop.task("orbits"))
+    loop = Session()                                 # (blocks come on the session's loop: poll)
+    w = Worker(loop, on_block)
     try:
         first = w.submit(0.3, 0.1, s)
         w.cancel()                                   # before or after its first block: nothing more comes
@@ -238,7 +239,7 @@ def test_worker_blocks_are_one_uninterrupted_run_and_cancelled_orbits_hand_out_n
         rows = np.concatenate(got["rows"][second.ident])
         assert len(set(got["sizes"])) > 1          # the blocks had different sizes
     finally:
-        w.stop()
+        loop.close()
     ref = sections.crossings(s.params, s.h, [(-0.4, 0.2)], n_crossings=s.crossings, **s.section_kwargs())
     np.testing.assert_array_equal(rows, ref.orbit(0))
 
@@ -270,9 +271,8 @@ TINY_DT = Settings(params=model.FIGURE4.with_(mu=0.03), method="split2", dt=1e-1
 
 def test_a_cancelled_fixed_step_orbit_stops_within_a_block_and_was_said_with_its_estimate_up_front():
     notices, blocks = [], []
-    loop = SessionLoop()
-    w = Worker(lambda *b: blocks.append(b), task=loop.task("orbits"),
-               on_notice=lambda ident, text: notices.append((ident, text)))
+    loop = Session()
+    w = Worker(loop, lambda *b: blocks.append(b), on_notice=lambda ident, text: notices.append((ident, text)))
     try:
         run = w.submit(0.5, 0.0, TINY_DT)
         t0 = time.monotonic()
@@ -287,7 +287,7 @@ def test_a_cancelled_fixed_step_orbit_stops_within_a_block_and_was_said_with_its
             assert time.monotonic() - t0 < 5.0, "the cancelled orbit kept a core busy"
         assert not blocks                            # no crossing: nothing handed out
     finally:
-        w.stop()
+        loop.close()
 
 
 #: crossings per click of the pause tests: an orbit of about a second, so that a second click
@@ -297,11 +297,11 @@ PAUSE_CROSSINGS = 30_000
 
 def _idle(page) -> bool:
     """The page's status line counts no orbit running."""
-    return " 0 running" in page.status.text
+    return " 0 running" in page.orbits.status.text
 
 
 def _orbit_rows(page, ident) -> np.ndarray:
-    d = page.crossings.data
+    d = page.orbits.crossings.data
     mine = np.asarray(d["orbit"]) == ident
     return np.column_stack([np.asarray(d[k])[mine] for k in ("t", "p1", "p2", "M", "dH")])
 
@@ -322,45 +322,46 @@ def test_a_click_pauses_the_running_orbit_and_resume_completes_it_bit_for_bit():
     a, b = (c1 + 0.3 * r1, c2), (c1 - 0.5 * r1, c2 + 0.2 * r2)
     page = SectionPage(s)
     try:
-        assert page.pause_box.value and page.url_query()["pause"] == "1"            # on by default
+        assert page.orbits.pause_box.value and page.url_query()["pause"] == "1"            # on by default
         first, second = _click_while_running(page, a, b)
         _poll_until(page, lambda: len(_orbit_rows(page, second)) == s.crossings and _idle(page))
         held = len(_orbit_rows(page, first))
-        assert 0 < held < s.crossings and page.worker.paused() == [first]          # paused mid-orbit
-        assert "1 running" not in page.status.text and "1 paused" in page.status.text
+        assert 0 < held < s.crossings and page.orbits.worker.paused() == [first]          # paused mid-orbit
+        assert "1 running" not in page.orbits.status.text and "1 paused" in page.orbits.status.text
         time.sleep(0.3)
         page.poll()
         assert len(_orbit_rows(page, first)) == held                               # and it stays there
         assert len(parse_starts(page.url_query()["orbits"])) == 2                  # both starts in the link
-        assert page.resume() == 1 and page.worker.paused() == [] and "paused" not in page.status.text
-        _poll_until(page, lambda: first not in page._running and _idle(page))
+        assert page.orbit_list.resume() == 1 and page.orbits.worker.paused() == []
+        assert "paused" not in page.orbits.status.text
+        _poll_until(page, lambda: first not in page.orbits.running and _idle(page))
         for ident, (p1, p2) in ((first, a), (second, b)):        # as one uninterrupted run, bit for bit
             ref = sections.crossings(s.params, s.h, [(p1, p2)], n_crossings=s.crossings, **s.section_kwargs())
             np.testing.assert_array_equal(_orbit_rows(page, ident), ref.orbit(0))
-        assert page.resume() == 0                                                   # nothing left to resume
+        assert page.orbit_list.resume() == 0                                                   # nothing left to resume
 
         # a paused orbit is undone like any other
         third, fourth = _click_while_running(page, a, b)
-        assert page.worker.paused() == [third]
-        page.undo()
-        page.undo()
-        assert page.worker.paused() == [] and _idle(page) and len(page.starts) == 2
+        assert page.orbits.worker.paused() == [third]
+        page.orbit_list.undo()
+        page.orbit_list.undo()
+        assert page.orbits.worker.paused() == [] and _idle(page) and len(page.orbits.starts) == 2
         page.poll()
-        assert set(np.asarray(page.crossings.data["orbit"]).tolist()) == {first, second}
-        assert "paused" not in page.status.text
+        assert set(np.asarray(page.orbits.crossings.data["orbit"]).tolist()) == {first, second}
+        assert "paused" not in page.orbits.status.text
 
         # Clear lets paused orbits go
         _click_while_running(page, a, b)
-        page.clear()
-        assert page.worker.paused() == [] and "paused" not in page.status.text
+        page.orbit_list.clear()
+        assert page.orbits.worker.paused() == [] and "paused" not in page.orbits.status.text
 
         # a new value restarts paused orbits with the other starts: all run, none paused
         _click_while_running(page, a, b)
-        assert len(page.worker.paused()) == 1
+        assert len(page.orbits.worker.paused()) == 1
         page.inputs["crossings"].value = "300"
-        assert page.settings.crossings == 300 and page.worker.paused() == [] and len(page.starts) == 2
-        _poll_until(page, lambda: len(page.crossings.data["t"]) == 2 * 300 and _idle(page))
-        assert "paused" not in page.status.text
+        assert page.settings.crossings == 300 and page.orbits.worker.paused() == [] and len(page.orbits.starts) == 2
+        _poll_until(page, lambda: len(page.orbits.crossings.data["t"]) == 2 * 300 and _idle(page))
+        assert "paused" not in page.orbits.status.text
     finally:
         page.close()
 
@@ -374,10 +375,10 @@ def test_with_the_box_unticked_a_click_leaves_the_running_orbits_running():
     a, b = (c1 + 0.3 * r1, c2), (c1 - 0.5 * r1, c2 + 0.2 * r2)
     page = SectionPage(s, {"pause": "0"})                        # the box, off through the link
     try:
-        assert not page.pause_box.value and page.url_query()["pause"] == "0"
+        assert not page.orbits.pause_box.value and page.url_query()["pause"] == "0"
         first, second = _click_while_running(page, a, b)
-        assert page.worker.paused() == [] and "paused" not in page.status.text
-        _poll_until(page, lambda: len(page.crossings.data["t"]) == 2 * s.crossings and _idle(page))
+        assert page.orbits.worker.paused() == [] and "paused" not in page.orbits.status.text
+        _poll_until(page, lambda: len(page.orbits.crossings.data["t"]) == 2 * s.crossings and _idle(page))
         for ident, (p1, p2) in ((first, a), (second, b)):        # both complete, no Resume needed
             ref = sections.crossings(s.params, s.h, [(p1, p2)], n_crossings=s.crossings, **s.section_kwargs())
             np.testing.assert_array_equal(_orbit_rows(page, ident), ref.orbit(0))
@@ -862,8 +863,6 @@ def test_the_megno_raster_is_refined_and_marks_chaos_and_order():
     assert np.isnan(final[outside]).all() and np.isfinite(final[~outside]).all()
     # the chaotic sea (MEGNO grows) and regular islands (MEGNO near 2) are both on the map
     assert np.nanmax(final) > 8 and np.nanmin(np.abs(final - 2)) < 0.3
-    stopped = list(raster.rasters(s, w, stop=lambda: True))
-    assert stopped == []
 
 
 @browser_needed
@@ -909,28 +908,28 @@ def test_explore_in_a_notebook_renders_and_streams_the_clicked_orbit(monkeypatch
         page = app.page
         assert page.click(0.3, 0.1) is not None
         t0 = time.time()
-        while len(page.crossings.data["t"]) < 60 and time.time() - t0 < 120:
+        while len(page.orbits.crossings.data["t"]) < 60 and time.time() - t0 < 120:
             page.poll()
             time.sleep(0.01)
         ref = sections.crossings(page.settings.params, page.settings.h, [(0.3, 0.1)], n_crossings=60)
-        got = np.column_stack([np.asarray(page.crossings.data[k]) for k in ("t", "p1", "p2", "M", "dH")])
+        got = np.column_stack([np.asarray(page.orbits.crossings.data[k]) for k in ("t", "p1", "p2", "M", "dH")])
         np.testing.assert_array_equal(got, ref.orbit(0))
         # the orbit's chaos indicators colour its points on demand
         from explorer.analysis import lyapunov
         from explorer.app.serve.orbits import INDICATOR_TIME
 
-        while not page.indicators and time.time() - t0 < 120:
+        while not page.orbits.indicators and time.time() - t0 < 120:
             page.poll()
             time.sleep(0.01)
-        (megno, mlce), = page.indicators.values()
+        (megno, mlce), = page.orbits.indicators.values()
         ind = lyapunov.indicators(page.settings.params, states=ex.section_state(page.settings.params, [0.3], [0.1],
                                                                          page.settings.h), tmax=INDICATOR_TIME)
         assert (megno, mlce) == (float(ind.megno[0]), float(ind.mlce[0]))
-        assert np.all(np.asarray(page.crossings.data["megno"]) == megno) and "<Y> =" in page.status.text
-        page.colour_box.value = True
-        assert page.points.glyph.fill_color["field"] == "megno" and page.url_query()["colour"] == "megno"
-        page.undo()
-        assert len(page.crossings.data["t"]) == 0 and page.url_query()["orbits"] == ""
+        assert np.all(np.asarray(page.orbits.crossings.data["megno"]) == megno) and "<Y> =" in page.orbits.status.text
+        page.orbits.colour_box.value = True
+        assert page.orbits.points.glyph.fill_color["field"] == "megno" and page.url_query()["colour"] == "megno"
+        page.orbit_list.undo()
+        assert len(page.orbits.crossings.data["t"]) == 0 and page.url_query()["orbits"] == ""
         with pytest.raises(ParameterError, match="a1"):
             ex.explore(a1=-1.0)
     finally:
@@ -1146,9 +1145,9 @@ def test_the_scene_seeds_button_starts_the_sweeps_seeds_at_the_current_settings(
     base, _label = settings_mod.settings_for(sc, 1, crossings=5)
     page = SectionPage(base, {"mu": "0.5"}, seeds=sc.seeds)
     try:
-        assert page.run_seeds() == len(page.starts) > 0
+        assert page.run_seeds() == len(page.orbits.starts) > 0
         p1, p2, _ = seed_points(sc.seeds, page.settings.params, page.settings.h)
-        assert [(a, b) for _i, a, b, _c in page.starts] == list(zip(p1.tolist(), p2.tolist()))
+        assert [(a, b) for _i, a, b, _c in page.orbits.starts] == list(zip(p1.tolist(), p2.tolist()))
         assert page.settings.params.mu == 0.5 and "orbits started" in page.message.text
         assert len(parse_starts(page.url_query()["orbits"])) == len(p1)           # kept in the link
     finally:
@@ -1160,7 +1159,7 @@ def _poll_until(page, cond, timeout=240.0):
     while not cond() and time.time() - t0 < timeout:
         page.poll()
         time.sleep(0.02)
-    assert cond(), (page.message.text, page.status.text)
+    assert cond(), (page.message.text, page.orbits.status.text)
     for _ in range(10):          # then what the page scheduled meanwhile (the flush after a first block)
         if not page.poll():
             break
@@ -1178,20 +1177,22 @@ def test_an_orbits_megno_reaches_its_rows_whether_live_or_settled():
     page = SectionPage(s)
     try:
         older = page.click(c1 + 0.3 * r1, c2).ident
-        _poll_until(page, lambda: len(page.shown.data["t"]) == s.crossings and older in page.indicators)
-        page._running = {older + 1}                         # a second orbit's first block, by hand
-        page.starts.append((older + 1, c1, c2, 1))
+        _poll_until(page, lambda: len(page.orbits.shown.data["t"]) == s.crossings and older in page.orbits.indicators)
+        page.orbits.progress[older + 1] = (0, "running")          # a second orbit's first block, by hand
+        page.orbits.starts.append((older + 1, c1, c2, 1))
         rows = np.column_stack([np.arange(1.0, 5.0), np.full(4, c1), np.full(4, c2), np.ones(4), np.zeros(4)])
-        page._on_block(older + 1, rows, 4, "running")
-        assert page.poll() and len(page.live.data["t"]) == 4      # live, not yet settled
-        page._on_indicators(older, 2.5, 0.01)               # the older orbit's rows: settled
-        page._on_indicators(older + 1, 7.0, 0.2)            # the newer one's: live
-        np.testing.assert_array_equal(page.shown.data["megno"], np.full(s.crossings, 2.5))
-        assert page.live.data["megno"] == [7.0] * 4
+        page.orbits._on_block(older + 1, rows, 4, "running")
+        page.orbits._flush()                                # (its flush, by hand: the loop runs the next one)
+        assert len(page.orbits.live.data["t"]) == 4                # live, not yet settled
+        page.orbits._on_indicators(older, 2.5, 0.01)               # the older orbit's rows: settled
+        page.orbits._on_indicators(older + 1, 7.0, 0.2)            # the newer one's: live
+        np.testing.assert_array_equal(page.orbits.shown.data["megno"], np.full(s.crossings, 2.5))
+        assert page.orbits.live.data["megno"] == [7.0] * 4
         assert page.poll()                                  # the next flush settles them
-        assert page.live.data["megno"] == []
-        np.testing.assert_array_equal(page.shown.data["megno"], np.r_[np.full(s.crossings, 2.5), np.full(4, 7.0)])
-        np.testing.assert_array_equal(page.shown.data["megno"], page.crossings.data["megno"])
+        assert page.orbits.live.data["megno"] == []
+        np.testing.assert_array_equal(page.orbits.shown.data["megno"],
+                                      np.r_[np.full(s.crossings, 2.5), np.full(4, 7.0)])
+        np.testing.assert_array_equal(page.orbits.shown.data["megno"], page.orbits.crossings.data["megno"])
     finally:
         page.close()
 
@@ -1210,39 +1211,39 @@ def test_picking_an_orbits_crossing_shows_its_mlce_megno_and_rotation_number():
         starts = [(0.3, 0.1), (1.3, 0.05)]             # the second in the island of the elliptic point (1.58, 0)
         for p in starts:
             page.click(*p)
-        page.resume()                                  # (the second click paused the first if it still ran)
-        _poll_until(page, lambda: len(page.crossings.data["t"]) == 2 * s.crossings)
-        d = page.crossings.data
-        second = np.asarray(d["orbit"]) == page.starts[1][0]
+        page.orbit_list.resume()                                  # (the second click paused the first if it still ran)
+        _poll_until(page, lambda: len(page.orbits.crossings.data["t"]) == 2 * s.crossings)
+        d = page.orbits.crossings.data
+        second = np.asarray(d["orbit"]) == page.orbits.starts[1][0]
         k = int(np.flatnonzero(second)[17])                     # a crossing of the second orbit, not its start
-        assert page.pick(float(d["p1"][k]) + 1e-9, float(d["p2"][k])) == page.starts[1][0]
-        _poll_until(page, lambda: "rotation number" in page.readout.text)
-        r = page.readouts[page.starts[1][0]]
+        assert page.readout.pick(float(d["p1"][k]) + 1e-9, float(d["p2"][k])) == page.orbits.starts[1][0]
+        _poll_until(page, lambda: "rotation number" in page.readout.text.text)
+        r = page.readout.readouts[page.orbits.starts[1][0]]
         y0 = model.section_state(s.params, [starts[1][0]], [starts[1][1]], s.h)
         ind = lyapunov.indicators(s.params, states=y0, tmax=INDICATOR_TIME, method=s.method, tol=s.tol)
         assert (r["megno"], r["mlce"]) == (float(ind.megno[0]), float(ind.mlce[0]))          # the same numbers
         fp = elliptic_center(s, starts[1])
         assert fp.stable and fp.point == pytest.approx(find_fixed_point(s.params, s.h, starts[1]).point, abs=0)
         ref = rotation.rotation_number(s.params, s.h, starts[1], center=fp.point, tol=s.tol)
-        assert r["rotation"].value == ref.value and f"{ref.value:.10g}" in page.readout.text
-        assert f"{float(ind.mlce[0]):.4g}" in page.readout.text and "orbit 2" in page.readout.text
-        assert page.pick(50.0, 50.0) is None and "no crossing within" in page.message.text     # nowhere near
+        assert r["rotation"].value == ref.value and f"{ref.value:.10g}" in page.readout.text.text
+        assert f"{float(ind.mlce[0]):.4g}" in page.readout.text.text and "orbit 2" in page.readout.text.text
+        assert page.readout.pick(50.0, 50.0) is None and "no crossing within" in page.message.text     # nowhere near
         import threading
 
         before = threading.active_count()
-        page.readouts.clear()
+        page.readout.readouts.clear()
         for _ in range(20):                                         # rapid picks: one readout thread, the last pick
-            page.pick(float(d["p1"][k]), float(d["p2"][k]))
+            page.readout.pick(float(d["p1"][k]), float(d["p2"][k]))
         assert threading.active_count() <= before
-        _poll_until(page, lambda: page.starts[1][0] in page.readouts)
+        _poll_until(page, lambda: page.orbits.starts[1][0] in page.readout.readouts)
         page.click_mode.value = "pick an orbit"                  # the switch: a tap picks instead of starting
         from bokeh.events import Tap
 
-        page._on_tap(Tap(page.figure, sx=1.0, sy=1.0, x=float(d["p1"][0]), y=float(d["p2"][0])))
-        assert len(page.starts) == 2 and page.picked == int(d["orbit"][0])
-        page.undo()
-        page.undo()
-        assert page.readout.text == "" and page.readouts == {}
+        page._on_tap(Tap(page.section.figure, sx=1.0, sy=1.0, x=float(d["p1"][0]), y=float(d["p2"][0])))
+        assert len(page.orbits.starts) == 2 and page.readout.picked == int(d["orbit"][0])
+        page.orbit_list.undo()
+        page.orbit_list.undo()
+        assert page.readout.text.text == "" and page.readout.readouts == {}
     finally:
         page.close()
 
@@ -1291,6 +1292,7 @@ def test_a_thousand_clicks_leave_the_session_with_bounded_memory_and_threads(mon
     c1, c2, r1, r2 = s.region
     rng = np.random.default_rng(7)
     page = SectionPage(s)
+    page.poll()                                                    # (the thread that runs the page's own loop)
     threads0 = threading.active_count()
     tracemalloc.start()
     try:
@@ -1299,35 +1301,36 @@ def test_a_thousand_clicks_leave_the_session_with_bounded_memory_and_threads(mon
             for _ in range(ROUND):
                 u, v = rng.uniform(-0.9, 0.9, 2)
                 assert page.click(c1 + u * r1 * np.sqrt(1 - v * v), c2 + v * r2 * 0.9) is not None
-            paused += len(page.worker.paused())                     # each click paused the orbits still running ...
-            page.resume()                                           # ... and Resume continues them
-            _poll_until(page, lambda: len(page.crossings.data["t"]) == ROUND * CLICK_CROSSINGS
-                        and len(page.indicators) == ROUND and _idle(page))
-            assert sorted(np.unique(page.crossings.data["orbit"])) == sorted(i for i, *_ in page.starts)
-            page.clear()
+            paused += len(page.orbits.worker.paused())  # each click paused the orbits still running ...
+            page.orbit_list.resume()                                           # ... and Resume continues them
+            _poll_until(page, lambda: len(page.orbits.crossings.data["t"]) == ROUND * CLICK_CROSSINGS
+                        and len(page.orbits.indicators) == ROUND and _idle(page))
+            assert sorted(np.unique(page.orbits.crossings.data["orbit"])) == sorted(i for i, *_ in page.orbits.starts)
+            page.orbit_list.clear()
             page.poll()
-            assert len(page.crossings.data["t"]) == 0 and page.starts == [] and page.indicators == {}
+            assert len(page.orbits.crossings.data["t"]) == 0 and page.orbits.starts == []
+            assert page.orbits.indicators == {}
             assert page.orbits._pending == []
-            assert page.worker._runs == page.worker._paused == []
+            assert page.orbits.worker._runs == page.orbits.worker._paused == []
             gc.collect()                                            # (Bokeh's models hold reference cycles)
             heap.append(tracemalloc.get_traced_memory()[0])
-        # no thread per click: the orbits run on one shared thread (tasks.py), that is all
-        assert threading.active_count() <= threads0 + 1
+        # no thread per click: the orbits and their indicators run in the shared executor (tasks.py)
+        assert threading.active_count() <= threads0 + 2
         assert paused > 0                                          # paused orbits were held, and let go
         growth = heap[-1] - heap[1]
         print(f"heap after each round (kB): {[h // 1024 for h in heap]}; growth {growth / 1024:.0f} kB; "
               f"{paused} orbits paused in all")
         assert growth < HEAP_GROWTH_BOUND, heap
-        page.loop.close(wait=True)                                 # the tab is gone: its jobs end
-        assert page.worker.task.join(0)
+        page.close()                                               # the tab is gone: its work ends
+        assert not page.session.busy()
     finally:
         tracemalloc.stop()
         page.close()
 
 
 def test_fifty_clicks_and_five_megno_toggles_start_no_thread_of_their_own():
-    """The page's jobs run on threads shared by every session (tasks.py): the count of threads
-    stays within those of the jobs that run at once (the orbits and the raster), whatever the
+    """The page's work runs in the executor shared by every session (tasks.py): the count of threads
+    stays within those of the work that runs at once (the orbits and the raster), whatever the
     number of clicks and toggles."""
     pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
     import threading
@@ -1339,16 +1342,17 @@ def test_fifty_clicks_and_five_megno_toggles_start_no_thread_of_their_own():
     rng = np.random.default_rng(3)
     page = SectionPage(s, megno_resolution=16, megno_time=5.0)
     try:
+        page.poll()                                         # (the thread that runs the page's own loop)
         threads0, most = threading.active_count(), 0
         for k in range(50):
             u, v = rng.uniform(-0.9, 0.9, 2)
             assert page.click(c1 + u * r1 * np.sqrt(1 - v * v), c2 + v * r2 * 0.9) is not None
             if k % 10 == 0:
-                page.layer.value = not page.layer.value               # the MEGNO layer on, then off, ...
+                page.chaos.layer.value = not page.chaos.layer.value               # the MEGNO layer on, then off, ...
             page.poll()
             most = max(most, threading.active_count())
-        page.resume()
-        _poll_until(page, lambda: len(page.crossings.data["t"]) == 50 * CLICK_CROSSINGS and _idle(page))
+        page.orbit_list.resume()
+        _poll_until(page, lambda: len(page.orbits.crossings.data["t"]) == 50 * CLICK_CROSSINGS and _idle(page))
         assert most <= threads0 + 2, (threads0, most)
     finally:
         page.close()
@@ -1362,11 +1366,11 @@ def test_a_value_changed_during_the_megno_raster_restarts_it_for_the_new_value()
     page = SectionPage(Settings(params=model.FIGURE4.with_(mu=0.03), tol=1e-10), {"megno": "1"})
     shown = []
     show = page.chaos.show_image
-    page.chaos.show_image = lambda im: (shown.append((page.chaos.task.generation, im)), show(im))
+    page.chaos.show_image = lambda im: (shown.append((page.settings.params.mu, im)), show(im))
     try:
-        _poll_until(page, lambda: bool(page.raster_source.data["n"]))          # the old raster is on
+        _poll_until(page, lambda: bool(page.chaos.raster_source.data["n"]))          # the old raster is on
         page.inputs["mu"].value = "0.5"                                        # changed while it runs
-        new = page.chaos.task.generation
+        new = 0.5                                       # (an image the older task handed in later would show here)
         assert page.settings.params.mu == 0.5
         # the new value's first complete raster, as the page was handed it: the state the wait is
         # for, read from the record of what was shown (the page may show a finer one by then)
@@ -1374,12 +1378,12 @@ def test_a_value_changed_during_the_megno_raster_restarts_it_for_the_new_value()
             return [im for g, im in shown if g == new and im.complete and im.n == raster.RESOLUTIONS[0]]
 
         _poll_until(page, lambda: bool(complete_at_first_resolution()))
-        ref = next(im for im in raster.rasters(page.settings, page.window) if im.complete)
+        ref = next(im for im in raster.rasters(page.settings, page.section.window) if im.complete)
         np.testing.assert_array_equal(complete_at_first_resolution()[0].values, ref.values)  # the new value's
         after = [im for g, im in shown if g == new]
-        assert after and all(im.window == page.window for im in after)
-        page.layer.value = False
-        assert page.raster_source.data["n"] == []
+        assert after and all(im.window == page.section.window for im in after)
+        page.chaos.layer.value = False
+        assert page.chaos.raster_source.data["n"] == []
     finally:
         page.close()
 
@@ -1436,26 +1440,26 @@ def test_the_view_exports_as_svg_with_one_group_per_orbit_and_as_png_in_the_orbi
     try:
         for u in (0.5, -0.3, 0.1):
             page.click(c1 + u * r1, c2 + 0.1 * r2)
-        page.resume()                                  # (each click paused the orbits still running)
-        _poll_until(page, lambda: len(page.crossings.data["t"]) == 3 * s.crossings)
-        svg = page.figure_bytes("svg")
+        page.orbit_list.resume()                                  # (each click paused the orbits still running)
+        _poll_until(page, lambda: len(page.orbits.crossings.data["t"]) == 3 * s.crossings)
+        svg = page.exports.figure_bytes("svg")
         groups = _svg_orbits(svg)                                        # parses as XML
-        assert sorted(groups) == sorted(i for i, *_ in page.starts)      # one group per orbit
-        for ident, _a, _b, c in page.starts:
-            n_inside = int(np.sum(np.asarray(page.crossings.data["orbit"]) == ident))
+        assert sorted(groups) == sorted(i for i, *_ in page.orbits.starts)      # one group per orbit
+        for ident, _a, _b, c in page.orbits.starts:
+            n_inside = int(np.sum(np.asarray(page.orbits.crossings.data["orbit"]) == ident))
             assert len(groups[ident]) == n_inside                       # a point per crossing
             assert set(groups[ident]) == {COLORS[c]}                     # in the orbit's colour
-        img = matplotlib.image.imread(io.BytesIO(page.figure_bytes("png")))[..., :3]
-        for _i, _a, _b, c in page.starts:                                # each orbit's colour is on the picture
+        img = matplotlib.image.imread(io.BytesIO(page.exports.figure_bytes("png")))[..., :3]
+        for _i, _a, _b, c in page.orbits.starts:                                # each orbit's colour is on the picture
             rgb = np.array(matplotlib.colors.to_rgb(COLORS[c]))
             assert np.sum(np.abs(img - rgb).max(axis=2) < 0.05) > 50, COLORS[c]
         gray = np.array(matplotlib.colors.to_rgb("0.8"))
         assert np.sum(np.abs(img - gray).max(axis=2) < 0.02) > 1000        # the forbidden region
-        page.colour_box.value = True                                      # coloured by MEGNO: not the orbit colours
-        _poll_until(page, lambda: len(page.indicators) == 3)
-        assert all(set(v) != {COLORS[c]} for (_i, _a, _b, c), v in zip(page.starts, _svg_orbits(
-            page.figure_bytes("svg")).values()))
-        page.export_figure()                                              # into --export-dir, PNG and SVG
+        page.orbits.colour_box.value = True  # coloured by MEGNO: not the orbit colours
+        _poll_until(page, lambda: len(page.orbits.indicators) == 3)
+        assert all(set(v) != {COLORS[c]} for (_i, _a, _b, c), v in zip(page.orbits.starts, _svg_orbits(
+            page.exports.figure_bytes("svg")).values()))
+        page.exports.export_figure()                                              # into --export-dir, PNG and SVG
         _poll_until(page, lambda: "figure written" in page.message.text, timeout=60)
         assert sorted(p.suffix for p in tmp_path.iterdir()) == [".png", ".svg"]
     finally:
@@ -1490,42 +1494,47 @@ def test_a_million_crossings_are_drawn_as_a_density_image_of_the_visible_window(
     try:
         for u in (-0.5, 0.5):
             page.click(c1 + u * r1, c2)
-        page.resume()                                  # (the second click paused the first if it still ran)
-        _poll_until(page, lambda: _idle(page) and len(page.crossings.data["t"]) == 2 * s.crossings)
-        assert not page.dense and page.points.visible and page.density.data["image"] == []
+        page.orbit_list.resume()                                  # (the second click paused the first if it still ran)
+        _poll_until(page, lambda: _idle(page) and len(page.orbits.crossings.data["t"]) == 2 * s.crossings)
+        assert not page.density_image.dense and page.orbits.points.visible
+        assert page.density_image.density.data["image"] == []
         # 10^6 more crossings of the two orbits (points spread over the region), as the worker hands them in
         rng = np.random.default_rng(3)
         n = 500_000
-        for ident, _a, _b, _c in page.starts:
+        for ident, _a, _b, _c in page.orbits.starts:
             a, r = rng.uniform(0, 2 * np.pi, n), np.sqrt(rng.uniform(0, 1, n))
             rows = np.column_stack([np.arange(n, dtype=float), c1 + r1 * r * np.cos(a), c2 + r2 * r * np.sin(a),
                                     np.ones(n), np.zeros(n)])
-            page._on_block(ident, rows, s.crossings + n, "done")   # (done: the orbit's crossings so far)
-        page._running = set()
+            page.orbits._on_block(ident, rows, s.crossings + n, "done")   # (done: the orbit's crossings so far)
         page.poll()
-        assert len(page.crossings.data["t"]) > density.THRESHOLD and page.dense and not page.points.visible
-        assert len(page.shown.data["t"]) == 0                                   # nothing of it for the browser
-        image = page.density.data["image"][0]
-        assert image.dtype == np.uint32 and page.density.data["n"] == [len(page.crossings.data["t"])]
+        assert len(page.orbits.crossings.data["t"]) > density.THRESHOLD and page.density_image.dense
+        assert not page.orbits.points.visible
+        assert len(page.orbits.shown.data["t"]) == 0                                   # nothing of it for the browser
+        image = page.density_image.density.data["image"][0]
+        assert image.dtype == np.uint32
+        assert page.density_image.density.data["n"] == [len(page.orbits.crossings.data["t"])]
         rgba = image.view(np.uint8).reshape(*image.shape, 4)
         drawn = {"#%02x%02x%02x" % tuple(px) for px in rgba[rgba[..., 3] > 0][:, :3]}
-        assert drawn == {COLORS[c] for *_x, c in page.starts}                    # the orbits' colours
+        assert drawn == {COLORS[c] for *_x, c in page.orbits.starts}                    # the orbits' colours
         assert (rgba[..., 3] > 0).mean() > 0.3                                   # the region is covered
         # zoom: re-aggregated for the new window, in well under a second
         class Ranges:
             x0, x1, y0, y1 = c1 - 0.1 * r1, c1 + 0.1 * r1, c2 - 0.1 * r2, c2 + 0.1 * r2
         t0 = time.perf_counter()
-        page._on_ranges(Ranges)
+        page.section._on_ranges(Ranges)
         took = time.perf_counter() - t0
-        assert page.density.data["x"] == [Ranges.x0] and page.density.data["dw"] == [Ranges.x1 - Ranges.x0]
-        assert page.window == settings_mod.Window(Ranges.x0, Ranges.x1, Ranges.y0, Ranges.y1)
-        print(f"density image of {len(page.crossings.data['t'])} crossings re-aggregated in {took * 1e3:.0f} ms")
+        assert page.density_image.density.data["x"] == [Ranges.x0]
+        assert page.density_image.density.data["dw"] == [Ranges.x1 - Ranges.x0]
+        assert page.section.window == settings_mod.Window(Ranges.x0, Ranges.x1, Ranges.y0, Ranges.y1)
+        print(f"density image of {len(page.orbits.crossings.data['t'])} crossings re-aggregated in {took * 1e3:.0f} ms")
         assert took < 2.0
-        page.undo()                                                              # one orbit less: redrawn
-        assert page.dense and page.density.data["n"] == [len(page.crossings.data["t"])] == [n + s.crossings]
-        page.undo()                                                              # below the threshold: glyphs again
-        assert not page.dense and page.points.visible and page.density.data["image"] == []
-        np.testing.assert_array_equal(page.shown.data["p1"], page.crossings.data["p1"])   # the rows, back
+        page.orbit_list.undo()                                                              # one orbit less: redrawn
+        assert page.density_image.dense
+        assert page.density_image.density.data["n"] == [len(page.orbits.crossings.data["t"])] == [n + s.crossings]
+        page.orbit_list.undo()  # below the threshold: glyphs again
+        assert not page.density_image.dense and page.orbits.points.visible
+        assert page.density_image.density.data["image"] == []
+        np.testing.assert_array_equal(page.orbits.shown.data["p1"], page.orbits.crossings.data["p1"])   # the rows, back
     finally:
         page.close()
 
@@ -1537,25 +1546,25 @@ def _glyphs_and_image(page):
     from explorer.app.serve import density
     from explorer.app.serve.orbits import COLORS
 
-    orbit = np.asarray(page.shown.data["orbit"])
-    np.testing.assert_array_equal(orbit, page.crossings.data["orbit"])          # the browser holds every row
-    first = page.glyph_filter.args["first"]
+    orbit = np.asarray(page.orbits.shown.data["orbit"])
+    np.testing.assert_array_equal(orbit, page.orbits.crossings.data["orbit"])          # the browser holds every row
+    first = page.orbits.glyph_filter.args["first"]
     drawn = orbit >= first                                                      # what the browser's filter keeps
-    ids = [i for i, *_ in page.starts]
+    ids = [i for i, *_ in page.orbits.starts]
     glyphs, image = [i for i in ids if i >= first], [i for i in ids if i < first]
     assert ids == sorted(ids) and glyphs == ids[len(image):]                    # the newest orbits
     assert np.count_nonzero(drawn) <= density.GLYPH_BUDGET
     if image:                                                                   # whole orbits, as many as fit
         assert np.count_nonzero(orbit >= image[-1]) > density.GLYPH_BUDGET
-        assert page.density.data["n"] == [np.count_nonzero(~drawn)]            # every other crossing
-        assert np.count_nonzero(drawn) + page.density.data["n"][0] == len(orbit)
-        picture = page.density.data["image"][0]
+        assert page.density_image.density.data["n"] == [np.count_nonzero(~drawn)]            # every other crossing
+        assert np.count_nonzero(drawn) + page.density_image.density.data["n"][0] == len(orbit)
+        picture = page.density_image.density.data["image"][0]
         rgba = picture.view(np.uint8).reshape(*picture.shape, 4)
-        if not page.colour_box.value:
+        if not page.orbits.colour_box.value:
             colours = {"#%02x%02x%02x" % tuple(px) for px in rgba[rgba[..., 3] > 0][:, :3]}
-            assert colours == {COLORS[c] for i, _a, _b, c in page.starts if i in image}
+            assert colours == {COLORS[c] for i, _a, _b, c in page.orbits.starts if i in image}
     else:
-        assert first == 0 and page.density.data["image"] == [] and len(orbit) <= density.GLYPH_BUDGET
+        assert first == 0 and page.density_image.density.data["image"] == [] and len(orbit) <= density.GLYPH_BUDGET
     return glyphs, image
 
 
@@ -1573,52 +1582,54 @@ def test_past_the_glyph_budget_the_newest_orbits_are_glyphs_and_the_older_ones_i
         a, r = rng.uniform(0, 2 * np.pi, n), np.sqrt(rng.uniform(0, 1, n))
         rows = np.column_stack([np.arange(n, dtype=float), c1 + r1 * r * np.cos(a), c2 + r2 * r * np.sin(a),
                                 np.ones(n), np.zeros(n)])
-        page._on_block(ident, rows, n if first else 10 * n, status)      # (done == rows: its first block)
+        page.orbits._on_block(ident, rows, n if first else 10 * n, status)      # (done == rows: its first block)
 
     try:
-        page.pause_box.value = False
+        page.orbits.pause_box.value = False
         for u in (-0.6, -0.3, 0.0, 0.3, 0.6):
             page.click(c1 + u * r1, c2)
-        _poll_until(page, lambda: _idle(page) and len(page.crossings.data["t"]) == 5 * s.crossings)
-        ids = [i for i, *_ in page.starts]
+        _poll_until(page, lambda: _idle(page) and len(page.orbits.crossings.data["t"]) == 5 * s.crossings)
+        ids = [i for i, *_ in page.orbits.starts]
         assert _glyphs_and_image(page) == (ids, [])                              # under the budget: as today
         budget = density.GLYPH_BUDGET                  # (the orbits' sizes as parts of it)
         for ident, part in zip(ids, (0.45, 0.3, 0.4, 0.25, 0.35)):
             more(ident, int(part * budget))
         page.poll()
-        assert len(page.crossings.data["t"]) > density.GLYPH_BUDGET
+        assert len(page.orbits.crossings.data["t"]) > density.GLYPH_BUDGET
         assert _glyphs_and_image(page) == (ids[3:], ids[:3])
-        page._running = {ids[-1]}                       # as if the newest ran and this were its first block:
-        shown, status = len(page.shown.data["t"]), page.status.text
+        page.orbits.progress[ids[-1]] = (0, "running")        # as if the newest ran and this were its first block:
+        shown, status = len(page.orbits.shown.data["t"]), page.orbits.status.text
         more(ids[-1], int(0.45 * budget), "running", first=True)
-        page.poll()                                     # its first crossings go alone, to the live layer:
-        assert len(page.live.data["t"]) == int(0.45 * budget) and len(page.shown.data["t"]) == shown
-        np.testing.assert_array_equal(page.live.data["p1"], page.crossings.data["p1"][shown:])
-        assert page.glyph_filter.args["first"] == ids[3] and page.status.text == status   # nothing else moves
-        assert page.density.data["n"] == [np.count_nonzero(np.asarray(page.crossings.data["orbit"]) < ids[3])]
+        page.orbits._flush()                            # its first crossings go alone, to the live layer:
+        assert len(page.orbits.live.data["t"]) == int(0.45 * budget) and len(page.orbits.shown.data["t"]) == shown
+        np.testing.assert_array_equal(page.orbits.live.data["p1"], page.orbits.crossings.data["p1"][shown:])
+        assert page.orbits.glyph_filter.args["first"] == ids[3]  # nothing else moves
+        assert page.orbits.status.text == status
+        older = np.count_nonzero(np.asarray(page.orbits.crossings.data["orbit"]) < ids[3])
+        assert page.density_image.density.data["n"] == [older]
         assert page.poll()                              # the next flush (scheduled): they settle, and
-        assert len(page.live.data["t"]) == 0            # one orbit more is in the image
+        assert len(page.orbits.live.data["t"]) == 0            # one orbit more is in the image
         assert _glyphs_and_image(page) == (ids[4:], ids[:4])
         class Ranges:
             x0, x1, y0, y1 = c1 - 0.5 * r1, c1 + 0.5 * r1, c2 - 0.5 * r2, c2 + 0.5 * r2
-        page._on_ranges(Ranges)                                                  # zoom: a new image, same split
-        assert page.density.data["x"] == [Ranges.x0] and _glyphs_and_image(page) == (ids[4:], ids[:4])
-        page.colour_box.value = True                                             # by MEGNO: the image too
-        by_megno = page.density.data["image"][0]
+        page.section._on_ranges(Ranges)                                                  # zoom: a new image, same split
+        assert page.density_image.density.data["x"] == [Ranges.x0] and _glyphs_and_image(page) == (ids[4:], ids[:4])
+        page.orbits.colour_box.value = True                                             # by MEGNO: the image too
+        by_megno = page.density_image.density.data["image"][0]
         assert _glyphs_and_image(page) == (ids[4:], ids[:4])
-        page.colour_box.value = False
-        assert not np.array_equal(page.density.data["image"][0], by_megno)
-        page.undo()                                                              # older orbits back to glyphs
+        page.orbits.colour_box.value = False
+        assert not np.array_equal(page.density_image.density.data["image"][0], by_megno)
+        page.orbit_list.undo()  # older orbits back to glyphs
         assert _glyphs_and_image(page) == (ids[1:4], ids[:1])
-        page.undo()
-        page.undo()                                                              # under the budget again
+        page.orbit_list.undo()
+        page.orbit_list.undo()                                                              # under the budget again
         assert _glyphs_and_image(page) == (ids[:2], [])
         for ident in ids[:2]:
             more(ident, int(0.6 * budget))
         page.poll()
         assert _glyphs_and_image(page) == (ids[1:2], ids[:1])
-        page.clear()
-        assert _glyphs_and_image(page) == ([], []) and page.density.data["image"] == []
+        page.orbit_list.clear()
+        assert _glyphs_and_image(page) == ([], []) and page.density_image.density.data["image"] == []
     finally:
         page.close()
 
@@ -1698,12 +1709,12 @@ def test_picking_a_hyperbolic_fixed_point_draws_its_grown_stable_and_unstable_ma
 
     page = SectionPage(Settings(params=model.FIGURE4.with_(mu=0.03)), {"separatrices": "1"})
     try:
-        _poll_until(page, lambda: "hyperbolic" in page.fixed.data["kind"], timeout=120)
-        k = page.fixed.data["kind"].index("hyperbolic")
-        saddle = (page.fixed.data["p1"][k], page.fixed.data["p2"][k])
-        assert page.pick(saddle[0] + 1e-9, saddle[1]) is None          # a mark, not an orbit
-        _poll_until(page, lambda: len(page.manifold_source.data["xs"]) == 4, timeout=120)
-        m = page.manifold_source.data
+        _poll_until(page, lambda: "hyperbolic" in page.overlays.fixed.data["kind"], timeout=120)
+        k = page.overlays.fixed.data["kind"].index("hyperbolic")
+        saddle = (page.overlays.fixed.data["p1"][k], page.overlays.fixed.data["p2"][k])
+        assert page.readout.pick(saddle[0] + 1e-9, saddle[1]) is None          # a mark, not an orbit
+        _poll_until(page, lambda: len(page.overlays.manifold_source.data["xs"]) == 4, timeout=120)
+        m = page.overlays.manifold_source.data
         ref = manifolds(page.settings.params, page.settings.h, saddle, arclength=MANIFOLD_ARCLENGTH)
         assert m["kind"] == [b.kind for b in ref] == ["unstable", "unstable", "stable", "stable"]
         assert m["color"] == [MANIFOLD_COLORS[b.kind] for b in ref]
@@ -1711,42 +1722,23 @@ def test_picking_a_hyperbolic_fixed_point_draws_its_grown_stable_and_unstable_ma
             np.testing.assert_array_equal(np.column_stack([x, y]), b.points)
             assert np.hypot(x[0] - saddle[0], y[0] - saddle[1]) < 1e-3  # each grows out of the saddle
             assert np.sum(np.hypot(np.diff(x), np.diff(y))) > 0.5 * MANIFOLD_ARCLENGTH
-        assert "W^u red, W^s blue" in page.overlay_text.text
-        svg = page.figure_bytes("svg").decode()
+        assert "W^u red, W^s blue" in page.overlays.text.text
+        svg = page.exports.figure_bytes("svg").decode()
         assert 'id="manifold-unstable' in svg and 'id="manifold-stable' in svg
         page.inputs["mu"].value = "0.05"                                   # a new value: the manifolds go
-        _poll_until(page, lambda: page.manifold_source.data["xs"] == [])
+        _poll_until(page, lambda: page.overlays.manifold_source.data["xs"] == [])
     finally:
         page.close()
 
 
 class _FakeDoc:
-    """A served page's document without a server: the page's callbacks, run by :meth:`run` as a
-    server's event loop would (next-tick ones at once, timeouts when due)."""
-
-    def __init__(self):
-        self.soon: list = []        # add_next_tick_callback (thread-safe in Bokeh: the worker uses it)
-        self.later: list = []       # (due, delay ms, callback) of add_timeout_callback
+    """A served page's document without a server (its work runs on the page's own loop)."""
 
     def on_session_destroyed(self, _f):
         pass
 
     def on_event(self, _event, *_callbacks):     # (the connection is never lost here)
         pass
-
-    def add_next_tick_callback(self, f):
-        self.soon.append(f)
-
-    def add_timeout_callback(self, f, ms):
-        self.later.append((time.monotonic() + ms / 1000, ms, f))
-
-    def run(self, skip=()):
-        todo, self.soon = self.soon, []
-        now = time.monotonic()
-        due = [x for x in self.later if x[0] <= now and x[2] not in skip]
-        self.later = [x for x in self.later if x not in due]
-        for f in todo + [x[2] for x in due]:
-            f()
 
 
 def test_a_served_click_sends_its_cross_with_its_first_crossings_and_later_blocks_at_most_every_flush_interval():
@@ -1757,32 +1749,30 @@ def test_a_served_click_sends_its_cross_with_its_first_crossings_and_later_block
     c1, c2, r1, _r2 = s.region
     doc = _FakeDoc()
     page = page_mod.SectionPage(s, doc=doc)
-    page.pause_box.value = False
+    page.orbits.pause_box.value = False
     flushes = []          # (start, crosses, rows in crossings, rows in live, status) after each flush with rows
-    flush = page._flush
+    flush = page.orbits._flush
 
     def rows():
-        return len(page.shown.data["p1"]), len(page.live.data["p1"])
+        return len(page.orbits.shown.data["p1"]), len(page.orbits.live.data["p1"])
 
     def traced():
         before, start = rows(), time.monotonic()       # (when it takes the queued blocks)
         flush()
         if rows() != before:
-            flushes.append((start, len(page.start_source.data["orbit"]), *rows(), page.status.text,
+            flushes.append((start, len(page.orbits.start_source.data["orbit"]), *rows(), page.orbits.status.text,
                             page.url_state.orbits))
-    page._flush = traced
+    page.orbits._flush = traced
     try:
         page.click(c1 + 0.3 * r1, c2)
         # the cross and the link wait for the first crossings (sent in the same callback, just after
         # them: off the path from the click to them)
-        assert page.start_source.data["orbit"] == [] and rows() == (0, 0) and page.url_state.orbits == ""
-        status = page.status.text
-        t0 = time.time()
-        while (page._running or doc.soon or page.orbits.flush_timer.pending) and time.time() - t0 < 240:
-            doc.run()
-            time.sleep(0.001)
-        assert len(page.shown.data["p1"]) == s.crossings
-        np.testing.assert_array_equal(np.asarray(page.crossings.data["p1"]), np.asarray(page.shown.data["p1"]))
+        assert page.orbits.start_source.data["orbit"] == [] and rows() == (0, 0) and page.url_state.orbits == ""
+        status = page.orbits.status.text
+        page.settle()
+        assert len(page.orbits.shown.data["p1"]) == s.crossings
+        np.testing.assert_array_equal(np.asarray(page.orbits.crossings.data["p1"]),
+                                      np.asarray(page.orbits.shown.data["p1"]))
         # the first rows alone on the live layer (the status line unchanged), with the cross; the
         # next flush moves them to the crossings, with what came meanwhile
         # (with the orbit's next blocks if they were there already when the flush ran)
@@ -1810,27 +1800,24 @@ def test_a_short_orbit_joins_its_first_crossings_on_the_live_layer_until_they_se
     doc = _FakeDoc()
     page = page_mod.SectionPage(s, doc=doc)
     seen = []             # (time, rows in crossings, rows in live, status) after each flush
-    flush = page._flush
+    flush = page.orbits._flush
 
     def traced():
         flush()
-        seen.append((time.monotonic(), len(page.shown.data["p1"]), len(page.live.data["p1"]), page.status.text))
-    page._flush = traced
+        seen.append((time.monotonic(), len(page.orbits.shown.data["p1"]), len(page.orbits.live.data["p1"]),
+                     page.orbits.status.text))
+    page.orbits._flush = traced
     try:
-        status = page.status.text
+        status = page.orbits.status.text
         page.click(c1 + 0.3 * r1, c2)
-        t0 = time.time()
-        while (page._running or doc.soon or page.orbits.flush_timer.pending
-               or len(page.live.data["p1"])) and time.time() - t0 < 240:
-            doc.run()
-            time.sleep(0.001)
+        page.settle()
         firsts = [x for x in seen if x[2] > 0]      # the first block (with the last if it was there)
         assert firsts[0][1] == 0 and firsts[0][2] in (FIRST_BLOCK, s.crossings) and firsts[0][3] == status
         assert any(x[1:3] == (0, s.crossings) for x in seen)                  # the last one joins it
         settled = [x for x in seen if x[1] > 0]
         assert settled[0][1:3] == (s.crossings, 0) and settled[0][3] != status  # all at once, with the status
         assert settled[0][0] - firsts[0][0] >= page_mod.FLUSH_SECONDS - page_mod.SETTLE_SLACK
-        np.testing.assert_array_equal(page.shown.data["p1"], page.crossings.data["p1"])
-        assert len(page.crossings.data["p1"]) == s.crossings
+        np.testing.assert_array_equal(page.orbits.shown.data["p1"], page.orbits.crossings.data["p1"])
+        assert len(page.orbits.crossings.data["p1"]) == s.crossings
     finally:
         page.close()

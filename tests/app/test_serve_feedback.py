@@ -40,7 +40,7 @@ def _poll_until(page, cond, timeout=240.0):
         if cond():
             return
         time.sleep(0.02)
-    raise AssertionError(f"timed out; overlay: {page.overlay_text.text!r}; message: {page.message.text!r}")
+    raise AssertionError(f"timed out; overlay: {page.overlays.text.text!r}; message: {page.message.text!r}")
 
 
 def test_a_refused_value_does_not_poison_later_edits_of_other_fields():
@@ -60,11 +60,11 @@ def test_the_status_line_follows_a_change_that_drops_every_start():
     try:
         c1, c2, r1, _r2 = SERVED.region
         assert page.click(c1 + 0.9 * r1, c2) is not None
-        assert "1 orbit(s)" in page.status.text
+        assert "1 orbit(s)" in page.orbits.status.text
         page.inputs["h"].value = "0.7"                        # a smaller region: the start is outside it
-        assert page.settings.h == 0.7 and page.starts == []
+        assert page.settings.h == 0.7 and page.orbits.starts == []
         assert "dropped" in page.message.text
-        assert page.status.text.startswith("0 orbit(s), 0 running") and "h = 0.7" in page.status.text
+        assert page.orbits.status.text.startswith("0 orbit(s), 0 running") and "h = 0.7" in page.orbits.status.text
     finally:
         page.close()
 
@@ -88,16 +88,16 @@ def test_successes_and_errors_are_shown_in_their_own_colours():
 def test_at_mu_1_5_the_overlay_lists_the_hyperbolic_fixed_points_at_once_and_draws_their_separatrices():
     page = _page(Settings(params=model.FIGURE4.with_(mu=1.5)), {"separatrices": "1"})
     try:
-        _poll_until(page, lambda: page.fixed.data["p1"] != [])
-        kinds = page.fixed.data["kind"]
+        _poll_until(page, lambda: page.overlays.fixed.data["p1"] != [])
+        kinds = page.overlays.fixed.data["kind"]
         assert kinds.count("hyperbolic") >= 5                  # the five saddles at mu = 1.5
-        assert page.overlay_text.text.count("hyperbolic") == kinds.count("hyperbolic")   # each listed
-        assert "growing the separatrices" in page.overlay_text.text         # ... while the curves grow
-        _poll_until(page, lambda: "separatrix branches" in page.overlay_text.text)
-        text = page.overlay_text.text
+        assert page.overlays.text.text.count("hyperbolic") == kinds.count("hyperbolic")   # each listed
+        assert "growing the separatrices" in page.overlays.text.text         # ... while the curves grow
+        _poll_until(page, lambda: "separatrix branches" in page.overlays.text.text)
+        text = page.overlays.text.text
         assert "failed" not in text and "no return" not in text, text
         assert text.count("hyperbolic") == kinds.count("hyperbolic")                      # still listed
-        assert len(page.curves.data["xs"]) >= 4
+        assert len(page.overlays.curves.data["xs"]) >= 4
     finally:
         page.close()
 
@@ -172,14 +172,14 @@ def test_the_separatrices_stand_out_on_every_colour_of_the_megno_layer_and_it_ha
 
     page = _page(SERVED)
     try:
-        casing, line = (r.glyph.line_color for r in page.separatrix_lines)
+        casing, line = (r.glyph.line_color for r in page.overlays.separatrix_lines)
         for background in [*megno_palette(), ALLOWED_COLOR]:           # WCAG's 3:1 for graphics
             assert max(_contrast(line, background), _contrast(casing, background)) >= 3.0, background
-        assert not page.colour_bar.visible
-        page.layer.value = True
-        assert page.colour_bar.visible and page.url_query()["megno"] == "1"
-        page.layer.value = False
-        assert not page.colour_bar.visible
+        assert not page.chaos.colour_bar.visible
+        page.chaos.layer.value = True
+        assert page.chaos.colour_bar.visible and page.url_query()["megno"] == "1"
+        page.chaos.layer.value = False
+        assert not page.chaos.colour_bar.visible
     finally:
         page.close()
 
@@ -189,11 +189,11 @@ def test_start_markers_can_be_hidden_and_shown_again():
     try:
         c1, c2, r1, _r2 = SERVED.region
         page.click(c1 + 0.3 * r1, c2)
-        assert page.start_marks.visible and len(page.start_source.data["p1"]) == 1
-        page.starts_box.value = False
-        assert not page.start_marks.visible and len(page.start_source.data["p1"]) == 1   # hidden, kept
-        page.starts_box.value = True
-        assert page.start_marks.visible
+        assert page.orbits.start_marks.visible and len(page.orbits.start_source.data["p1"]) == 1
+        page.orbits.starts_box.value = False
+        assert not page.orbits.start_marks.visible and len(page.orbits.start_source.data["p1"]) == 1   # hidden, kept
+        page.orbits.starts_box.value = True
+        assert page.orbits.start_marks.visible
     finally:
         page.close()
 
@@ -213,17 +213,17 @@ def test_the_exported_svg_names_each_element_once_and_the_scene_records_the_over
         page.click(c1 + 0.3 * r1, c2)
         page.click(c1 - 0.3 * r1, c2)
         arc = np.column_stack([np.linspace(c1, c1 + 0.1, 5), np.full(5, c2)])
-        view = dataclasses.replace(page.view(), separatrices=[arc, arc + 0.01],
+        view = dataclasses.replace(page.exports.view(), separatrices=[arc, arc + 0.01],
                                    manifolds=[("unstable", arc), ("unstable", arc + 0.02), ("stable", arc + 0.03),
                                               ("stable", arc + 0.04)])
         ids = [e.get("id") for e in ET.fromstring(render(view, "svg")).iter() if e.get("id")]
         assert len(ids) == len(set(ids)), sorted(i for i in ids if ids.count(i) > 1)
         assert sum(i.startswith("manifold-unstable") for i in ids) == 2
-        scene = load_scene_text(page._scene_text())
+        scene = load_scene_text(page.exports.scene_text())
         assert "separatrices" in scene.compute and "periodic" in scene.description
         plain = _page(SERVED)
         plain.click(c1 + 0.3 * r1, c2)
-        assert "separatrices" not in load_scene_text(plain._scene_text()).compute
+        assert "separatrices" not in load_scene_text(plain.exports.scene_text()).compute
         plain.close()
     finally:
         page.close()
@@ -239,13 +239,13 @@ def test_the_section_angle_is_a_field_and_the_zoom_window_is_in_the_link():
         assert page.settings.phi0 == 0.5 and page.url_query()["phi0"] == "0.5"
         assert "φ = 0.5" in page.title.object and page.settings.region != region0
         w = Window(-0.3, 0.2 / 3, -0.25, 0.1)
-        page._on_ranges(type("E", (), {"x0": w.x0, "x1": w.x1, "y0": w.y0, "y1": w.y1})())   # a zoom
+        page.section._on_ranges(type("E", (), {"x0": w.x0, "x1": w.x1, "y0": w.y0, "y1": w.y1})())   # a zoom
         link = page.url_query()
         assert parse_window(link["view"]) == w and format_window(w) == link["view"]          # exactly
         again = _page(SERVED, link)                            # the link reopens the same angle and window
         try:
-            assert again.settings == page.settings and again.window == w
-            assert (again.figure.x_range.start, again.figure.x_range.end) == (w.x0, w.x1)
+            assert again.settings == page.settings and again.section.window == w
+            assert (again.section.figure.x_range.start, again.section.figure.x_range.end) == (w.x0, w.x1)
         finally:
             again.close()
         for bad in ("1,2,3", "1,0,0,1", "nan,1,0,1", "0,1e300,0,1"):
@@ -282,9 +282,9 @@ def test_the_first_twenty_orbits_each_have_a_colour_of_their_own():
         c1, c2, r1, _r2 = page.settings.region
         for k in range(20):
             assert page.click(c1 + (-0.9 + 0.09 * k) * r1, c2) is not None
-        colours = [COLORS[c] for *_x, c in page.starts]
+        colours = [COLORS[c] for *_x, c in page.orbits.starts]
         assert len(set(colours)) == 20, colours
-        assert page.start_source.data["c"] == [c for *_x, c in page.starts]   # the crosses carry them
+        assert page.orbits.start_source.data["c"] == [c for *_x, c in page.orbits.starts]   # the crosses carry them
     finally:
         page.close()
 
@@ -351,7 +351,7 @@ def test_an_address_overtaken_by_an_older_one_heals_to_the_pages_link():
     page = _page(Settings(params=model.FIGURE4.with_(mu=0.03), crossings=1))
     try:
         location = Location()
-        page.url_state.attach(location, page.loop)
+        page.url_state.attach(location, page.session)
         c1, c2, r1, _r2 = page.settings.region
         for k in range(3):
             assert page.click(c1 + (0.2 * k - 0.3) * r1, c2) is not None

@@ -195,10 +195,9 @@ def test_ctrl_c_ends_a_server_busy_with_hostile_searches_within_a_second(browser
 
 def test_a_page_whose_connection_is_lost_stops_every_computation_it_started(monkeypatch):
     """A tab that closes (its websocket: Bokeh's ConnectionLost) wants nothing more: its overlay
-    searches, MEGNO raster and orbits stop then, and their threads end, not when Bokeh discards
-    the session 15-30 s later (issue 32 item 1: a computation is cancelled when its result is no
-    longer wanted).  The searches' budgets are lifted here: the threads end because they were
-    cancelled."""
+    searches, MEGNO raster and orbits stop then (their tasks and budgets cancelled, the executor's
+    work ended), not when Bokeh discards the session.  The searches' budgets are lifted here: the
+    work ends because it was cancelled."""
     pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
     from bokeh.document import Document
     from bokeh.events import ConnectionLost
@@ -209,26 +208,29 @@ def test_a_page_whose_connection_is_lost_stops_every_computation_it_started(monk
 
     monkeypatch.setattr(overlays, "FIXED_SECONDS", 3600.0)
     monkeypatch.setattr(overlays, "PERIODIC_SECONDS", 3600.0)
-    doc = Document()                 # a served page's document: its next-tick callbacks run here, as a server would
+    doc = Document()                 # a served page's document (no server: the page's own loop runs its work)
     page = SectionPage(Settings(params=SERVED.params.with_(mu=0.5), crossings=MAX_CROSSINGS),
                        {"separatrices": "1", "periodic": "1", "megno": "1"}, doc=doc)
     c1, c2, r1, _r2 = page.settings.region
     assert page.click(c1 + 0.3 * r1, c2) is not None                 # an orbit of a million crossings
     t0 = time.time()
-    def started():
-        return [t for t in page.loop._tasks if t.generation > 0 or not t.join(0)]
-
-    while not {"overlay", "raster", "orbits"} <= {t.name for t in started()}:
-        assert time.time() - t0 < 600, [t.name for t in started()]
-        for cb in [c for c in doc.session_callbacks if type(c).__name__ == "NextTickCallback"]:
-            doc.remove_next_tick_callback(cb)
-            cb.callback()
-        time.sleep(0.01)
-    tasks = started()
+    wanted = {"overlay", "raster", "orbits"}
+    while {n for n in wanted if page.session.running(n)} != wanted:
+        assert time.time() - t0 < 600
+        page.poll()
+    budgets = [b for _t, b in page.session._tasks.values() if b is not None]
     doc.callbacks.trigger_event(ConnectionLost())                    # the tab closed
-    assert page.loop.closed and all(t._stopped for t in tasks)
-    for t in tasks:
-        assert t.join(600), t.name
+    assert page.session.closed and not page.session.busy() and budgets and all(b.cancelled for b in budgets)
+    t0 = time.monotonic()
+    while _process_cores(0.5) > IDLE_CORES:                         # the executor's work ends too
+        assert time.monotonic() - t0 < 10.0, "the closed page's work kept a core busy"
+
+
+def _process_cores(seconds: float) -> float:
+    """The cores this process used over the next ``seconds``."""
+    c0, t0 = time.process_time(), time.monotonic()
+    time.sleep(seconds)
+    return (time.process_time() - c0) / (time.monotonic() - t0)
 
 
 def test_a_client_gone_mid_send_is_not_reported_as_an_error_and_other_task_errors_still_are(caplog):

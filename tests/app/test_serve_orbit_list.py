@@ -45,7 +45,7 @@ def _table(page) -> dict:
 
 
 def _rows(page, ident) -> np.ndarray:
-    d = page.crossings.data
+    d = page.orbits.crossings.data
     mine = np.asarray(d["orbit"]) == ident
     return np.column_stack([np.asarray(d[k])[mine] for k in ("t", "p1", "p2", "M", "dH")])
 
@@ -53,7 +53,7 @@ def _rows(page, ident) -> np.ndarray:
 def _drawn(page, ident) -> int:
     """How many rows of orbit ``ident`` the browser's sources hold (dots, live layer, starts)."""
     return sum(int(np.count_nonzero(np.asarray(src.data["orbit"]) == ident))
-               for src in (page.shown, page.live, page.start_source))
+               for src in (page.orbits.shown, page.orbits.live, page.orbits.start_source))
 
 
 def test_the_list_shows_every_orbit_with_its_colour_start_crossings_and_state():
@@ -67,19 +67,19 @@ def test_the_list_shows_every_orbit_with_its_colour_start_crossings_and_state():
         first = page.click(c1 + 0.3 * r1, c2).ident
         _poll_until(page, lambda: len(_rows(page, first)) > 0)
         second = page.click(c1 - 0.5 * r1, c2 + 0.2 * r2).ident                    # pauses the first
-        _poll_until(page, lambda: len(_rows(page, second)) == LONG and " 0 running" in page.status.text)
+        _poll_until(page, lambda: len(_rows(page, second)) == LONG and " 0 running" in page.orbits.status.text)
         table = _table(page)
         assert list(table) == [first, second]                                     # every orbit, in click order
-        for ident, p1, p2, c in page.starts:
+        for ident, p1, p2, c in page.orbits.starts:
             _style, cells = table[ident]
             assert f"background:{COLORS[c]}" in cells[0] and cells[1] == str(ident)
             assert cells[2] == f"({p1:.6g}, {p2:.6g})"
             assert cells[3] == str(len(_rows(page, ident)))                       # crossings so far, as on the page
         assert table[first][1][4] == "paused" and 0 < len(_rows(page, first)) < LONG
         assert table[second][1][4] == "done"
-        page.resume()
+        page.orbit_list.resume()
         assert _table(page)[first][1][4] == "running"
-        _poll_until(page, lambda: not page._running)
+        _poll_until(page, lambda: not page.orbits.running)
         assert _table(page)[first][1][3:] == [str(LONG), "done"]
     finally:
         page.close()
@@ -93,32 +93,32 @@ def test_choosing_an_orbit_selects_it_as_a_pick_does_and_a_pick_marks_its_row():
     try:
         for p in ((0.3, 0.1), (1.3, 0.05)):
             page.click(*p)
-        page.resume()
-        _poll_until(page, lambda: len(page.crossings.data["t"]) == 2 * s.crossings)
-        one, two = (i for i, *_ in page.starts)
+        page.orbit_list.resume()
+        _poll_until(page, lambda: len(page.orbits.crossings.data["t"]) == 2 * s.crossings)
+        one, two = (i for i, *_ in page.orbits.starts)
         lst = page.orbit_list
         assert lst.filter.args == {"orbit": 0} and lst.hide_button.disabled       # nothing selected yet
         lst.choice.value = two                                                    # chosen in the list
-        assert page.picked == two and "orbit 2 from (1.3, 0.05)" in page.readout.text
-        _poll_until(page, lambda: two in page.readouts and "rotation number" in page.readout.text)
+        assert page.readout.picked == two and "orbit 2 from (1.3, 0.05)" in page.readout.text.text
+        _poll_until(page, lambda: two in page.readout.readouts and "rotation number" in page.readout.text.text)
         # the highlight: the browser's filter keeps exactly this orbit's rows of the drawn dots
-        assert lst.filter.args == {"orbit": two} and lst.marks.data_source is page.shown
-        kept = np.asarray(page.shown.data["orbit"]) == lst.filter.args["orbit"]
-        np.testing.assert_array_equal(np.asarray(page.shown.data["p1"])[kept], _rows(page, two)[:, 1])
-        assert lst.marks.glyph.size > page.points.glyph.size                      # larger, outlined
+        assert lst.filter.args == {"orbit": two} and lst.marks.data_source is page.orbits.shown
+        kept = np.asarray(page.orbits.shown.data["orbit"]) == lst.filter.args["orbit"]
+        np.testing.assert_array_equal(np.asarray(page.orbits.shown.data["p1"])[kept], _rows(page, two)[:, 1])
+        assert lst.marks.glyph.size > page.orbits.points.glyph.size                      # larger, outlined
         assert SELECTED_BACKGROUND in _table(page)[two][0] and SELECTED_BACKGROUND not in _table(page)[one][0]
         assert not lst.hide_button.disabled and not lst.delete_button.disabled
-        shown_by_list = page.readout.text
+        shown_by_list = page.readout.text.text
         # a pick (Shift + click) of the other orbit: the list follows it
-        d = page.crossings.data
+        d = page.orbits.crossings.data
         k = int(np.flatnonzero(np.asarray(d["orbit"]) == one)[5])
-        assert page.pick(float(d["p1"][k]), float(d["p2"][k])) == one
+        assert page.readout.pick(float(d["p1"][k]), float(d["p2"][k])) == one
         assert lst.choice.value == one and lst.filter.args == {"orbit": one}
         assert SELECTED_BACKGROUND in _table(page)[one][0] and SELECTED_BACKGROUND not in _table(page)[two][0]
         lst.choice.value = two                                                    # back: the same readout, at once
-        assert page.readout.text == shown_by_list
+        assert page.readout.text.text == shown_by_list
         lst.choice.value = 0                                                      # none
-        assert page.picked is None and page.readout.text == "" and lst.filter.args == {"orbit": 0}
+        assert page.readout.picked is None and page.readout.text.text == "" and lst.filter.args == {"orbit": 0}
     finally:
         page.close()
 
@@ -137,11 +137,11 @@ def test_a_hidden_orbit_leaves_every_drawn_source_keeps_computing_and_comes_back
         assert _drawn(page, first) == 0 and len(_rows(page, first)) == 0
         assert "hidden" in _table(page)[first][1][4]
         second = page.click(*b).ident
-        _poll_until(page, lambda: not page._running and not page._running)
+        _poll_until(page, lambda: not page.orbits.running and not page.orbits.running)
         assert _drawn(page, first) == 0 and len(_rows(page, first)) == 0         # its later rows: hidden too
-        assert set(np.asarray(page.shown.data["orbit"]).tolist()) == {second}
+        assert set(np.asarray(page.orbits.shown.data["orbit"]).tolist()) == {second}
         assert _table(page)[first][1][3:] == [str(LONG), "done, hidden"]         # it went on computing
-        assert page.pick(*a) != first                                             # not pickable while hidden
+        assert page.readout.pick(*a) != first                                             # not pickable while hidden
         view = page.exports.view()                                                # the figures: the view ...
         assert [o[0] for o in view.orbits] == [second] and len(view.starts) == 1
         assert len(tomllib.loads(page.exports.scene_text())["seeds"]["points"]) == 2   # ... the scene: the session
@@ -152,8 +152,8 @@ def test_a_hidden_orbit_leaves_every_drawn_source_keeps_computing_and_comes_back
         assert _drawn(page, first) == LONG + 1 and "hidden" not in _table(page)[first][1][4]
         page.orbit_list.toggle(second)
         page.inputs["crossings"].value = "50"                                     # a new value: still hidden
-        hidden_again = page.starts[1][0]
-        _poll_until(page, lambda: not page._running and not page._running)
+        hidden_again = page.orbits.starts[1][0]
+        _poll_until(page, lambda: not page.orbits.running and not page.orbits.running)
         assert page.orbits.hidden.keys() == {hidden_again} and _drawn(page, hidden_again) == 0
         assert len(page.orbits.hidden[hidden_again]["t"]) == 50
     finally:
@@ -167,18 +167,18 @@ def test_delete_removes_one_orbit_from_the_page_the_session_and_the_link():
     try:
         for p in starts:
             page.click(*p)
-        page.resume()
-        _poll_until(page, lambda: len(page.crossings.data["t"]) == 3 * s.crossings)
-        one, two, three = (i for i, *_ in page.starts)
+        page.orbit_list.resume()
+        _poll_until(page, lambda: len(page.orbits.crossings.data["t"]) == 3 * s.crossings)
+        one, two, three = (i for i, *_ in page.orbits.starts)
         page.orbit_list.choice.value = two
         assert not page.orbit_list.delete_button.disabled
-        page.orbit_list.delete(page.picked)                                       # what *delete* does
-        assert [i for i, *_ in page.starts] == [one, three] and _drawn(page, two) == 0
-        assert list(_table(page)) == [one, three] and page.picked is None
+        page.orbit_list.delete(page.readout.picked)                                       # what *delete* does
+        assert [i for i, *_ in page.orbits.starts] == [one, three] and _drawn(page, two) == 0
+        assert list(_table(page)) == [one, three] and page.readout.picked is None
         assert parse_starts(page.url_query()["orbits"]) == [starts[0], starts[2]]
-        assert "2 orbit(s)" in page.status.text
-        page.undo()                                                               # Undo: still the newest
-        assert [i for i, *_ in page.starts] == [one] and list(_table(page)) == [one]
+        assert "2 orbit(s)" in page.orbits.status.text
+        page.orbit_list.undo()                                                               # Undo: still the newest
+        assert [i for i, *_ in page.orbits.starts] == [one] and list(_table(page)) == [one]
     finally:
         page.close()
 
@@ -192,7 +192,7 @@ def test_the_hidden_orbits_are_in_the_link_and_a_page_from_it_keeps_them_hidden(
     try:
         for p in starts:
             page.click(*p)
-        one, two, three = (i for i, *_ in page.starts)
+        one, two, three = (i for i, *_ in page.orbits.starts)
         assert page.url_query()["hidden"] == ""
         page.orbit_list.toggle(two)
         page.orbit_list.toggle(three)
@@ -204,8 +204,8 @@ def test_the_hidden_orbits_are_in_the_link_and_a_page_from_it_keeps_them_hidden(
         page.close()
     again = _page(s, link)                                                        # a reload of that link
     try:
-        _poll_until(again, lambda: not again._running and not again._running)
-        ids = [i for i, *_ in again.starts]
+        _poll_until(again, lambda: not again.orbits.running and not again.orbits.running)
+        ids = [i for i, *_ in again.orbits.starts]
         assert again.orbits.hidden.keys() == {ids[1]} and _drawn(again, ids[1]) == 0
         assert len(again.orbits.hidden[ids[1]]["t"]) == s.crossings                 # computed all the same
         assert [_drawn(again, i) for i in (ids[0], ids[2])] == [s.crossings + 1] * 2
@@ -216,7 +216,7 @@ def test_the_hidden_orbits_are_in_the_link_and_a_page_from_it_keeps_them_hidden(
         page = _page(s, {**link, "hidden": bad})
         try:
             assert page.message.text.startswith("link's hidden ignored: hidden"), (bad, page.message.text)
-            assert len(page.starts) == 3 and not page.orbits.hidden and page.url_query()["hidden"] == ""
+            assert len(page.orbits.starts) == 3 and not page.orbits.hidden and page.url_query()["hidden"] == ""
         finally:
             page.close()
 

@@ -1,14 +1,8 @@
-"""Many crossings as one image: past ``GLYPH_BUDGET`` crossings on a page, the page draws a glyph
-per crossing only for its newest orbits (:func:`glyph_cutoff`) and the older ones in this image of
-the visible window; past ``THRESHOLD`` crossings, every orbit is in the image.  The image is
-aggregated in the server with numpy and redone when the view moves (docs/commands/serve.md,
-docs/architecture.md: why numpy and not Datashader).
-
-Each cell of an ``nx`` x ``ny`` grid over the window gets the colour of the orbit with the most
-crossings in it (the page's orbit colours), or, coloured by MEGNO, the mean MEGNO of its crossings
-through the page's MEGNO palette; its opacity grows with the logarithm of its count, so a dense
-chaotic sea and a thin invariant curve both show.  Returned as the packed RGBA image Bokeh's
-``image_rgba`` draws (uint32, row 0 at the bottom).  No web library here.
+"""Many crossings as one image (docs/architecture.md, "Many crossings in the browser"): past
+``GLYPH_BUDGET`` crossings the page draws dots for its newest orbits only (:func:`glyph_cutoff`) and the older ones
+in this image of the visible window; past ``THRESHOLD``, every orbit.  Each cell takes the colour
+of the orbit with the most crossings in it (or their mean MEGNO's colour), its opacity growing with
+the logarithm of its count; packed RGBA as Bokeh's ``image_rgba`` draws it.  No web library here.
 """
 from __future__ import annotations
 

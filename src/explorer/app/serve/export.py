@@ -1,10 +1,6 @@
-"""A browser session as a scene (docs/scenes.md) that ``explorer sweep`` reruns: the model, the
-energy, the clicked starts as ``[seeds] kind = "points"`` and the integration settings, so the
-sweep's panel has the session's orbits, crossing for crossing; and its orbits as an HDF5 store
-in the sweep's format (docs/store.md), written by that sweep (:func:`write_store`).
-
-Files are written only into the directory given at start (``--export-dir``), under a name made
-here (``<scene name>-<UTC time>.toml``), atomically; nothing from the page names a file.
+"""A browser session as a scene (docs/scenes.md) that ``explorer sweep`` reruns crossing for
+crossing, its orbits as a store in the sweep's format (docs/store.md) and its figure files:
+written only into ``--export-dir``, under names made here, atomically.
 """
 from __future__ import annotations
 

@@ -1,12 +1,7 @@
-"""The page's view as a picture: PNG or SVG drawn with matplotlib (the *Figure (PNG)* and *Figure
-(SVG)* downloads and *Export figure*, docs/commands/serve.md).
-
-:class:`View` is a copy of what the page shows, taken on the page's event loop (plain arrays and
-tuples: it can be drawn in any thread); :func:`render` draws it in the style of the sweep's
-figures (:mod:`explorer.app.figures`: the forbidden region light gray, the allowed ellipse white
-with a thin dark edge): the visible window, the MEGNO layer if on, every orbit in its page colour
-(or coloured by its MEGNO), the clicked starts, the fixed points, separatrices and periodic orbits.
-Each orbit is one scatter collection with the SVG id ``orbit-<id>``.  No web library here.
+"""The page's view as a picture: PNG or SVG drawn with matplotlib (docs/commands/serve.md).
+:class:`View` is a copy of what the page shows (plain arrays: drawn in any thread); :func:`render`
+draws it in the style of the sweep's figures, each orbit a collection with the SVG id
+``orbit-<id>``.  No web library here.
 """
 from __future__ import annotations
 

@@ -1,10 +1,7 @@
 """The explorer in a notebook cell: ``ex.explore(scene)`` returns a Panel object that displays the
-page of ``explorer serve`` (the same :class:`~explorer.app.serve.page.SectionPage`).
-
-In a notebook no Bokeh server owns the page's document, so the workers' blocks and images wait in
-the page's inbox and a periodic callback (every ``POLL_MS``) moves them onto the page and pushes
-the change to the notebook (``panel.io.push_notebook``).  Needs ``pn.extension()`` in the notebook,
-as every Panel object does.
+page of ``explorer serve``.  No server owns the page's document: a periodic callback (every
+``POLL_MS``) runs the page's own loop a moment (:meth:`SectionPage.poll`) and pushes what reached
+the page (``panel.io.push_notebook``).  Needs ``pn.extension()``, as every Panel object does.
 """
 from __future__ import annotations
 
@@ -13,13 +10,13 @@ import panel as pn
 from explorer.app.serve.page import SectionPage
 from explorer.app.serve.settings import seeds_for, settings_for
 
-#: how often the notebook page takes in new crossings and raster images (ms)
+#: how often the page's loop runs and the notebook is pushed (ms)
 POLL_MS = 50
 
 
 class Explorer(pn.viewable.Viewer):
     """The displayable explorer of a notebook cell; ``page`` is its :class:`SectionPage`
-    (``page.click(p1, p2)``, ``page.crossings.data``, ``page.url_query()``, ...)."""
+    (``page.click(p1, p2)``, ``page.orbits.crossings.data``, ``page.url_query()``, ...)."""
 
     def __init__(self, page: SectionPage, **params):
         super().__init__(**params)
@@ -39,7 +36,7 @@ class Explorer(pn.viewable.Viewer):
         return self.page.layout
 
     def close(self) -> None:
-        """Stop the polling and the page's threads."""
+        """Stop the polling and the page's work."""
         if self._poller is not None:
             self._poller.stop()
         self.page.close()

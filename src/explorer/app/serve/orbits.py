@@ -1,31 +1,17 @@
-"""The orbits of one browser session, computed block by block (a job of the session's task helper).
+"""The orbits of one browser session, computed block by block (a task of the page's session).
 
 An :class:`OrbitRun` continues one clicked orbit with
-:func:`explorer.analysis.sections.iter_crossings`, one block at a time from the
+:func:`explorer.analysis.sections.iter_crossings` from the
 :class:`~explorer.analysis.sections.StreamState` the previous block ended in: its rows are bit for
-bit those of ``explorer orbit`` for the same start and settings whatever the block sizes
-(``iter_crossings`` continues the drivers' carry, ``tests/analysis/test_streaming.py``).  The
-first block is small (``FIRST_BLOCK`` crossings: something is on screen at once), later ones
-are sized so that a block takes about ``BLOCK_SECONDS``, which bounds how long a cancelled
-orbit keeps the worker and how long the page waits between updates.
-
-A :class:`Worker` runs a session's orbits as one job of its task (explorer.app.serve.tasks, one
-thread) and serves them newest first (a new click gets its first block before older orbits
-continue), round robin after that.  ``cancel`` stops every orbit (a parameter change, clear) at
-its next block boundary, and what they handed in is dropped;
-``remove`` stops one (undo).  ``pause`` sets every running orbit aside at its next block boundary
-(a new click: the block in progress is still handed out, nothing after it), keeping its
-:class:`OrbitRun` (about 1.5 kB: the start, the settings and the StreamState, never its
-rows); ``resume`` queues them again, and each continues from its StreamState, so its rows are
-those of an uninterrupted run.  Each block is handed to ``on_block(orbit_id, rows, done,
-status)`` on the session's loop.  When an
-orbit is finished (or its blocks took INDICATOR_AFTER seconds), its mean MEGNO and finite-time
-mLCE over INDICATOR_TIME go to ``on_indicators(orbit_id, megno, mlce)``.  No web library here.
+bit those of ``explorer orbit`` whatever the block sizes.  The first block is small
+(``FIRST_BLOCK``), later ones take about ``BLOCK_SECONDS``.  A :class:`Worker` runs a session's
+orbits newest first, then round robin; ``cancel`` stops them all, ``remove`` one, ``pause`` sets
+them aside and ``resume`` continues them from their StreamState.  No web library here
+(docs/commands/serve.md, "How it works").
 """
 from __future__ import annotations
 
 import math
-import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
@@ -41,9 +27,7 @@ from explorer.kernels import STATUS_NAMES
 
 #: crossings of an orbit's first block (the first points on screen, milliseconds after a click)
 FIRST_BLOCK = 16
-#: steps of an orbit's first block at most; later blocks at most about BLOCK_SECONDS of steps.  A
-#: block ends at its crossings or at its steps, whichever comes first: a cancel takes effect within
-#: a block whatever the method and step (dt = 1e-12 finds no crossing in 10^9 steps)
+#: steps of an orbit's first block, and of later ones at most: a cancel stops within a block whatever dt
 FIRST_STEPS = 20_000
 MAX_STEPS_PER_BLOCK = 50_000_000
 #: an orbit whose estimated steps (:func:`step_estimate`) exceed this is said in the page up front
@@ -56,17 +40,13 @@ MIN_BLOCK = 16
 MAX_BLOCK = 20_000
 #: time over which the chaos indicators (mean MEGNO, finite-time mLCE) of an orbit are computed
 INDICATOR_TIME = 1000.0
-#: an orbit's indicators are computed when it is finished, or once its blocks took this long (s):
-#: not between its first blocks, where they would hold back its crossings
+#: an orbit's indicators are computed when it is finished, or once its blocks took this long (s)
 INDICATOR_AFTER = 0.5
-#: steps of an orbit's indicators at most: a few thousand at Figure 4's parameters, but the time
-#: scale shrinks as the parameters grow (mu = 1e8 would run for hours, a compiled batch that no
-#: one can stop); past it the indicators are unknown (NaN)
+#: steps of an orbit's indicators at most (past it they are unknown, NaN)
 INDICATOR_MAX_STEPS = 1_000_000
 #: mean MEGNO above this is called "chaotic-like" (quasi-periodic orbits: <Y> -> 2)
 CHAOTIC_MEGNO = 3.0
-#: one colour per orbit, in turn: 24 distinct (the first 20 orbits of a page never share one;
-#: Tableau 10 and the dark and mid rows of Vega's category20b/c, none near white or the region's gray)
+#: one colour per orbit, in turn: Tableau 10 and Vega's category20b/c, none near white or gray
 COLORS = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf",
           "#bcbd22", "#393b79", "#637939", "#843c39", "#7b4173", "#3182bd", "#e6550d", "#31a354",
           "#5254a3", "#8ca252", "#bd9e39", "#ad494a", "#a55194", "#756bb1", "#636363", "#fd8d3c")
@@ -107,8 +87,7 @@ class OrbitRun:
 
     def advance(self) -> np.ndarray:
         """Compute the next block (at most ``block`` crossings and ``steps`` steps); returns its
-        rows (n, 5): t, p1, p2, M, H - H0.  A block cut at its steps is continued by the next one
-        exactly (the drivers check the step cap before a step, and the carry holds the count)."""
+        rows (n, 5): t, p1, p2, M, H - H0."""
         s = self.settings
         taken = int(self.state.carry[0, layout.CARRY_STEPS])
         t0 = time.perf_counter()
@@ -160,8 +139,7 @@ def step_estimate(settings: Settings, y0) -> int | None:
 
 def warm_up(settings: Settings) -> None:
     """Load (or compile) the crossing kernels of ``settings``' method before the first click: one
-    crossing from the centre of the region (nothing when the region is empty).  A failure here
-    only costs the first click its speed: it is not reported."""
+    crossing from the centre of the region (a failure is not reported)."""
     region = settings.region
     if region is None:
         return
@@ -186,100 +164,78 @@ def orbit_indicators(settings: Settings, y0) -> tuple:
     return float(res.megno[0]), float(res.mlce[0])
 
 
-BlockCallback = Callable[[int, np.ndarray, int, str], None]
-
-
 class Worker:
-    """A session's orbits, run block by block as one job of ``task`` (a
-    :class:`~explorer.app.serve.tasks.LatestTask`; see the module docstring).  Each block, error
-    and indicator is handed to the callbacks on the session's loop, and only while no
-    :meth:`cancel` came after it (the task's generation)."""
+    """A session's orbits, run block by block by one task ``orbits`` of ``session`` (a
+    :class:`~explorer.app.serve.tasks.Session`; module docstring); each block, error, notice and
+    indicator is applied on the session's loop by that task, and a :meth:`cancel` ends it."""
 
-    def __init__(self, on_block: BlockCallback, on_error: Callable[[int, BaseException], None] | None = None,
-                 on_indicators: Callable[[int, float, float], None] | None = None, *, task,
+    def __init__(self, session, on_block: Callable[[int, np.ndarray, int, str], None],
+                 on_error: Callable[[int, BaseException], None] | None = None,
+                 on_indicators: Callable[[int, float, float], None] | None = None,
                  on_notice: Callable[[int, str], None] | None = None):
-        self._on_block = on_block
-        self._on_notice = on_notice
-        self._on_error = on_error
-        self._on_indicators = on_indicators
-        self.task = task
+        self.session = session
+        self._on_block, self._on_error = on_block, on_error
+        self._on_indicators, self._on_notice = on_indicators, on_notice
         self._runs: list[OrbitRun] = []
         self._paused: list[OrbitRun] = []     # set aside by pause(), in the order they had
-        self._cond = threading.Condition()
-        self._job = None                      # the task's job running the orbits (None: none runs)
         self._next_id = 0
         self._rr = 0
 
     def _ensure_running(self) -> None:
-        """(Under the lock) a job runs the queued orbits."""
-        if self._runs and (self._job is None or not self._job.current):
-            self._job = self.task.run(self._loop)
+        if self._runs and not self.session.running("orbits"):
+            self.session.start("orbits", self._loop())
 
     def submit(self, p1: float, p2: float, settings: Settings, ident: int | None = None) -> OrbitRun:
         """Queue an orbit from (p1, p2) (ParameterError, nothing queued, outside the region), as
         orbit ``ident`` (None: a new id; an id of an orbit cancelled before, rerun at new settings)."""
-        with self._cond:
-            if ident is None:
-                self._next_id += 1
-                ident = self._next_id
-            run = OrbitRun(ident, float(p1), float(p2), settings)
-            self._runs.insert(0, run)      # newest first: its first block comes next
-            self._ensure_running()
+        if ident is None:
+            self._next_id += 1
+            ident = self._next_id
+        run = OrbitRun(ident, float(p1), float(p2), settings)
+        self._runs.insert(0, run)      # newest first: its first block comes next
+        self._ensure_running()
         return run
 
-    def cancel(self) -> int:
-        """Stop every queued or running orbit (at its next block boundary); returns the new
-        generation (what older ones handed in is dropped on the loop)."""
-        with self._cond:
-            self._runs, self._paused = [], []
-            return self.task.cancel()
+    def cancel(self) -> None:
+        """Stop every queued, running or paused orbit (the block in progress is dropped)."""
+        self._runs, self._paused = [], []
+        self.session.cancel("orbits")
 
     def remove(self, ident: int) -> None:
         """Stop one orbit, running or paused (undo)."""
-        with self._cond:
-            self._runs = [r for r in self._runs if r.ident != ident]
-            self._paused = [r for r in self._paused if r.ident != ident]
+        self._runs = [r for r in self._runs if r.ident != ident]
+        self._paused = [r for r in self._paused if r.ident != ident]
 
     def pause(self) -> list[int]:
-        """Set every running orbit aside (at its next block boundary: a block in progress is
-        still handed out); returns their ids.  :meth:`resume` continues them."""
-        with self._cond:
-            moved, self._runs = self._runs, []
-            self._paused = self._paused + moved
-            return [r.ident for r in moved]
+        """Set every running orbit aside (the block in progress is still applied); returns their
+        ids.  :meth:`resume` continues them."""
+        moved, self._runs = self._runs, []
+        self._paused = self._paused + moved
+        return [r.ident for r in moved]
 
     def resume(self) -> list[int]:
         """Queue the paused orbits again, after the running ones; returns their ids."""
-        with self._cond:
-            moved, self._paused = self._paused, []
-            self._runs = self._runs + moved
-            self._ensure_running()
-            return [r.ident for r in moved]
+        moved, self._paused = self._paused, []
+        self._runs = self._runs + moved
+        self._ensure_running()
+        return [r.ident for r in moved]
 
     def paused(self) -> list[int]:
         """The ids of the paused orbits."""
-        with self._cond:
-            return [r.ident for r in self._paused]
+        return [r.ident for r in self._paused]
 
-    def stop(self, wait: bool = False) -> None:
-        """End the orbits (the session is gone)."""
-        with self._cond:
-            self._runs, self._paused = [], []
-        self.task.stop(wait)
-
-    def _say_estimate(self, job, run: OrbitRun) -> None:
-        """An orbit expected to take more than STEP_BUDGET steps is said before it runs."""
+    def _estimate(self, run: OrbitRun) -> str | None:
+        """(In the executor) the notice of an orbit expected to take more than STEP_BUDGET steps."""
         if run.finished or self._on_notice is None:
-            return
+            return None
         steps = step_estimate(run.settings, run.y0)
         if steps is None or steps <= STEP_BUDGET:
-            return
+            return None
         s, rate = run.settings, run.step_rate
         took = f", about {_duration(steps / rate)} at {rate:.2g} steps/s" if rate > 0 else ""
-        job.post(partial(self._on_notice, run.ident,
-                         f"orbit {run.ident} needs about {steps:.2g} steps ({s.crossings} crossings of {s.method} "
-                         f"at dt = {s.dt:g}{took}); it runs until Clear, Undo, a new value or closing the tab "
-                         "stops it; a larger dt or fewer crossings is quicker"))
+        return (f"orbit {run.ident} needs about {steps:.2g} steps ({s.crossings} crossings of {s.method} "
+                f"at dt = {s.dt:g}{took}); it runs until Clear, Undo, a new value or closing the tab "
+                "stops it; a larger dt or fewer crossings is quicker")
 
     def _pick(self) -> OrbitRun | None:
         fresh = [r for r in self._runs if r.done == 0]
@@ -290,43 +246,38 @@ class Worker:
         self._rr = (self._rr + 1) % len(self._runs)
         return self._runs[self._rr]
 
-    def _loop(self, job) -> None:
-        """The task's job: block after block of the queued orbits until none is left or a cancel
-        supersedes it."""
-        while True:
-            with self._cond:
-                run = self._pick() if job.current else None
-                if run is None:
-                    if self._job is job:
-                        self._job = None
-                    return
+    def _queued(self, run: OrbitRun) -> bool:
+        return any(r is run for r in self._runs + self._paused)
+
+    async def _loop(self) -> None:
+        """The task: block after block of the queued orbits until none is left."""
+        session = self.session
+        while (run := self._pick()) is not None:
             try:
-                rows = run.advance()
+                rows = await session.run(run.advance)
+                notice = None
                 if not run.estimated:
                     run.estimated = True
-                    self._say_estimate(job, run)
+                    notice = await session.run(self._estimate, run)
             except Exception as exc:  # noqa: BLE001 - reported in the page; the server keeps serving
-                with self._cond:
-                    self._runs = [r for r in self._runs if r is not run]
-                    self._paused = [r for r in self._paused if r is not run]
-                if self._on_error is not None:
-                    job.post(partial(self._on_error, run.ident, exc))
+                if self._queued(run):
+                    self.remove(run.ident)
+                    if self._on_error is not None:
+                        await session.apply(partial(self._on_error, run.ident, exc))
                 continue
-            with self._cond:
-                # a run paused while its block was computed still hands that block out
-                if not any(r is run for r in self._runs + self._paused):
-                    continue
-                if run.finished:
-                    self._runs = [r for r in self._runs if r is not run]
-                    self._paused = [r for r in self._paused if r is not run]
+            if not self._queued(run):       # removed while its block was computed
+                continue
+            if run.finished:
+                self.remove(run.ident)
+            if notice is not None:
+                await session.apply(partial(self._on_notice, run.ident, notice))
             if len(rows) or run.finished:   # (a block cut at its steps before a crossing: nothing to show)
-                job.post(partial(self._on_block, run.ident, rows, run.done, run.status))
+                await session.apply(partial(self._on_block, run.ident, rows, run.done, run.status))
             if run.wants_indicators and (run.finished or run.wall >= INDICATOR_AFTER) and \
                     self._on_indicators is not None:
-                # once the orbit is finished (or has run INDICATOR_AFTER): its chaos indicators, once
-                run.wants_indicators = False
+                run.wants_indicators = False      # once the orbit is finished (or has run INDICATOR_AFTER)
                 try:
-                    megno, mlce = orbit_indicators(run.settings, run.y0)
+                    megno, mlce = await session.run(orbit_indicators, run.settings, run.y0)
                 except Exception:  # noqa: BLE001 - an indicator that fails is shown as unknown
                     megno = mlce = math.nan
-                job.post(partial(self._on_indicators, run.ident, megno, mlce))
+                await session.apply(partial(self._on_indicators, run.ident, megno, mlce))

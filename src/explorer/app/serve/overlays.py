@@ -1,6 +1,6 @@
 """The searches the page's check boxes run, in a thread of the page: the fixed points of the
-section map and the separatrices of the hyperbolic ones (:func:`fixed_points_and_curves`), and the
-periodic orbits of periods 1..PERIODIC_MAX (:func:`periodic_orbits`); and the readout of a clicked
+section map (:func:`fixed_points`), the separatrices of the hyperbolic ones (:func:`separatrices`),
+the periodic orbits of periods 1..PERIODIC_MAX (:func:`periodic_orbits`); and the readout of a clicked
 orbit (:func:`orbit_readout`: its MEGNO, mLCE and rotation number around :func:`elliptic_center`).
 No web library here.
 """
@@ -39,16 +39,13 @@ def _fixed_points_from(view, first):
             continue
 
 
-#: wall-clock budget of the fixed points and their separatrices (s): the search stops there and
-#: shows what it found (explorer.analysis.budget; a page's search never outlives it)
+#: wall-clock budget of the fixed points and their separatrices (s): the search shows what it found
 FIXED_SECONDS = 30.0
 #: wall-clock budget of the periodic orbits of periods 1..PERIODIC_MAX (s)
 PERIODIC_SECONDS = 60.0
 #: wall-clock budget of a pick's readout (its indicators and rotation number, s)
 READOUT_SECONDS = 30.0
-#: steps per orbit in a crossing batch of a page's search: an orbit that never comes back to the
-#: section (half the symmetry line at mu = 1e6) would otherwise run to 10^9 steps; a return at
-#: Figure 4's parameters takes about 65
+#: steps per orbit in a crossing batch of a page's search (a return takes about 65 at Figure 4's values)
 SEARCH_MAX_STEPS = 100_000
 #: arclength of each separatrix branch of the overlay (explorer.analysis.manifolds)
 SEPARATRIX_ARCLENGTH = 4.0
@@ -93,11 +90,8 @@ def fixed_points(view) -> tuple:
 
 
 def separatrix_branches(view, fp) -> tuple:
-    """(curves, note): the four separatrix branches of the hyperbolic fixed point ``fp``
-    (W^u and W^s, both signs), each grown to SEPARATRIX_ARCLENGTH by
-    :func:`explorer.analysis.manifolds.manifolds` (adaptive insertion, docs/manifolds.md; a branch
-    that meets the region's edge, where points have no return, ends there; SEPARATRIX_MAX_TIME
-    each): a list of (M, 2) arrays, and a note on branches that stopped short ("" when none)."""
+    """(curves, note): the four separatrix branches of the hyperbolic fixed point ``fp``, each grown
+    to SEPARATRIX_ARCLENGTH (docs/manifolds.md), as (M, 2) arrays, and a note on those that stopped short."""
     from explorer.analysis.manifolds import manifolds
 
     branches = manifolds(view.params, view.h, fp, arclength=SEPARATRIX_ARCLENGTH, phi0=view.phi0,
@@ -107,17 +101,13 @@ def separatrix_branches(view, fp) -> tuple:
     return curves, (f"some branches stopped short ({', '.join(short)})" if short else "")
 
 
-def fixed_points_and_curves(view, on_points=None):
-    """(fixed points, curves, message): :func:`fixed_points` and the separatrices of the hyperbolic
-    ones (:func:`separatrix_branches`).  ``on_points(points, message)``, when given, is called as
-    soon as the points are known (the page shows them before the curves).  A branch that fails or
-    a budget that runs out (:class:`~explorer.analysis.budget.BudgetExceeded`) ends the curves
-    there; the points are listed whatever happens to the curves."""
+def separatrices(view, points, text: str) -> tuple:
+    """(curves, message): the separatrices of the hyperbolic ones of the fixed ``points``
+    (:func:`separatrix_branches`), and ``text`` (:func:`fixed_points`' message) with what they
+    gave.  A branch that fails or a budget that runs out
+    (:class:`~explorer.analysis.budget.BudgetExceeded`) ends the curves there."""
     from explorer.analysis.budget import BudgetExceeded
 
-    points, text = fixed_points(view)
-    if on_points is not None:
-        on_points(points, text + ("; growing the separatrices ..." if any(not p.stable for p in points) else ""))
     curves: list = []
     notes = []
     for fp in points:
@@ -137,7 +127,7 @@ def fixed_points_and_curves(view, on_points=None):
             notes.append(f"({_num(fp.point[0])}, {_num(fp.point[1])}): {note}")
     if points:
         text += f"; {len(curves)} separatrix branches" + "".join(f"; {n}" for n in notes)
-    return points, curves, text
+    return curves, text
 
 
 def periodic_orbits(view, max_period=None):
@@ -169,25 +159,17 @@ def periodic_orbits(view, max_period=None):
 
 
 def elliptic_center(view, start):
-    """The elliptic fixed point an orbit from ``start`` is measured around (its rotation number):
-    the first elliptic one Newton's method (:func:`explorer.analysis.fixedpoints.find_fixed_point`)
-    reaches from ``start`` itself (the centre of the start's island), the region's centre, or
-    half-way to its edge along both axes; None when none is.  ``view``: as for
-    :func:`fixed_points_and_curves`."""
-
+    """The elliptic fixed point an orbit from ``start`` turns around: the first one Newton's method
+    reaches from ``start``, then from the guesses of :func:`fixed_points` (None: none)."""
     if view.region is None:
         return None
     return next((fp for fp in _fixed_points_from(view, tuple(start)) if fp.stable), None)
 
 
 def orbit_readout(settings, start) -> dict:
-    """What the page shows of the orbit from ``start`` = (p1, p2) when one of its crossings is
-    clicked: its mean MEGNO and finite-time mLCE over INDICATOR_TIME
-    (:func:`explorer.app.serve.orbits.orbit_indicators`: ``lyapunov.indicators``, the page's
-    method and tolerance) and its rotation number around :func:`elliptic_center`
-    (:func:`explorer.analysis.rotation.rotation_number`, default iterates; Taylor at the page's
-    tol with the taylor method, else at the rotation's default tol).  Keys: megno, mlce,
-    rotation (a RotationNumber or None), center (a FixedPoint or None), rotation_error (text)."""
+    """A picked orbit from ``start``: its MEGNO and mLCE (orbits.orbit_indicators) and its rotation
+    number around :func:`elliptic_center`.  Keys: megno, mlce, rotation (a RotationNumber or
+    None), center (a FixedPoint or None), rotation_error (text)."""
     from explorer import model
     from explorer.analysis import rotation
     from explorer.analysis.budget import BudgetExceeded
@@ -221,19 +203,16 @@ def rotation_tol(settings) -> float:
 
 #: arclength each manifold branch of a picked saddle is grown to (explorer.analysis.manifolds)
 MANIFOLD_ARCLENGTH = 10.0
-#: wall-clock budget of each branch (s): growth stops there and the branch is drawn as far as it got
+#: wall-clock budget of each branch (s): drawn as far as it got
 MANIFOLD_MAX_TIME = 10.0
 #: wall-clock budget of a pick's manifolds, Newton's method and the four branches (s)
 MANIFOLD_SECONDS = 4 * MANIFOLD_MAX_TIME + 5.0
 
 
 def saddle_manifolds(settings, point, period=1):
-    """(branches, message): the unstable and stable manifolds of the hyperbolic periodic orbit of
-    ``period`` through ``point`` (a hyperbolic mark of the page), both branches of each, grown to
-    MANIFOLD_ARCLENGTH by :func:`explorer.analysis.manifolds.manifolds` (adaptive insertion;
-    docs/manifolds.md) at the page's parameters and energy.  ``branches``: the
-    :class:`~explorer.analysis.manifolds.ManifoldBranch` list (unstable first).  An orbit that
-    Newton's method does not find, or finds elliptic, raises ParameterError."""
+    """(branches, message): W^u and W^s of the hyperbolic orbit of ``period`` through ``point``,
+    both branches of each grown to MANIFOLD_ARCLENGTH (docs/manifolds.md; unstable first);
+    ParameterError when Newton's method finds no such orbit."""
     from explorer.analysis.manifolds import manifolds
 
     p1, p2 = float(point[0]), float(point[1])

@@ -1,9 +1,5 @@
-"""The page's exports: the session as a scene (download, and into --export-dir with its HDF5 store)
-and the view as PNG/SVG (downloads, and into --export-dir): :mod:`explorer.app.serve.export` and
-:mod:`explorer.app.serve.image` do the work, the files into --export-dir as jobs of the session's
-task helper.  The figures are the view: a hidden orbit (the orbit list) is not in them; the scene
-and its store are the session: every orbit, hidden or not.  A component of
-:class:`~explorer.app.serve.page.SectionPage`."""
+"""The page's exports (:mod:`explorer.app.serve.export`, :mod:`explorer.app.serve.image`): the
+session as a scene and its store (every orbit), the view as PNG/SVG (hidden orbits left out)."""
 from __future__ import annotations
 
 import io
@@ -24,18 +20,14 @@ def _why(exc: BaseException) -> str:
 class Exports:
     """Scene and figure exports of a page (``host``: its settings, components and messages)."""
 
-    def __init__(self, host, loop, export_dir=None, label: str = ""):
-        self.host, self.export_dir, self.label = host, export_dir, label
-        self.figure_task = loop.task("figure")
-        self.store_task = loop.task("store")
+    def __init__(self, host, session, export_dir=None, label: str = ""):
+        self.host, self.session, self.export_dir, self.label = host, session, export_dir, label
 
     def _starts(self) -> list:
         return [(a, b) for _i, a, b, _c in self.host.orbits.starts]
 
     def scene_text(self) -> str:
         return export.session_scene(self.host.settings, self._starts(), overlays=self.host.overlays_on()).to_toml()
-
-    _scene_text = scene_text
 
     def scene_file(self):
         try:
@@ -90,22 +82,22 @@ class Exports:
             return io.BytesIO(b"")
 
     def export_figure(self) -> None:
-        """Write the page's view as PNG and SVG into the export directory (drawn by a job)."""
+        """Write the page's view as PNG and SVG into the export directory (drawn by a task)."""
         view = self.view()
         self.host.tell("writing the figure ...")
-        self.figure_task.submit(self._write_figure, view)
+        self.session.start("figure", self._write_figure(view))
 
-    def _write_figure(self, job, view):
+    async def _write_figure(self, view):
         try:
-            paths = export.write_figure(self.export_dir, view)
+            paths = await self.session.run(export.write_figure, self.export_dir, view)
             text, ok = "figure written: " + " and ".join(os.path.basename(p) for p in paths), True
         except Exception as exc:  # noqa: BLE001 - reported in the page
             text, ok = f"figure export failed: {_why(exc)}", False
-        job.post(lambda: self.host.say(text, ok))
+        await self.session.apply(lambda: self.host.say(text, ok))
 
     def export(self) -> str | None:
         """Write the session's scene into the export directory; returns its path (its orbits'
-        store follows, written by a job)."""
+        store follows, written by a task)."""
         try:
             sc = export.session_scene(self.host.settings, self._starts(), overlays=self.host.overlays_on())
             path = export.write_scene(self.export_dir, sc)
@@ -114,15 +106,15 @@ class Exports:
             return None
         name = os.path.basename(path)
         self.host.tell(f"scene written: {name} (rerun: explorer sweep {name}); writing the orbits' store ...")
-        self.store_task.submit(self._write_store, path)
+        self.session.start("store", self._write_store(path))
         return path
 
-    def _write_store(self, job, scene_path):
+    async def _write_store(self, scene_path):
         """The exported scene's orbits as an HDF5 store next to it."""
         try:
-            out = export.write_store(scene_path)
+            out = await self.session.run(export.write_store, scene_path)
             text = f"written: {os.path.basename(scene_path)} and {os.path.basename(out)} (the orbits, sweep format)"
             ok = True
         except Exception as exc:  # noqa: BLE001 - reported in the page
             text, ok = f"store export failed: {_why(exc)}", False
-        job.post(lambda: self.host.say(text, ok))
+        await self.session.apply(lambda: self.host.say(text, ok))

@@ -48,7 +48,7 @@ def stepped(name: str, text: str, step: float, k: int) -> str:
 class Fields:
     """One widget per field (``inputs``); an edit calls ``on_edit(name)`` on the session's loop."""
 
-    def __init__(self, loop, settings: Settings, on_edit):
+    def __init__(self, session, settings: Settings, on_edit):
         from explorer.analysis.sections import METHODS
 
         self._quiet = False
@@ -60,7 +60,7 @@ class Fields:
                 w = pn.widgets.Select(label=LABELS[name], options=list(METHODS), value=s[name], width=FIELD_WIDTH)
             else:
                 w = pn.widgets.TextInput(label=LABELS[name], value=s[name], width=FIELD_WIDTH)
-            w.param.watch(lambda _e, name=name: self._edited(loop, on_edit, name), "value")
+            w.param.watch(lambda _e, name=name: self._edited(session, on_edit, name), "value")
             self.inputs[name] = w
         lo, hi, step = MU_SLIDER
         self.mu_slider = pn.widgets.FloatSlider(label=f"{LABELS['mu']} (slider)", start=lo, end=hi, step=step,
@@ -76,18 +76,18 @@ class Fields:
         buttons = []
         for label, k in (("−", -1), ("+", 1)):
             b = pn.widgets.Button(label=label, width=28, align="end", margin=STEP_MARGIN)
-            b.on_click(lambda _e, k=k: loop.soon(lambda: self.step(k)))
+            b.on_click(lambda _e, k=k: session.soon(lambda: self.step(k)))
             buttons.append(b)
         self.step_buttons = tuple(buttons)
         self.grid = pn.Column(self.mu_slider, pn.GridBox(*self.inputs.values(), ncols=2),
                               pn.Row(self.step_field, self.step_size, *buttons))
 
-    def _edited(self, loop, on_edit, name: str) -> None:
+    def _edited(self, session, on_edit, name: str) -> None:
         if self._quiet:
             return
         if name in STEP_FIELDS and self.step_field.value != name:
             self.step_field.value = name          # (the stepper steps the field edited last)
-        loop.soon(lambda: on_edit(name))
+        session.soon(lambda: on_edit(name))
 
     def _retarget(self, name: str) -> None:
         self.step_size.value = default_step(float(self.applied.fields()[name]))

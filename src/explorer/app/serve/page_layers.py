@@ -1,13 +1,7 @@
-"""The page's images under the orbits: the chaos raster of the visible window, MEGNO or frequency
-diffusion (:class:`ChaosLayer`, :func:`explorer.app.serve.raster.rasters` as a job of the session's
-task helper) and the density image of the crossings that are not drawn as glyphs
-(:class:`DensityImage`: the older orbits past :data:`explorer.app.serve.density.GLYPH_BUDGET`
-crossings, all past :data:`explorer.app.serve.density.THRESHOLD`).  Components of
-:class:`~explorer.app.serve.page.SectionPage`.
-
-By Bokeh model name: ``raster`` (image, x, y, dw, dh: the window, n, complete), ``megno-colour-bar``
-(the layer's scale and its indicator's label, shown with it) and ``density`` (image, x, y, dw, dh,
-n: how many crossings).
+"""The page's images under the orbits: the chaos raster of the visible window (:class:`ChaosLayer`,
+MEGNO or frequency diffusion, :func:`explorer.app.serve.raster.rasters`) and the density image of
+the crossings not drawn as dots (:class:`DensityImage`).  By Bokeh model name: ``raster`` (image,
+x, y, dw, dh, n, complete), ``megno-colour-bar`` and ``density`` (image, x, y, dw, dh, n).
 """
 from __future__ import annotations
 
@@ -47,11 +41,11 @@ class ChaosLayer:
     older).  Frequency diffusion turns around :func:`~explorer.app.serve.raster.diffusion_center`
     of the settings (``center``: (settings, point, elliptic) of the last one found)."""
 
-    def __init__(self, host, view, loop, resolutions: tuple, time: float):
+    def __init__(self, host, view, session, resolutions: tuple, time: float):
         self.host, self.view = host, view
         self.resolutions, self.time = resolutions, float(time)
         self.iterates = raster_mod.DIFFUSION_ITERATES
-        self.task = loop.task("raster")
+        self.session = session
         self.raster_source = ColumnDataSource(_empty_raster(), name="raster")
         self.center: tuple | None = None
         self.layer = Box(label="chaos layer", value=False)
@@ -59,8 +53,8 @@ class ChaosLayer:
                                                     f"frequency diffusion (N = {self.iterates})":
                                                     "frequency_diffusion"},
                                            value="megno", width=210)
-        self.layer.param.watch(lambda _e: loop.soon(self._layer_changed), "value")
-        self.indicator.param.watch(lambda _e: loop.soon(self._indicator_changed), "value")
+        self.layer.param.watch(lambda _e: session.soon(self._layer_changed), "value")
+        self.indicator.param.watch(lambda _e: session.soon(self._indicator_changed), "value")
         view.on_window(self._window_moved)
 
     def draw(self, fig) -> None:
@@ -130,27 +124,28 @@ class ChaosLayer:
         window, settings = self.view.window, self.host.settings
         self._show_scale()
         if not self.layer.value or window is None or settings.region is None:
-            self.task.cancel()
+            self.session.cancel("raster")
             self.raster_source.data = _empty_raster()
             return
         # (a budget: cancelled by the next submit, it stops frequency diffusion's search for its centre
         # and its runs between batches; its step cap bounds each orbit's steps in a crossing batch)
-        self.task.submit(self._compute, settings, window, self.indicator.value, on_error=self._failed,
-                         budget=Budget(None, max_steps=raster_mod.RASTER_MAX_STEPS))
+        self.session.start("raster", self._compute(settings, window, self.indicator.value), on_error=self._failed,
+                           budget=Budget(None, max_steps=raster_mod.RASTER_MAX_STEPS))
 
-    def _compute(self, job, settings, window, indicator) -> None:
+    async def _compute(self, settings, window, indicator) -> None:
+        session = self.session
         center = None
         if indicator == "frequency_diffusion":
             c = self.center
-            if c is None or c[0] != settings:      # (this thread alone sets it: one search per settings)
-                point, elliptic = raster_mod.diffusion_center(settings)
+            if c is None or c[0] != settings:      # (one search per settings)
+                point, elliptic = await session.run(raster_mod.diffusion_center, settings)
                 self.center = c = (settings, point, elliptic)
-                job.post(self._show_scale)
+                await session.apply(self._show_scale)
             center = c[1]
-        for image in raster_mod.rasters(settings, window, stop=lambda: not job.current, resolutions=self.resolutions,
-                                        time=self.time, indicator=indicator, center=center,
-                                        iterates=self.iterates):
-            job.post(lambda image=image: self.show_image(image))
+        images = raster_mod.rasters(settings, window, resolutions=self.resolutions, time=self.time,
+                                    indicator=indicator, center=center, iterates=self.iterates)
+        while (image := await session.run(next, images, None)) is not None:
+            await session.apply(lambda image=image: self.show_image(image))
 
     def _failed(self, exc) -> None:
         self.host.say(f"chaos layer failed: {type(exc).__name__}: {' '.join(str(exc).split())}")
@@ -177,14 +172,9 @@ class DensityImage:
         fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.density)
 
     def refresh(self, force: bool = False) -> None:
-        """Draw the crossings that are not glyphs as the density image of the visible window: past
-        density.GLYPH_BUDGET crossings, those of the older orbits (the glyphs keep the newest,
-        :func:`~explorer.app.serve.density.glyph_cutoff`); past density.THRESHOLD, all of them
-        (the glyphs hidden, the browser holds no rows); below the budget, none (no image).  The
-        image is redrawn at most every DENSITY_SECONDS while orbits stream in, at once when
-        ``force`` (the view moved, the colouring changed, the last orbit finished) or when orbits
-        move between the glyphs and the image; never when what it shows is unchanged.  (Not called
-        by a message carrying a click's first crossings: those go alone, OrbitsLayer._flush.)"""
+        """Draw the crossings that are not dots as the density image of the visible window
+        (:mod:`explorer.app.serve.density`): at most every DENSITY_SECONDS while orbits stream in,
+        at once when ``force`` or when orbits move between dots and image, never unchanged."""
         orbits = self.orbits
         orbit = orbits.crossings.data["orbit"]
         n = len(orbit)

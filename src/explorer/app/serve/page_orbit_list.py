@@ -1,23 +1,8 @@
-"""The orbit list of the page (as DynamicalSystems.jl's interactive Poincaré tool has one): every
-orbit of the session in a table (its colour, start (p1, p2), crossings so far and state: running,
-paused, done or why it stopped; hidden ones marked), and the controls that act on one orbit: the
-chooser ``orbit`` (choosing one selects it: its crossings drawn larger and outlined on the
-section, its readout shown as a pick shows it), *hide*/*show* and *delete*.  The picked orbit
-(Shift + click) is the chosen one and its row is highlighted.  The list writes the link's
-``orbits`` and ``hidden`` (which are hidden: a reload keeps them hidden).  A component of
-:class:`~explorer.app.serve.page.SectionPage`, built on the public methods of
-:class:`~explorer.app.serve.page_orbits.OrbitsLayer` and
-:class:`~explorer.app.serve.page_readout.Readout`.
-
-Why a table in one Div and three widgets, not a row of widgets per orbit nor a Tabulator: a
-session holds up to 256 orbits (Scene seeds starts 200 at once); a row of widgets each would be
-about a thousand Bokeh models, and every update of the crossings a message per row, where one
-Div's text is one message per status update (at most every flush); Tabulator brings a large
-JavaScript library to the page for a list of a few columns.
-
-By Bokeh model name: ``orbit-list`` (the table; each row ``<tr data-orbit="ID" ...>``) and
-``selected-orbit`` (the CustomJSFilter of the highlight: the rows of orbit ``args.orbit``, 0: none).
-The page's *Clear*, *Undo* and *Resume* act on the list too (:meth:`OrbitList.clear`, ...).
+"""The orbit list of the page: every orbit in a table (colour, start, crossings so far, state,
+hidden or not), a chooser that selects one (its readout and highlight, as a pick does), *hide*/
+*show* and *delete*; it writes the link's ``orbits`` and ``hidden``.  One Div's table, not a
+widget per orbit: a session holds up to 256 orbits.  By Bokeh model name: ``orbit-list`` (rows
+``<tr data-orbit="ID">``) and ``selected-orbit`` (the highlight's filter, ``args.orbit``).
 """
 from __future__ import annotations
 
@@ -48,7 +33,7 @@ class OrbitList:
     """The list (module docstring).  ``orbits``: the page's OrbitsLayer; ``readout``: its Readout;
     ``on_changed()``: after a hide, show, delete or clear (the page's link)."""
 
-    def __init__(self, orbits, readout, loop, on_changed):
+    def __init__(self, orbits, readout, session, on_changed):
         self.orbits, self.readout, self.on_changed = orbits, readout, on_changed
         self._quiet = False
         self._idents: tuple = ()
@@ -56,11 +41,11 @@ class OrbitList:
         self.table = Div(name="orbit-list", text="", styles={"max-height": LIST_MAX_HEIGHT, "overflow-y": "auto"},
                          sizing_mode="stretch_width")
         self.choice = pn.widgets.Select(label="orbit", options={NONE_LABEL: 0}, value=0, width=200)
-        self.choice.param.watch(lambda e: self._quiet or loop.soon(lambda: self.choose(e.new)), "value")
+        self.choice.param.watch(lambda e: self._quiet or session.soon(lambda: self.choose(e.new)), "value")
         self.hide_button = pn.widgets.Button(label="hide", width=70, disabled=True, align="end")
-        self.hide_button.on_click(lambda _e: loop.soon(self.toggle))
+        self.hide_button.on_click(lambda _e: session.soon(self.toggle))
         self.delete_button = pn.widgets.Button(label="delete", width=70, disabled=True, align="end")
-        self.delete_button.on_click(lambda _e: loop.soon(lambda: self.delete(self.readout.picked)))
+        self.delete_button.on_click(lambda _e: session.soon(lambda: self.delete(self.readout.picked)))
         self.panel = pn.Column(pn.Row(self.choice, self.hide_button, self.delete_button),
                                pn.pane.Bokeh(self.table, sizing_mode="stretch_width"), sizing_mode="stretch_width")
         orbits.on_change(self.refresh)

@@ -1,21 +1,9 @@
-"""The orbits on the page: the clicked starts, their crossings as they arrive from the session's
-:class:`~explorer.app.serve.orbits.Worker` (a job of the session's task helper,
-:mod:`explorer.app.serve.tasks`), the live layer of a click's first crossings, the status line, and
-the colouring of the orbits (by orbit, or by their MEGNO once known).  A component of
-:class:`~explorer.app.serve.page.SectionPage`.
-
-What it holds, by Bokeh model name: ``crossings`` (every crossing the browser draws as a dot:
-orbit, t, p1, p2, M, dH, the orbit's colour index c and its MEGNO, NaN until known; empty past
-density.THRESHOLD, where :attr:`OrbitsLayer.crossings`, in the server only, holds them all),
-``glyphs`` (the CustomJSFilter of the rows drawn as glyphs: the orbits from ``args.first`` on),
-``live`` (the rows of a message that carried an orbit's first crossings, drawn on Bokeh's overlay
-canvas until the next flush moves them to ``crossings``; every row is in exactly one of the two),
-``starts`` (the clicked starts: orbit, p1, p2, c) and ``status``.
-
-A hidden orbit (:meth:`OrbitsLayer.hide`, the orbit list) keeps computing, but its rows and its
-start are in the server only (:attr:`OrbitsLayer.hidden`), off every source the page draws from
-(the dots, the live layer, the density image, a pick, the figure exports); :meth:`OrbitsLayer.show`
-puts them back.
+"""The orbits on the page (docs/commands/serve.md, "How it works"): the starts, their crossings
+from the session's :class:`~explorer.app.serve.orbits.Worker`, the live layer of a click's first
+crossings, the status line and the orbits' colours.  By Bokeh model name: ``crossings`` (the
+rows the browser draws; none past density.THRESHOLD), ``glyphs`` (the filter of the orbits drawn as
+dots), ``live``, ``starts`` and ``status``.  A hidden orbit keeps computing, its rows in
+:attr:`OrbitsLayer.hidden` only.
 """
 from __future__ import annotations
 
@@ -29,17 +17,14 @@ from explorer.app.serve.box import Box
 from explorer.app.serve.orbits import CHAOTIC_MEGNO, COLORS, INDICATOR_TIME, Worker
 from explorer.app.serve.style import MEGNO_HIGH, MEGNO_LOW, MEGNO_ORBIT_SKIP, POINT_SIZE, megno_palette
 
-#: after an orbit's first block (sent at once, to the live layer), blocks go to the browser at most
-#: this often (s): each message makes the browser redraw every dot on screen (benchmarks/bench_serve.py)
+#: blocks after an orbit's first go to the browser at most this often (s): each message redraws every dot
 FLUSH_SECONDS = 0.25
 #: a flush this close to the time the live rows are due to settle (s) settles them
 SETTLE_SLACK = 0.01
-#: rows sent before the live rows settle join them while the live layer stays within this many
-#: (a short orbit's last block); a larger block settles at once with them (one repaint, not two)
+#: rows sent before the live rows settle join them up to this many (a short orbit's last block)
 LIVE_MAX_ROWS = 2_000
-#: the check box: on, a new orbit pauses those still running (Resume continues them); off, they run together
 PAUSE_LABEL = "a click pauses running orbits"
-#: the browser's filter of the drawn crossings: the rows of the orbits from ``first`` on (their indices)
+#: the browser's filter of the drawn crossings: the rows of the orbits from ``first`` on
 GLYPH_FILTER = ("const o = source.data.orbit, n = o.length, rows = [];\n"
                 "for (let i = 0; i < n; i++) if (o[i] >= first) rows.push(i);\n"
                 "return rows;")
@@ -63,15 +48,13 @@ def _empty_starts() -> dict:
 
 
 class OrbitsLayer:
-    """The starts, crossings and status of a page (module docstring).  ``host``: the page (its
-    ``settings``, ``say``, ``push_url`` and ``density``)."""
+    """The starts, crossings and status of a page; ``host``: the page."""
 
-    def __init__(self, host, view, loop):
-        self.host, self.view, self.loop = host, view, loop
+    def __init__(self, host, view, session):
+        self.host, self.view, self.session = host, view, session
         self.starts: list[tuple] = []          # (orbit id, p1, p2, colour) of every start, in click order
         self._unmarked: list[tuple] = []       # starts whose cross is not yet in start_source
         self._color = 0
-        self._running: set = set()             # ids of the orbits still computing (or paused)
         self.indicators: dict = {}             # orbit id -> (mean MEGNO, mLCE) over INDICATOR_TIME
         self.progress: dict = {}               # orbit id -> (crossings on the page so far, status)
         self.hidden: dict = {}                 # orbit id -> its rows (columns of crossings), hidden
@@ -80,15 +63,11 @@ class OrbitsLayer:
         self._flushed_at = -math.inf           # when the last flush ran (monotonic)
         self._settle_at = -math.inf            # the flush due then moves the live rows
         self._settled = 0                      # crossings' rows up to here are in shown, from here on in live
-        self.flush_timer = loop.timer(lambda: self._flush())   # (looked up when due: a test may trace it)
-        self.worker = Worker(self._on_block, self._on_error, self._on_indicators, task=loop.task("orbits"),
-                             on_notice=self._on_notice)
-        # every crossing of the session, in the server (never in the document: not sent to the browser) ...
+        self.flush_timer = session.timer(lambda: self._flush())   # (looked up when due: tests trace it)
+        self.worker = Worker(session, self._on_block, self._on_error, self._on_indicators, on_notice=self._on_notice)
+        # every crossing (server only); what the browser draws; a click's first rows (lists: one JSON frame)
         self.crossings = ColumnDataSource(_empty_crossings())
-        # ... what the browser draws: the same rows up to density.THRESHOLD, none past it ...
         self.shown = ColumnDataSource(_empty_crossings(), name="crossings")
-        # ... and the rows of a message with an orbit's first crossings, until the next flush
-        # (as lists: a few rows as JSON, one frame of the websocket, not a binary buffer per column)
         self.live = ColumnDataSource(_empty_live(), name="live")
         self.start_source = ColumnDataSource(_empty_starts(), name="starts")
         self.by_orbit = {"field": "c", "transform": LinearColorMapper(palette=list(COLORS), low=-0.5,
@@ -97,17 +76,15 @@ class OrbitsLayer:
             palette=megno_palette(MEGNO_ORBIT_SKIP), low=MEGNO_LOW, high=MEGNO_HIGH, nan_color="#9e9e9e")}
         self.status = Div(name="status", text="click in the white region to start an orbit", render_as_text=True)
         self.colour_box = Box(label="colour orbits by MEGNO", value=False)
-        self.colour_box.param.watch(lambda _e: loop.soon(self._colour_changed), "value")
+        self.colour_box.param.watch(lambda _e: session.soon(self._colour_changed), "value")
         self.starts_box = Box(label="start markers (+)", value=True)
-        self.starts_box.param.watch(lambda _e: loop.soon(self._starts_box_changed), "value")
+        self.starts_box.param.watch(lambda _e: session.soon(self._starts_box_changed), "value")
         self.pause_box = Box(label=PAUSE_LABEL, value=True)
-        self.pause_box.param.watch(lambda _e: loop.soon(host.push_url), "value")
+        self.pause_box.param.watch(lambda _e: session.soon(host.push_url), "value")
 
     def draw(self, fig) -> None:
-        """The crossings' glyphs (drawn over the images: call after them) and the starts' crosses."""
-        # the glyphs: only the orbits from glyph_first on (the newest, at most density.GLYPH_BUDGET
-        # crossings), filtered in the browser from the rows it holds: a change of glyph_first sends
-        # one number, never the rows again; the older orbits are in the density image
+        """The crossings' glyphs (call after the images) and the starts' crosses."""
+        # the newest orbits (density.GLYPH_BUDGET) as dots, filtered in the browser: one number moves them
         self.glyph_filter = CustomJSFilter(name="glyphs", args={"first": 0}, code=GLYPH_FILTER)
         self.points = fig.scatter("p1", "p2", source=self.shown, color=self.by_orbit, size=POINT_SIZE, line_width=0,
                                   view=CDSView(filter=self.glyph_filter))
@@ -121,8 +98,8 @@ class OrbitsLayer:
     # ------------------------------------------------------------ starts
     def start(self, p1: float, p2: float, color: int | None = None, mark_later: bool = False,
               ident: int | None = None):
-        """Queue the orbit from (p1, p2) and mark its start (``mark_later``, a click on a served
-        page: with its first crossings, :meth:`_mark_starts`); None outside the region."""
+        """Queue the orbit from (p1, p2) and mark its start (``mark_later`` on a served page: with its
+        first crossings); None outside the region."""
         settings = self.host.settings
         if not settings.admissible(p1, p2):
             return None
@@ -132,15 +109,14 @@ class OrbitsLayer:
         run = self.worker.submit(p1, p2, settings, ident)
         self.starts.append((run.ident, p1, p2, color))
         self._unmarked.append((run.ident, p1, p2, color))
-        self._running = self._running | {run.ident}
-        if not mark_later or self.loop.doc is None:
+        self.progress[run.ident] = (0, "running")
+        if not mark_later or self.session.doc is None:
             self._mark_starts()
             self.update_status()             # (else with the first crossings, in their flush)
         return run
 
     def _mark_starts(self):
-        """Stream the crosses of the starts not yet marked (on a served page, a click's with its
-        first crossings, just after them: the cross's redraw does not delay them)."""
+        """Stream the crosses of the starts not yet marked."""
         live = {i for i, *_ in self.starts if i not in self.hidden}
         marks, self._unmarked = [m for m in self._unmarked if m[0] in live], []
         if marks:
@@ -150,7 +126,7 @@ class OrbitsLayer:
         """Stop every orbit and take them off the page; returns their starts."""
         self.worker.cancel()
         self.flush_timer.cancel()
-        old, self.starts, self._running, self._pending = self.starts, [], set(), []
+        old, self.starts, self._pending = self.starts, [], []
         self.indicators, self.progress, self.hidden = {}, {}, {}
         self.crossings.data = _empty_crossings()
         self.show_all()
@@ -164,7 +140,6 @@ class OrbitsLayer:
         self.worker.remove(ident)
         self.indicators.pop(ident, None)
         self.progress.pop(ident, None)
-        self._running = self._running - {ident}
         if self.hidden.pop(ident, None) is None:
             self._take_rows(ident)
             self._unmark(ident)
@@ -182,8 +157,7 @@ class OrbitsLayer:
         self.start_source.data = {k: [x for x, ok in zip(v, keep) if ok] for k, v in self.start_source.data.items()}
 
     def hide(self, ident: int) -> None:
-        """Take orbit ``ident``'s crossings and start off the page, into :attr:`hidden` (it keeps
-        computing; later rows go there too)."""
+        """Take orbit ``ident``'s crossings and start off the page, into :attr:`hidden`."""
         if ident in self.hidden or not any(i == ident for i, *_ in self.starts):
             return
         self.hidden[ident] = self._take_rows(ident)
@@ -203,50 +177,41 @@ class OrbitsLayer:
 
     def state(self, ident: int) -> str:
         """running, paused, done, or why the orbit stopped."""
-        if ident in self._running:
+        if ident in self.running:
             return "paused" if ident in self.worker.paused() else "running"
         return self.progress.get(ident, (0, "done"))[1]
 
+    @property
+    def running(self) -> set:
+        """The ids of the orbits still computing (or paused)."""
+        return {i for i, (_n, status) in self.progress.items() if status == "running"}
+
     def on_change(self, listener) -> None:
-        """``listener()`` after every update of the status line (orbits added, grown, stopped, removed)."""
+        """``listener()`` after every update of the status line."""
         self._listeners.append(listener)
 
     # ------------------------------------------------------------ blocks from the worker
     def _on_block(self, ident, rows, done, status):
-        """On the loop: queue the block (the flush at the next tick at the earliest).  An orbit's
-        first block and its last go at once; others at most every FLUSH_SECONDS after the last
-        flush (each message redraws every crossing in the browser).  Blocks queued meanwhile go
-        to the page together (one stream of rows)."""
+        """Queue the block: an orbit's first and last go at once, others at most every FLUSH_SECONDS."""
         urgent = done == len(rows) or status != "running"
         self._pending.append((ident, rows, done, status))
         now = time.monotonic()
-        self.flush_timer.at(now if urgent else max(now, self._flushed_at + FLUSH_SECONDS), reentrant=False)
+        self.flush_timer.at(now if urgent else max(now, self._flushed_at + FLUSH_SECONDS))
 
     def _flush(self):
-        """The queued blocks onto the page, each change of a model a message of Bokeh's own, in
-        order (not Panel's ``unlocked``: SessionLoop.bokeh_sends).
-
-        A flush that carries an orbit's first crossings sends them to ``live`` (drawn on the
-        overlay canvas: the browser repaints that alone), then the starts' crosses (also on the overlay),
-        then the link with the new start (a reload from then on keeps it), and nothing else: the
-        status line and the density image, whose changes make the browser lay out the page or
-        repaint everything, wait for the flush FLUSH_SECONDS later, which moves the live rows to
-        ``crossings``.  A few rows that come before it (a short orbit's last block, sent at once;
-        LIVE_MAX_ROWS) go to ``live`` too: otherwise the browser, taking both messages in one
-        frame, would repaint everything for the first rows."""
+        """The queued blocks onto the page (docs/architecture.md, "Many crossings in the browser"): a click's first
+        rows go alone to ``live`` (the overlay canvas), with its cross and the link; the status line
+        and the density image wait for the flush FLUSH_SECONDS later, which settles them."""
         blocks, self._pending = self._pending, []
         now = self._flushed_at = time.monotonic()
         live = {i: c for i, _a, _b, c in self.starts}
-        blocks = [b for b in blocks if b[0] in live]          # undone meanwhile: dropped
-        blocks = [self._keep_hidden(b, live) for b in blocks]  # (a hidden orbit's rows: to hidden)
+        blocks = [self._keep_hidden(b, live) for b in blocks if b[0] in live]
         first_rows = {b[0] for b in blocks if 0 < len(b[1]) == b[2]}   # orbits at their first block
         if first_rows and any(b[0] not in first_rows for b in blocks):
-            # other orbits' blocks wait for the next flush: these go alone
             self._pending[:0] = [b for b in blocks if b[0] not in first_rows]
             blocks = [b for b in blocks if b[0] in first_rows]
         full = [b for b in blocks if len(b[1])]
         held = len(self.live.data["orbit"])
-        # (SETTLE_SLACK: a timer is never early by more; a flush it runs must settle)
         to_live = bool(first_rows) or (0 < held and now < self._settle_at - SETTLE_SLACK
                                        and held + sum(len(b[1]) for b in full) <= LIVE_MAX_ROWS)
         if full:
@@ -255,23 +220,18 @@ class OrbitsLayer:
             if to_live:
                 self.live.stream({k: v.tolist() for k, v in new.items()})   # drawn at once, alone
         moved = False if to_live else self._settle()
-        self._mark_starts()              # (their starts' crosses in the next message)
+        self._mark_starts()
         for ident, _rows, done, status in blocks:
             self.progress[ident] = (done, status)
-            if status != "running":
-                self._running = self._running - {ident}
-                if status != "done":
-                    self.host.say(f"orbit {ident} stopped after {done} crossings: {status}")
+            if status not in ("running", "done"):
+                self.host.say(f"orbit {ident} stopped after {done} crossings: {status}")
         if first_rows:
-            # (in a notebook the next poll settles them: it pushes everything in one message anyway)
-            self._settle_at = now + FLUSH_SECONDS if self.loop.doc is not None else -math.inf
-            self.host.push_url()         # (after the rows: a reload from now on has the click)
+            self._settle_at = now + FLUSH_SECONDS if self.session.doc is not None else -math.inf
+            self.host.push_url()
         elif not to_live:
             self.update_status(force_density=self.host.density_image.dense and moved)
         if self._pending or len(self.live.data["orbit"]):
-            # what waits goes at the latest when the live rows are due to settle
-            self.flush_timer.at(max(self._settle_at, now + (FLUSH_SECONDS if self._pending else 0.0)),
-                                reentrant=False)
+            self.flush_timer.at(max(self._settle_at, now + (FLUSH_SECONDS if self._pending else 0.0)))
 
     def _keep_hidden(self, block, colour: dict):
         """A hidden orbit's block: its rows go to :attr:`hidden`, the block goes on without them."""
@@ -283,9 +243,7 @@ class OrbitsLayer:
         return ident, rows[:0], done, status
 
     def _settle(self) -> bool:
-        """The live rows to ``crossings`` (past density.THRESHOLD, to the density image only: the
-        caller redraws it at once), streamed before ``live`` empties (never a frame without them);
-        returns whether there were live rows."""
+        """The live rows to ``crossings`` (streamed before ``live`` empties); returns whether there were any."""
         moved = bool(len(self.live.data["orbit"]))
         n = len(self.crossings.data["orbit"])
         if n > self._settled:
@@ -297,8 +255,7 @@ class OrbitsLayer:
         return moved
 
     def show_all(self) -> None:
-        """The browser's rows anew: every crossing in ``crossings`` (none past density.THRESHOLD),
-        none live (after an undo, a clear, a change of settings or of the threshold's side)."""
+        """The browser's rows anew: every crossing (none past density.THRESHOLD), none live."""
         self.shown.data = _empty_crossings() if self.host.density_image.dense else dict(self.crossings.data)
         if len(self.live.data["orbit"]):
             self.live.data = _empty_live()
@@ -310,7 +267,6 @@ class OrbitsLayer:
 
     def _on_error(self, ident, exc):
         self._mark_starts()
-        self._running = self._running - {ident}
         self.progress[ident] = (self.progress.get(ident, (0,))[0], "failed")
         self.host.say(f"orbit {ident} failed: {type(exc).__name__}: {' '.join(str(exc).split())}")
         self.update_status()
@@ -318,9 +274,8 @@ class OrbitsLayer:
 
     def update_status(self, force_density: bool = False):
         """The status line (and the density image, at once if ``force_density``)."""
-        # the worker's paused orbits still running here (one paused as its last block came is done)
-        paused = len(self._running.intersection(self.worker.paused()))
-        running = len(self._running) - paused
+        paused = len(self.running.intersection(self.worker.paused()))
+        running = len(self.running) - paused
         n = len(self.crossings.data["orbit"])
         density = self.host.density_image
         density.refresh(force=force_density or not running)   # (at once when the last orbit is done)
@@ -349,7 +304,7 @@ class OrbitsLayer:
         rows = np.flatnonzero(np.asarray(self.crossings.data["orbit"]) == ident)
         if rows.size:      # the rows streamed before the indicator was known
             self.crossings.patch(_megno_patch(rows, megno))
-            settled = self._settled        # (the browser's: crossings up to it, live from it on)
+            settled = self._settled        # (the browser's rows: settled up to it, live from it on)
             if not self.host.density_image.dense and rows[0] < settled:
                 self.shown.patch(_megno_patch(rows[rows < settled], megno))
             if rows[-1] >= settled:
@@ -367,10 +322,6 @@ class OrbitsLayer:
     def _starts_box_changed(self) -> None:
         """Show or hide the clicked starts' crosses."""
         self.start_marks.visible = bool(self.starts_box.value)
-
-    def close(self) -> None:
-        self.flush_timer.cancel()
-        self.worker.stop()
 
 
 def _columns(blocks, colour: dict, indicators: dict) -> dict:

@@ -1,10 +1,6 @@
-"""The overlays of the page: the fixed points of the section map with the separatrices of the
-hyperbolic ones, the periodic orbits of periods 1..PERIODIC_MAX (:mod:`explorer.app.serve.overlays`,
-the searches its check boxes ask for, as one job of the session's task helper, under a budget) and
-the manifolds of a picked hyperbolic mark (another task).  A component of
-:class:`~explorer.app.serve.page.SectionPage`.
-
-By Bokeh model name: ``fixed`` (p1, p2, kind, marker), ``separatrices`` (xs, ys: one polyline per
+"""The overlays of the page: the fixed points with their separatrices and the periodic orbits
+(:mod:`explorer.app.serve.overlays`, one task under a budget) and a picked saddle's manifolds
+(another).  By Bokeh model name: ``fixed`` (p1, p2, kind, marker), ``separatrices`` (xs, ys: one polyline per
 branch), ``periodic`` (p1, p2, period, kind, marker), ``manifolds`` (xs, ys, color, kind) and
 ``overlay`` (what the searches found).
 """
@@ -39,10 +35,8 @@ def _marks(points, stable) -> dict:
 class Overlays:
     """Fixed points, separatrices, periodic orbits and a saddle's manifolds (module docstring)."""
 
-    def __init__(self, host, view, loop):
-        self.host, self.view = host, view
-        self.search_task = loop.task("overlay")
-        self.manifold_task = loop.task("manifolds")
+    def __init__(self, host, view, session):
+        self.host, self.view, self.session = host, view, session
         self.fixed = ColumnDataSource(_empty_fixed(), name="fixed")
         self.curves = ColumnDataSource({"xs": [], "ys": []}, name="separatrices")
         self.periodic = ColumnDataSource(_empty_periodic(), name="periodic")
@@ -51,7 +45,7 @@ class Overlays:
         self.overlay = Box(label="fixed points, separatrices", value=False)
         self.periodic_box = Box(label=f"periodic orbits, periods 1-{search.PERIODIC_MAX}", value=False)
         for box in (self.overlay, self.periodic_box):
-            box.param.watch(lambda _e: loop.soon(self._boxes_changed), "value")
+            box.param.watch(lambda _e: session.soon(self._boxes_changed), "value")
 
     def draw_lines(self, fig) -> None:
         """The separatrices and manifolds (under the crossings)."""
@@ -88,38 +82,32 @@ class Overlays:
         self.text.text = ""
         wanted = (self.overlay.value, self.periodic_box.value)
         if not any(wanted) or self.host.settings.region is None:
-            self.search_task.cancel()
+            self.session.cancel("overlay")
             return
         self.text.text = "searching ..."
         budget = search.search_budget(search.FIXED_SECONDS * wanted[0] + search.PERIODIC_SECONDS * wanted[1])
-        self.search_task.submit(self._compute, self.host.settings, *wanted, budget=budget)
+        self.session.start("overlay", self._compute(self.host.settings, *wanted), budget=budget)
 
-    def _compute(self, job, settings, fixed, periodic):
-        texts: list = []
-
-        def on_points(points, text):
-            shown = "; ".join([*texts, text])           # (now: texts grows before the post is delivered)
-            job.post(lambda: self._show_fixed(points, [], shown))
-
+    async def _compute(self, settings, fixed, periodic):
+        run, apply = self.session.run, self.session.apply
+        text = ""
         if fixed:
             try:
-                points, curves, text = search.fixed_points_and_curves(settings, on_points)
+                points, text = await run(search.fixed_points, settings)
+                growing = "; growing the separatrices ..." if any(not p.stable for p in points) else ""
+                await apply(lambda: self._show_fixed(points, [], text + growing))
+                curves, text = await run(search.separatrices, settings, points, text)
             except Exception as exc:  # noqa: BLE001 - reported in the page
                 points, curves, text = [], [], f"fixed points: failed ({type(exc).__name__}: {exc})"
-            texts.append(text)
-            found = "; ".join(texts)
-            job.post(lambda: self._show_fixed(points, curves, found))
-        if periodic and job.current:
+            await apply(lambda: self._show_fixed(points, curves, text))
+        if periodic:
             if fixed:
-                waiting = "; ".join([*texts, "searching the periodic orbits ..."])
-                job.post(lambda: setattr(self.text, "text", waiting))
+                await apply(lambda: setattr(self.text, "text", f"{text}; searching the periodic orbits ..."))
             try:
-                orbits, text = search.periodic_orbits(settings, search.PERIODIC_MAX)
+                orbits, found = await run(search.periodic_orbits, settings, search.PERIODIC_MAX)
             except Exception as exc:  # noqa: BLE001 - reported in the page
-                orbits, text = [], f"periodic orbits: failed ({type(exc).__name__}: {exc})"
-            texts.append(text)
-            done = "; ".join(texts)
-            job.post(lambda: self._show_periodic(orbits, done))
+                orbits, found = [], f"periodic orbits: failed ({type(exc).__name__}: {exc})"
+            await apply(lambda: self._show_periodic(orbits, "; ".join(t for t in (text, found) if t)))
 
     def _show_periodic(self, orbits, text):
         rows = [(p, int(o.period), o.stable) for o in orbits for p in np.asarray(o.points)]
@@ -153,21 +141,19 @@ class Overlays:
         self.manifold_source.data = _empty_manifolds()
         self.text.text = (f"growing the manifolds of the period-{period} orbit at "
                           f"({point[0]:.6g}, {point[1]:.6g}) ...")
-        self.manifold_task.submit(self._compute_manifolds, tuple(point), int(period), self.host.settings,
-                                  budget=search.search_budget(search.MANIFOLD_SECONDS))
+        self.session.start("manifolds", self._compute_manifolds(tuple(point), int(period), self.host.settings),
+                           budget=search.search_budget(search.MANIFOLD_SECONDS))
 
     def clear_manifolds(self) -> None:
-        self.manifold_task.cancel()
+        self.session.cancel("manifolds")
         self.manifold_source.data = _empty_manifolds()
 
-    def _compute_manifolds(self, job, point, period, settings):
+    async def _compute_manifolds(self, point, period, settings):
         try:
-            branches, text = search.saddle_manifolds(settings, point, period)
+            branches, text = await self.session.run(search.saddle_manifolds, settings, point, period)
         except Exception as exc:  # noqa: BLE001 - reported in the page
-            if job.budget is not None and job.budget.cancelled:
-                return
             branches, text = [], f"manifolds: failed ({type(exc).__name__}: {' '.join(str(exc).split())})"
-        job.post(lambda: self._show_manifolds(branches, text))
+        await self.session.apply(lambda: self._show_manifolds(branches, text))
 
     def _show_manifolds(self, branches, text):
         pts = [np.asarray(b.points, float) for b in branches]

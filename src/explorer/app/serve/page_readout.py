@@ -1,6 +1,6 @@
 """The readout of a picked orbit (Shift + click, or the click switch): the orbit with a crossing
 near the click, its mLCE, mean MEGNO and rotation number
-(:func:`explorer.app.serve.overlays.orbit_readout`, a job of the session's task helper, the latest
+(:func:`explorer.app.serve.overlays.orbit_readout`, a task of the page's session, the latest
 pick only, under a budget), or, near a hyperbolic mark of the overlays, that mark's manifolds.  A
 component of :class:`~explorer.app.serve.page.SectionPage`; by Bokeh model name: ``readout``.
 """
@@ -21,9 +21,9 @@ PICK_PX = 6.0
 class Readout:
     """The picked orbit (``picked``), its readout text, and the readouts computed so far."""
 
-    def __init__(self, host, view, orbits, overlays, loop):
+    def __init__(self, host, view, orbits, overlays, session):
         self.host, self.view, self.orbits, self.overlays = host, view, orbits, overlays
-        self.task = loop.task("readout")
+        self.session = session
         self.text = Div(name="readout", text="", render_as_text=True, styles={"font-family": "monospace"})
         self.picked: int | None = None          # the orbit whose readout is shown
         self.readouts: dict = {}                # orbit id -> orbit_readout(...) of a picked orbit
@@ -71,16 +71,16 @@ class Readout:
         self._picked(ident)
         self.host.say("")
         if ident in self.readouts:
-            self.task.cancel()
+            self.session.cancel("readout")
             self._show(ident, self.readouts[ident])
             return
         self.text.text = f"orbit {ident} from ({start[0]:.6g}, {start[1]:.6g}): computing mLCE, MEGNO, rotation ..."
-        self.task.submit(self._compute, ident, start, self.host.settings,
-                         budget=search.search_budget(search.READOUT_SECONDS))
+        self.session.start("readout", self._compute(ident, start, self.host.settings),
+                           budget=search.search_budget(search.READOUT_SECONDS))
 
     def unpick(self) -> None:
         """No orbit picked (its readout stays known: picked again, it shows at once)."""
-        self.task.cancel()
+        self.session.cancel("readout")
         self.text.text = ""
         self._picked(None)
 
@@ -93,15 +93,13 @@ class Readout:
         if ident is None or self.picked == ident:
             self.unpick()
 
-    def _compute(self, job, ident, start, settings):
+    async def _compute(self, ident, start, settings):
         try:
-            r = search.orbit_readout(settings, start)
+            r = await self.session.run(search.orbit_readout, settings, start)
         except Exception as exc:  # noqa: BLE001 - reported in the page
-            if job.budget is not None and job.budget.cancelled:
-                return                       # replaced: nothing to show, nothing to keep
             r = {"error": f"{type(exc).__name__}: {' '.join(str(exc).split())}"}
         r["start"] = start
-        job.post(lambda: self._keep(ident, r))
+        await self.session.apply(lambda: self._keep(ident, r))
 
     def _keep(self, ident, r):
         if not any(i == ident for i, *_ in self.orbits.starts):

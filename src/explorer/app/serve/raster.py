@@ -1,26 +1,11 @@
-"""The chaos layer of the page: a raster of a chaos indicator over the visible window, coarse first,
-then refined.
-
-For each resolution of ``RESOLUTIONS`` (n x n cells over the window), the centres of the cells
-inside the allowed region are started on the section (docs/model.md R9, M > 0) and the layer's
-indicator (``INDICATORS``, by their names in the registry :mod:`explorer.kernels.indicator_table`)
-is computed for them, a batch of seeds per call; cells outside the region are NaN:
-
-- ``megno``: the mean MEGNO <Y>(``RASTER_TIME``) of :func:`explorer.analysis.lyapunov.indicators`
-  (the tangent lanes, the page's method and tolerance), ``BATCH`` seeds per call;
-- ``frequency_diffusion``: log10 |nu1 - nu2| of
-  :func:`explorer.analysis.rotation.frequency_diffusion` (the function a sweep's
-  ``frequency_diffusion`` calls) on the page's section map, N = ``DIFFUSION_ITERATES``, around
-  :func:`diffusion_center` (the elliptic fixed point reached from the allowed region's centre: the
-  same centre for every window of the same settings), ``DIFFUSION_BATCH`` seeds per call.
-
-After each batch the partial image is handed out, so the page fills in while the next batch runs;
-its ``stop()`` ends the raster at the next batch (the page's ChaosLayer runs it as a job of the
-session's task helper: a new window, indicator or settings supersede it).  No web library here.
+"""The chaos layer of the page: a raster of a chaos indicator (``INDICATORS``: mean MEGNO over
+``RASTER_TIME``, or frequency diffusion log10 |nu1 - nu2| around :func:`diffusion_center`) over the
+visible window, coarse first, then refined (``RESOLUTIONS``); cells outside the allowed region are
+NaN.  The partial image is yielded after each batch of seeds (docs/commands/serve.md, "Chaos
+layer").  No web library here.
 """
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -121,12 +106,10 @@ def diffusion_cells(settings: Settings, p1, p2, center, iterates: int = DIFFUSIO
                                iterates=iterates)
 
 
-def rasters(settings: Settings, window: Window, stop: Callable[[], bool] = lambda: False,
-            resolutions: tuple = RESOLUTIONS, time: float = RASTER_TIME, indicator: str = "megno",
-            center=None, iterates: int = DIFFUSION_ITERATES):
-    """Yield the :class:`Image` of ``indicator`` after every batch of every resolution (until
-    ``stop()``); ``time``: MEGNO's, ``center`` (None: :func:`diffusion_center`) and ``iterates``:
-    frequency diffusion's."""
+def rasters(settings: Settings, window: Window, resolutions: tuple = RESOLUTIONS, time: float = RASTER_TIME,
+            indicator: str = "megno", center=None, iterates: int = DIFFUSION_ITERATES):
+    """Yield the :class:`Image` of ``indicator`` after every batch of every resolution; ``time``:
+    MEGNO's, ``center`` (None: :func:`diffusion_center`) and ``iterates``: frequency diffusion's."""
     from explorer.model import validation
 
     validation.choice("indicator", indicator, INDICATORS)
@@ -149,8 +132,6 @@ def rasters(settings: Settings, window: Window, stop: Callable[[], bool] = lambd
             values = np.where(inside, np.kron(previous, np.ones((k, k))), np.nan)
         rows, cols = np.nonzero(inside)
         for a in range(0, len(rows), batch):
-            if stop():
-                return
             r, c = rows[a:a + batch], cols[a:a + batch]
             values[r, c] = cells(P1[r, c], P2[r, c])
             yield Image(window, n, values.copy(), a + batch >= len(rows), indicator)

@@ -1,17 +1,7 @@
 """The web server of ``explorer serve``: Panel on Bokeh's Tornado server, one
-:class:`~explorer.app.serve.page.SectionPage` per browser session.
-
-Safe by default:
-
-- it binds 127.0.0.1 unless told otherwise; a host that is not a loopback address needs a token
-  (one is made when none is given: ``secrets.token_urlsafe``), printed in the URL;
-- with a token, every page request must carry it (``?token=...``, compared in constant time
-  by Panel's ``authorize_callback``; a missing or wrong token gets HTTP 403 and no app), and
-  Bokeh's sessions are signed with a secret made at start, so the websocket of a session can only
-  be opened from a page that was served (its signed session token carries the page's request);
-- without a token (loopback only) the websocket accepts pages of this host and port only
-  (Bokeh's origin check);
-- nothing from the page names a file: exports go to the directory given at start.
+:class:`~explorer.app.serve.page.SectionPage` per browser session; safe by default (loopback
+unless told otherwise, a token elsewhere, signed sessions, no file named by the page:
+docs/commands/serve.md, "Safe by default").
 """
 from __future__ import annotations
 
@@ -104,18 +94,15 @@ def make_server(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT
     # a page whose server has gone says so (Panel's notification on a lost connection)
     pn.config.disconnect_notification = DISCONNECT_NOTICE
     app = session_app(base, export_dir=export_dir, label=label, **page_options)
-    # liveness: GET /liveness answers {"/liveness": true} from the event loop, nothing else (a health
-    # check: a loop that a computation held would not answer; tests/app/test_serve_hostile.py)
+    # GET /liveness, answered by the event loop itself (a health check)
     server = pn.serve(app, port=port, address=host, show=False, start=False, verbose=False, title="explorer",
                       location=True, liveness=True, **kw)
     return server, url_of(host, port, token)
 
 
 def web_browser():
-    """The user's web browser (:func:`webbrowser.get`), or None when there is none: ``get``
-    raises, or a Linux/BSD session has no display (neither DISPLAY nor WAYLAND_DISPLAY) and no
-    BROWSER chosen, where the only browsers are text ones that would take over the terminal (an
-    SSH session on a cluster node: forward the port and open the URL on the laptop)."""
+    """The user's web browser (:func:`webbrowser.get`), or None when there is none (on Linux/BSD
+    without a display nor BROWSER only text browsers would take over the terminal)."""
     import os
     import webbrowser
 
@@ -143,11 +130,9 @@ def open_in_browser(url: str, err=None) -> threading.Thread | None:
 
 
 def warm_up_and_freeze(base: Settings) -> None:
-    """Load the crossing kernels (:func:`explorer.app.serve.orbits.warm_up`), then put every
-    object alive out of the cyclic garbage collector's sight (``gc.freeze``): a full collection
-    walks the imported modules and kernels on the event loop, in front of a click's first
-    crossings (docs/commands/serve.md, *Latency*).  A session opened before this ends is frozen
-    too (kept until the server stops)."""
+    """Load the crossing kernels (:func:`explorer.app.serve.orbits.warm_up`), then ``gc.freeze``
+    every object alive: a full collection would walk them on the event loop (docs/commands/serve.md,
+    *Latency*)."""
     from explorer.app.serve.orbits import warm_up
 
     warm_up(base)
@@ -177,11 +162,9 @@ def run(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, t
 
 
 def _quiet_about_clients_gone(loop, context) -> None:
-    """The event loop's exception handler: a browser that closed its websocket while Bokeh was
-    sending it a message leaves a task whose ``WebSocketClosedError`` nobody retrieves (Tornado's
-    ``write_message`` wrapper), and asyncio's default handler prints its traceback when the task
-    is collected.  A client that went away is not an error of the server (Bokeh logs it once as a warning); every
-    other exception goes to asyncio's default handler, unchanged."""
+    """The event loop's exception handler: a client that closed its websocket while Bokeh sent it a
+    message (a ``WebSocketClosedError`` nobody retrieves) is not an error of the server; every
+    other exception goes to asyncio's default handler."""
     from tornado.iostream import StreamClosedError
     from tornado.websocket import WebSocketClosedError
 
@@ -191,16 +174,9 @@ def _quiet_about_clients_gone(loop, context) -> None:
 
 
 def _end_on_signals(out) -> Callable[[], None]:
-    """SIGINT and SIGTERM end the process from the signal handler; returns ``restore()``, which
-    puts the previous handlers back.  Off the main thread (no handler can be installed there)
-    nothing changes.
-
-    The handler runs in the main thread between two bytecodes, whatever the event loop is doing,
-    and ends the process at once (``os._exit(0)`` after flushing the two streams), without
-    stopping the loop, the server or the interpreter's finalisation, which wait for work the
-    process drops anyway.  Nothing is lost: the server writes nothing at exit (an export's files
-    appear whole or not at all).  Ctrl-C ends the server within 1 s in every state
-    (docs/commands/serve.md)."""
+    """SIGINT and SIGTERM end the process at once (``os._exit(0)`` after flushing the streams,
+    whatever the loop is doing: the server writes nothing at exit; docs/commands/serve.md, "Faults");
+    returns ``restore()``, which puts the previous handlers back.  Off the main thread nothing changes."""
     import signal
 
     if threading.current_thread() is not threading.main_thread():

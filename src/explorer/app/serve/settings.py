@@ -1,11 +1,8 @@
-"""What the page may set, read and checked: the model parameters, the energy, the integration
-settings and the crossings per click (:class:`Settings`), from the text of the page's fields or
-of the URL (:func:`parse_fields`), and the clicked starts (:func:`parse_starts`).
-
-Every value from the page goes through :mod:`explorer.model.validation` and the model's own
-checks (:class:`explorer.model.Params`), as the command line's do: a bad value raises
-:class:`~explorer.model.ParameterError` with a one-line message naming the field, and nothing is
-changed.  No value here is a file path.  Pure Python (no web library): tested without a browser.
+"""What the page may set, read and checked as the command line's values are
+(:mod:`explorer.model.validation`): the model parameters, the energy, the integration settings and
+the crossings per click (:class:`Settings`, :func:`parse_fields`), the starts (:func:`parse_starts`)
+and the view window.  A bad value raises :class:`~explorer.model.ParameterError` naming the
+field.  No web library here.
 """
 from __future__ import annotations
 
@@ -18,11 +15,9 @@ from explorer import model
 from explorer.analysis import sections
 from explorer.model import ParameterError, validation
 
-#: the model parameters the page has a field for: every row of model.PARAMETERS, mu (the
-#: circulation, Figure 4's parameter, the one most often changed) first, then the table's order
+#: the model parameters the page has a field for: mu (the one most often changed) first
 PAGE_PARAMS = ("mu",) + tuple(n for n in model.PARAM_NAMES if n != "mu")
-#: every field of the page, in the order they are shown (and written in the URL); phi0: the section
-#: phi = phi0 (any finite angle, as --phi0)
+#: every field of the page, in the order shown (and written in the URL)
 FIELDS = ("mu", "h") + PAGE_PARAMS[1:] + ("method", "tol", "dt", "crossings", "phi0")
 #: crossings per click: the page's default and its upper bound (bounded memory per orbit:
 #: 40 bytes a row in the server, about as much in the browser)
@@ -30,8 +25,7 @@ DEFAULT_CROSSINGS = 2000
 MAX_CROSSINGS = 1_000_000
 #: at most this many orbits (clicked starts) in one session
 MAX_STARTS = 256
-#: at most this many crossings on one session's page (orbits x crossings per click): about 56
-#: bytes a row in the server's copy of the page's data, so a session stays below ~0.2 GB
+#: at most this many crossings on one session's page (orbits x crossings per click; ~0.2 GB)
 MAX_SESSION_CROSSINGS = 4_000_000
 
 

@@ -1,128 +1,157 @@
-"""How a page's work runs in the background and comes back: the session's loop
-(:class:`SessionLoop`), its latest-only tasks (:class:`LatestTask`) and timers (:class:`Timer`).
-
-Every background job of a page (orbits, raster, searches, readout, manifolds, exports) is a
-:class:`LatestTask` job on a thread shared by every session (:class:`_Threads`).  A newer submit or
-a cancel supersedes the older job: its :class:`~explorer.analysis.budget.Budget` is cancelled and
-what it still hands in (:meth:`Job.post`) is dropped.  Results reach the page on the session's
-loop (Bokeh's next-tick and timeout callbacks, the document's lock held) in the order handed in;
-in a notebook they wait for :meth:`SessionLoop.poll`.  A served session's watch makes up a Bokeh
-callback that never ran (:meth:`SessionLoop._look_for_lost`; docs/commands/serve.md, "Lost
-callbacks").
+"""A page's background work on asyncio (docs/architecture.md, "The page"): :class:`Session` runs
+each kind of work as one latest-wins asyncio task on the session's event loop; the numba work of a
+task runs in :data:`EXECUTOR` (``Session.run``, the kernels release the GIL) and its results are
+applied in the task, on the loop, with the session's document locked (``Session.apply``).
 """
 from __future__ import annotations
 
-import collections
+import asyncio
 import contextlib
 import logging
-import threading
-import time
+from concurrent.futures import ThreadPoolExecutor
 from functools import partial
 
 from explorer.analysis.budget import Budget, BudgetExceeded
 
-#: a Bokeh callback not run this long after it was due is taken as lost (s): the watch runs after
-#: every callback ready before it (Bokeh's lock serves its waiters in order)
-LOST_AFTER_SECONDS = 2.0
-#: how often a served session looks for lost callbacks (ms; a Bokeh periodic callback)
-WATCH_MS = 1000
+#: the threads of every session's numba work, shared: a server holds as many as calls run at once
+WORKERS = 32
+EXECUTOR = ThreadPoolExecutor(max_workers=WORKERS, thread_name_prefix="explorer-serve")
+#: the thread that runs a page's loop of its own, while its caller waits (Session.poll): another
+#: loop may be running in the caller's thread (a notebook kernel's, Playwright's in the tests)
+_DRIVER = ThreadPoolExecutor(max_workers=1, thread_name_prefix="explorer-page-loop")
 
 _log = logging.getLogger("explorer.serve")
 
 
-class _Threads:
-    """The background threads of every session, shared: a call takes an idle thread or starts one,
-    and a thread idle for IDLE_SECONDS ends.  So a server holds as many threads as calls run at
-    once (a session's orbits, its raster, a search), never one per kind of task and session.
-    Daemon threads (not ``ThreadPoolExecutor``'s, which the interpreter joins at exit: a search no
-    one waits for would hold the exit up)."""
-
-    def __init__(self):
-        self._cond = threading.Condition()
-        self._calls: collections.deque = collections.deque()
-        self._idle = 0
-
-    def submit(self, fn) -> None:
-        with self._cond:
-            self._calls.append(fn)
-            if self._idle >= len(self._calls):
-                self._cond.notify()
-                return
-        threading.Thread(target=self._loop, name="explorer-serve-worker", daemon=True).start()
-
-    def _loop(self) -> None:
-        while True:
-            with self._cond:
-                self._idle += 1
-                while not self._calls:
-                    if not self._cond.wait(IDLE_SECONDS) and not self._calls:
-                        self._idle -= 1
-                        return
-                fn = self._calls.popleft()
-                self._idle -= 1
-            fn()
+def _in_budget(budget: Budget | None, fn, *args):
+    if budget is None:
+        return fn(*args)
+    with budget:
+        return fn(*args)
 
 
-#: a shared background thread with nothing to run this long ends (s)
-IDLE_SECONDS = 10.0
-_threads = _Threads()
-
-
-class SessionLoop:
-    """A session's event loop: ``doc``, its Bokeh document (None: a notebook, :meth:`poll`)."""
+class Session:
+    """The event loop of a page: a server's (``doc``, the page's Bokeh document, in a server
+    session), else a loop of its own that :meth:`poll` and :meth:`settle` run (a notebook, a
+    script, the tests; without a server, results apply at once)."""
 
     def __init__(self, doc=None):
-        self.doc = doc
-        self.closed = False
-        self._inbox: list = []
-        self._scheduled = 0             # next-tick callbacks added and not yet run
-        self._ran_at = time.monotonic()  # when the last of them ran (or the first was added)
-        self._lock = threading.Lock()
-        self._tasks: list[LatestTask] = []
-        self._timers: list[Timer] = []
-        self.made_up = 0                # lost callbacks made up by the watch (_watch)
-        self._watch = None
-        if doc is not None:
-            try:
-                self._watch = doc.add_periodic_callback(self._look_for_lost, WATCH_MS)
-            except (AttributeError, RuntimeError, ValueError):
-                pass                    # (a document torn down already)
+        self.doc, self.closed, self.applied = doc, False, 0
+        self.loop, self.own = None, True
+        if getattr(doc, "session_context", None) is not None:
+            with contextlib.suppress(RuntimeError):
+                self.loop, self.own = asyncio.get_running_loop(), False
+        if self.loop is None:
+            self.loop = asyncio.new_event_loop()
+        self._tasks: dict[str, tuple[asyncio.Task, Budget | None]] = {}
+        self._timers: set = set()
 
-    def post(self, action) -> None:
-        """From any thread: run ``action()`` on the loop after every action posted before it
-        (dropped once the session is closed).  The order is kept in the inbox, one action per
-        next-tick callback: Bokeh starts the callbacks added before a session is attached in a
-        set's order."""
+    # ------------------------------------------------------------ tasks
+    def start(self, name: str, coro, budget: Budget | None = None, on_error=None) -> asyncio.Task | None:
+        """Task ``name`` anew: the one running is cancelled (its budget too) and the coroutine
+        ``coro`` runs in its place (``budget``: what its :meth:`run` calls run in).  An exception
+        goes to ``on_error(exc)`` on the loop; a budget that ran out ends the task quietly."""
+        self.cancel(name)
         if self.closed:
-            return
-        with self._lock:
-            self._inbox.append(action)
-        if self.doc is not None:        # (a notebook: poll runs them)
-            self._schedule()
+            coro.close()
+            return None
+        task = self.loop.create_task(coro)
+        task.add_done_callback(partial(self._ended, on_error))
+        self._tasks[name] = (task, budget)
+        return task
 
-    def _schedule(self) -> None:
-        """One next-tick callback more, unless as many wait as actions (a refused one is made up
-        by the next)."""
-        with self._lock:
-            if self._scheduled >= len(self._inbox):
-                return
-            if not self._scheduled:
-                self._ran_at = time.monotonic()
-            self._scheduled += 1
-        try:
-            self.doc.add_next_tick_callback(lambda: self._run_oldest())
-        except (AttributeError, RuntimeError, ValueError):
-            with self._lock:            # (destroyed meanwhile: Bokeh tore the document's callbacks down)
-                self._scheduled -= 1
+    def _ended(self, on_error, task) -> None:
+        """A task's exception goes to ``on_error(exc)`` on the loop; a budget that ran out ends it
+        quietly."""
+        exc = None if task.cancelled() else task.exception()
+        if exc is None or isinstance(exc, BudgetExceeded):
+            return
+        if on_error is None:
+            _log.error("explorer serve: a task failed", exc_info=exc)
+        else:
+            self.soon(partial(on_error, exc))
+
+    def running(self, name: str) -> bool:
+        t = self._tasks.get(name)
+        return t is not None and not t[0].done()
+
+    def cancel(self, name: str) -> None:
+        """Task ``name`` stops (at its next await; its budget's compiled loops at their next step)."""
+        task, budget = self._tasks.pop(name, (None, None))
+        if task is not None:
+            task.cancel()
+        if budget is not None:
+            budget.cancel()
+
+    async def run(self, fn, *args):
+        """``fn(*args)`` in :data:`EXECUTOR`, inside the budget of the task that awaits it."""
+        me = asyncio.current_task()
+        budget = next((b for t, b in self._tasks.values() if t is me), None)
+        return await self.loop.run_in_executor(EXECUTOR, partial(_in_budget, budget, fn, *args))
+
+    async def apply(self, fn) -> None:
+        """``fn()`` on the loop with the document locked (Bokeh's ``with_locked_document``)."""
+        context = getattr(self.doc, "session_context", None)
+        if context is None:
+            fn()
+        else:
+            async def locked(doc):
+                import panel as pn
+
+                pn.state.curdoc = doc       # (as in Bokeh's callbacks: Panel writes its widgets' changes at once)
+                fn()
+            await context.with_locked_document(locked)
+        self.applied += 1
+
+    def soon(self, fn) -> None:
+        """From a widget watcher (Panel calls them outside the document's lock): ``fn()`` on the
+        loop with the lock; at once when no server owns the document."""
+        if self.doc is None:
+            fn()
+            self.applied += 1
+        elif not self.closed:
+            task = self.loop.create_task(self.apply(fn))
+            self._timers.add(task)
+            task.add_done_callback(self._done)
+
+    def _done(self, task) -> None:
+        self._timers.discard(task)
+        if not task.cancelled() and task.exception() is not None:
+            _log.error("explorer serve: a page callback failed", exc_info=task.exception())
+
+    def timer(self, action) -> Timer:
+        return Timer(self, action)
+
+    # ------------------------------------------------------------ a loop of its own
+    def poll(self, seconds: float = 0.01) -> bool:
+        """Run a loop of its own for ``seconds``; returns whether anything was applied since the
+        last call (a notebook's periodic callback pushes the page then)."""
+        if self.own and not self.loop.is_closed():
+            self._drive(asyncio.sleep(seconds))
+        applied, self.applied = self.applied, 0
+        return bool(applied)
+
+    def busy(self) -> bool:
+        """A task or a timer is pending."""
+        return any(not t.done() for t, _b in self._tasks.values()) or bool(self._timers)
+
+    def settle(self, timeout: float = 240.0) -> None:
+        """Run a loop of its own until no task or timer is pending (TimeoutError after ``timeout``)."""
+        async def idle():
+            while self.busy():
+                await asyncio.sleep(0.005)
+        self._drive(asyncio.wait_for(idle(), timeout))
+
+    def _drive(self, coro) -> None:
+        _DRIVER.submit(self.loop.run_until_complete, coro).result()
 
     @contextlib.contextmanager
     def bokeh_sends(self):
         """On the loop: the changes made within go to the browser through Bokeh's own dispatch
-        (the document held, ``Document.hold("collect")``, until the block ends), not Panel's
-        writer, which may leave a message queued for a busy socket unsent (panel 1.9;
-        tests/app/test_serve.py, a Panel that loses its own writes).  Not for a block that
-        replaces a source's data and then streams to it (the rows would arrive twice).  Without
-        a document, or within a hold, the block just runs."""
+        (the document held, ``Document.hold("collect")``), not Panel's writer, which may leave a
+        message queued for a busy socket unsent (panel 1.9; tests/app/lossy_panel_serve.py).  Not
+        for a block that replaces a source's data and then streams to it (the rows would arrive
+        twice).  Without a document, or within a hold, the block just runs."""
         doc = self.doc
         if doc is None or doc.callbacks.hold_value is not None:
             yield
@@ -133,230 +162,55 @@ class SessionLoop:
         finally:
             doc.unhold()
 
-    def _run_oldest(self) -> None:
-        with self._lock:
-            self._scheduled = max(self._scheduled - 1, 0)
-            self._ran_at = time.monotonic()
-            action = self._inbox.pop(0) if self._inbox else None
-        if action is not None:
-            action()
-        if self.doc is not None and not self.closed:
-            self._schedule()
-
-    def soon(self, action) -> None:
-        """From a widget watcher (Panel calls them outside the document's lock): ``action()`` on the
-        loop with the lock; at once when no server owns the document."""
-        if self.doc is None:
-            action()
-        else:
-            self.post(action)
-
-    def _look_for_lost(self) -> None:
-        """The watch (every WATCH_MS): a next-tick callback waiting while none has run for
-        LOST_AFTER_SECONDS, or a timer that long past due, was lost and is made up now, with a
-        warning in the server's log."""
-        if self.closed:
-            return
-        now = time.monotonic()
-        with self._lock:
-            stranded = bool(self._inbox) and self._scheduled > 0 and now - self._ran_at > LOST_AFTER_SECONDS
-            if stranded:
-                lost, self._scheduled = self._scheduled, 0
-        if stranded:
-            self.made_up += 1
-            _log.warning("explorer serve: %d next-tick callback(s) lost; made up", lost)
-            self._schedule()
-        for timer in list(self._timers):
-            late = timer.make_up_if_lost(now)
-            if late is not None:
-                self.made_up += 1
-                _log.warning("explorer serve: a timer's callback lost (%.1f s past due); made up", late)
-
-    def poll(self) -> bool:
-        """Run what was handed in since the last call (a notebook's periodic callback); returns
-        whether there was anything."""
-        with self._lock:
-            actions, self._inbox = self._inbox, []
-        for action in actions:
-            action()
-        return bool(actions)
-
-    def task(self, name: str) -> LatestTask:
-        t = LatestTask(self, name)
-        self._tasks.append(t)
-        return t
-
-    def timer(self, action) -> Timer:
-        t = Timer(self, action)
-        self._timers.append(t)
-        return t
-
-    def close(self, wait: bool = False) -> None:
-        """The session is gone: every task cancelled and its thread ended (``wait``: joined)."""
+    def close(self) -> None:
+        """The session is gone: every task and timer cancelled (a loop of its own: closed)."""
         self.closed = True
-        if self._watch is not None:
-            try:
-                self.doc.remove_periodic_callback(self._watch)
-            except (AttributeError, RuntimeError, ValueError):
-                pass                    # (Bokeh removed it with the session)
-            self._watch = None
-        for t in self._tasks:
-            t.stop(wait)
-
-
-class Job:
-    """What a running job sees of its task: its ``generation`` and ``budget``."""
-
-    def __init__(self, task: LatestTask, generation: int, budget: Budget | None):
-        self.task, self.generation, self.budget = task, generation, budget
-
-    @property
-    def current(self) -> bool:
-        """No newer job (nor a cancel) superseded this one."""
-        return self.generation == self.task.generation
-
-    def post(self, action) -> None:
-        """``action()`` on the loop, if this job is still the current one when it gets there."""
-        if self.current:
-            self.task.loop.post(lambda: action() if self.current else None)
-
-
-class LatestTask:
-    """One kind of background job of a session: the latest request only (module docstring).  Its
-    jobs run one after the other, each on a shared thread (:class:`_Threads`)."""
-
-    def __init__(self, loop: SessionLoop, name: str):
-        self.loop, self.name = loop, name
-        self.generation = 0
-        self._lock = threading.Lock()
-        self._budget: Budget | None = None
-        self._queue: collections.deque = collections.deque()
-        self._idle = threading.Event()        # no job queued or running
-        self._idle.set()
-        self._stopped = False
-
-    def submit(self, work, *args, budget: Budget | None = None, on_error=None) -> Job:
-        """Supersede the current job and run ``work(job, *args)`` in the background, inside ``budget``
-        if given.  An exception of a current job goes to ``on_error(exc)`` on the loop; a budget
-        that ran out or was cancelled ends the job quietly."""
-        with self._lock:
-            self._supersede()
-            self._budget = budget
-            return self._start(work, args, budget, on_error)
-
-    def run(self, work, *args, on_error=None) -> Job:
-        """Run ``work(job, *args)`` as a job of the current generation, after the jobs already
-        queued; a cancel stops them all."""
-        with self._lock:
-            return self._start(work, args, None, on_error)
-
-    def _start(self, work, args, budget, on_error) -> Job:
-        job = Job(self, self.generation, budget)
-        if not self._stopped:
-            self._queue.append((job, work, args, on_error))
-            if self._idle.is_set():
-                self._idle.clear()
-                _threads.submit(self._drain)
-        return job
-
-    def _drain(self) -> None:
-        while True:
-            with self._lock:
-                if not self._queue:
-                    self._idle.set()
-                    return
-                item = self._queue.popleft()
-            self._run(*item)
-
-    def _supersede(self) -> None:
-        self.generation += 1
-        if self._budget is not None:
-            self._budget.cancel()
-            self._budget = None
-
-    def cancel(self) -> int:
-        """No current job any more (the running one stops); returns the new generation."""
-        with self._lock:
-            self._supersede()
-            return self.generation
-
-    def stop(self, wait: bool = False) -> None:
-        """No job any more (the queued ones return at once); ``wait``: until the running one has."""
-        with self._lock:
-            self._stopped = True
-            self._supersede()
-        if wait:
-            self.join()
-
-    def join(self, timeout: float | None = None) -> bool:
-        """Wait until no job of this task is queued or running; returns whether none is."""
-        return self._idle.wait(timeout)
-
-    @staticmethod
-    def _run(job: Job, work, args, on_error) -> None:
-        if not job.current:
-            return                      # superseded while it waited
-        try:
-            if job.budget is None:
-                work(job, *args)
-            else:
-                with job.budget:
-                    work(job, *args)
-        except BudgetExceeded:
-            return
-        except Exception as exc:  # noqa: BLE001 - reported in the page; the server keeps serving
-            if on_error is not None:
-                job.post(partial(on_error, exc))
+        for name in list(self._tasks):
+            self.cancel(name)
+        for t in list(self._timers):
+            t.cancel()
+        if self.own and not self.loop.is_closed() and not self.loop.is_running():
+            self._drive(asyncio.sleep(0))
+            self.loop.close()
 
 
 class Timer:
     """``action()`` on the loop at a time (:meth:`at`), at most one due: an earlier request
     supersedes a later one, a later one leaves an earlier one be."""
 
-    def __init__(self, loop: SessionLoop, action):
-        self.loop, self.action = loop, action
-        self.due: float | None = None         # (monotonic) when the pending call runs
-        self.generation = 0
-        self._bokeh_timeout = False           # the pending call is a Bokeh timeout callback
+    def __init__(self, session: Session, action):
+        self.session, self.action = session, action
+        self.due: float | None = None          # (loop time = time.monotonic) of the pending call
+        self._handle = None
 
     @property
     def pending(self) -> bool:
         return self.due is not None
 
-    def at(self, when: float, reentrant: bool = True) -> None:
-        """On the loop: run the action at ``when`` (time.monotonic): now if it is due and
-        ``reentrant``, else at the next tick once it is due (in a notebook: at the next poll)."""
-        if self.due is not None and self.due <= when:
+    def at(self, when: float) -> None:
+        if self.due is not None and self.due <= when or self.session.closed:
             return
-        self.generation += 1
-        g, self.due = self.generation, when
-        wait = when - time.monotonic()
-        doc = self.loop.doc
-        self._bokeh_timeout = False
-        if wait < 0.001 and reentrant:
-            self._fire(g)
-        elif doc is None or wait < 0.001:
-            self.loop.post(lambda: self._fire(g))     # (the loop's watch covers a post: SessionLoop)
-        else:
-            self._bokeh_timeout = True
-            doc.add_timeout_callback(lambda: self._fire(g), max(int(1000 * wait) + 1, 1))
-
-    def make_up_if_lost(self, now: float) -> float | None:
-        """On the loop (SessionLoop's watch): if the pending Bokeh timeout callback is more than
-        LOST_AFTER_SECONDS past due, it was lost: run the action now and return how late it was
-        (the lost callback, should it come after all, is stale); else None."""
-        if self.due is None or not self._bokeh_timeout or now - self.due <= LOST_AFTER_SECONDS:
-            return None
-        late = now - self.due
-        self.generation += 1
-        self._fire(self.generation)
-        return late
+        self.cancel()
+        self.due = when
+        self._handle = self.session.loop.call_at(when, self._fire)
+        self.session._timers.add(self)
 
     def cancel(self) -> None:
-        self.generation += 1
-        self.due = None
+        if self._handle is not None:
+            self._handle.cancel()
+        self._handle = self.due = None
+        self.session._timers.discard(self)
 
-    def _fire(self, g: int) -> None:
-        if g == self.generation:
+    def _fire(self) -> None:
+        self._handle = None
+        self.session._timers.discard(self)
+        if self.session.doc is None:
             self.due = None
             self.action()
+            self.session.applied += 1
+        else:
+            self.session.soon(self._locked)
+
+    def _locked(self) -> None:
+        self.due = None
+        self.action()
