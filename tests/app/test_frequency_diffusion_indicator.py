@@ -117,14 +117,14 @@ def _layer_page(args):
 
 
 def _complete(page):
-    d = page.raster_source.data
+    d = page.chaos.raster_source.data
     return bool(d["n"]) and d["complete"][0] and d["n"][0] == LAYER_N
 
 
 def _inside_seeds(page):
     """The cells of the layer's raster inside the allowed region: (mask (n, n), their centres (k, 2))."""
     s = page.settings
-    P1, P2 = page.window.centres(LAYER_N)
+    P1, P2 = page.section.window.centres(LAYER_N)
     inside = model.section_M2(s.params, P1, P2, s.h, s.phi0) > 0.0
     return inside, np.column_stack([P1[inside], P2[inside]])
 
@@ -138,7 +138,7 @@ def test_the_browsers_frequency_diffusion_layer_shows_the_functions_values_aroun
     page = _layer_page({})
     try:
         page.chaos.indicator.value = "frequency_diffusion"
-        page.layer.value = True
+        page.chaos.layer.value = True
         _poll_until(page, lambda: _complete(page))
         settings, point, elliptic = page.chaos.center
         assert settings == page.settings and elliptic
@@ -147,17 +147,17 @@ def test_the_browsers_frequency_diffusion_layer_shows_the_functions_values_aroun
         assert abs(np.trace(sm.jacobian(point))) < 2.0                          # ... and elliptic
         inside, seeds = _inside_seeds(page)
         want = ex.frequency_diffusion(sm, seeds, center=point, iterates=ITERATES)
-        got = np.asarray(page.raster_source.data["image"][0])
+        got = np.asarray(page.chaos.raster_source.data["image"][0])
         assert len(seeds) > 32                                                  # more than one batch
         np.testing.assert_array_equal(got[inside], want)                        # bit for bit
         assert np.isnan(got[~inside]).all() and np.isfinite(got[inside]).mean() > 0.8
-        title = page.colour_bar.title
+        title = page.chaos.colour_bar.title
         assert "ν1 − ν2" in title and f"{point[0]:.4g}" in title and "elliptic" in title
         q = page.url_query()
         assert q["indicator"] == "frequency_diffusion" and q["megno"] == "1"
         again = _layer_page(q)                                   # the link reopens the same layer
         try:
-            assert again.chaos.indicator.value == "frequency_diffusion" and again.layer.value
+            assert again.chaos.indicator.value == "frequency_diffusion" and again.chaos.layer.value
         finally:
             again.close()
     finally:
@@ -172,28 +172,28 @@ def test_choosing_the_chaos_layers_indicator_changes_its_values_scale_and_label(
     page = _layer_page({"megno": "1"})
     try:
         _poll_until(page, lambda: _complete(page))
-        megno = np.asarray(page.raster_source.data["image"][0])
-        ref = list(raster.rasters(page.settings, page.window, resolutions=(LAYER_N,)))[-1]
+        megno = np.asarray(page.chaos.raster_source.data["image"][0])
+        ref = list(raster.rasters(page.settings, page.section.window, resolutions=(LAYER_N,)))[-1]
         np.testing.assert_array_equal(megno, ref.values)
-        assert page.colour_bar.title.startswith("⟨Y⟩") and (page.chaos.mapper.low, page.chaos.mapper.high) == (
+        assert page.chaos.colour_bar.title.startswith("⟨Y⟩") and (page.chaos.mapper.low, page.chaos.mapper.high) == (
             MEGNO_LOW, MEGNO_HIGH)
         assert page.url_query()["indicator"] == "megno"
         assert page.overlays_on()[-1] == "megno"
         page.chaos.indicator.value = "frequency_diffusion"               # the choice: a new raster
-        assert page.raster_source.data["n"] == []                       # (MEGNO's values gone at once)
+        assert page.chaos.raster_source.data["n"] == []                       # (MEGNO's values gone at once)
         _poll_until(page, lambda: _complete(page) and page.chaos.center is not None)
-        fd = np.asarray(page.raster_source.data["image"][0])
+        fd = np.asarray(page.chaos.raster_source.data["image"][0])
         inside = np.isfinite(megno)
         assert np.isfinite(fd[inside]).mean() > 0.8 and np.nanmax(fd) <= 0.5      # log10 |nu1 - nu2|, not <Y>
         # the same orbits, another indicator: the cells MEGNO calls regular drift less in frequency
         regular, chaotic = inside & (megno < 3.0), inside & (megno > 8.0)
         assert regular.sum() >= 3 and chaotic.sum() >= 10
         assert np.nanmedian(fd[regular]) < np.nanmedian(fd[chaotic]) - 1.0
-        assert "ν1 − ν2" in page.colour_bar.title and page.chaos.mapper.low < -10
+        assert "ν1 − ν2" in page.chaos.colour_bar.title and page.chaos.mapper.low < -10
         assert page.url_query()["indicator"] == "frequency_diffusion"
         assert page.overlays_on()[-1] == "frequency_diffusion"           # the exported scene says which
         page.chaos.indicator.value = "megno"                             # and back
-        _poll_until(page, lambda: _complete(page) and np.array_equal(page.raster_source.data["image"][0], megno,
+        _poll_until(page, lambda: _complete(page) and np.array_equal(page.chaos.raster_source.data["image"][0], megno,
                                                                      equal_nan=True))
     finally:
         page.close()
