@@ -73,6 +73,7 @@ def test_deviation_vectors_agree_with_scipy_on_the_hand_written_variational_equa
     assert res.fli[0] >= np.log(np.linalg.norm(v)) - 1e-9
 
 
+@pytest.mark.cpu_dependent   # a classification by thresholds (tests/conftest.py)
 def test_a_regular_orbit_has_megno_near_2_small_exponent_and_sali_gali2_away_from_0(four):
     T = 1000.0
     for i in (0, 3):
@@ -81,6 +82,7 @@ def test_a_regular_orbit_has_megno_near_2_small_exponent_and_sali_gali2_away_fro
         assert four.sali[i] > 1e-2 and four.gali2[i] > 1e-2
 
 
+@pytest.mark.cpu_dependent   # a classification by thresholds (tests/conftest.py)
 def test_a_chaotic_orbit_has_megno_growing_as_half_the_exponent_times_t_and_sali_gali2_fall_to_0(four):
     T = 1000.0
     for i in (1, 2):
@@ -113,6 +115,7 @@ def test_two_harmonic_oscillators_rotate_the_deviation_vectors_so_megno_and_the_
     np.testing.assert_allclose(res.gali2, 1.0, atol=1e-10)
 
 
+@pytest.mark.cpu_dependent   # a classification by thresholds (tests/conftest.py)
 def test_the_lorenz_system_without_energy_has_the_published_exponent_and_a_nan_energy_error():
     # sigma = 10, rho = 28, beta = 8/3: lambda_1 = 0.9056 (Viswanath 1998; Sprott 2003, Chaos and
     # Time-Series Analysis, Table A.1); the mean finite-time exponent of three orbits over T = 2000
@@ -163,6 +166,7 @@ def test_an_orbit_out_of_steps_ends_with_max_steps_at_the_time_it_reached(hh):
     assert np.isfinite(res.megno[0])
 
 
+@pytest.mark.cpu_dependent   # a classification by thresholds (tests/conftest.py)
 def test_early_stop_ends_a_chaotic_orbit_by_sali_and_not_a_regular_one(hh):
     res = ex.indicators(hh, states=[CHAOTIC_CT, REGULAR], tmax=2000.0, which=("megno", "sali"), early_stop=True)
     assert res.early[0] > 0 and res.time[0] < 2000.0
@@ -198,3 +202,24 @@ def test_states_of_the_wrong_shape_and_states_beside_a_map_are_refused(hh):
     smap = ex.SectionMap(hh, 1/8, section=x, direction=+1, coords=(y, py), solve=px)
     with pytest.raises(ParameterError, match="states"):
         ex.indicators(smap, states=[REGULAR])
+
+
+def test_an_orbit_reaching_a_pole_stops_with_the_step_underflow_or_non_finite_status():
+    # dw/dt = 1/s, ds/dt = 1 from s = -1: the pole at t = 1 (the crossings' example, docs/systems.md)
+    s, w = sp.symbols("s w")
+    pole = ex.System({s: sp.Integer(1), w: 1 / s}, name="pole")
+    res = ex.indicators(pole, states=[[-1.0, 0.0]], tmax=3.0, which=("megno",))
+    assert res.status_of(0) in (Status.STEP_UNDERFLOW, Status.NONFINITE)
+    assert abs(res.time[0] - 1.0) < 1e-6 and np.isnan(res.energy_error[0])
+
+
+def test_the_example_of_docs_systems_md_chaos_indicators_runs():
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[2] / "docs" / "systems.md").read_text()
+    if "## Chaos indicators" not in page:
+        pytest.skip("docs/systems.md has no section 'Chaos indicators' yet")
+    block = page.split("## Chaos indicators", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
+    namespace = {}
+    exec(compile(block, "docs/systems.md", "exec"), namespace)   # its own asserts check the result
+    assert namespace["res"].megno.shape == (2,) and namespace["megno"].shape == (2,)
