@@ -140,10 +140,12 @@ MAP_SCENE = textwrap.dedent(f"""\
     time = 40.0
     tol = 1e-12
     map_resolution = 6
+    indicators = ["fli"]
+    map_indicator = "fli"
     """)
 
 
-def test_a_megno_map_stores_the_indicators_of_the_raster_cells_on_the_energy_surface_and_draws_them(workdir, capsys):
+def test_a_chaos_map_stores_the_indicators_of_the_raster_cells_on_the_energy_surface_and_draws_them(workdir, capsys):
     (workdir / "map.toml").write_text(MAP_SCENE)
     code, out, err = run(["sweep", "map.toml", "--out", "res/map.h5", "--quiet"], capsys)
     assert code == 0, err
@@ -154,8 +156,9 @@ def test_a_megno_map_stores_the_indicators_of_the_raster_cells_on_the_energy_sur
     A, B = np.meshgrid(-0.45 + 1.1 * cells, -0.52 + 1.04 * cells)
     on_surface = [p for p in zip(A.ravel(), B.ravel()) if 0.5 * p[1] ** 2 + 0.5 * p[0] ** 2 - p[0] ** 3 / 3 < E]
     np.testing.assert_allclose(pd.seeds, np.array(on_surface), rtol=0, atol=1e-15)   # the cells with H(0, y, 0, py) < E
-    ref = ex.indicators(smap, pd.seeds, tmax=40.0, tol=1e-12, which=("megno",))
+    ref = ex.indicators(smap, pd.seeds, tmax=40.0, tol=1e-12, which=("megno", "fli"))
     np.testing.assert_array_equal(pd.extra["megno"], ref.values["megno"])
+    np.testing.assert_array_equal(pd.extra["fli"], ref.values["fli"])
     assert pd.attrs["map_resolution"] == 6 and np.all(pd.extra["lyapunov_status"] == 0)
     assert (workdir / "res" / "map_map.png").exists()
 

@@ -64,7 +64,7 @@ def _union(boxes):
 
 def draw_system_figure(scene, out_path, stem, text=None):
     """Read the store of a System's scene and draw its figures (PNG and PDF, ``text`` chunks in the
-    PNG): ``stem`` (sections), ``stem``_map (the MEGNO map of a ``map_resolution`` grid) and
+    PNG): ``stem`` (sections), ``stem``_map (the map of ``map_indicator`` on a ``map_resolution`` grid) and
     ``stem``_fraction (the stored chaotic fractions of more than one panel).  Returns the paths."""
     data = store.read_store(out_path)
     fs = scene.figure
@@ -80,6 +80,7 @@ def draw_system_figure(scene, out_path, stem, text=None):
                                     marker_size=fs.marker_size, dpi=fs.dpi, window=scene.seeds.window)
         paths += figures.save_figure(fig, stem, text=text)
     if "lyapunov" in scene.compute:
+        ind = scene.lyapunov.map_indicator
         rasters, fractions = [], []
         for i, pd in sorted(data.panels.items()):
             if i >= scene.n_panels or "megno" not in pd.extra:
@@ -89,11 +90,12 @@ def draw_system_figure(scene, out_path, stem, text=None):
             fractions.append((scene.sweep_values[i] if scene.sweep_values else 0.0, *fraction))
             if "map_resolution" in a:
                 grid = (int(a["map_resolution"]), *(float(v) for v in a["map_p1"]), *(float(v) for v in a["map_p2"]))
-                rasters.append({"seeds": pd.extra.get("lyapunov_seeds", pd.seeds), "values": pd.extra["megno"],
+                values = pd.extra[ind] if ind in pd.extra else pd.extra["megno"]
+                rasters.append({"seeds": pd.extra.get("lyapunov_seeds", pd.seeds), "values": values,
                                 "grid": grid, "params": None, "h": scene.panel(i)[1], "axes": scene.coords,
                                 "label": scene.panel(i)[2] or scene.system.name, "fraction": fraction[0]})
         if rasters:
-            fig = chaos_rasters(rasters, indicator="megno", threshold=scene.lyapunov.threshold, columns=fs.columns,
+            fig = chaos_rasters(rasters, indicator=ind, threshold=scene.lyapunov.threshold, columns=fs.columns,
                                 dpi=fs.dpi)
             paths += figures.save_figure(fig, stem.with_name(stem.name + "_map"), text=text)
         if len(fractions) > 1:

@@ -38,6 +38,7 @@ from explorer.io.scene.schema import (
     MAX_SEEDS,
 )
 from explorer.io.scene.specs import FigureSpec
+from explorer.kernels.indicator_table import TANGENT_NAMES
 from explorer.model import ParameterError
 
 #: the keys of a System's scene (the tables of Chaplygin's model, [model], [energy] h, [manifolds],
@@ -47,7 +48,7 @@ SYSTEM_TOP_KEYS = ("name", "description", "system", "section", "direction", "coo
 SYSTEM_SEED_KINDS = ("grid", "random", "points")
 _SEED_KEYS = ("kind", "n", "seed", "points", "window")
 _INTEGRATION_KEYS = ("method", "crossings", "tol", "tmax", "max_steps")
-_LYAPUNOV_KEYS = ("time", "tol", "threshold", "map_resolution")
+_LYAPUNOV_KEYS = ("time", "tol", "threshold", "map_resolution", "indicators", "map_indicator")
 _COMPUTE_KEYS = ("sections", "lyapunov")
 #: the swept name of the energy level (a parameter of the system may not take it)
 ENERGY = "energy"
@@ -238,14 +239,16 @@ class SystemIntegration:
 
 @dataclass(frozen=True)
 class SystemLyapunov:
-    """[lyapunov] of a System's scene: MEGNO <Y> over ``time`` (Taylor ``tol``) of every seed, or of
-    the cell centres of a ``map_resolution``^2 raster of [seeds] window; ``threshold`` classifies."""
+    """[lyapunov] of a System's scene: ``indicators`` (MEGNO <Y> always) over ``time`` (Taylor
+    ``tol``) of every seed, or of the cell centres of a ``map_resolution``^2 raster of [seeds]
+    window, drawn by ``map_indicator``; ``threshold`` classifies by <Y>."""
 
     time: float = 1000.0
     tol: float = 1e-12
     threshold: float = 4.0
     map_resolution: int = 0
     indicators: tuple = ("megno",)
+    map_indicator: str = "megno"
 
     method = "taylor"
 
@@ -257,10 +260,12 @@ class SystemLyapunov:
         object.__setattr__(self, "threshold", _real("lyapunov.threshold", self.threshold, 2.0, lo_open=True))
         object.__setattr__(self, "map_resolution",
                            _int("lyapunov.map_resolution", self.map_resolution, 0, MAX_MAP_RESOLUTION))
-
-    @property
-    def map_indicator(self) -> str:
-        return "megno"
+        names = [_choice(f"lyapunov.indicators[{i}]", q, TANGENT_NAMES)
+                 for i, q in enumerate(_list("lyapunov.indicators", self.indicators))]
+        object.__setattr__(self, "indicators", tuple(dict.fromkeys(["megno", *names])))
+        if self.map_indicator not in self.indicators:
+            _fail("lyapunov.map_indicator", f"must be one of lyapunov.indicators {list(self.indicators)}; "
+                  f"got {_short(self.map_indicator)}")
 
     def used_dict(self) -> dict:
         d = {"time": self.time, "tol": self.tol, "indicators": list(self.indicators)}
@@ -422,7 +427,7 @@ class SystemScene:
     def figure_settings(self) -> str:
         d: dict = {"figure": self.figure.to_dict(), "coords": list(self.coords)}
         if "lyapunov" in self.compute:
-            d["threshold"] = self.lyapunov.threshold
+            d.update(threshold=self.lyapunov.threshold, map_indicator=self.lyapunov.map_indicator)
         return _canonical_json(d)
 
 
@@ -491,7 +496,10 @@ def system_scene_from_dict(data: dict, text: str = "", system=None) -> SystemSce
     comp = _table("compute", data.get("compute", {}), _COMPUTE_KEYS)
     kw["compute"] = tuple(q for q, default in (("sections", True), ("lyapunov", False))
                           if _bool(f"compute.{q}", comp.get(q, default)))
-    kw["lyapunov"] = SystemLyapunov(**_table("lyapunov", data.get("lyapunov", {}), _LYAPUNOV_KEYS))
+    ly = dict(_table("lyapunov", data.get("lyapunov", {}), _LYAPUNOV_KEYS))
+    if "indicators" in ly:
+        ly["indicators"] = tuple(_list("lyapunov.indicators", ly["indicators"]))
+    kw["lyapunov"] = SystemLyapunov(**ly)
     fig = dict(_table("figure", data.get("figure", {}), _FIGURE_KEYS))
     if "own_scale" in fig:
         fig["own_scale"] = tuple(_list("figure.own_scale", fig["own_scale"], min_len=0))
