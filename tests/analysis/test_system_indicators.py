@@ -87,7 +87,7 @@ def test_a_chaotic_orbit_has_megno_growing_as_half_the_exponent_times_t_and_sali
     T = 1000.0
     for i in (1, 2):
         assert four.mlce[i] > 0.02
-        assert four.megno[i] > 20.0
+        assert four.megno[i] > 10.0   # 23 to 78 over start perturbations of 1e-13
         assert abs(four.megno[i] - four.mlce[i] * T / 2) < 0.2 * four.mlce[i] * T / 2   # Cincotta & Simó 2000
         assert four.sali[i] < 1e-8 and four.gali2[i] < 1e-8
     assert np.all(four.status == Status.DONE) and np.all(four.time == T)
