@@ -7,12 +7,12 @@ import functools
 import inspect
 import math
 import numbers
-from dataclasses import dataclass
 
 import numpy as np
 
 from explorer import model
 from explorer.analysis import budget, system_sections
+from explorer.analysis.map_result import RETURN_TMAX, MapResult
 from explorer.integrate.methods import MAP_TOL, MAX_TOL, MIN_TOL
 from explorer.integrate.tangent import return_map_taylor
 from explorer.kernels import STATUS_CANCELLED, STATUS_DONE, STATUS_NAMES
@@ -25,19 +25,8 @@ __all__ = ["DEFAULT_TOL", "MAP_SETTINGS", "MAX_STEPS", "RETURN_TMAX", "MapResult
 
 #: Taylor tolerance of the section map: the tightest the order rule allows
 DEFAULT_TOL = MAP_TOL
-#: time and step budgets of one return of the map
-RETURN_TMAX = 1e3
+#: step budget of one return of the map (the time budget: RETURN_TMAX)
 MAX_STEPS = 10**8
-
-
-@dataclass(frozen=True)
-class MapResult:
-    """One application of the section map."""
-
-    point: np.ndarray
-    jacobian: np.ndarray   # None when not asked for
-    time: float            # signed return time
-    state: np.ndarray      # (p1, p2, M, g1, g2) at the crossing
 
 
 class SectionMap:
