@@ -18,7 +18,7 @@ map's domain is where one has.  A System's map has 4 state variables (2 degrees 
 coords, solve and fixed.
 
 The map is an :class:`explorer.analysis.maps.AreaPreservingMap`: ``smap(x)`` is a
-:class:`~explorer.analysis.section_map.MapResult` with the Jacobian of the 2-D map, from the
+:class:`~explorer.analysis.map_result.MapResult` with the Jacobian of the 2-D map, from the
 variational equations (``System.variational(2)``) integrated to the next crossing: the monodromy
 Phi applied to the lift of the unit vectors of coords (tangent to the section and the energy level,
 by the implicit function theorem), corrected for the crossing time, ``(I - f a^T/(a . f)) Phi``
@@ -37,7 +37,7 @@ import numbers
 
 import numpy as np
 
-from explorer.analysis.section_map import RETURN_TMAX, MapResult
+from explorer.analysis.map_result import RETURN_TMAX, MapResult
 from explorer.analysis.system_sections import is_system, linear_section, system_crossings
 from explorer.integrate.methods import MAP_TOL, MAX_TOL, MIN_TOL
 from explorer.kernels import STATUS_NAMES
