@@ -46,7 +46,7 @@ from pathlib import Path
 
 import sympy as sp
 
-from explorer.integrate import codegen_crossings, codegen_indicators, codegen_lanes
+from explorer.integrate import codegen_crossings, codegen_flow, codegen_indicators, codegen_lanes
 from explorer.model.system import System
 from explorer.model.validation import ParameterError
 
@@ -58,7 +58,7 @@ GENERATOR_VERSION = 8
 #: the modules that append drivers to the generated source: each has ``render(system) -> str``, code
 #: that calls the recurrence (``taylor_coefficients_into``, ``taylor_coefficients_lanes``, ``energy``)
 #: and is compiled beside it, so that numba's cache of it follows the recurrence
-TEMPLATES = (codegen_crossings, codegen_indicators, codegen_lanes)
+TEMPLATES = (codegen_crossings, codegen_indicators, codegen_lanes, codegen_flow)
 
 #: the elementary operations and their recurrence at order k >= 1 (Jorba & Zou 2005)
 RULES = {
