@@ -41,6 +41,7 @@ _EXPORTS = {
     "METHODS": "explorer.analysis.sections",
     "Crossings": "explorer.analysis.sections",
     "crossings": "explorer.analysis.sections",
+    "flow": "explorer.analysis.system_flow",      # a System's orbits at given times
     "iter_crossings": "explorer.analysis.sections",
     "propagate": "explorer.analysis.sections",
     "CrossingBlock": "explorer.analysis.sections",

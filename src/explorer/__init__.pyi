@@ -96,6 +96,9 @@ from explorer.analysis.sections import (
 from explorer.analysis.sections import (
     propagate as propagate,
 )
+from explorer.analysis.system_flow import (
+    flow as flow,
+)
 from explorer.analysis.transport import (
     exit_times as exit_times,
 )
