@@ -99,7 +99,7 @@ def system_indicators(system, y0=None, *, states=None, tmax: float, method, tol:
         if y0 is not None and states is not None:
             raise ParameterError("indicators of a System: give the start states once (states=)")
         Y0 = _states(system, states if states is not None else y0)
-        smap, system = None, system
+        smap = None
     else:
         if states is not None:
             raise ParameterError("indicators of a System's SectionMap takes section points, not states=; "
