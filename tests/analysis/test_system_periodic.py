@@ -81,12 +81,26 @@ def test_a_period_2_orbit_is_found_by_newton_and_returns_to_itself(smap, ellipti
     assert pr.find_periodic_orbit(smap, elliptic.point, 2).period == 1
 
 
-def test_the_search_on_the_symmetry_line_finds_both_fixed_points(smap, elliptic, hyperbolic):
+def test_the_search_finds_the_fixed_points_and_their_copies_under_the_threefold_symmetry(smap, elliptic, hyperbolic):
+    """Seeds on the symmetry line py = 0 and grid minima over the domain: both fixed points, and the
+    orbits that Hénon–Heiles' rotation by 2 pi/3 in (x, y) makes of them, which cross x = 0 elsewhere
+    with the same multipliers."""
     seeds = pr.symmetry_line_points(smap, 1, n=24)
     assert seeds.shape == (24, 2) and np.all(seeds[:, 1] == 0.0)
-    found = pr.search_periodic_orbits(smap, 1, line=24, guesses=seeds[(seeds[:, 0] > -0.25) & (seeds[:, 0] < 0.35)])
+    found = pr.search_periodic_orbits(smap, 1, grid=6, line=12, max_guesses=12)
     for fp in (elliptic, hyperbolic):
         assert any(o.distance_to(fp.point) <= 1e-8 for o in found)
+        copies = [o for o in found if o.distance_to(fp.point) > 1e-3 and abs(o.trace - fp.trace) <= 1e-8]
+        assert copies, f"no copy of the orbit through {fp.point} (trace {fp.trace})"
+
+
+def test_the_elliptic_point_is_continued_in_the_energy(smap, elliptic):
+    br = pr.continue_periodic(smap, 1, "energy", E, E + 0.01, 0.005, elliptic.points)
+    assert br.stopped is None and np.allclose(br.values, [E, E + 0.005, E + 0.01])
+    for v, o in zip(br.values, br.orbits):
+        at = smap.with_value("energy", v)
+        assert np.max(np.abs(at(o.points[0], jacobian=False).point - o.points[0])) <= 1e-10
+    assert br.traces[0] == pytest.approx(elliptic.trace, abs=1e-9) and len(set(np.round(br.traces, 6))) == 3
 
 
 def test_rotation_numbers_around_the_elliptic_point_tend_to_its_linear_value(smap, elliptic):

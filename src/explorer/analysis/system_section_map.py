@@ -372,7 +372,8 @@ class SystemSectionMap:
         flow = _flow(self.system, backward, jacobian)
         direction = -self.direction if backward else self.direction
         data, count, status, *_ = system_crossings(flow, Y, n_crossings=n, section=self.section.expr,
-                                                   direction=direction, tol=self.tol, tmax=self.tmax * n)
+                                                   direction=direction, tol=self.tol, tmax=self.tmax * n,
+                                                   threads=1 if len(Y) == 1 else None)
         return data, count, status
 
     def __call__(self, x, *, backward=False, jacobian=True) -> MapResult:
