@@ -8,9 +8,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from explorer.analysis.maps import images
+from explorer.analysis.maps import AreaPreservingMap, images
 from explorer.analysis.periodic import PeriodicOrbit, find_periodic_orbit
-from explorer.analysis.section_map import SectionMap, system_first
+from explorer.analysis.section_map import system_first
 from explorer.model import ParameterError, validation
 
 __all__ = ["DEFAULT_MAX_ANGLE", "DEFAULT_MAX_GAP", "DEFAULT_MAX_GAP_ANGLE", "DEFAULT_START_TOL", "Homoclinic",
@@ -54,7 +54,7 @@ class Saddle:
     eigenvalues: np.ndarray
     e_unstable: np.ndarray
     e_stable: np.ndarray
-    smap: SectionMap
+    smap: AreaPreservingMap
     orbit_points: np.ndarray
 
 
@@ -557,7 +557,7 @@ def heteroclinic_points(unstable: ManifoldBranch, stable: ManifoldBranch, *, max
     return _intersections(unstable, stable, max_residual, balance=True)
 
 
-def homoclinic_orbit(smap: SectionMap, point, n=8) -> np.ndarray:
+def homoclinic_orbit(smap: AreaPreservingMap, point, n=8) -> np.ndarray:
     """P^-n(x), ..., x, ..., P^n(x) of a homoclinic point x: a (2n + 1, 2) array."""
     n = validation.integer("n", n, 0)
     back = smap.iterate(point, n, backward=True)[::-1]

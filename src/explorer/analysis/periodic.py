@@ -12,7 +12,7 @@ import numpy as np
 from explorer import model
 from explorer.analysis.continuation import continuation_values, golden_section_max, secant_follower
 from explorer.analysis.halfturn import partner_points
-from explorer.analysis.maps import difference, images, is_section_map
+from explorer.analysis.maps import AreaPreservingMap, difference, images, is_section_map
 from explorer.analysis.maps import reduce as reduce_points
 from explorer.analysis.section_map import SectionMap, system_first
 from explorer.analysis.sections import crossings
@@ -118,7 +118,7 @@ class PeriodicOrbit:
 class _Shooting:
     """Evaluations of the K maps along a set of points."""
 
-    def __init__(self, smap: SectionMap, K: int):
+    def __init__(self, smap: AreaPreservingMap, K: int):
         self.smap, self.K = smap, K
 
     def along(self, x0, multiple, X=None):
