@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from explorer.analysis.sections import crossings
+from explorer.analysis.system_flow import flow
 from explorer.analysis.system_section_map import SystemSectionMap
 from explorer.app.figures import _matplotlib
 from explorer.model import ParameterError, classic
@@ -98,19 +99,11 @@ def henon_heiles_figure(*, seeds=16, n_crossings=300):
 
 
 def arenstorf_orbit(n: int = 300, tol: float = 1e-15):
-    """Arenstorf's orbit over one period T, sampled at t = kT/n (k = 0..n): (t, states (n + 1, 4)).
-    Each piece is the crossings integrator run to its time budget (its final state at t exactly)."""
-    system = classic.pcr3bp(classic.ARENSTORF_MU)
-    y = system.states[1]
-    dt = classic.ARENSTORF_PERIOD / n
-    Y = np.array([classic.ARENSTORF_STATE])
-    out = [Y[0]]
-    for _ in range(n):
-        # a section the orbit never reaches (|y| < 2): the run ends at its time budget dt
-        res = crossings(system, states=Y, n_crossings=1, section=y - 100.0, direction=1, tmax=dt, tol=tol)
-        Y = res.final.copy()
-        out.append(Y[0])
-    return np.linspace(0.0, classic.ARENSTORF_PERIOD, n + 1), np.array(out)
+    """Arenstorf's orbit over one period T, sampled at t = kT/n (k = 0..n): (t, states (n + 1, 4)),
+    read off the Taylor steps of one integration (:func:`explorer.analysis.system_flow.flow`)."""
+    t = np.linspace(0.0, classic.ARENSTORF_PERIOD, n + 1)
+    res = flow(classic.pcr3bp(classic.ARENSTORF_MU), states=[classic.ARENSTORF_STATE], times=t, tol=tol)
+    return res.t, res.states[0]
 
 
 def arenstorf_figure(*, n=300):
