@@ -1,9 +1,6 @@
-"""The fields of the page's values (the model parameters, h, method, tol, dt, crossings per click,
-φ0): their widgets, the text they show, and the settings an edit gives
-(:func:`explorer.app.serve.settings.parse_fields`, the command line's checks).  Beside them, the
-μ slider and a stepper (a field, a step, − and +) for every numeric field: both write their value
-into the field as text, and the field applies it as if typed (one validation).  A component of
-:class:`~explorer.app.serve.page.SectionPage`."""
+"""The fields of the page's values, the μ slider and the stepper: slider and stepper write into a
+field, which applies the value as typed (:func:`explorer.app.serve.settings.parse_fields`).
+"""
 from __future__ import annotations
 
 import math

@@ -35,11 +35,9 @@ def _empty_density() -> dict:
 
 
 class ChaosLayer:
-    """The chaos layer: its check box ``layer``, its choice of ``indicator`` (MEGNO or frequency
-    diffusion, :data:`explorer.app.serve.raster.INDICATORS`), its source and colour bar, and its
-    task (the rasters of the latest window, indicator and settings; a new one supersedes the
-    older).  Frequency diffusion turns around :func:`~explorer.app.serve.raster.diffusion_center`
-    of the settings (``center``: (settings, point, elliptic) of the last one found)."""
+    """The chaos layer: its box ``layer``, its ``indicator``, its source, colour bar and task (the
+    rasters of the latest window, indicator and settings); ``center``: (settings, point, elliptic)
+    of frequency diffusion's last centre found."""
 
     def __init__(self, host, view, session, resolutions: tuple, time: float):
         self.host, self.view = host, view

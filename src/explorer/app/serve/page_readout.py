@@ -1,8 +1,6 @@
 """The readout of a picked orbit (Shift + click, or the click switch): the orbit with a crossing
-near the click, its mLCE, mean MEGNO and rotation number
-(:func:`explorer.app.serve.overlays.orbit_readout`, a task of the page's session, the latest
-pick only, under a budget), or, near a hyperbolic mark of the overlays, that mark's manifolds.  A
-component of :class:`~explorer.app.serve.page.SectionPage`; by Bokeh model name: ``readout``.
+near the click, its mLCE, mean MEGNO and rotation number (a task under a budget), or near a
+hyperbolic mark that mark's manifolds.  By Bokeh model name: ``readout``.
 """
 from __future__ import annotations
 
@@ -39,11 +37,8 @@ class Readout:
             listener(ident)
 
     def pick(self, p1: float, p2: float, radius_px: float = PICK_PX) -> int | None:
-        """A pick at (p1, p2).  Near a hyperbolic mark of the overlays (× of a fixed point or of a
-        periodic orbit, within ``radius_px`` screen pixels): its stable and unstable manifolds are
-        grown and drawn and None is returned.  Else the orbit with the crossing nearest to it
-        (within ``radius_px`` screen pixels) is selected (:meth:`select`); returns its id (None:
-        no crossing near)."""
+        """A pick at (p1, p2): within ``radius_px`` screen pixels of a hyperbolic mark, its manifolds
+        (None); else the orbit with the nearest crossing within them is selected; returns its id."""
         finite = math.isfinite(p1) and math.isfinite(p2)
         saddle = self.overlays.saddle_near(p1, p2, radius_px) if finite else None
         if saddle is not None:           # a hyperbolic mark of the overlays: its manifolds

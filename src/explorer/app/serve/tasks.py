@@ -192,7 +192,7 @@ class Timer:
             return
         self.cancel()
         self.due = when
-        self._handle = self.session.loop.call_at(when, self._fire)
+        self._handle = handle = self.session.loop.call_at(when, lambda: self.session.soon(lambda: self._fire(handle)))
         self.session._timers.add(self)
 
     def cancel(self) -> None:
@@ -201,16 +201,9 @@ class Timer:
         self._handle = self.due = None
         self.session._timers.discard(self)
 
-    def _fire(self) -> None:
-        self._handle = None
+    def _fire(self, handle) -> None:
+        if handle is not self._handle:
+            return                  # cancelled or superseded while its call waited for the lock
+        self._handle = self.due = None
         self.session._timers.discard(self)
-        if self.session.doc is None:
-            self.due = None
-            self.action()
-            self.session.applied += 1
-        else:
-            self.session.soon(self._locked)
-
-    def _locked(self) -> None:
-        self.due = None
         self.action()

@@ -1,8 +1,7 @@
-"""The section view of the page: the Bokeh figure, the allowed region drawn on it and the visible
-window (``window``, a :class:`~explorer.app.serve.settings.Window`), fitted to the region after every
-change of it (Reset goes back there) and followed through the browser's zoom and pan.  The layers
-draw onto :attr:`SectionView.figure`; they are told of a moved window through
-:meth:`SectionView.on_window`.  A component of :class:`~explorer.app.serve.page.SectionPage`."""
+"""The section view of the page: the Bokeh figure, the allowed region and the visible ``window``,
+fitted to the region after every change of it and followed through the browser's zoom and pan
+(:meth:`SectionView.on_window`).
+"""
 from __future__ import annotations
 
 from bokeh.events import RangesUpdate
