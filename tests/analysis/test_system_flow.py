@@ -131,3 +131,15 @@ def test_a_bad_request_is_refused_naming_the_parameter(hh):
         ex.flow(hh, states=hh_starts(), times=[1.0], tol=1.0)
     with pytest.raises(ParameterError, match="System"):
         ex.flow(ex.FIGURE4, states=hh_starts(), times=[1.0])
+
+
+def test_the_example_of_docs_systems_md_flow_runs():
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[2] / "docs" / "systems.md").read_text()
+    if "## The flow at given times" not in page:
+        pytest.skip("docs/systems.md has no section 'The flow at given times' yet")
+    block = page.split("## The flow at given times", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
+    namespace = {}
+    exec(compile(block, "docs/systems.md", "exec"), namespace)   # its own asserts check the result
+    assert namespace["res"].states.shape == (1, 301, 4)
