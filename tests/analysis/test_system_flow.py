@@ -1,7 +1,7 @@
 """A System's orbits at given times, ex.flow (docs/systems.md, "The flow at given times"): Arenstorf's
 periodic orbit closing after its period, samples against scipy's DOP853 dense output, samples that
-change no step, the last sample equal to the crossings' final state, thread independence, statuses
-and the refusals."""
+change no step, the last sample equal to the crossings' final state, the SIMD lanes equal to the scalar
+driver, thread independence, statuses and the refusals."""
 import numpy as np
 import pytest
 
@@ -94,10 +94,25 @@ def test_the_flow_is_identical_with_one_and_two_threads(hh):
         pytest.skip("one thread only")
     Y0 = np.repeat(hh_starts(), 3, axis=0) * np.linspace(0.9, 1.0, 9)[:, None]
     times = np.linspace(0.0, 20.0, 50)
-    a = ex.flow(hh, states=Y0, times=times, threads=1)
-    b = ex.flow(hh, states=Y0, times=times, threads=2)
-    assert np.array_equal(a.states, b.states) and np.array_equal(a.energy_error, b.energy_error)
-    assert np.array_equal(a.steps, b.steps) and np.array_equal(a.status, b.status)
+    for driver in ("scalar", "lanes"):
+        a = ex.flow(hh, states=Y0, times=times, threads=1, driver=driver)
+        b = ex.flow(hh, states=Y0, times=times, threads=2, driver=driver)
+        assert np.array_equal(a.states, b.states) and np.array_equal(a.energy_error, b.energy_error)
+        assert np.array_equal(a.steps, b.steps) and np.array_equal(a.status, b.status)
+
+
+def test_the_simd_lanes_give_the_scalar_drivers_samples_bit_for_bit(hh):
+    """Regular orbits, two that escape (status STEP_UNDERFLOW), repeated times and step budgets."""
+    rng = np.random.default_rng(2)
+    Y0 = np.vstack([np.repeat(hh_starts(), 4, axis=0) * np.linspace(0.9, 1.0, 12)[:, None],
+                    [[0.0, 0.0, 0.8, 0.3], [0.0, 1.2, 0.5, 0.0]]])
+    times = np.sort(np.concatenate([[0.0, 0.0], rng.uniform(0.0, 60.0, 100), [30.0, 30.0, 60.0, 60.0]]))
+    for max_steps in (7, 10**9):
+        a = ex.flow(hh, states=Y0, times=times, max_steps=max_steps, driver="scalar")
+        b = ex.flow(hh, states=Y0, times=times, max_steps=max_steps, driver="lanes")
+        for k in ("states", "energy_error", "status", "steps"):
+            assert np.array_equal(getattr(a, k), getattr(b, k), equal_nan=True), k
+    assert set(a.status[-2:]) <= {Status.STEP_UNDERFLOW, Status.NONFINITE} and np.all(a.status[:-2] == Status.DONE)
 
 
 def test_an_orbit_out_of_steps_has_the_budget_status_and_nan_beyond(hh):
@@ -129,6 +144,8 @@ def test_a_bad_request_is_refused_naming_the_parameter(hh):
         ex.flow(hh, states=[[0.0, 0.1]], times=[1.0])
     with pytest.raises(ParameterError, match="tol"):
         ex.flow(hh, states=hh_starts(), times=[1.0], tol=1.0)
+    with pytest.raises(ParameterError, match="driver"):
+        ex.flow(hh, states=hh_starts(), times=[1.0], driver="gpu")
     with pytest.raises(ParameterError, match="System"):
         ex.flow(ex.FIGURE4, states=hh_starts(), times=[1.0])
 

@@ -4,7 +4,8 @@
 The integrator is the adaptive Taylor method of the crossings (Jorba & Zou 2005, Exp. Math. 14, 99),
 generated into the system's module (``flow_taylor``, :mod:`explorer.integrate.codegen_flow`): each
 sample is the polynomial of the step that contains it, at the integrator's order, so the samples
-change no step; the last step is clipped onto the last time.
+change no step; the last step is clipped onto the last time.  By default its SIMD form (``flow_lanes``)
+runs the orbits, each with the scalar driver's samples bit for bit.
 """
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from explorer._jit import get_num_threads, max_threads, set_num_threads
-from explorer.analysis.system_sections import DEFAULT_MAX_STEPS, _states, is_system
+from explorer.analysis.system_sections import DEFAULT_MAX_STEPS, DRIVERS, _states, driver_for, is_system
 from explorer.integrate.methods import DEFAULT_TOL, check_setting
 from explorer.kernels import Status
 from explorer.kernels.taylor_order import order_for_tolerance
@@ -63,11 +64,12 @@ def _times(times) -> np.ndarray:
 
 
 def flow(system, states=None, *, times=None, tol: float = DEFAULT_TOL, max_steps: int = DEFAULT_MAX_STEPS,
-         threads: int | None = None) -> Flow:
+         threads: int | None = None, driver: str = "auto") -> Flow:
     """The state of each orbit of ``system`` (a row of ``states``, (N, n) in the system's state
     order) at each of ``times`` (finite, >= 0, sorted non-decreasing; t = 0 is the start exactly),
     with the adaptive Taylor method of tolerance ``tol`` (docs/methods.md), up to ``max_steps``
-    steps an orbit, on ``threads`` threads (the result does not depend on them).  Returns a
+    steps an orbit, on ``threads`` threads and ``driver`` (system_sections.DRIVERS: ``auto`` the SIMD
+    lanes, ``scalar`` one orbit per thread; the result depends on neither).  Returns a
     :class:`Flow` (docs/systems.md, "The flow at given times")."""
     from explorer.analysis import budget
     from explorer.integrate import codegen
@@ -79,6 +81,8 @@ def flow(system, states=None, *, times=None, tol: float = DEFAULT_TOL, max_steps
     tol = check_setting("tol", tol)
     if threads is not None:
         threads = validation.threads(threads, max_threads())
+    if driver not in DRIVERS:
+        raise ParameterError(f"driver must be one of {', '.join(map(repr, DRIVERS))}, got {driver!r}")
     ts = _times(times)
     Y0 = _states(system, states)
     N, n, M = Y0.shape[0], system.dimension, ts.size
@@ -97,8 +101,14 @@ def flow(system, states=None, *, times=None, tol: float = DEFAULT_TOL, max_steps
     if threads is not None:
         set_num_threads(threads)
     try:
-        mod.flow_taylor(Y0, system.parameter_array(), ts, int(order), int(max_steps), out, energy_error, status,
-                        info)
+        args = (Y0, system.parameter_array(), ts, int(order), int(max_steps), out, energy_error, status, info)
+        workers = driver_for(N, driver)
+        if workers == 0:
+            mod.flow_taylor(*args)
+        elif workers == 1:   # one group of lanes: no parallel region
+            mod.flow_lanes_worker(np.zeros(1, np.int64), *args)
+        else:
+            mod.flow_lanes(*args, workers)
     finally:
         if threads is not None:
             set_num_threads(old)
