@@ -100,6 +100,43 @@ def test_the_domain_is_where_the_energy_level_has_a_root_on_the_directions_branc
         smap((0.1, 0.2, 0.3))
 
 
+def grid(a0, a1, b0, b1, n=31):
+    return np.stack(np.meshgrid(np.linspace(a0, a1, n), np.linspace(b0, b1, n), indexing="ij"), axis=-1)
+
+
+def test_allowed_is_in_domain_point_by_point_and_on_x_0_the_region_where_h_is_below_e(smap):
+    G = grid(-1.0, 2.0, -0.7, 0.7)
+    mask = smap.allowed(G)
+    assert mask.shape == G.shape[:2] and mask.dtype == bool and 0 < mask.sum() < mask.size
+    assert mask.tolist() == [[smap.in_domain(p) for p in row] for row in G]
+    Y, P = G[..., 0], G[..., 1]
+    H = P**2 / 2 + Y**2 / 2 - Y**3 / 3                     # H(0, y, 0, py) at lam = 1
+    clear = np.abs(H - E) > 1e-12
+    assert np.array_equal(mask[clear], (H < E)[clear])
+    # on the boundary the root is px = 0: the flow is tangent to the section, not allowed
+    edge = [(0.0, 0.5), (0.0, -0.5)]
+    assert not smap.allowed(edge).any() and not any(smap.in_domain(p) for p in edge)
+    assert smap.allowed([[np.nan, 0.0], [0.1, np.inf], [0.1, 0.1]]).tolist() == [False, False, True]
+    with pytest.raises(ParameterError, match="pairs"):
+        smap.allowed([0.1, 0.2, 0.3])
+
+
+def test_on_a_tilted_section_allowed_is_in_domain_point_by_point():
+    tilted = ex.SectionMap(henon_heiles(), E, section=x + y - 0.1, direction=-1, coords=(y, py), solve=px)
+    G = grid(-0.8, 1.0, -0.7, 0.7)
+    mask = tilted.allowed(G)
+    assert 0 < mask.sum() < mask.size
+    assert mask.tolist() == [[tilted.in_domain(p) for p in row] for row in G]
+    tilted.states(G[mask])                                  # every allowed point lifts
+    # on x = 0.1 - y: px = +-sqrt(D), D = 2 (E - V(0.1 - y, y)) - py^2, crossed with px + py < 0
+    Y, P = G[..., 0], G[..., 1]
+    X = 0.1 - Y
+    D = 2 * (E - (X**2 + Y**2) / 2 - X**2 * Y + Y**3 / 3) - P**2
+    r = np.sqrt(np.maximum(D, 0.0))
+    clear = (np.abs(D) > 1e-12) & ((D < 0) | (np.abs(P - r) > 1e-12))
+    assert np.array_equal(mask[clear], ((D > 0) & (P < r))[clear]) and clear.mean() > 0.99
+
+
 def test_with_value_sets_a_parameter_or_the_energy_level(smap):
     low = smap.with_value("energy", 1.0 / 12.0)
     half = smap.with_parameter(0.5)

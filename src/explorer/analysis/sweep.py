@@ -431,25 +431,6 @@ class SystemSweepSpec:
         return [0] + [1 + index.index(c) for c in (*self.coords, self.solve)] + [1 + len(index)]
 
 
-def allowed_points(smap, points) -> np.ndarray:
-    """Mask of the points (N, 2) that the System's section map ``smap`` lifts onto its energy
-    surface on the direction's branch (its ``states`` refuses the others): ranges bisected until
-    each is lifted whole or is one refused point."""
-    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-    ok = np.zeros(len(pts), dtype=bool)
-    todo = [(0, len(pts))] if len(pts) else []
-    while todo:
-        lo, hi = todo.pop()
-        try:
-            smap.states(pts[lo:hi])
-            ok[lo:hi] = True
-        except ParameterError:
-            if hi - lo > 1:
-                mid = (lo + hi) // 2
-                todo += [(lo, mid), (mid, hi)]
-    return ok
-
-
 def _window_grid(window, na: int, nb: int) -> np.ndarray:
     """Cell centres of an na x nb raster of ``window`` (a_lo, a_hi, b_lo, b_hi), b rows ascending, then a."""
     a0, a1, b0, b1 = window
@@ -471,7 +452,7 @@ def system_seed_points(seeds, smap):
         a0, a1, b0, b1 = seeds.window
         u = np.random.default_rng(seeds.seed).random((seeds.n, 2))
         cand = np.column_stack([a0 + (a1 - a0) * u[:, 0], b0 + (b1 - b0) * u[:, 1]])
-    ok = allowed_points(smap, cand)
+    ok = smap.allowed(cand)
     return cand[ok], int((~ok).sum()) if seeds.kind == "points" else 0
 
 
@@ -481,7 +462,7 @@ def system_map_seeds(smap, window, resolution: int):
     :func:`map_raster`."""
     n = int(resolution)
     pts = _window_grid(window, n, n)
-    return pts[allowed_points(smap, pts)], (n, *(float(w) for w in window))
+    return pts[smap.allowed(pts)], (n, *(float(w) for w in window))
 
 
 def build_system_spec(scene, panel_indices, *, chunk_orbits: int, product: str | None = None) -> SystemSweepSpec:

@@ -14,8 +14,8 @@ section point ``(a, b)`` becomes a full state on ``EXPR = 0`` with energy ``E``:
 - of the real roots, the one where ``d(EXPR)/dt`` has the sign of ``direction``.
 
 A point where no real root has that sign is refused (ParameterError naming the point and E): the
-map's domain is where one has.  A System's map has 4 state variables (2 degrees of freedom):
-coords, solve and fixed.
+map's domain is where one has (:meth:`SystemSectionMap.allowed`, a mask over many points).  A
+System's map has 4 state variables (2 degrees of freedom): coords, solve and fixed.
 
 The map is an :class:`explorer.analysis.maps.AreaPreservingMap`: ``smap(x)`` is a
 :class:`~explorer.analysis.map_result.MapResult` with the Jacobian of the 2-D map, from the
@@ -222,7 +222,7 @@ class SystemSectionMap:
     # ------------------------------------------------------------------ points and states
     def _lifted(self, pts) -> np.ndarray:
         """The states (N, 4) of the points (N, 2); NaN rows where the energy level has no solution
-        on the direction's branch."""
+        on the direction's branch (ds/dt = 0, the boundary, has none)."""
         roots_of, fixed_of, energy, dH, sdot = self._lift[:5]
         P = list(self.system.parameter_array())
         A, B = pts[:, 0], pts[:, 1]
@@ -241,6 +241,25 @@ class SystemSectionMap:
             Y[take] = state[take]
             done |= take
         return Y
+
+    @staticmethod
+    def _on_surface(Y) -> np.ndarray:
+        """The rows of :meth:`_lifted` that are states (the domain's one rule)."""
+        return np.isfinite(Y[:, 0])
+
+    def allowed(self, points) -> np.ndarray:
+        """Mask (...) of the points (..., 2) in the map's domain (those :meth:`states` lifts): the
+        energy level has a real root for ``solve`` with d(section)/dt of the direction's sign, not
+        zero; False at a non-finite point.  Vectorised: one evaluation of the roots for all points."""
+        pts = np.asarray(points, dtype=np.float64)
+        if pts.ndim < 1 or pts.shape[-1] != 2:
+            a, b = self.coords
+            raise ParameterError(f"points must be ({a.name}, {b.name}) pairs (..., 2), got shape {pts.shape}")
+        flat = pts.reshape(-1, 2)
+        ok = np.all(np.isfinite(flat), axis=1)
+        if ok.any():
+            ok[ok] = self._on_surface(self._lifted(flat[ok]))
+        return ok.reshape(pts.shape[:-1])
 
     def _points(self, points) -> np.ndarray:
         try:
@@ -265,7 +284,7 @@ class SystemSectionMap:
         for a point where the energy level has no solution on the direction's branch."""
         pts = self._points(points)
         Y = self._lifted(pts)
-        bad = np.flatnonzero(np.isnan(Y[:, 0]))
+        bad = np.flatnonzero(~self._on_surface(Y))
         if bad.size:
             i = int(bad[0])
             a, b = self.coords
@@ -319,7 +338,7 @@ class SystemSectionMap:
     def in_domain(self, x) -> bool:
         """x is a point of the section where the energy level has a solution on the direction's branch."""
         x = np.asarray(x, dtype=np.float64)
-        return bool(x.shape == (2,) and np.all(np.isfinite(x)) and np.isfinite(self._lifted(x[None, :])[0, 0]))
+        return bool(x.shape == (2,) and self.allowed(x))
 
     @functools.cached_property
     def domain(self) -> tuple:
@@ -328,7 +347,7 @@ class SystemSectionMap:
         u = np.linspace(-1.0, 1.0, 101)
         for k in range(21):
             A, B = np.meshgrid(u * 2.0 ** k, u * 2.0 ** k, indexing="ij")
-            inside = np.isfinite(self._lifted(np.column_stack([A.ravel(), B.ravel()]))[:, 0]).reshape(A.shape)
+            inside = self.allowed(np.stack([A, B], axis=-1))
             i, j = np.flatnonzero(inside.any(axis=1)), np.flatnonzero(inside.any(axis=0))
             if i.size and i[0] > 0 and j[0] > 0 and i[-1] < 100 and j[-1] < 100:
                 a, b = A[:, 0], B[0]
@@ -418,9 +437,10 @@ class SystemSectionMap:
         if n == 0 or not ok.any():
             return out
         Y = self._lifted(X[ok])
-        inside = np.flatnonzero(ok)[np.isfinite(Y[:, 0])]
+        lifted = self._on_surface(Y)
+        inside = np.flatnonzero(ok)[lifted]
         if inside.size:
-            data, count, _ = self._returns(self._starts(Y[np.isfinite(Y[:, 0])], backward), n, backward, False)
+            data, count, _ = self._returns(self._starts(Y[lifted], backward), n, backward, False)
             cols = [1 + j for j in self._index[:2]]
             img = data[:, :, cols]
             for i in range(len(img)):
@@ -527,14 +547,14 @@ class SystemSectionMap:
             v = np.real(V[:, fixed[0]])
             for k in range(21):
                 t = np.linspace(-(2.0 ** k), 2.0 ** k, 2001)
-                inside = np.flatnonzero(np.isfinite(self._lifted(t[:, None] * v)[:, 0]))
+                inside = np.flatnonzero(self.allowed(t[:, None] * v))
                 if inside.size and inside[0] > 0 and inside[-1] < t.size - 1:
                     break
             if not inside.size:
                 continue
             lo, hi = t[max(inside[0] - 1, 0)], t[min(inside[-1] + 1, t.size - 1)]
             pts = (lo + (hi - lo) * (np.arange(n) + 0.5) / n)[:, None] * v
-            lines.append(pts[np.isfinite(self._lifted(pts)[:, 0])])
+            lines.append(pts[self.allowed(pts)])
         return np.concatenate(lines) if lines else np.empty((0, 2))
 
     def require_reversor(self, what: str):
