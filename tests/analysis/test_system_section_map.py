@@ -3,20 +3,14 @@ state, the branch the direction selects, the refusal outside the energy surface,
 against the flow's, the analyses that refuse a System, and the energy column of a result."""
 import numpy as np
 import pytest
-import sympy as sp
+from systems import henon_heiles, lam, oscillator, px, py, x, y
 
 import explorer as ex
 from explorer.analysis import sections
 from explorer.model import ParameterError
 
-x, y, px, py, lam = sp.symbols("x y px py lam")
 E = 1.0 / 8.0
 POINTS = [(0.1, 0.1), (-0.1, 0.2), (0.3, 0.0)]
-
-
-def henon_heiles():
-    return ex.System({x: px, y: py, px: -x - 2*lam*x*y, py: -y - lam*(x**2 - y**2)}, parameters={lam: 1.0},
-                     energy=(px**2 + py**2)/2 + (x**2 + y**2)/2 + lam*(x**2*y - y**3/3), name="henon_heiles")
 
 
 def energy(Y):
@@ -122,8 +116,8 @@ def test_max_energy_error_reads_the_energy_column_of_a_system_and_of_chaplygins_
     rows = np.zeros((2, 3, 5))
     rows[1, 2, 4] = -3e-9
     assert sections.max_energy_error(rows) == 3e-9
-    bare = ex.System(dict(zip(hh.states, hh.rhs)), parameters={lam: 1.0})
-    plain = ex.crossings(bare, states=by_hand(POINTS[:1]), n_crossings=2, section=x, direction=+1)
+    osc, q, _ = oscillator()                          # a System without an energy: no energy column
+    plain = ex.crossings(osc, states=[[1.0, 0.0]], n_crossings=2, section=q, direction=+1)
     with pytest.raises(ParameterError, match="no energy column"):
         sections.max_energy_error(plain)
 

@@ -4,18 +4,13 @@ thread independence, statuses and the refusals."""
 import numpy as np
 import pytest
 import sympy as sp
+from systems import henon_heiles, lam, oscillator, pole, x, y
 
 import explorer as ex
 from explorer.kernels import Status
 from explorer.model import ParameterError
 
-x, y, px, py, lam = sp.symbols("x y px py lam")
 E = 1.0 / 8.0
-
-
-def henon_heiles():
-    return ex.System({x: px, y: py, px: -x - 2*lam*x*y, py: -y - lam*(x**2 - y**2)}, parameters={lam: 1.0},
-                     energy=(px**2 + py**2)/2 + (x**2 + y**2)/2 + lam*(x**2*y - y**3/3), name="henon_heiles")
 
 
 def starts(points):
@@ -127,11 +122,6 @@ def test_a_parameter_in_the_section_takes_its_value():
 
 
 # ---------------------------------------------------------------------- statuses
-def oscillator():
-    q, v = sp.symbols("q v")
-    return ex.System({q: v, v: -q}, name="oscillator"), q, v
-
-
 def test_an_orbit_that_never_crosses_ends_with_the_budget_status():
     osc, q, v = oscillator()
     res = ex.crossings(osc, states=[[1.0, 0.0]], n_crossings=3, section=q - 2, direction=+1, tmax=20.0)
@@ -146,8 +136,7 @@ def test_an_orbit_that_never_crosses_ends_with_the_budget_status():
 
 
 def test_a_division_by_a_zero_denominator_gives_the_non_finite_status():
-    s, w = sp.symbols("s w")
-    system = ex.System({s: 1, w: 1 / s}, name="pole")
+    system, _, w = pole()
     res = ex.crossings(system, states=[[0.0, 0.0], [-1.0, 0.0]], n_crossings=1, section=w - 100, direction=+1)
     assert res.status_of(0) == Status.NONFINITE and res.count[0] == 0
     # approached continuously, the steps shrink with the radius of convergence |s| (a fixed

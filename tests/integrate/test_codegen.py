@@ -17,8 +17,10 @@ import mpmath
 import numpy as np
 import pytest
 import sympy as sp
+from systems import henon_heiles, oscillator
 
 from explorer.integrate import codegen
+from explorer.model import chaplygin
 from explorer.model import parameters as mp_
 from explorer.model.system import System
 from explorer.model.validation import ParameterError
@@ -153,29 +155,14 @@ def test_common_subexpressions_are_one_node():
 
 
 # ---------------------------------------------------------------------- Chaplygin (docs/model.md R3)
-def chaplygin():
-    """docs/model.md R3, state (p1, p2, M, g1, g2), parameters in the order of
-    explorer.model.parameters' index constants (the packed array P)."""
-    p1, p2, M, g1, g2 = sp.symbols("p1 p2 M g1 g2")
-    a1, a2, b, la, chi, zeta, mu, xi, eta = sp.symbols("a1 a2 b lam chi zeta mu xi eta")
-    w = M / b
-    eqs = {p1: w * (p2 - zeta) - mu * g1 - la * p2 / a2,
-           p2: -w * (p1 - chi) - mu * g2 + la * p1 / a1,
-           M: (p1 - chi) * p2 / a2 - (p2 - zeta) * p1 / a1 - mu * (xi * g2 - eta * g1),
-           g1: w * g2,
-           g2: -w * g1}
-    order = sorted([(mp_.A1, a1), (mp_.A2, a2), (mp_.B, b), (mp_.LAM, la), (mp_.CHI, chi), (mp_.ZETA, zeta),
-                    (mp_.MU, mu), (mp_.XI, xi), (mp_.ETA, eta)], key=lambda p: p[0])
-    return System(eqs, parameters={sym: 1.0 for _, sym in order}, name="chaplygin_r3")
-
-
+# explorer.model.chaplygin's System: state (p1, p2, M, g1, g2), parameters in the order of the packed array P
 @pytest.mark.parametrize("params", [mp_.FIGURE4.with_(mu=0.5),
                                     mp_.Params(a1=1.3, a2=0.6, b=1.7, lam=-0.8, chi=0.2, zeta=-0.15, mu=0.7,
                                                xi=0.3, eta=-0.25)])
 def test_generated_chaplygin_coefficients_equal_the_hand_written_recurrence(params):
     from explorer.model.equations import taylor_coefficients
 
-    system = chaplygin()
+    system = chaplygin.system(params)
     P = mp_.packed_params(params)
     assert [p.name for p in system.parameters] == ["a1", "a2", "b", "lam", "chi", "zeta", "mu", "xi", "eta"]
     mod = codegen.load(system)
@@ -197,14 +184,6 @@ def test_generated_chaplygin_coefficients_equal_the_hand_written_recurrence(para
 
 
 # ---------------------------------------------------------------------- Hénon–Heiles against DOP853
-def henon_heiles():
-    x, y, px, py, la = sp.symbols("x y px py lam")
-    return System({x: px, y: py, px: -x - 2 * la * x * y, py: -y - la * (x**2 - y**2)},
-                  parameters={la: 1.0},
-                  energy=(px**2 + py**2) / 2 + (x**2 + y**2) / 2 + la * (x**2 * y - y**3 / 3),
-                  name="henon_heiles")
-
-
 def taylor_orbit(mod, P, y0, dt, steps, order=20):
     from explorer.kernels.taylor import evaluate
 
@@ -260,8 +239,7 @@ def test_another_parameter_value_uses_the_same_generated_module():
 # ---------------------------------------------------------------------- the on-disk cache
 def test_the_module_is_written_once_under_its_content_key_and_reused(tmp_path, monkeypatch):
     monkeypatch.setenv("EXPLORER_SYSTEMS_CACHE", str(tmp_path / "systems"))
-    x, v = sp.symbols("x v")
-    system = System({x: v, v: -x}, name="oscillator")
+    system, q, v = oscillator()
     mod = codegen.load(system)
     path = tmp_path / "systems" / f"oscillator_{codegen.module_key(system)}.py"
     assert mod.__file__ == str(path) and path.exists()
@@ -272,15 +250,14 @@ def test_the_module_is_written_once_under_its_content_key_and_reused(tmp_path, m
     again = codegen.load(system)
     assert again is not mod and again.__file__ == str(path) and path.stat().st_mtime_ns == stamp
     assert "taylor_coefficients" in path.read_text() and "def crossings_taylor" in path.read_text()
-    other = System({x: v, v: -2 * x}, name="oscillator")
+    other = System({q: v, v: -2 * q}, name="oscillator")
     assert codegen.module_key(other) != codegen.module_key(system)
 
 
 def test_a_change_of_a_kernel_the_generated_code_calls_changes_the_module_key(tmp_path, monkeypatch):
     """numba's cache of the generated crossings integrator does not follow its callees in
     explorer.kernels: the key does, so a changed kernel gives a new module file."""
-    x, v = sp.symbols("x v")
-    system = System({x: v, v: -x}, name="oscillator")
+    system, _, _ = oscillator()
     key = codegen.module_key(system)
     kernels = tmp_path / "explorer"
     (kernels / "kernels").mkdir(parents=True)
@@ -320,7 +297,7 @@ def test_an_operation_the_generator_does_not_know_is_refused():
 def test_generated_chaplygin_variational_coefficients_equal_the_hand_written_tangent_recurrence():
     from explorer.model.equations import taylor_coefficients_tangent
 
-    system = chaplygin().variational(1)     # one deviation vector: the Jacobian is the same for each
+    system = chaplygin.variational(vectors=1)     # one deviation vector: the Jacobian is the same for each
     mod = codegen.load(system)
     P = mp_.packed_params(mp_.Params(a1=1.3, a2=0.6, b=1.7, lam=-0.8, chi=0.2, zeta=-0.15, mu=0.7, xi=0.3, eta=-0.25))
     rng = np.random.default_rng(3)
@@ -377,14 +354,14 @@ def lane_states(system, rng):
     return rng.uniform(-0.5, 0.5, (system.dimension, LANES))
 
 
-@pytest.mark.parametrize("which", ["ad_rules", "henon_heiles", "chaplygin_r3_variational1"])
+@pytest.mark.parametrize("which", ["ad_rules", "henon_heiles", "chaplygin_variational1"])
 def test_each_lane_of_the_simd_form_equals_the_scalar_recurrence_bit_for_bit(rules_module, which):
     from explorer.integrate.simd import LANES
 
     system = {"ad_rules": rules_module[0], "henon_heiles": henon_heiles(),
-              "chaplygin_r3_variational1": chaplygin().variational(1)}[which]
+              "chaplygin_variational1": chaplygin.variational(vectors=1)}[which]
     mod = codegen.load(system)
-    P = system.parameter_array() if which != "chaplygin_r3_variational1" else mp_.packed_params(
+    P = system.parameter_array() if which != "chaplygin_variational1" else mp_.packed_params(
         mp_.FIGURE4.with_(mu=0.5))
     order = 18
     X0 = lane_states(system, np.random.default_rng(8))

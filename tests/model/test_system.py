@@ -37,6 +37,21 @@ def test_with_changes_a_value_and_keeps_the_content_hash():
     assert t.energy == s.energy and t.name == s.name
 
 
+def test_the_docs_hand_written_henon_heiles_is_classics_and_the_shared_test_systems_one_module():
+    """docs/systems.md writes Hénon–Heiles by hand as here (HH, HH_ENERGY, name "henon_heiles"): the
+    same content hash and name as explorer.model.classic's and tests/systems.py's, so one generated
+    module; with the reversor likewise."""
+    import systems
+
+    from explorer.model import classic
+
+    hh = henon_heiles()
+    assert hh.content_hash == classic.henon_heiles().content_hash == systems.henon_heiles().content_hash
+    assert hh.name == classic.henon_heiles().name == systems.henon_heiles().name
+    reversible = System(HH, parameters={lam: 1.0}, energy=HH_ENERGY, name="henon_heiles", reversor=HH_REVERSOR)
+    assert reversible.content_hash == systems.henon_heiles_reversible().content_hash != hh.content_hash
+
+
 def test_content_hash_changes_with_the_equations_the_parameters_and_the_energy():
     base = henon_heiles().content_hash
     assert System(HH, parameters={lam: 1.0}, energy=HH_ENERGY, name="other").content_hash == base
