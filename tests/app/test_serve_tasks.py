@@ -115,7 +115,9 @@ class _Doc:
         self.session_context = _Context()
 
 
-def test_results_apply_in_order_with_the_document_locked():
+def test_actions_reach_the_loop_in_the_order_they_were_handed_in_whatever_order_bokeh_starts_callbacks():
+    """Results apply in the order a task computes them, each with the document locked (no Bokeh
+    callback carries them: their order is the coroutine's)."""
     doc = _Doc()
     session = Session(doc)
     shown: list = []

@@ -44,7 +44,7 @@ class Session:
         if self.loop is None:
             self.loop = asyncio.new_event_loop()
         self._tasks: dict[str, tuple[asyncio.Task, Budget | None]] = {}
-        self._timers: set = set()
+        self.waiting: set = set()         # pending timers and watcher calls
 
     # ------------------------------------------------------------ tasks
     def start(self, name: str, coro, budget: Budget | None = None, on_error=None) -> asyncio.Task | None:
@@ -111,11 +111,11 @@ class Session:
             self.applied += 1
         elif not self.closed:
             task = self.loop.create_task(self.apply(fn))
-            self._timers.add(task)
+            self.waiting.add(task)
             task.add_done_callback(self._done)
 
     def _done(self, task) -> None:
-        self._timers.discard(task)
+        self.waiting.discard(task)
         if not task.cancelled() and task.exception() is not None:
             _log.error("explorer serve: a page callback failed", exc_info=task.exception())
 
@@ -133,7 +133,7 @@ class Session:
 
     def busy(self) -> bool:
         """A task or a timer is pending."""
-        return any(not t.done() for t, _b in self._tasks.values()) or bool(self._timers)
+        return any(not t.done() for t, _b in self._tasks.values()) or bool(self.waiting)
 
     def settle(self, timeout: float = 240.0) -> None:
         """Run a loop of its own until no task or timer is pending (TimeoutError after ``timeout``)."""
@@ -167,7 +167,7 @@ class Session:
         self.closed = True
         for name in list(self._tasks):
             self.cancel(name)
-        for t in list(self._timers):
+        for t in list(self.waiting):
             t.cancel()
         if self.own and not self.loop.is_closed() and not self.loop.is_running():
             self._drive(asyncio.sleep(0))
@@ -193,17 +193,17 @@ class Timer:
         self.cancel()
         self.due = when
         self._handle = handle = self.session.loop.call_at(when, lambda: self.session.soon(lambda: self._fire(handle)))
-        self.session._timers.add(self)
+        self.session.waiting.add(self)
 
     def cancel(self) -> None:
         if self._handle is not None:
             self._handle.cancel()
         self._handle = self.due = None
-        self.session._timers.discard(self)
+        self.session.waiting.discard(self)
 
     def _fire(self, handle) -> None:
         if handle is not self._handle:
             return                  # cancelled or superseded while its call waited for the lock
         self._handle = self.due = None
-        self.session._timers.discard(self)
+        self.session.waiting.discard(self)
         self.action()
