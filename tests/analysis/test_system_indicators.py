@@ -5,6 +5,7 @@ Lorenz exponent, thread independence and the refusals."""
 import numpy as np
 import pytest
 import sympy as sp
+from systems import henon_heiles, pole, px, py, x, y
 
 import explorer as ex
 from explorer.analysis.lyapunov import regular_bound
@@ -12,13 +13,7 @@ from explorer.analysis.system_indicators import default_vectors
 from explorer.kernels import Status
 from explorer.model import ParameterError
 
-x, y, px, py, lam = sp.symbols("x y px py lam")
 ALL = ("mlce", "megno", "fli", "sali", "gali2")
-
-
-def henon_heiles(value=1.0):
-    return ex.System({x: px, y: py, px: -x - 2*lam*x*y, py: -y - lam*(x**2 - y**2)}, parameters={lam: value},
-                     energy=(px**2 + py**2)/2 + (x**2 + y**2)/2 + lam*(x**2*y - y**3/3), name="henon_heiles")
 
 
 def on_x0(E, yy, pyy=0.0):
@@ -206,9 +201,7 @@ def test_states_of_the_wrong_shape_and_states_beside_a_map_are_refused(hh):
 
 def test_an_orbit_reaching_a_pole_stops_with_the_step_underflow_or_non_finite_status():
     # dw/dt = 1/s, ds/dt = 1 from s = -1: the pole at t = 1 (the crossings' example, docs/systems.md)
-    s, w = sp.symbols("s w")
-    pole = ex.System({s: sp.Integer(1), w: 1 / s}, name="pole")
-    res = ex.indicators(pole, states=[[-1.0, 0.0]], tmax=3.0, which=("megno",))
+    res = ex.indicators(pole()[0], states=[[-1.0, 0.0]], tmax=3.0, which=("megno",))
     assert res.status_of(0) in (Status.STEP_UNDERFLOW, Status.NONFINITE)
     assert abs(res.time[0] - 1.0) < 1e-6 and np.isnan(res.energy_error[0])
 

@@ -7,15 +7,14 @@ import math
 
 import numpy as np
 import pytest
-import sympy as sp
 from scipy.integrate import solve_ivp
+from systems import henon_heiles_reversible, px, py, x, y
 
 import explorer as ex
 from explorer.analysis import manifolds as mf
 from explorer.analysis import periodic as pr
 from explorer.analysis import rotation as ro
 
-x, y, px, py, lam = sp.symbols("x y px py lam")
 E = 1.0 / 8.0
 #: the fixed points on py = 0 (Fix of the reversor (y, py) -> (y, -py)): seen on a scan of the line
 ELLIPTIC_GUESS = (0.3, 0.0)
@@ -24,10 +23,7 @@ HYPERBOLIC_GUESS = (-0.18, 0.0)
 
 @pytest.fixture(scope="module")
 def smap():
-    hh = ex.System({x: px, y: py, px: -x - 2*lam*x*y, py: -y - lam*(x**2 - y**2)}, parameters={lam: 1.0},
-                   energy=(px**2 + py**2)/2 + (x**2 + y**2)/2 + lam*(x**2*y - y**3/3), name="henon_heiles",
-                   reversor={x: -x, y: y, px: px, py: -py})
-    return ex.SectionMap(hh, E, section=x, direction=+1, coords=(y, py), solve=px)
+    return ex.SectionMap(henon_heiles_reversible(), E, section=x, direction=+1, coords=(y, py), solve=px)
 
 
 @pytest.fixture(scope="module")

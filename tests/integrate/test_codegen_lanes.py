@@ -4,20 +4,18 @@ bit, in a full group of lanes, a partial one, on any hyperplane and direction, f
 stops, and whatever the number of threads."""
 import numpy as np
 import pytest
-import sympy as sp
+from systems import henon_heiles, pole, x, y
 
 import explorer as ex
 from explorer.integrate.simd import LANES
 from explorer.kernels import Status
 
-x, y, px, py, lam = sp.symbols("x y px py lam")
 E = 1.0 / 8.0
 
 
 @pytest.fixture(scope="module")
 def hh():
-    return ex.System({x: px, y: py, px: -x - 2*lam*x*y, py: -y - lam*(x**2 - y**2)}, parameters={lam: 1.0},
-                     energy=(px**2 + py**2)/2 + (x**2 + y**2)/2 + lam*(x**2*y - y**3/3), name="henon_heiles")
+    return henon_heiles()
 
 
 def starts(n):
@@ -61,10 +59,9 @@ def test_a_tilted_section_crossed_downwards_gives_the_scalar_rows(hh):
 
 
 def test_orbits_stopped_by_a_pole_give_the_scalar_statuses():
-    s, w = sp.symbols("s w")
-    pole = ex.System({s: 1, w: 1 / s}, name="pole")
+    system, _, w = pole()
     Y0 = np.array([[0.0, 0.0], [-1.0, 0.0], [-0.5, 1.0], [1.0, 0.0], [-2.0, 0.0]])
-    lanes, scalar = both(pole, states=Y0, n_crossings=1, section=w - 1, direction=+1, tmax=5.0, threads=1)
+    lanes, scalar = both(system, states=Y0, n_crossings=1, section=w - 1, direction=+1, tmax=5.0, threads=1)
     assert_same(lanes, scalar)
     assert {Status.NONFINITE, Status.STEP_UNDERFLOW, Status.DONE} <= set(lanes.status.tolist())
 
