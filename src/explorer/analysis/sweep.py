@@ -85,7 +85,8 @@ def panel_block(n_orbits: int, crossings: int, budget: int | None = None) -> int
 PRODUCTS = ("sections", "indicators")
 
 
-def build_spec(scene, panel_indices, *, chunk_orbits: int, product: str | None = None) -> SweepSpec:
+def build_spec(scene, panel_indices, *, chunk_orbits: int,
+               product: str | None = None) -> SweepSpec | SystemSweepSpec:
     """Seeds every panel to compute (inside the allowed region only, R9) and cuts it into chunks; a
     System's scene (one with a ``system``): :func:`build_system_spec`."""
     from explorer.analysis.seeds import seed_points

@@ -26,7 +26,7 @@ __all__ = ["Flow", "flow"]
 @dataclass(frozen=True)
 class Flow:
     """Orbits sampled at the times ``t`` (M,): ``states[i, m]`` (N, M, n) the state of orbit i at
-    ``t[m]``, NaN beyond where it stopped; ``energy_error[i, m]`` = |E - E0| there (NaN without an
+    ``t[m]``, NaN beyond where it stopped; ``energy_error[i, m]`` = ``|E - E0|`` there (NaN without an
     energy); ``status[i]`` (DONE when the last time is reached); ``steps[i]`` its Taylor steps."""
 
     t: np.ndarray

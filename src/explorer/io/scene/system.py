@@ -11,6 +11,7 @@ import operator
 import os
 import sys
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -181,8 +182,8 @@ class SystemSeeds:
     def used_dict(self) -> dict:
         """The keys that determine the points of this kind."""
         if self.kind == "points":
-            return {"kind": "points", "points": [list(p) for p in self.points]}
-        d = {"kind": self.kind, "n": self.n, "window": list(self.window)}
+            return {"kind": "points", "points": [list(p) for p in self.points or ()]}
+        d = {"kind": self.kind, "n": self.n, "window": list(self.window or ())}
         if self.kind == "random":
             d["seed"] = self.seed
         return d
@@ -190,10 +191,10 @@ class SystemSeeds:
 
 def window_of(key, v) -> tuple:
     """[a_lo, a_hi, b_lo, b_hi] with a_lo < a_hi and b_lo < b_hi."""
-    w = _list(key, v)
-    if len(w) != 4:
-        _fail(key, f"must be [a_lo, a_hi, b_lo, b_hi] (4 numbers), got {len(w)} items")
-    w = tuple(_real(f"{key}[{i}]", x) for i, x in enumerate(w))
+    items = _list(key, v)
+    if len(items) != 4:
+        _fail(key, f"must be [a_lo, a_hi, b_lo, b_hi] (4 numbers), got {len(items)} items")
+    w = tuple(_real(f"{key}[{i}]", x) for i, x in enumerate(items))
     if not (w[0] < w[1] and w[2] < w[3]):
         _fail(key, f"must have a_lo < a_hi and b_lo < b_hi, got {list(w)}")
     return w
@@ -280,7 +281,7 @@ class SystemScene:
     the energy), validated on construction (docs/scenes.md)."""
 
     name: str
-    system: object
+    system: Any
     section: object
     coords: tuple
     solve: str
@@ -417,7 +418,7 @@ class SystemScene:
         if "lyapunov" in self.compute:
             ly = self.lyapunov.used_dict()
             grid = ly.pop("map_resolution", 0)
-            seeds = {"map_resolution": grid, "window": list(self.seeds.window)} if grid else d["seeds"]
+            seeds = {"map_resolution": grid, "window": list(self.seeds.window or ())} if grid else d["seeds"]
             out["indicators"] = dict(base, seeds=seeds, lyapunov=ly, alone="sections" not in self.compute)
         return out
 
