@@ -113,7 +113,8 @@ def test_a_value_change_reruns_the_orbits_under_their_own_ids():
         ids = [page.click(c1 + f * r1, c2).ident for f in (0.3, -0.3)]
         page.inputs["mu"].value = "0.031"
         assert [i for i, *_ in page.orbits.starts] == ids
-        _poll_until(page, lambda: len(page.orbits.crossings.data["t"]) == 2 * s.crossings and not page.orbits.running)
+        page.settle()
+        assert len(page.orbits.crossings.data["t"]) == 2 * s.crossings and not page.orbits.running
         assert sorted(set(np.asarray(page.orbits.crossings.data["orbit"]).tolist())) == sorted(ids)
         assert page.click(c1, c2).ident == max(ids) + 1                        # a new click: a new id
     finally:
@@ -324,7 +325,8 @@ def test_a_click_pauses_the_running_orbit_and_resume_completes_it_bit_for_bit():
     try:
         assert page.orbits.pause_box.value and page.url_query()["pause"] == "1"            # on by default
         first, second = _click_while_running(page, a, b)
-        _poll_until(page, lambda: len(_orbit_rows(page, second)) == s.crossings and _idle(page))
+        page.settle()
+        assert len(_orbit_rows(page, second)) == s.crossings and _idle(page)
         held = len(_orbit_rows(page, first))
         assert 0 < held < s.crossings and page.orbits.worker.paused() == [first]          # paused mid-orbit
         assert "1 running" not in page.orbits.status.text and "1 paused" in page.orbits.status.text
@@ -334,7 +336,8 @@ def test_a_click_pauses_the_running_orbit_and_resume_completes_it_bit_for_bit():
         assert len(parse_starts(page.url_query()["orbits"])) == 2                  # both starts in the link
         assert page.orbit_list.resume() == 1 and page.orbits.worker.paused() == []
         assert "paused" not in page.orbits.status.text
-        _poll_until(page, lambda: first not in page.orbits.running and _idle(page))
+        page.settle()
+        assert first not in page.orbits.running and _idle(page)
         for ident, (p1, p2) in ((first, a), (second, b)):        # as one uninterrupted run, bit for bit
             ref = sections.crossings(s.params, s.h, [(p1, p2)], n_crossings=s.crossings, **s.section_kwargs())
             np.testing.assert_array_equal(_orbit_rows(page, ident), ref.orbit(0))
@@ -360,7 +363,8 @@ def test_a_click_pauses_the_running_orbit_and_resume_completes_it_bit_for_bit():
         assert len(page.orbits.worker.paused()) == 1
         page.inputs["crossings"].value = "300"
         assert page.settings.crossings == 300 and page.orbits.worker.paused() == [] and len(page.orbits.starts) == 2
-        _poll_until(page, lambda: len(page.orbits.crossings.data["t"]) == 2 * 300 and _idle(page))
+        page.settle()
+        assert len(page.orbits.crossings.data["t"]) == 2 * 300 and _idle(page)
         assert "paused" not in page.orbits.status.text
     finally:
         page.close()
@@ -378,7 +382,8 @@ def test_with_the_box_unticked_a_click_leaves_the_running_orbits_running():
         assert not page.orbits.pause_box.value and page.url_query()["pause"] == "0"
         first, second = _click_while_running(page, a, b)
         assert page.orbits.worker.paused() == [] and "paused" not in page.orbits.status.text
-        _poll_until(page, lambda: len(page.orbits.crossings.data["t"]) == 2 * s.crossings and _idle(page))
+        page.settle()
+        assert len(page.orbits.crossings.data["t"]) == 2 * s.crossings and _idle(page)
         for ident, (p1, p2) in ((first, a), (second, b)):        # both complete, no Resume needed
             ref = sections.crossings(s.params, s.h, [(p1, p2)], n_crossings=s.crossings, **s.section_kwargs())
             np.testing.assert_array_equal(_orbit_rows(page, ident), ref.orbit(0))
@@ -1352,7 +1357,8 @@ def test_fifty_clicks_and_five_megno_toggles_start_no_thread_of_their_own():
             page.poll()
             most = max(most, threading.active_count())
         page.orbit_list.resume()
-        _poll_until(page, lambda: len(page.orbits.crossings.data["t"]) == 50 * CLICK_CROSSINGS and _idle(page))
+        page.settle()
+        assert len(page.orbits.crossings.data["t"]) == 50 * CLICK_CROSSINGS and _idle(page)
         assert most <= threads0 + 2, (threads0, most)
     finally:
         page.close()
@@ -1495,7 +1501,8 @@ def test_a_million_crossings_are_drawn_as_a_density_image_of_the_visible_window(
         for u in (-0.5, 0.5):
             page.click(c1 + u * r1, c2)
         page.orbit_list.resume()                                  # (the second click paused the first if it still ran)
-        _poll_until(page, lambda: _idle(page) and len(page.orbits.crossings.data["t"]) == 2 * s.crossings)
+        page.settle()
+        assert _idle(page) and len(page.orbits.crossings.data["t"]) == 2 * s.crossings
         assert not page.density_image.dense and page.orbits.points.visible
         assert page.density_image.density.data["image"] == []
         # 10^6 more crossings of the two orbits (points spread over the region), as the worker hands them in
@@ -1588,7 +1595,8 @@ def test_past_the_glyph_budget_the_newest_orbits_are_glyphs_and_the_older_ones_i
         page.orbits.pause_box.value = False
         for u in (-0.6, -0.3, 0.0, 0.3, 0.6):
             page.click(c1 + u * r1, c2)
-        _poll_until(page, lambda: _idle(page) and len(page.orbits.crossings.data["t"]) == 5 * s.crossings)
+        page.settle()
+        assert _idle(page) and len(page.orbits.crossings.data["t"]) == 5 * s.crossings
         ids = [i for i, *_ in page.orbits.starts]
         assert _glyphs_and_image(page) == (ids, [])                              # under the budget: as today
         budget = density.GLYPH_BUDGET                  # (the orbits' sizes as parts of it)

@@ -79,7 +79,8 @@ def test_the_list_shows_every_orbit_with_its_colour_start_crossings_and_state():
         assert table[second][1][4] == "done"
         page.orbit_list.resume()
         assert _table(page)[first][1][4] == "running"
-        _poll_until(page, lambda: not page.orbits.running)
+        page.settle()
+        assert not page.orbits.running
         assert _table(page)[first][1][3:] == [str(LONG), "done"]
     finally:
         page.close()
@@ -137,7 +138,8 @@ def test_a_hidden_orbit_leaves_every_drawn_source_keeps_computing_and_comes_back
         assert _drawn(page, first) == 0 and len(_rows(page, first)) == 0
         assert "hidden" in _table(page)[first][1][4]
         second = page.click(*b).ident
-        _poll_until(page, lambda: not page.orbits.running and not page.orbits.running)
+        page.settle()
+        assert not page.orbits.running
         assert _drawn(page, first) == 0 and len(_rows(page, first)) == 0         # its later rows: hidden too
         assert set(np.asarray(page.orbits.shown.data["orbit"]).tolist()) == {second}
         assert _table(page)[first][1][3:] == [str(LONG), "done, hidden"]         # it went on computing
@@ -153,7 +155,8 @@ def test_a_hidden_orbit_leaves_every_drawn_source_keeps_computing_and_comes_back
         page.orbit_list.toggle(second)
         page.inputs["crossings"].value = "50"                                     # a new value: still hidden
         hidden_again = page.orbits.starts[1][0]
-        _poll_until(page, lambda: not page.orbits.running and not page.orbits.running)
+        page.settle()
+        assert not page.orbits.running
         assert page.orbits.hidden.keys() == {hidden_again} and _drawn(page, hidden_again) == 0
         assert len(page.orbits.hidden[hidden_again]["t"]) == 50
     finally:
@@ -204,7 +207,8 @@ def test_the_hidden_orbits_are_in_the_link_and_a_page_from_it_keeps_them_hidden(
         page.close()
     again = _page(s, link)                                                        # a reload of that link
     try:
-        _poll_until(again, lambda: not again.orbits.running and not again.orbits.running)
+        again.settle()
+        assert not again.orbits.running
         ids = [i for i, *_ in again.orbits.starts]
         assert again.orbits.hidden.keys() == {ids[1]} and _drawn(again, ids[1]) == 0
         assert len(again.orbits.hidden[ids[1]]["t"]) == s.crossings                 # computed all the same
