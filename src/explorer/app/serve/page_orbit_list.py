@@ -30,8 +30,7 @@ SELECTED_BACKGROUND = "#fff3b0"
 
 
 class OrbitList:
-    """The list (module docstring).  ``orbits``: the page's OrbitsLayer; ``readout``: its Readout;
-    ``on_changed()``: after a hide, show, delete or clear (the page's link)."""
+    """The list; ``on_changed()`` after a hide, show, delete or clear (the page's link)."""
 
     def __init__(self, orbits, readout, session, on_changed):
         self.orbits, self.readout, self.on_changed = orbits, readout, on_changed
@@ -52,8 +51,7 @@ class OrbitList:
         readout.on_select(lambda _ident: self.refresh())
 
     def draw(self, fig) -> None:
-        """The selected orbit's markers (over the dots: call after OrbitsLayer.draw), from the rows
-        the browser already holds (a selection sends one number, not the rows)."""
+        """The selected orbit's markers (call after OrbitsLayer.draw), filtered from the browser's rows."""
         self.filter = CustomJSFilter(name="selected-orbit", args={"orbit": 0}, code=SELECTED_FILTER)
         self.marks = fig.scatter("p1", "p2", source=self.orbits.shown, view=CDSView(filter=self.filter),
                                  fill_color=self.orbits.by_orbit, line_color=SELECTED_LINE, line_width=1.0,
@@ -92,8 +90,7 @@ class OrbitList:
             self.delete(self.orbits.starts[-1][0])
 
     def resume(self) -> int:
-        """Continue the orbits a click paused, from where each stopped (its rows are those of an
-        uninterrupted run); returns how many."""
+        """Continue the orbits a click paused, from where each stopped; returns how many."""
         n = len(self.orbits.worker.resume())
         self.orbits.update_status()
         return n
@@ -109,9 +106,7 @@ class OrbitList:
 
     # ------------------------------------------------------------ the link
     def load_url(self, starts, hidden: str) -> None:
-        """Start a link's orbits (``starts``, its ``orbits``) and hide those its ``hidden`` names
-        (their positions, :func:`~explorer.app.serve.settings.parse_hidden`; a malformed one is
-        ignored and said, every orbit shown)."""
+        """Start a link's orbits and hide those its ``hidden`` names (a malformed one is said)."""
         try:
             positions = settings_mod.parse_hidden(hidden, len(starts))
         except ParameterError as exc:

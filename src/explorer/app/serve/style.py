@@ -10,10 +10,7 @@ from explorer.app.figures import MANIFOLD_COLORS  # noqa: F401  (one definition,
 FORBIDDEN_COLOR = "#cccccc"
 ALLOWED_COLOR = "#ffffff"
 BOUNDARY_COLOR = "#262626"
-#: size of the figure in pixels (nominal: in the browser its width follows the window's, its height
-#: keeps this aspect), its least width, the height of the page above and below it that stays in view
-#: (title, buttons, status lines: the figure's height is at most the window's less this), and the
-#: size of a crossing's dot
+#: the figure's nominal size (px; its aspect kept), least width, the page's height around it, a dot's size
 FIGURE_WIDTH = 720
 FIGURE_HEIGHT = 560
 FIGURE_MIN_WIDTH = 360
@@ -23,17 +20,14 @@ FIELD_WIDTH = 100
 POINT_SIZE = 2.0
 #: the view shows the region's bounding box and this margin around it (fraction of the semi-axes)
 VIEW_MARGIN = 0.08
-#: colour scale of the MEGNO layer: <Y> from 0 (stable periodic) over 2 (quasi-periodic, light) to
-#: MEGNO_HIGH and above (chaotic, dark)
+#: colour scale of the MEGNO layer: <Y> from 0 over 2 (quasi-periodic, light) to MEGNO_HIGH (chaotic, dark)
 MEGNO_LOW, MEGNO_HIGH = 0.0, 8.0
 #: periodic orbits of periods 1..PERIODIC_MAX are marked, filled with the colour of their period
 PERIOD_COLORS = ("#ffffff", "#f4a582", "#92c5de", "#b8e186")
 #: colours of the message under the figure: a refusal or failure, and a success
 MESSAGE_ERROR_COLOR = "#b00020"
 MESSAGE_OK_COLOR = "#1b5e20"
-#: colour of the separatrices, cyan, over a dark casing (a wider line under it): one of the two stands
-#: out from the white region and from every colour of the MEGNO layer (Inferno: black, purple,
-#: orange, yellow); #303030 alone vanished on its dark end
+#: the separatrices: cyan over a dark casing, visible on white and on every colour of the MEGNO layer
 SEPARATRIX_COLOR = "#00e5ff"
 SEPARATRIX_CASING = "#101010"
 
