@@ -269,7 +269,7 @@ class Worker:
                 continue
             if run.finished:
                 self.remove(run.ident)
-            if notice is not None:
+            if notice is not None and self._on_notice is not None:
                 await session.apply(partial(self._on_notice, run.ident, notice))
             if len(rows) or run.finished:   # (a block cut at its steps before a crossing: nothing to show)
                 await session.apply(partial(self._on_block, run.ident, rows, run.done, run.status))

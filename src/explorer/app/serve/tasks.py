@@ -181,7 +181,7 @@ class Timer:
     def __init__(self, session: Session, action):
         self.session, self.action = session, action
         self.due: float | None = None          # (loop time = time.monotonic) of the pending call
-        self._handle = None
+        self._handle: asyncio.TimerHandle | None = None
 
     @property
     def pending(self) -> bool:
@@ -192,7 +192,9 @@ class Timer:
             return
         self.cancel()
         self.due = when
-        self._handle = handle = self.session.loop.call_at(when, lambda: self.session.soon(lambda: self._fire(handle)))
+        handle: asyncio.TimerHandle = self.session.loop.call_at(
+            when, lambda: self.session.soon(lambda: self._fire(handle)))
+        self._handle = handle
         self.session.waiting.add(self)
 
     def cancel(self) -> None:
