@@ -454,6 +454,15 @@ def chaos_maps(maps, *, layout="row", columns=None, threshold=4.0, dpi=200, pane
     return fig
 
 
+def save_fraction_curve(fractions, scene, dpi, stem, text=None) -> list:
+    """The chaotic fraction against the swept value (rows (value, fraction, error)) of ``scene``,
+    saved as ``<stem>_fraction``: :func:`fraction_curve`, :func:`save_figure`."""
+    fr = np.array(fractions)
+    fig = fraction_curve(fr[:, 0], fr[:, 1], fr[:, 2], parameter=scene.sweep_parameter or "",
+                         threshold=scene.lyapunov.threshold, dpi=dpi)
+    return save_figure(fig, stem.with_name(stem.name + "_fraction"), text=text)
+
+
 def fraction_curve(values, fraction, error, *, parameter="mu", threshold=4.0, dpi=200):
     """The chaotic fraction of the allowed section (seeds with <Y> > threshold) against the
     swept parameter, with binomial error bars."""

@@ -171,10 +171,7 @@ def draw_figure(scene, out_path, stem):
                                      dpi=fs.dpi)
             paths += figures.save_figure(fig, stem.with_name(stem.name + "_chaosmap"), text=text)
         if len(fractions) > 1:
-            fr = np.array(fractions)
-            fig = figures.fraction_curve(fr[:, 0], fr[:, 1], fr[:, 2], parameter=scene.sweep_parameter or "",
-                                         threshold=scene.lyapunov.threshold, dpi=fs.dpi)
-            paths += figures.save_figure(fig, stem.with_name(stem.name + "_fraction"), text=text)
+            paths += figures.save_fraction_curve(fractions, scene, fs.dpi, stem, text)
     return paths
 
 
