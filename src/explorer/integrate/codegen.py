@@ -53,7 +53,7 @@ from explorer.model.validation import ParameterError
 __all__ = ["GENERATOR_VERSION", "Decomposition", "cache_directory", "decompose", "load", "module_key", "source"]
 
 #: changes whenever the emitted code changes, so that a cached module of an older generator is not used
-GENERATOR_VERSION = 8
+GENERATOR_VERSION = 9
 
 #: the modules that append drivers to the generated source: each has ``render(system) -> str``, code
 #: that calls the recurrence (``taylor_coefficients_into``, ``taylor_coefficients_lanes``, ``energy``)
@@ -551,6 +551,10 @@ import math
 import numpy as np
 
 from explorer._jit import njit
+from explorer.kernels.checks import all_finite, is_finite
+from explorer.kernels.clock import clip_step, resolves
+from explorer.kernels.status import STATUS_NONFINITE, STATUS_STEP_UNDERFLOW
+from explorer.kernels.taylor import evaluate, step_size
 
 #: state dimension, number of parameters, rows of the work array of taylor_coefficients_into
 DIM = {dim}
@@ -576,6 +580,38 @@ def taylor_coefficients(P, X, order):
     """:func:`taylor_coefficients_into` with its own work array."""
     W = np.empty((max(N_WORK, 1), order + 1))
     taylor_coefficients_into(P, X, order, W)
+
+
+#: taylor_step's status of a step taken
+STEP_OK = -1
+
+
+@njit(error_model="numpy")
+def _rows_finite(X, k, n):
+    for i in range(n):
+        if not is_finite(X[i, k]):
+            return False
+    return True
+
+
+@njit(error_model="numpy")
+def taylor_step(P, X, W, n, t, tend, order, factor, steps, ynew):
+    """One step of the adaptive Taylor method of ``order`` (Jorba & Zou 2005) from X[:, 0] at time
+    t towards tend: the coefficients, the step from rows :n (the orbit's) clipped onto tend, ynew
+    the state at its end.  Returns (status, h, last, steps): STEP_OK, or why no step was taken
+    (h = 0) or why its end is not finite."""
+    taylor_coefficients_into(P, X, order, W)
+    if not (_rows_finite(X, order, n) and _rows_finite(X, order - 1, n)):
+        return STATUS_NONFINITE, 0.0, False, steps
+    h = step_size(X[:n], order, factor)
+    h, last = clip_step(t, h, tend)
+    if not resolves(t, h):
+        return STATUS_STEP_UNDERFLOW, 0.0, False, steps
+    evaluate(X, order, h, ynew)
+    steps += 1
+    if not all_finite(ynew):
+        return STATUS_NONFINITE, h, last, steps
+    return STEP_OK, h, last, steps
 
 
 @njit(error_model="numpy")

@@ -31,14 +31,6 @@ def _section_value(a, b, y):
 
 
 @njit(error_model="numpy")
-def _finite_column(X, k):
-    for i in range(DIM):
-        if not is_finite(X[i, k]):
-            return False
-    return True
-
-
-@njit(error_model="numpy")
 def crossings_orbit(j, y0, P, a, b, direction, tmax, order, max_steps, limit, data, final, info):
     """Orbit j from y0 with the adaptive Taylor method of ``order`` (Jorba & Zou 2005: the order
     from the tolerance, the step from the last two coefficients, kernels.taylor.step_size) until
@@ -69,19 +61,9 @@ def crossings_orbit(j, y0, P, a, b, direction, tmax, order, max_steps, limit, da
         if steps >= max_steps:
             status = STATUS_MAX_STEPS
             break
-        taylor_coefficients_into(P, X, order, W)
-        if not (_finite_column(X, order) and _finite_column(X, order - 1)):
-            status = STATUS_NONFINITE
-            break
-        h = step_size(X, order, factor)
-        h, last = clip_step(t, h, tmax)
-        if not resolves(t, h):
-            status = STATUS_STEP_UNDERFLOW
-            break
-        evaluate(X, order, h, ynew)
-        steps += 1
-        if not all_finite(ynew):
-            status = STATUS_NONFINITE
+        st, h, last, steps = taylor_step(P, X, W, DIM, t, tmax, order, factor, steps, ynew)
+        if st != STEP_OK:
+            status = st
             break
         gnew = _section_value(a, b, ynew)
         for k in range(order + 1):

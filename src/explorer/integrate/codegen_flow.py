@@ -20,14 +20,6 @@ from explorer.kernels.taylor import evaluate, safety_factor, step_size  # noqa: 
 
 
 @njit(error_model="numpy")
-def _flow_finite_column(X, k):
-    for i in range(DIM):
-        if not is_finite(X[i, k]):
-            return False
-    return True
-
-
-@njit(error_model="numpy")
 def _flow_sample(j, m, y, P, E0, states, energy_error):
     for i in range(DIM):
         states[j, m, i] = y[i]
@@ -64,19 +56,9 @@ def flow_orbit(j, y0, P, times, order, max_steps, states, energy_error, info):
         if steps >= max_steps:
             status = STATUS_MAX_STEPS
             break
-        taylor_coefficients_into(P, X, order, W)
-        if not (_flow_finite_column(X, order) and _flow_finite_column(X, order - 1)):
-            status = STATUS_NONFINITE
-            break
-        h = step_size(X, order, factor)
-        h, last = clip_step(t, h, tend)
-        if not resolves(t, h):
-            status = STATUS_STEP_UNDERFLOW
-            break
-        evaluate(X, order, h, ynew)
-        steps += 1
-        if not all_finite(ynew):
-            status = STATUS_NONFINITE
+        st, h, last, steps = taylor_step(P, X, W, DIM, t, tend, order, factor, steps, ynew)
+        if st != STEP_OK:
+            status = st
             break
         start = t - tc
         t, tc = advance_time(t, tc, h, last, tend)

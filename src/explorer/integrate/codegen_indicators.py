@@ -24,14 +24,6 @@ from explorer.kernels.taylor import evaluate, safety_factor, step_size  # noqa: 
 
 
 @njit(error_model="numpy")
-def _orbit_rows_finite(X, k, n):
-    for i in range(n):
-        if not is_finite(X[i, k]):
-            return False
-    return True
-
-
-@njit(error_model="numpy")
 def _indicator_history(acc, hist_t, hist, hpos, row):
     """The result rows at the history times the step end passed (as the engine's tangent loops)."""
     while hpos < hist_t.shape[0] and acc[_tg.ACC_T] >= hist_t[hpos]:
@@ -94,19 +86,9 @@ def indicators_orbit(y0, v0, w0, n, nvec, P, T, order, max_steps, early_stop, sa
             break
         for i in range(DIM):
             X[i, 0] = z[i]
-        taylor_coefficients_into(P, X, order, Wk)
-        if not (_orbit_rows_finite(X, order, n) and _orbit_rows_finite(X, order - 1, n)):
-            status = STATUS_NONFINITE
-            break
-        h = step_size(X[:n], order, factor)
-        h, last = clip_step(t, h, T)
-        if not resolves(t, h):
-            status = STATUS_STEP_UNDERFLOW
-            break
-        evaluate(X, order, h, znew)
-        steps += 1
-        if not all_finite(znew):
-            status = STATUS_NONFINITE
+        st, h, last, steps = taylor_step(P, X, Wk, n, t, T, order, factor, steps, znew)
+        if st != STEP_OK:
+            status = st
             break
         t_new = T if last else t + h
         dlog = _tg.renormalize(znew[n:2 * n], n)
