@@ -139,6 +139,8 @@ def _cases():
         ("sweep--scheduler=empty", BASE["sweep"] + ["--backend=dask", "--scheduler="], "--scheduler"),
         ("sweep--scheduler_without_dask", BASE["sweep"] + ["--scheduler=x:1"], "--scheduler"),
         ("sweep--unknown_scene", ["sweep", "nosuchscene"], "scene"),
+        ("sweep--system=empty", BASE["sweep"] + ["--system="], "--system"),
+        ("sweep--system=no_such_module", BASE["sweep"] + ["--system=no_such_module_xyz:hh"], "--system"),
         ("figures--only=empty", ["figures", "--only="], "figure"),
         ("figures--only=unknown", ["figures", "--only=figure44"], "figure"),
         ("explore--unknown_scene", ["explore", "nosuchscene"], "scene"),
