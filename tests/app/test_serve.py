@@ -1162,8 +1162,7 @@ def test_the_scene_seeds_button_starts_the_sweeps_seeds_at_the_current_settings(
 def _poll_until(page, cond, timeout=240.0):
     t0 = time.time()
     while not cond() and time.time() - t0 < timeout:
-        page.poll()
-        time.sleep(0.02)
+        page.session.poll(0.02)  # (the page's own loop runs only while polled: no sleep between polls)
     assert cond(), (page.message.text, page.orbits.status.text)
     for _ in range(10):          # then what the page scheduled meanwhile (the flush after a first block)
         if not page.poll():
