@@ -13,8 +13,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from explorer._jit import get_num_threads, max_threads, set_num_threads
-from explorer.analysis.system_sections import DEFAULT_MAX_STEPS, DRIVERS, _states, driver_for, is_system
+from explorer._jit import max_threads
+from explorer.analysis.system_sections import DEFAULT_MAX_STEPS, DRIVERS, _states, check_memory, is_system, run_driver
 from explorer.integrate.methods import DEFAULT_TOL, check_setting
 from explorer.kernels import Status
 from explorer.kernels.taylor_order import order_for_tolerance
@@ -86,32 +86,15 @@ def flow(system, states=None, *, times=None, tol: float = DEFAULT_TOL, max_steps
     ts = _times(times)
     Y0 = _states(system, states)
     N, n, M = Y0.shape[0], system.dimension, ts.size
-    need = N * M * (n + 1) * 8
-    mem = validation.physical_memory()
-    if mem and need > validation.MAX_MEMORY_FRACTION * mem:
-        raise ParameterError(f"flow: {N} orbits x {M} times need {validation.human_bytes(need)} in memory "
-                             f"(this machine has {validation.human_bytes(mem)}); fewer times or orbits")
+    check_memory(f"flow: {N} orbits x {M} times", N * M * (n + 1) * 8, "fewer times or orbits")
     order = order_for_tolerance(tol)
     mod = codegen.load(system)
     out = np.full((N, M, n), np.nan)
     energy_error = np.full((N, M), np.nan)
     status = np.zeros(N, np.int64)
     info = np.zeros((N, 2))
-    old = get_num_threads()
-    if threads is not None:
-        set_num_threads(threads)
-    try:
-        args = (Y0, system.parameter_array(), ts, int(order), int(max_steps), out, energy_error, status, info)
-        workers = driver_for(N, driver)
-        if workers == 0:
-            mod.flow_taylor(*args)
-        elif workers == 1:   # one group of lanes: no parallel region
-            mod.flow_lanes_worker(np.zeros(1, np.int64), *args)
-        else:
-            mod.flow_lanes(*args, workers)
-    finally:
-        if threads is not None:
-            set_num_threads(old)
+    run_driver(mod, "flow", N, driver, threads,
+               (Y0, system.parameter_array(), ts, int(order), int(max_steps), out, energy_error, status, info))
     settings = {"method": "taylor", "tol": tol, "order": order, "system": system.name, "max_steps": max_steps,
                 "columns": [s.name for s in system.states]}
     return Flow(ts.copy(), out, energy_error, status, info[:, 1].astype(np.int64), settings)

@@ -32,8 +32,8 @@ from explorer.integrate.methods import DEFAULT_TOL, check_setting
 from explorer.kernels.taylor_order import order_for_tolerance
 from explorer.model import ParameterError, validation
 
-__all__ = ["Section", "is_system", "is_system_map", "linear_section", "or_a_system", "refuse_a_system",
-           "system_crossings"]
+__all__ = ["Section", "check_memory", "is_system", "is_system_map", "linear_section", "or_a_system",
+           "refuse_a_system", "run_driver", "system_crossings"]
 
 DEFAULT_MAX_STEPS = 10**9
 #: the drivers of ``system_crossings(driver=)``; every one gives the same rows bit for bit.  ``auto``
@@ -218,37 +218,48 @@ def system_crossings(system, states=None, *, n_crossings: int, section=None, dir
     P = system.parameter_array()
     N = Y0.shape[0]
     width = 1 + system.dimension + (system.energy is not None)
-    need = N * K * width * 8
-    mem = validation.physical_memory()
-    if mem and need > validation.MAX_MEMORY_FRACTION * mem:
-        raise ParameterError(f"crossings: {N} orbits x {K} crossings need {validation.human_bytes(need)} in memory "
-                             f"(this machine has {validation.human_bytes(mem)}); lower n_crossings or the orbits")
+    check_memory(f"crossings: {N} orbits x {K} crossings", N * K * width * 8, "lower n_crossings or the orbits")
     data = np.full((N, K, width), np.nan)
     count = np.zeros(N, np.int64)
     status = np.zeros(N, np.int64)
     final = np.zeros((N, system.dimension))
     info = np.zeros((N, 3))
-    old = get_num_threads()
-    if threads is not None:
-        set_num_threads(threads)
-    try:
-        args = (Y0, P, sec.a, float(sec.b), int(direction), float(tmax), int(order), int(max_steps), int(K), data,
-                count, status, final, info)
-        workers = driver_for(N, driver)
-        if workers == 0:
-            mod.crossings_taylor(*args)
-        elif workers == 1:   # one group of lanes: no parallel region
-            mod.crossings_lanes_worker(np.zeros(1, np.int64), *args)
-        else:
-            mod.crossings_lanes(*args, workers)
-    finally:
-        if threads is not None:
-            set_num_threads(old)
+    run_driver(mod, "crossings", N, driver, threads,
+               (Y0, P, sec.a, float(sec.b), int(direction), float(tmax), int(order), int(max_steps), int(K), data,
+                count, status, final, info))
     columns = ["t", *(s.name for s in system.states)] + (["E - E0"] if system.energy is not None else [])
     settings = {"method": "taylor", "tol": tol, "order": order, "system": system.name, "section": str(sec.expr),
                 "direction": int(direction), "tmax": tmax, "max_steps": max_steps, "n_crossings": K,
                 "columns": columns}
     return data, count, status, final, info, "taylor", settings
+
+
+def check_memory(what: str, need: int, hint: str) -> None:
+    """ParameterError when ``need`` bytes exceed validation.MAX_MEMORY_FRACTION of this machine's memory."""
+    mem = validation.physical_memory()
+    if mem and need > validation.MAX_MEMORY_FRACTION * mem:
+        raise ParameterError(f"{what} need {validation.human_bytes(need)} in memory "
+                             f"(this machine has {validation.human_bytes(mem)}); {hint}")
+
+
+def run_driver(mod, name: str, n: int, driver: str, threads, args: tuple) -> None:
+    """The generated driver ``name`` of module ``mod`` on ``n`` orbits with ``args``: ``<name>_taylor``
+    (the scalar form), ``<name>_lanes_worker`` (one group of lanes, no parallel region) or
+    ``<name>_lanes`` (:func:`driver_for`), on ``threads`` numba threads (None: as set)."""
+    old = get_num_threads()
+    if threads is not None:
+        set_num_threads(threads)
+    try:
+        workers = driver_for(n, driver)
+        if workers == 0:
+            getattr(mod, f"{name}_taylor")(*args)
+        elif workers == 1:
+            getattr(mod, f"{name}_lanes_worker")(np.zeros(1, np.int64), *args)
+        else:
+            getattr(mod, f"{name}_lanes")(*args, workers)
+    finally:
+        if threads is not None:
+            set_num_threads(old)
 
 
 def driver_for(n: int, driver: str = "auto") -> int:

@@ -94,3 +94,16 @@ def _table(key, v, allowed) -> dict:
                              f"(allowed: {', '.join(allowed)})")
     return v
 
+
+
+def _sweep(data: dict) -> dict:
+    """A scene's ``[sweep]`` table (both keys required) as ``sweep_parameter`` and ``sweep_values``;
+    {} without one."""
+    if "sweep" not in data:
+        return {}
+    sweep = _table("sweep", data["sweep"], ("parameter", "values"))
+    for k in ("parameter", "values"):
+        if k not in sweep:
+            _fail(f"sweep.{k}", "is required in a [sweep] table")
+    return {"sweep_parameter": _str("sweep.parameter", sweep["parameter"]),
+            "sweep_values": tuple(_list("sweep.values", sweep["values"]))}

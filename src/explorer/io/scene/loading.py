@@ -11,7 +11,7 @@ except ModuleNotFoundError:  # Python < 3.11
 
 from explorer import model
 from explorer.io.scene.atlas import _atlas_from_dict
-from explorer.io.scene.checks import SceneError, _bool, _fail, _got, _list, _real, _str, _table
+from explorer.io.scene.checks import SceneError, _bool, _fail, _got, _list, _real, _sweep, _table
 from explorer.io.scene.core import Scene
 from explorer.io.scene.schema import (
     _FIGURE_KEYS,
@@ -58,13 +58,7 @@ def scene_from_dict(data: dict, text: str = "", system=None):
     if "h" in energy:
         kw["h"] = energy["h"]
 
-    if "sweep" in data:
-        sweep = _table("sweep", data["sweep"], ("parameter", "values"))
-        for k in ("parameter", "values"):
-            if k not in sweep:
-                _fail(f"sweep.{k}", "is required in a [sweep] table")
-        kw["sweep_parameter"] = _str("sweep.parameter", sweep["parameter"])
-        kw["sweep_values"] = tuple(_list("sweep.values", sweep["values"]))
+    kw.update(_sweep(data))
 
     kw["seeds"] = SeedSpec(**_table("seeds", data.get("seeds", {}), _SEED_KEYS))
     kw["integration"] = IntegrationSpec(**_table("integration", data.get("integration", {}), _INTEGRATION_KEYS))

@@ -27,6 +27,7 @@ from explorer.io.scene.checks import (
     _real,
     _short,
     _str,
+    _sweep,
     _table,
 )
 from explorer.io.scene.hashes import _canonical_json, _sha256
@@ -483,13 +484,7 @@ def system_scene_from_dict(data: dict, text: str = "", system=None) -> SystemSce
     if "value" not in energy:
         _fail("energy.value", f"is required: the energy level E of the section map of {sys_obj.name}")
     kw["energy"] = energy["value"]
-    if "sweep" in data:
-        sweep = _table("sweep", data["sweep"], ("parameter", "values"))
-        for k in ("parameter", "values"):
-            if k not in sweep:
-                _fail(f"sweep.{k}", "is required in a [sweep] table")
-        kw["sweep_parameter"] = _str("sweep.parameter", sweep["parameter"])
-        kw["sweep_values"] = tuple(_list("sweep.values", sweep["values"]))
+    kw.update(_sweep(data))
     seeds = dict(_table("seeds", data.get("seeds", {}), _SEED_KEYS))
     kw["seeds"] = SystemSeeds(**seeds) if seeds else SystemSeeds()
     kw["integration"] = SystemIntegration(**_table("integration", data.get("integration", {}), _INTEGRATION_KEYS),
