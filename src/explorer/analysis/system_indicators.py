@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from explorer._jit import get_num_threads, max_threads, set_num_threads
-from explorer.analysis.system_sections import _states, is_system
+from explorer._jit import max_threads
+from explorer.analysis.system_sections import _states, is_system, run_driver
 from explorer.integrate.methods import DEFAULT_TOL, check_setting
 from explorer.kernels import indicator_table as table
 from explorer.kernels.taylor_order import order_for_tolerance
@@ -136,16 +136,10 @@ def system_indicators(system, y0=None, *, states=None, tmax: float, method, tol:
     final = np.zeros((N, n))
     steps = np.zeros(N, np.int64)
     dev = np.full((N, 2, n), np.nan)
-    old = get_num_threads()
-    if threads is not None:
-        set_num_threads(threads)
-    try:
-        mod.indicators_taylor(Y0, V0, W0, n, nvec, system.parameter_array(), T, order, max_steps, early_stop,
-                              float(early_sali) if nvec == 2 else 0.0, float(early_megno), float(early_time), hist_t,
-                              hist, res, ext, status, final, steps, dev)
-    finally:
-        if threads is not None:
-            set_num_threads(old)
+    run_driver(mod, "indicators", N, "scalar", threads,   # (no SIMD form of this driver)
+               (Y0, V0, W0, n, nvec, system.parameter_array(), T, order, max_steps, early_stop,
+                float(early_sali) if nvec == 2 else 0.0, float(early_megno), float(early_time), hist_t, hist, res,
+                ext, status, final, steps, dev))
     settings = {"method": "taylor", "time": T, "tol": tol, "order": order, "system": system.name,
                 "states": [s.name for s in system.states], "vectors": nvec}
     if smap is not None:
