@@ -13,11 +13,6 @@ from explorer.analysis.system_indicators import default_vectors
 from explorer.kernels import Status
 from explorer.model import ParameterError
 
-# The classifications below are not rerun for a generic CPU (cpu_dependent): their generated modules
-# would compile a second time there, which README's command has no time for (benchmarks/RESULTS.md,
-# "README's test command"); their margins are wide (regular <Y> 1.86 and 1.89 within (1.5, 2.3), chaotic
-# <Y> 23 to 78 against 10).
-
 ALL = ("mlce", "megno", "fli", "sali", "gali2")
 
 
@@ -73,6 +68,7 @@ def test_deviation_vectors_agree_with_scipy_on_the_hand_written_variational_equa
     assert res.fli[0] >= np.log(np.linalg.norm(v)) - 1e-9
 
 
+@pytest.mark.cpu_dependent   # a classification by thresholds (tests/conftest.py)
 def test_a_regular_orbit_has_megno_near_2_small_exponent_and_sali_gali2_away_from_0(four):
     T = 1000.0
     for i in (0, 3):
@@ -81,6 +77,7 @@ def test_a_regular_orbit_has_megno_near_2_small_exponent_and_sali_gali2_away_fro
         assert four.sali[i] > 1e-2 and four.gali2[i] > 1e-2
 
 
+@pytest.mark.cpu_dependent   # a classification by thresholds (tests/conftest.py)
 def test_a_chaotic_orbit_has_megno_growing_as_half_the_exponent_times_t_and_sali_gali2_fall_to_0(four):
     T = 1000.0
     for i in (1, 2):
@@ -113,6 +110,7 @@ def test_two_harmonic_oscillators_rotate_the_deviation_vectors_so_megno_and_the_
     np.testing.assert_allclose(res.gali2, 1.0, atol=1e-10)
 
 
+@pytest.mark.cpu_dependent   # a classification by thresholds (tests/conftest.py)
 def test_the_lorenz_system_without_energy_has_the_published_exponent_and_a_nan_energy_error():
     # sigma = 10, rho = 28, beta = 8/3: lambda_1 = 0.9056 (Viswanath 1998; Sprott 2003, Chaos and
     # Time-Series Analysis, Table A.1); the mean finite-time exponent of three orbits over T = 2000
@@ -163,6 +161,7 @@ def test_an_orbit_out_of_steps_ends_with_max_steps_at_the_time_it_reached(hh):
     assert np.isfinite(res.megno[0])
 
 
+@pytest.mark.cpu_dependent   # a classification by thresholds (tests/conftest.py)
 def test_early_stop_ends_a_chaotic_orbit_by_sali_and_not_a_regular_one(hh):
     res = ex.indicators(hh, states=[CHAOTIC_CT, REGULAR], tmax=2000.0, which=("megno", "sali"), early_stop=True)
     assert res.early[0] > 0 and res.time[0] < 2000.0
