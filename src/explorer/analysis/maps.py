@@ -213,6 +213,17 @@ class StandardMap:
     def describe_domain(self) -> str:
         return "the cylinder theta mod 2 pi"
 
+    def allowed(self, points) -> np.ndarray:
+        """Mask (...) of the finite points (..., 2): the whole cylinder."""
+        return np.all(np.isfinite(np.asarray(points, float)), axis=-1)
+
+    def indicators(self, points, **kw) -> dict:
+        """The chaos indicators of the orbits from ``points``: :func:`explorer.analysis.map_indicators.
+        standard_indicators` (what :func:`explorer.indicators` gives for this map)."""
+        from explorer.analysis.map_indicators import standard_indicators
+
+        return standard_indicators(self.k, points, **kw)
+
     def not_finite(self, x) -> str:
         return f"the map's Jacobian is not finite at ({x[0]:.6g}, {x[1]:.6g})"
 
