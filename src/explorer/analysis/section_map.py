@@ -141,6 +141,21 @@ class SectionMap:
         """x lies inside the allowed region, M^2 > 0 (docs/model.md R9)."""
         return bool(model.section_M2(self.params, x[0], x[1], self.h, self.phi0) > 0)
 
+    @property
+    def domain(self) -> tuple:
+        """((p1_lo, p1_hi), (p2_lo, p2_hi)): the box of the allowed ellipse (docs/model.md R9)."""
+        ell = model.allowed_ellipse(self.params, self.h, self.phi0)
+        if ell is None or not (ell[2] > 0.0 and ell[3] > 0.0):
+            raise ParameterError(f"energy h = {self.h!r}: the allowed region of the section is empty")
+        c1, c2, r1, r2 = ell
+        return (float(c1 - r1), float(c1 + r1)), (float(c2 - r2), float(c2 + r2))
+
+    def allowed(self, points) -> np.ndarray:
+        """Mask (...) of the points (..., 2) inside the allowed region, M^2 > 0 (docs/model.md R9)."""
+        pts = np.asarray(points, float)
+        with np.errstate(invalid="ignore", over="ignore"):
+            return np.asarray(model.section_M2(self.params, pts[..., 0], pts[..., 1], self.h, self.phi0) > 0.0)
+
     def describe_domain(self) -> str:
         """The allowed region in words."""
         return f"allowed: {model.describe_region(self.params, self.h, self.phi0)}"
