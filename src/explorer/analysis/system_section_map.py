@@ -462,6 +462,41 @@ class SystemSectionMap:
         cols = [1 + j for j in self._index[:2]]
         return np.vstack([x[None, :], data[0][:, cols]])
 
+    # ------------------------------------------------------------------ half turns (docs/greene.md)
+    @property
+    def section_label(self) -> float:
+        """The direction, which tells this map's half of the section from :meth:`opposite`'s."""
+        return float(self.direction)
+
+    def opposite(self) -> SystemSectionMap:
+        """The map of the same section crossed in the other direction."""
+        return SystemSectionMap(self.system, self.energy_value, **dict(self._settings(), direction=-self.direction))
+
+    def half_turns(self, X, q: int) -> np.ndarray:
+        """The coords (m, 2) of the ``q``-th crossing of the section in either direction (crossings
+        alternate) after each point of X: on this map's half for even ``q``, :meth:`opposite`'s for
+        odd; NaN outside the domain or for no crossing."""
+        X = np.asarray(X, float).reshape(-1, 2)
+        out = np.full(X.shape, np.nan)
+        Y = self._lifted(X)
+        ok = np.flatnonzero(self._on_surface(Y))
+        ia, ib = self._index[:2]
+        if q == 0 or not ok.size:
+            out[ok] = X[ok]
+            return out
+        Y = self._starts(Y[ok], False)
+        if q >= 2:
+            data, count, _ = self._returns(Y, q // 2, False, False)
+            Y = np.where((count >= q // 2)[:, None], data[:, q // 2 - 1, 1:1 + self.system.dimension], np.nan)
+        if q % 2:
+            data, count, *_ = system_crossings(_flow(self.system, False, False), np.nan_to_num(Y), n_crossings=1,
+                                               section=self.section.expr, direction=-self.direction, tol=self.tol,
+                                               tmax=self.tmax, threads=1)
+            reached = (count >= 1) & np.isfinite(Y[:, 0])
+            Y = np.where(reached[:, None], data[:, 0, 1:1 + self.system.dimension], np.nan)
+        out[ok] = Y[:, [ia, ib]]
+        return out
+
     # ------------------------------------------------------------------ parameters
     @property
     def parameters(self) -> tuple:
@@ -478,6 +513,11 @@ class SystemSectionMap:
     def parameter_value(self) -> float:
         """The value of :attr:`parameter`."""
         return self._value(self.parameter)
+
+    def value_of(self, name: str) -> float:
+        """The value of the parameter ``name`` of :attr:`parameters`."""
+        validation.choice("param", name, self.parameters)
+        return self._value(name)
 
     def _value(self, name) -> float:
         for p, v in self.system.parameters.items():
