@@ -59,13 +59,16 @@ MAX_EXPRESSION = 500
 _OPERATORS = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv}
 
 
-def resolve_system(value, label: str = "system"):
+def resolve_system(value, label: str = "system", maps: bool = False):
     """The System named by ``value``, ``"module:attribute"`` (the module imported from the current
-    directory or ``sys.path``; the attribute a System or a callable returning one), or a System
-    itself.  ParameterError naming the value otherwise."""
-    from explorer.analysis.system_sections import is_system
+    directory or ``sys.path``; the attribute a System or a callable returning one; with ``maps``
+    also a System's section map), or a System itself.  ParameterError naming the value otherwise."""
+    from explorer.analysis.system_sections import is_system, is_system_map
 
-    if is_system(value):
+    def is_system_or_map(obj):
+        return is_system(obj) or (maps and is_system_map(obj))
+
+    if is_system_or_map(value):
         return value
     form = f"{label} must be 'module:attribute' naming an explorer System, e.g. my_systems:henon_heiles"
     if not isinstance(value, str) or value.count(":") != 1:
@@ -88,15 +91,15 @@ def resolve_system(value, label: str = "system"):
         if not hasattr(obj, part):
             raise ParameterError(f"{label} {value!r}: module {mod_name} has no attribute {attr!r}")
         obj = getattr(obj, part)
-    if not is_system(obj) and callable(obj) and not isinstance(obj, type):
+    if not is_system_or_map(obj) and callable(obj) and not isinstance(obj, type):
         try:
             obj = obj()
         except Exception as exc:
             raise ParameterError(f"{label} {value!r}: calling {attr}() failed: {type(exc).__name__}: {exc}") \
                 from None
-    if not is_system(obj):
-        raise ParameterError(f"{label} {value!r} is a {type(obj).__name__}, not an explorer System (nor a "
-                             "callable returning one)")
+    if not is_system_or_map(obj):
+        raise ParameterError(f"{label} {value!r} is a {type(obj).__name__}, not an explorer System "
+                             f"{'or its section map ' if maps else ''}(nor a callable returning one)")
     return obj
 
 
