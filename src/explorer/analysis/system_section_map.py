@@ -525,12 +525,6 @@ class SystemSectionMap:
                 return float(v)
         return self.energy_value
 
-    def value_of(self, name: str) -> float:
-        """The value of the parameter ``name`` of :attr:`parameters` (``"energy"``: the level)."""
-        if name not in self.parameters:
-            raise ParameterError(f"the section map of {self.system.name} has no parameter {name!r}")
-        return self._value(name)
-
     def energy_of(self, states) -> np.ndarray:
         """The system's energy at the states (N, 4)."""
         Y = np.asarray(states, dtype=np.float64).reshape(-1, self.system.dimension)
