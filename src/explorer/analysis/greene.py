@@ -21,7 +21,7 @@ from explorer.analysis.greene_core import (
     rotation_value,
 )
 from explorer.analysis.maps import StandardMap, standard_half_orbit, standard_monodromy
-from explorer.analysis.section_map import SectionMap
+from explorer.analysis.system_sections import is_system
 from explorer.model import ParameterError, validation
 
 __all__ = ["CRITICAL_RESIDUE", "GOLDEN", "GreeneResult", "SymmetricOrbit", "convergents", "greene",
@@ -93,16 +93,17 @@ def symmetric_orbit(system, p, q, *, line=math.pi, guess=None):
     """The symmetric orbit of type ``p``/``q`` through theta = ``line``, Newton from p = ``guess``
     (default 2 pi p/q).  A section map: :func:`~explorer.analysis.greene_section.section_symmetric_orbit`
     of period ``q`` from p1 = ``guess`` (required)."""
-    if isinstance(system, SectionMap):
+    if hasattr(system, "half_turns"):       # a section map: shot over half turns
         if guess is None:
-            raise ParameterError("symmetric_orbit on a section map needs guess=p1, a point of the line p2 = 0 "
-                                 "near the orbit")
+            raise ParameterError("symmetric_orbit on a section map needs guess=t, the point t v of the symmetry "
+                                 "line (p1 of p2 = 0 on Chaplygin's section) near the orbit")
         validation.integer("p", p, 0)
         return greene_section.section_symmetric_orbit(system, validation.integer("q", q, 1),
-                                                      validation.real("guess", guess))
+                                                      validation.real("guess", guess),
+                                                      line=None if line == math.pi else line)
     if not isinstance(system, StandardMap):
-        raise ParameterError(f"symmetric_orbit: the half-orbit method is implemented for StandardMap and "
-                             f"SectionMap; got {type(system).__name__}")
+        raise ParameterError(f"symmetric_orbit: the half-orbit method is implemented for StandardMap and a "
+                             f"section map (with a reversor); got {type(system).__name__}")
     P = validation.integer("p", p, 0)
     Q = validation.integer("q", q, MIN_Q)
     theta0 = validation.real("line", line)
@@ -126,11 +127,14 @@ def greene(system, nu="golden", *, qmax=None, residue=CRITICAL_RESIDUE, line=Non
     (:func:`~explorer.analysis.greene_section.section_greene`)."""
     x = rotation_value(nu)
     target = validation.real("residue", residue, 0.0, 1.0, lo_open=True, hi_open=True)
-    if isinstance(system, SectionMap):
+    if is_system(system):
+        raise ParameterError("greene takes a map: give the System's section map, SectionMap(system, E, section=..., "
+                             "direction=..., coords=..., solve=...), with a reversor (System(..., reversor=...))")
+    if hasattr(system, "half_turns"):       # a section map: shot over half turns
         return greene_section.section_greene(system, x, qmax=qmax, target=target, line=line, around=around,
                                              param=param)
     if not isinstance(system, StandardMap):
-        raise ParameterError(f"greene takes a StandardMap or a SectionMap, got {type(system).__name__}")
+        raise ParameterError(f"greene takes a StandardMap or a section map, got {type(system).__name__}")
     if around is not None or param not in (None, system.parameter):
         raise ParameterError("greene: around= and param= belong to a section map; the standard map's "
                              "parameter is k")

@@ -1,7 +1,8 @@
-"""Greene's residue criterion on a section map (docs/greene.md, "Greene on the section of Figure 4's
-scene"): symmetric orbits shot over Q half-turns of phi from a symmetry line p2 = 0 (of phi0 or
-phi0 + pi, "Two symmetry lines"), their monodromy M = G0 B^-1 G0 A from the first half's Jacobians,
-and :func:`section_greene`."""
+"""Greene's residue criterion on a section map with a linear reversor G (docs/greene.md, "Greene on
+the section of Figure 4's scene"; a System's map: "Greene on a System"): symmetric orbits shot over Q
+half turns (the map's ``half_turns``) from the symmetry line Fix G of the map's half or its opposite's
+("Two symmetry lines"), their monodromy M = G B^-1 G A from the first half's Jacobians, and
+:func:`section_greene`."""
 from __future__ import annotations
 
 import math
@@ -9,85 +10,77 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from explorer import model
-from explorer.analysis import budget
 from explorer.analysis.fixedpoints import find_fixed_point
 from explorer.analysis.greene_core import SECTION_QMAX, GreeneResult, Residue, critical_parameter, enough_convergents
-from explorer.analysis.section_map import MAX_STEPS, SectionMap
-from explorer.integrate.tangent import return_map_taylor
-from explorer.kernels import STATUS_DONE
 from explorer.model import ParameterError, validation
 
 __all__ = ["SectionSymmetricOrbit", "first_orbit", "half_turn_p2", "island_centre", "island_line",
-           "line_map", "line_point", "line_roots", "section_greene", "section_symmetric_orbit"]
+           "axes", "line_map", "line_point", "line_roots", "section_greene", "section_symmetric_orbit"]
 
 #: an orbit of type P/Q turns P/Q per return around the centre to this (times Q)
 ROTATION_TOL = 1e-6
-PARAM_NAMES_AND_H = (*model.PARAM_NAMES, "h")
-#: the reversor on the section: G0 P G0 = P^-1
-G0 = np.diag([1.0, -1.0])
 SECANT_TOL, SECANT_MAX_ITER = 1e-13, 40
-#: samples of the line p2 = 0 scanned for the first convergent's orbit, and the scan's distance from
-#: the allowed region's edge (a fraction of its half-width)
-LINE_SAMPLES, EDGE_MARGIN = 200, 1e-3
+#: samples of the symmetry line scanned for the first convergent's orbit
+LINE_SAMPLES = 200
 
 
-def line_map(smap: SectionMap, line) -> SectionMap:
-    """``smap`` on the section phi = ``line`` (``smap`` itself when ``line`` is None or its phi0)."""
-    if line is None or _same_phi(line, smap.phi0):
+def line_map(smap, line):
+    """``smap`` on the half of the section labelled ``line`` (its own, None, or :meth:`opposite`'s)."""
+    if line is None or _same(line, smap.section_label):
         return smap
-    return SectionMap(smap.params, smap.h, phi0=float(line), tol=smap.tol, tmax=smap.tmax)
+    other = smap.opposite()
+    if not _same(line, other.section_label):
+        raise ParameterError(f"line must be {smap.section_label:g} or {other.section_label:g} (the map's and the "
+                             f"opposite half's symmetry lines), got {line!r}")
+    return other
 
 
-def _same_phi(a, b) -> bool:
+def _same(a, b) -> bool:
     return abs(math.remainder(float(a) - float(b), 2.0 * math.pi)) < 1e-12
 
 
-def _flow_to(smap: SectionMap, y, phi) -> np.ndarray:
-    """The state y carried by the flow to its next crossing of phi = ``phi`` (dphi/dt > 0)."""
-    out = np.empty(5)
-    g1, g2 = model.section_gamma(phi)
-    status, _ = return_map_taylor(np.asarray(y, float), np.zeros((0, 5)), smap.P, g2, g1, 1.0, smap.tmax, smap.order,
-                                  MAX_STEPS, budget.stop_switch(), out, np.zeros((0, 5)))
-    if status != STATUS_DONE:
-        raise ParameterError(f"the flow from p1 = {y[0]:.10g} on phi = {math.atan2(y[3], y[4]) % (2 * math.pi):.6g} "
-                             f"did not reach the section phi = {phi:.6g}")
-    return out
+def axes(smap):
+    """(G, v, u) of the map's linear reversor: its matrix G, v spanning Fix G (G v = v) and u with
+    u . x = 0 on Fix G (u G = -u); the largest component of each positive."""
+    R = smap.require_reversor("greene")
+    if not callable(R):
+        raise ParameterError("greene needs a reversor of the map")
+    G = np.asarray(R(np.eye(2)), float).T
+    if not np.allclose(G @ G, np.eye(2), atol=1e-12) or abs(np.trace(G)) > 1e-12:
+        raise ParameterError(f"greene needs a reversor of the map that is a reflection (linear, with a fixed line), "
+                             f"got the matrix {G.tolist()}")
+    w, V = np.linalg.eig(G)
+    wl, U = np.linalg.eig(G.T)
+    v, u = np.real(V[:, np.argmax(np.real(w))]), np.real(U[:, np.argmin(np.real(wl))])
+    v, u = v * np.sign(v[np.argmax(np.abs(v))]), u / np.linalg.norm(u) * np.sign(u[np.argmax(np.abs(u))])
+    return G, v / np.linalg.norm(v), u
 
 
-def line_point(smap: SectionMap, x, line) -> np.ndarray:
-    """Where the flow from ``smap``'s point x next crosses the section phi = ``line`` (x on its own)."""
-    if _same_phi(line, smap.phi0):
+def line_point(smap, x, line) -> np.ndarray:
+    """Where the flow from ``smap``'s point x next crosses the half labelled ``line`` (x on its own)."""
+    if _same(line, smap.section_label):
         return np.asarray(x, float).copy()
-    return _flow_to(smap, smap.state(x), float(line))[:2].copy()
+    y = smap.half_turns(np.asarray(x, float)[None, :], 1)[0]
+    if not np.all(np.isfinite(y)):
+        raise ParameterError(f"the flow from {tuple(np.ravel(x))} did not reach the section's half {line:g}")
+    return y
 
 
-def half_turn_p2(smap: SectionMap, p1: float, Q: int, line=None) -> float:
-    """p2 after Q half-turns of phi from (p1, 0) on phi = ``line`` (default phi0); NaN if not reached."""
-    start = smap.phi0 if line is None else float(line)
-    try:
-        y = model.section_state(smap.params, [p1], [0.0], smap.h, start)[0]
-    except ParameterError:
-        return math.nan
-    none = np.zeros((0, 5))
-    out = np.empty(5)
-    sections = (model.section_gamma((start + math.pi) % (2.0 * math.pi)), model.section_gamma(start))
-    stop = budget.stop_switch()
-    for j in range(Q):
-        g1, g2 = sections[j % 2]
-        status, _ = return_map_taylor(y, none, smap.P, g2, g1, 1.0, smap.tmax, smap.order, MAX_STEPS, stop, out,
-                                      np.zeros((0, 5)))
-        if status != STATUS_DONE:
-            return math.nan
-        y = out.copy()
-    return float(y[1])
+def half_turn_p2(smap, t, Q: int, line=None) -> np.ndarray:
+    """u . x after Q half turns from the points t v of the symmetry line of the half ``line`` (:func:`axes`;
+    p2 on Chaplygin's section); NaN where not reached."""
+    m = line_map(smap, line)
+    _, v, _ = axes(m)
+    _, _, u = axes(m.opposite() if Q % 2 else m)
+    ts = np.atleast_1d(np.asarray(t, float))
+    return m.half_turns(ts[:, None] * v[None, :], Q) @ u
 
 
-def line_roots(smap: SectionMap, Q: int, a: float, b: float, n: int, line=None) -> list:
-    """The starts p1 in [a, b] on p2 = 0 of phi = ``line`` of the symmetric orbits of period Q (or a
-    divisor): the sign changes of :func:`half_turn_p2` over n + 1 samples, refined by the secant."""
+def line_roots(smap, Q: int, a: float, b: float, n: int, line=None) -> list:
+    """The starts t in [a, b] on the symmetry line of the half ``line`` of the symmetric orbits of period Q
+    (or a divisor): the sign changes of :func:`half_turn_p2` over n + 1 samples, refined by the secant."""
     xs = np.linspace(a, b, n + 1)
-    fs = np.array([half_turn_p2(smap, x, Q, line) for x in xs])
+    fs = half_turn_p2(smap, xs, Q, line)
     roots = []
     for i in np.flatnonzero(np.isfinite(fs[:-1]) & np.isfinite(fs[1:]) & (np.sign(fs[:-1]) != np.sign(fs[1:]))):
         try:
@@ -99,25 +92,25 @@ def line_roots(smap: SectionMap, Q: int, a: float, b: float, n: int, line=None) 
 
 def _secant(smap, Q, x0, x1, f0=None, f1=None, line=None) -> float:
     """A root of :func:`half_turn_p2` by the secant method from x0, x1."""
-    f0 = half_turn_p2(smap, x0, Q, line) if f0 is None else f0
-    f1 = half_turn_p2(smap, x1, Q, line) if f1 is None else f1
+    f0 = half_turn_p2(smap, x0, Q, line)[0] if f0 is None else f0
+    f1 = half_turn_p2(smap, x1, Q, line)[0] if f1 is None else f1
     for _ in range(SECANT_MAX_ITER):
         if not (math.isfinite(f0) and math.isfinite(f1)) or f1 == f0:
             break
         x2 = x1 - f1 * (x1 - x0) / (f1 - f0)
         if abs(x2 - x1) <= SECANT_TOL * max(1.0, abs(x1)) or f1 == 0.0:
             return float(x2)
-        f2 = half_turn_p2(smap, x2, Q, line)
+        f2 = half_turn_p2(smap, x2, Q, line)[0]
         x0, f0, x1, f1 = x1, f1, x2, f2
-    raise ParameterError(f"no symmetric orbit of period {Q} near p1 = {x1:.10g} (the half-turn equation "
-                         f"did not converge)")
+    raise ParameterError(f"no symmetric orbit of period {Q} near {x1:.10g} on the symmetry line (the half-turn "
+                         f"equation did not converge)")
 
 
 @dataclass(frozen=True)
 class SectionSymmetricOrbit(Residue):
-    """A symmetric periodic orbit of the section map: ``points`` (Q, 2) on the map's section,
-    ``monodromy`` on the section of its symmetry line phi = ``line`` (the same trace), ``start`` its
-    p1 on that line."""
+    """A symmetric periodic orbit of a section map: ``points`` (Q, 2) on the map's section,
+    ``monodromy`` on the half of its symmetry line ``line`` (the same trace), ``start`` its
+    coordinate t on that line (the point t v, :func:`axes`)."""
 
     q: int
     points: np.ndarray
@@ -128,47 +121,42 @@ class SectionSymmetricOrbit(Residue):
 
     @property
     def line_start(self) -> float:
-        """p1 of the orbit's point on its symmetry line."""
+        """t of the orbit's point on its symmetry line."""
         return float(self.points[0, 0]) if math.isnan(self.start) else self.start
 
-    def rotation(self, smap: SectionMap, centre) -> float:
-        """Turns around ``centre`` per return, in (-1/2, 1/2], from the increments lifted through the
-        flow (docs/greene.md, "Which orbits")."""
-        from explorer.analysis.rotation import _lifted_increments
+    def rotation(self, smap, centre) -> float:
+        """Turns around ``centre`` per return, in (-1/2, 1/2] (docs/greene.md, "Which orbits")."""
+        from explorer.analysis.rotation import orbit_turns
 
-        inc, _, status, _ = _lifted_increments(smap.params, smap.h, self.points[:1], np.asarray(centre, float),
-                                               self.q, smap.phi0, smap.tol, None)
-        if status[0] != "done":
-            raise ParameterError(f"the rotation of the orbit of period {self.q} around the centre is not defined "
-                                 f"({status[0]})")
-        turns = float(np.sum(inc[0])) / (2.0 * math.pi * self.q)
+        turns = orbit_turns(smap, self.points[0], centre, self.q)
         return turns - math.ceil(turns - 0.5)
 
 
-def section_symmetric_orbit(smap: SectionMap, Q: int, guess, guess2=None, *, param=None,
-                            line=None) -> SectionSymmetricOrbit:
-    """The symmetric orbit of period Q through (p1, 0) on phi = ``line`` (default phi0), p1 by the secant
-    from ``guess``, ``guess2``; points and monodromy from the first half (docs/greene.md, "Greene on
-    the section of Figure 4's scene"; phi0 + pi: solved on that line's section, "Two symmetry lines")."""
+def section_symmetric_orbit(smap, Q: int, guess, guess2=None, *, param=None, line=None) -> SectionSymmetricOrbit:
+    """The symmetric orbit of period Q through t v on the symmetry line of the half ``line`` (default the
+    map's own), t by the secant from ``guess``, ``guess2``; points and monodromy M = G B^-1 G A from the
+    first half (docs/greene.md, "Greene on the section of Figure 4's scene"; the other half: solved there,
+    "Two symmetry lines")."""
     other = line_map(smap, line)
     if other is not smap:
         orb = section_symmetric_orbit(other, Q, guess, guess2, param=param)
-        x0 = _flow_to(other, other.state(orb.points[0]), smap.phi0)[:2]
+        x0 = line_point(other, orb.points[0], smap.section_label)
         pts = smap.iterate(x0, Q - 1) if Q > 1 else x0[None, :]
         return SectionSymmetricOrbit(Q, np.asarray(pts, float)[:Q].copy(), orb.monodromy, orb.param_value,
-                                     other.phi0, float(orb.points[0, 0]))
+                                     other.section_label, orb.start)
+    G, v, _ = axes(smap)
     g = float(guess)
-    p1 = _secant(smap, Q, g, g + 1e-7 * max(1.0, abs(g)) if guess2 is None else float(guess2))
+    t = _secant(smap, Q, g, g + 1e-7 * max(1.0, abs(g)) if guess2 is None else float(guess2))
     n = (Q + 1) // 2
     pts = np.empty((Q + 1, 2))
-    pts[0] = (p1, 0.0)
+    pts[0] = t * v
     jacs = []
     for j in range(n):
         r = smap(pts[j])
         jacs.append(r.jacobian)
         pts[j + 1] = r.point
     for j in range(n + 1, Q + 1):
-        pts[j] = G0 @ pts[Q - j]
+        pts[j] = G @ pts[Q - j]
     A = np.eye(2)
     B = np.eye(2)
     for j, J in enumerate(jacs):
@@ -179,29 +167,28 @@ def section_symmetric_orbit(smap: SectionMap, Q: int, guess, guess2=None, *, par
         B = A
     det = B[0, 0] * B[1, 1] - B[0, 1] * B[1, 0]
     if not (np.all(np.isfinite(A)) and math.isfinite(det) and det != 0.0):
-        raise ParameterError(f"the half orbit's Jacobian of the orbit of period {Q} from p1 = {p1:.10g} is singular "
+        raise ParameterError(f"the half orbit's Jacobian of the orbit of period {Q} from t = {t:.10g} is singular "
                              f"or not finite")
     B_inv = np.array([[B[1, 1], -B[0, 1]], [-B[1, 0], B[0, 0]]]) / det
-    M = G0 @ B_inv @ G0 @ A
-    value = smap.parameter_value if param is None else float(getattr(smap.params, param)) if param != "h" else smap.h
-    return SectionSymmetricOrbit(Q, pts[:Q].copy(), M, value, smap.phi0, float(p1))
+    M = G @ B_inv @ G @ A       # DP^Q = DP^(Q-n)(x_n) A with P^(Q-n) = G P^-(Q-n) G
+    value = smap.parameter_value if param is None else smap.value_of(param)
+    return SectionSymmetricOrbit(Q, pts[:Q].copy(), M, value, smap.section_label, float(t))
 
 
-def _typed_orbits(smap: SectionMap, P: int, Q: int, centre, line, side: int):
-    """(distance, orbit) of the symmetric orbits of type P/Q around ``centre`` on phi = ``line``, nearest
-    first, scanned from the centre towards smaller (``side`` 0) or larger p1 (docs/greene.md, "Which orbits")."""
+def _typed_orbits(smap, P: int, Q: int, centre, line, side: int):
+    """(distance, orbit) of the symmetric orbits of type P/Q around ``centre`` on the half ``line``, nearest
+    first, scanned from the centre towards smaller (``side`` 0) or larger t (docs/greene.md, "Which orbits")."""
     other = line_map(smap, line)
-    e = model.allowed_ellipse(other.params, other.h, other.phi0)
-    if e is None:
-        raise ParameterError("the allowed region is empty")
-    c1, c2, r1, r2 = e
-    half = r1 * math.sqrt(max(0.0, 1.0 - (c2 / r2) ** 2)) * (1.0 - EDGE_MARGIN)
+    _, v, _ = axes(other)
+    ts = other.symmetry_line_points(LINE_SAMPLES) @ v
+    if not ts.size:
+        raise ParameterError("the symmetry line has no point in the map's domain")
     turn = -1.0 if smap.jacobian(centre)[1, 0] < 0 else 1.0
-    x0 = float(line_point(smap, centre, other.phi0)[0])
-    end = c1 + half if side else c1 - half
+    x0 = float(line_point(smap, centre, other.section_label) @ v)
+    end = float(ts.max() if side else ts.min())
     for root in sorted(line_roots(other, Q, x0, end, LINE_SAMPLES), key=lambda r: abs(r - x0)):
         try:
-            orb = section_symmetric_orbit(smap, Q, root, line=other.phi0)
+            orb = section_symmetric_orbit(smap, Q, root, line=other.section_label)
             turns = orb.rotation(smap, centre)
         except ParameterError:
             continue
@@ -209,40 +196,40 @@ def _typed_orbits(smap: SectionMap, P: int, Q: int, centre, line, side: int):
             yield abs(root - x0), orb
 
 
-def first_orbit(smap: SectionMap, P: int, Q: int, centre, line=None) -> SectionSymmetricOrbit:
-    """The symmetric orbit of type P/Q with a positive residue nearest to ``centre`` on phi = ``line``
-    (default phi0; docs/greene.md, "Which orbits")."""
+def first_orbit(smap, P: int, Q: int, centre, line=None) -> SectionSymmetricOrbit:
+    """The symmetric orbit of type P/Q with a positive residue nearest to ``centre`` on the half ``line``
+    (default the map's own; docs/greene.md, "Which orbits")."""
     best = None
+    label = smap.section_label if line is None else line
     for side in (0, 1):
-        dist, orb = next(((d, o) for d, o in _typed_orbits(smap, P, Q, centre, smap.phi0 if line is None else line,
-                                                          side) if o.residue > 0), (math.inf, None))
+        dist, orb = next(((d, o) for d, o in _typed_orbits(smap, P, Q, centre, label, side) if o.residue > 0),
+                         (math.inf, None))
         if orb is not None and (best is None or dist < best[0]):
             best = (dist, orb)
     if best is None:
         raise ParameterError(f"no symmetric orbit of type {P}/{Q} with a positive residue around "
-                             f"({centre[0]:.6g}, {centre[1]:.6g}) on the line p2 = 0 of phi = "
-                             f"{smap.phi0 if line is None else line:.6g} at {smap.parameter} = "
-                             f"{smap.parameter_value:.8g}")
+                             f"({centre[0]:.6g}, {centre[1]:.6g}) on the symmetry line of the half {label:g} at "
+                             f"{smap.parameter} = {smap.parameter_value:.8g}")
     return best[1]
 
 
-def island_line(smap: SectionMap, P: int, Q: int, centre):
-    """(line, orbit): the symmetry line (phi0 or phi0 + pi) of the island's elliptic orbits of even
-    period Q around ``centre``, and the orbit of type P/Q that decided it (docs/greene.md, "Two
-    symmetry lines")."""
+def island_line(smap, P: int, Q: int, centre):
+    """(line, orbit): the half (the map's or its opposite's) whose symmetry line holds the island's elliptic
+    orbits of even period Q around ``centre``, and the orbit of type P/Q that decided it (docs/greene.md,
+    "Two symmetry lines")."""
     if Q % 2:
         raise ParameterError(f"island_line needs an even period (an orbit of odd period meets both lines), got {Q}")
-    found = [next(_typed_orbits(smap, P, Q, centre, smap.phi0, side), None) for side in (0, 1)]
+    found = [next(_typed_orbits(smap, P, Q, centre, smap.section_label, side), None) for side in (0, 1)]
     nearest = min((f for f in found if f is not None), key=lambda t: t[0], default=None)
     if nearest is None:
         raise ParameterError(f"no symmetric orbit of type {P}/{Q} around ({centre[0]:.6g}, {centre[1]:.6g}) on "
-                             f"the line p2 = 0 of phi = {smap.phi0:.6g}: the line of the island's elliptic orbits "
-                             f"is not decided")
+                             f"the symmetry line of the half {smap.section_label:g}: the line of the island's "
+                             "elliptic orbits is not decided")
     orb = nearest[1]
-    return (smap.phi0 if orb.residue > 0 else (smap.phi0 + math.pi) % (2.0 * math.pi)), orb
+    return (smap.section_label if orb.residue > 0 else smap.opposite().section_label), orb
 
 
-def island_centre(smap: SectionMap, guess) -> np.ndarray:
+def island_centre(smap, guess) -> np.ndarray:
     """The elliptic fixed point of ``smap`` near ``guess``."""
     fp = find_fixed_point(smap, tuple(float(v) for v in guess))
     if not fp.stable:
@@ -254,31 +241,28 @@ def island_centre(smap: SectionMap, guess) -> np.ndarray:
 
 def _section_line(smap, conv, centre, line):
     """(line, the first convergent's orbit if the decision found it): ``line`` if given, else
-    :func:`island_line` of the first even convergent (phi0 when all are odd)."""
+    :func:`island_line` of the first even convergent (the map's own when all are odd)."""
     if line is not None:
-        value = validation.real("line", line)
-        if not any(_same_phi(value, phi) for phi in (smap.phi0, smap.phi0 + math.pi)):
-            raise ParameterError(f"line must be the section's phi0 = {smap.phi0:g} or phi0 + pi (the reversor's "
-                                 f"two symmetry lines), got {line!r}")
-        return value % (2.0 * math.pi), None
+        return line_map(smap, validation.real("line", line)).section_label, None
     even = [(P, Q) for P, Q in conv if Q % 2 == 0]
     if not even:
-        return smap.phi0, None
+        return smap.section_label, None
     value, orb = island_line(smap, *even[0], centre)
-    return value, (orb if value == smap.phi0 and even[0] == conv[0] else None)
+    return value, (orb if value == smap.section_label and even[0] == conv[0] else None)
 
 
-def section_greene(smap: SectionMap, nu: float, *, qmax=None, target, line=None, around=None, param=None):
-    """:func:`explorer.greene` on a section map (docs/greene.md, "Greene on the section of Figure 4's
-    scene"): the curve ``nu`` around the elliptic fixed point near ``around``, broken by ``param``
-    (default "mu"; its value in ``smap`` is the first guess); points on ``smap``'s section."""
+def section_greene(smap, nu: float, *, qmax=None, target, line=None, around=None, param=None):
+    """:func:`explorer.greene` on a section map with a linear reversor (docs/greene.md, "Greene on the
+    section of Figure 4's scene"): the curve ``nu`` around the elliptic fixed point near ``around``,
+    broken by ``param`` (default the map's :attr:`parameter`; its value in ``smap`` is the first guess);
+    points on ``smap``'s section."""
+    axes(smap)
     if around is None:
-        raise ParameterError("greene on a section map needs around=(p1, p2), a guess of the island's elliptic "
+        raise ParameterError("greene on a section map needs around=(a, b), a guess of the island's elliptic "
                              "fixed point")
-    pname = "mu" if param is None else param
-    validation.choice("param", pname, PARAM_NAMES_AND_H)
+    pname = smap.parameter if param is None else param
+    first = smap.value_of(pname)
     conv = enough_convergents(nu, SECTION_QMAX if qmax is None else qmax)
-    first = smap.h if pname == "h" else float(getattr(smap.params, pname))
     centre = island_centre(smap, around)
     line, seed = _section_line(smap, conv, centre, line)
 
@@ -292,8 +276,8 @@ def section_greene(smap: SectionMap, nu: float, *, qmax=None, target, line=None,
         if check:
             rot = orb.rotation(m, island_centre(m, centre))
             if abs(abs(rot) * Q - P) > ROTATION_TOL:
-                raise ParameterError(f"the symmetric orbit of period {Q} near p1 = {orb.points[0, 0]:.8g} "
-                                     f"turns {rot:.8g} per return around the centre, not {P}/{Q}")
+                raise ParameterError(f"the symmetric orbit of period {Q} near {orb.line_start:.8g} turns {rot:.8g} "
+                                     f"per return around the centre, not {P}/{Q}")
         return orb
 
     rows, crit, uncertainty, ratio = critical_parameter(conv, orbit_at, lambda orb: orb.line_start,

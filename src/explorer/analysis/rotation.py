@@ -19,8 +19,8 @@ from explorer.integrate.methods import MAP_TOL
 from explorer.model import ParameterError, validation
 
 __all__ = ["CONVERGED_TOL", "DEFAULT_ITERATES", "DIFFUSION_FLOOR", "RotationNumber", "RotationProfile",
-           "birkhoff_weights", "frequency_diffusion", "orbit_rotation", "rotation_number", "rotation_profile",
-           "weighted_birkhoff"]
+           "birkhoff_weights", "frequency_diffusion", "orbit_rotation", "orbit_turns", "rotation_number",
+           "rotation_profile", "weighted_birkhoff"]
 
 #: |WB_N - WB_2N| below this: the orbit is regular
 CONVERGED_TOL = 1e-10
@@ -236,6 +236,22 @@ def _map_rotation(system, start, center, N, conv_tol) -> RotationNumber:
     turns = b / (2.0 * np.pi)
     return RotationNumber(turns - math.ceil(turns - 0.5), bool(diff < conv_tol), diff, 2 * N, tuple(x), tuple(c),
                           turns=turns)
+
+
+def orbit_turns(system, start, center, n: int) -> float:
+    """Turns per return around ``center`` over the first ``n`` returns from ``start`` (a section map's
+    lifted through the flow); ParameterError where the lift is not defined."""
+    x, c = np.asarray(start, float), np.asarray(center, float)
+    if is_section_map(system):
+        inc, _, status, _ = _lifted_increments(system.params, system.h, x[None, :], c, n, system.phi0, system.tol,
+                                               None)
+        why = status[0]
+        inc = inc[0] if why == "done" else None
+    else:
+        inc, why = _map_increments(system, x, c, n), "unresolved"
+    if inc is None or not np.all(np.isfinite(inc)):
+        raise ParameterError(f"the rotation of the orbit from {tuple(x)} around the centre is not defined ({why})")
+    return float(np.sum(inc)) / (2.0 * math.pi * n)
 
 
 def _map_increments(system, x, center, n):

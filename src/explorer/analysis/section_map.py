@@ -137,6 +137,61 @@ class SectionMap:
         R = self.reflection
         return () if R is None else (R,)
 
+    def require_reversor(self, what: str):
+        """:attr:`reflection`; ParameterError naming ``what`` needs it when there is none."""
+        if self.reflection is None:
+            raise ParameterError(f"{what} needs a reversor of the map: G0 reverses it only at zeta = xi = 0 on "
+                                 f"phi0 = 0 or pi (docs/model.md, \"Symmetries\"); got {self!r}")
+        return self.reflection
+
+    def symmetry_line_points(self, n) -> np.ndarray:
+        """``n`` points of p2 = 0 (Fix G0) across the allowed region (none without G0)."""
+        n = validation.integer("n", n, 1)
+        e = model.allowed_ellipse(self.params, self.h, self.phi0)
+        if e is None or self.reflection is None:
+            return np.empty((0, 2))
+        c1, c2, r1, r2 = e
+        half = r1 * math.sqrt(max(0.0, 1.0 - (c2 / r2) ** 2)) * (1.0 - 1e-3)     # off the edge M = 0
+        return np.column_stack([np.linspace(c1 - half, c1 + half, n), np.zeros(n)])
+
+    @property
+    def section_label(self) -> float:
+        """phi0, which tells this section from :meth:`opposite`'s."""
+        return self.phi0
+
+    def opposite(self) -> SectionMap:
+        """The map on the section phi = phi0 + pi, half a turn of phi on."""
+        return SectionMap(self.params, self.h, phi0=(self.phi0 + math.pi) % (2.0 * math.pi), tol=self.tol,
+                          tmax=self.tmax)
+
+    def half_turns(self, X, q: int) -> np.ndarray:
+        """(p1, p2) (m, 2) of each point of X after ``q`` half-turns of phi: on phi0 for even ``q``, on
+        :meth:`opposite`'s section for odd; NaN outside the allowed region or for no crossing."""
+        X = np.asarray(X, float).reshape(-1, 2)
+        out = np.full(X.shape, np.nan)
+        sections = (model.section_gamma((self.phi0 + math.pi) % (2.0 * math.pi)), model.section_gamma(self.phi0))
+        stop = budget.stop_switch()
+        none = np.zeros((0, 5))
+        for i, x in enumerate(X):
+            if not (np.all(np.isfinite(x)) and self.in_domain(x)):
+                continue
+            y, yout = self.state(x), np.empty(5)
+            for j in range(q):
+                g1, g2 = sections[j % 2]
+                status, _ = return_map_taylor(y, none, self.P, g2, g1, 1.0, self.tmax, self.order, MAX_STEPS, stop,
+                                              yout, none)
+                if status != STATUS_DONE:
+                    break
+                y = yout.copy()
+            else:
+                out[i] = y[:2]
+        return out
+
+    def value_of(self, name: str) -> float:
+        """The value of the parameter ``name`` of :attr:`parameters`."""
+        validation.choice("param", name, self.parameters)
+        return self.h if name == "h" else float(getattr(self.params, name))
+
     def in_domain(self, x) -> bool:
         """x lies inside the allowed region, M^2 > 0 (docs/model.md R9)."""
         return bool(model.section_M2(self.params, x[0], x[1], self.h, self.phi0) > 0)
