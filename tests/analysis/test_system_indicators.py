@@ -1,7 +1,7 @@
 """Chaos indicators of a System and of its section map (docs/systems.md, "Chaos indicators"): the
 deviation vectors against scipy's solve_ivp of the hand-written variational equations, MEGNO, mLCE,
 SALI and GALI_2 on regular and chaotic Hénon–Heiles orbits and on two harmonic oscillators, the
-Lorenz exponent, thread independence and the refusals."""
+Lorenz exponent, the SIMD lanes against the scalar driver and thread independence, and the refusals."""
 import numpy as np
 import pytest
 import sympy as sp
@@ -125,14 +125,33 @@ def test_the_lorenz_system_without_energy_has_the_published_exponent_and_a_nan_e
     assert res.final.shape == (3, 3) and res.deviation.shape == (3, 2, 3)
 
 
-def test_indicators_of_a_system_are_identical_with_one_and_two_threads(hh):
-    states = [REGULAR, CHAOTIC, CHAOTIC_CT, REGULAR_CT, on_x0(1/8, 0.2)]
-    a = ex.indicators(hh, states=states, tmax=300.0, which=ALL, threads=1, history=4)
-    b = ex.indicators(hh, states=states, tmax=300.0, which=ALL, threads=2, history=4)
-    for name in ALL:
-        np.testing.assert_array_equal(a.values[name], b.values[name])
-    for u, v in [(a.final, b.final), (a.deviation, b.deviation), (a.history, b.history), (a.steps, b.steps)]:
-        np.testing.assert_array_equal(u, v)
+def _driver_run(hh, driver, threads, states, **kw):
+    """system_indicators on ``driver`` (the SIMD lanes or the scalar driver) with every indicator."""
+    from explorer.analysis.system_indicators import system_indicators
+
+    args = dict(tmax=300.0, method=None, tol=None, history=4, v0=None, w0=None, max_steps=10**9, which=ALL,
+                early_stop=False, early_sali=1e-8, early_megno=8.0, early_time=0.0)
+    return system_indicators(hh, states=states, threads=threads, driver=driver, **dict(args, **kw))
+
+
+@pytest.mark.parametrize("kw", [{}, dict(early_stop=True, max_steps=865)], ids=["full", "early-stop-and-budget"])
+def test_each_lane_gives_the_scalar_drivers_indicators_bit_for_bit_on_one_or_two_threads(hh, kw):
+    """13 orbits (a full group of SIMD lanes and a partial one), regular and chaotic; with early stops and a
+    step budget, lanes take new orbits at different steps.  Every output equals the scalar driver's."""
+    from explorer.integrate.simd import LANES
+
+    states = [REGULAR, CHAOTIC, CHAOTIC_CT, REGULAR_CT] + [on_x0(1/8, v) for v in np.linspace(-0.3, 0.45, 9)]
+    assert LANES < len(states) < 2 * LANES
+    ref = _driver_run(hh, "scalar", 2, states, **kw)
+    for threads in (1, 2):
+        got = _driver_run(hh, "lanes", threads, states, **kw)
+        for key in ("time", "Y", "status", "steps", "final", "history", "deviation", "early"):
+            np.testing.assert_array_equal(got[key], ref[key], err_msg=key, strict=True)
+        for name in ALL:
+            np.testing.assert_array_equal(got["values"][name], ref["values"][name], err_msg=name, strict=True)
+    if kw:
+        status = set(ref["status"].tolist())
+        assert np.any(ref["early"] > 0) and {Status.DONE, Status.MAX_STEPS} <= status
 
 
 def test_the_section_map_lifts_its_points_to_the_states_of_the_flow(hh):

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from explorer._jit import max_threads
-from explorer.analysis.system_sections import _states, is_system, run_driver
+from explorer.analysis.system_sections import DRIVERS, _states, is_system, run_driver
 from explorer.integrate.methods import DEFAULT_TOL, check_setting
 from explorer.kernels import indicator_table as table
 from explorer.kernels.taylor_order import order_for_tolerance
@@ -75,14 +75,16 @@ def _energy_error(system, Y0, final) -> np.ndarray:
 
 def system_indicators(system, y0=None, *, states=None, tmax: float, method, tol: float | None, history: int, v0,
                       w0, max_steps: int, threads: int | None, which: tuple, early_stop: bool, early_sali: float,
-                      early_megno: float, early_time: float, dt=None, phi0=None, h=None) -> dict:
+                      early_megno: float, early_time: float, dt=None, phi0=None, h=None,
+                      driver: str = "auto") -> dict:
     """The fields of :class:`~explorer.analysis.lyapunov.Indicators` for the indicators ``which``
     (checked names) of the orbits of ``system`` (a System: full states ``states=``, shape (N, n) in
     its state order; a System's section map: section points, lifted by its ``states``) over the time
     ``tmax``, by the adaptive Taylor method of ``tol`` (the only method for a System) on the
     variational equations, with the engine's meaning of ``history``, ``v0``, ``w0`` (default
     :func:`default_vectors`), ``early_stop`` and its levels, ``max_steps`` and ``threads``
-    (docs/commands/lyapunov.md).  ParameterError for the engine's settings of Chaplygin's model
+    (docs/commands/lyapunov.md); ``driver`` as :func:`~explorer.analysis.system_sections.driver_for`
+    (the same values either way).  ParameterError for the engine's settings of Chaplygin's model
     (phi0, h, dt) and a method other than "taylor"."""
     from explorer.analysis import budget
     from explorer.integrate import codegen
@@ -91,6 +93,8 @@ def system_indicators(system, y0=None, *, states=None, tmax: float, method, tol:
     if given:
         raise ParameterError(f"indicators of a System: {', '.join(given)} belong(s) to Chaplygin's model and "
                              "do(es) not apply (a System's start is states=, its method the Taylor method of tol=)")
+    if driver not in DRIVERS:
+        raise ParameterError(f"driver must be one of {', '.join(map(repr, DRIVERS))}, got {driver!r}")
     if method not in (None, "taylor"):
         raise ParameterError(f"method must be 'taylor' for a System (the generated Taylor integrator of the "
                              f"variational equations), got {method!r}")
@@ -136,7 +140,7 @@ def system_indicators(system, y0=None, *, states=None, tmax: float, method, tol:
     final = np.zeros((N, n))
     steps = np.zeros(N, np.int64)
     dev = np.full((N, 2, n), np.nan)
-    run_driver(mod, "indicators", N, "scalar", threads,   # (no SIMD form of this driver)
+    run_driver(mod, "indicators", N, driver, threads,
                (Y0, V0, W0, n, nvec, system.parameter_array(), T, order, max_steps, early_stop,
                 float(early_sali) if nvec == 2 else 0.0, float(early_megno), float(early_time), hist_t, hist, res,
                 ext, status, final, steps, dev))

@@ -130,6 +130,219 @@ def indicators_taylor(Y0, V0, W0, n, nvec, P, T, order, max_steps, early_stop, s
                                 out_final[j])
         out_status[j] = s
         out_steps[j] = k
+
+
+# ---- the indicators on SIMD lanes: each lane indicators_orbit bit for bit.  The recurrence, the step
+# (its norms over the orbit's rows) and the Horner evaluation in vector form; the renormalisation and the
+# accumulators after a step lane by lane with the scalar kernels (their cost is small beside the recurrence)
+from explorer.integrate.simd import (  # noqa: E402
+    atomic_fetch_add, next_bit, vbits, vmax_gt, vmin_lt, vradius_power_core)
+from explorer.kernels.power import is_normal  # noqa: E402
+from explorer.kernels.taylor import radius_min  # noqa: E402
+
+
+@njit(error_model="numpy")
+def _indicator_norms_lanes(X, order, n, e_p, e_q, NORM):
+    """_norms_lanes over the orbit's rows :n only, as taylor_step (its finiteness test and
+    kernels.taylor.step_size on X[:n]): NORM = (a, bm, s/a, s/bm, min((s/a)^e_p, (s/bm)^e_q)).
+    Returns the bits of the finite lanes and of those with s/a, s/bm normal."""
+    op = order * XS
+    oq = (order - 1) * XS
+    s = vsplat(1.0)
+    a = vzero()
+    bm = vzero()
+    fin = is_finite(s)
+    for i in range(n):
+        p = vload(X, op + i * LANES)
+        q = vload(X, oq + i * LANES)
+        s = vmax_gt(abs(vload(X, i * LANES)), s)
+        a = vmax_gt(abs(p), a)
+        bm = vmax_gt(abs(q), bm)
+        fin = fin & is_finite(p) & is_finite(q)
+    u = s / a
+    v = s / bm
+    vstore(NORM, 0, a)
+    vstore(NORM, LANES, bm)
+    vstore(NORM, 2 * LANES, u)
+    vstore(NORM, 3 * LANES, v)
+    vstore(NORM, 4 * LANES, vmin_lt(vradius_power_core(v, e_q), vradius_power_core(u, e_p)))
+    return vbits(fin), vbits(is_normal(u) & is_normal(v))
+
+
+@njit(error_model="numpy")
+def _indicator_status(early, t, T, steps, max_steps):
+    """Why indicators_orbit stops after a step (its checks in its order), or -1 to go on."""
+    if early != _tg.EARLY_NONE or not (t < T):
+        return STATUS_DONE
+    if steps >= max_steps:
+        return STATUS_MAX_STEPS
+    return -1
+
+
+@njit(error_model="numpy")
+def _indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on, L_t, L_steps,
+                          L_early, L_hpos, L_since, acc, out_hist, out_res, out_ext, out_status, out_final,
+                          out_steps, out_w):
+    """Lane l takes the next orbit of the queue ``next_orbit`` at its start, as indicators_orbit (an
+    orbit stopped before its first step is written out and the next one taken).  Returns 1, or 0 when
+    the queue is empty: the lane then idles on the zero state."""
+    while True:
+        j = atomic_fetch_add(next_orbit, 0, 1)
+        if j >= Y0.shape[0]:
+            orb[l] = -1
+            L_on[l] = 0.0
+            for i in range(DIM):
+                X[0, i, l] = 0.0
+            return 0
+        for i in range(DIM):
+            z[i] = 0.0
+        for i in range(n):
+            z[i] = Y0[j, i]
+            z[n + i] = V0[j, i]
+            if nvec == 2:
+                z[2 * n + i] = W0[j, i]
+        _tg.renormalize(z[n:2 * n], n)
+        if nvec == 2:
+            _tg.renormalize(z[2 * n:3 * n], n)
+        for i in range(DIM):
+            X[0, i, l] = z[i]
+        orb[l] = j
+        L_on[l] = 1.0
+        L_t[l] = 0.0
+        L_steps[l] = 0
+        L_early[l] = _tg.EARLY_NONE
+        L_hpos[l] = 0
+        L_since[l] = -1.0
+        for c in range(_tg.N_ACC):
+            acc[l, c] = 0.0
+        st = _indicator_status(_tg.EARLY_NONE, 0.0, T, 0, max_steps)
+        if st < 0:
+            return 1
+        _indicator_lane_finish(l, st, n, nvec, X, z, orb, L_steps, L_early, acc, out_res, out_ext, out_status,
+                               out_final, out_steps, out_w)
+
+
+@njit(error_model="numpy")
+def _indicator_lane_finish(l, st, n, nvec, X, z, orb, L_steps, L_early, acc, out_res, out_ext, out_status,
+                           out_final, out_steps, out_w):
+    """Write out lane l's orbit, stopped with status ``st`` (indicators_orbit's outputs)."""
+    j = orb[l]
+    for i in range(DIM):
+        z[i] = X[0, i, l]
+    _tg.result(acc[l], out_res[j])
+    for i in range(n):
+        out_final[j, i] = z[i]
+        out_w[j, 0, i] = z[n + i]
+        if nvec == 2:
+            out_w[j, 1, i] = z[2 * n + i]
+    if nvec == 2:
+        _tg.extra(z[n:2 * n], z[2 * n:3 * n], n, out_ext[j])
+    else:
+        for c in range(_tg.N_EXT):
+            out_ext[j, c] = np.nan
+    out_ext[j, _tg.EXT_EARLY] = L_early[l]
+    out_status[j] = st
+    out_steps[j] = L_steps[l]
+
+
+@njit(error_model="numpy")
+def indicators_lanes_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_steps, early_stop, sali_stop,
+                            megno_level, early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final,
+                            out_steps, out_w):
+    """One group of LANES lanes: orbits from the queue ``next_orbit`` until it is empty, each lane
+    indicators_orbit's loop (its arguments and outputs)."""
+    X = np.zeros((order + 1, DIM, LANES))
+    Wk = np.zeros((order + 1, max(N_WORK, 1), LANES))
+    Y = np.zeros((DIM, LANES))
+    NORM = np.zeros((5, LANES))
+    hv = np.zeros(LANES)
+    L_t = np.zeros(LANES)
+    L_on = np.zeros(LANES)
+    L_last = np.zeros(LANES)
+    L_go = np.zeros(LANES)
+    L_since = np.zeros(LANES)
+    L_steps = np.zeros(LANES, np.int64)
+    L_early = np.zeros(LANES, np.int64)
+    L_hpos = np.zeros(LANES, np.int64)
+    orb = np.full(LANES, -1, np.int64)
+    acc = np.zeros((LANES, _tg.N_ACC))
+    z = np.zeros(DIM)
+    row = np.empty(_tg.N_RES)
+    factor = safety_factor(order)
+    e_p = 1.0 / order
+    e_q = 1.0 / (order - 1)
+    active = 0
+    for l in range(LANES):
+        active += _indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on, L_t,
+                                        L_steps, L_early, L_hpos, L_since, acc, out_hist, out_res, out_ext,
+                                        out_status, out_final, out_steps, out_w)
+    while active > 0:
+        taylor_coefficients_lanes(P, X, order, Wk)
+        fin, normal = _indicator_norms_lanes(X, order, n, e_p, e_q, NORM)
+        bits = _steps_lanes(NORM, fin, normal, L_on, L_t, T, factor, hv, L_last, L_go)
+        while bits != 0:
+            l, bits = next_bit(bits)
+            st = STATUS_NONFINITE
+            if (fin >> l) & 1:
+                if (normal >> l) & 1:
+                    h = NORM[4, l] * factor
+                else:
+                    h = radius_min(NORM[0, l], NORM[1, l], NORM[2, l], NORM[3, l], e_p, e_q) * factor
+                h, last = clip_step(L_t[l], h, T)
+                st = STATUS_STEP_UNDERFLOW
+                if resolves(L_t[l], h):
+                    st = -1
+                    hv[l] = h
+                    L_last[l] = 1.0 if last else 0.0
+                    L_go[l] = 1.0
+            if st >= 0:
+                _indicator_lane_finish(l, st, n, nvec, X, z, orb, L_steps, L_early, acc, out_res, out_ext,
+                                       out_status, out_final, out_steps, out_w)
+                active += _indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on,
+                                                L_t, L_steps, L_early, L_hpos, L_since, acc, out_hist, out_res,
+                                                out_ext, out_status, out_final, out_steps, out_w) - 1
+        _evaluate_lanes(X, order, hv, Y)
+        for l in range(LANES):
+            if L_go[l] == 0.0:
+                continue
+            L_steps[l] += 1
+            for i in range(DIM):
+                z[i] = Y[i, l]
+            st = STATUS_NONFINITE
+            if all_finite(z):
+                t = L_t[l]
+                t_new = T if L_last[l] != 0.0 else t + hv[l]
+                dlog = _tg.renormalize(z[n:2 * n], n)
+                _tg.accumulate(acc[l], t, t_new, dlog)
+                L_hpos[l] = _indicator_history(acc[l], hist_t, out_hist[orb[l]], L_hpos[l], row)
+                if nvec == 2:
+                    _tg.renormalize(z[2 * n:3 * n], n)
+                L_t[l] = t_new
+                for i in range(DIM):
+                    X[0, i, l] = z[i]
+                if early_stop:
+                    early, L_since[l] = _indicator_early(acc[l], z[n:2 * n], z[nvec * n:(nvec + 1) * n], n, nvec,
+                                                         sali_stop, megno_level, early_tmin, L_since[l])
+                    L_early[l] = early
+                st = _indicator_status(L_early[l], t_new, T, L_steps[l], max_steps)
+            if st >= 0:
+                _indicator_lane_finish(l, st, n, nvec, X, z, orb, L_steps, L_early, acc, out_res, out_ext,
+                                       out_status, out_final, out_steps, out_w)
+                active += _indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on,
+                                                L_t, L_steps, L_early, L_hpos, L_since, acc, out_hist, out_res,
+                                                out_ext, out_status, out_final, out_steps, out_w) - 1
+
+
+@njit(parallel=True, error_model="numpy")
+def indicators_lanes(Y0, V0, W0, n, nvec, P, T, order, max_steps, early_stop, sali_stop, megno_level, early_tmin,
+                     hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w, workers):
+    """indicators_taylor's arguments and outputs, on ``workers`` groups of LANES lanes (prange) fed from
+    one queue of orbits; each orbit's results are indicators_orbit's bit for bit."""
+    next_orbit = np.zeros(1, np.int64)
+    for w in prange(workers):
+        indicators_lanes_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_steps, early_stop, sali_stop,
+                                megno_level, early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final,
+                                out_steps, out_w)
 '''
 
 
