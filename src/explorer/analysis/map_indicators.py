@@ -54,19 +54,14 @@ def standard_tangent(X, V, k, n, early_stop, early_megno, early_time, res, early
         steps[i] = j
 
 
-_NOT_FOR_A_MAP = ("method", "tol", "dt", "w0", "states", "phi0", "h")
-
-
 def standard_indicators(k: float, points, *, tmax, which, threads=None, early_stop=False, early_megno=8.0,
-                        early_time=100.0, v0=None, history=0, max_steps=None, **given):
+                        early_time=100.0, v0=None, history=0, max_steps=None, flow=None) -> dict:
     """The fields of :class:`~explorer.analysis.lyapunov.Indicators` of the standard map's orbits
     from ``points`` (N, 2) over ``tmax`` iterates (an integer), for ``which`` of
     :data:`MAP_INDICATORS`; ``early_stop`` ends an orbit whose <Y> stays above ``early_megno``
-    (docs/commands/lyapunov.md).  ParameterError for a setting of a flow (method, tol, dt, w0, ...)."""
-    extra = [name for name, value in given.items() if value is not None and name in _NOT_FOR_A_MAP]
-    unknown = [name for name in given if name not in _NOT_FOR_A_MAP]
-    if unknown:
-        raise TypeError(f"standard_indicators() got unexpected keyword(s) {', '.join(unknown)}")
+    (docs/commands/lyapunov.md).  ParameterError for a setting of a flow given in ``flow`` (name ->
+    value, None when not given: method, tol, dt, w0, phi0, h) and for ``history``."""
+    extra = [name for name, value in (flow or {}).items() if value is not None]
     if extra or history:
         raise ParameterError(f"indicators of the standard map: {', '.join(extra or ['history'])} belong(s) to a "
                              "flow; a map iterates (tmax is the number of iterates)")

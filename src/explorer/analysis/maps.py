@@ -217,12 +217,17 @@ class StandardMap:
         """Mask (...) of the finite points (..., 2): the whole cylinder."""
         return np.all(np.isfinite(np.asarray(points, float)), axis=-1)
 
-    def indicators(self, points, **kw) -> dict:
+    def indicators(self, points, *, tmax, which=("mlce", "megno", "fli"), threads=None, early_stop=False,
+                   early_megno=8.0, early_time=100.0, v0=None, history=0, max_steps=None, method=None, tol=None,
+                   dt=None, w0=None, phi0=None, h=None) -> dict:
         """The chaos indicators of the orbits from ``points``: :func:`explorer.analysis.map_indicators.
         standard_indicators` (what :func:`explorer.indicators` gives for this map)."""
         from explorer.analysis.map_indicators import standard_indicators
 
-        return standard_indicators(self.k, points, **kw)
+        return standard_indicators(self.k, points, tmax=tmax, which=which, threads=threads, early_stop=early_stop,
+                                   early_megno=early_megno, early_time=early_time, v0=v0, history=history,
+                                   max_steps=max_steps, flow={"method": method, "tol": tol, "dt": dt, "w0": w0,
+                                                              "phi0": phi0, "h": h})
 
     def not_finite(self, x) -> str:
         return f"the map's Jacobian is not finite at ({x[0]:.6g}, {x[1]:.6g})"
