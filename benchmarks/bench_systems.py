@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Benchmark SYSTEMS: a System's section crossings against heyoka on the same equations.
+"""Benchmark SYSTEMS: a System's section crossings and chaos map against heyoka on the same equations.
 
 Workload: Hénon–Heiles (lam = 1) as an ``explorer.System``; 64 orbits started on the section
 x = 0 at E = 1/8 with py = 0, y across 95 % of the allowed interval and px > 0 from the energy;
@@ -16,8 +16,19 @@ first 100 crossings of the regular orbits (those where explorer at tol 1e-12 and
 agree to 1e-9 over those crossings).  First use: a fresh process with an empty
 ``EXPLORER_SYSTEMS_CACHE`` (generation and compilation), then a second fresh process (rerun).
 
-    python benchmarks/bench_systems.py            # full run (~3 min on 2 cores)
-    python benchmarks/bench_systems.py --quick    # smoke test (16 orbits x 200 crossings)
+Chaos map: 400 points of the section x = 0 at E = 1/8 (a 20 x 20 grid in (y, py) inside the energy
+curve, lifted to states by ``ex.SectionMap(...).states``), MEGNO and mLCE to T = 1000, tol 1e-12,
+one deviation vector (:func:`explorer.analysis.system_indicators.default_vectors`).  Rows:
+``system_indicators`` (what ``ex.indicators(system, ...)`` calls; the SIMD lanes and the scalar
+driver) and heyoka ``taylor_adaptive_batch`` on the System's variational equations
+(``System.variational(1)``: the state and one deviation vector, its SymPy expressions through
+``heyoka.from_sympy``; heyoka's tutorial "The variational equations" forms them the same way,
+``var_ode_sys`` would carry the whole n x n matrix), the vector renormalised every time unit and
+MEGNO accumulated over those units with the engine's formulas (bench_chaos's harness), 1 and 2
+processes.  Agreement: the class (<Y> > 4) per orbit, and |<Y>| and mLCE of the regular orbits.
+
+    python benchmarks/bench_systems.py            # full run (~4 min on 2 cores)
+    python benchmarks/bench_systems.py --quick    # smoke test (16 orbits x 200 crossings; chaos map 64 orbits, T = 100)
 """
 from __future__ import annotations
 
@@ -205,6 +216,180 @@ def heyoka_processes(Y0, K, tol, simd, nproc, tmax):
     return merged
 
 
+# ----------------------------------------------------------------------------- chaos map
+CHAOS_T = 1000.0
+CHAOS_SIDE = 20                 # 20 x 20 section points
+CHAOS_THRESHOLD = 4.0           # <Y> > 4: chaotic (bench_chaos, the scene default)
+CHAOS_REGULAR = 2.5             # <Y> below this for both codes: a regular orbit whose values are compared
+
+
+def chaos_seeds(hh, side):
+    """side x side section points (y, py) inside the energy curve of x = 0 at E = 1/8 (y at equal steps
+    across the allowed interval, py at equal steps across 98 % of the allowed range at that y), lifted
+    to states (px > 0) by the System's SectionMap."""
+    import explorer as ex
+    xs, y, px, py = hh.states
+    roots = np.roots([-1.0 / 3.0, 0.5, 0.0, -E_LEVEL])
+    lo, hi = np.sort(roots[np.abs(roots.imag) < 1e-12].real)[:2]
+    yy = lo + (hi - lo) * (np.arange(side) + 0.5) / side
+    top = np.sqrt(2 * E_LEVEL - yy**2 + 2 * yy**3 / 3)
+    u = 0.98 * (2 * (np.arange(side) + 0.5) / side - 1)
+    pts = np.array([(a, b * u_) for a, b in zip(yy, top) for u_ in u])
+    smap = ex.SectionMap(hh, E_LEVEL, section=xs, direction=+1, coords=(y, py), solve=px)
+    return np.ascontiguousarray(smap.states(pts))
+
+
+def _hy_chaos_worker(Y0, v0, T, tol, simd, barrier, queue, tag):
+    import heyoka as hy
+    import sympy as sp
+    from bench_chaos import _hy_accumulate
+    t0 = time.perf_counter()
+    hh, _ = henon_heiles()
+    var = hh.variational(1)
+    hv = {s: hy.make_vars(s.name) for s in var.states}
+    vals = dict(var.parameters)
+    eqs = [(hv[s], hy.from_sympy(sp.sympify(f).subs(vals), hv)) for s, f in zip(var.states, var.rhs)]
+    n = hh.dimension
+    ta = hy.taylor_adaptive_batch(eqs, np.zeros((2 * n, simd)), tol=float(tol))
+    build = time.perf_counter() - t0
+    N = Y0.shape[0]
+    megno, mlce = np.full(N, np.nan), np.full(N, np.nan)
+    barrier.wait()
+    start, c0 = time.monotonic(), time.process_time()
+    for a in range(0, N, simd):
+        b = min(a + simd, N)
+        st = ta.state
+        st[:n, :] = Y0[a][:, None]                  # a short last batch padded with its first orbit
+        st[:n, :b - a] = Y0[a:b].T
+        st[n:, :] = v0[:, None]
+        ta.set_time(np.zeros(simd))
+        acc = np.zeros((6, simd))
+        for k in range(1, int(round(T)) + 1):
+            ta.propagate_until(float(k))
+            st = ta.state
+            norm = np.sqrt(np.sum(st[n:] ** 2, axis=0))
+            st[n:] /= norm
+            _hy_accumulate(acc, float(k - 1), float(k), np.log(norm))
+        megno[a:b] = (acc[2] / acc[5])[:b - a]
+        mlce[a:b] = (acc[0] / acc[5])[:b - a]
+    end, cpu = time.monotonic(), time.process_time() - c0
+    queue.put(dict(tag=tag, megno=megno, mlce=mlce, start=start, end=end, cpu=cpu, build=build, order=int(ta.order)))
+
+
+def heyoka_chaos(Y0, v0, T, tol, simd, nproc):
+    """The chaos map's MEGNO and mLCE with heyoka over nproc spawned processes (orbit j to process
+    j % nproc); wall = integration only, after a barrier."""
+    ctx = mp.get_context("spawn")
+    barrier, queue = ctx.Barrier(nproc), ctx.Queue()
+    parts = [np.arange(r, Y0.shape[0], nproc) for r in range(nproc)]
+    T0 = time.monotonic()
+    procs = [ctx.Process(target=_hy_chaos_worker, args=(Y0[idx], v0, T, tol, simd, barrier, queue, r))
+             for r, idx in enumerate(parts)]
+    for p in procs:
+        p.start()
+    outs = [queue.get() for _ in procs]
+    for p in procs:
+        p.join()
+    megno, mlce = np.full(Y0.shape[0], np.nan), np.full(Y0.shape[0], np.nan)
+    for o in outs:
+        megno[parts[o["tag"]]] = o["megno"]
+        mlce[parts[o["tag"]]] = o["mlce"]
+    return dict(megno=megno, mlce=mlce, wall=max(o["end"] for o in outs) - min(o["start"] for o in outs),
+                total=time.monotonic() - T0, cpu=sum(o["cpu"] for o in outs), build=max(o["build"] for o in outs),
+                order=outs[0]["order"])
+
+
+def chaos_map(hh, quick, repeats, budget, threads, simd):
+    """The chaos map's rows (explorer's drivers on ``threads`` and 1 thread, heyoka in 1 and 2
+    processes, interleaved runs) and the agreement of the two codes."""
+    from explorer.analysis import system_indicators as si
+    T = 100.0 if quick else CHAOS_T
+    Y0 = chaos_seeds(hh, 8 if quick else CHAOS_SIDE)
+    v0, _ = si.default_vectors(hh.dimension)
+    kw = dict(tmax=T, method=None, tol=TOL, history=0, v0=v0, w0=None, max_steps=10**9, which=("megno", "mlce"),
+              early_stop=False, early_sali=0.0, early_megno=4.0, early_time=0.0)
+    ex_rows = [("auto", threads), ("scalar", threads), ("auto", 1), ("scalar", 1)]
+
+    def explorer_job(driver, th):
+        def job():
+            t0, c0 = time.perf_counter(), time.process_time()
+            r = si.system_indicators(hh, states=Y0, threads=th, driver=driver, **kw)
+            sec = time.perf_counter() - t0
+            return sec, sec, (r, time.process_time() - c0)
+        return job
+
+    jobs = [explorer_job(d, th) for d, th in ex_rows]
+    for d in ("auto", "scalar"):
+        si.system_indicators(hh, states=Y0[:16], threads=threads, driver=d, **dict(kw, tmax=1.0))  # compile / load
+
+    def heyoka_job(nproc):
+        def job():
+            r = heyoka_chaos(Y0, v0, T, TOL, simd, nproc)
+            return r["wall"], r["total"], r
+        return job
+
+    jobs += [heyoka_job(1), heyoka_job(2)]
+    print(f"SYSTEMS chaos map: {len(Y0)} orbits, T = {T:g}, {len(jobs)} rows", flush=True)
+    timings = round_robin(jobs, repeats, budget)
+    rows = []
+    for (driver, th), tm in zip(ex_rows, timings):
+        r, cpu = tm["res"]
+        rows.append(dict(name=f"explorer ex.indicators, driver {driver}", setting=f"tol {TOL:.0e}, order "
+                         f"{r['settings']['order']}, {th} thread{'s' if th > 1 else ''}", wall=tm["best"],
+                         times=tm["times"], cpu=cpu, megno=r["values"]["megno"], mlce=r["values"]["mlce"],
+                         steps=int(r["steps"].sum()), driver=driver, threads=th))
+    for nproc, tm in zip((1, 2), timings[len(ex_rows):]):
+        r = tm["res"]
+        rows.append(dict(name=f"heyoka taylor_adaptive_batch (batch {simd})", setting=f"tol {TOL:.0e}, order "
+                         f"{r['order']}, {nproc} process{'es' if nproc > 1 else ''}", wall=tm["best"],
+                         times=tm["times"], cpu=r["cpu"], megno=r["megno"], mlce=r["mlce"], processes=nproc,
+                         build=r["build"], total=r["total"]))
+    ex_ref = next(r for r in rows if r.get("driver") == "auto" and r["threads"] == threads)
+    hy2 = next(r for r in rows if r.get("processes") == 2)
+    me, mh = ex_ref["megno"], hy2["megno"]
+    reg = (me < CHAOS_REGULAR) & (mh < CHAOS_REGULAR)
+    agree = dict(n=len(Y0), T=T, fraction_explorer=float(np.mean(me > CHAOS_THRESHOLD)),
+                 fraction_heyoka=float(np.mean(mh > CHAOS_THRESHOLD)),
+                 same_class=float(np.mean((me > CHAOS_THRESHOLD) == (mh > CHAOS_THRESHOLD))), n_regular=int(reg.sum()),
+                 megno_regular=float(np.max(np.abs(me - mh)[reg])) if reg.any() else float("nan"),
+                 mlce_regular=float(np.max(np.abs(ex_ref["mlce"] - hy2["mlce"])[reg])) if reg.any() else float("nan"),
+                 drivers_identical=bool(all(np.array_equal(r["megno"], ex_ref["megno"]) for r in rows if "driver" in r)),
+                 steps_per_orbit=ex_ref["steps"] / len(Y0))
+    return rows, agree
+
+
+def chaos_lines(rows, agree, threads):
+    exr = {(r["driver"], r["threads"]): r for r in rows if "driver" in r}
+    hyb = {r["processes"]: r for r in rows if "processes" in r}
+    auto, auto1 = exr[("auto", threads)], exr[("auto", 1)]
+    out = ["", f"### Chaos map: {agree['n']} orbits of the section x = 0 at E = 1/8, MEGNO and mLCE to "
+           f"T = {agree['T']:g}", "",
+           "| row | setting | wall (s) | CPU (s) | orbits/s | chaotic fraction (<Y> > 4) | runs |",
+           "|---|---|---:|---:|---:|---:|---|"]
+    for r in rows:
+        out.append(f"| {r['name']} | {r['setting']} | {r['wall']:.3f} | {r['cpu']:.3f} | {agree['n'] / r['wall']:,.0f} | "
+                   f"{np.mean(r['megno'] > CHAOS_THRESHOLD):.4f} | {runs_note(r['times'])}"
+                   + (f"; heyoka build {r['build']:.1f} s, process total {r['total']:.1f} s" if "build" in r else "")
+                   + " |")
+    out += ["", f"- Speed-up (wall-time ratios): explorer `ex.indicators` ({threads} threads, the SIMD lanes) against "
+            f"heyoka batch in 2 processes **{hyb[2]['wall'] / auto['wall']:.2f}x** (goal >= 3x), in 1 process "
+            f"{hyb[1]['wall'] / auto['wall']:.2f}x; explorer on 1 thread against heyoka in 1 process "
+            f"{hyb[1]['wall'] / auto1['wall']:.2f}x; the SIMD lanes against the scalar driver "
+            f"{exr[('scalar', threads)]['wall'] / auto['wall']:.2f}x ({threads} threads), "
+            f"{exr[('scalar', 1)]['wall'] / auto1['wall']:.2f}x (1 thread).",
+            f"- CPU time: heyoka 2 processes / explorer {threads} threads **{hyb[2]['cpu'] / auto['cpu']:.2f}**, heyoka "
+            f"1 process / explorer 1 thread {hyb[1]['cpu'] / auto1['cpu']:.2f}.",
+            f"- Agreement: the same class (<Y> > 4) for {agree['same_class']:.4f} of the orbits (chaotic fractions "
+            f"{agree['fraction_explorer']:.4f} explorer, {agree['fraction_heyoka']:.4f} heyoka); on the "
+            f"{agree['n_regular']} orbits regular for both (<Y> < {CHAOS_REGULAR:g}) max |difference| of <Y> "
+            f"{C.fmt_e(agree['megno_regular'])} and of the mLCE {C.fmt_e(agree['mlce_regular'])} (explorer "
+            "renormalises and accumulates after every step, about "
+            f"{agree['steps_per_orbit'] / agree['T']:.1f} a time unit; heyoka here once a time unit: "
+            "two quadratures of the same integrals); the drivers and thread counts of explorer give identical "
+            f"values: {'yes' if agree['drivers_identical'] else 'NO'}."]
+    return out
+
+
 # ----------------------------------------------------------------------------- first use
 FIRST_USE = HH_SOURCE + r"""
 import json, time, numpy as np
@@ -258,6 +443,7 @@ def main(argv=None):
     ap.add_argument("--repeats", type=int, default=None, help="max timing runs per row (default 5)")
     ap.add_argument("--row-budget", type=float, default=None, help="cumulative seconds per row (default 30)")
     ap.add_argument("--skip-first-use", action="store_true", help="no first-use / rerun subprocesses")
+    ap.add_argument("--skip-chaos", action="store_true", help="no chaos map")
     ap.add_argument("--no-write", action="store_true", help="print only")
     ap.add_argument("--note", default=None, help="a line about the run's conditions for the RESULTS.md section")
     args = ap.parse_args(argv)
@@ -331,12 +517,13 @@ def main(argv=None):
     agree_reg = float(np.max(diff[reg])) if reg.any() else float("nan")
     agree_all_first = float(np.max(diff[:, :10]))
 
+    chaos = None if args.skip_chaos else chaos_map(hh, quick, repeats, budget, threads, simd)
     startup = None if args.skip_first_use else first_use(N, 1 if quick else 3)
     exr = {(r["driver"], r["threads"]): r for r in rows if r["name"].startswith("explorer")}
     hyb = {r["processes"]: r for r in rows if r.get("processes")}
     elapsed = time.perf_counter() - T_START
     command = C.command_line("bench_systems.py", argv)
-    lines, meta = C.header("SYSTEMS: Hénon–Heiles sections against heyoka", command, started, elapsed, load0,
+    lines, meta = C.header("SYSTEMS: Hénon–Heiles sections and chaos map against heyoka", command, started, elapsed, load0,
                            extra=[f"Workload: Hénon–Heiles (lam = 1) as an explorer.System, {N} orbits on x = 0 at "
                                   f"E = 1/8 (py = 0, y across 95 % of the allowed interval, px > 0), {K} crossings "
                                   f"of x = 0 with px > 0 each, tol {TOL:.0e} for both.",
@@ -379,11 +566,16 @@ def main(argv=None):
                   f"{f['first_crossings']:.1f} s); rerun (a fresh process, the cache filled): **{rr['process']:.1f} s**, "
                   f"{rr['cpu']:.1f} CPU-s (best of {len(rr['runs'])}: {', '.join(f'{v:.1f}' for v in rr['runs'])}; "
                   f"first crossings {rr['first_crossings']:.2f} s)."]
+    if chaos:
+        lines += chaos_lines(*chaos, threads)
     record = not (quick or args.no_write)
     if not args.no_write:
         C.write_json(C.OUT_DIR / ("systems_quick.json" if quick else "systems.json"),
                      dict(meta, rows=[{k2: v for k2, v in r.items() if k2 != "rows"} for r in rows], startup=startup,
-                          agreement=dict(regular=agree_reg, n_regular=int(reg.sum()), first10=agree_all_first)))
+                          agreement=dict(regular=agree_reg, n_regular=int(reg.sum()), first10=agree_all_first),
+                          chaos=None if not chaos else dict(
+                              rows=[{k2: v for k2, v in r.items() if k2 not in ("megno", "mlce")} for r in chaos[0]],
+                              agreement=chaos[1])))
     return C.report("SYSTEMS", lines, record)
 
 
