@@ -51,6 +51,8 @@ _EXPORTS = {
     "Indicators": "explorer.analysis.lyapunov",
     "indicators": "explorer.analysis.lyapunov",
     "chaotic_fraction": "explorer.analysis.lyapunov",
+    "chaos_map": "explorer.analysis.chaos_map",          # an adaptive chaos map (docs/chaos_map.md)
+    "ChaosMap": "explorer.analysis.chaos_map",
     # the section map and its fixed points
     "SectionMap": "explorer.analysis.section_map",
     "StandardMap": "explorer.analysis.maps",

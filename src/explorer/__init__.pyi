@@ -3,6 +3,12 @@ file lets IDEs and type checkers see the names).  tests/test_api.py keeps it equ
 
 __version__: str
 
+from explorer.analysis.chaos_map import (
+    ChaosMap as ChaosMap,
+)
+from explorer.analysis.chaos_map import (
+    chaos_map as chaos_map,
+)
 from explorer.analysis.fixedpoints import (
     Branch as Branch,
 )
