@@ -58,29 +58,24 @@ def random_states(params, n, seed=0, scale=1.0):
     return y
 
 
-def assert_groups_threads_and_order_keep_the_bits(run, n, seed=0):
-    """``run(groups, perm)`` runs the lane driver on the orbits in the order ``perm`` (an index
-    array of n) with ``groups`` lane groups and returns its output arrays: for G = 2 (the other
-    G offered, lanes.GROUPS), 1 and 2 threads, in the given and in a permuted order, every array
-    equals that of G = 1 on one thread bit for bit (np.array_equal on the bytes, rows put back in
-    order)."""
+def assert_threads_and_order_keep_the_bits(run, n, seed=0):
+    """``run(perm)`` runs the lane driver on the orbits in the order ``perm`` (an index array of n)
+    and returns its output arrays: on 1 and 2 threads, in the given and in a permuted order, every
+    array equals that of one thread in the given order bit for bit (np.array_equal on the bytes,
+    rows put back in order)."""
     from explorer._jit import get_num_threads, set_num_threads
-    from explorer.integrate.lanes import GROUPS
 
     ident = np.arange(n)
     perm = np.random.default_rng(seed).permutation(n)
     old = get_num_threads()
     try:
         set_num_threads(1)
-        ref = run(1, ident)
-        for groups in GROUPS[1:]:
-            for threads in (1, 2):
-                set_num_threads(threads)
-                for order in (ident, perm):
-                    got = run(groups, order)
-                    for a, b in zip(ref, got):
-                        assert np.array_equal(a.view(np.uint8), b[np.argsort(order)].view(np.uint8)), \
-                            (groups, threads)
+        ref = run(ident)
+        for threads, order in ((1, perm), (2, ident), (2, perm)):
+            set_num_threads(threads)
+            got = run(order)
+            for a, b in zip(ref, got):
+                assert np.array_equal(a.view(np.uint8), b[np.argsort(order)].view(np.uint8)), threads
     finally:
         set_num_threads(old)
 
@@ -177,11 +172,11 @@ def _drop_a_stale_kernel_cache() -> None:
     inlines or calls one from another file keeps the old callee (a developer's warm cache failed
     19 tests of tests/integrate/test_lanes.py after kernels/taylor.py changed, while a fresh cache
     passed).  So the tests start from a cache written by this tree's sources: a stamp (a hash of
-    every .py of the package) is kept beside the cached kernels, and when it differs they are
-    removed first.  Only the package's own entries go: numba's files beside the sources
-    (__pycache__/*.nbi, *.nbc) or, with NUMBA_CACHE_DIR, its per-directory subfolders there
-    (named ``<dir>_<sha1 of the directory's path>`` by numba).  CI and a fresh install start with
-    an empty cache and lose nothing."""
+    every .py that may shape a kernel, :func:`_may_shape_a_kernel`) is kept beside the cached
+    kernels, and when it differs they are removed first.  Only the package's own entries go:
+    numba's files beside the sources (__pycache__/*.nbi, *.nbc) or, with NUMBA_CACHE_DIR, its
+    per-directory subfolders there (named ``<dir>_<sha1 of the directory's path>`` by numba).  CI
+    and a fresh install start with an empty cache and lose nothing."""
     import hashlib
     import shutil
     from pathlib import Path
@@ -192,7 +187,8 @@ def _drop_a_stale_kernel_cache() -> None:
     dirs = sorted({p.parent for p in pkg.rglob("*.py")})
     digest = hashlib.sha256()
     for p in sorted(pkg.rglob("*.py")):
-        digest.update(p.relative_to(pkg).as_posix().encode() + b"\0" + p.read_bytes())
+        if _may_shape_a_kernel(pkg, p):
+            digest.update(p.relative_to(pkg).as_posix().encode() + b"\0" + p.read_bytes())
     key = digest.hexdigest()
     cache = os.environ.get("NUMBA_CACHE_DIR")
     stamp = Path(cache) / "explorer-sources.sha256" if cache else pkg / "__pycache__" / "explorer-sources.sha256"
@@ -207,6 +203,19 @@ def _drop_a_stale_kernel_cache() -> None:
                 f.unlink(missing_ok=True)
     stamp.parent.mkdir(parents=True, exist_ok=True)
     stamp.write_text(key)
+
+
+#: the folders whose every module may be compiled into a kernel or read by one (a global's value is
+#: frozen into the kernel that reads it): the layers below analysis
+KERNEL_LAYERS = ("kernels", "model", "integrate")
+
+
+def _may_shape_a_kernel(pkg, path) -> bool:
+    """``path`` may change what a cached kernel computes: it is in :data:`KERNEL_LAYERS` or it
+    compiles kernels itself.  The stamp covers these files only, so that editing the page or the
+    docs of an analysis does not throw away every compiled kernel."""
+    rel = path.relative_to(pkg).parts
+    return rel[0] in KERNEL_LAYERS or rel[0] == "_jit.py" or b"njit" in path.read_bytes()
 
 
 #: seconds of the phases of a run that no test's duration shows (printed at the end, docs/tests.md)
