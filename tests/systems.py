@@ -35,3 +35,9 @@ def pole():
     s, w = sp.symbols("s w")
     return ex.System({s: sp.Integer(1), w: 1 / s}, name="pole"), s, w
 
+
+
+def henon_heiles_map(energy=1 / 8):
+    """The section map of :func:`henon_heiles` on x = 0 (px > 0) at ``energy``, coords (y, py), px from
+    the energy (docs/systems.md "Section map"; ``explorer serve --system tests.systems:henon_heiles_map``)."""
+    return ex.SectionMap(henon_heiles(), energy, section=x, direction=+1, coords=(y, py), solve=px)
