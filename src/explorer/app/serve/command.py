@@ -22,6 +22,10 @@ def add_options(s) -> None:
     s.add_argument("scene", nargs="?", default=None,
                    help="scene file (.toml) or preset name: start from its panel's parameters, h, integration "
                    "settings and seeds [none: Figure 4 with mu = 0, h = 2]")
+    s.add_argument("--system", default=None,
+                   help="module:attribute of an explorer System's section map, SectionMap(system, E, section=..., "
+                   "direction=..., coords=(a, b), solve=c) (imported from the current directory or sys.path; a "
+                   "callable returning one is called), or of a System whose scene is given (docs/commands/serve.md)")
     s.add_argument("--panel", type=int, default=0, help="panel of the scene [0]")
     s.add_argument("--port", type=int, default=DEFAULT_PORT, help="TCP port (0: any free port) [%(default)s]")
     s.add_argument("--host", default=DEFAULT_HOST, help="address to bind [%(default)s]; not a loopback "
@@ -62,21 +66,26 @@ Serve the explorer as a web page (HoloViz Panel on Bokeh). The first line printe
 COMMAND = Command("serve", HELP, "figure4 --mu 0.03", (add_options,), fields={"page": PAGE_DESCRIPTION})
 
 
-def settings_from_args(args):
-    """The page's starting settings and label from the command's arguments."""
-    from explorer.app.serve.settings import settings_for
+def page_from_args(args) -> tuple:
+    """(settings, label, seeds) the page starts from: a System's section map (``--system``, or a
+    scene of a System; :func:`explorer.app.serve.system_page.system_page`), else Chaplygin's model
+    (the scene's panel, the options on top); seeds: the scene's ``[seeds]`` (*Scene seeds*)."""
+    from explorer.app.serve.settings import seeds_for, settings_for
+    from explorer.io.scene import load_scene
+    from explorer.io.scene.system import SystemScene
 
+    scene = args.scene if args.scene is None else load_scene(args.scene, system=args.system)
+    if args.system is not None or isinstance(scene, SystemScene):
+        from explorer.app.serve.system_page import system_page
+
+        chaplygin = [n for n in (*model.PARAM_NAMES, "method", "dt") if getattr(args, n) is not None]
+        if chaplygin:
+            raise ParameterError(f"--{chaplygin[0]} belongs to Chaplygin's model; a System's page takes --h (its "
+                                 "energy), --tol and --crossings")
+        return system_page(args.system, scene, args.panel, energy=args.h, tol=args.tol, crossings=args.crossings)
     overrides = {n: getattr(args, n) for n in (*model.PARAM_NAMES, "h", "method", "tol", "dt", "crossings")
                  if getattr(args, n) is not None}
-    return settings_for(args.scene, args.panel, **overrides)
-
-
-def seeds_from_args(args):
-    """The ``[seeds]`` of the scene's panel (the page's *Scene seeds* button), or those of the
-    default scene when no scene is given."""
-    from explorer.app.serve.settings import seeds_for
-
-    return seeds_for(args.scene)
+    return (*settings_for(scene, args.panel, **overrides), seeds_for(scene))
 
 
 def run(args, open_browser: bool = False) -> int:
@@ -106,8 +115,7 @@ def run(args, open_browser: bool = False) -> int:
     raster.resolutions_up_to(megno_resolution)
     megno_time = raster.RASTER_TIME if args.megno_time is None else args.megno_time
     validation.real("--megno-time", megno_time, 0.0, raster.MAX_RASTER_TIME, lo_open=True)
-    base, label = settings_from_args(args)
-    seeds = seeds_from_args(args)
+    base, label, seeds = page_from_args(args)
     try:
         import panel  # noqa: F401
     except ImportError:

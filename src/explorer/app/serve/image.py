@@ -29,7 +29,8 @@ class View:
     None: MEGNO's); ``fixed``: [(p1, p2, elliptic)];
     ``separatrices``: [(n, 2) arrays]; ``manifolds``: [(kind, (n, 2) array)] of a picked saddle
     (kind "unstable" or "stable"); ``periodic``: [(p1, p2, period, elliptic)];
-    ``by_megno``: colour the orbits by their MEGNO; ``title``: one line."""
+    ``by_megno``: colour the orbits by their MEGNO; ``title``: one line; ``region_mask``: the region
+    as a mask (n, n) over its box (None: the ellipse ``region``); ``axes``: the coordinates' names."""
 
     window: tuple
     region: tuple | None
@@ -43,6 +44,8 @@ class View:
     periodic: list = field(default_factory=list)
     by_megno: bool = False
     title: str = ""
+    region_mask: np.ndarray | None = None
+    axes: tuple = ("p1", "p2")
 
 
 def _megno_colormap(skip: int = 0):
@@ -74,7 +77,13 @@ def figure(view: View):
     ax = fig.add_subplot()
     x0, x1, y0, y1 = view.window
     ax.set_facecolor(figures.FORBIDDEN_COLOR)
-    if view.region is not None:
+    if view.region is not None and view.region_mask is not None:
+        c1, c2, r1, r2 = view.region
+        white = np.zeros((*np.shape(view.region_mask), 4))
+        white[np.asarray(view.region_mask, bool)] = 1.0
+        ax.imshow(white, extent=(c1 - r1, c1 + r1, c2 - r2, c2 + r2), origin="lower", interpolation="nearest",
+                  zorder=0.5)
+    elif view.region is not None:
         c1, c2, r1, r2 = view.region
         ax.add_patch(Ellipse((c1, c2), 2 * r1, 2 * r2, facecolor="white", edgecolor="none", zorder=0.5))
         ax.add_patch(Ellipse((c1, c2), 2 * r1, 2 * r2, facecolor="none", edgecolor=figures.BOUNDARY_COLOR,
@@ -117,8 +126,8 @@ def figure(view: View):
     ax.set_xlim(x0, x1)
     ax.set_ylim(y0, y1)
     ax.set_aspect("equal", adjustable="box")
-    ax.set_xlabel("$p_1$")
-    ax.set_ylabel("$p_2$")
+    ax.set_xlabel({"p1": "$p_1$"}.get(view.axes[0], view.axes[0]))
+    ax.set_ylabel({"p2": "$p_2$"}.get(view.axes[1], view.axes[1]))
     if view.title:
         ax.set_title(figures.mathtext_label(view.title), fontsize=9)
     ax.tick_params(direction="in", top=True, right=True)

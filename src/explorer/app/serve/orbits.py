@@ -16,12 +16,12 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from functools import partial
+from typing import Any
 
 import numpy as np
 
 from explorer import model
 from explorer.analysis import sections
-from explorer.app.serve.settings import Settings
 from explorer.integrate import layout, methods
 from explorer.kernels import STATUS_NAMES
 
@@ -59,7 +59,7 @@ class OrbitRun:
     ident: int
     p1: float
     p2: float
-    settings: Settings
+    settings: Any                  # the page's settings (explorer.app.serve.maps)
     y0: np.ndarray = field(init=False)
     state: sections.StreamState = field(init=False)
     block: int = FIRST_BLOCK
@@ -121,7 +121,7 @@ def _duration(seconds: float) -> str:
     return f"{seconds:.2g} s"
 
 
-def step_estimate(settings: Settings, y0) -> int | None:
+def step_estimate(settings, y0) -> int | None:
     """Steps that an orbit of a fixed-step method from ``y0`` is expected to take: its crossings
     times the time between two crossings (of a Taylor probe of two crossings) over ``dt``, within
     its time and step budgets; None for an adaptive method or when the probe finds no crossing."""
@@ -137,31 +137,69 @@ def step_estimate(settings: Settings, y0) -> int | None:
     return int(min(need, settings.max_steps))
 
 
-def warm_up(settings: Settings) -> None:
+class SystemRun(OrbitRun):
+    """A clicked orbit of a System's section map (:class:`explorer.app.serve.system_page.SystemSettings`):
+    each block continues the flow from the state its last step ended in, with the System's
+    crossings of the map's section (:func:`explorer.analysis.system_sections.system_crossings`);
+    rows (t, a, b, solve, H - H0) in the map's coords."""
+
+    def __post_init__(self):
+        smap = self.settings.smap
+        self.y0 = smap.states([(self.p1, self.p2)])
+        self._y, self._t, self._h0 = self.y0, 0.0, float(smap.energy_of(self.y0)[0])
+        self._cols = [1 + smap.system.states.index(s) for s in (*smap.coords, smap.solve)]
+        self._finished = False
+
+    cut_at_steps = True
+
+    @property
+    def finished(self) -> bool:
+        return self._finished
+
+    def advance(self) -> np.ndarray:
+        from explorer.analysis.system_sections import system_crossings
+        from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS
+
+        s, smap = self.settings, self.settings.smap
+        k = min(self.block, s.crossings - self.done)
+        t0 = time.perf_counter()
+        data, count, status, final, info, *_ = system_crossings(
+            smap.system, self._y, n_crossings=k, section=smap.section.expr, direction=smap.direction, tol=s.tol,
+            tmax=smap.tmax * k, max_steps=self.steps, threads=1)
+        elapsed = time.perf_counter() - t0
+        self.wall += elapsed
+        n, code = int(count[0]), int(status[0])
+        d = data[0, :n]
+        rows = np.column_stack([d[:, 0] + self._t, d[:, self._cols], smap.energy_of(d[:, 1:5]) - self._h0])
+        self._y, self._t, self.done = final[:1].copy(), self._t + float(info[0, 0]), self.done + n
+        if self.done >= s.crossings or code not in (STATUS_DONE, STATUS_MAX_STEPS):
+            self._finished = True
+            self.status = "done" if self.done >= s.crossings else STATUS_NAMES[code]
+        rate = n / elapsed if elapsed > 0 and n else 0.0
+        self.block = max(MIN_BLOCK, min(MAX_BLOCK, int(rate * BLOCK_SECONDS) if rate else 2 * self.block,
+                                        4 * self.block))
+        self.step_rate = float(info[0, 1]) / elapsed if elapsed > 0 else 0.0
+        self.steps = max(FIRST_STEPS, min(MAX_STEPS_PER_BLOCK, int(self.step_rate * BLOCK_SECONDS)))
+        return rows
+
+
+def warm_up(settings) -> None:
     """Load (or compile) the crossing kernels of ``settings``' method before the first click: one
     crossing from the centre of the region (a failure is not reported)."""
     region = settings.region
     if region is None:
         return
     try:
-        OrbitRun(0, region[0], region[1], replace(settings, crossings=1)).advance()
+        replace(settings, crossings=1).new_run(0, region[0], region[1]).advance()
     except Exception:  # noqa: BLE001 - the click will report the same error with its orbit
         return
 
 
-def orbit_indicators(settings: Settings, y0) -> tuple:
-    """(mean MEGNO <Y>, finite-time mLCE) over INDICATOR_TIME of the orbit from ``y0``
-    (:func:`explorer.analysis.lyapunov.indicators`, the orbit's method and tolerance); NaN when
-    the run stopped early."""
-    from explorer.analysis import lyapunov
-
-    if not settings.adaptive and INDICATOR_TIME / settings.dt > INDICATOR_MAX_STEPS:
-        return math.nan, math.nan         # (the run would stop at its step cap)
-    res = lyapunov.indicators(settings.params, states=y0, tmax=INDICATOR_TIME, method=settings.method, tol=settings.tol,
-                              dt=settings.dt, max_steps=INDICATOR_MAX_STEPS)
-    if int(res.status[0]) != 0:
-        return math.nan, math.nan
-    return float(res.megno[0]), float(res.mlce[0])
+def orbit_indicators(settings, p1: float, p2: float) -> tuple:
+    """(mean MEGNO <Y>, finite-time mLCE) over INDICATOR_TIME of the orbit from (p1, p2)
+    (the settings' ``megno``: the orbit's method and tolerance); NaN when the run stopped early."""
+    megno, mlce = settings.megno([p1], [p2], INDICATOR_TIME, INDICATOR_MAX_STEPS, mlce=True)
+    return float(megno[0]), float(mlce[0])
 
 
 class Worker:
@@ -185,13 +223,13 @@ class Worker:
         if self._runs and not self.session.running("orbits"):
             self.session.start("orbits", self._loop())
 
-    def submit(self, p1: float, p2: float, settings: Settings, ident: int | None = None) -> OrbitRun:
+    def submit(self, p1: float, p2: float, settings, ident: int | None = None) -> OrbitRun:
         """Queue an orbit from (p1, p2) (ParameterError, nothing queued, outside the region), as
         orbit ``ident`` (None: a new id; an id of an orbit cancelled before, rerun at new settings)."""
         if ident is None:
             self._next_id += 1
             ident = self._next_id
-        run = OrbitRun(ident, float(p1), float(p2), settings)
+        run = settings.new_run(ident, float(p1), float(p2))
         self._runs.insert(0, run)      # newest first: its first block comes next
         self._ensure_running()
         return run
@@ -277,7 +315,7 @@ class Worker:
                     self._on_indicators is not None:
                 run.wants_indicators = False      # once the orbit is finished (or has run INDICATOR_AFTER)
                 try:
-                    megno, mlce = await session.run(orbit_indicators, run.settings, run.y0)
+                    megno, mlce = await session.run(orbit_indicators, run.settings, run.p1, run.p2)
                 except Exception:  # noqa: BLE001 - an indicator that fails is shown as unknown
                     megno = mlce = math.nan
                 await session.apply(partial(self._on_indicators, run.ident, megno, mlce))

@@ -32,7 +32,7 @@ def _fixed_points_from(view, first):
         if not view.admissible(*g):
             continue
         try:
-            yield find_fixed_point(view.params, view.h, g, phi0=view.phi0)
+            yield find_fixed_point(view.section_map(), g)
         except BudgetExceeded:
             raise
         except Exception:  # noqa: BLE001 - no convergence from this guess
@@ -70,8 +70,8 @@ def describe_points(points) -> str:
 def fixed_points(view) -> tuple:
     """(points, message): the distinct fixed points Newton's method reaches from p = 0, the centre
     of the region and half-way to its edge along both axes.  ``view``: anything with ``params``,
-    ``h``, ``phi0``, ``region`` (c1, c2, r1, r2 or None) and ``admissible(p1, p2)`` (the page's
-    :class:`~explorer.app.serve.settings.Settings`)."""
+    the page's settings (:mod:`explorer.app.serve.maps`: ``region`` (c1, c2, r1, r2 or None),
+    ``admissible(p1, p2)`` and ``section_map()``)."""
     if view.region is None:
         return [], "fixed points: the region is empty"
     from explorer.analysis.budget import BudgetExceeded
@@ -94,8 +94,7 @@ def separatrix_branches(view, fp) -> tuple:
     to SEPARATRIX_ARCLENGTH (docs/manifolds.md), as (M, 2) arrays, and a note on those that stopped short."""
     from explorer.analysis.manifolds import manifolds
 
-    branches = manifolds(view.params, view.h, fp, arclength=SEPARATRIX_ARCLENGTH, phi0=view.phi0,
-                         max_time=SEPARATRIX_MAX_TIME)
+    branches = manifolds(view.section_map(), fp, arclength=SEPARATRIX_ARCLENGTH, max_time=SEPARATRIX_MAX_TIME)
     curves = [np.asarray(b.points, dtype=np.float64) for b in branches if len(b.points)]
     short = sorted({b.status for b in branches if b.status != "arclength"})
     return curves, (f"some branches stopped short ({', '.join(short)})" if short else "")
@@ -146,7 +145,7 @@ def periodic_orbits(view, max_period=None):
     done = 0
     for k in range(1, K + 1):
         try:
-            orbits += search_periodic_orbits(view.params, view.h, k, grid=8, max_guesses=30, phi0=view.phi0)
+            orbits += search_periodic_orbits(view.section_map(), k, grid=8, max_guesses=30)
         except BudgetExceeded as exc:
             stopped = f"; periods {k}-{K} not searched: {exc}"
             break
@@ -170,14 +169,12 @@ def orbit_readout(settings, start) -> dict:
     """A picked orbit from ``start``: its MEGNO and mLCE (orbits.orbit_indicators) and its rotation
     number around :func:`elliptic_center`.  Keys: megno, mlce, rotation (a RotationNumber or
     None), center (a FixedPoint or None), rotation_error (text)."""
-    from explorer import model
     from explorer.analysis import rotation
     from explorer.analysis.budget import BudgetExceeded
     from explorer.app.serve.orbits import orbit_indicators
 
     p1, p2 = float(start[0]), float(start[1])
-    y0 = model.section_state(settings.params, [p1], [p2], settings.h, settings.phi0, settings.direction or 1)
-    megno, mlce = orbit_indicators(settings, y0)
+    megno, mlce = orbit_indicators(settings, p1, p2)
     out = {"megno": megno, "mlce": mlce, "rotation": None, "center": None, "rotation_error": ""}
     try:
         fp = elliptic_center(settings, (p1, p2))
@@ -185,8 +182,8 @@ def orbit_readout(settings, start) -> dict:
             out["rotation_error"] = "no elliptic fixed point found (Newton from the start and the region's centre)"
             return out
         out["center"] = fp
-        out["rotation"] = rotation.rotation_number(settings.params, settings.h, (p1, p2), center=fp.point,
-                                                   phi0=settings.phi0, tol=rotation_tol(settings))
+        out["rotation"] = rotation.rotation_number(settings.section_map(rotation_tol(settings)), (p1, p2),
+                                                   center=fp.point)
     except BudgetExceeded:
         raise
     except Exception as exc:  # noqa: BLE001 - shown in the readout
@@ -216,8 +213,8 @@ def saddle_manifolds(settings, point, period=1):
     from explorer.analysis.manifolds import manifolds
 
     p1, p2 = float(point[0]), float(point[1])
-    branches = manifolds(settings.params, settings.h, (p1, p2), arclength=MANIFOLD_ARCLENGTH, period=int(period),
-                         phi0=settings.phi0, max_time=MANIFOLD_MAX_TIME)
+    branches = manifolds(settings.section_map(), (p1, p2), arclength=MANIFOLD_ARCLENGTH, period=int(period),
+                         max_time=MANIFOLD_MAX_TIME)
     npts = sum(len(b.points) for b in branches)
     text = (f"manifolds of the hyperbolic period-{int(period)} orbit at ({_num(p1)}, {_num(p2)}): "
             f"{len(branches)} branches (W^u red, W^s blue) to arclength {MANIFOLD_ARCLENGTH:g}, {npts} points")

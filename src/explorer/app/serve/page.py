@@ -10,7 +10,8 @@ from __future__ import annotations
 import contextlib
 import math
 import time
-from urllib.parse import parse_qsl, urlsplit
+from typing import Any
+from urllib.parse import parse_qsl, urlencode, urlsplit
 
 import panel as pn
 import param
@@ -33,11 +34,13 @@ from explorer.app.serve.page_orbits import (  # noqa: F401  (the page's constant
 )
 from explorer.app.serve.page_overlays import Overlays
 from explorer.app.serve.page_readout import Readout
-from explorer.app.serve.settings import FIELDS, Settings, format_window
+from explorer.app.serve.server import TOKEN_ARG
+from explorer.app.serve.settings import Settings, format_window
 from explorer.app.serve.style import (
     FIGURE_CHROME_PX,
     FIGURE_HEIGHT,
     FIGURE_MIN_WIDTH,
+    FIGURE_SIDES_PX,
     FIGURE_WIDTH,
 )
 from explorer.app.serve.tasks import Session
@@ -59,31 +62,42 @@ class UrlState(param.Parameterized):
     address by ``pn.state.location.sync`` once :meth:`attach` ed; the address heals to it
     (docs/architecture.md, "The page")."""
 
+    @classmethod
+    def of(cls, fields: tuple) -> UrlState:
+        """The link of a page with these ``fields`` (and URL_EXTRAS): one class per set of keys."""
+        names = tuple(fields) + URL_EXTRAS
+        if names not in _URL_CLASSES:
+            _URL_CLASSES[names] = type(cls.__name__, (cls,), {"names": names,
+                                                              **{n: param.String(default="") for n in names}})
+        return _URL_CLASSES[names]()
+
     def attach(self, location, session) -> None:
         """Keep the browser's address (Panel's ``location``) this link from now on, healed on ``session``."""
         # (the address first: sync reads it into the link, and a link the page ignored is not the page's)
-        location.update_query(**{n: getattr(self, n) for n in FIELDS + URL_EXTRAS})
+        location.search = _address(location.search, {n: getattr(self, n) for n in self.names})
         location.sync(self, on_error=lambda _values: None)
         self._location, self._session = location, session
         location.param.watch(self._on_address, ["search", "href"])
 
     def write(self, link: dict) -> None:
-        """The link anew ({name: text}); the address takes it whole when it lacks any value of it
-        (``sync`` writes only the values that change)."""
+        """The link anew ({name: text}); the address takes it whole when it lacks any value of it or
+        has another key (``sync`` writes only the values that change)."""
         self._link = dict(link)
         with self._sent_by_bokeh():
             self.param.update(**link)
             if self._location is not None and self._lacks(self._location.search):
-                self._location.update_query(**link)
+                self._location.search = _address(self._location.search, link)
 
     def _sent_by_bokeh(self):
         """The address's changes sent by Bokeh, not Panel's writer (Session.bokeh_sends)."""
         return self._session.bokeh_sends() if self._session is not None else contextlib.nullcontext()
 
     def _lacks(self, query: str) -> bool:
-        """Whether the address's query text lacks a non-empty value of the page's link (as text)."""
+        """Whether the address's query text lacks a non-empty value of the page's link (as text) or
+        has a key that is neither the link's nor the token."""
         have = dict(parse_qsl(query.lstrip("?"), keep_blank_values=True))
-        return any(v and have.get(k) != v for k, v in self._link.items())
+        return (any(v and have.get(k) != v for k, v in self._link.items())
+                or any(k not in self._link and k != TOKEN_ARG for k in have))
 
     def _on_address(self, event) -> None:
         """A changed address that lacks the link is healed on the session's loop."""
@@ -104,13 +118,19 @@ class UrlState(param.Parameterized):
             with self._sent_by_bokeh():
                 location.param.trigger("search")
 
-    _location = None            # Panel's location of a served page (attach), else None
-    _session = None             # the page's Session (attach)
+    _location: Any = None       # Panel's location of a served page (attach), else None
+    _session: Any = None        # the page's Session (attach)
     _link: dict = {}            # the page's link as last written ({name: text})
+    names: tuple = ()           # its keys
 
 
-for _name in FIELDS + URL_EXTRAS:
-    UrlState.param.add_parameter(_name, param.String(default=""))
+_URL_CLASSES: dict = {}
+
+
+def _address(query: str, link: dict) -> str:
+    """The address's query text: the ``link`` and the token of ``query`` (if any), nothing else."""
+    token = [(k, v) for k, v in parse_qsl(query.lstrip("?"), keep_blank_values=True) if k == TOKEN_ARG]
+    return "?" + urlencode(token + list(link.items()))
 
 
 class SectionPage:
@@ -127,8 +147,9 @@ class SectionPage:
         self.session = Session(doc)
         self.messages = Message()
         self.message, self.say, self.tell = self.messages.message, self.messages.say, self.messages.tell
-        self.url_state = UrlState()
+        self.url_state = UrlState.of(base.field_names)
         self.section = SectionView()
+        self.section.set_axes(*base.axes)
         self.orbits = OrbitsLayer(self, self.section, self.session)
         self.density_image = DensityImage(self.orbits, self.section)
         self.chaos = ChaosLayer(self, self.section, self.session, raster_mod.resolutions_up_to(megno_resolution),
@@ -169,13 +190,15 @@ class SectionPage:
             b = pn.widgets.Button(label=label, width=width, color="warning" if label == "Clear" else "default")
             b.on_click(lambda _e, action=action: self.session.soon(action))
             buttons.append(b)
-        buttons.append(pn.widgets.FileDownload(callback=self.exports.scene_file, filename=f"{export.SCENE_NAME}.toml",
-                                               label="Scene (TOML)", color="primary", width=110))
+        if self.base.scene_export:
+            buttons.append(pn.widgets.FileDownload(callback=self.exports.scene_file, label="Scene (TOML)",
+                                                   filename=f"{export.SCENE_NAME}.toml", color="primary", width=110))
         buttons += [pn.widgets.FileDownload(callback=lambda fmt=fmt: self.exports.figure_file(fmt),
                                             filename=f"{export.SCENE_NAME}.{fmt}", label=f"Figure ({fmt.upper()})",
                                             width=100) for fmt in ("png", "svg")]
         if self.export_dir is not None:
-            for label, action in (("Export scene", self.exports.export), ("Export figure", self.exports.export_figure)):
+            actions = (("Export scene", self.exports.export), ("Export figure", self.exports.export_figure))
+            for label, action in actions[0 if self.base.scene_export else 1:]:
                 b = pn.widgets.Button(label=label, width=110)
                 b.on_click(lambda _e, action=action: self.session.soon(action))
                 buttons.append(b)
@@ -191,11 +214,12 @@ class SectionPage:
         bar = pn.FlexBox(*buttons, flex_wrap="wrap", sizing_mode="stretch_width")
         # as wide as the window leaves it, no taller than the window less the lines around it (view.py)
         aspect = FIGURE_WIDTH / FIGURE_HEIGHT
-        self.section.figure.styles = {"max-width": f"max({FIGURE_MIN_WIDTH}px, calc((100vh - {FIGURE_CHROME_PX}px)"
-                                                   f" * {aspect:.6f}))"}
+        self.section.figure.styles = {"max-width": f"max({FIGURE_MIN_WIDTH}px, min(calc((100vh - {FIGURE_CHROME_PX}px)"
+                                                   f" * {aspect:.6f}), calc(100vw - {FIGURE_SIDES_PX}px)))"}
         plot = pn.pane.Bokeh(self.section.figure, sizing_mode="stretch_width")
-        self.layout = pn.Row(controls, pn.Column(self.title, bar, plot, *(pn.pane.Bokeh(d) for d in texts),
-                                                 self.orbit_list.panel, sizing_mode="stretch_width"),
+        self.layout = pn.Row(controls, pn.Column(self.title, bar, pn.Row(plot, self.orbit_list.panel,
+                                                                         sizing_mode="stretch_width"),
+                                                 *(pn.pane.Bokeh(d) for d in texts), sizing_mode="stretch_width"),
                              sizing_mode="stretch_width")
 
     def close(self) -> None:
@@ -213,8 +237,10 @@ class SectionPage:
 
     # ------------------------------------------------------------ state in the URL
     def _load_url(self, args: dict):
-        fields = {k: v for k, v in args.items() if k in FIELDS}
+        args, unknown = settings_mod.screen_link(args, self.url_state.names + (TOKEN_ARG,))
+        fields = {k: v for k, v in args.items() if k in self.base.field_names}
         self.settings, refused = settings_mod.parse_link_fields(self.base, fields)
+        refused[:0] = unknown
         try:
             starts = settings_mod.parse_starts(args.get("orbits", ""))
             full = settings_mod.room_for(len(starts), self.settings.crossings)
@@ -227,7 +253,7 @@ class SectionPage:
         if refused:
             self.say(f"link ignored in part (the rest applies): {'; '.join(refused)}")
         self._show_fields()
-        if self.settings.phi0 != self.base.phi0:
+        if self.settings.title() != self.base.title():
             self.title.object = self._title()
         self._draw_region()
         if args.get("view"):
@@ -289,7 +315,7 @@ class SectionPage:
             return
         hidden = set(self.orbits.hidden)
         old = self._drop_orbits()
-        angle_changed = new.phi0 != self.settings.phi0
+        angle_changed = new.title() != self.settings.title()
         self.settings = new
         if angle_changed:                 # (only then: a change of the title is a message of its own)
             self.title.object = self._title()
@@ -309,15 +335,13 @@ class SectionPage:
         self.push_url()
 
     def _draw_region(self):
-        self.section.draw_region(self.settings.region)
-        if self.settings.region is None:
-            self.say(f"the allowed region is empty at h = {self.settings.h:g} (h is below the minimum of "
-                     "the energy on the section)")
+        region = self.settings.region
+        self.section.draw_region(region, None if region is None else self.settings.region_mask())
+        if region is None:
+            self.say(self.settings.empty_region())
 
     def _title(self) -> str:
-        phi0 = self.settings.phi0
-        shown = "π" if phi0 == math.pi else f"{phi0:.6g}"
-        return f"### explorer: Poincaré section φ = {shown}" + (f" ({self.label})" if self.label else "")
+        return f"### explorer: {self.settings.title()}" + (f" ({self.label})" if self.label else "")
 
     # ------------------------------------------------------------ orbits
     def _drop_orbits(self) -> list:
@@ -331,7 +355,7 @@ class SectionPage:
         """Start an orbit at each seed point of the scene's ``[seeds]`` at the current settings, as
         many as the session has room for; returns how many."""
         try:
-            starts = settings_mod.seed_starts(self.seeds or settings_mod.seeds_for(None), self.settings)
+            starts = self.settings.seed_starts(self.seeds)
         except ParameterError as exc:
             self.say(f"scene seeds: {exc}")
             return 0
@@ -359,9 +383,9 @@ class SectionPage:
         if self.settings.region is None:
             self.say("nothing to do: the allowed region is empty at this energy")
             return None
-        if not self.settings.admissible(p1, p2):
-            self.say(f"({p1:.4g}, {p2:.4g}) is outside the allowed region (M^2 < 0 there): click in the white "
-                     "ellipse")
+        why = self.settings.refusal(p1, p2)
+        if why is not None:
+            self.say(why)
             return None
         if self.orbits.pause_box.value:
             self.orbits.worker.pause()

@@ -57,8 +57,9 @@ class Exports:
             raster = (np.array(r["image"][0], float), (x, x + r["dw"][0], y, y + r["dh"][0]))
         f, q, m = ov.fixed.data, ov.periodic.data, ov.manifold_source.data
         s = host.settings
-        title = f"mu = {s.params.mu:g}, h = {s.h:g}, {s.method}" + (f" ({self.label})" if self.label else "")
-        return View(window=window, region=s.region, orbits=shown,
+        title = s.describe() + (f" ({self.label})" if self.label else "")
+        mask = s.region_mask()
+        return View(window=window, region=s.region, region_mask=mask, orbits=shown, axes=s.axes,
                     starts=[(a, b, COLORS[c]) for _i, a, b, c in visible], raster=raster,
                     raster_scale=host.chaos.scale(),
                     fixed=[(a, b, k == "elliptic") for a, b, k in zip(f["p1"], f["p2"], f["kind"])],

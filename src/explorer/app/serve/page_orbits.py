@@ -14,8 +14,8 @@ import numpy as np
 from bokeh.models import CDSView, ColumnDataSource, CustomJSFilter, Div, LinearColorMapper
 
 from explorer.app.serve.box import Box
-from explorer.app.serve.orbits import CHAOTIC_MEGNO, COLORS, INDICATOR_TIME, Worker
-from explorer.app.serve.style import MEGNO_HIGH, MEGNO_LOW, MEGNO_ORBIT_SKIP, POINT_SIZE, megno_palette
+from explorer.app.serve.orbits import COLORS, INDICATOR_TIME, Worker
+from explorer.app.serve.style import MEGNO_HIGH, MEGNO_LOW, MEGNO_ORBIT_SKIP, POINT_SIZE, megno_kind, megno_palette
 
 #: blocks after an orbit's first go to the browser at most this often (s): each message redraws every dot
 FLUSH_SECONDS = 0.25
@@ -282,14 +282,12 @@ class OrbitsLayer:
         s = self.host.settings
         text = (f"{len(self.starts)} orbit(s), {running} running, "
                 + (f"{paused} paused (Resume continues them), " if paused else "") + f"{n} crossings drawn"
-                + (" (as a density image)" if density.dense else "") + "; "
-                f"mu = {s.params.mu:g}, h = {s.h:g}, {s.method}")
+                + (" (as a density image)" if density.dense else "") + "; " + s.describe())
         known = [i for i, *_ in self.starts if i in self.indicators]
         if known:
             megno, mlce = self.indicators[known[-1]]
-            kind = "chaotic-like" if megno > CHAOTIC_MEGNO else "regular-like"
             text += (f"; orbit {known[-1]}: <Y> = {megno:.3g}, mLCE = {mlce:.3g} over t <= {INDICATOR_TIME:g}"
-                     + (f" ({kind})" if math.isfinite(megno) else " (unknown: the run stopped early)"))
+                     f" ({megno_kind(megno)})")
         self.status.text = text
         for listener in self._listeners:
             listener()

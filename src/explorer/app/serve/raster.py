@@ -10,7 +10,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from explorer import model
 from explorer.app.serve.settings import Settings, Window
 
 #: resolutions of the successive rasters of one window (each a refinement of the last), by default
@@ -59,15 +58,8 @@ def resolutions_up_to(n: int) -> tuple:
 
 
 def megno_cells(settings: Settings, p1, p2, time: float = RASTER_TIME) -> np.ndarray:
-    """Mean MEGNO <Y>(``time``) of the orbits started at (p1, p2) on the section."""
-    from explorer.analysis import lyapunov
-
-    if not settings.adaptive and time / settings.dt > RASTER_MAX_STEPS:
-        return np.full(np.shape(p1), np.nan)      # (every cell would stop at its step cap)
-    y0 = model.section_state(settings.params, p1, p2, settings.h, settings.phi0, settings.direction or 1)
-    res = lyapunov.indicators(settings.params, states=y0, tmax=time, method=settings.method, tol=settings.tol,
-                              dt=settings.dt, which=("megno",), max_steps=RASTER_MAX_STEPS)
-    return np.where(np.asarray(res.status) == 0, np.asarray(res.megno, dtype=np.float64), np.nan)
+    """Mean MEGNO <Y>(``time``) of the orbits started at (p1, p2) on the section (NaN past RASTER_MAX_STEPS)."""
+    return settings.megno(p1, p2, time, RASTER_MAX_STEPS)
 
 
 def diffusion_center(settings: Settings) -> tuple:
@@ -94,16 +86,14 @@ def diffusion_cells(settings: Settings, p1, p2, center, iterates: int = DIFFUSIO
     method, else at the rotation's default, as the readout's rotation number) around ``center``.
     Crossings in direction -1 have no such map: ParameterError (as a scene's)."""
     from explorer.analysis.rotation import frequency_diffusion
-    from explorer.analysis.section_map import SectionMap
     from explorer.app.serve.overlays import rotation_tol
     from explorer.model import ParameterError
 
     if settings.direction == -1:
         raise ParameterError("frequency diffusion needs crossings in direction + or both (the section map's "
                              "returns); these settings count them in direction -")
-    smap = SectionMap(settings.params, settings.h, phi0=settings.phi0, tol=rotation_tol(settings))
-    return frequency_diffusion(smap, np.column_stack([np.ravel(p1), np.ravel(p2)]), center=center,
-                               iterates=iterates)
+    return frequency_diffusion(settings.section_map(rotation_tol(settings)), np.column_stack([np.ravel(p1),
+                               np.ravel(p2)]), center=center, iterates=iterates)
 
 
 def rasters(settings: Settings, window: Window, resolutions: tuple = RESOLUTIONS, time: float = RASTER_TIME,
@@ -125,7 +115,7 @@ def rasters(settings: Settings, window: Window, resolutions: tuple = RESOLUTIONS
     previous = None
     for n in resolutions:
         P1, P2 = window.centres(n)
-        inside = model.section_M2(settings.params, P1, P2, settings.h, settings.phi0) > 0.0
+        inside = settings.allowed(P1, P2)
         values = np.full((n, n), np.nan)
         if previous is not None:     # until a cell is computed, it shows the coarser raster's value
             k = n // previous.shape[0]

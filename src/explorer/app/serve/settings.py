@@ -13,6 +13,7 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis import sections
+from explorer.app.serve.maps import ChaplyginPage
 from explorer.model import ParameterError, validation
 
 #: the model parameters the page has a field for: mu (the one most often changed) first
@@ -39,10 +40,12 @@ def room_for(n_orbits: int, crossings: int) -> str | None:
     return None
 #: longest field text read from the page or the URL
 MAX_FIELD_CHARS = 64
+#: a link's arguments at most this many characters in all (a page's own link, 256 starts, is under 20,000)
+MAX_LINK_CHARS = 100_000
 
 
 @dataclass(frozen=True)
-class Settings(sections.Integration):
+class Settings(ChaplyginPage, sections.Integration):
     """Everything that determines a clicked orbit's crossings: ``explorer orbit --p1 P1 --p2 P2
     --h H --method M --tol TOL --dt DT --crossings K`` with the model ``params`` gives the same
     rows bit for bit (the section phi = ``phi0``, crossings in ``direction``).
@@ -90,6 +93,14 @@ class Settings(sections.Integration):
         d.update(h=repr(float(self.h)), method=self.method, tol=repr(float(self.tol)), dt=repr(float(self.dt)),
                  crossings=str(self.crossings), phi0=repr(float(self.phi0)))
         return {n: d[n] for n in FIELDS}
+
+    field_names = FIELDS
+
+    def with_fields(self, fields: dict) -> Settings:
+        return parse_fields(self, fields)
+
+    def seed_starts(self, seeds) -> list:
+        return seed_starts(seeds or seeds_for(None), self)
 
 
 def settings_for(scene=None, panel: int = 0, **overrides) -> tuple:
@@ -211,16 +222,28 @@ def parse_link_fields(base: Settings, fields: dict) -> tuple:
     """(settings, refusals): ``base`` with every field of a link that applies (all at once, else
     one after the other) and the message of each field refused."""
     try:
-        return parse_fields(base, fields), []
+        return base.with_fields(fields), []
     except ParameterError:
         pass
     settings, refused = base, []
     for name, text in fields.items():
         try:
-            settings = parse_fields(settings, {name: text})
+            settings = settings.with_fields({name: text})
         except ParameterError as exc:
             refused.append(str(exc))
     return settings, refused
+
+
+def screen_link(args: dict, names) -> tuple:
+    """(args, refusals): the arguments of a link ({name: text}) that the page reads (``names``) and
+    a message naming the others; none of a link longer than MAX_LINK_CHARS, and a message saying so."""
+    size = sum(len(k) + len(v) + 2 for k, v in args.items())
+    if size > MAX_LINK_CHARS:
+        return {}, [f"the link is {size:,} characters long (at most {MAX_LINK_CHARS:,}): none of it applies"]
+    unknown = [repr(k[:MAX_FIELD_CHARS]) for k in args if k not in names]
+    shown = ", ".join(unknown[:3]) + (f" and {len(unknown) - 3} more" if len(unknown) > 3 else "")
+    refused = [f"unknown {'key' if len(unknown) == 1 else 'keys'} {shown} (removed)"] if unknown else []
+    return {k: v for k, v in args.items() if k in names}, refused
 
 
 def format_starts(starts) -> str:

@@ -4,6 +4,7 @@ fitted to the region after every change of it and followed through the browser's
 """
 from __future__ import annotations
 
+import numpy as np
 from bokeh.events import RangesUpdate
 from bokeh.models import ColumnDataSource, Range1d
 from bokeh.plotting import figure
@@ -41,6 +42,9 @@ class SectionView:
                      toolbar_location="above")
         fig.ellipse("x", "y", width="width", height="height", source=self.region, fill_color=ALLOWED_COLOR,
                     line_color=BOUNDARY_COLOR, line_width=1.0)
+        # a region without a closed form (a System's map): its mask as an image, white where allowed
+        self.region_image = ColumnDataSource({"image": [], "x": [], "y": [], "dw": [], "dh": []}, name="region-image")
+        fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.region_image)
         fig.grid.visible = False
         fig.on_event(RangesUpdate, self._on_ranges)
         self.figure = fig
@@ -75,13 +79,24 @@ class SectionView:
         width, height = self.frame_px()
         return (w.x1 - w.x0) / max(width, 1.0), (w.y1 - w.y0) / max(height, 1.0)
 
-    def draw_region(self, region) -> None:
-        """The allowed region (c1, c2, r1, r2; None: empty), and the view fitted to it."""
+    def set_axes(self, a: str, b: str) -> None:
+        self.figure.xaxis.axis_label, self.figure.yaxis.axis_label = a, b
+
+    def draw_region(self, region, mask=None) -> None:
+        """The allowed region (c1, c2, r1, r2; None: empty): the ellipse, or ``mask`` (n, n) over
+        its box (rows: the second coordinate); and the view fitted to it."""
+        self.region_image.data = {"image": [], "x": [], "y": [], "dw": [], "dh": []}
         if region is None:
             self.region.data = _empty_region()
             return
         c1, c2, r1, r2 = region
-        self.region.data = {"x": [c1], "y": [c2], "width": [2 * r1], "height": [2 * r2]}
+        if mask is None:
+            self.region.data = {"x": [c1], "y": [c2], "width": [2 * r1], "height": [2 * r2]}
+        else:
+            self.region.data = _empty_region()
+            rgba = np.where(np.asarray(mask, bool), np.uint32(0xFFFFFFFF), np.uint32(0)).astype(np.uint32)
+            self.region_image.data = {"image": [rgba], "x": [c1 - r1], "y": [c2 - r2], "dw": [2 * r1],
+                                      "dh": [2 * r2]}
         self.fit(c1, c2, (1 + VIEW_MARGIN) * r1, (1 + VIEW_MARGIN) * r2)
 
     def show_window(self, w) -> None:

@@ -1,0 +1,89 @@
+"""What the page asks of its section (docs/commands/serve.md, "Your own system"): one protocol, two
+implementations.  :class:`ChaplyginPage` gives it to Chaplygin's
+:class:`~explorer.app.serve.settings.Settings` (with ``field_names``, ``with_fields`` and
+``seed_starts`` there); :class:`explorer.app.serve.system_page.SystemSettings` to a System's section
+map.  The page, its orbits, layers and searches call only these methods.  No web library here.
+"""
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+
+def nan_unless_done(status, values, shape) -> np.ndarray:
+    return np.where(np.asarray(status) == 0, np.asarray(values, dtype=np.float64), np.nan).reshape(shape)
+
+
+class ChaplyginPage:
+    """The page's protocol for Chaplygin's model (mixed into Settings: params, h, phi0, method, ...)."""
+
+    scene_export = True            # the session exports as a scene that `explorer sweep` reruns
+    axes = ("p1", "p2")
+    if TYPE_CHECKING:              # (Settings' fields and methods)
+        params: Any
+        h: Any
+        phi0: Any
+        method: Any
+        tol: Any
+        dt: Any
+        direction: Any
+        adaptive: Any
+        admissible: Any
+
+    def describe(self) -> str:
+        return f"mu = {self.params.mu:g}, h = {self.h:g}, {self.method}"
+
+    def title(self) -> str:
+        return f"Poincaré section φ = {'π' if self.phi0 == math.pi else f'{self.phi0:.6g}'}"
+
+    def empty_region(self) -> str:
+        return f"the allowed region is empty at h = {self.h:g} (h is below the minimum of the energy on the section)"
+
+    def region_mask(self):
+        """None: the region is the ellipse :attr:`region` (docs/model.md R9)."""
+        return None
+
+    def allowed(self, p1, p2) -> np.ndarray:
+        """Mask of the points strictly inside the allowed region (M^2 > 0)."""
+        from explorer import model
+
+        return model.section_M2(self.params, p1, p2, self.h, self.phi0) > 0.0
+
+    def refusal(self, p1: float, p2: float) -> str | None:
+        """Why a click at (p1, p2) starts no orbit (None: it does)."""
+        if self.admissible(p1, p2):
+            return None
+        return f"({p1:.4g}, {p2:.4g}) is outside the allowed region (M^2 < 0 there): click in the white ellipse"
+
+    def section_map(self, tol=None):
+        """The section map the page's searches ask (fixed points, manifolds, rotation numbers)."""
+        from explorer.analysis.section_map import DEFAULT_TOL, SectionMap
+
+        return SectionMap(self.params, self.h, phi0=self.phi0, tol=DEFAULT_TOL if tol is None else tol)
+
+    def states(self, p1, p2) -> np.ndarray:
+        from explorer import model
+
+        return model.section_state(self.params, p1, p2, self.h, self.phi0, self.direction or 1)
+
+    def megno(self, p1, p2, time: float, max_steps: int, mlce: bool = False):
+        """Mean MEGNO <Y>(time) (and the mLCE with ``mlce``) of the orbits from (p1, p2), NaN where
+        the run stopped early (or would stop at its step cap)."""
+        from explorer.analysis import lyapunov
+
+        shape = np.shape(p1)
+        if not self.adaptive and time / self.dt > max_steps:
+            nan = np.full(shape, np.nan)
+            return (nan, nan) if mlce else nan
+        res = lyapunov.indicators(self.params, states=self.states(p1, p2), tmax=time, method=self.method,
+                                  tol=self.tol, dt=self.dt, which=("megno", "mlce") if mlce else ("megno",),
+                                  max_steps=max_steps)
+        megno = nan_unless_done(res.status, res.megno, shape)
+        return (megno, nan_unless_done(res.status, res.mlce, shape)) if mlce else megno
+
+    def new_run(self, ident: int, p1: float, p2: float):
+        from explorer.app.serve.orbits import OrbitRun
+
+        return OrbitRun(ident, p1, p2, self)

@@ -1,0 +1,200 @@
+"""The page of a System's section map (docs/commands/serve.md, "Your own system"):
+:class:`SystemSettings`, the protocol of :mod:`explorer.app.serve.maps` for a
+:class:`~explorer.analysis.system_section_map.SystemSectionMap`, and :func:`system_page`, what
+``explorer serve --system module:attribute`` starts from.  No web library here.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from explorer.app.serve.maps import nan_unless_done
+from explorer.app.serve.settings import MAX_CROSSINGS, MAX_FIELD_CHARS, _number, _whole
+from explorer.model import ParameterError, validation
+
+#: names the page's link keeps for itself: a System parameter may not take one (its field is a link key)
+RESERVED = ("energy", "tol", "crossings", "orbits", "hidden", "megno", "indicator", "separatrices", "periodic",
+            "colour", "pause", "view", "token", "name")
+#: cells per side of the allowed region's image (a System's region has no closed form)
+REGION_CELLS = 256
+
+
+@dataclass(frozen=True, eq=False)
+class SystemSettings:
+    """The page of a System's section map ``smap`` (at the page's parameter values and energy):
+    its fields are the system's parameters, ``energy``, ``tol`` (the Taylor method's) and
+    ``crossings`` per click.  Two settings are equal when their fields are."""
+
+    smap: Any
+    tol: float = 1e-13
+    crossings: int = 2000
+    max_steps: int = 10**9
+
+    method = "taylor"
+    adaptive = True
+    direction = 1                  # the map's own (smap.direction): the page counts every crossing it makes
+    dt = math.nan
+    scene_export = False
+
+    def __post_init__(self):
+        from explorer.analysis.system_sections import is_system_map
+        from explorer.integrate.methods import MAX_TOL, MIN_TOL
+
+        if not is_system_map(self.smap):
+            raise ParameterError(f"a System's page needs its section map, got {type(self.smap).__name__}")
+        for name in self.field_names[:-3]:
+            if name in RESERVED[1:]:
+                raise ParameterError(f"the page cannot show {self.smap.system.name}'s parameter {name!r}: the page's "
+                                     f"link uses that name (rename it; reserved: {', '.join(RESERVED)})")
+        validation.real("tol", self.tol, MIN_TOL, MAX_TOL)
+        validation.integer("crossings", self.crossings, 1, MAX_CROSSINGS)
+
+    def __eq__(self, other):
+        return isinstance(other, SystemSettings) and other.fields() == self.fields()
+
+    def __hash__(self):
+        return hash(tuple(self.fields().items()))
+
+    @property
+    def field_names(self) -> tuple:
+        return (*self.smap.parameters, "tol", "crossings")
+
+    @property
+    def axes(self) -> tuple:
+        return tuple(s.name for s in self.smap.coords)
+
+    def fields(self) -> dict:
+        d = {n: repr(float(self.smap.value_of(n))) for n in self.smap.parameters}
+        return {**d, "tol": repr(float(self.tol)), "crossings": str(self.crossings)}
+
+    def with_fields(self, fields: dict) -> SystemSettings:
+        smap, other = self.smap, dict[str, Any]()
+        for name, text in fields.items():
+            if name not in self.field_names:
+                raise ParameterError(f"unknown field {str(name)[:MAX_FIELD_CHARS]!r}; one of "
+                                     f"{', '.join(self.field_names)}")
+            if name == "crossings":
+                other["crossings"] = _whole("crossings", text)
+            elif name == "tol":
+                other["tol"] = _number("tol", text)
+            else:
+                value = _number(name, text)
+                if value != smap.value_of(name):
+                    smap = smap.with_value(name, value)
+        return replace(self, smap=smap, **other)
+
+    def describe(self) -> str:
+        values = ", ".join(f"{n} = {self.smap.value_of(n):g}" for n in self.smap.parameters)
+        return f"{self.smap.system.name}: {values}"
+
+    def title(self) -> str:
+        s = self.smap
+        return f"Poincaré section {s.section.expr} = 0 ({s.direction:+d}) of {s.system.name}, {s.solve.name} from E"
+
+    def empty_region(self) -> str:
+        return f"the allowed region is empty: {self.smap.describe_domain()}"
+
+    @property
+    def region(self):
+        """(c1, c2, r1, r2): the centre and half-sizes of a box holding the map's domain; None when empty."""
+        try:
+            (a0, a1), (b0, b1) = self.smap.domain
+        except ParameterError:
+            return None
+        return (0.5 * (a0 + a1), 0.5 * (b0 + b1), 0.5 * (a1 - a0), 0.5 * (b1 - b0))
+
+    def region_mask(self):
+        """The map's domain on a REGION_CELLS^2 grid of the :attr:`region` box (rows: the second coordinate)."""
+        c1, c2, r1, r2 = self.region
+        u = (np.arange(REGION_CELLS) + 0.5) / REGION_CELLS * 2.0 - 1.0
+        A, B = np.meshgrid(c1 + r1 * u, c2 + r2 * u)
+        return self.allowed(A, B)
+
+    def allowed(self, p1, p2) -> np.ndarray:
+        return self.smap.allowed(np.stack([np.asarray(p1, float), np.asarray(p2, float)], axis=-1))
+
+    def admissible(self, p1: float, p2: float) -> bool:
+        return bool(self.allowed(p1, p2))
+
+    def refusal(self, p1: float, p2: float) -> str | None:
+        """The map's own message for a point outside its domain (None inside)."""
+        if self.admissible(p1, p2):
+            return None
+        try:
+            self.smap.states([(p1, p2)])
+        except ParameterError as exc:
+            return str(exc)
+        return self.smap.describe_domain()
+
+    def section_map(self, tol=None):
+        s = self.smap
+        if tol is None or tol == s.tol:
+            return s
+        return type(s)(s.system, s.energy_value, section=s.section.expr, direction=s.direction, coords=s.coords,
+                       solve=s.solve, tol=tol, tmax=s.tmax)
+
+    def megno(self, p1, p2, time: float, max_steps: int, mlce: bool = False):
+        from explorer.analysis import lyapunov
+
+        shape = np.shape(p1)
+        pts = np.column_stack([np.ravel(p1), np.ravel(p2)])
+        res = lyapunov.indicators(self.smap, pts, tmax=time, tol=self.tol, max_steps=max_steps,
+                                  which=("megno", "mlce") if mlce else ("megno",))
+        megno = nan_unless_done(res.status, res.megno, shape)
+        return (megno, nan_unless_done(res.status, res.mlce, shape)) if mlce else megno
+
+    def new_run(self, ident: int, p1: float, p2: float):
+        from explorer.app.serve.orbits import SystemRun
+
+        return SystemRun(ident, p1, p2, self)
+
+    def seed_starts(self, seeds) -> list:
+        """The scene's ``[seeds]`` on the map's domain (default: a grid of 100 over the region box)."""
+        from explorer.analysis.sweep import system_seed_points
+        from explorer.io.scene.system import SystemSeeds
+
+        if seeds is None:
+            c1, c2, r1, r2 = self.region or (0.0, 0.0, 1.0, 1.0)
+            seeds = SystemSeeds(window=(c1 - r1, c1 + r1, c2 - r2, c2 + r2))
+        pts, _dropped = system_seed_points(seeds, self.smap)
+        if not len(pts):
+            raise ParameterError(f"no seed point on the energy surface ({self.smap.describe_domain()})")
+        return [(float(a), float(b)) for a, b in pts]
+
+
+def system_page(value=None, scene=None, panel: int = 0, **overrides) -> tuple:
+    """(SystemSettings, label, seeds) of ``--system`` (``value``: 'module:attribute', resolved by
+    :func:`explorer.io.scene.system.resolve_system`; the attribute a System's section map, or a System
+    with ``scene`` a scene of it) or of ``scene`` a System's scene; ``overrides``: energy, tol,
+    crossings.  ParameterError (exit 2) for a bare System without a scene, naming what to give."""
+    from explorer.analysis.system_sections import is_system_map
+    from explorer.io.scene import load_scene
+    from explorer.io.scene.system import SystemScene, resolve_system
+
+    seeds, label = None, ""
+    if scene is not None:
+        sc = scene if isinstance(scene, SystemScene) else load_scene(scene, system=value)
+        i = validation.integer("panel", panel, 0, sc.n_panels - 1)
+        smap, plabel = sc.section_map(i), sc.panel(i)[2]
+        integ = sc.integration
+        base = {"tol": integ.tol, "crossings": min(integ.crossings, MAX_CROSSINGS)}
+        seeds, label = sc.seeds, sc.name if not plabel else f"{sc.name}: {plabel}"
+    else:
+        smap = resolve_system(value, "--system", maps=True)
+        if not is_system_map(smap):
+            raise ParameterError(f"--system {value!r} is a System without a section: the page shows a section map. "
+                                 "Name its map (SectionMap(system, E, section=..., direction=..., coords=(a, b), "
+                                 "solve=c) as the attribute) or give a scene of it (explorer serve SCENE.toml "
+                                 f"--system {value})")
+        base = {}
+        label = smap.system.name
+    if panel != 0 and scene is None:
+        raise ParameterError("panel needs a scene")
+    energy = overrides.pop("energy", None)
+    if energy is not None:
+        smap = smap.with_value("energy", validation.real("--h", energy))
+    s = SystemSettings(smap, **{k: v for k, v in {**base, **overrides}.items() if v is not None})
+    return s, label, seeds

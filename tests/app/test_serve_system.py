@@ -1,0 +1,100 @@
+"""`explorer serve --system module:attribute`: the page of a System's section map (docs/commands/serve.md,
+"Your own system"), through the page's protocol (src/explorer/app/serve/maps.py, system_page.py).
+Hénon–Heiles of tests/systems.py (its modules are those the other tests compile)."""
+from __future__ import annotations
+
+import importlib
+
+import numpy as np
+import pytest
+from systems import henon_heiles_map
+
+import explorer as ex
+from explorer.app import cli
+from explorer.model import ParameterError
+
+pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+
+E = 1 / 8
+
+
+def _energy(y, py, px):
+    """Hénon–Heiles' H on x = 0 (lam = 1)."""
+    return (px**2 + py**2) / 2 + y**2 / 2 - y**3 / 3
+
+
+def test_serve_system_names_what_to_give_for_a_bare_system_and_refuses_chaplygins_options(capsys):
+    from explorer.app.serve.command import page_from_args
+    from explorer.app.serve.system_page import SystemSettings
+
+    for argv, said in ((["--system", "tests.systems:henon_heiles"], "System without a section"),
+                       (["--system", "tests.systems:henon_heiles_map", "--mu", "0.5"], "--mu belongs to Chaplygin"),
+                       (["--system", "tests.systems:HH_REVERSOR"], "not an explorer System or its section map")):
+        assert cli.main(["serve", *argv]) == 2
+        err = capsys.readouterr().err
+        assert said in err and "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+    args = cli.build_parser().parse_args(["serve", "--system", "tests.systems:henon_heiles_map", "--h", "0.1",
+                                          "--crossings", "30"])
+    base, label, seeds = page_from_args(args)
+    assert isinstance(base, SystemSettings) and seeds is None and label == "henon_heiles"
+    assert base.fields() == {"lam": "1.0", "energy": "0.1", "tol": "1e-13", "crossings": "30"}
+
+
+def test_a_link_naming_a_system_imports_nothing_and_changes_nothing(monkeypatch):
+    from explorer.app.serve.page import SectionPage
+    from explorer.app.serve.settings import Settings
+    from explorer.app.serve.system_page import SystemSettings
+
+    def refuse(name, *a, **kw):
+        raise AssertionError(f"the page imported {name}")
+
+    monkeypatch.setattr(importlib, "import_module", refuse)
+    for base in (Settings(crossings=10), SystemSettings(henon_heiles_map(), crossings=10)):
+        page = SectionPage(base, {"system": "tests.systems:henon_heiles", "module": "os:system"})
+        try:
+            assert page.settings == base and "system" not in page.url_query()
+        finally:
+            page.close()
+
+
+def test_a_system_page_runs_the_maps_orbits_on_its_energy_level_and_refuses_points_outside():
+    from explorer.app.serve import overlays
+    from explorer.app.serve.page import SectionPage
+    from explorer.app.serve.system_page import SystemSettings
+
+    smap = henon_heiles_map()
+    page = SectionPage(SystemSettings(smap, crossings=40))
+    try:
+        assert tuple(page.inputs) == ("lam", "energy", "tol", "crossings") and not page.fields.mu_slider.visible
+        assert page.click(0.1, 0.1) is not None
+        page.settle()
+        d = page.orbits.crossings.data
+        rows = np.column_stack([np.asarray(d[k]) for k in ("t", "p1", "p2", "M", "dH")])
+        assert rows.shape == (40, 5) and np.max(np.abs(_energy(rows[:, 1], rows[:, 2], rows[:, 3]) - E)) <= 1e-10
+        ref = ex.crossings(smap, [(0.1, 0.1)], n_crossings=40).data[0]
+        np.testing.assert_array_equal(rows[:, 1:4], ref[:, [2, 4, 3]])      # (y, py, px): the map's iterates
+        np.testing.assert_allclose(rows[:, 0], ref[:, 0], rtol=0, atol=1e-12)  # (the clock restarts per block)
+        assert page.click(0.6, 0.45) is None and "has no solution for px" in page.message.text
+        page.inputs["energy"].value = "0.1"                                   # the orbit reruns on E = 0.1
+        page.settle()
+        d = page.orbits.crossings.data
+        assert page.settings.smap.energy_value == 0.1 and len(d["t"]) == 40
+        assert np.max(np.abs(_energy(*(np.asarray(d[k]) for k in ("p1", "p2", "M"))) - 0.1)) <= 1e-10
+        points, text = overlays.fixed_points(page.settings)                 # the searches ask the map
+        assert any(fp.stable and abs(fp.point[1]) < 1e-9 for fp in points), text
+    finally:
+        page.close()
+
+
+def test_a_parameter_named_as_a_link_key_is_refused_naming_it():
+    import sympy as sp
+
+    from explorer.app.serve.system_page import SystemSettings
+
+    hh = henon_heiles_map().system
+    (lam,), view = hh.parameters, sp.Symbol("view")
+    sy = ex.System({s: f.subs(lam, view) for s, f in zip(hh.states, hh.rhs)}, parameters={view: 1.0},
+                   energy=hh.energy.subs(lam, view), name="hh_view")
+    x, y, px, py = sy.states
+    with pytest.raises(ParameterError, match="parameter 'view'"):
+        SystemSettings(ex.SectionMap(sy, E, section=x, direction=1, coords=(y, py), solve=px))
