@@ -98,3 +98,44 @@ def test_a_parameter_named_as_a_link_key_is_refused_naming_it():
     x, y, px, py = sy.states
     with pytest.raises(ParameterError, match="parameter 'view'"):
         SystemSettings(ex.SectionMap(sy, E, section=x, direction=1, coords=(y, py), solve=px))
+
+
+@pytest.fixture(scope="module")
+def browser(launch_chromium):
+    """Chromium (tests/app/browser_session.py)."""
+    return launch_chromium()
+
+
+def test_in_the_browser_a_systems_page_clicks_orbits_on_its_energy_level_and_draws_its_megno_layer(browser):
+    from test_serve import DATA, SET_BOX, TEXT, Served, _click, _open, _wait, browser_needed
+
+    if browser_needed.args[0]:
+        pytest.skip(browser_needed.kwargs["reason"])
+    served = Served("--system", "tests.systems:henon_heiles_map", "--crossings", "60", "--megno-resolution", "16",
+                    "--megno-time", "50")
+    try:
+        page = _open(browser, served.url + "?system=os:system")           # a link names no system
+        _click(page, 0.1, 0.1)
+        _wait(page, "() => Bokeh.documents[0].get_model_by_name('crossings').data.p1.length >= 60", 240_000)
+        d = page.evaluate(DATA, "crossings")
+        y, py, px = (np.array(d[k]) for k in ("p1", "p2", "M"))
+        assert np.all(px > 0) and np.max(np.abs(_energy(y, py, px) - E)) <= 1e-10
+        assert "henon_heiles: lam = 1, energy = 0.125" in page.evaluate(TEXT, "status")
+        _click(page, 0.6, 0.45)                                              # H = 0.209 > E there
+        _wait(page, "() => Bokeh.documents[0].get_model_by_name('message').text.includes('has no solution for px')")
+        page.evaluate(SET_BOX, ["chaos layer", True])
+        raster = "Bokeh.documents[0].get_model_by_name('raster').data"
+        _wait(page, f"() => {raster}.complete.length && {raster}.complete[0]", 240_000)
+        r = page.evaluate(f"() => {{ const d = {raster}; return [Array.from(d.image[0]), d.x[0], d.y[0], d.dw[0],"
+                          " d.dh[0]]; }")
+        values = np.array(r[0], dtype=float).reshape(16, 16)
+        u = (np.arange(16) + 0.5) / 16
+        A, B = np.meshgrid(r[1] + r[3] * u, r[2] + r[4] * u)
+        inside = henon_heiles_map().allowed(np.stack([A, B], axis=-1))
+        assert np.isnan(values[~inside]).all() and np.isfinite(values[inside]).all() and inside.sum() > 50
+        ref = ex.indicators(henon_heiles_map(), np.column_stack([A[inside], B[inside]]), tmax=50.0, which=("megno",))
+        np.testing.assert_array_equal(values[inside], ref.megno)           # <Y>(T) of each cell's orbit
+        page.close()
+    finally:
+        code, err = served.interrupt()
+    assert code in (0, 130) and "Traceback" not in err, err[-2000:]
