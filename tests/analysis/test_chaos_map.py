@@ -107,3 +107,14 @@ def test_standard_map_refuses_what_belongs_to_a_flow():
         ex.indicators(ex.StandardMap(1.0), [(0.1, 0.1)], tmax=10.0, tol=1e-9)
     with pytest.raises(ex.ParameterError, match="sali"):
         ex.indicators(ex.StandardMap(1.0), [(0.1, 0.1)], tmax=10.0, which=("sali",))
+
+
+def test_a_systems_section_map_takes_the_same_rule():
+    from systems import henon_heiles_map
+
+    smap = henon_heiles_map()
+    a = ex.chaos_map(smap, 24, tmax=100.0, coarse=6)
+    e = ex.chaos_map(smap, 24, tmax=100.0, exact=True)
+    assert np.array_equal(a.allowed, smap.allowed(a.centres())) and 0.5 < a.allowed.mean() < 1.0
+    assert np.array_equal(a.values[a.computed], e.values[a.computed])
+    assert not a.chaotic[~a.allowed].any()
