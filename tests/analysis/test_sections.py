@@ -357,3 +357,15 @@ def test_propagate_gives_the_state_at_t_as_scipys_reference_integration_and_from
     np.testing.assert_array_equal(sections.propagate(smap, pts, t=7.5), got)
     with pytest.raises(model.ParameterError, match="shorter times"):
         sections.propagate(prm, states=y0, t=100.0 * sections.PROPAGATE_CROSSINGS)
+
+
+def test_propagate_and_iter_crossings_refuse_a_system_pointing_to_its_flow_and_crossings():
+    """docs/systems.md: a System's states at a time are explorer.flow's, its crossings explorer.crossings'
+    (not streamed); the refusal comes before any integration."""
+    from systems import henon_heiles
+
+    hh = henon_heiles()
+    with pytest.raises(model.ParameterError, match=r"propagate is for Chaplygin's model.*explorer\.flow\(system"):
+        sections.propagate(hh, states=[[0.0, 0.1, 0.3, 0.0]], t=1.0)
+    with pytest.raises(model.ParameterError, match=r"iter_crossings is for Chaplygin's model.*explorer\.crossings"):
+        next(sections.iter_crossings(hh, states=[[0.0, 0.1, 0.3, 0.0]], n_crossings=4))

@@ -5,6 +5,7 @@ half turns (the map's ``half_turns``) from the symmetry line Fix G of the map's 
 :func:`section_greene`."""
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -69,11 +70,16 @@ def line_point(smap, x, line) -> np.ndarray:
 def half_turn_p2(smap, t, Q: int, line=None) -> np.ndarray:
     """u . x after Q half turns from the points t v of the symmetry line of the half ``line`` (:func:`axes`;
     p2 on Chaplygin's section); NaN where not reached."""
-    m = line_map(smap, line)
-    _, v, _ = axes(m)
-    _, _, u = axes(m.opposite() if Q % 2 else m)
+    m, v, u = _shooting(smap, line, Q % 2)
     ts = np.atleast_1d(np.asarray(t, float))
     return m.half_turns(ts[:, None] * v[None, :], Q) @ u
+
+
+@functools.lru_cache(maxsize=64)
+def _shooting(smap, line, odd):
+    """(the map of the half ``line``, v of its line, u of the line where Q half turns end)."""
+    m = line_map(smap, line)
+    return m, axes(m)[1], axes(m.opposite() if odd else m)[2]
 
 
 def line_roots(smap, Q: int, a: float, b: float, n: int, line=None) -> list:
@@ -165,6 +171,9 @@ def section_symmetric_orbit(smap, Q: int, guess, guess2=None, *, param=None, lin
             B = A.copy()
     if Q % 2 == 0:
         B = A
+    gaps = np.max(np.abs(pts[1:Q] - pts[0]), axis=1)
+    if gaps.size and gaps.min() <= 1e-9 * max(1.0, float(np.max(np.abs(pts[0])))):
+        raise ParameterError(f"the symmetric orbit from t = {t:.10g} has period {int(np.argmin(gaps)) + 1}, not {Q}")
     det = B[0, 0] * B[1, 1] - B[0, 1] * B[1, 0]
     if not (np.all(np.isfinite(A)) and math.isfinite(det) and det != 0.0):
         raise ParameterError(f"the half orbit's Jacobian of the orbit of period {Q} from t = {t:.10g} is singular "
@@ -266,18 +275,30 @@ def section_greene(smap, nu: float, *, qmax=None, target, line=None, around=None
     centre = island_centre(smap, around)
     line, seed = _section_line(smap, conv, centre, line)
 
+    typed = set()      # the convergents whose orbit was checked once; the first guess is the previous one's
+
     def orbit_at(value, P, Q, guess, check):
         m = smap.with_parameter(value, pname)
         if guess is None:
             if seed is not None and value == first and (P, Q) == conv[0]:
                 return seed
+            typed.add((P, Q))
             return first_orbit(m, P, Q, island_centre(m, centre), line)
-        orb = section_symmetric_orbit(m, Q, guess, param=pname, line=line)
-        if check:
-            rot = orb.rotation(m, island_centre(m, centre))
-            if abs(abs(rot) * Q - P) > ROTATION_TOL:
+        try:
+            orb = section_symmetric_orbit(m, Q, guess, param=pname, line=line)
+            rot = orb.rotation(m, island_centre(m, centre)) if check or (P, Q) not in typed else P / Q
+        except ParameterError:
+            if check or (P, Q) in typed:
+                raise
+            rot = math.nan
+        if abs(abs(rot) * Q - P) > ROTATION_TOL or not math.isfinite(rot):
+            if check:
                 raise ParameterError(f"the symmetric orbit of period {Q} near {orb.line_start:.8g} turns {rot:.8g} "
                                      f"per return around the centre, not {P}/{Q}")
+            if (P, Q) not in typed:
+                typed.add((P, Q))
+                return first_orbit(m, P, Q, island_centre(m, centre), line)
+        typed.add((P, Q))
         return orb
 
     rows, crit, uncertainty, ratio = critical_parameter(conv, orbit_at, lambda orb: orb.line_start,

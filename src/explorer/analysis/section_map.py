@@ -21,7 +21,7 @@ from explorer.model import ParameterError, symmetry, validation, with_value
 from explorer.model.equations import rhs
 
 __all__ = ["DEFAULT_TOL", "MAP_SETTINGS", "MAX_STEPS", "RETURN_TMAX", "MapResult", "SectionMap", "as_system",
-           "is_params", "system_first"]
+           "is_params", "not_a_system", "system_first"]
 
 #: Taylor tolerance of the section map: the tightest the order rule allows
 DEFAULT_TOL = MAP_TOL
@@ -316,6 +316,21 @@ def as_system(name: str, system, args: tuple, kw: dict, settings: tuple = MAP_SE
             raise ParameterError(f"{name} has no return budget of the map: use a SectionMap with the default "
                                  f"tmax ({RETURN_TMAX:g}), got {system.tmax!r}")
     return system, args, kw
+
+
+def not_a_system(hint: str):
+    """Refuse a System or its map in the decorated analysis, pointing to ``hint`` (docs/systems.md)."""
+
+    def wrap(fn):
+        @functools.wraps(fn)
+        def call(system, *args, **kw):
+            if system_sections.is_system(system) or system_sections.is_system_map(system):
+                raise ParameterError(f"{fn.__name__} is for Chaplygin's model; of a System, {hint} (docs/systems.md)")
+            return fn(system, *args, **kw)
+
+        return call
+
+    return wrap
 
 
 def system_first(fn=None, *, settings: tuple = MAP_SETTINGS, defaults=None, flow: bool = False,

@@ -11,7 +11,7 @@ import numpy as np
 from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
 from explorer.analysis import system_sections
-from explorer.analysis.section_map import is_params, system_first
+from explorer.analysis.section_map import is_params, not_a_system, system_first
 from explorer.integrate import layout, methods
 from explorer.integrate.methods import (
     ADAPTIVE_METHODS,
@@ -293,6 +293,7 @@ def crossings(system, y0, *, n_crossings: int, method: str = "taylor", tol: floa
 PROPAGATE_CROSSINGS = 16
 
 
+@not_a_system("explorer.flow(system, states, times=[t]) gives the states at time t")
 @system_first(settings=("phi0", "tol"), defaults={"tol": DEFAULT_TOL}, flow=True)
 def propagate(system, y0, *, t: float, method: str = "taylor", tol: float = DEFAULT_TOL, dt: float | None = None,
               threads: int | None = None) -> np.ndarray:
@@ -377,6 +378,8 @@ class CrossingBlock:
         return self.data[i, : self.count[i]]
 
 
+@not_a_system("explorer.crossings(system, states=..., n_crossings=..., section=...) gives the crossings at once "
+               "(or explorer.crossings(SectionMap(system, ...), points, n_crossings=...)); they are not streamed")
 @system_first(settings=("phi0", "tol"), defaults={"tol": DEFAULT_TOL}, flow=True)
 def iter_crossings(system, y0, *, n_crossings: int, block: int = DEFAULT_BLOCK, state: StreamState | None = None,
                    method: str = "taylor", tol: float = DEFAULT_TOL, dt: float | None = None,

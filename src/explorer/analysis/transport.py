@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from explorer.analysis.manifolds import Homoclinic, ManifoldBranch, homoclinic_points
-from explorer.analysis.section_map import SectionMap, system_first
+from explorer.analysis.section_map import SectionMap, not_a_system, system_first
 from explorer.model import ParameterError
 
 __all__ = ["DEFAULT_FLUX_MUS", "FluxCurve", "Lobe", "REASON_LOBES_DIFFER", "REASON_NO_EYE", "REASON_NO_PAIR",
@@ -254,6 +254,8 @@ def _eye_point(points, reversible):
     return min(first, key=lambda p: p.sigma_u)
 
 
+@not_a_system("find its saddle (explorer.find_fixed_point, manifolds.saddle) and take the lobes of its tangle "
+              "with transport.turnstile(saddle), exit_times with them")
 @system_first
 def flux_curve(system, mus=None, *, guess=(0.0, 0.0), arclength=6.0, max_arclength=None, sign=1,
                exit_samples=EXIT_SAMPLES, seed=0) -> FluxCurve:
