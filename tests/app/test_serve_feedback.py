@@ -18,7 +18,7 @@ import test_serve
 from test_serve import DATA, SERVED, TO_SCREEN, _click, _open, _set_field, _wait, browser_needed
 
 from explorer import model
-from explorer.app.serve.settings import Settings
+from explorer.app.serve.settings import FIELDS, Settings
 
 #: chromium and the served page (`--mu 0.03`), as in test_serve.py (one per pytest process:
 #: tests/app/browser_session.py)
@@ -128,6 +128,12 @@ def test_at_1280_by_720_the_export_buttons_are_in_view_then_the_view_follows_a_n
         for name in EXPORT_BUTTONS:                            # (the layout does not depend on timing)
             box = page.get_by_role("button", name=name).bounding_box()
             assert box is not None and box["y"] >= 0 and box["y"] + box["height"] <= 720, (name, box)
+        _the_orbit_list_is_beside_the_figure_in_view(page, 1280, 720)
+        # every field says what it sets (a tooltip icon of its own, drawn)
+        from explorer.app.serve.page_fields import LABELS
+
+        tips = page.evaluate(TOOLTIPS)
+        assert sorted(t for t, n in tips if n == 1) == sorted(LABELS[f] for f in FIELDS), tips
         # the figure sized to the window: as wide as the controls leave it, bounded by its height
         narrow = page.evaluate(CANVAS)
         assert narrow[3] <= 720 and 0.9 * 660 <= narrow[0] <= 1280 - 230, narrow
@@ -147,12 +153,33 @@ def test_at_1280_by_720_the_export_buttons_are_in_view_then_the_view_follows_a_n
         _wait(page, f"() => ({RANGE})()[1] - ({RANGE})()[0] < {0.9 * (x1 - x0)}")
         page.locator(".bk-tool-icon-reset").first.click()
         _wait(page, f"() => Math.abs(({RANGE})()[0] - {x0}) < 1e-9 && Math.abs(({RANGE})()[1] - {x1}) < 1e-9")
+        page.set_viewport_size({"width": 1400, "height": 900})
+        _wait(page, "() => window.innerWidth === 1400 && window.innerHeight === 900 && Bokeh.documents[0].is_idle")
+        _the_orbit_list_is_beside_the_figure_in_view(page, 1400, 900)
         page.set_viewport_size({"width": 1800, "height": 1100})      # a larger window: a larger figure
         _wait(page, f"() => window.innerWidth === 1800 && ({CANVAS})()[0] > {narrow[0] + 300}")
         wide = page.evaluate(CANVAS)
         assert wide[3] <= 1100 and abs(wide[0] / wide[1] - narrow[0] / narrow[1]) < 0.02, (narrow, wide)
     finally:
         page.close()
+
+
+#: the orbit list's chooser and table, and the figure: [left, top, right, bottom] of each
+LIST_BOXES = ("() => ['orbit', 'orbit-list', 'section'].map(k => [...Bokeh.index.all_views()].find(v => "
+              "v.model.name === k || v.model.title === k)).map(v => { const r = v.el.getBoundingClientRect(); "
+              "return [r.left, r.top, r.right, r.bottom]; })")
+#: [title, number of drawn tooltip icons] of each widget with a description
+TOOLTIPS = ("() => [...Bokeh.index.all_views()].filter(v => v.model.description).map(v => [v.model.title, "
+            "[...v.shadow_el.querySelectorAll('.bk-description')].filter(e => e.getBoundingClientRect().width > 0)"
+            ".length])")
+
+
+def _the_orbit_list_is_beside_the_figure_in_view(page, width, height):
+    """The list's chooser and the top of its table right of the figure, inside the window, with
+    room for rows."""
+    chooser, table, figure = page.evaluate(LIST_BOXES)
+    assert chooser[0] >= figure[2] - 1 and table[0] >= figure[2] - 1, (chooser, table, figure)
+    assert chooser[2] <= width and table[2] <= width and chooser[3] <= table[1] <= height - 200, (chooser, table)
 
 
 def _luminance(colour: str) -> float:
@@ -290,20 +317,31 @@ def test_the_first_twenty_orbits_each_have_a_colour_of_their_own():
 
 
 def test_the_mu_slider_applies_its_value_through_the_field_and_follows_the_field():
+    """Its range follows mu (0 to the 1-2-5 number at or above 2 mu): about 1-2 % of mu a pixel, and
+    any mu it can show; a drag applies while it moves (every SLIDE_SECONDS), its range changes at the
+    release only (the handle stays under the pointer)."""
     import param
+
+    from explorer.app.serve.page_fields import SLIDE_SECONDS
 
     page = _page(SERVED)
     try:
         slider = page.fields.mu_slider
-        assert slider.value == SERVED.params.mu
+        assert slider.value == SERVED.params.mu == 0.03
+        assert (slider.end - slider.start) / slider.width <= 0.001                  # a pixel: 0.00045 of mu
+        slider.value = 0.0412                             # a drag, not released: applies within SLIDE_SECONDS
+        t0 = time.monotonic()
+        page.settle()
+        assert page.settings.params.mu == 0.0412 and page.inputs["mu"].value == "0.0412"
+        assert time.monotonic() - t0 >= 0.9 * SLIDE_SECONDS and slider.end == 0.1   # (its range kept mid-drag)
         with param.parameterized.edit_constant(slider):
-            slider.value_throttled = 0.5                  # a drag released at 0.5
-        assert page.settings.params.mu == 0.5 and page.inputs["mu"].value == "0.5"
-        assert page.url_query()["mu"] == "0.5"
+            slider.value_throttled = 0.09                 # released at 0.09: applied, the range follows
+        assert page.settings.params.mu == 0.09 and page.url_query()["mu"] == "0.09"
+        assert slider.end == 0.2 and slider.value == 0.09
         page.inputs["mu"].value = "0.25"                  # the field moves the slider
-        assert page.settings.params.mu == 0.25 and slider.value == 0.25
-        page.inputs["mu"].value = "7"                     # beyond its range: applied, the slider at its end
-        assert page.settings.params.mu == 7.0 and slider.value == slider.end
+        assert page.settings.params.mu == 0.25 and slider.value == 0.25 and slider.end == 0.5
+        page.inputs["mu"].value = "1e6"                   # far beyond: the slider reads it, not its old end
+        assert page.settings.params.mu == 1e6 and slider.value == 1e6 < slider.end
     finally:
         page.close()
 
@@ -372,6 +410,39 @@ def test_an_address_overtaken_by_an_older_one_heals_to_the_pages_link():
         assert len(sent) == 1
     finally:
         page.close()
+
+
+def test_a_links_unknown_keys_are_named_and_leave_the_address_and_an_overlong_link_is_said_not_applied():
+    from urllib.parse import parse_qsl
+
+    from panel.io.location import Location
+
+    from explorer.app.serve.settings import MAX_LINK_CHARS, screen_link
+
+    kept, said = screen_link({"mu": "0.5", "foo": "1", "zzz": "", "token": "t"}, ("mu", "token"))
+    assert kept == {"mu": "0.5", "token": "t"} and said == ["unknown keys 'foo', 'zzz' (removed)"]
+    kept, said = screen_link({"mu": "0.5", "junk": "a" * MAX_LINK_CHARS}, ("mu",))
+    assert kept == {} and "none of it applies" in said[0]
+    page = _page(Settings(params=model.FIGURE4.with_(mu=0.03), crossings=1), {"mu": "0.5", "foo": "bar"})
+    try:
+        assert page.settings.params.mu == 0.5 and "unknown key 'foo'" in page.message.text   # the rest applies
+        location = Location(search="?foo=bar&mu=0.5&token=t")
+        page.url_state.attach(location, page.session)
+        have = dict(parse_qsl(location.search.lstrip("?"), keep_blank_values=True))
+        assert "foo" not in have and have["mu"] == "0.5" and have["token"] == "t"           # (the token stays)
+        location.search += "&junk=1"                        # junk typed into the address: healed away
+        page.poll()
+        assert "junk" not in location.search and "mu=0.5" in location.search
+    finally:
+        page.close()
+
+
+def test_a_one_megabyte_link_gets_the_page_not_a_connection_reset(served):
+    """(The page then says it ignores the link: the test above.)"""
+    import urllib.request
+
+    with urllib.request.urlopen(served.url.rstrip("/") + "/?mu=0.05&junk=" + "a" * 1_000_000, timeout=120) as r:
+        assert r.status == 200 and b"<html" in r.read(4000).lower()
 
 
 #: how long the slow click holds the button (ms): past Bokeh's press threshold (300 ms), after

@@ -4,22 +4,30 @@ field, which applies the value as typed (:func:`explorer.app.serve.settings.pars
 from __future__ import annotations
 
 import math
+import time
 
 import panel as pn
 
 from explorer import model
 from explorer.app.serve import settings as settings_mod
-from explorer.app.serve.settings import FIELDS, Settings, parse_fields
+from explorer.app.serve.settings import FIELDS, Settings
 from explorer.app.serve.style import FIELD_WIDTH
 from explorer.model import ParameterError
 
-#: the slider beside the field of mu (the circulation, the parameter most often changed): its range
-#: and step (the field takes any value the command line does; the slider then stops at its end)
-MU_SLIDER = (0.0, 2.0, 0.001)
-#: labels of the fields
+#: the slider of mu (the parameter most often changed) ends at least here (slider_range); while it is
+#: dragged its value applies at most every SLIDE_SECONDS
+MU_SLIDER_END = 0.1
+SLIDE_SECONDS = 0.25
+#: labels of the fields, and what each means (its tooltip)
 LABELS = {p.name: p.symbol for p in model.PARAMETERS} | {
-    "h": "h", "method": "method", "tol": "tol (taylor, dop853)", "dt": "dt (split*)",
-    "crossings": "crossings per click", "phi0": "φ0 (section φ = φ0)"}
+    "h": "h", "method": "method", "tol": "tol", "dt": "dt", "crossings": "crossings", "phi0": "φ0"}
+HELP = {p.name: f"{p.symbol}: {p.help} (docs/model.md)" for p in model.PARAMETERS} | {
+    "h": "the energy: the white ellipse is where it allows motion (M² ≥ 0), gray where not",
+    "method": "the integrator: taylor and dop853 adapt their step to tol; split2 to split8 take fixed steps dt",
+    "tol": "the local error per step of taylor and dop853 (smaller: more accurate, slower)",
+    "dt": "the fixed step of split2 to split8 (smaller: more accurate, more steps)",
+    "crossings": "how many crossings of the section each click computes",
+    "phi0": "the section φ = φ0 (a number, or pi, pi/2, 2pi)"}
 #: the fields the stepper steps: every numeric one (the method is a choice)
 STEP_FIELDS = tuple(n for n in FIELDS if n != "method")
 #: the stepper's widgets' margins (px: top and bottom, left and right): its row fits the fields' 230 px
@@ -42,6 +50,15 @@ def stepped(name: str, text: str, step: float, k: int) -> str:
     return repr(float(f"{float(text) + k * step:.15g}"))
 
 
+def slider_range(mu: float) -> tuple:
+    """(end, step) of the μ slider (from 0) at ``mu``: the 1-2-5 number at or above 2|mu| (at least
+    MU_SLIDER_END), in steps of a thousandth of its decade: 1 to 2.5 % of mu per pixel of its 220."""
+    want = max(2.0 * abs(mu), MU_SLIDER_END) if math.isfinite(2.0 * mu) else MU_SLIDER_END
+    decade = 10.0 ** math.floor(math.log10(want))
+    end = next(m * decade for m in (1, 2, 5, 10) if m * decade >= want * (1 - 1e-12))
+    return end, 10.0 ** (math.floor(math.log10(end * (1 + 1e-12))) - 3)
+
+
 class Fields:
     """One widget per field (``inputs``); an edit calls ``on_edit(name)`` on the session's loop."""
 
@@ -52,22 +69,29 @@ class Fields:
         self.applied = settings
         s = settings.fields()
         self.inputs: dict = {}
-        for name in FIELDS:
+        for name in settings.field_names:
             if name == "method":
-                w = pn.widgets.Select(label=LABELS[name], options=list(METHODS), value=s[name], width=FIELD_WIDTH)
+                w = pn.widgets.Select(label=LABELS[name], options=list(METHODS), value=s[name], width=FIELD_WIDTH,
+                                      description=HELP[name])
             else:
-                w = pn.widgets.TextInput(label=LABELS[name], value=s[name], width=FIELD_WIDTH)
+                w = pn.widgets.TextInput(label=LABELS.get(name, name), value=s[name], width=FIELD_WIDTH,
+                                         description=HELP.get(name))
             w.param.watch(lambda _e, name=name: self._edited(session, on_edit, name), "value")
             self.inputs[name] = w
-        lo, hi, step = MU_SLIDER
-        self.mu_slider = pn.widgets.FloatSlider(label=f"{LABELS['mu']} (slider)", start=lo, end=hi, step=step,
-                                                value=min(max(settings.params.mu, lo), hi), width=220)
-        # on release (value_throttled): one new value per drag, written into the field, which applies it
-        self.mu_slider.param.watch(self._slid, "value_throttled")
+        mu = float(s.get("mu", 0.0))
+        end, step = slider_range(mu)
+        self.mu_slider = pn.widgets.FloatSlider(label=f"{LABELS['mu']} (slider)", start=0.0, end=end, step=step,
+                                                value=min(max(mu, 0.0), end), width=220, visible="mu" in s)
+        # its value goes into the field, which applies it: while dragged every SLIDE_SECONDS, and at the release
+        self._dragging = False                  # (from a drag's first move to its release: the range stays)
+        self._slide_timer = session.timer(lambda: self._slid(self.mu_slider.value, held=True))
+        self.mu_slider.param.watch(lambda e: self._quiet or self._drag(), "value")
+        self.mu_slider.param.watch(lambda e: self._quiet or self._slid(e.new), "value_throttled")
         # the stepper: which field (the last one edited), by how much (1 % of its value when chosen)
-        self.step_field = pn.widgets.Select(label="step", options={LABELS[n]: n for n in STEP_FIELDS}, value="mu",
-                                            width=62, margin=STEP_MARGIN)
-        self.step_size = pn.widgets.FloatInput(label="by", value=default_step(settings.params.mu), width=82,
+        steps = [n for n in settings.field_names if n in STEP_FIELDS or n not in FIELDS]
+        self.step_field = pn.widgets.Select(label="step", options={LABELS.get(n, n): n for n in steps},
+                                            value=steps[0], width=62, margin=STEP_MARGIN)
+        self.step_size = pn.widgets.FloatInput(label="by", value=default_step(float(s[steps[0]])), width=82,
                                             margin=STEP_MARGIN)
         self.step_field.param.watch(lambda e: self._retarget(e.new), "value")
         buttons = []
@@ -104,26 +128,50 @@ class Fields:
         else:
             self.inputs[name].value = text
 
-    def _slid(self, event) -> None:
-        if not self._quiet and event.new is not None:
-            # (rounded to the slider's step: the browser's sums of steps carry float noise, 0.49800000000000005)
-            digits = max(0, -math.floor(math.log10(MU_SLIDER[2])))
-            self.inputs["mu"].value = repr(round(float(event.new), digits))
+    def _drag(self) -> None:
+        self._dragging = True
+        self._slide_timer.at(time.monotonic() + SLIDE_SECONDS)
+
+    def _slid(self, value, held: bool = False) -> None:
+        """The slider's ``value`` into the field (``held``: mid-drag; at the release the range follows it)."""
+        if value is None:
+            return
+        if not held:
+            self._slide_timer.cancel()
+            self._dragging = False
+        # (rounded to the slider's step: the browser's sums of steps carry float noise, 0.49800000000000005)
+        text = repr(round(float(value), max(0, -math.floor(math.log10(self.mu_slider.step)))))
+        if not held and self.inputs["mu"].value == text:
+            self._slider_at(float(text))          # (no edit: the range follows the released value now)
+        self.inputs["mu"].value = text
+
+    def _slider_at(self, mu: float) -> None:
+        """The slider at ``mu``, over slider_range(mu)."""
+        slider, (end, step) = self.mu_slider, slider_range(mu)
+        self._quiet = True
+        try:
+            if end > slider.end:
+                slider.param.update(end=end, step=step)
+            if slider.value != min(max(mu, 0.0), end):
+                slider.value = min(max(mu, 0.0), end)
+            if (end, step) != (slider.end, slider.step):
+                slider.param.update(end=end, step=step)
+        finally:
+            self._quiet = False
 
     def show(self, settings: Settings) -> None:
         """The fields and the slider show ``settings`` (not an edit: nothing is called)."""
-        lo, hi, _step = MU_SLIDER
         self.applied = settings
         self._quiet = True
         try:
             for name, text in settings.fields().items():
                 if self.inputs[name].value != text:
                     self.inputs[name].value = text
-            mu = min(max(float(settings.params.mu), lo), hi)
-            if self.mu_slider.value != mu:
-                self.mu_slider.value = mu
         finally:
             self._quiet = False
+        mu = settings.fields().get("mu")
+        if mu is not None and not self._dragging:
+            self._slider_at(float(mu))
 
     def read(self, base: Settings, applied: Settings, n_orbits: int, name: str | None = None) -> Settings:
         """The settings the fields give: ``applied`` with the text of field ``name`` (every field's
@@ -133,7 +181,7 @@ class Fields:
             fields = {n: w.value for n, w in self.inputs.items()}
         else:
             fields = {**applied.fields(), name: self.inputs[name].value}
-        new = parse_fields(base, fields)
+        new = base.with_fields(fields)
         full = settings_mod.room_for(n_orbits, new.crossings)
         if full:
             raise ParameterError(f"crossings: {full}")

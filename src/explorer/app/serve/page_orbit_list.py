@@ -13,6 +13,7 @@ from bokeh.models import CDSView, CustomJSFilter, Div
 
 from explorer.app.serve import settings as settings_mod
 from explorer.app.serve.orbits import COLORS
+from explorer.app.serve.style import LIST_WIDTH
 from explorer.model import ParameterError
 
 #: the chooser's entry for "no orbit selected" (orbit ids start at 1)
@@ -24,9 +25,17 @@ SELECTED_FILTER = ("const o = source.data.orbit, n = o.length, rows = [];\n"
 #: the selected orbit's markers: this size (pixels; the dots are 2), outlined in this colour
 SELECTED_SIZE = 6.0
 SELECTED_LINE = "#000000"
-#: the table's height at most (then it scrolls) and the background of the selected row
-LIST_MAX_HEIGHT = "12em"
+#: the table's height at most (then it scrolls: beside the figure, as tall as it) and the selected row's background
+LIST_MAX_HEIGHT = "calc(100vh - 300px)"
 SELECTED_BACKGROUND = "#fff3b0"
+#: what the section's colours and the list's columns mean (the legend under the list; each header's tooltip)
+LEGEND = ("white: the allowed region at h (M² ≥ 0), gray: forbidden; +: a start; a dot: a crossing, in its "
+          "orbit's colour, or by its ⟨Y⟩ when orbits are coloured by MEGNO (light 0-2: regular, dark: chaotic). "
+          "⟨Y⟩ (MEGNO, t ≤ 1000) tends to 2 on a torus and to 0 on a stable periodic orbit (a little below 0 "
+          "there is no error); above 3: chaotic-like. A field's ? says what it sets.")
+COLUMNS = (("", "the orbit's colour on the section"), ("orbit", "its id (choose it above, or Shift + click a dot)"),
+           ("start (p1, p2)", "where it was clicked"), ("crossings", "crossings of the section so far"),
+           ("state", "running, paused (Resume continues it), done, or why it stopped"))
 
 
 class OrbitList:
@@ -38,15 +47,17 @@ class OrbitList:
         self._idents: tuple = ()
         self.filter: CustomJSFilter | None = None
         self.table = Div(name="orbit-list", text="", styles={"max-height": LIST_MAX_HEIGHT, "overflow-y": "auto"},
-                         sizing_mode="stretch_width")
-        self.choice = pn.widgets.Select(label="orbit", options={NONE_LABEL: 0}, value=0, width=200)
+                         width=LIST_WIDTH)
+        self.choice = pn.widgets.Select(label="orbit", options={NONE_LABEL: 0}, value=0, width=LIST_WIDTH - 170)
         self.choice.param.watch(lambda e: self._quiet or session.soon(lambda: self.choose(e.new)), "value")
-        self.hide_button = pn.widgets.Button(label="hide", width=70, disabled=True, align="end")
+        self.hide_button = pn.widgets.Button(label="hide", width=50, disabled=True, align="end")
         self.hide_button.on_click(lambda _e: session.soon(self.toggle))
-        self.delete_button = pn.widgets.Button(label="delete", width=70, disabled=True, align="end")
+        self.delete_button = pn.widgets.Button(label="delete", width=50, disabled=True, align="end")
         self.delete_button.on_click(lambda _e: session.soon(lambda: self.delete(self.readout.picked)))
-        self.panel = pn.Column(pn.Row(self.choice, self.hide_button, self.delete_button),
-                               pn.pane.Bokeh(self.table, sizing_mode="stretch_width"), sizing_mode="stretch_width")
+        # beside the figure (its own column, LIST_WIDTH wide): in view with it at 1280 x 720
+        self.panel = pn.Column(pn.Row(self.choice, self.hide_button, self.delete_button), pn.pane.Bokeh(self.table),
+                               pn.pane.HTML(LEGEND, width=LIST_WIDTH, styles={"font-size": "11px", "color": "#444"}),
+                               width=LIST_WIDTH)
         orbits.on_change(self.refresh)
         readout.on_select(lambda _ident: self.refresh())
 
@@ -158,8 +169,7 @@ def _table(rows, picked) -> str:
     """The list as an HTML table (numbers and fixed words only, escaped all the same)."""
     if not rows:
         return ""
-    head = "".join(f"<th style='text-align:left;padding:0 6px'>{h}</th>"
-                   for h in ("", "orbit", "start (p1, p2)", "crossings", "state"))
+    head = "".join(f"<th style='text-align:left;padding:0 3px' title='{tip}'>{h}</th>" for h, tip in COLUMNS)
     body = []
     for i, colour, p1, p2, n, state, hidden in rows:
         style = "font-weight:bold;background:" + SELECTED_BACKGROUND if i == picked else ""
@@ -168,5 +178,5 @@ def _table(rows, picked) -> str:
         cells = (f"<span style='display:inline-block;width:10px;height:10px;background:{colour}'></span>",
                  str(i), f"({p1:.6g}, {p2:.6g})", str(n), html.escape(state) + (", hidden" if hidden else ""))
         body.append(f"<tr data-orbit='{i}' style='{style}'>"
-                    + "".join(f"<td style='padding:0 6px'>{c}</td>" for c in cells) + "</tr>")
+                    + "".join(f"<td style='padding:0 3px'>{c}</td>" for c in cells) + "</tr>")
     return f"<table style='border-collapse:collapse;font-size:12px'><tr>{head}</tr>{''.join(body)}</table>"

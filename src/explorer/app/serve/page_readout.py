@@ -10,7 +10,8 @@ import numpy as np
 from bokeh.models import Div
 
 from explorer.app.serve import overlays as search
-from explorer.app.serve.orbits import CHAOTIC_MEGNO, INDICATOR_TIME
+from explorer.app.serve.orbits import INDICATOR_TIME
+from explorer.app.serve.style import megno_kind
 
 #: a pick selects the orbit with a crossing within this many pixels of the click
 PICK_PX = 6.0
@@ -108,9 +109,8 @@ class Readout:
         if "error" in r:
             self.text.text = head + f"failed: {r['error']}"
             return
-        kind = "chaotic-like" if r["megno"] > CHAOTIC_MEGNO else "regular-like"
         text = (head + f"mLCE = {r['mlce']:.4g}, <Y> = {r['megno']:.4g} over t <= {INDICATOR_TIME:g}"
-                + (f" ({kind})" if math.isfinite(r["megno"]) else " (unknown: the run stopped early)"))
+                f" ({megno_kind(r['megno'])})")
         rot, fp = r["rotation"], r["center"]
         if rot is None:
             text += f"; rotation number: none ({r['rotation_error']})"

@@ -24,6 +24,9 @@ DEFAULT_PORT = 5006
 #: the URL argument that carries the token
 TOKEN_ARG = "token"
 #: what a page shows when its connection to the server is lost (the server stopped, the network went)
+#: a request's headers at most (bytes): longer than any address a browser sends (Chromium's: 2 MB), so a
+#: long link reaches the page, which says why it ignores it (settings.MAX_LINK_CHARS), instead of a reset
+MAX_HEADER_BYTES = 4 << 20
 DISCONNECT_NOTICE = "connection to the server lost: nothing on this page is computed any more; reload when it is back"
 
 
@@ -96,7 +99,8 @@ def make_server(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT
     app = session_app(base, export_dir=export_dir, label=label, **page_options)
     # GET /liveness, answered by the event loop itself (a health check)
     server = pn.serve(app, port=port, address=host, show=False, start=False, verbose=False, title="explorer",
-                      location=True, liveness=True, **kw)
+                      location=True, liveness=True,
+                      http_server_kwargs={"max_header_size": MAX_HEADER_BYTES}, **kw)
     return server, url_of(host, port, token)
 
 

@@ -3,6 +3,8 @@ MEGNO colour scale and the colours of the overlays; :mod:`~explorer.app.serve.pa
 them in the browser and :mod:`~explorer.app.serve.image` in the exported PNG and SVG."""
 from __future__ import annotations
 
+import math
+
 #: the manifolds of a picked saddle: W^u and W^s in the colours of a sweep's [manifolds]
 from explorer.app.figures import MANIFOLD_COLORS  # noqa: F401  (one definition, in figures.py)
 
@@ -15,8 +17,11 @@ FIGURE_WIDTH = 720
 FIGURE_HEIGHT = 560
 FIGURE_MIN_WIDTH = 360
 FIGURE_CHROME_PX = 200
-#: width of a field (two columns of them beside the figure)
+#: width of a field (two columns of them left of the figure) and of the orbit list (right of it)
 FIELD_WIDTH = 100
+LIST_WIDTH = 280
+#: the page's width beside the figure: the controls, the orbit list, margins and a scroll bar (px)
+FIGURE_SIDES_PX = 230 + LIST_WIDTH + 60
 POINT_SIZE = 2.0
 #: the view shows the region's bounding box and this margin around it (fraction of the semi-axes)
 VIEW_MARGIN = 0.08
@@ -38,6 +43,18 @@ def megno_palette(skip: int = 0) -> list:
     from bokeh.palettes import Inferno256  # (a table of colours: no server, no document)
 
     return list(reversed(Inferno256))[skip:]
+
+
+def megno_kind(megno: float) -> str:
+    """What an orbit's MEGNO <Y> says (the status line's and the readout's words)."""
+    from explorer.app.serve.orbits import CHAOTIC_MEGNO
+
+    if not math.isfinite(megno):
+        return "unknown: the run stopped early"
+    if megno > CHAOTIC_MEGNO:
+        return "chaotic-like"
+    # (<Y> tends to 2 on a torus and to 0 on a stable periodic orbit, about which a finite run's mean oscillates)
+    return "regular-like" + (": below 0, near a stable periodic orbit, where <Y> tends to 0" if megno < 0 else "")
 
 
 #: the MEGNO layer's palette and the one of the orbits coloured by MEGNO (without its near-white end)
