@@ -4,17 +4,20 @@ sign convention")."""
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
 from explorer import model
 from explorer._jit import njit
+from explorer.analysis.greene_core import MIN_Q, Residue
 from explorer.analysis.section_map import MapResult, SectionMap
 from explorer.analysis.sections import crossings
 from explorer.model import ParameterError, validation
 
-__all__ = ["AreaPreservingMap", "StandardMap", "difference", "images", "is_section_map", "reduce", "with_value"]
+__all__ = ["AreaPreservingMap", "StandardMap", "SymmetricOrbit", "difference", "images", "is_section_map", "reduce",
+           "with_value"]
 
 
 @runtime_checkable
@@ -168,6 +171,68 @@ def standard_monodromy(theta, p, k, n):
     return a, b, c, d, theta, p
 
 
+#: Newton on the half orbit: the step in p relative to max(1, |p|) at convergence, or below the floor
+#: once the steps stop shrinking (round-off)
+SHOOT_TOL, SHOOT_MAX_ITER, SHOOT_FLOOR = 1e-15, 40, 1e-11
+#: the closure after Q steps, relative to max(1, |M|)
+CLOSURE_TOL = 1e-9
+
+
+@dataclass(frozen=True)
+class SymmetricOrbit(Residue):
+    """A symmetric orbit of type P/Q of the standard map: ``points`` (Q, 2) from theta = ``line``,
+    theta lifted; ``closure`` = max |T^Q(x_0) - x_0 - (2 pi P, 0)|."""
+
+    p: int
+    q: int
+    points: np.ndarray
+    monodromy: np.ndarray
+    param_value: float
+    line: float
+    closure: float
+
+
+def _shoot(k, P, Q, theta0, p0):
+    """Newton on the half-orbit equation (docs/greene.md) for the start p0 on theta = theta0."""
+    even = Q % 2 == 0
+    n = Q // 2 if even else (Q + 1) // 2
+    p = float(p0)
+    prev = math.inf
+    for _ in range(SHOOT_MAX_ITER):
+        th, pn, dth, dpn = standard_half_orbit(theta0, p, k, n)
+        if even:
+            f, df = th - theta0 - math.pi * P, dth
+        else:
+            f, df = 2.0 * th - pn - 2.0 * theta0 - 2.0 * math.pi * P, 2.0 * dth - dpn
+        if not (math.isfinite(f) and math.isfinite(df)) or df == 0.0:
+            break
+        step = -f / df
+        p += step
+        scale = max(1.0, abs(p))
+        if abs(step) <= SHOOT_TOL * scale or (abs(step) <= SHOOT_FLOOR * scale and abs(step) >= 0.5 * abs(prev)):
+            return p
+        prev = step
+    raise ParameterError(f"no symmetric orbit of type {P}/{Q} on theta = {theta0:g} at k = {k:.12g} "
+                         f"(Newton on the half orbit did not converge from p = {p0:.12g})")
+
+
+def _half_orbit_monodromy(k, Q, theta0, p0) -> np.ndarray:
+    """The monodromy from the half orbit's Jacobian A (docs/greene.md): Q = 2n: M = G(z_0) A^-1 G(z_n) A;
+    Q = 2n - 1: M = H DT(z_0) A^-1 H A."""
+    even = Q % 2 == 0
+    n = Q // 2 if even else (Q + 1) // 2
+    a, b, c, d, theta_n, _ = standard_monodromy(theta0, p0, k, n)
+    A = np.array([[a, b], [c, d]])
+    A_inv = np.array([[d, -b], [-c, a]])
+    if even:
+        G0 = np.array([[-1.0, 0.0], [k * math.cos(theta0), 1.0]])
+        Gn = np.array([[-1.0, 0.0], [k * math.cos(theta_n), 1.0]])
+        return G0 @ A_inv @ Gn @ A
+    H = np.array([[-1.0, 1.0], [0.0, 1.0]])
+    kc = k * math.cos(theta0)
+    return H @ np.array([[1.0 + kc, 1.0], [kc, 1.0]]) @ A_inv @ H @ A
+
+
 class StandardMap:
     """Chirikov's standard map (S1) p' = p + k sin(theta), theta' = theta + p', theta lifted."""
 
@@ -283,6 +348,22 @@ class StandardMap:
         if n and X.shape[0]:
             standard_images(X, self.k, n, bool(backward), out)
         return out
+
+    def symmetric_orbit(self, p, q, *, line=math.pi, guess=None) -> SymmetricOrbit:
+        """The symmetric orbit of type ``p``/``q`` through theta = ``line``, Newton on the half orbit from
+        p = ``guess`` (default 2 pi p/q) (docs/greene.md, "The half-orbit (symmetry-line) method")."""
+        P = validation.integer("p", p, 0)
+        Q = validation.integer("q", q, MIN_Q)
+        theta0 = validation.real("line", line)
+        k = self.k
+        p0 = _shoot(k, P, Q, theta0, 2.0 * math.pi * P / Q if guess is None else validation.real("guess", guess))
+        pts = self.iterate((theta0, p0), Q)
+        M = _half_orbit_monodromy(k, Q, theta0, p0)
+        closure = float(max(abs(pts[Q, 0] - theta0 - 2.0 * math.pi * P), abs(pts[Q, 1] - p0)))
+        if not closure <= CLOSURE_TOL * max(1.0, float(np.max(np.abs(M)))):
+            raise ParameterError(f"the orbit of type {P}/{Q} from theta = {theta0:g} does not close at k = {k:.12g} "
+                                 f"(error {closure:.3g}): too far above the breakup for double precision")
+        return SymmetricOrbit(P, Q, pts[:Q].copy(), M, float(k), theta0, closure)
 
     def i0(self, x) -> np.ndarray:
         """I0(theta, p) = (-theta, p + k sin theta): an involution with I0 T I0 = T^-1."""
