@@ -87,31 +87,35 @@ class OrbitRun:
 
     def advance(self) -> np.ndarray:
         """Compute the next block (at most ``block`` crossings and ``steps`` steps); returns its
-        rows (n, 5): t, p1, p2, M, H - H0."""
-        s = self.settings
-        taken = int(self.state.carry[0, layout.CARRY_STEPS])
+        rows (n, 5): t, p1, p2, M, H - H0 (a System's: t, a, b, solve, H - H0)."""
         t0 = time.perf_counter()
-        it = sections.iter_crossings(s.params, states=self.y0, n_crossings=s.crossings, block=self.block,
-                                     state=self.state, max_steps=s.max_steps,
-                                     step_block=self.steps if self.cut_at_steps else None,
-                                     **s.section_kwargs())
-        b = next(it, None)
+        rows, steps = self._next_block()
         elapsed = time.perf_counter() - t0
         self.wall += elapsed
+        # the next block: about BLOCK_SECONDS at this block's rates
+        rate = len(rows) / elapsed if elapsed > 0 and len(rows) else 0.0
+        target = int(rate * BLOCK_SECONDS) if rate else 2 * self.block
+        self.block = max(MIN_BLOCK, min(MAX_BLOCK, target, 4 * self.block))
+        self.step_rate = steps / elapsed if elapsed > 0 else 0.0
+        self.steps = max(FIRST_STEPS, min(MAX_STEPS_PER_BLOCK, int(self.step_rate * BLOCK_SECONDS)))
+        return rows
+
+    def _next_block(self) -> tuple:
+        """(rows, steps taken) of the next block of the stream."""
+        s = self.settings
+        taken = int(self.state.carry[0, layout.CARRY_STEPS])
+        b = next(sections.iter_crossings(s.params, states=self.y0, n_crossings=s.crossings, block=self.block,
+                                         state=self.state, max_steps=s.max_steps,
+                                         step_block=self.steps if self.cut_at_steps else None,
+                                         **s.section_kwargs()), None)
         if b is None:           # nothing left (the state was finished already)
-            return np.zeros((0, 5))
+            return np.zeros((0, 5)), 0
         rows = b.rows(0).copy() if b.count.size else np.zeros((0, 5))
         self.state = b.state
         self.done = int(self.state.done[0])
         if self.finished:
             self.status = STATUS_NAMES[int(self.state.status[0])]
-        # the next block: about BLOCK_SECONDS at this block's rates
-        rate = len(rows) / elapsed if elapsed > 0 and len(rows) else 0.0
-        target = int(rate * BLOCK_SECONDS) if rate else 2 * self.block
-        self.block = max(MIN_BLOCK, min(MAX_BLOCK, target, 4 * self.block))
-        self.step_rate = (int(self.state.carry[0, layout.CARRY_STEPS]) - taken) / elapsed if elapsed > 0 else 0.0
-        self.steps = max(FIRST_STEPS, min(MAX_STEPS_PER_BLOCK, int(self.step_rate * BLOCK_SECONDS)))
-        return rows
+        return rows, int(self.state.carry[0, layout.CARRY_STEPS]) - taken
 
 
 def _duration(seconds: float) -> str:
@@ -156,18 +160,15 @@ class SystemRun(OrbitRun):
     def finished(self) -> bool:
         return self._finished
 
-    def advance(self) -> np.ndarray:
+    def _next_block(self) -> tuple:
         from explorer.analysis.system_sections import system_crossings
         from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS
 
         s, smap = self.settings, self.settings.smap
         k = min(self.block, s.crossings - self.done)
-        t0 = time.perf_counter()
         data, count, status, final, info, *_ = system_crossings(
             smap.system, self._y, n_crossings=k, section=smap.section.expr, direction=smap.direction, tol=s.tol,
             tmax=smap.tmax * k, max_steps=self.steps, threads=1)
-        elapsed = time.perf_counter() - t0
-        self.wall += elapsed
         n, code = int(count[0]), int(status[0])
         d = data[0, :n]
         rows = np.column_stack([d[:, 0] + self._t, d[:, self._cols], smap.energy_of(d[:, 1:5]) - self._h0])
@@ -175,12 +176,7 @@ class SystemRun(OrbitRun):
         if self.done >= s.crossings or code not in (STATUS_DONE, STATUS_MAX_STEPS):
             self._finished = True
             self.status = "done" if self.done >= s.crossings else STATUS_NAMES[code]
-        rate = n / elapsed if elapsed > 0 and n else 0.0
-        self.block = max(MIN_BLOCK, min(MAX_BLOCK, int(rate * BLOCK_SECONDS) if rate else 2 * self.block,
-                                        4 * self.block))
-        self.step_rate = float(info[0, 1]) / elapsed if elapsed > 0 else 0.0
-        self.steps = max(FIRST_STEPS, min(MAX_STEPS_PER_BLOCK, int(self.step_rate * BLOCK_SECONDS)))
-        return rows
+        return rows, int(info[0, 1])
 
 
 def warm_up(settings) -> None:

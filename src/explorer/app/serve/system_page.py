@@ -5,7 +5,6 @@
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -31,12 +30,10 @@ class SystemSettings:
     smap: Any
     tol: float = 1e-13
     crossings: int = 2000
-    max_steps: int = 10**9
 
     method = "taylor"
     adaptive = True
     direction = 1                  # the map's own (smap.direction): the page counts every crossing it makes
-    dt = math.nan
     scene_export = False
 
     def __post_init__(self):
