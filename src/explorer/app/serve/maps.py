@@ -12,8 +12,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 
-def nan_unless_done(status, values, shape) -> np.ndarray:
-    return np.where(np.asarray(status) == 0, np.asarray(values, dtype=np.float64), np.nan).reshape(shape)
+def megno_of(res, shape, mlce: bool):
+    """<Y> (and the mLCE with ``mlce``) of the Indicators ``res`` in ``shape``, NaN where a run stopped early."""
+    def of(values):
+        return np.where(np.asarray(res.status) == 0, np.asarray(values, dtype=np.float64), np.nan).reshape(shape)
+    return (of(res.megno), of(res.mlce)) if mlce else of(res.megno)
 
 
 class ChaplyginPage:
@@ -63,25 +66,19 @@ class ChaplyginPage:
 
         return SectionMap(self.params, self.h, phi0=self.phi0, tol=DEFAULT_TOL if tol is None else tol)
 
-    def states(self, p1, p2) -> np.ndarray:
-        from explorer import model
-
-        return model.section_state(self.params, p1, p2, self.h, self.phi0, self.direction or 1)
-
     def megno(self, p1, p2, time: float, max_steps: int, mlce: bool = False):
         """Mean MEGNO <Y>(time) (and the mLCE with ``mlce``) of the orbits from (p1, p2), NaN where
         the run stopped early (or would stop at its step cap)."""
+        from explorer import model
         from explorer.analysis import lyapunov
 
-        shape = np.shape(p1)
         if not self.adaptive and time / self.dt > max_steps:
-            nan = np.full(shape, np.nan)
+            nan = np.full(np.shape(p1), np.nan)
             return (nan, nan) if mlce else nan
-        res = lyapunov.indicators(self.params, states=self.states(p1, p2), tmax=time, method=self.method,
-                                  tol=self.tol, dt=self.dt, which=("megno", "mlce") if mlce else ("megno",),
-                                  max_steps=max_steps)
-        megno = nan_unless_done(res.status, res.megno, shape)
-        return (megno, nan_unless_done(res.status, res.mlce, shape)) if mlce else megno
+        y0 = model.section_state(self.params, p1, p2, self.h, self.phi0, self.direction or 1)
+        return megno_of(lyapunov.indicators(self.params, states=y0, tmax=time, method=self.method, tol=self.tol,
+                                            dt=self.dt, which=("megno", "mlce") if mlce else ("megno",),
+                                            max_steps=max_steps), np.shape(p1), mlce)
 
     def new_run(self, ident: int, p1: float, p2: float):
         from explorer.app.serve.orbits import OrbitRun

@@ -1,13 +1,7 @@
-"""The orbits of one browser session, computed block by block (a task of the page's session).
-
-An :class:`OrbitRun` continues one clicked orbit with
-:func:`explorer.analysis.sections.iter_crossings` from the
-:class:`~explorer.analysis.sections.StreamState` the previous block ended in: its rows are bit for
-bit those of ``explorer orbit`` whatever the block sizes.  The first block is small
-(``FIRST_BLOCK``), later ones take about ``BLOCK_SECONDS``.  A :class:`Worker` runs a session's
-orbits newest first, then round robin; ``cancel`` stops them all, ``remove`` one, ``pause`` sets
-them aside and ``resume`` continues them from their StreamState.  No web library here
-(docs/commands/serve.md, "How it works").
+"""The orbits of one browser session, block by block (docs/commands/serve.md, "How it works"):
+an :class:`OrbitRun` continues a clicked orbit from the StreamState its last block ended in (rows
+bit for bit those of ``explorer orbit``; a :class:`SystemRun` a System's); a :class:`Worker` runs
+them newest first, then round robin.  No web library here.
 """
 from __future__ import annotations
 

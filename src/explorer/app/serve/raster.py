@@ -57,19 +57,11 @@ def resolutions_up_to(n: int) -> tuple:
     return tuple(16 << k for k in range(n.bit_length() - 4))
 
 
-def megno_cells(settings: Settings, p1, p2, time: float = RASTER_TIME) -> np.ndarray:
-    """Mean MEGNO <Y>(``time``) of the orbits started at (p1, p2) on the section (NaN past RASTER_MAX_STEPS)."""
-    return settings.megno(p1, p2, time, RASTER_MAX_STEPS)
-
-
 def diffusion_center(settings: Settings) -> tuple:
-    """(point, elliptic): the point the layer's frequency diffusion turns around at ``settings``.
-    The first elliptic fixed point Newton's method reaches from the allowed region's centre, then
-    from half-way to its edge along both axes (:func:`explorer.app.serve.overlays.elliptic_center`,
-    the readout's search), ``elliptic`` True; when none is elliptic, the region's centre itself,
-    ``elliptic`` False.  It depends on the settings only, never on the window: a cell's value is
-    the same in every window (docs/greene.md, "Frequency diffusion": any centre off the orbits
-    gives a valid indicator, an elliptic point the rotation numbers of its island)."""
+    """(point, elliptic): the centre of the layer's frequency diffusion at ``settings``, never
+    depending on the window: the readout's elliptic fixed point from the region's centre
+    (:func:`explorer.app.serve.overlays.elliptic_center`), else that centre itself (docs/greene.md,
+    "Frequency diffusion": any centre off the orbits gives a valid indicator)."""
     from explorer.app.serve.overlays import elliptic_center
 
     c1, c2 = settings.region[:2]
@@ -80,11 +72,9 @@ def diffusion_center(settings: Settings) -> tuple:
 
 
 def diffusion_cells(settings: Settings, p1, p2, center, iterates: int = DIFFUSION_ITERATES) -> np.ndarray:
-    """Frequency diffusion log10 |nu1 - nu2| of the orbits started at (p1, p2) on the section:
-    :func:`explorer.analysis.rotation.frequency_diffusion` (the sweep's indicator, one
-    implementation) on the page's section map (phi0; Taylor at the page's tol with the taylor
-    method, else at the rotation's default, as the readout's rotation number) around ``center``.
-    Crossings in direction -1 have no such map: ParameterError (as a scene's)."""
+    """Frequency diffusion log10 |nu1 - nu2| of the orbits from (p1, p2) around ``center``:
+    :func:`explorer.analysis.rotation.frequency_diffusion` on the page's section map at the
+    readout's rotation tolerance; ParameterError for crossings in direction -1 (no such map)."""
     from explorer.analysis.rotation import frequency_diffusion
     from explorer.app.serve.overlays import rotation_tol
     from explorer.model import ParameterError
@@ -106,7 +96,7 @@ def rasters(settings: Settings, window: Window, resolutions: tuple = RESOLUTIONS
     if indicator == "megno":
         batch = BATCH
         def cells(a, b):
-            return megno_cells(settings, a, b, time)
+            return settings.megno(a, b, time, RASTER_MAX_STEPS)
     else:
         batch = DIFFUSION_BATCH
         point = diffusion_center(settings)[0] if center is None else center

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from explorer.app.serve.maps import nan_unless_done
+from explorer.app.serve.maps import megno_of
 from explorer.app.serve.settings import MAX_CROSSINGS, MAX_FIELD_CHARS, _number, _whole
 from explorer.model import ParameterError, validation
 
@@ -136,12 +136,9 @@ class SystemSettings:
     def megno(self, p1, p2, time: float, max_steps: int, mlce: bool = False):
         from explorer.analysis import lyapunov
 
-        shape = np.shape(p1)
         pts = np.column_stack([np.ravel(p1), np.ravel(p2)])
-        res = lyapunov.indicators(self.smap, pts, tmax=time, tol=self.tol, max_steps=max_steps,
-                                  which=("megno", "mlce") if mlce else ("megno",))
-        megno = nan_unless_done(res.status, res.megno, shape)
-        return (megno, nan_unless_done(res.status, res.mlce, shape)) if mlce else megno
+        return megno_of(lyapunov.indicators(self.smap, pts, tmax=time, tol=self.tol, max_steps=max_steps,
+                                            which=("megno", "mlce") if mlce else ("megno",)), np.shape(p1), mlce)
 
     def new_run(self, ident: int, p1: float, p2: float):
         from explorer.app.serve.orbits import SystemRun
