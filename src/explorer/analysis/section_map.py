@@ -307,14 +307,13 @@ def as_system(name: str, system, args: tuple, kw: dict, settings: tuple = MAP_SE
             raise ParameterError(f"{name}(params, h, ...): h is missing")
         given = dict(defaults or {}, **{k: kw.pop(k) for k in settings if k in kw})
         return SectionMap(system, h, **given), args, kw
-    if isinstance(system, SectionMap):
-        given = [k for k in ("h", *settings) if k in kw]
-        if given:
-            raise ParameterError(f"{name}: {', '.join(given)} belong(s) to the SectionMap; do not give them "
-                                 "beside it")
-        if "tmax" not in settings and system.tmax != RETURN_TMAX:
-            raise ParameterError(f"{name} has no return budget of the map: use a SectionMap with the default "
-                                 f"tmax ({RETURN_TMAX:g}), got {system.tmax!r}")
+    given = [k for k in ("h", *settings) if k in kw and hasattr(system, k)]     # the map's own settings
+    if given:
+        raise ParameterError(f"{name}: {', '.join(given)} belong(s) to the SectionMap; do not give them "
+                             "beside it")
+    if "tmax" not in settings and getattr(system, "tmax", RETURN_TMAX) != RETURN_TMAX:
+        raise ParameterError(f"{name} has no return budget of the map: use a SectionMap with the default "
+                             f"tmax ({RETURN_TMAX:g}), got {system.tmax!r}")
     return system, args, kw
 
 

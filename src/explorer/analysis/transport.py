@@ -266,13 +266,12 @@ def flux_curve(system, mus=None, *, guess=(0.0, 0.0), arclength=6.0, max_arcleng
     "melnikov", "ratio", "arclength", "status", "reason", "eye_flux", "eye_error", "trace"}``."""
     from explorer.analysis import fixedpoints
     from explorer.analysis.manifolds import saddle
-    from explorer.analysis.maps import is_section_map
     from explorer.model.symmetry import is_reversible
 
-    if not is_section_map(system):
+    prm, h = getattr(system, "params", None), getattr(system, "h", None)      # Melnikov's needs the model's
+    if prm is None or h is None:
         raise ParameterError(f"flux_curve follows the central saddle of a section map in mu; got "
                              f"{type(system).__name__}: grow its branches (grow_branch) and use lobes and exit_times")
-    prm, h = system.params, system.h
     mus = [float(m) for m in (DEFAULT_FLUX_MUS if mus is None else mus)]
     if any(b <= a for a, b in zip(mus, mus[1:])) or not mus or mus[0] < 0:
         raise ParameterError(f"mus must be >= 0 and increasing, got {mus}")
