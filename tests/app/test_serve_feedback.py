@@ -11,6 +11,7 @@ back to it (not to the first window); a page whose server stops says so.
 """
 from __future__ import annotations
 
+import math
 import time
 
 import pytest
@@ -209,6 +210,26 @@ def test_the_separatrices_stand_out_on_every_colour_of_the_megno_layer_and_it_ha
         assert not page.chaos.colour_bar.visible
     finally:
         page.close()
+
+
+def test_on_the_chaos_layer_every_dot_has_a_casing_and_a_negative_megno_is_explained():
+    from explorer.app.serve.style import DOT_CASING, POINT_SIZE, megno_kind
+
+    page = _page(SERVED, {"megno": "1"})
+    try:
+        casings, dots = page.orbits.casings, (page.orbits.points, page.orbits.live_points)
+        assert all(c.visible for c in casings) and DOT_CASING[0] > POINT_SIZE          # the layer on: cased
+        for casing, dot in zip(casings, dots):        # the same rows, drawn under the dots on their canvas
+            assert casing.data_source is dot.data_source and casing.level == dot.level
+            assert page.section.figure.renderers.index(casing) < page.section.figure.renderers.index(dot)
+        assert _contrast(DOT_CASING[1], DOT_CASING[2]) > 15                  # a white disc, a dark edge
+        page.chaos.layer.value = False
+        page.poll()
+        assert not any(c.visible for c in casings)
+    finally:
+        page.close()
+    assert megno_kind(2.0) == "regular-like" and megno_kind(8.0) == "chaotic-like"
+    assert "stable periodic orbit" in megno_kind(-0.05) and "stopped early" in megno_kind(math.nan)
 
 
 def test_start_markers_can_be_hidden_and_shown_again():

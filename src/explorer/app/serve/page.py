@@ -167,6 +167,7 @@ class SectionPage:
         self.orbits.draw(fig)
         self.orbit_list.draw(fig)
         self.overlays.draw_marks(fig)
+        self.chaos.layer.param.watch(lambda e: self.session.soon(lambda: self.orbits.case_dots(e.new)), "value")
         fig.on_event(Tap, self._on_tap)
         fig.on_event(DoubleTap, self._on_tap)   # a second click within 300 ms is a double tap
         fig.on_event(PressUp, self._on_tap)     # a click held 300 ms or more is a press

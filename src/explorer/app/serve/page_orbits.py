@@ -15,7 +15,15 @@ from bokeh.models import CDSView, ColumnDataSource, CustomJSFilter, Div, LinearC
 
 from explorer.app.serve.box import Box
 from explorer.app.serve.orbits import COLORS, INDICATOR_TIME, Worker
-from explorer.app.serve.style import MEGNO_HIGH, MEGNO_LOW, MEGNO_ORBIT_SKIP, POINT_SIZE, megno_kind, megno_palette
+from explorer.app.serve.style import (
+    DOT_CASING,
+    MEGNO_HIGH,
+    MEGNO_LOW,
+    MEGNO_ORBIT_SKIP,
+    POINT_SIZE,
+    megno_kind,
+    megno_palette,
+)
 
 #: blocks after an orbit's first go to the browser at most this often (s): each message redraws every dot
 FLUSH_SECONDS = 0.25
@@ -86,6 +94,11 @@ class OrbitsLayer:
         """The crossings' glyphs (call after the images) and the starts' crosses."""
         # the newest orbits (density.GLYPH_BUDGET) as dots, filtered in the browser: one number moves them
         self.glyph_filter = CustomJSFilter(name="glyphs", args={"first": 0}, code=GLYPH_FILTER)
+        # under each dot, while the chaos layer is on, a white disc with a dark edge: seen on its every colour
+        self.casings = [fig.scatter("p1", "p2", source=src, size=DOT_CASING[0], fill_color=DOT_CASING[1],
+                                    line_color=DOT_CASING[2], line_width=DOT_CASING[3], visible=False, **kw)
+                        for src, kw in ((self.shown, {"view": CDSView(filter=self.glyph_filter)}),
+                                        (self.live, {"level": "overlay"}))]
         self.points = fig.scatter("p1", "p2", source=self.shown, color=self.by_orbit, size=POINT_SIZE, line_width=0,
                                   view=CDSView(filter=self.glyph_filter))
         # the newest rows on the overlay canvas: Bokeh repaints only that canvas when they change
@@ -316,6 +329,11 @@ class OrbitsLayer:
             r.glyph.line_color = spec
         self.host.density_image.refresh(force=True)
         self.host.push_url()
+
+    def case_dots(self, on: bool) -> None:
+        """Each dot on a casing (:data:`~explorer.app.serve.style.DOT_CASING`), or not."""
+        for r in self.casings:
+            r.visible = bool(on)
 
     def _starts_box_changed(self) -> None:
         """Show or hide the clicked starts' crosses."""

@@ -23,6 +23,8 @@ LIST_WIDTH = 280
 #: the page's width beside the figure: the controls, the orbit list, margins and a scroll bar (px)
 FIGURE_SIDES_PX = 230 + LIST_WIDTH + 60
 POINT_SIZE = 2.0
+#: a dot's casing on the chaos layer: size (px), fill, edge colour and width
+DOT_CASING = (4.5, "#ffffff", "#101010", 0.6)
 #: the view shows the region's bounding box and this margin around it (fraction of the semi-axes)
 VIEW_MARGIN = 0.08
 #: colour scale of the MEGNO layer: <Y> from 0 over 2 (quasi-periodic, light) to MEGNO_HIGH (chaotic, dark)
