@@ -34,8 +34,7 @@ from explorer.app.serve.page_orbits import (  # noqa: F401  (the page's constant
 )
 from explorer.app.serve.page_overlays import Overlays
 from explorer.app.serve.page_readout import Readout
-from explorer.app.serve.server import TOKEN_ARG
-from explorer.app.serve.settings import Settings, format_window
+from explorer.app.serve.settings import TOKEN_ARG, Settings, format_window
 from explorer.app.serve.style import (
     FIGURE_CHROME_PX,
     FIGURE_HEIGHT,

@@ -16,13 +16,11 @@ import sys
 import threading
 from collections.abc import Callable
 
-from explorer.app.serve.settings import Settings
+from explorer.app.serve.settings import TOKEN_ARG, Settings
 
 #: where the page is served unless told otherwise (loopback only: docs/commands/serve.md)
 DEFAULT_HOST = "127.0.0.1"
 DEFAULT_PORT = 5006
-#: the URL argument that carries the token
-TOKEN_ARG = "token"
 #: what a page shows when its connection to the server is lost (the server stopped, the network went)
 #: a request's headers at most (bytes): longer than any address a browser sends (Chromium's: 2 MB), so a
 #: long link reaches the page, which says why it ignores it (settings.MAX_LINK_CHARS), instead of a reset

@@ -40,6 +40,8 @@ def room_for(n_orbits: int, crossings: int) -> str | None:
     return None
 #: longest field text read from the page or the URL
 MAX_FIELD_CHARS = 64
+#: the URL argument that carries the token (explorer.app.serve.server)
+TOKEN_ARG = "token"
 #: a link's arguments at most this many characters in all (a page's own link, 256 starts, is under 20,000)
 MAX_LINK_CHARS = 100_000
 
