@@ -69,21 +69,9 @@ def _version_of(name: str):
         return None
 
 
-def _lane_groups():
-    """The lane groups G of this process's Taylor lanes (or EXPLORER_LANE_GROUPS as given when it
-    is not a valid G); imported only when a result is written."""
-    from explorer.integrate.lanes import lane_groups
-    from explorer.model import ParameterError
-
-    try:
-        return lane_groups()
-    except ParameterError:
-        return os.environ.get("EXPLORER_LANE_GROUPS")
-
-
 def provenance(extra: dict | None = None) -> dict:
     """Where a result comes from: package ``versions`` (from metadata), ``python``, ``platform``,
-    ``git_revision`` (``+dirty`` when modified), ``command_line``, ``date``, ``lane_groups``; plus
+    ``git_revision`` (``+dirty`` when modified), ``command_line``, ``date``; plus
     ``extra``."""
     versions = {}
     for name in _DEPENDENCIES:
@@ -99,7 +87,6 @@ def provenance(extra: dict | None = None) -> dict:
         "git_revision": _git_revision(os.path.dirname(os.path.abspath(__file__))),
         "command_line": list(sys.argv),
         "date": _utcnow(),
-        "lane_groups": _lane_groups(),
     }
     if extra:
         info.update(extra)
