@@ -5,35 +5,27 @@ split8 (dt 0.05), and the chaos indicators of 64 orbits over T = 1000 (taylor an
 
 Each revision runs in its own processes with its own Numba cache (warm: one untimed call
 first); the revisions alternate, ``--rounds`` times, and the best time per row is kept, so a
-load change on the machine hits both.  Used when a refactor must not slow W4 down (issue 13:
-at most 5 %).
+load change on the machine hits both.  Used when a refactor must not slow W4 down.
 
 ``--cpu`` times each call by the process's CPU time with one Numba thread (NUMBA_NUM_THREADS=1):
 on a virtual machine whose wall times move by 20-30 % between processes minutes apart (steal
 time, a neighbour's load), this is the measurement that can resolve a few per cent.
 ``--repeat K`` times each row K times in each process (best kept): one call of a process can
 take 30-40 % more CPU time than the next on such a machine, for either revision alike.
-``--rows`` picks rows (split8 alone takes 35 s a call).
+``--rows`` picks rows (split8 alone takes 35 s a call).  Every round is kept: the table gives the
+best time of each side, the median ratio new/base over the rounds and its spread, and below it how
+far apart the two sides' results are (the W4 taylor crossings per orbit, MEGNO; each side's first,
+untimed call)::
 
     git worktree add /tmp/base <rev>
     python benchmarks/bench_ab.py /tmp/base .            # prints the table
-    python benchmarks/bench_ab.py /tmp/base . --write    # and records it in RESULTS.md
-
-``--generated``: base is a snapshot of ``new``'s src/ with the hand-written recurrences, new the same
-snapshot whose engine takes the recurrences generated from :mod:`explorer.model.chaplygin` by
-:mod:`explorer.integrate.codegen` (:func:`generated_tree`: the W4 Taylor lanes from ``system()``,
-the chaos map's from ``variational(1)`` and ``variational(2)``; G = 1 lane group, the only form the
-generator writes).  Every round is kept: the table gives the median ratio new/base and its spread,
-and the largest difference of the W4 taylor crossings (first, untimed call) per orbit::
-
-    python benchmarks/bench_ab.py . . --generated --cpu --rounds 15 --rows taylor,megno_taylor
+    python benchmarks/bench_ab.py /tmp/base . --write    # and records it in RESULTS.md (section AB)
 """
 from __future__ import annotations
 
 import argparse
 import json
 import os
-import shutil
 import statistics
 import subprocess
 import sys
@@ -100,71 +92,6 @@ def run(rev: Path, cache: str, cpu: bool = False, rows=ROWS, repeat: int = 1, en
     return json.loads(r.stdout.strip().splitlines()[-1])
 
 
-#: generates the module source of a Chaplygin System in the tree on sys.path[0]
-GENERATE = r"""
-import sys
-sys.path.insert(0, sys.argv[1])
-from explorer.integrate import codegen
-from explorer.model import chaplygin
-which = sys.argv[2]
-s = chaplygin.system() if which == "orbit" else chaplygin.variational(vectors=int(which[-1]))
-sys.stdout.write(codegen.source(s))
-"""
-
-
-def _replace(path: Path, old: str, new: str) -> None:
-    text = path.read_text()
-    if text.count(old) != 1:
-        raise SystemExit(f"{path}: expected one {old!r}")
-    path.write_text(text.replace(old, new))
-
-
-def snapshot(tree: Path, prefix: str) -> Path:
-    """A copy of ``tree``'s src/ (the revision measured, fixed while the rounds run)."""
-    out = Path(tempfile.mkdtemp(prefix=prefix))
-    shutil.copytree(tree / "src", out / "src", ignore=shutil.ignore_patterns("__pycache__"))
-    return out
-
-
-def generated_tree(tree: Path) -> Path:
-    """A snapshot of ``tree``'s src/ whose lane engine calls the recurrences that codegen generates
-    from explorer.model.chaplygin instead of the hand-written ones: ``_lanes_generated`` and
-    ``_tangent_lanes_generated`` become imports of generated modules (the tangent ones with the row
-    stride of the engine's 15-row array), and lanes.py / tangent_lanes.py pass a work array where
-    they passed the lane groups (G = 1 only)."""
-    out = snapshot(tree, "ab-generated-")
-    pkg = out / "src" / "explorer" / "integrate"
-    for which in ("orbit", "tangent1", "tangent2"):
-        text = subprocess.run([sys.executable, "-c", GENERATE, str(tree / "src"), which], capture_output=True,
-                              text=True, check=True).stdout
-        if which != "orbit":
-            text = text.replace("XS = DIM * LANES", "XS = 15 * LANES")   # rows of the engine's Z array
-        (pkg / f"_ab_{which}.py").write_text(text)
-    (pkg / "_lanes_generated.py").write_text(
-        "from explorer.integrate._ab_orbit import N_WORK, taylor_coefficients_lanes  # noqa: F401\n"
-        "NVAR = 5\nGROUPS = (1,)\n")
-    (pkg / "_tangent_lanes_generated.py").write_text(
-        "from explorer.integrate._ab_tangent1 import N_WORK as N_WORK1  # noqa: F401\n"
-        "from explorer.integrate._ab_tangent1 import taylor_coefficients_lanes as tangent_coefficients_lanes  # noqa\n"
-        "from explorer.integrate._ab_tangent2 import N_WORK as N_WORK2  # noqa: F401\n"
-        "from explorer.integrate._ab_tangent2 import taylor_coefficients_lanes as deviation_coefficients_lanes  # noqa\n"
-        "NROWS = 15\nDEV1 = 5\nDEV2 = 10\nGROUPS = (1,)\n")
-    _replace(pkg / "lanes.py", "import GROUPS, NVAR, taylor_coefficients_lanes",
-             "import GROUPS, N_WORK, NVAR, taylor_coefficients_lanes")
-    _replace(pkg / "lanes.py", "    while active > 0:\n        taylor_coefficients_lanes(P, X, order, groups)",
-             "    Wg = aligned_zeros((order + 1) * max(N_WORK, 1) * LANES).reshape((order + 1, max(N_WORK, 1), LANES))\n"
-             "    while active > 0:\n        taylor_coefficients_lanes(P, X, order, Wg)")
-    _replace(pkg / "tangent_lanes.py", "    tangent_coefficients_lanes,\n)",
-             "    tangent_coefficients_lanes,\n    N_WORK1,\n    N_WORK2,\n)")
-    _replace(pkg / "tangent_lanes.py", "    while active > 0:\n        tangent_coefficients_lanes(P, Z, order, DEV1, groups)",
-             "    W1 = aligned_zeros((order + 1) * max(N_WORK1, 1) * LANES).reshape((order + 1, max(N_WORK1, 1), LANES))\n"
-             "    W2 = aligned_zeros((order + 1) * max(N_WORK2, 1) * LANES).reshape((order + 1, max(N_WORK2, 1), LANES))\n"
-             "    while active > 0:\n        tangent_coefficients_lanes(P, Z, order, W1)")
-    _replace(pkg / "tangent_lanes.py", "deviation_coefficients_lanes(P, Z, order, DEV2, groups)",
-             "deviation_coefficients_lanes(P, Z, order, W2)")
-    return out
-
-
 def compare_saved(base_dir: str, new_dir: str) -> list:
     """Lines on the difference of the saved results: the W4 taylor crossings (per orbit, the largest
     difference over its crossings; the orbits within 1e-13; the first crossing beyond it) and MEGNO."""
@@ -196,33 +123,25 @@ def main(argv=None):
     ap.add_argument("new", type=Path)
     ap.add_argument("--rounds", type=int, default=4)
     ap.add_argument("--write", action="store_true", help="record the table in RESULTS.md")
+    ap.add_argument("--section", default="AB", help="with --write: the section of RESULTS.md (default AB)")
+    ap.add_argument("--title", default="A/B of two revisions on W4 (explorer rows)", help="with --write: its title")
     ap.add_argument("--cpu", action="store_true", help="CPU time of one Numba thread instead of wall time")
     ap.add_argument("--repeat", type=int, default=1, help="timed calls of each row per process (best kept)")
     ap.add_argument("--rows", default=",".join(ROWS), help=f"comma-separated rows (default: all, {','.join(ROWS)})")
-    ap.add_argument("--generated", action="store_true",
-                    help="base: new's hand-written recurrences; new: the same tree on the generated ones (G = 1)")
-    ap.add_argument("--base-groups", default="1", help="with --generated: the lane groups of base (1, 2, or "
-                    "'default' for the engine's choice); new always runs G = 1")
     args = ap.parse_args(argv)
     rows = tuple(r for r in args.rows.split(",") if r)
     if not rows or set(rows) - set(ROWS) or args.repeat < 1 or args.rounds < 1:
         ap.error(f"--rows must name some of {', '.join(ROWS)}; --repeat and --rounds at least 1")
     base, new = args.base.resolve(), args.new.resolve()
-    env = {"base": {}, "new": {}}
-    if args.generated:
-        base, new = snapshot(new, "ab-hand-"), generated_tree(new)
-        env["new"] = {"EXPLORER_LANE_GROUPS": "1"}
-        if args.base_groups != "default":
-            env["base"] = {"EXPLORER_LANE_GROUPS": args.base_groups}
     started, load0 = C.now(), C.loadavg()
     caches = {k: tempfile.mkdtemp(prefix=f"nc-ab-{k}-") for k in ("base", "new")}
     saved = {k: tempfile.mkdtemp(prefix=f"ab-out-{k}-") for k in ("base", "new")}
     for key, rev in (("base", base), ("new", new)):   # compile both once (not timed); keep the results
-        run(rev, caches[key], args.cpu, rows, env_extra=dict(env[key], EXPLORER_AB_SAVE=saved[key]))
+        run(rev, caches[key], args.cpu, rows, env_extra={"EXPLORER_AB_SAVE": saved[key]})
     best: dict = {"base": {}, "new": {}}
     ratios: dict = {}
     for _ in range(args.rounds):
-        got = {key: run(rev, caches[key], args.cpu, rows, args.repeat, env[key])
+        got = {key: run(rev, caches[key], args.cpu, rows, args.repeat)
                for key, rev in (("base", base), ("new", new))}
         for key in got:
             for row, (sec, n) in got[key].items():
@@ -243,20 +162,16 @@ def main(argv=None):
         rev = lambda p: subprocess.run(["git", "-C", str(p), "rev-parse", "--short", "HEAD"],  # noqa: E731
                                        capture_output=True, text=True).stdout.strip() or p.name
         seconds = (C.now() - started).total_seconds()
-        what = (f"base: hand-written recurrences (G = {args.base_groups}), new: generated (G = 1), of "
-                f"{rev(args.new.resolve())}" if args.generated else f"base {rev(base)}, new {rev(new)}")
-        head, _ = C.header("Chaplygin generated: the engine on the generated recurrences (W4 rows)" if args.generated
-                           else "A/B of two revisions on W4 (explorer rows)", C.command_line("bench_ab.py", (
-                               [".", ".", "--generated", "--base-groups", args.base_groups] if args.generated
-                               else ["<worktree of base>", "."]) + ["--rounds", str(args.rounds)]
+        head, _ = C.header(args.title, C.command_line("bench_ab.py", (
+                               ["<worktree of base>", "."] + ["--rounds", str(args.rounds)]
                                + (["--cpu"] if args.cpu else [])
                                + (["--repeat", str(args.repeat)] if args.repeat > 1 else [])
-                               + (["--rows", ",".join(rows)] if rows != ROWS else [])), started,
-            seconds, load0, extra=[f"{what}; {args.rounds} alternating rounds"
+                               + (["--rows", ",".join(rows)] if rows != ROWS else []))), started,
+            seconds, load0, extra=[f"base {rev(base)}, new {rev(new)}; {args.rounds} alternating rounds"
                                    + (f" x {args.repeat} calls" if args.repeat > 1 else "") + ", warm caches"
                                    + ("; CPU time of one Numba thread" if args.cpu else "; wall time")],
             numba_threads=1 if args.cpu else None)   # (--cpu: the timed processes run one thread)
-        C.update_section("CHAPLYGIN GENERATED" if args.generated else "AB", head + [""] + lines)
+        C.update_section(args.section, head + [""] + lines)
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 """The lane (SIMD) Taylor driver, the one Taylor crossing loop, is bit for bit the scalar oracle
 (tests/integrate/taylor_oracle.py): kernels, step size, whole batches (parameter sets, orbit
-counts not multiple of LANES, very different orbit lengths and stop reasons, lane groupings,
-threads); the generated kernel file is up to date."""
+counts not multiple of LANES, very different orbit lengths and stop reasons, threads, orbit
+order); the generated recurrence file is up to date."""
 import math
 import subprocess
 import sys
@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import PARAM_SETS, assert_groups_threads_and_order_keep_the_bits, random_states
+from conftest import PARAM_SETS, assert_threads_and_order_keep_the_bits, random_states
 from taylor_oracle import run_taylor_batch
 
 from explorer import model
@@ -44,48 +44,27 @@ def test_gen_lanes_check_passes_on_the_repository_and_fails_on_a_stale_file(tmp_
     assert r.returncode == 1 and "out of date" in r.stderr
 
 
-def test_gen_lanes_inlines_a_helper_with_its_arguments_and_refuses_one_that_reuses_a_callers_name():
-    """A call statement of a function of equations.py becomes its statements: parameters replaced
-    by the arguments, its locals kept apart at a second call (so prune() cannot confuse them)."""
-    import ast
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("gen_lanes", ROOT / "tools" / "gen_lanes.py")
-    gen = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(gen)
-    fns = {f.name: f for f in ast.parse(
-        "def helper(A, k, s):\n    r = s * 2.0\n    A[0, k + 1] = r\n"
-        "def twice(X, D, k, a, b):\n    a, b = 1.0, 2.0\n    helper(X, k, a)\n    helper(D, k, b)\n"
-        "def clash(X, k, r):\n    helper(X, k, r)\n").body}
-    body = gen.expand(fns["twice"].body, fns)
-    assert [ast.unparse(st) for st in body] == ["a = 1.0", "b = 2.0", "r = a * 2.0", "X[0, k + 1] = r",
-                                                 "r_2 = b * 2.0", "D[0, k + 1] = r_2"]
-    with pytest.raises(gen.Untranslatable, match="names of its caller"):
-        gen.expand(fns["clash"].body, fns)
-
-
 # ---------------------------------------------------------------- kernels
 @pytest.mark.parametrize("name", sorted(PARAM_SETS))
 @pytest.mark.parametrize("order", [4, 5, 15, 16, 19, 27])
-@pytest.mark.parametrize("ngroups", G.GROUPS)
-def test_kernels_match_scalar_bitwise(name, order, ngroups):
-    """Every lane of every group (G = 1, 2 groups of LANES lanes) of the recurrence, the Horner
-    sums and the step norms is the scalar kernel's double."""
+def test_kernels_match_scalar_bitwise(name, order):
+    """Every lane of the generated recurrence, the Horner sums and the step norms is the scalar
+    kernel's double."""
     P = PARAM_SETS[name].as_array()
     rng = np.random.default_rng(order)
-    W = ngroups * L
+    W = L
     X = np.zeros((order + 1, 5, W))
     X[0] = random_states(PARAM_SETS[name], W, seed=order, scale=2.0).T
     X[0, :, 0] = 0.0      # an idle lane
-    X[0, 2, W - 1] = 1e150    # a lane whose coefficients overflow (in the last group)
-    G.taylor_coefficients_lanes(P, X, order, (0,) * ngroups)
+    X[0, 2, W - 1] = 1e150    # a lane whose coefficients overflow
+    G.taylor_coefficients_lanes(P, X, order, np.zeros((order + 1, max(G.N_WORK, 1), W)))
     h = rng.uniform(0.0, 0.5, W)
     out = np.empty((5, W))
-    lanes.evaluate_lanes(X, order, h, out, 0, (0,) * ngroups)
+    lanes.evaluate_lanes(X, order, h, out, 0)
     e_p, e_q = 1.0 / order, 1.0 / (order - 1)
     norms = np.empty((lanes.N_NORMS, W))
     vary = np.empty(W)
-    lanes.variation_lanes(X, order, h, 0.3, 0.8, vary, (0,) * ngroups)
+    lanes.variation_lanes(X, order, h, 0.3, 0.8, vary)
     with np.errstate(all="ignore"):
         for l in range(W):
             c = X[1:, 3, l] * 0.3 - X[1:, 4, l] * 0.8
@@ -94,7 +73,7 @@ def test_kernels_match_scalar_bitwise(name, order, ngroups):
                 want = (want + abs(c[k])) * h[l]
             assert vary[l] == want or (np.isnan(vary[l]) and np.isnan(want))
     with np.errstate(all="ignore"):
-        lanes.step_norms_lanes(X, order, e_p, e_q, norms, (0,) * ngroups)
+        lanes.step_norms_lanes(X, order, e_p, e_q, norms)
         for l in range(W):
             _check_lane(P, X, order, h, out, norms, l)
 
@@ -104,7 +83,7 @@ def _check_lane(P, X, order, h, out, norms, l):
     e_p, e_q = 1.0 / order, 1.0 / (order - 1)
     Xs = np.zeros((5, order + 1))
     Xs[:, 0] = X[0, :, l]
-    equations.taylor_coefficients(P, Xs, order)
+    G.taylor_coefficients(P, Xs, order)
     np.testing.assert_array_equal(Xs.T, X[:, :, l])
     ys = np.empty(5)
     tk.evaluate(Xs, order, h[l], ys)
@@ -152,7 +131,7 @@ def test_lane_step_size_is_step_size_near_ties_and_for_vanishing_or_subnormal_no
             X[0, 2, l], X[order, 3, l], X[order - 1, 1, l] = s, -a, bm
         norms = np.empty((lanes.N_NORMS, W))
         with np.errstate(all="ignore"):
-            lanes.step_norms_lanes(X, order, e_p, e_q, norms, (0,))
+            lanes.step_norms_lanes(X, order, e_p, e_q, norms)
         for l in range(len(chunk)):
             want = tk.step_size(np.ascontiguousarray(X[:, :, l].T), order, factor)
             got = lanes.lane_step_size(norms[2, l], norms[3, l], norms[4, l], norms[5, l], norms[6, l],
@@ -215,15 +194,14 @@ def test_vector_masks_are_the_scalar_comparisons_lane_by_lane_nan_included():
         assert np.array_equal(a.view(np.uint64), sel.view(np.uint64))
 
 
-@pytest.mark.parametrize("ngroups", G.GROUPS)
-def test_vector_step_takes_lane_steps_double_and_leaves_the_rare_lanes_to_it(ngroups):
+def test_vector_step_takes_lane_steps_double_and_leaves_the_rare_lanes_to_it():
     """step_lanes on norms of every kind (finite, non-finite, vanishing, subnormal, steps that
     reach tend or underflow, idle lanes): for every lane the step, the flag of the last step and
     the stop are those of the scalar lane_step, and the lanes whose step it took in vector form
     (L_fast) are exactly those with finite coefficients, positive normal s/a, s/bm and no
     underflow."""
-    W = ngroups * L
-    rng = np.random.default_rng(ngroups)
+    W = L
+    rng = np.random.default_rng(1)
     order = 15
     factor, e_p, e_q = lanes.step_constants(order)
     tend = 50.0
@@ -261,17 +239,16 @@ def test_vector_step_takes_lane_steps_double_and_leaves_the_rare_lanes_to_it(ngr
     assert {(True, -1), (False, -1), (False, STATUS_NONFINITE), (False, lanes.STATUS_STEP_UNDERFLOW)} <= seen
 
 
-@pytest.mark.parametrize("ngroups", G.GROUPS)
-def test_vector_step_end_is_the_scalar_one_and_leaves_roots_and_stops_to_the_scalar_loop(ngroups):
-    """end_steps_lanes on every group: a lane holding an orbit is ended in vector form exactly
+def test_vector_step_end_is_the_scalar_one_and_leaves_roots_and_stops_to_the_scalar_loop():
+    """end_steps_lanes: a lane holding an orbit is ended in vector form exactly
     when the scalar loop would have nothing to do but the bookkeeping (a step taken in vector
     form, not the last, a finite new state, no root possible - by the variation bound, or by a
     monotone polynomial without a sign change of the direction (isolate_crossings' two tests) -
     no stop by the clock, the step budget or the crossings wanted), and then its new state, sin(phi - phi0),
     time, compensation and step count are the scalar loop's doubles; every other lane that holds
     an orbit is in the returned bits, untouched."""
-    W = ngroups * L
-    rng = np.random.default_rng(10 + ngroups)
+    W = L
+    rng = np.random.default_rng(11)
     order = 6
     cphi, sphi = math.cos(2.0), math.sin(2.0)
     tmax, max_steps = 100.0, 1000
@@ -430,34 +407,21 @@ def test_threads_do_not_change_results():
         set_num_threads(old)
 
 
-def test_lane_groups_threads_and_orbit_order_do_not_change_a_bit():
-    """G = 2 groups of lanes per worker, 1 and 2 threads, the orbits permuted: the raw
-    arrays (crossings, counts, statuses, final states, time and steps) equal those of G = 1 on
-    one thread bit for bit."""
+def test_threads_and_orbit_order_do_not_change_a_bit():
+    """1 and 2 threads, the orbits permuted: the raw arrays (crossings, counts, statuses, final
+    states, time and steps) equal those of one thread bit for bit."""
     prm = PARAM_SETS["figure4_mu0.5"]
     P = prm.as_array()
     Y0 = _mixed_states(prm, 53, seed=9)
-    assert_groups_threads_and_order_keep_the_bits(
-        lambda groups, order: _run(lanes.run_taylor_lanes_batch, Y0[order], P, 20, groups=groups), len(Y0), seed=4)
+    assert_threads_and_order_keep_the_bits(
+        lambda order: _run(lanes.run_taylor_lanes_batch, Y0[order], P, 20), len(Y0), seed=4)
 
 
-def test_lane_groups_are_one_or_two():
-    """lanes.lane_groups: the argument, else EXPLORER_LANE_GROUPS, else the default of the CPU's
-    vector width (default_groups); anything but 1 or 2 (G = 4 was slower everywhere and is not
-    offered) raises ParameterError naming the variable; worker_lanes runs a small batch on the
-    fewest groups that hold its lanes."""
-    assert lanes.GROUPS == (1, 2)
-    assert lanes.lane_groups(2) == 2 and lanes.lane_groups("1") == 1
-    assert lanes.lane_groups() == lanes.default_groups() or "EXPLORER_LANE_GROUPS" in __import__("os").environ
-    assert lanes.default_groups() in (lanes.DEFAULT_GROUPS, lanes.AVX512_GROUPS)
-    for bad in (0, 3, 4, 8, "x"):
-        with pytest.raises(model.ParameterError, match="EXPLORER_LANE_GROUPS"):
-            lanes.lane_groups(bad)
-    assert lanes.worker_lanes(1, 1, None, 2) == (1, (0,))
-    assert lanes.worker_lanes(20, 2, None, 2) == (10, (0, 0))
-    assert lanes.worker_lanes(64, 2, None, 2) == (16, (0, 0))
-    assert lanes.worker_lanes(64, 2, 3, 2) == (3, (0,))
-    assert lanes.worker_lanes(64, 2, None, 1) == (8, (0,))
+def test_worker_lanes_fill_at_most_one_vector():
+    """lanes.worker_lanes: min(max_lanes, LANES, ceil(n / workers)) lanes per worker."""
+    assert lanes.worker_lanes(1, 1) == 1
+    assert lanes.worker_lanes(20, 2) == L and lanes.worker_lanes(10, 2) == 5
+    assert lanes.worker_lanes(64, 2, 3) == 3
 
 
 def test_a_batch_that_one_group_of_lanes_holds_runs_on_one_worker_and_a_larger_one_on_every_thread():

@@ -1,5 +1,5 @@
 """Tangent dynamics on SIMD lanes are bit for bit the scalar tangent Taylor driver: the
-generated kernels lane by lane, whole batches (one and two deviation vectors, early
+generated lane kernels lane by lane their scalar twins, whole batches (one and two deviation vectors, early
 classification, history rows, orbits stopping for every reason) for several thread counts,
 lane widths and orbit orderings; the generated file is up to date."""
 import subprocess
@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import PARAM_SETS, assert_groups_threads_and_order_keep_the_bits, random_states
+from conftest import PARAM_SETS, random_states
 
 from explorer import model
 from explorer._jit import get_num_threads, set_num_threads
@@ -18,7 +18,6 @@ from explorer.integrate import lanes, tangent, tangent_lanes
 from explorer.kernels import STATUS_MAX_STEPS, STATUS_NONFINITE
 from explorer.kernels import tangent as tg
 from explorer.kernels import taylor as tk
-from explorer.model import equations
 
 ROOT = Path(__file__).resolve().parents[2]
 L = G.LANES
@@ -35,52 +34,46 @@ def test_generated_tangent_file_is_up_to_date(tmp_path):
 
 @pytest.mark.parametrize("name", sorted(PARAM_SETS))
 @pytest.mark.parametrize("order", [4, 15, 20])
-@pytest.mark.parametrize("ngroups", G.GROUPS)
-def test_tangent_lane_kernels_match_the_scalar_recurrence_bitwise(name, order, ngroups):
-    """Every lane of every group of the G-group kernels (G = 1, 2) is the scalar recurrence."""
+def test_tangent_lane_kernels_match_the_scalar_recurrence_bitwise(name, order):
+    """Every lane of the generated lane kernels (the orbit and a vector; a second vector alone) is
+    their scalar twin, as the scalar driver calls them (tangent.orbit_tangent_taylor_ext)."""
     P = PARAM_SETS[name].as_array()
     rng = np.random.default_rng(order)
-    W = ngroups * L
+    W = L
     Z = np.zeros((order + 1, G.NROWS, W))
     Z[0, :5] = random_states(PARAM_SETS[name], W, seed=order, scale=2.0).T
     Z[0, 5:] = rng.normal(size=(10, W))
     Z[0, :, 0] = 0.0      # an idle lane
-    G.tangent_coefficients_lanes(P, Z, order, G.DEV1, (0,) * ngroups)
-    G.deviation_coefficients_lanes(P, Z, order, G.DEV2, (0,) * ngroups)
+    work = np.zeros((order + 1, G.N_WORK_TANGENT, W))
+    G.tangent_coefficients_lanes(P, Z, order, work)
+    G.deviation_coefficients_lanes(P, Z, order, work)
     h = rng.uniform(0.0, 0.5, W)
     out = np.empty((G.NROWS, W))
     for base in (0, G.DEV1, G.DEV2):
-        lanes.evaluate_lanes(Z, order, h, out, base, (0,) * ngroups)
+        lanes.evaluate_lanes(Z, order, h, out, base)
     for l in range(W):
-        X = np.zeros((5, order + 1))
-        D = np.zeros((5, order + 1))
-        D2 = np.zeros((5, order + 1))
-        X[:, 0] = Z[0, :5, l]
-        D[:, 0] = Z[0, 5:10, l]
-        D2[:, 0] = Z[0, 10:, l]
-        equations.taylor_coefficients_tangent(P, X, D, order)
-        X2 = X.copy()
-        equations.taylor_coefficients_tangent(P, X2, D2, order)
-        np.testing.assert_array_equal(X2, X)
-        for rows, A in ((slice(0, 5), X), (slice(5, 10), D), (slice(10, 15), D2)):
-            np.testing.assert_array_equal(A.T, Z[:, rows, l])
+        S = np.zeros((G.NROWS, order + 1))
+        S[:, 0] = Z[0, :, l]
+        G.tangent_coefficients(P, S[:10], order)
+        G.deviation_coefficients(P, S, order)
+        np.testing.assert_array_equal(S.T, Z[:, :, l])
+        for rows in (slice(0, 5), slice(5, 10), slice(10, 15)):
             y = np.empty(5)
-            tk.evaluate(A, order, h[l], y)
+            tk.evaluate(S[rows], order, h[l], y)
             np.testing.assert_array_equal(y, out[rows, l])
 
 
 # ---------------------------------------------------------------- the step end in vector form
 @pytest.mark.parametrize("nvec", [1, 2])
-@pytest.mark.parametrize("ngroups", G.GROUPS)
-def test_vector_step_end_is_the_scalar_one_and_leaves_stops_and_history_rows_to_the_scalar_loop(ngroups, nvec):
-    """end_steps_tangent_lanes on every group: a lane holding an orbit is ended in vector form
+def test_vector_step_end_is_the_scalar_one_and_leaves_stops_and_history_rows_to_the_scalar_loop(nvec):
+    """end_steps_tangent_lanes: a lane holding an orbit is ended in vector form
     exactly when the scalar loop has only the bookkeeping to do (a step taken in vector form, not
     the last, a finite new state and vectors, no stop by T or the step budget, no history row due),
     and then its state, unit deviation vectors (kernels.tangent.renormalize), accumulators
     (kernels.tangent.accumulate), time and step count are the scalar loop's doubles; every other
     lane that holds an orbit is in the returned bits, untouched."""
-    W = ngroups * L
-    rng = np.random.default_rng(20 + ngroups + nvec)
+    W = L
+    rng = np.random.default_rng(21 + nvec)
     T, max_steps = 100.0, 1000
     seen = set()
     for _ in range(40):
@@ -232,16 +225,6 @@ def test_lane_batches_equal_the_scalar_reference_for_any_threads_lanes_and_order
         _assert_same([g[np.argsort(perm)] for g in got], ref)
     finally:
         set_num_threads(old)
-
-
-def test_lane_groups_threads_and_orbit_order_do_not_change_a_bit():
-    """G = 2 groups of lanes per worker, 1 and 2 threads, the orbits permuted: the raw
-    arrays (indicators, history, final states and vectors, status, steps) equal those of G = 1
-    on one thread bit for bit."""
-    P, Y0, V0, W0 = _orbits(45, seed=11)
-    assert_groups_threads_and_order_keep_the_bits(
-        lambda groups, o: _run(tangent_lanes.run_tangent_lanes_batch, P, Y0[o], V0[o], W0[o], 2, True, groups=groups),
-        len(Y0), seed=2)
 
 
 def test_one_vector_lanes_equal_orbit_tangent_taylor():

@@ -1,126 +1,198 @@
 # GENERATED FILE - DO NOT EDIT.
-# Written by tools/gen_lanes.py from explorer.model.equations.taylor_coefficients
-# (translated operation by operation).
+# Written by tools/gen_lanes.py from explorer.model.chaplygin.system() by explorer.integrate.codegen
+# (generator version 9).
 # Regenerate:  python tools/gen_lanes.py     (check: --check)
-"""Lane kernel of the Taylor method: the recurrence of R3 for G groups of LANES orbits (one
-vector per group), coefficient arrays X[k, var, lane] (C-contiguous, lanes contiguous).
-Used by :mod:`explorer.integrate.lanes`.
+"""The Taylor recurrence of Chaplygin's R3 (docs/model.md), generated: the scalar form for the
+scalar drivers (:mod:`explorer.integrate.systems`), the lane form for
+:mod:`explorer.integrate.lanes`.
 
-Each lane computes bit for bit what the scalar recurrence computes (the same IEEE operations in
-the same order; the vector operations of :mod:`explorer.integrate.simd`: no fast-math, no FMA).
+Each lane of a ``*_lanes`` kernel computes bit for bit what its scalar twin computes (the same
+IEEE operations in the same order; the vector operations of :mod:`explorer.integrate.simd`: no
+fast-math, no FMA).
 """
+import numpy as np
+
 from explorer._jit import njit
-from explorer.integrate.simd import (
-    LANES,
-    by_groups,
-    vadd,
-    vload,
-    vmul,
-    vneg,
-    vsplat,
-    vstore,
-    vsub,
-    vzero,
-)
-from explorer.model.equations import taylor_constants
+from explorer.integrate.simd import LANES, vload, vsplat, vstore, vzero  # noqa: F401
 
 #: state variables (p1, p2, M, g1, g2): the rows of X
 NVAR = 5
-#: the numbers of lane groups the kernels are written for
-GROUPS = (1, 2)
+#: rows of the work array
+N_WORK = 0
+#: flat strides of one order in the lane arrays X[k, i, l] and W[k, r, l]
+XS = NVAR * LANES
+WS = max(N_WORK, 1) * LANES
 
 
-@njit
-def taylor_coefficients_lanes_1(P, X, order):
-    """taylor_coefficients_lanes for G = 1 group of LANES lanes."""
-    C = taylor_constants(P)
-    for k in range(order):
-        wp2 = vzero()
-        wp1 = vzero()
-        p12 = vzero()
-        wg2 = vzero()
-        wg1 = vzero()
+# error_model="numpy": a division by zero gives inf/nan (the integrators' non-finite status), not an exception
+@njit(error_model="numpy")
+def taylor_coefficients_into(P, X, order, W):
+    """The Taylor coefficients of R3 from X[:, 0]: X[i, k] = x_i^(k)(0)/k! for k = 1..order in rows 0..4,
+    with the parameters P (the packed vector) and the work array W[N_WORK, >= order]."""
+    s1 = P[6]
+    s3 = 1.0
+    s4 = P[2]
+    s5 = s3 / s4
+    s9 = P[1]
+    s14 = P[0]
+    s19 = P[3]
+    s20 = s19 / s9
+    s23 = P[5]
+    s24 = s5 * s23
+    s27 = P[4]
+    s28 = s27 * s5
+    s30 = s19 / s14
+    s37 = P[8]
+    s38 = s37 * s1
+    s40 = s23 / s14
+    s44 = s9 * s14
+    s45 = s14 - s9
+    s46 = s45 / s44
+    s49 = s27 / s9
+    s52 = P[7]
+    s53 = s1 * s52
+    v16 = X[2, 0] * X[1, 0]
+    v18 = (s5 * v16) - (s1 * X[3, 0])
+    v22 = v18 - (s20 * X[1, 0])
+    v26 = v22 - (s24 * X[2, 0])
+    v32 = (s28 * X[2, 0]) + (s30 * X[0, 0])
+    v33 = v32 - (s1 * X[4, 0])
+    v34 = X[0, 0] * X[2, 0]
+    v36 = v33 - (s5 * v34)
+    v42 = (s38 * X[3, 0]) + (s40 * X[0, 0])
+    v43 = X[1, 0] * X[0, 0]
+    v48 = v42 + (s46 * v43)
+    v51 = v48 - (s49 * X[1, 0])
+    v55 = v51 - (s53 * X[4, 0])
+    v56 = X[4, 0] * X[2, 0]
+    v58 = X[3, 0] * X[2, 0]
+    v60 = -(s5 * v58)
+    X[0, 1] = v26
+    X[1, 1] = v36
+    X[2, 1] = v55
+    X[3, 1] = (s5 * v56)
+    X[4, 1] = v60
+    for k in range(1, order):
+        m16 = 0.0
+        m34 = 0.0
+        m43 = 0.0
+        m56 = 0.0
+        m58 = 0.0
         for j in range(k + 1):
-            i = k - j
-            wj = vload(X, (j) * (NVAR * LANES) + (2) * LANES)
-            wp2 = vadd(wp2, vmul(wj, vload(X, (i) * (NVAR * LANES) + (1) * LANES)))
-            wp1 = vadd(wp1, vmul(wj, vload(X, (i) * (NVAR * LANES) + (0) * LANES)))
-            p12 = vadd(p12, vmul(vload(X, (j) * (NVAR * LANES) + (0) * LANES), vload(X, (i) * (NVAR * LANES) + (1) * LANES)))
-            wg2 = vadd(wg2, vmul(wj, vload(X, (i) * (NVAR * LANES) + (4) * LANES)))
-            wg1 = vadd(wg1, vmul(wj, vload(X, (i) * (NVAR * LANES) + (3) * LANES)))
-        inv_b, c12, la1, la2, ca2, za1, chi, zeta, mu, mxi, meta = C
+            m16 = m16 + X[2, j] * X[1, k - j]
+            m34 = m34 + X[0, j] * X[2, k - j]
+            m43 = m43 + X[1, j] * X[0, k - j]
+            m56 = m56 + X[4, j] * X[2, k - j]
+            m58 = m58 + X[3, j] * X[2, k - j]
+        v16 = m16
+        v34 = m34
+        v43 = m43
+        v56 = m56
+        v58 = m58
+        v32 = (s28 * X[2, k]) + (s30 * X[0, k])
+        v42 = (s38 * X[3, k]) + (s40 * X[0, k])
+        v18 = (s5 * v16) - (s1 * X[3, k])
+        v33 = v32 - (s1 * X[4, k])
+        v48 = v42 + (s46 * v43)
+        v60 = -(s5 * v58)
+        v22 = v18 - (s20 * X[1, k])
+        v36 = v33 - (s5 * v34)
+        v51 = v48 - (s49 * X[1, k])
+        v26 = v22 - (s24 * X[2, k])
+        v55 = v51 - (s53 * X[4, k])
         r = 1.0 / (k + 1)
-        wk = vmul(vload(X, (k) * (NVAR * LANES) + (2) * LANES), vsplat(inv_b))
-        vstore(X, (k + 1) * (NVAR * LANES) + (0) * LANES, vmul(vsub(vsub(vsub(vmul(wp2, vsplat(inv_b)), vmul(vsplat(zeta), wk)), vmul(vsplat(mu), vload(X, (k) * (NVAR * LANES) + (3) * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * LANES) + (1) * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * LANES) + (1) * LANES, vmul(vadd(vsub(vadd(vmul(vneg(wp1), vsplat(inv_b)), vmul(vsplat(chi), wk)), vmul(vsplat(mu), vload(X, (k) * (NVAR * LANES) + (4) * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * LANES) + (0) * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * LANES) + (2) * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12), vmul(vsplat(ca2), vload(X, (k) * (NVAR * LANES) + (1) * LANES))), vmul(vsplat(za1), vload(X, (k) * (NVAR * LANES) + (0) * LANES))), vmul(vsplat(mxi), vload(X, (k) * (NVAR * LANES) + (4) * LANES))), vmul(vsplat(meta), vload(X, (k) * (NVAR * LANES) + (3) * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * LANES) + (3) * LANES, vmul(vmul(wg2, vsplat(inv_b)), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * LANES) + (4) * LANES, vmul(vmul(vneg(wg1), vsplat(inv_b)), vsplat(r)))
+        X[0, k + 1] = v26 * r
+        X[1, k + 1] = v36 * r
+        X[2, k + 1] = v55 * r
+        X[3, k + 1] = (s5 * v56) * r
+        X[4, k + 1] = v60 * r
 
 
-@njit
-def taylor_coefficients_lanes_2(P, X, order):
-    """taylor_coefficients_lanes for G = 2 groups of LANES lanes."""
-    C = taylor_constants(P)
-    for k in range(order):
-        wp2_0 = vzero()
-        wp2_1 = vzero()
-        wp1_0 = vzero()
-        wp1_1 = vzero()
-        p12_0 = vzero()
-        p12_1 = vzero()
-        wg2_0 = vzero()
-        wg2_1 = vzero()
-        wg1_0 = vzero()
-        wg1_1 = vzero()
+@njit(error_model="numpy")
+def taylor_coefficients(P, X, order):
+    """:func:`taylor_coefficients_into` with its own work array."""
+    W = np.empty((max(N_WORK, 1), order + 1))
+    taylor_coefficients_into(P, X, order, W)
+
+
+@njit(error_model="numpy")
+def taylor_coefficients_lanes(P, X, order, W):
+    """LANES orbits at once: rows 0..4 of X[k, row, l] (C-contiguous, XS / LANES rows), k = 1..order,
+    W of shape (order + 1, max(N_WORK, 1), LANES).  Each lane equals taylor_coefficients_into bit for bit."""
+    s1 = P[6]
+    s3 = 1.0
+    s4 = P[2]
+    s5 = s3 / s4
+    s9 = P[1]
+    s14 = P[0]
+    s19 = P[3]
+    s20 = s19 / s9
+    s23 = P[5]
+    s24 = s5 * s23
+    s27 = P[4]
+    s28 = s27 * s5
+    s30 = s19 / s14
+    s37 = P[8]
+    s38 = s37 * s1
+    s40 = s23 / s14
+    s44 = s9 * s14
+    s45 = s14 - s9
+    s46 = s45 / s44
+    s49 = s27 / s9
+    s52 = P[7]
+    s53 = s1 * s52
+    v16 = vload(X, (0) * XS + 2 * LANES) * vload(X, (0) * XS + 1 * LANES)
+    v18 = (s5 * v16) - (s1 * vload(X, (0) * XS + 3 * LANES))
+    v22 = v18 - (s20 * vload(X, (0) * XS + 1 * LANES))
+    v26 = v22 - (s24 * vload(X, (0) * XS + 2 * LANES))
+    v32 = (s28 * vload(X, (0) * XS + 2 * LANES)) + (s30 * vload(X, (0) * XS + 0 * LANES))
+    v33 = v32 - (s1 * vload(X, (0) * XS + 4 * LANES))
+    v34 = vload(X, (0) * XS + 0 * LANES) * vload(X, (0) * XS + 2 * LANES)
+    v36 = v33 - (s5 * v34)
+    v42 = (s38 * vload(X, (0) * XS + 3 * LANES)) + (s40 * vload(X, (0) * XS + 0 * LANES))
+    v43 = vload(X, (0) * XS + 1 * LANES) * vload(X, (0) * XS + 0 * LANES)
+    v48 = v42 + (s46 * v43)
+    v51 = v48 - (s49 * vload(X, (0) * XS + 1 * LANES))
+    v55 = v51 - (s53 * vload(X, (0) * XS + 4 * LANES))
+    v56 = vload(X, (0) * XS + 4 * LANES) * vload(X, (0) * XS + 2 * LANES)
+    v58 = vload(X, (0) * XS + 3 * LANES) * vload(X, (0) * XS + 2 * LANES)
+    v60 = -(s5 * v58)
+    vstore(X, (1) * XS + 0 * LANES, v26)
+    vstore(X, (1) * XS + 1 * LANES, v36)
+    vstore(X, (1) * XS + 2 * LANES, v55)
+    vstore(X, (1) * XS + 3 * LANES, (s5 * v56))
+    vstore(X, (1) * XS + 4 * LANES, v60)
+    for k in range(1, order):
+        m16 = vzero()
+        m34 = vzero()
+        m43 = vzero()
+        m56 = vzero()
+        m58 = vzero()
         for j in range(k + 1):
-            i = k - j
-            wj_0 = vload(X, (j) * (NVAR * 2 * LANES) + (2) * 2 * LANES)
-            wj_1 = vload(X, (j) * (NVAR * 2 * LANES) + (2) * 2 * LANES + 1 * LANES)
-            wp2_0 = vadd(wp2_0, vmul(wj_0, vload(X, (i) * (NVAR * 2 * LANES) + (1) * 2 * LANES)))
-            wp2_1 = vadd(wp2_1, vmul(wj_1, vload(X, (i) * (NVAR * 2 * LANES) + (1) * 2 * LANES + 1 * LANES)))
-            wp1_0 = vadd(wp1_0, vmul(wj_0, vload(X, (i) * (NVAR * 2 * LANES) + (0) * 2 * LANES)))
-            wp1_1 = vadd(wp1_1, vmul(wj_1, vload(X, (i) * (NVAR * 2 * LANES) + (0) * 2 * LANES + 1 * LANES)))
-            p12_0 = vadd(p12_0, vmul(vload(X, (j) * (NVAR * 2 * LANES) + (0) * 2 * LANES), vload(X, (i) * (NVAR * 2 * LANES) + (1) * 2 * LANES)))
-            p12_1 = vadd(p12_1, vmul(vload(X, (j) * (NVAR * 2 * LANES) + (0) * 2 * LANES + 1 * LANES), vload(X, (i) * (NVAR * 2 * LANES) + (1) * 2 * LANES + 1 * LANES)))
-            wg2_0 = vadd(wg2_0, vmul(wj_0, vload(X, (i) * (NVAR * 2 * LANES) + (4) * 2 * LANES)))
-            wg2_1 = vadd(wg2_1, vmul(wj_1, vload(X, (i) * (NVAR * 2 * LANES) + (4) * 2 * LANES + 1 * LANES)))
-            wg1_0 = vadd(wg1_0, vmul(wj_0, vload(X, (i) * (NVAR * 2 * LANES) + (3) * 2 * LANES)))
-            wg1_1 = vadd(wg1_1, vmul(wj_1, vload(X, (i) * (NVAR * 2 * LANES) + (3) * 2 * LANES + 1 * LANES)))
-        inv_b, c12, la1, la2, ca2, za1, chi, zeta, mu, mxi, meta = C
+            m16 = m16 + vload(X, (j) * XS + 2 * LANES) * vload(X, (k - j) * XS + 1 * LANES)
+            m34 = m34 + vload(X, (j) * XS + 0 * LANES) * vload(X, (k - j) * XS + 2 * LANES)
+            m43 = m43 + vload(X, (j) * XS + 1 * LANES) * vload(X, (k - j) * XS + 0 * LANES)
+            m56 = m56 + vload(X, (j) * XS + 4 * LANES) * vload(X, (k - j) * XS + 2 * LANES)
+            m58 = m58 + vload(X, (j) * XS + 3 * LANES) * vload(X, (k - j) * XS + 2 * LANES)
+        v16 = m16
+        v34 = m34
+        v43 = m43
+        v56 = m56
+        v58 = m58
+        v32 = (s28 * vload(X, (k) * XS + 2 * LANES)) + (s30 * vload(X, (k) * XS + 0 * LANES))
+        v42 = (s38 * vload(X, (k) * XS + 3 * LANES)) + (s40 * vload(X, (k) * XS + 0 * LANES))
+        v18 = (s5 * v16) - (s1 * vload(X, (k) * XS + 3 * LANES))
+        v33 = v32 - (s1 * vload(X, (k) * XS + 4 * LANES))
+        v48 = v42 + (s46 * v43)
+        v60 = -(s5 * v58)
+        v22 = v18 - (s20 * vload(X, (k) * XS + 1 * LANES))
+        v36 = v33 - (s5 * v34)
+        v51 = v48 - (s49 * vload(X, (k) * XS + 1 * LANES))
+        v26 = v22 - (s24 * vload(X, (k) * XS + 2 * LANES))
+        v55 = v51 - (s53 * vload(X, (k) * XS + 4 * LANES))
         r = 1.0 / (k + 1)
-        wk_0 = vmul(vload(X, (k) * (NVAR * 2 * LANES) + (2) * 2 * LANES), vsplat(inv_b))
-        wk_1 = vmul(vload(X, (k) * (NVAR * 2 * LANES) + (2) * 2 * LANES + 1 * LANES), vsplat(inv_b))
-        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (0) * 2 * LANES, vmul(vsub(vsub(vsub(vmul(wp2_0, vsplat(inv_b)), vmul(vsplat(zeta), wk_0)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 2 * LANES) + (3) * 2 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 2 * LANES) + (1) * 2 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (0) * 2 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(vmul(wp2_1, vsplat(inv_b)), vmul(vsplat(zeta), wk_1)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 2 * LANES) + (3) * 2 * LANES + 1 * LANES))), vmul(vsplat(la2), vload(X, (k) * (NVAR * 2 * LANES) + (1) * 2 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (1) * 2 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(wp1_0), vsplat(inv_b)), vmul(vsplat(chi), wk_0)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 2 * LANES) + (4) * 2 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 2 * LANES) + (0) * 2 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (1) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(wp1_1), vsplat(inv_b)), vmul(vsplat(chi), wk_1)), vmul(vsplat(mu), vload(X, (k) * (NVAR * 2 * LANES) + (4) * 2 * LANES + 1 * LANES))), vmul(vsplat(la1), vload(X, (k) * (NVAR * 2 * LANES) + (0) * 2 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (2) * 2 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_0), vmul(vsplat(ca2), vload(X, (k) * (NVAR * 2 * LANES) + (1) * 2 * LANES))), vmul(vsplat(za1), vload(X, (k) * (NVAR * 2 * LANES) + (0) * 2 * LANES))), vmul(vsplat(mxi), vload(X, (k) * (NVAR * 2 * LANES) + (4) * 2 * LANES))), vmul(vsplat(meta), vload(X, (k) * (NVAR * 2 * LANES) + (3) * 2 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (2) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_1), vmul(vsplat(ca2), vload(X, (k) * (NVAR * 2 * LANES) + (1) * 2 * LANES + 1 * LANES))), vmul(vsplat(za1), vload(X, (k) * (NVAR * 2 * LANES) + (0) * 2 * LANES + 1 * LANES))), vmul(vsplat(mxi), vload(X, (k) * (NVAR * 2 * LANES) + (4) * 2 * LANES + 1 * LANES))), vmul(vsplat(meta), vload(X, (k) * (NVAR * 2 * LANES) + (3) * 2 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (3) * 2 * LANES, vmul(vmul(wg2_0, vsplat(inv_b)), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (3) * 2 * LANES + 1 * LANES, vmul(vmul(wg2_1, vsplat(inv_b)), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (4) * 2 * LANES, vmul(vmul(vneg(wg1_0), vsplat(inv_b)), vsplat(r)))
-        vstore(X, (k + 1) * (NVAR * 2 * LANES) + (4) * 2 * LANES + 1 * LANES, vmul(vmul(vneg(wg1_1), vsplat(inv_b)), vsplat(r)))
-
-
-#: taylor_coefficients_lanes for each G
-_TAYLOR_COEFFICIENTS_LANES = {1: taylor_coefficients_lanes_1, 2: taylor_coefficients_lanes_2}
-
-
-def taylor_coefficients_lanes(P, X, order, groups):
-    """Lane twin of equations.taylor_coefficients, translated from its source by
-    tools/gen_lanes.py: X[k, i, l] = y_i^(k)(0)/k! of lane l for k = 1..order, given
-    X[0, :, :]; X has shape (order + 1, NVAR, G * LANES), G in GROUPS.
-
-    ``groups``: a tuple of G zeros.  Its length is part of its type, so a compiled caller is
-    specialised to one G and compiles only that kernel."""
-    _TAYLOR_COEFFICIENTS_LANES[len(groups)](P, X, order)
-
-
-@by_groups(taylor_coefficients_lanes)
-def _taylor_coefficients_lanes(P, X, order, groups):
-    kernel = _TAYLOR_COEFFICIENTS_LANES[len(groups)]
-
-    def impl(P, X, order, groups):
-        kernel(P, X, order)
-    return impl
+        vstore(X, (k + 1) * XS + 0 * LANES, v26 * r)
+        vstore(X, (k + 1) * XS + 1 * LANES, v36 * r)
+        vstore(X, (k + 1) * XS + 2 * LANES, v55 * r)
+        vstore(X, (k + 1) * XS + 3 * LANES, (s5 * v56) * r)
+        vstore(X, (k + 1) * XS + 4 * LANES, v60 * r)

@@ -1,285 +1,605 @@
 # GENERATED FILE - DO NOT EDIT.
-# Written by tools/gen_lanes.py from explorer.model.equations.taylor_coefficients_tangent
-# (translated operation by operation).
+# Written by tools/gen_lanes.py from explorer.model.chaplygin.system(), variational(1) and (2) by explorer.integrate.codegen
+# (generator version 9).
 # Regenerate:  python tools/gen_lanes.py     (check: --check)
-"""Lane kernels of the tangent Taylor method: G groups of LANES orbits (one vector per group),
-each orbit with its state and up to two deviation vectors in Z[k, row, lane] (C-contiguous,
-NROWS rows: 0..4 the orbit, 5..9 the first deviation vector, 10..14 the second).  Used by
-:mod:`explorer.integrate.tangent_lanes`.
+"""The Taylor recurrence of R3 with deviation vectors (its variational equations), generated:
+the scalar form for :mod:`explorer.integrate.tangent`, the lane form for
+:mod:`explorer.integrate.tangent_lanes`; the orbit's rows by the orbit's own recurrence.
 
-Each lane computes bit for bit what the scalar recurrence computes (the same IEEE operations in
-the same order; the vector operations of :mod:`explorer.integrate.simd`: no fast-math, no FMA).
+Each lane of a ``*_lanes`` kernel computes bit for bit what its scalar twin computes (the same
+IEEE operations in the same order; the vector operations of :mod:`explorer.integrate.simd`: no
+fast-math, no FMA).
 """
+import numpy as np
+
 from explorer._jit import njit
-from explorer.integrate.simd import (
-    LANES,
-    by_groups,
-    vadd,
-    vload,
-    vmul,
-    vneg,
-    vsplat,
-    vstore,
-    vsub,
-    vzero,
-)
-from explorer.model.equations import taylor_constants
+from explorer.integrate.simd import LANES, vload, vsplat, vstore, vzero  # noqa: F401
+
+from explorer.integrate._lanes_generated import taylor_coefficients_into
 
 #: rows of the lane array: the orbit (5) and two deviation vectors (5 each)
 NROWS = 15
 #: first row of each deviation vector
 DEV1 = 5
 DEV2 = 10
-#: the numbers of lane groups the kernels are written for
-GROUPS = (1, 2)
+#: rows of the work array W[k, r, l] of every recurrence here (at least 1)
+N_WORK_TANGENT = 1
+#: flat strides of one order in the lane arrays X[k, i, l] and W[k, r, l]
+XS = NROWS * LANES
+WS_TANGENT = N_WORK_TANGENT * LANES
 
 
-@njit
-def tangent_coefficients_lanes_1(P, Z, order, db):
-    """tangent_coefficients_lanes for G = 1 group of LANES lanes."""
-    C = taylor_constants(P)
-    for k in range(order):
-        wp2 = vzero()
-        wp1 = vzero()
-        p12 = vzero()
-        wg2 = vzero()
-        wg1 = vzero()
-        dwp2 = vzero()
-        dwp1 = vzero()
-        dp12 = vzero()
-        dwg2 = vzero()
-        dwg1 = vzero()
+# error_model="numpy": a division by zero gives inf/nan (the integrators' non-finite status), not an exception
+@njit(error_model="numpy")
+def first_deviation_coefficients_into(P, X, order, W):
+    """The deviation vector alone (the orbit's coefficients given in rows 0..4): X[i, k] = x_i^(k)(0)/k! for k = 1..order in rows 5..9,
+    with the parameters P (the packed vector) and the work array W[N_WORK_TANGENT, >= order]."""
+    s1 = P[6]
+    s3 = 1.0
+    s4 = P[2]
+    s5 = s3 / s4
+    s8 = P[1]
+    s9 = s3 / s8
+    s16 = P[0]
+    s17 = s3 / s16
+    s20 = s16 - s8
+    s28 = P[3]
+    s29 = s28 * s9
+    s32 = P[5]
+    s33 = s5 * s32
+    s36 = P[4]
+    s37 = s36 * s5
+    s39 = s28 * s17
+    s50 = P[8]
+    s51 = s50 * s1
+    s53 = s17 * s32
+    s57 = s9 * s17
+    s58 = s57 * s20
+    s64 = s36 * s9
+    s67 = P[7]
+    s68 = s1 * s67
+    v21 = X[2, 0] * X[6, 0]
+    v24 = X[7, 0] * X[1, 0]
+    v26 = (s5 * v21) + (s5 * v24)
+    v27 = v26 - (s1 * X[8, 0])
+    v31 = v27 - (s29 * X[6, 0])
+    v35 = v31 - (s33 * X[7, 0])
+    v41 = (s37 * X[7, 0]) + (s39 * X[5, 0])
+    v42 = v41 - (s1 * X[9, 0])
+    v43 = X[5, 0] * X[2, 0]
+    v45 = v42 - (s5 * v43)
+    v47 = X[0, 0] * X[7, 0]
+    v49 = v45 - (s5 * v47)
+    v55 = (s51 * X[8, 0]) + (s53 * X[5, 0])
+    v56 = X[0, 0] * X[6, 0]
+    v60 = v55 + (s58 * v56)
+    v61 = X[1, 0] * X[5, 0]
+    v63 = v60 + (s58 * v61)
+    v66 = v63 - (s64 * X[6, 0])
+    v70 = v66 - (s68 * X[9, 0])
+    v71 = X[9, 0] * X[2, 0]
+    v74 = X[4, 0] * X[7, 0]
+    v76 = (s5 * v71) + (s5 * v74)
+    v77 = X[8, 0] * X[2, 0]
+    v79 = -(s5 * v77)
+    v81 = X[3, 0] * X[7, 0]
+    v83 = v79 - (s5 * v81)
+    X[5, 1] = v35
+    X[6, 1] = v49
+    X[7, 1] = v70
+    X[8, 1] = v76
+    X[9, 1] = v83
+    for k in range(1, order):
+        m21 = 0.0
+        m24 = 0.0
+        m43 = 0.0
+        m47 = 0.0
+        m56 = 0.0
+        m61 = 0.0
+        m71 = 0.0
+        m74 = 0.0
+        m77 = 0.0
+        m81 = 0.0
         for j in range(k + 1):
-            i = k - j
-            wj = vload(Z, (j) * (NROWS * LANES) + (2) * LANES)
-            dwj = vload(Z, (j) * (NROWS * LANES) + (db + (2)) * LANES)
-            wp2 = vadd(wp2, vmul(wj, vload(Z, (i) * (NROWS * LANES) + (1) * LANES)))
-            dwp2 = vadd(dwp2, vadd(vmul(dwj, vload(Z, (i) * (NROWS * LANES) + (1) * LANES)), vmul(wj, vload(Z, (i) * (NROWS * LANES) + (db + (1)) * LANES))))
-            wp1 = vadd(wp1, vmul(wj, vload(Z, (i) * (NROWS * LANES) + (0) * LANES)))
-            dwp1 = vadd(dwp1, vadd(vmul(dwj, vload(Z, (i) * (NROWS * LANES) + (0) * LANES)), vmul(wj, vload(Z, (i) * (NROWS * LANES) + (db + (0)) * LANES))))
-            p12 = vadd(p12, vmul(vload(Z, (j) * (NROWS * LANES) + (0) * LANES), vload(Z, (i) * (NROWS * LANES) + (1) * LANES)))
-            dp12 = vadd(dp12, vadd(vmul(vload(Z, (j) * (NROWS * LANES) + (db + (0)) * LANES), vload(Z, (i) * (NROWS * LANES) + (1) * LANES)), vmul(vload(Z, (j) * (NROWS * LANES) + (0) * LANES), vload(Z, (i) * (NROWS * LANES) + (db + (1)) * LANES))))
-            wg2 = vadd(wg2, vmul(wj, vload(Z, (i) * (NROWS * LANES) + (4) * LANES)))
-            dwg2 = vadd(dwg2, vadd(vmul(dwj, vload(Z, (i) * (NROWS * LANES) + (4) * LANES)), vmul(wj, vload(Z, (i) * (NROWS * LANES) + (db + (4)) * LANES))))
-            wg1 = vadd(wg1, vmul(wj, vload(Z, (i) * (NROWS * LANES) + (3) * LANES)))
-            dwg1 = vadd(dwg1, vadd(vmul(dwj, vload(Z, (i) * (NROWS * LANES) + (3) * LANES)), vmul(wj, vload(Z, (i) * (NROWS * LANES) + (db + (3)) * LANES))))
-        inv_b, c12, la1, la2, ca2, za1, chi, zeta, mu, mxi, meta = C
+            m21 = m21 + X[2, j] * X[6, k - j]
+            m24 = m24 + X[7, j] * X[1, k - j]
+            m43 = m43 + X[5, j] * X[2, k - j]
+            m47 = m47 + X[0, j] * X[7, k - j]
+            m56 = m56 + X[0, j] * X[6, k - j]
+            m61 = m61 + X[1, j] * X[5, k - j]
+            m71 = m71 + X[9, j] * X[2, k - j]
+            m74 = m74 + X[4, j] * X[7, k - j]
+            m77 = m77 + X[8, j] * X[2, k - j]
+            m81 = m81 + X[3, j] * X[7, k - j]
+        v21 = m21
+        v24 = m24
+        v43 = m43
+        v47 = m47
+        v56 = m56
+        v61 = m61
+        v71 = m71
+        v74 = m74
+        v77 = m77
+        v81 = m81
+        v41 = (s37 * X[7, k]) + (s39 * X[5, k])
+        v55 = (s51 * X[8, k]) + (s53 * X[5, k])
+        v26 = (s5 * v21) + (s5 * v24)
+        v42 = v41 - (s1 * X[9, k])
+        v60 = v55 + (s58 * v56)
+        v76 = (s5 * v71) + (s5 * v74)
+        v79 = -(s5 * v77)
+        v27 = v26 - (s1 * X[8, k])
+        v45 = v42 - (s5 * v43)
+        v63 = v60 + (s58 * v61)
+        v83 = v79 - (s5 * v81)
+        v31 = v27 - (s29 * X[6, k])
+        v49 = v45 - (s5 * v47)
+        v66 = v63 - (s64 * X[6, k])
+        v35 = v31 - (s33 * X[7, k])
+        v70 = v66 - (s68 * X[9, k])
         r = 1.0 / (k + 1)
-        wk = vmul(vload(Z, (k) * (NROWS * LANES) + (2) * LANES), vsplat(inv_b))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (0) * LANES, vmul(vsub(vsub(vsub(vmul(wp2, vsplat(inv_b)), vmul(vsplat(zeta), wk)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * LANES) + (3) * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * LANES) + (1) * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (1) * LANES, vmul(vadd(vsub(vadd(vmul(vneg(wp1), vsplat(inv_b)), vmul(vsplat(chi), wk)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * LANES) + (4) * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * LANES) + (0) * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (2) * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * LANES) + (1) * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * LANES) + (0) * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * LANES) + (4) * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * LANES) + (3) * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (3) * LANES, vmul(vmul(wg2, vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (4) * LANES, vmul(vmul(vneg(wg1), vsplat(inv_b)), vsplat(r)))
-        inv_b_2, c12_2, la1_2, la2_2, ca2_2, za1_2, chi_2, zeta_2, mu_2, mxi_2, meta_2 = C
-        r_2 = 1.0 / (k + 1)
-        wk_2 = vmul(vload(Z, (k) * (NROWS * LANES) + (db + (2)) * LANES), vsplat(inv_b_2))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (0)) * LANES, vmul(vsub(vsub(vsub(vmul(dwp2, vsplat(inv_b_2)), vmul(vsplat(zeta_2), wk_2)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * LANES) + (db + (3)) * LANES))), vmul(vsplat(la2_2), vload(Z, (k) * (NROWS * LANES) + (db + (1)) * LANES))), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (1)) * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1), vsplat(inv_b_2)), vmul(vsplat(chi_2), wk_2)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * LANES) + (db + (4)) * LANES))), vmul(vsplat(la1_2), vload(Z, (k) * (NROWS * LANES) + (db + (0)) * LANES))), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (2)) * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12_2), dp12), vmul(vsplat(ca2_2), vload(Z, (k) * (NROWS * LANES) + (db + (1)) * LANES))), vmul(vsplat(za1_2), vload(Z, (k) * (NROWS * LANES) + (db + (0)) * LANES))), vmul(vsplat(mxi_2), vload(Z, (k) * (NROWS * LANES) + (db + (4)) * LANES))), vmul(vsplat(meta_2), vload(Z, (k) * (NROWS * LANES) + (db + (3)) * LANES))), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (3)) * LANES, vmul(vmul(dwg2, vsplat(inv_b_2)), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (4)) * LANES, vmul(vmul(vneg(dwg1), vsplat(inv_b_2)), vsplat(r_2)))
+        X[5, k + 1] = v35 * r
+        X[6, k + 1] = v49 * r
+        X[7, k + 1] = v70 * r
+        X[8, k + 1] = v76 * r
+        X[9, k + 1] = v83 * r
 
 
-@njit
-def tangent_coefficients_lanes_2(P, Z, order, db):
-    """tangent_coefficients_lanes for G = 2 groups of LANES lanes."""
-    C = taylor_constants(P)
-    for k in range(order):
-        wp2_0 = vzero()
-        wp2_1 = vzero()
-        wp1_0 = vzero()
-        wp1_1 = vzero()
-        p12_0 = vzero()
-        p12_1 = vzero()
-        wg2_0 = vzero()
-        wg2_1 = vzero()
-        wg1_0 = vzero()
-        wg1_1 = vzero()
-        dwp2_0 = vzero()
-        dwp2_1 = vzero()
-        dwp1_0 = vzero()
-        dwp1_1 = vzero()
-        dp12_0 = vzero()
-        dp12_1 = vzero()
-        dwg2_0 = vzero()
-        dwg2_1 = vzero()
-        dwg1_0 = vzero()
-        dwg1_1 = vzero()
+@njit(error_model="numpy")
+def first_deviation_coefficients(P, X, order):
+    """:func:`first_deviation_coefficients_into` with its own work array."""
+    W = np.empty((max(N_WORK_TANGENT, 1), order + 1))
+    first_deviation_coefficients_into(P, X, order, W)
+
+
+@njit(error_model="numpy")
+def first_deviation_coefficients_lanes(P, X, order, W):
+    """LANES orbits at once: rows 5..9 of X[k, row, l] (C-contiguous, XS / LANES rows), k = 1..order,
+    W of shape (order + 1, max(N_WORK_TANGENT, 1), LANES).  Each lane equals first_deviation_coefficients_into bit for bit."""
+    s1 = P[6]
+    s3 = 1.0
+    s4 = P[2]
+    s5 = s3 / s4
+    s8 = P[1]
+    s9 = s3 / s8
+    s16 = P[0]
+    s17 = s3 / s16
+    s20 = s16 - s8
+    s28 = P[3]
+    s29 = s28 * s9
+    s32 = P[5]
+    s33 = s5 * s32
+    s36 = P[4]
+    s37 = s36 * s5
+    s39 = s28 * s17
+    s50 = P[8]
+    s51 = s50 * s1
+    s53 = s17 * s32
+    s57 = s9 * s17
+    s58 = s57 * s20
+    s64 = s36 * s9
+    s67 = P[7]
+    s68 = s1 * s67
+    v21 = vload(X, (0) * XS + 2 * LANES) * vload(X, (0) * XS + 6 * LANES)
+    v24 = vload(X, (0) * XS + 7 * LANES) * vload(X, (0) * XS + 1 * LANES)
+    v26 = (s5 * v21) + (s5 * v24)
+    v27 = v26 - (s1 * vload(X, (0) * XS + 8 * LANES))
+    v31 = v27 - (s29 * vload(X, (0) * XS + 6 * LANES))
+    v35 = v31 - (s33 * vload(X, (0) * XS + 7 * LANES))
+    v41 = (s37 * vload(X, (0) * XS + 7 * LANES)) + (s39 * vload(X, (0) * XS + 5 * LANES))
+    v42 = v41 - (s1 * vload(X, (0) * XS + 9 * LANES))
+    v43 = vload(X, (0) * XS + 5 * LANES) * vload(X, (0) * XS + 2 * LANES)
+    v45 = v42 - (s5 * v43)
+    v47 = vload(X, (0) * XS + 0 * LANES) * vload(X, (0) * XS + 7 * LANES)
+    v49 = v45 - (s5 * v47)
+    v55 = (s51 * vload(X, (0) * XS + 8 * LANES)) + (s53 * vload(X, (0) * XS + 5 * LANES))
+    v56 = vload(X, (0) * XS + 0 * LANES) * vload(X, (0) * XS + 6 * LANES)
+    v60 = v55 + (s58 * v56)
+    v61 = vload(X, (0) * XS + 1 * LANES) * vload(X, (0) * XS + 5 * LANES)
+    v63 = v60 + (s58 * v61)
+    v66 = v63 - (s64 * vload(X, (0) * XS + 6 * LANES))
+    v70 = v66 - (s68 * vload(X, (0) * XS + 9 * LANES))
+    v71 = vload(X, (0) * XS + 9 * LANES) * vload(X, (0) * XS + 2 * LANES)
+    v74 = vload(X, (0) * XS + 4 * LANES) * vload(X, (0) * XS + 7 * LANES)
+    v76 = (s5 * v71) + (s5 * v74)
+    v77 = vload(X, (0) * XS + 8 * LANES) * vload(X, (0) * XS + 2 * LANES)
+    v79 = -(s5 * v77)
+    v81 = vload(X, (0) * XS + 3 * LANES) * vload(X, (0) * XS + 7 * LANES)
+    v83 = v79 - (s5 * v81)
+    vstore(X, (1) * XS + 5 * LANES, v35)
+    vstore(X, (1) * XS + 6 * LANES, v49)
+    vstore(X, (1) * XS + 7 * LANES, v70)
+    vstore(X, (1) * XS + 8 * LANES, v76)
+    vstore(X, (1) * XS + 9 * LANES, v83)
+    for k in range(1, order):
+        m21 = vzero()
+        m24 = vzero()
+        m43 = vzero()
+        m47 = vzero()
+        m56 = vzero()
+        m61 = vzero()
+        m71 = vzero()
+        m74 = vzero()
+        m77 = vzero()
+        m81 = vzero()
         for j in range(k + 1):
-            i = k - j
-            wj_0 = vload(Z, (j) * (NROWS * 2 * LANES) + (2) * 2 * LANES)
-            wj_1 = vload(Z, (j) * (NROWS * 2 * LANES) + (2) * 2 * LANES + 1 * LANES)
-            dwj_0 = vload(Z, (j) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES)
-            dwj_1 = vload(Z, (j) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES + 1 * LANES)
-            wp2_0 = vadd(wp2_0, vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES)))
-            wp2_1 = vadd(wp2_1, vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES + 1 * LANES)))
-            dwp2_0 = vadd(dwp2_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))))
-            dwp2_1 = vadd(dwp2_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))))
-            wp1_0 = vadd(wp1_0, vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (0) * 2 * LANES)))
-            wp1_1 = vadd(wp1_1, vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES)))
-            dwp1_0 = vadd(dwp1_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (0) * 2 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES))))
-            dwp1_1 = vadd(dwp1_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES))))
-            p12_0 = vadd(p12_0, vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (0) * 2 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES)))
-            p12_1 = vadd(p12_1, vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES + 1 * LANES)))
-            dp12_0 = vadd(dp12_0, vadd(vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES)), vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (0) * 2 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))))
-            dp12_1 = vadd(dp12_1, vadd(vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES + 1 * LANES)), vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))))
-            wg2_0 = vadd(wg2_0, vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (4) * 2 * LANES)))
-            wg2_1 = vadd(wg2_1, vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (4) * 2 * LANES + 1 * LANES)))
-            dwg2_0 = vadd(dwg2_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (4) * 2 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES))))
-            dwg2_1 = vadd(dwg2_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (4) * 2 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES))))
-            wg1_0 = vadd(wg1_0, vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (3) * 2 * LANES)))
-            wg1_1 = vadd(wg1_1, vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (3) * 2 * LANES + 1 * LANES)))
-            dwg1_0 = vadd(dwg1_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (3) * 2 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES))))
-            dwg1_1 = vadd(dwg1_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (3) * 2 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES))))
-        inv_b, c12, la1, la2, ca2, za1, chi, zeta, mu, mxi, meta = C
+            m21 = m21 + vload(X, (j) * XS + 2 * LANES) * vload(X, (k - j) * XS + 6 * LANES)
+            m24 = m24 + vload(X, (j) * XS + 7 * LANES) * vload(X, (k - j) * XS + 1 * LANES)
+            m43 = m43 + vload(X, (j) * XS + 5 * LANES) * vload(X, (k - j) * XS + 2 * LANES)
+            m47 = m47 + vload(X, (j) * XS + 0 * LANES) * vload(X, (k - j) * XS + 7 * LANES)
+            m56 = m56 + vload(X, (j) * XS + 0 * LANES) * vload(X, (k - j) * XS + 6 * LANES)
+            m61 = m61 + vload(X, (j) * XS + 1 * LANES) * vload(X, (k - j) * XS + 5 * LANES)
+            m71 = m71 + vload(X, (j) * XS + 9 * LANES) * vload(X, (k - j) * XS + 2 * LANES)
+            m74 = m74 + vload(X, (j) * XS + 4 * LANES) * vload(X, (k - j) * XS + 7 * LANES)
+            m77 = m77 + vload(X, (j) * XS + 8 * LANES) * vload(X, (k - j) * XS + 2 * LANES)
+            m81 = m81 + vload(X, (j) * XS + 3 * LANES) * vload(X, (k - j) * XS + 7 * LANES)
+        v21 = m21
+        v24 = m24
+        v43 = m43
+        v47 = m47
+        v56 = m56
+        v61 = m61
+        v71 = m71
+        v74 = m74
+        v77 = m77
+        v81 = m81
+        v41 = (s37 * vload(X, (k) * XS + 7 * LANES)) + (s39 * vload(X, (k) * XS + 5 * LANES))
+        v55 = (s51 * vload(X, (k) * XS + 8 * LANES)) + (s53 * vload(X, (k) * XS + 5 * LANES))
+        v26 = (s5 * v21) + (s5 * v24)
+        v42 = v41 - (s1 * vload(X, (k) * XS + 9 * LANES))
+        v60 = v55 + (s58 * v56)
+        v76 = (s5 * v71) + (s5 * v74)
+        v79 = -(s5 * v77)
+        v27 = v26 - (s1 * vload(X, (k) * XS + 8 * LANES))
+        v45 = v42 - (s5 * v43)
+        v63 = v60 + (s58 * v61)
+        v83 = v79 - (s5 * v81)
+        v31 = v27 - (s29 * vload(X, (k) * XS + 6 * LANES))
+        v49 = v45 - (s5 * v47)
+        v66 = v63 - (s64 * vload(X, (k) * XS + 6 * LANES))
+        v35 = v31 - (s33 * vload(X, (k) * XS + 7 * LANES))
+        v70 = v66 - (s68 * vload(X, (k) * XS + 9 * LANES))
         r = 1.0 / (k + 1)
-        wk_0 = vmul(vload(Z, (k) * (NROWS * 2 * LANES) + (2) * 2 * LANES), vsplat(inv_b))
-        wk_1 = vmul(vload(Z, (k) * (NROWS * 2 * LANES) + (2) * 2 * LANES + 1 * LANES), vsplat(inv_b))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (0) * 2 * LANES, vmul(vsub(vsub(vsub(vmul(wp2_0, vsplat(inv_b)), vmul(vsplat(zeta), wk_0)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (3) * 2 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 2 * LANES) + (1) * 2 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(vmul(wp2_1, vsplat(inv_b)), vmul(vsplat(zeta), wk_1)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (3) * 2 * LANES + 1 * LANES))), vmul(vsplat(la2), vload(Z, (k) * (NROWS * 2 * LANES) + (1) * 2 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (1) * 2 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(wp1_0), vsplat(inv_b)), vmul(vsplat(chi), wk_0)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (4) * 2 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 2 * LANES) + (0) * 2 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (1) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(wp1_1), vsplat(inv_b)), vmul(vsplat(chi), wk_1)), vmul(vsplat(mu), vload(Z, (k) * (NROWS * 2 * LANES) + (4) * 2 * LANES + 1 * LANES))), vmul(vsplat(la1), vload(Z, (k) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (2) * 2 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_0), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 2 * LANES) + (1) * 2 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 2 * LANES) + (0) * 2 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 2 * LANES) + (4) * 2 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 2 * LANES) + (3) * 2 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (2) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12), p12_1), vmul(vsplat(ca2), vload(Z, (k) * (NROWS * 2 * LANES) + (1) * 2 * LANES + 1 * LANES))), vmul(vsplat(za1), vload(Z, (k) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES))), vmul(vsplat(mxi), vload(Z, (k) * (NROWS * 2 * LANES) + (4) * 2 * LANES + 1 * LANES))), vmul(vsplat(meta), vload(Z, (k) * (NROWS * 2 * LANES) + (3) * 2 * LANES + 1 * LANES))), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (3) * 2 * LANES, vmul(vmul(wg2_0, vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (3) * 2 * LANES + 1 * LANES, vmul(vmul(wg2_1, vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (4) * 2 * LANES, vmul(vmul(vneg(wg1_0), vsplat(inv_b)), vsplat(r)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (4) * 2 * LANES + 1 * LANES, vmul(vmul(vneg(wg1_1), vsplat(inv_b)), vsplat(r)))
-        inv_b_2, c12_2, la1_2, la2_2, ca2_2, za1_2, chi_2, zeta_2, mu_2, mxi_2, meta_2 = C
-        r_2 = 1.0 / (k + 1)
-        wk_2_0 = vmul(vload(Z, (k) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES), vsplat(inv_b_2))
-        wk_2_1 = vmul(vload(Z, (k) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES + 1 * LANES), vsplat(inv_b_2))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_0, vsplat(inv_b_2)), vmul(vsplat(zeta_2), wk_2_0)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES))), vmul(vsplat(la2_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_1, vsplat(inv_b_2)), vmul(vsplat(zeta_2), wk_2_1)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES))), vmul(vsplat(la2_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_0), vsplat(inv_b_2)), vmul(vsplat(chi_2), wk_2_0)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES))), vmul(vsplat(la1_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES))), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_1), vsplat(inv_b_2)), vmul(vsplat(chi_2), wk_2_1)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES))), vmul(vsplat(la1_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES))), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12_2), dp12_0), vmul(vsplat(ca2_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))), vmul(vsplat(za1_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES))), vmul(vsplat(mxi_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES))), vmul(vsplat(meta_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES))), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12_2), dp12_1), vmul(vsplat(ca2_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))), vmul(vsplat(za1_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES))), vmul(vsplat(mxi_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES))), vmul(vsplat(meta_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES))), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES, vmul(vmul(dwg2_0, vsplat(inv_b_2)), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES, vmul(vmul(dwg2_1, vsplat(inv_b_2)), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES, vmul(vmul(vneg(dwg1_0), vsplat(inv_b_2)), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES, vmul(vmul(vneg(dwg1_1), vsplat(inv_b_2)), vsplat(r_2)))
+        vstore(X, (k + 1) * XS + 5 * LANES, v35 * r)
+        vstore(X, (k + 1) * XS + 6 * LANES, v49 * r)
+        vstore(X, (k + 1) * XS + 7 * LANES, v70 * r)
+        vstore(X, (k + 1) * XS + 8 * LANES, v76 * r)
+        vstore(X, (k + 1) * XS + 9 * LANES, v83 * r)
 
 
-@njit
-def deviation_coefficients_lanes_1(P, Z, order, db):
-    """deviation_coefficients_lanes for G = 1 group of LANES lanes."""
-    C = taylor_constants(P)
-    for k in range(order):
-        dwp2 = vzero()
-        dwp1 = vzero()
-        dp12 = vzero()
-        dwg2 = vzero()
-        dwg1 = vzero()
+# error_model="numpy": a division by zero gives inf/nan (the integrators' non-finite status), not an exception
+@njit(error_model="numpy")
+def deviation_coefficients_into(P, X, order, W):
+    """The second deviation vector alone (the orbit's coefficients given in rows 0..4): X[i, k] = x_i^(k)(0)/k! for k = 1..order in rows 10..14,
+    with the parameters P (the packed vector) and the work array W[N_WORK_TANGENT, >= order]."""
+    s1 = P[6]
+    s3 = 1.0
+    s4 = P[2]
+    s5 = s3 / s4
+    s8 = P[1]
+    s9 = s3 / s8
+    s16 = P[0]
+    s17 = s3 / s16
+    s20 = s16 - s8
+    s28 = P[3]
+    s29 = s28 * s9
+    s32 = P[5]
+    s33 = s5 * s32
+    s36 = P[4]
+    s37 = s36 * s5
+    s39 = s28 * s17
+    s50 = P[8]
+    s51 = s50 * s1
+    s53 = s17 * s32
+    s57 = s9 * s17
+    s58 = s57 * s20
+    s64 = s36 * s9
+    s67 = P[7]
+    s68 = s1 * s67
+    v21 = X[2, 0] * X[11, 0]
+    v24 = X[12, 0] * X[1, 0]
+    v26 = (s5 * v21) + (s5 * v24)
+    v27 = v26 - (s1 * X[13, 0])
+    v31 = v27 - (s29 * X[11, 0])
+    v35 = v31 - (s33 * X[12, 0])
+    v41 = (s37 * X[12, 0]) + (s39 * X[10, 0])
+    v42 = v41 - (s1 * X[14, 0])
+    v43 = X[10, 0] * X[2, 0]
+    v45 = v42 - (s5 * v43)
+    v47 = X[0, 0] * X[12, 0]
+    v49 = v45 - (s5 * v47)
+    v55 = (s51 * X[13, 0]) + (s53 * X[10, 0])
+    v56 = X[0, 0] * X[11, 0]
+    v60 = v55 + (s58 * v56)
+    v61 = X[1, 0] * X[10, 0]
+    v63 = v60 + (s58 * v61)
+    v66 = v63 - (s64 * X[11, 0])
+    v70 = v66 - (s68 * X[14, 0])
+    v71 = X[14, 0] * X[2, 0]
+    v74 = X[4, 0] * X[12, 0]
+    v76 = (s5 * v71) + (s5 * v74)
+    v77 = X[13, 0] * X[2, 0]
+    v79 = -(s5 * v77)
+    v81 = X[3, 0] * X[12, 0]
+    v83 = v79 - (s5 * v81)
+    X[10, 1] = v35
+    X[11, 1] = v49
+    X[12, 1] = v70
+    X[13, 1] = v76
+    X[14, 1] = v83
+    for k in range(1, order):
+        m21 = 0.0
+        m24 = 0.0
+        m43 = 0.0
+        m47 = 0.0
+        m56 = 0.0
+        m61 = 0.0
+        m71 = 0.0
+        m74 = 0.0
+        m77 = 0.0
+        m81 = 0.0
         for j in range(k + 1):
-            i = k - j
-            wj = vload(Z, (j) * (NROWS * LANES) + (2) * LANES)
-            dwj = vload(Z, (j) * (NROWS * LANES) + (db + (2)) * LANES)
-            dwp2 = vadd(dwp2, vadd(vmul(dwj, vload(Z, (i) * (NROWS * LANES) + (1) * LANES)), vmul(wj, vload(Z, (i) * (NROWS * LANES) + (db + (1)) * LANES))))
-            dwp1 = vadd(dwp1, vadd(vmul(dwj, vload(Z, (i) * (NROWS * LANES) + (0) * LANES)), vmul(wj, vload(Z, (i) * (NROWS * LANES) + (db + (0)) * LANES))))
-            dp12 = vadd(dp12, vadd(vmul(vload(Z, (j) * (NROWS * LANES) + (db + (0)) * LANES), vload(Z, (i) * (NROWS * LANES) + (1) * LANES)), vmul(vload(Z, (j) * (NROWS * LANES) + (0) * LANES), vload(Z, (i) * (NROWS * LANES) + (db + (1)) * LANES))))
-            dwg2 = vadd(dwg2, vadd(vmul(dwj, vload(Z, (i) * (NROWS * LANES) + (4) * LANES)), vmul(wj, vload(Z, (i) * (NROWS * LANES) + (db + (4)) * LANES))))
-            dwg1 = vadd(dwg1, vadd(vmul(dwj, vload(Z, (i) * (NROWS * LANES) + (3) * LANES)), vmul(wj, vload(Z, (i) * (NROWS * LANES) + (db + (3)) * LANES))))
-        inv_b_2, c12_2, la1_2, la2_2, ca2_2, za1_2, chi_2, zeta_2, mu_2, mxi_2, meta_2 = C
-        r_2 = 1.0 / (k + 1)
-        wk_2 = vmul(vload(Z, (k) * (NROWS * LANES) + (db + (2)) * LANES), vsplat(inv_b_2))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (0)) * LANES, vmul(vsub(vsub(vsub(vmul(dwp2, vsplat(inv_b_2)), vmul(vsplat(zeta_2), wk_2)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * LANES) + (db + (3)) * LANES))), vmul(vsplat(la2_2), vload(Z, (k) * (NROWS * LANES) + (db + (1)) * LANES))), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (1)) * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1), vsplat(inv_b_2)), vmul(vsplat(chi_2), wk_2)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * LANES) + (db + (4)) * LANES))), vmul(vsplat(la1_2), vload(Z, (k) * (NROWS * LANES) + (db + (0)) * LANES))), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (2)) * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12_2), dp12), vmul(vsplat(ca2_2), vload(Z, (k) * (NROWS * LANES) + (db + (1)) * LANES))), vmul(vsplat(za1_2), vload(Z, (k) * (NROWS * LANES) + (db + (0)) * LANES))), vmul(vsplat(mxi_2), vload(Z, (k) * (NROWS * LANES) + (db + (4)) * LANES))), vmul(vsplat(meta_2), vload(Z, (k) * (NROWS * LANES) + (db + (3)) * LANES))), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (3)) * LANES, vmul(vmul(dwg2, vsplat(inv_b_2)), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * LANES) + (db + (4)) * LANES, vmul(vmul(vneg(dwg1), vsplat(inv_b_2)), vsplat(r_2)))
+            m21 = m21 + X[2, j] * X[11, k - j]
+            m24 = m24 + X[12, j] * X[1, k - j]
+            m43 = m43 + X[10, j] * X[2, k - j]
+            m47 = m47 + X[0, j] * X[12, k - j]
+            m56 = m56 + X[0, j] * X[11, k - j]
+            m61 = m61 + X[1, j] * X[10, k - j]
+            m71 = m71 + X[14, j] * X[2, k - j]
+            m74 = m74 + X[4, j] * X[12, k - j]
+            m77 = m77 + X[13, j] * X[2, k - j]
+            m81 = m81 + X[3, j] * X[12, k - j]
+        v21 = m21
+        v24 = m24
+        v43 = m43
+        v47 = m47
+        v56 = m56
+        v61 = m61
+        v71 = m71
+        v74 = m74
+        v77 = m77
+        v81 = m81
+        v41 = (s37 * X[12, k]) + (s39 * X[10, k])
+        v55 = (s51 * X[13, k]) + (s53 * X[10, k])
+        v26 = (s5 * v21) + (s5 * v24)
+        v42 = v41 - (s1 * X[14, k])
+        v60 = v55 + (s58 * v56)
+        v76 = (s5 * v71) + (s5 * v74)
+        v79 = -(s5 * v77)
+        v27 = v26 - (s1 * X[13, k])
+        v45 = v42 - (s5 * v43)
+        v63 = v60 + (s58 * v61)
+        v83 = v79 - (s5 * v81)
+        v31 = v27 - (s29 * X[11, k])
+        v49 = v45 - (s5 * v47)
+        v66 = v63 - (s64 * X[11, k])
+        v35 = v31 - (s33 * X[12, k])
+        v70 = v66 - (s68 * X[14, k])
+        r = 1.0 / (k + 1)
+        X[10, k + 1] = v35 * r
+        X[11, k + 1] = v49 * r
+        X[12, k + 1] = v70 * r
+        X[13, k + 1] = v76 * r
+        X[14, k + 1] = v83 * r
 
 
-@njit
-def deviation_coefficients_lanes_2(P, Z, order, db):
-    """deviation_coefficients_lanes for G = 2 groups of LANES lanes."""
-    C = taylor_constants(P)
-    for k in range(order):
-        dwp2_0 = vzero()
-        dwp2_1 = vzero()
-        dwp1_0 = vzero()
-        dwp1_1 = vzero()
-        dp12_0 = vzero()
-        dp12_1 = vzero()
-        dwg2_0 = vzero()
-        dwg2_1 = vzero()
-        dwg1_0 = vzero()
-        dwg1_1 = vzero()
+@njit(error_model="numpy")
+def deviation_coefficients(P, X, order):
+    """:func:`deviation_coefficients_into` with its own work array."""
+    W = np.empty((max(N_WORK_TANGENT, 1), order + 1))
+    deviation_coefficients_into(P, X, order, W)
+
+
+@njit(error_model="numpy")
+def deviation_coefficients_lanes(P, X, order, W):
+    """LANES orbits at once: rows 10..14 of X[k, row, l] (C-contiguous, XS / LANES rows), k = 1..order,
+    W of shape (order + 1, max(N_WORK_TANGENT, 1), LANES).  Each lane equals deviation_coefficients_into bit for bit."""
+    s1 = P[6]
+    s3 = 1.0
+    s4 = P[2]
+    s5 = s3 / s4
+    s8 = P[1]
+    s9 = s3 / s8
+    s16 = P[0]
+    s17 = s3 / s16
+    s20 = s16 - s8
+    s28 = P[3]
+    s29 = s28 * s9
+    s32 = P[5]
+    s33 = s5 * s32
+    s36 = P[4]
+    s37 = s36 * s5
+    s39 = s28 * s17
+    s50 = P[8]
+    s51 = s50 * s1
+    s53 = s17 * s32
+    s57 = s9 * s17
+    s58 = s57 * s20
+    s64 = s36 * s9
+    s67 = P[7]
+    s68 = s1 * s67
+    v21 = vload(X, (0) * XS + 2 * LANES) * vload(X, (0) * XS + 11 * LANES)
+    v24 = vload(X, (0) * XS + 12 * LANES) * vload(X, (0) * XS + 1 * LANES)
+    v26 = (s5 * v21) + (s5 * v24)
+    v27 = v26 - (s1 * vload(X, (0) * XS + 13 * LANES))
+    v31 = v27 - (s29 * vload(X, (0) * XS + 11 * LANES))
+    v35 = v31 - (s33 * vload(X, (0) * XS + 12 * LANES))
+    v41 = (s37 * vload(X, (0) * XS + 12 * LANES)) + (s39 * vload(X, (0) * XS + 10 * LANES))
+    v42 = v41 - (s1 * vload(X, (0) * XS + 14 * LANES))
+    v43 = vload(X, (0) * XS + 10 * LANES) * vload(X, (0) * XS + 2 * LANES)
+    v45 = v42 - (s5 * v43)
+    v47 = vload(X, (0) * XS + 0 * LANES) * vload(X, (0) * XS + 12 * LANES)
+    v49 = v45 - (s5 * v47)
+    v55 = (s51 * vload(X, (0) * XS + 13 * LANES)) + (s53 * vload(X, (0) * XS + 10 * LANES))
+    v56 = vload(X, (0) * XS + 0 * LANES) * vload(X, (0) * XS + 11 * LANES)
+    v60 = v55 + (s58 * v56)
+    v61 = vload(X, (0) * XS + 1 * LANES) * vload(X, (0) * XS + 10 * LANES)
+    v63 = v60 + (s58 * v61)
+    v66 = v63 - (s64 * vload(X, (0) * XS + 11 * LANES))
+    v70 = v66 - (s68 * vload(X, (0) * XS + 14 * LANES))
+    v71 = vload(X, (0) * XS + 14 * LANES) * vload(X, (0) * XS + 2 * LANES)
+    v74 = vload(X, (0) * XS + 4 * LANES) * vload(X, (0) * XS + 12 * LANES)
+    v76 = (s5 * v71) + (s5 * v74)
+    v77 = vload(X, (0) * XS + 13 * LANES) * vload(X, (0) * XS + 2 * LANES)
+    v79 = -(s5 * v77)
+    v81 = vload(X, (0) * XS + 3 * LANES) * vload(X, (0) * XS + 12 * LANES)
+    v83 = v79 - (s5 * v81)
+    vstore(X, (1) * XS + 10 * LANES, v35)
+    vstore(X, (1) * XS + 11 * LANES, v49)
+    vstore(X, (1) * XS + 12 * LANES, v70)
+    vstore(X, (1) * XS + 13 * LANES, v76)
+    vstore(X, (1) * XS + 14 * LANES, v83)
+    for k in range(1, order):
+        m21 = vzero()
+        m24 = vzero()
+        m43 = vzero()
+        m47 = vzero()
+        m56 = vzero()
+        m61 = vzero()
+        m71 = vzero()
+        m74 = vzero()
+        m77 = vzero()
+        m81 = vzero()
         for j in range(k + 1):
-            i = k - j
-            wj_0 = vload(Z, (j) * (NROWS * 2 * LANES) + (2) * 2 * LANES)
-            wj_1 = vload(Z, (j) * (NROWS * 2 * LANES) + (2) * 2 * LANES + 1 * LANES)
-            dwj_0 = vload(Z, (j) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES)
-            dwj_1 = vload(Z, (j) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES + 1 * LANES)
-            dwp2_0 = vadd(dwp2_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))))
-            dwp2_1 = vadd(dwp2_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))))
-            dwp1_0 = vadd(dwp1_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (0) * 2 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES))))
-            dwp1_1 = vadd(dwp1_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES))))
-            dp12_0 = vadd(dp12_0, vadd(vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES)), vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (0) * 2 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))))
-            dp12_1 = vadd(dp12_1, vadd(vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (1) * 2 * LANES + 1 * LANES)), vmul(vload(Z, (j) * (NROWS * 2 * LANES) + (0) * 2 * LANES + 1 * LANES), vload(Z, (i) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))))
-            dwg2_0 = vadd(dwg2_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (4) * 2 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES))))
-            dwg2_1 = vadd(dwg2_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (4) * 2 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES))))
-            dwg1_0 = vadd(dwg1_0, vadd(vmul(dwj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (3) * 2 * LANES)), vmul(wj_0, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES))))
-            dwg1_1 = vadd(dwg1_1, vadd(vmul(dwj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (3) * 2 * LANES + 1 * LANES)), vmul(wj_1, vload(Z, (i) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES))))
-        inv_b_2, c12_2, la1_2, la2_2, ca2_2, za1_2, chi_2, zeta_2, mu_2, mxi_2, meta_2 = C
-        r_2 = 1.0 / (k + 1)
-        wk_2_0 = vmul(vload(Z, (k) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES), vsplat(inv_b_2))
-        wk_2_1 = vmul(vload(Z, (k) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES + 1 * LANES), vsplat(inv_b_2))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_0, vsplat(inv_b_2)), vmul(vsplat(zeta_2), wk_2_0)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES))), vmul(vsplat(la2_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES, vmul(vsub(vsub(vsub(vmul(dwp2_1, vsplat(inv_b_2)), vmul(vsplat(zeta_2), wk_2_1)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES))), vmul(vsplat(la2_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_0), vsplat(inv_b_2)), vmul(vsplat(chi_2), wk_2_0)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES))), vmul(vsplat(la1_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES))), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vmul(vneg(dwp1_1), vsplat(inv_b_2)), vmul(vsplat(chi_2), wk_2_1)), vmul(vsplat(mu_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES))), vmul(vsplat(la1_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES))), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12_2), dp12_0), vmul(vsplat(ca2_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES))), vmul(vsplat(za1_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES))), vmul(vsplat(mxi_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES))), vmul(vsplat(meta_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES))), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (2)) * 2 * LANES + 1 * LANES, vmul(vadd(vsub(vadd(vsub(vmul(vsplat(c12_2), dp12_1), vmul(vsplat(ca2_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (1)) * 2 * LANES + 1 * LANES))), vmul(vsplat(za1_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (0)) * 2 * LANES + 1 * LANES))), vmul(vsplat(mxi_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES))), vmul(vsplat(meta_2), vload(Z, (k) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES))), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES, vmul(vmul(dwg2_0, vsplat(inv_b_2)), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (3)) * 2 * LANES + 1 * LANES, vmul(vmul(dwg2_1, vsplat(inv_b_2)), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES, vmul(vmul(vneg(dwg1_0), vsplat(inv_b_2)), vsplat(r_2)))
-        vstore(Z, (k + 1) * (NROWS * 2 * LANES) + (db + (4)) * 2 * LANES + 1 * LANES, vmul(vmul(vneg(dwg1_1), vsplat(inv_b_2)), vsplat(r_2)))
+            m21 = m21 + vload(X, (j) * XS + 2 * LANES) * vload(X, (k - j) * XS + 11 * LANES)
+            m24 = m24 + vload(X, (j) * XS + 12 * LANES) * vload(X, (k - j) * XS + 1 * LANES)
+            m43 = m43 + vload(X, (j) * XS + 10 * LANES) * vload(X, (k - j) * XS + 2 * LANES)
+            m47 = m47 + vload(X, (j) * XS + 0 * LANES) * vload(X, (k - j) * XS + 12 * LANES)
+            m56 = m56 + vload(X, (j) * XS + 0 * LANES) * vload(X, (k - j) * XS + 11 * LANES)
+            m61 = m61 + vload(X, (j) * XS + 1 * LANES) * vload(X, (k - j) * XS + 10 * LANES)
+            m71 = m71 + vload(X, (j) * XS + 14 * LANES) * vload(X, (k - j) * XS + 2 * LANES)
+            m74 = m74 + vload(X, (j) * XS + 4 * LANES) * vload(X, (k - j) * XS + 12 * LANES)
+            m77 = m77 + vload(X, (j) * XS + 13 * LANES) * vload(X, (k - j) * XS + 2 * LANES)
+            m81 = m81 + vload(X, (j) * XS + 3 * LANES) * vload(X, (k - j) * XS + 12 * LANES)
+        v21 = m21
+        v24 = m24
+        v43 = m43
+        v47 = m47
+        v56 = m56
+        v61 = m61
+        v71 = m71
+        v74 = m74
+        v77 = m77
+        v81 = m81
+        v41 = (s37 * vload(X, (k) * XS + 12 * LANES)) + (s39 * vload(X, (k) * XS + 10 * LANES))
+        v55 = (s51 * vload(X, (k) * XS + 13 * LANES)) + (s53 * vload(X, (k) * XS + 10 * LANES))
+        v26 = (s5 * v21) + (s5 * v24)
+        v42 = v41 - (s1 * vload(X, (k) * XS + 14 * LANES))
+        v60 = v55 + (s58 * v56)
+        v76 = (s5 * v71) + (s5 * v74)
+        v79 = -(s5 * v77)
+        v27 = v26 - (s1 * vload(X, (k) * XS + 13 * LANES))
+        v45 = v42 - (s5 * v43)
+        v63 = v60 + (s58 * v61)
+        v83 = v79 - (s5 * v81)
+        v31 = v27 - (s29 * vload(X, (k) * XS + 11 * LANES))
+        v49 = v45 - (s5 * v47)
+        v66 = v63 - (s64 * vload(X, (k) * XS + 11 * LANES))
+        v35 = v31 - (s33 * vload(X, (k) * XS + 12 * LANES))
+        v70 = v66 - (s68 * vload(X, (k) * XS + 14 * LANES))
+        r = 1.0 / (k + 1)
+        vstore(X, (k + 1) * XS + 10 * LANES, v35 * r)
+        vstore(X, (k + 1) * XS + 11 * LANES, v49 * r)
+        vstore(X, (k + 1) * XS + 12 * LANES, v70 * r)
+        vstore(X, (k + 1) * XS + 13 * LANES, v76 * r)
+        vstore(X, (k + 1) * XS + 14 * LANES, v83 * r)
 
 
-#: tangent_coefficients_lanes for each G
-_TANGENT_COEFFICIENTS_LANES = {1: tangent_coefficients_lanes_1, 2: tangent_coefficients_lanes_2}
+@njit(error_model="numpy")
+def orbit_coefficients_lanes(P, X, order, W):
+    """LANES orbits at once: rows 0..4 of X[k, row, l] (C-contiguous, XS / LANES rows), k = 1..order,
+    W of shape (order + 1, max(N_WORK_TANGENT, 1), LANES).  Each lane equals taylor_coefficients_into bit for bit."""
+    s1 = P[6]
+    s3 = 1.0
+    s4 = P[2]
+    s5 = s3 / s4
+    s9 = P[1]
+    s14 = P[0]
+    s19 = P[3]
+    s20 = s19 / s9
+    s23 = P[5]
+    s24 = s5 * s23
+    s27 = P[4]
+    s28 = s27 * s5
+    s30 = s19 / s14
+    s37 = P[8]
+    s38 = s37 * s1
+    s40 = s23 / s14
+    s44 = s9 * s14
+    s45 = s14 - s9
+    s46 = s45 / s44
+    s49 = s27 / s9
+    s52 = P[7]
+    s53 = s1 * s52
+    v16 = vload(X, (0) * XS + 2 * LANES) * vload(X, (0) * XS + 1 * LANES)
+    v18 = (s5 * v16) - (s1 * vload(X, (0) * XS + 3 * LANES))
+    v22 = v18 - (s20 * vload(X, (0) * XS + 1 * LANES))
+    v26 = v22 - (s24 * vload(X, (0) * XS + 2 * LANES))
+    v32 = (s28 * vload(X, (0) * XS + 2 * LANES)) + (s30 * vload(X, (0) * XS + 0 * LANES))
+    v33 = v32 - (s1 * vload(X, (0) * XS + 4 * LANES))
+    v34 = vload(X, (0) * XS + 0 * LANES) * vload(X, (0) * XS + 2 * LANES)
+    v36 = v33 - (s5 * v34)
+    v42 = (s38 * vload(X, (0) * XS + 3 * LANES)) + (s40 * vload(X, (0) * XS + 0 * LANES))
+    v43 = vload(X, (0) * XS + 1 * LANES) * vload(X, (0) * XS + 0 * LANES)
+    v48 = v42 + (s46 * v43)
+    v51 = v48 - (s49 * vload(X, (0) * XS + 1 * LANES))
+    v55 = v51 - (s53 * vload(X, (0) * XS + 4 * LANES))
+    v56 = vload(X, (0) * XS + 4 * LANES) * vload(X, (0) * XS + 2 * LANES)
+    v58 = vload(X, (0) * XS + 3 * LANES) * vload(X, (0) * XS + 2 * LANES)
+    v60 = -(s5 * v58)
+    vstore(X, (1) * XS + 0 * LANES, v26)
+    vstore(X, (1) * XS + 1 * LANES, v36)
+    vstore(X, (1) * XS + 2 * LANES, v55)
+    vstore(X, (1) * XS + 3 * LANES, (s5 * v56))
+    vstore(X, (1) * XS + 4 * LANES, v60)
+    for k in range(1, order):
+        m16 = vzero()
+        m34 = vzero()
+        m43 = vzero()
+        m56 = vzero()
+        m58 = vzero()
+        for j in range(k + 1):
+            m16 = m16 + vload(X, (j) * XS + 2 * LANES) * vload(X, (k - j) * XS + 1 * LANES)
+            m34 = m34 + vload(X, (j) * XS + 0 * LANES) * vload(X, (k - j) * XS + 2 * LANES)
+            m43 = m43 + vload(X, (j) * XS + 1 * LANES) * vload(X, (k - j) * XS + 0 * LANES)
+            m56 = m56 + vload(X, (j) * XS + 4 * LANES) * vload(X, (k - j) * XS + 2 * LANES)
+            m58 = m58 + vload(X, (j) * XS + 3 * LANES) * vload(X, (k - j) * XS + 2 * LANES)
+        v16 = m16
+        v34 = m34
+        v43 = m43
+        v56 = m56
+        v58 = m58
+        v32 = (s28 * vload(X, (k) * XS + 2 * LANES)) + (s30 * vload(X, (k) * XS + 0 * LANES))
+        v42 = (s38 * vload(X, (k) * XS + 3 * LANES)) + (s40 * vload(X, (k) * XS + 0 * LANES))
+        v18 = (s5 * v16) - (s1 * vload(X, (k) * XS + 3 * LANES))
+        v33 = v32 - (s1 * vload(X, (k) * XS + 4 * LANES))
+        v48 = v42 + (s46 * v43)
+        v60 = -(s5 * v58)
+        v22 = v18 - (s20 * vload(X, (k) * XS + 1 * LANES))
+        v36 = v33 - (s5 * v34)
+        v51 = v48 - (s49 * vload(X, (k) * XS + 1 * LANES))
+        v26 = v22 - (s24 * vload(X, (k) * XS + 2 * LANES))
+        v55 = v51 - (s53 * vload(X, (k) * XS + 4 * LANES))
+        r = 1.0 / (k + 1)
+        vstore(X, (k + 1) * XS + 0 * LANES, v26 * r)
+        vstore(X, (k + 1) * XS + 1 * LANES, v36 * r)
+        vstore(X, (k + 1) * XS + 2 * LANES, v55 * r)
+        vstore(X, (k + 1) * XS + 3 * LANES, (s5 * v56) * r)
+        vstore(X, (k + 1) * XS + 4 * LANES, v60 * r)
 
 
-def tangent_coefficients_lanes(P, Z, order, db, groups):
-    """Lane twin of equations.taylor_coefficients_tangent, translated from its source by
-    tools/gen_lanes.py: the orbit's coefficients in rows 0..4 and those of the deviation
-    vector in rows db..db + 4 of Z[k, row, lane], k = 1..order, given Z[0].
-
-    ``groups``: a tuple of G zeros.  Its length is part of its type, so a compiled caller is
-    specialised to one G and compiles only that kernel."""
-    _TANGENT_COEFFICIENTS_LANES[len(groups)](P, Z, order, db)
-
-
-@by_groups(tangent_coefficients_lanes)
-def _tangent_coefficients_lanes(P, Z, order, db, groups):
-    kernel = _TANGENT_COEFFICIENTS_LANES[len(groups)]
-
-    def impl(P, Z, order, db, groups):
-        kernel(P, Z, order, db)
-    return impl
+@njit(error_model="numpy")
+def tangent_coefficients(P, X, order):
+    """R3 and its variational equations from X[:, 0]: rows 0..4 (the orbit, as
+    explorer.integrate._lanes_generated.taylor_coefficients) and 5..9 (the deviation vector) of X."""
+    W = np.empty((N_WORK_TANGENT, order + 1))
+    taylor_coefficients_into(P, X, order, W)
+    first_deviation_coefficients_into(P, X, order, W)
 
 
-#: deviation_coefficients_lanes for each G
-_DEVIATION_COEFFICIENTS_LANES = {1: deviation_coefficients_lanes_1, 2: deviation_coefficients_lanes_2}
-
-
-def deviation_coefficients_lanes(P, Z, order, db, groups):
-    """The deviation vector's part of taylor_coefficients_tangent only (its statements that
-    the stores into D need, unchanged; tools/gen_lanes.py prune): rows db..db + 4 of Z
-    from the orbit's coefficients already in rows 0..4 (the same numbers the full
-    recurrence recomputes for them).
-
-    ``groups``: a tuple of G zeros.  Its length is part of its type, so a compiled caller is
-    specialised to one G and compiles only that kernel."""
-    _DEVIATION_COEFFICIENTS_LANES[len(groups)](P, Z, order, db)
-
-
-@by_groups(deviation_coefficients_lanes)
-def _deviation_coefficients_lanes(P, Z, order, db, groups):
-    kernel = _DEVIATION_COEFFICIENTS_LANES[len(groups)]
-
-    def impl(P, Z, order, db, groups):
-        kernel(P, Z, order, db)
-    return impl
+@njit(error_model="numpy")
+def tangent_coefficients_lanes(P, X, order, W):
+    """LANES orbits at once: rows 0..9 of X[k, row, l] (NROWS rows), k = 1..order, W of shape
+    (order + 1, N_WORK_TANGENT, LANES).  Each lane equals tangent_coefficients bit for bit."""
+    orbit_coefficients_lanes(P, X, order, W)
+    first_deviation_coefficients_lanes(P, X, order, W)

@@ -271,11 +271,15 @@ class _Emitter:
     ``lanes``: the SIMD form (:mod:`explorer.integrate.simd`): X[k, i, l] and W[k, r, l] with
     LANES lanes contiguous, each coefficient a vector (vload/vstore), the same operations in the
     same order as the scalar form (so each lane equals the scalar recurrence bit for bit); the
-    order-0 values of exp, log, sin, cos and real powers lane by lane with :mod:`math`."""
+    order-0 values of exp, log, sin, cos and real powers lane by lane with :mod:`math`.  ``xs``, ``ws``:
+    the names of the flat strides of one order in X and W; ``rows``: the row of X of each output
+    (default: output i in row i)."""
 
-    def __init__(self, d: Decomposition, lanes: bool = False):
+    def __init__(self, d: Decomposition, lanes: bool = False, xs: str = "XS", ws: str = "WS", rows=None):
         self.d = d
         self.lanes = lanes
+        self.strides = {"X": xs, "W": ws}
+        self.out_rows = list(range(len(d.outputs))) if rows is None else list(rows)
         # a homogeneous linear node (-u, c u, u / c, u +- v) whose operands are stored is not
         # stored: its coefficient of any order is written where it is used (the same operations,
         # so the same values; fewer rows of W to load)
@@ -331,13 +335,13 @@ class _Emitter:
     # -- access to one coefficient (a code string), scalar or vector
     def load(self, array, r, k):
         if self.lanes:
-            stride = "XS" if array == "X" else "WS"
+            stride = self.strides[array]
             return f"vload({array}, ({k}) * {stride} + {r} * LANES)"
         return f"{array}[{r}, {k}]"
 
     def store(self, array, r, k, code):
         if self.lanes:
-            stride = "XS" if array == "X" else "WS"
+            stride = self.strides[array]
             return f"vstore({array}, ({k}) * {stride} + {r} * LANES, {code})"
         return f"{array}[{r}, {k}] = {code}"
 
@@ -529,10 +533,10 @@ class _Emitter:
 
     def next_lines(self):
         """x_1 = f_0 and x_{k+1} = f_k (1 / (k + 1))."""
-        first = [self.store("X", i, 1, self.output(o, 0)) for i, o in enumerate(self.d.outputs)]
+        first = [self.store("X", i, 1, self.output(o, 0)) for i, o in zip(self.out_rows, self.d.outputs)]
         # one reciprocal per order: a product per row, not a division
         nxt = ["r = 1.0 / (k + 1)"] + [self.store("X", i, "k + 1", f"{self.output(o, 'k')} * r")
-                                       for i, o in enumerate(self.d.outputs)]
+                                       for i, o in zip(self.out_rows, self.d.outputs)]
         return first, nxt
 
 
@@ -562,25 +566,7 @@ N_PARAMS = {n_params}
 N_WORK = {n_work}
 
 
-# error_model="numpy": a division by zero gives inf/nan (the integrators' non-finite status), not an exception
-@njit(error_model="numpy")
-def taylor_coefficients_into(P, X, order, W):
-    """X[i, k] = x_i^(k)(0)/k! for k = 0..order (order >= 1) from X[:, 0], with the parameters P and the
-    work array W[N_WORK, >= order] (automatic differentiation, Jorba & Zou 2005)."""
-{scalars}
-{order0}
-{first}
-    for k in range(1, order):
-{orderk}
-{next_}
-
-
-@njit(error_model="numpy")
-def taylor_coefficients(P, X, order):
-    """:func:`taylor_coefficients_into` with its own work array."""
-    W = np.empty((max(N_WORK, 1), order + 1))
-    taylor_coefficients_into(P, X, order, W)
-
+{scalar_recurrence}
 
 #: taylor_step's status of a step taken
 STEP_OK = -1
@@ -634,18 +620,79 @@ XS = DIM * LANES
 WS = max(N_WORK, 1) * LANES
 
 
+{lanes_recurrence}'''
+
+#: the scalar recurrence ``{name}_into(P, X, order, W)`` and ``{name}(P, X, order)`` (its own W of
+#: ``{n_work}`` rows)
+SCALAR_RECURRENCE = '''\
+# error_model="numpy": a division by zero gives inf/nan (the integrators' non-finite status), not an exception
 @njit(error_model="numpy")
-def taylor_coefficients_lanes(P, X, order, W):
-    """LANES orbits at once: X[k, i, l] for k = 1..order from X[0] (X of shape (order + 1, DIM, LANES),
-    W of shape (order + 1, max(N_WORK, 1), LANES), both C-contiguous).  Each lane equals
-    taylor_coefficients_into bit for bit (the same operations in the same order)."""
+def {name}_into(P, X, order, W):
+    """{doc}"""
 {scalars}
-{order0_lanes}
-{first_lanes}
+{order0}
+{first}
     for k in range(1, order):
-{orderk_lanes}
-{next_lanes}
+{orderk}
+{next_}
+
+
+@njit(error_model="numpy")
+def {name}(P, X, order):
+    """:func:`{name}_into` with its own work array."""
+    W = np.empty((max({n_work}, 1), order + 1))
+    {name}_into(P, X, order, W)
 '''
+
+#: the SIMD recurrence ``{name}_lanes(P, X, order, W)``
+LANES_RECURRENCE = '''\
+@njit(error_model="numpy")
+def {name}_lanes(P, X, order, W):
+    """{doc}"""
+{scalars}
+{order0}
+{first}
+    for k in range(1, order):
+{orderk}
+{next_}
+'''
+
+#: the docstrings of a generated module's recurrences
+SCALAR_DOC = ("X[i, k] = x_i^(k)(0)/k! for k = 0..order (order >= 1) from X[:, 0], with the parameters P and the\n"
+              "    work array W[N_WORK, >= order] (automatic differentiation, Jorba & Zou 2005).")
+LANES_DOC = ("LANES orbits at once: X[k, i, l] for k = 1..order from X[0] (X of shape (order + 1, DIM, LANES),\n"
+             "    W of shape (order + 1, max(N_WORK, 1), LANES), both C-contiguous).  Each lane equals\n"
+             "    taylor_coefficients_into bit for bit (the same operations in the same order).")
+
+
+@dataclass(frozen=True)
+class Recurrence:
+    """The source of one recurrence (:func:`recurrence`): ``scalar`` (:data:`SCALAR_RECURRENCE`),
+    ``lanes`` (:data:`LANES_RECURRENCE`), ``n_work`` the rows of its work array."""
+    scalar: str
+    lanes: str
+    n_work: int
+
+
+def recurrence(system: System, name: str = "taylor_coefficients", expressions=None, rows=None, *,
+               n_work: str = "N_WORK", xs: str = "XS", ws: str = "WS", doc: str = SCALAR_DOC,
+               lanes_doc: str = LANES_DOC) -> Recurrence:
+    """The scalar and SIMD recurrence of ``expressions`` (default: the right-hand sides; the output i
+    stored in row ``rows[i]`` of X, default i), named ``name``; ``n_work``, ``xs``, ``ws``: the names
+    of the module's constants it reads (its work rows, the flat strides of one order in X and W)."""
+    d = decompose(system, expressions)
+    e = _Emitter(d, rows=rows)
+    scalars = _indent(e.scalar_lines(), 4)
+    first, next_ = e.next_lines()
+    scalar = SCALAR_RECURRENCE.format(name=name, doc=doc, n_work=n_work, scalars=scalars,
+                                      order0=_indent(e.order0_lines(), 4), first=_indent(first, 4),
+                                      orderk=_indent(e.orderk_lines() or ["pass"], 8), next_=_indent(next_, 8))
+    v = _Emitter(d, lanes=True, xs=xs, ws=ws, rows=rows)
+    first, next_ = v.next_lines()
+    lanes = LANES_RECURRENCE.format(name=name, doc=lanes_doc, scalars=scalars, order0=_indent(v.order0_lines(), 4),
+                                    first=_indent(first, 4), orderk=_indent(v.orderk_lines() or ["pass"], 8),
+                                    next_=_indent(next_, 8))
+    return Recurrence(scalar, lanes, len(e.row))
 
 ENERGY = '''
 
@@ -672,20 +719,14 @@ def source(system: System, key: str = "") -> str:
     dim = system.dimension
     scalars = _indent(e.scalar_lines(), 4)
     order0 = _indent(e.order0_lines(), 4)
-    first, next_ = e.next_lines()
-    first, next_ = _indent(first, 4), _indent(next_, 8)
-    orderk = _indent(e.orderk_lines() or ["pass"], 8)
-    v = _Emitter(d, lanes=True)
-    first_lanes, next_lanes = v.next_lines()
-    lanes = dict(order0_lanes=_indent(v.order0_lines(), 4), first_lanes=_indent(first_lanes, 4),
-                 next_lanes=_indent(next_lanes, 8), orderk_lanes=_indent(v.orderk_lines() or ["pass"], 8))
+    r = recurrence(system)
     rhs_out = _indent([f"dy[{i}] = {e.output(o, 0)}" for i, o in enumerate(d.outputs)], 4)
     equations = "\n".join(f"#   d{s.name}/dt = {f}" for s, f in zip(system.states, system.rhs))
     equations += "\n#   parameters: " + (", ".join(p.name for p in system.parameters) or "none")
     text = MODULE.format(version=GENERATOR_VERSION, name=system.name, key=key, equations=equations,
                          and_energy=" and energy" if system.energy is not None else "", dim=dim,
-                         n_params=len(system.parameters), n_work=len(e.row), scalars=scalars, order0=order0,
-                         first=first, orderk=orderk, next_=next_, rhs_out=rhs_out, **lanes)
+                         n_params=len(system.parameters), n_work=r.n_work, scalars=scalars, order0=order0,
+                         rhs_out=rhs_out, scalar_recurrence=r.scalar, lanes_recurrence=r.lanes)
     if system.energy is not None:
         de = decompose(system, [system.energy])
         ee = _Emitter(de)

@@ -1,16 +1,12 @@
 """The Taylor crossing loop on SIMD lanes, the method's only implementation: LANES orbits advance
 in lockstep (a lone orbit is one lane), each lane bit for bit the scalar oracle
-tests/integrate/taylor_oracle.py whatever the lane grouping and thread count.  Design, lane
-groups and the scalar/vector split: docs/methods.md (Parallelism), docs/architecture.md (The
-system seam).  Kernel contract: explorer/kernels/__init__.py.
+tests/integrate/taylor_oracle.py whatever the thread count.  Design and the scalar/vector split:
+docs/methods.md (Parallelism), docs/architecture.md (The system seam).  Kernel contract: explorer/kernels/__init__.py.
 """
-import functools
-import os
-
 import numpy as np
 
-from explorer._jit import NOJIT, get_num_threads, njit, prange
-from explorer.integrate._lanes_generated import GROUPS, NVAR, taylor_coefficients_lanes
+from explorer._jit import get_num_threads, njit, prange
+from explorer.integrate._lanes_generated import N_WORK, NVAR, taylor_coefficients_lanes
 from explorer.integrate.drivers import (
     LIMIT_ROOM,
     LIMIT_TARGET,
@@ -58,7 +54,6 @@ from explorer.kernels.events import (
     tail_term,
 )
 from explorer.kernels.power import is_normal
-from explorer.model import ParameterError
 from explorer.model.equations import section_g
 
 _IDLE = -1
@@ -69,10 +64,6 @@ N_ORBIT = 5
 #: rows of sin(phi) = g1 and cos(phi) = g2 in the state (p1, p2, M, g1, g2)
 _G1 = 3
 _G2 = 4
-#: the groups of LANES lanes a worker advances together by default (default_groups): 1 on AVX2
-#: and narrower, 2 with AVX-512 (docs/methods.md, lane groups)
-DEFAULT_GROUPS = 1
-AVX512_GROUPS = 2
 
 
 @njit
@@ -83,68 +74,66 @@ def step_constants(order):
 
 
 @njit
-def evaluate_lanes(X, order, h, out, base, groups):
+def evaluate_lanes(X, order, h, out, base):
     """out[base + i, l] = sum_k X[k, base + i, l] h[l]^k for i = 0..4 per lane (Horner: per lane
-    exactly kernels.taylor.evaluate); W = G * LANES lanes, G = len(groups)."""
-    w = len(groups) * LANES
+    exactly kernels.taylor.evaluate); LANES lanes."""
+    w = LANES
     stride = X.shape[1] * w
-    for g in range(0, w, LANES):
-        hv = vload(h, g)
-        o = order * stride + base * w + g
-        a0 = vload(X, o)
-        a1 = vload(X, o + w)
-        a2 = vload(X, o + 2 * w)
-        a3 = vload(X, o + 3 * w)
-        a4 = vload(X, o + 4 * w)
-        for k in range(order - 1, -1, -1):
-            o = k * stride + base * w + g
-            a0 = vadd(vmul(a0, hv), vload(X, o))
-            a1 = vadd(vmul(a1, hv), vload(X, o + w))
-            a2 = vadd(vmul(a2, hv), vload(X, o + 2 * w))
-            a3 = vadd(vmul(a3, hv), vload(X, o + 3 * w))
-            a4 = vadd(vmul(a4, hv), vload(X, o + 4 * w))
-        o = base * w + g
-        vstore(out, o, a0)
-        vstore(out, o + w, a1)
-        vstore(out, o + 2 * w, a2)
-        vstore(out, o + 3 * w, a3)
-        vstore(out, o + 4 * w, a4)
+    hv = vload(h, 0)
+    o = order * stride + base * w
+    a0 = vload(X, o)
+    a1 = vload(X, o + w)
+    a2 = vload(X, o + 2 * w)
+    a3 = vload(X, o + 3 * w)
+    a4 = vload(X, o + 4 * w)
+    for k in range(order - 1, -1, -1):
+        o = k * stride + base * w
+        a0 = vadd(vmul(a0, hv), vload(X, o))
+        a1 = vadd(vmul(a1, hv), vload(X, o + w))
+        a2 = vadd(vmul(a2, hv), vload(X, o + 2 * w))
+        a3 = vadd(vmul(a3, hv), vload(X, o + 3 * w))
+        a4 = vadd(vmul(a4, hv), vload(X, o + 4 * w))
+    o = base * w
+    vstore(out, o, a0)
+    vstore(out, o + w, a1)
+    vstore(out, o + 2 * w, a2)
+    vstore(out, o + 3 * w, a3)
+    vstore(out, o + 4 * w, a4)
 
 
 @njit
-def step_norms_lanes(X, order, e_p, e_q, out, groups):
-    """Per lane, the norms of kernels.taylor.step_size in its order (out (N_NORMS, W)): out[0], out[1]
-    the sums of X[order] and X[order - 1] (finiteness), out[2] = a, out[3] = bm, out[4] = s/a,
+def step_norms_lanes(X, order, e_p, e_q, out):
+    """Per lane, the norms of kernels.taylor.step_size in its order (out (N_NORMS, LANES)): out[0],
+    out[1] the sums of X[order] and X[order - 1] (finiteness), out[2] = a, out[3] = bm, out[4] = s/a,
     out[5] = s/bm, out[6] = min((s/a)^e_p, (s/bm)^e_q) (valid where both are positive normal)."""
-    w = len(groups) * LANES
+    w = LANES
     stride = X.shape[1] * w
-    for c in range(0, w, LANES):
-        op = order * stride + c
-        oq = (order - 1) * stride + c
-        f = vload(X, op)
-        g = vload(X, oq)
-        for i in range(1, N_ORBIT):
-            f = vadd(f, vload(X, op + i * w))
-            g = vadd(g, vload(X, oq + i * w))
-        s = vsplat(1.0)
-        a = vzero()
-        bm = vzero()
-        for i in range(N_ORBIT):
-            s = vmax_gt(vabs(vload(X, i * w + c)), s)
-            a = vmax_gt(vabs(vload(X, op + i * w)), a)
-            bm = vmax_gt(vabs(vload(X, oq + i * w)), bm)
-        u = vdiv(s, a)
-        v = vdiv(s, bm)
-        # kernels.taylor.radius_min's rho = u^e_p; if v^e_q < rho: rho = v^e_q, for all lanes
-        pu = vradius_power_core(u, e_p)
-        pv = vradius_power_core(v, e_q)
-        vstore(out, 6 * w + c, vmin_lt(pv, pu))
-        vstore(out, c, f)
-        vstore(out, w + c, g)
-        vstore(out, 2 * w + c, a)
-        vstore(out, 3 * w + c, bm)
-        vstore(out, 4 * w + c, u)
-        vstore(out, 5 * w + c, v)
+    op = order * stride
+    oq = (order - 1) * stride
+    f = vload(X, op)
+    g = vload(X, oq)
+    for i in range(1, N_ORBIT):
+        f = vadd(f, vload(X, op + i * w))
+        g = vadd(g, vload(X, oq + i * w))
+    s = vsplat(1.0)
+    a = vzero()
+    bm = vzero()
+    for i in range(N_ORBIT):
+        s = vmax_gt(vabs(vload(X, i * w)), s)
+        a = vmax_gt(vabs(vload(X, op + i * w)), a)
+        bm = vmax_gt(vabs(vload(X, oq + i * w)), bm)
+    u = vdiv(s, a)
+    v = vdiv(s, bm)
+    # kernels.taylor.radius_min's rho = u^e_p; if v^e_q < rho: rho = v^e_q, for all lanes
+    pu = vradius_power_core(u, e_p)
+    pv = vradius_power_core(v, e_q)
+    vstore(out, 6 * w, vmin_lt(pv, pu))
+    vstore(out, 0, f)
+    vstore(out, w, g)
+    vstore(out, 2 * w, a)
+    vstore(out, 3 * w, bm)
+    vstore(out, 4 * w, u)
+    vstore(out, 5 * w, v)
 
 
 @njit
@@ -233,18 +222,16 @@ def count_step(l, znew, first, last, L_steps, L_status, L_stop):
 
 
 @njit
-def variation_lanes(X, order, h, cphi, sphi, out, groups):
+def variation_lanes(X, order, h, cphi, sphi, out):
     """out[l] = sum_{k>=1} |c_k| h[l]^k, c_k the step's Taylor coefficients of sin(phi - phi0): the
     variation bound of kernels.events.excluded_by_variation, per lane."""
-    w = len(groups) * LANES
     cv = vsplat(cphi)
     sv = vsplat(sphi)
-    for g in range(0, w, LANES):
-        hv = vload(h, g)
-        acc = vzero()
-        for k in range(order, 0, -1):
-            acc = vmul(vadd(acc, vabs(_sin_diff_lanes(X, k, g, w, cv, sv))), hv)
-        vstore(out, g, acc)
+    hv = vload(h, 0)
+    acc = vzero()
+    for k in range(order, 0, -1):
+        acc = vmul(vadd(acc, vabs(_sin_diff_lanes(X, k, 0, LANES, cv, sv))), hv)
+    vstore(out, 0, acc)
 
 
 @njit(inline="always")
@@ -438,12 +425,12 @@ def workspace_views(order, w, wf, wi, wb):
 
 # nogil: the batch drivers Python calls release the GIL (docs/architecture.md, Parallelism)
 @njit(nogil=True)
-def _run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
+def _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
                 out_cross, out_count, out_status, out_final, out_info):
-    w = len(groups) * LANES
+    w = LANES
     n = np.zeros(N_WORKSPACE, np.int64)
     workspace_sizes(order, w, n)
-    return run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry,
+    return run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry,
                       limits, out_cross, out_count, out_status, out_final, out_info,
                       aligned_zeros(n[0]).reshape((order + 1, NVAR, w)),
                       aligned_zeros(n[1]).reshape((N_NORMS, w)), aligned_zeros(n[2]).reshape((NVAR, w)),
@@ -461,12 +448,14 @@ def aligned_zeros(n):
 
 
 @njit
-def run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
+def run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
                out_cross, out_count, out_status, out_final, out_info, X, norms, ynew, brackets, stack, wf, wi, wb):
     """Integrate orbits taken from the shared counter ``next_orbit`` on up to ``nlanes`` lanes
-    until none is left: the Taylor crossing loop, each lane one orbit, in
-    G = len(groups) groups of LANES lanes (W = G * LANES lanes: the last axis of X)."""
-    w = len(groups) * LANES
+    until none is left: the Taylor crossing loop, each lane one orbit, LANES lanes (the last axis
+    of X)."""
+    w = LANES
+    # the recurrence's work array (explorer.integrate.codegen: rows of the nodes whose past it reads)
+    Wr = aligned_zeros((order + 1) * max(N_WORK, 1) * w).reshape((order + 1, max(N_WORK, 1), w))
     (hv, vary, yl, yc, gc, work, roots, L_t, L_tc, L_gprev, L_H0, L_steps, L_on, L_left, L_fast, L_last, orb,
      L_count, L_target, L_room, L_status, L_stop) = workspace_views(order, w, wf, wi, wb)
     for l in range(w):
@@ -480,11 +469,11 @@ def run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, o
                               out_count, out_status, out_final, out_info)
 
     while active > 0:
-        taylor_coefficients_lanes(P, X, order, groups)
-        step_norms_lanes(X, order, e_p, e_q, norms, groups)
+        taylor_coefficients_lanes(P, X, order, Wr)
+        step_norms_lanes(X, order, e_p, e_q, norms)
         step_lanes(L_on, norms, L_t, tmax, e_p, e_q, factor, hv, L_last, L_fast, L_status, L_stop, w)
-        evaluate_lanes(X, order, hv, ynew, 0, groups)
-        variation_lanes(X, order, hv, cphi, sphi, vary, groups)
+        evaluate_lanes(X, order, hv, ynew, 0)
+        variation_lanes(X, order, hv, cphi, sphi, vary)
         for c in range(0, w, LANES):
             bits = end_steps_lanes(X, order, ynew, vary, hv, L_t, L_tc, L_gprev, L_steps, L_left, L_on, L_fast,
                                    L_last, cphi, sphi, direction, tmax, max_steps, c, w)
@@ -548,77 +537,42 @@ def run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, o
 
 
 @njit(parallel=True, nogil=True)
-def _run_lanes(nworkers, nlanes, groups, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
+def _run_lanes(nworkers, nlanes, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
                out_cross, out_count, out_status, out_final, out_info):
     """nworkers workers (prange) of nlanes lanes each, fed from one shared queue of orbits."""
     next_orbit = np.zeros(1, np.int64)
     for w in prange(nworkers):
-        _run_worker(nlanes, groups, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
+        _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
                     out_cross, out_count, out_status, out_final, out_info)
     return 0
 
 
 def run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
-                           out_cross, out_count, out_status, out_final, out_info, max_lanes=None, groups=None):
+                           out_cross, out_count, out_status, out_final, out_info, max_lanes=None):
     """Crossings of the section by the Taylor method of ``order`` for every orbit of Y0: the
     arguments and outputs of every batch driver (:mod:`explorer.integrate.drivers`: the carry, the
     limits of a block, the outputs)."""
     n = Y0.shape[0]
     nworkers = lane_workers(n, max_lanes)
-    nlanes, g = worker_lanes(n, nworkers, max_lanes, groups)
+    nlanes = worker_lanes(n, nworkers, max_lanes)
     if nworkers == 1:
-        return _run_worker(nlanes, g, np.zeros(1, np.int64), Y0, P, cphi, sphi, int(direction), float(tmax),
+        return _run_worker(nlanes, np.zeros(1, np.int64), Y0, P, cphi, sphi, int(direction), float(tmax),
                            int(order), int(max_steps), carry, limits, out_cross, out_count, out_status, out_final,
                            out_info)
-    return _run_lanes(nworkers, nlanes, g, Y0, P, cphi, sphi, int(direction), float(tmax), int(order),
+    return _run_lanes(nworkers, nlanes, Y0, P, cphi, sphi, int(direction), float(tmax), int(order),
                       int(max_steps), carry, limits, out_cross, out_count, out_status, out_final, out_info)
 
 
 def lane_workers(n, max_lanes=None):
     """How many lane workers a batch of ``n`` orbits runs on: one per numba thread, but no more
-    than the batch fills groups of LANES lanes (of ``max_lanes`` when that is fewer), and at least
+    than the batch fills workers of LANES lanes (of ``max_lanes`` when that is fewer), and at least
     one."""
     per = LANES if max_lanes is None else max(1, min(int(max_lanes), LANES))
     return max(1, min(get_num_threads(), -(-int(n) // per)))
 
 
-def lane_groups(groups=None):
-    """The number G of groups of LANES lanes a lane worker advances together: ``groups`` if given,
-    else the environment variable ``EXPLORER_LANE_GROUPS``, else :func:`default_groups`; one of
-    GROUPS (1, 2), else ParameterError."""
-    if groups is None:
-        groups = os.environ.get("EXPLORER_LANE_GROUPS", "") or default_groups()
-    try:
-        g = int(groups)
-    except (TypeError, ValueError):
-        g = None
-    if g not in GROUPS:
-        raise ParameterError(f"lane groups (EXPLORER_LANE_GROUPS) must be one of {GROUPS}, got {groups!r}")
-    return g
-
-
-@functools.cache
-def default_groups():
-    """G when neither the caller nor EXPLORER_LANE_GROUPS says: AVX512_GROUPS if the kernels are
-    compiled for AVX-512 (NUMBA_CPU_NAME/NUMBA_CPU_FEATURES, else the host), else DEFAULT_GROUPS."""
-    if NOJIT:
-        return DEFAULT_GROUPS
-    from numba.core import config
-
-    if config.CPU_NAME and config.CPU_NAME != "host":
-        avx512 = "+avx512f" in (config.CPU_FEATURES or "")
-    else:
-        import llvmlite.binding as ll
-
-        avx512 = bool(ll.get_host_cpu_features().get("avx512f", False))
-    return AVX512_GROUPS if avx512 else DEFAULT_GROUPS
-
-
-def worker_lanes(n, nworkers, max_lanes=None, groups=None):
-    """(nlanes, groups) of each of ``nworkers`` workers for ``n`` orbits: nlanes = min(max_lanes,
-    G * LANES, ceil(n / nworkers)), groups the fewest (up to G) that hold them."""
-    g = lane_groups(groups)
-    cap = g * LANES if max_lanes is None else min(int(max_lanes), g * LANES)
-    nlanes = max(1, min(cap, -(-n // nworkers)))
-    used = next(k for k in GROUPS if k * LANES >= nlanes or k == g)
-    return nlanes, (0,) * used
+def worker_lanes(n, nworkers, max_lanes=None):
+    """The lanes each of ``nworkers`` workers fills for ``n`` orbits: min(max_lanes, LANES,
+    ceil(n / nworkers))."""
+    cap = LANES if max_lanes is None else min(int(max_lanes), LANES)
+    return max(1, min(cap, -(-n // nworkers)))

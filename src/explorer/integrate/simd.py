@@ -100,10 +100,6 @@ if NOJIT:  # pragma: no cover - plain-Python twins (numpy elementwise = the same
         old = a[i]
         a[i] += v
         return old
-
-    def by_groups(stub):
-        """Nothing to register: the plain-Python ``stub`` runs as it is."""
-        return lambda typer: typer
 else:
     from llvmlite import ir as _ir
     from numba.core import cgutils as _cgutils
@@ -335,14 +331,6 @@ else:
         if a == f64vec:
             return lambda a: vabs(a)
         return None
-
-    def by_groups(stub):
-        """Register the decorated typer as the compiled implementation (numba ``overload``) of the
-        plain-Python ``stub(..., groups)``: the length of ``groups`` picks the kernel of that G."""
-        from numba.extending import overload
-
-        # inline="always": otherwise LLVM keeps the overload a separate call in the lane worker
-        return overload(stub, inline="always")
 
 
 @njit(inline="always")

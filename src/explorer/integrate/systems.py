@@ -4,6 +4,8 @@ R3 and one deviation vector, ``FULL`` R1, ``REDUCED_BACKWARD`` R3 in reversed ti
 :func:`taylor_step`, :func:`split_step` -- that every loop takes before observing it.
 """
 from explorer._jit import njit
+from explorer.integrate._lanes_generated import taylor_coefficients
+from explorer.integrate._tangent_lanes_generated import tangent_coefficients
 from explorer.kernels import STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW
 from explorer.kernels import dop853 as dp
 from explorer.kernels import taylor as tk
@@ -16,8 +18,6 @@ from explorer.model.equations import (
     rhs,
     rhs_full,
     rhs_tangent,
-    taylor_coefficients,
-    taylor_coefficients_tangent,
 )
 
 REDUCED = 0
@@ -110,13 +110,14 @@ def dop853_dense_stages(system, y, P, K, h, tmp):
 @njit(inline="always")
 def taylor_coefficients_of(system, P, X, order):
     """The normalised Taylor coefficients X[i, k] = y_i^(k)/k!, k = 0..order, of ``system`` from
-    X[:, 0] by its recurrence: R3 (``REDUCED``), or R3 and its variational equations
-    (``TANGENT``: rows 5..9 the deviation vector), or R3's in reversed time
+    X[:, 0] by its recurrence, generated from explorer.model.chaplygin (tools/gen_lanes.py): R3
+    (``REDUCED``), or R3 and its variational equations (``TANGENT``: rows 5..9 the deviation
+    vector), or R3's in reversed time
     (``REDUCED_BACKWARD``: y(t0 - s) has the coefficients (-1)^k X_k, exactly)."""
     if system == REDUCED:
         taylor_coefficients(P, X, order)
     elif system == TANGENT:
-        taylor_coefficients_tangent(P, X[:N_ORBIT], X[N_ORBIT:], order)
+        tangent_coefficients(P, X, order)
     else:
         taylor_coefficients(P, X, order)
         reverse_time(X, order)

@@ -8,6 +8,13 @@ import numpy as np
 
 from explorer._jit import njit, prange
 from explorer.integrate import systems as sy
+from explorer.integrate._tangent_lanes_generated import (
+    DEV2,
+    N_WORK_TANGENT,
+    NROWS,
+    deviation_coefficients_into,
+    tangent_coefficients,
+)
 from explorer.integrate.drivers import ON_SECTION
 from explorer.kernels import STATUS_CANCELLED, STATUS_DONE, STATUS_NONFINITE
 from explorer.kernels import STATUS_TMAX as STATUS_TMAX_CODE
@@ -20,7 +27,6 @@ from explorer.model.equations import (
     G2,
     section_c,
     section_g,
-    taylor_coefficients_tangent,
 )
 
 
@@ -107,15 +113,17 @@ def _finish_ext(acc, v, w, nvec, early, res, ext, wout):
 def orbit_tangent_taylor_ext(y0, v0, w0, nvec, P, T, order, max_steps, early_stop, sali_stop, megno_level,
                              early_tmin, hist_t, hist, res, ext, wout, yout):
     """:func:`orbit_tangent_taylor` with a second deviation vector ``w0`` (nvec = 2: SALI and
-    GALI_2; its coefficients from the same recurrence, taylor_coefficients_tangent, on the orbit's
-    coefficients) and the early classification (``early_stop``: :func:`_early` after every step;
-    the orbit stops with STATUS_DONE at the time reached and its EARLY_* code in ext).  With
+    GALI_2; its coefficients in rows DEV2.. of the lanes' 15-row array, from the orbit's, by the
+    generated deviation_coefficients) and the early classification (``early_stop``: :func:`_early`
+    after every step; the orbit stops with STATUS_DONE at the time reached and its EARLY_* code in
+    ext).  With
     nvec = 1 and no early stop the orbit, steps and indicators are those of
     :func:`orbit_tangent_taylor` bit for bit.  The scalar reference of
     :mod:`explorer.integrate.tangent_lanes`."""
     n = 10
-    Z = np.empty((n, order + 1))
-    W = np.empty((5, order + 1))
+    Z3 = np.empty((NROWS, order + 1))   # the orbit, v and w, as in the lanes
+    Z = Z3[:n]
+    Wd = np.empty((N_WORK_TANGENT, order + 1))
     z = np.empty(n)
     znew = np.empty(n)
     w = np.zeros(5)
@@ -144,9 +152,9 @@ def orbit_tangent_taylor_ext(y0, v0, w0, nvec, P, T, order, max_steps, early_sto
             break
         if nvec == 2:
             for i in range(5):
-                W[i, 0] = w[i]
-            taylor_coefficients_tangent(P, Z[:5], W, order)
-            tk.evaluate(W, order, h, wnew)
+                Z3[DEV2 + i, 0] = w[i]
+            deviation_coefficients_into(P, Z3, order, Wd)
+            tk.evaluate(Z3[DEV2:], order, h, wnew)
             if not all_finite(wnew):
                 code = STATUS_NONFINITE
                 break
@@ -261,8 +269,7 @@ def return_map_taylor(y0, V0, P, cphi, sphi, tsign, tmax, order, max_steps, stop
     switch ``stop[0]`` != 0 (STATUS_CANCELLED), ``tmax`` or ``max_steps``; returns (status, signed time)."""
     m = V0.shape[0]
     X = np.empty((5, order + 1))
-    Xs = np.empty((5, order + 1))
-    D = np.empty((m, 5, order + 1))
+    D = np.empty((m, 10, order + 1))   # per vector, the orbit and the vector (rows 5..9)
     y = np.empty(5)
     ynew = np.empty(5)
     gc, work, roots, brackets, stack = root_workspace(order)
@@ -289,9 +296,9 @@ def return_map_taylor(y0, V0, P, cphi, sphi, tsign, tmax, order, max_steps, stop
             return code, tsign * s
         for r in range(m):
             for i in range(5):
-                Xs[i, 0] = y[i]
-                D[r, i, 0] = V[r, i]
-            taylor_coefficients_tangent(P, Xs, D[r], order)
+                D[r, i, 0] = y[i]
+                D[r, 5 + i, 0] = V[r, i]
+            tangent_coefficients(P, D[r], order)
             if tsign < 0:
                 sy.reverse_time(D[r], order)
         gnew = section_g(ynew, cphi, sphi)
@@ -309,10 +316,10 @@ def return_map_taylor(y0, V0, P, cphi, sphi, tsign, tmax, order, max_steps, stop
                 break
         if found:
             for r in range(m):
-                tk.evaluate(D[r], order, tau, Vout[r])
+                tk.evaluate(D[r, 5:], order, tau, Vout[r])
             return STATUS_DONE, tsign * (s + tau)
         for r in range(m):
-            tk.evaluate(D[r], order, h, V[r])
+            tk.evaluate(D[r, 5:], order, h, V[r])
         for i in range(5):
             y[i] = ynew[i]
         s += h

@@ -1,7 +1,7 @@
 """Tangent dynamics by the Taylor method on SIMD lanes (docs/methods.md, Parallelism): LANES
 orbits with one or two deviation vectors in lockstep, each lane bit for bit what
 :func:`explorer.integrate.tangent.orbit_tangent_taylor_ext` gives for its orbit, whatever the
-grouping of orbits and the thread count.  Kernel contract: explorer/kernels/__init__.py.
+order of the orbits and the thread count.  Kernel contract: explorer/kernels/__init__.py.
 """
 import math
 
@@ -11,6 +11,7 @@ from explorer._jit import njit, prange
 from explorer.integrate._tangent_lanes_generated import (
     DEV1,
     DEV2,
+    N_WORK_TANGENT,
     NROWS,
     deviation_coefficients_lanes,
     tangent_coefficients_lanes,
@@ -231,10 +232,12 @@ def early_lanes(Z, acc, L_since, L_on, bits, nvec, sali_stop, megno_level, tmin,
 
 # nogil: the batch drivers Python calls release the GIL (docs/architecture.md, Parallelism)
 @njit(nogil=True)
-def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop,
+def _run_worker(nlanes, next_orbit, Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop,
                 megno_level, early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w):
-    nl = len(groups) * LANES
+    nl = LANES
     Z = aligned_zeros((order + 1) * NROWS * nl).reshape((order + 1, NROWS, nl))
+    # the recurrences' work array (explorer.integrate.codegen: rows of the nodes whose past they read)
+    WT = aligned_zeros((order + 1) * N_WORK_TANGENT * nl).reshape((order + 1, N_WORK_TANGENT, nl))
     znew = aligned_zeros(NROWS * nl).reshape((NROWS, nl))
     norms = aligned_zeros(N_NORMS * nl).reshape((N_NORMS, nl))
     hv = aligned_zeros(nl)
@@ -263,15 +266,15 @@ def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_s
                               out_w)
 
     while active > 0:
-        tangent_coefficients_lanes(P, Z, order, DEV1, groups)
+        tangent_coefficients_lanes(P, Z, order, WT)
         if nvec == 2:
-            deviation_coefficients_lanes(P, Z, order, DEV2, groups)
-        step_norms_lanes(Z, order, e_p, e_q, norms, groups)
+            deviation_coefficients_lanes(P, Z, order, WT)
+        step_norms_lanes(Z, order, e_p, e_q, norms)
         step_lanes(L_on, norms, L_t, T, e_p, e_q, factor, hv, L_last, L_fast, L_status, L_stop, nl)
-        evaluate_lanes(Z, order, hv, znew, 0, groups)
-        evaluate_lanes(Z, order, hv, znew, DEV1, groups)
+        evaluate_lanes(Z, order, hv, znew, 0)
+        evaluate_lanes(Z, order, hv, znew, DEV1)
         if nvec == 2:
-            evaluate_lanes(Z, order, hv, znew, DEV2, groups)
+            evaluate_lanes(Z, order, hv, znew, DEV2)
         for c in range(0, nl, LANES):
             bits = end_steps_tangent_lanes(Z, znew, hv, nrm, acc, L_t, L_steps, L_hnext, L_on, L_fast, L_last,
                                            nvec, T, max_steps, c, nl)
@@ -335,11 +338,11 @@ def _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_s
 
 
 @njit(parallel=True, nogil=True)
-def _run_lanes(nworkers, nlanes, groups, Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop,
+def _run_lanes(nworkers, nlanes, Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop,
                megno_level, early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w):
     next_orbit = np.zeros(1, np.int64)
     for _w in prange(nworkers):
-        _run_worker(nlanes, groups, next_orbit, Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop,
+        _run_worker(nlanes, next_orbit, Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop,
                     megno_level, early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps,
                     out_w)
     return 0
@@ -347,14 +350,14 @@ def _run_lanes(nworkers, nlanes, groups, Y0, V0, W0, nvec, P, T, order, max_step
 
 def run_tangent_lanes_batch(Y0, V0, W0, nvec, P, T, order, max_steps, early_stop, sali_stop, megno_level,
                             early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w,
-                            max_lanes=None, groups=None):
+                            max_lanes=None):
     """Lane twin of :func:`explorer.integrate.tangent.orbit_tangent_taylor_ext` over the orbits:
     out_*[j] is what it gives for orbit j (out_status, out_steps its return), bit for bit."""
     n = Y0.shape[0]
     if n == 0:
         return 0
     nworkers = lane_workers(n, max_lanes)
-    nlanes, g = worker_lanes(n, nworkers, max_lanes, groups)
-    return _run_lanes(nworkers, nlanes, g, Y0, V0, W0, int(nvec), P, float(T), int(order), int(max_steps),
+    nlanes = worker_lanes(n, nworkers, max_lanes)
+    return _run_lanes(nworkers, nlanes, Y0, V0, W0, int(nvec), P, float(T), int(order), int(max_steps),
                       bool(early_stop), float(sali_stop), float(megno_level), float(early_tmin), hist_t, out_hist,
                       out_res, out_ext, out_status, out_final, out_steps, out_w)

@@ -5,8 +5,8 @@ generated code reads ``packed_params(params)`` as its P), and the energy H of R3
 
 The right-hand sides are polynomials in the state, collected by monomial (``sympy.Poly``): each
 product of two state variables is one Cauchy product, scaled once (M p2, M p1, p1 p2, M g2, M g1:
-five per order, as in :func:`explorer.model.equations.taylor_coefficients`), and the variational
-equations likewise (one product per pair of a state variable and a deviation).
+five per order), and the variational equations likewise (one product per pair of a state variable
+and a deviation).  tools/gen_lanes.py writes the engine's recurrences from these systems.
 """
 from __future__ import annotations
 

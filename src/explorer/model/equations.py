@@ -1,5 +1,6 @@
-"""Compiled physics of the reduced system (docs/model.md R3, R4): the vector field, the energy,
-the exact sub-flows of the splitting and the Taylor recurrences; the numpy twin is
+"""Compiled physics of the reduced system (docs/model.md R3, R4): the vector field, the energy and
+the exact sub-flows of the splitting (the Taylor recurrences are generated from
+:mod:`explorer.model.chaplygin` by tools/gen_lanes.py); the numpy twin is
 :mod:`explorer.model.parameters`.  y = (p1, p2, M, g1, g2); P packed, read by the index constants.
 """
 import math
@@ -107,53 +108,6 @@ def apply_flow(k, y, P, t):
         flow_hm(y, P, t)
 
 
-@njit(inline="always")
-def taylor_constants(P):
-    """The constants of the Taylor recurrence of R3 (:func:`taylor_coefficients`), read from P by
-    the model's parameter indices: (1/b, 1/a2 - 1/a1, lam/a1, lam/a2, chi/a2, zeta/a1, chi, zeta,
-    mu, mu xi, mu eta).  Called once per recurrence; ``tools/gen_lanes.py`` keeps the call."""
-    a1, a2, lam, chi, zeta, mu = P[A1], P[A2], P[LAM], P[CHI], P[ZETA], P[MU]
-    return (1.0 / P[B], 1.0 / a2 - 1.0 / a1, lam / a1, lam / a2, chi / a2, zeta / a1, chi, zeta, mu, mu * P[XI],
-            mu * P[ETA])
-
-
-@njit(inline="always")
-def next_coefficients(C, A, k, wp2, wp1, p12, wg2, wg1):
-    """A[:, k + 1] = f_k / (k + 1) from A[:, k] and the Cauchy sums of order k, C the
-    :func:`taylor_constants`."""
-    inv_b, c12, la1, la2, ca2, za1, chi, zeta, mu, mxi, meta = C
-    r = 1.0 / (k + 1)
-    wk = A[2, k] * inv_b
-    # docs/model.md R3: f1_k = (w p2)_k - zeta w_k - mu g1_k - (lam/a2) p2_k, and so on (taylor_coefficients)
-    A[0, k + 1] = (wp2 * inv_b - zeta * wk - mu * A[3, k] - la2 * A[1, k]) * r
-    A[1, k + 1] = (-wp1 * inv_b + chi * wk - mu * A[4, k] + la1 * A[0, k]) * r
-    A[2, k + 1] = (c12 * p12 - ca2 * A[1, k] + za1 * A[0, k] - mxi * A[4, k] + meta * A[3, k]) * r
-    A[3, k + 1] = wg2 * inv_b * r
-    A[4, k + 1] = -wg1 * inv_b * r
-
-
-@njit
-def taylor_coefficients(P, X, order):
-    """Normalised Taylor coefficients X[i, k] = y_i^{(k)}(0)/k! for k = 0..order, given X[:, 0]
-    (Jorba & Zou 2005).  With w = M/b and Cauchy products (u v)_k, R3 gives
-      f1_k = (w p2)_k - zeta w_k - mu g1_k - (lam/a2) p2_k
-      f2_k = -(w p1)_k + chi w_k - mu g2_k + (lam/a1) p1_k
-      f3_k = (1/a2 - 1/a1)(p1 p2)_k - (chi/a2) p2_k + (zeta/a1) p1_k - mu xi g2_k + mu eta g1_k
-      f4_k = (w g2)_k,   f5_k = -(w g1)_k,   X[:, k+1] = f_k/(k+1)."""
-    C = taylor_constants(P)
-    for k in range(order):
-        wp2, wp1, p12, wg2, wg1 = 0.0, 0.0, 0.0, 0.0, 0.0
-        for j in range(k + 1):
-            i = k - j
-            wj = X[2, j]
-            wp2 += wj * X[1, i]
-            wp1 += wj * X[0, i]
-            p12 += X[0, j] * X[1, i]
-            wg2 += wj * X[4, i]
-            wg1 += wj * X[3, i]
-        next_coefficients(C, X, k, wp2, wp1, p12, wg2, wg1)
-
-
 # ------------------------------------------------------------------ the section phi = phi0
 #: rows of g1 = sin phi and g2 = cos phi in the state (p1, p2, M, g1, g2) and in its Taylor
 #: coefficients
@@ -193,33 +147,6 @@ def rhs_tangent(y, v, P, dv):
     dv[2] = (v1 * p2 + (p1 - chi) * v2) / a2 - (v2 * p1 + (p2 - zeta) * v1) / a1 - mu * (xi * vg2 - eta * vg1)
     dv[3] = dw * g2 + w * vg2
     dv[4] = -dw * g1 - w * vg1
-
-
-@njit
-def taylor_coefficients_tangent(P, X, D, order):
-    """Taylor coefficients of the state X (as :func:`taylor_coefficients`) and of a tangent
-    vector D (D[:, 0] given) under dv/dt = Df(y) v: each Cauchy product (u v)_k gets its
-    derivative (du v)_k + (u dv)_k, and :func:`next_coefficients` makes both columns k + 1."""
-    C = taylor_constants(P)
-    for k in range(order):
-        wp2, wp1, p12, wg2, wg1 = 0.0, 0.0, 0.0, 0.0, 0.0
-        dwp2, dwp1, dp12, dwg2, dwg1 = 0.0, 0.0, 0.0, 0.0, 0.0
-        for j in range(k + 1):
-            i = k - j
-            wj = X[2, j]
-            dwj = D[2, j]
-            wp2 += wj * X[1, i]
-            dwp2 += dwj * X[1, i] + wj * D[1, i]
-            wp1 += wj * X[0, i]
-            dwp1 += dwj * X[0, i] + wj * D[0, i]
-            p12 += X[0, j] * X[1, i]
-            dp12 += D[0, j] * X[1, i] + X[0, j] * D[1, i]
-            wg2 += wj * X[4, i]
-            dwg2 += dwj * X[4, i] + wj * D[4, i]
-            wg1 += wj * X[3, i]
-            dwg1 += dwj * X[3, i] + wj * D[3, i]
-        next_coefficients(C, X, k, wp2, wp1, p12, wg2, wg1)
-        next_coefficients(C, D, k, dwp2, dwp1, dp12, dwg2, dwg1)
 
 
 @njit
