@@ -11,6 +11,8 @@ from explorer import model
 from explorer._jit import njit
 from explorer.analysis import lyapunov, sections
 from explorer.app import cli
+from explorer.integrate import _lanes_generated as generated
+from explorer.integrate import _tangent_lanes_generated as generated_tangent
 from explorer.kernels import STATUS_DONE
 from explorer.kernels import tangent as tg
 from explorer.model import equations
@@ -62,15 +64,15 @@ def test_tangent_taylor_series_matches_finite_differences_of_the_series():
     y = random_states(PARAM_SETS["asym_lam_pos"], 1, seed=5)[0]
     v = np.array([0.1, 0.4, -0.3, 0.6, -0.2])
     order, h = 25, 0.1
-    X = np.zeros((5, order + 1))
-    D = np.zeros((5, order + 1))
-    X[:, 0], D[:, 0] = y, v
-    equations.taylor_coefficients_tangent(P, X, D, order)
+    XD = np.zeros((10, order + 1))   # the orbit and the vector (generated from explorer.model.chaplygin)
+    XD[:5, 0], XD[5:, 0] = y, v
+    generated_tangent.tangent_coefficients(P, XD, order)
+    X, D = XD[:5], XD[5:]
     out = {}
     for sgn in (1, -1):
         Z = np.zeros((5, order + 1))
         Z[:, 0] = y + sgn * FD * v
-        equations.taylor_coefficients(P, Z, order)
+        generated.taylor_coefficients(P, Z, order)
         out[sgn] = np.empty(5)
         taylor.evaluate(Z, order, h, out[sgn])
     dv = np.empty(5)
@@ -79,7 +81,7 @@ def test_tangent_taylor_series_matches_finite_differences_of_the_series():
     # and the state part is exactly the plain recurrence
     X2 = np.zeros((5, order + 1))
     X2[:, 0] = y
-    equations.taylor_coefficients(P, X2, order)
+    generated.taylor_coefficients(P, X2, order)
     np.testing.assert_array_equal(X, X2)
 
 
