@@ -28,13 +28,14 @@ from explorer import model
 from explorer._jit import get_num_threads, njit, prange, set_num_threads
 from explorer.analysis import fixedpoints, lyapunov, sections
 from explorer.integrate import drivers
+from explorer.integrate._lanes_generated import taylor_coefficients
 from explorer.integrate.tangent import return_map_taylor
 from explorer.kernels import STATUS_DONE, STATUS_NONFINITE, STATUS_TMAX, splitting
 from explorer.kernels import dop853 as dp
 from explorer.kernels import taylor as tk
 from explorer.kernels.taylor import order_for_tolerance
 from explorer.model import ParameterError, exact
-from explorer.model.equations import N_FLOWS, rhs, taylor_coefficients
+from explorer.model.equations import N_FLOWS, rhs
 
 EPS = np.finfo(float).eps
 ASYM = model.Params(a1=1.3, a2=0.6, b=1.7, lam=-0.8, chi=0.2, zeta=-0.15, mu=0.7, xi=0.3, eta=-0.25)
