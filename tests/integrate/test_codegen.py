@@ -154,35 +154,6 @@ def test_common_subexpressions_are_one_node():
     assert kinds.count("sin") == 1 and kinds.count("cos") == 1 and kinds.count("exp") == 1
 
 
-# ---------------------------------------------------------------------- Chaplygin (docs/model.md R3)
-# explorer.model.chaplygin's System: state (p1, p2, M, g1, g2), parameters in the order of the packed array P
-@pytest.mark.parametrize("params", [mp_.FIGURE4.with_(mu=0.5),
-                                    mp_.Params(a1=1.3, a2=0.6, b=1.7, lam=-0.8, chi=0.2, zeta=-0.15, mu=0.7,
-                                               xi=0.3, eta=-0.25)])
-def test_generated_chaplygin_coefficients_equal_the_hand_written_recurrence(params):
-    from explorer.model.equations import taylor_coefficients
-
-    system = chaplygin.system(params)
-    P = mp_.packed_params(params)
-    assert [p.name for p in system.parameters] == ["a1", "a2", "b", "lam", "chi", "zeta", "mu", "xi", "eta"]
-    mod = codegen.load(system)
-    rng = np.random.default_rng(12)
-    order = 24
-    worst = 0.0
-    for _ in range(4):
-        X0 = rng.uniform(-1, 1, 5)
-        X0[3:] /= np.hypot(X0[3], X0[4])      # (g1, g2) = (sin phi, cos phi)
-        gen = np.zeros((5, order + 1))
-        hand = np.zeros((5, order + 1))
-        gen[:, 0] = hand[:, 0] = X0
-        mod.taylor_coefficients(P, gen, order)
-        taylor_coefficients(P, hand, order)
-        # relative to each order's largest coefficient (a single one may cancel to near zero)
-        scale = np.max(np.abs(hand), axis=0)
-        worst = max(worst, np.max(np.abs(gen - hand) / scale))
-    assert worst <= 1e-14, worst
-
-
 # ---------------------------------------------------------------------- Hénon–Heiles against DOP853
 def taylor_orbit(mod, P, y0, dt, steps, order=20):
     from explorer.kernels.taylor import evaluate
@@ -294,31 +265,6 @@ def test_an_operation_the_generator_does_not_know_is_refused():
 
 
 # ---------------------------------------------------------------------- variational equations
-def test_generated_chaplygin_variational_coefficients_equal_the_hand_written_tangent_recurrence():
-    from explorer.model.equations import taylor_coefficients_tangent
-
-    system = chaplygin.variational(vectors=1)     # one deviation vector: the Jacobian is the same for each
-    mod = codegen.load(system)
-    P = mp_.packed_params(mp_.Params(a1=1.3, a2=0.6, b=1.7, lam=-0.8, chi=0.2, zeta=-0.15, mu=0.7, xi=0.3, eta=-0.25))
-    rng = np.random.default_rng(3)
-    order = 20
-    worst = 0.0
-    for _ in range(4):
-        X0 = rng.uniform(-1, 1, 5)
-        X0[3:] /= np.hypot(X0[3], X0[4])
-        D0 = rng.uniform(-1, 1, 5)
-        Z = np.zeros((10, order + 1))
-        Z[:5, 0], Z[5:, 0] = X0, D0
-        mod.taylor_coefficients(P, Z, order)
-        X = np.zeros((5, order + 1))
-        D = np.zeros((5, order + 1))
-        X[:, 0], D[:, 0] = X0, D0
-        taylor_coefficients_tangent(P, X, D, order)
-        for gen, hand in ((Z[:5], X), (Z[5:], D)):
-            worst = max(worst, np.max(np.abs(gen - hand) / np.max(np.abs(hand), axis=0)))
-    assert worst <= 1e-14, worst
-
-
 def test_variational_coefficients_are_the_derivative_of_the_state_coefficients():
     """D_k = d X_k / d x0 . d0: against a central difference of the generated state coefficients."""
     base = henon_heiles()
