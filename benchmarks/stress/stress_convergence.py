@@ -12,7 +12,7 @@ tol 1e-16 for the others (never the method being measured).
   least-squares slope of log(error) against log(dt) over the points with errors in
   [1e-11, 1e-5] (the asymptotic range, away from round-off; at least 3 points) within 10 % of
   the nominal order;
-- Taylor at a fixed step (the kernels of the taylor method, equations.taylor_coefficients and
+- Taylor at a fixed step (the kernels of the taylor method, _lanes_generated.taylor_coefficients and
   kernels.taylor.evaluate) for orders p = 2, 3, 4, 6, 8, 10, same fit: within 10 % of p.
   (Orders >= 12 cannot be seen in double precision: an error above 1e-11 needs h / rho > 0.1,
   where the terms beyond h^(p+1) still count and the apparent order is p + 1 or more.);
@@ -82,10 +82,11 @@ def main(argv=None):
     from explorer import model
     from explorer._jit import njit
     from explorer.integrate import drivers
+    from explorer.integrate._lanes_generated import taylor_coefficients
     from explorer.kernels import dop853 as dp
     from explorer.kernels import splitting
     from explorer.kernels import taylor as tk
-    from explorer.model.equations import N_FLOWS, rhs, taylor_coefficients
+    from explorer.model.equations import N_FLOWS, rhs
 
     @njit
     def split_steps(y, P, dt, ids, fr, n):
