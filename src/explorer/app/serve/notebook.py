@@ -59,7 +59,7 @@ def explore(scene=None, *, panel: int = 0, export_dir=None, h: float | None = No
     crossings per orbit ``n_crossings`` (validated: ParameterError).  ``export_dir``: where the page's *Export
     scene* button writes (None: download only).  What the page does: docs/commands/serve.md.
     """
-    given = {"a1": a1, "a2": a2, "b": b, "lam": lam, "chi": chi, "zeta": zeta, "mu": mu, "xi": xi, "eta": eta}
-    given.update(h=h, method=method, tol=tol, dt=dt, crossings=n_crossings)
+    given: dict[str, object] = {"a1": a1, "a2": a2, "b": b, "lam": lam, "chi": chi, "zeta": zeta, "mu": mu, "xi": xi,
+                                "eta": eta, "h": h, "method": method, "tol": tol, "dt": dt, "crossings": n_crossings}
     base, label = settings_for(scene, panel, **{k: v for k, v in given.items() if v is not None})
     return Explorer(SectionPage(base, {}, export_dir=export_dir, label=label, seeds=seeds_for(scene)))
