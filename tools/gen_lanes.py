@@ -147,6 +147,51 @@ def generate_tangent():
     return text + "\n\n" + orbit.lanes + TANGENT
 
 
+def operation_counts(kernel, order, tangent=False):
+    """The vector operations one call of the generated lane ``kernel`` executes at ``order``:
+    {"vadd": n, "vsub": n, "vmul": n, "vneg": n, "vdiv": n}, each on one vector of LANES doubles (per
+    lane: that many scalar operations; a scalar's operations are not counted).  Counted by running the
+    generated text itself with one-lane stand-ins that count (benchmarks/bench_roofline.py divides the
+    flops of a step by these)."""
+    import re
+
+    import numpy as np
+
+    text = generate_tangent() if tangent else generate()
+    text = re.sub(r"^from explorer\..*$", "", text, flags=re.M)
+    counts = dict.fromkeys(("vadd", "vsub", "vmul", "vneg", "vdiv"), 0)
+
+    class Vec:
+        def __init__(self, x):
+            self.x = float(x)
+
+        def _op(name, fn, swap=False):  # a factory of methods
+            def op(a, b):
+                counts[name] += 1
+                a, b = (b, a) if swap else (a, b)
+                return Vec(fn(a.x if isinstance(a, Vec) else a, b.x if isinstance(b, Vec) else b))
+            return op
+
+        __add__, __radd__ = _op("vadd", float.__add__), _op("vadd", float.__add__, True)
+        __sub__, __rsub__ = _op("vsub", float.__sub__), _op("vsub", float.__sub__, True)
+        __mul__, __rmul__ = _op("vmul", float.__mul__), _op("vmul", float.__mul__, True)
+        __truediv__, __rtruediv__ = _op("vdiv", float.__truediv__), _op("vdiv", float.__truediv__, True)
+
+        def __neg__(self):
+            counts["vneg"] += 1
+            return Vec(-self.x)
+
+    ns = {"np": np, "njit": lambda *a, **k: (a[0] if a and callable(a[0]) else (lambda f: f)), "LANES": 1,
+          "vload": lambda a, i: Vec(a.reshape(-1)[i]), "vstore": lambda a, i, v: a.reshape(-1).__setitem__(i, v.x),
+          "vzero": lambda: Vec(0.0), "vsplat": lambda x: Vec(x), "taylor_coefficients_into": None}
+    exec(compile(text, "<generated>", "exec"), ns)
+    rows = ns.get("NROWS", ns.get("NVAR"))
+    X = np.zeros((order + 1, rows, 1))
+    X[0] = 0.5
+    ns[kernel](np.ones(9), X, order, np.zeros((order + 1, 1, 1)))
+    return counts
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("-o", "--output", type=Path, default=OUTPUT)
