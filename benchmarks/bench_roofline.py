@@ -21,8 +21,8 @@ and one orbit reach.
    the measured peak (per core used).  3b: each vector stage of a step alone (recurrence, step
    size, Horner, variation bound, the tangent step end) per orbit-step, so that what a
    workload's step spends outside the recurrence is split into its parts (issue 34).
-4. The recurrence for G = 1, 2, 4 lane groups: CPU per orbit-step and its Cauchy-product loop's
-   multiplies, adds and stack accesses (a fresh compile of each kernel, read with inspect_asm).
+4. The recurrence alone: CPU per orbit-step and its Cauchy-product loop's multiplies, adds and
+   stack accesses (a fresh compile of the kernel, read with inspect_asm).
 5. Steps per crossing of explorer and of heyoka's taylor_adaptive on the same W4 orbits to the
    same time (20 crossings, before the chaotic paths part, and 500), if heyoka is installed.
 
@@ -198,7 +198,7 @@ def step_flops(order, tangent=False, nvec=1):
     if tangent:
         c = gen_lanes.operation_counts("tangent_coefficients_lanes", order, tangent=True)
         if nvec == 2:
-            d = gen_lanes.operation_counts("deviation_coefficients_lanes", order, tangent=True, db=10)
+            d = gen_lanes.operation_counts("deviation_coefficients_lanes", order, tangent=True)
             c = {k: c[k] + d[k] for k in c}
         rec = c["vadd"] + c["vsub"] + c["vmul"]
         return rec, rec + (1 + nvec) * 5 * 2 * order, c
@@ -208,9 +208,8 @@ def step_flops(order, tangent=False, nvec=1):
 
 
 # ----------------------------------------------------------------------------- 3. achieved
-def recurrence_alone(order, tangent, reps=20000, groups=1):
-    """Seconds of CPU per orbit-step of the generated recurrence alone (``groups`` groups of LANES
-    lanes, one thread)."""
+def recurrence_alone(order, tangent, reps=20000):
+    """Seconds of CPU per orbit-step of the generated recurrence alone (LANES lanes, one thread)."""
     from explorer import model
     from explorer._jit import njit
     from explorer.integrate import _lanes_generated as LG
@@ -223,25 +222,25 @@ def recurrence_alone(order, tangent, reps=20000, groups=1):
         @njit(cache=False)
         def loop(P, Z, order, reps, g):
             for _ in range(reps):
-                TG.tangent_coefficients_lanes(P, Z, order, TG.DEV1, g)
-        X = np.zeros((order + 1, TG.NROWS, groups * LANES))
-        X[0, :10] = rng.uniform(-0.5, 0.5, (10, groups * LANES))
+                TG.tangent_coefficients_lanes(P, Z, order, g)
+        X = np.zeros((order + 1, TG.NROWS, LANES))
+        X[0, :10] = rng.uniform(-0.5, 0.5, (10, LANES))
+        g = np.zeros((order + 1, TG.N_WORK_TANGENT, LANES))
     else:
         @njit(cache=False)
         def loop(P, Z, order, reps, g):
             for _ in range(reps):
                 LG.taylor_coefficients_lanes(P, Z, order, g)
-        X = np.zeros((order + 1, 5, groups * LANES))
-        X[0] = rng.uniform(-0.5, 0.5, (5, groups * LANES))
-    g = (0,) * groups
+        X = np.zeros((order + 1, 5, LANES))
+        X[0] = rng.uniform(-0.5, 0.5, (5, LANES))
+        g = np.zeros((order + 1, max(LG.N_WORK, 1), LANES))
     loop(P, X, order, 1, g)
     _wall, cpu = timed(lambda: loop(P, X, order, reps, g), 5)
-    return cpu / (reps * groups * LANES)
+    return cpu / (reps * LANES)
 
 
-def stages_alone(order, tangent, groups, reps=20000):
-    """Seconds of CPU per orbit-step of each vector stage of a step alone, on ``groups`` groups of
-    LANES lanes holding W4's orbits (Figure 4, mu = 0.5) or the chaos map's (mu = 1, one deviation
+def stages_alone(order, tangent, reps=20000):
+    """Seconds of CPU per orbit-step of each vector stage of a step alone, on LANES lanes holding W4's orbits (Figure 4, mu = 0.5) or the chaos map's (mu = 1, one deviation
     vector), one thread: the recurrence, the step norms and the step size's two vector powers
     (``lanes.step_norms_lanes``), the Horner sums (``lanes.evaluate_lanes``, once per vector) and,
     for the crossings, the variation bound (``lanes.variation_lanes``).  What a workload's step
@@ -258,8 +257,7 @@ def stages_alone(order, tangent, groups, reps=20000):
     from explorer.integrate import lanes
     from explorer.integrate.simd import LANES
 
-    w = groups * LANES
-    g = (0,) * groups
+    w = LANES
     prm = model.FIGURE4.with_(mu=1.0 if tangent else 0.5)
     c1, c2, r1, r2 = model.allowed_ellipse(prm, 2.0)
     Y = model.section_state(prm, c1 + r1 * np.linspace(-0.9, 0.9, w), np.zeros(w), 2.0)
@@ -270,10 +268,12 @@ def stages_alone(order, tangent, groups, reps=20000):
         X = np.zeros((order + 1, TG.NROWS, w))
         X[0, :5] = Y.T
         X[0, 5:10] = lyapunov.deviation_vector(P, Y).T
-        TG.tangent_coefficients_lanes(P, X, order, TG.DEV1, g)
+        g = np.zeros((order + 1, TG.N_WORK_TANGENT, w))   # the recurrence's work array
+        TG.tangent_coefficients_lanes(P, X, order, g)
     else:
         X = np.zeros((order + 1, 5, w))
         X[0] = Y.T
+        g = np.zeros((order + 1, max(LG.N_WORK, 1), w))
         LG.taylor_coefficients_lanes(P, X, order, g)
     hv = np.full(w, 0.05)
     out = np.zeros((X.shape[1], w))
@@ -282,32 +282,32 @@ def stages_alone(order, tangent, groups, reps=20000):
     def recurrence(reps, P, X, order, g):
         for _ in range(reps):
             if tangent:
-                TG.tangent_coefficients_lanes(P, X, order, TG.DEV1, g)
+                TG.tangent_coefficients_lanes(P, X, order, g)
             else:
                 LG.taylor_coefficients_lanes(P, X, order, g)
 
     @njit(cache=False)
-    def step_norms(reps, X, order, g, norms):
+    def step_norms(reps, X, order, norms):
         for _ in range(reps):
-            lanes.step_norms_lanes(X, order, e_p, e_q, norms, g)
+            lanes.step_norms_lanes(X, order, e_p, e_q, norms)
 
     @njit(cache=False)
-    def horner(reps, X, order, g, hv, out, nvec):
+    def horner(reps, X, order, hv, out, nvec):
         for _ in range(reps):
             for v in range(nvec):
-                lanes.evaluate_lanes(X, order, hv, out, 5 * v, g)
+                lanes.evaluate_lanes(X, order, hv, out, 5 * v)
 
     @njit(cache=False)
-    def variation(reps, X, order, g, hv, out):
+    def variation(reps, X, order, hv, out):
         for _ in range(reps):
-            lanes.variation_lanes(X, order, hv, -1.0, 0.0, out, g)
+            lanes.variation_lanes(X, order, hv, -1.0, 0.0, out)
 
     stages = [("recurrence", recurrence, (P, X, order, g)),
-              ("step norms and the step size's two powers", step_norms, (X, order, g, norms)),
+              ("step norms and the step size's two powers", step_norms, (X, order, norms)),
               ("Horner sums" + (" (orbit and vector)" if tangent else ""), horner,
-               (X, order, g, hv, out, 2 if tangent else 1))]
+               (X, order, hv, out, 2 if tangent else 1))]
     if not tangent:
-        stages.append(("variation bound", variation, (X, order, g, hv, out[0])))
+        stages.append(("variation bound", variation, (X, order, hv, out[0])))
     rows = []
     for name, fn, args in stages:
         fn(1, *args)
@@ -346,19 +346,19 @@ def libm_log_per_lane(reps=2_000_000):
     return (with_log - without) / (reps * LANES)
 
 
-def recurrence_asm(groups, tangent):
-    """The Cauchy-product loop of the generated recurrence for ``groups`` groups (a fresh,
-    uncached compile of the kernel, so that numba can show its assembly)."""
+def recurrence_asm(tangent):
+    """The Cauchy-product loop of the generated recurrence (the deviation vector's, for the tangent;
+    a fresh, uncached compile of the kernel, so that numba can show its assembly)."""
     from numba import types
 
     from explorer._jit import njit
     from explorer.integrate import _lanes_generated as LG
     from explorer.integrate import _tangent_lanes_generated as TG
 
-    mod, name = (TG, "tangent_coefficients_lanes") if tangent else (LG, "taylor_coefficients_lanes")
-    k = njit(cache=False)(getattr(mod, f"{name}_{groups}").py_func)
+    mod, name = (TG, "first_deviation_coefficients_lanes") if tangent else (LG, "taylor_coefficients_lanes")
+    k = njit(cache=False, error_model="numpy")(getattr(mod, name).py_func)
     arr1, arr3 = types.Array(types.float64, 1, "C"), types.Array(types.float64, 3, "C")
-    k.compile((arr1, arr3, types.int64, types.int64) if tangent else (arr1, arr3, types.int64))
+    k.compile((arr1, arr3, types.int64, arr3))
     return _loop_asm(k)
 
 
@@ -486,32 +486,27 @@ def main(argv=None):
         cpu = f"{w['cpu']:.3f}" if w["threads"] == 1 else ""
         emit(f"| {w['name']} | {w['wall']:.3f} | {cpu} | {w['steps']:.3g} | {spc} | "
               f"{seconds / w['steps'] * 1e9:.1f} | {g:.1f} | {g / peak_fma:.0%} ({g / peak_unfused:.0%}) |")
-    from explorer.integrate.lanes import default_groups
-    G = default_groups()
-    emit(f"\n### 3b. The step's vector stages alone (one thread, G = {G} as the workloads; CPU per orbit-step): "
+    emit("\n### 3b. The step's vector stages alone (one thread; CPU per orbit-step): "
          "what the rest of a workload's step costs is its ns / orbit-step above less their sum\n")
     emit("| lanes | stage | ns / orbit-step |")
     emit("|---|---|---:|")
     for tangent in (False, True):
         total = 0.0
-        for name, sec in stages_alone(order, tangent, G):
+        for name, sec in stages_alone(order, tangent):
             total += sec
             emit(f"| {'tangent (1 vector)' if tangent else 'crossings'} | {name} | {sec * 1e9:.1f} |")
         emit(f"| {'tangent (1 vector)' if tangent else 'crossings'} | sum of the stages | {total * 1e9:.1f} |")
     emit(f"| tangent (1 vector) | libm's log, per lane, in the vector step end (not in the sum) | "
          f"{libm_log_per_lane() * 1e9:.1f} |")
-    from explorer.integrate._lanes_generated import GROUPS
-    emit("\n### 4. The recurrence per number of lane groups G (one thread): CPU per orbit-step and its "
-         "Cauchy-product loop\n")
-    emit("| recurrence | G | ns / orbit-step | of FMA peak | loop: vmulpd, vaddpd, stack accesses |")
-    emit("|---|---:|---:|---:|---|")
+    emit("\n### 4. The recurrence alone (one thread): CPU per orbit-step and its Cauchy-product loop\n")
+    emit("| recurrence | ns / orbit-step | of FMA peak | loop: vmulpd, vaddpd, stack accesses |")
+    emit("|---|---:|---:|---|")
     for tangent in (False, True):
-        for g in GROUPS:
-            ns = recurrence_alone(order, tangent, groups=g)
-            a = recurrence_asm(g, tangent)
-            f = work[(tangent, 1)][0] / ns / 1e9
-            emit(f"| {'tangent' if tangent else 'orbit'} | {g} | {ns * 1e9:.1f} | {f / peak_fma:.0%} | "
-                 f"{a['mul']}, {a['add']}, {a['spill']} ({'zmm' if a['zmm'] else 'ymm'}) |")
+        ns = recurrence_alone(order, tangent)
+        a = recurrence_asm(tangent)
+        f = work[(tangent, 1)][0] / ns / 1e9
+        emit(f"| {'tangent' if tangent else 'orbit'} | {ns * 1e9:.1f} | {f / peak_fma:.0%} | "
+             f"{a['mul']}, {a['add']}, {a['spill']} ({'zmm' if a['zmm'] else 'ymm'}) |")
     rows = None
     for K in (20, 100 if args.quick else 500):   # 20 crossings: before the chaotic paths part
         got = steps_check(K)
