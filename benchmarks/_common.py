@@ -59,11 +59,6 @@ def machine():
         info["numba_threads"] = numba.get_num_threads()
     except Exception:  # pragma: no cover
         pass
-    try:  # the lane groups of the Taylor lane workers (issue 24: EXPLORER_LANE_GROUPS or the default)
-        from explorer.integrate.lanes import lane_groups
-        info["lane_groups"] = lane_groups()
-    except Exception:  # pragma: no cover - an explorer without lane groups (bench_ab's base)
-        pass
     return info
 
 
@@ -71,8 +66,7 @@ def machine_line(m):
     cores = m.get("cores_per_socket")
     cores = cores * m.get("sockets", 1) if isinstance(cores, int) else "?"
     return (f"{m.get('model_name')}, {m.get('cpus')} CPUs ({cores} cores, {m.get('threads_per_core', '?')} "
-            f"thread/core), numba threads {m.get('numba_threads', '?')}"
-            + (f", lane groups G = {m['lane_groups']}" if "lane_groups" in m else ""))
+            f"thread/core), numba threads {m.get('numba_threads', '?')}")
 
 
 def versions():
