@@ -118,3 +118,12 @@ def test_a_systems_section_map_takes_the_same_rule():
     assert np.array_equal(a.allowed, smap.allowed(a.centres())) and 0.5 < a.allowed.mean() < 1.0
     assert np.array_equal(a.values[a.computed], e.values[a.computed])
     assert not a.chaotic[~a.allowed].any()
+
+
+def test_early_stop_keeps_computed_cells_exact_and_stopped_cells_chaotic(standard):
+    a = ex.chaos_map(standard, 32, tmax=T, coarse=8, early_stop=True)
+    e = ex.chaos_map(standard, 32, tmax=T, exact=True, early_stop=True)
+    assert np.array_equal(a.values[a.computed], e.values[a.computed])
+    r = ex.indicators(standard, e.centres().reshape(-1, 2), tmax=T, which=("megno",), early_stop=True)
+    stopped = (r.early > 0).reshape(32, 32)
+    assert stopped.any() and e.chaotic[stopped].all()

@@ -157,7 +157,7 @@ class _Raster:
                 chaotic = early | ((v > self.threshold) if self.rule.above else (v < self.threshold))
             self.values[rr, cc] = v
             self.computed[rr, cc] = True
-            ok = np.isfinite(v) & (np.asarray(ind.status) == 0)
+            ok = early | (np.isfinite(v) & (np.asarray(ind.status) == 0))   # stopped early: chaotic
             self.cls[rr, cc] = np.where(ok, np.where(chaotic, CHAOTIC, REGULAR), FAILED)
             self.q[rr, cc] = self._compared(v, chaotic)
 
