@@ -86,6 +86,21 @@ def test_a_system_page_runs_the_maps_orbits_on_its_energy_level_and_refuses_poin
         page.close()
 
 
+def test_explore_in_a_notebook_takes_a_systems_section_map():
+    page = ex.explore(henon_heiles_map(), h=0.1, n_crossings=20).page
+    try:
+        assert page.settings.fields() == {"lam": "1.0", "energy": "0.1", "tol": "1e-13", "crossings": "20"}
+        assert page.click(0.1, 0.1) is not None
+        page.settle()
+        d = page.orbits.crossings.data
+        y, py, px = (np.asarray(d[k]) for k in ("p1", "p2", "M"))
+        assert len(y) == 20 and np.max(np.abs(_energy(y, py, px) - 0.1)) <= 1e-10
+    finally:
+        page.close()
+    with pytest.raises(ParameterError, match="mu belongs to Chaplygin"):
+        ex.explore(henon_heiles_map(), mu=0.5)
+
+
 def test_a_parameter_named_as_a_link_key_is_refused_naming_it():
     import sympy as sp
 

@@ -9,6 +9,7 @@ import panel as pn
 
 from explorer.app.serve.page import SectionPage
 from explorer.app.serve.settings import seeds_for, settings_for
+from explorer.model import ParameterError
 
 #: how often the page's loop runs and the notebook is pushed (ms)
 POLL_MS = 50
@@ -57,9 +58,23 @@ def explore(scene=None, *, panel: int = 0, export_dir=None, h: float | None = No
     mu = 0, h = 2) and its ``panel``; on top of it, each given: the model parameters (``a1`` ...
     ``eta``, docs/model.md), the energy ``h``, the integrator ``method``, ``tol``, ``dt`` and the
     crossings per orbit ``n_crossings`` (validated: ParameterError).  ``export_dir``: where the page's *Export
-    scene* button writes (None: download only).  What the page does: docs/commands/serve.md.
+    scene* button writes (None: download only).  ``scene`` a System's section map (``ex.SectionMap(system, E,
+    ...)``) or scene: its page, ``h`` its energy (docs/commands/serve.md, "Your own system").
     """
     given: dict[str, object] = {"a1": a1, "a2": a2, "b": b, "lam": lam, "chi": chi, "zeta": zeta, "mu": mu, "xi": xi,
                                 "eta": eta, "h": h, "method": method, "tol": tol, "dt": dt, "crossings": n_crossings}
-    base, label = settings_for(scene, panel, **{k: v for k, v in given.items() if v is not None})
-    return Explorer(SectionPage(base, {}, export_dir=export_dir, label=label, seeds=seeds_for(scene)))
+    from explorer.analysis.system_sections import is_system_map
+    from explorer.io.scene import SystemScene, load_scene
+
+    sc = scene if scene is None or is_system_map(scene) else load_scene(scene)
+    if is_system_map(sc) or isinstance(sc, SystemScene):
+        from explorer.app.serve.system_page import system_page
+
+        wrong = [k for k, v in given.items() if v is not None and k not in ("h", "tol", "crossings")]
+        if wrong:
+            raise ParameterError(f"{wrong[0]} belongs to Chaplygin's model; a System's page takes h, tol, n_crossings")
+        base, label, seeds = system_page(sc if is_system_map(sc) else None, None if is_system_map(sc) else sc, panel,
+                                         energy=h, tol=tol, crossings=n_crossings)
+        return Explorer(SectionPage(base, {}, export_dir=export_dir, label=label, seeds=seeds))
+    base, label = settings_for(sc, panel, **{k: v for k, v in given.items() if v is not None})
+    return Explorer(SectionPage(base, {}, export_dir=export_dir, label=label, seeds=seeds_for(sc)))
