@@ -17,7 +17,7 @@ SOURCE = '''
 from explorer._jit import prange  # noqa: E402
 from explorer.kernels import tangent as _tg  # noqa: E402
 from explorer.kernels.checks import all_finite, is_finite  # noqa: E402
-from explorer.kernels.clock import clip_step, resolves  # noqa: E402
+from explorer.kernels.clock import advance_time, clip_step, resolves  # noqa: E402
 from explorer.kernels.status import (  # noqa: E402
     STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW)
 from explorer.kernels.taylor import evaluate, safety_factor, step_size  # noqa: E402
@@ -73,6 +73,7 @@ def indicators_orbit(y0, v0, w0, n, nvec, P, T, order, max_steps, early_stop, sa
     if nvec == 2:
         _tg.renormalize(z[2 * n:3 * n], n)
     t = 0.0
+    tc = 0.0
     steps = 0
     hpos = 0
     since = -1.0
@@ -90,13 +91,13 @@ def indicators_orbit(y0, v0, w0, n, nvec, P, T, order, max_steps, early_stop, sa
         if st != STEP_OK:
             status = st
             break
-        t_new = T if last else t + h
+        start = t - tc
+        t, tc = advance_time(t, tc, h, last, T)
         dlog = _tg.renormalize(znew[n:2 * n], n)
-        _tg.accumulate(acc, t, t_new, dlog)
+        _tg.accumulate(acc, start, t - tc, dlog)
         hpos = _indicator_history(acc, hist_t, hist, hpos, row)
         if nvec == 2:
             _tg.renormalize(znew[2 * n:3 * n], n)
-        t = t_new
         for i in range(DIM):
             z[i] = znew[i]
         if early_stop:
@@ -180,7 +181,7 @@ def _indicator_status(early, t, T, steps, max_steps):
 
 
 @njit(error_model="numpy")
-def _indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on, L_t, L_steps,
+def _indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on, L_t, L_tc, L_steps,
                           L_early, L_hpos, L_since, acc, out_hist, out_res, out_ext, out_status, out_final,
                           out_steps, out_w):
     """Lane l takes the next orbit of the queue ``next_orbit`` at its start, as indicators_orbit (an
@@ -209,6 +210,7 @@ def _indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z
         orb[l] = j
         L_on[l] = 1.0
         L_t[l] = 0.0
+        L_tc[l] = 0.0
         L_steps[l] = 0
         L_early[l] = _tg.EARLY_NONE
         L_hpos[l] = 0
@@ -257,6 +259,7 @@ def indicators_lanes_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_st
     NORM = np.zeros((5, LANES))
     hv = np.zeros(LANES)
     L_t = np.zeros(LANES)
+    L_tc = np.zeros(LANES)
     L_on = np.zeros(LANES)
     L_last = np.zeros(LANES)
     L_go = np.zeros(LANES)
@@ -274,7 +277,7 @@ def indicators_lanes_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_st
     active = 0
     for l in range(LANES):
         active += _indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on, L_t,
-                                        L_steps, L_early, L_hpos, L_since, acc, out_hist, out_res, out_ext,
+                                        L_tc, L_steps, L_early, L_hpos, L_since, acc, out_hist, out_res, out_ext,
                                         out_status, out_final, out_steps, out_w)
     while active > 0:
         taylor_coefficients_lanes(P, X, order, Wk)
@@ -299,7 +302,7 @@ def indicators_lanes_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_st
                 _indicator_lane_finish(l, st, n, nvec, X, z, orb, L_steps, L_early, acc, out_res, out_ext,
                                        out_status, out_final, out_steps, out_w)
                 active += _indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on,
-                                                L_t, L_steps, L_early, L_hpos, L_since, acc, out_hist, out_res,
+                                                L_t, L_tc, L_steps, L_early, L_hpos, L_since, acc, out_hist, out_res,
                                                 out_ext, out_status, out_final, out_steps, out_w) - 1
         _evaluate_lanes(X, order, hv, Y)
         for l in range(LANES):
@@ -310,26 +313,27 @@ def indicators_lanes_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_st
                 z[i] = Y[i, l]
             st = STATUS_NONFINITE
             if all_finite(z):
-                t = L_t[l]
-                t_new = T if L_last[l] != 0.0 else t + hv[l]
+                start = L_t[l] - L_tc[l]
+                t, tc = advance_time(L_t[l], L_tc[l], hv[l], L_last[l] != 0.0, T)
                 dlog = _tg.renormalize(z[n:2 * n], n)
-                _tg.accumulate(acc[l], t, t_new, dlog)
+                _tg.accumulate(acc[l], start, t - tc, dlog)
                 L_hpos[l] = _indicator_history(acc[l], hist_t, out_hist[orb[l]], L_hpos[l], row)
                 if nvec == 2:
                     _tg.renormalize(z[2 * n:3 * n], n)
-                L_t[l] = t_new
+                L_t[l] = t
+                L_tc[l] = tc
                 for i in range(DIM):
                     X[0, i, l] = z[i]
                 if early_stop:
                     early, L_since[l] = _indicator_early(acc[l], z[n:2 * n], z[nvec * n:(nvec + 1) * n], n, nvec,
                                                          sali_stop, megno_level, early_tmin, L_since[l])
                     L_early[l] = early
-                st = _indicator_status(L_early[l], t_new, T, L_steps[l], max_steps)
+                st = _indicator_status(L_early[l], t, T, L_steps[l], max_steps)
             if st >= 0:
                 _indicator_lane_finish(l, st, n, nvec, X, z, orb, L_steps, L_early, acc, out_res, out_ext,
                                        out_status, out_final, out_steps, out_w)
                 active += _indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on,
-                                                L_t, L_steps, L_early, L_hpos, L_since, acc, out_hist, out_res,
+                                                L_t, L_tc, L_steps, L_early, L_hpos, L_since, acc, out_hist, out_res,
                                                 out_ext, out_status, out_final, out_steps, out_w) - 1
 
 
