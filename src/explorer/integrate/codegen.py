@@ -14,11 +14,12 @@ and emitted as compiled Python source (docs/systems.md).
    order 0 is the operation itself, order k >= 1 follows from the operands' coefficients up to k
    (the rules at :data:`RULES`), and x_{k+1} = f_k / (k + 1).
 3. **Emission** (:func:`source`): a module with ``@njit`` functions (cache=True)
-   ``taylor_coefficients(P, X, order)`` (same contract as
-   :func:`explorer.model.equations.taylor_coefficients`: X[i, k] for k = 0..order from X[:, 0]),
+   ``taylor_coefficients(P, X, order)`` (X[i, k] for k = 0..order from X[:, 0]),
    ``taylor_coefficients_into(P, X, order, W)`` (with a work array of ``N_WORK`` rows),
    ``taylor_coefficients_lanes(P, X, order, W)`` (the SIMD form, LANES orbits at once, each lane bit
    for bit the scalar form), ``rhs(y, P, dy)`` and, when the system has one, ``energy(y, P)``.
+   :func:`recurrence` gives one recurrence's source alone (also of some right-hand sides, stored in
+   given rows): tools/gen_lanes.py writes the engine's Chaplygin recurrences with it.
    P holds the parameter values in the order of ``system.parameters`` (:meth:`System.parameter_array`):
    another value compiles nothing new.  At each order, the Cauchy products of one depth of the DAG
    share one loop over j, and homogeneous linear nodes are written where they are used (neither
