@@ -9,11 +9,9 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from explorer import model
 from explorer._jit import njit
 from explorer.analysis.greene_core import MIN_Q, Residue
 from explorer.analysis.section_map import MapResult, SectionMap
-from explorer.analysis.sections import crossings
 from explorer.model import ParameterError, validation
 
 __all__ = ["AreaPreservingMap", "StandardMap", "SymmetricOrbit", "difference", "images", "is_section_map", "reduce",
@@ -92,30 +90,12 @@ def difference(system, a, b) -> np.ndarray:
     return d
 
 
-#: a batch of a section map with fewer returns (points x n) runs on one thread
-SERIAL_RETURNS = 4096
-
-
 def images(system, X, n: int, *, backward: bool = False) -> np.ndarray:
     """The first ``n`` images (preimages with ``backward``) of each point of X (m, 2): (m, n, 2),
-    NaN from a failure; a section map's as one batch of the lanes (backward through G0)."""
+    NaN from a failure: the map's own ``images`` (a section map's one batch of the lanes)."""
     X = np.asarray(X, float).reshape(-1, 2)
     if n == 0 or X.size == 0:
         return np.full((X.shape[0], n, 2), np.nan)
-    # the batch of the lanes lives above the section map (sections imports section_map)
-    if isinstance(system, SectionMap) and (not backward or system.reflection is not None):
-        out = np.full((X.shape[0], n, 2), np.nan)
-        G = system.reflection
-        Y = G(X) if backward else X
-        ok = model.section_M2(system.params, Y[:, 0], Y[:, 1], system.h, system.phi0) > 0
-        if ok.any():
-            c = crossings(system.params, system.h, Y[ok], n_crossings=n, phi0=system.phi0, tol=system.tol,
-                          tmax=system.tmax * n, threads=1 if int(ok.sum()) * n < SERIAL_RETURNS else None)
-            img = np.array(c.data[:, :n, 1:3], float)
-            for i in range(len(img)):
-                img[i, c.count[i]:] = np.nan
-            out[ok] = G(img) if backward else img
-        return out
     return system.images(X, n, backward=backward)
 
 

@@ -12,6 +12,7 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis import budget, system_sections
+from explorer.analysis.crossings_run import run
 from explorer.analysis.map_result import RETURN_TMAX, MapResult
 from explorer.integrate.methods import MAP_TOL, MAX_TOL, MIN_TOL
 from explorer.integrate.tangent import return_map_taylor
@@ -27,6 +28,8 @@ __all__ = ["DEFAULT_TOL", "MAP_SETTINGS", "MAX_STEPS", "RETURN_TMAX", "MapResult
 DEFAULT_TOL = MAP_TOL
 #: step budget of one return of the map (the time budget: RETURN_TMAX)
 MAX_STEPS = 10**8
+#: a batch of the map with fewer returns (points x n) runs on one thread
+SERIAL_RETURNS = 4096
 
 
 class SectionMap:
@@ -226,9 +229,23 @@ class SectionMap:
         return {"params": self.params, "h": self.h, "phi0": self.phi0}
 
     def images(self, X, n, *, backward=False) -> np.ndarray:
-        """The first ``n`` images of each point of X, point by point: (m, n, 2), NaN from a failure."""
+        """The first ``n`` images (preimages with ``backward``) of each point of X: (m, n, 2), NaN from
+        a failure; one batch of the lanes (backward through G0), else point by point."""
         X = np.asarray(X, float).reshape(-1, 2)
         out = np.full((X.shape[0], n, 2), np.nan)
+        G = self.reflection
+        if n and X.size and (G is not None or not backward):
+            Y = G(X) if backward else X
+            with np.errstate(invalid="ignore"):
+                ok = model.section_M2(self.params, Y[:, 0], Y[:, 1], self.h, self.phi0) > 0
+            if ok.any():
+                c = run(self.params, self.states(Y[ok]), n_crossings=n, phi0=self.phi0, tol=self.tol,
+                        tmax=self.tmax * n, threads=1 if int(ok.sum()) * n < SERIAL_RETURNS else None)
+                img = np.array(c.data[:, :n, 1:3], float)
+                for i in range(len(img)):
+                    img[i, c.count[i]:] = np.nan
+                out[ok] = G(img) if backward else img
+            return out
         for i, x in enumerate(X):
             if not np.all(np.isfinite(x)):
                 continue
