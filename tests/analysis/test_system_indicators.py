@@ -134,24 +134,41 @@ def _driver_run(hh, driver, threads, states, **kw):
     return system_indicators(hh, states=states, threads=threads, driver=driver, **dict(args, **kw))
 
 
-@pytest.mark.parametrize("kw", [{}, dict(early_stop=True, max_steps=865)], ids=["full", "early-stop-and-budget"])
-def test_each_lane_gives_the_scalar_drivers_indicators_bit_for_bit_on_one_or_two_threads(hh, kw):
-    """13 orbits (a full group of SIMD lanes and a partial one), regular and chaotic; with early stops and a
-    step budget, lanes take new orbits at different steps.  Every output equals the scalar driver's."""
+#: 13 orbits (a full group of SIMD lanes and a partial one), regular and chaotic
+THIRTEEN = [REGULAR, CHAOTIC, CHAOTIC_CT, REGULAR_CT] + [on_x0(1/8, v) for v in np.linspace(-0.3, 0.45, 9)]
+
+
+@pytest.fixture(scope="module", params=[{}, dict(early_stop=True, max_steps=865)],
+                ids=["full", "early-stop-and-budget"])
+def driver_runs(hh, request):
+    """The 13 orbits with every indicator on the scalar driver (2 threads) and on the SIMD lanes (1 and 2
+    threads); with early stops and a step budget, lanes take new orbits at different steps."""
+    runs = {(d, th): _driver_run(hh, d, th, THIRTEEN, **request.param) for d, th in
+            [("scalar", 2), ("lanes", 1), ("lanes", 2)]}
+    return request.param, runs
+
+
+def _assert_identical(got, ref):
+    for key in ("time", "Y", "status", "steps", "final", "history", "deviation", "early"):
+        np.testing.assert_array_equal(got[key], ref[key], err_msg=key, strict=True)
+    for name in ALL:
+        np.testing.assert_array_equal(got["values"][name], ref["values"][name], err_msg=name, strict=True)
+
+
+def test_each_lane_gives_the_scalar_drivers_indicators_bit_for_bit(driver_runs):
     from explorer.integrate.simd import LANES
 
-    states = [REGULAR, CHAOTIC, CHAOTIC_CT, REGULAR_CT] + [on_x0(1/8, v) for v in np.linspace(-0.3, 0.45, 9)]
-    assert LANES < len(states) < 2 * LANES
-    ref = _driver_run(hh, "scalar", 2, states, **kw)
-    for threads in (1, 2):
-        got = _driver_run(hh, "lanes", threads, states, **kw)
-        for key in ("time", "Y", "status", "steps", "final", "history", "deviation", "early"):
-            np.testing.assert_array_equal(got[key], ref[key], err_msg=key, strict=True)
-        for name in ALL:
-            np.testing.assert_array_equal(got["values"][name], ref["values"][name], err_msg=name, strict=True)
+    kw, runs = driver_runs
+    assert LANES < len(THIRTEEN) < 2 * LANES
+    _assert_identical(runs["lanes", 1], runs["scalar", 2])
     if kw:
-        status = set(ref["status"].tolist())
-        assert np.any(ref["early"] > 0) and {Status.DONE, Status.MAX_STEPS} <= status
+        status = set(runs["scalar", 2]["status"].tolist())
+        assert np.any(runs["scalar", 2]["early"] > 0) and {Status.DONE, Status.MAX_STEPS} <= status
+
+
+def test_indicators_of_a_system_are_identical_with_one_and_two_threads(driver_runs):
+    _, runs = driver_runs
+    _assert_identical(runs["lanes", 2], runs["lanes", 1])
 
 
 def test_the_section_map_lifts_its_points_to_the_states_of_the_flow(hh):
