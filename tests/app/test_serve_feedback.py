@@ -459,11 +459,12 @@ def test_a_links_unknown_keys_are_named_and_leave_the_address_and_an_overlong_li
 
 
 def test_a_one_megabyte_link_gets_the_page_not_a_connection_reset(served):
-    """(The page then says it ignores the link: the test above.)"""
+    """The server reads a request whose address is 1 MB (asked of /liveness, which builds no page; the
+    page then says it ignores such a link: the test above)."""
     import urllib.request
 
-    with urllib.request.urlopen(served.url.rstrip("/") + "/?mu=0.05&junk=" + "a" * 1_000_000, timeout=120) as r:
-        assert r.status == 200 and b"<html" in r.read(4000).lower()
+    with urllib.request.urlopen(served.url.rstrip("/") + "/liveness?junk=" + "a" * 1_000_000, timeout=60) as r:
+        assert r.status == 200
 
 
 #: how long the slow click holds the button (ms): past Bokeh's press threshold (300 ms), after

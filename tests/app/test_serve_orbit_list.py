@@ -26,8 +26,9 @@ from explorer.model import ParameterError
 #: chromium and the served page (`--mu 0.03`), as in test_serve.py (its module-scoped fixtures)
 browser = test_serve.browser
 served = test_serve.served
-#: crossings of an orbit long enough that a second click comes while it still runs (as test_serve's)
-LONG = 30_000
+#: crossings of an orbit long enough that a second click comes while it still runs (in-process the page
+#: computes only while polled, and an orbit's first block is 16 crossings)
+LONG = 5_000
 ROW = re.compile(r"<tr data-orbit='(\d+)' style='([^']*)'>(.*?)</tr>")
 CELL = re.compile(r"<td[^>]*>(.*?)</td>")
 
@@ -310,6 +311,6 @@ def test_in_the_browser_a_hidden_orbit_stays_hidden_after_a_reload(served, brows
                            " hidden: new URLSearchParams(location.search).get('hidden')}; }",
                      timeout=test_serve.FIRST_ORBIT_TIMEOUT_MS)
         assert (seen["crossings"], seen["live"], seen["starts"], seen["hidden"]) == (0, 0, 0, "1"), seen
-        assert f"<td style='padding:0 6px'>{SERVED.crossings}</td>" in seen["list"]
+        assert f">{SERVED.crossings}</td>" in seen["list"]
     finally:
         page.close()
