@@ -6,13 +6,18 @@
   ``<!-- BEGIN name -->`` and ``<!-- END name -->`` (appended when missing; the rest of the
   file is left alone);
 - header(...): the common first lines of a section (date, command, machine, versions, load);
-- best_of(fn, repeats, budget): timing runs; write_json(path, obj).
+- best_of(fn, repeats, budget), round_robin(jobs, max_runs, budget), runs_note(times): timing runs;
+  write_json(path, obj);
+- heyoka's side of the side-by-side runs: Recorder (the crossings an event callback records),
+  heyoka_lanes (a queue of orbits over the lanes of one ``taylor_adaptive_batch``) and spawned
+  (workers in spawned processes, timed after a barrier).
 """
 from __future__ import annotations
 
 import datetime as _dt
 import json
 import math
+import multiprocessing as mp
 import os
 import platform
 import re
@@ -229,3 +234,125 @@ def savefig(fig, path, title=None, rect=(0, 0, 1, 1)):
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
+
+
+def round_robin(jobs, max_runs, budget):
+    """Timing runs interleaved over rows, so that a burst of load from other processes spreads
+    over rows instead of spoiling one row.  jobs[i]() returns (seconds, cost, result); round r
+    runs every job that still has max_runs - r runs left and whose cumulative cost plus its best
+    time stays within budget (every job runs at least once).  Returns, per job, a dict with all
+    times, the best time and the result of the best run."""
+    state = [dict(times=[], best=math.inf, cost=0.0, res=None) for _ in jobs]
+    for rnd in range(max_runs):
+        for fn, st in zip(jobs, state):
+            if rnd > 0 and st["cost"] + st["best"] > budget:
+                continue
+            sec, cost, res = fn()
+            st["times"].append(sec)
+            st["cost"] += cost
+            if sec < st["best"]:
+                st["best"], st["res"] = sec, res
+    return state
+
+
+def runs_note(times):
+    n = len(times)
+    if n == 1:
+        return "1 run"
+    return f"best of {n} (runs {min(times):.2f}-{max(times):.2f} s)"
+
+
+class Recorder:
+    """Crossings recorded by heyoka's event callbacks: ts (N, K), ys (N, K, dim), count (N); ``lane``
+    the orbit of each batch lane (-1: none), ``orbit`` the orbit of the scalar integrator."""
+
+    def __init__(self, dim):
+        self.dim = dim
+        self.lane = np.full(1, -1, np.int64)
+        self.orbit = -1
+        self.reset(0, 1)
+
+    def reset(self, N, K):
+        self.K = K
+        self.ts = np.full((N, K), np.nan)
+        self.ys = np.full((N, K, self.dim), np.nan)
+        self.count = np.zeros(N, np.int64)
+
+    def record(self, o, t, y):
+        """Record a crossing of orbit o; False (stop the lane) once it has K."""
+        k = self.count[o]
+        self.ts[o, k] = t
+        self.ys[o, k] = y
+        self.count[o] = k + 1
+        return k + 1 < self.K
+
+
+def heyoka_lanes(ta, rec, Y0, tmax, status, steps):
+    """The rows of Y0 through the lanes of the ``taylor_adaptive_batch`` ``ta`` whose terminal event
+    records into ``rec`` and stops a lane after rec.K crossings: a lane that stops is refilled with the
+    next orbit (state, time 0, cooldowns reset) and the propagation resumes; lanes without work get a
+    time limit equal to their time (no step).  status[o]: 0 done, 1 time limit, 2 non-finite; steps[o]
+    the steps taken."""
+    S = int(ta.batch_size)
+    N = Y0.shape[0]
+    nxt = 0
+    rec.lane = np.full(S, -1, np.int64)
+    limit = np.zeros(S)
+
+    def refill(lanes):
+        nonlocal nxt
+        tt = np.array(ta.time, dtype=np.float64)
+        st = ta.state
+        for i in lanes:
+            if nxt < N:
+                rec.lane[i] = nxt
+                st[:, i] = Y0[nxt]
+                tt[i] = 0.0
+                limit[i] = tmax
+                nxt += 1
+            else:
+                rec.lane[i] = -1
+                limit[i] = tt[i]
+        ta.set_time(tt)
+        for i in lanes:
+            ta.reset_cooldowns(i)
+
+    refill(range(S))
+    while np.any(rec.lane >= 0):
+        ta.propagate_until(limit)
+        res = ta.propagate_res
+        tt = ta.time
+        done = []
+        for i in range(S):
+            o = rec.lane[i]
+            if o < 0:
+                continue
+            steps[o] += int(res[i][3])
+            if rec.count[o] >= rec.K:
+                done.append(i)
+            elif not np.all(np.isfinite(ta.state[:, i])):
+                status[o] = 2
+                done.append(i)
+            elif tt[i] >= limit[i]:
+                status[o] = 1
+                done.append(i)
+        if done:
+            refill(done)
+
+
+def spawned(target, args_per_process):
+    """Run ``target(*args, barrier, queue, tag)`` in one spawned process per entry of args_per_process
+    (tag: its index); each puts a dict with ``tag``, ``start`` and ``end`` (time.monotonic() around its
+    timed work, started after the barrier) on the queue.  Returns (the dicts in tag order, the wall time
+    of the timed work: latest end - earliest start, the total wall time with process starts)."""
+    ctx = mp.get_context("spawn")
+    n = len(args_per_process)
+    barrier, queue = ctx.Barrier(n), ctx.Queue()
+    T0 = time.monotonic()
+    procs = [ctx.Process(target=target, args=(*a, barrier, queue, r)) for r, a in enumerate(args_per_process)]
+    for p in procs:
+        p.start()
+    outs = sorted((queue.get() for _ in procs), key=lambda o: o["tag"])
+    for p in procs:
+        p.join()
+    return outs, max(o["end"] for o in outs) - min(o["start"] for o in outs), time.monotonic() - T0

@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import multiprocessing as mp
 import os
 import resource
 import shutil
@@ -45,7 +44,7 @@ import time
 
 import _common as C
 import numpy as np
-from bench_w4 import round_robin, runs_note
+from _common import Recorder, heyoka_lanes, round_robin, runs_note, spawned
 
 E_LEVEL = 1.0 / 8.0
 TOL = 1e-12
@@ -82,8 +81,8 @@ def starts(n):
 
 # ----------------------------------------------------------------------------- heyoka
 class HeyokaSystemSections:
-    """Crossings of a System's section with heyoka's batch mode: the harness of
-    bench_w4.HeyokaSections (a queue of orbits over the lanes of one ``taylor_adaptive_batch``,
+    """Crossings of a System's section with heyoka's batch mode: bench_w4's harness
+    (:func:`_common.heyoka_lanes`: a queue of orbits over the lanes of one ``taylor_adaptive_batch``,
     a terminal event whose callback records the crossing and stops the lane after K), for the
     System's equations (``heyoka.from_sympy``) and its section EXPR = 0 in ``direction``."""
 
@@ -99,7 +98,7 @@ class HeyokaSystemSections:
         eqs = [(hv[s], hy.from_sympy(sp.sympify(f).subs(vals), smap)) for s, f in zip(system.states, system.rhs)]
         ev_expr = hy.from_sympy(xs, smap)
         self.dim = system.dimension
-        rec = self.rec = _Recorder(self.dim)
+        rec = self.rec = Recorder(self.dim)
 
         def cb(ta, d_sgn, i):
             o = rec.lane[i]
@@ -116,69 +115,13 @@ class HeyokaSystemSections:
         self.build_time = time.perf_counter() - t0
 
     def run(self, Y0, K, tmax):
-        ta, S, rec = self.ta, self.simd, self.rec
         N = Y0.shape[0]
-        rec.reset(N, K)
+        self.rec.reset(N, K)
         steps = np.zeros(N, np.int64)
-        nxt = 0
-        rec.lane = np.full(S, -1, np.int64)
-        limit = np.zeros(S)
-
-        def refill(lanes):
-            nonlocal nxt
-            tt = np.array(ta.time, dtype=np.float64)
-            st = ta.state
-            for i in lanes:
-                if nxt < N:
-                    rec.lane[i] = nxt
-                    st[:, i] = Y0[nxt]
-                    tt[i] = 0.0
-                    limit[i] = tmax
-                    nxt += 1
-                else:
-                    rec.lane[i] = -1
-                    limit[i] = tt[i]
-            ta.set_time(tt)
-            for i in lanes:
-                ta.reset_cooldowns(i)
-
         t0 = time.perf_counter()
-        refill(range(S))
-        while np.any(rec.lane >= 0):
-            ta.propagate_until(limit)
-            res = ta.propagate_res
-            tt = ta.time
-            done = []
-            for i in range(S):
-                o = rec.lane[i]
-                if o < 0:
-                    continue
-                steps[o] += int(res[i][3])
-                if rec.count[o] >= K or not np.all(np.isfinite(ta.state[:, i])) or tt[i] >= limit[i]:
-                    done.append(i)
-            if done:
-                refill(done)
-        return dict(ts=rec.ts, ys=rec.ys, count=rec.count, steps=steps, elapsed=time.perf_counter() - t0)
-
-
-class _Recorder:
-    def __init__(self, dim):
-        self.dim = dim
-        self.lane = np.full(1, -1, np.int64)
-        self.reset(0, 1)
-
-    def reset(self, N, K):
-        self.K = K
-        self.ts = np.full((N, K), np.nan)
-        self.ys = np.full((N, K, self.dim), np.nan)
-        self.count = np.zeros(N, np.int64)
-
-    def record(self, o, t, y):
-        k = self.count[o]
-        self.ts[o, k] = t
-        self.ys[o, k] = y
-        self.count[o] = k + 1
-        return k + 1 < self.K
+        heyoka_lanes(self.ta, self.rec, Y0, tmax, np.zeros(N, np.int64), steps)
+        return dict(ts=self.rec.ts, ys=self.rec.ys, count=self.rec.count, steps=steps,
+                    elapsed=time.perf_counter() - t0)
 
 
 def _hy_worker(Y0, K, tol, simd, tmax, barrier, queue, tag):
@@ -194,25 +137,16 @@ def _hy_worker(Y0, K, tol, simd, tmax, barrier, queue, tag):
 def heyoka_processes(Y0, K, tol, simd, nproc, tmax):
     """Y0 over nproc spawned processes (orbit j to process j % nproc); wall = integration only
     (latest end - earliest start after a barrier), as bench_w4.heyoka_processes."""
-    ctx = mp.get_context("spawn")
-    barrier, queue = ctx.Barrier(nproc), ctx.Queue()
     parts = [np.arange(r, Y0.shape[0], nproc) for r in range(nproc)]
-    T0 = time.monotonic()
-    procs = [ctx.Process(target=_hy_worker, args=(Y0[idx], K, tol, simd, tmax, barrier, queue, r))
-             for r, idx in enumerate(parts)]
-    for p in procs:
-        p.start()
-    outs = [queue.get() for _ in procs]
-    for p in procs:
-        p.join()
+    outs, wall, total = spawned(_hy_worker, [(Y0[idx], K, tol, simd, tmax) for idx in parts])
     N, dim = Y0.shape
     merged = dict(ts=np.full((N, K), np.nan), ys=np.full((N, K, dim), np.nan), count=np.zeros(N, np.int64),
                   steps=np.zeros(N, np.int64))
     for o in outs:
         for key in ("ts", "ys", "count", "steps"):
             merged[key][parts[o["tag"]]] = o[key]
-    merged.update(wall=max(o["end"] for o in outs) - min(o["start"] for o in outs), total=time.monotonic() - T0,
-                  build=max(o["build"] for o in outs), order=outs[0]["order"], cpu=sum(o["cpu"] for o in outs))
+    merged.update(wall=wall, total=total, build=max(o["build"] for o in outs), order=outs[0]["order"],
+                  cpu=sum(o["cpu"] for o in outs))
     return merged
 
 
@@ -304,24 +238,14 @@ def _hy_chaos_worker(Y0, v0, T, tol, simd, ode, barrier, queue, tag):
 def heyoka_chaos(Y0, v0, T, tol, simd, nproc, ode):
     """The chaos map's MEGNO and mLCE with heyoka over nproc spawned processes (orbit j to process
     j % nproc); wall = integration only, after a barrier."""
-    ctx = mp.get_context("spawn")
-    barrier, queue = ctx.Barrier(nproc), ctx.Queue()
     parts = [np.arange(r, Y0.shape[0], nproc) for r in range(nproc)]
-    T0 = time.monotonic()
-    procs = [ctx.Process(target=_hy_chaos_worker, args=(Y0[idx], v0, T, tol, simd, ode, barrier, queue, r))
-             for r, idx in enumerate(parts)]
-    for p in procs:
-        p.start()
-    outs = [queue.get() for _ in procs]
-    for p in procs:
-        p.join()
+    outs, wall, total = spawned(_hy_chaos_worker, [(Y0[idx], v0, T, tol, simd, ode) for idx in parts])
     megno, mlce = np.full(Y0.shape[0], np.nan), np.full(Y0.shape[0], np.nan)
     for o in outs:
         megno[parts[o["tag"]]] = o["megno"]
         mlce[parts[o["tag"]]] = o["mlce"]
-    return dict(megno=megno, mlce=mlce, wall=max(o["end"] for o in outs) - min(o["start"] for o in outs),
-                total=time.monotonic() - T0, cpu=sum(o["cpu"] for o in outs), build=max(o["build"] for o in outs),
-                order=outs[0]["order"])
+    return dict(megno=megno, mlce=mlce, wall=wall, total=total, cpu=sum(o["cpu"] for o in outs),
+                build=max(o["build"] for o in outs), order=outs[0]["order"])
 
 
 def chaos_map(hh, quick, repeats, budget, threads, simd):
