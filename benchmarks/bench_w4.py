@@ -37,6 +37,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _common import Recorder, heyoka_lanes, round_robin, runs_note
 
 HERE = Path(__file__).resolve().parent
 RESULTS_MD = HERE / "RESULTS.md"
@@ -94,28 +95,6 @@ def _hy_system(P):
     return eqs, g1
 
 
-class _Recorder:
-    """Crossings recorded by the heyoka event callbacks."""
-
-    def __init__(self):
-        self.lane = np.full(1, -1, np.int64)
-        self.orbit = -1
-        self.reset(0, 1)
-
-    def reset(self, N, K):
-        self.K = K
-        self.ts = np.full((N, K), np.nan)
-        self.ys = np.full((N, K, 5), np.nan)
-        self.count = np.zeros(N, np.int64)
-
-    def record(self, o, t, y):
-        k = self.count[o]
-        self.ts[o, k] = t
-        self.ys[o, k] = y
-        self.count[o] = k + 1
-        return k + 1 < self.K
-
-
 class HeyokaSections:
     """Crossings of phi = pi (dphi/dt > 0) with heyoka.
 
@@ -138,7 +117,7 @@ class HeyokaSections:
         eqs, g1 = _hy_system(P)
         # The callbacks are closures over a plain namespace (heyoka deep-copies callback objects:
         # a bound method would drag a copy of self along; a function object is not copied).
-        self.rec = rec = _Recorder()
+        self.rec = rec = Recorder(5)
         if self.simd > 1:
             def cb_batch(ta, d_sgn, i):
                 o = rec.lane[i]
@@ -204,51 +183,7 @@ class HeyokaSections:
                 status[o] = 1 if np.all(np.isfinite(ta.state)) else 2
 
     def _run_batch(self, Y0, tmax, status, steps):
-        ta, S = self.ta, self.simd
-        N = Y0.shape[0]
-        nxt = 0
-        self.rec.lane = np.full(S, -1, np.int64)
-        limit = np.zeros(S)
-
-        def refill(lanes):
-            nonlocal nxt
-            tt = np.array(ta.time, dtype=np.float64)
-            st = ta.state
-            for i in lanes:
-                if nxt < N:
-                    self.rec.lane[i] = nxt
-                    st[:, i] = Y0[nxt]
-                    tt[i] = 0.0
-                    limit[i] = tmax
-                    nxt += 1
-                else:
-                    self.rec.lane[i] = -1
-                    limit[i] = tt[i]
-            ta.set_time(tt)
-            for i in lanes:
-                ta.reset_cooldowns(i)
-
-        refill(range(S))
-        while np.any(self.rec.lane >= 0):
-            ta.propagate_until(limit)
-            res = ta.propagate_res
-            tt = ta.time
-            done = []
-            for i in range(S):
-                o = self.rec.lane[i]
-                if o < 0:
-                    continue
-                steps[o] += int(res[i][3])
-                if self.rec.count[o] >= self.rec.K:
-                    done.append(i)
-                elif not np.all(np.isfinite(ta.state[:, i])):
-                    status[o] = 2
-                    done.append(i)
-                elif tt[i] >= limit[i]:
-                    status[o] = 1
-                    done.append(i)
-            if done:
-                refill(done)
+        heyoka_lanes(self.ta, self.rec, Y0, tmax, status, steps)
 
 
 def _hy_worker(P, Y0, K, tol, simd, tmax, barrier, queue, tag):
@@ -447,32 +382,6 @@ def versions():
     except Exception:  # pragma: no cover
         pass
     return v
-
-
-def round_robin(jobs, max_runs, budget):
-    """Timing runs interleaved over rows, so that a burst of load from other processes spreads
-    over rows instead of spoiling one row.  jobs[i]() returns (seconds, cost, result); round r
-    runs every job that still has max_runs - r runs left and whose cumulative cost plus its best
-    time stays within budget (every job runs at least once).  Returns, per job, a dict with all
-    times, the best time and the result of the best run."""
-    state = [dict(times=[], best=math.inf, cost=0.0, res=None) for _ in jobs]
-    for rnd in range(max_runs):
-        for fn, st in zip(jobs, state):
-            if rnd > 0 and st["cost"] + st["best"] > budget:
-                continue
-            sec, cost, res = fn()
-            st["times"].append(sec)
-            st["cost"] += cost
-            if sec < st["best"]:
-                st["best"], st["res"] = sec, res
-    return state
-
-
-def runs_note(times):
-    n = len(times)
-    if n == 1:
-        return "1 run"
-    return f"best of {n} (runs {min(times):.2f}-{max(times):.2f} s)"
 
 
 # ----------------------------------------------------------------------------- startup
