@@ -8,8 +8,8 @@ columns and statuses), ``final`` and ``deviation`` in the system's dimension n, 
 
 The tangent dynamics are the variational equations of :meth:`System.variational` (the symbolic
 Jacobian times the deviation vectors), whose Taylor recurrence is generated with the state's
-(:mod:`explorer.integrate.codegen`); the driver ``indicators_taylor`` (integrate/codegen_indicators.py)
-renormalises the vectors after every step and accumulates the indicators by
+(:mod:`explorer.integrate.codegen`); the drivers of integrate/codegen_indicators.py (scalar, or on SIMD
+lanes with the same results) renormalise the vectors after every step and accumulate the indicators by
 :mod:`explorer.kernels.tangent`, the engine's formulas.
 """
 from __future__ import annotations

@@ -1,7 +1,9 @@
-"""The chaos-indicator driver appended to every generated module (:data:`explorer.integrate.codegen.TEMPLATES`):
+"""The chaos-indicator drivers appended to every generated module (:data:`explorer.integrate.codegen.TEMPLATES`):
 ``indicators_taylor``, the adaptive Taylor method on the variational system of
 :meth:`explorer.model.system.System.variational` with the indicators of :mod:`explorer.kernels.tangent`
-(docs/systems.md, "Chaos indicators"), called by :mod:`explorer.analysis.system_indicators`.
+(docs/systems.md, "Chaos indicators"), and ``indicators_lanes``, the same for LANES orbits at once on
+SIMD lanes (each lane the scalar driver bit for bit, as :mod:`explorer.integrate.codegen_lanes`), called by
+:mod:`explorer.analysis.system_indicators`.
 
 It is rendered into every module but compiled only when called, on the module of ``System.variational(nvec)``:
 its rows are the state (n), then nvec deviation vectors (n each), so DIM = n (1 + nvec).
