@@ -244,13 +244,17 @@ class System:
     def content_hash(self) -> str:
         """SHA-256 (hex) of the symbolic content: ``srepr`` of the states, right-hand sides,
         parameter symbols (in order), energy and reversors (when there are any), and
-        :data:`HASH_FORMAT`.  Not of the parameter values (runtime data) nor the name."""
+        :data:`HASH_FORMAT`.  Not of the parameter values (runtime data) nor the name.  Kept once
+        computed (the content is fixed at construction; :meth:`with_` copies it)."""
+        if "_content_hash" in self.__dict__:
+            return self.__dict__["_content_hash"]
         parts = [f"format {HASH_FORMAT}", sp.srepr(self.states), sp.srepr(self.rhs),
                  sp.srepr(tuple(self.parameters)), sp.srepr(self.energy)]
         if self.reversors:
             parts.append("reversors " + sp.srepr(self.reversors))
         text = "\n".join(parts)
-        return hashlib.sha256(text.encode()).hexdigest()
+        self.__dict__["_content_hash"] = hashlib.sha256(text.encode()).hexdigest()
+        return self.__dict__["_content_hash"]
 
     def __repr__(self):
         eqs = ", ".join(f"d{s.name}/dt = {e}" for s, e in zip(self.states, self.rhs))
