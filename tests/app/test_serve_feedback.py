@@ -232,6 +232,19 @@ def test_on_the_chaos_layer_every_dot_has_a_casing_and_a_negative_megno_is_expla
     assert "stable periodic orbit" in megno_kind(-0.05) and "stopped early" in megno_kind(math.nan)
 
 
+def test_scene_seeds_mark_every_start_and_update_the_status_line_once_not_once_per_seed():
+    page = _page(SERVED)
+    try:
+        updates, update = [], page.orbits.update_status
+        page.orbits.update_status = lambda *a, **k: (updates.append(1), update(*a, **k))
+        n = page.run_seeds()
+        assert n > 50 and updates == [1]                      # (the list's table is rebuilt with it)
+        assert len(page.orbits.start_source.data["orbit"]) == n and f"{n} orbit(s), {n} running" in \
+            page.orbits.status.text
+    finally:
+        page.close()
+
+
 def test_start_markers_can_be_hidden_and_shown_again():
     page = _page(SERVED)
     try:

@@ -363,7 +363,8 @@ class SectionPage:
         for p1, p2 in starts:
             if settings_mod.room_for(len(self.orbits.starts) + 1, self.settings.crossings):
                 break
-            n += self.orbits.start(p1, p2) is not None
+            n += self.orbits.start(p1, p2, quiet=True) is not None
+        self.orbits.mark_starts()                # (once for all: not a status line and list per seed)
         if n < len(starts):
             why = settings_mod.room_for(len(self.orbits.starts) + 1, self.settings.crossings)
             self.say(f"scene seeds: {n} of {len(starts)} started ({why})")

@@ -110,9 +110,9 @@ class OrbitsLayer:
 
     # ------------------------------------------------------------ starts
     def start(self, p1: float, p2: float, color: int | None = None, mark_later: bool = False,
-              ident: int | None = None):
+              ident: int | None = None, quiet: bool = False):
         """Queue the orbit from (p1, p2) and mark its start (``mark_later`` on a served page: with its
-        first crossings); None outside the region."""
+        first crossings; ``quiet``: when the caller calls :meth:`mark_starts`); None outside the region."""
         settings = self.host.settings
         if not settings.admissible(p1, p2):
             return None
@@ -123,10 +123,14 @@ class OrbitsLayer:
         self.starts.append((run.ident, p1, p2, color))
         self._unmarked.append((run.ident, p1, p2, color))
         self.progress[run.ident] = (0, "running")
-        if not mark_later or self.session.doc is None:
-            self._mark_starts()
-            self.update_status()             # (else with the first crossings, in their flush)
+        if not quiet and (not mark_later or self.session.doc is None):
+            self.mark_starts()               # (else with the first crossings, in their flush)
         return run
+
+    def mark_starts(self) -> None:
+        """Mark the starts not marked yet, and the status line (and the orbit list) anew."""
+        self._mark_starts()
+        self.update_status()
 
     def _mark_starts(self):
         """Stream the crosses of the starts not yet marked."""
