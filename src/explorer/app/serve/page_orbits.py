@@ -13,17 +13,10 @@ import time
 import numpy as np
 from bokeh.models import CDSView, ColumnDataSource, CustomJSFilter, Div, LinearColorMapper
 
+from explorer.app.serve import style
 from explorer.app.serve.box import Box
 from explorer.app.serve.orbits import COLORS, INDICATOR_TIME, Worker
-from explorer.app.serve.style import (
-    DOT_CASING,
-    MEGNO_HIGH,
-    MEGNO_LOW,
-    MEGNO_ORBIT_SKIP,
-    POINT_SIZE,
-    megno_kind,
-    megno_palette,
-)
+from explorer.app.serve.style import MEGNO_HIGH, MEGNO_LOW, MEGNO_ORBIT_SKIP, POINT_SIZE, megno_palette
 
 #: blocks after an orbit's first go to the browser at most this often (s): each message redraws every dot
 FLUSH_SECONDS = 0.25
@@ -95,8 +88,9 @@ class OrbitsLayer:
         # the newest orbits (density.GLYPH_BUDGET) as dots, filtered in the browser: one number moves them
         self.glyph_filter = CustomJSFilter(name="glyphs", args={"first": 0}, code=GLYPH_FILTER)
         # under each dot, while the chaos layer is on, a white disc with a dark edge: seen on its every colour
-        self.casings = [fig.scatter("p1", "p2", source=src, size=DOT_CASING[0], fill_color=DOT_CASING[1],
-                                    line_color=DOT_CASING[2], line_width=DOT_CASING[3], visible=False, **kw)
+        size, fill, edge, width = style.DOT_CASING
+        self.casings = [fig.scatter("p1", "p2", source=src, size=size, fill_color=fill, line_color=edge,
+                                    line_width=width, visible=False, **kw)
                         for src, kw in ((self.shown, {"view": CDSView(filter=self.glyph_filter)}),
                                         (self.live, {"level": "overlay"}))]
         self.points = fig.scatter("p1", "p2", source=self.shown, color=self.by_orbit, size=POINT_SIZE, line_width=0,
@@ -304,7 +298,7 @@ class OrbitsLayer:
         if known:
             megno, mlce = self.indicators[known[-1]]
             text += (f"; orbit {known[-1]}: <Y> = {megno:.3g}, mLCE = {mlce:.3g} over t <= {INDICATOR_TIME:g}"
-                     f" ({megno_kind(megno)})")
+                     f" ({style.megno_kind(megno)})")
         self.status.text = text
         for listener in self._listeners:
             listener()
