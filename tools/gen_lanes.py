@@ -7,9 +7,10 @@ generator of every System (docs/systems.md), so the engine's recurrence is deriv
   ``taylor_coefficients_into``/``taylor_coefficients``/``taylor_coefficients_lanes``.
 - ``src/explorer/integrate/_tangent_lanes_generated.py``: in the engine's 15-row array (the orbit,
   then two deviation vectors from rows DEV1 = 5 and DEV2 = 10), the orbit and one deviation vector
-  (``tangent_coefficients*``: the orbit's recurrence, then rows 5..9 of ``chaplygin.variational(1)``
-  from the orbit's coefficients), and the second deviation vector alone (``deviation_coefficients*``:
-  rows 10..14 of ``chaplygin.variational(2)``).
+  (``tangent_coefficients*``: the orbit's decomposition extended by rows 5..9 of
+  ``chaplygin.variational(1)``, so the orbit's rows are R3's bit for bit), and the second deviation
+  vector alone (``deviation_coefficients*``: rows 10..14 of ``chaplygin.variational(2)``, from the
+  orbit's coefficients).
 
 Each lane of a ``*_lanes`` kernel computes bit for bit what its scalar twin computes (one generator
 emits both: the same operations in the same order).  Regenerate after changing the generator or
@@ -93,58 +94,39 @@ def generate():
                    ":mod:`explorer.integrate.lanes`.", constants, [r])
 
 
-#: the orbit and the first deviation vector: the orbit's recurrence, then the vector's (rows
-#: 0..4 are then R3's bit for bit, with or without deviation vectors)
-TANGENT = '''
-
-@njit(error_model="numpy")
-def tangent_coefficients(P, X, order):
-    """R3 and its variational equations from X[:, 0]: rows 0..4 (the orbit, as
-    explorer.integrate._lanes_generated.taylor_coefficients) and 5..9 (the deviation vector) of X."""
-    W = np.empty((N_WORK_TANGENT, order + 1))
-    taylor_coefficients_into(P, X, order, W)
-    first_deviation_coefficients_into(P, X, order, W)
-
-
-@njit(error_model="numpy")
-def tangent_coefficients_lanes(P, X, order, W):
-    """LANES orbits at once: rows 0..9 of X[k, row, l] (NROWS rows), k = 1..order, W of shape
-    (order + 1, N_WORK_TANGENT, LANES).  Each lane equals tangent_coefficients bit for bit."""
-    orbit_coefficients_lanes(P, X, order, W)
-    first_deviation_coefficients_lanes(P, X, order, W)
-'''
-
-
 def generate_tangent():
     """``_tangent_lanes_generated.py``: the orbit and a deviation vector, and a second deviation
     vector alone, scalar and on lanes, in the 15-row array."""
+    orbit = chaplygin.system()
     one = chaplygin.variational(vectors=1)
     two = chaplygin.variational(vectors=2)
-    orbit = codegen.recurrence(chaplygin.system(), "orbit_coefficients", n_work="N_WORK_TANGENT", ws="WS_TANGENT",
-                               lanes_doc=_lanes_doc("taylor_coefficients", "0..4", "N_WORK_TANGENT"))
-    parts = []
-    for system, name, first, which in ((one, "first_deviation_coefficients", DEV1, "The deviation vector"),
-                                       (two, "deviation_coefficients", DEV2, "The second deviation vector")):
-        rows = range(first, first + 5)
-        parts.append(codegen.recurrence(
-            system, name, [system.rhs[i] for i in rows], rows, n_work="N_WORK_TANGENT", ws="WS_TANGENT",
-            doc=_doc(f"{which} alone (the orbit's coefficients given in rows 0..4)", f"{first}..{first + 4}",
-                     "N_WORK_TANGENT"),
-            lanes_doc=_lanes_doc(name, f"{first}..{first + 4}", "N_WORK_TANGENT")))
-    work = max(orbit.n_work, *(r.n_work for r in parts), 1)
-    constants = ("from explorer.integrate._lanes_generated import taylor_coefficients_into\n\n"
-                 "#: rows of the lane array: the orbit (5) and two deviation vectors (5 each)\n"
+    # the orbit's own decomposition, extended by the first vector's equations: the orbit's rows are
+    # the same operations as in the orbit's recurrence, so R3's bit for bit
+    d = codegen.decompose(orbit)
+    codegen.decompose(one, one.rhs[DEV1:DEV1 + 5], into=d)
+    tangent = codegen.recurrence(
+        one, "tangent_coefficients", decomposition=d, n_work="N_WORK_TANGENT", ws="WS_TANGENT",
+        doc=_doc("R3 and its variational equations from X[:, 0] (rows 0..4: the orbit's recurrence's\n"
+                 "    operations, so its values)", "0..9", "N_WORK_TANGENT"),
+        lanes_doc=_lanes_doc("tangent_coefficients", "0..9", "N_WORK_TANGENT"))
+    rows = range(DEV2, DEV2 + 5)
+    deviation = codegen.recurrence(
+        two, "deviation_coefficients", [two.rhs[i] for i in rows], rows, n_work="N_WORK_TANGENT",
+        ws="WS_TANGENT",
+        doc=_doc("The second deviation vector alone (the orbit's coefficients given in rows 0..4)",
+                 f"{DEV2}..{DEV2 + 4}", "N_WORK_TANGENT"),
+        lanes_doc=_lanes_doc("deviation_coefficients", f"{DEV2}..{DEV2 + 4}", "N_WORK_TANGENT"))
+    work = max(tangent.n_work, deviation.n_work, 1)
+    constants = ("#: rows of the lane array: the orbit (5) and two deviation vectors (5 each)\n"
                  f"NROWS = {TANGENT_ROWS}\n#: first row of each deviation vector\nDEV1 = {DEV1}\nDEV2 = {DEV2}\n"
-                 "#: rows of the work array W[k, r, l] of every recurrence here (at least 1)\n"
+                 "#: rows of the work array W[k, r, l] of both recurrences (at least 1)\n"
                  f"N_WORK_TANGENT = {work}\n"
                  "#: flat strides of one order in the lane arrays X[k, i, l] and W[k, r, l]\n"
                  "XS = NROWS * LANES\nWS_TANGENT = N_WORK_TANGENT * LANES")
-    text = _module("explorer.model.chaplygin.system(), variational(1) and (2)",
+    return _module("explorer.model.chaplygin.system(), variational(1) and (2)",
                    "The Taylor recurrence of R3 with deviation vectors (its variational equations), generated:\n"
                    "the scalar form for :mod:`explorer.integrate.tangent`, the lane form for\n"
-                   ":mod:`explorer.integrate.tangent_lanes`; the orbit's rows by the orbit's own recurrence.",
-                   constants, parts)
-    return text + "\n\n" + orbit.lanes + TANGENT
+                   ":mod:`explorer.integrate.tangent_lanes`.", constants, [tangent, deviation])
 
 
 def operation_counts(kernel, order, tangent=False):

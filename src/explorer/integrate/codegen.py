@@ -252,16 +252,18 @@ class _Builder:
         return self.node("mul", sq, u) if n % 2 else sq
 
 
-def decompose(system: System, expressions=None) -> Decomposition:
+def decompose(system: System, expressions=None, into: Decomposition | None = None) -> Decomposition:
     """The elementary operations of ``expressions`` (default: the right-hand sides), common
-    subexpressions shared (``sympy.cse``, then equal subtrees are one node)."""
+    subexpressions shared (``sympy.cse``, then equal subtrees are one node).  ``into``: a
+    decomposition to extend (its nodes and outputs kept as they are, equal nodes shared; the
+    states' and parameters' indices must be the same in both systems)."""
     exprs = list(system.rhs if expressions is None else expressions)
     replacements, reduced = sp.cse(exprs, order="none")
-    d = Decomposition()
+    d = Decomposition() if into is None else into
     b = _Builder(system, d)
     for sym, e in replacements:
         b.memo[sym] = b.visit(e)
-    d.outputs = [b.visit(e) for e in reduced]
+    d.outputs = d.outputs + [b.visit(e) for e in reduced]
     return d
 
 
@@ -677,11 +679,12 @@ class Recurrence:
 
 def recurrence(system: System, name: str = "taylor_coefficients", expressions=None, rows=None, *,
                n_work: str = "N_WORK", xs: str = "XS", ws: str = "WS", doc: str = SCALAR_DOC,
-               lanes_doc: str = LANES_DOC) -> Recurrence:
-    """The scalar and SIMD recurrence of ``expressions`` (default: the right-hand sides; the output i
-    stored in row ``rows[i]`` of X, default i), named ``name``; ``n_work``, ``xs``, ``ws``: the names
-    of the module's constants it reads (its work rows, the flat strides of one order in X and W)."""
-    d = decompose(system, expressions)
+               lanes_doc: str = LANES_DOC, decomposition: Decomposition | None = None) -> Recurrence:
+    """The scalar and SIMD recurrence of ``expressions`` (default: the right-hand sides; or of a
+    ``decomposition`` already made; the output i stored in row ``rows[i]`` of X, default i), named
+    ``name``; ``n_work``, ``xs``, ``ws``: the names of the module's constants it reads (its work rows,
+    the flat strides of one order in X and W)."""
+    d = decompose(system, expressions) if decomposition is None else decomposition
     e = _Emitter(d, rows=rows)
     scalars = _indent(e.scalar_lines(), 4)
     first, next_ = e.next_lines()
