@@ -347,15 +347,15 @@ def libm_log_per_lane(reps=2_000_000):
 
 
 def recurrence_asm(tangent):
-    """The Cauchy-product loop of the generated recurrence (the deviation vector's, for the tangent;
-    a fresh, uncached compile of the kernel, so that numba can show its assembly)."""
+    """The Cauchy-product loop of the generated recurrence (a fresh, uncached compile of the kernel,
+    so that numba can show its assembly)."""
     from numba import types
 
     from explorer._jit import njit
     from explorer.integrate import _lanes_generated as LG
     from explorer.integrate import _tangent_lanes_generated as TG
 
-    mod, name = (TG, "first_deviation_coefficients_lanes") if tangent else (LG, "taylor_coefficients_lanes")
+    mod, name = (TG, "tangent_coefficients_lanes") if tangent else (LG, "taylor_coefficients_lanes")
     k = njit(cache=False, error_model="numpy")(getattr(mod, name).py_func)
     arr1, arr3 = types.Array(types.float64, 1, "C"), types.Array(types.float64, 3, "C")
     k.compile((arr1, arr3, types.int64, arr3))
