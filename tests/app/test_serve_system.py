@@ -40,6 +40,20 @@ def test_serve_system_names_what_to_give_for_a_bare_system_and_refuses_chaplygin
     assert base.fields() == {"lam": "1.0", "energy": "0.1", "tol": "1e-13", "crossings": "30"}
 
 
+def test_a_systems_scene_gives_the_page_its_panel_crossings_and_seeds(tmp_path):
+    from explorer.app.serve.command import page_from_args
+
+    scene = tmp_path / "hh.toml"
+    scene.write_text('name = "hh"\nsystem = "tests.systems:henon_heiles"\nsection = "x"\ndirection = 1\n'
+                     'coords = ["y", "py"]\nsolve = "px"\n[energy]\nvalue = 0.125\n[sweep]\nparameter = "lam"\n'
+                     'values = [0.5, 1.0]\n[seeds]\nkind = "points"\npoints = [[0.1, 0.1], [0.6, 0.45]]\n'
+                     '[integration]\ncrossings = 50\n')
+    base, label, seeds = page_from_args(cli.build_parser().parse_args(["serve", str(scene), "--panel", "1"]))
+    assert label == "hh: lam = 1.0" and base.fields() == {"lam": "1.0", "energy": "0.125", "tol": "1e-13",
+                                                          "crossings": "50"}
+    assert base.seed_starts(seeds) == [(0.1, 0.1)]                       # (0.6, 0.45) is off the level
+
+
 def test_a_link_naming_a_system_imports_nothing_and_changes_nothing(monkeypatch):
     from explorer.app.serve.page import SectionPage
     from explorer.app.serve.settings import Settings

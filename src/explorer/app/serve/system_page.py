@@ -190,5 +190,5 @@ def system_page(value=None, scene=None, panel: int = 0, **overrides) -> tuple:
     energy = overrides.pop("energy", None)
     if energy is not None:
         smap = smap.with_value("energy", validation.real("--h", energy))
-    s = SystemSettings(smap, **{k: v for k, v in {**base, **overrides}.items() if v is not None})
+    s = SystemSettings(smap, **{**base, **{k: v for k, v in overrides.items() if v is not None}})
     return s, label, seeds
