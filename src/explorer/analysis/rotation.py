@@ -12,8 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from explorer import model
-from explorer.analysis.maps import is_section_map
+from explorer.analysis.flow_lift import WRAP_SAFE
 from explorer.analysis.section_map import system_first
 from explorer.integrate.methods import MAP_TOL
 from explorer.model import ParameterError, validation
@@ -28,19 +27,6 @@ CONVERGED_TOL = 1e-10
 DEFAULT_ITERATES = 2000
 #: Taylor tolerance of the orbits (the rotation number inherits the integration error)
 DEFAULT_TOL = MAP_TOL
-#: sub-sections per return at the first try
-SUBSECTIONS = 4
-#: most sub-sections per return: an orbit still under-sampled there is "unresolved"
-MAX_SUBSECTIONS = 256
-#: largest change of the angle between two consecutive samples accepted as resolved
-MAX_SUBSTEP = 0.5 * math.pi
-#: the fast path: when every return's increment, wrapped to (-pi, pi], stays within this bound, the
-#: wrapped increments are the lifted ones less one constant 2 pi j (docs/commands/rotation.md)
-WRAP_SAFE = 0.75 * math.pi
-#: time budget of an orbit per return
-TMAX_PER_RETURN = 1e3
-
-
 def birkhoff_weights(N: int) -> np.ndarray:
     """Normalised weights w(n/N), n = 0..N-1, w(t) = exp(-1/(t (1 - t))) (w(0) = 0)."""
     t = np.arange(N) / N
@@ -94,7 +80,7 @@ class RotationNumber:
                 "iterates": int(self.iterates), "status": self.status}
 
 
-def _center(params, h, center, near, phi0, tol):
+def _center(system, center, near):
     if center is not None:
         c = np.asarray(getattr(center, "point", center), float)
         if c.shape != (2,) or not np.all(np.isfinite(c)):
@@ -102,106 +88,16 @@ def _center(params, h, center, near, phi0, tol):
         return c
     from explorer.analysis.fixedpoints import find_fixed_point
 
-    fp = find_fixed_point(params, h, near, phi0=phi0, tol=tol)
-    return fp.point
+    return find_fixed_point(system, near).point
 
 
-class _Samples:
-
-    def __init__(self, params, h, starts, center, n_returns, phi0, tol, threads):
-        self.args = (params, n_returns, phi0, tol, threads)
-        self.center = center
-        self.starts = starts
-        self.Y0 = model.section_state(params, np.concatenate([[center[0]], starts[:, 0]]),
-                                      np.concatenate([[center[1]], starts[:, 1]]), h, phi0, 1)
-        self.runs: dict = {}
-
-    def at(self, f: float):
-        """Crossings of phi0 + 2 pi f, 0 <= f < 1 (f = 0: the returns to the section)."""
-        if f not in self.runs:
-            from explorer.analysis.sections import crossings
-
-            params, n_returns, phi0, tol, threads = self.args
-            c = crossings(params, states=self.Y0, n_crossings=n_returns, phi0=phi0 + 2.0 * math.pi * f, tol=tol,
-                          threads=threads, tmax=TMAX_PER_RETURN * n_returns)
-            if c.count[0] < 1:
-                raise ParameterError(f"center {tuple(self.center)} must be a point whose orbit crosses the "
-                                     f"section; its orbit stopped ({c.status_name(0)})")
-            self.runs[f] = c
-        return self.runs[f]
-
-    def increments(self, rows, m: int):
-        """For the orbits ``rows`` sampled on m sub-sections: (per-return increments (n, n_returns),
-        largest sample-to-sample change (n,), returns reached (n,), status names (n,)); rows of
-        orbits that stopped early or turned back are NaN."""
-        _, n_returns, _, _, _ = self.args
-        n = rows.size
-        xs = np.empty((n, n_returns, m, 2))     # x at phi0 + 2 pi (lap + (k + 1)/m), k = 0..m-1
-        ts = np.empty((n, n_returns, m))
-        ref = np.empty((m, 2))
-        count = np.full(n, n_returns)
-        status = np.array(["done"] * n, dtype=object)
-        for k in range(1, m + 1):
-            c = self.at((k % m) / m)
-            ref[k - 1] = self.center if k == m else c.data[0, 0, 1:3]
-            xs[:, :, k - 1] = c.data[1 + rows, :, 1:3]
-            ts[:, :, k - 1] = c.data[1 + rows, :, 0]
-            for i in np.flatnonzero(c.count[1 + rows] < count):
-                count[i], status[i] = c.count[1 + rows[i]], c.status_name(1 + rows[i])
-        theta = np.arctan2(xs[..., 1] - ref[:, 1], xs[..., 0] - ref[:, 0]).reshape(n, -1)
-        x0 = self.starts[rows]
-        theta0 = np.arctan2(x0[:, 1] - self.center[1], x0[:, 0] - self.center[0])
-        d = np.diff(np.concatenate([theta0[:, None], theta], axis=1), axis=1)
-        d -= 2.0 * np.pi * np.ceil((d - np.pi) / (2.0 * np.pi))
-        t = np.concatenate([np.zeros((n, 1)), ts.reshape(n, -1)], axis=1)
-        with np.errstate(invalid="ignore"):
-            turned = ~np.all(np.diff(t, axis=1) > 0.0, axis=1) & (count == n_returns)
-        status[turned] = "turned"
-        d[turned] = np.nan
-        return d.reshape(n, n_returns, m).sum(axis=2), np.abs(d).max(axis=1, initial=0.0), count, status
+def _inside(system, points) -> bool:
+    return all(system.in_domain(x) for x in np.reshape(points, (-1, 2)))
 
 
-def _refined(samples: _Samples, n: int):
-    inc = np.full((n, samples.args[1]), np.nan)
-    count = np.zeros(n, np.int64)
-    status = np.array(["unresolved"] * n, dtype=object)
-    todo = np.arange(n)
-    m = SUBSECTIONS
-    while todo.size and m <= MAX_SUBSECTIONS:
-        d, worst, cnt, st = samples.increments(todo, m)
-        ok = (worst <= MAX_SUBSTEP) | (st != "done")
-        inc[todo[ok]], count[todo[ok]], status[todo[ok]] = d[ok], cnt[ok], st[ok]
-        count[todo[~ok]] = cnt[~ok]
-        todo, m = todo[~ok], 2 * m
-    return inc, count, status
-
-
-def _lifted_increments(params, h, starts, center, n_returns, phi0, tol, threads):
-    n = starts.shape[0]
-    args = (params, h)
-    tail = (phi0, tol, threads)
-    # the returns alone (m = 1): the increments wrapped to (-pi, pi]
-    inc, worst, count, status = _Samples(*args, starts, center, n_returns, *tail).increments(np.arange(n), 1)
-    lifted = np.zeros(n, bool)
-    safe = np.flatnonzero((status == "done") & (worst <= WRAP_SAFE))
-    if safe.size:
-        first, _, st = _refined(_Samples(*args, starts[safe], center, 1, *tail), safe.size)
-        j = np.round((first[:, 0] - inc[safe, 0]) / (2.0 * np.pi))
-        known = (st == "done") & np.isfinite(j)
-        inc[safe[known]] += 2.0 * np.pi * j[known, None]
-        lifted[safe[known]] = True
-    rest = np.flatnonzero((status == "done") & (worst > WRAP_SAFE))
-    if rest.size:
-        d, cnt, st = _refined(_Samples(*args, starts[rest], center, n_returns, *tail), rest.size)
-        inc[rest], count[rest], status[rest] = d, cnt, st
-        lifted[rest] = st == "done"
-    return inc, count, status, lifted
-
-
-def _rotations(params, h, starts, center, N, phi0, tol, threads, conv_tol):
+def _rotations(system, starts, center, N, threads, conv_tol):
     starts = np.atleast_2d(np.asarray(starts, float))
-    inc, count, status, lifted = _lifted_increments(params, h, starts, np.asarray(center, float), 2 * N, phi0, tol,
-                                                    threads)
+    inc, count, status, lifted = system.lifted_increments(starts, np.asarray(center, float), 2 * N, threads)
     out = []
     for i, s in enumerate(starts):
         if status[i] != "done":
@@ -242,9 +138,8 @@ def orbit_turns(system, start, center, n: int) -> float:
     """Turns per return around ``center`` over the first ``n`` returns from ``start`` (a section map's
     lifted through the flow); ParameterError where the lift is not defined."""
     x, c = np.asarray(start, float), np.asarray(center, float)
-    if is_section_map(system):
-        inc, _, status, _ = _lifted_increments(system.params, system.h, x[None, :], c, n, system.phi0, system.tol,
-                                               None)
+    if hasattr(system, "lifted_increments"):     # the map lifts them through its flow
+        inc, _, status, _ = system.lifted_increments(x[None, :], c, n)
         why = status[0]
         inc = inc[0] if why == "done" else None
     else:
@@ -287,16 +182,14 @@ def _lifted_through_gap(inc):
 def rotation_number(system, start, *, center=None, iterates=DEFAULT_ITERATES, conv_tol=CONVERGED_TOL,
                     threads=None) -> RotationNumber:
     """Rotation number of the orbit of ``start`` around an elliptic fixed point (weighted Birkhoff)."""
-    if not is_section_map(system):
+    if not hasattr(system, "lifted_increments"):
         return _map_rotation(system, start, center, validation.integer("iterates", iterates, 10), conv_tol)
-    params, h, phi0, tol = system.params, system.h, system.phi0, system.tol
     N = validation.integer("iterates", iterates, 10)
     x = np.asarray(start, float)
-    if x.shape != (2,) or not model.is_admissible(params, x[0], x[1], h, phi0):
-        raise ParameterError(f"start {tuple(np.ravel(x))} must be a point (p1, p2) of the allowed region; allowed: "
-                             f"{model.describe_region(params, h, phi0)}")
-    c = _center(params, h, center, x, phi0, tol)
-    return _rotations(params, h, x, c, N, phi0, tol, threads, conv_tol)[0]
+    if x.shape != (2,) or not _inside(system, x):
+        raise ParameterError(f"start {tuple(np.ravel(x))} must be a point (p1, p2) of the allowed region; "
+                             f"{system.describe_domain()}")
+    return _rotations(system, x, _center(system, center, x), N, threads, conv_tol)[0]
 
 
 @dataclass(frozen=True)
@@ -334,7 +227,7 @@ def rotation_profile(system, start, stop, *, n, center=None, iterates=DEFAULT_IT
     a, b = np.asarray(start, float), np.asarray(stop, float)
     s = np.linspace(0.0, 1.0, n)
     pts = a[None, :] + s[:, None] * (b - a)[None, :]
-    if not is_section_map(system):
+    if not hasattr(system, "lifted_increments"):
         per = getattr(system, "periods", None)
         if center is None and not (per is not None and per[0] > 0):
             from explorer.analysis.fixedpoints import find_fixed_point
@@ -345,13 +238,11 @@ def rotation_profile(system, start, stop, *, n, center=None, iterates=DEFAULT_IT
         return RotationProfile(pts, s, np.array([r.value for r in rs]), np.array([r.converged for r in rs]),
                                np.array([r.difference for r in rs]), c, 2 * N, np.array([r.turns for r in rs]),
                                tuple(r.status for r in rs))
-    params, h, phi0, tol = system.params, system.h, system.phi0, system.tol
-    bad = ~model.is_admissible(params, pts[:, 0], pts[:, 1], h, phi0)
-    if bad.any():
-        raise ParameterError(f"the segment from {tuple(a)} to {tuple(b)} leaves the allowed region; allowed: "
-                             f"{model.describe_region(params, h, phi0)}")
-    c = _center(params, h, center, a, phi0, tol)
-    rs = _rotations(params, h, pts, c, N, phi0, tol, threads, conv_tol)
+    if not _inside(system, pts):
+        raise ParameterError(f"the segment from {tuple(a)} to {tuple(b)} leaves the allowed region; "
+                             f"{system.describe_domain()}")
+    c = _center(system, center, a)
+    rs = _rotations(system, pts, c, N, threads, conv_tol)
     return RotationProfile(pts, s, np.array([r.value for r in rs]), np.array([r.converged for r in rs]),
                            np.array([r.difference for r in rs]), c, 2 * N, np.array([r.turns for r in rs]),
                            tuple(r.status for r in rs))
@@ -374,13 +265,12 @@ def frequency_diffusion(system, starts, *, center, iterates=DEFAULT_ITERATES, th
     if X.ndim != 2 or X.shape[1] != 2:
         raise ParameterError(f"starts must be points (n, 2), got shape {np.shape(starts)}")
     N = validation.integer("iterates", iterates, 10)
-    if is_section_map(system):
+    if hasattr(system, "lifted_increments"):
         if center is None:
             raise ParameterError("frequency_diffusion on a section map needs center=(p1, p2): the point the "
                                  "rotation numbers turn around (e.g. an elliptic fixed point)")
         c = np.asarray(getattr(center, "point", center), float)
-        inc, count, status, _ = _lifted_increments(system.params, system.h, X, c, 2 * N, system.phi0, system.tol,
-                                                   threads)
+        inc, count, status, _ = system.lifted_increments(X, c, 2 * N, threads)
         inc[status != "done"] = np.nan
     else:
         inc = np.full((len(X), 2 * N), np.nan)

@@ -13,6 +13,7 @@ import numpy as np
 from explorer import model
 from explorer.analysis import budget, system_sections
 from explorer.analysis.crossings_run import run
+from explorer.analysis.flow_lift import lifted_increments
 from explorer.analysis.map_result import RETURN_TMAX, MapResult
 from explorer.integrate.methods import MAP_TOL, MAX_TOL, MIN_TOL
 from explorer.integrate.tangent import return_map_taylor
@@ -259,6 +260,12 @@ class SectionMap:
                         break
                     out[i, j] = x
         return out
+
+    def lifted_increments(self, starts, center, n, threads=None):
+        """(increments (m, n) around ``center``, returns reached, status names, lifted) of the orbits from
+        ``starts``, lifted through the flow (:func:`explorer.analysis.flow_lift.lifted_increments`)."""
+        return lifted_increments(self.params, self.h, np.atleast_2d(np.asarray(starts, float)),
+                                 np.asarray(center, float), n, self.phi0, self.tol, threads)
 
     def jacobian(self, x) -> np.ndarray:
         """DP(x), the 2x2 Jacobian of the map at x."""
