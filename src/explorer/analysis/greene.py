@@ -1,5 +1,6 @@
-"""Greene's residue criterion (docs/greene.md): :func:`greene`, and the standard map's symmetric orbits
-by the half-orbit method ("The half-orbit (symmetry-line) method")."""
+"""Greene's residue criterion (docs/greene.md): :func:`greene` and :func:`symmetric_orbit`, which ask the
+map for its symmetric orbits: a section map's half turns ("Greene on a System"), the standard map's
+half-orbit method ("The half-orbit (symmetry-line) method")."""
 from __future__ import annotations
 
 import math
