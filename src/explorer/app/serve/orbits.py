@@ -5,6 +5,7 @@ them newest first, then round robin.  No web library here.
 """
 from __future__ import annotations
 
+import copy
 import math
 import time
 from collections.abc import Callable
@@ -64,6 +65,14 @@ class OrbitRun:
     wants_indicators: bool = True
     estimated: bool = False
     step_rate: float = 0.0
+    ahead: np.ndarray = field(default_factory=lambda: np.zeros((0, 5)))   # rows computed past ``done``, cut
+    after: str = "running"         # the status once ``ahead`` is handed out
+
+    def reopen(self) -> None:
+        """Compute on to a larger count from where the run stopped at its own."""
+        self.state = self.state.copy()
+        self.state.finished[:] = False
+        self.status = "running"
 
     def __post_init__(self):
         s = self.settings
@@ -154,6 +163,9 @@ class SystemRun(OrbitRun):
     def finished(self) -> bool:
         return self._finished
 
+    def reopen(self) -> None:
+        self._finished, self.status = False, "running"
+
     def _next_block(self) -> tuple:
         from explorer.analysis.system_sections import system_crossings
         from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS
@@ -206,6 +218,7 @@ class Worker:
         self._on_indicators, self._on_notice = on_indicators, on_notice
         self._runs: list[OrbitRun] = []
         self._paused: list[OrbitRun] = []     # set aside by pause(), in the order they had
+        self._ended: list[OrbitRun] = []      # finished, kept for a change of the crossings (recount)
         self._next_id = 0
         self._rr = 0
 
@@ -226,13 +239,55 @@ class Worker:
 
     def cancel(self) -> None:
         """Stop every queued, running or paused orbit (the block in progress is dropped)."""
-        self._runs, self._paused = [], []
+        self._runs, self._paused, self._ended = [], [], []
         self.session.cancel("orbits")
 
     def remove(self, ident: int) -> None:
         """Stop one orbit, running or paused (undo)."""
         self._runs = [r for r in self._runs if r.ident != ident]
         self._paused = [r for r in self._paused if r.ident != ident]
+        self._ended = [r for r in self._ended if r.ident != ident]
+
+    def recount(self, settings, cut: Callable[[int, int], np.ndarray], clear: Callable[[int], None]) -> dict:
+        """Every orbit at ``settings``, which differ only in the crossings per click K: an orbit past K
+        is cut to K (``cut(ident, K)`` takes its rows past K off the page and returns them, kept in
+        :attr:`OrbitRun.ahead`); one short of K gets its kept rows, then continues exactly where it
+        stopped, or reruns from its start (``clear(ident)`` first) when its stop depends on K (its time
+        budget, 100 K).  A block in progress is dropped.  Returns {ident: (crossings, status)}."""
+        out: dict = {}
+        groups = (self._runs, self._paused, self._ended)
+        self._runs, self._paused, self._ended = [], [], []
+        for paused, runs in zip((False, True, False), groups):
+            for run in runs:
+                run = self._recount(run, settings, cut, clear)
+                (self._ended if run.status != "running" else self._paused if paused else self._runs).append(run)
+                out[run.ident] = (run.done, run.status)
+        self._ensure_running()
+        return out
+
+    def _recount(self, run: OrbitRun, settings, cut, clear) -> OrbitRun:
+        k, run.settings = settings.crossings, settings
+        if run.done > k:
+            if not len(run.ahead):
+                run.after = run.status
+            run.ahead = np.concatenate([cut(run.ident, k), run.ahead])
+            run.done, run.status = k, "done"
+            return run
+        end = run.after if len(run.ahead) else run.status      # the status at the end of its rows
+        if end == "tmax" and run.done + len(run.ahead) < k:     # (its time budget, 100 K, grows with K)
+            clear(run.ident)
+            return settings.new_run(run.ident, run.p1, run.p2)
+        rows, run.ahead = run.ahead[:k - run.done], run.ahead[k - run.done:]
+        run.done += len(rows)
+        run.status = "done" if len(run.ahead) else end
+        if run.status in ("running", "done"):
+            run.status = "done" if run.done >= k else "running"
+            if run.status == "running" and run.finished:
+                run.reopen()
+                run.estimated = False
+        if len(rows):
+            self._on_block(run.ident, rows, run.done, run.status)
+        return run
 
     def pause(self) -> list[int]:
         """Set every running orbit aside (the block in progress is still applied); returns their
@@ -275,32 +330,29 @@ class Worker:
         return self._runs[self._rr]
 
     def _queued(self, run: OrbitRun) -> bool:
-        return any(r is run for r in self._runs + self._paused)
+        return any(r is run for r in self._runs + self._paused + self._ended)
 
     async def _loop(self) -> None:
-        """The task: block after block of the queued orbits until none is left."""
+        """The task: block after block of the queued orbits until none is left.  A block is computed
+        on a copy of its run, handed out only if the run is still queued at the same settings."""
         session = self.session
         while (run := self._pick()) is not None:
+            work = copy.copy(run)
             try:
-                rows = await session.run(run.advance)
+                rows = await session.run(work.advance)
                 notice = None
-                if not run.estimated:
-                    run.estimated = True
-                    notice = await session.run(self._estimate, run)
+                if not work.estimated:
+                    work.estimated = True
+                    notice = await session.run(self._estimate, work)
             except Exception as exc:  # noqa: BLE001 - reported in the page; the server keeps serving
                 if self._queued(run):
                     self.remove(run.ident)
                     if self._on_error is not None:
                         await session.apply(partial(self._on_error, run.ident, exc))
                 continue
+            await session.apply(partial(self._hand_out, run, work, rows, notice))
             if not self._queued(run):       # removed while its block was computed
                 continue
-            if run.finished:
-                self.remove(run.ident)
-            if notice is not None and self._on_notice is not None:
-                await session.apply(partial(self._on_notice, run.ident, notice))
-            if len(rows) or run.finished:   # (a block cut at its steps before a crossing: nothing to show)
-                await session.apply(partial(self._on_block, run.ident, rows, run.done, run.status))
             if run.wants_indicators and (run.finished or run.wall >= INDICATOR_AFTER) and \
                     self._on_indicators is not None:
                 run.wants_indicators = False      # once the orbit is finished (or has run INDICATOR_AFTER)
@@ -309,3 +361,16 @@ class Worker:
                 except Exception:  # noqa: BLE001 - an indicator that fails is shown as unknown
                     megno = mlce = math.nan
                 await session.apply(partial(self._on_indicators, run.ident, megno, mlce))
+
+    def _hand_out(self, run: OrbitRun, work: OrbitRun, rows: np.ndarray, notice: str | None) -> None:
+        """(On the loop) the block computed on ``work`` becomes ``run``'s, and goes to the page."""
+        if not self._queued(run) or work.settings is not run.settings:   # removed or recounted meanwhile
+            return
+        run.__dict__.update(work.__dict__)
+        if run.finished:
+            self.remove(run.ident)
+            self._ended.append(run)
+        if notice is not None and self._on_notice is not None:
+            self._on_notice(run.ident, notice)
+        if len(rows) or run.finished:   # (a block cut at its steps before a crossing: nothing to show)
+            self._on_block(run.ident, rows, run.done, run.status)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextlib
 import math
 import time
+from dataclasses import replace
 from typing import Any
 from urllib.parse import parse_qsl, urlencode, urlsplit
 
@@ -310,8 +311,15 @@ class SectionPage:
         self.apply(new)
 
     def apply(self, new: Settings) -> None:
-        """New settings: the orbits stop, the region is redrawn, the starts inside it run again."""
+        """New settings: the orbits stop, the region is redrawn, the starts inside it run again; a new
+        crossings per click alone cuts each orbit to it or continues it (OrbitsLayer.recount)."""
         if new == self.settings:
+            return
+        if new.crossings != self.settings.crossings and replace(self.settings, crossings=new.crossings) == new:
+            self.settings = new           # (only the crossings per click: each orbit is cut or continues)
+            self.orbits.recount(new)
+            self._show_fields()
+            self.push_url()
             return
         hidden = set(self.orbits.hidden)
         old = self._drop_orbits()

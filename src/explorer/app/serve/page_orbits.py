@@ -31,6 +31,8 @@ GLYPH_FILTER = ("const o = source.data.orbit, n = o.length, rows = [];\n"
                 "return rows;")
 #: the columns of the page's crossings (and c, the orbit's colour index)
 CROSSING_COLUMNS = ("orbit", "t", "p1", "p2", "M", "dH", "megno")
+#: the columns of a block's rows (orbits.OrbitRun.advance)
+ROW_COLUMNS = ("t", "p1", "p2", "M", "dH")
 
 
 def _empty_crossings() -> dict:
@@ -185,6 +187,48 @@ class OrbitsLayer:
         self.show_all()
         self._unmarked += [s for s in self.starts if s[0] == ident]
         self._mark_starts()
+
+    def recount(self, settings) -> None:
+        """New ``settings`` that differ only in the crossings per click K (Worker.recount): each orbit
+        past K is cut to its first K rows, each one short of K continues exactly, none reruns."""
+        now = self.worker.recount(settings, self._cut, self._clear)
+        self._pending = [(i, rows, done, now[i][1] if i in now and done == now[i][0] else "running")
+                         for i, rows, done, _status in self._pending]
+        self.progress.update({i: now[i] for i in self.progress if i in now})
+        self.show_all()
+        self.update_status(force_density=True)
+
+    def _cut(self, ident: int, keep: int) -> np.ndarray:
+        """Orbit ``ident``'s rows past its first ``keep`` off the page (its queued blocks too); returns them."""
+        data = self.hidden.get(ident, self.crossings.data)
+        drop = np.flatnonzero(np.asarray(data["orbit"]) == ident)[keep:]
+        cut = [np.column_stack([np.asarray(data[k])[drop] for k in ROW_COLUMNS])]
+        if drop.size:
+            rest = np.ones(len(data["orbit"]), bool)
+            rest[drop] = False
+            data = {k: np.asarray(v)[rest] for k, v in data.items()}
+            if ident in self.hidden:
+                self.hidden[ident] = data
+            else:
+                self.crossings.data = data
+        pending = []
+        for i, rows, done, status in self._pending:
+            if i == ident and done > keep:        # (done: the orbit's crossings up to the block's end)
+                n = max(0, len(rows) - (done - keep))
+                cut.append(rows[n:])
+                rows, done, status = rows[:n], keep, "done"
+            pending.append((i, rows, done, status))
+        self._pending = pending
+        return np.concatenate(cut)
+
+    def _clear(self, ident: int) -> None:
+        """Orbit ``ident``'s rows off the page, its start kept (it runs again from there)."""
+        if ident in self.hidden:
+            self.hidden[ident] = {k: v[:0] for k, v in self.hidden[ident].items()}
+        else:
+            self._cut(ident, 0)
+        self._pending = [b for b in self._pending if b[0] != ident]
+        self.progress[ident] = (0, "running")
 
     def state(self, ident: int) -> str:
         """running, paused, done, or why the orbit stopped."""

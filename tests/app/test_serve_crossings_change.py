@@ -1,0 +1,104 @@
+"""`explorer serve`: a new crossings per click alone reruns nothing (docs/commands/serve.md).
+
+Without a browser (a SectionPage in-process): raised, each orbit continues from where it stopped and
+its rows are those of one uninterrupted run of the new count; lowered, each orbit's rows (drawn or
+hidden) are cut to the new count with no computation, and raised again, the cut rows come back
+without computation.  For Chaplygin's page and a System's.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from systems import henon_heiles_map
+
+import explorer as ex
+from explorer import model
+from explorer.analysis import sections
+from explorer.app.serve.orbits import OrbitRun, SystemRun
+from explorer.app.serve.settings import Settings
+
+pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+
+N = 120
+STARTS = ((0.3, 0.1), (-0.4, 0.2))
+
+
+def _rows(page, ident) -> np.ndarray:
+    orbits = page.orbits
+    d = orbits.hidden.get(ident, orbits.crossings.data)
+    mine = np.asarray(d["orbit"]) == ident
+    return np.column_stack([np.asarray(d[k])[mine] for k in ("t", "p1", "p2", "M", "dH")])
+
+
+@pytest.fixture
+def computed(monkeypatch):
+    """The crossings each run class computes from now on (its blocks' rows, summed)."""
+    got = {"rows": 0}
+    for cls in (OrbitRun, SystemRun):
+        def counted(self, _next=cls._next_block):
+            rows, steps = _next(self)
+            got["rows"] += len(rows)
+            return rows, steps
+        monkeypatch.setattr(cls, "_next_block", counted)
+    return got
+
+
+def _set_crossings(page, k: int) -> None:
+    page.inputs["crossings"].value = str(k)
+    page.settle()
+    assert page.settings.crossings == k
+
+
+def test_raising_the_crossings_continues_each_orbit_and_lowering_cuts_it_without_computing(computed):
+    from explorer.app.serve.page import SectionPage
+
+    s = Settings(params=model.FIGURE4.with_(mu=0.5), crossings=N)
+    page = SectionPage(s)
+    page.orbits.pause_box.value = False                   # (a click would pause the orbit before it)
+    try:
+        runs = [page.click(*p) for p in STARTS]
+        page.settle()
+        page.orbits.hide(runs[1].ident)                 # (a hidden orbit's rows are cut and continued too)
+        ref = sections.crossings(s.params, s.h, list(STARTS), n_crossings=2 * N, **s.section_kwargs())
+        computed["rows"] = 0
+        _set_crossings(page, 2 * N)
+        assert computed["rows"] == 2 * N                  # N more per orbit: none reran
+        for i, run in enumerate(runs):
+            np.testing.assert_array_equal(_rows(page, run.ident), ref.orbit(i))
+            assert page.orbits.state(run.ident) == "done"
+        computed["rows"] = 0
+        _set_crossings(page, N // 2)
+        _set_crossings(page, 2 * N)                       # (the cut rows come back)
+        _set_crossings(page, N // 2)
+        assert computed["rows"] == 0
+        for i, run in enumerate(runs):
+            np.testing.assert_array_equal(_rows(page, run.ident), ref.orbit(i)[:N // 2])
+            assert page.orbits.progress[run.ident] == (N // 2, "done")
+        assert len(page.orbits.shown.data["orbit"]) == N // 2 and not len(page.orbits.live.data["orbit"])
+        assert page.url_query()["crossings"] == str(N // 2)
+    finally:
+        page.close()
+
+
+def test_a_systems_page_continues_and_cuts_its_orbits_too(computed):
+    from explorer.app.serve.page import SectionPage
+    from explorer.app.serve.system_page import SystemSettings
+
+    smap = henon_heiles_map()
+    page = SectionPage(SystemSettings(smap, crossings=40))
+    try:
+        run = page.click(0.1, 0.1)
+        page.settle()
+        computed["rows"] = 0
+        _set_crossings(page, 80)
+        assert computed["rows"] == 40
+        ref = ex.crossings(smap, [(0.1, 0.1)], n_crossings=80).data[0]
+        rows = _rows(page, run.ident)
+        np.testing.assert_array_equal(rows[:, 1:4], ref[:, [2, 4, 3]])          # (y, py, px): the map's iterates
+        np.testing.assert_allclose(rows[:, 0], ref[:, 0], rtol=0, atol=1e-12)    # (the clock restarts per block)
+        computed["rows"] = 0
+        _set_crossings(page, 25)
+        assert computed["rows"] == 0
+        np.testing.assert_array_equal(_rows(page, run.ident), rows[:25])
+    finally:
+        page.close()
