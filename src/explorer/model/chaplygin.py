@@ -21,12 +21,14 @@ __all__ = ["PARAMETERS", "STATES", "system", "variational"]
 STATES = sp.symbols("p1 p2 M g1 g2")
 #: the parameter symbols, in the order of the packed vector P
 PARAMETERS = sp.symbols(" ".join(PARAM_NAMES))
+#: each parameter's symbol by its name (the packed order may change; docs/contributing.md)
+_SYMBOL = dict(zip(PARAM_NAMES, PARAMETERS))
 
 
 def equations():
     """The right-hand sides of R3, {state: derivative}, and the energy H."""
     p1, p2, m, g1, g2 = STATES
-    a1, a2, b, lam, chi, zeta, mu, xi, eta = PARAMETERS
+    a1, a2, b, lam, chi, zeta, mu, xi, eta = (_SYMBOL[n] for n in "a1 a2 b lam chi zeta mu xi eta".split())
     w = m / b
     # docs/model.md R3, expanded: dp/dt = (M/b) J (p - s) - mu g - lam J A p
     f1 = m * p2 / b - zeta * w - mu * g1 - lam * p2 / a2
