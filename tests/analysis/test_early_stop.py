@@ -1,6 +1,7 @@
 """Early classification ([lyapunov] early_stop): an orbit stops as chaotic when SALI < 1e-8 or
 when <Y> has stayed above 8 over [t/2, t] with t >= 100; the chaotic fraction of every panel of
-the `fraction` preset agrees with the full-T run within its binomial error, in fewer steps."""
+the `fraction` preset's panels that span regular to chaotic agrees with the full-T run within its
+binomial error, in fewer steps."""
 
 import numpy as np
 import pytest
@@ -11,13 +12,19 @@ from explorer.analysis.lyapunov import chaotic_fraction
 from explorer.analysis.seeds import seed_points
 from explorer.io.scene import load_scene
 
+#: the preset's panels checked: mostly regular (mu = 0.005), Figure 4's mixed (0.03), mixed with a
+#: large sea (0.3) and nearly all chaotic (4); the other nine lie between these in kind
+PANEL_MUS = (0.005, 0.03, 0.3, 4.0)
+
 
 @pytest.mark.cpu_dependent
 def test_early_stop_keeps_the_chaotic_fraction_of_the_fraction_preset():
     scene = load_scene("fraction")
     ly = scene.lyapunov
     full_steps = early_steps = 0
-    for i in range(scene.n_panels):
+    panels = [i for i in range(scene.n_panels) if scene.panel(i)[0].mu in PANEL_MUS]
+    assert len(panels) == len(PANEL_MUS)
+    for i in panels:
         params, h, _label = scene.panel(i)
         p1, p2, _ = seed_points(scene.seeds, params, h, scene.integration.phi0)
         y0 = model.section_state(params, p1, p2, h, scene.integration.phi0)
