@@ -18,7 +18,7 @@ import numpy as np
 from explorer import model
 from explorer.analysis import sections
 from explorer.integrate import layout, methods
-from explorer.kernels import STATUS_NAMES
+from explorer.kernels import STATUS_NAMES, STATUS_TMAX
 
 #: crossings of an orbit's first block (the first points on screen, milliseconds after a click)
 FIRST_BLOCK = 16
@@ -274,7 +274,7 @@ class Worker:
             run.done, run.status = k, "done"
             return run
         end = run.after if len(run.ahead) else run.status      # the status at the end of its rows
-        if end == "tmax" and run.done + len(run.ahead) < k:     # (its time budget, 100 K, grows with K)
+        if end == STATUS_NAMES[STATUS_TMAX] and run.done + len(run.ahead) < k:   # (its time budget, 100 K, grows)
             clear(run.ident)
             return settings.new_run(run.ident, run.p1, run.p2)
         rows, run.ahead = run.ahead[:k - run.done], run.ahead[k - run.done:]
