@@ -1,9 +1,5 @@
-"""What the page may set, read and checked as the command line's values are
-(:mod:`explorer.model.validation`): the model parameters, the energy, the integration settings and
-the crossings per click (:class:`Settings`, :func:`parse_fields`), the starts (:func:`parse_starts`)
-and the view window.  A bad value raises :class:`~explorer.model.ParameterError` naming the
-field.  No web library here.
-"""
+"""What the page and its link may set, validated as the command line's values are (docs/commands/serve.md):
+a bad value raises :class:`~explorer.model.ParameterError` naming the field.  No web library here."""
 from __future__ import annotations
 
 import math
@@ -20,8 +16,7 @@ from explorer.model import ParameterError, validation
 PAGE_PARAMS = ("mu",) + tuple(n for n in model.PARAM_NAMES if n != "mu")
 #: every field of the page, in the order shown (and written in the URL)
 FIELDS = ("mu", "h") + PAGE_PARAMS[1:] + ("method", "tol", "dt", "crossings", "phi0")
-#: crossings per click: the page's default and its upper bound (bounded memory per orbit:
-#: 40 bytes a row in the server, about as much in the browser)
+#: crossings per click: the page's default and its upper bound (40 bytes a row in the server)
 DEFAULT_CROSSINGS = 2000
 MAX_CROSSINGS = 1_000_000
 #: at most this many orbits (clicked starts) in one session
@@ -48,14 +43,8 @@ MAX_LINK_CHARS = 100_000
 
 @dataclass(frozen=True)
 class Settings(ChaplyginPage, sections.Integration):
-    """Everything that determines a clicked orbit's crossings: ``explorer orbit --p1 P1 --p2 P2
-    --h H --method M --tol TOL --dt DT --crossings K`` with the model ``params`` gives the same
-    rows bit for bit (the section phi = ``phi0``, crossings in ``direction``).
-
-    The integration settings are a :class:`explorer.analysis.sections.Integration` (the one
-    integration settings object, validated once, there, as the command line's and a scene's);
-    the page adds the model ``params`` (a validated :class:`explorer.model.Params`), the energy
-    ``h``, its own bound on the crossings per click (MAX_CROSSINGS) and a finite allowed region."""
+    """What determines a clicked orbit's crossings, bit for bit those of ``explorer orbit`` with the same
+    values: an :class:`~explorer.analysis.sections.Integration` plus ``params``, ``h`` and ``crossings``."""
 
     params: model.Params = model.FIGURE4
     h: float = model.FIGURE4_H
@@ -64,10 +53,10 @@ class Settings(ChaplyginPage, sections.Integration):
     def __post_init__(self):
         super().__post_init__()
         validation.integer("crossings", self.crossings, 1, MAX_CROSSINGS)
-        validation.magnitude("h", self.h)      # (as --h: the model's MAX_MAGNITUDE)
+        validation.magnitude("h", self.h)
         e = model.allowed_ellipse(self.params, self.h, self.phi0)
         if e is not None and not all(math.isfinite(float(v)) for v in e):
-            # (e.g. lam = -1e-300: the ellipse's centre or radii overflow; nothing could be drawn or computed)
+            # e.g. lam = -1e-300: the ellipse's centre or radii overflow
             shown = ", ".join(f"{float(v):g}" for v in e)
             raise ParameterError(f"the allowed region is not finite at these values (centre and radii {shown}): "
                                  "a parameter is too far from 1 (lam, a1, a2, b)")
@@ -106,9 +95,8 @@ class Settings(ChaplyginPage, sections.Integration):
 
 
 def settings_for(scene=None, panel: int = 0, **overrides) -> tuple:
-    """(Settings, label) to start from: the scene's panel ``panel`` (a TOML path or a preset name;
-    None: Figure 4 with mu = 0, h = 2), then ``overrides`` (model parameters, h, method, tol, dt,
-    crossings) on top, all validated."""
+    """(Settings, label): the scene's panel ``panel`` (None: Figure 4), then ``overrides`` (model
+    parameters, h, method, tol, dt, crossings), all validated."""
     from explorer.io import scene as scene_mod
 
     base, label = Settings(), ""
@@ -131,8 +119,7 @@ def settings_for(scene=None, panel: int = 0, **overrides) -> tuple:
 
 
 def seeds_for(scene=None):
-    """The ``[seeds]`` of ``scene`` (a TOML path, preset name or Scene), the page's *Scene seeds*;
-    None: the default seeds of a scene (a grid of DEFAULT_SEED_N points)."""
+    """The ``[seeds]`` of ``scene`` (a TOML path, preset name or Scene; None: a scene's default)."""
     from explorer.io import scene as scene_mod
 
     if scene is None:
@@ -142,9 +129,8 @@ def seeds_for(scene=None):
 
 
 def seed_starts(seeds, settings: Settings) -> list:
-    """The starts [(p1, p2), ...] of ``seeds`` at ``settings`` (those ``explorer sweep`` runs for
-    a panel with these parameters and energy; :func:`explorer.analysis.seeds.seed_points`);
-    ParameterError when the region is empty."""
+    """The starts [(p1, p2), ...] ``explorer sweep`` runs for ``seeds`` at ``settings``
+    (:func:`explorer.analysis.seeds.seed_points`)."""
     from explorer.analysis.seeds import seed_points
 
     p1, p2, _dropped = seed_points(seeds, settings.params, settings.h, settings.phi0)
@@ -195,9 +181,7 @@ def _whole(name: str, text) -> int:
 
 
 def parse_fields(base: Settings, fields: dict) -> Settings:
-    """``base`` with the page's ``fields`` ({name: text}) applied; every field validated
-    (ParameterError, one line naming the field, and nothing changed otherwise).  Unknown names
-    are refused."""
+    """``base`` with the page's ``fields`` ({name: text}) applied, each validated (ParameterError naming it)."""
     params: dict[str, float] = {}
     other: dict[str, object] = {}
     h = base.h
@@ -221,8 +205,7 @@ def parse_fields(base: Settings, fields: dict) -> Settings:
 
 
 def parse_link_fields(base: Settings, fields: dict) -> tuple:
-    """(settings, refusals): ``base`` with every field of a link that applies (all at once, else
-    one after the other) and the message of each field refused."""
+    """(settings, refusals): ``base`` with every field of a link that applies, and why each other is refused."""
     try:
         return base.with_fields(fields), []
     except ParameterError:
@@ -237,8 +220,8 @@ def parse_link_fields(base: Settings, fields: dict) -> tuple:
 
 
 def screen_link(args: dict, names) -> tuple:
-    """(args, refusals): the arguments of a link ({name: text}) that the page reads (``names``) and
-    a message naming the others; none of a link longer than MAX_LINK_CHARS, and a message saying so."""
+    """(args, refusals): a link's arguments among ``names``, and a message naming the others (or
+    refusing a link longer than MAX_LINK_CHARS)."""
     size = sum(len(k) + len(v) + 2 for k, v in args.items())
     if size > MAX_LINK_CHARS:
         return {}, [f"the link is {size:,} characters long (at most {MAX_LINK_CHARS:,}): none of it applies"]
@@ -271,14 +254,12 @@ def parse_starts(text: str) -> list:
 
 
 def format_hidden(positions) -> str:
-    """Which of a link's starts are hidden, as URL text: their positions among its ``orbits``
-    (1 for the first), ``2,5``."""
+    """Hidden starts as URL text: their positions (from 1) among the link's ``orbits``, ``2,5``."""
     return ",".join(str(int(k)) for k in sorted(positions))
 
 
 def parse_hidden(text: str, n_starts: int) -> set:
-    """The positions of :func:`format_hidden` among a link's ``n_starts`` starts (ParameterError
-    for anything else: not a whole number, out of 1..n_starts)."""
+    """The positions of :func:`format_hidden`, each in 1..``n_starts`` (ParameterError otherwise)."""
     text = str(text).strip()
     if not text:
         return set()
@@ -318,8 +299,7 @@ def format_window(w) -> str:
 
 
 def parse_window(text: str):
-    """The window of :func:`format_window` (a :class:`Window`: four
-    finite numbers, x0 < x1 and y0 < y1, each within MAX_MAGNITUDE); ParameterError otherwise."""
+    """The :class:`Window` of :func:`format_window` (ParameterError otherwise)."""
     pieces = str(text).strip().split(",")
     if len(pieces) != 4:
         raise ParameterError(f"view must be x0,x1,y0,y1 (four numbers), got {str(text)[:MAX_FIELD_CHARS * 4]!r}")
