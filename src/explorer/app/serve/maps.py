@@ -1,9 +1,5 @@
-"""What the page asks of its section (docs/commands/serve.md, "Your own system"): one protocol, two
-implementations.  :class:`ChaplyginPage` gives it to Chaplygin's
-:class:`~explorer.app.serve.settings.Settings` (with ``field_names``, ``with_fields`` and
-``seed_starts`` there); :class:`explorer.app.serve.system_page.SystemSettings` to a System's section
-map.  The page, its orbits, layers and searches call only these methods.  No web library here.
-"""
+"""What the page asks of its section (docs/commands/serve.md, "Your own system"): implemented by
+:class:`ChaplyginPage` (Chaplygin's Settings) and by :class:`~explorer.app.serve.system_page.SystemSettings`."""
 from __future__ import annotations
 
 import math
@@ -67,8 +63,7 @@ class ChaplyginPage:
         return SectionMap(self.params, self.h, phi0=self.phi0, tol=DEFAULT_TOL if tol is None else tol)
 
     def megno(self, p1, p2, time: float, max_steps: int, mlce: bool = False):
-        """Mean MEGNO <Y>(time) (and the mLCE with ``mlce``) of the orbits from (p1, p2), NaN where
-        the run stopped early (or would stop at its step cap)."""
+        """<Y>(time) (and the mLCE with ``mlce``) of the orbits from (p1, p2), NaN where a run stops early."""
         from explorer import model
         from explorer.analysis import lyapunov
 
