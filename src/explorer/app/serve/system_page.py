@@ -1,8 +1,5 @@
-"""The page of a System's section map (docs/commands/serve.md, "Your own system"):
-:class:`SystemSettings`, the protocol of :mod:`explorer.app.serve.maps` for a
-:class:`~explorer.analysis.system_section_map.SystemSectionMap`, and :func:`system_page`, what
-``explorer serve --system module:attribute`` starts from.  No web library here.
-"""
+"""The page of a System's section map (docs/commands/serve.md, "Your own system"): the protocol of
+:mod:`explorer.app.serve.maps`, and what ``explorer serve --system`` starts from.  No web library here."""
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
@@ -23,9 +20,8 @@ REGION_CELLS = 256
 
 @dataclass(frozen=True, eq=False)
 class SystemSettings:
-    """The page of a System's section map ``smap`` (at the page's parameter values and energy):
-    its fields are the system's parameters, ``energy``, ``tol`` (the Taylor method's) and
-    ``crossings`` per click.  Two settings are equal when their fields are."""
+    """The page of a System's section map ``smap``: fields the system's parameters, ``energy``, ``tol``
+    and ``crossings``; equal when their fields are."""
 
     smap: Any
     tol: float = 1e-13
@@ -160,10 +156,8 @@ class SystemSettings:
 
 
 def system_page(value=None, scene=None, panel: int = 0, **overrides) -> tuple:
-    """(SystemSettings, label, seeds) of ``--system`` (``value``: 'module:attribute', resolved by
-    :func:`explorer.io.scene.system.resolve_system`; the attribute a System's section map, or a System
-    with ``scene`` a scene of it) or of ``scene`` a System's scene; ``overrides``: energy, tol,
-    crossings.  ParameterError (exit 2) for a bare System without a scene, naming what to give."""
+    """(SystemSettings, label, seeds) of ``--system module:attribute`` (a section map, or a System with
+    ``scene``) or of ``scene`` a System's scene; ``overrides``: energy, tol, crossings."""
     from explorer.analysis.system_sections import is_system_map
     from explorer.io.scene import load_scene
     from explorer.io.scene.system import SystemScene, resolve_system
