@@ -1,9 +1,5 @@
-"""The searches the page's check boxes run, in a thread of the page: the fixed points of the
-section map (:func:`fixed_points`), the separatrices of the hyperbolic ones (:func:`separatrices`),
-the periodic orbits of periods 1..PERIODIC_MAX (:func:`periodic_orbits`); and the readout of a clicked
-orbit (:func:`orbit_readout`: its MEGNO, mLCE and rotation number around :func:`elliptic_center`).
-No web library here.
-"""
+"""The searches the page's check boxes and picks run (docs/commands/serve.md): fixed points, separatrices,
+periodic orbits, a picked orbit's readout and a saddle's manifolds.  No web library here."""
 from __future__ import annotations
 
 import numpy as np
@@ -19,9 +15,8 @@ def _num(x) -> str:
 
 
 def _fixed_points_from(view, first):
-    """The fixed points Newton's method (:func:`explorer.analysis.fixedpoints.find_fixed_point`)
-    reaches from ``first``, the region's centre and half-way to its edge along both axes, in that
-    order (one per guess that converges; guesses outside the region are skipped), lazily."""
+    """The fixed points Newton's method reaches from ``first``, the region's centre and half-way to its
+    edge along both axes (admissible guesses only), lazily."""
     from explorer.analysis.budget import BudgetExceeded
     from explorer.analysis.fixedpoints import find_fixed_point
 
@@ -54,8 +49,7 @@ SEPARATRIX_MAX_TIME = 4.0
 
 
 def search_budget(seconds: float):
-    """The :class:`~explorer.analysis.budget.Budget` a page's search runs in: ``seconds`` and
-    SEARCH_MAX_STEPS."""
+    """The Budget a page's search runs in: ``seconds`` and SEARCH_MAX_STEPS."""
     from explorer.analysis.budget import Budget
 
     return Budget(seconds, max_steps=SEARCH_MAX_STEPS)
@@ -68,10 +62,8 @@ def describe_points(points) -> str:
 
 
 def fixed_points(view) -> tuple:
-    """(points, message): the distinct fixed points Newton's method reaches from p = 0, the centre
-    of the region and half-way to its edge along both axes.  ``view``: anything with ``params``,
-    the page's settings (:mod:`explorer.app.serve.maps`: ``region`` (c1, c2, r1, r2 or None),
-    ``admissible(p1, p2)`` and ``section_map()``)."""
+    """(points, message): the distinct fixed points of :func:`_fixed_points_from` p = 0; ``view``: the
+    page's settings (:mod:`explorer.app.serve.maps`)."""
     if view.region is None:
         return [], "fixed points: the region is empty"
     from explorer.analysis.budget import BudgetExceeded
@@ -101,10 +93,8 @@ def separatrix_branches(view, fp) -> tuple:
 
 
 def separatrices(view, points, text: str) -> tuple:
-    """(curves, message): the separatrices of the hyperbolic ones of the fixed ``points``
-    (:func:`separatrix_branches`), and ``text`` (:func:`fixed_points`' message) with what they
-    gave.  A branch that fails or a budget that runs out
-    (:class:`~explorer.analysis.budget.BudgetExceeded`) ends the curves there."""
+    """(curves, message): the separatrices of the hyperbolic fixed ``points``, and ``text`` (the fixed
+    points' message) with what they gave; a budget that runs out ends the curves there."""
     from explorer.analysis.budget import BudgetExceeded
 
     curves: list = []
@@ -130,10 +120,8 @@ def separatrices(view, points, text: str) -> tuple:
 
 
 def periodic_orbits(view, max_period=None):
-    """(orbits, message): the periodic orbits of minimal periods 1..``max_period`` (default
-    PERIODIC_MAX) found by :func:`explorer.analysis.periodic.search_periodic_orbits` (a coarse
-    grid, 8 x 8, and the symmetry lines), each once.  ``view``: as for :func:`fixed_points`.
-    A budget that runs out ends the search there (said in the message)."""
+    """(orbits, message): the periodic orbits of minimal periods 1..``max_period`` (default PERIODIC_MAX)
+    of :func:`explorer.analysis.periodic.search_periodic_orbits`; a budget that runs out ends it there."""
     from explorer.analysis.budget import BudgetExceeded
     from explorer.analysis.periodic import search_periodic_orbits
 
@@ -158,17 +146,15 @@ def periodic_orbits(view, max_period=None):
 
 
 def elliptic_center(view, start):
-    """The elliptic fixed point an orbit from ``start`` turns around: the first one Newton's method
-    reaches from ``start``, then from the guesses of :func:`fixed_points` (None: none)."""
+    """The first elliptic fixed point Newton's method reaches from ``start``, then the other guesses (or None)."""
     if view.region is None:
         return None
     return next((fp for fp in _fixed_points_from(view, tuple(start)) if fp.stable), None)
 
 
 def orbit_readout(settings, start) -> dict:
-    """A picked orbit from ``start``: its MEGNO and mLCE (orbits.orbit_indicators) and its rotation
-    number around :func:`elliptic_center`.  Keys: megno, mlce, rotation (a RotationNumber or
-    None), center (a FixedPoint or None), rotation_error (text)."""
+    """A picked orbit's megno, mlce, rotation (around ``center``, the :func:`elliptic_center`; or None)
+    and rotation_error (text)."""
     from explorer.analysis import rotation
     from explorer.analysis.budget import BudgetExceeded
     from explorer.app.serve.orbits import orbit_indicators
@@ -207,9 +193,8 @@ MANIFOLD_SECONDS = 4 * MANIFOLD_MAX_TIME + 5.0
 
 
 def saddle_manifolds(settings, point, period=1):
-    """(branches, message): W^u and W^s of the hyperbolic orbit of ``period`` through ``point``,
-    both branches of each grown to MANIFOLD_ARCLENGTH (docs/manifolds.md; unstable first);
-    ParameterError when Newton's method finds no such orbit."""
+    """(branches, message): W^u then W^s of the hyperbolic orbit of ``period`` through ``point``, grown
+    to MANIFOLD_ARCLENGTH (docs/manifolds.md); ParameterError when there is no such orbit."""
     from explorer.analysis.manifolds import manifolds
 
     p1, p2 = float(point[0]), float(point[1])
