@@ -16,8 +16,7 @@ from explorer.analysis.budget import Budget, BudgetExceeded
 #: the threads of every session's numba work, shared: a server holds as many as calls run at once
 WORKERS = 32
 EXECUTOR = ThreadPoolExecutor(max_workers=WORKERS, thread_name_prefix="explorer-serve")
-#: the thread that runs a page's loop of its own, while its caller waits (Session.poll): another
-#: loop may be running in the caller's thread (a notebook kernel's, Playwright's in the tests)
+#: runs a page's own loop while its caller waits: the caller's thread may run another loop
 _DRIVER = ThreadPoolExecutor(max_workers=1, thread_name_prefix="explorer-page-loop")
 
 _log = logging.getLogger("explorer.serve")
@@ -48,9 +47,8 @@ class Session:
 
     # ------------------------------------------------------------ tasks
     def start(self, name: str, coro, budget: Budget | None = None, on_error=None) -> asyncio.Task | None:
-        """Task ``name`` anew: the one running is cancelled (its budget too) and the coroutine
-        ``coro`` runs in its place (``budget``: what its :meth:`run` calls run in).  An exception
-        goes to ``on_error(exc)`` on the loop; a budget that ran out ends the task quietly."""
+        """Task ``name`` anew (latest wins): ``coro`` replaces the running one, its :meth:`run` calls in
+        ``budget``; an exception goes to ``on_error(exc)``, a budget that ran out ends it quietly."""
         self.cancel(name)
         if self.closed:
             coro.close()
@@ -61,8 +59,6 @@ class Session:
         return task
 
     def _ended(self, on_error, task) -> None:
-        """A task's exception goes to ``on_error(exc)`` on the loop; a budget that ran out ends it
-        quietly."""
         exc = None if task.cancelled() else task.exception()
         if exc is None or isinstance(exc, BudgetExceeded):
             return
@@ -147,11 +143,9 @@ class Session:
 
     @contextlib.contextmanager
     def bokeh_sends(self):
-        """On the loop: the changes made within go to the browser through Bokeh's own dispatch
-        (the document held, ``Document.hold("collect")``), not Panel's writer, which may leave a
-        message queued for a busy socket unsent (panel 1.9; tests/app/lossy_panel_serve.py).  Not
-        for a block that replaces a source's data and then streams to it (the rows would arrive
-        twice).  Without a document, or within a hold, the block just runs."""
+        """The changes made within go out through Bokeh's dispatch (``Document.hold("collect")``), not
+        Panel's writer, which may leave a message unsent (tests/app/lossy_panel_serve.py).  Not for a
+        block that replaces a source's data and then streams to it (the rows would arrive twice)."""
         doc = self.doc
         if doc is None or doc.callbacks.hold_value is not None:
             yield
