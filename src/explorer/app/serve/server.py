@@ -21,10 +21,9 @@ from explorer.app.serve.settings import TOKEN_ARG, Settings
 #: where the page is served unless told otherwise (loopback only: docs/commands/serve.md)
 DEFAULT_HOST = "127.0.0.1"
 DEFAULT_PORT = 5006
-#: what a page shows when its connection to the server is lost (the server stopped, the network went)
-#: a request's headers at most (bytes): longer than any address a browser sends (Chromium's: 2 MB), so a
-#: long link reaches the page, which says why it ignores it (settings.MAX_LINK_CHARS), instead of a reset
+#: a request's headers at most (bytes): above any address a browser sends, so the page refuses a long link
 MAX_HEADER_BYTES = 4 << 20
+#: what a page shows when its connection to the server is lost
 DISCONNECT_NOTICE = "connection to the server lost: nothing on this page is computed any more; reload when it is back"
 
 
@@ -74,9 +73,8 @@ def _authorize(token: str):
 
 def make_server(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, token: str | None = None,
                 export_dir=None, label: str = "", **page_options):
-    """The Bokeh server (not started) and its URL.  ``token`` None on a loopback host: no token;
-    on another host one is made.  ``page_options``: of every session's SectionPage (seeds,
-    megno_resolution, megno_time)."""
+    """The Bokeh server (not started) and its URL; a token is made on a host other than loopback.
+    ``page_options``: of every session's SectionPage."""
     import panel as pn
 
     from explorer.app.serve.page import session_app
@@ -92,10 +90,8 @@ def make_server(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT
     else:
         hosts = dict.fromkeys(("127.0.0.1", "localhost", host))
         kw["websocket_origin"] = [f"{h}:{port}" for h in hosts if ":" not in h]   # (Bokeh takes no IPv6 here)
-    # a page whose server has gone says so (Panel's notification on a lost connection)
     pn.config.disconnect_notification = DISCONNECT_NOTICE
     app = session_app(base, export_dir=export_dir, label=label, **page_options)
-    # GET /liveness, answered by the event loop itself (a health check)
     server = pn.serve(app, port=port, address=host, show=False, start=False, verbose=False, title="explorer",
                       location=True, liveness=True,
                       http_server_kwargs={"max_header_size": MAX_HEADER_BYTES}, **kw)
@@ -103,8 +99,7 @@ def make_server(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT
 
 
 def web_browser():
-    """The user's web browser (:func:`webbrowser.get`), or None when there is none (on Linux/BSD
-    without a display nor BROWSER only text browsers would take over the terminal)."""
+    """The user's web browser, or None (on Linux/BSD without a display nor BROWSER: no text browser)."""
     import os
     import webbrowser
 
@@ -118,8 +113,7 @@ def web_browser():
 
 
 def open_in_browser(url: str, err=None) -> threading.Thread | None:
-    """Open ``url`` in :func:`web_browser` (in a thread: a browser command may wait for its
-    window); without one, say so on ``err`` (the URL is already the first line printed)."""
+    """Open ``url`` in :func:`web_browser` in a thread; without one, say so on ``err``."""
     err = sys.stderr if err is None else err
     browser = web_browser()
     if browser is None:
@@ -132,9 +126,7 @@ def open_in_browser(url: str, err=None) -> threading.Thread | None:
 
 
 def warm_up_and_freeze(base: Settings) -> None:
-    """Load the crossing kernels (:func:`explorer.app.serve.orbits.warm_up`), then ``gc.freeze``
-    every object alive: a full collection would walk them on the event loop (docs/commands/serve.md,
-    *Latency*)."""
+    """Load the crossing kernels, then ``gc.freeze`` every object alive (docs/commands/serve.md, *Latency*)."""
     from explorer.app.serve.orbits import warm_up
 
     warm_up(base)
@@ -144,8 +136,7 @@ def warm_up_and_freeze(base: Settings) -> None:
 
 def run(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, token: str | None = None,
         export_dir=None, label: str = "", open_browser: bool = False, out=None, **page_options) -> None:
-    """Serve until interrupted: the URL is the first line printed; ``open_browser``: then open it
-    in the user's browser (:func:`open_in_browser`), once the server listens."""
+    """Serve until interrupted, printing the URL first (then opening it with ``open_browser``)."""
     out = sys.stdout if out is None else out
     server, url = make_server(base, host=host, port=port, token=token, export_dir=export_dir, label=label,
                               **page_options)
@@ -164,9 +155,7 @@ def run(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, t
 
 
 def _quiet_about_clients_gone(loop, context) -> None:
-    """The event loop's exception handler: a client that closed its websocket while Bokeh sent it a
-    message (a ``WebSocketClosedError`` nobody retrieves) is not an error of the server; every
-    other exception goes to asyncio's default handler."""
+    """The loop's exception handler: a client gone while Bokeh wrote to it is no error of the server."""
     from tornado.iostream import StreamClosedError
     from tornado.websocket import WebSocketClosedError
 
@@ -176,9 +165,8 @@ def _quiet_about_clients_gone(loop, context) -> None:
 
 
 def _end_on_signals(out) -> Callable[[], None]:
-    """SIGINT and SIGTERM end the process at once (``os._exit(0)`` after flushing the streams,
-    whatever the loop is doing: the server writes nothing at exit; docs/commands/serve.md, "Faults");
-    returns ``restore()``, which puts the previous handlers back.  Off the main thread nothing changes."""
+    """SIGINT and SIGTERM end the process at once, streams flushed (docs/commands/serve.md, "Faults");
+    returns ``restore()``.  Off the main thread nothing changes."""
     import signal
 
     if threading.current_thread() is not threading.main_thread():
