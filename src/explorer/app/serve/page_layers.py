@@ -1,8 +1,5 @@
-"""The page's images under the orbits: the chaos raster of the visible window (:class:`ChaosLayer`,
-MEGNO or frequency diffusion, :func:`explorer.app.serve.raster.rasters`) and the density image of
-the crossings not drawn as dots (:class:`DensityImage`).  By Bokeh model name: ``raster`` (image,
-x, y, dw, dh, n, complete), ``megno-colour-bar`` and ``density`` (image, x, y, dw, dh, n).
-"""
+"""The page's images under the orbits (docs/commands/serve.md): the chaos raster of the visible window
+and the density image of the crossings not drawn as dots."""
 from __future__ import annotations
 
 import time
@@ -35,9 +32,8 @@ def _empty_density() -> dict:
 
 
 class ChaosLayer:
-    """The chaos layer: its box ``layer``, its ``indicator``, its source, colour bar and task (the
-    rasters of the latest window, indicator and settings); ``center``: (settings, point, elliptic)
-    of frequency diffusion's last centre found."""
+    """The chaos layer (box, indicator, source, colour bar, task); ``center``: (settings, point,
+    elliptic) of frequency diffusion's last centre."""
 
     def __init__(self, host, view, session, resolutions: tuple, time: float):
         self.host, self.view = host, view
@@ -88,8 +84,7 @@ class ChaosLayer:
         self.colour_bar.title = self.title()
 
     def load_url(self, args: dict) -> None:
-        """The layer's state from a link: ``indicator`` (a name of raster.INDICATORS; another is
-        ignored and said) and ``megno`` (the box, "1": on)."""
+        """The layer's state from a link: ``indicator`` and ``megno`` ("1": on)."""
         name = args.get("indicator") or "megno"
         if name not in raster_mod.INDICATORS:
             self.host.say(f"link's indicator ignored: must be one of {', '.join(raster_mod.INDICATORS)}, got "
@@ -125,8 +120,6 @@ class ChaosLayer:
             self.session.cancel("raster")
             self.raster_source.data = _empty_raster()
             return
-        # (a budget: cancelled by the next submit, it stops frequency diffusion's search for its centre
-        # and its runs between batches; its step cap bounds each orbit's steps in a crossing batch)
         self.session.start("raster", self._compute(settings, window, self.indicator.value), on_error=self._failed,
                            budget=Budget(None, max_steps=raster_mod.RASTER_MAX_STEPS))
 
@@ -170,9 +163,8 @@ class DensityImage:
         fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.density)
 
     def refresh(self, force: bool = False) -> None:
-        """Draw the crossings that are not dots as the density image of the visible window
-        (:mod:`explorer.app.serve.density`): at most every DENSITY_SECONDS while orbits stream in,
-        at once when ``force`` or when orbits move between dots and image, never unchanged."""
+        """Redraw the density image of the crossings that are not dots: at most every DENSITY_SECONDS while
+        orbits stream in, at once when ``force`` or orbits move between dots and image, never unchanged."""
         orbits = self.orbits
         orbit = orbits.crossings.data["orbit"]
         n = len(orbit)
@@ -180,8 +172,6 @@ class DensityImage:
         if dense != self.dense:
             self.dense = dense
             orbits.points.visible = not dense
-            # past the threshold the browser holds no rows (one message empties them); below it again,
-            # every row goes back
             orbits.show_all()
             force = True
         first = 0 if dense else density.glyph_cutoff(orbit)
@@ -202,8 +192,7 @@ class DensityImage:
         by_megno = bool(orbits.colour_box.value)
         keep = None if dense else np.asarray(orbit) < first           # the image's rows: the older orbits
         shown = n if keep is None else int(np.count_nonzero(keep))
-        # the image's rows change only by growing, by leaving (undo, clear: first or their count
-        # changes) and (coloured by MEGNO) by the MEGNO of an orbit becoming known
+        # the rows change only by growing, leaving, or an orbit's MEGNO becoming known
         key = (dense, first, shown, len(orbits.indicators) if by_megno else -1, by_megno, w, nx, ny)
         if key == self._key:
             return
