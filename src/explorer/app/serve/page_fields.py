@@ -1,6 +1,5 @@
-"""The fields of the page's values, the μ slider and the stepper: slider and stepper write into a
-field, which applies the value as typed (:func:`explorer.app.serve.settings.parse_fields`).
-"""
+"""The page's fields, the μ slider and the stepper (docs/commands/serve.md): slider and stepper write
+into a field, which applies the value as typed."""
 from __future__ import annotations
 
 import math
@@ -14,8 +13,7 @@ from explorer.app.serve.settings import FIELDS, Settings
 from explorer.app.serve.style import FIELD_WIDTH
 from explorer.model import ParameterError
 
-#: the slider of mu (the parameter most often changed) ends at least here (slider_range); while it is
-#: dragged its value applies at most every SLIDE_SECONDS
+#: the μ slider ends at least here; while dragged its value applies at most every SLIDE_SECONDS
 MU_SLIDER_END = 0.1
 SLIDE_SECONDS = 0.25
 #: labels of the fields, and what each means (its tooltip)
@@ -28,9 +26,8 @@ HELP = {p.name: f"{p.symbol}: {p.help} (docs/model.md)" for p in model.PARAMETER
     "dt": "the fixed step of split2 to split8 (smaller: more accurate, more steps)",
     "crossings": "how many crossings of the section each click computes",
     "phi0": "the section φ = φ0 (a number, or pi, pi/2, 2pi)"}
-#: the fields the stepper steps: every numeric one (the method is a choice)
 STEP_FIELDS = tuple(n for n in FIELDS if n != "method")
-#: the stepper's widgets' margins (px: top and bottom, left and right): its row fits the fields' 230 px
+#: the stepper's widgets' margins (px): its row fits the fields' 230 px
 STEP_MARGIN = (5, 3)
 
 
@@ -43,16 +40,15 @@ def default_step(value: float) -> float:
 
 
 def stepped(name: str, text: str, step: float, k: int) -> str:
-    """The text of field ``name`` (now ``text``) moved by ``k`` steps of ``step`` (a whole number of
-    crossings, at least 1; a float written to 15 significant digits, so 0.03 + 0.0001 is 0.0301)."""
+    """Field ``name``'s ``text`` moved by ``k`` steps of ``step`` (15 significant digits: 0.03 + 0.0001 is 0.0301)."""
     if name == "crossings":
         return str(int(text) + k * max(1, round(step)))
     return repr(float(f"{float(text) + k * step:.15g}"))
 
 
 def slider_range(mu: float) -> tuple:
-    """(end, step) of the μ slider (from 0) at ``mu``: the 1-2-5 number at or above 2|mu| (at least
-    MU_SLIDER_END), in steps of a thousandth of its decade: 1 to 2.5 % of mu per pixel of its 220."""
+    """(end, step) of the μ slider at ``mu``: the 1-2-5 number >= max(2|mu|, MU_SLIDER_END), in steps of
+    a thousandth of its decade."""
     want = max(2.0 * abs(mu), MU_SLIDER_END) if math.isfinite(2.0 * mu) else MU_SLIDER_END
     decade = 10.0 ** math.floor(math.log10(want))
     end = next(m * decade for m in (1, 2, 5, 10) if m * decade >= want * (1 - 1e-12))
@@ -82,12 +78,10 @@ class Fields:
         end, step = slider_range(mu)
         self.mu_slider = pn.widgets.FloatSlider(label=f"{LABELS['mu']} (slider)", start=0.0, end=end, step=step,
                                                 value=min(max(mu, 0.0), end), width=220, visible="mu" in s)
-        # its value goes into the field, which applies it: while dragged every SLIDE_SECONDS, and at the release
-        self._dragging = False                  # (from a drag's first move to its release: the range stays)
+        self._dragging = False                  # from a drag's first move to its release: the range stays
         self._slide_timer = session.timer(lambda: self._slid(self.mu_slider.value, held=True))
         self.mu_slider.param.watch(lambda e: self._quiet or self._drag(), "value")
         self.mu_slider.param.watch(lambda e: self._quiet or self._slid(e.new), "value_throttled")
-        # the stepper: which field (the last one edited), by how much (1 % of its value when chosen)
         steps = [n for n in settings.field_names if n in STEP_FIELDS or n not in FIELDS]
         self.step_field = pn.widgets.Select(label="step", options={LABELS.get(n, n): n for n in steps},
                                             value=steps[0], width=62, margin=STEP_MARGIN)
@@ -107,23 +101,21 @@ class Fields:
         if self._quiet:
             return
         if name in STEP_FIELDS and self.step_field.value != name:
-            self.step_field.value = name          # (the stepper steps the field edited last)
+            self.step_field.value = name
         session.soon(lambda: on_edit(name))
 
     def _retarget(self, name: str) -> None:
         self.step_size.value = default_step(float(self.applied.fields()[name]))
 
     def step(self, k: int, name: str | None = None) -> None:
-        """Move field ``name`` (None: the stepper's) ``k`` steps of the stepper's size from the value
-        that applies: its new text goes into the field, which applies it as a typed value (refused
-        with the field's message when the command line would refuse it)."""
+        """Move field ``name`` (None: the stepper's) ``k`` steps from the value that applies, as if typed."""
         name = name or self.step_field.value
         size = self.step_size.value
         if size is None or not (math.isfinite(size) and size > 0.0):
             self.step_size.value = default_step(float(self.applied.fields()[name]))
             return
         text = stepped(name, self.applied.fields()[name], float(size), k)
-        if self.inputs[name].value == text:       # (the same refused text again: said again)
+        if self.inputs[name].value == text:       # the same refused text again: said again
             self.inputs[name].param.trigger("value")
         else:
             self.inputs[name].value = text
@@ -139,10 +131,10 @@ class Fields:
         if not held:
             self._slide_timer.cancel()
             self._dragging = False
-        # (rounded to the slider's step: the browser's sums of steps carry float noise, 0.49800000000000005)
+        # rounded to the slider's step: the browser's sums of steps carry float noise
         text = repr(round(float(value), max(0, -math.floor(math.log10(self.mu_slider.step)))))
         if not held and self.inputs["mu"].value == text:
-            self._slider_at(float(text))          # (no edit: the range follows the released value now)
+            self._slider_at(float(text))          # no edit: the range follows the released value now
         self.inputs["mu"].value = text
 
     def _slider_at(self, mu: float) -> None:
@@ -174,9 +166,8 @@ class Fields:
             self._slider_at(float(mu))
 
     def read(self, base: Settings, applied: Settings, n_orbits: int, name: str | None = None) -> Settings:
-        """The settings the fields give: ``applied`` with the text of field ``name`` (every field's
-        text when None) on top of ``base``, validated as the command line's values are, and room
-        on the page for ``n_orbits`` orbits of its crossings (ParameterError otherwise)."""
+        """``base`` with ``applied`` and the text of field ``name`` (None: every field's), validated, with
+        room for ``n_orbits`` orbits (ParameterError otherwise)."""
         if name is None:
             fields = {n: w.value for n, w in self.inputs.items()}
         else:
