@@ -1,9 +1,5 @@
-"""The orbit list of the page: every orbit in a table (colour, start, crossings so far, state,
-hidden or not), a chooser that selects one (its readout and highlight, as a pick does), *hide*/
-*show* and *delete*; it writes the link's ``orbits`` and ``hidden``.  One Div's table, not a
-widget per orbit: a session holds up to 256 orbits.  By Bokeh model name: ``orbit-list`` (rows
-``<tr data-orbit="ID">``) and ``selected-orbit`` (the highlight's filter, ``args.orbit``).
-"""
+"""The page's orbit list (docs/commands/serve.md): a table of every orbit, a chooser, *hide*/*show* and
+*delete*; it writes the link's ``orbits`` and ``hidden``.  One Div's table: up to 256 orbits."""
 from __future__ import annotations
 
 import html
@@ -25,10 +21,10 @@ SELECTED_FILTER = ("const o = source.data.orbit, n = o.length, rows = [];\n"
 #: the selected orbit's markers: this size (pixels; the dots are 2), outlined in this colour
 SELECTED_SIZE = 6.0
 SELECTED_LINE = "#000000"
-#: the table's height at most (then it scrolls: beside the figure, as tall as it) and the selected row's background
+#: the table's height at most (then it scrolls) and the selected row's background
 LIST_MAX_HEIGHT = "calc(100vh - 300px)"
 SELECTED_BACKGROUND = "#fff3b0"
-#: what the section's colours and the list's columns mean (the legend under the list; each header's tooltip)
+#: the legend under the list, and each column's tooltip
 LEGEND = ("white: the allowed region at h (M² ≥ 0), gray: forbidden; +: a start; a dot: a crossing, in its "
           "orbit's colour, or by its ⟨Y⟩ when orbits are coloured by MEGNO (light 0-2: regular, dark: chaotic). "
           "⟨Y⟩ (MEGNO, t ≤ 1000) tends to 2 on a torus and to 0 on a stable periodic orbit (a little below 0 "
@@ -54,7 +50,6 @@ class OrbitList:
         self.hide_button.on_click(lambda _e: session.soon(self.toggle))
         self.delete_button = pn.widgets.Button(label="delete", width=50, disabled=True, align="end")
         self.delete_button.on_click(lambda _e: session.soon(lambda: self.delete(self.readout.picked)))
-        # beside the figure (its own column, LIST_WIDTH wide): in view with it at 1280 x 720
         self.panel = pn.Column(pn.Row(self.choice, self.hide_button, self.delete_button), pn.pane.Bokeh(self.table),
                                pn.pane.HTML(LEGEND, width=LIST_WIDTH, styles={"font-size": "11px", "color": "#444"}),
                                width=LIST_WIDTH)
@@ -85,14 +80,14 @@ class OrbitList:
             self.orbits.show(ident)
         else:
             self.orbits.hide(ident)
-        self.orbits.update_status(force_density=True)       # (the density image without it, at once)
-        self.on_changed()                                   # (which orbits are hidden is in the link)
+        self.orbits.update_status(force_density=True)
+        self.on_changed()
 
     def clear(self) -> None:
         """Remove every orbit (running and paused ones stopped)."""
         self.readout.forget()
         self.orbits.drop_all()
-        self.orbits.update_status(force_density=True)      # (no image left of them)
+        self.orbits.update_status(force_density=True)
         self.on_changed()
 
     def undo(self) -> None:
