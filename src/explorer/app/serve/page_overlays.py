@@ -1,9 +1,5 @@
-"""The overlays of the page: the fixed points with their separatrices and the periodic orbits
-(:mod:`explorer.app.serve.overlays`, one task under a budget) and a picked saddle's manifolds
-(another).  By Bokeh model name: ``fixed`` (p1, p2, kind, marker), ``separatrices`` (xs, ys: one polyline per
-branch), ``periodic`` (p1, p2, period, kind, marker), ``manifolds`` (xs, ys, color, kind) and
-``overlay`` (what the searches found).
-"""
+"""The page's overlays (docs/commands/serve.md): fixed points with their separatrices, periodic orbits
+(one task under a budget) and a picked saddle's manifolds (another), searched by :mod:`.overlays`."""
 from __future__ import annotations
 
 import numpy as np
@@ -33,7 +29,7 @@ def _marks(points, stable) -> dict:
 
 
 class Overlays:
-    """Fixed points, separatrices, periodic orbits and a saddle's manifolds (module docstring)."""
+    """Fixed points, separatrices, periodic orbits and a saddle's manifolds."""
 
     def __init__(self, host, view, session):
         self.host, self.view, self.session = host, view, session
@@ -72,9 +68,7 @@ class Overlays:
         self.host.push_url()
 
     def restart(self):
-        """Search the fixed points (and separatrices) and the periodic orbits the boxes ask for, at
-        the current settings, under a budget (search_budget: FIXED_SECONDS, PERIODIC_SECONDS); a
-        newer request cancels the older search (its compiled loops stop within a step)."""
+        """Search what the boxes ask for at the current settings, under a budget; latest wins."""
         self.clear_manifolds()
         self.fixed.data = _empty_fixed()
         self.curves.data = {"xs": [], "ys": []}
@@ -121,8 +115,7 @@ class Overlays:
 
     # ------------------------------------------------------------ manifolds of a picked saddle
     def saddle_near(self, p1: float, p2: float, radius_px: float) -> tuple | None:
-        """(point, period) of the hyperbolic mark (fixed point or point of a periodic orbit) within
-        ``radius_px`` screen pixels of (p1, p2), the nearest; None when there is none."""
+        """(point, period) of the nearest hyperbolic mark within ``radius_px`` pixels of (p1, p2), or None."""
         px, py = self.view.pixel()
         best = None
         for src, fixed in ((self.fixed.data, True), (self.periodic.data, False)):
@@ -136,8 +129,7 @@ class Overlays:
         return None if best is None else best[1:]
 
     def show_manifolds(self, point, period: int = 1) -> None:
-        """Grow and draw W^u and W^s of the hyperbolic orbit of ``period`` through ``point`` (the
-        latest pick only; a new value or overlay drops it)."""
+        """Grow and draw W^u and W^s of the hyperbolic orbit of ``period`` through ``point`` (latest wins)."""
         self.manifold_source.data = _empty_manifolds()
         self.text.text = (f"growing the manifolds of the period-{period} orbit at "
                           f"({point[0]:.6g}, {point[1]:.6g}) ...")
