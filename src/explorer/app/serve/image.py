@@ -1,8 +1,5 @@
-"""The page's view as a picture: PNG or SVG drawn with matplotlib (docs/commands/serve.md).
-:class:`View` is a copy of what the page shows (plain arrays: drawn in any thread); :func:`render`
-draws it in the style of the sweep's figures, each orbit a collection with the SVG id
-``orbit-<id>``.  No web library here.
-"""
+"""The page's view as a PNG or SVG drawn with matplotlib (docs/commands/serve.md), each orbit with the
+SVG id ``orbit-<id>``.  No web library here."""
 from __future__ import annotations
 
 import io
@@ -14,8 +11,7 @@ import numpy as np
 #: size of the picture (inches) and the PNG's resolution
 FIGSIZE = (7.0, 5.6)
 DPI = 150
-#: above this many crossings in all, the orbits are rasterized in the SVG (a vector point each
-#: would make a file of ~100 bytes a crossing)
+#: above this many crossings in all, the orbits are rasterized in the SVG (~100 bytes a vector point)
 SVG_VECTOR_MAX = 200_000
 #: the formats render() writes
 FORMATS = ("png", "svg")
@@ -23,14 +19,10 @@ FORMATS = ("png", "svg")
 
 @dataclass
 class View:
-    """What the page shows.  ``orbits``: [(id, colour, points (n, 2), megno)]; ``starts``:
-    [(p1, p2, colour)]; ``window``: (x0, x1, y0, y1); ``region``: (c1, c2, r1, r2) or None;
-    ``raster``: (values (n, n), window) or None, on the colour scale ``raster_scale`` (low, high;
-    None: MEGNO's); ``fixed``: [(p1, p2, elliptic)];
-    ``separatrices``: [(n, 2) arrays]; ``manifolds``: [(kind, (n, 2) array)] of a picked saddle
-    (kind "unstable" or "stable"); ``periodic``: [(p1, p2, period, elliptic)];
-    ``by_megno``: colour the orbits by their MEGNO; ``title``: one line; ``region_mask``: the region
-    as a mask (n, n) over its box (None: the ellipse ``region``); ``axes``: the coordinates' names."""
+    """A copy of what the page shows, in plain arrays.  ``orbits``: [(id, colour, points (n, 2), megno)];
+    ``starts``: [(p1, p2, colour)]; ``region``: (c1, c2, r1, r2) or None, drawn as ``region_mask`` over its
+    box if given (else an ellipse); ``raster``: (values, window), on ``raster_scale`` (None: MEGNO's);
+    ``fixed``: [(p1, p2, elliptic)]; ``manifolds``: [(kind, curve)]; ``periodic``: [(p1, p2, period, elliptic)]."""
 
     window: tuple
     region: tuple | None
@@ -109,7 +101,6 @@ def figure(view: View):
         s = np.asarray([(a, b) for a, b, _c in view.starts], float)
         ax.scatter(s[:, 0], s[:, 1], s=40, marker="+", c=[c for _a, _b, c in view.starts], linewidths=1.5,
                    zorder=4, gid="starts")
-    # (every gid once in the SVG: an id names one element)
     for n, curve in enumerate(view.separatrices):
         c = np.asarray(curve, float)
         ax.plot(c[:, 0], c[:, 1], color=SEPARATRIX_COLOR, linewidth=0.8, zorder=2.5, gid=f"separatrix-{n}")
