@@ -1,6 +1,4 @@
-"""The ``serve`` command: its line (:data:`COMMAND`, whose options :func:`add_options` imports
-no web library, so ``explorer --help`` stays fast) and what it does (:func:`run`); listed in
-:mod:`explorer.app.commands.registry` like every command.  Its page: docs/commands/serve.md."""
+"""The ``serve`` command (docs/commands/serve.md); its options import no web library."""
 from __future__ import annotations
 
 import math
@@ -13,8 +11,7 @@ from explorer.model import ParameterError, validation
 
 
 def add_options(s) -> None:
-    """The options ``serve`` and ``explore`` share (one definition: explore is serve that also
-    opens the page in the browser, :mod:`explorer.app.commands.explore`)."""
+    """The options ``serve`` and ``explore`` share."""
     from explorer.analysis.sections import DEFAULT_DT, DEFAULT_TOL, METHODS
     from explorer.app.serve.server import DEFAULT_HOST, DEFAULT_PORT
     from explorer.app.serve.settings import DEFAULT_CROSSINGS
@@ -55,8 +52,6 @@ PAGE_DESCRIPTION = ("A click on the section starts an orbit whose crossings appe
                     "the method, tol, dt and the crossings per click; the URL keeps the view. Binds 127.0.0.1 "
                     "unless --host is given; another host needs a token.")
 
-
-#: the command's help (first paragraph) and description (the rest), as the other commands' docstrings
 HELP = """the explorer in the browser: click on the section, watch the orbits appear
 
 Serve the explorer as a web page (HoloViz Panel on Bokeh). The first line printed is the URL to open
@@ -67,9 +62,7 @@ COMMAND = Command("serve", HELP, "figure4 --mu 0.03", (add_options,), fields={"p
 
 
 def page_from_args(args) -> tuple:
-    """(settings, label, seeds) the page starts from: a System's section map (``--system``, or a
-    scene of a System; :func:`explorer.app.serve.system_page.system_page`), else Chaplygin's model
-    (the scene's panel, the options on top); seeds: the scene's ``[seeds]`` (*Scene seeds*)."""
+    """(settings, label, seeds) the page starts from: a System's section map, else Chaplygin's model."""
     from explorer.app.serve.settings import seeds_for, settings_for
     from explorer.io.scene import load_scene
     from explorer.io.scene.system import SystemScene
@@ -89,8 +82,7 @@ def page_from_args(args) -> tuple:
 
 
 def run(args, open_browser: bool = False) -> int:
-    """Serve the page until Ctrl-C (status 0); ``open_browser``: also open it in the user's web
-    browser (``explore``)."""
+    """Serve the page until Ctrl-C (status 0); ``open_browser``: also open it (``explore``)."""
     from explorer.app.serve import server
 
     if not 0 <= args.port <= 65535:
@@ -99,7 +91,6 @@ def run(args, open_browser: bool = False) -> int:
                                    or any(c in args.token for c in " &#?%/")):
         raise ParameterError("--token must be 1 to 256 printable characters without spaces or & # ? % /")
     if not args.host or not args.host.strip() or any(c.isspace() for c in args.host):
-        # an empty address would bind every interface with no token: refused, not guessed
         raise ParameterError(f"--host must be an address or host name (127.0.0.1 by default), got {args.host!r}")
     for name in ("h", "tol", "dt"):
         v = getattr(args, name)
