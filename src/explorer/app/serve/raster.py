@@ -1,9 +1,5 @@
-"""The chaos layer of the page: a raster of a chaos indicator (``INDICATORS``: mean MEGNO over
-``RASTER_TIME``, or frequency diffusion log10 |nu1 - nu2| around :func:`diffusion_center`) over the
-visible window, coarse first, then refined (``RESOLUTIONS``); cells outside the allowed region are
-NaN.  The partial image is yielded after each batch of seeds (docs/commands/serve.md, "Chaos
-layer").  No web library here.
-"""
+"""The chaos layer's rasters of the visible window, coarse first, a partial image after each batch; NaN
+outside the allowed region (docs/commands/serve.md, "Chaos layer").  No web library here."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -14,32 +10,26 @@ from explorer.app.serve.settings import Settings, Window
 
 #: resolutions of the successive rasters of one window (each a refinement of the last), by default
 RESOLUTIONS = (16, 32, 64, 128)
-#: the finest resolution the command accepts (--megno-resolution: a power of 2 in [16, MAX_RESOLUTION])
+#: the finest resolution --megno-resolution accepts
 MAX_RESOLUTION = 512
-#: integration time of the MEGNO of a cell (quasi-periodic: <Y> -> 2, chaotic: grows ~ chi t / 2), by
-#: default, and the longest the command accepts (--megno-time)
+#: integration time of a cell's MEGNO by default, and the longest --megno-time accepts
 RASTER_TIME = 200.0
 MAX_RASTER_TIME = 100_000.0
-#: steps per cell at most (a few thousand at Figure 4's parameters and RASTER_TIME; at extreme
-#: parameters the time scale shrinks and a batch no one can stop would run for hours); a cell past
-#: it is unknown (NaN, transparent)
+#: steps per cell at most (a batch must stay stoppable at extreme parameters); a cell past it is NaN
 RASTER_MAX_STEPS = 100_000
 #: seeds per call of the indicators (bounds the time until a cancel takes effect)
 BATCH = 512
 #: the indicators the layer can show (names of the registry, explorer.kernels.indicator_table)
 INDICATORS = ("megno", "frequency_diffusion")
-#: N of the layer's frequency diffusion: nu1 from the first N returns, nu2 from the next N (2N = 200
-#: returns a cell; a torus reaches about 1e-6 there and 1e-12 at N ~ 1000, a chaotic orbit 1e-4 to 1)
+#: N of the layer's frequency diffusion: nu1 from the first N returns, nu2 from the next N
 DIFFUSION_ITERATES = 100
-#: seeds per call of frequency_diffusion (a cancel takes effect within a batch, and the budget
-#: stops it between its runs)
+#: seeds per call of frequency_diffusion
 DIFFUSION_BATCH = 32
 
 
 @dataclass(frozen=True)
 class Image:
-    """One (partial) raster: ``values`` (n, n) of the ``indicator``, NaN outside the region or not
-    yet computed; ``complete`` when every cell of this resolution is in."""
+    """One (partial) raster: ``values`` (n, n), NaN outside the region or not yet computed."""
 
     window: Window
     n: int
@@ -58,10 +48,8 @@ def resolutions_up_to(n: int) -> tuple:
 
 
 def diffusion_center(settings: Settings) -> tuple:
-    """(point, elliptic): the centre of the layer's frequency diffusion at ``settings``, never
-    depending on the window: the readout's elliptic fixed point from the region's centre
-    (:func:`explorer.app.serve.overlays.elliptic_center`), else that centre itself (docs/greene.md,
-    "Frequency diffusion": any centre off the orbits gives a valid indicator)."""
+    """(point, elliptic): frequency diffusion's centre, the elliptic fixed point from the region's centre,
+    else that centre (docs/greene.md, "Frequency diffusion")."""
     from explorer.app.serve.overlays import elliptic_center
 
     c1, c2 = settings.region[:2]
@@ -72,9 +60,7 @@ def diffusion_center(settings: Settings) -> tuple:
 
 
 def diffusion_cells(settings: Settings, p1, p2, center, iterates: int = DIFFUSION_ITERATES) -> np.ndarray:
-    """Frequency diffusion log10 |nu1 - nu2| of the orbits from (p1, p2) around ``center``:
-    :func:`explorer.analysis.rotation.frequency_diffusion` on the page's section map at the
-    readout's rotation tolerance; ParameterError for crossings in direction -1 (no such map)."""
+    """log10 |nu1 - nu2| of the orbits from (p1, p2) around ``center`` (ParameterError in direction -1)."""
     from explorer.analysis.rotation import frequency_diffusion
     from explorer.app.serve.overlays import rotation_tol
     from explorer.model import ParameterError
