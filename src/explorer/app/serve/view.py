@@ -1,7 +1,5 @@
-"""The section view of the page: the Bokeh figure, the allowed region and the visible ``window``,
-fitted to the region after every change of it and followed through the browser's zoom and pan
-(:meth:`SectionView.on_window`).
-"""
+"""The page's section view: the Bokeh figure, the allowed region and the visible ``window``, fitted
+to the region and followed through the browser's zoom and pan."""
 from __future__ import annotations
 
 import numpy as np
@@ -9,16 +7,8 @@ from bokeh.events import RangesUpdate
 from bokeh.models import ColumnDataSource, Range1d
 from bokeh.plotting import figure
 
+from explorer.app.serve import style
 from explorer.app.serve.settings import Window
-from explorer.app.serve.style import (
-    ALLOWED_COLOR,
-    BOUNDARY_COLOR,
-    FIGURE_HEIGHT,
-    FIGURE_MIN_WIDTH,
-    FIGURE_WIDTH,
-    FORBIDDEN_COLOR,
-    VIEW_MARGIN,
-)
 
 
 def _empty_region() -> dict:
@@ -30,19 +20,16 @@ class SectionView:
 
     def __init__(self):
         self.region = ColumnDataSource(_empty_region(), name="region")
-        # Range1d, set by the server (fit): a DataRange1d kept the window it started with in the
-        # browser (its initial start and end) whatever the server set later, and Reset went back to it
-        # sized to the window: its width follows the page's, its height keeps the aspect of the
-        # nominal size (the same length per pixel along both axes stays so, fit), from FIGURE_MIN_WIDTH
-        fig = figure(name="section", width=FIGURE_WIDTH, height=FIGURE_HEIGHT, sizing_mode="scale_width",
-                     min_width=FIGURE_MIN_WIDTH,
+        # Range1d, set by the server (a DataRange1d keeps its first window in the browser for Reset)
+        fig = figure(name="section", width=style.FIGURE_WIDTH, height=style.FIGURE_HEIGHT, sizing_mode="scale_width",
+                     min_width=style.FIGURE_MIN_WIDTH,
                      x_range=Range1d(-1.0, 1.0), y_range=Range1d(-1.0, 1.0),
                      tools="pan,wheel_zoom,box_zoom,reset,save", active_scroll="wheel_zoom",
-                     x_axis_label="p1", y_axis_label="p2", background_fill_color=FORBIDDEN_COLOR,
+                     x_axis_label="p1", y_axis_label="p2", background_fill_color=style.FORBIDDEN_COLOR,
                      toolbar_location="above")
-        fig.ellipse("x", "y", width="width", height="height", source=self.region, fill_color=ALLOWED_COLOR,
-                    line_color=BOUNDARY_COLOR, line_width=1.0)
-        # a region without a closed form (a System's map): its mask as an image, white where allowed
+        fig.ellipse("x", "y", width="width", height="height", source=self.region, fill_color=style.ALLOWED_COLOR,
+                    line_color=style.BOUNDARY_COLOR, line_width=1.0)
+        # a region without a closed form (a System's map): its mask, white where allowed
         self.region_image = ColumnDataSource({"image": [], "x": [], "y": [], "dw": [], "dh": []}, name="region-image")
         fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.region_image)
         fig.grid.visible = False
@@ -64,12 +51,11 @@ class SectionView:
             listener()
 
     def frame_px(self) -> tuple:
-        """Width and height of the plot's frame in screen pixels (as drawn in the browser; before
-        that, the figure's nominal size less its axes)."""
+        """Width and height of the plot's frame in screen pixels (before it is drawn: the nominal size)."""
         try:
             return float(self.figure.inner_width), float(self.figure.inner_height)
         except Exception:  # noqa: BLE001 - not drawn in a browser yet: the figure's nominal size
-            return FIGURE_WIDTH - 60.0, FIGURE_HEIGHT - 60.0
+            return style.FIGURE_WIDTH - 60.0, style.FIGURE_HEIGHT - 60.0
 
     def pixel(self) -> tuple:
         """The size of a screen pixel in p1 and p2 (from the visible window and the plot's frame)."""
@@ -83,8 +69,7 @@ class SectionView:
         self.figure.xaxis.axis_label, self.figure.yaxis.axis_label = a, b
 
     def draw_region(self, region, mask=None) -> None:
-        """The allowed region (c1, c2, r1, r2; None: empty): the ellipse, or ``mask`` (n, n) over
-        its box (rows: the second coordinate); and the view fitted to it."""
+        """The allowed region (c1, c2, r1, r2; None: empty) as the ellipse or ``mask`` over its box; the view fitted."""
         self.region_image.data = {"image": [], "x": [], "y": [], "dw": [], "dh": []}
         if region is None:
             self.region.data = _empty_region()
@@ -97,7 +82,7 @@ class SectionView:
             rgba = np.where(np.asarray(mask, bool), np.uint32(0xFFFFFFFF), np.uint32(0)).astype(np.uint32)
             self.region_image.data = {"image": [rgba], "x": [c1 - r1], "y": [c2 - r2], "dw": [2 * r1],
                                       "dh": [2 * r2]}
-        self.fit(c1, c2, (1 + VIEW_MARGIN) * r1, (1 + VIEW_MARGIN) * r2)
+        self.fit(c1, c2, (1 + style.VIEW_MARGIN) * r1, (1 + style.VIEW_MARGIN) * r2)
 
     def show_window(self, w) -> None:
         """Show the window ``w`` (a link's zoom; Reset still goes to the region's view)."""
@@ -106,8 +91,7 @@ class SectionView:
         self.window = w
 
     def fit(self, c1: float, c2: float, m1: float, m2: float) -> None:
-        """Show the box c1 +- m1, c2 +- m2, the same length per pixel along both axes (the frame's
-        size as drawn; before that, the nominal size), and make it the view Reset goes back to."""
+        """Show the box c1 +- m1, c2 +- m2, equal length per pixel along both axes; Reset goes back to it."""
         px, py = self.frame_px()
         scale = max(2.0 * m1 / max(px, 1.0), 2.0 * m2 / max(py, 1.0))     # p-units per pixel
         h1, h2 = 0.5 * scale * max(px, 1.0), 0.5 * scale * max(py, 1.0)
