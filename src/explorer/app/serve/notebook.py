@@ -1,8 +1,5 @@
-"""The explorer in a notebook cell: ``ex.explore(scene)`` returns a Panel object that displays the
-page of ``explorer serve``.  No server owns the page's document: a periodic callback (every
-``POLL_MS``) runs the page's own loop a moment (:meth:`SectionPage.poll`) and pushes what reached
-the page (``panel.io.push_notebook``).  Needs ``pn.extension()``, as every Panel object does.
-"""
+"""The explorer in a notebook cell (docs/commands/serve.md): a periodic callback runs the page's own loop
+and pushes what reached it (``panel.io.push_notebook``)."""
 from __future__ import annotations
 
 import panel as pn
@@ -16,8 +13,7 @@ POLL_MS = 50
 
 
 class Explorer(pn.viewable.Viewer):
-    """The displayable explorer of a notebook cell; ``page`` is its :class:`SectionPage`
-    (``page.click(p1, p2)``, ``page.orbits.crossings.data``, ``page.url_query()``, ...)."""
+    """The displayable explorer of a notebook cell; ``page`` is its :class:`SectionPage`."""
 
     def __init__(self, page: SectionPage, **params):
         super().__init__(**params)
@@ -54,12 +50,9 @@ def explore(scene=None, *, panel: int = 0, export_dir=None, h: float | None = No
         pn.extension()
         ex.explore("figure4", panel=2)            # or ex.explore(mu=0.03, n_crossings=5000)
 
-    ``scene``: a scene (TOML path, preset name or :class:`explorer.Scene`; None: Figure 4 with
-    mu = 0, h = 2) and its ``panel``; on top of it, each given: the model parameters (``a1`` ...
-    ``eta``, docs/model.md), the energy ``h``, the integrator ``method``, ``tol``, ``dt`` and the
-    crossings per orbit ``n_crossings`` (validated: ParameterError).  ``export_dir``: where the page's *Export
-    scene* button writes (None: download only).  ``scene`` a System's section map (``ex.SectionMap(system, E,
-    ...)``) or scene: its page, ``h`` its energy (docs/commands/serve.md, "Your own system").
+    ``scene`` (a scene, None: Figure 4) and its ``panel``, with each value given on top (validated);
+    ``export_dir``: where *Export scene* writes.  ``scene`` a System's section map or scene: its page,
+    ``h`` its energy (docs/commands/serve.md, "Your own system").
     """
     given: dict[str, object] = {"a1": a1, "a2": a2, "b": b, "lam": lam, "chi": chi, "zeta": zeta, "mu": mu, "xi": xi,
                                 "eta": eta, "h": h, "method": method, "tol": tol, "dt": dt, "crossings": n_crossings}
