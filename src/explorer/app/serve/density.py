@@ -1,18 +1,12 @@
-"""Many crossings as one image (docs/architecture.md, "Many crossings in the browser"): past
-``GLYPH_BUDGET`` crossings the page draws dots for its newest orbits only (:func:`glyph_cutoff`) and the older ones
-in this image of the visible window; past ``THRESHOLD``, every orbit.  Each cell takes the colour
-of the orbit with the most crossings in it (or their mean MEGNO's colour), its opacity growing with
-the logarithm of its count; packed RGBA as Bokeh's ``image_rgba`` draws it.  No web library here.
-"""
+"""Many crossings as one image (docs/architecture.md, "Many crossings in the browser"), packed RGBA as
+Bokeh's ``image_rgba`` draws it.  No web library here."""
 from __future__ import annotations
 
 import numpy as np
 
 #: crossings on a page above which the density image replaces the glyphs
 THRESHOLD = 200_000
-#: at most this many crossings are drawn as glyphs (the newest orbits, whole); older orbits go to the
-#: image.  The browser redraws every glyph on screen after each message with crossings: this
-#: bounds that redraw (docs/commands/serve.md, "Latency")
+#: at most this many crossings are drawn as glyphs (the newest orbits, whole; docs/commands/serve.md, "Latency")
 GLYPH_BUDGET = 10_000
 #: one cell of the image per this many screen pixels (each way)
 CELL_PX = 2
@@ -26,16 +20,14 @@ def _rgb(colour: str) -> tuple:
 
 
 def glyph_cutoff(orbit, budget: int = GLYPH_BUDGET) -> int:
-    """The first orbit id drawn as glyphs, given the orbit id of every crossing (ids grow with the
-    clicks): the newest orbits whose crossings add up to at most ``budget``, whole, newest first;
-    the orbits below it go to the image.  0 when every crossing fits (no image); one more than the
-    newest id when even the newest orbit alone has more than ``budget`` crossings."""
+    """The first orbit id drawn as glyphs, given every crossing's orbit id: the newest whole orbits within
+    ``budget`` crossings (0: every one fits)."""
     ids = np.asarray(orbit, np.int64)
     if ids.size <= budget:
         return 0
     count = np.bincount(ids)
     from_here = np.cumsum(count[::-1])[::-1]          # crossings of the orbits with id >= k
-    fits = np.flatnonzero(from_here <= budget)         # (from_here decreases: a tail of the ids)
+    fits = np.flatnonzero(from_here <= budget)
     return int(fits[0]) if fits.size else len(count)
 
 
@@ -50,9 +42,8 @@ def cells(p1, p2, window, nx: int, ny: int):
 
 def density_rgba(p1, p2, colour_index, window, nx: int, ny: int, colors, megno=None, palette=None,
                  lo: float = 0.0, hi: float = 8.0) -> np.ndarray:
-    """The (ny, nx) uint32 RGBA image of the points (p1, p2) in ``window``: each cell in the colour
-    ``colors[colour_index]`` of its most frequent orbit colour, or (``megno`` and ``palette``
-    given) the palette's colour of its points' mean MEGNO between ``lo`` and ``hi`` (NaN: gray)."""
+    """The (ny, nx) uint32 RGBA image of (p1, p2) in ``window``: each cell in its most frequent orbit colour,
+    or the ``palette`` colour of its mean ``megno`` in [lo, hi]; opacity growing with log(count)."""
     ncell = nx * ny
     cell, inside = cells(p1, p2, window, nx, ny)
     count = np.bincount(cell, minlength=ncell)
