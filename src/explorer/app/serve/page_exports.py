@@ -37,8 +37,7 @@ class Exports:
             return io.StringIO("")
 
     def view(self):
-        """What the page shows now, copied (:class:`explorer.app.serve.image.View`: drawn by
-        :func:`explorer.app.serve.image.render`, in any thread): hidden orbits left out."""
+        """What the page shows now, hidden orbits left out, copied (drawn in any thread)."""
         from explorer.app.serve.image import View
 
         host = self.host
@@ -97,8 +96,7 @@ class Exports:
         await self.session.apply(lambda: self.host.say(text, ok))
 
     def export(self) -> str | None:
-        """Write the session's scene into the export directory; returns its path (its orbits'
-        store follows, written by a task)."""
+        """Write the session's scene into the export directory (its store follows in a task); returns its path."""
         try:
             sc = export.session_scene(self.host.settings, self._starts(), overlays=self.host.overlays_on())
             path = export.write_scene(self.export_dir, sc)
