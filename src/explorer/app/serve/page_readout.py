@@ -1,7 +1,5 @@
-"""The readout of a picked orbit (Shift + click, or the click switch): the orbit with a crossing
-near the click, its mLCE, mean MEGNO and rotation number (a task under a budget), or near a
-hyperbolic mark that mark's manifolds.  By Bokeh model name: ``readout``.
-"""
+"""The readout of a picked orbit (docs/commands/serve.md): its mLCE, MEGNO and rotation number (a task
+under a budget), or near a hyperbolic mark that mark's manifolds."""
 from __future__ import annotations
 
 import math
@@ -38,11 +36,11 @@ class Readout:
             listener(ident)
 
     def pick(self, p1: float, p2: float, radius_px: float = PICK_PX) -> int | None:
-        """A pick at (p1, p2): within ``radius_px`` screen pixels of a hyperbolic mark, its manifolds
-        (None); else the orbit with the nearest crossing within them is selected; returns its id."""
+        """A pick at (p1, p2): near a hyperbolic mark its manifolds (None), else selects the orbit with the
+        nearest crossing within ``radius_px`` pixels and returns its id."""
         finite = math.isfinite(p1) and math.isfinite(p2)
         saddle = self.overlays.saddle_near(p1, p2, radius_px) if finite else None
-        if saddle is not None:           # a hyperbolic mark of the overlays: its manifolds
+        if saddle is not None:
             self.overlays.show_manifolds(*saddle)
             return None
         d = self.orbits.crossings.data
