@@ -1,6 +1,4 @@
-"""How the page looks, in one place (no web library): the colours of the section, the sizes, the
-MEGNO colour scale and the colours of the overlays; :mod:`~explorer.app.serve.page` draws with
-them in the browser and :mod:`~explorer.app.serve.image` in the exported PNG and SVG."""
+"""How the page and its exported figures look, in one place (no web library)."""
 from __future__ import annotations
 
 import math
@@ -40,8 +38,7 @@ SEPARATRIX_CASING = "#101010"
 
 
 def megno_palette(skip: int = 0) -> list:
-    """The MEGNO colour scale, light (regular) to dark (chaotic): Inferno reversed, without its
-    ``skip`` lightest colours (256 - skip colours, "#rrggbb")."""
+    """The MEGNO colour scale, light (regular) to dark (chaotic): Inferno reversed, less ``skip`` lightest."""
     from bokeh.palettes import Inferno256  # (a table of colours: no server, no document)
 
     return list(reversed(Inferno256))[skip:]
@@ -55,7 +52,6 @@ def megno_kind(megno: float) -> str:
         return "unknown: the run stopped early"
     if megno > CHAOTIC_MEGNO:
         return "chaotic-like"
-    # (<Y> tends to 2 on a torus and to 0 on a stable periodic orbit, about which a finite run's mean oscillates)
     return "regular-like" + (": below 0, near a stable periodic orbit, where <Y> tends to 0" if megno < 0 else "")
 
 
