@@ -1,7 +1,5 @@
-"""The page's check box: a boolean ``value`` drawn as Panel's ``CheckBoxGroup`` of one option
-(Bokeh's ``CheckboxGroup``), whose input is inside a ``<label>``: a click on the label's text
-toggles it (Panel's ``Checkbox`` puts its label in a ``<div>`` beside the input).  Public API
-only: a :class:`panel.viewable.Viewer` whose ``value`` two watchers keep equal to the group's."""
+"""The page's check box: a ``CheckBoxGroup`` of one option, whose label text toggles it (Panel's
+``Checkbox`` puts its label beside the input)."""
 from __future__ import annotations
 
 import panel as pn
@@ -9,9 +7,7 @@ import param
 
 
 class Box(pn.viewable.Viewer):
-    """A check box with a clickable label (module docstring): ``value`` is a bool, watched and set
-    like a widget's (``box.param.watch(fn, "value")``, ``box.value = True``); ``widget`` is the
-    ``CheckBoxGroup`` drawn."""
+    """A check box with a clickable label; ``value`` is watched and set like a widget's."""
 
     value = param.Boolean(default=False, doc="ticked")
     label = param.String(default="", constant=True, doc="the text beside the box (a click on it ticks it)")
