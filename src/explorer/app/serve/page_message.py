@@ -1,7 +1,4 @@
-"""The message line under the page's figure (Bokeh model name ``message``): the last refusal or
-failure in the error colour, or what went well (an export written, seeds started) in the success
-colour.  Text, never HTML: a message may quote what was typed into a field.  A component of
-:class:`~explorer.app.serve.page.SectionPage`; every other component says things through it."""
+"""The message line under the page's figure: text, never HTML (a message may quote a field)."""
 from __future__ import annotations
 
 from bokeh.models import Div
@@ -18,8 +15,7 @@ class Message:
         self.message_ok = False
 
     def say(self, text: str, ok: bool = False) -> None:
-        """``text`` under the figure: a refusal or a failure in the error colour, or (``ok``) what
-        went well in the success colour (:meth:`tell`)."""
+        """``text`` under the figure, in the error colour or (``ok``) the success colour."""
         self.message_ok = bool(ok)
         color = MESSAGE_OK_COLOR if ok else MESSAGE_ERROR_COLOR
         if self.message.styles.get("color") != color:
