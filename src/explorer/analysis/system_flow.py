@@ -2,9 +2,9 @@
 "The flow at given times"): ``flow(system, states=Y0, times=ts)``.
 
 The integrator is the adaptive Taylor method of the crossings (Jorba & Zou 2005, Exp. Math. 14, 99),
-generated into the system's module (``flow_taylor``, :mod:`explorer.integrate.codegen_flow`): each
+generated into the system's module (``flow_taylor_worker``, :mod:`explorer.integrate.codegen_flow`): each
 sample is the polynomial of the step that contains it, at the integrator's order, so the samples
-change no step; the last step is clipped onto the last time.  By default its SIMD form (``flow_lanes``)
+change no step; the last step is clipped onto the last time.  By default its SIMD form (``flow_lanes_worker``)
 runs the orbits, each with the scalar driver's samples bit for bit.
 """
 from __future__ import annotations

@@ -7,11 +7,11 @@ is the same :class:`~explorer.analysis.sections.Crossings`, with the rows of a s
 ``final[i]`` the state where orbit i stopped and ``info[i] = (t_end, steps, nan)``.
 
 The integrator is the adaptive Taylor method (Jorba & Zou 2005, Exp. Math. 14, 99), generated
-into the system's module by :mod:`explorer.integrate.codegen` (``crossings_taylor``): the order
+into the system's module by :mod:`explorer.integrate.codegen` (``crossings_taylor_worker``): the order
 from ``tol`` (:func:`explorer.kernels.taylor_order.order_for_tolerance`), the step from the last
 two coefficients, the crossings the roots of each step's polynomial of the section function,
 isolated and refined as the engine's (kernels/events.py).  By default its SIMD form
-(``crossings_lanes``, :mod:`explorer.integrate.codegen_lanes`) runs the orbits, each with the
+(``crossings_lanes_worker``, :mod:`explorer.integrate.codegen_lanes`) runs the orbits, each with the
 scalar driver's rows bit for bit (:func:`driver_for`).
 
 This module imports neither SymPy nor numba at import time: :func:`is_system` is asked about
@@ -24,10 +24,11 @@ import inspect
 import math
 import numbers
 import sys
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from explorer._jit import get_num_threads, max_threads, set_num_threads
+from explorer._jit import get_num_threads, max_threads
 from explorer.integrate.methods import DEFAULT_TOL, check_setting
 from explorer.kernels.taylor_order import order_for_tolerance
 from explorer.model import ParameterError, validation
@@ -243,30 +244,31 @@ def check_memory(what: str, need: int, hint: str) -> None:
 
 
 def run_driver(mod, name: str, n: int, driver: str, threads, args: tuple) -> None:
-    """The generated driver ``name`` of module ``mod`` on ``n`` orbits with ``args``: ``<name>_taylor``
-    (the scalar form), ``<name>_lanes_worker`` (one group of lanes, no parallel region) or
-    ``<name>_lanes`` (:func:`driver_for`), on ``threads`` numba threads (None: as set)."""
-    old = get_num_threads()
-    if threads is not None:
-        set_num_threads(threads)
-    try:
-        workers = driver_for(n, driver)
-        if workers == 0:
-            getattr(mod, f"{name}_taylor")(*args)
-        elif workers == 1:
-            getattr(mod, f"{name}_lanes_worker")(np.zeros(1, np.int64), *args)
-        else:
-            getattr(mod, f"{name}_lanes")(*args, workers)
-    finally:
-        if threads is not None:
-            set_num_threads(old)
+    """The generated driver ``name`` of module ``mod`` on ``n`` orbits with ``args``: ``<name>_taylor_worker``
+    (the scalar form) or ``<name>_lanes_worker`` (groups of LANES lanes, :func:`driver_for`), on ``threads``
+    threads (None: numba's thread count) that take the orbits from one queue.  The workers release the
+    GIL, so the threads run at once; each orbit is computed alone, so the result does not depend on the
+    threads.  Plain threads, not a numba parallel region: a parallel region would be compiled anew for
+    every generated module, a few seconds each (docs/systems.md, "The cache")."""
+    count = get_num_threads() if threads is None else int(threads)
+    workers = driver_for(n, driver, count)
+    worker = getattr(mod, f"{name}_lanes_worker" if workers else f"{name}_taylor_worker")
+    workers = workers or max(1, min(count, n))
+    queue = np.zeros(1, np.int64)
+    if workers == 1:
+        worker(queue, *args)
+        return
+    with ThreadPoolExecutor(workers) as pool:
+        for done in [pool.submit(worker, queue, *args) for _ in range(workers)]:
+            done.result()
 
 
-def driver_for(n: int, driver: str = "auto") -> int:
+def driver_for(n: int, driver: str = "auto", threads: int | None = None) -> int:
     """How ``n`` orbits run: 0 on the scalar driver (one orbit per thread), else on that many groups of
-    LANES SIMD lanes (one per thread, no more than ceil(n / LANES)); ``auto`` is the lanes."""
+    LANES SIMD lanes (one per thread of ``threads``, numba's count by default, no more than
+    ceil(n / LANES)); ``auto`` is the lanes."""
     from explorer.integrate.simd import LANES
 
     if driver == "scalar":
         return 0
-    return max(1, min(get_num_threads(), -(-n // LANES)))
+    return max(1, min(get_num_threads() if threads is None else threads, -(-n // LANES)))

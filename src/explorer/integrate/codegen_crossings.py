@@ -1,5 +1,5 @@
 """The crossings driver appended to every generated module (:data:`explorer.integrate.codegen.TEMPLATES`):
-``crossings_taylor``, the adaptive Taylor method with the crossings of a section a . x + b = 0
+``crossings_taylor_worker``, the adaptive Taylor method with the crossings of a section a . x + b = 0
 (docs/systems.md, "Crossings"), called by :mod:`explorer.analysis.system_sections`."""
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ SOURCE = '''
 
 # ---- crossings of a section a . x + b = 0 (explorer.analysis.system_sections): generated here, beside
 # the recurrence they call, so that numba's cache of them follows the recurrence (docs/systems.md)
-from explorer._jit import prange  # noqa: E402
+from explorer.integrate.simd import atomic_fetch_add  # noqa: E402
 from explorer.kernels.checks import all_finite, is_finite  # noqa: E402
 from explorer.kernels.clock import advance_time, clip_step, resolves  # noqa: E402
 from explorer.kernels.events import poly_step_roots, root_workspace  # noqa: E402
@@ -98,14 +98,18 @@ def crossings_orbit(j, y0, P, a, b, direction, tmax, order, max_steps, limit, da
     return n, status
 
 
-@njit(parallel=True, error_model="numpy")
-def crossings_taylor(Y0, P, a, b, direction, tmax, order, max_steps, limit, data, count, status, final, info):
-    """:func:`crossings_orbit` for every orbit (row of Y0), in parallel over orbits: each orbit
-    is computed alone, so the result does not depend on the number of threads."""
-    for j in prange(Y0.shape[0]):
+@njit(nogil=True, error_model="numpy")
+def crossings_taylor_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_steps, limit, data, count, status,
+                            final, info):
+    """:func:`crossings_orbit` for the orbits (rows of Y0) of the queue ``next_orbit`` that threads share
+    (analysis.system_sections.run_driver): each orbit is computed alone, so the result does not depend on
+    the number of threads."""
+    j = atomic_fetch_add(next_orbit, 0, 1)
+    while j < Y0.shape[0]:
         c, s = crossings_orbit(j, Y0[j], P, a, b, direction, tmax, order, max_steps, limit, data, final, info)
         count[j] = c
         status[j] = s
+        j = atomic_fetch_add(next_orbit, 0, 1)
 '''
 
 

@@ -1,7 +1,7 @@
 """The flow driver appended to every generated module (:data:`explorer.integrate.codegen.TEMPLATES`):
-``flow_taylor``, the states of orbits at given times read off each adaptive Taylor step's polynomial
+``flow_taylor_worker``, the states of orbits at given times read off each adaptive Taylor step's polynomial
 (docs/systems.md, "The flow at given times"), called by :mod:`explorer.analysis.system_flow`; and its SIMD
-form ``flow_lanes``, each lane ``flow_orbit`` bit for bit: the step of :mod:`explorer.integrate.codegen_lanes`
+form ``flow_lanes_worker``, each lane ``flow_orbit`` bit for bit: the step of :mod:`explorer.integrate.codegen_lanes`
 in vector form, a step's end in vector form for a lane with no sample in it, the samples lane by lane."""
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ SOURCE = '''
 
 # ---- the flow at given times (explorer.analysis.system_flow): generated here, beside the recurrence it
 # calls, so that numba's cache of it follows the recurrence (docs/systems.md)
-from explorer._jit import prange  # noqa: E402
+from explorer.integrate.simd import atomic_fetch_add  # noqa: E402
 from explorer.kernels.checks import all_finite, is_finite  # noqa: E402
 from explorer.kernels.clock import advance_time, clip_step, resolves  # noqa: E402
 from explorer.kernels.status import (  # noqa: E402
@@ -78,16 +78,18 @@ def flow_orbit(j, y0, P, times, order, max_steps, states, energy_error, info):
     return status
 
 
-@njit(parallel=True, error_model="numpy")
-def flow_taylor(Y0, P, times, order, max_steps, states, energy_error, status, info):
-    """:func:`flow_orbit` for every orbit (row of Y0), in parallel over orbits: each orbit is
-    computed alone, so the result does not depend on the number of threads."""
-    for j in prange(Y0.shape[0]):
+@njit(nogil=True, error_model="numpy")
+def flow_taylor_worker(next_orbit, Y0, P, times, order, max_steps, states, energy_error, status, info):
+    """:func:`flow_orbit` for the orbits (rows of Y0) of the queue ``next_orbit`` that threads share: each
+    orbit is computed alone, so the result does not depend on the number of threads."""
+    j = atomic_fetch_add(next_orbit, 0, 1)
+    while j < Y0.shape[0]:
         status[j] = flow_orbit(j, Y0[j], P, times, order, max_steps, states, energy_error, info)
+        j = atomic_fetch_add(next_orbit, 0, 1)
 
-# ---- the flow on SIMD lanes: each lane flow_orbit bit for bit, with the vector step of crossings_lanes
+# ---- the flow on SIMD lanes: each lane flow_orbit bit for bit, with the vector step of crossings_lanes_worker
 # (_norms_lanes, _steps_lanes, _evaluate_lanes: kernels.taylor's step and Horner evaluation per lane)
-from explorer.integrate.simd import atomic_fetch_add, next_bit, vbits, vmask, vselect  # noqa: E402
+from explorer.integrate.simd import next_bit, vbits, vmask, vselect  # noqa: E402
 from explorer.kernels.clock import compensated_add  # noqa: E402
 from explorer.kernels.taylor import radius_min  # noqa: E402
 
@@ -155,7 +157,7 @@ def _flow_lane_finish(l, st, orb, L_t, L_tc, L_steps, status, info):
     status[j] = st
 
 
-@njit(error_model="numpy")
+@njit(nogil=True, error_model="numpy")
 def flow_lanes_worker(next_orbit, Y0, P, times, order, max_steps, states, energy_error, status, info):
     """One group of LANES lanes: orbits from the queue ``next_orbit`` until it is empty, each lane
     flow_orbit's loop (its arguments and outputs)."""
@@ -248,15 +250,6 @@ def flow_lanes_worker(next_orbit, Y0, P, times, order, max_steps, states, energy
                 _flow_lane_finish(l, st, orb, L_t, L_tc, L_steps, status, info)
                 active += _flow_lane_start(l, next_orbit, Y0, P, times, X, orb, L_on, L_t, L_tc, L_steps, L_m,
                                            L_next, L_E0, states, energy_error, status, info) - 1
-
-
-@njit(parallel=True, error_model="numpy")
-def flow_lanes(Y0, P, times, order, max_steps, states, energy_error, status, info, workers):
-    """flow_taylor's arguments and outputs, on ``workers`` groups of LANES lanes (prange) fed from one
-    queue of orbits; each orbit's results are flow_orbit's bit for bit."""
-    next_orbit = np.zeros(1, np.int64)
-    for w in prange(workers):
-        flow_lanes_worker(next_orbit, Y0, P, times, order, max_steps, states, energy_error, status, info)
 '''
 
 

@@ -1,7 +1,7 @@
 """The chaos-indicator drivers appended to every generated module (:data:`explorer.integrate.codegen.TEMPLATES`):
-``indicators_taylor``, the adaptive Taylor method on the variational system of
+``indicators_taylor_worker``, the adaptive Taylor method on the variational system of
 :meth:`explorer.model.system.System.variational` with the indicators of :mod:`explorer.kernels.tangent`
-(docs/systems.md, "Chaos indicators"), and ``indicators_lanes``, the same for LANES orbits at once on
+(docs/systems.md, "Chaos indicators"), and ``indicators_lanes_worker``, the same for LANES orbits at once on
 SIMD lanes (each lane the scalar driver bit for bit, as :mod:`explorer.integrate.codegen_lanes`), called by
 :mod:`explorer.analysis.system_indicators`.
 
@@ -16,7 +16,7 @@ SOURCE = '''
 
 # ---- chaos indicators along deviation vectors (explorer.analysis.system_indicators): generated here,
 # beside the recurrence they call, so that numba's cache of them follows the recurrence (docs/systems.md)
-from explorer._jit import prange  # noqa: E402
+from explorer.integrate.simd import atomic_fetch_add  # noqa: E402
 from explorer.kernels import tangent as _tg  # noqa: E402
 from explorer.kernels.checks import all_finite, is_finite  # noqa: E402
 from explorer.kernels.clock import advance_time, clip_step, resolves  # noqa: E402
@@ -122,24 +122,27 @@ def indicators_orbit(y0, v0, w0, n, nvec, P, T, order, max_steps, early_stop, sa
     return status, steps
 
 
-@njit(parallel=True, error_model="numpy")
-def indicators_taylor(Y0, V0, W0, n, nvec, P, T, order, max_steps, early_stop, sali_stop, megno_level, early_tmin,
-                      hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w):
-    """:func:`indicators_orbit` for every orbit (row of Y0), in parallel over orbits: each orbit
-    is computed alone, so the result does not depend on the number of threads."""
-    for j in prange(Y0.shape[0]):
+@njit(nogil=True, error_model="numpy")
+def indicators_taylor_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_steps, early_stop, sali_stop,
+                             megno_level, early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final,
+                             out_steps, out_w):
+    """:func:`indicators_orbit` for the orbits (rows of Y0) of the queue ``next_orbit`` that threads share:
+    each orbit is computed alone, so the result does not depend on the number of threads."""
+    j = atomic_fetch_add(next_orbit, 0, 1)
+    while j < Y0.shape[0]:
         s, k = indicators_orbit(Y0[j], V0[j], W0[j], n, nvec, P, T, order, max_steps, early_stop, sali_stop,
                                 megno_level, early_tmin, hist_t, out_hist[j], out_res[j], out_ext[j], out_w[j],
                                 out_final[j])
         out_status[j] = s
         out_steps[j] = k
+        j = atomic_fetch_add(next_orbit, 0, 1)
 
 
 # ---- the indicators on SIMD lanes: each lane indicators_orbit bit for bit.  The recurrence, the step
 # (its norms over the orbit's rows) and the Horner evaluation in vector form; the renormalisation and the
 # accumulators after a step lane by lane with the scalar kernels (their cost is small beside the recurrence)
 from explorer.integrate.simd import (  # noqa: E402
-    atomic_fetch_add, next_bit, vbits, vmax_gt, vmin_lt, vradius_power_core)
+    next_bit, vbits, vmax_gt, vmin_lt, vradius_power_core)
 from explorer.kernels.power import is_normal  # noqa: E402
 from explorer.kernels.taylor import radius_min  # noqa: E402
 
@@ -249,7 +252,7 @@ def _indicator_lane_finish(l, st, n, nvec, X, z, orb, L_steps, L_early, acc, out
     out_steps[j] = L_steps[l]
 
 
-@njit(error_model="numpy")
+@njit(nogil=True, error_model="numpy")
 def indicators_lanes_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_steps, early_stop, sali_stop,
                             megno_level, early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final,
                             out_steps, out_w):
@@ -337,18 +340,6 @@ def indicators_lanes_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_st
                 active += _indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on,
                                                 L_t, L_tc, L_steps, L_early, L_hpos, L_since, acc, out_hist, out_res,
                                                 out_ext, out_status, out_final, out_steps, out_w) - 1
-
-
-@njit(parallel=True, error_model="numpy")
-def indicators_lanes(Y0, V0, W0, n, nvec, P, T, order, max_steps, early_stop, sali_stop, megno_level, early_tmin,
-                     hist_t, out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w, workers):
-    """indicators_taylor's arguments and outputs, on ``workers`` groups of LANES lanes (prange) fed from
-    one queue of orbits; each orbit's results are indicators_orbit's bit for bit."""
-    next_orbit = np.zeros(1, np.int64)
-    for w in prange(workers):
-        indicators_lanes_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_steps, early_stop, sali_stop,
-                                megno_level, early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final,
-                                out_steps, out_w)
 '''
 
 

@@ -1,5 +1,5 @@
 """The SIMD crossings driver appended to every generated module (:data:`explorer.integrate.codegen.TEMPLATES`):
-``crossings_lanes``, the crossings of ``crossings_orbit`` (:mod:`explorer.integrate.codegen_crossings`) for
+``crossings_lanes_worker``, the crossings of ``crossings_orbit`` (:mod:`explorer.integrate.codegen_crossings`) for
 LANES orbits at once with ``taylor_coefficients_lanes`` (docs/systems.md, "Crossings").
 
 Each lane is the scalar driver bit for bit.  Written with the vectors of :mod:`explorer.integrate.simd`,
@@ -191,7 +191,7 @@ def _lane_finish(l, st, X, orb, L_t, L_tc, L_n, L_steps, count, status, final, i
     status[j] = st
 
 
-@njit(error_model="numpy")
+@njit(nogil=True, error_model="numpy")
 def crossings_lanes_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_steps, limit, data, count, status,
                            final, info):
     """One group of LANES lanes: orbits from the queue ``next_orbit`` until it is empty, each lane
@@ -286,17 +286,6 @@ def crossings_lanes_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_
                 _lane_finish(l, st, X, orb, L_t, L_tc, L_n, L_steps, count, status, final, info)
                 active += _lane_start(l, next_orbit, Y0, P, a, b, tmax, max_steps, limit, X, orb, L_on, L_t, L_tc,
                                       L_g, L_E0, L_n, L_steps, count, status, final, info) - 1
-
-
-@njit(parallel=True, error_model="numpy")
-def crossings_lanes(Y0, P, a, b, direction, tmax, order, max_steps, limit, data, count, status, final, info,
-                    workers):
-    """crossings_taylor's arguments and outputs, on ``workers`` groups of LANES lanes (prange) fed from
-    one queue of orbits; each orbit's results are crossings_orbit's bit for bit."""
-    next_orbit = np.zeros(1, np.int64)
-    for w in prange(workers):
-        crossings_lanes_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_steps, limit, data, count,
-                                status, final, info)
 '''
 
 
