@@ -100,7 +100,6 @@ def make_server(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT
 
 def web_browser():
     """The user's web browser, or None (on Linux/BSD without a display nor BROWSER: no text browser)."""
-    import os
     import webbrowser
 
     if (os.name == "posix" and sys.platform != "darwin" and not os.environ.get("DISPLAY")
