@@ -95,16 +95,16 @@ def test_analyses_that_do_not_take_a_system_say_so_naming_the_function():
     hh = henon_heiles()
     smap = ex.SectionMap(hh, E, section=x, direction=+1, coords=(y, py), solve=px)
     Y0 = by_hand(POINTS[:1])
-    calls = {
-        "iter_crossings": lambda: next(ex.iter_crossings(hh, states=Y0, n_crossings=2)),
-        "propagate": lambda: ex.propagate(hh, states=Y0, t=1.0),
+    calls = {   # each names the function and what to use for a System instead
+        "iter_crossings": (lambda: next(ex.iter_crossings(hh, states=Y0, n_crossings=2)), "explorer.crossings"),
+        "propagate": (lambda: ex.propagate(hh, states=Y0, t=1.0), "explorer.flow"),
     }
-    for name, call in calls.items():
-        with pytest.raises(ParameterError, match=f"^{name} does not take a System yet"):
+    for name, (call, instead) in calls.items():
+        with pytest.raises(ParameterError, match=f"^{name} is for Chaplygin's model; of a System, {instead}"):
             call()
     from explorer.analysis.transport import flux_curve
 
-    with pytest.raises(ParameterError, match="^flux_curve does not take a System yet \\(got a System's SectionMap"):
+    with pytest.raises(ParameterError, match="^flux_curve is for Chaplygin's model; .*transport.turnstile"):
         flux_curve(smap, [0.1])
 
 
