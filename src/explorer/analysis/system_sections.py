@@ -258,8 +258,10 @@ def run_driver(mod, name: str, n: int, driver: str, threads, args: tuple) -> Non
     if workers == 1:
         worker(queue, *args)
         return
-    with ThreadPoolExecutor(workers) as pool:
-        for done in [pool.submit(worker, queue, *args) for _ in range(workers)]:
+    with ThreadPoolExecutor(workers - 1) as pool:       # this thread is the last worker
+        others = [pool.submit(worker, queue, *args) for _ in range(workers - 1)]
+        worker(queue, *args)
+        for done in others:
             done.result()
 
 
