@@ -1,12 +1,14 @@
 """The paper figures of issue 10: the chaotic-fraction curve against mu (preset fraction_curve)
 and the MEGNO raster map (preset megno_map), headless, on reduced settings (figures --quick) and
-redrawn from a complete stored panel."""
+redrawn from a complete stored panel.  Their bounds on the chaotic fractions (below 0.05 or 0.2
+where the flow is integrable, above 0.5 or 0.8 where it is chaotic, between 0.05 and 0.95 at
+mu = 0.03) leave room far beyond the few orbits a last-bit change can reclassify, so they are not
+marked cpu_dependent (not rerun for the generic CPU, tests/generic_cpu.py)."""
 import matplotlib
 
 matplotlib.use("Agg")
 
 import numpy as np
-import pytest
 from matplotlib.image import imread
 
 from explorer.app import paper
@@ -23,7 +25,6 @@ def test_fraction_curve_preset_has_41_values_and_1600_seeds_each():
     assert min(len(s.panel_seeds(i)[0]) for i in (0, 20, 40)) >= 1600
 
 
-@pytest.mark.cpu_dependent
 def test_fraction_curve_quick_figure(tmp_path):
     o = paper.make("fraction_curve", out_dir=tmp_path / "figs", results_dir=tmp_path / "res", quick=True)
     assert o.status == "written" and o.data["reduced"]
@@ -46,7 +47,6 @@ def _check_raster_png(path):
     return img
 
 
-@pytest.mark.cpu_dependent
 def test_megno_map_quick_figure_is_a_raster(tmp_path):
     o = paper.make("megno_map", out_dir=tmp_path / "figs", results_dir=tmp_path / "res", quick=True)
     assert o.status == "written" and o.data["reduced"] and o.data["resolution"] == 64
@@ -70,7 +70,6 @@ def test_megno_map_is_redrawn_from_a_complete_stored_panel(monkeypatch, tmp_path
     np.testing.assert_array_equal(imread(tmp_path / "figs2" / "megno_map.png"), img)
 
 
-@pytest.mark.cpu_dependent
 def test_atlas_quick_figure_is_a_heat_map_of_every_cell(tmp_path):
     o = paper.make("atlas", out_dir=tmp_path / "figs", results_dir=tmp_path / "res", quick=True)
     assert o.status == "written" and o.data["reduced"] and tuple(o.data["shape"]) == (16, 12)
