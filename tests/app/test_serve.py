@@ -673,7 +673,9 @@ def test_on_a_slow_connection_the_page_ends_with_every_row_of_the_server(browser
                 _click(page, *p)
                 time.sleep(0.05)
             _set_field(page, "mu", mu)                      # while they stream: both run again
-            time.sleep(0.2)
+            # the page shows the new mu before the crossings are typed: a field typed into while the
+            # server's echo of the last change is on its way can end as the two texts joined
+            _wait(page, f"() => ({TEXT})('status').includes('mu = {mu},')", timeout=FIRST_ORBIT_TIMEOUT_MS)
             _set_field(page, "crossings", str(m))           # and again, with more crossings
             n = len(starts) * m
             # (the page lags the server by up to seconds here: only this status says it has caught up)
