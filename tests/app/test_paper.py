@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 from conftest import random_states
+from matplotlib.image import imread
 
 import reference
 from explorer import model
@@ -50,6 +51,36 @@ def test_the_breakup_figures_two_sections_share_one_window(quick):
     _root, out = quick
     below, above = out["breakup"].data["section_limits"]
     assert below == above == tuple(out["breakup"].data["window"])
+
+
+# ---------------------------------------------------------------- the chaotic fraction against mu, the atlas
+# (quick: reduced presets; the bounds leave room beyond any last-bit change, tests/app/test_chaos_paper.py)
+def test_fraction_curve_quick_figure(quick):
+    tmp_path, out = quick
+    o = out["fraction_curve"]
+    assert o.status == "written" and o.data["reduced"]
+    assert len(o.data["values"]) == 41
+    fr = np.asarray(o.data["fraction"])
+    assert fr[0] < 0.05 and fr[-1] > 0.5                          # integrable at mu = 0, chaotic at mu = 10
+    img = imread(tmp_path / "figs" / "fraction_curve.png")
+    assert img.shape[0] > 200 and img.shape[1] > 300 and float(np.std(img[..., :3])) > 0.02
+    assert (tmp_path / "figs" / "fraction_curve.pdf").read_bytes()[:5] == b"%PDF-"
+
+
+def test_atlas_quick_figure_is_a_heat_map_of_every_cell(quick):
+    tmp_path, out = quick
+    o = out["atlas"]
+    assert o.status == "written" and o.data["reduced"] and tuple(o.data["shape"]) == (16, 12)
+    fr = np.asarray(o.data["fraction"])
+    ok = np.isfinite(fr)
+    assert ok.mean() > 0.9 and np.all((fr[ok] >= 0) & (fr[ok] <= 1))
+    assert fr[0][ok[0]].max() < 0.2 and np.nanmax(fr) > 0.8     # regular at mu = 0, chaotic at large mu
+    img = imread(tmp_path / "figs" / "atlas.png")
+    colourful = (img[..., :3].max(axis=-1) - img[..., :3].min(axis=-1)) > 0.3
+    assert img.shape[1] > 300 and colourful.mean() > 0.1
+    # a rerun redraws from the stored atlas: nothing recomputed, the same fractions
+    again = paper.make("atlas", out_dir=tmp_path / "figs-again", results_dir=tmp_path / "res", quick=True)
+    np.testing.assert_array_equal(np.asarray(again.data["fraction"]), fr)
 
 
 # ---------------------------------------------------------------- Figure 2
