@@ -193,19 +193,7 @@ def flow_lanes_worker(next_orbit, Y0, P, times, order, max_steps, states, energy
         bits = _steps_lanes(NORM, fin, normal, L_on, L_t, tend, factor, hv, L_last, L_go)
         while bits != 0:
             l, bits = next_bit(bits)
-            st = STATUS_NONFINITE
-            if (fin >> l) & 1:
-                if (normal >> l) & 1:
-                    h = NORM[4, l] * factor
-                else:
-                    h = radius_min(NORM[0, l], NORM[1, l], NORM[2, l], NORM[3, l], e_p, e_q) * factor
-                h, last = clip_step(L_t[l], h, tend)
-                st = STATUS_STEP_UNDERFLOW
-                if resolves(L_t[l], h):
-                    st = -1
-                    hv[l] = h
-                    L_last[l] = 1.0 if last else 0.0
-                    L_go[l] = 1.0
+            st = _lane_step(l, fin, normal, NORM, e_p, e_q, factor, L_t, tend, hv, L_last, L_go)
             if st >= 0:
                 _flow_lane_finish(l, st, orb, L_t, L_tc, L_steps, status, info)
                 active += _flow_lane_start(l, next_orbit, Y0, P, times, X, orb, L_on, L_t, L_tc, L_steps, L_m,

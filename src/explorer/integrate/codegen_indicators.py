@@ -290,19 +290,7 @@ def indicators_lanes_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_st
         bits = _steps_lanes(NORM, fin, normal, L_on, L_t, T, factor, hv, L_last, L_go)
         while bits != 0:
             l, bits = next_bit(bits)
-            st = STATUS_NONFINITE
-            if (fin >> l) & 1:
-                if (normal >> l) & 1:
-                    h = NORM[4, l] * factor
-                else:
-                    h = radius_min(NORM[0, l], NORM[1, l], NORM[2, l], NORM[3, l], e_p, e_q) * factor
-                h, last = clip_step(L_t[l], h, T)
-                st = STATUS_STEP_UNDERFLOW
-                if resolves(L_t[l], h):
-                    st = -1
-                    hv[l] = h
-                    L_last[l] = 1.0 if last else 0.0
-                    L_go[l] = 1.0
+            st = _lane_step(l, fin, normal, NORM, e_p, e_q, factor, L_t, T, hv, L_last, L_go)
             if st >= 0:
                 _indicator_lane_finish(l, st, n, nvec, X, z, orb, L_steps, L_early, acc, out_res, out_ext,
                                        out_status, out_final, out_steps, out_w)

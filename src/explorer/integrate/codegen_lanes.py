@@ -95,6 +95,26 @@ def _section_lanes(X, order, hv, Y, a, b, direction, L_g, GC, G):
 
 
 @njit(error_model="numpy")
+def _lane_step(l, fin, normal, NORM, e_p, e_q, factor, L_t, tmax, hv, L_last, L_go):
+    """The step of lane ``l`` that _steps_lanes left to the scalar code (kernels.taylor.step_size's
+    radius from NORM, clipped onto ``tmax``): -1 with hv, L_last and L_go set, else the lane's stop
+    status (non-finite coefficients, a step below the clock's resolution)."""
+    if not (fin >> l) & 1:
+        return STATUS_NONFINITE
+    if (normal >> l) & 1:
+        h = NORM[4, l] * factor
+    else:
+        h = radius_min(NORM[0, l], NORM[1, l], NORM[2, l], NORM[3, l], e_p, e_q) * factor
+    h, last = clip_step(L_t[l], h, tmax)
+    if not resolves(L_t[l], h):
+        return STATUS_STEP_UNDERFLOW
+    hv[l] = h
+    L_last[l] = 1.0 if last else 0.0
+    L_go[l] = 1.0
+    return -1
+
+
+@njit(error_model="numpy")
 def _steps_lanes(NORM, fin, normal, L_on, L_t, tmax, factor, hv, L_last, L_go):
     """crossings_orbit's step (step_size, clip_step, resolves) in vector form for the lanes holding an orbit
     whose norms are finite and normal: their hv, L_last and L_go (1.0: the step goes on; 0.0 and hv = 0 for
@@ -229,19 +249,7 @@ def crossings_lanes_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_
         bits = _steps_lanes(NORM, fin, normal, L_on, L_t, tmax, factor, hv, L_last, L_go)
         while bits != 0:
             l, bits = next_bit(bits)
-            st = STATUS_NONFINITE
-            if (fin >> l) & 1:
-                if (normal >> l) & 1:
-                    h = NORM[4, l] * factor
-                else:
-                    h = radius_min(NORM[0, l], NORM[1, l], NORM[2, l], NORM[3, l], e_p, e_q) * factor
-                h, last = clip_step(L_t[l], h, tmax)
-                st = STATUS_STEP_UNDERFLOW
-                if resolves(L_t[l], h):
-                    st = -1
-                    hv[l] = h
-                    L_last[l] = 1.0 if last else 0.0
-                    L_go[l] = 1.0
+            st = _lane_step(l, fin, normal, NORM, e_p, e_q, factor, L_t, tmax, hv, L_last, L_go)
             if st >= 0:
                 _lane_finish(l, st, X, orb, L_t, L_tc, L_n, L_steps, count, status, final, info)
                 active += _lane_start(l, next_orbit, Y0, P, a, b, tmax, max_steps, limit, X, orb, L_on, L_t, L_tc,
