@@ -23,7 +23,7 @@ from explorer.analysis import budget
 from explorer.kernels import indicator_table as table
 from explorer.model import ParameterError, validation
 
-__all__ = ["ChaosMap", "INDICATORS", "chaos_map", "default_threshold"]
+__all__ = ["CellRaster", "ChaosMap", "INDICATORS", "chaos_map", "default_threshold", "refinement"]
 
 #: the largest raster side
 MAX_RESOLUTION = 4096
@@ -125,7 +125,7 @@ def _window(smap, window) -> tuple:
     return w
 
 
-class _Raster:
+class CellRaster:
     """The cells' values, classes and compared values, and how a batch of them is computed."""
 
     def __init__(self, smap, centres, allowed, indicator, rule, threshold, options):
@@ -153,13 +153,17 @@ class _Raster:
             ind = indicators(self.smap, self.centres[rr, cc], which=(self.indicator,), **self.options)
             v = np.asarray(ind.values[self.indicator], float)
             early = np.zeros(len(v), bool) if ind.early is None else np.asarray(ind.early) > 0
-            with np.errstate(invalid="ignore"):
-                chaotic = early | ((v > self.threshold) if self.rule.above else (v < self.threshold))
-            self.values[rr, cc] = v
-            self.computed[rr, cc] = True
-            ok = early | (np.isfinite(v) & (np.asarray(ind.status) == 0))   # stopped early: chaotic
-            self.cls[rr, cc] = np.where(ok, np.where(chaotic, CHAOTIC, REGULAR), FAILED)
-            self.q[rr, cc] = self._compared(v, chaotic)
+            self.record(rr, cc, v, early, np.asarray(ind.status) == 0)
+
+    def record(self, r, c, v, early, ok) -> None:
+        """Cells (r, c) computed: values ``v``, stopped ``early`` (chaotic), integrated to the end (``ok``)."""
+        with np.errstate(invalid="ignore"):
+            chaotic = early | ((v > self.threshold) if self.rule.above else (v < self.threshold))
+        self.values[r, c] = v
+        self.computed[r, c] = True
+        ok = early | (np.isfinite(v) & ok)   # stopped early: chaotic
+        self.cls[r, c] = np.where(ok, np.where(chaotic, CHAOTIC, REGULAR), FAILED)
+        self.q[r, c] = self._compared(v, chaotic)
 
     def _compared(self, v, chaotic):
         t = self.threshold
@@ -212,7 +216,7 @@ def _dilate(m: np.ndarray) -> np.ndarray:
     return out
 
 
-def _agree(raster: _Raster, idx: np.ndarray, tolerance: float) -> tuple:
+def _agree(raster: CellRaster, idx: np.ndarray, tolerance: float) -> tuple:
     """(disagree, empty) of the blocks (len(idx) - 1)^2 of the lattice ``idx``: the allowed corners
     of a block disagree (the module's rule); no corner of a block is allowed."""
     cls = raster.cls[np.ix_(idx, idx)]
@@ -250,8 +254,8 @@ def chaos_map(smap, resolution: int = 512, indicator: str = "megno", tmax: float
     w = _window(smap, window)
     centres = cell_centres(w, n)
     allowed = np.asarray(smap.allowed(centres), bool)
-    raster = _Raster(smap, centres, allowed, indicator, RULES[indicator], thr,
-                     {"tmax": T, "threads": threads, "early_stop": bool(early_stop)})
+    raster = CellRaster(smap, centres, allowed, indicator, RULES[indicator], thr,
+                        {"tmax": T, "threads": threads, "early_stop": bool(early_stop)})
     if exact:
         r, c = np.nonzero(allowed)
         raster.compute(r, c)
@@ -262,12 +266,19 @@ def chaos_map(smap, resolution: int = 512, indicator: str = "megno", tmax: float
                     indicator, float(thr), T, exact)
 
 
-def _refine(raster: _Raster, allowed: np.ndarray, n: int, coarse: int, tolerance: float, cap: int) -> None:
+def _refine(raster: CellRaster, allowed: np.ndarray, n: int, coarse: int, tolerance: float, cap: int) -> None:
+    for r, c in refinement(raster, allowed, n, coarse, tolerance, cap):
+        raster.compute(r, c)
+
+
+def refinement(raster: CellRaster, allowed: np.ndarray, n: int, coarse: int, tolerance: float, cap: int):
+    """Yield (rows, cols) of the cells to compute, the coarse lattice first, then level by level (the
+    module's rule); the caller computes them into ``raster`` before the next, the rest is filled."""
     s = 2 ** max(0, int(math.floor(math.log2(n / coarse)))) if n > coarse else 1
     idx = _lattice(n, s)
     R, C = np.meshgrid(idx, idx, indexing="ij")
     first = allowed[R, C]
-    raster.compute(R[first], C[first])
+    yield R[first], C[first]
     left = cap - int(first.sum())
     while s > 1:
         t = s // 2
@@ -283,7 +294,7 @@ def _refine(raster: _Raster, allowed: np.ndarray, n: int, coarse: int, tolerance
         if int(need.sum()) > left:          # the budget: no more refinement, the rest is filled
             need[:] = False
             left = 0
-        raster.compute(r[need], c[need])
+        yield r[need], c[need]
         left -= int(need.sum())
         fill = ~need
         raster.fill(r[fill], c[fill], idx[bi[fill]], idx[bi[fill] + 1], idx[bj[fill]], idx[bj[fill] + 1])
