@@ -11,10 +11,10 @@ from explorer.io.scene.schema import SWEEP_PARAMETERS
 from explorer.model import ParameterError
 
 
-def check_atlas(scene) -> None:
-    """[atlas]: a scene of two swept parameters, [sweep] (rows) x [atlas] (columns), storing
+def check_atlas(scene, parameters=SWEEP_PARAMETERS) -> None:
+    """[atlas]: a scene of two swept ``parameters``, [sweep] (rows) x [atlas] (columns), storing
     only the chaotic fraction per cell (indicators only)."""
-    if not _swept(scene, "atlas", SWEEP_PARAMETERS):
+    if not _swept(scene, "atlas", parameters):
         return
     if scene.sweep_parameter is None:
         _fail("sweep.parameter", "is required in an atlas scene (the atlas sweeps [sweep] x [atlas])")
