@@ -25,7 +25,7 @@ and emitted as compiled Python source (docs/systems.md).
    share one loop over j, and homogeneous linear nodes are written where they are used (neither
    changes a value: each is the same sequence of operations).
 4. **Cache** (:func:`load`): the module is written to ``<cache>/<name>_<key>.py``, with ``key`` the
-   SHA-256 of the system's :attr:`~System.content_hash` and :data:`GENERATOR_VERSION`, and imported from that
+   SHA-256 of the system's :attr:`~System.flow_hash` and :data:`GENERATOR_VERSION`, and imported from that
    file with importlib, so numba's on-disk cache (``cache=True``) applies to it; a second run finds
    the file and does not rewrite it.  The cache directory is ``$EXPLORER_SYSTEMS_CACHE``, else
    ``$XDG_CACHE_HOME/explorer/systems``, else ``~/.cache/explorer/systems``.
@@ -549,7 +549,7 @@ def _indent(lines, n):
 
 MODULE = '''\
 # GENERATED FILE - DO NOT EDIT. Written by explorer.integrate.codegen (generator version {version})
-# from the system {name!r}; the key {key} is of its content (explorer.model.system.System.content_hash).
+# from the system {name!r}; the key {key} is of its content (explorer.model.system.System.flow_hash).
 #
 {equations}
 """The Taylor recurrence, right-hand side{and_energy} of the system {name!r} (explorer.integrate.codegen)."""
@@ -770,9 +770,9 @@ def _callee_digest() -> str:
 
 
 def module_key(system: System) -> str:
-    """The cache key: SHA-256 of the system's content hash, :data:`GENERATOR_VERSION` and the
-    sources the generated code calls (:func:`_callee_digest`)."""
-    text = f"{system.content_hash} generator {GENERATOR_VERSION} callees {_callee_digest()}"
+    """The cache key: SHA-256 of the system's flow hash (its content but the reversors),
+    :data:`GENERATOR_VERSION` and the sources the generated code calls (:func:`_callee_digest`)."""
+    text = f"{system.flow_hash} generator {GENERATOR_VERSION} callees {_callee_digest()}"
     return hashlib.sha256(text.encode()).hexdigest()[:32]
 
 

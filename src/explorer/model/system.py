@@ -240,21 +240,27 @@ class System:
         return System(equations, parameters=dict(self.parameters), name=f"{self.name}_variational{vectors}")
 
     # ------------------------------------------------------------------ identity
+    def _hash(self, key: str, reversors: bool) -> str:
+        if key not in self.__dict__:
+            parts = [f"format {HASH_FORMAT}", sp.srepr(self.states), sp.srepr(self.rhs),
+                     sp.srepr(tuple(self.parameters)), sp.srepr(self.energy)]
+            if reversors and self.reversors:
+                parts.append("reversors " + sp.srepr(self.reversors))
+            self.__dict__[key] = hashlib.sha256("\n".join(parts).encode()).hexdigest()
+        return self.__dict__[key]
+
     @property
     def content_hash(self) -> str:
         """SHA-256 (hex) of the symbolic content: ``srepr`` of the states, right-hand sides,
         parameter symbols (in order), energy and reversors (when there are any), and
-        :data:`HASH_FORMAT`.  Not of the parameter values (runtime data) nor the name.  Kept once
-        computed (the content is fixed at construction; :meth:`with_` copies it)."""
-        if "_content_hash" in self.__dict__:
-            return self.__dict__["_content_hash"]
-        parts = [f"format {HASH_FORMAT}", sp.srepr(self.states), sp.srepr(self.rhs),
-                 sp.srepr(tuple(self.parameters)), sp.srepr(self.energy)]
-        if self.reversors:
-            parts.append("reversors " + sp.srepr(self.reversors))
-        text = "\n".join(parts)
-        self.__dict__["_content_hash"] = hashlib.sha256(text.encode()).hexdigest()
-        return self.__dict__["_content_hash"]
+        :data:`HASH_FORMAT`.  Not of the parameter values (runtime data) nor the name."""
+        return self._hash("_content_hash", True)
+
+    @property
+    def flow_hash(self) -> str:
+        """:attr:`content_hash` without the reversors: what the generated code depends on
+        (:func:`explorer.integrate.codegen.module_key`), so declaring a reversor compiles nothing new."""
+        return self._hash("_flow_hash", False)
 
     def __repr__(self):
         eqs = ", ".join(f"d{s.name}/dt = {e}" for s, e in zip(self.states, self.rhs))
