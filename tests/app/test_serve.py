@@ -102,6 +102,31 @@ def test_the_mu_slider_writes_its_value_without_float_noise():
         page.close()
 
 
+def test_the_servers_echo_of_an_apply_leaves_a_field_the_user_is_typing_into_alone():
+    """On a slow link the server's echo of an applied value (its text as the page writes it) can
+    arrive after the user typed on: it must not write into that field (the texts would join)."""
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    page = _served_page(Settings())
+    mu, h = page.inputs["mu"], page.inputs["h"]
+    try:
+        h.value_input = h.value = "2.00"                 # (Enter: value and value_input the same)
+        mu.value_input = mu.value = "0.040"
+        mu.value_input = "0.05"                          # typed on before the echo of 0.040
+        writes = []
+        mu.param.watch(lambda e: writes.append(e.new), "value")
+        page.settle()                                    # the echo: both applied, written as the page writes them
+        assert page.settings.params.mu == 0.04 and page.settings.h == 2.0
+        assert writes == [] and h.value == "2.0"       # the typed-into field is left alone, the other shown
+        mu.value = "0.05"                                # (Enter)
+        page.settle()
+        assert page.settings.params.mu == 0.05 and page.url_query()["mu"] == "0.05"
+        page.fields.step(1, "mu")                        # the stepper writes into it as before
+        page.settle()
+        assert mu.value == "0.06" and page.settings.params.mu == 0.06
+    finally:
+        page.close()
+
+
 def test_a_value_change_reruns_the_orbits_under_their_own_ids():
     pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
     from explorer.app.serve.page import SectionPage
@@ -1759,6 +1784,13 @@ class _FakeDoc:
 
     def on_event(self, _event, *_callbacks):     # (the connection is never lost here)
         pass
+
+
+def _served_page(settings: Settings, **kw):
+    """A SectionPage as served (its callbacks wait for the page's loop: settle), with no server."""
+    from explorer.app.serve.page import SectionPage
+
+    return SectionPage(settings, doc=_FakeDoc(), **kw)
 
 
 def test_a_served_click_sends_its_cross_with_its_first_crossings_and_later_blocks_at_most_every_flush_interval():

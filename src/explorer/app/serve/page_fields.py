@@ -63,6 +63,7 @@ class Fields:
 
         self._quiet = False
         self.applied = settings
+        self._typed: dict = {}                  # each text field's value_input when last read
         s = settings.fields()
         self.inputs: dict = {}
         for name in settings.field_names:
@@ -157,8 +158,11 @@ class Fields:
         self._quiet = True
         try:
             for name, text in settings.fields().items():
-                if self.inputs[name].value != text:
-                    self.inputs[name].value = text
+                w = self.inputs[name]
+                if getattr(w, "value_input", None) not in (None, self._typed.get(name, "")):
+                    continue            # typed into since its last apply: the text is the user's
+                if w.value != text:
+                    w.value = text
         finally:
             self._quiet = False
         mu = settings.fields().get("mu")
@@ -168,6 +172,10 @@ class Fields:
     def read(self, base: Settings, applied: Settings, n_orbits: int, name: str | None = None) -> Settings:
         """``base`` with ``applied`` and the text of field ``name`` (None: every field's), validated, with
         room for ``n_orbits`` orbits (ParameterError otherwise)."""
+        for n in self.inputs if name is None else (name,):
+            typed = getattr(self.inputs[n], "value_input", None)
+            if typed == self.inputs[n].value:
+                self._typed[n] = typed              # this text applies now (or is refused): no longer typing
         if name is None:
             fields = {n: w.value for n, w in self.inputs.items()}
         else:
