@@ -1,9 +1,11 @@
-"""`explorer serve`: a new crossings per click alone reruns nothing (docs/commands/serve.md).
+"""`explorer serve`: a new crossings per click alone reruns only an orbit stopped on its time budget
+(docs/commands/serve.md).
 
 Without a browser (a SectionPage in-process): raised, each orbit continues from where it stopped and
 its rows are those of one uninterrupted run of the new count; lowered, each orbit's rows (drawn or
 hidden) are cut to the new count with no computation, and raised again, the cut rows come back
-without computation.  For Chaplygin's page and a System's.
+without computation; an orbit stopped on its time budget (which grows with the count) reruns from
+its start.  For Chaplygin's page and a System's.
 """
 from __future__ import annotations
 
@@ -100,5 +102,38 @@ def test_a_systems_page_continues_and_cuts_its_orbits_too(computed):
         _set_crossings(page, 25)
         assert computed["rows"] == 0
         np.testing.assert_array_equal(_rows(page, run.ident), rows[:25])
+    finally:
+        page.close()
+
+
+#: an orbit's time budget per crossing here: about half the time between two crossings at mu = 0.5
+#: (9.8), so that an orbit stops on its budget (100 per crossing by default) about half way
+TMAX_PER_CROSSING = 5.0
+
+
+def test_an_orbit_stopped_on_its_time_budget_reruns_from_its_start_when_the_crossings_grow(computed, monkeypatch):
+    """The budget grows with the crossings per click (tmax = 100 K by default): an orbit that stopped
+    on it cannot continue where it stopped, it reruns from its start at the new count."""
+    from explorer.app.serve.page import SectionPage
+    from explorer.kernels import STATUS_NAMES, STATUS_TMAX
+
+    iter_crossings = sections.iter_crossings
+    monkeypatch.setattr(sections, "iter_crossings", lambda *a, n_crossings, **kw: iter_crossings(
+        *a, n_crossings=n_crossings, tmax=TMAX_PER_CROSSING * n_crossings, **kw))
+    s = Settings(params=model.FIGURE4.with_(mu=0.5), crossings=N)
+    page = SectionPage(s)
+    try:
+        run = page.click(*STARTS[0])
+        page.settle()
+        done, status = page.orbits.progress[run.ident]
+        assert status == STATUS_NAMES[STATUS_TMAX] and 0 < done < N
+        ref = sections.crossings(s.params, s.h, [STARTS[0]], n_crossings=2 * N, tmax=TMAX_PER_CROSSING * 2 * N,
+                                 **s.section_kwargs())
+        assert int(ref.count[0]) > done                  # (the longer budget reaches further)
+        computed["rows"] = 0
+        _set_crossings(page, 2 * N)
+        assert computed["rows"] == int(ref.count[0])     # every row again, from the start
+        np.testing.assert_array_equal(_rows(page, run.ident), ref.orbit(0))
+        assert page.orbits.progress[run.ident] == (int(ref.count[0]), STATUS_NAMES[STATUS_TMAX])
     finally:
         page.close()
