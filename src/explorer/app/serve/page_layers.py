@@ -33,13 +33,15 @@ def _empty_density() -> dict:
 
 class ChaosLayer:
     """The chaos layer (box, indicator, source, colour bar, task); ``center``: (settings, point,
-    elliptic) of frequency diffusion's last centre."""
+    elliptic) of frequency diffusion's last centre; ``exact``: MEGNO's finest raster computes every
+    cell (the link's ``megno=exact``), else it is adaptive (raster.adaptive_raster)."""
 
     def __init__(self, host, view, session, resolutions: tuple, time: float):
         self.host, self.view = host, view
         self.resolutions, self.time = resolutions, float(time)
         self.iterates = raster_mod.DIFFUSION_ITERATES
         self.session = session
+        self.exact = False
         self.raster_source = ColumnDataSource(_empty_raster(), name="raster")
         self.center: tuple | None = None
         self.layer = Box(label="chaos layer", value=False)
@@ -84,18 +86,20 @@ class ChaosLayer:
         self.colour_bar.title = self.title()
 
     def load_url(self, args: dict) -> None:
-        """The layer's state from a link: ``indicator`` and ``megno`` ("1": on)."""
+        """The layer's state from a link: ``indicator`` and ``megno`` ("1": on; "exact": on, every cell computed)."""
         name = args.get("indicator") or "megno"
         if name not in raster_mod.INDICATORS:
             self.host.say(f"link's indicator ignored: must be one of {', '.join(raster_mod.INDICATORS)}, got "
                           f"{name[:40]!r}")
             name = "megno"
         self.indicator.value = name
-        self.layer.value = args.get("megno") == "1"
+        self.exact = args.get("megno") == "exact"
+        self.layer.value = args.get("megno") in ("1", "exact")
 
     def url_query(self) -> dict:
         """The layer's URL arguments: ``megno`` (the box) and ``indicator``."""
-        return {"megno": "1" if self.layer.value else "0", "indicator": self.indicator.value}
+        on = "exact" if self.exact else "1"
+        return {"megno": on if self.layer.value else "0", "indicator": self.indicator.value}
 
     def _window_moved(self) -> None:
         if self.layer.value:
@@ -134,7 +138,7 @@ class ChaosLayer:
                 await session.apply(self._show_scale)
             center = c[1]
         images = raster_mod.rasters(settings, window, resolutions=self.resolutions, time=self.time,
-                                    indicator=indicator, center=center, iterates=self.iterates)
+                                    indicator=indicator, center=center, iterates=self.iterates, adaptive=not self.exact)
         while (image := await session.run(next, images, None)) is not None:
             await session.apply(lambda image=image: self.show_image(image))
 

@@ -1,5 +1,7 @@
 """The chaos layer's rasters of the visible window, coarse first, a partial image after each batch; NaN
-outside the allowed region (docs/commands/serve.md, "Chaos layer").  No web library here."""
+outside the allowed region (docs/commands/serve.md, "Chaos layer").  MEGNO's finest raster is
+adaptive by default: the cells docs/chaos_map.md's rule refines are computed, the others filled.
+No web library here."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -36,6 +38,7 @@ class Image:
     values: np.ndarray
     complete: bool
     indicator: str = "megno"
+    computed: np.ndarray | None = None      # cells integrated (adaptive rasters; None: every allowed cell)
 
 
 def resolutions_up_to(n: int) -> tuple:
@@ -73,12 +76,19 @@ def diffusion_cells(settings: Settings, p1, p2, center, iterates: int = DIFFUSIO
 
 
 def rasters(settings: Settings, window: Window, resolutions: tuple = RESOLUTIONS, time: float = RASTER_TIME,
-            indicator: str = "megno", center=None, iterates: int = DIFFUSION_ITERATES):
+            indicator: str = "megno", center=None, iterates: int = DIFFUSION_ITERATES, adaptive: bool = False):
     """Yield the :class:`Image` of ``indicator`` after every batch of every resolution; ``time``:
-    MEGNO's, ``center`` (None: :func:`diffusion_center`) and ``iterates``: frequency diffusion's."""
+    MEGNO's, ``center`` (None: :func:`diffusion_center`) and ``iterates``: frequency diffusion's.
+    ``adaptive`` (MEGNO): the first resolution, then the last by :func:`adaptive_raster`."""
     from explorer.model import validation
 
     validation.choice("indicator", indicator, INDICATORS)
+    if adaptive and indicator == "megno" and len(resolutions) > 1:
+        first = None
+        for first in rasters(settings, window, resolutions[:1], time):
+            yield first
+        yield from adaptive_raster(settings, window, resolutions[-1], time, first.values)
+        return
     if indicator == "megno":
         batch = BATCH
         def cells(a, b):
@@ -104,3 +114,29 @@ def rasters(settings: Settings, window: Window, resolutions: tuple = RESOLUTIONS
         if not len(rows):
             yield Image(window, n, values.copy(), True, indicator)
         previous = values
+
+
+def adaptive_raster(settings: Settings, window: Window, n: int, time: float = RASTER_TIME, coarser=None):
+    """Yield the :class:`Image` of MEGNO on the n x n raster after every batch: the cells
+    :func:`explorer.analysis.chaos_map.refinement` asks for (a lattice of about ``coarser``'s side,
+    then where neighbours disagree) are computed, each the exact raster's cell bit for bit, the
+    others filled (docs/chaos_map.md); a cell not yet known shows ``coarser``'s value."""
+    from explorer.analysis.chaos_map import RULES, TOLERANCE, CellRaster, default_threshold, refinement
+
+    P1, P2 = window.centres(n)
+    inside = np.asarray(settings.allowed(P1, P2), bool)
+    shown = np.full((n, n), np.nan)
+    if coarser is not None:
+        k = n // coarser.shape[0]
+        shown = np.where(inside, np.kron(coarser, np.ones((k, k))), np.nan)
+    raster = CellRaster(None, None, inside, "megno", RULES["megno"], default_threshold("megno", time), {})
+    coarse = n // 8 if coarser is None else coarser.shape[0]
+    for r, c in refinement(raster, inside, n, coarse, TOLERANCE, n * n):
+        for a in range(0, len(r), BATCH):
+            rr, cc = r[a:a + BATCH], c[a:a + BATCH]
+            v = np.asarray(settings.megno(P1[rr, cc], P2[rr, cc], time, RASTER_MAX_STEPS), float)
+            raster.record(rr, cc, v, np.zeros(len(v), bool), np.isfinite(v))
+            known = raster.computed | np.isfinite(raster.values)
+            yield Image(window, n, np.where(known, raster.values, shown), False, "megno", raster.computed & inside)
+    values = np.where(inside, raster.values, np.nan)
+    yield Image(window, n, values, True, "megno", raster.computed & inside)
