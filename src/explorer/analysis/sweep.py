@@ -38,7 +38,9 @@ MIN_BLOCK = 256
 #: per-orbit arrays of the chaos indicators that ``task`` returns: one per indicator of the registry
 #: (explorer.kernels.indicator_table), its status, its early-classification code and ``lyapunov_dh``
 #: (|H - H0| at the end of each orbit's indicator integration, measured, not stored)
-INDICATOR_ARRAYS = indicator_table.NAMES + ("lyapunov_status", "lyapunov_early", "lyapunov_dh")
+INDICATOR_ARRAYS = indicator_table.NAMES + ("lyapunov_status", "lyapunov_early", "lyapunov_dh", "map_computed")
+#: the coarse lattice of an adaptive map panel: about this many cells a side (explorer.chaos_map)
+MAP_COARSE = 64
 
 
 @dataclass(frozen=True)
@@ -68,6 +70,7 @@ class SweepSpec:
     lyapunov: Any = None
     sections: bool = True
     blocks: tuple = ()
+    map_rule: tuple = ()      # (coarse, tolerance) of an adaptive map panel
 
     def streamed(self, pos: int) -> bool:
         """Panel ``pos`` is computed in rounds of blocks and streamed to the store."""
@@ -119,10 +122,12 @@ def build_spec(scene, panel_indices, *, chunk_orbits: int,
                                 np.column_stack([p1, p2]), grid, dropped))
         n = len(p1)
         blocks.append(panel_block(n, integ.crossings))
-        chunks += _chunks(pos, n, chunk_orbits)
+        # an adaptive map refines level by level: one chunk (its batches follow chaos_map's levels)
+        chunks += [(pos, 0, n)] if grid and ly.adaptive else _chunks(pos, n, chunk_orbits)
+    rule = tuple(map_rule().values())
     return SweepSpec(tuple(panels), integ.method, integ.tol, integ.dt, integ.crossings, integ.effective_tmax,
                      integ.max_steps, integ.phi0, integ.direction, tuple(chunks), ly,
-                     with_sections, tuple(blocks))
+                     with_sections, tuple(blocks), rule)
 
 
 def _chunks(pos: int, n: int, chunk_orbits: int, parts: int = CHUNKS_PER_PANEL_THREADS) -> list:
@@ -172,14 +177,21 @@ def map_seeds(params, h: float, phi0: float, resolution: int):
     return P1[inside], P2[inside], (n, c1 - r1, c1 + r1, c2 - r2, c2 + r2)
 
 
+def raster_cells(seeds, grid) -> tuple:
+    """(rows, columns) of the cells of ``grid`` that hold the points ``seeds`` (N, 2)."""
+    n, a1, b1, a2, b2 = grid
+    n = int(n)
+    c = np.floor((seeds[:, 0] - a1) / (b1 - a1) * n).astype(int).clip(0, n - 1)
+    r = np.floor((seeds[:, 1] - a2) / (b2 - a2) * n).astype(int).clip(0, n - 1)
+    return r, c
+
+
 def map_raster(seeds, values, grid):
     """values per seed -> a (resolution, resolution) raster (NaN outside the allowed region),
     row r = p2 index, column c = p1 index (the geometry of :func:`map_seeds`)."""
-    n, a1, b1, a2, b2 = grid
-    n = int(n)
+    n = int(grid[0])
     img = np.full((n, n), np.nan)
-    c = np.floor((seeds[:, 0] - a1) / (b1 - a1) * n).astype(int).clip(0, n - 1)
-    r = np.floor((seeds[:, 1] - a2) / (b2 - a2) * n).astype(int).clip(0, n - 1)
+    r, c = raster_cells(seeds, grid)
     img[r, c] = values
     return img
 
@@ -202,38 +214,121 @@ def task(spec: SweepSpec, i: int, threads: int | None = None) -> dict:
         out = {"chunk": i, "data": np.zeros((n, 0, 5)), "count": np.zeros(n, np.int64),
                "status": np.zeros(n, np.int64), "final": panel.y0[a:b].copy(), "info": np.zeros((n, 3)),
                "settings": {"sections": False}}
-    if spec.lyapunov is not None:
-        from explorer.analysis.lyapunov import indicators
-
-        ly = spec.lyapunov
-        which = tuple(q for q in ly.indicators if indicator_table.BY_NAME[q].tangent) or None
-        ind = indicators(panel.P, states=panel.y0[a:b], tmax=ly.time, method=ly.method, tol=ly.tol, dt=ly.dt,
-                         threads=threads, which=which, early_stop=ly.early_stop, early_sali=ly.early_sali,
-                         early_megno=ly.early_megno, early_time=ly.early_time)
-        y0 = panel.y0[a:b]
-        with np.errstate(invalid="ignore", over="ignore"):
-            dh = np.abs(model.energy(panel.P, ind.final) - model.energy(panel.P, y0))
-        out.update({i.name: ind.values[i.name] for i in indicator_table.TANGENT
-                    if i.vectors == 1 or ly.second_vector})
-        out.update(lyapunov_status=ind.status, lyapunov_dh=dh)
-        if ly.frequency_diffusion is not None:
-            out["frequency_diffusion"] = panel_frequency_diffusion(spec, panel, a, b, threads)
-        if ly.early_stop:
-            out.update(lyapunov_early=ind.early)
+    if spec.lyapunov is not None and adaptive_panel(spec, panel):
+        out.update(adaptive_map(spec, panel, threads))
+    elif spec.lyapunov is not None:
+        out.update(_indicator_arrays(spec, panel, np.arange(a, b), threads)[1])
     out["wall_time"] = time.perf_counter() - t0
     return out
+
+
+def _indicator_arrays(spec: SweepSpec, panel: PanelSpec, rows: np.ndarray, threads=None) -> tuple:
+    """(Indicators, arrays) of the seeds ``rows`` of ``panel``: [lyapunov]'s indicators as ``task``
+    returns them (each orbit alone: the same numbers whatever the rows)."""
+    from explorer.analysis.lyapunov import indicators
+
+    ly = spec.lyapunov
+    which = tuple(q for q in ly.indicators if indicator_table.BY_NAME[q].tangent) or None
+    y0 = panel.y0[rows]
+    ind = indicators(panel.P, states=y0, tmax=ly.time, method=ly.method, tol=ly.tol, dt=ly.dt,
+                     threads=threads, which=which, early_stop=ly.early_stop, early_sali=ly.early_sali,
+                     early_megno=ly.early_megno, early_time=ly.early_time)
+    with np.errstate(invalid="ignore", over="ignore"):
+        dh = np.abs(model.energy(panel.P, ind.final) - model.energy(panel.P, y0))
+    out = {i.name: ind.values[i.name] for i in indicator_table.TANGENT if i.vectors == 1 or ly.second_vector}
+    out.update(lyapunov_status=ind.status, lyapunov_dh=dh)
+    if ly.frequency_diffusion is not None:
+        out["frequency_diffusion"] = _frequency_diffusion(spec, panel, panel.seeds[rows], threads)
+    if ly.early_stop:
+        out.update(lyapunov_early=ind.early)
+    return ind, out
 
 
 def panel_frequency_diffusion(spec: SweepSpec, panel: PanelSpec, a: int, b: int, threads=None) -> np.ndarray:
     """The indicator frequency_diffusion of the seeds a:b of ``panel``: :func:`explorer.analysis.
     rotation.frequency_diffusion` on the panel's section map (phi0 of the sweep, Taylor tolerance
     [lyapunov] tol) around [lyapunov] center, N = [lyapunov] diffusion_iterates."""
+    return _frequency_diffusion(spec, panel, panel.seeds[a:b], threads)
+
+
+def _frequency_diffusion(spec, panel, seeds, threads):
     from explorer.analysis.rotation import frequency_diffusion
     from explorer.analysis.section_map import SectionMap
 
     fd = spec.lyapunov.frequency_diffusion
     smap = SectionMap(panel.P, panel.h, phi0=spec.phi0, tol=fd["tol"])
-    return frequency_diffusion(smap, panel.seeds[a:b], center=fd["center"], iterates=fd["iterates"], threads=threads)
+    return frequency_diffusion(smap, seeds, center=fd["center"], iterates=fd["iterates"], threads=threads)
+
+
+def map_rule() -> dict:
+    """The settings of the adaptive map's refinement (:func:`explorer.chaos_map`): part of the
+    indicators' hash of an adaptive map panel (docs/scenes.md)."""
+    from explorer.analysis.chaos_map import TOLERANCE
+
+    return {"coarse": int(MAP_COARSE), "tolerance": float(TOLERANCE)}
+
+
+def adaptive_panel(spec, panel) -> bool:
+    """Panel ``panel`` of ``spec`` is a chaos map computed adaptively ([lyapunov] ``adaptive``)."""
+    return bool(panel.grid) and spec.lyapunov is not None and bool(getattr(spec.lyapunov, "adaptive", False))
+
+
+class _MapCells:
+    """The raster of a map panel as a map for :func:`explorer.chaos_map`: ``domain`` its grid,
+    ``allowed`` the cells with a seed, ``indicators`` the sweep's arrays of the cells asked
+    (each cell its own seed's orbit, as the exact path integrates it), kept in ``arrays``."""
+
+    def __init__(self, spec, panel, threads):
+        self.spec, self.panel, self.threads = spec, panel, threads
+        n, a1, b1, a2, b2 = panel.grid
+        self.domain = ((a1, b1), (a2, b2))
+        self.row = np.full((int(n), int(n)), -1, np.int64)
+        r, c = raster_cells(panel.seeds, panel.grid)
+        self.row[r, c] = np.arange(len(panel.seeds))
+        self.arrays: dict = {}
+
+    def _rows(self, points):
+        p = np.asarray(points, float).reshape(-1, 2)
+        r, c = raster_cells(p, self.panel.grid)
+        return self.row[r, c].reshape(np.shape(points)[:-1])
+
+    def allowed(self, points):
+        return self._rows(points) >= 0
+
+    def indicators(self, y0, **_ignored):
+        import dataclasses
+
+        rows = self._rows(y0).ravel()
+        ind, arrays = _indicator_arrays(self.spec, self.panel, rows, self.threads)
+        n = len(self.panel.seeds)
+        for k, v in arrays.items():
+            v = np.asarray(v)
+            if k not in self.arrays:
+                fill = np.nan if v.dtype.kind == "f" else 0
+                self.arrays[k] = np.full(n, fill, dtype=v.dtype)
+            self.arrays[k][rows] = v
+        return {f.name: getattr(ind, f.name) for f in dataclasses.fields(ind)}
+
+
+def adaptive_map(spec: SweepSpec, panel: PanelSpec, threads=None) -> dict:
+    """The indicator arrays of the map panel ``panel`` computed adaptively: :func:`explorer.
+    chaos_map` of MEGNO at the scene's threshold over the panel's grid; a computed cell's arrays
+    are the exact path's bit for bit, a filled cell has MEGNO filled and the other indicators NaN;
+    ``map_computed`` marks the computed seeds (docs/scenes.md)."""
+    from explorer.analysis.chaos_map import chaos_map
+
+    ly = spec.lyapunov
+    cells = _MapCells(spec, panel, threads)
+    coarse, tolerance = spec.map_rule or tuple(map_rule().values())
+    m = chaos_map(cells, resolution=int(panel.grid[0]), indicator=ly.map_indicator, tmax=ly.time,
+                  threshold=ly.threshold, tolerance=tolerance, coarse=coarse, threads=threads,
+                  early_stop=ly.early_stop)
+    r, c = raster_cells(panel.seeds, panel.grid)
+    out = cells.arrays
+    computed = m.computed[r, c]
+    out[ly.map_indicator] = np.where(computed, out[ly.map_indicator], m.values[r, c])
+    out["map_computed"] = computed
+    return out
 
 
 def _worker_task(spec, i):

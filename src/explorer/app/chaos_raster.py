@@ -70,7 +70,8 @@ def axis_label(name) -> str:
 def chaos_rasters(maps, *, indicator="megno", threshold=4.0, columns=None, dpi=200, panel_width=PANEL_WIDTH):
     """One raster per map: dicts with ``seeds`` (N, 2), ``values`` (N,) of ``indicator``,
     ``grid`` (resolution, p1_lo, p1_hi, p2_lo, p2_hi), ``params``, ``h``, ``phi0``, ``label``,
-    optional ``curves`` (separatrix polylines (p1, p2)) and ``fraction`` (chaotic fraction).
+    optional ``curves`` (separatrix polylines (p1, p2)), ``fraction`` (chaotic fraction) and
+    ``computed`` (the fraction of cells computed, not filled, of an adaptive map: written in a corner).
     Cells without a seed (outside the allowed region) are drawn gray.  A System's map (docs/systems.md):
     ``params`` None (no ellipse of Chaplygin's model) and ``axes``, the names of its coords."""
     mpl = _matplotlib()
@@ -125,8 +126,10 @@ def chaos_rasters(maps, *, indicator="megno", threshold=4.0, columns=None, dpi=2
             ax.set_xlabel(xlabel, fontsize=_FONT_SIZE)
             ax.set_ylabel(ylabel, fontsize=_FONT_SIZE)
             ax.tick_params(direction="in", top=True, right=True, labelsize=_TICK_SIZE)
-            ax.text(0.01, 0.01, f"{int(res)}$\\times${int(res)}", transform=ax.transAxes, fontsize=_TICK_SIZE - 1,
-                    va="bottom", ha="left", zorder=4)
+            size = f"{int(res)}$\\times${int(res)}"
+            if m.get("computed") is not None and m["computed"] < 1.0:
+                size += f", {m['computed']:.1%} of cells computed (adaptive)"
+            ax.text(0.01, 0.01, size, transform=ax.transAxes, fontsize=_TICK_SIZE - 1, va="bottom", ha="left", zorder=4)
         if im is not None:
             cb = fig.colorbar(im, ax=list(axes[:n]), shrink=0.9, pad=0.01)
             cb.set_label(label, fontsize=_FONT_SIZE)

@@ -110,6 +110,12 @@ def lyapunov_panels(scene, data):
     return maps, np.array(fractions).reshape(-1, 3)
 
 
+def computed_fraction(extra) -> float | None:
+    """The fraction of a map panel's cells computed, not filled (``map_computed``; None without one)."""
+    mask = extra.get("map_computed")
+    return float(np.mean(mask)) if mask is not None and len(mask) else None
+
+
 def _grid_of(attrs):
     """The raster geometry of a stored chaos map panel, (resolution, p1_lo, p1_hi, p2_lo, p2_hi), or ()."""
     if "map_resolution" not in attrs:
@@ -163,6 +169,7 @@ def draw_figure(scene, out_path, stem):
             for m in rasters:
                 m["values"] = m["extra"][ind] if ind in m["extra"] else m["megno"]
                 m["fraction"] = chaotic_fraction(classify_megno(m["extra"]), scene.lyapunov.threshold, m["valid"])[0]
+                m["computed"] = computed_fraction(m["extra"])
             fig = chaos_rasters(rasters, indicator=ind, threshold=scene.lyapunov.threshold, columns=fs.columns,
                                 dpi=fs.dpi)
             paths += figures.save_figure(fig, stem.with_name(stem.name + "_map"), text=text)
@@ -200,6 +207,7 @@ class SweepReport:
     indicator_dh: float = 0.0    # largest |H - H0| at the end of the indicator integrations
     indicator_warning: str | None = None
     indicator_statuses: dict = field(default_factory=dict)
+    map_cells: tuple = ()        # (panel label, cells computed, allowed cells) per adaptive map panel
 
 
 def format_report(r: SweepReport) -> str:
@@ -229,6 +237,9 @@ def format_report(r: SweepReport) -> str:
     if r.restamped:
         lines.append(f"  chaotic fraction reclassified at MEGNO > {r.threshold:g} (stored MEGNO, "
                      f"nothing recomputed) for panels {', '.join(str(i) for i in r.restamped)}")
+    for label, done, cells in r.map_cells:
+        lines.append(f"  {label}: map cells computed {done} of {cells} ({done / max(cells, 1):.1%}), the rest filled "
+                     "(adaptive; [lyapunov] exact = true computes every cell)")
     for label, frac, err in r.fractions:
         lines.append(f"  {label}: chaotic fraction {frac:.3f} +- {err:.3f} (MEGNO > {r.threshold:g})")
     if r.figure:
@@ -365,6 +376,7 @@ class _SweepStats:
     ind_dh: float = 0.0
     ind_warning: str | None = None
     ind_statuses: dict = field(default_factory=dict)
+    map_cells: list = field(default_factory=list)
 
     def add_dropped(self, i, panel) -> None:
         self.dropped[i] = max(self.dropped.get(i, 0), int(panel.dropped))
@@ -391,6 +403,8 @@ class _SweepStats:
         self.ind_dh = max(self.ind_dh, dh)
         self.ind_warning = self.ind_warning or energy_warning(dh, panel.h, setting)
         _count_statuses(self.ind_statuses, arrays["lyapunov_status"])
+        if "map_computed" in arrays:
+            self.map_cells.append((panel.label, int(np.sum(arrays["map_computed"])), len(arrays["map_computed"])))
 
     def report(self, scene, out, plan: _Plan, figure, wall_time) -> SweepReport:
         return SweepReport(scene=scene.name, out=out, n_panels=scene.n_panels, computed=tuple(plan.computed),
@@ -400,7 +414,8 @@ class _SweepStats:
                            figure=figure, wall_time=wall_time, restamped=plan.restamped,
                            dropped=sum(self.dropped.values()), products={k: tuple(v) for k, v in plan.todo.items()},
                            indicator_orbits=self.ind_orbits, indicator_dh=self.ind_dh,
-                           indicator_warning=self.ind_warning, indicator_statuses=dict(self.ind_statuses))
+                           indicator_warning=self.ind_warning, indicator_statuses=dict(self.ind_statuses),
+                           map_cells=tuple(self.map_cells))
 
 
 def _setting(section) -> str:

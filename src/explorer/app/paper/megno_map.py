@@ -21,7 +21,7 @@ def megno_map_figure(*, results_dir="results", quick=False, quiet=True) -> Drawn
     from explorer.analysis.lyapunov import chaotic_fraction
     from explorer.app.chaos_raster import chaos_rasters
     from explorer.app.paper._sweeps import _lyapunov_panels
-    from explorer.app.runner import classify_megno
+    from explorer.app.runner import classify_megno, computed_fraction
 
     scene, out, reduced, _summary = ensure_sweep(PRESET, results_dir=results_dir, quick=quick, quiet=quiet)
     maps, _fr = _lyapunov_panels(scene, out)
@@ -30,6 +30,7 @@ def megno_map_figure(*, results_dir="results", quick=False, quiet=True) -> Drawn
     for m in maps:
         m["values"] = m["extra"][ind] if ind in m["extra"] else m["megno"]
         m["fraction"] = chaotic_fraction(classify_megno(m["extra"]), scene.lyapunov.threshold, m["valid"])[0]
+        m["computed"] = computed_fraction(m["extra"])
     fig = chaos_rasters(maps, indicator=ind, threshold=scene.lyapunov.threshold, columns=1, dpi=scene.figure.dpi)
     notes = [f"from {out}"]
     if reduced:
@@ -37,7 +38,8 @@ def megno_map_figure(*, results_dir="results", quick=False, quiet=True) -> Drawn
         fig.text(0.99, 0.005, quick_note(scene), ha="right", va="bottom", fontsize=6, color="#b2182b")
     m = maps[0]
     return Drawn(fig, {"resolution": int(m["grid"][0]), "grid": tuple(m["grid"]), "orbits": len(m["seeds"]),
-                       "fraction": float(m["fraction"]), "store": str(out), "reduced": reduced}, notes)
+                       "fraction": float(m["fraction"]), "computed": m["computed"], "store": str(out),
+                       "reduced": reduced}, notes)
 
 
 def build(out_dir, *, results_dir="results", quick=False, benchmark=None, quiet=True) -> Outcome:

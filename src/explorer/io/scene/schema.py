@@ -38,7 +38,7 @@ _INTEGRATION_KEYS = ("method", "tol", "dt", "crossings", "tmax", "max_steps", "p
 _FIGURE_KEYS = ("layout", "columns", "share_scale", "own_scale", "marker_size", "dpi")
 _MANIFOLD_KEYS = ("draw", "arclength", "guess", "period", "max_points")
 _LYAPUNOV_KEYS = ("time", "method", "tol", "dt", "threshold", "indicators", "early_stop", "early_sali", "early_megno",
-                  "early_time", "map_resolution", "map_indicator", "center", "diffusion_iterates")
+                  "early_time", "map_resolution", "map_indicator", "exact", "center", "diffusion_iterates")
 #: the indicators a scene can ask for (explorer.analysis.lyapunov.INDICATOR_NAMES)
 LYAPUNOV_INDICATORS = INDICATOR_NAMES
 #: [lyapunov] diffusion_iterates: N of frequency_diffusion (2N section returns per orbit), by

@@ -164,6 +164,9 @@ class LyapunovSpec:
     #: map_indicator; the sections keep the [seeds]
     map_resolution: int = 0
     map_indicator: str = "megno"
+    #: false: a MEGNO map is adaptive (explorer.analysis.chaos_map: a coarse lattice, refined where
+    #: neighbours disagree, the rest filled); true: every cell computed
+    exact: bool = False
     #: the indicator frequency_diffusion (explorer.analysis.rotation.frequency_diffusion): the point
     #: (p1, p2) its rotation numbers turn around, required with it (docs/greene.md, "Frequency
     #: diffusion": a decision, not found by Newton), and N (2N section returns per orbit)
@@ -187,6 +190,7 @@ class LyapunovSpec:
                            _int("lyapunov.map_resolution", self.map_resolution, 0, MAX_MAP_RESOLUTION))
         object.__setattr__(self, "map_indicator",
                            _choice("lyapunov.map_indicator", self.map_indicator, LYAPUNOV_INDICATORS))
+        object.__setattr__(self, "exact", _bool("lyapunov.exact", self.exact))
         if self.center is not None:
             c = _list("lyapunov.center", self.center)
             if len(c) != 2:
@@ -206,6 +210,12 @@ class LyapunovSpec:
         if self.map_resolution and self.map_indicator not in self.indicators:
             _fail("lyapunov.map_indicator", f"must be one of lyapunov.indicators {list(self.indicators)}; "
                   f"got {self.map_indicator!r}")
+
+    @property
+    def adaptive(self) -> bool:
+        """The map is computed adaptively: a map grid of MEGNO (the indicator the scene's threshold
+        classifies) without ``exact``."""
+        return bool(self.map_resolution and not self.exact and self.map_indicator == "megno")
 
     @property
     def second_vector(self) -> bool:
@@ -253,6 +263,10 @@ class LyapunovSpec:
                      early_megno=self.early_megno, early_time=self.early_time)
         if self.map_resolution:
             d["map_resolution"] = self.map_resolution
+        if self.adaptive:   # which cells are computed depends on the class threshold and the rule
+            from explorer.analysis.sweep import map_rule
+
+            d["adaptive"] = dict(map_rule(), threshold=self.threshold)
         if self.frequency_diffusion is not None:
             d["frequency_diffusion"] = self.frequency_diffusion
         return d

@@ -45,6 +45,7 @@ _OPTIONAL_PER_ORBIT = {
     **{i.name: ((), np.dtype(i.dtype)) for i in indicator_table.INDICATORS},   # the indicator registry
     "lyapunov_status": ((), np.dtype(np.int8)),
     "lyapunov_early": ((), np.dtype(np.int8)),
+    "map_computed": ((), np.dtype(bool)),   # a chaos map's cell computed (True) or filled (docs/store.md)
 }
 #: ``lyapunov_seeds`` (M, 2): the seeds of the indicators when they are not the panel's ``seeds``
 #: (a chaos map's grid beside sections of the [seeds]); the indicator datasets then have M rows
@@ -394,7 +395,7 @@ def _read_panel(idx: int, grp, path: str) -> PanelData:
     if missing:
         raise StoreError(f"{path}: panel {idx} lacks dataset(s) {', '.join(missing)}")
     arrays = {d: grp[d][()] for d in DATASETS}
-    extra = {d: grp[d][()] for d in OPTIONAL_DATASETS if d in grp}
+    extra = _with_map_mask(grp, {d: grp[d][()] for d in OPTIONAL_DATASETS if d in grp})
     names = _from_h5_attr(grp["status"].attrs.get("status_names"))
     status_names = {int(k): v for k, v in json.loads(names).items()} if names else dict(STATUS_NAMES)
     panel = PanelData(index=idx, attrs=_read_attrs(grp), status_names=status_names, extra=extra, **arrays)
@@ -404,6 +405,13 @@ def _read_panel(idx: int, grp, path: str) -> PanelData:
             or np.any(np.diff(off) != panel.count)):
         raise StoreError(f"{path}: panel {idx} has inconsistent offsets/count/crossings")
     return panel
+
+
+def _with_map_mask(grp, extra: dict) -> dict:
+    """``extra`` with ``map_computed`` all True for a map panel stored without the mask (every cell computed)."""
+    if "map_resolution" in grp.attrs and "map_computed" not in extra and "lyapunov_status" in grp:
+        extra["map_computed"] = np.ones(grp["lyapunov_status"].shape[0], bool)
+    return extra
 
 
 @contextlib.contextmanager
@@ -503,4 +511,5 @@ def read_panel_datasets(path, index: int, names) -> tuple[dict, dict]:
     path = os.fspath(path)
     with _reading(path) as f:
         grp = _panel_group(f, path, int(index))
-        return {d: grp[d][()] for d in names if d in grp}, _read_attrs(grp)
+        got = {d: grp[d][()] for d in names if d in grp}
+        return _with_map_mask(grp, got) if "map_computed" in names else got, _read_attrs(grp)
