@@ -106,3 +106,99 @@ def test_an_atlas_scene_refuses_drawn_manifolds():
     assert "draw = false" in atlas.to_toml()
     with pytest.raises(SceneError, match="manifolds.draw"):
         parse_scene(atlas.to_toml().replace("draw = false", "draw = true"))
+
+
+# A System's scene (docs/scenes.md, "A scene of your own system"): Hénon–Heiles on x = 0 at E = 1/8
+SYSTEM_SCENE = """
+name = "hh_curves"
+section = "x"
+coords = ["y", "py"]
+solve = "px"
+[energy]
+value = 0.125
+[seeds]
+kind = "points"
+points = [[0.1, 0.1], [0.3, 0.0]]
+[integration]
+crossings = 20
+"""
+SADDLE_GUESS = (0.3, 0.3)
+CURVES = f"[compute]\nseparatrices = true\n[manifolds]\ndraw = true\nguess = {list(SADDLE_GUESS)}\narclength = 0.5\n"
+
+
+def _system_scene(text):
+    from systems import henon_heiles
+
+    return parse_scene(text, system=henon_heiles())
+
+
+@pytest.fixture(scope="module")
+def hh_curves():
+    from explorer.app.system_sweep import panel_curves
+
+    scene = _system_scene(SYSTEM_SCENE + CURVES)
+    return scene, panel_curves(scene, 0)
+
+
+def _distance_to_polyline(points, line):
+    a, b = line[:-1], line[1:]
+    d = b - a
+    out = []
+    for p in points:
+        t = np.clip(np.einsum("ij,ij->i", p - a, d) / np.einsum("ij,ij->i", d, d), 0.0, 1.0)
+        out.append(np.min(np.linalg.norm(a + t[:, None] * d - p, axis=1)))
+    return np.array(out)
+
+
+def test_a_system_scenes_separatrices_and_manifolds_change_its_figure_settings_and_no_hash():
+    plain, drawn = _system_scene(SYSTEM_SCENE), _system_scene(SYSTEM_SCENE + CURVES)
+    assert drawn.separatrices and drawn.manifolds.draw and drawn.manifolds.guess == SADDLE_GUESS
+    assert plain.product_hashes(0) == drawn.product_hashes(0) and plain.panel_hash(0) == drawn.panel_hash(0)
+    assert '"separatrices":true' in drawn.figure_settings() and '"manifolds"' in drawn.figure_settings()
+    assert plain.figure_settings() == _system_scene(SYSTEM_SCENE + "[manifolds]\narclength = 3.0\n").figure_settings()
+
+
+def test_a_system_panels_separatrices_leave_its_hyperbolic_fixed_points_and_are_invariant(hh_curves):
+    scene, drawn = hh_curves
+    smap = scene.section_map(0)
+    curves = drawn["curves"]
+    assert "note" not in drawn and len(curves) % 4 == 0 and len(curves) >= 8
+    saddles = np.array([c[0] for c in curves[::4]])
+    for k, x in enumerate(saddles):
+        assert all(np.array_equal(c[0], x) for c in curves[4 * k:4 * k + 4])   # four branches from one point
+        res = smap(x)
+        assert np.linalg.norm(res.point - x) < 1e-10 and abs(np.trace(res.jacobian)) > 2.0
+    # Hénon–Heiles is reversible, (y, py) -> (y, -py) on x = 0, and has threefold symmetry: the
+    # saddles come in mirror pairs (or lie on py = 0) and their orbits share one trace
+    mirrored = saddles * [1.0, -1.0]
+    assert all(np.min(np.linalg.norm(saddles - m, axis=1)) < 1e-8 for m in mirrored)
+    traces = [np.trace(smap(x).jacobian) for x in saddles]
+    assert np.ptp(traces) < 1e-8 * abs(traces[0])
+    # a branch of W^u holds the preimages of its points, one of W^s the images (both nearer the saddle)
+    for c, backward in ((curves[0], True), (curves[2], False)):
+        pts = c[len(c) // 4:len(c) // 2:max(1, len(c) // 40)]
+        img = smap.images(pts, 1, backward=backward)[:, 0]
+        assert np.max(_distance_to_polyline(img, c)) < 1e-4
+
+
+def test_a_system_panels_manifolds_are_the_branches_of_the_orbit_newton_finds_from_the_guess(hh_curves):
+    _scene, drawn = hh_curves
+    branches = drawn["manifolds"]
+    assert sorted(k for k, _ in branches) == ["stable"] * 2 + ["unstable"] * 2
+    assert len({tuple(b[0]) for _, b in branches}) == 1
+    assert np.linalg.norm(branches[0][1][0] - SADDLE_GUESS) < 0.01
+    for _, b in branches:
+        assert 0.5 <= np.sum(np.linalg.norm(np.diff(b, axis=0), axis=1)) < 0.55
+
+
+def test_a_system_sweep_draws_the_manifolds_over_its_section_and_says_why_there_are_none(tmp_path):
+    scene = _system_scene(SYSTEM_SCENE + CURVES.replace("separatrices = true", "separatrices = false"))
+    stem = tmp_path / "hh"
+    report = run_sweep(scene, tmp_path / "hh.h5", figure=stem, progress=False)
+    png = stem.with_suffix(".png")
+    assert png in report.figure and '"manifolds"' in figures.png_text(png, FIGURE_SETTINGS_KEY)
+    assert _pixels_near(png, figures.MANIFOLD_COLORS["stable"]) > 100
+    from explorer.app.system_sweep import panel_curves
+
+    elliptic = _system_scene(SYSTEM_SCENE + "[manifolds]\ndraw = true\nguess = [0.0, 0.0]\n")
+    assert panel_curves(elliptic, 0) == {"note": "no manifolds: the orbit is not hyperbolic"}

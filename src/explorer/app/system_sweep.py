@@ -1,7 +1,8 @@
 """The figures of a System's sweep (docs/scenes.md, "A scene of your own system"), drawn from the
-store alone: the section points of each panel with the axes named by the map's coords, the chaos
-map (:func:`explorer.app.chaos_raster.chaos_rasters`) and the chaotic fraction against the swept
-value.  The sweep itself is :func:`explorer.app.runner.run_sweep`'s."""
+store: the section points of each panel with the axes named by the map's coords, with the
+separatrices and [manifolds] branches computed when drawn, the chaos map
+(:func:`explorer.app.chaos_raster.chaos_rasters`) and the chaotic fraction against the swept value.
+The sweep itself is :func:`explorer.app.runner.run_sweep`'s."""
 from __future__ import annotations
 
 import math
@@ -11,17 +12,21 @@ import numpy as np
 from explorer.app import figures
 from explorer.app.chaos_raster import axis_label, chaos_rasters
 from explorer.io import store
+from explorer.model import ParameterError
 
 
 def system_section_panels(panels, *, axes, layout="row", columns=None, share_scale=True, own_scale=(),
                           marker_size=0.25, dpi=200, window=None):
-    """One panel per dict of ``panels`` (``points`` (M, 2), ``label``): the section points, the axes
-    named by ``axes`` (the coords); limits ``window`` (a_lo, a_hi, b_lo, b_hi) or the points' extent
-    (+5 %), shared unless ``share_scale`` is false or the panel is in ``own_scale``."""
+    """One panel per dict of ``panels`` (``points`` (M, 2), ``label``, optional ``curves``,
+    ``manifolds`` and ``note`` as :func:`explorer.app.figures.section_panels` has them): the
+    section points, the axes named by ``axes`` (the coords); limits ``window`` (a_lo, a_hi, b_lo,
+    b_hi) or the extent of the points and curves (+5 %), shared unless ``share_scale`` is false or
+    the panel is in ``own_scale``."""
     mpl = figures._matplotlib()
     n = len(panels)
     ncols = n if layout == "row" else min(n, 3 if columns is None else int(columns))
-    boxes = [_box(p["points"], window) for p in panels]
+    boxes = [_box(np.concatenate([np.asarray(p["points"], np.float64).reshape(-1, 2), *p.get("curves", ()),
+                                  *(c for _kind, c in p.get("manifolds", ()))]), window) for p in panels]
     shared = _union([b for i, b in enumerate(boxes) if i not in own_scale and b is not None])
     xlabel, ylabel = (axis_label(a) for a in axes)
     with mpl.rc_context({"mathtext.fontset": "dejavusans", "axes.linewidth": 0.6}):
@@ -32,6 +37,15 @@ def system_section_panels(panels, *, axes, layout="row", columns=None, share_sca
             if len(pts):
                 ax.plot(pts[:, 0], pts[:, 1], linestyle="none", marker="o", markersize=math.sqrt(marker_size),
                         markeredgewidth=0, color=figures.POINT_COLOR, rasterized=True)
+            for c in figures._as_curves(p.get("curves"), i):
+                ax.plot(c[:, 0], c[:, 1], zorder=2.5, **figures.CURVE_STYLE)
+            for kind, c in figures._as_manifolds(p.get("manifolds"), i):
+                ax.plot(c[:, 0], c[:, 1], zorder=2.6, color=figures.MANIFOLD_COLORS[kind], gid=f"manifold-{kind}",
+                        **figures.MANIFOLD_STYLE)
+            if p.get("note"):
+                ax.text(0.03, 0.03, figures.mathtext_label(p["note"]), transform=ax.transAxes,
+                        fontsize=figures._NOTE_SIZE, ha="left", va="bottom", zorder=4,
+                        bbox=dict(boxstyle="round,pad=0.25", facecolor="white", edgecolor="none", alpha=0.85))
             box = shared if share_scale and i not in own_scale and shared is not None else boxes[i]
             if box is not None:
                 ax.set_xlim(*box[0])
@@ -62,6 +76,31 @@ def _union(boxes):
             (min(b[1][0] for b in boxes), max(b[1][1] for b in boxes)))
 
 
+def panel_curves(scene, i) -> dict:
+    """What panel i of a System's ``scene`` draws over its points, computed now, never stored:
+    ``curves``, the separatrices of its map's hyperbolic fixed points ([compute] separatrices,
+    :func:`explorer.analysis.system_scene.separatrix_curves`), ``manifolds``, the branches of the
+    [manifolds] orbit, and a ``note`` saying why either is missing."""
+    from explorer.analysis.system_scene import orbit_branches, separatrix_curves
+
+    out: dict = {}
+    notes = []
+    smap = scene.section_map(i) if scene.separatrices or scene.manifolds.draw else None
+    if scene.separatrices:
+        points, out["curves"] = separatrix_curves(smap)
+        if not points:
+            notes.append("no hyperbolic fixed point found")
+    if scene.manifolds.draw:
+        try:
+            out["manifolds"] = orbit_branches(smap, scene.manifolds)
+        except ParameterError as exc:
+            msg = str(exc).split(" (")[0]
+            notes.append("no manifolds: " + (msg if len(msg) <= 60 else msg[:57] + "..."))
+    if notes:
+        out["note"] = "\n".join(notes)
+    return out
+
+
 def draw_system_figure(scene, out_path, stem, text=None):
     """Read the store of a System's scene and draw its figures (PNG and PDF, ``text`` chunks in the
     PNG): ``stem`` (sections), ``stem``_map (the map of ``map_indicator`` on a ``map_resolution`` grid) and
@@ -75,6 +114,7 @@ def draw_system_figure(scene, out_path, stem, text=None):
             pd = data.panels.get(i)
             pts = pd.crossings[:, 1:3] if pd is not None and len(pd.crossings) else np.zeros((0, 2))
             panels.append({"points": pts, "label": scene.panel(i)[2] or scene.system.name})
+            panels[-1].update(panel_curves(scene, i))
         fig = system_section_panels(panels, axes=scene.coords, layout=fs.layout, columns=fs.columns,
                                     share_scale=fs.share_scale, own_scale=tuple(fs.own_scale),
                                     marker_size=fs.marker_size, dpi=fs.dpi, window=scene.seeds.window)

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from explorer.io.scene import atlas as _atlas
 from explorer.io.scene.checks import (
     SceneError,
     _bool,
@@ -28,30 +29,31 @@ from explorer.io.scene.checks import (
     _short,
     _str,
     _sweep,
+    _swept,
     _table,
 )
 from explorer.io.scene.hashes import _canonical_json, _sha256
 from explorer.io.scene.schema import (
     _FIGURE_KEYS,
+    _MANIFOLD_KEYS,
     _NAME_RE,
     FORMAT_VERSION,
     MAX_MAP_RESOLUTION,
     MAX_NAME_LENGTH,
     MAX_SEEDS,
 )
-from explorer.io.scene.specs import FigureSpec
+from explorer.io.scene.specs import FigureSpec, ManifoldSpec, SeedSpec
 from explorer.kernels.indicator_table import TANGENT_NAMES
 from explorer.model import ParameterError
 
-#: the keys of a System's scene (the tables of Chaplygin's model, [model], [energy] h, [manifolds],
-#: [atlas], are not among them)
+#: the keys of a System's scene (Chaplygin's [model] and [energy] h are not among them)
 SYSTEM_TOP_KEYS = ("name", "description", "system", "section", "direction", "coords", "solve", "parameters",
-                   "energy", "sweep", "seeds", "integration", "compute", "lyapunov", "figure")
+                   "energy", "sweep", "atlas", "seeds", "integration", "compute", "lyapunov", "figure", "manifolds")
 SYSTEM_SEED_KINDS = ("grid", "random", "points")
 _SEED_KEYS = ("kind", "n", "seed", "points", "window")
 _INTEGRATION_KEYS = ("method", "crossings", "tol", "tmax", "max_steps")
 _LYAPUNOV_KEYS = ("time", "tol", "threshold", "map_resolution", "indicators", "map_indicator")
-_COMPUTE_KEYS = ("sections", "lyapunov")
+_COMPUTE_KEYS = ("sections", "lyapunov", "separatrices")
 #: the swept name of the energy level (a parameter of the system may not take it)
 ENERGY = "energy"
 #: longest section expression read from a scene
@@ -166,17 +168,8 @@ class SystemSeeds:
         object.__setattr__(self, "seed", _int("seeds.seed", self.seed, 0))
         if self.window is not None:
             object.__setattr__(self, "window", window_of("seeds.window", self.window))
-        if self.points is not None:
-            pts = _list("seeds.points", self.points)
-            if len(pts) > MAX_SEEDS:
-                _fail("seeds.points", f"must have at most {MAX_SEEDS} points, got {len(pts)}")
-            out = []
-            for i, pt in enumerate(pts):
-                pt = _list(f"seeds.points[{i}]", pt)
-                if len(pt) != 2:
-                    _fail(f"seeds.points[{i}]", f"must be [a, b] (2 numbers), got {len(pt)} items")
-                out.append((_real(f"seeds.points[{i}]", pt[0]), _real(f"seeds.points[{i}]", pt[1])))
-            object.__setattr__(self, "points", tuple(out))
+        if self.points is not None:   # the points of Chaplygin's [seeds], checked as there
+            object.__setattr__(self, "points", SeedSpec(kind="points", points=self.points).points)
         if self.kind == "points" and self.points is None:
             _fail("seeds.points", "is required with kind = 'points'")
         if self.kind != "points" and self.window is None:
@@ -256,6 +249,7 @@ class SystemLyapunov:
     map_indicator: str = "megno"
 
     method = "taylor"
+    early_stop = False
 
     def __post_init__(self):
         from explorer.analysis import sections
@@ -300,8 +294,12 @@ class SystemScene:
     figure: FigureSpec = field(default_factory=FigureSpec)
     description: str = ""
     text: str = ""
-
-    is_atlas = False
+    #: [compute] separatrices: the branches of the hyperbolic fixed points of each panel's map,
+    #: computed when the figure is drawn (as [manifolds]), never stored
+    separatrices: bool = False
+    manifolds: ManifoldSpec = field(default_factory=ManifoldSpec)
+    atlas_parameter: str | None = None
+    atlas_values: tuple = ()
 
     def __post_init__(self):
         name = _str("name", self.name)
@@ -309,24 +307,23 @@ class SystemScene:
             _fail("name", f"must match [A-Za-z0-9_.-]+, not start with '.', and have at most "
                   f"{MAX_NAME_LENGTH} characters; got {_short(name)}")
         object.__setattr__(self, "energy", _real("energy.value", self.energy))
-        pars = [p.name for p in self.system.parameters]
-        if ENERGY in pars:
+        swept = [p.name for p in self.system.parameters] + [ENERGY]
+        if ENERGY in swept[:-1]:
             _fail("system", f"{self.system.name} has a parameter named {ENERGY!r}, the name a scene sweeps the "
                   "energy level by: rename the parameter")
-        if self.sweep_parameter is not None:
-            if self.sweep_parameter not in pars + [ENERGY]:
-                _fail("sweep.parameter", f"must be a parameter of {self.system.name} ({', '.join(pars) or 'none'}) "
-                      f"or {ENERGY!r}, got {_short(self.sweep_parameter)}")
+        if _swept(self, "sweep", swept):
             object.__setattr__(self, "sweep_values", _distinct_reals("sweep.values", self.sweep_values))
-        elif self.sweep_values:
-            _fail("sweep.parameter", "is required when sweep values are given")
-        if not self.compute or any(q not in _COMPUTE_KEYS for q in self.compute):
+        if not self.compute or any(q not in _COMPUTE_KEYS[:2] for q in self.compute):
             _fail("compute", f"must turn on sections or lyapunov (or both), got {list(self.compute)}")
         if self.lyapunov.map_resolution and self.seeds.window is None:
             _fail("seeds.window", "is required with lyapunov.map_resolution: the rectangle [a_lo, a_hi, b_lo, b_hi] "
                   "the chaos map covers")
         if self.lyapunov.map_resolution and "lyapunov" not in self.compute:
             _fail("lyapunov.map_resolution", "needs compute.lyapunov = true")
+        _atlas.check_atlas(self, swept)
+        if self.is_atlas and (self.separatrices or self.manifolds.draw):
+            _fail("compute.separatrices" if self.separatrices else "manifolds.draw",
+                  "is not used by an atlas scene (it draws a heat map, no sections)")
         for j, idx in enumerate(self.figure.own_scale):
             if idx >= self.n_panels:
                 _fail(f"figure.own_scale[{j}]", f"must be a panel index in [0, {self.n_panels - 1}], got {idx}")
@@ -337,7 +334,8 @@ class SystemScene:
 
     def _check_panels(self):
         """Every panel's section map (the section, coords, solve and energy checked by
-        :class:`~explorer.analysis.system_section_map.SystemSectionMap`) and seeds."""
+        :class:`~explorer.analysis.system_section_map.SystemSectionMap`) and, but in an atlas (whose
+        cells may lie off the energy surface), its seeds."""
         from explorer.analysis.sweep import system_seed_points
 
         for i in range(self.n_panels):
@@ -347,6 +345,8 @@ class SystemScene:
                 first = str(e).split(" ")[0]
                 key = first if first in ("coords", "solve") else "section" if i == 0 else self._key(i)
                 raise SceneError(f"scene key '{key}' ({self.panel(i)[2] or self.system.name}): {e}") from None
+            if self.is_atlas:
+                continue
             pts, _dropped = system_seed_points(self.seeds, smap)
             if not len(pts) and ("sections" in self.compute or not self.lyapunov.map_resolution):
                 where = f" of panel {i} ({self.panel(i)[2]})" if self.sweep_parameter is not None else ""
@@ -363,9 +363,29 @@ class SystemScene:
         return max(1, len(self.sweep_values))
 
     @property
+    def is_atlas(self) -> bool:
+        return self.atlas_parameter is not None
+
+    @property
+    def n_cells(self) -> int:
+        """Cells of an atlas: len(sweep.values) x len(atlas.values) (0 for other scenes)."""
+        return _atlas.n_cells(self)
+
+    @property
     def params(self) -> dict:
         """The system's parameter values by name."""
         return {p.name: float(v) for p, v in self.system.parameters.items()}
+
+    def _at(self, values: dict, key: str | None = None):
+        """(System, energy) with ``values`` {parameter or 'energy': value} set; a refused value is
+        a SceneError naming ``key`` (a ParameterError without one)."""
+        energy = values.pop(ENERGY, self.energy)
+        try:
+            return (self.system.with_(**values) if values else self.system), energy
+        except ParameterError as e:
+            if key is None:
+                raise
+            raise SceneError(f"scene key '{key}': {e}") from None
 
     def panel(self, i):
         """(System, energy, label) of panel i; label e.g. ``"lam = 0.5"`` ("" without a sweep)."""
@@ -374,24 +394,34 @@ class SystemScene:
         if self.sweep_parameter is None:
             return self.system, self.energy, ""
         v = self.sweep_values[i]
-        label = f"{self.sweep_parameter} = {v!r}"
-        if self.sweep_parameter == ENERGY:
-            return self.system, v, label
-        try:
-            return self.system.with_(**{self.sweep_parameter: v}), self.energy, label
-        except ParameterError as e:
-            raise SceneError(f"scene key 'sweep.values[{i}]': {e}") from None
+        return (*self._at({self.sweep_parameter: v}, f"sweep.values[{i}]"), f"{self.sweep_parameter} = {v!r}")
+
+    def cell(self, i):
+        """(System, energy, label) of atlas cell i = row * len(atlas.values) + column (row: sweep
+        value, column: atlas value)."""
+        if not self.is_atlas or isinstance(i, bool) or not isinstance(i, (int, np.integer)) \
+                or not 0 <= i < self.n_cells:
+            raise IndexError(f"atlas cell index must be an integer in [0, {self.n_cells - 1}], got {i!r}")
+        r, c = divmod(int(i), len(self.atlas_values))
+        values = {self.sweep_parameter: self.sweep_values[r], self.atlas_parameter: self.atlas_values[c]}
+        return (*self._at(values), _atlas.cell_label(self, r, c))
 
     def panel_h(self, i) -> float:
         return self.panel(i)[1]
 
-    def section_map(self, i):
-        """The section map of panel i (:class:`~explorer.analysis.system_section_map.SystemSectionMap`)."""
+    def _map(self, system, energy):
         from explorer.analysis.system_section_map import SystemSectionMap
 
-        system, energy, _label = self.panel(i)
         return SystemSectionMap(system, energy, section=self.section, direction=self.direction, coords=self.coords,
                                 solve=self.solve)
+
+    def section_map(self, i):
+        """The section map of panel i (:class:`~explorer.analysis.system_section_map.SystemSectionMap`)."""
+        return self._map(*self.panel(i)[:2])
+
+    def cell_map(self, i):
+        """The section map of atlas cell i."""
+        return self._map(*self.cell(i)[:2])
 
     def map_settings(self) -> dict:
         """The section map's definition, as stored (``coords`` and the columns of a crossing row)."""
@@ -430,10 +460,25 @@ class SystemScene:
         return {k: _sha256({"format_version": FORMAT_VERSION, k: v}) for k, v in self.product_settings(i).items()}
 
     def figure_settings(self) -> str:
+        """Canonical JSON of what changes the drawing but not the numbers ([figure], the coords, the
+        threshold and map_indicator with [lyapunov], separatrices and [manifolds] when drawn)."""
         d: dict = {"figure": self.figure.to_dict(), "coords": list(self.coords)}
         if "lyapunov" in self.compute:
             d.update(threshold=self.lyapunov.threshold, map_indicator=self.lyapunov.map_indicator)
+        if self.separatrices:
+            d["separatrices"] = True
+        if self.manifolds.draw:
+            d["manifolds"] = self.manifolds.to_dict()
         return _canonical_json(d)
+
+    def atlas_hash(self) -> str:
+        """sha256 of everything that determines an atlas's numbers: the system and the map, both
+        axes, the seeds and [lyapunov] (not name, description, figure or [integration])."""
+        d = {"system": {"name": self.system.name, "content": self.system.content_hash}, "params": self.params,
+             "energy": self.energy, "map": self.map_settings(), "rows": [self.sweep_parameter, list(self.sweep_values)],
+             "columns": [self.atlas_parameter, list(self.atlas_values)], "seeds": self.seeds.used_dict(),
+             "lyapunov": self.lyapunov.used_dict(), "threshold": self.lyapunov.threshold}
+        return _sha256({"format_version": FORMAT_VERSION, "atlas": d})
 
 
 def is_system_scene(data: dict, system=None) -> bool:
@@ -454,8 +499,8 @@ def system_scene_from_dict(data: dict, text: str = "", system=None) -> SystemSce
                          f"docs/scenes.md); scene {data.get('name', '')!r} has no section")
     for k in data:
         if k not in SYSTEM_TOP_KEYS:
-            chaplygin = k in ("model", "manifolds", "atlas")
-            hint = " ([model], [manifolds] and [atlas] belong to Chaplygin's model)" if chaplygin else ""
+            hint = " ([model] is Chaplygin's model; a System's scene names its parameters in [parameters])" \
+                if k == "model" else ""
             raise SceneError(f"scene: unknown key '{k}' of a System's scene{did_you_mean(k, SYSTEM_TOP_KEYS)}{hint} "
                              f"(allowed: {', '.join(SYSTEM_TOP_KEYS)})")
     if "name" not in data:
@@ -488,6 +533,7 @@ def system_scene_from_dict(data: dict, text: str = "", system=None) -> SystemSce
         _fail("energy.value", f"is required: the energy level E of the section map of {sys_obj.name}")
     kw["energy"] = energy["value"]
     kw.update(_sweep(data))
+    kw.update(_atlas._atlas_from_dict(data))
     seeds = dict(_table("seeds", data.get("seeds", {}), _SEED_KEYS))
     kw["seeds"] = SystemSeeds(**seeds) if seeds else SystemSeeds()
     kw["integration"] = SystemIntegration(**_table("integration", data.get("integration", {}), _INTEGRATION_KEYS),
@@ -495,12 +541,9 @@ def system_scene_from_dict(data: dict, text: str = "", system=None) -> SystemSce
     comp = _table("compute", data.get("compute", {}), _COMPUTE_KEYS)
     kw["compute"] = tuple(q for q, default in (("sections", True), ("lyapunov", False))
                           if _bool(f"compute.{q}", comp.get(q, default)))
-    ly = dict(_table("lyapunov", data.get("lyapunov", {}), _LYAPUNOV_KEYS))
-    if "indicators" in ly:
-        ly["indicators"] = tuple(_list("lyapunov.indicators", ly["indicators"]))
-    kw["lyapunov"] = SystemLyapunov(**ly)
-    fig = dict(_table("figure", data.get("figure", {}), _FIGURE_KEYS))
-    if "own_scale" in fig:
-        fig["own_scale"] = tuple(_list("figure.own_scale", fig["own_scale"], min_len=0))
-    kw["figure"] = FigureSpec(**fig)
+    kw["separatrices"] = _bool("compute.separatrices", comp.get("separatrices", False))
+    # the specs check lists themselves (indicators, own_scale, guess)
+    kw["lyapunov"] = SystemLyapunov(**_table("lyapunov", data.get("lyapunov", {}), _LYAPUNOV_KEYS))
+    kw["figure"] = FigureSpec(**_table("figure", data.get("figure", {}), _FIGURE_KEYS))
+    kw["manifolds"] = ManifoldSpec(**_table("manifolds", data.get("manifolds", {}), _MANIFOLD_KEYS))
     return SystemScene(**kw)
