@@ -648,6 +648,14 @@ def test_a_change_of_mu_redraws_the_region_and_keeps_the_starts(served, browser)
     assert len(page.evaluate(DATA, "starts")["orbit"]) == 1             # the start is kept and runs again
     _wait_crossings(page, CROSSINGS)
     _wait(page, "() => window.location.search.includes('mu=0.5&')", timeout=60_000)
+    # the crossings per click lowered, then raised again: the orbit is cut, then its rows come back
+    _wait(page, f"() => ({TEXT})('status').includes('0 running, {CROSSINGS} crossings drawn')")
+    before = page.evaluate(DATA, "crossings")["t"]
+    for k in (CROSSINGS // 3, CROSSINGS):
+        _set_field(page, "crossings", str(k))
+        _wait(page, f"() => ({TEXT})('status').includes('0 running, {k} crossings drawn')")
+        _wait(page, f"() => Bokeh.documents[0].get_model_by_name('crossings').data.t.length === {k}")
+        assert page.evaluate(DATA, "crossings")["t"] == before[:k]
     page.close()
 
 
@@ -1247,34 +1255,34 @@ def test_picking_an_orbits_crossing_shows_its_mlce_megno_and_rotation_number():
         d = page.orbits.crossings.data
         second = np.asarray(d["orbit"]) == page.orbits.starts[1][0]
         k = int(np.flatnonzero(second)[17])                     # a crossing of the second orbit, not its start
-        assert page.readout.pick(float(d["p1"][k]) + 1e-9, float(d["p2"][k])) == page.orbits.starts[1][0]
-        _poll_until(page, lambda: "rotation number" in page.readout.text.text)
-        r = page.readout.readouts[page.orbits.starts[1][0]]
+        assert page.orbit_list.pick(float(d["p1"][k]) + 1e-9, float(d["p2"][k])) == page.orbits.starts[1][0]
+        _poll_until(page, lambda: "rotation number" in page.orbit_list.text.text)
+        r = page.orbit_list.readouts[page.orbits.starts[1][0]]
         y0 = model.section_state(s.params, [starts[1][0]], [starts[1][1]], s.h)
         ind = lyapunov.indicators(s.params, states=y0, tmax=INDICATOR_TIME, method=s.method, tol=s.tol)
         assert (r["megno"], r["mlce"]) == (float(ind.megno[0]), float(ind.mlce[0]))          # the same numbers
         fp = elliptic_center(s, starts[1])
         assert fp.stable and fp.point == pytest.approx(find_fixed_point(s.params, s.h, starts[1]).point, abs=0)
         ref = rotation.rotation_number(s.params, s.h, starts[1], center=fp.point, tol=s.tol)
-        assert r["rotation"].value == ref.value and f"{ref.value:.10g}" in page.readout.text.text
-        assert f"{float(ind.mlce[0]):.4g}" in page.readout.text.text and "orbit 2" in page.readout.text.text
-        assert page.readout.pick(50.0, 50.0) is None and "no crossing within" in page.message.text     # nowhere near
+        assert r["rotation"].value == ref.value and f"{ref.value:.10g}" in page.orbit_list.text.text
+        assert f"{float(ind.mlce[0]):.4g}" in page.orbit_list.text.text and "orbit 2" in page.orbit_list.text.text
+        assert page.orbit_list.pick(50.0, 50.0) is None and "no crossing within" in page.message.text     # nowhere near
         import threading
 
         before = threading.active_count()
-        page.readout.readouts.clear()
+        page.orbit_list.readouts.clear()
         for _ in range(20):                                         # rapid picks: one readout thread, the last pick
-            page.readout.pick(float(d["p1"][k]), float(d["p2"][k]))
+            page.orbit_list.pick(float(d["p1"][k]), float(d["p2"][k]))
         assert threading.active_count() <= before
-        _poll_until(page, lambda: page.orbits.starts[1][0] in page.readout.readouts)
+        _poll_until(page, lambda: page.orbits.starts[1][0] in page.orbit_list.readouts)
         page.click_mode.value = "pick an orbit"                  # the switch: a tap picks instead of starting
         from bokeh.events import Tap
 
         page._on_tap(Tap(page.section.figure, sx=1.0, sy=1.0, x=float(d["p1"][0]), y=float(d["p2"][0])))
-        assert len(page.orbits.starts) == 2 and page.readout.picked == int(d["orbit"][0])
+        assert len(page.orbits.starts) == 2 and page.orbit_list.picked == int(d["orbit"][0])
         page.orbit_list.undo()
         page.orbit_list.undo()
-        assert page.readout.text.text == "" and page.readout.readouts == {}
+        assert page.orbit_list.text.text == "" and page.orbit_list.readouts == {}
     finally:
         page.close()
 
@@ -1757,7 +1765,7 @@ def test_picking_a_hyperbolic_fixed_point_draws_its_grown_stable_and_unstable_ma
         _poll_until(page, lambda: "hyperbolic" in page.overlays.fixed.data["kind"], timeout=120)
         k = page.overlays.fixed.data["kind"].index("hyperbolic")
         saddle = (page.overlays.fixed.data["p1"][k], page.overlays.fixed.data["p2"][k])
-        assert page.readout.pick(saddle[0] + 1e-9, saddle[1]) is None          # a mark, not an orbit
+        assert page.orbit_list.pick(saddle[0] + 1e-9, saddle[1]) is None          # a mark, not an orbit
         _poll_until(page, lambda: len(page.overlays.manifold_source.data["xs"]) == 4, timeout=120)
         m = page.overlays.manifold_source.data
         ref = manifolds(page.settings.params, page.settings.h, saddle, arclength=MANIFOLD_ARCLENGTH)

@@ -101,8 +101,8 @@ def test_choosing_an_orbit_selects_it_as_a_pick_does_and_a_pick_marks_its_row():
         lst = page.orbit_list
         assert lst.filter.args == {"orbit": 0} and lst.hide_button.disabled       # nothing selected yet
         lst.choice.value = two                                                    # chosen in the list
-        assert page.readout.picked == two and "orbit 2 from (1.3, 0.05)" in page.readout.text.text
-        _poll_until(page, lambda: two in page.readout.readouts and "rotation number" in page.readout.text.text)
+        assert page.orbit_list.picked == two and "orbit 2 from (1.3, 0.05)" in page.orbit_list.text.text
+        _poll_until(page, lambda: two in page.orbit_list.readouts and "rotation number" in page.orbit_list.text.text)
         # the highlight: the browser's filter keeps exactly this orbit's rows of the drawn dots
         assert lst.filter.args == {"orbit": two} and lst.marks.data_source is page.orbits.shown
         kept = np.asarray(page.orbits.shown.data["orbit"]) == lst.filter.args["orbit"]
@@ -110,17 +110,17 @@ def test_choosing_an_orbit_selects_it_as_a_pick_does_and_a_pick_marks_its_row():
         assert lst.marks.glyph.size > page.orbits.points.glyph.size                      # larger, outlined
         assert SELECTED_BACKGROUND in _table(page)[two][0] and SELECTED_BACKGROUND not in _table(page)[one][0]
         assert not lst.hide_button.disabled and not lst.delete_button.disabled
-        shown_by_list = page.readout.text.text
+        shown_by_list = page.orbit_list.text.text
         # a pick (Shift + click) of the other orbit: the list follows it
         d = page.orbits.crossings.data
         k = int(np.flatnonzero(np.asarray(d["orbit"]) == one)[5])
-        assert page.readout.pick(float(d["p1"][k]), float(d["p2"][k])) == one
+        assert page.orbit_list.pick(float(d["p1"][k]), float(d["p2"][k])) == one
         assert lst.choice.value == one and lst.filter.args == {"orbit": one}
         assert SELECTED_BACKGROUND in _table(page)[one][0] and SELECTED_BACKGROUND not in _table(page)[two][0]
         lst.choice.value = two                                                    # back: the same readout, at once
-        assert page.readout.text.text == shown_by_list
+        assert page.orbit_list.text.text == shown_by_list
         lst.choice.value = 0                                                      # none
-        assert page.readout.picked is None and page.readout.text.text == "" and lst.filter.args == {"orbit": 0}
+        assert page.orbit_list.picked is None and page.orbit_list.text.text == "" and lst.filter.args == {"orbit": 0}
     finally:
         page.close()
 
@@ -144,7 +144,7 @@ def test_a_hidden_orbit_leaves_every_drawn_source_keeps_computing_and_comes_back
         assert _drawn(page, first) == 0 and len(_rows(page, first)) == 0         # its later rows: hidden too
         assert set(np.asarray(page.orbits.shown.data["orbit"]).tolist()) == {second}
         assert _table(page)[first][1][3:] == [str(LONG), "done, hidden"]         # it went on computing
-        assert page.readout.pick(*a) != first                                             # not pickable while hidden
+        assert page.orbit_list.pick(*a) != first                                             # not pickable while hidden
         view = page.exports.view()                                                # the figures: the view ...
         assert [o[0] for o in view.orbits] == [second] and len(view.starts) == 1
         assert len(tomllib.loads(page.exports.scene_text())["seeds"]["points"]) == 2   # ... the scene: the session
@@ -176,9 +176,9 @@ def test_delete_removes_one_orbit_from_the_page_the_session_and_the_link():
         one, two, three = (i for i, *_ in page.orbits.starts)
         page.orbit_list.choice.value = two
         assert not page.orbit_list.delete_button.disabled
-        page.orbit_list.delete(page.readout.picked)                                       # what *delete* does
+        page.orbit_list.delete(page.orbit_list.picked)                                       # what *delete* does
         assert [i for i, *_ in page.orbits.starts] == [one, three] and _drawn(page, two) == 0
-        assert list(_table(page)) == [one, three] and page.readout.picked is None
+        assert list(_table(page)) == [one, three] and page.orbit_list.picked is None
         assert parse_starts(page.url_query()["orbits"]) == [starts[0], starts[2]]
         assert "2 orbit(s)" in page.orbits.status.text
         page.orbit_list.undo()                                                               # Undo: still the newest

@@ -1,5 +1,5 @@
 """`explorer serve --system module:attribute`: the page of a System's section map (docs/commands/serve.md,
-"Your own system"), through the page's protocol (src/explorer/app/serve/maps.py, system_page.py).
+"Your own system"), through the page's protocol (src/explorer/app/serve/settings.py, system_page.py).
 Hénon–Heiles of tests/systems.py (its modules are those the other tests compile)."""
 from __future__ import annotations
 

@@ -63,22 +63,10 @@ COMMAND = Command("serve", HELP, "figure4 --mu 0.03", (add_options,), fields={"p
 
 def page_from_args(args) -> tuple:
     """(settings, label, seeds) the page starts from: a System's section map, else Chaplygin's model."""
-    from explorer.app.serve.settings import seeds_for, settings_for
-    from explorer.io.scene import load_scene
-    from explorer.io.scene.system import SystemScene
+    from explorer.app.serve.system_page import page_settings
 
-    scene = args.scene if args.scene is None else load_scene(args.scene, system=args.system)
-    if args.system is not None or isinstance(scene, SystemScene):
-        from explorer.app.serve.system_page import system_page
-
-        chaplygin = [n for n in (*model.PARAM_NAMES, "method", "dt") if getattr(args, n) is not None]
-        if chaplygin:
-            raise ParameterError(f"--{chaplygin[0]} belongs to Chaplygin's model; a System's page takes --h (its "
-                                 "energy), --tol and --crossings")
-        return system_page(args.system, scene, args.panel, energy=args.h, tol=args.tol, crossings=args.crossings)
-    overrides = {n: getattr(args, n) for n in (*model.PARAM_NAMES, "h", "method", "tol", "dt", "crossings")
-                 if getattr(args, n) is not None}
-    return (*settings_for(scene, args.panel, **overrides), seeds_for(scene))
+    names = (*model.PARAM_NAMES, "h", "method", "tol", "dt", "crossings")
+    return page_settings(args.scene, args.system, args.panel, flag="--", **{n: getattr(args, n) for n in names})
 
 
 def run(args, open_browser: bool = False) -> int:

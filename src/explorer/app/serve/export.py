@@ -1,10 +1,16 @@
-"""A browser session as a scene that ``explorer sweep`` reruns (docs/scenes.md), its store (docs/store.md)
-and its figure files: written only into ``--export-dir``, under names made here, atomically."""
+"""The page's exports: the session as a scene that ``explorer sweep`` reruns (docs/scenes.md) and its
+store (docs/store.md), every orbit; the view as PNG/SVG (:mod:`explorer.app.serve.image`), hidden orbits
+left out.  Files go only into ``--export-dir``, under names made here, atomically."""
 from __future__ import annotations
 
+import io
+import math
 import os
 import time
 
+import numpy as np
+
+from explorer.app.serve.orbits import COLORS
 from explorer.app.serve.settings import Settings
 from explorer.io import scene as scene_mod
 from explorer.model import ParameterError
@@ -69,3 +75,100 @@ def write_store(scene_path) -> str:
     out = os.path.splitext(os.fspath(scene_path))[0] + ".h5"
     run_sweep(os.fspath(scene_path), out, draw=False, progress=False)
     return out
+
+
+def _why(exc: BaseException) -> str:
+    return f"{type(exc).__name__}: {' '.join(str(exc).split())}"
+
+
+class Exports:
+    """Scene and figure exports of a page (``host``: its settings, components and message line)."""
+
+    def __init__(self, host, session, export_dir=None, label: str = ""):
+        self.host, self.session, self.export_dir, self.label = host, session, export_dir, label
+
+    def scene(self) -> scene_mod.Scene:
+        starts = [(a, b) for _i, a, b, _c in self.host.orbits.starts]
+        return session_scene(self.host.settings, starts, overlays=self.host.overlays_on())
+
+    def scene_text(self) -> str:
+        return self.scene().to_toml()
+
+    def scene_file(self):
+        try:
+            return io.StringIO(self.scene_text())
+        except ParameterError as exc:
+            self.host.say(str(exc))
+            return io.StringIO("")
+
+    def view(self):
+        """What the page shows now, hidden orbits left out, copied (drawn in any thread)."""
+        from explorer.app.serve.image import View
+
+        host = self.host
+        orbits, ov = host.orbits, host.overlays
+        d = orbits.crossings.data
+        orbit = np.asarray(d["orbit"])
+        p = np.column_stack([np.asarray(d["p1"], float), np.asarray(d["p2"], float)])
+        visible = [s for s in orbits.starts if s[0] not in orbits.hidden]
+        shown = [(i, COLORS[c], p[orbit == i], orbits.indicators.get(i, (math.nan,))[0]) for i, _a, _b, c in visible]
+        w = host.section.window
+        r = host.chaos.raster_source.data
+        raster = None
+        if len(r["image"]):
+            x, y = r["x"][0], r["y"][0]
+            raster = (np.array(r["image"][0], float), (x, x + r["dw"][0], y, y + r["dh"][0]))
+        f, q, m = ov.fixed.data, ov.periodic.data, ov.manifold_source.data
+        s = host.settings
+        return View(window=(w.x0, w.x1, w.y0, w.y1) if w is not None else (-1.0, 1.0, -1.0, 1.0), region=s.region,
+                    region_mask=s.region_mask(), orbits=shown, axes=s.axes,
+                    starts=[(a, b, COLORS[c]) for _i, a, b, c in visible], raster=raster,
+                    raster_scale=host.chaos.scale(),
+                    fixed=[(a, b, k == "elliptic") for a, b, k in zip(f["p1"], f["p2"], f["kind"])],
+                    separatrices=[np.column_stack([x, y]) for x, y in zip(ov.curves.data["xs"], ov.curves.data["ys"])],
+                    manifolds=[(k, np.column_stack([x, y])) for k, x, y in zip(m["kind"], m["xs"], m["ys"])],
+                    periodic=[(a, b, k, e == "elliptic") for a, b, k, e in zip(q["p1"], q["p2"], q["period"],
+                                                                               q["kind"])],
+                    by_megno=bool(orbits.colour_box.value),
+                    title=s.describe() + (f" ({self.label})" if self.label else ""))
+
+    def figure_bytes(self, fmt: str) -> bytes:
+        """The page's view as a PNG or SVG file (the *Figure* downloads)."""
+        from explorer.app.serve.image import render
+
+        return render(self.view(), fmt)
+
+    def figure_file(self, fmt):
+        try:
+            return io.BytesIO(self.figure_bytes(fmt))
+        except Exception as exc:  # noqa: BLE001 - reported in the page; the download is empty
+            self.host.say(f"figure failed: {_why(exc)}")
+            return io.BytesIO(b"")
+
+    def export_figure(self) -> None:
+        """Write the page's view as PNG and SVG into the export directory (drawn by a task)."""
+        self.host.say("writing the figure ...", ok=True)
+        self.session.start("figure", self._write(write_figure, (self.export_dir, self.view()), "figure export",
+                                                 lambda paths: "figure written: " + " and ".join(
+                                                     map(os.path.basename, paths))))
+
+    def export(self) -> str | None:
+        """Write the session's scene into the export directory (its store follows in a task); returns its path."""
+        try:
+            path = write_scene(self.export_dir, self.scene())
+        except (ParameterError, OSError) as exc:
+            self.host.say(f"export failed: {exc}")
+            return None
+        name = os.path.basename(path)
+        self.host.say(f"scene written: {name} (rerun: explorer sweep {name}); writing the orbits' store ...", ok=True)
+        self.session.start("store", self._write(write_store, (path,), "store export", lambda out: (
+            f"written: {name} and {os.path.basename(out)} (the orbits, sweep format)")))
+        return path
+
+    async def _write(self, fn, args, what: str, said):
+        """``fn(*args)`` off the loop, then ``said(result)`` (or why ``what`` failed) on the message line."""
+        try:
+            text, ok = said(await self.session.run(fn, *args)), True
+        except Exception as exc:  # noqa: BLE001 - reported in the page
+            text, ok = f"{what} failed: {_why(exc)}", False
+        await self.session.apply(lambda: self.host.say(text, ok))

@@ -5,8 +5,6 @@ from __future__ import annotations
 import panel as pn
 
 from explorer.app.serve.page import SectionPage
-from explorer.app.serve.settings import seeds_for, settings_for
-from explorer.model import ParameterError
 
 #: how often the page's loop runs and the notebook is pushed (ms)
 POLL_MS = 50
@@ -54,20 +52,8 @@ def explore(scene=None, *, panel: int = 0, export_dir=None, h: float | None = No
     ``export_dir``: where *Export scene* writes.  ``scene`` a System's section map or scene: its page,
     ``h`` its energy (docs/commands/serve.md, "Your own system").
     """
-    given: dict[str, object] = {"a1": a1, "a2": a2, "b": b, "lam": lam, "chi": chi, "zeta": zeta, "mu": mu, "xi": xi,
-                                "eta": eta, "h": h, "method": method, "tol": tol, "dt": dt, "crossings": n_crossings}
-    from explorer.analysis.system_sections import is_system_map
-    from explorer.io.scene import SystemScene, load_scene
+    from explorer.app.serve.system_page import page_settings
 
-    sc = scene if scene is None or is_system_map(scene) else load_scene(scene)
-    if is_system_map(sc) or isinstance(sc, SystemScene):
-        from explorer.app.serve.system_page import system_page
-
-        wrong = [k for k, v in given.items() if v is not None and k not in ("h", "tol", "crossings")]
-        if wrong:
-            raise ParameterError(f"{wrong[0]} belongs to Chaplygin's model; a System's page takes h, tol, n_crossings")
-        base, label, seeds = system_page(sc if is_system_map(sc) else None, None if is_system_map(sc) else sc, panel,
-                                         energy=h, tol=tol, crossings=n_crossings)
-        return Explorer(SectionPage(base, {}, export_dir=export_dir, label=label, seeds=seeds))
-    base, label = settings_for(sc, panel, **{k: v for k, v in given.items() if v is not None})
-    return Explorer(SectionPage(base, {}, export_dir=export_dir, label=label, seeds=seeds_for(sc)))
+    base, label, seeds = page_settings(scene, None, panel, a1=a1, a2=a2, b=b, lam=lam, chi=chi, zeta=zeta, mu=mu,
+                                       xi=xi, eta=eta, h=h, method=method, tol=tol, dt=dt, crossings=n_crossings)
+    return Explorer(SectionPage(base, {}, export_dir=export_dir, label=label, seeds=seeds))

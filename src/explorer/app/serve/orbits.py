@@ -54,7 +54,7 @@ class OrbitRun:
     ident: int
     p1: float
     p2: float
-    settings: Any                  # the page's settings (explorer.app.serve.maps)
+    settings: Any                  # the page's settings (explorer.app.serve.settings)
     y0: np.ndarray = field(init=False)
     state: sections.StreamState = field(init=False)
     block: int = FIRST_BLOCK

@@ -63,7 +63,7 @@ def describe_points(points) -> str:
 
 def fixed_points(view) -> tuple:
     """(points, message): the distinct fixed points of :func:`_fixed_points_from` p = 0; ``view``: the
-    page's settings (:mod:`explorer.app.serve.maps`)."""
+    page's settings (:class:`~explorer.app.serve.settings.Settings`)."""
     if view.region is None:
         return [], "fixed points: the region is empty"
     from explorer.analysis.budget import BudgetExceeded

@@ -17,14 +17,13 @@ from urllib.parse import parse_qsl, urlencode, urlsplit
 import panel as pn
 import param
 from bokeh.events import ConnectionLost, DoubleTap, PressUp, Tap
+from bokeh.models import Div
 
 from explorer.app.serve import export
 from explorer.app.serve import raster as raster_mod
 from explorer.app.serve import settings as settings_mod
-from explorer.app.serve.page_exports import Exports
 from explorer.app.serve.page_fields import LABELS, Fields  # noqa: F401
 from explorer.app.serve.page_layers import ChaosLayer, DensityImage
-from explorer.app.serve.page_message import Message
 from explorer.app.serve.page_orbit_list import OrbitList
 from explorer.app.serve.page_orbits import (  # noqa: F401  (the page's constants)
     FLUSH_SECONDS,
@@ -34,7 +33,6 @@ from explorer.app.serve.page_orbits import (  # noqa: F401  (the page's constant
     OrbitsLayer,
 )
 from explorer.app.serve.page_overlays import Overlays
-from explorer.app.serve.page_readout import Readout
 from explorer.app.serve.settings import TOKEN_ARG, Settings, format_window
 from explorer.app.serve.style import (
     FIGURE_CHROME_PX,
@@ -42,6 +40,8 @@ from explorer.app.serve.style import (
     FIGURE_MIN_WIDTH,
     FIGURE_SIDES_PX,
     FIGURE_WIDTH,
+    MESSAGE_ERROR_COLOR,
+    MESSAGE_OK_COLOR,
 )
 from explorer.app.serve.tasks import Session
 from explorer.app.serve.view import SectionView
@@ -145,8 +145,9 @@ class SectionPage:
         self.base = self.settings = base
         self.seeds, self.export_dir, self.label = seeds, export_dir, label
         self.session = Session(doc)
-        self.messages = Message()
-        self.message, self.say, self.tell = self.messages.message, self.messages.say, self.messages.tell
+        # the message line under the figure: text, never HTML (a message may quote a field)
+        self.message = Div(name="message", text="", render_as_text=True,
+                           styles={"color": MESSAGE_ERROR_COLOR, "min-height": "1.2em"})
         self.url_state = UrlState.of(base.field_names)
         self.section = SectionView()
         self.section.set_axes(*base.axes)
@@ -155,9 +156,9 @@ class SectionPage:
         self.chaos = ChaosLayer(self, self.section, self.session, raster_mod.resolutions_up_to(megno_resolution),
                                 megno_time)
         self.overlays = Overlays(self, self.section, self.session)
-        self.readout = Readout(self, self.section, self.orbits, self.overlays, self.session)
-        self.orbit_list = OrbitList(self.orbits, self.readout, self.session, on_changed=self.push_url)
-        self.exports = Exports(self, self.session, export_dir, label)
+        self.orbit_list = OrbitList(self.orbits, self.overlays, self.section, self.session, lambda: self.settings,
+                                    self.say, on_changed=self.push_url)
+        self.exports = export.Exports(self, self.session, export_dir, label)
         self._url_timer = self.session.timer(self.push_url)
         self.section.on_window(lambda: self._url_timer.at(time.monotonic() + URL_DELAY_SECONDS))
         fig = self.section.figure
@@ -209,7 +210,7 @@ class SectionPage:
         controls = pn.Column(pn.pane.Markdown("a click (Shift + click: pick):", margin=(0, 5)), self.click_mode,
                              o.pause_box, self.fields.grid, o.colour_box, self.chaos.layer, self.chaos.indicator,
                              ov.overlay, ov.periodic_box, o.starts_box, width=230)
-        texts = (o.status, self.readout.text, self.message, self.overlays.text)
+        texts = (o.status, self.orbit_list.text, self.message, self.overlays.text)
         for div in texts:
             div.sizing_mode = "stretch_width"
         bar = pn.FlexBox(*buttons, flex_wrap="wrap", sizing_mode="stretch_width")
@@ -222,6 +223,13 @@ class SectionPage:
                                                                          sizing_mode="stretch_width"),
                                                  *(pn.pane.Bokeh(d) for d in texts), sizing_mode="stretch_width"),
                              sizing_mode="stretch_width")
+
+    def say(self, text: str, ok: bool = False) -> None:
+        """``text`` on the message line, in the error colour or (``ok``) the success colour."""
+        color = MESSAGE_OK_COLOR if ok else MESSAGE_ERROR_COLOR
+        if self.message.styles.get("color") != color:
+            self.message.styles = {**self.message.styles, "color": color}
+        self.message.text = text
 
     def close(self) -> None:
         """Stop the session's work (the browser tab is gone)."""
@@ -354,7 +362,7 @@ class SectionPage:
     # ------------------------------------------------------------ orbits
     def _drop_orbits(self) -> list:
         """Stop every orbit and take them off the page; returns their starts."""
-        self.readout.forget()
+        self.orbit_list.forget()
         old = self.orbits.drop_all()
         self.density_image.refresh(force=True)       # no image left of them
         return old
@@ -377,7 +385,7 @@ class SectionPage:
             why = settings_mod.room_for(len(self.orbits.starts) + 1, self.settings.crossings)
             self.say(f"scene seeds: {n} of {len(starts)} started ({why})")
         else:
-            self.tell(f"scene seeds: {n} orbits started")
+            self.say(f"scene seeds: {n} orbits started", ok=True)
         self.push_url()
         return n
 
@@ -414,7 +422,7 @@ class SectionPage:
             return
         shift = bool((getattr(event, "modifiers", None) or {}).get("shift"))
         if shift or self.click_mode.value == CLICK_MODES[1]:
-            self.readout.pick(float(event.x), float(event.y))
+            self.orbit_list.pick(float(event.x), float(event.y))
         else:
             self.click(float(event.x), float(event.y))
 

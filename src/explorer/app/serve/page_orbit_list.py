@@ -1,16 +1,24 @@
-"""The page's orbit list (docs/commands/serve.md): a table of every orbit, a chooser, *hide*/*show* and
-*delete*; it writes the link's ``orbits`` and ``hidden``.  One Div's table: up to 256 orbits."""
+"""The page's orbit list and the picked orbit (docs/commands/serve.md): a table of every orbit, a
+chooser, *hide*/*show* and *delete*, the link's ``orbits`` and ``hidden`` (one Div's table: up to 256
+orbits); the picked orbit's readout, its mLCE, MEGNO and rotation number (a task under a budget), or
+near a hyperbolic mark that mark's manifolds."""
 from __future__ import annotations
 
 import html
+import math
 
+import numpy as np
 import panel as pn
 from bokeh.models import CDSView, CustomJSFilter, Div
 
+from explorer.app.serve import overlays as search
 from explorer.app.serve import settings as settings_mod
-from explorer.app.serve.orbits import COLORS
-from explorer.app.serve.style import LIST_WIDTH
+from explorer.app.serve.orbits import COLORS, INDICATOR_TIME
+from explorer.app.serve.style import LIST_WIDTH, megno_kind
 from explorer.model import ParameterError
+
+#: a pick selects the orbit with a crossing within this many pixels of the click
+PICK_PX = 6.0
 
 #: the chooser's entry for "no orbit selected" (orbit ids start at 1)
 NONE_LABEL = "(none)"
@@ -35,10 +43,16 @@ COLUMNS = (("", "the orbit's colour on the section"), ("orbit", "its id (choose 
 
 
 class OrbitList:
-    """The list; ``on_changed()`` after a hide, show, delete or clear (the page's link)."""
+    """The list and the picked orbit (``picked``, its readout ``text``, the ``readouts`` computed so far);
+    ``settings()``: the page's, ``say(text)``: its message line, ``on_changed()`` after a hide, show,
+    delete or clear (the page's link)."""
 
-    def __init__(self, orbits, readout, session, on_changed):
-        self.orbits, self.readout, self.on_changed = orbits, readout, on_changed
+    def __init__(self, orbits, overlays, view, session, settings, say, on_changed):
+        self.orbits, self.overlays, self.view, self.session = orbits, overlays, view, session
+        self.settings, self.say, self.on_changed = settings, say, on_changed
+        self.text = Div(name="readout", text="", render_as_text=True, styles={"font-family": "monospace"})
+        self.picked: int | None = None          # the orbit whose readout is shown
+        self.readouts: dict = {}                # orbit id -> orbit_readout(...) of a picked orbit
         self._quiet = False
         self._idents: tuple = ()
         self.filter: CustomJSFilter | None = None
@@ -49,12 +63,11 @@ class OrbitList:
         self.hide_button = pn.widgets.Button(label="hide", width=50, disabled=True, align="end")
         self.hide_button.on_click(lambda _e: session.soon(self.toggle))
         self.delete_button = pn.widgets.Button(label="delete", width=50, disabled=True, align="end")
-        self.delete_button.on_click(lambda _e: session.soon(lambda: self.delete(self.readout.picked)))
+        self.delete_button.on_click(lambda _e: session.soon(lambda: self.delete(self.picked)))
         self.panel = pn.Column(pn.Row(self.choice, self.hide_button, self.delete_button), pn.pane.Bokeh(self.table),
                                pn.pane.HTML(LEGEND, width=LIST_WIDTH, styles={"font-size": "11px", "color": "#444"}),
                                width=LIST_WIDTH)
         orbits.on_change(self.refresh)
-        readout.on_select(lambda _ident: self.refresh())
 
     def draw(self, fig) -> None:
         """The selected orbit's markers (call after OrbitsLayer.draw), filtered from the browser's rows."""
@@ -67,13 +80,13 @@ class OrbitList:
     def choose(self, ident) -> None:
         """Select orbit ``ident`` (0 or None: none), as a pick of it does: its readout and highlight."""
         if ident and any(i == ident for i, *_ in self.orbits.starts):
-            self.readout.select(int(ident))
-        elif self.readout.picked is not None:
-            self.readout.unpick()
+            self.select(int(ident))
+        elif self.picked is not None:
+            self.unpick()
 
     def toggle(self, ident: int | None = None) -> None:
         """Hide orbit ``ident`` (None: the selected one), or show it again if hidden."""
-        ident = self.readout.picked if ident is None else ident
+        ident = self.picked if ident is None else ident
         if ident is None:
             return
         if ident in self.orbits.hidden:
@@ -85,7 +98,7 @@ class OrbitList:
 
     def clear(self) -> None:
         """Remove every orbit (running and paused ones stopped)."""
-        self.readout.forget()
+        self.forget()
         self.orbits.drop_all()
         self.orbits.update_status(force_density=True)
         self.on_changed()
@@ -105,7 +118,7 @@ class OrbitList:
         """Stop orbit ``ident`` (running or paused) and remove it from the page and the session."""
         if ident is None or not any(i == ident for i, *_ in self.orbits.starts):
             return
-        self.readout.forget(ident)
+        self.forget(ident)
         self.orbits.remove(ident)
         self.orbits.update_status()
         self.on_changed()
@@ -117,7 +130,7 @@ class OrbitList:
             positions = settings_mod.parse_hidden(hidden, len(starts))
         except ParameterError as exc:
             positions = set()
-            self.orbits.host.say(f"link's hidden ignored: {exc}")
+            self.say(f"link's hidden ignored: {exc}")
         for k, (p1, p2) in enumerate(starts, 1):
             run = self.orbits.start(p1, p2)
             if run is not None and k in positions:
@@ -138,7 +151,7 @@ class OrbitList:
 
     def refresh(self) -> None:
         """The table, the chooser and the highlight anew (after a status update or a selection)."""
-        rows, picked = self.rows(), self.readout.picked
+        rows, picked = self.rows(), self.picked
         idents = tuple(r[0] for r in rows)
         self._quiet = True
         try:
@@ -158,6 +171,96 @@ class OrbitList:
         text = _table(rows, picked)
         if self.table.text != text:
             self.table.text = text
+
+    # ------------------------------------------------------------ the picked orbit
+    def _picked(self, ident) -> None:
+        self.picked = ident
+        self.refresh()
+
+    def pick(self, p1: float, p2: float, radius_px: float = PICK_PX) -> int | None:
+        """A pick at (p1, p2): near a hyperbolic mark its manifolds (None), else selects the orbit with the
+        nearest crossing within ``radius_px`` pixels and returns its id."""
+        finite = math.isfinite(p1) and math.isfinite(p2)
+        saddle = self.overlays.saddle_near(p1, p2, radius_px) if finite else None
+        if saddle is not None:
+            self.overlays.show_manifolds(*saddle)
+            return None
+        d = self.orbits.crossings.data
+        if not finite or not len(d["orbit"]):
+            self.say("pick: no orbit on the page yet")
+            return None
+        px, py = self.view.pixel()
+        dist = np.hypot((np.asarray(d["p1"]) - p1) / (px or 1.0), (np.asarray(d["p2"]) - p2) / (py or 1.0))
+        k = int(np.argmin(dist))
+        if not dist[k] <= radius_px:
+            self.say(f"pick: no crossing within {radius_px:g} pixels of ({p1:.4g}, {p2:.4g})")
+            return None
+        ident = int(np.asarray(d["orbit"])[k])
+        self.select(ident)
+        return ident
+
+    def select(self, ident: int) -> None:
+        """Show orbit ``ident``'s readout (computed once per orbit and settings, the latest pick)."""
+        start = next(((a, b) for i, a, b, _c in self.orbits.starts if i == ident), None)
+        if start is None:
+            return
+        self._picked(ident)
+        self.say("")
+        if ident in self.readouts:
+            self.session.cancel("readout")
+            self._show(ident, self.readouts[ident])
+            return
+        self.text.text = f"orbit {ident} from ({start[0]:.6g}, {start[1]:.6g}): computing mLCE, MEGNO, rotation ..."
+        self.session.start("readout", self._compute(ident, start, self.settings()),
+                           budget=search.search_budget(search.READOUT_SECONDS))
+
+    def unpick(self) -> None:
+        """No orbit picked (its readout stays known: picked again, it shows at once)."""
+        self.session.cancel("readout")
+        self.text.text = ""
+        self._picked(None)
+
+    def forget(self, ident: int | None = None) -> None:
+        """Drop the readout of orbit ``ident`` (None: of every orbit) and stop computing it."""
+        if ident is None:
+            self.readouts = {}
+        else:
+            self.readouts.pop(ident, None)
+        if ident is None or self.picked == ident:
+            self.unpick()
+
+    async def _compute(self, ident, start, settings):
+        try:
+            r = await self.session.run(search.orbit_readout, settings, start)
+        except Exception as exc:  # noqa: BLE001 - reported in the page
+            r = {"error": f"{type(exc).__name__}: {' '.join(str(exc).split())}"}
+        r["start"] = start
+        await self.session.apply(lambda: self._keep(ident, r))
+
+    def _keep(self, ident, r):
+        if not any(i == ident for i, *_ in self.orbits.starts):
+            return                           # the orbit went meanwhile
+        self.readouts[ident] = r
+        self._show(ident, r)
+
+    def _show(self, ident, r):
+        p1, p2 = r["start"]
+        head = f"orbit {ident} from ({p1:.6g}, {p2:.6g}): "
+        if "error" in r:
+            self.text.text = head + f"failed: {r['error']}"
+            return
+        text = (head + f"mLCE = {r['mlce']:.4g}, <Y> = {r['megno']:.4g} over t <= {INDICATOR_TIME:g}"
+                f" ({megno_kind(r['megno'])})")
+        rot, fp = r["rotation"], r["center"]
+        if rot is None:
+            text += f"; rotation number: none ({r['rotation_error']})"
+        elif not math.isfinite(rot.value):
+            text += f"; rotation number: none ({rot.status})"
+        else:
+            text += (f"; rotation number {rot.value:.10g} around ({fp.point[0]:.6g}, {fp.point[1]:.6g}) over "
+                     f"{rot.iterates} returns, " + ("converged" if rot.converged else
+                                                        f"not converged (|WB_N - WB_2N| = {rot.difference:.2g})"))
+        self.text.text = text
 
 
 def _table(rows, picked) -> str:

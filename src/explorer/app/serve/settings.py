@@ -9,7 +9,6 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis import sections
-from explorer.app.serve.maps import ChaplyginPage
 from explorer.model import ParameterError, validation
 
 #: the model parameters the page has a field for: mu (the one most often changed) first
@@ -41,14 +40,26 @@ TOKEN_ARG = "token"
 MAX_LINK_CHARS = 100_000
 
 
+def megno_of(res, shape, mlce: bool):
+    """<Y> (and the mLCE with ``mlce``) of the Indicators ``res`` in ``shape``, NaN where a run stopped early."""
+    def of(values):
+        return np.where(np.asarray(res.status) == 0, np.asarray(values, dtype=np.float64), np.nan).reshape(shape)
+    return (of(res.megno), of(res.mlce)) if mlce else of(res.megno)
+
+
 @dataclass(frozen=True)
-class Settings(ChaplyginPage, sections.Integration):
+class Settings(sections.Integration):
     """What determines a clicked orbit's crossings, bit for bit those of ``explorer orbit`` with the same
-    values: an :class:`~explorer.analysis.sections.Integration` plus ``params``, ``h`` and ``crossings``."""
+    values: an :class:`~explorer.analysis.sections.Integration` plus ``params``, ``h`` and ``crossings``.
+    What the page asks of its section (docs/commands/serve.md, "Your own system") is implemented here
+    and by :class:`~explorer.app.serve.system_page.SystemSettings`."""
 
     params: model.Params = model.FIGURE4
     h: float = model.FIGURE4_H
     crossings: int = DEFAULT_CROSSINGS
+
+    scene_export = True            # the session exports as a scene that `explorer sweep` reruns
+    axes = ("p1", "p2")
 
     def __post_init__(self):
         super().__post_init__()
@@ -77,6 +88,52 @@ class Settings(ChaplyginPage, sections.Integration):
     def admissible(self, p1: float, p2: float) -> bool:
         """(p1, p2) lies in the allowed region (M^2 >= 0, docs/model.md R9)."""
         return bool(model.section_M2(self.params, p1, p2, self.h, self.phi0) >= 0.0)
+
+    def allowed(self, p1, p2) -> np.ndarray:
+        """Mask of the points strictly inside the allowed region (M^2 > 0)."""
+        return model.section_M2(self.params, p1, p2, self.h, self.phi0) > 0.0
+
+    def region_mask(self):
+        """None: the region is the ellipse :attr:`region` (docs/model.md R9)."""
+        return None
+
+    def refusal(self, p1: float, p2: float) -> str | None:
+        """Why a click at (p1, p2) starts no orbit (None: it does)."""
+        if self.admissible(p1, p2):
+            return None
+        return f"({p1:.4g}, {p2:.4g}) is outside the allowed region (M^2 < 0 there): click in the white ellipse"
+
+    def describe(self) -> str:
+        return f"mu = {self.params.mu:g}, h = {self.h:g}, {self.method}"
+
+    def title(self) -> str:
+        return f"Poincaré section φ = {'π' if self.phi0 == math.pi else f'{self.phi0:.6g}'}"
+
+    def empty_region(self) -> str:
+        return f"the allowed region is empty at h = {self.h:g} (h is below the minimum of the energy on the section)"
+
+    def section_map(self, tol=None):
+        """The section map the page's searches ask (fixed points, manifolds, rotation numbers)."""
+        from explorer.analysis.section_map import DEFAULT_TOL, SectionMap
+
+        return SectionMap(self.params, self.h, phi0=self.phi0, tol=DEFAULT_TOL if tol is None else tol)
+
+    def megno(self, p1, p2, time: float, max_steps: int, mlce: bool = False):
+        """<Y>(time) (and the mLCE with ``mlce``) of the orbits from (p1, p2), NaN where a run stops early."""
+        from explorer.analysis import lyapunov
+
+        if not self.adaptive and time / self.dt > max_steps:
+            nan = np.full(np.shape(p1), np.nan)
+            return (nan, nan) if mlce else nan
+        y0 = model.section_state(self.params, p1, p2, self.h, self.phi0, self.direction or 1)
+        return megno_of(lyapunov.indicators(self.params, states=y0, tmax=time, method=self.method, tol=self.tol,
+                                            dt=self.dt, which=("megno", "mlce") if mlce else ("megno",),
+                                            max_steps=max_steps), np.shape(p1), mlce)
+
+    def new_run(self, ident: int, p1: float, p2: float):
+        from explorer.app.serve.orbits import OrbitRun
+
+        return OrbitRun(ident, p1, p2, self)
 
     def fields(self) -> dict:
         """The page's fields as text (``repr`` of each float: read back, the same number)."""
@@ -180,28 +237,30 @@ def _whole(name: str, text) -> int:
     return validation.integer(name, text)
 
 
+def read_fields(names, fields: dict, numbers=()) -> dict:
+    """{name: value} of the page's ``fields`` ({name: text}) among ``names``, each validated (ParameterError
+    naming it); ``numbers``: the names read as plain numbers (a System's parameters)."""
+    out: dict = {}
+    for name, text in fields.items():
+        if name not in names:
+            raise ParameterError(f"unknown field {str(name)[:MAX_FIELD_CHARS]!r}; one of {', '.join(names)}")
+        if name in numbers:
+            out[name] = _number(name, text)
+        elif name == "method":
+            out[name] = validation.choice("method", str(text).strip(), sections.METHODS)
+        elif name == "crossings":
+            out[name] = validation.integer("crossings", _whole("crossings", text), 1, MAX_CROSSINGS)
+        else:
+            out[name] = (_angle if name == "phi0" else _number)(name, text)
+    return out
+
+
 def parse_fields(base: Settings, fields: dict) -> Settings:
     """``base`` with the page's ``fields`` ({name: text}) applied, each validated (ParameterError naming it)."""
-    params: dict[str, float] = {}
-    other: dict[str, object] = {}
-    h = base.h
-    for name, text in fields.items():
-        if name not in FIELDS:
-            raise ParameterError(f"unknown field {str(name)[:MAX_FIELD_CHARS]!r}; one of {', '.join(FIELDS)}")
-        if name in PAGE_PARAMS:
-            params[name] = _number(name, text)
-        elif name == "h":
-            h = _number("h", text)
-        elif name == "method":
-            other["method"] = validation.choice("method", str(text).strip(), sections.METHODS)
-        elif name == "crossings":
-            other["crossings"] = validation.integer("crossings", _whole("crossings", text), 1, MAX_CROSSINGS)
-        elif name == "phi0":
-            other["phi0"] = _angle("phi0", text)
-        else:
-            other[name] = _number(name, text)
+    values = read_fields(FIELDS, fields)
+    params = {n: values.pop(n) for n in PAGE_PARAMS if n in values}
     prm = base.params.with_(**params) if params else base.params   # Params checks a1, a2, b > 0, lam != 0
-    return replace(base, params=prm, h=h, **other)  # type: ignore[arg-type]
+    return replace(base, params=prm, **values)
 
 
 def parse_link_fields(base: Settings, fields: dict) -> tuple:

@@ -1,5 +1,5 @@
 """The page of a System's section map (docs/commands/serve.md, "Your own system"): the protocol of
-:mod:`explorer.app.serve.maps`, and what ``explorer serve --system`` starts from.  No web library here."""
+:class:`~explorer.app.serve.settings.Settings`, and what ``explorer serve --system`` starts from."""
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
@@ -7,8 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from explorer.app.serve.maps import megno_of
-from explorer.app.serve.settings import MAX_CROSSINGS, MAX_FIELD_CHARS, _number, _whole
+from explorer.app.serve.settings import MAX_CROSSINGS, megno_of, read_fields
 from explorer.model import ParameterError, validation
 
 #: names the page's link keeps for itself: a System parameter may not take one (its field is a link key)
@@ -64,20 +63,12 @@ class SystemSettings:
         return {**d, "tol": repr(float(self.tol)), "crossings": str(self.crossings)}
 
     def with_fields(self, fields: dict) -> SystemSettings:
-        smap, other = self.smap, dict[str, Any]()
-        for name, text in fields.items():
-            if name not in self.field_names:
-                raise ParameterError(f"unknown field {str(name)[:MAX_FIELD_CHARS]!r}; one of "
-                                     f"{', '.join(self.field_names)}")
-            if name == "crossings":
-                other["crossings"] = _whole("crossings", text)
-            elif name == "tol":
-                other["tol"] = _number("tol", text)
-            else:
-                value = _number(name, text)
-                if value != smap.value_of(name):
-                    smap = smap.with_value(name, value)
-        return replace(self, smap=smap, **other)
+        values, smap = read_fields(self.field_names, fields, numbers=self.smap.parameters), self.smap
+        for name in self.smap.parameters:
+            if name in values and values[name] != smap.value_of(name):
+                smap = smap.with_value(name, values[name])
+            values.pop(name, None)
+        return replace(self, smap=smap, **values)
 
     def describe(self) -> str:
         values = ", ".join(f"{n} = {self.smap.value_of(n):g}" for n in self.smap.parameters)
@@ -186,3 +177,26 @@ def system_page(value=None, scene=None, panel: int = 0, **overrides) -> tuple:
         smap = smap.with_value("energy", validation.real("--h", energy))
     s = SystemSettings(smap, **{**base, **{k: v for k, v in overrides.items() if v is not None}})
     return s, label, seeds
+
+
+def page_settings(scene=None, system=None, panel: int = 0, flag: str = "", **values) -> tuple:
+    """(settings, label, seeds) a page starts from: a System's section map (``system``, or ``scene`` a
+    section map or a System's scene), else Chaplygin's model; ``values``: the settings given (None: not
+    given), each named ``flag`` + its name in a refusal."""
+    from explorer.analysis.system_sections import is_system_map
+    from explorer.app.serve.settings import seeds_for, settings_for
+    from explorer.io.scene import SystemScene, load_scene
+
+    values = {k: v for k, v in values.items() if v is not None}
+    if is_system_map(scene):
+        system, scene = scene, None
+    elif scene is not None:
+        scene = load_scene(scene, system=system)
+    if system is None and not isinstance(scene, SystemScene):
+        return (*settings_for(scene, panel, **values), seeds_for(scene))
+    wrong = [k for k in values if k not in ("h", "tol", "crossings")]
+    if wrong:
+        raise ParameterError(f"{flag}{wrong[0]} belongs to Chaplygin's model; a System's page takes {flag}h (its "
+                             f"energy), {flag}tol and {flag}crossings")
+    return system_page(system, scene, panel, energy=values.get("h"), tol=values.get("tol"),
+                       crossings=values.get("crossings"))
