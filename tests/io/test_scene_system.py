@@ -153,3 +153,37 @@ def test_the_panel_hash_follows_the_numbers_not_the_drawing():
     assert parse_scene(SCENE + "[figure]\ndpi = 100\n").panel_hash(0) == base.panel_hash(0)
     assert parse_scene(SCENE.replace("value = 0.125", "value = 0.12")).panel_hash(0) != base.panel_hash(0)
     assert parse_scene(SCENE.replace("direction = 1", "direction = -1")).panel_hash(0) != base.panel_hash(0)
+
+
+ATLAS = SCENE.replace("[seeds]", '[atlas]\nparameter = "energy"\nvalues = [0.0625, 0.125]\n'
+                      '[compute]\nsections = false\nlyapunov = true\n[seeds]')
+
+
+def test_an_atlas_crosses_the_swept_parameter_with_the_energy_cell_by_cell():
+    scene = parse_scene(ATLAS)
+    assert scene.is_atlas and scene.n_cells == 4 and scene.n_panels == 2
+    system, energy, label = scene.cell(1)                     # row 0 (lam = 0.5), column 1
+    (lam,) = system.parameters
+    assert system.parameters[lam] == 0.5 and energy == 0.125 and label == "lam = 0.5, energy = 0.125"
+    system, energy, _ = scene.cell(2)                          # row 1 (lam = 1.0), column 0
+    assert system.parameters[lam] == 1.0 and energy == 0.0625
+    assert scene.cell_map(2).energy_value == 0.0625 and scene.cell_map(2).system.parameters[lam] == 1.0
+    with pytest.raises(IndexError):
+        scene.cell(4)
+    assert parse_scene(ATLAS + "[figure]\ndpi = 100\n").atlas_hash() == scene.atlas_hash()
+    for edit in (("0.0625", "0.0626"), ("[0.5, 1.0]", "[0.5, 0.9]"),
+                 ("[compute]", "[lyapunov]\ntime = 10.0\n[compute]")):
+        assert parse_scene(ATLAS.replace(*edit)).atlas_hash() != scene.atlas_hash(), edit
+
+
+@pytest.mark.parametrize("edit, key", [
+    (("sections = false", "sections = true"), "compute"),
+    (('parameter = "energy"', 'parameter = "lam"'), "atlas.parameter"),
+    (('parameter = "energy"', 'parameter = "mu"'), "atlas.parameter"),
+    (("[0.0625, 0.125]", "[0.0625, 0.0625]"), "atlas.values[1]"),
+    (("lyapunov = true", "lyapunov = true\nseparatrices = true"), "compute.separatrices"),
+    (("[seeds]", "[manifolds]\ndraw = true\n[seeds]"), "manifolds.draw"),
+])
+def test_a_bad_system_atlas_is_refused_naming_the_key(edit, key):
+    with pytest.raises(SceneError, match=key.replace("[", r"\[").replace(".", r"\.")):
+        parse_scene(ATLAS.replace(*edit))
