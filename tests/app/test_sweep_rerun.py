@@ -281,3 +281,55 @@ def test_a_panel_whose_file_was_lost_is_recomputed_alone_and_a_format_1_store_is
     data = store.read_store(old)
     assert data.attrs["format_version"] == store.FORMAT_VERSION and sorted(data.panels) == [0, 1, 2]
     np.testing.assert_array_equal(data.panels[1].crossings, before[1]["crossings"])
+
+
+ADAPTIVE = """
+name = "adaptive"
+[sweep]
+parameter = "mu"
+values = [0.03, 0.01]
+[compute]
+sections = false
+lyapunov = true
+[lyapunov]
+time = 40.0
+map_resolution = 32
+"""
+
+
+def test_an_interrupted_adaptive_map_stores_no_half_panel_and_the_rerun_equals_an_uninterrupted_run(tmp_path,
+                                                                                                 monkeypatch):
+    """docs/scenes.md, "Adaptive maps": a map panel is committed whole (mask beside the values) or
+    not at all; a Ctrl-C in the middle of panel 1's refinement keeps panel 0, and the rerun
+    computes panel 1 alone, to the same numbers as a run that was never interrupted."""
+    from explorer.analysis import sweep
+    from explorer.app.interrupt import Interrupted
+
+    monkeypatch.setattr(sweep, "MAP_COARSE", 4)
+    ref = run(tmp_path, ADAPTIVE, tmp_path / "ref.h5")
+    assert len(ref.map_cells) == 2
+    assert all(0 < done < cells for _label, done, cells in ref.map_cells)
+    assert "map cells computed" in format_report(ref)
+    want = panel_arrays(tmp_path / "ref.h5", ("megno", "map_computed"))
+    for i, (_label, done, cells) in enumerate(ref.map_cells):
+        assert want[i]["map_computed"].sum() == done and len(want[i]["megno"]) == cells
+    calls = []
+    ask = sweep._MapCells.indicators
+
+    def interrupted_in_panel_1(self, y0, **kw):
+        calls.append(self.panel.index)
+        if self.panel.index == 1 and calls.count(1) == 2:   # panel 1's second level
+            raise KeyboardInterrupt
+        return ask(self, y0, **kw)
+
+    monkeypatch.setattr(sweep._MapCells, "indicators", interrupted_in_panel_1)
+    out = tmp_path / "cut.h5"
+    with pytest.raises(Interrupted):
+        run(tmp_path, ADAPTIVE, out)
+    assert sorted(store.panel_product_hashes(out)) == [0]          # panel 1: nothing of it stored
+    monkeypatch.setattr(sweep._MapCells, "indicators", ask)
+    assert run(tmp_path, ADAPTIVE, out).computed == (1,)
+    got = panel_arrays(out, ("megno", "map_computed"))
+    for i in (0, 1):
+        for k in ("megno", "map_computed"):
+            np.testing.assert_array_equal(got[i][k], want[i][k], err_msg=f"panel {i} {k}")

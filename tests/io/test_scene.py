@@ -365,6 +365,20 @@ def test_the_megno_threshold_alone_keeps_panel_hashes():
     assert _hashes(changed) == _hashes(LYAP_SCENE)
 
 
+def test_the_exact_key_and_an_adaptive_maps_threshold_change_its_hashes_an_exact_maps_threshold_does_not():
+    """An adaptive map's computed cells depend on the class threshold (docs/scenes.md): a stored
+    exact panel is never reused as an adaptive one, nor the other way; ``exact`` is refused unless a boolean."""
+    adaptive = LYAP_SCENE + "map_resolution = 16\n"
+    exact = adaptive + "exact = true\n"
+    assert parse_scene(adaptive).lyapunov.adaptive and not parse_scene(exact).lyapunov.adaptive
+    assert set(_hashes(adaptive)).isdisjoint(_hashes(exact))
+    assert set(_hashes(adaptive)).isdisjoint(_hashes(adaptive.replace("[lyapunov]\n", "[lyapunov]\nthreshold = 6.0\n")))
+    assert _hashes(exact) == _hashes(exact.replace("[lyapunov]\n", "[lyapunov]\nthreshold = 6.0\n"))
+    assert _hashes(LYAP_SCENE + "exact = true\n") == _hashes(LYAP_SCENE)      # no map: nothing to refine
+    with pytest.raises(SceneError, match=r"lyapunov\.exact"):
+        parse_scene(adaptive + 'exact = "yes"\n')
+
+
 def test_the_diffusion_settings_alone_keep_panel_hashes_unless_it_is_asked_for():
     """[lyapunov] center and diffusion_iterates determine only frequency_diffusion: a scene that
     does not ask for it keeps its hashes (its panels are not recomputed)."""

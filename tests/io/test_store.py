@@ -397,3 +397,24 @@ def test_write_bytes_atomic_and_atomic_path(tmp_path):
             raise RuntimeError("failed while saving")
     assert target.read_bytes() == b"two"
     assert list(tmp_path.iterdir()) == [target]
+
+
+def test_a_map_panels_computed_mask_round_trips_and_a_map_stored_without_it_reads_as_all_computed(tmp_path):
+    arrays, attrs = make_panel(0, 1, n=40, k=3)
+    mask = np.arange(40) % 3 != 0
+    arrays.update(megno=np.linspace(1.0, 9.0, 40), lyapunov_status=np.zeros(40, np.int8), map_computed=mask)
+    attrs.update(map_resolution=8, map_p1=[0.0, 1.0], map_p2=[0.0, 1.0])
+    commit_panel(tmp_path / "new.h5", 0, arrays, attrs, FILE_ATTRS)
+    got = read_store(tmp_path / "new.h5").panels[0].extra["map_computed"]
+    assert got.dtype == bool
+    np.testing.assert_array_equal(got, mask)
+    np.testing.assert_array_equal(store.read_panel_datasets(tmp_path / "new.h5", 0, ("map_computed",))[0]
+                                  ["map_computed"], mask)
+    del arrays["map_computed"]                          # a map written before the mask existed
+    commit_panel(tmp_path / "old.h5", 0, arrays, attrs, FILE_ATTRS)
+    old = read_store(tmp_path / "old.h5").panels[0].extra["map_computed"]
+    assert old.dtype == bool and old.shape == (40,) and old.all()
+    assert store.read_panel_datasets(tmp_path / "old.h5", 0, ("map_computed",))[0]["map_computed"].all()
+    del attrs["map_resolution"]                         # not a map: no mask
+    commit_panel(tmp_path / "seeds.h5", 0, arrays, attrs, FILE_ATTRS)
+    assert "map_computed" not in read_store(tmp_path / "seeds.h5").panels[0].extra
