@@ -1,6 +1,7 @@
 """The scene's validators: each value checked under its dotted key, refusals as :class:`SceneError`."""
 from __future__ import annotations
 
+from explorer.io.scene.schema import _NAME_RE, MAX_NAME_LENGTH
 from explorer.model import ParameterError, validation
 
 
@@ -46,6 +47,22 @@ def _str(key, v) -> str:
     if not isinstance(v, str):
         _fail(key, f"must be a string, {_got(v)}")
     return v
+
+
+def _scene_name(v) -> str:
+    """A scene's ``name``: [A-Za-z0-9_.-]+, not starting with '.', at most MAX_NAME_LENGTH characters."""
+    name = _str("name", v)
+    if not _NAME_RE.match(name) or name.startswith(".") or len(name) > MAX_NAME_LENGTH:
+        _fail("name", f"must match [A-Za-z0-9_.-]+, not start with '.', and have at most "
+              f"{MAX_NAME_LENGTH} characters; got {_short(name)}")
+    return name
+
+
+def _own_scale(figure, n_panels: int) -> None:
+    """[figure] own_scale names panels of the scene."""
+    for j, idx in enumerate(figure.own_scale):
+        if idx >= n_panels:
+            _fail(f"figure.own_scale[{j}]", f"must be a panel index in [0, {n_panels - 1}], got {idx}")
 
 
 def _choice(key, v, choices) -> str:

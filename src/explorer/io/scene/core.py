@@ -18,11 +18,12 @@ from explorer.io.scene.checks import (
     _fail,
     _got,
     _list,
-    _short,
+    _own_scale,
+    _scene_name,
     _str,
     _swept,
 )
-from explorer.io.scene.schema import _NAME_RE, COMPUTE_QUANTITIES, MAX_NAME_LENGTH, SWEEP_PARAMETERS
+from explorer.io.scene.schema import COMPUTE_QUANTITIES, SWEEP_PARAMETERS
 from explorer.io.scene.specs import FigureSpec, IntegrationSpec, LyapunovSpec, ManifoldSpec, SeedSpec
 from explorer.io.scene.writer import scene_toml
 from explorer.model import PARAM_NAMES, ParameterError, validation
@@ -50,10 +51,7 @@ class Scene:
     manifolds: ManifoldSpec = field(default_factory=ManifoldSpec)   # [manifolds]: drawing only
 
     def __post_init__(self):
-        name = _str("name", self.name)
-        if not _NAME_RE.match(name) or name.startswith(".") or len(name) > MAX_NAME_LENGTH:
-            _fail("name", f"must match [A-Za-z0-9_.-]+, not start with '.', and have at most "
-                  f"{MAX_NAME_LENGTH} characters; got {_short(name)}")
+        _scene_name(self.name)
         _str("description", self.description)
         _str("text", self.text)
         if not isinstance(self.params, model.Params):
@@ -81,9 +79,7 @@ class Scene:
         if self.is_atlas and self.manifolds.draw:
             _fail("manifolds.draw", "is not used by an atlas scene (it draws a heat map, no sections)")
         self._check_panels()
-        for j, idx in enumerate(self.figure.own_scale):
-            if idx >= self.n_panels:
-                _fail(f"figure.own_scale[{j}]", f"must be a panel index in [0, {self.n_panels - 1}], got {idx}")
+        _own_scale(self.figure, self.n_panels)
 
     def _check_sweep(self):
         if _swept(self, "sweep", SWEEP_PARAMETERS):
