@@ -25,23 +25,18 @@ from explorer.io.scene.checks import (
     _got,
     _int,
     _list,
+    _own_scale,
     _real,
+    _scene_name,
     _short,
     _str,
     _sweep,
     _swept,
     _table,
 )
+from explorer.io.scene.core import Scene
 from explorer.io.scene.hashes import _canonical_json, _sha256
-from explorer.io.scene.schema import (
-    _FIGURE_KEYS,
-    _MANIFOLD_KEYS,
-    _NAME_RE,
-    FORMAT_VERSION,
-    MAX_MAP_RESOLUTION,
-    MAX_NAME_LENGTH,
-    MAX_SEEDS,
-)
+from explorer.io.scene.schema import _FIGURE_KEYS, _MANIFOLD_KEYS, FORMAT_VERSION, MAX_MAP_RESOLUTION, MAX_SEEDS
 from explorer.io.scene.specs import FigureSpec, ManifoldSpec, SeedSpec
 from explorer.kernels.indicator_table import TANGENT_NAMES
 from explorer.model import ParameterError
@@ -302,10 +297,7 @@ class SystemScene:
     atlas_values: tuple = ()
 
     def __post_init__(self):
-        name = _str("name", self.name)
-        if not _NAME_RE.match(name) or name.startswith(".") or len(name) > MAX_NAME_LENGTH:
-            _fail("name", f"must match [A-Za-z0-9_.-]+, not start with '.', and have at most "
-                  f"{MAX_NAME_LENGTH} characters; got {_short(name)}")
+        _scene_name(self.name)
         object.__setattr__(self, "energy", _real("energy.value", self.energy))
         swept = [p.name for p in self.system.parameters] + [ENERGY]
         if ENERGY in swept[:-1]:
@@ -324,9 +316,7 @@ class SystemScene:
         if self.is_atlas and (self.separatrices or self.manifolds.draw):
             _fail("compute.separatrices" if self.separatrices else "manifolds.draw",
                   "is not used by an atlas scene (it draws a heat map, no sections)")
-        for j, idx in enumerate(self.figure.own_scale):
-            if idx >= self.n_panels:
-                _fail(f"figure.own_scale[{j}]", f"must be a panel index in [0, {self.n_panels - 1}], got {idx}")
+        _own_scale(self.figure, self.n_panels)
         self._check_panels()
 
     def _key(self, i) -> str:
@@ -358,18 +348,12 @@ class SystemScene:
         """The direction of the crossings (``integration.direction``, the scene's top-level ``direction``)."""
         return self.integration.direction
 
-    @property
-    def n_panels(self) -> int:
-        return max(1, len(self.sweep_values))
-
-    @property
-    def is_atlas(self) -> bool:
-        return self.atlas_parameter is not None
-
-    @property
-    def n_cells(self) -> int:
-        """Cells of an atlas: len(sweep.values) x len(atlas.values) (0 for other scenes)."""
-        return _atlas.n_cells(self)
+    # the panels and cells of [sweep] x [atlas], counted and labelled as in Chaplygin's scene
+    n_panels = Scene.n_panels
+    is_atlas = Scene.is_atlas
+    n_cells = Scene.n_cells
+    _check_index = Scene._check_index
+    _label = Scene._label
 
     @property
     def params(self) -> dict:
@@ -389,12 +373,10 @@ class SystemScene:
 
     def panel(self, i):
         """(System, energy, label) of panel i; label e.g. ``"lam = 0.5"`` ("" without a sweep)."""
-        if isinstance(i, bool) or not isinstance(i, (int, np.integer)) or not 0 <= i < self.n_panels:
-            raise IndexError(f"panel index must be an integer in [0, {self.n_panels - 1}], got {i!r}")
+        i = self._check_index(i)
         if self.sweep_parameter is None:
             return self.system, self.energy, ""
-        v = self.sweep_values[i]
-        return (*self._at({self.sweep_parameter: v}, f"sweep.values[{i}]"), f"{self.sweep_parameter} = {v!r}")
+        return (*self._at({self.sweep_parameter: self.sweep_values[i]}, f"sweep.values[{i}]"), self._label(i))
 
     def cell(self, i):
         """(System, energy, label) of atlas cell i = row * len(atlas.values) + column (row: sweep
