@@ -66,7 +66,7 @@ def test_explore_in_a_live_kernel_displays_the_page_and_streams_the_clicked_orbi
     import nbformat
     from ipykernel.kernelspec import install
 
-    from explorer.app.serve.settings import settings_for
+    from explorer.app.serve.system_page import page_settings
 
     # the kernel is this interpreter (not whatever "python3" a Jupyter path holds) and imports the
     # explorer the tests import
@@ -99,6 +99,6 @@ def test_explore_in_a_live_kernel_displays_the_page_and_streams_the_clicked_orbi
     printed = "".join(o.get("text", "") for o in nb.cells[2].outputs if o.output_type == "stream")
     assert f"crossings: {CROSSINGS}" in printed.splitlines(), printed
 
-    base, _ = settings_for(None, 0, mu=MU, crossings=CROSSINGS)
+    base, _label, _seeds = page_settings(mu=MU, crossings=CROSSINGS)
     ref = sections.crossings(base.params, base.h, [(START[0], START[1])], n_crossings=CROSSINGS)
     np.testing.assert_array_equal(np.load(tmp_path / "orbit.npy"), ref.orbit(0))

@@ -1179,10 +1179,11 @@ def test_the_scene_seeds_button_starts_the_sweeps_seeds_at_the_current_settings(
     pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
     from explorer.analysis.seeds import seed_points
     from explorer.app.serve.page import SectionPage
+    from explorer.app.serve.system_page import page_settings
     from explorer.io import scene as scene_mod
 
     sc = scene_mod.load_scene("figure4")
-    base, _label = settings_mod.settings_for(sc, 1, crossings=5)
+    base, _label, _seeds = page_settings(sc, None, 1, crossings=5)
     page = SectionPage(base, {"mu": "0.5"}, seeds=sc.seeds)
     try:
         assert page.run_seeds() == len(page.orbits.starts) > 0

@@ -185,25 +185,21 @@ class SectionPage:
         self.fields = Fields(self.session, self.settings, self._on_field)
         self.inputs = self.fields.inputs
         # the buttons in rows above the figure: at 1280 x 720 every one is in view with the figure
+        ol, ex, scene = self.orbit_list, self.exports, self.base.scene_export
+        actions = [("Clear", ol.clear, 70), ("Undo", ol.undo, 70), ("Resume", ol.resume, 80),
+                   ("Scene seeds", self.run_seeds, 100)]
+        if self.export_dir is not None:
+            actions += [("Export scene", ex.export, 110)] * scene + [("Export figure", ex.export_figure, 110)]
         buttons = []
-        ol = self.orbit_list
-        for label, action, width in (("Clear", ol.clear, 70), ("Undo", ol.undo, 70), ("Resume", ol.resume, 80),
-                                     ("Scene seeds", self.run_seeds, 100)):
+        for label, action, width in actions:
             b = pn.widgets.Button(label=label, width=width, color="warning" if label == "Clear" else "default")
             b.on_click(lambda _e, action=action: self.session.soon(action))
             buttons.append(b)
-        if self.base.scene_export:
-            buttons.append(pn.widgets.FileDownload(callback=self.exports.scene_file, label="Scene (TOML)",
-                                                   filename=f"{export.SCENE_NAME}.toml", color="primary", width=110))
-        buttons += [pn.widgets.FileDownload(callback=lambda fmt=fmt: self.exports.figure_file(fmt),
-                                            filename=f"{export.SCENE_NAME}.{fmt}", label=f"Figure ({fmt.upper()})",
-                                            width=100) for fmt in ("png", "svg")]
-        if self.export_dir is not None:
-            actions = (("Export scene", self.exports.export), ("Export figure", self.exports.export_figure))
-            for label, action in actions[0 if self.base.scene_export else 1:]:
-                b = pn.widgets.Button(label=label, width=110)
-                b.on_click(lambda _e, action=action: self.session.soon(action))
-                buttons.append(b)
+        downloads = [(ex.scene_file, "Scene (TOML)", "toml", 110)] * scene + [
+            (lambda fmt=fmt: ex.figure_file(fmt), f"Figure ({fmt.upper()})", fmt, 100) for fmt in ("png", "svg")]
+        buttons[4:4] = [pn.widgets.FileDownload(callback=f, label=label, filename=f"{export.SCENE_NAME}.{x}", width=w,
+                                                color="primary" if x == "toml" else "default")
+                        for f, label, x, w in downloads]
         self.click_mode = pn.widgets.RadioButtonGroup(options=list(CLICK_MODES), value=CLICK_MODES[0], width=220)
         self.title = pn.pane.Markdown(self._title())
         o, ov = self.orbits, self.overlays
@@ -261,7 +257,7 @@ class SectionPage:
             refused.append(str(exc))
         if refused:
             self.say(f"link ignored in part (the rest applies): {'; '.join(refused)}")
-        self._show_fields()
+        self.fields.show(self.settings)
         if self.settings.title() != self.base.title():
             self.title.object = self._title()
         self._draw_region()
@@ -301,9 +297,6 @@ class SectionPage:
         """The names of the overlays that are on (the chaos layer by its indicator), for the scene."""
         return self.overlays.on() + ((self.chaos.indicator.value,) if self.chaos.layer.value else ())
 
-    def _show_fields(self):
-        self.fields.show(self.settings)
-
     # ------------------------------------------------------------ values
     def _on_field(self, name: str | None = None):
         """The field ``name`` was edited (None: every field): the applied settings with its text,
@@ -315,7 +308,7 @@ class SectionPage:
             self.say(f"not applied: {exc}")
             return
         self.say("")
-        self._show_fields()               # (a refused text in another field goes: the fields show what applies)
+        self.fields.show(self.settings)   # (a refused text in another field goes: the fields show what applies)
         self.apply(new)
 
     def apply(self, new: Settings) -> None:
@@ -326,11 +319,13 @@ class SectionPage:
         if new.crossings != self.settings.crossings and replace(self.settings, crossings=new.crossings) == new:
             self.settings = new           # (only the crossings per click: each orbit is cut or continues)
             self.orbits.recount(new)
-            self._show_fields()
+            self.fields.show(self.settings)
             self.push_url()
             return
         hidden = set(self.orbits.hidden)
-        old = self._drop_orbits()
+        self.orbit_list.forget()
+        old = self.orbits.drop_all()
+        self.density_image.refresh(force=True)       # no image left of them
         angle_changed = new.title() != self.settings.title()
         self.settings = new
         if angle_changed:                 # (only then: a change of the title is a message of its own)
@@ -341,7 +336,7 @@ class SectionPage:
             if run is not None and i in hidden:
                 self.orbits.hide(run.ident)           # (a hidden orbit stays hidden)
         self._draw_region()
-        self._show_fields()
+        self.fields.show(self.settings)
         self.chaos.restart()
         self.overlays.restart()
         dropped = sum(r is None for r in kept)
@@ -360,13 +355,6 @@ class SectionPage:
         return f"### explorer: {self.settings.title()}" + (f" ({self.label})" if self.label else "")
 
     # ------------------------------------------------------------ orbits
-    def _drop_orbits(self) -> list:
-        """Stop every orbit and take them off the page; returns their starts."""
-        self.orbit_list.forget()
-        old = self.orbits.drop_all()
-        self.density_image.refresh(force=True)       # no image left of them
-        return old
-
     def run_seeds(self) -> int:
         """Start an orbit at each seed point of the scene's ``[seeds]`` at the current settings, as
         many as the session has room for; returns how many."""

@@ -148,50 +148,13 @@ class Settings(sections.Integration):
         return parse_fields(self, fields)
 
     def seed_starts(self, seeds) -> list:
-        return seed_starts(seeds or seeds_for(None), self)
+        """The starts [(p1, p2), ...] ``explorer sweep`` runs for ``seeds`` (None: a scene's default) here
+        (:func:`explorer.analysis.seeds.seed_points`)."""
+        from explorer.analysis.seeds import seed_points
+        from explorer.io.scene import SeedSpec
 
-
-def settings_for(scene=None, panel: int = 0, **overrides) -> tuple:
-    """(Settings, label): the scene's panel ``panel`` (None: Figure 4), then ``overrides`` (model
-    parameters, h, method, tol, dt, crossings), all validated."""
-    from explorer.io import scene as scene_mod
-
-    base, label = Settings(), ""
-    if scene is not None:
-        sc = scene if isinstance(scene, scene_mod.Scene) else scene_mod.load_scene(scene)
-        i = validation.integer("panel", panel, 0, sc.n_panels - 1)
-        params, h, plabel = sc.panel(i)
-        integ = sc.integration
-        base = Settings(params=params, h=h, method=integ.method, tol=integ.tol, dt=integ.dt,
-                        crossings=min(integ.crossings, MAX_CROSSINGS), phi0=integ.phi0, direction=integ.direction)
-        label = sc.name if not plabel else f"{sc.name}: {plabel}"
-    elif panel != 0:
-        raise ParameterError("panel needs a scene")
-    unknown = set(overrides) - set(model.PARAM_NAMES) - {"h", "method", "tol", "dt", "crossings"}
-    if unknown:
-        raise ParameterError(f"unknown setting {sorted(unknown)[0]!r}; model parameters, h, method, tol, dt, crossings")
-    params = {k: validation.real(k, v) for k, v in overrides.items() if k in model.PARAM_NAMES}
-    rest = {k: v for k, v in overrides.items() if k not in model.PARAM_NAMES}
-    return replace(base, params=base.params.with_(**params) if params else base.params, **rest), label
-
-
-def seeds_for(scene=None):
-    """The ``[seeds]`` of ``scene`` (a TOML path, preset name or Scene; None: a scene's default)."""
-    from explorer.io import scene as scene_mod
-
-    if scene is None:
-        return scene_mod.SeedSpec()
-    sc = scene if isinstance(scene, scene_mod.Scene) else scene_mod.load_scene(scene)
-    return sc.seeds
-
-
-def seed_starts(seeds, settings: Settings) -> list:
-    """The starts [(p1, p2), ...] ``explorer sweep`` runs for ``seeds`` at ``settings``
-    (:func:`explorer.analysis.seeds.seed_points`)."""
-    from explorer.analysis.seeds import seed_points
-
-    p1, p2, _dropped = seed_points(seeds, settings.params, settings.h, settings.phi0)
-    return [(float(a), float(b)) for a, b in zip(p1, p2)]
+        p1, p2, _dropped = seed_points(seeds or SeedSpec(), self.params, self.h, self.phi0)
+        return [(float(a), float(b)) for a, b in zip(p1, p2)]
 
 
 def _number(name: str, text) -> float:

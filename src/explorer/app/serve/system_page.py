@@ -7,7 +7,8 @@ from typing import Any
 
 import numpy as np
 
-from explorer.app.serve.settings import MAX_CROSSINGS, megno_of, read_fields
+from explorer import model
+from explorer.app.serve.settings import MAX_CROSSINGS, Settings, megno_of, read_fields
 from explorer.model import ParameterError, validation
 
 #: names the page's link keeps for itself: a System parameter may not take one (its field is a link key)
@@ -146,57 +147,50 @@ class SystemSettings:
         return [(float(a), float(b)) for a, b in pts]
 
 
-def system_page(value=None, scene=None, panel: int = 0, **overrides) -> tuple:
-    """(SystemSettings, label, seeds) of ``--system module:attribute`` (a section map, or a System with
-    ``scene``) or of ``scene`` a System's scene; ``overrides``: energy, tol, crossings."""
-    from explorer.analysis.system_sections import is_system_map
-    from explorer.io.scene import load_scene
-    from explorer.io.scene.system import SystemScene, resolve_system
-
-    seeds, label = None, ""
-    if scene is not None:
-        sc = scene if isinstance(scene, SystemScene) else load_scene(scene, system=value)
-        i = validation.integer("panel", panel, 0, sc.n_panels - 1)
-        smap, plabel = sc.section_map(i), sc.panel(i)[2]
-        integ = sc.integration
-        base = {"tol": integ.tol, "crossings": min(integ.crossings, MAX_CROSSINGS)}
-        seeds, label = sc.seeds, sc.name if not plabel else f"{sc.name}: {plabel}"
-    else:
-        smap = resolve_system(value, "--system", maps=True)
-        if not is_system_map(smap):
-            raise ParameterError(f"--system {value!r} is a System without a section: the page shows a section map. "
-                                 "Name its map (SectionMap(system, E, section=..., direction=..., coords=(a, b), "
-                                 "solve=c) as the attribute) or give a scene of it (explorer serve SCENE.toml "
-                                 f"--system {value})")
-        base = {}
-        label = smap.system.name
-    if panel != 0 and scene is None:
-        raise ParameterError("panel needs a scene")
-    energy = overrides.pop("energy", None)
-    if energy is not None:
-        smap = smap.with_value("energy", validation.real("--h", energy))
-    s = SystemSettings(smap, **{**base, **{k: v for k, v in overrides.items() if v is not None}})
-    return s, label, seeds
-
-
 def page_settings(scene=None, system=None, panel: int = 0, flag: str = "", **values) -> tuple:
-    """(settings, label, seeds) a page starts from: a System's section map (``system``, or ``scene`` a
-    section map or a System's scene), else Chaplygin's model; ``values``: the settings given (None: not
-    given), each named ``flag`` + its name in a refusal."""
+    """(settings, label, seeds) a page starts from: a System's section map (``system``, a section map or
+    'module:attribute', or ``scene`` a section map or a System's scene), else Chaplygin's model (``scene``'s
+    panel ``panel``; None: Figure 4); ``values`` (None: not given) on top, validated, each named ``flag`` +
+    its name in a refusal."""
     from explorer.analysis.system_sections import is_system_map
-    from explorer.app.serve.settings import seeds_for, settings_for
-    from explorer.io.scene import SystemScene, load_scene
+    from explorer.io.scene import SeedSpec, SystemScene, load_scene
+    from explorer.io.scene.system import resolve_system
 
     values = {k: v for k, v in values.items() if v is not None}
     if is_system_map(scene):
         system, scene = scene, None
     elif scene is not None:
         scene = load_scene(scene, system=system)
+    if scene is None and panel != 0:
+        raise ParameterError("panel needs a scene")
+    i = 0 if scene is None else validation.integer("panel", panel, 0, scene.n_panels - 1)
+    plabel = "" if scene is None else scene.panel(i)[2]
+    label = "" if scene is None else f"{scene.name}: {plabel}" if plabel else scene.name
+    given = {} if scene is None else {"tol": scene.integration.tol,
+                                      "crossings": min(scene.integration.crossings, MAX_CROSSINGS)}
     if system is None and not isinstance(scene, SystemScene):
-        return (*settings_for(scene, panel, **values), seeds_for(scene))
+        if scene is not None:
+            integ = scene.integration
+            given.update(params=scene.panel(i)[0], h=scene.panel(i)[1], method=integ.method, dt=integ.dt,
+                         phi0=integ.phi0, direction=integ.direction)
+        base = Settings(**given)
+        params = {k: validation.real(flag + k, values.pop(k)) for k in model.PARAM_NAMES if k in values}
+        return (replace(base, params=base.params.with_(**params), **values), label,
+                SeedSpec() if scene is None else scene.seeds)
     wrong = [k for k in values if k not in ("h", "tol", "crossings")]
     if wrong:
         raise ParameterError(f"{flag}{wrong[0]} belongs to Chaplygin's model; a System's page takes {flag}h (its "
                              f"energy), {flag}tol and {flag}crossings")
-    return system_page(system, scene, panel, energy=values.get("h"), tol=values.get("tol"),
-                       crossings=values.get("crossings"))
+    if scene is not None:
+        smap = scene.section_map(i)
+    else:
+        smap = resolve_system(system, "--system", maps=True)
+        if not is_system_map(smap):
+            raise ParameterError(f"--system {system!r} is a System without a section: the page shows a section map. "
+                                 "Name its map (SectionMap(system, E, section=..., direction=..., coords=(a, b), "
+                                 "solve=c) as the attribute) or give a scene of it (explorer serve SCENE.toml "
+                                 f"--system {system})")
+        label = smap.system.name
+    if "h" in values:
+        smap = smap.with_value("energy", validation.real(flag + "h", values.pop("h")))
+    return SystemSettings(smap, **{**given, **values}), label, None if scene is None else scene.seeds
