@@ -5,9 +5,11 @@ import math
 import numpy as np
 import pytest
 
+from explorer import model
 from explorer.analysis import cantorus as ca
 from explorer.analysis import greene as gm
 from explorer.analysis.maps import StandardMap
+from explorer.analysis.section_map import SectionMap
 
 #: the critical k of the golden curve (explorer's, docs/greene.md: 0.971635405749 +- 3.9e-10)
 K_C = 0.971635405749
@@ -61,4 +63,10 @@ def test_the_minimizing_orbits_are_periodic_and_have_less_action_than_the_minima
         assert (2.0 - np.trace(M)) / 4.0 < 0.0
         mx = gm.symmetric_orbit(m, P, Q, guess=guess["max"])
         guess["max"] = mx.points[0, 1]
-        assert ca.action(1.0, pts, P) < ca.action(1.0, mx.points, P)
+        assert ca.action(m, pts, P) < ca.action(m, mx.points, P)
+
+
+def test_a_map_without_a_generating_function_is_refused_naming_what_it_lacks():
+    """The flux is the action difference of a twist map's orbits: a section map has no generating function."""
+    with pytest.raises(model.ParameterError, match="generating_function and symmetric_orbit"):
+        ca.cantorus_flux(SectionMap(model.FIGURE4, model.FIGURE4_H))

@@ -77,17 +77,34 @@ def test_a_period_2_orbit_is_found_by_newton_and_returns_to_itself(smap, ellipti
     assert pr.find_periodic_orbit(smap, elliptic.point, 2).period == 1
 
 
-def test_the_search_finds_the_fixed_points_and_their_copies_under_the_threefold_symmetry(smap, elliptic, hyperbolic):
-    """Seeds on the symmetry line py = 0 and grid minima over the domain: both fixed points, and the
-    orbits that Hénon–Heiles' rotation by 2 pi/3 in (x, y) makes of them, which cross x = 0 elsewhere
-    with the same multipliers."""
+def test_the_symmetric_seeds_are_the_fixed_points_on_the_reversors_line(smap, elliptic, hyperbolic):
+    """Seeds of period 1: the roots, on the fixed line py = 0 of each half of the section, of the
+    distance to that line after one half turn; each is a fixed point of the map on py = 0, and both
+    fixed points are among them."""
     seeds = pr.symmetry_line_points(smap, 1, n=24)
-    assert seeds.shape == (24, 2) and np.all(seeds[:, 1] == 0.0)
+    assert len(seeds) >= 2 and np.max(np.abs(seeds[:, 1])) <= 1e-12
+    assert np.max(np.abs(smap.images(seeds, 1)[:, 0] - seeds)) <= 1e-9
+    for fp in (elliptic, hyperbolic):
+        assert np.min(np.linalg.norm(seeds - fp.point, axis=1)) <= 1e-9
+
+
+def test_the_search_finds_the_fixed_points_their_mirror_pairs_and_their_threefold_copies(smap, elliptic, hyperbolic):
+    """Seeds on the symmetry lines and grid minima over the domain: both fixed points, and the orbits
+    that Hénon–Heiles' rotation by 2 pi/3 in (x, y) makes of them, which cross x = 0 elsewhere with the
+    same multipliers; every orbit found returns to itself, and an asymmetric one comes with its image
+    under the reversor (y, py) -> (y, -py)."""
     found = pr.search_periodic_orbits(smap, 1, grid=6, line=12, max_guesses=12)
     for fp in (elliptic, hyperbolic):
         assert any(o.distance_to(fp.point) <= 1e-8 for o in found)
         copies = [o for o in found if o.distance_to(fp.point) > 1e-3 and abs(o.trace - fp.trace) <= 1e-8]
         assert copies, f"no copy of the orbit through {fp.point} (trace {fp.trace})"
+    R = smap.reflection
+    for o in found:
+        assert o.period == 1 and np.max(np.abs(smap(o.points[0], jacobian=False).point - o.points[0])) <= 1e-9
+        assert o.symmetric == o.same_orbit(R(o.points), 1e-9)
+        if not o.symmetric:
+            assert any(m.same_orbit(R(o.points), 1e-9) and m.trace == pytest.approx(o.trace, abs=1e-9)
+                       for m in found if m is not o)
 
 
 def test_the_elliptic_point_is_continued_in_the_energy(smap, elliptic):

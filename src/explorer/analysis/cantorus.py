@@ -12,7 +12,7 @@ import numpy as np
 
 from explorer.analysis import greene as gm
 from explorer.analysis.greene_core import MAX_QMAX, MIN_Q, aitken
-from explorer.analysis.maps import StandardMap, standard_monodromy
+from explorer.analysis.maps import StandardMap
 from explorer.model import ParameterError, validation
 
 __all__ = ["CantorusFlux", "action", "cantorus_flux", "minimizing_orbit"]
@@ -22,14 +22,16 @@ __all__ = ["CantorusFlux", "action", "cantorus_flux", "minimizing_orbit"]
 CLOSURE_FRACTION = 1e-3
 #: the largest period followed by default
 DEFAULT_QMAX = 610
+#: what the flux asks of the map: the generating function F(theta, theta') of the action, its symmetric
+#: orbits on Fix I0 (the half-orbit method) and its iterates on Fix I1 (2 theta = p)
+TWIST_MAP = ("generating_function", "symmetric_orbit", "images")
 
 
-def action(k: float, points, P: int) -> float:
+def action(system, points, P: int) -> float:
     """W = sum_{t=0}^{Q-1} F(theta_t, theta_{t+1}) of the orbit ``points`` ((Q, 2), theta lifted) of
-    type P/Q, with theta_Q = theta_0 + 2 pi P and F(theta, theta') = (theta' - theta)^2/2 - k cos(theta)."""
+    type P/Q, with theta_Q = theta_0 + 2 pi P and F the map's ``generating_function``."""
     th = np.append(np.asarray(points, float)[:, 0], points[0][0] + 2.0 * math.pi * P)
-    d = np.diff(th)
-    return float(np.sum(0.5 * d * d - k * np.cos(th[:-1])))
+    return float(np.sum(system.generating_function(th[:-1], th[1:])))
 
 
 #: the even-period scan of the line 2 theta - p = 0: this many samples within SCAN_WIDTH of the guess
@@ -39,10 +41,11 @@ SCAN_WIDTH = 1.0
 BISECTIONS = 60
 
 
-def _i1_function(k, P, Q, s) -> float:
-    n = Q // 2
-    _, _, _, _, th, p = standard_monodromy(0.5 * s, s, k, n)
-    return 2.0 * th - p - 2.0 * math.pi * P
+def _i1_function(system, P, Q, s) -> np.ndarray:
+    """2 theta_n - p_n - 2 pi P after n = Q/2 steps from the points (s/2, s) of Fix I1 (s an array): zero
+    on a symmetric orbit."""
+    end = system.images(np.column_stack([0.5 * s, s]), Q // 2)[:, -1]
+    return 2.0 * end[:, 0] - end[:, 1] - 2.0 * math.pi * P
 
 
 def _bisect(fn, a, b, fa) -> float:
@@ -68,17 +71,17 @@ def minimizing_orbit(system: StandardMap, p: int, q: int, *, guess=None) -> np.n
     minimizing orbit is the one of least action among all of its type, Aubry-Mather theory)."""
     P = validation.integer("p", p, 0)
     Q = validation.integer("q", q, MIN_Q)
-    k = system.k
+    k = system.parameter_value
     g = 2.0 * math.pi * P / Q if guess is None else float(guess)
     if Q % 2:
         return gm.symmetric_orbit(system, P, Q, line=0.0, guess=g).points
     s = g + SCAN_WIDTH * np.linspace(-1.0, 1.0, SCAN_SAMPLES + 1)
-    f = np.array([_i1_function(k, P, Q, x) for x in s])
+    f = _i1_function(system, P, Q, s)
     best = None
     for i in np.flatnonzero(np.isfinite(f[:-1]) & np.isfinite(f[1:]) & (np.sign(f[:-1]) != np.sign(f[1:]))):
-        p0 = _bisect(lambda x: _i1_function(k, P, Q, x), s[i], s[i + 1], f[i])
+        p0 = _bisect(lambda x: _i1_function(system, P, Q, np.array([x]))[0], s[i], s[i + 1], f[i])
         pts = system.iterate((0.5 * p0, p0), Q)[:Q]
-        w = action(k, pts, P)
+        w = action(system, pts, P)
         if best is None or w < best[0]:
             best = (w, pts)
     if best is None:
@@ -117,11 +120,12 @@ def cantorus_flux(system: StandardMap, nu="golden", *, qmax=DEFAULT_QMAX, qmin=5
     """The flux Delta W through the cantorus of rotation number ``nu`` of the standard map above its
     breakup (MacKay, Meiss & Percival 1984; docs/greene.md), in the map's (theta, p) units (the
     papers' (x, y) = (theta/2 pi, p/2 pi) units give Delta W / (2 pi)^2)."""
-    if not isinstance(system, StandardMap):
-        raise ParameterError(f"cantorus_flux needs a StandardMap (its generating function), got "
-                             f"{type(system).__name__}")
+    missing = [name for name in TWIST_MAP if not callable(getattr(system, name, None))]
+    if missing:
+        raise ParameterError(f"cantorus_flux needs a twist map with {' and '.join(missing)} (as StandardMap's); "
+                             f"{system!r} has none")
     x = gm.rotation_value(nu)
-    k = system.k
+    k = system.parameter_value
     qs: list[int] = []
     dws: list[float] = []
     g_max = g_min_odd = g_min_even = None
@@ -140,7 +144,7 @@ def cantorus_flux(system: StandardMap, nu="golden", *, qmax=DEFAULT_QMAX, qmin=5
             g_min_even = mn[0, 1]
         if Q < qmin:
             continue
-        dw = action(k, mx.points, P) - action(k, mn, P)
+        dw = action(system, mx.points, P) - action(system, mn, P)
         err = max(_closure(system, mx.points, P), _closure(system, mn, P))
         if not err <= CLOSURE_FRACTION * abs(dw):
             stopped = f"q = {Q}: the orbits close only to {err:.2g} (Delta W_n = {dw:.3g}): double precision's end"

@@ -11,10 +11,10 @@ import numpy as np
 
 from explorer._jit import njit
 from explorer.analysis.greene_core import MIN_Q, Residue
-from explorer.analysis.section_map import MapResult, SectionMap
+from explorer.analysis.map_result import MapResult
 from explorer.model import ParameterError, validation
 
-__all__ = ["AreaPreservingMap", "StandardMap", "SymmetricOrbit", "difference", "images", "is_section_map", "reduce",
+__all__ = ["AreaPreservingMap", "StandardMap", "SymmetricOrbit", "difference", "grid_minima", "images", "reduce",
            "with_value"]
 
 
@@ -57,10 +57,13 @@ class AreaPreservingMap(Protocol):
 
     def orbit_fields(self) -> dict: ...
 
+    def with_tmax(self, tmax): ...
 
-def is_section_map(system) -> bool:
-    """True for a :class:`~explorer.analysis.section_map.SectionMap`."""
-    return isinstance(system, SectionMap)
+    def symmetric_seeds(self, period: int, n: int, *, threads=None) -> np.ndarray: ...
+
+    def grid_seeds(self, period: int, grid: int, *, threads=None) -> np.ndarray: ...
+
+    def partner_points(self, points, *, threads=None): ...
 
 
 def with_value(system, name: str, value):
@@ -97,6 +100,24 @@ def images(system, X, n: int, *, backward: bool = False) -> np.ndarray:
     if n == 0 or X.size == 0:
         return np.full((X.shape[0], n, 2), np.nan)
     return system.images(X, n, backward=backward)
+
+
+def grid_minima(system, K: int, grid: int) -> np.ndarray:
+    """The centres of a ``grid`` x ``grid`` grid of cells over the map's ``domain`` where
+    ``|P^K(x) - x|`` (on its cylinder) has a local minimum, best first."""
+    (a0, a1), (b0, b1) = system.domain
+    u = (np.arange(grid) + 0.5) / grid
+    U, V = np.meshgrid(a0 + (a1 - a0) * u, b0 + (b1 - b0) * u, indexing="ij")
+    X = np.column_stack([U.ravel(), V.ravel()])
+    img = images(system, X, K)[:, -1]
+    R = np.linalg.norm(difference(system, img, X), axis=1).reshape(grid, grid)
+    R[~np.isfinite(R)] = np.inf
+    pad = np.pad(R, 1, constant_values=np.inf)
+    nb = np.stack([pad[1 + di:1 + di + grid, 1 + dj:1 + dj + grid]
+                   for di in (-1, 0, 1) for dj in (-1, 0, 1) if di or dj])
+    idx = np.flatnonzero((np.isfinite(R) & (R <= nb.min(axis=0))).ravel())
+    idx = idx[np.argsort(R.ravel()[idx])]
+    return X[idx]
 
 
 @njit
@@ -365,6 +386,29 @@ class StandardMap:
     def reversors(self) -> tuple:
         """(I0, I1)."""
         return (self.i0, self.i1)
+
+    def with_tmax(self, tmax) -> StandardMap:
+        """This map: an application is one step, with no time budget."""
+        return self
+
+    def symmetric_seeds(self, period: int, n: int, *, threads=None) -> np.ndarray:
+        """The seeds of symmetric orbits of any period: :meth:`symmetry_line_points`."""
+        return self.symmetry_line_points(n)
+
+    def grid_seeds(self, period: int, grid: int, *, threads=None) -> np.ndarray:
+        """:func:`grid_minima` over :attr:`domain`."""
+        return grid_minima(self, period, grid)
+
+    def partner_points(self, points, *, threads=None):
+        """None: the map's reversors are I0 and I1 (an orbit's image under I1 is its image under I0, moved on
+        by one step)."""
+        return None
+
+    def generating_function(self, theta, theta_next):
+        """F(theta, theta') = (theta' - theta)^2/2 - k cos(theta), with p = -dF/dtheta and p' = dF/dtheta'
+        (MacKay, Meiss & Percival 1984)."""
+        d = np.asarray(theta_next, float) - np.asarray(theta, float)
+        return 0.5 * d * d - self.k * np.cos(theta)
 
     def symmetry_line_points(self, n) -> np.ndarray:
         """``n`` points on each symmetry line (Fix I0, Fix I1) across :attr:`domain`."""

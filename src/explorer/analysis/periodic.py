@@ -11,14 +11,10 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis.continuation import continuation_values, golden_section_max, secant_follower
-from explorer.analysis.halfturn import partner_points
-from explorer.analysis.maps import AreaPreservingMap, difference, images, is_section_map
+from explorer.analysis.maps import AreaPreservingMap, difference
 from explorer.analysis.maps import reduce as reduce_points
 from explorer.analysis.section_map import SectionMap, system_first
-from explorer.analysis.sections import crossings
-from explorer.integrate.methods import DEFAULT_TOL as SECTIONS_TOL
-from explorer.model import ParameterError, symmetry, validation
-from explorer.model.symmetry import is_reversible, reversor
+from explorer.model import ParameterError, validation
 
 __all__ = ["DEGENERATE_RESIDUE", "ISOLATION_TOL", "KIND_TOL", "MULTIPLE_SHOOTING_FROM", "PeriodicBranch",
            "PeriodicOrbit", "continue_periodic", "find_periodic_orbit", "mirror_orbit", "periodic_guesses",
@@ -264,23 +260,30 @@ def _make_orbit(smap, pts, imgs, jacs, times, iters, reduce=True) -> PeriodicOrb
 
 
 def mirror_orbit(orb: PeriodicOrbit) -> PeriodicOrbit:
-    """G0(orbit): z_j = G0 x_{-j}, DP(z_j) = G0 DP(x_{-j-1})^-1 G0, computed exactly (no search);
-    ParameterError when the system is not reversible."""
-    if not is_reversible(orb.params, orb.phi0):
-        raise ParameterError("the mirror image needs a reversible system (zeta = xi = 0) and phi0 = 0 or pi")
+    """R(orbit) for the linear reversor R of the orbit's map: z_j = R x_{-j}, DP(z_j) = R DP(x_{-j-1})^-1 R,
+    computed exactly (no search); ParameterError when the map has none."""
+    smap = _map_of(orb)
+    if smap.reflection is None:
+        smap.require_reversor("the mirror image")
+        raise ParameterError("the mirror image needs a reversor of the map that is linear in its coordinates")
+    return _mirror(smap, orb)
+
+
+def _mirror(smap, orb: PeriodicOrbit) -> PeriodicOrbit:
+    """:func:`mirror_orbit` by ``smap``'s :attr:`reflection`."""
+    R = smap.reflection
+    G = np.asarray(R(np.eye(2)), float).T + 0.0      # + 0.0: no negative zeros
     K = orb.period
-    G = np.diag([1.0, -1.0])
     idx = (-np.arange(K)) % K                      # x_{-j}
     prev = (-np.arange(K) - 1) % K                 # x_{-j-1}
-    pts = reversor(orb.points[idx])
     jacs = np.array([G @ np.linalg.inv(orb.map_jacobians[i]) @ G for i in prev])
-    return _orbit(_section_map_of(orb), pts, jacs, orb.return_times[prev], orb.residual, orb.iterations,
+    return _orbit(smap, R(orb.points[idx]), jacs, orb.return_times[prev], orb.residual, orb.iterations,
                   orb.symmetric)
 
 
-def _section_map_of(orb: PeriodicOrbit) -> SectionMap:
-    """The section map an orbit names (``params``, ``h``, ``phi0``)."""
-    return SectionMap(orb.params, orb.h, phi0=orb.phi0)
+def _map_of(orb: PeriodicOrbit):
+    """The map an orbit names: its ``system``, or the section map of ``params``, ``h``, ``phi0``."""
+    return orb.system if orb.system is not None else SectionMap(orb.params, orb.h, phi0=orb.phi0)
 
 
 def _check_period(period) -> int:
@@ -312,195 +315,75 @@ def find_periodic_orbit(system, guess, period, *, max_iter=NEWTON_MAX_ITER, redu
     return _make_orbit(smap, pts, imgs, jacs, times, it, reduce)
 
 
-def _line_p1(params, h, phi0, n):
-    e = model.allowed_ellipse(params, h, phi0)
-    if e is None:
-        return np.empty(0)
-    c1, c2, r1, r2 = e
-    if abs(c2) > r2:
-        return np.empty(0)
-    half = r1 * math.sqrt(max(0.0, 1.0 - (c2 / r2) ** 2))
-    return c1 + half * np.linspace(-1.0, 1.0, n + 2)[1:-1]
-
-
 @system_first(systems="map")
 def symmetry_line_points(system, period, *, n=200, threads=None):
-    """Seeds (m, 2) of symmetric orbits of period ``period`` on the symmetry lines, ``n`` per line
-    (docs/commands/periodic.md); another map's own ``symmetry_line_points(n)``."""
+    """Seeds (m, 2) of symmetric orbits of period ``period`` on the map's symmetry lines, ``n`` per line:
+    the map's ``symmetric_seeds`` (docs/commands/periodic.md)."""
     K = _check_period(period)
-    if not is_section_map(system):
-        seeds = getattr(system, "symmetry_line_points", None)
-        return np.empty((0, 2)) if seeds is None else np.asarray(seeds(validation.integer("n", n, 1)), float)
-    prm, h, phi0, tol, tmax = system.params, system.h, system.phi0, system.tol, system.tmax
-    if not is_reversible(prm, phi0):
-        return np.empty((0, 2))
-    other = phi0 + math.pi
-
-    def run(p1, line, threads=threads):
-        """(p2 after K half-turns, point on phi0) for starts p1 on line 0 or 1 (NaN when stopped)."""
-        start_phi = phi0 if line == 0 else other
-        Y0 = model.section_state(prm, p1, np.zeros_like(p1), h, start_phi)
-        target = phi0 if (K % 2 == 0) == (line == 0) else other
-        n_target = (K + line) // 2 if target == phi0 else (K + 1 - line) // 2
-        n_target = max(n_target, 1)
-        c = crossings(prm, states=Y0, n_crossings=n_target, phi0=target, tol=tol, tmax=tmax * n_target, threads=threads)
-        f = np.where(c.count >= n_target, c.data[:, n_target - 1, 2], np.nan)
-        if line == 0:
-            on = np.column_stack([p1, np.zeros_like(p1)])
-        else:
-            c1 = crossings(prm, states=Y0, n_crossings=1, phi0=phi0, tol=tol, tmax=tmax, threads=threads)
-            on = np.where((c1.count >= 1)[:, None], c1.data[:, 0, 1:3], np.nan)
-        return f, on
-
-    seeds = []
-    for line in (0, 1):
-        p1 = _line_p1(prm, h, phi0 if line == 0 else other, n)
-        if len(p1) < 2:
-            continue
-        f, _ = run(p1, line)
-        for i in np.flatnonzero(np.isfinite(f[:-1]) & np.isfinite(f[1:]) & (np.sign(f[:-1]) != np.sign(f[1:]))):
-            a, b, fa = p1[i], p1[i + 1], f[i]
-            for _ in range(16):   # Newton does the rest
-                m = 0.5 * (a + b)
-                fm, _ = run(np.array([m]), line, 1)
-                if not np.isfinite(fm[0]):
-                    break
-                if np.sign(fm[0]) == np.sign(fa):
-                    a, fa = m, fm[0]
-                else:
-                    b = m
-            _, on = run(np.array([0.5 * (a + b)]), line, 1)
-            if np.all(np.isfinite(on[0])):
-                seeds.append(on[0])
-    return np.array(seeds).reshape(-1, 2)
+    return np.asarray(system.symmetric_seeds(K, validation.integer("n", n, 1), threads=threads), float)
 
 
-def _grid_seeds(prm, h, K, grid, phi0, tol, tmax, threads):
-    """Grid points of the allowed region where |P^K(x) - x| has a local minimum, best first."""
-    e = model.allowed_ellipse(prm, h, phi0)
-    if e is None:
-        return np.empty((0, 2))
-    c1, c2, r1, r2 = e
-    u = np.linspace(-1.0, 1.0, grid + 2)[1:-1]
-    U, V = np.meshgrid(c1 + r1 * u, c2 + r2 * u, indexing="ij")
-    inside = model.section_M2(prm, U, V, h, phi0) > 0
-    R = np.full(U.shape, np.inf)
-    if inside.any():
-        c = crossings(prm, h, np.column_stack([U[inside], V[inside]]), n_crossings=K, phi0=phi0,
-                      tol=max(tol, SECTIONS_TOL), tmax=tmax * K, threads=threads)
-        ok = c.count >= K
-        r = np.full(ok.shape, np.inf)
-        r[ok] = np.hypot(c.data[ok, K - 1, 1] - U[inside][ok], c.data[ok, K - 1, 2] - V[inside][ok])
-        R[inside] = r
-    pad = np.pad(R, 1, constant_values=np.inf)
-    nb = np.stack([pad[1 + di:1 + di + grid, 1 + dj:1 + dj + grid]
-                   for di in (-1, 0, 1) for dj in (-1, 0, 1) if di or dj])
-    ismin = np.isfinite(R) & (R <= nb.min(axis=0))
-    idx = np.flatnonzero(ismin.ravel())
-    idx = idx[np.argsort(R.ravel()[idx])]
-    return np.column_stack([U.ravel()[idx], V.ravel()[idx]])
+def _points(x) -> np.ndarray:
+    return x.points if isinstance(x, PeriodicOrbit) else np.atleast_2d(x)
 
 
-def _map_guesses(system, K, grid, line) -> np.ndarray:
-    """:func:`periodic_guesses` of a map other than a section map."""
-    seeds = [np.asarray(system.symmetry_line_points(line), float).reshape(-1, 2)] \
-        if hasattr(system, "symmetry_line_points") else []
-    domain = getattr(system, "domain", None)
-    if domain is None:
-        if not seeds:
-            raise ParameterError(f"{type(system).__name__} has no domain and no symmetry lines to search: give "
-                                 "guesses=")
-        return seeds[0]
-    (a0, a1), (b0, b1) = domain
-    u = (np.arange(grid) + 0.5) / grid
-    U, V = np.meshgrid(a0 + (a1 - a0) * u, b0 + (b1 - b0) * u, indexing="ij")
-    X = np.column_stack([U.ravel(), V.ravel()])
-    img = images(system, X, K)[:, -1]
-    R = np.linalg.norm(difference(system, img, X), axis=1).reshape(grid, grid)
-    R[~np.isfinite(R)] = np.inf
-    pad = np.pad(R, 1, constant_values=np.inf)
-    nb = np.stack([pad[1 + di:1 + di + grid, 1 + dj:1 + dj + grid]
-                   for di in (-1, 0, 1) for dj in (-1, 0, 1) if di or dj])
-    idx = np.flatnonzero((np.isfinite(R) & (R <= nb.min(axis=0))).ravel())
-    idx = idx[np.argsort(R.ravel()[idx])]
-    return np.concatenate(seeds + [X[idx]])
+def _near(smap, orb, x, tol) -> bool:
+    """A point of ``orb`` lies within ``tol`` (strictly) of the point x, on the map's cylinder."""
+    return bool(np.min(np.linalg.norm(difference(smap, orb.points, x), axis=1)) < tol)
 
 
-def _map_search(system, K, grid, line, max_guesses, max_iter, same_tol, guesses) -> list:
-    """:func:`search_periodic_orbits` of a map other than a section map."""
-    G = periodic_guesses(system, K, grid=grid, line=line) if guesses is None else \
-        np.asarray(guesses, float).reshape(-1, 2)
-    found: list[PeriodicOrbit] = []
-    tried = 0
-    for g in G:
-        if tried >= max_guesses:
-            break
-        if any(not o.degenerate and _maps_onto(system, g[None, :], o.points, 1e-4) for o in found):
-            continue
-        tried += 1
-        try:
-            orb = find_periodic_orbit(system, g, K, max_iter=max_iter)
-        except ParameterError:
-            continue
-        if orb.period == K and not any(_maps_onto(system, orb.points[:1], o.points, same_tol) for o in found):
-            found.append(orb)
-    out = []
-    for o in found:
-        k = int(np.lexsort((o.points[:, 1], o.points[:, 0]))[0])
-        out.append(o if k == 0 else _orbit(system, np.roll(o.points, -k, axis=0), np.roll(o.map_jacobians, -k, axis=0),
-                                           np.roll(o.return_times, -k), o.residual, o.iterations, o.symmetric))
-    return sorted(out, key=lambda o: (o.degenerate, o.points[0, 0], o.points[0, 1]))
+def _same_orbit(smap, a, b, tol) -> bool:
+    """A point of ``a`` lies within ``tol`` of a point of ``b`` (orbits or (n, 2) arrays), on the map's cylinder."""
+    d = np.linalg.norm(difference(smap, _points(a)[:, None, :], _points(b)[None, :, :]), axis=2)
+    return bool(np.min(d) <= tol)
 
 
-def _canonical(orb: PeriodicOrbit) -> PeriodicOrbit:
+def _canonical(smap, orb: PeriodicOrbit) -> PeriodicOrbit:
     """The same orbit from its point nearest p2 = 0 (then smallest p1)."""
     k = int(np.lexsort((orb.points[:, 0], np.round(np.abs(orb.points[:, 1]), 9)))[0])
     if k == 0:
         return orb
-    return _orbit(_section_map_of(orb), np.roll(orb.points, -k, axis=0),
-                  np.roll(orb.map_jacobians, -k, axis=0), np.roll(orb.return_times, -k), orb.residual,
-                  orb.iterations, orb.symmetric)
+    return _orbit(smap, np.roll(orb.points, -k, axis=0), np.roll(orb.map_jacobians, -k, axis=0),
+                  np.roll(orb.return_times, -k), orb.residual, orb.iterations, orb.symmetric)
 
 
-def _half_turn_partners(prm, h, orbits, same_tol, *, tol, max_iter, tmax, threads) -> list:
-    """The half-turn partners of the isolated ``orbits`` not among them yet."""
+def _partners(smap, orbits, same_tol, *, max_iter, threads) -> list:
+    """The partners under the map's ``partner_points`` (an orbit run backwards) of the isolated ``orbits``
+    not among them yet, each polished by Newton."""
     isolated = [o for o in orbits if not o.degenerate]
     if not isolated:
         return []
-    images = partner_points(prm, h, np.concatenate([o.points for o in isolated]), phi0=isolated[0].phi0, tol=tol,
-                            threads=threads).points
+    images = smap.partner_points(np.concatenate([o.points for o in isolated]), threads=threads)
+    if images is None:
+        return []
     added: list[PeriodicOrbit] = []
     start = 0
     for o in isolated:
         pts = images[start:start + o.period][::-1]
         start += o.period
-        if not np.all(np.isfinite(pts)) or any(f.same_orbit(pts, same_tol) for f in orbits + added):
+        if not np.all(np.isfinite(pts)) or any(_same_orbit(smap, f, pts, same_tol) for f in orbits + added):
             continue
         try:
-            partner = find_periodic_orbit(prm, h, pts if o.period >= MULTIPLE_SHOOTING_FROM else pts[0], o.period,
-                                          phi0=o.phi0, tol=tol, max_iter=max_iter, tmax=tmax)
+            partner = find_periodic_orbit(smap, pts if o.period >= MULTIPLE_SHOOTING_FROM else pts[0], o.period,
+                                          max_iter=max_iter)
         except ParameterError:
             continue
-        if partner.period == o.period and not partner.degenerate and partner.same_orbit(pts, 1e3 * same_tol):
+        if partner.period == o.period and not partner.degenerate and _same_orbit(smap, partner, pts, 1e3 * same_tol):
             added.append(partner)
     return added
 
 
 @system_first(systems="map", settings=("phi0", "tol"))
 def periodic_guesses(system, period, *, grid=12, line=None, tmax=SEARCH_TMAX, threads=None) -> np.ndarray:
-    """The Newton starts of :func:`search_periodic_orbits` in order: the symmetry-line seeds, then
-    the local minima of ``|P^K(x) - x|`` on a ``grid`` x ``grid`` grid, best first."""
+    """The Newton starts of :func:`search_periodic_orbits` in order: the map's ``symmetric_seeds``, ``line``
+    per symmetry line, then its ``grid_seeds``, the local minima of ``|P^K(x) - x|`` on a ``grid`` x ``grid``
+    grid, best first; ``tmax``: the time budget of one return."""
     K = _check_period(period)
     grid = validation.integer("grid", grid, 2, 1000)
     line = 8 * grid if line is None else validation.integer("line", line, 2)
-    if not is_section_map(system):
-        return _map_guesses(system, K, grid, line)
-    prm, h, phi0, tol = system.params, system.h, system.phi0, system.tol
-    if model.allowed_ellipse(prm, h, phi0) is None:
-        raise ParameterError(f"the allowed region is empty at h = {h:g}; allowed: "
-                             f"{model.describe_region(prm, h, phi0)}")
-    return np.concatenate([symmetry_line_points(prm, h, K, n=line, phi0=phi0, tol=tol, tmax=tmax, threads=threads),
-                           _grid_seeds(prm, h, K, grid, phi0, tol, tmax, threads)])
+    smap = system.with_tmax(tmax)
+    return np.concatenate([np.asarray(smap.symmetric_seeds(K, line, threads=threads), float).reshape(-1, 2),
+                           np.asarray(smap.grid_seeds(K, grid, threads=threads), float).reshape(-1, 2)])
 
 
 @system_first(systems="map", settings=("phi0", "tol"))
@@ -508,45 +391,41 @@ def search_periodic_orbits(system, period, *, grid=12, line=None, max_guesses=60
                            tmax=SEARCH_TMAX, time_limit=None, same_tol=SAME_ORBIT_TOL, threads=None,
                            guesses=None) -> list:
     """The periodic orbits of minimal period ``period`` found from :func:`periodic_guesses` (or
-    ``guesses``), each once, completed by symmetry, isolated before degenerate
-    (docs/commands/periodic.md)."""
+    ``guesses``), each once, completed by symmetry (the map's linear reversor, exactly; its
+    ``partner_points``, by Newton), isolated before degenerate (docs/commands/periodic.md)."""
     K = _check_period(period)
     max_guesses = validation.integer("max_guesses", max_guesses, 1)
-    if not is_section_map(system):
-        return _map_search(system, K, grid, line, max_guesses, max_iter, same_tol, guesses)
-    prm, h, phi0, tol = system.params, system.h, system.phi0, system.tol
+    smap = system.with_tmax(tmax)
     if guesses is None:
-        guesses = periodic_guesses(prm, h, K, grid=grid, line=line, phi0=phi0, tol=tol, tmax=tmax, threads=threads)
+        guesses = periodic_guesses(system, K, grid=grid, line=line, tmax=tmax, threads=threads)
     else:
         guesses = np.asarray(guesses, float).reshape(-1, 2)
-    reversible = is_reversible(prm, phi0)
+    R = smap.reflection
     t0 = time.perf_counter()
     newton: list[PeriodicOrbit] = []
     tried = 0
     for g in guesses:
         if tried >= max_guesses or (time_limit is not None and time.perf_counter() - t0 > time_limit):
             break
-        if any(not o.degenerate and (o.distance_to(g) < 1e-4 or (reversible and o.distance_to(reversor(g)) < 1e-4))
+        if any(not o.degenerate and (_near(smap, o, g, 1e-4) or (R is not None and _near(smap, o, R(g), 1e-4)))
                for o in newton):
             continue
         tried += 1
         try:
-            orb = find_periodic_orbit(prm, h, g, K, phi0=phi0, tol=tol, max_iter=max_iter, tmax=tmax)
+            orb = find_periodic_orbit(smap, g, K, max_iter=max_iter)
         except ParameterError:
             continue
-        if orb.period == K and not any(o.same_orbit(orb, same_tol) for o in newton):
+        if orb.period == K and not any(_same_orbit(smap, o, orb, same_tol) for o in newton):
             newton.append(orb)
-    if symmetry.has_half_turn_symmetry(prm, phi0):
-        newton += _half_turn_partners(prm, h, newton, same_tol, tol=tol, max_iter=max_iter, tmax=tmax,
-                                      threads=threads)
+    newton += _partners(smap, newton, same_tol, max_iter=max_iter, threads=threads)
     found: list[PeriodicOrbit] = []
     for o in newton:
-        if any(f.same_orbit(o, same_tol) for f in found):
+        if any(_same_orbit(smap, f, o, same_tol) for f in found):
             continue
         found.append(o)
-        if reversible and not o.symmetric:
-            found.append(mirror_orbit(o))
-    found = [_canonical(o) for o in found]
+        if R is not None and not o.symmetric:
+            found.append(_mirror(smap, o))
+    found = [_canonical(smap, o) for o in found]
     return sorted(found, key=lambda o: (o.degenerate, o.points[0, 0], o.points[0, 1]))
 
 

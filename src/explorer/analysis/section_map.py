@@ -15,6 +15,7 @@ from explorer.analysis import budget, system_sections
 from explorer.analysis.crossings_run import run
 from explorer.analysis.flow_lift import lifted_increments
 from explorer.analysis.map_result import RETURN_TMAX, MapResult
+from explorer.analysis.section_symmetry import grid_seeds, half_turn_partners, half_turn_seeds
 from explorer.integrate.methods import MAP_TOL, MAX_TOL, MIN_TOL
 from explorer.integrate.tangent import return_map_taylor
 from explorer.kernels import STATUS_CANCELLED, STATUS_DONE, STATUS_NAMES
@@ -157,6 +158,27 @@ class SectionMap:
         c1, c2, r1, r2 = e
         half = r1 * math.sqrt(max(0.0, 1.0 - (c2 / r2) ** 2)) * (1.0 - 1e-3)     # off the edge M = 0
         return np.column_stack([np.linspace(c1 - half, c1 + half, n), np.zeros(n)])
+
+    def symmetric_seeds(self, period: int, n: int, *, threads=None) -> np.ndarray:
+        """Seeds (m, 2) of the symmetric orbits of period ``period``, from ``n`` points of each symmetry
+        line (:func:`explorer.analysis.section_symmetry.half_turn_seeds`)."""
+        return half_turn_seeds(self, period, n, threads)
+
+    def grid_seeds(self, period: int, grid: int, *, threads=None) -> np.ndarray:
+        """The local minima of |P^K(x) - x| on a ``grid`` x ``grid`` grid, best first
+        (:func:`explorer.analysis.section_symmetry.grid_seeds`)."""
+        return grid_seeds(self, period, grid, threads)
+
+    def partner_points(self, points, *, threads=None):
+        """The images (n, 2) of ``points`` under the half-turn reversor T, which maps an orbit to an orbit
+        run backwards, where T is a symmetry (docs/model.md, "Symmetries"); else None."""
+        if not symmetry.has_half_turn_symmetry(self.params, self.phi0):
+            return None
+        return half_turn_partners(self, points, threads).points
+
+    def with_tmax(self, tmax) -> SectionMap:
+        """This map with the time budget ``tmax`` of one return."""
+        return SectionMap(self.params, self.h, phi0=self.phi0, tol=self.tol, tmax=tmax)
 
     @property
     def section_label(self) -> float:

@@ -32,12 +32,15 @@ runs: the points lifted to states, then the System's crossings of the map's sect
 """
 from __future__ import annotations
 
+import copy
 import functools
 import numbers
 
 import numpy as np
 
 from explorer.analysis.map_result import RETURN_TMAX, MapResult
+from explorer.analysis.maps import grid_minima
+from explorer.analysis.symmetry_lines import symmetric_seeds
 from explorer.analysis.system_sections import is_system, linear_section, system_crossings
 from explorer.integrate.methods import MAP_TOL, MAX_TOL, MIN_TOL
 from explorer.kernels import STATUS_NAMES
@@ -602,6 +605,28 @@ class SystemSectionMap:
             pts = (lo + (hi - lo) * (np.arange(n) + 0.5) / n)[:, None] * v
             lines.append(pts[self.allowed(pts)])
         return np.concatenate(lines) if lines else np.empty((0, 2))
+
+    def symmetric_seeds(self, period: int, n: int, *, threads=None) -> np.ndarray:
+        """Seeds (m, 2) of the orbits of period ``period`` symmetric under the linear reversor, from ``n``
+        points of its fixed line on each half of the section
+        (:func:`explorer.analysis.symmetry_lines.symmetric_seeds`); none without one."""
+        return symmetric_seeds(self, period, n)
+
+    def grid_seeds(self, period: int, grid: int, *, threads=None) -> np.ndarray:
+        """:func:`explorer.analysis.maps.grid_minima` over :attr:`domain`."""
+        return grid_minima(self, period, grid)
+
+    def partner_points(self, points, *, threads=None):
+        """The images (n, 2) of ``points`` under the first of :attr:`reversors` not linear in coords (an orbit
+        run backwards; a linear one gives the exact mirror image, :attr:`reflection`), else None."""
+        R = next((R for R in self.reversors if not isinstance(R, _Linear)), None)
+        return None if R is None else R(np.asarray(points, dtype=np.float64))
+
+    def with_tmax(self, tmax) -> SystemSectionMap:
+        """This map with the time budget ``tmax`` of one return (its lift and domain kept)."""
+        out = copy.copy(self)
+        out.tmax = validation.real("tmax", tmax, 0.0, lo_open=True)
+        return out
 
     def require_reversor(self, what: str):
         """The first of :attr:`reversors`; ParameterError naming ``what`` needs it when there is none."""

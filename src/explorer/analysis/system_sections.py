@@ -107,11 +107,33 @@ class Section:
         return np.asarray(y, dtype=np.float64) @ self.a + self.b
 
 
+#: (content hash, parameter values, section) -> its Section: a map's section, parsed once
+_SECTIONS: dict = {}
+_SECTIONS_KEPT = 256
+
+
 def linear_section(system, section) -> Section:
     """The section ``section = 0`` of ``system``: a SymPy expression (or a state symbol) linear in
-    the state, with numbers and the system's parameters (at their values) as coefficients.
-    ParameterError naming ``section`` otherwise: not an expression, a symbol that is neither a
-    state variable nor a parameter, a term that is not linear in the state, no state at all."""
+    the state, with numbers and the system's parameters (at their values) as coefficients, parsed
+    once per system content, parameter values and expression.  ParameterError naming ``section``
+    otherwise: not an expression, a symbol that is neither a state variable nor a parameter, a term
+    that is not linear in the state, no state at all."""
+    import sympy as sp
+
+    key = None
+    if isinstance(section, sp.Basic):
+        key = (system.content_hash, tuple(system.parameter_array()), section)
+        if key in _SECTIONS:
+            return _SECTIONS[key]
+        if len(_SECTIONS) >= _SECTIONS_KEPT:
+            _SECTIONS.clear()
+    sec = _parse_section(system, section)
+    if key is not None:
+        _SECTIONS[key] = sec
+    return sec
+
+
+def _parse_section(system, section) -> Section:
     import sympy as sp
 
     from explorer.model.validation import did_you_mean
