@@ -137,7 +137,9 @@ def _flow(system, backward: bool, jacobian: bool):
         if backward:
             base = System({s: -f for s, f in zip(system.states, system.rhs)}, parameters=dict(system.parameters),
                           energy=system.energy, name=f"{system.name}_reversed")
-        _FLOWS[key] = base.variational(2) if jacobian else base
+        flow = base.variational(2) if jacobian else base
+        _ = flow.content_hash, flow.flow_hash    # hashed once: with_ copies them to every integration's system
+        _FLOWS[key] = flow
     flow = _FLOWS[key]
     return flow if flow is system else flow.with_(**{p.name: v for p, v in system.parameters.items()})
 
