@@ -12,7 +12,15 @@ section and measures, in the page (polled every animation frame):
 
 Times include Playwright's round trips (a few ms each; the painted times two of them, so they
 err on the slow side).  Usage: python benchmarks/bench_serve.py [REPEATS]
-[--breakdown] [--empty]
+[--breakdown] [--empty] [--megno]
+
+``--megno`` measures the MEGNO layer instead (docs/commands/serve.md, "Chaos layer"): per repeat, a
+page opened with the layer on, adaptive (``megno=1``) and exact (``megno=exact``) in turn, waits for
+its raster of the whole window, then zooms in with the wheel at a point of the section and
+measures the time from the wheel to the final (128^2) raster of the new window in the page, and
+the server process's CPU seconds meanwhile; both modes zoom at the same points, so their windows
+are the same.  It reports the medians and the exact / adaptive ratios, and the share of the final
+rasters' cells of the same class (<Y> > 4).
 
 ``--empty`` clears the page before each click: every orbit is clicked on an empty section
 (the latency of a first click), instead of beside the 0 to 40,000 crossings of the clicks before.
@@ -133,6 +141,90 @@ def main(repeats: int = 5, breakdown: bool = False, empty: bool = False) -> None
         print_breakdown(trace, clicks, seen)
 
 
+#: the MEGNO layer's raster: its data, and the figure's ranges
+RASTER = "Bokeh.documents[0].get_model_by_name('raster').data"
+RANGES = ("() => { const f = Bokeh.documents[0].get_model_by_name('section');"
+          " return [f.x_range.start, f.x_range.end, f.y_range.start, f.y_range.end]; }")
+#: the final raster of the figure's window is in the page
+FINAL = (f"([n]) => {{ const r = ({RANGES})(); const d = {RASTER}; return d.n.length > 0 && d.n[0] === n && "
+         "d.complete[0] && d.x[0] === r[0] && Math.abs(d.x[0] + d.dw[0] - r[1]) < 1e-12 && d.y[0] === r[2]; }")
+#: points of the section (in units of the region's half axes) the wheel zooms in at
+ZOOMS = ((0.0, 0.0), (0.55, 0.05), (-0.3, 0.45), (0.2, -0.5), (-0.6, -0.1))
+
+
+def _cpu(pid: int) -> float:
+    """CPU seconds (user + system) of process ``pid`` so far, all its threads."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def megno_zoom(repeats: int = 3, n: int = 128) -> None:
+    """--megno: the MEGNO layer's final raster after a zoom, adaptive and exact in one run."""
+    import numpy as np
+    from playwright.sync_api import sync_playwright
+
+    from explorer import model
+
+    c1, c2, r1, r2 = model.allowed_ellipse(model.FIGURE4.with_(mu=0.03), 2.0)
+    proc = subprocess.Popen([sys.executable, "-m", "explorer", "serve", "--port", "0", "--mu", "0.03"],
+                            stdout=subprocess.PIPE, text=True)
+    url = proc.stdout.readline().strip()
+    sep = "&" if "?" in url else "?"
+    times: dict = {"adaptive": [], "exact": []}
+    cpus: dict = {"adaptive": [], "exact": []}
+    same = []
+    try:
+        with sync_playwright() as p:
+            ctx = p.chromium.launch_persistent_context(tempfile.mkdtemp(), executable_path=CHROMIUM, args=ARGS,
+                                                       headless=True, viewport={"width": 1100, "height": 800})
+            for i in range(repeats + 1):                      # (the first: warm-up, not counted)
+                u, v = ZOOMS[(i - 1) % len(ZOOMS)]
+                modes = ("adaptive", "exact") if i % 2 else ("exact", "adaptive")
+                finals = []
+                for mode in modes:
+                    page = ctx.new_page()
+                    page.goto(f"{url}{sep}megno={'exact' if mode == 'exact' else '1'}")
+                    page.wait_for_function(READY, timeout=120_000)
+                    page.wait_for_function(FINAL, arg=[n], timeout=600_000)       # the whole window's raster
+                    page.mouse.move(*page.evaluate(TO_SCREEN, [c1 + u * r1, c2 + v * r2]))
+                    before = page.evaluate(RANGES)
+                    cpu0, t0 = _cpu(proc.pid), time.perf_counter()
+                    page.mouse.wheel(0, -400)
+                    page.wait_for_function(f"() => ({RANGES})()[0] !== {before[0]!r}", timeout=60_000)
+                    page.wait_for_function(FINAL, arg=[n], timeout=600_000)
+                    wall, cpu = time.perf_counter() - t0, _cpu(proc.pid) - cpu0
+                    finals.append((page.evaluate(RANGES), np.array(page.evaluate(f"() => Array.from({RASTER}"
+                                                                                ".image[0])"), float)))
+                    page.close()
+                    if i:
+                        times[mode].append(wall)
+                        cpus[mode].append(cpu)
+                assert finals[0][0] == finals[1][0], (finals[0][0], finals[1][0])     # the same window
+                x0, x1, y0, y1 = finals[0][0]
+                print(f"  zoom {i}{'' if i else ' (warm-up)'} at ({u:+.2f}, {v:+.2f}) of the half axes: window "
+                      f"p1 {x0:.4f}..{x1:.4f}, p2 {y0:.4f}..{y1:.4f}" + (f"; exact {times['exact'][-1]:.2f} s, "
+                      f"{cpus['exact'][-1]:.2f} CPU-s; adaptive {times['adaptive'][-1]:.2f} s, "
+                      f"{cpus['adaptive'][-1]:.2f} CPU-s" if i else ""), flush=True)
+                inside = np.isfinite(finals[1][1])
+                if i:
+                    same.append(float(np.mean((finals[0][1][inside] > 4) == (finals[1][1][inside] > 4))))
+            ctx.close()
+    finally:
+        proc.terminate()
+        proc.wait()
+    med = {m: (statistics.median(times[m]), statistics.median(cpus[m])) for m in times}
+    print(f"SERVE MEGNO layer ({repeats} zooms, mu = 0.03, {n}^2, T = 200, warm server, load average "
+          f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)")
+    for m in ("exact", "adaptive"):
+        print(f"  wheel -> final raster, {m:<8}: median {med[m][0]:.2f} s wall (min {min(times[m]):.2f}, max "
+              f"{max(times[m]):.2f}), {med[m][1]:.2f} CPU-s of the server (min {min(cpus[m]):.2f}, max "
+              f"{max(cpus[m]):.2f})")
+    print(f"  exact / adaptive: {med['exact'][0] / med['adaptive'][0]:.2f}x wall, "
+          f"{med['exact'][1] / med['adaptive'][1]:.2f}x CPU (medians); per zoom: "
+          + ", ".join(f"{e / a:.2f}x" for e, a in zip(cpus["exact"], cpus["adaptive"])) + " CPU")
+    print(f"  cells of the same class (<Y> > 4): {', '.join(f'{100 * x:.2f} %' for x in same)}")
+
+
 def print_breakdown(trace: str, clicks: list, seen: list) -> None:
     """Medians (ms) of the steps of each click, from the server's trace and the page's times."""
     events = []
@@ -171,4 +263,7 @@ def print_breakdown(trace: str, clicks: list, seen: list) -> None:
 
 if __name__ == "__main__":
     numbers = [a for a in sys.argv[1:] if not a.startswith("--")]
+    if "--megno" in sys.argv[1:]:
+        megno_zoom(int(numbers[0]) if numbers else 3)
+        sys.exit(0)
     main(int(numbers[0]) if numbers else 5, breakdown="--breakdown" in sys.argv[1:], empty="--empty" in sys.argv[1:])
