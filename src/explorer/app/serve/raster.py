@@ -5,6 +5,7 @@ No web library here."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from time import monotonic
 
 import numpy as np
 
@@ -23,6 +24,8 @@ RASTER_MAX_STEPS = 100_000
 BATCH = 512
 #: the indicators the layer can show (names of the registry, explorer.kernels.indicator_table)
 INDICATORS = ("megno", "frequency_diffusion")
+#: an adaptive raster's partial image at most this often (s), unless BATCH cells were computed since the last
+IMAGE_SECONDS = 0.25
 #: N of the layer's frequency diffusion: nu1 from the first N returns, nu2 from the next N
 DIFFUSION_ITERATES = 100
 #: seeds per call of frequency_diffusion
@@ -131,12 +134,17 @@ def adaptive_raster(settings: Settings, window: Window, n: int, time: float = RA
         shown = np.where(inside, np.kron(coarser, np.ones((k, k))), np.nan)
     raster = CellRaster(None, None, inside, "megno", RULES["megno"], default_threshold("megno", time), {})
     coarse = n // 8 if coarser is None else coarser.shape[0]
+    last, pending = monotonic(), 0
     for r, c in refinement(raster, inside, n, coarse, TOLERANCE, n * n):
         for a in range(0, len(r), BATCH):
             rr, cc = r[a:a + BATCH], c[a:a + BATCH]
             v = np.asarray(settings.megno(P1[rr, cc], P2[rr, cc], time, RASTER_MAX_STEPS), float)
             raster.record(rr, cc, v, np.zeros(len(v), bool), np.isfinite(v))
-            known = raster.computed | np.isfinite(raster.values)
-            yield Image(window, n, np.where(known, raster.values, shown), False, "megno", raster.computed & inside)
+            pending += len(rr)
+            if pending >= BATCH or monotonic() - last >= IMAGE_SECONDS:    # (the rule's small steps: fewer images)
+                known = raster.computed | np.isfinite(raster.values)
+                yield Image(window, n, np.where(known, raster.values, shown), False, "megno",
+                            raster.computed & inside)
+                last, pending = monotonic(), 0
     values = np.where(inside, raster.values, np.nan)
     yield Image(window, n, values, True, "megno", raster.computed & inside)
