@@ -342,7 +342,7 @@ a1 = 1.0
 a2 = 0.5
 b = 2.0
 lam = 1.0
-mu = 0.03
+mu = 0.02
 [energy]
 h = 2.0
 [compute]
@@ -351,7 +351,7 @@ lyapunov = true
 [lyapunov]
 time = 100.0
 indicators = ["megno", "sali"]
-map_resolution = 48
+map_resolution = 64
 """
 
 
@@ -364,14 +364,14 @@ def test_an_adaptive_map_panel_fills_some_cells_computes_the_rest_as_the_exact_m
     from explorer.app.runner import classify_megno
     from explorer.io.scene import parse_scene
 
-    monkeypatch.setattr(sweep, "MAP_COARSE", 6)          # a 48-cell map with a coarse lattice of 8 a side
+    monkeypatch.setattr(sweep, "MAP_COARSE", 16)         # a 64-cell map from a lattice of 16 a side
     panels = {}
     for key, text in (("adaptive", MAP_SCENE), ("exact", MAP_SCENE + "exact = true\n")):
         spec = sweep.build_spec(parse_scene(text), [0], chunk_orbits=0)
         sweep.run(spec, lambda panel, arrays, key=key: panels.__setitem__(key, arrays))
     a, e = panels["adaptive"], panels["exact"]
     done = a["map_computed"]
-    assert "map_computed" not in e and 0.5 < done.mean() < 1.0     # some cells were filled
+    assert "map_computed" not in e and 0.2 < done.mean() < 0.9     # many cells were filled
     for k in ("megno", "sali", "gali2", "mlce", "fli", "lyapunov_status", "lyapunov_dh"):
         np.testing.assert_array_equal(a[k][done], e[k][done], err_msg=k)
     for k in ("sali", "gali2", "mlce", "fli", "lyapunov_dh"):

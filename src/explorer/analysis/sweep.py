@@ -6,6 +6,7 @@ this process and hands finished panels, in order, to the parent's callback.  Pan
 """
 from __future__ import annotations
 
+import contextvars
 import math
 import os
 import time
@@ -41,6 +42,9 @@ MIN_BLOCK = 256
 INDICATOR_ARRAYS = indicator_table.NAMES + ("lyapunov_status", "lyapunov_early", "lyapunov_dh", "map_computed")
 #: the coarse lattice of an adaptive map panel: about this many cells a side (explorer.chaos_map)
 MAP_COARSE = 64
+#: ``run``'s ``check`` while it runs in this process: an adaptive map panel (one task) calls it
+#: before each batch of cells, so Ctrl-C stops it between batches (the panel is then not stored)
+_CHECK: contextvars.ContextVar = contextvars.ContextVar("sweep_check", default=None)
 
 
 @dataclass(frozen=True)
@@ -298,6 +302,9 @@ class _MapCells:
     def indicators(self, y0, **_ignored):
         import dataclasses
 
+        check = _CHECK.get()
+        if check is not None:
+            check()
         rows = self._rows(y0).ravel()
         ind, arrays = _indicator_arrays(self.spec, self.panel, rows, self.threads)
         n = len(self.panel.seeds)
@@ -421,6 +428,14 @@ def run(spec: SweepSpec, on_panel, *, jobs: int = 1, backend: str | None = None,
     """Map ``task`` over the chunks and call ``on_panel(panel_spec, arrays)`` for each completed panel,
     in panel order, in this (the parent) process."""
     checked = check if check is not None else (lambda: None)
+    token = _CHECK.set(check)
+    try:
+        _run(spec, on_panel, jobs, backend, progress, streamer, check, checked)
+    finally:
+        _CHECK.reset(token)
+
+
+def _run(spec, on_panel, jobs, backend, progress, streamer, check, checked):
     if any(spec.streamed(pos) for pos in range(len(spec.panels))):
         if streamer is None:
             raise ValueError("a streamed panel needs a streamer (the store's writer of blocks)")
