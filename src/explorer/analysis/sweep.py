@@ -142,7 +142,8 @@ def _chunks(pos: int, n: int, chunk_orbits: int, parts: int = CHUNKS_PER_PANEL_T
 
 def build_atlas_spec(scene, *, chunk_orbits: int, cells=None) -> SweepSpec:
     """The cells of a two-parameter atlas (a scene with [atlas]) as the panels of a sweep of
-    indicators only: cell i (row = sweep value, column = atlas value) with its seeds (R9);
+    indicators only: cell i (row = sweep value, column = atlas value) with its seeds (R9), or
+    with [lyapunov] map_resolution the cells of its map (adaptive as a map panel is);
     cells whose allowed region is empty are left out (drawn gray), and so are cells not in
     ``cells`` (None: all; a resumed atlas computes only its missing cells).  ``task(spec, i)``
     maps it unchanged (PanelSpec.index is the cell index)."""
@@ -155,15 +156,20 @@ def build_atlas_spec(scene, *, chunk_orbits: int, cells=None) -> SweepSpec:
         if not scene.cell_allowed(i) or (cells is not None and i not in cells):
             continue
         params, h, label = scene.cell(i)
-        p1, p2, _dropped = seed_points(scene.seeds, params, h, integ.phi0)
+        grid: tuple = ()
+        if scene.lyapunov.map_resolution:
+            p1, p2, grid = map_seeds(params, h, integ.phi0, scene.lyapunov.map_resolution)
+        else:
+            p1, p2, _dropped = seed_points(scene.seeds, params, h, integ.phi0)
         if len(p1) == 0:
             continue
         y0 = model.section_state(params, p1, p2, h, integ.phi0, integ.direction if integ.direction else 1)
-        chunks += _chunks(len(panels), len(p1), chunk_orbits, parts=1)
+        chunks += ([(len(panels), 0, len(p1))] if grid and scene.lyapunov.adaptive else
+                   _chunks(len(panels), len(p1), chunk_orbits, parts=1))
         panels.append(PanelSpec(i, label, params.as_array(), float(h), np.ascontiguousarray(y0),
-                                np.column_stack([p1, p2])))
+                                np.column_stack([p1, p2]), grid))
     return SweepSpec(tuple(panels), integ.method, integ.tol, integ.dt, 1, integ.effective_tmax, integ.max_steps,
-                     integ.phi0, integ.direction, tuple(chunks), scene.lyapunov, False, ())
+                     integ.phi0, integ.direction, tuple(chunks), scene.lyapunov, False, (), tuple(map_rule().values()))
 
 
 def map_seeds(params, h: float, phi0: float, resolution: int):

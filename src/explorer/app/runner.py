@@ -573,6 +573,8 @@ def run_atlas(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
             n_ok = np.zeros((rows, cols), np.int64) if held is None else held.orbits.copy()
             wall = np.zeros((rows, cols)) if held is None else held.wall_time.copy()
             done = np.zeros((rows, cols), bool) if held is None else held.done.copy()
+            held_computed = None if held is None else held.computed
+            computed_cells = np.full((rows, cols), np.nan) if held_computed is None else held_computed.copy()
             client = None
             if backend == "dask":
                 client = _dask_client(scheduler, jobs)
@@ -589,7 +591,8 @@ def run_atlas(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
                                         row_values=scene.sweep_values, column_values=scene.atlas_values,
                                         fraction=frac, error=err, orbits=n_ok, wall_time=wall,
                                         threshold=scene.lyapunov.threshold,
-                                        provenance=store.provenance({"scene": scene.name}), done=done)
+                                        provenance=store.provenance({"scene": scene.name}), done=done,
+                                        computed=computed_cells if scene.lyapunov.adaptive else None)
                 last[:] = [time.perf_counter(), 0]
 
             def on_cell(panel, arrays):
@@ -597,6 +600,8 @@ def run_atlas(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
                 f, e, n = chaotic_fraction(classify_megno(arrays), scene.lyapunov.threshold,
                                            arrays["lyapunov_status"] == 0)
                 frac[r, c], err[r, c], n_ok[r, c], wall[r, c] = f, e, n, arrays["wall_time"]
+                if "map_computed" in arrays:
+                    computed_cells[r, c] = np.mean(arrays["map_computed"])
                 done[r, c] = True
                 last[1] += 1
                 if time.perf_counter() - last[0] >= ATLAS_COMMIT_SECONDS:
@@ -620,7 +625,7 @@ def run_atlas(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
         if draw and (computed or force or _figure_stale(stem, out, settings)):
             data = atlas_store.read_atlas(out)
             ly = scene.lyapunov
-            title = (f"{scene.name}: chaotic fraction\n{scene.seeds.n} seeds per cell, MEGNO time {ly.time:g}"
+            title = (f"{scene.name}: chaotic fraction\n{atlas_seeding(scene, data)}, MEGNO time {ly.time:g}"
                      + (", early classification" if ly.early_stop else ""))
             figure_paths = tuple(save_figure(atlas_heatmap(data, title=title, dpi=scene.figure.dpi), stem,
                                              text={FIGURE_SETTINGS_KEY: settings}))
@@ -628,6 +633,18 @@ def run_atlas(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
                        crossings=0, stopped=0, statuses={}, max_dh=0.0, warning=None, fractions=(),
                        threshold=float(scene.lyapunov.threshold), figure=figure_paths,
                        wall_time=time.perf_counter() - t_start, products={"cells": computed})
+
+
+def atlas_seeding(scene, data) -> str:
+    """How an atlas's cells are seeded, for its title: [seeds] n, or the map (and, adaptive, the
+    fraction of its cells computed over the atlas)."""
+    n = scene.lyapunov.map_resolution
+    if not n:
+        return f"{scene.seeds.n} seeds per cell"
+    text = f"a {n}x{n} map per cell"
+    if data.computed is not None and np.isfinite(data.computed).any():
+        text += f" ({float(np.nanmean(data.computed)):.0%} of map cells computed, adaptive)"
+    return text
 
 
 def _stored_atlas(out: Path, force: bool):

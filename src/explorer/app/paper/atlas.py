@@ -15,12 +15,13 @@ def atlas_figure(*, results_dir="results", quick=False, quiet=True, dpi=200) -> 
     import numpy as np
 
     from explorer.app.atlas_figure import atlas_heatmap
+    from explorer.app.runner import atlas_seeding
     from explorer.io.store.atlas import read_atlas
 
     scene, out, reduced, _summary = ensure_sweep(PRESET, results_dir=results_dir, quick=quick, quiet=quiet)
     atlas = read_atlas(out)
     ly = scene.lyapunov
-    title = (f"chaotic fraction (MEGNO > {ly.threshold:g}, T = {ly.time:g}), {scene.seeds.n} seeds per cell"
+    title = (f"chaotic fraction (MEGNO > {ly.threshold:g}, T = {ly.time:g}), {atlas_seeding(scene, atlas)}"
              + (" [reduced settings: figures --quick]" if reduced else ""))
     fig = atlas_heatmap(atlas, title=title, dpi=dpi)
     frac = np.asarray(atlas.fraction, float)

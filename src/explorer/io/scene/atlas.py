@@ -23,8 +23,6 @@ def check_atlas(scene, parameters=SWEEP_PARAMETERS) -> None:
     if "lyapunov" not in scene.compute or "sections" in scene.compute or "separatrices" in scene.compute:
         _fail("compute", "of an atlas scene must be lyapunov = true, sections = false, separatrices = false "
               "(an atlas stores only the chaotic fraction per cell)")
-    if scene.lyapunov.map_resolution:
-        _fail("lyapunov.map_resolution", "is not used by an atlas scene (its cells are seeded by [seeds])")
     object.__setattr__(scene, "atlas_values", _distinct_reals("atlas.values", scene.atlas_values))
     for i in range(scene.n_cells):
         try:

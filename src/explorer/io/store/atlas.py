@@ -31,6 +31,7 @@ class AtlasData:
     hash: str
     attrs: dict
     done: np.ndarray | None = None
+    computed: np.ndarray | None = None     # per cell: the fraction of its map's cells computed (None: all)
 
     @property
     def complete(self) -> bool:
@@ -40,9 +41,10 @@ class AtlasData:
 
 def write_atlas(path, *, scene_name: str, scene_text: str, hash: str, row_parameter: str, column_parameter: str,
                 row_values, column_values, fraction, error, orbits, wall_time, threshold: float,
-                provenance: dict | None = None, done=None) -> Path:
+                provenance: dict | None = None, done=None, computed=None) -> Path:
     """Write the atlas file at ``path`` whole and atomically; ``done`` (R, C booleans, default all)
-    marks the cells it holds."""
+    marks the cells it holds; ``computed`` (R, C, optional): the fraction of each cell's map
+    computed, not filled (an adaptive map, docs/scenes.md)."""
     import h5py
 
     path = Path(path)
@@ -61,6 +63,8 @@ def write_atlas(path, *, scene_name: str, scene_text: str, hash: str, row_parame
             f["orbits"] = np.asarray(orbits, np.int64)
             f["wall_time"] = np.asarray(wall_time, float)
             f["done"] = np.ones(np.shape(fraction), np.int8) if done is None else np.asarray(done, np.int8)
+            if computed is not None:
+                f["computed"] = np.asarray(computed, float)
     return path
 
 
@@ -75,4 +79,5 @@ def read_atlas(path) -> AtlasData:
         return AtlasData(str(attrs["row_parameter"]), str(attrs["column_parameter"]), f["row_values"][()],
                          f["column_values"][()], f["fraction"][()], f["error"][()], f["orbits"][()],
                          f["wall_time"][()], float(attrs["threshold"]), str(attrs["hash"]), attrs,
-                         f["done"][()].astype(bool) if "done" in f else None)
+                         f["done"][()].astype(bool) if "done" in f else None,
+                         f["computed"][()] if "computed" in f else None)
