@@ -238,7 +238,8 @@ def format_report(r: SweepReport) -> str:
         lines.append(f"  chaotic fraction reclassified at MEGNO > {r.threshold:g} (stored MEGNO, "
                      f"nothing recomputed) for panels {', '.join(str(i) for i in r.restamped)}")
     for label, done, cells in r.map_cells:
-        lines.append(f"  {label}: map cells computed {done} of {cells} ({done / max(cells, 1):.1%}), the rest filled "
+        head = f"{label}: " if label else ""
+        lines.append(f"  {head}map cells computed {done} of {cells} ({done / max(cells, 1):.1%}), the rest filled "
                      "(adaptive; [lyapunov] exact = true computes every cell)")
     for label, frac, err in r.fractions:
         lines.append(f"  {label}: chaotic fraction {frac:.3f} +- {err:.3f} (MEGNO > {r.threshold:g})")
