@@ -88,7 +88,7 @@ def test_the_symmetric_seeds_are_the_fixed_points_on_the_reversors_line(smap, el
         assert np.min(np.linalg.norm(seeds - fp.point, axis=1)) <= 1e-9
 
 
-def test_the_search_finds_the_fixed_points_their_mirror_pairs_and_their_threefold_copies(smap, elliptic, hyperbolic):
+def test_the_search_finds_the_fixed_points_and_their_copies_under_the_threefold_symmetry(smap, elliptic, hyperbolic):
     """Seeds on the symmetry lines and grid minima over the domain: both fixed points, and the orbits
     that Hénon–Heiles' rotation by 2 pi/3 in (x, y) makes of them, which cross x = 0 elsewhere with the
     same multipliers; every orbit found returns to itself, and an asymmetric one comes with its image

@@ -112,9 +112,12 @@ def symmetric_seeds(smap, Q: int, n: int) -> np.ndarray:
     (:func:`line_point`); none without a linear reversor."""
     seeds = []
     for m in (smap, smap.opposite()):
-        if m.reflection is None:
+        try:
+            v = axes(m)[1] if m.reflection is not None else None
+        except ParameterError:      # its first reversor is not the linear one
+            v = None
+        if v is None:
             continue
-        v = axes(m)[1]
         ts = m.symmetry_line_points(n) @ v
         if ts.size < 2:
             continue
