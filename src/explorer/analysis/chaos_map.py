@@ -5,9 +5,11 @@ computes a coarse lattice of cells (spacing s), then halves s level by level: a 
 lattice is uniform when its allowed corners are of one class (chaotic or regular by the
 indicator's threshold) and, both regular, within ``tolerance`` in the indicator's compared value
 (its logarithm, clipped at the threshold: the chaotic sea's finite-time values are compared by
-class alone).  The new lattice cells of a block that is not uniform, or next to one that is not,
-or that has no allowed corner, are computed; the others are filled from their block's corners
-(bilinear in the drawn scale) with its class, and marked filled.  Each computed cell is the orbit of its own centre
+class alone).  The new lattice cells of a block that is not uniform, or that has no allowed
+corner, are computed; the others are filled from their block's corners (bilinear in the drawn
+scale) with its class, and marked filled.  Then the boundary grows: a filled cell of the new
+lattice within :data:`REACH` lattice steps (and :data:`REACH_CELLS` cells) of a computed cell of
+the other class is computed, until none is left.  Each computed cell is the orbit of its own centre
 (:func:`explorer.indicators`), so it is the exact map's cell bit for bit whatever the batches
 and threads.  What a map must give: ``domain`` (the default window), ``allowed(points)`` (the
 cells computed) and its indicators through :func:`explorer.indicators`.
@@ -31,10 +33,15 @@ MAX_RESOLUTION = 4096
 BATCH = 16384
 #: the default coarse lattice: about this many cells a side
 COARSE = 64
-#: default tolerance on the compared value (natural log for a log scale): a factor e
-TOLERANCE = 1.0
+#: default tolerance on the compared value (natural log for a log scale): a factor e^2
+TOLERANCE = 2.0
 #: class codes of the cells
 REGULAR, CHAOTIC, OUTSIDE, FAILED = 0, 1, 2, 3
+#: lattice steps (Chebyshev) around a computed cell within which a filled cell of the other class is
+#: computed, and at least :data:`REACH_CELLS` cells: farther around a regular cell (a fill misses thin
+#: regular structures in a chaotic sea), two cells around any (a thin chaotic layer is dashed in cells)
+REACH = {REGULAR: 2, CHAOTIC: 1}
+REACH_CELLS = 2
 
 
 @dataclass(frozen=True)
@@ -206,14 +213,32 @@ def _lattice(n: int, s: int) -> np.ndarray:
     return np.unique(np.r_[np.arange(0, n, s), n - 1])
 
 
-def _dilate(m: np.ndarray) -> np.ndarray:
-    """m or any of its 8 neighbours."""
-    p = np.pad(m, 1)
-    out = np.zeros_like(m)
-    for di in range(3):
-        for dj in range(3):
-            out |= p[di:di + m.shape[0], dj:dj + m.shape[1]]
-    return out
+def _growth(raster: CellRaster, allowed: np.ndarray, idx: np.ndarray, t: int):
+    """Yield (rows, cols) of the filled allowed cells of the lattice ``idx`` (spacing t) within
+    :data:`REACH` of a computed cell of another class, until none is left; the caller computes
+    each batch."""
+    ix = np.ix_(idx, idx)
+    ok = allowed[ix]
+    m = len(idx)
+    fi, fj = np.nonzero(raster.computed[ix])     # the frontier: every computed cell, then the new ones
+    while len(fi):
+        cls = raster.cls[ix]
+        kind = cls[fi, fj]
+        want = np.zeros((m, m), bool)
+        for k, steps in REACH.items():
+            reach = max(steps, -(-REACH_CELLS // t))
+            a, b = fi[kind == k], fj[kind == k]
+            for di in range(-reach, reach + 1):
+                for dj in range(-reach, reach + 1):
+                    i, j = a + di, b + dj
+                    inside = (i >= 0) & (i < m) & (j >= 0) & (j < m)
+                    i, j = i[inside], j[inside]
+                    other = cls[i, j] != k
+                    want[i[other], j[other]] = True
+        want &= ok & ~raster.computed[ix]
+        fi, fj = np.nonzero(want)
+        if len(fi):
+            yield idx[fi], idx[fj]
 
 
 def _agree(raster: CellRaster, idx: np.ndarray, tolerance: float) -> tuple:
@@ -283,7 +308,7 @@ def refinement(raster: CellRaster, allowed: np.ndarray, n: int, coarse: int, tol
     while s > 1:
         t = s // 2
         disagree, empty = _agree(raster, idx, tolerance)
-        refine = _dilate(disagree) | empty
+        refine = disagree | empty
         new = _lattice(n, t)
         R, C = np.meshgrid(new, new, indexing="ij")
         fresh = ~(np.isin(R, idx) & np.isin(C, idx)) & allowed[R, C]
@@ -298,4 +323,10 @@ def refinement(raster: CellRaster, allowed: np.ndarray, n: int, coarse: int, tol
         left -= int(need.sum())
         fill = ~need
         raster.fill(r[fill], c[fill], idx[bi[fill]], idx[bi[fill] + 1], idx[bj[fill]], idx[bj[fill] + 1])
+        for gr, gc in _growth(raster, allowed, new, t) if left else ():
+            if len(gr) > left:
+                left = 0
+                break
+            yield gr, gc
+            left -= len(gr)
         idx, s = new, t
