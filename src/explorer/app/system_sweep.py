@@ -87,18 +87,26 @@ def panel_curves(scene, i) -> dict:
     notes = []
     smap = scene.section_map(i) if scene.separatrices or scene.manifolds.draw else None
     if scene.separatrices:
-        points, out["curves"] = separatrix_curves(smap)
-        if not points:
-            notes.append("no hyperbolic fixed point found")
+        try:
+            points, out["curves"] = separatrix_curves(smap)
+            if not points:
+                notes.append("no hyperbolic fixed point found")
+        except ParameterError as exc:
+            notes.append(_why("no separatrices", exc))
     if scene.manifolds.draw:
         try:
             out["manifolds"] = orbit_branches(smap, scene.manifolds)
         except ParameterError as exc:
-            msg = str(exc).split(" (")[0]
-            notes.append("no manifolds: " + (msg if len(msg) <= 60 else msg[:57] + "..."))
+            notes.append(_why("no manifolds", exc))
     if notes:
         out["note"] = "\n".join(notes)
     return out
+
+
+def _why(what: str, exc: Exception) -> str:
+    """A panel's note: ``what``, then the refusal's first clause in at most 60 characters."""
+    msg = str(exc).split(" (")[0]
+    return f"{what}: " + (msg if len(msg) <= 60 else msg[:57] + "...")
 
 
 def draw_system_figure(scene, out_path, stem, text=None):
