@@ -95,3 +95,12 @@ def test_bad_points_and_parameters_raise_parameter_error():
         StandardMap(float("nan"))
     with pytest.raises(ex.ParameterError, match="theta, p"):
         StandardMap(1.0)([1.0, 2.0, 3.0])
+
+
+def test_the_mirror_image_of_an_orbit_is_refused_naming_the_missing_linear_reversor():
+    """The standard map's reversors I0, I1 are not linear: mirror_orbit, exact for a linear one, says so."""
+    from explorer.analysis import periodic as pr
+
+    orb = pr.find_periodic_orbit(StandardMap(1.2), (3.1, 0.1), 1)
+    with pytest.raises(model.ParameterError, match="reflection"):
+        pr.mirror_orbit(orb)

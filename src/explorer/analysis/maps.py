@@ -55,6 +55,8 @@ class AreaPreservingMap(Protocol):
 
     def not_finite(self, x) -> str: ...
 
+    def require_reversor(self, what: str): ...
+
     def orbit_fields(self) -> dict: ...
 
     def with_tmax(self, tmax): ...
@@ -386,6 +388,10 @@ class StandardMap:
     def reversors(self) -> tuple:
         """(I0, I1)."""
         return (self.i0, self.i1)
+
+    def require_reversor(self, what: str):
+        """I0, a reversor of the map (``what`` needs one: the map always has it)."""
+        return self.i0
 
     def with_tmax(self, tmax) -> StandardMap:
         """This map: an application is one step, with no time budget."""

@@ -265,7 +265,8 @@ def mirror_orbit(orb: PeriodicOrbit) -> PeriodicOrbit:
     smap = _map_of(orb)
     if smap.reflection is None:
         smap.require_reversor("the mirror image")
-        raise ParameterError("the mirror image needs a reversor of the map that is linear in its coordinates")
+        raise ParameterError(f"the mirror image needs a reversor of the map linear in its coordinates (its "
+                             f"reflection); {smap!r} has none")
     return _mirror(smap, orb)
 
 
