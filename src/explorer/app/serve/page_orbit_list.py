@@ -67,7 +67,7 @@ class OrbitList:
         self.panel = pn.Column(pn.Row(self.choice, self.hide_button, self.delete_button), pn.pane.Bokeh(self.table),
                                pn.pane.HTML(LEGEND, width=LIST_WIDTH, styles={"font-size": "11px", "color": "#444"}),
                                width=LIST_WIDTH)
-        orbits.on_change(self.refresh)
+        orbits.on_status = self.refresh
 
     def draw(self, fig) -> None:
         """The selected orbit's markers (call after OrbitsLayer.draw), filtered from the browser's rows."""

@@ -36,10 +36,7 @@ ROW_COLUMNS = ("t", "p1", "p2", "M", "dH")
 
 
 def _empty_crossings() -> dict:
-    d = {c: np.zeros(0) for c in CROSSING_COLUMNS}
-    d["orbit"] = np.zeros(0, np.int64)
-    d["c"] = np.zeros(0, np.int64)
-    return d
+    return {c: np.zeros(0, np.int64 if c in ("orbit", "c") else float) for c in (*CROSSING_COLUMNS, "c")}
 
 
 def _empty_live() -> dict:
@@ -61,7 +58,7 @@ class OrbitsLayer:
         self.indicators: dict = {}             # orbit id -> (mean MEGNO, mLCE) over INDICATOR_TIME
         self.progress: dict = {}               # orbit id -> (crossings on the page so far, status)
         self.hidden: dict = {}                 # orbit id -> its rows (columns of crossings), hidden
-        self._listeners: list = []
+        self.on_status = lambda: None          # called after every update of the status line
         self._pending: list = []               # blocks handed in, not yet on the page
         self._flushed_at = -math.inf           # when the last flush ran (monotonic)
         self._settle_at = -math.inf            # the flush due then moves the live rows
@@ -241,10 +238,6 @@ class OrbitsLayer:
         """The ids of the orbits still computing (or paused)."""
         return {i for i, (_n, status) in self.progress.items() if status == "running"}
 
-    def on_change(self, listener) -> None:
-        """``listener()`` after every update of the status line."""
-        self._listeners.append(listener)
-
     # ------------------------------------------------------------ blocks from the worker
     def _on_block(self, ident, rows, done, status):
         """Queue the block: an orbit's first and last go at once, others at most every FLUSH_SECONDS."""
@@ -344,8 +337,7 @@ class OrbitsLayer:
             text += (f"; orbit {known[-1]}: <Y> = {megno:.3g}, mLCE = {mlce:.3g} over t <= {INDICATOR_TIME:g}"
                      f" ({style.megno_kind(megno)})")
         self.status.text = text
-        for listener in self._listeners:
-            listener()
+        self.on_status()
 
     # ------------------------------------------------------------ chaos indicators and colours
     def _on_indicators(self, ident, megno, mlce):
