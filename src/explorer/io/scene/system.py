@@ -243,8 +243,10 @@ class SystemLyapunov:
     indicators: tuple = ("megno",)
     map_indicator: str = "megno"
 
+    # a System's indicators: the Taylor method, no early classification, every map cell computed
     method = "taylor"
     early_stop = False
+    adaptive = False
 
     def __post_init__(self):
         from explorer.analysis import sections
