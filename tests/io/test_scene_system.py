@@ -134,6 +134,8 @@ def test_the_section_is_read_as_arithmetic_of_the_systems_symbols_and_nothing_is
     (("[0.5, 1.0]", "[0.5, 0.5]"), "sweep.values[1]"),
     (("[seeds]", "[lyapunov]\nindicators = [\"frequency_diffusion\"]\n[seeds]"), "lyapunov.indicators[0]"),
     (("[seeds]", "[lyapunov]\nmap_indicator = \"fli\"\n[seeds]"), "lyapunov.map_indicator"),
+    (("[seeds]", "[compute]\nsections = false\nlyapunov = true\nseparatrices = true\n[seeds]"),
+     "compute.separatrices"),
 ])
 def test_a_bad_system_scene_is_refused_naming_the_key(edit, key):
     with pytest.raises(SceneError, match=key.replace("[", r"\[").replace(".", r"\.")):

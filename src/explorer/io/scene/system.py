@@ -315,9 +315,11 @@ class SystemScene:
         if self.lyapunov.map_resolution and "lyapunov" not in self.compute:
             _fail("lyapunov.map_resolution", "needs compute.lyapunov = true")
         _atlas.check_atlas(self, swept)
-        if self.is_atlas and (self.separatrices or self.manifolds.draw):
-            _fail("compute.separatrices" if self.separatrices else "manifolds.draw",
-                  "is not used by an atlas scene (it draws a heat map, no sections)")
+        drawn = "compute.separatrices" if self.separatrices else "manifolds.draw" if self.manifolds.draw else None
+        if drawn and self.is_atlas:
+            _fail(drawn, "is not used by an atlas scene (it draws a heat map, no sections)")
+        if drawn and "sections" not in self.compute:
+            _fail(drawn, "needs compute.sections = true (it is drawn over the section figure)")
         _own_scale(self.figure, self.n_panels)
         self._check_panels()
 
