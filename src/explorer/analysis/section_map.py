@@ -165,7 +165,7 @@ class SectionMap:
         return half_turn_seeds(self, period, n, threads)
 
     def grid_seeds(self, period: int, grid: int, *, threads=None) -> np.ndarray:
-        """The local minima of |P^K(x) - x| on a ``grid`` x ``grid`` grid, best first
+        """The local minima of ``|P^K(x) - x|`` on a ``grid`` x ``grid`` grid, best first
         (:func:`explorer.analysis.section_symmetry.grid_seeds`)."""
         return grid_seeds(self, period, grid, threads)
 

@@ -82,7 +82,7 @@ def half_turn_seeds(smap, K: int, n: int, threads=None) -> np.ndarray:
 
 
 def grid_seeds(smap, K: int, grid: int, threads=None) -> np.ndarray:
-    """Points of a ``grid`` x ``grid`` grid over the allowed ellipse of ``smap`` where |P^K(x) - x|
+    """Points of a ``grid`` x ``grid`` grid over the allowed ellipse of ``smap`` where ``|P^K(x) - x|``
     has a local minimum, best first; ParameterError when the region is empty."""
     prm, h, phi0, tol, tmax = smap.params, smap.h, smap.phi0, smap.tol, smap.tmax
     e = model.allowed_ellipse(prm, h, phi0)
