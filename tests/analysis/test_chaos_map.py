@@ -104,6 +104,24 @@ def test_bad_input_names_the_parameter(standard, kw, name):
         ex.chaos_map(standard, **{"resolution": 8, "tmax": 10.0, **kw})
 
 
+def test_frequency_diffusion_map_computes_each_cell_as_frequency_diffusion_and_classifies_above_the_threshold():
+    """docs/chaos_map.md, "Frequency diffusion": a computed cell is explorer.frequency_diffusion of
+    its centre (N = tmax returns per half), bit for bit in the adaptive and the exact map; chaotic
+    where log10 |nu1 - nu2| > -6."""
+    from explorer.analysis.rotation import frequency_diffusion
+
+    smap = ex.StandardMap(K)
+    a = ex.chaos_map(smap, 24, indicator="frequency_diffusion", tmax=200, coarse=6)
+    e = ex.chaos_map(smap, 24, indicator="frequency_diffusion", tmax=200, exact=True)
+    direct = frequency_diffusion(smap, e.centres().reshape(-1, 2), center=None, iterates=200).reshape(24, 24)
+    assert np.array_equal(e.values, direct) and e.threshold == -6.0
+    assert np.array_equal(e.chaotic, direct > -6.0) and 0.1 < e.chaotic_fraction < 0.9
+    assert 0 < a.computed.sum() < a.computed.size
+    assert np.array_equal(a.values[a.computed], e.values[a.computed])
+    with pytest.raises(ex.ParameterError, match="center"):
+        ex.chaos_map(smap, 8, tmax=10.0, center=(1.0, 0.0))
+
+
 def test_standard_map_megno_is_two_on_a_torus_and_zero_near_the_elliptic_point():
     """<Y> -> 2 on a quasi-periodic orbit and -> 0 near a stable periodic orbit (Cincotta & Simo 2000);
     (pi, 0) is the elliptic fixed point of p' = p + k sin(theta) for 0 < k < 4."""

@@ -56,15 +56,20 @@ class _Rule:
 
 #: the indicators a chaos map draws, and their rules
 RULES = {"mlce": _Rule(True, True, 1e-4), "megno": _Rule(True, True, 0.5), "fli": _Rule(True, False, 0.0),
-         "sali": _Rule(False, True, 1e-16), "gali2": _Rule(False, True, 1e-16)}
-INDICATORS = tuple(n for n in table.TANGENT_NAMES if n in RULES)
+         "sali": _Rule(False, True, 1e-16), "gali2": _Rule(False, True, 1e-16),
+         "frequency_diffusion": _Rule(True, False, 0.0)}   # log10 |nu1 - nu2| already
+#: the indicator of :func:`explorer.frequency_diffusion` (tmax: its N returns per half)
+FREQUENCY = "frequency_diffusion"
+INDICATORS = tuple(n for n in table.TANGENT_NAMES if n in RULES) + (FREQUENCY,)
 
 
 def default_threshold(indicator: str, tmax: float) -> float:
     """The class threshold of ``indicator`` at time T: <Y> > 4 (MEGNO); mLCE > 3 ln T / T (the
-    regular envelope); FLI > 2 ln T (|w| grows linearly on a torus); SALI, GALI_2 < 1e-8."""
+    regular envelope); FLI > 2 ln T (|w| grows linearly on a torus); SALI, GALI_2 < 1e-8; frequency
+    diffusion log10 |nu1 - nu2| > -6 (docs/chaos_map.md)."""
     T = max(float(tmax), math.e)
-    return {"megno": 4.0, "mlce": 3.0 * math.log(T) / T, "fli": 2.0 * math.log(T)}.get(indicator, 1e-8)
+    return {"megno": 4.0, "mlce": 3.0 * math.log(T) / T, "fli": 2.0 * math.log(T), FREQUENCY: -6.0}.get(indicator,
+                                                                                                      1e-8)
 
 
 @dataclass(frozen=True)
@@ -153,10 +158,15 @@ class CellRaster:
 
     def compute(self, r, c) -> None:
         from explorer.analysis.lyapunov import indicators
+        from explorer.analysis.rotation import frequency_diffusion
 
         for a in range(0, len(r), BATCH):
             budget.checkpoint()
             rr, cc = r[a:a + BATCH], c[a:a + BATCH]
+            if self.indicator == FREQUENCY:
+                v = frequency_diffusion(self.smap, self.centres[rr, cc], **self.options)
+                self.record(rr, cc, v, np.zeros(len(v), bool), np.isfinite(v))
+                continue
             ind = indicators(self.smap, self.centres[rr, cc], which=(self.indicator,), **self.options)
             v = np.asarray(ind.values[self.indicator], float)
             early = np.zeros(len(v), bool) if ind.early is None else np.asarray(ind.early) > 0
@@ -260,14 +270,16 @@ def _agree(raster: CellRaster, idx: np.ndarray, tolerance: float) -> tuple:
 
 def chaos_map(smap, resolution: int = 512, indicator: str = "megno", tmax: float = 1000.0, exact: bool = False,
               window=None, *, threshold: float | None = None, tolerance: float = TOLERANCE, coarse: int = COARSE,
-              max_cells: int | None = None, threads: int | None = None, early_stop: bool = False) -> ChaosMap:
+              max_cells: int | None = None, threads: int | None = None, early_stop: bool = False,
+              center=None) -> ChaosMap:
     """The map of ``indicator`` (of :data:`INDICATORS`) over ``tmax`` on a ``resolution``^2 raster of
     ``window`` (default: the map's ``domain``, the box of its allowed region): adaptive (the
     module's rule, from a lattice of about ``coarse`` cells a side) unless ``exact``.  Cells
     outside the allowed region are NaN, neither computed nor chaotic.  ``threshold`` (default
     :func:`default_threshold`) classifies; ``max_cells`` bounds the computed cells (refinement
-    stops there and the rest is filled); ``threads``, ``early_stop``: :func:`explorer.indicators`
-    (docs/chaos_map.md)."""
+    stops there and the rest is filled); ``threads``, ``early_stop``: :func:`explorer.indicators`;
+    frequency diffusion: N = ``tmax`` returns per half around ``center``
+    (:func:`explorer.frequency_diffusion`; docs/chaos_map.md)."""
     n = validation.integer("resolution", resolution, 2, MAX_RESOLUTION)
     indicator = validation.choice("indicator", indicator, INDICATORS)
     T = validation.real("tmax", tmax, 0.0, lo_open=True)
@@ -279,8 +291,17 @@ def chaos_map(smap, resolution: int = 512, indicator: str = "megno", tmax: float
     w = _window(smap, window)
     centres = cell_centres(w, n)
     allowed = np.asarray(smap.allowed(centres), bool)
-    raster = CellRaster(smap, centres, allowed, indicator, RULES[indicator], thr,
-                        {"tmax": T, "threads": threads, "early_stop": bool(early_stop)})
+    if indicator == FREQUENCY:
+        if early_stop:
+            raise ParameterError("early_stop belongs to the tangent indicators (MEGNO, SALI); frequency_diffusion "
+                                 "has none")
+        options = {"center": center, "iterates": validation.integer("tmax", int(T) if T.is_integer() else T, 10),
+                   "threads": threads}
+    elif center is not None:
+        raise ParameterError(f"center belongs to the indicator frequency_diffusion, not {indicator!r}")
+    else:
+        options = {"tmax": T, "threads": threads, "early_stop": bool(early_stop)}
+    raster = CellRaster(smap, centres, allowed, indicator, RULES[indicator], thr, options)
     if exact:
         r, c = np.nonzero(allowed)
         raster.compute(r, c)
