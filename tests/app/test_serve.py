@@ -578,7 +578,7 @@ def _orbit_json(settings: Settings, p1, p2) -> np.ndarray:
 
 
 def _set_field(page, field, text):
-    from explorer.app.serve.page import LABELS
+    from explorer.app.serve.page_fields import LABELS
 
     box = page.get_by_label(LABELS[field], exact=True)
     box.fill(text)
@@ -1720,7 +1720,7 @@ def test_past_the_glyph_budget_the_browser_draws_the_newest_orbit_and_the_image_
 @browser_needed
 def test_past_the_threshold_the_browser_shows_a_density_image_that_follows_the_zoom(served, browser):
     from explorer.app.serve import density
-    from explorer.app.serve.page import PAUSE_LABEL
+    from explorer.app.serve.page_orbits import PAUSE_LABEL
 
     page = _open(browser, served.url)
     per_orbit = density.THRESHOLD // 2 + 5000
@@ -1805,6 +1805,7 @@ def _served_page(settings: Settings, **kw):
 def test_a_served_click_sends_its_cross_with_its_first_crossings_and_later_blocks_at_most_every_flush_interval():
     pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
     from explorer.app.serve import page as page_mod
+    from explorer.app.serve import page_orbits
 
     s = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=40_000)
     c1, c2, r1, _r2 = s.region
@@ -1844,7 +1845,7 @@ def test_a_served_click_sends_its_cross_with_its_first_crossings_and_later_block
         # between the first flush and the last, FLUSH_SECONDS at least (the last block goes at once)
         assert len(flushes) >= 3, flushes
         gaps = np.diff([t for t, *_x in flushes])[:-1]
-        assert gaps.min() >= page_mod.FLUSH_SECONDS - 0.01, gaps
+        assert gaps.min() >= page_orbits.FLUSH_SECONDS - 0.01, gaps
     finally:
         page.close()
 
@@ -1855,6 +1856,7 @@ def test_a_short_orbit_joins_its_first_crossings_on_the_live_layer_until_they_se
     FLUSH_SECONDS after the first, with the status line; nothing is lost or doubled."""
     pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
     from explorer.app.serve import page as page_mod
+    from explorer.app.serve import page_orbits
 
     s = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=40)       # blocks of 16 and 24
     c1, c2, r1, _r2 = s.region
@@ -1877,7 +1879,7 @@ def test_a_short_orbit_joins_its_first_crossings_on_the_live_layer_until_they_se
         assert any(x[1:3] == (0, s.crossings) for x in seen)                  # the last one joins it
         settled = [x for x in seen if x[1] > 0]
         assert settled[0][1:3] == (s.crossings, 0) and settled[0][3] != status  # all at once, with the status
-        assert settled[0][0] - firsts[0][0] >= page_mod.FLUSH_SECONDS - page_mod.SETTLE_SLACK
+        assert settled[0][0] - firsts[0][0] >= page_orbits.FLUSH_SECONDS - page_orbits.SETTLE_SLACK
         np.testing.assert_array_equal(page.orbits.shown.data["p1"], page.orbits.crossings.data["p1"])
         assert len(page.orbits.crossings.data["p1"]) == s.crossings
     finally:

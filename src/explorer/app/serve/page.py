@@ -22,16 +22,10 @@ from bokeh.models import Div
 from explorer.app.serve import export
 from explorer.app.serve import raster as raster_mod
 from explorer.app.serve import settings as settings_mod
-from explorer.app.serve.page_fields import LABELS, Fields  # noqa: F401
+from explorer.app.serve.page_fields import Fields
 from explorer.app.serve.page_layers import ChaosLayer, DensityImage
 from explorer.app.serve.page_orbit_list import OrbitList
-from explorer.app.serve.page_orbits import (  # noqa: F401  (the page's constants)
-    FLUSH_SECONDS,
-    LIVE_MAX_ROWS,
-    PAUSE_LABEL,
-    SETTLE_SLACK,
-    OrbitsLayer,
-)
+from explorer.app.serve.page_orbits import OrbitsLayer
 from explorer.app.serve.page_overlays import Overlays
 from explorer.app.serve.settings import TOKEN_ARG, Settings, format_window
 from explorer.app.serve.style import (
