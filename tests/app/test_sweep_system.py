@@ -231,3 +231,24 @@ def test_an_atlas_of_a_system_computes_each_cells_indicators_on_that_cells_secti
     # lam = 0.5 at E = 1/12 is lam = 1 at E = 1/48 (q -> lam q, H -> lam^2 H), below E = 1/12 where Hénon and
     # Heiles (1964) found every orbit regular
     assert chaotic_fraction(got[0]["megno"], scene.lyapunov.threshold, got[0]["lyapunov_status"] == 0)[0] == 0.0
+
+
+def test_an_atlas_cell_seeded_by_its_map_takes_the_raster_cells_on_that_cells_energy_surface():
+    from systems import henon_heiles
+
+    from explorer.analysis.system_scene import build_system_atlas_spec
+    from explorer.io.scene import parse_scene
+
+    text = ATLAS_SCENE.replace("tol = 1e-12", "tol = 1e-12\nmap_resolution = 3")
+    text = text.replace('kind = "points"', 'kind = "points"\nwindow = [-0.45, 0.65, -0.52, 0.52]')
+    scene = parse_scene(text, system=henon_heiles())
+    spec = build_system_atlas_spec(scene, chunk_orbits=0)
+    centres = (np.arange(3) + 0.5) / 3
+    A, B = np.meshgrid(-0.45 + 1.1 * centres, -0.52 + 1.04 * centres)
+    for panel in spec.panels:
+        system, energy, _label = scene.cell(panel.index)
+        (lam,) = system.parameters.values()
+        inside = [(a, b) for a, b in zip(A.ravel(), B.ravel()) if 0.5 * b**2 + 0.5 * a**2 - lam * a**3 / 3 < energy]
+        np.testing.assert_allclose(panel.seeds, np.array(inside), rtol=0, atol=1e-15)   # H(0, y, 0, py) < E
+        assert panel.grid == (3, -0.45, 0.65, -0.52, 0.52)
+    assert 2 not in [p.index for p in spec.panels]     # lam = 0.5, E = 0.001: no cell centre on the surface

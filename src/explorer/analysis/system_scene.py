@@ -52,22 +52,27 @@ def orbit_branches(smap, spec) -> list:
 
 def build_system_atlas_spec(scene, *, chunk_orbits: int, cells=None) -> sweep.SystemSweepSpec:
     """The cells of a System scene's [atlas] (row = sweep value, column = atlas value) as the panels
-    of a sweep of indicators only, seeded by [seeds] on each cell's energy surface; cells with no
+    of a sweep of indicators only, seeded by [seeds] on each cell's energy surface, or with
+    [lyapunov] map_resolution by the cells of its map's raster of [seeds] window; cells with no
     seed there are left out (drawn gray), and so are cells not in ``cells`` (None: all).  The
     panel's ``index`` is the cell's, as :func:`explorer.analysis.sweep.build_atlas_spec` has it."""
     panels: list = []
     chunks: list = []
+    resolution = scene.lyapunov.map_resolution
     for i in range(scene.n_cells):
         if cells is not None and i not in cells:
             continue
         smap = scene.cell_map(i)
-        pts, _dropped = sweep.system_seed_points(scene.seeds, smap)
+        if resolution:
+            pts, grid = sweep.system_map_seeds(smap, scene.seeds.window, resolution)
+        else:
+            (pts, _dropped), grid = sweep.system_seed_points(scene.seeds, smap), ()
         if not len(pts):
             continue
         system, energy, label = scene.cell(i)
         chunks += sweep._chunks(len(panels), len(pts), chunk_orbits, parts=1)
         panels.append(sweep.SystemPanelSpec(i, label, system, float(energy), np.ascontiguousarray(smap.states(pts)),
-                                            pts))
+                                            pts, grid))
     integ = scene.integration
     return sweep.SystemSweepSpec(tuple(panels), scene.section, scene.direction, tuple(scene.coords), scene.solve, 1,
                                  integ.tol, integ.effective_tmax, integ.max_steps, tuple(chunks), scene.lyapunov,
