@@ -293,7 +293,7 @@ sections = false
 lyapunov = true
 [lyapunov]
 time = 40.0
-map_resolution = 32
+map_resolution = 24
 """
 
 
