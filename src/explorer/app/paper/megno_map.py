@@ -1,5 +1,6 @@
 """The high-resolution MEGNO raster map of Figure 4's mu = 0.03 panel (scene preset ``megno_map``:
-512 x 512 cells, T = 1000, indicators only).  The stored panel is redrawn from its grid geometry
+512 x 512 cells, T = 1000, indicators only; adaptive unless the scene's [lyapunov] exact, the
+fraction of cells computed in the raster's corner).  The stored panel is redrawn from its grid geometry
 when the store is complete; ``--quick`` otherwise computes a 64 x 64 map over T = 200."""
 
 from explorer.app.paper._common import Drawn, Outcome, save
