@@ -298,6 +298,7 @@ SCENE_KEYS = {
     "lyapunov.threshold": REAL + ("2", "1"),
     "lyapunov.indicators": LIST + ("['lyap']",),
     "lyapunov.early_stop": BOOL,
+    "lyapunov.exact": BOOL,
     "lyapunov.early_sali": REAL + ("-1", "2"),
     "lyapunov.early_megno": REAL + ("2",),
     "lyapunov.early_time": REAL + ("-1",),
