@@ -252,3 +252,17 @@ def test_an_atlas_cell_seeded_by_its_map_takes_the_raster_cells_on_that_cells_en
         np.testing.assert_allclose(panel.seeds, np.array(inside), rtol=0, atol=1e-15)   # H(0, y, 0, py) < E
         assert panel.grid == (3, -0.45, 0.65, -0.52, 0.52)
     assert 2 not in [p.index for p in spec.panels]     # lam = 0.5, E = 0.001: no cell centre on the surface
+
+
+def test_a_systems_atlas_is_swept_stored_and_resumed_by_explorer_sweep(workdir, capsys):
+    from explorer.io.store import atlas as atlas_store
+
+    (workdir / "atlas.toml").write_text(f'system = "{MODULE}:hh"\n' + ATLAS_SCENE)
+    args = ["sweep", "atlas.toml", "--out", "res/atlas.h5", "--quiet", "--no-figure"]
+    code, out, err = run(args, capsys)
+    assert code == 0, err
+    data = atlas_store.read_atlas(workdir / "res" / "atlas.h5")
+    assert data.done.all() and np.isnan(data.fraction[:, 2]).all()   # E = 0.001: no seed on the surface (gray)
+    assert data.fraction[0, 0] == 0.0        # lam = 0.5, E = 1/12: all regular (Henon & Heiles 1964)
+    code, out, err = run(args, capsys)
+    assert code == 0 and "0 computed" in out, out

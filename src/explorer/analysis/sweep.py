@@ -146,7 +146,12 @@ def build_atlas_spec(scene, *, chunk_orbits: int, cells=None) -> SweepSpec:
     with [lyapunov] map_resolution the cells of its map (adaptive as a map panel is);
     cells whose allowed region is empty are left out (drawn gray), and so are cells not in
     ``cells`` (None: all; a resumed atlas computes only its missing cells).  ``task(spec, i)``
-    maps it unchanged (PanelSpec.index is the cell index)."""
+    maps it unchanged (PanelSpec.index is the cell index).  A System's scene: its own cells
+    (:func:`explorer.analysis.system_scene.build_system_atlas_spec`)."""
+    if getattr(scene, "system", None) is not None:
+        from explorer.analysis.system_scene import build_system_atlas_spec
+
+        return build_system_atlas_spec(scene, chunk_orbits=chunk_orbits, cells=cells)
     from explorer.analysis.seeds import seed_points
 
     integ = scene.integration
