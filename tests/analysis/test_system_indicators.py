@@ -5,7 +5,7 @@ Lorenz exponent, the SIMD lanes against the scalar driver and thread independenc
 import numpy as np
 import pytest
 import sympy as sp
-from systems import henon_heiles, pole, px, py, x, y
+from systems import henon_heiles, px, py, x, y
 
 import explorer as ex
 from explorer.analysis.lyapunov import regular_bound
@@ -235,11 +235,16 @@ def test_states_of_the_wrong_shape_and_states_beside_a_map_are_refused(hh):
         ex.indicators(smap, states=[REGULAR])
 
 
-def test_an_orbit_reaching_a_pole_stops_with_the_step_underflow_or_non_finite_status():
-    # dw/dt = 1/s, ds/dt = 1 from s = -1: the pole at t = 1 (the crossings' example, docs/systems.md)
-    res = ex.indicators(pole()[0], states=[[-1.0, 0.0]], tmax=3.0, which=("megno",))
+def test_an_orbit_escaping_in_finite_time_stops_at_its_blow_up_with_the_step_underflow_or_non_finite_status(hh):
+    # x = px = 0 stays so: y'' = -y + y**2, which from (y, py) = (1.2, 0.5) escapes, py = sqrt(2E - y**2 +
+    # 2 y**3 / 3) > 0 for y > 1, to y = infinity at t* = the integral of dy / py from 1.2 (a finite time)
+    from scipy.integrate import quad
+
+    E = 0.5**2 / 2 + 1.2**2 / 2 - 1.2**3 / 3
+    t_star = quad(lambda yy: 1.0 / np.sqrt(2*E - yy**2 + 2*yy**3/3), 1.2, np.inf, epsabs=1e-13, epsrel=1e-13)[0]
+    res = ex.indicators(hh, states=[[0.0, 1.2, 0.0, 0.5]], tmax=10.0, which=("megno",))
     assert res.status_of(0) in (Status.STEP_UNDERFLOW, Status.NONFINITE)
-    assert abs(res.time[0] - 1.0) < 1e-6 and np.isnan(res.energy_error[0])
+    assert abs(res.time[0] - t_star) < 1e-10 and t_star < 10.0    # y ~ 6 / (t* - t)**2 near t*
 
 
 def test_the_example_of_docs_systems_md_chaos_indicators_runs():

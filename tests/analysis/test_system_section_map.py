@@ -3,7 +3,7 @@ state, the branch the direction selects, the refusal outside the energy surface,
 against the flow's, the analyses that refuse a System, and the energy column of a result."""
 import numpy as np
 import pytest
-from systems import henon_heiles, lam, oscillator, px, py, x, y
+from systems import henon_heiles, lam, pole, px, py, x, y
 
 import explorer as ex
 from explorer.analysis import sections
@@ -116,8 +116,9 @@ def test_max_energy_error_reads_the_energy_column_of_a_system_and_of_chaplygins_
     rows = np.zeros((2, 3, 5))
     rows[1, 2, 4] = -3e-9
     assert sections.max_energy_error(rows) == 3e-9
-    osc, q, _ = oscillator()                          # a System without an energy: no energy column
-    plain = ex.crossings(osc, states=[[1.0, 0.0]], n_crossings=2, section=q, direction=+1)
+    system, _, w = pole()                             # a System without an energy: no energy column
+    plain = ex.crossings(system, states=[[1.0, 0.0]], n_crossings=1, section=w - 1, direction=+1)
+    assert plain.data.shape == (1, 1, 3) and abs(plain.data[0, 0, 0] - (np.e - 1)) <= 1e-12   # w = ln(1 + t)
     with pytest.raises(ParameterError, match="no energy column"):
         sections.max_energy_error(plain)
 

@@ -4,7 +4,7 @@ thread independence, statuses and the refusals."""
 import numpy as np
 import pytest
 import sympy as sp
-from systems import henon_heiles, lam, oscillator, pole, x, y
+from systems import henon_heiles, lam, pole, x, y
 
 import explorer as ex
 from explorer.kernels import Status
@@ -123,14 +123,15 @@ def test_a_parameter_in_the_section_takes_its_value():
 
 # ---------------------------------------------------------------------- statuses
 def test_an_orbit_that_never_crosses_ends_with_the_budget_status():
-    osc, q, v = oscillator()
-    res = ex.crossings(osc, states=[[1.0, 0.0]], n_crossings=3, section=q - 2, direction=+1, tmax=20.0)
+    # lam = 0: two harmonic oscillators of period 2 pi; from x = 1 at rest, x = cos t never reaches 2
+    lin = henon_heiles(0.0)
+    rest = [[1.0, 0.0, 0.0, 0.0]]
+    res = ex.crossings(lin, states=rest, n_crossings=3, section=x - 2, direction=+1, tmax=20.0)
     assert res.count[0] == 0 and res.status_of(0) == Status.TMAX and res.info[0, 0] == 20.0
-    assert res.data.shape == (1, 3, 3)                           # t, q, v: no energy column
-    res = ex.crossings(osc, states=[[1.0, 0.0]], n_crossings=3, section=q - 2, direction=+1, max_steps=7)
+    res = ex.crossings(lin, states=rest, n_crossings=3, section=x - 2, direction=+1, max_steps=7)
     assert res.count[0] == 0 and res.status_of(0) == Status.MAX_STEPS and res.info[0, 1] == 7
-    # the same oscillator crosses q = 0.5 upwards once per period 2 pi
-    res = ex.crossings(osc, states=[[1.0, 0.0]], n_crossings=3, section=2*q - 1, direction=+1)
+    # the same orbit crosses x = 0.5 upwards once per period 2 pi
+    res = ex.crossings(lin, states=rest, n_crossings=3, section=2*x - 1, direction=+1)
     assert res.status_of(0) == Status.DONE
     np.testing.assert_allclose(res.data[0, :, 0], 2*np.pi*np.arange(1, 4) - np.pi/3, rtol=0, atol=1e-12)
 
