@@ -1,7 +1,7 @@
 """The scalar Taylor crossing loop: the oracle of the lane driver (explorer.integrate.lanes).
 
 One orbit at a time, written as plainly as the method reads: take the step of
-``systems.taylor_step`` (budgets, coefficients of R3, finiteness, the Jorba-Zou step clipped to
+``_systems_generated.taylor_step_reduced`` (budgets, coefficients of R3, finiteness, the Jorba-Zou step clipped to
 tmax, Horner), find every root of the step's Taylor polynomial of sin(phi - phi0)
 (``kernels.events.poly_step_roots``), keep those on the branch phi = phi0
 (``drivers.keep_crossing``), advance the compensated clock, stop at the block's target or a
@@ -14,7 +14,8 @@ import numpy as np
 
 from explorer._jit import njit
 from explorer.integrate import drivers
-from explorer.integrate import systems as sy
+from explorer.integrate._systems_generated import taylor_step_reduced
+from explorer.integrate.systems import STEP_OK
 from explorer.kernels import STATUS_DONE, STATUS_NONFINITE, STATUS_TMAX
 from explorer.kernels import taylor as tk
 from explorer.kernels.clock import advance_time
@@ -40,9 +41,9 @@ def orbit_taylor(y0, P, cphi, sphi, direction, tmax, order, max_steps, cross, yo
     while True:
         for i in range(5):
             X[i, 0] = yout[i]
-        code, h, last, steps = sy.taylor_step(sy.REDUCED, X, P, t, tmax, STATUS_TMAX, order, factor,
-                                              steps, max_steps, ynew)
-        if code != sy.STEP_OK:
+        code, h, last, steps = taylor_step_reduced(X, P, t, tmax, STATUS_TMAX, order, factor, steps, max_steps,
+                                                   ynew)
+        if code != STEP_OK:
             status = code
             break
         gnew = section_g(ynew, cphi, sphi)

@@ -90,9 +90,9 @@ def _check_lane(P, X, order, h, out, norms, l):
     np.testing.assert_array_equal(ys, out[:, l])
     assert (norms[0, l] == Xs[0, order] + Xs[1, order] + Xs[2, order] + Xs[3, order] + Xs[4, order]
             or np.isnan(norms[0, l]))
-    assert sy._finite_column(Xs, order, 5) == (norms[0, l] - norms[0, l] == 0.0)
-    assert sy._finite_column(Xs, order - 1, 5) == (norms[1, l] - norms[1, l] == 0.0)
-    if sy._finite_column(Xs, order, 5) and sy._finite_column(Xs, order - 1, 5):
+    assert sy.finite_column(Xs, order, 5) == (norms[0, l] - norms[0, l] == 0.0)
+    assert sy.finite_column(Xs, order - 1, 5) == (norms[1, l] - norms[1, l] == 0.0)
+    if sy.finite_column(Xs, order, 5) and sy.finite_column(Xs, order - 1, 5):
         s = max(1.0, np.abs(Xs[:, 0]).max())
         assert norms[2, l] == np.abs(Xs[:, order]).max()
         assert norms[3, l] == np.abs(Xs[:, order - 1]).max()

@@ -1,4 +1,4 @@
-"""The system seam: the dispatched field is each system's field; the shared DOP853 step takes
+"""The system seam: each system's field is its equations; the shared DOP853 step takes
 exactly the steps of the crossing driver's own copy of it (the W4 hot path keeps the step
 written out, drivers.orbit_dop853); the Taylor and splitting steps carry a deviation vector
 without touching the orbit, and that vector is the flow's derivative."""
@@ -6,8 +6,10 @@ import numpy as np
 
 from explorer import model
 from explorer._jit import njit
+from explorer.integrate import _systems_generated as sg
 from explorer.integrate import drivers
-from explorer.integrate import systems as sy
+from explorer.integrate.systems import STEP_OK
+from explorer.kernels import taylor as tk
 from explorer.kernels.clock import advance_time
 from explorer.model import equations
 
@@ -15,43 +17,38 @@ PRM = model.FIGURE4.with_(mu=0.5)
 P = PRM.as_array()
 
 
-def test_the_dispatched_field_is_each_systems_field():
+def test_each_systems_field_is_its_equations():
     rng = np.random.default_rng(3)
     y = rng.normal(size=10)
-    for system, n, ref in ((sy.REDUCED, 5, None), (sy.TANGENT, 10, None), (sy.FULL, 7, None),
-                           (sy.REDUCED_BACKWARD, 5, None)):
+    for field, n in ((sg.field_reduced, 5), (sg.field_tangent, 10), (sg.field_full, equations.FULL_DIM)):
         got = np.empty(n)
-        sy.field(system, y[:n].copy(), P, got)
+        field(y[:n].copy(), P, got)
         want = np.empty(n)
-        if system == sy.REDUCED:
+        if n == 5:
             equations.rhs(y[:5].copy(), P, want)
-        elif system == sy.TANGENT:
+        elif n == 10:
             equations.rhs(y[:5].copy(), P, want[:5])
             equations.rhs_tangent(y[:5].copy(), y[5:10].copy(), P, want[5:])
-        elif system == sy.FULL:
-            equations.rhs_full(y[:7].copy(), P, want)
         else:
-            equations.rhs(y[:5].copy(), P, want)
-            want = -want
+            equations.rhs_full(y[:n].copy(), P, want)
         np.testing.assert_array_equal(got, want)
-        assert sy.DIMENSION[system] == n
 
 
 @njit
 def _plain_dop853(y0, P, T, rtol, atol, max_steps):
-    """The bare loop over systems.dop853_step (REDUCED) from 0 to T: final state and steps."""
+    """The bare loop over dop853_step_reduced from 0 to T: final state and steps."""
     K = np.empty((16, 5))
     y = y0.copy()
     ynew = np.empty(5)
     tmp = np.empty(5)
-    h_abs = sy.dop853_first_step(sy.REDUCED, y, P, K, rtol, atol, T, tmp)
+    h_abs = sg.dop853_first_step_reduced(y, P, K, rtol, atol, T, tmp)
     t = 0.0
     tc = 0.0
     steps = 0
     while True:
-        code, h, last, h_abs, steps = sy.dop853_step(sy.REDUCED, y, P, K, t, T, 1, h_abs, steps, max_steps, rtol,
-                                                     atol, tmp, ynew, True)
-        if code != sy.STEP_OK:
+        code, h, last, h_abs, steps = sg.dop853_step_reduced(y, P, K, t, T, 1, h_abs, steps, max_steps, rtol,
+                                                             atol, tmp, ynew, True)
+        if code != STEP_OK:
             return y, steps, code
         t, tc = advance_time(t, tc, h, last, T)  # Kahan-compensated, as the driver
         for i in range(5):
@@ -80,51 +77,47 @@ def model_status_tmax():
     return int(Status.TMAX)
 
 
-@njit
-def _plain_taylor(system, z0, P, T, order, max_steps):
-    """The bare loop over systems.taylor_step from 0 to T: final state, steps, times, code."""
+def _plain_taylor(taylor_step, z0, P, T, order, max_steps):
+    """The bare loop over a system's taylor_step from 0 to T: final state, steps, times, code."""
     n = z0.shape[0]
     X = np.empty((n, order + 1))
     z = z0.copy()
     znew = np.empty(n)
-    factor = sy.tk.safety_factor(order)
-    times = np.empty(max_steps + 1)
+    factor = tk.safety_factor(order)
+    times = []
     t = 0.0
     tc = 0.0
     steps = 0
     while True:
-        for i in range(n):
-            X[i, 0] = z[i]
-        code, h, last, steps = sy.taylor_step(system, X, P, t, T, 1, order, factor, steps, max_steps, znew)
-        if code != sy.STEP_OK:
-            return z, steps, times[:steps], code
+        X[:, 0] = z
+        code, h, last, steps = taylor_step(X, P, t, T, 1, order, factor, steps, max_steps, znew)
+        if code != STEP_OK:
+            return z, steps, np.array(times), code
         t, tc = advance_time(t, tc, h, last, T)
-        times[steps - 1] = t
-        for i in range(n):
-            z[i] = znew[i]
+        times.append(t)
+        z[:] = znew
 
 
-@njit
-def _plain_split(system, z0, P, dt, nsteps, flow_ids, fracs):
+def _plain_split(split_step, z0, P, dt, nsteps, flow_ids, fracs):
+    """The bare loop over a system's split_step: final state, code."""
     z = z0.copy()
     znew = np.empty(z.shape[0])
     steps = 0
     while steps < nsteps:
-        code, steps = sy.split_step(system, z, P, dt, flow_ids, fracs, steps, 10**9, znew)
-        if code != sy.STEP_OK:
+        code, steps = split_step(z, P, dt, flow_ids, fracs, steps, 10**9, znew)
+        if code != STEP_OK:
             return z, code
-        for i in range(z.shape[0]):
-            z[i] = znew[i]
+        z[:] = znew
     return z, 1
 
 
 def test_a_deviation_vector_never_changes_the_orbit_or_its_taylor_steps():
     """The Taylor step is chosen from the orbit's own coefficients and the tangent recurrence
-    computes the orbit's as R3's: the orbit rows of TANGENT are REDUCED's, step for step, bit for bit."""
+    computes the orbit's as R3's: the orbit rows of the tangent system are R3's, step for step, bit for bit."""
     y0 = model.section_state(PRM, [0.3], [0.1], 2.0)[0]
     z0 = np.concatenate([y0, [1.0, -0.5, 0.2, 0.0, 0.0]])
-    y, ns, ty, cy = _plain_taylor(sy.REDUCED, y0, P, 41.7, 17, 10**5)
-    z, nz, tz, cz = _plain_taylor(sy.TANGENT, z0, P, 41.7, 17, 10**5)
+    y, ns, ty, cy = _plain_taylor(sg.taylor_step_reduced, y0, P, 41.7, 17, 10**5)
+    z, nz, tz, cz = _plain_taylor(sg.taylor_step_tangent, z0, P, 41.7, 17, 10**5)
     assert ns == nz > 100 and cy == cz == 1
     np.testing.assert_array_equal(ty, tz)
     np.testing.assert_array_equal(z[:5], y)
@@ -132,33 +125,33 @@ def test_a_deviation_vector_never_changes_the_orbit_or_its_taylor_steps():
 
 
 def test_the_backward_system_retraces_the_forward_orbit():
-    """REDUCED_BACKWARD is R3 in reversed time: its Taylor steps from the forward run's end state
+    """The backward system is R3 in reversed time: its Taylor steps from the forward run's end state
     over the same span come back to the start (to the tolerance of order 17), and its first
     coefficients are the forward ones with the odd orders negated, exactly."""
     y0 = model.section_state(PRM, [0.3], [0.1], 2.0)[0]
-    y, ns, _t, code = _plain_taylor(sy.REDUCED, y0, P, 7.3, 17, 10**5)
-    back, nb, _tb, code_b = _plain_taylor(sy.REDUCED_BACKWARD, y, P, 7.3, 17, 10**5)
+    y, ns, _t, code = _plain_taylor(sg.taylor_step_reduced, y0, P, 7.3, 17, 10**5)
+    back, nb, _tb, code_b = _plain_taylor(sg.taylor_step_backward, y, P, 7.3, 17, 10**5)
     assert code == code_b == 1 and ns > 10 and nb > 10
     assert np.max(np.abs(back - y0)) < 1e-11
     assert np.max(np.abs(y - y0)) > 0.1                          # the orbit did move
     X = np.zeros((5, 8))
     Xb = np.zeros((5, 8))
     X[:, 0] = Xb[:, 0] = y0
-    sy.taylor_coefficients_of(sy.REDUCED, P, X, 7)
-    sy.taylor_coefficients_of(sy.REDUCED_BACKWARD, P, Xb, 7)
+    sg.taylor_coefficients_reduced(P, X, 7)
+    sg.taylor_coefficients_backward(P, Xb, 7)
     np.testing.assert_array_equal(Xb, X * (-1.0) ** np.arange(8))
 
 
 def test_the_taylor_steps_deviation_is_the_flows_derivative():
-    """TANGENT's deviation after T is D Phi_T v0: central differences of REDUCED's flow over the
+    """The tangent system's deviation after T is D Phi_T v0: central differences of R3's flow over the
     same fixed number of steps (eps 1e-6, so agreement to ~1e-7 relative)."""
     y0 = model.section_state(PRM, [0.3], [0.1], 2.0)[0]
     v0 = np.array([0.3, -0.2, 0.1, 0.05, -0.04])
     z0 = np.concatenate([y0, v0])
-    z, _, _, _ = _plain_taylor(sy.TANGENT, z0, P, 7.3, 20, 10**5)
+    z, _, _, _ = _plain_taylor(sg.taylor_step_tangent, z0, P, 7.3, 20, 10**5)
     e = 1e-6
-    yp, _, _, _ = _plain_taylor(sy.REDUCED, y0 + e * v0, P, 7.3, 20, 10**5)
-    ym, _, _, _ = _plain_taylor(sy.REDUCED, y0 - e * v0, P, 7.3, 20, 10**5)
+    yp, _, _, _ = _plain_taylor(sg.taylor_step_reduced, y0 + e * v0, P, 7.3, 20, 10**5)
+    ym, _, _, _ = _plain_taylor(sg.taylor_step_reduced, y0 - e * v0, P, 7.3, 20, 10**5)
     fd = (yp - ym) / (2 * e)
     np.testing.assert_allclose(z[5:], fd, rtol=1e-6, atol=1e-6 * np.linalg.norm(fd))
 
@@ -169,13 +162,13 @@ def test_split_steps_of_tangent_carry_reduceds_orbit_and_its_derivative():
     prep = methods.get("split6").prepare(dt=0.02)
     y0 = model.section_state(PRM, [0.3], [0.1], 2.0)[0]
     v0 = np.array([0.3, -0.2, 0.1, 0.05, -0.04])
-    y, cy = _plain_split(sy.REDUCED, y0, P, 0.02, 400, prep.flow_ids, prep.fracs)
-    z, cz = _plain_split(sy.TANGENT, np.concatenate([y0, v0]), P, 0.02, 400, prep.flow_ids, prep.fracs)
+    y, cy = _plain_split(sg.split_step_reduced, y0, P, 0.02, 400, prep.flow_ids, prep.fracs)
+    z, cz = _plain_split(sg.split_step_tangent, np.concatenate([y0, v0]), P, 0.02, 400, prep.flow_ids, prep.fracs)
     assert cy == cz == 1
     np.testing.assert_array_equal(z[:5], y)
     e = 1e-6
-    yp, _ = _plain_split(sy.REDUCED, y0 + e * v0, P, 0.02, 400, prep.flow_ids, prep.fracs)
-    ym, _ = _plain_split(sy.REDUCED, y0 - e * v0, P, 0.02, 400, prep.flow_ids, prep.fracs)
+    yp, _ = _plain_split(sg.split_step_reduced, y0 + e * v0, P, 0.02, 400, prep.flow_ids, prep.fracs)
+    ym, _ = _plain_split(sg.split_step_reduced, y0 - e * v0, P, 0.02, 400, prep.flow_ids, prep.fracs)
     fd = (yp - ym) / (2 * e)
     np.testing.assert_allclose(z[5:], fd, rtol=1e-6, atol=1e-6 * np.linalg.norm(fd))
 
@@ -184,9 +177,9 @@ def test_a_taylor_step_budget_and_a_nonfinite_state_end_the_loop_with_their_code
     from explorer.kernels import Status
 
     y0 = model.section_state(PRM, [0.3], [0.1], 2.0)[0]
-    _, steps, _, code = _plain_taylor(sy.REDUCED, y0, P, 1e3, 15, 7)
+    _, steps, _, code = _plain_taylor(sg.taylor_step_reduced, y0, P, 1e3, 15, 7)
     assert steps == 7 and code == int(Status.MAX_STEPS)
     bad = y0.copy()
     bad[2] = np.nan
-    _, steps, _, code = _plain_taylor(sy.REDUCED, bad, P, 1e3, 15, 7)
+    _, steps, _, code = _plain_taylor(sg.taylor_step_reduced, bad, P, 1e3, 15, 7)
     assert steps == 0 and code == int(Status.NONFINITE)

@@ -3,7 +3,7 @@
 # (generator version 9).
 # Regenerate:  python tools/gen_lanes.py     (check: --check)
 """The Taylor recurrence of Chaplygin's R3 (docs/model.md), generated: the scalar form for the
-scalar drivers (:mod:`explorer.integrate.systems`), the lane form for
+scalar drivers (:mod:`explorer.integrate._systems_generated`), the lane form for
 :mod:`explorer.integrate.lanes`.
 
 Each lane of a ``*_lanes`` kernel computes bit for bit what its scalar twin computes (the same

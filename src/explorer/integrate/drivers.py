@@ -13,7 +13,7 @@ out_final (N, 5); out_info (N, 3) final time, steps, Casimir error.
 import numpy as np
 
 from explorer._jit import njit, prange
-from explorer.integrate import systems as sy
+from explorer.integrate import _systems_generated as sg
 from explorer.integrate.layout import (  # noqa: F401 (the carry and limits columns, re-exported)
     CARRY_G,
     CARRY_H0,
@@ -26,6 +26,7 @@ from explorer.integrate.layout import (  # noqa: F401 (the carry and limits colu
     MAX_ROOTS_PER_STEP,
     N_CARRY,
 )
+from explorer.integrate.systems import STEP_OK
 from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_TMAX
 from explorer.kernels import dop853 as dp
 from explorer.kernels.checks import EPS, all_finite, is_finite
@@ -133,8 +134,8 @@ def store_orbit(j, count, status, t, steps, out_count, out_status, out_final, ou
 @njit
 def split_step(y, P, dt, flow_ids, fracs):
     """One step of a composition of exact sub-flows (docs/model.md R4), in place
-    (:func:`explorer.integrate.systems.compose` of ``REDUCED``)."""
-    sy.compose(sy.REDUCED, y, P, dt, flow_ids, fracs)
+    (:func:`explorer.integrate._systems_generated.compose_reduced`)."""
+    sg.compose_reduced(y, P, dt, flow_ids, fracs)
 
 
 #: the functionals of the splitting root search: sin(phi - phi0), and M (the turn of phi)
@@ -205,7 +206,7 @@ def _split_step_roots(y, P, dt, flow_ids, fracs, cphi, sphi, gprev, gnew, mnew, 
 def orbit_split(y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max_steps, cross, yout, carry, target,
                 room):
     """One orbit with a fixed-step composition of exact flows (the step:
-    :func:`explorer.integrate.systems.split_step` of ``REDUCED``); t_n = n dt (no summation
+    :func:`explorer.integrate._systems_generated.split_step_reduced`); t_n = n dt (no summation
     error).  Returns (count, status, t, steps)."""
     ynew = np.empty(5)
     yc = np.empty(5)
@@ -223,8 +224,8 @@ def orbit_split(y0, P, cphi, sphi, direction, tmax, dt, flow_ids, fracs, max_ste
         if t >= tmax:
             status = STATUS_TMAX
             break
-        code, n = sy.split_step(sy.REDUCED, yout, P, dt, flow_ids, fracs, n, max_steps, ynew)
-        if code != sy.STEP_OK:
+        code, n = sg.split_step_reduced(yout, P, dt, flow_ids, fracs, n, max_steps, ynew)
+        if code != STEP_OK:
             status = code
             break
         gnew = section_g(ynew, cphi, sphi)
@@ -301,9 +302,9 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
         return 0, STATUS_DONE, t, steps
     h_abs = carry[CARRY_HABS]
     if h_abs > 0.0:
-        sy.field(sy.REDUCED, yout, P, K[0])
+        sg.field_reduced(yout, P, K[0])
     else:
-        h_abs = sy.dop853_first_step(sy.REDUCED, yout, P, K, rtol, atol, tmax, tmp)
+        h_abs = sg.dop853_first_step_reduced(yout, P, K, rtol, atol, tmax, tmp)
     count = 0
     rejected = False
     while True:
@@ -336,7 +337,7 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
         gnew = section_g(ynew, cphi, sphi)
         if sign_change(gprev, gnew, direction) or _may_reach_section(yout, ynew, K, P, h, gprev,
                                                                      gnew):
-            sy.dop853_dense_stages(sy.REDUCED, yout, P, K, h, tmp)
+            sg.dop853_dense_stages_reduced(yout, P, K, h, tmp)
             dp.dense_coefficients(yout, ynew, K, h, F)
             g_old = section_g(yout, cphi, sphi)
             for k in range(7):

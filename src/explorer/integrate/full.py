@@ -1,13 +1,14 @@
-"""The body in the plane (docs/model.md R1, docs/commands/trajectory.md): adaptive DOP853 of the
-system ``FULL`` with samples at requested times and the turning points of phi from the
-continuous extension.
+"""The body in the plane (docs/model.md R1, docs/commands/trajectory.md): adaptive DOP853 of R1
+(:func:`explorer.integrate._systems_generated.dop853_step_full`) with samples at requested times and
+the turning points of phi from the continuous extension.
 """
 import math
 
 import numpy as np
 
 from explorer._jit import njit
-from explorer.integrate import systems as sy
+from explorer.integrate._systems_generated import dop853_dense_stages_full, dop853_step_full
+from explorer.integrate.systems import FIRST_STEP, STEP_OK
 from explorer.kernels import STATUS_DONE
 from explorer.kernels import dop853 as dp
 from explorer.kernels.clock import advance_time
@@ -56,11 +57,11 @@ def integrate_full(y0, phi0, P, t_samples, rtol, atol, max_steps, out, out_phi, 
         return STATUS_DONE, j, nturn, steps, 0.0
     t = 0.0
     tc = 0.0
-    h_abs = sy.FIRST_STEP
+    h_abs = FIRST_STEP
     while True:
-        code, h, last, h_abs, steps = sy.dop853_step(sy.FULL, ycur, P, K, t, tmax, STATUS_DONE, h_abs, steps,
-                                                     max_steps, rtol, atol, tmp, ynew, True)
-        if code != sy.STEP_OK:
+        code, h, last, h_abs, steps = dop853_step_full(ycur, P, K, t, tmax, STATUS_DONE, h_abs, steps,
+                                                       max_steps, rtol, atol, tmp, ynew, True)
+        if code != STEP_OK:
             break
         t_old = t - tc
         t_new = tmax if last else t_old + h
@@ -69,7 +70,7 @@ def integrate_full(y0, phi0, P, t_samples, rtol, atol, max_steps, out, out_phi, 
         sign_m = (m_old < 0.0 and m_new >= 0.0) or (m_old > 0.0 and m_new <= 0.0)
         need_dense = sign_m or (j < ns and t_samples[j] <= t_new)
         if need_dense:
-            sy.dop853_dense_stages(sy.FULL, ycur, P, K, h, tmp)
+            dop853_dense_stages_full(ycur, P, K, h, tmp)
             dp.dense_coefficients(ycur, ynew, K, h, F)
             if sign_m:
                 for k in range(7):

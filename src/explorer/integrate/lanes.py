@@ -147,7 +147,7 @@ def lane_step_size(a, bm, u, v, rho, e_p, e_q, factor):
 
 @njit(inline="always")
 def lane_step(l, norms, t, tend, e_p, e_q, factor):
-    """The checks and the step of :func:`explorer.integrate.systems.taylor_step` for lane l from
+    """The checks and the step of :func:`explorer.integrate._systems_generated.taylor_step_reduced` for lane l from
     its norms (step_norms_lanes): finiteness of the last two coefficients, the step size, clipped
     to ``tend``, and the underflow test."""
     if not (is_finite(norms[0, l]) and is_finite(norms[1, l])):

@@ -7,7 +7,7 @@ section return map with its Jacobian (docs/commands/lyapunov.md, docs/architectu
 import numpy as np
 
 from explorer._jit import njit, prange
-from explorer.integrate import systems as sy
+from explorer.integrate import _systems_generated as sg
 from explorer.integrate._tangent_lanes_generated import (
     DEV2,
     N_WORK_TANGENT,
@@ -16,6 +16,7 @@ from explorer.integrate._tangent_lanes_generated import (
     tangent_coefficients,
 )
 from explorer.integrate.drivers import ON_SECTION
+from explorer.integrate.systems import FIRST_STEP, STEP_OK, reverse_time
 from explorer.kernels import STATUS_CANCELLED, STATUS_DONE, STATUS_NONFINITE
 from explorer.kernels import STATUS_TMAX as STATUS_TMAX_CODE
 from explorer.kernels import tangent as tg
@@ -74,7 +75,7 @@ def _observe(acc, v, t_old, t_new, hist_t, hist, hpos, row):
 @njit
 def orbit_tangent_taylor(y0, v0, P, T, order, max_steps, hist_t, hist, res, yout):
     """The orbit and one deviation vector by the Taylor series of R3 and its variational
-    equations (the step: :func:`explorer.integrate.systems.taylor_step` of ``TANGENT``, chosen
+    equations (the step: :func:`explorer.integrate._systems_generated.taylor_step_tangent`, chosen
     from the orbit's own coefficients): :func:`orbit_tangent_taylor_ext` with one vector and no
     early classification."""
     ext = np.empty(tg.N_EXT)
@@ -146,9 +147,9 @@ def orbit_tangent_taylor_ext(y0, v0, w0, nvec, P, T, order, max_steps, early_sto
     while True:
         for i in range(n):
             Z[i, 0] = z[i]
-        code, h, last, steps = sy.taylor_step(sy.TANGENT, Z, P, t, T, STATUS_DONE, order, factor, steps,
-                                              max_steps, znew)
-        if code != sy.STEP_OK:
+        code, h, last, steps = sg.taylor_step_tangent(Z, P, t, T, STATUS_DONE, order, factor, steps,
+                                                      max_steps, znew)
+        if code != STEP_OK:
             break
         if nvec == 2:
             for i in range(5):
@@ -190,19 +191,19 @@ def orbit_tangent_dop853(y0, v0, P, T, rtol, atol, max_steps, hist_t, hist, res,
     t = 0.0
     steps = 0
     hpos = 0
-    h_abs = sy.FIRST_STEP
+    h_abs = FIRST_STEP
     _start(y0, v0, z)
     while True:
-        code, h, last, h_abs, steps = sy.dop853_step(sy.TANGENT, z, P, K, t, T, STATUS_DONE, h_abs, steps,
-                                                     max_steps, rtol, atol, tmp, znew, False)
-        if code != sy.STEP_OK:
+        code, h, last, h_abs, steps = sg.dop853_step_tangent(z, P, K, t, T, STATUS_DONE, h_abs, steps,
+                                                             max_steps, rtol, atol, tmp, znew, False)
+        if code != STEP_OK:
             break
         t_new = T if last else t + h
         hpos = _observe(acc, znew[5:], t, t_new, hist_t, hist, hpos, row)
         t = t_new
         for i in range(n):
             z[i] = znew[i]
-        sy.field(sy.TANGENT, z, P, K[0])
+        sg.field_tangent(z, P, K[0])
     _end(acc, res, z, yout)
     return code, steps
 
@@ -210,7 +211,7 @@ def orbit_tangent_dop853(y0, v0, P, T, rtol, atol, max_steps, hist_t, hist, res,
 @njit
 def orbit_tangent_split(y0, v0, P, T, dt, flow_ids, fracs, max_steps, hist_t, hist, res, yout):
     """The orbit and one deviation vector by the splitting method's own tangent map (the step:
-    :func:`explorer.integrate.systems.split_step` of ``TANGENT``); t_n = n dt."""
+    :func:`explorer.integrate._systems_generated.split_step_tangent`); t_n = n dt."""
     n = 10
     z = np.empty(n)
     znew = np.empty(n)
@@ -222,8 +223,8 @@ def orbit_tangent_split(y0, v0, P, T, dt, flow_ids, fracs, max_steps, hist_t, hi
     code = STATUS_DONE
     nsteps = int(np.ceil(T / dt - 1e-9))
     while steps < nsteps:
-        code, steps = sy.split_step(sy.TANGENT, z, P, dt, flow_ids, fracs, steps, max_steps, znew)
-        if code != sy.STEP_OK:
+        code, steps = sg.split_step_tangent(z, P, dt, flow_ids, fracs, steps, max_steps, znew)
+        if code != STEP_OK:
             break
         hpos = _observe(acc, znew[5:], (steps - 1) * dt, steps * dt, hist_t, hist, hpos, row)
         for i in range(n):
@@ -274,7 +275,6 @@ def return_map_taylor(y0, V0, P, cphi, sphi, tsign, tmax, order, max_steps, stop
     ynew = np.empty(5)
     gc, work, roots, brackets, stack = root_workspace(order)
     factor = tk.safety_factor(order)
-    system = sy.REDUCED if tsign > 0 else sy.REDUCED_BACKWARD
     V = np.empty((m, 5))
     for i in range(5):
         y[i] = y0[i]
@@ -290,9 +290,13 @@ def return_map_taylor(y0, V0, P, cphi, sphi, tsign, tmax, order, max_steps, stop
             return STATUS_CANCELLED, tsign * s
         for i in range(5):
             X[i, 0] = y[i]
-        code, h, _last, steps = sy.taylor_step(system, X, P, s, tmax, STATUS_TMAX_CODE, order, factor, steps,
-                                               max_steps, ynew)
-        if code != sy.STEP_OK:
+        if tsign > 0:
+            code, h, _last, steps = sg.taylor_step_reduced(X, P, s, tmax, STATUS_TMAX_CODE, order, factor, steps,
+                                                           max_steps, ynew)
+        else:   # the inverse map: R3 in reversed time
+            code, h, _last, steps = sg.taylor_step_backward(X, P, s, tmax, STATUS_TMAX_CODE, order, factor, steps,
+                                                            max_steps, ynew)
+        if code != STEP_OK:
             return code, tsign * s
         for r in range(m):
             for i in range(5):
@@ -300,7 +304,7 @@ def return_map_taylor(y0, V0, P, cphi, sphi, tsign, tmax, order, max_steps, stop
                 D[r, 5 + i, 0] = V[r, i]
             tangent_coefficients(P, D[r], order)
             if tsign < 0:
-                sy.reverse_time(D[r], order)
+                reverse_time(D[r], order)
         gnew = section_g(ynew, cphi, sphi)
         found = False
         tau = h
