@@ -195,6 +195,51 @@ def test_the_notebook_walk_through_sweeps_a_system_object_and_draws_its_megno_ma
     assert all(len(data.panels[i].extra["lyapunov_seeds"]) == len(data.panels[i].extra["megno"]) for i in (0, 1))
 
 
+ADAPTIVE_SCENE = textwrap.dedent(f"""\
+    name = "hh_adaptive"
+    section = "x"
+    coords = ["y", "py"]
+    solve = "px"
+    [energy]
+    value = {E}
+    [seeds]
+    window = [-0.45, 0.65, -0.52, 0.52]
+    [compute]
+    sections = false
+    lyapunov = true
+    [lyapunov]
+    time = 100.0
+    map_resolution = 32
+    """)
+
+
+def test_a_systems_megno_map_is_adaptive_its_computed_cells_the_exact_maps_bit_for_bit_its_mask_stored(tmp_path,
+                                                                                                     monkeypatch):
+    """docs/scenes.md, "Adaptive maps", for a System: the stored map's computed cells (``map_computed``)
+    are the exact panel's same cells bit for bit, the others filled (MEGNO only), cells off the energy
+    surface left out, and the summary counts the cells computed."""
+    from systems import henon_heiles
+
+    from explorer.analysis import sweep
+    from explorer.app.runner import format_report
+    from explorer.io.scene import parse_scene
+
+    monkeypatch.setattr(sweep, "MAP_COARSE", 8)         # a 32-cell map from a lattice of 8 a side
+    exact = sweep.build_spec(parse_scene(ADAPTIVE_SCENE + "exact = true\n", system=henon_heiles()), [0], chunk_orbits=0)
+    got: dict = {}
+    sweep.run(exact, lambda panel, arrays: got.update(arrays))
+    assert "map_computed" not in got
+    report = ex.run_sweep(parse_scene(ADAPTIVE_SCENE, system=henon_heiles()), tmp_path / "a.h5", progress=False)
+    pd = store.read_store(tmp_path / "a.h5").panels[0]
+    np.testing.assert_array_equal(pd.seeds, exact.panels[0].seeds)          # the cells on the energy surface
+    done = pd.extra["map_computed"]
+    assert 0.2 < done.mean() < 0.9                                          # many cells were filled
+    for k in ("megno", "lyapunov_status"):
+        np.testing.assert_array_equal(pd.extra[k][done], got[k][done], err_msg=k)
+    assert np.isfinite(pd.extra["megno"]).all() and (pd.extra["megno"][done] > 4).any()
+    assert f"map cells computed {int(done.sum())} of {len(done)}" in format_report(report)
+
+
 ATLAS_T = 100.0
 ATLAS_SCENE = SCENE.replace("[integration]", f"""[atlas]
 parameter = "energy"
@@ -213,7 +258,7 @@ def test_an_atlas_of_a_system_computes_each_cells_indicators_on_that_cells_secti
 
     from explorer.analysis import sweep
     from explorer.analysis.lyapunov import chaotic_fraction
-    from explorer.analysis.system_scene import build_system_atlas_spec
+    from explorer.analysis.sweep import build_system_atlas_spec
     from explorer.io.scene import parse_scene
 
     scene = parse_scene(ATLAS_SCENE, system=henon_heiles())
@@ -236,7 +281,7 @@ def test_an_atlas_of_a_system_computes_each_cells_indicators_on_that_cells_secti
 def test_an_atlas_cell_seeded_by_its_map_takes_the_raster_cells_on_that_cells_energy_surface():
     from systems import henon_heiles
 
-    from explorer.analysis.system_scene import build_system_atlas_spec
+    from explorer.analysis.sweep import build_system_atlas_spec
     from explorer.io.scene import parse_scene
 
     text = ATLAS_SCENE.replace("tol = 1e-12", "tol = 1e-12\nmap_resolution = 3")
@@ -252,6 +297,7 @@ def test_an_atlas_cell_seeded_by_its_map_takes_the_raster_cells_on_that_cells_en
         np.testing.assert_allclose(panel.seeds, np.array(inside), rtol=0, atol=1e-15)   # H(0, y, 0, py) < E
         assert panel.grid == (3, -0.45, 0.65, -0.52, 0.52)
     assert 2 not in [p.index for p in spec.panels]     # lam = 0.5, E = 0.001: no cell centre on the surface
+    assert scene.lyapunov.adaptive and len(spec.chunks) == len(spec.panels)   # each map refined in one task
 
 
 def test_a_systems_atlas_is_swept_stored_and_resumed_by_explorer_sweep(workdir, capsys):

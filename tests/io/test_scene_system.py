@@ -136,6 +136,7 @@ def test_the_section_is_read_as_arithmetic_of_the_systems_symbols_and_nothing_is
     (("[seeds]", "[lyapunov]\nmap_indicator = \"fli\"\n[seeds]"), "lyapunov.map_indicator"),
     (("[seeds]", "[compute]\nsections = false\nlyapunov = true\nseparatrices = true\n[seeds]"),
      "compute.separatrices"),
+    (("[seeds]", "[lyapunov]\nexact = 1\n[seeds]"), "lyapunov.exact"),
 ])
 def test_a_bad_system_scene_is_refused_naming_the_key(edit, key):
     with pytest.raises(SceneError, match=key.replace("[", r"\[").replace(".", r"\.")):
@@ -155,6 +156,26 @@ def test_the_panel_hash_follows_the_numbers_not_the_drawing():
     assert parse_scene(SCENE + "[figure]\ndpi = 100\n").panel_hash(0) == base.panel_hash(0)
     assert parse_scene(SCENE.replace("value = 0.125", "value = 0.12")).panel_hash(0) != base.panel_hash(0)
     assert parse_scene(SCENE.replace("direction = 1", "direction = -1")).panel_hash(0) != base.panel_hash(0)
+
+
+def test_a_systems_map_is_adaptive_unless_exact_and_only_an_adaptive_maps_hashes_name_its_rule():
+    """As Chaplygin's (docs/scenes.md): an exact panel is never reused as an adaptive one; an adaptive
+    map's hashes follow the threshold (it picks the cells computed), an exact map's keep the keys of
+    the numbers alone."""
+    text = SCENE.replace('kind = "points"', 'window = [-0.45, 0.65, -0.52, 0.52]\nkind = "points"')
+    adaptive = text + "[compute]\nlyapunov = true\n[lyapunov]\nmap_resolution = 8\n"
+    exact = adaptive + "exact = true\n"
+
+    def hashes(t):
+        s = parse_scene(t)
+        return [h for i in range(s.n_panels) for h in (s.panel_hash(i), s.product_hashes(i)["indicators"])]
+
+    assert parse_scene(adaptive).lyapunov.adaptive and not parse_scene(exact).lyapunov.adaptive
+    assert set(hashes(adaptive)).isdisjoint(hashes(exact))
+    retold = "[lyapunov]\nthreshold = 6.0\n"
+    assert set(hashes(adaptive)).isdisjoint(hashes(adaptive.replace("[lyapunov]\n", retold)))
+    assert hashes(exact) == hashes(exact.replace("[lyapunov]\n", retold))
+    assert set(parse_scene(exact).product_settings(0)["indicators"]["lyapunov"]) == {"time", "tol", "indicators"}
 
 
 ATLAS = SCENE.replace("[seeds]", '[atlas]\nparameter = "energy"\nvalues = [0.0625, 0.125]\n'

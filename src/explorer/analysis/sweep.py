@@ -147,10 +147,8 @@ def build_atlas_spec(scene, *, chunk_orbits: int, cells=None) -> SweepSpec:
     cells whose allowed region is empty are left out (drawn gray), and so are cells not in
     ``cells`` (None: all; a resumed atlas computes only its missing cells).  ``task(spec, i)``
     maps it unchanged (PanelSpec.index is the cell index).  A System's scene: its own cells
-    (:func:`explorer.analysis.system_scene.build_system_atlas_spec`)."""
+    (:func:`build_system_atlas_spec`)."""
     if getattr(scene, "system", None) is not None:
-        from explorer.analysis.system_scene import build_system_atlas_spec
-
         return build_system_atlas_spec(scene, chunk_orbits=chunk_orbits, cells=cells)
     from explorer.analysis.seeds import seed_points
 
@@ -240,6 +238,8 @@ def task(spec: SweepSpec, i: int, threads: int | None = None) -> dict:
 def _indicator_arrays(spec: SweepSpec, panel: PanelSpec, rows: np.ndarray, threads=None) -> tuple:
     """(Indicators, arrays) of the seeds ``rows`` of ``panel``: [lyapunov]'s indicators as ``task``
     returns them (each orbit alone: the same numbers whatever the rows)."""
+    if isinstance(spec, SystemSweepSpec):
+        return _system_indicator_arrays(spec, panel, rows, threads)
     from explorer.analysis.lyapunov import indicators
 
     ly = spec.lyapunov
@@ -536,6 +536,7 @@ class SystemSweepSpec:
     lyapunov: Any = None
     sections: bool = True
     blocks: tuple = ()
+    map_rule: tuple = ()      # (coarse, tolerance) of an adaptive map panel
 
     def streamed(self, pos: int) -> bool:
         return False
@@ -611,15 +612,47 @@ def build_system_spec(scene, panel_indices, *, chunk_orbits: int, product: str |
                                  f"E = {energy!r}")
         panels.append(SystemPanelSpec(i, label, system, float(energy), np.ascontiguousarray(smap.states(pts)),
                                       pts, grid, dropped))
-        chunks += _chunks(pos, len(pts), chunk_orbits)
+        # an adaptive map refines level by level: one chunk (as a Chaplygin map panel)
+        chunks += [(pos, 0, len(pts))] if grid and ly.adaptive else _chunks(pos, len(pts), chunk_orbits)
     return SystemSweepSpec(tuple(panels), scene.section, scene.direction, tuple(scene.coords), scene.solve,
                            integ.crossings, integ.tol, integ.effective_tmax, integ.max_steps, tuple(chunks), ly,
-                           with_sections)
+                           with_sections, map_rule=tuple(map_rule().values()))
+
+
+def build_system_atlas_spec(scene, *, chunk_orbits: int, cells=None) -> SystemSweepSpec:
+    """The cells of a System scene's [atlas] (row = sweep value, column = atlas value) as the panels
+    of a sweep of indicators only, seeded by [seeds] on each cell's energy surface, or with
+    [lyapunov] map_resolution by the cells of its map's raster of [seeds] window; cells with no
+    seed there are left out (drawn gray), and so are cells not in ``cells`` (None: all); a map is
+    adaptive as a map panel is.  The panel's ``index`` is the cell's, as in :func:`build_atlas_spec`."""
+    panels: list = []
+    chunks: list = []
+    resolution = scene.lyapunov.map_resolution
+    for i in range(scene.n_cells):
+        if cells is not None and i not in cells:
+            continue
+        smap = scene.cell_map(i)
+        if resolution:
+            pts, grid = system_map_seeds(smap, scene.seeds.window, resolution)
+        else:
+            (pts, _dropped), grid = system_seed_points(scene.seeds, smap), ()
+        if not len(pts):
+            continue
+        system, energy, label = scene.cell(i)
+        chunks += ([(len(panels), 0, len(pts))] if grid and scene.lyapunov.adaptive else
+                   _chunks(len(panels), len(pts), chunk_orbits, parts=1))
+        panels.append(SystemPanelSpec(i, label, system, float(energy), np.ascontiguousarray(smap.states(pts)),
+                                      pts, grid))
+    integ = scene.integration
+    return SystemSweepSpec(tuple(panels), scene.section, scene.direction, tuple(scene.coords), scene.solve, 1,
+                           integ.tol, integ.effective_tmax, integ.max_steps, tuple(chunks), scene.lyapunov, False,
+                           map_rule=tuple(map_rule().values()))
 
 
 def system_task(spec: SystemSweepSpec, i: int, threads: int | None = None) -> dict:
     """Pure map of a System's sweep: chunk i's crossings of the panel's section map (rows
-    :meth:`SystemSweepSpec.columns`) and, with [lyapunov], the orbits' MEGNO."""
+    :meth:`SystemSweepSpec.columns`) and, with [lyapunov], the orbits' indicators (a map panel
+    adaptive as :func:`adaptive_map`)."""
     pos, a, b = spec.chunks[i]
     panel = spec.panels[pos]
     t0 = time.perf_counter()
@@ -635,12 +668,21 @@ def system_task(spec: SystemSweepSpec, i: int, threads: int | None = None) -> di
         out = {"chunk": i, "data": np.zeros((n, 0, 5)), "count": np.zeros(n, np.int64),
                "status": np.zeros(n, np.int64), "final": panel.y0[a:b].copy(), "info": np.zeros((n, 3)),
                "settings": {"sections": False}}
-    if spec.lyapunov is not None:
-        from explorer.analysis.lyapunov import indicators
-
-        ly = spec.lyapunov
-        ind = indicators(smap, pts, tmax=ly.time, tol=ly.tol, which=tuple(ly.indicators), threads=threads)
-        out.update({k: ind.values[k] for k in ly.indicators})
-        out.update(lyapunov_status=ind.status, lyapunov_dh=ind.energy_error)
+    if spec.lyapunov is not None and adaptive_panel(spec, panel):
+        out.update(adaptive_map(spec, panel, threads))
+    elif spec.lyapunov is not None:
+        out.update(_system_indicator_arrays(spec, panel, np.arange(a, b), threads, smap)[1])
     out["wall_time"] = time.perf_counter() - t0
     return out
+
+
+def _system_indicator_arrays(spec: SystemSweepSpec, panel, rows, threads=None, smap=None) -> tuple:
+    """(Indicators, arrays) of the seeds ``rows`` of a System's ``panel`` (each orbit alone)."""
+    from explorer.analysis.lyapunov import indicators
+
+    ly = spec.lyapunov
+    smap = spec.section_map(panel) if smap is None else smap
+    ind = indicators(smap, panel.seeds[rows], tmax=ly.time, tol=ly.tol, which=tuple(ly.indicators), threads=threads)
+    out = {k: ind.values[k] for k in ly.indicators}
+    out.update(lyapunov_status=ind.status, lyapunov_dh=ind.energy_error)
+    return ind, out

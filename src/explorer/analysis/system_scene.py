@@ -1,12 +1,10 @@
 """What a System's scene computes beside the crossings and indicators of its panels (docs/scenes.md,
 "A scene of your own system"): the separatrices of the hyperbolic fixed points of a panel's section
-map, the branches of its [manifolds] orbit, and the cells of its [atlas] as a sweep of indicators
-that :func:`explorer.analysis.sweep.task` maps."""
+map and the branches of its [manifolds] orbit."""
 from __future__ import annotations
 
 import numpy as np
 
-from explorer.analysis import sweep
 from explorer.analysis.fixedpoints import FixedPoint, separatrices
 from explorer.analysis.manifolds import manifolds
 from explorer.analysis.periodic import find_periodic_orbit, search_periodic_orbits
@@ -48,32 +46,3 @@ def orbit_branches(smap, spec) -> list:
     orb = find_periodic_orbit(smap, spec.guess, spec.period)
     return [(b.kind, b.points) for j in range(orb.period)
             for b in manifolds(smap, orb, index=j, arclength=spec.arclength, max_points=spec.max_points)]
-
-
-def build_system_atlas_spec(scene, *, chunk_orbits: int, cells=None) -> sweep.SystemSweepSpec:
-    """The cells of a System scene's [atlas] (row = sweep value, column = atlas value) as the panels
-    of a sweep of indicators only, seeded by [seeds] on each cell's energy surface, or with
-    [lyapunov] map_resolution by the cells of its map's raster of [seeds] window; cells with no
-    seed there are left out (drawn gray), and so are cells not in ``cells`` (None: all).  The
-    panel's ``index`` is the cell's, as :func:`explorer.analysis.sweep.build_atlas_spec` has it."""
-    panels: list = []
-    chunks: list = []
-    resolution = scene.lyapunov.map_resolution
-    for i in range(scene.n_cells):
-        if cells is not None and i not in cells:
-            continue
-        smap = scene.cell_map(i)
-        if resolution:
-            pts, grid = sweep.system_map_seeds(smap, scene.seeds.window, resolution)
-        else:
-            (pts, _dropped), grid = sweep.system_seed_points(scene.seeds, smap), ()
-        if not len(pts):
-            continue
-        system, energy, label = scene.cell(i)
-        chunks += sweep._chunks(len(panels), len(pts), chunk_orbits, parts=1)
-        panels.append(sweep.SystemPanelSpec(i, label, system, float(energy), np.ascontiguousarray(smap.states(pts)),
-                                            pts, grid))
-    integ = scene.integration
-    return sweep.SystemSweepSpec(tuple(panels), scene.section, scene.direction, tuple(scene.coords), scene.solve, 1,
-                                 integ.tol, integ.effective_tmax, integ.max_steps, tuple(chunks), scene.lyapunov,
-                                 False)

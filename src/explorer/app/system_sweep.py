@@ -141,7 +141,8 @@ def draw_system_figure(scene, out_path, stem, text=None):
                 values = pd.extra[ind] if ind in pd.extra else pd.extra["megno"]
                 rasters.append({"seeds": pd.extra.get("lyapunov_seeds", pd.seeds), "values": values,
                                 "grid": grid, "params": None, "h": scene.panel(i)[1], "axes": scene.coords,
-                                "label": scene.panel(i)[2] or scene.system.name, "fraction": fraction[0]})
+                                "label": scene.panel(i)[2] or scene.system.name, "fraction": fraction[0],
+                                "computed": float(np.mean(pd.extra.get("map_computed", True)))})
         if rasters:
             fig = chaos_rasters(rasters, indicator=ind, threshold=scene.lyapunov.threshold, columns=fs.columns,
                                 dpi=fs.dpi)

@@ -37,7 +37,7 @@ from explorer.io.scene.checks import (
 from explorer.io.scene.core import Scene
 from explorer.io.scene.hashes import _canonical_json, _sha256
 from explorer.io.scene.schema import _FIGURE_KEYS, _MANIFOLD_KEYS, FORMAT_VERSION, MAX_MAP_RESOLUTION, MAX_SEEDS
-from explorer.io.scene.specs import FigureSpec, ManifoldSpec, SeedSpec
+from explorer.io.scene.specs import FigureSpec, LyapunovSpec, ManifoldSpec, SeedSpec
 from explorer.kernels.indicator_table import TANGENT_NAMES
 from explorer.model import ParameterError
 
@@ -47,7 +47,7 @@ SYSTEM_TOP_KEYS = ("name", "description", "system", "section", "direction", "coo
 SYSTEM_SEED_KINDS = ("grid", "random", "points")
 _SEED_KEYS = ("kind", "n", "seed", "points", "window")
 _INTEGRATION_KEYS = ("method", "crossings", "tol", "tmax", "max_steps")
-_LYAPUNOV_KEYS = ("time", "tol", "threshold", "map_resolution", "indicators", "map_indicator")
+_LYAPUNOV_KEYS = ("time", "tol", "threshold", "map_resolution", "indicators", "map_indicator", "exact")
 _COMPUTE_KEYS = ("sections", "lyapunov", "separatrices")
 #: the swept name of the energy level (a parameter of the system may not take it)
 ENERGY = "energy"
@@ -234,7 +234,8 @@ class SystemIntegration:
 class SystemLyapunov:
     """[lyapunov] of a System's scene: ``indicators`` (MEGNO <Y> always) over ``time`` (Taylor
     ``tol``) of every seed, or of the cell centres of a ``map_resolution``^2 raster of [seeds]
-    window, drawn by ``map_indicator``; ``threshold`` classifies by <Y>."""
+    window, drawn by ``map_indicator``; ``threshold`` classifies by <Y>.  A MEGNO map is adaptive
+    unless ``exact`` (as Chaplygin's, :attr:`explorer.io.scene.specs.LyapunovSpec.adaptive`)."""
 
     time: float = 1000.0
     tol: float = 1e-12
@@ -242,11 +243,12 @@ class SystemLyapunov:
     map_resolution: int = 0
     indicators: tuple = ("megno",)
     map_indicator: str = "megno"
+    exact: bool = False
 
-    # a System's indicators: the Taylor method, no early classification, every map cell computed
+    # a System's indicators: the Taylor method, no early classification
     method = "taylor"
     early_stop = False
-    adaptive = False
+    adaptive = LyapunovSpec.adaptive
 
     def __post_init__(self):
         from explorer.analysis import sections
@@ -259,6 +261,7 @@ class SystemLyapunov:
         names = [_choice(f"lyapunov.indicators[{i}]", q, TANGENT_NAMES)
                  for i, q in enumerate(_list("lyapunov.indicators", self.indicators))]
         object.__setattr__(self, "indicators", tuple(dict.fromkeys(["megno", *names])))
+        object.__setattr__(self, "exact", _bool("lyapunov.exact", self.exact))
         if self.map_indicator not in self.indicators:
             _fail("lyapunov.map_indicator", f"must be one of lyapunov.indicators {list(self.indicators)}; "
                   f"got {_short(self.map_indicator)}")
@@ -267,6 +270,10 @@ class SystemLyapunov:
         d = {"time": self.time, "tol": self.tol, "indicators": list(self.indicators)}
         if self.map_resolution:
             d["map_resolution"] = self.map_resolution
+        if self.adaptive:   # which cells are computed depends on the class threshold and the rule
+            from explorer.analysis.sweep import map_rule
+
+            d["adaptive"] = dict(map_rule(), threshold=self.threshold)
         return d
 
 
