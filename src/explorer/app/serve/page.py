@@ -19,7 +19,7 @@ import param
 from bokeh.events import ConnectionLost, DoubleTap, PressUp, Tap
 from bokeh.models import Div
 
-from explorer.app.serve import export
+from explorer.app.serve import export, style
 from explorer.app.serve import raster as raster_mod
 from explorer.app.serve import settings as settings_mod
 from explorer.app.serve.page_fields import Fields
@@ -28,15 +28,6 @@ from explorer.app.serve.page_orbit_list import OrbitList
 from explorer.app.serve.page_orbits import OrbitsLayer
 from explorer.app.serve.page_overlays import Overlays
 from explorer.app.serve.settings import TOKEN_ARG, Settings, format_window
-from explorer.app.serve.style import (
-    FIGURE_CHROME_PX,
-    FIGURE_HEIGHT,
-    FIGURE_MIN_WIDTH,
-    FIGURE_SIDES_PX,
-    FIGURE_WIDTH,
-    MESSAGE_ERROR_COLOR,
-    MESSAGE_OK_COLOR,
-)
 from explorer.app.serve.tasks import Session
 from explorer.app.serve.view import SectionView
 from explorer.model import ParameterError
@@ -141,7 +132,7 @@ class SectionPage:
         self.session = Session(doc)
         # the message line under the figure: text, never HTML (a message may quote a field)
         self.message = Div(name="message", text="", render_as_text=True,
-                           styles={"color": MESSAGE_ERROR_COLOR, "min-height": "1.2em"})
+                           styles={"color": style.MESSAGE_ERROR_COLOR, "min-height": "1.2em"})
         self.url_state = UrlState.of(base.field_names)
         self.section = SectionView()
         self.section.set_axes(*base.axes)
@@ -204,10 +195,7 @@ class SectionPage:
         for div in texts:
             div.sizing_mode = "stretch_width"
         bar = pn.FlexBox(*buttons, flex_wrap="wrap", sizing_mode="stretch_width")
-        # as wide as the window leaves it, no taller than the window less the lines around it (view.py)
-        aspect = FIGURE_WIDTH / FIGURE_HEIGHT
-        self.section.figure.styles = {"max-width": f"max({FIGURE_MIN_WIDTH}px, min(calc((100vh - {FIGURE_CHROME_PX}px)"
-                                                   f" * {aspect:.6f}), calc(100vw - {FIGURE_SIDES_PX}px)))"}
+        self.section.figure.styles = {"max-width": style.FIGURE_MAX_WIDTH}
         plot = pn.pane.Bokeh(self.section.figure, sizing_mode="stretch_width")
         self.layout = pn.Row(controls, pn.Column(self.title, bar, pn.Row(plot, self.orbit_list.panel,
                                                                          sizing_mode="stretch_width"),
@@ -216,7 +204,7 @@ class SectionPage:
 
     def say(self, text: str, ok: bool = False) -> None:
         """``text`` on the message line, in the error colour or (``ok``) the success colour."""
-        color = MESSAGE_OK_COLOR if ok else MESSAGE_ERROR_COLOR
+        color = style.MESSAGE_OK_COLOR if ok else style.MESSAGE_ERROR_COLOR
         if self.message.styles.get("color") != color:
             self.message.styles = {**self.message.styles, "color": color}
         self.message.text = text

@@ -9,17 +9,13 @@ from explorer.app.serve import overlays as search
 from explorer.app.serve.box import Box
 from explorer.app.serve.style import MANIFOLD_COLORS, PERIOD_COLORS, SEPARATRIX_CASING, SEPARATRIX_COLOR
 
-
-def _empty_fixed() -> dict:
-    return {"p1": [], "p2": [], "kind": [], "marker": []}
-
-
-def _empty_manifolds() -> dict:
-    return {"xs": [], "ys": [], "color": [], "kind": []}
+#: the columns of each overlay's source
+COLUMNS = {"fixed": ("p1", "p2", "kind", "marker"), "separatrices": ("xs", "ys"),
+           "manifolds": ("xs", "ys", "color", "kind"), "periodic": ("p1", "p2", "period", "kind", "marker")}
 
 
-def _empty_periodic() -> dict:
-    return {"p1": [], "p2": [], "period": [], "kind": [], "marker": []}
+def _empty(name: str) -> dict:
+    return {k: [] for k in COLUMNS[name]}
 
 
 def _marks(points, stable) -> dict:
@@ -33,10 +29,10 @@ class Overlays:
 
     def __init__(self, host, view, session):
         self.host, self.view, self.session = host, view, session
-        self.fixed = ColumnDataSource(_empty_fixed(), name="fixed")
-        self.curves = ColumnDataSource({"xs": [], "ys": []}, name="separatrices")
-        self.periodic = ColumnDataSource(_empty_periodic(), name="periodic")
-        self.manifold_source = ColumnDataSource(_empty_manifolds(), name="manifolds")
+        self.fixed = ColumnDataSource(_empty("fixed"), name="fixed")
+        self.curves = ColumnDataSource(_empty("separatrices"), name="separatrices")
+        self.periodic = ColumnDataSource(_empty("periodic"), name="periodic")
+        self.manifold_source = ColumnDataSource(_empty("manifolds"), name="manifolds")
         self.text = Div(name="overlay", text="", render_as_text=True)
         self.overlay = Box(label="fixed points, separatrices", value=False)
         self.periodic_box = Box(label=f"periodic orbits, periods 1-{search.PERIODIC_MAX}", value=False)
@@ -70,9 +66,9 @@ class Overlays:
     def restart(self):
         """Search what the boxes ask for at the current settings, under a budget; latest wins."""
         self.clear_manifolds()
-        self.fixed.data = _empty_fixed()
-        self.curves.data = {"xs": [], "ys": []}
-        self.periodic.data = _empty_periodic()
+        self.fixed.data = _empty("fixed")
+        self.curves.data = _empty("separatrices")
+        self.periodic.data = _empty("periodic")
         self.text.text = ""
         wanted = (self.overlay.value, self.periodic_box.value)
         if not any(wanted) or self.host.settings.region is None:
@@ -130,7 +126,7 @@ class Overlays:
 
     def show_manifolds(self, point, period: int = 1) -> None:
         """Grow and draw W^u and W^s of the hyperbolic orbit of ``period`` through ``point`` (latest wins)."""
-        self.manifold_source.data = _empty_manifolds()
+        self.manifold_source.data = _empty("manifolds")
         self.text.text = (f"growing the manifolds of the period-{period} orbit at "
                           f"({point[0]:.6g}, {point[1]:.6g}) ...")
         self.session.start("manifolds", self._compute_manifolds(tuple(point), int(period), self.host.settings),
@@ -138,7 +134,7 @@ class Overlays:
 
     def clear_manifolds(self) -> None:
         self.session.cancel("manifolds")
-        self.manifold_source.data = _empty_manifolds()
+        self.manifold_source.data = _empty("manifolds")
 
     async def _compute_manifolds(self, point, period, settings):
         try:

@@ -21,6 +21,9 @@ LIST_WIDTH = 280
 #: the page's width beside the figure: the controls, the orbit list, margins and a scroll bar (px)
 FIGURE_SIDES_PX = 230 + LIST_WIDTH + 60
 POINT_SIZE = 2.0
+#: the figure's CSS max-width: as wide as the window leaves it, no taller than the window less the lines around it
+FIGURE_MAX_WIDTH = (f"max({FIGURE_MIN_WIDTH}px, min(calc((100vh - {FIGURE_CHROME_PX}px) * "
+                    f"{FIGURE_WIDTH / FIGURE_HEIGHT:.6f}), calc(100vw - {FIGURE_SIDES_PX}px)))")
 #: a dot's casing on the chaos layer: size (px), fill, edge colour and width
 DOT_CASING = (4.5, "#ffffff", "#101010", 0.6)
 #: the view shows the region's bounding box and this margin around it (fraction of the semi-axes)
