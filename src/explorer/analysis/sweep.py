@@ -49,14 +49,19 @@ _CHECK: contextvars.ContextVar = contextvars.ContextVar("sweep_check", default=N
 
 @dataclass(frozen=True)
 class PanelSpec:
+    """A panel (or atlas cell) of a sweep: Chaplygin's parameters ``P`` (None for a System) or its
+    ``system`` (None for Chaplygin's model), energy ``h``, seeds (N, 2) of the section and their
+    states ``y0``; ``grid`` the raster of a chaos map, ``dropped`` the [seeds] left out."""
+
     index: int
     label: str
-    P: np.ndarray
+    P: np.ndarray | None
     h: float
     y0: np.ndarray
     seeds: np.ndarray
     grid: tuple = ()
     dropped: int = 0
+    system: Any = None
 
 
 @dataclass(frozen=True)
@@ -504,21 +509,6 @@ def cpu_count() -> int:
 
 
 @dataclass(frozen=True)
-class SystemPanelSpec:
-    """A panel of a System's sweep: its System (parameter values), energy ``h``, seeds (N, 2) in
-    the map's coords and their states ``y0`` (N, n); ``grid`` the raster of a chaos map."""
-
-    index: int
-    label: str
-    system: Any
-    h: float
-    y0: np.ndarray
-    seeds: np.ndarray
-    grid: tuple = ()
-    dropped: int = 0
-
-
-@dataclass(frozen=True)
 class SystemSweepSpec:
     """The panels of a System's sweep and the section map they share (docs/scenes.md, "A scene of
     your own system"); ``task`` maps it as a :class:`SweepSpec`.  Not streamed."""
@@ -610,8 +600,8 @@ def build_system_spec(scene, panel_indices, *, chunk_orbits: int, product: str |
         if len(pts) == 0:
             raise ParameterError(f"scene panel {i} ({label or system.name}): no seed lies on the energy surface "
                                  f"E = {energy!r}")
-        panels.append(SystemPanelSpec(i, label, system, float(energy), np.ascontiguousarray(smap.states(pts)),
-                                      pts, grid, dropped))
+        panels.append(PanelSpec(i, label, None, float(energy), np.ascontiguousarray(smap.states(pts)), pts, grid,
+                                dropped, system))
         # an adaptive map refines level by level: one chunk (as a Chaplygin map panel)
         chunks += [(pos, 0, len(pts))] if grid and ly.adaptive else _chunks(pos, len(pts), chunk_orbits)
     return SystemSweepSpec(tuple(panels), scene.section, scene.direction, tuple(scene.coords), scene.solve,
@@ -641,8 +631,8 @@ def build_system_atlas_spec(scene, *, chunk_orbits: int, cells=None) -> SystemSw
         system, energy, label = scene.cell(i)
         chunks += ([(len(panels), 0, len(pts))] if grid and scene.lyapunov.adaptive else
                    _chunks(len(panels), len(pts), chunk_orbits, parts=1))
-        panels.append(SystemPanelSpec(i, label, system, float(energy), np.ascontiguousarray(smap.states(pts)),
-                                      pts, grid))
+        panels.append(PanelSpec(i, label, None, float(energy), np.ascontiguousarray(smap.states(pts)), pts, grid,
+                                system=system))
     integ = scene.integration
     return SystemSweepSpec(tuple(panels), scene.section, scene.direction, tuple(scene.coords), scene.solve, 1,
                            integ.tol, integ.effective_tmax, integ.max_steps, tuple(chunks), scene.lyapunov, False,
