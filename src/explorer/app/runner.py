@@ -210,6 +210,11 @@ class SweepReport:
     map_cells: tuple = ()        # (panel label, cells computed, allowed cells) per adaptive map panel
 
 
+def _head(label: str) -> str:
+    """A summary line's panel label (none for a scene of one unlabelled panel)."""
+    return f"{label}: " if label else ""
+
+
 def format_report(r: SweepReport) -> str:
     """The summary that ``explorer sweep`` prints: what was computed and what was measured."""
     lines = [f"scene {r.scene}: {r.n_panels} panels ({len(r.computed)} computed, "
@@ -238,11 +243,10 @@ def format_report(r: SweepReport) -> str:
         lines.append(f"  chaotic fraction reclassified at MEGNO > {r.threshold:g} (stored MEGNO, "
                      f"nothing recomputed) for panels {', '.join(str(i) for i in r.restamped)}")
     for label, done, cells in r.map_cells:
-        head = f"{label}: " if label else ""
-        lines.append(f"  {head}map cells computed {done} of {cells} ({done / max(cells, 1):.1%}), the rest filled "
-                     "(adaptive; [lyapunov] exact = true computes every cell)")
+        lines.append(f"  {_head(label)}map cells computed {done} of {cells} ({done / max(cells, 1):.1%}), "
+                     "the rest filled (adaptive; [lyapunov] exact = true computes every cell)")
     for label, frac, err in r.fractions:
-        lines.append(f"  {label}: chaotic fraction {frac:.3f} +- {err:.3f} (MEGNO > {r.threshold:g})")
+        lines.append(f"  {_head(label)}chaotic fraction {frac:.3f} +- {err:.3f} (MEGNO > {r.threshold:g})")
     if r.figure:
         lines.append("  figure " + ", ".join(str(p) for p in r.figure))
     lines.append(f"  wall time {r.wall_time:.2f} s")
