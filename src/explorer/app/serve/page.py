@@ -86,12 +86,8 @@ class UrlState(param.Parameterized):
 
     def _on_address(self, event) -> None:
         """A changed address that lacks the link is healed on the session's loop."""
-        if event.new != event.old and self._lacks(self._query(event.name, event.new)):
+        if event.new != event.old and self._lacks(urlsplit(event.new).query if event.name == "href" else event.new):
             self._session.soon(self._heal)
-
-    @staticmethod
-    def _query(name: str, address: str) -> str:
-        return urlsplit(address).query if name == "href" else address
 
     def _heal(self) -> None:
         """The link written again into Panel's location when its ``search`` lacks it, else sent to
@@ -99,7 +95,7 @@ class UrlState(param.Parameterized):
         location = self._location
         if self._lacks(location.search):
             self.write(self._link)
-        elif self._lacks(self._query("href", location.href or "")):
+        elif self._lacks(urlsplit(location.href or "").query):
             with self._sent_by_bokeh():
                 location.param.trigger("search")
 
@@ -135,7 +131,8 @@ class SectionPage:
                            styles={"color": style.MESSAGE_ERROR_COLOR, "min-height": "1.2em"})
         self.url_state = UrlState.of(base.field_names)
         self.section = SectionView()
-        self.section.set_axes(*base.axes)
+        fig = self.section.figure
+        fig.xaxis.axis_label, fig.yaxis.axis_label = base.axes
         self.orbits = OrbitsLayer(self, self.section, self.session)
         self.density_image = DensityImage(self.orbits, self.section)
         self.chaos = ChaosLayer(self, self.section, self.session, raster_mod.resolutions_up_to(megno_resolution),
@@ -146,7 +143,6 @@ class SectionPage:
         self.exports = export.Exports(self, self.session, export_dir, label)
         self._url_timer = self.session.timer(self.push_url)
         self.section.on_window(lambda: self._url_timer.at(time.monotonic() + URL_DELAY_SECONDS))
-        fig = self.section.figure
         self.chaos.draw(fig)
         self.overlays.draw_lines(fig)
         self.density_image.draw(fig)
@@ -249,10 +245,8 @@ class SectionPage:
             except ParameterError as exc:
                 self.say(f"link's view ignored: {exc}")
         self.chaos.load_url(args)                 # (its indicator, then its box)
-        self.overlays.overlay.value = args.get("separatrices") == "1"
-        self.overlays.periodic_box.value = args.get("periodic") == "1"
-        self.orbits.colour_box.value = args.get("colour") == "megno"
-        self.orbits.pause_box.value = args.get("pause") != "0"
+        for name, box, on, off in self._boxes():
+            box.value = args.get(name) == on if name != "pause" else args.get(name) != off   # (pause: on by default)
         self.orbit_list.load_url(starts, args.get("hidden", ""))
         self.push_url()
 
@@ -261,14 +255,17 @@ class SectionPage:
         the window."""
         q = self.settings.fields()
         q.update(self.orbit_list.url_query())
-        for name, box in (("separatrices", self.overlays.overlay), ("periodic", self.overlays.periodic_box),
-                          ("pause", self.orbits.pause_box)):
-            q[name] = "1" if box.value else "0"
+        q.update({name: on if box.value else off for name, box, on, off in self._boxes()})
         q.update(self.chaos.url_query())
-        q["colour"] = "megno" if self.orbits.colour_box.value else "orbit"
         w = self.section.window
         q["view"] = "" if w is None else format_window(w)
         return q
+
+    def _boxes(self) -> tuple:
+        """(URL name, box, its text ticked, unticked) of the page's boxes in the link."""
+        o, ov = self.orbits, self.overlays
+        return (("separatrices", ov.overlay, "1", "0"), ("periodic", ov.periodic_box, "1", "0"),
+                ("colour", o.colour_box, "megno", "orbit"), ("pause", o.pause_box, "1", "0"))
 
     def push_url(self):
         """The link anew (UrlState.write; the browser's address follows it once attached)."""

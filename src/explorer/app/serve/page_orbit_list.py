@@ -173,10 +173,6 @@ class OrbitList:
             self.table.text = text
 
     # ------------------------------------------------------------ the picked orbit
-    def _picked(self, ident) -> None:
-        self.picked = ident
-        self.refresh()
-
     def pick(self, p1: float, p2: float, radius_px: float = PICK_PX) -> int | None:
         """A pick at (p1, p2): near a hyperbolic mark its manifolds (None), else selects the orbit with the
         nearest crossing within ``radius_px`` pixels and returns its id."""
@@ -204,7 +200,8 @@ class OrbitList:
         start = next(((a, b) for i, a, b, _c in self.orbits.starts if i == ident), None)
         if start is None:
             return
-        self._picked(ident)
+        self.picked = ident
+        self.refresh()
         self.say("")
         if ident in self.readouts:
             self.session.cancel("readout")
@@ -218,7 +215,8 @@ class OrbitList:
         """No orbit picked (its readout stays known: picked again, it shows at once)."""
         self.session.cancel("readout")
         self.text.text = ""
-        self._picked(None)
+        self.picked = None
+        self.refresh()
 
     def forget(self, ident: int | None = None) -> None:
         """Drop the readout of orbit ``ident`` (None: of every orbit) and stop computing it."""

@@ -177,10 +177,6 @@ class Timer:
         self.due: float | None = None          # (loop time = time.monotonic) of the pending call
         self._handle: asyncio.TimerHandle | None = None
 
-    @property
-    def pending(self) -> bool:
-        return self.due is not None
-
     def at(self, when: float) -> None:
         if self.due is not None and self.due <= when or self.session.closed:
             return

@@ -65,9 +65,6 @@ class SectionView:
         width, height = self.frame_px()
         return (w.x1 - w.x0) / max(width, 1.0), (w.y1 - w.y0) / max(height, 1.0)
 
-    def set_axes(self, a: str, b: str) -> None:
-        self.figure.xaxis.axis_label, self.figure.yaxis.axis_label = a, b
-
     def draw_region(self, region, mask=None) -> None:
         """The allowed region (c1, c2, r1, r2; None: empty) as the ellipse or ``mask`` over its box; the view fitted."""
         self.region_image.data = {"image": [], "x": [], "y": [], "dw": [], "dh": []}
