@@ -379,6 +379,17 @@ def test_the_exact_key_and_an_adaptive_maps_threshold_change_its_hashes_an_exact
         parse_scene(adaptive + 'exact = "yes"\n')
 
 
+def test_a_new_version_of_the_refinement_rule_changes_an_adaptive_maps_hashes_not_an_exact_maps(monkeypatch):
+    """A stored adaptive map is not reused once chaos_map's rule has changed (its RULE_VERSION)."""
+    from explorer.analysis import chaos_map
+
+    adaptive = LYAP_SCENE + "map_resolution = 16\n"
+    exact = adaptive + "exact = true\n"
+    before = _hashes(adaptive), _hashes(exact)
+    monkeypatch.setattr(chaos_map, "RULE_VERSION", chaos_map.RULE_VERSION + 1)
+    assert set(_hashes(adaptive)).isdisjoint(before[0]) and _hashes(exact) == before[1]
+
+
 def test_the_diffusion_settings_alone_keep_panel_hashes_unless_it_is_asked_for():
     """[lyapunov] center and diffusion_iterates determine only frequency_diffusion: a scene that
     does not ask for it keeps its hashes (its panels are not recomputed)."""

@@ -42,6 +42,9 @@ REGULAR, CHAOTIC, OUTSIDE, FAILED = 0, 1, 2, 3
 #: regular structures in a chaotic sea), two cells around any (a thin chaotic layer is dashed in cells)
 REACH = {REGULAR: 2, CHAOTIC: 1}
 REACH_CELLS = 2
+#: the version of :func:`refinement`'s rule: raise it when a change of the rule changes which cells it
+#: computes (a scene's adaptive map is hashed with it: explorer.analysis.sweep.map_rule)
+RULE_VERSION = 2
 
 
 @dataclass(frozen=True)

@@ -283,9 +283,10 @@ def _frequency_diffusion(spec, panel, seeds, threads):
 def map_rule() -> dict:
     """The settings of the adaptive map's refinement (:func:`explorer.chaos_map`): part of the
     indicators' hash of an adaptive map panel (docs/scenes.md)."""
-    from explorer.analysis.chaos_map import TOLERANCE
+    from explorer.analysis.chaos_map import REACH, REACH_CELLS, RULE_VERSION, TOLERANCE
 
-    return {"coarse": int(MAP_COARSE), "tolerance": float(TOLERANCE)}
+    return {"rule": RULE_VERSION, "coarse": int(MAP_COARSE), "tolerance": float(TOLERANCE),
+            "reach": tuple(sorted(REACH.items())), "reach_cells": int(REACH_CELLS)}
 
 
 def adaptive_panel(spec, panel) -> bool:
@@ -342,7 +343,8 @@ def adaptive_map(spec: SweepSpec, panel: PanelSpec, threads=None) -> dict:
 
     ly = spec.lyapunov
     cells = _MapCells(spec, panel, threads)
-    coarse, tolerance = spec.map_rule or tuple(map_rule().values())
+    rule = dict(zip(map_rule(), spec.map_rule)) if spec.map_rule else map_rule()
+    coarse, tolerance = rule["coarse"], rule["tolerance"]
     m = chaos_map(cells, resolution=int(panel.grid[0]), indicator=ly.map_indicator, tmax=ly.time,
                   threshold=ly.threshold, tolerance=tolerance, coarse=coarse, threads=threads,
                   early_stop=ly.early_stop)
