@@ -12,6 +12,7 @@ import numpy as np
 
 from explorer.app.serve.orbits import COLORS
 from explorer.app.serve.settings import Settings
+from explorer.app.serve.tasks import failure
 from explorer.io import scene as scene_mod
 from explorer.model import ParameterError
 
@@ -77,10 +78,6 @@ def write_store(scene_path) -> str:
     return out
 
 
-def _why(exc: BaseException) -> str:
-    return f"{type(exc).__name__}: {' '.join(str(exc).split())}"
-
-
 class Exports:
     """Scene and figure exports of a page (``host``: its settings, components and message line)."""
 
@@ -142,7 +139,7 @@ class Exports:
         try:
             return io.BytesIO(self.figure_bytes(fmt))
         except Exception as exc:  # noqa: BLE001 - reported in the page; the download is empty
-            self.host.say(f"figure failed: {_why(exc)}")
+            self.host.say(f"figure failed: {failure(exc)}")
             return io.BytesIO(b"")
 
     def export_figure(self) -> None:
@@ -170,5 +167,5 @@ class Exports:
         try:
             text, ok = said(await self.session.run(fn, *args)), True
         except Exception as exc:  # noqa: BLE001 - reported in the page
-            text, ok = f"{what} failed: {_why(exc)}", False
+            text, ok = f"{what} failed: {failure(exc)}", False
         await self.session.apply(lambda: self.host.say(text, ok))

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from explorer.app.serve.tasks import failure
+
 #: the periodic orbits of periods 1..PERIODIC_MAX are marked (analysis/periodic.py)
 PERIODIC_MAX = 4
 
@@ -108,8 +110,7 @@ def separatrices(view, points, text: str) -> tuple:
             notes.append(f"separatrices {exc}")
             break
         except Exception as exc:  # noqa: BLE001 - reported in the status line, the other points go on
-            notes.append(f"separatrices of ({_num(fp.point[0])}, {_num(fp.point[1])}) failed "
-                         f"({type(exc).__name__}: {' '.join(str(exc).split())})")
+            notes.append(f"separatrices of ({_num(fp.point[0])}, {_num(fp.point[1])}) failed ({failure(exc)})")
             continue
         curves += c
         if note:
@@ -173,7 +174,7 @@ def orbit_readout(settings, start) -> dict:
     except BudgetExceeded:
         raise
     except Exception as exc:  # noqa: BLE001 - shown in the readout
-        out["rotation_error"] = f"{type(exc).__name__}: {' '.join(str(exc).split())}"
+        out["rotation_error"] = failure(exc)
     return out
 
 

@@ -28,7 +28,7 @@ from explorer.app.serve.page_orbit_list import OrbitList
 from explorer.app.serve.page_orbits import OrbitsLayer
 from explorer.app.serve.page_overlays import Overlays
 from explorer.app.serve.settings import TOKEN_ARG, Settings, format_window
-from explorer.app.serve.tasks import Session
+from explorer.app.serve.tasks import Session, failure
 from explorer.app.serve.view import SectionView
 from explorer.model import ParameterError
 
@@ -405,7 +405,7 @@ def session_app(base: Settings, export_dir=None, label: str = "", **page_options
             page = SectionPage(base, args, export_dir=export_dir, label=label, doc=pn.state.curdoc, **page_options)
         except Exception as exc:  # noqa: BLE001 - a link the checks let through: the page without it, and why
             page = SectionPage(base, {}, export_dir=export_dir, label=label, doc=pn.state.curdoc, **page_options)
-            page.say(f"link ignored: {type(exc).__name__}: {' '.join(str(exc).split())}")
+            page.say(f"link ignored: {failure(exc)}")
         if pn.state.location is not None:
             page.url_state.attach(pn.state.location, page.session)
         return page.layout

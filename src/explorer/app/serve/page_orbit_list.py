@@ -15,6 +15,7 @@ from explorer.app.serve import overlays as search
 from explorer.app.serve import settings as settings_mod
 from explorer.app.serve.orbits import COLORS, INDICATOR_TIME
 from explorer.app.serve.style import LIST_WIDTH, megno_kind
+from explorer.app.serve.tasks import failure
 from explorer.model import ParameterError
 
 #: a pick selects the orbit with a crossing within this many pixels of the click
@@ -231,7 +232,7 @@ class OrbitList:
         try:
             r = await self.session.run(search.orbit_readout, settings, start)
         except Exception as exc:  # noqa: BLE001 - reported in the page
-            r = {"error": f"{type(exc).__name__}: {' '.join(str(exc).split())}"}
+            r = {"error": failure(exc)}
         r["start"] = start
         await self.session.apply(lambda: self._keep(ident, r))
 

@@ -17,6 +17,7 @@ from explorer.app.serve import style
 from explorer.app.serve.box import Box
 from explorer.app.serve.orbits import COLORS, INDICATOR_TIME, Worker
 from explorer.app.serve.style import MEGNO_HIGH, MEGNO_LOW, MEGNO_ORBIT_SKIP, POINT_SIZE, megno_palette
+from explorer.app.serve.tasks import failure
 
 #: blocks after an orbit's first go to the browser at most this often (s): each message redraws every dot
 FLUSH_SECONDS = 0.25
@@ -316,7 +317,7 @@ class OrbitsLayer:
     def _on_error(self, ident, exc):
         self._mark_starts()
         self.progress[ident] = (self.progress.get(ident, (0,))[0], "failed")
-        self.host.say(f"orbit {ident} failed: {type(exc).__name__}: {' '.join(str(exc).split())}")
+        self.host.say(f"orbit {ident} failed: {failure(exc)}")
         self.update_status()
         self.host.push_url()
 

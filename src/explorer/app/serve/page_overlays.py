@@ -8,6 +8,7 @@ from bokeh.models import ColumnDataSource, Div, LinearColorMapper
 from explorer.app.serve import overlays as search
 from explorer.app.serve.box import Box
 from explorer.app.serve.style import MANIFOLD_COLORS, PERIOD_COLORS, SEPARATRIX_CASING, SEPARATRIX_COLOR
+from explorer.app.serve.tasks import failure
 
 #: the columns of each overlay's source
 COLUMNS = {"fixed": ("p1", "p2", "kind", "marker"), "separatrices": ("xs", "ys"),
@@ -88,7 +89,7 @@ class Overlays:
                 await apply(lambda: self._show_fixed(points, [], text + growing))
                 curves, text = await run(search.separatrices, settings, points, text)
             except Exception as exc:  # noqa: BLE001 - reported in the page
-                points, curves, text = [], [], f"fixed points: failed ({type(exc).__name__}: {exc})"
+                points, curves, text = [], [], f"fixed points: failed ({failure(exc)})"
             await apply(lambda: self._show_fixed(points, curves, text))
         if periodic:
             if fixed:
@@ -96,7 +97,7 @@ class Overlays:
             try:
                 orbits, found = await run(search.periodic_orbits, settings, search.PERIODIC_MAX)
             except Exception as exc:  # noqa: BLE001 - reported in the page
-                orbits, found = [], f"periodic orbits: failed ({type(exc).__name__}: {exc})"
+                orbits, found = [], f"periodic orbits: failed ({failure(exc)})"
             await apply(lambda: self._show_periodic(orbits, "; ".join(t for t in (text, found) if t)))
 
     def _show_periodic(self, orbits, text):
@@ -140,7 +141,7 @@ class Overlays:
         try:
             branches, text = await self.session.run(search.saddle_manifolds, settings, point, period)
         except Exception as exc:  # noqa: BLE001 - reported in the page
-            branches, text = [], f"manifolds: failed ({type(exc).__name__}: {' '.join(str(exc).split())})"
+            branches, text = [], f"manifolds: failed ({failure(exc)})"
         await self.session.apply(lambda: self._show_manifolds(branches, text))
 
     def _show_manifolds(self, branches, text):

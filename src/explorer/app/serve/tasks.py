@@ -22,6 +22,11 @@ _DRIVER = ThreadPoolExecutor(max_workers=1, thread_name_prefix="explorer-page-lo
 _log = logging.getLogger("explorer.serve")
 
 
+def failure(exc: BaseException) -> str:
+    """A failure as the page says it: the exception's type and its message on one line."""
+    return f"{type(exc).__name__}: {' '.join(str(exc).split())}"
+
+
 def _in_budget(budget: Budget | None, fn, *args):
     if budget is None:
         return fn(*args)
