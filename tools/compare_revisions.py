@@ -9,8 +9,8 @@ and without its Jacobian, and a return cut by its time budget: the compiled retu
     python tools/compare_revisions.py $PWD /tmp/new.npz
     python tools/compare_revisions.py --compare /tmp/base.npz /tmp/new.npz
 
-Used for refactors that must not change results (e.g. the DOP853 step written once in
-explorer.integrate.systems). Each run must use its own NUMBA_CACHE_DIR.
+Used for refactors that must not change results (e.g. each method's step rendered per system
+by tools/gen_lanes.py). Each run must use its own NUMBA_CACHE_DIR.
 """
 import sys
 import warnings

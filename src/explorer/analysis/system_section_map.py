@@ -54,7 +54,7 @@ ENERGY = "energy"
 #: (content hash, section, coords, solve, fixed) -> the lambdified roots, fixed, energy, dH/dsolve, ds/dt,
 #: grad H, f, and per reversor (images, ds/dt at the image over ds/dt, on the section)
 _SOLUTIONS: dict = {}
-#: (content hash, backward, jacobian) -> the System integrated by the map (values of the first map)
+#: (content hash, jacobian) -> the System integrated by the map (values of the first map)
 _FLOWS: dict = {}
 #: a root is real where its imaginary part is at most this times max(1, |root|)
 REAL_TOL = 1e-12
@@ -126,18 +126,12 @@ def _solutions(system, section, coords, solve, fixed):
     return out
 
 
-def _flow(system, backward: bool, jacobian: bool):
-    """The System the map integrates: ``system`` or its time reversal (``-f``, the same energy),
-    with two deviation vectors for the Jacobian; at ``system``'s parameter values."""
-    from explorer.model.system import System
-
-    key = (system.content_hash, backward, jacobian)
+def _flow(system, jacobian: bool):
+    """The System the map integrates, forward or backward in time: ``system``, with two deviation
+    vectors for the Jacobian; at ``system``'s parameter values."""
+    key = (system.content_hash, jacobian)
     if key not in _FLOWS:
-        base = system
-        if backward:
-            base = System({s: -f for s, f in zip(system.states, system.rhs)}, parameters=dict(system.parameters),
-                          energy=system.energy, name=f"{system.name}_reversed")
-        flow = base.variational(2) if jacobian else base
+        flow = system.variational(2) if jacobian else system
         _ = flow.content_hash, flow.flow_hash    # hashed once: with_ copies them to every integration's system
         _FLOWS[key] = flow
     flow = _FLOWS[key]
@@ -393,11 +387,11 @@ class SystemSectionMap:
 
     def _returns(self, Y, n: int, backward: bool, jacobian: bool):
         """The crossings of the flow (backward: reversed) from the states Y: (data, count, status)."""
-        flow = _flow(self.system, backward, jacobian)
         direction = -self.direction if backward else self.direction
-        data, count, status, *_ = system_crossings(flow, Y, n_crossings=n, section=self.section.expr,
-                                                   direction=direction, tol=self.tol, tmax=self.tmax * n,
-                                                   threads=1 if len(Y) == 1 else None)
+        data, count, status, *_ = system_crossings(_flow(self.system, jacobian), Y, n_crossings=n,
+                                                   section=self.section.expr, direction=direction, tol=self.tol,
+                                                   tmax=self.tmax * n, threads=1 if len(Y) == 1 else None,
+                                                   backward=backward)
         return data, count, status
 
     def __call__(self, x, *, backward=False, jacobian=True) -> MapResult:
@@ -494,7 +488,7 @@ class SystemSectionMap:
             data, count, _ = self._returns(Y, q // 2, False, False)
             Y = np.where((count >= q // 2)[:, None], data[:, q // 2 - 1, 1:1 + self.system.dimension], np.nan)
         if q % 2:
-            data, count, *_ = system_crossings(_flow(self.system, False, False), np.nan_to_num(Y), n_crossings=1,
+            data, count, *_ = system_crossings(_flow(self.system, False), np.nan_to_num(Y), n_crossings=1,
                                                section=self.section.expr, direction=-self.direction, tol=self.tol,
                                                tmax=self.tmax, threads=1)
             reached = (count >= 1) & np.isfinite(Y[:, 0])
@@ -644,6 +638,9 @@ class SystemSectionMap:
         """The arguments of the Crossings of the orbits from ``points``: the System's crossings of
         this map's section and direction from :meth:`states`; settings add the energy, coords and
         solve."""
+        if kw.get("backward"):
+            raise ParameterError("crossings of a SectionMap: backward= is not for a map; its preimages are "
+                                 "smap.images(points, n, backward=True)")
         if section is not None or "direction" in kw or "states" in kw:
             given = [k for k in ("section", "direction", "states") if (k == "section" and section is not None)
                      or k in kw]

@@ -203,14 +203,15 @@ def _states(system, states) -> np.ndarray:
 def system_crossings(system, states=None, *, n_crossings: int, section=None, direction: int = 1,
                      method: str = "taylor", tol: float = DEFAULT_TOL, tmax: float | None = None,
                      max_steps: int = DEFAULT_MAX_STEPS, threads: int | None = None, driver: str = "auto",
-                     **other):
+                     backward: bool = False, **other):
     """Integrate each orbit of ``system`` from ``states`` (N, n) until it has crossed the section
     ``section = 0`` ``n_crossings`` times in ``direction`` (+1: ds/dt > 0, -1: ds/dt < 0), or its
     time budget ``tmax`` (default 100 * n_crossings) or ``max_steps`` runs out.  Returns the
     arguments of :class:`~explorer.analysis.sections.Crossings` (data, count, status, final,
     info, method, settings); the rows and statuses as in the module docstring.  ``tol``: the
     Taylor method's, as the engine's (docs/methods.md).  ``driver``: one of :data:`DRIVERS`
-    (:func:`driver_for`); the rows do not depend on it."""
+    (:func:`driver_for`); the rows do not depend on it.  ``backward``: backward in time (the flow of
+    -f, exactly), t the time elapsed backward and ``direction`` the sign of ds/dt along it."""
     from explorer.analysis import budget
     from explorer.integrate import codegen
 
@@ -232,6 +233,8 @@ def system_crossings(system, states=None, *, n_crossings: int, section=None, dir
     max_steps = validation.integer("max_steps", max_steps, 1)
     if threads is not None:
         threads = validation.threads(threads, max_threads())
+    if not isinstance(backward, bool):
+        raise ParameterError(f"backward must be True or False, got {backward!r}")
     if driver not in DRIVERS:
         raise ParameterError(f"driver must be one of {', '.join(map(repr, DRIVERS))}, got {driver!r}")
     sec = linear_section(system, section)
@@ -249,11 +252,13 @@ def system_crossings(system, states=None, *, n_crossings: int, section=None, dir
     info = np.zeros((N, 3))
     run_driver(mod, "crossings", N, driver, threads,
                (Y0, P, sec.a, float(sec.b), int(direction), float(tmax), int(order), int(max_steps), int(K), data,
-                count, status, final, info))
+                count, status, final, info, backward))
     columns = ["t", *(s.name for s in system.states)] + (["E - E0"] if system.energy is not None else [])
     settings = {"method": "taylor", "tol": tol, "order": order, "system": system.name, "section": str(sec.expr),
                 "direction": int(direction), "tmax": tmax, "max_steps": max_steps, "n_crossings": K,
                 "columns": columns}
+    if backward:
+        settings["backward"] = True
     return data, count, status, final, info, "taylor", settings
 
 

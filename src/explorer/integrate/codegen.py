@@ -584,12 +584,17 @@ def _rows_finite(X, k, n):
 
 
 @njit(error_model="numpy")
-def taylor_step(P, X, W, n, t, tend, order, factor, steps, ynew):
+def taylor_step(P, X, W, n, t, tend, order, factor, steps, ynew, backward):
     """One step of the adaptive Taylor method of ``order`` (Jorba & Zou 2005) from X[:, 0] at time
     t towards tend: the coefficients, the step from rows :n (the orbit's) clipped onto tend, ynew
-    the state at its end.  Returns (status, h, last, steps): STEP_OK, or why no step was taken
-    (h = 0) or why its end is not finite."""
+    the state at its end.  ``backward``: t is the time elapsed backward, the coefficients those of
+    y(t0 - t), (-1)^k X[:, k] (exactly the flow of -f's).  Returns (status, h, last, steps): STEP_OK,
+    or why no step was taken (h = 0) or why its end is not finite."""
     taylor_coefficients_into(P, X, order, W)
+    if backward:
+        for k in range(1, order + 1, 2):
+            for i in range(DIM):
+                X[i, k] = -X[i, k]
     if not (_rows_finite(X, order, n) and _rows_finite(X, order - 1, n)):
         return STATUS_NONFINITE, 0.0, False, steps
     h = step_size(X[:n], order, factor)

@@ -31,14 +31,15 @@ def _section_value(a, b, y):
 
 
 @njit(error_model="numpy")
-def crossings_orbit(j, y0, P, a, b, direction, tmax, order, max_steps, limit, data, final, info):
+def crossings_orbit(j, y0, P, a, b, direction, tmax, order, max_steps, limit, data, final, info, backward):
     """Orbit j from y0 with the adaptive Taylor method of ``order`` (Jorba & Zou 2005: the order
     from the tolerance, the step from the last two coefficients, kernels.taylor.step_size) until
     ``limit`` crossings of s = a . y + b = 0 in ``direction`` (+1: ds/dt > 0, -1: < 0), the time
     ``tmax`` or ``max_steps`` steps.  Each step's polynomial s(t + tau) = a . X[:, k] tau^k (+ b)
     has its roots in (0, h] isolated and refined by kernels.events.poly_step_roots; a crossing's
     row data[j, n] = (t, y, E - E0) with y the step's polynomial at the root.  Returns (count,
-    status); final[j] the state and info[j] = (t, steps, nan) where the orbit stopped."""
+    status); final[j] the state and info[j] = (t, steps, nan) where the orbit stopped.  ``backward``:
+    backward in time (taylor_step), t the time elapsed backward, ``direction`` the sign of ds/dt along it."""
     X = np.empty((DIM, order + 1))
     W = np.empty((max(N_WORK, 1), order + 1))
     ynew = np.empty(DIM)
@@ -61,7 +62,7 @@ def crossings_orbit(j, y0, P, a, b, direction, tmax, order, max_steps, limit, da
         if steps >= max_steps:
             status = STATUS_MAX_STEPS
             break
-        st, h, last, steps = taylor_step(P, X, W, DIM, t, tmax, order, factor, steps, ynew)
+        st, h, last, steps = taylor_step(P, X, W, DIM, t, tmax, order, factor, steps, ynew, backward)
         if st != STEP_OK:
             status = st
             break
@@ -100,13 +101,14 @@ def crossings_orbit(j, y0, P, a, b, direction, tmax, order, max_steps, limit, da
 
 @njit(nogil=True, error_model="numpy")
 def crossings_taylor_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_steps, limit, data, count, status,
-                            final, info):
+                            final, info, backward):
     """:func:`crossings_orbit` for the orbits (rows of Y0) of the queue ``next_orbit`` that threads share
     (analysis.system_sections.run_driver): each orbit is computed alone, so the result does not depend on
     the number of threads."""
     j = atomic_fetch_add(next_orbit, 0, 1)
     while j < Y0.shape[0]:
-        c, s = crossings_orbit(j, Y0[j], P, a, b, direction, tmax, order, max_steps, limit, data, final, info)
+        c, s = crossings_orbit(j, Y0[j], P, a, b, direction, tmax, order, max_steps, limit, data, final, info,
+                               backward)
         count[j] = c
         status[j] = s
         j = atomic_fetch_add(next_orbit, 0, 1)

@@ -56,7 +56,7 @@ def flow_orbit(j, y0, P, times, order, max_steps, states, energy_error, info):
         if steps >= max_steps:
             status = STATUS_MAX_STEPS
             break
-        st, h, last, steps = taylor_step(P, X, W, DIM, t, tend, order, factor, steps, ynew)
+        st, h, last, steps = taylor_step(P, X, W, DIM, t, tend, order, factor, steps, ynew, False)
         if st != STEP_OK:
             status = st
             break

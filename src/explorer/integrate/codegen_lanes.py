@@ -213,9 +213,9 @@ def _lane_finish(l, st, X, orb, L_t, L_tc, L_n, L_steps, count, status, final, i
 
 @njit(nogil=True, error_model="numpy")
 def crossings_lanes_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_steps, limit, data, count, status,
-                           final, info):
+                           final, info, backward):
     """One group of LANES lanes: orbits from the queue ``next_orbit`` until it is empty, each lane
-    crossings_orbit's loop (its arguments and outputs)."""
+    crossings_orbit's loop (its arguments and outputs, ``backward`` its (-1)^k X[k])."""
     X = np.zeros((order + 1, DIM, LANES))
     W = np.zeros((order + 1, max(N_WORK, 1), LANES))
     Y = np.zeros((DIM, LANES))
@@ -245,6 +245,11 @@ def crossings_lanes_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_
                               L_E0, L_n, L_steps, count, status, final, info)
     while active > 0:
         taylor_coefficients_lanes(P, X, order, W)
+        if backward:
+            for k in range(1, order + 1, 2):
+                for i in range(DIM):
+                    for l in range(LANES):
+                        X[k, i, l] = -X[k, i, l]
         fin, normal = _norms_lanes(X, order, e_p, e_q, NORM)
         bits = _steps_lanes(NORM, fin, normal, L_on, L_t, tmax, factor, hv, L_last, L_go)
         while bits != 0:
