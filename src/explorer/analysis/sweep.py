@@ -110,7 +110,7 @@ def build_spec(scene, panel_indices, *, chunk_orbits: int,
         raise ValueError(f"product must be one of {PRODUCTS} or None, got {product!r}")
     integ = scene.integration
     panels = []
-    chunks = []
+    chunks: list = []
     blocks = []
     ly = scene.lyapunov if "lyapunov" in scene.compute and product != "sections" else None
     with_sections = "sections" in scene.compute and product != "indicators"
@@ -132,7 +132,7 @@ def build_spec(scene, panel_indices, *, chunk_orbits: int,
         n = len(p1)
         blocks.append(panel_block(n, integ.crossings))
         # an adaptive map refines level by level: one chunk (its batches follow chaos_map's levels)
-        chunks += [(pos, 0, n)] if grid and ly.adaptive else _chunks(pos, n, chunk_orbits)
+        chunks += [(pos, 0, n)] if grid and ly is not None and ly.adaptive else _chunks(pos, n, chunk_orbits)
     rule = tuple(map_rule().values())
     return SweepSpec(tuple(panels), integ.method, integ.tol, integ.dt, integ.crossings, integ.effective_tmax,
                      integ.max_steps, integ.phi0, integ.direction, tuple(chunks), ly,
@@ -145,7 +145,7 @@ def _chunks(pos: int, n: int, chunk_orbits: int, parts: int = CHUNKS_PER_PANEL_T
     return [(pos, a, min(n, a + step)) for a in range(0, n, step)]
 
 
-def build_atlas_spec(scene, *, chunk_orbits: int, cells=None) -> SweepSpec:
+def build_atlas_spec(scene, *, chunk_orbits: int, cells=None) -> SweepSpec | SystemSweepSpec:
     """The cells of a two-parameter atlas (a scene with [atlas]) as the panels of a sweep of
     indicators only: cell i (row = sweep value, column = atlas value) with its seeds (R9), or
     with [lyapunov] map_resolution the cells of its map (adaptive as a map panel is);
@@ -334,7 +334,7 @@ class _MapCells:
         return {f.name: getattr(ind, f.name) for f in dataclasses.fields(ind)}
 
 
-def adaptive_map(spec: SweepSpec, panel: PanelSpec, threads=None) -> dict:
+def adaptive_map(spec: SweepSpec | SystemSweepSpec, panel: PanelSpec, threads=None) -> dict:
     """The indicator arrays of the map panel ``panel`` computed adaptively: :func:`explorer.
     chaos_map` of MEGNO at the scene's threshold over the panel's grid; a computed cell's arrays
     are the exact path's bit for bit, a filled cell has MEGNO filled and the other indicators NaN;
@@ -589,7 +589,8 @@ def build_system_spec(scene, panel_indices, *, chunk_orbits: int, product: str |
     if product is None and with_sections and ly is not None and ly.map_resolution:
         raise ValueError("sections with a map grid are two products: build one spec for each")
     integ = scene.integration
-    panels, chunks = [], []
+    panels: list = []
+    chunks: list = []
     for pos, i in enumerate(panel_indices):
         smap = scene.section_map(i)
         grid: tuple = ()
@@ -605,7 +606,8 @@ def build_system_spec(scene, panel_indices, *, chunk_orbits: int, product: str |
         panels.append(PanelSpec(i, label, None, float(energy), np.ascontiguousarray(smap.states(pts)), pts, grid,
                                 dropped, system))
         # an adaptive map refines level by level: one chunk (as a Chaplygin map panel)
-        chunks += [(pos, 0, len(pts))] if grid and ly.adaptive else _chunks(pos, len(pts), chunk_orbits)
+        whole = grid and ly is not None and ly.adaptive
+        chunks += [(pos, 0, len(pts))] if whole else _chunks(pos, len(pts), chunk_orbits)
     return SystemSweepSpec(tuple(panels), scene.section, scene.direction, tuple(scene.coords), scene.solve,
                            integ.crossings, integ.tol, integ.effective_tmax, integ.max_steps, tuple(chunks), ly,
                            with_sections, map_rule=tuple(map_rule().values()))

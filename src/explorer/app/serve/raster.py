@@ -90,6 +90,8 @@ def rasters(settings: Settings, window: Window, resolutions: tuple = RESOLUTIONS
         first = None
         for first in rasters(settings, window, resolutions[:1], time):
             yield first
+        if first is None:
+            return
         yield from adaptive_raster(settings, window, resolutions[-1], time, first.values)
         return
     if indicator == "megno":

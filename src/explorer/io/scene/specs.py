@@ -141,6 +141,12 @@ class IntegrationSpec(sections.Integration):
         return d
 
 
+def adaptive_map(ly) -> bool:
+    """A [lyapunov] table's map is computed adaptively: a map grid of MEGNO (the indicator the
+    scene's threshold classifies) without ``exact`` (Chaplygin's scenes and a System's)."""
+    return bool(ly.map_resolution and not ly.exact and ly.map_indicator == "megno")
+
+
 @dataclass(frozen=True)
 class LyapunovSpec:
     """[lyapunov]: the chaos indicators of every seed (docs/scenes.md): integration settings and the
@@ -213,9 +219,7 @@ class LyapunovSpec:
 
     @property
     def adaptive(self) -> bool:
-        """The map is computed adaptively: a map grid of MEGNO (the indicator the scene's threshold
-        classifies) without ``exact``."""
-        return bool(self.map_resolution and not self.exact and self.map_indicator == "megno")
+        return adaptive_map(self)
 
     @property
     def second_vector(self) -> bool:

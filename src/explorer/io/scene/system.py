@@ -37,7 +37,7 @@ from explorer.io.scene.checks import (
 from explorer.io.scene.core import Scene
 from explorer.io.scene.hashes import _canonical_json, _sha256
 from explorer.io.scene.schema import _FIGURE_KEYS, _MANIFOLD_KEYS, FORMAT_VERSION, MAX_MAP_RESOLUTION, MAX_SEEDS
-from explorer.io.scene.specs import FigureSpec, LyapunovSpec, ManifoldSpec, SeedSpec
+from explorer.io.scene.specs import FigureSpec, ManifoldSpec, SeedSpec, adaptive_map
 from explorer.kernels.indicator_table import TANGENT_NAMES
 from explorer.model import ParameterError
 
@@ -235,7 +235,7 @@ class SystemLyapunov:
     """[lyapunov] of a System's scene: ``indicators`` (MEGNO <Y> always) over ``time`` (Taylor
     ``tol``) of every seed, or of the cell centres of a ``map_resolution``^2 raster of [seeds]
     window, drawn by ``map_indicator``; ``threshold`` classifies by <Y>.  A MEGNO map is adaptive
-    unless ``exact`` (as Chaplygin's, :attr:`explorer.io.scene.specs.LyapunovSpec.adaptive`)."""
+    unless ``exact`` (:func:`explorer.io.scene.specs.adaptive_map`, as Chaplygin's)."""
 
     time: float = 1000.0
     tol: float = 1e-12
@@ -248,7 +248,10 @@ class SystemLyapunov:
     # a System's indicators: the Taylor method, no early classification
     method = "taylor"
     early_stop = False
-    adaptive = LyapunovSpec.adaptive
+
+    @property
+    def adaptive(self) -> bool:
+        return adaptive_map(self)
 
     def __post_init__(self):
         from explorer.analysis import sections
