@@ -27,10 +27,10 @@ from explorer.integrate.layout import (  # noqa: F401 (the carry and limits colu
     N_CARRY,
 )
 from explorer.integrate.systems import STEP_OK
-from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_TMAX
+from explorer.kernels import STATUS_DONE, STATUS_NONFINITE, STATUS_TMAX
 from explorer.kernels import dop853 as dp
-from explorer.kernels.checks import EPS, all_finite, is_finite
-from explorer.kernels.clock import advance_time, clip_step
+from explorer.kernels.checks import EPS, is_finite
+from explorer.kernels.clock import advance_time
 from explorer.kernels.events import (
     ROOT_MAX_ITER,
     ROOT_XTOL,
@@ -306,34 +306,11 @@ def orbit_dop853(y0, P, cphi, sphi, direction, tmax, rtol, atol, max_steps, cros
     else:
         h_abs = sg.dop853_first_step_reduced(yout, P, K, rtol, atol, tmax, tmp)
     count = 0
-    rejected = False
     while True:
-        if t >= tmax:
-            code = STATUS_TMAX
+        code, h, last, h_abs, steps = sg.dop853_step_reduced(yout, P, K, t, tmax, STATUS_TMAX, h_abs, steps,
+                                                             max_steps, rtol, atol, tmp, ynew, True)
+        if code != STEP_OK:
             break
-        if steps >= max_steps:
-            code = STATUS_MAX_STEPS
-            break
-        if dp.step_too_small(t, h_abs):
-            code = STATUS_STEP_UNDERFLOW
-            break
-        h, last = clip_step(t, h_abs, tmax)
-        for s in range(1, 12):
-            dp.stage_input(yout, K, s, h, tmp)
-            rhs(tmp, P, K[s])
-        dp.step_solution(yout, K, h, ynew)
-        err = dp.error_norm(yout, ynew, K, h, rtol, atol)
-        steps += 1
-        if not (err == err) or not all_finite(ynew):
-            code = STATUS_NONFINITE
-            break
-        if err >= 1.0:
-            h_abs *= dp.step_factor(err)
-            rejected = True
-            continue
-        h_abs *= dp.accepted_factor(err, rejected)
-        rejected = False
-        rhs(ynew, P, K[12])
         gnew = section_g(ynew, cphi, sphi)
         if sign_change(gprev, gnew, direction) or _may_reach_section(yout, ynew, K, P, h, gprev,
                                                                      gnew):
