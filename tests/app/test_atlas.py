@@ -115,3 +115,13 @@ def test_an_atlas_of_maps_is_adaptive_by_default_and_exact_on_request(tmp_path, 
     np.testing.assert_array_equal(a.orbits, e.orbits)                # every allowed map cell counted
     assert np.all(np.abs(a.fraction - e.fraction) <= 0.06) and np.all(e.fraction[1] > 0.5)
     assert "of map cells computed, adaptive" in runner.atlas_seeding(parse_scene(text), a)
+
+
+def test_the_atlas_title_counts_the_seeds_a_points_scene_gives_each_cell():
+    text = ('name = "s"\n[sweep]\nparameter = "mu"\nvalues = [0.1, 0.2]\n'
+            '[atlas]\nparameter = "h"\nvalues = [2.0, 3.0]\n'
+            '[seeds]\nkind = "points"\npoints = [[0.1, 0.0], [0.2, 0.0], [0.3, 0.0]]\n'
+            '[compute]\nsections = false\nlyapunov = true\n')
+    assert runner.atlas_seeding(parse_scene(text), None) == "3 seeds per cell"
+    assert runner.atlas_seeding(parse_scene(text.replace('kind = "points"', 'kind = "grid"\nn = 50')), None) \
+        == "50 seeds per cell"

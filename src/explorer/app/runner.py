@@ -645,7 +645,9 @@ def atlas_seeding(scene, data) -> str:
     fraction of its cells computed over the atlas)."""
     n = scene.lyapunov.map_resolution
     if not n:
-        return f"{scene.seeds.n} seeds per cell"
+        seeds = scene.seeds
+        count = len(seeds.points) if seeds.kind == "points" and seeds.points is not None else seeds.n
+        return f"{count} seeds per cell"
     text = f"a {n}x{n} map per cell"
     if data.computed is not None and np.isfinite(data.computed).any():
         text += f" ({float(np.nanmean(data.computed)):.0%} of map cells computed, adaptive)"
