@@ -79,7 +79,6 @@ class SweepSpec:
     lyapunov: Any = None
     sections: bool = True
     blocks: tuple = ()
-    map_rule: tuple = ()      # (coarse, tolerance) of an adaptive map panel
 
     def streamed(self, pos: int) -> bool:
         """Panel ``pos`` is computed in rounds of blocks and streamed to the store."""
@@ -133,10 +132,9 @@ def build_spec(scene, panel_indices, *, chunk_orbits: int,
         blocks.append(panel_block(n, integ.crossings))
         # an adaptive map refines level by level: one chunk (its batches follow chaos_map's levels)
         chunks += [(pos, 0, n)] if grid and ly is not None and ly.adaptive else _chunks(pos, n, chunk_orbits)
-    rule = tuple(map_rule().values())
     return SweepSpec(tuple(panels), integ.method, integ.tol, integ.dt, integ.crossings, integ.effective_tmax,
                      integ.max_steps, integ.phi0, integ.direction, tuple(chunks), ly,
-                     with_sections, tuple(blocks), rule)
+                     with_sections, tuple(blocks))
 
 
 def _chunks(pos: int, n: int, chunk_orbits: int, parts: int = CHUNKS_PER_PANEL_THREADS) -> list:
@@ -177,7 +175,7 @@ def build_atlas_spec(scene, *, chunk_orbits: int, cells=None) -> SweepSpec | Sys
         panels.append(PanelSpec(i, label, params.as_array(), float(h), np.ascontiguousarray(y0),
                                 np.column_stack([p1, p2]), grid))
     return SweepSpec(tuple(panels), integ.method, integ.tol, integ.dt, 1, integ.effective_tmax, integ.max_steps,
-                     integ.phi0, integ.direction, tuple(chunks), scene.lyapunov, False, (), tuple(map_rule().values()))
+                     integ.phi0, integ.direction, tuple(chunks), scene.lyapunov, False, ())
 
 
 def map_seeds(params, h: float, phi0: float, resolution: int):
@@ -343,7 +341,7 @@ def adaptive_map(spec: SweepSpec | SystemSweepSpec, panel: PanelSpec, threads=No
 
     ly = spec.lyapunov
     cells = _MapCells(spec, panel, threads)
-    rule = dict(zip(map_rule(), spec.map_rule)) if spec.map_rule else map_rule()
+    rule = map_rule()
     coarse, tolerance = rule["coarse"], rule["tolerance"]
     m = chaos_map(cells, resolution=int(panel.grid[0]), indicator=ly.map_indicator, tmax=ly.time,
                   threshold=ly.threshold, tolerance=tolerance, coarse=coarse, threads=threads,
@@ -528,7 +526,6 @@ class SystemSweepSpec:
     lyapunov: Any = None
     sections: bool = True
     blocks: tuple = ()
-    map_rule: tuple = ()      # (coarse, tolerance) of an adaptive map panel
 
     def streamed(self, pos: int) -> bool:
         return False
@@ -610,7 +607,7 @@ def build_system_spec(scene, panel_indices, *, chunk_orbits: int, product: str |
         chunks += [(pos, 0, len(pts))] if whole else _chunks(pos, len(pts), chunk_orbits)
     return SystemSweepSpec(tuple(panels), scene.section, scene.direction, tuple(scene.coords), scene.solve,
                            integ.crossings, integ.tol, integ.effective_tmax, integ.max_steps, tuple(chunks), ly,
-                           with_sections, map_rule=tuple(map_rule().values()))
+                           with_sections)
 
 
 def build_system_atlas_spec(scene, *, chunk_orbits: int, cells=None) -> SystemSweepSpec:
@@ -639,8 +636,7 @@ def build_system_atlas_spec(scene, *, chunk_orbits: int, cells=None) -> SystemSw
                                 system=system))
     integ = scene.integration
     return SystemSweepSpec(tuple(panels), scene.section, scene.direction, tuple(scene.coords), scene.solve, 1,
-                           integ.tol, integ.effective_tmax, integ.max_steps, tuple(chunks), scene.lyapunov, False,
-                           map_rule=tuple(map_rule().values()))
+                           integ.tol, integ.effective_tmax, integ.max_steps, tuple(chunks), scene.lyapunov, False)
 
 
 def system_task(spec: SystemSweepSpec, i: int, threads: int | None = None) -> dict:

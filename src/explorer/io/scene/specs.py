@@ -147,6 +147,14 @@ def adaptive_map(ly) -> bool:
     return bool(ly.map_resolution and not ly.exact and ly.map_indicator == "megno")
 
 
+def adaptive_settings(ly) -> dict:
+    """What decides which cells an adaptive map computes, for its hashes: the refinement rule
+    (explorer.analysis.sweep.map_rule) and the class threshold."""
+    from explorer.analysis.sweep import map_rule
+
+    return dict(map_rule(), threshold=ly.threshold)
+
+
 @dataclass(frozen=True)
 class LyapunovSpec:
     """[lyapunov]: the chaos indicators of every seed (docs/scenes.md): integration settings and the
@@ -268,9 +276,7 @@ class LyapunovSpec:
         if self.map_resolution:
             d["map_resolution"] = self.map_resolution
         if self.adaptive:   # which cells are computed depends on the class threshold and the rule
-            from explorer.analysis.sweep import map_rule
-
-            d["adaptive"] = dict(map_rule(), threshold=self.threshold)
+            d["adaptive"] = adaptive_settings(self)
         if self.frequency_diffusion is not None:
             d["frequency_diffusion"] = self.frequency_diffusion
         return d

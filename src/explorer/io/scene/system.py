@@ -37,7 +37,7 @@ from explorer.io.scene.checks import (
 from explorer.io.scene.core import Scene
 from explorer.io.scene.hashes import _canonical_json, _sha256
 from explorer.io.scene.schema import _FIGURE_KEYS, _MANIFOLD_KEYS, FORMAT_VERSION, MAX_MAP_RESOLUTION, MAX_SEEDS
-from explorer.io.scene.specs import FigureSpec, ManifoldSpec, SeedSpec, adaptive_map
+from explorer.io.scene.specs import FigureSpec, ManifoldSpec, SeedSpec, adaptive_map, adaptive_settings
 from explorer.kernels.indicator_table import TANGENT_NAMES
 from explorer.model import ParameterError
 
@@ -274,9 +274,7 @@ class SystemLyapunov:
         if self.map_resolution:
             d["map_resolution"] = self.map_resolution
         if self.adaptive:   # which cells are computed depends on the class threshold and the rule
-            from explorer.analysis.sweep import map_rule
-
-            d["adaptive"] = dict(map_rule(), threshold=self.threshold)
+            d["adaptive"] = adaptive_settings(self)
         return d
 
 
