@@ -10,12 +10,13 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from explorer._jit import njit
+from explorer.analysis.flow_lift import WRAP_SAFE
 from explorer.analysis.greene_core import MIN_Q, Residue
 from explorer.analysis.map_result import MapResult
 from explorer.model import ParameterError, validation
 
-__all__ = ["AreaPreservingMap", "StandardMap", "SymmetricOrbit", "difference", "grid_minima", "images", "reduce",
-           "with_value"]
+__all__ = ["AreaPreservingMap", "StandardMap", "SymmetricOrbit", "angle_increments", "difference", "grid_minima",
+           "images", "reduce", "returns_increments", "with_value"]
 
 
 @runtime_checkable
@@ -66,6 +67,10 @@ class AreaPreservingMap(Protocol):
     def grid_seeds(self, period: int, grid: int, *, threads=None) -> np.ndarray: ...
 
     def partner_points(self, points, *, threads=None): ...
+
+    def lifted_increments(self, starts, center, n, threads=None) -> tuple: ...
+
+    def symmetric_orbit(self, p, q, *, line=None, guess=None): ...
 
 
 def with_value(system, name: str, value):
@@ -120,6 +125,56 @@ def grid_minima(system, K: int, grid: int) -> np.ndarray:
     idx = np.flatnonzero((np.isfinite(R) & (R <= nb.min(axis=0))).ravel())
     idx = idx[np.argsort(R.ravel()[idx])]
     return X[idx]
+
+
+def angle_increments(points, center):
+    """Angle increments around center, each wrapped to (-pi, pi]: (..., n) from (..., n + 1, 2)."""
+    th = np.arctan2(points[..., 1] - center[1], points[..., 0] - center[0])
+    d = np.diff(th, axis=-1)
+    return d - 2.0 * np.pi * np.ceil((d - np.pi) / (2.0 * np.pi))
+
+
+def _lifted_through_gap(inc):
+    """The increments lifted into one window of 2 pi cut in the middle of the largest gap of their
+    values mod 2 pi (an invariant circle's increments span less than a turn), when that gap is at
+    least the fast path's margin 2 pi - 2 WRAP_SAFE; else None."""
+    v = np.sort(np.mod(inc, 2.0 * np.pi))
+    gaps = np.diff(np.concatenate([v, [v[0] + 2.0 * np.pi]]))
+    k = int(np.argmax(gaps))
+    if not gaps[k] >= 2.0 * np.pi - 2.0 * WRAP_SAFE:
+        return None
+    cut = v[k] + 0.5 * gaps[k]
+    return np.mod(inc - cut, 2.0 * np.pi) + cut - 2.0 * np.pi
+
+
+def _returns_increments(system, x, center, n):
+    pts = system.iterate(x, n)
+    if center is None:
+        return np.diff(pts[:, 0]) * (2.0 * np.pi / _periods(system)[0])
+    inc = angle_increments(center + difference(system, pts, center), center)
+    return inc if np.all(np.abs(inc) <= WRAP_SAFE) else _lifted_through_gap(inc)
+
+
+def returns_increments(system, starts, center, n: int) -> tuple:
+    """:meth:`AreaPreservingMap.lifted_increments` of a map with no flow to lift through: the angle
+    increments of the first ``n`` returns around ``center`` wrapped to (-pi, pi], lifted through the
+    largest gap of their values mod 2 pi where one exceeds WRAP_SAFE ("unresolved" where that gap is
+    too small); ``center=None``: the increments of the map's angle coordinate (:attr:`periods`), exact."""
+    X = np.atleast_2d(np.asarray(starts, float))
+    if center is None and not _periods(system)[0] > 0:
+        raise ParameterError("center=None needs a map with an angle coordinate (periods); give center=")
+    c = None if center is None else np.asarray(center, float)
+    if c is not None and (c.shape != (2,) or not np.all(np.isfinite(c))):
+        raise ParameterError(f"center must be a finite point, got {center!r}")
+    inc = np.full((len(X), n), np.nan)
+    status = np.full(len(X), "done", dtype=object)
+    for i, x in enumerate(X):
+        row = _returns_increments(system, x, c, n)
+        if row is None:
+            status[i] = "unresolved"
+        else:
+            inc[i] = row
+    return inc, np.full(len(X), n), status, status == "done"
 
 
 @njit
@@ -404,6 +459,11 @@ class StandardMap:
     def grid_seeds(self, period: int, grid: int, *, threads=None) -> np.ndarray:
         """:func:`grid_minima` over :attr:`domain`."""
         return grid_minima(self, period, grid)
+
+    def lifted_increments(self, starts, center, n, threads=None) -> tuple:
+        """The angle increments of the orbits' first ``n`` returns around ``center``
+        (:func:`returns_increments`; ``center=None``: of theta, lifted exactly)."""
+        return returns_increments(self, starts, center, n)
 
     def partner_points(self, points, *, threads=None):
         """None: the map's reversors are I0 and I1 (an orbit's image under I1 is its image under I0, moved on

@@ -1,9 +1,8 @@
-"""Rotation numbers of orbits of the section map around an elliptic fixed point
-(docs/commands/rotation.md): the increments lifted through the flow on sub-sections (or wrapped,
-when every wrapped increment is within ``WRAP_SAFE`` of 0; for another map, the returns' increments
-wrapped so, or lifted through the largest gap of their values mod 2 pi), averaged by the weighted Birkhoff
-average of Das, Sander, Yorke & Meiss (Nonlinearity 30 (2017) 4111); ``converged`` when the
-averages over N and 2N returns agree to ``CONVERGED_TOL``.
+"""Rotation numbers of orbits of a map around an elliptic fixed point (docs/commands/rotation.md):
+the angle increments the map gives (``lifted_increments``: Chaplygin's section map lifts them through
+the flow, another map wraps its returns' increments, :func:`explorer.analysis.maps.returns_increments`),
+averaged by the weighted Birkhoff average of Das, Sander, Yorke & Meiss (Nonlinearity 30 (2017) 4111);
+``converged`` when the averages over N and 2N returns agree to ``CONVERGED_TOL``.
 """
 from __future__ import annotations
 
@@ -12,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from explorer.analysis.flow_lift import WRAP_SAFE
+from explorer.analysis.maps import angle_increments
 from explorer.analysis.section_map import system_first
 from explorer.integrate.methods import MAP_TOL
 from explorer.model import ParameterError, validation
@@ -43,19 +42,12 @@ def weighted_birkhoff(values, N: int | None = None) -> float:
     return float(birkhoff_weights(N) @ v[:N])
 
 
-def _increments(points, center):
-    """Angle increments around center, each wrapped to (-pi, pi]: (..., n) from (..., n + 1, 2)."""
-    th = np.arctan2(points[..., 1] - center[1], points[..., 0] - center[0])
-    d = np.diff(th, axis=-1)
-    return d - 2.0 * np.pi * np.ceil((d - np.pi) / (2.0 * np.pi))
-
-
 def orbit_rotation(points, center) -> float:
     """Rotation number m/K of a periodic orbit (K points in order) around ``center``: the sum
     of its K wrapped angle increments (around the closed orbit) over 2 pi K."""
     pts = np.asarray(points, float)
     closed = np.concatenate([pts, pts[:1]])
-    return float(np.sum(_increments(closed, center)) / (2.0 * np.pi * len(pts)))
+    return float(np.sum(angle_increments(closed, center)) / (2.0 * np.pi * len(pts)))
 
 
 @dataclass(frozen=True)
@@ -80,15 +72,23 @@ class RotationNumber:
                 "iterates": int(self.iterates), "status": self.status}
 
 
-def _center(system, center, near):
-    if center is not None:
-        c = np.asarray(getattr(center, "point", center), float)
-        if c.shape != (2,) or not np.all(np.isfinite(c)):
-            raise ParameterError(f"center must be a finite point (p1, p2), got {center!r}")
-        return c
-    from explorer.analysis.fixedpoints import find_fixed_point
+def _has_angle(system) -> bool:
+    return np.asarray(system.periods, float)[0] > 0
 
-    return find_fixed_point(system, near).point
+
+def _center(system, center, near):
+    """The centre the rotation is measured around: ``center``, or on a map with an angle coordinate
+    none (its angle itself), else the fixed point Newton finds from ``near``."""
+    if center is None:
+        if _has_angle(system):
+            return None
+        from explorer.analysis.fixedpoints import find_fixed_point
+
+        return find_fixed_point(system, near).point
+    c = np.asarray(getattr(center, "point", center), float)
+    if c.shape != (2,) or not np.all(np.isfinite(c)):
+        raise ParameterError(f"center must be a finite point (p1, p2), got {center!r}")
+    return c
 
 
 def _inside(system, points) -> bool:
@@ -97,97 +97,42 @@ def _inside(system, points) -> bool:
 
 def _rotations(system, starts, center, N, threads, conv_tol):
     starts = np.atleast_2d(np.asarray(starts, float))
-    inc, count, status, lifted = system.lifted_increments(starts, np.asarray(center, float), 2 * N, threads)
+    inc, count, status, lifted = system.lifted_increments(starts, center, 2 * N, threads)
+    c = tuple(np.full(2, np.nan) if center is None else center)
     out = []
     for i, s in enumerate(starts):
-        if status[i] != "done":
-            out.append(RotationNumber(float("nan"), False, float("nan"), int(count[i]), tuple(s), tuple(center),
-                                      str(status[i])))
+        if status[i] != "done" or not np.all(np.isfinite(inc[i])):
+            out.append(RotationNumber(float("nan"), False, float("nan"), int(count[i]), tuple(s), c, str(status[i])))
             continue
         a, b = weighted_birkhoff(inc[i], N), weighted_birkhoff(inc[i], 2 * N)
         diff = abs(a - b) / (2.0 * np.pi)
         turns = b / (2.0 * np.pi)
-        out.append(RotationNumber(turns - math.ceil(turns - 0.5), bool(diff < conv_tol), diff, 2 * N, tuple(s),
-                                  tuple(center), turns=turns if lifted[i] else float("nan")))
+        out.append(RotationNumber(turns - math.ceil(turns - 0.5), bool(diff < conv_tol), diff, 2 * N, tuple(s), c,
+                                  turns=turns if lifted[i] else float("nan")))
     return out
 
 
-def _map_rotation(system, start, center, N, conv_tol) -> RotationNumber:
-    x = np.asarray(start, float)
-    if x.shape != (2,) or not np.all(np.isfinite(x)):
-        raise ParameterError(f"start must be a finite point, got {start!r}")
-    per = getattr(system, "periods", None)
-    if center is None and not (per is not None and per[0] > 0):
-        from explorer.analysis.fixedpoints import find_fixed_point
-
-        center = find_fixed_point(system, x)
-    inc = _map_increments(system, x, center, 2 * N)
-    status = "done" if inc is not None else "unresolved"
-    c = (float("nan"), float("nan")) if center is None else \
-        tuple(float(t) for t in np.asarray(getattr(center, "point", center), float))
-    if inc is None or not np.all(np.isfinite(inc)):
-        return RotationNumber(float("nan"), False, float("nan"), 2 * N, tuple(x), tuple(c), status)
-    a, b = weighted_birkhoff(inc, N), weighted_birkhoff(inc, 2 * N)
-    diff = abs(a - b) / (2.0 * np.pi)
-    turns = b / (2.0 * np.pi)
-    return RotationNumber(turns - math.ceil(turns - 0.5), bool(diff < conv_tol), diff, 2 * N, tuple(x), tuple(c),
-                          turns=turns)
-
-
 def orbit_turns(system, start, center, n: int) -> float:
-    """Turns per return around ``center`` over the first ``n`` returns from ``start`` (a section map's
-    lifted through the flow); ParameterError where the lift is not defined."""
+    """Turns per return around ``center`` over the first ``n`` returns from ``start`` (the map's
+    ``lifted_increments``); ParameterError where the lift is not defined."""
     x, c = np.asarray(start, float), np.asarray(center, float)
-    if hasattr(system, "lifted_increments"):     # the map lifts them through its flow
-        inc, _, status, _ = system.lifted_increments(x[None, :], c, n)
-        why = status[0]
-        inc = inc[0] if why == "done" else None
-    else:
-        inc, why = _map_increments(system, x, c, n), "unresolved"
-    if inc is None or not np.all(np.isfinite(inc)):
-        raise ParameterError(f"the rotation of the orbit from {tuple(x)} around the centre is not defined ({why})")
-    return float(np.sum(inc)) / (2.0 * math.pi * n)
-
-
-def _map_increments(system, x, center, n):
-    from explorer.analysis.maps import difference
-
-    pts = system.iterate(x, n)
-    per = getattr(system, "periods", None)
-    if center is None:
-        if per is None or not per[0] > 0:
-            raise ParameterError("center=None needs a map with an angle coordinate (periods); give center=")
-        return np.diff(pts[:, 0]) * (2.0 * np.pi / per[0])
-    c = np.asarray(getattr(center, "point", center), float)
-    if c.shape != (2,) or not np.all(np.isfinite(c)):
-        raise ParameterError(f"center must be a finite point, got {center!r}")
-    inc = _increments(c + difference(system, pts, c), c)
-    return inc if np.all(np.abs(inc) <= WRAP_SAFE) else _lifted_through_gap(inc)
-
-
-def _lifted_through_gap(inc):
-    """The increments lifted into one window of 2 pi cut in the middle of the largest gap of their
-    values mod 2 pi (an invariant circle's increments span less than a turn), when that gap is at
-    least the fast path's margin 2 pi - 2 WRAP_SAFE; else None."""
-    v = np.sort(np.mod(inc, 2.0 * np.pi))
-    gaps = np.diff(np.concatenate([v, [v[0] + 2.0 * np.pi]]))
-    k = int(np.argmax(gaps))
-    if not gaps[k] >= 2.0 * np.pi - 2.0 * WRAP_SAFE:
-        return None
-    cut = v[k] + 0.5 * gaps[k]
-    return np.mod(inc - cut, 2.0 * np.pi) + cut - 2.0 * np.pi
+    inc, _, status, _ = system.lifted_increments(x[None, :], c, n)
+    if status[0] != "done" or not np.all(np.isfinite(inc[0])):
+        raise ParameterError(f"the rotation of the orbit from {tuple(x)} around the centre is not defined "
+                             f"({status[0]})")
+    return float(np.sum(inc[0])) / (2.0 * math.pi * n)
 
 
 @system_first(systems="map", settings=("phi0", "tol"))
 def rotation_number(system, start, *, center=None, iterates=DEFAULT_ITERATES, conv_tol=CONVERGED_TOL,
                     threads=None) -> RotationNumber:
-    """Rotation number of the orbit of ``start`` around an elliptic fixed point (weighted Birkhoff)."""
-    if not hasattr(system, "lifted_increments"):
-        return _map_rotation(system, start, center, validation.integer("iterates", iterates, 10), conv_tol)
+    """Rotation number of the orbit of ``start`` around ``center`` (default: the fixed point Newton finds
+    from ``start``; on a map with an angle coordinate, the angle itself), by the weighted Birkhoff average
+    of the map's ``lifted_increments``."""
     N = validation.integer("iterates", iterates, 10)
     x = np.asarray(start, float)
-    if x.shape != (2,) or not _inside(system, x):
-        raise ParameterError(f"start {tuple(np.ravel(x))} must be a point (p1, p2) of the allowed region; "
+    if x.shape != (2,) or not np.all(np.isfinite(x)) or not _inside(system, x):
+        raise ParameterError(f"start {tuple(np.ravel(x))} must be a point of the map's allowed region; "
                              f"{system.describe_domain()}")
     return _rotations(system, x, _center(system, center, x), N, threads, conv_tol)[0]
 
@@ -227,25 +172,14 @@ def rotation_profile(system, start, stop, *, n, center=None, iterates=DEFAULT_IT
     a, b = np.asarray(start, float), np.asarray(stop, float)
     s = np.linspace(0.0, 1.0, n)
     pts = a[None, :] + s[:, None] * (b - a)[None, :]
-    if not hasattr(system, "lifted_increments"):
-        per = getattr(system, "periods", None)
-        if center is None and not (per is not None and per[0] > 0):
-            from explorer.analysis.fixedpoints import find_fixed_point
-
-            center = find_fixed_point(system, a)
-        rs = [_map_rotation(system, x, center, N, conv_tol) for x in pts]
-        c = np.full(2, np.nan) if center is None else np.asarray(getattr(center, "point", center), float)
-        return RotationProfile(pts, s, np.array([r.value for r in rs]), np.array([r.converged for r in rs]),
-                               np.array([r.difference for r in rs]), c, 2 * N, np.array([r.turns for r in rs]),
-                               tuple(r.status for r in rs))
     if not _inside(system, pts):
-        raise ParameterError(f"the segment from {tuple(a)} to {tuple(b)} leaves the allowed region; "
+        raise ParameterError(f"the segment from {tuple(a)} to {tuple(b)} leaves the map's allowed region; "
                              f"{system.describe_domain()}")
     c = _center(system, center, a)
     rs = _rotations(system, pts, c, N, threads, conv_tol)
     return RotationProfile(pts, s, np.array([r.value for r in rs]), np.array([r.converged for r in rs]),
-                           np.array([r.difference for r in rs]), c, 2 * N, np.array([r.turns for r in rs]),
-                           tuple(r.status for r in rs))
+                           np.array([r.difference for r in rs]), np.full(2, np.nan) if c is None else c, 2 * N,
+                           np.array([r.turns for r in rs]), tuple(r.status for r in rs))
 
 
 #: log10 |nu1 - nu2| is reported no lower than log10 of this (a difference of exactly 0: a point at
@@ -265,19 +199,9 @@ def frequency_diffusion(system, starts, *, center, iterates=DEFAULT_ITERATES, th
     if X.ndim != 2 or X.shape[1] != 2:
         raise ParameterError(f"starts must be points (n, 2), got shape {np.shape(starts)}")
     N = validation.integer("iterates", iterates, 10)
-    if hasattr(system, "lifted_increments"):
-        if center is None:
-            raise ParameterError("frequency_diffusion on a section map needs center=(p1, p2): the point the "
-                                 "rotation numbers turn around (e.g. an elliptic fixed point)")
-        c = np.asarray(getattr(center, "point", center), float)
-        inc, count, status, _ = system.lifted_increments(X, c, 2 * N, threads)
-        inc[status != "done"] = np.nan
-    else:
-        inc = np.full((len(X), 2 * N), np.nan)
-        for i, x in enumerate(X):
-            r_inc = _map_increments(system, x, center, 2 * N)
-            if r_inc is not None:
-                inc[i] = r_inc
+    c = None if center is None else _center(system, center, None)
+    inc, _, status, _ = system.lifted_increments(X, c, 2 * N, threads)
+    inc[status != "done"] = np.nan
     w = birkhoff_weights(N)
     # per-row sums, not a BLAS product: an orbit's value must not depend on the other rows
     nu1 = (inc[:, :N] * w).sum(axis=1) / (2.0 * np.pi)

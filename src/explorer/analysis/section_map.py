@@ -285,7 +285,11 @@ class SectionMap:
 
     def lifted_increments(self, starts, center, n, threads=None):
         """(increments (m, n) around ``center``, returns reached, status names, lifted) of the orbits from
-        ``starts``, lifted through the flow (:func:`explorer.analysis.flow_lift.lifted_increments`)."""
+        ``starts``, lifted through the flow (:func:`explorer.analysis.flow_lift.lifted_increments`); the section
+        has no angle coordinate, so ``center`` is required."""
+        if center is None:
+            raise ParameterError("the section map has no angle coordinate: give center=(p1, p2), the point the "
+                                 "rotation turns around (e.g. an elliptic fixed point)")
         return lifted_increments(self.params, self.h, np.atleast_2d(np.asarray(starts, float)),
                                  np.asarray(center, float), n, self.phi0, self.tol, threads)
 

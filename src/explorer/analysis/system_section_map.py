@@ -39,7 +39,7 @@ import numbers
 import numpy as np
 
 from explorer.analysis.map_result import RETURN_TMAX, MapResult
-from explorer.analysis.maps import grid_minima
+from explorer.analysis.maps import grid_minima, returns_increments
 from explorer.analysis.symmetry_lines import symmetric_seeds
 from explorer.analysis.system_sections import is_system, linear_section, system_crossings
 from explorer.integrate.methods import MAP_TOL, MAX_TOL, MIN_TOL
@@ -460,6 +460,11 @@ class SystemSectionMap:
                                  f"returns ({STATUS_NAMES[int(status[0])]})")
         cols = [1 + j for j in self._index[:2]]
         return np.vstack([x[None, :], data[0][:, cols]])
+
+    def lifted_increments(self, starts, center, n, threads=None) -> tuple:
+        """The angle increments of the orbits' first ``n`` returns around ``center``: the returns' own
+        (:func:`explorer.analysis.maps.returns_increments`)."""
+        return returns_increments(self, starts, center, n)
 
     # ------------------------------------------------------------------ half turns (docs/greene.md)
     @property
