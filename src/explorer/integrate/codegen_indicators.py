@@ -142,7 +142,8 @@ def indicators_taylor_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_s
 # (its norms over the orbit's rows) and the Horner evaluation in vector form; the renormalisation and the
 # accumulators after a step lane by lane with the scalar kernels (their cost is small beside the recurrence)
 from explorer.integrate.simd import (  # noqa: E402
-    next_bit, vbits, vmax_gt, vmin_lt, vradius_power_core)
+    next_bit, vbits, vmask, vmax_gt, vmin_lt, vradius_power_core, vselect)
+from explorer.kernels.clock import compensated_add  # noqa: E402
 from explorer.kernels.power import is_normal  # noqa: E402
 from explorer.kernels.taylor import radius_min  # noqa: E402
 
@@ -176,6 +177,92 @@ def _indicator_norms_lanes(X, order, n, e_p, e_q, NORM):
 
 
 @njit(error_model="numpy")
+def _unit_rows_lanes(Y, X, first, n, m, NRM):
+    """kernels.tangent.renormalize of rows first..first+n-1 of Y per lane, written to X[0] in the lanes
+    of the mask m: the same operations in the same order; NRM the former norms."""
+    s = vzero()
+    for i in range(first, first + n):
+        v = vload(Y, i * LANES)
+        s = s + v * v
+    norm = vsqrt(s)
+    inv = vsplat(1.0) / norm
+    for i in range(first, first + n):
+        vstore(X, i * LANES, vselect(m, vload(Y, i * LANES) * inv, vload(X, i * LANES)))
+    vstore(NRM, 0, norm)
+
+
+@njit(error_model="numpy")
+def _indicator_ends_lanes(X, Y, hv, L_go, L_last, L_t, L_tc, L_steps, L_hnext, L_since, acc, NRM, n, nvec, T,
+                          max_steps, early_stop, sali_stop, megno_level, tmin):
+    """The end of indicators_orbit's step in vector form for the lanes whose step went on, is not the
+    last, ends finite before T, the step cap and the next history time: the compensated clock, the
+    renormalised vectors, kernels.tangent.accumulate and (``early_stop``) _indicator_early, lane-wise
+    the scalar kernels' operations.  Returns (the bits of the other lanes whose step went on, their
+    end taken per lane; the bits stopping by SALI; by MEGNO)."""
+    zero = vzero()
+    go = vbits(vload(L_go, 0) > 0.0)
+    s = zero
+    for i in range(DIM):
+        s = s + vload(Y, i * LANES)
+    start = vload(L_t, 0) - vload(L_tc, 0)
+    t, tc = compensated_add(vload(L_t, 0), vload(L_tc, 0), vload(hv, 0))
+    t1 = t - tc
+    steps = vload(L_steps, 0) + 1.0
+    ok = (go & vbits(is_finite(s)) & ~vbits(vload(L_last, 0) > 0.0)
+          & vbits((t < T) & (steps < float(max_steps)) & (t1 < vload(L_hnext, 0))))
+    if ok == 0:
+        return go, 0, 0
+    m = vmask(ok)
+    vstore(L_t, 0, vselect(m, t, vload(L_t, 0)))
+    vstore(L_tc, 0, vselect(m, tc, vload(L_tc, 0)))
+    vstore(L_steps, 0, vselect(m, steps, vload(L_steps, 0)))
+    for i in range(n):
+        vstore(X, i * LANES, vselect(m, vload(Y, i * LANES), vload(X, i * LANES)))
+    _unit_rows_lanes(Y, X, n, n, m, NRM)
+    bits = ok
+    while bits != 0:   # libm's log per lane (kernels.tangent.renormalize's)
+        l, bits = next_bit(bits)
+        NRM[l] = math.log(NRM[l])
+    dlog = vload(NRM, 0)
+    lg = vload(acc, _tg.ACC_LOG * LANES) + dlog
+    w = _tg.megno_weight(vload(acc, _tg.ACC_W * LANES), start, t1, dlog)
+    y1 = vselect(t1 > zero, _tg.megno_y(w, t1), zero)
+    yint = _tg.megno_mean_integral(vload(acc, _tg.ACC_YINT * LANES), vload(acc, _tg.ACC_Y * LANES), y1, start, t1)
+    fli = vmax_gt(lg, vload(acc, _tg.ACC_FLI * LANES))
+    vstore(acc, _tg.ACC_LOG * LANES, vselect(m, lg, vload(acc, _tg.ACC_LOG * LANES)))
+    vstore(acc, _tg.ACC_W * LANES, vselect(m, w, vload(acc, _tg.ACC_W * LANES)))
+    vstore(acc, _tg.ACC_YINT * LANES, vselect(m, yint, vload(acc, _tg.ACC_YINT * LANES)))
+    vstore(acc, _tg.ACC_Y * LANES, vselect(m, y1, vload(acc, _tg.ACC_Y * LANES)))
+    vstore(acc, _tg.ACC_T * LANES, vselect(m, t1, vload(acc, _tg.ACC_T * LANES)))
+    vstore(acc, _tg.ACC_FLI * LANES, vselect(m, fli, vload(acc, _tg.ACC_FLI * LANES)))
+    if nvec == 2:
+        _unit_rows_lanes(Y, X, 2 * n, n, m, NRM)
+    stop_sali = 0
+    stop_megno = 0
+    if early_stop:
+        if nvec == 2 and sali_stop > 0.0:
+            sp = zero
+            sm = zero
+            for i in range(n):
+                v = vload(X, (n + i) * LANES)
+                u = vload(X, (2 * n + i) * LANES)
+                a = v + u
+                b = v - u
+                sp = sp + a * a
+                sm = sm + b * b
+            stop_sali = ok & vbits(vsqrt(vmin_lt(sm, sp)) < vsplat(sali_stop))
+        if megno_level > 0.0:
+            rest = vmask(ok & ~stop_sali)
+            ym = vselect(t1 > zero, yint / t1, zero)
+            since = vload(L_since, 0)
+            since = vselect(ym > vsplat(megno_level), vselect(since < zero, t1, since), vsplat(-1.0))
+            vstore(L_since, 0, vselect(rest, since, vload(L_since, 0)))
+            stop = (since >= zero) & (t1 >= vsplat(tmin)) & (vsplat(2.0) * since <= t1)
+            stop_megno = vbits(rest & stop)
+    return go & ~ok, stop_sali, stop_megno
+
+
+@njit(error_model="numpy")
 def _indicator_status(early, t, T, steps, max_steps):
     """Why indicators_orbit stops after a step (its checks in its order), or -1 to go on."""
     if early != _tg.EARLY_NONE or not (t < T):
@@ -186,9 +273,15 @@ def _indicator_status(early, t, T, steps, max_steps):
 
 
 @njit(error_model="numpy")
+def _next_history_time(hist_t, hpos):
+    """The next history time of a lane (inf after the last)."""
+    return hist_t[hpos] if hpos < hist_t.shape[0] else math.inf
+
+
+@njit(error_model="numpy")
 def _indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on, L_t, L_tc, L_steps,
-                          L_early, L_hpos, L_since, acc, out_hist, out_res, out_ext, out_status, out_final,
-                          out_steps, out_w):
+                          L_early, L_hpos, L_hnext, L_since, hist_t, acc, out_hist, out_res, out_ext, out_status,
+                          out_final, out_steps, out_w):
     """Lane l takes the next orbit of the queue ``next_orbit`` at its start, as indicators_orbit (an
     orbit stopped before its first step is written out and the next one taken).  Returns 1, or 0 when
     the queue is empty: the lane then idles on the zero state."""
@@ -219,9 +312,10 @@ def _indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z
         L_steps[l] = 0
         L_early[l] = _tg.EARLY_NONE
         L_hpos[l] = 0
+        L_hnext[l] = _next_history_time(hist_t, 0)
         L_since[l] = -1.0
         for c in range(_tg.N_ACC):
-            acc[l, c] = 0.0
+            acc[c, l] = 0.0
         st = _indicator_status(_tg.EARLY_NONE, 0.0, T, 0, max_steps)
         if st < 0:
             return 1
@@ -236,7 +330,7 @@ def _indicator_lane_finish(l, st, n, nvec, X, z, orb, L_steps, L_early, acc, out
     j = orb[l]
     for i in range(DIM):
         z[i] = X[0, i, l]
-    _tg.result(acc[l], out_res[j])
+    _tg.result(acc[:, l], out_res[j])
     for i in range(n):
         out_final[j, i] = z[i]
         out_w[j, 0, i] = z[n + i]
@@ -249,7 +343,7 @@ def _indicator_lane_finish(l, st, n, nvec, X, z, orb, L_steps, L_early, acc, out
             out_ext[j, c] = np.nan
     out_ext[j, _tg.EXT_EARLY] = L_early[l]
     out_status[j] = st
-    out_steps[j] = L_steps[l]
+    out_steps[j] = int(L_steps[l])
 
 
 @njit(nogil=True, error_model="numpy")
@@ -262,6 +356,7 @@ def indicators_lanes_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_st
     Wk = np.zeros((order + 1, max(N_WORK, 1), LANES))
     Y = np.zeros((DIM, LANES))
     NORM = np.zeros((5, LANES))
+    NRM = np.zeros(LANES)
     hv = np.zeros(LANES)
     L_t = np.zeros(LANES)
     L_tc = np.zeros(LANES)
@@ -269,11 +364,12 @@ def indicators_lanes_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_st
     L_last = np.zeros(LANES)
     L_go = np.zeros(LANES)
     L_since = np.zeros(LANES)
-    L_steps = np.zeros(LANES, np.int64)
+    L_steps = np.zeros(LANES)
+    L_hnext = np.zeros(LANES)
     L_early = np.zeros(LANES, np.int64)
     L_hpos = np.zeros(LANES, np.int64)
     orb = np.full(LANES, -1, np.int64)
-    acc = np.zeros((LANES, _tg.N_ACC))
+    acc = np.zeros((_tg.N_ACC, LANES))
     z = np.zeros(DIM)
     row = np.empty(_tg.N_RES)
     factor = safety_factor(order)
@@ -282,8 +378,8 @@ def indicators_lanes_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_st
     active = 0
     for l in range(LANES):
         active += _indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on, L_t,
-                                        L_tc, L_steps, L_early, L_hpos, L_since, acc, out_hist, out_res, out_ext,
-                                        out_status, out_final, out_steps, out_w)
+                                        L_tc, L_steps, L_early, L_hpos, L_hnext, L_since, hist_t, acc, out_hist,
+                                        out_res, out_ext, out_status, out_final, out_steps, out_w)
     while active > 0:
         taylor_coefficients_lanes(P, X, order, Wk)
         fin, normal = _indicator_norms_lanes(X, order, n, e_p, e_q, NORM)
@@ -295,22 +391,36 @@ def indicators_lanes_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_st
                 _indicator_lane_finish(l, st, n, nvec, X, z, orb, L_steps, L_early, acc, out_res, out_ext,
                                        out_status, out_final, out_steps, out_w)
                 active += _indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on,
-                                                L_t, L_tc, L_steps, L_early, L_hpos, L_since, acc, out_hist, out_res,
-                                                out_ext, out_status, out_final, out_steps, out_w) - 1
+                                                L_t, L_tc, L_steps, L_early, L_hpos, L_hnext, L_since, hist_t, acc,
+                                                out_hist, out_res, out_ext, out_status, out_final, out_steps,
+                                                out_w) - 1
         _evaluate_lanes(X, order, hv, Y)
-        for l in range(LANES):
-            if L_go[l] == 0.0:
-                continue
-            L_steps[l] += 1
+        bits, stop_sali, stop_megno = _indicator_ends_lanes(X, Y, hv, L_go, L_last, L_t, L_tc, L_steps, L_hnext,
+                                                            L_since, acc, NRM, n, nvec, T, max_steps, early_stop,
+                                                            sali_stop, megno_level, early_tmin)
+        stops = stop_sali | stop_megno
+        while stops != 0:
+            l, stops = next_bit(stops)
+            L_early[l] = _tg.EARLY_SALI if (stop_sali >> l) & 1 else _tg.EARLY_MEGNO
+            _indicator_lane_finish(l, STATUS_DONE, n, nvec, X, z, orb, L_steps, L_early, acc, out_res, out_ext,
+                                   out_status, out_final, out_steps, out_w)
+            active += _indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on,
+                                            L_t, L_tc, L_steps, L_early, L_hpos, L_hnext, L_since, hist_t, acc,
+                                            out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w) - 1
+        while bits != 0:
+            l, bits = next_bit(bits)
+            L_steps[l] += 1.0
             for i in range(DIM):
                 z[i] = Y[i, l]
             st = STATUS_NONFINITE
             if all_finite(z):
+                al = acc[:, l]
                 start = L_t[l] - L_tc[l]
                 t, tc = advance_time(L_t[l], L_tc[l], hv[l], L_last[l] != 0.0, T)
                 dlog = _tg.renormalize(z[n:2 * n], n)
-                _tg.accumulate(acc[l], start, t - tc, dlog)
-                L_hpos[l] = _indicator_history(acc[l], hist_t, out_hist[orb[l]], L_hpos[l], row)
+                _tg.accumulate(al, start, t - tc, dlog)
+                L_hpos[l] = _indicator_history(al, hist_t, out_hist[orb[l]], L_hpos[l], row)
+                L_hnext[l] = _next_history_time(hist_t, L_hpos[l])
                 if nvec == 2:
                     _tg.renormalize(z[2 * n:3 * n], n)
                 L_t[l] = t
@@ -318,7 +428,7 @@ def indicators_lanes_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_st
                 for i in range(DIM):
                     X[0, i, l] = z[i]
                 if early_stop:
-                    early, L_since[l] = _indicator_early(acc[l], z[n:2 * n], z[nvec * n:(nvec + 1) * n], n, nvec,
+                    early, L_since[l] = _indicator_early(al, z[n:2 * n], z[nvec * n:(nvec + 1) * n], n, nvec,
                                                          sali_stop, megno_level, early_tmin, L_since[l])
                     L_early[l] = early
                 st = _indicator_status(L_early[l], t, T, L_steps[l], max_steps)
@@ -326,8 +436,9 @@ def indicators_lanes_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_st
                 _indicator_lane_finish(l, st, n, nvec, X, z, orb, L_steps, L_early, acc, out_res, out_ext,
                                        out_status, out_final, out_steps, out_w)
                 active += _indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on,
-                                                L_t, L_tc, L_steps, L_early, L_hpos, L_since, acc, out_hist, out_res,
-                                                out_ext, out_status, out_final, out_steps, out_w) - 1
+                                                L_t, L_tc, L_steps, L_early, L_hpos, L_hnext, L_since, hist_t, acc,
+                                                out_hist, out_res, out_ext, out_status, out_final, out_steps,
+                                                out_w) - 1
 '''
 
 
