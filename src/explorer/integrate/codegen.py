@@ -267,6 +267,17 @@ def decompose(system: System, expressions=None, into: Decomposition | None = Non
     return d
 
 
+def decompose_extending(orbit: System, system: System) -> Decomposition:
+    """The decomposition of ``orbit`` extended by the rest of ``system`` (whose first states and
+    parameters are the orbit's), one block of ``orbit.dimension`` rows after another: the orbit's rows
+    are its own operations, so their values those of the orbit's recurrence bit for bit."""
+    d = decompose(orbit)
+    n = orbit.dimension
+    for k in range(n, system.dimension, n):
+        decompose(system, system.rhs[k:k + n], into=d)
+    return d
+
+
 # ---------------------------------------------------------------------- emission
 class _Emitter:
     """Source lines of one decomposition: scalars once, order 0, then orders k >= 1.
@@ -721,14 +732,15 @@ N_ENERGY_WORK = {n_work}
 '''
 
 
-def source(system: System, key: str = "") -> str:
-    """The Python source of the generated module (see the module docstring)."""
-    d = decompose(system)
+def source(system: System, key: str = "", orbit: System | None = None) -> str:
+    """The Python source of the generated module (see the module docstring); with ``orbit``, the
+    recurrence of :func:`decompose_extending`."""
+    d = decompose(system) if orbit is None else decompose_extending(orbit, system)
     e = _Emitter(d)
     dim = system.dimension
     scalars = _indent(e.scalar_lines(), 4)
     order0 = _indent(e.order0_lines(), 4)
-    r = recurrence(system)
+    r = recurrence(system, decomposition=None if orbit is None else d)
     rhs_out = _indent([f"dy[{i}] = {e.output(o, 0)}" for i, o in enumerate(d.outputs)], 4)
     equations = "\n".join(f"#   d{s.name}/dt = {f}" for s, f in zip(system.states, system.rhs))
     equations += "\n#   parameters: " + (", ".join(p.name for p in system.parameters) or "none")
@@ -760,12 +772,13 @@ def cache_directory() -> Path:
 
 @functools.lru_cache(maxsize=1)
 def _callee_digest() -> str:
-    """SHA-256 of the sources the generated code calls (explorer.kernels, explorer.integrate.simd,
-    explorer._jit) and of the templates (:data:`TEMPLATES`): numba's cache of a function does not
+    """SHA-256 of the sources the generated code calls (explorer.kernels, explorer.integrate.simd and
+    .layout, explorer._jit) and of the templates (:data:`TEMPLATES`): numba's cache of a function does not
     follow a change of a callee in another file, so such a change gives the generated module another
     key (a new file, compiled afresh)."""
     root = Path(__file__).resolve().parent.parent
-    files = (sorted((root / "kernels").glob("*.py")) + [root / "integrate" / "simd.py", root / "_jit.py"]
+    files = (sorted((root / "kernels").glob("*.py"))
+             + [root / "integrate" / "simd.py", root / "integrate" / "layout.py", root / "_jit.py"]
              + [Path(t.__file__) for t in TEMPLATES])
     h = hashlib.sha256()
     for f in files:
@@ -774,10 +787,13 @@ def _callee_digest() -> str:
     return h.hexdigest()
 
 
-def module_key(system: System) -> str:
+def module_key(system: System, orbit: System | None = None) -> str:
     """The cache key: SHA-256 of the system's flow hash (its content but the reversors),
-    :data:`GENERATOR_VERSION` and the sources the generated code calls (:func:`_callee_digest`)."""
+    :data:`GENERATOR_VERSION`, the sources the generated code calls (:func:`_callee_digest`) and
+    the ``orbit`` of :func:`load`."""
     text = f"{system.flow_hash} generator {GENERATOR_VERSION} callees {_callee_digest()}"
+    if orbit is not None:
+        text += f" orbit {orbit.flow_hash}"
     return hashlib.sha256(text.encode()).hexdigest()[:32]
 
 
@@ -786,10 +802,11 @@ def _module_path(system: System, key: str) -> Path:
     return cache_directory() / f"{stem}_{key}.py"
 
 
-def load(system: System):
+def load(system: System, orbit: System | None = None):
     """The generated module of ``system``: imported once per process (``sys.modules``), written to
-    the cache directory only if its file is missing (a rewrite would invalidate numba's cache)."""
-    key = module_key(system)
+    the cache directory only if its file is missing (a rewrite would invalidate numba's cache).
+    ``orbit``: the system of the first rows (:func:`decompose_extending`)."""
+    key = module_key(system, orbit)
     path = _module_path(system, key)
     mod_name = f"explorer_system_{path.stem}"
     mod = sys.modules.get(mod_name)
@@ -799,7 +816,7 @@ def load(system: System):
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.stem, suffix=".tmp")
         with os.fdopen(fd, "w") as f:
-            f.write(source(system, key))
+            f.write(source(system, key, orbit))
         os.replace(tmp, path)   # atomic: a concurrent process or thread sees the whole file or none
     spec = importlib.util.spec_from_file_location(mod_name, path)
     mod = importlib.util.module_from_spec(spec)
