@@ -235,6 +235,7 @@ def test_a_change_of_a_kernel_the_generated_code_calls_changes_the_module_key(tm
     (kernels / "integrate").mkdir()
     (kernels / "kernels" / "taylor.py").write_text("a")
     (kernels / "integrate" / "simd.py").write_text("b")
+    (kernels / "integrate" / "layout.py").write_text("d")
     (kernels / "_jit.py").write_text("c")
     monkeypatch.setattr(codegen, "__file__", str(kernels / "integrate" / "codegen.py"))
     codegen._callee_digest.cache_clear()

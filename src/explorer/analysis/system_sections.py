@@ -29,6 +29,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from explorer._jit import get_num_threads, max_threads
+from explorer.integrate import layout
 from explorer.integrate.methods import DEFAULT_TOL, check_setting
 from explorer.kernels.taylor_order import order_for_tolerance
 from explorer.model import ParameterError, validation
@@ -250,9 +251,13 @@ def system_crossings(system, states=None, *, n_crossings: int, section=None, dir
     status = np.zeros(N, np.int64)
     final = np.zeros((N, system.dimension))
     info = np.zeros((N, 3))
+    carry = np.empty((N, layout.N_CARRY))
+    mod.crossings_start(Y0, P, sec.a, float(sec.b), carry)
+    limits = np.full((N, 2), K, np.int64)
     run_driver(mod, "crossings", N, driver, threads,
-               (Y0, P, sec.a, float(sec.b), int(direction), float(tmax), int(order), int(max_steps), int(K), data,
-                count, status, final, info, backward))
+               (Y0, P, sec.a, float(sec.b), every_crossing(system.dimension), np.arange(system.dimension),
+                int(direction), float(tmax), int(order), int(max_steps), carry, limits, data, count, status, final,
+                info, backward))
     columns = ["t", *(s.name for s in system.states)] + (["E - E0"] if system.energy is not None else [])
     settings = {"method": "taylor", "tol": tol, "order": order, "system": system.name, "section": str(sec.expr),
                 "direction": int(direction), "tmax": tmax, "max_steps": max_steps, "n_crossings": K,
@@ -260,6 +265,13 @@ def system_crossings(system, states=None, *, n_crossings: int, section=None, dir
     if backward:
         settings["backward"] = True
     return data, count, status, final, info, "taylor", settings
+
+
+def every_crossing(dimension: int) -> np.ndarray:
+    """The ``keep`` of the generated crossing drivers that keeps every root: keep . (y, 1) = 1 > 0."""
+    keep = np.zeros(dimension + 1)
+    keep[dimension] = 1.0
+    return keep
 
 
 def check_memory(what: str, need: int, hint: str) -> None:

@@ -168,11 +168,11 @@ def _lane_status(n, limit, t, tmax, steps, max_steps):
 
 
 @njit(error_model="numpy")
-def _lane_start(l, next_orbit, Y0, P, a, b, tmax, max_steps, limit, X, orb, L_on, L_t, L_tc, L_g, L_E0, L_n,
-                L_steps, count, status, final, info):
-    """Lane l takes the next orbit of the queue ``next_orbit`` at its start, as crossings_orbit does (an
-    orbit stopped before its first step is written out and the next one taken).  Returns 1, or 0 when the
-    queue is empty: the lane then idles on the zero state (its coefficients all 0)."""
+def _lane_start(l, next_orbit, Y0, tmax, max_steps, carry, limits, X, orb, L_on, L_t, L_tc, L_g, L_E0, L_n, L_steps,
+                L_target, L_room, count, status, final, info):
+    """Lane l takes the next orbit of the queue ``next_orbit`` where its carry left it, as crossings_orbit
+    does (an orbit stopped before its first step is written out and the next one taken).  Returns 1, or 0
+    when the queue is empty: the lane then idles on the zero state (its coefficients all 0)."""
     while True:
         j = atomic_fetch_add(next_orbit, 0, 1)
         if j >= Y0.shape[0]:
@@ -181,29 +181,34 @@ def _lane_start(l, next_orbit, Y0, P, a, b, tmax, max_steps, limit, X, orb, L_on
             for i in range(DIM):
                 X[0, i, l] = 0.0
             return 0
-        y0 = Y0[j]
         for i in range(DIM):
-            X[0, i, l] = y0[i]
+            X[0, i, l] = Y0[j, i]
         orb[l] = j
         L_on[l] = 1.0
-        L_t[l] = 0.0
-        L_tc[l] = 0.0
+        L_t[l] = carry[j, CARRY_T]
+        L_tc[l] = carry[j, CARRY_TC]
+        L_g[l] = carry[j, CARRY_G]
+        L_steps[l] = carry[j, CARRY_STEPS]
+        L_E0[l] = carry[j, CARRY_H0]
         L_n[l] = 0
-        L_steps[l] = 0.0
-{energy_start}
-        L_g[l] = _section_value(a, b, y0)
-        st = _lane_status(0, limit, 0.0, tmax, 0, max_steps)
+        L_target[l] = limits[j, 0]
+        L_room[l] = limits[j, 1]
+        st = _lane_status(0, L_target[l], L_t[l], tmax, L_steps[l], max_steps)
         if st < 0:
             return 1
-        _lane_finish(l, st, X, orb, L_t, L_tc, L_n, L_steps, count, status, final, info)
+        _lane_finish(l, st, X, orb, L_t, L_tc, L_g, L_n, L_steps, carry, count, status, final, info)
 
 
 @njit(error_model="numpy")
-def _lane_finish(l, st, X, orb, L_t, L_tc, L_n, L_steps, count, status, final, info):
-    """Write out lane l's orbit, stopped with status ``st`` (crossings_orbit's final, info, count)."""
+def _lane_finish(l, st, X, orb, L_t, L_tc, L_g, L_n, L_steps, carry, count, status, final, info):
+    """Write out lane l's orbit, stopped with status ``st`` (crossings_orbit's final, info, count, carry)."""
     j = orb[l]
     for i in range(DIM):
         final[j, i] = X[0, i, l]
+    carry[j, CARRY_T] = L_t[l]
+    carry[j, CARRY_TC] = L_tc[l]
+    carry[j, CARRY_G] = L_g[l]
+    carry[j, CARRY_STEPS] = L_steps[l]
     info[j, 0] = L_t[l] - L_tc[l]
     info[j, 1] = L_steps[l]
     info[j, 2] = np.nan
@@ -212,10 +217,11 @@ def _lane_finish(l, st, X, orb, L_t, L_tc, L_n, L_steps, count, status, final, i
 
 
 @njit(nogil=True, error_model="numpy")
-def crossings_lanes_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_steps, limit, data, count, status,
-                           final, info, backward):
+def crossings_lanes_worker(next_orbit, Y0, P, a, b, keep, cols, direction, tmax, order, max_steps, carry, limits,
+                           data, count, status, final, info, backward):
     """One group of LANES lanes: orbits from the queue ``next_orbit`` until it is empty, each lane
-    crossings_orbit's loop (its arguments and outputs, ``backward`` its (-1)^k X[k])."""
+    crossings_orbit's loop (the arguments and outputs of crossings_taylor_worker, ``backward`` its
+    (-1)^k X[k])."""
     X = np.zeros((order + 1, DIM, LANES))
     W = np.zeros((order + 1, max(N_WORK, 1), LANES))
     Y = np.zeros((DIM, LANES))
@@ -234,6 +240,8 @@ def crossings_lanes_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_
     L_go = np.zeros(LANES)
     orb = np.full(LANES, -1, np.int64)
     L_n = np.zeros(LANES, np.int64)
+    L_target = np.zeros(LANES, np.int64)
+    L_room = np.zeros(LANES, np.int64)
     yc = np.empty(DIM)
     gc, work, roots, brackets, stack = root_workspace(order)
     factor = safety_factor(order)
@@ -241,8 +249,8 @@ def crossings_lanes_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_
     e_q = 1.0 / (order - 1)
     active = 0
     for l in range(LANES):
-        active += _lane_start(l, next_orbit, Y0, P, a, b, tmax, max_steps, limit, X, orb, L_on, L_t, L_tc, L_g,
-                              L_E0, L_n, L_steps, count, status, final, info)
+        active += _lane_start(l, next_orbit, Y0, tmax, max_steps, carry, limits, X, orb, L_on, L_t, L_tc, L_g,
+                              L_E0, L_n, L_steps, L_target, L_room, count, status, final, info)
     while active > 0:
         taylor_coefficients_lanes(P, X, order, W)
         if backward:
@@ -256,9 +264,10 @@ def crossings_lanes_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_
             l, bits = next_bit(bits)
             st = _lane_step(l, fin, normal, NORM, e_p, e_q, factor, L_t, tmax, hv, L_last, L_go)
             if st >= 0:
-                _lane_finish(l, st, X, orb, L_t, L_tc, L_n, L_steps, count, status, final, info)
-                active += _lane_start(l, next_orbit, Y0, P, a, b, tmax, max_steps, limit, X, orb, L_on, L_t, L_tc,
-                                      L_g, L_E0, L_n, L_steps, count, status, final, info) - 1
+                _lane_finish(l, st, X, orb, L_t, L_tc, L_g, L_n, L_steps, carry, count, status, final, info)
+                active += _lane_start(l, next_orbit, Y0, tmax, max_steps, carry, limits, X, orb, L_on, L_t,
+                                      L_tc, L_g, L_E0, L_n, L_steps, L_target, L_room, count, status, final,
+                                      info) - 1
         _evaluate_lanes(X, order, hv, Y)
         finite, maybe = _section_lanes(X, order, hv, Y, a, b, direction, L_g, GC, G)
         bits = _ends_lanes(X, Y, G, hv, L_go, L_last, finite, maybe, L_t, L_tc, L_steps, L_g, tmax, max_steps)
@@ -277,28 +286,30 @@ def crossings_lanes_worker(next_orbit, Y0, P, a, b, direction, tmax, order, max_
                     for k in range(order + 1):
                         gc[k] = GC[k, l]
                     nroots = poly_step_roots(gc, order, h, L_g[l], G[l], direction, roots, brackets, work, stack)
+                kept = n
                 for r in range(nroots):
-                    if n >= limit:
+                    if n >= L_room[l]:
                         break
                     tau = roots[r]
                     evaluate(X[:, :, l].T, order, tau, yc)
-                    data[j, n, 0] = (t - tc) + tau
-                    for i in range(DIM):
-                        data[j, n, 1 + i] = yc[i]
-{energy_column}
-                    n += 1
+                    kept = _record(data, j, n, (t - tc) + tau, yc, P, L_E0[l], keep, cols)
+                    if kept < 0:
+                        break
+                    n = kept
                 L_n[l] = n
-                t, tc = advance_time(t, tc, h, L_last[l] != 0.0, tmax)
-                L_t[l] = t
-                L_tc[l] = tc
-                for i in range(DIM):
-                    X[0, i, l] = Y[i, l]
-                L_g[l] = G[l]
-                st = _lane_status(n, limit, t, tmax, L_steps[l], max_steps)
+                if kept >= 0:
+                    t, tc = advance_time(t, tc, h, L_last[l] != 0.0, tmax)
+                    L_t[l] = t
+                    L_tc[l] = tc
+                    for i in range(DIM):
+                        X[0, i, l] = Y[i, l]
+                    L_g[l] = G[l]
+                    st = _lane_status(n, L_target[l], t, tmax, L_steps[l], max_steps)
             if st >= 0:
-                _lane_finish(l, st, X, orb, L_t, L_tc, L_n, L_steps, count, status, final, info)
-                active += _lane_start(l, next_orbit, Y0, P, a, b, tmax, max_steps, limit, X, orb, L_on, L_t, L_tc,
-                                      L_g, L_E0, L_n, L_steps, count, status, final, info) - 1
+                _lane_finish(l, st, X, orb, L_t, L_tc, L_g, L_n, L_steps, carry, count, status, final, info)
+                active += _lane_start(l, next_orbit, Y0, tmax, max_steps, carry, limits, X, orb, L_on, L_t,
+                                      L_tc, L_g, L_E0, L_n, L_steps, L_target, L_room, count, status, final,
+                                      info) - 1
 '''
 
 
@@ -309,7 +320,6 @@ def _lines(template, dim, indent):
 def render(system) -> str:
     """The driver's source for ``system``: the loops over the state written out, one vector each."""
     n = system.dimension
-    has_energy = system.energy is not None
     norms = "\n".join([
         _lines("x{i} = vload(X, {i} * LANES)", n, 4), _lines("p{i} = vload(X, op + {i} * LANES)", n, 4),
         _lines("q{i} = vload(X, oq + {i} * LANES)", n, 4),
@@ -326,5 +336,4 @@ def render(system) -> str:
         eval_store=_lines("vstore(Y, {i} * LANES, y{i})", n, 4),
         section_y=section_y,
         section_c=_lines("c = c + a[{i}] * vload(X, o + {i} * LANES)", n, 8),
-        energy_start="        L_E0[l] = energy(y0, P)" if has_energy else "",
-        energy_column="                    data[j, n, 1 + DIM] = energy(yc, P) - L_E0[l]" if has_energy else "")
+)
