@@ -84,6 +84,14 @@ class SweepSpec:
         """Panel ``pos`` is computed in rounds of blocks and streamed to the store."""
         return bool(self.sections and self.blocks and self.blocks[pos] < self.crossings)
 
+    def task(self, i: int, threads: int | None = None) -> dict:
+        """Chunk i's arrays (:func:`task`)."""
+        return chaplygin_task(self, i, threads)
+
+    def indicator_arrays(self, panel, rows, threads=None) -> tuple:
+        """(Indicators, arrays) of the seeds ``rows`` of ``panel`` (:func:`chaplygin_indicator_arrays`)."""
+        return chaplygin_indicator_arrays(self, panel, rows, threads)
+
 
 def panel_block(n_orbits: int, crossings: int, budget: int | None = None) -> int:
     """Crossings per orbit and round of a panel of ``n_orbits``: all of them when its rows fit in
@@ -212,10 +220,13 @@ def map_raster(seeds, values, grid):
     return img
 
 
-def task(spec: SweepSpec, i: int, threads: int | None = None) -> dict:
-    """Pure map: integrate chunk i of the sweep and return its arrays."""
-    if isinstance(spec, SystemSweepSpec):
-        return system_task(spec, i, threads)
+def task(spec: SweepSpec | SystemSweepSpec, i: int, threads: int | None = None) -> dict:
+    """Pure map: integrate chunk i of the sweep and return its arrays (the spec's own ``task``)."""
+    return spec.task(i, threads)
+
+
+def chaplygin_task(spec: SweepSpec, i: int, threads: int | None = None) -> dict:
+    """:func:`task` of a sweep of Chaplygin's model."""
     pos, a, b = spec.chunks[i]
     panel = spec.panels[pos]
     t0 = time.perf_counter()
@@ -233,16 +244,14 @@ def task(spec: SweepSpec, i: int, threads: int | None = None) -> dict:
     if spec.lyapunov is not None and adaptive_panel(spec, panel):
         out.update(adaptive_map(spec, panel, threads))
     elif spec.lyapunov is not None:
-        out.update(_indicator_arrays(spec, panel, np.arange(a, b), threads)[1])
+        out.update(spec.indicator_arrays(panel, np.arange(a, b), threads)[1])
     out["wall_time"] = time.perf_counter() - t0
     return out
 
 
-def _indicator_arrays(spec: SweepSpec, panel: PanelSpec, rows: np.ndarray, threads=None) -> tuple:
+def chaplygin_indicator_arrays(spec: SweepSpec, panel: PanelSpec, rows: np.ndarray, threads=None) -> tuple:
     """(Indicators, arrays) of the seeds ``rows`` of ``panel``: [lyapunov]'s indicators as ``task``
     returns them (each orbit alone: the same numbers whatever the rows)."""
-    if isinstance(spec, SystemSweepSpec):
-        return _system_indicator_arrays(spec, panel, rows, threads)
     from explorer.analysis.lyapunov import indicators
 
     ly = spec.lyapunov
@@ -321,7 +330,7 @@ class _MapCells:
         if check is not None:
             check()
         rows = self._rows(y0).ravel()
-        ind, arrays = _indicator_arrays(self.spec, self.panel, rows, self.threads)
+        ind, arrays = self.spec.indicator_arrays(self.panel, rows, self.threads)
         n = len(self.panel.seeds)
         for k, v in arrays.items():
             v = np.asarray(v)
@@ -530,6 +539,14 @@ class SystemSweepSpec:
     def streamed(self, pos: int) -> bool:
         return False
 
+    def task(self, i: int, threads: int | None = None) -> dict:
+        """Chunk i's arrays (:func:`system_task`)."""
+        return system_task(self, i, threads)
+
+    def indicator_arrays(self, panel, rows, threads=None) -> tuple:
+        """(Indicators, arrays) of the seeds ``rows`` of ``panel`` (:func:`system_indicator_arrays`)."""
+        return system_indicator_arrays(self, panel, rows, threads)
+
     def section_map(self, panel):
         from explorer.analysis.system_section_map import SystemSectionMap
 
@@ -661,12 +678,12 @@ def system_task(spec: SystemSweepSpec, i: int, threads: int | None = None) -> di
     if spec.lyapunov is not None and adaptive_panel(spec, panel):
         out.update(adaptive_map(spec, panel, threads))
     elif spec.lyapunov is not None:
-        out.update(_system_indicator_arrays(spec, panel, np.arange(a, b), threads, smap)[1])
+        out.update(system_indicator_arrays(spec, panel, np.arange(a, b), threads, smap)[1])
     out["wall_time"] = time.perf_counter() - t0
     return out
 
 
-def _system_indicator_arrays(spec: SystemSweepSpec, panel, rows, threads=None, smap=None) -> tuple:
+def system_indicator_arrays(spec: SystemSweepSpec, panel, rows, threads=None, smap=None) -> tuple:
     """(Indicators, arrays) of the seeds ``rows`` of a System's ``panel`` (each orbit alone)."""
     from explorer.analysis.lyapunov import indicators
 
