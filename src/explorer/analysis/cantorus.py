@@ -12,7 +12,7 @@ import numpy as np
 
 from explorer.analysis import greene as gm
 from explorer.analysis.greene_core import MAX_QMAX, MIN_Q, aitken
-from explorer.analysis.maps import StandardMap
+from explorer.analysis.maps import StandardMap, has_angle
 from explorer.model import ParameterError, validation
 
 __all__ = ["CantorusFlux", "action", "cantorus_flux", "minimizing_orbit"]
@@ -22,9 +22,6 @@ __all__ = ["CantorusFlux", "action", "cantorus_flux", "minimizing_orbit"]
 CLOSURE_FRACTION = 1e-3
 #: the largest period followed by default
 DEFAULT_QMAX = 610
-#: what the flux asks of the map: the generating function F(theta, theta') of the action, its symmetric
-#: orbits on Fix I0 (the half-orbit method) and its iterates on Fix I1 (2 theta = p)
-TWIST_MAP = ("generating_function", "symmetric_orbit", "images")
 
 
 def action(system, points, P: int) -> float:
@@ -120,10 +117,10 @@ def cantorus_flux(system: StandardMap, nu="golden", *, qmax=DEFAULT_QMAX, qmin=5
     """The flux Delta W through the cantorus of rotation number ``nu`` of the standard map above its
     breakup (MacKay, Meiss & Percival 1984; docs/greene.md), in the map's (theta, p) units (the
     papers' (x, y) = (theta/2 pi, p/2 pi) units give Delta W / (2 pi)^2)."""
-    missing = [name for name in TWIST_MAP if not callable(getattr(system, name, None))]
-    if missing:
-        raise ParameterError(f"cantorus_flux needs a twist map with {' and '.join(missing)} (as StandardMap's); "
-                             f"{system!r} has none")
+    if not has_angle(system):
+        raise ParameterError(f"cantorus_flux needs a twist map with an angle coordinate (periods: its lift counts "
+                             f"the orbits' types) and a generating_function, as StandardMap's; {system!r} has no "
+                             "angle coordinate")
     x = gm.rotation_value(nu)
     k = system.parameter_value
     qs: list[int] = []

@@ -16,7 +16,7 @@ from explorer.analysis.greene_core import (
     enough_convergents,
     rotation_value,
 )
-from explorer.analysis.maps import SymmetricOrbit
+from explorer.analysis.maps import SymmetricOrbit, has_angle, reduce
 from explorer.analysis.system_sections import is_system
 from explorer.model import ParameterError, validation
 
@@ -24,23 +24,12 @@ __all__ = ["CRITICAL_RESIDUE", "GOLDEN", "GreeneResult", "SymmetricOrbit", "conv
            "rotation_value", "symmetric_orbit"]
 
 
-def symmetric_orbit(system, p, q, *, line=math.pi, guess=None):
-    """The symmetric orbit of type ``p``/``q`` through theta = ``line``, Newton from p = ``guess``
-    (default 2 pi p/q).  A section map: :func:`~explorer.analysis.greene_section.section_symmetric_orbit`
-    of period ``q`` from p1 = ``guess`` (required)."""
-    if hasattr(system, "half_turns"):       # a section map: shot over half turns
-        if guess is None:
-            raise ParameterError("symmetric_orbit on a section map needs guess=t, the point t v of the symmetry "
-                                 "line (p1 of p2 = 0 on Chaplygin's section) near the orbit")
-        validation.integer("p", p, 0)
-        return greene_section.section_symmetric_orbit(system, validation.integer("q", q, 1),
-                                                      validation.real("guess", guess),
-                                                      line=None if line == math.pi else line)
-    shoot = getattr(system, "symmetric_orbit", None)
-    if shoot is None:
-        raise ParameterError(f"symmetric_orbit: the half-orbit method is implemented for StandardMap and a "
-                             f"section map (with a reversor); got {type(system).__name__}")
-    return shoot(p, q, line=line, guess=guess)
+def symmetric_orbit(system, p, q, *, line=None, guess=None):
+    """The map's symmetric orbit of type ``p``/``q`` on its symmetry line ``line`` from ``guess`` (its
+    ``symmetric_orbit``): the standard map's half-orbit method on theta = ``line`` (default pi), Newton from
+    p = ``guess`` (default 2 pi p/q); a section map's shot over its half turns from ``guess`` (required) on
+    the half ``line`` (default its own)."""
+    return system.symmetric_orbit(p, q, line=line, guess=guess)
 
 
 def greene(system, nu="golden", *, qmax=None, residue=CRITICAL_RESIDUE, line=None, around=None,
@@ -55,11 +44,10 @@ def greene(system, nu="golden", *, qmax=None, residue=CRITICAL_RESIDUE, line=Non
     if is_system(system):
         raise ParameterError("greene takes a map: give the System's section map, SectionMap(system, E, section=..., "
                              "direction=..., coords=..., solve=...), with a reversor (System(..., reversor=...))")
-    if hasattr(system, "half_turns"):       # a section map: shot over half turns
+    if not has_angle(system):
+        # no angle coordinate: an orbit's type is counted by its turns around the island's centre
         return greene_section.section_greene(system, x, qmax=qmax, target=target, line=line, around=around,
                                              param=param)
-    if not hasattr(system, "symmetric_orbit"):
-        raise ParameterError(f"greene takes a StandardMap or a section map, got {type(system).__name__}")
     if around is not None or param not in (None, system.parameter):
         raise ParameterError("greene: around= and param= belong to a section map; the standard map's "
                              "parameter is k")
@@ -70,6 +58,6 @@ def greene(system, nu="golden", *, qmax=None, residue=CRITICAL_RESIDUE, line=Non
         return system.with_parameter(k).symmetric_orbit(P, Q, line=line, guess=guess)
 
     rows, crit, uncertainty, ratio = critical_parameter(conv, orbit_at, lambda orb: orb.points[0, 1],
-                                                        lambda orb: system.wrap(orb.points[0]),
+                                                        lambda orb: reduce(system, orb.points[0]),
                                                         system.parameter_value, target)
     return GreeneResult("standard", system.parameter, x, crit, uncertainty, rows, target, ratio, float(line))

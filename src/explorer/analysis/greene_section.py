@@ -1,18 +1,24 @@
 """Greene's residue criterion on a section map with a linear reversor G (docs/greene.md, "Greene on
-the section of Figure 4's scene"; a System's map: "Greene on a System"): symmetric orbits shot over Q
-half turns (the map's ``half_turns``) from the symmetry line Fix G of the map's half or its opposite's
-("Two symmetry lines"), their monodromy M = G B^-1 G A from the first half's Jacobians, and
+the section of Figure 4's scene"; a System's map: "Greene on a System"): the symmetric orbits of each
+type around the island's centre on the symmetry line of the map's half or its opposite's ("Two symmetry
+lines"; shot over half turns, :func:`explorer.analysis.symmetry_lines.section_symmetric_orbit`), and
 :func:`section_greene`."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from explorer.analysis.fixedpoints import find_fixed_point
-from explorer.analysis.greene_core import SECTION_QMAX, GreeneResult, Residue, critical_parameter, enough_convergents
-from explorer.analysis.symmetry_lines import axes, line_map, line_point, line_root, line_roots
+from explorer.analysis.greene_core import SECTION_QMAX, GreeneResult, critical_parameter, enough_convergents
+from explorer.analysis.symmetry_lines import (
+    SectionSymmetricOrbit,
+    axes,
+    line_map,
+    line_point,
+    line_roots,
+    section_symmetric_orbit,
+)
 from explorer.model import ParameterError, validation
 
 __all__ = ["SectionSymmetricOrbit", "first_orbit", "island_centre", "island_line", "section_greene",
@@ -22,78 +28,6 @@ __all__ = ["SectionSymmetricOrbit", "first_orbit", "island_centre", "island_line
 ROTATION_TOL = 1e-6
 #: samples of the symmetry line scanned for the first convergent's orbit
 LINE_SAMPLES = 200
-
-
-@dataclass(frozen=True)
-class SectionSymmetricOrbit(Residue):
-    """A symmetric periodic orbit of a section map: ``points`` (Q, 2) on the map's section,
-    ``monodromy`` on the half of its symmetry line ``line`` (the same trace), ``start`` its
-    coordinate t on that line (the point t v, :func:`axes`)."""
-
-    q: int
-    points: np.ndarray
-    monodromy: np.ndarray
-    param_value: float
-    line: float = math.pi
-    start: float = math.nan
-
-    @property
-    def line_start(self) -> float:
-        """t of the orbit's point on its symmetry line."""
-        return float(self.points[0, 0]) if math.isnan(self.start) else self.start
-
-    def rotation(self, smap, centre) -> float:
-        """Turns around ``centre`` per return, in (-1/2, 1/2] (docs/greene.md, "Which orbits")."""
-        from explorer.analysis.rotation import orbit_turns
-
-        turns = orbit_turns(smap, self.points[0], centre, self.q)
-        return turns - math.ceil(turns - 0.5)
-
-
-def section_symmetric_orbit(smap, Q: int, guess, guess2=None, *, param=None, line=None) -> SectionSymmetricOrbit:
-    """The symmetric orbit of period Q through t v on the symmetry line of the half ``line`` (default the
-    map's own), t by the secant from ``guess``, ``guess2``; points and monodromy M = G B^-1 G A from the
-    first half (docs/greene.md, "Greene on the section of Figure 4's scene"; the other half: solved there,
-    "Two symmetry lines")."""
-    other = line_map(smap, line)
-    if other is not smap:
-        orb = section_symmetric_orbit(other, Q, guess, guess2, param=param)
-        x0 = line_point(other, orb.points[0], smap.section_label)
-        pts = smap.iterate(x0, Q - 1) if Q > 1 else x0[None, :]
-        return SectionSymmetricOrbit(Q, np.asarray(pts, float)[:Q].copy(), orb.monodromy, orb.param_value,
-                                     other.section_label, orb.start)
-    G, v, _ = axes(smap)
-    g = float(guess)
-    t = line_root(smap, Q, g, g + 1e-7 * max(1.0, abs(g)) if guess2 is None else float(guess2))
-    n = (Q + 1) // 2
-    pts = np.empty((Q + 1, 2))
-    pts[0] = t * v
-    jacs = []
-    for j in range(n):
-        r = smap(pts[j])
-        jacs.append(r.jacobian)
-        pts[j + 1] = r.point
-    for j in range(n + 1, Q + 1):
-        pts[j] = G @ pts[Q - j]
-    A = np.eye(2)
-    B = np.eye(2)
-    for j, J in enumerate(jacs):
-        A = J @ A
-        if j < Q - n:
-            B = A.copy()
-    if Q % 2 == 0:
-        B = A
-    gaps = np.max(np.abs(pts[1:Q] - pts[0]), axis=1)
-    if gaps.size and gaps.min() <= 1e-9 * max(1.0, float(np.max(np.abs(pts[0])))):
-        raise ParameterError(f"the symmetric orbit from t = {t:.10g} has period {int(np.argmin(gaps)) + 1}, not {Q}")
-    det = B[0, 0] * B[1, 1] - B[0, 1] * B[1, 0]
-    if not (np.all(np.isfinite(A)) and math.isfinite(det) and det != 0.0):
-        raise ParameterError(f"the half orbit's Jacobian of the orbit of period {Q} from t = {t:.10g} is singular "
-                             f"or not finite")
-    B_inv = np.array([[B[1, 1], -B[0, 1]], [-B[1, 0], B[0, 0]]]) / det
-    M = G @ B_inv @ G @ A       # DP^Q = DP^(Q-n)(x_n) A with P^(Q-n) = G P^-(Q-n) G
-    value = smap.parameter_value if param is None else smap.value_of(param)
-    return SectionSymmetricOrbit(Q, pts[:Q].copy(), M, value, smap.section_label, float(t))
 
 
 def _typed_orbits(smap, P: int, Q: int, centre, line, side: int):

@@ -66,12 +66,9 @@ def _orient(v):
 @system_first(systems="map")
 def saddle(system, orbit, *, index=0) -> Saddle:
     """The :class:`Saddle` at point ``index`` of a hyperbolic ``orbit`` of the map ``system``."""
-    if isinstance(orbit, PeriodicOrbit):
-        pts, K, jacs = orbit.points, orbit.period, orbit.map_jacobians
-    elif hasattr(orbit, "jacobian") and hasattr(orbit, "point"):
-        pts, K, jacs = np.atleast_2d(orbit.point), 1, np.array([orbit.jacobian])
-    else:
+    if not isinstance(orbit, PeriodicOrbit):
         raise ParameterError(f"orbit must be a PeriodicOrbit or a FixedPoint, got {type(orbit).__name__}")
+    pts, K, jacs = orbit.points, orbit.period, orbit.map_jacobians
     index = validation.integer("index", index, 0, K - 1)
     M = np.eye(2)
     for j in range(K):
@@ -396,7 +393,7 @@ def manifolds(system, orbit, *, arclength=5.0, kinds=("unstable", "stable"), sig
               integrate_backward=False) -> list:
     """The branches of W^u and W^s of a hyperbolic ``orbit`` (or the orbit of ``period`` found from a
     point) at its point ``index``, each grown to ``arclength`` by :func:`grow_branch`."""
-    if not isinstance(orbit, PeriodicOrbit) and not hasattr(orbit, "jacobian"):
+    if not isinstance(orbit, PeriodicOrbit):
         orbit = _orbit_from_point(system, orbit, period)
     sd = saddle(system, orbit, index=index)
     for k in kinds:

@@ -16,7 +16,7 @@ from explorer.analysis.map_result import MapResult
 from explorer.model import ParameterError, validation
 
 __all__ = ["AreaPreservingMap", "StandardMap", "SymmetricOrbit", "angle_increments", "difference", "grid_minima",
-           "images", "reduce", "returns_increments", "with_value"]
+           "has_angle", "images", "orbit_turns", "reduce", "returns_increments", "with_value"]
 
 
 @runtime_checkable
@@ -72,6 +72,8 @@ class AreaPreservingMap(Protocol):
 
     def symmetric_orbit(self, p, q, *, line=None, guess=None): ...
 
+    def generating_function(self, theta, theta_next): ...
+
 
 def with_value(system, name: str, value):
     """The map with its parameter ``name`` set to ``value``."""
@@ -80,6 +82,11 @@ def with_value(system, name: str, value):
 
 def _periods(system) -> np.ndarray:
     return np.asarray(system.periods, float)
+
+
+def has_angle(system) -> bool:
+    """The map's first coordinate is an angle (``periods[0] > 0``): types of orbits are counted by its lift."""
+    return bool(_periods(system)[0] > 0)
 
 
 def reduce(system, x) -> np.ndarray:
@@ -161,7 +168,7 @@ def returns_increments(system, starts, center, n: int) -> tuple:
     largest gap of their values mod 2 pi where one exceeds WRAP_SAFE ("unresolved" where that gap is
     too small); ``center=None``: the increments of the map's angle coordinate (:attr:`periods`), exact."""
     X = np.atleast_2d(np.asarray(starts, float))
-    if center is None and not _periods(system)[0] > 0:
+    if center is None and not has_angle(system):
         raise ParameterError("center=None needs a map with an angle coordinate (periods); give center=")
     c = None if center is None else np.asarray(center, float)
     if c is not None and (c.shape != (2,) or not np.all(np.isfinite(c))):
@@ -175,6 +182,17 @@ def returns_increments(system, starts, center, n: int) -> tuple:
         else:
             inc[i] = row
     return inc, np.full(len(X), n), status, status == "done"
+
+
+def orbit_turns(system, start, center, n: int) -> float:
+    """Turns per return around ``center`` over the first ``n`` returns from ``start`` (the map's
+    ``lifted_increments``); ParameterError where the lift is not defined."""
+    x, c = np.asarray(start, float), np.asarray(center, float)
+    inc, _, status, _ = system.lifted_increments(x[None, :], c, n)
+    if status[0] != "done" or not np.all(np.isfinite(inc[0])):
+        raise ParameterError(f"the rotation of the orbit from {tuple(x)} around the centre is not defined "
+                             f"({status[0]})")
+    return float(np.sum(inc[0])) / (2.0 * math.pi * n)
 
 
 @njit
@@ -407,12 +425,12 @@ class StandardMap:
             standard_images(X, self.k, n, bool(backward), out)
         return out
 
-    def symmetric_orbit(self, p, q, *, line=math.pi, guess=None) -> SymmetricOrbit:
-        """The symmetric orbit of type ``p``/``q`` through theta = ``line``, Newton on the half orbit from
-        p = ``guess`` (default 2 pi p/q) (docs/greene.md, "The half-orbit (symmetry-line) method")."""
+    def symmetric_orbit(self, p, q, *, line=None, guess=None) -> SymmetricOrbit:
+        """The symmetric orbit of type ``p``/``q`` through theta = ``line`` (default pi), Newton on the half
+        orbit from p = ``guess`` (default 2 pi p/q) (docs/greene.md, "The half-orbit (symmetry-line) method")."""
         P = validation.integer("p", p, 0)
         Q = validation.integer("q", q, MIN_Q)
-        theta0 = validation.real("line", line)
+        theta0 = math.pi if line is None else validation.real("line", line)
         k = self.k
         p0 = _shoot(k, P, Q, theta0, 2.0 * math.pi * P / Q if guess is None else validation.real("guess", guess))
         pts = self.iterate((theta0, p0), Q)

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from explorer.analysis.maps import angle_increments
+from explorer.analysis.maps import angle_increments, has_angle, orbit_turns
 from explorer.analysis.section_map import system_first
 from explorer.integrate.methods import MAP_TOL
 from explorer.model import ParameterError, validation
@@ -72,15 +72,11 @@ class RotationNumber:
                 "iterates": int(self.iterates), "status": self.status}
 
 
-def _has_angle(system) -> bool:
-    return np.asarray(system.periods, float)[0] > 0
-
-
 def _center(system, center, near):
     """The centre the rotation is measured around: ``center``, or on a map with an angle coordinate
     none (its angle itself), else the fixed point Newton finds from ``near``."""
     if center is None:
-        if _has_angle(system):
+        if has_angle(system):
             return None
         from explorer.analysis.fixedpoints import find_fixed_point
 
@@ -110,17 +106,6 @@ def _rotations(system, starts, center, N, threads, conv_tol):
         out.append(RotationNumber(turns - math.ceil(turns - 0.5), bool(diff < conv_tol), diff, 2 * N, tuple(s), c,
                                   turns=turns if lifted[i] else float("nan")))
     return out
-
-
-def orbit_turns(system, start, center, n: int) -> float:
-    """Turns per return around ``center`` over the first ``n`` returns from ``start`` (the map's
-    ``lifted_increments``); ParameterError where the lift is not defined."""
-    x, c = np.asarray(start, float), np.asarray(center, float)
-    inc, _, status, _ = system.lifted_increments(x[None, :], c, n)
-    if status[0] != "done" or not np.all(np.isfinite(inc[0])):
-        raise ParameterError(f"the rotation of the orbit from {tuple(x)} around the centre is not defined "
-                             f"({status[0]})")
-    return float(np.sum(inc[0])) / (2.0 * math.pi * n)
 
 
 @system_first(systems="map", settings=("phi0", "tol"))

@@ -16,6 +16,7 @@ from explorer.analysis.crossings_run import run
 from explorer.analysis.flow_lift import lifted_increments
 from explorer.analysis.map_result import RETURN_TMAX, MapResult
 from explorer.analysis.section_symmetry import grid_seeds, half_turn_partners, half_turn_seeds
+from explorer.analysis.symmetry_lines import half_turn_orbit
 from explorer.integrate.methods import MAP_TOL, MAX_TOL, MIN_TOL
 from explorer.integrate.tangent import return_map_taylor
 from explorer.kernels import STATUS_CANCELLED, STATUS_DONE, STATUS_NAMES
@@ -212,6 +213,16 @@ class SectionMap:
             else:
                 out[i] = y[:2]
         return out
+
+    def generating_function(self, theta, theta_next):
+        """None known: ParameterError (a section of a flow, not a twist map given by its generating function)."""
+        raise ParameterError(f"{self!r} has no generating function: it is the section map of a flow, not a twist "
+                             "map given by F(theta, theta') (docs/greene.md)")
+
+    def symmetric_orbit(self, p, q, *, line=None, guess=None):
+        """The symmetric orbit of period ``q`` through (``guess``, 0) on p2 = 0 of the half phi0 = ``line``
+        (default this map's), shot over its half turns (:func:`explorer.analysis.symmetry_lines.half_turn_orbit`)."""
+        return half_turn_orbit(self, p, q, line, guess)
 
     def value_of(self, name: str) -> float:
         """The value of the parameter ``name`` of :attr:`parameters`."""

@@ -2,18 +2,22 @@
 the half of the section a line lies on (the map's or its :meth:`opposite`'s), G's axes, and the
 symmetric orbits of period Q shot over Q half turns from Fix G (the map's ``half_turns``): an orbit
 from Fix G that is back on a line Fix G after Q half turns is symmetric with period Q (or a divisor),
-G P G = P^-1 (Lamb & Roberts 1998, Physica D 112, 1)."""
+G P G = P^-1 (Lamb & Roberts 1998, Physica D 112, 1); its monodromy M = G B^-1 G A from the first half's
+Jacobians (:func:`section_symmetric_orbit`, a section map's ``symmetric_orbit``)."""
 from __future__ import annotations
 
 import functools
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
-from explorer.model import ParameterError
+from explorer.analysis.greene_core import Residue
+from explorer.analysis.maps import orbit_turns
+from explorer.model import ParameterError, validation
 
-__all__ = ["axes", "half_turn_p2", "line_map", "line_point", "line_root", "line_roots", "same_line",
-           "symmetric_seeds"]
+__all__ = ["SectionSymmetricOrbit", "axes", "half_turn_orbit", "half_turn_p2", "line_map", "line_point", "line_root",
+           "line_roots", "same_line", "section_symmetric_orbit", "symmetric_seeds"]
 
 SECANT_TOL, SECANT_MAX_ITER = 1e-13, 40
 
@@ -127,3 +131,83 @@ def symmetric_seeds(smap, Q: int, n: int) -> np.ndarray:
             except ParameterError:
                 continue
     return np.array(seeds, float).reshape(-1, 2)
+
+
+@dataclass(frozen=True)
+class SectionSymmetricOrbit(Residue):
+    """A symmetric periodic orbit of a section map: ``points`` (Q, 2) on the map's section,
+    ``monodromy`` on the half of its symmetry line ``line`` (the same trace), ``start`` its
+    coordinate t on that line (the point t v, :func:`axes`)."""
+
+    q: int
+    points: np.ndarray
+    monodromy: np.ndarray
+    param_value: float
+    line: float = math.pi
+    start: float = math.nan
+
+    @property
+    def line_start(self) -> float:
+        """t of the orbit's point on its symmetry line."""
+        return float(self.points[0, 0]) if math.isnan(self.start) else self.start
+
+    def rotation(self, smap, centre) -> float:
+        """Turns around ``centre`` per return, in (-1/2, 1/2] (docs/greene.md, "Which orbits")."""
+        turns = orbit_turns(smap, self.points[0], centre, self.q)
+        return turns - math.ceil(turns - 0.5)
+
+
+def section_symmetric_orbit(smap, Q: int, guess, guess2=None, *, param=None, line=None) -> SectionSymmetricOrbit:
+    """The symmetric orbit of period Q through t v on the symmetry line of the half ``line`` (default the
+    map's own), t by the secant from ``guess``, ``guess2``; points and monodromy M = G B^-1 G A from the
+    first half (docs/greene.md, "Greene on the section of Figure 4's scene"; the other half: solved there,
+    "Two symmetry lines")."""
+    other = line_map(smap, line)
+    if other is not smap:
+        orb = section_symmetric_orbit(other, Q, guess, guess2, param=param)
+        x0 = line_point(other, orb.points[0], smap.section_label)
+        pts = smap.iterate(x0, Q - 1) if Q > 1 else x0[None, :]
+        return SectionSymmetricOrbit(Q, np.asarray(pts, float)[:Q].copy(), orb.monodromy, orb.param_value,
+                                     other.section_label, orb.start)
+    G, v, _ = axes(smap)
+    g = float(guess)
+    t = line_root(smap, Q, g, g + 1e-7 * max(1.0, abs(g)) if guess2 is None else float(guess2))
+    n = (Q + 1) // 2
+    pts = np.empty((Q + 1, 2))
+    pts[0] = t * v
+    jacs = []
+    for j in range(n):
+        r = smap(pts[j])
+        jacs.append(r.jacobian)
+        pts[j + 1] = r.point
+    for j in range(n + 1, Q + 1):
+        pts[j] = G @ pts[Q - j]
+    A = np.eye(2)
+    B = np.eye(2)
+    for j, J in enumerate(jacs):
+        A = J @ A
+        if j < Q - n:
+            B = A.copy()
+    if Q % 2 == 0:
+        B = A
+    gaps = np.max(np.abs(pts[1:Q] - pts[0]), axis=1)
+    if gaps.size and gaps.min() <= 1e-9 * max(1.0, float(np.max(np.abs(pts[0])))):
+        raise ParameterError(f"the symmetric orbit from t = {t:.10g} has period {int(np.argmin(gaps)) + 1}, not {Q}")
+    det = B[0, 0] * B[1, 1] - B[0, 1] * B[1, 0]
+    if not (np.all(np.isfinite(A)) and math.isfinite(det) and det != 0.0):
+        raise ParameterError(f"the half orbit's Jacobian of the orbit of period {Q} from t = {t:.10g} is singular "
+                             f"or not finite")
+    B_inv = np.array([[B[1, 1], -B[0, 1]], [-B[1, 0], B[0, 0]]]) / det
+    M = G @ B_inv @ G @ A       # DP^Q = DP^(Q-n)(x_n) A with P^(Q-n) = G P^-(Q-n) G
+    value = smap.parameter_value if param is None else smap.value_of(param)
+    return SectionSymmetricOrbit(Q, pts[:Q].copy(), M, value, smap.section_label, float(t))
+
+
+def half_turn_orbit(smap, p, q, line=None, guess=None) -> SectionSymmetricOrbit:
+    """A section map's ``symmetric_orbit``: :func:`section_symmetric_orbit` of period ``q`` from the point
+    ``guess`` v of the symmetry line of the half ``line`` (default the map's own); ``guess`` is required."""
+    if guess is None:
+        raise ParameterError("symmetric_orbit on a section map needs guess=t, the point t v of the symmetry "
+                             "line (p1 of p2 = 0 on Chaplygin's section) near the orbit")
+    validation.integer("p", p, 0)
+    return section_symmetric_orbit(smap, validation.integer("q", q, 1), validation.real("guess", guess), line=line)

@@ -40,7 +40,7 @@ import numpy as np
 
 from explorer.analysis.map_result import RETURN_TMAX, MapResult
 from explorer.analysis.maps import grid_minima, returns_increments
-from explorer.analysis.symmetry_lines import symmetric_seeds
+from explorer.analysis.symmetry_lines import half_turn_orbit, symmetric_seeds
 from explorer.analysis.system_sections import is_system, linear_section, system_crossings
 from explorer.integrate.methods import MAP_TOL, MAX_TOL, MIN_TOL
 from explorer.kernels import STATUS_NAMES
@@ -500,6 +500,17 @@ class SystemSectionMap:
             Y = np.where(reached[:, None], data[:, 0, 1:1 + self.system.dimension], np.nan)
         out[ok] = Y[:, [ia, ib]]
         return out
+
+    def generating_function(self, theta, theta_next):
+        """None known: ParameterError (a section of a flow, not a twist map given by its generating function)."""
+        raise ParameterError(f"{self!r} has no generating function: it is the section map of a flow, not a twist "
+                             "map given by F(theta, theta') (docs/greene.md)")
+
+    def symmetric_orbit(self, p, q, *, line=None, guess=None):
+        """The symmetric orbit of period ``q`` through ``guess`` v on the fixed line of the linear reversor, on
+        the half ``line`` (a direction, default this map's), shot over its half turns
+        (:func:`explorer.analysis.symmetry_lines.half_turn_orbit`)."""
+        return half_turn_orbit(self, p, q, line, guess)
 
     # ------------------------------------------------------------------ parameters
     @property
