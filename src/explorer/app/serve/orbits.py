@@ -210,9 +210,9 @@ class Worker:
     indicator is applied on the session's loop by that task, and a :meth:`cancel` ends it."""
 
     def __init__(self, session, on_block: Callable[[int, np.ndarray, int, str], None],
-                 on_error: Callable[[int, BaseException], None] | None = None,
+                 on_error: Callable[[int, BaseException], None] = lambda _i, _e: None,
                  on_indicators: Callable[[int, float, float], None] | None = None,
-                 on_notice: Callable[[int, str], None] | None = None):
+                 on_notice: Callable[[int, str], None] = lambda _i, _t: None):
         self.session = session
         self._on_block, self._on_error = on_block, on_error
         self._on_indicators, self._on_notice = on_indicators, on_notice
@@ -248,24 +248,24 @@ class Worker:
         self._paused = [r for r in self._paused if r.ident != ident]
         self._ended = [r for r in self._ended if r.ident != ident]
 
-    def recount(self, settings, cut: Callable[[int, int], np.ndarray], clear: Callable[[int], None]) -> dict:
+    def recount(self, settings, cut: Callable[[int, int], np.ndarray]) -> dict:
         """Every orbit at ``settings``, which differ only in the crossings per click K: an orbit past K
         is cut to K (``cut(ident, K)`` takes its rows past K off the page and returns them, kept in
         :attr:`OrbitRun.ahead`); one short of K gets its kept rows, then continues exactly where it
-        stopped, or reruns from its start (``clear(ident)`` first) when its stop depends on K (its time
+        stopped, or reruns from its start (``cut(ident, 0)`` first) when its stop depends on K (its time
         budget, 100 K).  A block in progress is dropped.  Returns {ident: (crossings, status)}."""
         out: dict = {}
         groups = (self._runs, self._paused, self._ended)
         self._runs, self._paused, self._ended = [], [], []
         for paused, runs in zip((False, True, False), groups):
             for run in runs:
-                run = self._recount(run, settings, cut, clear)
+                run = self._recount(run, settings, cut)
                 (self._ended if run.status != "running" else self._paused if paused else self._runs).append(run)
                 out[run.ident] = (run.done, run.status)
         self._ensure_running()
         return out
 
-    def _recount(self, run: OrbitRun, settings, cut, clear) -> OrbitRun:
+    def _recount(self, run: OrbitRun, settings, cut) -> OrbitRun:
         k, run.settings = settings.crossings, settings
         if run.done > k:
             if not len(run.ahead):
@@ -275,7 +275,7 @@ class Worker:
             return run
         end = run.after if len(run.ahead) else run.status      # the status at the end of its rows
         if end == STATUS_NAMES[STATUS_TMAX] and run.done + len(run.ahead) < k:   # (its time budget, 100 K, grows)
-            clear(run.ident)
+            cut(run.ident, 0)
             return settings.new_run(run.ident, run.p1, run.p2)
         rows, run.ahead = run.ahead[:k - run.done], run.ahead[k - run.done:]
         run.done += len(rows)
@@ -309,7 +309,7 @@ class Worker:
 
     def _estimate(self, run: OrbitRun) -> str | None:
         """(In the executor) the notice of an orbit expected to take more than STEP_BUDGET steps."""
-        if run.finished or self._on_notice is None:
+        if run.finished:
             return None
         steps = step_estimate(run.settings, run.y0)
         if steps is None or steps <= STEP_BUDGET:
@@ -347,14 +347,12 @@ class Worker:
             except Exception as exc:  # noqa: BLE001 - reported in the page; the server keeps serving
                 if self._queued(run):
                     self.remove(run.ident)
-                    if self._on_error is not None:
-                        await session.apply(partial(self._on_error, run.ident, exc))
+                    await session.apply(partial(self._on_error, run.ident, exc))
                 continue
             await session.apply(partial(self._hand_out, run, work, rows, notice))
             if not self._queued(run):       # removed while its block was computed
                 continue
-            if run.wants_indicators and (run.finished or run.wall >= INDICATOR_AFTER) and \
-                    self._on_indicators is not None:
+            if self._on_indicators and run.wants_indicators and (run.finished or run.wall >= INDICATOR_AFTER):
                 run.wants_indicators = False      # once the orbit is finished (or has run INDICATOR_AFTER)
                 try:
                     megno, mlce = await session.run(orbit_indicators, run.settings, run.p1, run.p2)
@@ -370,7 +368,7 @@ class Worker:
         if run.finished:
             self.remove(run.ident)
             self._ended.append(run)
-        if notice is not None and self._on_notice is not None:
+        if notice is not None:
             self._on_notice(run.ident, notice)
         if len(rows) or run.finished:   # (a block cut at its steps before a crossing: nothing to show)
             self._on_block(run.ident, rows, run.done, run.status)

@@ -1,10 +1,8 @@
-"""The orbits on the page (docs/commands/serve.md, "How it works"): the starts, their crossings
-from the session's :class:`~explorer.app.serve.orbits.Worker`, the live layer of a click's first
-crossings, the status line and the orbits' colours.  By Bokeh model name: ``crossings`` (the
-rows the browser draws; none past density.THRESHOLD), ``glyphs`` (the filter of the orbits drawn as
-dots), ``live``, ``starts`` and ``status``.  A hidden orbit keeps computing, its rows in
-:attr:`OrbitsLayer.hidden` only.
-"""
+"""The orbits on the page (docs/commands/serve.md, "How it works"): the starts, their crossings from the
+session's :class:`~explorer.app.serve.orbits.Worker`, the live layer of a click's first crossings, the
+status line and the colours.  Bokeh model names: ``crossings`` (the rows the browser draws; none past
+density.THRESHOLD), ``glyphs``, ``live``, ``starts``, ``status``.  A hidden orbit keeps computing, its
+rows in :attr:`OrbitsLayer.hidden` only."""
 from __future__ import annotations
 
 import math
@@ -145,6 +143,10 @@ class OrbitsLayer:
         self._unmarked = []
         return old
 
+    def has(self, ident) -> bool:
+        """Orbit ``ident`` is on the page (hidden or not)."""
+        return any(i == ident for i, *_ in self.starts)
+
     def remove(self, ident: int) -> None:
         """Stop orbit ``ident`` (running or paused) and take it off the page."""
         self.starts = [s for s in self.starts if s[0] != ident]
@@ -152,16 +154,23 @@ class OrbitsLayer:
         self.indicators.pop(ident, None)
         self.progress.pop(ident, None)
         if self.hidden.pop(ident, None) is None:
-            self._take_rows(ident)
+            self._take(ident)
+            self.show_all()
             self._unmark(ident)
 
-    def _take_rows(self, ident: int) -> dict:
-        """Orbit ``ident``'s rows off ``crossings`` (and the browser's sources); returns them."""
-        orbit = np.asarray(self.crossings.data["orbit"])
-        mine = {k: np.asarray(v)[orbit == ident] for k, v in self.crossings.data.items()}
-        self.crossings.data = {k: np.asarray(v)[orbit != ident] for k, v in self.crossings.data.items()}
-        self.show_all()
-        return mine
+    def _take(self, ident: int, keep: int = 0) -> dict:
+        """Orbit ``ident``'s rows past its first ``keep`` off ``crossings`` (or :attr:`hidden`); returns them."""
+        data = self.hidden.get(ident, self.crossings.data)
+        mine = np.asarray(data["orbit"]) == ident
+        mine[np.flatnonzero(mine)[:keep]] = False
+        taken = {k: np.asarray(v)[mine] for k, v in data.items()}
+        if mine.any():
+            rest = {k: np.asarray(v)[~mine] for k, v in data.items()}
+            if ident in self.hidden:
+                self.hidden[ident] = rest
+            else:
+                self.crossings.data = rest
+        return taken
 
     def _unmark(self, ident: int) -> None:
         keep = [o != ident for o in self.start_source.data["orbit"]]
@@ -169,9 +178,10 @@ class OrbitsLayer:
 
     def hide(self, ident: int) -> None:
         """Take orbit ``ident``'s crossings and start off the page, into :attr:`hidden`."""
-        if ident in self.hidden or not any(i == ident for i, *_ in self.starts):
+        if ident in self.hidden or not self.has(ident):
             return
-        self.hidden[ident] = self._take_rows(ident)
+        self.hidden[ident] = self._take(ident)
+        self.show_all()
         self._unmark(ident)
         self._unmarked = [m for m in self._unmarked if m[0] != ident]
 
@@ -189,44 +199,16 @@ class OrbitsLayer:
     def recount(self, settings) -> None:
         """New ``settings`` that differ only in the crossings per click K (Worker.recount): each orbit
         past K is cut to its first K rows, each one short of K continues exactly, none reruns."""
-        now = self.worker.recount(settings, self._cut, self._clear)
-        self._pending = [(i, rows, done, now[i][1] if i in now and done == now[i][0] else "running")
-                         for i, rows, done, _status in self._pending]
+        self._apply(self._take_pending())      # (the rows the worker counted, on the page before the cut)
+        now = self.worker.recount(settings, self._cut)
         self.progress.update({i: now[i] for i in self.progress if i in now})
         self.show_all()
         self.update_status(force_density=True)
 
     def _cut(self, ident: int, keep: int) -> np.ndarray:
-        """Orbit ``ident``'s rows past its first ``keep`` off the page (its queued blocks too); returns them."""
-        data = self.hidden.get(ident, self.crossings.data)
-        drop = np.flatnonzero(np.asarray(data["orbit"]) == ident)[keep:]
-        cut = [np.column_stack([np.asarray(data[k])[drop] for k in ROW_COLUMNS])]
-        if drop.size:
-            rest = np.ones(len(data["orbit"]), bool)
-            rest[drop] = False
-            data = {k: np.asarray(v)[rest] for k, v in data.items()}
-            if ident in self.hidden:
-                self.hidden[ident] = data
-            else:
-                self.crossings.data = data
-        pending = []
-        for i, rows, done, status in self._pending:
-            if i == ident and done > keep:        # (done: the orbit's crossings up to the block's end)
-                n = max(0, len(rows) - (done - keep))
-                cut.append(rows[n:])
-                rows, done, status = rows[:n], keep, "done"
-            pending.append((i, rows, done, status))
-        self._pending = pending
-        return np.concatenate(cut)
-
-    def _clear(self, ident: int) -> None:
-        """Orbit ``ident``'s rows off the page, its start kept (it runs again from there)."""
-        if ident in self.hidden:
-            self.hidden[ident] = {k: v[:0] for k, v in self.hidden[ident].items()}
-        else:
-            self._cut(ident, 0)
-        self._pending = [b for b in self._pending if b[0] != ident]
-        self.progress[ident] = (0, "running")
+        """Orbit ``ident``'s rows past its first ``keep`` off the page; returns them (n, 5)."""
+        rows = self._take(ident, keep)
+        return np.column_stack([rows[k] for k in ROW_COLUMNS])
 
     def state(self, ident: int) -> str:
         """running, paused, done, or why the orbit stopped."""
@@ -251,36 +233,45 @@ class OrbitsLayer:
         """The queued blocks onto the page (docs/architecture.md, "Many crossings in the browser"): a click's first
         rows go alone to ``live`` (the overlay canvas), with its cross and the link; the status line
         and the density image wait for the flush FLUSH_SECONDS later, which settles them."""
-        blocks, self._pending = self._pending, []
+        blocks = self._take_pending()
+        first = {b[0] for b in blocks if 0 < len(b[1]) == b[2]}   # orbits at their first block: alone
+        if first:
+            self._pending[:0] = [b for b in blocks if b[0] not in first]
+            blocks = [b for b in blocks if b[0] in first]
         now = self._flushed_at = time.monotonic()
-        live = {i: c for i, _a, _b, c in self.starts}
-        blocks = [self._keep_hidden(b, live) for b in blocks if b[0] in live]
-        first_rows = {b[0] for b in blocks if 0 < len(b[1]) == b[2]}   # orbits at their first block
-        if first_rows and any(b[0] not in first_rows for b in blocks):
-            self._pending[:0] = [b for b in blocks if b[0] not in first_rows]
-            blocks = [b for b in blocks if b[0] in first_rows]
-        full = [b for b in blocks if len(b[1])]
         held = len(self.live.data["orbit"])
-        to_live = bool(first_rows) or (0 < held and now < self._settle_at - SETTLE_SLACK
-                                       and held + sum(len(b[1]) for b in full) <= LIVE_MAX_ROWS)
-        if full:
-            new = _columns(full, live, self.indicators)
-            self.crossings.stream(new)
-            if to_live:
-                self.live.stream({k: v.tolist() for k, v in new.items()})   # drawn at once, alone
+        to_live = bool(first) or (0 < held and now < self._settle_at - SETTLE_SLACK
+                                  and held + sum(len(b[1]) for b in blocks) <= LIVE_MAX_ROWS)
+        new = self._apply(blocks)
+        if new and to_live:
+            self.live.stream({k: v.tolist() for k, v in new.items()})   # drawn at once, alone
         moved = False if to_live else self._settle()
         self._mark_starts()
-        for ident, _rows, done, status in blocks:
-            self.progress[ident] = (done, status)
-            if status not in ("running", "done"):
-                self.host.say(f"orbit {ident} stopped after {done} crossings: {status}")
-        if first_rows:
+        if first:
             self._settle_at = now + FLUSH_SECONDS if self.session.doc is not None else -math.inf
             self.host.push_url()
         elif not to_live:
             self.update_status(force_density=self.host.density_image.dense and moved)
         if self._pending or len(self.live.data["orbit"]):
             self.flush_timer.at(max(self._settle_at, now + (FLUSH_SECONDS if self._pending else 0.0)))
+
+    def _take_pending(self) -> list:
+        """The queued blocks of the orbits on the page (a hidden orbit's rows already in :attr:`hidden`)."""
+        blocks, self._pending = self._pending, []
+        colour = {i: c for i, _a, _b, c in self.starts}
+        return [self._keep_hidden(b, colour) for b in blocks if b[0] in colour]
+
+    def _apply(self, blocks) -> dict:
+        """The blocks' rows streamed to ``crossings`` (returned as columns, {} if none), their progress."""
+        full = [b for b in blocks if len(b[1])]
+        new = _columns(full, {i: c for i, _a, _b, c in self.starts}, self.indicators) if full else {}
+        if new:
+            self.crossings.stream(new)
+        for ident, _rows, done, status in blocks:
+            self.progress[ident] = (done, status)
+            if status not in ("running", "done"):
+                self.host.say(f"orbit {ident} stopped after {done} crossings: {status}")
+        return new
 
     def _keep_hidden(self, block, colour: dict):
         """A hidden orbit's block: its rows go to :attr:`hidden`, the block goes on without them."""
@@ -342,7 +333,7 @@ class OrbitsLayer:
 
     # ------------------------------------------------------------ chaos indicators and colours
     def _on_indicators(self, ident, megno, mlce):
-        if not any(i == ident for i, *_ in self.starts):
+        if not self.has(ident):
             return
         self.indicators[ident] = (megno, mlce)
         if ident in self.hidden:
