@@ -68,6 +68,13 @@ def test_the_fixed_points_on_the_symmetry_line_are_periodic_orbits_that_close_un
     assert np.max(np.abs(orb.points[0] - elliptic.point)) <= 1e-10
 
 
+def test_a_fixed_point_prints_the_system_its_parameters_the_energy_and_the_section(elliptic):
+    text = repr(elliptic)
+    for part in ("henon_heiles(lam=1.0)", f"energy={E!r}", "section=x", "direction=+1", "coords=(y, py)"):
+        assert part in text and part in str(elliptic)
+    assert "params=" not in text and "h=nan" not in text and "phi0=" not in text     # Chaplygin's fields
+
+
 def test_a_period_2_orbit_is_found_by_newton_and_returns_to_itself(smap, elliptic):
     # period 2 of the elliptic point's island chain is not known here: a period-1 start gives the
     # period-1 orbit again (reduced to its minimal period), the unreduced one has the squared trace

@@ -17,7 +17,7 @@ __all__ = ["Branch", "FixedPoint", "analytic_eigenvalues_solution_I", "continue_
            "manifold", "separatrices"]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class FixedPoint(PeriodicOrbit):
     """The :class:`~explorer.analysis.periodic.PeriodicOrbit` of period 1, with ``point`` and ``return_time``."""
 

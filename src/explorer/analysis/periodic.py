@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -68,6 +68,14 @@ class PeriodicOrbit:
     degenerate: bool = False
     #: the map, when ``params``, ``h``, ``phi0`` do not name it
     system: object = field(default=None, repr=False, compare=False)
+
+    def __repr__(self):
+        """The fields; the map by its own repr where ``params``, ``h`` and ``phi0`` do not name it."""
+        skip = () if self.system is None else ("params", "h", "phi0")
+        body = [f"{f.name}={getattr(self, f.name)!r}" for f in fields(self) if f.repr and f.name not in skip]
+        if self.system is not None:
+            body.append(f"system={self.system!r}")
+        return f"{type(self).__name__}({', '.join(body)})"
 
     @property
     def residue(self) -> float:

@@ -214,8 +214,11 @@ class SystemSectionMap:
         self._lift = _solutions(self.system, self.section.expr, self.coords, self.solve, self.fixed)
 
     def __repr__(self):
+        """What names the map: the system with its parameter values, the energy, the section and its
+        direction, coords and solve."""
         a, b = self.coords
-        return (f"SectionMap({self.system.name}, {self.energy_value!r}, section={self.section.expr}, "
+        pars = ", ".join(f"{p.name}={v!r}" for p, v in self.system.parameters.items())
+        return (f"SectionMap({self.system.name}({pars}), energy={self.energy_value!r}, section={self.section.expr}, "
                 f"direction={self.direction:+d}, coords=({a.name}, {b.name}), solve={self.solve.name})")
 
     # ------------------------------------------------------------------ points and states
