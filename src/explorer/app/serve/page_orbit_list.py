@@ -1,7 +1,6 @@
-"""The page's orbit list and the picked orbit (docs/commands/serve.md): a table of every orbit, a
-chooser, *hide*/*show* and *delete*, the link's ``orbits`` and ``hidden`` (one Div's table: up to 256
-orbits); the picked orbit's readout, its mLCE, MEGNO and rotation number (a task under a budget), or
-near a hyperbolic mark that mark's manifolds."""
+"""The page's orbit list and the picked orbit (docs/commands/serve.md, "Orbit list"): a table of every
+orbit, a chooser, *hide*/*show*, *delete*, the link's ``orbits`` and ``hidden``; the picked orbit's
+readout (mLCE, MEGNO, rotation number), or near a hyperbolic mark that mark's manifolds."""
 from __future__ import annotations
 
 import html
@@ -80,7 +79,7 @@ class OrbitList:
     # ------------------------------------------------------------ actions
     def choose(self, ident) -> None:
         """Select orbit ``ident`` (0 or None: none), as a pick of it does: its readout and highlight."""
-        if ident and any(i == ident for i, *_ in self.orbits.starts):
+        if ident and self.orbits.has(ident):
             self.select(int(ident))
         elif self.picked is not None:
             self.unpick()
@@ -117,7 +116,7 @@ class OrbitList:
 
     def delete(self, ident: int | None) -> None:
         """Stop orbit ``ident`` (running or paused) and remove it from the page and the session."""
-        if ident is None or not any(i == ident for i, *_ in self.orbits.starts):
+        if ident is None or not self.orbits.has(ident):
             return
         self.forget(ident)
         self.orbits.remove(ident)
@@ -144,21 +143,15 @@ class OrbitList:
                 "hidden": settings_mod.format_hidden(k for k, (i, *_s) in enumerate(starts, 1) if i in hidden)}
 
     # ------------------------------------------------------------ what is shown
-    def rows(self) -> list:
-        """(id, colour, p1, p2, crossings so far, state, hidden) of every orbit, in click order."""
-        o = self.orbits
-        return [(i, COLORS[c], p1, p2, o.progress.get(i, (0,))[0], o.state(i), i in o.hidden)
-                for i, p1, p2, c in o.starts]
-
     def refresh(self) -> None:
         """The table, the chooser and the highlight anew (after a status update or a selection)."""
-        rows, picked = self.rows(), self.picked
-        idents = tuple(r[0] for r in rows)
+        starts, picked = self.orbits.starts, self.picked
+        idents = tuple(i for i, *_ in starts)
         self._quiet = True
         try:
             if idents != self._idents:
                 self._idents = idents
-                self.choice.options = {NONE_LABEL: 0} | {f"{i}: ({p1:.4g}, {p2:.4g})": i for i, _c, p1, p2, *_ in rows}
+                self.choice.options = {NONE_LABEL: 0} | {f"{i}: ({p1:.4g}, {p2:.4g})": i for i, p1, p2, _c in starts}
             value = picked if picked in idents else 0
             if self.choice.value != value:
                 self.choice.value = value
@@ -169,7 +162,7 @@ class OrbitList:
         self.hide_button.disabled = self.delete_button.disabled = picked is None
         if self.filter is not None and self.filter.args.get("orbit") != (picked or 0):
             self.filter.args = {"orbit": picked or 0}
-        text = _table(rows, picked)
+        text = _table(self.orbits, picked)
         if self.table.text != text:
             self.table.text = text
 
@@ -237,7 +230,7 @@ class OrbitList:
         await self.session.apply(lambda: self._keep(ident, r))
 
     def _keep(self, ident, r):
-        if not any(i == ident for i, *_ in self.orbits.starts):
+        if not self.orbits.has(ident):
             return                           # the orbit went meanwhile
         self.readouts[ident] = r
         self._show(ident, r)
@@ -262,18 +255,20 @@ class OrbitList:
         self.text.text = text
 
 
-def _table(rows, picked) -> str:
-    """The list as an HTML table (numbers and fixed words only, escaped all the same)."""
-    if not rows:
+def _table(orbits, picked) -> str:
+    """The list of ``orbits`` (an OrbitsLayer) as an HTML table (numbers and fixed words, escaped all the same)."""
+    if not orbits.starts:
         return ""
     head = "".join(f"<th style='text-align:left;padding:0 3px' title='{tip}'>{h}</th>" for h, tip in COLUMNS)
     body = []
-    for i, colour, p1, p2, n, state, hidden in rows:
+    for i, p1, p2, c in orbits.starts:
+        hidden = i in orbits.hidden
         style = "font-weight:bold;background:" + SELECTED_BACKGROUND if i == picked else ""
         if hidden:
             style += ";color:#808080"
-        cells = (f"<span style='display:inline-block;width:10px;height:10px;background:{colour}'></span>",
-                 str(i), f"({p1:.6g}, {p2:.6g})", str(n), html.escape(state) + (", hidden" if hidden else ""))
+        cells = (f"<span style='display:inline-block;width:10px;height:10px;background:{COLORS[c]}'></span>",
+                 str(i), f"({p1:.6g}, {p2:.6g})", str(orbits.progress.get(i, (0,))[0]),
+                 html.escape(orbits.state(i)) + (", hidden" if hidden else ""))
         body.append(f"<tr data-orbit='{i}' style='{style}'>"
                     + "".join(f"<td style='padding:0 3px'>{c}</td>" for c in cells) + "</tr>")
     return f"<table style='border-collapse:collapse;font-size:12px'><tr>{head}</tr>{''.join(body)}</table>"
