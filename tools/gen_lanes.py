@@ -83,20 +83,36 @@ def _module(source, doc, constants, recurrences):
                          recurrences=text)
 
 
+#: what follows the generated module of Chaplygin's System in ``_lanes_generated.py``
+CHAPLYGIN_TAIL = """
+
+# ---- the engine's names: its state's rows, and its H (explorer.model.equations.energy, docs/model.md R3)
+# in the rows' H - H0, of which explorer.integrate.drivers.start_carry takes H0 for every method
+from explorer.model.equations import energy  # noqa: E402, F811
+
+#: state variables (p1, p2, M, g1, g2): the rows of X
+NVAR = DIM
+"""
+
+
 def generate():
-    """``_lanes_generated.py``: the orbit's recurrence, scalar and on lanes."""
+    """``_lanes_generated.py``: the generated module of ``chaplygin.system()``
+    (:func:`explorer.integrate.codegen.source`: the recurrence, scalar and on lanes, and the crossing
+    drivers of every System, :mod:`~explorer.integrate.codegen_crossings` and
+    :mod:`~explorer.integrate.codegen_lanes`), the model's H in its rows."""
+    from explorer.integrate import codegen_crossings, codegen_lanes
+
     system = chaplygin.system()
-    what = "The Taylor coefficients of R3 from X[:, 0]"
-    r = codegen.recurrence(system, "taylor_coefficients", doc=_doc(what, "0..4", "N_WORK"),
-                           lanes_doc=_lanes_doc("taylor_coefficients", "0..4", "N_WORK"))
-    constants = (f"#: state variables (p1, p2, M, g1, g2): the rows of X\nNVAR = {system.dimension}\n"
-                 f"#: rows of the work array\nN_WORK = {r.n_work}\n"
-                 "#: flat strides of one order in the lane arrays X[k, i, l] and W[k, r, l]\n"
-                 "XS = NVAR * LANES\nWS = max(N_WORK, 1) * LANES")
-    return _module("explorer.model.chaplygin.system()",
-                   "The Taylor recurrence of Chaplygin's R3 (docs/model.md), generated: the scalar form for the\n"
-                   "scalar drivers (:mod:`explorer.integrate._systems_generated`), the lane form for\n"
-                   ":mod:`explorer.integrate.lanes`.", constants, [r])
+    text = codegen.source(system)
+    for template in codegen.TEMPLATES:   # only the crossing drivers: the engine has its own indicators
+        if template not in (codegen_crossings, codegen_lanes):
+            part = template.render(system)
+            assert text.count(part) == 1, template.__name__
+            text = text.replace(part, "")
+    head = ("# Written to this file by tools/gen_lanes.py from explorer.model.chaplygin.system().\n"
+            "# Regenerate:  python tools/gen_lanes.py     (check: --check)\n"
+            "# ruff: noqa  (the text of every System's module: its imports repeat, template by template)\n")
+    return head + text + CHAPLYGIN_TAIL
 
 
 def generate_tangent():
@@ -309,7 +325,11 @@ def operation_counts(kernel, order, tangent=False):
 
     import numpy as np
 
-    text = generate_tangent() if tangent else generate()
+    if tangent:
+        text = generate_tangent()
+    else:
+        r = codegen.recurrence(chaplygin.system())
+        text = f"NVAR = 5\nN_WORK = {r.n_work}\nXS = NVAR * LANES\nWS = max(N_WORK, 1) * LANES\n{r.lanes}"
     text = re.sub(r"^from explorer\..*$", "", text, flags=re.M)
     counts = dict.fromkeys(("vadd", "vsub", "vmul", "vneg", "vdiv"), 0)
 

@@ -1,7 +1,8 @@
-"""The lane (SIMD) Taylor driver, the one Taylor crossing loop, is bit for bit the scalar oracle
-(tests/integrate/taylor_oracle.py): kernels, step size, whole batches (parameter sets, orbit
-counts not multiple of LANES, very different orbit lengths and stop reasons, threads, orbit
-order); the generated recurrence file is up to date."""
+"""The engine's Taylor crossings, every System's lane driver (explorer.integrate.codegen_lanes rendered
+into _lanes_generated for chaplygin.system(), run by explorer.integrate.lanes), are bit for bit the
+scalar oracle (tests/integrate/taylor_oracle.py): the lane kernels, step size, whole batches (parameter
+sets, orbit counts not multiple of LANES, very different orbit lengths and stop reasons, threads, orbit
+order); the generated file is up to date."""
 import math
 import subprocess
 import sys
@@ -18,9 +19,8 @@ from explorer.analysis import sections
 from explorer.integrate import _lanes_generated as G
 from explorer.integrate import drivers, lanes, simd
 from explorer.integrate import systems as sy
-from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_TMAX, clock, events
+from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_TMAX
 from explorer.kernels import taylor as tk
-from explorer.model import equations
 
 ROOT = Path(__file__).resolve().parents[2]
 L = simd.LANES
@@ -63,15 +63,6 @@ def test_kernels_match_scalar_bitwise(name, order):
     lanes.evaluate_lanes(X, order, h, out, 0)
     e_p, e_q = 1.0 / order, 1.0 / (order - 1)
     norms = np.empty((lanes.N_NORMS, W))
-    vary = np.empty(W)
-    lanes.variation_lanes(X, order, h, 0.3, 0.8, vary)
-    with np.errstate(all="ignore"):
-        for l in range(W):
-            c = X[1:, 3, l] * 0.3 - X[1:, 4, l] * 0.8
-            want = 0.0
-            for k in range(order - 1, -1, -1):   # the Horner sum of variation_lanes, from k = order down
-                want = (want + abs(c[k])) * h[l]
-            assert vary[l] == want or (np.isnan(vary[l]) and np.isnan(want))
     with np.errstate(all="ignore"):
         lanes.step_norms_lanes(X, order, e_p, e_q, norms)
         for l in range(W):
@@ -239,76 +230,6 @@ def test_vector_step_takes_lane_steps_double_and_leaves_the_rare_lanes_to_it():
     assert {(True, -1), (False, -1), (False, STATUS_NONFINITE), (False, lanes.STATUS_STEP_UNDERFLOW)} <= seen
 
 
-def test_vector_step_end_is_the_scalar_one_and_leaves_roots_and_stops_to_the_scalar_loop():
-    """end_steps_lanes: a lane holding an orbit is ended in vector form exactly
-    when the scalar loop would have nothing to do but the bookkeeping (a step taken in vector
-    form, not the last, a finite new state, no root possible - by the variation bound, or by a
-    monotone polynomial without a sign change of the direction (isolate_crossings' two tests) -
-    no stop by the clock, the step budget or the crossings wanted), and then its new state, sin(phi - phi0),
-    time, compensation and step count are the scalar loop's doubles; every other lane that holds
-    an orbit is in the returned bits, untouched."""
-    W = L
-    rng = np.random.default_rng(11)
-    order = 6
-    cphi, sphi = math.cos(2.0), math.sin(2.0)
-    tmax, max_steps = 100.0, 1000
-    seen = set()
-    for _ in range(60):
-        X = np.zeros((order + 1, 5, W))
-        X[0] = random_states(PARAM_SETS["figure4_mu0.5"], W, seed=int(rng.integers(1 << 30))).T
-        X[1:] = rng.normal(size=(order, 5, W)) * rng.choice([0.1, 1.0, 10.0], (order, 1, W))
-        direction = int(rng.choice([-1, 0, 1]))
-        ynew = X[0] + rng.normal(scale=0.05, size=(5, W))
-        ynew[rng.integers(0, 5), rng.integers(0, W)] = rng.choice([np.nan, np.inf])
-        g0 = np.abs(X[0, 3] * cphi - X[0, 4] * sphi)
-        vary = g0 * rng.choice([0.5, 1.0, 1.0 - 1e-15, 1.0 - 1e-13, 2.0], W)   # near the slack too
-        hv = rng.uniform(0.01, 0.2, W)
-        L_t = rng.choice([1.0, 99.9, 100.0 - 1e-15], W, p=[0.8, 0.1, 0.1])
-        L_tc = rng.normal(scale=1e-17, size=W)
-        L_gprev = rng.normal(size=W) * rng.choice([0.0, 1.0], W, p=[0.1, 0.9])
-        L_steps = rng.choice([3.0, 998.0, 999.0], W, p=[0.8, 0.1, 0.1])
-        L_left = rng.choice([0.0, 1.0, 5.0], W, p=[0.1, 0.45, 0.45])
-        L_on = rng.choice([0.0, 1.0], W, p=[0.1, 0.9])
-        L_fast = rng.choice([0.0, 1.0], W, p=[0.1, 0.9]) * L_on    # step_lanes: idle lanes are not fast
-        L_last = rng.choice([0.0, 1.0], W, p=[0.9, 0.1])
-        before = [a.copy() for a in (X, L_t, L_tc, L_gprev, L_steps)]
-        bits = 0
-        for c in range(0, W, L):
-            with np.errstate(all="ignore"):
-                bits |= lanes.end_steps_lanes(X, order, ynew, vary, hv, L_t, L_tc, L_gprev, L_steps, L_left, L_on,
-                                              L_fast, L_last, cphi, sphi, direction, tmax, max_steps, c, W) << c
-        for l in range(W):
-            y = ynew[:, l].copy()
-            t, tc = clock.advance_time(before[1][l], before[2][l], hv[l], False, tmax)
-            s = 0.0
-            for i in range(5):
-                s += y[i]
-            with np.errstate(invalid="ignore"):
-                finite = s - s == 0.0
-            gc = before[0][:, 3, l] * cphi - before[0][:, 4, l] * sphi
-            excluded = events.excluded_by_variation(gc[0], vary[l])
-            monotone = events.monotone_within(gc, order, hv[l])
-            sign = events.sign_change(before[3][l], equations.section_g(y, cphi, sphi), direction)
-            seen.add((excluded, monotone, sign))
-            excluded = excluded or (monotone and not sign)
-            vector = (L_fast[l] == 1.0 and L_last[l] == 0.0 and finite and excluded
-                      and not t >= tmax and not before[4][l] + 1 >= max_steps and L_left[l] > 0.0)
-            seen.add((vector, excluded))
-            if L_on[l] == 1.0:
-                assert bool(bits >> l & 1) == (not vector)
-            else:
-                assert not bits >> l & 1
-            if vector:
-                assert np.array_equal(X[0, :, l], y) and L_gprev[l] == equations.section_g(y, cphi, sphi)
-                assert (L_t[l], L_tc[l], L_steps[l]) == (t, tc, before[4][l] + 1)
-            else:
-                assert np.array_equal(X[:, :, l], before[0][:, :, l])
-                assert (L_t[l], L_tc[l], L_gprev[l], L_steps[l]) == tuple(a[l] for a in before[1:])
-    # both ends, and every answer of the three root tests, seen
-    assert {(True, True), (False, True), (False, False)} <= seen
-    assert {(e, m, c) for e in (False, True) for m in (False, True) for c in (False, True)} <= seen
-
-
 # ---------------------------------------------------------------- whole batches
 def _run(fn, Y0, P, K, *, order=15, tmax=None, max_steps=10**9, phi0=math.pi, direction=1, **kw):
     n = Y0.shape[0]
@@ -355,8 +276,7 @@ def test_batch_bitwise_identical(name, n):
     Y0 = _mixed_states(prm, n, seed=n)
     K = 12
     ref = _run(run_taylor_batch, Y0, P, K)
-    for max_lanes in (L, 3):
-        _assert_identical(ref, _run(lanes.run_taylor_lanes_batch, Y0, P, K, max_lanes=max_lanes))
+    _assert_identical(ref, _run(lanes.run_taylor_lanes_batch, Y0, P, K))
     if n >= 5:
         assert ref[2][4] == STATUS_NONFINITE
     if n >= 3 and name == "figure4_mu0.5":
@@ -365,7 +285,7 @@ def test_batch_bitwise_identical(name, n):
 
 def test_batch_statuses_and_settings():
     """Budgets (time, steps), both directions, another section angle, another order: every
-    stop reason of the W4-like batch, lane groupings 1..LANES."""
+    stop reason of the W4-like batch."""
     prm = PARAM_SETS["asym_lam_neg"]
     P = prm.as_array()
     Y0 = _mixed_states(prm, 23, seed=3)
@@ -377,8 +297,7 @@ def test_batch_statuses_and_settings():
         K = kw.pop("K")
         ref = _run(run_taylor_batch, Y0, P, K, **kw)
         seen.update(ref[2].tolist())
-        for max_lanes in (1, 2, 5, L):
-            _assert_identical(ref, _run(lanes.run_taylor_lanes_batch, Y0, P, K, max_lanes=max_lanes, **kw))
+        _assert_identical(ref, _run(lanes.run_taylor_lanes_batch, Y0, P, K, **kw))
     assert {STATUS_DONE, STATUS_TMAX, STATUS_MAX_STEPS, STATUS_NONFINITE} <= seen
 
 

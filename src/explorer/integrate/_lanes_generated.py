@@ -1,34 +1,37 @@
-# GENERATED FILE - DO NOT EDIT.
-# Written by tools/gen_lanes.py from explorer.model.chaplygin.system() by explorer.integrate.codegen
-# (generator version 9).
+# Written to this file by tools/gen_lanes.py from explorer.model.chaplygin.system().
 # Regenerate:  python tools/gen_lanes.py     (check: --check)
-"""The Taylor recurrence of Chaplygin's R3 (docs/model.md), generated: the scalar form for the
-scalar drivers (:mod:`explorer.integrate._systems_generated`), the lane form for
-:mod:`explorer.integrate.lanes`.
+# ruff: noqa  (the text of every System's module: its imports repeat, template by template)
+# GENERATED FILE - DO NOT EDIT. Written by explorer.integrate.codegen (generator version 9)
+# from the system 'chaplygin'; the key  is of its content (explorer.model.system.System.flow_hash).
+#
+#   dp1/dt = M*p2/b - M*zeta/b - g1*mu - lam*p2/a2
+#   dp2/dt = M*chi/b - M*p1/b - g2*mu + lam*p1/a1
+#   dM/dt = eta*g1*mu - g2*mu*xi - chi*p2/a2 + p1*zeta/a1 + p1*p2*(a1 - a2)/(a1*a2)
+#   dg1/dt = M*g2/b
+#   dg2/dt = -M*g1/b
+#   parameters: a1, a2, b, lam, chi, zeta, mu, xi, eta
+"""The Taylor recurrence, right-hand side and energy of the system 'chaplygin' (explorer.integrate.codegen)."""
+import math
 
-Each lane of a ``*_lanes`` kernel computes bit for bit what its scalar twin computes (the same
-IEEE operations in the same order; the vector operations of :mod:`explorer.integrate.simd`: no
-fast-math, no FMA).
-"""
 import numpy as np
 
 from explorer._jit import njit
-from explorer.integrate.simd import LANES, vload, vsplat, vstore, vzero  # noqa: F401
+from explorer.kernels.checks import all_finite, is_finite
+from explorer.kernels.clock import clip_step, resolves
+from explorer.kernels.status import STATUS_NONFINITE, STATUS_STEP_UNDERFLOW
+from explorer.kernels.taylor import evaluate, step_size
 
-#: state variables (p1, p2, M, g1, g2): the rows of X
-NVAR = 5
-#: rows of the work array
+#: state dimension, number of parameters, rows of the work array of taylor_coefficients_into
+DIM = 5
+N_PARAMS = 9
 N_WORK = 0
-#: flat strides of one order in the lane arrays X[k, i, l] and W[k, r, l]
-XS = NVAR * LANES
-WS = max(N_WORK, 1) * LANES
 
 
 # error_model="numpy": a division by zero gives inf/nan (the integrators' non-finite status), not an exception
 @njit(error_model="numpy")
 def taylor_coefficients_into(P, X, order, W):
-    """The Taylor coefficients of R3 from X[:, 0]: X[i, k] = x_i^(k)(0)/k! for k = 1..order in rows 0..4,
-    with the parameters P (the packed vector) and the work array W[N_WORK, >= order]."""
+    """X[i, k] = x_i^(k)(0)/k! for k = 0..order (order >= 1) from X[:, 0], with the parameters P and the
+    work array W[N_WORK, >= order] (automatic differentiation, Jorba & Zou 2005)."""
     s1 = P[6]
     s3 = 1.0
     s4 = P[2]
@@ -115,10 +118,108 @@ def taylor_coefficients(P, X, order):
     taylor_coefficients_into(P, X, order, W)
 
 
+#: taylor_step's status of a step taken
+STEP_OK = -1
+
+
+@njit(error_model="numpy")
+def _rows_finite(X, k, n):
+    for i in range(n):
+        if not is_finite(X[i, k]):
+            return False
+    return True
+
+
+@njit(error_model="numpy")
+def taylor_step(P, X, W, n, t, tend, order, factor, steps, ynew, backward):
+    """One step of the adaptive Taylor method of ``order`` (Jorba & Zou 2005) from X[:, 0] at time
+    t towards tend: the coefficients, the step from rows :n (the orbit's) clipped onto tend, ynew
+    the state at its end.  ``backward``: t is the time elapsed backward, the coefficients those of
+    y(t0 - t), (-1)^k X[:, k] (exactly the flow of -f's).  Returns (status, h, last, steps): STEP_OK,
+    or why no step was taken (h = 0) or why its end is not finite."""
+    taylor_coefficients_into(P, X, order, W)
+    if backward:
+        for k in range(1, order + 1, 2):
+            for i in range(DIM):
+                X[i, k] = -X[i, k]
+    if not (_rows_finite(X, order, n) and _rows_finite(X, order - 1, n)):
+        return STATUS_NONFINITE, 0.0, False, steps
+    h = step_size(X[:n], order, factor)
+    h, last = clip_step(t, h, tend)
+    if not resolves(t, h):
+        return STATUS_STEP_UNDERFLOW, 0.0, False, steps
+    evaluate(X, order, h, ynew)
+    steps += 1
+    if not all_finite(ynew):
+        return STATUS_NONFINITE, h, last, steps
+    return STEP_OK, h, last, steps
+
+
+@njit(error_model="numpy")
+def rhs(y, P, dy):
+    """dy = f(y) (the order-0 part of the recurrence)."""
+    X = np.empty((DIM, 1))
+    for i in range(DIM):
+        X[i, 0] = y[i]
+    W = np.empty((max(N_WORK, 1), 1))
+    s1 = P[6]
+    s3 = 1.0
+    s4 = P[2]
+    s5 = s3 / s4
+    s9 = P[1]
+    s14 = P[0]
+    s19 = P[3]
+    s20 = s19 / s9
+    s23 = P[5]
+    s24 = s5 * s23
+    s27 = P[4]
+    s28 = s27 * s5
+    s30 = s19 / s14
+    s37 = P[8]
+    s38 = s37 * s1
+    s40 = s23 / s14
+    s44 = s9 * s14
+    s45 = s14 - s9
+    s46 = s45 / s44
+    s49 = s27 / s9
+    s52 = P[7]
+    s53 = s1 * s52
+    v16 = X[2, 0] * X[1, 0]
+    v18 = (s5 * v16) - (s1 * X[3, 0])
+    v22 = v18 - (s20 * X[1, 0])
+    v26 = v22 - (s24 * X[2, 0])
+    v32 = (s28 * X[2, 0]) + (s30 * X[0, 0])
+    v33 = v32 - (s1 * X[4, 0])
+    v34 = X[0, 0] * X[2, 0]
+    v36 = v33 - (s5 * v34)
+    v42 = (s38 * X[3, 0]) + (s40 * X[0, 0])
+    v43 = X[1, 0] * X[0, 0]
+    v48 = v42 + (s46 * v43)
+    v51 = v48 - (s49 * X[1, 0])
+    v55 = v51 - (s53 * X[4, 0])
+    v56 = X[4, 0] * X[2, 0]
+    v58 = X[3, 0] * X[2, 0]
+    v60 = -(s5 * v58)
+    dy[0] = v26
+    dy[1] = v36
+    dy[2] = v55
+    dy[3] = (s5 * v56)
+    dy[4] = v60
+
+
+# ---- the SIMD form (explorer.integrate.simd): LANES orbits at once
+from explorer.integrate.simd import LANES, vload, vsplat, vsqrt, vstore, vzero  # noqa: E402
+
+#: flat strides of one order in the lane arrays X[k, i, l] and W[k, r, l]
+XS = DIM * LANES
+WS = max(N_WORK, 1) * LANES
+
+
 @njit(error_model="numpy")
 def taylor_coefficients_lanes(P, X, order, W):
-    """LANES orbits at once: rows 0..4 of X[k, row, l] (C-contiguous, XS / LANES rows), k = 1..order,
-    W of shape (order + 1, max(N_WORK, 1), LANES).  Each lane equals taylor_coefficients_into bit for bit."""
+    """LANES orbits at once: X[k, i, l] for k = 1..order from X[0] (X of shape (order + 1, DIM, LANES),
+    W of shape (order + 1, max(N_WORK, 1), LANES), both C-contiguous).  Each lane equals
+    taylor_coefficients_into bit for bit (the same operations in the same order)."""
     s1 = P[6]
     s3 = 1.0
     s4 = P[2]
@@ -196,3 +297,554 @@ def taylor_coefficients_lanes(P, X, order, W):
         vstore(X, (k + 1) * XS + 2 * LANES, v55 * r)
         vstore(X, (k + 1) * XS + 3 * LANES, (s5 * v56) * r)
         vstore(X, (k + 1) * XS + 4 * LANES, v60 * r)
+
+
+@njit(error_model="numpy")
+def energy(y, P):
+    """The energy at the state y."""
+    X = np.empty((DIM, 1))
+    for i in range(DIM):
+        X[i, 0] = y[i]
+    W = np.empty((max(N_ENERGY_WORK, 1), 1))
+    s0 = P[6]
+    s1 = P[8]
+    s5 = P[7]
+    s11 = 2.0
+    s12 = P[2]
+    s13 = s11 * s12
+    s18 = P[0]
+    s19 = s11 * s18
+    s24 = P[1]
+    s25 = s11 * s24
+    s28 = P[4]
+    s31 = P[5]
+    s36 = P[3]
+    v7 = (s1 * X[4, 0]) + (s5 * X[3, 0])
+    W[0, 0] = X[2, 0] * X[2, 0]
+    v15 = (s0 * v7) + (W[0, 0] / s13)
+    W[1, 0] = X[0, 0] * X[0, 0]
+    v21 = v15 + (W[1, 0] / s19)
+    W[2, 0] = X[1, 0] * X[1, 0]
+    v27 = v21 + (W[2, 0] / s25)
+    W[3, 0] = X[0, 0] - s28
+    v30 = X[4, 0] * W[3, 0]
+    W[4, 0] = X[1, 0] - s31
+    v33 = X[3, 0] * W[4, 0]
+    v35 = s0 * (v30 - v33)
+    v38 = v27 - (v35 / s36)
+    return v38
+
+
+N_ENERGY_WORK = 5
+
+
+# ---- crossings of a section a . x + b = 0 (explorer.analysis.system_sections): generated here, beside
+# the recurrence they call, so that numba's cache of them follows the recurrence (docs/systems.md)
+from explorer.integrate.layout import CARRY_G, CARRY_H0, CARRY_STEPS, CARRY_T, CARRY_TC  # noqa: E402
+from explorer.integrate.simd import atomic_fetch_add  # noqa: E402
+from explorer.kernels.checks import all_finite, is_finite  # noqa: E402
+from explorer.kernels.clock import advance_time, clip_step, resolves  # noqa: E402
+from explorer.kernels.events import poly_step_roots, root_workspace  # noqa: E402
+from explorer.kernels.status import (  # noqa: E402
+    STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_TMAX)
+from explorer.kernels.taylor import evaluate, safety_factor, step_size  # noqa: E402
+
+#: a crossing row ends with E - E0 when the system has an energy
+HAS_ENERGY = True
+
+
+@njit(error_model="numpy")
+def _section_value(a, b, y):
+    """s(y) = a . y + b."""
+    s = b
+    for i in range(DIM):
+        s += a[i] * y[i]
+    return s
+
+
+@njit(error_model="numpy")
+def crossings_start(Y0, P, a, b, carry):
+    """The carry of a run's first block (explorer.integrate.layout): time 0, no steps, s(y0), E0 = E(y0)."""
+    for j in range(Y0.shape[0]):
+        carry[j, CARRY_T] = 0.0
+        carry[j, CARRY_TC] = 0.0
+        carry[j, CARRY_G] = _section_value(a, b, Y0[j])
+        carry[j, CARRY_STEPS] = 0.0
+        carry[j, CARRY_H0] = energy(Y0[j], P)
+
+
+@njit(error_model="numpy")
+def _record(data, j, n, tr, yc, P, E0, keep, cols):
+    """Crossing n of orbit j at time tr, state yc, if keep . (yc, 1) > 0 (a half of the hyperplane; a
+    NaN is not refused here): the row data[j, n] = (tr, yc[cols], E - E0).  Returns n + 1, n (the other
+    half), or -1 when the row is not finite."""
+    side = keep[DIM]
+    for i in range(DIM):
+        side += keep[i] * yc[i]
+    if side <= 0.0:
+        return n
+    s = tr
+    for i in range(cols.shape[0]):
+        s += yc[cols[i]]
+    e = energy(yc, P) - E0
+    s += e
+    if not is_finite(s):
+        return -1
+    data[j, n, 0] = tr
+    for i in range(cols.shape[0]):
+        data[j, n, 1 + i] = yc[cols[i]]
+    data[j, n, 1 + cols.shape[0]] = e
+    return n + 1
+
+
+@njit(error_model="numpy")
+def crossings_orbit(j, y0, P, a, b, keep, cols, direction, tmax, order, max_steps, carry, target, room, data, final,
+                    info, backward):
+    """Orbit j from y0 with the adaptive Taylor method of ``order`` (Jorba & Zou 2005: the order
+    from the tolerance, the step from the last two coefficients, kernels.taylor.step_size), a block
+    continued from ``carry[j]`` (explorer.integrate.layout: t, its compensation, s(y0), steps, E0;
+    written back at the end), until ``target`` crossings of s = a . y + b = 0 in ``direction``
+    (+1: ds/dt > 0, -1: < 0, 0: both), the time ``tmax`` or ``max_steps`` steps.  Each step's
+    polynomial s(t + tau) = a . X[:, k] tau^k (+ b) has its roots in (0, h] isolated and refined by
+    kernels.events.poly_step_roots; those with keep . (y, 1) > 0 are the crossings, at most ``room``,
+    rows :func:`_record`.  Returns (count, status); final[j] the state and info[j] = (t, steps, nan)
+    where the orbit stopped.  ``backward``: backward in time (taylor_step), t the time elapsed
+    backward, ``direction`` the sign of ds/dt along it."""
+    X = np.empty((DIM, order + 1))
+    W = np.empty((max(N_WORK, 1), order + 1))
+    ynew = np.empty(DIM)
+    yc = np.empty(DIM)
+    gc, work, roots, brackets, stack = root_workspace(order)
+    factor = safety_factor(order)
+    for i in range(DIM):
+        X[i, 0] = y0[i]
+    t = carry[j, CARRY_T]
+    tc = carry[j, CARRY_TC]
+    gprev = carry[j, CARRY_G]
+    steps = int(carry[j, CARRY_STEPS])
+    E0 = carry[j, CARRY_H0]
+    n = 0
+    status = STATUS_DONE
+    while n < target:
+        if not (t < tmax):
+            status = STATUS_TMAX
+            break
+        if steps >= max_steps:
+            status = STATUS_MAX_STEPS
+            break
+        st, h, last, steps = taylor_step(P, X, W, DIM, t, tmax, order, factor, steps, ynew, backward)
+        if st != STEP_OK:
+            status = st
+            break
+        gnew = _section_value(a, b, ynew)
+        for k in range(order + 1):
+            s = 0.0
+            for i in range(DIM):
+                s += a[i] * X[i, k]
+            gc[k] = s
+        gc[0] += b
+        nroots = poly_step_roots(gc, order, h, gprev, gnew, direction, roots, brackets, work, stack)
+        for r in range(nroots):
+            if n >= room:
+                break
+            tau = roots[r]
+            evaluate(X, order, tau, yc)
+            kept = _record(data, j, n, (t - tc) + tau, yc, P, E0, keep, cols)
+            if kept < 0:
+                status = STATUS_NONFINITE
+                break
+            n = kept
+        if status == STATUS_NONFINITE:
+            break
+        t, tc = advance_time(t, tc, h, last, tmax)
+        for i in range(DIM):
+            X[i, 0] = ynew[i]
+        gprev = gnew
+    for i in range(DIM):
+        final[j, i] = X[i, 0]
+    carry[j, CARRY_T] = t
+    carry[j, CARRY_TC] = tc
+    carry[j, CARRY_G] = gprev
+    carry[j, CARRY_STEPS] = steps
+    info[j, 0] = t - tc
+    info[j, 1] = steps
+    info[j, 2] = np.nan
+    return n, status
+
+
+@njit(nogil=True, error_model="numpy")
+def crossings_taylor_worker(next_orbit, Y0, P, a, b, keep, cols, direction, tmax, order, max_steps, carry, limits,
+                            data, count, status, final, info, backward):
+    """:func:`crossings_orbit` for the orbits (rows of Y0) of the queue ``next_orbit`` that threads share
+    (analysis.system_sections.run_driver), orbit j's block up to limits[j] = (target, room): each orbit
+    is computed alone, so the result does not depend on the number of threads."""
+    j = atomic_fetch_add(next_orbit, 0, 1)
+    while j < Y0.shape[0]:
+        c, s = crossings_orbit(j, Y0[j], P, a, b, keep, cols, direction, tmax, order, max_steps, carry,
+                               limits[j, 0], limits[j, 1], data, final, info, backward)
+        count[j] = c
+        status[j] = s
+        j = atomic_fetch_add(next_orbit, 0, 1)
+
+
+# ---- crossings on SIMD lanes (explorer.analysis.system_sections): each lane crossings_orbit bit for bit
+from explorer.integrate.simd import (  # noqa: E402
+    atomic_fetch_add, next_bit, vbits, vmask, vmax_gt, vmin_lt, vradius_power_core, vselect)
+from explorer.kernels.clock import compensated_add  # noqa: E402
+from explorer.kernels.events import excluded_by_variation, sign_change, tail_term  # noqa: E402
+from explorer.kernels.power import is_normal  # noqa: E402
+from explorer.kernels.taylor import radius_min  # noqa: E402
+
+#: all lanes' bits
+_ALL_LANES = (1 << LANES) - 1
+
+
+@njit(error_model="numpy")
+def _norms_lanes(X, order, e_p, e_q, NORM):
+    """kernels.taylor.step_size per lane: NORM = (a, bm, s/a, s/bm, min((s/a)^e_p, (s/bm)^e_q)), the
+    last valid where s/a and s/bm are positive normal.  Returns the bits of the lanes whose
+    coefficients of orders order - 1 and order are finite, and of those with s/a, s/bm normal."""
+    op = order * XS
+    oq = (order - 1) * XS
+    s = vsplat(1.0)
+    a = vzero()
+    bm = vzero()
+    x0 = vload(X, 0 * LANES)
+    x1 = vload(X, 1 * LANES)
+    x2 = vload(X, 2 * LANES)
+    x3 = vload(X, 3 * LANES)
+    x4 = vload(X, 4 * LANES)
+    p0 = vload(X, op + 0 * LANES)
+    p1 = vload(X, op + 1 * LANES)
+    p2 = vload(X, op + 2 * LANES)
+    p3 = vload(X, op + 3 * LANES)
+    p4 = vload(X, op + 4 * LANES)
+    q0 = vload(X, oq + 0 * LANES)
+    q1 = vload(X, oq + 1 * LANES)
+    q2 = vload(X, oq + 2 * LANES)
+    q3 = vload(X, oq + 3 * LANES)
+    q4 = vload(X, oq + 4 * LANES)
+    s = vmax_gt(abs(x0), s)
+    a = vmax_gt(abs(p0), a)
+    bm = vmax_gt(abs(q0), bm)
+    s = vmax_gt(abs(x1), s)
+    a = vmax_gt(abs(p1), a)
+    bm = vmax_gt(abs(q1), bm)
+    s = vmax_gt(abs(x2), s)
+    a = vmax_gt(abs(p2), a)
+    bm = vmax_gt(abs(q2), bm)
+    s = vmax_gt(abs(x3), s)
+    a = vmax_gt(abs(p3), a)
+    bm = vmax_gt(abs(q3), bm)
+    s = vmax_gt(abs(x4), s)
+    a = vmax_gt(abs(p4), a)
+    bm = vmax_gt(abs(q4), bm)
+    fin = is_finite(p0) & is_finite(q0) & is_finite(p1) & is_finite(q1) & is_finite(p2) & is_finite(q2) & is_finite(p3) & is_finite(q3) & is_finite(p4) & is_finite(q4)
+    u = s / a
+    v = s / bm
+    vstore(NORM, 0, a)
+    vstore(NORM, LANES, bm)
+    vstore(NORM, 2 * LANES, u)
+    vstore(NORM, 3 * LANES, v)
+    vstore(NORM, 4 * LANES, vmin_lt(vradius_power_core(v, e_q), vradius_power_core(u, e_p)))
+    return vbits(fin), vbits(is_normal(u) & is_normal(v))
+
+
+@njit(error_model="numpy")
+def _evaluate_lanes(X, order, hv, Y):
+    """Y[i, l] = sum_k X[k, i, l] hv[l]^k: kernels.taylor.evaluate (Horner) per lane."""
+    h = vload(hv, 0)
+    o = order * XS
+    y0 = vload(X, o + 0 * LANES)
+    y1 = vload(X, o + 1 * LANES)
+    y2 = vload(X, o + 2 * LANES)
+    y3 = vload(X, o + 3 * LANES)
+    y4 = vload(X, o + 4 * LANES)
+    for k in range(order - 1, -1, -1):
+        o = k * XS
+        y0 = y0 * h + vload(X, o + 0 * LANES)
+        y1 = y1 * h + vload(X, o + 1 * LANES)
+        y2 = y2 * h + vload(X, o + 2 * LANES)
+        y3 = y3 * h + vload(X, o + 3 * LANES)
+        y4 = y4 * h + vload(X, o + 4 * LANES)
+    vstore(Y, 0 * LANES, y0)
+    vstore(Y, 1 * LANES, y1)
+    vstore(Y, 2 * LANES, y2)
+    vstore(Y, 3 * LANES, y3)
+    vstore(Y, 4 * LANES, y4)
+
+
+@njit(error_model="numpy")
+def _section_lanes(X, order, hv, Y, a, b, direction, L_g, GC, G):
+    """Per lane, as crossings_orbit: G = _section_value(a, b, y) of the new state y = Y, GC[k] = a . X[k]
+    (+ b at k = 0).  Returns the bits of the lanes whose new state is finite (kernels.checks.all_finite)
+    and of those where kernels.events.isolate_crossings(GC, order, h, L_g, G, direction, ...) may find a
+    root: its first two tests (no_root_within; monotone_within without a sign change) in vector form."""
+    h = vload(hv, 0)
+    sy = vzero()
+    g = vsplat(b)
+    y0 = vload(Y, 0 * LANES)
+    sy = sy + y0
+    g = g + a[0] * y0
+    y1 = vload(Y, 1 * LANES)
+    sy = sy + y1
+    g = g + a[1] * y1
+    y2 = vload(Y, 2 * LANES)
+    sy = sy + y2
+    g = g + a[2] * y2
+    y3 = vload(Y, 3 * LANES)
+    sy = sy + y3
+    g = g + a[3] * y3
+    y4 = vload(Y, 4 * LANES)
+    sy = sy + y4
+    g = g + a[4] * y4
+    vstore(G, 0, g)
+    tail = vzero()
+    rk = vsplat(1.0)
+    dtail = vzero()
+    drk = vsplat(1.0)
+    for k in range(order + 1):
+        o = k * XS
+        c = vzero()
+        c = c + a[0] * vload(X, o + 0 * LANES)
+        c = c + a[1] * vload(X, o + 1 * LANES)
+        c = c + a[2] * vload(X, o + 2 * LANES)
+        c = c + a[3] * vload(X, o + 3 * LANES)
+        c = c + a[4] * vload(X, o + 4 * LANES)
+        if k == 0:
+            c = c + b
+        else:
+            tail, rk = tail_term(tail, rk, h, 1.0, c)
+            if k >= 2:
+                dtail, drk = tail_term(dtail, drk, h, float(k), c)
+        vstore(GC, k * LANES, c)
+    excluded = vbits(excluded_by_variation(vload(GC, 0), tail))
+    monotone = vbits(excluded_by_variation(vload(GC, LANES), dtail))
+    cross = vbits(sign_change(vload(L_g, 0), g, direction))
+    return vbits(is_finite(sy)), _ALL_LANES & ~excluded & (~monotone | cross)
+
+
+@njit(error_model="numpy")
+def _lane_step(l, fin, normal, NORM, e_p, e_q, factor, L_t, tmax, hv, L_last, L_go):
+    """The step of lane ``l`` that _steps_lanes left to the scalar code (kernels.taylor.step_size's
+    radius from NORM, clipped onto ``tmax``): -1 with hv, L_last and L_go set, else the lane's stop
+    status (non-finite coefficients, a step below the clock's resolution)."""
+    if not (fin >> l) & 1:
+        return STATUS_NONFINITE
+    if (normal >> l) & 1:
+        h = NORM[4, l] * factor
+    else:
+        h = radius_min(NORM[0, l], NORM[1, l], NORM[2, l], NORM[3, l], e_p, e_q) * factor
+    h, last = clip_step(L_t[l], h, tmax)
+    if not resolves(L_t[l], h):
+        return STATUS_STEP_UNDERFLOW
+    hv[l] = h
+    L_last[l] = 1.0 if last else 0.0
+    L_go[l] = 1.0
+    return -1
+
+
+@njit(error_model="numpy")
+def _steps_lanes(NORM, fin, normal, L_on, L_t, tmax, factor, hv, L_last, L_go):
+    """crossings_orbit's step (step_size, clip_step, resolves) in vector form for the lanes holding an orbit
+    whose norms are finite and normal: their hv, L_last and L_go (1.0: the step goes on; 0.0 and hv = 0 for
+    the others).  Returns the bits of the other lanes holding an orbit: their step is taken per lane."""
+    t = vload(L_t, 0)
+    tv = vsplat(tmax)
+    h = vload(NORM, 4 * LANES) * factor
+    last = (t + h) >= tv
+    h = vselect(last, tv - t, h)
+    live = vbits(vload(L_on, 0) > 0.0)
+    ok = live & fin & normal & vbits(resolves(t, h))
+    go = vmask(ok)
+    zero = vzero()
+    one = vsplat(1.0)
+    vstore(hv, 0, vselect(go, h, zero))
+    vstore(L_last, 0, vselect(last, one, zero))
+    vstore(L_go, 0, vselect(go, one, zero))
+    return live & ~ok
+
+
+@njit(error_model="numpy")
+def _ends_lanes(X, Y, G, hv, L_go, L_last, finite, maybe, L_t, L_tc, L_steps, L_g, tmax, max_steps):
+    """The end of crossings_orbit's step in vector form for the lanes whose step went on, is not the last,
+    ends finite, cannot hold a root and leaves the orbit running: the compensated clock
+    (kernels.clock.compensated_add), the step count, the state and the section's value.  Returns the bits
+    of the other lanes whose step went on: their end is taken per lane."""
+    go = vbits(vload(L_go, 0) > 0.0)
+    t, tc = compensated_add(vload(L_t, 0), vload(L_tc, 0), vload(hv, 0))
+    steps = vload(L_steps, 0) + 1.0
+    ok = go & finite & ~maybe & ~vbits(vload(L_last, 0) > 0.0) & vbits((t < tmax) & (steps < float(max_steps)))
+    m = vmask(ok)
+    vstore(L_t, 0, vselect(m, t, vload(L_t, 0)))
+    vstore(L_tc, 0, vselect(m, tc, vload(L_tc, 0)))
+    vstore(L_steps, 0, vselect(m, steps, vload(L_steps, 0)))
+    vstore(L_g, 0, vselect(m, vload(G, 0), vload(L_g, 0)))
+    for i in range(DIM):
+        vstore(X, i * LANES, vselect(m, vload(Y, i * LANES), vload(X, i * LANES)))
+    return go & ~ok
+
+
+@njit(error_model="numpy")
+def _lane_status(n, limit, t, tmax, steps, max_steps):
+    """Why crossings_orbit stops after a step (its checks in its order), or -1 to go on."""
+    if n >= limit:
+        return STATUS_DONE
+    if not (t < tmax):
+        return STATUS_TMAX
+    if steps >= max_steps:
+        return STATUS_MAX_STEPS
+    return -1
+
+
+@njit(error_model="numpy")
+def _lane_start(l, next_orbit, Y0, tmax, max_steps, carry, limits, X, orb, L_on, L_t, L_tc, L_g, L_E0, L_n, L_steps,
+                L_target, L_room, count, status, final, info):
+    """Lane l takes the next orbit of the queue ``next_orbit`` where its carry left it, as crossings_orbit
+    does (an orbit stopped before its first step is written out and the next one taken).  Returns 1, or 0
+    when the queue is empty: the lane then idles on the zero state (its coefficients all 0)."""
+    while True:
+        j = atomic_fetch_add(next_orbit, 0, 1)
+        if j >= Y0.shape[0]:
+            orb[l] = -1
+            L_on[l] = 0.0
+            for i in range(DIM):
+                X[0, i, l] = 0.0
+            return 0
+        for i in range(DIM):
+            X[0, i, l] = Y0[j, i]
+        orb[l] = j
+        L_on[l] = 1.0
+        L_t[l] = carry[j, CARRY_T]
+        L_tc[l] = carry[j, CARRY_TC]
+        L_g[l] = carry[j, CARRY_G]
+        L_steps[l] = carry[j, CARRY_STEPS]
+        L_E0[l] = carry[j, CARRY_H0]
+        L_n[l] = 0
+        L_target[l] = limits[j, 0]
+        L_room[l] = limits[j, 1]
+        st = _lane_status(0, L_target[l], L_t[l], tmax, L_steps[l], max_steps)
+        if st < 0:
+            return 1
+        _lane_finish(l, st, X, orb, L_t, L_tc, L_g, L_n, L_steps, carry, count, status, final, info)
+
+
+@njit(error_model="numpy")
+def _lane_finish(l, st, X, orb, L_t, L_tc, L_g, L_n, L_steps, carry, count, status, final, info):
+    """Write out lane l's orbit, stopped with status ``st`` (crossings_orbit's final, info, count, carry)."""
+    j = orb[l]
+    for i in range(DIM):
+        final[j, i] = X[0, i, l]
+    carry[j, CARRY_T] = L_t[l]
+    carry[j, CARRY_TC] = L_tc[l]
+    carry[j, CARRY_G] = L_g[l]
+    carry[j, CARRY_STEPS] = L_steps[l]
+    info[j, 0] = L_t[l] - L_tc[l]
+    info[j, 1] = L_steps[l]
+    info[j, 2] = np.nan
+    count[j] = L_n[l]
+    status[j] = st
+
+
+@njit(nogil=True, error_model="numpy")
+def crossings_lanes_worker(next_orbit, Y0, P, a, b, keep, cols, direction, tmax, order, max_steps, carry, limits,
+                           data, count, status, final, info, backward):
+    """One group of LANES lanes: orbits from the queue ``next_orbit`` until it is empty, each lane
+    crossings_orbit's loop (the arguments and outputs of crossings_taylor_worker, ``backward`` its
+    (-1)^k X[k])."""
+    X = np.zeros((order + 1, DIM, LANES))
+    W = np.zeros((order + 1, max(N_WORK, 1), LANES))
+    Y = np.zeros((DIM, LANES))
+    GC = np.zeros((order + 1, LANES))
+    NORM = np.zeros((5, LANES))
+    # per lane: the step, the clock, the section's values, E0, the step count, and flags as 1.0 / 0.0
+    hv = np.zeros(LANES)
+    G = np.zeros(LANES)
+    L_t = np.zeros(LANES)
+    L_tc = np.zeros(LANES)
+    L_g = np.zeros(LANES)
+    L_E0 = np.zeros(LANES)
+    L_steps = np.zeros(LANES)
+    L_on = np.zeros(LANES)
+    L_last = np.zeros(LANES)
+    L_go = np.zeros(LANES)
+    orb = np.full(LANES, -1, np.int64)
+    L_n = np.zeros(LANES, np.int64)
+    L_target = np.zeros(LANES, np.int64)
+    L_room = np.zeros(LANES, np.int64)
+    yc = np.empty(DIM)
+    gc, work, roots, brackets, stack = root_workspace(order)
+    factor = safety_factor(order)
+    e_p = 1.0 / order
+    e_q = 1.0 / (order - 1)
+    active = 0
+    for l in range(LANES):
+        active += _lane_start(l, next_orbit, Y0, tmax, max_steps, carry, limits, X, orb, L_on, L_t, L_tc, L_g,
+                              L_E0, L_n, L_steps, L_target, L_room, count, status, final, info)
+    while active > 0:
+        taylor_coefficients_lanes(P, X, order, W)
+        if backward:
+            for k in range(1, order + 1, 2):
+                for i in range(DIM):
+                    for l in range(LANES):
+                        X[k, i, l] = -X[k, i, l]
+        fin, normal = _norms_lanes(X, order, e_p, e_q, NORM)
+        bits = _steps_lanes(NORM, fin, normal, L_on, L_t, tmax, factor, hv, L_last, L_go)
+        while bits != 0:
+            l, bits = next_bit(bits)
+            st = _lane_step(l, fin, normal, NORM, e_p, e_q, factor, L_t, tmax, hv, L_last, L_go)
+            if st >= 0:
+                _lane_finish(l, st, X, orb, L_t, L_tc, L_g, L_n, L_steps, carry, count, status, final, info)
+                active += _lane_start(l, next_orbit, Y0, tmax, max_steps, carry, limits, X, orb, L_on, L_t,
+                                      L_tc, L_g, L_E0, L_n, L_steps, L_target, L_room, count, status, final,
+                                      info) - 1
+        _evaluate_lanes(X, order, hv, Y)
+        finite, maybe = _section_lanes(X, order, hv, Y, a, b, direction, L_g, GC, G)
+        bits = _ends_lanes(X, Y, G, hv, L_go, L_last, finite, maybe, L_t, L_tc, L_steps, L_g, tmax, max_steps)
+        while bits != 0:
+            l, bits = next_bit(bits)
+            L_steps[l] += 1.0
+            st = STATUS_NONFINITE
+            if (finite >> l) & 1:
+                j = orb[l]
+                t = L_t[l]
+                tc = L_tc[l]
+                h = hv[l]
+                n = L_n[l]
+                nroots = 0
+                if (maybe >> l) & 1:
+                    for k in range(order + 1):
+                        gc[k] = GC[k, l]
+                    nroots = poly_step_roots(gc, order, h, L_g[l], G[l], direction, roots, brackets, work, stack)
+                kept = n
+                for r in range(nroots):
+                    if n >= L_room[l]:
+                        break
+                    tau = roots[r]
+                    evaluate(X[:, :, l].T, order, tau, yc)
+                    kept = _record(data, j, n, (t - tc) + tau, yc, P, L_E0[l], keep, cols)
+                    if kept < 0:
+                        break
+                    n = kept
+                L_n[l] = n
+                if kept >= 0:
+                    t, tc = advance_time(t, tc, h, L_last[l] != 0.0, tmax)
+                    L_t[l] = t
+                    L_tc[l] = tc
+                    for i in range(DIM):
+                        X[0, i, l] = Y[i, l]
+                    L_g[l] = G[l]
+                    st = _lane_status(n, L_target[l], t, tmax, L_steps[l], max_steps)
+            if st >= 0:
+                _lane_finish(l, st, X, orb, L_t, L_tc, L_g, L_n, L_steps, carry, count, status, final, info)
+                active += _lane_start(l, next_orbit, Y0, tmax, max_steps, carry, limits, X, orb, L_on, L_t,
+                                      L_tc, L_g, L_E0, L_n, L_steps, L_target, L_room, count, status, final,
+                                      info) - 1
+
+
+# ---- the engine's names: its state's rows, and its H (explorer.model.equations.energy, docs/model.md R3)
+# in the rows' H - H0, of which explorer.integrate.drivers.start_carry takes H0 for every method
+from explorer.model.equations import energy  # noqa: E402, F811
+
+#: state variables (p1, p2, M, g1, g2): the rows of X
+NVAR = DIM

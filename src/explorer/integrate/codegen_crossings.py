@@ -9,7 +9,7 @@ SOURCE = '''
 
 # ---- crossings of a section a . x + b = 0 (explorer.analysis.system_sections): generated here, beside
 # the recurrence they call, so that numba's cache of them follows the recurrence (docs/systems.md)
-from explorer.integrate.layout import CARRY_H0, CARRY_G, CARRY_STEPS, CARRY_T, CARRY_TC  # noqa: E402
+from explorer.integrate.layout import CARRY_G, CARRY_H0, CARRY_STEPS, CARRY_T, CARRY_TC  # noqa: E402
 from explorer.integrate.simd import atomic_fetch_add  # noqa: E402
 from explorer.kernels.checks import all_finite, is_finite  # noqa: E402
 from explorer.kernels.clock import advance_time, clip_step, resolves  # noqa: E402

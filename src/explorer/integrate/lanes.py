@@ -1,20 +1,16 @@
-"""The Taylor crossing loop on SIMD lanes, the method's only implementation: LANES orbits advance
-in lockstep (a lone orbit is one lane), each lane bit for bit the scalar oracle
-tests/integrate/taylor_oracle.py whatever the thread count.  Design and the scalar/vector split:
-docs/methods.md (Parallelism), docs/architecture.md (The system seam).  Kernel contract: explorer/kernels/__init__.py.
+"""The engine's Taylor crossings on SIMD lanes, and the lane kernels its tangent driver shares
+(:mod:`explorer.integrate.tangent_lanes`).  The crossings are those of every System
+(:mod:`explorer.integrate.codegen_lanes`, rendered into :mod:`explorer.integrate._lanes_generated` for
+``chaplygin.system()``): the section phi = phi0 is the hyperplane sin(phi - phi0) = g1 cos phi0 - g2 sin phi0
+= 0, its half cos(phi - phi0) = g2 cos phi0 + g1 sin phi0 > 0 kept (docs/model.md; docs/architecture.md,
+The system seam).  Each lane is bit for bit the scalar oracle tests/integrate/taylor_oracle.py, whatever
+the thread count.  Kernel contract: explorer/kernels/__init__.py.
 """
 import numpy as np
 
 from explorer._jit import get_num_threads, njit, prange
-from explorer.integrate._lanes_generated import N_WORK, NVAR, taylor_coefficients_lanes
-from explorer.integrate.drivers import (
-    LIMIT_ROOM,
-    LIMIT_TARGET,
-    keep_crossing,
-    read_carry,
-    save_carry,
-    store_orbit,
-)
+from explorer.integrate import _lanes_generated as G
+from explorer.integrate.layout import CARRY_T
 from explorer.integrate.simd import (
     LANES,
     atomic_fetch_add,
@@ -28,11 +24,9 @@ from explorer.integrate.simd import (
     vge,
     vgt,
     vload,
-    vlt,
     vmax_gt,
     vmin_lt,
     vmul,
-    vor,
     vradius_power_core,
     vselect,
     vsplat,
@@ -40,30 +34,17 @@ from explorer.integrate.simd import (
     vsub,
     vzero,
 )
-from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_TMAX
+from explorer.kernels import STATUS_NONFINITE, STATUS_STEP_UNDERFLOW
 from explorer.kernels import taylor as tk
 from explorer.kernels.checks import is_finite
-from explorer.kernels.clock import advance_time, clip_step, compensated_add, resolves
-from explorer.kernels.events import (
-    ISOLATE_STACK,
-    MAX_STEP_ROOTS,
-    excluded_by_variation,
-    poly_step_roots,
-    sign_change,
-    sin_diff,
-    tail_term,
-)
+from explorer.kernels.clock import clip_step, resolves
 from explorer.kernels.power import is_normal
-from explorer.model.equations import section_g
 
 _IDLE = -1
 #: rows of the step_norms_lanes output
 N_NORMS = 7
 #: rows of the orbit (p1, p2, M, g1, g2) in every lane array: the rows that choose the step
 N_ORBIT = 5
-#: rows of sin(phi) = g1 and cos(phi) = g2 in the state (p1, p2, M, g1, g2)
-_G1 = 3
-_G2 = 4
 
 
 @njit
@@ -221,99 +202,6 @@ def count_step(l, znew, first, last, L_steps, L_status, L_stop):
         stop_unless_finite(l, znew, first, last, L_status, L_stop)
 
 
-@njit
-def variation_lanes(X, order, h, cphi, sphi, out):
-    """out[l] = sum_{k>=1} |c_k| h[l]^k, c_k the step's Taylor coefficients of sin(phi - phi0): the
-    variation bound of kernels.events.excluded_by_variation, per lane."""
-    cv = vsplat(cphi)
-    sv = vsplat(sphi)
-    hv = vload(h, 0)
-    acc = vzero()
-    for k in range(order, 0, -1):
-        acc = vmul(vadd(acc, vabs(_sin_diff_lanes(X, k, 0, LANES, cv, sv))), hv)
-    vstore(out, 0, acc)
-
-
-@njit(inline="always")
-def _sin_diff_lanes(X, k, c, w, cv, sv):
-    o = k * (NVAR * w) + c
-    return sin_diff(vload(X, o + _G1 * w), vload(X, o + _G2 * w), cv, sv)
-
-
-@njit(inline="always")
-def monotone_lanes(X, order, hv, cv, sv, c, w):
-    """kernels.events.monotone_within(gc, order, h) for the group of LANES lanes at ``c``, built
-    from the scalar functions on vectors, so the mask is the scalar test's answer."""
-    h = vload(hv, c)
-    rk = vsplat(1.0)
-    s = vzero()
-    for k in range(2, order + 1):
-        s, rk = tail_term(s, rk, h, float(k), _sin_diff_lanes(X, k, c, w, cv, sv))
-    return excluded_by_variation(_sin_diff_lanes(X, 1, c, w, cv, sv), s)
-
-
-@njit(inline="always")
-def end_steps_lanes(X, order, ynew, vary, hv, L_t, L_tc, L_gprev, L_steps, L_left, L_on, L_fast, L_last, cphi, sphi,
-                    direction, tmax, max_steps, c, w):
-    """The end of the step, in vector form, for the lanes of the group at ``c`` whose step needs only
-    bookkeeping: taken in vector form, not the last, finite, no root possible (variation bound, or
-    monotone without a sign change) and no stop; they take the new state, sin(phi - phi0), the
-    compensated time and the step count as the scalar loop would.  Returns the bits of the other
-    lanes holding an orbit (lane c + i bit i), whose step end :func:`run_worker` runs per lane."""
-    zero = vzero()
-    live = vgt(vload(L_on, c), zero)
-    ok = vandnot(vgt(vload(L_fast, c), zero), vgt(vload(L_last, c), zero))
-    y0 = vload(ynew, c)
-    y1 = vload(ynew, w + c)
-    y2 = vload(ynew, 2 * w + c)
-    y3 = vload(ynew, 3 * w + c)
-    y4 = vload(ynew, 4 * w + c)
-    ok = vand(ok, is_finite(vadd(vadd(vadd(vadd(vadd(zero, y0), y1), y2), y3), y4)))
-    cv = vsplat(cphi)
-    sv = vsplat(sphi)
-    none = excluded_by_variation(_sin_diff_lanes(X, 0, c, w, cv, sv), vload(vary, c))
-    gnew = sin_diff(y3, y4, cv, sv)
-    if vbits(vandnot(vand(live, ok), none)) != 0:
-        cross = sign_change(vload(L_gprev, c), gnew, direction)
-        none = vor(none, vandnot(monotone_lanes(X, order, hv, cv, sv, c, w), cross))
-    ok = vand(ok, none)
-    t = vload(L_t, c)
-    tc = vload(L_tc, c)
-    tn, tcn = compensated_add(t, tc, vload(hv, c))
-    steps = vload(L_steps, c)
-    sn = vadd(steps, vsplat(1.0))
-    ok = vand(ok, vand(vand(vlt(tn, vsplat(tmax)), vlt(sn, vsplat(max_steps))), vgt(vload(L_left, c), zero)))
-    vstore(L_t, c, vselect(ok, tn, t))
-    vstore(L_tc, c, vselect(ok, tcn, tc))
-    vstore(L_steps, c, vselect(ok, sn, steps))
-    vstore(L_gprev, c, vselect(ok, gnew, vload(L_gprev, c)))
-    vstore(X, c, vselect(ok, y0, vload(X, c)))
-    vstore(X, w + c, vselect(ok, y1, vload(X, w + c)))
-    vstore(X, 2 * w + c, vselect(ok, y2, vload(X, 2 * w + c)))
-    vstore(X, 3 * w + c, vselect(ok, y3, vload(X, 3 * w + c)))
-    vstore(X, 4 * w + c, vselect(ok, y4, vload(X, 4 * w + c)))
-    return vbits(vandnot(live, ok))
-
-
-@njit
-def _evaluate_lane(X, order, l, h, out):
-    """out[i] = sum_k X[k, i, l] h^k: kernels.taylor.evaluate on lane l."""
-    for i in range(NVAR):
-        acc = X[order, i, l]
-        for k in range(order - 1, -1, -1):
-            acc = acc * h + X[k, i, l]
-        out[i] = acc
-
-
-@njit
-def _finish(j, l, X, count, status, t, tc, gprev, steps, carry, out_count, out_status, out_final,
-            out_info):
-    for i in range(NVAR):
-        out_final[j, i] = X[0, i, l]
-    save_carry(carry[j], t, tc, gprev, steps)
-    store_orbit(j, count, status, t, steps, out_count, out_status, out_final, out_info)
-
-
 @njit(inline="always")
 def next_lane_orbit(next_orbit, n, orb, l, X, nrows):
     """The next unstarted orbit of a batch of ``n`` (the shared counter ``next_orbit``) for lane
@@ -328,115 +216,8 @@ def next_lane_orbit(next_orbit, n, orb, l, X, nrows):
     return j
 
 
-@njit
-def _start_lane(l, X, orb, L_on, L_left, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, L_target, L_room,
-                next_orbit, Y0, tmax, max_steps, carry, limits, out_count, out_status, out_final, out_info):
-    while True:
-        j = next_lane_orbit(next_orbit, Y0.shape[0], orb, l, X, NVAR)
-        if j < 0:
-            L_on[l] = 0.0
-            return 0
-        for i in range(NVAR):
-            X[0, i, l] = Y0[j, i]
-        t, tc, g, steps, H0 = read_carry(carry[j])
-        if limits[j, LIMIT_TARGET] == 0:
-            _finish(j, l, X, 0, STATUS_DONE, t, tc, g, steps, carry, out_count, out_status, out_final,
-                    out_info)
-            continue
-        if t >= tmax:
-            _finish(j, l, X, 0, STATUS_TMAX, t, tc, g, steps, carry, out_count, out_status, out_final,
-                    out_info)
-            continue
-        if steps >= max_steps:
-            _finish(j, l, X, 0, STATUS_MAX_STEPS, t, tc, g, steps, carry, out_count, out_status, out_final,
-                    out_info)
-            continue
-        orb[l] = j
-        L_H0[l] = H0
-        L_gprev[l] = g
-        L_t[l] = t
-        L_tc[l] = tc
-        L_count[l] = 0
-        L_steps[l] = steps
-        L_target[l] = limits[j, LIMIT_TARGET]
-        L_room[l] = limits[j, LIMIT_ROOM]
-        L_on[l] = 1.0
-        L_left[l] = float(L_target[l])
-        return 1
-
-
-#: the lane worker's work arrays: five n-dimensional ones, then the 1-D ones of workspace_views
-WORKSPACE_ND = (("X", "(p + 1, NVAR, W)"), ("norms", "(N_NORMS, W)"), ("ynew", "(NVAR, W)"),
-                ("brackets", "(MAX_STEP_ROOTS, 4)"), ("stack", "(ISOLATE_STACK, 5)"))
-WORKSPACE_F = (("hv", "W"), ("vary", "W"), ("yl", "NVAR"), ("yc", "NVAR"), ("gc", "p + 1"),
-               ("work", "p + 1"), ("roots", "MAX_STEP_ROOTS"), ("L_t", "W"), ("L_tc", "W"),
-               ("L_gprev", "W"), ("L_H0", "W"), ("L_steps", "W"), ("L_on", "W"), ("L_left", "W"),
-               ("L_fast", "W"), ("L_last", "W"))
-WORKSPACE_I = ("orb", "L_count", "L_target", "L_room", "L_status")
-WORKSPACE_B = ("L_stop",)
-#: the float work arrays of W lanes (the first of WORKSPACE_F's flat buffer), the int ones
-N_FLOAT_W = 11
-N_INT_W = 5
-#: length of the output of :func:`workspace_sizes`
-N_WORKSPACE = 8
 #: alignment (bytes) of the float work arrays: one cache line, one vector of LANES doubles
 ALIGN = 64
-
-
-@njit
-def workspace_sizes(order, w, out):
-    """Sizes of the worker's work arrays for ``order`` and ``w`` lanes: out[0:5] the elements of
-    WORKSPACE_ND (X, norms, ynew, brackets, stack), out[5:8] the lengths of the flat float64,
-    int64 and bool buffers of :func:`workspace_views`."""
-    p1 = order + 1
-    out[0] = p1 * NVAR * w
-    out[1] = N_NORMS * w
-    out[2] = NVAR * w
-    out[3] = MAX_STEP_ROOTS * 4
-    out[4] = ISOLATE_STACK * 5
-    out[5] = N_FLOAT_W * w + 2 * NVAR + 2 * p1 + MAX_STEP_ROOTS
-    out[6] = N_INT_W * w
-    out[7] = w
-
-
-@njit
-def workspace_views(order, w, wf, wi, wb):
-    """The 1-D work arrays (WORKSPACE_F, WORKSPACE_I, WORKSPACE_B) of ``w`` lanes as views of the
-    flat buffers ``wf``, ``wi``, ``wb`` (slices: views that cost nothing)."""
-    p1 = order + 1
-    hv, vary, L_t, L_tc, L_gprev, L_H0 = (wf[0:w], wf[w:2 * w], wf[2 * w:3 * w], wf[3 * w:4 * w], wf[4 * w:5 * w],
-                                          wf[5 * w:6 * w])
-    L_steps, L_on, L_left, L_fast, L_last = (wf[6 * w:7 * w], wf[7 * w:8 * w], wf[8 * w:9 * w], wf[9 * w:10 * w],
-                                             wf[10 * w:11 * w])
-    orb, L_count, L_target, L_room, L_status = (wi[0:w], wi[w:2 * w], wi[2 * w:3 * w], wi[3 * w:4 * w],
-                                                wi[4 * w:5 * w])
-    a = N_FLOAT_W * w
-    yl = wf[a:a + NVAR]
-    yc = wf[a + NVAR:a + 2 * NVAR]
-    a += 2 * NVAR
-    gc = wf[a:a + p1]
-    work = wf[a + p1:a + 2 * p1]
-    a += 2 * p1
-    roots = wf[a:a + MAX_STEP_ROOTS]
-    L_stop = wb[0:w]
-    return (hv, vary, yl, yc, gc, work, roots, L_t, L_tc, L_gprev, L_H0, L_steps, L_on, L_left, L_fast, L_last, orb,
-            L_count, L_target, L_room, L_status, L_stop)
-
-
-# nogil: the batch drivers Python calls release the GIL (docs/architecture.md, Parallelism)
-@njit(nogil=True)
-def _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
-                out_cross, out_count, out_status, out_final, out_info):
-    w = LANES
-    n = np.zeros(N_WORKSPACE, np.int64)
-    workspace_sizes(order, w, n)
-    return run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry,
-                      limits, out_cross, out_count, out_status, out_final, out_info,
-                      aligned_zeros(n[0]).reshape((order + 1, NVAR, w)),
-                      aligned_zeros(n[1]).reshape((N_NORMS, w)), aligned_zeros(n[2]).reshape((NVAR, w)),
-                      aligned_zeros(n[3]).reshape((MAX_STEP_ROOTS, 4)),
-                      aligned_zeros(n[4]).reshape((ISOLATE_STACK, 5)), aligned_zeros(n[5]),
-                      np.zeros(n[6], np.int64), np.zeros(n[7], np.bool_))
 
 
 @njit
@@ -447,120 +228,45 @@ def aligned_zeros(n):
     return buf[skip:skip + n]
 
 
-@njit
-def run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
-               out_cross, out_count, out_status, out_final, out_info, X, norms, ynew, brackets, stack, wf, wi, wb):
-    """Integrate orbits taken from the shared counter ``next_orbit`` on up to ``nlanes`` lanes
-    until none is left: the Taylor crossing loop, each lane one orbit, LANES lanes (the last axis
-    of X)."""
-    w = LANES
-    # the recurrence's work array (explorer.integrate.codegen: rows of the nodes whose past it reads)
-    Wr = aligned_zeros((order + 1) * max(N_WORK, 1) * w).reshape((order + 1, max(N_WORK, 1), w))
-    (hv, vary, yl, yc, gc, work, roots, L_t, L_tc, L_gprev, L_H0, L_steps, L_on, L_left, L_fast, L_last, orb,
-     L_count, L_target, L_room, L_status, L_stop) = workspace_views(order, w, wf, wi, wb)
-    for l in range(w):
-        orb[l] = _IDLE
-        L_on[l] = 0.0
-    factor, e_p, e_q = step_constants(order)
-    active = 0
-    for l in range(nlanes):
-        active += _start_lane(l, X, orb, L_on, L_left, L_t, L_tc, L_gprev, L_H0, L_count, L_steps, L_target,
-                              L_room, next_orbit, Y0, tmax, max_steps, carry, limits,
-                              out_count, out_status, out_final, out_info)
-
-    while active > 0:
-        taylor_coefficients_lanes(P, X, order, Wr)
-        step_norms_lanes(X, order, e_p, e_q, norms)
-        step_lanes(L_on, norms, L_t, tmax, e_p, e_q, factor, hv, L_last, L_fast, L_status, L_stop, w)
-        evaluate_lanes(X, order, hv, ynew, 0)
-        variation_lanes(X, order, hv, cphi, sphi, vary)
-        for c in range(0, w, LANES):
-            bits = end_steps_lanes(X, order, ynew, vary, hv, L_t, L_tc, L_gprev, L_steps, L_left, L_on, L_fast,
-                                   L_last, cphi, sphi, direction, tmax, max_steps, c, w)
-            while bits != 0:
-                ib, bits = next_bit(bits)
-                l = c + ib
-                j = orb[l]
-                if not L_stop[l]:
-                    L_steps[l] += 1.0
-                    s = 0.0
-                    for i in range(NVAR):
-                        yl[i] = ynew[i, l]
-                        s += yl[i]
-                    if not is_finite(s):
-                        stop_lane(l, STATUS_NONFINITE, L_status, L_stop)
-                if not L_stop[l]:
-                    h = hv[l]
-                    t = L_t[l]
-                    tc = L_tc[l]
-                    gprev = L_gprev[l]
-                    count = L_count[l]
-                    gnew = section_g(yl, cphi, sphi)
-                    nroots = 0
-                    if not excluded_by_variation(sin_diff(X[0, _G1, l], X[0, _G2, l], cphi, sphi), vary[l]):
-                        for k in range(order + 1):
-                            gc[k] = sin_diff(X[k, _G1, l], X[k, _G2, l], cphi, sphi)
-                        nroots = poly_step_roots(gc, order, h, gprev, gnew, direction, roots,
-                                                 brackets, work, stack)
-                    for r in range(nroots):
-                        if count >= L_room[l]:
-                            break
-                        tau = roots[r]
-                        _evaluate_lane(X, order, l, tau, yc)
-                        kept = keep_crossing(out_cross[j], count, (t - tc) + tau, yc, P, L_H0[l], cphi, sphi)
-                        if kept < 0:
-                            stop_lane(l, STATUS_NONFINITE, L_status, L_stop)
-                            break
-                        count = kept
-                        L_count[l] = count
-                        L_left[l] = float(L_target[l] - count)
-                if not L_stop[l]:
-                    t, tc = advance_time(t, tc, h, L_last[l] != 0.0, tmax)
-                    L_t[l] = t
-                    L_tc[l] = tc
-                    for i in range(NVAR):
-                        X[0, i, l] = yl[i]
-                    L_gprev[l] = gnew
-                    if count >= L_target[l]:
-                        stop_lane(l, STATUS_DONE, L_status, L_stop)
-                    elif t >= tmax:
-                        stop_lane(l, STATUS_TMAX, L_status, L_stop)
-                    elif L_steps[l] >= max_steps:
-                        stop_lane(l, STATUS_MAX_STEPS, L_status, L_stop)
-                if L_stop[l]:
-                    _finish(j, l, X, L_count[l], L_status[l], L_t[l], L_tc[l], L_gprev[l], L_steps[l], carry,
-                            out_count, out_status, out_final, out_info)
-                    active += _start_lane(l, X, orb, L_on, L_left, L_t, L_tc, L_gprev, L_H0, L_count, L_steps,
-                                          L_target, L_room, next_orbit, Y0, tmax, max_steps, carry, limits,
-                                          out_count, out_status, out_final, out_info) - 1
-    return 0
+#: the section phi = phi0 as every System's: s = a . y + b (sin(phi - phi0)), its half keep . (y, 1) > 0
+#: (cos(phi - phi0)), the rows (t, p1, p2, M, H - H0)
+ROW_STATES = np.array([0, 1, 2], np.int64)
 
 
+def section_arrays(cphi, sphi):
+    """(a, b, keep) of the section phi = phi0 (cphi, sphi = cos phi0, sin phi0) for the generated drivers."""
+    return (np.array([0.0, 0.0, 0.0, cphi, -sphi]), 0.0, np.array([0.0, 0.0, 0.0, sphi, cphi, 0.0]))
+
+
+# nogil: the batch drivers Python calls release the GIL (docs/architecture.md, Parallelism)
 @njit(parallel=True, nogil=True)
-def _run_lanes(nworkers, nlanes, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
-               out_cross, out_count, out_status, out_final, out_info):
-    """nworkers workers (prange) of nlanes lanes each, fed from one shared queue of orbits."""
+def _run_lanes(nworkers, Y0, P, a, b, keep, direction, tmax, order, max_steps, carry, limits, out_cross, out_count,
+               out_status, out_final, out_info):
+    """nworkers groups of LANES lanes (prange), fed from one shared queue of orbits."""
     next_orbit = np.zeros(1, np.int64)
     for w in prange(nworkers):
-        _run_worker(nlanes, next_orbit, Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
-                    out_cross, out_count, out_status, out_final, out_info)
+        G.crossings_lanes_worker(next_orbit, Y0, P, a, b, keep, ROW_STATES, direction, tmax, order, max_steps, carry,
+                                 limits, out_cross, out_count, out_status, out_final, out_info, False)
     return 0
 
 
 def run_taylor_lanes_batch(Y0, P, cphi, sphi, direction, tmax, order, max_steps, carry, limits,
-                           out_cross, out_count, out_status, out_final, out_info, max_lanes=None):
+                           out_cross, out_count, out_status, out_final, out_info):
     """Crossings of the section by the Taylor method of ``order`` for every orbit of Y0: the
     arguments and outputs of every batch driver (:mod:`explorer.integrate.drivers`: the carry, the
-    limits of a block, the outputs)."""
-    n = Y0.shape[0]
-    nworkers = lane_workers(n, max_lanes)
-    nlanes = worker_lanes(n, nworkers, max_lanes)
+    limits of a block, the outputs; info's time the clock's sum t and its last column the Casimir
+    error g1^2 + g2^2 - 1 of the final state)."""
+    a, b, keep = section_arrays(cphi, sphi)
+    nworkers = lane_workers(Y0.shape[0])
+    args = (Y0, P, a, b, keep, int(direction), float(tmax), int(order), int(max_steps), carry, limits, out_cross,
+            out_count, out_status, out_final, out_info)
     if nworkers == 1:
-        return _run_worker(nlanes, np.zeros(1, np.int64), Y0, P, cphi, sphi, int(direction), float(tmax),
-                           int(order), int(max_steps), carry, limits, out_cross, out_count, out_status, out_final,
-                           out_info)
-    return _run_lanes(nworkers, nlanes, Y0, P, cphi, sphi, int(direction), float(tmax), int(order),
-                      int(max_steps), carry, limits, out_cross, out_count, out_status, out_final, out_info)
+        G.crossings_lanes_worker(np.zeros(1, np.int64), *args[:5], ROW_STATES, *args[5:], False)
+    else:
+        _run_lanes(nworkers, *args)
+    out_info[:, 0] = carry[:, CARRY_T]
+    out_info[:, 2] = out_final[:, 3] ** 2 + out_final[:, 4] ** 2 - 1.0
+    return 0
 
 
 def lane_workers(n, max_lanes=None):
