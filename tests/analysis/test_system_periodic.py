@@ -114,6 +114,34 @@ def test_the_search_finds_the_fixed_points_and_their_copies_under_the_threefold_
                        for m in found if m is not o)
 
 
+def test_the_seeds_run_on_the_threads_given_and_are_the_same_on_one_or_two(smap, monkeypatch):
+    from explorer.analysis import system_section_map as ssm
+
+    seen = []
+
+    def spy(*args, **kw):
+        seen.append(kw["threads"])
+        return crossings(*args, **kw)
+
+    crossings = ssm.system_crossings
+    monkeypatch.setattr(ssm, "system_crossings", spy)
+    one = smap.symmetric_seeds(1, 12, threads=1), smap.grid_seeds(1, 6, threads=1)
+    assert set(seen) == {1}
+    seen.clear()
+    two = smap.symmetric_seeds(1, 12, threads=2), smap.grid_seeds(1, 6, threads=2)
+    assert 2 in seen and set(seen) <= {1, 2}           # a lone orbit runs on one thread
+    assert all(np.array_equal(a, b) and len(a) for a, b in zip(one, two))
+
+
+def test_the_search_budget_is_eight_typical_returns_near_the_linear_period_2pi(smap, elliptic, hyperbolic):
+    """Near the origin Hénon–Heiles is two oscillators of frequency 1: returns take about 2 pi."""
+    from explorer.analysis.system_section_map import SEARCH_RETURNS
+
+    assert smap.typical_return_time == pytest.approx(2.0 * math.pi, rel=0.15)
+    assert smap.search_tmax == SEARCH_RETURNS * smap.typical_return_time
+    assert max(elliptic.return_time, hyperbolic.return_time) < smap.search_tmax
+
+
 def test_the_elliptic_point_is_continued_in_the_energy(smap, elliptic):
     br = pr.continue_periodic(smap, 1, "energy", E, E + 0.01, 0.005, elliptic.points)
     assert br.stopped is None and np.allclose(br.values, [E, E + 0.005, E + 0.01])

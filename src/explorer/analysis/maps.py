@@ -42,7 +42,7 @@ class AreaPreservingMap(Protocol):
 
     def with_value(self, name: str, value): ...
 
-    def images(self, X, n, *, backward: bool = False) -> np.ndarray: ...
+    def images(self, X, n, *, backward: bool = False, threads=None) -> np.ndarray: ...
 
     @property
     def reversors(self) -> tuple: ...
@@ -61,6 +61,9 @@ class AreaPreservingMap(Protocol):
     def orbit_fields(self) -> dict: ...
 
     def with_tmax(self, tmax): ...
+
+    @property
+    def search_tmax(self) -> float: ...
 
     def symmetric_seeds(self, period: int, n: int, *, threads=None) -> np.ndarray: ...
 
@@ -107,23 +110,23 @@ def difference(system, a, b) -> np.ndarray:
     return d
 
 
-def images(system, X, n: int, *, backward: bool = False) -> np.ndarray:
+def images(system, X, n: int, *, backward: bool = False, threads=None) -> np.ndarray:
     """The first ``n`` images (preimages with ``backward``) of each point of X (m, 2): (m, n, 2),
-    NaN from a failure: the map's own ``images`` (a section map's one batch of the lanes)."""
+    NaN from a failure: the map's own ``images`` (a section map's one batch of the lanes, on ``threads``)."""
     X = np.asarray(X, float).reshape(-1, 2)
     if n == 0 or X.size == 0:
         return np.full((X.shape[0], n, 2), np.nan)
-    return system.images(X, n, backward=backward)
+    return system.images(X, n, backward=backward, threads=threads)
 
 
-def grid_minima(system, K: int, grid: int) -> np.ndarray:
+def grid_minima(system, K: int, grid: int, threads=None) -> np.ndarray:
     """The centres of a ``grid`` x ``grid`` grid of cells over the map's ``domain`` where
-    ``|P^K(x) - x|`` (on its cylinder) has a local minimum, best first."""
+    ``|P^K(x) - x|`` (on its cylinder) has a local minimum, best first; the images on ``threads``."""
     (a0, a1), (b0, b1) = system.domain
     u = (np.arange(grid) + 0.5) / grid
     U, V = np.meshgrid(a0 + (a1 - a0) * u, b0 + (b1 - b0) * u, indexing="ij")
     X = np.column_stack([U.ravel(), V.ravel()])
-    img = images(system, X, K)[:, -1]
+    img = images(system, X, K, threads=threads)[:, -1]
     R = np.linalg.norm(difference(system, img, X), axis=1).reshape(grid, grid)
     R[~np.isfinite(R)] = np.inf
     pad = np.pad(R, 1, constant_values=np.inf)
@@ -318,6 +321,8 @@ class StandardMap:
     #: the lines theta = const of Fix I0
     I0_LINES = (0.0, math.pi)
     periods = (2.0 * math.pi, 0.0)
+    #: an application is one step: no time budget (:meth:`with_tmax`)
+    search_tmax = math.inf
     #: the fundamental domain drawn and searched ((theta0, theta1), (p0, p1))
     domain = ((0.0, 2.0 * math.pi), (-math.pi, math.pi))
 
@@ -416,8 +421,9 @@ class StandardMap:
         standard_orbit(th, p, self.k, n, bool(backward), out)
         return out
 
-    def images(self, X, n, *, backward=False) -> np.ndarray:
-        """The first ``n`` images of each point of X (m, 2): (m, n, 2), one compiled loop."""
+    def images(self, X, n, *, backward=False, threads=None) -> np.ndarray:
+        """The first ``n`` images of each point of X (m, 2): (m, n, 2), one compiled serial loop (``threads``
+        unused: an image costs a few operations)."""
         X = np.ascontiguousarray(np.asarray(X, float).reshape(-1, 2))
         n = validation.integer("n", n, 0)
         out = np.empty((X.shape[0], n, 2))
@@ -476,7 +482,7 @@ class StandardMap:
 
     def grid_seeds(self, period: int, grid: int, *, threads=None) -> np.ndarray:
         """:func:`grid_minima` over :attr:`domain`."""
-        return grid_minima(self, period, grid)
+        return grid_minima(self, period, grid, threads)
 
     def lifted_increments(self, starts, center, n, threads=None) -> tuple:
         """The angle increments of the orbits' first ``n`` returns around ``center``

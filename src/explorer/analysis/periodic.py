@@ -38,8 +38,6 @@ SAME_ORBIT_TOL = 1e-6
 ISOLATION_TOL = SAME_ORBIT_TOL
 MAP_NOISE = 1e-15
 DEGENERATE_RESIDUE = KIND_TOL / 4
-#: time budget of one return of the map in a search
-SEARCH_TMAX = 50.0
 MAX_HALVINGS = 6
 
 
@@ -383,28 +381,28 @@ def _partners(smap, orbits, same_tol, *, max_iter, threads) -> list:
 
 
 @system_first(systems="map", settings=("phi0", "tol"))
-def periodic_guesses(system, period, *, grid=12, line=None, tmax=SEARCH_TMAX, threads=None) -> np.ndarray:
+def periodic_guesses(system, period, *, grid=12, line=None, tmax=None, threads=None) -> np.ndarray:
     """The Newton starts of :func:`search_periodic_orbits` in order: the map's ``symmetric_seeds``, ``line``
     per symmetry line, then its ``grid_seeds``, the local minima of ``|P^K(x) - x|`` on a ``grid`` x ``grid``
-    grid, best first; ``tmax``: the time budget of one return."""
+    grid, best first; ``tmax``: the time budget of one return (default the map's ``search_tmax``)."""
     K = _check_period(period)
     grid = validation.integer("grid", grid, 2, 1000)
     line = 8 * grid if line is None else validation.integer("line", line, 2)
-    smap = system.with_tmax(tmax)
+    smap = system.with_tmax(system.search_tmax if tmax is None else tmax)
     return np.concatenate([np.asarray(smap.symmetric_seeds(K, line, threads=threads), float).reshape(-1, 2),
                            np.asarray(smap.grid_seeds(K, grid, threads=threads), float).reshape(-1, 2)])
 
 
 @system_first(systems="map", settings=("phi0", "tol"))
 def search_periodic_orbits(system, period, *, grid=12, line=None, max_guesses=60, max_iter=NEWTON_MAX_ITER,
-                           tmax=SEARCH_TMAX, time_limit=None, same_tol=SAME_ORBIT_TOL, threads=None,
+                           tmax=None, time_limit=None, same_tol=SAME_ORBIT_TOL, threads=None,
                            guesses=None) -> list:
     """The periodic orbits of minimal period ``period`` found from :func:`periodic_guesses` (or
     ``guesses``), each once, completed by symmetry (the map's linear reversor, exactly; its
     ``partner_points``, by Newton), isolated before degenerate (docs/commands/periodic.md)."""
     K = _check_period(period)
     max_guesses = validation.integer("max_guesses", max_guesses, 1)
-    smap = system.with_tmax(tmax)
+    smap = system.with_tmax(system.search_tmax if tmax is None else tmax)
     if guesses is None:
         guesses = periodic_guesses(system, K, grid=grid, line=line, tmax=tmax, threads=threads)
     else:

@@ -24,8 +24,8 @@ from explorer.kernels.taylor import order_for_tolerance
 from explorer.model import ParameterError, symmetry, validation, with_value
 from explorer.model.equations import rhs
 
-__all__ = ["DEFAULT_TOL", "MAP_SETTINGS", "MAX_STEPS", "RETURN_TMAX", "MapResult", "SectionMap", "as_system",
-           "is_params", "not_a_system", "system_first"]
+__all__ = ["DEFAULT_TOL", "MAP_SETTINGS", "MAX_STEPS", "RETURN_TMAX", "SEARCH_TMAX", "MapResult", "SectionMap",
+           "as_system", "is_params", "not_a_system", "system_first"]
 
 #: Taylor tolerance of the section map: the tightest the order rule allows
 DEFAULT_TOL = MAP_TOL
@@ -33,6 +33,9 @@ DEFAULT_TOL = MAP_TOL
 MAX_STEPS = 10**8
 #: a batch of the map with fewer returns (points x n) runs on one thread
 SERIAL_RETURNS = 4096
+#: time budget of one return in a periodic-orbit search: 8 typical returns (~6.2 at h = 2), the rule of
+#: a System's map (explorer.analysis.system_section_map.SEARCH_RETURNS)
+SEARCH_TMAX = 50.0
 
 
 class SectionMap:
@@ -44,6 +47,8 @@ class SectionMap:
 
     #: the integrator of the map, which the analyses given a map use
     method = "taylor"
+    #: the time budget of one return in a periodic-orbit search
+    search_tmax = SEARCH_TMAX
 
     def __new__(cls, *args, **kw):
         """A System first gives its section map on an energy level (docs/systems.md, "Section map")."""
@@ -191,9 +196,10 @@ class SectionMap:
         return SectionMap(self.params, self.h, phi0=(self.phi0 + math.pi) % (2.0 * math.pi), tol=self.tol,
                           tmax=self.tmax)
 
-    def half_turns(self, X, q: int) -> np.ndarray:
+    def half_turns(self, X, q: int, threads=None) -> np.ndarray:
         """(p1, p2) (m, 2) of each point of X after ``q`` half-turns of phi: on phi0 for even ``q``, on
-        :meth:`opposite`'s section for odd; NaN outside the allowed region or for no crossing."""
+        :meth:`opposite`'s section for odd; NaN outside the allowed region or for no crossing; point by
+        point on this thread (``threads`` unused)."""
         X = np.asarray(X, float).reshape(-1, 2)
         out = np.full(X.shape, np.nan)
         sections = (model.section_gamma((self.phi0 + math.pi) % (2.0 * math.pi)), model.section_gamma(self.phi0))
@@ -262,9 +268,9 @@ class SectionMap:
         """What names the map in a PeriodicOrbit: ``params``, ``h``, ``phi0``."""
         return {"params": self.params, "h": self.h, "phi0": self.phi0}
 
-    def images(self, X, n, *, backward=False) -> np.ndarray:
+    def images(self, X, n, *, backward=False, threads=None) -> np.ndarray:
         """The first ``n`` images (preimages with ``backward``) of each point of X: (m, n, 2), NaN from
-        a failure; one batch of the lanes (backward through G0), else point by point."""
+        a failure; one batch of the lanes on ``threads`` (backward through G0), else point by point."""
         X = np.asarray(X, float).reshape(-1, 2)
         out = np.full((X.shape[0], n, 2), np.nan)
         G = self.reflection
@@ -274,7 +280,7 @@ class SectionMap:
                 ok = model.section_M2(self.params, Y[:, 0], Y[:, 1], self.h, self.phi0) > 0
             if ok.any():
                 c = run(self.params, self.states(Y[ok]), n_crossings=n, phi0=self.phi0, tol=self.tol,
-                        tmax=self.tmax * n, threads=1 if int(ok.sum()) * n < SERIAL_RETURNS else None)
+                        tmax=self.tmax * n, threads=1 if int(ok.sum()) * n < SERIAL_RETURNS else threads)
                 img = np.array(c.data[:, :n, 1:3], float)
                 for i in range(len(img)):
                     img[i, c.count[i]:] = np.nan

@@ -64,12 +64,12 @@ def line_point(smap, x, line) -> np.ndarray:
     return y
 
 
-def half_turn_p2(smap, t, Q: int, line=None) -> np.ndarray:
+def half_turn_p2(smap, t, Q: int, line=None, threads=None) -> np.ndarray:
     """u . x after Q half turns from the points t v of the symmetry line of the half ``line`` (:func:`axes`;
-    p2 on Chaplygin's section); NaN where not reached."""
+    p2 on Chaplygin's section); NaN where not reached; the half turns on ``threads``."""
     m, v, u = _shooting(smap, line, Q % 2)
     ts = np.atleast_1d(np.asarray(t, float))
-    return m.half_turns(ts[:, None] * v[None, :], Q) @ u
+    return m.half_turns(ts[:, None] * v[None, :], Q, threads) @ u
 
 
 @functools.lru_cache(maxsize=64)
@@ -79,11 +79,12 @@ def _shooting(smap, line, odd):
     return m, axes(m)[1], axes(m.opposite() if odd else m)[2]
 
 
-def line_roots(smap, Q: int, a: float, b: float, n: int, line=None) -> list:
+def line_roots(smap, Q: int, a: float, b: float, n: int, line=None, threads=None) -> list:
     """The starts t in [a, b] on the symmetry line of the half ``line`` of the symmetric orbits of period Q
-    (or a divisor): the sign changes of :func:`half_turn_p2` over n + 1 samples, refined by the secant."""
+    (or a divisor): the sign changes of :func:`half_turn_p2` over n + 1 samples (on ``threads``), refined by
+    the secant."""
     xs = np.linspace(a, b, n + 1)
-    fs = half_turn_p2(smap, xs, Q, line)
+    fs = half_turn_p2(smap, xs, Q, line, threads)
     roots = []
     for i in np.flatnonzero(np.isfinite(fs[:-1]) & np.isfinite(fs[1:]) & (np.sign(fs[:-1]) != np.sign(fs[1:]))):
         try:
@@ -109,11 +110,11 @@ def line_root(smap, Q, x0, x1, f0=None, f1=None, line=None) -> float:
                          f"equation did not converge)")
 
 
-def symmetric_seeds(smap, Q: int, n: int) -> np.ndarray:
+def symmetric_seeds(smap, Q: int, n: int, threads=None) -> np.ndarray:
     """Seeds (m, 2) on ``smap``'s half of its symmetric orbits of period Q (or a divisor): the roots of
     :func:`half_turn_p2` among ``n`` samples of the symmetry line of each half (the map's and its
     opposite's: an orbit of even period may meet one only), carried to the map's half
-    (:func:`line_point`); none without a linear reversor."""
+    (:func:`line_point`); none without a linear reversor; the samples' half turns on ``threads``."""
     seeds = []
     for m in (smap, smap.opposite()):
         try:
@@ -125,7 +126,7 @@ def symmetric_seeds(smap, Q: int, n: int) -> np.ndarray:
         ts = m.symmetry_line_points(n) @ v
         if ts.size < 2:
             continue
-        for t in line_roots(m, Q, float(ts.min()), float(ts.max()), n - 1):
+        for t in line_roots(m, Q, float(ts.min()), float(ts.max()), n - 1, threads=threads):
             try:
                 seeds.append(line_point(m, t * v, smap.section_label))
             except ParameterError:

@@ -46,7 +46,7 @@ from explorer.integrate.methods import MAP_TOL, MAX_TOL, MIN_TOL
 from explorer.kernels import STATUS_NAMES
 from explorer.model import ParameterError, validation
 
-__all__ = ["ENERGY", "SystemSectionMap"]
+__all__ = ["ENERGY", "SEARCH_RETURNS", "SystemSectionMap"]
 
 #: the name of the energy level among a System map's parameters (``with_value("energy", E)``)
 ENERGY = "energy"
@@ -58,6 +58,14 @@ _SOLUTIONS: dict = {}
 _FLOWS: dict = {}
 #: a root is real where its imaginary part is at most this times max(1, |root|)
 REAL_TOL = 1e-12
+#: a periodic-orbit search gives one return of a seed at most this many typical return times
+#: (:attr:`SystemSectionMap.search_tmax`): seeds whose orbits never come back (they escape, or graze the
+#: section's edge) are cut early, while the slow returns near a hyperbolic point (their time grows like
+#: the log of the distance) and near the domain's edge (2-3 typical on Chaplygin's and Henon-Heiles'
+#: sections) are kept; Chaplygin's search budget, 50, is 8 of its typical returns (~6.2 at h = 2)
+SEARCH_RETURNS = 8
+#: the median return time of the points of a TYPICAL_GRID x TYPICAL_GRID grid of the domain is typical
+TYPICAL_GRID = 8
 
 
 def _symbol_of(system, label, s):
@@ -388,12 +396,13 @@ class SystemSectionMap:
             V[r, [ic, jf]] = np.linalg.solve(A, -np.array([s[j], gH[j]]))
         return V
 
-    def _returns(self, Y, n: int, backward: bool, jacobian: bool):
-        """The crossings of the flow (backward: reversed) from the states Y: (data, count, status)."""
+    def _returns(self, Y, n: int, backward: bool, jacobian: bool, threads=None):
+        """The crossings of the flow (backward: reversed) from the states Y on ``threads``: (data, count,
+        status)."""
         direction = -self.direction if backward else self.direction
         data, count, status, *_ = system_crossings(_flow(self.system, jacobian), Y, n_crossings=n,
                                                    section=self.section.expr, direction=direction, tol=self.tol,
-                                                   tmax=self.tmax * n, threads=1 if len(Y) == 1 else None,
+                                                   tmax=self.tmax * n, threads=1 if len(Y) == 1 else threads,
                                                    backward=backward)
         return data, count, status
 
@@ -429,9 +438,9 @@ class SystemSectionMap:
         """P^-1(x): the previous crossing (the flow backward in time)."""
         return self(x, backward=True, jacobian=False).point
 
-    def images(self, X, n, *, backward=False) -> np.ndarray:
+    def images(self, X, n, *, backward=False, threads=None) -> np.ndarray:
         """The first ``n`` images (preimages with ``backward``) of each point of X: (m, n, 2), NaN for a
-        point outside the domain and after a failed return; one batch of crossings."""
+        point outside the domain and after a failed return; one batch of crossings on ``threads``."""
         X = np.asarray(X, float).reshape(-1, 2)
         n = validation.integer("n", n, 0)
         out = np.full((X.shape[0], n, 2), np.nan)
@@ -442,7 +451,7 @@ class SystemSectionMap:
         lifted = self._on_surface(Y)
         inside = np.flatnonzero(ok)[lifted]
         if inside.size:
-            data, count, _ = self._returns(self._starts(Y[lifted], backward), n, backward, False)
+            data, count, _ = self._returns(self._starts(Y[lifted], backward), n, backward, False, threads)
             cols = [1 + j for j in self._index[:2]]
             img = data[:, :, cols]
             for i in range(len(img)):
@@ -479,10 +488,10 @@ class SystemSectionMap:
         """The map of the same section crossed in the other direction."""
         return SystemSectionMap(self.system, self.energy_value, **dict(self._settings(), direction=-self.direction))
 
-    def half_turns(self, X, q: int) -> np.ndarray:
+    def half_turns(self, X, q: int, threads=None) -> np.ndarray:
         """The coords (m, 2) of the ``q``-th crossing of the section in either direction (crossings
         alternate) after each point of X: on this map's half for even ``q``, :meth:`opposite`'s for
-        odd; NaN outside the domain or for no crossing."""
+        odd; NaN outside the domain or for no crossing; one batch of crossings on ``threads``."""
         X = np.asarray(X, float).reshape(-1, 2)
         out = np.full(X.shape, np.nan)
         Y = self._lifted(X)
@@ -493,12 +502,12 @@ class SystemSectionMap:
             return out
         Y = self._starts(Y[ok], False)
         if q >= 2:
-            data, count, _ = self._returns(Y, q // 2, False, False)
+            data, count, _ = self._returns(Y, q // 2, False, False, threads)
             Y = np.where((count >= q // 2)[:, None], data[:, q // 2 - 1, 1:1 + self.system.dimension], np.nan)
         if q % 2:
             data, count, *_ = system_crossings(_flow(self.system, False), np.nan_to_num(Y), n_crossings=1,
                                                section=self.section.expr, direction=-self.direction, tol=self.tol,
-                                               tmax=self.tmax, threads=1)
+                                               tmax=self.tmax, threads=1 if len(Y) == 1 else threads)
             reached = (count >= 1) & np.isfinite(Y[:, 0])
             Y = np.where(reached[:, None], data[:, 0, 1:1 + self.system.dimension], np.nan)
         out[ok] = Y[:, [ia, ib]]
@@ -621,15 +630,36 @@ class SystemSectionMap:
             lines.append(pts[self.allowed(pts)])
         return np.concatenate(lines) if lines else np.empty((0, 2))
 
+    @functools.cached_property
+    def typical_return_time(self) -> float:
+        """The median return time of the points of a TYPICAL_GRID x TYPICAL_GRID grid of cell centres of
+        :attr:`domain` (those in the domain and returning within ``tmax``)."""
+        (a0, a1), (b0, b1) = self.domain
+        u = (np.arange(TYPICAL_GRID) + 0.5) / TYPICAL_GRID
+        A, B = np.meshgrid(a0 + (a1 - a0) * u, b0 + (b1 - b0) * u, indexing="ij")
+        Y = self._lifted(np.column_stack([A.ravel(), B.ravel()]))
+        Y = Y[self._on_surface(Y)]
+        data, count, _ = self._returns(self._starts(Y, False), 1, False, False) if len(Y) else (None, [0], None)
+        times = data[:, 0, 0][np.asarray(count) >= 1] if len(Y) else np.empty(0)
+        if not times.size:
+            raise ParameterError(f"no point of a {TYPICAL_GRID} x {TYPICAL_GRID} grid of the domain of {self!r} "
+                                 f"returns within tmax = {self.tmax:g}: the map has no typical return time")
+        return float(np.median(times))
+
+    @property
+    def search_tmax(self) -> float:
+        """The time budget of one return in a periodic-orbit search: SEARCH_RETURNS typical return times."""
+        return SEARCH_RETURNS * self.typical_return_time
+
     def symmetric_seeds(self, period: int, n: int, *, threads=None) -> np.ndarray:
         """Seeds (m, 2) of the orbits of period ``period`` symmetric under the linear reversor, from ``n``
         points of its fixed line on each half of the section
-        (:func:`explorer.analysis.symmetry_lines.symmetric_seeds`); none without one."""
-        return symmetric_seeds(self, period, n)
+        (:func:`explorer.analysis.symmetry_lines.symmetric_seeds`, on ``threads``); none without one."""
+        return symmetric_seeds(self, period, n, threads)
 
     def grid_seeds(self, period: int, grid: int, *, threads=None) -> np.ndarray:
-        """:func:`explorer.analysis.maps.grid_minima` over :attr:`domain`."""
-        return grid_minima(self, period, grid)
+        """:func:`explorer.analysis.maps.grid_minima` over :attr:`domain`, on ``threads``."""
+        return grid_minima(self, period, grid, threads)
 
     def partner_points(self, points, *, threads=None):
         """The images (n, 2) of ``points`` under the first of :attr:`reversors` not linear in coords (an orbit
