@@ -19,7 +19,7 @@ from explorer.analysis import sections
 from explorer.integrate import _lanes_generated as G
 from explorer.integrate import drivers, lanes, simd
 from explorer.integrate import systems as sy
-from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_TMAX
+from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_TMAX, clock, events
 from explorer.kernels import taylor as tk
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -228,6 +228,71 @@ def test_vector_step_takes_lane_steps_double_and_leaves_the_rare_lanes_to_it():
             assert L_fast[l] == (1.0 if vector else 0.0)
             seen.add((vector, code))
     assert {(True, -1), (False, -1), (False, STATUS_NONFINITE), (False, lanes.STATUS_STEP_UNDERFLOW)} <= seen
+
+
+def test_vector_step_end_is_the_scalar_one_and_leaves_roots_and_stops_to_the_scalar_loop():
+    """The generated step end (_section_lanes, _ends_lanes of every System's lane driver, here of
+    phi = phi0 as a . y + b): the section's value and coefficients are the scalar loop's doubles; a lane
+    is ended in vector form exactly when the scalar loop would have nothing to do but the bookkeeping
+    (its step went on, not the last, a finite new state, no root possible - by the variation bound, or
+    a monotone polynomial without a sign change of the direction: isolate_crossings' two tests - and no
+    stop by the clock or the step budget), and then its state, sin(phi - phi0), time, compensation and
+    step count are the scalar loop's doubles; every other lane whose step went on is in the returned
+    bits, untouched."""
+    W = L
+    rng = np.random.default_rng(11)
+    order = 6
+    a, b, _keep = lanes.section_arrays(math.cos(2.0), math.sin(2.0))
+    tmax, max_steps = 100.0, 1000
+    seen = set()
+    for _ in range(60):
+        X = np.zeros((order + 1, 5, W))
+        X[0] = random_states(PARAM_SETS["figure4_mu0.5"], W, seed=int(rng.integers(1 << 30))).T
+        X[1:] = rng.normal(size=(order, 5, W)) * rng.choice([0.1, 1.0, 10.0], (order, 1, W))
+        X[1:, :, 0] *= 1e-9                       # a lane far from the section: excluded by the bound
+        direction = int(rng.choice([-1, 0, 1]))
+        hv = rng.uniform(0.01, 0.2, W)
+        Y = np.empty((5, W))
+        G._evaluate_lanes(X, order, hv, Y)
+        Y[rng.integers(0, 5), rng.integers(0, W)] = rng.choice([np.nan, np.inf])
+        L_g = rng.normal(size=W) * rng.choice([0.0, 1.0], W, p=[0.1, 0.9])
+        GC, Gv = np.empty((order + 1, W)), np.empty(W)
+        with np.errstate(all="ignore"):
+            finite, maybe = G._section_lanes(X, order, hv, Y, a, b, direction, L_g, GC, Gv)
+        L_t = rng.choice([1.0, 99.9, 100.0 - 1e-15], W, p=[0.8, 0.1, 0.1])
+        L_tc = rng.normal(scale=1e-17, size=W)
+        L_steps = rng.choice([3.0, 998.0, 999.0], W, p=[0.8, 0.1, 0.1])
+        L_go = rng.choice([0.0, 1.0], W, p=[0.1, 0.9])
+        L_last = rng.choice([0.0, 1.0], W, p=[0.9, 0.1])
+        before = [x.copy() for x in (X, L_t, L_tc, L_g, L_steps)]
+        with np.errstate(all="ignore"):
+            bits = G._ends_lanes(X, Y, Gv, hv, L_go, L_last, finite, maybe, L_t, L_tc, L_steps, L_g, tmax, max_steps)
+        for l in range(W):
+            y = Y[:, l]
+            gc = np.array([G._section_value(a, 0.0, before[0][k, :, l]) for k in range(order + 1)])
+            assert np.array_equal(GC[:, l], gc, equal_nan=True)
+            assert np.array_equal(Gv[l], G._section_value(a, b, y), equal_nan=True)
+            with np.errstate(invalid="ignore"):
+                assert bool(finite >> l & 1) == (sum(y, 0.0) - sum(y, 0.0) == 0.0)
+            excluded = events.no_root_within(gc, order, hv[l])
+            monotone = events.monotone_within(gc, order, hv[l])
+            sign = events.sign_change(L_g_before := before[3][l], Gv[l], direction)
+            seen.add((excluded, monotone, sign))
+            assert bool(maybe >> l & 1) == (not excluded and (not monotone or sign))
+            t, tc = clock.compensated_add(before[1][l], before[2][l], hv[l])
+            vector = (L_go[l] == 1.0 and L_last[l] == 0.0 and bool(finite >> l & 1) and not maybe >> l & 1
+                      and t < tmax and before[4][l] + 1 < max_steps)
+            seen.add((vector, bool(maybe >> l & 1)))
+            assert bool(bits >> l & 1) == (L_go[l] == 1.0 and not vector)
+            if vector:
+                assert np.array_equal(X[0, :, l], y) and L_g[l] == Gv[l]
+                assert (L_t[l], L_tc[l], L_steps[l]) == (t, tc, before[4][l] + 1)
+            else:
+                assert np.array_equal(X[:, :, l], before[0][:, :, l])
+                assert (L_t[l], L_tc[l], L_g[l], L_steps[l]) == (before[1][l], before[2][l], L_g_before, before[4][l])
+    # both ends, and every answer of the three root tests, seen
+    assert {(True, False), (False, True), (False, False)} <= seen
+    assert {(e, m, c) for e in (False, True) for m in (False, True) for c in (False, True)} <= seen
 
 
 # ---------------------------------------------------------------- whole batches
