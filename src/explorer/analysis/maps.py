@@ -77,6 +77,8 @@ class AreaPreservingMap(Protocol):
 
     def generating_function(self, theta, theta_next): ...
 
+    def own_indicators(self, points, **settings): ...
+
 
 def with_value(system, name: str, value):
     """The map with its parameter ``name`` set to ``value``."""
@@ -374,6 +376,10 @@ class StandardMap:
                                    early_megno=early_megno, early_time=early_time, v0=v0, history=history,
                                    max_steps=max_steps, flow={"method": method, "tol": tol, "dt": dt, "w0": w0,
                                                               "phi0": phi0, "h": h})
+
+    def own_indicators(self, points, **settings) -> dict:
+        """:meth:`indicators`: the map has its own tangent map."""
+        return self.indicators(points, **settings)
 
     def not_finite(self, x) -> str:
         return f"the map's Jacobian is not finite at ({x[0]:.6g}, {x[1]:.6g})"

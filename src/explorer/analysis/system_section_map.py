@@ -513,6 +513,10 @@ class SystemSectionMap:
         out[ok] = Y[:, [ia, ib]]
         return out
 
+    def own_indicators(self, points, **settings):
+        """None: the map's chaos indicators are its flow's (:func:`explorer.indicators` integrates them)."""
+        return None
+
     def generating_function(self, theta, theta_next):
         """None known: ParameterError (a section of a flow, not a twist map given by its generating function)."""
         raise ParameterError(f"{self!r} has no generating function: it is the section map of a flow, not a twist "
