@@ -1,8 +1,7 @@
-"""The orbits of one browser session, block by block (docs/commands/serve.md, "How it works"):
-an :class:`OrbitRun` continues a clicked orbit from the StreamState its last block ended in (rows
-bit for bit those of ``explorer orbit``; a :class:`SystemRun` a System's); a :class:`Worker` runs
-them newest first, then round robin.  No web library here.
-"""
+"""The orbits of one browser session, block by block (docs/commands/serve.md, "How it works"): an
+:class:`OrbitRun` (a :class:`SystemRun` for a System) continues a clicked orbit where its last block
+ended, rows bit for bit those of ``explorer orbit``; a :class:`Worker` runs them newest first, then
+round robin.  No web library here."""
 from __future__ import annotations
 
 import copy
@@ -68,12 +67,6 @@ class OrbitRun:
     ahead: np.ndarray = field(default_factory=lambda: np.zeros((0, 5)))   # rows computed past ``done``, cut
     after: str = "running"         # the status once ``ahead`` is handed out
 
-    def reopen(self) -> None:
-        """Compute on to a larger count from where the run stopped at its own."""
-        self.state = self.state.copy()
-        self.state.finished[:] = False
-        self.status = "running"
-
     def __post_init__(self):
         s = self.settings
         self.y0 = model.section_state(s.params, [self.p1], [self.p2], s.h, s.phi0, s.direction or 1)
@@ -88,6 +81,12 @@ class OrbitRun:
     def finished(self) -> bool:
         return bool(self.state.finished[0])
 
+    def reopen(self) -> None:
+        """Compute on to a larger count from where the run stopped at its own."""
+        self.state = self.state.copy()
+        self.state.finished[:] = False
+        self.status = "running"
+
     def advance(self) -> np.ndarray:
         """Compute the next block (at most ``block`` crossings and ``steps`` steps); returns its
         rows (n, 5): t, p1, p2, M, H - H0 (a System's: t, a, b, solve, H - H0)."""
@@ -95,7 +94,6 @@ class OrbitRun:
         rows, steps = self._next_block()
         elapsed = time.perf_counter() - t0
         self.wall += elapsed
-        # the next block: about BLOCK_SECONDS at this block's rates
         rate = len(rows) / elapsed if elapsed > 0 and len(rows) else 0.0
         target = int(rate * BLOCK_SECONDS) if rate else 2 * self.block
         self.block = max(MIN_BLOCK, min(MAX_BLOCK, target, 4 * self.block))
@@ -104,7 +102,7 @@ class OrbitRun:
         return rows
 
     def _next_block(self) -> tuple:
-        """(rows, steps taken) of the next block of the stream."""
+        """(rows, steps taken) of the next block."""
         s = self.settings
         taken = int(self.state.carry[0, layout.CARRY_STEPS])
         b = next(sections.iter_crossings(s.params, states=self.y0, n_crossings=s.crossings, block=self.block,
@@ -129,9 +127,8 @@ def _duration(seconds: float) -> str:
 
 
 def step_estimate(settings, y0) -> int | None:
-    """Steps that an orbit of a fixed-step method from ``y0`` is expected to take: its crossings
-    times the time between two crossings (of a Taylor probe of two crossings) over ``dt``, within
-    its time and step budgets; None for an adaptive method or when the probe finds no crossing."""
+    """Steps a fixed-step orbit from ``y0`` is expected to take (its crossings times the time between
+    two, from a Taylor probe, over ``dt``, within its budgets); None if adaptive or the probe finds none."""
     if settings.adaptive:
         return None
     probe = sections.crossings(settings.params, states=y0, n_crossings=2, max_steps=PROBE_STEPS,
@@ -145,10 +142,8 @@ def step_estimate(settings, y0) -> int | None:
 
 
 class SystemRun(OrbitRun):
-    """A clicked orbit of a System's section map (:class:`explorer.app.serve.system_page.SystemSettings`):
-    each block continues the flow from the state its last step ended in, with the System's
-    crossings of the map's section (:func:`explorer.analysis.system_sections.system_crossings`);
-    rows (t, a, b, solve, H - H0) in the map's coords."""
+    """A clicked orbit of a System's section map (system_page.SystemSettings): each block continues the
+    flow from its last state (analysis.system_sections.system_crossings); rows (t, a, b, solve, H - H0)."""
 
     def __post_init__(self):
         smap = self.settings.smap
@@ -186,8 +181,7 @@ class SystemRun(OrbitRun):
 
 
 def warm_up(settings) -> None:
-    """Load (or compile) the crossing kernels of ``settings``' method before the first click: one
-    crossing from the centre of the region (a failure is not reported)."""
+    """Load (or compile) the crossing kernels of ``settings``' method: one crossing from the region's centre."""
     region = settings.region
     if region is None:
         return
@@ -198,16 +192,14 @@ def warm_up(settings) -> None:
 
 
 def orbit_indicators(settings, p1: float, p2: float) -> tuple:
-    """(mean MEGNO <Y>, finite-time mLCE) over INDICATOR_TIME of the orbit from (p1, p2)
-    (the settings' ``megno``: the orbit's method and tolerance); NaN when the run stopped early."""
+    """(mean MEGNO <Y>, finite-time mLCE) over INDICATOR_TIME of the orbit from (p1, p2); NaN if it stopped early."""
     megno, mlce = settings.megno([p1], [p2], INDICATOR_TIME, INDICATOR_MAX_STEPS, mlce=True)
     return float(megno[0]), float(mlce[0])
 
 
 class Worker:
-    """A session's orbits, run block by block by one task ``orbits`` of ``session`` (a
-    :class:`~explorer.app.serve.tasks.Session`; module docstring); each block, error, notice and
-    indicator is applied on the session's loop by that task, and a :meth:`cancel` ends it."""
+    """A session's orbits, run block by block by one task ``orbits`` of ``session`` (tasks.Session), which
+    applies each block, error, notice and indicator on the session's loop; :meth:`cancel` ends it."""
 
     def __init__(self, session, on_block: Callable[[int, np.ndarray, int, str], None],
                  on_error: Callable[[int, BaseException], None] = lambda _i, _e: None,
@@ -227,8 +219,7 @@ class Worker:
             self.session.start("orbits", self._loop())
 
     def submit(self, p1: float, p2: float, settings, ident: int | None = None) -> OrbitRun:
-        """Queue an orbit from (p1, p2) (ParameterError, nothing queued, outside the region), as
-        orbit ``ident`` (None: a new id; an id of an orbit cancelled before, rerun at new settings)."""
+        """Queue the orbit from (p1, p2) as orbit ``ident`` (None: a new id; a cancelled orbit's: its rerun)."""
         if ident is None:
             self._next_id += 1
             ident = self._next_id
@@ -249,11 +240,10 @@ class Worker:
         self._ended = [r for r in self._ended if r.ident != ident]
 
     def recount(self, settings, cut: Callable[[int, int], np.ndarray]) -> dict:
-        """Every orbit at ``settings``, which differ only in the crossings per click K: an orbit past K
-        is cut to K (``cut(ident, K)`` takes its rows past K off the page and returns them, kept in
-        :attr:`OrbitRun.ahead`); one short of K gets its kept rows, then continues exactly where it
-        stopped, or reruns from its start (``cut(ident, 0)`` first) when its stop depends on K (its time
-        budget, 100 K).  A block in progress is dropped.  Returns {ident: (crossings, status)}."""
+        """Every orbit at ``settings``, which differ only in the crossings per click K: one past K is cut to
+        K (``cut(ident, K)`` returns its rows past K, kept in :attr:`OrbitRun.ahead`); one short of K gets
+        its kept rows and continues, or reruns (``cut(ident, 0)``) if it stopped on its time budget (100 K).
+        A block in progress is dropped.  Returns {ident: (crossings, status)}."""
         out: dict = {}
         groups = (self._runs, self._paused, self._ended)
         self._runs, self._paused, self._ended = [], [], []
@@ -290,8 +280,7 @@ class Worker:
         return run
 
     def pause(self) -> list[int]:
-        """Set every running orbit aside (the block in progress is still applied); returns their
-        ids.  :meth:`resume` continues them."""
+        """Set every running orbit aside (the block in progress still applies); returns their ids."""
         moved, self._runs = self._runs, []
         self._paused = self._paused + moved
         return [r.ident for r in moved]
@@ -333,8 +322,7 @@ class Worker:
         return any(r is run for r in self._runs + self._paused + self._ended)
 
     async def _loop(self) -> None:
-        """The task: block after block of the queued orbits until none is left.  A block is computed
-        on a copy of its run, handed out only if the run is still queued at the same settings."""
+        """The task: block after block until no orbit is queued; each on a copy of its run (_hand_out)."""
         session = self.session
         while (run := self._pick()) is not None:
             work = copy.copy(run)
@@ -353,7 +341,7 @@ class Worker:
             if not self._queued(run):       # removed while its block was computed
                 continue
             if self._on_indicators and run.wants_indicators and (run.finished or run.wall >= INDICATOR_AFTER):
-                run.wants_indicators = False      # once the orbit is finished (or has run INDICATOR_AFTER)
+                run.wants_indicators = False
                 try:
                     megno, mlce = await session.run(orbit_indicators, run.settings, run.p1, run.p2)
                 except Exception:  # noqa: BLE001 - an indicator that fails is shown as unknown

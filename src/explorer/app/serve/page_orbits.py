@@ -42,17 +42,13 @@ def _empty_live() -> dict:
     return {c: [] for c in _empty_crossings()}
 
 
-def _empty_starts() -> dict:
-    return {"orbit": [], "p1": [], "p2": [], "c": []}
-
-
 class OrbitsLayer:
     """The starts, crossings and status of a page; ``host``: the page."""
 
     def __init__(self, host, view, session):
         self.host, self.view, self.session = host, view, session
         self.starts: list[tuple] = []          # (orbit id, p1, p2, colour) of every start, in click order
-        self._unmarked: list[tuple] = []       # starts whose cross is not yet in start_source
+        self._marked: set = set()              # the starts whose cross is drawn unless hidden
         self._color = 0
         self.indicators: dict = {}             # orbit id -> (mean MEGNO, mLCE) over INDICATOR_TIME
         self.progress: dict = {}               # orbit id -> (crossings on the page so far, status)
@@ -68,7 +64,7 @@ class OrbitsLayer:
         self.crossings = ColumnDataSource(_empty_crossings())
         self.shown = ColumnDataSource(_empty_crossings(), name="crossings")
         self.live = ColumnDataSource(_empty_live(), name="live")
-        self.start_source = ColumnDataSource(_empty_starts(), name="starts")
+        self.start_source = ColumnDataSource({"orbit": [], "p1": [], "p2": [], "c": []}, name="starts")
         self.by_orbit = {"field": "c", "transform": LinearColorMapper(palette=list(COLORS), low=-0.5,
                                                                        high=len(COLORS) - 0.5)}
         self.by_megno = {"field": "megno", "transform": LinearColorMapper(
@@ -113,7 +109,6 @@ class OrbitsLayer:
             self._color += 1
         run = self.worker.submit(p1, p2, settings, ident)
         self.starts.append((run.ident, p1, p2, color))
-        self._unmarked.append((run.ident, p1, p2, color))
         self.progress[run.ident] = (0, "running")
         if not quiet and (not mark_later or self.session.doc is None):
             self.mark_starts()               # (else with the first crossings, in their flush)
@@ -125,11 +120,15 @@ class OrbitsLayer:
         self.update_status()
 
     def _mark_starts(self):
-        """Stream the crosses of the starts not yet marked."""
-        live = {i for i, *_ in self.starts if i not in self.hidden}
-        marks, self._unmarked = [m for m in self._unmarked if m[0] in live], []
-        if marks:
-            self.start_source.stream({k: [m[j] for m in marks] for j, k in enumerate(("orbit", "p1", "p2", "c"))})
+        self._marked = {i for i, *_ in self.starts}
+        self._draw_starts()
+
+    def _draw_starts(self):
+        """The crosses of the marked starts that are not hidden."""
+        marks = [m for m in self.starts if m[0] in self._marked and m[0] not in self.hidden]
+        data = {k: [m[j] for m in marks] for j, k in enumerate(("orbit", "p1", "p2", "c"))}
+        if data != self.start_source.data:
+            self.start_source.data = data
 
     def drop_all(self) -> list:
         """Stop every orbit and take them off the page; returns their starts."""
@@ -139,8 +138,8 @@ class OrbitsLayer:
         self.indicators, self.progress, self.hidden = {}, {}, {}
         self.crossings.data = _empty_crossings()
         self.show_all()
-        self.start_source.data = _empty_starts()
-        self._unmarked = []
+        self._marked = set()
+        self._draw_starts()
         return old
 
     def has(self, ident) -> bool:
@@ -156,7 +155,7 @@ class OrbitsLayer:
         if self.hidden.pop(ident, None) is None:
             self._take(ident)
             self.show_all()
-            self._unmark(ident)
+            self._draw_starts()
 
     def _take(self, ident: int, keep: int = 0) -> dict:
         """Orbit ``ident``'s rows past its first ``keep`` off ``crossings`` (or :attr:`hidden`); returns them."""
@@ -172,18 +171,13 @@ class OrbitsLayer:
                 self.crossings.data = rest
         return taken
 
-    def _unmark(self, ident: int) -> None:
-        keep = [o != ident for o in self.start_source.data["orbit"]]
-        self.start_source.data = {k: [x for x, ok in zip(v, keep) if ok] for k, v in self.start_source.data.items()}
-
     def hide(self, ident: int) -> None:
         """Take orbit ``ident``'s crossings and start off the page, into :attr:`hidden`."""
         if ident in self.hidden or not self.has(ident):
             return
         self.hidden[ident] = self._take(ident)
         self.show_all()
-        self._unmark(ident)
-        self._unmarked = [m for m in self._unmarked if m[0] != ident]
+        self._draw_starts()
 
     def show(self, ident: int) -> None:
         """Put a hidden orbit's crossings and start back on the page."""
@@ -193,8 +187,7 @@ class OrbitsLayer:
         d = self.crossings.data
         self.crossings.data = {k: np.concatenate([np.asarray(d[k]), rows[k]]) for k in d}
         self.show_all()
-        self._unmarked += [s for s in self.starts if s[0] == ident]
-        self._mark_starts()
+        self._draw_starts()
 
     def recount(self, settings) -> None:
         """New ``settings`` that differ only in the crossings per click K (Worker.recount): each orbit
@@ -256,10 +249,19 @@ class OrbitsLayer:
             self.flush_timer.at(max(self._settle_at, now + (FLUSH_SECONDS if self._pending else 0.0)))
 
     def _take_pending(self) -> list:
-        """The queued blocks of the orbits on the page (a hidden orbit's rows already in :attr:`hidden`)."""
+        """The queued blocks of the orbits on the page; a hidden orbit's rows go to :attr:`hidden` instead."""
         blocks, self._pending = self._pending, []
         colour = {i: c for i, _a, _b, c in self.starts}
-        return [self._keep_hidden(b, colour) for b in blocks if b[0] in colour]
+        out = []
+        for ident, rows, done, status in blocks:
+            if ident not in colour:
+                continue
+            if ident in self.hidden and len(rows):
+                new, old = _columns([(ident, rows)], colour, self.indicators), self.hidden[ident]
+                self.hidden[ident] = {k: np.concatenate([old[k], new[k]]) for k in new}
+                rows = rows[:0]
+            out.append((ident, rows, done, status))
+        return out
 
     def _apply(self, blocks) -> dict:
         """The blocks' rows streamed to ``crossings`` (returned as columns, {} if none), their progress."""
@@ -272,15 +274,6 @@ class OrbitsLayer:
             if status not in ("running", "done"):
                 self.host.say(f"orbit {ident} stopped after {done} crossings: {status}")
         return new
-
-    def _keep_hidden(self, block, colour: dict):
-        """A hidden orbit's block: its rows go to :attr:`hidden`, the block goes on without them."""
-        ident, rows, done, status = block
-        if ident not in self.hidden or not len(rows):
-            return block
-        new, old = _columns([block], colour, self.indicators), self.hidden[ident]
-        self.hidden[ident] = {k: np.concatenate([old[k], new[k]]) for k in new}
-        return ident, rows[:0], done, status
 
     def _settle(self) -> bool:
         """The live rows to ``crossings`` (streamed before ``live`` empties); returns whether there were any."""
@@ -369,12 +362,12 @@ class OrbitsLayer:
 def _columns(blocks, colour: dict, indicators: dict) -> dict:
     """The blocks' rows as the columns of ``crossings`` (``colour``: orbit id -> colour index;
     ``indicators``: orbit id -> (MEGNO, mLCE) where known)."""
+    ids, n = [b[0] for b in blocks], [len(b[1]) for b in blocks]
     data = np.concatenate([b[1] for b in blocks])
-    megno = [indicators.get(b[0], (math.nan,))[0] for b in blocks]
-    return {"orbit": np.concatenate([np.full(len(b[1]), b[0], np.int64) for b in blocks]),
-            "megno": np.concatenate([np.full(len(b[1]), m) for b, m in zip(blocks, megno)]),
-            "t": data[:, 0], "p1": data[:, 1], "p2": data[:, 2], "M": data[:, 3], "dH": data[:, 4],
-            "c": np.concatenate([np.full(len(b[1]), colour[b[0]], np.int64) for b in blocks])}
+    return {"orbit": np.repeat(np.array(ids, np.int64), n),
+            "megno": np.repeat([indicators.get(i, (math.nan,))[0] for i in ids], n).astype(float),
+            **{k: data[:, j] for j, k in enumerate(ROW_COLUMNS)},
+            "c": np.repeat(np.array([colour[i] for i in ids], np.int64), n)}
 
 
 def _megno_patch(rows, megno: float, as_list: bool = False) -> dict:
