@@ -50,20 +50,21 @@ def test_mask_marks_filled_cells_and_exact_computes_every_cell(exact, adaptive):
     assert adaptive.values.shape == adaptive.chaotic.shape == adaptive.computed.shape == (N, N)
 
 
-def test_no_filled_cell_lies_within_two_cells_of_a_computed_cell_of_the_other_class(adaptive):
+def test_no_filled_cell_lies_within_reach_of_a_computed_cell_of_the_other_class(adaptive):
     """docs/chaos_map.md, the rule's step 4: the boundary grew until no filled cell was left within
-    reach (at least 2 cells at the last level) of a computed cell of the other class."""
-    from explorer.analysis.chaos_map import REACH_CELLS
+    reach of a computed cell of the other class (at the last level: REACH[class] and at least
+    REACH_CELLS cells, 2 around a regular cell and 1 around a chaotic one)."""
+    from explorer.analysis.chaos_map import CHAOTIC, REACH, REACH_CELLS, REGULAR
 
-    n, r = adaptive.resolution, REACH_CELLS
+    n = adaptive.resolution
     filled = adaptive.allowed & ~adaptive.computed
-    pad = np.pad(adaptive.computed, r)
-    cls = np.pad(adaptive.chaotic, r)
-    for di in range(-r, r + 1):
-        for dj in range(-r, r + 1):
-            near = pad[r + di:r + di + n, r + dj:r + dj + n] & (cls[r + di:r + di + n, r + dj:r + dj + n] !=
-                                                                 adaptive.chaotic)
-            assert not (filled & near).any()
+    for kind, chaotic in ((REGULAR, False), (CHAOTIC, True)):
+        r = max(REACH[kind], REACH_CELLS)
+        source = np.pad(adaptive.computed & adaptive.allowed & (adaptive.chaotic == chaotic), r)
+        for di in range(-r, r + 1):
+            for dj in range(-r, r + 1):
+                near = source[r + di:r + di + n, r + dj:r + dj + n]
+                assert not (filled & near & (adaptive.chaotic != chaotic)).any()
 
 
 def test_threads_and_batches_do_not_change_a_cell(standard, adaptive, monkeypatch):

@@ -39,12 +39,12 @@ TOLERANCE = 2.0
 REGULAR, CHAOTIC, OUTSIDE, FAILED = 0, 1, 2, 3
 #: lattice steps (Chebyshev) around a computed cell within which a filled cell of the other class is
 #: computed, and at least :data:`REACH_CELLS` cells: farther around a regular cell (a fill misses thin
-#: regular structures in a chaotic sea), two cells around any (a thin chaotic layer is dashed in cells)
+#: regular structures in a chaotic sea more often than the reverse)
 REACH = {REGULAR: 2, CHAOTIC: 1}
-REACH_CELLS = 2
+REACH_CELLS = 1
 #: the version of :func:`refinement`'s rule: raise it when a change of the rule changes which cells it
 #: computes (a scene's adaptive map is hashed with it: explorer.analysis.sweep.map_rule)
-RULE_VERSION = 2
+RULE_VERSION = 3
 
 
 @dataclass(frozen=True)
