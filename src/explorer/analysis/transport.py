@@ -268,10 +268,12 @@ def flux_curve(system, mus=None, *, guess=(0.0, 0.0), arclength=6.0, max_arcleng
     from explorer.analysis.manifolds import saddle
     from explorer.model.symmetry import is_reversible
 
-    prm, h = getattr(system, "params", None), getattr(system, "h", None)      # Melnikov's needs the model's
-    if prm is None or h is None:
-        raise ParameterError(f"flux_curve follows the central saddle of a section map in mu; got "
-                             f"{type(system).__name__}: grow its branches (grow_branch) and use lobes and exit_times")
+    named = system.orbit_fields()       # Melnikov's integral needs the model's parameters and energy
+    if "params" not in named:
+        raise ParameterError(f"flux_curve follows the central saddle of Chaplygin's section map in mu (Melnikov's "
+                             f"integral needs the model's parameters and energy h); {system!r} has none: grow its "
+                             "branches (grow_branch) and use lobes and exit_times")
+    prm, h = named["params"], named["h"]
     mus = [float(m) for m in (DEFAULT_FLUX_MUS if mus is None else mus)]
     if any(b <= a for a, b in zip(mus, mus[1:])) or not mus or mus[0] < 0:
         raise ParameterError(f"mus must be >= 0 and increasing, got {mus}")
