@@ -71,3 +71,42 @@ def test_the_lanes_rows_do_not_depend_on_the_number_of_threads(hh):
     one = ex.crossings(hh, states=Y0, n_crossings=40, section=x, direction=+1, driver="lanes", threads=1)
     two = ex.crossings(hh, states=Y0, n_crossings=40, section=x, direction=+1, driver="lanes", threads=2)
     assert_same(one, two)
+
+
+def test_blocks_resumed_from_their_carry_give_one_runs_rows_on_both_drivers(hh):
+    """The drivers' carry (t, its compensation, s, steps, E0) and limits (target, room) continue an orbit
+    across blocks bit for bit, as the engine streams its orbits (docs/architecture.md, Streaming): the
+    blocks' rows, the final states and the carry after the last block are those of one run."""
+    from explorer.analysis import system_sections as ss
+    from explorer.integrate import codegen, layout
+
+    mod = codegen.load(hh)
+    Y0, K, n = starts(11), 40, 11
+    sec = ss.linear_section(hh, x)
+    P, keep, cols = hh.parameter_array(), ss.every_crossing(4), np.arange(4)
+    order = ex.crossings(hh, states=Y0[:1], n_crossings=1, section=x).settings["order"]
+
+    def run(worker, Y, carry, target, room):
+        limits = np.column_stack([target, room]).astype(np.int64)
+        m = len(Y)
+        out = (np.full((m, int(room.max()), 6), np.nan), np.zeros(m, np.int64), np.zeros(m, np.int64),
+               np.zeros((m, 4)), np.zeros((m, 3)))
+        worker(np.zeros(1, np.int64), Y, P, sec.a, sec.b, keep, cols, 1, 1e4, order, 10**9, carry, limits, *out,
+               False)
+        return out
+
+    for worker in (mod.crossings_lanes_worker, mod.crossings_taylor_worker):
+        carry = np.empty((n, layout.N_CARRY))
+        mod.crossings_start(Y0, P, sec.a, sec.b, carry)
+        whole = run(worker, Y0, carry.copy(), np.full(n, K), np.full(n, K))
+        rows, Y, done = [[] for _ in range(n)], Y0.copy(), np.zeros(n, np.int64)
+        for block in (7, 13, 40):                      # a step may add crossings past a block's target
+            target = np.minimum(block, K - done)
+            data, count, status, final, _info = run(worker, Y, carry, target, np.full(n, K) - done)
+            for i in range(n):
+                rows[i].append(data[i, :count[i]])
+            Y, done = final, done + count
+        assert np.array_equal(done, whole[1]) and np.all(status == Status.DONE)
+        for i in range(n):
+            np.testing.assert_array_equal(np.concatenate(rows[i]), whole[0][i, :whole[1][i]], strict=True)
+        np.testing.assert_array_equal(Y, whole[3], strict=True)
