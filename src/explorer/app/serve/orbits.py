@@ -73,11 +73,6 @@ class OrbitRun:
         self.state = sections.StreamState.initial(s.params, self.y0, phi0=s.phi0)
 
     @property
-    def cut_at_steps(self) -> bool:
-        """Blocks end at ``steps`` too where that leaves the rows exact (integrate.methods.Kind)."""
-        return methods.get(self.settings.method).loops.resumes_at_any_step
-
-    @property
     def finished(self) -> bool:
         return bool(self.state.finished[0])
 
@@ -105,9 +100,10 @@ class OrbitRun:
         """(rows, steps taken) of the next block."""
         s = self.settings
         taken = int(self.state.carry[0, layout.CARRY_STEPS])
+        exact = methods.get(s.method).loops.resumes_at_any_step    # (a block may end at ``steps`` then)
         b = next(sections.iter_crossings(s.params, states=self.y0, n_crossings=s.crossings, block=self.block,
                                          state=self.state, max_steps=s.max_steps,
-                                         step_block=self.steps if self.cut_at_steps else None,
+                                         step_block=self.steps if exact else None,
                                          **s.section_kwargs()), None)
         if b is None:           # nothing left (the state was finished already)
             return np.zeros((0, 5)), 0
@@ -151,8 +147,6 @@ class SystemRun(OrbitRun):
         self._y, self._t, self._h0 = self.y0, 0.0, float(smap.energy_of(self.y0)[0])
         self._cols = [1 + smap.system.states.index(s) for s in (*smap.coords, smap.solve)]
         self._finished = False
-
-    cut_at_steps = True
 
     @property
     def finished(self) -> bool:
