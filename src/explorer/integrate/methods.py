@@ -73,8 +73,10 @@ class Kind:
     setting: str
     prepare: Callable[[Method, float], Prepared]
     crossings: tuple[str, str]
-    tangent: tuple[str, str]
+    #: the one-vector indicator loop (None: the kind has ``tangent_ext``)
+    tangent: tuple[str, str] | None
     args: tuple[str, ...]
+    #: nvec -> the generated module whose indicator drivers run one or two deviation vectors and early stops
     tangent_ext: tuple[str, str] | None = None
     #: a run stopped at a step cap and continued from its carry gives the uninterrupted run's
     #: numbers (false for DOP853, whose continued rows differ in the last digits:
@@ -90,8 +92,8 @@ class Kind:
 #: every kind of integrator: a new kind is its loops and one entry here
 KINDS: dict[str, Kind] = {k.name: k for k in (
     Kind("taylor", "tol", _taylor, ("explorer.integrate.lanes", "run_taylor_lanes_batch"),
-         ("explorer.integrate.tangent", "run_tangent_taylor_batch"), ("order",),
-         tangent_ext=("explorer.integrate.tangent_lanes", "run_tangent_lanes_batch")),
+         None, ("order",),
+         tangent_ext=("explorer.integrate.tangent", "indicators_module")),
     Kind("dop853", "tol", _dop853, ("explorer.integrate.drivers", "run_dop853_batch"),
          ("explorer.integrate.tangent", "run_tangent_dop853_batch"), ("tol", "tol"),   # rtol = atol = tol
          resumes_at_any_step=False),
