@@ -203,11 +203,12 @@ def indicators(system, y0=None, *, tmax: float = DEFAULT_TIME, method: str | Non
     try:
         prep = m.prepare(tol=tol, dt=dt)
         settings.update(prep.settings)
-        if m.loops.tangent_ext is not None:
-            m.loops.loop("tangent_ext")(
-                Y0, V0, W0, nvec, P, T, prep.order, int(max_steps), early_stop,
-                float(early_sali) if nvec == 2 else 0.0, float(early_megno), float(early_time), hist_t, hist, res,
-                ext, status, final, steps, dev)
+        if m.loops.tangent_ext is not None:   # the indicators template of every System (docs/systems.md)
+            system_sections.run_driver(
+                m.loops.loop("tangent_ext")(nvec), "indicators", N, "auto", None,
+                (Y0, V0, W0, 5, nvec, P, T, prep.order, int(max_steps), early_stop,
+                 float(early_sali) if nvec == 2 else 0.0, float(early_megno), float(early_time), hist_t, hist, res,
+                 ext, status, final, steps, dev))
         else:
             # an orbit the fixed step does not resolve is not integrated
             slow = methods.unresolved(prep, P, Y0)

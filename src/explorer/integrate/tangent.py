@@ -2,26 +2,22 @@
 integrator (the Taylor variational series, DOP853 on (y, v), the exact tangent maps of the
 sub-flows: Skokos & Gerlach 2010), the indicators of :mod:`explorer.kernels.tangent`, and the
 section return map with its Jacobian (docs/commands/lyapunov.md, docs/architecture.md).
+The Taylor indicators of :func:`explorer.analysis.lyapunov.indicators` (one or two vectors, early
+stops, on SIMD lanes) run on the drivers of every System (:func:`indicators_module`).
 """
+import functools
 
 import numpy as np
 
 from explorer._jit import njit, prange
 from explorer.integrate import _systems_generated as sg
-from explorer.integrate._tangent_lanes_generated import (
-    DEV2,
-    N_WORK_TANGENT,
-    NROWS,
-    deviation_coefficients_into,
-    tangent_coefficients,
-)
+from explorer.integrate._tangent_lanes_generated import tangent_coefficients
 from explorer.integrate.drivers import ON_SECTION
 from explorer.integrate.systems import FIRST_STEP, STEP_OK, reverse_time
-from explorer.kernels import STATUS_CANCELLED, STATUS_DONE, STATUS_NONFINITE
+from explorer.kernels import STATUS_CANCELLED, STATUS_DONE
 from explorer.kernels import STATUS_TMAX as STATUS_TMAX_CODE
 from explorer.kernels import tangent as tg
 from explorer.kernels import taylor as tk
-from explorer.kernels.checks import all_finite
 from explorer.kernels.events import poly_step_roots, root_workspace, sin_diff
 from explorer.model.equations import (
     G1,
@@ -72,111 +68,16 @@ def _observe(acc, v, t_old, t_new, hist_t, hist, hpos, row):
     return _history(acc, hist_t, hist, hpos, row)
 
 
-@njit
-def orbit_tangent_taylor(y0, v0, P, T, order, max_steps, hist_t, hist, res, yout):
-    """The orbit and one deviation vector by the Taylor series of R3 and its variational
-    equations (the step: :func:`explorer.integrate._systems_generated.taylor_step_tangent`, chosen
-    from the orbit's own coefficients): :func:`orbit_tangent_taylor_ext` with one vector and no
-    early classification."""
-    ext = np.empty(tg.N_EXT)
-    wout = np.empty((2, 5))
-    return orbit_tangent_taylor_ext(y0, v0, v0, 1, P, T, order, max_steps, False, 0.0, 0.0, 0.0, hist_t, hist, res,
-                                    ext, wout, yout)
+@functools.cache
+def indicators_module(nvec: int):
+    """The generated module of Chaplygin's variational system of ``nvec`` deviation vectors
+    (:func:`explorer.model.chaplygin.variational`) whose orbit rows are R3's recurrence bit for bit
+    (:func:`explorer.integrate.codegen.decompose_extending`): its indicator drivers are a System's
+    (:mod:`explorer.integrate.codegen_indicators`, docs/systems.md "Chaos indicators")."""
+    from explorer.integrate import codegen
+    from explorer.model import chaplygin
 
-@njit
-def _early(acc, v, w, nvec, sali_stop, megno_level, tmin, since):
-    if nvec == 2 and sali_stop > 0.0 and tg.sali(v, w, 5) < sali_stop:
-        return tg.EARLY_SALI, since
-    if megno_level > 0.0:
-        stop, since = tg.megno_early(acc, since, megno_level, tmin)
-        if stop:
-            return tg.EARLY_MEGNO, since
-    return tg.EARLY_NONE, since
-
-
-@njit
-def _finish_ext(acc, v, w, nvec, early, res, ext, wout):
-    """The result row, (SALI, GALI_2, early code) and the final unit deviation vectors."""
-    tg.result(acc, res)
-    for i in range(5):
-        wout[0, i] = v[i]
-        if nvec == 2:
-            wout[1, i] = w[i]
-    if nvec == 2:
-        tg.extra(v, w, 5, ext)
-    else:
-        for c in range(tg.N_EXT):
-            ext[c] = np.nan
-    ext[tg.EXT_EARLY] = early
-
-
-@njit
-def orbit_tangent_taylor_ext(y0, v0, w0, nvec, P, T, order, max_steps, early_stop, sali_stop, megno_level,
-                             early_tmin, hist_t, hist, res, ext, wout, yout):
-    """:func:`orbit_tangent_taylor` with a second deviation vector ``w0`` (nvec = 2: SALI and
-    GALI_2; its coefficients in rows DEV2.. of the lanes' 15-row array, from the orbit's, by the
-    generated deviation_coefficients) and the early classification (``early_stop``: :func:`_early`
-    after every step; the orbit stops with STATUS_DONE at the time reached and its EARLY_* code in
-    ext).  With
-    nvec = 1 and no early stop the orbit, steps and indicators are those of
-    :func:`orbit_tangent_taylor` bit for bit.  The scalar reference of
-    :mod:`explorer.integrate.tangent_lanes`."""
-    n = 10
-    Z3 = np.empty((NROWS, order + 1))   # the orbit, v and w, as in the lanes
-    Z = Z3[:n]
-    Wd = np.empty((N_WORK_TANGENT, order + 1))
-    z = np.empty(n)
-    znew = np.empty(n)
-    w = np.zeros(5)
-    wnew = np.empty(5)
-    acc = np.zeros(tg.N_ACC)
-    row = np.empty(tg.N_RES)
-    factor = tk.safety_factor(order)
-    for i in range(5):
-        z[i] = y0[i]
-        z[5 + i] = v0[i]
-        w[i] = w0[i]
-    tg.renormalize(z[5:], 5)
-    if nvec == 2:
-        tg.renormalize(w, 5)
-    t = 0.0
-    steps = 0
-    hpos = 0
-    since = -1.0
-    early = tg.EARLY_NONE
-    while True:
-        for i in range(n):
-            Z[i, 0] = z[i]
-        code, h, last, steps = sg.taylor_step_tangent(Z, P, t, T, STATUS_DONE, order, factor, steps,
-                                                      max_steps, znew)
-        if code != STEP_OK:
-            break
-        if nvec == 2:
-            for i in range(5):
-                Z3[DEV2 + i, 0] = w[i]
-            deviation_coefficients_into(P, Z3, order, Wd)
-            tk.evaluate(Z3[DEV2:], order, h, wnew)
-            if not all_finite(wnew):
-                code = STATUS_NONFINITE
-                break
-        t_new = T if last else t + h
-        hpos = _observe(acc, znew[5:], t, t_new, hist_t, hist, hpos, row)
-        if nvec == 2:
-            tg.renormalize(wnew, 5)
-            for i in range(5):
-                w[i] = wnew[i]
-        t = t_new
-        for i in range(n):
-            z[i] = znew[i]
-        if early_stop:
-            early, since = _early(acc, z[5:], w, nvec, sali_stop, megno_level, early_tmin, since)
-            if early != tg.EARLY_NONE:
-                code = STATUS_DONE
-                break
-    _finish_ext(acc, z[5:], w, nvec, early, res, ext, wout)
-    for i in range(5):
-        yout[i] = z[i]
-    return code, steps
+    return codegen.load(chaplygin.variational(vectors=nvec), orbit=chaplygin.system())
 
 
 @njit
@@ -232,15 +133,6 @@ def orbit_tangent_split(y0, v0, P, T, dt, flow_ids, fracs, max_steps, hist_t, hi
         code = STATUS_DONE
     _end(acc, res, z, yout)
     return code, steps
-
-
-@njit(parallel=True, nogil=True)
-def run_tangent_taylor_batch(Y0, V0, P, T, order, max_steps, hist_t, out_hist, out_res, out_status,
-                             out_final, out_steps):
-    for j in prange(Y0.shape[0]):
-        _store(j, orbit_tangent_taylor(Y0[j], V0[j], P, T, order, max_steps, hist_t, out_hist[j], out_res[j],
-                                       out_final[j]), out_status, out_steps)
-    return 0
 
 
 @njit(parallel=True, nogil=True)
