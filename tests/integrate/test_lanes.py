@@ -19,7 +19,15 @@ from explorer.analysis import sections
 from explorer.integrate import _lanes_generated as G
 from explorer.integrate import drivers, lanes, simd
 from explorer.integrate import systems as sy
-from explorer.kernels import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_TMAX, clock, events
+from explorer.kernels import (
+    STATUS_DONE,
+    STATUS_MAX_STEPS,
+    STATUS_NONFINITE,
+    STATUS_STEP_UNDERFLOW,
+    STATUS_TMAX,
+    clock,
+    events,
+)
 from explorer.kernels import taylor as tk
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -45,11 +53,19 @@ def test_gen_lanes_check_passes_on_the_repository_and_fails_on_a_stale_file(tmp_
 
 
 # ---------------------------------------------------------------- kernels
+def _lane_h(l, fin, normal, NORM, order, t=0.0, tend=1e300):
+    """The generated _lane_step of lane l from its norms: (status, h, last), status -1 for a step."""
+    hv, L_last, L_go, L_t = np.zeros(L), np.zeros(L), np.zeros(L), np.full(L, t)
+    st = G._lane_step(l, fin, normal, NORM, 1.0 / order, 1.0 / (order - 1), tk.safety_factor(order), L_t, tend, hv,
+                      L_last, L_go)
+    return st, hv[l], L_last[l] == 1.0
+
+
 @pytest.mark.parametrize("name", sorted(PARAM_SETS))
 @pytest.mark.parametrize("order", [4, 5, 15, 16, 19, 27])
 def test_kernels_match_scalar_bitwise(name, order):
-    """Every lane of the generated recurrence, the Horner sums and the step norms is the scalar
-    kernel's double."""
+    """Every lane of the generated recurrence, the Horner sums, the step norms and the step is the
+    scalar kernel's double."""
     P = PARAM_SETS[name].as_array()
     rng = np.random.default_rng(order)
     W = L
@@ -60,18 +76,16 @@ def test_kernels_match_scalar_bitwise(name, order):
     G.taylor_coefficients_lanes(P, X, order, np.zeros((order + 1, max(G.N_WORK, 1), W)))
     h = rng.uniform(0.0, 0.5, W)
     out = np.empty((5, W))
-    lanes.evaluate_lanes(X, order, h, out, 0)
-    e_p, e_q = 1.0 / order, 1.0 / (order - 1)
-    norms = np.empty((lanes.N_NORMS, W))
+    G._evaluate_lanes(X, order, h, out)
+    NORM = np.empty((5, W))
     with np.errstate(all="ignore"):
-        lanes.step_norms_lanes(X, order, e_p, e_q, norms)
+        fin, normal = G._norms_lanes(X, order, 1.0 / order, 1.0 / (order - 1), NORM)
         for l in range(W):
-            _check_lane(P, X, order, h, out, norms, l)
+            _check_lane(P, X, order, h, out, NORM, fin, normal, l)
 
 
-def _check_lane(P, X, order, h, out, norms, l):
+def _check_lane(P, X, order, h, out, NORM, fin, normal, l):
     """Lane l of the vector kernels against the scalar ones."""
-    e_p, e_q = 1.0 / order, 1.0 / (order - 1)
     Xs = np.zeros((5, order + 1))
     Xs[:, 0] = X[0, :, l]
     G.taylor_coefficients(P, Xs, order)
@@ -79,25 +93,19 @@ def _check_lane(P, X, order, h, out, norms, l):
     ys = np.empty(5)
     tk.evaluate(Xs, order, h[l], ys)
     np.testing.assert_array_equal(ys, out[:, l])
-    assert (norms[0, l] == Xs[0, order] + Xs[1, order] + Xs[2, order] + Xs[3, order] + Xs[4, order]
-            or np.isnan(norms[0, l]))
-    assert sy.finite_column(Xs, order, 5) == (norms[0, l] - norms[0, l] == 0.0)
-    assert sy.finite_column(Xs, order - 1, 5) == (norms[1, l] - norms[1, l] == 0.0)
-    if sy.finite_column(Xs, order, 5) and sy.finite_column(Xs, order - 1, 5):
+    finite = sy.finite_column(Xs, order, 5) and sy.finite_column(Xs, order - 1, 5)
+    assert bool(fin >> l & 1) == finite
+    if finite:
         s = max(1.0, np.abs(Xs[:, 0]).max())
-        assert norms[2, l] == np.abs(Xs[:, order]).max()
-        assert norms[3, l] == np.abs(Xs[:, order - 1]).max()
-        factor, e_p, e_q = lanes.step_constants(order)
-        assert factor == tk.safety_factor(order)
-        got = lanes.lane_step_size(norms[2, l], norms[3, l], norms[4, l], norms[5, l], norms[6, l],
-                                   e_p, e_q, factor)
-        assert got == tk.step_size(Xs, order, factor)
-        assert norms[4, l] == s / norms[2, l] and norms[5, l] == s / norms[3, l]
+        assert NORM[0, l] == np.abs(Xs[:, order]).max() and NORM[1, l] == np.abs(Xs[:, order - 1]).max()
+        assert NORM[2, l] == s / NORM[0, l] and NORM[3, l] == s / NORM[1, l]
+        st, got, _last = _lane_h(l, fin, normal, NORM, order)
+        assert st == -1 and got == clock.clip_step(0.0, tk.step_size(Xs, order, tk.safety_factor(order)), 1e300)[0]
 
 
 @pytest.mark.parametrize("order", [4, 15, 16, 25, 40])
 def test_lane_step_size_is_step_size_near_ties_and_for_vanishing_or_subnormal_norms(order):
-    """The vector powers of step_norms_lanes and lane_step_size give step_size's double when the
+    """The vector powers of the generated _norms_lanes and _lane_step give step_size's double when the
     two radii are nearly equal (either may be the minimum), far apart, and when a norm is 0 or
     subnormal (the scalar path)."""
     rng = np.random.default_rng(order)
@@ -120,14 +128,13 @@ def test_lane_step_size_is_step_size_near_ties_and_for_vanishing_or_subnormal_no
         chunk = cases[c0:c0 + W]
         for l, (s, a, bm) in enumerate(chunk):
             X[0, 2, l], X[order, 3, l], X[order - 1, 1, l] = s, -a, bm
-        norms = np.empty((lanes.N_NORMS, W))
+        NORM = np.empty((5, W))
         with np.errstate(all="ignore"):
-            lanes.step_norms_lanes(X, order, e_p, e_q, norms)
+            fin, normal = G._norms_lanes(X, order, e_p, e_q, NORM)
         for l in range(len(chunk)):
             want = tk.step_size(np.ascontiguousarray(X[:, :, l].T), order, factor)
-            got = lanes.lane_step_size(norms[2, l], norms[3, l], norms[4, l], norms[5, l], norms[6, l],
-                                       e_p, e_q, factor)
-            assert got == want
+            st, got, _last = _lane_h(l, fin, normal, NORM, order)
+            assert st == -1 and got == clock.clip_step(0.0, want, 1e300)[0]
 
 
 # ---------------------------------------------------------------- the step in vector form
@@ -186,48 +193,44 @@ def test_vector_masks_are_the_scalar_comparisons_lane_by_lane_nan_included():
 
 
 def test_vector_step_takes_lane_steps_double_and_leaves_the_rare_lanes_to_it():
-    """step_lanes on norms of every kind (finite, non-finite, vanishing, subnormal, steps that
-    reach tend or underflow, idle lanes): for every lane the step, the flag of the last step and
-    the stop are those of the scalar lane_step, and the lanes whose step it took in vector form
-    (L_fast) are exactly those with finite coefficients, positive normal s/a, s/bm and no
-    underflow."""
+    """The generated _steps_lanes on norms of every kind (finite, non-finite, vanishing, subnormal, steps
+    that reach tend or underflow, idle lanes): every lane it steps gets the step and the flag of the last
+    step of the scalar _lane_step, and it leaves to that exactly the lanes holding an orbit whose
+    coefficients are not finite, whose s/a, s/bm are not positive normal, or whose step underflows."""
     W = L
     rng = np.random.default_rng(1)
     order = 15
-    factor, e_p, e_q = lanes.step_constants(order)
+    factor, e_p, e_q = tk.safety_factor(order), 1.0 / order, 1.0 / (order - 1)
     tend = 50.0
     seen = set()
     for _ in range(40):
-        norms = np.empty((lanes.N_NORMS, W))
-        norms[0] = rng.choice([1.0, -3.0, np.nan, np.inf], W, p=[0.7, 0.2, 0.05, 0.05])
-        norms[1] = rng.choice([1.0, np.nan, -np.inf], W, p=[0.9, 0.05, 0.05])
-        norms[2] = rng.choice([0.0, 5e-324, 1e-3, 2.0], W)
-        norms[3] = rng.choice([0.0, 5e-324, 1e-3, 2.0], W)
-        norms[4] = rng.choice([np.inf, 1e-320, 3.0, 1e5, 1e-310], W, p=[0.1, 0.05, 0.4, 0.4, 0.05])
-        norms[5] = rng.choice([np.inf, 1e-320, 3.0, 1e5], W, p=[0.1, 0.05, 0.45, 0.4])
-        norms[6] = np.minimum(norms[4] ** e_p, norms[5] ** e_q)
+        NORM = np.empty((5, W))
+        NORM[0] = rng.choice([0.0, 5e-324, 1e-3, 2.0], W)
+        NORM[1] = rng.choice([0.0, 5e-324, 1e-3, 2.0], W)
+        NORM[2] = rng.choice([np.inf, 1e-320, 3.0, 1e5, 1e-310], W, p=[0.1, 0.05, 0.4, 0.4, 0.05])
+        NORM[3] = rng.choice([np.inf, 1e-320, 3.0, 1e5], W, p=[0.1, 0.05, 0.45, 0.4])
+        NORM[4] = np.minimum(NORM[2] ** e_p, NORM[3] ** e_q)
+        fin = sum(1 << l for l in range(W) if rng.random() < 0.85)
+        normal = sum(1 << l for l in range(W) if all(2.2250738585072014e-308 <= v <= 1.7976931348623157e308
+                                                     for v in NORM[2:4, l]))
         L_t = rng.choice([0.0, 10.0, 49.9, 50.0 - 1e-14, 1e17], W)
         L_on = rng.choice([0.0, 1.0], W, p=[0.2, 0.8])
-        hv, L_last, L_fast = np.full(W, -1.0), np.full(W, -1.0), np.full(W, -1.0)
-        L_status = np.full(W, -7, np.int64)
-        L_stop = np.ones(W, np.bool_)
+        hv, L_last, L_go = np.full(W, -1.0), np.full(W, -1.0), np.full(W, -1.0)
         with np.errstate(all="ignore"):
-            lanes.step_lanes(L_on, norms, L_t, tend, e_p, e_q, factor, hv, L_last, L_fast, L_status, L_stop, W)
+            bits = G._steps_lanes(NORM, fin, normal, L_on, L_t, tend, factor, hv, L_last, L_go)
         for l in range(W):
             if L_on[l] == 0.0:
-                assert hv[l] == 0.0 and not L_stop[l] and L_fast[l] == 0.0
+                assert hv[l] == 0.0 and L_go[l] == 0.0 and not bits >> l & 1
                 continue
-            code, h, last = lanes.lane_step(l, norms, L_t[l], tend, e_p, e_q, factor)
-            assert L_stop[l] == (code >= 0)
-            if code >= 0:
-                assert L_status[l] == code and hv[l] == 0.0
+            st, h, last = _lane_h(l, fin, normal, NORM, order, L_t[l], tend)
+            vector = bool(fin >> l & 1 and normal >> l & 1) and st == -1
+            assert bool(bits >> l & 1) == (not vector)
+            if vector:
+                assert hv[l] == h and L_last[l] == (1.0 if last else 0.0) and L_go[l] == 1.0
             else:
-                assert hv[l] == h and L_last[l] == (1.0 if last else 0.0)
-            vector = (np.isfinite(norms[0, l]) and np.isfinite(norms[1, l]) and code < 0
-                      and all(2.2250738585072014e-308 <= x <= 1.7976931348623157e308 for x in norms[4:6, l]))
-            assert L_fast[l] == (1.0 if vector else 0.0)
-            seen.add((vector, code))
-    assert {(True, -1), (False, -1), (False, STATUS_NONFINITE), (False, lanes.STATUS_STEP_UNDERFLOW)} <= seen
+                assert hv[l] == 0.0 and L_go[l] == 0.0
+            seen.add((vector, st))
+    assert {(True, -1), (False, -1), (False, STATUS_NONFINITE), (False, STATUS_STEP_UNDERFLOW)} <= seen
 
 
 def test_vector_step_end_is_the_scalar_one_and_leaves_roots_and_stops_to_the_scalar_loop():
