@@ -142,6 +142,23 @@ def test_the_search_budget_is_eight_typical_returns_near_the_linear_period_2pi(s
     assert max(elliptic.return_time, hyperbolic.return_time) < smap.search_tmax
 
 
+def test_what_a_systems_map_lacks_is_refused_naming_it(smap):
+    """The map answers the protocol's questions or names what it lacks: no angle coordinate (a centre
+    is needed), no generating function (not a twist map), no guess for its half-turn shooting."""
+    from explorer.analysis import cantorus
+    from explorer.analysis import greene as gm
+
+    with pytest.raises(ex.ParameterError, match="angle coordinate"):
+        ro.frequency_diffusion(smap, [ELLIPTIC_GUESS], center=None, iterates=10)
+    with pytest.raises(ex.ParameterError, match="angle coordinate"):
+        cantorus.cantorus_flux(smap)
+    with pytest.raises(ex.ParameterError, match="no generating function"):
+        smap.generating_function(0.0, 0.1)
+    with pytest.raises(ex.ParameterError, match="needs guess"):
+        gm.symmetric_orbit(smap, 1, 5)
+    assert smap.own_indicators(ELLIPTIC_GUESS, tmax=1.0) is None      # its flow's: explorer.indicators
+
+
 def test_the_elliptic_point_is_continued_in_the_energy(smap, elliptic):
     br = pr.continue_periodic(smap, 1, "energy", E, E + 0.01, 0.005, elliptic.points)
     assert br.stopped is None and np.allclose(br.values, [E, E + 0.005, E + 0.01])
