@@ -404,27 +404,14 @@ def test_threads_and_orbit_order_do_not_change_a_bit():
         lambda order: _run(lanes.run_taylor_lanes_batch, Y0[order], P, 20), len(Y0), seed=4)
 
 
-def test_worker_lanes_fill_at_most_one_vector():
-    """lanes.worker_lanes: min(max_lanes, LANES, ceil(n / workers)) lanes per worker."""
-    assert lanes.worker_lanes(1, 1) == 1
-    assert lanes.worker_lanes(20, 2) == L and lanes.worker_lanes(10, 2) == 5
-    assert lanes.worker_lanes(64, 2, 3) == 3
-
-
 def test_a_batch_that_one_group_of_lanes_holds_runs_on_one_worker_and_a_larger_one_on_every_thread():
     """lanes.lane_workers: a group steps all LANES lanes whether they hold an orbit or not, so a
     second worker on a batch one group holds would step a second group for nothing (the same wall
-    time, up to twice the CPU); from LANES + 1 orbits on, one worker per thread.  max_lanes below
-    LANES makes the groups that narrow."""
-    from explorer._jit import get_num_threads, set_num_threads
-
-    L = lanes.LANES
+    time, up to twice the CPU); from LANES + 1 orbits on, one worker per thread."""
     old = get_num_threads()
     try:
         set_num_threads(2)
         assert [lanes.lane_workers(n) for n in (0, 1, 2, L, L + 1, 10 * L)] == [1, 1, 1, 1, 2, 2]
-        assert [lanes.lane_workers(n, 3) for n in (1, 3, 4, 37)] == [1, 1, 2, 2]
-        assert lanes.lane_workers(L + 1, 1) == 2 and lanes.lane_workers(2, 1) == 2
         set_num_threads(1)
         assert lanes.lane_workers(10 * L) == 1
     finally:
