@@ -384,7 +384,12 @@ def save_figure(fig, stem, dpi=None, *, text=None):
     dpi = fig.dpi if dpi is None else float(dpi)
     png, pdf = Path(stem + ".png"), Path(stem + ".pdf")
     _atomic_savefig(fig, pdf, "pdf", dpi=dpi, facecolor="white", metadata={"CreationDate": None})
-    _atomic_savefig(fig, png, "png", dpi=dpi, facecolor="white", metadata=dict(text or {}))
+    engine = fig.get_layout_engine()
+    fig.set_layout_engine("none")     # the PDF's layout holds for the PNG: not computed twice
+    try:
+        _atomic_savefig(fig, png, "png", dpi=dpi, facecolor="white", metadata=dict(text or {}))
+    finally:
+        fig.set_layout_engine(engine)
     return png, pdf
 
 
