@@ -4,8 +4,8 @@ the browser through Panel's own writer (``panel.io.document.unlocked``: ``write_
 ``schedule_write_events`` when the socket is busy), and panel 1.9's queue for the latter can end
 its write task before it sends a message queued meanwhile (the message then waits for Panel's
 next write, which may never come).  Here both drop every message, so a change that reaches the
-browser only through them never does; Bokeh's own dispatch (what the page's loop holds the
-document for, explorer.app.serve.tasks) is untouched.  Test scaffolding only."""
+browser only through them never does; Bokeh's own dispatch (the page's Bokeh models, its link
+among them: explorer.app.serve.page) is untouched.  Test scaffolding only."""
 import sys
 
 import panel.io.document as panel_document

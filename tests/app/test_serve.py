@@ -553,6 +553,13 @@ def _open(browser, url):
     return page
 
 
+def _link(page) -> dict:
+    """The page's link ({name: text}): what a served page writes into the browser's address."""
+    from urllib.parse import parse_qsl
+
+    return dict(parse_qsl(page.link.text, keep_blank_values=True))
+
+
 def _click(page, p1, p2):
     x, y = page.evaluate(TO_SCREEN, [p1, p2])
     page.mouse.click(x, y)
@@ -855,6 +862,10 @@ def test_a_bad_token_gets_no_app_and_ctrl_c_ends_the_server_cleanly(browser, tok
         page.goto(bare + "?token=wrong")
         page.wait_for_timeout(500)
         assert page.evaluate("() => !window.Bokeh || Bokeh.documents.length === 0")
+        page.close()
+        page = _open(browser, s.url + "&foo=bar&mu=0.04")     # the address: the token first, then the link
+        _wait(page, "() => /^[?]token=s3cret&mu=0[.]04&/.test(window.location.search)"
+                    " && !window.location.search.includes('foo')")
         page.close()
         assert urllib.request.urlopen(s.url, timeout=PAGE_TIMEOUT).status == 200
     finally:
@@ -1823,13 +1834,13 @@ def test_a_served_click_sends_its_cross_with_its_first_crossings_and_later_block
         flush()
         if rows() != before:
             flushes.append((start, len(page.orbits.start_source.data["orbit"]), *rows(), page.orbits.status.text,
-                            page.url_state.orbits))
+                            _link(page)["orbits"]))
     page.orbits._flush = traced
     try:
         page.click(c1 + 0.3 * r1, c2)
         # the cross and the link wait for the first crossings (sent in the same callback, just after
         # them: off the path from the click to them)
-        assert page.orbits.start_source.data["orbit"] == [] and rows() == (0, 0) and page.url_state.orbits == ""
+        assert page.orbits.start_source.data["orbit"] == [] and rows() == (0, 0) and _link(page)["orbits"] == ""
         status = page.orbits.status.text
         page.settle()
         assert len(page.orbits.shown.data["p1"]) == s.crossings

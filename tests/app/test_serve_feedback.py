@@ -16,7 +16,7 @@ import time
 
 import pytest
 import test_serve
-from test_serve import DATA, SERVED, TO_SCREEN, _click, _open, _set_field, _wait, browser_needed
+from test_serve import DATA, SERVED, TO_SCREEN, _click, _link, _open, _set_field, _wait, browser_needed
 
 from explorer import model
 from explorer.app.serve.settings import FIELDS, Settings
@@ -383,9 +383,8 @@ def test_the_mu_slider_applies_its_value_through_the_field_and_follows_the_field
 @browser_needed
 def test_a_page_opened_at_a_bare_address_writes_the_whole_link_with_the_first_click(served, browser):
     """Opened with no query, the first click puts every field and the start in the address, not
-    the start alone (at load the browser gives Panel's location its own, empty, query; before the
-    fix the address became ``?orbits=...``, and a link copied from it reopened the orbit at
-    whatever the receiving server's defaults are)."""
+    the start alone (a link copied from it reopens the orbit at the page's values, whatever the
+    receiving server's defaults are); the address is replaced, not pushed: no history entry."""
     import json
     from urllib.parse import parse_qs
 
@@ -393,6 +392,7 @@ def test_a_page_opened_at_a_bare_address_writes_the_whole_link_with_the_first_cl
 
     page = _open(browser, served.url)
     try:
+        history = page.evaluate("() => window.history.length")
         c1, c2, r1, _r2 = SERVED.region
         _click(page, c1 + 0.5 * r1, c2)
         query = _wait(page, "() => { const q = new URLSearchParams(window.location.search);"
@@ -401,56 +401,14 @@ def test_a_page_opened_at_a_bare_address_writes_the_whole_link_with_the_first_cl
         link = {k: v[0] for k, v in parse_qs(query.lstrip("?")).items()}
         assert link["mu"] == repr(SERVED.params.mu) and link["crossings"] == str(SERVED.crossings)
         assert len(link["orbits"].split(";")) == 1
-    finally:
-        page.close()
-
-
-def test_an_address_overtaken_by_an_older_one_heals_to_the_pages_link():
-    """The page's link is the truth: Panel's location is written from both ends and its model now
-    or on the next tick, so a write can be overtaken by an older address (twice in the browser
-    loops the address held two of three clicked starts for good).  In-process, with Panel's
-    location and no browser: an older address that the browser reports is written over with the
-    page's link, and when the browser shows an older address than the location holds, the
-    location's value is sent again, once, and not once the browser shows the link."""
-    from urllib.parse import parse_qsl, urlencode
-
-    from panel.io.location import Location
-    from panel.util import edit_readonly
-
-    def orbits(query):
-        return dict(parse_qsl(query.lstrip("?"))).get("orbits")
-
-    page = _page(Settings(params=model.FIGURE4.with_(mu=0.03), crossings=1))
-    try:
-        location = Location()
-        page.url_state.attach(location, page.session)
-        c1, c2, r1, _r2 = page.settings.region
-        for k in range(3):
-            assert page.click(c1 + (0.2 * k - 0.3) * r1, c2) is not None
-        _poll_until(page, lambda: len((orbits(location.search) or "").split(";")) == 3)
-        link = page.url_query()["orbits"]
-        older = "?" + urlencode({**dict(parse_qsl(location.search.lstrip("?"), keep_blank_values=True)),
-                                 "orbits": link.rsplit(";", 1)[0]})    # two of the three starts
-        assert orbits(older) != link
-        location.search = older                              # the browser reports an older address
-        assert orbits(location.search) == link == page.url_state.orbits
-        sent = []
-        location.param.watch(lambda e: sent.append(e.new), "search", onlychanged=False)
-        with edit_readonly(location):                        # the browser shows the older address
-            location.href = "http://127.0.0.1/" + older
-        assert [orbits(q) for q in sent] == [link]           # the link sent to the browser again
-        with edit_readonly(location):                        # and once it shows the link, no more
-            location.href = "http://127.0.0.1/" + location.search
-        assert len(sent) == 1
+        assert page.evaluate("() => window.history.length") == history    # replaced: Back leaves the page
     finally:
         page.close()
 
 
 def test_a_links_unknown_keys_are_named_and_leave_the_address_and_an_overlong_link_is_said_not_applied():
-    from urllib.parse import parse_qsl
-
-    from panel.io.location import Location
-
+    """(In the browser, the address a served page writes keeps the token and drops the unknown keys:
+    test_serve.py::test_a_bad_token_gets_no_app_and_ctrl_c_ends_the_server_cleanly.)"""
     from explorer.app.serve.settings import MAX_LINK_CHARS, screen_link
 
     kept, said = screen_link({"mu": "0.5", "foo": "1", "zzz": "", "token": "t"}, ("mu", "token"))
@@ -460,13 +418,7 @@ def test_a_links_unknown_keys_are_named_and_leave_the_address_and_an_overlong_li
     page = _page(Settings(params=model.FIGURE4.with_(mu=0.03), crossings=1), {"mu": "0.5", "foo": "bar"})
     try:
         assert page.settings.params.mu == 0.5 and "unknown key 'foo'" in page.message.text   # the rest applies
-        location = Location(search="?foo=bar&mu=0.5&token=t")
-        page.url_state.attach(location, page.session)
-        have = dict(parse_qsl(location.search.lstrip("?"), keep_blank_values=True))
-        assert "foo" not in have and have["mu"] == "0.5" and have["token"] == "t"           # (the token stays)
-        location.search += "&junk=1"                        # junk typed into the address: healed away
-        page.poll()
-        assert "junk" not in location.search and "mu=0.5" in location.search
+        assert "foo" not in _link(page) and _link(page)["mu"] == "0.5"                     # the link lacks it
     finally:
         page.close()
 

@@ -91,12 +91,6 @@ class Exports:
     def scene_text(self) -> str:
         return self.scene().to_toml()
 
-    def scene_file(self):
-        try:
-            return io.StringIO(self.scene_text())
-        except ParameterError as exc:
-            self.host.say(str(exc))
-            return io.StringIO("")
 
     def view(self):
         """What the page shows now, hidden orbits left out, copied (drawn in any thread)."""
@@ -135,12 +129,16 @@ class Exports:
 
         return render(self.view(), fmt)
 
-    def figure_file(self, fmt):
+    def download(self, fmt: str):
+        """The file of a download button: the scene ("toml") or the view ("png", "svg"); empty when it
+        fails, and why said on the message line."""
         try:
-            return io.BytesIO(self.figure_bytes(fmt))
+            return io.BytesIO(self.scene_text().encode("utf-8") if fmt == "toml" else self.figure_bytes(fmt))
+        except ParameterError as exc:
+            self.host.say(str(exc))
         except Exception as exc:  # noqa: BLE001 - reported in the page; the download is empty
-            self.host.say(f"figure failed: {failure(exc)}")
-            return io.BytesIO(b"")
+            self.host.say(f"{fmt} download failed: {failure(exc)}")
+        return io.BytesIO(b"")
 
     def export_figure(self) -> None:
         """Write the page's view as PNG and SVG into the export directory (drawn by a task)."""

@@ -56,14 +56,7 @@ def figure(view: View):
     from matplotlib.figure import Figure
     from matplotlib.patches import Ellipse
 
-    from explorer.app.serve.style import (
-        MANIFOLD_COLORS,
-        MEGNO_HIGH,
-        MEGNO_LOW,
-        MEGNO_ORBIT_SKIP,
-        PERIOD_COLORS,
-        SEPARATRIX_COLOR,
-    )
+    from explorer.app.serve import style
 
     fig = Figure(figsize=FIGSIZE, dpi=DPI, layout="constrained")
     ax = fig.add_subplot()
@@ -81,10 +74,10 @@ def figure(view: View):
         ax.add_patch(Ellipse((c1, c2), 2 * r1, 2 * r2, facecolor="none", edgecolor=figures.BOUNDARY_COLOR,
                              linewidth=figures.BOUNDARY_WIDTH, zorder=3))
     cmap = _megno_colormap()
-    orbit_cmap = _megno_colormap(MEGNO_ORBIT_SKIP)
+    orbit_cmap = _megno_colormap(style.MEGNO_ORBIT_SKIP)
     if view.raster is not None:
         values, (a0, a1, b0, b1) = view.raster
-        low, high = view.raster_scale or (MEGNO_LOW, MEGNO_HIGH)
+        low, high = view.raster_scale or (style.MEGNO_LOW, style.MEGNO_HIGH)
         ax.imshow(np.asarray(values, float), extent=(a0, a1, b0, b1), origin="lower", cmap=cmap, vmin=low,
                   vmax=high, alpha=0.85, interpolation="nearest", zorder=1)
     total = sum(len(pts) for _i, _c, pts, _m in view.orbits)
@@ -93,8 +86,8 @@ def figure(view: View):
     for ident, colour, pts, megno in view.orbits:
         pts = np.asarray(pts, float).reshape(-1, 2)
         if view.by_megno:
-            colour = "#9e9e9e" if not math.isfinite(megno) else orbit_cmap(min(max((megno - MEGNO_LOW) /
-                                                                             (MEGNO_HIGH - MEGNO_LOW), 0.0), 1.0))
+            u = (megno - style.MEGNO_LOW) / (style.MEGNO_HIGH - style.MEGNO_LOW)    # (outside [0, 1]: an end's colour)
+            colour = orbit_cmap(u) if math.isfinite(megno) else "#9e9e9e"
         ax.scatter(pts[:, 0], pts[:, 1], s=size, c=[colour], linewidths=0, marker="o", zorder=2,
                    rasterized=raster_points, gid=f"orbit-{ident}")
     if view.starts:
@@ -103,14 +96,14 @@ def figure(view: View):
                    zorder=4, gid="starts")
     for n, curve in enumerate(view.separatrices):
         c = np.asarray(curve, float)
-        ax.plot(c[:, 0], c[:, 1], color=SEPARATRIX_COLOR, linewidth=0.8, zorder=2.5, gid=f"separatrix-{n}")
+        ax.plot(c[:, 0], c[:, 1], color=style.SEPARATRIX_COLOR, linewidth=0.8, zorder=2.5, gid=f"separatrix-{n}")
     for n, (kind, curve) in enumerate(view.manifolds):
         c = np.asarray(curve, float)
-        ax.plot(c[:, 0], c[:, 1], color=MANIFOLD_COLORS[kind], linewidth=0.8, zorder=2.6,
+        ax.plot(c[:, 0], c[:, 1], color=style.MANIFOLD_COLORS[kind], linewidth=0.8, zorder=2.6,
                 gid=f"manifold-{kind}-{n}")
     for p1, p2, period, elliptic in view.periodic:
         ax.scatter([p1], [p2], s=36, marker="o" if elliptic else "X", edgecolors="black", linewidths=1.0,
-                   c=[PERIOD_COLORS[(int(period) - 1) % len(PERIOD_COLORS)]], zorder=5)
+                   c=[style.PERIOD_COLORS[(int(period) - 1) % len(style.PERIOD_COLORS)]], zorder=5)
     for p1, p2, elliptic in view.fixed:
         ax.scatter([p1], [p2], s=60, marker="o" if elliptic else "X", edgecolors="black", facecolors="white",
                    linewidths=1.5, zorder=6)

@@ -83,38 +83,31 @@ def fixed_points(view) -> tuple:
     return points, f"fixed points {describe_points(points)}"
 
 
-def separatrix_branches(view, fp) -> tuple:
-    """(curves, note): the four separatrix branches of the hyperbolic fixed point ``fp``, each grown
-    to SEPARATRIX_ARCLENGTH (docs/manifolds.md), as (M, 2) arrays, and a note on those that stopped short."""
-    from explorer.analysis.manifolds import manifolds
-
-    branches = manifolds(view.section_map(), fp, arclength=SEPARATRIX_ARCLENGTH, max_time=SEPARATRIX_MAX_TIME)
-    curves = [np.asarray(b.points, dtype=np.float64) for b in branches if len(b.points)]
-    short = sorted({b.status for b in branches if b.status != "arclength"})
-    return curves, (f"some branches stopped short ({', '.join(short)})" if short else "")
-
-
 def separatrices(view, points, text: str) -> tuple:
-    """(curves, message): the separatrices of the hyperbolic fixed ``points``, and ``text`` (the fixed
-    points' message) with what they gave; a budget that runs out ends the curves there."""
+    """(curves, message): the four separatrix branches of each hyperbolic fixed point of ``points``, grown
+    to SEPARATRIX_ARCLENGTH (docs/manifolds.md) as (M, 2) arrays, and ``text`` (the fixed points' message)
+    with what they gave; a budget that runs out ends the curves there."""
     from explorer.analysis.budget import BudgetExceeded
+    from explorer.analysis.manifolds import manifolds
 
     curves: list = []
     notes = []
     for fp in points:
         if fp.stable:
             continue
+        at = f"({_num(fp.point[0])}, {_num(fp.point[1])})"
         try:
-            c, note = separatrix_branches(view, fp)
+            branches = manifolds(view.section_map(), fp, arclength=SEPARATRIX_ARCLENGTH, max_time=SEPARATRIX_MAX_TIME)
         except BudgetExceeded as exc:
             notes.append(f"separatrices {exc}")
             break
         except Exception as exc:  # noqa: BLE001 - reported in the status line, the other points go on
-            notes.append(f"separatrices of ({_num(fp.point[0])}, {_num(fp.point[1])}) failed ({failure(exc)})")
+            notes.append(f"separatrices of {at} failed ({failure(exc)})")
             continue
-        curves += c
-        if note:
-            notes.append(f"({_num(fp.point[0])}, {_num(fp.point[1])}): {note}")
+        curves += [np.asarray(b.points, dtype=np.float64) for b in branches if len(b.points)]
+        short = sorted({b.status for b in branches if b.status != "arclength"})
+        if short:
+            notes.append(f"{at}: some branches stopped short ({', '.join(short)})")
     if points:
         text += f"; {len(curves)} separatrix branches" + "".join(f"; {n}" for n in notes)
     return curves, text

@@ -1,23 +1,20 @@
 """The page of ``explorer serve``: one :class:`SectionPage` per browser session, made of components
 that each own their Bokeh models, widgets and state (docs/architecture.md, "The page", lists them),
 their background work on the page's :class:`~explorer.app.serve.tasks.Session`.  The page holds the
-settings, the fields and the link (:class:`UrlState`), and routes clicks, buttons and values to
+settings, the fields and the link (``link``, the address's query), and routes clicks, buttons and values to
 the components.  Bokeh models are found in the browser by name: ``message``, ``section`` and each
 component's own.
 """
 from __future__ import annotations
 
-import contextlib
 import math
 import time
 from dataclasses import replace
-from typing import Any
-from urllib.parse import parse_qsl, urlencode, urlsplit
+from urllib.parse import urlencode
 
 import panel as pn
-import param
-from bokeh.events import ConnectionLost, DoubleTap, PressUp, Tap
-from bokeh.models import Div
+from bokeh.events import ConnectionLost, DocumentReady, DoubleTap, PressUp, Tap
+from bokeh.models import CustomJS, Div
 
 from explorer.app.serve import export, style
 from explorer.app.serve import raster as raster_mod
@@ -40,78 +37,11 @@ URL_DELAY_SECONDS = 0.5
 CLICK_MODES = ("start an orbit", "pick an orbit")
 #: the URL's arguments besides the fields (what url_query writes)
 URL_EXTRAS = ("orbits", "hidden", "megno", "indicator", "separatrices", "periodic", "colour", "pause", "view")
-
-
-class UrlState(param.Parameterized):
-    """The link of a page: every field and :data:`URL_EXTRAS`, as text, kept in the browser's
-    address by ``pn.state.location.sync`` once :meth:`attach` ed; the address heals to it
-    (docs/architecture.md, "The page")."""
-
-    @classmethod
-    def of(cls, fields: tuple) -> UrlState:
-        """The link of a page with these ``fields`` (and URL_EXTRAS): one class per set of keys."""
-        names = tuple(fields) + URL_EXTRAS
-        if names not in _URL_CLASSES:
-            _URL_CLASSES[names] = type(cls.__name__, (cls,), {"names": names,
-                                                              **{n: param.String(default="") for n in names}})
-        return _URL_CLASSES[names]()
-
-    def attach(self, location, session) -> None:
-        """Keep the browser's address (Panel's ``location``) this link from now on, healed on ``session``."""
-        # (the address first: sync reads it into the link, and a link the page ignored is not the page's)
-        location.search = _address(location.search, {n: getattr(self, n) for n in self.names})
-        location.sync(self, on_error=lambda _values: None)
-        self._location, self._session = location, session
-        location.param.watch(self._on_address, ["search", "href"])
-
-    def write(self, link: dict) -> None:
-        """The link anew ({name: text}); the address takes it whole when it lacks any value of it or
-        has another key (``sync`` writes only the values that change)."""
-        self._link = dict(link)
-        with self._sent_by_bokeh():
-            self.param.update(**link)
-            if self._location is not None and self._lacks(self._location.search):
-                self._location.search = _address(self._location.search, link)
-
-    def _sent_by_bokeh(self):
-        """The address's changes sent by Bokeh, not Panel's writer (Session.bokeh_sends)."""
-        return self._session.bokeh_sends() if self._session is not None else contextlib.nullcontext()
-
-    def _lacks(self, query: str) -> bool:
-        """Whether the address's query text lacks a non-empty value of the page's link (as text) or
-        has a key that is neither the link's nor the token."""
-        have = dict(parse_qsl(query.lstrip("?"), keep_blank_values=True))
-        return (any(v and have.get(k) != v for k, v in self._link.items())
-                or any(k not in self._link and k != TOKEN_ARG for k in have))
-
-    def _on_address(self, event) -> None:
-        """A changed address that lacks the link is healed on the session's loop."""
-        if event.new != event.old and self._lacks(urlsplit(event.new).query if event.name == "href" else event.new):
-            self._session.soon(self._heal)
-
-    def _heal(self) -> None:
-        """The link written again into Panel's location when its ``search`` lacks it, else sent to
-        the browser again (``param.trigger``) while its ``href`` lacks it."""
-        location = self._location
-        if self._lacks(location.search):
-            self.write(self._link)
-        elif self._lacks(urlsplit(location.href or "").query):
-            with self._sent_by_bokeh():
-                location.param.trigger("search")
-
-    _location: Any = None       # Panel's location of a served page (attach), else None
-    _session: Any = None        # the page's Session (attach)
-    _link: dict = {}            # the page's link as last written ({name: text})
-    names: tuple = ()           # its keys
-
-
-_URL_CLASSES: dict = {}
-
-
-def _address(query: str, link: dict) -> str:
-    """The address's query text: the ``link`` and the token of ``query`` (if any), nothing else."""
-    token = [(k, v) for k, v in parse_qsl(query.lstrip("?"), keep_blank_values=True) if k == TOKEN_ARG]
-    return "?" + urlencode(token + list(link.items()))
+#: a served page's address: the text of its ``link`` as the query, the token kept, replacing the
+#: address (no history entry), when the document is ready and at every change of the link
+WRITE_LINK = """const token = new URLSearchParams(window.location.search).get("token");
+const query = (token === null ? [] : ["token=" + encodeURIComponent(token)]).concat(link.text ? [link.text] : []);
+window.history.replaceState(window.history.state, "", window.location.pathname + "?" + query.join("&"));"""
 
 
 class SectionPage:
@@ -129,15 +59,16 @@ class SectionPage:
         # the message line under the figure: text, never HTML (a message may quote a field)
         self.message = Div(name="message", text="", render_as_text=True,
                            styles={"color": style.MESSAGE_ERROR_COLOR, "min-height": "1.2em"})
-        self.url_state = UrlState.of(base.field_names)
+        # the link (push_url): sent by Bokeh's own dispatch, written into the address in the browser
+        self.link = Div(name="link", text="", visible=False)
         self.section = SectionView()
         fig = self.section.figure
         fig.xaxis.axis_label, fig.yaxis.axis_label = base.axes
         self.orbits = OrbitsLayer(self, self.section, self.session)
         self.density_image = DensityImage(self.orbits, self.section)
-        self.chaos = ChaosLayer(self, self.section, self.session, raster_mod.resolutions_up_to(megno_resolution),
-                                megno_time)
-        self.overlays = Overlays(self, self.section, self.session)
+        self.chaos = ChaosLayer(self.section, self.session, raster_mod.resolutions_up_to(megno_resolution),
+                                megno_time, lambda: self.settings, self.say, self.push_url)
+        self.overlays = Overlays(self.section, self.session, lambda: self.settings, self.push_url)
         self.orbit_list = OrbitList(self.orbits, self.overlays, self.section, self.session, lambda: self.settings,
                                     self.say, on_changed=self.push_url)
         self.exports = export.Exports(self, self.session, export_dir, label)
@@ -176,18 +107,18 @@ class SectionPage:
             b = pn.widgets.Button(label=label, width=width, color="warning" if label == "Clear" else "default")
             b.on_click(lambda _e, action=action: self.session.soon(action))
             buttons.append(b)
-        downloads = [(ex.scene_file, "Scene (TOML)", "toml", 110)] * scene + [
-            (lambda fmt=fmt: ex.figure_file(fmt), f"Figure ({fmt.upper()})", fmt, 100) for fmt in ("png", "svg")]
-        buttons[4:4] = [pn.widgets.FileDownload(callback=f, label=label, filename=f"{export.SCENE_NAME}.{x}", width=w,
+        downloads = [("Scene (TOML)", "toml")] * scene + [(f"Figure ({x.upper()})", x) for x in ("png", "svg")]
+        buttons[4:4] = [pn.widgets.FileDownload(callback=lambda x=x: ex.download(x), label=label,
+                                                filename=f"{export.SCENE_NAME}.{x}", width=110 if x == "toml" else 100,
                                                 color="primary" if x == "toml" else "default")
-                        for f, label, x, w in downloads]
+                        for label, x in downloads]
         self.click_mode = pn.widgets.RadioButtonGroup(options=list(CLICK_MODES), value=CLICK_MODES[0], width=220)
         self.title = pn.pane.Markdown(self._title())
         o, ov = self.orbits, self.overlays
         controls = pn.Column(pn.pane.Markdown("a click (Shift + click: pick):", margin=(0, 5)), self.click_mode,
                              o.pause_box, self.fields.grid, o.colour_box, self.chaos.layer, self.chaos.indicator,
                              ov.overlay, ov.periodic_box, o.starts_box, width=230)
-        texts = (o.status, self.orbit_list.text, self.message, self.overlays.text)
+        texts = (o.status, self.orbit_list.text, self.message, self.overlays.text, self.link)
         for div in texts:
             div.sizing_mode = "stretch_width"
         bar = pn.FlexBox(*buttons, flex_wrap="wrap", sizing_mode="stretch_width")
@@ -220,7 +151,7 @@ class SectionPage:
 
     # ------------------------------------------------------------ state in the URL
     def _load_url(self, args: dict):
-        args, unknown = settings_mod.screen_link(args, self.url_state.names + (TOKEN_ARG,))
+        args, unknown = settings_mod.screen_link(args, self.base.field_names + URL_EXTRAS + (TOKEN_ARG,))
         fields = {k: v for k, v in args.items() if k in self.base.field_names}
         self.settings, refused = settings_mod.parse_link_fields(self.base, fields)
         refused[:0] = unknown
@@ -268,9 +199,9 @@ class SectionPage:
                 ("colour", o.colour_box, "megno", "orbit"), ("pause", o.pause_box, "1", "0"))
 
     def push_url(self):
-        """The link anew (UrlState.write; the browser's address follows it once attached)."""
+        """The link anew: ``link``'s text, the address's query on a served page (WRITE_LINK)."""
         self._url_timer.cancel()
-        self.url_state.write(self.url_query())
+        self.link.text = urlencode(self.url_query())
 
     def overlays_on(self) -> tuple:
         """The names of the overlays that are on (the chaos layer by its indicator), for the scene."""
@@ -406,7 +337,8 @@ def session_app(base: Settings, export_dir=None, label: str = "", **page_options
         except Exception as exc:  # noqa: BLE001 - a link the checks let through: the page without it, and why
             page = SectionPage(base, {}, export_dir=export_dir, label=label, doc=pn.state.curdoc, **page_options)
             page.say(f"link ignored: {failure(exc)}")
-        if pn.state.location is not None:
-            page.url_state.attach(pn.state.location, page.session)
+        write = CustomJS(args={"link": page.link}, code=WRITE_LINK)
+        page.link.js_on_change("text", write)
+        pn.state.curdoc.js_on_event(DocumentReady, write)
         return page.layout
     return app

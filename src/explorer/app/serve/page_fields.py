@@ -67,12 +67,11 @@ class Fields:
         s = settings.fields()
         self.inputs: dict = {}
         for name in settings.field_names:
+            shown = dict(label=LABELS.get(name, name), value=s[name], width=FIELD_WIDTH, description=HELP.get(name))
             if name == "method":
-                w = pn.widgets.Select(label=LABELS[name], options=list(METHODS), value=s[name], width=FIELD_WIDTH,
-                                      description=HELP[name])
+                w = pn.widgets.Select(options=list(METHODS), **shown)
             else:
-                w = pn.widgets.TextInput(label=LABELS.get(name, name), value=s[name], width=FIELD_WIDTH,
-                                         description=HELP.get(name))
+                w = pn.widgets.TextInput(**shown)
             w.param.watch(lambda _e, name=name: self._edited(session, on_edit, name), "value")
             self.inputs[name] = w
         mu = float(s.get("mu", 0.0))
@@ -139,16 +138,11 @@ class Fields:
         self.inputs["mu"].value = text
 
     def _slider_at(self, mu: float) -> None:
-        """The slider at ``mu``, over slider_range(mu)."""
-        slider, (end, step) = self.mu_slider, slider_range(mu)
+        """The slider at ``mu``, over slider_range(mu), in one update (the browser takes them together)."""
+        end, step = slider_range(mu)
         self._quiet = True
         try:
-            if end > slider.end:
-                slider.param.update(end=end, step=step)
-            if slider.value != min(max(mu, 0.0), end):
-                slider.value = min(max(mu, 0.0), end)
-            if (end, step) != (slider.end, slider.step):
-                slider.param.update(end=end, step=step)
+            self.mu_slider.param.update(value=min(max(mu, 0.0), end), end=end, step=step)
         finally:
             self._quiet = False
 

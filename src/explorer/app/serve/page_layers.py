@@ -15,6 +15,7 @@ from explorer.app.serve import raster as raster_mod
 from explorer.app.serve.box import Box
 from explorer.app.serve.orbits import COLORS
 from explorer.app.serve.style import MEGNO_HIGH, MEGNO_LOW, MEGNO_ORBIT_SKIP, megno_palette
+from explorer.app.serve.tasks import failure
 
 #: while orbits stream in, the density image is redrawn at most this often (s)
 DENSITY_SECONDS = 0.5
@@ -23,26 +24,23 @@ MEGNO_TITLE = "⟨Y⟩ (MEGNO)"
 DIFFUSION_TITLE = "log10|ν1 − ν2| (frequency diffusion)"
 
 
-def _empty_raster() -> dict:
-    return {"image": [], "x": [], "y": [], "dw": [], "dh": [], "n": [], "complete": []}
-
-
-def _empty_density() -> dict:
-    return {"image": [], "x": [], "y": [], "dw": [], "dh": [], "n": []}
+def _empty(*extra) -> dict:
+    return {k: [] for k in ("image", "x", "y", "dw", "dh", "n", *extra)}
 
 
 class ChaosLayer:
-    """The chaos layer (box, indicator, source, colour bar, task); ``center``: (settings, point,
+    """The chaos layer (box, indicator, source, colour bar, task) of ``settings()``; ``say(text)`` the
+    message line, ``on_changed()`` after the box or the indicator changed.  ``center``: (settings, point,
     elliptic) of frequency diffusion's last centre; ``exact``: MEGNO's finest raster computes every
     cell (the link's ``megno=exact``), else it is adaptive (raster.adaptive_raster)."""
 
-    def __init__(self, host, view, session, resolutions: tuple, time: float):
-        self.host, self.view = host, view
+    def __init__(self, view, session, resolutions: tuple, time: float, settings, say, on_changed):
+        self.view, self.settings, self.say, self.on_changed = view, settings, say, on_changed
         self.resolutions, self.time = resolutions, float(time)
         self.iterates = raster_mod.DIFFUSION_ITERATES
         self.session = session
         self.exact = False
-        self.raster_source = ColumnDataSource(_empty_raster(), name="raster")
+        self.raster_source = ColumnDataSource(_empty("complete"), name="raster")
         self.center: tuple | None = None
         self.layer = Box(label="chaos layer", value=False)
         self.indicator = pn.widgets.Select(options={f"MEGNO ⟨Y⟩ (T = {self.time:g})": "megno",
@@ -75,7 +73,7 @@ class ChaosLayer:
         if self.indicator.value == "megno":
             return MEGNO_TITLE
         c = self.center
-        if c is None or c[0] != self.host.settings:
+        if c is None or c[0] != self.settings():
             return DIFFUSION_TITLE
         (p1, p2), elliptic = c[1], c[2]
         return f"{DIFFUSION_TITLE} around {'elliptic point' if elliptic else 'region centre'} ({p1:.4g}, {p2:.4g})"
@@ -89,7 +87,7 @@ class ChaosLayer:
         """The layer's state from a link: ``indicator`` and ``megno`` ("1": on; "exact": on, every cell computed)."""
         name = args.get("indicator") or "megno"
         if name not in raster_mod.INDICATORS:
-            self.host.say(f"link's indicator ignored: must be one of {', '.join(raster_mod.INDICATORS)}, got "
+            self.say(f"link's indicator ignored: must be one of {', '.join(raster_mod.INDICATORS)}, got "
                           f"{name[:40]!r}")
             name = "megno"
         self.indicator.value = name
@@ -108,21 +106,21 @@ class ChaosLayer:
     def _layer_changed(self):
         self.colour_bar.visible = bool(self.layer.value)
         self.restart()
-        self.host.push_url()
+        self.on_changed()
 
     def _indicator_changed(self):
         self._show_scale()
-        self.raster_source.data = _empty_raster()       # no value of the other indicator on its scale
+        self.raster_source.data = _empty("complete")       # no value of the other indicator on its scale
         self.restart()
-        self.host.push_url()
+        self.on_changed()
 
     def restart(self) -> None:
         """The rasters of the current window, indicator and settings (none when the layer is off)."""
-        window, settings = self.view.window, self.host.settings
+        window, settings = self.view.window, self.settings()
         self._show_scale()
         if not self.layer.value or window is None or settings.region is None:
             self.session.cancel("raster")
-            self.raster_source.data = _empty_raster()
+            self.raster_source.data = _empty("complete")
             return
         self.session.start("raster", self._compute(settings, window, self.indicator.value), on_error=self._failed,
                            budget=Budget(None, max_steps=raster_mod.RASTER_MAX_STEPS))
@@ -143,7 +141,7 @@ class ChaosLayer:
             await session.apply(lambda image=image: self.show_image(image))
 
     def _failed(self, exc) -> None:
-        self.host.say(f"chaos layer failed: {type(exc).__name__}: {' '.join(str(exc).split())}")
+        self.say(f"chaos layer failed: {failure(exc)}")
 
     def show_image(self, image) -> None:
         w = image.window
@@ -156,7 +154,7 @@ class DensityImage:
 
     def __init__(self, orbits, view):
         self.orbits, self.view = orbits, view
-        self.density = ColumnDataSource(_empty_density(), name="density")
+        self.density = ColumnDataSource(_empty(), name="density")
         self.dense = False                      # the density image replaces the crossings' glyphs
         self.glyph_first = 0                    # orbits from this id on are glyphs, older ones in the image
         self._key: tuple | None = None          # what the image on the page shows
@@ -185,7 +183,7 @@ class DensityImage:
             force = True
         if not dense and first == 0:
             if self.density.data["image"]:
-                self.density.data = _empty_density()
+                self.density.data = _empty()
             self._key = None
             return
         w = self.view.window

@@ -26,10 +26,11 @@ def _marks(points, stable) -> dict:
 
 
 class Overlays:
-    """Fixed points, separatrices, periodic orbits and a saddle's manifolds."""
+    """Fixed points, separatrices, periodic orbits and a saddle's manifolds of ``settings()``;
+    ``on_changed()`` after a box changed."""
 
-    def __init__(self, host, view, session):
-        self.host, self.view, self.session = host, view, session
+    def __init__(self, view, session, settings, on_changed):
+        self.view, self.session, self.settings, self.on_changed = view, session, settings, on_changed
         self.fixed = ColumnDataSource(_empty("fixed"), name="fixed")
         self.curves = ColumnDataSource(_empty("separatrices"), name="separatrices")
         self.periodic = ColumnDataSource(_empty("periodic"), name="periodic")
@@ -62,7 +63,7 @@ class Overlays:
 
     def _boxes_changed(self):
         self.restart()
-        self.host.push_url()
+        self.on_changed()
 
     def restart(self):
         """Search what the boxes ask for at the current settings, under a budget; latest wins."""
@@ -72,12 +73,12 @@ class Overlays:
         self.periodic.data = _empty("periodic")
         self.text.text = ""
         wanted = (self.overlay.value, self.periodic_box.value)
-        if not any(wanted) or self.host.settings.region is None:
+        if not any(wanted) or self.settings().region is None:
             self.session.cancel("overlay")
             return
         self.text.text = "searching ..."
         budget = search.search_budget(search.FIXED_SECONDS * wanted[0] + search.PERIODIC_SECONDS * wanted[1])
-        self.session.start("overlay", self._compute(self.host.settings, *wanted), budget=budget)
+        self.session.start("overlay", self._compute(self.settings(), *wanted), budget=budget)
 
     async def _compute(self, settings, fixed, periodic):
         run, apply = self.session.run, self.session.apply
@@ -130,7 +131,7 @@ class Overlays:
         self.manifold_source.data = _empty("manifolds")
         self.text.text = (f"growing the manifolds of the period-{period} orbit at "
                           f"({point[0]:.6g}, {point[1]:.6g}) ...")
-        self.session.start("manifolds", self._compute_manifolds(tuple(point), int(period), self.host.settings),
+        self.session.start("manifolds", self._compute_manifolds(tuple(point), int(period), self.settings()),
                            budget=search.search_budget(search.MANIFOLD_SECONDS))
 
     def clear_manifolds(self) -> None:

@@ -78,6 +78,14 @@ def diffusion_cells(settings: Settings, p1, p2, center, iterates: int = DIFFUSIO
                                np.ravel(p2)]), center=center, iterates=iterates)
 
 
+def _shown(coarser, inside) -> np.ndarray:
+    """What a raster shows of the cells ``inside`` until each is computed: ``coarser``'s value (None: NaN)."""
+    if coarser is None:
+        return np.full(inside.shape, np.nan)
+    k = inside.shape[0] // coarser.shape[0]
+    return np.where(inside, np.kron(coarser, np.ones((k, k))), np.nan)
+
+
 def rasters(settings: Settings, window: Window, resolutions: tuple = RESOLUTIONS, time: float = RASTER_TIME,
             indicator: str = "megno", center=None, iterates: int = DIFFUSION_ITERATES, adaptive: bool = False):
     """Yield the :class:`Image` of ``indicator`` after every batch of every resolution; ``time``:
@@ -107,10 +115,7 @@ def rasters(settings: Settings, window: Window, resolutions: tuple = RESOLUTIONS
     for n in resolutions:
         P1, P2 = window.centres(n)
         inside = settings.allowed(P1, P2)
-        values = np.full((n, n), np.nan)
-        if previous is not None:     # until a cell is computed, it shows the coarser raster's value
-            k = n // previous.shape[0]
-            values = np.where(inside, np.kron(previous, np.ones((k, k))), np.nan)
+        values = _shown(previous, inside)
         rows, cols = np.nonzero(inside)
         for a in range(0, len(rows), batch):
             r, c = rows[a:a + batch], cols[a:a + batch]
@@ -130,10 +135,7 @@ def adaptive_raster(settings: Settings, window: Window, n: int, time: float = RA
 
     P1, P2 = window.centres(n)
     inside = np.asarray(settings.allowed(P1, P2), bool)
-    shown = np.full((n, n), np.nan)
-    if coarser is not None:
-        k = n // coarser.shape[0]
-        shown = np.where(inside, np.kron(coarser, np.ones((k, k))), np.nan)
+    shown = _shown(coarser, inside)
     raster = CellRaster(None, None, inside, "megno", RULES["megno"], default_threshold("megno", time), {})
     coarse = n // 8 if coarser is None else coarser.shape[0]
     last, pending = monotonic(), 0

@@ -93,7 +93,7 @@ def make_server(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT
     pn.config.disconnect_notification = DISCONNECT_NOTICE
     app = session_app(base, export_dir=export_dir, label=label, **page_options)
     server = pn.serve(app, port=port, address=host, show=False, start=False, verbose=False, title="explorer",
-                      location=True, liveness=True,
+                      liveness=True,
                       http_server_kwargs={"max_header_size": MAX_HEADER_BYTES}, **kw)
     return server, url_of(host, port, token)
 

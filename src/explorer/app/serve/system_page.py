@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from explorer import model
-from explorer.app.serve.settings import MAX_CROSSINGS, Settings, megno_of, read_fields
+from explorer.app.serve.settings import MAX_CROSSINGS, Settings, Window, megno_of, read_fields
 from explorer.model import ParameterError, validation
 
 #: names the page's link keeps for itself: a System parameter may not take one (its field is a link key)
@@ -94,9 +94,7 @@ class SystemSettings:
     def region_mask(self):
         """The map's domain on a REGION_CELLS^2 grid of the :attr:`region` box (rows: the second coordinate)."""
         c1, c2, r1, r2 = self.region
-        u = (np.arange(REGION_CELLS) + 0.5) / REGION_CELLS * 2.0 - 1.0
-        A, B = np.meshgrid(c1 + r1 * u, c2 + r2 * u)
-        return self.allowed(A, B)
+        return self.allowed(*Window(c1 - r1, c1 + r1, c2 - r2, c2 + r2).centres(REGION_CELLS))
 
     def allowed(self, p1, p2) -> np.ndarray:
         return self.smap.allowed(np.stack([np.asarray(p1, float), np.asarray(p2, float)], axis=-1))

@@ -28,9 +28,7 @@ def failure(exc: BaseException) -> str:
 
 
 def _in_budget(budget: Budget | None, fn, *args):
-    if budget is None:
-        return fn(*args)
-    with budget:
+    with contextlib.nullcontext() if budget is None else budget:
         return fn(*args)
 
 
@@ -145,21 +143,6 @@ class Session:
 
     def _drive(self, coro) -> None:
         _DRIVER.submit(self.loop.run_until_complete, coro).result()
-
-    @contextlib.contextmanager
-    def bokeh_sends(self):
-        """The changes made within go out through Bokeh's dispatch (``Document.hold("collect")``), not
-        Panel's writer, which may leave a message unsent (tests/app/lossy_panel_serve.py).  Not for a
-        block that replaces a source's data and then streams to it (the rows would arrive twice)."""
-        doc = self.doc
-        if doc is None or doc.callbacks.hold_value is not None:
-            yield
-            return
-        doc.hold("collect")
-        try:
-            yield
-        finally:
-            doc.unhold()
 
     def close(self) -> None:
         """The session is gone: every task and timer cancelled (a loop of its own: closed)."""
