@@ -96,9 +96,3 @@ def default_server(tmp_path_factory):
     yield s
     code, err = s.interrupt()
     assert code in (0, 130) and "Traceback" not in err, err[-2000:]
-    made_up = [line for line in err.splitlines() if "made up" in line]
-    if made_up:                # (not a failure: the page was made whole; said in pytest's summary)
-        import warnings
-
-        warnings.warn(f"the served pages made up {len(made_up)} lost Bokeh callback(s): {made_up[:3]}",
-                      stacklevel=1)

@@ -524,12 +524,11 @@ SET_BOX = "([text, on]) => { const m = [...Bokeh.documents[0].all_models].find(m
           " String(m.labels[0]).startsWith(text)); m.active = on ? [0] : []; }"
 
 
-#: what a page says, for a failed wait: its message, status and readout lines, then its address as
-#: Panel's location model holds it and as the browser shows it, and whether BokehJS calls the
-#: document idle (Panel 1.9 writes the address only once it is)
-SAID = ("() => { const d = Bokeh.documents[0], loc = d.get_model_by_name('location');"
-        " return ['message', 'status', 'readout'].map(n => (m => m ? m.text : null)(d.get_model_by_name(n)))"
-        ".concat([loc ? loc.search : null, window.location.search, d.is_idle]); }")
+#: what a page says, for a failed wait: its message, status and readout lines, its link, then its
+#: address as the browser shows it, and whether BokehJS calls the document idle
+SAID = ("() => { const d = Bokeh.documents[0];"
+        " return ['message', 'status', 'readout', 'link'].map(n => (m => m ? m.text : null)(d.get_model_by_name(n)))"
+        ".concat([window.location.search, d.is_idle]); }")
 
 
 def _wait(page, expression, timeout=60_000, polling="raf"):
