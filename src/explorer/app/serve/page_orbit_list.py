@@ -53,8 +53,7 @@ class OrbitList:
         self.text = Div(name="readout", text="", render_as_text=True, styles={"font-family": "monospace"})
         self.picked: int | None = None          # the orbit whose readout is shown
         self.readouts: dict = {}                # orbit id -> orbit_readout(...) of a picked orbit
-        self._quiet = False
-        self._idents: tuple = ()
+        self._quiet = False                     # (the chooser set by refresh, not by the user)
         self.filter: CustomJSFilter | None = None
         self.table = Div(name="orbit-list", text="", styles={"max-height": LIST_MAX_HEIGHT, "overflow-y": "auto"},
                          width=LIST_WIDTH)
@@ -146,25 +145,18 @@ class OrbitList:
     def refresh(self) -> None:
         """The table, the chooser and the highlight anew (after a status update or a selection)."""
         starts, picked = self.orbits.starts, self.picked
-        idents = tuple(i for i, *_ in starts)
         self._quiet = True
-        try:
-            if idents != self._idents:
-                self._idents = idents
-                self.choice.options = {NONE_LABEL: 0} | {f"{i}: ({p1:.4g}, {p2:.4g})": i for i, p1, p2, _c in starts}
-            value = picked if picked in idents else 0
-            if self.choice.value != value:
-                self.choice.value = value
+        try:       # (a value equal to the one there is not sent again: param and Bokeh compare them)
+            self.choice.options = {NONE_LABEL: 0} | {f"{i}: ({p1:.4g}, {p2:.4g})": i for i, p1, p2, _c in starts}
+            self.choice.value = picked if self.orbits.has(picked) else 0
         finally:
             self._quiet = False
         hidden = picked is not None and picked in self.orbits.hidden
         self.hide_button.label = "show" if hidden else "hide"
         self.hide_button.disabled = self.delete_button.disabled = picked is None
-        if self.filter is not None and self.filter.args.get("orbit") != (picked or 0):
+        if self.filter is not None:
             self.filter.args = {"orbit": picked or 0}
-        text = _table(self.orbits, picked)
-        if self.table.text != text:
-            self.table.text = text
+        self.table.text = _table(self.orbits, picked)
 
     # ------------------------------------------------------------ the picked orbit
     def pick(self, p1: float, p2: float, radius_px: float = PICK_PX) -> int | None:
