@@ -162,3 +162,20 @@ def test_early_stop_keeps_computed_cells_exact_and_stopped_cells_chaotic(standar
     r = ex.indicators(standard, e.centres().reshape(-1, 2), tmax=T, which=("megno",), early_stop=True)
     stopped = (r.early > 0).reshape(32, 32)
     assert stopped.any() and e.chaotic[stopped].all()
+
+
+#: the cells of Figure 4's mu = 0.03 map (512^2, the megno_map preset) stopped early at <Y> > 5 whose
+#: <Y> at T = 1000 is closest to the threshold 4: sticky orbits at the islands' rims
+STICKY = [(-0.033906689428408354, -0.665749627423012), (-0.2058010242783841, -0.6436500547284723),
+          (-0.6277234825465068, -0.09116073736497676), (1.325621231657764, 0.4558036868248838)]
+
+
+def test_megno_early_stop_at_five_keeps_the_class_of_sticky_orbits_at_t_1000():
+    """The megno_map preset's early stop (<Y> > 5 over [t/2, t], t >= 100) classifies the stickiest
+    stopped orbits as the full T = 1000 integration does (docs/chaos_map.md)."""
+    smap = ex.SectionMap(ex.FIGURE4.with_(mu=0.03), 2.0, tol=1e-12)
+    seeds = np.array(STICKY)
+    stop = ex.indicators(smap, seeds, tmax=1000.0, which=("megno",), early_stop=True, early_megno=5.0)
+    full = ex.indicators(smap, seeds, tmax=1000.0, which=("megno",))
+    assert (stop.early > 0).all() and (stop.time < 1000.0).all()
+    assert (full.megno > 4.0).all()
