@@ -4,13 +4,9 @@ left out.  Files go only into ``--export-dir``, under names made here, atomicall
 from __future__ import annotations
 
 import io
-import math
 import os
 import time
 
-import numpy as np
-
-from explorer.app.serve.orbits import COLORS
 from explorer.app.serve.settings import Settings
 from explorer.app.serve.tasks import failure
 from explorer.io import scene as scene_mod
@@ -79,49 +75,14 @@ def write_store(scene_path) -> str:
 
 
 class Exports:
-    """Scene and figure exports of a page (``host``: its settings, components and message line)."""
+    """Scene and figure exports of a page: ``scene()`` its session's scene (:func:`session_scene`),
+    ``view()`` what it shows (:class:`~explorer.app.serve.image.View`), ``say`` its message line."""
 
-    def __init__(self, host, session, export_dir=None, label: str = ""):
-        self.host, self.session, self.export_dir, self.label = host, session, export_dir, label
-
-    def scene(self) -> scene_mod.Scene:
-        starts = [(a, b) for _i, a, b, _c in self.host.orbits.starts]
-        return session_scene(self.host.settings, starts, overlays=self.host.overlays_on())
+    def __init__(self, session, export_dir, scene, view, say):
+        self.session, self.export_dir, self.scene, self.view, self.say = session, export_dir, scene, view, say
 
     def scene_text(self) -> str:
         return self.scene().to_toml()
-
-
-    def view(self):
-        """What the page shows now, hidden orbits left out, copied (drawn in any thread)."""
-        from explorer.app.serve.image import View
-
-        host = self.host
-        orbits, ov = host.orbits, host.overlays
-        d = orbits.crossings.data
-        orbit = np.asarray(d["orbit"])
-        p = np.column_stack([np.asarray(d["p1"], float), np.asarray(d["p2"], float)])
-        visible = [s for s in orbits.starts if s[0] not in orbits.hidden]
-        shown = [(i, COLORS[c], p[orbit == i], orbits.indicators.get(i, (math.nan,))[0]) for i, _a, _b, c in visible]
-        w = host.section.window
-        r = host.chaos.raster_source.data
-        raster = None
-        if len(r["image"]):
-            x, y = r["x"][0], r["y"][0]
-            raster = (np.array(r["image"][0], float), (x, x + r["dw"][0], y, y + r["dh"][0]))
-        f, q, m = ov.fixed.data, ov.periodic.data, ov.manifold_source.data
-        s = host.settings
-        return View(window=(w.x0, w.x1, w.y0, w.y1) if w is not None else (-1.0, 1.0, -1.0, 1.0), region=s.region,
-                    region_mask=s.region_mask(), orbits=shown, axes=s.axes,
-                    starts=[(a, b, COLORS[c]) for _i, a, b, c in visible], raster=raster,
-                    raster_scale=host.chaos.scale(),
-                    fixed=[(a, b, k == "elliptic") for a, b, k in zip(f["p1"], f["p2"], f["kind"])],
-                    separatrices=[np.column_stack([x, y]) for x, y in zip(ov.curves.data["xs"], ov.curves.data["ys"])],
-                    manifolds=[(k, np.column_stack([x, y])) for k, x, y in zip(m["kind"], m["xs"], m["ys"])],
-                    periodic=[(a, b, k, e == "elliptic") for a, b, k, e in zip(q["p1"], q["p2"], q["period"],
-                                                                               q["kind"])],
-                    by_megno=bool(orbits.colour_box.value),
-                    title=s.describe() + (f" ({self.label})" if self.label else ""))
 
     def figure_bytes(self, fmt: str) -> bytes:
         """The page's view as a PNG or SVG file (the *Figure* downloads)."""
@@ -135,14 +96,14 @@ class Exports:
         try:
             return io.BytesIO(self.scene_text().encode("utf-8") if fmt == "toml" else self.figure_bytes(fmt))
         except ParameterError as exc:
-            self.host.say(str(exc))
+            self.say(str(exc))
         except Exception as exc:  # noqa: BLE001 - reported in the page; the download is empty
-            self.host.say(f"{fmt} download failed: {failure(exc)}")
+            self.say(f"{fmt} download failed: {failure(exc)}")
         return io.BytesIO(b"")
 
     def export_figure(self) -> None:
         """Write the page's view as PNG and SVG into the export directory (drawn by a task)."""
-        self.host.say("writing the figure ...", ok=True)
+        self.say("writing the figure ...", ok=True)
         self.session.start("figure", self._write(write_figure, (self.export_dir, self.view()), "figure export",
                                                  lambda paths: "figure written: " + " and ".join(
                                                      map(os.path.basename, paths))))
@@ -152,10 +113,10 @@ class Exports:
         try:
             path = write_scene(self.export_dir, self.scene())
         except (ParameterError, OSError) as exc:
-            self.host.say(f"export failed: {exc}")
+            self.say(f"export failed: {exc}")
             return None
         name = os.path.basename(path)
-        self.host.say(f"scene written: {name} (rerun: explorer sweep {name}); writing the orbits' store ...", ok=True)
+        self.say(f"scene written: {name} (rerun: explorer sweep {name}); writing the orbits' store ...", ok=True)
         self.session.start("store", self._write(write_store, (path,), "store export", lambda out: (
             f"written: {name} and {os.path.basename(out)} (the orbits, sweep format)")))
         return path
@@ -166,4 +127,4 @@ class Exports:
             text, ok = said(await self.session.run(fn, *args)), True
         except Exception as exc:  # noqa: BLE001 - reported in the page
             text, ok = f"{what} failed: {failure(exc)}", False
-        await self.session.apply(lambda: self.host.say(text, ok))
+        await self.session.apply(lambda: self.say(text, ok))

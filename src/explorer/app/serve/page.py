@@ -12,6 +12,7 @@ import time
 from dataclasses import replace
 from urllib.parse import urlencode
 
+import numpy as np
 import panel as pn
 from bokeh.events import ConnectionLost, DocumentReady, DoubleTap, PressUp, Tap
 from bokeh.models import CustomJS, Div
@@ -19,6 +20,7 @@ from bokeh.models import CustomJS, Div
 from explorer.app.serve import export, style
 from explorer.app.serve import raster as raster_mod
 from explorer.app.serve import settings as settings_mod
+from explorer.app.serve.orbits import COLORS
 from explorer.app.serve.page_fields import Fields
 from explorer.app.serve.page_layers import ChaosLayer, DensityImage
 from explorer.app.serve.page_orbit_list import OrbitList
@@ -71,7 +73,7 @@ class SectionPage:
         self.overlays = Overlays(self.section, self.session, lambda: self.settings, self.push_url)
         self.orbit_list = OrbitList(self.orbits, self.overlays, self.section, self.session, lambda: self.settings,
                                     self.say, on_changed=self.push_url)
-        self.exports = export.Exports(self, self.session, export_dir, label)
+        self.exports = export.Exports(self.session, export_dir, self.scene, self.view, self.say)
         self._url_timer = self.session.timer(self.push_url)
         self.section.on_window(lambda: self._url_timer.at(time.monotonic() + URL_DELAY_SECONDS))
         self.chaos.draw(fig)
@@ -206,6 +208,41 @@ class SectionPage:
     def overlays_on(self) -> tuple:
         """The names of the overlays that are on (the chaos layer by its indicator), for the scene."""
         return self.overlays.on() + ((self.chaos.indicator.value,) if self.chaos.layer.value else ())
+
+    def scene(self):
+        """The session as a scene (export.session_scene): its settings, starts and overlays."""
+        starts = [(a, b) for _i, a, b, _c in self.orbits.starts]
+        return export.session_scene(self.settings, starts, overlays=self.overlays_on())
+
+    def view(self):
+        """What the page shows now, hidden orbits left out, copied (drawn in any thread)."""
+        from explorer.app.serve.image import View
+
+        orbits, ov = self.orbits, self.overlays
+        d = orbits.crossings.data
+        orbit = np.asarray(d["orbit"])
+        p = np.column_stack([np.asarray(d["p1"], float), np.asarray(d["p2"], float)])
+        visible = [s for s in orbits.starts if s[0] not in orbits.hidden]
+        shown = [(i, COLORS[c], p[orbit == i], orbits.indicators.get(i, (math.nan,))[0]) for i, _a, _b, c in visible]
+        w = self.section.window
+        r = self.chaos.raster_source.data
+        raster = None
+        if len(r["image"]):
+            x, y = r["x"][0], r["y"][0]
+            raster = (np.array(r["image"][0], float), (x, x + r["dw"][0], y, y + r["dh"][0]))
+        f, q, m = ov.fixed.data, ov.periodic.data, ov.manifold_source.data
+        s = self.settings
+        return View(window=(w.x0, w.x1, w.y0, w.y1) if w is not None else (-1.0, 1.0, -1.0, 1.0), region=s.region,
+                    region_mask=s.region_mask(), orbits=shown, axes=s.axes,
+                    starts=[(a, b, COLORS[c]) for _i, a, b, c in visible], raster=raster,
+                    raster_scale=self.chaos.scale(),
+                    fixed=[(a, b, k == "elliptic") for a, b, k in zip(f["p1"], f["p2"], f["kind"])],
+                    separatrices=[np.column_stack([x, y]) for x, y in zip(ov.curves.data["xs"], ov.curves.data["ys"])],
+                    manifolds=[(k, np.column_stack([x, y])) for k, x, y in zip(m["kind"], m["xs"], m["ys"])],
+                    periodic=[(a, b, k, e == "elliptic") for a, b, k, e in zip(q["p1"], q["p2"], q["period"],
+                                                                               q["kind"])],
+                    by_megno=bool(orbits.colour_box.value),
+                    title=s.describe() + (f" ({self.label})" if self.label else ""))
 
     # ------------------------------------------------------------ values
     def _on_field(self, name: str | None = None):
