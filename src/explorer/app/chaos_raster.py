@@ -70,7 +70,8 @@ def axis_label(name) -> str:
 def chaos_rasters(maps, *, indicator="megno", threshold=4.0, columns=None, dpi=200, panel_width=PANEL_WIDTH):
     """One raster per map: dicts with ``seeds`` (N, 2), ``values`` (N,) of ``indicator``,
     ``grid`` (resolution, p1_lo, p1_hi, p2_lo, p2_hi), ``params``, ``h``, ``phi0``, ``label``,
-    optional ``curves`` (separatrix polylines (p1, p2)), ``fraction`` (chaotic fraction) and
+    optional ``curves`` (separatrix polylines (p1, p2)), ``fraction`` (chaotic fraction; ``classified``
+    says by what, default MEGNO > ``threshold``) and
     ``computed`` (the fraction of cells computed, not filled, of an adaptive map: written in a corner).
     Cells without a seed (outside the allowed region) are drawn gray.  A System's map (docs/systems.md):
     ``params`` None (no ellipse of Chaplygin's model) and ``axes``, the names of its coords."""
@@ -120,7 +121,7 @@ def chaos_rasters(maps, *, indicator="megno", threshold=4.0, columns=None, dpi=2
             ax.set_ylim(a2, b2)
             title = mathtext_label(m.get("label", ""))
             if m.get("fraction") is not None and math.isfinite(m["fraction"]):
-                title += f"   chaotic {m['fraction']:.1%} (MEGNO > {threshold:g})"
+                title += f"   chaotic {m['fraction']:.1%} ({m.get('classified') or f'MEGNO > {threshold:g}'})"
             ax.set_title(title, fontsize=_FONT_SIZE, pad=4)
             xlabel, ylabel = (axis_label(a) for a in m.get("axes", ("p1", "p2")))
             ax.set_xlabel(xlabel, fontsize=_FONT_SIZE)
