@@ -326,7 +326,7 @@ def test_a_new_megno_threshold_reclassifies_the_stored_fraction_without_recomput
         assert np.array_equal(pd.extra["megno"], before[i])          # nothing recomputed
         ok = pd.extra["lyapunov_status"] == 0
         frac, err, _ = chaotic_fraction(pd.extra["megno"], 2.5, ok)
-        assert pd.attrs["megno_threshold"] == 2.5
+        assert pd.attrs["class_indicator"] == "megno" and pd.attrs["class_threshold"] == 2.5
         assert pd.attrs["chaotic_fraction"] == frac and pd.attrs["chaotic_fraction_error"] == err
         changed += frac != chaotic_fraction(pd.extra["megno"], 4.0, ok)[0]
     assert changed >= 1   # the threshold really moved some orbits across (else the test proves nothing)
@@ -383,3 +383,63 @@ def test_an_adaptive_map_panel_fills_some_cells_computes_the_rest_as_the_exact_m
     ok = e["lyapunov_status"] == 0
     fa, fe = chaotic_fraction(classify_megno(a), thr, ok)[0], chaotic_fraction(classify_megno(e), thr, ok)[0]
     assert 0.05 < fe < 0.95 and abs(fa - fe) <= 0.005
+
+
+def test_an_adaptive_fli_map_panel_is_classified_by_fli_stored_with_its_mask_and_agrees_with_the_exact_map(
+        tmp_path, monkeypatch):
+    """docs/scenes.md, "Adaptive maps", for a map of another indicator than MEGNO: the refinement
+    follows FLI at its own threshold (2 ln T); the stored panel's computed cells are the exact
+    panel's bit for bit (every indicator array), ``map_computed`` and ``map_chaotic`` read back from
+    the store, >= 99.5 % of the cells in the same FLI class as the exact map's, and the panel's
+    chaotic fraction is FLI's (attributes ``class_indicator``, ``class_threshold``, the summary)."""
+    import math
+
+    from explorer.analysis import sweep
+    from explorer.app.runner import format_report, run_sweep
+    from explorer.io.scene import parse_scene
+
+    monkeypatch.setattr(sweep, "MAP_COARSE", 16)         # a 64-cell map from a lattice of 16 a side
+    text = MAP_SCENE.replace('indicators = ["megno", "sali"]', 'indicators = ["megno", "fli"]\nmap_indicator = "fli"')
+    exact: dict = {}
+    sweep.run(sweep.build_spec(parse_scene(text + "exact = true\n"), [0], chunk_orbits=0),
+              lambda panel, arrays: exact.update(arrays))
+    report = run_sweep(parse_scene(text), tmp_path / "a.h5", draw=False, progress=False)
+    pd = store.read_store(tmp_path / "a.h5").panels[0]
+    a, done = pd.extra, pd.extra["map_computed"]
+    assert 0.2 < done.mean() < 0.9                                          # many cells were filled
+    for k in ("megno", "fli", "mlce", "lyapunov_status"):
+        np.testing.assert_array_equal(a[k][done], exact[k][done], err_msg=k)
+    assert np.isnan(a["megno"][~done]).all() and np.isfinite(a["fli"]).all()   # a filled cell has its FLI only
+    thr = 2 * math.log(100.0)
+    chaotic_a, _ = sweep.classify(a, "fli", thr)
+    chaotic_e, ok = sweep.classify(exact, "fli", thr)
+    np.testing.assert_array_equal(a["map_chaotic"][done], chaotic_e[done])   # the stored class of a computed cell
+    assert (chaotic_a == chaotic_e).mean() >= 0.995
+    fe = sweep.panel_fraction(exact, "fli", thr)[0]
+    assert 0.05 < fe < 0.95 and abs(pd.attrs["chaotic_fraction"] - fe) <= 0.005
+    assert pd.attrs["class_indicator"] == "fli" and pd.attrs["class_threshold"] == thr
+    assert f"(FLI > {thr:.3g})" in format_report(report)
+
+
+def test_an_adaptive_frequency_diffusion_map_panel_computes_its_cells_as_the_exact_path(monkeypatch):
+    """docs/scenes.md, "Adaptive maps": a frequency-diffusion map is refined by its own values (chaotic
+    above -6); each computed cell's frequency diffusion and tangent indicators are the exact path's
+    (explorer.frequency_diffusion on the panel's section map, seed for seed) bit for bit."""
+    from explorer.analysis import sweep
+    from explorer.io.scene import parse_scene
+
+    monkeypatch.setattr(sweep, "MAP_COARSE", 4)          # an 8-cell map from a lattice of 4 a side
+    text = (MAP_SCENE.replace("time = 100.0", "time = 5.0").replace("map_resolution = 64", "map_resolution = 8")
+            .replace('indicators = ["megno", "sali"]', 'indicators = ["megno", "frequency_diffusion"]\n'
+                     'map_indicator = "frequency_diffusion"\ncenter = [0.0, 0.0]\ndiffusion_iterates = 10'))
+    spec = sweep.build_spec(parse_scene(text), [0], chunk_orbits=0)
+    got: dict = {}
+    sweep.run(spec, lambda panel, arrays: got.update(arrays))
+    done = got["map_computed"]
+    assert 0.2 < done.mean() < 0.9 and np.isfinite(got["frequency_diffusion"]).any()
+    exact = spec.indicator_arrays(spec.panels[0], np.flatnonzero(done))[1]
+    for k in ("frequency_diffusion", "megno", "fli", "lyapunov_status"):
+        np.testing.assert_array_equal(got[k][done], exact[k], err_msg=k)
+    chaotic = sweep.classify(got, "frequency_diffusion", -6.0)[0]
+    np.testing.assert_array_equal(got["map_chaotic"], chaotic)
+

@@ -125,3 +125,32 @@ def test_the_atlas_title_counts_the_seeds_a_points_scene_gives_each_cell():
     assert runner.atlas_seeding(parse_scene(text), None) == "3 seeds per cell"
     assert runner.atlas_seeding(parse_scene(text.replace('kind = "points"', 'kind = "grid"\nn = 50')), None) \
         == "50 seeds per cell"
+
+
+def test_an_atlas_of_fli_maps_classifies_each_cell_by_fli_and_says_so(tmp_path, monkeypatch):
+    """docs/scenes.md, "Two-parameter atlas": with map_indicator = "fli" each cell's adaptive map is
+    refined and classified by FLI at 2 ln T; the file names the indicator and threshold, the heat map's
+    colour bar says FLI, and the atlas hash differs from the MEGNO map atlas's."""
+    import math
+
+    from explorer.app.atlas_figure import atlas_heatmap
+
+    monkeypatch.setattr(sweep, "MAP_COARSE", 4)
+    megno = SCENE.replace("values = [0.0, 1.0]", "values = [1.0]").replace("values = [2.0, 4.0, 6.0]",
+                                                                          "values = [2.0, 4.0]")
+    megno = megno.replace('indicators = ["megno"]', 'indicators = ["megno", "fli"]\nmap_resolution = 16')
+    text = megno.replace("map_resolution = 16", 'map_resolution = 16\nmap_indicator = "fli"')
+    path = tmp_path / "fli.toml"
+    path.write_text(text)
+    runner.run_sweep(str(path), out=tmp_path / "fli.h5", draw=False, progress=False)
+    a = read_atlas(tmp_path / "fli.h5")
+    thr = 2 * math.log(60.0)
+    assert a.indicator == "fli" and a.threshold == thr and np.all(a.computed < 1)
+    scene = parse_scene(text)
+    spec = sweep.build_atlas_spec(scene, chunk_orbits=0)
+    for pos, panel in enumerate(spec.panels):
+        arrays = sweep.task(spec, [k for k, c in enumerate(spec.chunks) if c[0] == pos][0])
+        assert a.fraction.flat[panel.index] == sweep.panel_fraction(arrays, "fli", thr)[0]
+    fig = atlas_heatmap(a)
+    assert f"FLI > {thr:.3g}" in fig.axes[1].get_ylabel()
+    assert scene.atlas_hash() != parse_scene(megno).atlas_hash()

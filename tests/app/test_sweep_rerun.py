@@ -266,7 +266,7 @@ def test_a_panel_whose_file_was_lost_is_recomputed_alone_and_a_format_1_store_is
     for k in ("crossings", "megno"):
         np.testing.assert_array_equal(after[0][k], before[0][k])
         np.testing.assert_array_equal(after[1][k], before[1][k])    # the same numbers, computed again
-    assert store.read_store(out).panels[0].attrs["megno_threshold"] == 3.0
+    assert store.read_store(out).panels[0].attrs["class_threshold"] == 3.0
 
     old = tmp_path / "old.h5"                 # the same store in format 1
     with h5py.File(out, "r") as s, h5py.File(old, "w") as d:
@@ -314,7 +314,7 @@ def test_an_interrupted_adaptive_map_stores_no_half_panel_and_the_rerun_equals_a
     for i, (_label, done, cells) in enumerate(ref.map_cells):
         assert want[i]["map_computed"].sum() == done and len(want[i]["megno"]) == cells
     calls = []
-    ask = sweep._MapCells.indicators
+    ask = sweep._MapCells._compute    # every batch of cells an adaptive map computes
 
     def interrupted_in_panel_1(self, y0, **kw):
         calls.append(self.panel.index)
@@ -322,12 +322,12 @@ def test_an_interrupted_adaptive_map_stores_no_half_panel_and_the_rerun_equals_a
             raise KeyboardInterrupt
         return ask(self, y0, **kw)
 
-    monkeypatch.setattr(sweep._MapCells, "indicators", interrupted_in_panel_1)
+    monkeypatch.setattr(sweep._MapCells, "_compute", interrupted_in_panel_1)
     out = tmp_path / "cut.h5"
     with pytest.raises(Interrupted):
         run(tmp_path, ADAPTIVE, out)
     assert sorted(store.panel_product_hashes(out)) == [0]          # panel 1: nothing of it stored
-    monkeypatch.setattr(sweep._MapCells, "indicators", ask)
+    monkeypatch.setattr(sweep._MapCells, "_compute", ask)
     assert run(tmp_path, ADAPTIVE, out).computed == (1,)
     got = panel_arrays(out, ("megno", "map_computed"))
     for i in (0, 1):

@@ -390,6 +390,23 @@ def test_a_new_version_of_the_refinement_rule_changes_an_adaptive_maps_hashes_no
     assert set(_hashes(adaptive)).isdisjoint(before[0]) and _hashes(exact) == before[1]
 
 
+def test_the_map_indicator_changes_an_adaptive_maps_hashes_and_class_not_an_exact_maps_hashes():
+    """An adaptive map is refined and classified by its own indicator (docs/scenes.md, "Adaptive
+    maps"): map_indicator enters its hashes; an exact map's cells are the same whatever it draws,
+    so only its class (and an atlas of it, whose fractions are stored) changes."""
+    from explorer.analysis.sweep import map_threshold, panel_class
+
+    adaptive = LYAP_SCENE + "indicators = ['megno', 'fli']\nmap_resolution = 16\n"
+    fli = adaptive + "map_indicator = 'fli'\n"
+    assert parse_scene(fli).lyapunov.adaptive
+    assert set(_hashes(adaptive)).isdisjoint(_hashes(fli))
+    assert _hashes(adaptive + "exact = true\n") == _hashes(fli + "exact = true\n")
+    ly = parse_scene(fli).lyapunov
+    assert panel_class(ly, True) == ("fli", map_threshold(ly)) and map_threshold(ly) == 2 * math.log(500.0)
+    assert panel_class(ly, False) == ("megno", 4.0) and panel_class(parse_scene(adaptive).lyapunov, True) == \
+        ("megno", 4.0)
+
+
 def test_the_diffusion_settings_alone_keep_panel_hashes_unless_it_is_asked_for():
     """[lyapunov] center and diffusion_iterates determine only frequency_diffusion: a scene that
     does not ask for it keeps its hashes (its panels are not recomputed)."""

@@ -39,7 +39,8 @@ MIN_BLOCK = 256
 #: per-orbit arrays of the chaos indicators that ``task`` returns: one per indicator of the registry
 #: (explorer.kernels.indicator_table), its status, its early-classification code and ``lyapunov_dh``
 #: (|H - H0| at the end of each orbit's indicator integration, measured, not stored)
-INDICATOR_ARRAYS = indicator_table.NAMES + ("lyapunov_status", "lyapunov_early", "lyapunov_dh", "map_computed")
+INDICATOR_ARRAYS = indicator_table.NAMES + ("lyapunov_status", "lyapunov_early", "lyapunov_dh", "map_computed",
+                                            "map_chaotic")
 #: the coarse lattice of an adaptive map panel: about this many cells a side (explorer.chaos_map)
 MAP_COARSE = 64
 #: ``run``'s ``check`` while it runs in this process: an adaptive map panel (one task) calls it
@@ -88,9 +89,15 @@ class SweepSpec:
         """Chunk i's arrays (:func:`task`)."""
         return chaplygin_task(self, i, threads)
 
-    def indicator_arrays(self, panel, rows, threads=None) -> tuple:
+    def indicator_arrays(self, panel, rows, threads=None, diffusion: bool = True) -> tuple:
         """(Indicators, arrays) of the seeds ``rows`` of ``panel`` (:func:`chaplygin_indicator_arrays`)."""
-        return chaplygin_indicator_arrays(self, panel, rows, threads)
+        return chaplygin_indicator_arrays(self, panel, rows, threads, diffusion)
+
+    def section_map(self, panel):
+        """The section map of ``panel`` whose returns give frequency diffusion ([lyapunov] tol)."""
+        from explorer.analysis.section_map import SectionMap
+
+        return SectionMap(panel.P, panel.h, phi0=self.phi0, tol=self.lyapunov.frequency_diffusion["tol"])
 
 
 def panel_block(n_orbits: int, crossings: int, budget: int | None = None) -> int:
@@ -249,9 +256,11 @@ def chaplygin_task(spec: SweepSpec, i: int, threads: int | None = None) -> dict:
     return out
 
 
-def chaplygin_indicator_arrays(spec: SweepSpec, panel: PanelSpec, rows: np.ndarray, threads=None) -> tuple:
+def chaplygin_indicator_arrays(spec: SweepSpec, panel: PanelSpec, rows: np.ndarray, threads=None,
+                               diffusion: bool = True) -> tuple:
     """(Indicators, arrays) of the seeds ``rows`` of ``panel``: [lyapunov]'s indicators as ``task``
-    returns them (each orbit alone: the same numbers whatever the rows)."""
+    returns them (each orbit alone: the same numbers whatever the rows); frequency diffusion only
+    with ``diffusion``."""
     from explorer.analysis.lyapunov import indicators
 
     ly = spec.lyapunov
@@ -264,7 +273,7 @@ def chaplygin_indicator_arrays(spec: SweepSpec, panel: PanelSpec, rows: np.ndarr
         dh = np.abs(model.energy(panel.P, ind.final) - model.energy(panel.P, y0))
     out = {i.name: ind.values[i.name] for i in indicator_table.TANGENT if i.vectors == 1 or ly.second_vector}
     out.update(lyapunov_status=ind.status, lyapunov_dh=dh)
-    if ly.frequency_diffusion is not None:
+    if ly.frequency_diffusion is not None and diffusion:
         out["frequency_diffusion"] = _frequency_diffusion(spec, panel, panel.seeds[rows], threads)
     if ly.early_stop:
         out.update(lyapunov_early=ind.early)
@@ -280,11 +289,10 @@ def panel_frequency_diffusion(spec: SweepSpec, panel: PanelSpec, a: int, b: int,
 
 def _frequency_diffusion(spec, panel, seeds, threads):
     from explorer.analysis.rotation import frequency_diffusion
-    from explorer.analysis.section_map import SectionMap
 
     fd = spec.lyapunov.frequency_diffusion
-    smap = SectionMap(panel.P, panel.h, phi0=spec.phi0, tol=fd["tol"])
-    return frequency_diffusion(smap, seeds, center=fd["center"], iterates=fd["iterates"], threads=threads)
+    return frequency_diffusion(spec.section_map(panel), seeds, center=fd["center"], iterates=fd["iterates"],
+                               threads=threads)
 
 
 def map_rule() -> dict:
@@ -296,6 +304,26 @@ def map_rule() -> dict:
             "reach": tuple(sorted(REACH.items())), "reach_cells": int(REACH_CELLS)}
 
 
+def map_time(ly) -> float:
+    """The time of a [lyapunov] table's map indicator: ``time``, for frequency diffusion its N."""
+    return float(ly.diffusion_iterates if ly.map_indicator == "frequency_diffusion" else ly.time)
+
+
+def map_threshold(ly) -> float:
+    """The class threshold of a [lyapunov] table's map: ``threshold`` for MEGNO, else the map
+    indicator's default at its time (explorer.analysis.chaos_map.default_threshold)."""
+    from explorer.analysis.chaos_map import default_threshold
+
+    ind = ly.map_indicator
+    return float(ly.threshold) if ind == "megno" else float(default_threshold(ind, map_time(ly)))
+
+
+def panel_class(ly, grid: bool) -> tuple:
+    """(indicator, threshold) that classify the orbits of a panel of a [lyapunov] table ``ly``: a
+    map's (``grid``) its own (:func:`map_threshold`), any other panel's MEGNO at ``threshold``."""
+    return (ly.map_indicator, map_threshold(ly)) if grid else ("megno", float(ly.threshold))
+
+
 def adaptive_panel(spec, panel) -> bool:
     """Panel ``panel`` of ``spec`` is a chaos map computed adaptively ([lyapunov] ``adaptive``)."""
     return bool(panel.grid) and spec.lyapunov is not None and bool(getattr(spec.lyapunov, "adaptive", False))
@@ -303,8 +331,9 @@ def adaptive_panel(spec, panel) -> bool:
 
 class _MapCells:
     """The raster of a map panel as a map for :func:`explorer.chaos_map`: ``domain`` its grid,
-    ``allowed`` the cells with a seed, ``indicators`` the sweep's arrays of the cells asked
-    (each cell its own seed's orbit, as the exact path integrates it), kept in ``arrays``."""
+    ``allowed`` the cells with a seed, ``own_indicators`` (``lifted_increments`` for frequency
+    diffusion) the sweep's arrays of the cells asked (each cell its own seed's orbit, as the exact
+    path integrates it), kept in ``arrays``."""
 
     def __init__(self, spec, panel, threads):
         self.spec, self.panel, self.threads = spec, panel, threads
@@ -323,14 +352,13 @@ class _MapCells:
     def allowed(self, points):
         return self._rows(points) >= 0
 
-    def indicators(self, y0, **_ignored):
-        import dataclasses
-
+    def _compute(self, points, **kw):
+        """The sweep's arrays of the cells of ``points``, kept; returns (rows, Indicators)."""
         check = _CHECK.get()
         if check is not None:
             check()
-        rows = self._rows(y0).ravel()
-        ind, arrays = self.spec.indicator_arrays(self.panel, rows, self.threads)
+        rows = self._rows(points).ravel()
+        ind, arrays = self.spec.indicator_arrays(self.panel, rows, self.threads, **kw)
         n = len(self.panel.seeds)
         for k, v in arrays.items():
             v = np.asarray(v)
@@ -338,29 +366,87 @@ class _MapCells:
                 fill = np.nan if v.dtype.kind == "f" else 0
                 self.arrays[k] = np.full(n, fill, dtype=v.dtype)
             self.arrays[k][rows] = v
+        return rows, ind
+
+    def own_indicators(self, y0, **_ignored):
+        import dataclasses
+
+        ind = self._compute(y0)[1]
         return {f.name: getattr(ind, f.name) for f in dataclasses.fields(ind)}
+
+    indicators = own_indicators   # the name explorer.indicators asks a map with its own indicators for
+
+    def lifted_increments(self, points, center, n, threads):
+        """Frequency diffusion's returns (explorer.frequency_diffusion) of the cells' own seeds on the
+        panel's section map; the cells' other indicators are kept as :meth:`own_indicators` keeps them."""
+        rows = self._compute(points, diffusion=False)[0]
+        return self.spec.section_map(self.panel).lifted_increments(self.panel.seeds[rows], center, n, threads)
 
 
 def adaptive_map(spec: SweepSpec | SystemSweepSpec, panel: PanelSpec, threads=None) -> dict:
     """The indicator arrays of the map panel ``panel`` computed adaptively: :func:`explorer.
-    chaos_map` of MEGNO at the scene's threshold over the panel's grid; a computed cell's arrays
-    are the exact path's bit for bit, a filled cell has MEGNO filled and the other indicators NaN;
-    ``map_computed`` marks the computed seeds (docs/scenes.md)."""
-    from explorer.analysis.chaos_map import chaos_map
+    chaos_map` of [lyapunov] map_indicator at its class threshold (:func:`map_threshold`) over
+    the panel's grid; a computed cell's arrays are the exact path's bit for
+    bit, a filled cell has the map's indicator filled and the others NaN; ``map_computed`` marks
+    the computed seeds, ``map_chaotic`` every cell's class (docs/scenes.md)."""
+    from explorer.analysis.chaos_map import FREQUENCY, chaos_map
 
     ly = spec.lyapunov
+    ind = ly.map_indicator
     cells = _MapCells(spec, panel, threads)
     rule = map_rule()
-    coarse, tolerance = rule["coarse"], rule["tolerance"]
-    m = chaos_map(cells, resolution=int(panel.grid[0]), indicator=ly.map_indicator, tmax=ly.time,
-                  threshold=ly.threshold, tolerance=tolerance, coarse=coarse, threads=threads,
-                  early_stop=ly.early_stop)
+    fd = ind == FREQUENCY
+    m = chaos_map(cells, resolution=int(panel.grid[0]), indicator=ind, tmax=map_time(ly), threshold=map_threshold(ly),
+                  tolerance=rule["tolerance"], coarse=rule["coarse"], threads=threads,
+                  early_stop=ly.early_stop and not fd, center=ly.frequency_diffusion["center"] if fd else None)
     r, c = raster_cells(panel.seeds, panel.grid)
     out = cells.arrays
     computed = m.computed[r, c]
-    out[ly.map_indicator] = np.where(computed, out[ly.map_indicator], m.values[r, c])
-    out["map_computed"] = computed
+    out[ind] = np.where(computed, out[ind], m.values[r, c]) if ind in out else m.values[r, c]
+    out.update(map_computed=computed, map_chaotic=m.chaotic[r, c])
     return out
+
+
+def classify(arrays, indicator: str, threshold: float) -> tuple:
+    """(chaotic, valid) per seed of a panel's indicator ``arrays`` by ``indicator`` at ``threshold``,
+    as explorer.chaos_map classifies (chaotic above it, SALI and GALI_2 below; an orbit stopped early
+    counts as chaotic; valid: integrated to the end with a finite value); a filled cell of an
+    adaptive map has the class it was filled with (``map_chaotic``)."""
+    from explorer.analysis.chaos_map import FREQUENCY, RULES
+
+    v = np.asarray(arrays[indicator], float)
+    with np.errstate(invalid="ignore"):
+        chaotic = v > threshold if RULES[indicator].above else v < threshold
+    if indicator == FREQUENCY:
+        valid = np.isfinite(v)
+    else:
+        early = arrays.get("lyapunov_early")
+        early = np.zeros(len(v), bool) if early is None else np.asarray(early) > 0
+        chaotic |= early
+        valid = (np.asarray(arrays["lyapunov_status"]) == 0) & (early | np.isfinite(v))
+    if "map_chaotic" in arrays:
+        chaotic = np.where(np.asarray(arrays["map_computed"], bool), chaotic, arrays["map_chaotic"])
+    return chaotic & valid, valid
+
+
+#: how a summary, a raster's title and an atlas name the indicator that classifies
+CLASS_NAMES = {"megno": "MEGNO", "mlce": "mLCE", "fli": "FLI", "sali": "SALI", "gali2": "GALI2",
+               "frequency_diffusion": "log10 |nu1 - nu2|"}
+
+
+def class_text(indicator: str, threshold: float) -> str:
+    """How :func:`classify` classifies, as text: ``MEGNO > 4``, ``SALI < 1e-08``."""
+    from explorer.analysis.chaos_map import RULES
+
+    return f"{CLASS_NAMES[indicator]} {'>' if RULES[indicator].above else '<'} {threshold:.3g}"
+
+
+def panel_fraction(arrays, indicator: str, threshold: float) -> tuple:
+    """(chaotic fraction, binomial standard error, valid orbits) of a panel (:func:`classify`)."""
+    from explorer.analysis.lyapunov import chaotic_fraction
+
+    chaotic, valid = classify(arrays, indicator, threshold)
+    return chaotic_fraction(chaotic.astype(float), 0.5, valid)
 
 
 def _worker_task(spec, i):
@@ -543,8 +629,9 @@ class SystemSweepSpec:
         """Chunk i's arrays (:func:`system_task`)."""
         return system_task(self, i, threads)
 
-    def indicator_arrays(self, panel, rows, threads=None) -> tuple:
-        """(Indicators, arrays) of the seeds ``rows`` of ``panel`` (:func:`system_indicator_arrays`)."""
+    def indicator_arrays(self, panel, rows, threads=None, diffusion: bool = True) -> tuple:
+        """(Indicators, arrays) of the seeds ``rows`` of ``panel`` (:func:`system_indicator_arrays`;
+        a System's scene has no frequency diffusion)."""
         return system_indicator_arrays(self, panel, rows, threads)
 
     def section_map(self, panel):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from explorer.analysis.sweep import class_text
 from explorer.app.figures import _FONT_SIZE, _TICK_SIZE, FORBIDDEN_COLOR, _matplotlib, symbol_label
 
 
@@ -16,7 +17,8 @@ def _ticks(values, max_ticks=9):
 
 def atlas_heatmap(atlas, *, title="", dpi=200):
     """A Figure of ``atlas`` (:class:`explorer.io.store.atlas.AtlasData`): the chaotic fraction per
-    cell as a heat map with a colour bar (0 to 1), gray where a cell has no allowed region."""
+    cell as a heat map with a colour bar (0 to 1, named by the indicator that classifies), gray
+    where a cell has no allowed region."""
     mpl = _matplotlib()
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
@@ -41,6 +43,6 @@ def atlas_heatmap(atlas, *, title="", dpi=200):
         if title:
             ax.set_title(title, fontsize=_TICK_SIZE)
         cb = fig.colorbar(im, ax=ax, fraction=0.05, pad=0.02)
-        cb.set_label(f"chaotic fraction (MEGNO > {atlas.threshold:g})", fontsize=_FONT_SIZE)
+        cb.set_label(f"chaotic fraction ({class_text(atlas.indicator, atlas.threshold)})", fontsize=_FONT_SIZE)
         cb.ax.tick_params(labelsize=_TICK_SIZE)
     return fig

@@ -14,7 +14,6 @@ from pathlib import Path
 import numpy as np
 
 from explorer.analysis import sections, sweep
-from explorer.analysis.lyapunov import chaotic_fraction
 from explorer.analysis.sections import ADAPTIVE_METHODS, energy_warning
 from explorer.app import interrupt
 from explorer.app.interrupt import Interrupted
@@ -91,9 +90,21 @@ def classify_megno(arrays):
     return np.where(np.asarray(early) > 0, np.finfo(float).max, m)
 
 
+def scene_class(scene) -> tuple:
+    """(indicator, threshold) that classify the orbits of ``scene``'s panels (a map: its own)."""
+    return sweep.panel_class(scene.lyapunov, bool(scene.lyapunov.map_resolution))
+
+
+def stored_class(attrs) -> tuple:
+    """(indicator, threshold) that classified a stored panel (a store without ``class_indicator``: MEGNO)."""
+    if "class_indicator" in attrs:
+        return str(attrs["class_indicator"]), float(attrs["class_threshold"])
+    return "megno", float(attrs.get("megno_threshold", float("nan")))
+
+
 def lyapunov_panels(scene, data):
     """The chaos maps of the stored panels of ``scene`` and the chaotic fraction per panel as rows
-    (swept value, fraction, binomial error) at the scene's threshold."""
+    (swept value, fraction, binomial error) by the scene's class (:func:`scene_class`)."""
     maps, fractions = [], []
     for i in range(scene.n_panels):
         params, h, label = scene.panel(i)
@@ -106,7 +117,7 @@ def lyapunov_panels(scene, data):
                      "phi0": scene.integration.phi0, "label": label})
         value = scene.sweep_values[i] if scene.sweep_values else 0.0
         maps[-1].update(grid=_grid_of(pd.attrs), extra=pd.extra, curves=pd.separatrices())
-        fractions.append((value,) + chaotic_fraction(classify_megno(pd.extra), scene.lyapunov.threshold, ok)[:2])
+        fractions.append((value,) + sweep.panel_fraction(pd.extra, *scene_class(scene))[:2])
     return maps, np.array(fractions).reshape(-1, 3)
 
 
@@ -168,8 +179,9 @@ def draw_figure(scene, out_path, stem):
             ind = scene.lyapunov.map_indicator
             for m in rasters:
                 m["values"] = m["extra"][ind] if ind in m["extra"] else m["megno"]
-                m["fraction"] = chaotic_fraction(classify_megno(m["extra"]), scene.lyapunov.threshold, m["valid"])[0]
+                m["fraction"] = sweep.panel_fraction(m["extra"], *scene_class(scene))[0]
                 m["computed"] = computed_fraction(m["extra"])
+                m["classified"] = sweep.class_text(*scene_class(scene))
             fig = chaos_rasters(rasters, indicator=ind, threshold=scene.lyapunov.threshold, columns=fs.columns,
                                 dpi=fs.dpi)
             paths += figures.save_figure(fig, stem.with_name(stem.name + "_map"), text=text)
@@ -197,7 +209,7 @@ class SweepReport:
     max_dh: float            # largest |H - H0| over all crossings computed
     warning: str | None      # energy-error warning naming the setting to tighten
     fractions: tuple         # (panel label, chaotic fraction, binomial error) per computed panel
-    threshold: float         # MEGNO threshold of the fractions
+    threshold: float         # the threshold of the fractions (of ``classified``)
     figure: tuple            # paths of the figure files drawn by this run (empty: none)
     wall_time: float
     restamped: tuple = ()    # stored panels whose chaotic fraction was reclassified (new threshold)
@@ -208,6 +220,7 @@ class SweepReport:
     indicator_warning: str | None = None
     indicator_statuses: dict = field(default_factory=dict)
     map_cells: tuple = ()        # (panel label, cells computed, allowed cells) per adaptive map panel
+    classified: str = ""         # how the fractions classify (class_text), e.g. "MEGNO > 4"
 
 
 def _head(label: str) -> str:
@@ -240,13 +253,13 @@ def format_report(r: SweepReport) -> str:
     elif r.computed:
         lines.append(f"  seeds outside the allowed region (dropped, not integrated): {r.dropped}")
     if r.restamped:
-        lines.append(f"  chaotic fraction reclassified at MEGNO > {r.threshold:g} (stored MEGNO, "
+        lines.append(f"  chaotic fraction reclassified at {r.classified} (stored indicators, "
                      f"nothing recomputed) for panels {', '.join(str(i) for i in r.restamped)}")
     for label, done, cells in r.map_cells:
         lines.append(f"  {_head(label)}map cells computed {done} of {cells} ({done / max(cells, 1):.1%}), "
                      "the rest filled (adaptive; [lyapunov] exact = true computes every cell)")
     for label, frac, err in r.fractions:
-        lines.append(f"  {_head(label)}chaotic fraction {frac:.3f} +- {err:.3f} (MEGNO > {r.threshold:g})")
+        lines.append(f"  {_head(label)}chaotic fraction {frac:.3f} +- {err:.3f} ({r.classified})")
     if r.figure:
         lines.append("  figure " + ", ".join(str(p) for p in r.figure))
     lines.append(f"  wall time {r.wall_time:.2f} s")
@@ -415,12 +428,12 @@ class _SweepStats:
         return SweepReport(scene=scene.name, out=out, n_panels=scene.n_panels, computed=tuple(plan.computed),
                            orbits=self.orbits, crossings=self.crossings, stopped=self.stopped,
                            statuses=dict(self.statuses), max_dh=self.max_dh, warning=self.warning,
-                           fractions=tuple(self.fractions), threshold=float(scene.lyapunov.threshold),
+                           fractions=tuple(self.fractions), threshold=scene_class(scene)[1],
                            figure=figure, wall_time=wall_time, restamped=plan.restamped,
                            dropped=sum(self.dropped.values()), products={k: tuple(v) for k, v in plan.todo.items()},
                            indicator_orbits=self.ind_orbits, indicator_dh=self.ind_dh,
                            indicator_warning=self.ind_warning, indicator_statuses=dict(self.ind_statuses),
-                           map_cells=tuple(self.map_cells))
+                           map_cells=tuple(self.map_cells), classified=sweep.class_text(*scene_class(scene)))
 
 
 def _setting(section) -> str:
@@ -479,7 +492,6 @@ class _PanelWriter:
 
     def _indicators_part(self, panel, i, arrays) -> tuple:
         """(payload, attrs) of panel i's indicators: the datasets, the map grid, the chaotic fraction."""
-        ly = self.scene.lyapunov
         payload = {k: arrays[k] for k in store.INDICATOR_DATASETS if k in arrays}
         attrs = {"indicators_hash": self.plan.want[i]["indicators"], "indicators_wall_time": arrays["wall_time"]}
         if panel.grid:
@@ -487,8 +499,9 @@ class _PanelWriter:
             attrs.update(map_resolution=int(n), map_p1=[float(a1), float(b1)], map_p2=[float(a2), float(b2)])
             if not self.plan.alone:
                 payload["lyapunov_seeds"] = panel.seeds
-        frac, err, _n_ok = chaotic_fraction(classify_megno(arrays), ly.threshold, arrays["lyapunov_status"] == 0)
-        attrs.update(chaotic_fraction=frac, chaotic_fraction_error=err, megno_threshold=ly.threshold)
+        ind, thr = scene_class(self.scene)
+        frac, err, _n_ok = sweep.panel_fraction(arrays, ind, thr)
+        attrs.update(chaotic_fraction=frac, chaotic_fraction_error=err, class_indicator=ind, class_threshold=thr)
         self.stats.add_indicators(panel, arrays, (frac, err), self.ly_setting)
         return payload, attrs
 
@@ -589,21 +602,21 @@ def run_atlas(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
             spec = sweep.build_atlas_spec(scene, chunk_orbits=chunk_orbits, cells=missing)
             done.flat[sorted(missing - {p.index for p in spec.panels})] = True   # no allowed region: gray
             last = [time.perf_counter(), 0]      # time of the last commit, cells since
+            cls = scene_class(scene)
 
             def commit():
                 atlas_store.write_atlas(out, scene_name=scene.name, scene_text=scene.text, hash=key,
                                         row_parameter=scene.sweep_parameter, column_parameter=scene.atlas_parameter,
                                         row_values=scene.sweep_values, column_values=scene.atlas_values,
                                         fraction=frac, error=err, orbits=n_ok, wall_time=wall,
-                                        threshold=scene.lyapunov.threshold,
+                                        indicator=cls[0], threshold=cls[1],
                                         provenance=store.provenance({"scene": scene.name}), done=done,
                                         computed=computed_cells if scene.lyapunov.adaptive else None)
                 last[:] = [time.perf_counter(), 0]
 
             def on_cell(panel, arrays):
                 r, c = divmod(panel.index, cols)
-                f, e, n = chaotic_fraction(classify_megno(arrays), scene.lyapunov.threshold,
-                                           arrays["lyapunov_status"] == 0)
+                f, e, n = sweep.panel_fraction(arrays, *cls)
                 frac[r, c], err[r, c], n_ok[r, c], wall[r, c] = f, e, n, arrays["wall_time"]
                 if "map_computed" in arrays:
                     computed_cells[r, c] = np.mean(arrays["map_computed"])
@@ -630,14 +643,17 @@ def run_atlas(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
         if draw and (computed or force or _figure_stale(stem, out, settings)):
             data = atlas_store.read_atlas(out)
             ly = scene.lyapunov
-            title = (f"{scene.name}: chaotic fraction\n{atlas_seeding(scene, data)}, MEGNO time {ly.time:g}"
+            time_ = sweep.map_time(ly) if ly.map_resolution else ly.time
+            title = (f"{scene.name}: chaotic fraction\n{atlas_seeding(scene, data)}, "
+                     f"{sweep.CLASS_NAMES[data.indicator]} time {time_:g}"
                      + (", early classification" if ly.early_stop else ""))
             figure_paths = tuple(save_figure(atlas_heatmap(data, title=title, dpi=scene.figure.dpi), stem,
                                              text={FIGURE_SETTINGS_KEY: settings}))
     return SweepReport(scene=scene.name, out=out, n_panels=scene.n_cells, computed=computed, orbits=orbits,
                        crossings=0, stopped=0, statuses={}, max_dh=0.0, warning=None, fractions=(),
-                       threshold=float(scene.lyapunov.threshold), figure=figure_paths,
-                       wall_time=time.perf_counter() - t_start, products={"cells": computed})
+                       threshold=scene_class(scene)[1], figure=figure_paths,
+                       wall_time=time.perf_counter() - t_start, products={"cells": computed},
+                       classified=sweep.class_text(*scene_class(scene)))
 
 
 def atlas_seeding(scene, data) -> str:
@@ -671,23 +687,24 @@ def _stored_atlas(out: Path, force: bool):
 
 
 def _restamp_fractions(scene, out, stored) -> tuple:
-    """The MEGNO threshold is outside the panel hash: a stored panel whose ``megno_threshold``
-    differs from the scene's gets its chaotic fraction recomputed from its stored MEGNO (an atomic
-    attribute update).  Returns the panels restamped."""
+    """The class threshold of seeds and of an exact map is outside the panel hash: a stored panel
+    classified otherwise than the scene's class (:func:`scene_class`, :func:`stored_class`) gets its
+    chaotic fraction recomputed from its stored indicators (an atomic attribute update).  Returns
+    the panels restamped."""
     if "lyapunov" not in scene.compute or not stored:
         return ()
-    threshold = float(scene.lyapunov.threshold)
+    ind, threshold = scene_class(scene)
     on_disk = store.panel_product_hashes(out)   # complete panels whose files are there
     done = []
     for i in stored:
         if i not in on_disk:
             continue
         extra, attrs = store.read_panel_datasets(out, i, store.INDICATOR_DATASETS)   # not the crossings
-        if "megno" not in extra or attrs.get("megno_threshold") == threshold:
+        if ind not in extra or stored_class(attrs) == (ind, threshold):
             continue
-        frac, err, _n_ok = chaotic_fraction(classify_megno(extra), threshold, extra["lyapunov_status"] == 0)
+        frac, err, _n_ok = sweep.panel_fraction(extra, ind, threshold)
         store.update_panel_attrs(out, i, {"chaotic_fraction": frac, "chaotic_fraction_error": err,
-                                          "megno_threshold": threshold})
+                                          "class_indicator": ind, "class_threshold": threshold})
         done.append(i)
     return tuple(done)
 

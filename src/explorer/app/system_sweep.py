@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 
+from explorer.analysis.sweep import class_text, panel_class
 from explorer.app import figures
 from explorer.app.chaos_raster import axis_label, chaos_rasters
 from explorer.io import store
@@ -142,7 +143,8 @@ def draw_system_figure(scene, out_path, stem, text=None):
                 rasters.append({"seeds": pd.extra.get("lyapunov_seeds", pd.seeds), "values": values,
                                 "grid": grid, "params": None, "h": scene.panel(i)[1], "axes": scene.coords,
                                 "label": scene.panel(i)[2] or scene.system.name, "fraction": fraction[0],
-                                "computed": float(np.mean(pd.extra.get("map_computed", True)))})
+                                "computed": float(np.mean(pd.extra.get("map_computed", True))),
+                                "classified": class_text(*panel_class(scene.lyapunov, True))})
         if rasters:
             fig = chaos_rasters(rasters, indicator=ind, threshold=scene.lyapunov.threshold, columns=fs.columns,
                                 dpi=fs.dpi)

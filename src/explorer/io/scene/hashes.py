@@ -6,6 +6,7 @@ import hashlib
 import json
 
 from explorer.io.scene.schema import FORMAT_VERSION
+from explorer.io.scene.specs import class_settings
 
 
 def _canonical_json(obj) -> str:
@@ -79,5 +80,6 @@ def atlas_hash(scene) -> str:
     d = {"params": scene.params.as_dict(), "h": scene.h, "rows": [scene.sweep_parameter, list(scene.sweep_values)],
          "columns": [scene.atlas_parameter, list(scene.atlas_values)], "seeds": scene.seeds.used_dict(),
          "phi0": scene.integration.phi0, "direction": scene.integration.direction,
-         "lyapunov": scene.lyapunov.used_dict(), "threshold": scene.lyapunov.threshold}
+         "lyapunov": scene.lyapunov.used_dict(), "threshold": scene.lyapunov.threshold,
+         **class_settings(scene.lyapunov)}
     return _sha256({"format_version": FORMAT_VERSION, "atlas": d})

@@ -142,17 +142,25 @@ class IntegrationSpec(sections.Integration):
 
 
 def adaptive_map(ly) -> bool:
-    """A [lyapunov] table's map is computed adaptively: a map grid of MEGNO (the indicator the
-    scene's threshold classifies) without ``exact`` (Chaplygin's scenes and a System's)."""
-    return bool(ly.map_resolution and not ly.exact and ly.map_indicator == "megno")
+    """A [lyapunov] table's map is computed adaptively: a map grid without ``exact``, whatever its
+    ``map_indicator`` (Chaplygin's scenes and a System's)."""
+    return bool(ly.map_resolution and not ly.exact)
+
+
+def class_settings(ly) -> dict:
+    """For an atlas's hash, the class of a map of another indicator than MEGNO (whose ``threshold``
+    the hash holds already): {"class": [indicator, threshold]}, else nothing."""
+    from explorer.analysis.sweep import panel_class
+
+    return {"class": list(panel_class(ly, True))} if ly.map_resolution and ly.map_indicator != "megno" else {}
 
 
 def adaptive_settings(ly) -> dict:
     """What decides which cells an adaptive map computes, for its hashes: the refinement rule
-    (explorer.analysis.sweep.map_rule) and the class threshold."""
-    from explorer.analysis.sweep import map_rule
+    (explorer.analysis.sweep.map_rule), the map's indicator and its class threshold."""
+    from explorer.analysis.sweep import map_rule, map_threshold
 
-    return dict(map_rule(), threshold=ly.threshold)
+    return dict(map_rule(), indicator=ly.map_indicator, threshold=map_threshold(ly))
 
 
 @dataclass(frozen=True)
@@ -178,8 +186,8 @@ class LyapunovSpec:
     #: map_indicator; the sections keep the [seeds]
     map_resolution: int = 0
     map_indicator: str = "megno"
-    #: false: a MEGNO map is adaptive (explorer.analysis.chaos_map: a coarse lattice, refined where
-    #: neighbours disagree, the rest filled); true: every cell computed
+    #: false: a map is adaptive (explorer.analysis.chaos_map: a coarse lattice, refined where
+    #: neighbours disagree by map_indicator's class or value, the rest filled); true: every cell computed
     exact: bool = False
     #: the indicator frequency_diffusion (explorer.analysis.rotation.frequency_diffusion): the point
     #: (p1, p2) its rotation numbers turn around, required with it (docs/greene.md, "Frequency

@@ -37,7 +37,14 @@ from explorer.io.scene.checks import (
 from explorer.io.scene.core import Scene
 from explorer.io.scene.hashes import _canonical_json, _sha256
 from explorer.io.scene.schema import _FIGURE_KEYS, _MANIFOLD_KEYS, FORMAT_VERSION, MAX_MAP_RESOLUTION, MAX_SEEDS
-from explorer.io.scene.specs import FigureSpec, ManifoldSpec, SeedSpec, adaptive_map, adaptive_settings
+from explorer.io.scene.specs import (
+    FigureSpec,
+    ManifoldSpec,
+    SeedSpec,
+    adaptive_map,
+    adaptive_settings,
+    class_settings,
+)
 from explorer.kernels.indicator_table import TANGENT_NAMES
 from explorer.model import ParameterError
 
@@ -234,8 +241,9 @@ class SystemIntegration:
 class SystemLyapunov:
     """[lyapunov] of a System's scene: ``indicators`` (MEGNO <Y> always) over ``time`` (Taylor
     ``tol``) of every seed, or of the cell centres of a ``map_resolution``^2 raster of [seeds]
-    window, drawn by ``map_indicator``; ``threshold`` classifies by <Y>.  A MEGNO map is adaptive
-    unless ``exact`` (:func:`explorer.io.scene.specs.adaptive_map`, as Chaplygin's)."""
+    window, drawn by ``map_indicator``; ``threshold`` classifies by <Y> (a map by its own indicator,
+    :func:`explorer.analysis.sweep.panel_class`).  A map is adaptive unless ``exact``
+    (:func:`explorer.io.scene.specs.adaptive_map`, as Chaplygin's)."""
 
     time: float = 1000.0
     tol: float = 1e-12
@@ -471,7 +479,8 @@ class SystemScene:
         d = {"system": {"name": self.system.name, "content": self.system.content_hash}, "params": self.params,
              "energy": self.energy, "map": self.map_settings(), "rows": [self.sweep_parameter, list(self.sweep_values)],
              "columns": [self.atlas_parameter, list(self.atlas_values)], "seeds": self.seeds.used_dict(),
-             "lyapunov": self.lyapunov.used_dict(), "threshold": self.lyapunov.threshold}
+             "lyapunov": self.lyapunov.used_dict(), "threshold": self.lyapunov.threshold,
+             **class_settings(self.lyapunov)}
         return _sha256({"format_version": FORMAT_VERSION, "atlas": d})
 
 

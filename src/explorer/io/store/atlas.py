@@ -32,6 +32,7 @@ class AtlasData:
     attrs: dict
     done: np.ndarray | None = None
     computed: np.ndarray | None = None     # per cell: the fraction of its map's cells computed (None: all)
+    indicator: str = "megno"               # the indicator that classifies, at ``threshold``
 
     @property
     def complete(self) -> bool:
@@ -41,10 +42,10 @@ class AtlasData:
 
 def write_atlas(path, *, scene_name: str, scene_text: str, hash: str, row_parameter: str, column_parameter: str,
                 row_values, column_values, fraction, error, orbits, wall_time, threshold: float,
-                provenance: dict | None = None, done=None, computed=None) -> Path:
+                provenance: dict | None = None, done=None, computed=None, indicator: str = "megno") -> Path:
     """Write the atlas file at ``path`` whole and atomically; ``done`` (R, C booleans, default all)
     marks the cells it holds; ``computed`` (R, C, optional): the fraction of each cell's map
-    computed, not filled (an adaptive map, docs/scenes.md)."""
+    computed, not filled (an adaptive map, docs/scenes.md); ``indicator`` classifies at ``threshold``."""
     import h5py
 
     path = Path(path)
@@ -52,7 +53,7 @@ def write_atlas(path, *, scene_name: str, scene_text: str, hash: str, row_parame
         with h5py.File(tmp, "w") as f:
             f.attrs.update(format=FORMAT, format_version=FORMAT_VERSION, scene_name=scene_name, scene=scene_text,
                            hash=hash, row_parameter=row_parameter, column_parameter=column_parameter,
-                           threshold=float(threshold),
+                           threshold=float(threshold), indicator=str(indicator),
                            created=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
                            provenance=json.dumps(provenance or {}, sort_keys=True),
                            complete=bool(done is None or np.all(done)))
@@ -80,4 +81,4 @@ def read_atlas(path) -> AtlasData:
                          f["column_values"][()], f["fraction"][()], f["error"][()], f["orbits"][()],
                          f["wall_time"][()], float(attrs["threshold"]), str(attrs["hash"]), attrs,
                          f["done"][()].astype(bool) if "done" in f else None,
-                         f["computed"][()] if "computed" in f else None)
+                         f["computed"][()] if "computed" in f else None, str(attrs.get("indicator", "megno")))

@@ -46,6 +46,7 @@ _OPTIONAL_PER_ORBIT = {
     "lyapunov_status": ((), np.dtype(np.int8)),
     "lyapunov_early": ((), np.dtype(np.int8)),
     "map_computed": ((), np.dtype(bool)),   # a chaos map's cell computed (True) or filled (docs/store.md)
+    "map_chaotic": ((), np.dtype(bool)),    # an adaptive map's cell class, computed or filled
 }
 #: ``lyapunov_seeds`` (M, 2): the seeds of the indicators when they are not the panel's ``seeds``
 #: (a chaos map's grid beside sections of the [seeds]); the indicator datasets then have M rows
@@ -76,8 +77,8 @@ def _utcnow() -> str:
 
 
 #: the panel attributes of the indicators product (kept with its datasets, replaced with them)
-INDICATOR_ATTRS = ("indicators_hash", "chaotic_fraction", "chaotic_fraction_error", "megno_threshold",
-                   "map_resolution", "map_p1", "map_p2", "indicators_wall_time")
+INDICATOR_ATTRS = ("indicators_hash", "chaotic_fraction", "chaotic_fraction_error", "class_indicator",
+                   "class_threshold", "megno_threshold", "map_resolution", "map_p1", "map_p2", "indicators_wall_time")
 
 
 @dataclass(frozen=True)
