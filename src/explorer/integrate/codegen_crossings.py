@@ -1,6 +1,8 @@
 """The crossings driver appended to every generated module (:data:`explorer.integrate.codegen.TEMPLATES`):
-``crossings_taylor_worker``, the adaptive Taylor method with the crossings of a section a . x + b = 0
-(docs/systems.md, "Crossings"), called by :mod:`explorer.analysis.system_sections`."""
+``crossings_taylor_worker``, the adaptive Taylor method with the crossings of a section a . x + b = 0 on its
+half keep . (x, 1) > 0, a block of each orbit continued from its carry (docs/systems.md, "Crossings"), called
+by :mod:`explorer.analysis.system_sections`; rendered for ``chaplygin.system()`` into
+:mod:`explorer.integrate._lanes_generated`, the engine's section phi = phi0 (:mod:`explorer.integrate.lanes`)."""
 from __future__ import annotations
 
 __all__ = ["render"]

@@ -7,9 +7,9 @@ the same operations in the same order as the scalar kernels: the recurrence, the
 power, clipping, underflow test), the Horner evaluation, the section's value and coefficients, the
 first two tests of kernels.events.isolate_crossings, and the step's end of a lane with no root
 possible.  A lane that may hold a root, or stops, is finished lane by lane with the scalar kernels.
-A lane whose orbit stops takes the next one from a queue shared by the workers (``prange`` over
-groups of LANES lanes, as :mod:`explorer.integrate.lanes`); an orbit's rows depend neither on its
-lane nor on the thread count.
+A lane whose orbit stops takes the next one from a queue shared by the workers (one group of LANES lanes
+per thread: analysis.system_sections.run_driver, or ``prange`` in :mod:`explorer.integrate.lanes` for the
+engine's phi = phi0); an orbit's rows depend neither on its lane nor on the thread count.
 """
 from __future__ import annotations
 
