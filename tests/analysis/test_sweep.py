@@ -121,11 +121,17 @@ def test_summary_gives_the_energy_error_and_warns_when_the_step_is_too_coarse(tm
 
 
 def test_jobs_1_and_2_give_identical_files(tmp_path, capsys):
-    scene = write_scene(tmp_path)
+    """Sections and an adaptive map of each panel (one task per map panel, docs/scenes.md, "Adaptive
+    maps"; 128 x 128 cells, the first raster the default lattice of 64 cells a side refines, T = 10)
+    store the same arrays, masks and classes computed in joblib worker processes as in this one."""
+    scene = write_scene(tmp_path, SMALL + "[compute]\nlyapunov = true\n[lyapunov]\ntime = 10.0\nmap_resolution = 128\n")
     a, b = tmp_path / "a.h5", tmp_path / "b.h5"
     assert sweep([scene, "--out", a, "--no-figure", "--jobs", "1"], capsys)[0] == 0
     assert sweep([scene, "--out", b, "--no-figure", "--jobs", "2"], capsys)[0] == 0
     assert_same_data(a, b)
+    panels = store.read_store(b).panels
+    assert all(0.05 < panels[i].extra["map_computed"].mean() < 0.9 for i in panels)     # adaptive
+    assert any(panels[i].extra["map_chaotic"].any() for i in panels)
 
 
 def test_dask_local_cluster_gives_the_same_file(tmp_path, capsys):
