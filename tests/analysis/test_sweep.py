@@ -434,7 +434,7 @@ def test_an_adaptive_frequency_diffusion_map_panel_computes_its_cells_as_the_exa
     from explorer.analysis import sweep
     from explorer.io.scene import parse_scene
 
-    monkeypatch.setattr(sweep, "MAP_COARSE", 4)          # an 8-cell map from a lattice of 4 a side
+    monkeypatch.setattr(sweep, "MAP_COARSE", 2)          # an 8-cell map from a lattice of 2 a side
     text = (MAP_SCENE.replace("time = 100.0", "time = 5.0").replace("map_resolution = 64", "map_resolution = 8")
             .replace('indicators = ["megno", "sali"]', 'indicators = ["megno", "frequency_diffusion"]\n'
                      'map_indicator = "frequency_diffusion"\ncenter = [0.0, 0.0]\ndiffusion_iterates = 10'))
@@ -442,7 +442,7 @@ def test_an_adaptive_frequency_diffusion_map_panel_computes_its_cells_as_the_exa
     got: dict = {}
     sweep.run(spec, lambda panel, arrays: got.update(arrays))
     done = got["map_computed"]
-    assert 0.2 < done.mean() < 0.9 and np.isfinite(got["frequency_diffusion"]).any()
+    assert 3 <= done.sum() < len(done) and np.isfinite(got["frequency_diffusion"]).all()
     exact = spec.indicator_arrays(spec.panels[0], np.flatnonzero(done))[1]
     for k in ("frequency_diffusion", "megno", "fli", "lyapunov_status"):
         np.testing.assert_array_equal(got[k][done], exact[k], err_msg=k)
