@@ -14,13 +14,14 @@ and one orbit reach.
    the count of vfmadd / vmulpd / vaddpd per iteration, the register width, and whether
    accumulators spill to the stack.
 2. Work per Taylor step (``tools/gen_lanes.operation_counts``: the generated recurrence run with
-   counting stand-ins), plus the Horner sums and the variation bound of a step.
+   counting stand-ins), plus the Horner sums and the section values and variation bound of a step.
 3. Achieved: the recurrence alone (a loop over one lane array), W4 (64 x 2000 crossings, tol
    1e-12, order 15, 1 and 2 threads), the 400-orbit chaos map (mu = 1, T = 1000, MEGNO) and one
    orbit (30,000 crossings): measured steps, steps per crossing, flops / s and the fraction of
-   the measured peak (per core used).  3b: each vector stage of a step alone (recurrence, step
-   size, Horner, variation bound, the tangent step end) per orbit-step, so that what a
-   workload's step spends outside the recurrence is split into its parts (issue 34).
+   the measured peak (per core used).  3b: each vector stage of a step alone as the generated lane
+   drivers call it (recurrence, step size, Horner, the section's variation bound; libm's log of the
+   tangent step end) per orbit-step, so that what a workload's step spends outside the recurrence
+   is split into its parts (issue 34).
 4. The recurrence alone: CPU per orbit-step and its Cauchy-product loop's multiplies, adds and
    stack accesses (a fresh compile of the kernel, read with inspect_asm).
 5. Steps per crossing of explorer and of heyoka's taylor_adaptive on the same W4 orbits to the
@@ -193,8 +194,11 @@ def peak_table(seconds_per_kernel=0.8):
 # ----------------------------------------------------------------------------- 2. work per step
 def step_flops(order, tangent=False, nvec=1):
     """Flops of the vector part of one Taylor step of one orbit (one lane): the recurrence
-    (generator's count), the Horner sums (5 rows per vector: order mul + add each) and, for the
-    crossings, the variation bound (order x (3 mul, 1 sub, 1 add))."""
+    (generator's count: the indicators module's recurrence has the operations of
+    ``tangent_coefficients_lanes``), the Horner sums (5 rows per vector: order mul + add each) and, for
+    the crossings, ``_section_lanes``: the new state's sum and s(y) (15), a . X[k] for k = 0..order
+    (10 each, + b), the tail bounds of s and s' (4 per term: orders 1..order and 2..order) and the two
+    variation tests (3 each)."""
     if tangent:
         c = gen_lanes.operation_counts("tangent_coefficients_lanes", order, tangent=True)
         if nvec == 2:
@@ -204,110 +208,113 @@ def step_flops(order, tangent=False, nvec=1):
         return rec, rec + (1 + nvec) * 5 * 2 * order, c
     c = gen_lanes.operation_counts("taylor_coefficients_lanes", order)
     rec = c["vadd"] + c["vsub"] + c["vmul"]
-    return rec, rec + 5 * 2 * order + 5 * order, c
+    section = 15 + 10 * (order + 1) + 1 + 4 * order + 4 * (order - 1) + 2 * 3
+    return rec, rec + 5 * 2 * order + section, c
 
 
 # ----------------------------------------------------------------------------- 3. achieved
+def _recurrence(tangent):
+    """(module, its lane recurrence ``taylor_coefficients_lanes``) that the crossings (the generated module of
+    ``chaplygin.system()``, :mod:`explorer.integrate._lanes_generated`) or the indicators (that of
+    ``chaplygin.variational(1)``, :func:`explorer.integrate.tangent.indicators_module`) step with."""
+    from explorer.integrate import _lanes_generated as LG
+    from explorer.integrate import tangent as tg
+
+    mod = tg.indicators_module(1) if tangent else LG
+    return mod, mod.taylor_coefficients_lanes
+
+
 def recurrence_alone(order, tangent, reps=20000):
     """Seconds of CPU per orbit-step of the generated recurrence alone (LANES lanes, one thread)."""
     from explorer import model
     from explorer._jit import njit
-    from explorer.integrate import _lanes_generated as LG
-    from explorer.integrate import _tangent_lanes_generated as TG
     from explorer.integrate.simd import LANES
 
+    mod, rec = _recurrence(tangent)
     P = model.FIGURE4.with_(mu=0.5).as_array()
     rng = np.random.default_rng(1)
-    if tangent:
-        @njit(cache=False)
-        def loop(P, Z, order, reps, g):
-            for _ in range(reps):
-                TG.tangent_coefficients_lanes(P, Z, order, g)
-        X = np.zeros((order + 1, TG.NROWS, LANES))
-        X[0, :10] = rng.uniform(-0.5, 0.5, (10, LANES))
-        g = np.zeros((order + 1, TG.N_WORK_TANGENT, LANES))
-    else:
-        @njit(cache=False)
-        def loop(P, Z, order, reps, g):
-            for _ in range(reps):
-                LG.taylor_coefficients_lanes(P, Z, order, g)
-        X = np.zeros((order + 1, 5, LANES))
-        X[0] = rng.uniform(-0.5, 0.5, (5, LANES))
-        g = np.zeros((order + 1, max(LG.N_WORK, 1), LANES))
+
+    @njit(cache=False)
+    def loop(P, X, order, reps, g):
+        for _ in range(reps):
+            rec(P, X, order, g)
+    X = np.zeros((order + 1, mod.DIM, LANES))   # the lane array X[k, row, lane] of the generated drivers
+    X[0] = rng.uniform(-0.5, 0.5, (mod.DIM, LANES))
+    g = np.zeros((order + 1, max(mod.N_WORK, 1), LANES))
     loop(P, X, order, 1, g)
     _wall, cpu = timed(lambda: loop(P, X, order, reps, g), 5)
     return cpu / (reps * LANES)
 
 
 def stages_alone(order, tangent, reps=20000):
-    """Seconds of CPU per orbit-step of each vector stage of a step alone, on LANES lanes holding W4's orbits (Figure 4, mu = 0.5) or the chaos map's (mu = 1, one deviation
-    vector), one thread: the recurrence, the step norms and the step size's two vector powers
-    (``lanes.step_norms_lanes``), the Horner sums (``lanes.evaluate_lanes``, once per vector) and,
-    for the crossings, the variation bound (``lanes.variation_lanes``).  What a workload's step
-    costs beyond their sum is the rest: the step's checks (``lanes.step_lanes``), the vector step
-    end, the lanes that take the scalar step end (the roots, the stops, the history rows) and the
-    loop.  (The inline helpers, ``step_lanes`` and the step ends, are not timed alone: in a loop of
-    their own numba counts references to each of their array arguments at every call, atomic
-    increments that cost more than the helper; in the lane workers those are pruned.)"""
+    """Seconds of CPU per orbit-step of each vector stage of a step alone, on LANES lanes holding W4's
+    orbits (Figure 4, mu = 0.5) or the chaos map's (mu = 1, one deviation vector), one thread, as the
+    generated lane drivers call them (``crossings_lanes_worker`` of :mod:`explorer.integrate.codegen_lanes`,
+    ``indicators_lanes_worker`` of :mod:`explorer.integrate.codegen_indicators`): the recurrence, the step
+    norms and the step size's two vector powers (``_norms_lanes``; ``_indicator_norms_lanes`` on the orbit's
+    rows), the Horner sums (``_evaluate_lanes``, every row: the orbit and, for the tangent, its vector) and,
+    for the crossings, the section's values and variation bound (``_section_lanes``).  What a workload's
+    step costs beyond their sum is the rest: the step's checks (``_steps_lanes``), the vector step end
+    (``_ends_lanes``, ``_indicator_ends_lanes``), the lanes that take the scalar step end (the roots, the
+    stops, the history rows) and the loop; those depend on the lanes' states and are not timed alone."""
     from explorer import model
     from explorer._jit import njit
     from explorer.analysis import lyapunov
-    from explorer.integrate import _lanes_generated as LG
-    from explorer.integrate import _tangent_lanes_generated as TG
     from explorer.integrate import lanes
     from explorer.integrate.simd import LANES
 
     w = LANES
+    mod, rec = _recurrence(tangent)
     prm = model.FIGURE4.with_(mu=1.0 if tangent else 0.5)
     c1, c2, r1, r2 = model.allowed_ellipse(prm, 2.0)
     Y = model.section_state(prm, c1 + r1 * np.linspace(-0.9, 0.9, w), np.zeros(w), 2.0)
     P = prm.as_array()
-    _factor, e_p, e_q = lanes.step_constants(order)
-    norms = np.zeros((lanes.N_NORMS, w))
+    e_p, e_q = 1.0 / order, 1.0 / (order - 1)    # the workers' exponents of the step size
+    norm = np.zeros((5, w))
+    X = np.zeros((order + 1, mod.DIM, w))
+    X[0, :5] = Y.T
     if tangent:
-        X = np.zeros((order + 1, TG.NROWS, w))
-        X[0, :5] = Y.T
         X[0, 5:10] = lyapunov.deviation_vector(P, Y).T
-        g = np.zeros((order + 1, TG.N_WORK_TANGENT, w))   # the recurrence's work array
-        TG.tangent_coefficients_lanes(P, X, order, g)
-    else:
-        X = np.zeros((order + 1, 5, w))
-        X[0] = Y.T
-        g = np.zeros((order + 1, max(LG.N_WORK, 1), w))
-        LG.taylor_coefficients_lanes(P, X, order, g)
+    g = np.zeros((order + 1, max(mod.N_WORK, 1), w))   # the recurrence's work array
+    rec(P, X, order, g)
     hv = np.full(w, 0.05)
-    out = np.zeros((X.shape[1], w))
+    out = np.zeros((mod.DIM, w))
+    a, b, _keep = lanes.section_arrays(-1.0, 0.0)
+    L_g = np.zeros(w)
+    GC = np.zeros((order + 1, w))
+    G = np.zeros(w)
+    norms = mod._indicator_norms_lanes if tangent else mod._norms_lanes
+    evaluate, section = mod._evaluate_lanes, mod._section_lanes
 
     @njit(cache=False)
     def recurrence(reps, P, X, order, g):
         for _ in range(reps):
+            rec(P, X, order, g)
+
+    @njit(cache=False)
+    def step_norms(reps, X, order, norm):
+        for _ in range(reps):
             if tangent:
-                TG.tangent_coefficients_lanes(P, X, order, g)
+                norms(X, order, 5, e_p, e_q, norm)
             else:
-                LG.taylor_coefficients_lanes(P, X, order, g)
+                norms(X, order, e_p, e_q, norm)
 
     @njit(cache=False)
-    def step_norms(reps, X, order, norms):
+    def horner(reps, X, order, hv, out):
         for _ in range(reps):
-            lanes.step_norms_lanes(X, order, e_p, e_q, norms)
+            evaluate(X, order, hv, out)
 
     @njit(cache=False)
-    def horner(reps, X, order, hv, out, nvec):
+    def variation(reps, X, order, hv, out, a, b, L_g, GC, G):
         for _ in range(reps):
-            for v in range(nvec):
-                lanes.evaluate_lanes(X, order, hv, out, 5 * v)
-
-    @njit(cache=False)
-    def variation(reps, X, order, hv, out):
-        for _ in range(reps):
-            lanes.variation_lanes(X, order, hv, -1.0, 0.0, out)
+            section(X, order, hv, out, a, b, 1, L_g, GC, G)
 
     stages = [("recurrence", recurrence, (P, X, order, g)),
-              ("step norms and the step size's two powers", step_norms, (X, order, norms)),
-              ("Horner sums" + (" (orbit and vector)" if tangent else ""), horner,
-               (X, order, hv, out, 2 if tangent else 1))]
+              ("step norms and the step size's two powers", step_norms, (X, order, norm)),
+              ("Horner sums" + (" (orbit and vector)" if tangent else ""), horner, (X, order, hv, out))]
     if not tangent:
-        stages.append(("variation bound", variation, (X, order, hv, out[0])))
+        evaluate(X, order, hv, out)
+        stages.append(("section values and variation bound", variation, (X, order, hv, out, a, b, L_g, GC, G)))
     rows = []
     for name, fn, args in stages:
         fn(1, *args)
@@ -316,10 +323,10 @@ def stages_alone(order, tangent, reps=20000):
 
 
 def libm_log_per_lane(reps=2_000_000):
-    """Seconds of CPU per lane of libm's log as ``tangent_lanes.end_steps_tangent_lanes`` calls
-    it (a loop over the LANES lanes of a group, arguments near 1 as the norms of a renormalised
-    deviation vector after a step), less the same loop without the log (issue 34: whether a vector
-    log is worth writing)."""
+    """Seconds of CPU per lane of libm's log as the indicators' vector step end calls it
+    (``_indicator_ends_lanes`` of :mod:`explorer.integrate.codegen_indicators`: a loop over the lanes of a
+    group, arguments near 1 as the norms of a renormalised deviation vector after a step), less the same
+    loop without the log (whether a vector log is worth writing)."""
     import math
 
     from explorer._jit import njit
@@ -352,11 +359,9 @@ def recurrence_asm(tangent):
     from numba import types
 
     from explorer._jit import njit
-    from explorer.integrate import _lanes_generated as LG
-    from explorer.integrate import _tangent_lanes_generated as TG
 
-    mod, name = (TG, "tangent_coefficients_lanes") if tangent else (LG, "taylor_coefficients_lanes")
-    k = njit(cache=False, error_model="numpy")(getattr(mod, name).py_func)
+    _mod, rec = _recurrence(tangent)
+    k = njit(cache=False, error_model="numpy")(rec.py_func)
     arr1, arr3 = types.Array(types.float64, 1, "C"), types.Array(types.float64, 3, "C")
     k.compile((arr1, arr3, types.int64, arr3))
     return _loop_asm(k)
@@ -457,7 +462,7 @@ def main(argv=None):
 
     order = order_for_tolerance(1e-12)
     emit(f"\n### 2. Work of one Taylor step of one orbit (order {order}, tol 1e-12)\n")
-    emit("| kernel | vmul | vadd | vsub | vneg | recurrence flops | step flops (+ Horner, variation) |")
+    emit("| kernel | vmul | vadd | vsub | vneg | recurrence flops | step flops (+ Horner, section) |")
     emit("|---|---:|---:|---:|---:|---:|---:|")
     work = {}
     for name, tangent, nvec in (("crossings (orbit)", False, 1), ("tangent, 1 vector (MEGNO, mLCE)", True, 1),
