@@ -161,7 +161,6 @@ def test_a_multiple_shooting_orbit_of_period_5_returns_to_itself(case):
         assert o.det == pytest.approx(1.0, abs=1e-8)
 
 
-@pytest.mark.cpu_dependent
 def test_the_half_orbit_method_finds_newtons_orbit_with_the_residue_of_the_full_product(case):
     """greene.symmetric_orbit (one unknown on a symmetry line, the monodromy from the first half
     orbit and the reversor) against find_periodic_orbit (multiple shooting over all points, the

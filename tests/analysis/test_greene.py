@@ -113,7 +113,6 @@ def test_the_half_orbit_monodromy_equals_the_full_product_of_jacobians():
         np.testing.assert_allclose(orb.monodromy, M, rtol=1e-10, atol=1e-10)
 
 
-@pytest.mark.cpu_dependent
 @pytest.mark.parametrize("k", (0.5, K_C_PUBLISHED, 1.0))
 def test_residues_up_to_period_233_agree_with_the_long_double_full_orbit_to_1e_8(k):
     for orb in _chain(k, 233):
@@ -139,9 +138,15 @@ def test_greene_reproduces_greenes_critical_k_to_seven_digits_from_periods_up_to
     assert r.ratio == pytest.approx(-0.376, abs=0.01)          # k_n -> k_c geometrically
 
 
+@pytest.fixture(scope="module")
+def golden987():
+    """Greene's criterion for the golden curve of the standard map, convergents up to q = 987."""
+    return ex.greene(ex.StandardMap(0.9), "golden", qmax=987)
+
+
 @pytest.mark.cpu_dependent
-def test_greene_to_period_987_agrees_with_the_published_nine_digits():
-    r = ex.greene(ex.StandardMap(0.9), "golden", qmax=987)
+def test_greene_to_period_987_agrees_with_the_published_nine_digits(golden987):
+    r = golden987
     assert abs(r.critical - K_C_PUBLISHED) < 1e-9             # 0.971635406 (MacKay 1983), 9 digits
     assert abs(r.critical - K_C_PUBLISHED) <= r.uncertainty + 5e-10   # within our error bar + rounding
     # the same curve seen as 1 - nu (the symmetry (theta, p) -> (-theta, -p) maps nu to 1 - nu)
@@ -150,8 +155,8 @@ def test_greene_to_period_987_agrees_with_the_published_nine_digits():
 
 
 @pytest.mark.cpu_dependent
-def test_residues_at_the_critical_k_converge_to_mackays_limit():
-    r = ex.greene(ex.StandardMap(0.9), "golden", qmax=987)
+def test_residues_at_the_critical_k_converge_to_mackays_limit(golden987):
+    r = golden987
     # MacKay 1983: R* = 0.2500888
     dev = {c["q"]: abs(c["residue_at_critical"] - R_STAR_PUBLISHED) for c in r.convergents}
     assert dev[233] < 3e-4 and dev[987] < 6e-5
@@ -172,11 +177,11 @@ def _covers_the_longer_chains(ks, least=4):
 
 
 @pytest.mark.cpu_dependent
-def test_the_uncertainty_of_every_shorter_golden_chain_covers_its_distance_to_the_chain_to_987():
+def test_the_uncertainty_of_every_shorter_golden_chain_covers_its_distance_to_the_chain_to_987(golden987):
     """docs/greene.md, "The criterion": the spread of the last three Aitken extrapolations bounds
     the error of the critical k; each chain q <= 5, 8, ..., 610 lies within it of the chain to q = 987,
     and that one within its own of the published 0.971635406 (plus its rounding)."""
-    r = ex.greene(ex.StandardMap(0.9), "golden", qmax=987)
+    r = golden987
     ks = [c["param_n"] for c in r.convergents]
     assert greene_core.extrapolate(ks)[:2] == (r.critical, r.uncertainty)
     assert _covers_the_longer_chains(ks) == []

@@ -144,7 +144,6 @@ def test_a_longer_branch_continued_from_a_shorter_one_is_the_branch_grown_from_t
     assert np.array_equal(other.points, mf.grow_branch(saddle, sign=1, arclength=6.0, start_tol=1e-8).points)
 
 
-@pytest.mark.cpu_dependent
 def test_growth_stops_at_budgets_with_a_status(saddle):
     b = mf.grow_branch(saddle, arclength=50.0, max_points=60)
     assert b.status == "max_points" and len(b.points) <= 61
@@ -166,7 +165,6 @@ def test_growth_stops_where_points_have_no_return(saddle):
     assert np.all(np.isfinite(b.points))
 
 
-@pytest.mark.cpu_dependent
 def test_a_non_hyperbolic_orbit_is_refused():
     c, s = math.cos(0.3), math.sin(0.3)    # an elliptic monodromy (rotation by 0.3)
     J = np.array([[c, -s], [s, c]])
@@ -282,7 +280,6 @@ def test_inside_follows_the_even_odd_rule():
     assert got.tolist() == [True, False, False, False, False]
 
 
-@pytest.mark.cpu_dependent
 @pytest.mark.parametrize("guess, maps", [((-1.8408, 0.0), 2), ((0.2909, 0.0), 4)])
 def test_manifolds_of_a_period_2_orbit_are_mapped_onto_each_other(guess, maps):
     """Period 2 (trace 9.96, and -6.80: negative multipliers, so F = P^4 keeps each branch):

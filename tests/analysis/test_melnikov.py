@@ -193,7 +193,6 @@ def _richardson(rows):
     return (m2 * r[0]["ratio"] - m1 * r[1]["ratio"]) / (m2 - m1)
 
 
-@pytest.mark.cpu_dependent
 @pytest.mark.parametrize("sign", [1, -1])
 def test_measured_splitting_approaches_mu_J(sign):
     rows = melnikov.melnikov_table(FIG4, H, (1e-4, 3e-4, 1e-3, 3e-3), (0.5 * math.pi,), (sign,))
@@ -205,7 +204,6 @@ def test_measured_splitting_approaches_mu_J(sign):
     assert all(np.sign(r["measured"]) == np.sign(r["predicted"]) for r in rows)
 
 
-@pytest.mark.cpu_dependent
 def test_measured_splitting_with_centre_of_mass_offset_checks_J_R():
     prm = FIG4.with_(xi=0.3, eta=-0.2)
     for g0, s in ((0.0, 1), (2.5, -1)):
@@ -218,7 +216,6 @@ def test_measured_splitting_with_centre_of_mass_offset_checks_J_R():
         assert abs(r[0]["ratio"] - 1) < 0.01 and abs(_richardson(r) - 1) < 1e-4
 
 
-@pytest.mark.cpu_dependent
 def test_no_splitting_at_the_symmetric_point():
     """g0 = pi is the centre of the lobe (p2 = 0): J(pi) = 0 and the manifolds intersect there."""
     r = melnikov.measured_splitting(FIG4, H, 1e-3, math.pi, 1)

@@ -30,6 +30,11 @@ def search3():
     return pm.search_periodic_orbits(PRM, H, 3)
 
 
+@pytest.fixture(scope="module")
+def search4():
+    return pm.search_periodic_orbits(PRM, H, 4)
+
+
 def _independent_orbit(x, K):
     """K crossings of phi = pi from (p1, p2) with scipy DOP853 (rtol = atol = 1e-13)."""
     P = PRM.as_array()
@@ -43,7 +48,6 @@ def _elliptic(orbits):
     return sorted([o for o in orbits if o.kind == "elliptic"], key=lambda o: np.min(np.abs(o.points[:, 0])))
 
 
-@pytest.mark.cpu_dependent
 @pytest.mark.parametrize("K", [2, 3])
 def test_every_orbit_found_returns_to_itself_under_an_independent_scipy_integration(K, search2, search3):
     orbits = {2: search2, 3: search3}[K]
@@ -100,8 +104,8 @@ def test_a_period_two_orbit_found_with_period_four_is_reported_with_its_minimal_
 
 
 @pytest.mark.cpu_dependent
-def test_search_of_period_four_reports_no_orbit_of_period_one_or_two(search2):
-    orbits = pm.search_periodic_orbits(PRM, H, 4, grid=8, line=48)
+def test_search_of_period_four_reports_no_orbit_of_period_one_or_two(search2, search4):
+    orbits = search4
     assert orbits and all(o.period == 4 for o in orbits)
     for o in orbits:
         assert pm._minimal_period(o.points, SectionMap(PRM, H)) == 4
@@ -183,7 +187,6 @@ def test_an_orbit_on_a_resonant_curve_is_flagged_degenerate_and_is_not_isolated(
         np.testing.assert_allclose(pts[-1], o.points[0], atol=1e-8)    # both really return
 
 
-@pytest.mark.cpu_dependent
 def test_isolated_orbits_are_not_degenerate(search2, search3):
     for o in search2 + search3:
         if not o.degenerate:
@@ -202,10 +205,10 @@ def _isolated(orbits):
 
 @pytest.mark.cpu_dependent
 @pytest.mark.parametrize("K", [2, 3])
-def test_the_same_isolated_orbits_come_out_when_the_seeds_move_by_1e_12(K):
+def test_the_same_isolated_orbits_come_out_when_the_seeds_move_by_1e_12(K, request):
     guesses = pm.periodic_guesses(PRM, H, K)
     rng = np.random.default_rng(K)
-    base = _isolated(pm.search_periodic_orbits(PRM, H, K, guesses=guesses))
+    base = _isolated(request.getfixturevalue(f"search{K}"))      # the default search starts from these guesses
     shift = 1e-12 * rng.choice([-1, 1], guesses.shape)
     moved = _isolated(pm.search_periodic_orbits(PRM, H, K, guesses=guesses + shift))
     assert len(base) == len(moved)
@@ -221,8 +224,8 @@ ISOLATED_COUNTS = {1: 5, 2: 8, 3: 14, 4: 12}
 
 @pytest.mark.cpu_dependent
 @pytest.mark.parametrize("K", sorted(ISOLATED_COUNTS))
-def test_isolated_orbit_count_per_period_is_the_same_on_any_cpu(K, search2, search3):
-    orbits = {2: search2, 3: search3}.get(K) or pm.search_periodic_orbits(PRM, H, K)
+def test_isolated_orbit_count_per_period_is_the_same_on_any_cpu(K, request):
+    orbits = request.getfixturevalue(f"search{K}") if K > 1 else pm.search_periodic_orbits(PRM, H, K)
     iso = _isolated(orbits)
     assert len(iso) == ISOLATED_COUNTS[K]
     assert sum(not o.symmetric for o in iso) % 2 == 0          # asymmetric orbits come in mirror pairs
@@ -355,14 +358,14 @@ def test_as_dict_has_the_json_shape(search2):
 
 
 @pytest.mark.cpu_dependent
-def test_every_isolated_orbit_comes_with_its_half_turn_partner_of_the_same_trace_and_period():
+def test_every_isolated_orbit_comes_with_its_half_turn_partner_of_the_same_trace_and_period(search4):
     """docs/model.md, "Symmetries": T P = P^-1 T, so T(orbit) is an orbit with the same trace of the
     monodromy and the same period (the sum of its return times).  Period 4 at the mu = 0.03 scene:
     before the search completed its set with T, the partner of the orbit through (-1.8617, 0) was
     missing."""
     from explorer.analysis.halfturn import partner_points
 
-    orbits = _isolated(pm.search_periodic_orbits(PRM, H, 4))
+    orbits = _isolated(search4)
     for o in orbits:
         image = partner_points(PRM, H, o.points).points
         partners = [b for b in orbits if b.same_orbit(image, 1e-7)]

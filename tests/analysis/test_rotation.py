@@ -66,7 +66,6 @@ def test_rotation_number_at_mu0_equals_the_period_quadrature_of_R6(p1):
     assert r.turns == pytest.approx(expected, abs=1e-11)
 
 
-@pytest.mark.cpu_dependent
 @pytest.mark.parametrize("p1", [1.8, 1.9, 1.97])
 def test_rotation_number_is_lifted_through_the_flow_out_to_the_edge_of_the_region(p1):
     """Beyond p1 ~ 1.75 (the region's edge is p1 = 2) single returns turn by more than half a
@@ -95,7 +94,6 @@ PRM = model.FIGURE4.with_(mu=0.03)
 CENTER = (1.582201141, 0.0)   # elliptic fixed point of the Figure 4 scene at mu = 0.03
 
 
-@pytest.mark.cpu_dependent
 def test_rotation_center_defaults_to_the_fixed_point_found_from_the_start():
     r = rm.rotation_number(PRM, H, (1.58, 0.0), iterates=200)
     np.testing.assert_allclose(r.center, pm.find_periodic_orbit(PRM, H, CENTER, 1).points[0], atol=1e-12)

@@ -51,7 +51,6 @@ def test_periodic_continuation_prints_the_stability_changes(capsys):
     assert len(d["branch"]) == 5 and d["stopped"] is None
 
 
-@pytest.mark.cpu_dependent
 def test_rotation_profile_json_from_the_elliptic_point(capsys):
     code, out, _ = run_cli(["rotation", "--from", "1.5822,0", "--to", "1.45,0", "--n", "3", "--iterates", "500",
                             "--mu", "0.03", "--json"], capsys)

@@ -142,8 +142,8 @@ def test_figure2_critical_levels_and_curves_in_every_interval():
 
 
 # ---------------------------------------------------------------- Figure 3
-@pytest.mark.cpu_dependent
 def test_figure3_draws_the_branches_dashed_where_unstable():
+    """The analytic branches only (check=False: nothing integrated, nothing a CPU could change)."""
     d = paper.figure3_figure(check=False)
     ax = d.fig.axes[0]
     lines = {}
