@@ -187,3 +187,41 @@ def test_the_example_of_docs_systems_md_runs():
 def test_section_is_refused_for_chaplygins_model_which_takes_phi0():
     with pytest.raises(ParameterError, match="section= is the hyperplane EXPR = 0 of a System"):
         ex.crossings(ex.FIGURE4, ex.FIGURE4_H, [(0.1, 0.0)], n_crossings=2, section=x)
+
+
+def streamed(blocks, n_orbits):
+    """Per orbit, the rows of ``blocks`` joined in order (each block's start must follow the last),
+    and the last block's state."""
+    rows, state = [[] for _ in range(n_orbits)], None
+    for blk in blocks:
+        for k, i in enumerate(blk.index):
+            assert blk.start[k] == sum(len(r) for r in rows[i])
+            rows[i].append(blk.rows(k))
+        state = blk.state
+    return [np.concatenate(r) if r else np.zeros((0, 6)) for r in rows], state
+
+
+@pytest.mark.parametrize("driver", ["auto", "scalar"])
+def test_a_systems_crossings_streamed_in_blocks_of_any_size_are_one_runs_rows_bit_for_bit(driver):
+    """sections.iter_crossings streams a System from its drivers' carry (docs/architecture.md, "Streaming"):
+    blocks of 1, 7 or all crossings, and a run resumed from a block's state, concatenate to one run's rows,
+    counts, statuses, final states and info bit for bit, also for orbits the time budget stops mid-run."""
+    from explorer.analysis import sections
+
+    hh = henon_heiles()
+    Y0 = starts(POINTS + [(0.0, 0.35), (-0.2, -0.1)])
+    K, n = 30, len(Y0)
+    tmax = float(np.median(ex.crossings(hh, states=Y0, n_crossings=K, section=x).data[:, K - 1, 0]))
+    kw = dict(states=Y0, n_crossings=K, section=x, direction=+1, tmax=tmax, driver=driver)
+    one = ex.crossings(hh, **kw)
+    assert 0 < np.sum(one.status == Status.TMAX) < n        # some orbits are cut by the time budget
+    first = next(sections.iter_crossings(hh, block=7, **kw))
+    runs = [sections.iter_crossings(hh, block=b, **kw) for b in (1, 7, K)]
+    runs.append(iter([first, *sections.iter_crossings(hh, block=7, state=first.state, **kw)]))
+    for blocks in runs:
+        rows, state = streamed(blocks, n)
+        for i in range(n):
+            np.testing.assert_array_equal(rows[i], one.orbit(i), strict=True)
+        for name, got in (("count", state.done), ("status", state.status), ("final", state.y), ("info", state.info)):
+            np.testing.assert_array_equal(got, getattr(one, name), err_msg=name, strict=True)
+        assert state.finished.all()

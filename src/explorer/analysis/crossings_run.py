@@ -16,7 +16,7 @@ from explorer.kernels import STATUS_NAMES, Status
 from explorer.model import ParameterError, packed_params, validation
 
 __all__ = ["DEFAULT_MAX_STEPS", "CrossingBlock", "Crossings", "Integration", "StreamState", "crossing_settings",
-           "energy_warning", "human_bytes", "max_energy_error", "result_bytes", "run"]
+           "energy_warning", "human_bytes", "max_energy_error", "result_bytes", "run", "stream"]
 
 DEFAULT_MAX_STEPS = 10**9
 #: an energy error above this fraction of max(|h|, 1) is warned about (:func:`energy_warning`)
@@ -296,6 +296,34 @@ class CrossingBlock:
     def rows(self, i: int) -> np.ndarray:
         """The rows of the i-th orbit of this block, (count[i], 5)."""
         return self.data[i, : self.count[i]]
+
+
+def stream(st: StreamState, K: int, block: int, run_block):
+    """The blocks of a streamed run from ``st`` (updated in place) until every orbit has ``K`` crossings or
+    stopped: per block, the unfinished orbits' limits (target: ``block`` more crossings, room for the
+    roots of the last step) and ``run_block(Y, carry, limits, width)`` -> (data, count, status, final,
+    info) with ``carry`` continued in place, so the blocks take one run's steps (docs/architecture.md,
+    "Streaming")."""
+    width = min(K, int(block) + layout.MAX_ROOTS_PER_STEP)
+    while True:
+        idx = np.flatnonzero(~st.finished)
+        if idx.size == 0:
+            return
+        remaining = K - st.done[idx]
+        limits = np.empty((idx.size, 2), np.int64)
+        limits[:, layout.LIMIT_TARGET] = np.minimum(block, remaining)
+        limits[:, layout.LIMIT_ROOM] = np.minimum(remaining, width)
+        carry = np.ascontiguousarray(st.carry[idx])
+        data, count, status, final, info = run_block(np.ascontiguousarray(st.y[idx]), carry, limits, width)
+        start = st.done[idx].copy()
+        st.y[idx] = final
+        st.carry[idx] = carry
+        st.done[idx] += count
+        st.status[idx] = status
+        st.info[idx] = info
+        st.finished[idx] = (status != int(Status.DONE)) | (st.done[idx] >= K)
+        st.blocks += 1
+        yield CrossingBlock(idx, start, data, count, st.copy())
 
 
 def run(params, y0, *, n_crossings: int, method: str = "taylor", tol: float = DEFAULT_TOL, dt: float | None = None,

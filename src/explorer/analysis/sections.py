@@ -26,6 +26,7 @@ from explorer.analysis.crossings_run import (
     max_energy_error,
     result_bytes,
     run,
+    stream,
 )
 from explorer.analysis.section_map import is_params, not_a_system, system_first
 from explorer.integrate import layout, methods
@@ -99,8 +100,7 @@ def propagate(system, y0, *, t: float, method: str = "taylor", tol: float = DEFA
     return res.final.copy()
 
 
-@not_a_system("explorer.crossings(system, states=..., n_crossings=..., section=...) gives the crossings at once "
-               "(or explorer.crossings(SectionMap(system, ...), points, n_crossings=...)); they are not streamed")
+@system_sections.or_a_system
 @system_first(settings=("phi0", "tol"), defaults={"tol": DEFAULT_TOL}, flow=True)
 def iter_crossings(system, y0, *, n_crossings: int, block: int = DEFAULT_BLOCK, state: StreamState | None = None,
                    method: str = "taylor", tol: float = DEFAULT_TOL, dt: float | None = None,
@@ -112,7 +112,8 @@ def iter_crossings(system, y0, *, n_crossings: int, block: int = DEFAULT_BLOCK, 
     may take more than that many steps in it (a block of a fixed-step orbit that finds no crossing
     for a long time stays short, so a caller can stop between blocks); such a cut is no budget's
     end: the next block continues the orbit exactly, for the methods whose kind
-    ``resumes_at_any_step`` (integrate.methods.Kind; not DOP853)."""
+    ``resumes_at_any_step`` (integrate.methods.Kind; not DOP853).  A System streams its crossings of
+    ``section=`` (system_sections.iter_system_crossings)."""
     params, y0, tol, phi0 = _start(system, y0, tol, phi0, direction)
     run = _validated(params, y0, n_crossings, method, tol, dt, tmax, max_steps, phi0, direction, threads)
     if not isinstance(block, numbers.Integral) or block < 1:
@@ -127,33 +128,18 @@ def iter_crossings(system, y0, *, n_crossings: int, block: int = DEFAULT_BLOCK, 
     st = StreamState.initial(run.P, run.Y0, phi0=run.settings["phi0"]) if state is None else state.copy()
     if st.y.shape != (N, 5) or st.carry.shape != (N, layout.N_CARRY):
         raise ParameterError(f"state is for {st.y.shape[0]} orbits, y0 has {N}")
-    width = min(K, int(block) + layout.MAX_ROOTS_PER_STEP)
-    while True:
-        idx = np.flatnonzero(~st.finished)
-        if idx.size == 0:
-            return
-        n = idx.size
-        remaining = K - st.done[idx]
-        limits = np.empty((n, 2), np.int64)
-        limits[:, layout.LIMIT_TARGET] = np.minimum(block, remaining)
-        limits[:, layout.LIMIT_ROOM] = np.minimum(remaining, width)
-        Y = np.ascontiguousarray(st.y[idx])
-        carry = np.ascontiguousarray(st.carry[idx])
-        data, count, status, final, info = _outputs(n, width)
+
+    def run_block(Y, carry, limits, width):
+        out = _outputs(Y.shape[0], width)
         block_run = run
         if step_block is not None:   # the step cap of this block: the orbit least advanced takes step_block
             cap = int(carry[:, layout.CARRY_STEPS].min()) + int(step_block)
             block_run = replace(run, max_steps=min(run.max_steps, cap))
-        _run_block(block_run, Y, carry, limits, data, count, status, final, info)
+        _run_block(block_run, Y, carry, limits, *out)
         if block_run is not run:     # stopped at this block's cap, not at the run's budget: not finished
-            cut = (status == int(Status.MAX_STEPS)) & (carry[:, layout.CARRY_STEPS] < run.max_steps)
-            status[cut] = int(Status.DONE)
-        start = st.done[idx].copy()
-        st.y[idx] = final
-        st.carry[idx] = carry
-        st.done[idx] += count
-        st.status[idx] = status
-        st.info[idx] = info
-        st.finished[idx] = (status != int(Status.DONE)) | (st.done[idx] >= K)
-        st.blocks += 1
-        yield CrossingBlock(idx, start, data, count, st.copy())
+            status = out[2]
+            status[(status == int(Status.MAX_STEPS)) & (carry[:, layout.CARRY_STEPS] < run.max_steps)] = \
+                int(Status.DONE)
+        return out
+
+    yield from stream(st, K, block, run_block)

@@ -34,8 +34,8 @@ from explorer.integrate.methods import DEFAULT_TOL, check_setting
 from explorer.kernels.taylor_order import order_for_tolerance
 from explorer.model import ParameterError, validation
 
-__all__ = ["Section", "check_memory", "is_system", "is_system_map", "linear_section", "or_a_system",
-           "refuse_a_system", "run_driver", "system_crossings"]
+__all__ = ["Section", "check_memory", "is_system", "is_system_map", "iter_system_crossings", "linear_section",
+           "or_a_system", "refuse_a_system", "run_driver", "system_crossings"]
 
 DEFAULT_MAX_STEPS = 10**9
 #: the drivers of ``system_crossings(driver=)``; every one gives the same rows bit for bit.  ``auto``
@@ -68,16 +68,23 @@ def refuse_a_system(name: str, obj) -> None:
                              "explorer.crossings(SectionMap(system, ...), points, ...)) (docs/systems.md)")
 
 
-def or_a_system(fn, result):
+def or_a_system(fn, result=None):
     """``fn`` (the engine's crossings) with a System path: a System as first argument goes to
-    :func:`system_crossings`, its arrays made into ``result`` (the Crossings type); ``section=``
-    is added to the signature and refused for the engine's model."""
+    :func:`system_crossings`, its arrays made into ``result`` (the Crossings type), or with
+    ``result`` None (``fn`` streams) to :func:`iter_system_crossings`; ``section=`` is added to the
+    signature and refused for the engine's model."""
 
     @functools.wraps(fn)
     def call(system, *args, section=None, **kw):
         if is_system(system):
+            if result is None:
+                return iter_system_crossings(system, *args, section=section, **kw)
             return result(*system_crossings(system, *args, section=section, **kw))
         if is_system_map(system):   # its points lifted to states, its section and direction
+            if result is None:
+                raise ParameterError(f"{fn.__name__} of a System's SectionMap: stream its System, "
+                                     f"{fn.__name__}(smap.system, states=smap.states(points), section=..., "
+                                     "direction=...), or take explorer.crossings(smap, points, n_crossings=...)")
             return result(*system.crossings(*args, section=section, **kw))
         if section is not None:
             raise ParameterError("section= is the hyperplane EXPR = 0 of a System (docs/systems.md); the section of "
@@ -89,7 +96,7 @@ def or_a_system(fn, result):
                                                  inspect.Parameter("section", inspect.Parameter.KEYWORD_ONLY,
                                                                    default=None)])
     call.__doc__ = (fn.__doc__ or "") + (
-        "\n    A System (docs/systems.md, \"Crossings of a section\"): ``crossings(system, states=Y0, "
+        f"\n    A System (docs/systems.md, \"Crossings of a section\"): ``{fn.__name__}(system, states=Y0, "
         "n_crossings=K, section=EXPR, direction=+1 or -1)``, the section EXPR = 0 with EXPR linear in the "
         "state; rows (t, state, E - E0).\n")
     return call
@@ -213,58 +220,108 @@ def system_crossings(system, states=None, *, n_crossings: int, section=None, dir
     Taylor method's, as the engine's (docs/methods.md).  ``driver``: one of :data:`DRIVERS`
     (:func:`driver_for`); the rows do not depend on it.  ``backward``: backward in time (the flow of
     -f, exactly), t the time elapsed backward and ``direction`` the sign of ds/dt along it."""
-    from explorer.analysis import budget
-    from explorer.integrate import codegen
+    run = _SystemRun(system, states, n_crossings, section, direction, method, tol, tmax, max_steps, threads, driver,
+                     backward, other)
+    N, K = run.Y0.shape[0], run.K
+    check_memory(f"crossings: {N} orbits x {K} crossings", N * K * run.width * 8, "lower n_crossings or the orbits")
+    carry = run.start(run.Y0)
+    data, count, status, final, info = run.block(run.Y0, carry, np.full((N, 2), K, np.int64), K)
+    return data, count, status, final, info, "taylor", run.settings
 
-    given = [k for k in _NOT_FOR_A_SYSTEM if k in other]
-    if given:
-        raise ParameterError(f"crossings of a System: {', '.join(given)} do(es) not apply (the section is "
-                             "section=EXPR, the start states=)")
-    if other:
-        raise ParameterError(f"crossings of a System has no setting {', '.join(sorted(other))}")
-    if method != "taylor":
-        raise ParameterError(f"method must be 'taylor' for a System (the generated Taylor integrator), got {method!r}")
-    budget.checkpoint()
-    max_steps = budget.step_cap(max_steps)
-    K = validation.integer("n_crossings", n_crossings, 1)
-    if isinstance(direction, bool) or not isinstance(direction, numbers.Integral) or direction not in (-1, 1):
-        raise ParameterError(f"direction must be +1 (ds/dt > 0) or -1 (ds/dt < 0), got {direction!r}")
-    tol = check_setting("tol", tol)
-    tmax = 100.0 * K if tmax is None else validation.real("tmax", tmax, 0.0, lo_open=True)
-    max_steps = validation.integer("max_steps", max_steps, 1)
-    if threads is not None:
-        threads = validation.threads(threads, max_threads())
-    if not isinstance(backward, bool):
-        raise ParameterError(f"backward must be True or False, got {backward!r}")
-    if driver not in DRIVERS:
-        raise ParameterError(f"driver must be one of {', '.join(map(repr, DRIVERS))}, got {driver!r}")
-    sec = linear_section(system, section)
-    Y0 = _states(system, states)
-    order = order_for_tolerance(tol)
-    mod = codegen.load(system)
-    P = system.parameter_array()
-    N = Y0.shape[0]
-    width = 1 + system.dimension + (system.energy is not None)
-    check_memory(f"crossings: {N} orbits x {K} crossings", N * K * width * 8, "lower n_crossings or the orbits")
-    data = np.full((N, K, width), np.nan)
-    count = np.zeros(N, np.int64)
-    status = np.zeros(N, np.int64)
-    final = np.zeros((N, system.dimension))
-    info = np.zeros((N, 3))
-    carry = np.empty((N, layout.N_CARRY))
-    mod.crossings_start(Y0, P, sec.a, float(sec.b), carry)
-    limits = np.full((N, 2), K, np.int64)
-    run_driver(mod, "crossings", N, driver, threads,
-               (Y0, P, sec.a, float(sec.b), every_crossing(system.dimension), np.arange(system.dimension),
-                int(direction), float(tmax), int(order), int(max_steps), carry, limits, data, count, status, final,
-                info, backward))
-    columns = ["t", *(s.name for s in system.states)] + (["E - E0"] if system.energy is not None else [])
-    settings = {"method": "taylor", "tol": tol, "order": order, "system": system.name, "section": str(sec.expr),
-                "direction": int(direction), "tmax": tmax, "max_steps": max_steps, "n_crossings": K,
-                "columns": columns}
-    if backward:
-        settings["backward"] = True
-    return data, count, status, final, info, "taylor", settings
+
+def iter_system_crossings(system, states=None, *, n_crossings: int, section=None, direction: int = 1,
+                          block: int | None = None, state=None, method: str = "taylor", tol: float = DEFAULT_TOL,
+                          tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS, threads: int | None = None,
+                          driver: str = "auto", backward: bool = False, **other):
+    """:func:`system_crossings` in blocks of about ``block`` crossings per orbit (default
+    crossings_run.DEFAULT_BLOCK), each a :class:`~explorer.analysis.crossings_run.CrossingBlock` whose
+    rows continue the orbits' carry bit for bit, so the blocks concatenate to one run's rows, in
+    O(N x block) memory; ``state`` (a block's ``state``) resumes the run (docs/systems.md, "Crossings").
+    Checks its arguments at the call."""
+    from explorer.analysis.crossings_run import DEFAULT_BLOCK, StreamState, stream
+
+    run = _SystemRun(system, states, n_crossings, section, direction, method, tol, tmax, max_steps, threads, driver,
+                     backward, other)
+    block = DEFAULT_BLOCK if block is None else block
+    if isinstance(block, bool) or not isinstance(block, numbers.Integral) or block < 1:
+        raise ParameterError(f"block must be an integer >= 1, got {block!r}")
+    N = run.Y0.shape[0]
+    if state is None:
+        state = StreamState(run.Y0.copy(), run.start(run.Y0), np.zeros(N, np.int64), np.zeros(N, bool),
+                            np.zeros(N, np.int64), np.zeros((N, 3)), 0)
+    elif not isinstance(state, StreamState) or state.y.shape != run.Y0.shape \
+            or state.carry.shape != (N, layout.N_CARRY):
+        raise ParameterError(f"state must be the StreamState of a block of these {N} orbits of {system.name}")
+    else:
+        state = state.copy()
+    return stream(state, run.K, int(block), run.block)
+
+
+class _SystemRun:
+    """The checked settings of a System's crossings and its generated module: :meth:`start` the carry of
+    states, :meth:`block` one block of the crossing driver."""
+
+    def __init__(self, system, states, n_crossings, section, direction, method, tol, tmax, max_steps, threads,
+                 driver, backward, other):
+        from explorer.analysis import budget
+        from explorer.integrate import codegen
+
+        given = [k for k in _NOT_FOR_A_SYSTEM if k in other]
+        if given:
+            raise ParameterError(f"crossings of a System: {', '.join(given)} do(es) not apply (the section is "
+                                 "section=EXPR, the start states=)")
+        if other:
+            raise ParameterError(f"crossings of a System has no setting {', '.join(sorted(other))}")
+        if method != "taylor":
+            raise ParameterError(f"method must be 'taylor' for a System (the generated Taylor integrator), "
+                                 f"got {method!r}")
+        budget.checkpoint()
+        max_steps = budget.step_cap(max_steps)
+        self.K = K = validation.integer("n_crossings", n_crossings, 1)
+        if isinstance(direction, bool) or not isinstance(direction, numbers.Integral) or direction not in (-1, 1):
+            raise ParameterError(f"direction must be +1 (ds/dt > 0) or -1 (ds/dt < 0), got {direction!r}")
+        tol = check_setting("tol", tol)
+        tmax = 100.0 * K if tmax is None else validation.real("tmax", tmax, 0.0, lo_open=True)
+        max_steps = validation.integer("max_steps", max_steps, 1)
+        if threads is not None:
+            threads = validation.threads(threads, max_threads())
+        if not isinstance(backward, bool):
+            raise ParameterError(f"backward must be True or False, got {backward!r}")
+        if driver not in DRIVERS:
+            raise ParameterError(f"driver must be one of {', '.join(map(repr, DRIVERS))}, got {driver!r}")
+        self.sec = sec = linear_section(system, section)
+        self.Y0 = _states(system, states)
+        self.order = order = order_for_tolerance(tol)
+        self.mod = codegen.load(system)
+        self.P = system.parameter_array()
+        self.dimension = n = system.dimension
+        self.width = 1 + n + (system.energy is not None)
+        self.args = (sec.a, float(sec.b), every_crossing(n), np.arange(n), int(direction), float(tmax), int(order),
+                     int(max_steps))
+        self.driver, self.threads, self.backward = driver, threads, backward
+        columns = ["t", *(s.name for s in system.states)] + (["E - E0"] if system.energy is not None else [])
+        self.settings = {"method": "taylor", "tol": tol, "order": order, "system": system.name,
+                         "section": str(sec.expr), "direction": int(direction), "tmax": tmax,
+                         "max_steps": max_steps, "n_crossings": K, "columns": columns}
+        if backward:
+            self.settings["backward"] = True
+
+    def start(self, Y) -> np.ndarray:
+        """The carry of orbits starting at the states ``Y``: t = 0, s(y), no steps, E0."""
+        carry = np.empty((Y.shape[0], layout.N_CARRY))
+        self.mod.crossings_start(Y, self.P, self.sec.a, float(self.sec.b), carry)
+        return carry
+
+    def block(self, Y, carry, limits, width: int):
+        """(data, count, status, final, info) of the orbits from ``Y`` continued from ``carry`` (in place)
+        up to ``limits`` (target, room), ``width`` rows each."""
+        N = Y.shape[0]
+        data = np.full((N, width, self.width), np.nan)
+        count, status = np.zeros(N, np.int64), np.zeros(N, np.int64)
+        final, info = np.zeros((N, self.dimension)), np.zeros((N, 3))
+        run_driver(self.mod, "crossings", N, self.driver, self.threads,
+                   (Y, self.P, *self.args, carry, limits, data, count, status, final, info, self.backward))
+        return data, count, status, final, info
 
 
 def every_crossing(dimension: int) -> np.ndarray:
