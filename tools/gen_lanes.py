@@ -146,8 +146,8 @@ def generate_tangent():
                  "XS = NROWS * LANES\nWS_TANGENT = N_WORK_TANGENT * LANES")
     return _module("explorer.model.chaplygin.system(), variational(1) and (2)",
                    "The Taylor recurrence of R3 with deviation vectors (its variational equations), generated:\n"
-                   "the scalar form for :mod:`explorer.integrate.tangent`, the lane form for\n"
-                   ":mod:`explorer.integrate.tangent_lanes`.", constants, [tangent, deviation])
+                   "the scalar form for :mod:`explorer.integrate.tangent`, the lane form its operations on\n"
+                   "LANES orbits at once (tests/integrate/test_tangent_lanes.py).", constants, [tangent, deviation])
 
 
 #: the systems of the scalar drivers: (suffix, what it is, its field dy = f(y) or None, its Taylor

@@ -3,8 +3,8 @@
 # (generator version 9).
 # Regenerate:  python tools/gen_lanes.py     (check: --check)
 """The Taylor recurrence of R3 with deviation vectors (its variational equations), generated:
-the scalar form for :mod:`explorer.integrate.tangent`, the lane form for
-:mod:`explorer.integrate.tangent_lanes`.
+the scalar form for :mod:`explorer.integrate.tangent`, the lane form its operations on
+LANES orbits at once (tests/integrate/test_tangent_lanes.py).
 
 Each lane of a ``*_lanes`` kernel computes bit for bit what its scalar twin computes (the same
 IEEE operations in the same order; the vector operations of :mod:`explorer.integrate.simd`: no
