@@ -105,3 +105,56 @@ def test_a_scene_whose_rows_do_not_fit_on_the_disk_is_refused_up_front(tmp_path,
 def test_panel_blocks_bound_the_rows_in_memory(n, K, block):
     assert sweep.panel_block(n, K) == block
     assert min(K, block) * n * 40 <= max(sweep.STREAM_BYTES, sweep.MIN_BLOCK * n * 40)
+
+
+SYSTEM_SCENE = """
+name = "hh_streamed"
+section = "x"
+direction = 1
+coords = ["y", "py"]
+solve = "px"
+[energy]
+value = 0.125
+[seeds]
+kind = "points"
+points = [[0.1, 0.1], [-0.1, 0.2], [0.3, 0.0], [0.0, 0.35], [0.2, -0.1]]
+[integration]
+crossings = 1500
+"""
+
+
+def test_a_systems_streamed_panel_is_one_runs_panel_and_resumes_after_an_interruption(tmp_path, monkeypatch):
+    """A System's scene panel past the row budget is streamed as Chaplygin's (docs/scenes.md): its store
+    is the unstreamed run's, and a sweep interrupted after some blocks resumes from them."""
+    from systems import henon_heiles
+
+    import explorer as ex
+    from explorer.io.scene import parse_scene
+
+    scene = parse_scene(SYSTEM_SCENE, system=henon_heiles())
+    ex.run_sweep(scene, tmp_path / "whole.h5", progress=False)
+    monkeypatch.setattr(sweep, "STREAM_BYTES", 5 * 256 * 40)     # -> blocks of 256 crossings
+    ex.run_sweep(scene, tmp_path / "streamed.h5", progress=False)
+    stored = [0]
+    block = stream.PanelStreams.block
+
+    def interrupted(self, *args):
+        block(self, *args)
+        stored[0] += 1
+        if stored[0] == 3:
+            raise KeyboardInterrupt
+    monkeypatch.setattr(stream.PanelStreams, "block", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        ex.run_sweep(scene, tmp_path / "resumed.h5", progress=False)
+    assert not (tmp_path / "resumed.h5").exists()                 # the panel was not written: its blocks were
+    monkeypatch.setattr(stream.PanelStreams, "block", block)
+    ex.run_sweep(scene, tmp_path / "resumed.h5", progress=False)
+    a = datasets(tmp_path / "whole.h5")
+    for name in ("streamed.h5", "resumed.h5"):
+        b = datasets(tmp_path / name)
+        assert a.keys() == b.keys()
+        for k in a:
+            np.testing.assert_array_equal(a[k], b[k], err_msg=k)
+    p = store.read_store(tmp_path / "resumed.h5").panels[0]
+    assert p.attrs["block"] == 256 and p.attrs["resumed_blocks"] == 3 and p.count.sum() == 5 * 1500
+    assert not any(n.endswith(".blocks") for n in os.listdir(tmp_path))

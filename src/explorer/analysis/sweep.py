@@ -89,6 +89,14 @@ class SweepSpec:
         """Chunk i's arrays (:func:`task`)."""
         return chaplygin_task(self, i, threads)
 
+    def initial_state(self, panel):
+        """The StreamState of a streamed ``panel`` before its first block."""
+        return sections.StreamState.initial(panel.P, panel.y0, phi0=self.phi0)
+
+    def task_block(self, i: int, state, threads: int | None = None) -> dict:
+        """Chunk i's next block (:func:`task_block`)."""
+        return chaplygin_task_block(self, i, state, threads)
+
     def indicator_arrays(self, panel, rows, threads=None, diffusion: bool = True) -> tuple:
         """(Indicators, arrays) of the seeds ``rows`` of ``panel`` (:func:`chaplygin_indicator_arrays`)."""
         return chaplygin_indicator_arrays(self, panel, rows, threads, diffusion)
@@ -453,23 +461,33 @@ def _worker_task(spec, i):
     return task(spec, i, threads=1)
 
 
-def task_block(spec: SweepSpec, i: int, state, threads: int | None = None) -> dict:
+def task_block(spec: SweepSpec | SystemSweepSpec, i: int, state, threads: int | None = None) -> dict:
     """Pure map of a streamed panel: the next block of chunk i's orbits, continued from ``state``
-    (their :class:`~explorer.analysis.sections.StreamState`)."""
+    (their :class:`~explorer.analysis.sections.StreamState`; the spec's own ``task_block``)."""
+    return spec.task_block(i, state, threads)
+
+
+def chaplygin_task_block(spec: SweepSpec, i: int, state, threads: int | None = None) -> dict:
+    """:func:`task_block` of a sweep of Chaplygin's model."""
     pos, a, b = spec.chunks[i]
     panel = spec.panels[pos]
-    t0 = time.perf_counter()
     it = sections.iter_crossings(panel.P, states=panel.y0[a:b], n_crossings=spec.crossings, block=spec.blocks[pos],
                                  state=state, method=spec.method, tol=spec.tol, dt=spec.dt, tmax=spec.tmax,
                                  max_steps=spec.max_steps, phi0=spec.phi0, direction=spec.direction, threads=threads)
+    return _block_arrays(i, a, it, state)
+
+
+def _block_arrays(i: int, a: int, it, state, columns=slice(None)) -> dict:
+    """The arrays of chunk i's next block of the stream ``it`` (its rows' ``columns``: the store's)."""
+    t0 = time.perf_counter()
     blk = next(it, None)
     it.close()
     if blk is None:
         return {"chunk": i, "index": np.zeros(0, np.int64), "start": np.zeros(0, np.int64),
                 "count": np.zeros(0, np.int64), "data": np.zeros((0, 0, 5)), "state": state,
                 "wall_time": time.perf_counter() - t0}
-    return {"chunk": i, "index": a + blk.index, "start": blk.start, "count": blk.count, "data": blk.data,
-            "state": blk.state, "wall_time": time.perf_counter() - t0}
+    return {"chunk": i, "index": a + blk.index, "start": blk.start, "count": blk.count,
+            "data": blk.data[..., columns], "state": blk.state, "wall_time": time.perf_counter() - t0}
 
 
 def _worker_task_block(spec, i, state):
@@ -504,7 +522,7 @@ def _stream_panel(spec: SweepSpec, pos: int, chunk_ids, streamer, jobs, backend,
     import dataclasses
 
     panel = spec.panels[pos]
-    state = streamer.resume(panel)
+    state = streamer.resume(panel, spec.initial_state(panel))
     rounds = max(1, math.ceil(spec.crossings / spec.blocks[pos]))
     wall = 0.0
     while not state.finished.all():
@@ -606,7 +624,7 @@ def cpu_count() -> int:
 @dataclass(frozen=True)
 class SystemSweepSpec:
     """The panels of a System's sweep and the section map they share (docs/scenes.md, "A scene of
-    your own system"); ``task`` maps it as a :class:`SweepSpec`.  Not streamed."""
+    your own system"); ``task`` and ``task_block`` map it as a :class:`SweepSpec`'s."""
 
     panels: tuple
     section: Any
@@ -622,12 +640,31 @@ class SystemSweepSpec:
     sections: bool = True
     blocks: tuple = ()
 
-    def streamed(self, pos: int) -> bool:
-        return False
+    streamed = SweepSpec.streamed
 
     def task(self, i: int, threads: int | None = None) -> dict:
         """Chunk i's arrays (:func:`system_task`)."""
         return system_task(self, i, threads)
+
+    def stream_settings(self, panel) -> dict:
+        """The keywords of the System's crossings of ``panel``'s section map (iter_crossings)."""
+        smap = self.section_map(panel)
+        return dict(n_crossings=self.crossings, section=smap.section.expr, direction=smap.direction, tol=self.tol,
+                    tmax=self.tmax, max_steps=self.max_steps)
+
+    def initial_state(self, panel):
+        """The StreamState of a streamed ``panel`` before its first block."""
+        from explorer.analysis.system_sections import initial_state
+
+        return initial_state(panel.system, panel.y0, **self.stream_settings(panel))
+
+    def task_block(self, i: int, state, threads: int | None = None) -> dict:
+        """Chunk i's next block (:func:`task_block`), rows :meth:`columns`."""
+        pos, a, b = self.chunks[i]
+        panel = self.panels[pos]
+        it = sections.iter_crossings(panel.system, states=panel.y0[a:b], block=self.blocks[pos], state=state,
+                                     threads=threads, **self.stream_settings(panel))
+        return _block_arrays(i, a, it, state, self.columns(panel.system))
 
     def indicator_arrays(self, panel, rows, threads=None, diffusion: bool = True) -> tuple:
         """(Indicators, arrays) of the seeds ``rows`` of ``panel`` (:func:`system_indicator_arrays`;
@@ -692,6 +729,7 @@ def build_system_spec(scene, panel_indices, *, chunk_orbits: int, product: str |
     integ = scene.integration
     panels: list = []
     chunks: list = []
+    blocks: list = []
     for pos, i in enumerate(panel_indices):
         smap = scene.section_map(i)
         grid: tuple = ()
@@ -706,12 +744,13 @@ def build_system_spec(scene, panel_indices, *, chunk_orbits: int, product: str |
                                  f"E = {energy!r}")
         panels.append(PanelSpec(i, label, None, float(energy), np.ascontiguousarray(smap.states(pts)), pts, grid,
                                 dropped, system))
+        blocks.append(panel_block(len(pts), integ.crossings))
         # an adaptive map refines level by level: one chunk (as a Chaplygin map panel)
         whole = grid and ly is not None and ly.adaptive
         chunks += [(pos, 0, len(pts))] if whole else _chunks(pos, len(pts), chunk_orbits)
     return SystemSweepSpec(tuple(panels), scene.section, scene.direction, tuple(scene.coords), scene.solve,
                            integ.crossings, integ.tol, integ.effective_tmax, integ.max_steps, tuple(chunks), ly,
-                           with_sections)
+                           with_sections, tuple(blocks))
 
 
 def build_system_atlas_spec(scene, *, chunk_orbits: int, cells=None) -> SystemSweepSpec:

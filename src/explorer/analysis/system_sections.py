@@ -34,8 +34,8 @@ from explorer.integrate.methods import DEFAULT_TOL, check_setting
 from explorer.kernels.taylor_order import order_for_tolerance
 from explorer.model import ParameterError, validation
 
-__all__ = ["Section", "check_memory", "is_system", "is_system_map", "iter_system_crossings", "linear_section",
-           "or_a_system", "refuse_a_system", "run_driver", "system_crossings"]
+__all__ = ["Section", "check_memory", "initial_state", "is_system", "is_system_map", "iter_system_crossings",
+           "linear_section", "or_a_system", "refuse_a_system", "run_driver", "system_crossings"]
 
 DEFAULT_MAX_STEPS = 10**9
 #: the drivers of ``system_crossings(driver=)``; every one gives the same rows bit for bit.  ``auto``
@@ -247,14 +247,21 @@ def iter_system_crossings(system, states=None, *, n_crossings: int, section=None
         raise ParameterError(f"block must be an integer >= 1, got {block!r}")
     N = run.Y0.shape[0]
     if state is None:
-        state = StreamState(run.Y0.copy(), run.start(run.Y0), np.zeros(N, np.int64), np.zeros(N, bool),
-                            np.zeros(N, np.int64), np.zeros((N, 3)), 0)
+        state = run.initial()
     elif not isinstance(state, StreamState) or state.y.shape != run.Y0.shape \
             or state.carry.shape != (N, layout.N_CARRY):
         raise ParameterError(f"state must be the StreamState of a block of these {N} orbits of {system.name}")
     else:
         state = state.copy()
     return stream(state, run.K, int(block), run.block)
+
+
+def initial_state(system, states=None, *, n_crossings: int, section=None, direction: int = 1, **kw):
+    """The StreamState that :func:`iter_system_crossings` with these arguments starts from (a store of
+    blocks resumes from it, io.store.stream)."""
+    return _SystemRun(system, states, n_crossings, section, direction, kw.pop("method", "taylor"),
+                      kw.pop("tol", DEFAULT_TOL), kw.pop("tmax", None), kw.pop("max_steps", DEFAULT_MAX_STEPS),
+                      kw.pop("threads", None), kw.pop("driver", "auto"), kw.pop("backward", False), kw).initial()
 
 
 class _SystemRun:
@@ -305,6 +312,14 @@ class _SystemRun:
                          "max_steps": max_steps, "n_crossings": K, "columns": columns}
         if backward:
             self.settings["backward"] = True
+
+    def initial(self):
+        """The StreamState of these orbits before their first block."""
+        from explorer.analysis.crossings_run import StreamState
+
+        N = self.Y0.shape[0]
+        return StreamState(self.Y0.copy(), self.start(self.Y0), np.zeros(N, np.int64), np.zeros(N, bool),
+                           np.zeros(N, np.int64), np.zeros((N, 3)), 0)
 
     def start(self, Y) -> np.ndarray:
         """The carry of orbits starting at the states ``Y``: t = 0, s(y), no steps, E0."""

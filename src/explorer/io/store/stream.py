@@ -91,13 +91,15 @@ class BlockStream:
         except StoreError:
             return False
 
-    def resume_state(self, params, y0, *, phi0: float, force: bool = False):
+    def resume_state(self, params, y0, *, phi0: float, force: bool = False, initial=None):
         """The StreamState the run of ``y0`` continues from (:meth:`resume`) and the number of blocks
-        stored; blocks of another run (without ``force``) are a ParameterError."""
+        stored; blocks of another run (without ``force``) are a ParameterError.  ``initial``: the run's
+        state before its first block (default Chaplygin's, of ``params`` at ``phi0``)."""
         from explorer.analysis import sections
         from explorer.model import ParameterError
 
-        initial = sections.StreamState.initial(params, y0, phi0=phi0)
+        if initial is None:
+            initial = sections.StreamState.initial(params, y0, phi0=phi0)
         try:
             saved, n = self.resume(initial.as_arrays(), force=force)
         except StoreError as exc:
@@ -207,12 +209,13 @@ class PanelStreams:
         #: {panel index: blocks stored by an earlier run}
         self.resumed: dict = {}
 
-    def resume(self, panel):
-        """The state ``panel`` continues from (blocks of another setting are stale: removed)."""
+    def resume(self, panel, initial=None):
+        """The state ``panel`` continues from (blocks of another setting are stale: removed);
+        ``initial``: its state before the first block (:meth:`BlockStream.resume_state`)."""
         bs = BlockStream(self.out, {"panel_hash": self.hashes[panel.index]}, index=panel.index)
         if self.force:
             bs.discard()
-        state, n = bs.resume_state(panel.P, panel.y0, phi0=self.phi0, force=True)
+        state, n = bs.resume_state(panel.P, panel.y0, phi0=self.phi0, force=True, initial=initial)
         self.streams[panel.index] = bs
         self.resumed[panel.index] = n
         return state
