@@ -99,7 +99,8 @@ def test_section_map_cells_outside_the_allowed_region_are_nan_and_neither_comput
 @pytest.mark.parametrize("kw, name", [({"resolution": 1}, "resolution"), ({"indicator": "megnoo"}, "indicator"),
                                       ({"tmax": 0.0}, "tmax"), ({"window": (1.0, 0.0, 0.0, 1.0)}, "window"),
                                       ({"tolerance": -1.0}, "tolerance"), ({"max_cells": 0}, "max_cells"),
-                                      ({"exact": "yes"}, "exact"), ({"coarse": 1}, "coarse")])
+                                      ({"exact": "yes"}, "exact"), ({"coarse": 1}, "coarse"),
+                                      ({"early_megno": 1.0}, "early_megno")])
 def test_bad_input_names_the_parameter(standard, kw, name):
     with pytest.raises(ex.ParameterError, match=name):
         ex.chaos_map(standard, **{"resolution": 8, "tmax": 10.0, **kw})

@@ -274,13 +274,14 @@ def _agree(raster: CellRaster, idx: np.ndarray, tolerance: float) -> tuple:
 def chaos_map(smap, resolution: int = 512, indicator: str = "megno", tmax: float = 1000.0, exact: bool = False,
               window=None, *, threshold: float | None = None, tolerance: float = TOLERANCE, coarse: int = COARSE,
               max_cells: int | None = None, threads: int | None = None, early_stop: bool = False,
-              center=None) -> ChaosMap:
+              early_megno: float | None = None, center=None) -> ChaosMap:
     """The map of ``indicator`` (of :data:`INDICATORS`) over ``tmax`` on a ``resolution``^2 raster of
     ``window`` (default: the map's ``domain``, the box of its allowed region): adaptive (the
     module's rule, from a lattice of about ``coarse`` cells a side) unless ``exact``.  Cells
     outside the allowed region are NaN, neither computed nor chaotic.  ``threshold`` (default
     :func:`default_threshold`) classifies; ``max_cells`` bounds the computed cells (refinement
-    stops there and the rest is filled); ``threads``, ``early_stop``: :func:`explorer.indicators`;
+    stops there and the rest is filled); ``threads``, ``early_stop``, ``early_megno`` (default
+    :func:`explorer.indicators`'): :func:`explorer.indicators`;
     frequency diffusion: N = ``tmax`` returns per half around ``center``
     (:func:`explorer.frequency_diffusion`; docs/chaos_map.md)."""
     n = validation.integer("resolution", resolution, 2, MAX_RESOLUTION)
@@ -295,15 +296,17 @@ def chaos_map(smap, resolution: int = 512, indicator: str = "megno", tmax: float
     centres = cell_centres(w, n)
     allowed = np.asarray(smap.allowed(centres), bool)
     if indicator == FREQUENCY:
-        if early_stop:
-            raise ParameterError("early_stop belongs to the tangent indicators (MEGNO, SALI); frequency_diffusion "
-                                 "has none")
+        if early_stop or early_megno is not None:
+            raise ParameterError("early_stop and early_megno belong to the tangent indicators (MEGNO, SALI); "
+                                 "frequency_diffusion has no early stop")
         options = {"center": center, "iterates": validation.integer("tmax", int(T) if T.is_integer() else T, 10),
                    "threads": threads}
     elif center is not None:
         raise ParameterError(f"center belongs to the indicator frequency_diffusion, not {indicator!r}")
     else:
         options = {"tmax": T, "threads": threads, "early_stop": bool(early_stop)}
+        if early_megno is not None:
+            options["early_megno"] = validation.real("early_megno", early_megno, 2.0, lo_open=True)
     raster = CellRaster(smap, centres, allowed, indicator, RULES[indicator], thr, options)
     if exact:
         r, c = np.nonzero(allowed)
