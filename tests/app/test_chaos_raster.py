@@ -75,3 +75,19 @@ def test_bad_lyapunov_keys_name_the_key(tmp_path, text, key):
                                   text))
     with pytest.raises(SceneError, match=key.replace("[", r"\[").replace("]", r"\]")):
         load_scene(str(path))
+
+
+def test_an_orbit_stopped_early_is_drawn_at_the_chaotic_end_and_its_stop_value_sets_no_scale():
+    """An early-stopped orbit is chaotic, its <Y> at the stop is not its <Y> at T: it is drawn at the
+    scale's dark end (MEGNO: the largest value of the orbits run to T), and that end ignores it."""
+    from explorer.app.chaos_raster import chaos_rasters
+
+    seeds = np.array([[0.25, 0.25], [0.75, 0.25], [0.25, 0.75], [0.75, 0.75]])
+    m = dict(seeds=seeds, values=np.array([2.0, 30.0, 5.0, 400.0]), grid=(2, 0.0, 1.0, 0.0, 1.0),
+             stopped=np.array([False, False, True, True]), label="stopped")
+    fig = chaos_rasters([m], indicator="megno")
+    im = fig.axes[0].images[0]
+    img = np.ma.filled(im.get_array(), np.nan)
+    assert im.norm.vmax == 30.0
+    assert img[1, 0] == 30.0 and img[1, 1] == 30.0 and img[0, 0] == 2.0
+    assert "50.0% stopped early" in " ".join(t.get_text() for t in fig.axes[0].texts)

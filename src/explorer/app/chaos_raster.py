@@ -67,6 +67,18 @@ def axis_label(name) -> str:
         (f"${name}$" if str(name).isalpha() else str(name))
 
 
+def _stopped(m) -> np.ndarray:
+    """Per seed: did its orbit stop early as chaotic (the map's ``stopped``, False when absent)?"""
+    values = np.asarray(m["values"], float)
+    s = m.get("stopped")
+    return np.zeros(values.shape, bool) if s is None else np.asarray(s, bool).reshape(values.shape)
+
+
+def _unstopped(m) -> np.ndarray:
+    """The map's values with its early-stopped orbits left out (NaN)."""
+    return np.where(_stopped(m), np.nan, np.asarray(m["values"], float))
+
+
 def chaos_rasters(maps, *, indicator="megno", threshold=4.0, columns=None, dpi=200, panel_width=PANEL_WIDTH):
     """One raster per map: dicts with ``seeds`` (N, 2), ``values`` (N,) of ``indicator``,
     ``grid`` (resolution, p1_lo, p1_hi, p2_lo, p2_hi), ``params``, ``h``, ``phi0``, ``label``,
@@ -85,9 +97,13 @@ def chaos_rasters(maps, *, indicator="megno", threshold=4.0, columns=None, dpi=2
     if n == 0:
         raise ValueError("chaos_rasters needs at least one map")
     label, log, vmin, vmax = SCALES[indicator]
+    free = [_unstopped(m) for m in maps]
     if vmax is None:
-        finite = [float(np.nanmax(m["values"])) for m in maps if np.isfinite(m["values"]).any()]
+        finite = [float(np.nanmax(v)) for v in free if np.isfinite(v).any()]
         vmax = max([vmin * 20 if log else 1.0] + finite)
+    # an orbit stopped early is chaotic (docs/scenes.md, early classification): its value at the stop
+    # is not its value at T, so it is drawn at the scale's chaotic end (the dark end of the colour map)
+    chaotic_end = vmax if STYLES[indicator].cmap.endswith("_r") else vmin
     norm = LogNorm(vmin=vmin, vmax=vmax) if log else Normalize(vmin=vmin, vmax=vmax)
     cmap = mpl.colormaps[STYLES[indicator].cmap].with_extremes(
         bad=FORBIDDEN_COLOR)
@@ -98,7 +114,8 @@ def chaos_rasters(maps, *, indicator="megno", threshold=4.0, columns=None, dpi=2
         im = None
         for ax, m in zip(axes, maps):
             res, a1, b1, a2, b2 = m["grid"]
-            vals = np.asarray(m["values"], float)
+            stopped = _stopped(m)
+            vals = np.where(stopped, chaotic_end, np.asarray(m["values"], float))
             if log:
                 vals = np.clip(vals, vmin, None)
             img = map_raster(np.asarray(m["seeds"], float), vals, m["grid"])
@@ -130,6 +147,8 @@ def chaos_rasters(maps, *, indicator="megno", threshold=4.0, columns=None, dpi=2
             size = f"{int(res)}$\\times${int(res)}"
             if m.get("computed") is not None and m["computed"] < 1.0:
                 size += f", {m['computed']:.1%} of cells computed (adaptive)"
+            if stopped.any():
+                size += f", {stopped.mean():.1%} stopped early (chaotic, drawn at the scale's end)"
             ax.text(0.01, 0.01, size, transform=ax.transAxes, fontsize=_TICK_SIZE - 1, va="bottom", ha="left", zorder=4)
         if im is not None:
             cb = fig.colorbar(im, ax=list(axes[:n]), shrink=0.9, pad=0.01)

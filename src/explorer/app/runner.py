@@ -90,6 +90,12 @@ def classify_megno(arrays):
     return np.where(np.asarray(early) > 0, np.finfo(float).max, m)
 
 
+def stopped_early(arrays):
+    """Per orbit: was it stopped early as chaotic (``lyapunov_early`` > 0; None without early stop)?"""
+    early = arrays.get("lyapunov_early")
+    return None if early is None else np.asarray(early) > 0
+
+
 def scene_class(scene) -> tuple:
     """(indicator, threshold) that classify the orbits of ``scene``'s panels (a map: its own)."""
     return sweep.panel_class(scene.lyapunov, bool(scene.lyapunov.map_resolution))
@@ -182,6 +188,7 @@ def draw_figure(scene, out_path, stem):
                 m["fraction"] = sweep.panel_fraction(m["extra"], *scene_class(scene))[0]
                 m["computed"] = computed_fraction(m["extra"])
                 m["classified"] = sweep.class_text(*scene_class(scene))
+                m["stopped"] = stopped_early(m["extra"])
             fig = chaos_rasters(rasters, indicator=ind, threshold=scene.lyapunov.threshold, columns=fs.columns,
                                 dpi=fs.dpi)
             paths += figures.save_figure(fig, stem.with_name(stem.name + "_map"), text=text)

@@ -22,7 +22,7 @@ def megno_map_figure(*, results_dir="results", quick=False, quiet=True) -> Drawn
     from explorer.analysis.lyapunov import chaotic_fraction
     from explorer.app.chaos_raster import chaos_rasters
     from explorer.app.paper._sweeps import _lyapunov_panels
-    from explorer.app.runner import classify_megno, computed_fraction
+    from explorer.app.runner import classify_megno, computed_fraction, stopped_early
 
     scene, out, reduced, _summary = ensure_sweep(PRESET, results_dir=results_dir, quick=quick, quiet=quiet)
     maps, _fr = _lyapunov_panels(scene, out)
@@ -32,6 +32,7 @@ def megno_map_figure(*, results_dir="results", quick=False, quiet=True) -> Drawn
         m["values"] = m["extra"][ind] if ind in m["extra"] else m["megno"]
         m["fraction"] = chaotic_fraction(classify_megno(m["extra"]), scene.lyapunov.threshold, m["valid"])[0]
         m["computed"] = computed_fraction(m["extra"])
+        m["stopped"] = stopped_early(m["extra"])
     fig = chaos_rasters(maps, indicator=ind, threshold=scene.lyapunov.threshold, columns=1, dpi=scene.figure.dpi)
     notes = [f"from {out}"]
     if reduced:
