@@ -194,19 +194,16 @@ def peak_table(seconds_per_kernel=0.8):
 # ----------------------------------------------------------------------------- 2. work per step
 def step_flops(order, tangent=False, nvec=1):
     """Flops of the vector part of one Taylor step of one orbit (one lane): the recurrence
-    (generator's count: the indicators module's recurrence has the operations of
-    ``tangent_coefficients_lanes``), the Horner sums (5 rows per vector: order mul + add each) and, for
+    (generator's count of ``taylor_coefficients_lanes``: the orbit's, or the indicators module's with
+    ``nvec`` vectors), the Horner sums (5 rows per vector: order mul + add each) and, for
     the crossings, ``_section_lanes``: the new state's sum and s(y) (15), a . X[k] for k = 0..order
     (10 each, + b), the tail bounds of s and s' (4 per term: orders 1..order and 2..order) and the two
     variation tests (3 each)."""
     if tangent:
-        c = gen_lanes.operation_counts("tangent_coefficients_lanes", order, tangent=True)
-        if nvec == 2:
-            d = gen_lanes.operation_counts("deviation_coefficients_lanes", order, tangent=True)
-            c = {k: c[k] + d[k] for k in c}
+        c = gen_lanes.operation_counts(order, nvec)
         rec = c["vadd"] + c["vsub"] + c["vmul"]
         return rec, rec + (1 + nvec) * 5 * 2 * order, c
-    c = gen_lanes.operation_counts("taylor_coefficients_lanes", order)
+    c = gen_lanes.operation_counts(order)
     rec = c["vadd"] + c["vsub"] + c["vmul"]
     section = 15 + 10 * (order + 1) + 1 + 4 * order + 4 * (order - 1) + 2 * 3
     return rec, rec + 5 * 2 * order + section, c

@@ -5,12 +5,11 @@ generator of every System (docs/systems.md), so the engine's recurrence is deriv
 
 - ``src/explorer/integrate/_lanes_generated.py``: the orbit, ``chaplygin.system()`` (5 rows);
   ``taylor_coefficients_into``/``taylor_coefficients``/``taylor_coefficients_lanes``.
-- ``src/explorer/integrate/_tangent_lanes_generated.py``: in the engine's 15-row array (the orbit,
-  then two deviation vectors from rows DEV1 = 5 and DEV2 = 10), the orbit and one deviation vector
-  (``tangent_coefficients*``: the orbit's decomposition extended by rows 5..9 of
-  ``chaplygin.variational(1)``, so the orbit's rows are R3's bit for bit), and the second deviation
-  vector alone (``deviation_coefficients*``: rows 10..14 of ``chaplygin.variational(2)``, from the
-  orbit's coefficients).
+- ``src/explorer/integrate/_tangent_lanes_generated.py``: the orbit and one deviation vector
+  (``tangent_coefficients``: the orbit's decomposition extended by rows 5..9 of
+  ``chaplygin.variational(1)``, so the orbit's rows are R3's bit for bit), scalar, for the DOP853,
+  splitting and return-map tangent loops (the Taylor indicators load ``chaplygin.variational``'s
+  own module, :func:`explorer.integrate.tangent.indicators_module`).
 - ``src/explorer/integrate/_systems_generated.py``: each method's one step for each system of the
   scalar drivers (:data:`SYSTEMS`), rendered from one template per method (:data:`STEPS`), so a
   driver calls its system's step by name (numba cannot cache a function that takes another
@@ -39,10 +38,8 @@ from explorer.model import chaplygin  # noqa: E402
 OUTPUT = ROOT / "src" / "explorer" / "integrate" / "_lanes_generated.py"
 TANGENT_OUTPUT = ROOT / "src" / "explorer" / "integrate" / "_tangent_lanes_generated.py"
 SYSTEMS_OUTPUT = ROOT / "src" / "explorer" / "integrate" / "_systems_generated.py"
-#: rows of the tangent lane array Z[k, row, lane]: the orbit, then up to two deviation vectors
-TANGENT_ROWS = 15
+#: first row of the deviation vector in the tangent array
 DEV1 = 5
-DEV2 = 10
 
 #: the one template of a generated file
 MODULE = '''\
@@ -50,16 +47,10 @@ MODULE = '''\
 # Written by tools/gen_lanes.py from {source} by explorer.integrate.codegen
 # (generator version {version}).
 # Regenerate:  python tools/gen_lanes.py     (check: --check)
-"""{doc}
-
-Each lane of a ``*_lanes`` kernel computes bit for bit what its scalar twin computes (the same
-IEEE operations in the same order; the vector operations of :mod:`explorer.integrate.simd`: no
-fast-math, no FMA).
-"""
+"""{doc}"""
 import numpy as np
 
 from explorer._jit import njit
-from explorer.integrate.simd import LANES, vload, vsplat, vstore, vzero  # noqa: F401
 
 {constants}
 
@@ -72,13 +63,8 @@ def _doc(what, rows, work):
             f"    with the parameters P (the packed vector) and the work array W[{work}, >= order].")
 
 
-def _lanes_doc(name, rows, work):
-    return (f"LANES orbits at once: rows {rows} of X[k, row, l] (C-contiguous, XS / LANES rows), k = 1..order,\n"
-            f"    W of shape (order + 1, max({work}, 1), LANES).  Each lane equals {name}_into bit for bit.")
-
-
 def _module(source, doc, constants, recurrences):
-    text = "\n\n".join(part for r in recurrences for part in (r.scalar, r.lanes))
+    text = "\n\n".join(r.scalar for r in recurrences)
     return MODULE.format(source=source, version=codegen.GENERATOR_VERSION, doc=doc, constants=constants,
                          recurrences=text)
 
@@ -116,38 +102,23 @@ def generate():
 
 
 def generate_tangent():
-    """``_tangent_lanes_generated.py``: the orbit and a deviation vector, and a second deviation
-    vector alone, scalar and on lanes, in the 15-row array."""
+    """``_tangent_lanes_generated.py``: the orbit and a deviation vector, scalar, in 10 rows."""
     orbit = chaplygin.system()
     one = chaplygin.variational(vectors=1)
-    two = chaplygin.variational(vectors=2)
-    # the orbit's own decomposition, extended by the first vector's equations: the orbit's rows are
-    # the same operations as in the orbit's recurrence, so R3's bit for bit
-    d = codegen.decompose(orbit)
-    codegen.decompose(one, one.rhs[DEV1:DEV1 + 5], into=d)
+    # the orbit's own decomposition, extended by the vector's equations: the orbit's rows are the
+    # same operations as in the orbit's recurrence, so R3's bit for bit
     tangent = codegen.recurrence(
-        one, "tangent_coefficients", decomposition=d, n_work="N_WORK_TANGENT", ws="WS_TANGENT",
+        one, "tangent_coefficients", decomposition=codegen.decompose_extending(orbit, one),
+        n_work="N_WORK_TANGENT", ws="WS_TANGENT",
         doc=_doc("R3 and its variational equations from X[:, 0] (rows 0..4: the orbit's recurrence's\n"
-                 "    operations, so its values)", "0..9", "N_WORK_TANGENT"),
-        lanes_doc=_lanes_doc("tangent_coefficients", "0..9", "N_WORK_TANGENT"))
-    rows = range(DEV2, DEV2 + 5)
-    deviation = codegen.recurrence(
-        two, "deviation_coefficients", [two.rhs[i] for i in rows], rows, n_work="N_WORK_TANGENT",
-        ws="WS_TANGENT",
-        doc=_doc("The second deviation vector alone (the orbit's coefficients given in rows 0..4)",
-                 f"{DEV2}..{DEV2 + 4}", "N_WORK_TANGENT"),
-        lanes_doc=_lanes_doc("deviation_coefficients", f"{DEV2}..{DEV2 + 4}", "N_WORK_TANGENT"))
-    work = max(tangent.n_work, deviation.n_work, 1)
-    constants = ("#: rows of the lane array: the orbit (5) and two deviation vectors (5 each)\n"
-                 f"NROWS = {TANGENT_ROWS}\n#: first row of each deviation vector\nDEV1 = {DEV1}\nDEV2 = {DEV2}\n"
-                 "#: rows of the work array W[k, r, l] of both recurrences (at least 1)\n"
-                 f"N_WORK_TANGENT = {work}\n"
-                 "#: flat strides of one order in the lane arrays X[k, i, l] and W[k, r, l]\n"
-                 "XS = NROWS * LANES\nWS_TANGENT = N_WORK_TANGENT * LANES")
-    return _module("explorer.model.chaplygin.system(), variational(1) and (2)",
-                   "The Taylor recurrence of R3 with deviation vectors (its variational equations), generated:\n"
-                   "the scalar form for :mod:`explorer.integrate.tangent`, the lane form its operations on\n"
-                   "LANES orbits at once (tests/integrate/test_tangent_lanes.py).", constants, [tangent, deviation])
+                 "    operations, so its values)", "0..9", "N_WORK_TANGENT"))
+    constants = (f"#: first row of the deviation vector\nDEV1 = {DEV1}\n"
+                 "#: rows of the work array W[k, r] of the recurrence (at least 1)\n"
+                 f"N_WORK_TANGENT = {max(tangent.n_work, 1)}")
+    return _module("explorer.model.chaplygin.system() and variational(1)",
+                   "The Taylor recurrence of R3 with a deviation vector (its variational equations), generated,\n"
+                   "for the tangent loops of :mod:`explorer.integrate.tangent` (docs/systems.md).", constants,
+                   [tangent])
 
 
 #: the systems of the scalar drivers: (suffix, what it is, its field dy = f(y) or None, its Taylor
@@ -155,8 +126,7 @@ def generate_tangent():
 SYSTEMS = (
     ("reduced", "R3 (docs/model.md), 5 variables", "rhs(y, P, dy)", "taylor_coefficients(P, X, order)",
      "apply_flow(flow_ids[i], y, P, fracs[i] * dt)"),
-    ("tangent", "R3 and one deviation vector (rows 5..9), 10 variables", "rhs_augmented(y, P, dy)",
-     "tangent_coefficients(P, X, order)",
+    ("tangent", "R3 and one deviation vector (rows 5..9), 10 variables", "rhs_augmented(y, P, dy)", None,
      "apply_flow_tangent(flow_ids[i], y[:N_ORBIT], y[N_ORBIT:], P, fracs[i] * dt)"),
     ("full", "R1 (docs/model.md) with the position, FULL_DIM variables", "rhs_full(y, P, dy)", None, None),
     # y(t0 - s) has the coefficients (-1)^k X_k of y(t0 + s), exactly
@@ -176,7 +146,6 @@ sub-flows, so a loop calls its system's step by name:
 """
 from explorer._jit import njit
 from explorer.integrate._lanes_generated import taylor_coefficients
-from explorer.integrate._tangent_lanes_generated import tangent_coefficients
 from explorer.integrate.systems import FIRST_STEP, N_ORBIT, STEP_OK, finite_column, reverse_time, rhs_augmented
 from explorer.kernels import STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW
 from explorer.kernels import dop853 as dp
@@ -315,21 +284,23 @@ def generate_systems():
     return SYSTEMS_MODULE.format(systems=names) + "".join(parts)
 
 
-def operation_counts(kernel, order, tangent=False):
-    """The vector operations one call of the generated lane ``kernel`` executes at ``order``:
-    {"vadd": n, "vsub": n, "vmul": n, "vneg": n, "vdiv": n}, each on one vector of LANES doubles (per
-    lane: that many scalar operations; a scalar's operations are not counted).  Counted by running the
-    generated text itself with one-lane stand-ins that count (benchmarks/bench_roofline.py divides the
-    flops of a step by these)."""
+def operation_counts(order, nvec=0):
+    """The vector operations one call of the generated lane recurrence ``taylor_coefficients_lanes``
+    executes at ``order``, of the orbit (``nvec = 0``, ``chaplygin.system()``) or of the indicators'
+    module with ``nvec`` deviation vectors (``chaplygin.variational(nvec)``, the orbit's decomposition
+    extended): {"vadd": n, "vsub": n, "vmul": n, "vneg": n, "vdiv": n}, each on one vector of LANES
+    doubles (per lane: that many scalar operations; a scalar's operations are not counted).  Counted by
+    running the generated text itself with one-lane stand-ins that count (benchmarks/bench_roofline.py
+    divides the flops of a step by these)."""
     import re
 
     import numpy as np
 
-    if tangent:
-        text = generate_tangent()
-    else:
-        r = codegen.recurrence(chaplygin.system())
-        text = f"NVAR = 5\nN_WORK = {r.n_work}\nXS = NVAR * LANES\nWS = max(N_WORK, 1) * LANES\n{r.lanes}"
+    orbit = chaplygin.system()
+    system = chaplygin.variational(vectors=nvec) if nvec else orbit
+    r = codegen.recurrence(system, decomposition=codegen.decompose_extending(orbit, system))
+    text = (f"NVAR = {system.dimension}\nN_WORK = {r.n_work}\nXS = NVAR * LANES\nWS = max(N_WORK, 1) * LANES\n"
+            f"{r.lanes}")
     text = re.sub(r"^from explorer\..*$", "", text, flags=re.M)
     counts = dict.fromkeys(("vadd", "vsub", "vmul", "vneg", "vdiv"), 0)
 
@@ -357,10 +328,9 @@ def operation_counts(kernel, order, tangent=False):
           "vload": lambda a, i: Vec(a.reshape(-1)[i]), "vstore": lambda a, i, v: a.reshape(-1).__setitem__(i, v.x),
           "vzero": lambda: Vec(0.0), "vsplat": lambda x: Vec(x), "taylor_coefficients_into": None}
     exec(compile(text, "<generated>", "exec"), ns)
-    rows = ns.get("NROWS", ns.get("NVAR"))
-    X = np.zeros((order + 1, rows, 1))
+    X = np.zeros((order + 1, system.dimension, 1))
     X[0] = 0.5
-    ns[kernel](np.ones(9), X, order, np.zeros((order + 1, 1, 1)))
+    ns["taylor_coefficients_lanes"](np.ones(9), X, order, np.zeros((order + 1, max(r.n_work, 1), 1)))
     return counts
 
 

@@ -112,16 +112,19 @@ def _plain_split(split_step, z0, P, dt, nsteps, flow_ids, fracs):
 
 
 def test_a_deviation_vector_never_changes_the_orbit_or_its_taylor_steps():
-    """The Taylor step is chosen from the orbit's own coefficients and the tangent recurrence
-    computes the orbit's as R3's: the orbit rows of the tangent system are R3's, step for step, bit for bit."""
-    y0 = model.section_state(PRM, [0.3], [0.1], 2.0)[0]
-    z0 = np.concatenate([y0, [1.0, -0.5, 0.2, 0.0, 0.0]])
-    y, ns, ty, cy = _plain_taylor(sg.taylor_step_reduced, y0, P, 41.7, 17, 10**5)
-    z, nz, tz, cz = _plain_taylor(sg.taylor_step_tangent, z0, P, 41.7, 17, 10**5)
-    assert ns == nz > 100 and cy == cz == 1
-    np.testing.assert_array_equal(ty, tz)
-    np.testing.assert_array_equal(z[:5], y)
-    assert np.all(np.isfinite(z[5:])) and np.linalg.norm(z[5:]) > 0
+    """The Taylor indicators' step is chosen from the orbit's own rows, whose recurrence is R3's: with one
+    or two deviation vectors their orbits end where the Taylor crossings' orbits end, after as many steps,
+    bit for bit."""
+    from explorer.analysis import lyapunov, sections
+
+    y0 = model.section_state(PRM, [0.3, 0.5], [0.1, 0.0], 2.0)
+    c = sections.crossings(PRM, states=y0, n_crossings=1000, method="taylor", tmax=41.7, direction=0, tol=1e-12)
+    for which in (("megno",), ("megno", "sali")):
+        r = lyapunov.indicators(PRM, states=y0, tmax=41.7, method="taylor", tol=1e-12, which=which)
+        assert np.all(r.steps > 100)
+        np.testing.assert_array_equal(r.steps, c.info[:, 1])
+        np.testing.assert_array_equal(r.final[:, :5], c.final)
+        assert np.all(np.isfinite(r.deviation[:, 0])) and np.all(np.linalg.norm(r.deviation[:, 0], axis=-1) > 0)
 
 
 def test_the_backward_system_retraces_the_forward_orbit():
@@ -140,20 +143,6 @@ def test_the_backward_system_retraces_the_forward_orbit():
     sg.taylor_coefficients_reduced(P, X, 7)
     sg.taylor_coefficients_backward(P, Xb, 7)
     np.testing.assert_array_equal(Xb, X * (-1.0) ** np.arange(8))
-
-
-def test_the_taylor_steps_deviation_is_the_flows_derivative():
-    """The tangent system's deviation after T is D Phi_T v0: central differences of R3's flow over the
-    same fixed number of steps (eps 1e-6, so agreement to ~1e-7 relative)."""
-    y0 = model.section_state(PRM, [0.3], [0.1], 2.0)[0]
-    v0 = np.array([0.3, -0.2, 0.1, 0.05, -0.04])
-    z0 = np.concatenate([y0, v0])
-    z, _, _, _ = _plain_taylor(sg.taylor_step_tangent, z0, P, 7.3, 20, 10**5)
-    e = 1e-6
-    yp, _, _, _ = _plain_taylor(sg.taylor_step_reduced, y0 + e * v0, P, 7.3, 20, 10**5)
-    ym, _, _, _ = _plain_taylor(sg.taylor_step_reduced, y0 - e * v0, P, 7.3, 20, 10**5)
-    fd = (yp - ym) / (2 * e)
-    np.testing.assert_allclose(z[5:], fd, rtol=1e-6, atol=1e-6 * np.linalg.norm(fd))
 
 
 def test_split_steps_of_tangent_carry_reduceds_orbit_and_its_derivative():

@@ -22,7 +22,7 @@ from explorer.kernels import indicator_table as table
 from explorer.kernels import taylor as tk
 
 ROOT = Path(__file__).resolve().parents[2]
-L = G.LANES
+L = lanes.LANES
 
 
 def test_generated_tangent_file_is_up_to_date(tmp_path):
@@ -37,37 +37,39 @@ def test_generated_tangent_file_is_up_to_date(tmp_path):
 @pytest.mark.parametrize("name", sorted(PARAM_SETS))
 @pytest.mark.parametrize("order", [4, 20])
 def test_tangent_lane_kernels_match_the_scalar_recurrence_bitwise(name, order):
-    """Every lane of the generated lane kernels of _tangent_lanes_generated (the orbit and a vector; a second
-    vector alone) is their scalar twin, and so is each lane of the indicator module's recurrence (its rows the
-    orbit's and the vectors' of the engine's recurrence, explorer.integrate.codegen.decompose_extending)."""
+    """Every lane of the indicator module's recurrence (one and two vectors) is its scalar twin, its orbit
+    and first vector rows the engine's tangent recurrence (_tangent_lanes_generated, the orbit's
+    decomposition extended: explorer.integrate.codegen.decompose_extending), and Horner on lanes is
+    kernels.taylor.evaluate on each lane's rows."""
     P = PARAM_SETS[name].as_array()
     rng = np.random.default_rng(order)
-    Z = np.zeros((order + 1, G.NROWS, L))
-    Z[0, :5] = random_states(PARAM_SETS[name], L, seed=order, scale=2.0).T
-    Z[0, 5:] = rng.normal(size=(10, L))
-    Z[0, :, 0] = 0.0      # an idle lane
-    X = {nvec: np.ascontiguousarray(Z[:, :5 * (1 + nvec)]) for nvec in (1, 2)}
-    work = np.zeros((order + 1, G.N_WORK_TANGENT, L))
-    G.tangent_coefficients_lanes(P, Z, order, work)
-    G.deviation_coefficients_lanes(P, Z, order, work)
-    for nvec, Xv in X.items():
-        mod = tangent.indicators_module(nvec)
-        mod.taylor_coefficients_lanes(P, Xv, order, np.zeros((order + 1, max(mod.N_WORK, 1), L)))
-        np.testing.assert_array_equal(Xv, Z[:, :Xv.shape[1]])
+    Z0 = np.zeros((15, L))
+    Z0[:5] = random_states(PARAM_SETS[name], L, seed=order, scale=2.0).T
+    Z0[5:] = rng.normal(size=(10, L))
+    Z0[:, 0] = 0.0      # an idle lane
     h = rng.uniform(0.0, 0.5, L)
-    out = np.empty((G.NROWS, L))
-    for base in (0, G.DEV1, G.DEV2):
-        lanes.evaluate_lanes(Z, order, h, out, base)
-    for l in range(L):
-        S = np.zeros((G.NROWS, order + 1))
-        S[:, 0] = Z[0, :, l]
-        G.tangent_coefficients(P, S[:10], order)
-        G.deviation_coefficients(P, S, order)
-        np.testing.assert_array_equal(S.T, Z[:, :, l])
-        for rows in (slice(0, 5), slice(5, 10), slice(10, 15)):
-            y = np.empty(5)
-            tk.evaluate(S[rows], order, h[l], y)
-            np.testing.assert_array_equal(y, out[rows, l])
+    for nvec in (1, 2):
+        mod = tangent.indicators_module(nvec)
+        rows = 5 * (1 + nvec)
+        X = np.zeros((order + 1, rows, L))
+        X[0] = Z0[:rows]
+        mod.taylor_coefficients_lanes(P, X, order, np.zeros((order + 1, max(mod.N_WORK, 1), L)))
+        out = np.empty((rows, L))
+        for base in range(0, rows, 5):
+            lanes.evaluate_lanes(X, order, h, out, base)
+        for l in range(L):
+            S = np.zeros((rows, order + 1))
+            S[:, 0] = Z0[:rows, l]
+            mod.taylor_coefficients(P, S, order)
+            np.testing.assert_array_equal(S.T, X[:, :, l])
+            E = np.zeros((10, order + 1))
+            E[:, 0] = Z0[:10, l]
+            G.tangent_coefficients(P, E, order)
+            np.testing.assert_array_equal(E, S[:10])
+            for r in range(0, rows, 5):
+                y = np.empty(5)
+                tk.evaluate(S[r:r + 5], order, h[l], y)
+                np.testing.assert_array_equal(y, out[r:r + 5, l])
 
 
 # ---------------------------------------------------------------- whole batches

@@ -12,7 +12,6 @@ sub-flows, so a loop calls its system's step by name:
 """
 from explorer._jit import njit
 from explorer.integrate._lanes_generated import taylor_coefficients
-from explorer.integrate._tangent_lanes_generated import tangent_coefficients
 from explorer.integrate.systems import FIRST_STEP, N_ORBIT, STEP_OK, finite_column, reverse_time, rhs_augmented
 from explorer.kernels import STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW
 from explorer.kernels import dop853 as dp
@@ -182,35 +181,6 @@ def dop853_dense_stages_tangent(y, P, K, h, tmp):
     for s in range(13, 16):
         dp.stage_input(y, K, s, h, tmp)
         field_tangent(tmp, P, K[s])
-
-
-@njit(inline="always")
-def taylor_coefficients_tangent(P, X, order):
-    """X[i, k] = y_i^(k)/k!, k = 0..order, from X[:, 0]: R3 and one deviation vector (rows 5..9), 10 variables."""
-    tangent_coefficients(P, X, order)
-
-
-@njit(inline="always")
-def taylor_step_tangent(X, P, t, tend, end_code, order, factor, steps, max_steps, ynew):
-    """One step of the adaptive Taylor method of ``order`` (Jorba & Zou 2005) from X[:, 0] at time ``t``
-    towards ``tend``, its size from the orbit's rows; ``end_code`` (h = 0) when ``t`` has reached ``tend``.
-    Returns (code, h, last, steps)."""
-    if not (t < tend):
-        return end_code, 0.0, False, steps
-    if steps >= max_steps:
-        return STATUS_MAX_STEPS, 0.0, False, steps
-    taylor_coefficients_tangent(P, X, order)
-    if not (finite_column(X, order, N_ORBIT) and finite_column(X, order - 1, N_ORBIT)):
-        return STATUS_NONFINITE, 0.0, False, steps
-    h = tk.step_size(X[:N_ORBIT], order, factor)
-    h, last = clip_step(t, h, tend)
-    if not resolves(t, h):
-        return STATUS_STEP_UNDERFLOW, 0.0, False, steps
-    tk.evaluate(X, order, h, ynew)
-    steps += 1
-    if not all_finite(ynew):
-        return STATUS_NONFINITE, h, last, steps
-    return STEP_OK, h, last, steps
 
 
 @njit(inline="always")
