@@ -32,6 +32,7 @@ import pytest
 
 from explorer import model
 from explorer.analysis import sections
+from explorer.analysis.system_sections import DRIVER_THREADS
 from explorer.app.serve import export, tasks
 from explorer.app.serve import settings as settings_mod
 from explorer.app.serve.orbits import FIRST_BLOCK, OrbitRun, Worker
@@ -1316,14 +1317,20 @@ def test_shift_click_on_a_crossing_in_the_browser_shows_that_orbits_readout(serv
 
 
 # ---------------------------------------------------------------- faults: the server keeps serving, memory returns
+#: the shared executors' bound: the page's workers, its loop, the generated drivers' threads
+POOL_THREADS = tasks.WORKERS + 1 + DRIVER_THREADS
+
+
 def _threads():
-    """(threads outside the shared executors of app/serve/tasks.py, threads of those executors):
+    """(threads outside the shared executors of app/serve/tasks.py and of the generated drivers
+    (analysis/system_sections.py), threads of those executors):
     the page may start no thread of its own per task; the executors are bounded (tasks.WORKERS) and
     keep as many threads as calls ever ran at once (a cancelled task's last block may still be
     finishing beside its successor's), so only the first count must stay flat."""
     import threading
 
-    pool = [t for t in threading.enumerate() if t.name.startswith(("explorer-serve", "explorer-page-loop"))]
+    pool = [t for t in threading.enumerate()
+            if t.name.startswith(("explorer-serve", "explorer-page-loop", "explorer-driver"))]
     return threading.active_count() - len(pool), len(pool)
 
 
@@ -1376,7 +1383,7 @@ def test_five_hundred_clicks_leave_the_session_with_bounded_memory_and_threads(m
             heap.append(tracemalloc.get_traced_memory()[0])
         # no thread per click: the orbits and their indicators run in the shared executor (tasks.py)
         others, pool = _threads()
-        assert others <= others0 and pool <= tasks.WORKERS + 1, (others0, others, pool)
+        assert others <= others0 and pool <= POOL_THREADS, (others0, others, pool)
         assert paused > 0                                          # paused orbits were held, and let go
         growth = heap[-1] - heap[1]
         print(f"heap after each round (kB): {[h // 1024 for h in heap]}; growth {growth / 1024:.0f} kB; "
@@ -1411,7 +1418,7 @@ def test_fifty_clicks_and_five_megno_toggles_start_no_thread_of_their_own():
             page.poll()
             others, pool = _threads()
             most = max(most, others)
-            assert pool <= tasks.WORKERS + 1, pool
+            assert pool <= POOL_THREADS, pool
         page.orbit_list.resume()
         page.settle()
         assert len(page.orbits.crossings.data["t"]) == 50 * CLICK_CROSSINGS and _idle(page)

@@ -354,6 +354,13 @@ def check_memory(what: str, need: int, hint: str) -> None:
                              f"(this machine has {validation.human_bytes(mem)}); {hint}")
 
 
+#: the threads that run a driver's workers beside the calling thread, shared by every call (numba's
+#: thread count less one): a call starts no thread of its own, so a long-lived caller (the page) keeps
+#: a fixed set of threads
+DRIVER_THREADS = max(1, max_threads() - 1)
+_POOL = ThreadPoolExecutor(max_workers=DRIVER_THREADS, thread_name_prefix="explorer-driver")
+
+
 def run_driver(mod, name: str, n: int, driver: str, threads, args: tuple) -> None:
     """The generated driver ``name`` of module ``mod`` on ``n`` orbits with ``args``: ``<name>_taylor_worker``
     (the scalar form) or ``<name>_lanes_worker`` (groups of LANES lanes, :func:`driver_for`), on ``threads``
@@ -369,11 +376,10 @@ def run_driver(mod, name: str, n: int, driver: str, threads, args: tuple) -> Non
     if workers == 1:
         worker(queue, *args)
         return
-    with ThreadPoolExecutor(workers - 1) as pool:       # this thread is the last worker
-        others = [pool.submit(worker, queue, *args) for _ in range(workers - 1)]
-        worker(queue, *args)
-        for done in others:
-            done.result()
+    others = [_POOL.submit(worker, queue, *args) for _ in range(workers - 1)]   # this thread is the last worker
+    worker(queue, *args)
+    for done in others:
+        done.result()
 
 
 def driver_for(n: int, driver: str = "auto", threads: int | None = None) -> int:
