@@ -741,13 +741,16 @@ def source(system: System, key: str = "", orbit: System | None = None) -> str:
     scalars = _indent(e.scalar_lines(), 4)
     order0 = _indent(e.order0_lines(), 4)
     r = recurrence(system, decomposition=None if orbit is None else d)
+    lanes, n_work = r.lanes, r.n_work
+    if orbit is not None and system.dimension > 2 * orbit.dimension:
+        lanes, n_work = _blocked_lanes(orbit, system, n_work)
     rhs_out = _indent([f"dy[{i}] = {e.output(o, 0)}" for i, o in enumerate(d.outputs)], 4)
     equations = "\n".join(f"#   d{s.name}/dt = {f}" for s, f in zip(system.states, system.rhs))
     equations += "\n#   parameters: " + (", ".join(p.name for p in system.parameters) or "none")
     text = MODULE.format(version=GENERATOR_VERSION, name=system.name, key=key, equations=equations,
                          and_energy=" and energy" if system.energy is not None else "", dim=dim,
-                         n_params=len(system.parameters), n_work=r.n_work, scalars=scalars, order0=order0,
-                         rhs_out=rhs_out, scalar_recurrence=r.scalar, lanes_recurrence=r.lanes)
+                         n_params=len(system.parameters), n_work=n_work, scalars=scalars, order0=order0,
+                         rhs_out=rhs_out, scalar_recurrence=r.scalar, lanes_recurrence=lanes)
     if system.energy is not None:
         de = decompose(system, [system.energy])
         ee = _Emitter(de)
@@ -756,6 +759,30 @@ def source(system: System, key: str = "", orbit: System | None = None) -> str:
     for template in TEMPLATES:
         text += template.render(system)
     return text
+
+
+def _blocked_lanes(orbit: System, system: System, n_work: int):
+    """The SIMD recurrence of :func:`decompose_extending` in loops over the orders of its blocks: the
+    orbit with the first block, then each further block alone from the orbit's rows (the same values:
+    tests/integrate/test_tangent_lanes.py); one loop over all rows keeps more vectors live than
+    registers hold, and its stack spills run slower when the stack is not 64-byte aligned.  Returns
+    (the source, the work rows of the largest)."""
+    n = orbit.dimension
+    head = decompose(orbit)
+    decompose(system, system.rhs[n:2 * n], into=head)
+    parts = [recurrence(system, "_block0", decomposition=head)]
+    for k in range(2 * n, system.dimension, n):
+        parts.append(recurrence(system, f"_block{k // n - 1}", system.rhs[k:k + n], range(k, k + n)))
+    calls = "\n".join(f"    _block{i}_lanes(P, X, order, W)" for i in range(len(parts)))
+    text = "\n\n".join(p.lanes for p in parts)
+    text += f'''
+
+@njit(error_model="numpy")
+def taylor_coefficients_lanes(P, X, order, W):
+    """{LANES_DOC}"""
+{calls}
+'''
+    return text, max(n_work, *(p.n_work for p in parts))
 
 
 # ---------------------------------------------------------------------- cache
@@ -793,7 +820,7 @@ def module_key(system: System, orbit: System | None = None) -> str:
     the ``orbit`` of :func:`load`."""
     text = f"{system.flow_hash} generator {GENERATOR_VERSION} callees {_callee_digest()}"
     if orbit is not None:
-        text += f" orbit {orbit.flow_hash}"
+        text += f" orbit {orbit.flow_hash} in blocks"   # _blocked_lanes
     return hashlib.sha256(text.encode()).hexdigest()[:32]
 
 
