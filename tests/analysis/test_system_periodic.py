@@ -156,7 +156,7 @@ def test_what_a_systems_map_lacks_is_refused_naming_it(smap):
         smap.generating_function(0.0, 0.1)
     with pytest.raises(ex.ParameterError, match="needs guess"):
         gm.symmetric_orbit(smap, 1, 5)
-    assert smap.own_indicators(ELLIPTIC_GUESS, tmax=1.0) is None      # its flow's: explorer.indicators
+    assert smap.own_indicators(ELLIPTIC_GUESS, {"tmax": 1.0}) is None      # its flow's: explorer.indicators
 
 
 def test_the_elliptic_point_is_continued_in_the_energy(smap, elliptic):

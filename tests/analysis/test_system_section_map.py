@@ -95,8 +95,8 @@ def test_analyses_that_do_not_take_a_system_say_so_naming_the_function():
     hh = henon_heiles()
     smap = ex.SectionMap(hh, E, section=x, direction=+1, coords=(y, py), solve=px)
     Y0 = by_hand(POINTS[:1])
-    calls = {   # each names the function and what to use for a System instead
-        "iter_crossings": (lambda: next(ex.iter_crossings(hh, states=Y0, n_crossings=2)), "explorer.crossings"),
+    calls = {   # each names the function and what to use for a System instead (iter_crossings streams
+        # a System: tests/analysis/test_system_sections.py)
         "propagate": (lambda: ex.propagate(hh, states=Y0, t=1.0), "explorer.flow"),
     }
     for name, (call, instead) in calls.items():

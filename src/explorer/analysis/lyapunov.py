@@ -143,10 +143,10 @@ def indicators(system, y0=None, *, tmax: float = DEFAULT_TIME, method: str | Non
             system, y0, tmax=tmax, method=method, tol=tol, dt=dt, history=history, v0=v0, w0=w0, max_steps=max_steps,
             threads=threads, which=check_which(which), early_stop=early_stop, early_sali=early_sali,
             early_megno=early_megno, early_time=early_time, states=states, phi0=phi0, h=h))
-    own = None if is_params(system) else system.own_indicators(
-        y0, tmax=tmax, which=check_which(which), threads=threads, early_stop=early_stop, early_megno=early_megno,
+    own = None if is_params(system) else system.own_indicators(y0, dict(
+        tmax=tmax, which=check_which(which), threads=threads, early_stop=early_stop, early_megno=early_megno,
         early_time=early_time, v0=v0, history=history, max_steps=max_steps, method=method, tol=tol, dt=dt, w0=w0,
-        phi0=phi0, h=h)
+        phi0=phi0, h=h))
     if own is not None:   # the map's own tangent map (the standard map, docs/chaos_map.md)
         return Indicators(**own)
     dt = DEFAULT_DT if dt is None else dt

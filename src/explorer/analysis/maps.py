@@ -77,7 +77,7 @@ class AreaPreservingMap(Protocol):
 
     def generating_function(self, theta, theta_next): ...
 
-    def own_indicators(self, points, **settings): ...
+    def own_indicators(self, points, settings: dict): ...
 
 
 def with_value(system, name: str, value):
@@ -377,8 +377,8 @@ class StandardMap:
                                    max_steps=max_steps, flow={"method": method, "tol": tol, "dt": dt, "w0": w0,
                                                               "phi0": phi0, "h": h})
 
-    def own_indicators(self, points, **settings) -> dict:
-        """:meth:`indicators`: the map has its own tangent map."""
+    def own_indicators(self, points, settings: dict) -> dict:
+        """:meth:`indicators` with the keywords ``settings``: the map has its own tangent map."""
         return self.indicators(points, **settings)
 
     def not_finite(self, x) -> str:

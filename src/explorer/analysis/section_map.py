@@ -220,7 +220,7 @@ class SectionMap:
                 out[i] = y[:2]
         return out
 
-    def own_indicators(self, points, **settings):
+    def own_indicators(self, points, settings: dict):
         """None: the map's chaos indicators are its flow's (:func:`explorer.indicators` integrates them)."""
         return None
 

@@ -376,13 +376,11 @@ class _MapCells:
             self.arrays[k][rows] = v
         return rows, ind
 
-    def own_indicators(self, y0, **_ignored):
+    def own_indicators(self, y0, settings: dict):
         import dataclasses
 
         ind = self._compute(y0)[1]
         return {f.name: getattr(ind, f.name) for f in dataclasses.fields(ind)}
-
-    indicators = own_indicators   # the name explorer.indicators asks a map with its own indicators for
 
     def lifted_increments(self, points, center, n, threads):
         """Frequency diffusion's returns (explorer.frequency_diffusion) of the cells' own seeds on the

@@ -513,7 +513,7 @@ class SystemSectionMap:
         out[ok] = Y[:, [ia, ib]]
         return out
 
-    def own_indicators(self, points, **settings):
+    def own_indicators(self, points, settings: dict):
         """None: the map's chaos indicators are its flow's (:func:`explorer.indicators` integrates them)."""
         return None
 
