@@ -250,6 +250,49 @@ def test_a_systems_megno_map_is_adaptive_its_computed_cells_the_exact_maps_bit_f
     assert f"map cells computed {int(done.sum())} of {len(done)}" in format_report(report)
 
 
+def test_a_systems_frequency_diffusion_is_that_of_its_seeds_on_the_panels_section_map_and_its_map_adaptive(
+        tmp_path, monkeypatch):
+    """docs/scenes.md, "A scene of your own system": [lyapunov] indicators = ["frequency_diffusion"] of
+    a System's scene stores explorer.frequency_diffusion of each seed on the panel's section map (its
+    returns at [lyapunov] tol, around ``center``, N = ``diffusion_iterates``) bit for bit, for seeds
+    and, its map adaptive as the others, for the computed cells of a map of it (the rest filled)."""
+    from systems import henon_heiles
+
+    from explorer.analysis import sweep
+    from explorer.io.scene import parse_scene
+
+    monkeypatch.setattr(sweep, "MAP_COARSE", 4)         # a 16-cell map from a lattice of 4 a side
+    hh = henon_heiles()
+    x, y, px, py = hh.states
+    smap = ex.SectionMap(hh, E, section=x, direction=1, coords=(y, py), solve=px, tol=1e-12)
+    fd = 'indicators = ["frequency_diffusion"]\ncenter = [0.0, 0.0]\ndiffusion_iterates = 50\n'
+    base = ADAPTIVE_SCENE.replace("time = 100.0", "time = 10.0")
+    seeded = base.replace("map_resolution = 32\n", fd).replace("[seeds]\n", f"[seeds]\npoints = {POINTS}\n"
+                                                                         'kind = "points"\n')
+    ex.run_sweep(parse_scene(seeded, system=hh), tmp_path / "s.h5", progress=False)
+    pd = store.read_store(tmp_path / "s.h5").panels[0]
+    np.testing.assert_array_equal(pd.seeds, POINTS)
+    np.testing.assert_array_equal(pd.extra["frequency_diffusion"],
+                                  ex.frequency_diffusion(smap, POINTS, center=(0.0, 0.0), iterates=50))
+    assert np.isfinite(pd.extra["megno"]).all()
+    mapped = base.replace("map_resolution = 32", "map_resolution = 16") + fd \
+        + 'map_indicator = "frequency_diffusion"\n'
+    ex.run_sweep(parse_scene(mapped, system=hh), tmp_path / "m.h5", progress=False)
+    pd = store.read_store(tmp_path / "m.h5").panels[0]
+    done = pd.extra["map_computed"]
+    assert 0.2 < done.mean() < 1 and pd.attrs["class_indicator"] == "frequency_diffusion"
+    np.testing.assert_array_equal(pd.extra["frequency_diffusion"][done],
+                                  ex.frequency_diffusion(smap, pd.seeds[done], center=(0.0, 0.0), iterates=50))
+    assert np.isfinite(pd.extra["frequency_diffusion"][~done]).all()                 # the filled cells
+
+
+def test_a_systems_frequency_diffusion_without_a_center_is_refused_naming_it(workdir, capsys):
+    (workdir / "fd.toml").write_text(SCENE + '[compute]\nlyapunov = true\n[lyapunov]\nindicators = '
+                                             '["frequency_diffusion"]\n')
+    code, _out, err = run(["sweep", "fd.toml", "--system", f"{MODULE}:hh", "--out", "res/fd.h5", "--quiet"], capsys)
+    assert code == 2 and "lyapunov.center" in err and len(err.strip().splitlines()) == 1
+
+
 ATLAS_T = 100.0
 ATLAS_SCENE = SCENE.replace("[integration]", f"""[atlas]
 parameter = "energy"

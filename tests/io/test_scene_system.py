@@ -132,7 +132,8 @@ def test_the_section_is_read_as_arithmetic_of_the_systems_symbols_and_nothing_is
     (('kind = "points"', 'kind = "grid"'), "seeds.window"),
     (("[seeds]", "[model]\nmu = 1.0\n[seeds]"), "model"),
     (("[0.5, 1.0]", "[0.5, 0.5]"), "sweep.values[1]"),
-    (("[seeds]", "[lyapunov]\nindicators = [\"frequency_diffusion\"]\n[seeds]"), "lyapunov.indicators[0]"),
+    (("[seeds]", "[lyapunov]\nindicators = [\"frequency_diffusion\"]\n[seeds]"), "lyapunov.center"),
+    (("[seeds]", "[lyapunov]\nindicators = [\"lyapunov\"]\n[seeds]"), "lyapunov.indicators[0]"),
     (("[seeds]", "[lyapunov]\nmap_indicator = \"fli\"\n[seeds]"), "lyapunov.map_indicator"),
     (("[seeds]", "[compute]\nsections = false\nlyapunov = true\nseparatrices = true\n[seeds]"),
      "compute.separatrices"),
@@ -210,3 +211,18 @@ def test_an_atlas_crosses_the_swept_parameter_with_the_energy_cell_by_cell():
 def test_a_bad_system_atlas_is_refused_naming_the_key(edit, key):
     with pytest.raises(SceneError, match=key.replace("[", r"\[").replace(".", r"\.")):
         parse_scene(ATLAS.replace(*edit))
+
+
+def test_a_systems_frequency_diffusion_hashes_follow_its_center_and_iterates():
+    """As Chaplygin's (docs/scenes.md): [lyapunov] center and diffusion_iterates enter the indicators'
+    hashes when frequency_diffusion is asked for, and a scene without it keeps its hashes."""
+    text = SCENE + "[compute]\nlyapunov = true\n[lyapunov]\ntime = 10.0\n"
+    fd = text + 'indicators = ["frequency_diffusion"]\ncenter = [0.0, 0.0]\ndiffusion_iterates = 50\n'
+
+    def hashes(t):
+        return parse_scene(t).product_hashes(0)["indicators"]
+
+    assert parse_scene(fd).lyapunov.frequency_diffusion == {"center": [0.0, 0.0], "iterates": 50, "tol": 1e-12}
+    assert hashes(text) == hashes(text + "center = [0.1, 0.0]\ndiffusion_iterates = 60\n")
+    assert len({hashes(fd), hashes(text), hashes(fd.replace("[0.0, 0.0]", "[0.1, 0.0]")),
+                hashes(fd.replace("= 50", "= 60"))}) == 4

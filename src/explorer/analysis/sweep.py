@@ -295,12 +295,12 @@ def panel_frequency_diffusion(spec: SweepSpec, panel: PanelSpec, a: int, b: int,
     return _frequency_diffusion(spec, panel, panel.seeds[a:b], threads)
 
 
-def _frequency_diffusion(spec, panel, seeds, threads):
+def _frequency_diffusion(spec, panel, seeds, threads, smap=None):
     from explorer.analysis.rotation import frequency_diffusion
 
     fd = spec.lyapunov.frequency_diffusion
-    return frequency_diffusion(spec.section_map(panel), seeds, center=fd["center"], iterates=fd["iterates"],
-                               threads=threads)
+    smap = spec.section_map(panel) if smap is None else smap
+    return frequency_diffusion(smap, seeds, center=fd["center"], iterates=fd["iterates"], threads=threads)
 
 
 def map_rule() -> dict:
@@ -665,15 +665,16 @@ class SystemSweepSpec:
         return _block_arrays(i, a, it, state, self.columns(panel.system))
 
     def indicator_arrays(self, panel, rows, threads=None, diffusion: bool = True) -> tuple:
-        """(Indicators, arrays) of the seeds ``rows`` of ``panel`` (:func:`system_indicator_arrays`;
-        a System's scene has no frequency diffusion)."""
-        return system_indicator_arrays(self, panel, rows, threads)
+        """(Indicators, arrays) of the seeds ``rows`` of ``panel`` (:func:`system_indicator_arrays`)."""
+        return system_indicator_arrays(self, panel, rows, threads, diffusion=diffusion)
 
     def section_map(self, panel):
+        """The section map of ``panel``; with frequency diffusion its returns at [lyapunov] tol (as Chaplygin's)."""
         from explorer.analysis.system_section_map import SystemSectionMap
 
+        fd = None if self.lyapunov is None else self.lyapunov.frequency_diffusion
         return SystemSectionMap(panel.system, panel.h, section=self.section, direction=self.direction,
-                                coords=self.coords, solve=self.solve)
+                                coords=self.coords, solve=self.solve, **({} if fd is None else {"tol": fd["tol"]}))
 
     def columns(self, system) -> list:
         """The columns of a System's crossing row (t, x_1..x_n, E - E0) stored as the panel's rows:
@@ -807,13 +808,19 @@ def system_task(spec: SystemSweepSpec, i: int, threads: int | None = None) -> di
     return out
 
 
-def system_indicator_arrays(spec: SystemSweepSpec, panel, rows, threads=None, smap=None) -> tuple:
-    """(Indicators, arrays) of the seeds ``rows`` of a System's ``panel`` (each orbit alone)."""
+def system_indicator_arrays(spec: SystemSweepSpec, panel, rows, threads=None, smap=None,
+                            diffusion: bool = True) -> tuple:
+    """(Indicators, arrays) of the seeds ``rows`` of a System's ``panel`` (each orbit alone); frequency
+    diffusion (:func:`explorer.analysis.rotation.frequency_diffusion` on the panel's section map) only
+    with ``diffusion``."""
     from explorer.analysis.lyapunov import indicators
 
     ly = spec.lyapunov
     smap = spec.section_map(panel) if smap is None else smap
-    ind = indicators(smap, panel.seeds[rows], tmax=ly.time, tol=ly.tol, which=tuple(ly.indicators), threads=threads)
-    out = {k: ind.values[k] for k in ly.indicators}
+    which = tuple(q for q in ly.indicators if indicator_table.BY_NAME[q].tangent)
+    ind = indicators(smap, panel.seeds[rows], tmax=ly.time, tol=ly.tol, which=which, threads=threads)
+    out = {k: ind.values[k] for k in which}
     out.update(lyapunov_status=ind.status, lyapunov_dh=ind.energy_error)
+    if ly.frequency_diffusion is not None and diffusion:
+        out["frequency_diffusion"] = _frequency_diffusion(spec, panel, panel.seeds[rows], threads, smap)
     return ind, out

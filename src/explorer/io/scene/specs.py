@@ -213,16 +213,7 @@ class LyapunovSpec:
         object.__setattr__(self, "map_indicator",
                            _choice("lyapunov.map_indicator", self.map_indicator, LYAPUNOV_INDICATORS))
         object.__setattr__(self, "exact", _bool("lyapunov.exact", self.exact))
-        if self.center is not None:
-            c = _list("lyapunov.center", self.center)
-            if len(c) != 2:
-                _fail("lyapunov.center", f"must be a point [p1, p2] (two numbers), got {len(c)} items")
-            object.__setattr__(self, "center", (_real("lyapunov.center[0]", c[0]), _real("lyapunov.center[1]", c[1])))
-        object.__setattr__(self, "diffusion_iterates", _int("lyapunov.diffusion_iterates", self.diffusion_iterates,
-                                                            10, MAX_DIFFUSION_ITERATES))
-        if self.center is None and self._orbit_names():
-            _fail("lyapunov.center", "is required with the indicator frequency_diffusion: the point [p1, p2] its "
-                  "rotation numbers turn around, e.g. the elliptic fixed point of the island studied (docs/greene.md)")
+        self._check_diffusion()
         if self.early_stop and self.method not in EARLY_STOP_METHODS:
             _fail("lyapunov.method", f"must be {' or '.join(repr(n) for n in EARLY_STOP_METHODS)} for early_stop; "
                   f"got {self.method!r}")
@@ -236,6 +227,19 @@ class LyapunovSpec:
     @property
     def adaptive(self) -> bool:
         return adaptive_map(self)
+
+    def _check_diffusion(self):
+        """``center`` a point [p1, p2], required with frequency_diffusion, and ``diffusion_iterates`` N."""
+        if self.center is not None:
+            c = _list("lyapunov.center", self.center)
+            if len(c) != 2:
+                _fail("lyapunov.center", f"must be a point [p1, p2] (two numbers), got {len(c)} items")
+            object.__setattr__(self, "center", (_real("lyapunov.center[0]", c[0]), _real("lyapunov.center[1]", c[1])))
+        object.__setattr__(self, "diffusion_iterates", _int("lyapunov.diffusion_iterates", self.diffusion_iterates,
+                                                            10, MAX_DIFFUSION_ITERATES))
+        if self.center is None and self._orbit_names():
+            _fail("lyapunov.center", "is required with the indicator frequency_diffusion: the point [p1, p2] its "
+                  "rotation numbers turn around, e.g. the elliptic fixed point of the island studied (docs/greene.md)")
 
     @property
     def second_vector(self) -> bool:

@@ -36,16 +36,24 @@ from explorer.io.scene.checks import (
 )
 from explorer.io.scene.core import Scene
 from explorer.io.scene.hashes import _canonical_json, _sha256
-from explorer.io.scene.schema import _FIGURE_KEYS, _MANIFOLD_KEYS, FORMAT_VERSION, MAX_MAP_RESOLUTION, MAX_SEEDS
+from explorer.io.scene.schema import (
+    _FIGURE_KEYS,
+    _MANIFOLD_KEYS,
+    DEFAULT_DIFFUSION_ITERATES,
+    FORMAT_VERSION,
+    MAX_MAP_RESOLUTION,
+    MAX_SEEDS,
+)
 from explorer.io.scene.specs import (
     FigureSpec,
+    LyapunovSpec,
     ManifoldSpec,
     SeedSpec,
     adaptive_map,
     adaptive_settings,
     class_settings,
 )
-from explorer.kernels.indicator_table import TANGENT_NAMES
+from explorer.kernels.indicator_table import NAMES as INDICATOR_NAMES
 from explorer.model import ParameterError
 
 #: the keys of a System's scene (Chaplygin's [model] and [energy] h are not among them)
@@ -54,7 +62,8 @@ SYSTEM_TOP_KEYS = ("name", "description", "system", "section", "direction", "coo
 SYSTEM_SEED_KINDS = ("grid", "random", "points")
 _SEED_KEYS = ("kind", "n", "seed", "points", "window")
 _INTEGRATION_KEYS = ("method", "crossings", "tol", "tmax", "max_steps")
-_LYAPUNOV_KEYS = ("time", "tol", "threshold", "map_resolution", "indicators", "map_indicator", "exact")
+_LYAPUNOV_KEYS = ("time", "tol", "threshold", "map_resolution", "indicators", "map_indicator", "exact", "center",
+                  "diffusion_iterates")
 _COMPUTE_KEYS = ("sections", "lyapunov", "separatrices")
 #: the swept name of the energy level (a parameter of the system may not take it)
 ENERGY = "energy"
@@ -243,7 +252,8 @@ class SystemLyapunov:
     ``tol``) of every seed, or of the cell centres of a ``map_resolution``^2 raster of [seeds]
     window, drawn by ``map_indicator``; ``threshold`` classifies by <Y> (a map by its own indicator,
     :func:`explorer.analysis.sweep.panel_class`).  A map is adaptive unless ``exact``
-    (:func:`explorer.io.scene.specs.adaptive_map`, as Chaplygin's)."""
+    (:func:`explorer.io.scene.specs.adaptive_map`, as Chaplygin's).  frequency_diffusion needs
+    ``center`` and takes ``diffusion_iterates``, as Chaplygin's (:class:`~explorer.io.scene.specs.LyapunovSpec`)."""
 
     time: float = 1000.0
     tol: float = 1e-12
@@ -252,6 +262,8 @@ class SystemLyapunov:
     indicators: tuple = ("megno",)
     map_indicator: str = "megno"
     exact: bool = False
+    center: tuple | None = None
+    diffusion_iterates: int = DEFAULT_DIFFUSION_ITERATES
 
     # a System's indicators: the Taylor method, no early classification
     method = "taylor"
@@ -261,6 +273,10 @@ class SystemLyapunov:
     def adaptive(self) -> bool:
         return adaptive_map(self)
 
+    _check_diffusion = LyapunovSpec._check_diffusion
+    _orbit_names = LyapunovSpec._orbit_names
+    frequency_diffusion = LyapunovSpec.frequency_diffusion
+
     def __post_init__(self):
         from explorer.analysis import sections
 
@@ -269,10 +285,11 @@ class SystemLyapunov:
         object.__setattr__(self, "threshold", _real("lyapunov.threshold", self.threshold, 2.0, lo_open=True))
         object.__setattr__(self, "map_resolution",
                            _int("lyapunov.map_resolution", self.map_resolution, 0, MAX_MAP_RESOLUTION))
-        names = [_choice(f"lyapunov.indicators[{i}]", q, TANGENT_NAMES)
+        names = [_choice(f"lyapunov.indicators[{i}]", q, INDICATOR_NAMES)
                  for i, q in enumerate(_list("lyapunov.indicators", self.indicators))]
         object.__setattr__(self, "indicators", tuple(dict.fromkeys(["megno", *names])))
         object.__setattr__(self, "exact", _bool("lyapunov.exact", self.exact))
+        self._check_diffusion()
         if self.map_indicator not in self.indicators:
             _fail("lyapunov.map_indicator", f"must be one of lyapunov.indicators {list(self.indicators)}; "
                   f"got {_short(self.map_indicator)}")
@@ -283,6 +300,8 @@ class SystemLyapunov:
             d["map_resolution"] = self.map_resolution
         if self.adaptive:   # which cells are computed depends on the class threshold and the rule
             d["adaptive"] = adaptive_settings(self)
+        if self.frequency_diffusion is not None:
+            d["frequency_diffusion"] = self.frequency_diffusion
         return d
 
 
