@@ -54,7 +54,7 @@ def indicators_orbit(y0, v0, w0, n, nvec, P, T, order, max_steps, early_stop, sa
                      hist_t, hist, res, ext, wout, yout):
     """The orbit from y0 and nvec (1 or 2) deviation vectors from v0, w0 (made unit) over the time T
     by the adaptive Taylor method of ``order`` on the variational system (Jorba & Zou 2005; the step
-    from the orbit's rows only, as the engine's taylor_step_tangent, so the vectors do not change
+    from the orbit's rows only, as the crossings' taylor step of the orbit, so the vectors do not change
     the orbit), the vectors renormalised after every step and the indicators accumulated by
     kernels.tangent (the engine's formulas and columns).  Returns (status, steps); res the result
     row, ext (SALI, GALI_2, early code; NaN without a second vector), wout the final unit vectors,
