@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 from explorer.analysis import sections
 from explorer.analysis.lyapunov import EARLY_STOP_METHODS, methods_for
@@ -163,8 +164,43 @@ def adaptive_settings(ly) -> dict:
     return dict(map_rule(), indicator=ly.map_indicator, threshold=map_threshold(ly))
 
 
+class DiffusionSettings:
+    """Frequency diffusion's keys of a ``[lyapunov]`` table (``center``, ``diffusion_iterates``), shared by
+    Chaplygin's :class:`LyapunovSpec` and a System's (docs/scenes.md)."""
+
+    indicators: tuple
+    center: Any
+    diffusion_iterates: int
+    tol: float
+
+    def _check_diffusion(self):
+        """``center`` a point [p1, p2], required with frequency_diffusion, and ``diffusion_iterates`` N."""
+        if self.center is not None:
+            c = _list("lyapunov.center", self.center)
+            if len(c) != 2:
+                _fail("lyapunov.center", f"must be a point [p1, p2] (two numbers), got {len(c)} items")
+            object.__setattr__(self, "center", (_real("lyapunov.center[0]", c[0]), _real("lyapunov.center[1]", c[1])))
+        object.__setattr__(self, "diffusion_iterates", _int("lyapunov.diffusion_iterates", self.diffusion_iterates,
+                                                            10, MAX_DIFFUSION_ITERATES))
+        if self.center is None and self._orbit_names():
+            _fail("lyapunov.center", "is required with the indicator frequency_diffusion: the point [p1, p2] its "
+                  "rotation numbers turn around, e.g. the elliptic fixed point of the island studied (docs/greene.md)")
+
+    def _orbit_names(self) -> list:
+        """The indicators asked for that the section map's returns give (frequency diffusion)."""
+        return [q for q in self.indicators if INDICATOR_BY_NAME[q].row == ORBIT]
+
+    @property
+    def frequency_diffusion(self) -> dict | None:
+        """The settings of the indicator frequency_diffusion when asked for (None otherwise): its
+        centre, N and the Taylor tolerance of its section returns (``tol``, whatever the method)."""
+        if self.center is None or not self._orbit_names():   # (__post_init__ refuses it without a centre)
+            return None
+        return {"center": list(self.center), "iterates": self.diffusion_iterates, "tol": self.tol}
+
+
 @dataclass(frozen=True)
-class LyapunovSpec:
+class LyapunovSpec(DiffusionSettings):
     """[lyapunov]: the chaos indicators of every seed (docs/scenes.md): integration settings and the
     MEGNO threshold above which an orbit counts as chaotic."""
 
@@ -228,19 +264,6 @@ class LyapunovSpec:
     def adaptive(self) -> bool:
         return adaptive_map(self)
 
-    def _check_diffusion(self):
-        """``center`` a point [p1, p2], required with frequency_diffusion, and ``diffusion_iterates`` N."""
-        if self.center is not None:
-            c = _list("lyapunov.center", self.center)
-            if len(c) != 2:
-                _fail("lyapunov.center", f"must be a point [p1, p2] (two numbers), got {len(c)} items")
-            object.__setattr__(self, "center", (_real("lyapunov.center[0]", c[0]), _real("lyapunov.center[1]", c[1])))
-        object.__setattr__(self, "diffusion_iterates", _int("lyapunov.diffusion_iterates", self.diffusion_iterates,
-                                                            10, MAX_DIFFUSION_ITERATES))
-        if self.center is None and self._orbit_names():
-            _fail("lyapunov.center", "is required with the indicator frequency_diffusion: the point [p1, p2] its "
-                  "rotation numbers turn around, e.g. the elliptic fixed point of the island studied (docs/greene.md)")
-
     @property
     def second_vector(self) -> bool:
         """SALI or GALI_2 asked for: two deviation vectors."""
@@ -249,18 +272,6 @@ class LyapunovSpec:
     def _two_vector_names(self) -> list:
         """The indicators asked for that need two deviation vectors (the registry's EXTRA row)."""
         return sorted(q for q in self.indicators if INDICATOR_BY_NAME[q].vectors == 2)
-
-    def _orbit_names(self) -> list:
-        """The indicators asked for that the section map's returns give (frequency diffusion)."""
-        return [q for q in self.indicators if INDICATOR_BY_NAME[q].row == ORBIT]
-
-    @property
-    def frequency_diffusion(self) -> dict | None:
-        """The settings of the indicator frequency_diffusion when asked for (None otherwise): its
-        centre, N and the Taylor tolerance of its section returns (``tol``, whatever the method)."""
-        if self.center is None or not self._orbit_names():   # (__post_init__ refuses it without a centre)
-            return None
-        return {"center": list(self.center), "iterates": self.diffusion_iterates, "tol": self.tol}
 
     def to_dict(self) -> dict:
         d = {k: getattr(self, k) for k in _LYAPUNOV_KEYS}

@@ -45,8 +45,8 @@ from explorer.io.scene.schema import (
     MAX_SEEDS,
 )
 from explorer.io.scene.specs import (
+    DiffusionSettings,
     FigureSpec,
-    LyapunovSpec,
     ManifoldSpec,
     SeedSpec,
     adaptive_map,
@@ -247,7 +247,7 @@ class SystemIntegration:
 
 
 @dataclass(frozen=True)
-class SystemLyapunov:
+class SystemLyapunov(DiffusionSettings):
     """[lyapunov] of a System's scene: ``indicators`` (MEGNO <Y> always) over ``time`` (Taylor
     ``tol``) of every seed, or of the cell centres of a ``map_resolution``^2 raster of [seeds]
     window, drawn by ``map_indicator``; ``threshold`` classifies by <Y> (a map by its own indicator,
@@ -273,9 +273,6 @@ class SystemLyapunov:
     def adaptive(self) -> bool:
         return adaptive_map(self)
 
-    _check_diffusion = LyapunovSpec._check_diffusion
-    _orbit_names = LyapunovSpec._orbit_names
-    frequency_diffusion = LyapunovSpec.frequency_diffusion
 
     def __post_init__(self):
         from explorer.analysis import sections
