@@ -14,7 +14,7 @@ from explorer import model
 from explorer.analysis import budget, system_sections
 from explorer.analysis.crossings_run import run
 from explorer.analysis.flow_lift import lifted_increments
-from explorer.analysis.map_result import RETURN_TMAX, MapResult
+from explorer.analysis.map_result import RETURN_TMAX, FlowSection, MapResult
 from explorer.analysis.section_symmetry import grid_seeds, half_turn_partners, half_turn_seeds
 from explorer.analysis.symmetry_lines import half_turn_orbit
 from explorer.integrate.methods import MAP_TOL, MAX_TOL, MIN_TOL
@@ -38,7 +38,7 @@ SERIAL_RETURNS = 4096
 SEARCH_TMAX = 50.0
 
 
-class SectionMap:
+class SectionMap(FlowSection):
     """The section map P of phi = ``phi0`` at energy ``h``: ``smap(x)`` is a :class:`MapResult`
     (P(x), DP(x), the return time); ParameterError for no return within ``tmax``.
     ``SectionMap(system, E, section=, direction=, coords=, solve=)`` with a System is that
@@ -219,15 +219,6 @@ class SectionMap:
             else:
                 out[i] = y[:2]
         return out
-
-    def own_indicators(self, points, settings: dict):
-        """None: the map's chaos indicators are its flow's (:func:`explorer.indicators` integrates them)."""
-        return None
-
-    def generating_function(self, theta, theta_next):
-        """None known: ParameterError (a section of a flow, not a twist map given by its generating function)."""
-        raise ParameterError(f"{self!r} has no generating function: it is the section map of a flow, not a twist "
-                             "map given by F(theta, theta') (docs/greene.md)")
 
     def symmetric_orbit(self, p, q, *, line=None, guess=None):
         """The symmetric orbit of period ``q`` through (``guess``, 0) on p2 = 0 of the half phi0 = ``line``

@@ -38,7 +38,7 @@ import numbers
 
 import numpy as np
 
-from explorer.analysis.map_result import RETURN_TMAX, MapResult
+from explorer.analysis.map_result import RETURN_TMAX, FlowSection, MapResult
 from explorer.analysis.maps import grid_minima, returns_increments
 from explorer.analysis.symmetry_lines import half_turn_orbit, symmetric_seeds
 from explorer.analysis.system_sections import is_system, linear_section, system_crossings
@@ -159,7 +159,7 @@ class _Linear:
         return f"_Linear({self.M.tolist()})"
 
 
-class SystemSectionMap:
+class SystemSectionMap(FlowSection):
     """The section map of ``system`` on its energy level ``energy_value``: points ``(a, b)`` of
     ``coords`` on ``section = 0``, crossed in ``direction``; ``solve`` from the energy (module
     docstring).  ``states(points)`` lifts points; ``explorer.crossings(smap, points,
@@ -512,15 +512,6 @@ class SystemSectionMap:
             Y = np.where(reached[:, None], data[:, 0, 1:1 + self.system.dimension], np.nan)
         out[ok] = Y[:, [ia, ib]]
         return out
-
-    def own_indicators(self, points, settings: dict):
-        """None: the map's chaos indicators are its flow's (:func:`explorer.indicators` integrates them)."""
-        return None
-
-    def generating_function(self, theta, theta_next):
-        """None known: ParameterError (a section of a flow, not a twist map given by its generating function)."""
-        raise ParameterError(f"{self!r} has no generating function: it is the section map of a flow, not a twist "
-                             "map given by F(theta, theta') (docs/greene.md)")
 
     def symmetric_orbit(self, p, q, *, line=None, guess=None):
         """The symmetric orbit of period ``q`` through ``guess`` v on the fixed line of the linear reversor, on
