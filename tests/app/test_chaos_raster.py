@@ -77,9 +77,10 @@ def test_bad_lyapunov_keys_name_the_key(tmp_path, text, key):
         load_scene(str(path))
 
 
-def test_an_orbit_stopped_early_is_drawn_at_the_chaotic_end_and_its_stop_value_sets_no_scale():
+def test_an_orbit_stopped_early_is_drawn_at_the_chaotic_end_and_a_megno_scale_saturates_at_the_stop_level():
     """An early-stopped orbit is chaotic, its <Y> at the stop is not its <Y> at T: it is drawn at the
-    scale's dark end (MEGNO: the largest value of the orbits run to T), and that end ignores it."""
+    scale's dark end (the largest value of the orbits run to T, which ignores it; with the stop's level
+    known, a MEGNO scale ends there, so cells filled from stopped ones are dark too)."""
     from explorer.app.chaos_raster import chaos_rasters
 
     seeds = np.array([[0.25, 0.25], [0.75, 0.25], [0.25, 0.75], [0.75, 0.75]])
@@ -91,3 +92,6 @@ def test_an_orbit_stopped_early_is_drawn_at_the_chaotic_end_and_its_stop_value_s
     assert im.norm.vmax == 30.0
     assert img[1, 0] == 30.0 and img[1, 1] == 30.0 and img[0, 0] == 2.0
     assert "50.0% stopped early" in " ".join(t.get_text() for t in fig.axes[0].texts)
+    # stopped at <Y> > 5 (the scene's early_megno): the scale saturates there, filled cells alike
+    im = chaos_rasters([dict(m, stop_level=5.0)], indicator="megno").axes[0].images[0]
+    assert im.norm.vmax == 5.0 and np.ma.filled(im.get_array(), np.nan)[1, 1] == 5.0

@@ -67,6 +67,10 @@ def axis_label(name) -> str:
         (f"${name}$" if str(name).isalpha() else str(name))
 
 
+#: the colour bar's ticks of a MEGNO scale saturated at an early stop's level
+SATURATED_TICKS = (0.5, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0, 15.0, 20.0)
+
+
 def _stopped(m) -> np.ndarray:
     """Per seed: did its orbit stop early as chaotic (the map's ``stopped``, False when absent)?"""
     values = np.asarray(m["values"], float)
@@ -101,6 +105,12 @@ def chaos_rasters(maps, *, indicator="megno", threshold=4.0, columns=None, dpi=2
     if vmax is None:
         finite = [float(np.nanmax(v)) for v in free if np.isfinite(v).any()]
         vmax = max([vmin * 20 if log else 1.0] + finite)
+    # MEGNO maps whose chaotic orbits stopped early at <Y> > level: the scale saturates at the level, so the
+    # stopped orbits and the cells filled from them are drawn alike (their <Y> at the stop is not <Y>(T))
+    levels = [m["stop_level"] for m in maps if m.get("stop_level") and _stopped(m).any()]
+    saturated = indicator == "megno" and bool(levels)
+    if saturated:
+        vmax = min(levels)
     # an orbit stopped early is chaotic (docs/scenes.md, early classification): its value at the stop
     # is not its value at T, so it is drawn at the scale's chaotic end (the dark end of the colour map)
     chaotic_end = vmax if STYLES[indicator].cmap.endswith("_r") else vmin
@@ -148,10 +158,17 @@ def chaos_rasters(maps, *, indicator="megno", threshold=4.0, columns=None, dpi=2
             if m.get("computed") is not None and m["computed"] < 1.0:
                 size += f", {m['computed']:.1%} of cells computed (adaptive)"
             if stopped.any():
-                size += f", {stopped.mean():.1%} stopped early (chaotic, drawn at the scale's end)"
-            ax.text(0.01, 0.01, size, transform=ax.transAxes, fontsize=_TICK_SIZE - 1, va="bottom", ha="left", zorder=4)
+                size += f"\n{stopped.mean():.1%} stopped early (chaotic)"
+                if saturated:
+                    size += rf", $\langle Y\rangle$ > {vmax:g}: the scale's top"
+            ax.text(0.01, 0.01, size, transform=ax.transAxes, fontsize=_TICK_SIZE - 1, va="bottom", ha="left", zorder=4,
+                    in_layout=False)
         if im is not None:
-            cb = fig.colorbar(im, ax=list(axes[:n]), shrink=0.9, pad=0.01)
+            cb = fig.colorbar(im, ax=list(axes[:n]), shrink=0.9, pad=0.01, extend="max" if saturated else "neither")
             cb.set_label(label, fontsize=_FONT_SIZE)
+            if saturated:   # a short log scale: plain ticks, not powers of ten
+                cb.ax.minorticks_off()
+                ticks = [v for v in SATURATED_TICKS if vmin <= v <= vmax]
+                cb.set_ticks(ticks, labels=[f"{v:g}" for v in ticks])
             cb.ax.tick_params(labelsize=_TICK_SIZE)
     return fig

@@ -189,6 +189,7 @@ def draw_figure(scene, out_path, stem):
                 m["computed"] = computed_fraction(m["extra"])
                 m["classified"] = sweep.class_text(*scene_class(scene))
                 m["stopped"] = stopped_early(m["extra"])
+                m["stop_level"] = scene.lyapunov.early_megno if scene.lyapunov.early_stop else None
             fig = chaos_rasters(rasters, indicator=ind, threshold=scene.lyapunov.threshold, columns=fs.columns,
                                 dpi=fs.dpi)
             paths += figures.save_figure(fig, stem.with_name(stem.name + "_map"), text=text)

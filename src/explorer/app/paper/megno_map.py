@@ -33,6 +33,7 @@ def megno_map_figure(*, results_dir="results", quick=False, quiet=True) -> Drawn
         m["fraction"] = chaotic_fraction(classify_megno(m["extra"]), scene.lyapunov.threshold, m["valid"])[0]
         m["computed"] = computed_fraction(m["extra"])
         m["stopped"] = stopped_early(m["extra"])
+        m["stop_level"] = scene.lyapunov.early_megno if scene.lyapunov.early_stop else None
     fig = chaos_rasters(maps, indicator=ind, threshold=scene.lyapunov.threshold, columns=1, dpi=scene.figure.dpi)
     notes = [f"from {out}"]
     if reduced:
