@@ -15,6 +15,11 @@ def _empty_region() -> dict:
     return {"x": [], "y": [], "width": [], "height": []}
 
 
+#: ms after a wheel or pan step at which BokehJS ends its interactive mode and sends the new window
+#: (RangesUpdate): Bokeh's default, 500, delays every zoom's first raster by half a second
+LOD_TIMEOUT_MS = 100
+
+
 class SectionView:
     """The figure, the ``region`` source (the allowed ellipse: x, y, width, height) and the window."""
 
@@ -26,7 +31,7 @@ class SectionView:
                      x_range=Range1d(-1.0, 1.0), y_range=Range1d(-1.0, 1.0),
                      tools="pan,wheel_zoom,box_zoom,reset,save", active_scroll="wheel_zoom",
                      x_axis_label="p1", y_axis_label="p2", background_fill_color=style.FORBIDDEN_COLOR,
-                     toolbar_location="above")
+                     toolbar_location="above", lod_timeout=LOD_TIMEOUT_MS)
         fig.ellipse("x", "y", width="width", height="height", source=self.region, fill_color=style.ALLOWED_COLOR,
                     line_color=style.BOUNDARY_COLOR, line_width=1.0)
         # a region without a closed form (a System's map): its mask, white where allowed
