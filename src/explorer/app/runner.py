@@ -84,10 +84,24 @@ def classify_megno(arrays):
     """<Y> for classifying orbits: an orbit stopped early as chaotic (``lyapunov_early`` > 0) counts
     as above every threshold."""
     m = np.asarray(arrays["megno"], float)
-    early = arrays.get("lyapunov_early")
-    if early is None:
-        return m
-    return np.where(np.asarray(early) > 0, np.finfo(float).max, m)
+    early = stopped_early(arrays)
+    return m if early is None else np.where(early, np.finfo(float).max, m)
+
+
+def raster_maps(scene, maps) -> list:
+    """The map panels of ``maps`` (those with a grid) as :func:`explorer.app.chaos_raster.chaos_rasters`
+    draws them: the values of ``map_indicator``, the panel's class and fraction, the cells computed,
+    the orbits stopped early and the stop's level."""
+    ly = scene.lyapunov
+    rasters = [m for m in maps if m.get("grid")]
+    for m in rasters:
+        m["values"] = m["extra"][ly.map_indicator] if ly.map_indicator in m["extra"] else m["megno"]
+        m["fraction"] = sweep.panel_fraction(m["extra"], *scene_class(scene))[0]
+        m["computed"] = computed_fraction(m["extra"])
+        m["classified"] = sweep.class_text(*scene_class(scene))
+        m["stopped"] = stopped_early(m["extra"])
+        m["stop_level"] = ly.early_megno if ly.early_stop else None
+    return rasters
 
 
 def stopped_early(arrays):
@@ -178,18 +192,11 @@ def draw_figure(scene, out_path, stem):
     paths = list(figures.save_figure(fig, stem, text=text))
     if "lyapunov" in scene.compute:
         maps, fractions = lyapunov_panels(scene, data)
-        rasters = [m for m in maps if m.get("grid")]
+        rasters = raster_maps(scene, maps)
         if rasters:
             from explorer.app.chaos_raster import chaos_rasters
 
             ind = scene.lyapunov.map_indicator
-            for m in rasters:
-                m["values"] = m["extra"][ind] if ind in m["extra"] else m["megno"]
-                m["fraction"] = sweep.panel_fraction(m["extra"], *scene_class(scene))[0]
-                m["computed"] = computed_fraction(m["extra"])
-                m["classified"] = sweep.class_text(*scene_class(scene))
-                m["stopped"] = stopped_early(m["extra"])
-                m["stop_level"] = scene.lyapunov.early_megno if scene.lyapunov.early_stop else None
             fig = chaos_rasters(rasters, indicator=ind, threshold=scene.lyapunov.threshold, columns=fs.columns,
                                 dpi=fs.dpi)
             paths += figures.save_figure(fig, stem.with_name(stem.name + "_map"), text=text)

@@ -19,21 +19,14 @@ def quick_note(scene) -> str:
 
 
 def megno_map_figure(*, results_dir="results", quick=False, quiet=True) -> Drawn:
-    from explorer.analysis.lyapunov import chaotic_fraction
     from explorer.app.chaos_raster import chaos_rasters
     from explorer.app.paper._sweeps import _lyapunov_panels
-    from explorer.app.runner import classify_megno, computed_fraction, stopped_early
+    from explorer.app.runner import raster_maps
 
     scene, out, reduced, _summary = ensure_sweep(PRESET, results_dir=results_dir, quick=quick, quiet=quiet)
     maps, _fr = _lyapunov_panels(scene, out)
-    maps = [m for m in maps if m.get("grid")]
+    maps = raster_maps(scene, maps)
     ind = scene.lyapunov.map_indicator
-    for m in maps:
-        m["values"] = m["extra"][ind] if ind in m["extra"] else m["megno"]
-        m["fraction"] = chaotic_fraction(classify_megno(m["extra"]), scene.lyapunov.threshold, m["valid"])[0]
-        m["computed"] = computed_fraction(m["extra"])
-        m["stopped"] = stopped_early(m["extra"])
-        m["stop_level"] = scene.lyapunov.early_megno if scene.lyapunov.early_stop else None
     fig = chaos_rasters(maps, indicator=ind, threshold=scene.lyapunov.threshold, columns=1, dpi=scene.figure.dpi)
     notes = [f"from {out}"]
     if reduced:
