@@ -1,7 +1,6 @@
-"""A page's background work on asyncio (docs/architecture.md, "The page"): :class:`Session` runs
-each kind of work as one latest-wins asyncio task on the session's event loop; the numba work of a
-task runs in :data:`EXECUTOR` (``Session.run``, the kernels release the GIL) and its results are
-applied in the task, on the loop, with the session's document locked (``Session.apply``).
+"""A page's background work on asyncio (docs/architecture.md, "The page"): :class:`Session` runs each kind of
+work as one latest-wins task on the session's loop, its numba work in the shared :data:`EXECUTOR`
+(``Session.run``: the kernels release the GIL), its results applied with the document locked (``Session.apply``).
 """
 from __future__ import annotations
 
@@ -33,9 +32,8 @@ def _in_budget(budget: Budget | None, fn, *args):
 
 
 class Session:
-    """The event loop of a page: a server's (``doc``, the page's Bokeh document, in a server
-    session), else a loop of its own that :meth:`poll` and :meth:`settle` run (a notebook, a
-    script, the tests; without a server, results apply at once)."""
+    """The event loop of a page: a server's (``doc``, the page's Bokeh document, in a server session), else
+    a loop of its own that :meth:`poll` and :meth:`settle` run (without a document, results apply at once)."""
 
     def __init__(self, doc=None):
         self.doc, self.closed, self.applied = doc, False, 0
@@ -45,13 +43,12 @@ class Session:
                 self.loop, self.own = asyncio.get_running_loop(), False
         if self.loop is None:
             self.loop = asyncio.new_event_loop()
-        self._tasks: dict[str, tuple[asyncio.Task, Budget | None]] = {}
-        self.waiting: set = set()         # pending timers and watcher calls
+        self._tasks: dict[object, tuple[asyncio.Task, Budget | None]] = {}
+        self.waiting: set[asyncio.Task] = set()         # pending watcher calls
 
-    # ------------------------------------------------------------ tasks
-    def start(self, name: str, coro, budget: Budget | None = None, on_error=None) -> asyncio.Task | None:
-        """Task ``name`` anew (latest wins): ``coro`` replaces the running one, its :meth:`run` calls in
-        ``budget``; an exception goes to ``on_error(exc)``, a budget that ran out ends it quietly."""
+    def start(self, name, coro, budget: Budget | None = None, on_error=None) -> asyncio.Task | None:
+        """Task ``name`` (a kind of work, or a :class:`Timer`) anew, latest wins: ``coro`` replaces the running
+        one, its :meth:`run` calls in ``budget``; an exception goes to ``on_error(exc)`` (a spent budget: none)."""
         self.cancel(name)
         if self.closed:
             coro.close()
@@ -62,19 +59,20 @@ class Session:
         return task
 
     def _ended(self, on_error, task) -> None:
+        self.waiting.discard(task)
         exc = None if task.cancelled() else task.exception()
         if exc is None or isinstance(exc, BudgetExceeded):
             return
         if on_error is None:
-            _log.error("explorer serve: a task failed", exc_info=exc)
+            _log.error("explorer serve: a page's work failed", exc_info=exc)
         else:
             self.soon(partial(on_error, exc))
 
-    def running(self, name: str) -> bool:
+    def running(self, name) -> bool:
         t = self._tasks.get(name)
         return t is not None and not t[0].done()
 
-    def cancel(self, name: str) -> None:
+    def cancel(self, name) -> None:
         """Task ``name`` stops (at its next await; its budget's compiled loops at their next step)."""
         task, budget = self._tasks.pop(name, (None, None))
         if task is not None:
@@ -103,39 +101,33 @@ class Session:
         self.applied += 1
 
     def soon(self, fn) -> None:
-        """From a widget watcher (Panel calls them outside the document's lock): ``fn()`` on the
-        loop with the lock; at once when no server owns the document."""
+        """From a widget watcher (Panel calls them outside the document's lock): ``fn()`` on the loop with the
+        lock; at once without a document."""
         if self.doc is None:
             fn()
             self.applied += 1
         elif not self.closed:
             task = self.loop.create_task(self.apply(fn))
             self.waiting.add(task)
-            task.add_done_callback(self._done)
-
-    def _done(self, task) -> None:
-        self.waiting.discard(task)
-        if not task.cancelled() and task.exception() is not None:
-            _log.error("explorer serve: a page callback failed", exc_info=task.exception())
+            task.add_done_callback(partial(self._ended, None))
 
     def timer(self, action) -> Timer:
         return Timer(self, action)
 
-    # ------------------------------------------------------------ a loop of its own
     def poll(self, seconds: float = 0.01) -> bool:
-        """Run a loop of its own for ``seconds``; returns whether anything was applied since the
-        last call (a notebook's periodic callback pushes the page then)."""
+        """Run a loop of its own for ``seconds``; returns whether anything was applied since the last call (a
+        notebook pushes the page then)."""
         if self.own and not self.loop.is_closed():
             self._drive(asyncio.sleep(seconds))
         applied, self.applied = self.applied, 0
         return bool(applied)
 
     def busy(self) -> bool:
-        """A task or a timer is pending."""
+        """A task, a timer or a watcher call is pending."""
         return any(not t.done() for t, _b in self._tasks.values()) or bool(self.waiting)
 
     def settle(self, timeout: float = 240.0) -> None:
-        """Run a loop of its own until no task or timer is pending (TimeoutError after ``timeout``)."""
+        """Run a loop of its own until nothing is pending (TimeoutError after ``timeout``)."""
         async def idle():
             while self.busy():
                 await asyncio.sleep(0.005)
@@ -157,33 +149,30 @@ class Session:
 
 
 class Timer:
-    """``action()`` on the loop at a time (:meth:`at`), at most one due: an earlier request
-    supersedes a later one, a later one leaves an earlier one be."""
+    """``action()`` with the document locked at a loop time (:meth:`at`; the loop's clock is time.monotonic), a
+    task of its session: an earlier request supersedes a later one, a later one leaves an earlier one be."""
 
     def __init__(self, session: Session, action):
         self.session, self.action = session, action
-        self.due: float | None = None          # (loop time = time.monotonic) of the pending call
-        self._handle: asyncio.TimerHandle | None = None
+        self._due: float | None = None
+
+    @property
+    def due(self) -> float | None:
+        """When the pending call is due (None: no call is pending)."""
+        return self._due if self.session.running(self) else None
 
     def at(self, when: float) -> None:
-        if self.due is not None and self.due <= when or self.session.closed:
-            return
-        self.cancel()
-        self.due = when
-        handle: asyncio.TimerHandle = self.session.loop.call_at(
-            when, lambda: self.session.soon(lambda: self._fire(handle)))
-        self._handle = handle
-        self.session.waiting.add(self)
+        if self.due is None or when < self.due:
+            self._due = when
+            self.session.start(self, self._fire(when))
 
     def cancel(self) -> None:
-        if self._handle is not None:
-            self._handle.cancel()
-        self._handle = self.due = None
-        self.session.waiting.discard(self)
+        self.session.cancel(self)
 
-    def _fire(self, handle) -> None:
-        if handle is not self._handle:
-            return                  # cancelled or superseded while its call waited for the lock
-        self._handle = self.due = None
-        self.session.waiting.discard(self)
+    async def _fire(self, when: float) -> None:
+        await asyncio.sleep(when - self.session.loop.time())
+        await self.session.apply(self._act)
+
+    def _act(self) -> None:
+        self._due = None            # (the action may ask for the next call)
         self.action()
