@@ -1269,7 +1269,7 @@ def test_picking_an_orbits_crossing_shows_its_mlce_megno_and_rotation_number():
         k = int(np.flatnonzero(second)[17])                     # a crossing of the second orbit, not its start
         assert page.orbit_list.pick(float(d["p1"][k]) + 1e-9, float(d["p2"][k])) == page.orbits.starts[1][0]
         _poll_until(page, lambda: "rotation number" in page.orbit_list.text.text)
-        r = page.orbit_list.readouts[page.orbits.starts[1][0]]
+        r, _text = page.orbit_list.readouts[page.orbits.starts[1][0]]
         y0 = model.section_state(s.params, [starts[1][0]], [starts[1][1]], s.h)
         ind = lyapunov.indicators(s.params, states=y0, tmax=INDICATOR_TIME, method=s.method, tol=s.tol)
         assert (r["megno"], r["mlce"]) == (float(ind.megno[0]), float(ind.mlce[0]))          # the same numbers

@@ -2,6 +2,8 @@
 periodic orbits, a picked orbit's readout and a saddle's manifolds.  No web library here."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from explorer.app.serve.tasks import failure
@@ -146,29 +148,33 @@ def elliptic_center(view, start):
     return next((fp for fp in _fixed_points_from(view, tuple(start)) if fp.stable), None)
 
 
-def orbit_readout(settings, start) -> dict:
-    """A picked orbit's megno, mlce, rotation (around ``center``, the :func:`elliptic_center`; or None)
-    and rotation_error (text)."""
+def orbit_readout(settings, start) -> tuple:
+    """(values, message): a picked orbit's megno, mlce, rotation number (around ``center``, its
+    :func:`elliptic_center`; or None) and the readout's words (docs/commands/serve.md)."""
     from explorer.analysis import rotation
     from explorer.analysis.budget import BudgetExceeded
-    from explorer.app.serve.orbits import orbit_indicators
+    from explorer.app.serve.orbits import INDICATOR_TIME, orbit_indicators
+    from explorer.app.serve.style import megno_kind
 
     p1, p2 = float(start[0]), float(start[1])
     megno, mlce = orbit_indicators(settings, p1, p2)
-    out = {"megno": megno, "mlce": mlce, "rotation": None, "center": None, "rotation_error": ""}
+    values = {"megno": megno, "mlce": mlce, "rotation": None, "center": None}
+    text = f"mLCE = {mlce:.4g}, <Y> = {megno:.4g} over t <= {INDICATOR_TIME:g} ({megno_kind(megno)}); rotation number"
     try:
-        fp = elliptic_center(settings, (p1, p2))
+        fp = values["center"] = elliptic_center(settings, (p1, p2))
         if fp is None:
-            out["rotation_error"] = "no elliptic fixed point found (Newton from the start and the region's centre)"
-            return out
-        out["center"] = fp
-        out["rotation"] = rotation.rotation_number(settings.section_map(rotation_tol(settings)), (p1, p2),
-                                                   center=fp.point)
+            return values, f"{text}: none (Newton's method found no elliptic fixed point)"
+        rot = values["rotation"] = rotation.rotation_number(settings.section_map(rotation_tol(settings)), (p1, p2),
+                                                            center=fp.point)
     except BudgetExceeded:
         raise
     except Exception as exc:  # noqa: BLE001 - shown in the readout
-        out["rotation_error"] = failure(exc)
-    return out
+        return values, f"{text}: none ({failure(exc)})"
+    if not math.isfinite(rot.value):
+        return values, f"{text}: none ({rot.status})"
+    return values, (f"{text} {rot.value:.10g} around ({fp.point[0]:.6g}, {fp.point[1]:.6g}) over {rot.iterates} "
+                    "returns, " + ("converged" if rot.converged else
+                                   f"not converged (|WB_N - WB_2N| = {rot.difference:.2g})"))
 
 
 def rotation_tol(settings) -> float:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import html
 import math
+from functools import partial
 
 import numpy as np
 import panel as pn
@@ -12,9 +13,9 @@ from bokeh.models import CDSView, CustomJSFilter, Div
 
 from explorer.app.serve import overlays as search
 from explorer.app.serve import settings as settings_mod
-from explorer.app.serve.orbits import COLORS, INDICATOR_TIME
-from explorer.app.serve.style import LIST_WIDTH, megno_kind
-from explorer.app.serve.tasks import failure
+from explorer.app.serve.orbits import COLORS
+from explorer.app.serve.page_overlays import show_search
+from explorer.app.serve.style import LIST_WIDTH
 from explorer.model import ParameterError
 
 #: a pick selects the orbit with a crossing within this many pixels of the click
@@ -52,13 +53,12 @@ class OrbitList:
         self.settings, self.say, self.on_changed = settings, say, on_changed
         self.text = Div(name="readout", text="", render_as_text=True, styles={"font-family": "monospace"})
         self.picked: int | None = None          # the orbit whose readout is shown
-        self.readouts: dict = {}                # orbit id -> orbit_readout(...) of a picked orbit
-        self._quiet = False                     # (the chooser set by refresh, not by the user)
+        self.readouts: dict = {}                # orbit id -> (values, readout text) of search.orbit_readout
         self.filter: CustomJSFilter | None = None
         self.table = Div(name="orbit-list", text="", styles={"max-height": LIST_MAX_HEIGHT, "overflow-y": "auto"},
                          width=LIST_WIDTH)
         self.choice = pn.widgets.Select(label="orbit", options={NONE_LABEL: 0}, value=0, width=LIST_WIDTH - 170)
-        self.choice.param.watch(lambda e: self._quiet or session.soon(lambda: self.choose(e.new)), "value")
+        self.choice.param.watch(lambda e: session.soon(lambda: self.choose(e.new)), "value")
         self.hide_button = pn.widgets.Button(label="hide", width=50, disabled=True, align="end")
         self.hide_button.on_click(lambda _e: session.soon(self.toggle))
         self.delete_button = pn.widgets.Button(label="delete", width=50, disabled=True, align="end")
@@ -78,6 +78,8 @@ class OrbitList:
     # ------------------------------------------------------------ actions
     def choose(self, ident) -> None:
         """Select orbit ``ident`` (0 or None: none), as a pick of it does: its readout and highlight."""
+        if (ident or None) == self.picked:
+            return                              # (refresh set the chooser to the selection)
         if ident and self.orbits.has(ident):
             self.select(int(ident))
         elif self.picked is not None:
@@ -88,10 +90,7 @@ class OrbitList:
         ident = self.picked if ident is None else ident
         if ident is None:
             return
-        if ident in self.orbits.hidden:
-            self.orbits.show(ident)
-        else:
-            self.orbits.hide(ident)
+        (self.orbits.show if ident in self.orbits.hidden else self.orbits.hide)(ident)
         self.orbits.update_status(force_density=True)
         self.on_changed()
 
@@ -145,12 +144,9 @@ class OrbitList:
     def refresh(self) -> None:
         """The table, the chooser and the highlight anew (after a status update or a selection)."""
         starts, picked = self.orbits.starts, self.picked
-        self._quiet = True
-        try:       # (a value equal to the one there is not sent again: param and Bokeh compare them)
-            self.choice.options = {NONE_LABEL: 0} | {f"{i}: ({p1:.4g}, {p2:.4g})": i for i, p1, p2, _c in starts}
-            self.choice.value = picked if self.orbits.has(picked) else 0
-        finally:
-            self._quiet = False
+        # (a value equal to the one there is not sent again: param and Bokeh compare them)
+        self.choice.options = {NONE_LABEL: 0} | {f"{i}: ({p1:.4g}, {p2:.4g})": i for i, p1, p2, _c in starts}
+        self.choice.value = picked if self.orbits.has(picked) else 0
         hidden = picked is not None and picked in self.orbits.hidden
         self.hide_button.label = "show" if hidden else "hide"
         self.hide_button.disabled = self.delete_button.disabled = picked is None
@@ -191,10 +187,11 @@ class OrbitList:
         self.say("")
         if ident in self.readouts:
             self.session.cancel("readout")
-            self._show(ident, self.readouts[ident])
+            self.text.text = self.readouts[ident][1]
             return
         self.text.text = f"orbit {ident} from ({start[0]:.6g}, {start[1]:.6g}): computing mLCE, MEGNO, rotation ..."
-        self.session.start("readout", self._compute(ident, start, self.settings()),
+        self.session.start("readout", show_search(self.session, "readout", partial(self._keep, ident, start),
+                                                  search.orbit_readout, self.settings(), start),
                            budget=search.search_budget(search.READOUT_SECONDS))
 
     def unpick(self) -> None:
@@ -213,38 +210,10 @@ class OrbitList:
         if ident is None or self.picked == ident:
             self.unpick()
 
-    async def _compute(self, ident, start, settings):
-        try:
-            r = await self.session.run(search.orbit_readout, settings, start)
-        except Exception as exc:  # noqa: BLE001 - reported in the page
-            r = {"error": failure(exc)}
-        r["start"] = start
-        await self.session.apply(lambda: self._keep(ident, r))
-
-    def _keep(self, ident, r):
-        if not self.orbits.has(ident):
-            return                           # the orbit went meanwhile
-        self.readouts[ident] = r
-        self._show(ident, r)
-
-    def _show(self, ident, r):
-        p1, p2 = r["start"]
-        head = f"orbit {ident} from ({p1:.6g}, {p2:.6g}): "
-        if "error" in r:
-            self.text.text = head + f"failed: {r['error']}"
-            return
-        text = (head + f"mLCE = {r['mlce']:.4g}, <Y> = {r['megno']:.4g} over t <= {INDICATOR_TIME:g}"
-                f" ({megno_kind(r['megno'])})")
-        rot, fp = r["rotation"], r["center"]
-        if rot is None:
-            text += f"; rotation number: none ({r['rotation_error']})"
-        elif not math.isfinite(rot.value):
-            text += f"; rotation number: none ({rot.status})"
-        else:
-            text += (f"; rotation number {rot.value:.10g} around ({fp.point[0]:.6g}, {fp.point[1]:.6g}) over "
-                     f"{rot.iterates} returns, " + ("converged" if rot.converged else
-                                                        f"not converged (|WB_N - WB_2N| = {rot.difference:.2g})"))
-        self.text.text = text
+    def _keep(self, ident, start, values, text):
+        if self.orbits.has(ident):              # (not when the orbit went meanwhile)
+            self.readouts[ident] = (values, f"orbit {ident} from ({start[0]:.6g}, {start[1]:.6g}): {text}")
+            self.text.text = self.readouts[ident][1]
 
 
 def _table(orbits, picked) -> str:

@@ -2,6 +2,9 @@
 (one task under a budget) and a picked saddle's manifolds (another), searched by :mod:`.overlays`."""
 from __future__ import annotations
 
+from functools import partial
+from itertools import repeat
+
 import numpy as np
 from bokeh.models import ColumnDataSource, Div, LinearColorMapper
 
@@ -10,13 +13,25 @@ from explorer.app.serve.box import Box
 from explorer.app.serve.style import MANIFOLD_COLORS, PERIOD_COLORS, SEPARATRIX_CASING, SEPARATRIX_COLOR
 from explorer.app.serve.tasks import failure
 
-#: the columns of each overlay's source
+#: the columns of each overlay's source (by its name)
 COLUMNS = {"fixed": ("p1", "p2", "kind", "marker"), "separatrices": ("xs", "ys"),
-           "manifolds": ("xs", "ys", "color", "kind"), "periodic": ("p1", "p2", "period", "kind", "marker")}
+           "periodic": ("p1", "p2", "period", "kind", "marker"), "manifolds": ("xs", "ys", "color", "kind")}
 
 
-def _empty(name: str) -> dict:
-    return {k: [] for k in COLUMNS[name]}
+async def show_search(session, what: str, show, fn, *args) -> tuple:
+    """(found, message) of the search ``fn(*args)`` run by ``session``, applied by ``show(found, message)``;
+    one that raises gives ``([], "<what>: failed (why)")``."""
+    try:
+        found, text = await session.run(fn, *args)
+    except Exception as exc:  # noqa: BLE001 - reported in the page
+        found, text = [], f"{what}: failed ({failure(exc)})"
+    await session.apply(lambda: show(found, text))
+    return found, text
+
+
+def _clear(*sources) -> None:
+    for src in sources:
+        src.data = {k: [] for k in COLUMNS[src.name]}
 
 
 def _marks(points, stable) -> dict:
@@ -25,16 +40,18 @@ def _marks(points, stable) -> dict:
             "marker": ["circle" if s else "x" for s in stable]}
 
 
+def _lines(curves) -> dict:
+    return {"xs": [c[:, 0] for c in curves], "ys": [c[:, 1] for c in curves]}
+
+
 class Overlays:
     """Fixed points, separatrices, periodic orbits and a saddle's manifolds of ``settings()``;
     ``on_changed()`` after a box changed."""
 
     def __init__(self, view, session, settings, on_changed):
         self.view, self.session, self.settings, self.on_changed = view, session, settings, on_changed
-        self.fixed = ColumnDataSource(_empty("fixed"), name="fixed")
-        self.curves = ColumnDataSource(_empty("separatrices"), name="separatrices")
-        self.periodic = ColumnDataSource(_empty("periodic"), name="periodic")
-        self.manifold_source = ColumnDataSource(_empty("manifolds"), name="manifolds")
+        self.fixed, self.curves, self.periodic, self.manifold_source = (
+            ColumnDataSource({k: [] for k in columns}, name=name) for name, columns in COLUMNS.items())
         self.text = Div(name="overlay", text="", render_as_text=True)
         self.overlay = Box(label="fixed points, separatrices", value=False)
         self.periodic_box = Box(label=f"periodic orbits, periods 1-{search.PERIODIC_MAX}", value=False)
@@ -67,87 +84,64 @@ class Overlays:
 
     def restart(self):
         """Search what the boxes ask for at the current settings, under a budget; latest wins."""
-        self.clear_manifolds()
-        self.fixed.data = _empty("fixed")
-        self.curves.data = _empty("separatrices")
-        self.periodic.data = _empty("periodic")
-        self.text.text = ""
+        self.session.cancel("manifolds")
+        _clear(self.fixed, self.curves, self.periodic, self.manifold_source)
         wanted = (self.overlay.value, self.periodic_box.value)
-        if not any(wanted) or self.settings().region is None:
+        searching = any(wanted) and self.settings().region is not None
+        self.text.text = "searching ..." if searching else ""
+        if not searching:
             self.session.cancel("overlay")
             return
-        self.text.text = "searching ..."
         budget = search.search_budget(search.FIXED_SECONDS * wanted[0] + search.PERIODIC_SECONDS * wanted[1])
         self.session.start("overlay", self._compute(self.settings(), *wanted), budget=budget)
 
     async def _compute(self, settings, fixed, periodic):
-        run, apply = self.session.run, self.session.apply
-        text = ""
+        text, session = "", self.session
         if fixed:
-            try:
-                points, text = await run(search.fixed_points, settings)
-                growing = "; growing the separatrices ..." if any(not p.stable for p in points) else ""
-                await apply(lambda: self._show_fixed(points, [], text + growing))
-                curves, text = await run(search.separatrices, settings, points, text)
-            except Exception as exc:  # noqa: BLE001 - reported in the page
-                points, curves, text = [], [], f"fixed points: failed ({failure(exc)})"
-            await apply(lambda: self._show_fixed(points, curves, text))
+            points, text = await show_search(session, "fixed points", self._show_points, search.fixed_points, settings)
+            _c, text = await show_search(session, f"{text}; separatrices", partial(self._show_curves, periodic),
+                                         search.separatrices, settings, points, text)
         if periodic:
-            if fixed:
-                await apply(lambda: setattr(self.text, "text", f"{text}; searching the periodic orbits ..."))
-            try:
-                orbits, found = await run(search.periodic_orbits, settings, search.PERIODIC_MAX)
-            except Exception as exc:  # noqa: BLE001 - reported in the page
-                orbits, found = [], f"periodic orbits: failed ({failure(exc)})"
-            await apply(lambda: self._show_periodic(orbits, "; ".join(t for t in (text, found) if t)))
+            await show_search(session, "periodic orbits", partial(self._show_periodic, text), search.periodic_orbits,
+                              settings)
 
-    def _show_periodic(self, orbits, text):
+    def _show_points(self, points, text):
+        self.fixed.data = _marks([fp.point for fp in points], [fp.stable for fp in points])
+        self.text.text = text + ("; growing the separatrices ..." if any(not p.stable for p in points) else "")
+
+    def _show_curves(self, periodic, curves, text):
+        self.curves.data = _lines(curves)
+        self.text.text = text + ("; searching the periodic orbits ..." if periodic else "")
+
+    def _show_periodic(self, text, orbits, found):
         rows = [(p, int(o.period), o.stable) for o in orbits for p in np.asarray(o.points)]
         self.periodic.data = {**_marks([r[0] for r in rows], [r[2] for r in rows]), "period": [r[1] for r in rows]}
-        self.text.text = text
-
-    def _show_fixed(self, points, curves, text):
-        self.fixed.data = _marks([fp.point for fp in points], [fp.stable for fp in points])
-        self.curves.data = {"xs": [c[:, 0] for c in curves], "ys": [c[:, 1] for c in curves]}
-        self.text.text = text
+        self.text.text = "; ".join(t for t in (text, found) if t)
 
     # ------------------------------------------------------------ manifolds of a picked saddle
     def saddle_near(self, p1: float, p2: float, radius_px: float) -> tuple | None:
         """(point, period) of the nearest hyperbolic mark within ``radius_px`` pixels of (p1, p2), or None."""
         px, py = self.view.pixel()
-        best = None
-        for src, fixed in ((self.fixed.data, True), (self.periodic.data, False)):
-            for i, (a, b, kind) in enumerate(zip(src["p1"], src["p2"], src["kind"])):
-                if kind != "hyperbolic":
-                    continue
-                d = float(np.hypot((a - p1) / (px or 1.0), (b - p2) / (py or 1.0)))
-                k = 1 if fixed else int(src["period"][i])
-                if d <= radius_px and (best is None or d < best[0]):
-                    best = (d, (float(a), float(b)), k)
-        return None if best is None else best[1:]
+        marks = [(a, b, k) for src in (self.fixed.data, self.periodic.data)
+                 for a, b, kind, k in zip(src["p1"], src["p2"], src["kind"], src.get("period", repeat(1)))
+                 if kind == "hyperbolic"]
+        d = [np.hypot((a - p1) / (px or 1.0), (b - p2) / (py or 1.0)) for a, b, _k in marks]
+        if not marks or min(d) > radius_px:
+            return None
+        a, b, k = marks[int(np.argmin(d))]
+        return (float(a), float(b)), int(k)
 
     def show_manifolds(self, point, period: int = 1) -> None:
         """Grow and draw W^u and W^s of the hyperbolic orbit of ``period`` through ``point`` (latest wins)."""
-        self.manifold_source.data = _empty("manifolds")
-        self.text.text = (f"growing the manifolds of the period-{period} orbit at "
-                          f"({point[0]:.6g}, {point[1]:.6g}) ...")
-        self.session.start("manifolds", self._compute_manifolds(tuple(point), int(period), self.settings()),
+        _clear(self.manifold_source)
+        self.text.text = f"growing the manifolds of the period-{period} orbit at ({point[0]:.6g}, {point[1]:.6g}) ..."
+        self.session.start("manifolds", show_search(self.session, "manifolds", self._show_manifolds,
+                                                    search.saddle_manifolds, self.settings(), tuple(point),
+                                                    int(period)),
                            budget=search.search_budget(search.MANIFOLD_SECONDS))
 
-    def clear_manifolds(self) -> None:
-        self.session.cancel("manifolds")
-        self.manifold_source.data = _empty("manifolds")
-
-    async def _compute_manifolds(self, point, period, settings):
-        try:
-            branches, text = await self.session.run(search.saddle_manifolds, settings, point, period)
-        except Exception as exc:  # noqa: BLE001 - reported in the page
-            branches, text = [], f"manifolds: failed ({failure(exc)})"
-        await self.session.apply(lambda: self._show_manifolds(branches, text))
-
     def _show_manifolds(self, branches, text):
-        pts = [np.asarray(b.points, float) for b in branches]
-        self.manifold_source.data = {"xs": [p[:, 0] for p in pts], "ys": [p[:, 1] for p in pts],
+        self.manifold_source.data = {**_lines([np.asarray(b.points, float) for b in branches]),
                                      "color": [MANIFOLD_COLORS[b.kind] for b in branches],
                                      "kind": [b.kind for b in branches]}
         self.text.text = text
