@@ -1511,14 +1511,14 @@ def test_the_view_exports_as_svg_with_one_group_per_orbit_and_as_png_in_the_orbi
             page.click(c1 + u * r1, c2 + 0.1 * r2)
         page.orbit_list.resume()                                  # (each click paused the orbits still running)
         _poll_until(page, lambda: len(page.orbits.crossings.data["t"]) == 3 * s.crossings)
-        svg = page.exports.figure_bytes("svg")
+        svg = page.exports.download("svg").getvalue()
         groups = _svg_orbits(svg)                                        # parses as XML
         assert sorted(groups) == sorted(i for i, *_ in page.orbits.starts)      # one group per orbit
         for ident, _a, _b, c in page.orbits.starts:
             n_inside = int(np.sum(np.asarray(page.orbits.crossings.data["orbit"]) == ident))
             assert len(groups[ident]) == n_inside                       # a point per crossing
             assert set(groups[ident]) == {COLORS[c]}                     # in the orbit's colour
-        img = matplotlib.image.imread(io.BytesIO(page.exports.figure_bytes("png")))[..., :3]
+        img = matplotlib.image.imread(io.BytesIO(page.exports.download("png").getvalue()))[..., :3]
         for _i, _a, _b, c in page.orbits.starts:                                # each orbit's colour is on the picture
             rgb = np.array(matplotlib.colors.to_rgb(COLORS[c]))
             assert np.sum(np.abs(img - rgb).max(axis=2) < 0.05) > 50, COLORS[c]
@@ -1527,7 +1527,7 @@ def test_the_view_exports_as_svg_with_one_group_per_orbit_and_as_png_in_the_orbi
         page.orbits.colour_box.value = True  # coloured by MEGNO: not the orbit colours
         _poll_until(page, lambda: len(page.orbits.indicators) == 3)
         assert all(set(v) != {COLORS[c]} for (_i, _a, _b, c), v in zip(page.orbits.starts, _svg_orbits(
-            page.exports.figure_bytes("svg")).values()))
+            page.exports.download("svg").getvalue()).values()))
         page.exports.export_figure()                                              # into --export-dir, PNG and SVG
         _poll_until(page, lambda: "figure written" in page.message.text, timeout=60)
         assert sorted(p.suffix for p in tmp_path.iterdir()) == [".png", ".svg"]
@@ -1794,7 +1794,7 @@ def test_picking_a_hyperbolic_fixed_point_draws_its_grown_stable_and_unstable_ma
             assert np.hypot(x[0] - saddle[0], y[0] - saddle[1]) < 1e-3  # each grows out of the saddle
             assert np.sum(np.hypot(np.diff(x), np.diff(y))) > 0.5 * MANIFOLD_ARCLENGTH
         assert "W^u red, W^s blue" in page.overlays.text.text
-        svg = page.exports.figure_bytes("svg").decode()
+        svg = page.exports.download("svg").getvalue().decode()
         assert 'id="manifold-unstable' in svg and 'id="manifold-stable' in svg
         page.inputs["mu"].value = "0.05"                                   # a new value: the manifolds go
         _poll_until(page, lambda: page.overlays.manifold_source.data["xs"] == [])

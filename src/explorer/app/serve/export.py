@@ -32,37 +32,31 @@ def session_scene(settings: Settings, starts, name: str = SCENE_NAME, overlays: 
                            compute=compute, description="orbits clicked in `explorer serve`" + shown)
 
 
-def _free_stem(directory, name: str, formats) -> str:
-    """``directory/name-<UTC time>[-n]`` with no file of any of the extensions ``formats`` yet."""
+def write_files(directory, name: str, contents: dict) -> list:
+    """Write ``contents`` ({extension: bytes}) as ``directory/name-<UTC time>[-n].<extension>``, atomically, over
+    no existing file; returns their paths."""
+    from explorer.io.store.atomic import write_bytes_atomic
+
     stamp = time.strftime("%Y%m%dT%H%M%S", time.gmtime())
     stem, n = os.path.join(os.fspath(directory), f"{name}-{stamp}"), 1
-    while any(os.path.exists(f"{stem}.{fmt}") for fmt in formats):
+    while any(os.path.exists(f"{stem}.{ext}") for ext in contents):
         n += 1
         stem = os.path.join(os.fspath(directory), f"{name}-{stamp}-{n}")
-    return stem
+    for ext, data in contents.items():
+        write_bytes_atomic(f"{stem}.{ext}", data)
+    return [f"{stem}.{ext}" for ext in contents]
 
 
 def write_scene(directory, scene: scene_mod.Scene) -> str:
-    """Write ``scene`` as TOML into ``directory`` (atomically); returns the file's path."""
-    from explorer.io.store.atomic import write_bytes_atomic
-
-    path = _free_stem(directory, scene.name, ("toml",)) + ".toml"
-    write_bytes_atomic(path, scene.to_toml().encode("utf-8"))
-    return path
+    """Write ``scene`` as TOML into ``directory`` (:func:`write_files`); returns the file's path."""
+    return write_files(directory, scene.name, {"toml": scene.to_toml().encode("utf-8")})[0]
 
 
 def write_figure(directory, view, name: str = SCENE_NAME) -> list:
-    """Write the page's ``view`` as ``<name>-<UTC time>.png`` and ``.svg`` into ``directory``
-    (atomically); returns their paths."""
+    """Write the page's ``view`` as PNG and SVG into ``directory`` (:func:`write_files`); returns their paths."""
     from explorer.app.serve.image import FORMATS, render
-    from explorer.io.store.atomic import write_bytes_atomic
 
-    stem = _free_stem(directory, name, FORMATS)
-    paths = []
-    for fmt in FORMATS:
-        write_bytes_atomic(f"{stem}.{fmt}", render(view, fmt))
-        paths.append(f"{stem}.{fmt}")
-    return paths
+    return write_files(directory, name, {fmt: render(view, fmt) for fmt in FORMATS})
 
 
 def write_store(scene_path) -> str:
@@ -84,17 +78,13 @@ class Exports:
     def scene_text(self) -> str:
         return self.scene().to_toml()
 
-    def figure_bytes(self, fmt: str) -> bytes:
-        """The page's view as a PNG or SVG file (the *Figure* downloads)."""
-        from explorer.app.serve.image import render
-
-        return render(self.view(), fmt)
-
     def download(self, fmt: str):
         """The file of a download button: the scene ("toml") or the view ("png", "svg"); empty when it
         fails, and why said on the message line."""
+        from explorer.app.serve.image import render
+
         try:
-            return io.BytesIO(self.scene_text().encode("utf-8") if fmt == "toml" else self.figure_bytes(fmt))
+            return io.BytesIO(self.scene_text().encode("utf-8") if fmt == "toml" else render(self.view(), fmt))
         except ParameterError as exc:
             self.say(str(exc))
         except Exception as exc:  # noqa: BLE001 - reported in the page; the download is empty

@@ -1,10 +1,6 @@
-"""The page of ``explorer serve``: one :class:`SectionPage` per browser session, made of components
-that each own their Bokeh models, widgets and state (docs/architecture.md, "The page", lists them),
-their background work on the page's :class:`~explorer.app.serve.tasks.Session`.  The page holds the
-settings, the fields and the link (``link``, the address's query), and routes clicks, buttons and values to
-the components.  Bokeh models are found in the browser by name: ``message``, ``section`` and each
-component's own.
-"""
+"""The page of ``explorer serve``: one :class:`SectionPage` per browser session, made of components that own
+their models, widgets and state (docs/architecture.md, "The page"); it holds the settings, the fields and the
+link, and routes clicks, buttons and values to the components."""
 from __future__ import annotations
 
 import math
@@ -47,10 +43,9 @@ window.history.replaceState(window.history.state, "", window.location.pathname +
 
 
 class SectionPage:
-    """One browser session.  ``base``: the settings before any URL argument or field; ``args``: the
-    URL arguments ({name: text}); ``export_dir``: where the export buttons write (None: downloads
-    only); ``doc``: the session's Bokeh document (None: no server, :meth:`poll`); ``seeds``: the
-    scene's ``[seeds]``; ``megno_resolution``, ``megno_time``: the MEGNO layer's finest raster and time."""
+    """One browser session: ``base`` the settings before the URL arguments ``args`` ({name: text}); ``export_dir``
+    where the export buttons write (None: downloads only); ``doc`` the session's Bokeh document (None: no server);
+    ``seeds`` the scene's ``[seeds]``; ``megno_resolution``, ``megno_time``: the MEGNO layer's finest raster."""
 
     def __init__(self, base: Settings, args: dict | None = None, export_dir=None, label: str = "", doc=None,
                  seeds=None, megno_resolution: int = raster_mod.RESOLUTIONS[-1],
@@ -87,9 +82,7 @@ class SectionPage:
         fig.on_event(DoubleTap, self._on_tap)   # a second click within 300 ms is a double tap
         fig.on_event(PressUp, self._on_tap)     # a click held 300 ms or more is a press
         self._build()
-        if doc is not None:
-            # the tab is gone (its websocket closed, or a page never connected expired): its work
-            # stop now, not when Bokeh discards the session
+        if doc is not None:       # the tab is gone (or never connected): its work stops now
             doc.on_event(ConnectionLost, lambda _e: self.close())
             doc.on_session_destroyed(lambda _ctx: self.close())
         self._load_url(args or {})
@@ -134,8 +127,7 @@ class SectionPage:
     def say(self, text: str, ok: bool = False) -> None:
         """``text`` on the message line, in the error colour or (``ok``) the success colour."""
         color = style.MESSAGE_OK_COLOR if ok else style.MESSAGE_ERROR_COLOR
-        if self.message.styles.get("color") != color:
-            self.message.styles = {**self.message.styles, "color": color}
+        self.message.styles = {**self.message.styles, "color": color}     # (Bokeh sends no unchanged value)
         self.message.text = text
 
     def close(self) -> None:
@@ -143,12 +135,11 @@ class SectionPage:
         self.session.close()
 
     def poll(self) -> bool:
-        """Run the page's loop a moment when it owns it (Session.poll); returns whether anything
-        reached the page since the last call."""
+        """Run the page's own loop a moment; whether anything reached the page since the last call (Session.poll)."""
         return self.session.poll()
 
     def settle(self, timeout: float = 240.0) -> None:
-        """Run the page's own loop until its work is done (every task and timer; Session.settle)."""
+        """Run the page's own loop until every task and timer is done (Session.settle)."""
         self.session.settle(timeout)
 
     # ------------------------------------------------------------ state in the URL
@@ -169,8 +160,7 @@ class SectionPage:
         if refused:
             self.say(f"link ignored in part (the rest applies): {'; '.join(refused)}")
         self.fields.show(self.settings)
-        if self.settings.title() != self.base.title():
-            self.title.object = self._title()
+        self.title.object = self._title()
         self._draw_region()
         if args.get("view"):
             try:
@@ -184,8 +174,7 @@ class SectionPage:
         self.push_url()
 
     def url_query(self) -> dict:
-        """The view as URL arguments: every field, the starts (and which are hidden), the boxes and
-        the window."""
+        """The view as URL arguments: the fields, the starts (which are hidden), the boxes and the window."""
         q = self.settings.fields()
         q.update(self.orbit_list.url_query())
         q.update({name: on if box.value else off for name, box, on, off in self._boxes()})
@@ -210,7 +199,7 @@ class SectionPage:
         return self.overlays.on() + ((self.chaos.indicator.value,) if self.chaos.layer.value else ())
 
     def scene(self):
-        """The session as a scene (export.session_scene): its settings, starts and overlays."""
+        """The session as a scene (export.session_scene)."""
         starts = [(a, b) for _i, a, b, _c in self.orbits.starts]
         return export.session_scene(self.settings, starts, overlays=self.overlays_on())
 
@@ -218,20 +207,17 @@ class SectionPage:
         """What the page shows now, hidden orbits left out, copied (drawn in any thread)."""
         from explorer.app.serve.image import View
 
-        orbits, ov = self.orbits, self.overlays
-        d = orbits.crossings.data
+        orbits, ov, s, w = self.orbits, self.overlays, self.settings, self.section.window
+        d, r = orbits.crossings.data, self.chaos.raster_source.data
         orbit = np.asarray(d["orbit"])
         p = np.column_stack([np.asarray(d["p1"], float), np.asarray(d["p2"], float)])
         visible = [s for s in orbits.starts if s[0] not in orbits.hidden]
         shown = [(i, COLORS[c], p[orbit == i], orbits.indicators.get(i, (math.nan,))[0]) for i, _a, _b, c in visible]
-        w = self.section.window
-        r = self.chaos.raster_source.data
         raster = None
         if len(r["image"]):
             x, y = r["x"][0], r["y"][0]
             raster = (np.array(r["image"][0], float), (x, x + r["dw"][0], y, y + r["dh"][0]))
         f, q, m = ov.fixed.data, ov.periodic.data, ov.manifold_source.data
-        s = self.settings
         return View(window=(w.x0, w.x1, w.y0, w.y1) if w is not None else (-1.0, 1.0, -1.0, 1.0), region=s.region,
                     region_mask=s.region_mask(), orbits=shown, axes=s.axes,
                     starts=[(a, b, COLORS[c]) for _i, a, b, c in visible], raster=raster,
@@ -246,9 +232,8 @@ class SectionPage:
 
     # ------------------------------------------------------------ values
     def _on_field(self, name: str | None = None):
-        """The field ``name`` was edited (None: every field): the applied settings with its text,
-        validated as the command line's values are (Fields.read); a refused value changes nothing
-        and is said in the message."""
+        """The field ``name`` (None: every field) was edited: applied if valid as on the command line (Fields.read),
+        else said on the message line."""
         try:
             new = self.fields.read(self.base, self.settings, len(self.orbits.starts), name)
         except ParameterError as exc:
@@ -259,8 +244,8 @@ class SectionPage:
         self.apply(new)
 
     def apply(self, new: Settings) -> None:
-        """New settings: the orbits stop, the region is redrawn, the starts inside it run again; a new
-        crossings per click alone cuts each orbit to it or continues it (OrbitsLayer.recount)."""
+        """New settings: the starts inside the new region run again, under their ids; a new crossings per click
+        alone cuts or continues each orbit (OrbitsLayer.recount)."""
         if new == self.settings:
             return
         if new.crossings != self.settings.crossings and replace(self.settings, crossings=new.crossings) == new:
@@ -273,10 +258,8 @@ class SectionPage:
         self.orbit_list.forget()
         old = self.orbits.drop_all()
         self.density_image.refresh(force=True)       # no image left of them
-        angle_changed = new.title() != self.settings.title()
         self.settings = new
-        if angle_changed:                 # (only then: a change of the title is a message of its own)
-            self.title.object = self._title()
+        self.title.object = self._title()         # (param sends no unchanged value)
         # the kept starts' crosses go before the region and the view
         kept = [self.orbits.start(p1, p2, color, ident=i) for i, p1, p2, color in old]   # (their ids kept)
         for run, (i, *_s) in zip(kept, old):
@@ -303,8 +286,7 @@ class SectionPage:
 
     # ------------------------------------------------------------ orbits
     def run_seeds(self) -> int:
-        """Start an orbit at each seed point of the scene's ``[seeds]`` at the current settings, as
-        many as the session has room for; returns how many."""
+        """An orbit at each of the scene's ``[seeds]`` (at the settings) there is room for; returns how many."""
         try:
             starts = self.settings.seed_starts(self.seeds)
         except ParameterError as exc:
@@ -348,8 +330,8 @@ class SectionPage:
         return run
 
     def _on_tap(self, event):
-        """Tap, double tap or the end of a press, each a click (docs/commands/serve.md): a double tap
-        at the place of the previous click is that click again (ignored)."""
+        """Tap, double tap or the end of a press, each a click (docs/commands/serve.md); a double tap at the
+        previous click's place is that click again."""
         here = (float(event.sx), float(event.sy))
         last, self._last_tap = self._last_tap, here
         if isinstance(event, DoubleTap) and last is not None and max(abs(here[0] - last[0]),
@@ -365,8 +347,7 @@ class SectionPage:
 
 
 def session_app(base: Settings, export_dir=None, label: str = "", **page_options):
-    """A Panel app function for ``pn.serve``: one :class:`SectionPage` per session, built from
-    the session's URL arguments (``page_options``: seeds, megno_resolution, megno_time)."""
+    """The app function of ``pn.serve``: a :class:`SectionPage` per session from its URL arguments."""
     def app():
         args = {k: v[0].decode("utf-8", "replace") for k, v in (pn.state.session_args or {}).items() if v}
         try:

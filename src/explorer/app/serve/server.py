@@ -1,8 +1,6 @@
-"""The web server of ``explorer serve``: Panel on Bokeh's Tornado server, one
-:class:`~explorer.app.serve.page.SectionPage` per browser session; safe by default (loopback
-unless told otherwise, a token elsewhere, signed sessions, no file named by the page:
-docs/commands/serve.md, "Safe by default").
-"""
+"""The web server of ``explorer serve``: Panel on Bokeh's Tornado server, a page (page.SectionPage) per browser
+session; safe by default (docs/commands/serve.md, "Safe by default": loopback unless told otherwise, a token
+elsewhere, signed sessions, no file named by the page)."""
 from __future__ import annotations
 
 import asyncio
@@ -64,10 +62,8 @@ def _authorize(token: str):
     def check(_user_info, _path):
         import panel as pn
 
-        args = pn.state.session_args or {}
-        given = args.get(TOKEN_ARG, [b""])
-        given = given[0].decode("utf-8", "replace") if given else ""
-        return token_matches(token, given)
+        given = (pn.state.session_args or {}).get(TOKEN_ARG) or [b""]
+        return token_matches(token, given[0].decode("utf-8", "replace"))
     return check
 
 
@@ -93,8 +89,7 @@ def make_server(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT
     pn.config.disconnect_notification = DISCONNECT_NOTICE
     app = session_app(base, export_dir=export_dir, label=label, **page_options)
     server = pn.serve(app, port=port, address=host, show=False, start=False, verbose=False, title="explorer",
-                      liveness=True,
-                      http_server_kwargs={"max_header_size": MAX_HEADER_BYTES}, **kw)
+                      liveness=True, http_server_kwargs={"max_header_size": MAX_HEADER_BYTES}, **kw)
     return server, url_of(host, port, token)
 
 
