@@ -33,8 +33,6 @@ SAME_SPOT_PX = 4.0
 URL_DELAY_SECONDS = 0.5
 #: what a click does: the choices of the page's switch (Shift + click always picks)
 CLICK_MODES = ("start an orbit", "pick an orbit")
-#: the URL's arguments besides the fields (what url_query writes)
-URL_EXTRAS = ("orbits", "hidden", "megno", "indicator", "separatrices", "periodic", "colour", "pause", "view")
 #: a served page's address: the text of its ``link`` as the query, the token kept, replacing the
 #: address (no history entry), when the document is ready and at every change of the link
 WRITE_LINK = """const token = new URLSearchParams(window.location.search).get("token");
@@ -144,7 +142,7 @@ class SectionPage:
 
     # ------------------------------------------------------------ state in the URL
     def _load_url(self, args: dict):
-        args, unknown = settings_mod.screen_link(args, self.base.field_names + URL_EXTRAS + (TOKEN_ARG,))
+        args, unknown = settings_mod.screen_link(args, (*self.url_query(), TOKEN_ARG))   # (what a link carries)
         fields = {k: v for k, v in args.items() if k in self.base.field_names}
         self.settings, refused = settings_mod.parse_link_fields(self.base, fields)
         refused[:0] = unknown
