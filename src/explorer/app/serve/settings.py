@@ -3,6 +3,7 @@ a bad value raises :class:`~explorer.model.ParameterError` naming the field.  No
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -22,6 +23,12 @@ MAX_CROSSINGS = 1_000_000
 MAX_STARTS = 256
 #: at most this many crossings on one session's page (orbits x crossings per click; ~0.2 GB)
 MAX_SESSION_CROSSINGS = 4_000_000
+#: longest field text read from the page or the URL
+MAX_FIELD_CHARS = 64
+#: the URL argument that carries the token (explorer.app.serve.server)
+TOKEN_ARG = "token"
+#: a link's arguments at most this many characters in all (a page's own link, 256 starts, is under 20,000)
+MAX_LINK_CHARS = 100_000
 
 
 def room_for(n_orbits: int, crossings: int) -> str | None:
@@ -32,27 +39,29 @@ def room_for(n_orbits: int, crossings: int) -> str | None:
         return (f"at most {MAX_SESSION_CROSSINGS:,} crossings on a page: {n_orbits} orbits x {crossings} crossings "
                 "per click is more; clear, undo or lower the crossings per click")
     return None
-#: longest field text read from the page or the URL
-MAX_FIELD_CHARS = 64
-#: the URL argument that carries the token (explorer.app.serve.server)
-TOKEN_ARG = "token"
-#: a link's arguments at most this many characters in all (a page's own link, 256 starts, is under 20,000)
-MAX_LINK_CHARS = 100_000
 
 
-def megno_of(res, shape, mlce: bool):
-    """<Y> (and the mLCE with ``mlce``) of the Indicators ``res`` in ``shape``, NaN where a run stopped early."""
-    def of(values):
-        return np.where(np.asarray(res.status) == 0, np.asarray(values, dtype=np.float64), np.nan).reshape(shape)
-    return (of(res.megno), of(res.mlce)) if mlce else of(res.megno)
+class PageSettings:
+    """What Chaplygin's page (:class:`Settings`) and a System's (system_page.SystemSettings) say alike."""
+
+    def refusal(self, p1: float, p2: float) -> str | None:
+        """Why a click at (p1, p2) starts no orbit (None: it does)."""
+        return None if self.admissible(p1, p2) else self.outside(p1, p2)
+
+    def megno(self, p1, p2, time: float, max_steps: int, mlce: bool = False):
+        """<Y>(time) (and the mLCE with ``mlce``) of the orbits from (p1, p2), NaN where a run stops early."""
+        res = self.indicators(np.ravel(p1), np.ravel(p2), time, max_steps, ("megno", "mlce") if mlce else ("megno",))
+        ok = np.zeros(np.size(p1), bool) if res is None else np.asarray(res.status) == 0
+
+        def of(name):
+            return np.where(ok, np.asarray(getattr(res, name, np.nan), dtype=np.float64), np.nan).reshape(np.shape(p1))
+        return (of("megno"), of("mlce")) if mlce else of("megno")
 
 
 @dataclass(frozen=True)
-class Settings(sections.Integration):
+class Settings(PageSettings, sections.Integration):
     """What determines a clicked orbit's crossings, bit for bit those of ``explorer orbit`` with the same
-    values: an :class:`~explorer.analysis.sections.Integration` plus ``params``, ``h`` and ``crossings``.
-    What the page asks of its section (docs/commands/serve.md, "Your own system") is implemented here
-    and by :class:`~explorer.app.serve.system_page.SystemSettings`."""
+    values: an :class:`~explorer.analysis.sections.Integration` plus ``params``, ``h`` and ``crossings``."""
 
     params: model.Params = model.FIGURE4
     h: float = model.FIGURE4_H
@@ -60,6 +69,7 @@ class Settings(sections.Integration):
 
     scene_export = True            # the session exports as a scene that `explorer sweep` reruns
     axes = ("p1", "p2")
+    field_names = FIELDS
 
     def __post_init__(self):
         super().__post_init__()
@@ -94,13 +104,10 @@ class Settings(sections.Integration):
         return model.section_M2(self.params, p1, p2, self.h, self.phi0) > 0.0
 
     def region_mask(self):
-        """None: the region is the ellipse :attr:`region` (docs/model.md R9)."""
+        """None: the region is the ellipse :attr:`region`."""
         return None
 
-    def refusal(self, p1: float, p2: float) -> str | None:
-        """Why a click at (p1, p2) starts no orbit (None: it does)."""
-        if self.admissible(p1, p2):
-            return None
+    def outside(self, p1: float, p2: float) -> str:
         return f"({p1:.4g}, {p2:.4g}) is outside the allowed region (M^2 < 0 there): click in the white ellipse"
 
     def describe(self) -> str:
@@ -118,17 +125,15 @@ class Settings(sections.Integration):
 
         return SectionMap(self.params, self.h, phi0=self.phi0, tol=DEFAULT_TOL if tol is None else tol)
 
-    def megno(self, p1, p2, time: float, max_steps: int, mlce: bool = False):
-        """<Y>(time) (and the mLCE with ``mlce``) of the orbits from (p1, p2), NaN where a run stops early."""
+    def indicators(self, p1, p2, time: float, max_steps: int, which):
+        """lyapunov.indicators of the orbits from (p1, p2); None when a fixed step would take over ``max_steps``."""
         from explorer.analysis import lyapunov
 
         if not self.adaptive and time / self.dt > max_steps:
-            nan = np.full(np.shape(p1), np.nan)
-            return (nan, nan) if mlce else nan
+            return None
         y0 = model.section_state(self.params, p1, p2, self.h, self.phi0, self.direction or 1)
-        return megno_of(lyapunov.indicators(self.params, states=y0, tmax=time, method=self.method, tol=self.tol,
-                                            dt=self.dt, which=("megno", "mlce") if mlce else ("megno",),
-                                            max_steps=max_steps), np.shape(p1), mlce)
+        return lyapunov.indicators(self.params, states=y0, tmax=time, method=self.method, tol=self.tol, dt=self.dt,
+                                   which=which, max_steps=max_steps)
 
     def new_run(self, ident: int, p1: float, p2: float):
         from explorer.app.serve.orbits import OrbitRun
@@ -142,14 +147,14 @@ class Settings(sections.Integration):
                  crossings=str(self.crossings), phi0=repr(float(self.phi0)))
         return {n: d[n] for n in FIELDS}
 
-    field_names = FIELDS
-
     def with_fields(self, fields: dict) -> Settings:
-        return parse_fields(self, fields)
+        """These settings with the page's ``fields`` ({name: text}) applied, each validated."""
+        values = read_fields(FIELDS, fields)
+        params = {n: values.pop(n) for n in PAGE_PARAMS if n in values}
+        return replace(self, params=self.params.with_(**params), **values)   # Params checks a1, a2, b > 0, lam != 0
 
     def seed_starts(self, seeds) -> list:
-        """The starts [(p1, p2), ...] ``explorer sweep`` runs for ``seeds`` (None: a scene's default) here
-        (:func:`explorer.analysis.seeds.seed_points`)."""
+        """The starts [(p1, p2), ...] ``explorer sweep`` runs for ``seeds`` (None: a scene's default) here."""
         from explorer.analysis.seeds import seed_points
         from explorer.io.scene import SeedSpec
 
@@ -157,47 +162,31 @@ class Settings(sections.Integration):
         return [(float(a), float(b)) for a, b in zip(p1, p2)]
 
 
-def _number(name: str, text) -> float:
-    """A field's text as a finite float (ParameterError naming the field otherwise)."""
-    if isinstance(text, str):
-        s = text.strip()
+def read_number(name: str, text, whole: bool = False):
+    """A field's text as a finite float (``whole``: an int); ParameterError naming ``name`` otherwise."""
+    s = str(text).strip()
+    try:
         if len(s) > MAX_FIELD_CHARS:
-            raise ParameterError(f"{name} must be a number (at most {MAX_FIELD_CHARS} characters)")
-        try:
-            value = float(s)
-        except ValueError:
-            raise ParameterError(f"{name} must be a number, got {s!r}") from None
-        return validation.real(name, value)
-    return validation.real(name, text)
+            raise ValueError
+        value = int(s) if whole else float(s)
+    except ValueError:
+        raise ParameterError(f"{name} must be {'a whole number' if whole else 'a number'}, "
+                             f"got {s[:MAX_FIELD_CHARS]!r}") from None
+    return value if whole else validation.real(name, value)
 
 
-def _angle(name: str, text) -> float:
-    """An angle's text: a number, or ``pi`` (or ``π``) times or over a number (``-pi``, ``2pi``,
-    ``pi/2``, ``0.5*pi``)."""
-    if isinstance(text, str):
-        s = text.strip().lower().replace("π", "pi").replace(" ", "")
-        if "pi" in s and len(s) <= MAX_FIELD_CHARS:
-            before, _, after = s.partition("pi")
-            before = before[:-1] if before.endswith("*") else before
-            try:
-                factor = float(before + "1" if before in ("", "+", "-") else before)
-                divisor = float(after[1:]) if after.startswith("/") else (1.0 if not after else None)
-            except ValueError:
-                divisor = None
-            if divisor is not None and divisor != 0.0:
-                return validation.real(name, factor * math.pi / divisor)
-            raise ParameterError(f"{name} must be a number or a multiple of pi (pi, -pi, 2pi, pi/2), "
-                                 f"got {text.strip()[:MAX_FIELD_CHARS]!r}")
-    return _number(name, text)
-
-
-def _whole(name: str, text) -> int:
-    if isinstance(text, str):
-        s = text.strip()
-        if len(s) > MAX_FIELD_CHARS or not (s.isdigit() or (s[:1] in "+-" and s[1:].isdigit())):
-            raise ParameterError(f"{name} must be a whole number, got {s[:MAX_FIELD_CHARS]!r}")
-        text = int(s)
-    return validation.integer(name, text)
+def read_angle(name: str, text) -> float:
+    """An angle's text: a number, or ``pi`` (``π``) times or over a number (``-pi``, ``2pi``, ``pi/2``, ``0.5*pi``)."""
+    s = str(text).strip().lower().replace("π", "pi").replace(" ", "")
+    if "pi" not in s:
+        return read_number(name, text)
+    m = re.fullmatch(r"([+-]?)(.*?)\*?pi(?:/(.+))?", s) if len(s) <= MAX_FIELD_CHARS else None
+    try:
+        value = float(m[1] + (m[2] or "1")) * math.pi / float(m[3] or 1)
+    except (TypeError, ValueError, ZeroDivisionError):
+        raise ParameterError(f"{name} must be a number or a multiple of pi (pi, -pi, 2pi, pi/2), "
+                             f"got {str(text).strip()[:MAX_FIELD_CHARS]!r}") from None
+    return validation.real(name, value)
 
 
 def read_fields(names, fields: dict, numbers=()) -> dict:
@@ -208,25 +197,15 @@ def read_fields(names, fields: dict, numbers=()) -> dict:
         if name not in names:
             raise ParameterError(f"unknown field {str(name)[:MAX_FIELD_CHARS]!r}; one of {', '.join(names)}")
         if name in numbers:
-            out[name] = _number(name, text)
+            out[name] = read_number(name, text)
         elif name == "method":
             out[name] = validation.choice("method", str(text).strip(), sections.METHODS)
-        elif name == "crossings":
-            out[name] = validation.integer("crossings", _whole("crossings", text), 1, MAX_CROSSINGS)
         else:
-            out[name] = (_angle if name == "phi0" else _number)(name, text)
+            out[name] = read_angle(name, text) if name == "phi0" else read_number(name, text, name == "crossings")
     return out
 
 
-def parse_fields(base: Settings, fields: dict) -> Settings:
-    """``base`` with the page's ``fields`` ({name: text}) applied, each validated (ParameterError naming it)."""
-    values = read_fields(FIELDS, fields)
-    params = {n: values.pop(n) for n in PAGE_PARAMS if n in values}
-    prm = base.params.with_(**params) if params else base.params   # Params checks a1, a2, b > 0, lam != 0
-    return replace(base, params=prm, **values)
-
-
-def parse_link_fields(base: Settings, fields: dict) -> tuple:
+def parse_link_fields(base, fields: dict) -> tuple:
     """(settings, refusals): ``base`` with every field of a link that applies, and why each other is refused."""
     try:
         return base.with_fields(fields), []
@@ -271,7 +250,7 @@ def parse_starts(text: str) -> list:
         xy = piece.split(",")
         if len(xy) != 2:
             raise ParameterError(f"orbits[{i}] must be p1,p2 (two numbers), got {piece[:MAX_FIELD_CHARS]!r}")
-        starts.append((_number(f"orbits[{i}].p1", xy[0]), _number(f"orbits[{i}].p2", xy[1])))
+        starts.append((read_number(f"orbits[{i}].p1", xy[0]), read_number(f"orbits[{i}].p2", xy[1])))
     return starts
 
 
@@ -325,7 +304,7 @@ def parse_window(text: str):
     pieces = str(text).strip().split(",")
     if len(pieces) != 4:
         raise ParameterError(f"view must be x0,x1,y0,y1 (four numbers), got {str(text)[:MAX_FIELD_CHARS * 4]!r}")
-    x0, x1, y0, y1 = (validation.magnitude(f"view.{n}", _number(f"view.{n}", v))
+    x0, x1, y0, y1 = (validation.magnitude(f"view.{n}", read_number(f"view.{n}", v))
                       for n, v in zip(("x0", "x1", "y0", "y1"), pieces))
     if not (x0 < x1 and y0 < y1):
         raise ParameterError(f"view must have x0 < x1 and y0 < y1, got {x0!r},{x1!r},{y0!r},{y1!r}")

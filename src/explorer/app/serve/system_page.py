@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from explorer import model
+from explorer.analysis import sections
 from explorer.app.serve.settings import MAX_CROSSINGS, Settings, Window, megno_of, read_fields
 from explorer.model import ParameterError, validation
 
@@ -30,6 +31,7 @@ class SystemSettings:
     method = "taylor"
     adaptive = True
     direction = 1                  # the map's own (smap.direction): the page counts every crossing it makes
+    max_steps = 10**9              # an orbit's step budget (the engine's default)
     scene_export = False
 
     def __post_init__(self):
@@ -126,10 +128,14 @@ class SystemSettings:
         return megno_of(lyapunov.indicators(self.smap, pts, tmax=time, tol=self.tol, max_steps=max_steps,
                                             which=("megno", "mlce") if mlce else ("megno",)), np.shape(p1), mlce)
 
-    def new_run(self, ident: int, p1: float, p2: float):
-        from explorer.app.serve.orbits import SystemRun
-
-        return SystemRun(ident, p1, p2, self)
+    def stream(self, p1: float, p2: float, state, block: int, max_steps: int):
+        """Settings.stream of the map's orbit from (p1, p2): rows (t, a, b, solve, E - E0)."""
+        s = self.smap
+        cols = [0, *(1 + s.system.states.index(v) for v in (*s.coords, s.solve)), -1]
+        return ((b.rows(0)[:, cols], b.state) for b in sections.iter_crossings(
+            s.system, states=s.states([(p1, p2)]), n_crossings=self.crossings, section=s.section.expr,
+            direction=s.direction, tol=self.tol, tmax=s.tmax * self.crossings, max_steps=max_steps, block=block,
+            state=state, threads=1))
 
     def seed_starts(self, seeds) -> list:
         """The scene's ``[seeds]`` on the map's domain (default: a grid of 100 over the region box)."""
