@@ -4,6 +4,7 @@ apply with the document locked, a timer keeps only its earliest due call, and cl
 ends everything.  No browser, no compiled code."""
 from __future__ import annotations
 
+import asyncio
 import threading
 import time
 
@@ -95,7 +96,8 @@ def test_an_exception_of_a_task_goes_to_its_error_callback_on_the_loop():
 
 
 class _Context:
-    """A session context whose ``with_locked_document`` records that the document was locked."""
+    """A session context whose ``with_locked_document`` records that the document was locked and, as
+    Bokeh's, awaits the sending of the changes after ``func``; ``calls``: the calls that ended so."""
 
     def __init__(self):
         self.locked = False
@@ -107,7 +109,8 @@ class _Context:
             await func(None)
         finally:
             self.locked = False
-            self.calls += 1
+        await asyncio.sleep(0)                  # (Bokeh: its pending writes)
+        self.calls += 1
 
 
 class _Doc:
@@ -144,6 +147,25 @@ def test_a_timer_keeps_its_earliest_due_call_only():
     timer.at(now - 1.0)                         # due now: it replaces the one in 10 s
     session.settle(60)
     assert len(fired) == 1 and timer.due is None and not session.busy()
+    session.close()
+
+
+def test_a_timers_action_that_asks_for_its_next_call_or_cancels_it_still_has_its_changes_sent():
+    doc = _Doc()
+    session = Session(doc)
+    fired: list = []
+
+    def action():
+        fired.append(time.monotonic())
+        if len(fired) == 1:
+            timer.at(time.monotonic())          # the next call, asked for by the action
+        else:
+            timer.cancel()
+
+    timer = session.timer(action)
+    timer.at(time.monotonic())
+    session.settle(60)
+    assert len(fired) == 2 and doc.session_context.calls == 2 and timer.due is None
     session.close()
 
 

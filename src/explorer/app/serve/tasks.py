@@ -174,5 +174,7 @@ class Timer:
         await self.session.apply(self._act)
 
     def _act(self) -> None:
-        self._due = None            # (the action may ask for the next call)
+        # due no more: the action may cancel the timer or ask for its next call, and this call still ends
+        # (Bokeh sends the action's changes after it returns)
+        self.session._tasks.pop(self, None)
         self.action()
