@@ -36,7 +36,7 @@ from explorer.analysis.system_sections import DRIVER_THREADS
 from explorer.app.serve import export, tasks
 from explorer.app.serve import settings as settings_mod
 from explorer.app.serve.orbits import FIRST_BLOCK, OrbitRun, Worker
-from explorer.app.serve.settings import Settings, format_starts, parse_fields, parse_starts
+from explorer.app.serve.settings import Settings, format_starts, parse_starts
 from explorer.app.serve.tasks import Session
 from explorer.model import ParameterError
 
@@ -63,27 +63,27 @@ SERVED = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=CROSSINGS)
 # ---------------------------------------------------------------- without a browser
 def test_page_values_are_validated_like_the_command_line():
     base = Settings()
-    s = parse_fields(base, {"mu": "0.5", "h": " 2.5 ", "method": "dop853", "tol": "1e-12", "crossings": "300"})
+    s = base.with_fields({"mu": "0.5", "h": " 2.5 ", "method": "dop853", "tol": "1e-12", "crossings": "300"})
     assert (s.params.mu, s.h, s.method, s.tol, s.crossings) == (0.5, 2.5, "dop853", 1e-12, 300)
     bad = {"a1": "-1", "mu": "abc", "lam": "0", "tol": "0.5", "h": "nan", "crossings": "2.5", "method": "rk4",
            "b": "1e999", "dt": "0"}
     for name, text in bad.items():
         with pytest.raises(ParameterError, match=name):
-            parse_fields(base, {name: text})
+            base.with_fields({name: text})
     with pytest.raises(ParameterError, match="unknown field"):
-        parse_fields(base, {"/etc/passwd": "1"})
+        base.with_fields({"/etc/passwd": "1"})
     with pytest.raises(ParameterError, match="crossings"):
-        parse_fields(base, {"crossings": str(settings_mod.MAX_CROSSINGS + 1)})
+        base.with_fields({"crossings": str(settings_mod.MAX_CROSSINGS + 1)})
 
 
 def test_the_section_angle_accepts_multiples_of_pi():
     base = Settings()
     for text, value in (("pi", np.pi), (" -pi ", -np.pi), ("2pi", 2 * np.pi), ("pi/2", np.pi / 2),
                         ("0.5*π", 0.5 * np.pi), ("1.25", 1.25)):
-        assert parse_fields(base, {"phi0": text}).phi0 == value, text
+        assert base.with_fields({"phi0": text}).phi0 == value, text
     for text in ("pix", "pi/0", "two pi"):
         with pytest.raises(ParameterError, match="phi0"):
-            parse_fields(base, {"phi0": text})
+            base.with_fields({"phi0": text})
 
 
 def test_the_mu_slider_writes_its_value_without_float_noise():
@@ -227,7 +227,7 @@ def test_starts_survive_the_url_bit_for_bit():
     starts = [tuple(map(float, rng.normal(size=2) / 3)) for _ in range(5)]
     assert parse_starts(format_starts(starts)) == starts
     s = Settings(params=model.FIGURE4.with_(mu=0.1 / 3), h=2.0 / 3 + 1)
-    assert parse_fields(Settings(), s.fields()) == s
+    assert Settings().with_fields(s.fields()) == s
     for text in ("1,2,3", "a,b", "1;", "nan,0"):
         with pytest.raises(ParameterError, match="orbits"):
             parse_starts(text)

@@ -20,7 +20,7 @@ from test_serve import SERVED, _click, _open, _poll_until, _wait, _wait_crossing
 
 from explorer import model
 from explorer.analysis import sections
-from explorer.app.serve.settings import Settings, parse_fields, parse_starts
+from explorer.app.serve.settings import Settings, parse_starts
 from explorer.model import ParameterError
 
 #: chromium and the served page (`--mu 0.03`), as in test_serve.py (its module-scoped fixtures)
@@ -250,7 +250,7 @@ def test_a_step_applies_its_value_through_the_field_refused_as_the_command_line_
         before = page.settings
         f.step(-1)
         with pytest.raises(ParameterError) as refused:                            # ... as the command line's checks
-            parse_fields(SERVED, {"a1": page.inputs["a1"].value})
+            SERVED.with_fields({"a1": page.inputs["a1"].value})
         assert page.message.text == f"not applied: {refused.value}" and page.settings == before
         f.step(-1)                                                                # the same step again: said again
         assert page.message.text == f"not applied: {refused.value}"

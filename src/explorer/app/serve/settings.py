@@ -135,10 +135,13 @@ class Settings(PageSettings, sections.Integration):
         return lyapunov.indicators(self.params, states=y0, tmax=time, method=self.method, tol=self.tol, dt=self.dt,
                                    which=which, max_steps=max_steps)
 
-    def new_run(self, ident: int, p1: float, p2: float):
-        from explorer.app.serve.orbits import OrbitRun
-
-        return OrbitRun(ident, p1, p2, self)
+    def stream(self, p1: float, p2: float, state, block: int, max_steps: int):
+        """Blocks (rows (n, 5): t, p1, p2, M, H - H0; the stream's state) of the orbit from (p1, p2), on from
+        ``state`` (None: its start): :func:`explorer.analysis.sections.iter_crossings`."""
+        y0 = model.section_state(self.params, [p1], [p2], self.h, self.phi0, self.direction or 1)
+        return ((b.rows(0), b.state) for b in sections.iter_crossings(
+            self.params, states=y0, n_crossings=self.crossings, block=block, state=state, max_steps=max_steps,
+            **self.section_kwargs()))
 
     def fields(self) -> dict:
         """The page's fields as text (``repr`` of each float: read back, the same number)."""

@@ -9,7 +9,7 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis import sections
-from explorer.app.serve.settings import MAX_CROSSINGS, Settings, Window, megno_of, read_fields
+from explorer.app.serve.settings import MAX_CROSSINGS, PageSettings, Settings, Window, read_fields
 from explorer.model import ParameterError, validation
 
 #: names the page's link keeps for itself: a System parameter may not take one (its field is a link key)
@@ -20,7 +20,7 @@ REGION_CELLS = 256
 
 
 @dataclass(frozen=True, eq=False)
-class SystemSettings:
+class SystemSettings(PageSettings):
     """The page of a System's section map ``smap``: fields the system's parameters, ``energy``, ``tol``
     and ``crossings``; equal when their fields are."""
 
@@ -104,10 +104,8 @@ class SystemSettings:
     def admissible(self, p1: float, p2: float) -> bool:
         return bool(self.allowed(p1, p2))
 
-    def refusal(self, p1: float, p2: float) -> str | None:
-        """The map's own message for a point outside its domain (None inside)."""
-        if self.admissible(p1, p2):
-            return None
+    def outside(self, p1: float, p2: float) -> str:
+        """The map's own message for a point outside its domain."""
         try:
             self.smap.states([(p1, p2)])
         except ParameterError as exc:
@@ -121,12 +119,11 @@ class SystemSettings:
         return type(s)(s.system, s.energy_value, section=s.section.expr, direction=s.direction, coords=s.coords,
                        solve=s.solve, tol=tol, tmax=s.tmax)
 
-    def megno(self, p1, p2, time: float, max_steps: int, mlce: bool = False):
+    def indicators(self, p1, p2, time: float, max_steps: int, which):
         from explorer.analysis import lyapunov
 
-        pts = np.column_stack([np.ravel(p1), np.ravel(p2)])
-        return megno_of(lyapunov.indicators(self.smap, pts, tmax=time, tol=self.tol, max_steps=max_steps,
-                                            which=("megno", "mlce") if mlce else ("megno",)), np.shape(p1), mlce)
+        return lyapunov.indicators(self.smap, np.column_stack([p1, p2]), tmax=time, tol=self.tol,
+                                   max_steps=max_steps, which=which)
 
     def stream(self, p1: float, p2: float, state, block: int, max_steps: int):
         """Settings.stream of the map's orbit from (p1, p2): rows (t, a, b, solve, E - E0)."""
