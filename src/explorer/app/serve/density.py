@@ -31,21 +31,16 @@ def glyph_cutoff(orbit, budget: int = GLYPH_BUDGET) -> int:
     return int(fits[0]) if fits.size else len(count)
 
 
-def cells(p1, p2, window, nx: int, ny: int):
-    """(cell index, mask): the grid cell of every point (p1, p2) in the window (x0, x1, y0, y1)."""
-    x0, x1, y0, y1 = window
-    ix = np.floor((np.asarray(p1, float) - x0) * (nx / (x1 - x0)))
-    iy = np.floor((np.asarray(p2, float) - y0) * (ny / (y1 - y0)))
-    inside = (ix >= 0) & (ix < nx) & (iy >= 0) & (iy < ny)
-    return (iy[inside] * nx + ix[inside]).astype(np.int64), inside
-
-
 def density_rgba(p1, p2, colour_index, window, nx: int, ny: int, colors, megno=None, palette=None,
                  lo: float = 0.0, hi: float = 8.0) -> np.ndarray:
     """The (ny, nx) uint32 RGBA image of (p1, p2) in ``window``: each cell in its most frequent orbit colour,
     or the ``palette`` colour of its mean ``megno`` in [lo, hi]; opacity growing with log(count)."""
     ncell = nx * ny
-    cell, inside = cells(p1, p2, window, nx, ny)
+    x0, x1, y0, y1 = window
+    ix = np.floor((np.asarray(p1, float) - x0) * (nx / (x1 - x0)))
+    iy = np.floor((np.asarray(p2, float) - y0) * (ny / (y1 - y0)))
+    inside = (ix >= 0) & (ix < nx) & (iy >= 0) & (iy < ny)
+    cell = (iy[inside] * nx + ix[inside]).astype(np.int64)
     count = np.bincount(cell, minlength=ncell)
     rgb = np.zeros((ncell, 3), np.uint8)
     if megno is None or palette is None:

@@ -29,10 +29,10 @@ def _empty(*extra) -> dict:
 
 
 class ChaosLayer:
-    """The chaos layer (box, indicator, source, colour bar, task) of ``settings()``; ``say(text)`` the
-    message line, ``on_changed()`` after the box or the indicator changed.  ``center``: (settings, point,
-    elliptic) of frequency diffusion's last centre; ``exact``: MEGNO's finest raster computes every
-    cell (the link's ``megno=exact``), else it is adaptive (raster.adaptive_raster)."""
+    """The chaos layer of ``settings()`` (box, indicator, raster, colour bar, task); ``say(text)`` the message
+    line, ``on_changed()`` after the box or the indicator changed.  ``center``: (settings, point, elliptic) of
+    frequency diffusion's last centre; ``exact``: MEGNO's finest raster computes every cell (the link's
+    ``megno=exact``), else it is adaptive (raster.adaptive_raster)."""
 
     def __init__(self, view, session, resolutions: tuple, time: float, settings, say, on_changed):
         self.view, self.settings, self.say, self.on_changed = view, settings, say, on_changed
@@ -47,8 +47,8 @@ class ChaosLayer:
                                                     f"frequency diffusion (N = {self.iterates})":
                                                     "frequency_diffusion"},
                                            value="megno", width=210)
-        self.layer.param.watch(lambda _e: session.soon(self._layer_changed), "value")
-        self.indicator.param.watch(lambda _e: session.soon(self._indicator_changed), "value")
+        self.layer.param.watch(lambda _e: session.soon(self._changed), "value")
+        self.indicator.param.watch(lambda _e: session.soon(lambda: self._changed(clear=True)), "value")
         view.on_window(self._window_moved)
 
     def draw(self, fig) -> None:
@@ -62,33 +62,27 @@ class ChaosLayer:
         self._show_scale()
 
     def scale(self) -> tuple:
-        """(low, high) of the colour scale of the layer's indicator."""
+        """(low, high) of the colour scale of the layer's indicator (frequency diffusion: the chaos maps')."""
         if self.indicator.value == "megno":
             return MEGNO_LOW, MEGNO_HIGH
-        style = STYLES["frequency_diffusion"]        # the chaos maps' scale (one definition)
+        style = STYLES["frequency_diffusion"]
         return style.vmin, style.vmax
 
-    def title(self) -> str:
-        """The colour bar's label: the indicator, and frequency diffusion's centre once known."""
-        if self.indicator.value == "megno":
-            return MEGNO_TITLE
-        c = self.center
-        if c is None or c[0] != self.settings():
-            return DIFFUSION_TITLE
-        (p1, p2), elliptic = c[1], c[2]
-        return f"{DIFFUSION_TITLE} around {'elliptic point' if elliptic else 'region centre'} ({p1:.4g}, {p2:.4g})"
-
     def _show_scale(self) -> None:
+        """The colour bar's scale and label: the indicator, and frequency diffusion's centre once known."""
         low, high = self.scale()
         self.mapper.update(low=low, high=high)
-        self.colour_bar.title = self.title()
+        title, c = (MEGNO_TITLE if self.indicator.value == "megno" else DIFFUSION_TITLE), self.center
+        if title == DIFFUSION_TITLE and c is not None and c[0] == self.settings():
+            title += f" around {'elliptic point' if c[2] else 'region centre'} ({c[1][0]:.4g}, {c[1][1]:.4g})"
+        self.colour_bar.title = title
 
     def load_url(self, args: dict) -> None:
         """The layer's state from a link: ``indicator`` and ``megno`` ("1": on; "exact": on, every cell computed)."""
         name = args.get("indicator") or "megno"
         if name not in raster_mod.INDICATORS:
             self.say(f"link's indicator ignored: must be one of {', '.join(raster_mod.INDICATORS)}, got "
-                          f"{name[:40]!r}")
+                     f"{name[:40]!r}")
             name = "megno"
         self.indicator.value = name
         self.exact = args.get("megno") == "exact"
@@ -103,14 +97,11 @@ class ChaosLayer:
         if self.layer.value:
             self.restart()
 
-    def _layer_changed(self):
+    def _changed(self, clear: bool = False):
+        """The box or (``clear``) the indicator changed."""
         self.colour_bar.visible = bool(self.layer.value)
-        self.restart()
-        self.on_changed()
-
-    def _indicator_changed(self):
-        self._show_scale()
-        self.raster_source.data = _empty("complete")       # no value of the other indicator on its scale
+        if clear:
+            self.raster_source.data = _empty("complete")       # no value of the other indicator on its scale
         self.restart()
         self.on_changed()
 
@@ -146,7 +137,7 @@ class ChaosLayer:
     def show_image(self, image) -> None:
         w = image.window
         self.raster_source.data = {"image": [image.values], "x": [w.x0], "y": [w.y0], "dw": [w.x1 - w.x0],
-                            "dh": [w.y1 - w.y0], "n": [image.n], "complete": [image.complete]}
+                                   "dh": [w.y1 - w.y0], "n": [image.n], "complete": [image.complete]}
 
 
 class DensityImage:
@@ -165,51 +156,39 @@ class DensityImage:
         fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.density)
 
     def refresh(self, force: bool = False) -> None:
-        """Redraw the density image of the crossings that are not dots: at most every DENSITY_SECONDS while
-        orbits stream in, at once when ``force`` or orbits move between dots and image, never unchanged."""
+        """Redraw the image of the crossings that are not dots: at most every DENSITY_SECONDS while orbits
+        stream in, at once when ``force`` or orbits move between dots and image, never unchanged."""
         orbits = self.orbits
-        orbit = orbits.crossings.data["orbit"]
-        n = len(orbit)
-        dense = n > density.THRESHOLD
+        orbit = np.asarray(orbits.crossings.data["orbit"])
+        dense = len(orbit) > density.THRESHOLD
+        first = 0 if dense else density.glyph_cutoff(orbit)
+        force = force or (dense, first) != (self.dense, self.glyph_first)
         if dense != self.dense:
             self.dense = dense
             orbits.points.visible = not dense
             orbits.show_all()
-            force = True
-        first = 0 if dense else density.glyph_cutoff(orbit)
-        if first != self.glyph_first:
-            self.glyph_first = first
-            orbits.glyph_filter.args = {"first": first}
-            force = True
-        if not dense and first == 0:
-            if self.density.data["image"]:
+        self.glyph_first = first
+        orbits.glyph_filter.args = {"first": first}
+        older = orbit < first
+        rows = slice(None) if dense else older          # the image's: every row, or the older orbits'
+        n = len(orbit) if dense else int(np.count_nonzero(older))
+        w = self.view.window
+        if not n or w is None:
+            if not n and self.density.data["image"]:
                 self.density.data = _empty()
             self._key = None
-            return
-        w = self.view.window
-        if w is None:
             return
         px, py = self.view.frame_px()
         nx, ny = max(int(px) // density.CELL_PX, 1), max(int(py) // density.CELL_PX, 1)
         by_megno = bool(orbits.colour_box.value)
-        keep = None if dense else np.asarray(orbit) < first           # the image's rows: the older orbits
-        shown = n if keep is None else int(np.count_nonzero(keep))
         # the rows change only by growing, leaving, or an orbit's MEGNO becoming known
-        key = (dense, first, shown, len(orbits.indicators) if by_megno else -1, by_megno, w, nx, ny)
-        if key == self._key:
+        key = (dense, first, n, len(orbits.indicators) if by_megno else -1, w, nx, ny)
+        if key == self._key or not force and time.monotonic() - self._at < DENSITY_SECONDS:
             return
-        now = time.monotonic()
-        if not force and now - self._at < DENSITY_SECONDS:
-            return
-        self._at, self._key = now, key
-        d = orbits.crossings.data
-        if keep is None:
-            p1, p2, c, megno = d["p1"], d["p2"], d["c"], d["megno"]
-        else:
-            p1, p2, c, megno = (np.asarray(d[k])[keep] for k in ("p1", "p2", "c", "megno"))
+        self._at, self._key = time.monotonic(), key
+        p1, p2, c, megno = (np.asarray(orbits.crossings.data[k])[rows] for k in ("p1", "p2", "c", "megno"))
         image = density.density_rgba(p1, p2, c, (w.x0, w.x1, w.y0, w.y1), nx, ny, COLORS,
-                                     megno=megno if by_megno else None,
-                                     palette=megno_palette(MEGNO_ORBIT_SKIP) if by_megno else None,
+                                     megno=megno if by_megno else None, palette=megno_palette(MEGNO_ORBIT_SKIP),
                                      lo=MEGNO_LOW, hi=MEGNO_HIGH)
         self.density.data = {"image": [image], "x": [w.x0], "y": [w.y0], "dw": [w.x1 - w.x0], "dh": [w.y1 - w.y0],
-                            "n": [shown]}
+                             "n": [n]}

@@ -1,8 +1,6 @@
-"""The orbits on the page (docs/commands/serve.md, "How it works"): the starts, their crossings from the
-session's :class:`~explorer.app.serve.orbits.Worker`, the live layer of a click's first crossings, the
-status line and the colours.  Bokeh model names: ``crossings`` (the rows the browser draws; none past
-density.THRESHOLD), ``glyphs``, ``live``, ``starts``, ``status``.  A hidden orbit keeps computing, its
-rows in :attr:`OrbitsLayer.hidden` only."""
+"""The orbits on the page (docs/commands/serve.md, "How it works"): starts, crossings from the session's
+:class:`~explorer.app.serve.orbits.Worker`, a click's first crossings on the live layer, the status line.
+Bokeh model names: ``crossings`` (none past density.THRESHOLD), ``glyphs``, ``live``, ``starts``, ``status``."""
 from __future__ import annotations
 
 import math
@@ -52,7 +50,7 @@ class OrbitsLayer:
         self._color = 0
         self.indicators: dict = {}             # orbit id -> (mean MEGNO, mLCE) over INDICATOR_TIME
         self.progress: dict = {}               # orbit id -> (crossings on the page so far, status)
-        self.hidden: dict = {}                 # orbit id -> its rows (columns of crossings), hidden
+        self.hidden: dict = {}                 # orbit id -> its rows (columns of crossings), hidden: not in crossings
         self.on_status = lambda: None          # called after every update of the status line
         self._pending: list = []               # blocks handed in, not yet on the page
         self._flushed_at = -math.inf           # when the last flush ran (monotonic)
@@ -116,15 +114,13 @@ class OrbitsLayer:
 
     def mark_starts(self) -> None:
         """Mark the starts not marked yet, and the status line (and the orbit list) anew."""
-        self._mark_starts()
+        self._draw_starts(mark=True)
         self.update_status()
 
-    def _mark_starts(self):
-        self._marked = {i for i, *_ in self.starts}
-        self._draw_starts()
-
-    def _draw_starts(self):
-        """The crosses of the marked starts that are not hidden."""
+    def _draw_starts(self, mark: bool = False):
+        """The crosses of the marked starts that are not hidden (``mark``: every start marked)."""
+        if mark:
+            self._marked = {i for i, *_ in self.starts}
         marks = [m for m in self.starts if m[0] in self._marked and m[0] not in self.hidden]
         data = {k: [m[j] for m in marks] for j, k in enumerate(("orbit", "p1", "p2", "c"))}
         if data != self.start_source.data:
@@ -138,8 +134,7 @@ class OrbitsLayer:
         self.indicators, self.progress, self.hidden = {}, {}, {}
         self.crossings.data = _empty_crossings()
         self.show_all()
-        self._marked = set()
-        self._draw_starts()
+        self._draw_starts(mark=True)
         return old
 
     def has(self, ident) -> bool:
@@ -192,7 +187,8 @@ class OrbitsLayer:
     def recount(self, settings) -> None:
         """New ``settings`` that differ only in the crossings per click K (Worker.recount): each orbit
         past K is cut to its first K rows, each one short of K continues exactly, none reruns."""
-        self._apply(self._take_pending())      # (the rows the worker counted, on the page before the cut)
+        blocks, self._pending = self._pending, []
+        self._apply(blocks)                    # (the rows the worker counted, on the page before the cut)
         now = self.worker.recount(settings, self._cut)
         self.progress.update({i: now[i] for i in self.progress if i in now})
         self.show_all()
@@ -226,8 +222,9 @@ class OrbitsLayer:
         """The queued blocks onto the page (docs/architecture.md, "Many crossings in the browser"): a click's first
         rows go alone to ``live`` (the overlay canvas), with its cross and the link; the status line
         and the density image wait for the flush FLUSH_SECONDS later, which settles them."""
-        blocks = self._take_pending()
-        first = {b[0] for b in blocks if 0 < len(b[1]) == b[2]}   # orbits at their first block: alone
+        blocks = [b for b in self._pending if self.has(b[0])]
+        self._pending = []
+        first = {b[0] for b in blocks if 0 < len(b[1]) == b[2] and b[0] not in self.hidden}   # alone
         if first:
             self._pending[:0] = [b for b in blocks if b[0] not in first]
             blocks = [b for b in blocks if b[0] in first]
@@ -239,7 +236,7 @@ class OrbitsLayer:
         if new and to_live:
             self.live.stream({k: v.tolist() for k, v in new.items()})   # drawn at once, alone
         moved = False if to_live else self._settle()
-        self._mark_starts()
+        self._draw_starts(mark=True)
         if first:
             self._settle_at = now + FLUSH_SECONDS if self.session.doc is not None else -math.inf
             self.host.push_url()
@@ -248,31 +245,22 @@ class OrbitsLayer:
         if self._pending or len(self.live.data["orbit"]):
             self.flush_timer.at(max(self._settle_at, now + (FLUSH_SECONDS if self._pending else 0.0)))
 
-    def _take_pending(self) -> list:
-        """The queued blocks of the orbits on the page; a hidden orbit's rows go to :attr:`hidden` instead."""
-        blocks, self._pending = self._pending, []
+    def _apply(self, blocks) -> dict:
+        """The blocks' rows onto ``crossings`` (a hidden orbit's into :attr:`hidden`), their progress; returns
+        the rows added to ``crossings`` as columns ({} if none)."""
         colour = {i: c for i, _a, _b, c in self.starts}
-        out = []
+        blocks = [b for b in blocks if b[0] in colour]
         for ident, rows, done, status in blocks:
-            if ident not in colour:
-                continue
             if ident in self.hidden and len(rows):
                 new, old = _columns([(ident, rows)], colour, self.indicators), self.hidden[ident]
                 self.hidden[ident] = {k: np.concatenate([old[k], new[k]]) for k in new}
-                rows = rows[:0]
-            out.append((ident, rows, done, status))
-        return out
-
-    def _apply(self, blocks) -> dict:
-        """The blocks' rows streamed to ``crossings`` (returned as columns, {} if none), their progress."""
-        full = [b for b in blocks if len(b[1])]
-        new = _columns(full, {i: c for i, _a, _b, c in self.starts}, self.indicators) if full else {}
-        if new:
-            self.crossings.stream(new)
-        for ident, _rows, done, status in blocks:
             self.progress[ident] = (done, status)
             if status not in ("running", "done"):
                 self.host.say(f"orbit {ident} stopped after {done} crossings: {status}")
+        drawn = [b for b in blocks if len(b[1]) and b[0] not in self.hidden]
+        new = _columns(drawn, colour, self.indicators) if drawn else {}
+        if new:
+            self.crossings.stream(new)
         return new
 
     def _settle(self) -> bool:
@@ -295,11 +283,11 @@ class OrbitsLayer:
         self._settled = len(self.crossings.data["orbit"])
 
     def _on_notice(self, _ident, text):
-        self._mark_starts()
+        self._draw_starts(mark=True)
         self.host.say(text)
 
     def _on_error(self, ident, exc):
-        self._mark_starts()
+        self._draw_starts(mark=True)
         self.progress[ident] = (self.progress.get(ident, (0,))[0], "failed")
         self.host.say(f"orbit {ident} failed: {failure(exc)}")
         self.update_status()
@@ -329,16 +317,13 @@ class OrbitsLayer:
         if not self.has(ident):
             return
         self.indicators[ident] = (megno, mlce)
-        if ident in self.hidden:
-            self.hidden[ident]["megno"] = np.full(len(self.hidden[ident]["megno"]), megno)
-        rows = np.flatnonzero(np.asarray(self.crossings.data["orbit"]) == ident)
-        if rows.size:      # the rows streamed before the indicator was known
-            self.crossings.patch(_megno_patch(rows, megno))
-            settled = self._settled        # (the browser's rows: settled up to it, live from it on)
-            if not self.host.density_image.dense and rows[0] < settled:
-                self.shown.patch(_megno_patch(rows[rows < settled], megno))
-            if rows[-1] >= settled:
-                self.live.patch(_megno_patch(rows[rows >= settled] - settled, megno, as_list=True))
+        for d in (self.hidden.get(ident), self.crossings.data):     # (server only: in place)
+            if d is not None:
+                d["megno"][np.asarray(d["orbit"]) == ident] = megno
+        for src in (self.shown, self.live):        # the browser's rows streamed before the indicator was known
+            rows = np.flatnonzero(np.asarray(src.data["orbit"]) == ident)
+            if rows.size:
+                src.patch(_megno_patch(rows, megno, as_list=src is self.live))
         self.update_status()
 
     def _colour_changed(self):
