@@ -14,17 +14,9 @@ class Box(pn.viewable.Viewer):
 
     def __init__(self, **params):
         super().__init__(**params)
-        self.widget = pn.widgets.CheckBoxGroup(options=[self.label], value=self._group_value(self.value))
+        self.widget = pn.widgets.CheckBoxGroup(options=[self.label], value=[self.label] if self.value else [])
         self.widget.param.watch(lambda e: setattr(self, "value", self.label in e.new), "value")
-        self.param.watch(lambda e: self._show(e.new), "value")
-
-    def _group_value(self, ticked: bool) -> list:
-        return [self.label] if ticked else []
-
-    def _show(self, ticked: bool) -> None:
-        want = self._group_value(ticked)
-        if self.widget.value != want:
-            self.widget.value = want
+        self.param.watch(lambda e: self.widget.param.update(value=[self.label] if e.new else []), "value")
 
     def __panel__(self):
         return self.widget

@@ -1,7 +1,6 @@
 """The ``serve`` command (docs/commands/serve.md); its options import no web library."""
 from __future__ import annotations
 
-import math
 import os
 
 from explorer import model
@@ -73,19 +72,12 @@ def run(args, open_browser: bool = False) -> int:
     """Serve the page until Ctrl-C (status 0); ``open_browser``: also open it (``explore``)."""
     from explorer.app.serve import server
 
-    if not 0 <= args.port <= 65535:
-        raise ParameterError(f"--port must be an integer in [0, 65535], got {args.port}")
+    validation.integer("--port", args.port, 0, 65535)
     if args.token is not None and (not args.token or len(args.token) > 256 or not args.token.isprintable()
                                    or any(c in args.token for c in " &#?%/")):
         raise ParameterError("--token must be 1 to 256 printable characters without spaces or & # ? % /")
     if not args.host or not args.host.strip() or any(c.isspace() for c in args.host):
         raise ParameterError(f"--host must be an address or host name (127.0.0.1 by default), got {args.host!r}")
-    for name in ("h", "tol", "dt"):
-        v = getattr(args, name)
-        if v is not None and not math.isfinite(v):
-            raise ParameterError(f"--{name} must be finite, got {v!r}")
-    if args.h is not None:
-        validation.magnitude("--h", args.h)
     if args.export_dir is not None and not os.path.isdir(args.export_dir):
         raise ParameterError(f"--export-dir must be an existing directory, got {args.export_dir!r}")
     from explorer.app.serve import raster

@@ -8,8 +8,7 @@ import time
 import panel as pn
 
 from explorer import model
-from explorer.app.serve import settings as settings_mod
-from explorer.app.serve.settings import FIELDS, Settings
+from explorer.app.serve.settings import FIELDS, Settings, room_for
 from explorer.app.serve.style import FIELD_WIDTH
 from explorer.model import ParameterError
 
@@ -80,22 +79,20 @@ class Fields:
                                                 value=min(max(mu, 0.0), end), width=220, visible="mu" in s)
         self._dragging = False                  # from a drag's first move to its release: the range stays
         self._slide_timer = session.timer(lambda: self._slid(self.mu_slider.value, held=True))
-        self.mu_slider.param.watch(lambda e: self._quiet or self._drag(), "value")
-        self.mu_slider.param.watch(lambda e: self._quiet or self._slid(e.new), "value_throttled")
+        self.mu_slider.param.watch(self._drag, "value")
+        self.mu_slider.param.watch(lambda e: None if self._quiet else self._slid(e.new), "value_throttled")
         steps = [n for n in settings.field_names if n in STEP_FIELDS or n not in FIELDS]
         self.step_field = pn.widgets.Select(label="step", options={LABELS.get(n, n): n for n in steps},
                                             value=steps[0], width=62, margin=STEP_MARGIN)
         self.step_size = pn.widgets.FloatInput(label="by", value=default_step(float(s[steps[0]])), width=82,
                                             margin=STEP_MARGIN)
-        self.step_field.param.watch(lambda e: self._retarget(e.new), "value")
-        buttons = []
-        for label, k in (("−", -1), ("+", 1)):
-            b = pn.widgets.Button(label=label, width=28, align="end", margin=STEP_MARGIN)
+        self.step_field.param.watch(lambda e: self._reset_step(e.new), "value")
+        self.step_buttons = tuple(pn.widgets.Button(label=label, width=28, align="end", margin=STEP_MARGIN)
+                                  for label in ("−", "+"))
+        for b, k in zip(self.step_buttons, (-1, 1)):
             b.on_click(lambda _e, k=k: session.soon(lambda: self.step(k)))
-            buttons.append(b)
-        self.step_buttons = tuple(buttons)
         self.grid = pn.Column(self.mu_slider, pn.GridBox(*self.inputs.values(), ncols=2),
-                              pn.Row(self.step_field, self.step_size, *buttons))
+                              pn.Row(self.step_field, self.step_size, *self.step_buttons))
 
     def _edited(self, session, on_edit, name: str) -> None:
         if self._quiet:
@@ -104,7 +101,7 @@ class Fields:
             self.step_field.value = name
         session.soon(lambda: on_edit(name))
 
-    def _retarget(self, name: str) -> None:
+    def _reset_step(self, name: str) -> None:
         self.step_size.value = default_step(float(self.applied.fields()[name]))
 
     def step(self, k: int, name: str | None = None) -> None:
@@ -112,17 +109,17 @@ class Fields:
         name = name or self.step_field.value
         size = self.step_size.value
         if size is None or not (math.isfinite(size) and size > 0.0):
-            self.step_size.value = default_step(float(self.applied.fields()[name]))
-            return
+            return self._reset_step(name)
         text = stepped(name, self.applied.fields()[name], float(size), k)
         if self.inputs[name].value == text:       # the same refused text again: said again
             self.inputs[name].param.trigger("value")
         else:
             self.inputs[name].value = text
 
-    def _drag(self) -> None:
-        self._dragging = True
-        self._slide_timer.at(time.monotonic() + SLIDE_SECONDS)
+    def _drag(self, _event) -> None:
+        if not self._quiet:
+            self._dragging = True
+            self._slide_timer.at(time.monotonic() + SLIDE_SECONDS)
 
     def _slid(self, value, held: bool = False) -> None:
         """The slider's ``value`` into the field (``held``: mid-drag; at the release the range follows it)."""
@@ -175,7 +172,7 @@ class Fields:
         else:
             fields = {**applied.fields(), name: self.inputs[name].value}
         new = base.with_fields(fields)
-        full = settings_mod.room_for(n_orbits, new.crossings)
+        full = room_for(n_orbits, new.crossings)
         if full:
             raise ParameterError(f"crossings: {full}")
         return new

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -43,6 +44,10 @@ def room_for(n_orbits: int, crossings: int) -> str | None:
 
 class PageSettings:
     """What Chaplygin's page (:class:`Settings`) and a System's (system_page.SystemSettings) say alike."""
+
+    admissible: Any                # (p1, p2) -> bool: a click there starts an orbit
+    outside: Any                   # (p1, p2) -> str: why not
+    indicators: Any                # (p1, p2, time, max_steps, which) -> lyapunov.indicators' result or None
 
     def refusal(self, p1: float, p2: float) -> str | None:
         """Why a click at (p1, p2) starts no orbit (None: it does)."""
@@ -185,8 +190,10 @@ def read_angle(name: str, text) -> float:
         return read_number(name, text)
     m = re.fullmatch(r"([+-]?)(.*?)\*?pi(?:/(.+))?", s) if len(s) <= MAX_FIELD_CHARS else None
     try:
+        if m is None:
+            raise ValueError
         value = float(m[1] + (m[2] or "1")) * math.pi / float(m[3] or 1)
-    except (TypeError, ValueError, ZeroDivisionError):
+    except (ValueError, ZeroDivisionError):
         raise ParameterError(f"{name} must be a number or a multiple of pi (pi, -pi, 2pi, pi/2), "
                              f"got {str(text).strip()[:MAX_FIELD_CHARS]!r}") from None
     return validation.real(name, value)

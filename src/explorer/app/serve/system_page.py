@@ -149,10 +149,10 @@ class SystemSettings(PageSettings):
 
 
 def page_settings(scene=None, system=None, panel: int = 0, flag: str = "", **values) -> tuple:
-    """(settings, label, seeds) a page starts from: a System's section map (``system``, a section map or
-    'module:attribute', or ``scene`` a section map or a System's scene), else Chaplygin's model (``scene``'s
-    panel ``panel``; None: Figure 4); ``values`` (None: not given) on top, validated, each named ``flag`` +
-    its name in a refusal."""
+    """(settings, label, seeds) a page starts from: a System's section map (``system``: a section map or
+    'module:attribute'; or ``scene``: a section map or a System's scene), else Chaplygin's model (``scene``'s
+    panel ``panel``; None: Figure 4); the ``values`` given (not None) on top, validated; ``flag``: how the
+    refusal of a Chaplygin option on a System's page names it."""
     from explorer.analysis.system_sections import is_system_map
     from explorer.io.scene import SeedSpec, SystemScene, load_scene
     from explorer.io.scene.system import resolve_system
@@ -165,19 +165,17 @@ def page_settings(scene=None, system=None, panel: int = 0, flag: str = "", **val
     if scene is None and panel != 0:
         raise ParameterError("panel needs a scene")
     i = 0 if scene is None else validation.integer("panel", panel, 0, scene.n_panels - 1)
-    plabel = "" if scene is None else scene.panel(i)[2]
-    label = "" if scene is None else f"{scene.name}: {plabel}" if plabel else scene.name
+    label = "" if scene is None else ": ".join(n for n in (scene.name, scene.panel(i)[2]) if n)
     given = {} if scene is None else {"tol": scene.integration.tol,
                                       "crossings": min(scene.integration.crossings, MAX_CROSSINGS)}
     if system is None and not isinstance(scene, SystemScene):
+        params, h = (model.FIGURE4, model.FIGURE4_H) if scene is None else scene.panel(i)[:2]
         if scene is not None:
             integ = scene.integration
-            given.update(params=scene.panel(i)[0], h=scene.panel(i)[1], method=integ.method, dt=integ.dt,
-                         phi0=integ.phi0, direction=integ.direction)
-        base = Settings(**given)
-        params = {k: validation.real(flag + k, values.pop(k)) for k in model.PARAM_NAMES if k in values}
-        return (replace(base, params=base.params.with_(**params), **values), label,
-                SeedSpec() if scene is None else scene.seeds)
+            given.update(method=integ.method, dt=integ.dt, phi0=integ.phi0, direction=integ.direction)
+        params = params.with_(**{k: values.pop(k) for k in model.PARAM_NAMES if k in values})
+        seeds = SeedSpec() if scene is None else scene.seeds
+        return Settings(params=params, **{"h": h, **given, **values}), label, seeds
     wrong = [k for k in values if k not in ("h", "tol", "crossings")]
     if wrong:
         raise ParameterError(f"{flag}{wrong[0]} belongs to Chaplygin's model; a System's page takes {flag}h (its "
@@ -193,5 +191,5 @@ def page_settings(scene=None, system=None, panel: int = 0, flag: str = "", **val
                                  f"--system {system})")
         label = smap.system.name
     if "h" in values:
-        smap = smap.with_value("energy", validation.real(flag + "h", values.pop("h")))
+        smap = smap.with_value("energy", validation.magnitude(flag + "h", values.pop("h")))
     return SystemSettings(smap, **{**given, **values}), label, None if scene is None else scene.seeds
