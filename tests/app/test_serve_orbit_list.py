@@ -99,13 +99,13 @@ def test_choosing_an_orbit_selects_it_as_a_pick_does_and_a_pick_marks_its_row():
         _poll_until(page, lambda: len(page.orbits.crossings.data["t"]) == 2 * s.crossings)
         one, two = (i for i, *_ in page.orbits.starts)
         lst = page.orbit_list
-        assert lst.filter.args == {"orbit": 0} and lst.hide_button.disabled       # nothing selected yet
+        assert lst.filter.group == 0 and lst.hide_button.disabled       # nothing selected yet
         lst.choice.value = two                                                    # chosen in the list
         assert page.orbit_list.picked == two and "orbit 2 from (1.3, 0.05)" in page.orbit_list.text.text
         _poll_until(page, lambda: two in page.orbit_list.readouts and "rotation number" in page.orbit_list.text.text)
         # the highlight: the browser's filter keeps exactly this orbit's rows of the drawn dots
-        assert lst.filter.args == {"orbit": two} and lst.marks.data_source is page.orbits.shown
-        kept = np.asarray(page.orbits.shown.data["orbit"]) == lst.filter.args["orbit"]
+        assert lst.filter.group == two and lst.marks.data_source is page.orbits.shown
+        kept = np.asarray(page.orbits.shown.data["orbit"]) == lst.filter.group
         np.testing.assert_array_equal(np.asarray(page.orbits.shown.data["p1"])[kept], _rows(page, two)[:, 1])
         assert lst.marks.glyph.size > page.orbits.points.glyph.size                      # larger, outlined
         assert SELECTED_BACKGROUND in _table(page)[two][0] and SELECTED_BACKGROUND not in _table(page)[one][0]
@@ -115,12 +115,12 @@ def test_choosing_an_orbit_selects_it_as_a_pick_does_and_a_pick_marks_its_row():
         d = page.orbits.crossings.data
         k = int(np.flatnonzero(np.asarray(d["orbit"]) == one)[5])
         assert page.orbit_list.pick(float(d["p1"][k]), float(d["p2"][k])) == one
-        assert lst.choice.value == one and lst.filter.args == {"orbit": one}
+        assert lst.choice.value == one and lst.filter.group == one
         assert SELECTED_BACKGROUND in _table(page)[one][0] and SELECTED_BACKGROUND not in _table(page)[two][0]
         lst.choice.value = two                                                    # back: the same readout, at once
         assert page.orbit_list.text.text == shown_by_list
         lst.choice.value = 0                                                      # none
-        assert page.orbit_list.picked is None and page.orbit_list.text.text == "" and lst.filter.args == {"orbit": 0}
+        assert page.orbit_list.picked is None and page.orbit_list.text.text == "" and lst.filter.group == 0
     finally:
         page.close()
 
@@ -271,9 +271,8 @@ def _click_and_choose_the_orbit(page) -> None:
     _wait_crossings(page, SERVED.crossings)
     _wait(page, "() => Bokeh.documents[0].get_model_by_name('orbit-list').text.includes(\"data-orbit='1'\")")
     page.locator("select").filter(has_text="(none)").select_option(index=1)
-    _wait(page, "() => { const a = Bokeh.documents[0].get_model_by_name('selected-orbit').args;"
-                " return (a instanceof Map ? a.get('orbit') : a.orbit) === 1 && "
-                "Bokeh.documents[0].get_model_by_name('readout').text.startsWith('orbit 1'); }")
+    _wait(page, "() => Bokeh.documents[0].get_model_by_name('selected-orbit').group === 1 && "
+                "Bokeh.documents[0].get_model_by_name('readout').text.startsWith('orbit 1')")
 
 
 def test_in_the_browser_the_list_selects_and_hides_an_orbit(served, browser):

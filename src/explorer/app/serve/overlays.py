@@ -1,68 +1,65 @@
-"""The searches the page's check boxes and picks run (docs/commands/serve.md): fixed points, separatrices,
-periodic orbits, a picked orbit's readout and a saddle's manifolds.  No web library here."""
+"""The searches the page's check boxes and picks run (docs/commands/serve.md), each giving (found, message):
+fixed points, separatrices, periodic orbits, a picked orbit's readout and a saddle's manifolds.  No web library."""
 from __future__ import annotations
 
 import math
 
 import numpy as np
 
+from explorer.analysis import rotation
+from explorer.analysis.budget import Budget, BudgetExceeded
+from explorer.analysis.fixedpoints import find_fixed_point
+from explorer.analysis.manifolds import manifolds
+from explorer.analysis.periodic import search_periodic_orbits
+from explorer.app.serve.orbits import INDICATOR_TIME, orbit_indicators
+from explorer.app.serve.style import megno_kind
 from explorer.app.serve.tasks import failure
 
 #: the periodic orbits of periods 1..PERIODIC_MAX are marked (analysis/periodic.py)
 PERIODIC_MAX = 4
+#: wall-clock budgets (s) of the fixed points with their separatrices, the periodic orbits and a pick's readout;
+#: a search that runs out shows what it found
+FIXED_SECONDS = 30.0
+PERIODIC_SECONDS = 60.0
+READOUT_SECONDS = 30.0
+#: steps per orbit in a crossing batch of a page's search (a return takes about 65 at Figure 4's values)
+SEARCH_MAX_STEPS = 100_000
+#: arclength and wall-clock budget (s) of each separatrix branch, and of each branch of a picked saddle's
+#: manifolds (explorer.analysis.manifolds): drawn as far as it got
+SEPARATRIX_ARCLENGTH = 4.0
+SEPARATRIX_MAX_TIME = 4.0
+MANIFOLD_ARCLENGTH = 10.0
+MANIFOLD_MAX_TIME = 10.0
+#: wall-clock budget of a pick's manifolds, Newton's method and the four branches (s)
+MANIFOLD_SECONDS = 4 * MANIFOLD_MAX_TIME + 5.0
 
 
-def _num(x) -> str:
-    """Short form of a coordinate: 4 digits, round-off-sized values as 0."""
-    x = float(x)
-    return "0" if abs(x) < 1e-12 else f"{x:.4g}"
+def search_budget(seconds: float) -> Budget:
+    """The Budget a page's search runs in: ``seconds`` and SEARCH_MAX_STEPS."""
+    return Budget(seconds, max_steps=SEARCH_MAX_STEPS)
+
+
+def _at(p) -> str:
+    """``(p1, p2)`` in 4 digits, round-off-sized values as 0."""
+    return "(" + ", ".join("0" if abs(float(x)) < 1e-12 else f"{float(x):.4g}" for x in p[:2]) + ")"
 
 
 def _fixed_points_from(view, first):
     """The fixed points Newton's method reaches from ``first``, the region's centre and half-way to its
     edge along both axes (admissible guesses only), lazily."""
-    from explorer.analysis.budget import BudgetExceeded
-    from explorer.analysis.fixedpoints import find_fixed_point
-
     c1, c2, r1, r2 = view.region
-    guesses = [first, (c1, c2), (c1 - 0.5 * r1, c2), (c1 + 0.5 * r1, c2), (c1, c2 - 0.5 * r2),
-               (c1, c2 + 0.5 * r2)]
-    for g in guesses:
-        if not view.admissible(*g):
-            continue
+    for g in (first, (c1, c2), (c1 - 0.5 * r1, c2), (c1 + 0.5 * r1, c2), (c1, c2 - 0.5 * r2), (c1, c2 + 0.5 * r2)):
         try:
-            yield find_fixed_point(view.section_map(), g)
+            if view.admissible(*g):
+                yield find_fixed_point(view.section_map(), g)
         except BudgetExceeded:
             raise
         except Exception:  # noqa: BLE001 - no convergence from this guess
             continue
 
 
-#: wall-clock budget of the fixed points and their separatrices (s): the search shows what it found
-FIXED_SECONDS = 30.0
-#: wall-clock budget of the periodic orbits of periods 1..PERIODIC_MAX (s)
-PERIODIC_SECONDS = 60.0
-#: wall-clock budget of a pick's readout (its indicators and rotation number, s)
-READOUT_SECONDS = 30.0
-#: steps per orbit in a crossing batch of a page's search (a return takes about 65 at Figure 4's values)
-SEARCH_MAX_STEPS = 100_000
-#: arclength of each separatrix branch of the overlay (explorer.analysis.manifolds)
-SEPARATRIX_ARCLENGTH = 4.0
-#: wall-clock budget of each separatrix branch (s): drawn as far as it got
-SEPARATRIX_MAX_TIME = 4.0
-
-
-def search_budget(seconds: float):
-    """The Budget a page's search runs in: ``seconds`` and SEARCH_MAX_STEPS."""
-    from explorer.analysis.budget import Budget
-
-    return Budget(seconds, max_steps=SEARCH_MAX_STEPS)
-
-
-def describe_points(points) -> str:
-    """``(p1, p2) elliptic, ...`` of fixed points."""
-    return ", ".join(f"({_num(fp.point[0])}, {_num(fp.point[1])}) {'elliptic' if fp.stable else 'hyperbolic'}"
-                     for fp in points)
+def _described(points) -> str:
+    return ", ".join(f"{_at(fp.point)} {'elliptic' if fp.stable else 'hyperbolic'}" for fp in points)
 
 
 def fixed_points(view) -> tuple:
@@ -70,34 +67,26 @@ def fixed_points(view) -> tuple:
     page's settings (:class:`~explorer.app.serve.settings.Settings`)."""
     if view.region is None:
         return [], "fixed points: the region is empty"
-    from explorer.analysis.budget import BudgetExceeded
-
     points: list = []
+    stopped = ""
     try:
         for fp in _fixed_points_from(view, (0.0, 0.0)):
             if all(np.max(np.abs(np.asarray(fp.point) - np.asarray(q.point))) > 1e-7 for q in points):
                 points.append(fp)
     except BudgetExceeded as exc:
-        return points, f"fixed points {describe_points(points) or 'none found'}: search {exc}"
-    if not points:
-        return [], ("fixed points: Newton's method found none from p = 0, the region's centre or half-way to "
-                    "its edge")
-    return points, f"fixed points {describe_points(points)}"
+        stopped = f": search {exc}"
+    found = _described(points) or "none found (Newton's method from p = 0, the region's centre, half-way to its edge)"
+    return points, f"fixed points {found}{stopped}"
 
 
 def separatrices(view, points, text: str) -> tuple:
     """(curves, message): the four separatrix branches of each hyperbolic fixed point of ``points``, grown
     to SEPARATRIX_ARCLENGTH (docs/manifolds.md) as (M, 2) arrays, and ``text`` (the fixed points' message)
     with what they gave; a budget that runs out ends the curves there."""
-    from explorer.analysis.budget import BudgetExceeded
-    from explorer.analysis.manifolds import manifolds
-
     curves: list = []
     notes = []
-    for fp in points:
-        if fp.stable:
-            continue
-        at = f"({_num(fp.point[0])}, {_num(fp.point[1])})"
+    for fp in (fp for fp in points if not fp.stable):
+        at = _at(fp.point)
         try:
             branches = manifolds(view.section_map(), fp, arclength=SEPARATRIX_ARCLENGTH, max_time=SEPARATRIX_MAX_TIME)
         except BudgetExceeded as exc:
@@ -115,18 +104,13 @@ def separatrices(view, points, text: str) -> tuple:
     return curves, text
 
 
-def periodic_orbits(view, max_period=None):
-    """(orbits, message): the periodic orbits of minimal periods 1..``max_period`` (default PERIODIC_MAX)
-    of :func:`explorer.analysis.periodic.search_periodic_orbits`; a budget that runs out ends it there."""
-    from explorer.analysis.budget import BudgetExceeded
-    from explorer.analysis.periodic import search_periodic_orbits
-
-    K = PERIODIC_MAX if max_period is None else int(max_period)
+def periodic_orbits(view):
+    """(orbits, message): the periodic orbits of minimal periods 1..PERIODIC_MAX of
+    :func:`explorer.analysis.periodic.search_periodic_orbits`; a budget that runs out ends it there."""
+    K = PERIODIC_MAX
     if view.region is None:
         return [], "periodic orbits: the region is empty"
-    orbits = []
-    stopped = ""
-    done = 0
+    orbits, stopped, done = [], "", 0
     for k in range(1, K + 1):
         try:
             orbits += search_periodic_orbits(view.section_map(), k, grid=8, max_guesses=30)
@@ -151,11 +135,6 @@ def elliptic_center(view, start):
 def orbit_readout(settings, start) -> tuple:
     """(values, message): a picked orbit's megno, mlce, rotation number (around ``center``, its
     :func:`elliptic_center`; or None) and the readout's words (docs/commands/serve.md)."""
-    from explorer.analysis import rotation
-    from explorer.analysis.budget import BudgetExceeded
-    from explorer.app.serve.orbits import INDICATOR_TIME, orbit_indicators
-    from explorer.app.serve.style import megno_kind
-
     p1, p2 = float(start[0]), float(start[1])
     megno, mlce = orbit_indicators(settings, p1, p2)
     values = {"megno": megno, "mlce": mlce, "rotation": None, "center": None}
@@ -179,28 +158,16 @@ def orbit_readout(settings, start) -> tuple:
 
 def rotation_tol(settings) -> float:
     """The Taylor tolerance of an orbit's rotation number (rotation numbers are Taylor only)."""
-    from explorer.analysis import rotation
-
     return float(settings.tol) if settings.method == "taylor" else float(rotation.DEFAULT_TOL)
-
-
-#: arclength each manifold branch of a picked saddle is grown to (explorer.analysis.manifolds)
-MANIFOLD_ARCLENGTH = 10.0
-#: wall-clock budget of each branch (s): drawn as far as it got
-MANIFOLD_MAX_TIME = 10.0
-#: wall-clock budget of a pick's manifolds, Newton's method and the four branches (s)
-MANIFOLD_SECONDS = 4 * MANIFOLD_MAX_TIME + 5.0
 
 
 def saddle_manifolds(settings, point, period=1):
     """(branches, message): W^u then W^s of the hyperbolic orbit of ``period`` through ``point``, grown
     to MANIFOLD_ARCLENGTH (docs/manifolds.md); ParameterError when there is no such orbit."""
-    from explorer.analysis.manifolds import manifolds
-
     p1, p2 = float(point[0]), float(point[1])
     branches = manifolds(settings.section_map(), (p1, p2), arclength=MANIFOLD_ARCLENGTH, period=int(period),
                          max_time=MANIFOLD_MAX_TIME)
     npts = sum(len(b.points) for b in branches)
-    text = (f"manifolds of the hyperbolic period-{int(period)} orbit at ({_num(p1)}, {_num(p2)}): "
+    text = (f"manifolds of the hyperbolic period-{int(period)} orbit at {_at((p1, p2))}: "
             f"{len(branches)} branches (W^u red, W^s blue) to arclength {MANIFOLD_ARCLENGTH:g}, {npts} points")
     return branches, text

@@ -4,17 +4,16 @@ readout (mLCE, MEGNO, rotation number), or near a hyperbolic mark that mark's ma
 from __future__ import annotations
 
 import html
-import math
 from functools import partial
 
 import numpy as np
 import panel as pn
-from bokeh.models import CDSView, CustomJSFilter, Div
+from bokeh.models import CDSView, Div, GroupFilter
 
 from explorer.app.serve import overlays as search
 from explorer.app.serve import settings as settings_mod
 from explorer.app.serve.orbits import COLORS
-from explorer.app.serve.page_overlays import show_search
+from explorer.app.serve.page_overlays import nearest, show_search
 from explorer.app.serve.style import LIST_WIDTH
 from explorer.model import ParameterError
 
@@ -23,10 +22,6 @@ PICK_PX = 6.0
 
 #: the chooser's entry for "no orbit selected" (orbit ids start at 1)
 NONE_LABEL = "(none)"
-#: the browser's filter of the highlighted rows: those of orbit ``orbit``
-SELECTED_FILTER = ("const o = source.data.orbit, n = o.length, rows = [];\n"
-                   "for (let i = 0; i < n; i++) if (o[i] == orbit) rows.push(i);\n"
-                   "return rows;")
 #: the selected orbit's markers: this size (pixels; the dots are 2), outlined in this colour
 SELECTED_SIZE = 6.0
 SELECTED_LINE = "#000000"
@@ -44,9 +39,8 @@ COLUMNS = (("", "the orbit's colour on the section"), ("orbit", "its id (choose 
 
 
 class OrbitList:
-    """The list and the picked orbit (``picked``, its readout ``text``, the ``readouts`` computed so far);
-    ``settings()``: the page's, ``say(text)``: its message line, ``on_changed()`` after a hide, show,
-    delete or clear (the page's link)."""
+    """The list and the picked orbit (``picked``, its readout ``text``); ``settings()``: the page's,
+    ``say(text)``: its message line, ``on_changed()`` after a hide, show, delete or clear (the link)."""
 
     def __init__(self, orbits, overlays, view, session, settings, say, on_changed):
         self.orbits, self.overlays, self.view, self.session = orbits, overlays, view, session
@@ -54,7 +48,7 @@ class OrbitList:
         self.text = Div(name="readout", text="", render_as_text=True, styles={"font-family": "monospace"})
         self.picked: int | None = None          # the orbit whose readout is shown
         self.readouts: dict = {}                # orbit id -> (values, readout text) of search.orbit_readout
-        self.filter: CustomJSFilter | None = None
+        self.filter = GroupFilter(name="selected-orbit", column_name="orbit", group=0)   # the highlighted rows
         self.table = Div(name="orbit-list", text="", styles={"max-height": LIST_MAX_HEIGHT, "overflow-y": "auto"},
                          width=LIST_WIDTH)
         self.choice = pn.widgets.Select(label="orbit", options={NONE_LABEL: 0}, value=0, width=LIST_WIDTH - 170)
@@ -70,7 +64,6 @@ class OrbitList:
 
     def draw(self, fig) -> None:
         """The selected orbit's markers (call after OrbitsLayer.draw), filtered from the browser's rows."""
-        self.filter = CustomJSFilter(name="selected-orbit", args={"orbit": 0}, code=SELECTED_FILTER)
         self.marks = fig.scatter("p1", "p2", source=self.orbits.shown, view=CDSView(filter=self.filter),
                                  fill_color=self.orbits.by_orbit, line_color=SELECTED_LINE, line_width=1.0,
                                  size=SELECTED_SIZE)
@@ -78,12 +71,8 @@ class OrbitList:
     # ------------------------------------------------------------ actions
     def choose(self, ident) -> None:
         """Select orbit ``ident`` (0 or None: none), as a pick of it does: its readout and highlight."""
-        if (ident or None) == self.picked:
-            return                              # (refresh set the chooser to the selection)
-        if ident and self.orbits.has(ident):
-            self.select(int(ident))
-        elif self.picked is not None:
-            self.unpick()
+        if (ident or None) != self.picked:      # (not when refresh set the chooser to the selection)
+            self.select(ident)
 
     def toggle(self, ident: int | None = None) -> None:
         """Hide orbit ``ident`` (None: the selected one), or show it again if hidden."""
@@ -91,15 +80,13 @@ class OrbitList:
         if ident is None:
             return
         (self.orbits.show if ident in self.orbits.hidden else self.orbits.hide)(ident)
-        self.orbits.update_status(force_density=True)
-        self.on_changed()
+        self._changed(force_density=True)
 
     def clear(self) -> None:
         """Remove every orbit (running and paused ones stopped)."""
         self.forget()
         self.orbits.drop_all()
-        self.orbits.update_status(force_density=True)
-        self.on_changed()
+        self._changed(force_density=True)
 
     def undo(self) -> None:
         """Remove the newest orbit (stopped if it runs or is paused)."""
@@ -118,7 +105,10 @@ class OrbitList:
             return
         self.forget(ident)
         self.orbits.remove(ident)
-        self.orbits.update_status()
+        self._changed()
+
+    def _changed(self, force_density: bool = False) -> None:
+        self.orbits.update_status(force_density=force_density)
         self.on_changed()
 
     # ------------------------------------------------------------ the link
@@ -150,56 +140,45 @@ class OrbitList:
         hidden = picked is not None and picked in self.orbits.hidden
         self.hide_button.label = "show" if hidden else "hide"
         self.hide_button.disabled = self.delete_button.disabled = picked is None
-        if self.filter is not None:
-            self.filter.args = {"orbit": picked or 0}
+        self.filter.group = picked or 0
         self.table.text = _table(self.orbits, picked)
 
     # ------------------------------------------------------------ the picked orbit
     def pick(self, p1: float, p2: float, radius_px: float = PICK_PX) -> int | None:
         """A pick at (p1, p2): near a hyperbolic mark its manifolds (None), else selects the orbit with the
         nearest crossing within ``radius_px`` pixels and returns its id."""
-        finite = math.isfinite(p1) and math.isfinite(p2)
-        saddle = self.overlays.saddle_near(p1, p2, radius_px) if finite else None
+        saddle = self.overlays.saddle_near(p1, p2, radius_px)
         if saddle is not None:
             self.overlays.show_manifolds(*saddle)
             return None
         d = self.orbits.crossings.data
-        if not finite or not len(d["orbit"]):
-            self.say("pick: no orbit on the page yet")
-            return None
-        px, py = self.view.pixel()
-        dist = np.hypot((np.asarray(d["p1"]) - p1) / (px or 1.0), (np.asarray(d["p2"]) - p2) / (py or 1.0))
-        k = int(np.argmin(dist))
-        if not dist[k] <= radius_px:
-            self.say(f"pick: no crossing within {radius_px:g} pixels of ({p1:.4g}, {p2:.4g})")
+        k = nearest(self.view, d["p1"], d["p2"], p1, p2, radius_px)
+        if k is None:
+            self.say(f"pick: no crossing within {radius_px:g} pixels of ({p1:.4g}, {p2:.4g})" if len(d["orbit"])
+                     else "pick: no orbit on the page yet")
             return None
         ident = int(np.asarray(d["orbit"])[k])
         self.select(ident)
         return ident
 
-    def select(self, ident: int) -> None:
-        """Show orbit ``ident``'s readout (computed once per orbit and settings, the latest pick)."""
+    def select(self, ident) -> None:
+        """Select orbit ``ident`` (None, or not an orbit of the page: none) and show its readout (computed once
+        per orbit and settings, the latest pick; a readout stays known until :meth:`forget`)."""
         start = next(((a, b) for i, a, b, _c in self.orbits.starts if i == ident), None)
-        if start is None:
-            return
-        self.picked = ident
+        self.session.cancel("readout")
+        self.picked = None if start is None else int(ident)
         self.refresh()
+        if start is None:
+            self.text.text = ""
+            return
         self.say("")
         if ident in self.readouts:
-            self.session.cancel("readout")
             self.text.text = self.readouts[ident][1]
             return
         self.text.text = f"orbit {ident} from ({start[0]:.6g}, {start[1]:.6g}): computing mLCE, MEGNO, rotation ..."
         self.session.start("readout", show_search(self.session, "readout", partial(self._keep, ident, start),
                                                   search.orbit_readout, self.settings(), start),
                            budget=search.search_budget(search.READOUT_SECONDS))
-
-    def unpick(self) -> None:
-        """No orbit picked (its readout stays known: picked again, it shows at once)."""
-        self.session.cancel("readout")
-        self.text.text = ""
-        self.picked = None
-        self.refresh()
 
     def forget(self, ident: int | None = None) -> None:
         """Drop the readout of orbit ``ident`` (None: of every orbit) and stop computing it."""
@@ -208,7 +187,7 @@ class OrbitList:
         else:
             self.readouts.pop(ident, None)
         if ident is None or self.picked == ident:
-            self.unpick()
+            self.select(None)
 
     def _keep(self, ident, start, values, text):
         if self.orbits.has(ident):              # (not when the orbit went meanwhile)

@@ -29,6 +29,14 @@ async def show_search(session, what: str, show, fn, *args) -> tuple:
     return found, text
 
 
+def nearest(view, xs, ys, p1: float, p2: float, radius_px: float) -> int | None:
+    """The index of the point of (xs, ys) nearest to (p1, p2) within ``radius_px`` pixels of ``view``, or None."""
+    px, py = view.pixel()
+    d = np.hypot((np.asarray(xs, float) - p1) / (px or 1.0), (np.asarray(ys, float) - p2) / (py or 1.0))
+    k = int(np.argmin(d)) if len(d) else 0
+    return k if len(d) and d[k] <= radius_px else None
+
+
 def _clear(*sources) -> None:
     for src in sources:
         src.data = {k: [] for k in COLUMNS[src.name]}
@@ -121,15 +129,11 @@ class Overlays:
     # ------------------------------------------------------------ manifolds of a picked saddle
     def saddle_near(self, p1: float, p2: float, radius_px: float) -> tuple | None:
         """(point, period) of the nearest hyperbolic mark within ``radius_px`` pixels of (p1, p2), or None."""
-        px, py = self.view.pixel()
         marks = [(a, b, k) for src in (self.fixed.data, self.periodic.data)
                  for a, b, kind, k in zip(src["p1"], src["p2"], src["kind"], src.get("period", repeat(1)))
                  if kind == "hyperbolic"]
-        d = [np.hypot((a - p1) / (px or 1.0), (b - p2) / (py or 1.0)) for a, b, _k in marks]
-        if not marks or min(d) > radius_px:
-            return None
-        a, b, k = marks[int(np.argmin(d))]
-        return (float(a), float(b)), int(k)
+        i = nearest(self.view, [m[0] for m in marks], [m[1] for m in marks], p1, p2, radius_px)
+        return None if i is None else ((float(marks[i][0]), float(marks[i][1])), int(marks[i][2]))
 
     def show_manifolds(self, point, period: int = 1) -> None:
         """Grow and draw W^u and W^s of the hyperbolic orbit of ``period`` through ``point`` (latest wins)."""

@@ -1,15 +1,19 @@
-"""The chaos layer's rasters of the visible window, coarse first, a partial image after each batch; NaN
-outside the allowed region (docs/commands/serve.md, "Chaos layer").  MEGNO's finest raster is
-adaptive by default: the cells docs/chaos_map.md's rule refines are computed, the others filled.
-No web library here."""
+"""The chaos layer's rasters of the visible window, coarse first, a partial image after each batch, NaN
+outside the allowed region (docs/commands/serve.md, "Chaos layer"); MEGNO's finest is adaptive by default
+(docs/chaos_map.md).  No web library here."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 from time import monotonic
 
 import numpy as np
 
+from explorer.analysis.chaos_map import RULES, TOLERANCE, CellRaster, default_threshold, refinement
+from explorer.analysis.rotation import frequency_diffusion
+from explorer.app.serve.overlays import elliptic_center, rotation_tol
 from explorer.app.serve.settings import Settings, Window
+from explorer.model import ParameterError, validation
 
 #: resolutions of the successive rasters of one window (each a refinement of the last), by default
 RESOLUTIONS = (16, 32, 64, 128)
@@ -20,16 +24,15 @@ RASTER_TIME = 200.0
 MAX_RASTER_TIME = 100_000.0
 #: steps per cell at most (a batch must stay stoppable at extreme parameters); a cell past it is NaN
 RASTER_MAX_STEPS = 100_000
-#: seeds per call of the indicators (bounds the time until a cancel takes effect)
+#: seeds per call of MEGNO and of frequency_diffusion (bounds the time until a cancel takes effect)
 BATCH = 512
+DIFFUSION_BATCH = 32
 #: the indicators the layer can show (names of the registry, explorer.kernels.indicator_table)
 INDICATORS = ("megno", "frequency_diffusion")
 #: an adaptive raster's partial image at most this often (s), unless BATCH cells were computed since the last
 IMAGE_SECONDS = 0.25
 #: N of the layer's frequency diffusion: nu1 from the first N returns, nu2 from the next N
 DIFFUSION_ITERATES = 100
-#: seeds per call of frequency_diffusion
-DIFFUSION_BATCH = 32
 
 
 @dataclass(frozen=True)
@@ -46,8 +49,6 @@ class Image:
 
 def resolutions_up_to(n: int) -> tuple:
     """The resolutions 16, 32, ... up to ``n`` (a power of 2 in [16, MAX_RESOLUTION]: ParameterError)."""
-    from explorer.model import ParameterError
-
     if not isinstance(n, int) or n < 16 or n > MAX_RESOLUTION or n & (n - 1):
         raise ParameterError(f"--megno-resolution must be a power of 2 in [16, {MAX_RESOLUTION}], got {n!r}")
     return tuple(16 << k for k in range(n.bit_length() - 4))
@@ -56,21 +57,14 @@ def resolutions_up_to(n: int) -> tuple:
 def diffusion_center(settings: Settings) -> tuple:
     """(point, elliptic): frequency diffusion's centre, the elliptic fixed point from the region's centre,
     else that centre (docs/greene.md, "Frequency diffusion")."""
-    from explorer.app.serve.overlays import elliptic_center
-
     c1, c2 = settings.region[:2]
     fp = elliptic_center(settings, (c1, c2))
-    if fp is None:
-        return (float(c1), float(c2)), False
-    return (float(fp.point[0]), float(fp.point[1])), True
+    point = (c1, c2) if fp is None else fp.point
+    return (float(point[0]), float(point[1])), fp is not None
 
 
 def diffusion_cells(settings: Settings, p1, p2, center, iterates: int = DIFFUSION_ITERATES) -> np.ndarray:
     """log10 |nu1 - nu2| of the orbits from (p1, p2) around ``center`` (ParameterError in direction -1)."""
-    from explorer.analysis.rotation import frequency_diffusion
-    from explorer.app.serve.overlays import rotation_tol
-    from explorer.model import ParameterError
-
     if settings.direction == -1:
         raise ParameterError("frequency diffusion needs crossings in direction + or both (the section map's "
                              "returns); these settings count them in direction -")
@@ -91,28 +85,17 @@ def rasters(settings: Settings, window: Window, resolutions: tuple = RESOLUTIONS
     """Yield the :class:`Image` of ``indicator`` after every batch of every resolution; ``time``:
     MEGNO's, ``center`` (None: :func:`diffusion_center`) and ``iterates``: frequency diffusion's.
     ``adaptive`` (MEGNO): the first resolution, then the last by :func:`adaptive_raster`."""
-    from explorer.model import validation
-
     validation.choice("indicator", indicator, INDICATORS)
-    if adaptive and indicator == "megno" and len(resolutions) > 1:
-        first = None
-        for first in rasters(settings, window, resolutions[:1], time):
-            yield first
-        if first is None:
-            return
-        yield from adaptive_raster(settings, window, resolutions[-1], time, first.values)
-        return
     if indicator == "megno":
-        batch = BATCH
-        def cells(a, b):
-            return settings.megno(a, b, time, RASTER_MAX_STEPS)
+        batch, cells = BATCH, partial(settings.megno, time=time, max_steps=RASTER_MAX_STEPS)
     else:
-        batch = DIFFUSION_BATCH
         point = diffusion_center(settings)[0] if center is None else center
-        def cells(a, b):
-            return diffusion_cells(settings, a, b, point, iterates)
+        batch, cells = DIFFUSION_BATCH, partial(diffusion_cells, settings, center=point, iterates=iterates)
     previous = None
     for n in resolutions:
+        if adaptive and indicator == "megno" and previous is not None:
+            yield from adaptive_raster(settings, window, resolutions[-1], time, previous)
+            return
         P1, P2 = window.centres(n)
         inside = settings.allowed(P1, P2)
         values = _shown(previous, inside)
@@ -131,8 +114,6 @@ def adaptive_raster(settings: Settings, window: Window, n: int, time: float = RA
     :func:`explorer.analysis.chaos_map.refinement` asks for (a lattice of about ``coarser``'s side,
     then where neighbours disagree) are computed, each the exact raster's cell bit for bit, the
     others filled (docs/chaos_map.md); a cell not yet known shows ``coarser``'s value."""
-    from explorer.analysis.chaos_map import RULES, TOLERANCE, CellRaster, default_threshold, refinement
-
     P1, P2 = window.centres(n)
     inside = np.asarray(settings.allowed(P1, P2), bool)
     shown = _shown(coarser, inside)
