@@ -247,21 +247,21 @@ def format_starts(starts) -> str:
     return ";".join(f"{float(a)!r},{float(b)!r}" for a, b in starts)
 
 
+def read_numbers(name: str, text, labels) -> list:
+    """Comma-separated numbers, one per label, each within MAX_MAGNITUDE (ParameterError naming ``name``)."""
+    pieces = str(text).split(",")
+    if len(pieces) != len(labels):
+        raise ParameterError(f"{name} must be {','.join(labels)} ({len(labels)} numbers), "
+                             f"got {str(text).strip()[:MAX_FIELD_CHARS * 4]!r}")
+    return [validation.magnitude(f"{name}.{n}", read_number(f"{name}.{n}", v)) for n, v in zip(labels, pieces)]
+
+
 def parse_starts(text: str) -> list:
     """The starts of :func:`format_starts` (ParameterError for anything else)."""
-    text = str(text).strip()
-    if not text:
-        return []
-    pieces = text.split(";")
+    pieces = str(text).strip().split(";") if str(text).strip() else []
     if len(pieces) > MAX_STARTS:
         raise ParameterError(f"orbits must list at most {MAX_STARTS} starts, got {len(pieces)}")
-    starts = []
-    for i, piece in enumerate(pieces):
-        xy = piece.split(",")
-        if len(xy) != 2:
-            raise ParameterError(f"orbits[{i}] must be p1,p2 (two numbers), got {piece[:MAX_FIELD_CHARS]!r}")
-        starts.append((read_number(f"orbits[{i}].p1", xy[0]), read_number(f"orbits[{i}].p2", xy[1])))
-    return starts
+    return [tuple(read_numbers(f"orbits[{i}]", piece, ("p1", "p2"))) for i, piece in enumerate(pieces)]
 
 
 def format_hidden(positions) -> str:
@@ -271,18 +271,12 @@ def format_hidden(positions) -> str:
 
 def parse_hidden(text: str, n_starts: int) -> set:
     """The positions of :func:`format_hidden`, each in 1..``n_starts`` (ParameterError otherwise)."""
-    text = str(text).strip()
-    if not text:
-        return set()
-    positions = set()
-    for i, piece in enumerate(text.split(",")[:MAX_STARTS + 1]):
-        piece = piece.strip()
-        k = int(piece) if piece.isascii() and piece.isdigit() and len(piece) <= 4 else 0
-        if not 1 <= k <= n_starts:
+    pieces = [p.strip() for p in str(text).split(",")[:MAX_STARTS + 1]] if str(text).strip() else []
+    for i, piece in enumerate(pieces):
+        if not (piece.isascii() and piece.isdigit() and len(piece) <= 4 and 1 <= int(piece) <= n_starts):
             raise ParameterError(f"hidden[{i}] must be the position of one of the link's {n_starts} orbits "
                                  f"(1 to {n_starts}), got {piece[:MAX_FIELD_CHARS]!r}")
-        positions.add(k)
-    return positions
+    return {int(p) for p in pieces}
 
 
 @dataclass(frozen=True)
@@ -311,11 +305,7 @@ def format_window(w) -> str:
 
 def parse_window(text: str):
     """The :class:`Window` of :func:`format_window` (ParameterError otherwise)."""
-    pieces = str(text).strip().split(",")
-    if len(pieces) != 4:
-        raise ParameterError(f"view must be x0,x1,y0,y1 (four numbers), got {str(text)[:MAX_FIELD_CHARS * 4]!r}")
-    x0, x1, y0, y1 = (validation.magnitude(f"view.{n}", read_number(f"view.{n}", v))
-                      for n, v in zip(("x0", "x1", "y0", "y1"), pieces))
+    x0, x1, y0, y1 = read_numbers("view", text, ("x0", "x1", "y0", "y1"))
     if not (x0 < x1 and y0 < y1):
         raise ParameterError(f"view must have x0 < x1 and y0 < y1, got {x0!r},{x1!r},{y0!r},{y1!r}")
     return Window(x0, x1, y0, y1)
