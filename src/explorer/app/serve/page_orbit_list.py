@@ -54,7 +54,7 @@ class OrbitList:
         self.choice = pn.widgets.Select(label="orbit", options={NONE_LABEL: 0}, value=0, width=LIST_WIDTH - 170)
         self.choice.param.watch(lambda e: session.soon(lambda: self.choose(e.new)), "value")
         self.hide_button = pn.widgets.Button(label="hide", width=50, disabled=True, align="end")
-        self.hide_button.on_click(lambda _e: session.soon(self.toggle))
+        self.hide_button.on_click(lambda _e: session.soon(lambda: self.toggle(self.picked)))
         self.delete_button = pn.widgets.Button(label="delete", width=50, disabled=True, align="end")
         self.delete_button.on_click(lambda _e: session.soon(lambda: self.delete(self.picked)))
         self.panel = pn.Column(pn.Row(self.choice, self.hide_button, self.delete_button), pn.pane.Bokeh(self.table),
@@ -74,9 +74,8 @@ class OrbitList:
         if (ident or None) != self.picked:      # (not when refresh set the chooser to the selection)
             self.select(ident)
 
-    def toggle(self, ident: int | None = None) -> None:
-        """Hide orbit ``ident`` (None: the selected one), or show it again if hidden."""
-        ident = self.picked if ident is None else ident
+    def toggle(self, ident: int | None) -> None:
+        """Hide orbit ``ident`` (None: none), or show it again if hidden."""
         if ident is None:
             return
         (self.orbits.show if ident in self.orbits.hidden else self.orbits.hide)(ident)
