@@ -2,6 +2,7 @@
 page, README stays a front door, and every test, module or object the docs name exists (so a
 claim cannot point at a test that was renamed or never written)."""
 import ast
+import functools
 import importlib
 import re
 import subprocess
@@ -17,6 +18,7 @@ PAGES = sorted(DOCS.rglob("*.md")) + [ROOT / "README.md", ROOT / "benchmarks" / 
 COMMANDS = ("sweep", "orbit", "lyapunov", "fixedpoint", "explore", "melnikov", "trajectory", "figures")
 
 
+@functools.cache
 def _test_functions(path):
     tree = ast.parse(path.read_text())
     return {n.name for n in ast.walk(tree) if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))}
