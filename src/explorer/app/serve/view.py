@@ -72,19 +72,17 @@ class SectionView:
 
     def draw_region(self, region, mask=None) -> None:
         """The allowed region (c1, c2, r1, r2; None: empty) as the ellipse or ``mask`` over its box; the view fitted."""
-        self.region_image.data = {"image": [], "x": [], "y": [], "dw": [], "dh": []}
-        if region is None:
-            self.region.data = _empty_region()
-            return
-        c1, c2, r1, r2 = region
-        if mask is None:
-            self.region.data = {"x": [c1], "y": [c2], "width": [2 * r1], "height": [2 * r2]}
-        else:
-            self.region.data = _empty_region()
-            rgba = np.where(np.asarray(mask, bool), np.uint32(0xFFFFFFFF), np.uint32(0)).astype(np.uint32)
-            self.region_image.data = {"image": [rgba], "x": [c1 - r1], "y": [c2 - r2], "dw": [2 * r1],
-                                      "dh": [2 * r2]}
-        self.fit(c1, c2, (1 + style.VIEW_MARGIN) * r1, (1 + style.VIEW_MARGIN) * r2)
+        ellipse, image = _empty_region(), {"image": [], "x": [], "y": [], "dw": [], "dh": []}  # type: dict, dict
+        if region is not None:
+            c1, c2, r1, r2 = region
+            if mask is None:
+                ellipse = {"x": [c1], "y": [c2], "width": [2 * r1], "height": [2 * r2]}
+            else:
+                rgba = np.where(np.asarray(mask, bool), np.uint32(0xFFFFFFFF), np.uint32(0)).astype(np.uint32)
+                image = {"image": [rgba], "x": [c1 - r1], "y": [c2 - r2], "dw": [2 * r1], "dh": [2 * r2]}
+        self.region.data, self.region_image.data = ellipse, image
+        if region is not None:
+            self.fit(c1, c2, (1 + style.VIEW_MARGIN) * r1, (1 + style.VIEW_MARGIN) * r2)
 
     def show_window(self, w) -> None:
         """Show the window ``w`` (a link's zoom; Reset still goes to the region's view)."""
