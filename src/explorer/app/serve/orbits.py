@@ -71,11 +71,6 @@ class OrbitRun:
     def finished(self) -> bool:
         return self.state is not None and bool(self.state.finished[0])
 
-    @property
-    def taken(self) -> int:
-        """Steps taken so far."""
-        return 0 if self.state is None else int(self.state.carry[0, layout.CARRY_STEPS])
-
     def reopen(self) -> None:
         """Compute on from where the stream stopped (at a larger count, or past a block's step cap)."""
         self.state = self.state.copy()
@@ -85,7 +80,8 @@ class OrbitRun:
     def advance(self) -> np.ndarray:
         """Compute the next block (at most ``block`` crossings, and ``steps`` steps where the method resumes
         exactly at any step); returns its rows (n, 5): t, p1, p2, M, H - H0 (a System's: t, a, b, solve, E - E0)."""
-        s, t0, taken = self.settings, time.perf_counter(), self.taken
+        s, t0 = self.settings, time.perf_counter()
+        taken = 0 if self.state is None else int(self.state.carry[0, layout.CARRY_STEPS])
         cap = taken + self.steps if methods.get(s.method).loops.resumes_at_any_step else s.max_steps
         rows, state = next(s.stream(self.p1, self.p2, self.state, self.block, min(cap, s.max_steps)),
                            (np.zeros((0, 5)), self.state))
@@ -99,7 +95,7 @@ class OrbitRun:
         rate = len(rows) / elapsed if elapsed > 0 and len(rows) else 0.0
         target = int(rate * BLOCK_SECONDS) if rate else 2 * self.block
         self.block = max(MIN_BLOCK, min(MAX_BLOCK, target, 4 * self.block))
-        self.step_rate = (self.taken - taken) / elapsed if elapsed > 0 else 0.0
+        self.step_rate = (int(state.carry[0, layout.CARRY_STEPS]) - taken) / elapsed if elapsed > 0 else 0.0
         self.steps = max(FIRST_STEPS, min(MAX_STEPS_PER_BLOCK, int(self.step_rate * BLOCK_SECONDS)))
         return rows
 
@@ -155,9 +151,8 @@ class Worker:
         self.session = session
         self._on_block, self._on_error = on_block, on_error
         self._on_indicators, self._on_notice = on_indicators, on_notice
-        self._runs: list[OrbitRun] = []      # every orbit, newest first: running, paused or stopped
+        self._runs: list[OrbitRun] = []      # every orbit (running, paused or stopped): new ones first, then by turn
         self._next_id = 0
-        self._rr = 0
 
     def _queue(self) -> list[OrbitRun]:
         """The orbits to compute, newest first."""
@@ -253,11 +248,7 @@ class Worker:
 
     def _pick(self) -> OrbitRun | None:
         queue = self._queue()
-        fresh = [r for r in queue if r.done == 0]
-        if fresh or not queue:
-            return fresh[0] if fresh else None
-        self._rr = (self._rr + 1) % len(queue)
-        return queue[self._rr]
+        return next((r for r in queue if r.done == 0), queue[0] if queue else None)
 
     def _queued(self, run: OrbitRun) -> bool:
         return any(r is run for r in self._runs)
@@ -281,6 +272,8 @@ class Worker:
             await session.apply(partial(self._hand_out, run, work, rows, notice))
             if not self._queued(run):       # removed while its block was computed
                 continue
+            self._runs.remove(run)
+            self._runs.append(run)          # (round robin)
             if self._on_indicators and run.wants_indicators and (run.finished or run.wall >= INDICATOR_AFTER):
                 run.wants_indicators = False
                 try:

@@ -26,14 +26,13 @@ PAUSE_LABEL = "a click pauses running orbits"
 GLYPH_FILTER = ("const o = source.data.orbit, n = o.length, rows = [];\n"
                 "for (let i = 0; i < n; i++) if (o[i] >= first) rows.push(i);\n"
                 "return rows;")
-#: the columns of the page's crossings (and c, the orbit's colour index)
-CROSSING_COLUMNS = ("orbit", "t", "p1", "p2", "M", "dH", "megno")
 #: the columns of a block's rows (orbits.OrbitRun.advance)
 ROW_COLUMNS = ("t", "p1", "p2", "M", "dH")
 
 
 def _empty_crossings() -> dict:
-    return {c: np.zeros(0, np.int64 if c in ("orbit", "c") else float) for c in (*CROSSING_COLUMNS, "c")}
+    """The page's crossings: a block's rows, the orbit's id, its MEGNO and c, its colour index."""
+    return {c: np.zeros(0, np.int64 if c in ("orbit", "c") else float) for c in ("orbit", *ROW_COLUMNS, "megno", "c")}
 
 
 def _empty_live() -> dict:
@@ -77,7 +76,7 @@ class OrbitsLayer:
 
     def draw(self, fig) -> None:
         """The crossings' glyphs (call after the images) and the starts' crosses."""
-        # the newest orbits (density.GLYPH_BUDGET) as dots, filtered in the browser: one number moves them
+        # the newest orbits (density.GLYPH_BUDGET) as dots: one number moves them between dots and image
         self.glyph_filter = CustomJSFilter(name="glyphs", args={"first": 0}, code=GLYPH_FILTER)
         # under each dot, while the chaos layer is on, a white disc with a dark edge: seen on its every colour
         size, fill, edge, width = style.DOT_CASING
@@ -87,8 +86,7 @@ class OrbitsLayer:
                                         (self.live, {"level": "overlay"}))]
         self.points = fig.scatter("p1", "p2", source=self.shown, color=self.by_orbit, size=POINT_SIZE, line_width=0,
                                   view=CDSView(filter=self.glyph_filter))
-        # the newest rows on the overlay canvas: Bokeh repaints only that canvas when they change
-        # (not the primary one with every older crossing and the images; benchmarks/bench_serve.py)
+        # the newest rows on the overlay canvas, which Bokeh repaints alone (docs/architecture.md)
         self.live_points = fig.scatter("p1", "p2", source=self.live, color=self.by_orbit, size=POINT_SIZE,
                                        line_width=0, level="overlay")
         self.start_marks = fig.scatter("p1", "p2", source=self.start_source, marker="cross", color=self.by_orbit,
@@ -195,7 +193,7 @@ class OrbitsLayer:
         self.update_status(force_density=True)
 
     def _cut(self, ident: int, keep: int) -> np.ndarray:
-        """Orbit ``ident``'s rows past its first ``keep`` off the page; returns them (n, 5)."""
+        """Orbit ``ident``'s rows past its first ``keep`` off the page, (n, 5)."""
         rows = self._take(ident, keep)
         return np.column_stack([rows[k] for k in ROW_COLUMNS])
 
