@@ -1,7 +1,5 @@
-"""The orbits of one browser session, block by block (docs/commands/serve.md, "How it works"): an
-:class:`OrbitRun` continues a clicked orbit's stream (``settings.stream``) where its last block ended, rows
-bit for bit those of ``explorer orbit``; a :class:`Worker` runs them newest first, then round robin.
-No web library here."""
+"""A browser session's orbits (docs/commands/serve.md, "How it works"): an :class:`OrbitRun` streams a clicked
+orbit block by block, bit for bit ``explorer orbit``; a :class:`Worker` runs them.  No web library here."""
 from __future__ import annotations
 
 import copy
@@ -182,10 +180,8 @@ class Worker:
         self._runs = [r for r in self._runs if r.ident != ident]
 
     def recount(self, settings, cut: Callable[[int, int], np.ndarray]) -> dict:
-        """Every orbit at ``settings``, which differ only in the crossings per click K: one past K is cut to
-        K (``cut(ident, K)`` returns its rows past K, kept in :attr:`OrbitRun.ahead`); one short of K gets
-        its kept rows and continues, or reruns (``cut(ident, 0)``) if it stopped on its time budget (100 K).
-        A block in progress is dropped.  Returns {ident: (crossings, status)}."""
+        """Every orbit at ``settings`` (only the crossings per click K differ): cut to K (``cut(ident, K)``, its rows
+        past K kept in ``ahead``), continued, or rerun if its time budget stopped it.  Returns {ident: (n, status)}."""
         self._runs = [self._recount(run, settings, cut) for run in self._runs]
         self._ensure_running()
         return {run.ident: (run.done, run.status) for run in self._runs}

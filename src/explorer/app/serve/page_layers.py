@@ -29,10 +29,8 @@ def _empty(*extra) -> dict:
 
 
 class ChaosLayer:
-    """The chaos layer of ``settings()`` (box, indicator, raster, colour bar, task); ``say(text)`` the message
-    line, ``on_changed()`` after the box or the indicator changed.  ``center``: (settings, point, elliptic) of
-    frequency diffusion's last centre; ``exact``: MEGNO's finest raster computes every cell (the link's
-    ``megno=exact``), else it is adaptive (raster.adaptive_raster)."""
+    """The chaos layer of ``settings()``; ``on_changed()`` after its box or indicator changed.  ``center``: frequency
+    diffusion's last (settings, point, elliptic); ``exact``: MEGNO's finest raster not adaptive (``megno=exact``)."""
 
     def __init__(self, view, session, resolutions: tuple, time: float, settings, say, on_changed):
         self.view, self.settings, self.say, self.on_changed = view, settings, say, on_changed

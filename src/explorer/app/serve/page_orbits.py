@@ -217,9 +217,8 @@ class OrbitsLayer:
         self.flush_timer.at(now if urgent else max(now, self._flushed_at + FLUSH_SECONDS))
 
     def _flush(self):
-        """The queued blocks onto the page (docs/architecture.md, "Many crossings in the browser"): a click's first
-        rows go alone to ``live`` (the overlay canvas), with its cross and the link; the status line
-        and the density image wait for the flush FLUSH_SECONDS later, which settles them."""
+        """The queued blocks onto the page (docs/architecture.md, "Many crossings in the browser"): a click's first rows
+        alone to ``live``, with its cross and the link; the flush FLUSH_SECONDS later settles them into ``shown``."""
         blocks = [b for b in self._pending if self.has(b[0])]
         self._pending = []
         first = {b[0] for b in blocks if 0 < len(b[1]) == b[2] and b[0] not in self.hidden}   # alone
