@@ -63,7 +63,6 @@ class OrbitRun:
     estimated: bool = False
     step_rate: float = 0.0
     ahead: np.ndarray = field(default_factory=lambda: np.zeros((0, 5)))   # rows computed past ``done``, cut
-    after: str = "running"         # the status once ``ahead`` is handed out
 
     @property
     def finished(self) -> bool:
@@ -189,12 +188,10 @@ class Worker:
     def _recount(self, run: OrbitRun, settings, cut) -> OrbitRun:
         k, run.settings = settings.crossings, settings
         if run.done > k:
-            if not len(run.ahead):
-                run.after = run.status
             run.ahead = np.concatenate([cut(run.ident, k), run.ahead])
             run.done, run.status = k, "done"
             return run
-        end = run.after if len(run.ahead) else run.status      # the status at the end of its rows
+        end = STATUS_NAMES[int(run.state.status[0])] if run.finished else "running"   # (after ``ahead``)
         if end == STATUS_NAMES[STATUS_TMAX] and run.done + len(run.ahead) < k:   # (its time budget, 100 K, grows)
             cut(run.ident, 0)
             return OrbitRun(run.ident, run.p1, run.p2, settings, paused=run.paused)
