@@ -2,6 +2,8 @@
 and pushes what reached it (``panel.io.push_notebook``)."""
 from __future__ import annotations
 
+import contextlib
+
 import panel as pn
 
 from explorer.app.serve.page import SectionPage
@@ -20,10 +22,8 @@ class Explorer(pn.viewable.Viewer):
 
     def _poll(self):
         if self.page.poll():
-            try:
+            with contextlib.suppress(Exception):    # not rendered in a notebook (yet): nothing to push
                 pn.io.push_notebook(self.page.layout)
-            except Exception:  # noqa: BLE001 - not rendered in a notebook (yet): nothing to push
-                pass
 
     def __panel__(self):
         if self._poller is None:

@@ -4,6 +4,7 @@ elsewhere, signed sessions, no file named by the page)."""
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import gc
 import hmac
 import ipaddress
@@ -168,10 +169,8 @@ def _end_on_signals(out) -> Callable[[], None]:
 
     def handler(_signum, _frame):
         for stream in (out, sys.stdout, sys.stderr):
-            try:
+            with contextlib.suppress(OSError, ValueError, RuntimeError):   # closed, or interrupted inside a write
                 stream.flush()
-            except (OSError, ValueError, RuntimeError):  # closed, or interrupted inside a write
-                pass
         os._exit(0)
 
     old = {sig: signal.signal(sig, handler) for sig in (signal.SIGINT, signal.SIGTERM)}
