@@ -20,7 +20,7 @@ from explorer.io import store
 from explorer.io.store import atlas as atlas_store
 from explorer.io.store import lock, stream
 
-#: three panels of 200 orbits x 600 crossings: about a second each on 2 cores
+#: three panels of 200 orbits x 300 crossings: about half a second each on 2 cores
 SCENE = """
 name = "ctrlc"
 [energy]
@@ -34,9 +34,9 @@ n = 200
 [integration]
 method = "taylor"
 tol = 1e-12
-crossings = 600
+crossings = 300
 """
-#: a streamed run stores blocks of sweep.MIN_BLOCK = 256 crossings per orbit (3 rounds a panel)
+#: a streamed run stores blocks of sweep.MIN_BLOCK = 256 crossings per orbit (2 rounds a panel: 256 and 44)
 STREAM_ENV = {"EXPLORER_STREAM_BYTES": str(200 * 256 * 40)}
 #: "within a few seconds": one kernel call (a bounded chunk) plus the exit, with margin for a busy machine
 STOP_SECONDS = 10.0
@@ -152,7 +152,7 @@ def test_a_sigint_that_lands_in_a_weakref_callback_still_stops_the_sweep(tmp_pat
     may be a weakref callback of numba's caches, where it is printed as "Exception ignored in:
     <function WeakValueDictionary...>" and lost: the sweep ran on and exited 0 (issue 25).  Here
     the SIGINT is delivered exactly there; the sweep must still stop, with status 130."""
-    scene = write_scene(tmp_path, SCENE.replace("n = 600", "n = 40").replace("crossings = 300", "crossings = 20"))
+    scene = write_scene(tmp_path, SCENE.replace("n = 200", "n = 40").replace("crossings = 300", "crossings = 20"))
     task = sweep.task
     calls = []
 
