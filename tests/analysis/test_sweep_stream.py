@@ -67,7 +67,7 @@ def test_a_streamed_panel_is_stored_as_one_run_would_store_it(tmp_path, monkeypa
 
 
 def test_a_killed_streamed_sweep_resumes_from_its_blocks(tmp_path):
-    scene = write_scene(tmp_path, SCENE.replace("crossings = 3000", "crossings = 20000"))
+    scene = write_scene(tmp_path, SCENE.replace("crossings = 3000", "crossings = 10000"))
     ref, out = tmp_path / "ref.h5", tmp_path / "killed.h5"
     env = dict(os.environ, EXPLORER_STREAM_BYTES=str(6 * 1000 * 40))
     cmd = [sys.executable, "-m", "explorer", "sweep", str(scene), "--no-figure", "--quiet"]
