@@ -85,9 +85,13 @@ class SweepSpec:
         """Panel ``pos`` is computed in rounds of blocks and streamed to the store."""
         return bool(self.sections and self.blocks and self.blocks[pos] < self.crossings)
 
-    def task(self, i: int, threads: int | None = None) -> dict:
-        """Chunk i's arrays (:func:`task`)."""
-        return chaplygin_task(self, i, threads)
+    def chunk_crossings(self, panel, a: int, b: int, threads: int | None = None) -> dict:
+        """The crossings of the seeds a:b of ``panel`` as :func:`task` returns them."""
+        res = sections.crossings(panel.P, states=panel.y0[a:b], n_crossings=self.crossings, method=self.method,
+                                 tol=self.tol, dt=self.dt, tmax=self.tmax, max_steps=self.max_steps, phi0=self.phi0,
+                                 direction=self.direction, threads=threads)
+        return {"data": res.data, "count": res.count, "status": res.status, "final": res.final, "info": res.info,
+                "settings": res.settings}
 
     def initial_state(self, panel):
         """The StreamState of a streamed ``panel`` before its first block."""
@@ -236,30 +240,21 @@ def map_raster(seeds, values, grid):
 
 
 def task(spec: SweepSpec | SystemSweepSpec, i: int, threads: int | None = None) -> dict:
-    """Pure map: integrate chunk i of the sweep and return its arrays (the spec's own ``task``)."""
-    return spec.task(i, threads)
-
-
-def chaplygin_task(spec: SweepSpec, i: int, threads: int | None = None) -> dict:
-    """:func:`task` of a sweep of Chaplygin's model."""
+    """Pure map: chunk i's crossings (the spec's ``chunk_crossings``; none without [sections]) and, with
+    [lyapunov], its orbits' indicators (``indicator_arrays``; a map panel adaptive as :func:`adaptive_map`)."""
     pos, a, b = spec.chunks[i]
     panel = spec.panels[pos]
     t0 = time.perf_counter()
     if spec.sections:
-        res = sections.crossings(panel.P, states=panel.y0[a:b], n_crossings=spec.crossings, method=spec.method,
-                                 tol=spec.tol, dt=spec.dt, tmax=spec.tmax, max_steps=spec.max_steps, phi0=spec.phi0,
-                                 direction=spec.direction, threads=threads)
-        out = {"chunk": i, "data": res.data, "count": res.count, "status": res.status, "final": res.final,
-               "info": res.info, "settings": res.settings}
+        out = {"chunk": i, **spec.chunk_crossings(panel, a, b, threads)}
     else:
         n = b - a
         out = {"chunk": i, "data": np.zeros((n, 0, 5)), "count": np.zeros(n, np.int64),
                "status": np.zeros(n, np.int64), "final": panel.y0[a:b].copy(), "info": np.zeros((n, 3)),
                "settings": {"sections": False}}
-    if spec.lyapunov is not None and adaptive_panel(spec, panel):
-        out.update(adaptive_map(spec, panel, threads))
-    elif spec.lyapunov is not None:
-        out.update(spec.indicator_arrays(panel, np.arange(a, b), threads)[1])
+    if spec.lyapunov is not None:
+        out.update(adaptive_map(spec, panel, threads) if adaptive_panel(spec, panel)
+                   else spec.indicator_arrays(panel, np.arange(a, b), threads)[1])
     out["wall_time"] = time.perf_counter() - t0
     return out
 
@@ -640,9 +635,13 @@ class SystemSweepSpec:
 
     streamed = SweepSpec.streamed
 
-    def task(self, i: int, threads: int | None = None) -> dict:
-        """Chunk i's arrays (:func:`system_task`)."""
-        return system_task(self, i, threads)
+    def chunk_crossings(self, panel, a: int, b: int, threads: int | None = None) -> dict:
+        """The crossings of the seeds a:b of ``panel``'s section map (rows :meth:`columns`) as :func:`task`
+        returns them."""
+        res = sections.crossings(self.section_map(panel), panel.seeds[a:b], n_crossings=self.crossings, tol=self.tol,
+                                 tmax=self.tmax, max_steps=self.max_steps, threads=threads)
+        return {"data": res.data[..., self.columns(panel.system)], "count": res.count, "status": res.status,
+                "final": res.final, "info": res.info, "settings": res.settings}
 
     def stream_settings(self, panel) -> dict:
         """The keywords of the System's crossings of ``panel``'s section map (iter_crossings)."""
@@ -779,33 +778,6 @@ def build_system_atlas_spec(scene, *, chunk_orbits: int, cells=None) -> SystemSw
     integ = scene.integration
     return SystemSweepSpec(tuple(panels), scene.section, scene.direction, tuple(scene.coords), scene.solve, 1,
                            integ.tol, integ.effective_tmax, integ.max_steps, tuple(chunks), scene.lyapunov, False)
-
-
-def system_task(spec: SystemSweepSpec, i: int, threads: int | None = None) -> dict:
-    """Pure map of a System's sweep: chunk i's crossings of the panel's section map (rows
-    :meth:`SystemSweepSpec.columns`) and, with [lyapunov], the orbits' indicators (a map panel
-    adaptive as :func:`adaptive_map`)."""
-    pos, a, b = spec.chunks[i]
-    panel = spec.panels[pos]
-    t0 = time.perf_counter()
-    smap = spec.section_map(panel)
-    pts = panel.seeds[a:b]
-    if spec.sections:
-        res = sections.crossings(smap, pts, n_crossings=spec.crossings, tol=spec.tol, tmax=spec.tmax,
-                                 max_steps=spec.max_steps, threads=threads)
-        out = {"chunk": i, "data": res.data[..., spec.columns(panel.system)], "count": res.count,
-               "status": res.status, "final": res.final, "info": res.info, "settings": res.settings}
-    else:
-        n = b - a
-        out = {"chunk": i, "data": np.zeros((n, 0, 5)), "count": np.zeros(n, np.int64),
-               "status": np.zeros(n, np.int64), "final": panel.y0[a:b].copy(), "info": np.zeros((n, 3)),
-               "settings": {"sections": False}}
-    if spec.lyapunov is not None and adaptive_panel(spec, panel):
-        out.update(adaptive_map(spec, panel, threads))
-    elif spec.lyapunov is not None:
-        out.update(system_indicator_arrays(spec, panel, np.arange(a, b), threads, smap)[1])
-    out["wall_time"] = time.perf_counter() - t0
-    return out
 
 
 def system_indicator_arrays(spec: SystemSweepSpec, panel, rows, threads=None, smap=None,
