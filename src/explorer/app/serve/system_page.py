@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from explorer import model
-from explorer.analysis import sections
+from explorer.analysis import sections, system_sections
 from explorer.app.serve.settings import MAX_CROSSINGS, PageSettings, Settings, Window, read_fields
 from explorer.model import ParameterError, validation
 
@@ -31,7 +31,7 @@ class SystemSettings(PageSettings):
     method = "taylor"
     adaptive = True
     direction = 1                  # the map's own (smap.direction): the page counts every crossing it makes
-    max_steps = 10**9              # an orbit's step budget (the engine's default)
+    max_steps = system_sections.DEFAULT_MAX_STEPS    # an orbit's step budget
     scene_export = False
 
     def __post_init__(self):
