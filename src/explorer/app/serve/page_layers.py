@@ -75,21 +75,30 @@ class ChaosLayer:
             title += f" around {'elliptic point' if c[2] else 'region centre'} ({c[1][0]:.4g}, {c[1][1]:.4g})"
         self.colour_bar.title = title
 
-    def load_url(self, args: dict) -> None:
-        """The layer's state from a link: ``indicator`` and ``megno`` ("1": on; "exact": on, every cell computed)."""
-        name = args.get("indicator") or "megno"
+    def load_url(self, args: dict) -> list:
+        """The layer's state from a link: ``indicator`` and ``megno`` ("1": on; "exact": on, every cell computed);
+        returns what it refused."""
+        name, refused = args.get("indicator") or "megno", []
         if name not in raster_mod.INDICATORS:
-            self.say(f"link's indicator ignored: must be one of {', '.join(raster_mod.INDICATORS)}, got "
-                     f"{name[:40]!r}")
+            refused = [f"indicator must be one of {', '.join(raster_mod.INDICATORS)}, got {name[:40]!r}"]
             name = "megno"
         self.indicator.value = name
         self.exact = args.get("megno") == "exact"
         self.layer.value = args.get("megno") in ("1", "exact")
+        return refused
 
     def url_query(self) -> dict:
         """The layer's URL arguments: ``megno`` (the box) and ``indicator``."""
         on = "exact" if self.exact else "1"
         return {"megno": on if self.layer.value else "0", "indicator": self.indicator.value}
+
+    def view_fields(self) -> dict:
+        """Its part of the exported view (image.View): the raster shown and its colour scale."""
+        r, raster = self.raster_source.data, None
+        if len(r["image"]):
+            x, y = r["x"][0], r["y"][0]
+            raster = (np.array(r["image"][0], float), (x, x + r["dw"][0], y, y + r["dh"][0]))
+        return {"raster": raster, "raster_scale": self.scale()}
 
     def _window_moved(self) -> None:
         if self.layer.value:
