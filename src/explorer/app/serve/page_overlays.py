@@ -86,6 +86,23 @@ class Overlays:
         """The names of the overlays that are on, as in the URL."""
         return tuple(n for n, box in (("separatrices", self.overlay), ("periodic", self.periodic_box)) if box.value)
 
+    def load_url(self, args: dict) -> list:
+        """The boxes from a link (``separatrices``, ``periodic``: "1" ticked); nothing refused."""
+        self.overlay.value, self.periodic_box.value = args.get("separatrices") == "1", args.get("periodic") == "1"
+        return []
+
+    def url_query(self) -> dict:
+        return {"separatrices": str(int(self.overlay.value)), "periodic": str(int(self.periodic_box.value))}
+
+    def view_fields(self) -> dict:
+        """Its part of the exported view (image.View): the marks and curves shown."""
+        f, c, m, q = self.fixed.data, self.curves.data, self.manifold_source.data, self.periodic.data
+        return {"fixed": [(a, b, k == "elliptic") for a, b, k in zip(f["p1"], f["p2"], f["kind"])],
+                "separatrices": [np.column_stack([x, y]) for x, y in zip(c["xs"], c["ys"])],
+                "manifolds": [(k, np.column_stack([x, y])) for k, x, y in zip(m["kind"], m["xs"], m["ys"])],
+                "periodic": [(a, b, k, e == "elliptic") for a, b, k, e in zip(q["p1"], q["p2"], q["period"],
+                                                                              q["kind"])]}
+
     def _boxes_changed(self):
         self.restart()
         self.on_changed()
