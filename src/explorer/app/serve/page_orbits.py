@@ -331,6 +331,23 @@ class OrbitsLayer:
         self.host.density_image.refresh(force=True)
         self.host.push_url()
 
+    def load_url(self, args: dict) -> list:
+        """The boxes from a link: ``colour`` ("megno": by MEGNO), ``pause`` ("0": off); nothing refused."""
+        self.colour_box.value, self.pause_box.value = args.get("colour") == "megno", args.get("pause") != "0"
+        return []
+
+    def url_query(self) -> dict:
+        return {"colour": "megno" if self.colour_box.value else "orbit", "pause": str(int(self.pause_box.value))}
+
+    def view_fields(self) -> dict:
+        """Its part of the exported view (image.View): the orbits shown (hidden ones left out), their starts."""
+        orbit = np.asarray(self.crossings.data["orbit"])
+        p = np.column_stack([np.asarray(self.crossings.data[k], float) for k in ("p1", "p2")])
+        visible = [s for s in self.starts if s[0] not in self.hidden]
+        return {"orbits": [(i, COLORS[c], p[orbit == i], self.indicators.get(i, (math.nan,))[0])
+                           for i, _a, _b, c in visible],
+                "starts": [(a, b, COLORS[c]) for _i, a, b, c in visible], "by_megno": bool(self.colour_box.value)}
+
     def case_dots(self, on: bool) -> None:
         """Each dot on a casing (:data:`~explorer.app.serve.style.DOT_CASING`), or not."""
         for r in self.casings:
