@@ -111,17 +111,26 @@ class OrbitList:
         self.on_changed()
 
     # ------------------------------------------------------------ the link
-    def load_url(self, starts, hidden: str) -> None:
-        """Start a link's orbits and hide those its ``hidden`` names (a malformed one is said)."""
+    def load_url(self, args: dict) -> list:
+        """Start a link's ``orbits`` (none when they do not fit) and hide those its ``hidden`` names; returns what
+        it refused."""
         try:
-            positions = settings_mod.parse_hidden(hidden, len(starts))
+            starts = settings_mod.parse_starts(args.get("orbits", ""))
+            full = settings_mod.room_for(len(starts), self.settings().crossings)
+            if full:
+                raise ParameterError(full)
         except ParameterError as exc:
-            positions = set()
-            self.say(f"link's hidden ignored: {exc}")
+            return [str(exc)]                   # (no starts: their ``hidden`` goes with them)
+        refused = []
+        try:
+            positions = settings_mod.parse_hidden(args.get("hidden", ""), len(starts))
+        except ParameterError as exc:
+            positions, refused = set(), [str(exc)]
         for k, (p1, p2) in enumerate(starts, 1):
             run = self.orbits.start(p1, p2)
             if run is not None and k in positions:
                 self.orbits.hide(run.ident)
+        return refused
 
     def url_query(self) -> dict:
         """The link's ``orbits`` (every start) and ``hidden`` (the positions of the hidden ones)."""
