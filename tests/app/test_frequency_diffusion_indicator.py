@@ -199,6 +199,6 @@ def test_choosing_the_chaos_layers_indicator_changes_its_values_scale_and_label(
         page.close()
     bad = _layer_page({"indicator": "lyapunov"})                         # a link's unknown indicator
     try:
-        assert "indicator ignored" in bad.message.text and bad.chaos.indicator.value == "megno"
+        assert "applies): indicator must be one of" in bad.message.text and bad.chaos.indicator.value == "megno"
     finally:
         bad.close()

@@ -313,7 +313,7 @@ def test_the_section_angle_is_a_field_and_the_zoom_window_is_in_the_link():
             with pytest.raises(model.ParameterError, match="view"):
                 parse_window(bad)
         odd = _page(SERVED, {"view": "1,0,0,1", "mu": "0.5"})
-        assert odd.settings.params.mu == 0.5 and "view ignored" in odd.message.text       # the rest applies
+        assert odd.settings.params.mu == 0.5 and "(the rest applies): view must" in odd.message.text
         odd.close()
     finally:
         page.close()

@@ -46,9 +46,9 @@ def _table(page) -> dict:
 
 
 def _rows(page, ident) -> np.ndarray:
-    d = page.orbits.crossings.data
-    mine = np.asarray(d["orbit"]) == ident
-    return np.column_stack([np.asarray(d[k])[mine] for k in ("t", "p1", "p2", "M", "dH")])
+    """The orbit's rows in the page's store (drawn or hidden)."""
+    run = page.orbits.runs[ident]
+    return run.rows[:run.done]
 
 
 def _drawn(page, ident) -> int:
@@ -96,7 +96,7 @@ def test_choosing_an_orbit_selects_it_as_a_pick_does_and_a_pick_marks_its_row():
         for p in ((0.3, 0.1), (1.3, 0.05)):
             page.click(*p)
         page.orbit_list.resume()
-        _poll_until(page, lambda: len(page.orbits.crossings.data["t"]) == 2 * s.crossings)
+        _poll_until(page, lambda: len(page.orbits.columns()["t"]) == 2 * s.crossings)
         one, two = (i for i, *_ in page.orbits.starts)
         lst = page.orbit_list
         assert lst.filter.group == 0 and lst.hide_button.disabled       # nothing selected yet
@@ -112,7 +112,7 @@ def test_choosing_an_orbit_selects_it_as_a_pick_does_and_a_pick_marks_its_row():
         assert not lst.hide_button.disabled and not lst.delete_button.disabled
         shown_by_list = page.orbit_list.text.text
         # a pick (Shift + click) of the other orbit: the list follows it
-        d = page.orbits.crossings.data
+        d = page.orbits.columns()
         k = int(np.flatnonzero(np.asarray(d["orbit"]) == one)[5])
         assert page.orbit_list.pick(float(d["p1"][k]), float(d["p2"][k])) == one
         assert lst.choice.value == one and lst.filter.group == one
@@ -136,12 +136,12 @@ def test_a_hidden_orbit_leaves_every_drawn_source_keeps_computing_and_comes_back
         first = page.click(*a).ident
         _poll_until(page, lambda: len(_rows(page, first)) > 0)
         page.orbit_list.toggle(first)                       # hidden while it runs
-        assert _drawn(page, first) == 0 and len(_rows(page, first)) == 0
+        assert _drawn(page, first) == 0 and first not in page.orbits.columns()["orbit"]
         assert "hidden" in _table(page)[first][1][4]
         second = page.click(*b).ident
         page.settle()
         assert not page.orbits.running
-        assert _drawn(page, first) == 0 and len(_rows(page, first)) == 0         # its later rows: hidden too
+        assert _drawn(page, first) == 0 and first not in page.orbits.columns()["orbit"]         # its later rows: hidden too
         assert set(np.asarray(page.orbits.shown.data["orbit"]).tolist()) == {second}
         assert _table(page)[first][1][3:] == [str(LONG), "done, hidden"]         # it went on computing
         assert page.orbit_list.pick(*a) != first                                             # not pickable while hidden
@@ -158,8 +158,8 @@ def test_a_hidden_orbit_leaves_every_drawn_source_keeps_computing_and_comes_back
         hidden_again = page.orbits.starts[1][0]
         page.settle()
         assert not page.orbits.running
-        assert page.orbits.hidden.keys() == {hidden_again} and _drawn(page, hidden_again) == 0
-        assert len(page.orbits.hidden[hidden_again]["t"]) == 50
+        assert page.orbits.hidden == {hidden_again} and _drawn(page, hidden_again) == 0
+        assert len(_rows(page, hidden_again)) == 50
     finally:
         page.close()
 
@@ -172,7 +172,7 @@ def test_delete_removes_one_orbit_from_the_page_the_session_and_the_link():
         for p in starts:
             page.click(*p)
         page.orbit_list.resume()
-        _poll_until(page, lambda: len(page.orbits.crossings.data["t"]) == 3 * s.crossings)
+        _poll_until(page, lambda: len(page.orbits.columns()["t"]) == 3 * s.crossings)
         one, two, three = (i for i, *_ in page.orbits.starts)
         page.orbit_list.choice.value = two
         assert not page.orbit_list.delete_button.disabled
@@ -211,8 +211,8 @@ def test_the_hidden_orbits_are_in_the_link_and_a_page_from_it_keeps_them_hidden(
         again.settle()
         assert not again.orbits.running
         ids = [i for i, *_ in again.orbits.starts]
-        assert again.orbits.hidden.keys() == {ids[1]} and _drawn(again, ids[1]) == 0
-        assert len(again.orbits.hidden[ids[1]]["t"]) == s.crossings                 # computed all the same
+        assert again.orbits.hidden == {ids[1]} and _drawn(again, ids[1]) == 0
+        assert len(_rows(again, ids[1])) == s.crossings                 # computed all the same
         assert [_drawn(again, i) for i in (ids[0], ids[2])] == [s.crossings + 1] * 2
         assert "done, hidden" in _table(again)[ids[1]][1][4] and again.url_query()["hidden"] == "2"
     finally:
@@ -220,7 +220,7 @@ def test_the_hidden_orbits_are_in_the_link_and_a_page_from_it_keeps_them_hidden(
     for bad in ("4", "x", "0", "1,,2"):
         page = _page(s, {**link, "hidden": bad})
         try:
-            assert page.message.text.startswith("link's hidden ignored: hidden"), (bad, page.message.text)
+            assert page.message.text.startswith("link ignored in part (the rest applies): hidden"), bad
             assert len(page.orbits.starts) == 3 and not page.orbits.hidden and page.url_query()["hidden"] == ""
         finally:
             page.close()

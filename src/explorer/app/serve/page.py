@@ -8,7 +8,6 @@ import time
 from dataclasses import replace
 from urllib.parse import urlencode
 
-import numpy as np
 import panel as pn
 from bokeh.events import ConnectionLost, DocumentReady, DoubleTap, PressUp, Tap
 from bokeh.models import CustomJS, Div
@@ -16,13 +15,12 @@ from bokeh.models import CustomJS, Div
 from explorer.app.serve import export, style
 from explorer.app.serve import raster as raster_mod
 from explorer.app.serve import settings as settings_mod
-from explorer.app.serve.orbits import COLORS
 from explorer.app.serve.page_fields import Fields
 from explorer.app.serve.page_layers import ChaosLayer, DensityImage
 from explorer.app.serve.page_orbit_list import OrbitList
 from explorer.app.serve.page_orbits import OrbitsLayer
 from explorer.app.serve.page_overlays import Overlays
-from explorer.app.serve.settings import TOKEN_ARG, Settings, format_window
+from explorer.app.serve.settings import TOKEN_ARG, Settings
 from explorer.app.serve.tasks import Session, failure
 from explorer.app.serve.view import SectionView
 from explorer.model import ParameterError
@@ -66,6 +64,8 @@ class SectionPage:
         self.overlays = Overlays(self.section, self.session, lambda: self.settings, self.push_url)
         self.orbit_list = OrbitList(self.orbits, self.overlays, self.section, self.session, lambda: self.settings,
                                     self.say, on_changed=self.push_url)
+        # each reads and writes its own link arguments (load_url, url_query), in this order
+        self.link_parts = (self.section, self.chaos, self.overlays, self.orbits, self.orbit_list)
         self.exports = export.Exports(self.session, export_dir, self.scene, self.view, self.say)
         self._url_timer = self.session.timer(self.push_url)
         self.section.on_window(lambda: self._url_timer.at(time.monotonic() + URL_DELAY_SECONDS))
@@ -142,50 +142,25 @@ class SectionPage:
 
     # ------------------------------------------------------------ state in the URL
     def _load_url(self, args: dict):
-        args, unknown = settings_mod.screen_link(args, (*self.url_query(), TOKEN_ARG))   # (what a link carries)
+        args, refused = settings_mod.screen_link(args, (*self.url_query(), TOKEN_ARG))   # (what a link carries)
         fields = {k: v for k, v in args.items() if k in self.base.field_names}
-        self.settings, refused = settings_mod.parse_link_fields(self.base, fields)
-        refused[:0] = unknown
-        try:
-            starts = settings_mod.parse_starts(args.get("orbits", ""))
-            full = settings_mod.room_for(len(starts), self.settings.crossings)
-            if full:
-                raise ParameterError(full)
-        except ParameterError as exc:
-            # (no starts: their ``hidden`` goes with them)
-            starts, args = [], {k: v for k, v in args.items() if k != "hidden"}
-            refused.append(str(exc))
-        if refused:
-            self.say(f"link ignored in part (the rest applies): {'; '.join(refused)}")
+        self.settings, wrong = settings_mod.parse_link_fields(self.base, fields)
         self.fields.show(self.settings)
         self.title.object = self._title()
         self._draw_region()
-        if args.get("view"):
-            try:
-                self.section.show_window(settings_mod.parse_window(args["view"]))
-            except ParameterError as exc:
-                self.say(f"link's view ignored: {exc}")
-        self.chaos.load_url(args)                 # (its indicator, then its box)
-        for name, box, on, off in self._boxes():
-            box.value = args.get(name) == on if name != "pause" else args.get(name) != off   # (pause: on by default)
-        self.orbit_list.load_url(starts, args.get("hidden", ""))
+        refused += wrong
+        for part in self.link_parts:
+            refused += part.load_url(args)
+        if refused:
+            self.say(f"link ignored in part (the rest applies): {'; '.join(refused)}")
         self.push_url()
 
     def url_query(self) -> dict:
         """The view as URL arguments: the fields, the starts (which are hidden), the boxes and the window."""
         q = self.settings.fields()
-        q.update(self.orbit_list.url_query())
-        q.update({name: on if box.value else off for name, box, on, off in self._boxes()})
-        q.update(self.chaos.url_query())
-        w = self.section.window
-        q["view"] = "" if w is None else format_window(w)
+        for part in self.link_parts:
+            q.update(part.url_query())
         return q
-
-    def _boxes(self) -> tuple:
-        """(URL name, box, its text ticked, unticked) of the page's boxes in the link."""
-        o, ov = self.orbits, self.overlays
-        return (("separatrices", ov.overlay, "1", "0"), ("periodic", ov.periodic_box, "1", "0"),
-                ("colour", o.colour_box, "megno", "orbit"), ("pause", o.pause_box, "1", "0"))
 
     def push_url(self):
         """The link anew: ``link``'s text, the address's query on a served page (WRITE_LINK)."""
@@ -202,31 +177,14 @@ class SectionPage:
         return export.session_scene(self.settings, starts, overlays=self.overlays_on())
 
     def view(self):
-        """What the page shows now, hidden orbits left out, copied (drawn in any thread)."""
+        """What the page shows now, hidden orbits left out, copied (drawn in any thread): each component's part."""
         from explorer.app.serve.image import View
 
-        orbits, ov, s, w = self.orbits, self.overlays, self.settings, self.section.window
-        d, r = orbits.crossings.data, self.chaos.raster_source.data
-        orbit = np.asarray(d["orbit"])
-        p = np.column_stack([np.asarray(d["p1"], float), np.asarray(d["p2"], float)])
-        visible = [s for s in orbits.starts if s[0] not in orbits.hidden]
-        shown = [(i, COLORS[c], p[orbit == i], orbits.indicators.get(i, (math.nan,))[0]) for i, _a, _b, c in visible]
-        raster = None
-        if len(r["image"]):
-            x, y = r["x"][0], r["y"][0]
-            raster = (np.array(r["image"][0], float), (x, x + r["dw"][0], y, y + r["dh"][0]))
-        f, q, m = ov.fixed.data, ov.periodic.data, ov.manifold_source.data
-        return View(window=(w.x0, w.x1, w.y0, w.y1) if w is not None else (-1.0, 1.0, -1.0, 1.0), region=s.region,
-                    region_mask=s.region_mask(), orbits=shown, axes=s.axes,
-                    starts=[(a, b, COLORS[c]) for _i, a, b, c in visible], raster=raster,
-                    raster_scale=self.chaos.scale(),
-                    fixed=[(a, b, k == "elliptic") for a, b, k in zip(f["p1"], f["p2"], f["kind"])],
-                    separatrices=[np.column_stack([x, y]) for x, y in zip(ov.curves.data["xs"], ov.curves.data["ys"])],
-                    manifolds=[(k, np.column_stack([x, y])) for k, x, y in zip(m["kind"], m["xs"], m["ys"])],
-                    periodic=[(a, b, k, e == "elliptic") for a, b, k, e in zip(q["p1"], q["p2"], q["period"],
-                                                                               q["kind"])],
-                    by_megno=bool(orbits.colour_box.value),
-                    title=s.describe() + (f" ({self.label})" if self.label else ""))
+        s, parts = self.settings, {}
+        for part in (self.section, self.chaos, self.overlays, self.orbits):
+            parts.update(part.view_fields())
+        return View(region=s.region, region_mask=s.region_mask(), axes=s.axes,
+                    title=s.describe() + (f" ({self.label})" if self.label else ""), **parts)
 
     # ------------------------------------------------------------ values
     def _on_field(self, name: str | None = None):

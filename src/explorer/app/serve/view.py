@@ -8,7 +8,8 @@ from bokeh.models import ColumnDataSource, Range1d
 from bokeh.plotting import figure
 
 from explorer.app.serve import style
-from explorer.app.serve.settings import Window
+from explorer.app.serve.settings import Window, format_window, parse_window
+from explorer.model import ParameterError
 
 
 def _empty_region() -> dict:
@@ -84,11 +85,25 @@ class SectionView:
         if region is not None:
             self.fit(c1, c2, (1 + style.VIEW_MARGIN) * r1, (1 + style.VIEW_MARGIN) * r2)
 
-    def show_window(self, w) -> None:
-        """Show the window ``w`` (a link's zoom; Reset still goes to the region's view)."""
-        self.figure.x_range.update(start=w.x0, end=w.x1)
-        self.figure.y_range.update(start=w.y0, end=w.y1)
-        self.window = w
+    def load_url(self, args: dict) -> list:
+        """A link's ``view`` shown (Reset still goes to the region's view); returns what it refused."""
+        try:
+            w = parse_window(args["view"]) if args.get("view") else None
+        except ParameterError as exc:
+            return [str(exc)]
+        if w is not None:
+            self.figure.x_range.update(start=w.x0, end=w.x1)
+            self.figure.y_range.update(start=w.y0, end=w.y1)
+            self.window = w
+        return []
+
+    def url_query(self) -> dict:
+        return {"view": "" if self.window is None else format_window(self.window)}
+
+    def view_fields(self) -> dict:
+        """Its part of the exported view (image.View): the window."""
+        w = self.window
+        return {"window": (-1.0, 1.0, -1.0, 1.0) if w is None else (w.x0, w.x1, w.y0, w.y1)}
 
     def fit(self, c1: float, c2: float, m1: float, m2: float) -> None:
         """Show the box c1 +- m1, c2 +- m2, equal length per pixel along both axes; Reset goes back to it."""
