@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from page_loop import poll, settle
 
 from explorer import model
 from explorer.analysis import sections
@@ -115,14 +116,14 @@ def test_the_servers_echo_of_an_apply_leaves_a_field_the_user_is_typing_into_alo
         mu.value_input = "0.05"                          # typed on before the echo of 0.040
         writes = []
         mu.param.watch(lambda e: writes.append(e.new), "value")
-        page.settle()                                    # the echo: both applied, written as the page writes them
+        settle(page)                                    # the echo: both applied, written as the page writes them
         assert page.settings.params.mu == 0.04 and page.settings.h == 2.0
         assert writes == [] and h.value == "2.0"       # the typed-into field is left alone, the other shown
         mu.value = "0.05"                                # (Enter)
-        page.settle()
+        settle(page)
         assert page.settings.params.mu == 0.05 and page.url_query()["mu"] == "0.05"
         page.fields.step(1, "mu")                        # the stepper writes into it as before
-        page.settle()
+        settle(page)
         assert mu.value == "0.06" and page.settings.params.mu == 0.06
     finally:
         page.close()
@@ -139,9 +140,9 @@ def test_a_value_change_reruns_the_orbits_under_their_own_ids():
         ids = [page.click(c1 + f * r1, c2).ident for f in (0.3, -0.3)]
         page.inputs["mu"].value = "0.031"
         assert [i for i, *_ in page.orbits.starts] == ids
-        page.settle()
-        assert len(page.orbits.crossings.data["t"]) == 2 * s.crossings and not page.orbits.running
-        assert sorted(set(np.asarray(page.orbits.crossings.data["orbit"]).tolist())) == sorted(ids)
+        settle(page)
+        assert len(page.orbits.columns()["t"]) == 2 * s.crossings and not page.orbits.running
+        assert sorted(set(np.asarray(page.orbits.columns()["orbit"]).tolist())) == sorted(ids)
         assert page.click(c1, c2).ident == max(ids) + 1                        # a new click: a new id
     finally:
         page.close()
@@ -178,7 +179,7 @@ def test_the_overlay_marks_the_fixed_points_and_draws_their_separatrices(monkeyp
         t0 = time.time()
         while "separatrix branches" not in page.overlays.text.text:   # (points first)
             assert time.time() - t0 < 1200, page.overlays.text.text
-            page.poll()
+            poll(page)
             time.sleep(0.02)
         fp = find_fixed_point(page.settings.params, page.settings.h, (-0.2, 0.0))   # solution I, hyperbolic
         fixed = page.overlays.fixed.data
@@ -193,7 +194,7 @@ def test_the_overlay_marks_the_fixed_points_and_draws_their_separatrices(monkeyp
         t0 = time.time()
         while not page.overlays.periodic.data["p1"]:
             assert time.time() - t0 < 1200, page.overlays.text.text
-            page.poll()
+            poll(page)
             time.sleep(0.05)
         periods = np.array(page.overlays.periodic.data["period"])
         assert periods.size and set(periods) <= {1, 2, 3, 4} and "periodic orbits K=1" in page.overlays.text.text
@@ -236,7 +237,7 @@ def test_starts_survive_the_url_bit_for_bit():
 def _collect(worker_blocks, loop, timeout=120.0):
     t0 = time.time()
     while time.time() - t0 < timeout:
-        loop.poll()
+        poll(loop)
         if worker_blocks["finished"]:
             return
         time.sleep(0.01)
@@ -258,7 +259,7 @@ def test_worker_blocks_are_one_uninterrupted_run_and_cancelled_orbits_hand_out_n
     try:
         first = w.submit(0.3, 0.1, s)
         w.cancel()                                   # before or after its first block: nothing more comes
-        loop.poll()
+        poll(loop)
         n_before = len(got["rows"].get(first.ident, []))
         second = w.submit(-0.4, 0.2, s)
         _collect(got, loop)
@@ -305,7 +306,7 @@ def test_a_cancelled_fixed_step_orbit_stops_within_a_block_and_was_said_with_its
         t0 = time.monotonic()
         while not notices:
             assert time.monotonic() - t0 < 240, "no estimate was said"
-            loop.poll()
+            poll(loop)
             time.sleep(0.01)
         assert notices[0][0] == run.ident and "1e+09 steps" in notices[0][1]
         w.cancel()
@@ -327,8 +328,16 @@ def _idle(page) -> bool:
     return " 0 running" in page.orbits.status.text
 
 
+def _hand_in(page, ident: int, rows: np.ndarray, status: str = "done") -> None:
+    """A block of orbit ``ident`` handed to the page as the worker hands one out (orbits.Worker._hand_out)."""
+    run = page.orbits.runs[ident]
+    run.rows, run.status = np.concatenate([run.rows, rows]), status
+    run.done = len(run.rows)
+    page.orbits._on_block(ident, rows, run.done, status)
+
+
 def _orbit_rows(page, ident) -> np.ndarray:
-    d = page.orbits.crossings.data
+    d = page.orbits.columns()
     mine = np.asarray(d["orbit"]) == ident
     return np.column_stack([np.asarray(d[k])[mine] for k in ("t", "p1", "p2", "M", "dH")])
 
@@ -351,18 +360,18 @@ def test_a_click_pauses_the_running_orbit_and_resume_completes_it_bit_for_bit():
     try:
         assert page.orbits.pause_box.value and page.url_query()["pause"] == "1"            # on by default
         first, second = _click_while_running(page, a, b)
-        page.settle()
+        settle(page)
         assert len(_orbit_rows(page, second)) == s.crossings and _idle(page)
         held = len(_orbit_rows(page, first))
         assert 0 < held < s.crossings and page.orbits.worker.paused() == [first]          # paused mid-orbit
         assert "1 running" not in page.orbits.status.text and "1 paused" in page.orbits.status.text
         time.sleep(0.3)
-        page.poll()
+        poll(page)
         assert len(_orbit_rows(page, first)) == held                               # and it stays there
         assert len(parse_starts(page.url_query()["orbits"])) == 2                  # both starts in the link
         assert page.orbit_list.resume() == 1 and page.orbits.worker.paused() == []
         assert "paused" not in page.orbits.status.text
-        page.settle()
+        settle(page)
         assert first not in page.orbits.running and _idle(page)
         for ident, (p1, p2) in ((first, a), (second, b)):        # as one uninterrupted run, bit for bit
             ref = sections.crossings(s.params, s.h, [(p1, p2)], n_crossings=s.crossings, **s.section_kwargs())
@@ -375,8 +384,8 @@ def test_a_click_pauses_the_running_orbit_and_resume_completes_it_bit_for_bit():
         page.orbit_list.undo()
         page.orbit_list.undo()
         assert page.orbits.worker.paused() == [] and _idle(page) and len(page.orbits.starts) == 2
-        page.poll()
-        assert set(np.asarray(page.orbits.crossings.data["orbit"]).tolist()) == {first, second}
+        poll(page)
+        assert set(np.asarray(page.orbits.columns()["orbit"]).tolist()) == {first, second}
         assert "paused" not in page.orbits.status.text
 
         # Clear lets paused orbits go
@@ -389,8 +398,8 @@ def test_a_click_pauses_the_running_orbit_and_resume_completes_it_bit_for_bit():
         assert len(page.orbits.worker.paused()) == 1
         page.inputs["crossings"].value = "300"
         assert page.settings.crossings == 300 and page.orbits.worker.paused() == [] and len(page.orbits.starts) == 2
-        page.settle()
-        assert len(page.orbits.crossings.data["t"]) == 2 * 300 and _idle(page)
+        settle(page)
+        assert len(page.orbits.columns()["t"]) == 2 * 300 and _idle(page)
         assert "paused" not in page.orbits.status.text
     finally:
         page.close()
@@ -408,8 +417,8 @@ def test_with_the_box_unticked_a_click_leaves_the_running_orbits_running():
         assert not page.orbits.pause_box.value and page.url_query()["pause"] == "0"
         first, second = _click_while_running(page, a, b)
         assert page.orbits.worker.paused() == [] and "paused" not in page.orbits.status.text
-        page.settle()
-        assert len(page.orbits.crossings.data["t"]) == 2 * s.crossings and _idle(page)
+        settle(page)
+        assert len(page.orbits.columns()["t"]) == 2 * s.crossings and _idle(page)
         for ident, (p1, p2) in ((first, a), (second, b)):        # both complete, no Resume needed
             ref = sections.crossings(s.params, s.h, [(p1, p2)], n_crossings=s.crossings, **s.section_kwargs())
             np.testing.assert_array_equal(_orbit_rows(page, ident), ref.orbit(0))
@@ -959,28 +968,28 @@ def test_explore_in_a_notebook_renders_and_streams_the_clicked_orbit(monkeypatch
         page = app.page
         assert page.click(0.3, 0.1) is not None
         t0 = time.time()
-        while len(page.orbits.crossings.data["t"]) < 60 and time.time() - t0 < 120:
-            page.poll()
+        while len(page.orbits.columns()["t"]) < 60 and time.time() - t0 < 120:
+            poll(page)
             time.sleep(0.01)
         ref = sections.crossings(page.settings.params, page.settings.h, [(0.3, 0.1)], n_crossings=60)
-        got = np.column_stack([np.asarray(page.orbits.crossings.data[k]) for k in ("t", "p1", "p2", "M", "dH")])
+        got = np.column_stack([np.asarray(page.orbits.columns()[k]) for k in ("t", "p1", "p2", "M", "dH")])
         np.testing.assert_array_equal(got, ref.orbit(0))
         # the orbit's chaos indicators colour its points on demand
         from explorer.analysis import lyapunov
         from explorer.app.serve.orbits import INDICATOR_TIME
 
         while not page.orbits.indicators and time.time() - t0 < 120:
-            page.poll()
+            poll(page)
             time.sleep(0.01)
         (megno, mlce), = page.orbits.indicators.values()
         ind = lyapunov.indicators(page.settings.params, states=ex.section_state(page.settings.params, [0.3], [0.1],
                                                                          page.settings.h), tmax=INDICATOR_TIME)
         assert (megno, mlce) == (float(ind.megno[0]), float(ind.mlce[0]))
-        assert np.all(np.asarray(page.orbits.crossings.data["megno"]) == megno) and "<Y> =" in page.orbits.status.text
+        assert np.all(np.asarray(page.orbits.columns()["megno"]) == megno) and "<Y> =" in page.orbits.status.text
         page.orbits.colour_box.value = True
         assert page.orbits.points.glyph.fill_color["field"] == "megno" and page.url_query()["colour"] == "megno"
         page.orbit_list.undo()
-        assert len(page.orbits.crossings.data["t"]) == 0 and page.url_query()["orbits"] == ""
+        assert len(page.orbits.columns()["t"]) == 0 and page.url_query()["orbits"] == ""
         with pytest.raises(ParameterError, match="a1"):
             ex.explore(a1=-1.0)
     finally:
@@ -1209,10 +1218,10 @@ def test_the_scene_seeds_button_starts_the_sweeps_seeds_at_the_current_settings(
 def _poll_until(page, cond, timeout=240.0):
     t0 = time.time()
     while not cond() and time.time() - t0 < timeout:
-        page.session.poll(0.02)  # (the page's own loop runs only while polled: no sleep between polls)
+        poll(page, 0.02)  # (the page's own loop runs only while polled: no sleep between polls)
     assert cond(), (page.message.text, page.orbits.status.text)
     for _ in range(10):          # then what the page scheduled meanwhile (the flush after a first block)
-        if not page.poll():
+        if not poll(page):
             break
 
 
@@ -1229,21 +1238,20 @@ def test_an_orbits_megno_reaches_its_rows_whether_live_or_settled():
     try:
         older = page.click(c1 + 0.3 * r1, c2).ident
         _poll_until(page, lambda: len(page.orbits.shown.data["t"]) == s.crossings and older in page.orbits.indicators)
-        page.orbits.progress[older + 1] = (0, "running")          # a second orbit's first block, by hand
-        page.orbits.starts.append((older + 1, c1, c2, 1))
+        page.orbits.runs[older + 1] = OrbitRun(older + 1, c1, c2, s, 1, paused=True)   # a second orbit, by hand:
         rows = np.column_stack([np.arange(1.0, 5.0), np.full(4, c1), np.full(4, c2), np.ones(4), np.zeros(4)])
-        page.orbits._on_block(older + 1, rows, 4, "running")
+        _hand_in(page, older + 1, rows, "running")                            # its first block
         page.orbits._flush()                                # (its flush, by hand: the loop runs the next one)
         assert len(page.orbits.live.data["t"]) == 4                # live, not yet settled
         page.orbits._on_indicators(older, 2.5, 0.01)               # the older orbit's rows: settled
         page.orbits._on_indicators(older + 1, 7.0, 0.2)            # the newer one's: live
         np.testing.assert_array_equal(page.orbits.shown.data["megno"], np.full(s.crossings, 2.5))
         assert page.orbits.live.data["megno"] == [7.0] * 4
-        assert page.poll()                                  # the next flush settles them
+        assert poll(page)                                  # the next flush settles them
         assert page.orbits.live.data["megno"] == []
         np.testing.assert_array_equal(page.orbits.shown.data["megno"],
                                       np.r_[np.full(s.crossings, 2.5), np.full(4, 7.0)])
-        np.testing.assert_array_equal(page.orbits.shown.data["megno"], page.orbits.crossings.data["megno"])
+        np.testing.assert_array_equal(page.orbits.shown.data["megno"], page.orbits.columns()["megno"])
     finally:
         page.close()
 
@@ -1263,8 +1271,8 @@ def test_picking_an_orbits_crossing_shows_its_mlce_megno_and_rotation_number():
         for p in starts:
             page.click(*p)
         page.orbit_list.resume()                                  # (the second click paused the first if it still ran)
-        _poll_until(page, lambda: len(page.orbits.crossings.data["t"]) == 2 * s.crossings)
-        d = page.orbits.crossings.data
+        _poll_until(page, lambda: len(page.orbits.columns()["t"]) == 2 * s.crossings)
+        d = page.orbits.columns()
         second = np.asarray(d["orbit"]) == page.orbits.starts[1][0]
         k = int(np.flatnonzero(second)[17])                     # a crossing of the second orbit, not its start
         assert page.orbit_list.pick(float(d["p1"][k]) + 1e-9, float(d["p2"][k])) == page.orbits.starts[1][0]
@@ -1359,7 +1367,7 @@ def test_five_hundred_clicks_leave_the_session_with_bounded_memory_and_threads(m
     c1, c2, r1, r2 = s.region
     rng = np.random.default_rng(7)
     page = SectionPage(s)
-    page.poll()                                                    # (the thread that runs the page's own loop)
+    poll(page)                                                    # (the thread that runs the page's own loop)
     others0 = _threads()[0]
     tracemalloc.start()
     try:
@@ -1370,15 +1378,14 @@ def test_five_hundred_clicks_leave_the_session_with_bounded_memory_and_threads(m
                 assert page.click(c1 + u * r1 * np.sqrt(1 - v * v), c2 + v * r2 * 0.9) is not None
             paused += len(page.orbits.worker.paused())  # each click paused the orbits still running ...
             page.orbit_list.resume()                                           # ... and Resume continues them
-            _poll_until(page, lambda: len(page.orbits.crossings.data["t"]) == ROUND * CLICK_CROSSINGS
+            _poll_until(page, lambda: len(page.orbits.columns()["t"]) == ROUND * CLICK_CROSSINGS
                         and len(page.orbits.indicators) == ROUND and _idle(page))
-            assert sorted(np.unique(page.orbits.crossings.data["orbit"])) == sorted(i for i, *_ in page.orbits.starts)
+            assert sorted(np.unique(page.orbits.columns()["orbit"])) == sorted(i for i, *_ in page.orbits.starts)
             page.orbit_list.clear()
-            page.poll()
-            assert len(page.orbits.crossings.data["t"]) == 0 and page.orbits.starts == []
+            poll(page)
+            assert len(page.orbits.columns()["t"]) == 0 and page.orbits.starts == []
             assert page.orbits.indicators == {}
-            assert page.orbits._pending == []
-            assert page.orbits.worker._runs == []                   # (running, paused or stopped)
+            assert page.orbits.runs == {}                           # (running, paused or stopped)
             gc.collect()                                            # (Bokeh's models hold reference cycles)
             heap.append(tracemalloc.get_traced_memory()[0])
         # no thread per click: the orbits and their indicators run in the shared executor (tasks.py)
@@ -1408,20 +1415,20 @@ def test_fifty_clicks_and_five_megno_toggles_start_no_thread_of_their_own():
     rng = np.random.default_rng(3)
     page = SectionPage(s, megno_resolution=16, megno_time=5.0)
     try:
-        page.poll()                                         # (the thread that runs the page's own loop)
+        poll(page)                                         # (the thread that runs the page's own loop)
         others0, most = _threads()[0], 0
         for k in range(50):
             u, v = rng.uniform(-0.9, 0.9, 2)
             assert page.click(c1 + u * r1 * np.sqrt(1 - v * v), c2 + v * r2 * 0.9) is not None
             if k % 10 == 0:
                 page.chaos.layer.value = not page.chaos.layer.value               # the MEGNO layer on, then off, ...
-            page.poll()
+            poll(page)
             others, pool = _threads()
             most = max(most, others)
             assert pool <= POOL_THREADS, pool
         page.orbit_list.resume()
-        page.settle()
-        assert len(page.orbits.crossings.data["t"]) == 50 * CLICK_CROSSINGS and _idle(page)
+        settle(page)
+        assert len(page.orbits.columns()["t"]) == 50 * CLICK_CROSSINGS and _idle(page)
         assert most <= others0, (others0, most)
     finally:
         page.close()
@@ -1510,12 +1517,12 @@ def test_the_view_exports_as_svg_with_one_group_per_orbit_and_as_png_in_the_orbi
         for u in (0.5, -0.3, 0.1):
             page.click(c1 + u * r1, c2 + 0.1 * r2)
         page.orbit_list.resume()                                  # (each click paused the orbits still running)
-        _poll_until(page, lambda: len(page.orbits.crossings.data["t"]) == 3 * s.crossings)
+        _poll_until(page, lambda: len(page.orbits.columns()["t"]) == 3 * s.crossings)
         svg = page.exports.download("svg").getvalue()
         groups = _svg_orbits(svg)                                        # parses as XML
         assert sorted(groups) == sorted(i for i, *_ in page.orbits.starts)      # one group per orbit
         for ident, _a, _b, c in page.orbits.starts:
-            n_inside = int(np.sum(np.asarray(page.orbits.crossings.data["orbit"]) == ident))
+            n_inside = int(np.sum(np.asarray(page.orbits.columns()["orbit"]) == ident))
             assert len(groups[ident]) == n_inside                       # a point per crossing
             assert set(groups[ident]) == {COLORS[c]}                     # in the orbit's colour
         img = matplotlib.image.imread(io.BytesIO(page.exports.download("png").getvalue()))[..., :3]
@@ -1564,8 +1571,8 @@ def test_a_million_crossings_are_drawn_as_a_density_image_of_the_visible_window(
         for u in (-0.5, 0.5):
             page.click(c1 + u * r1, c2)
         page.orbit_list.resume()                                  # (the second click paused the first if it still ran)
-        page.settle()
-        assert _idle(page) and len(page.orbits.crossings.data["t"]) == 2 * s.crossings
+        settle(page)
+        assert _idle(page) and len(page.orbits.columns()["t"]) == 2 * s.crossings
         assert not page.density_image.dense and page.orbits.points.visible
         assert page.density_image.density.data["image"] == []
         # 10^6 more crossings of the two orbits (points spread over the region), as the worker hands them in
@@ -1575,14 +1582,14 @@ def test_a_million_crossings_are_drawn_as_a_density_image_of_the_visible_window(
             a, r = rng.uniform(0, 2 * np.pi, n), np.sqrt(rng.uniform(0, 1, n))
             rows = np.column_stack([np.arange(n, dtype=float), c1 + r1 * r * np.cos(a), c2 + r2 * r * np.sin(a),
                                     np.ones(n), np.zeros(n)])
-            page.orbits._on_block(ident, rows, s.crossings + n, "done")   # (done: the orbit's crossings so far)
-        page.poll()
-        assert len(page.orbits.crossings.data["t"]) > density.THRESHOLD and page.density_image.dense
+            _hand_in(page, ident, rows)
+        poll(page)
+        assert len(page.orbits.columns()["t"]) > density.THRESHOLD and page.density_image.dense
         assert not page.orbits.points.visible
         assert len(page.orbits.shown.data["t"]) == 0                                   # nothing of it for the browser
         image = page.density_image.density.data["image"][0]
         assert image.dtype == np.uint32
-        assert page.density_image.density.data["n"] == [len(page.orbits.crossings.data["t"])]
+        assert page.density_image.density.data["n"] == [len(page.orbits.columns()["t"])]
         rgba = image.view(np.uint8).reshape(*image.shape, 4)
         drawn = {"#%02x%02x%02x" % tuple(px) for px in rgba[rgba[..., 3] > 0][:, :3]}
         assert drawn == {COLORS[c] for *_x, c in page.orbits.starts}                    # the orbits' colours
@@ -1596,15 +1603,15 @@ def test_a_million_crossings_are_drawn_as_a_density_image_of_the_visible_window(
         assert page.density_image.density.data["x"] == [Ranges.x0]
         assert page.density_image.density.data["dw"] == [Ranges.x1 - Ranges.x0]
         assert page.section.window == settings_mod.Window(Ranges.x0, Ranges.x1, Ranges.y0, Ranges.y1)
-        print(f"density image of {len(page.orbits.crossings.data['t'])} crossings re-aggregated in {took * 1e3:.0f} ms")
+        print(f"density image of {len(page.orbits.columns()['t'])} crossings re-aggregated in {took * 1e3:.0f} ms")
         assert took < 2.0
         page.orbit_list.undo()                                                              # one orbit less: redrawn
         assert page.density_image.dense
-        assert page.density_image.density.data["n"] == [len(page.orbits.crossings.data["t"])] == [n + s.crossings]
+        assert page.density_image.density.data["n"] == [len(page.orbits.columns()["t"])] == [n + s.crossings]
         page.orbit_list.undo()  # below the threshold: glyphs again
         assert not page.density_image.dense and page.orbits.points.visible
         assert page.density_image.density.data["image"] == []
-        np.testing.assert_array_equal(page.orbits.shown.data["p1"], page.orbits.crossings.data["p1"])   # the rows, back
+        np.testing.assert_array_equal(page.orbits.shown.data["p1"], page.orbits.columns()["p1"])   # the rows, back
     finally:
         page.close()
 
@@ -1617,7 +1624,7 @@ def _glyphs_and_image(page):
     from explorer.app.serve.orbits import COLORS
 
     orbit = np.asarray(page.orbits.shown.data["orbit"])
-    np.testing.assert_array_equal(orbit, page.orbits.crossings.data["orbit"])          # the browser holds every row
+    np.testing.assert_array_equal(np.sort(orbit), page.orbits.columns()["orbit"])   # the browser holds every row
     first = page.orbits.glyph_filter.args["first"]
     drawn = orbit >= first                                                      # what the browser's filter keeps
     ids = [i for i, *_ in page.orbits.starts]
@@ -1648,37 +1655,40 @@ def test_past_the_glyph_budget_the_newest_orbits_are_glyphs_and_the_older_ones_i
     page = SectionPage(s)
     rng = np.random.default_rng(5)
 
-    def more(ident, n, status="done", first=False):   # n more crossings of orbit ident (over the region)
+    def more(ident, n, status="done"):   # n more crossings of orbit ident (over the region)
         a, r = rng.uniform(0, 2 * np.pi, n), np.sqrt(rng.uniform(0, 1, n))
         rows = np.column_stack([np.arange(n, dtype=float), c1 + r1 * r * np.cos(a), c2 + r2 * r * np.sin(a),
                                 np.ones(n), np.zeros(n)])
-        page.orbits._on_block(ident, rows, n if first else 10 * n, status)      # (done == rows: its first block)
+        _hand_in(page, ident, rows, status)
 
     try:
         page.orbits.pause_box.value = False
         for u in (-0.6, -0.3, 0.0, 0.3, 0.6):
             page.click(c1 + u * r1, c2)
-        page.settle()
-        assert _idle(page) and len(page.orbits.crossings.data["t"]) == 5 * s.crossings
+        settle(page)
+        assert _idle(page) and len(page.orbits.columns()["t"]) == 5 * s.crossings
         ids = [i for i, *_ in page.orbits.starts]
         assert _glyphs_and_image(page) == (ids, [])                              # under the budget: as today
         budget = density.GLYPH_BUDGET                  # (the orbits' sizes as parts of it)
         for ident, part in zip(ids, (0.45, 0.3, 0.4, 0.25, 0.35)):
             more(ident, int(part * budget))
-        page.poll()
-        assert len(page.orbits.crossings.data["t"]) > density.GLYPH_BUDGET
+        poll(page)
+        assert len(page.orbits.columns()["t"]) > density.GLYPH_BUDGET
         assert _glyphs_and_image(page) == (ids[3:], ids[:3])
-        page.orbits.progress[ids[-1]] = (0, "running")        # as if the newest ran and this were its first block:
+        newest = page.orbits.runs[ids[-1]]             # as if the newest ran and this were its first block:
+        page.orbits.hide(newest.ident)                 # (its rows off the browser's sources ...
+        page.orbits.hidden.discard(newest.ident)       # ... and none sent yet)
+        newest.sent = 0
         shown, status = len(page.orbits.shown.data["t"]), page.orbits.status.text
-        more(ids[-1], int(0.45 * budget), "running", first=True)
+        more(ids[-1], int(0.45 * budget), "running")
         page.orbits._flush()                            # its first crossings go alone, to the live layer:
-        assert len(page.orbits.live.data["t"]) == int(0.45 * budget) and len(page.orbits.shown.data["t"]) == shown
-        np.testing.assert_array_equal(page.orbits.live.data["p1"], page.orbits.crossings.data["p1"][shown:])
+        assert len(page.orbits.live.data["t"]) == newest.done and len(page.orbits.shown.data["t"]) == shown
+        np.testing.assert_array_equal(page.orbits.live.data["p1"], page.orbits.columns()["p1"][shown:])
         assert page.orbits.glyph_filter.args["first"] == ids[3]  # nothing else moves
         assert page.orbits.status.text == status
-        older = np.count_nonzero(np.asarray(page.orbits.crossings.data["orbit"]) < ids[3])
+        older = np.count_nonzero(np.asarray(page.orbits.columns()["orbit"]) < ids[3])
         assert page.density_image.density.data["n"] == [older]
-        assert page.poll()                              # the next flush (scheduled): they settle, and
+        assert poll(page)                              # the next flush (scheduled): they settle, and
         assert len(page.orbits.live.data["t"]) == 0            # one orbit more is in the image
         assert _glyphs_and_image(page) == (ids[4:], ids[:4])
         class Ranges:
@@ -1697,7 +1707,7 @@ def test_past_the_glyph_budget_the_newest_orbits_are_glyphs_and_the_older_ones_i
         assert _glyphs_and_image(page) == (ids[:2], [])
         for ident in ids[:2]:
             more(ident, int(0.6 * budget))
-        page.poll()
+        poll(page)
         assert _glyphs_and_image(page) == (ids[1:2], ids[:1])
         page.orbit_list.clear()
         assert _glyphs_and_image(page) == ([], []) and page.density_image.density.data["image"] == []
@@ -1774,9 +1784,9 @@ def test_past_the_threshold_the_browser_shows_a_density_image_that_follows_the_z
 def test_picking_a_hyperbolic_fixed_point_draws_its_grown_stable_and_unstable_manifolds(tmp_path):
     pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
     from explorer.analysis.manifolds import manifolds
+    from explorer.app.figures import MANIFOLD_COLORS
     from explorer.app.serve.overlays import MANIFOLD_ARCLENGTH
     from explorer.app.serve.page import SectionPage
-    from explorer.app.serve.style import MANIFOLD_COLORS
 
     page = SectionPage(Settings(params=model.FIGURE4.with_(mu=0.03)), {"separatrices": "1"})
     try:
@@ -1848,9 +1858,9 @@ def test_a_served_click_sends_its_cross_with_its_first_crossings_and_later_block
         # them: off the path from the click to them)
         assert page.orbits.start_source.data["orbit"] == [] and rows() == (0, 0) and _link(page)["orbits"] == ""
         status = page.orbits.status.text
-        page.settle()
+        settle(page)
         assert len(page.orbits.shown.data["p1"]) == s.crossings
-        np.testing.assert_array_equal(np.asarray(page.orbits.crossings.data["p1"]),
+        np.testing.assert_array_equal(np.asarray(page.orbits.columns()["p1"]),
                                       np.asarray(page.orbits.shown.data["p1"]))
         # the first rows alone on the live layer (the status line unchanged), with the cross; the
         # next flush moves them to the crossings, with what came meanwhile
@@ -1890,14 +1900,14 @@ def test_a_short_orbit_joins_its_first_crossings_on_the_live_layer_until_they_se
     try:
         status = page.orbits.status.text
         page.click(c1 + 0.3 * r1, c2)
-        page.settle()
+        settle(page)
         firsts = [x for x in seen if x[2] > 0]      # the first block (with the last if it was there)
         assert firsts[0][1] == 0 and firsts[0][2] in (FIRST_BLOCK, s.crossings) and firsts[0][3] == status
         assert any(x[1:3] == (0, s.crossings) for x in seen)                  # the last one joins it
         settled = [x for x in seen if x[1] > 0]
         assert settled[0][1:3] == (s.crossings, 0) and settled[0][3] != status  # all at once, with the status
         assert settled[0][0] - firsts[0][0] >= page_orbits.FLUSH_SECONDS - page_orbits.SETTLE_SLACK
-        np.testing.assert_array_equal(page.orbits.shown.data["p1"], page.orbits.crossings.data["p1"])
-        assert len(page.orbits.crossings.data["p1"]) == s.crossings
+        np.testing.assert_array_equal(page.orbits.shown.data["p1"], page.orbits.columns()["p1"])
+        assert len(page.orbits.columns()["p1"]) == s.crossings
     finally:
         page.close()

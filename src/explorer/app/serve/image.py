@@ -99,7 +99,7 @@ def figure(view: View):
         ax.plot(c[:, 0], c[:, 1], color=style.SEPARATRIX_COLOR, linewidth=0.8, zorder=2.5, gid=f"separatrix-{n}")
     for n, (kind, curve) in enumerate(view.manifolds):
         c = np.asarray(curve, float)
-        ax.plot(c[:, 0], c[:, 1], color=style.MANIFOLD_COLORS[kind], linewidth=0.8, zorder=2.6,
+        ax.plot(c[:, 0], c[:, 1], color=figures.MANIFOLD_COLORS[kind], linewidth=0.8, zorder=2.6,
                 gid=f"manifold-{kind}-{n}")
     for p1, p2, period, elliptic in view.periodic:
         ax.scatter([p1], [p2], s=36, marker="o" if elliptic else "X", edgecolors="black", linewidths=1.0,

@@ -8,7 +8,7 @@ import time
 import panel as pn
 
 from explorer import model
-from explorer.app.serve.settings import FIELDS, Settings, room_for
+from explorer.app.serve.settings import Settings, room_for
 from explorer.app.serve.style import FIELD_WIDTH
 from explorer.model import ParameterError
 
@@ -25,7 +25,6 @@ HELP = {p.name: f"{p.symbol}: {p.help} (docs/model.md)" for p in model.PARAMETER
     "dt": "the fixed step of split2 to split8 (smaller: more accurate, more steps)",
     "crossings": "how many crossings of the section each click computes",
     "phi0": "the section φ = φ0 (a number, or pi, pi/2, 2pi)"}
-STEP_FIELDS = tuple(n for n in FIELDS if n != "method")
 #: the stepper's widgets' margins (px): its row fits the fields' 230 px
 STEP_MARGIN = (5, 3)
 
@@ -78,10 +77,10 @@ class Fields:
         self.mu_slider = pn.widgets.FloatSlider(label=f"{LABELS['mu']} (slider)", start=0.0, end=end, step=step,
                                                 value=min(max(mu, 0.0), end), width=220, visible="mu" in s)
         self._dragging = False                  # from a drag's first move to its release: the range stays
-        self._slide_timer = session.timer(lambda: self._slid(self.mu_slider.value, held=True))
+        self._slide_timer = session.timer(lambda: self._slid(self.mu_slider.value))
         self.mu_slider.param.watch(self._drag, "value")
-        self.mu_slider.param.watch(lambda e: None if self._quiet else self._slid(e.new), "value_throttled")
-        steps = [n for n in settings.field_names if n in STEP_FIELDS or n not in FIELDS]
+        self.mu_slider.param.watch(self._released, "value_throttled")
+        steps = [n for n in settings.field_names if n != "method"]
         self.step_field = pn.widgets.Select(label="step", options={LABELS.get(n, n): n for n in steps},
                                             value=steps[0], width=62, margin=STEP_MARGIN)
         self.step_size = pn.widgets.FloatInput(label="by", value=default_step(float(s[steps[0]])), width=82,
@@ -97,7 +96,7 @@ class Fields:
     def _edited(self, session, on_edit, name: str) -> None:
         if self._quiet:
             return
-        if name in STEP_FIELDS and self.step_field.value != name:
+        if name != "method" and self.step_field.value != name:
             self.step_field.value = name
         session.soon(lambda: on_edit(name))
 
@@ -116,23 +115,24 @@ class Fields:
         else:
             self.inputs[name].value = text
 
+    # Panel's slider gives ``value`` at every move and ``value_throttled`` at the release only, a value that
+    # is a browser's sum of steps, and one fixed range: the hold, the rounding and the range are the page's.
     def _drag(self, _event) -> None:
         if not self._quiet:
             self._dragging = True
             self._slide_timer.at(time.monotonic() + SLIDE_SECONDS)
 
-    def _slid(self, value, held: bool = False) -> None:
-        """The slider's ``value`` into the field (``held``: mid-drag; at the release the range follows it)."""
-        if value is None:
-            return
-        if not held:
+    def _released(self, event) -> None:
+        if not self._quiet:
             self._slide_timer.cancel()
             self._dragging = False
-        # rounded to the slider's step: the browser's sums of steps carry float noise
+            self._slider_at(self._slid(event.new))      # the range follows the released value
+
+    def _slid(self, value) -> float:
+        """The slider's ``value`` into the μ field, rounded to the slider's step (no float noise)."""
         text = repr(round(float(value), max(0, -math.floor(math.log10(self.mu_slider.step)))))
-        if not held and self.inputs["mu"].value == text:
-            self._slider_at(float(text))          # no edit: the range follows the released value now
         self.inputs["mu"].value = text
+        return float(text)
 
     def _slider_at(self, mu: float) -> None:
         """The slider at ``mu``, over slider_range(mu), in one update (the browser takes them together)."""

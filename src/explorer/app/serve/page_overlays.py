@@ -8,9 +8,10 @@ from itertools import repeat
 import numpy as np
 from bokeh.models import ColumnDataSource, Div, LinearColorMapper
 
+from explorer.app.figures import MANIFOLD_COLORS
 from explorer.app.serve import overlays as search
 from explorer.app.serve.box import Box
-from explorer.app.serve.style import MANIFOLD_COLORS, PERIOD_COLORS, SEPARATRIX_CASING, SEPARATRIX_COLOR
+from explorer.app.serve.style import PERIOD_COLORS, SEPARATRIX_CASING, SEPARATRIX_COLOR
 from explorer.app.serve.tasks import failure
 
 #: the columns of each overlay's source (by its name)

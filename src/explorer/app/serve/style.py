@@ -3,9 +3,6 @@ from __future__ import annotations
 
 import math
 
-#: the manifolds of a picked saddle: W^u and W^s in the colours of a sweep's [manifolds]
-from explorer.app.figures import MANIFOLD_COLORS  # noqa: F401  (one definition, in figures.py)
-
 #: colours of the section (as the figures: forbidden region light gray, allowed region white)
 FORBIDDEN_COLOR = "#cccccc"
 ALLOWED_COLOR = "#ffffff"
