@@ -2,6 +2,7 @@
 a bad value raises :class:`~explorer.model.ParameterError` naming the field.  No web library here."""
 from __future__ import annotations
 
+import functools
 import math
 import re
 from dataclasses import dataclass, replace
@@ -13,10 +14,8 @@ from explorer import model
 from explorer.analysis import sections
 from explorer.model import ParameterError, validation
 
-#: the model parameters the page has a field for: mu (the one most often changed) first
-PAGE_PARAMS = ("mu",) + tuple(n for n in model.PARAM_NAMES if n != "mu")
-#: every field of the page, in the order shown (and written in the URL)
-FIELDS = ("mu", "h") + PAGE_PARAMS[1:] + ("method", "tol", "dt", "crossings", "phi0")
+#: every field of Chaplygin's page, in the order shown (and written in the URL): mu and h (most often changed) first
+FIELDS = ("mu", "h", *(n for n in model.PARAM_NAMES if n != "mu"), "method", "tol", "dt", "crossings", "phi0")
 #: crossings per click: the page's default and its upper bound (40 bytes a row in the server)
 DEFAULT_CROSSINGS = 2000
 MAX_CROSSINGS = 1_000_000
@@ -43,15 +42,67 @@ def room_for(n_orbits: int, crossings: int) -> str | None:
 
 
 class PageSettings:
-    """What Chaplygin's page (:class:`Settings`) and a System's (system_page.SystemSettings) say alike."""
+    """The page of a section map ``self.smap`` (docs/commands/serve.md): its fields (the map's parameters,
+    then ``own_fields``), region and refusals are the map's answers, one code path for Chaplygin's page
+    (:class:`Settings`) and a System's (system_page.SystemSettings); ``on(smap, **values)``: the same page
+    on another map."""
 
-    admissible: Any                # (p1, p2) -> bool: a click there starts an orbit
-    outside: Any                   # (p1, p2) -> str: why not
+    smap: Any                      # the section map the page shows
+    on: Any                        # (smap, **values) -> these settings on ``smap`` with ``values``
     indicators: Any                # (p1, p2, time, max_steps, which) -> lyapunov.indicators' result or None
+    own_fields: tuple = ("tol", "crossings")
+
+    @property
+    def field_names(self) -> tuple:
+        """The map's parameters (mu and h first) and ``own_fields``."""
+        return (*sorted(self.smap.parameters, key=lambda n: (n != "mu", n != "h")), *self.own_fields)
+
+    def fields(self) -> dict:
+        """The page's fields as text (``repr`` of each float: read back, the same number)."""
+        own = {n: str(getattr(self, n)) if n in ("method", "crossings") else repr(float(getattr(self, n)))
+               for n in self.own_fields}
+        return {n: own[n] if n in own else repr(float(self.smap.value_of(n))) for n in self.field_names}
+
+    def with_fields(self, fields: dict):
+        """These settings with the page's ``fields`` ({name: text}) applied, each validated."""
+        values, smap = read_fields(self.field_names, fields, numbers=self.smap.parameters), self.smap
+        for name in self.smap.parameters:
+            if name in values and values[name] != smap.value_of(name):
+                smap = smap.with_value(name, values[name])
+            values.pop(name, None)
+        return self.on(smap, **values)
+
+    @property
+    def region(self):
+        """(c1, c2, r1, r2): the centre and half-sizes of the box of the map's domain; None when it is empty."""
+        try:
+            (a0, a1), (b0, b1) = self.smap.domain
+        except ParameterError:
+            return None
+        return (0.5 * (a0 + a1), 0.5 * (b0 + b1), 0.5 * (a1 - a0), 0.5 * (b1 - b0))
+
+    def empty_region(self) -> str:
+        """Why the region is empty, in the map's words ("" when it is not)."""
+        try:
+            _ = self.smap.domain
+        except ParameterError as exc:
+            return str(exc)
+        return ""
+
+    def allowed(self, p1, p2) -> np.ndarray:
+        """Mask of the points in the map's domain."""
+        return self.smap.allowed(np.stack([np.asarray(p1, float), np.asarray(p2, float)], axis=-1))
 
     def refusal(self, p1: float, p2: float) -> str | None:
-        """Why a click at (p1, p2) starts no orbit (None: it does)."""
-        return None if self.admissible(p1, p2) else self.outside(p1, p2)
+        """Why a click at (p1, p2) starts no orbit, in the map's words (None: the map lifts it to a state)."""
+        try:
+            self.smap.states([(p1, p2)])
+        except ParameterError as exc:
+            return str(exc)
+        return None
+
+    def admissible(self, p1: float, p2: float) -> bool:
+        return self.refusal(p1, p2) is None
 
     def megno(self, p1, p2, time: float, max_steps: int, mlce: bool = False):
         """<Y>(time) (and the mLCE with ``mlce``) of the orbits from (p1, p2), NaN where a run stops early."""
@@ -65,8 +116,9 @@ class PageSettings:
 
 @dataclass(frozen=True)
 class Settings(PageSettings, sections.Integration):
-    """What determines a clicked orbit's crossings, bit for bit those of ``explorer orbit`` with the same
-    values: an :class:`~explorer.analysis.sections.Integration` plus ``params``, ``h`` and ``crossings``."""
+    """Chaplygin's page: its map ``SectionMap(params, h, phi0=phi0)`` and an
+    :class:`~explorer.analysis.sections.Integration`; a clicked orbit's crossings are bit for bit those of
+    ``explorer orbit`` with the same values."""
 
     params: model.Params = model.FIGURE4
     h: float = model.FIGURE4_H
@@ -74,7 +126,7 @@ class Settings(PageSettings, sections.Integration):
 
     scene_export = True            # the session exports as a scene that `explorer sweep` reruns
     axes = ("p1", "p2")
-    field_names = FIELDS
+    own_fields = FIELDS[-5:]
 
     def __post_init__(self):
         super().__post_init__()
@@ -87,42 +139,26 @@ class Settings(PageSettings, sections.Integration):
             raise ParameterError(f"the allowed region is not finite at these values (centre and radii {shown}): "
                                  "a parameter is too far from 1 (lam, a1, a2, b)")
 
+    @functools.cached_property
+    def smap(self):
+        return self.section_map()
+
     def section_kwargs(self) -> dict:
         """Keywords of :func:`explorer.analysis.sections.iter_crossings` (with ``crossings``)."""
-        return {"method": self.method, "tol": self.tol, "dt": self.dt, "phi0": self.phi0,
-                "direction": self.direction}
+        return {"method": self.method, "tol": self.tol, "dt": self.dt, "phi0": self.phi0, "direction": self.direction}
 
-    @property
-    def region(self):
-        """(c1, c2, r1, r2) of the allowed region (docs/model.md R9), or None when it is empty."""
-        e = model.allowed_ellipse(self.params, self.h, self.phi0)
-        if e is None or not (e[2] > 0.0 and e[3] > 0.0):
-            return None
-        return tuple(float(v) for v in e)
-
-    def admissible(self, p1: float, p2: float) -> bool:
-        """(p1, p2) lies in the allowed region (M^2 >= 0, docs/model.md R9)."""
-        return bool(model.section_M2(self.params, p1, p2, self.h, self.phi0) >= 0.0)
-
-    def allowed(self, p1, p2) -> np.ndarray:
-        """Mask of the points strictly inside the allowed region (M^2 > 0)."""
-        return model.section_M2(self.params, p1, p2, self.h, self.phi0) > 0.0
+    def on(self, smap, **values) -> Settings:
+        return replace(self, params=smap.params, h=smap.h, **values)
 
     def region_mask(self):
-        """None: the region is the ellipse :attr:`region`."""
+        """None: the region is the ellipse in closed form (docs/model.md R9)."""
         return None
-
-    def outside(self, p1: float, p2: float) -> str:
-        return f"({p1:.4g}, {p2:.4g}) is outside the allowed region (M^2 < 0 there): click in the white ellipse"
 
     def describe(self) -> str:
         return f"mu = {self.params.mu:g}, h = {self.h:g}, {self.method}"
 
     def title(self) -> str:
         return f"Poincaré section φ = {'π' if self.phi0 == math.pi else f'{self.phi0:.6g}'}"
-
-    def empty_region(self) -> str:
-        return f"the allowed region is empty at h = {self.h:g} (h is below the minimum of the energy on the section)"
 
     def section_map(self, tol=None):
         """The section map the page's searches ask (fixed points, manifolds, rotation numbers)."""
@@ -147,19 +183,6 @@ class Settings(PageSettings, sections.Integration):
         return ((b.rows(0), b.state) for b in sections.iter_crossings(
             self.params, states=y0, n_crossings=self.crossings, block=block, state=state, max_steps=max_steps,
             **self.section_kwargs()))
-
-    def fields(self) -> dict:
-        """The page's fields as text (``repr`` of each float: read back, the same number)."""
-        d = {n: repr(float(getattr(self.params, n))) for n in PAGE_PARAMS}
-        d.update(h=repr(float(self.h)), method=self.method, tol=repr(float(self.tol)), dt=repr(float(self.dt)),
-                 crossings=str(self.crossings), phi0=repr(float(self.phi0)))
-        return {n: d[n] for n in FIELDS}
-
-    def with_fields(self, fields: dict) -> Settings:
-        """These settings with the page's ``fields`` ({name: text}) applied, each validated."""
-        values = read_fields(FIELDS, fields)
-        params = {n: values.pop(n) for n in PAGE_PARAMS if n in values}
-        return replace(self, params=self.params.with_(**params), **values)   # Params checks a1, a2, b > 0, lam != 0
 
     def seed_starts(self, seeds) -> list:
         """The starts [(p1, p2), ...] ``explorer sweep`` runs for ``seeds`` (None: a scene's default) here."""

@@ -1,5 +1,5 @@
-"""The page of a System's section map (docs/commands/serve.md, "Your own system"): the protocol of
-:class:`~explorer.app.serve.settings.Settings`, and what ``explorer serve --system`` starts from."""
+"""The page of a System's section map (docs/commands/serve.md, "Your own system"), a
+:class:`~explorer.app.serve.settings.PageSettings`, and what ``explorer serve`` starts from."""
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
@@ -9,7 +9,7 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis import sections, system_sections
-from explorer.app.serve.settings import MAX_CROSSINGS, PageSettings, Settings, Window, read_fields
+from explorer.app.serve.settings import MAX_CROSSINGS, PageSettings, Settings, Window
 from explorer.model import ParameterError, validation
 
 #: names the page's link keeps for itself: a System parameter may not take one (its field is a link key)
@@ -40,7 +40,7 @@ class SystemSettings(PageSettings):
 
         if not is_system_map(self.smap):
             raise ParameterError(f"a System's page needs its section map, got {type(self.smap).__name__}")
-        for name in self.field_names[:-3]:
+        for name in self.smap.parameters:
             if name in RESERVED[1:]:
                 raise ParameterError(f"the page cannot show {self.smap.system.name}'s parameter {name!r}: the page's "
                                      f"link uses that name (rename it; reserved: {', '.join(RESERVED)})")
@@ -54,23 +54,10 @@ class SystemSettings(PageSettings):
         return hash(tuple(self.fields().items()))
 
     @property
-    def field_names(self) -> tuple:
-        return (*self.smap.parameters, "tol", "crossings")
-
-    @property
     def axes(self) -> tuple:
         return tuple(s.name for s in self.smap.coords)
 
-    def fields(self) -> dict:
-        d = {n: repr(float(self.smap.value_of(n))) for n in self.smap.parameters}
-        return {**d, "tol": repr(float(self.tol)), "crossings": str(self.crossings)}
-
-    def with_fields(self, fields: dict) -> SystemSettings:
-        values, smap = read_fields(self.field_names, fields, numbers=self.smap.parameters), self.smap
-        for name in self.smap.parameters:
-            if name in values and values[name] != smap.value_of(name):
-                smap = smap.with_value(name, values[name])
-            values.pop(name, None)
+    def on(self, smap, **values) -> SystemSettings:
         return replace(self, smap=smap, **values)
 
     def describe(self) -> str:
@@ -81,36 +68,10 @@ class SystemSettings(PageSettings):
         s = self.smap
         return f"Poincaré section {s.section.expr} = 0 ({s.direction:+d}) of {s.system.name}, {s.solve.name} from E"
 
-    def empty_region(self) -> str:
-        return f"the allowed region is empty: {self.smap.describe_domain()}"
-
-    @property
-    def region(self):
-        """(c1, c2, r1, r2): the centre and half-sizes of a box holding the map's domain; None when empty."""
-        try:
-            (a0, a1), (b0, b1) = self.smap.domain
-        except ParameterError:
-            return None
-        return (0.5 * (a0 + a1), 0.5 * (b0 + b1), 0.5 * (a1 - a0), 0.5 * (b1 - b0))
-
     def region_mask(self):
         """The map's domain on a REGION_CELLS^2 grid of the :attr:`region` box (rows: the second coordinate)."""
         c1, c2, r1, r2 = self.region
         return self.allowed(*Window(c1 - r1, c1 + r1, c2 - r2, c2 + r2).centres(REGION_CELLS))
-
-    def allowed(self, p1, p2) -> np.ndarray:
-        return self.smap.allowed(np.stack([np.asarray(p1, float), np.asarray(p2, float)], axis=-1))
-
-    def admissible(self, p1: float, p2: float) -> bool:
-        return bool(self.allowed(p1, p2))
-
-    def outside(self, p1: float, p2: float) -> str:
-        """The map's own message for a point outside its domain."""
-        try:
-            self.smap.states([(p1, p2)])
-        except ParameterError as exc:
-            return str(exc)
-        return self.smap.describe_domain()
 
     def section_map(self, tol=None):
         s = self.smap
