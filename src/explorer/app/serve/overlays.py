@@ -64,9 +64,7 @@ def _described(points) -> str:
 
 def fixed_points(view) -> tuple:
     """(points, message): the distinct fixed points of :func:`_fixed_points_from` p = 0; ``view``: the
-    page's settings (:class:`~explorer.app.serve.settings.Settings`)."""
-    if view.region is None:
-        return [], "fixed points: the region is empty"
+    page's settings, with a region."""
     points: list = []
     stopped = ""
     try:
@@ -108,8 +106,6 @@ def periodic_orbits(view):
     """(orbits, message): the periodic orbits of minimal periods 1..PERIODIC_MAX of
     :func:`explorer.analysis.periodic.search_periodic_orbits`; a budget that runs out ends it there."""
     K = PERIODIC_MAX
-    if view.region is None:
-        return [], "periodic orbits: the region is empty"
     orbits, stopped, done = [], "", 0
     for k in range(1, K + 1):
         try:
@@ -127,14 +123,12 @@ def periodic_orbits(view):
 
 def elliptic_center(view, start):
     """The first elliptic fixed point Newton's method reaches from ``start``, then the other guesses (or None)."""
-    if view.region is None:
-        return None
     return next((fp for fp in _fixed_points_from(view, tuple(start)) if fp.stable), None)
 
 
 def orbit_readout(settings, start) -> tuple:
-    """(values, message): a picked orbit's megno, mlce, rotation number (around ``center``, its
-    :func:`elliptic_center`; or None) and the readout's words (docs/commands/serve.md)."""
+    """(values, message): a picked orbit's megno, mlce, rotation number around ``center`` (its
+    :func:`elliptic_center`, or None) and the readout's words (docs/commands/serve.md)."""
     p1, p2 = float(start[0]), float(start[1])
     megno, mlce = orbit_indicators(settings, p1, p2)
     values = {"megno": megno, "mlce": mlce, "rotation": None, "center": None}
