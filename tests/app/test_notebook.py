@@ -50,12 +50,12 @@ CELLS = [
     "import time\nimport numpy as np\n"
     f"assert app.page.click({START[0]}, {START[1]}) is not None\n"
     "t0 = time.time()\n"
-    f"while len(app.page.orbits.crossings.data['t']) < {CROSSINGS} and time.time() - t0 < 240:\n"
+    f"while len(app.page.orbits.columns()['t']) < {CROSSINGS} and time.time() - t0 < 240:\n"
     "    app.page.poll()\n"
     "    time.sleep(0.01)\n"
-    "got = np.column_stack([np.asarray(app.page.orbits.crossings.data[k]) for k in ('t', 'p1', 'p2', 'M', 'dH')])\n"
+    "got = np.column_stack([np.asarray(app.page.orbits.columns()[k]) for k in ('t', 'p1', 'p2', 'M', 'dH')])\n"
     "np.save('orbit.npy', got)\n"
-    "print('crossings:', len(app.page.orbits.crossings.data['t']))",
+    "print('crossings:', len(app.page.orbits.columns()['t']))",
     "app.close()",
 ]
 

@@ -26,10 +26,13 @@ STARTS = ((0.3, 0.1), (-0.4, 0.2))
 
 
 def _rows(page, ident) -> np.ndarray:
-    orbits = page.orbits
-    d = orbits.hidden.get(ident, orbits.crossings.data)
-    mine = np.asarray(d["orbit"]) == ident
-    return np.column_stack([np.asarray(d[k])[mine] for k in ("t", "p1", "p2", "M", "dH")])
+    """The orbit's rows in the page's store (drawn or hidden)."""
+    run = page.orbits.runs[ident]
+    return run.rows[:run.done]
+
+
+def _progress(page, ident) -> tuple:
+    return len(_rows(page, ident)), page.orbits.state(ident)
 
 
 @pytest.fixture
@@ -75,7 +78,7 @@ def test_raising_the_crossings_continues_each_orbit_and_lowering_cuts_it_without
         assert computed["rows"] == 0
         for i, run in enumerate(runs):
             np.testing.assert_array_equal(_rows(page, run.ident), ref.orbit(i)[:N // 2])
-            assert page.orbits.progress[run.ident] == (N // 2, "done")
+            assert _progress(page, run.ident) == (N // 2, "done")
         assert len(page.orbits.shown.data["orbit"]) == N // 2 and not len(page.orbits.live.data["orbit"])
         assert page.url_query()["crossings"] == str(N // 2)
     finally:
@@ -125,7 +128,7 @@ def test_an_orbit_stopped_on_its_time_budget_reruns_from_its_start_when_the_cros
     try:
         run = page.click(*STARTS[0])
         page.settle()
-        done, status = page.orbits.progress[run.ident]
+        done, status = _progress(page, run.ident)
         assert status == STATUS_NAMES[STATUS_TMAX] and 0 < done < N
         ref = sections.crossings(s.params, s.h, [STARTS[0]], n_crossings=2 * N, tmax=TMAX_PER_CROSSING * 2 * N,
                                  **s.section_kwargs())
@@ -134,6 +137,6 @@ def test_an_orbit_stopped_on_its_time_budget_reruns_from_its_start_when_the_cros
         _set_crossings(page, 2 * N)
         assert computed["rows"] == int(ref.count[0])     # every row again, from the start
         np.testing.assert_array_equal(_rows(page, run.ident), ref.orbit(0))
-        assert page.orbits.progress[run.ident] == (int(ref.count[0]), STATUS_NAMES[STATUS_TMAX])
+        assert _progress(page, run.ident) == (int(ref.count[0]), STATUS_NAMES[STATUS_TMAX])
     finally:
         page.close()

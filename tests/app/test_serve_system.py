@@ -82,7 +82,7 @@ def test_a_system_page_runs_the_maps_orbits_on_its_energy_level_and_refuses_poin
         assert tuple(page.inputs) == ("lam", "energy", "tol", "crossings") and not page.fields.mu_slider.visible
         assert page.click(0.1, 0.1) is not None
         page.settle()
-        d = page.orbits.crossings.data
+        d = page.orbits.columns()
         rows = np.column_stack([np.asarray(d[k]) for k in ("t", "p1", "p2", "M", "dH")])
         assert rows.shape == (40, 5) and np.max(np.abs(_energy(rows[:, 1], rows[:, 2], rows[:, 3]) - E)) <= 1e-10
         ref = ex.crossings(smap, [(0.1, 0.1)], n_crossings=40).data[0]
@@ -91,7 +91,7 @@ def test_a_system_page_runs_the_maps_orbits_on_its_energy_level_and_refuses_poin
         assert page.click(0.6, 0.45) is None and "has no solution for px" in page.message.text
         page.inputs["energy"].value = "0.1"                                   # the orbit reruns on E = 0.1
         page.settle()
-        d = page.orbits.crossings.data
+        d = page.orbits.columns()
         assert page.settings.smap.energy_value == 0.1 and len(d["t"]) == 40
         assert np.max(np.abs(_energy(*(np.asarray(d[k]) for k in ("p1", "p2", "M"))) - 0.1)) <= 1e-10
         points, text = overlays.fixed_points(page.settings)                 # the searches ask the map
@@ -106,7 +106,7 @@ def test_explore_in_a_notebook_takes_a_systems_section_map():
         assert page.settings.fields() == {"lam": "1.0", "energy": "0.1", "tol": "1e-13", "crossings": "20"}
         assert page.click(0.1, 0.1) is not None
         page.settle()
-        d = page.orbits.crossings.data
+        d = page.orbits.columns()
         y, py, px = (np.asarray(d[k]) for k in ("p1", "p2", "M"))
         assert len(y) == 20 and np.max(np.abs(_energy(y, py, px) - 0.1)) <= 1e-10
     finally:

@@ -46,12 +46,14 @@ COLORS = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e3
 
 @dataclass
 class OrbitRun:
-    """One clicked orbit: its start, its settings and where its stream stands."""
+    """One clicked orbit: its start, settings, colour index, every row computed (``rows``, of which the first
+    ``done`` count: a lowered crossings per click keeps the others) and where its stream stands."""
 
     ident: int
     p1: float
     p2: float
     settings: Any                  # the page's settings (settings.Settings, system_page.SystemSettings)
+    colour: int = 0
     paused: bool = False
     state: Any = None              # the stream's sections.StreamState after the last block
     block: int = FIRST_BLOCK
@@ -62,7 +64,9 @@ class OrbitRun:
     wants_indicators: bool = True
     estimated: bool = False
     step_rate: float = 0.0
-    ahead: np.ndarray = field(default_factory=lambda: np.zeros((0, 5)))   # rows computed past ``done``, cut
+    turn: int = 0                  # when its last block was handed out (round robin)
+    sent: int = 0                  # its rows in the browser (the page's)
+    rows: np.ndarray = field(default_factory=lambda: np.zeros((0, 5)))
 
     @property
     def finished(self) -> bool:
@@ -82,7 +86,7 @@ class OrbitRun:
         cap = taken + self.steps if methods.get(s.method).loops.resumes_at_any_step else s.max_steps
         rows, state = next(s.stream(self.p1, self.p2, self.state, self.block, min(cap, s.max_steps)),
                            (np.zeros((0, 5)), self.state))
-        self.state, self.done = state, int(state.done[0])
+        self.state, self.done, self.rows = state, int(state.done[0]), np.concatenate([self.rows, rows])
         if self.finished and int(state.status[0]) == STATUS_MAX_STEPS and cap < s.max_steps:
             self.reopen()       # stopped at this block's step cap, not at the orbit's budget
         elif self.finished:
@@ -138,8 +142,9 @@ def orbit_indicators(settings, p1: float, p2: float) -> tuple:
 
 
 class Worker:
-    """A session's orbits, run block by block by one task ``orbits`` of ``session`` (tasks.Session), which
-    applies each block, error, notice and indicator on the session's loop; :meth:`cancel` ends it."""
+    """A session's orbits, ``runs`` {orbit id: OrbitRun} in click order (running, paused or stopped), run block
+    by block by one task ``orbits`` of ``session`` (tasks.Session), which applies each block, error, notice and
+    indicator on the session's loop; :meth:`cancel` ends it."""
 
     def __init__(self, session, on_block: Callable[[int, np.ndarray, int, str], None],
                  on_error: Callable[[int, BaseException], None] = lambda _i, _e: None,
@@ -148,63 +153,54 @@ class Worker:
         self.session = session
         self._on_block, self._on_error = on_block, on_error
         self._on_indicators, self._on_notice = on_indicators, on_notice
-        self._runs: list[OrbitRun] = []      # every orbit (running, paused or stopped): new ones first, then by turn
-        self._next_id = 0
+        self.runs: dict[int, OrbitRun] = {}
+        self._next_id = self._turn = 0
 
     def _queue(self) -> list[OrbitRun]:
-        """The orbits to compute, newest first."""
-        return [r for r in self._runs if r.status == "running" and not r.paused]
+        """The orbits to compute."""
+        return [r for r in self.runs.values() if r.status == "running" and not r.paused]
 
     def _ensure_running(self) -> None:
         if self._queue() and not self.session.running("orbits"):
             self.session.start("orbits", self._loop())
 
-    def submit(self, p1: float, p2: float, settings, ident: int | None = None) -> OrbitRun:
+    def submit(self, p1: float, p2: float, settings, ident: int | None = None, colour: int = 0) -> OrbitRun:
         """Queue the orbit from (p1, p2) as orbit ``ident`` (None: a new id; a cancelled orbit's: its rerun)."""
         if ident is None:
             self._next_id += 1
             ident = self._next_id
-        run = OrbitRun(ident, float(p1), float(p2), settings)
-        self._runs.insert(0, run)      # newest first: its first block comes next
+        run = self.runs[ident] = OrbitRun(ident, float(p1), float(p2), settings, colour)
         self._ensure_running()
         return run
 
     def cancel(self) -> None:
         """Stop every orbit (the block in progress is dropped)."""
-        self._runs = []
+        self.runs.clear()
         self.session.cancel("orbits")
 
-    def remove(self, ident: int) -> None:
-        """Stop one orbit, running or paused (undo)."""
-        self._runs = [r for r in self._runs if r.ident != ident]
-
-    def recount(self, settings, cut: Callable[[int, int], np.ndarray]) -> dict:
-        """Every orbit at ``settings`` (only the crossings per click K differ): cut to K (``cut(ident, K)``, its rows
-        past K kept in ``ahead``), continued, or rerun if its time budget stopped it.  Returns {ident: (n, status)}."""
-        self._runs = [self._recount(run, settings, cut) for run in self._runs]
+    def recount(self, settings) -> None:
+        """Every orbit at ``settings`` (only the crossings per click K differ): cut to K (its rows kept), continued,
+        or rerun if its time budget stopped it."""
+        for ident, run in self.runs.items():
+            self.runs[ident] = self._recount(run, settings)
         self._ensure_running()
-        return {run.ident: (run.done, run.status) for run in self._runs}
 
-    def _recount(self, run: OrbitRun, settings, cut) -> OrbitRun:
-        k, run.settings = settings.crossings, settings
-        if run.done > k:
-            run.ahead = np.concatenate([cut(run.ident, k), run.ahead])
-            run.done, run.status = k, "done"
+    @staticmethod
+    def _recount(run: OrbitRun, settings) -> OrbitRun:
+        k, n, run.settings = settings.crossings, len(run.rows), settings
+        run.done = min(n, k)
+        if run.status == "failed":
             return run
-        end = STATUS_NAMES[int(run.state.status[0])] if run.finished else "running"   # (after ``ahead``)
-        if end == STATUS_NAMES[STATUS_TMAX] and run.done + len(run.ahead) < k:   # (its time budget, 100 K, grows)
-            cut(run.ident, 0)
-            return OrbitRun(run.ident, run.p1, run.p2, settings, paused=run.paused)
-        rows, run.ahead = run.ahead[:k - run.done], run.ahead[k - run.done:]
-        run.done += len(rows)
-        run.status = "done" if len(run.ahead) else end
-        if run.status in ("running", "done"):
-            run.status = "done" if run.done >= k else "running"
+        end = STATUS_NAMES[int(run.state.status[0])] if run.finished else "running"
+        if n >= k:
+            run.status = "done" if n > k or end == "running" else end
+        elif end == STATUS_NAMES[STATUS_TMAX]:     # (its time budget, 100 K, grows)
+            return OrbitRun(run.ident, run.p1, run.p2, settings, run.colour, paused=run.paused)
+        else:
+            run.status = end if end not in ("running", "done") else "running"
             if run.status == "running" and run.finished:
                 run.reopen()
                 run.estimated = False
-        if len(rows):
-            self._on_block(run.ident, rows, run.done, run.status)
         return run
 
     def pause(self) -> list[int]:
@@ -216,7 +212,7 @@ class Worker:
 
     def resume(self) -> list[int]:
         """Queue the paused orbits again; returns their ids."""
-        moved = [r for r in self._runs if r.paused]
+        moved = [r for r in self.runs.values() if r.paused]
         for r in moved:
             r.paused = False
         self._ensure_running()
@@ -224,7 +220,7 @@ class Worker:
 
     def paused(self) -> list[int]:
         """The ids of the paused orbits."""
-        return [r.ident for r in self._runs if r.paused and r.status == "running"]
+        return [r.ident for r in self.runs.values() if r.paused and r.status == "running"]
 
     def _estimate(self, run: OrbitRun) -> str | None:
         """(In the executor) the notice of an orbit expected to take more than STEP_BUDGET steps."""
@@ -239,17 +235,15 @@ class Worker:
                 f"at dt = {s.dt:g}{took}); it runs until Clear, Undo, a new value or closing the tab "
                 "stops it; a larger dt or fewer crossings is quicker")
 
-    def _pick(self) -> OrbitRun | None:
-        queue = self._queue()
-        return next((r for r in queue if r.done == 0), queue[0] if queue else None)
-
     def _queued(self, run: OrbitRun) -> bool:
-        return any(r is run for r in self._runs)
+        return self.runs.get(run.ident) is run
 
     async def _loop(self) -> None:
-        """The task: block after block until no orbit is queued; each on a copy of its run (_hand_out)."""
+        """The task: block after block until no orbit is queued (a new one's first, then round robin); each on
+        a copy of its run (_hand_out)."""
         session = self.session
-        while (run := self._pick()) is not None:
+        while queue := self._queue():
+            run = next((r for r in reversed(queue) if r.done == 0), min(queue, key=lambda r: r.turn))
             work = copy.copy(run)
             try:
                 rows = await session.run(work.advance)
@@ -259,14 +253,12 @@ class Worker:
                     notice = await session.run(self._estimate, work)
             except Exception as exc:  # noqa: BLE001 - reported in the page; the server keeps serving
                 if self._queued(run):
-                    self.remove(run.ident)
+                    run.status = "failed"
                     await session.apply(partial(self._on_error, run.ident, exc))
                 continue
             await session.apply(partial(self._hand_out, run, work, rows, notice))
             if not self._queued(run):       # removed while its block was computed
                 continue
-            self._runs.remove(run)
-            self._runs.append(run)          # (round robin)
             if self._on_indicators and run.wants_indicators and (run.finished or run.wall >= INDICATOR_AFTER):
                 run.wants_indicators = False
                 try:
@@ -279,7 +271,8 @@ class Worker:
         """(On the loop) the block computed on ``work`` becomes ``run``'s, and goes to the page."""
         if not self._queued(run) or work.settings is not run.settings:   # removed or recounted meanwhile
             return
-        run.__dict__.update(work.__dict__, paused=run.paused)   # (a pause meanwhile stays)
+        self._turn += 1
+        run.__dict__.update(work.__dict__, paused=run.paused, sent=run.sent, turn=self._turn)   # (set meanwhile)
         if notice is not None:
             self._on_notice(run.ident, notice)
         if len(rows) or run.finished:   # (a block cut at its steps before a crossing: nothing to show)

@@ -166,7 +166,7 @@ class DensityImage:
         """Redraw the image of the crossings that are not dots: at most every DENSITY_SECONDS while orbits
         stream in, at once when ``force`` or orbits move between dots and image, never unchanged."""
         orbits = self.orbits
-        orbit = np.asarray(orbits.crossings.data["orbit"])
+        orbit = orbits.columns(keys=("orbit",))["orbit"]
         dense = len(orbit) > density.THRESHOLD
         first = 0 if dense else density.glyph_cutoff(orbit)
         force = force or (dense, first) != (self.dense, self.glyph_first)
@@ -193,7 +193,7 @@ class DensityImage:
         if key == self._key or not force and time.monotonic() - self._at < DENSITY_SECONDS:
             return
         self._at, self._key = time.monotonic(), key
-        p1, p2, c, megno = (np.asarray(orbits.crossings.data[k])[rows] for k in ("p1", "p2", "c", "megno"))
+        p1, p2, c, megno = (v[rows] for v in orbits.columns(keys=("p1", "p2", "c", "megno")).values())
         image = density.density_rgba(p1, p2, c, (w.x0, w.x1, w.y0, w.y1), nx, ny, COLORS,
                                      megno=megno if by_megno else None, palette=megno_palette(MEGNO_ORBIT_SKIP),
                                      lo=MEGNO_LOW, hi=MEGNO_HIGH)

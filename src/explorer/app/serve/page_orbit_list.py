@@ -6,7 +6,6 @@ from __future__ import annotations
 import html
 from functools import partial
 
-import numpy as np
 import panel as pn
 from bokeh.models import CDSView, Div, GroupFilter
 
@@ -159,20 +158,21 @@ class OrbitList:
         if saddle is not None:
             self.overlays.show_manifolds(*saddle)
             return None
-        d = self.orbits.crossings.data
+        d = self.orbits.columns(keys=("orbit", "p1", "p2"))
         k = nearest(self.view, d["p1"], d["p2"], p1, p2, radius_px)
         if k is None:
             self.say(f"pick: no crossing within {radius_px:g} pixels of ({p1:.4g}, {p2:.4g})" if len(d["orbit"])
                      else "pick: no orbit on the page yet")
             return None
-        ident = int(np.asarray(d["orbit"])[k])
+        ident = int(d["orbit"][k])
         self.select(ident)
         return ident
 
     def select(self, ident) -> None:
         """Select orbit ``ident`` (None, or not an orbit of the page: none) and show its readout (computed once
         per orbit and settings, the latest pick; a readout stays known until :meth:`forget`)."""
-        start = next(((a, b) for i, a, b, _c in self.orbits.starts if i == ident), None)
+        run = self.orbits.runs.get(ident)
+        start = None if run is None else (run.p1, run.p2)
         self.session.cancel("readout")
         self.picked = None if start is None else int(ident)
         self.refresh()
@@ -205,17 +205,17 @@ class OrbitList:
 
 def _table(orbits, picked) -> str:
     """The list of ``orbits`` (an OrbitsLayer) as an HTML table (numbers and fixed words, escaped all the same)."""
-    if not orbits.starts:
+    if not orbits.runs:
         return ""
     head = "".join(f"<th style='text-align:left;padding:0 3px' title='{tip}'>{h}</th>" for h, tip in COLUMNS)
     body = []
-    for i, p1, p2, c in orbits.starts:
+    for i, r in orbits.runs.items():
         hidden = i in orbits.hidden
         style = "font-weight:bold;background:" + SELECTED_BACKGROUND if i == picked else ""
         if hidden:
             style += ";color:#808080"
-        cells = (f"<span style='display:inline-block;width:10px;height:10px;background:{COLORS[c]}'></span>",
-                 str(i), f"({p1:.6g}, {p2:.6g})", str(orbits.progress.get(i, (0,))[0]),
+        cells = (f"<span style='display:inline-block;width:10px;height:10px;background:{COLORS[r.colour]}'></span>",
+                 str(i), f"({r.p1:.6g}, {r.p2:.6g})", str(r.done),
                  html.escape(orbits.state(i)) + (", hidden" if hidden else ""))
         body.append(f"<tr data-orbit='{i}' style='{style}'>"
                     + "".join(f"<td style='padding:0 3px'>{c}</td>" for c in cells) + "</tr>")

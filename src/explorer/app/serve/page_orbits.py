@@ -26,41 +26,31 @@ PAUSE_LABEL = "a click pauses running orbits"
 GLYPH_FILTER = ("const o = source.data.orbit, n = o.length, rows = [];\n"
                 "for (let i = 0; i < n; i++) if (o[i] >= first) rows.push(i);\n"
                 "return rows;")
-#: the columns of a block's rows (orbits.OrbitRun.advance)
+#: the columns of a block's rows (orbits.OrbitRun.advance), and of the browser's sources
 ROW_COLUMNS = ("t", "p1", "p2", "M", "dH")
-
-
-def _empty_crossings() -> dict:
-    """The page's crossings: a block's rows, the orbit's id, its MEGNO and c, its colour index."""
-    return {c: np.zeros(0, np.int64 if c in ("orbit", "c") else float) for c in ("orbit", *ROW_COLUMNS, "megno", "c")}
-
-
-def _empty_live() -> dict:
-    return {c: [] for c in _empty_crossings()}
+COLUMNS = ("orbit", *ROW_COLUMNS, "megno", "c")
 
 
 class OrbitsLayer:
-    """The starts, crossings and status of a page; ``host``: the page."""
+    """The starts, crossings and status of a page; ``host``: the page.  The one store of the orbits is
+    ``runs`` (the worker's {orbit id: OrbitRun}, click order), which the browser's ``shown`` and ``live`` are
+    written from; ``hidden``: the ids of the hidden orbits."""
 
     def __init__(self, host, view, session):
         self.host, self.view, self.session = host, view, session
-        self.starts: list[tuple] = []          # (orbit id, p1, p2, colour) of every start, in click order
-        self._marked: set = set()              # the starts whose cross is drawn unless hidden
+        self._unmarked: set = set()            # the starts whose cross waits for their first crossings
         self._color = 0
         self.indicators: dict = {}             # orbit id -> (mean MEGNO, mLCE) over INDICATOR_TIME
-        self.progress: dict = {}               # orbit id -> (crossings on the page so far, status)
-        self.hidden: dict = {}                 # orbit id -> its rows (columns of crossings), hidden: not in crossings
+        self.hidden: set = set()
         self.on_status = lambda: None          # called after every update of the status line
-        self._pending: list = []               # blocks handed in, not yet on the page
         self._flushed_at = -math.inf           # when the last flush ran (monotonic)
         self._settle_at = -math.inf            # the flush due then moves the live rows
-        self._settled = 0                      # crossings' rows up to here are in shown, from here on in live
         self.flush_timer = session.timer(lambda: self._flush())   # (looked up when due: tests trace it)
         self.worker = Worker(session, self._on_block, self._on_error, self._on_indicators, on_notice=self._on_notice)
-        # every crossing (server only); what the browser draws; a click's first rows (lists: one JSON frame)
-        self.crossings = ColumnDataSource(_empty_crossings())
-        self.shown = ColumnDataSource(_empty_crossings(), name="crossings")
-        self.live = ColumnDataSource(_empty_live(), name="live")
+        self.runs = self.worker.runs
+        # what the browser draws; a click's first rows (lists: one JSON frame)
+        self.shown = ColumnDataSource(self.columns([]), name="crossings")
+        self.live = ColumnDataSource({k: [] for k in COLUMNS}, name="live")
         self.start_source = ColumnDataSource({"orbit": [], "p1": [], "p2": [], "c": []}, name="starts")
         self.by_orbit = {"field": "c", "transform": LinearColorMapper(palette=list(COLORS), low=-0.5,
                                                                        high=len(COLORS) - 0.5)}
@@ -73,6 +63,23 @@ class OrbitsLayer:
         self.starts_box.param.watch(lambda _e: session.soon(self._starts_box_changed), "value")
         self.pause_box = Box(label=PAUSE_LABEL, value=True)
         self.pause_box.param.watch(lambda _e: session.soon(host.push_url), "value")
+
+    def columns(self, runs=None, keys=COLUMNS, unsent: bool = False) -> dict:
+        """The rows of ``runs`` (None: every orbit not hidden) as ``keys`` of the browser's columns: a row, its
+        orbit's id, MEGNO and colour index; each orbit's first ``done`` rows (``unsent``: those past ``sent``)."""
+        if runs is None:
+            runs = [r for r in self.runs.values() if r.ident not in self.hidden]
+        parts = [r.rows[r.sent if unsent else 0:r.done] for r in runs]
+        n = [len(rows) for rows in parts]
+        each = {"orbit": [r.ident for r in runs], "c": [r.colour for r in runs],
+                "megno": [self.indicators.get(r.ident, (math.nan,))[0] for r in runs]}
+        out = {}
+        for k in keys:
+            if k in ROW_COLUMNS:
+                out[k] = np.concatenate([rows[:, ROW_COLUMNS.index(k)] for rows in parts] or [np.zeros(0)])
+            else:
+                out[k] = np.repeat(np.array(each[k], float if k == "megno" else np.int64), n)
+        return out
 
     def draw(self, fig) -> None:
         """The crossings' glyphs (call after the images) and the starts' crosses."""
@@ -93,6 +100,11 @@ class OrbitsLayer:
                                        size=9, line_width=2, level="overlay")   # (above the crossings and images)
 
     # ------------------------------------------------------------ starts
+    @property
+    def starts(self) -> list:
+        """(orbit id, p1, p2, colour index) of every start, in click order."""
+        return [(r.ident, r.p1, r.p2, r.colour) for r in self.runs.values()]
+
     def start(self, p1: float, p2: float, color: int | None = None, mark_later: bool = False,
               ident: int | None = None, quiet: bool = False):
         """Queue the orbit from (p1, p2) and mark its start (``mark_later`` on a served page: with its
@@ -103,9 +115,8 @@ class OrbitsLayer:
         if color is None:
             color = self._color % len(COLORS)
             self._color += 1
-        run = self.worker.submit(p1, p2, settings, ident)
-        self.starts.append((run.ident, p1, p2, color))
-        self.progress[run.ident] = (0, "running")
+        run = self.worker.submit(p1, p2, settings, ident, color)
+        self._unmarked.add(run.ident)
         if not quiet and (not mark_later or self.session.doc is None):
             self.mark_starts()               # (else with the first crossings, in their flush)
         return run
@@ -118,166 +129,116 @@ class OrbitsLayer:
     def _draw_starts(self, mark: bool = False):
         """The crosses of the marked starts that are not hidden (``mark``: every start marked)."""
         if mark:
-            self._marked = {i for i, *_ in self.starts}
-        marks = [m for m in self.starts if m[0] in self._marked and m[0] not in self.hidden]
+            self._unmarked = set()
+        marks = [m for m in self.starts if m[0] not in self._unmarked and m[0] not in self.hidden]
         data = {k: [m[j] for m in marks] for j, k in enumerate(("orbit", "p1", "p2", "c"))}
         if data != self.start_source.data:
             self.start_source.data = data
 
     def drop_all(self) -> list:
         """Stop every orbit and take them off the page; returns their starts."""
+        old = self.starts
         self.worker.cancel()
         self.flush_timer.cancel()
-        old, self.starts, self._pending = self.starts, [], []
-        self.indicators, self.progress, self.hidden = {}, {}, {}
-        self.crossings.data = _empty_crossings()
+        self.indicators, self.hidden = {}, set()
         self.show_all()
         self._draw_starts(mark=True)
         return old
 
     def has(self, ident) -> bool:
         """Orbit ``ident`` is on the page (hidden or not)."""
-        return any(i == ident for i, *_ in self.starts)
+        return ident in self.runs
 
     def remove(self, ident: int) -> None:
         """Stop orbit ``ident`` (running or paused) and take it off the page."""
-        self.starts = [s for s in self.starts if s[0] != ident]
-        self.worker.remove(ident)
+        self.runs.pop(ident, None)
         self.indicators.pop(ident, None)
-        self.progress.pop(ident, None)
-        if self.hidden.pop(ident, None) is None:
-            self._take(ident)
+        self.hidden.discard(ident)
+        self.show_all()
+        self._draw_starts()
+
+    def hide(self, ident: int) -> None:
+        """Take orbit ``ident``'s crossings and start off the page (it keeps computing)."""
+        if self.has(ident):
+            self.hidden.add(ident)
             self.show_all()
             self._draw_starts()
 
-    def _take(self, ident: int, keep: int = 0) -> dict:
-        """Orbit ``ident``'s rows past its first ``keep`` off ``crossings`` (or :attr:`hidden`); returns them."""
-        data = self.hidden.get(ident, self.crossings.data)
-        mine = np.asarray(data["orbit"]) == ident
-        mine[np.flatnonzero(mine)[:keep]] = False
-        taken = {k: np.asarray(v)[mine] for k, v in data.items()}
-        if mine.any():
-            rest = {k: np.asarray(v)[~mine] for k, v in data.items()}
-            if ident in self.hidden:
-                self.hidden[ident] = rest
-            else:
-                self.crossings.data = rest
-        return taken
-
-    def hide(self, ident: int) -> None:
-        """Take orbit ``ident``'s crossings and start off the page, into :attr:`hidden`."""
-        if ident in self.hidden or not self.has(ident):
-            return
-        self.hidden[ident] = self._take(ident)
-        self.show_all()
-        self._draw_starts()
-
     def show(self, ident: int) -> None:
         """Put a hidden orbit's crossings and start back on the page."""
-        rows = self.hidden.pop(ident, None)
-        if rows is None:
-            return
-        d = self.crossings.data
-        self.crossings.data = {k: np.concatenate([np.asarray(d[k]), rows[k]]) for k in d}
-        self.show_all()
-        self._draw_starts()
+        if ident in self.hidden:
+            self.hidden.discard(ident)
+            self.show_all()
+            self._draw_starts()
 
     def recount(self, settings) -> None:
         """New ``settings`` that differ only in the crossings per click K (Worker.recount): each orbit
         past K is cut to its first K rows, each one short of K continues exactly, none reruns."""
-        blocks, self._pending = self._pending, []
-        self._apply(blocks)                    # (the rows the worker counted, on the page before the cut)
-        now = self.worker.recount(settings, self._cut)
-        self.progress.update({i: now[i] for i in self.progress if i in now})
+        self.worker.recount(settings)
         self.show_all()
         self.update_status(force_density=True)
 
-    def _cut(self, ident: int, keep: int) -> np.ndarray:
-        """Orbit ``ident``'s rows past its first ``keep`` off the page, (n, 5)."""
-        rows = self._take(ident, keep)
-        return np.column_stack([rows[k] for k in ROW_COLUMNS])
-
     def state(self, ident: int) -> str:
         """running, paused, done, or why the orbit stopped."""
-        if ident in self.running:
-            return "paused" if ident in self.worker.paused() else "running"
-        return self.progress.get(ident, (0, "done"))[1]
+        run = self.runs.get(ident)
+        if run is None:
+            return "done"
+        return "paused" if run.paused and run.status == "running" else run.status
 
     @property
     def running(self) -> set:
         """The ids of the orbits still computing (or paused)."""
-        return {i for i, (_n, status) in self.progress.items() if status == "running"}
+        return {i for i, r in self.runs.items() if r.status == "running"}
 
     # ------------------------------------------------------------ blocks from the worker
     def _on_block(self, ident, rows, done, status):
-        """Queue the block: an orbit's first and last go at once, others at most every FLUSH_SECONDS."""
+        """An orbit's block is in ``runs``: its first and last go to the browser at once, others at most every
+        FLUSH_SECONDS."""
+        if status not in ("running", "done"):
+            self.host.say(f"orbit {ident} stopped after {done} crossings: {status}")
         urgent = done == len(rows) or status != "running"
-        self._pending.append((ident, rows, done, status))
         now = time.monotonic()
         self.flush_timer.at(now if urgent else max(now, self._flushed_at + FLUSH_SECONDS))
 
     def _flush(self):
-        """The queued blocks onto the page (docs/architecture.md, "Many crossings in the browser"): a click's first rows
-        alone to ``live``, with its cross and the link; the flush FLUSH_SECONDS later settles them into ``shown``."""
-        blocks = [b for b in self._pending if self.has(b[0])]
-        self._pending = []
-        first = {b[0] for b in blocks if 0 < len(b[1]) == b[2] and b[0] not in self.hidden}   # alone
-        if first:
-            self._pending[:0] = [b for b in blocks if b[0] not in first]
-            blocks = [b for b in blocks if b[0] in first]
+        """The rows not sent yet onto the page (docs/architecture.md, "Many crossings in the browser"): a click's
+        first rows alone to ``live``, with its cross and the link; the flush FLUSH_SECONDS later settles them into
+        ``shown``."""
+        due = [r for r in self.runs.values() if r.ident not in self.hidden and r.sent < r.done]
+        first = [r for r in due if r.sent == 0]
         now = self._flushed_at = time.monotonic()
         held = len(self.live.data["orbit"])
         to_live = bool(first) or (0 < held and now < self._settle_at - SETTLE_SLACK
-                                  and held + sum(len(b[1]) for b in blocks) <= LIVE_MAX_ROWS)
-        new = self._apply(blocks)
-        if new and to_live:
+                                  and held + sum(r.done - r.sent for r in due) <= LIVE_MAX_ROWS)
+        new = self.columns(first or due, unsent=True)
+        for r in first or due:
+            r.sent = r.done
+        if to_live and len(new["orbit"]):
             self.live.stream({k: v.tolist() for k, v in new.items()})   # drawn at once, alone
-        moved = False if to_live else self._settle()
+        elif not to_live and (held or len(new["orbit"])):
+            if not self.host.density_image.dense:     # (the live rows and the new ones, one message)
+                live = self.live.data
+                self.shown.stream({k: np.concatenate([np.asarray(live[k], v.dtype), v]) for k, v in new.items()})
+            if held:
+                self.live.data = {k: [] for k in COLUMNS}
         self._draw_starts(mark=True)
         if first:
             self._settle_at = now + FLUSH_SECONDS if self.session.doc is not None else -math.inf
             self.host.push_url()
         elif not to_live:
-            self.update_status(force_density=self.host.density_image.dense and moved)
-        if self._pending or len(self.live.data["orbit"]):
-            self.flush_timer.at(max(self._settle_at, now + (FLUSH_SECONDS if self._pending else 0.0)))
-
-    def _apply(self, blocks) -> dict:
-        """The blocks' rows onto ``crossings`` (a hidden orbit's into :attr:`hidden`), their progress; returns
-        the rows added to ``crossings`` as columns ({} if none)."""
-        colour = {i: c for i, _a, _b, c in self.starts}
-        blocks = [b for b in blocks if b[0] in colour]
-        for ident, rows, done, status in blocks:
-            if ident in self.hidden and len(rows):
-                new, old = _columns([(ident, rows)], colour, self.indicators), self.hidden[ident]
-                self.hidden[ident] = {k: np.concatenate([old[k], new[k]]) for k in new}
-            self.progress[ident] = (done, status)
-            if status not in ("running", "done"):
-                self.host.say(f"orbit {ident} stopped after {done} crossings: {status}")
-        drawn = [b for b in blocks if len(b[1]) and b[0] not in self.hidden]
-        new = _columns(drawn, colour, self.indicators) if drawn else {}
-        if new:
-            self.crossings.stream(new)
-        return new
-
-    def _settle(self) -> bool:
-        """The live rows to ``crossings`` (streamed before ``live`` empties); returns whether there were any."""
-        moved = bool(len(self.live.data["orbit"]))
-        n = len(self.crossings.data["orbit"])
-        if n > self._settled:
-            if not self.host.density_image.dense:
-                self.shown.stream({k: np.asarray(v)[self._settled:] for k, v in self.crossings.data.items()})
-            self._settled = n
-        if moved:
-            self.live.data = _empty_live()
-        return moved
+            self.update_status(force_density=self.host.density_image.dense and held > 0)
+        later = bool(first) and len(first) < len(due)       # (the other orbits' rows)
+        if later or len(self.live.data["orbit"]):
+            self.flush_timer.at(max(self._settle_at, now + (FLUSH_SECONDS if later else 0.0)))
 
     def show_all(self) -> None:
-        """The browser's rows anew: every crossing (none past density.THRESHOLD), none live."""
-        self.shown.data = _empty_crossings() if self.host.density_image.dense else dict(self.crossings.data)
+        """The browser's rows anew: every crossing of the orbits not hidden (none past density.THRESHOLD), none
+        live."""
+        self.shown.data = self.columns([]) if self.host.density_image.dense else self.columns()
         if len(self.live.data["orbit"]):
-            self.live.data = _empty_live()
-        self._settled = len(self.crossings.data["orbit"])
+            self.live.data = {k: [] for k in COLUMNS}
+        for r in self.runs.values():
+            r.sent = r.done
 
     def _on_notice(self, _ident, text):
         self._draw_starts(mark=True)
@@ -285,16 +246,15 @@ class OrbitsLayer:
 
     def _on_error(self, ident, exc):
         self._draw_starts(mark=True)
-        self.progress[ident] = (self.progress.get(ident, (0,))[0], "failed")
         self.host.say(f"orbit {ident} failed: {failure(exc)}")
         self.update_status()
         self.host.push_url()
 
     def update_status(self, force_density: bool = False):
         """The status line (and the density image, at once if ``force_density``)."""
-        paused = len(self.running.intersection(self.worker.paused()))
+        paused = len(self.worker.paused())
         running = len(self.running) - paused
-        n = len(self.crossings.data["orbit"])
+        n = sum(r.done for r in self.runs.values() if r.ident not in self.hidden)
         density = self.host.density_image
         density.refresh(force=force_density or not running)   # (at once when the last orbit is done)
         s = self.host.settings
@@ -314,9 +274,6 @@ class OrbitsLayer:
         if not self.has(ident):
             return
         self.indicators[ident] = (megno, mlce)
-        for d in (self.hidden.get(ident), self.crossings.data):     # (server only: in place)
-            if d is not None:
-                d["megno"][np.asarray(d["orbit"]) == ident] = megno
         for src in (self.shown, self.live):        # the browser's rows streamed before the indicator was known
             rows = np.flatnonzero(np.asarray(src.data["orbit"]) == ident)
             if rows.size:
@@ -341,12 +298,10 @@ class OrbitsLayer:
 
     def view_fields(self) -> dict:
         """Its part of the exported view (image.View): the orbits shown (hidden ones left out), their starts."""
-        orbit = np.asarray(self.crossings.data["orbit"])
-        p = np.column_stack([np.asarray(self.crossings.data[k], float) for k in ("p1", "p2")])
-        visible = [s for s in self.starts if s[0] not in self.hidden]
-        return {"orbits": [(i, COLORS[c], p[orbit == i], self.indicators.get(i, (math.nan,))[0])
-                           for i, _a, _b, c in visible],
-                "starts": [(a, b, COLORS[c]) for _i, a, b, c in visible], "by_megno": bool(self.colour_box.value)}
+        visible = [r for r in self.runs.values() if r.ident not in self.hidden]
+        megno = [self.indicators.get(r.ident, (math.nan,))[0] for r in visible]
+        return {"orbits": [(r.ident, COLORS[r.colour], r.rows[:r.done, 1:3], m) for r, m in zip(visible, megno)],
+                "starts": [(r.p1, r.p2, COLORS[r.colour]) for r in visible], "by_megno": bool(self.colour_box.value)}
 
     def case_dots(self, on: bool) -> None:
         """Each dot on a casing (:data:`~explorer.app.serve.style.DOT_CASING`), or not."""
@@ -356,17 +311,6 @@ class OrbitsLayer:
     def _starts_box_changed(self) -> None:
         """Show or hide the clicked starts' crosses."""
         self.start_marks.visible = bool(self.starts_box.value)
-
-
-def _columns(blocks, colour: dict, indicators: dict) -> dict:
-    """The blocks' rows as the columns of ``crossings`` (``colour``: orbit id -> colour index;
-    ``indicators``: orbit id -> (MEGNO, mLCE) where known)."""
-    ids, n = [b[0] for b in blocks], [len(b[1]) for b in blocks]
-    data = np.concatenate([b[1] for b in blocks])
-    return {"orbit": np.repeat(np.array(ids, np.int64), n),
-            "megno": np.repeat([indicators.get(i, (math.nan,))[0] for i in ids], n).astype(float),
-            **{k: data[:, j] for j, k in enumerate(ROW_COLUMNS)},
-            "c": np.repeat(np.array([colour[i] for i in ids], np.int64), n)}
 
 
 def _megno_patch(rows, megno: float, as_list: bool = False) -> dict:
