@@ -8,6 +8,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from explorer.app.serve import style
+
 #: size of the picture (inches) and the PNG's resolution
 FIGSIZE = (7.0, 5.6)
 DPI = 150
@@ -43,9 +45,7 @@ class View:
 def _megno_colormap(skip: int = 0):
     from matplotlib.colors import ListedColormap
 
-    from explorer.app.serve.style import megno_palette
-
-    return ListedColormap(megno_palette(skip)).with_extremes(bad=(0, 0, 0, 0))
+    return ListedColormap(style.megno_palette(skip)).with_extremes(bad=(0, 0, 0, 0))
 
 
 def figure(view: View):
@@ -55,8 +55,6 @@ def figure(view: View):
     figures._matplotlib()
     from matplotlib.figure import Figure
     from matplotlib.patches import Ellipse
-
-    from explorer.app.serve import style
 
     fig = Figure(figsize=FIGSIZE, dpi=DPI, layout="constrained")
     ax = fig.add_subplot()
