@@ -5,6 +5,7 @@ does not ask for it neither computes nor stores it.  The browser's chaos layer (
 in process: no browser) set to it shows exactly the function's values around the page's elliptic
 point, and the choice of indicator changes the layer's values, scale, label and link."""
 import matplotlib
+from page_loop import poll
 
 matplotlib.use("Agg")
 
@@ -99,7 +100,7 @@ def _poll_until(page, cond, timeout=POLL_TIMEOUT):
 
     t0 = time.time()
     while not cond() and time.time() - t0 < timeout:
-        page.poll()
+        poll(page)
         time.sleep(0.02)
     assert cond(), page.message.text
 

@@ -4,6 +4,7 @@ filled ones agree in class, a coarse raster is shown first, and the link's ``meg
 every cell.  In process, no browser."""
 import numpy as np
 import pytest
+from page_loop import settle
 
 from explorer import model
 from explorer.app.serve import raster
@@ -70,7 +71,7 @@ def test_a_link_with_megno_exact_computes_every_cell_and_keeps_it_in_the_link():
         page.chaos.resolutions, page.chaos.time = (16, n), t
         page.chaos.load_url({"megno": "exact"})
         assert page.url_query()["megno"] == "exact" and page.chaos.layer.value and page.chaos.exact
-        page.session.settle()
+        settle(page)
         d = page.chaos.raster_source.data
         assert d["n"] == [n] and d["complete"] == [True]
         exact = list(raster.rasters(page.settings, page.section.window, resolutions=(n,), time=t))[-1]

@@ -45,14 +45,12 @@ PANEL_MIME = "application/vnd.holoviews_exec.v0+json"
 CELLS = [
     "import panel as pn\nimport explorer as ex\npn.extension()\nprint('explorer:', ex.__file__)",
     f"app = ex.explore(mu={MU}, n_crossings={CROSSINGS})\napp",
-    # the kernel is busy while a cell runs, so the periodic callback cannot move the crossings onto
-    # the page: the cell polls the page itself, as the callback would
-    "import time\nimport numpy as np\n"
+    # the page's work runs on the kernel's event loop: the cell awaits (top-level await) while it waits
+    "import asyncio\nimport time\nimport numpy as np\n"
     f"assert app.page.click({START[0]}, {START[1]}) is not None\n"
     "t0 = time.time()\n"
     f"while len(app.page.orbits.columns()['t']) < {CROSSINGS} and time.time() - t0 < 240:\n"
-    "    app.page.poll()\n"
-    "    time.sleep(0.01)\n"
+    "    await asyncio.sleep(0.01)\n"
     "got = np.column_stack([np.asarray(app.page.orbits.columns()[k]) for k in ('t', 'p1', 'p2', 'M', 'dH')])\n"
     "np.save('orbit.npy', got)\n"
     "print('crossings:', len(app.page.orbits.columns()['t']))",
@@ -66,7 +64,7 @@ def test_explore_in_a_live_kernel_displays_the_page_and_streams_the_clicked_orbi
     import nbformat
     from ipykernel.kernelspec import install
 
-    from explorer.app.serve.system_page import page_settings
+    from explorer.app.serve.settings import page_settings
 
     # the kernel is this interpreter (not whatever "python3" a Jupyter path holds) and imports the
     # explorer the tests import

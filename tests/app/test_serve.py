@@ -1199,7 +1199,7 @@ def test_the_scene_seeds_button_starts_the_sweeps_seeds_at_the_current_settings(
     pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
     from explorer.analysis.seeds import seed_points
     from explorer.app.serve.page import SectionPage
-    from explorer.app.serve.system_page import page_settings
+    from explorer.app.serve.settings import page_settings
     from explorer.io import scene as scene_mod
 
     sc = scene_mod.load_scene("figure4")

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from page_loop import settle
 from systems import henon_heiles_map
 
 import explorer as ex
@@ -50,7 +51,7 @@ def computed(monkeypatch):
 
 def _set_crossings(page, k: int) -> None:
     page.inputs["crossings"].value = str(k)
-    page.settle()
+    settle(page)
     assert page.settings.crossings == k
 
 
@@ -62,7 +63,7 @@ def test_raising_the_crossings_continues_each_orbit_and_lowering_cuts_it_without
     page.orbits.pause_box.value = False                   # (a click would pause the orbit before it)
     try:
         runs = [page.click(*p) for p in STARTS]
-        page.settle()
+        settle(page)
         page.orbits.hide(runs[1].ident)                 # (a hidden orbit's rows are cut and continued too)
         ref = sections.crossings(s.params, s.h, list(STARTS), n_crossings=2 * N, **s.section_kwargs())
         computed["rows"] = 0
@@ -87,13 +88,13 @@ def test_raising_the_crossings_continues_each_orbit_and_lowering_cuts_it_without
 
 def test_a_systems_page_continues_and_cuts_its_orbits_too(computed):
     from explorer.app.serve.page import SectionPage
-    from explorer.app.serve.system_page import SystemSettings
+    from explorer.app.serve.settings import SystemSettings
 
     smap = henon_heiles_map()
     page = SectionPage(SystemSettings(smap, crossings=40))
     try:
         run = page.click(0.1, 0.1)
-        page.settle()
+        settle(page)
         computed["rows"] = 0
         _set_crossings(page, 80)
         assert computed["rows"] == 40
@@ -127,7 +128,7 @@ def test_an_orbit_stopped_on_its_time_budget_reruns_from_its_start_when_the_cros
     page = SectionPage(s)
     try:
         run = page.click(*STARTS[0])
-        page.settle()
+        settle(page)
         done, status = _progress(page, run.ident)
         assert status == STATUS_NAMES[STATUS_TMAX] and 0 < done < N
         ref = sections.crossings(s.params, s.h, [STARTS[0]], n_crossings=2 * N, tmax=TMAX_PER_CROSSING * 2 * N,

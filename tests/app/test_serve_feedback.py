@@ -16,6 +16,7 @@ import time
 
 import pytest
 import test_serve
+from page_loop import poll, settle
 from test_serve import DATA, SERVED, TO_SCREEN, _click, _link, _open, _set_field, _wait, browser_needed
 
 from explorer import model
@@ -37,7 +38,7 @@ def _page(settings, args=None):
 def _poll_until(page, cond, timeout=240.0):
     t0 = time.time()
     while time.time() - t0 < timeout:
-        page.poll()
+        poll(page)
         if cond():
             return
         time.sleep(0.02)
@@ -224,7 +225,7 @@ def test_on_the_chaos_layer_every_dot_has_a_casing_and_a_negative_megno_is_expla
             assert page.section.figure.renderers.index(casing) < page.section.figure.renderers.index(dot)
         assert _contrast(DOT_CASING[1], DOT_CASING[2]) > 15                  # a white disc, a dark edge
         page.chaos.layer.value = False
-        page.poll()
+        poll(page)
         assert not any(c.visible for c in casings)
     finally:
         page.close()
@@ -365,7 +366,7 @@ def test_the_mu_slider_applies_its_value_through_the_field_and_follows_the_field
         assert (slider.end - slider.start) / slider.width <= 0.001                  # a pixel: 0.00045 of mu
         slider.value = 0.0412                             # a drag, not released: applies within SLIDE_SECONDS
         t0 = time.monotonic()
-        page.settle()
+        settle(page)
         assert page.settings.params.mu == 0.0412 and page.inputs["mu"].value == "0.0412"
         assert time.monotonic() - t0 >= 0.9 * SLIDE_SECONDS and slider.end == 0.1   # (its range kept mid-drag)
         with param.parameterized.edit_constant(slider):

@@ -19,6 +19,7 @@ import urllib.request
 
 import pytest
 import test_serve
+from page_loop import poll
 from test_serve import (
     DATA,
     SERVED,
@@ -217,7 +218,7 @@ def test_a_page_whose_connection_is_lost_stops_every_computation_it_started(monk
     wanted = {"overlay", "raster", "orbits"}
     while {n for n in wanted if page.session.running(n)} != wanted:
         assert time.time() - t0 < 600
-        page.poll()
+        poll(page)
     budgets = [b for _t, b in page.session._tasks.values() if b is not None]
     doc.callbacks.trigger_event(ConnectionLost())                    # the tab closed
     assert page.session.closed and not page.session.busy() and budgets and all(b.cancelled for b in budgets)

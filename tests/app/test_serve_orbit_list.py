@@ -16,6 +16,7 @@ import re
 import numpy as np
 import pytest
 import test_serve
+from page_loop import settle
 from test_serve import SERVED, _click, _open, _poll_until, _wait, _wait_crossings, browser_needed
 
 from explorer import model
@@ -66,7 +67,8 @@ def test_the_list_shows_every_orbit_with_its_colour_start_crossings_and_state():
     try:
         assert page.orbit_list.table.text == ""                                   # no orbit, no table
         first = page.click(c1 + 0.3 * r1, c2).ident
-        _poll_until(page, lambda: len(_rows(page, first)) > 0)
+        while not len(_rows(page, first)):                                        # (no poll more: it runs on)
+            test_serve.poll(page)
         second = page.click(c1 - 0.5 * r1, c2 + 0.2 * r2).ident                    # pauses the first
         _poll_until(page, lambda: len(_rows(page, second)) == LONG and " 0 running" in page.orbits.status.text)
         table = _table(page)
@@ -80,7 +82,7 @@ def test_the_list_shows_every_orbit_with_its_colour_start_crossings_and_state():
         assert table[second][1][4] == "done"
         page.orbit_list.resume()
         assert _table(page)[first][1][4] == "running"
-        page.settle()
+        settle(page)
         assert not page.orbits.running
         assert _table(page)[first][1][3:] == [str(LONG), "done"]
     finally:
@@ -139,9 +141,9 @@ def test_a_hidden_orbit_leaves_every_drawn_source_keeps_computing_and_comes_back
         assert _drawn(page, first) == 0 and first not in page.orbits.columns()["orbit"]
         assert "hidden" in _table(page)[first][1][4]
         second = page.click(*b).ident
-        page.settle()
+        settle(page)
         assert not page.orbits.running
-        assert _drawn(page, first) == 0 and first not in page.orbits.columns()["orbit"]         # its later rows: hidden too
+        assert _drawn(page, first) == 0 and first not in page.orbits.columns()["orbit"]   # its later rows: hidden too
         assert set(np.asarray(page.orbits.shown.data["orbit"]).tolist()) == {second}
         assert _table(page)[first][1][3:] == [str(LONG), "done, hidden"]         # it went on computing
         assert page.orbit_list.pick(*a) != first                                             # not pickable while hidden
@@ -156,7 +158,7 @@ def test_a_hidden_orbit_leaves_every_drawn_source_keeps_computing_and_comes_back
         page.orbit_list.toggle(second)
         page.inputs["crossings"].value = "50"                                     # a new value: still hidden
         hidden_again = page.orbits.starts[1][0]
-        page.settle()
+        settle(page)
         assert not page.orbits.running
         assert page.orbits.hidden == {hidden_again} and _drawn(page, hidden_again) == 0
         assert len(_rows(page, hidden_again)) == 50
@@ -208,7 +210,7 @@ def test_the_hidden_orbits_are_in_the_link_and_a_page_from_it_keeps_them_hidden(
         page.close()
     again = _page(s, link)                                                        # a reload of that link
     try:
-        again.settle()
+        settle(again)
         assert not again.orbits.running
         ids = [i for i, *_ in again.orbits.starts]
         assert again.orbits.hidden == {ids[1]} and _drawn(again, ids[1]) == 0

@@ -1,5 +1,5 @@
 """`explorer serve --system module:attribute`: the page of a System's section map (docs/commands/serve.md,
-"Your own system"), through the page's protocol (src/explorer/app/serve/settings.py, system_page.py).
+"Your own system"), through the page's protocol (src/explorer/app/serve/settings.py).
 Hénon–Heiles of tests/systems.py (its modules are those the other tests compile)."""
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import importlib
 
 import numpy as np
 import pytest
+from page_loop import settle
 from systems import henon_heiles_map
 
 import explorer as ex
@@ -25,7 +26,7 @@ def _energy(y, py, px):
 
 def test_serve_system_names_what_to_give_for_a_bare_system_and_refuses_chaplygins_options(capsys):
     from explorer.app.serve.command import page_from_args
-    from explorer.app.serve.system_page import SystemSettings
+    from explorer.app.serve.settings import SystemSettings
 
     for argv, said in ((["--system", "tests.systems:henon_heiles"], "System without a section"),
                        (["--system", "tests.systems:henon_heiles_map", "--mu", "0.5"], "--mu belongs to Chaplygin"),
@@ -56,8 +57,7 @@ def test_a_systems_scene_gives_the_page_its_panel_crossings_and_seeds(tmp_path):
 
 def test_a_link_naming_a_system_imports_nothing_and_changes_nothing(monkeypatch):
     from explorer.app.serve.page import SectionPage
-    from explorer.app.serve.settings import Settings
-    from explorer.app.serve.system_page import SystemSettings
+    from explorer.app.serve.settings import Settings, SystemSettings
 
     def refuse(name, *a, **kw):
         raise AssertionError(f"the page imported {name}")
@@ -74,14 +74,14 @@ def test_a_link_naming_a_system_imports_nothing_and_changes_nothing(monkeypatch)
 def test_a_system_page_runs_the_maps_orbits_on_its_energy_level_and_refuses_points_outside():
     from explorer.app.serve import overlays
     from explorer.app.serve.page import SectionPage
-    from explorer.app.serve.system_page import SystemSettings
+    from explorer.app.serve.settings import SystemSettings
 
     smap = henon_heiles_map()
     page = SectionPage(SystemSettings(smap, crossings=40))
     try:
         assert tuple(page.inputs) == ("lam", "energy", "tol", "crossings") and not page.fields.mu_slider.visible
         assert page.click(0.1, 0.1) is not None
-        page.settle()
+        settle(page)
         d = page.orbits.columns()
         rows = np.column_stack([np.asarray(d[k]) for k in ("t", "p1", "p2", "M", "dH")])
         assert rows.shape == (40, 5) and np.max(np.abs(_energy(rows[:, 1], rows[:, 2], rows[:, 3]) - E)) <= 1e-10
@@ -90,7 +90,7 @@ def test_a_system_page_runs_the_maps_orbits_on_its_energy_level_and_refuses_poin
         np.testing.assert_array_equal(rows[:, 0], ref[:, 0])                  # (one stream: its clock too)
         assert page.click(0.6, 0.45) is None and "has no solution for px" in page.message.text
         page.inputs["energy"].value = "0.1"                                   # the orbit reruns on E = 0.1
-        page.settle()
+        settle(page)
         d = page.orbits.columns()
         assert page.settings.smap.energy_value == 0.1 and len(d["t"]) == 40
         assert np.max(np.abs(_energy(*(np.asarray(d[k]) for k in ("p1", "p2", "M"))) - 0.1)) <= 1e-10
@@ -105,7 +105,7 @@ def test_explore_in_a_notebook_takes_a_systems_section_map():
     try:
         assert page.settings.fields() == {"lam": "1.0", "energy": "0.1", "tol": "1e-13", "crossings": "20"}
         assert page.click(0.1, 0.1) is not None
-        page.settle()
+        settle(page)
         d = page.orbits.columns()
         y, py, px = (np.asarray(d[k]) for k in ("p1", "p2", "M"))
         assert len(y) == 20 and np.max(np.abs(_energy(y, py, px) - 0.1)) <= 1e-10
@@ -118,7 +118,7 @@ def test_explore_in_a_notebook_takes_a_systems_section_map():
 def test_a_parameter_named_as_a_link_key_is_refused_naming_it():
     import sympy as sp
 
-    from explorer.app.serve.system_page import SystemSettings
+    from explorer.app.serve.settings import SystemSettings
 
     hh = henon_heiles_map().system
     (lam,), view = hh.parameters, sp.Symbol("view")

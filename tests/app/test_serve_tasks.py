@@ -8,6 +8,8 @@ import asyncio
 import threading
 import time
 
+from page_loop import poll, settle
+
 from explorer.analysis import budget as budget_mod
 from explorer.analysis.budget import Budget
 from explorer.app.serve.tasks import Session
@@ -33,10 +35,10 @@ def test_a_newer_job_cancels_the_older_ones_budget_and_only_its_results_reach_th
     first = Budget()
     session.start("t", work(_until_stopped, started), budget=first)
     while not started.is_set():
-        session.poll()
+        poll(session)
     session.start("t", work(lambda: "new"), budget=Budget())
     assert first.cancelled                      # its compiled loops stop at their next step
-    session.settle(60)
+    settle(session, 60)
     assert shown == ["new"] and not session.busy()
     session.close()
 
@@ -58,11 +60,11 @@ def test_a_result_handed_in_before_a_cancel_is_dropped_on_the_loop():
 
     session.start("t", task())
     while not started.is_set():
-        session.poll()
+        poll(session)
     release.set()
     finished.wait(60)                           # computed, not yet on the page ...
     session.cancel("t")                         # ... when the page cancels (on its loop)
-    session.settle(60)
+    settle(session, 60)
     assert shown == [] and not session.busy()
     session.close()
 
@@ -76,7 +78,7 @@ def test_a_tasks_work_runs_in_the_shared_executor_inside_the_tasks_budget():
         seen.append(await session.run(lambda: (threading.current_thread().name, budget_mod.current())))
 
     session.start("t", work(), budget=b)
-    session.settle(60)
+    settle(session, 60)
     (name, inside), = seen
     assert name.startswith("explorer-serve") and inside is b
     session.close()
@@ -90,7 +92,7 @@ def test_an_exception_of_a_task_goes_to_its_error_callback_on_the_loop():
         await session.run(lambda: 1 / 0)
 
     session.start("t", fails(), on_error=errors.append)
-    session.settle(60)
+    settle(session, 60)
     assert len(errors) == 1 and isinstance(errors[0], ZeroDivisionError)
     session.close()
 
@@ -131,7 +133,7 @@ def test_actions_reach_the_loop_in_the_order_they_were_handed_in_whatever_order_
             await session.apply(lambda k=k: shown.append((k, doc.session_context.locked)))
 
     session.start("t", blocks())
-    session.settle(60)
+    settle(session, 60)
     assert shown == [(k, True) for k in range(5)] and doc.session_context.calls == 5
     session.close()
 
@@ -145,7 +147,7 @@ def test_a_timer_keeps_its_earliest_due_call_only():
     timer.at(now + 20.0)                        # later than the one due: nothing changes
     assert timer.due == now + 10.0
     timer.at(now - 1.0)                         # due now: it replaces the one in 10 s
-    session.settle(60)
+    settle(session, 60)
     assert len(fired) == 1 and timer.due is None and not session.busy()
     session.close()
 
@@ -164,7 +166,7 @@ def test_a_timers_action_that_asks_for_its_next_call_or_cancels_it_still_has_its
 
     timer = session.timer(action)
     timer.at(time.monotonic())
-    session.settle(60)
+    settle(session, 60)
     assert len(fired) == 2 and doc.session_context.calls == 2 and timer.due is None
     session.close()
 
@@ -180,7 +182,7 @@ def test_closing_the_session_cancels_every_task_budget_and_timer():
     timer = session.timer(lambda: None)
     timer.at(time.monotonic() + 60.0)
     while not started.is_set():
-        session.poll()
+        poll(session)
     session.close()
     assert b.cancelled and timer.due is None and session.loop.is_closed()
     assert session.start("t", work()) is None   # nothing starts on a closed session

@@ -1,14 +1,16 @@
-"""The explorer in a notebook cell (docs/commands/serve.md): a periodic callback runs the page's own loop
-and pushes what reached it (``panel.io.push_notebook``)."""
+"""The explorer in a notebook cell (docs/commands/serve.md): the page's work runs on the kernel's event loop,
+and a periodic callback pushes what reached the page (``panel.io.push_notebook``)."""
 from __future__ import annotations
 
+import asyncio
 import contextlib
+import sys
 
 import panel as pn
 
 from explorer.app.serve.page import SectionPage
 
-#: how often the page's loop runs and the notebook is pushed (ms)
+#: how often the notebook is pushed (ms)
 POLL_MS = 50
 
 
@@ -21,9 +23,8 @@ class Explorer(pn.viewable.Viewer):
         self._poller = None
 
     def _poll(self):
-        if self.page.poll():
-            with contextlib.suppress(Exception):    # not rendered in a notebook (yet): nothing to push
-                pn.io.push_notebook(self.page.layout)
+        with contextlib.suppress(Exception):    # not rendered in a notebook (yet): nothing to push
+            pn.io.push_notebook(self.page.layout)
 
     def __panel__(self):
         if self._poller is None:
@@ -52,8 +53,16 @@ def explore(scene=None, *, panel: int = 0, export_dir=None, h: float | None = No
     ``export_dir``: where *Export scene* writes.  ``scene`` a System's section map or scene: its page,
     ``h`` its energy (docs/commands/serve.md, "Your own system").
     """
-    from explorer.app.serve.system_page import page_settings
+    from explorer.app.serve.settings import page_settings
 
     base, label, seeds = page_settings(scene, None, panel, a1=a1, a2=a2, b=b, lam=lam, chi=chi, zeta=zeta, mu=mu,
                                        xi=xi, eta=eta, h=h, method=method, tol=tol, dt=dt, crossings=n_crossings)
-    return Explorer(SectionPage(base, {}, export_dir=export_dir, label=label, seeds=seeds))
+    return Explorer(SectionPage(base, {}, export_dir=export_dir, label=label, seeds=seeds, loop=_kernel_loop()))
+
+
+def _kernel_loop():
+    """The event loop of the Jupyter kernel this runs in (None elsewhere: the page gets a loop of its own)."""
+    ipython = sys.modules.get("IPython")
+    if getattr(ipython and ipython.get_ipython(), "kernel", None) is None:
+        return None
+    return asyncio.get_running_loop()

@@ -41,14 +41,15 @@ window.history.replaceState(window.history.state, "", window.location.pathname +
 class SectionPage:
     """One browser session: ``base`` the settings before the URL arguments ``args`` ({name: text}); ``export_dir``
     where the export buttons write (None: downloads only); ``doc`` the session's Bokeh document (None: no server);
-    ``seeds`` the scene's ``[seeds]``; ``megno_resolution``, ``megno_time``: the MEGNO layer's finest raster."""
+    ``seeds`` the scene's ``[seeds]``; ``megno_resolution``, ``megno_time``: the MEGNO layer's finest raster;
+    ``loop`` the event loop of its work without a server (tasks.Session)."""
 
     def __init__(self, base: Settings, args: dict | None = None, export_dir=None, label: str = "", doc=None,
                  seeds=None, megno_resolution: int = raster_mod.RESOLUTIONS[-1],
-                 megno_time: float = raster_mod.RASTER_TIME):
+                 megno_time: float = raster_mod.RASTER_TIME, loop=None):
         self.base = self.settings = base
         self.seeds, self.export_dir, self.label = seeds, export_dir, label
-        self.session = Session(doc)
+        self.session = Session(doc, loop)
         # the message line under the figure: text, never HTML (a message may quote a field)
         self.message = Div(name="message", text="", render_as_text=True,
                            styles={"color": style.MESSAGE_ERROR_COLOR, "min-height": "1.2em"})
@@ -131,14 +132,6 @@ class SectionPage:
     def close(self) -> None:
         """Stop the session's work (the browser tab is gone)."""
         self.session.close()
-
-    def poll(self) -> bool:
-        """Run the page's own loop a moment; whether anything reached the page since the last call (Session.poll)."""
-        return self.session.poll()
-
-    def settle(self, timeout: float = 240.0) -> None:
-        """Run the page's own loop until every task and timer is done (Session.settle)."""
-        self.session.settle(timeout)
 
     # ------------------------------------------------------------ state in the URL
     def _load_url(self, args: dict):

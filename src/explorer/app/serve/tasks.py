@@ -7,6 +7,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import threading
 from concurrent.futures import ThreadPoolExecutor
 from functools import partial
 
@@ -15,8 +16,6 @@ from explorer.analysis.budget import Budget, BudgetExceeded
 #: the threads of every session's numba work, shared: a server holds as many as calls run at once
 WORKERS = 32
 EXECUTOR = ThreadPoolExecutor(max_workers=WORKERS, thread_name_prefix="explorer-serve")
-#: runs a page's own loop while its caller waits: the caller's thread may run another loop
-_DRIVER = ThreadPoolExecutor(max_workers=1, thread_name_prefix="explorer-page-loop")
 
 _log = logging.getLogger("explorer.serve")
 
@@ -33,14 +32,14 @@ def _in_budget(budget: Budget | None, fn, *args):
 
 class Session:
     """The event loop of a page: a server's (``doc``, the page's Bokeh document, in a server session), else
-    a loop of its own that :meth:`poll` and :meth:`settle` run (without a document, results apply at once)."""
+    ``loop`` (a notebook's kernel's), else a new one that its caller runs (without a document, results apply
+    at once)."""
 
-    def __init__(self, doc=None):
-        self.doc, self.closed, self.applied = doc, False, 0
-        self.loop, self.own = None, True
-        if getattr(doc, "session_context", None) is not None:
+    def __init__(self, doc=None, loop=None):
+        self.doc, self.closed, self.loop = doc, False, loop
+        if loop is None and getattr(doc, "session_context", None) is not None:
             with contextlib.suppress(RuntimeError):
-                self.loop, self.own = asyncio.get_running_loop(), False
+                self.loop = asyncio.get_running_loop()
         if self.loop is None:
             self.loop = asyncio.new_event_loop()
         self._tasks: dict[object, tuple[asyncio.Task, Budget | None]] = {}
@@ -102,14 +101,12 @@ class Session:
                 pn.state.curdoc = doc       # (as in Bokeh's callbacks: Panel writes its widgets' changes at once)
                 fn()
             await context.with_locked_document(locked)
-        self.applied += 1
 
     def soon(self, fn) -> None:
         """From a widget watcher (Panel calls them outside the document's lock): ``fn()`` on the loop with the
         lock; at once without a document."""
         if self.doc is None:
             fn()
-            self.applied += 1
         elif not self.closed:
             task = self.loop.create_task(self.apply(fn))
             self.waiting.add(task)
@@ -118,37 +115,22 @@ class Session:
     def timer(self, action) -> Timer:
         return Timer(self, action)
 
-    def poll(self, seconds: float = 0.01) -> bool:
-        """Run a loop of its own for ``seconds``; returns whether anything was applied since the last call (a
-        notebook pushes the page then)."""
-        if self.own and not self.loop.is_closed():
-            self._drive(asyncio.sleep(seconds))
-        applied, self.applied = self.applied, 0
-        return bool(applied)
-
     def busy(self) -> bool:
         """A task, a timer or a watcher call is pending."""
         return any(not t.done() for t, _b in self._tasks.values()) or bool(self.waiting)
 
-    def settle(self, timeout: float = 240.0) -> None:
-        """Run a loop of its own until nothing is pending (TimeoutError after ``timeout``)."""
-        async def idle():
-            while self.busy():
-                await asyncio.sleep(0.005)
-        self._drive(asyncio.wait_for(idle(), timeout))
-
-    def _drive(self, coro) -> None:
-        _DRIVER.submit(self.loop.run_until_complete, coro).result()
-
     def close(self) -> None:
-        """The session is gone: every task and timer cancelled (a loop of its own: closed)."""
+        """The session is gone: every task and timer cancelled (a loop of its own, not running: closed)."""
         self.closed = True
         for name in list(self._tasks):
             self.cancel(name)
         for t in list(self.waiting):
             t.cancel()
-        if self.own and not self.loop.is_closed() and not self.loop.is_running():
-            self._drive(asyncio.sleep(0))
+        if not (self.loop.is_running() or self.loop.is_closed()):
+            # its cancelled tasks end first, in a thread of their own (this one may have a loop marked running)
+            end = threading.Thread(target=self.loop.run_until_complete, args=(asyncio.sleep(0),))
+            end.start()
+            end.join()
             self.loop.close()
 
 
