@@ -52,7 +52,7 @@ class OrbitRun:
     ident: int
     p1: float
     p2: float
-    settings: Any                  # the page's settings (settings.Settings, system_page.SystemSettings)
+    settings: Any                  # the page's settings (settings.Settings, settings.SystemSettings)
     colour: int = 0
     paused: bool = False
     state: Any = None              # the stream's sections.StreamState after the last block
@@ -203,12 +203,10 @@ class Worker:
                 run.estimated = False
         return run
 
-    def pause(self) -> list[int]:
-        """Set every running orbit aside (the block in progress still applies); returns their ids."""
-        moved = self._queue()
-        for r in moved:
+    def pause(self) -> None:
+        """Set every running orbit aside (the block in progress still applies)."""
+        for r in self._queue():
             r.paused = True
-        return [r.ident for r in moved]
 
     def resume(self) -> list[int]:
         """Queue the paused orbits again; returns their ids."""

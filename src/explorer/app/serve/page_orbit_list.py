@@ -77,7 +77,7 @@ class OrbitList:
         """Hide orbit ``ident`` (None: none), or show it again if hidden."""
         if ident is None:
             return
-        (self.orbits.show if ident in self.orbits.hidden else self.orbits.hide)(ident)
+        self.orbits.hide(ident, ident not in self.orbits.hidden)
         self._changed(force_density=True)
 
     def clear(self) -> None:
@@ -99,7 +99,7 @@ class OrbitList:
 
     def delete(self, ident: int | None) -> None:
         """Stop orbit ``ident`` (running or paused) and remove it from the page and the session."""
-        if ident is None or not self.orbits.has(ident):
+        if ident is None or ident not in self.orbits.runs:
             return
         self.forget(ident)
         self.orbits.remove(ident)
@@ -143,7 +143,7 @@ class OrbitList:
         starts, picked = self.orbits.starts, self.picked
         # (a value equal to the one there is not sent again: param and Bokeh compare them)
         self.choice.options = {NONE_LABEL: 0} | {f"{i}: ({p1:.4g}, {p2:.4g})": i for i, p1, p2, _c in starts}
-        self.choice.value = picked if self.orbits.has(picked) else 0
+        self.choice.value = picked if picked in self.orbits.runs else 0
         hidden = picked is not None and picked in self.orbits.hidden
         self.hide_button.label = "show" if hidden else "hide"
         self.hide_button.disabled = self.delete_button.disabled = picked is None
@@ -198,7 +198,7 @@ class OrbitList:
             self.select(None)
 
     def _keep(self, ident, start, values, text):
-        if self.orbits.has(ident):              # (not when the orbit went meanwhile)
+        if ident in self.orbits.runs:           # (not when the orbit went meanwhile)
             self.readouts[ident] = (values, f"orbit {ident} from ({start[0]:.6g}, {start[1]:.6g}): {text}")
             self.text.text = self.readouts[ident][1]
 

@@ -145,10 +145,6 @@ class OrbitsLayer:
         self._draw_starts(mark=True)
         return old
 
-    def has(self, ident) -> bool:
-        """Orbit ``ident`` is on the page (hidden or not)."""
-        return ident in self.runs
-
     def remove(self, ident: int) -> None:
         """Stop orbit ``ident`` (running or paused) and take it off the page."""
         self.runs.pop(ident, None)
@@ -157,17 +153,11 @@ class OrbitsLayer:
         self.show_all()
         self._draw_starts()
 
-    def hide(self, ident: int) -> None:
-        """Take orbit ``ident``'s crossings and start off the page (it keeps computing)."""
-        if self.has(ident):
-            self.hidden.add(ident)
-            self.show_all()
-            self._draw_starts()
-
-    def show(self, ident: int) -> None:
-        """Put a hidden orbit's crossings and start back on the page."""
-        if ident in self.hidden:
-            self.hidden.discard(ident)
+    def hide(self, ident: int, hidden: bool = True) -> None:
+        """Take orbit ``ident``'s crossings and start off the page (it keeps computing), or (``hidden`` false)
+        put them back."""
+        if ident in self.runs:
+            (self.hidden.add if hidden else self.hidden.discard)(ident)
             self.show_all()
             self._draw_starts()
 
@@ -180,9 +170,7 @@ class OrbitsLayer:
 
     def state(self, ident: int) -> str:
         """running, paused, done, or why the orbit stopped."""
-        run = self.runs.get(ident)
-        if run is None:
-            return "done"
+        run = self.runs[ident]
         return "paused" if run.paused and run.status == "running" else run.status
 
     @property
@@ -271,7 +259,7 @@ class OrbitsLayer:
 
     # ------------------------------------------------------------ chaos indicators and colours
     def _on_indicators(self, ident, megno, mlce):
-        if not self.has(ident):
+        if ident not in self.runs:
             return
         self.indicators[ident] = (megno, mlce)
         for src in (self.shown, self.live):        # the browser's rows streamed before the indicator was known
