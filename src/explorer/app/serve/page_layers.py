@@ -47,7 +47,7 @@ class ChaosLayer:
                                            value="megno", width=210)
         self.layer.param.watch(lambda _e: session.soon(self._changed), "value")
         self.indicator.param.watch(lambda _e: session.soon(lambda: self._changed(clear=True)), "value")
-        view.on_window(self._window_moved)
+        view.on_window(self.restart)
 
     def draw(self, fig) -> None:
         self.mapper = LinearColorMapper(palette=megno_palette(), low=MEGNO_LOW, high=MEGNO_HIGH,
@@ -100,10 +100,6 @@ class ChaosLayer:
             raster = (np.array(r["image"][0], float), (x, x + r["dw"][0], y, y + r["dh"][0]))
         return {"raster": raster, "raster_scale": self.scale()}
 
-    def _window_moved(self) -> None:
-        if self.layer.value:
-            self.restart()
-
     def _changed(self, clear: bool = False):
         """The box or (``clear``) the indicator changed."""
         self.colour_bar.visible = bool(self.layer.value)
@@ -120,7 +116,8 @@ class ChaosLayer:
             self.session.cancel("raster")
             self.raster_source.data = _empty("complete")
             return
-        self.session.start("raster", self._compute(settings, window, self.indicator.value), on_error=self._failed,
+        self.session.start("raster", self._compute(settings, window, self.indicator.value),
+                           on_error=lambda exc: self.say(f"chaos layer failed: {failure(exc)}"),
                            budget=Budget(None, max_steps=raster_mod.RASTER_MAX_STEPS))
 
     async def _compute(self, settings, window, indicator) -> None:
@@ -137,9 +134,6 @@ class ChaosLayer:
                                     indicator=indicator, center=center, iterates=self.iterates, adaptive=not self.exact)
         while (image := await session.run(next, images, None)) is not None:
             await session.apply(lambda image=image: self.show_image(image))
-
-    def _failed(self, exc) -> None:
-        self.say(f"chaos layer failed: {failure(exc)}")
 
     def show_image(self, image) -> None:
         w = image.window
