@@ -62,7 +62,7 @@ COMMAND = Command("serve", HELP, "figure4 --mu 0.03", (add_options,), fields={"p
 
 def page_from_args(args) -> tuple:
     """(settings, label, seeds) the page starts from: a System's section map, else Chaplygin's model."""
-    from explorer.app.serve.system_page import page_settings
+    from explorer.app.serve.settings import page_settings
 
     names = (*model.PARAM_NAMES, "h", "method", "tol", "dt", "crossings")
     return page_settings(args.scene, args.system, args.panel, flag="--", **{n: getattr(args, n) for n in names})
