@@ -70,16 +70,12 @@ class SectionPage:
         self.exports = export.Exports(self.session, export_dir, self.scene, self.view, self.say)
         self._url_timer = self.session.timer(self.push_url)
         self.section.on_window(lambda: self._url_timer.at(time.monotonic() + URL_DELAY_SECONDS))
-        self.chaos.draw(fig)
-        self.overlays.draw_lines(fig)
-        self.density_image.draw(fig)
-        self.orbits.draw(fig)
-        self.orbit_list.draw(fig)
-        self.overlays.draw_marks(fig)
+        for draw in (self.chaos.draw, self.overlays.draw_lines, self.density_image.draw, self.orbits.draw,
+                     self.orbit_list.draw, self.overlays.draw_marks):      # (bottom to top)
+            draw(fig)
         self.chaos.layer.param.watch(lambda e: self.session.soon(lambda: self.orbits.case_dots(e.new)), "value")
-        fig.on_event(Tap, self._on_tap)
-        fig.on_event(DoubleTap, self._on_tap)   # a second click within 300 ms is a double tap
-        fig.on_event(PressUp, self._on_tap)     # a click held 300 ms or more is a press
+        for event in (Tap, DoubleTap, PressUp):     # a second click within 300 ms is a double tap, one held 300 ms
+            fig.on_event(event, self._on_tap)       # or more a press: each a click
         self._build()
         if doc is not None:       # the tab is gone (or never connected): its work stops now
             doc.on_event(ConnectionLost, lambda _e: self.close())

@@ -43,7 +43,6 @@ class Session:
         if self.loop is None:
             self.loop = asyncio.new_event_loop()
         self._tasks: dict[object, tuple[asyncio.Task, Budget | None]] = {}
-        self.waiting: set[asyncio.Task] = set()         # pending watcher calls
 
     def start(self, name, coro, budget: Budget | None = None, on_error=None) -> asyncio.Task | None:
         """Task ``name`` (a kind of work, or a :class:`Timer`) anew, latest wins: ``coro`` replaces the running
@@ -53,12 +52,13 @@ class Session:
             coro.close()
             return None
         task = self.loop.create_task(coro)
-        task.add_done_callback(partial(self._ended, on_error))
+        task.add_done_callback(partial(self._ended, name, on_error))
         self._tasks[name] = (task, budget)
         return task
 
-    def _ended(self, on_error, task) -> None:
-        self.waiting.discard(task)
+    def _ended(self, name, on_error, task) -> None:
+        if self._tasks.get(name, (None,))[0] is task:
+            del self._tasks[name]
         exc = None if task.cancelled() else task.exception()
         if exc is None or isinstance(exc, BudgetExceeded):
             return
@@ -107,25 +107,21 @@ class Session:
         lock; at once without a document."""
         if self.doc is None:
             fn()
-        elif not self.closed:
-            task = self.loop.create_task(self.apply(fn))
-            self.waiting.add(task)
-            task.add_done_callback(partial(self._ended, None))
+        else:
+            self.start(object(), self.apply(fn))        # (a task of its own: none replaces it)
 
     def timer(self, action) -> Timer:
         return Timer(self, action)
 
     def busy(self) -> bool:
         """A task, a timer or a watcher call is pending."""
-        return any(not t.done() for t, _b in self._tasks.values()) or bool(self.waiting)
+        return any(not t.done() for t, _b in self._tasks.values())
 
     def close(self) -> None:
         """The session is gone: every task and timer cancelled (a loop of its own, not running: closed)."""
         self.closed = True
         for name in list(self._tasks):
             self.cancel(name)
-        for t in list(self.waiting):
-            t.cancel()
         if not (self.loop.is_running() or self.loop.is_closed()):
             # its cancelled tasks end first, in a thread of their own (this one may have a loop marked running)
             end = threading.Thread(target=self.loop.run_until_complete, args=(asyncio.sleep(0),))
