@@ -72,10 +72,9 @@ class Fields:
                 w = pn.widgets.TextInput(**shown)
             w.param.watch(lambda _e, name=name: self._edited(session, on_edit, name), "value")
             self.inputs[name] = w
-        mu = float(s.get("mu", 0.0))
-        end, step = slider_range(mu)
-        self.mu_slider = pn.widgets.FloatSlider(label=f"{LABELS['mu']} (slider)", start=0.0, end=end, step=step,
-                                                value=min(max(mu, 0.0), end), width=220, visible="mu" in s)
+        self.mu_slider = pn.widgets.FloatSlider(label=f"{LABELS['mu']} (slider)", start=0.0, width=220,
+                                                visible="mu" in s)
+        self._slider_at(float(s.get("mu", 0.0)))
         self._dragging = False                  # from a drag's first move to its release: the range stays
         self._slide_timer = session.timer(lambda: self._slid(self.mu_slider.value))
         self.mu_slider.param.watch(self._drag, "value")
@@ -83,8 +82,8 @@ class Fields:
         steps = [n for n in settings.field_names if n != "method"]
         self.step_field = pn.widgets.Select(label="step", options={LABELS.get(n, n): n for n in steps},
                                             value=steps[0], width=62, margin=STEP_MARGIN)
-        self.step_size = pn.widgets.FloatInput(label="by", value=default_step(float(s[steps[0]])), width=82,
-                                            margin=STEP_MARGIN)
+        self.step_size = pn.widgets.FloatInput(label="by", width=82, margin=STEP_MARGIN)
+        self._reset_step(steps[0])
         self.step_field.param.watch(lambda e: self._reset_step(e.new), "value")
         self.step_buttons = tuple(pn.widgets.Button(label=label, width=28, align="end", margin=STEP_MARGIN)
                                   for label in ("−", "+"))
