@@ -206,7 +206,7 @@ class SectionPage:
         self.settings = new
         self.title.object = self._title()         # (param sends no unchanged value)
         # the kept starts' crosses go before the region and the view
-        kept = [self.orbits.start(p1, p2, color, ident=i) for i, p1, p2, color in old]   # (their ids kept)
+        kept = [self.orbits.start(p1, p2, ident=i) for i, p1, p2, _c in old]   # (their ids and colours kept)
         for run, (i, *_s) in zip(kept, old):
             if run is not None and i in hidden:
                 self.orbits.hide(run.ident)           # (a hidden orbit stays hidden)
