@@ -1238,7 +1238,7 @@ def test_an_orbits_megno_reaches_its_rows_whether_live_or_settled():
     try:
         older = page.click(c1 + 0.3 * r1, c2).ident
         _poll_until(page, lambda: len(page.orbits.shown.data["t"]) == s.crossings and older in page.orbits.indicators)
-        page.orbits.runs[older + 1] = OrbitRun(older + 1, c1, c2, s, 1, paused=True)   # a second orbit, by hand:
+        page.orbits.runs[older + 1] = OrbitRun(older + 1, c1, c2, s, paused=True)   # a second orbit, by hand:
         rows = np.column_stack([np.arange(1.0, 5.0), np.full(4, c1), np.full(4, c2), np.ones(4), np.zeros(4)])
         _hand_in(page, older + 1, rows, "running")                            # its first block
         page.orbits._flush()                                # (its flush, by hand: the loop runs the next one)

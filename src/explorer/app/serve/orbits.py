@@ -46,14 +46,13 @@ COLORS = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e3
 
 @dataclass
 class OrbitRun:
-    """One clicked orbit: its start, settings, colour index, every row computed (``rows``, of which the first
+    """One clicked orbit: its start, settings, every row computed (``rows``, of which the first
     ``done`` count: a lowered crossings per click keeps the others) and where its stream stands."""
 
     ident: int
     p1: float
     p2: float
     settings: Any                  # the page's settings (settings.Settings, settings.SystemSettings)
-    colour: int = 0
     paused: bool = False
     state: Any = None              # the stream's sections.StreamState after the last block
     block: int = FIRST_BLOCK
@@ -67,6 +66,11 @@ class OrbitRun:
     turn: int = 0                  # when its last block was handed out (round robin)
     sent: int = 0                  # its rows in the browser (the page's)
     rows: np.ndarray = field(default_factory=lambda: np.zeros((0, 5)))
+
+    @property
+    def colour(self) -> int:
+        """Its index in COLORS: the orbits take them in turn."""
+        return (self.ident - 1) % len(COLORS)
 
     @property
     def finished(self) -> bool:
@@ -164,12 +168,12 @@ class Worker:
         if self._queue() and not self.session.running("orbits"):
             self.session.start("orbits", self._loop())
 
-    def submit(self, p1: float, p2: float, settings, ident: int | None = None, colour: int = 0) -> OrbitRun:
+    def submit(self, p1: float, p2: float, settings, ident: int | None = None) -> OrbitRun:
         """Queue the orbit from (p1, p2) as orbit ``ident`` (None: a new id; a cancelled orbit's: its rerun)."""
         if ident is None:
             self._next_id += 1
             ident = self._next_id
-        run = self.runs[ident] = OrbitRun(ident, float(p1), float(p2), settings, colour)
+        run = self.runs[ident] = OrbitRun(ident, float(p1), float(p2), settings)
         self._ensure_running()
         return run
 
@@ -195,7 +199,7 @@ class Worker:
         if n >= k:
             run.status = "done" if n > k or end == "running" else end
         elif end == STATUS_NAMES[STATUS_TMAX]:     # (its time budget, 100 K, grows)
-            return OrbitRun(run.ident, run.p1, run.p2, settings, run.colour, paused=run.paused)
+            return OrbitRun(run.ident, run.p1, run.p2, settings, paused=run.paused)
         else:
             run.status = end if end not in ("running", "done") else "running"
             if run.status == "running" and run.finished:

@@ -39,7 +39,6 @@ class OrbitsLayer:
     def __init__(self, host, view, session):
         self.host, self.view, self.session = host, view, session
         self._unmarked: set = set()            # the starts whose cross waits for their first crossings
-        self._color = 0
         self.indicators: dict = {}             # orbit id -> (mean MEGNO, mLCE) over INDICATOR_TIME
         self.hidden: set = set()
         self.on_status = lambda: None          # called after every update of the status line
@@ -105,17 +104,13 @@ class OrbitsLayer:
         """(orbit id, p1, p2, colour index) of every start, in click order."""
         return [(r.ident, r.p1, r.p2, r.colour) for r in self.runs.values()]
 
-    def start(self, p1: float, p2: float, color: int | None = None, mark_later: bool = False,
-              ident: int | None = None, quiet: bool = False):
+    def start(self, p1: float, p2: float, mark_later: bool = False, ident: int | None = None, quiet: bool = False):
         """Queue the orbit from (p1, p2) and mark its start (``mark_later`` on a served page: with its
         first crossings; ``quiet``: when the caller calls :meth:`mark_starts`); None outside the region."""
         settings = self.host.settings
         if not settings.admissible(p1, p2):
             return None
-        if color is None:
-            color = self._color % len(COLORS)
-            self._color += 1
-        run = self.worker.submit(p1, p2, settings, ident, color)
+        run = self.worker.submit(p1, p2, settings, ident)
         self._unmarked.add(run.ident)
         if not quiet and (not mark_later or self.session.doc is None):
             self.mark_starts()               # (else with the first crossings, in their flush)
