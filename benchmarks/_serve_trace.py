@@ -47,7 +47,7 @@ def _traced(name, before=None, after=None, cls=page_mod.SectionPage):
 _traced("_on_tap", before=lambda self, _e: "tap")
 _traced("_on_block", before=lambda self, _i, rows, done, status: f"block {len(rows)} {done} {status}",
         cls=page_orbits.OrbitsLayer)
-_traced("_flush", after=lambda self: f"flush {len(self.crossings.data['p1'])}", cls=page_orbits.OrbitsLayer)
+_traced("_flush", after=lambda self: f"flush {len(self.columns(keys=('orbit',))['orbit'])}", cls=page_orbits.OrbitsLayer)
 
 if __name__ == "__main__":
     sys.exit(main(["serve", *sys.argv[1:]]))
