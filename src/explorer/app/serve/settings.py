@@ -215,10 +215,9 @@ class SystemSettings(PageSettings):
     scene_export = False
 
     def __post_init__(self):
-        from explorer.analysis.system_sections import is_system_map
         from explorer.integrate.methods import MAX_TOL, MIN_TOL
 
-        if not is_system_map(self.smap):
+        if not system_sections.is_system_map(self.smap):
             raise ParameterError(f"a System's page needs its section map, got {type(self.smap).__name__}")
         for name in self.smap.parameters:
             if name in RESERVED[1:]:
@@ -294,12 +293,11 @@ def page_settings(scene=None, system=None, panel: int = 0, flag: str = "", **val
     'module:attribute'; or ``scene``: a section map or a System's scene), else Chaplygin's model (``scene``'s
     panel ``panel``; None: Figure 4); the ``values`` given (not None) on top, validated; ``flag``: how the
     refusal of a Chaplygin option on a System's page names it."""
-    from explorer.analysis.system_sections import is_system_map
     from explorer.io.scene import SeedSpec, SystemScene, load_scene
     from explorer.io.scene.system import resolve_system
 
     values = {k: v for k, v in values.items() if v is not None}
-    if is_system_map(scene):
+    if system_sections.is_system_map(scene):
         system, scene = scene, None
     elif scene is not None:
         scene = load_scene(scene, system=system)
@@ -325,7 +323,7 @@ def page_settings(scene=None, system=None, panel: int = 0, flag: str = "", **val
         smap = scene.section_map(i)
     else:
         smap = resolve_system(system, "--system", maps=True)
-        if not is_system_map(smap):
+        if not system_sections.is_system_map(smap):
             raise ParameterError(f"--system {system!r} is a System without a section: the page shows a section map. "
                                  "Name its map (SectionMap(system, E, section=..., direction=..., coords=(a, b), "
                                  "solve=c) as the attribute) or give a scene of it (explorer serve SCENE.toml "
