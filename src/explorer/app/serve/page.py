@@ -196,28 +196,26 @@ class SectionPage:
         if new.crossings != self.settings.crossings and replace(self.settings, crossings=new.crossings) == new:
             self.settings = new           # (only the crossings per click: each orbit is cut or continues)
             self.orbits.recount(new)
-            self.fields.show(self.settings)
-            self.push_url()
-            return
-        hidden = set(self.orbits.hidden)
-        self.orbit_list.forget()
-        old = self.orbits.drop_all()
-        self.density_image.refresh(force=True)       # no image left of them
-        self.settings = new
-        self.title.object = self._title()         # (param sends no unchanged value)
-        # the kept starts' crosses go before the region and the view
-        kept = [self.orbits.start(p1, p2, ident=i) for i, p1, p2, _c in old]   # (their ids and colours kept)
-        for run, (i, *_s) in zip(kept, old):
-            if run is not None and i in hidden:
-                self.orbits.hide(run.ident)           # (a hidden orbit stays hidden)
-        self._draw_region()
+        else:
+            hidden = set(self.orbits.hidden)
+            self.orbit_list.forget()
+            old = self.orbits.drop_all()
+            self.density_image.refresh(force=True)       # no image left of them
+            self.settings = new
+            self.title.object = self._title()         # (param sends no unchanged value)
+            # the kept starts' crosses go before the region and the view
+            kept = [self.orbits.start(p1, p2, ident=i) for i, p1, p2, _c in old]   # (their ids and colours kept)
+            for run, (i, *_s) in zip(kept, old):
+                if run is not None and i in hidden:
+                    self.orbits.hide(run.ident)           # (a hidden orbit stays hidden)
+            self._draw_region()
+            self.chaos.restart()
+            self.overlays.restart()
+            dropped = sum(r is None for r in kept)
+            if dropped:
+                self.say(f"{dropped} start(s) outside the new allowed region dropped")
+            self.orbits.update_status()   # (the orbits and values now, also when every start was dropped)
         self.fields.show(self.settings)
-        self.chaos.restart()
-        self.overlays.restart()
-        dropped = sum(r is None for r in kept)
-        if dropped:
-            self.say(f"{dropped} start(s) outside the new allowed region dropped")
-        self.orbits.update_status()   # (the orbits and values now, also when every start was dropped)
         self.push_url()
 
     def _draw_region(self):
@@ -270,8 +268,6 @@ class SectionPage:
             self.orbits.worker.pause()
         run = self.orbits.start(p1, p2, mark_later=True)
         self.say("")
-        if self.session.doc is None:
-            self.push_url()
         return run
 
     def _on_tap(self, event):
