@@ -1,5 +1,4 @@
-"""The searches the page's check boxes and picks run (docs/commands/serve.md), each giving (found, message):
-fixed points, separatrices, periodic orbits, a picked orbit's readout and a saddle's manifolds.  No web library."""
+"""The searches of the page's check boxes and picks, each giving (found, message) (docs/commands/serve.md)."""
 from __future__ import annotations
 
 import math
@@ -15,22 +14,18 @@ from explorer.app.serve.orbits import INDICATOR_TIME, orbit_indicators
 from explorer.app.serve.style import megno_kind
 from explorer.app.serve.tasks import failure
 
-#: the periodic orbits of periods 1..PERIODIC_MAX are marked (analysis/periodic.py)
+#: the searches' limits (docs/bad_input.md): the periods marked, wall-clock budgets (s), steps per orbit of a
+#: crossing batch, and the arclength and budget (s) of each separatrix branch and of each branch of a pick's manifolds
 PERIODIC_MAX = 4
-#: wall-clock budgets (s) of the fixed points with their separatrices, the periodic orbits and a pick's readout;
-#: a search that runs out shows what it found
 FIXED_SECONDS = 30.0
 PERIODIC_SECONDS = 60.0
 READOUT_SECONDS = 30.0
-#: steps per orbit in a crossing batch of a page's search (a return takes about 65 at Figure 4's values)
 SEARCH_MAX_STEPS = 100_000
-#: arclength and wall-clock budget (s) of each separatrix branch, and of each branch of a picked saddle's
-#: manifolds (explorer.analysis.manifolds): drawn as far as it got
 SEPARATRIX_ARCLENGTH = 4.0
 SEPARATRIX_MAX_TIME = 4.0
 MANIFOLD_ARCLENGTH = 10.0
 MANIFOLD_MAX_TIME = 10.0
-#: wall-clock budget of a pick's manifolds, Newton's method and the four branches (s)
+#: Newton's method and the four branches
 MANIFOLD_SECONDS = 4 * MANIFOLD_MAX_TIME + 5.0
 
 
@@ -45,8 +40,7 @@ def _at(p) -> str:
 
 
 def _fixed_points_from(view, first):
-    """The fixed points Newton's method reaches from ``first``, the region's centre and half-way to its
-    edge along both axes (admissible guesses only), lazily."""
+    """Lazily, the fixed points Newton's method reaches from ``first``, the region's centre and half-way to its edge."""
     c1, c2, r1, r2 = view.region
     for g in (first, (c1, c2), (c1 - 0.5 * r1, c2), (c1 + 0.5 * r1, c2), (c1, c2 - 0.5 * r2), (c1, c2 + 0.5 * r2)):
         try:
@@ -58,13 +52,8 @@ def _fixed_points_from(view, first):
             continue
 
 
-def _described(points) -> str:
-    return ", ".join(f"{_at(fp.point)} {'elliptic' if fp.stable else 'hyperbolic'}" for fp in points)
-
-
 def fixed_points(view) -> tuple:
-    """(points, message): the distinct fixed points of :func:`_fixed_points_from` p = 0; ``view``: the
-    page's settings, with a region."""
+    """(points, message): the distinct fixed points of :func:`_fixed_points_from` p = 0 (docs/commands/serve.md)."""
     points: list = []
     stopped = ""
     try:
@@ -73,14 +62,14 @@ def fixed_points(view) -> tuple:
                 points.append(fp)
     except BudgetExceeded as exc:
         stopped = f": search {exc}"
-    found = _described(points) or "none found (Newton's method from p = 0, the region's centre, half-way to its edge)"
+    found = ", ".join(f"{_at(fp.point)} {'elliptic' if fp.stable else 'hyperbolic'}" for fp in points)
+    found = found or "none found (Newton's method from p = 0, the region's centre, half-way to its edge)"
     return points, f"fixed points {found}{stopped}"
 
 
 def separatrices(view, points, text: str) -> tuple:
-    """(curves, message): the four separatrix branches of each hyperbolic fixed point of ``points``, grown
-    to SEPARATRIX_ARCLENGTH (docs/manifolds.md) as (M, 2) arrays, and ``text`` (the fixed points' message)
-    with what they gave; a budget that runs out ends the curves there."""
+    """(curves, message): the (M, 2) separatrix branches of the hyperbolic ``points`` (docs/manifolds.md), and
+    ``text`` (the fixed points' message) with what they gave."""
     curves: list = []
     notes = []
     for fp in (fp for fp in points if not fp.stable):
@@ -103,15 +92,13 @@ def separatrices(view, points, text: str) -> tuple:
 
 
 def periodic_orbits(view):
-    """(orbits, message): the periodic orbits of minimal periods 1..PERIODIC_MAX of
-    :func:`explorer.analysis.periodic.search_periodic_orbits`; a budget that runs out ends it there."""
-    K = PERIODIC_MAX
+    """(orbits, message): the periodic orbits of minimal periods 1..PERIODIC_MAX (docs/commands/serve.md)."""
     orbits, stopped, done = [], "", 0
-    for k in range(1, K + 1):
+    for k in range(1, PERIODIC_MAX + 1):
         try:
             orbits += search_periodic_orbits(view.section_map(), k, grid=8, max_guesses=30)
         except BudgetExceeded as exc:
-            stopped = f"; periods {k}-{K} not searched: {exc}"
+            stopped = f"; periods {k}-{PERIODIC_MAX} not searched: {exc}"
             break
         except Exception:  # noqa: BLE001 - a failed search marks nothing for this period
             pass
@@ -127,8 +114,8 @@ def elliptic_center(view, start):
 
 
 def orbit_readout(settings, start) -> tuple:
-    """(values, message): a picked orbit's megno, mlce, rotation number around ``center`` (its
-    :func:`elliptic_center`, or None) and the readout's words (docs/commands/serve.md)."""
+    """(values, message): a picked orbit's megno, mlce, rotation number, its :func:`elliptic_center` (or None)
+    and the readout's words (docs/commands/serve.md, "Pick an orbit")."""
     p1, p2 = float(start[0]), float(start[1])
     megno, mlce = orbit_indicators(settings, p1, p2)
     values = {"megno": megno, "mlce": mlce, "rotation": None, "center": None}
