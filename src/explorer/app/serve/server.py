@@ -107,17 +107,14 @@ def web_browser():
         return None
 
 
-def open_in_browser(url: str, err=None) -> threading.Thread | None:
-    """Open ``url`` in :func:`web_browser` in a thread; without one, say so on ``err``."""
-    err = sys.stderr if err is None else err
+def open_in_browser(url: str) -> None:
+    """Open ``url`` in :func:`web_browser` in a thread; without one, say so on stderr."""
     browser = web_browser()
     if browser is None:
-        print("explorer: no web browser here: open the URL above (or forward the port: ssh -L)", file=err,
+        print("explorer: no web browser here: open the URL above (or forward the port: ssh -L)", file=sys.stderr,
               flush=True)
-        return None
-    t = threading.Thread(target=browser.open, args=(url,), name="explorer-open-browser", daemon=True)
-    t.start()
-    return t
+    else:
+        threading.Thread(target=browser.open, args=(url,), name="explorer-open-browser", daemon=True).start()
 
 
 def warm_up_and_freeze(base: Settings) -> None:
