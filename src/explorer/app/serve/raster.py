@@ -1,6 +1,5 @@
-"""The chaos layer's rasters of the visible window, coarse first, a partial image after each batch, NaN
-outside the allowed region (docs/commands/serve.md, "Chaos layer"); MEGNO's finest is adaptive by default
-(docs/chaos_map.md).  No web library here."""
+"""The chaos layer's rasters of the visible window, coarse first, NaN outside the allowed region
+(docs/commands/serve.md, "Chaos layer"; the adaptive raster: docs/chaos_map.md)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -15,9 +14,8 @@ from explorer.app.serve.overlays import elliptic_center, rotation_tol
 from explorer.app.serve.settings import Settings, Window
 from explorer.model import ParameterError, validation
 
-#: resolutions of the successive rasters of one window (each a refinement of the last), by default
+#: the default resolutions of one window's rasters (each refines the last), and the finest --megno-resolution accepts
 RESOLUTIONS = (16, 32, 64, 128)
-#: the finest resolution --megno-resolution accepts
 MAX_RESOLUTION = 512
 #: integration time of a cell's MEGNO by default, and the longest --megno-time accepts
 RASTER_TIME = 200.0
@@ -82,9 +80,8 @@ def _shown(coarser, inside) -> np.ndarray:
 
 def rasters(settings: Settings, window: Window, resolutions: tuple = RESOLUTIONS, time: float = RASTER_TIME,
             indicator: str = "megno", center=None, iterates: int = DIFFUSION_ITERATES, adaptive: bool = False):
-    """Yield the :class:`Image` of ``indicator`` after every batch of every resolution; ``time``:
-    MEGNO's, ``center`` (None: :func:`diffusion_center`) and ``iterates``: frequency diffusion's.
-    ``adaptive`` (MEGNO): the first resolution, then the last by :func:`adaptive_raster`."""
+    """Yield the :class:`Image` of ``indicator`` after every batch of every resolution (``center`` None:
+    :func:`diffusion_center`); ``adaptive`` (MEGNO): the first resolution, then the last by :func:`adaptive_raster`."""
     validation.choice("indicator", indicator, INDICATORS)
     if indicator == "megno":
         batch, cells = BATCH, partial(settings.megno, time=time, max_steps=RASTER_MAX_STEPS)
@@ -110,10 +107,8 @@ def rasters(settings: Settings, window: Window, resolutions: tuple = RESOLUTIONS
 
 
 def adaptive_raster(settings: Settings, window: Window, n: int, time: float = RASTER_TIME, coarser=None):
-    """Yield the :class:`Image` of MEGNO on the n x n raster after every batch: the cells
-    :func:`explorer.analysis.chaos_map.refinement` asks for (a lattice of about ``coarser``'s side,
-    then where neighbours disagree) are computed, each the exact raster's cell bit for bit, the
-    others filled (docs/chaos_map.md); a cell not yet known shows ``coarser``'s value."""
+    """Yield MEGNO's n x n :class:`Image` after every batch, computing the cells ``refinement`` asks for, each the
+    exact raster's bit for bit, the others filled (docs/chaos_map.md); a cell not yet known shows ``coarser``'s."""
     P1, P2 = window.centres(n)
     inside = np.asarray(settings.allowed(P1, P2), bool)
     shown = _shown(coarser, inside)
