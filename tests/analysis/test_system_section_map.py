@@ -153,3 +153,18 @@ def test_another_parameter_value_lifts_onto_its_own_energy_surface():
     H = (PX**2 + PY**2)/2 + (X**2 + Yv**2)/2 + 0.5*(X**2*Yv - Yv**3/3)
     assert np.max(np.abs(H - E)) <= 1e-15 and np.all(PX > 0.0)
     assert np.max(np.abs(energy(Y) - E)) > 1e-4          # not on lam = 1's surface
+
+
+@pytest.mark.parametrize("system", ["chaplygin", "henon_heiles"])
+def test_with_tol_is_the_same_map_at_that_tolerance_and_its_returns_agree_to_it(system):
+    if system == "chaplygin":
+        smap, x0 = ex.SectionMap(ex.FIGURE4, ex.FIGURE4_H, phi0=0.5), (0.3, 0.1)
+    else:
+        smap, x0 = ex.SectionMap(henon_heiles(), E, section=x, direction=-1, coords=(y, py), solve=px), POINTS[0]
+    loose = smap.with_tol(1e-9)
+    assert loose.tol == 1e-9 and smap.with_tol(smap.tol) is smap and type(loose) is type(smap)
+    assert [loose.value_of(n) for n in smap.parameters] == [smap.value_of(n) for n in smap.parameters]
+    assert loose.tmax == smap.tmax and loose.section_label == smap.section_label
+    assert np.max(np.abs(loose(x0).point - smap(x0).point)) < 1e-7
+    with pytest.raises(ParameterError, match="tol"):
+        smap.with_tol(0.5)

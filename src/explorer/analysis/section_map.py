@@ -186,6 +186,10 @@ class SectionMap(FlowSection):
         """This map with the time budget ``tmax`` of one return."""
         return SectionMap(self.params, self.h, phi0=self.phi0, tol=self.tol, tmax=tmax)
 
+    def with_tol(self, tol) -> SectionMap:
+        """This map with the Taylor tolerance ``tol`` of its returns (itself at its own)."""
+        return self if tol == self.tol else SectionMap(self.params, self.h, phi0=self.phi0, tol=tol, tmax=self.tmax)
+
     @property
     def section_label(self) -> float:
         """phi0, which tells this section from :meth:`opposite`'s."""

@@ -668,6 +668,12 @@ class SystemSectionMap(FlowSection):
         out.tmax = validation.real("tmax", tmax, 0.0, lo_open=True)
         return out
 
+    def with_tol(self, tol) -> SystemSectionMap:
+        """This map with the Taylor tolerance ``tol`` of its returns (itself at its own)."""
+        if tol == self.tol:
+            return self
+        return SystemSectionMap(self.system, self.energy_value, **dict(self._settings(), tol=tol))
+
     def require_reversor(self, what: str):
         """The first of :attr:`reversors`; ParameterError naming ``what`` needs it when there is none."""
         if self.reversors:

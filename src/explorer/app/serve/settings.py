@@ -110,6 +110,11 @@ class PageSettings:
     def admissible(self, p1: float, p2: float) -> bool:
         return self.refusal(p1, p2) is None
 
+    def section_map(self, tol=None):
+        """The page's map (at ``tol``: :meth:`with_tol`) that its searches ask (fixed points, manifolds,
+        rotation numbers)."""
+        return self.smap if tol is None else self.smap.with_tol(tol)
+
     def megno(self, p1, p2, time: float, max_steps: int, mlce: bool = False):
         """<Y>(time) (and the mLCE with ``mlce``) of the orbits from (p1, p2), NaN where a run stops early."""
         res = self.indicators(np.ravel(p1), np.ravel(p2), time, max_steps, ("megno", "mlce") if mlce else ("megno",))
@@ -147,7 +152,9 @@ class Settings(PageSettings, sections.Integration):
 
     @functools.cached_property
     def smap(self):
-        return self.section_map()
+        from explorer.analysis.section_map import SectionMap
+
+        return SectionMap(self.params, self.h, phi0=self.phi0)
 
     def section_kwargs(self) -> dict:
         """Keywords of :func:`explorer.analysis.sections.iter_crossings` (with ``crossings``)."""
@@ -165,12 +172,6 @@ class Settings(PageSettings, sections.Integration):
 
     def title(self) -> str:
         return f"Poincaré section φ = {'π' if self.phi0 == math.pi else f'{self.phi0:.6g}'}"
-
-    def section_map(self, tol=None):
-        """The section map the page's searches ask (fixed points, manifolds, rotation numbers)."""
-        from explorer.analysis.section_map import DEFAULT_TOL, SectionMap
-
-        return SectionMap(self.params, self.h, phi0=self.phi0, tol=DEFAULT_TOL if tol is None else tol)
 
     def indicators(self, p1, p2, time: float, max_steps: int, which):
         """lyapunov.indicators of the orbits from (p1, p2); None when a fixed step would take over ``max_steps``."""
@@ -251,13 +252,6 @@ class SystemSettings(PageSettings):
         """The map's domain on a REGION_CELLS^2 grid of the :attr:`region` box (rows: the second coordinate)."""
         c1, c2, r1, r2 = self.region
         return self.allowed(*Window(c1 - r1, c1 + r1, c2 - r2, c2 + r2).centres(REGION_CELLS))
-
-    def section_map(self, tol=None):
-        s = self.smap
-        if tol is None or tol == s.tol:
-            return s
-        return type(s)(s.system, s.energy_value, section=s.section.expr, direction=s.direction, coords=s.coords,
-                       solve=s.solve, tol=tol, tmax=s.tmax)
 
     def indicators(self, p1, p2, time: float, max_steps: int, which):
         from explorer.analysis import lyapunov
