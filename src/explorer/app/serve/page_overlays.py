@@ -83,10 +83,6 @@ class Overlays:
         fig.scatter("p1", "p2", source=self.fixed, marker="marker", size=11, line_color="black",
                     fill_color="white", line_width=2)
 
-    def on(self) -> tuple:
-        """The names of the overlays that are on, as in the URL."""
-        return tuple(n for n, box in (("separatrices", self.overlay), ("periodic", self.periodic_box)) if box.value)
-
     def load_url(self, args: dict) -> list:
         """The boxes from a link (``separatrices``, ``periodic``: "1" ticked); nothing refused."""
         self.overlay.value, self.periodic_box.value = args.get("separatrices") == "1", args.get("periodic") == "1"
