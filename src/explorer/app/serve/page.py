@@ -158,7 +158,8 @@ class SectionPage:
 
     def overlays_on(self) -> tuple:
         """The names of the overlays that are on (the chaos layer by its indicator), for the scene."""
-        return self.overlays.on() + ((self.chaos.indicator.value,) if self.chaos.layer.value else ())
+        on = tuple(name for name, value in self.overlays.url_query().items() if value == "1")
+        return on + ((self.chaos.indicator.value,) if self.chaos.layer.value else ())
 
     def scene(self):
         """The session as a scene (export.session_scene)."""
