@@ -1,5 +1,4 @@
-"""The page's images under the orbits (docs/commands/serve.md): the chaos raster of the visible window
-and the density image of the crossings not drawn as dots."""
+"""The page's images under the orbits: the chaos layer and the density image (docs/commands/serve.md)."""
 from __future__ import annotations
 
 import time
@@ -67,7 +66,6 @@ class ChaosLayer:
         return style.vmin, style.vmax
 
     def _show_scale(self) -> None:
-        """The colour bar's scale and label: the indicator, and frequency diffusion's centre once known."""
         low, high = self.scale()
         self.mapper.update(low=low, high=high)
         title, c = (MEGNO_TITLE if self.indicator.value == "megno" else DIFFUSION_TITLE), self.center
@@ -76,8 +74,7 @@ class ChaosLayer:
         self.colour_bar.title = title
 
     def load_url(self, args: dict) -> list:
-        """The layer's state from a link: ``indicator`` and ``megno`` ("1": on; "exact": on, every cell computed);
-        returns what it refused."""
+        """The layer from a link (``indicator``; ``megno``: "1" on, "exact" not adaptive); returns what it refused."""
         name, refused = args.get("indicator") or "megno", []
         if name not in raster_mod.INDICATORS:
             refused = [f"indicator must be one of {', '.join(raster_mod.INDICATORS)}, got {name[:40]!r}"]
@@ -88,7 +85,6 @@ class ChaosLayer:
         return refused
 
     def url_query(self) -> dict:
-        """The layer's URL arguments: ``megno`` (the box) and ``indicator``."""
         on = "exact" if self.exact else "1"
         return {"megno": on if self.layer.value else "0", "indicator": self.indicator.value}
 
@@ -101,7 +97,6 @@ class ChaosLayer:
         return {"raster": raster, "raster_scale": self.scale()}
 
     def _changed(self, clear: bool = False):
-        """The box or (``clear``) the indicator changed."""
         self.colour_bar.visible = bool(self.layer.value)
         if clear:
             self.raster_source.data = _empty("complete")       # no value of the other indicator on its scale
@@ -125,7 +120,7 @@ class ChaosLayer:
         center = None
         if indicator == "frequency_diffusion":
             c = self.center
-            if c is None or c[0] != settings:      # (one search per settings)
+            if c is None or c[0] != settings:
                 point, elliptic = await session.run(raster_mod.diffusion_center, settings)
                 self.center = c = (settings, point, elliptic)
                 await session.apply(self._show_scale)
