@@ -1,5 +1,4 @@
-"""The page's fields, the μ slider and the stepper (docs/commands/serve.md): slider and stepper write
-into a field, which applies the value as typed."""
+"""The page's fields, and the μ slider and stepper that write into them (docs/commands/serve.md)."""
 from __future__ import annotations
 
 import math
@@ -45,8 +44,7 @@ def stepped(name: str, text: str, step: float, k: int) -> str:
 
 
 def slider_range(mu: float) -> tuple:
-    """(end, step) of the μ slider at ``mu``: the 1-2-5 number >= max(2|mu|, MU_SLIDER_END), in steps of
-    a thousandth of its decade."""
+    """(end, step) of the μ slider at ``mu`` (docs/commands/serve.md, "μ slider")."""
     want = max(2.0 * abs(mu), MU_SLIDER_END) if math.isfinite(2.0 * mu) else MU_SLIDER_END
     decade = 10.0 ** math.floor(math.log10(want))
     end = next(m * decade for m in (1, 2, 5, 10) if m * decade >= want * (1 - 1e-12))
