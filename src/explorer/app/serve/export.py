@@ -1,6 +1,5 @@
-"""The page's exports: the session as a scene that ``explorer sweep`` reruns (docs/scenes.md) and its
-store (docs/store.md), every orbit; the view as PNG/SVG (:mod:`explorer.app.serve.image`), hidden orbits
-left out.  Files go only into ``--export-dir``, under names made here, atomically."""
+"""The page's exports (docs/commands/serve.md): the session's scene (docs/scenes.md) and store (docs/store.md),
+the view as PNG/SVG; files go only into ``--export-dir``, under names made here, atomically."""
 from __future__ import annotations
 
 import io
@@ -112,7 +111,6 @@ class Exports:
         return path
 
     async def _write(self, fn, args, what: str, said):
-        """``fn(*args)`` off the loop, then ``said(result)`` (or why ``what`` failed) on the message line."""
         try:
             text, ok = said(await self.session.run(fn, *args)), True
         except Exception as exc:  # noqa: BLE001 - reported in the page
