@@ -1,5 +1,4 @@
-"""The page's overlays (docs/commands/serve.md): fixed points with their separatrices, periodic orbits
-(one task under a budget) and a picked saddle's manifolds (another), searched by :mod:`.overlays`."""
+"""The page's overlays, searched by :mod:`.overlays` in a task under a budget (docs/commands/serve.md)."""
 from __future__ import annotations
 
 from functools import partial
@@ -69,7 +68,6 @@ class Overlays:
 
     def draw_lines(self, fig) -> None:
         """The separatrices and manifolds (under the crossings)."""
-        # a dark casing under a bright line: visible on white and on every colour of the MEGNO layer
         self.separatrix_lines = (
             fig.multi_line("xs", "ys", source=self.curves, line_color=SEPARATRIX_CASING, line_width=3.0),
             fig.multi_line("xs", "ys", source=self.curves, line_color=SEPARATRIX_COLOR, line_width=1.4))
@@ -140,7 +138,6 @@ class Overlays:
         self.periodic.data = {**_marks([r[0] for r in rows], [r[2] for r in rows]), "period": [r[1] for r in rows]}
         self.text.text = "; ".join(t for t in (text, found) if t)
 
-    # ------------------------------------------------------------ manifolds of a picked saddle
     def saddle_near(self, p1: float, p2: float, radius_px: float) -> tuple | None:
         """(point, period) of the nearest hyperbolic mark within ``radius_px`` pixels of (p1, p2), or None."""
         marks = [(a, b, k) for src in (self.fixed.data, self.periodic.data)
