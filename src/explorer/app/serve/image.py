@@ -1,5 +1,4 @@
-"""The page's view as a PNG or SVG drawn with matplotlib (docs/commands/serve.md), each orbit with the
-SVG id ``orbit-<id>``.  No web library here."""
+"""The page's view as a PNG or SVG by matplotlib, each orbit's SVG id ``orbit-<id>`` (docs/commands/serve.md)."""
 from __future__ import annotations
 
 import io
@@ -15,16 +14,15 @@ FIGSIZE = (7.0, 5.6)
 DPI = 150
 #: above this many crossings in all, the orbits are rasterized in the SVG (~100 bytes a vector point)
 SVG_VECTOR_MAX = 200_000
-#: the formats render() writes
 FORMATS = ("png", "svg")
 
 
 @dataclass
 class View:
-    """A copy of what the page shows, in plain arrays.  ``orbits``: [(id, colour, points (n, 2), megno)];
-    ``starts``: [(p1, p2, colour)]; ``region``: (c1, c2, r1, r2) or None, drawn as ``region_mask`` over its
-    box if given (else an ellipse); ``raster``: (values, window), on ``raster_scale`` (None: MEGNO's);
-    ``fixed``: [(p1, p2, elliptic)]; ``manifolds``: [(kind, curve)]; ``periodic``: [(p1, p2, period, elliptic)]."""
+    """What the page shows: ``orbits`` [(id, colour, points (n, 2), megno)], ``starts`` [(p1, p2, colour)], ``region``
+    (c1, c2, r1, r2) or None, drawn as ``region_mask`` over its box if given (else an ellipse), ``raster`` (values,
+    window) on ``raster_scale`` (None: MEGNO's), ``fixed`` [(p1, p2, elliptic)], ``manifolds`` [(kind, curve)],
+    ``periodic`` [(p1, p2, period, elliptic)]."""
 
     window: tuple
     region: tuple | None
