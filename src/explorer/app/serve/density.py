@@ -1,5 +1,4 @@
-"""Many crossings as one image (docs/architecture.md, "Many crossings in the browser"), packed RGBA as
-Bokeh's ``image_rgba`` draws it.  No web library here."""
+"""Many crossings as one packed RGBA image (docs/architecture.md, "Many crossings in the browser")."""
 from __future__ import annotations
 
 import numpy as np
