@@ -45,7 +45,6 @@ def add_options(s) -> None:
     options.add_model_args(s, None, title=options.SCENE_MODEL_GROUP)
 
 
-#: what the page does, said once for both commands' --help
 PAGE_DESCRIPTION = ("A click on the section starts an orbit whose crossings appear as they are computed (those of "
                     "`explorer orbit` for the same start and settings); the fields set mu, h, lambda, a1, a2, b, "
                     "the method, tol, dt and the crossings per click; the URL keeps the view. Binds 127.0.0.1 "
