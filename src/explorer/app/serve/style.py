@@ -29,7 +29,6 @@ VIEW_MARGIN = 0.08
 MEGNO_LOW, MEGNO_HIGH = 0.0, 8.0
 #: periodic orbits of periods 1..PERIODIC_MAX are marked, filled with the colour of their period
 PERIOD_COLORS = ("#ffffff", "#f4a582", "#92c5de", "#b8e186")
-#: colours of the message under the figure: a refusal or failure, and a success
 MESSAGE_ERROR_COLOR = "#b00020"
 MESSAGE_OK_COLOR = "#1b5e20"
 #: the separatrices: cyan over a dark casing, visible on white and on every colour of the MEGNO layer
