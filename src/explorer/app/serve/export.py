@@ -78,8 +78,7 @@ class Exports:
         return self.scene().to_toml()
 
     def download(self, fmt: str):
-        """The file of a download button: the scene ("toml") or the view ("png", "svg"); empty when it
-        fails, and why said on the message line."""
+        """A download button's file: the scene ("toml") or the view ("png", "svg"); empty, and why said, if it fails."""
         from explorer.app.serve.image import render
 
         try:
