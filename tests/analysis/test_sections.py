@@ -359,19 +359,14 @@ def test_propagate_gives_the_state_at_t_as_scipys_reference_integration_and_from
         sections.propagate(prm, states=y0, t=100.0 * sections.PROPAGATE_CROSSINGS)
 
 
-def test_propagate_refuses_a_system_pointing_to_its_flow_and_iter_crossings_streams_a_system_not_its_map():
+def test_propagate_refuses_a_system_pointing_to_its_flow_and_iter_crossings_of_a_system_needs_its_section():
     """docs/systems.md: a System's states at a time are explorer.flow's; iter_crossings streams a System
-    (tests/analysis/test_system_sections.py) and points a System's map to its System; the refusals come
-    before any integration."""
-    from types import SimpleNamespace
-
+    (tests/analysis/test_system_sections.py) and a System's map
+    (tests/analysis/test_system_section_map.py); the refusals come before any integration."""
     from systems import henon_heiles
 
     hh = henon_heiles()
-    smap = SimpleNamespace(system=hh)   # a System's map, to system_sections.is_system_map
     with pytest.raises(model.ParameterError, match=r"propagate is for Chaplygin's model.*explorer\.flow\(system"):
         sections.propagate(hh, states=[[0.0, 0.1, 0.3, 0.0]], t=1.0)
-    with pytest.raises(model.ParameterError, match=r"iter_crossings of a System's SectionMap: stream its System"):
-        sections.iter_crossings(smap, [[0.1, 0.0]], n_crossings=4)
     with pytest.raises(model.ParameterError, match=r"section is missing"):
         sections.iter_crossings(hh, states=[[0.0, 0.1, 0.3, 0.0]], n_crossings=4)

@@ -91,6 +91,22 @@ def test_crossings_of_the_map_equal_the_flows_crossings_from_the_states_built_by
         ex.crossings(smap, POINTS, n_crossings=3, direction=-1)
 
 
+@pytest.mark.parametrize("system", ["chaplygin", "henon_heiles"])
+def test_a_maps_crossings_streamed_in_blocks_are_its_crossings_rows_bit_for_bit_and_columns_name_a_b_solve(system):
+    if system == "chaplygin":
+        smap, pts, kw = ex.SectionMap(ex.FIGURE4, ex.FIGURE4_H, tol=1e-12), [(0.3, 0.1)], {"direction": -1}
+    else:
+        smap = ex.SectionMap(henon_heiles(), E, section=x, direction=-1, coords=(y, py), solve=px)
+        pts, kw = POINTS[:1], {"tol": smap.tol}
+    one = ex.crossings(smap, pts, n_crossings=12, **kw)
+    blocks = list(ex.iter_crossings(smap, pts, n_crossings=12, block=5, **kw))
+    assert len(blocks) == 3 and np.array_equal(np.concatenate([b.rows(0) for b in blocks]), one.orbit(0))
+    cols = one.orbit(0)[:, list(smap.columns)]                         # (t, a, b, solve, E - E0)
+    if system != "chaplygin":                                           # the map's own iterates at its tol
+        assert np.array_equal(cols[:, 1:3], smap.iterate(pts[0], 12)[1:])
+    assert np.all(cols[:, 3] < 0.0) and np.max(np.abs(cols[:, 4])) < 1e-9   # solve's sign is the direction's
+
+
 def test_analyses_that_do_not_take_a_system_say_so_naming_the_function():
     hh = henon_heiles()
     smap = ex.SectionMap(hh, E, section=x, direction=+1, coords=(y, py), solve=px)

@@ -136,6 +136,8 @@ class SectionMap(FlowSection):
 
     parameters = model.PARAM_NAMES + ("h",)
     periods = (0.0, 0.0)
+    #: the columns (t, p1, p2, M, H - H0) of a row of the map's crossings: (t, a, b, solve, E - E0) of docs/systems.md
+    columns = (0, 1, 2, 3, 4)
 
     @property
     def reflection(self):

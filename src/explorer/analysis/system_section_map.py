@@ -41,7 +41,7 @@ import numpy as np
 from explorer.analysis.map_result import RETURN_TMAX, FlowSection, MapResult
 from explorer.analysis.maps import grid_minima, returns_increments
 from explorer.analysis.symmetry_lines import half_turn_orbit, symmetric_seeds
-from explorer.analysis.system_sections import is_system, linear_section, system_crossings
+from explorer.analysis.system_sections import is_system, iter_system_crossings, linear_section, system_crossings
 from explorer.integrate.methods import MAP_TOL, MAX_TOL, MIN_TOL
 from explorer.kernels import STATUS_NAMES
 from explorer.model import ParameterError, validation
@@ -452,8 +452,7 @@ class SystemSectionMap(FlowSection):
         inside = np.flatnonzero(ok)[lifted]
         if inside.size:
             data, count, _ = self._returns(self._starts(Y[lifted], backward), n, backward, False, threads)
-            cols = [1 + j for j in self._index[:2]]
-            img = data[:, :, cols]
+            img = data[:, :, list(self.columns[1:3])]
             for i in range(len(img)):
                 img[i, count[i]:] = np.nan
             out[inside] = img
@@ -470,8 +469,7 @@ class SystemSectionMap(FlowSection):
         if count[0] < n:
             raise ParameterError(f"section map of {self.system.name} from {tuple(x)}: {int(count[0])} of {n} "
                                  f"returns ({STATUS_NAMES[int(status[0])]})")
-        cols = [1 + j for j in self._index[:2]]
-        return np.vstack([x[None, :], data[0][:, cols]])
+        return np.vstack([x[None, :], data[0][:, list(self.columns[1:3])]])
 
     def lifted_increments(self, starts, center, n, threads=None) -> tuple:
         """The angle increments of the orbits' first ``n`` returns around ``center``: the returns' own
@@ -684,10 +682,28 @@ class SystemSectionMap(FlowSection):
         raise ParameterError(f"{what} needs a reversor of the map: {self.system.name} {why}")
 
     # ------------------------------------------------------------------ crossings
+    @property
+    def columns(self) -> tuple:
+        """The columns (t, a, b, solve, E - E0) of a row of the map's crossings (t, state, E - E0)."""
+        return (0, *(1 + i for i in self._index[:3]), -1)
+
     def crossings(self, points, *, n_crossings: int, section=None, **kw):
         """The arguments of the Crossings of the orbits from ``points``: the System's crossings of
         this map's section and direction from :meth:`states`; settings add the energy, coords and
         solve."""
+        out = system_crossings(**self._crossing_args(points, n_crossings, section, kw))
+        settings = dict(out[-1], energy=self.energy_value, coords=[s.name for s in self.coords],
+                        solve=self.solve.name)
+        return (*out[:-1], settings)
+
+    def iter_crossings(self, points, *, n_crossings: int, section=None, **kw):
+        """:meth:`crossings` in blocks (``explorer.iter_crossings(smap, points, n_crossings=K, block=...)``):
+        the System's stream (:func:`~explorer.analysis.system_sections.iter_system_crossings`), the same rows."""
+        return iter_system_crossings(**self._crossing_args(points, n_crossings, section, kw))
+
+    def _crossing_args(self, points, n_crossings, section, kw) -> dict:
+        """The System's crossings' arguments for the orbits from ``points``: this map's section and direction,
+        the states from :meth:`states`."""
         if kw.get("backward"):
             raise ParameterError("crossings of a SectionMap: backward= is not for a map; its preimages are "
                                  "smap.images(points, n, backward=True)")
@@ -696,8 +712,5 @@ class SystemSectionMap(FlowSection):
                      or k in kw]
             raise ParameterError(f"crossings of a SectionMap: {', '.join(given)} belong(s) to the map (or are its "
                                  "points); do not give them beside it")
-        out = system_crossings(self.system, self.states(points), n_crossings=n_crossings,
-                               section=self.section.expr, direction=self.direction, **kw)
-        settings = dict(out[-1], energy=self.energy_value, coords=[s.name for s in self.coords],
-                        solve=self.solve.name)
-        return (*out[:-1], settings)
+        return dict(kw, system=self.system, states=self.states(points), n_crossings=n_crossings,
+                    section=self.section.expr, direction=self.direction)

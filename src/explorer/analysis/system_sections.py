@@ -71,8 +71,9 @@ def refuse_a_system(name: str, obj) -> None:
 def or_a_system(fn, result=None):
     """``fn`` (the engine's crossings) with a System path: a System as first argument goes to
     :func:`system_crossings`, its arrays made into ``result`` (the Crossings type), or with
-    ``result`` None (``fn`` streams) to :func:`iter_system_crossings`; ``section=`` is added to the
-    signature and refused for the engine's model."""
+    ``result`` None (``fn`` streams) to :func:`iter_system_crossings`; a System's map to its own
+    ``crossings`` / ``iter_crossings``; ``section=`` is added to the signature and refused for the
+    engine's model."""
 
     @functools.wraps(fn)
     def call(system, *args, section=None, **kw):
@@ -82,9 +83,7 @@ def or_a_system(fn, result=None):
             return result(*system_crossings(system, *args, section=section, **kw))
         if is_system_map(system):   # its points lifted to states, its section and direction
             if result is None:
-                raise ParameterError(f"{fn.__name__} of a System's SectionMap: stream its System, "
-                                     f"{fn.__name__}(smap.system, states=smap.states(points), section=..., "
-                                     "direction=...), or take explorer.crossings(smap, points, n_crossings=...)")
+                return system.iter_crossings(*args, section=section, **kw)
             return result(*system.crossings(*args, section=section, **kw))
         if section is not None:
             raise ParameterError("section= is the hyperplane EXPR = 0 of a System (docs/systems.md); the section of "

@@ -54,8 +54,11 @@ class PageSettings:
     on another map."""
 
     smap: Any                      # the section map the page shows
+    tol: float                     # the tolerance of the page's orbits
+    crossings: int                 # crossings per click
     on: Any                        # (smap, **values) -> these settings on ``smap`` with ``values``
     indicators: Any                # (p1, p2, time, max_steps, which) -> lyapunov.indicators' result or None
+    stream_kwargs: Any             # () -> the integration keywords of stream, beside the map at tol
     own_fields: tuple = ("tol", "crossings")
 
     @property
@@ -109,6 +112,14 @@ class PageSettings:
 
     def admissible(self, p1: float, p2: float) -> bool:
         return self.refusal(p1, p2) is None
+
+    def stream(self, p1: float, p2: float, state, block: int, max_steps: int):
+        """Blocks (rows (n, 5): t, a, b, solve, E - E0; the stream's state) of the orbit from (p1, p2), on from
+        ``state`` (None: its start): :func:`explorer.analysis.sections.iter_crossings` of the map at ``tol``."""
+        s = self.section_map(self.tol)
+        return ((b.rows(0)[:, list(s.columns)], b.state) for b in sections.iter_crossings(
+            s, [(p1, p2)], n_crossings=self.crossings, block=block, state=state, max_steps=max_steps,
+            **self.stream_kwargs()))
 
     def section_map(self, tol=None):
         """The page's map (at ``tol``: :meth:`with_tol`) that its searches ask (fixed points, manifolds,
@@ -183,13 +194,9 @@ class Settings(PageSettings, sections.Integration):
         return lyapunov.indicators(self.params, states=y0, tmax=time, method=self.method, tol=self.tol, dt=self.dt,
                                    which=which, max_steps=max_steps)
 
-    def stream(self, p1: float, p2: float, state, block: int, max_steps: int):
-        """Blocks (rows (n, 5): t, p1, p2, M, H - H0; the stream's state) of the orbit from (p1, p2), on from
-        ``state`` (None: its start): :func:`explorer.analysis.sections.iter_crossings`."""
-        y0 = model.section_state(self.params, [p1], [p2], self.h, self.phi0, self.direction or 1)
-        return ((b.rows(0), b.state) for b in sections.iter_crossings(
-            self.params, states=y0, n_crossings=self.crossings, block=block, state=state, max_steps=max_steps,
-            **self.section_kwargs()))
+    def stream_kwargs(self) -> dict:
+        """:meth:`stream`'s integration: the method, its step and the crossing direction."""
+        return {"method": self.method, "dt": self.dt, "direction": self.direction}
 
     def seed_starts(self, seeds) -> list:
         """The starts [(p1, p2), ...] ``explorer sweep`` runs for ``seeds`` (None: a scene's default) here."""
@@ -259,14 +266,9 @@ class SystemSettings(PageSettings):
         return lyapunov.indicators(self.smap, np.column_stack([p1, p2]), tmax=time, tol=self.tol,
                                    max_steps=max_steps, which=which)
 
-    def stream(self, p1: float, p2: float, state, block: int, max_steps: int):
-        """Settings.stream of the map's orbit from (p1, p2): rows (t, a, b, solve, E - E0)."""
-        s = self.smap
-        cols = [0, *(1 + s.system.states.index(v) for v in (*s.coords, s.solve)), -1]
-        return ((b.rows(0)[:, cols], b.state) for b in sections.iter_crossings(
-            s.system, states=s.states([(p1, p2)]), n_crossings=self.crossings, section=s.section.expr,
-            direction=s.direction, tol=self.tol, tmax=s.tmax * self.crossings, max_steps=max_steps, block=block,
-            state=state, threads=1))
+    def stream_kwargs(self) -> dict:
+        """:meth:`stream`'s integration: ``tol`` and the map's return budget for each crossing, on this thread."""
+        return {"tol": self.tol, "tmax": self.smap.tmax * self.crossings, "threads": 1}
 
     def seed_starts(self, seeds) -> list:
         """The scene's ``[seeds]`` on the map's domain (default: a grid of 100 over the region box)."""
