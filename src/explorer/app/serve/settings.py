@@ -98,6 +98,11 @@ class PageSettings:
             return str(exc)
         return ""
 
+    def region_mask(self):
+        """The map's domain on a REGION_CELLS^2 grid of the :attr:`region` box (rows: the second coordinate)."""
+        c1, c2, r1, r2 = self.region
+        return self.allowed(*Window(c1 - r1, c1 + r1, c2 - r2, c2 + r2).centres(REGION_CELLS))
+
     def allowed(self, p1, p2) -> np.ndarray:
         """Mask of the points in the map's domain."""
         return self.smap.allowed(np.stack([np.asarray(p1, float), np.asarray(p2, float)], axis=-1))
@@ -175,7 +180,7 @@ class Settings(PageSettings, sections.Integration):
         return replace(self, params=smap.params, h=smap.h, **values)
 
     def region_mask(self):
-        """None: the region is the ellipse in closed form (docs/model.md R9)."""
+        """None: the region is the ellipse, drawn in closed form (docs/model.md R9)."""
         return None
 
     def describe(self) -> str:
@@ -254,11 +259,6 @@ class SystemSettings(PageSettings):
     def title(self) -> str:
         s = self.smap
         return f"Poincaré section {s.section.expr} = 0 ({s.direction:+d}) of {s.system.name}, {s.solve.name} from E"
-
-    def region_mask(self):
-        """The map's domain on a REGION_CELLS^2 grid of the :attr:`region` box (rows: the second coordinate)."""
-        c1, c2, r1, r2 = self.region
-        return self.allowed(*Window(c1 - r1, c1 + r1, c2 - r2, c2 + r2).centres(REGION_CELLS))
 
     def indicators(self, p1, p2, time: float, max_steps: int, which):
         from explorer.analysis import lyapunov
