@@ -57,7 +57,7 @@ class PageSettings:
     tol: float                     # the tolerance of the page's orbits
     crossings: int                 # crossings per click
     on: Any                        # (smap, **values) -> these settings on ``smap`` with ``values``
-    indicators: Any                # (p1, p2, time, max_steps, which) -> lyapunov.indicators' result or None
+    indicator_run: Any             # (points) -> (system, keywords) of lyapunov.indicators for orbits from points
     stream_kwargs: Any             # () -> the integration keywords of stream, beside the map at tol
     own_fields: tuple = ("tol", "crossings")
 
@@ -132,9 +132,16 @@ class PageSettings:
         return self.smap if tol is None else self.smap.with_tol(tol)
 
     def megno(self, p1, p2, time: float, max_steps: int, mlce: bool = False):
-        """<Y>(time) (and the mLCE with ``mlce``) of the orbits from (p1, p2), NaN where a run stops early."""
-        res = self.indicators(np.ravel(p1), np.ravel(p2), time, max_steps, ("megno", "mlce") if mlce else ("megno",))
-        ok = np.zeros(np.size(p1), bool) if res is None else np.asarray(res.status) == 0
+        """<Y>(time) (and the mLCE with ``mlce``) of the orbits from (p1, p2) (lyapunov.indicators of
+        :meth:`indicator_run`), NaN where a run stops early or a fixed step would take over ``max_steps``."""
+        from explorer.analysis import lyapunov
+
+        ok, res = np.zeros(np.size(p1), bool), None
+        if self.adaptive or time / self.dt <= max_steps:
+            system, kw = self.indicator_run(np.column_stack([np.ravel(p1), np.ravel(p2)]))
+            res = lyapunov.indicators(system, tmax=time, max_steps=max_steps,
+                                      which=("megno", "mlce") if mlce else ("megno",), **kw)
+            ok = np.asarray(res.status) == 0
 
         def of(name):
             return np.where(ok, np.asarray(getattr(res, name, np.nan), dtype=np.float64), np.nan).reshape(np.shape(p1))
@@ -189,15 +196,10 @@ class Settings(PageSettings, sections.Integration):
     def title(self) -> str:
         return f"Poincaré section φ = {'π' if self.phi0 == math.pi else f'{self.phi0:.6g}'}"
 
-    def indicators(self, p1, p2, time: float, max_steps: int, which):
-        """lyapunov.indicators of the orbits from (p1, p2); None when a fixed step would take over ``max_steps``."""
-        from explorer.analysis import lyapunov
-
-        if not self.adaptive and time / self.dt > max_steps:
-            return None
-        y0 = model.section_state(self.params, p1, p2, self.h, self.phi0, self.direction or 1)
-        return lyapunov.indicators(self.params, states=y0, tmax=time, method=self.method, tol=self.tol, dt=self.dt,
-                                   which=which, max_steps=max_steps)
+    def indicator_run(self, points) -> tuple:
+        """The flow from the points' states on the page's crossing direction, with its integration."""
+        states = self.smap.states(points, self.direction)
+        return self.params, {"states": states, "method": self.method, "tol": self.tol, "dt": self.dt}
 
     def stream_kwargs(self) -> dict:
         """:meth:`stream`'s integration: the method, its step and the crossing direction."""
@@ -260,11 +262,9 @@ class SystemSettings(PageSettings):
         s = self.smap
         return f"Poincaré section {s.section.expr} = 0 ({s.direction:+d}) of {s.system.name}, {s.solve.name} from E"
 
-    def indicators(self, p1, p2, time: float, max_steps: int, which):
-        from explorer.analysis import lyapunov
-
-        return lyapunov.indicators(self.smap, np.column_stack([p1, p2]), tmax=time, tol=self.tol,
-                                   max_steps=max_steps, which=which)
+    def indicator_run(self, points) -> tuple:
+        """The map's points, at ``tol``."""
+        return self.smap, {"y0": points, "tol": self.tol}
 
     def stream_kwargs(self) -> dict:
         """:meth:`stream`'s integration: ``tol`` and the map's return budget for each crossing, on this thread."""
