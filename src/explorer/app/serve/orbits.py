@@ -65,12 +65,17 @@ class OrbitRun:
     step_rate: float = 0.0
     turn: int = 0                  # when its last block was handed out (round robin)
     sent: int = 0                  # its rows in the browser (the page's)
+    indicators: tuple | None = None   # (mean MEGNO, mLCE) over INDICATOR_TIME, once known
     rows: np.ndarray = field(default_factory=lambda: np.zeros((0, 5)))
 
     @property
     def colour(self) -> int:
         """Its index in COLORS: the orbits take them in turn."""
         return (self.ident - 1) % len(COLORS)
+
+    @property
+    def megno(self) -> float:
+        return self.indicators[0] if self.indicators else math.nan
 
     @property
     def finished(self) -> bool:
@@ -199,7 +204,8 @@ class Worker:
         if n >= k:
             run.status = "done" if n > k or end == "running" else end
         elif end == STATUS_NAMES[STATUS_TMAX]:     # (its time budget, 100 K, grows)
-            return OrbitRun(run.ident, run.p1, run.p2, settings, paused=run.paused)
+            return OrbitRun(run.ident, run.p1, run.p2, settings, paused=run.paused,
+                            wants_indicators=run.wants_indicators, indicators=run.indicators)
         else:
             run.status = end if end not in ("running", "done") else "running"
             if run.status == "running" and run.finished:

@@ -39,7 +39,6 @@ class OrbitsLayer:
     def __init__(self, host, view, session):
         self.host, self.view, self.session = host, view, session
         self._unmarked: set = set()            # the starts whose cross waits for their first crossings
-        self.indicators: dict = {}             # orbit id -> (mean MEGNO, mLCE) over INDICATOR_TIME
         self.hidden: set = set()
         self.on_status = lambda: None          # called after every update of the status line
         self._flushed_at = -math.inf           # when the last flush ran (monotonic)
@@ -71,7 +70,7 @@ class OrbitsLayer:
         parts = [r.rows[r.sent if unsent else 0:r.done] for r in runs]
         n = [len(rows) for rows in parts]
         each = {"orbit": [r.ident for r in runs], "c": [r.colour for r in runs],
-                "megno": [self.indicators.get(r.ident, (math.nan,))[0] for r in runs]}
+                "megno": [r.megno for r in runs]}
         out = {}
         for k in keys:
             if k in ROW_COLUMNS:
@@ -135,7 +134,7 @@ class OrbitsLayer:
         old = self.starts
         self.worker.cancel()
         self.flush_timer.cancel()
-        self.indicators, self.hidden = {}, set()
+        self.hidden = set()
         self.show_all()
         self._draw_starts(mark=True)
         return old
@@ -143,7 +142,6 @@ class OrbitsLayer:
     def remove(self, ident: int) -> None:
         """Stop orbit ``ident`` (running or paused) and take it off the page."""
         self.runs.pop(ident, None)
-        self.indicators.pop(ident, None)
         self.hidden.discard(ident)
         self.show_all()
         self._draw_starts()
@@ -167,6 +165,11 @@ class OrbitsLayer:
         """running, paused, done, or why the orbit stopped."""
         run = self.runs[ident]
         return "paused" if run.paused and run.status == "running" else run.status
+
+    @property
+    def indicators(self) -> dict:
+        """{orbit id: (mean MEGNO, mLCE)} of the orbits whose indicators are known."""
+        return {i: r.indicators for i, r in self.runs.items() if r.indicators}
 
     @property
     def running(self) -> set:
@@ -244,10 +247,10 @@ class OrbitsLayer:
         text = (f"{len(self.starts)} orbit(s), {running} running, "
                 + (f"{paused} paused (Resume continues them), " if paused else "") + f"{n} crossings drawn"
                 + (" (as a density image)" if density.dense else "") + "; " + s.describe())
-        known = [i for i, *_ in self.starts if i in self.indicators]
+        known = [r for r in self.runs.values() if r.indicators]
         if known:
-            megno, mlce = self.indicators[known[-1]]
-            text += (f"; orbit {known[-1]}: <Y> = {megno:.3g}, mLCE = {mlce:.3g} over t <= {INDICATOR_TIME:g}"
+            megno, mlce = known[-1].indicators
+            text += (f"; orbit {known[-1].ident}: <Y> = {megno:.3g}, mLCE = {mlce:.3g} over t <= {INDICATOR_TIME:g}"
                      f" ({style.megno_kind(megno)})")
         self.status.text = text
         self.on_status()
@@ -256,7 +259,7 @@ class OrbitsLayer:
     def _on_indicators(self, ident, megno, mlce):
         if ident not in self.runs:
             return
-        self.indicators[ident] = (megno, mlce)
+        self.runs[ident].indicators = (megno, mlce)
         for src in (self.shown, self.live):        # the browser's rows streamed before the indicator was known
             rows = np.flatnonzero(np.asarray(src.data["orbit"]) == ident)
             if rows.size:
@@ -282,8 +285,7 @@ class OrbitsLayer:
     def view_fields(self) -> dict:
         """Its part of the exported view (image.View): the orbits shown (hidden ones left out), their starts."""
         visible = [r for r in self.runs.values() if r.ident not in self.hidden]
-        megno = [self.indicators.get(r.ident, (math.nan,))[0] for r in visible]
-        return {"orbits": [(r.ident, COLORS[r.colour], r.rows[:r.done, 1:3], m) for r, m in zip(visible, megno)],
+        return {"orbits": [(r.ident, COLORS[r.colour], r.rows[:r.done, 1:3], r.megno) for r in visible],
                 "starts": [(r.p1, r.p2, COLORS[r.colour]) for r in visible], "by_megno": bool(self.colour_box.value)}
 
     def case_dots(self, on: bool) -> None:
