@@ -66,6 +66,7 @@ class OrbitRun:
     turn: int = 0                  # when its last block was handed out (round robin)
     sent: int = 0                  # its rows in the browser (the page's)
     indicators: tuple | None = None   # (mean MEGNO, mLCE) over INDICATOR_TIME, once known
+    readout: tuple | None = None      # (values, text) of overlays.orbit_readout once picked (the orbit list's)
     rows: np.ndarray = field(default_factory=lambda: np.zeros((0, 5)))
 
     @property
@@ -205,7 +206,7 @@ class Worker:
             run.status = "done" if n > k or end == "running" else end
         elif end == STATUS_NAMES[STATUS_TMAX]:     # (its time budget, 100 K, grows)
             return OrbitRun(run.ident, run.p1, run.p2, settings, paused=run.paused,
-                            wants_indicators=run.wants_indicators, indicators=run.indicators)
+                            wants_indicators=run.wants_indicators, indicators=run.indicators, readout=run.readout)
         else:
             run.status = end if end not in ("running", "done") else "running"
             if run.status == "running" and run.finished:

@@ -46,7 +46,6 @@ class OrbitList:
         self.settings, self.say, self.on_changed = settings, say, on_changed
         self.text = Div(name="readout", text="", render_as_text=True, styles={"font-family": "monospace"})
         self.picked: int | None = None          # the orbit whose readout is shown
-        self.readouts: dict = {}                # orbit id -> (values, readout text) of search.orbit_readout
         self.filter = GroupFilter(name="selected-orbit", column_name="orbit", group=0)   # the highlighted rows
         self.table = Div(name="orbit-list", text="", styles={"max-height": LIST_MAX_HEIGHT, "overflow-y": "auto"},
                          width=LIST_WIDTH)
@@ -170,7 +169,7 @@ class OrbitList:
 
     def select(self, ident) -> None:
         """Select orbit ``ident`` (None, or not an orbit of the page: none) and show its readout (computed once
-        per orbit and settings, the latest pick; a readout stays known until :meth:`forget`)."""
+        per orbit and settings, the latest pick; it stays on the orbit's run)."""
         run = self.orbits.runs.get(ident)
         start = None if run is None else (run.p1, run.p2)
         self.session.cancel("readout")
@@ -180,27 +179,28 @@ class OrbitList:
             self.text.text = ""
             return
         self.say("")
-        if ident in self.readouts:
-            self.text.text = self.readouts[ident][1]
+        if run.readout:
+            self.text.text = run.readout[1]
             return
         self.text.text = f"orbit {ident} from ({start[0]:.6g}, {start[1]:.6g}): computing mLCE, MEGNO, rotation ..."
         self.session.start("readout", show_search(self.session, "readout", partial(self._keep, ident, start),
                                                   search.orbit_readout, self.settings(), start),
                            budget=search.search_budget(search.READOUT_SECONDS))
 
+    @property
+    def readouts(self) -> dict:
+        """{orbit id: (values, text)} of the orbits whose readout is known."""
+        return {i: r.readout for i, r in self.orbits.runs.items() if r.readout}
+
     def forget(self, ident: int | None = None) -> None:
-        """Drop the readout of orbit ``ident`` (None: of every orbit) and stop computing it."""
-        if ident is None:
-            self.readouts = {}
-        else:
-            self.readouts.pop(ident, None)
+        """Before orbit ``ident`` (None: every orbit) leaves: stop computing its readout, unselect it."""
         if ident is None or self.picked == ident:
             self.select(None)
 
     def _keep(self, ident, start, values, text):
-        if ident in self.orbits.runs:           # (not when the orbit went meanwhile)
-            self.readouts[ident] = (values, f"orbit {ident} from ({start[0]:.6g}, {start[1]:.6g}): {text}")
-            self.text.text = self.readouts[ident][1]
+        if (run := self.orbits.runs.get(ident)) is not None:      # (not when the orbit went meanwhile)
+            run.readout = (values, f"orbit {ident} from ({start[0]:.6g}, {start[1]:.6g}): {text}")
+            self.text.text = run.readout[1]
 
 
 def _table(orbits, picked) -> str:
