@@ -4,7 +4,6 @@ link, and routes clicks, buttons and values to the components."""
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import replace
 from urllib.parse import urlencode
 
@@ -27,8 +26,6 @@ from explorer.model import ParameterError
 
 #: a double tap within this many pixels of the click before it is that click again
 SAME_SPOT_PX = 4.0
-#: a zoom or pan reaches the link this long after the view stopped moving (s): one update per gesture
-URL_DELAY_SECONDS = 0.5
 #: what a click does: the choices of the page's switch (Shift + click always picks)
 CLICK_MODES = ("start an orbit", "pick an orbit")
 #: a served page's address: the text of its ``link`` as the query, the token kept, replacing the
@@ -68,8 +65,7 @@ class SectionPage:
         # each reads and writes its own link arguments (load_url, url_query), in this order
         self.link_parts = (self.section, self.chaos, self.overlays, self.orbits, self.orbit_list)
         self.exports = export.Exports(self.session, export_dir, self.scene, self.view, self.say)
-        self._url_timer = self.session.timer(self.push_url)
-        self.section.on_window(lambda: self._url_timer.at(time.monotonic() + URL_DELAY_SECONDS))
+        self.section.on_window(self.push_url)       # (the browser sends one window per zoom or pan: view.py)
         for draw in (self.chaos.draw, self.overlays.draw_lines, self.density_image.draw, self.orbits.draw,
                      self.orbit_list.draw, self.overlays.draw_marks):      # (bottom to top)
             draw(fig)
@@ -153,7 +149,6 @@ class SectionPage:
 
     def push_url(self):
         """The link anew: ``link``'s text, the address's query on a served page (WRITE_LINK)."""
-        self._url_timer.cancel()
         self.link.text = urlencode(self.url_query())
 
     def overlays_on(self) -> tuple:
@@ -257,9 +252,6 @@ class SectionPage:
         full = settings_mod.room_for(len(self.orbits.starts) + 1, self.settings.crossings)
         if full:
             self.say(full)
-            return None
-        if self.settings.region is None:
-            self.say("nothing to do: the allowed region is empty at this energy")
             return None
         why = self.settings.refusal(p1, p2)
         if why is not None:
