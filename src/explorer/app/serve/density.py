@@ -18,16 +18,14 @@ def _rgb(colour: str) -> tuple:
     return int(c[0:2], 16), int(c[2:4], 16), int(c[4:6], 16)
 
 
-def glyph_cutoff(orbit, budget: int = GLYPH_BUDGET) -> int:
-    """The first orbit id drawn as glyphs, given every crossing's orbit id: the newest whole orbits within
-    ``budget`` crossings (0: every one fits)."""
-    ids = np.asarray(orbit, np.int64)
-    if ids.size <= budget:
+def glyph_cutoff(counts: dict, budget: int = GLYPH_BUDGET) -> int:
+    """The first orbit id drawn as glyphs, given {orbit id: crossings} in ascending ids: the newest whole orbits
+    within ``budget`` crossings (0: every one fits)."""
+    ids, n = list(counts), np.fromiter(counts.values(), np.int64, len(counts))
+    if n.sum() <= budget:
         return 0
-    count = np.bincount(ids)
-    from_here = np.cumsum(count[::-1])[::-1]          # crossings of the orbits with id >= k
-    fits = np.flatnonzero(from_here <= budget)
-    return int(fits[0]) if fits.size else len(count)
+    fits = np.flatnonzero(np.cumsum(n[::-1])[::-1] <= budget)     # the orbits from each on fit
+    return ids[fits[0]] if fits.size else ids[-1] + 1
 
 
 def density_rgba(p1, p2, colour_index, window, nx: int, ny: int, colors, megno=None, palette=None,

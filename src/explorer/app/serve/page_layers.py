@@ -155,9 +155,9 @@ class DensityImage:
         """Redraw the image of the crossings that are not dots: at most every DENSITY_SECONDS while orbits
         stream in, at once when ``force`` or orbits move between dots and image, never unchanged."""
         orbits = self.orbits
-        orbit = orbits.columns(keys=("orbit",))["orbit"]
-        dense = len(orbit) > density.THRESHOLD
-        first = 0 if dense else density.glyph_cutoff(orbit)
+        counts = {r.ident: r.done for r in orbits.runs.values() if r.ident not in orbits.hidden}
+        dense = sum(counts.values()) > density.THRESHOLD
+        first = 0 if dense else density.glyph_cutoff(counts)
         force = force or (dense, first) != (self.dense, self.glyph_first)
         if dense != self.dense:
             self.dense = dense
@@ -165,9 +165,8 @@ class DensityImage:
             orbits.show_all()
         self.glyph_first = first
         orbits.glyph_filter.args = {"first": first}
-        older = orbit < first
-        rows = slice(None) if dense else older          # the image's: every row, or the older orbits'
-        n = len(orbit) if dense else int(np.count_nonzero(older))
+        imaged = [orbits.runs[i] for i in counts if dense or i < first]      # every orbit, or the older ones
+        n = sum(r.done for r in imaged)
         w = self.view.window
         if not n or w is None:
             if not n and self.density.data["image"]:
@@ -182,7 +181,7 @@ class DensityImage:
         if key == self._key or not force and time.monotonic() - self._at < DENSITY_SECONDS:
             return
         self._at, self._key = time.monotonic(), key
-        p1, p2, c, megno = (v[rows] for v in orbits.columns(keys=("p1", "p2", "c", "megno")).values())
+        p1, p2, c, megno = orbits.columns(imaged, keys=("p1", "p2", "c", "megno")).values()
         image = density.density_rgba(p1, p2, c, (w.x0, w.x1, w.y0, w.y1), nx, ny, COLORS,
                                      megno=megno if by_megno else None, palette=megno_palette(MEGNO_ORBIT_SKIP),
                                      lo=MEGNO_LOW, hi=MEGNO_HIGH)
