@@ -181,18 +181,15 @@ class SectionPage:
             self.say(f"not applied: {exc}")
             return
         self.say("")
-        self.fields.show(self.settings)   # (a refused text in another field goes: the fields show what applies)
         self.apply(new)
 
     def apply(self, new: Settings) -> None:
         """New settings: the starts inside the new region run again, under their ids; a new crossings per click
-        alone cuts or continues each orbit (OrbitsLayer.recount)."""
-        if new == self.settings:
-            return
+        alone cuts or continues each orbit (OrbitsLayer.recount); the fields show what applies."""
         if new.crossings != self.settings.crossings and replace(self.settings, crossings=new.crossings) == new:
             self.settings = new           # (only the crossings per click: each orbit is cut or continues)
             self.orbits.recount(new)
-        else:
+        elif new != self.settings:
             hidden = set(self.orbits.hidden)
             self.orbit_list.forget()
             old = self.orbits.drop_all()
