@@ -315,3 +315,19 @@ def test_in_the_browser_a_hidden_orbit_stays_hidden_after_a_reload(served, brows
         assert f">{SERVED.crossings}</td>" in seen["list"]
     finally:
         page.close()
+
+
+def test_a_readout_that_arrives_while_a_block_computes_stays_on_its_orbit():
+    """The worker hands a block computed on a copy of the run back to the run: a readout the page kept on the
+    run meanwhile (OrbitList._keep) is not overwritten by the copy's."""
+    import copy
+
+    from explorer.app.serve.orbits import OrbitRun, Worker
+
+    worker = Worker(None, lambda *_a: None)
+    run = worker.runs[1] = OrbitRun(1, 0.3, 0.1, settings=None)
+    work = copy.copy(run)                               # the block's copy, taken before the readout came
+    run.readout = ({"megno": 2.0}, "orbit 1 from (0.3, 0.1): ...")
+    work.done = 3
+    worker._hand_out(run, work, np.zeros((0, 5)), None)
+    assert run.done == 3 and run.readout == ({"megno": 2.0}, "orbit 1 from (0.3, 0.1): ...")

@@ -281,7 +281,8 @@ class Worker:
         if not self._queued(run) or work.settings is not run.settings:   # removed or recounted meanwhile
             return
         self._turn += 1
-        run.__dict__.update(work.__dict__, paused=run.paused, sent=run.sent, turn=self._turn)   # (set meanwhile)
+        run.__dict__.update(work.__dict__, paused=run.paused, sent=run.sent, readout=run.readout,   # (set meanwhile)
+                            turn=self._turn)
         if notice is not None:
             self._on_notice(run.ident, notice)
         if len(rows) or run.finished:   # (a block cut at its steps before a crossing: nothing to show)
