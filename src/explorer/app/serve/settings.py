@@ -56,6 +56,8 @@ class PageSettings:
     smap: Any                      # the section map the page shows
     tol: float                     # the tolerance of the page's orbits
     crossings: int                 # crossings per click
+    adaptive: bool                 # the step is adaptive (else fixed, ``dt``)
+    dt: float
     on: Any                        # (smap, **values) -> these settings on ``smap`` with ``values``
     indicator_run: Any             # (points) -> (system, keywords) of lyapunov.indicators for orbits from points
     stream_kwargs: Any             # () -> the integration keywords of stream, beside the map at tol
