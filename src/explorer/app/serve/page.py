@@ -228,14 +228,13 @@ class SectionPage:
         except ParameterError as exc:
             self.say(f"scene seeds: {exc}")
             return 0
-        n = 0
+        n, why = 0, None
         for p1, p2 in starts:
-            if settings_mod.room_for(len(self.orbits.starts) + 1, self.settings.crossings):
+            if why := settings_mod.room_for(len(self.orbits.starts) + 1, self.settings.crossings):
                 break
             n += self.orbits.start(p1, p2, quiet=True) is not None
         self.orbits.mark_starts()                # (once for all: not a status line and list per seed)
         if n < len(starts):
-            why = settings_mod.room_for(len(self.orbits.starts) + 1, self.settings.crossings)
             self.say(f"scene seeds: {n} of {len(starts)} started ({why})")
         else:
             self.say(f"scene seeds: {n} orbits started", ok=True)
