@@ -59,7 +59,6 @@ class PageSettings:
     adaptive: bool                 # the step is adaptive (else fixed, ``dt``)
     dt: float
     on: Any                        # (smap, **values) -> these settings on ``smap`` with ``values``
-    indicator_run: Any             # (points) -> (system, keywords) of lyapunov.indicators for orbits from points
     stream_kwargs: Any             # () -> the integration keywords of stream, beside the map at tol
     own_fields: tuple = ("tol", "crossings")
 
@@ -132,6 +131,10 @@ class PageSettings:
         """The page's map (at ``tol``: :meth:`with_tol`) that its searches ask (fixed points, manifolds,
         rotation numbers)."""
         return self.smap if tol is None else self.smap.with_tol(tol)
+
+    def indicator_run(self, points) -> tuple:
+        """(system, keywords) of lyapunov.indicators for the orbits from ``points``: the map's points at ``tol``."""
+        return self.smap, {"y0": points, "tol": self.tol}
 
     def megno(self, p1, p2, time: float, max_steps: int, mlce: bool = False):
         """<Y>(time) (and the mLCE with ``mlce``) of the orbits from (p1, p2) (lyapunov.indicators of
@@ -263,10 +266,6 @@ class SystemSettings(PageSettings):
     def title(self) -> str:
         s = self.smap
         return f"Poincaré section {s.section.expr} = 0 ({s.direction:+d}) of {s.system.name}, {s.solve.name} from E"
-
-    def indicator_run(self, points) -> tuple:
-        """The map's points, at ``tol``."""
-        return self.smap, {"y0": points, "tol": self.tol}
 
     def stream_kwargs(self) -> dict:
         """:meth:`stream`'s integration: ``tol`` and the map's return budget for each crossing, on this thread."""
