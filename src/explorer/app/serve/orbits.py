@@ -75,6 +75,11 @@ class OrbitRun:
         return (self.ident - 1) % len(COLORS)
 
     @property
+    def phase(self) -> str:
+        """running, paused (set aside while running), done, or why it stopped."""
+        return "paused" if self.paused and self.status == "running" else self.status
+
+    @property
     def megno(self) -> float:
         return self.indicators[0] if self.indicators else math.nan
 
@@ -221,15 +226,15 @@ class Worker:
 
     def resume(self) -> list[int]:
         """Queue the paused orbits again; returns their ids."""
-        moved = [r for r in self.runs.values() if r.paused]
-        for r in moved:
+        moved = self.paused()
+        for r in self.runs.values():
             r.paused = False
         self._ensure_running()
-        return [r.ident for r in moved if r.status == "running"]
+        return moved
 
     def paused(self) -> list[int]:
         """The ids of the paused orbits."""
-        return [r.ident for r in self.runs.values() if r.paused and r.status == "running"]
+        return [r.ident for r in self.runs.values() if r.phase == "paused"]
 
     def _estimate(self, run: OrbitRun) -> str | None:
         """(In the executor) the notice of an orbit expected to take more than STEP_BUDGET steps."""

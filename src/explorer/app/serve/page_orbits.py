@@ -163,8 +163,7 @@ class OrbitsLayer:
 
     def state(self, ident: int) -> str:
         """running, paused, done, or why the orbit stopped."""
-        run = self.runs[ident]
-        return "paused" if run.paused and run.status == "running" else run.status
+        return self.runs[ident].phase
 
     @property
     def indicators(self) -> dict:
