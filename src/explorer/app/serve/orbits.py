@@ -67,6 +67,7 @@ class OrbitRun:
     sent: int = 0                  # its rows in the browser (the page's)
     indicators: tuple | None = None   # (mean MEGNO, mLCE) over INDICATOR_TIME, once known
     readout: tuple | None = None      # (values, text) of overlays.orbit_readout once picked (the orbit list's)
+    marked: bool = True               # its start's cross is drawn before its first crossings (the page's)
     rows: np.ndarray = field(default_factory=lambda: np.zeros((0, 5)))
 
     @property

@@ -38,13 +38,13 @@ class OrbitsLayer:
 
     def __init__(self, host, view, session):
         self.host, self.view, self.session = host, view, session
-        self._unmarked: set = set()            # the starts whose cross waits for their first crossings
         self.hidden: set = set()
         self.on_status = lambda: None          # called after every update of the status line
         self._flushed_at = -math.inf           # when the last flush ran (monotonic)
         self._settle_at = -math.inf            # the flush due then moves the live rows
         self.flush_timer = session.timer(lambda: self._flush())   # (looked up when due: tests trace it)
-        self.worker = Worker(session, self._on_block, self._on_error, self._on_indicators, on_notice=self._on_notice)
+        self.worker = Worker(session, self._on_block, self._on_error, self._on_indicators,
+                             on_notice=lambda _i, text: host.say(text))
         self.runs = self.worker.runs
         # what the browser draws; a click's first rows (lists: one JSON frame)
         self.shown = ColumnDataSource(self.columns([]), name="crossings")
@@ -110,21 +110,21 @@ class OrbitsLayer:
         if not settings.admissible(p1, p2):
             return None
         run = self.worker.submit(p1, p2, settings, ident)
-        self._unmarked.add(run.ident)
-        if not quiet and (not mark_later or self.session.doc is None):
+        run.marked = not mark_later or self.session.doc is None
+        if run.marked and not quiet:
             self.mark_starts()               # (else with the first crossings, in their flush)
         return run
 
     def mark_starts(self) -> None:
-        """Mark the starts not marked yet, and the status line (and the orbit list) anew."""
-        self._draw_starts(mark=True)
+        """The starts' crosses and the status line (and the orbit list) anew."""
+        self._draw_starts()
         self.update_status()
 
-    def _draw_starts(self, mark: bool = False):
-        """The crosses of the marked starts that are not hidden (``mark``: every start marked)."""
-        if mark:
-            self._unmarked = set()
-        marks = [m for m in self.starts if m[0] not in self._unmarked and m[0] not in self.hidden]
+    def _draw_starts(self):
+        """The crosses of the starts not hidden that are marked (OrbitRun.marked), have crossings in the browser
+        or stopped running."""
+        marks = [(r.ident, r.p1, r.p2, r.colour) for r in self.runs.values() if r.ident not in self.hidden
+                 and (r.marked or r.sent or r.phase != "running")]
         data = {k: [m[j] for m in marks] for j, k in enumerate(("orbit", "p1", "p2", "c"))}
         if data != self.start_source.data:
             self.start_source.data = data
@@ -136,7 +136,7 @@ class OrbitsLayer:
         self.flush_timer.cancel()
         self.hidden = set()
         self.show_all()
-        self._draw_starts(mark=True)
+        self._draw_starts()
         return old
 
     def remove(self, ident: int) -> None:
@@ -206,7 +206,7 @@ class OrbitsLayer:
                 self.shown.stream({k: np.concatenate([np.asarray(live[k], v.dtype), v]) for k, v in new.items()})
             if held:
                 self.live.data = {k: [] for k in COLUMNS}
-        self._draw_starts(mark=True)
+        self._draw_starts()
         if first:
             self._settle_at = now + FLUSH_SECONDS if self.session.doc is not None else -math.inf
             self.host.push_url()
@@ -225,12 +225,8 @@ class OrbitsLayer:
         for r in self.runs.values():
             r.sent = r.done
 
-    def _on_notice(self, _ident, text):
-        self._draw_starts(mark=True)
-        self.host.say(text)
-
     def _on_error(self, ident, exc):
-        self._draw_starts(mark=True)
+        self._draw_starts()
         self.host.say(f"orbit {ident} failed: {failure(exc)}")
         self.update_status()
         self.host.push_url()
