@@ -185,5 +185,6 @@ def test_closing_the_session_cancels_every_task_budget_and_timer():
         poll(session)
     session.close()
     assert b.cancelled and timer.due is None and session.loop.is_closed()
-    assert session.start("t", work()) is None   # nothing starts on a closed session
+    session.start("t", work())
+    assert not session.busy()                   # nothing starts on a closed session
 

@@ -44,17 +44,17 @@ class Session:
             self.loop = asyncio.new_event_loop()
         self._tasks: dict[object, tuple[asyncio.Task, Budget | None]] = {}
 
-    def start(self, name, coro, budget: Budget | None = None, on_error=None) -> asyncio.Task | None:
+    def start(self, name, coro, budget: Budget | None = None, on_error=None) -> None:
         """Task ``name`` (a kind of work, or a :class:`Timer`) anew, latest wins: ``coro`` replaces the running
-        one, its :meth:`run` calls in ``budget``; an exception goes to ``on_error(exc)`` (a spent budget: none)."""
+        one, its :meth:`run` calls in ``budget``; an exception goes to ``on_error(exc)`` (a spent budget: none).
+        On a closed session nothing starts."""
         self.cancel(name)
         if self.closed:
             coro.close()
-            return None
+            return
         task = self.loop.create_task(coro)
         task.add_done_callback(partial(self._ended, name, on_error))
         self._tasks[name] = (task, budget)
-        return task
 
     def _ended(self, name, on_error, task) -> None:
         if self._tasks.get(name, (None,))[0] is task:
@@ -70,10 +70,6 @@ class Session:
     def running(self, name) -> bool:
         t = self._tasks.get(name)
         return t is not None and not t[0].done()
-
-    def release(self, name) -> None:
-        """Task ``name`` is no longer the session's: it runs on, and a new task ``name`` does not cancel it."""
-        self._tasks.pop(name, None)
 
     def cancel(self, name) -> None:
         """Task ``name`` stops (at its next await; its budget's compiled loops at their next step)."""
@@ -153,10 +149,7 @@ class Timer:
 
     async def _fire(self, when: float) -> None:
         await asyncio.sleep(when - self.session.loop.time())
-        await self.session.apply(self._act)
-
-    def _act(self) -> None:
-        # due no more: the action may cancel the timer or ask for its next call, and this call still ends
-        # (Bokeh sends the action's changes after it returns)
-        self.session.release(self)
-        self.action()
+        # due no more: the action (with a document, a task of its own) may cancel the timer or ask for its next
+        # call, and this call still ends (Bokeh sends the action's changes after it returns)
+        self._due = None
+        self.session.soon(self.action)
