@@ -901,8 +901,8 @@ def test_a_non_loopback_host_gets_a_token_that_every_page_request_needs():
     assert code in (0, 130) and "Traceback" not in err, err[-2000:]
     assert server.is_loopback("127.0.0.1") and server.is_loopback("::1") and server.is_loopback("localhost")
     assert not server.is_loopback("0.0.0.0") and not server.is_loopback("192.168.1.2")
-    assert server.token_matches("abc", "abc") and not server.token_matches("abc", "abd")
-    assert not server.token_matches("abc", None)
+    assert server.token_matches("abc", {"token": [b"abc"]}) and not server.token_matches("abc", {"token": [b"abd"]})
+    assert not server.token_matches("abc", {}) and not server.token_matches("abc", None)
 
 
 def test_the_megno_raster_is_refined_and_marks_chaos_and_order():
@@ -1277,7 +1277,7 @@ def test_picking_an_orbits_crossing_shows_its_mlce_megno_and_rotation_number():
         k = int(np.flatnonzero(second)[17])                     # a crossing of the second orbit, not its start
         assert page.orbit_list.pick(float(d["p1"][k]) + 1e-9, float(d["p2"][k])) == page.orbits.starts[1][0]
         _poll_until(page, lambda: "rotation number" in page.orbit_list.text.text)
-        r, _text = page.orbit_list.readouts[page.orbits.starts[1][0]]
+        r, _text = page.orbits.runs[page.orbits.starts[1][0]].readout
         y0 = model.section_state(s.params, [starts[1][0]], [starts[1][1]], s.h)
         ind = lyapunov.indicators(s.params, states=y0, tmax=INDICATOR_TIME, method=s.method, tol=s.tol)
         assert (r["megno"], r["mlce"]) == (float(ind.megno[0]), float(ind.mlce[0]))          # the same numbers
@@ -1295,7 +1295,7 @@ def test_picking_an_orbits_crossing_shows_its_mlce_megno_and_rotation_number():
         for _ in range(20):                                         # rapid picks: one readout thread, the last pick
             page.orbit_list.pick(float(d["p1"][k]), float(d["p2"][k]))
         assert threading.active_count() <= before
-        _poll_until(page, lambda: page.orbits.starts[1][0] in page.orbit_list.readouts)
+        _poll_until(page, lambda: page.orbits.runs[page.orbits.starts[1][0]].readout)
         page.click_mode.value = "pick an orbit"                  # the switch: a tap picks instead of starting
         from bokeh.events import Tap
 
@@ -1303,7 +1303,7 @@ def test_picking_an_orbits_crossing_shows_its_mlce_megno_and_rotation_number():
         assert len(page.orbits.starts) == 2 and page.orbit_list.picked == int(d["orbit"][0])
         page.orbit_list.undo()
         page.orbit_list.undo()
-        assert page.orbit_list.text.text == "" and page.orbit_list.readouts == {}
+        assert page.orbit_list.text.text == "" and page.orbits.runs == {}
     finally:
         page.close()
 

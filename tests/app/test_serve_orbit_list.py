@@ -104,7 +104,7 @@ def test_choosing_an_orbit_selects_it_as_a_pick_does_and_a_pick_marks_its_row():
         assert lst.filter.group == 0 and lst.hide_button.disabled       # nothing selected yet
         lst.choice.value = two                                                    # chosen in the list
         assert page.orbit_list.picked == two and "orbit 2 from (1.3, 0.05)" in page.orbit_list.text.text
-        _poll_until(page, lambda: two in page.orbit_list.readouts and "rotation number" in page.orbit_list.text.text)
+        _poll_until(page, lambda: page.orbits.runs[two].readout and "rotation number" in page.orbit_list.text.text)
         # the highlight: the browser's filter keeps exactly this orbit's rows of the drawn dots
         assert lst.filter.group == two and lst.marks.data_source is page.orbits.shown
         kept = np.asarray(page.orbits.shown.data["orbit"]) == lst.filter.group
@@ -149,7 +149,7 @@ def test_a_hidden_orbit_leaves_every_drawn_source_keeps_computing_and_comes_back
         assert page.orbit_list.pick(*a) != first                                             # not pickable while hidden
         view = page.exports.view()                                                # the figures: the view ...
         assert [o[0] for o in view.orbits] == [second] and len(view.starts) == 1
-        assert len(tomllib.loads(page.exports.scene_text())["seeds"]["points"]) == 2   # ... the scene: the session
+        assert len(tomllib.loads(page.scene().to_toml())["seeds"]["points"]) == 2   # ... the scene: the session
         page.orbit_list.toggle(first)                                             # shown again
         rows = _rows(page, first)
         ref = sections.crossings(s.params, s.h, [a], n_crossings=s.crossings, **s.section_kwargs())

@@ -74,10 +74,9 @@ class OrbitList:
 
     def toggle(self, ident: int | None) -> None:
         """Hide orbit ``ident`` (None: none), or show it again if hidden."""
-        if ident is None:
-            return
-        self.orbits.hide(ident, ident not in self.orbits.hidden)
-        self._changed(force_density=True)
+        if ident in self.orbits.runs:
+            self.orbits.hide(ident, ident not in self.orbits.hidden)
+            self._changed(force_density=True)
 
     def clear(self) -> None:
         """Remove every orbit (running and paused ones stopped)."""
@@ -87,8 +86,7 @@ class OrbitList:
 
     def undo(self) -> None:
         """Remove the newest orbit (stopped if it runs or is paused)."""
-        if self.orbits.starts:
-            self.delete(self.orbits.starts[-1][0])
+        self.delete(next(reversed(self.orbits.runs), None))
 
     def resume(self) -> int:
         """Continue the orbits a click paused, from where each stopped; returns how many."""
@@ -98,7 +96,7 @@ class OrbitList:
 
     def delete(self, ident: int | None) -> None:
         """Stop orbit ``ident`` (running or paused) and remove it from the page and the session."""
-        if ident is None or ident not in self.orbits.runs:
+        if ident not in self.orbits.runs:
             return
         self.forget(ident)
         self.orbits.remove(ident)
@@ -114,11 +112,11 @@ class OrbitList:
         it refused."""
         try:
             starts = settings_mod.parse_starts(args.get("orbits", ""))
-            full = settings_mod.room_for(len(starts), self.settings().crossings)
-            if full:
-                raise ParameterError(full)
         except ParameterError as exc:
             return [str(exc)]                   # (no starts: their ``hidden`` goes with them)
+        full = settings_mod.room_for(len(starts), self.settings().crossings)
+        if full:
+            return [full]
         refused = []
         try:
             positions = settings_mod.parse_hidden(args.get("hidden", ""), len(starts))
@@ -143,8 +141,7 @@ class OrbitList:
         # (a value equal to the one there is not sent again: param and Bokeh compare them)
         self.choice.options = {NONE_LABEL: 0} | {f"{i}: ({p1:.4g}, {p2:.4g})": i for i, p1, p2, _c in starts}
         self.choice.value = picked if picked in self.orbits.runs else 0
-        hidden = picked is not None and picked in self.orbits.hidden
-        self.hide_button.label = "show" if hidden else "hide"
+        self.hide_button.label = "show" if picked in self.orbits.hidden else "hide"
         self.hide_button.disabled = self.delete_button.disabled = picked is None
         self.filter.group = picked or 0
         self.table.text = _table(self.orbits, picked)
@@ -171,35 +168,30 @@ class OrbitList:
         """Select orbit ``ident`` (None, or not an orbit of the page: none) and show its readout (computed once
         per orbit and settings, the latest pick; it stays on the orbit's run)."""
         run = self.orbits.runs.get(ident)
-        start = None if run is None else (run.p1, run.p2)
         self.session.cancel("readout")
-        self.picked = None if start is None else int(ident)
+        self.picked = None if run is None else run.ident
         self.refresh()
-        if start is None:
+        if run is None:
             self.text.text = ""
             return
         self.say("")
         if run.readout:
             self.text.text = run.readout[1]
             return
-        self.text.text = f"orbit {ident} from ({start[0]:.6g}, {start[1]:.6g}): computing mLCE, MEGNO, rotation ..."
-        self.session.start("readout", show_search(self.session, "readout", partial(self._keep, ident, start),
-                                                  search.orbit_readout, self.settings(), start),
+        head = f"orbit {run.ident} from ({run.p1:.6g}, {run.p2:.6g}): "
+        self.text.text = head + "computing mLCE, MEGNO, rotation ..."
+        self.session.start("readout", show_search(self.session, "readout", partial(self._keep, run.ident, head),
+                                                  search.orbit_readout, self.settings(), (run.p1, run.p2)),
                            budget=search.search_budget(search.READOUT_SECONDS))
-
-    @property
-    def readouts(self) -> dict:
-        """{orbit id: (values, text)} of the orbits whose readout is known."""
-        return {i: r.readout for i, r in self.orbits.runs.items() if r.readout}
 
     def forget(self, ident: int | None = None) -> None:
         """Before orbit ``ident`` (None: every orbit) leaves: stop computing its readout, unselect it."""
         if ident is None or self.picked == ident:
             self.select(None)
 
-    def _keep(self, ident, start, values, text):
+    def _keep(self, ident, head, values, text):
         if (run := self.orbits.runs.get(ident)) is not None:      # (not when the orbit went meanwhile)
-            run.readout = (values, f"orbit {ident} from ({start[0]:.6g}, {start[1]:.6g}): {text}")
+            run.readout = (values, head + text)
             self.text.text = run.readout[1]
 
 
@@ -216,7 +208,7 @@ def _table(orbits, picked) -> str:
             style += ";color:#808080"
         cells = (f"<span style='display:inline-block;width:10px;height:10px;background:{COLORS[r.colour]}'></span>",
                  str(i), f"({r.p1:.6g}, {r.p2:.6g})", str(r.done),
-                 html.escape(orbits.state(i)) + (", hidden" if hidden else ""))
+                 html.escape(r.phase) + (", hidden" if hidden else ""))
         body.append(f"<tr data-orbit='{i}' style='{style}'>"
                     + "".join(f"<td style='padding:0 3px'>{c}</td>" for c in cells) + "</tr>")
     return f"<table style='border-collapse:collapse;font-size:12px'><tr>{head}</tr>{''.join(body)}</table>"
