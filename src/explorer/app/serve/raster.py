@@ -41,8 +41,7 @@ class Image:
     n: int
     values: np.ndarray
     complete: bool
-    indicator: str = "megno"
-    computed: np.ndarray | None = None      # cells integrated (adaptive rasters; None: every allowed cell)
+    computed: np.ndarray        # the cells integrated (an adaptive raster fills the others)
 
 
 def resolutions_up_to(n: int) -> tuple:
@@ -81,50 +80,37 @@ def _shown(coarser, inside) -> np.ndarray:
 def rasters(settings: Settings, window: Window, resolutions: tuple = RESOLUTIONS, time: float = RASTER_TIME,
             indicator: str = "megno", center=None, iterates: int = DIFFUSION_ITERATES, adaptive: bool = False):
     """Yield the :class:`Image` of ``indicator`` after every batch of every resolution (``center`` None:
-    :func:`diffusion_center`); ``adaptive`` (MEGNO): the first resolution, then the last by :func:`adaptive_raster`."""
+    :func:`diffusion_center`); ``adaptive`` (MEGNO): the first resolution, then the last computing the cells
+    ``refinement`` asks for, each the exact raster's bit for bit, the others filled (docs/chaos_map.md)."""
     validation.choice("indicator", indicator, INDICATORS)
     if indicator == "megno":
         batch, cells = BATCH, partial(settings.megno, time=time, max_steps=RASTER_MAX_STEPS)
     else:
         point = diffusion_center(settings)[0] if center is None else center
         batch, cells = DIFFUSION_BATCH, partial(diffusion_cells, settings, center=point, iterates=iterates)
+    adaptive = adaptive and indicator == "megno"
+    if adaptive:
+        resolutions = resolutions[:1] + resolutions[1:][-1:]        # the first and the last (if another)
     previous = None
     for n in resolutions:
-        if adaptive and indicator == "megno" and previous is not None:
-            yield from adaptive_raster(settings, window, resolutions[-1], time, previous)
-            return
         P1, P2 = window.centres(n)
-        inside = settings.allowed(P1, P2)
-        values = _shown(previous, inside)
-        rows, cols = np.nonzero(inside)
-        for a in range(0, len(rows), batch):
-            r, c = rows[a:a + batch], cols[a:a + batch]
-            values[r, c] = cells(P1[r, c], P2[r, c])
-            yield Image(window, n, values.copy(), a + batch >= len(rows), indicator)
-        if not len(rows):
-            yield Image(window, n, values.copy(), True, indicator)
-        previous = values
-
-
-def adaptive_raster(settings: Settings, window: Window, n: int, time: float = RASTER_TIME, coarser=None):
-    """Yield MEGNO's n x n :class:`Image` after every batch, computing the cells ``refinement`` asks for, each the
-    exact raster's bit for bit, the others filled (docs/chaos_map.md); a cell not yet known shows ``coarser``'s."""
-    P1, P2 = window.centres(n)
-    inside = np.asarray(settings.allowed(P1, P2), bool)
-    shown = _shown(coarser, inside)
-    raster = CellRaster(None, None, inside, "megno", RULES["megno"], default_threshold("megno", time), {})
-    coarse = n // 8 if coarser is None else coarser.shape[0]
-    last, pending = monotonic(), 0
-    for r, c in refinement(raster, inside, n, coarse, TOLERANCE, n * n):
-        for a in range(0, len(r), BATCH):
-            rr, cc = r[a:a + BATCH], c[a:a + BATCH]
-            v = np.asarray(settings.megno(P1[rr, cc], P2[rr, cc], time, RASTER_MAX_STEPS), float)
-            raster.record(rr, cc, v, np.zeros(len(v), bool), np.isfinite(v))
-            pending += len(rr)
-            if pending >= BATCH or monotonic() - last >= IMAGE_SECONDS:    # (the rule's small steps: fewer images)
-                known = raster.computed | np.isfinite(raster.values)
-                yield Image(window, n, np.where(known, raster.values, shown), False, "megno",
-                            raster.computed & inside)
-                last, pending = monotonic(), 0
-    values = np.where(inside, raster.values, np.nan)
-    yield Image(window, n, values, True, "megno", raster.computed & inside)
+        inside = np.asarray(settings.allowed(P1, P2), bool)
+        shown = _shown(previous, inside)
+        raster = CellRaster(None, None, inside, indicator, RULES[indicator], default_threshold(indicator, time), {})
+        steps = iter([np.nonzero(inside)])              # every cell, or those refinement asks for
+        if adaptive and previous is not None:
+            steps = refinement(raster, inside, n, previous.shape[0], TOLERANCE, n * n)
+        last, pending = monotonic(), 0
+        for r, c in steps:
+            for a in range(0, len(r), batch):
+                # an image of the cells known before the next batch (the rule's small steps: fewer images)
+                if pending >= batch or (pending and monotonic() - last >= IMAGE_SECONDS):
+                    known = raster.computed | np.isfinite(raster.values)
+                    yield Image(window, n, np.where(known, raster.values, shown), False, raster.computed & inside)
+                    last, pending = monotonic(), 0
+                rr, cc = r[a:a + batch], c[a:a + batch]
+                v = np.asarray(cells(P1[rr, cc], P2[rr, cc]), float)
+                raster.record(rr, cc, v, np.zeros(len(v), bool), np.isfinite(v))
+                pending += len(rr)
+        previous = np.where(inside, raster.values, np.nan)
+        yield Image(window, n, previous, True, raster.computed & inside)
