@@ -44,11 +44,11 @@ def free_port(host: str) -> int:
         return int(s.getsockname()[1])
 
 
-def token_matches(expected: str, given) -> bool:
-    """The request's token equals ``expected`` (constant-time comparison)."""
-    if not isinstance(given, str):
-        return False
-    return hmac.compare_digest(expected.encode("utf-8"), given.encode("utf-8"))
+def token_matches(expected: str, arguments) -> bool:
+    """A request's ``arguments`` (Tornado's, {name: [bytes]}) carry the token ``expected`` (constant-time
+    comparison)."""
+    given = (arguments or {}).get(TOKEN_ARG) or [b""]
+    return hmac.compare_digest(expected.encode("utf-8"), given[0])
 
 
 def url_of(host: str, port: int, token: str | None) -> str:
@@ -56,16 +56,6 @@ def url_of(host: str, port: int, token: str | None) -> str:
     if host in ("0.0.0.0", "::"):
         shown = socket.gethostname()
     return f"http://{shown}:{port}/" + (f"?{TOKEN_ARG}={token}" if token else "")
-
-
-def _authorize(token: str):
-    """Panel's authorize_callback: the page request's ``token`` argument must match."""
-    def check(_user_info, _path):
-        import panel as pn
-
-        given = (pn.state.session_args or {}).get(TOKEN_ARG) or [b""]
-        return token_matches(token, given[0].decode("utf-8", "replace"))
-    return check
 
 
 def make_server(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, token: str | None = None,
@@ -82,7 +72,8 @@ def make_server(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT
         port = free_port(host)
     kw: dict = {}
     if token:
-        pn.config.authorize_callback = _authorize(token)
+        # (Panel's authorize_callback: the page request's token argument must match)
+        pn.config.authorize_callback = lambda _user_info, _path: token_matches(token, pn.state.session_args)
         kw.update(sign_sessions=True, secret_key=secrets.token_urlsafe(48), websocket_origin="*")
     else:
         hosts = dict.fromkeys(("127.0.0.1", "localhost", host))
@@ -127,18 +118,17 @@ def warm_up_and_freeze(base: Settings) -> None:
 
 
 def run(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, token: str | None = None,
-        export_dir=None, label: str = "", open_browser: bool = False, out=None, **page_options) -> None:
+        export_dir=None, label: str = "", open_browser: bool = False, **page_options) -> None:
     """Serve until interrupted, printing the URL first (then opening it with ``open_browser``)."""
-    out = sys.stdout if out is None else out
     server, url = make_server(base, host=host, port=port, token=token, export_dir=export_dir, label=label,
                               **page_options)
-    print(url, file=out, flush=True)
+    print(url, flush=True)
     threading.Thread(target=warm_up_and_freeze, args=(base,), name="explorer-serve-warm-up", daemon=True).start()
     server.start()
     if open_browser:
         open_in_browser(url)
     server.io_loop.add_callback(lambda: asyncio.get_running_loop().set_exception_handler(_quiet_about_clients_gone))
-    restore = _end_on_signals(out)
+    restore = _end_on_signals()
     try:
         server.io_loop.start()
     finally:
@@ -156,7 +146,7 @@ def _quiet_about_clients_gone(loop, context) -> None:
     loop.default_exception_handler(context)
 
 
-def _end_on_signals(out) -> Callable[[], None]:
+def _end_on_signals() -> Callable[[], None]:
     """SIGINT and SIGTERM end the process at once, streams flushed (docs/commands/serve.md, "Faults");
     returns ``restore()``.  Off the main thread nothing changes."""
     import signal
@@ -165,7 +155,7 @@ def _end_on_signals(out) -> Callable[[], None]:
         return lambda: None
 
     def handler(_signum, _frame):
-        for stream in (out, sys.stdout, sys.stderr):
+        for stream in (sys.stdout, sys.stderr):
             with contextlib.suppress(OSError, ValueError, RuntimeError):   # closed, or interrupted inside a write
                 stream.flush()
         os._exit(0)
