@@ -58,7 +58,7 @@ def fixed_points(view) -> tuple:
     stopped = ""
     try:
         for fp in _fixed_points_from(view, (0.0, 0.0)):
-            if all(np.max(np.abs(np.asarray(fp.point) - np.asarray(q.point))) > 1e-7 for q in points):
+            if not any(fp.same_orbit(q) for q in points):
                 points.append(fp)
     except BudgetExceeded as exc:
         stopped = f": search {exc}"

@@ -117,9 +117,8 @@ class OrbitList:
         full = settings_mod.room_for(len(starts), self.settings().crossings)
         if full:
             return [full]
-        refused = []
         try:
-            positions = settings_mod.parse_hidden(args.get("hidden", ""), len(starts))
+            positions, refused = settings_mod.parse_hidden(args.get("hidden", ""), len(starts)), []
         except ParameterError as exc:
             positions, refused = set(), [str(exc)]
         for k, (p1, p2) in enumerate(starts, 1):

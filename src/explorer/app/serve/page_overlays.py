@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 from functools import partial
-from itertools import repeat
 
 import numpy as np
 from bokeh.models import ColumnDataSource, Div, LinearColorMapper
@@ -13,9 +12,9 @@ from explorer.app.serve.box import Box
 from explorer.app.serve.style import PERIOD_COLORS, SEPARATRIX_CASING, SEPARATRIX_COLOR
 from explorer.app.serve.tasks import failure
 
-#: the columns of each overlay's source (by its name)
-COLUMNS = {"fixed": ("p1", "p2", "kind", "marker"), "separatrices": ("xs", "ys"),
-           "periodic": ("p1", "p2", "period", "kind", "marker"), "manifolds": ("xs", "ys", "color", "kind")}
+#: the columns of each overlay's source (by its name); the fixed points' and periodic orbits' marks (_marks)
+MARKS = ("p1", "p2", "period", "kind", "marker")
+COLUMNS = {"fixed": MARKS, "separatrices": ("xs", "ys"), "periodic": MARKS, "manifolds": ("xs", "ys", "color", "kind")}
 
 
 async def show_search(session, what: str, show, fn, *args) -> tuple:
@@ -42,10 +41,16 @@ def _clear(*sources) -> None:
         src.data = {k: [] for k in COLUMNS[src.name]}
 
 
-def _marks(points, stable) -> dict:
-    return {"p1": [float(p[0]) for p in points], "p2": [float(p[1]) for p in points],
-            "kind": ["elliptic" if s else "hyperbolic" for s in stable],
-            "marker": ["circle" if s else "x" for s in stable]}
+def _marks(orbits) -> dict:
+    """The columns (MARKS) of a mark at each point of each periodic orbit of ``orbits`` (a fixed point: period 1)."""
+    rows = [(float(p[0]), float(p[1]), int(o.period), *(("elliptic", "circle") if o.stable else ("hyperbolic", "x")))
+            for o in orbits for p in np.asarray(o.points)]
+    return {k: [r[j] for r in rows] for j, k in enumerate(MARKS)}
+
+
+def _marked(data) -> list:
+    """(p1, p2, period, elliptic) of each mark of the columns ``data`` (:func:`_marks`)."""
+    return [(a, b, k, e == "elliptic") for a, b, k, e in zip(data["p1"], data["p2"], data["period"], data["kind"])]
 
 
 def _lines(curves) -> dict:
@@ -91,12 +96,11 @@ class Overlays:
 
     def view_fields(self) -> dict:
         """Its part of the exported view (image.View): the marks and curves shown."""
-        f, c, m, q = self.fixed.data, self.curves.data, self.manifold_source.data, self.periodic.data
-        return {"fixed": [(a, b, k == "elliptic") for a, b, k in zip(f["p1"], f["p2"], f["kind"])],
+        c, m = self.curves.data, self.manifold_source.data
+        return {"fixed": [(a, b, e) for a, b, _k, e in _marked(self.fixed.data)],
                 "separatrices": [np.column_stack([x, y]) for x, y in zip(c["xs"], c["ys"])],
                 "manifolds": [(k, np.column_stack([x, y])) for k, x, y in zip(m["kind"], m["xs"], m["ys"])],
-                "periodic": [(a, b, k, e == "elliptic") for a, b, k, e in zip(q["p1"], q["p2"], q["period"],
-                                                                              q["kind"])]}
+                "periodic": _marked(self.periodic.data)}
 
     def _boxes_changed(self):
         self.restart()
@@ -105,15 +109,14 @@ class Overlays:
     def restart(self):
         """Search what the boxes ask for at the current settings, under a budget; latest wins."""
         self.session.cancel("manifolds")
+        self.session.cancel("overlay")
         _clear(self.fixed, self.curves, self.periodic, self.manifold_source)
-        wanted = (self.overlay.value, self.periodic_box.value)
-        searching = any(wanted) and self.settings().region is not None
+        fixed, periodic = self.overlay.value, self.periodic_box.value
+        searching = (fixed or periodic) and self.settings().region is not None
         self.text.text = "searching ..." if searching else ""
-        if not searching:
-            self.session.cancel("overlay")
-            return
-        budget = search.search_budget(search.FIXED_SECONDS * wanted[0] + search.PERIODIC_SECONDS * wanted[1])
-        self.session.start("overlay", self._compute(self.settings(), *wanted), budget=budget)
+        if searching:
+            budget = search.search_budget(search.FIXED_SECONDS * fixed + search.PERIODIC_SECONDS * periodic)
+            self.session.start("overlay", self._compute(self.settings(), fixed, periodic), budget=budget)
 
     async def _compute(self, settings, fixed, periodic):
         text, session = "", self.session
@@ -126,7 +129,7 @@ class Overlays:
                               settings)
 
     def _show_points(self, points, text):
-        self.fixed.data = _marks([fp.point for fp in points], [fp.stable for fp in points])
+        self.fixed.data = _marks(points)
         self.text.text = text + ("; growing the separatrices ..." if any(not p.stable for p in points) else "")
 
     def _show_curves(self, periodic, curves, text):
@@ -134,15 +137,12 @@ class Overlays:
         self.text.text = text + ("; searching the periodic orbits ..." if periodic else "")
 
     def _show_periodic(self, text, orbits, found):
-        rows = [(p, int(o.period), o.stable) for o in orbits for p in np.asarray(o.points)]
-        self.periodic.data = {**_marks([r[0] for r in rows], [r[2] for r in rows]), "period": [r[1] for r in rows]}
+        self.periodic.data = _marks(orbits)
         self.text.text = "; ".join(t for t in (text, found) if t)
 
     def saddle_near(self, p1: float, p2: float, radius_px: float) -> tuple | None:
         """(point, period) of the nearest hyperbolic mark within ``radius_px`` pixels of (p1, p2), or None."""
-        marks = [(a, b, k) for src in (self.fixed.data, self.periodic.data)
-                 for a, b, kind, k in zip(src["p1"], src["p2"], src["kind"], src.get("period", repeat(1)))
-                 if kind == "hyperbolic"]
+        marks = [m for src in (self.fixed, self.periodic) for m in _marked(src.data) if not m[3]]
         i = nearest(self.view, [m[0] for m in marks], [m[1] for m in marks], p1, p2, radius_px)
         return None if i is None else ((float(marks[i][0]), float(marks[i][1])), int(marks[i][2]))
 
