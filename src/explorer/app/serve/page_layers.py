@@ -18,9 +18,10 @@ from explorer.app.serve.tasks import failure
 
 #: while orbits stream in, the density image is redrawn at most this often (s)
 DENSITY_SECONDS = 0.5
-#: the chaos layer's colour bar labels
-MEGNO_TITLE = "⟨Y⟩ (MEGNO)"
-DIFFUSION_TITLE = "log10|ν1 − ν2| (frequency diffusion)"
+#: the chaos layer's colour bar label and (low, high) scale of each indicator (frequency diffusion: the chaos maps')
+SCALES = {"megno": ("⟨Y⟩ (MEGNO)", MEGNO_LOW, MEGNO_HIGH),
+          "frequency_diffusion": ("log10|ν1 − ν2| (frequency diffusion)", STYLES["frequency_diffusion"].vmin,
+                                  STYLES["frequency_diffusion"].vmax)}
 
 
 def _empty(*extra) -> dict:
@@ -49,29 +50,21 @@ class ChaosLayer:
         view.on_window(self.restart)
 
     def draw(self, fig) -> None:
-        self.mapper = LinearColorMapper(palette=megno_palette(), low=MEGNO_LOW, high=MEGNO_HIGH,
-                                        nan_color=(0, 0, 0, 0))
+        self.mapper = LinearColorMapper(palette=megno_palette(), nan_color=(0, 0, 0, 0))
         fig.image(image="image", x="x", y="y", dw="dw", dh="dh", source=self.raster_source, color_mapper=self.mapper,
                   alpha=0.85)
-        self.colour_bar = ColorBar(color_mapper=self.mapper, title=MEGNO_TITLE, visible=False, width=12,
-                                   name="megno-colour-bar")
+        self.colour_bar = ColorBar(color_mapper=self.mapper, width=12, name="megno-colour-bar")
         fig.add_layout(self.colour_bar, "right")
         self._show_scale()
 
-    def scale(self) -> tuple:
-        """(low, high) of the colour scale of the layer's indicator (frequency diffusion: the chaos maps')."""
-        if self.indicator.value == "megno":
-            return MEGNO_LOW, MEGNO_HIGH
-        style = STYLES["frequency_diffusion"]
-        return style.vmin, style.vmax
-
     def _show_scale(self) -> None:
-        low, high = self.scale()
+        """The colour bar: shown with the layer, the indicator's label and scale (frequency diffusion: its centre)."""
+        title, low, high = SCALES[self.indicator.value]
         self.mapper.update(low=low, high=high)
-        title, c = (MEGNO_TITLE if self.indicator.value == "megno" else DIFFUSION_TITLE), self.center
-        if title == DIFFUSION_TITLE and c is not None and c[0] == self.settings():
+        c = self.center
+        if self.indicator.value == "frequency_diffusion" and c is not None and c[0] == self.settings():
             title += f" around {'elliptic point' if c[2] else 'region centre'} ({c[1][0]:.4g}, {c[1][1]:.4g})"
-        self.colour_bar.title = title
+        self.colour_bar.update(title=title, visible=bool(self.layer.value))
 
     def load_url(self, args: dict) -> list:
         """The layer from a link (``indicator``; ``megno``: "1" on, "exact" not adaptive); returns what it refused."""
@@ -94,10 +87,9 @@ class ChaosLayer:
         if len(r["image"]):
             x, y = r["x"][0], r["y"][0]
             raster = (np.array(r["image"][0], float), (x, x + r["dw"][0], y, y + r["dh"][0]))
-        return {"raster": raster, "raster_scale": self.scale()}
+        return {"raster": raster, "raster_scale": SCALES[self.indicator.value][1:]}
 
     def _changed(self, clear: bool = False):
-        self.colour_bar.visible = bool(self.layer.value)
         if clear:
             self.raster_source.data = _empty("complete")       # no value of the other indicator on its scale
         self.restart()
@@ -116,17 +108,12 @@ class ChaosLayer:
                            budget=Budget(None, max_steps=raster_mod.RASTER_MAX_STEPS))
 
     async def _compute(self, settings, window, indicator) -> None:
-        session = self.session
-        center = None
-        if indicator == "frequency_diffusion":
-            c = self.center
-            if c is None or c[0] != settings:
-                point, elliptic = await session.run(raster_mod.diffusion_center, settings)
-                self.center = c = (settings, point, elliptic)
-                await session.apply(self._show_scale)
-            center = c[1]
-        images = raster_mod.rasters(settings, window, resolutions=self.resolutions, time=self.time,
-                                    indicator=indicator, center=center, iterates=self.iterates, adaptive=not self.exact)
+        session, c = self.session, self.center
+        if indicator == "frequency_diffusion" and (c is None or c[0] != settings):
+            c = self.center = (settings, *await session.run(raster_mod.diffusion_center, settings))
+            await session.apply(self._show_scale)
+        images = raster_mod.rasters(settings, window, resolutions=self.resolutions, time=self.time, indicator=indicator,
+                                    center=None if c is None else c[1], iterates=self.iterates, adaptive=not self.exact)
         while (image := await session.run(next, images, None)) is not None:
             await session.apply(lambda image=image: self.show_image(image))
 
@@ -143,27 +130,24 @@ class DensityImage:
         self.orbits, self.view = orbits, view
         self.density = ColumnDataSource(_empty(), name="density")
         self.dense = False                      # the density image replaces the crossings' glyphs
-        self.glyph_first = 0                    # orbits from this id on are glyphs, older ones in the image
         self._key: tuple | None = None          # what the image on the page shows
         self._at = 0.0
-        view.on_window(lambda: self.refresh(force=True))
+        view.on_window(self.refresh)
 
     def draw(self, fig) -> None:
         fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.density)
 
     def refresh(self, force: bool = False) -> None:
-        """Redraw the image of the crossings that are not dots: at most every DENSITY_SECONDS while orbits
-        stream in, at once when ``force`` or orbits move between dots and image, never unchanged."""
+        """Redraw the image of the crossings that are not dots: at once when ``force`` or which orbits it images,
+        where or how changed, at most every DENSITY_SECONDS while their rows change alone, never unchanged."""
         orbits = self.orbits
         counts = {r.ident: r.done for r in orbits.runs.values() if r.ident not in orbits.hidden}
         dense = sum(counts.values()) > density.THRESHOLD
         first = 0 if dense else density.glyph_cutoff(counts)
-        force = force or (dense, first) != (self.dense, self.glyph_first)
         if dense != self.dense:
             self.dense = dense
             orbits.points.visible = not dense
             orbits.show_all()
-        self.glyph_first = first
         orbits.glyph_filter.args = {"first": first}
         imaged = [orbits.runs[i] for i in counts if dense or i < first]      # every orbit, or the older ones
         n = sum(r.done for r in imaged)
@@ -176,9 +160,10 @@ class DensityImage:
         px, py = self.view.frame_px()
         nx, ny = max(int(px) // density.CELL_PX, 1), max(int(py) // density.CELL_PX, 1)
         by_megno = bool(orbits.colour_box.value)
-        # the rows change only by growing, leaving, or an orbit's MEGNO becoming known
-        key = (dense, first, n, len(orbits.indicators) if by_megno else -1, w, nx, ny)
-        if key == self._key or not force and time.monotonic() - self._at < DENSITY_SECONDS:
+        # (which orbits, where, how coloured), (their rows: they change only by growing, leaving, or a MEGNO known)
+        key = (dense, first, w, nx, ny, by_megno), (n, len(orbits.indicators) if by_megno else -1)
+        rows_alone = not force and self._key is not None and key[0] == self._key[0]
+        if key == self._key or rows_alone and time.monotonic() - self._at < DENSITY_SECONDS:
             return
         self._at, self._key = time.monotonic(), key
         p1, p2, c, megno = orbits.columns(imaged, keys=("p1", "p2", "c", "megno")).values()
