@@ -3,6 +3,7 @@ to the region and followed through the browser's zoom and pan."""
 from __future__ import annotations
 
 import numpy as np
+from bokeh.core.property.descriptors import UnsetValueError
 from bokeh.events import RangesUpdate
 from bokeh.models import ColumnDataSource, Range1d
 from bokeh.plotting import figure
@@ -10,11 +11,6 @@ from bokeh.plotting import figure
 from explorer.app.serve import style
 from explorer.app.serve.settings import Window, format_window, parse_window
 from explorer.model import ParameterError
-
-
-def _empty_region() -> dict:
-    return {"x": [], "y": [], "width": [], "height": []}
-
 
 #: ms after a wheel or pan step at which BokehJS ends its interactive mode and sends the new window
 #: (RangesUpdate): Bokeh's default, 500, delays every zoom's first raster by half a second
@@ -25,24 +21,23 @@ class SectionView:
     """The figure, the ``region`` source (the allowed ellipse: x, y, width, height) and the window."""
 
     def __init__(self):
-        self.region = ColumnDataSource(_empty_region(), name="region")
+        self.region = ColumnDataSource(name="region")
+        # a region without a closed form (a System's map): its mask, white where allowed
+        self.region_image = ColumnDataSource(name="region-image")
         # Range1d, set by the server (a DataRange1d keeps its first window in the browser for Reset)
         fig = figure(name="section", width=style.FIGURE_WIDTH, height=style.FIGURE_HEIGHT, sizing_mode="scale_width",
-                     min_width=style.FIGURE_MIN_WIDTH,
-                     x_range=Range1d(-1.0, 1.0), y_range=Range1d(-1.0, 1.0),
-                     tools="pan,wheel_zoom,box_zoom,reset,save", active_scroll="wheel_zoom",
-                     x_axis_label="p1", y_axis_label="p2", background_fill_color=style.FORBIDDEN_COLOR,
-                     toolbar_location="above", lod_timeout=LOD_TIMEOUT_MS)
+                     min_width=style.FIGURE_MIN_WIDTH, x_range=Range1d(-1.0, 1.0), y_range=Range1d(-1.0, 1.0),
+                     tools="pan,wheel_zoom,box_zoom,reset,save", active_scroll="wheel_zoom", toolbar_location="above",
+                     background_fill_color=style.FORBIDDEN_COLOR, lod_timeout=LOD_TIMEOUT_MS)
         fig.ellipse("x", "y", width="width", height="height", source=self.region, fill_color=style.ALLOWED_COLOR,
                     line_color=style.BOUNDARY_COLOR, line_width=1.0)
-        # a region without a closed form (a System's map): its mask, white where allowed
-        self.region_image = ColumnDataSource({"image": [], "x": [], "y": [], "dw": [], "dh": []}, name="region-image")
         fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.region_image)
         fig.grid.visible = False
         fig.on_event(RangesUpdate, self._on_ranges)
         self.figure = fig
         self.window: Window | None = None
         self._listeners: list = []
+        self.draw_region(None)
 
     def on_window(self, listener) -> None:
         """``listener()`` after the browser moved the window (zoom, pan, Reset)."""
@@ -57,10 +52,10 @@ class SectionView:
             listener()
 
     def frame_px(self) -> tuple:
-        """Width and height of the plot's frame in screen pixels (before it is drawn: the nominal size)."""
+        """Width and height of the plot's frame in screen pixels, at least 1 (before it is drawn: the nominal size)."""
         try:
-            return float(self.figure.inner_width), float(self.figure.inner_height)
-        except Exception:  # noqa: BLE001 - not drawn in a browser yet: the figure's nominal size
+            return max(float(self.figure.inner_width), 1.0), max(float(self.figure.inner_height), 1.0)
+        except UnsetValueError:  # not drawn in a browser yet: the figure's nominal size
             return style.FIGURE_WIDTH - 60.0, style.FIGURE_HEIGHT - 60.0
 
     def pixel(self) -> tuple:
@@ -69,11 +64,12 @@ class SectionView:
         if w is None:
             return 0.0, 0.0
         width, height = self.frame_px()
-        return (w.x1 - w.x0) / max(width, 1.0), (w.y1 - w.y0) / max(height, 1.0)
+        return (w.x1 - w.x0) / width, (w.y1 - w.y0) / height
 
     def draw_region(self, region, mask=None) -> None:
         """The allowed region (c1, c2, r1, r2; None: empty) as the ellipse or ``mask`` over its box; the view fitted."""
-        ellipse, image = _empty_region(), {"image": [], "x": [], "y": [], "dw": [], "dh": []}  # type: dict, dict
+        ellipse: dict = {"x": [], "y": [], "width": [], "height": []}
+        image: dict = {"image": [], "x": [], "y": [], "dw": [], "dh": []}
         if region is not None:
             c1, c2, r1, r2 = region
             if mask is None:
@@ -108,8 +104,8 @@ class SectionView:
     def fit(self, c1: float, c2: float, m1: float, m2: float) -> None:
         """Show the box c1 +- m1, c2 +- m2, equal length per pixel along both axes; Reset goes back to it."""
         px, py = self.frame_px()
-        scale = max(2.0 * m1 / max(px, 1.0), 2.0 * m2 / max(py, 1.0))     # p-units per pixel
-        h1, h2 = 0.5 * scale * max(px, 1.0), 0.5 * scale * max(py, 1.0)
+        scale = max(2.0 * m1 / px, 2.0 * m2 / py)     # p-units per pixel
+        h1, h2 = 0.5 * scale * px, 0.5 * scale * py
         for rng, lo, hi in ((self.figure.x_range, c1 - h1, c1 + h1), (self.figure.y_range, c2 - h2, c2 + h2)):
             rng.update(start=lo, end=hi, reset_start=lo, reset_end=hi)
         self.window = Window(c1 - h1, c1 + h1, c2 - h2, c2 + h2)
