@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import io
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -21,7 +20,7 @@ FORMATS = ("png", "svg")
 class View:
     """What the page shows: ``orbits`` [(id, colour, points (n, 2), megno)], ``starts`` [(p1, p2, colour)], ``region``
     (c1, c2, r1, r2) or None, drawn as ``region_mask`` over its box if given (else an ellipse), ``raster`` (values,
-    window) on ``raster_scale`` (None: MEGNO's), ``fixed`` [(p1, p2, elliptic)], ``manifolds`` [(kind, curve)],
+    window) on ``raster_scale``, ``fixed`` [(p1, p2, elliptic)], ``manifolds`` [(kind, curve)],
     ``periodic`` [(p1, p2, period, elliptic)]."""
 
     window: tuple
@@ -29,7 +28,7 @@ class View:
     orbits: list = field(default_factory=list)
     starts: list = field(default_factory=list)
     raster: tuple | None = None
-    raster_scale: tuple | None = None
+    raster_scale: tuple = (style.MEGNO_LOW, style.MEGNO_HIGH)
     fixed: list = field(default_factory=list)
     separatrices: list = field(default_factory=list)
     manifolds: list = field(default_factory=list)
@@ -40,50 +39,43 @@ class View:
     axes: tuple = ("p1", "p2")
 
 
-def _megno_colormap(skip: int = 0):
-    from matplotlib.colors import ListedColormap
-
-    return ListedColormap(style.megno_palette(skip)).with_extremes(bad=(0, 0, 0, 0))
-
-
 def figure(view: View):
     """The matplotlib Figure of ``view`` (not registered with pyplot)."""
     from explorer.app import figures
 
     figures._matplotlib()
+    from matplotlib.colors import ListedColormap
     from matplotlib.figure import Figure
     from matplotlib.patches import Ellipse
 
     fig = Figure(figsize=FIGSIZE, dpi=DPI, layout="constrained")
     ax = fig.add_subplot()
-    x0, x1, y0, y1 = view.window
     ax.set_facecolor(figures.FORBIDDEN_COLOR)
-    if view.region is not None and view.region_mask is not None:
+    if view.region is not None:
         c1, c2, r1, r2 = view.region
-        white = np.zeros((*np.shape(view.region_mask), 4))
-        white[np.asarray(view.region_mask, bool)] = 1.0
-        ax.imshow(white, extent=(c1 - r1, c1 + r1, c2 - r2, c2 + r2), origin="lower", interpolation="nearest",
-                  zorder=0.5)
-    elif view.region is not None:
-        c1, c2, r1, r2 = view.region
-        ax.add_patch(Ellipse((c1, c2), 2 * r1, 2 * r2, facecolor="white", edgecolor="none", zorder=0.5))
-        ax.add_patch(Ellipse((c1, c2), 2 * r1, 2 * r2, facecolor="none", edgecolor=figures.BOUNDARY_COLOR,
-                             linewidth=figures.BOUNDARY_WIDTH, zorder=3))
-    cmap = _megno_colormap()
-    orbit_cmap = _megno_colormap(style.MEGNO_ORBIT_SKIP)
+        if view.region_mask is None:
+            ax.add_patch(Ellipse((c1, c2), 2 * r1, 2 * r2, facecolor="white", edgecolor="none", zorder=0.5))
+            ax.add_patch(Ellipse((c1, c2), 2 * r1, 2 * r2, facecolor="none", edgecolor=figures.BOUNDARY_COLOR,
+                                 linewidth=figures.BOUNDARY_WIDTH, zorder=3))
+        else:
+            white = np.zeros((*np.shape(view.region_mask), 4))
+            white[np.asarray(view.region_mask, bool)] = 1.0
+            ax.imshow(white, extent=(c1 - r1, c1 + r1, c2 - r2, c2 + r2), origin="lower", interpolation="nearest",
+                      zorder=0.5)
     if view.raster is not None:
-        values, (a0, a1, b0, b1) = view.raster
-        low, high = view.raster_scale or (style.MEGNO_LOW, style.MEGNO_HIGH)
-        ax.imshow(np.asarray(values, float), extent=(a0, a1, b0, b1), origin="lower", cmap=cmap, vmin=low,
-                  vmax=high, alpha=0.85, interpolation="nearest", zorder=1)
+        values, extent = view.raster
+        cmap = ListedColormap(style.megno_palette()).with_extremes(bad=(0, 0, 0, 0))
+        ax.imshow(np.asarray(values, float), extent=extent, origin="lower", cmap=cmap, vmin=view.raster_scale[0],
+                  vmax=view.raster_scale[1], alpha=0.85, interpolation="nearest", zorder=1)
+    # by MEGNO as on the page: NaN (unknown) gray, outside the scale an end's colour
+    orbit_cmap = ListedColormap(style.megno_palette(style.MEGNO_ORBIT_SKIP)).with_extremes(bad="#9e9e9e")
     total = sum(len(pts) for _i, _c, pts, _m in view.orbits)
     raster_points = total > SVG_VECTOR_MAX
     size = 4.0 if total < 20_000 else 1.0
     for ident, colour, pts, megno in view.orbits:
         pts = np.asarray(pts, float).reshape(-1, 2)
         if view.by_megno:
-            u = (megno - style.MEGNO_LOW) / (style.MEGNO_HIGH - style.MEGNO_LOW)    # (outside [0, 1]: an end's colour)
-            colour = orbit_cmap(u) if math.isfinite(megno) else "#9e9e9e"
+            colour = orbit_cmap((megno - style.MEGNO_LOW) / (style.MEGNO_HIGH - style.MEGNO_LOW))
         ax.scatter(pts[:, 0], pts[:, 1], s=size, c=[colour], linewidths=0, marker="o", zorder=2,
                    rasterized=raster_points, gid=f"orbit-{ident}")
     if view.starts:
@@ -103,11 +95,9 @@ def figure(view: View):
     for p1, p2, elliptic in view.fixed:
         ax.scatter([p1], [p2], s=60, marker="o" if elliptic else "X", edgecolors="black", facecolors="white",
                    linewidths=1.5, zorder=6)
-    ax.set_xlim(x0, x1)
-    ax.set_ylim(y0, y1)
+    ax.set(xlim=view.window[:2], ylim=view.window[2:], xlabel=figures.symbol_label(view.axes[0]),
+           ylabel=figures.symbol_label(view.axes[1]))
     ax.set_aspect("equal", adjustable="box")
-    ax.set_xlabel({"p1": "$p_1$"}.get(view.axes[0], view.axes[0]))
-    ax.set_ylabel({"p2": "$p_2$"}.get(view.axes[1], view.axes[1]))
     if view.title:
         ax.set_title(figures.mathtext_label(view.title), fontsize=9)
     ax.tick_params(direction="in", top=True, right=True)
