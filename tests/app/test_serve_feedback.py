@@ -281,11 +281,11 @@ def test_the_exported_svg_names_each_element_once_and_the_scene_records_the_over
         ids = [e.get("id") for e in ET.fromstring(render(view, "svg")).iter() if e.get("id")]
         assert len(ids) == len(set(ids)), sorted(i for i in ids if ids.count(i) > 1)
         assert sum(i.startswith("manifold-unstable") for i in ids) == 2
-        scene = load_scene_text(page.exports.scene_text())
+        scene = load_scene_text(page.scene().to_toml())
         assert "separatrices" in scene.compute and "periodic" in scene.description
         plain = _page(SERVED)
         plain.click(c1 + 0.3 * r1, c2)
-        assert "separatrices" not in load_scene_text(plain.exports.scene_text()).compute
+        assert "separatrices" not in load_scene_text(plain.scene().to_toml()).compute
         plain.close()
     finally:
         page.close()

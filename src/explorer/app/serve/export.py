@@ -22,9 +22,7 @@ def session_scene(settings: Settings, starts, name: str = SCENE_NAME, overlays: 
     if not points:
         raise ParameterError("export: no orbit inside the allowed region yet; click on the section first")
     seeds = scene_mod.SeedSpec(kind="points", points=points, n=len(points))
-    integ = scene_mod.IntegrationSpec(method=settings.method, tol=settings.tol, dt=settings.dt,
-                                      crossings=settings.crossings, phi0=settings.phi0,
-                                      direction=settings.direction)
+    integ = scene_mod.IntegrationSpec(crossings=settings.crossings, **settings.section_kwargs())
     compute = ("sections", "separatrices") if "separatrices" in overlays else ("sections",)
     shown = f"; overlays on the page: {', '.join(overlays)}" if overlays else "; no overlay on the page"
     return scene_mod.Scene(name=name, params=settings.params, h=settings.h, seeds=seeds, integration=integ,
@@ -51,11 +49,11 @@ def write_scene(directory, scene: scene_mod.Scene) -> str:
     return write_files(directory, scene.name, {"toml": scene.to_toml().encode("utf-8")})[0]
 
 
-def write_figure(directory, view, name: str = SCENE_NAME) -> list:
+def write_figure(directory, view) -> list:
     """Write the page's ``view`` as PNG and SVG into ``directory`` (:func:`write_files`); returns their paths."""
     from explorer.app.serve.image import FORMATS, render
 
-    return write_files(directory, name, {fmt: render(view, fmt) for fmt in FORMATS})
+    return write_files(directory, SCENE_NAME, {fmt: render(view, fmt) for fmt in FORMATS})
 
 
 def write_store(scene_path) -> str:
@@ -74,15 +72,12 @@ class Exports:
     def __init__(self, session, export_dir, scene, view, say):
         self.session, self.export_dir, self.scene, self.view, self.say = session, export_dir, scene, view, say
 
-    def scene_text(self) -> str:
-        return self.scene().to_toml()
-
     def download(self, fmt: str):
         """A download button's file: the scene ("toml") or the view ("png", "svg"); empty, and why said, if it fails."""
         from explorer.app.serve.image import render
 
         try:
-            return io.BytesIO(self.scene_text().encode("utf-8") if fmt == "toml" else render(self.view(), fmt))
+            return io.BytesIO(self.scene().to_toml().encode("utf-8") if fmt == "toml" else render(self.view(), fmt))
         except ParameterError as exc:
             self.say(str(exc))
         except Exception as exc:  # noqa: BLE001 - reported in the page; the download is empty
@@ -96,18 +91,17 @@ class Exports:
                                                  lambda paths: "figure written: " + " and ".join(
                                                      map(os.path.basename, paths))))
 
-    def export(self) -> str | None:
-        """Write the session's scene into the export directory (its store follows in a task); returns its path."""
+    def export(self) -> None:
+        """Write the session's scene into the export directory (its store follows in a task)."""
         try:
             path = write_scene(self.export_dir, self.scene())
         except (ParameterError, OSError) as exc:
             self.say(f"export failed: {exc}")
-            return None
+            return
         name = os.path.basename(path)
         self.say(f"scene written: {name} (rerun: explorer sweep {name}); writing the orbits' store ...", ok=True)
         self.session.start("store", self._write(write_store, (path,), "store export", lambda out: (
             f"written: {name} and {os.path.basename(out)} (the orbits, sweep format)")))
-        return path
 
     async def _write(self, fn, args, what: str, said):
         try:
