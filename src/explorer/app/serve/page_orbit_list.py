@@ -149,9 +149,7 @@ class OrbitList:
     def pick(self, p1: float, p2: float, radius_px: float = PICK_PX) -> int | None:
         """A pick at (p1, p2): near a hyperbolic mark its manifolds (None), else selects the orbit with the
         nearest crossing within ``radius_px`` pixels and returns its id."""
-        saddle = self.overlays.saddle_near(p1, p2, radius_px)
-        if saddle is not None:
-            self.overlays.show_manifolds(*saddle)
+        if self.overlays.pick(p1, p2, radius_px):
             return None
         d = self.orbits.columns(keys=("orbit", "p1", "p2"))
         k = nearest(self.view, d["p1"], d["p2"], p1, p2, radius_px)

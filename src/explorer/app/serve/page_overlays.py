@@ -140,20 +140,20 @@ class Overlays:
         self.periodic.data = _marks(orbits)
         self.text.text = "; ".join(t for t in (text, found) if t)
 
-    def saddle_near(self, p1: float, p2: float, radius_px: float) -> tuple | None:
-        """(point, period) of the nearest hyperbolic mark within ``radius_px`` pixels of (p1, p2), or None."""
+    def pick(self, p1: float, p2: float, radius_px: float) -> bool:
+        """A pick at (p1, p2): W^u and W^s of the orbit of the nearest hyperbolic mark within ``radius_px`` pixels
+        grown and drawn (latest wins), True; False when there is no such mark."""
         marks = [m for src in (self.fixed, self.periodic) for m in _marked(src.data) if not m[3]]
         i = nearest(self.view, [m[0] for m in marks], [m[1] for m in marks], p1, p2, radius_px)
-        return None if i is None else ((float(marks[i][0]), float(marks[i][1])), int(marks[i][2]))
-
-    def show_manifolds(self, point, period: int = 1) -> None:
-        """Grow and draw W^u and W^s of the hyperbolic orbit of ``period`` through ``point`` (latest wins)."""
+        if i is None:
+            return False
+        a, b, period, _e = marks[i]
         _clear(self.manifold_source)
-        self.text.text = f"growing the manifolds of the period-{period} orbit at ({point[0]:.6g}, {point[1]:.6g}) ..."
+        self.text.text = f"growing the manifolds of the period-{period} orbit at ({a:.6g}, {b:.6g}) ..."
         self.session.start("manifolds", show_search(self.session, "manifolds", self._show_manifolds,
-                                                    search.saddle_manifolds, self.settings(), tuple(point),
-                                                    int(period)),
+                                                    search.saddle_manifolds, self.settings(), (a, b), period),
                            budget=search.search_budget(search.MANIFOLD_SECONDS))
+        return True
 
     def _show_manifolds(self, branches, text):
         self.manifold_source.data = {**_lines([np.asarray(b.points, float) for b in branches]),
