@@ -39,27 +39,23 @@ def density_rgba(p1, p2, colour_index, window, nx: int, ny: int, colors, megno=N
     inside = (ix >= 0) & (ix < nx) & (iy >= 0) & (iy < ny)
     cell = (iy[inside] * nx + ix[inside]).astype(np.int64)
     count = np.bincount(cell, minlength=ncell)
-    rgb = np.zeros((ncell, 3), np.uint8)
     if megno is None or palette is None:
+        table = colors
         k = np.asarray(colour_index, np.int64)[inside] % len(colors)
         per = np.bincount(cell * len(colors) + k, minlength=ncell * len(colors)).reshape(ncell, len(colors))
-        table = np.array([_rgb(c) for c in colors], np.uint8)
-        rgb[:] = table[np.argmax(per, axis=1)]
+        idx = np.argmax(per, axis=1)
     else:
+        table = [*palette, "#9e9e9e"]           # the last: grey, a cell without a known MEGNO
         m = np.asarray(megno, float)[inside]
         known = np.isfinite(m)
-        total = np.bincount(cell[known], weights=m[known], minlength=ncell)
         n_known = np.bincount(cell[known], minlength=ncell)
         with np.errstate(invalid="ignore", divide="ignore"):
-            mean = total / n_known
-        table = np.array([_rgb(c) for c in palette], np.uint8)
+            mean = np.bincount(cell[known], weights=m[known], minlength=ncell) / n_known
         u = np.clip((mean - lo) / (hi - lo), 0.0, 1.0)
-        idx = np.where(np.isfinite(u), np.round(np.nan_to_num(u) * (len(palette) - 1)), 0).astype(np.int64)
-        rgb[:] = table[idx]
-        rgb[n_known == 0] = (158, 158, 158)
+        idx = np.where(n_known > 0, np.round(np.nan_to_num(u) * (len(palette) - 1)), len(palette)).astype(np.int64)
     top = max(int(count.max()) if count.size else 0, 1)
     alpha = np.where(count > 0, 255 * (MIN_ALPHA + (1 - MIN_ALPHA) * np.log1p(count) / np.log1p(top)), 0)
     rgba = np.empty((ncell, 4), np.uint8)
-    rgba[:, :3] = rgb
+    rgba[:, :3] = np.array([_rgb(c) for c in table], np.uint8)[idx]
     rgba[:, 3] = alpha.astype(np.uint8)
     return rgba.view(np.uint32).reshape(ny, nx)
