@@ -41,12 +41,11 @@ class View:
 
 def figure(view: View):
     """The matplotlib Figure of ``view`` (not registered with pyplot)."""
-    from explorer.app import figures
-
-    figures._matplotlib()
     from matplotlib.colors import ListedColormap
     from matplotlib.figure import Figure
     from matplotlib.patches import Ellipse
+
+    from explorer.app import figures
 
     fig = Figure(figsize=FIGSIZE, dpi=DPI, layout="constrained")
     ax = fig.add_subplot()
@@ -82,13 +81,11 @@ def figure(view: View):
         s = np.asarray([(a, b) for a, b, _c in view.starts], float)
         ax.scatter(s[:, 0], s[:, 1], s=40, marker="+", c=[c for _a, _b, c in view.starts], linewidths=1.5,
                    zorder=4, gid="starts")
-    for n, curve in enumerate(view.separatrices):
+    curves = [(f"separatrix-{n}", style.SEPARATRIX_COLOR, c) for n, c in enumerate(view.separatrices)]
+    curves += [(f"manifold-{k}-{n}", figures.MANIFOLD_COLORS[k], c) for n, (k, c) in enumerate(view.manifolds)]
+    for gid, colour, curve in curves:       # (the manifolds drawn over the separatrices)
         c = np.asarray(curve, float)
-        ax.plot(c[:, 0], c[:, 1], color=style.SEPARATRIX_COLOR, linewidth=0.8, zorder=2.5, gid=f"separatrix-{n}")
-    for n, (kind, curve) in enumerate(view.manifolds):
-        c = np.asarray(curve, float)
-        ax.plot(c[:, 0], c[:, 1], color=figures.MANIFOLD_COLORS[kind], linewidth=0.8, zorder=2.6,
-                gid=f"manifold-{kind}-{n}")
+        ax.plot(c[:, 0], c[:, 1], color=colour, linewidth=0.8, zorder=2.5, gid=gid)
     for p1, p2, period, elliptic in view.periodic:
         ax.scatter([p1], [p2], s=36, marker="o" if elliptic else "X", edgecolors="black", linewidths=1.0,
                    c=[style.PERIOD_COLORS[(int(period) - 1) % len(style.PERIOD_COLORS)]], zorder=5)
