@@ -126,9 +126,7 @@ def orbit_readout(settings, start) -> tuple:
             return values, f"{text}: none (Newton's method found no elliptic fixed point)"
         rot = values["rotation"] = rotation.rotation_number(settings.section_map(rotation_tol(settings)), (p1, p2),
                                                             center=fp.point)
-    except BudgetExceeded:
-        raise
-    except Exception as exc:  # noqa: BLE001 - shown in the readout
+    except Exception as exc:  # noqa: BLE001 - shown in the readout (a spent budget too: the indicators stay)
         return values, f"{text}: none ({failure(exc)})"
     if not math.isfinite(rot.value):
         return values, f"{text}: none ({rot.status})"
