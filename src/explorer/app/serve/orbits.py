@@ -12,8 +12,6 @@ from typing import Any
 
 import numpy as np
 
-from explorer import model
-from explorer.analysis import sections
 from explorer.integrate import layout, methods
 from explorer.kernels import STATUS_MAX_STEPS, STATUS_NAMES, STATUS_TMAX
 
@@ -126,16 +124,14 @@ def _duration(seconds: float) -> str:
 
 def step_estimate(settings, p1: float, p2: float) -> int | None:
     """Steps a fixed-step orbit from (p1, p2) is expected to take (its crossings times the time between
-    two, from a Taylor probe, over ``dt``, within its budgets); None if adaptive or the probe finds none."""
+    two, from a Taylor probe of the page's stream, over ``dt``, within its budgets); None if adaptive or the
+    probe finds none."""
     if settings.adaptive:
         return None
-    y0 = model.section_state(settings.params, [p1], [p2], settings.h, settings.phi0, settings.direction or 1)
-    probe = sections.crossings(settings.params, states=y0, n_crossings=2, max_steps=PROBE_STEPS,
-                               phi0=settings.phi0, direction=settings.direction)
-    n = int(probe.count[0])
-    if n == 0:
+    rows, _state = next(replace(settings, method="taylor", crossings=2).stream(p1, p2, None, 2, PROBE_STEPS))
+    if not len(rows):
         return None
-    period = float(probe.orbit(0)[n - 1, 0]) / n
+    period = float(rows[-1, 0]) / len(rows)
     need = min(settings.crossings * period, settings.effective_tmax) / settings.dt
     return int(min(need, settings.max_steps))
 
