@@ -55,6 +55,27 @@ def test_a_systems_scene_gives_the_page_its_panel_crossings_and_seeds(tmp_path):
     assert base.seed_starts(seeds) == [(0.1, 0.1)]                       # (0.6, 0.45) is off the level
 
 
+def test_one_seed_starts_runs_each_seed_kind_on_either_page():
+    from explorer.analysis.seeds import seed_points
+    from explorer.app.serve.settings import Settings, SystemSettings
+    from explorer.io.scene import SeedSpec
+    from explorer.io.scene.system import SystemSeeds
+
+    chap, system = Settings(h=1.0), SystemSettings(henon_heiles_map(E))
+    p1, p2, _dropped = seed_points(SeedSpec(), chap.params, chap.h, chap.phi0)
+    assert chap.seed_starts(None) == list(zip(p1.tolist(), p2.tolist())) and len(p1) > 50   # a scene's default
+    window = SystemSeeds(kind="random", n=20, window=(-0.6, 0.6, -0.6, 0.6))
+    for page in (chap, system):                       # a System's [seeds] on Chaplygin's map too
+        starts = page.seed_starts(window)
+        assert 0 < len(starts) <= 20 and page.allowed(*np.transpose(starts)).all()
+    c1, c2, r1, r2 = system.region                    # no scene: a grid of about 100 over the region box
+    starts = np.array(system.seed_starts(None))
+    assert 50 < len(starts) <= 100 and system.allowed(starts[:, 0], starts[:, 1]).all()
+    assert np.all(np.abs(starts - (c1, c2)) <= (r1, r2))
+    with pytest.raises(ParameterError, match="no seed point on the section"):
+        system.seed_starts(SystemSeeds(kind="points", points=((0.0, 1.0),)))   # (off the level)
+
+
 def test_a_link_naming_a_system_imports_nothing_and_changes_nothing(monkeypatch):
     from explorer.app.serve.page import SectionPage
     from explorer.app.serve.settings import Settings, SystemSettings

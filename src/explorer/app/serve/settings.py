@@ -13,6 +13,7 @@ import numpy as np
 
 from explorer import model
 from explorer.analysis import sections, system_sections
+from explorer.analysis.chaos_map import cell_centres
 from explorer.model import ParameterError, validation
 
 #: every field of Chaplygin's page, in the order shown (and written in the URL): mu and h (most often changed) first
@@ -82,27 +83,28 @@ class PageSettings:
             values.pop(name, None)
         return self.on(smap, **values)
 
+    @functools.cached_property
+    def _domain(self) -> tuple:
+        """(region, why): the map's domain asked once (a System's is a scan, not kept by the map when empty)."""
+        try:
+            (a0, a1), (b0, b1) = self.smap.domain
+        except ParameterError as exc:
+            return None, str(exc)
+        return (0.5 * (a0 + a1), 0.5 * (b0 + b1), 0.5 * (a1 - a0), 0.5 * (b1 - b0)), ""
+
     @property
     def region(self):
         """(c1, c2, r1, r2): the centre and half-sizes of the box of the map's domain; None when it is empty."""
-        try:
-            (a0, a1), (b0, b1) = self.smap.domain
-        except ParameterError:
-            return None
-        return (0.5 * (a0 + a1), 0.5 * (b0 + b1), 0.5 * (a1 - a0), 0.5 * (b1 - b0))
+        return self._domain[0]
 
     def empty_region(self) -> str:
         """Why the region is empty, in the map's words ("" when it is not)."""
-        try:
-            _ = self.smap.domain
-        except ParameterError as exc:
-            return str(exc)
-        return ""
+        return self._domain[1]
 
     def region_mask(self):
         """The map's domain on a REGION_CELLS^2 grid of the :attr:`region` box (rows: the second coordinate)."""
         c1, c2, r1, r2 = self.region
-        return self.allowed(*Window(c1 - r1, c1 + r1, c2 - r2, c2 + r2).centres(REGION_CELLS))
+        return self.smap.allowed(cell_centres((c1 - r1, c1 + r1, c2 - r2, c2 + r2), REGION_CELLS))
 
     def allowed(self, p1, p2) -> np.ndarray:
         """Mask of the points in the map's domain."""
@@ -135,6 +137,27 @@ class PageSettings:
     def indicator_run(self, points) -> tuple:
         """(system, keywords) of lyapunov.indicators for the orbits from ``points``: the map's points at ``tol``."""
         return self.smap, {"y0": points, "tol": self.tol}
+
+    def seed_starts(self, seeds) -> list:
+        """The starts [(a, b), ...] ``explorer sweep`` runs for a scene's ``seeds`` on the map: Chaplygin's
+        SeedSpec in the allowed ellipse, a System's SystemSeeds on any map's domain (None, no scene: a scene's
+        default on Chaplygin's map, a grid of 100 over the region box on a System's)."""
+        from explorer.analysis.seeds import seed_points
+        from explorer.analysis.sweep import system_seed_points
+        from explorer.io.scene import SeedSpec
+        from explorer.io.scene.system import SystemSeeds
+
+        if seeds is None:
+            c1, c2, r1, r2 = self.region or (0.0, 0.0, 1.0, 1.0)
+            system = system_sections.is_system_map(self.smap)
+            seeds = SystemSeeds(window=(c1 - r1, c1 + r1, c2 - r2, c2 + r2)) if system else SeedSpec()
+        if isinstance(seeds, SystemSeeds):
+            pts = system_seed_points(seeds, self.smap)[0]
+        else:
+            pts = np.column_stack(seed_points(seeds, self.smap.params, self.smap.h, self.smap.phi0)[:2])
+        if not len(pts):
+            raise ParameterError(f"no seed point on the section ({self.smap.describe_domain()})")
+        return [(float(a), float(b)) for a, b in pts]
 
     def megno(self, p1, p2, time: float, max_steps: int, mlce: bool = False):
         """<Y>(time) (and the mLCE with ``mlce``) of the orbits from (p1, p2) (lyapunov.indicators of
@@ -210,14 +233,6 @@ class Settings(PageSettings, sections.Integration):
         """:meth:`stream`'s integration: the method, its step and the crossing direction."""
         return {"method": self.method, "dt": self.dt, "direction": self.direction}
 
-    def seed_starts(self, seeds) -> list:
-        """The starts [(p1, p2), ...] ``explorer sweep`` runs for ``seeds`` (None: a scene's default) here."""
-        from explorer.analysis.seeds import seed_points
-        from explorer.io.scene import SeedSpec
-
-        p1, p2, _dropped = seed_points(seeds or SeedSpec(), self.params, self.h, self.phi0)
-        return [(float(a), float(b)) for a, b in zip(p1, p2)]
-
 
 @dataclass(frozen=True, eq=False)
 class SystemSettings(PageSettings):
@@ -226,7 +241,7 @@ class SystemSettings(PageSettings):
 
     smap: Any
     tol: float = 1e-13
-    crossings: int = 2000
+    crossings: int = DEFAULT_CROSSINGS
 
     method = "taylor"
     adaptive = True
@@ -271,26 +286,13 @@ class SystemSettings(PageSettings):
         """:meth:`stream`'s integration: ``tol`` and the map's return budget for each crossing, on this thread."""
         return {"tol": self.tol, "tmax": self.smap.tmax * self.crossings, "threads": 1}
 
-    def seed_starts(self, seeds) -> list:
-        """The scene's ``[seeds]`` on the map's domain (default: a grid of 100 over the region box)."""
-        from explorer.analysis.sweep import system_seed_points
-        from explorer.io.scene.system import SystemSeeds
-
-        if seeds is None:
-            c1, c2, r1, r2 = self.region or (0.0, 0.0, 1.0, 1.0)
-            seeds = SystemSeeds(window=(c1 - r1, c1 + r1, c2 - r2, c2 + r2))
-        pts, _dropped = system_seed_points(seeds, self.smap)
-        if not len(pts):
-            raise ParameterError(f"no seed point on the energy surface ({self.smap.describe_domain()})")
-        return [(float(a), float(b)) for a, b in pts]
-
 
 def page_settings(scene=None, system=None, panel: int = 0, flag: str = "", **values) -> tuple:
     """(settings, label, seeds) a page starts from: a System's section map (``system``: a section map or
     'module:attribute'; or ``scene``: a section map or a System's scene), else Chaplygin's model (``scene``'s
     panel ``panel``; None: Figure 4); the ``values`` given (not None) on top, validated; ``flag``: how the
     refusal of a Chaplygin option on a System's page names it."""
-    from explorer.io.scene import SeedSpec, SystemScene, load_scene
+    from explorer.io.scene import SystemScene, load_scene
     from explorer.io.scene.system import resolve_system
 
     values = {k: v for k, v in values.items() if v is not None}
@@ -304,13 +306,13 @@ def page_settings(scene=None, system=None, panel: int = 0, flag: str = "", **val
     label = "" if scene is None else ": ".join(n for n in (scene.name, scene.panel(i)[2]) if n)
     given = {} if scene is None else {"tol": scene.integration.tol,
                                       "crossings": min(scene.integration.crossings, MAX_CROSSINGS)}
+    seeds = None if scene is None else scene.seeds      # (None: the page's default, PageSettings.seed_starts)
     if system is None and not isinstance(scene, SystemScene):
         params, h = (model.FIGURE4, model.FIGURE4_H) if scene is None else scene.panel(i)[:2]
         if scene is not None:
             integ = scene.integration
             given.update(method=integ.method, dt=integ.dt, phi0=integ.phi0, direction=integ.direction)
         params = params.with_(**{k: values.pop(k) for k in model.PARAM_NAMES if k in values})
-        seeds = SeedSpec() if scene is None else scene.seeds
         return Settings(params=params, **{"h": h, **given, **values}), label, seeds
     wrong = [k for k in values if k not in ("h", "tol", "crossings")]
     if wrong:
@@ -328,7 +330,7 @@ def page_settings(scene=None, system=None, panel: int = 0, flag: str = "", **val
         label = smap.system.name
     if "h" in values:
         smap = smap.with_value("energy", validation.magnitude(flag + "h", values.pop("h")))
-    return SystemSettings(smap, **{**given, **values}), label, None if scene is None else scene.seeds
+    return SystemSettings(smap, **{**given, **values}), label, seeds
 
 
 def read_number(name: str, text, whole: bool = False):
@@ -454,9 +456,8 @@ class Window:
             raise ValueError(f"not a window: {self}")
 
     def centres(self, n: int):
-        """Cell centres of an n x n raster, (n, n) arrays P1, P2 (row = p2 index)."""
-        u = (np.arange(n) + 0.5) / n
-        return np.meshgrid(self.x0 + (self.x1 - self.x0) * u, self.y0 + (self.y1 - self.y0) * u)
+        """Cell centres of an n x n raster, (n, n) arrays P1, P2 (row = p2 index): analysis.chaos_map's."""
+        return tuple(np.moveaxis(cell_centres((self.x0, self.x1, self.y0, self.y1), n), -1, 0))
 
 
 def format_window(w) -> str:
