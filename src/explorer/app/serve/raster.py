@@ -27,7 +27,7 @@ BATCH = 512
 DIFFUSION_BATCH = 32
 #: the indicators the layer can show (names of the registry, explorer.kernels.indicator_table)
 INDICATORS = ("megno", "frequency_diffusion")
-#: an adaptive raster's partial image at most this often (s), unless BATCH cells were computed since the last
+#: a raster's partial image after each batch, or after fewer cells (an adaptive raster's small steps) this long (s)
 IMAGE_SECONDS = 0.25
 #: N of the layer's frequency diffusion: nu1 from the first N returns, nu2 from the next N
 DIFFUSION_ITERATES = 100
@@ -35,7 +35,8 @@ DIFFUSION_ITERATES = 100
 
 @dataclass(frozen=True)
 class Image:
-    """One (partial) raster: ``values`` (n, n), NaN outside the region or not yet computed."""
+    """One (partial) raster: ``values`` (n, n), NaN outside the region; a cell not yet known shows the coarser
+    raster's value (none: NaN)."""
 
     window: Window
     n: int
@@ -69,14 +70,6 @@ def diffusion_cells(settings: Settings, p1, p2, center, iterates: int = DIFFUSIO
                                np.ravel(p2)]), center=center, iterates=iterates)
 
 
-def _shown(coarser, inside) -> np.ndarray:
-    """What a raster shows of the cells ``inside`` until each is computed: ``coarser``'s value (None: NaN)."""
-    if coarser is None:
-        return np.full(inside.shape, np.nan)
-    k = inside.shape[0] // coarser.shape[0]
-    return np.where(inside, np.kron(coarser, np.ones((k, k))), np.nan)
-
-
 def rasters(settings: Settings, window: Window, resolutions: tuple = RESOLUTIONS, time: float = RASTER_TIME,
             indicator: str = "megno", center=None, iterates: int = DIFFUSION_ITERATES, adaptive: bool = False):
     """Yield the :class:`Image` of ``indicator`` after every batch of every resolution (``center`` None:
@@ -91,14 +84,15 @@ def rasters(settings: Settings, window: Window, resolutions: tuple = RESOLUTIONS
     adaptive = adaptive and indicator == "megno"
     if adaptive:
         resolutions = resolutions[:1] + resolutions[1:][-1:]        # the first and the last (if another)
-    previous = None
-    for n in resolutions:
+    previous = np.full((1, 1), np.nan)          # the coarser raster (before the first: nothing known)
+    for i, n in enumerate(resolutions):
         P1, P2 = window.centres(n)
         inside = np.asarray(settings.allowed(P1, P2), bool)
-        shown = _shown(previous, inside)
+        k = n // previous.shape[0]
+        shown = np.where(inside, np.kron(previous, np.ones((k, k))), np.nan)
         raster = CellRaster(None, None, inside, indicator, RULES[indicator], default_threshold(indicator, time), {})
         steps = iter([np.nonzero(inside)])              # every cell, or those refinement asks for
-        if adaptive and previous is not None:
+        if adaptive and i:
             steps = refinement(raster, inside, n, previous.shape[0], TOLERANCE, n * n)
         last, pending = monotonic(), 0
         for r, c in steps:
