@@ -1,4 +1,4 @@
-"""The page's MEGNO layer refines its finest raster by docs/chaos_map.md's rule (raster.adaptive_raster;
+"""The page's MEGNO layer refines its finest raster by docs/chaos_map.md's rule (raster.rasters, adaptive;
 docs/commands/serve.md, "Chaos layer"): its computed cells are the exact raster's bit for bit, the
 filled ones agree in class, a coarse raster is shown first, and the link's ``megno=exact`` computes
 every cell.  In process, no browser."""
