@@ -78,9 +78,8 @@ def figure(view: View):
         ax.scatter(pts[:, 0], pts[:, 1], s=size, c=[colour], linewidths=0, marker="o", zorder=2,
                    rasterized=raster_points, gid=f"orbit-{ident}")
     if view.starts:
-        s = np.asarray([(a, b) for a, b, _c in view.starts], float)
-        ax.scatter(s[:, 0], s[:, 1], s=40, marker="+", c=[c for _a, _b, c in view.starts], linewidths=1.5,
-                   zorder=4, gid="starts")
+        p1, p2, colours = zip(*view.starts)
+        ax.scatter(p1, p2, s=40, marker="+", c=list(colours), linewidths=1.5, zorder=4, gid="starts")
     curves = [(f"separatrix-{n}", style.SEPARATRIX_COLOR, c) for n, c in enumerate(view.separatrices)]
     curves += [(f"manifold-{k}-{n}", figures.MANIFOLD_COLORS[k], c) for n, (k, c) in enumerate(view.manifolds)]
     for gid, colour, curve in curves:       # (the manifolds drawn over the separatrices)
