@@ -6,6 +6,7 @@ import io
 import os
 import time
 
+from explorer.app.serve.image import FORMATS, render
 from explorer.app.serve.settings import Settings
 from explorer.app.serve.tasks import failure
 from explorer.io import scene as scene_mod
@@ -51,8 +52,6 @@ def write_scene(directory, scene: scene_mod.Scene) -> str:
 
 def write_figure(directory, view) -> list:
     """Write the page's ``view`` as PNG and SVG into ``directory`` (:func:`write_files`); returns their paths."""
-    from explorer.app.serve.image import FORMATS, render
-
     return write_files(directory, SCENE_NAME, {fmt: render(view, fmt) for fmt in FORMATS})
 
 
@@ -74,8 +73,6 @@ class Exports:
 
     def download(self, fmt: str):
         """A download button's file: the scene ("toml") or the view ("png", "svg"); empty, and why said, if it fails."""
-        from explorer.app.serve.image import render
-
         try:
             return io.BytesIO(self.scene().to_toml().encode("utf-8") if fmt == "toml" else render(self.view(), fmt))
         except ParameterError as exc:
