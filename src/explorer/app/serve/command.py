@@ -75,7 +75,7 @@ def run(args, open_browser: bool = False) -> int:
     if args.token is not None and (not args.token or len(args.token) > 256 or not args.token.isprintable()
                                    or any(c in args.token for c in " &#?%/")):
         raise ParameterError("--token must be 1 to 256 printable characters without spaces or & # ? % /")
-    if not args.host or not args.host.strip() or any(c.isspace() for c in args.host):
+    if not args.host or any(c.isspace() for c in args.host):
         raise ParameterError(f"--host must be an address or host name (127.0.0.1 by default), got {args.host!r}")
     if args.export_dir is not None and not os.path.isdir(args.export_dir):
         raise ParameterError(f"--export-dir must be an existing directory, got {args.export_dir!r}")

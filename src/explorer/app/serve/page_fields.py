@@ -160,14 +160,11 @@ class Fields:
     def read(self, base: Settings, applied: Settings, n_orbits: int, name: str | None = None) -> Settings:
         """``base`` with ``applied`` and the text of field ``name`` (None: every field's), validated, with
         room for ``n_orbits`` orbits (ParameterError otherwise)."""
+        fields = applied.fields()
         for n in self.inputs if name is None else (name,):
-            typed = getattr(self.inputs[n], "value_input", None)
-            if typed == self.inputs[n].value:
-                self._typed[n] = typed              # this text applies now (or is refused): no longer typing
-        if name is None:
-            fields = {n: w.value for n, w in self.inputs.items()}
-        else:
-            fields = {**applied.fields(), name: self.inputs[name].value}
+            fields[n] = self.inputs[n].value
+            if getattr(self.inputs[n], "value_input", None) == fields[n]:
+                self._typed[n] = fields[n]          # this text applies now (or is refused): no longer typing
         new = base.with_fields(fields)
         full = room_for(n_orbits, new.crossings)
         if full:
