@@ -141,7 +141,8 @@ def test_a_value_change_reruns_the_orbits_under_their_own_ids():
         page.inputs["mu"].value = "0.031"
         assert [i for i, *_ in page.orbits.starts] == ids
         settle(page)
-        assert len(page.orbits.columns()["t"]) == 2 * s.crossings and not page.orbits.running
+        assert len(page.orbits.columns()["t"]) == 2 * s.crossings
+        assert all(r.status != "running" for r in page.orbits.runs.values())
         assert sorted(set(np.asarray(page.orbits.columns()["orbit"]).tolist())) == sorted(ids)
         assert page.click(c1, c2).ident == max(ids) + 1                        # a new click: a new id
     finally:
@@ -372,7 +373,7 @@ def test_a_click_pauses_the_running_orbit_and_resume_completes_it_bit_for_bit():
         assert page.orbit_list.resume() == 1 and page.orbits.worker.paused() == []
         assert "paused" not in page.orbits.status.text
         settle(page)
-        assert first not in page.orbits.running and _idle(page)
+        assert page.orbits.runs[first].status != "running" and _idle(page)
         for ident, (p1, p2) in ((first, a), (second, b)):        # as one uninterrupted run, bit for bit
             ref = sections.crossings(s.params, s.h, [(p1, p2)], n_crossings=s.crossings, **s.section_kwargs())
             np.testing.assert_array_equal(_orbit_rows(page, ident), ref.orbit(0))

@@ -33,7 +33,7 @@ def _rows(page, ident) -> np.ndarray:
 
 
 def _progress(page, ident) -> tuple:
-    return len(_rows(page, ident)), page.orbits.state(ident)
+    return len(_rows(page, ident)), page.orbits.runs[ident].phase
 
 
 @pytest.fixture
@@ -71,7 +71,7 @@ def test_raising_the_crossings_continues_each_orbit_and_lowering_cuts_it_without
         assert computed["rows"] == 2 * N                  # N more per orbit: none reran
         for i, run in enumerate(runs):
             np.testing.assert_array_equal(_rows(page, run.ident), ref.orbit(i))
-            assert page.orbits.state(run.ident) == "done"
+            assert page.orbits.runs[run.ident].phase == "done"
         computed["rows"] = 0
         _set_crossings(page, N // 2)
         _set_crossings(page, 2 * N)                       # (the cut rows come back)

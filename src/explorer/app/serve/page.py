@@ -99,7 +99,7 @@ class SectionPage:
                                                 color="primary" if x == "toml" else "default")
                         for label, x in downloads]
         self.click_mode = pn.widgets.RadioButtonGroup(options=list(CLICK_MODES), value=CLICK_MODES[0], width=220)
-        self.title = pn.pane.Markdown(self._title())
+        self.title = pn.pane.Markdown()         # (the settings' title: _show_section)
         o, ov = self.orbits, self.overlays
         controls = pn.Column(pn.pane.Markdown("a click (Shift + click: pick):", margin=(0, 5)), self.click_mode,
                              o.pause_box, self.fields.grid, o.colour_box, self.chaos.layer, self.chaos.indicator,
@@ -131,11 +131,12 @@ class SectionPage:
         fields = {k: v for k, v in args.items() if k in self.base.field_names}
         self.settings, wrong = settings_mod.parse_link_fields(self.base, fields)
         self.fields.show(self.settings)
-        self.title.object = self._title()
-        self._draw_region()
+        self._show_section()
         refused += wrong
         for part in self.link_parts:
             refused += part.load_url(args)
+        if self.orbits.runs:                  # the link's starts: their crosses and the status line at once
+            self.orbits.mark_starts()
         if refused:
             self.say(f"link ignored in part (the rest applies): {'; '.join(refused)}")
         self.push_url()
@@ -190,35 +191,27 @@ class SectionPage:
             self.settings = new           # (only the crossings per click: each orbit is cut or continues)
             self.orbits.recount(new)
         elif new != self.settings:
-            hidden = set(self.orbits.hidden)
             self.orbit_list.forget()
-            old = self.orbits.drop_all()
-            self.density_image.refresh(force=True)       # no image left of them
             self.settings = new
-            self.title.object = self._title()         # (param sends no unchanged value)
-            # the kept starts' crosses go before the region and the view
-            kept = [self.orbits.start(p1, p2, ident=i) for i, p1, p2, _c in old]   # (their ids and colours kept)
-            for run, (i, *_s) in zip(kept, old):
-                if run is not None and i in hidden:
-                    self.orbits.hide(run.ident)           # (a hidden orbit stays hidden)
-            self._draw_region()
+            # the kept starts' crosses go before the region and the view, with the status line (the orbits and
+            # values now, also when every start was dropped)
+            dropped = self.orbits.rerun()
+            self._show_section()
             self.chaos.restart()
             self.overlays.restart()
-            dropped = sum(r is None for r in kept)
             if dropped:
                 self.say(f"{dropped} start(s) outside the new allowed region dropped")
-            self.orbits.update_status()   # (the orbits and values now, also when every start was dropped)
         self.fields.show(self.settings)
         self.push_url()
 
-    def _draw_region(self):
+    def _show_section(self):
+        """The settings' title and allowed region (the view fitted to it; an empty one said)."""
+        label = f" ({self.label})" if self.label else ""
+        self.title.object = f"### explorer: {self.settings.title()}{label}"    # (param sends no unchanged value)
         region = self.settings.region
         self.section.draw_region(region, None if region is None else self.settings.region_mask())
         if region is None:
             self.say(self.settings.empty_region())
-
-    def _title(self) -> str:
-        return f"### explorer: {self.settings.title()}" + (f" ({self.label})" if self.label else "")
 
     # ------------------------------------------------------------ orbits
     def run_seeds(self) -> int:
@@ -232,7 +225,7 @@ class SectionPage:
         for p1, p2 in starts:
             if why := settings_mod.room_for(len(self.orbits.starts) + 1, self.settings.crossings):
                 break
-            n += self.orbits.start(p1, p2, quiet=True) is not None
+            n += self.orbits.start(p1, p2) is not None
         self.orbits.mark_starts()                # (once for all: not a status line and list per seed)
         if n < len(starts):
             self.say(f"scene seeds: {n} of {len(starts)} started ({why})")
@@ -242,20 +235,20 @@ class SectionPage:
         return n
 
     def click(self, p1: float, p2: float):
-        """A click at (p1, p2): a new orbit, or a message saying why not."""
+        """A click at (p1, p2): a new orbit, or a message saying why not (no room left, or the map refuses the
+        place).  On a served page its cross waits for its first crossings (they go first: OrbitsLayer._flush)."""
         if not (math.isfinite(p1) and math.isfinite(p2)):
             return None
-        full = settings_mod.room_for(len(self.orbits.starts) + 1, self.settings.crossings)
-        if full:
-            self.say(full)
-            return None
-        why = self.settings.refusal(p1, p2)
+        why = (settings_mod.room_for(len(self.orbits.runs) + 1, self.settings.crossings)
+               or self.settings.refusal(p1, p2))
         if why is not None:
             self.say(why)
             return None
         if self.orbits.pause_box.value:
             self.orbits.worker.pause()
-        run = self.orbits.start(p1, p2, mark_later=True)
+        run = self.orbits.start(p1, p2)
+        if self.session.doc is None:        # (without a server nothing is sent: marked at once)
+            self.orbits.mark_starts()
         self.say("")
         return run
 

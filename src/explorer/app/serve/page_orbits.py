@@ -103,20 +103,21 @@ class OrbitsLayer:
         """(orbit id, p1, p2, colour index) of every start, in click order."""
         return [(r.ident, r.p1, r.p2, r.colour) for r in self.runs.values()]
 
-    def start(self, p1: float, p2: float, mark_later: bool = False, ident: int | None = None, quiet: bool = False):
-        """Queue the orbit from (p1, p2) and mark its start (``mark_later`` on a served page: with its
-        first crossings; ``quiet``: when the caller calls :meth:`mark_starts`); None outside the region."""
+    def start(self, p1: float, p2: float, ident: int | None = None):
+        """Queue the orbit from (p1, p2) (as orbit ``ident``; None: a new id); None outside the region.  It draws
+        nothing: its cross comes with its first crossings, or before them from :meth:`mark_starts`."""
         settings = self.host.settings
         if not settings.admissible(p1, p2):
             return None
         run = self.worker.submit(p1, p2, settings, ident)
-        run.marked = not mark_later or self.session.doc is None
-        if run.marked and not quiet:
-            self.mark_starts()               # (else with the first crossings, in their flush)
+        run.marked = False
         return run
 
     def mark_starts(self) -> None:
-        """The starts' crosses and the status line (and the orbit list) anew."""
+        """Every start marked: the crosses and the status line (and the orbit list) anew, once for the starts
+        queued together (a link's, the scene's seeds, those a new value reruns)."""
+        for r in self.runs.values():
+            r.marked = True
         self._draw_starts()
         self.update_status()
 
@@ -129,22 +130,29 @@ class OrbitsLayer:
         if data != self.start_source.data:
             self.start_source.data = data
 
-    def drop_all(self) -> list:
-        """Stop every orbit and take them off the page; returns their starts."""
-        old = self.starts
+    def drop_all(self) -> None:
+        """Stop every orbit and take them off the page."""
         self.worker.cancel()
         self.flush_timer.cancel()
         self.hidden = set()
         self.show_all()
-        self._draw_starts()
-        return old
+
+    def rerun(self) -> int:
+        """Every orbit anew at the page's settings, under its id (its colour kept), a hidden one still hidden, its
+        cross and the status line at once; returns how many were dropped (outside the new region)."""
+        old, hidden = self.starts, self.hidden
+        self.drop_all()
+        for ident, p1, p2, _c in old:
+            if self.start(p1, p2, ident) is not None and ident in hidden:
+                self.hidden.add(ident)
+        self.mark_starts()
+        return len(old) - len(self.runs)
 
     def remove(self, ident: int) -> None:
         """Stop orbit ``ident`` (running or paused) and take it off the page."""
         self.runs.pop(ident, None)
         self.hidden.discard(ident)
         self.show_all()
-        self._draw_starts()
 
     def hide(self, ident: int, hidden: bool = True) -> None:
         """Take orbit ``ident``'s crossings and start off the page (it keeps computing), or (``hidden`` false)
@@ -152,7 +160,6 @@ class OrbitsLayer:
         if ident in self.runs:
             (self.hidden.add if hidden else self.hidden.discard)(ident)
             self.show_all()
-            self._draw_starts()
 
     def recount(self, settings) -> None:
         """New ``settings`` that differ only in the crossings per click K (Worker.recount): each orbit
@@ -161,19 +168,10 @@ class OrbitsLayer:
         self.show_all()
         self.update_status(force_density=True)
 
-    def state(self, ident: int) -> str:
-        """running, paused, done, or why the orbit stopped."""
-        return self.runs[ident].phase
-
     @property
     def indicators(self) -> dict:
         """{orbit id: (mean MEGNO, mLCE)} of the orbits whose indicators are known."""
         return {i: r.indicators for i, r in self.runs.items() if r.indicators}
-
-    @property
-    def running(self) -> set:
-        """The ids of the orbits still computing (or paused)."""
-        return {i for i, r in self.runs.items() if r.status == "running"}
 
     # ------------------------------------------------------------ blocks from the worker
     def _on_block(self, ident, rows, done, status):
@@ -218,12 +216,13 @@ class OrbitsLayer:
 
     def show_all(self) -> None:
         """The browser's rows anew: every crossing of the orbits not hidden (none past density.THRESHOLD), none
-        live."""
+        live; and their starts' crosses."""
         self.shown.data = self.columns([]) if self.host.density_image.dense else self.columns()
         if len(self.live.data["orbit"]):
             self.live.data = {k: [] for k in COLUMNS}
         for r in self.runs.values():
             r.sent = r.done
+        self._draw_starts()
 
     def _on_error(self, ident, exc):
         self._draw_starts()
@@ -233,13 +232,13 @@ class OrbitsLayer:
 
     def update_status(self, force_density: bool = False):
         """The status line (and the density image, at once if ``force_density``)."""
-        paused = len(self.worker.paused())
-        running = len(self.running) - paused
+        phases = [r.phase for r in self.runs.values()]
+        paused, running = phases.count("paused"), phases.count("running")
         n = sum(r.done for r in self.runs.values() if r.ident not in self.hidden)
         density = self.host.density_image
         density.refresh(force=force_density or not running)   # (at once when the last orbit is done)
         s = self.host.settings
-        text = (f"{len(self.starts)} orbit(s), {running} running, "
+        text = (f"{len(self.runs)} orbit(s), {running} running, "
                 + (f"{paused} paused (Resume continues them), " if paused else "") + f"{n} crossings drawn"
                 + (" (as a density image)" if density.dense else "") + "; " + s.describe())
         known = [r for r in self.runs.values() if r.indicators]
