@@ -121,6 +121,22 @@ def test_a_system_page_runs_the_maps_orbits_on_its_energy_level_and_refuses_poin
         page.close()
 
 
+def test_a_system_page_with_an_empty_region_says_why_and_still_draws_its_figure():
+    from explorer.app.serve.image import render
+    from explorer.app.serve.page import SectionPage
+    from explorer.app.serve.settings import SystemSettings
+
+    page = SectionPage(SystemSettings(henon_heiles_map().with_value("energy", -0.1)))
+    try:
+        assert page.settings.region is None and "domain of the section map" in page.message.text
+        assert page.click(0.1, 0.1) is None
+        view = page.view()
+        assert view.region is None and view.region_mask is None
+        assert render(view, "png").startswith(b"\x89PNG")
+    finally:
+        page.close()
+
+
 def test_explore_in_a_notebook_takes_a_systems_section_map():
     page = ex.explore(henon_heiles_map(), h=0.1, n_crossings=20).page
     try:

@@ -102,7 +102,10 @@ class PageSettings:
         return self._domain[1]
 
     def region_mask(self):
-        """The map's domain on a REGION_CELLS^2 grid of the :attr:`region` box (rows: the second coordinate)."""
+        """The map's domain on a REGION_CELLS^2 grid of the :attr:`region` box (rows: the second coordinate);
+        None when the region is empty."""
+        if self.region is None:
+            return None
         c1, c2, r1, r2 = self.region
         return self.smap.allowed(cell_centres((c1 - r1, c1 + r1, c2 - r2, c2 + r2), REGION_CELLS))
 
