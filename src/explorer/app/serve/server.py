@@ -10,10 +10,10 @@ import hmac
 import ipaddress
 import os
 import secrets
+import signal
 import socket
 import sys
 import threading
-from collections.abc import Callable
 
 from explorer.app.serve.settings import TOKEN_ARG, Settings
 
@@ -128,11 +128,12 @@ def run(base: Settings, *, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, t
     if open_browser:
         open_in_browser(url)
     server.io_loop.add_callback(lambda: asyncio.get_running_loop().set_exception_handler(_quiet_about_clients_gone))
-    restore = _end_on_signals()
+    before = _end_on_signals()
     try:
         server.io_loop.start()
     finally:
-        restore()
+        for sig, handler in before.items():
+            signal.signal(sig, handler)
         server.stop()
 
 
@@ -146,13 +147,11 @@ def _quiet_about_clients_gone(loop, context) -> None:
     loop.default_exception_handler(context)
 
 
-def _end_on_signals() -> Callable[[], None]:
+def _end_on_signals() -> dict:
     """SIGINT and SIGTERM end the process at once, streams flushed (docs/commands/serve.md, "Faults");
-    returns ``restore()``.  Off the main thread nothing changes."""
-    import signal
-
+    returns their handlers before.  Off the main thread nothing changes."""
     if threading.current_thread() is not threading.main_thread():
-        return lambda: None
+        return {}
 
     def handler(_signum, _frame):
         for stream in (sys.stdout, sys.stderr):
@@ -160,9 +159,4 @@ def _end_on_signals() -> Callable[[], None]:
                 stream.flush()
         os._exit(0)
 
-    old = {sig: signal.signal(sig, handler) for sig in (signal.SIGINT, signal.SIGTERM)}
-
-    def restore():
-        for sig, h in old.items():
-            signal.signal(sig, h)
-    return restore
+    return {sig: signal.signal(sig, handler) for sig in (signal.SIGINT, signal.SIGTERM)}
