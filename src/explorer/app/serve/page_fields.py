@@ -93,7 +93,7 @@ class Fields:
     def _edited(self, session, on_edit, name: str) -> None:
         if self._quiet:
             return
-        if name != "method" and self.step_field.value != name:
+        if name != "method":
             self.step_field.value = name
         session.soon(lambda: on_edit(name))
 
@@ -149,8 +149,7 @@ class Fields:
                 w = self.inputs[name]
                 if getattr(w, "value_input", None) not in (None, self._typed.get(name, "")):
                     continue            # typed into since its last apply: the text is the user's
-                if w.value != text:
-                    w.value = text
+                w.value = text          # (param calls no watcher and sends nothing for an unchanged value)
         finally:
             self._quiet = False
         mu = settings.fields().get("mu")
