@@ -71,6 +71,10 @@ class Session:
         t = self._tasks.get(name)
         return t is not None and not t[0].done()
 
+    def release(self, name) -> None:
+        """Task ``name`` is no longer the session's: it runs on, and a new task ``name`` does not cancel it."""
+        self._tasks.pop(name, None)
+
     def cancel(self, name) -> None:
         """Task ``name`` stops (at its next await; its budget's compiled loops at their next step)."""
         task, budget = self._tasks.pop(name, (None, None))
@@ -149,7 +153,10 @@ class Timer:
 
     async def _fire(self, when: float) -> None:
         await asyncio.sleep(when - self.session.loop.time())
-        # due no more: the action (with a document, a task of its own) may cancel the timer or ask for its next
-        # call, and this call still ends (Bokeh sends the action's changes after it returns)
-        self._due = None
-        self.session.soon(self.action)
+        await self.session.apply(self._act)
+
+    def _act(self) -> None:
+        # due no more: the action may cancel the timer or ask for its next call, and this call still ends
+        # (Bokeh sends the action's changes after it returns)
+        self.session.release(self)
+        self.action()
