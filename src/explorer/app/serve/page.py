@@ -45,7 +45,8 @@ class SectionPage:
                  seeds=None, megno_resolution: int = raster_mod.RESOLUTIONS[-1],
                  megno_time: float = raster_mod.RASTER_TIME, loop=None):
         self.base = self.settings = base
-        self.seeds, self.export_dir, self.label = seeds, export_dir, label
+        self.seeds, self.export_dir = seeds, export_dir
+        self.suffix = f" ({label})" if label else ""      # (the label after the page's and an image's title)
         self.session = Session(doc, loop)
         # the message line under the figure: text, never HTML (a message may quote a field)
         self.message = Div(name="message", text="", render_as_text=True,
@@ -170,14 +171,14 @@ class SectionPage:
         for part in (self.section, self.chaos, self.overlays, self.orbits):
             parts.update(part.view_fields())
         return View(region=s.region, region_mask=s.region_mask(), axes=s.axes,
-                    title=s.describe() + (f" ({self.label})" if self.label else ""), **parts)
+                    title=s.describe() + self.suffix, **parts)
 
     # ------------------------------------------------------------ values
     def _on_field(self, name: str | None = None):
         """The field ``name`` (None: every field) was edited: applied if valid as on the command line (Fields.read),
         else said on the message line."""
         try:
-            new = self.fields.read(self.base, self.settings, len(self.orbits.starts), name)
+            new = self.fields.read(self.base, self.settings, len(self.orbits.runs), name)
         except ParameterError as exc:
             self.say(f"not applied: {exc}")
             return
@@ -206,8 +207,7 @@ class SectionPage:
 
     def _show_section(self):
         """The settings' title and allowed region (the view fitted to it; an empty one said)."""
-        label = f" ({self.label})" if self.label else ""
-        self.title.object = f"### explorer: {self.settings.title()}{label}"    # (param sends no unchanged value)
+        self.title.object = f"### explorer: {self.settings.title()}{self.suffix}"   # (param sends no unchanged value)
         region = self.settings.region
         self.section.draw_region(region, None if region is None else self.settings.region_mask())
         if region is None:
@@ -223,7 +223,7 @@ class SectionPage:
             return 0
         n, why = 0, None
         for p1, p2 in starts:
-            if why := settings_mod.room_for(len(self.orbits.starts) + 1, self.settings.crossings):
+            if why := settings_mod.room_for(len(self.orbits.runs) + 1, self.settings.crossings):
                 break
             n += self.orbits.start(p1, p2) is not None
         self.orbits.mark_starts()                # (once for all: not a status line and list per seed)
