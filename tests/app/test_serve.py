@@ -979,10 +979,10 @@ def test_explore_in_a_notebook_renders_and_streams_the_clicked_orbit(monkeypatch
         from explorer.analysis import lyapunov
         from explorer.app.serve.orbits import INDICATOR_TIME
 
-        while not page.orbits.indicators and time.time() - t0 < 120:
+        while not any(r.indicators for r in page.orbits.runs.values()) and time.time() - t0 < 120:
             poll(page)
             time.sleep(0.01)
-        (megno, mlce), = page.orbits.indicators.values()
+        (megno, mlce), = [r.indicators for r in page.orbits.runs.values()]
         ind = lyapunov.indicators(page.settings.params, states=ex.section_state(page.settings.params, [0.3], [0.1],
                                                                          page.settings.h), tmax=INDICATOR_TIME)
         assert (megno, mlce) == (float(ind.megno[0]), float(ind.mlce[0]))
@@ -1216,6 +1216,21 @@ def test_the_scene_seeds_button_starts_the_sweeps_seeds_at_the_current_settings(
         page.close()
 
 
+def test_scene_seeds_the_map_refuses_start_no_orbit_and_the_message_says_so(monkeypatch):
+    pytest.importorskip("panel", reason="panel is not installed (pip install panel)")
+    from explorer.app.serve.page import SectionPage
+
+    s = Settings(params=model.FIGURE4.with_(mu=0.03), crossings=5)
+    c1, c2, r1, _r2 = s.region
+    page = SectionPage(s)
+    monkeypatch.setattr(Settings, "seed_starts", lambda _s, _seeds: [(c1, c2), (c1 + 3 * r1, c2)])  # (outside)
+    try:
+        assert page.run_seeds() == 1 == len(page.orbits.runs)
+        assert page.message.text == "scene seeds: 1 of 2 started (the map refuses the others)"
+    finally:
+        page.close()
+
+
 def _poll_until(page, cond, timeout=240.0):
     t0 = time.time()
     while not cond() and time.time() - t0 < timeout:
@@ -1238,7 +1253,8 @@ def test_an_orbits_megno_reaches_its_rows_whether_live_or_settled():
     page = SectionPage(s)
     try:
         older = page.click(c1 + 0.3 * r1, c2).ident
-        _poll_until(page, lambda: len(page.orbits.shown.data["t"]) == s.crossings and older in page.orbits.indicators)
+        _poll_until(page, lambda: len(page.orbits.shown.data["t"]) == s.crossings
+                    and page.orbits.runs[older].indicators)
         page.orbits.runs[older + 1] = OrbitRun(older + 1, c1, c2, s, paused=True)   # a second orbit, by hand:
         rows = np.column_stack([np.arange(1.0, 5.0), np.full(4, c1), np.full(4, c2), np.ones(4), np.zeros(4)])
         _hand_in(page, older + 1, rows, "running")                            # its first block
@@ -1381,12 +1397,11 @@ def test_five_hundred_clicks_leave_the_session_with_bounded_memory_and_threads(m
             paused += len(page.orbits.worker.paused())  # each click paused the orbits still running ...
             page.orbit_list.resume()                                           # ... and Resume continues them
             _poll_until(page, lambda: len(page.orbits.columns()["t"]) == ROUND * CLICK_CROSSINGS
-                        and len(page.orbits.indicators) == ROUND and _idle(page))
+                        and all(r.indicators for r in page.orbits.runs.values()) and _idle(page))
             assert sorted(np.unique(page.orbits.columns()["orbit"])) == sorted(i for i, *_ in page.orbits.starts)
             page.orbit_list.clear()
             poll(page)
             assert len(page.orbits.columns()["t"]) == 0 and page.orbits.starts == []
-            assert page.orbits.indicators == {}
             assert page.orbits.runs == {}                           # (running, paused or stopped)
             gc.collect()                                            # (Bokeh's models hold reference cycles)
             heap.append(tracemalloc.get_traced_memory()[0])
@@ -1534,7 +1549,7 @@ def test_the_view_exports_as_svg_with_one_group_per_orbit_and_as_png_in_the_orbi
         gray = np.array(matplotlib.colors.to_rgb("0.8"))
         assert np.sum(np.abs(img - gray).max(axis=2) < 0.02) > 1000        # the forbidden region
         page.orbits.colour_box.value = True  # coloured by MEGNO: not the orbit colours
-        _poll_until(page, lambda: len(page.orbits.indicators) == 3)
+        _poll_until(page, lambda: all(r.indicators for r in page.orbits.runs.values()))
         assert all(set(v) != {COLORS[c]} for (_i, _a, _b, c), v in zip(page.orbits.starts, _svg_orbits(
             page.exports.download("svg").getvalue()).values()))
         page.exports.export_figure()                                              # into --export-dir, PNG and SVG

@@ -14,6 +14,7 @@ from bokeh.models import CustomJS, Div
 from explorer.app.serve import export, style
 from explorer.app.serve import raster as raster_mod
 from explorer.app.serve import settings as settings_mod
+from explorer.app.serve.image import View
 from explorer.app.serve.page_fields import Fields
 from explorer.app.serve.page_layers import ChaosLayer, DensityImage
 from explorer.app.serve.page_orbit_list import OrbitList
@@ -165,8 +166,6 @@ class SectionPage:
 
     def view(self):
         """What the page shows now, hidden orbits left out, copied (drawn in any thread): each component's part."""
-        from explorer.app.serve.image import View
-
         s, parts = self.settings, {}
         for part in (self.section, self.chaos, self.overlays, self.orbits):
             parts.update(part.view_fields())
@@ -221,9 +220,10 @@ class SectionPage:
         except ParameterError as exc:
             self.say(f"scene seeds: {exc}")
             return 0
-        n, why = 0, None
+        n, why = 0, "the map refuses the others"        # (start: None for a seed the map cannot lift)
         for p1, p2 in starts:
-            if why := settings_mod.room_for(len(self.orbits.runs) + 1, self.settings.crossings):
+            if full := settings_mod.room_for(len(self.orbits.runs) + 1, self.settings.crossings):
+                why = full
                 break
             n += self.orbits.start(p1, p2) is not None
         self.orbits.mark_starts()                # (once for all: not a status line and list per seed)
