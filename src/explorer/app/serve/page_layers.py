@@ -161,7 +161,8 @@ class DensityImage:
         nx, ny = max(int(px) // density.CELL_PX, 1), max(int(py) // density.CELL_PX, 1)
         by_megno = bool(orbits.colour_box.value)
         # (which orbits, where, how coloured), (their rows: they change only by growing, leaving, or a MEGNO known)
-        key = (dense, first, w, nx, ny, by_megno), (n, len(orbits.indicators) if by_megno else -1)
+        known = sum(r.indicators is not None for r in imaged) if by_megno else -1
+        key = (dense, first, w, nx, ny, by_megno), (n, known)
         rows_alone = not force and self._key is not None and key[0] == self._key[0]
         if key == self._key or rows_alone and time.monotonic() - self._at < DENSITY_SECONDS:
             return

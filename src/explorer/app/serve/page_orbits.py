@@ -58,7 +58,7 @@ class OrbitsLayer:
         self.colour_box = Box(label="colour orbits by MEGNO", value=False)
         self.colour_box.param.watch(lambda _e: session.soon(self._colour_changed), "value")
         self.starts_box = Box(label="start markers (+)", value=True)
-        self.starts_box.param.watch(lambda _e: session.soon(self._starts_box_changed), "value")
+        self.starts_box.param.watch(lambda e: session.soon(lambda: self.start_marks.update(visible=e.new)), "value")
         self.pause_box = Box(label=PAUSE_LABEL, value=True)
         self.pause_box.param.watch(lambda _e: session.soon(host.push_url), "value")
 
@@ -168,11 +168,6 @@ class OrbitsLayer:
         self.show_all()
         self.update_status(force_density=True)
 
-    @property
-    def indicators(self) -> dict:
-        """{orbit id: (mean MEGNO, mLCE)} of the orbits whose indicators are known."""
-        return {i: r.indicators for i, r in self.runs.items() if r.indicators}
-
     # ------------------------------------------------------------ blocks from the worker
     def _on_block(self, ident, rows, done, status):
         """An orbit's block is in ``runs``: its first and last go to the browser at once, others at most every
@@ -265,7 +260,7 @@ class OrbitsLayer:
         for r in (self.points, self.live_points):
             r.glyph.fill_color = spec
             r.glyph.line_color = spec
-        self.host.density_image.refresh(force=True)
+        self.host.density_image.refresh()       # (at once: how it is coloured is part of what it shows)
         self.host.push_url()
 
     def load_url(self, args: dict) -> list:
@@ -286,10 +281,6 @@ class OrbitsLayer:
         """Each dot on a casing (:data:`~explorer.app.serve.style.DOT_CASING`), or not."""
         for r in self.casings:
             r.visible = bool(on)
-
-    def _starts_box_changed(self) -> None:
-        """Show or hide the clicked starts' crosses."""
-        self.start_marks.visible = bool(self.starts_box.value)
 
 
 def _megno_patch(rows, megno: float, as_list: bool = False) -> dict:
