@@ -20,8 +20,8 @@ FORMATS = ("png", "svg")
 class View:
     """What the page shows: ``orbits`` [(id, colour, points (n, 2), megno)], ``starts`` [(p1, p2, colour)], ``region``
     (c1, c2, r1, r2) or None, drawn as ``region_mask`` over its box if given (else an ellipse), ``raster`` (values,
-    window) on ``raster_scale``, ``fixed`` [(p1, p2, elliptic)], ``manifolds`` [(kind, curve)],
-    ``periodic`` [(p1, p2, period, elliptic)]."""
+    window) on ``raster_scale``, ``manifolds`` [(kind, curve)], the marks of the ``periodic`` orbits and of the
+    ``fixed`` points (period 1), each [(p1, p2, period, elliptic)]."""
 
     window: tuple
     region: tuple | None
@@ -85,12 +85,10 @@ def figure(view: View):
     for gid, colour, curve in curves:       # (the manifolds drawn over the separatrices)
         c = np.asarray(curve, float)
         ax.plot(c[:, 0], c[:, 1], color=colour, linewidth=0.8, zorder=2.5, gid=gid)
-    for p1, p2, period, elliptic in view.periodic:
-        ax.scatter([p1], [p2], s=36, marker="o" if elliptic else "X", edgecolors="black", linewidths=1.0,
-                   c=[style.PERIOD_COLORS[(int(period) - 1) % len(style.PERIOD_COLORS)]], zorder=5)
-    for p1, p2, elliptic in view.fixed:
-        ax.scatter([p1], [p2], s=60, marker="o" if elliptic else "X", edgecolors="black", facecolors="white",
-                   linewidths=1.5, zorder=6)
+    for marks, size, width in ((view.periodic, 36, 1.0), (view.fixed, 60, 1.5)):     # (the fixed points larger, over)
+        for p1, p2, period, elliptic in marks:
+            ax.scatter([p1], [p2], s=size, marker="o" if elliptic else "X", edgecolors="black", linewidths=width,
+                       c=[style.PERIOD_COLORS[(int(period) - 1) % len(style.PERIOD_COLORS)]], zorder=5)
     ax.set(xlim=view.window[:2], ylim=view.window[2:], xlabel=figures.symbol_label(view.axes[0]),
            ylabel=figures.symbol_label(view.axes[1]))
     ax.set_aspect("equal", adjustable="box")

@@ -67,9 +67,9 @@ def fixed_points(view) -> tuple:
     return points, f"fixed points {found}{stopped}"
 
 
-def separatrices(view, points, text: str) -> tuple:
-    """(curves, message): the (M, 2) separatrix branches of the hyperbolic ``points`` (docs/manifolds.md), and
-    ``text`` (the fixed points' message) with what they gave."""
+def separatrices(view, points) -> tuple:
+    """(curves, message): the (M, 2) separatrix branches of the hyperbolic ``points`` (docs/manifolds.md) and what
+    they gave (none: "")."""
     curves: list = []
     notes = []
     for fp in (fp for fp in points if not fp.stable):
@@ -86,9 +86,7 @@ def separatrices(view, points, text: str) -> tuple:
         short = sorted({b.status for b in branches if b.status != "arclength"})
         if short:
             notes.append(f"{at}: some branches stopped short ({', '.join(short)})")
-    if points:
-        text += f"; {len(curves)} separatrix branches" + "".join(f"; {n}" for n in notes)
-    return curves, text
+    return curves, "; ".join([f"{len(curves)} separatrix branches", *notes]) if points else ""
 
 
 def periodic_orbits(view):

@@ -12,7 +12,7 @@ from bokeh.models import CDSView, Div, GroupFilter
 from explorer.app.serve import overlays as search
 from explorer.app.serve import settings as settings_mod
 from explorer.app.serve.orbits import COLORS
-from explorer.app.serve.page_overlays import nearest, show_search
+from explorer.app.serve.page_overlays import show_search
 from explorer.app.serve.style import LIST_WIDTH
 from explorer.model import ParameterError
 
@@ -108,8 +108,8 @@ class OrbitList:
 
     # ------------------------------------------------------------ the link
     def load_url(self, args: dict) -> list:
-        """Start a link's ``orbits`` (none when they do not fit) and hide those its ``hidden`` names; returns what
-        it refused."""
+        """Start a link's ``orbits`` (none when they do not fit), hide those its ``hidden`` names and mark the starts
+        (OrbitsLayer.mark_starts); returns what it refused."""
         try:
             starts = settings_mod.parse_starts(args.get("orbits", ""))
         except ParameterError as exc:
@@ -125,6 +125,8 @@ class OrbitList:
             run = self.orbits.start(p1, p2)
             if run is not None and k in positions:
                 self.orbits.hide(run.ident)
+        if self.orbits.runs:                    # their crosses and the status line at once
+            self.orbits.mark_starts()
         return refused
 
     def url_query(self) -> dict:
@@ -152,7 +154,7 @@ class OrbitList:
         if self.overlays.pick(p1, p2, radius_px):
             return None
         d = self.orbits.columns(keys=("orbit", "p1", "p2"))
-        k = nearest(self.view, d["p1"], d["p2"], p1, p2, radius_px)
+        k = self.view.nearest(d["p1"], d["p2"], p1, p2, radius_px)
         if k is None:
             self.say(f"pick: no crossing within {radius_px:g} pixels of ({p1:.4g}, {p2:.4g})" if len(d["orbit"])
                      else "pick: no orbit on the page yet")

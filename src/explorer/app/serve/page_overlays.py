@@ -28,14 +28,6 @@ async def show_search(session, what: str, show, fn, *args) -> tuple:
     return found, text
 
 
-def nearest(view, xs, ys, p1: float, p2: float, radius_px: float) -> int | None:
-    """The index of the point of (xs, ys) nearest to (p1, p2) within ``radius_px`` pixels of ``view``, or None."""
-    px, py = view.pixel()
-    d = np.hypot((np.asarray(xs, float) - p1) / (px or 1.0), (np.asarray(ys, float) - p2) / (py or 1.0))
-    k = int(np.argmin(d)) if len(d) else 0
-    return k if len(d) and d[k] <= radius_px else None
-
-
 def _clear(*sources) -> None:
     for src in sources:
         src.data = {k: [] for k in COLUMNS[src.name]}
@@ -55,6 +47,12 @@ def _marked(data) -> list:
 
 def _lines(curves) -> dict:
     return {"xs": [c[:, 0] for c in curves], "ys": [c[:, 1] for c in curves]}
+
+
+def _branches(branches) -> dict:
+    """The columns (COLUMNS["manifolds"]) of manifold ``branches``."""
+    return {**_lines([np.asarray(b.points, float) for b in branches]),
+            "color": [MANIFOLD_COLORS[b.kind] for b in branches], "kind": [b.kind for b in branches]}
 
 
 class Overlays:
@@ -79,12 +77,13 @@ class Overlays:
         fig.multi_line("xs", "ys", source=self.manifold_source, line_color="color", line_width=1.2)
 
     def draw_marks(self, fig) -> None:
-        """The marks of the periodic orbits and fixed points (over the crossings)."""
-        fig.scatter("p1", "p2", source=self.periodic, marker="marker", size=8, line_color="black",
-                    fill_color={"field": "period", "transform": LinearColorMapper(
-                        palette=list(PERIOD_COLORS), low=0.5, high=len(PERIOD_COLORS) + 0.5)}, line_width=1.5)
-        fig.scatter("p1", "p2", source=self.fixed, marker="marker", size=11, line_color="black",
-                    fill_color="white", line_width=2)
+        """The marks of the periodic orbits, then larger the fixed points (period 1), over the crossings, each filled
+        with the colour of its period."""
+        by_period = {"field": "period", "transform": LinearColorMapper(palette=list(PERIOD_COLORS), low=0.5,
+                                                                        high=len(PERIOD_COLORS) + 0.5)}
+        for source, size, width in ((self.periodic, 8, 1.5), (self.fixed, 11, 2.0)):
+            fig.scatter("p1", "p2", source=source, marker="marker", size=size, line_color="black",
+                        fill_color=by_period, line_width=width)
 
     def load_url(self, args: dict) -> list:
         """The boxes from a link (``separatrices``, ``periodic``: "1" ticked); nothing refused."""
@@ -97,7 +96,7 @@ class Overlays:
     def view_fields(self) -> dict:
         """Its part of the exported view (image.View): the marks and curves shown."""
         c, m = self.curves.data, self.manifold_source.data
-        return {"fixed": [(a, b, e) for a, b, _k, e in _marked(self.fixed.data)],
+        return {"fixed": _marked(self.fixed.data),
                 "separatrices": [np.column_stack([x, y]) for x, y in zip(c["xs"], c["ys"])],
                 "manifolds": [(k, np.column_stack([x, y])) for k, x, y in zip(m["kind"], m["xs"], m["ys"])],
                 "periodic": _marked(self.periodic.data)}
@@ -119,44 +118,36 @@ class Overlays:
             self.session.start("overlay", self._compute(self.settings(), fixed, periodic), budget=budget)
 
     async def _compute(self, settings, fixed, periodic):
-        text, session = "", self.session
+        show, session = partial(self._show, []), self.session      # (one list of what the searches said)
         if fixed:
-            points, text = await show_search(session, "fixed points", self._show_points, search.fixed_points, settings)
-            _c, text = await show_search(session, f"{text}; separatrices", partial(self._show_curves, periodic),
-                                         search.separatrices, settings, points, text)
+            points, _t = await show_search(session, "fixed points", partial(
+                show, self.fixed, _marks, "growing the separatrices ..."), search.fixed_points, settings)
+            then = "searching the periodic orbits ..." if periodic else ""
+            await show_search(session, "separatrices", partial(show, self.curves, _lines, then), search.separatrices,
+                              settings, points)
         if periodic:
-            await show_search(session, "periodic orbits", partial(self._show_periodic, text), search.periodic_orbits,
-                              settings)
+            await show_search(session, "periodic orbits", partial(show, self.periodic, _marks, ""),
+                              search.periodic_orbits, settings)
 
-    def _show_points(self, points, text):
-        self.fixed.data = _marks(points)
-        self.text.text = text + ("; growing the separatrices ..." if any(not p.stable for p in points) else "")
-
-    def _show_curves(self, periodic, curves, text):
-        self.curves.data = _lines(curves)
-        self.text.text = text + ("; searching the periodic orbits ..." if periodic else "")
-
-    def _show_periodic(self, text, orbits, found):
-        self.periodic.data = _marks(orbits)
-        self.text.text = "; ".join(t for t in (text, found) if t)
+    def _show(self, said, source, columns, then, found, text):
+        """A search's result: ``columns(found)`` in ``source``, its ``text`` after what the searches before it
+        ``said`` (a list), then ``then`` (what is searched next)."""
+        source.data = columns(found)
+        said.append(text)
+        self.text.text = "; ".join(t for t in (*said, then) if t)
 
     def pick(self, p1: float, p2: float, radius_px: float) -> bool:
         """A pick at (p1, p2): W^u and W^s of the orbit of the nearest hyperbolic mark within ``radius_px`` pixels
         grown and drawn (latest wins), True; False when there is no such mark."""
         marks = [m for src in (self.fixed, self.periodic) for m in _marked(src.data) if not m[3]]
-        i = nearest(self.view, [m[0] for m in marks], [m[1] for m in marks], p1, p2, radius_px)
+        i = self.view.nearest([m[0] for m in marks], [m[1] for m in marks], p1, p2, radius_px)
         if i is None:
             return False
         a, b, period, _e = marks[i]
         _clear(self.manifold_source)
         self.text.text = f"growing the manifolds of the period-{period} orbit at ({a:.6g}, {b:.6g}) ..."
-        self.session.start("manifolds", show_search(self.session, "manifolds", self._show_manifolds,
-                                                    search.saddle_manifolds, self.settings(), (a, b), period),
+        show = partial(self._show, [], self.manifold_source, _branches, "")
+        self.session.start("manifolds", show_search(self.session, "manifolds", show, search.saddle_manifolds,
+                                                    self.settings(), (a, b), period),
                            budget=search.search_budget(search.MANIFOLD_SECONDS))
         return True
-
-    def _show_manifolds(self, branches, text):
-        self.manifold_source.data = {**_lines([np.asarray(b.points, float) for b in branches]),
-                                     "color": [MANIFOLD_COLORS[b.kind] for b in branches],
-                                     "kind": [b.kind for b in branches]}
-        self.text.text = text

@@ -58,13 +58,16 @@ class SectionView:
         except UnsetValueError:  # not drawn in a browser yet: the figure's nominal size
             return style.FIGURE_WIDTH - 60.0, style.FIGURE_HEIGHT - 60.0
 
-    def pixel(self) -> tuple:
-        """The size of a screen pixel in p1 and p2 (from the visible window and the plot's frame)."""
+    def nearest(self, xs, ys, p1: float, p2: float, radius_px: float) -> int | None:
+        """The index of the point of (xs, ys) nearest to (p1, p2) within ``radius_px`` screen pixels, or None."""
         w = self.window
-        if w is None:
-            return 0.0, 0.0
+        if w is None or not len(xs):
+            return None
         width, height = self.frame_px()
-        return (w.x1 - w.x0) / width, (w.y1 - w.y0) / height
+        d = np.hypot((np.asarray(xs, float) - p1) * (width / (w.x1 - w.x0)),
+                     (np.asarray(ys, float) - p2) * (height / (w.y1 - w.y0)))
+        k = int(np.argmin(d))
+        return k if d[k] <= radius_px else None
 
     def draw_region(self, region, mask=None) -> None:
         """The allowed region (c1, c2, r1, r2; None: empty) as the ellipse or ``mask`` over its box; the view fitted."""
