@@ -87,10 +87,6 @@ def run(args, open_browser: bool = False) -> int:
     validation.real("--megno-time", megno_time, 0.0, raster.MAX_RASTER_TIME, lo_open=True)
     base, label, seeds = page_from_args(args)
     try:
-        import panel  # noqa: F401
-    except ImportError:
-        raise ParameterError("serve needs the panel package (pip install panel)") from None
-    try:
         server.run(base, host=args.host, port=args.port, token=args.token, export_dir=args.export_dir, label=label,
                    seeds=seeds, open_browser=open_browser, megno_resolution=megno_resolution,
                    megno_time=megno_time)
