@@ -16,8 +16,8 @@ from explorer.model import ParameterError
 SCENE_NAME = "browser-session"
 
 
-def session_scene(settings: Settings, starts, name: str = SCENE_NAME, overlays: tuple = ()) -> scene_mod.Scene:
-    """The scene of a session: one panel, the admissible ``starts`` as points (ParameterError: none).
+def session_scene(settings: Settings, starts, overlays: tuple = ()) -> scene_mod.Scene:
+    """The scene of a session (named SCENE_NAME): one panel, the admissible ``starts`` as points (ParameterError: none).
     ``overlays`` (URL names): "separatrices" is computed by the sweep; each is named in the description."""
     points = tuple((float(a), float(b)) for a, b in starts if settings.admissible(a, b))
     if not points:
@@ -26,7 +26,7 @@ def session_scene(settings: Settings, starts, name: str = SCENE_NAME, overlays: 
     integ = scene_mod.IntegrationSpec(crossings=settings.crossings, **settings.section_kwargs())
     compute = ("sections", "separatrices") if "separatrices" in overlays else ("sections",)
     shown = f"; overlays on the page: {', '.join(overlays)}" if overlays else "; no overlay on the page"
-    return scene_mod.Scene(name=name, params=settings.params, h=settings.h, seeds=seeds, integration=integ,
+    return scene_mod.Scene(name=SCENE_NAME, params=settings.params, h=settings.h, seeds=seeds, integration=integ,
                            compute=compute, description="orbits clicked in `explorer serve`" + shown)
 
 

@@ -122,8 +122,7 @@ def orbit_readout(settings, start) -> tuple:
         fp = values["center"] = elliptic_center(settings, (p1, p2))
         if fp is None:
             return values, f"{text}: none (Newton's method found no elliptic fixed point)"
-        rot = values["rotation"] = rotation.rotation_number(settings.section_map(rotation_tol(settings)), (p1, p2),
-                                                            center=fp.point)
+        rot = values["rotation"] = rotation.rotation_number(rotation_map(settings), (p1, p2), center=fp.point)
     except Exception as exc:  # noqa: BLE001 - shown in the readout (a spent budget too: the indicators stay)
         return values, f"{text}: none ({failure(exc)})"
     if not math.isfinite(rot.value):
@@ -133,9 +132,9 @@ def orbit_readout(settings, start) -> tuple:
                                    f"not converged (|WB_N - WB_2N| = {rot.difference:.2g})"))
 
 
-def rotation_tol(settings) -> float:
-    """The Taylor tolerance of an orbit's rotation number (rotation numbers are Taylor only)."""
-    return float(settings.tol) if settings.method == "taylor" else float(rotation.DEFAULT_TOL)
+def rotation_map(settings):
+    """The section map of an orbit's rotation number: Taylor only, at the page's tol, else the rotation's default."""
+    return settings.section_map(float(settings.tol) if settings.method == "taylor" else float(rotation.DEFAULT_TOL))
 
 
 def saddle_manifolds(settings, point, period=1):

@@ -10,7 +10,7 @@ import numpy as np
 
 from explorer.analysis.chaos_map import RULES, TOLERANCE, CellRaster, default_threshold, refinement
 from explorer.analysis.rotation import frequency_diffusion
-from explorer.app.serve.overlays import elliptic_center, rotation_tol
+from explorer.app.serve.overlays import elliptic_center, rotation_map
 from explorer.app.serve.settings import Settings, Window
 from explorer.model import ParameterError, validation
 
@@ -66,8 +66,8 @@ def diffusion_cells(settings: Settings, p1, p2, center, iterates: int = DIFFUSIO
     if settings.direction == -1:
         raise ParameterError("frequency diffusion needs crossings in direction + or both (the section map's "
                              "returns); these settings count them in direction -")
-    return frequency_diffusion(settings.section_map(rotation_tol(settings)), np.column_stack([np.ravel(p1),
-                               np.ravel(p2)]), center=center, iterates=iterates)
+    return frequency_diffusion(rotation_map(settings), np.column_stack([np.ravel(p1), np.ravel(p2)]), center=center,
+                               iterates=iterates)
 
 
 def rasters(settings: Settings, window: Window, resolutions: tuple = RESOLUTIONS, time: float = RASTER_TIME,
