@@ -13,11 +13,6 @@ CELL_PX = 2
 MIN_ALPHA = 0.45
 
 
-def _rgb(colour: str) -> tuple:
-    c = colour.lstrip("#")
-    return int(c[0:2], 16), int(c[2:4], 16), int(c[4:6], 16)
-
-
 def glyph_cutoff(counts: dict, budget: int = GLYPH_BUDGET) -> int:
     """The first orbit id drawn as glyphs, given {orbit id: crossings} in ascending ids: the newest whole orbits
     within ``budget`` crossings (0: every one fits)."""
@@ -56,6 +51,6 @@ def density_rgba(p1, p2, colour_index, window, nx: int, ny: int, colors, megno=N
     top = max(int(count.max()) if count.size else 0, 1)
     alpha = np.where(count > 0, 255 * (MIN_ALPHA + (1 - MIN_ALPHA) * np.log1p(count) / np.log1p(top)), 0)
     rgba = np.empty((ncell, 4), np.uint8)
-    rgba[:, :3] = np.array([_rgb(c) for c in table], np.uint8)[idx]
+    rgba[:, :3] = np.array([list(bytes.fromhex(c.lstrip("#"))) for c in table], np.uint8)[idx]     # ("#rrggbb")
     rgba[:, 3] = alpha.astype(np.uint8)
     return rgba.view(np.uint32).reshape(ny, nx)

@@ -76,13 +76,13 @@ class OrbitList:
         """Hide orbit ``ident`` (None: none), or show it again if hidden."""
         if ident in self.orbits.runs:
             self.orbits.hide(ident, ident not in self.orbits.hidden)
-            self._changed(force_density=True)
+            self._changed()
 
     def clear(self) -> None:
         """Remove every orbit (running and paused ones stopped)."""
         self.forget()
         self.orbits.drop_all()
-        self._changed(force_density=True)
+        self._changed()
 
     def undo(self) -> None:
         """Remove the newest orbit (stopped if it runs or is paused)."""
@@ -102,8 +102,9 @@ class OrbitList:
         self.orbits.remove(ident)
         self._changed()
 
-    def _changed(self, force_density: bool = False) -> None:
-        self.orbits.update_status(force_density=force_density)
+    def _changed(self) -> None:
+        """The orbits shown changed: the status line, the density image at once, the link."""
+        self.orbits.update_status(force_density=True)
         self.on_changed()
 
     # ------------------------------------------------------------ the link
