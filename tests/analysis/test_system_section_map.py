@@ -184,3 +184,15 @@ def test_with_tol_is_the_same_map_at_that_tolerance_and_its_returns_agree_to_it(
     assert np.max(np.abs(loose(x0).point - smap(x0).point)) < 1e-7
     with pytest.raises(ParameterError, match="tol"):
         smap.with_tol(0.5)
+
+
+def test_a_map_rebuilt_with_the_same_values_is_equal_and_any_other_value_makes_another_map():
+    hh = henon_heiles()
+    smap = ex.SectionMap(hh, E, section=x, direction=+1, coords=(y, py), solve=px)
+    again = ex.SectionMap(henon_heiles(), E, section=x, direction=+1, coords=(y, py), solve=px)
+    assert again == smap and hash(again) == hash(smap) and again is not smap
+    assert smap.with_value("lam", 0.5).with_value("lam", 1.0) == smap
+    assert smap.with_value("energy", 0.1).with_value("energy", E) == smap
+    others = (smap.with_value("lam", 0.5), smap.with_value("energy", 0.1), smap.opposite(), smap.with_tol(1e-9),
+              smap.with_tmax(10.0), ex.SectionMap(hh, E, section=x, direction=+1, coords=(py, y), solve=px))
+    assert all(o != smap for o in others) and smap != ex.SectionMap(ex.FIGURE4, ex.FIGURE4_H)

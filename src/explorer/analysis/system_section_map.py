@@ -211,6 +211,19 @@ class SystemSectionMap(FlowSection):
         return dict(section=self.section.expr, direction=self.direction, coords=self.coords, solve=self.solve,
                     tol=self.tol, tmax=self.tmax)
 
+    def _key(self) -> tuple:
+        """What makes two maps one: the system's equations (content hash), name and parameter values, the
+        energy and :meth:`_settings`."""
+        s = self.system
+        return s.content_hash, s.name, tuple(s.parameters.values()), self.energy_value, *self._settings().values()
+
+    def __eq__(self, other):
+        """Equal maps give the same points, states and crossings (a map rebuilt with the same values is equal)."""
+        return isinstance(other, SystemSectionMap) and other._key() == self._key()
+
+    def __hash__(self):
+        return hash(self._key())
+
     def __getstate__(self):
         """Pickled without the lambdified functions (rebuilt from the cache on unpickling)."""
         state = dict(self.__dict__)

@@ -237,10 +237,10 @@ class Settings(PageSettings, sections.Integration):
         return {"method": self.method, "dt": self.dt, "direction": self.direction}
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True)
 class SystemSettings(PageSettings):
     """The page of a System's section map ``smap``: fields the system's parameters, ``energy``, ``tol``
-    and ``crossings``; equal when their fields are."""
+    and ``crossings``; equal when their maps (equal by value), ``tol`` and ``crossings`` are."""
 
     smap: Any
     tol: float = 1e-13
@@ -263,12 +263,6 @@ class SystemSettings(PageSettings):
                                      f"link uses that name (rename it; reserved: {', '.join(RESERVED)})")
         validation.real("tol", self.tol, MIN_TOL, MAX_TOL)
         validation.integer("crossings", self.crossings, 1, MAX_CROSSINGS)
-
-    def __eq__(self, other):
-        return isinstance(other, SystemSettings) and other.fields() == self.fields()
-
-    def __hash__(self):
-        return hash(tuple(self.fields().items()))
 
     @property
     def axes(self) -> tuple:
@@ -447,7 +441,8 @@ def parse_hidden(text: str, n_starts: int) -> set:
 
 @dataclass(frozen=True)
 class Window:
-    """The visible part of the section: p1 in [x0, x1], p2 in [y0, y1]."""
+    """The visible part of the section, the link's ``view``: p1 in [x0, x1], p2 in [y0, y1] (ParameterError, a
+    ValueError, otherwise)."""
 
     x0: float
     x1: float
@@ -456,7 +451,7 @@ class Window:
 
     def __post_init__(self):
         if not all(np.isfinite([self.x0, self.x1, self.y0, self.y1])) or not (self.x1 > self.x0 and self.y1 > self.y0):
-            raise ValueError(f"not a window: {self}")
+            raise ParameterError(f"view must have finite x0 < x1 and y0 < y1, got {format_window(self)}")
 
     def centres(self, n: int):
         """Cell centres of an n x n raster, (n, n) arrays P1, P2 (row = p2 index): analysis.chaos_map's."""
@@ -470,7 +465,4 @@ def format_window(w) -> str:
 
 def parse_window(text: str):
     """The :class:`Window` of :func:`format_window` (ParameterError otherwise)."""
-    x0, x1, y0, y1 = read_numbers("view", text, ("x0", "x1", "y0", "y1"))
-    if not (x0 < x1 and y0 < y1):
-        raise ParameterError(f"view must have x0 < x1 and y0 < y1, got {x0!r},{x1!r},{y0!r},{y1!r}")
-    return Window(x0, x1, y0, y1)
+    return Window(*read_numbers("view", text, ("x0", "x1", "y0", "y1")))
