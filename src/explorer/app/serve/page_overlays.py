@@ -4,7 +4,8 @@ from __future__ import annotations
 from functools import partial
 
 import numpy as np
-from bokeh.models import ColumnDataSource, Div, LinearColorMapper
+from bokeh.models import ColumnDataSource, Div
+from bokeh.transform import factor_mark, linear_cmap
 
 from explorer.app.figures import MANIFOLD_COLORS
 from explorer.app.serve import overlays as search
@@ -13,7 +14,7 @@ from explorer.app.serve.style import PERIOD_COLORS, SEPARATRIX_CASING, SEPARATRI
 from explorer.app.serve.tasks import failure
 
 #: the columns of each overlay's source (by its name); the fixed points' and periodic orbits' marks (_marks)
-MARKS = ("p1", "p2", "period", "kind", "marker")
+MARKS = ("p1", "p2", "period", "kind")
 COLUMNS = {"fixed": MARKS, "separatrices": ("xs", "ys"), "periodic": MARKS, "manifolds": ("xs", "ys", "color", "kind")}
 
 
@@ -35,7 +36,7 @@ def _clear(*sources) -> None:
 
 def _marks(orbits) -> dict:
     """The columns (MARKS) of a mark at each point of each periodic orbit of ``orbits`` (a fixed point: period 1)."""
-    rows = [(float(p[0]), float(p[1]), int(o.period), *(("elliptic", "circle") if o.stable else ("hyperbolic", "x")))
+    rows = [(float(p[0]), float(p[1]), int(o.period), "elliptic" if o.stable else "hyperbolic")
             for o in orbits for p in np.asarray(o.points)]
     return {k: [r[j] for r in rows] for j, k in enumerate(MARKS)}
 
@@ -79,10 +80,10 @@ class Overlays:
     def draw_marks(self, fig) -> None:
         """The marks of the periodic orbits, then larger the fixed points (period 1), over the crossings, each filled
         with the colour of its period."""
-        by_period = {"field": "period", "transform": LinearColorMapper(palette=list(PERIOD_COLORS), low=0.5,
-                                                                        high=len(PERIOD_COLORS) + 0.5)}
+        by_period = linear_cmap("period", list(PERIOD_COLORS), 0.5, len(PERIOD_COLORS) + 0.5)
+        shape = factor_mark("kind", ["circle", "x"], ["elliptic", "hyperbolic"])
         for source, size, width in ((self.periodic, 8, 1.5), (self.fixed, 11, 2.0)):
-            fig.scatter("p1", "p2", source=source, marker="marker", size=size, line_color="black",
+            fig.scatter("p1", "p2", source=source, marker=shape, size=size, line_color="black",
                         fill_color=by_period, line_width=width)
 
     def load_url(self, args: dict) -> list:
