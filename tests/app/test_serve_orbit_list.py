@@ -325,9 +325,10 @@ def test_a_readout_that_arrives_while_a_block_computes_stays_on_its_orbit():
     from explorer.app.serve.orbits import OrbitRun, Worker
 
     worker = Worker(None, lambda *_a: None)
-    run = worker.runs[1] = OrbitRun(1, 0.3, 0.1, settings=None)
+    run = worker.runs[1] = OrbitRun(1, 0.3, 0.1, settings=None, marked=False)
     work = copy.copy(run)                               # the block's copy, taken before the readout came
     run.readout = ({"megno": 2.0}, "orbit 1 from (0.3, 0.1): ...")
+    run.marked = True                                   # (OrbitsLayer.mark_starts meanwhile)
     work.done = 3
     worker._hand_out(run, work, np.zeros((0, 5)), None)
-    assert run.done == 3 and run.readout == ({"megno": 2.0}, "orbit 1 from (0.3, 0.1): ...")
+    assert run.done == 3 and run.readout == ({"megno": 2.0}, "orbit 1 from (0.3, 0.1): ...") and run.marked

@@ -2,6 +2,7 @@
 orbit block by block, bit for bit ``explorer orbit``; a :class:`Worker` runs them.  No web library here."""
 from __future__ import annotations
 
+import contextlib
 import copy
 import math
 import time
@@ -20,7 +21,7 @@ FIRST_BLOCK = 16
 #: steps of an orbit's first block, and of later ones at most: a cancel stops within a block whatever dt
 FIRST_STEPS = 20_000
 MAX_STEPS_PER_BLOCK = 50_000_000
-#: an orbit whose estimated steps (:func:`step_estimate`) exceed this is said in the page up front
+#: an orbit whose estimated steps (Worker._estimate) exceed this is said in the page up front
 STEP_BUDGET = 50_000_000
 #: steps of the probe that measures the time between crossings for the estimate
 PROBE_STEPS = 20_000
@@ -122,29 +123,11 @@ def _duration(seconds: float) -> str:
     return f"{seconds:.2g} s"
 
 
-def step_estimate(settings, p1: float, p2: float) -> int | None:
-    """Steps a fixed-step orbit from (p1, p2) is expected to take (its crossings times the time between
-    two, from a Taylor probe of the page's stream, over ``dt``, within its budgets); None if adaptive or the
-    probe finds none."""
-    if settings.adaptive:
-        return None
-    rows, _state = next(replace(settings, method="taylor", crossings=2).stream(p1, p2, None, 2, PROBE_STEPS))
-    if not len(rows):
-        return None
-    period = float(rows[-1, 0]) / len(rows)
-    need = min(settings.crossings * period, settings.effective_tmax) / settings.dt
-    return int(min(need, settings.max_steps))
-
-
 def warm_up(settings) -> None:
     """Load (or compile) the crossing kernels of ``settings``' method: one crossing from the region's centre."""
-    region = settings.region
-    if region is None:
-        return
-    try:
-        OrbitRun(0, region[0], region[1], replace(settings, crossings=1)).advance()
-    except Exception:  # noqa: BLE001 - the click will report the same error with its orbit
-        return
+    if settings.region is not None:
+        with contextlib.suppress(Exception):    # the click will report the same error with its orbit
+            OrbitRun(0, settings.region[0], settings.region[1], replace(settings, crossings=1)).advance()
 
 
 def orbit_indicators(settings, p1: float, p2: float) -> tuple:
@@ -209,11 +192,11 @@ class Worker:
         elif end == STATUS_NAMES[STATUS_TMAX]:     # (its time budget, 100 K, grows)
             return OrbitRun(run.ident, run.p1, run.p2, settings, paused=run.paused,
                             wants_indicators=run.wants_indicators, indicators=run.indicators, readout=run.readout)
+        elif end == "done":                         # (it reached the old count: on to the new one)
+            run.reopen()
+            run.estimated = False
         else:
-            run.status = end if end not in ("running", "done") else "running"
-            if run.status == "running" and run.finished:
-                run.reopen()
-                run.estimated = False
+            run.status = end
         return run
 
     def pause(self) -> None:
@@ -233,14 +216,22 @@ class Worker:
         """The ids of the paused orbits."""
         return [r.ident for r in self.runs.values() if r.phase == "paused"]
 
-    def _estimate(self, run: OrbitRun) -> str | None:
-        """(In the executor) the notice of an orbit expected to take more than STEP_BUDGET steps."""
-        if run.finished:
-            return None
-        steps = step_estimate(run.settings, run.p1, run.p2)
-        if steps is None or steps <= STEP_BUDGET:
-            return None
+    @staticmethod
+    def _estimate(run: OrbitRun) -> str | None:
+        """(In the executor) the notice of a fixed-step orbit expected to take more than STEP_BUDGET steps: its
+        crossings times the time between two (from a Taylor probe of the page's stream) over ``dt``, within its
+        budgets.  None when adaptive, finished, within the budget, or the probe finds no crossing.  Once a run."""
+        run.estimated = True
         s, rate = run.settings, run.step_rate
+        if s.adaptive or run.finished:
+            return None
+        rows, _state = next(replace(s, method="taylor", crossings=2).stream(run.p1, run.p2, None, 2, PROBE_STEPS))
+        if not len(rows):
+            return None
+        need = min(s.crossings * float(rows[-1, 0]) / len(rows), s.effective_tmax) / s.dt
+        steps = int(min(need, s.max_steps))
+        if steps <= STEP_BUDGET:
+            return None
         took = f", about {_duration(steps / rate)} at {rate:.2g} steps/s" if rate > 0 else ""
         return (f"orbit {run.ident} needs about {steps:.2g} steps ({s.crossings} crossings of {s.method} "
                 f"at dt = {s.dt:g}{took}); it runs until Clear, Undo, a new value or closing the tab "
@@ -258,10 +249,7 @@ class Worker:
             work = copy.copy(run)
             try:
                 rows = await session.run(work.advance)
-                notice = None
-                if not work.estimated:
-                    work.estimated = True
-                    notice = await session.run(self._estimate, work)
+                notice = None if work.estimated else await session.run(self._estimate, work)
             except Exception as exc:  # noqa: BLE001 - reported in the page; the server keeps serving
                 if self._queued(run):
                     run.status = "failed"
@@ -283,8 +271,8 @@ class Worker:
         if not self._queued(run) or work.settings is not run.settings:   # removed or recounted meanwhile
             return
         self._turn += 1
-        run.__dict__.update(work.__dict__, paused=run.paused, sent=run.sent, readout=run.readout,   # (set meanwhile)
-                            turn=self._turn)
+        run.__dict__.update(work.__dict__, paused=run.paused, sent=run.sent, readout=run.readout, marked=run.marked,
+                            turn=self._turn)    # (the page's fields: set meanwhile)
         if notice is not None:
             self._on_notice(run.ident, notice)
         if len(rows) or run.finished:   # (a block cut at its steps before a crossing: nothing to show)
