@@ -46,7 +46,7 @@ class SectionPage:
                  seeds=None, megno_resolution: int = raster_mod.RESOLUTIONS[-1],
                  megno_time: float = raster_mod.RASTER_TIME, loop=None):
         self.base = self.settings = base
-        self.seeds, self.export_dir = seeds, export_dir
+        self.seeds = seeds
         self.suffix = f" ({label})" if label else ""      # (the label after the page's and an image's title)
         self.session = Session(doc, loop)
         # the message line under the figure: text, never HTML (a message may quote a field)
@@ -88,7 +88,7 @@ class SectionPage:
         ol, ex, scene = self.orbit_list, self.exports, self.base.scene_export
         actions = [("Clear", ol.clear, 70), ("Undo", ol.undo, 70), ("Resume", ol.resume, 80),
                    ("Scene seeds", self.run_seeds, 100)]
-        if self.export_dir is not None:
+        if ex.export_dir is not None:
             actions += [("Export scene", ex.export, 110)] * scene + [("Export figure", ex.export_figure, 110)]
         buttons = []
         for label, action, width in actions:
