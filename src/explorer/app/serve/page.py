@@ -137,8 +137,6 @@ class SectionPage:
         refused += wrong
         for part in self.link_parts:
             refused += part.load_url(args)
-        if self.orbits.runs:                  # the link's starts: their crosses and the status line at once
-            self.orbits.mark_starts()
         if refused:
             self.say(f"link ignored in part (the rest applies): {'; '.join(refused)}")
         self.push_url()
@@ -208,7 +206,7 @@ class SectionPage:
         """The settings' title and allowed region (the view fitted to it; an empty one said)."""
         self.title.object = f"### explorer: {self.settings.title()}{self.suffix}"   # (param sends no unchanged value)
         region = self.settings.region
-        self.section.draw_region(region, None if region is None else self.settings.region_mask())
+        self.section.draw_region(region, self.settings.region_mask())
         if region is None:
             self.say(self.settings.empty_region())
 
