@@ -18,15 +18,15 @@ MARKS = ("p1", "p2", "period", "kind")
 COLUMNS = {"fixed": MARKS, "separatrices": ("xs", "ys"), "periodic": MARKS, "manifolds": ("xs", "ys", "color", "kind")}
 
 
-async def show_search(session, what: str, show, fn, *args) -> tuple:
-    """(found, message) of the search ``fn(*args)`` run by ``session``, applied by ``show(found, message)``;
+async def show_search(session, what: str, show, fn, *args):
+    """What the search ``fn(*args)`` run by ``session`` found, applied with its message by ``show(found, message)``;
     one that raises gives ``([], "<what>: failed (why)")``."""
     try:
         found, text = await session.run(fn, *args)
     except Exception as exc:  # noqa: BLE001 - reported in the page
         found, text = [], f"{what}: failed ({failure(exc)})"
     await session.apply(lambda: show(found, text))
-    return found, text
+    return found
 
 
 def _clear(*sources) -> None:
@@ -121,7 +121,7 @@ class Overlays:
     async def _compute(self, settings, fixed, periodic):
         show, session = partial(self._show, []), self.session      # (one list of what the searches said)
         if fixed:
-            points, _t = await show_search(session, "fixed points", partial(
+            points = await show_search(session, "fixed points", partial(
                 show, self.fixed, _marks, "growing the separatrices ..."), search.fixed_points, settings)
             then = "searching the periodic orbits ..." if periodic else ""
             await show_search(session, "separatrices", partial(show, self.curves, _lines, then), search.separatrices,
