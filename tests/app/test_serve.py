@@ -22,6 +22,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 import urllib.error
 import urllib.request
@@ -285,6 +286,39 @@ def test_a_fixed_step_orbit_cut_into_step_blocks_gives_the_rows_of_one_uninterru
     assert cut > 0 and run.status == "done"
     ref = sections.crossings(s.params, s.h, [(0.3, 0.1)], n_crossings=s.crossings, **s.section_kwargs())
     np.testing.assert_array_equal(np.concatenate(parts), ref.orbit(0))
+
+
+def test_the_indicators_of_an_orbit_rerun_while_they_were_computed_are_not_the_reruns(monkeypatch):
+    from explorer.app.serve import orbits
+
+    s = Settings(params=model.FIGURE4.with_(mu=0.5), crossings=20)
+    asked, release, got = [], threading.Event(), []
+
+    def indicators(settings, p1, p2):            # the first (the old run's) waits until the rerun is queued
+        asked.append(p1)
+        if len(asked) == 1:
+            assert release.wait(60)
+        return float(len(asked)), p1
+
+    monkeypatch.setattr(orbits, "orbit_indicators", indicators)
+    loop = Session()
+    w = Worker(loop, lambda *b: None, on_indicators=lambda *i: got.append(i))
+    try:
+        old = w.submit(0.3, 0.1, s)
+        t0 = time.monotonic()
+        while not asked:
+            assert time.monotonic() - t0 < 120, "no indicators were asked"
+            poll(loop)
+            time.sleep(0.01)
+        rerun = w.submit(-0.4, 0.2, s, ident=old.ident)
+        release.set()
+        while loop.running("orbits"):
+            assert time.monotonic() - t0 < 120, "the rerun did not finish"
+            poll(loop)
+            time.sleep(0.01)
+    finally:
+        loop.close()
+    assert got == [(old.ident, 2.0, -0.4)] and rerun.indicators == (2.0, -0.4) and old.indicators is None
 
 
 def _cpu_over(seconds: float) -> float:
@@ -1260,8 +1294,9 @@ def test_an_orbits_megno_reaches_its_rows_whether_live_or_settled():
         _hand_in(page, older + 1, rows, "running")                            # its first block
         page.orbits._flush()                                # (its flush, by hand: the loop runs the next one)
         assert len(page.orbits.live.data["t"]) == 4                # live, not yet settled
-        page.orbits._on_indicators(older, 2.5, 0.01)               # the older orbit's rows: settled
-        page.orbits._on_indicators(older + 1, 7.0, 0.2)            # the newer one's: live
+        hand = page.orbits.worker._hand_indicators
+        hand(page.orbits.runs[older], 2.5, 0.01)                   # the older orbit's rows: settled
+        hand(page.orbits.runs[older + 1], 7.0, 0.2)                # the newer one's: live
         np.testing.assert_array_equal(page.orbits.shown.data["megno"], np.full(s.crossings, 2.5))
         assert page.orbits.live.data["megno"] == [7.0] * 4
         assert poll(page)                                  # the next flush settles them

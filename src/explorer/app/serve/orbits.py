@@ -190,8 +190,8 @@ class Worker:
         if n >= k:
             run.status = "done" if n > k or end == "running" else end
         elif end == STATUS_NAMES[STATUS_TMAX]:     # (its time budget, 100 K, grows)
-            return OrbitRun(run.ident, run.p1, run.p2, settings, paused=run.paused,
-                            wants_indicators=run.wants_indicators, indicators=run.indicators, readout=run.readout)
+            return OrbitRun(run.ident, run.p1, run.p2, settings, paused=run.paused,    # (indicators in flight: anew)
+                            wants_indicators=run.indicators is None, indicators=run.indicators, readout=run.readout)
         elif end == "done":                         # (it reached the old count: on to the new one)
             run.reopen()
             run.estimated = False
@@ -264,7 +264,14 @@ class Worker:
                     megno, mlce = await session.run(orbit_indicators, run.settings, run.p1, run.p2)
                 except Exception:  # noqa: BLE001 - an indicator that fails is shown as unknown
                     megno = mlce = math.nan
-                await session.apply(partial(self._on_indicators, run.ident, megno, mlce))
+                await session.apply(partial(self._hand_indicators, run, megno, mlce))
+
+    def _hand_indicators(self, run: OrbitRun, megno: float, mlce: float) -> None:
+        """(On the loop) the indicators computed for ``run`` become its own, and go to the page, unless it was
+        removed or rerun meanwhile (a rerun's are its own)."""
+        if self._queued(run) and self._on_indicators:
+            run.indicators = (megno, mlce)
+            self._on_indicators(run.ident, megno, mlce)
 
     def _hand_out(self, run: OrbitRun, work: OrbitRun, rows: np.ndarray, notice: str | None) -> None:
         """(On the loop) the block computed on ``work`` becomes ``run``'s, and goes to the page."""

@@ -246,9 +246,6 @@ class OrbitsLayer:
 
     # ------------------------------------------------------------ chaos indicators and colours
     def _on_indicators(self, ident, megno, mlce):
-        if ident not in self.runs:
-            return
-        self.runs[ident].indicators = (megno, mlce)
         for src in (self.shown, self.live):        # the browser's rows streamed before the indicator was known
             rows = np.flatnonzero(np.asarray(src.data["orbit"]) == ident)
             if rows.size:
