@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from explorer.app.serve.style import UNKNOWN_MEGNO_COLOR
+
 #: crossings on a page above which the density image replaces the glyphs
 THRESHOLD = 200_000
 #: at most this many crossings are drawn as glyphs (the newest orbits, whole; docs/commands/serve.md, "Latency")
@@ -40,7 +42,7 @@ def density_rgba(p1, p2, colour_index, window, nx: int, ny: int, colors, megno=N
         per = np.bincount(cell * len(colors) + k, minlength=ncell * len(colors)).reshape(ncell, len(colors))
         idx = np.argmax(per, axis=1)
     else:
-        table = [*palette, "#9e9e9e"]           # the last: grey, a cell without a known MEGNO
+        table = [*palette, UNKNOWN_MEGNO_COLOR]           # the last: grey, a cell without a known MEGNO
         m = np.asarray(megno, float)[inside]
         known = np.isfinite(m)
         n_known = np.bincount(cell[known], minlength=ncell)

@@ -67,7 +67,8 @@ def figure(view: View):
         ax.imshow(np.asarray(values, float), extent=extent, origin="lower", cmap=cmap, vmin=view.raster_scale[0],
                   vmax=view.raster_scale[1], alpha=0.85, interpolation="nearest", zorder=1)
     # by MEGNO as on the page: NaN (unknown) gray, outside the scale an end's colour
-    orbit_cmap = ListedColormap(style.megno_palette(style.MEGNO_ORBIT_SKIP)).with_extremes(bad="#9e9e9e")
+    orbit_cmap = ListedColormap(style.megno_palette(style.MEGNO_ORBIT_SKIP)).with_extremes(
+        bad=style.UNKNOWN_MEGNO_COLOR)
     total = sum(len(pts) for _i, _c, pts, _m in view.orbits)
     raster_points = total > SVG_VECTOR_MAX
     size = 4.0 if total < 20_000 else 1.0

@@ -35,8 +35,6 @@ INDICATOR_TIME = 1000.0
 INDICATOR_AFTER = 0.5
 #: steps of an orbit's indicators at most (past them they are unknown, NaN)
 INDICATOR_MAX_STEPS = 1_000_000
-#: mean MEGNO above this is called "chaotic-like" (quasi-periodic orbits: <Y> -> 2)
-CHAOTIC_MEGNO = 3.0
 #: one colour per orbit, in turn: Tableau 10 and Vega's category20b/c, none near white or gray
 COLORS = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf",
           "#bcbd22", "#393b79", "#637939", "#843c39", "#7b4173", "#3182bd", "#e6550d", "#31a354",

@@ -53,7 +53,8 @@ class OrbitsLayer:
         self.by_orbit = {"field": "c", "transform": LinearColorMapper(palette=list(COLORS), low=-0.5,
                                                                        high=len(COLORS) - 0.5)}
         self.by_megno = {"field": "megno", "transform": LinearColorMapper(
-            palette=megno_palette(MEGNO_ORBIT_SKIP), low=MEGNO_LOW, high=MEGNO_HIGH, nan_color="#9e9e9e")}
+            palette=megno_palette(MEGNO_ORBIT_SKIP), low=MEGNO_LOW, high=MEGNO_HIGH,
+            nan_color=style.UNKNOWN_MEGNO_COLOR)}
         self.status = Div(name="status", text="click in the white region to start an orbit", render_as_text=True)
         self.colour_box = Box(label="colour orbits by MEGNO", value=False)
         self.colour_box.param.watch(lambda _e: session.soon(self._colour_changed), "value")

@@ -27,6 +27,10 @@ DOT_CASING = (4.5, "#ffffff", "#101010", 0.6)
 VIEW_MARGIN = 0.08
 #: colour scale of the MEGNO layer: <Y> from 0 over 2 (quasi-periodic, light) to MEGNO_HIGH (chaotic, dark)
 MEGNO_LOW, MEGNO_HIGH = 0.0, 8.0
+#: mean MEGNO above this is called "chaotic-like" (quasi-periodic orbits: <Y> -> 2)
+CHAOTIC_MEGNO = 3.0
+#: an orbit or a density cell whose MEGNO is unknown (NaN), when orbits are coloured by MEGNO
+UNKNOWN_MEGNO_COLOR = "#9e9e9e"
 #: periodic orbits of periods 1..PERIODIC_MAX are marked, filled with the colour of their period
 PERIOD_COLORS = ("#ffffff", "#f4a582", "#92c5de", "#b8e186")
 MESSAGE_ERROR_COLOR = "#b00020"
@@ -45,8 +49,6 @@ def megno_palette(skip: int = 0) -> list:
 
 def megno_kind(megno: float) -> str:
     """What an orbit's MEGNO <Y> says (the status line's and the readout's words)."""
-    from explorer.app.serve.orbits import CHAOTIC_MEGNO
-
     if not math.isfinite(megno):
         return "unknown: the run stopped early"
     if megno > CHAOTIC_MEGNO:
