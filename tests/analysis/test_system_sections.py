@@ -225,3 +225,31 @@ def test_a_systems_crossings_streamed_in_blocks_of_any_size_are_one_runs_rows_bi
         for name, got in (("count", state.done), ("status", state.status), ("final", state.y), ("info", state.info)):
             np.testing.assert_array_equal(got, getattr(one, name), err_msg=name, strict=True)
         assert state.finished.all()
+
+
+@pytest.mark.parametrize("driver", ["auto", "scalar"])
+def test_a_systems_blocks_cut_at_their_steps_are_one_runs_rows_and_keep_the_runs_step_budget(driver):
+    """step_block ends a System's block once the least advanced orbit took that many steps in it (as
+    Chaplygin's, test_streaming.py): the blocks resume to one run's rows, counts, statuses, final states
+    and info bit for bit, a run's own max_steps still ends it, and no block takes an orbit more than
+    step_block steps beyond the least advanced one."""
+    from explorer.analysis import sections
+    from explorer.integrate import layout
+
+    hh = henon_heiles()
+    Y0 = starts(POINTS + [(0.0, 0.35)])
+    for max_steps in (10**6, 400):
+        kw = dict(states=Y0, n_crossings=30, section=x, max_steps=max_steps, driver=driver)
+        one = ex.crossings(hh, **kw)
+        blocks = list(sections.iter_crossings(hh, block=20, step_block=37, **kw))
+        rows, state = streamed(blocks, len(Y0))
+        for i in range(len(Y0)):
+            np.testing.assert_array_equal(rows[i], one.orbit(i), strict=True)
+        for name, got in (("count", state.done), ("status", state.status), ("final", state.y), ("info", state.info)):
+            np.testing.assert_array_equal(got, getattr(one, name), err_msg=name, strict=True)
+        steps = [b.state.carry[:, layout.CARRY_STEPS] for b in blocks]
+        assert all(np.max(b - a) <= 37 + np.ptp(a) for a, b in zip(steps, steps[1:]))
+        assert len(blocks) > 2 and state.finished.all()     # the step cap, not only the crossing count, cut blocks
+    assert np.any(one.status == Status.MAX_STEPS)           # 400 steps end the run, not a block's cap
+    with pytest.raises(ParameterError, match="step_block"):
+        next(sections.iter_crossings(hh, block=20, step_block=0, **kw))

@@ -4,6 +4,7 @@ system first, docs/commands/orbit.md)."""
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -298,12 +299,26 @@ class CrossingBlock:
         return self.data[i, : self.count[i]]
 
 
-def stream(st: StreamState, K: int, block: int, run_block):
+def check_step_block(step_block, method: str) -> None:
+    """ParameterError unless ``step_block`` of a stream of ``method`` is None, or an integer >= 1 for the methods a
+    step cap does not change (whose kind ``resumes_at_any_step``, integrate.methods.Kind; not DOP853)."""
+    if step_block is not None and (isinstance(step_block, bool) or not isinstance(step_block, numbers.Integral)
+                                   or step_block < 1):
+        raise ParameterError(f"step_block must be an integer >= 1 or None, got {step_block!r}")
+    if step_block is not None and not methods.get(method).loops.resumes_at_any_step:
+        raise ParameterError(f"step_block is for the methods a step cap does not change "
+                             f"({', '.join(n for n, m in methods.REGISTRY.items() if m.loops.resumes_at_any_step)}), "
+                             f"got method {method!r}")
+
+
+def stream(st: StreamState, K: int, block: int, run_block, max_steps: int, step_block: int | None = None):
     """The blocks of a streamed run from ``st`` (updated in place) until every orbit has ``K`` crossings or
     stopped: per block, the unfinished orbits' limits (target: ``block`` more crossings, room for the
-    roots of the last step) and ``run_block(Y, carry, limits, width)`` -> (data, count, status, final,
-    info) with ``carry`` continued in place, so the blocks take one run's steps (docs/architecture.md,
-    "Streaming")."""
+    roots of the last step) and ``run_block(Y, carry, limits, width, max_steps)`` -> (data, count, status,
+    final, info) with ``carry`` continued in place, so the blocks take one run's steps (docs/architecture.md,
+    "Streaming").  With ``step_block`` (check_step_block) a block's step cap is the least advanced orbit's
+    steps plus ``step_block``: a stop at that cap, below the run's ``max_steps``, is no end (the next block
+    continues the orbit exactly)."""
     width = min(K, int(block) + layout.MAX_ROOTS_PER_STEP)
     while True:
         idx = np.flatnonzero(~st.finished)
@@ -314,7 +329,12 @@ def stream(st: StreamState, K: int, block: int, run_block):
         limits[:, layout.LIMIT_TARGET] = np.minimum(block, remaining)
         limits[:, layout.LIMIT_ROOM] = np.minimum(remaining, width)
         carry = np.ascontiguousarray(st.carry[idx])
-        data, count, status, final, info = run_block(np.ascontiguousarray(st.y[idx]), carry, limits, width)
+        cap = max_steps
+        if step_block is not None:   # the step cap of this block: the orbit least advanced takes step_block
+            cap = min(max_steps, int(carry[:, layout.CARRY_STEPS].min()) + step_block)
+        data, count, status, final, info = run_block(np.ascontiguousarray(st.y[idx]), carry, limits, width, cap)
+        if cap < max_steps:          # stopped at this block's cap, not at the run's budget: not finished
+            status[(status == int(Status.MAX_STEPS)) & (carry[:, layout.CARRY_STEPS] < max_steps)] = int(Status.DONE)
         start = st.done[idx].copy()
         st.y[idx] = final
         st.carry[idx] = carry

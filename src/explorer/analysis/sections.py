@@ -20,6 +20,7 @@ from explorer.analysis.crossings_run import (
     _outputs,
     _run_block,
     _validated,
+    check_step_block,
     crossing_settings,
     energy_warning,
     human_bytes,
@@ -29,7 +30,7 @@ from explorer.analysis.crossings_run import (
     stream,
 )
 from explorer.analysis.section_map import is_params, not_a_system, system_first
-from explorer.integrate import layout, methods
+from explorer.integrate import layout
 from explorer.integrate.methods import (
     ADAPTIVE_METHODS,
     DEFAULT_DT,
@@ -118,28 +119,15 @@ def iter_crossings(system, y0, *, n_crossings: int, block: int = DEFAULT_BLOCK, 
     run = _validated(params, y0, n_crossings, method, tol, dt, tmax, max_steps, phi0, direction, threads)
     if not isinstance(block, numbers.Integral) or block < 1:
         raise ParameterError(f"block must be an integer >= 1, got {block!r}")
-    if step_block is not None and (not isinstance(step_block, numbers.Integral) or step_block < 1):
-        raise ParameterError(f"step_block must be an integer >= 1 or None, got {step_block!r}")
-    if step_block is not None and not run.prep.method.loops.resumes_at_any_step:
-        raise ParameterError(f"step_block is for the methods a step cap does not change "
-                             f"({', '.join(n for n, m in methods.REGISTRY.items() if m.loops.resumes_at_any_step)}), "
-                             f"got method {method!r}")
+    check_step_block(step_block, method)
     N, K = run.Y0.shape[0], run.K
     st = StreamState.initial(run.P, run.Y0, phi0=run.settings["phi0"]) if state is None else state.copy()
     if st.y.shape != (N, 5) or st.carry.shape != (N, layout.N_CARRY):
         raise ParameterError(f"state is for {st.y.shape[0]} orbits, y0 has {N}")
 
-    def run_block(Y, carry, limits, width):
+    def run_block(Y, carry, limits, width, max_steps):
         out = _outputs(Y.shape[0], width)
-        block_run = run
-        if step_block is not None:   # the step cap of this block: the orbit least advanced takes step_block
-            cap = int(carry[:, layout.CARRY_STEPS].min()) + int(step_block)
-            block_run = replace(run, max_steps=min(run.max_steps, cap))
-        _run_block(block_run, Y, carry, limits, *out)
-        if block_run is not run:     # stopped at this block's cap, not at the run's budget: not finished
-            status = out[2]
-            status[(status == int(Status.MAX_STEPS)) & (carry[:, layout.CARRY_STEPS] < run.max_steps)] = \
-                int(Status.DONE)
+        _run_block(replace(run, max_steps=max_steps), Y, carry, limits, *out)
         return out
 
-    yield from stream(st, K, block, run_block)
+    yield from stream(st, K, block, run_block, run.max_steps, step_block)

@@ -231,19 +231,22 @@ def system_crossings(system, states=None, *, n_crossings: int, section=None, dir
 def iter_system_crossings(system, states=None, *, n_crossings: int, section=None, direction: int = 1,
                           block: int | None = None, state=None, method: str = "taylor", tol: float = DEFAULT_TOL,
                           tmax: float | None = None, max_steps: int = DEFAULT_MAX_STEPS, threads: int | None = None,
-                          driver: str = "auto", backward: bool = False, **other):
+                          driver: str = "auto", backward: bool = False, step_block: int | None = None, **other):
     """:func:`system_crossings` in blocks of about ``block`` crossings per orbit (default
     crossings_run.DEFAULT_BLOCK), each a :class:`~explorer.analysis.crossings_run.CrossingBlock` whose
     rows continue the orbits' carry bit for bit, so the blocks concatenate to one run's rows, in
     O(N x block) memory; ``state`` (a block's ``state``) resumes the run (docs/systems.md, "Crossings").
-    Checks its arguments at the call."""
-    from explorer.analysis.crossings_run import DEFAULT_BLOCK, StreamState, stream
+    ``step_block``: a block also ends once no orbit may take more than that many steps in it, and the next
+    continues it exactly, as Chaplygin's (explorer.analysis.sections.iter_crossings).  Checks its arguments at
+    the call."""
+    from explorer.analysis.crossings_run import DEFAULT_BLOCK, StreamState, check_step_block, stream
 
     run = _SystemRun(system, states, n_crossings, section, direction, method, tol, tmax, max_steps, threads, driver,
                      backward, other)
     block = DEFAULT_BLOCK if block is None else block
     if isinstance(block, bool) or not isinstance(block, numbers.Integral) or block < 1:
         raise ParameterError(f"block must be an integer >= 1, got {block!r}")
+    check_step_block(step_block, method)
     N = run.Y0.shape[0]
     if state is None:
         state = run.initial()
@@ -252,7 +255,7 @@ def iter_system_crossings(system, states=None, *, n_crossings: int, section=None
         raise ParameterError(f"state must be the StreamState of a block of these {N} orbits of {system.name}")
     else:
         state = state.copy()
-    return stream(state, run.K, int(block), run.block)
+    return stream(state, run.K, int(block), run.block, run.max_steps, step_block)
 
 
 def initial_state(system, states=None, *, n_crossings: int, section=None, direction: int = 1, **kw):
@@ -302,8 +305,8 @@ class _SystemRun:
         self.P = system.parameter_array()
         self.dimension = n = system.dimension
         self.width = 1 + n + (system.energy is not None)
-        self.args = (sec.a, float(sec.b), every_crossing(n), np.arange(n), int(direction), float(tmax), int(order),
-                     int(max_steps))
+        self.args = (sec.a, float(sec.b), every_crossing(n), np.arange(n), int(direction), float(tmax), int(order))
+        self.max_steps = int(max_steps)
         self.driver, self.threads, self.backward = driver, threads, backward
         columns = ["t", *(s.name for s in system.states)] + (["E - E0"] if system.energy is not None else [])
         self.settings = {"method": "taylor", "tol": tol, "order": order, "system": system.name,
@@ -326,15 +329,16 @@ class _SystemRun:
         self.mod.crossings_start(Y, self.P, self.sec.a, float(self.sec.b), carry)
         return carry
 
-    def block(self, Y, carry, limits, width: int):
+    def block(self, Y, carry, limits, width: int, max_steps: int | None = None):
         """(data, count, status, final, info) of the orbits from ``Y`` continued from ``carry`` (in place)
-        up to ``limits`` (target, room), ``width`` rows each."""
+        up to ``limits`` (target, room), ``width`` rows each, and ``max_steps`` steps (None: the run's)."""
         N = Y.shape[0]
         data = np.full((N, width, self.width), np.nan)
         count, status = np.zeros(N, np.int64), np.zeros(N, np.int64)
         final, info = np.zeros((N, self.dimension)), np.zeros((N, 3))
         run_driver(self.mod, "crossings", N, self.driver, self.threads,
-                   (Y, self.P, *self.args, carry, limits, data, count, status, final, info, self.backward))
+                   (Y, self.P, *self.args, max_steps or self.max_steps, carry, limits, data, count, status, final, info,
+                    self.backward))
         return data, count, status, final, info
 
 

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from explorer.integrate import layout, methods
-from explorer.kernels import STATUS_MAX_STEPS, STATUS_NAMES, STATUS_TMAX
+from explorer.kernels import STATUS_NAMES, STATUS_TMAX
 
 #: crossings of an orbit's first block (the first points on screen, milliseconds after a click)
 FIRST_BLOCK = 16
@@ -86,7 +86,7 @@ class OrbitRun:
         return self.state is not None and bool(self.state.finished[0])
 
     def reopen(self) -> None:
-        """Compute on from where the stream stopped (at a larger count, or past a block's step cap)."""
+        """Compute on from where the stream stopped (at a larger count)."""
         self.state = self.state.copy()
         self.state.finished[:] = False
         self.status = "running"
@@ -96,13 +96,10 @@ class OrbitRun:
         exactly at any step); returns its rows (n, 5): t, p1, p2, M, H - H0 (a System's: t, a, b, solve, E - E0)."""
         s, t0 = self.settings, time.perf_counter()
         taken = 0 if self.state is None else int(self.state.carry[0, layout.CARRY_STEPS])
-        cap = taken + self.steps if methods.get(s.method).loops.resumes_at_any_step else s.max_steps
-        rows, state = next(s.stream(self.p1, self.p2, self.state, self.block, min(cap, s.max_steps)),
-                           (np.zeros((0, 5)), self.state))
+        steps = self.steps if methods.get(s.method).loops.resumes_at_any_step else None
+        rows, state = next(s.stream(self.p1, self.p2, self.state, self.block, steps), (np.zeros((0, 5)), self.state))
         self.state, self.done, self.rows = state, int(state.done[0]), np.concatenate([self.rows, rows])
-        if self.finished and int(state.status[0]) == STATUS_MAX_STEPS and cap < s.max_steps:
-            self.reopen()       # stopped at this block's step cap, not at the orbit's budget
-        elif self.finished:
+        if self.finished:
             self.status = STATUS_NAMES[int(state.status[0])]
         elapsed = time.perf_counter() - t0
         self.wall += elapsed

@@ -59,6 +59,7 @@ class PageSettings:
     crossings: int                 # crossings per click
     adaptive: bool                 # the step is adaptive (else fixed, ``dt``)
     dt: float
+    max_steps: int                 # an orbit's step budget
     on: Any                        # (smap, **values) -> these settings on ``smap`` with ``values``
     stream_kwargs: Any             # () -> the integration keywords of stream, beside the map at tol
     own_fields: tuple = ("tol", "crossings")
@@ -124,13 +125,14 @@ class PageSettings:
     def admissible(self, p1: float, p2: float) -> bool:
         return self.refusal(p1, p2) is None
 
-    def stream(self, p1: float, p2: float, state, block: int, max_steps: int):
+    def stream(self, p1: float, p2: float, state, block: int, step_block: int | None):
         """Blocks (rows (n, 5): t, a, b, solve, E - E0; the stream's state) of the orbit from (p1, p2), on from
-        ``state`` (None: its start): :func:`explorer.analysis.sections.iter_crossings` of the map at ``tol``."""
+        ``state`` (None: its start): :func:`explorer.analysis.sections.iter_crossings` of the map at ``tol``, its
+        blocks cut at ``step_block`` steps (None: at crossings only)."""
         s = self.section_map(self.tol)
         return ((b.rows(0)[:, list(s.columns)], b.state) for b in sections.iter_crossings(
-            s, [(p1, p2)], n_crossings=self.crossings, block=block, state=state, max_steps=max_steps,
-            **self.stream_kwargs()))
+            s, [(p1, p2)], n_crossings=self.crossings, block=block, state=state, max_steps=self.max_steps,
+            step_block=step_block, **self.stream_kwargs()))
 
     def section_map(self, tol=None):
         """The page's map (at ``tol``: :meth:`with_tol`) that its searches ask (fixed points, manifolds,
