@@ -4,6 +4,7 @@ have another loop marked running: Playwright's sync API does so between its call
 from __future__ import annotations
 
 import asyncio
+import time
 from concurrent.futures import ThreadPoolExecutor
 
 _DRIVER = ThreadPoolExecutor(max_workers=1, thread_name_prefix="explorer-page-loop")
@@ -21,6 +22,15 @@ def poll(page, seconds: float = 0.01) -> bool:
     if not session.loop.is_closed():
         _drive(session, asyncio.sleep(seconds))
     return pending
+
+
+def poll_until(page, done, timeout: float, why: str) -> None:
+    """Run the loop of ``page`` (a SectionPage or a Session) until ``done()``; AssertionError ``why`` after
+    ``timeout`` seconds."""
+    t0 = time.monotonic()
+    while not done():
+        assert time.monotonic() - t0 < timeout, why
+        poll(page)
 
 
 def settle(page, timeout: float = 240.0) -> None:

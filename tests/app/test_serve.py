@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from page_loop import poll, settle
+from page_loop import poll, poll_until, settle
 
 from explorer import model
 from explorer.analysis import sections
@@ -305,17 +305,10 @@ def test_the_indicators_of_an_orbit_rerun_while_they_were_computed_are_not_the_r
     w = Worker(loop, lambda *b: None, on_indicators=lambda *i: got.append(i))
     try:
         old = w.submit(0.3, 0.1, s)
-        t0 = time.monotonic()
-        while not asked:
-            assert time.monotonic() - t0 < 120, "no indicators were asked"
-            poll(loop)
-            time.sleep(0.01)
+        poll_until(loop, lambda: asked, 120, "no indicators were asked")
         rerun = w.submit(-0.4, 0.2, s, ident=old.ident)
         release.set()
-        while loop.running("orbits"):
-            assert time.monotonic() - t0 < 120, "the rerun did not finish"
-            poll(loop)
-            time.sleep(0.01)
+        poll_until(loop, lambda: not loop.running("orbits"), 120, "the rerun did not finish")
     finally:
         loop.close()
     assert got == [(old.ident, 2.0, -0.4)] and rerun.indicators == (2.0, -0.4) and old.indicators is None
@@ -338,11 +331,7 @@ def test_a_cancelled_fixed_step_orbit_stops_within_a_block_and_was_said_with_its
     w = Worker(loop, lambda *b: blocks.append(b), on_notice=lambda ident, text: notices.append((ident, text)))
     try:
         run = w.submit(0.5, 0.0, TINY_DT)
-        t0 = time.monotonic()
-        while not notices:
-            assert time.monotonic() - t0 < 240, "no estimate was said"
-            poll(loop)
-            time.sleep(0.01)
+        poll_until(loop, lambda: notices, 240, "no estimate was said")
         assert notices[0][0] == run.ident and "1e+09 steps" in notices[0][1]
         w.cancel()
         t0 = time.monotonic()
