@@ -1718,7 +1718,7 @@ def test_past_the_glyph_budget_the_newest_orbits_are_glyphs_and_the_older_ones_i
         assert _glyphs_and_image(page) == (ids[3:], ids[:3])
         newest = page.orbits.runs[ids[-1]]             # as if the newest ran and this were its first block:
         page.orbits.hide(newest.ident)                 # (its rows off the browser's sources ...
-        page.orbits.hidden.discard(newest.ident)       # ... and none sent yet)
+        newest.hidden = False                          # ... and none sent yet)
         newest.sent = 0
         shown, status = len(page.orbits.shown.data["t"]), page.orbits.status.text
         more(ids[-1], int(0.45 * budget), "running")

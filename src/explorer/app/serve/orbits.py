@@ -35,6 +35,8 @@ INDICATOR_TIME = 1000.0
 INDICATOR_AFTER = 0.5
 #: steps of an orbit's indicators at most (past them they are unknown, NaN)
 INDICATOR_MAX_STEPS = 1_000_000
+#: an OrbitRun's fields the page sets (while a block is computed on a copy: kept)
+PAGE_FIELDS = ("paused", "sent", "readout", "marked", "hidden")
 #: one colour per orbit, in turn: Tableau 10 and Vega's category20b/c, none near white or gray
 COLORS = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf",
           "#bcbd22", "#393b79", "#637939", "#843c39", "#7b4173", "#3182bd", "#e6550d", "#31a354",
@@ -65,6 +67,7 @@ class OrbitRun:
     indicators: tuple | None = None   # (mean MEGNO, mLCE) over INDICATOR_TIME, once known
     readout: tuple | None = None      # (values, text) of overlays.orbit_readout once picked (the orbit list's)
     marked: bool = True               # its start's cross is drawn before its first crossings (the page's)
+    hidden: bool = False              # off the page, still computed (the page's)
     rows: np.ndarray = field(default_factory=lambda: np.zeros((0, 5)))
 
     @property
@@ -185,8 +188,9 @@ class Worker:
         if n >= k:
             run.status = "done" if n > k or end == "running" else end
         elif end == STATUS_NAMES[STATUS_TMAX]:     # (its time budget, 100 K, grows)
-            return OrbitRun(run.ident, run.p1, run.p2, settings, paused=run.paused,    # (indicators in flight: anew)
-                            wants_indicators=run.indicators is None, indicators=run.indicators, readout=run.readout)
+            return OrbitRun(run.ident, run.p1, run.p2, settings, paused=run.paused, hidden=run.hidden,
+                            wants_indicators=run.indicators is None,    # (indicators in flight: anew)
+                            indicators=run.indicators, readout=run.readout)
         elif end == "done":                         # (it reached the old count: on to the new one)
             run.reopen()
             run.estimated = False
@@ -273,8 +277,7 @@ class Worker:
         if not self._queued(run) or work.settings is not run.settings:   # removed or recounted meanwhile
             return
         self._turn += 1
-        run.__dict__.update(work.__dict__, paused=run.paused, sent=run.sent, readout=run.readout, marked=run.marked,
-                            turn=self._turn)    # (the page's fields: set meanwhile)
+        run.__dict__.update(work.__dict__, turn=self._turn, **{k: getattr(run, k) for k in PAGE_FIELDS})
         if notice is not None:
             self._on_notice(run.ident, notice)
         if len(rows) or run.finished:   # (a block cut at its steps before a crossing: nothing to show)

@@ -141,7 +141,7 @@ class DensityImage:
         """Redraw the image of the crossings that are not dots: at once when ``force`` or which orbits it images,
         where or how changed, at most every DENSITY_SECONDS while their rows change alone, never unchanged."""
         orbits = self.orbits
-        counts = {r.ident: r.done for r in orbits.runs.values() if r.ident not in orbits.hidden}
+        counts = {r.ident: r.done for r in orbits.runs.values() if not r.hidden}
         dense = sum(counts.values()) > density.THRESHOLD
         first = 0 if dense else density.glyph_cutoff(counts)
         if dense != self.dense:

@@ -75,7 +75,7 @@ class OrbitList:
     def toggle(self, ident: int | None) -> None:
         """Hide orbit ``ident`` (None: none), or show it again if hidden."""
         if ident in self.orbits.runs:
-            self.orbits.hide(ident, ident not in self.orbits.hidden)
+            self.orbits.hide(ident, not self.orbits.runs[ident].hidden)
             self._changed()
 
     def clear(self) -> None:
@@ -123,18 +123,16 @@ class OrbitList:
         except ParameterError as exc:
             positions, refused = set(), [str(exc)]
         for k, (p1, p2) in enumerate(starts, 1):
-            run = self.orbits.start(p1, p2)
-            if run is not None and k in positions:
-                self.orbits.hide(run.ident)
+            self.orbits.start(p1, p2, hidden=k in positions)
         if self.orbits.runs:                    # their crosses and the status line at once
             self.orbits.mark_starts()
         return refused
 
     def url_query(self) -> dict:
         """The link's ``orbits`` (every start) and ``hidden`` (the positions of the hidden ones)."""
-        starts, hidden = self.orbits.starts, self.orbits.hidden
-        return {"orbits": settings_mod.format_starts((p1, p2) for _i, p1, p2, _c in starts),
-                "hidden": settings_mod.format_hidden(k for k, (i, *_s) in enumerate(starts, 1) if i in hidden)}
+        runs = list(self.orbits.runs.values())
+        return {"orbits": settings_mod.format_starts((r.p1, r.p2) for r in runs),
+                "hidden": settings_mod.format_hidden(k for k, r in enumerate(runs, 1) if r.hidden)}
 
     # ------------------------------------------------------------ what is shown
     def refresh(self) -> None:
@@ -143,7 +141,7 @@ class OrbitList:
         # (a value equal to the one there is not sent again: param and Bokeh compare them)
         self.choice.options = {NONE_LABEL: 0} | {f"{i}: ({p1:.4g}, {p2:.4g})": i for i, p1, p2, _c in starts}
         self.choice.value = picked if picked in self.orbits.runs else 0
-        self.hide_button.label = "show" if picked in self.orbits.hidden else "hide"
+        self.hide_button.label = "show" if getattr(self.orbits.runs.get(picked), "hidden", False) else "hide"
         self.hide_button.disabled = self.delete_button.disabled = picked is None
         self.filter.group = picked or 0
         self.table.text = _table(self.orbits, picked)
@@ -202,13 +200,12 @@ def _table(orbits, picked) -> str:
     head = "".join(f"<th style='text-align:left;padding:0 3px' title='{tip}'>{h}</th>" for h, tip in COLUMNS)
     body = []
     for i, r in orbits.runs.items():
-        hidden = i in orbits.hidden
         style = "font-weight:bold;background:" + SELECTED_BACKGROUND if i == picked else ""
-        if hidden:
+        if r.hidden:
             style += ";color:#808080"
         cells = (f"<span style='display:inline-block;width:10px;height:10px;background:{COLORS[r.colour]}'></span>",
                  str(i), f"({r.p1:.6g}, {r.p2:.6g})", str(r.done),
-                 html.escape(r.phase) + (", hidden" if hidden else ""))
+                 html.escape(r.phase) + (", hidden" if r.hidden else ""))
         body.append(f"<tr data-orbit='{i}' style='{style}'>"
                     + "".join(f"<td style='padding:0 3px'>{c}</td>" for c in cells) + "</tr>")
     return f"<table style='border-collapse:collapse;font-size:12px'><tr>{head}</tr>{''.join(body)}</table>"

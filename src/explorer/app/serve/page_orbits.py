@@ -34,11 +34,10 @@ COLUMNS = ("orbit", *ROW_COLUMNS, "megno", "c")
 class OrbitsLayer:
     """The starts, crossings and status of a page; ``host``: the page.  The one store of the orbits is
     ``runs`` (the worker's {orbit id: OrbitRun}, click order), which the browser's ``shown`` and ``live`` are
-    written from; ``hidden``: the ids of the hidden orbits."""
+    written from (a hidden run: OrbitRun.hidden)."""
 
     def __init__(self, host, view, session):
         self.host, self.view, self.session = host, view, session
-        self.hidden: set = set()
         self.on_status = lambda: None          # called after every update of the status line
         self._flushed_at = -math.inf           # when the last flush ran (monotonic)
         self._settle_at = -math.inf            # the flush due then moves the live rows
@@ -67,7 +66,7 @@ class OrbitsLayer:
         """The rows of ``runs`` (None: every orbit not hidden) as ``keys`` of the browser's columns: a row, its
         orbit's id, MEGNO and colour index; each orbit's first ``done`` rows (``unsent``: those past ``sent``)."""
         if runs is None:
-            runs = [r for r in self.runs.values() if r.ident not in self.hidden]
+            runs = [r for r in self.runs.values() if not r.hidden]
         parts = [r.rows[r.sent if unsent else 0:r.done] for r in runs]
         n = [len(rows) for rows in parts]
         each = {"orbit": [r.ident for r in runs], "c": [r.colour for r in runs],
@@ -104,14 +103,14 @@ class OrbitsLayer:
         """(orbit id, p1, p2, colour index) of every start, in click order."""
         return [(r.ident, r.p1, r.p2, r.colour) for r in self.runs.values()]
 
-    def start(self, p1: float, p2: float, ident: int | None = None):
-        """Queue the orbit from (p1, p2) (as orbit ``ident``; None: a new id); None outside the region.  It draws
-        nothing: its cross comes with its first crossings, or before them from :meth:`mark_starts`."""
+    def start(self, p1: float, p2: float, ident: int | None = None, hidden: bool = False):
+        """Queue the orbit from (p1, p2) as orbit ``ident`` (None: a new id), ``hidden`` or not; None outside the
+        region.  It draws nothing: its cross comes with its first crossings, or before them from :meth:`mark_starts`."""
         settings = self.host.settings
         if not settings.admissible(p1, p2):
             return None
         run = self.worker.submit(p1, p2, settings, ident)
-        run.marked = False
+        run.marked, run.hidden = False, hidden
         return run
 
     def mark_starts(self) -> None:
@@ -125,8 +124,8 @@ class OrbitsLayer:
     def _draw_starts(self):
         """The crosses of the starts not hidden that are marked (OrbitRun.marked), have crossings in the browser
         or stopped running."""
-        marks = [(r.ident, r.p1, r.p2, r.colour) for r in self.runs.values() if r.ident not in self.hidden
-                 and (r.marked or r.sent or r.phase != "running")]
+        marks = [(r.ident, r.p1, r.p2, r.colour) for r in self.runs.values()
+                 if not r.hidden and (r.marked or r.sent or r.phase != "running")]
         data = {k: [m[j] for m in marks] for j, k in enumerate(("orbit", "p1", "p2", "c"))}
         if data != self.start_source.data:
             self.start_source.data = data
@@ -135,31 +134,28 @@ class OrbitsLayer:
         """Stop every orbit and take them off the page."""
         self.worker.cancel()
         self.flush_timer.cancel()
-        self.hidden = set()
         self.show_all()
 
     def rerun(self) -> int:
         """Every orbit anew at the page's settings, under its id (its colour kept), a hidden one still hidden, its
         cross and the status line at once; returns how many were dropped (outside the new region)."""
-        old, hidden = self.starts, self.hidden
+        old = list(self.runs.values())
         self.drop_all()
-        for ident, p1, p2, _c in old:
-            if self.start(p1, p2, ident) is not None and ident in hidden:
-                self.hidden.add(ident)
+        for r in old:
+            self.start(r.p1, r.p2, r.ident, r.hidden)
         self.mark_starts()
         return len(old) - len(self.runs)
 
     def remove(self, ident: int) -> None:
         """Stop orbit ``ident`` (running or paused) and take it off the page."""
         self.runs.pop(ident, None)
-        self.hidden.discard(ident)
         self.show_all()
 
     def hide(self, ident: int, hidden: bool = True) -> None:
         """Take orbit ``ident``'s crossings and start off the page (it keeps computing), or (``hidden`` false)
         put them back."""
         if ident in self.runs:
-            (self.hidden.add if hidden else self.hidden.discard)(ident)
+            self.runs[ident].hidden = hidden
             self.show_all()
 
     def recount(self, settings) -> None:
@@ -183,7 +179,7 @@ class OrbitsLayer:
         """The rows not sent yet onto the page (docs/architecture.md, "Many crossings in the browser"): a click's
         first rows alone to ``live``, with its cross and the link; the flush FLUSH_SECONDS later settles them into
         ``shown``."""
-        due = [r for r in self.runs.values() if r.ident not in self.hidden and r.sent < r.done]
+        due = [r for r in self.runs.values() if not r.hidden and r.sent < r.done]
         first = [r for r in due if r.sent == 0]
         now = self._flushed_at = time.monotonic()
         held = len(self.live.data["orbit"])
@@ -230,7 +226,7 @@ class OrbitsLayer:
         """The status line (and the density image, at once if ``force_density``)."""
         phases = [r.phase for r in self.runs.values()]
         paused, running = phases.count("paused"), phases.count("running")
-        n = sum(r.done for r in self.runs.values() if r.ident not in self.hidden)
+        n = sum(r.done for r in self.runs.values() if not r.hidden)
         density = self.host.density_image
         density.refresh(force=force_density or not running)   # (at once when the last orbit is done)
         s = self.host.settings
@@ -271,7 +267,7 @@ class OrbitsLayer:
 
     def view_fields(self) -> dict:
         """Its part of the exported view (image.View): the orbits shown (hidden ones left out), their starts."""
-        visible = [r for r in self.runs.values() if r.ident not in self.hidden]
+        visible = [r for r in self.runs.values() if not r.hidden]
         return {"orbits": [(r.ident, COLORS[r.colour], r.rows[:r.done, 1:3], r.megno) for r in visible],
                 "starts": [(r.p1, r.p2, COLORS[r.colour]) for r in visible], "by_megno": bool(self.colour_box.value)}
 
