@@ -12,7 +12,7 @@ from page_loop import poll, settle
 
 from explorer.analysis import budget as budget_mod
 from explorer.analysis.budget import Budget
-from explorer.app.serve.tasks import Session
+from explorer.app.serve.tasks import Session, Timer
 
 
 def _until_stopped(started: threading.Event):
@@ -141,7 +141,7 @@ def test_actions_reach_the_loop_in_the_order_they_were_handed_in_whatever_order_
 def test_a_timer_keeps_its_earliest_due_call_only():
     session = Session()
     fired: list = []
-    timer = session.timer(lambda: fired.append(time.monotonic()))
+    timer = Timer(session, lambda: fired.append(time.monotonic()))
     now = time.monotonic()
     timer.at(now + 10.0)
     timer.at(now + 20.0)                        # later than the one due: nothing changes
@@ -164,7 +164,7 @@ def test_a_timers_action_that_asks_for_its_next_call_or_cancels_it_still_has_its
         else:
             timer.cancel()
 
-    timer = session.timer(action)
+    timer = Timer(session, action)
     timer.at(time.monotonic())
     settle(session, 60)
     assert len(fired) == 2 and doc.session_context.calls == 2 and timer.due is None
@@ -179,7 +179,7 @@ def test_closing_the_session_cancels_every_task_budget_and_timer():
         await session.run(_until_stopped, started)
 
     session.start("t", work(), budget=b)
-    timer = session.timer(lambda: None)
+    timer = Timer(session, lambda: None)
     timer.at(time.monotonic() + 60.0)
     while not started.is_set():
         poll(session)

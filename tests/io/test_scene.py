@@ -463,3 +463,14 @@ def test_panel_seeds_use_the_panel_parameters_and_phi0():
         got = s.panel_seeds(i)
         want = seed_points(s.seeds, prm, h, 1.0)
         assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1])
+
+
+def test_seeds_placed_on_a_section_map_lie_strictly_inside_its_allowed_region():
+    from explorer.analysis.section_map import SectionMap
+
+    smap = SectionMap(model.FIGURE4.with_(mu=0.03), 2.0)
+    pts = SeedSpec(n=50).points_on(smap)
+    assert 40 <= len(pts) <= 50 and smap.allowed(pts).all()      # about n points of a grid in the ellipse
+    inside, outside = (0.1, 0.0), (50.0, 50.0)
+    given = SeedSpec(kind="points", points=(inside, outside)).points_on(smap)
+    assert given.tolist() == [list(inside)]                  # a given point outside the region is left out

@@ -226,3 +226,17 @@ def test_a_systems_frequency_diffusion_hashes_follow_its_center_and_iterates():
     assert hashes(text) == hashes(text + "center = [0.1, 0.0]\ndiffusion_iterates = 60\n")
     assert len({hashes(fd), hashes(text), hashes(fd.replace("[0.0, 0.0]", "[0.1, 0.0]")),
                 hashes(fd.replace("= 50", "= 60"))}) == 4
+
+
+def test_a_systems_seeds_placed_on_its_section_map_are_the_points_of_its_domain():
+    import explorer as ex
+    from explorer.io.scene.system import SystemSeeds
+    from explorer.model import classic
+
+    hh = classic.henon_heiles()
+    x, y, px, py = hh.states
+    smap = ex.SectionMap(hh, 1 / 8, section=x, direction=1, coords=(y, py), solve=px)
+    grid = SystemSeeds(window=(-0.6, 0.8, -0.6, 0.6), n=100).points_on(smap)
+    assert 40 < len(grid) < 100 and smap.allowed(grid).all()        # the grid's points off the level left out
+    given = SystemSeeds(kind="points", points=((0.1, 0.0), (2.0, 2.0))).points_on(smap)
+    assert given.tolist() == [[0.1, 0.0]]

@@ -88,12 +88,6 @@ class OrbitRun:
     def finished(self) -> bool:
         return self.state is not None and bool(self.state.finished[0])
 
-    def reopen(self) -> None:
-        """Compute on from where the stream stopped (at a larger count)."""
-        self.state = self.state.copy()
-        self.state.finished[:] = False
-        self.status = "running"
-
     def advance(self) -> np.ndarray:
         """Compute the next block (at most ``block`` crossings, and ``steps`` steps where the method resumes
         exactly at any step); returns its rows (n, 5): t, p1, p2, M, H - H0 (a System's: t, a, b, solve, E - E0)."""
@@ -191,9 +185,10 @@ class Worker:
             return OrbitRun(run.ident, run.p1, run.p2, settings, paused=run.paused, hidden=run.hidden,
                             wants_indicators=run.indicators is None,    # (indicators in flight: anew)
                             indicators=run.indicators, readout=run.readout)
-        elif end == "done":                         # (it reached the old count: on to the new one)
-            run.reopen()
-            run.estimated = False
+        elif end == "done":                         # (it reached the old count: on from where its stream stopped)
+            run.state = run.state.copy()
+            run.state.finished[:] = False
+            run.status, run.estimated = "running", False
         else:
             run.status = end
         return run

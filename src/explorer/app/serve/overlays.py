@@ -45,7 +45,7 @@ def _fixed_points_from(view, first):
     for g in (first, (c1, c2), (c1 - 0.5 * r1, c2), (c1 + 0.5 * r1, c2), (c1, c2 - 0.5 * r2), (c1, c2 + 0.5 * r2)):
         try:
             if view.admissible(*g):
-                yield find_fixed_point(view.section_map(), g)
+                yield find_fixed_point(view.smap, g)
         except BudgetExceeded:
             raise
         except Exception:  # noqa: BLE001 - no convergence from this guess
@@ -75,7 +75,7 @@ def separatrices(view, points) -> tuple:
     for fp in (fp for fp in points if not fp.stable):
         at = _at(fp.point)
         try:
-            branches = manifolds(view.section_map(), fp, arclength=SEPARATRIX_ARCLENGTH, max_time=SEPARATRIX_MAX_TIME)
+            branches = manifolds(view.smap, fp, arclength=SEPARATRIX_ARCLENGTH, max_time=SEPARATRIX_MAX_TIME)
         except BudgetExceeded as exc:
             notes.append(f"separatrices {exc}")
             break
@@ -94,7 +94,7 @@ def periodic_orbits(view):
     orbits, stopped, done = [], "", 0
     for k in range(1, PERIODIC_MAX + 1):
         try:
-            orbits += search_periodic_orbits(view.section_map(), k, grid=8, max_guesses=30)
+            orbits += search_periodic_orbits(view.smap, k, grid=8, max_guesses=30)
         except BudgetExceeded as exc:
             stopped = f"; periods {k}-{PERIODIC_MAX} not searched: {exc}"
             break
@@ -134,14 +134,14 @@ def orbit_readout(settings, start) -> tuple:
 
 def rotation_map(settings):
     """The section map of an orbit's rotation number: Taylor only, at the page's tol, else the rotation's default."""
-    return settings.section_map(float(settings.tol) if settings.method == "taylor" else float(rotation.DEFAULT_TOL))
+    return settings.smap.with_tol(float(settings.tol) if settings.method == "taylor" else float(rotation.DEFAULT_TOL))
 
 
 def saddle_manifolds(settings, point, period=1):
     """(branches, message): W^u then W^s of the hyperbolic orbit of ``period`` through ``point``, grown
     to MANIFOLD_ARCLENGTH (docs/manifolds.md); ParameterError when there is no such orbit."""
     p1, p2 = float(point[0]), float(point[1])
-    branches = manifolds(settings.section_map(), (p1, p2), arclength=MANIFOLD_ARCLENGTH, period=int(period),
+    branches = manifolds(settings.smap, (p1, p2), arclength=MANIFOLD_ARCLENGTH, period=int(period),
                          max_time=MANIFOLD_MAX_TIME)
     npts = sum(len(b.points) for b in branches)
     text = (f"manifolds of the hyperbolic period-{int(period)} orbit at {_at((p1, p2))}: "

@@ -82,7 +82,7 @@ class SectionPage:
 
     # ------------------------------------------------------------ layout
     def _build(self):
-        self.fields = Fields(self.session, self.settings, self._on_field)
+        self.fields = Fields(self.session, lambda: self.settings, self._on_field)
         self.inputs = self.fields.inputs
         # the buttons in rows above the figure: at 1280 x 720 every one is in view with the figure
         ol, ex, scene = self.orbit_list, self.exports, self.base.scene_export
@@ -132,7 +132,7 @@ class SectionPage:
         args, refused = settings_mod.screen_link(args, (*self.url_query(), TOKEN_ARG))   # (what a link carries)
         fields = {k: v for k, v in args.items() if k in self.base.field_names}
         self.settings, wrong = settings_mod.parse_link_fields(self.base, fields)
-        self.fields.show(self.settings)
+        self.fields.show()
         self._show_section()
         refused += wrong
         for part in self.link_parts:
@@ -175,7 +175,7 @@ class SectionPage:
         """The field ``name`` (None: every field) was edited: applied if valid as on the command line (Fields.read),
         else said on the message line."""
         try:
-            new = self.fields.read(self.base, self.settings, len(self.orbits.runs), name)
+            new = self.fields.read(self.base, len(self.orbits.runs), name)
         except ParameterError as exc:
             self.say(f"not applied: {exc}")
             return
@@ -199,7 +199,7 @@ class SectionPage:
             self.overlays.restart()
             if dropped:
                 self.say(f"{dropped} start(s) outside the new allowed region dropped")
-        self.fields.show(self.settings)
+        self.fields.show()
         self.push_url()
 
     def _show_section(self):

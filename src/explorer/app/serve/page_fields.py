@@ -9,6 +9,7 @@ import panel as pn
 from explorer import model
 from explorer.app.serve.settings import Settings, room_for
 from explorer.app.serve.style import FIELD_WIDTH
+from explorer.app.serve.tasks import Timer
 from explorer.model import ParameterError
 
 #: the μ slider ends at least here; while dragged its value applies at most every SLIDE_SECONDS
@@ -52,17 +53,17 @@ def slider_range(mu: float) -> tuple:
 
 
 class Fields:
-    """One widget per field (``inputs``); an edit calls ``on_edit(name)`` on the session's loop."""
+    """One widget per field of ``settings()`` (``inputs``); an edit calls ``on_edit(name)`` on the session's loop."""
 
-    def __init__(self, session, settings: Settings, on_edit):
+    def __init__(self, session, settings, on_edit):
         from explorer.analysis.sections import METHODS
 
         self._quiet = False
-        self.applied = settings
+        self.settings = settings
         self._typed: dict = {}                  # each text field's value_input when last read
-        s = settings.fields()
+        s = settings().fields()
         self.inputs: dict = {}
-        for name in settings.field_names:
+        for name in settings().field_names:
             shown = dict(label=LABELS.get(name, name), value=s[name], width=FIELD_WIDTH, description=HELP.get(name))
             if name == "method":
                 w = pn.widgets.Select(options=list(METHODS), **shown)
@@ -74,10 +75,10 @@ class Fields:
                                                 visible="mu" in s)
         self._slider_at(float(s.get("mu", 0.0)))
         self._dragging = False                  # from a drag's first move to its release: the range stays
-        self._slide_timer = session.timer(lambda: self._slid(self.mu_slider.value))
+        self._slide_timer = Timer(session, lambda: self._slid(self.mu_slider.value))
         self.mu_slider.param.watch(self._drag, "value")
         self.mu_slider.param.watch(self._released, "value_throttled")
-        steps = [n for n in settings.field_names if n != "method"]
+        steps = [n for n in settings().field_names if n != "method"]
         self.step_field = pn.widgets.Select(label="step", options={LABELS.get(n, n): n for n in steps},
                                             value=steps[0], width=62, margin=STEP_MARGIN)
         self.step_size = pn.widgets.FloatInput(label="by", width=82, margin=STEP_MARGIN)
@@ -98,7 +99,7 @@ class Fields:
         session.soon(lambda: on_edit(name))
 
     def _reset_step(self, name: str) -> None:
-        self.step_size.value = default_step(float(self.applied.fields()[name]))
+        self.step_size.value = default_step(float(self.settings().fields()[name]))
 
     def step(self, k: int, name: str | None = None) -> None:
         """Move field ``name`` (None: the stepper's) ``k`` steps from the value that applies, as if typed."""
@@ -106,7 +107,7 @@ class Fields:
         size = self.step_size.value
         if size is None or not (math.isfinite(size) and size > 0.0):
             return self._reset_step(name)
-        text = stepped(name, self.applied.fields()[name], float(size), k)
+        text = stepped(name, self.settings().fields()[name], float(size), k)
         if self.inputs[name].value == text:       # the same refused text again: said again
             self.inputs[name].param.trigger("value")
         else:
@@ -140,26 +141,25 @@ class Fields:
         finally:
             self._quiet = False
 
-    def show(self, settings: Settings) -> None:
-        """The fields and the slider show ``settings`` (not an edit: nothing is called)."""
-        self.applied = settings
+    def show(self) -> None:
+        """The fields and the slider show the page's settings (not an edit: nothing is called)."""
         self._quiet = True
         try:
-            for name, text in settings.fields().items():
+            for name, text in self.settings().fields().items():
                 w = self.inputs[name]
                 if getattr(w, "value_input", None) not in (None, self._typed.get(name, "")):
                     continue            # typed into since its last apply: the text is the user's
                 w.value = text          # (param calls no watcher and sends nothing for an unchanged value)
         finally:
             self._quiet = False
-        mu = settings.fields().get("mu")
+        mu = self.settings().fields().get("mu")
         if mu is not None and not self._dragging:
             self._slider_at(float(mu))
 
-    def read(self, base: Settings, applied: Settings, n_orbits: int, name: str | None = None) -> Settings:
-        """``base`` with ``applied`` and the text of field ``name`` (None: every field's), validated, with
+    def read(self, base: Settings, n_orbits: int, name: str | None = None) -> Settings:
+        """``base`` with the page's settings and the text of field ``name`` (None: every field's), validated, with
         room for ``n_orbits`` orbits (ParameterError otherwise)."""
-        fields = applied.fields()
+        fields = self.settings().fields()
         for n in self.inputs if name is None else (name,):
             fields[n] = self.inputs[n].value
             if getattr(self.inputs[n], "value_input", None) == fields[n]:

@@ -13,7 +13,7 @@ from explorer.app.serve import style
 from explorer.app.serve.box import Box
 from explorer.app.serve.orbits import COLORS, INDICATOR_TIME, Worker
 from explorer.app.serve.style import MEGNO_HIGH, MEGNO_LOW, MEGNO_ORBIT_SKIP, POINT_SIZE, megno_palette
-from explorer.app.serve.tasks import failure
+from explorer.app.serve.tasks import Timer, failure
 
 #: blocks after an orbit's first go to the browser at most this often (s): each message redraws every dot
 FLUSH_SECONDS = 0.25
@@ -41,7 +41,7 @@ class OrbitsLayer:
         self.on_status = lambda: None          # called after every update of the status line
         self._flushed_at = -math.inf           # when the last flush ran (monotonic)
         self._settle_at = -math.inf            # the flush due then moves the live rows
-        self.flush_timer = session.timer(lambda: self._flush())   # (looked up when due: tests trace it)
+        self.flush_timer = Timer(session, lambda: self._flush())   # (looked up when due: tests trace it)
         self.worker = Worker(session, self._on_block, self._on_error, self._on_indicators,
                              on_notice=lambda _i, text: host.say(text))
         self.runs = self.worker.runs

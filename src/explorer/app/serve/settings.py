@@ -129,26 +129,18 @@ class PageSettings:
         """Blocks (rows (n, 5): t, a, b, solve, E - E0; the stream's state) of the orbit from (p1, p2), on from
         ``state`` (None: its start): :func:`explorer.analysis.sections.iter_crossings` of the map at ``tol``, its
         blocks cut at ``step_block`` steps (None: at crossings only)."""
-        s = self.section_map(self.tol)
+        s = self.smap.with_tol(self.tol)
         return ((b.rows(0)[:, list(s.columns)], b.state) for b in sections.iter_crossings(
             s, [(p1, p2)], n_crossings=self.crossings, block=block, state=state, max_steps=self.max_steps,
             step_block=step_block, **self.stream_kwargs()))
-
-    def section_map(self, tol=None):
-        """The page's map (at ``tol``: :meth:`with_tol`) that its searches ask (fixed points, manifolds,
-        rotation numbers)."""
-        return self.smap if tol is None else self.smap.with_tol(tol)
 
     def indicator_run(self, points) -> tuple:
         """(system, keywords) of lyapunov.indicators for the orbits from ``points``: the map's points at ``tol``."""
         return self.smap, {"y0": points, "tol": self.tol}
 
     def seed_starts(self, seeds) -> list:
-        """The starts [(a, b), ...] ``explorer sweep`` runs for a scene's ``seeds`` on the map: Chaplygin's
-        SeedSpec in the allowed ellipse, a System's SystemSeeds on any map's domain (None, no scene: a scene's
-        default on Chaplygin's map, a grid of 100 over the region box on a System's)."""
-        from explorer.analysis.seeds import seed_points
-        from explorer.analysis.sweep import system_seed_points
+        """The starts [(a, b), ...] ``explorer sweep`` runs for a scene's ``seeds`` on the map (``seeds.points_on``;
+        None, no scene: a scene's default on Chaplygin's map, a grid of 100 over the region box on a System's)."""
         from explorer.io.scene import SeedSpec
         from explorer.io.scene.system import SystemSeeds
 
@@ -156,10 +148,7 @@ class PageSettings:
             c1, c2, r1, r2 = self.region or (0.0, 0.0, 1.0, 1.0)
             system = system_sections.is_system_map(self.smap)
             seeds = SystemSeeds(window=(c1 - r1, c1 + r1, c2 - r2, c2 + r2)) if system else SeedSpec()
-        if isinstance(seeds, SystemSeeds):
-            pts = system_seed_points(seeds, self.smap)[0]
-        else:
-            pts = np.column_stack(seed_points(seeds, self.smap.params, self.smap.h, self.smap.phi0)[:2])
+        pts = seeds.points_on(self.smap)
         if not len(pts):
             raise ParameterError(f"no seed point on the section ({self.smap.describe_domain()})")
         return [(float(a), float(b)) for a, b in pts]

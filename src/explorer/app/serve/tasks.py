@@ -110,9 +110,6 @@ class Session:
         else:
             self.start(object(), self.apply(fn))        # (a task of its own: none replaces it)
 
-    def timer(self, action) -> Timer:
-        return Timer(self, action)
-
     def busy(self) -> bool:
         """A task, a timer or a watcher call is pending."""
         return any(not t.done() for t, _b in self._tasks.values())

@@ -4,6 +4,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from explorer.analysis import sections
 from explorer.analysis.lyapunov import EARLY_STOP_METHODS, methods_for
 from explorer.io.scene.checks import SceneError, _bool, _choice, _fail, _int, _list, _real
@@ -102,6 +104,12 @@ class SeedSpec:
         """Only the keys that determine the points of this kind."""
         d = self.to_dict()
         return {k: d[k] for k in _SEED_USED[self.kind]}
+
+    def points_on(self, smap):
+        """The seed points (M, 2) on Chaplygin's section map ``smap`` (analysis.seeds.seed_points)."""
+        from explorer.analysis.seeds import seed_points
+
+        return np.column_stack(seed_points(self, smap.params, smap.h, smap.phi0)[:2])
 
 
 @dataclass(frozen=True)

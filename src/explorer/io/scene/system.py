@@ -196,6 +196,12 @@ class SystemSeeds:
             d["seed"] = self.seed
         return d
 
+    def points_on(self, smap):
+        """The seed points (M, 2) on the domain of the section map ``smap`` (analysis.sweep.system_seed_points)."""
+        from explorer.analysis.sweep import system_seed_points
+
+        return system_seed_points(self, smap)[0]
+
 
 def window_of(key, v) -> tuple:
     """[a_lo, a_hi, b_lo, b_hi] with a_lo < a_hi and b_lo < b_hi."""
