@@ -2,7 +2,6 @@
 orbit block by block, bit for bit ``explorer orbit``; a :class:`Worker` runs them.  No web library here."""
 from __future__ import annotations
 
-import contextlib
 import copy
 import math
 import time
@@ -113,13 +112,6 @@ def _duration(seconds: float) -> str:
         if seconds >= size:
             return f"{seconds / size:.2g} {unit}"
     return f"{seconds:.2g} s"
-
-
-def warm_up(settings) -> None:
-    """Load (or compile) the crossing kernels of ``settings``' method: one crossing from the region's centre."""
-    if settings.region is not None:
-        with contextlib.suppress(Exception):    # the click will report the same error with its orbit
-            OrbitRun(0, settings.region[0], settings.region[1], replace(settings, crossings=1)).advance()
 
 
 def orbit_indicators(settings, p1: float, p2: float) -> tuple:

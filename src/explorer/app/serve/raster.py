@@ -87,7 +87,7 @@ def rasters(settings: Settings, window: Window, resolutions: tuple = RESOLUTIONS
     previous = np.full((1, 1), np.nan)          # the coarser raster (before the first: nothing known)
     for i, n in enumerate(resolutions):
         P1, P2 = window.centres(n)
-        inside = np.asarray(settings.allowed(P1, P2), bool)
+        inside = np.asarray(settings.smap.allowed(np.stack([P1, P2], axis=-1)), bool)
         k = n // previous.shape[0]
         shown = np.where(inside, np.kron(previous, np.ones((k, k))), np.nan)
         raster = CellRaster(None, None, inside, indicator, RULES[indicator], default_threshold(indicator, time), {})

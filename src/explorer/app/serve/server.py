@@ -14,6 +14,7 @@ import signal
 import socket
 import sys
 import threading
+from dataclasses import replace
 
 from explorer.app.serve.settings import TOKEN_ARG, Settings
 
@@ -109,10 +110,13 @@ def open_in_browser(url: str) -> None:
 
 
 def warm_up_and_freeze(base: Settings) -> None:
-    """Load the crossing kernels, then ``gc.freeze`` every object alive (docs/commands/serve.md, *Latency*)."""
-    from explorer.app.serve.orbits import warm_up
+    """Load (or compile) the crossing kernels of ``base``'s method, one crossing from the region's centre, then
+    ``gc.freeze`` every object alive (docs/commands/serve.md, *Latency*)."""
+    from explorer.app.serve.orbits import OrbitRun
 
-    warm_up(base)
+    if base.region is not None:
+        with contextlib.suppress(Exception):    # a click reports the same error with its orbit
+            OrbitRun(0, base.region[0], base.region[1], replace(base, crossings=1)).advance()
     gc.collect()
     gc.freeze()
 

@@ -110,10 +110,6 @@ class PageSettings:
         c1, c2, r1, r2 = self.region
         return self.smap.allowed(cell_centres((c1 - r1, c1 + r1, c2 - r2, c2 + r2), REGION_CELLS))
 
-    def allowed(self, p1, p2) -> np.ndarray:
-        """Mask of the points in the map's domain."""
-        return self.smap.allowed(np.stack([np.asarray(p1, float), np.asarray(p2, float)], axis=-1))
-
     def refusal(self, p1: float, p2: float) -> str | None:
         """Why a click at (p1, p2) starts no orbit, in the map's words (None: the map lifts it to a state)."""
         try:
