@@ -78,17 +78,31 @@ def test_crossings_of_the_map_equal_the_flows_crossings_from_the_states_built_by
     hh = henon_heiles()
     smap = ex.SectionMap(hh, E, section=x, direction=+1, coords=(y, py), solve=px)
     res = ex.crossings(smap, POINTS, n_crossings=30)
-    flow = ex.crossings(hh, states=by_hand(POINTS), n_crossings=30, section=x, direction=+1)
+    flow = ex.crossings(hh, states=by_hand(POINTS), n_crossings=30, section=x, direction=+1, tol=smap.tol)
     assert isinstance(res, ex.Crossings) and np.all(res.count == 30)
     for name in ("data", "count", "status", "final", "info"):
         assert np.array_equal(getattr(res, name), getattr(flow, name), equal_nan=True), name
     assert res.settings["energy"] == E and res.settings["solve"] == "px" and res.settings["section"] == "x"
-    # the map's iterates are the (y, py) columns of the crossings at the map's tolerance
+    # the map's iterates are the (y, py) columns of its crossings (both at the map's tolerance)
     it = smap.iterate(POINTS[0], 30)
-    tight = ex.crossings(smap, POINTS, n_crossings=30, tol=smap.tol)
-    assert np.array_equal(it[0], POINTS[0]) and np.array_equal(it[1:], tight.orbit(0)[:, [2, 4]])
+    assert np.array_equal(it[0], POINTS[0]) and np.array_equal(it[1:], res.orbit(0)[:, [2, 4]])
     with pytest.raises(ParameterError, match="belong\\(s\\) to the map"):
         ex.crossings(smap, POINTS, n_crossings=3, direction=-1)
+
+
+def test_the_maps_crossings_are_the_systems_at_the_maps_tol_and_another_tol_is_the_map_with_tol():
+    hh = henon_heiles()
+    smap = ex.SectionMap(hh, E, section=x, direction=+1, coords=(y, py), solve=px)
+    loose = smap.with_tol(1e-10)
+    res = ex.crossings(loose, POINTS, n_crossings=20)
+    flow = ex.crossings(hh, states=loose.states(POINTS), n_crossings=20, section=x, direction=+1, tol=1e-10)
+    for name in ("data", "count", "status", "final", "info"):
+        assert np.array_equal(getattr(res, name), getattr(flow, name), equal_nan=True), name
+    blocks = list(ex.iter_crossings(loose, POINTS, n_crossings=20, block=7))
+    assert np.array_equal(np.concatenate([b.rows(0) for b in blocks]), res.orbit(0))
+    tight = ex.crossings(smap, POINTS, n_crossings=20)
+    assert res.settings["tol"] == 1e-10 and tight.settings["tol"] == smap.tol == 1e-15
+    assert not np.array_equal(res.data, tight.data) and np.max(np.abs(res.data - tight.data)) < 1e-6
 
 
 @pytest.mark.parametrize("system", ["chaplygin", "henon_heiles"])
@@ -97,7 +111,7 @@ def test_a_maps_crossings_streamed_in_blocks_are_its_crossings_rows_bit_for_bit_
         smap, pts, kw = ex.SectionMap(ex.FIGURE4, ex.FIGURE4_H, tol=1e-12), [(0.3, 0.1)], {"direction": -1}
     else:
         smap = ex.SectionMap(henon_heiles(), E, section=x, direction=-1, coords=(y, py), solve=px)
-        pts, kw = POINTS[:1], {"tol": smap.tol}
+        pts, kw = POINTS[:1], {}
     one = ex.crossings(smap, pts, n_crossings=12, **kw)
     blocks = list(ex.iter_crossings(smap, pts, n_crossings=12, block=5, **kw))
     assert len(blocks) == 3 and np.array_equal(np.concatenate([b.rows(0) for b in blocks]), one.orbit(0))

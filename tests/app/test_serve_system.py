@@ -106,7 +106,7 @@ def test_a_system_page_runs_the_maps_orbits_on_its_energy_level_and_refuses_poin
         d = page.orbits.columns()
         rows = np.column_stack([np.asarray(d[k]) for k in ("t", "p1", "p2", "M", "dH")])
         assert rows.shape == (40, 5) and np.max(np.abs(_energy(rows[:, 1], rows[:, 2], rows[:, 3]) - E)) <= 1e-10
-        ref = ex.crossings(smap, [(0.1, 0.1)], n_crossings=40).data[0]
+        ref = ex.crossings(smap.with_tol(page.settings.tol), [(0.1, 0.1)], n_crossings=40).data[0]
         np.testing.assert_array_equal(rows[:, 1:4], ref[:, [2, 4, 3]])      # (y, py, px): the map's iterates
         np.testing.assert_array_equal(rows[:, 0], ref[:, 0])                  # (one stream: its clock too)
         assert page.click(0.6, 0.45) is None and "has no solution for px" in page.message.text

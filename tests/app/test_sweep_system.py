@@ -78,7 +78,7 @@ def test_swept_panels_equal_the_crossings_of_the_section_map_at_each_value_and_c
         pd = data.panels[i]
         assert pd.settings["map"]["columns"] == ["t", "y", "py", "px", "dE"]
         smap = ex.SectionMap(hh.with_(lam=lam), E, section=x, direction=+1, coords=(y, py), solve=px)
-        ref = ex.crossings(smap, POINTS, n_crossings=CROSSINGS, tol=1e-13)
+        ref = ex.crossings(smap.with_tol(1e-13), POINTS, n_crossings=CROSSINGS)
         assert np.all(ref.count == CROSSINGS) and np.all(pd.count == CROSSINGS)
         rows = np.concatenate([pd.orbit(k) for k in range(len(POINTS))])
         np.testing.assert_array_equal(rows, ref.data[..., [0, 2, 4, 3, 5]].reshape(-1, 5))

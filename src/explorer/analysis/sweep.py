@@ -636,10 +636,11 @@ class SystemSweepSpec:
     streamed = SweepSpec.streamed
 
     def chunk_crossings(self, panel, a: int, b: int, threads: int | None = None) -> dict:
-        """The crossings of the seeds a:b of ``panel``'s section map (rows :meth:`columns`) as :func:`task`
+        """The crossings of the seeds a:b of ``panel``'s section map at ``tol`` (rows :meth:`columns`) as :func:`task`
         returns them."""
-        res = sections.crossings(self.section_map(panel), panel.seeds[a:b], n_crossings=self.crossings, tol=self.tol,
-                                 tmax=self.tmax, max_steps=self.max_steps, threads=threads)
+        smap = self.section_map(panel).with_tol(self.tol)
+        res = sections.crossings(smap, panel.seeds[a:b], n_crossings=self.crossings, tmax=self.tmax,
+                                 max_steps=self.max_steps, threads=threads)
         return {"data": res.data[..., self.columns(panel.system)], "count": res.count, "status": res.status,
                 "final": res.final, "info": res.info, "settings": res.settings}
 

@@ -28,7 +28,8 @@ the flow of ``-f``, crossing the section in the opposite direction.  A reversor 
 involution of the map (:attr:`SystemSectionMap.reversors`).
 
 :meth:`SystemSectionMap.crossings` is what ``explorer.crossings(smap, points, n_crossings=K)``
-runs: the points lifted to states, then the System's crossings of the map's section and direction.
+runs: the points lifted to states, then the System's crossings of the map's section and direction at
+the map's ``tol`` (as Chaplygin's map: another tolerance is ``smap.with_tol(tol)``).
 """
 from __future__ import annotations
 
@@ -164,7 +165,7 @@ class SystemSectionMap(FlowSection):
     ``coords`` on ``section = 0``, crossed in ``direction``; ``solve`` from the energy (module
     docstring).  ``states(points)`` lifts points; ``explorer.crossings(smap, points,
     n_crossings=K)`` iterates the map; ``smap(x)`` is one application with its Jacobian.  ``tol``:
-    the Taylor tolerance of the map's returns; ``tmax``: the time budget of one return."""
+    the Taylor tolerance of the map's returns and crossings; ``tmax``: the time budget of one return."""
 
     method = "taylor"
     periods = (0.0, 0.0)
@@ -702,8 +703,8 @@ class SystemSectionMap(FlowSection):
 
     def crossings(self, points, *, n_crossings: int, section=None, **kw):
         """The arguments of the Crossings of the orbits from ``points``: the System's crossings of
-        this map's section and direction from :meth:`states`; settings add the energy, coords and
-        solve."""
+        this map's section and direction from :meth:`states`, at its ``tol``; settings add the energy,
+        coords and solve."""
         out = system_crossings(**self._crossing_args(points, n_crossings, section, kw))
         settings = dict(out[-1], energy=self.energy_value, coords=[s.name for s in self.coords],
                         solve=self.solve.name)
@@ -715,8 +716,9 @@ class SystemSectionMap(FlowSection):
         return iter_system_crossings(**self._crossing_args(points, n_crossings, section, kw))
 
     def _crossing_args(self, points, n_crossings, section, kw) -> dict:
-        """The System's crossings' arguments for the orbits from ``points``: this map's section and direction,
-        the states from :meth:`states`."""
+        """The System's crossings' arguments for the orbits from ``points``: this map's section, direction and
+        tol, the states from :meth:`states`.  (For now a ``tol`` given beside the map still wins: the serve
+        page passes one; once it does not, such a tol is refused as Chaplygin's map refuses it.)"""
         if kw.get("backward"):
             raise ParameterError("crossings of a SectionMap: backward= is not for a map; its preimages are "
                                  "smap.images(points, n, backward=True)")
@@ -725,5 +727,5 @@ class SystemSectionMap(FlowSection):
                      or k in kw]
             raise ParameterError(f"crossings of a SectionMap: {', '.join(given)} belong(s) to the map (or are its "
                                  "points); do not give them beside it")
-        return dict(kw, system=self.system, states=self.states(points), n_crossings=n_crossings,
+        return dict({"tol": self.tol, **kw}, system=self.system, states=self.states(points), n_crossings=n_crossings,
                     section=self.section.expr, direction=self.direction)

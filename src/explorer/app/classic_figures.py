@@ -71,9 +71,9 @@ def henon_heiles_sections(energies=classic.HENON_HEILES_ENERGIES, *, seeds=16, n
     x, y, px, py = hh.states
     out = []
     for E in energies:
-        smap = SystemSectionMap(hh, E, section=x, direction=1, coords=(y, py), solve=px)
+        smap = SystemSectionMap(hh, E, section=x, direction=1, coords=(y, py), solve=px, tol=TOL)
         by, bp = henon_heiles_boundary(E)
-        res = crossings(smap, _seeds_inside(by, bp, seeds), n_crossings=n_crossings, tol=TOL)
+        res = crossings(smap, _seeds_inside(by, bp, seeds), n_crossings=n_crossings)
         out.append({"energy": E, "points": res.data[..., [2, 4]], "energy_error": float(np.nanmax(
             np.abs(res.data[..., -1]))), "boundary": (by, bp)})
     return out
@@ -145,9 +145,9 @@ def double_pendulum_section(E=PENDULUM_ENERGY, *, seeds=16, n_crossings=300):
     (th2, p2): points (N, K, 2), the largest |E - E0| and the boundary."""
     dp = classic.double_pendulum()
     th1, th2, p1, p2 = dp.states
-    smap = SystemSectionMap(dp, E, section=th1, direction=1, coords=(th2, p2), solve=p1)
+    smap = SystemSectionMap(dp, E, section=th1, direction=1, coords=(th2, p2), solve=p1, tol=TOL)
     bt, bp = double_pendulum_boundary(E)
-    res = crossings(smap, _seeds_inside(bt, bp, seeds), n_crossings=n_crossings, tol=TOL)
+    res = crossings(smap, _seeds_inside(bt, bp, seeds), n_crossings=n_crossings)
     return {"energy": E, "points": res.data[..., [2, 4]], "energy_error": float(np.nanmax(np.abs(res.data[..., -1]))),
             "boundary": (bt, bp)}
 
