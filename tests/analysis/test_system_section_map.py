@@ -105,6 +105,13 @@ def test_the_maps_crossings_are_the_systems_at_the_maps_tol_and_another_tol_is_t
     assert not np.array_equal(res.data, tight.data) and np.max(np.abs(res.data - tight.data)) < 1e-6
 
 
+@pytest.mark.parametrize("run", ["crossings", "iter_crossings"])
+def test_a_tol_beside_a_systems_map_is_refused_naming_tol_and_pointing_to_with_tol(run):
+    smap = ex.SectionMap(henon_heiles(), E, section=x, direction=+1, coords=(y, py), solve=px)
+    with pytest.raises(ParameterError, match=r"tol belong\(s\) to the map.*smap\.with_tol\(tol\)"):
+        getattr(ex, run)(smap, POINTS, n_crossings=3, tol=smap.tol)
+
+
 @pytest.mark.parametrize("system", ["chaplygin", "henon_heiles"])
 def test_a_maps_crossings_streamed_in_blocks_are_its_crossings_rows_bit_for_bit_and_columns_name_a_b_solve(system):
     if system == "chaplygin":

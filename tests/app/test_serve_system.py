@@ -67,10 +67,10 @@ def test_one_seed_starts_runs_each_seed_kind_on_either_page():
     window = SystemSeeds(kind="random", n=20, window=(-0.6, 0.6, -0.6, 0.6))
     for page in (chap, system):                       # a System's [seeds] on Chaplygin's map too
         starts = page.seed_starts(window)
-        assert 0 < len(starts) <= 20 and page.allowed(*np.transpose(starts)).all()
+        assert 0 < len(starts) <= 20 and page.smap.allowed(np.array(starts)).all()
     c1, c2, r1, r2 = system.region                    # no scene: a grid of about 100 over the region box
     starts = np.array(system.seed_starts(None))
-    assert 50 < len(starts) <= 100 and system.allowed(starts[:, 0], starts[:, 1]).all()
+    assert 50 < len(starts) <= 100 and system.smap.allowed(starts).all()
     assert np.all(np.abs(starts - (c1, c2)) <= (r1, r2))
     with pytest.raises(ParameterError, match="no seed point on the section"):
         system.seed_starts(SystemSeeds(kind="points", points=((0.0, 1.0),)))   # (off the level)

@@ -29,7 +29,7 @@ involution of the map (:attr:`SystemSectionMap.reversors`).
 
 :meth:`SystemSectionMap.crossings` is what ``explorer.crossings(smap, points, n_crossings=K)``
 runs: the points lifted to states, then the System's crossings of the map's section and direction at
-the map's ``tol`` (as Chaplygin's map: another tolerance is ``smap.with_tol(tol)``).
+the map's ``tol`` (as Chaplygin's map: another tolerance is ``smap.with_tol(tol)``, not ``tol=`` beside it).
 """
 from __future__ import annotations
 
@@ -717,15 +717,16 @@ class SystemSectionMap(FlowSection):
 
     def _crossing_args(self, points, n_crossings, section, kw) -> dict:
         """The System's crossings' arguments for the orbits from ``points``: this map's section, direction and
-        tol, the states from :meth:`states`.  (For now a ``tol`` given beside the map still wins: the serve
-        page passes one; once it does not, such a tol is refused as Chaplygin's map refuses it.)"""
+        tol, the states from :meth:`states`."""
         if kw.get("backward"):
             raise ParameterError("crossings of a SectionMap: backward= is not for a map; its preimages are "
                                  "smap.images(points, n, backward=True)")
-        if section is not None or "direction" in kw or "states" in kw:
-            given = [k for k in ("section", "direction", "states") if (k == "section" and section is not None)
-                     or k in kw]
-            raise ParameterError(f"crossings of a SectionMap: {', '.join(given)} belong(s) to the map (or are its "
-                                 "points); do not give them beside it")
-        return dict({"tol": self.tol, **kw}, system=self.system, states=self.states(points), n_crossings=n_crossings,
-                    section=self.section.expr, direction=self.direction)
+        given = [k for k in ("section", "direction", "states", "tol") if (k == "section" and section is not None)
+                 or k in kw]
+        if given:
+            note = " (the states: its points)" if "states" in given else ""
+            other = "; at another tol, give the map smap.with_tol(tol)" if "tol" in given else ""
+            raise ParameterError(f"crossings of a SectionMap: {', '.join(given)} belong(s) to the map{note}; do not "
+                                 f"give them beside it{other}")
+        return dict(kw, system=self.system, states=self.states(points), n_crossings=n_crossings,
+                    section=self.section.expr, direction=self.direction, tol=self.tol)

@@ -267,8 +267,8 @@ class SystemSettings(PageSettings):
         return f"Poincaré section {s.section.expr} = 0 ({s.direction:+d}) of {s.system.name}, {s.solve.name} from E"
 
     def stream_kwargs(self) -> dict:
-        """:meth:`stream`'s integration: ``tol`` and the map's return budget for each crossing, on this thread."""
-        return {"tol": self.tol, "tmax": self.smap.tmax * self.crossings, "threads": 1}
+        """:meth:`stream`'s integration beside the map at ``tol``: its return budget per crossing, on this thread."""
+        return {"tmax": self.smap.tmax * self.crossings, "threads": 1}
 
 
 def page_settings(scene=None, system=None, panel: int = 0, flag: str = "", **values) -> tuple:
