@@ -252,8 +252,7 @@ class OrbitsLayer:
     def _colour_changed(self):
         spec = self.by_megno if self.colour_box.value else self.by_orbit
         for r in (self.points, self.live_points):
-            r.glyph.fill_color = spec
-            r.glyph.line_color = spec
+            r.glyph.update(fill_color=spec, line_color=spec)
         self.host.density_image.refresh()       # (at once: how it is coloured is part of what it shows)
         self.host.push_url()
 
