@@ -175,11 +175,27 @@ def test_the_section_map_lifts_its_points_to_the_states_of_the_flow(hh):
     smap = ex.SectionMap(hh, 1/8, section=x, direction=+1, coords=(y, py), solve=px)
     points = [(0.1, 0.1), (-0.1, 0.2)]
     a = ex.indicators(smap, points, tmax=200.0, which=("megno",))
-    b = ex.indicators(hh, states=smap.states(points), tmax=200.0, which=("megno",))
+    b = ex.indicators(hh, states=smap.states(points), tmax=200.0, tol=smap.tol, which=("megno",))
     np.testing.assert_array_equal(a.megno, b.megno)
     np.testing.assert_array_equal(a.final, b.final)
     assert a.settings["energy"] == 1/8 and a.settings["coords"] == ["y", "py"]
     assert np.all(np.isnan(a.sali))
+
+
+def test_the_maps_indicators_are_the_systems_at_the_maps_tol_and_another_tol_is_the_map_with_tol(hh):
+    smap = ex.SectionMap(hh, 1/8, section=x, direction=+1, coords=(y, py), solve=px)
+    points = [(0.1, 0.1), (-0.1, 0.2), (0.3, 0.0)]
+    loose = smap.with_tol(1e-10)
+    res = ex.indicators(loose, points, tmax=300.0, which=ALL)
+    flow = ex.indicators(hh, states=loose.states(points), tmax=300.0, tol=1e-10, which=ALL)
+    for name in ALL:
+        np.testing.assert_array_equal(res.values[name], flow.values[name], err_msg=name)
+    for name in ("time", "status", "steps", "final", "deviation", "energy_error"):
+        np.testing.assert_array_equal(getattr(res, name), getattr(flow, name), err_msg=name)
+    tight = ex.indicators(smap, points, tmax=300.0, which=ALL)
+    assert res.settings["tol"] == 1e-10 and tight.settings["tol"] == smap.tol == 1e-15
+    assert res.settings["order"] < tight.settings["order"]
+    assert not np.array_equal(res.final, tight.final) and np.max(np.abs(res.final - tight.final)) < 1e-6
 
 
 def test_one_deviation_vector_gives_the_first_vector_of_two_to_rounding(hh, four):

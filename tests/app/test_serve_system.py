@@ -199,7 +199,8 @@ def test_in_the_browser_a_systems_page_clicks_orbits_on_its_energy_level_and_dra
         A, B = np.meshgrid(r[1] + r[3] * u, r[2] + r[4] * u)
         inside = henon_heiles_map().allowed(np.stack([A, B], axis=-1))
         assert np.isnan(values[~inside]).all() and np.isfinite(values[inside]).all() and inside.sum() > 50
-        ref = ex.indicators(henon_heiles_map(), np.column_stack([A[inside], B[inside]]), tmax=50.0, which=("megno",))
+        ref = ex.indicators(henon_heiles_map().with_tol(1e-13), np.column_stack([A[inside], B[inside]]), tmax=50.0,
+                            which=("megno",))                              # (the page's tol, its default)
         np.testing.assert_array_equal(values[inside], ref.megno)           # <Y>(T) of each cell's orbit
         page.close()
     finally:

@@ -157,7 +157,7 @@ def test_a_chaos_map_stores_the_indicators_of_the_raster_cells_on_the_energy_sur
     A, B = np.meshgrid(-0.45 + 1.1 * cells, -0.52 + 1.04 * cells)
     on_surface = [p for p in zip(A.ravel(), B.ravel()) if 0.5 * p[1] ** 2 + 0.5 * p[0] ** 2 - p[0] ** 3 / 3 < E]
     np.testing.assert_allclose(pd.seeds, np.array(on_surface), rtol=0, atol=1e-15)   # the cells with H(0, y, 0, py) < E
-    ref = ex.indicators(smap, pd.seeds, tmax=40.0, tol=1e-12, which=("megno", "fli"))
+    ref = ex.indicators(smap.with_tol(1e-12), pd.seeds, tmax=40.0, which=("megno", "fli"))
     np.testing.assert_array_equal(pd.extra["megno"], ref.values["megno"])
     np.testing.assert_array_equal(pd.extra["fli"], ref.values["fli"])
     assert pd.attrs["map_resolution"] == 6 and np.all(pd.extra["lyapunov_status"] == 0)
@@ -323,7 +323,7 @@ def test_an_atlas_of_a_system_computes_each_cells_indicators_on_that_cells_secti
     for i in got:
         system, energy, _label = scene.cell(i)
         smap = ex.SectionMap(system, energy, section=x, direction=+1, coords=(y, py), solve=px)
-        ref = ex.indicators(smap, POINTS, tmax=ATLAS_T, tol=1e-12)
+        ref = ex.indicators(smap.with_tol(1e-12), POINTS, tmax=ATLAS_T)
         np.testing.assert_array_equal(got[i]["megno"], ref.values["megno"])
         np.testing.assert_array_equal(got[i]["lyapunov_status"], ref.status)
     # lam = 0.5 at E = 1/12 is lam = 1 at E = 1/48 (q -> lam q, H -> lam^2 H), below E = 1/12 where Hénon and

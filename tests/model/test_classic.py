@@ -126,7 +126,7 @@ def test_henon_heiles_chaotic_fraction_grows_with_the_energy_as_henon_and_heiles
     x, y, px, py = hh.states
     fraction = {}
     for E in classic.HENON_HEILES_ENERGIES:
-        smap = ex.SectionMap(hh, E, section=x, direction=+1, coords=(y, py), solve=px)
+        smap = ex.SectionMap(hh, E, section=x, direction=+1, coords=(y, py), solve=px, tol=1e-13)
         ind = ex.indicators(smap, _section_grid(E, 12), tmax=1000.0, which=("megno",))
         fraction[E], _, n = ex.chaotic_fraction(ind.megno, 4.0)
         assert n > 100

@@ -80,12 +80,12 @@ def system_indicators(system, y0=None, *, states=None, tmax: float, method, tol:
     """The fields of :class:`~explorer.analysis.lyapunov.Indicators` for the indicators ``which``
     (checked names) of the orbits of ``system`` (a System: full states ``states=``, shape (N, n) in
     its state order; a System's section map: section points, lifted by its ``states``) over the time
-    ``tmax``, by the adaptive Taylor method of ``tol`` (the only method for a System) on the
-    variational equations, with the engine's meaning of ``history``, ``v0``, ``w0`` (default
-    :func:`default_vectors`), ``early_stop`` and its levels, ``max_steps`` and ``threads``
-    (docs/commands/lyapunov.md); ``driver`` as :func:`~explorer.analysis.system_sections.driver_for`
-    (the same values either way).  ParameterError for the engine's settings of Chaplygin's model
-    (phi0, h, dt) and a method other than "taylor"."""
+    ``tmax``, by the adaptive Taylor method of ``tol`` (the only method for a System; of a map, the
+    map's own ``tol``, as Chaplygin's map) on the variational equations, with the engine's meaning
+    of ``history``, ``v0``, ``w0`` (default :func:`default_vectors`), ``early_stop`` and its levels,
+    ``max_steps`` and ``threads`` (docs/commands/lyapunov.md); ``driver`` as
+    :func:`~explorer.analysis.system_sections.driver_for` (the same values either way).  ParameterError
+    for the engine's settings of Chaplygin's model (phi0, h, dt) and a method other than "taylor"."""
     from explorer.analysis import budget
     from explorer.integrate import codegen
 
@@ -112,6 +112,7 @@ def system_indicators(system, y0=None, *, states=None, tmax: float, method, tol:
             raise ParameterError("indicators of a System's SectionMap: the section points are missing")
         smap, system = system, system.system
         Y0 = np.ascontiguousarray(smap.states(y0), dtype=np.float64)
+        tol = smap.tol if tol is None else tol   # (for now a tol beside the map wins: the serve page passes one)
     budget.checkpoint()
     max_steps = validation.integer("max_steps", budget.step_cap(max_steps), 1)
     T = validation.real("tmax", tmax, 0.0, lo_open=True)
