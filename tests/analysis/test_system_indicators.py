@@ -251,6 +251,15 @@ def test_states_of_the_wrong_shape_and_states_beside_a_map_are_refused(hh):
         ex.indicators(smap, states=[REGULAR])
 
 
+def test_a_tol_beside_a_systems_map_is_refused_naming_tol_and_pointing_to_with_tol_as_for_its_crossings(hh):
+    smap = ex.SectionMap(hh, 1/8, section=x, direction=+1, coords=(y, py), solve=px)
+    with pytest.raises(ParameterError, match=r"tol belong\(s\) to the map.*smap\.with_tol\(tol\)") as ind:
+        ex.indicators(smap, [(0.1, 0.1)], tmax=10.0, tol=smap.tol)
+    with pytest.raises(ParameterError) as cross:
+        ex.crossings(smap, [(0.1, 0.1)], n_crossings=3, tol=smap.tol)
+    assert str(ind.value).replace("indicators", "crossings", 1) == str(cross.value)   # the same words
+
+
 def test_an_orbit_escaping_in_finite_time_stops_at_its_blow_up_with_the_step_underflow_or_non_finite_status(hh):
     # x = px = 0 stays so: y'' = -y + y**2, which from (y, py) = (1.2, 0.5) escapes, py = sqrt(2E - y**2 +
     # 2 y**3 / 3) > 0 for y > 1, to y = infinity at t* = the integral of dy / py from 1.2 (a finite time)

@@ -135,8 +135,9 @@ def indicators(system, y0=None, *, tmax: float = DEFAULT_TIME, method: str | Non
     with ``method``'s tangent dynamics; ``early_stop`` ends an orbit classified chaotic by SALI or
     <Y>; ``history`` log-spaced records (docs/commands/lyapunov.md).  A System or its section map:
     :func:`explorer.analysis.system_indicators.system_indicators` (``states=`` the flow's start; a map
-    at its own ``tol``; ``phi0``, ``h`` and ``dt`` are refused).  For the model, ``states``, ``phi0``
-    and ``h`` are the system argument's (:func:`~explorer.analysis.section_map.system_first`)."""
+    at its own ``tol``, another is ``smap.with_tol(tol)``; ``phi0``, ``h`` and ``dt`` are refused).  For
+    the model, ``states``, ``phi0`` and ``h`` are the system argument's
+    (:func:`~explorer.analysis.section_map.system_first`)."""
     if system_sections.is_system(system) or system_sections.is_system_map(system):
         from explorer.analysis.system_indicators import system_indicators
         return Indicators(**system_indicators(

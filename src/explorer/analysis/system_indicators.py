@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from explorer._jit import max_threads
+from explorer.analysis.system_section_map import refused_beside
 from explorer.analysis.system_sections import DRIVERS, _states, is_system, run_driver
 from explorer.integrate.methods import DEFAULT_TOL, check_setting
 from explorer.kernels import indicator_table as table
@@ -81,11 +82,12 @@ def system_indicators(system, y0=None, *, states=None, tmax: float, method, tol:
     (checked names) of the orbits of ``system`` (a System: full states ``states=``, shape (N, n) in
     its state order; a System's section map: section points, lifted by its ``states``) over the time
     ``tmax``, by the adaptive Taylor method of ``tol`` (the only method for a System; of a map, the
-    map's own ``tol``, as Chaplygin's map) on the variational equations, with the engine's meaning
-    of ``history``, ``v0``, ``w0`` (default :func:`default_vectors`), ``early_stop`` and its levels,
-    ``max_steps`` and ``threads`` (docs/commands/lyapunov.md); ``driver`` as
+    map's own ``tol``) on the variational equations, with the engine's meaning of ``history``, ``v0``,
+    ``w0`` (default :func:`default_vectors`), ``early_stop`` and its levels, ``max_steps`` and
+    ``threads`` (docs/commands/lyapunov.md); ``driver`` as
     :func:`~explorer.analysis.system_sections.driver_for` (the same values either way).  ParameterError
-    for the engine's settings of Chaplygin's model (phi0, h, dt) and a method other than "taylor"."""
+    for the engine's settings of Chaplygin's model (phi0, h, dt), a method other than "taylor" and a
+    ``tol`` beside a map (as Chaplygin's map refuses it: the map at another tol is ``smap.with_tol(tol)``)."""
     from explorer.analysis import budget
     from explorer.integrate import codegen
 
@@ -112,7 +114,9 @@ def system_indicators(system, y0=None, *, states=None, tmax: float, method, tol:
             raise ParameterError("indicators of a System's SectionMap: the section points are missing")
         smap, system = system, system.system
         Y0 = np.ascontiguousarray(smap.states(y0), dtype=np.float64)
-        tol = smap.tol if tol is None else tol   # (for now a tol beside the map wins: the serve page passes one)
+        if tol is not None:
+            raise refused_beside("indicators", ["tol"])
+        tol = smap.tol
     budget.checkpoint()
     max_steps = validation.integer("max_steps", budget.step_cap(max_steps), 1)
     T = validation.real("tmax", tmax, 0.0, lo_open=True)

@@ -47,7 +47,7 @@ from explorer.integrate.methods import MAP_TOL, MAX_TOL, MIN_TOL
 from explorer.kernels import STATUS_NAMES
 from explorer.model import ParameterError, validation
 
-__all__ = ["ENERGY", "SEARCH_RETURNS", "SystemSectionMap"]
+__all__ = ["ENERGY", "SEARCH_RETURNS", "SystemSectionMap", "refused_beside"]
 
 #: the name of the energy level among a System map's parameters (``with_value("energy", E)``)
 ENERGY = "energy"
@@ -158,6 +158,15 @@ class _Linear:
 
     def __repr__(self):
         return f"_Linear({self.M.tolist()})"
+
+
+def refused_beside(run: str, given: list) -> ParameterError:
+    """The refusal of the map's own settings ``given`` beside a System's map to ``run`` (its crossings or
+    indicators): they belong to the map; at another tol it is ``smap.with_tol(tol)`` (as Chaplygin's map)."""
+    note = " (the states: its points)" if "states" in given else ""
+    other = "; at another tol, give the map smap.with_tol(tol)" if "tol" in given else ""
+    return ParameterError(f"{run} of a SectionMap: {', '.join(given)} belong(s) to the map{note}; do not give them "
+                          f"beside it{other}")
 
 
 class SystemSectionMap(FlowSection):
@@ -724,9 +733,6 @@ class SystemSectionMap(FlowSection):
         given = [k for k in ("section", "direction", "states", "tol") if (k == "section" and section is not None)
                  or k in kw]
         if given:
-            note = " (the states: its points)" if "states" in given else ""
-            other = "; at another tol, give the map smap.with_tol(tol)" if "tol" in given else ""
-            raise ParameterError(f"crossings of a SectionMap: {', '.join(given)} belong(s) to the map{note}; do not "
-                                 f"give them beside it{other}")
+            raise refused_beside("crossings", given)
         return dict(kw, system=self.system, states=self.states(points), n_crossings=n_crossings,
                     section=self.section.expr, direction=self.direction, tol=self.tol)

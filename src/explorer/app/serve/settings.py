@@ -131,8 +131,8 @@ class PageSettings:
             step_block=step_block, **self.stream_kwargs()))
 
     def indicator_run(self, points) -> tuple:
-        """(system, keywords) of lyapunov.indicators for the orbits from ``points``: the map's points at ``tol``."""
-        return self.smap, {"y0": points, "tol": self.tol}
+        """(system, keywords) of lyapunov.indicators for the orbits from ``points``: the map at ``tol``, its points."""
+        return self.smap.with_tol(self.tol), {"y0": points}
 
     def seed_starts(self, seeds) -> list:
         """The starts [(a, b), ...] ``explorer sweep`` runs for a scene's ``seeds`` on the map (``seeds.points_on``;
