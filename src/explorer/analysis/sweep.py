@@ -781,15 +781,14 @@ def build_system_atlas_spec(scene, *, chunk_orbits: int, cells=None) -> SystemSw
                            integ.tol, integ.effective_tmax, integ.max_steps, tuple(chunks), scene.lyapunov, False)
 
 
-def system_indicator_arrays(spec: SystemSweepSpec, panel, rows, threads=None, smap=None,
-                            diffusion: bool = True) -> tuple:
+def system_indicator_arrays(spec: SystemSweepSpec, panel, rows, threads=None, diffusion: bool = True) -> tuple:
     """(Indicators, arrays) of the seeds ``rows`` of a System's ``panel`` (each orbit alone, on the panel's
     map at [lyapunov] tol); frequency diffusion (:func:`explorer.analysis.rotation.frequency_diffusion` on
     the panel's section map) only with ``diffusion``."""
     from explorer.analysis.lyapunov import indicators
 
     ly = spec.lyapunov
-    smap = spec.section_map(panel) if smap is None else smap
+    smap = spec.section_map(panel)
     which = tuple(q for q in ly.indicators if indicator_table.BY_NAME[q].tangent)
     ind = indicators(smap.with_tol(ly.tol), panel.seeds[rows], tmax=ly.time, which=which, threads=threads)
     out = {k: ind.values[k] for k in which}
