@@ -97,7 +97,9 @@ def _solutions(system, section, coords, solve, fixed):
     if solve not in level.free_symbols:
         raise ParameterError(f"the energy of {system.name} on the section {section} = 0 does not depend on "
                              f"{solve.name}: solve must be a state variable the energy fixes")
-    roots = sp.solve(level, solve)
+    # no simplify: it costs seconds, and its factoring (Wang's, random evaluation points) can run for many
+    # minutes on an unlucky draw of sympy's generator (the double pendulum's roots in one test process)
+    roots = sp.solve(level, solve, simplify=False)
     if not roots:
         raise ParameterError(f"sympy finds no solution of energy = E for {solve.name} on the section "
                              f"{section} = 0: choose another solve")
