@@ -224,7 +224,7 @@ def system_crossings(system, states=None, *, n_crossings: int, section=None, dir
     N, K = run.Y0.shape[0], run.K
     check_memory(f"crossings: {N} orbits x {K} crossings", N * K * run.width * 8, "lower n_crossings or the orbits")
     carry = run.start(run.Y0)
-    data, count, status, final, info = run.block(run.Y0, carry, np.full((N, 2), K, np.int64), K)
+    data, count, status, final, info = run.block(run.Y0, carry, np.full((N, 2), K, np.int64), K, run.max_steps)
     return data, count, status, final, info, "taylor", run.settings
 
 
@@ -329,16 +329,15 @@ class _SystemRun:
         self.mod.crossings_start(Y, self.P, self.sec.a, float(self.sec.b), carry)
         return carry
 
-    def block(self, Y, carry, limits, width: int, max_steps: int | None = None):
+    def block(self, Y, carry, limits, width: int, max_steps: int):
         """(data, count, status, final, info) of the orbits from ``Y`` continued from ``carry`` (in place)
-        up to ``limits`` (target, room), ``width`` rows each, and ``max_steps`` steps (None: the run's)."""
+        up to ``limits`` (target, room), ``width`` rows each, and ``max_steps`` steps."""
         N = Y.shape[0]
         data = np.full((N, width, self.width), np.nan)
         count, status = np.zeros(N, np.int64), np.zeros(N, np.int64)
         final, info = np.zeros((N, self.dimension)), np.zeros((N, 3))
         run_driver(self.mod, "crossings", N, self.driver, self.threads,
-                   (Y, self.P, *self.args, max_steps or self.max_steps, carry, limits, data, count, status, final, info,
-                    self.backward))
+                   (Y, self.P, *self.args, max_steps, carry, limits, data, count, status, final, info, self.backward))
         return data, count, status, final, info
 
 
