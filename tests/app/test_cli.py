@@ -120,6 +120,23 @@ def test_values_with_a_leading_minus_parse_without_equals(argv, dest, value):
     assert getattr(args, dest) == value
 
 
+@pytest.mark.parametrize("argv, dest, value", [
+    (["orbit", "--p1", "0", "--p2", "0", "--phi0", "pi/2"], "phi0", 0.5 * math.pi),
+    (["orbit", "--p1", "0", "--p2", "0", "--phi0=-pi"], "phi0", -math.pi),
+    (["trajectory", "--phi", "2pi"], "phi", 2 * math.pi),
+    (["melnikov", "--g0", "0.5*π"], "g0", 0.5 * math.pi),
+    (["melnikov", "--g0", "1.25"], "g0", 1.25),
+])
+def test_an_angle_option_takes_a_number_or_a_multiple_of_pi(argv, dest, value):
+    assert getattr(cli.build_parser().parse_args(argv), dest) == value
+
+
+@pytest.mark.parametrize("text", ["pi/0", "two pi", "pix", "nan"])
+def test_a_bad_angle_is_refused_in_one_line_naming_the_option(text, capsys):
+    code, _, err = run_cli(["orbit", "--p1", "0", "--p2", "0", f"--phi0={text}"], capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "--phi0" in err and "Traceback" not in err
+
+
 def test_an_option_is_still_an_option_after_an_option_missing_its_value(capsys):
     assert cli.main(["orbit", "--p1", "--p2", "0"]) == 2
     assert "--p1: expected one argument" in capsys.readouterr().err

@@ -9,14 +9,15 @@ import difflib
 import math
 import numbers
 import os
+import re
 import tempfile
 
 import numpy as np
 
 __all__ = ["MAX_CONTINUATION_STEPS", "MAX_JOBS", "MAX_MAGNITUDE", "MAX_MEMORY_FRACTION", "MAX_PERIOD",
-           "ParameterError", "boolean", "choice", "continuation_steps", "did_you_mean", "fits_in_memory",
-           "human_bytes", "input_file", "integer", "magnitude", "output_path", "physical_memory",
-           "real", "threads", "writable_directory"]
+           "MAX_TEXT_CHARS", "ParameterError", "angle_text", "boolean", "choice", "continuation_steps", "did_you_mean",
+           "fits_in_memory", "human_bytes", "input_file", "integer", "magnitude", "number_text", "output_path",
+           "physical_memory", "real", "threads", "writable_directory"]
 
 #: largest absolute value of a model parameter, the energy h or a start coordinate.
 MAX_MAGNITUDE = 1e8
@@ -29,6 +30,8 @@ MAX_PERIOD = 1000
 MAX_CONTINUATION_STEPS = 100_000
 #: largest number of worker processes of a sweep (--jobs)
 MAX_JOBS = 1024
+#: longest text read as one value (a page's field, a link's argument, an option's word)
+MAX_TEXT_CHARS = 64
 
 
 class ParameterError(ValueError):
@@ -62,6 +65,36 @@ def real(label: str, value, lo: float | None = None, hi: float | None = None, *,
     if lo is not None:
         raise ParameterError(f"{label} must be {'>' if lo_open else '>='} {lo:g}, got {_short(value)}")
     raise ParameterError(f"{label} must be {'<' if hi_open else '<='} {hi:g}, got {_short(value)}")
+
+
+def number_text(label: str, text, whole: bool = False):
+    """A number written as text (a page's field, a link's argument): a finite float (``whole``: an int)."""
+    s = str(text).strip()
+    try:
+        if len(s) > MAX_TEXT_CHARS:
+            raise ValueError
+        value = int(s) if whole else float(s)
+    except ValueError:
+        raise ParameterError(f"{label} must be {'a whole number' if whole else 'a number'}, "
+                             f"got {s[:MAX_TEXT_CHARS]!r}") from None
+    return value if whole else real(label, value)
+
+
+def angle_text(label: str, text) -> float:
+    """An angle written as text: a number, or ``pi`` (``π``) times or over a number (``-pi``, ``2pi``, ``pi/2``,
+    ``0.5*pi``)."""
+    s = str(text).strip().lower().replace("π", "pi").replace(" ", "")
+    if "pi" not in s:
+        return number_text(label, text)
+    m = re.fullmatch(r"([+-]?)(.*?)\*?pi(?:/(.+))?", s) if len(s) <= MAX_TEXT_CHARS else None
+    try:
+        if m is None:
+            raise ValueError
+        value = float(m[1] + (m[2] or "1")) * math.pi / float(m[3] or 1)
+    except (ValueError, ZeroDivisionError):
+        raise ParameterError(f"{label} must be a number or a multiple of pi (pi, -pi, 2pi, pi/2), "
+                             f"got {str(text).strip()[:MAX_TEXT_CHARS]!r}") from None
+    return real(label, value)
 
 
 def magnitude(label: str, value, limit: float = MAX_MAGNITUDE) -> float:

@@ -21,7 +21,8 @@ COMMAND = Command("melnikov", __doc__, "--splitting --mus 1e-4,1e-3 --json", (
     opt("--splitting", action="store_true",
         help="also measure the splitting on the section for mu in --mus at phase --g0"),
     opt("--mus", default="1e-4,3e-4,1e-3,3e-3", help="mu values of --splitting [%(default)s]"),
-    opt("--g0", type=float, default=0.5 * math.pi, help="phase g0 of --splitting [pi/2]"),
+    opt("--g0", type=options.angle, default=0.5 * math.pi,
+        help="phase g0 of --splitting: a number or pi, pi/2, ... [pi/2]"),
     partial(options.add_model_args, json="print JSON"),
 ))
 
@@ -37,8 +38,6 @@ def run(args) -> int:
         raise model.ParameterError(f"--mus must be comma-separated numbers, got {args.mus!r}") from None
     if not mus or not all(math.isfinite(m) and m > 0 for m in mus):
         raise model.ParameterError(f"--mus must be finite and > 0, got {args.mus!r}")
-    if not math.isfinite(args.g0):
-        raise model.ParameterError(f"g0 must be finite, got {args.g0!r}")
     out = melnikov.amplitudes(params, args.h)
     if args.splitting:
         out["splitting"] = melnikov.melnikov_table(params, args.h, mus, (args.g0,))

@@ -4,6 +4,7 @@ every subparser), :func:`opt`, :func:`one_of`, and one copy of each option group
 ``add_map_args``) with their readers."""
 from __future__ import annotations
 
+import argparse
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -35,6 +36,14 @@ class Option:
 def opt(*flags: str, **kwargs) -> Option:
     """``opt("--n", type=int, default=21, help=...)``: an option as ``add_argument`` takes it."""
     return Option(flags, kwargs)
+
+
+def angle(text: str) -> float:
+    """An angle option's word: a number or a multiple of pi (``pi/2``, ``-pi``, ``2pi``; validation.angle_text)."""
+    try:
+        return validation.angle_text("the angle", text)
+    except model.ParameterError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def one_of(*choices: Option, required: bool = False) -> Callable:

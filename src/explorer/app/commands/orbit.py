@@ -22,7 +22,7 @@ COMMAND = Command("orbit", __doc__, "--p1 -0.4 --p2 0 --mu 0.5 --crossings 20 --
     partial(options.add_method_args, tol=DEFAULT_TOL, dt=DEFAULT_DT),
     opt("--tmax", type=float, default=None, help="time budget [100 K]"),
     opt("--max-steps", type=int, default=10**9, help="step budget [%(default)s]"),
-    opt("--phi0", type=float, default=math.pi, help="section angle phi0 [pi]"),
+    opt("--phi0", type=options.angle, default=math.pi, help="section angle phi0: a number or pi, pi/2, ... [pi]"),
     opt("--direction", default="+", help="crossing direction: + (dphi/dt > 0), - or both [+]"),
     opt("--out", default=None, help="stream the crossings into this HDF5 store, block by block (a rerun after a "
         "kill continues where it stopped) instead of printing them"),
@@ -46,7 +46,7 @@ def run(args) -> int:
     params = options.params_from(args)
     if args.method not in METHODS:
         raise model.ParameterError(f"method must be one of {', '.join(METHODS)}; got {args.method!r}")
-    for name in ("p1", "p2", "h", "phi0"):
+    for name in ("p1", "p2", "h"):
         v = getattr(args, name)
         if not math.isfinite(v):
             raise model.ParameterError(f"{name} must be finite, got {v!r}")

@@ -21,7 +21,7 @@ COMMAND = Command("trajectory", __doc__, "--p1 0.5 --M 2 --mu 0.5 --tmax 300 --o
     opt("--p1", type=float, default=0.5, help="initial p1 [%(default)s]"),
     opt("--p2", type=float, default=0.0, help="initial p2 [%(default)s]"),
     opt("--M", type=float, default=2.0, help="initial M [%(default)s]"),
-    opt("--phi", type=float, default=0.0, help="initial angle phi [%(default)s]"),
+    opt("--phi", type=options.angle, default=0.0, help="initial angle phi: a number or pi, pi/2, ... [%(default)s]"),
     opt("--tmax", type=float, default=300.0, help="integration time: the time the orbit runs to "
         "[%(default)s]"),
     opt("--samples", type=int, default=20001, help="samples on [0, T] [%(default)s]"),

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import functools
 import math
-import re
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -15,6 +14,7 @@ from explorer import model
 from explorer.analysis import sections, system_sections
 from explorer.analysis.chaos_map import cell_centres
 from explorer.model import ParameterError, validation
+from explorer.model.validation import MAX_TEXT_CHARS, angle_text, number_text
 
 #: every field of Chaplygin's page, in the order shown (and written in the URL): mu and h (most often changed) first
 FIELDS = ("mu", "h", *(n for n in model.PARAM_NAMES if n != "mu"), "method", "tol", "dt", "crossings", "phi0")
@@ -25,8 +25,6 @@ MAX_CROSSINGS = 1_000_000
 MAX_STARTS = 256
 #: at most this many crossings on one session's page (orbits x crossings per click; ~0.2 GB)
 MAX_SESSION_CROSSINGS = 4_000_000
-#: longest field text read from the page or the URL
-MAX_FIELD_CHARS = 64
 #: names the page's link keeps for itself: a System parameter may not take one (its field is a link key)
 RESERVED = ("energy", "tol", "crossings", "orbits", "hidden", "megno", "indicator", "separatrices", "periodic",
             "colour", "pause", "view", "token", "name")
@@ -317,48 +315,19 @@ def page_settings(scene=None, system=None, panel: int = 0, flag: str = "", **val
     return SystemSettings(smap, **{**given, **values}), label, seeds
 
 
-def read_number(name: str, text, whole: bool = False):
-    """A field's text as a finite float (``whole``: an int); ParameterError naming ``name`` otherwise."""
-    s = str(text).strip()
-    try:
-        if len(s) > MAX_FIELD_CHARS:
-            raise ValueError
-        value = int(s) if whole else float(s)
-    except ValueError:
-        raise ParameterError(f"{name} must be {'a whole number' if whole else 'a number'}, "
-                             f"got {s[:MAX_FIELD_CHARS]!r}") from None
-    return value if whole else validation.real(name, value)
-
-
-def read_angle(name: str, text) -> float:
-    """An angle's text: a number, or ``pi`` (``π``) times or over a number (``-pi``, ``2pi``, ``pi/2``, ``0.5*pi``)."""
-    s = str(text).strip().lower().replace("π", "pi").replace(" ", "")
-    if "pi" not in s:
-        return read_number(name, text)
-    m = re.fullmatch(r"([+-]?)(.*?)\*?pi(?:/(.+))?", s) if len(s) <= MAX_FIELD_CHARS else None
-    try:
-        if m is None:
-            raise ValueError
-        value = float(m[1] + (m[2] or "1")) * math.pi / float(m[3] or 1)
-    except (ValueError, ZeroDivisionError):
-        raise ParameterError(f"{name} must be a number or a multiple of pi (pi, -pi, 2pi, pi/2), "
-                             f"got {str(text).strip()[:MAX_FIELD_CHARS]!r}") from None
-    return validation.real(name, value)
-
-
 def read_fields(names, fields: dict, numbers=()) -> dict:
     """{name: value} of the page's ``fields`` ({name: text}) among ``names``, each validated (ParameterError
     naming it); ``numbers``: the names read as plain numbers (a System's parameters)."""
     out: dict = {}
     for name, text in fields.items():
         if name not in names:
-            raise ParameterError(f"unknown field {str(name)[:MAX_FIELD_CHARS]!r}; one of {', '.join(names)}")
+            raise ParameterError(f"unknown field {str(name)[:MAX_TEXT_CHARS]!r}; one of {', '.join(names)}")
         if name in numbers:
-            out[name] = read_number(name, text)
+            out[name] = number_text(name, text)
         elif name == "method":
             out[name] = validation.choice("method", str(text).strip(), sections.METHODS)
         else:
-            out[name] = read_angle(name, text) if name == "phi0" else read_number(name, text, name == "crossings")
+            out[name] = angle_text(name, text) if name == "phi0" else number_text(name, text, name == "crossings")
     return out
 
 
@@ -383,7 +352,7 @@ def screen_link(args: dict, names) -> tuple:
     size = sum(len(k) + len(v) + 2 for k, v in args.items())
     if size > MAX_LINK_CHARS:
         return {}, [f"the link is {size:,} characters long (at most {MAX_LINK_CHARS:,}): none of it applies"]
-    unknown = [repr(k[:MAX_FIELD_CHARS]) for k in args if k not in names]
+    unknown = [repr(k[:MAX_TEXT_CHARS]) for k in args if k not in names]
     shown = ", ".join(unknown[:3]) + (f" and {len(unknown) - 3} more" if len(unknown) > 3 else "")
     refused = [f"unknown {'key' if len(unknown) == 1 else 'keys'} {shown} (removed)"] if unknown else []
     return {k: v for k, v in args.items() if k in names}, refused
@@ -399,8 +368,8 @@ def read_numbers(name: str, text, labels) -> list:
     pieces = str(text).split(",")
     if len(pieces) != len(labels):
         raise ParameterError(f"{name} must be {','.join(labels)} ({len(labels)} numbers), "
-                             f"got {str(text).strip()[:MAX_FIELD_CHARS * 4]!r}")
-    return [validation.magnitude(f"{name}.{n}", read_number(f"{name}.{n}", v)) for n, v in zip(labels, pieces)]
+                             f"got {str(text).strip()[:MAX_TEXT_CHARS * 4]!r}")
+    return [validation.magnitude(f"{name}.{n}", number_text(f"{name}.{n}", v)) for n, v in zip(labels, pieces)]
 
 
 def parse_starts(text: str) -> list:
@@ -422,7 +391,7 @@ def parse_hidden(text: str, n_starts: int) -> set:
     for i, piece in enumerate(pieces):
         if not (piece.isascii() and piece.isdigit() and len(piece) <= 4 and 1 <= int(piece) <= n_starts):
             raise ParameterError(f"hidden[{i}] must be the position of one of the link's {n_starts} orbits "
-                                 f"(1 to {n_starts}), got {piece[:MAX_FIELD_CHARS]!r}")
+                                 f"(1 to {n_starts}), got {piece[:MAX_TEXT_CHARS]!r}")
     return {int(p) for p in pieces}
 
 
