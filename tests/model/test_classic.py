@@ -166,25 +166,22 @@ def _jacobi(s, mu):
 def test_arenstorf_orbit_closes_after_its_period_to_1e_10(pcr):
     """Hairer, Nørsett & Wanner, Solving ODEs I, II.0 (0.1)-(0.2): mu = 0.012277471 and the start
     (0.994, 0, 0, -2.0015851063790825...) give a periodic orbit of period T = 17.0652165601579625...
-    The run ends at its time budget T (the last step clipped onto T), its final state the orbit's
-    state at T."""
-    y = pcr.states[1]
-    res = ex.crossings(pcr, states=[classic.ARENSTORF_STATE], n_crossings=100, section=y, direction=+1,
-                       tmax=classic.ARENSTORF_PERIOD, tol=1e-15)
-    assert res.status_of(0) is ex.Status.TMAX
-    assert res.info[0, 0] == classic.ARENSTORF_PERIOD
-    assert np.max(np.abs(res.final[0] - np.array(classic.ARENSTORF_STATE))) <= 1e-10
+    The flow's state at T (its last step clipped onto T, as the crossings' onto tmax:
+    tests/analysis/test_system_flow.py) is the start again."""
+    res = ex.flow(pcr, states=[classic.ARENSTORF_STATE], times=[classic.ARENSTORF_PERIOD], tol=1e-15)
+    assert res.status_of(0) is ex.Status.DONE and res.t[-1] == classic.ARENSTORF_PERIOD
+    assert np.max(np.abs(res.states[0, -1] - np.array(classic.ARENSTORF_STATE))) <= 1e-10
 
 
 def test_jacobi_constant_is_conserved_to_1e_12_relative_over_ten_periods(pcr):
-    y = pcr.states[1]
-    res = ex.crossings(pcr, states=[classic.ARENSTORF_STATE], n_crossings=30, section=y, direction=+1,
-                       tmax=11 * classic.ARENSTORF_PERIOD, tol=1e-15)
+    """At 331 times over eleven periods (30 a period), by the flow's energy column and by hand."""
+    times = np.linspace(0.0, 11 * classic.ARENSTORF_PERIOD, 331)
+    res = ex.flow(pcr, states=[classic.ARENSTORF_STATE], times=times, tol=1e-15)
     C0 = _jacobi(classic.ARENSTORF_STATE, classic.ARENSTORF_MU)
-    assert res.count[0] == 30 and res.data[0, -1, 0] > 9 * classic.ARENSTORF_PERIOD
-    assert np.max(np.abs(res.data[0, :, 5])) <= 1e-12 * abs(C0)            # the C - C0 column
-    # the energy the system declares is the Jacobi constant, by hand at the crossings
-    C = [_jacobi(row[1:5], classic.ARENSTORF_MU) for row in res.data[0]]
+    assert res.status_of(0) is ex.Status.DONE
+    assert np.max(res.energy_error[0]) <= 1e-12 * abs(C0)                  # |C - C0|
+    # the energy the system declares is the Jacobi constant, by hand at the samples
+    C = [_jacobi(s, classic.ARENSTORF_MU) for s in res.states[0]]
     np.testing.assert_allclose(C, C0, rtol=1e-12)
 
 
