@@ -269,57 +269,63 @@ def test_a_step_applies_its_value_through_the_field_refused_as_the_command_line_
 
 
 # ---------------------------------------------------------------- in chromium
-@browser_needed
-def _click_and_choose_the_orbit(page) -> None:
-    """Click an orbit on the served page, wait for its crossings, choose it in the list and wait
-    until it is selected (highlighted, its readout shown)."""
-    c1, c2, r1, _r2 = SERVED.region
-    _click(page, c1 + 0.3 * r1, c2)
-    _wait_crossings(page, SERVED.crossings)
-    _wait(page, "() => Bokeh.documents[0].get_model_by_name('orbit-list').text.includes(\"data-orbit='1'\")")
-    page.locator("select").filter(has_text="(none)").select_option(index=1)
-    _wait(page, "() => Bokeh.documents[0].get_model_by_name('selected-orbit').group === 1 && "
-                "Bokeh.documents[0].get_model_by_name('readout').text.startsWith('orbit 1')")
+def _orbit_1(hidden: bool) -> str:
+    """A wait's expression: the page's one orbit hidden (its dots and start off the page, the list
+    saying so) or shown (all its dots and its start on the page, the list not saying hidden)."""
+    drawn = "n === 0 && s === 0 && said" if hidden else f"n >= {SERVED.crossings} && s === 1 && !said"
+    return ("() => { const d = Bokeh.documents[0], n = d.get_model_by_name('crossings').data.p1.length,"
+            " s = d.get_model_by_name('starts').data.p1.length,"
+            f" said = d.get_model_by_name('orbit-list').text.includes('hidden'); return {drawn}; }}")
 
 
-def test_in_the_browser_the_list_selects_and_hides_an_orbit(served, browser):
+@pytest.fixture(scope="module")
+def chosen(served, browser):
+    """One served page with one orbit clicked, computed and chosen in the list (selected: highlighted,
+    its readout shown), for the two tests below: the first hides it and shows it again (the page is
+    as it was), the second hides it and reloads the link."""
     page = _open(browser, served.url)
     try:
-        _click_and_choose_the_orbit(page)
-        page.get_by_role("button", name="hide", exact=True).click()
-        _wait(page, "() => Bokeh.documents[0].get_model_by_name('crossings').data.p1.length === 0 && "
-                    "Bokeh.documents[0].get_model_by_name('starts').data.p1.length === 0 && "
-                    "Bokeh.documents[0].get_model_by_name('orbit-list').text.includes('hidden')")
-        page.get_by_role("button", name="show", exact=True).click()
+        c1, c2, r1, _r2 = SERVED.region
+        _click(page, c1 + 0.3 * r1, c2)
         _wait_crossings(page, SERVED.crossings)
+        _wait(page, "() => Bokeh.documents[0].get_model_by_name('orbit-list').text.includes(\"data-orbit='1'\")")
+        page.locator("select").filter(has_text="(none)").select_option(index=1)
+        _wait(page, "() => Bokeh.documents[0].get_model_by_name('selected-orbit').group === 1 && "
+                    "Bokeh.documents[0].get_model_by_name('readout').text.startsWith('orbit 1')")
+        yield page
     finally:
         page.close()
 
 
 @browser_needed
-def test_in_the_browser_a_hidden_orbit_stays_hidden_after_a_reload(served, browser):
-    page = _open(browser, served.url)
-    try:
-        _click_and_choose_the_orbit(page)
-        page.get_by_role("button", name="hide", exact=True).click()
-        # the link with the orbit hidden, and the page without its dots: one state, read where it was waited for
-        link = _wait(page, "() => { const d = Bokeh.documents[0], q = new URLSearchParams(location.search);"
-                           " return q.get('hidden') === '1' && d.get_model_by_name('crossings').data.p1.length === 0"
-                           " && d.get_model_by_name('orbit-list').text.includes('hidden') && location.href; }")
-        page.goto(link)                                                 # a reload of that link
-        # the orbit computed to its end on the server (the list says so) and not one dot of it drawn
-        seen = _wait(page, "() => { const d = window.Bokeh && Bokeh.documents[0]; if (!d) return false;"
-                           " const list = d.get_model_by_name('orbit-list'); if (!list) return false;"
-                           " return list.text.includes('done, hidden') && {crossings:"
-                           " d.get_model_by_name('crossings').data.p1.length, live:"
-                           " d.get_model_by_name('live').data.p1.length, starts:"
-                           " d.get_model_by_name('starts').data.p1.length, list: list.text,"
-                           " hidden: new URLSearchParams(location.search).get('hidden')}; }",
-                     timeout=test_serve.FIRST_ORBIT_TIMEOUT_MS)
-        assert (seen["crossings"], seen["live"], seen["starts"], seen["hidden"]) == (0, 0, 0, "1"), seen
-        assert f">{SERVED.crossings}</td>" in seen["list"]
-    finally:
-        page.close()
+def test_in_the_browser_the_list_selects_and_hides_an_orbit(chosen):
+    page = chosen
+    page.get_by_role("button", name="hide", exact=True).click()
+    _wait(page, _orbit_1(True))
+    page.get_by_role("button", name="show", exact=True).click()
+    _wait(page, _orbit_1(False), polling=100)
+
+
+@browser_needed
+def test_in_the_browser_a_hidden_orbit_stays_hidden_after_a_reload(chosen):
+    page = chosen
+    page.get_by_role("button", name="hide", exact=True).click()
+    # the link with the orbit hidden, and the page without its dots: one state, read where it was waited for
+    link = _wait(page, "() => { const d = Bokeh.documents[0], q = new URLSearchParams(location.search);"
+                       " return q.get('hidden') === '1' && d.get_model_by_name('crossings').data.p1.length === 0"
+                       " && d.get_model_by_name('orbit-list').text.includes('hidden') && location.href; }")
+    page.goto(link)                                                 # a reload of that link
+    # the orbit computed to its end on the server (the list says so) and not one dot of it drawn
+    seen = _wait(page, "() => { const d = window.Bokeh && Bokeh.documents[0]; if (!d) return false;"
+                       " const list = d.get_model_by_name('orbit-list'); if (!list) return false;"
+                       " return list.text.includes('done, hidden') && {crossings:"
+                       " d.get_model_by_name('crossings').data.p1.length, live:"
+                       " d.get_model_by_name('live').data.p1.length, starts:"
+                       " d.get_model_by_name('starts').data.p1.length, list: list.text,"
+                       " hidden: new URLSearchParams(location.search).get('hidden')}; }",
+                 timeout=test_serve.FIRST_ORBIT_TIMEOUT_MS, polling=100)
+    assert (seen["crossings"], seen["live"], seen["starts"], seen["hidden"]) == (0, 0, 0, "1"), seen
+    assert f">{SERVED.crossings}</td>" in seen["list"]
 
 
 def test_a_readout_that_arrives_while_a_block_computes_stays_on_its_orbit():

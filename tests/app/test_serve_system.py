@@ -1,6 +1,8 @@
 """`explorer serve --system module:attribute`: the page of a System's section map (docs/commands/serve.md,
 "Your own system"), through the page's protocol (src/explorer/app/serve/settings.py).
-Hénon–Heiles of tests/systems.py (its modules are those the other tests compile)."""
+Hénon–Heiles of tests/systems.py (its modules are those the other tests compile).  In chromium (a
+server of its own, stopped at the end): orbits on the energy level, the MEGNO layer, and the
+page, once its server stops, says the connection is lost."""
 from __future__ import annotations
 
 import importlib
@@ -173,36 +175,46 @@ def browser(launch_chromium):
 
 
 def test_in_the_browser_a_systems_page_clicks_orbits_on_its_energy_level_and_draws_its_megno_layer(browser):
-    from test_serve import DATA, SET_BOX, TEXT, Served, _click, _open, _wait, browser_needed
+    """... and, its server stopped (Ctrl-C), the page says the connection is lost (Panel's disconnect
+    notification, which the server sets for every page it serves)."""
+    from test_serve import SET_BOX, TEXT, Served, _click, _open, _wait, browser_needed
+
+    from explorer.app.serve.server import DISCONNECT_NOTICE
 
     if browser_needed.args[0]:
         pytest.skip(browser_needed.kwargs["reason"])
     served = Served("--system", "tests.systems:henon_heiles_map", "--crossings", "60", "--megno-resolution", "16",
                     "--megno-time", "50")
+    page = None
     try:
-        page = _open(browser, served.url + "?system=os:system")           # a link names no system
-        _click(page, 0.1, 0.1)
-        _wait(page, "() => Bokeh.documents[0].get_model_by_name('crossings').data.p1.length >= 60", 240_000)
-        d = page.evaluate(DATA, "crossings")
-        y, py, px = (np.array(d[k]) for k in ("p1", "p2", "M"))
-        assert np.all(px > 0) and np.max(np.abs(_energy(y, py, px) - E)) <= 1e-10
-        assert "henon_heiles: lam = 1, energy = 0.125" in page.evaluate(TEXT, "status")
-        _click(page, 0.6, 0.45)                                              # H = 0.209 > E there
-        _wait(page, "() => Bokeh.documents[0].get_model_by_name('message').text.includes('has no solution for px')")
-        page.evaluate(SET_BOX, ["chaos layer", True])
-        raster = "Bokeh.documents[0].get_model_by_name('raster').data"
-        _wait(page, f"() => {raster}.complete.length && {raster}.complete[0]", 240_000)
-        r = page.evaluate(f"() => {{ const d = {raster}; return [Array.from(d.image[0]), d.x[0], d.y[0], d.dw[0],"
-                          " d.dh[0]]; }")
-        values = np.array(r[0], dtype=float).reshape(16, 16)
-        u = (np.arange(16) + 0.5) / 16
-        A, B = np.meshgrid(r[1] + r[3] * u, r[2] + r[4] * u)
-        inside = henon_heiles_map().allowed(np.stack([A, B], axis=-1))
-        assert np.isnan(values[~inside]).all() and np.isfinite(values[inside]).all() and inside.sum() > 50
-        ref = ex.indicators(henon_heiles_map().with_tol(1e-13), np.column_stack([A[inside], B[inside]]), tmax=50.0,
-                            which=("megno",))                              # (the page's tol, its default)
-        np.testing.assert_array_equal(values[inside], ref.megno)           # <Y>(T) of each cell's orbit
-        page.close()
+        try:
+            page = _open(browser, served.url + "?system=os:system")           # a link names no system
+            _click(page, 0.1, 0.1)
+            d = _wait(page, "() => { const d = Bokeh.documents[0].get_model_by_name('crossings').data;"
+                            " return d.p1.length >= 60 && {p1: Array.from(d.p1), p2: Array.from(d.p2),"
+                            " M: Array.from(d.M)}; }", 240_000, polling=100)
+            y, py, px = (np.array(d[k]) for k in ("p1", "p2", "M"))
+            assert len(y) == 60 and np.all(px > 0) and np.max(np.abs(_energy(y, py, px) - E)) <= 1e-10
+            assert "henon_heiles: lam = 1, energy = 0.125" in page.evaluate(TEXT, "status")
+            _click(page, 0.6, 0.45)                                              # H = 0.209 > E there
+            _wait(page, "() => Bokeh.documents[0].get_model_by_name('message').text.includes('has no solution for px')")
+            page.evaluate(SET_BOX, ["chaos layer", True])
+            r = _wait(page, "() => { const d = Bokeh.documents[0].get_model_by_name('raster').data;"
+                            " return d.complete.length && d.complete[0] && [Array.from(d.image[0]), d.x[0], d.y[0],"
+                            " d.dw[0], d.dh[0]]; }", 240_000, polling=100)
+            values = np.array(r[0], dtype=float).reshape(16, 16)
+            u = (np.arange(16) + 0.5) / 16
+            A, B = np.meshgrid(r[1] + r[3] * u, r[2] + r[4] * u)
+            inside = henon_heiles_map().allowed(np.stack([A, B], axis=-1))
+            assert np.isnan(values[~inside]).all() and np.isfinite(values[inside]).all() and inside.sum() > 50
+            ref = ex.indicators(henon_heiles_map().with_tol(1e-13), np.column_stack([A[inside], B[inside]]),
+                                tmax=50.0, which=("megno",))                   # (the page's tol, its default)
+            np.testing.assert_array_equal(values[inside], ref.megno)           # <Y>(T) of each cell's orbit
+            assert DISCONNECT_NOTICE not in page.evaluate("() => document.body.innerText")
+        finally:
+            code, err = served.interrupt()
+        assert code in (0, 130) and "Traceback" not in err, err[-2000:]
+        _wait(page, f"() => document.body.innerText.includes({DISCONNECT_NOTICE[:40]!r})", 30_000, polling=100)
     finally:
-        code, err = served.interrupt()
-    assert code in (0, 130) and "Traceback" not in err, err[-2000:]
+        if page is not None:
+            page.close()
