@@ -53,9 +53,9 @@ def _scene(tmp_path, text, name="scene.toml"):
     return path
 
 
-def _explorer(args, **kw):
+def _explorer(args, **env):
     return subprocess.Popen([sys.executable, "-m", "explorer"] + [str(a) for a in args], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, env=dict(os.environ, EXPLORER_NATIVE="0"), **kw)
+                            stderr=subprocess.PIPE, text=True, env=dict(os.environ, EXPLORER_NATIVE="0", **env))
 
 
 def _wait_for_lock(proc, out, timeout=120.0):
@@ -74,7 +74,7 @@ def test_a_second_writer_of_a_store_exits_2_naming_the_holder(tmp_path, command)
         args = ["sweep", _scene(tmp_path, LONG), "--out", out, "--no-figure", "--quiet"]
     else:
         args = ORBIT + ["--crossings", "10000000", "--block", "20000", "--out", out]
-    first = _explorer(args)
+    first = _explorer(args, NUMBA_NUM_THREADS="1")   # it only holds the lock: one thread burns half the CPU
     try:
         assert _wait_for_lock(first, out), first.communicate()
         second = subprocess.run([sys.executable, "-m", "explorer"] + [str(a) for a in args], capture_output=True,
