@@ -19,6 +19,7 @@ in ``app`` (and so may panel and bokeh, the web page of ``explorer serve``), h5p
 ``app``.
 """
 import ast
+import functools
 from pathlib import Path
 
 import pytest
@@ -43,9 +44,19 @@ def modules():
         yield ".".join(p for p in rel.parts if p != "__init__") if rel.name == "__init__" else ".".join(rel.parts), f
 
 
-def imports(path: Path, dotted: str):
+@functools.cache
+def syntax_tree(path: Path) -> ast.Module:
+    """The module's syntax tree, parsed once for all the tests (each walks every module)."""
+    return ast.parse(path.read_text())
+
+
+@functools.cache
+def imports(path: Path, dotted: str) -> tuple:
     """(module imported, line) for every import statement, relative ones resolved."""
-    tree = ast.parse(path.read_text())
+    return tuple(_imports(syntax_tree(path), path, dotted))
+
+
+def _imports(tree: ast.Module, path: Path, dotted: str):
     pkg = dotted if path.name == "__init__.py" else dotted.rpartition(".")[0]
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
@@ -102,7 +113,7 @@ def module_graph():
     graph = {}
     for dotted, path in mods.items():
         deps = set()
-        tree = ast.parse(path.read_text())
+        tree = syntax_tree(path)
         pkg = dotted if path.name == "__init__.py" else dotted.rpartition(".")[0]
         for node in ast.walk(tree):
             if isinstance(node, ast.Import):
@@ -172,13 +183,14 @@ def test_no_module_imports_itself_through_a_circle():
 MAX_PROSE_SHARE = 0.15
 
 
-def prose_lines(text: str) -> tuple[int, int]:
-    """(docstring and comment lines, all lines) of one module's source."""
+def prose_lines(text: str, tree: ast.Module | None = None) -> tuple[int, int]:
+    """(docstring and comment lines, all lines) of one module's source (``tree``: its syntax
+    tree, if parsed already)."""
     import io
     import tokenize
     marked = {tok.start[0] for tok in tokenize.generate_tokens(io.StringIO(text).readline)
               if tok.type == tokenize.COMMENT}
-    for node in ast.walk(ast.parse(text)):
+    for node in ast.walk(ast.parse(text) if tree is None else tree):
         if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) and node.body:
             first = node.body[0]
             if isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant) \
@@ -198,6 +210,6 @@ def test_docstrings_and_comments_are_at_most_15_percent_of_src():
     prose = total = 0
     for _, path in modules():
         if "_generated" not in path.name:
-            p, n = prose_lines(path.read_text())
+            p, n = prose_lines(path.read_text(), syntax_tree(path))
             prose, total = prose + p, total + n
     assert prose / total <= MAX_PROSE_SHARE, f"{prose} of {total} lines are prose ({prose / total:.1%})"
