@@ -612,9 +612,18 @@ def _orbit_args(s: Settings, p1, p2) -> list:
 
 
 def _orbit_json(settings: Settings, p1, p2) -> np.ndarray:
-    out = subprocess.run([sys.executable, "-m", "explorer", *_orbit_args(settings, p1, p2), "--json"],
-                         capture_output=True, text=True, check=True, cwd=REPO).stdout
-    return np.array(json.loads(out)["crossings"], dtype=np.float64).reshape(-1, 5)
+    """The crossings ``explorer orbit --json`` prints for the start (p1, p2) at ``settings``: the command's
+    own output (cli.main, as ``python -m explorer`` runs it), in this process (not a Python start of its own:
+    the command line, not the process, is what the page is compared with)."""
+    import contextlib
+    import io
+
+    from explorer.app import cli
+
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        assert cli.main([*_orbit_args(settings, p1, p2), "--json"]) == 0
+    return np.array(json.loads(out.getvalue())["crossings"], dtype=np.float64).reshape(-1, 5)
 
 
 def _set_field(page, field, text):
@@ -1063,12 +1072,21 @@ def test_rapid_clicks_undo_clear_and_export_keep_the_page_and_the_server_consist
     assert urllib.request.urlopen(served.url, timeout=PAGE_TIMEOUT).status == 200
 
 
+#: the browser pause test's orbits: fixed steps of split2 at dt = 1e-3, a few ms a crossing (taylor's take
+#: microseconds), so that an orbit of these 2,000 runs longer than one of 2 x PAUSE_CROSSINGS of
+#: taylor (0.7 s of CPU per 1,000 against 0.95 s per 60,000 here) -- the first is still running when the
+#: second click lands, with a wider margin than before -- while the browser gets 4,000 rows, not 120,000
+BROWSER_PAUSE = dataclasses.replace(SERVED, method="split2", dt=1e-3, crossings=2000)
+
+
 @browser_needed
 def test_in_the_browser_a_click_elsewhere_pauses_the_running_orbit_and_resume_completes_it(served, browser):
-    n = 2 * PAUSE_CROSSINGS                                   # an orbit of a few seconds
-    page = _open(browser, served.url)
-    _set_field(page, "crossings", str(n))
-    _wait(page, f"() => window.location.search.includes('crossings={n}')", timeout=60_000)
+    s = BROWSER_PAUSE
+    n = s.crossings
+    page = _open(browser, f"{served.url}?method={s.method}&dt={s.dt!r}&crossings={n}")   # (a link sets them)
+    _wait(page, f"() => window.location.search.includes('method={s.method}&') && "
+                f"window.location.search.includes('dt={s.dt!r}&') && window.location.search.includes('crossings={n}')",
+          timeout=60_000)
     c1, c2, r1, r2 = SERVED.region
     _click(page, c1 + 0.3 * r1, c2)
     _wait_crossings(page, 1)
@@ -1084,7 +1102,6 @@ def test_in_the_browser_a_click_elsewhere_pauses_the_running_orbit_and_resume_co
     data = page.evaluate(DATA, "crossings")
     mine = np.array(data["orbit"]) == first
     rows = np.column_stack([np.array(data[k])[mine] for k in ("t", "p1", "p2", "M", "dH")])
-    s = dataclasses.replace(SERVED, crossings=n)
     ref = sections.crossings(s.params, s.h, [(starts["p1"][0], starts["p2"][0])], n_crossings=n, **s.section_kwargs())
     np.testing.assert_array_equal(rows, ref.orbit(0))          # paused and resumed: one uninterrupted run
     page.close()
