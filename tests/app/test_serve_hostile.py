@@ -22,6 +22,7 @@ import test_serve
 from page_loop import poll
 from test_serve import (
     DATA,
+    READY,
     SERVED,
     SET_BOX,
     TEXT,
@@ -53,18 +54,21 @@ PROBE_GAP = 0.5
 SIGINT_SECONDS = 1.0
 #: every overlay of the page ticked, as URL arguments
 ALL_OVERLAYS = "separatrices=1&periodic=1&megno=1"
-#: hostile links: (query, text the page's message must contain, or None)
+#: hostile links: (query, texts the page's message must contain).  A link whose every value is refused
+#: opens the served page itself (settings.parse_link_fields returns its base settings): mu=1e300,
+#: h=1e300 and lam=-1e-300 (an allowed region not finite) are refused together in one link, each said,
+#: and mu=-1e8 (a weight below 0) in another (a link holds one mu); what the server computes after
+#: either is the base page with every overlay, the same work as after each value alone
 LINKS = [
-    (f"mu=1e6&{ALL_OVERLAYS}", None),
-    (f"mu=1e8&{ALL_OVERLAYS}&orbits=0.0,0.0", None),
-    (f"mu=-1e8&{ALL_OVERLAYS}", None),
-    (f"h=1e300&{ALL_OVERLAYS}", "h must be in"),
-    (f"h=1e8&{ALL_OVERLAYS}", None),
-    (f"lam=1e8&{ALL_OVERLAYS}", None),
-    (f"lam=-1e-300&{ALL_OVERLAYS}", None),
-    (f"b=1e8&{ALL_OVERLAYS}", None),
-    (f"b=1e-300&{ALL_OVERLAYS}", None),
-    (f"mu=1e300&{ALL_OVERLAYS}", "mu must be in"),
+    (f"mu=1e6&{ALL_OVERLAYS}", ()),
+    (f"mu=1e8&{ALL_OVERLAYS}&orbits=0.0,0.0", ()),
+    (f"h=1e8&{ALL_OVERLAYS}", ()),
+    (f"lam=1e8&{ALL_OVERLAYS}", ()),
+    (f"b=1e8&{ALL_OVERLAYS}", ()),
+    (f"b=1e-300&{ALL_OVERLAYS}", ()),
+    (f"mu=1e300&h=1e300&lam=-1e-300&{ALL_OVERLAYS}",
+     ("mu must be in", "h must be in", "the allowed region is not finite")),
+    (f"mu=-1e8&{ALL_OVERLAYS}", ("mu must be >= 0",)),
 ]
 #: hostile values typed into a page with every overlay ticked: (field, text, message or None)
 TYPED = [("mu", "1e6", None), ("h", "1e300", "h must be in"), ("lam", "1e8", None), ("b", "1e8", None),
@@ -103,8 +107,8 @@ def _answers_in_time(served) -> None:
     _assert_answered_in_time(_probe(served))
 
 
-def _second_session_works_while_the_server_answers(browser, served) -> None:
-    """A new session opens and draws a clicked orbit; from the moment it is open until its orbit
+def _second_session_works_while_the_server_answers(tab, served) -> None:
+    """A new session opens (in ``tab``) and draws a clicked orbit; from the moment it is open until its orbit
     is drawn and PROBES probes are done, ``GET /liveness`` is asked in a thread of its own (the
     browser stays on this one, Playwright's), each answered within LIVENESS_SECONDS.  The probes
     and the second session's orbit both run while the hostile page's searches do: one stretch of
@@ -113,8 +117,8 @@ def _second_session_works_while_the_server_answers(browser, served) -> None:
     is open: what they measure is the loop while pages compute, not a session being built."""
     import concurrent.futures
 
-    other = _open(browser, served.url)
     try:
+        other = _goto(tab, served.url)
         with concurrent.futures.ThreadPoolExecutor(1) as pool:
             probes = pool.submit(_probe, served)
             c1, c2, r1, _r2 = SERVED.region
@@ -122,7 +126,7 @@ def _second_session_works_while_the_server_answers(browser, served) -> None:
             _wait_crossings(other, 10)
             answers = probes.result(timeout=PROBES * (PROBE_GAP + 10) + 10)
     finally:
-        other.close()
+        _leave(tab)
     _assert_answered_in_time(answers)
 
 
@@ -133,23 +137,55 @@ def hostile(default_server):
     return default_server
 
 
+def _goto(tab, url):
+    """``tab`` at ``url``, the page ready (as test_serve._open, in a tab of this module's)."""
+    tab.goto(url)
+    _wait(tab, READY)
+    return tab
+
+
+def _leave(tab) -> None:
+    """``tab`` leaves its page for about:blank: its websocket closes, and the server ends the session's
+    work as when the tab closes (Bokeh's ConnectionLost)."""
+    tab.goto("about:blank")
+
+
+@pytest.fixture(scope="module")
+def tabs(browser):
+    """(hostile, other): two tabs of the shared Chromium that each test of this module leaves on
+    about:blank; a session opened in one is as new as one in a new tab (a page loads anew at each
+    goto), without starting a new tab's renderer each time."""
+    pages = [browser.new_page() for _ in range(2)]
+    yield pages
+    for p in pages:
+        p.close()
+
+
 @browser_needed
-@pytest.mark.parametrize("query,said", LINKS, ids=[q.split("&")[0] for q, _ in LINKS])
-def test_a_hostile_link_leaves_the_server_answering_and_a_second_session_working(hostile, browser, query, said):
-    page = _open(browser, f"{hostile.url}?{query}")
+@pytest.mark.parametrize("query,said", LINKS, ids=[q.replace(f"&{ALL_OVERLAYS}", "").replace("&", ",")
+                                                   for q, _ in LINKS])
+def test_a_hostile_link_leaves_the_server_answering_and_a_second_session_working(hostile, tabs, query, said):
+    page, other = tabs
     try:
-        if said is not None:                                   # refused as the command line refuses it
-            assert said in page.evaluate(TEXT, "message") and "link ignored" in page.evaluate(TEXT, "message")
-        _second_session_works_while_the_server_answers(browser, hostile)
+        _goto(page, f"{hostile.url}?{query}")
+        message = page.evaluate(TEXT, "message")
+        for text in said:                                      # refused as the command line refuses it
+            assert text in message and "link ignored" in message, message
+        _second_session_works_while_the_server_answers(other, hostile)
     finally:
-        page.close()
+        _leave(page)
     assert hostile.proc.poll() is None
 
 
 @browser_needed
-def test_hostile_typed_values_with_every_overlay_leave_the_server_answering(hostile, browser):
-    page = _open(browser, hostile.url)
+def test_hostile_typed_values_with_every_overlay_leave_the_server_answering(hostile, tabs):
+    """After each value that applies, a second session works while the server answers.  A refused
+    value changes nothing the server computes (SectionPage._on_field says it and returns: no task
+    starts or stops), so its check is the next value's, which comes after it."""
+    assert TYPED[-1][2] is None                                  # (a value that applies comes last)
+    page, other = tabs
     try:
+        _goto(page, hostile.url)
         for label in ("chaos layer", "fixed points", "periodic orbits"):
             page.evaluate(SET_BOX, [label, True])
         for field, text, said in TYPED:
@@ -159,21 +195,76 @@ def test_hostile_typed_values_with_every_overlay_leave_the_server_answering(host
             else:
                 applied = f"{field}={float(text)!r}"            # (the URL holds each value's repr)
                 _wait(page, f"() => window.location.search.includes({json.dumps(applied)})", timeout=60_000)
-            _second_session_works_while_the_server_answers(browser, hostile)
+                _second_session_works_while_the_server_answers(other, hostile)
         assert page.evaluate(DATA, "region")["x"]                # the page itself still has its region
     finally:
-        page.close()
+        _leave(page)
+
+
+@pytest.fixture(scope="module")
+def own_server():
+    """A function returning this module's own ``explorer serve --crossings 150 --mu 0.03`` (test_serve.SERVED),
+    started anew when there is none or the last one ended: the test of a tiny fixed step (which needs a
+    server no other test left work on) and then the Ctrl-C test (which ends it) share one start."""
+    box = []
+
+    def get():
+        if not box or box[-1].proc.poll() is not None:
+            box.append(Served("--crossings", str(SERVED.crossings), "--mu", "0.03"))
+        return box[-1]
+    yield get
+    for s in box:
+        if s.proc.poll() is None:
+            s.interrupt()
+
+
+#: the server's cores, measured over this long (s) from CLOSED_SECONDS after a tab closed, must stay below IDLE_CORES
+CLOSED_SECONDS = 5.0
+IDLE_WINDOW = 3.0
+IDLE_CORES = 0.2
+
+
+def _cores(proc, seconds: float) -> float:
+    """The cores that process ``proc`` (a psutil.Process) used over the next ``seconds``."""
+    c0, t0 = sum(proc.cpu_times()[:2]), time.monotonic()
+    time.sleep(seconds)
+    return (sum(proc.cpu_times()[:2]) - c0) / (time.monotonic() - t0)
 
 
 @browser_needed
-def test_ctrl_c_ends_a_server_busy_with_hostile_searches_within_a_second(browser):
-    s = Served("--crossings", "1000000", "--mu", "0.03")
+def test_a_link_with_a_tiny_fixed_step_is_said_up_front_and_stops_when_its_tab_closes(browser, own_server):
+    """``?method=split2&dt=1e-12&orbits=...``: an orbit of 10^9 steps, said in the page with its
+    estimate; once the tab closes the server is idle within CLOSED_SECONDS."""
+    psutil = pytest.importorskip("psutil")
+    s = own_server()                           # (fresh: no other page has been on it)
     page = None
     try:
-        page = _open(browser, f"{s.url}?mu=1e6&{ALL_OVERLAYS}")
+        proc = psutil.Process(s.proc.pid)
         c1, c2, r1, _r2 = SERVED.region
-        other = _open(browser, f"{s.url}?{ALL_OVERLAYS}")
-        _click(other, c1 + 0.3 * r1, c2)                    # a long orbit running too
+        page = _open(browser, f"{s.url}?method=split2&dt=1e-12&orbits={c1 + 0.3 * r1!r},{c2!r}")
+        _wait(page, f"() => ({TEXT})('message').includes('1e+09 steps')", timeout=240_000)
+        page.close()                           # (the estimate is said after the orbit's first block: it runs)
+        closed = time.monotonic()
+        time.sleep(max(0.0, closed + CLOSED_SECONDS - time.monotonic()))
+        used = _cores(proc, IDLE_WINDOW)
+        assert used < IDLE_CORES, f"{used:.2f} cores busy {CLOSED_SECONDS:g} s after the tab closed"
+    except BaseException:
+        s.interrupt()                          # (whatever it still runs: the next test starts its own)
+        raise
+    finally:
+        if page is not None and not page.is_closed():
+            page.close()
+
+
+@browser_needed
+def test_ctrl_c_ends_a_server_busy_with_hostile_searches_within_a_second(tabs, own_server):
+    s = own_server()
+    page, other = tabs
+    try:
+        _goto(page, f"{s.url}?mu=1e6&{ALL_OVERLAYS}")
+        c1, c2, r1, _r2 = SERVED.region
+        _goto(other, f"{s.url}?{ALL_OVERLAYS}&crossings=1000000")
+        _click(other, c1 + 0.3 * r1, c2)                    # a long orbit (a million crossings) running too
         _wait_crossings(other, 1)
         _answers_in_time(s)
     finally:
@@ -185,10 +276,8 @@ def test_ctrl_c_ends_a_server_busy_with_hostile_searches_within_a_second(browser
             s.proc.kill()
             s.proc.wait()
         took = time.perf_counter() - t0
-        if page is not None:
-            page.context.clear_cookies()
-            for p in page.context.pages:                    # (the browser is shared: tests/app/browser_session.py)
-                p.close()
+        for p in tabs:                                      # (the tabs are the module's: tests/app/browser_session.py)
+            _leave(p)
     err = s.proc.stderr.read()
     assert s.proc.returncode in (0, 130) and "Traceback" not in err, err[-2000:]
     assert took <= SIGINT_SECONDS, f"Ctrl-C took {took:.2f} s"
@@ -259,36 +348,3 @@ def test_a_client_gone_mid_send_is_not_reported_as_an_error_and_other_task_error
         assert caplog.records[0].exc_info[0] is ValueError
     finally:
         loop.close()
-
-
-#: the server's cores, measured over this long (s) from CLOSED_SECONDS after a tab closed, must stay below IDLE_CORES
-CLOSED_SECONDS = 5.0
-IDLE_WINDOW = 3.0
-IDLE_CORES = 0.2
-
-
-def _cores(proc, seconds: float) -> float:
-    """The cores that process ``proc`` (a psutil.Process) used over the next ``seconds``."""
-    c0, t0 = sum(proc.cpu_times()[:2]), time.monotonic()
-    time.sleep(seconds)
-    return (sum(proc.cpu_times()[:2]) - c0) / (time.monotonic() - t0)
-
-
-@browser_needed
-def test_a_link_with_a_tiny_fixed_step_is_said_up_front_and_stops_when_its_tab_closes(browser):
-    """``?method=split2&dt=1e-12&orbits=...``: an orbit of 10^9 steps, said in the page with its
-    estimate; once the tab closes the server is idle within CLOSED_SECONDS."""
-    psutil = pytest.importorskip("psutil")
-    s = Served("--crossings", "150", "--mu", "0.03")
-    try:
-        proc = psutil.Process(s.proc.pid)
-        c1, c2, r1, _r2 = SERVED.region
-        page = _open(browser, f"{s.url}?method=split2&dt=1e-12&orbits={c1 + 0.3 * r1!r},{c2!r}")
-        _wait(page, f"() => ({TEXT})('message').includes('1e+09 steps')", timeout=240_000)
-        page.close()                           # (the estimate is said after the orbit's first block: it runs)
-        closed = time.monotonic()
-        time.sleep(max(0.0, closed + CLOSED_SECONDS - time.monotonic()))
-        used = _cores(proc, IDLE_WINDOW)
-        assert used < IDLE_CORES, f"{used:.2f} cores busy {CLOSED_SECONDS:g} s after the tab closed"
-    finally:
-        s.interrupt()
