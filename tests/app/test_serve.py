@@ -1437,8 +1437,8 @@ def test_five_hundred_clicks_leave_the_session_with_bounded_memory_and_threads(m
                 assert page.click(c1 + u * r1 * np.sqrt(1 - v * v), c2 + v * r2 * 0.9) is not None
             paused += len(page.orbits.worker.paused())  # each click paused the orbits still running ...
             page.orbit_list.resume()                                           # ... and Resume continues them
-            _poll_until(page, lambda: len(page.orbits.columns()["t"]) == ROUND * CLICK_CROSSINGS
-                        and all(r.indicators for r in page.orbits.runs.values()) and _idle(page))
+            _poll_until(page, lambda: _idle(page) and all(r.indicators for r in page.orbits.runs.values())
+                        and len(page.orbits.columns()["t"]) == ROUND * CLICK_CROSSINGS)   # (the cheap checks first)
             assert sorted(np.unique(page.orbits.columns()["orbit"])) == sorted(i for i, *_ in page.orbits.starts)
             page.orbit_list.clear()
             poll(page)
