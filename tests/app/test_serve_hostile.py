@@ -8,6 +8,10 @@ hostile page's searches and the second session's orbit run; one of them may meet
 loop's own, up to PAUSE_SECONDS).
 A refused value (h = 1e300, as ``--h 1e300`` is) is said in the page.  Ctrl-C ends a server busy
 with such a page within SIGINT_SECONDS.
+
+The browser tests share one server of the module's own (fixture own_server; test_serve.SERVED's page)
+in the module's order: a tiny fixed step (on the fresh server), the links, the typed values, Ctrl-C
+(which ends it); and two tabs (fixture tabs), each page a new session in one of them.
 """
 from __future__ import annotations
 
@@ -130,13 +134,6 @@ def _second_session_works_while_the_server_answers(tab, served) -> None:
     _assert_answered_in_time(answers)
 
 
-@pytest.fixture(scope="module")
-def hostile(default_server):
-    """The served page of test_serve (``--crossings 150 --mu 0.03``; tests/app/browser_session.py: Ctrl-C
-    ends it cleanly at the end)."""
-    return default_server
-
-
 def _goto(tab, url):
     """``tab`` at ``url``, the page ready (as test_serve._open, in a tab of this module's)."""
     tab.goto(url)
@@ -159,6 +156,75 @@ def tabs(browser):
     yield pages
     for p in pages:
         p.close()
+
+
+@pytest.fixture(scope="module")
+def own_server():
+    """A function returning this module's own ``explorer serve --crossings 150 --mu 0.03`` (test_serve.SERVED's
+    page), started anew when there is none or the last one ended; ``fresh``: one no page has been on (the
+    running one is ended if one has).  One start serves the module in its order: the test of a tiny fixed step
+    (which needs a server no other page left work on) first, then the hostile links and typed values, then the
+    Ctrl-C test, which ends it (and with it the work that the last hostile page's searches still finish)."""
+    box = []
+
+    def get(fresh: bool = False):
+        if box and box[-1].proc.poll() is None and fresh and box[-1].used:
+            box[-1].interrupt()
+        if not box or box[-1].proc.poll() is not None:
+            box.append(Served("--crossings", str(SERVED.crossings), "--mu", "0.03"))
+            box[-1].used = False
+        s = box[-1]
+        was_fresh, s.used = not s.used, True
+        assert was_fresh or not fresh
+        return s
+    yield get
+    for s in box:
+        if s.proc.poll() is None:
+            s.interrupt()
+
+
+@pytest.fixture
+def hostile(own_server):
+    """The served page (test_serve.SERVED: ``--crossings 150 --mu 0.03``) on this module's own server."""
+    return own_server()
+
+
+#: the server's cores, measured over this long (s) from CLOSED_SECONDS after a tab closed, must stay below IDLE_CORES
+CLOSED_SECONDS = 5.0
+IDLE_WINDOW = 3.0
+IDLE_CORES = 0.2
+
+
+def _cores(proc, seconds: float) -> float:
+    """The cores that process ``proc`` (a psutil.Process) used over the next ``seconds``."""
+    c0, t0 = sum(proc.cpu_times()[:2]), time.monotonic()
+    time.sleep(seconds)
+    return (sum(proc.cpu_times()[:2]) - c0) / (time.monotonic() - t0)
+
+
+@browser_needed
+def test_a_link_with_a_tiny_fixed_step_is_said_up_front_and_stops_when_its_tab_closes(browser, own_server):
+    """``?method=split2&dt=1e-12&orbits=...``: an orbit of 10^9 steps, said in the page with its
+    estimate; once the tab closes the server is idle within CLOSED_SECONDS."""
+    psutil = pytest.importorskip("psutil")
+    s = own_server(fresh=True)                 # (no other page has been on it)
+    page = None
+    try:
+        proc = psutil.Process(s.proc.pid)
+        c1, c2, r1, _r2 = SERVED.region
+        page = _open(browser, f"{s.url}?method=split2&dt=1e-12&orbits={c1 + 0.3 * r1!r},{c2!r}")
+        _wait(page, f"() => ({TEXT})('message').includes('1e+09 steps')", timeout=240_000)
+        page.close()                           # (the estimate is said after the orbit's first block: it runs)
+        closed = time.monotonic()
+        time.sleep(max(0.0, closed + CLOSED_SECONDS - time.monotonic()))
+        used = _cores(proc, IDLE_WINDOW)
+        assert used < IDLE_CORES, f"{used:.2f} cores busy {CLOSED_SECONDS:g} s after the tab closed"
+    except BaseException:
+        s.interrupt()                          # (whatever it still runs: the next test starts another)
+        raise
+    finally:
+        if page is not None and not page.is_closed():
+            page.close()
 
 
 @browser_needed
@@ -199,61 +265,6 @@ def test_hostile_typed_values_with_every_overlay_leave_the_server_answering(host
         assert page.evaluate(DATA, "region")["x"]                # the page itself still has its region
     finally:
         _leave(page)
-
-
-@pytest.fixture(scope="module")
-def own_server():
-    """A function returning this module's own ``explorer serve --crossings 150 --mu 0.03`` (test_serve.SERVED),
-    started anew when there is none or the last one ended: the test of a tiny fixed step (which needs a
-    server no other test left work on) and then the Ctrl-C test (which ends it) share one start."""
-    box = []
-
-    def get():
-        if not box or box[-1].proc.poll() is not None:
-            box.append(Served("--crossings", str(SERVED.crossings), "--mu", "0.03"))
-        return box[-1]
-    yield get
-    for s in box:
-        if s.proc.poll() is None:
-            s.interrupt()
-
-
-#: the server's cores, measured over this long (s) from CLOSED_SECONDS after a tab closed, must stay below IDLE_CORES
-CLOSED_SECONDS = 5.0
-IDLE_WINDOW = 3.0
-IDLE_CORES = 0.2
-
-
-def _cores(proc, seconds: float) -> float:
-    """The cores that process ``proc`` (a psutil.Process) used over the next ``seconds``."""
-    c0, t0 = sum(proc.cpu_times()[:2]), time.monotonic()
-    time.sleep(seconds)
-    return (sum(proc.cpu_times()[:2]) - c0) / (time.monotonic() - t0)
-
-
-@browser_needed
-def test_a_link_with_a_tiny_fixed_step_is_said_up_front_and_stops_when_its_tab_closes(browser, own_server):
-    """``?method=split2&dt=1e-12&orbits=...``: an orbit of 10^9 steps, said in the page with its
-    estimate; once the tab closes the server is idle within CLOSED_SECONDS."""
-    psutil = pytest.importorskip("psutil")
-    s = own_server()                           # (fresh: no other page has been on it)
-    page = None
-    try:
-        proc = psutil.Process(s.proc.pid)
-        c1, c2, r1, _r2 = SERVED.region
-        page = _open(browser, f"{s.url}?method=split2&dt=1e-12&orbits={c1 + 0.3 * r1!r},{c2!r}")
-        _wait(page, f"() => ({TEXT})('message').includes('1e+09 steps')", timeout=240_000)
-        page.close()                           # (the estimate is said after the orbit's first block: it runs)
-        closed = time.monotonic()
-        time.sleep(max(0.0, closed + CLOSED_SECONDS - time.monotonic()))
-        used = _cores(proc, IDLE_WINDOW)
-        assert used < IDLE_CORES, f"{used:.2f} cores busy {CLOSED_SECONDS:g} s after the tab closed"
-    except BaseException:
-        s.interrupt()                          # (whatever it still runs: the next test starts its own)
-        raise
-    finally:
-        if page is not None and not page.is_closed():
-            page.close()
 
 
 @browser_needed
