@@ -15,6 +15,13 @@ sys.path.insert(0, os.path.dirname(__file__))
 if int(os.environ.get("NUMBA_NUM_THREADS", "0") or 0) < 2:
     os.environ["NUMBA_NUM_THREADS"] = str(max(2, os.cpu_count() or 1))
 
+#: Numba's parallel regions run on GNU OpenMP here (numba.threading_layer() == "omp"), whose idle
+#: threads spin after each region unless told to wait passively: with two xdist workers on two
+#: cores, one worker's spinning threads took the CPU the other's tests wanted (the quick periodic
+#: figure: 12-13 CPU-s spinning, 9 passive).  Results do not depend on it; every process the tests
+#: start (servers, commands, the generic-CPU rerun) inherits it.
+os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+
 from explorer import model  # noqa: E402
 
 #: the browser modules' shared Chromium and default server (tests/app/browser_session.py), and the
