@@ -843,8 +843,10 @@ def _dask_client(address, jobs):
         return Client(address)
     import logging
 
-    cluster = LocalCluster(n_workers=max(1, jobs), threads_per_worker=1, processes=True,
-                           dashboard_address=None, silence_logs=logging.ERROR)
+    # no dashboard, and the scheduler's HTTP routes on a free port: on its default, 8787, a second local
+    # cluster (another sweep) made distributed warn on stderr that the port was in use
+    cluster = LocalCluster(n_workers=max(1, jobs), threads_per_worker=1, processes=True, silence_logs=logging.ERROR,
+                           scheduler_kwargs={"dashboard": False, "dashboard_address": ":0"})
     return _ClientWithCluster(Client(cluster), cluster)
 
 
