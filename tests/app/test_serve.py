@@ -1072,10 +1072,10 @@ def test_rapid_clicks_undo_clear_and_export_keep_the_page_and_the_server_consist
     assert urllib.request.urlopen(served.url, timeout=PAGE_TIMEOUT).status == 200
 
 
-#: the browser pause test's orbits: fixed steps of split2 at dt = 1e-3, a few ms a crossing (taylor's take
-#: microseconds), so that an orbit of these 2,000 runs longer than one of 2 x PAUSE_CROSSINGS of
-#: taylor (0.7 s of CPU per 1,000 against 0.95 s per 60,000 here) -- the first is still running when the
-#: second click lands, with a wider margin than before -- while the browser gets 4,000 rows, not 120,000
+#: the browser pause test's orbits: fixed steps of split2 at dt = 1e-3, about 0.7 ms of CPU a crossing
+#: (taylor's: microseconds), so that an orbit of these 2,000 (1.4 CPU-s) runs longer than one of
+#: 2 x PAUSE_CROSSINGS taylor crossings (0.95 CPU-s): the first is still running when the second click
+#: lands, while the browser gets 4,000 rows
 BROWSER_PAUSE = dataclasses.replace(SERVED, method="split2", dt=1e-3, crossings=2000)
 
 
