@@ -19,21 +19,10 @@ C1, C2 = 2.0, 4.0                # lam b / a1, lam b / a2
 # ====================================================================== the whole --quick run
 @pytest.fixture(scope="module")
 def quick(tmp_path_factory):
-    """Every figure on reduced settings, headless, into a temporary directory.  On one Numba
-    thread: the results are the same bits on one or two (tests/analysis/test_sections.py::
-    test_results_are_identical_whatever_the_thread_count), and the many short parallel loops of
-    the periodic figure's search spent a third of its CPU time (4 of 13 s) in OpenMP's idle
-    threads spinning."""
-    from explorer._jit import get_num_threads, set_num_threads
-
+    """Every figure on reduced settings, headless, into a temporary directory."""
     root = tmp_path_factory.mktemp("paper")
-    threads = get_num_threads()
-    set_num_threads(1)
-    try:
-        out = paper.generate(None, out_dir=root / "figs", results_dir=root / "res", quick=True, quiet=True,
-                             raise_errors=True)
-    finally:
-        set_num_threads(threads)
+    out = paper.generate(None, out_dir=root / "figs", results_dir=root / "res", quick=True, quiet=True,
+                         raise_errors=True)
     return root, {o.name: o for o in out}
 
 
