@@ -12,12 +12,15 @@ import pytest
 
 from explorer import model
 from explorer._jit import NOJIT
-from explorer.analysis import sections
+from explorer.analysis import lyapunov, sections
 from explorer.analysis.budget import Budget, BudgetExceeded, step_cap
 from explorer.analysis.section_map import SectionMap
 from explorer.integrate.tangent import return_map_taylor
 from explorer.kernels import STATUS_CANCELLED, STATUS_DONE
 from explorer.kernels.taylor import order_for_tolerance
+
+#: a cancelled run must end this soon (s): a step takes microseconds, the uncancelled run minutes
+CANCEL_SECONDS = 2.0
 
 #: a circulation at which one return of the section map from p = 0 (on the edge of the region,
 #: M about 0) takes minutes: 10^5 Taylor steps advance t by 0.35 of a time budget of 1000
@@ -105,3 +108,41 @@ def test_a_budget_ends_a_search_at_its_seconds_and_caps_the_crossing_batches():
     b.cancel()
     with b, pytest.raises(BudgetExceeded):
         sections.crossings(model.FIGURE4, 2.0, [(0.2, 0.1)], n_crossings=5)
+
+
+@pytest.mark.skipif(NOJIT, reason="plain Python holds the GIL and reads no switch mid-step (EXPLORER_NOJIT)")
+@pytest.mark.parametrize("method", ["taylor", "dop853", "split4", "system"])
+def test_a_cancel_ends_the_chaos_indicators_of_every_method_within_a_step(method):
+    """The page's chaos layer runs lyapunov.indicators in a budget: a cancel (a closed tab, a new value) ends
+    every orbit of the batch at its next step, the fixed-step and DOP853 loops and a System's included, and the
+    call raises BudgetExceeded instead of returning a partial result."""
+    from systems import henon_heiles
+
+    if method == "system":
+        args, kw = (henon_heiles(),), {"states": [[0.0, 0.1, 0.35, 0.0]] * 40}
+    else:
+        prm = model.FIGURE4.with_(mu=0.3)
+        y0 = model.section_state(prm, np.linspace(-0.2, 0.2, 40), np.zeros(40), 2.0)
+        args, kw = (prm,), {"states": y0, "method": method, "dt": 0.05}
+    lyapunov.indicators(*args, tmax=1.0, **kw)                        # compiled (or loaded) first
+    budget = Budget()
+    got: dict = {}
+
+    def work():
+        try:
+            with budget:
+                lyapunov.indicators(*args, tmax=1e7, **kw)              # hours of steps uncancelled
+            got["result"] = "returned"
+        except BudgetExceeded as exc:
+            got["result"] = str(exc)
+        got["ended"] = time.perf_counter()
+
+    thread = threading.Thread(target=work, daemon=True)
+    thread.start()
+    thread.join(0.2)
+    assert thread.is_alive(), got
+    cancelled = time.perf_counter()
+    budget.cancel()
+    thread.join(60.0)
+    assert not thread.is_alive() and "cancelled" in got["result"], got
+    assert got["ended"] - cancelled < CANCEL_SECONDS

@@ -17,7 +17,7 @@ from explorer.analysis import lyapunov
 from explorer.analysis.system_sections import run_driver
 from explorer.integrate import _tangent_lanes_generated as G
 from explorer.integrate import lanes, tangent
-from explorer.kernels import STATUS_MAX_STEPS, STATUS_NONFINITE
+from explorer.kernels import STATUS_CANCELLED, STATUS_MAX_STEPS, STATUS_NONFINITE
 from explorer.kernels import indicator_table as table
 from explorer.kernels import taylor as tk
 
@@ -87,14 +87,16 @@ def _orbits(n, seed=3):
     return P, np.ascontiguousarray(Y0), np.ascontiguousarray(V0), np.ascontiguousarray(W0)
 
 
-def _run(driver, threads, P, Y0, V0, W0, nvec, early, T=60.0, order=16, max_steps=10**9, H=4):
-    """The indicator module's driver (``lanes`` or ``scalar``) as lyapunov.indicators calls it."""
+def _run(driver, threads, P, Y0, V0, W0, nvec, early, T=60.0, order=16, max_steps=10**9, H=4, stop=0):
+    """The indicator module's driver (``lanes`` or ``scalar``) as lyapunov.indicators calls it, its stop
+    switch set to ``stop``."""
     n = Y0.shape[0]
     hist_t = np.geomspace(1.0, T, H)
     out = (np.full((n, H, table.N_RES), np.nan), np.zeros((n, table.N_RES)), np.full((n, table.N_EXT), np.nan),
            np.zeros(n, np.int64), np.zeros((n, 5)), np.zeros(n, np.int64), np.full((n, 2, 5), np.nan))
     run_driver(tangent.indicators_module(nvec), "indicators", n, driver, threads,
-               (Y0, V0, W0, 5, nvec, P, T, order, max_steps, early, 1e-8, 6.0, 10.0, hist_t, *out))
+               (Y0, V0, W0, 5, nvec, P, T, order, max_steps, early, 1e-8, 6.0, 10.0, hist_t, *out,
+                np.full(1, stop, np.int64)))
     return out
 
 
@@ -128,3 +130,15 @@ def test_vector_step_end_is_the_scalar_one_and_leaves_stops_and_history_rows_to_
     assert ref[3][4] == STATUS_NONFINITE
     ref = _run("scalar", 1, P, Y0, V0, W0, 2, False, max_steps=7)
     assert np.all(ref[3][np.arange(11) != 4] == STATUS_MAX_STEPS)
+
+
+@pytest.mark.parametrize("driver", ["lanes", "scalar"])
+def test_a_set_stop_switch_ends_every_orbit_before_its_first_step_on_either_driver(driver):
+    """More orbits than the lanes of both threads hold: those in a lane and those still queued all end
+    cancelled, with no step taken (analysis.budget reads the status and raises BudgetExceeded)."""
+    from explorer.integrate.simd import LANES
+
+    P, Y0, V0, W0 = _orbits(3 * LANES)
+    out = _run(driver, 2, P, Y0, V0, W0, 2, False, stop=1)
+    status, steps = out[3], out[5]
+    assert np.all(status == STATUS_CANCELLED) and np.all(steps == 0), (status, steps)

@@ -13,7 +13,9 @@ import time
 
 import numpy as np
 
-__all__ = ["Budget", "BudgetExceeded", "checkpoint", "current", "step_cap", "stop_switch"]
+from explorer.kernels.status import STATUS_CANCELLED
+
+__all__ = ["Budget", "BudgetExceeded", "checkpoint", "current", "raise_if_cancelled", "step_cap", "stop_switch"]
 
 
 class BudgetExceeded(RuntimeError):
@@ -150,6 +152,14 @@ def checkpoint() -> None:
     b = current()
     if b is not None:
         b.check()
+
+
+def raise_if_cancelled(status) -> None:
+    """Raise :class:`BudgetExceeded` when a compiled batch that read :func:`stop_switch` ended an orbit
+    with STATUS_CANCELLED (its outputs are then incomplete)."""
+    if np.any(np.asarray(status) == STATUS_CANCELLED):
+        b = current()
+        raise BudgetExceeded("stopped" if b is None else b.reason())
 
 
 def step_cap(max_steps: int) -> int:

@@ -10,7 +10,7 @@ import numpy as np
 
 from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
-from explorer.analysis import system_sections
+from explorer.analysis import budget, system_sections
 from explorer.analysis.section_map import is_params, system_first
 from explorer.integrate import methods
 from explorer.integrate.methods import DEFAULT_DT, DEFAULT_TOL
@@ -198,6 +198,7 @@ def indicators(system, y0=None, *, tmax: float = DEFAULT_TIME, method: str | Non
     if early_stop:
         settings.update(early_stop=True, early_sali=early_sali if nvec == 2 else 0.0, early_megno=early_megno,
                         early_time=early_time)
+    stop = budget.stop_switch()         # a budget's cancel ends every orbit at its next step
     old = get_num_threads()
     if threads is not None:
         set_num_threads(validation.threads(threads, max_threads()))
@@ -209,17 +210,18 @@ def indicators(system, y0=None, *, tmax: float = DEFAULT_TIME, method: str | Non
                 m.loops.loop("tangent_ext")(nvec), "indicators", N, "auto", None,
                 (Y0, V0, W0, 5, nvec, P, T, prep.order, int(max_steps), early_stop,
                  float(early_sali) if nvec == 2 else 0.0, float(early_megno), float(early_time), hist_t, hist, res,
-                 ext, status, final, steps, dev))
+                 ext, status, final, steps, dev, stop))
         else:
             # an orbit the fixed step does not resolve is not integrated
             slow = methods.unresolved(prep, P, Y0)
             if not slow.any():
-                methods.run_tangent(prep, Y0, V0, P, T, int(max_steps), hist_t, hist, res, status, final, steps)
+                methods.run_tangent(prep, Y0, V0, P, T, int(max_steps), hist_t, hist, res, status, final, steps,
+                                    stop)
             else:
                 ok = np.flatnonzero(~slow)
                 parts = [np.ascontiguousarray(a[ok]) for a in (Y0, V0, hist, res, status, final, steps)]
                 if ok.size:
-                    methods.run_tangent(prep, parts[0], parts[1], P, T, int(max_steps), hist_t, *parts[2:])
+                    methods.run_tangent(prep, parts[0], parts[1], P, T, int(max_steps), hist_t, *parts[2:], stop)
                 for a, part in zip((hist, res, status, final, steps), parts[2:]):
                     a[ok] = part
                 res[slow] = np.nan
@@ -230,6 +232,7 @@ def indicators(system, y0=None, *, tmax: float = DEFAULT_TIME, method: str | Non
     finally:
         if threads is not None:
             set_num_threads(old)
+    budget.raise_if_cancelled(status)
     rows = {table.RESULT: res, table.EXTRA: ext}
     values = {i.name: rows[i.row][:, i.column] for i in table.TANGENT}
     with np.errstate(invalid="ignore", over="ignore"):

@@ -117,7 +117,7 @@ def system_indicators(system, y0=None, *, states=None, tmax: float, method, tol:
         if tol is not None:
             raise refused_beside("indicators", ["tol"])
         tol = smap.tol
-    budget.checkpoint()
+    stop = budget.stop_switch()         # raises when spent; a cancel ends every orbit at its next step
     max_steps = validation.integer("max_steps", budget.step_cap(max_steps), 1)
     T = validation.real("tmax", tmax, 0.0, lo_open=True)
     tol = check_setting("tol", DEFAULT_TOL if tol is None else tol)
@@ -148,7 +148,8 @@ def system_indicators(system, y0=None, *, states=None, tmax: float, method, tol:
     run_driver(mod, "indicators", N, driver, threads,
                (Y0, V0, W0, n, nvec, system.parameter_array(), T, order, max_steps, early_stop,
                 float(early_sali) if nvec == 2 else 0.0, float(early_megno), float(early_time), hist_t, hist, res,
-                ext, status, final, steps, dev))
+                ext, status, final, steps, dev, stop))
+    budget.raise_if_cancelled(status)
     settings = {"method": "taylor", "time": T, "tol": tol, "order": order, "system": system.name,
                 "states": [s.name for s in system.states], "vectors": nvec}
     if smap is not None:

@@ -21,7 +21,7 @@ from explorer.kernels import tangent as _tg  # noqa: E402
 from explorer.kernels.checks import all_finite, is_finite  # noqa: E402
 from explorer.kernels.clock import advance_time, clip_step, resolves  # noqa: E402
 from explorer.kernels.status import (  # noqa: E402
-    STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW)
+    STATUS_CANCELLED, STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW)
 from explorer.kernels.taylor import evaluate, safety_factor, step_size  # noqa: E402
 
 
@@ -51,14 +51,15 @@ def _indicator_early(acc, v, w, n, nvec, sali_stop, megno_level, tmin, since):
 
 @njit(error_model="numpy")
 def indicators_orbit(y0, v0, w0, n, nvec, P, T, order, max_steps, early_stop, sali_stop, megno_level, early_tmin,
-                     hist_t, hist, res, ext, wout, yout):
+                     hist_t, hist, res, ext, wout, yout, stop):
     """The orbit from y0 and nvec (1 or 2) deviation vectors from v0, w0 (made unit) over the time T
     by the adaptive Taylor method of ``order`` on the variational system (Jorba & Zou 2005; the step
     from the orbit's rows only, as the crossings' taylor step of the orbit, so the vectors do not change
     the orbit), the vectors renormalised after every step and the indicators accumulated by
     kernels.tangent (the engine's formulas and columns).  Returns (status, steps); res the result
     row, ext (SALI, GALI_2, early code; NaN without a second vector), wout the final unit vectors,
-    yout the final state, hist the rows at the times hist_t."""
+    yout the final state, hist the rows at the times hist_t; STATUS_CANCELLED before a step once the
+    caller's switch ``stop[0]`` is set (analysis.budget)."""
     X = np.empty((DIM, order + 1))
     Wk = np.empty((max(N_WORK, 1), order + 1))
     z = np.empty(DIM)
@@ -86,6 +87,9 @@ def indicators_orbit(y0, v0, w0, n, nvec, P, T, order, max_steps, early_stop, sa
             break
         if steps >= max_steps:
             status = STATUS_MAX_STEPS
+            break
+        if stop[0] != 0:
+            status = STATUS_CANCELLED
             break
         for i in range(DIM):
             X[i, 0] = z[i]
@@ -125,14 +129,14 @@ def indicators_orbit(y0, v0, w0, n, nvec, P, T, order, max_steps, early_stop, sa
 @njit(nogil=True, error_model="numpy")
 def indicators_taylor_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_steps, early_stop, sali_stop,
                              megno_level, early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final,
-                             out_steps, out_w):
+                             out_steps, out_w, stop):
     """:func:`indicators_orbit` for the orbits (rows of Y0) of the queue ``next_orbit`` that threads share:
     each orbit is computed alone, so the result does not depend on the number of threads."""
     j = atomic_fetch_add(next_orbit, 0, 1)
     while j < Y0.shape[0]:
         s, k = indicators_orbit(Y0[j], V0[j], W0[j], n, nvec, P, T, order, max_steps, early_stop, sali_stop,
                                 megno_level, early_tmin, hist_t, out_hist[j], out_res[j], out_ext[j], out_w[j],
-                                out_final[j])
+                                out_final[j], stop)
         out_status[j] = s
         out_steps[j] = k
         j = atomic_fetch_add(next_orbit, 0, 1)
@@ -346,12 +350,28 @@ def _indicator_lane_finish(l, st, n, nvec, X, z, orb, L_steps, L_early, acc, out
     out_steps[j] = int(L_steps[l])
 
 
+@njit(error_model="numpy")
+def _indicator_cancel_lanes(next_orbit, N, n, nvec, X, z, orb, L_steps, L_early, acc, out_res, out_ext, out_status,
+                            out_final, out_steps, out_w):
+    """The stop switch is set: the lanes' orbits end where they are, the queued ones before their start."""
+    for l in range(LANES):
+        if orb[l] >= 0:
+            _indicator_lane_finish(l, STATUS_CANCELLED, n, nvec, X, z, orb, L_steps, L_early, acc, out_res, out_ext,
+                                   out_status, out_final, out_steps, out_w)
+            orb[l] = -1
+    j = atomic_fetch_add(next_orbit, 0, 1)
+    while j < N:
+        out_status[j] = STATUS_CANCELLED
+        j = atomic_fetch_add(next_orbit, 0, 1)
+
+
 @njit(nogil=True, error_model="numpy")
 def indicators_lanes_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_steps, early_stop, sali_stop,
                             megno_level, early_tmin, hist_t, out_hist, out_res, out_ext, out_status, out_final,
-                            out_steps, out_w):
+                            out_steps, out_w, stop):
     """One group of LANES lanes: orbits from the queue ``next_orbit`` until it is empty, each lane
-    indicators_orbit's loop (its arguments and outputs)."""
+    indicators_orbit's loop (its arguments and outputs); once ``stop[0]`` is set, before the next step, every
+    orbit in a lane and every one still queued ends with STATUS_CANCELLED."""
     X = np.zeros((order + 1, DIM, LANES))
     Wk = np.zeros((order + 1, max(N_WORK, 1), LANES))
     Y = np.zeros((DIM, LANES))
@@ -381,6 +401,10 @@ def indicators_lanes_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_st
                                         L_tc, L_steps, L_early, L_hpos, L_hnext, L_since, hist_t, acc, out_hist,
                                         out_res, out_ext, out_status, out_final, out_steps, out_w)
     while active > 0:
+        if stop[0] != 0:
+            _indicator_cancel_lanes(next_orbit, Y0.shape[0], n, nvec, X, z, orb, L_steps, L_early, acc, out_res,
+                                    out_ext, out_status, out_final, out_steps, out_w)
+            return
         taylor_coefficients_lanes(P, X, order, Wk)
         fin, normal = _indicator_norms_lanes(X, order, n, e_p, e_q, NORM)
         bits = _steps_lanes(NORM, fin, normal, L_on, L_t, T, factor, hv, L_last, L_go)

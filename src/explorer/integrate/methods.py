@@ -178,10 +178,11 @@ def start_carry(Y0, P, cphi, sphi, carry):
     drivers.start_carry(Y0, P, cphi, sphi, carry)
 
 
-def run_tangent(prep: Prepared, Y0, V0, P, T, max_steps, hist_t, hist, res, status, final, steps):
-    """Chaos indicators (one deviation vector) for every orbit of ``Y0`` over [0, T]."""
+def run_tangent(prep: Prepared, Y0, V0, P, T, max_steps, hist_t, hist, res, status, final, steps, stop):
+    """Chaos indicators (one deviation vector) for every orbit of ``Y0`` over [0, T]; an orbit still
+    running when ``stop[0]`` is set ends with STATUS_CANCELLED at its next step (analysis.budget)."""
     prep.method.loops.loop("tangent")(Y0, V0, P, T, *_args(prep), max_steps, hist_t, hist, res, status,
-                                      final, steps)
+                                      final, steps, stop)
 
 
 REGISTRY: dict[str, Method] = {

@@ -81,7 +81,10 @@ def indicators_module(nvec: int):
 
 
 @njit
-def orbit_tangent_dop853(y0, v0, P, T, rtol, atol, max_steps, hist_t, hist, res, yout):
+def orbit_tangent_dop853(y0, v0, P, T, rtol, atol, max_steps, hist_t, hist, res, yout, stop):
+    """The orbit and one deviation vector by DOP853 on (y, v) (the step:
+    :func:`explorer.integrate._systems_generated.dop853_step_tangent`); STATUS_CANCELLED before a step once
+    the caller's switch ``stop[0]`` is set (analysis.budget)."""
     n = 10
     K = np.empty((16, n))
     z = np.empty(n)
@@ -95,6 +98,9 @@ def orbit_tangent_dop853(y0, v0, P, T, rtol, atol, max_steps, hist_t, hist, res,
     h_abs = FIRST_STEP
     _start(y0, v0, z)
     while True:
+        if stop[0] != 0:
+            code = STATUS_CANCELLED
+            break
         code, h, last, h_abs, steps = sg.dop853_step_tangent(z, P, K, t, T, STATUS_DONE, h_abs, steps,
                                                              max_steps, rtol, atol, tmp, znew, False)
         if code != STEP_OK:
@@ -110,9 +116,10 @@ def orbit_tangent_dop853(y0, v0, P, T, rtol, atol, max_steps, hist_t, hist, res,
 
 
 @njit
-def orbit_tangent_split(y0, v0, P, T, dt, flow_ids, fracs, max_steps, hist_t, hist, res, yout):
+def orbit_tangent_split(y0, v0, P, T, dt, flow_ids, fracs, max_steps, hist_t, hist, res, yout, stop):
     """The orbit and one deviation vector by the splitting method's own tangent map (the step:
-    :func:`explorer.integrate._systems_generated.split_step_tangent`); t_n = n dt."""
+    :func:`explorer.integrate._systems_generated.split_step_tangent`); t_n = n dt; STATUS_CANCELLED before
+    a step once ``stop[0]`` is set."""
     n = 10
     z = np.empty(n)
     znew = np.empty(n)
@@ -124,6 +131,9 @@ def orbit_tangent_split(y0, v0, P, T, dt, flow_ids, fracs, max_steps, hist_t, hi
     code = STATUS_DONE
     nsteps = int(np.ceil(T / dt - 1e-9))
     while steps < nsteps:
+        if stop[0] != 0:
+            code = STATUS_CANCELLED
+            break
         code, steps = sg.split_step_tangent(z, P, dt, flow_ids, fracs, steps, max_steps, znew)
         if code != STEP_OK:
             break
@@ -137,19 +147,19 @@ def orbit_tangent_split(y0, v0, P, T, dt, flow_ids, fracs, max_steps, hist_t, hi
 
 @njit(parallel=True, nogil=True)
 def run_tangent_dop853_batch(Y0, V0, P, T, rtol, atol, max_steps, hist_t, out_hist, out_res, out_status,
-                             out_final, out_steps):
+                             out_final, out_steps, stop):
     for j in prange(Y0.shape[0]):
         _store(j, orbit_tangent_dop853(Y0[j], V0[j], P, T, rtol, atol, max_steps, hist_t, out_hist[j],
-                                       out_res[j], out_final[j]), out_status, out_steps)
+                                       out_res[j], out_final[j], stop), out_status, out_steps)
     return 0
 
 
 @njit(parallel=True, nogil=True)
 def run_tangent_split_batch(Y0, V0, P, T, dt, flow_ids, fracs, max_steps, hist_t, out_hist, out_res,
-                            out_status, out_final, out_steps):
+                            out_status, out_final, out_steps, stop):
     for j in prange(Y0.shape[0]):
         _store(j, orbit_tangent_split(Y0[j], V0[j], P, T, dt, flow_ids, fracs, max_steps, hist_t,
-                                      out_hist[j], out_res[j], out_final[j]), out_status, out_steps)
+                                      out_hist[j], out_res[j], out_final[j], stop), out_status, out_steps)
     return 0
 
 
