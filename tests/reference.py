@@ -37,10 +37,12 @@ def rhs_numpy(t, y, P):
         dg1/dt = (M/b) g2
         dg2/dt = -(M/b) g1
 
-    ``y`` may be (5,) or (5, n) (vectorised along the last axis).
+    ``y`` may be (5,) or (5, n) (vectorised along the last axis).  ``P`` a tuple of floats (what
+    :func:`scipy_crossings` passes) or any sequence of 9 numbers; a (5,) state is read as Python
+    floats (the same doubles, in a third of numpy scalars' time: this is scipy's inner loop).
     """
-    a1, a2, b, lam, chi, zeta, mu, xi, eta = (float(v) for v in P)
-    p1, p2, M, g1, g2 = y[0], y[1], y[2], y[3], y[4]
+    a1, a2, b, lam, chi, zeta, mu, xi, eta = P if type(P) is tuple else (float(v) for v in P)
+    p1, p2, M, g1, g2 = y.tolist() if y.ndim == 1 else y
     w = M / b
     dp1 = w * (p2 - zeta) - mu * g1 - lam * p2 / a2
     dp2 = -w * (p1 - chi) - mu * g2 + lam * p1 / a1
@@ -143,8 +145,10 @@ def scipy_crossings(P, y0, n_crossings, phi0=np.pi, direction=+1,
     def event(t, y):
         return y[3] * c0 - y[4] * s0
 
+    floats = tuple(P.tolist())
+
     def fun(t, y):
-        return rhs_numpy(t, y, P)
+        return rhs_numpy(t, y, floats)
 
     event.direction = float(direction)
     event.terminal = False
