@@ -240,28 +240,3 @@ def pytest_terminal_summary(terminalreporter):
 #: ``@pytest.mark.cpu_dependent`` one by one: results may move in the last bits between CPUs,
 #: so the suite asserts properties and tolerances, and README's test command runs these tests a
 #: second time with Numba compiling for NUMBA_CPU_NAME=generic (docs/tests.md, "Across machines").
-
-
-#: README's test command runs the suite on two xdist workers with ``--dist loadscope``: a module's
-#: tests go to one worker (its module-scoped fixtures run once), and the modules are handed out
-#: in collection order as workers free up.  The longest modules come first, so that none of them
-#: starts last and leaves one core idle at the end (docs/tests.md, "Time"); the others keep
-#: their order.  Measured with README's command (``--durations``), slowest first.
-SLOW_MODULES_FIRST = (
-    "test_plain_install.py", "app/test_serve.py", "app/test_serve_hostile.py", "app/test_serve_feedback.py",
-    "app/test_serve_orbit_list.py", "test_stress.py", "app/test_paper.py", "analysis/test_greene.py",
-    "analysis/test_sections.py", "integrate/test_tangent_lanes.py", "analysis/test_sweep.py",
-    "app/test_interrupt.py", "integrate/test_lanes.py", "analysis/test_sweep_stream.py",
-    "analysis/test_periodic.py", "analysis/test_manifolds.py", "app/test_notebook.py", "test_docs.py",
-)
-
-
-def pytest_collection_modifyitems(config, items):
-    rank = {m: i for i, m in enumerate(SLOW_MODULES_FIRST)}
-    root = os.path.dirname(__file__)
-
-    def module_rank(item):
-        rel = os.path.relpath(str(item.path), root).replace(os.sep, "/")
-        return rank.get(rel, len(rank))
-
-    items.sort(key=module_rank)   # stable: the order within a module and among the rest is kept
