@@ -341,14 +341,25 @@ def _whole_pixels(fig):
 
 
 def _trim_height(fig, keep=0.04):
-    """Remove the empty height that constrained layout leaves below equal-aspect panels."""
+    """Remove the empty height that constrained layout leaves below equal-aspect panels (more than
+    ``keep`` inches of it).
+
+    Draws nothing: the layout engine alone lays the figure out on its Agg renderer, as the layout
+    pass of :meth:`~matplotlib.figure.Figure.draw_without_rendering` would, and the tight box is read
+    from that layout (the rest of a draw would not change it).  The height is then new, so the
+    figure is laid out again when it is drawn, e.g. by :func:`save_figure`.  A layout that fails
+    is skipped as ``Figure.draw`` skips it; any other trouble (odd labels) keeps the estimate."""
+    engine = fig.get_layout_engine()
     try:
-        fig.draw_without_rendering()
+        try:
+            engine.execute(fig)
+        except ValueError:  # as Figure.draw: no layout, the tight box of the figure as it is
+            pass
         tight = fig.get_tightbbox()
     except Exception:  # layout trouble (e.g. odd labels): keep the estimate
         return
     W, H = fig.get_size_inches()
-    pad = fig.get_layout_engine().get()["h_pad"]
+    pad = engine.get()["h_pad"]
     slack = H - tight.height - 2 * pad
     if slack > keep:
         fig.set_size_inches(W, H - slack + keep)
@@ -369,10 +380,23 @@ def _atomic_savefig(fig, path: Path, fmt: str, **kwargs):
         raise
 
 
+def _set_layout_engine(fig, engine):
+    """``fig.set_layout_engine(engine)``, where None means no engine whatever the rcParams say."""
+    with _matplotlib().rc_context({"figure.autolayout": False, "figure.constrained_layout.use": False}):
+        fig.set_layout_engine(engine)
+
+
 def save_figure(fig, stem, dpi=None, *, text=None):
     """Write ``<stem>.png`` and ``<stem>.pdf`` atomically (parents created; a ``.png``/``.pdf`` suffix
     of ``stem`` is dropped), at ``dpi`` [the figure's], the PDF without a creation date; ``text``:
-    {key: value} chunks of the PNG (:func:`png_text`), written last.  Returns (png, pdf) paths."""
+    {key: value} chunks of the PNG (:func:`png_text`, docs/scenes.md "What a rerun recomputes"),
+    written last.  Returns (png, pdf) paths.
+
+    The PDF is written first, as ``savefig`` writes it: its layout engine (constrained layout)
+    lays the figure out, then the figure is drawn.  The PNG keeps that layout: the figure has no
+    layout engine while it is written (restored after), so ``savefig`` draws it once, neither
+    laying it out again nor walking it beforehand; its size and layout are the PDF's
+    (``explorer figures``, docs/commands/figures.md, writes every figure this way)."""
     _matplotlib()
     stem = os.fspath(stem)
     if stem.lower().endswith((".png", ".pdf")):
@@ -385,11 +409,11 @@ def save_figure(fig, stem, dpi=None, *, text=None):
     png, pdf = Path(stem + ".png"), Path(stem + ".pdf")
     _atomic_savefig(fig, pdf, "pdf", dpi=dpi, facecolor="white", metadata={"CreationDate": None})
     engine = fig.get_layout_engine()
-    fig.set_layout_engine("none")     # the PDF's layout holds for the PNG: not computed twice
+    _set_layout_engine(fig, None)     # the PDF's layout holds for the PNG: not computed, not pre-drawn
     try:
         _atomic_savefig(fig, png, "png", dpi=dpi, facecolor="white", metadata=dict(text or {}))
     finally:
-        fig.set_layout_engine(engine)
+        _set_layout_engine(fig, engine)
     return png, pdf
 
 
