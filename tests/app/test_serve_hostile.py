@@ -1,8 +1,10 @@
 """`explorer serve` under hostile input (issue 32): no link and no typed value can freeze the server.
 
 Links and typed values with extreme mu, h, lam and b and every overlay ticked (fixed points and
-separatrices, periodic orbits, the MEGNO layer) are opened in Chromium; after each a second session
-still opens and draws a clicked orbit, and meanwhile the server answers HTTP within
+separatrices, periodic orbits, the MEGNO layer) are opened in Chromium; after each link a second
+session still opens and draws a clicked orbit (once per distinct work: two links whose values are
+all refused compute the same base page), after each typed value a second session (opened after the
+first) draws another clicked orbit, and meanwhile the server answers HTTP within
 LIVENESS_SECONDS (``GET /liveness``, answered by the event loop itself, PROBES times while the
 hostile page's searches and the second session's orbit run; one of them may meet a pause of the
 loop's own, up to PAUSE_SECONDS).
@@ -26,6 +28,7 @@ import test_serve
 from page_loop import poll
 from test_serve import (
     DATA,
+    FIRST_ORBIT_TIMEOUT_MS,
     READY,
     SERVED,
     SET_BOX,
@@ -58,21 +61,23 @@ PROBE_GAP = 0.5
 SIGINT_SECONDS = 1.0
 #: every overlay of the page ticked, as URL arguments
 ALL_OVERLAYS = "separatrices=1&periodic=1&megno=1"
-#: hostile links: (query, texts the page's message must contain).  A link whose every value is refused
-#: opens the served page itself (settings.parse_link_fields returns its base settings): mu=1e300,
-#: h=1e300 and lam=-1e-300 (an allowed region not finite) are refused together in one link, each said,
-#: and mu=-1e8 (a weight below 0) in another (a link holds one mu); what the server computes after
-#: either is the base page with every overlay, the same work as after each value alone
+#: hostile links: (query, texts the page's message must contain, whether a second session is opened
+#: meanwhile).  A link whose every value is refused opens the served page itself
+#: (settings.parse_link_fields returns its base settings): mu=1e300, h=1e300 and lam=-1e-300 (an
+#: allowed region not finite) are refused together in one link, each said, and mu=-1e8 (a weight
+#: below 0) in another (a link holds one mu); what the server computes after either is the base page
+#: with every overlay, the same work as after each value alone.  A second session is opened once per
+#: distinct work: after the first of these two; after mu=-1e8 (the same searches) the server is probed
 LINKS = [
-    (f"mu=1e6&{ALL_OVERLAYS}", ()),
-    (f"mu=1e8&{ALL_OVERLAYS}&orbits=0.0,0.0", ()),
-    (f"h=1e8&{ALL_OVERLAYS}", ()),
-    (f"lam=1e8&{ALL_OVERLAYS}", ()),
-    (f"b=1e8&{ALL_OVERLAYS}", ()),
-    (f"b=1e-300&{ALL_OVERLAYS}", ()),
+    (f"mu=1e6&{ALL_OVERLAYS}", (), True),
+    (f"mu=1e8&{ALL_OVERLAYS}&orbits=0.0,0.0", (), True),
+    (f"h=1e8&{ALL_OVERLAYS}", (), True),
+    (f"lam=1e8&{ALL_OVERLAYS}", (), True),
+    (f"b=1e8&{ALL_OVERLAYS}", (), True),
+    (f"b=1e-300&{ALL_OVERLAYS}", (), True),
     (f"mu=1e300&h=1e300&lam=-1e-300&{ALL_OVERLAYS}",
-     ("mu must be in", "h must be in", "the allowed region is not finite")),
-    (f"mu=-1e8&{ALL_OVERLAYS}", ("mu must be >= 0",)),
+     ("mu must be in", "h must be in", "the allowed region is not finite"), True),
+    (f"mu=-1e8&{ALL_OVERLAYS}", ("mu must be >= 0",), False),
 ]
 #: hostile values typed into a page with every overlay ticked: (field, text, message or None)
 TYPED = [("mu", "1e6", None), ("h", "1e300", "h must be in"), ("lam", "1e8", None), ("b", "1e8", None),
@@ -111,16 +116,18 @@ def _answers_in_time(served) -> None:
     _assert_answered_in_time(_probe(served))
 
 
-def _second_session_works_while_the_server_answers(tab, served) -> None:
+def _second_session_works_while_the_server_answers(tab, served, stay: bool = False) -> None:
     """A new session opens (in ``tab``) and draws a clicked orbit; from the moment it is open until its orbit
     is drawn and PROBES probes are done, ``GET /liveness`` is asked in a thread of its own (the
     browser stays on this one, Playwright's), each answered within LIVENESS_SECONDS.  The probes
     and the second session's orbit both run while the hostile page's searches do: one stretch of
     time proves both, where probes before and after the second session kept the hostile page
     open (its searches running flat out) twice as long.  The probes start once the second page
-    is open: what they measure is the loop while pages compute, not a session being built."""
+    is open: what they measure is the loop while pages compute, not a session being built.  ``stay``: the
+    session stays open in ``tab`` (unless the check fails)."""
     import concurrent.futures
 
+    drawn = False
     try:
         other = _goto(tab, served.url)
         with concurrent.futures.ThreadPoolExecutor(1) as pool:
@@ -129,8 +136,32 @@ def _second_session_works_while_the_server_answers(tab, served) -> None:
             _click(other, c1 + 0.3 * r1, c2)
             _wait_crossings(other, 10)
             answers = probes.result(timeout=PROBES * (PROBE_GAP + 10) + 10)
+        drawn = True
     finally:
-        _leave(tab)
+        if not (stay and drawn):
+            _leave(tab)
+    _assert_answered_in_time(answers)
+
+
+#: (k) => the k-th clicked orbit of the page (its k-th start) has at least 10 crossings drawn
+KTH_ORBIT_DRAWN = ("(k) => { const d = Bokeh.documents[0], starts = d.get_model_by_name('starts').data.orbit;"
+                   " if (starts.length < k) return false; const id = Number(starts[k - 1]); let n = 0;"
+                   " for (const o of d.get_model_by_name('crossings').data.orbit) if (Number(o) === id) n++;"
+                   " return n >= 10; }")
+
+
+def _another_orbit_drawn_while_the_server_answers(tab, served, k: int) -> None:
+    """In the session open in ``tab`` (k - 1 orbits clicked), a k-th clicked orbit is drawn while ``GET /liveness``
+    is asked PROBES times in a thread of its own, as in _second_session_works_while_the_server_answers."""
+    import concurrent.futures
+
+    c1, c2, r1, r2 = SERVED.region
+    starts = [(c1 + 0.5 * r1, c2), (c1 - 0.3 * r1, c2 + 0.2 * r2), (c1 + 0.1 * r1, c2 - 0.6 * r2)]
+    with concurrent.futures.ThreadPoolExecutor(1) as pool:
+        probes = pool.submit(_probe, served)
+        _click(tab, *starts[(k - 2) % len(starts)])
+        _wait(tab, f"() => ({KTH_ORBIT_DRAWN})({k})", timeout=FIRST_ORBIT_TIMEOUT_MS, polling=20)
+        answers = probes.result(timeout=PROBES * (PROBE_GAP + 10) + 10)
     _assert_answered_in_time(answers)
 
 
@@ -228,16 +259,19 @@ def test_a_link_with_a_tiny_fixed_step_is_said_up_front_and_stops_when_its_tab_c
 
 
 @browser_needed
-@pytest.mark.parametrize("query,said", LINKS, ids=[q.replace(f"&{ALL_OVERLAYS}", "").replace("&", ",")
-                                                   for q, _ in LINKS])
-def test_a_hostile_link_leaves_the_server_answering_and_a_second_session_working(hostile, tabs, query, said):
+@pytest.mark.parametrize("query,said,second", LINKS, ids=[q.replace(f"&{ALL_OVERLAYS}", "").replace("&", ",")
+                                                          for q, _s, _o in LINKS])
+def test_a_hostile_link_leaves_the_server_answering_and_a_second_session_working(hostile, tabs, query, said, second):
     page, other = tabs
     try:
         _goto(page, f"{hostile.url}?{query}")
         message = page.evaluate(TEXT, "message")
         for text in said:                                      # refused as the command line refuses it
             assert text in message and "link ignored" in message, message
-        _second_session_works_while_the_server_answers(other, hostile)
+        if second:
+            _second_session_works_while_the_server_answers(other, hostile)
+        else:                                                  # (the work of a link before it: LINKS)
+            _answers_in_time(hostile)
     finally:
         _leave(page)
     assert hostile.proc.poll() is None
@@ -245,11 +279,16 @@ def test_a_hostile_link_leaves_the_server_answering_and_a_second_session_working
 
 @browser_needed
 def test_hostile_typed_values_with_every_overlay_leave_the_server_answering(hostile, tabs):
-    """After each value that applies, a second session works while the server answers.  A refused
-    value changes nothing the server computes (SectionPage._on_field says it and returns: no task
-    starts or stops), so its check is the next value's, which comes after it."""
+    """After each value that applies, a second session draws a clicked orbit while the server answers:
+    after the first (mu = 1e6) a new session opens and draws one, after each later value it draws
+    another.  A new session opening under each value's searches is the hostile links' check (the same
+    values with every overlay, the same searches); what typing adds is the page's own cancel and
+    restart of its searches at each value, which the second session's next orbit and the probes
+    meet.  A refused value changes nothing the server computes (SectionPage._on_field says it and
+    returns: no task starts or stops), so its check is the next value's, which comes after it."""
     assert TYPED[-1][2] is None                                  # (a value that applies comes last)
     page, other = tabs
+    orbits = 0                                                  # (clicked in the second session)
     try:
         _goto(page, hostile.url)
         for label in ("chaos layer", "fixed points", "periodic orbits"):
@@ -258,13 +297,19 @@ def test_hostile_typed_values_with_every_overlay_leave_the_server_answering(host
             _set_field(page, field, text)
             if said is not None:
                 _wait(page, f"() => ({TEXT})('message').includes({json.dumps(said)})", timeout=60_000)
+                continue
+            applied = f"{field}={float(text)!r}"                # (the URL holds each value's repr)
+            _wait(page, f"() => window.location.search.includes({json.dumps(applied)})", timeout=60_000)
+            if not orbits:
+                _second_session_works_while_the_server_answers(other, hostile, stay=True)
             else:
-                applied = f"{field}={float(text)!r}"            # (the URL holds each value's repr)
-                _wait(page, f"() => window.location.search.includes({json.dumps(applied)})", timeout=60_000)
-                _second_session_works_while_the_server_answers(other, hostile)
+                _another_orbit_drawn_while_the_server_answers(other, hostile, orbits + 1)
+            orbits += 1
+        assert orbits == sum(said is None for _f, _t, said in TYPED)
         assert page.evaluate(DATA, "region")["x"]                # the page itself still has its region
     finally:
         _leave(page)
+        _leave(other)
 
 
 @browser_needed
@@ -276,8 +321,7 @@ def test_ctrl_c_ends_a_server_busy_with_hostile_searches_within_a_second(tabs, o
         c1, c2, r1, _r2 = SERVED.region
         _goto(other, f"{s.url}?{ALL_OVERLAYS}&crossings=1000000")
         _click(other, c1 + 0.3 * r1, c2)                    # a long orbit (a million crossings) running too
-        _wait_crossings(other, 1)
-        _answers_in_time(s)
+        _wait_crossings(other, 1)                            # (the server's answers under such work: the links')
     finally:
         t0 = time.perf_counter()
         s.proc.send_signal(signal.SIGINT)
