@@ -24,6 +24,7 @@ What a plain install is made of, proved in two parts (docs/tests.md, "What the t
 from __future__ import annotations
 
 import importlib.metadata as md
+import importlib.util
 import os
 import re
 import shlex
@@ -31,6 +32,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import sysconfig
 import time
 import urllib.request
 import venv
@@ -80,7 +82,40 @@ def _plain_venv(where: Path) -> Path:
     r = subprocess.run([*install, "-c", str(constraints), "-e", str(ROOT)], capture_output=True, text=True,
                        timeout=COMMAND_TIMEOUT)
     assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    _share_bytecode(where)
     return py
+
+
+def _share_bytecode(where: Path) -> int:
+    """Link into the venv at ``where`` the test environment's bytecode of each module file that the two
+    environments share, the same file (one inode: uv links both from its cache), as a pip install would
+    have compiled it; how many.  The commands then do not compile numpy, numba, matplotlib, Bokeh and
+    Panel from source (8 CPU-s over the module's processes).  Only the bytecode of a source the venv
+    has, next to it: a .pyc in __pycache__ imports nothing without its source, and Python checks each
+    against its source (mtime and size) as ever.  With a copying installer nothing is the same file:
+    nothing is linked and the commands compile as before."""
+    site = Path(sysconfig.get_path("purelib"))
+    plain = Path(sysconfig.get_path("purelib", vars={"base": str(where), "platbase": str(where)}))
+    if sys.pycache_prefix is not None or site == plain or not plain.is_dir():
+        return 0
+    linked = 0
+    for d, dirs, files in os.walk(plain):
+        dirs[:] = [x for x in dirs if x != "__pycache__"]
+        for f in files:
+            if not f.endswith(".py"):
+                continue
+            source, theirs = Path(d) / f, site / Path(d).relative_to(plain) / f
+            cached = Path(importlib.util.cache_from_source(str(theirs)))
+            try:
+                if not os.path.samefile(source, theirs):
+                    continue
+                mine = Path(importlib.util.cache_from_source(str(source)))
+                mine.parent.mkdir(exist_ok=True)
+                os.link(cached, mine)
+            except OSError:     # not in the test environment, no bytecode there, or already linked
+                continue
+            linked += 1
+    return linked
 
 
 @pytest.fixture(scope="module")
@@ -92,10 +127,12 @@ def plain(tmp_path_factory):
     env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTEST", "COV_"))}
     env.pop("PYTHONPATH", None)
     # pip compiles what it installs to bytecode; uv does not.  So that the commands run as after a
-    # pip install, they may write the bytecode of what they import (the first one does, the others
-    # read it), whatever the test run's PYTHONDONTWRITEBYTECODE: every process compiled numpy,
-    # scipy, numba, matplotlib, Bokeh and Panel from source when this machine set it, and uv's
-    # --compile-bytecode, which compiles every installed module, cost more (24 s) than it saved
+    # pip install, the venv has the test environment's bytecode of the files the two share
+    # (_share_bytecode), and they may write the bytecode of whatever else they import (the first
+    # one does, the others read it), whatever the test run's PYTHONDONTWRITEBYTECODE: every process
+    # compiled numpy, scipy, numba, matplotlib, Bokeh and Panel from source when this machine set
+    # it, and uv's --compile-bytecode, which compiles every installed module, cost more (24 s) than
+    # it saved
     env.pop("PYTHONDONTWRITEBYTECODE", None)
     env.update(PYTHONUNBUFFERED="1", MPLBACKEND="Agg")
     return py, cwd, env
