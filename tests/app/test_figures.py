@@ -219,6 +219,33 @@ def test_pdf_with_many_points_stays_small(tmp_path):
     assert b"/Subtype /Image" in data          # the points went in as a raster image
 
 
+def test_a_saved_figure_is_laid_out_once_and_drawn_once_per_file_the_pdf_as_savefig_writes_it(tmp_path, monkeypatch):
+    """save_figure's contract (figures.save_figure, how `explorer figures` writes every figure):
+    making the figure draws nothing (_trim_height lays it out only), saving draws it twice, once
+    per file; the PDF is byte for byte the one matplotlib's savefig writes, the PNG has the
+    figure's size in pixels, and the figure keeps its layout engine."""
+    from matplotlib.figure import Figure
+
+    panels = fig4_panels(100)[1:]
+
+    def make():
+        return figures.section_panels(panels, own_scale=[-1], title="lam = 1, h = 2", dpi=40)
+
+    plain = make()
+    plain.savefig(tmp_path / "plain.pdf", format="pdf", dpi=40, facecolor="white", metadata={"CreationDate": None})
+    draws = []
+    real = Figure.draw
+    monkeypatch.setattr(Figure, "draw", lambda self, renderer: draws.append(renderer) or real(self, renderer))
+    fig = make()
+    assert draws == [] and fig.get_size_inches().tolist() == plain.get_size_inches().tolist()
+    engine = fig.get_layout_engine()
+    png, pdf = figures.save_figure(fig, tmp_path / "fig")
+    assert len(draws) == 2
+    assert pdf.read_bytes() == (tmp_path / "plain.pdf").read_bytes()
+    assert mpimg.imread(png).shape[:2] == (round(fig.bbox.height), round(fig.bbox.width))
+    assert fig.get_layout_engine() is engine
+
+
 def test_save_is_atomic_on_failure(tmp_path, rendered):
     fig = figures.section_panels([dict(points=None, params=model.FIGURE4, h=H)], dpi=60)
     png, pdf = figures.save_figure(fig, tmp_path / "a" / "b" / "x")

@@ -386,17 +386,40 @@ def _set_layout_engine(fig, engine):
         fig.set_layout_engine(engine)
 
 
+def _lay_out_as_pdf(fig):
+    """Run ``fig``'s layout engine as ``savefig`` runs it before drawing a PDF: on a PDF canvas
+    at the PDF's 72 dpi (so with the PDF renderer's text metrics).  Draws nothing; a layout that
+    fails is skipped as ``Figure.draw`` skips it."""
+    engine = fig.get_layout_engine()
+    if engine is None or not fig.axes:
+        return
+    from matplotlib.backends.backend_pdf import FigureCanvasPdf
+
+    canvas, dpi = fig.canvas, fig.dpi
+    FigureCanvasPdf(fig)            # the canvas savefig switches to for a PDF
+    try:
+        fig.dpi = 72                # FigureCanvasPdf.print_pdf's: 72 points to the inch
+        try:
+            engine.execute(fig)
+        except ValueError:
+            pass
+    finally:
+        fig.dpi = dpi
+        fig.set_canvas(canvas)
+
+
 def save_figure(fig, stem, dpi=None, *, text=None):
     """Write ``<stem>.png`` and ``<stem>.pdf`` atomically (parents created; a ``.png``/``.pdf`` suffix
     of ``stem`` is dropped), at ``dpi`` [the figure's], the PDF without a creation date; ``text``:
     {key: value} chunks of the PNG (:func:`png_text`, docs/scenes.md "What a rerun recomputes"),
     written last.  Returns (png, pdf) paths.
 
-    The PDF is written first, as ``savefig`` writes it: its layout engine (constrained layout)
-    lays the figure out, then the figure is drawn.  The PNG keeps that layout: the figure has no
-    layout engine while it is written (restored after), so ``savefig`` draws it once, neither
-    laying it out again nor walking it beforehand; its size and layout are the PDF's
-    (``explorer figures``, docs/commands/figures.md, writes every figure this way)."""
+    Each file is one draw of the figure (``explorer figures``, docs/commands/figures.md, writes
+    every figure this way): the layout engine (constrained layout) lays the figure out once, as
+    ``savefig`` would before drawing the PDF, then the figure has no layout engine while both
+    files are written (restored after), so ``savefig`` neither lays it out again nor walks it
+    before drawing it.  The PDF is the one ``fig.savefig`` writes; the PNG has the PDF's size and
+    layout (a PNG saved alone may sit a pixel off: Agg's text metrics differ a little)."""
     _matplotlib()
     stem = os.fspath(stem)
     if stem.lower().endswith((".png", ".pdf")):
@@ -407,10 +430,11 @@ def save_figure(fig, stem, dpi=None, *, text=None):
     base.parent.mkdir(parents=True, exist_ok=True)
     dpi = fig.dpi if dpi is None else float(dpi)
     png, pdf = Path(stem + ".png"), Path(stem + ".pdf")
-    _atomic_savefig(fig, pdf, "pdf", dpi=dpi, facecolor="white", metadata={"CreationDate": None})
     engine = fig.get_layout_engine()
-    _set_layout_engine(fig, None)     # the PDF's layout holds for the PNG: not computed, not pre-drawn
+    _lay_out_as_pdf(fig)
+    _set_layout_engine(fig, None)     # laid out: neither file computes it again or draws it twice
     try:
+        _atomic_savefig(fig, pdf, "pdf", dpi=dpi, facecolor="white", metadata={"CreationDate": None})
         _atomic_savefig(fig, png, "png", dpi=dpi, facecolor="white", metadata=dict(text or {}))
     finally:
         _set_layout_engine(fig, engine)
