@@ -107,7 +107,7 @@ def _share_bytecode(where: Path) -> int:
             source, theirs = Path(d) / f, site / Path(d).relative_to(plain) / f
             cached = Path(importlib.util.cache_from_source(str(theirs)))
             try:
-                if not os.path.samefile(source, theirs):
+                if not os.path.samefile(source, theirs) or not cached.is_file():
                     continue
                 mine = Path(importlib.util.cache_from_source(str(source)))
                 mine.parent.mkdir(exist_ok=True)
