@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from conftest import random_states
 from matplotlib.image import imread
+from test_chaos_paper import _check_raster_png
 
 import reference
 from explorer import model
@@ -81,6 +82,17 @@ def test_atlas_quick_figure_is_a_heat_map_of_every_cell(quick):
     # a rerun redraws from the stored atlas: nothing recomputed, the same fractions
     again = paper.make("atlas", out_dir=tmp_path / "figs-again", results_dir=tmp_path / "res", quick=True)
     np.testing.assert_array_equal(np.asarray(again.data["fraction"]), fr)
+
+
+def test_megno_map_quick_figure_is_a_raster(quick):
+    """The quick MEGNO map (64 x 64, T = 200, mu = 0.03), checked on the figure the --quick run drew
+    (it lived in tests/app/test_chaos_paper.py, which computed and drew the same figure again)."""
+    root, out = quick
+    o = out["megno_map"]
+    assert o.status == "written" and o.data["reduced"] and o.data["resolution"] == 64
+    assert 0.6 * 64 ** 2 < o.data["orbits"] < 64 ** 2
+    assert 0.05 < o.data["fraction"] < 0.95                        # mu = 0.03: islands and a stochastic layer
+    _check_raster_png(root / "figs" / "megno_map.png")
 
 
 # ---------------------------------------------------------------- Figure 2
