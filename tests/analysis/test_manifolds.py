@@ -144,6 +144,20 @@ def test_a_longer_branch_continued_from_a_shorter_one_is_the_branch_grown_from_t
     assert np.array_equal(other.points, mf.grow_branch(saddle, sign=1, arclength=6.0, start_tol=1e-8).points)
 
 
+#: a branch maps at most this many points per point it keeps (those of its last generation past the cut)
+EVALS_PER_POINT = 2
+
+
+def test_a_branch_refines_only_up_to_its_cut_so_it_maps_about_the_points_it_keeps():
+    """Points past the cut at ``arclength`` are dropped, so they are not refined (docs/manifolds.md): at
+    mu = 1.5 the central saddle's last generation is stretched far past the page's arclength 4, and
+    refining all of it took the whole point budget (20,000 images for about 400 points kept)."""
+    prm = model.FIGURE4.with_(mu=1.5)
+    for b in mf.manifolds(prm, 2.0, (0.0185, 0.0), arclength=4.0, kinds=("unstable",)):
+        assert b.status == "arclength" and b.arclength >= 4.0
+        assert b.evaluations <= EVALS_PER_POINT * len(b.points), (b.sign, b.evaluations, len(b.points))
+
+
 def test_growth_stops_at_budgets_with_a_status(saddle):
     b = mf.grow_branch(saddle, arclength=50.0, max_points=60)
     assert b.status == "max_points" and len(b.points) <= 61

@@ -290,9 +290,8 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
 
     if (resume is not None and resume.grown is not None and resume.curve is not None and resume.curve.sd is sd
             and resume.grown[0] == settings and arclength >= resume.target):
-        _, sig, pts, lo, edge, evals = resume.grown
+        _, sig, pts, lo, edge, evals = resume.grown      # its last generation as mapped, refined anew below
         cv = resume.curve
-        refined = True
     else:
         cv = _Curve(sd, stable, sign, start_tol, integrate_backward)
         sig = cv.sigma0 + cv.L * np.arange(INITIAL_POINTS + 1) / INITIAL_POINTS
@@ -303,13 +302,15 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
             edge = float(sig[np.flatnonzero(~np.isfinite(pts[:, 0]))[0]])
             sig, pts = cut(sig, pts, edge)
         lo = 0                   # earlier intervals are final
-        refined = False
     grown = None
     while True:
-        while not refined:
+        # the generation before its refinement: a longer branch resumes from it (the same passes as from the start)
+        mapped = (sig, pts, lo, edge, evals)
+        while True:
             P = np.vstack([sd.point, pts])
             bad = _bad_intervals(P, max_gap, max_angle, max_gap_angle, lo + 1) - 1
             bad = bad[np.diff(sig)[bad] > MIN_DSIGMA]
+            bad = bad[_arc(P)[bad + 1] < arclength]     # points past the cut are dropped: not refined
             if bad.size == 0:
                 break
             if len(sig) + bad.size > max_points:
@@ -331,11 +332,10 @@ def grow_branch(sd: Saddle, *, stable=False, sign=1, arclength=5.0, start_tol=DE
             if max_time is not None and time.perf_counter() - t0 > max_time:
                 status = STATUS_MAX_TIME
                 break
-        refined = False
         s = _arc(np.vstack([sd.point, pts]))
         if s[-1] >= arclength:
             if status is None:
-                grown = (settings, sig, pts, lo, edge, evals)
+                grown = (settings, *mapped)
             k = int(np.searchsorted(s, arclength))
             sig, pts = sig[:k], pts[:k]
             status = STATUS_ARCLENGTH
