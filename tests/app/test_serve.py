@@ -1415,7 +1415,7 @@ CLICKS, CLICK_CROSSINGS, ROUND = 500, 20, 50
 #: rounds = 400 clicks later: 16 kB, 40 bytes a click.  A round holds 50 x 20 rows x 8 columns x
 #: 8 bytes = 64 kB of crossings, all dropped by Clear; a leak of one crossing row per click (64 B)
 #: would show as 25 kB, of one orbit's rows (1.3 kB) as 500 kB, of its indicators' tuple as
-#: 400 x ~100 B: each past the bound.  Measured at 1,000 clicks: 1 kB.
+#: 400 x ~100 B: each past the bound.  Measured: 1 kB.
 HEAP_GROWTH_BOUND = 16 * 1024
 #: the round from which tracemalloc traces (it costs ~1.1 CPU-s a round): the second, whose end is the
 #: baseline.  The growth is then what was allocated after round 0 and is alive at the end, less what

@@ -372,7 +372,9 @@ def run_driver(mod, name: str, n: int, driver: str, threads, args: tuple) -> Non
     every generated module, a few seconds each (docs/systems.md, "The cache")."""
     count = get_num_threads() if threads is None else int(threads)
     workers = driver_for(n, driver, count)
-    worker = getattr(mod, f"{name}_lanes_worker" if workers else f"{name}_taylor_worker")
+    # (interned: CPython's type-lookup cache keeps a reference to each distinct name string it sees, so a
+    # new string per call held about 70 bytes per call alive, up to the cache's 4096 entries)
+    worker = getattr(mod, sys.intern(f"{name}_lanes_worker" if workers else f"{name}_taylor_worker"))
     workers = workers or max(1, min(count, n))
     queue = np.zeros(1, np.int64)
     if workers == 1:
