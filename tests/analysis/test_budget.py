@@ -4,6 +4,7 @@ one return held the GIL for 40 s and froze `explorer serve`) ends within a step 
 the main thread keeps running, and a cancelled search ends as soon as it is cancelled."""
 from __future__ import annotations
 
+import functools
 import threading
 import time
 
@@ -52,19 +53,15 @@ def test_outside_a_budget_the_section_map_gives_the_same_numbers_as_inside_one()
     np.testing.assert_array_equal(free.jacobian, held.jacobian)
 
 
-@pytest.mark.skipif(NOJIT, reason="plain Python holds the GIL and reads no switch mid-step (EXPLORER_NOJIT)")
-def test_a_cancelled_return_at_a_huge_circulation_ends_at_once_and_leaves_the_main_thread_running():
-    prm = model.FIGURE4.with_(mu=HUGE_MU)
-    smap = SectionMap(prm, model.FIGURE4_H)
-    SectionMap(model.FIGURE4, 2.0)((0.1, 0.0))          # compiled (or loaded) first
-    x = (0.0, 0.0)
-    budget = Budget()
+def _in_budget_thread(budget, fn, *args):
+    """(thread, got): ``fn(*args)`` inside ``budget`` in a daemon thread, started; ``got`` then holds its
+    "result" ("returned" or the BudgetExceeded message) and the perf_counter time it "ended"."""
     got: dict = {}
 
     def work():
         try:
             with budget:
-                smap(x)
+                fn(*args)
             got["result"] = "returned"
         except BudgetExceeded as exc:
             got["result"] = str(exc)
@@ -72,6 +69,17 @@ def test_a_cancelled_return_at_a_huge_circulation_ends_at_once_and_leaves_the_ma
 
     thread = threading.Thread(target=work, daemon=True)
     thread.start()
+    return thread, got
+
+
+@pytest.mark.skipif(NOJIT, reason="plain Python holds the GIL and reads no switch mid-step (EXPLORER_NOJIT)")
+def test_a_cancelled_return_at_a_huge_circulation_ends_at_once_and_leaves_the_main_thread_running():
+    prm = model.FIGURE4.with_(mu=HUGE_MU)
+    smap = SectionMap(prm, model.FIGURE4_H)
+    SectionMap(model.FIGURE4, 2.0)((0.1, 0.0))          # compiled (or loaded) first
+    x = (0.0, 0.0)
+    budget = Budget()
+    thread, got = _in_budget_thread(budget, smap, x)
     t0 = last = time.perf_counter()
     stall = 0.0
     while time.perf_counter() - t0 < 1.0 and thread.is_alive():      # the main thread wakes every ms
@@ -126,20 +134,8 @@ def test_a_cancel_ends_the_chaos_indicators_of_every_method_within_a_step(method
         args, kw = (prm,), {"states": y0, "method": method, "dt": 0.05}
     lyapunov.indicators(*args, tmax=1.0, **kw)                        # compiled (or loaded) first
     budget = Budget()
-    got: dict = {}
-
-    def work():
-        try:
-            with budget:
-                lyapunov.indicators(*args, tmax=1e7, **kw)              # hours of steps uncancelled
-            got["result"] = "returned"
-        except BudgetExceeded as exc:
-            got["result"] = str(exc)
-        got["ended"] = time.perf_counter()
-
-    thread = threading.Thread(target=work, daemon=True)
-    thread.start()
-    thread.join(0.2)
+    thread, got = _in_budget_thread(budget, functools.partial(lyapunov.indicators, tmax=1e7, **kw), *args)
+    thread.join(0.2)                                                   # (hours of steps uncancelled)
     assert thread.is_alive(), got
     cancelled = time.perf_counter()
     budget.cancel()
