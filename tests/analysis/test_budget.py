@@ -142,3 +142,17 @@ def test_a_cancel_ends_the_chaos_indicators_of_every_method_within_a_step(method
     thread.join(60.0)
     assert not thread.is_alive() and "cancelled" in got["result"], got
     assert got["ended"] - cancelled < CANCEL_SECONDS
+
+
+@pytest.mark.skipif(NOJIT, reason="plain Python holds the GIL and reads no switch mid-step (EXPLORER_NOJIT)")
+def test_a_cancelled_half_turn_raises_instead_of_giving_a_point_without_a_return():
+    """half_turns marks a point with no return NaN; a cancel is not that: it raises BudgetExceeded."""
+    smap = SectionMap(model.FIGURE4.with_(mu=HUGE_MU), model.FIGURE4_H)
+    SectionMap(model.FIGURE4, 2.0).half_turns([(0.1, 0.0)], 1)        # compiled (or loaded) first
+    budget = Budget()
+    thread, got = _in_budget_thread(budget, smap.half_turns, [(0.0, 0.0)], 1)
+    thread.join(0.2)
+    assert thread.is_alive(), got
+    budget.cancel()
+    thread.join(60.0)
+    assert not thread.is_alive() and "cancelled" in got["result"], got

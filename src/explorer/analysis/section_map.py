@@ -19,7 +19,7 @@ from explorer.analysis.section_symmetry import grid_seeds, half_turn_partners, h
 from explorer.analysis.symmetry_lines import half_turn_orbit
 from explorer.integrate.methods import MAP_TOL, MAX_TOL, MIN_TOL
 from explorer.integrate.tangent import return_map_taylor
-from explorer.kernels import STATUS_CANCELLED, STATUS_DONE, STATUS_NAMES
+from explorer.kernels import STATUS_DONE, STATUS_NAMES
 from explorer.kernels.taylor import order_for_tolerance
 from explorer.model import ParameterError, symmetry, validation, with_value
 from explorer.model.equations import rhs
@@ -107,8 +107,7 @@ class SectionMap(FlowSection):
         stop = budget.stop_switch()
         status, t = return_map_taylor(y0, V0, self.P, self.cphi, self.sphi, -1.0 if backward else 1.0,
                                       self.tmax, self.order, MAX_STEPS, stop, yout, Vout)
-        if status == STATUS_CANCELLED:
-            budget.stop_switch()                      # raises BudgetExceeded
+        budget.raise_if_cancelled(status)
         if status != STATUS_DONE:
             raise ParameterError(f"section map from (p1, p2) = ({x[0]:.6g}, {x[1]:.6g}): no return "
                                  f"({STATUS_NAMES[int(status)]})")
@@ -220,6 +219,7 @@ class SectionMap(FlowSection):
                 status, _ = return_map_taylor(y, none, self.P, g2, g1, 1.0, self.tmax, self.order, MAX_STEPS, stop,
                                               yout, none)
                 if status != STATUS_DONE:
+                    budget.raise_if_cancelled(status)     # a cancel is not a point without a return
                     break
                 y = yout.copy()
             else:
