@@ -227,7 +227,8 @@ def test_the_module_is_written_once_under_its_content_key_and_reused(tmp_path, m
 
 def test_a_change_of_a_kernel_the_generated_code_calls_changes_the_module_key(tmp_path, monkeypatch):
     """numba's cache of the generated crossings integrator does not follow its callees in
-    explorer.kernels: the key does, so a changed kernel gives a new module file."""
+    explorer.kernels and explorer.integrate.lane_parts: the key does, so a changed kernel gives a new
+    module file."""
     system, _, _ = oscillator()
     key = codegen.module_key(system)
     kernels = tmp_path / "explorer"
@@ -236,6 +237,7 @@ def test_a_change_of_a_kernel_the_generated_code_calls_changes_the_module_key(tm
     (kernels / "kernels" / "taylor.py").write_text("a")
     (kernels / "integrate" / "simd.py").write_text("b")
     (kernels / "integrate" / "layout.py").write_text("d")
+    (kernels / "integrate" / "lane_parts.py").write_text("e")
     (kernels / "_jit.py").write_text("c")
     monkeypatch.setattr(codegen, "__file__", str(kernels / "integrate" / "codegen.py"))
     codegen._callee_digest.cache_clear()
@@ -244,7 +246,11 @@ def test_a_change_of_a_kernel_the_generated_code_calls_changes_the_module_key(tm
         assert first != key
         (kernels / "kernels" / "taylor.py").write_text("a changed")
         codegen._callee_digest.cache_clear()
-        assert codegen.module_key(system) not in (first, key)
+        second = codegen.module_key(system)
+        assert second not in (first, key)
+        (kernels / "integrate" / "lane_parts.py").write_text("e changed")
+        codegen._callee_digest.cache_clear()
+        assert codegen.module_key(system) not in (first, second, key)
     finally:
         monkeypatch.undo()
         codegen._callee_digest.cache_clear()

@@ -17,7 +17,7 @@ from explorer import model
 from explorer._jit import get_num_threads, njit, set_num_threads
 from explorer.analysis import sections
 from explorer.integrate import _lanes_generated as G
-from explorer.integrate import drivers, lanes, simd
+from explorer.integrate import drivers, lane_parts, lanes, simd
 from explorer.integrate import systems as sy
 from explorer.kernels import (
     STATUS_DONE,
@@ -48,10 +48,10 @@ def test_gen_lanes_check_passes_on_the_repository_and_fails_on_a_stale_file(tmp_
 
 # ---------------------------------------------------------------- kernels
 def _lane_h(l, fin, normal, NORM, order, t=0.0, tend=1e300):
-    """The generated _lane_step of lane l from its norms: (status, h, last), status -1 for a step."""
+    """lane_parts.lane_step of lane l from its norms: (status, h, last), status -1 for a step."""
     hv, L_last, L_go, L_t = np.zeros(L), np.zeros(L), np.zeros(L), np.full(L, t)
-    st = G._lane_step(l, fin, normal, NORM, 1.0 / order, 1.0 / (order - 1), tk.safety_factor(order), L_t, tend, hv,
-                      L_last, L_go)
+    st = lane_parts.lane_step(l, fin, normal, NORM, 1.0 / order, 1.0 / (order - 1), tk.safety_factor(order), L_t,
+                              tend, hv, L_last, L_go)
     return st, hv[l], L_last[l] == 1.0
 
 
@@ -99,7 +99,7 @@ def _check_lane(P, X, order, h, out, NORM, fin, normal, l):
 
 @pytest.mark.parametrize("order", [4, 15, 16, 25, 40])
 def test_lane_step_size_is_step_size_near_ties_and_for_vanishing_or_subnormal_norms(order):
-    """The vector powers of the generated _norms_lanes and _lane_step give step_size's double when the
+    """The vector powers of the generated _norms_lanes and lane_parts.lane_step give step_size's double when the
     two radii are nearly equal (either may be the minimum), far apart, and when a norm is 0 or
     subnormal (the scalar path)."""
     rng = np.random.default_rng(order)
@@ -187,9 +187,9 @@ def test_vector_masks_are_the_scalar_comparisons_lane_by_lane_nan_included():
 
 
 def test_vector_step_takes_lane_steps_double_and_leaves_the_rare_lanes_to_it():
-    """The generated _steps_lanes on norms of every kind (finite, non-finite, vanishing, subnormal, steps
+    """lane_parts.steps_lanes on norms of every kind (finite, non-finite, vanishing, subnormal, steps
     that reach tend or underflow, idle lanes): every lane it steps gets the step and the flag of the last
-    step of the scalar _lane_step, and it leaves to that exactly the lanes holding an orbit whose
+    step of the scalar lane_step, and it leaves to that exactly the lanes holding an orbit whose
     coefficients are not finite, whose s/a, s/bm are not positive normal, or whose step underflows."""
     W = L
     rng = np.random.default_rng(1)
@@ -211,7 +211,7 @@ def test_vector_step_takes_lane_steps_double_and_leaves_the_rare_lanes_to_it():
         L_on = rng.choice([0.0, 1.0], W, p=[0.2, 0.8])
         hv, L_last, L_go = np.full(W, -1.0), np.full(W, -1.0), np.full(W, -1.0)
         with np.errstate(all="ignore"):
-            bits = G._steps_lanes(NORM, fin, normal, L_on, L_t, tend, factor, hv, L_last, L_go)
+            bits = lane_parts.steps_lanes(NORM, fin, normal, L_on, L_t, tend, factor, hv, L_last, L_go)
         for l in range(W):
             if L_on[l] == 0.0:
                 assert hv[l] == 0.0 and L_go[l] == 0.0 and not bits >> l & 1

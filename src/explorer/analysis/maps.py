@@ -223,7 +223,9 @@ def standard_images(X, k, n, backward, out):
     buf = np.empty((n + 1, 2))
     for i in range(X.shape[0]):
         standard_orbit(X[i, 0], X[i, 1], k, n, backward, buf)
-        out[i] = buf[1:]
+        for j in range(n):   # element by element: an array assignment compiles numba's slow shape-error path
+            out[i, j, 0] = buf[j + 1, 0]
+            out[i, j, 1] = buf[j + 1, 1]
 
 
 @njit

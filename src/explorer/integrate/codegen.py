@@ -54,7 +54,7 @@ from explorer.model.validation import ParameterError
 __all__ = ["GENERATOR_VERSION", "Decomposition", "cache_directory", "decompose", "load", "module_key", "source"]
 
 #: changes whenever the emitted code changes, so that a cached module of an older generator is not used
-GENERATOR_VERSION = 9
+GENERATOR_VERSION = 10
 
 #: the modules that append drivers to the generated source: each has ``render(system) -> str``, code
 #: that calls the recurrence (``taylor_coefficients_into``, ``taylor_coefficients_lanes``, ``energy``)
@@ -799,13 +799,13 @@ def cache_directory() -> Path:
 
 @functools.lru_cache(maxsize=1)
 def _callee_digest() -> str:
-    """SHA-256 of the sources the generated code calls (explorer.kernels, explorer.integrate.simd and
-    .layout, explorer._jit) and of the templates (:data:`TEMPLATES`): numba's cache of a function does not
-    follow a change of a callee in another file, so such a change gives the generated module another
-    key (a new file, compiled afresh)."""
+    """SHA-256 of the sources the generated code calls (explorer.kernels, explorer.integrate.simd,
+    .layout and .lane_parts, explorer._jit) and of the templates (:data:`TEMPLATES`): numba's cache of
+    a function does not follow a change of a callee in another file, so such a change gives the
+    generated module another key (a new file, compiled afresh)."""
     root = Path(__file__).resolve().parent.parent
     files = (sorted((root / "kernels").glob("*.py"))
-             + [root / "integrate" / "simd.py", root / "integrate" / "layout.py", root / "_jit.py"]
+             + [root / "integrate" / n for n in ("simd.py", "layout.py", "lane_parts.py")] + [root / "_jit.py"]
              + [Path(t.__file__) for t in TEMPLATES])
     h = hashlib.sha256()
     for f in files:

@@ -12,11 +12,10 @@ SOURCE = '''
 # ---- the flow at given times (explorer.analysis.system_flow): generated here, beside the recurrence it
 # calls, so that numba's cache of it follows the recurrence (docs/systems.md)
 from explorer.integrate.simd import atomic_fetch_add  # noqa: E402
-from explorer.kernels.checks import all_finite, is_finite  # noqa: E402
-from explorer.kernels.clock import advance_time, clip_step, resolves  # noqa: E402
-from explorer.kernels.status import (  # noqa: E402
-    STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW)
-from explorer.kernels.taylor import evaluate, safety_factor, step_size  # noqa: E402
+from explorer.kernels.checks import all_finite  # noqa: E402
+from explorer.kernels.clock import advance_time  # noqa: E402
+from explorer.kernels.status import STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE  # noqa: E402
+from explorer.kernels.taylor import evaluate, safety_factor  # noqa: E402
 
 
 @njit(error_model="numpy")
@@ -88,10 +87,11 @@ def flow_taylor_worker(next_orbit, Y0, P, times, order, max_steps, states, energ
         j = atomic_fetch_add(next_orbit, 0, 1)
 
 # ---- the flow on SIMD lanes: each lane flow_orbit bit for bit, with the vector step of crossings_lanes_worker
-# (_norms_lanes, _steps_lanes, _evaluate_lanes: kernels.taylor's step and Horner evaluation per lane)
+# (_norms_lanes, steps_lanes, _evaluate_lanes: kernels.taylor's step and Horner evaluation per lane)
+from explorer.integrate.lane_parts import flow_lane_finish, lane_step, steps_lanes  # noqa: E402
 from explorer.integrate.simd import next_bit, vbits, vmask, vselect  # noqa: E402
+from explorer.kernels.checks import is_finite  # noqa: E402
 from explorer.kernels.clock import compensated_add  # noqa: E402
-from explorer.kernels.taylor import radius_min  # noqa: E402
 
 @njit(error_model="numpy")
 def _flow_ends_lanes(Y, hv, L_go, L_last, L_next, L_t, L_tc, L_steps, X, max_steps):
@@ -146,15 +146,7 @@ def _flow_lane_start(l, next_orbit, Y0, P, times, X, orb, L_on, L_t, L_tc, L_ste
             L_on[l] = 1.0
             L_next[l] = times[m]
             return 1
-        _flow_lane_finish(l, STATUS_DONE, orb, L_t, L_tc, L_steps, status, info)
-
-
-@njit(error_model="numpy")
-def _flow_lane_finish(l, st, orb, L_t, L_tc, L_steps, status, info):
-    j = orb[l]
-    info[j, 0] = L_t[l] - L_tc[l]
-    info[j, 1] = L_steps[l]
-    status[j] = st
+        flow_lane_finish(l, STATUS_DONE, orb, L_t, L_tc, L_steps, status, info)
 
 
 @njit(nogil=True, error_model="numpy")
@@ -190,12 +182,12 @@ def flow_lanes_worker(next_orbit, Y0, P, times, order, max_steps, states, energy
     while active > 0:
         taylor_coefficients_lanes(P, X, order, W)
         fin, normal = _norms_lanes(X, order, e_p, e_q, NORM)
-        bits = _steps_lanes(NORM, fin, normal, L_on, L_t, tend, factor, hv, L_last, L_go)
+        bits = steps_lanes(NORM, fin, normal, L_on, L_t, tend, factor, hv, L_last, L_go)
         while bits != 0:
             l, bits = next_bit(bits)
-            st = _lane_step(l, fin, normal, NORM, e_p, e_q, factor, L_t, tend, hv, L_last, L_go)
+            st = lane_step(l, fin, normal, NORM, e_p, e_q, factor, L_t, tend, hv, L_last, L_go)
             if st >= 0:
-                _flow_lane_finish(l, st, orb, L_t, L_tc, L_steps, status, info)
+                flow_lane_finish(l, st, orb, L_t, L_tc, L_steps, status, info)
                 active += _flow_lane_start(l, next_orbit, Y0, P, times, X, orb, L_on, L_t, L_tc, L_steps, L_m,
                                            L_next, L_E0, states, energy_error, status, info) - 1
         _evaluate_lanes(X, order, hv, Y)
@@ -235,7 +227,7 @@ def flow_lanes_worker(next_orbit, Y0, P, times, order, max_steps, states, energy
                 else:
                     L_next[l] = times[m]
             if st >= 0:
-                _flow_lane_finish(l, st, orb, L_t, L_tc, L_steps, status, info)
+                flow_lane_finish(l, st, orb, L_t, L_tc, L_steps, status, info)
                 active += _flow_lane_start(l, next_orbit, Y0, P, times, X, orb, L_on, L_t, L_tc, L_steps, L_m,
                                            L_next, L_E0, states, energy_error, status, info) - 1
 '''

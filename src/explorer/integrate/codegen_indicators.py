@@ -16,37 +16,13 @@ SOURCE = '''
 
 # ---- chaos indicators along deviation vectors (explorer.analysis.system_indicators): generated here,
 # beside the recurrence they call, so that numba's cache of them follows the recurrence (docs/systems.md)
+from explorer.integrate.lane_parts import indicator_early, indicator_history  # noqa: E402
 from explorer.integrate.simd import atomic_fetch_add  # noqa: E402
 from explorer.kernels import tangent as _tg  # noqa: E402
-from explorer.kernels.checks import all_finite, is_finite  # noqa: E402
-from explorer.kernels.clock import advance_time, clip_step, resolves  # noqa: E402
-from explorer.kernels.status import (  # noqa: E402
-    STATUS_CANCELLED, STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW)
-from explorer.kernels.taylor import evaluate, safety_factor, step_size  # noqa: E402
-
-
-@njit(error_model="numpy")
-def _indicator_history(acc, hist_t, hist, hpos, row):
-    """The result rows at the history times the step end passed (as the engine's tangent loops)."""
-    while hpos < hist_t.shape[0] and acc[_tg.ACC_T] >= hist_t[hpos]:
-        _tg.result(acc, row)
-        for c in range(_tg.N_RES):
-            hist[hpos, c] = row[c]
-        hpos += 1
-    return hpos
-
-
-@njit(error_model="numpy")
-def _indicator_early(acc, v, w, n, nvec, sali_stop, megno_level, tmin, since):
-    """The engine's early classification after a step: SALI below sali_stop, or <Y> above
-    megno_level for the last half of the time (kernels.tangent.megno_early)."""
-    if nvec == 2 and sali_stop > 0.0 and _tg.sali(v, w, n) < sali_stop:
-        return _tg.EARLY_SALI, since
-    if megno_level > 0.0:
-        stop, since = _tg.megno_early(acc, since, megno_level, tmin)
-        if stop:
-            return _tg.EARLY_MEGNO, since
-    return _tg.EARLY_NONE, since
+from explorer.kernels.checks import all_finite  # noqa: E402
+from explorer.kernels.clock import advance_time  # noqa: E402
+from explorer.kernels.status import STATUS_CANCELLED, STATUS_DONE, STATUS_MAX_STEPS, STATUS_NONFINITE  # noqa: E402
+from explorer.kernels.taylor import safety_factor  # noqa: E402
 
 
 @njit(error_model="numpy")
@@ -101,13 +77,13 @@ def indicators_orbit(y0, v0, w0, n, nvec, P, T, order, max_steps, early_stop, sa
         t, tc = advance_time(t, tc, h, last, T)
         dlog = _tg.renormalize(znew[n:2 * n], n)
         _tg.accumulate(acc, start, t - tc, dlog)
-        hpos = _indicator_history(acc, hist_t, hist, hpos, row)
+        hpos = indicator_history(acc, hist_t, hist, hpos, row)
         if nvec == 2:
             _tg.renormalize(znew[2 * n:3 * n], n)
         for i in range(DIM):
             z[i] = znew[i]
         if early_stop:
-            early, since = _indicator_early(acc, z[n:2 * n], z[nvec * n:(nvec + 1) * n], n, nvec, sali_stop,
+            early, since = indicator_early(acc, z[n:2 * n], z[nvec * n:(nvec + 1) * n], n, nvec, sali_stop,
                                             megno_level, early_tmin, since)
             if early != _tg.EARLY_NONE:
                 break
@@ -145,224 +121,10 @@ def indicators_taylor_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_s
 # ---- the indicators on SIMD lanes: each lane indicators_orbit bit for bit.  The recurrence, the step
 # (its norms over the orbit's rows) and the Horner evaluation in vector form; the renormalisation and the
 # accumulators after a step lane by lane with the scalar kernels (their cost is small beside the recurrence)
-from explorer.integrate.simd import (  # noqa: E402
-    next_bit, vbits, vmask, vmax_gt, vmin_lt, vradius_power_core, vselect)
-from explorer.kernels.clock import compensated_add  # noqa: E402
-from explorer.kernels.power import is_normal  # noqa: E402
-from explorer.kernels.taylor import radius_min  # noqa: E402
-
-
-@njit(error_model="numpy")
-def _indicator_norms_lanes(X, order, n, e_p, e_q, NORM):
-    """_norms_lanes over the orbit's rows :n only, as taylor_step (its finiteness test and
-    kernels.taylor.step_size on X[:n]): NORM = (a, bm, s/a, s/bm, min((s/a)^e_p, (s/bm)^e_q)).
-    Returns the bits of the finite lanes and of those with s/a, s/bm normal."""
-    op = order * XS
-    oq = (order - 1) * XS
-    s = vsplat(1.0)
-    a = vzero()
-    bm = vzero()
-    fin = is_finite(s)
-    for i in range(n):
-        p = vload(X, op + i * LANES)
-        q = vload(X, oq + i * LANES)
-        s = vmax_gt(abs(vload(X, i * LANES)), s)
-        a = vmax_gt(abs(p), a)
-        bm = vmax_gt(abs(q), bm)
-        fin = fin & is_finite(p) & is_finite(q)
-    u = s / a
-    v = s / bm
-    vstore(NORM, 0, a)
-    vstore(NORM, LANES, bm)
-    vstore(NORM, 2 * LANES, u)
-    vstore(NORM, 3 * LANES, v)
-    vstore(NORM, 4 * LANES, vmin_lt(vradius_power_core(v, e_q), vradius_power_core(u, e_p)))
-    return vbits(fin), vbits(is_normal(u) & is_normal(v))
-
-
-@njit(error_model="numpy")
-def _unit_rows_lanes(Y, X, first, n, m, NRM):
-    """kernels.tangent.renormalize of rows first..first+n-1 of Y per lane, written to X[0] in the lanes
-    of the mask m: the same operations in the same order; NRM the former norms."""
-    s = vzero()
-    for i in range(first, first + n):
-        v = vload(Y, i * LANES)
-        s = s + v * v
-    norm = vsqrt(s)
-    inv = vsplat(1.0) / norm
-    for i in range(first, first + n):
-        vstore(X, i * LANES, vselect(m, vload(Y, i * LANES) * inv, vload(X, i * LANES)))
-    vstore(NRM, 0, norm)
-
-
-@njit(error_model="numpy")
-def _indicator_ends_lanes(X, Y, hv, L_go, L_last, L_t, L_tc, L_steps, L_hnext, L_since, acc, NRM, n, nvec, T,
-                          max_steps, early_stop, sali_stop, megno_level, tmin):
-    """The end of indicators_orbit's step in vector form for the lanes whose step went on, is not the
-    last, ends finite before T, the step cap and the next history time: the compensated clock, the
-    renormalised vectors, kernels.tangent.accumulate and (``early_stop``) _indicator_early, lane-wise
-    the scalar kernels' operations.  Returns (the bits of the other lanes whose step went on, their
-    end taken per lane; the bits stopping by SALI; by MEGNO)."""
-    zero = vzero()
-    go = vbits(vload(L_go, 0) > 0.0)
-    s = zero
-    for i in range(DIM):
-        s = s + vload(Y, i * LANES)
-    start = vload(L_t, 0) - vload(L_tc, 0)
-    t, tc = compensated_add(vload(L_t, 0), vload(L_tc, 0), vload(hv, 0))
-    t1 = t - tc
-    steps = vload(L_steps, 0) + 1.0
-    ok = (go & vbits(is_finite(s)) & ~vbits(vload(L_last, 0) > 0.0)
-          & vbits((t < T) & (steps < float(max_steps)) & (t1 < vload(L_hnext, 0))))
-    if ok == 0:
-        return go, 0, 0
-    m = vmask(ok)
-    vstore(L_t, 0, vselect(m, t, vload(L_t, 0)))
-    vstore(L_tc, 0, vselect(m, tc, vload(L_tc, 0)))
-    vstore(L_steps, 0, vselect(m, steps, vload(L_steps, 0)))
-    for i in range(n):
-        vstore(X, i * LANES, vselect(m, vload(Y, i * LANES), vload(X, i * LANES)))
-    _unit_rows_lanes(Y, X, n, n, m, NRM)
-    bits = ok
-    while bits != 0:   # libm's log per lane (kernels.tangent.renormalize's)
-        l, bits = next_bit(bits)
-        NRM[l] = math.log(NRM[l])
-    dlog = vload(NRM, 0)
-    lg = vload(acc, _tg.ACC_LOG * LANES) + dlog
-    w = _tg.megno_weight(vload(acc, _tg.ACC_W * LANES), start, t1, dlog)
-    y1 = vselect(t1 > zero, _tg.megno_y(w, t1), zero)
-    yint = _tg.megno_mean_integral(vload(acc, _tg.ACC_YINT * LANES), vload(acc, _tg.ACC_Y * LANES), y1, start, t1)
-    fli = vmax_gt(lg, vload(acc, _tg.ACC_FLI * LANES))
-    vstore(acc, _tg.ACC_LOG * LANES, vselect(m, lg, vload(acc, _tg.ACC_LOG * LANES)))
-    vstore(acc, _tg.ACC_W * LANES, vselect(m, w, vload(acc, _tg.ACC_W * LANES)))
-    vstore(acc, _tg.ACC_YINT * LANES, vselect(m, yint, vload(acc, _tg.ACC_YINT * LANES)))
-    vstore(acc, _tg.ACC_Y * LANES, vselect(m, y1, vload(acc, _tg.ACC_Y * LANES)))
-    vstore(acc, _tg.ACC_T * LANES, vselect(m, t1, vload(acc, _tg.ACC_T * LANES)))
-    vstore(acc, _tg.ACC_FLI * LANES, vselect(m, fli, vload(acc, _tg.ACC_FLI * LANES)))
-    if nvec == 2:
-        _unit_rows_lanes(Y, X, 2 * n, n, m, NRM)
-    stop_sali = 0
-    stop_megno = 0
-    if early_stop:
-        if nvec == 2 and sali_stop > 0.0:
-            sp = zero
-            sm = zero
-            for i in range(n):
-                v = vload(X, (n + i) * LANES)
-                u = vload(X, (2 * n + i) * LANES)
-                a = v + u
-                b = v - u
-                sp = sp + a * a
-                sm = sm + b * b
-            stop_sali = ok & vbits(vsqrt(vmin_lt(sm, sp)) < vsplat(sali_stop))
-        if megno_level > 0.0:
-            rest = vmask(ok & ~stop_sali)
-            ym = vselect(t1 > zero, yint / t1, zero)
-            since = vload(L_since, 0)
-            since = vselect(ym > vsplat(megno_level), vselect(since < zero, t1, since), vsplat(-1.0))
-            vstore(L_since, 0, vselect(rest, since, vload(L_since, 0)))
-            stop = (since >= zero) & (t1 >= vsplat(tmin)) & (vsplat(2.0) * since <= t1)
-            stop_megno = vbits(rest & stop)
-    return go & ~ok, stop_sali, stop_megno
-
-
-@njit(error_model="numpy")
-def _indicator_status(early, t, T, steps, max_steps):
-    """Why indicators_orbit stops after a step (its checks in its order), or -1 to go on."""
-    if early != _tg.EARLY_NONE or not (t < T):
-        return STATUS_DONE
-    if steps >= max_steps:
-        return STATUS_MAX_STEPS
-    return -1
-
-
-@njit(error_model="numpy")
-def _next_history_time(hist_t, hpos):
-    """The next history time of a lane (inf after the last)."""
-    return hist_t[hpos] if hpos < hist_t.shape[0] else math.inf
-
-
-@njit(error_model="numpy")
-def _indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on, L_t, L_tc, L_steps,
-                          L_early, L_hpos, L_hnext, L_since, hist_t, acc, out_hist, out_res, out_ext, out_status,
-                          out_final, out_steps, out_w):
-    """Lane l takes the next orbit of the queue ``next_orbit`` at its start, as indicators_orbit (an
-    orbit stopped before its first step is written out and the next one taken).  Returns 1, or 0 when
-    the queue is empty: the lane then idles on the zero state."""
-    while True:
-        j = atomic_fetch_add(next_orbit, 0, 1)
-        if j >= Y0.shape[0]:
-            orb[l] = -1
-            L_on[l] = 0.0
-            for i in range(DIM):
-                X[0, i, l] = 0.0
-            return 0
-        for i in range(DIM):
-            z[i] = 0.0
-        for i in range(n):
-            z[i] = Y0[j, i]
-            z[n + i] = V0[j, i]
-            if nvec == 2:
-                z[2 * n + i] = W0[j, i]
-        _tg.renormalize(z[n:2 * n], n)
-        if nvec == 2:
-            _tg.renormalize(z[2 * n:3 * n], n)
-        for i in range(DIM):
-            X[0, i, l] = z[i]
-        orb[l] = j
-        L_on[l] = 1.0
-        L_t[l] = 0.0
-        L_tc[l] = 0.0
-        L_steps[l] = 0
-        L_early[l] = _tg.EARLY_NONE
-        L_hpos[l] = 0
-        L_hnext[l] = _next_history_time(hist_t, 0)
-        L_since[l] = -1.0
-        for c in range(_tg.N_ACC):
-            acc[c, l] = 0.0
-        st = _indicator_status(_tg.EARLY_NONE, 0.0, T, 0, max_steps)
-        if st < 0:
-            return 1
-        _indicator_lane_finish(l, st, n, nvec, X, z, orb, L_steps, L_early, acc, out_res, out_ext, out_status,
-                               out_final, out_steps, out_w)
-
-
-@njit(error_model="numpy")
-def _indicator_lane_finish(l, st, n, nvec, X, z, orb, L_steps, L_early, acc, out_res, out_ext, out_status,
-                           out_final, out_steps, out_w):
-    """Write out lane l's orbit, stopped with status ``st`` (indicators_orbit's outputs)."""
-    j = orb[l]
-    for i in range(DIM):
-        z[i] = X[0, i, l]
-    _tg.result(acc[:, l], out_res[j])
-    for i in range(n):
-        out_final[j, i] = z[i]
-        out_w[j, 0, i] = z[n + i]
-        if nvec == 2:
-            out_w[j, 1, i] = z[2 * n + i]
-    if nvec == 2:
-        _tg.extra(z[n:2 * n], z[2 * n:3 * n], n, out_ext[j])
-    else:
-        for c in range(_tg.N_EXT):
-            out_ext[j, c] = np.nan
-    out_ext[j, _tg.EXT_EARLY] = L_early[l]
-    out_status[j] = st
-    out_steps[j] = int(L_steps[l])
-
-
-@njit(error_model="numpy")
-def _indicator_cancel_lanes(next_orbit, N, n, nvec, X, z, orb, L_steps, L_early, acc, out_res, out_ext, out_status,
-                            out_final, out_steps, out_w):
-    """The stop switch is set: the lanes' orbits end where they are, the queued ones before their start."""
-    for l in range(LANES):
-        if orb[l] >= 0:
-            _indicator_lane_finish(l, STATUS_CANCELLED, n, nvec, X, z, orb, L_steps, L_early, acc, out_res, out_ext,
-                                   out_status, out_final, out_steps, out_w)
-            orb[l] = -1
-    j = atomic_fetch_add(next_orbit, 0, 1)
-    while j < N:
-        out_status[j] = STATUS_CANCELLED
-        j = atomic_fetch_add(next_orbit, 0, 1)
+from explorer.integrate.lane_parts import (  # noqa: E402
+    indicator_cancel_lanes, indicator_ends_lanes, indicator_lane_finish, indicator_lane_start,
+    indicator_norms_lanes, indicator_status, lane_step, next_history_time, steps_lanes)
+from explorer.integrate.simd import next_bit  # noqa: E402
 
 
 @njit(nogil=True, error_model="numpy")
@@ -397,38 +159,38 @@ def indicators_lanes_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_st
     e_q = 1.0 / (order - 1)
     active = 0
     for l in range(LANES):
-        active += _indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on, L_t,
+        active += indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on, L_t,
                                         L_tc, L_steps, L_early, L_hpos, L_hnext, L_since, hist_t, acc, out_hist,
                                         out_res, out_ext, out_status, out_final, out_steps, out_w)
     while active > 0:
         if stop[0] != 0:
-            _indicator_cancel_lanes(next_orbit, Y0.shape[0], n, nvec, X, z, orb, L_steps, L_early, acc, out_res,
+            indicator_cancel_lanes(next_orbit, Y0.shape[0], n, nvec, X, z, orb, L_steps, L_early, acc, out_res,
                                     out_ext, out_status, out_final, out_steps, out_w)
             return
         taylor_coefficients_lanes(P, X, order, Wk)
-        fin, normal = _indicator_norms_lanes(X, order, n, e_p, e_q, NORM)
-        bits = _steps_lanes(NORM, fin, normal, L_on, L_t, T, factor, hv, L_last, L_go)
+        fin, normal = indicator_norms_lanes(X, order, n, e_p, e_q, NORM)
+        bits = steps_lanes(NORM, fin, normal, L_on, L_t, T, factor, hv, L_last, L_go)
         while bits != 0:
             l, bits = next_bit(bits)
-            st = _lane_step(l, fin, normal, NORM, e_p, e_q, factor, L_t, T, hv, L_last, L_go)
+            st = lane_step(l, fin, normal, NORM, e_p, e_q, factor, L_t, T, hv, L_last, L_go)
             if st >= 0:
-                _indicator_lane_finish(l, st, n, nvec, X, z, orb, L_steps, L_early, acc, out_res, out_ext,
+                indicator_lane_finish(l, st, n, nvec, X, z, orb, L_steps, L_early, acc, out_res, out_ext,
                                        out_status, out_final, out_steps, out_w)
-                active += _indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on,
+                active += indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on,
                                                 L_t, L_tc, L_steps, L_early, L_hpos, L_hnext, L_since, hist_t, acc,
                                                 out_hist, out_res, out_ext, out_status, out_final, out_steps,
                                                 out_w) - 1
         _evaluate_lanes(X, order, hv, Y)
-        bits, stop_sali, stop_megno = _indicator_ends_lanes(X, Y, hv, L_go, L_last, L_t, L_tc, L_steps, L_hnext,
+        bits, stop_sali, stop_megno = indicator_ends_lanes(X, Y, hv, L_go, L_last, L_t, L_tc, L_steps, L_hnext,
                                                             L_since, acc, NRM, n, nvec, T, max_steps, early_stop,
                                                             sali_stop, megno_level, early_tmin)
         stops = stop_sali | stop_megno
         while stops != 0:
             l, stops = next_bit(stops)
             L_early[l] = _tg.EARLY_SALI if (stop_sali >> l) & 1 else _tg.EARLY_MEGNO
-            _indicator_lane_finish(l, STATUS_DONE, n, nvec, X, z, orb, L_steps, L_early, acc, out_res, out_ext,
+            indicator_lane_finish(l, STATUS_DONE, n, nvec, X, z, orb, L_steps, L_early, acc, out_res, out_ext,
                                    out_status, out_final, out_steps, out_w)
-            active += _indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on,
+            active += indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on,
                                             L_t, L_tc, L_steps, L_early, L_hpos, L_hnext, L_since, hist_t, acc,
                                             out_hist, out_res, out_ext, out_status, out_final, out_steps, out_w) - 1
         while bits != 0:
@@ -443,8 +205,8 @@ def indicators_lanes_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_st
                 t, tc = advance_time(L_t[l], L_tc[l], hv[l], L_last[l] != 0.0, T)
                 dlog = _tg.renormalize(z[n:2 * n], n)
                 _tg.accumulate(al, start, t - tc, dlog)
-                L_hpos[l] = _indicator_history(al, hist_t, out_hist[orb[l]], L_hpos[l], row)
-                L_hnext[l] = _next_history_time(hist_t, L_hpos[l])
+                L_hpos[l] = indicator_history(al, hist_t, out_hist[orb[l]], L_hpos[l], row)
+                L_hnext[l] = next_history_time(hist_t, L_hpos[l])
                 if nvec == 2:
                     _tg.renormalize(z[2 * n:3 * n], n)
                 L_t[l] = t
@@ -452,14 +214,14 @@ def indicators_lanes_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_st
                 for i in range(DIM):
                     X[0, i, l] = z[i]
                 if early_stop:
-                    early, L_since[l] = _indicator_early(al, z[n:2 * n], z[nvec * n:(nvec + 1) * n], n, nvec,
+                    early, L_since[l] = indicator_early(al, z[n:2 * n], z[nvec * n:(nvec + 1) * n], n, nvec,
                                                          sali_stop, megno_level, early_tmin, L_since[l])
                     L_early[l] = early
-                st = _indicator_status(L_early[l], t, T, L_steps[l], max_steps)
+                st = indicator_status(L_early[l], t, T, L_steps[l], max_steps)
             if st >= 0:
-                _indicator_lane_finish(l, st, n, nvec, X, z, orb, L_steps, L_early, acc, out_res, out_ext,
+                indicator_lane_finish(l, st, n, nvec, X, z, orb, L_steps, L_early, acc, out_res, out_ext,
                                        out_status, out_final, out_steps, out_w)
-                active += _indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on,
+                active += indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z, orb, L_on,
                                                 L_t, L_tc, L_steps, L_early, L_hpos, L_hnext, L_since, hist_t, acc,
                                                 out_hist, out_res, out_ext, out_status, out_final, out_steps,
                                                 out_w) - 1

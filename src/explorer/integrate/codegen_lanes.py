@@ -18,12 +18,12 @@ __all__ = ["render"]
 SOURCE = '''
 
 # ---- crossings on SIMD lanes (explorer.analysis.system_sections): each lane crossings_orbit bit for bit
-from explorer.integrate.simd import (  # noqa: E402
-    atomic_fetch_add, next_bit, vbits, vmask, vmax_gt, vmin_lt, vradius_power_core, vselect)
+from explorer.integrate.simd import next_bit, vbits, vmask, vmax_gt, vmin_lt, vradius_power_core, vselect  # noqa: E402
 from explorer.kernels.clock import compensated_add  # noqa: E402
 from explorer.kernels.events import excluded_by_variation, sign_change, tail_term  # noqa: E402
 from explorer.kernels.power import is_normal  # noqa: E402
-from explorer.kernels.taylor import radius_min  # noqa: E402
+from explorer.integrate.lane_parts import (  # noqa: E402
+    lane_finish, lane_start, lane_status, lane_step, steps_lanes)
 
 #: all lanes' bits
 _ALL_LANES = (1 << LANES) - 1
@@ -95,47 +95,6 @@ def _section_lanes(X, order, hv, Y, a, b, direction, L_g, GC, G):
 
 
 @njit(error_model="numpy")
-def _lane_step(l, fin, normal, NORM, e_p, e_q, factor, L_t, tmax, hv, L_last, L_go):
-    """The step of lane ``l`` that _steps_lanes left to the scalar code (kernels.taylor.step_size's
-    radius from NORM, clipped onto ``tmax``): -1 with hv, L_last and L_go set, else the lane's stop
-    status (non-finite coefficients, a step below the clock's resolution)."""
-    if not (fin >> l) & 1:
-        return STATUS_NONFINITE
-    if (normal >> l) & 1:
-        h = NORM[4, l] * factor
-    else:
-        h = radius_min(NORM[0, l], NORM[1, l], NORM[2, l], NORM[3, l], e_p, e_q) * factor
-    h, last = clip_step(L_t[l], h, tmax)
-    if not resolves(L_t[l], h):
-        return STATUS_STEP_UNDERFLOW
-    hv[l] = h
-    L_last[l] = 1.0 if last else 0.0
-    L_go[l] = 1.0
-    return -1
-
-
-@njit(error_model="numpy")
-def _steps_lanes(NORM, fin, normal, L_on, L_t, tmax, factor, hv, L_last, L_go):
-    """crossings_orbit's step (step_size, clip_step, resolves) in vector form for the lanes holding an orbit
-    whose norms are finite and normal: their hv, L_last and L_go (1.0: the step goes on; 0.0 and hv = 0 for
-    the others).  Returns the bits of the other lanes holding an orbit: their step is taken per lane."""
-    t = vload(L_t, 0)
-    tv = vsplat(tmax)
-    h = vload(NORM, 4 * LANES) * factor
-    last = (t + h) >= tv
-    h = vselect(last, tv - t, h)
-    live = vbits(vload(L_on, 0) > 0.0)
-    ok = live & fin & normal & vbits(resolves(t, h))
-    go = vmask(ok)
-    zero = vzero()
-    one = vsplat(1.0)
-    vstore(hv, 0, vselect(go, h, zero))
-    vstore(L_last, 0, vselect(last, one, zero))
-    vstore(L_go, 0, vselect(go, one, zero))
-    return live & ~ok
-
-
-@njit(error_model="numpy")
 def _ends_lanes(X, Y, G, hv, L_go, L_last, finite, maybe, L_t, L_tc, L_steps, L_g, tmax, max_steps):
     """The end of crossings_orbit's step in vector form for the lanes whose step went on, is not the last,
     ends finite, cannot hold a root and leaves the orbit running: the compensated clock
@@ -153,67 +112,6 @@ def _ends_lanes(X, Y, G, hv, L_go, L_last, finite, maybe, L_t, L_tc, L_steps, L_
     for i in range(DIM):
         vstore(X, i * LANES, vselect(m, vload(Y, i * LANES), vload(X, i * LANES)))
     return go & ~ok
-
-
-@njit(error_model="numpy")
-def _lane_status(n, limit, t, tmax, steps, max_steps):
-    """Why crossings_orbit stops after a step (its checks in its order), or -1 to go on."""
-    if n >= limit:
-        return STATUS_DONE
-    if not (t < tmax):
-        return STATUS_TMAX
-    if steps >= max_steps:
-        return STATUS_MAX_STEPS
-    return -1
-
-
-@njit(error_model="numpy")
-def _lane_start(l, next_orbit, Y0, tmax, max_steps, carry, limits, X, orb, L_on, L_t, L_tc, L_g, L_E0, L_n, L_steps,
-                L_target, L_room, count, status, final, info):
-    """Lane l takes the next orbit of the queue ``next_orbit`` where its carry left it, as crossings_orbit
-    does (an orbit stopped before its first step is written out and the next one taken).  Returns 1, or 0
-    when the queue is empty: the lane then idles on the zero state (its coefficients all 0)."""
-    while True:
-        j = atomic_fetch_add(next_orbit, 0, 1)
-        if j >= Y0.shape[0]:
-            orb[l] = -1
-            L_on[l] = 0.0
-            for i in range(DIM):
-                X[0, i, l] = 0.0
-            return 0
-        for i in range(DIM):
-            X[0, i, l] = Y0[j, i]
-        orb[l] = j
-        L_on[l] = 1.0
-        L_t[l] = carry[j, CARRY_T]
-        L_tc[l] = carry[j, CARRY_TC]
-        L_g[l] = carry[j, CARRY_G]
-        L_steps[l] = carry[j, CARRY_STEPS]
-        L_E0[l] = carry[j, CARRY_H0]
-        L_n[l] = 0
-        L_target[l] = limits[j, 0]
-        L_room[l] = limits[j, 1]
-        st = _lane_status(0, L_target[l], L_t[l], tmax, L_steps[l], max_steps)
-        if st < 0:
-            return 1
-        _lane_finish(l, st, X, orb, L_t, L_tc, L_g, L_n, L_steps, carry, count, status, final, info)
-
-
-@njit(error_model="numpy")
-def _lane_finish(l, st, X, orb, L_t, L_tc, L_g, L_n, L_steps, carry, count, status, final, info):
-    """Write out lane l's orbit, stopped with status ``st`` (crossings_orbit's final, info, count, carry)."""
-    j = orb[l]
-    for i in range(DIM):
-        final[j, i] = X[0, i, l]
-    carry[j, CARRY_T] = L_t[l]
-    carry[j, CARRY_TC] = L_tc[l]
-    carry[j, CARRY_G] = L_g[l]
-    carry[j, CARRY_STEPS] = L_steps[l]
-    info[j, 0] = L_t[l] - L_tc[l]
-    info[j, 1] = L_steps[l]
-    info[j, 2] = np.nan
-    count[j] = L_n[l]
-    status[j] = st
 
 
 @njit(nogil=True, error_model="numpy")
@@ -249,7 +147,7 @@ def crossings_lanes_worker(next_orbit, Y0, P, a, b, keep, cols, direction, tmax,
     e_q = 1.0 / (order - 1)
     active = 0
     for l in range(LANES):
-        active += _lane_start(l, next_orbit, Y0, tmax, max_steps, carry, limits, X, orb, L_on, L_t, L_tc, L_g,
+        active += lane_start(l, next_orbit, Y0, tmax, max_steps, carry, limits, X, orb, L_on, L_t, L_tc, L_g,
                               L_E0, L_n, L_steps, L_target, L_room, count, status, final, info)
     while active > 0:
         taylor_coefficients_lanes(P, X, order, W)
@@ -259,13 +157,13 @@ def crossings_lanes_worker(next_orbit, Y0, P, a, b, keep, cols, direction, tmax,
                     for l in range(LANES):
                         X[k, i, l] = -X[k, i, l]
         fin, normal = _norms_lanes(X, order, e_p, e_q, NORM)
-        bits = _steps_lanes(NORM, fin, normal, L_on, L_t, tmax, factor, hv, L_last, L_go)
+        bits = steps_lanes(NORM, fin, normal, L_on, L_t, tmax, factor, hv, L_last, L_go)
         while bits != 0:
             l, bits = next_bit(bits)
-            st = _lane_step(l, fin, normal, NORM, e_p, e_q, factor, L_t, tmax, hv, L_last, L_go)
+            st = lane_step(l, fin, normal, NORM, e_p, e_q, factor, L_t, tmax, hv, L_last, L_go)
             if st >= 0:
-                _lane_finish(l, st, X, orb, L_t, L_tc, L_g, L_n, L_steps, carry, count, status, final, info)
-                active += _lane_start(l, next_orbit, Y0, tmax, max_steps, carry, limits, X, orb, L_on, L_t,
+                lane_finish(l, st, X, orb, L_t, L_tc, L_g, L_n, L_steps, carry, count, status, final, info)
+                active += lane_start(l, next_orbit, Y0, tmax, max_steps, carry, limits, X, orb, L_on, L_t,
                                       L_tc, L_g, L_E0, L_n, L_steps, L_target, L_room, count, status, final,
                                       info) - 1
         _evaluate_lanes(X, order, hv, Y)
@@ -304,10 +202,10 @@ def crossings_lanes_worker(next_orbit, Y0, P, a, b, keep, cols, direction, tmax,
                     for i in range(DIM):
                         X[0, i, l] = Y[i, l]
                     L_g[l] = G[l]
-                    st = _lane_status(n, L_target[l], t, tmax, L_steps[l], max_steps)
+                    st = lane_status(n, L_target[l], t, tmax, L_steps[l], max_steps)
             if st >= 0:
-                _lane_finish(l, st, X, orb, L_t, L_tc, L_g, L_n, L_steps, carry, count, status, final, info)
-                active += _lane_start(l, next_orbit, Y0, tmax, max_steps, carry, limits, X, orb, L_on, L_t,
+                lane_finish(l, st, X, orb, L_t, L_tc, L_g, L_n, L_steps, carry, count, status, final, info)
+                active += lane_start(l, next_orbit, Y0, tmax, max_steps, carry, limits, X, orb, L_on, L_t,
                                       L_tc, L_g, L_E0, L_n, L_steps, L_target, L_room, count, status, final,
                                       info) - 1
 '''
