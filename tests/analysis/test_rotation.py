@@ -122,6 +122,32 @@ def test_chaotic_orbit_does_not_converge_and_the_profile_has_the_plateaus():
     assert any(abs(v + 1 / 6) < 1e-8 for v in prof.rotation)       # the period-6 island
 
 
+def test_sub_sections_integrate_only_the_orbits_still_unresolved_and_each_keeps_its_own_value(monkeypatch):
+    """A start at the centre itself has no angle around it and is refined up to MAX_SUBSECTIONS; the
+    deeper sub-sections integrate the centre and that orbit alone, and every other orbit gets the value
+    it gets alone (an orbit's crossings do not depend on the others in its run)."""
+    from explorer.analysis import flow_lift
+
+    c = pm.find_periodic_orbit(PRM, H, CENTER, 1).points[0]
+    sizes = []
+    real = flow_lift.run
+
+    def counting(params, Y0, **kw):
+        sizes.append(Y0.shape[0])
+        return real(params, Y0, **kw)
+
+    monkeypatch.setattr(flow_lift, "run", counting)
+    prof = rm.rotation_profile(PRM, H, c, (1.45, 0.0), n=4, center=c, iterates=40)
+    monkeypatch.undo()
+    assert prof.status[0] == "unresolved" and math.isnan(prof.rotation[0])
+    assert sizes.count(2) >= flow_lift.MAX_SUBSECTIONS // 2      # the deepest level: the centre and one orbit
+    assert max(sizes) == 1 + 4
+    for i in range(1, 4):
+        alone = rm.rotation_number(PRM, H, prof.points[i], center=c, iterates=40)
+        assert alone.status == prof.status[i]
+        assert np.array_equal([alone.value, alone.turns], [prof.rotation[i], prof.turns[i]], equal_nan=True)
+
+
 def test_rotation_refuses_points_outside_the_allowed_region():
     with pytest.raises(model.ParameterError, match="allowed region"):
         rm.rotation_number(PRM, H, (3.0, 0.0), center=CENTER)

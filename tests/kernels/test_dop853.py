@@ -52,6 +52,14 @@ def rhs(prob, y, out):
 
 
 @njit(cache=False)
+def copy_into(dst, src):
+    """dst[i] = src[i], element by element (an array assignment compiles numba's shape-error path,
+    seconds of compile for a test helper)."""
+    for i in range(src.shape[0]):
+        dst[i] = src[i]
+
+
+@njit(cache=False)
 def attempt(prob, y, h, K, y_new, tmp):
     """One trial step; K[0] = f(y) must be set.  Fills K[1..12], y_new."""
     for s in range(1, 12):
@@ -81,8 +89,8 @@ def fixed_step(prob, y0, t_span, n_steps):
     rhs(prob, y, K[0])
     for _ in range(n_steps):
         attempt(prob, y, h, K, y_new, tmp)
-        y[:] = y_new
-        K[0] = K[12]
+        copy_into(y, y_new)
+        copy_into(K[0], K[12])
     return y
 
 
@@ -107,7 +115,7 @@ def adaptive(prob, y0, t0, t_bound, rtol, atol, ts, ys, counts):
     counts[1] = 2
     t = t0
     ts[0] = t
-    ys[0] = y
+    copy_into(ys[0], y)
     k = 0
     while direction * (t - t_bound) < 0.0:
         min_step = 10.0 * abs(np.nextafter(t, direction * np.inf) - t)
@@ -136,13 +144,13 @@ def adaptive(prob, y0, t0, t_bound, rtol, atol, ts, ys, counts):
             rejected = True
             counts[0] += 1
         t = t_new
-        y[:] = y_new
-        K[0] = K[12]
+        copy_into(y, y_new)
+        copy_into(K[0], K[12])
         k += 1
         if k >= ts.shape[0]:
             return -2
         ts[k] = t
-        ys[k] = y
+        copy_into(ys[k], y)
     return k
 
 

@@ -37,20 +37,25 @@ class _Samples:
                                       np.concatenate([[center[1]], starts[:, 1]]), h, phi0, 1)
         self.runs: dict = {}
 
-    def at(self, f: float):
-        """Crossings of phi0 + 2 pi f, 0 <= f < 1 (f = 0: the returns to the section)."""
-        if f not in self.runs:
+    def at(self, f: float, rows):
+        """Crossings of phi0 + 2 pi f, 0 <= f < 1 (f = 0: the returns to the section), of the centre and
+        at least the orbits ``rows`` (sorted): (the orbits run, sorted; the crossings, the centre's in
+        row 0, then those orbits').  A sub-section is integrated once for the orbits asked when it is
+        first needed; refinement asks fewer (an orbit's crossings do not depend on the others in its
+        run), so an orbit still unresolved does not make the resolved ones run again."""
+        have = self.runs.get(f)
+        if have is None or not np.all(np.isin(rows, have[0])):
             params, n_returns, phi0, tol, threads = self.args
-            c = run(params, self.Y0, n_crossings=n_returns, phi0=phi0 + 2.0 * math.pi * f, tol=tol, threads=threads,
-                    tmax=TMAX_PER_RETURN * n_returns)
+            c = run(params, self.Y0[np.concatenate([[0], 1 + rows])], n_crossings=n_returns,
+                    phi0=phi0 + 2.0 * math.pi * f, tol=tol, threads=threads, tmax=TMAX_PER_RETURN * n_returns)
             if c.count[0] < 1:
                 raise ParameterError(f"center {tuple(self.center)} must be a point whose orbit crosses the "
                                      f"section; its orbit stopped ({c.status_name(0)})")
-            self.runs[f] = c
-        return self.runs[f]
+            have = self.runs[f] = (rows.copy(), c)
+        return have
 
     def increments(self, rows, m: int):
-        """For the orbits ``rows`` sampled on m sub-sections: (per-return increments (n, n_returns),
+        """For the orbits ``rows`` (sorted) sampled on m sub-sections: (per-return increments (n, n_returns),
         largest sample-to-sample change (n,), returns reached (n,), status names (n,)); rows of
         orbits that stopped early or turned back are NaN."""
         _, n_returns, _, _, _ = self.args
@@ -61,12 +66,13 @@ class _Samples:
         count = np.full(n, n_returns)
         status = np.array(["done"] * n, dtype=object)
         for k in range(1, m + 1):
-            c = self.at((k % m) / m)
+            ran, c = self.at((k % m) / m, rows)
+            at = 1 + np.searchsorted(ran, rows)
             ref[k - 1] = self.center if k == m else c.data[0, 0, 1:3]
-            xs[:, :, k - 1] = c.data[1 + rows, :, 1:3]
-            ts[:, :, k - 1] = c.data[1 + rows, :, 0]
-            for i in np.flatnonzero(c.count[1 + rows] < count):
-                count[i], status[i] = c.count[1 + rows[i]], c.status_name(1 + rows[i])
+            xs[:, :, k - 1] = c.data[at, :, 1:3]
+            ts[:, :, k - 1] = c.data[at, :, 0]
+            for i in np.flatnonzero(c.count[at] < count):
+                count[i], status[i] = c.count[at[i]], c.status_name(at[i])
         theta = np.arctan2(xs[..., 1] - ref[:, 1], xs[..., 0] - ref[:, 0]).reshape(n, -1)
         x0 = self.starts[rows]
         theta0 = np.arctan2(x0[:, 1] - self.center[1], x0[:, 0] - self.center[0])
