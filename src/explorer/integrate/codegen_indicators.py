@@ -6,7 +6,9 @@ SIMD lanes (each lane the scalar driver bit for bit, as :mod:`explorer.integrate
 :mod:`explorer.analysis.system_indicators`.
 
 It is rendered into every module but compiled only when called, on the module of ``System.variational(nvec)``:
-its rows are the state (n), then nvec deviation vectors (n each), so DIM = n (1 + nvec).
+its rows are the state (n), then nvec deviation vectors (n each), so DIM = n (1 + nvec).  What does not
+depend on the system (the bookkeeping, the lanes' start, finish and step end) is in
+:mod:`explorer.integrate.lane_parts`, compiled once for all systems.
 """
 from __future__ import annotations
 

@@ -9,7 +9,9 @@ first two tests of kernels.events.isolate_crossings, and the step's end of a lan
 possible.  A lane that may hold a root, or stops, is finished lane by lane with the scalar kernels.
 A lane whose orbit stops takes the next one from a queue shared by the workers (one group of LANES lanes
 per thread: analysis.system_sections.run_driver, or ``prange`` in :mod:`explorer.integrate.lanes` for the
-engine's phi = phi0); an orbit's rows depend neither on its lane nor on the thread count.
+engine's phi = phi0); an orbit's rows depend neither on its lane nor on the thread count.  A lane's start,
+finish and status and the vector step size do not depend on the system: they are in
+:mod:`explorer.integrate.lane_parts`, compiled once for all systems.
 """
 from __future__ import annotations
 
