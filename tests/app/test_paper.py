@@ -309,6 +309,19 @@ def test_the_periodic_figure_draws_isolated_orbits_of_every_period_each_returnin
             assert orb["period"] == K and orb["residual"] < 1e-9, orb
 
 
+def test_the_periodic_figures_profile_starts_at_the_elliptic_points_linear_rotation_number(quick):
+    """The rotation profile starts next to the elliptic point (at the point itself the angle around it
+    is undefined) at its linear rotation number: trace = 2 cos(2 pi rho) (to 1e-9; the quick figure's 300
+    returns leave its two halves 1.2e-10 apart, just short of the 1e-10 that counts as converged)."""
+    from explorer.analysis.fixedpoints import find_fixed_point
+    from explorer.app.paper.periodic import CENTER_GUESS
+
+    d = quick[1]["periodic"].data
+    fp = find_fixed_point(model.FIGURE4.with_(mu=0.03), model.FIGURE4_H, CENTER_GUESS)
+    assert np.array_equal(d["center"], fp.point) and abs(fp.trace) < 2.0
+    assert abs(d["rotation"][0]) == pytest.approx(math.acos(fp.trace / 2.0) / (2.0 * math.pi), abs=1e-9)
+
+
 def test_the_periodic_legend_lies_below_its_panel_with_a_colour_per_period_and_a_marker_per_kind_drawn():
     """The legend hides no orbit: it is drawn below the section's axes, inside the figure (the
     constrained layout makes room for it), and lists the periods and only the kinds drawn."""

@@ -13,6 +13,10 @@ DESCRIPTION = "Figure 4 at mu = 0.03: periodic orbits of periods 1..8 marked, ro
 #: the elliptic fixed point of the scene (Newton refines it) and the end of the profile segment
 CENTER_GUESS = (1.5822, 0.0)
 PROFILE_END = (0.9, 0.0)
+#: the profile starts this far from the elliptic point towards PROFILE_END: at the point itself the
+#: angle around it is undefined (no rotation number: docs/commands/rotation.md), next to it the
+#: rotation number is the linear one, arccos(trace / 2) / 2 pi
+PROFILE_START = 1e-6
 
 
 #: the figure's size (inches) and its panels' widths: the section, the rotation profile
@@ -71,7 +75,9 @@ def periodic_figure(params=None, h=None, *, periods=range(1, 9), seeds=40, cross
     pts = pts[np.isfinite(pts[:, 0])]
     orbits = {K: periodic.search_periodic_orbits(prm, h, K, grid=grid) for K in periods}
     center = find_fixed_point(prm, h, CENTER_GUESS)
-    prof = rotation.rotation_profile(prm, h, center.point, PROFILE_END, n=profile_n, center=center.point,
+    out = np.asarray(PROFILE_END) - center.point
+    start = center.point + PROFILE_START * out / np.linalg.norm(out)
+    prof = rotation.rotation_profile(prm, h, start, PROFILE_END, n=profile_n, center=center.point,
                                      iterates=iterates)
     levels = {}   # m/K of the elliptic orbits found whose level the profile reaches (a plateau)
     reached = prof.rotation[prof.converged]
