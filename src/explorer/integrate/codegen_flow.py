@@ -88,7 +88,7 @@ def flow_taylor_worker(next_orbit, Y0, P, times, order, max_steps, states, energ
 
 # ---- the flow on SIMD lanes: each lane flow_orbit bit for bit, with the vector step of crossings_lanes_worker
 # (_norms_lanes, steps_lanes, _evaluate_lanes: kernels.taylor's step and Horner evaluation per lane)
-from explorer.integrate.lane_parts import flow_lane_finish, lane_step, steps_lanes  # noqa: E402
+from explorer.integrate.lane_parts import flow_lane_finish, lane_step, lane_take, steps_lanes  # noqa: E402
 from explorer.integrate.simd import next_bit, vbits, vmask, vselect  # noqa: E402
 from explorer.kernels.checks import is_finite  # noqa: E402
 from explorer.kernels.clock import compensated_add  # noqa: E402
@@ -121,12 +121,8 @@ def _flow_lane_start(l, next_orbit, Y0, P, times, X, orb, L_on, L_t, L_tc, L_ste
     with no later time finished at once).  Returns 1, or 0 when the queue is empty (the lane idles)."""
     M = times.shape[0]
     while True:
-        j = atomic_fetch_add(next_orbit, 0, 1)
-        if j >= Y0.shape[0]:
-            orb[l] = -1
-            L_on[l] = 0.0
-            for i in range(DIM):
-                X[0, i, l] = 0.0
+        j = lane_take(l, next_orbit, Y0.shape[0], X, orb, L_on)
+        if j < 0:
             return 0
         y0 = Y0[j]
         for i in range(DIM):

@@ -103,6 +103,20 @@ def lane_status(n, limit, t, tmax, steps, max_steps):
 
 
 @njit(error_model="numpy")
+def lane_take(l, next_orbit, N, X, orb, L_on):
+    """The next orbit j < N of the queue ``next_orbit`` for lane l, or -1 when it is empty: the lane then
+    idles on the zero state (its coefficients all 0, orb[l] = -1, L_on[l] = 0)."""
+    j = atomic_fetch_add(next_orbit, 0, 1)
+    if j >= N:
+        orb[l] = -1
+        L_on[l] = 0.0
+        for i in range(X.shape[1]):
+            X[0, i, l] = 0.0
+        return -1
+    return j
+
+
+@njit(error_model="numpy")
 def lane_start(l, next_orbit, Y0, tmax, max_steps, carry, limits, X, orb, L_on, L_t, L_tc, L_g, L_E0, L_n, L_steps,
                 L_target, L_room, count, status, final, info):
     """Lane l takes the next orbit of the queue ``next_orbit`` where its carry left it, as crossings_orbit
@@ -110,12 +124,8 @@ def lane_start(l, next_orbit, Y0, tmax, max_steps, carry, limits, X, orb, L_on, 
     when the queue is empty: the lane then idles on the zero state (its coefficients all 0)."""
     dim = X.shape[1]
     while True:
-        j = atomic_fetch_add(next_orbit, 0, 1)
-        if j >= Y0.shape[0]:
-            orb[l] = -1
-            L_on[l] = 0.0
-            for i in range(dim):
-                X[0, i, l] = 0.0
+        j = lane_take(l, next_orbit, Y0.shape[0], X, orb, L_on)
+        if j < 0:
             return 0
         for i in range(dim):
             X[0, i, l] = Y0[j, i]
@@ -326,12 +336,8 @@ def indicator_lane_start(l, next_orbit, Y0, V0, W0, n, nvec, T, max_steps, X, z,
     the queue is empty: the lane then idles on the zero state."""
     dim = X.shape[1]
     while True:
-        j = atomic_fetch_add(next_orbit, 0, 1)
-        if j >= Y0.shape[0]:
-            orb[l] = -1
-            L_on[l] = 0.0
-            for i in range(dim):
-                X[0, i, l] = 0.0
+        j = lane_take(l, next_orbit, Y0.shape[0], X, orb, L_on)
+        if j < 0:
             return 0
         for i in range(dim):
             z[i] = 0.0

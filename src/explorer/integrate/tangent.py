@@ -13,6 +13,7 @@ from explorer._jit import njit, prange
 from explorer.integrate import _systems_generated as sg
 from explorer.integrate._tangent_lanes_generated import tangent_coefficients
 from explorer.integrate.drivers import ON_SECTION
+from explorer.integrate.lane_parts import indicator_history
 from explorer.integrate.systems import FIRST_STEP, STEP_OK, reverse_time
 from explorer.kernels import STATUS_CANCELLED, STATUS_DONE
 from explorer.kernels import STATUS_TMAX as STATUS_TMAX_CODE
@@ -25,16 +26,6 @@ from explorer.model.equations import (
     section_c,
     section_g,
 )
-
-
-@njit
-def _history(acc, hist_t, hist, hpos, row):
-    while hpos < hist_t.shape[0] and acc[tg.ACC_T] >= hist_t[hpos]:
-        tg.result(acc, row)
-        for c in range(tg.N_RES):
-            hist[hpos, c] = row[c]
-        hpos += 1
-    return hpos
 
 
 @njit
@@ -65,7 +56,7 @@ def _store(j, result, out_status, out_steps):
 def _observe(acc, v, t_old, t_new, hist_t, hist, hpos, row):
     dlog = tg.renormalize(v, 5)
     tg.accumulate(acc, t_old, t_new, dlog)
-    return _history(acc, hist_t, hist, hpos, row)
+    return indicator_history(acc, hist_t, hist, hpos, row)
 
 
 @functools.cache
