@@ -172,6 +172,19 @@ def adaptive_settings(ly) -> dict:
     return dict(map_rule(), indicator=ly.map_indicator, threshold=map_threshold(ly))
 
 
+def map_entries(ly) -> dict:
+    """The ``[lyapunov]`` keys of a chaos map that enter the panels' hashes only when set (a scene
+    without them keeps its hashes): the map's resolution, its adaptive rule, frequency diffusion."""
+    d = {}
+    if ly.map_resolution:
+        d["map_resolution"] = ly.map_resolution
+    if ly.adaptive:   # which cells are computed depends on the class threshold and the rule
+        d["adaptive"] = adaptive_settings(ly)
+    if ly.frequency_diffusion is not None:
+        d["frequency_diffusion"] = ly.frequency_diffusion
+    return d
+
+
 class DiffusionSettings:
     """Frequency diffusion's keys of a ``[lyapunov]`` table (``center``, ``diffusion_iterates``), shared by
     Chaplygin's :class:`LyapunovSpec` and a System's (docs/scenes.md)."""
@@ -304,12 +317,7 @@ class LyapunovSpec(DiffusionSettings):
         if self.early_stop:
             d.update(early_stop=True, early_sali=self.early_sali if self.second_vector else 0.0,
                      early_megno=self.early_megno, early_time=self.early_time)
-        if self.map_resolution:
-            d["map_resolution"] = self.map_resolution
-        if self.adaptive:   # which cells are computed depends on the class threshold and the rule
-            d["adaptive"] = adaptive_settings(self)
-        if self.frequency_diffusion is not None:
-            d["frequency_diffusion"] = self.frequency_diffusion
+        d.update(map_entries(self))
         return d
 
 

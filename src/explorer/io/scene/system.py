@@ -50,8 +50,8 @@ from explorer.io.scene.specs import (
     ManifoldSpec,
     SeedSpec,
     adaptive_map,
-    adaptive_settings,
     class_settings,
+    map_entries,
 )
 from explorer.kernels.indicator_table import NAMES as INDICATOR_NAMES
 from explorer.model import ParameterError
@@ -298,14 +298,7 @@ class SystemLyapunov(DiffusionSettings):
                   f"got {_short(self.map_indicator)}")
 
     def used_dict(self) -> dict:
-        d = {"time": self.time, "tol": self.tol, "indicators": list(self.indicators)}
-        if self.map_resolution:
-            d["map_resolution"] = self.map_resolution
-        if self.adaptive:   # which cells are computed depends on the class threshold and the rule
-            d["adaptive"] = adaptive_settings(self)
-        if self.frequency_diffusion is not None:
-            d["frequency_diffusion"] = self.frequency_diffusion
-        return d
+        return {"time": self.time, "tol": self.tol, "indicators": list(self.indicators), **map_entries(self)}
 
 
 @dataclass(frozen=True)
