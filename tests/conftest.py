@@ -8,6 +8,16 @@ import pytest
 
 sys.path.insert(0, os.path.dirname(__file__))
 
+#: The test run writes the bytecode of what it imports, whatever PYTHONDONTWRITEBYTECODE says, and
+#: so does every process it starts (xdist's workers, the generic-CPU rerun, servers, commands): the
+#: suite starts about a hundred Python processes, and without bytecode each compiled numpy, scipy,
+#: numba, Bokeh and Panel from source (10 CPU-s for a process that imports the page's stack, 3 with
+#: bytecode).  The first importer writes each module's file, the others read it.  This replaces
+#: the install's `uv pip install --compile-bytecode`, which compiled every installed module, most of
+#: them never imported (about 45 CPU-s and 20 s of README's command: benchmarks/RESULTS.md).
+sys.dont_write_bytecode = False
+os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
+
 #: The thread tests compare 1 and 2 Numba threads.  Numba launches at most NUMBA_NUM_THREADS
 #: (default: the number of cores), so on a one-core machine a request for 2 could not be met;
 #: ask for at least 2 before numba is imported (2 threads on one core are time-sliced, and

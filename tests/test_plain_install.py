@@ -128,12 +128,8 @@ def plain(tmp_path_factory):
     env.pop("PYTHONPATH", None)
     # pip compiles what it installs to bytecode; uv does not.  So that the commands run as after a
     # pip install, the venv has the test environment's bytecode of the files the two share
-    # (_share_bytecode), and they may write the bytecode of whatever else they import (the first
-    # one does, the others read it), whatever the test run's PYTHONDONTWRITEBYTECODE: every process
-    # compiled numpy, scipy, numba, matplotlib, Bokeh and Panel from source when this machine set
-    # it, and uv's --compile-bytecode, which compiles every installed module, cost more (24 s) than
-    # it saved
-    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    # (_share_bytecode), and they write the bytecode of whatever else they import (the first one
+    # does, the others read it), as every process of the test run does (tests/conftest.py)
     env.update(PYTHONUNBUFFERED="1", MPLBACKEND="Agg")
     return py, cwd, env
 
