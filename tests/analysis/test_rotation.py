@@ -122,13 +122,10 @@ def test_chaotic_orbit_does_not_converge_and_the_profile_has_the_plateaus():
     assert any(abs(v + 1 / 6) < 1e-8 for v in prof.rotation)       # the period-6 island
 
 
-def test_sub_sections_integrate_only_the_orbits_still_unresolved_and_each_keeps_its_own_value(monkeypatch):
-    """A start at the centre itself has no angle around it and is refined up to MAX_SUBSECTIONS; the
-    deeper sub-sections integrate the centre and that orbit alone, and every other orbit gets the value
-    it gets alone (an orbit's crossings do not depend on the others in its run)."""
+def _run_sizes(monkeypatch):
+    """The orbits of each run of the rotation lift (flow_lift.run), as they are asked for."""
     from explorer.analysis import flow_lift
 
-    c = pm.find_periodic_orbit(PRM, H, CENTER, 1).points[0]
     sizes = []
     real = flow_lift.run
 
@@ -137,7 +134,19 @@ def test_sub_sections_integrate_only_the_orbits_still_unresolved_and_each_keeps_
         return real(params, Y0, **kw)
 
     monkeypatch.setattr(flow_lift, "run", counting)
-    prof = rm.rotation_profile(PRM, H, c, (1.45, 0.0), n=4, center=c, iterates=40)
+    return sizes
+
+
+def test_sub_sections_integrate_only_the_orbits_still_unresolved_and_each_keeps_its_own_value(monkeypatch):
+    """A start one ulp from the centre has no angle around it at the integration's accuracy and is
+    refined up to MAX_SUBSECTIONS; the deeper sub-sections integrate the centre and that orbit alone,
+    and every other orbit gets the value it gets alone (an orbit's crossings do not depend on the
+    others in its run)."""
+    from explorer.analysis import flow_lift
+
+    c = pm.find_periodic_orbit(PRM, H, CENTER, 1).points[0]
+    sizes = _run_sizes(monkeypatch)
+    prof = rm.rotation_profile(PRM, H, (np.nextafter(c[0], 2.0), c[1]), (1.45, 0.0), n=4, center=c, iterates=40)
     monkeypatch.undo()
     assert prof.status[0] == "unresolved" and math.isnan(prof.rotation[0])
     assert sizes.count(2) >= flow_lift.MAX_SUBSECTIONS // 2      # the deepest level: the centre and one orbit
@@ -146,6 +155,20 @@ def test_sub_sections_integrate_only_the_orbits_still_unresolved_and_each_keeps_
         alone = rm.rotation_number(PRM, H, prof.points[i], center=c, iterates=40)
         assert alone.status == prof.status[i]
         assert np.array_equal([alone.value, alone.turns], [prof.rotation[i], prof.turns[i]], equal_nan=True)
+
+
+def test_a_start_at_the_centre_itself_is_unresolved_without_sub_sections(monkeypatch):
+    """Its angle around the centre is undefined: the returns (one run) say so, no sub-section is
+    integrated for it, and the other orbits' values are those they get without it."""
+    c = pm.find_periodic_orbit(PRM, H, CENTER, 1).points[0]
+    sizes = _run_sizes(monkeypatch)
+    prof = rm.rotation_profile(PRM, H, c, (1.45, 0.0), n=3, center=c, iterates=40)
+    monkeypatch.undo()
+    assert prof.status[0] == "unresolved" and math.isnan(prof.rotation[0])
+    assert sizes[0] == 1 + 3 and max(sizes[1:], default=0) <= 1 + 2   # after the returns: the others only
+    for i in (1, 2):
+        alone = rm.rotation_number(PRM, H, prof.points[i], center=c, iterates=40)
+        assert alone.status == prof.status[i] == "done" and alone.value == prof.rotation[i]
 
 
 def test_rotation_refuses_points_outside_the_allowed_region():

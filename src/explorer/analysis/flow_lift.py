@@ -110,6 +110,9 @@ def lifted_increments(params, h, starts, center, n_returns, phi0, tol, threads):
     tail = (phi0, tol, threads)
     # the returns alone (m = 1): the increments wrapped to (-pi, pi]
     inc, worst, count, status = _Samples(*args, starts, center, n_returns, *tail).increments(np.arange(n), 1)
+    # a start at the centre itself has no angle around it: unresolved now, not after MAX_SUBSECTIONS
+    at_centre = np.all(starts == np.asarray(center, float), axis=1) & (status == "done")
+    inc[at_centre], status[at_centre] = np.nan, "unresolved"
     lifted = np.zeros(n, bool)
     safe = np.flatnonzero((status == "done") & (worst <= WRAP_SAFE))
     if safe.size:
