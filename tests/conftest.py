@@ -8,13 +8,12 @@ import pytest
 
 sys.path.insert(0, os.path.dirname(__file__))
 
-#: The test run writes the bytecode of what it imports, whatever PYTHONDONTWRITEBYTECODE says, and
-#: so does every process it starts (xdist's workers, the generic-CPU rerun, servers, commands): the
-#: suite starts about a hundred Python processes, and without bytecode each compiled numpy, scipy,
-#: numba, Bokeh and Panel from source (10 CPU-s for a process that imports the page's stack, 3 with
-#: bytecode).  The first importer writes each module's file, the others read it.  This replaces
-#: the install's `uv pip install --compile-bytecode`, which compiled every installed module, most of
-#: them never imported (about 45 CPU-s and 20 s of README's command: benchmarks/RESULTS.md).
+#: The tests write the bytecode of the modules they import, whatever PYTHONDONTWRITEBYTECODE says,
+#: and so does every process they start (xdist's workers, the generic-CPU rerun, servers, commands):
+#: each module is compiled by its first importer and read by the others, where without bytecode
+#: every process compiled numpy, scipy, numba, Bokeh and Panel from source.  README's install
+#: therefore compiles none (uv's --compile-bytecode compiled every installed module, most of them
+#: never imported: benchmarks/RESULTS.md, "README's test command").
 sys.dont_write_bytecode = False
 os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
 
