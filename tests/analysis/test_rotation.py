@@ -94,30 +94,34 @@ PRM = model.FIGURE4.with_(mu=0.03)
 CENTER = (1.582201141, 0.0)   # elliptic fixed point of the Figure 4 scene at mu = 0.03
 
 
-def test_rotation_center_defaults_to_the_fixed_point_found_from_the_start():
+@pytest.fixture(scope="module")
+def centre():
+    """The elliptic fixed point near CENTER, refined by Newton once for the module."""
+    return pm.find_periodic_orbit(PRM, H, CENTER, 1).points[0]
+
+
+def test_rotation_center_defaults_to_the_fixed_point_found_from_the_start(centre):
     r = rm.rotation_number(PRM, H, (1.58, 0.0), iterates=200)
-    np.testing.assert_allclose(r.center, pm.find_periodic_orbit(PRM, H, CENTER, 1).points[0], atol=1e-12)
+    np.testing.assert_allclose(r.center, centre, atol=1e-12)
 
 
 @pytest.mark.cpu_dependent
-def test_island_chain_plateau_equals_m_over_K_of_the_periodic_orbit_found():
+def test_island_chain_plateau_equals_m_over_K_of_the_periodic_orbit_found(centre):
     """The period-8 chain (the period-6 plateau, -1/6: the profile test below)."""
     K = 8
     orb = pm.find_periodic_orbit(PRM, H, (1.154444, 0.0), K)
     assert orb.period == K and orb.kind == "elliptic"
-    c = pm.find_periodic_orbit(PRM, H, CENTER, 1).points[0]
-    m_over_K = rm.orbit_rotation(orb.points, c)
+    m_over_K = rm.orbit_rotation(orb.points, centre)
     assert abs(m_over_K * K - round(m_over_K * K)) < 1e-12     # an integer m
-    r = rm.rotation_number(PRM, H, orb.points[0] + np.array([0.002, 0.0]), center=c, iterates=3000)
+    r = rm.rotation_number(PRM, H, orb.points[0] + np.array([0.002, 0.0]), center=centre, iterates=3000)
     assert r.converged and r.value == pytest.approx(m_over_K, abs=1e-9)
 
 
 @pytest.mark.cpu_dependent
-def test_chaotic_orbit_does_not_converge_and_the_profile_has_the_plateaus():
-    c = pm.find_periodic_orbit(PRM, H, CENTER, 1).points[0]
-    r = rm.rotation_number(PRM, H, (0.5, 0.0), center=c, iterates=1000)
+def test_chaotic_orbit_does_not_converge_and_the_profile_has_the_plateaus(centre):
+    r = rm.rotation_number(PRM, H, (0.5, 0.0), center=centre, iterates=1000)
     assert not r.converged and r.difference > 1e-8
-    prof = rm.rotation_profile(PRM, H, (1.01, 0.0), (1.02, 0.0), n=3, center=c, iterates=500)
+    prof = rm.rotation_profile(PRM, H, (1.01, 0.0), (1.02, 0.0), n=3, center=centre, iterates=500)
     assert prof.points.shape == (3, 2) and prof.s[-1] == 1.0
     assert any(abs(v + 1 / 6) < 1e-8 for v in prof.rotation)       # the period-6 island
 
@@ -137,37 +141,36 @@ def _run_sizes(monkeypatch):
     return sizes
 
 
-def test_sub_sections_integrate_only_the_orbits_still_unresolved_and_each_keeps_its_own_value(monkeypatch):
+def test_sub_sections_integrate_only_the_orbits_still_unresolved_and_each_keeps_its_own_value(centre, monkeypatch):
     """A start one ulp from the centre has no angle around it at the integration's accuracy and is
     refined up to MAX_SUBSECTIONS; the deeper sub-sections integrate the centre and that orbit alone,
     and every other orbit gets the value it gets alone (an orbit's crossings do not depend on the
     others in its run)."""
     from explorer.analysis import flow_lift
 
-    c = pm.find_periodic_orbit(PRM, H, CENTER, 1).points[0]
     sizes = _run_sizes(monkeypatch)
-    prof = rm.rotation_profile(PRM, H, (np.nextafter(c[0], 2.0), c[1]), (1.45, 0.0), n=4, center=c, iterates=40)
+    next_to_it = (np.nextafter(centre[0], 2.0), centre[1])
+    prof = rm.rotation_profile(PRM, H, next_to_it, (1.45, 0.0), n=4, center=centre, iterates=40)
     monkeypatch.undo()
     assert prof.status[0] == "unresolved" and math.isnan(prof.rotation[0])
     assert sizes.count(2) >= flow_lift.MAX_SUBSECTIONS // 2      # the deepest level: the centre and one orbit
     assert max(sizes) == 1 + 4
     for i in range(1, 4):
-        alone = rm.rotation_number(PRM, H, prof.points[i], center=c, iterates=40)
+        alone = rm.rotation_number(PRM, H, prof.points[i], center=centre, iterates=40)
         assert alone.status == prof.status[i]
         assert np.array_equal([alone.value, alone.turns], [prof.rotation[i], prof.turns[i]], equal_nan=True)
 
 
-def test_a_start_at_the_centre_itself_is_unresolved_without_sub_sections(monkeypatch):
+def test_a_start_at_the_centre_itself_is_unresolved_without_sub_sections(centre, monkeypatch):
     """Its angle around the centre is undefined: the returns (one run) say so, no sub-section is
     integrated for it, and the other orbits' values are those they get without it."""
-    c = pm.find_periodic_orbit(PRM, H, CENTER, 1).points[0]
     sizes = _run_sizes(monkeypatch)
-    prof = rm.rotation_profile(PRM, H, c, (1.45, 0.0), n=3, center=c, iterates=40)
+    prof = rm.rotation_profile(PRM, H, centre, (1.45, 0.0), n=3, center=centre, iterates=40)
     monkeypatch.undo()
     assert prof.status[0] == "unresolved" and math.isnan(prof.rotation[0])
     assert sizes[0] == 1 + 3 and max(sizes[1:], default=0) <= 1 + 2   # after the returns: the others only
     for i in (1, 2):
-        alone = rm.rotation_number(PRM, H, prof.points[i], center=c, iterates=40)
+        alone = rm.rotation_number(PRM, H, prof.points[i], center=centre, iterates=40)
         assert alone.status == prof.status[i] == "done" and alone.value == prof.rotation[i]
 
 
