@@ -12,6 +12,7 @@ arbitrary-precision library) at 60 digits, for the rules with a closed-form refe
 checked against the series of the exact solution.
 """
 import math
+import re
 
 import mpmath
 import numpy as np
@@ -329,3 +330,34 @@ def test_each_lane_of_the_simd_form_equals_the_scalar_recurrence_bit_for_bit(rul
         mod.taylor_coefficients(P, X, order)
         assert np.all(np.isfinite(X))
         assert np.array_equal(XL[:, :, lane].T.view(np.uint64), X.view(np.uint64)), lane
+
+
+def test_vector_arithmetic_is_written_as_simd_calls_with_scalars_splatted_and_scalar_arithmetic_kept():
+    source = '''\
+def f(P, X, W, order):
+    s1 = P[0] * 2.0 - 1.0
+    u2 = vload(X, 0) * vload(X, 8)
+    acc = vzero()
+    for j in range(order):
+        acc = acc - (s1 * (order - j) - j) * u2
+    vstore(W, 0, -acc / order)
+'''
+    body = codegen.vector_calls(source).splitlines()[1:]
+    assert [line.strip() for line in body] == [
+        "s1 = P[0] * 2.0 - 1.0",
+        "u2 = vmul(vload(X, 0), vload(X, 8))",
+        "acc = vzero()",
+        "for j in range(order):",
+        "acc = vsub(acc, vmul(vsplat(s1 * (order - j) - j), u2))",
+        "vstore(W, 0, vdiv(vneg(acc), vsplat(order)))",
+    ]
+
+
+def test_every_simd_call_the_generated_recurrences_make_is_an_intrinsic_of_explorer_integrate_simd():
+    from explorer.integrate import simd
+
+    text = codegen.recurrence(chaplygin.variational(vectors=1)).lanes
+    called = set(re.findall(r"\b(v[a-z_]+)\(", text))
+    assert {"vadd", "vsub", "vmul", "vload", "vstore"} <= called
+    assert called <= codegen.VECTOR_RESULTS | {"vstore"}
+    assert all(callable(getattr(simd, name)) for name in codegen.VECTOR_RESULTS)

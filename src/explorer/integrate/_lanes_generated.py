@@ -1,7 +1,7 @@
 # Written to this file by tools/gen_lanes.py from explorer.model.chaplygin.system().
 # Regenerate:  python tools/gen_lanes.py     (check: --check)
 # ruff: noqa  (the text of every System's module: its imports repeat, template by template)
-# GENERATED FILE - DO NOT EDIT. Written by explorer.integrate.codegen (generator version 10)
+# GENERATED FILE - DO NOT EDIT. Written by explorer.integrate.codegen (generator version 11)
 # from the system 'chaplygin'; the key  is of its content (explorer.model.system.System.flow_hash).
 #
 #   dp1/dt = M*p2/b - M*zeta/b - g1*mu - lam*p2/a2
@@ -54,27 +54,27 @@ def taylor_coefficients_into(P, X, order, W):
     s49 = s27 / s9
     s52 = P[7]
     s53 = s1 * s52
-    v16 = X[2, 0] * X[1, 0]
-    v18 = (s5 * v16) - (s1 * X[3, 0])
-    v22 = v18 - (s20 * X[1, 0])
-    v26 = v22 - (s24 * X[2, 0])
-    v32 = (s28 * X[2, 0]) + (s30 * X[0, 0])
-    v33 = v32 - (s1 * X[4, 0])
-    v34 = X[0, 0] * X[2, 0]
-    v36 = v33 - (s5 * v34)
-    v42 = (s38 * X[3, 0]) + (s40 * X[0, 0])
-    v43 = X[1, 0] * X[0, 0]
-    v48 = v42 + (s46 * v43)
-    v51 = v48 - (s49 * X[1, 0])
-    v55 = v51 - (s53 * X[4, 0])
-    v56 = X[4, 0] * X[2, 0]
-    v58 = X[3, 0] * X[2, 0]
-    v60 = -(s5 * v58)
-    X[0, 1] = v26
-    X[1, 1] = v36
-    X[2, 1] = v55
-    X[3, 1] = (s5 * v56)
-    X[4, 1] = v60
+    u16 = X[2, 0] * X[1, 0]
+    u18 = (s5 * u16) - (s1 * X[3, 0])
+    u22 = u18 - (s20 * X[1, 0])
+    u26 = u22 - (s24 * X[2, 0])
+    u32 = (s28 * X[2, 0]) + (s30 * X[0, 0])
+    u33 = u32 - (s1 * X[4, 0])
+    u34 = X[0, 0] * X[2, 0]
+    u36 = u33 - (s5 * u34)
+    u42 = (s38 * X[3, 0]) + (s40 * X[0, 0])
+    u43 = X[1, 0] * X[0, 0]
+    u48 = u42 + (s46 * u43)
+    u51 = u48 - (s49 * X[1, 0])
+    u55 = u51 - (s53 * X[4, 0])
+    u56 = X[4, 0] * X[2, 0]
+    u58 = X[3, 0] * X[2, 0]
+    u60 = -(s5 * u58)
+    X[0, 1] = u26
+    X[1, 1] = u36
+    X[2, 1] = u55
+    X[3, 1] = (s5 * u56)
+    X[4, 1] = u60
     for k in range(1, order):
         m16 = 0.0
         m34 = 0.0
@@ -184,38 +184,39 @@ def rhs(y, P, dy):
     s49 = s27 / s9
     s52 = P[7]
     s53 = s1 * s52
-    v16 = X[2, 0] * X[1, 0]
-    v18 = (s5 * v16) - (s1 * X[3, 0])
-    v22 = v18 - (s20 * X[1, 0])
-    v26 = v22 - (s24 * X[2, 0])
-    v32 = (s28 * X[2, 0]) + (s30 * X[0, 0])
-    v33 = v32 - (s1 * X[4, 0])
-    v34 = X[0, 0] * X[2, 0]
-    v36 = v33 - (s5 * v34)
-    v42 = (s38 * X[3, 0]) + (s40 * X[0, 0])
-    v43 = X[1, 0] * X[0, 0]
-    v48 = v42 + (s46 * v43)
-    v51 = v48 - (s49 * X[1, 0])
-    v55 = v51 - (s53 * X[4, 0])
-    v56 = X[4, 0] * X[2, 0]
-    v58 = X[3, 0] * X[2, 0]
-    v60 = -(s5 * v58)
-    dy[0] = v26
-    dy[1] = v36
-    dy[2] = v55
-    dy[3] = (s5 * v56)
-    dy[4] = v60
+    u16 = X[2, 0] * X[1, 0]
+    u18 = (s5 * u16) - (s1 * X[3, 0])
+    u22 = u18 - (s20 * X[1, 0])
+    u26 = u22 - (s24 * X[2, 0])
+    u32 = (s28 * X[2, 0]) + (s30 * X[0, 0])
+    u33 = u32 - (s1 * X[4, 0])
+    u34 = X[0, 0] * X[2, 0]
+    u36 = u33 - (s5 * u34)
+    u42 = (s38 * X[3, 0]) + (s40 * X[0, 0])
+    u43 = X[1, 0] * X[0, 0]
+    u48 = u42 + (s46 * u43)
+    u51 = u48 - (s49 * X[1, 0])
+    u55 = u51 - (s53 * X[4, 0])
+    u56 = X[4, 0] * X[2, 0]
+    u58 = X[3, 0] * X[2, 0]
+    u60 = -(s5 * u58)
+    dy[0] = u26
+    dy[1] = u36
+    dy[2] = u55
+    dy[3] = (s5 * u56)
+    dy[4] = u60
 
 
 # ---- the SIMD form (explorer.integrate.simd): LANES orbits at once
-from explorer.integrate.simd import LANES, vload, vsplat, vsqrt, vstore, vzero  # noqa: E402
+from explorer.integrate.simd import (  # noqa: E402
+    LANES, vadd, vdiv, vload, vmul, vneg, vsplat, vsqrt, vstore, vsub, vzero)
 
 #: flat strides of one order in the lane arrays X[k, i, l] and W[k, r, l]
 XS = DIM * LANES
 WS = max(N_WORK, 1) * LANES
 
 
-@njit(error_model="numpy")
+@njit(error_model='numpy')
 def taylor_coefficients_lanes(P, X, order, W):
     """LANES orbits at once: X[k, i, l] for k = 1..order from X[0] (X of shape (order + 1, DIM, LANES),
     W of shape (order + 1, max(N_WORK, 1), LANES), both C-contiguous).  Each lane equals
@@ -242,27 +243,27 @@ def taylor_coefficients_lanes(P, X, order, W):
     s49 = s27 / s9
     s52 = P[7]
     s53 = s1 * s52
-    v16 = vload(X, (0) * XS + 2 * LANES) * vload(X, (0) * XS + 1 * LANES)
-    v18 = (s5 * v16) - (s1 * vload(X, (0) * XS + 3 * LANES))
-    v22 = v18 - (s20 * vload(X, (0) * XS + 1 * LANES))
-    v26 = v22 - (s24 * vload(X, (0) * XS + 2 * LANES))
-    v32 = (s28 * vload(X, (0) * XS + 2 * LANES)) + (s30 * vload(X, (0) * XS + 0 * LANES))
-    v33 = v32 - (s1 * vload(X, (0) * XS + 4 * LANES))
-    v34 = vload(X, (0) * XS + 0 * LANES) * vload(X, (0) * XS + 2 * LANES)
-    v36 = v33 - (s5 * v34)
-    v42 = (s38 * vload(X, (0) * XS + 3 * LANES)) + (s40 * vload(X, (0) * XS + 0 * LANES))
-    v43 = vload(X, (0) * XS + 1 * LANES) * vload(X, (0) * XS + 0 * LANES)
-    v48 = v42 + (s46 * v43)
-    v51 = v48 - (s49 * vload(X, (0) * XS + 1 * LANES))
-    v55 = v51 - (s53 * vload(X, (0) * XS + 4 * LANES))
-    v56 = vload(X, (0) * XS + 4 * LANES) * vload(X, (0) * XS + 2 * LANES)
-    v58 = vload(X, (0) * XS + 3 * LANES) * vload(X, (0) * XS + 2 * LANES)
-    v60 = -(s5 * v58)
-    vstore(X, (1) * XS + 0 * LANES, v26)
-    vstore(X, (1) * XS + 1 * LANES, v36)
-    vstore(X, (1) * XS + 2 * LANES, v55)
-    vstore(X, (1) * XS + 3 * LANES, (s5 * v56))
-    vstore(X, (1) * XS + 4 * LANES, v60)
+    u16 = vmul(vload(X, 0 * XS + 2 * LANES), vload(X, 0 * XS + 1 * LANES))
+    u18 = vsub(vmul(vsplat(s5), u16), vmul(vsplat(s1), vload(X, 0 * XS + 3 * LANES)))
+    u22 = vsub(u18, vmul(vsplat(s20), vload(X, 0 * XS + 1 * LANES)))
+    u26 = vsub(u22, vmul(vsplat(s24), vload(X, 0 * XS + 2 * LANES)))
+    u32 = vadd(vmul(vsplat(s28), vload(X, 0 * XS + 2 * LANES)), vmul(vsplat(s30), vload(X, 0 * XS + 0 * LANES)))
+    u33 = vsub(u32, vmul(vsplat(s1), vload(X, 0 * XS + 4 * LANES)))
+    u34 = vmul(vload(X, 0 * XS + 0 * LANES), vload(X, 0 * XS + 2 * LANES))
+    u36 = vsub(u33, vmul(vsplat(s5), u34))
+    u42 = vadd(vmul(vsplat(s38), vload(X, 0 * XS + 3 * LANES)), vmul(vsplat(s40), vload(X, 0 * XS + 0 * LANES)))
+    u43 = vmul(vload(X, 0 * XS + 1 * LANES), vload(X, 0 * XS + 0 * LANES))
+    u48 = vadd(u42, vmul(vsplat(s46), u43))
+    u51 = vsub(u48, vmul(vsplat(s49), vload(X, 0 * XS + 1 * LANES)))
+    u55 = vsub(u51, vmul(vsplat(s53), vload(X, 0 * XS + 4 * LANES)))
+    u56 = vmul(vload(X, 0 * XS + 4 * LANES), vload(X, 0 * XS + 2 * LANES))
+    u58 = vmul(vload(X, 0 * XS + 3 * LANES), vload(X, 0 * XS + 2 * LANES))
+    u60 = vneg(vmul(vsplat(s5), u58))
+    vstore(X, 1 * XS + 0 * LANES, u26)
+    vstore(X, 1 * XS + 1 * LANES, u36)
+    vstore(X, 1 * XS + 2 * LANES, u55)
+    vstore(X, 1 * XS + 3 * LANES, vmul(vsplat(s5), u56))
+    vstore(X, 1 * XS + 4 * LANES, u60)
     for k in range(1, order):
         m16 = vzero()
         m34 = vzero()
@@ -270,33 +271,33 @@ def taylor_coefficients_lanes(P, X, order, W):
         m56 = vzero()
         m58 = vzero()
         for j in range(k + 1):
-            m16 = m16 + vload(X, (j) * XS + 2 * LANES) * vload(X, (k - j) * XS + 1 * LANES)
-            m34 = m34 + vload(X, (j) * XS + 0 * LANES) * vload(X, (k - j) * XS + 2 * LANES)
-            m43 = m43 + vload(X, (j) * XS + 1 * LANES) * vload(X, (k - j) * XS + 0 * LANES)
-            m56 = m56 + vload(X, (j) * XS + 4 * LANES) * vload(X, (k - j) * XS + 2 * LANES)
-            m58 = m58 + vload(X, (j) * XS + 3 * LANES) * vload(X, (k - j) * XS + 2 * LANES)
+            m16 = vadd(m16, vmul(vload(X, j * XS + 2 * LANES), vload(X, (k - j) * XS + 1 * LANES)))
+            m34 = vadd(m34, vmul(vload(X, j * XS + 0 * LANES), vload(X, (k - j) * XS + 2 * LANES)))
+            m43 = vadd(m43, vmul(vload(X, j * XS + 1 * LANES), vload(X, (k - j) * XS + 0 * LANES)))
+            m56 = vadd(m56, vmul(vload(X, j * XS + 4 * LANES), vload(X, (k - j) * XS + 2 * LANES)))
+            m58 = vadd(m58, vmul(vload(X, j * XS + 3 * LANES), vload(X, (k - j) * XS + 2 * LANES)))
         v16 = m16
         v34 = m34
         v43 = m43
         v56 = m56
         v58 = m58
-        v32 = (s28 * vload(X, (k) * XS + 2 * LANES)) + (s30 * vload(X, (k) * XS + 0 * LANES))
-        v42 = (s38 * vload(X, (k) * XS + 3 * LANES)) + (s40 * vload(X, (k) * XS + 0 * LANES))
-        v18 = (s5 * v16) - (s1 * vload(X, (k) * XS + 3 * LANES))
-        v33 = v32 - (s1 * vload(X, (k) * XS + 4 * LANES))
-        v48 = v42 + (s46 * v43)
-        v60 = -(s5 * v58)
-        v22 = v18 - (s20 * vload(X, (k) * XS + 1 * LANES))
-        v36 = v33 - (s5 * v34)
-        v51 = v48 - (s49 * vload(X, (k) * XS + 1 * LANES))
-        v26 = v22 - (s24 * vload(X, (k) * XS + 2 * LANES))
-        v55 = v51 - (s53 * vload(X, (k) * XS + 4 * LANES))
+        v32 = vadd(vmul(vsplat(s28), vload(X, k * XS + 2 * LANES)), vmul(vsplat(s30), vload(X, k * XS + 0 * LANES)))
+        v42 = vadd(vmul(vsplat(s38), vload(X, k * XS + 3 * LANES)), vmul(vsplat(s40), vload(X, k * XS + 0 * LANES)))
+        v18 = vsub(vmul(vsplat(s5), v16), vmul(vsplat(s1), vload(X, k * XS + 3 * LANES)))
+        v33 = vsub(v32, vmul(vsplat(s1), vload(X, k * XS + 4 * LANES)))
+        v48 = vadd(v42, vmul(vsplat(s46), v43))
+        v60 = vneg(vmul(vsplat(s5), v58))
+        v22 = vsub(v18, vmul(vsplat(s20), vload(X, k * XS + 1 * LANES)))
+        v36 = vsub(v33, vmul(vsplat(s5), v34))
+        v51 = vsub(v48, vmul(vsplat(s49), vload(X, k * XS + 1 * LANES)))
+        v26 = vsub(v22, vmul(vsplat(s24), vload(X, k * XS + 2 * LANES)))
+        v55 = vsub(v51, vmul(vsplat(s53), vload(X, k * XS + 4 * LANES)))
         r = 1.0 / (k + 1)
-        vstore(X, (k + 1) * XS + 0 * LANES, v26 * r)
-        vstore(X, (k + 1) * XS + 1 * LANES, v36 * r)
-        vstore(X, (k + 1) * XS + 2 * LANES, v55 * r)
-        vstore(X, (k + 1) * XS + 3 * LANES, (s5 * v56) * r)
-        vstore(X, (k + 1) * XS + 4 * LANES, v60 * r)
+        vstore(X, (k + 1) * XS + 0 * LANES, vmul(v26, vsplat(r)))
+        vstore(X, (k + 1) * XS + 1 * LANES, vmul(v36, vsplat(r)))
+        vstore(X, (k + 1) * XS + 2 * LANES, vmul(v55, vsplat(r)))
+        vstore(X, (k + 1) * XS + 3 * LANES, vmul(vmul(vsplat(s5), v56), vsplat(r)))
+        vstore(X, (k + 1) * XS + 4 * LANES, vmul(v60, vsplat(r)))
 
 
 @njit(error_model="numpy")
@@ -319,20 +320,20 @@ def energy(y, P):
     s28 = P[4]
     s31 = P[5]
     s36 = P[3]
-    v7 = (s1 * X[4, 0]) + (s5 * X[3, 0])
+    u7 = (s1 * X[4, 0]) + (s5 * X[3, 0])
     W[0, 0] = X[2, 0] * X[2, 0]
-    v15 = (s0 * v7) + (W[0, 0] / s13)
+    u15 = (s0 * u7) + (W[0, 0] / s13)
     W[1, 0] = X[0, 0] * X[0, 0]
-    v21 = v15 + (W[1, 0] / s19)
+    u21 = u15 + (W[1, 0] / s19)
     W[2, 0] = X[1, 0] * X[1, 0]
-    v27 = v21 + (W[2, 0] / s25)
+    u27 = u21 + (W[2, 0] / s25)
     W[3, 0] = X[0, 0] - s28
-    v30 = X[4, 0] * W[3, 0]
+    u30 = X[4, 0] * W[3, 0]
     W[4, 0] = X[1, 0] - s31
-    v33 = X[3, 0] * W[4, 0]
-    v35 = s0 * (v30 - v33)
-    v38 = v27 - (v35 / s36)
-    return v38
+    u33 = X[3, 0] * W[4, 0]
+    u35 = s0 * (u30 - u33)
+    u38 = u27 - (u35 / s36)
+    return u38
 
 
 N_ENERGY_WORK = 5

@@ -35,6 +35,7 @@ exception: the integrators' non-finite status reports it.
 """
 from __future__ import annotations
 
+import ast
 import functools
 import hashlib
 import importlib.util
@@ -54,7 +55,7 @@ from explorer.model.validation import ParameterError
 __all__ = ["GENERATOR_VERSION", "Decomposition", "cache_directory", "decompose", "load", "module_key", "source"]
 
 #: changes whenever the emitted code changes, so that a cached module of an older generator is not used
-GENERATOR_VERSION = 10
+GENERATOR_VERSION = 11
 
 #: the modules that append drivers to the generated source: each has ``render(system) -> str``, code
 #: that calls the recurrence (``taylor_coefficients_into``, ``taylor_coefficients_lanes``, ``energy``)
@@ -371,7 +372,15 @@ class _Emitter:
             return self.linear(i, lambda a: self.coef(a, k))
         if i in self.row:
             return self.load("W", self.row[i], k)
-        return f"v{i}"   # a local: read at the order being computed only
+        return self.local(i, k)
+
+    @staticmethod
+    def local(i, k):
+        """The name of node i's local value (no row of W: read at the order being computed only):
+        ``u<i>`` at order 0, ``v<i>`` at the orders k >= 1.  Two names, not one assigned twice, so that
+        numba's SSA pass has no violator to fix for it: it rewrites the whole function once per name
+        assigned more than once."""
+        return f"u{i}" if isinstance(k, int) and k == 0 else f"v{i}"
 
     def w(self, r, k):
         return self.load("W", r, k)
@@ -415,7 +424,7 @@ class _Emitter:
 
     def put(self, i, k, code):
         """Node i's coefficient ``k`` (the order being computed) := code."""
-        return self.store("W", self.row[i], k, code) if i in self.row else f"v{i} = {code}"
+        return self.store("W", self.row[i], k, code) if i in self.row else f"{self.local(i, k)} = {code}"
 
     def order0_lines(self):
         out = []
@@ -632,7 +641,8 @@ def rhs(y, P, dy):
 
 
 # ---- the SIMD form (explorer.integrate.simd): LANES orbits at once
-from explorer.integrate.simd import LANES, vload, vsplat, vsqrt, vstore, vzero  # noqa: E402
+from explorer.integrate.simd import (  # noqa: E402
+    LANES, vadd, vdiv, vload, vmul, vneg, vsplat, vsqrt, vstore, vsub, vzero)
 
 #: flat strides of one order in the lane arrays X[k, i, l] and W[k, r, l]
 XS = DIM * LANES
@@ -712,7 +722,68 @@ def recurrence(system: System, name: str = "taylor_coefficients", expressions=No
     lanes = LANES_RECURRENCE.format(name=name, doc=lanes_doc, scalars=scalars, order0=_indent(v.order0_lines(), 4),
                                     first=_indent(first, 4), orderk=_indent(v.orderk_lines() or ["pass"], 8),
                                     next_=_indent(next_, 8))
-    return Recurrence(scalar, lanes, len(e.row))
+    return Recurrence(scalar, vector_calls(lanes), len(e.row))
+
+
+#: the functions of explorer.integrate.simd that return a vector, and the one of each arithmetic operator
+VECTOR_RESULTS = frozenset({"vload", "vzero", "vsplat", "vsqrt", "vadd", "vsub", "vmul", "vdiv", "vneg"})
+VECTOR_OPERATORS = {ast.Add: "vadd", ast.Sub: "vsub", ast.Mult: "vmul", ast.Div: "vdiv"}
+
+
+class _VectorCalls(ast.NodeTransformer):
+    """Rewrites :func:`vector_calls`' arithmetic; a name is a vector from its first assignment of a
+    vector (the emitted code assigns every name before it reads it, in program order)."""
+
+    def __init__(self):
+        self.vectors = set()
+
+    def is_vector(self, node) -> bool:
+        if isinstance(node, ast.Call):
+            return isinstance(node.func, ast.Name) and node.func.id in VECTOR_RESULTS
+        if isinstance(node, ast.Name):
+            return node.id in self.vectors
+        if isinstance(node, ast.BinOp):
+            return self.is_vector(node.left) or self.is_vector(node.right)
+        if isinstance(node, ast.UnaryOp):
+            return self.is_vector(node.operand)
+        return False
+
+    def _vector(self, node):
+        return node if self.is_vector(node) else ast.Call(ast.Name("vsplat", ast.Load()), [node], [])
+
+    def visit_BinOp(self, node):
+        if not self.is_vector(node):
+            return node
+        if type(node.op) not in VECTOR_OPERATORS:   # pragma: no cover - the emitter writes no other
+            raise AssertionError(f"no vector form of {ast.unparse(node)}")
+        node = self.generic_visit(node)
+        return ast.Call(ast.Name(VECTOR_OPERATORS[type(node.op)], ast.Load()),
+                        [self._vector(node.left), self._vector(node.right)], [])
+
+    def visit_UnaryOp(self, node):
+        if not self.is_vector(node):
+            return node
+        if not isinstance(node.op, ast.USub):   # pragma: no cover - the emitter writes no other
+            raise AssertionError(f"no vector form of {ast.unparse(node)}")
+        return ast.Call(ast.Name("vneg", ast.Load()), [self.visit(node.operand)], [])
+
+    def visit_Assign(self, node):
+        vector = self.is_vector(node.value)
+        node = self.generic_visit(node)
+        if vector:
+            self.vectors.update(t.id for t in node.targets if isinstance(t, ast.Name))
+        return node
+
+
+def vector_calls(text: str) -> str:
+    """``text`` (the source of SIMD functions) with every arithmetic operation on a vector written as
+    the call of its :mod:`explorer.integrate.simd` intrinsic (``a * b`` as ``vmul(a, b)``, a scalar
+    operand splatted: ``2.0 * acc`` as ``vmul(vsplat(2.0), acc)``, what the vector type's operators
+    compile to: the same IEEE operations, so each lane keeps its bits).  Numba types an operator by
+    trying each template of ``operator.mul`` and the like and compiles the overload it finds as a
+    function of its own; a call of the intrinsic is typed by itself and lowered in place
+    (docs/systems.md, "The cache")."""
+    return ast.unparse(_VectorCalls().visit(ast.parse(text))) + "\n"
 
 ENERGY = '''
 
