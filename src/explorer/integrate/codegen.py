@@ -785,6 +785,7 @@ def vector_calls(text: str) -> str:
     (docs/systems.md, "The cache")."""
     return ast.unparse(_VectorCalls().visit(ast.parse(text))) + "\n"
 
+
 ENERGY = '''
 
 @njit(error_model="numpy")
