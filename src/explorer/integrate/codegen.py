@@ -380,7 +380,7 @@ class _Emitter:
         ``u<i>`` at order 0, ``v<i>`` at the orders k >= 1.  Two names, not one assigned twice, so that
         numba's SSA pass has no violator to fix for it: it rewrites the whole function once per name
         assigned more than once."""
-        return f"u{i}" if isinstance(k, int) and k == 0 else f"v{i}"
+        return f"u{i}" if k == 0 else f"v{i}"   # k: 0, or the code of an order k >= 1 ("k", "k - j")
 
     def w(self, r, k):
         return self.load("W", r, k)
