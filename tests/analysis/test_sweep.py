@@ -367,8 +367,6 @@ def test_an_adaptive_map_panel_fills_some_cells_computes_the_rest_as_the_exact_m
     panel's same cells bit for bit (every indicator array), the filled ones leave >= 99.5 % of the
     cells in the same class (MEGNO > threshold) and the chaotic fraction within 0.5 points."""
     from explorer.analysis import sweep
-    from explorer.analysis.lyapunov import chaotic_fraction
-    from explorer.app.runner import classify_megno
     from explorer.io.scene import parse_scene
 
     monkeypatch.setattr(sweep, "MAP_COARSE", 16)         # a 64-cell map from a lattice of 16 a side
@@ -385,10 +383,9 @@ def test_an_adaptive_map_panel_fills_some_cells_computes_the_rest_as_the_exact_m
         assert np.isnan(a[k][~done]).all(), k              # a filled cell has its MEGNO only
     assert np.isfinite(a["megno"]).all()
     thr = 4.0
-    same = (classify_megno(a) > thr) == (classify_megno(e) > thr)
+    same = sweep.classify(a, "megno", thr)[0] == sweep.classify(e, "megno", thr)[0]
     assert same.mean() >= 0.995
-    ok = e["lyapunov_status"] == 0
-    fa, fe = chaotic_fraction(classify_megno(a), thr, ok)[0], chaotic_fraction(classify_megno(e), thr, ok)[0]
+    fa, fe = sweep.panel_fraction(a, "megno", thr)[0], sweep.panel_fraction(e, "megno", thr)[0]
     assert 0.05 < fe < 0.95 and abs(fa - fe) <= 0.005
 
 

@@ -39,8 +39,8 @@ def test_generated_tangent_file_is_up_to_date(tmp_path):
 def test_tangent_lane_kernels_match_the_scalar_recurrence_bitwise(name, order):
     """Every lane of the indicator module's recurrence (one and two vectors) is its scalar twin, its orbit
     and first vector rows the engine's tangent recurrence (_tangent_lanes_generated, the orbit's
-    decomposition extended: explorer.integrate.codegen.decompose_extending), and Horner on lanes is
-    kernels.taylor.evaluate on each lane's rows."""
+    decomposition extended: explorer.integrate.codegen.decompose_extending), and the module's Horner on
+    lanes (``_evaluate_lanes``) is kernels.taylor.evaluate on each lane's rows."""
     P = PARAM_SETS[name].as_array()
     rng = np.random.default_rng(order)
     Z0 = np.zeros((15, L))
@@ -55,8 +55,7 @@ def test_tangent_lane_kernels_match_the_scalar_recurrence_bitwise(name, order):
         X[0] = Z0[:rows]
         mod.taylor_coefficients_lanes(P, X, order, np.zeros((order + 1, max(mod.N_WORK, 1), L)))
         out = np.empty((rows, L))
-        for base in range(0, rows, 5):
-            lanes.evaluate_lanes(X, order, h, out, base)
+        mod._evaluate_lanes(X, order, h, out)
         for l in range(L):
             S = np.zeros((rows, order + 1))
             S[:, 0] = Z0[:rows, l]

@@ -283,13 +283,6 @@ def chaplygin_indicator_arrays(spec: SweepSpec, panel: PanelSpec, rows: np.ndarr
     return ind, out
 
 
-def panel_frequency_diffusion(spec: SweepSpec, panel: PanelSpec, a: int, b: int, threads=None) -> np.ndarray:
-    """The indicator frequency_diffusion of the seeds a:b of ``panel``: :func:`explorer.analysis.
-    rotation.frequency_diffusion` on the panel's section map (phi0 of the sweep, Taylor tolerance
-    [lyapunov] tol) around [lyapunov] center, N = [lyapunov] diffusion_iterates."""
-    return _frequency_diffusion(spec, panel, panel.seeds[a:b], threads)
-
-
 def _frequency_diffusion(spec, panel, seeds, threads, smap=None):
     from explorer.analysis.rotation import frequency_diffusion
 

@@ -570,12 +570,6 @@ class SystemSectionMap(FlowSection):
                 return float(v)
         return self.energy_value
 
-    def energy_of(self, states) -> np.ndarray:
-        """The system's energy at the states (N, 4)."""
-        Y = np.asarray(states, dtype=np.float64).reshape(-1, self.system.dimension)
-        H = self._lift[2](*Y.T, *self.system.parameter_array())
-        return np.broadcast_to(np.asarray(H, dtype=np.float64), (Y.shape[0],)).copy()
-
     def with_value(self, name: str, value) -> SystemSectionMap:
         """This map with the system's parameter ``name``, or the energy level (``"energy"``), set to ``value``."""
         if name not in self.parameters:

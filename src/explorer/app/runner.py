@@ -80,14 +80,6 @@ def panel_manifolds(scene, i):
     return branches, ""
 
 
-def classify_megno(arrays):
-    """<Y> for classifying orbits: an orbit stopped early as chaotic (``lyapunov_early`` > 0) counts
-    as above every threshold."""
-    m = np.asarray(arrays["megno"], float)
-    early = stopped_early(arrays)
-    return m if early is None else np.where(early, np.finfo(float).max, m)
-
-
 def raster_maps(scene, maps) -> list:
     """The map panels of ``maps`` (those with a grid) as :func:`explorer.app.chaos_raster.chaos_rasters`
     draws them: the values of ``map_indicator``, the panel's class and fraction, the cells computed,

@@ -3,44 +3,14 @@
 ``chaplygin.system()``): the section phi = phi0 is the hyperplane sin(phi - phi0) = g1 cos phi0 - g2 sin phi0
 = 0, its half cos(phi - phi0) = g2 cos phi0 + g1 sin phi0 > 0 kept (docs/model.md; docs/architecture.md,
 The system seam).  Each lane is bit for bit the scalar oracle tests/integrate/taylor_oracle.py, whatever
-the thread count.  Kernel contract: explorer/kernels/__init__.py.  :func:`evaluate_lanes`: Horner on
-rows of a lane array (tests/integrate/test_tangent_lanes.py).
+the thread count.  Kernel contract: explorer/kernels/__init__.py.
 """
 import numpy as np
 
 from explorer._jit import get_num_threads, njit, prange
 from explorer.integrate import _lanes_generated as G
 from explorer.integrate.layout import CARRY_T
-from explorer.integrate.simd import LANES, vadd, vload, vmul, vstore
-
-
-@njit
-def evaluate_lanes(X, order, h, out, base):
-    """out[base + i, l] = sum_k X[k, base + i, l] h[l]^k for i = 0..4 per lane (Horner: per lane
-    exactly kernels.taylor.evaluate); LANES lanes."""
-    w = LANES
-    stride = X.shape[1] * w
-    hv = vload(h, 0)
-    o = order * stride + base * w
-    a0 = vload(X, o)
-    a1 = vload(X, o + w)
-    a2 = vload(X, o + 2 * w)
-    a3 = vload(X, o + 3 * w)
-    a4 = vload(X, o + 4 * w)
-    for k in range(order - 1, -1, -1):
-        o = k * stride + base * w
-        a0 = vadd(vmul(a0, hv), vload(X, o))
-        a1 = vadd(vmul(a1, hv), vload(X, o + w))
-        a2 = vadd(vmul(a2, hv), vload(X, o + 2 * w))
-        a3 = vadd(vmul(a3, hv), vload(X, o + 3 * w))
-        a4 = vadd(vmul(a4, hv), vload(X, o + 4 * w))
-    o = base * w
-    vstore(out, o, a0)
-    vstore(out, o + w, a1)
-    vstore(out, o + 2 * w, a2)
-    vstore(out, o + 3 * w, a3)
-    vstore(out, o + 4 * w, a4)
-
+from explorer.integrate.simd import LANES
 
 #: the section phi = phi0 as every System's: s = a . y + b (sin(phi - phi0)), its half keep . (y, 1) > 0
 #: (cos(phi - phi0)), the rows (t, p1, p2, M, H - H0)

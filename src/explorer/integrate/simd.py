@@ -70,9 +70,6 @@ if NOJIT:  # pragma: no cover - plain-Python twins (numpy elementwise = the same
     def vand(a, b):
         return a & b
 
-    def vandnot(a, b):
-        return a & ~b
-
     def vor(a, b):
         return a | b
 
@@ -228,7 +225,6 @@ else:
     _M2 = (b1vec, b1vec)
     vand = _lanewise(_M2, b1vec, lambda b, x, y: b.and_(x, y))
     vor = _lanewise(_M2, b1vec, lambda b, x, y: b.or_(x, y))
-    vandnot = _lanewise(_M2, b1vec, lambda b, x, y: b.and_(x, b.not_(y)))
     #: a where m else b, lane by lane
     vselect = _lanewise((b1vec, f64vec, f64vec), f64vec, lambda b, m, x, y: b.select(m, x, y))
 
