@@ -94,6 +94,7 @@ class PeriodicOrbit:
 
     @property
     def total_time(self) -> float:
+        """The flow's time over one period of the map: the sum of the return times."""
         return float(np.sum(self.return_times))
 
     def distance_to(self, x) -> float:
