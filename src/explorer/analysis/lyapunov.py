@@ -12,6 +12,7 @@ from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
 from explorer.analysis import budget, system_sections
 from explorer.analysis.section_map import is_params, system_first
+from explorer.analysis.system_indicators import driver_outputs, early_levels, run_indicator_driver, system_indicators
 from explorer.integrate import methods
 from explorer.integrate.methods import DEFAULT_DT, DEFAULT_TOL
 from explorer.kernels import STATUS_NAMES, Status
@@ -139,7 +140,6 @@ def indicators(system, y0=None, *, tmax: float = DEFAULT_TIME, method: str | Non
     the model, ``states``, ``phi0`` and ``h`` are the system argument's
     (:func:`~explorer.analysis.section_map.system_first`)."""
     if system_sections.is_system(system) or system_sections.is_system_map(system):
-        from explorer.analysis.system_indicators import system_indicators
         return Indicators(**system_indicators(
             system, y0, tmax=tmax, method=method, tol=tol, dt=dt, history=history, v0=v0, w0=w0, max_steps=max_steps,
             threads=threads, which=check_which(which), early_stop=early_stop, early_sali=early_sali,
@@ -178,26 +178,12 @@ def indicators(system, y0=None, *, tmax: float = DEFAULT_TIME, method: str | Non
     V0 = np.array(np.broadcast_to(V0, Y0.shape), dtype=np.float64, order="C")
     W0 = second_deviation_vector(P, Y0) if w0 is None else np.atleast_2d(np.asarray(w0, float))
     W0 = np.array(np.broadcast_to(W0, Y0.shape), dtype=np.float64, order="C")
-    history = validation.fits_in_memory("history", history, Y0.shape[0] * table.N_RES * 8 + 8,
-                                        f"a row of {table.N_RES} float64 per orbit and history point")
-    early_stop = bool(early_stop)
-    if early_stop:
-        early_sali = validation.real("early_sali", early_sali, 0.0, 1.0)
-        early_megno = validation.real("early_megno", early_megno, 2.0, lo_open=True)
-        early_time = validation.real("early_time", early_time, 0.0)
-    N = Y0.shape[0]
-    hist_t = (np.geomspace(min(1.0, T), T, history) if history else np.zeros(0))
-    hist = np.full((N, len(hist_t), table.N_RES), np.nan)
-    res = np.zeros((N, table.N_RES))
-    status = np.zeros(N, np.int64)
-    final = np.zeros((N, 5))
-    steps = np.zeros(N, np.int64)
-    ext = np.full((N, table.N_EXT), np.nan)
-    dev = np.full((N, 2, 5), np.nan)
+    out = driver_outputs(Y0.shape[0], 5, T, history)
+    hist_t, hist, res, ext, status, final, steps, dev = out.values()
+    early = early_levels(early_stop, early_sali, early_megno, early_time, nvec)
     settings = {"method": method, "time": T}
-    if early_stop:
-        settings.update(early_stop=True, early_sali=early_sali if nvec == 2 else 0.0, early_megno=early_megno,
-                        early_time=early_time)
+    if early["early_stop"]:
+        settings.update(early)
     stop = budget.stop_switch()         # a budget's cancel ends every orbit at its next step
     old = get_num_threads()
     if threads is not None:
@@ -206,11 +192,8 @@ def indicators(system, y0=None, *, tmax: float = DEFAULT_TIME, method: str | Non
         prep = m.prepare(tol=tol, dt=dt)
         settings.update(prep.settings)
         if m.loops.tangent_ext is not None:   # the indicators template of every System (docs/systems.md)
-            system_sections.run_driver(
-                m.loops.loop("tangent_ext")(nvec), "indicators", N, "auto", None,
-                (Y0, V0, W0, 5, nvec, P, T, prep.order, int(max_steps), early_stop,
-                 float(early_sali) if nvec == 2 else 0.0, float(early_megno), float(early_time), hist_t, hist, res,
-                 ext, status, final, steps, dev, stop))
+            run_indicator_driver(m.loops.loop("tangent_ext")(nvec), "auto", None, Y0, V0, W0, nvec, P, T, prep.order,
+                                 int(max_steps), early, out, stop)
         else:
             # an orbit the fixed step does not resolve is not integrated
             slow = methods.unresolved(prep, P, Y0)

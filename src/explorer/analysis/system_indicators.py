@@ -24,7 +24,8 @@ from explorer.kernels import indicator_table as table
 from explorer.kernels.taylor_order import order_for_tolerance
 from explorer.model import ParameterError, validation
 
-__all__ = ["GENERIC_SEEDS", "default_vectors", "system_indicators"]
+__all__ = ["GENERIC_SEEDS", "default_vectors", "driver_outputs", "early_levels", "run_indicator_driver",
+           "system_indicators"]
 
 #: the engine's settings that have no meaning for a System (Chaplygin's section, energy and fixed step)
 _NOT_FOR_A_SYSTEM = ("phi0", "h", "dt")
@@ -72,6 +73,41 @@ def _energy_error(system, Y0, final) -> np.ndarray:
     P = system.parameter_array()
     with np.errstate(invalid="ignore", over="ignore"):
         return np.array([abs(mod.energy(f, P) - mod.energy(y, P)) for f, y in zip(final, Y0)])
+
+
+def early_levels(early_stop, early_sali, early_megno, early_time, nvec: int) -> dict:
+    """The early stop as the indicator drivers take it and the settings record it: ``early_stop`` and,
+    when set, its levels checked (SALI's in [0, 1], used with two vectors only, else 0; MEGNO's above 2;
+    the earliest time >= 0: docs/commands/lyapunov.md)."""
+    if not bool(early_stop):
+        return {"early_stop": False, "early_sali": 0.0, "early_megno": 0.0, "early_time": 0.0}
+    sali = validation.real("early_sali", early_sali, 0.0, 1.0)
+    return {"early_stop": True, "early_sali": sali if nvec == 2 else 0.0,
+            "early_megno": validation.real("early_megno", early_megno, 2.0, lo_open=True),
+            "early_time": validation.real("early_time", early_time, 0.0)}
+
+
+def driver_outputs(N: int, n: int, T: float, history) -> dict:
+    """The output arrays of the indicator drivers (integrate/codegen_indicators.py) for N orbits of
+    dimension n over the time T, with ``history`` (checked) log-spaced records: ``hist_t``, ``hist``,
+    ``res``, ``ext``, ``status``, ``final``, ``steps``, ``dev`` in the drivers' order."""
+    history = validation.fits_in_memory("history", history, N * table.N_RES * 8 + 8,
+                                        f"a row of {table.N_RES} float64 per orbit and history point")
+    hist_t = np.geomspace(min(1.0, T), T, history) if history else np.zeros(0)
+    return {"hist_t": hist_t, "hist": np.full((N, len(hist_t), table.N_RES), np.nan),
+            "res": np.zeros((N, table.N_RES)), "ext": np.full((N, table.N_EXT), np.nan),
+            "status": np.zeros(N, np.int64), "final": np.zeros((N, n)), "steps": np.zeros(N, np.int64),
+            "dev": np.full((N, 2, n), np.nan)}
+
+
+def run_indicator_driver(mod, driver: str, threads, Y0, V0, W0, nvec: int, P, T: float, order: int, max_steps: int,
+                         early: dict, out: dict, stop) -> None:
+    """The indicators driver of the generated variational module ``mod`` on the orbits Y0 with the
+    deviation vectors V0, W0 (:func:`~explorer.analysis.system_sections.run_driver`), into ``out``
+    (:func:`driver_outputs`), with the early stop ``early`` (:func:`early_levels`)."""
+    run_driver(mod, "indicators", Y0.shape[0], driver, threads,
+               (Y0, V0, W0, Y0.shape[1], nvec, P, T, order, max_steps, early["early_stop"], early["early_sali"],
+                early["early_megno"], early["early_time"], *out.values(), stop))
 
 
 def system_indicators(system, y0=None, *, states=None, tmax: float, method, tol: float | None, history: int, v0,
@@ -126,41 +162,26 @@ def system_indicators(system, y0=None, *, states=None, tmax: float, method, tol:
     dv, dw = default_vectors(n)
     V0 = _vectors("v0", v0, dv, N)
     W0 = _vectors("w0", w0, dw, N)
-    history = validation.fits_in_memory("history", history, N * table.N_RES * 8 + 8,
-                                        f"a row of {table.N_RES} float64 per orbit and history point")
-    early_stop = bool(early_stop)
-    if early_stop:
-        early_sali = validation.real("early_sali", early_sali, 0.0, 1.0)
-        early_megno = validation.real("early_megno", early_megno, 2.0, lo_open=True)
-        early_time = validation.real("early_time", early_time, 0.0)
+    out = driver_outputs(N, n, T, history)
+    early = early_levels(early_stop, early_sali, early_megno, early_time, nvec)
     if threads is not None:
         threads = validation.threads(threads, max_threads())
     # the variational system of nvec vectors: one recurrence, the Jacobian's subexpressions shared with f
     mod = codegen.load(system.variational(nvec))
-    hist_t = np.geomspace(min(1.0, T), T, history) if history else np.zeros(0)
-    hist = np.full((N, len(hist_t), table.N_RES), np.nan)
-    res = np.zeros((N, table.N_RES))
-    ext = np.full((N, table.N_EXT), np.nan)
-    status = np.zeros(N, np.int64)
-    final = np.zeros((N, n))
-    steps = np.zeros(N, np.int64)
-    dev = np.full((N, 2, n), np.nan)
-    run_driver(mod, "indicators", N, driver, threads,
-               (Y0, V0, W0, n, nvec, system.parameter_array(), T, order, max_steps, early_stop,
-                float(early_sali) if nvec == 2 else 0.0, float(early_megno), float(early_time), hist_t, hist, res,
-                ext, status, final, steps, dev, stop))
-    budget.raise_if_cancelled(status)
+    run_indicator_driver(mod, driver, threads, Y0, V0, W0, nvec, system.parameter_array(), T, order, max_steps,
+                         early, out, stop)
+    budget.raise_if_cancelled(out["status"])
     settings = {"method": "taylor", "time": T, "tol": tol, "order": order, "system": system.name,
                 "states": [s.name for s in system.states], "vectors": nvec}
     if smap is not None:
         settings.update(energy=smap.energy_value, section=str(smap.section.expr), direction=smap.direction,
                         coords=[s.name for s in smap.coords], solve=smap.solve.name)
-    if early_stop:
-        settings.update(early_stop=True, early_sali=early_sali if nvec == 2 else 0.0, early_megno=early_megno,
-                        early_time=early_time)
+    if early["early_stop"]:
+        settings.update(early)
+    res, ext = out["res"], out["ext"]
     rows = {table.RESULT: res, table.EXTRA: ext}
     values = {i.name: rows[i.row][:, i.column] for i in table.TANGENT}
-    return dict(time=res[:, table.RES_T], values=values, Y=res[:, table.RES_Y], status=status, steps=steps,
-                final=final, history_t=hist_t, history=hist, method="taylor", settings=settings,
-                early=ext[:, table.EXT_EARLY].astype(np.int64), deviation=dev, which=which,
-                energy_error=_energy_error(system, Y0, final))
+    return dict(time=res[:, table.RES_T], values=values, Y=res[:, table.RES_Y], status=out["status"],
+                steps=out["steps"], final=out["final"], history_t=out["hist_t"], history=out["hist"], method="taylor",
+                settings=settings, early=ext[:, table.EXT_EARLY].astype(np.int64), deviation=out["dev"], which=which,
+                energy_error=_energy_error(system, Y0, out["final"]))
