@@ -109,7 +109,7 @@ def generate_tangent():
     # same operations as in the orbit's recurrence, so R3's bit for bit
     tangent = codegen.recurrence(
         one, "tangent_coefficients", decomposition=codegen.decompose_extending(orbit, one),
-        n_work="N_WORK_TANGENT", ws="WS_TANGENT",
+        n_work="N_WORK_TANGENT",
         doc=_doc("R3 and its variational equations from X[:, 0] (rows 0..4: the orbit's recurrence's\n"
                  "    operations, so its values)", "0..9", "N_WORK_TANGENT"))
     constants = (f"#: first row of the deviation vector\nDEV1 = {DEV1}\n"
@@ -292,6 +292,7 @@ def operation_counts(order, nvec=0):
     doubles (per lane: that many scalar operations; a scalar's operations are not counted).  Counted by
     running the generated text itself with one-lane stand-ins that count (benchmarks/bench_roofline.py
     divides the flops of a step by these)."""
+    import math
     import re
 
     import numpy as np
@@ -299,34 +300,21 @@ def operation_counts(order, nvec=0):
     orbit = chaplygin.system()
     system = chaplygin.variational(vectors=nvec) if nvec else orbit
     r = codegen.recurrence(system, decomposition=codegen.decompose_extending(orbit, system))
-    text = (f"NVAR = {system.dimension}\nN_WORK = {r.n_work}\nXS = NVAR * LANES\nWS = max(N_WORK, 1) * LANES\n"
-            f"{r.lanes}")
-    text = re.sub(r"^from explorer\..*$", "", text, flags=re.M)
+    text = re.sub(r"^from explorer\..*$", "", r.lanes, flags=re.M)
     counts = dict.fromkeys(("vadd", "vsub", "vmul", "vneg", "vdiv"), 0)
 
-    class Vec:
-        def __init__(self, x):
-            self.x = float(x)
-
-        def _op(name, fn, swap=False):  # a factory of methods
-            def op(a, b):
-                counts[name] += 1
-                a, b = (b, a) if swap else (a, b)
-                return Vec(fn(a.x if isinstance(a, Vec) else a, b.x if isinstance(b, Vec) else b))
-            return op
-
-        __add__, __radd__ = _op("vadd", float.__add__), _op("vadd", float.__add__, True)
-        __sub__, __rsub__ = _op("vsub", float.__sub__), _op("vsub", float.__sub__, True)
-        __mul__, __rmul__ = _op("vmul", float.__mul__), _op("vmul", float.__mul__, True)
-        __truediv__, __rtruediv__ = _op("vdiv", float.__truediv__), _op("vdiv", float.__truediv__, True)
-
-        def __neg__(self):
-            counts["vneg"] += 1
-            return Vec(-self.x)
+    def counted(name, fn):
+        def op(*args):
+            counts[name] += 1
+            return fn(*args)
+        return op
 
     ns = {"np": np, "njit": lambda *a, **k: (a[0] if a and callable(a[0]) else (lambda f: f)), "LANES": 1,
-          "vload": lambda a, i: Vec(a.reshape(-1)[i]), "vstore": lambda a, i, v: a.reshape(-1).__setitem__(i, v.x),
-          "vzero": lambda: Vec(0.0), "vsplat": lambda x: Vec(x), "taylor_coefficients_into": None}
+          "vget": lambda a, k, r: float(a[k, r, 0]), "vset": lambda a, k, r, v: a.__setitem__((k, r, 0), v),
+          "vzero": lambda: 0.0, "vsplat": float, "vsqrt": math.sqrt, "taylor_coefficients_into": None,
+          "vadd": counted("vadd", float.__add__), "vsub": counted("vsub", float.__sub__),
+          "vmul": counted("vmul", float.__mul__), "vdiv": counted("vdiv", float.__truediv__),
+          "vneg": counted("vneg", float.__neg__)}
     exec(compile(text, "<generated>", "exec"), ns)
     X = np.zeros((order + 1, system.dimension, 1))
     X[0] = 0.5

@@ -358,6 +358,57 @@ def test_every_simd_call_the_generated_recurrences_make_is_an_intrinsic_of_explo
 
     text = codegen.recurrence(chaplygin.variational(vectors=1)).lanes
     called = set(re.findall(r"\b(v[a-z_]+)\(", text))
-    assert {"vadd", "vsub", "vmul", "vload", "vstore"} <= called
-    assert called <= codegen.VECTOR_RESULTS | {"vstore"}
+    assert {"vadd", "vsub", "vmul", "vget", "vset"} <= called
+    assert called <= codegen.VECTOR_RESULTS | {"vset"}
     assert all(callable(getattr(simd, name)) for name in codegen.VECTOR_RESULTS)
+
+
+class _Counted:
+    """A number whose arithmetic with series values counts itself in ``COUNTS`` (by the name of the
+    vector intrinsic that does it on lanes); a plain float's arithmetic, a scalar's, is not counted."""
+
+    COUNTS: dict = {}
+
+    def __init__(self, x):
+        self.x = x
+
+    def _op(name, fn, swap=False):    # a factory of methods
+        def op(a, b):
+            _Counted.COUNTS[name] += 1
+            a, b = (b, a) if swap else (a, b)
+            return _Counted(fn(getattr(a, "x", a), getattr(b, "x", b)))
+        return op
+
+    __add__, __radd__ = _op("vadd", float.__add__), _op("vadd", float.__add__, True)
+    __sub__, __rsub__ = _op("vsub", float.__sub__), _op("vsub", float.__sub__, True)
+    __mul__, __rmul__ = _op("vmul", float.__mul__), _op("vmul", float.__mul__, True)
+    __truediv__, __rtruediv__ = _op("vdiv", float.__truediv__), _op("vdiv", float.__truediv__, True)
+
+    def __neg__(self):
+        _Counted.COUNTS["vneg"] += 1
+        return _Counted(-self.x)
+
+
+@pytest.mark.parametrize("nvec", [0, 2])
+def test_the_roofline_counts_of_the_simd_recurrence_are_the_scalar_recurrences_operations_on_series(nvec):
+    """tools/gen_lanes.py's operation_counts (benchmarks/bench_roofline.py's flops per step), which runs
+    the SIMD text with counting intrinsics, counts each operation of the scalar recurrence on a series
+    value once: the same operations, run on one lane."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tools"))
+    import gen_lanes
+
+    orbit = chaplygin.system()
+    system = chaplygin.variational(vectors=nvec) if nvec else orbit
+    r = codegen.recurrence(system, decomposition=codegen.decompose_extending(orbit, system))
+    ns = {"np": np, "math": math, "njit": lambda *a, **k: a[0] if a and callable(a[0]) else (lambda f: f)}
+    exec(compile(re.sub(r"^from explorer\..*$", "", r.scalar, flags=re.M), "<scalar>", "exec"), ns)
+    order = 12
+    X = np.full((system.dimension, order + 1), _Counted(0.0), dtype=object)
+    X[:, 0] = [_Counted(0.5) for _ in range(system.dimension)]
+    W = np.full((max(r.n_work, 1), order + 1), _Counted(0.0), dtype=object)
+    _Counted.COUNTS = dict.fromkeys(("vadd", "vsub", "vmul", "vneg", "vdiv"), 0)
+    ns["taylor_coefficients_into"](np.ones(9), X, order, W)
+    assert _Counted.COUNTS["vmul"] > 0 and _Counted.COUNTS == gen_lanes.operation_counts(order, nvec)

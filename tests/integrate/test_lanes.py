@@ -157,6 +157,24 @@ def _visit(bits, out):
     return n
 
 
+@njit(cache=False)
+def _copy_rows(a, b):
+    """b[k, r] = a[k, r] for every k, r, through vget and vset."""
+    for k in range(a.shape[0]):
+        for r in range(a.shape[1]):
+            simd.vset(b, k, r, simd.vget(a, k, r))
+
+
+def test_vget_and_vset_address_coefficient_k_of_row_r_by_the_arrays_own_row_count():
+    """vget(a, k, r) is a[k, r, :] and vset(b, k, r, v) writes b[k, r, :], whatever a's row count (the
+    generated recurrences read and write X and W with them)."""
+    for rows in (1, 3, 7):
+        a = np.random.default_rng(rows).normal(size=(5, rows, L))
+        b = np.zeros_like(a)
+        _copy_rows(a, b)
+        assert np.array_equal(a.view(np.uint64), b.view(np.uint64))
+
+
 def test_next_bit_visits_the_set_lanes_of_a_mask_once_in_increasing_order():
     out = np.empty(64, np.int64)
     for bits in (1, 2, 0b10110010, (1 << L) - 1, 1 << 63 - 1, 0x5555):

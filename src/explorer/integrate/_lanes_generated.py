@@ -1,7 +1,7 @@
 # Written to this file by tools/gen_lanes.py from explorer.model.chaplygin.system().
 # Regenerate:  python tools/gen_lanes.py     (check: --check)
 # ruff: noqa  (the text of every System's module: its imports repeat, template by template)
-# GENERATED FILE - DO NOT EDIT. Written by explorer.integrate.codegen (generator version 11)
+# GENERATED FILE - DO NOT EDIT. Written by explorer.integrate.codegen (generator version 12)
 # from the system 'chaplygin'; the key  is of its content (explorer.model.system.System.flow_hash).
 #
 #   dp1/dt = M*p2/b - M*zeta/b - g1*mu - lam*p2/a2
@@ -209,7 +209,7 @@ def rhs(y, P, dy):
 
 # ---- the SIMD form (explorer.integrate.simd): LANES orbits at once
 from explorer.integrate.simd import (  # noqa: E402
-    LANES, vadd, vdiv, vload, vmul, vneg, vsplat, vsqrt, vstore, vsub, vzero)
+    LANES, vadd, vdiv, vget, vload, vmul, vneg, vset, vsplat, vsqrt, vstore, vsub, vzero)
 
 #: flat strides of one order in the lane arrays X[k, i, l] and W[k, r, l]
 XS = DIM * LANES
@@ -243,27 +243,27 @@ def taylor_coefficients_lanes(P, X, order, W):
     s49 = s27 / s9
     s52 = P[7]
     s53 = s1 * s52
-    u16 = vmul(vload(X, 0 * XS + 2 * LANES), vload(X, 0 * XS + 1 * LANES))
-    u18 = vsub(vmul(vsplat(s5), u16), vmul(vsplat(s1), vload(X, 0 * XS + 3 * LANES)))
-    u22 = vsub(u18, vmul(vsplat(s20), vload(X, 0 * XS + 1 * LANES)))
-    u26 = vsub(u22, vmul(vsplat(s24), vload(X, 0 * XS + 2 * LANES)))
-    u32 = vadd(vmul(vsplat(s28), vload(X, 0 * XS + 2 * LANES)), vmul(vsplat(s30), vload(X, 0 * XS + 0 * LANES)))
-    u33 = vsub(u32, vmul(vsplat(s1), vload(X, 0 * XS + 4 * LANES)))
-    u34 = vmul(vload(X, 0 * XS + 0 * LANES), vload(X, 0 * XS + 2 * LANES))
+    u16 = vmul(vget(X, 0, 2), vget(X, 0, 1))
+    u18 = vsub(vmul(vsplat(s5), u16), vmul(vsplat(s1), vget(X, 0, 3)))
+    u22 = vsub(u18, vmul(vsplat(s20), vget(X, 0, 1)))
+    u26 = vsub(u22, vmul(vsplat(s24), vget(X, 0, 2)))
+    u32 = vadd(vmul(vsplat(s28), vget(X, 0, 2)), vmul(vsplat(s30), vget(X, 0, 0)))
+    u33 = vsub(u32, vmul(vsplat(s1), vget(X, 0, 4)))
+    u34 = vmul(vget(X, 0, 0), vget(X, 0, 2))
     u36 = vsub(u33, vmul(vsplat(s5), u34))
-    u42 = vadd(vmul(vsplat(s38), vload(X, 0 * XS + 3 * LANES)), vmul(vsplat(s40), vload(X, 0 * XS + 0 * LANES)))
-    u43 = vmul(vload(X, 0 * XS + 1 * LANES), vload(X, 0 * XS + 0 * LANES))
+    u42 = vadd(vmul(vsplat(s38), vget(X, 0, 3)), vmul(vsplat(s40), vget(X, 0, 0)))
+    u43 = vmul(vget(X, 0, 1), vget(X, 0, 0))
     u48 = vadd(u42, vmul(vsplat(s46), u43))
-    u51 = vsub(u48, vmul(vsplat(s49), vload(X, 0 * XS + 1 * LANES)))
-    u55 = vsub(u51, vmul(vsplat(s53), vload(X, 0 * XS + 4 * LANES)))
-    u56 = vmul(vload(X, 0 * XS + 4 * LANES), vload(X, 0 * XS + 2 * LANES))
-    u58 = vmul(vload(X, 0 * XS + 3 * LANES), vload(X, 0 * XS + 2 * LANES))
+    u51 = vsub(u48, vmul(vsplat(s49), vget(X, 0, 1)))
+    u55 = vsub(u51, vmul(vsplat(s53), vget(X, 0, 4)))
+    u56 = vmul(vget(X, 0, 4), vget(X, 0, 2))
+    u58 = vmul(vget(X, 0, 3), vget(X, 0, 2))
     u60 = vneg(vmul(vsplat(s5), u58))
-    vstore(X, 1 * XS + 0 * LANES, u26)
-    vstore(X, 1 * XS + 1 * LANES, u36)
-    vstore(X, 1 * XS + 2 * LANES, u55)
-    vstore(X, 1 * XS + 3 * LANES, vmul(vsplat(s5), u56))
-    vstore(X, 1 * XS + 4 * LANES, u60)
+    vset(X, 1, 0, u26)
+    vset(X, 1, 1, u36)
+    vset(X, 1, 2, u55)
+    vset(X, 1, 3, vmul(vsplat(s5), u56))
+    vset(X, 1, 4, u60)
     for k in range(1, order):
         m16 = vzero()
         m34 = vzero()
@@ -271,33 +271,33 @@ def taylor_coefficients_lanes(P, X, order, W):
         m56 = vzero()
         m58 = vzero()
         for j in range(k + 1):
-            m16 = vadd(m16, vmul(vload(X, j * XS + 2 * LANES), vload(X, (k - j) * XS + 1 * LANES)))
-            m34 = vadd(m34, vmul(vload(X, j * XS + 0 * LANES), vload(X, (k - j) * XS + 2 * LANES)))
-            m43 = vadd(m43, vmul(vload(X, j * XS + 1 * LANES), vload(X, (k - j) * XS + 0 * LANES)))
-            m56 = vadd(m56, vmul(vload(X, j * XS + 4 * LANES), vload(X, (k - j) * XS + 2 * LANES)))
-            m58 = vadd(m58, vmul(vload(X, j * XS + 3 * LANES), vload(X, (k - j) * XS + 2 * LANES)))
+            m16 = vadd(m16, vmul(vget(X, j, 2), vget(X, k - j, 1)))
+            m34 = vadd(m34, vmul(vget(X, j, 0), vget(X, k - j, 2)))
+            m43 = vadd(m43, vmul(vget(X, j, 1), vget(X, k - j, 0)))
+            m56 = vadd(m56, vmul(vget(X, j, 4), vget(X, k - j, 2)))
+            m58 = vadd(m58, vmul(vget(X, j, 3), vget(X, k - j, 2)))
         v16 = m16
         v34 = m34
         v43 = m43
         v56 = m56
         v58 = m58
-        v32 = vadd(vmul(vsplat(s28), vload(X, k * XS + 2 * LANES)), vmul(vsplat(s30), vload(X, k * XS + 0 * LANES)))
-        v42 = vadd(vmul(vsplat(s38), vload(X, k * XS + 3 * LANES)), vmul(vsplat(s40), vload(X, k * XS + 0 * LANES)))
-        v18 = vsub(vmul(vsplat(s5), v16), vmul(vsplat(s1), vload(X, k * XS + 3 * LANES)))
-        v33 = vsub(v32, vmul(vsplat(s1), vload(X, k * XS + 4 * LANES)))
+        v32 = vadd(vmul(vsplat(s28), vget(X, k, 2)), vmul(vsplat(s30), vget(X, k, 0)))
+        v42 = vadd(vmul(vsplat(s38), vget(X, k, 3)), vmul(vsplat(s40), vget(X, k, 0)))
+        v18 = vsub(vmul(vsplat(s5), v16), vmul(vsplat(s1), vget(X, k, 3)))
+        v33 = vsub(v32, vmul(vsplat(s1), vget(X, k, 4)))
         v48 = vadd(v42, vmul(vsplat(s46), v43))
         v60 = vneg(vmul(vsplat(s5), v58))
-        v22 = vsub(v18, vmul(vsplat(s20), vload(X, k * XS + 1 * LANES)))
+        v22 = vsub(v18, vmul(vsplat(s20), vget(X, k, 1)))
         v36 = vsub(v33, vmul(vsplat(s5), v34))
-        v51 = vsub(v48, vmul(vsplat(s49), vload(X, k * XS + 1 * LANES)))
-        v26 = vsub(v22, vmul(vsplat(s24), vload(X, k * XS + 2 * LANES)))
-        v55 = vsub(v51, vmul(vsplat(s53), vload(X, k * XS + 4 * LANES)))
+        v51 = vsub(v48, vmul(vsplat(s49), vget(X, k, 1)))
+        v26 = vsub(v22, vmul(vsplat(s24), vget(X, k, 2)))
+        v55 = vsub(v51, vmul(vsplat(s53), vget(X, k, 4)))
         r = 1.0 / (k + 1)
-        vstore(X, (k + 1) * XS + 0 * LANES, vmul(v26, vsplat(r)))
-        vstore(X, (k + 1) * XS + 1 * LANES, vmul(v36, vsplat(r)))
-        vstore(X, (k + 1) * XS + 2 * LANES, vmul(v55, vsplat(r)))
-        vstore(X, (k + 1) * XS + 3 * LANES, vmul(vmul(vsplat(s5), v56), vsplat(r)))
-        vstore(X, (k + 1) * XS + 4 * LANES, vmul(v60, vsplat(r)))
+        vset(X, k + 1, 0, vmul(v26, vsplat(r)))
+        vset(X, k + 1, 1, vmul(v36, vsplat(r)))
+        vset(X, k + 1, 2, vmul(v55, vsplat(r)))
+        vset(X, k + 1, 3, vmul(vmul(vsplat(s5), v56), vsplat(r)))
+        vset(X, k + 1, 4, vmul(v60, vsplat(r)))
 
 
 @njit(error_model="numpy")

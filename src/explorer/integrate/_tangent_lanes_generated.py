@@ -1,6 +1,6 @@
 # GENERATED FILE - DO NOT EDIT.
 # Written by tools/gen_lanes.py from explorer.model.chaplygin.system() and variational(1) by explorer.integrate.codegen
-# (generator version 11).
+# (generator version 12).
 # Regenerate:  python tools/gen_lanes.py     (check: --check)
 """The Taylor recurrence of R3 with a deviation vector (its variational equations), generated,
 for the tangent loops of :mod:`explorer.integrate.tangent` (docs/systems.md)."""

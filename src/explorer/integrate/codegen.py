@@ -55,7 +55,7 @@ from explorer.model.validation import ParameterError
 __all__ = ["GENERATOR_VERSION", "Decomposition", "cache_directory", "decompose", "load", "module_key", "source"]
 
 #: changes whenever the emitted code changes, so that a cached module of an older generator is not used
-GENERATOR_VERSION = 11
+GENERATOR_VERSION = 12
 
 #: the modules that append drivers to the generated source: each has ``render(system) -> str``, code
 #: that calls the recurrence (``taylor_coefficients_into``, ``taylor_coefficients_lanes``, ``energy``)
@@ -284,16 +284,14 @@ class _Emitter:
     """Source lines of one decomposition: scalars once, order 0, then orders k >= 1.
 
     ``lanes``: the SIMD form (:mod:`explorer.integrate.simd`): X[k, i, l] and W[k, r, l] with
-    LANES lanes contiguous, each coefficient a vector (vload/vstore), the same operations in the
+    LANES lanes contiguous, each coefficient a vector (vget/vset), the same operations in the
     same order as the scalar form (so each lane equals the scalar recurrence bit for bit); the
-    order-0 values of exp, log, sin, cos and real powers lane by lane with :mod:`math`.  ``xs``, ``ws``:
-    the names of the flat strides of one order in X and W; ``rows``: the row of X of each output
-    (default: output i in row i)."""
+    order-0 values of exp, log, sin, cos and real powers lane by lane with :mod:`math`.  ``rows``: the
+    row of X of each output (default: output i in row i)."""
 
-    def __init__(self, d: Decomposition, lanes: bool = False, xs: str = "XS", ws: str = "WS", rows=None):
+    def __init__(self, d: Decomposition, lanes: bool = False, rows=None):
         self.d = d
         self.lanes = lanes
-        self.strides = {"X": xs, "W": ws}
         self.out_rows = list(range(len(d.outputs))) if rows is None else list(rows)
         # a homogeneous linear node (-u, c u, u / c, u +- v) whose operands are stored is not
         # stored: its coefficient of any order is written where it is used (the same operations,
@@ -349,16 +347,10 @@ class _Emitter:
 
     # -- access to one coefficient (a code string), scalar or vector
     def load(self, array, r, k):
-        if self.lanes:
-            stride = self.strides[array]
-            return f"vload({array}, ({k}) * {stride} + {r} * LANES)"
-        return f"{array}[{r}, {k}]"
+        return f"vget({array}, {k}, {r})" if self.lanes else f"{array}[{r}, {k}]"
 
     def store(self, array, r, k, code):
-        if self.lanes:
-            stride = self.strides[array]
-            return f"vstore({array}, ({k}) * {stride} + {r} * LANES, {code})"
-        return f"{array}[{r}, {k}] = {code}"
+        return f"vset({array}, {k}, {r}, {code})" if self.lanes else f"{array}[{r}, {k}] = {code}"
 
     def zero(self):
         return "vzero()" if self.lanes else "0.0"
@@ -642,7 +634,7 @@ def rhs(y, P, dy):
 
 # ---- the SIMD form (explorer.integrate.simd): LANES orbits at once
 from explorer.integrate.simd import (  # noqa: E402
-    LANES, vadd, vdiv, vload, vmul, vneg, vsplat, vsqrt, vstore, vsub, vzero)
+    LANES, vadd, vdiv, vget, vload, vmul, vneg, vset, vsplat, vsqrt, vstore, vsub, vzero)
 
 #: flat strides of one order in the lane arrays X[k, i, l] and W[k, r, l]
 XS = DIM * LANES
@@ -704,12 +696,11 @@ class Recurrence:
 
 
 def recurrence(system: System, name: str = "taylor_coefficients", expressions=None, rows=None, *,
-               n_work: str = "N_WORK", xs: str = "XS", ws: str = "WS", doc: str = SCALAR_DOC,
+               n_work: str = "N_WORK", doc: str = SCALAR_DOC,
                lanes_doc: str = LANES_DOC, decomposition: Decomposition | None = None) -> Recurrence:
     """The scalar and SIMD recurrence of ``expressions`` (default: the right-hand sides; or of a
     ``decomposition`` already made; the output i stored in row ``rows[i]`` of X, default i), named
-    ``name``; ``n_work``, ``xs``, ``ws``: the names of the module's constants it reads (its work rows,
-    the flat strides of one order in X and W)."""
+    ``name``; ``n_work``: the name of the module's constant of its work rows."""
     d = decompose(system, expressions) if decomposition is None else decomposition
     e = _Emitter(d, rows=rows)
     scalars = _indent(e.scalar_lines(), 4)
@@ -717,7 +708,7 @@ def recurrence(system: System, name: str = "taylor_coefficients", expressions=No
     scalar = SCALAR_RECURRENCE.format(name=name, doc=doc, n_work=n_work, scalars=scalars,
                                       order0=_indent(e.order0_lines(), 4), first=_indent(first, 4),
                                       orderk=_indent(e.orderk_lines() or ["pass"], 8), next_=_indent(next_, 8))
-    v = _Emitter(d, lanes=True, xs=xs, ws=ws, rows=rows)
+    v = _Emitter(d, lanes=True, rows=rows)
     first, next_ = v.next_lines()
     lanes = LANES_RECURRENCE.format(name=name, doc=lanes_doc, scalars=scalars, order0=_indent(v.order0_lines(), 4),
                                     first=_indent(first, 4), orderk=_indent(v.orderk_lines() or ["pass"], 8),
@@ -726,7 +717,7 @@ def recurrence(system: System, name: str = "taylor_coefficients", expressions=No
 
 
 #: the functions of explorer.integrate.simd that return a vector, and the one of each arithmetic operator
-VECTOR_RESULTS = frozenset({"vload", "vzero", "vsplat", "vsqrt", "vadd", "vsub", "vmul", "vdiv", "vneg"})
+VECTOR_RESULTS = frozenset({"vget", "vload", "vzero", "vsplat", "vsqrt", "vadd", "vsub", "vmul", "vdiv", "vneg"})
 VECTOR_OPERATORS = {ast.Add: "vadd", ast.Sub: "vsub", ast.Mult: "vmul", ast.Div: "vdiv"}
 
 

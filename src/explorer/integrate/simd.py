@@ -21,6 +21,12 @@ if NOJIT:  # pragma: no cover - plain-Python twins (numpy elementwise = the same
     def vstore(a, i, v):
         a.reshape(-1)[i:i + LANES] = v
 
+    def vget(a, k, r):
+        return a[k, r].copy()
+
+    def vset(a, k, r, v):
+        a[k, r] = v
+
     def vzero():
         return np.zeros(LANES)
 
@@ -146,6 +152,38 @@ else:
             builder.store(args[2], _vec_ptr(context, builder, sig.args[0], args[0], args[1]), align=8)
             return context.get_dummy_value()
         return _types.void(a, _types.intp, f64vec), codegen
+
+    def _is_c_f64_3d(a):
+        return _is_c_f64(a) and a.ndim == 3
+
+    def _row_ptr(context, builder, sig, args):
+        """The address of a[k, r, 0] (a of shape (K, R, LANES), C-contiguous) as a vector pointer: the
+        offset (k R + r) LANES computed from the array's own R."""
+        ary = context.make_array(sig.args[0])(context, builder, args[0])
+        rows = _cgutils.unpack_tuple(builder, ary.shape, 3)[1]
+        idx = builder.mul(builder.add(builder.mul(args[1], rows), args[2]), _ir.Constant(rows.type, LANES))
+        return builder.bitcast(builder.gep(ary.data, [idx]), _VT.as_pointer())
+
+    @_intrinsic
+    def vget(typingctx, a, k, r):
+        """a[k, r, 0:LANES] as a vector, a of shape (K, R, LANES): the recurrences' coefficient k of row
+        r (one call where ``vload(a, k * R * LANES + r * LANES)`` is five operations for numba to type)."""
+        if not (_is_c_f64_3d(a) and isinstance(k, _types.Integer) and isinstance(r, _types.Integer)):
+            return None
+        return f64vec(a, _types.intp, _types.intp), lambda context, builder, sig, args: builder.load(
+            _row_ptr(context, builder, sig, args), align=8)
+
+    @_intrinsic
+    def vset(typingctx, a, k, r, v):
+        """a[k, r, 0:LANES] = v, a of shape (K, R, LANES) (:func:`vget`)."""
+        if not (_is_c_f64_3d(a) and isinstance(k, _types.Integer) and isinstance(r, _types.Integer)
+                and v == f64vec):
+            return None
+
+        def codegen(context, builder, sig, args):
+            builder.store(args[3], _row_ptr(context, builder, sig, args), align=8)
+            return context.get_dummy_value()
+        return _types.void(a, _types.intp, _types.intp, f64vec), codegen
 
     @_intrinsic
     def vzero(typingctx):
