@@ -257,7 +257,7 @@ def stages_alone(order, tangent, reps=20000):
     from explorer import model
     from explorer._jit import njit
     from explorer.analysis import lyapunov
-    from explorer.integrate import lanes
+    from explorer.integrate import lane_parts, lanes
     from explorer.integrate.simd import LANES
 
     w = LANES
@@ -280,7 +280,7 @@ def stages_alone(order, tangent, reps=20000):
     L_g = np.zeros(w)
     GC = np.zeros((order + 1, w))
     G = np.zeros(w)
-    norms = mod._indicator_norms_lanes if tangent else mod._norms_lanes
+    norms = lane_parts.indicator_norms_lanes if tangent else mod._norms_lanes
     evaluate, section = mod._evaluate_lanes, mod._section_lanes
 
     @njit(cache=False)
@@ -321,7 +321,7 @@ def stages_alone(order, tangent, reps=20000):
 
 def libm_log_per_lane(reps=2_000_000):
     """Seconds of CPU per lane of libm's log as the indicators' vector step end calls it
-    (``_indicator_ends_lanes`` of :mod:`explorer.integrate.codegen_indicators`: a loop over the lanes of a
+    (``indicator_ends_lanes`` of :mod:`explorer.integrate.lane_parts`: a loop over the lanes of a
     group, arguments near 1 as the norms of a renormalised deviation vector after a step), less the same
     loop without the log (whether a vector log is worth writing)."""
     import math

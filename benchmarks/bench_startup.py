@@ -53,7 +53,7 @@ t_import = time.perf_counter() - t0
 prm = model.FIGURE4.with_(mu=0.5)
 Y0 = model.section_state(prm, [0.0, 0.3], [0.0, 0.0], 2.0)
 t1 = time.perf_counter()
-r = sections.crossings(prm, states=Y0, 3, method=METHOD, KW)
+r = sections.crossings(prm, states=Y0, n_crossings=3, method=METHOD, KW)
 t_call = time.perf_counter() - t1
 assert r.count.min() == 3
 print(json.dumps({"import": t_import, "first_call": t_call}))

@@ -75,7 +75,7 @@ def main():
     br = fixedpoints.continue_branch(model.FIGURE4, 2.0, "mu", 0.0, 4.0, 0.1)
     t_cont = time.perf_counter() - t0
     rows.append(("fixed-point continuation, 0 <= mu <= 4, step 0.1", t_cont,
-                 f"{len(br.values)} points, stability change at mu = {br.bifurcations[0]:.8f}"))
+                 f"{len(br.values)} points, stability change at mu = {br.bifurcations[0]['value']:.8f}"))
 
     lines = [BEGIN, "## Workflows", "",
              f"- Date: {time.strftime('%Y-%m-%dT%H:%M:%S%z')}",
