@@ -13,7 +13,6 @@ Used for refactors that must not change results (e.g. each method's step rendere
 by tools/gen_lanes.py). Each run must use its own NUMBA_CACHE_DIR.
 """
 import sys
-import warnings
 
 import numpy as np
 
@@ -39,10 +38,7 @@ for m, kw in (("dop853", dict(tol=1e-12)), ("taylor", dict(tol=1e-13)), ("split4
     out[m] = np.concatenate([r.data.ravel(), r.final.ravel(), r.info.ravel()])
 y0 = model.section_state(prm, p1[:6], p2[:6], 2.0)
 for m, kw in (("dop853", dict(tol=1e-12)), ("taylor", dict(tol=1e-13)), ("split6", dict(dt=0.05))):
-    # the flow's states by position: the one form that every revision compared takes (states= is newer)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)
-        r = lyapunov.indicators(prm, y0, tmax=300.0, method=m, history=5, **kw)
+    r = lyapunov.indicators(prm, states=y0, tmax=300.0, method=m, history=5, **kw)
     out["ly_" + m] = np.concatenate([r.mlce, r.megno, r.fli, r.final.ravel(), r.history.ravel()])
 res = tr.trajectory(tr.full_params(), tr.initial_state(tr.full_params(), 0.5, 0.0, 2.0, 0.0), 200.0, 2001)
 out["traj"] = np.concatenate([np.asarray(res[k], float).ravel() for k in sorted(res)
