@@ -79,11 +79,10 @@ def run_case(prm, h):
     from explorer import model
     from explorer.analysis import sections
     from explorer.model import ParameterError
-    e = model.allowed_ellipse(prm, h)
     u = np.array([-0.9, -0.3, 0.0, 0.5, 0.95, 0.2])
     v = np.array([0.1, -0.4, 0.0, 0.2, 0.0, 0.9])
     try:
-        c1, c2, r1, r2 = e
+        c1, c2, r1, r2 = model.allowed_ellipse(prm, h)
         y0 = model.section_state(prm, c1 + r1 * u, c2 + r2 * v, h)
     except (TypeError, ParameterError) as exc:
         return {"refused": f"start: {exc}"}, None, None

@@ -109,7 +109,8 @@ def main(argv=None):
 
     def ret(y, sign):
         out = np.empty(5)
-        st, t = return_map_taylor(y, V0, P, -1.0, 0.0, sign, 1e3, order, 10**8, out, np.empty((0, 5)))
+        st, t = return_map_taylor(y, V0, P, -1.0, 0.0, sign, 1e3, order, 10**8, np.zeros(1, np.int64), out,
+                                  np.empty((0, 5)))
         assert st == 0 and t * sign > 0
         return out
 

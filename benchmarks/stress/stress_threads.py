@@ -93,8 +93,8 @@ def main(argv=None):
             fp = fixedpoints.find_fixed_point(model.FIGURE4.with_(mu=0.5), 2.0, (-0.2, 0.0))
             br = fixedpoints.continue_branch(model.FIGURE4, 2.0, "mu", 0.0, 1.0 if quick else 3.2, 0.2)
             seps = fixedpoints.separatrices(fp.params, fp.h, fp, iterations=2 if quick else 4, max_points=400)
-            outs.append([fp.point, fp.jacobian, np.array([p.point for p in br.points]),
-                         np.array(br.bifurcations)] + seps)
+            outs.append([fp.point, fp.jacobian, np.array([p.point for p in br.orbits]),
+                         np.array([b["value"] for b in br.bifurcations])] + seps)
     finally:
         set_num_threads(old)
     ok = len(outs[0]) == len(outs[1]) and all(equal(x, y) for x, y in zip(outs[0], outs[1]))
