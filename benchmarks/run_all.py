@@ -18,6 +18,10 @@ Benchmarks (script, RESULTS.md section):
   greene          bench_greene.py          GREENE (Greene's k_c of the standard map's golden curve)
   systems         bench_systems.py         SYSTEMS (a System's crossings vs heyoka: Hénon–Heiles sections)
 
+With ``--quick`` it also runs, as a smoke test, the scripts a full run leaves to be run alone
+(:data:`SMOKE`: each records its table itself, with ``--write`` or by hand): adaptive, chaos,
+greene_section, periodic, roofline, store, manifolds and serve (the browser).
+
 Each section of RESULTS.md carries its own command, date, machine and versions; a full run of
 this script also writes the RUN-ALL section (what ran, exit status, wall time).  Benchmarks are
 run sequentially: they time themselves and must not compete for the cores.  Exit status: the
@@ -44,20 +48,39 @@ BENCHMARKS = {
     "greene": "bench_greene.py",
     "systems": "bench_systems.py",
 }
+#: the scripts that only ``--quick`` runs, with their arguments for a short run
+SMOKE = {
+    "adaptive": ["bench_adaptive.py", "--quick"],
+    "chaos": ["bench_chaos.py", "--quick"],
+    "greene_section": ["bench_greene_section.py", "--quick"],
+    "periodic": ["bench_periodic.py", "--quick"],
+    "roofline": ["bench_roofline.py", "--quick"],
+    "store": ["bench_store.py", "--quick"],
+    "manifolds": ["bench_manifolds.py"],
+    "serve": ["bench_serve.py", "2"],
+}
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="pass --quick to every script")
-    ap.add_argument("--only", nargs="+", choices=sorted(BENCHMARKS), help="run only these")
-    ap.add_argument("--skip", nargs="+", choices=sorted(BENCHMARKS), default=[], help="do not run these")
+    ap.add_argument("--only", nargs="+", choices=sorted({**BENCHMARKS, **SMOKE}), help="run only these")
+    ap.add_argument("--skip", nargs="+", choices=sorted({**BENCHMARKS, **SMOKE}), default=[],
+                    help="do not run these")
     ap.add_argument("--stress", action="store_true", help="also run benchmarks/stress/run_stress.py")
     ap.add_argument("--timeout", type=float, default=3 * 3600, help="per script, seconds [3 h]")
     args = ap.parse_args(argv)
-    names = [n for n in (args.only or BENCHMARKS) if n not in args.skip]
+    alone = sorted(set(args.only or ()) & set(SMOKE)) if not args.quick else []
+    if alone:
+        ap.error(f"{', '.join(alone)} run(s) only with --quick here; a full run is the script's own "
+                 f"(python benchmarks/{SMOKE[alone[0]][0]})")
+    scripts = {n: [f, *(["--quick"] if args.quick else [])] for n, f in BENCHMARKS.items()}
+    if args.quick:
+        scripts.update(SMOKE)
+    names = [n for n in (args.only or scripts) if n in scripts and n not in args.skip]
     started, load0, T0 = C.now(), C.loadavg(), time.perf_counter()
     report = []
-    jobs = [(n, [sys.executable, str(C.HERE / BENCHMARKS[n])] + (["--quick"] if args.quick else [])) for n in names]
+    jobs = [(n, [sys.executable, str(C.HERE / scripts[n][0]), *scripts[n][1:]]) for n in names]
     if args.stress:
         jobs.append(("stress", [sys.executable, str(C.HERE / "stress" / "run_stress.py")]
                      + (["--quick"] if args.quick else [])))
