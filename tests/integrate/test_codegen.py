@@ -336,20 +336,20 @@ def test_vector_arithmetic_is_written_as_simd_calls_with_scalars_splatted_and_sc
     source = '''\
 def f(P, X, W, order):
     s1 = P[0] * 2.0 - 1.0
-    u2 = vload(X, 0) * vload(X, 8)
+    u2 = vget(X, 0, 0) * vget(X, 0, 1)
     acc = vzero()
     for j in range(order):
         acc = acc - (s1 * (order - j) - j) * u2
-    vstore(W, 0, -acc / order)
+    vset(W, 0, 0, -acc / order)
 '''
     body = codegen.vector_calls(source).splitlines()[1:]
     assert [line.strip() for line in body] == [
         "s1 = P[0] * 2.0 - 1.0",
-        "u2 = vmul(vload(X, 0), vload(X, 8))",
+        "u2 = vmul(vget(X, 0, 0), vget(X, 0, 1))",
         "acc = vzero()",
         "for j in range(order):",
         "acc = vsub(acc, vmul(vsplat(s1 * (order - j) - j), u2))",
-        "vstore(W, 0, vdiv(vneg(acc), vsplat(order)))",
+        "vset(W, 0, 0, vdiv(vneg(acc), vsplat(order)))",
     ]
 
 

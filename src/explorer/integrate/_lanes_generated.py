@@ -211,9 +211,9 @@ def rhs(y, P, dy):
 from explorer.integrate.simd import (  # noqa: E402
     LANES, vadd, vdiv, vget, vload, vmul, vneg, vset, vsplat, vsqrt, vstore, vsub, vzero)
 
-#: flat strides of one order in the lane arrays X[k, i, l] and W[k, r, l]
+#: the flat stride of one order in the lane array X[k, i, l] (the drivers' helpers; the recurrence
+#: addresses X and W by vget and vset)
 XS = DIM * LANES
-WS = max(N_WORK, 1) * LANES
 
 
 @njit(error_model='numpy')

@@ -636,9 +636,9 @@ def rhs(y, P, dy):
 from explorer.integrate.simd import (  # noqa: E402
     LANES, vadd, vdiv, vget, vload, vmul, vneg, vset, vsplat, vsqrt, vstore, vsub, vzero)
 
-#: flat strides of one order in the lane arrays X[k, i, l] and W[k, r, l]
+#: the flat stride of one order in the lane array X[k, i, l] (the drivers' helpers; the recurrence
+#: addresses X and W by vget and vset)
 XS = DIM * LANES
-WS = max(N_WORK, 1) * LANES
 
 
 {lanes_recurrence}'''
@@ -717,7 +717,7 @@ def recurrence(system: System, name: str = "taylor_coefficients", expressions=No
 
 
 #: the functions of explorer.integrate.simd that return a vector, and the one of each arithmetic operator
-VECTOR_RESULTS = frozenset({"vget", "vload", "vzero", "vsplat", "vsqrt", "vadd", "vsub", "vmul", "vdiv", "vneg"})
+VECTOR_RESULTS = frozenset({"vget", "vzero", "vsplat", "vsqrt", "vadd", "vsub", "vmul", "vdiv", "vneg"})
 VECTOR_OPERATORS = {ast.Add: "vadd", ast.Sub: "vsub", ast.Mult: "vmul", ast.Div: "vdiv"}
 
 

@@ -167,7 +167,8 @@ else:
     @_intrinsic
     def vget(typingctx, a, k, r):
         """a[k, r, 0:LANES] as a vector, a of shape (K, R, LANES): the recurrences' coefficient k of row
-        r (one call where ``vload(a, k * R * LANES + r * LANES)`` is five operations for numba to type)."""
+        r (one call, where ``vload`` at the flat offset ``(k R + r) LANES`` also gives numba that
+        offset's arithmetic to type and lower)."""
         if not (_is_c_f64_3d(a) and isinstance(k, _types.Integer) and isinstance(r, _types.Integer)):
             return None
         return f64vec(a, _types.intp, _types.intp), lambda context, builder, sig, args: builder.load(
