@@ -22,10 +22,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from explorer.analysis import budget
+from explorer.analysis.classification import FREQUENCY, RULES, default_threshold, orbit_classes
 from explorer.kernels import indicator_table as table
 from explorer.model import ParameterError, validation
 
-__all__ = ["CellRaster", "ChaosMap", "INDICATORS", "chaos_map", "default_threshold", "refinement"]
+__all__ = ["CellRaster", "ChaosMap", "INDICATORS", "chaos_map", "refinement"]
 
 #: the largest raster side
 MAX_RESOLUTION = 4096
@@ -45,34 +46,8 @@ REACH_CELLS = 1
 #: the version of :func:`refinement`'s rule: raise it when a change of the rule changes which cells it
 #: computes (a scene's adaptive map is hashed with it: explorer.analysis.sweep.map_rule)
 RULE_VERSION = 3
-
-
-@dataclass(frozen=True)
-class _Rule:
-    """How an indicator classifies and compares: chaotic ``above`` the threshold (else below),
-    compared in log (values at least ``floor``) or as is."""
-
-    above: bool
-    log: bool
-    floor: float
-
-
-#: the indicators a chaos map draws, and their rules
-RULES = {"mlce": _Rule(True, True, 1e-4), "megno": _Rule(True, True, 0.5), "fli": _Rule(True, False, 0.0),
-         "sali": _Rule(False, True, 1e-16), "gali2": _Rule(False, True, 1e-16),
-         "frequency_diffusion": _Rule(True, False, 0.0)}   # log10 |nu1 - nu2| already
-#: the indicator of :func:`explorer.frequency_diffusion` (tmax: its N returns per half)
-FREQUENCY = "frequency_diffusion"
+#: the indicators a chaos map draws
 INDICATORS = tuple(n for n in table.TANGENT_NAMES if n in RULES) + (FREQUENCY,)
-
-
-def default_threshold(indicator: str, tmax: float) -> float:
-    """The class threshold of ``indicator`` at time T: <Y> > 4 (MEGNO); mLCE > 3 ln T / T (the
-    regular envelope); FLI > 2 ln T (|w| grows linearly on a torus); SALI, GALI_2 < 1e-8; frequency
-    diffusion log10 |nu1 - nu2| > -6 (docs/chaos_map.md)."""
-    T = max(float(tmax), math.e)
-    return {"megno": 4.0, "mlce": 3.0 * math.log(T) / T, "fli": 2.0 * math.log(T), FREQUENCY: -6.0}.get(indicator,
-                                                                                                      1e-8)
 
 
 @dataclass(frozen=True)
@@ -177,11 +152,9 @@ class CellRaster:
 
     def record(self, r, c, v, early, ok) -> None:
         """Cells (r, c) computed: values ``v``, stopped ``early`` (chaotic), integrated to the end (``ok``)."""
-        with np.errstate(invalid="ignore"):
-            chaotic = early | ((v > self.threshold) if self.rule.above else (v < self.threshold))
+        chaotic, ok = orbit_classes(v, self.indicator, self.threshold, early, ok)
         self.values[r, c] = v
         self.computed[r, c] = True
-        ok = early | (np.isfinite(v) & ok)   # stopped early: chaotic
         self.cls[r, c] = np.where(ok, np.where(chaotic, CHAOTIC, REGULAR), FAILED)
         self.q[r, c] = self._compared(v, chaotic)
 

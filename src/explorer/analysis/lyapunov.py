@@ -11,6 +11,7 @@ import numpy as np
 from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
 from explorer.analysis import budget, system_sections
+from explorer.analysis.classification import orbit_classes
 from explorer.analysis.section_map import is_params, system_first
 from explorer.analysis.system_indicators import driver_outputs, early_levels, run_indicator_driver, system_indicators
 from explorer.integrate import methods
@@ -112,10 +113,13 @@ class Indicators:
     sali = _Column("sali")
     gali2 = _Column("gali2")
 
-    def chaotic(self, threshold: float) -> np.ndarray:
-        """Orbits classified chaotic: <Y> > ``threshold`` or stopped early as chaotic."""
-        early = np.zeros(len(self.megno), bool) if self.early is None else self.early > 0
-        return early | (self.megno > threshold)
+    def chaotic(self, threshold: float, indicator: str = "megno") -> np.ndarray:
+        """Orbits classified chaotic by ``indicator`` (MEGNO: <Y> > ``threshold``) or stopped early
+        as chaotic (explorer.analysis.classification.orbit_classes; docs/chaos_map.md)."""
+        if indicator not in self.which:
+            raise ParameterError(f"indicator must be one of the computed indicators {list(self.which)}; "
+                                 f"got {indicator!r}")
+        return orbit_classes(self.values[indicator], indicator, threshold, self.early)[0]
 
     def status_name(self, i):
         return STATUS_NAMES[int(self.status[i])]

@@ -18,6 +18,7 @@ import numpy as np
 from explorer import model
 from explorer._jit import max_threads
 from explorer.analysis import sections
+from explorer.analysis.classification import FREQUENCY, default_threshold, orbit_classes
 from explorer.kernels import indicator_table
 from explorer.model import ParameterError
 
@@ -307,9 +308,7 @@ def map_time(ly) -> float:
 
 def map_threshold(ly) -> float:
     """The class threshold of a [lyapunov] table's map: ``threshold`` for MEGNO, else the map
-    indicator's default at its time (explorer.analysis.chaos_map.default_threshold)."""
-    from explorer.analysis.chaos_map import default_threshold
-
+    indicator's default at its time (explorer.analysis.classification.default_threshold)."""
     ind = ly.map_indicator
     return float(ly.threshold) if ind == "megno" else float(default_threshold(ind, map_time(ly)))
 
@@ -383,7 +382,7 @@ def adaptive_map(spec: SweepSpec | SystemSweepSpec, panel: PanelSpec, threads=No
     the panel's grid; a computed cell's arrays are the exact path's bit for
     bit, a filled cell has the map's indicator filled and the others NaN; ``map_computed`` marks
     the computed seeds, ``map_chaotic`` every cell's class (docs/scenes.md)."""
-    from explorer.analysis.chaos_map import FREQUENCY, chaos_map
+    from explorer.analysis.chaos_map import chaos_map
 
     ly = spec.lyapunov
     ind = ly.map_indicator
@@ -402,37 +401,18 @@ def adaptive_map(spec: SweepSpec | SystemSweepSpec, panel: PanelSpec, threads=No
 
 
 def classify(arrays, indicator: str, threshold: float) -> tuple:
-    """(chaotic, valid) per seed of a panel's indicator ``arrays`` by ``indicator`` at ``threshold``,
-    as explorer.chaos_map classifies (chaotic above it, SALI and GALI_2 below; an orbit stopped early
-    counts as chaotic; valid: integrated to the end with a finite value); a filled cell of an
-    adaptive map has the class it was filled with (``map_chaotic``)."""
-    from explorer.analysis.chaos_map import FREQUENCY, RULES
-
-    v = np.asarray(arrays[indicator], float)
-    with np.errstate(invalid="ignore"):
-        chaotic = v > threshold if RULES[indicator].above else v < threshold
-    if indicator == FREQUENCY:
-        valid = np.isfinite(v)
+    """(chaotic, valid) per seed of a panel's indicator ``arrays`` by ``indicator`` at ``threshold``
+    (explorer.analysis.classification.orbit_classes; valid: stopped early, or integrated to the end
+    with a finite value); a filled cell of an adaptive map has the class it was filled with
+    (``map_chaotic``)."""
+    if indicator == FREQUENCY:   # frequency diffusion: no early stop, no status
+        early = ok = None
     else:
-        early = arrays.get("lyapunov_early")
-        early = np.zeros(len(v), bool) if early is None else np.asarray(early) > 0
-        chaotic |= early
-        valid = (np.asarray(arrays["lyapunov_status"]) == 0) & (early | np.isfinite(v))
+        early, ok = arrays.get("lyapunov_early"), np.asarray(arrays["lyapunov_status"]) == 0
+    chaotic, valid = orbit_classes(arrays[indicator], indicator, threshold, early, ok)
     if "map_chaotic" in arrays:
         chaotic = np.where(np.asarray(arrays["map_computed"], bool), chaotic, arrays["map_chaotic"])
     return chaotic & valid, valid
-
-
-#: how a summary, a raster's title and an atlas name the indicator that classifies
-CLASS_NAMES = {"megno": "MEGNO", "mlce": "mLCE", "fli": "FLI", "sali": "SALI", "gali2": "GALI2",
-               "frequency_diffusion": "log10 |nu1 - nu2|"}
-
-
-def class_text(indicator: str, threshold: float) -> str:
-    """How :func:`classify` classifies, as text: ``MEGNO > 4``, ``SALI < 1e-08``."""
-    from explorer.analysis.chaos_map import RULES
-
-    return f"{CLASS_NAMES[indicator]} {'>' if RULES[indicator].above else '<'} {threshold:.3g}"
 
 
 def panel_fraction(arrays, indicator: str, threshold: float) -> tuple:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from explorer.analysis.sweep import class_text
+from explorer.analysis.classification import class_text
 from explorer.app.figures import _FONT_SIZE, _TICK_SIZE, FORBIDDEN_COLOR, _matplotlib, symbol_label
 
 

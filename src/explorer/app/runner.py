@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from explorer.analysis import sections, sweep
+from explorer.analysis.classification import CLASS_NAMES, class_text
 from explorer.analysis.sections import ADAPTIVE_METHODS, energy_warning
 from explorer.app import interrupt
 from explorer.app.interrupt import Interrupted
@@ -90,7 +91,7 @@ def raster_maps(scene, maps) -> list:
         m["values"] = m["extra"][ly.map_indicator] if ly.map_indicator in m["extra"] else m["megno"]
         m["fraction"] = sweep.panel_fraction(m["extra"], *scene_class(scene))[0]
         m["computed"] = computed_fraction(m["extra"])
-        m["classified"] = sweep.class_text(*scene_class(scene))
+        m["classified"] = class_text(*scene_class(scene))
         m["stopped"] = stopped_early(m["extra"])
         m["stop_level"] = ly.early_megno if ly.early_stop else None
     return rasters
@@ -440,7 +441,7 @@ class _SweepStats:
                            dropped=sum(self.dropped.values()), products={k: tuple(v) for k, v in plan.todo.items()},
                            indicator_orbits=self.ind_orbits, indicator_dh=self.ind_dh,
                            indicator_warning=self.ind_warning, indicator_statuses=dict(self.ind_statuses),
-                           map_cells=tuple(self.map_cells), classified=sweep.class_text(*scene_class(scene)))
+                           map_cells=tuple(self.map_cells), classified=class_text(*scene_class(scene)))
 
 
 def _setting(section) -> str:
@@ -652,7 +653,7 @@ def run_atlas(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
             ly = scene.lyapunov
             time_ = sweep.map_time(ly) if ly.map_resolution else ly.time
             title = (f"{scene.name}: chaotic fraction\n{atlas_seeding(scene, data)}, "
-                     f"{sweep.CLASS_NAMES[data.indicator]} time {time_:g}"
+                     f"{CLASS_NAMES[data.indicator]} time {time_:g}"
                      + (", early classification" if ly.early_stop else ""))
             figure_paths = tuple(save_figure(atlas_heatmap(data, title=title, dpi=scene.figure.dpi), stem,
                                              text={FIGURE_SETTINGS_KEY: settings}))
@@ -660,7 +661,7 @@ def run_atlas(scene, out=None, *, figure=None, draw=True, jobs=1, backend=None, 
                        crossings=0, stopped=0, statuses={}, max_dh=0.0, warning=None, fractions=(),
                        threshold=scene_class(scene)[1], figure=figure_paths,
                        wall_time=time.perf_counter() - t_start, products={"cells": computed},
-                       classified=sweep.class_text(*scene_class(scene)))
+                       classified=class_text(*scene_class(scene)))
 
 
 def atlas_seeding(scene, data) -> str:

@@ -9,7 +9,8 @@ import math
 
 import numpy as np
 
-from explorer.analysis.sweep import class_text, panel_class
+from explorer.analysis.classification import class_text
+from explorer.analysis.sweep import panel_class
 from explorer.app import figures
 from explorer.app.chaos_raster import axis_label, chaos_rasters
 from explorer.io import store

@@ -8,7 +8,8 @@ from time import monotonic
 
 import numpy as np
 
-from explorer.analysis.chaos_map import RULES, TOLERANCE, CellRaster, default_threshold, refinement
+from explorer.analysis.chaos_map import TOLERANCE, CellRaster, refinement
+from explorer.analysis.classification import RULES, default_threshold
 from explorer.analysis.rotation import frequency_diffusion
 from explorer.app.serve.overlays import elliptic_center, rotation_map
 from explorer.app.serve.settings import Settings, Window
