@@ -7,7 +7,7 @@ import pytest
 
 import explorer as ex
 from explorer.analysis import sweep
-from explorer.analysis.classification import RULES, class_text, default_threshold, orbit_classes
+from explorer.analysis.classification import RULES, class_text, default_threshold, fraction, orbit_classes
 
 K = 2.0
 N = 16
@@ -30,6 +30,17 @@ def test_an_orbit_stopped_early_is_chaotic_and_valid_and_a_nonfinite_or_unfinish
     chaotic, valid = orbit_classes(v, "megno", 4.0, early, ok)
     assert chaotic.tolist() == [True, False, False, False, True]
     assert valid.tolist() == [True, False, False, True, True]
+
+
+def test_a_fraction_has_the_binomial_error_and_never_claims_none():
+    chaotic = np.array([True] * 30 + [False] * 70 + [True] * 5)
+    valid = np.array([True] * 100 + [False] * 5)
+    p, err, n = fraction(chaotic, valid)
+    assert (p, n) == (0.3, 100) and err == pytest.approx(np.sqrt(0.3 * 0.7 / 100))
+    assert fraction(np.ones(8, bool), np.ones(8, bool))[1] == pytest.approx(1 / 16)
+    assert np.isnan(fraction(chaotic, np.zeros(105, bool))[0])
+    megno = np.array([1.0, 5.0, np.nan, 9.0])
+    assert ex.chaotic_fraction(megno, 4.0)[:2] == fraction(np.array([0, 1, 0, 1]), np.array([1, 1, 0, 1]))[:2]
 
 
 def test_default_thresholds_follow_the_regular_envelopes_of_their_time():

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["CLASS_NAMES", "FREQUENCY", "RULES", "class_text", "default_threshold", "orbit_classes"]
+__all__ = ["CLASS_NAMES", "FREQUENCY", "RULES", "class_text", "default_threshold", "fraction", "orbit_classes"]
 
 
 @dataclass(frozen=True)
@@ -55,6 +55,18 @@ def orbit_classes(values, indicator: str, threshold: float, early=None, ok=None)
         beyond = v > threshold if RULES[indicator].above else v < threshold
     finite = np.isfinite(v) if ok is None else np.isfinite(v) & np.asarray(ok, bool)
     return early | beyond, early | finite
+
+
+def fraction(chaotic, valid) -> tuple:
+    """(fraction p, binomial standard error, n) of the ``valid`` orbits that are ``chaotic``: the error
+    is sqrt(p (1 - p) / n), at least 1 / (2 n) so that a sample all of one class does not claim
+    none; (NaN, NaN, 0) when no orbit is valid."""
+    valid = np.asarray(valid, bool)
+    n = int(valid.sum())
+    if n == 0:
+        return float("nan"), float("nan"), 0
+    p = float(np.mean(np.asarray(chaotic, bool)[valid]))
+    return p, math.sqrt(max(p * (1 - p), 0.25 / n) / n), n
 
 
 def class_text(indicator: str, threshold: float) -> str:

@@ -11,7 +11,7 @@ import numpy as np
 from explorer import model
 from explorer._jit import get_num_threads, max_threads, set_num_threads
 from explorer.analysis import budget, system_sections
-from explorer.analysis.classification import orbit_classes
+from explorer.analysis.classification import fraction, orbit_classes
 from explorer.analysis.section_map import is_params, system_first
 from explorer.analysis.system_indicators import driver_outputs, early_levels, run_indicator_driver, system_indicators
 from explorer.integrate import methods
@@ -264,11 +264,6 @@ def regular_bound(T: float) -> float:
 
 
 def chaotic_fraction(megno, threshold, valid=None):
-    """(fraction, binomial standard error, n) of the valid orbits with <Y> > threshold."""
-    megno = np.asarray(megno, float)
-    ok = np.isfinite(megno) if valid is None else (np.asarray(valid, bool) & np.isfinite(megno))
-    n = int(ok.sum())
-    if n == 0:
-        return float("nan"), float("nan"), 0
-    p = float(np.mean(megno[ok] > threshold))
-    return p, math.sqrt(max(p * (1 - p), 0.25 / n) / n), n
+    """(fraction, binomial standard error, n) of the valid orbits (finite, and ``valid``) with
+    <Y> > threshold (explorer.analysis.classification.fraction)."""
+    return fraction(*orbit_classes(megno, "megno", threshold, ok=valid))

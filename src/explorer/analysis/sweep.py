@@ -18,7 +18,7 @@ import numpy as np
 from explorer import model
 from explorer._jit import max_threads
 from explorer.analysis import sections
-from explorer.analysis.classification import FREQUENCY, default_threshold, orbit_classes
+from explorer.analysis.classification import FREQUENCY, default_threshold, fraction, orbit_classes
 from explorer.kernels import indicator_table
 from explorer.model import ParameterError
 
@@ -417,10 +417,7 @@ def classify(arrays, indicator: str, threshold: float) -> tuple:
 
 def panel_fraction(arrays, indicator: str, threshold: float) -> tuple:
     """(chaotic fraction, binomial standard error, valid orbits) of a panel (:func:`classify`)."""
-    from explorer.analysis.lyapunov import chaotic_fraction
-
-    chaotic, valid = classify(arrays, indicator, threshold)
-    return chaotic_fraction(chaotic.astype(float), 0.5, valid)
+    return fraction(*classify(arrays, indicator, threshold))
 
 
 def _worker_task(spec, i):
