@@ -248,8 +248,7 @@ def stages_alone(order, tangent, reps=20000):
     orbits (Figure 4, mu = 0.5) or the chaos map's (mu = 1, one deviation vector), one thread, as the
     generated lane drivers call them (``crossings_lanes_worker`` of :mod:`explorer.integrate.codegen_lanes`,
     ``indicators_lanes_worker`` of :mod:`explorer.integrate.codegen_indicators`): the recurrence, the step
-    norms and the step size's two vector powers (``_norms_lanes``; ``_indicator_norms_lanes`` on the orbit's
-    rows), the Horner sums (``_evaluate_lanes``, every row: the orbit and, for the tangent, its vector) and,
+    norms and the step size's two vector powers (``lane_parts.norms_lanes``, on the orbit's rows), the Horner sums (``_evaluate_lanes``, every row: the orbit and, for the tangent, its vector) and,
     for the crossings, the section's values and variation bound (``_section_lanes``).  What a workload's
     step costs beyond their sum is the rest: the step's checks (``_steps_lanes``), the vector step end
     (``_ends_lanes``, ``_indicator_ends_lanes``), the lanes that take the scalar step end (the roots, the
@@ -280,7 +279,7 @@ def stages_alone(order, tangent, reps=20000):
     L_g = np.zeros(w)
     GC = np.zeros((order + 1, w))
     G = np.zeros(w)
-    norms = lane_parts.indicator_norms_lanes if tangent else mod._norms_lanes
+    n_rows = 5    # the orbit's rows: the tangent's norms leave out its vector
     evaluate, section = mod._evaluate_lanes, mod._section_lanes
 
     @njit(cache=False)
@@ -288,13 +287,12 @@ def stages_alone(order, tangent, reps=20000):
         for _ in range(reps):
             rec(P, X, order, g)
 
+    norms = lane_parts.norms_lanes
+
     @njit(cache=False)
     def step_norms(reps, X, order, norm):
         for _ in range(reps):
-            if tangent:
-                norms(X, order, 5, e_p, e_q, norm)
-            else:
-                norms(X, order, e_p, e_q, norm)
+            norms(X, order, n_rows, e_p, e_q, norm)
 
     @njit(cache=False)
     def horner(reps, X, order, hv, out):

@@ -73,7 +73,7 @@ def test_kernels_match_scalar_bitwise(name, order):
     G._evaluate_lanes(X, order, h, out)
     NORM = np.empty((5, W))
     with np.errstate(all="ignore"):
-        fin, normal = G._norms_lanes(X, order, 1.0 / order, 1.0 / (order - 1), NORM)
+        fin, normal = lane_parts.norms_lanes(X, order, 5, 1.0 / order, 1.0 / (order - 1), NORM)
         for l in range(W):
             _check_lane(P, X, order, h, out, NORM, fin, normal, l)
 
@@ -99,7 +99,7 @@ def _check_lane(P, X, order, h, out, NORM, fin, normal, l):
 
 @pytest.mark.parametrize("order", [4, 15, 16, 25, 40])
 def test_lane_step_size_is_step_size_near_ties_and_for_vanishing_or_subnormal_norms(order):
-    """The vector powers of the generated _norms_lanes and lane_parts.lane_step give step_size's double when the
+    """The vector powers of lane_parts.norms_lanes and lane_parts.lane_step give step_size's double when the
     two radii are nearly equal (either may be the minimum), far apart, and when a norm is 0 or
     subnormal (the scalar path)."""
     rng = np.random.default_rng(order)
@@ -124,7 +124,7 @@ def test_lane_step_size_is_step_size_near_ties_and_for_vanishing_or_subnormal_no
             X[0, 2, l], X[order, 3, l], X[order - 1, 1, l] = s, -a, bm
         NORM = np.empty((5, W))
         with np.errstate(all="ignore"):
-            fin, normal = G._norms_lanes(X, order, e_p, e_q, NORM)
+            fin, normal = lane_parts.norms_lanes(X, order, 5, e_p, e_q, NORM)
         for l in range(len(chunk)):
             want = tk.step_size(np.ascontiguousarray(X[:, :, l].T), order, factor)
             st, got, _last = _lane_h(l, fin, normal, NORM, order)

@@ -489,66 +489,14 @@ def crossings_taylor_worker(next_orbit, Y0, P, a, b, keep, cols, direction, tmax
 
 
 # ---- crossings on SIMD lanes (explorer.analysis.system_sections): each lane crossings_orbit bit for bit
-from explorer.integrate.simd import next_bit, vbits, vmask, vmax_gt, vmin_lt, vradius_power_core, vselect  # noqa: E402
+from explorer.integrate.simd import next_bit, vbits, vmask, vselect  # noqa: E402
 from explorer.kernels.clock import compensated_add  # noqa: E402
 from explorer.kernels.events import excluded_by_variation, sign_change, tail_term  # noqa: E402
-from explorer.kernels.power import is_normal  # noqa: E402
 from explorer.integrate.lane_parts import (  # noqa: E402
-    lane_finish, lane_start, lane_status, lane_step, steps_lanes)
+    lane_finish, lane_start, lane_status, lane_step, norms_lanes, steps_lanes)
 
 #: all lanes' bits
 _ALL_LANES = (1 << LANES) - 1
-
-
-@njit(error_model="numpy")
-def _norms_lanes(X, order, e_p, e_q, NORM):
-    """kernels.taylor.step_size per lane: NORM = (a, bm, s/a, s/bm, min((s/a)^e_p, (s/bm)^e_q)), the
-    last valid where s/a and s/bm are positive normal.  Returns the bits of the lanes whose
-    coefficients of orders order - 1 and order are finite, and of those with s/a, s/bm normal."""
-    op = order * XS
-    oq = (order - 1) * XS
-    s = vsplat(1.0)
-    a = vzero()
-    bm = vzero()
-    x0 = vload(X, 0 * LANES)
-    x1 = vload(X, 1 * LANES)
-    x2 = vload(X, 2 * LANES)
-    x3 = vload(X, 3 * LANES)
-    x4 = vload(X, 4 * LANES)
-    p0 = vload(X, op + 0 * LANES)
-    p1 = vload(X, op + 1 * LANES)
-    p2 = vload(X, op + 2 * LANES)
-    p3 = vload(X, op + 3 * LANES)
-    p4 = vload(X, op + 4 * LANES)
-    q0 = vload(X, oq + 0 * LANES)
-    q1 = vload(X, oq + 1 * LANES)
-    q2 = vload(X, oq + 2 * LANES)
-    q3 = vload(X, oq + 3 * LANES)
-    q4 = vload(X, oq + 4 * LANES)
-    s = vmax_gt(abs(x0), s)
-    a = vmax_gt(abs(p0), a)
-    bm = vmax_gt(abs(q0), bm)
-    s = vmax_gt(abs(x1), s)
-    a = vmax_gt(abs(p1), a)
-    bm = vmax_gt(abs(q1), bm)
-    s = vmax_gt(abs(x2), s)
-    a = vmax_gt(abs(p2), a)
-    bm = vmax_gt(abs(q2), bm)
-    s = vmax_gt(abs(x3), s)
-    a = vmax_gt(abs(p3), a)
-    bm = vmax_gt(abs(q3), bm)
-    s = vmax_gt(abs(x4), s)
-    a = vmax_gt(abs(p4), a)
-    bm = vmax_gt(abs(q4), bm)
-    fin = is_finite(p0) & is_finite(q0) & is_finite(p1) & is_finite(q1) & is_finite(p2) & is_finite(q2) & is_finite(p3) & is_finite(q3) & is_finite(p4) & is_finite(q4)
-    u = s / a
-    v = s / bm
-    vstore(NORM, 0, a)
-    vstore(NORM, LANES, bm)
-    vstore(NORM, 2 * LANES, u)
-    vstore(NORM, 3 * LANES, v)
-    vstore(NORM, 4 * LANES, vmin_lt(vradius_power_core(v, e_q), vradius_power_core(u, e_p)))
-    return vbits(fin), vbits(is_normal(u) & is_normal(v))
 
 
 @njit(error_model="numpy")
@@ -687,7 +635,7 @@ def crossings_lanes_worker(next_orbit, Y0, P, a, b, keep, cols, direction, tmax,
                 for i in range(DIM):
                     for l in range(LANES):
                         X[k, i, l] = -X[k, i, l]
-        fin, normal = _norms_lanes(X, order, e_p, e_q, NORM)
+        fin, normal = norms_lanes(X, order, DIM, e_p, e_q, NORM)
         bits = steps_lanes(NORM, fin, normal, L_on, L_t, tmax, factor, hv, L_last, L_go)
         while bits != 0:
             l, bits = next_bit(bits)

@@ -87,8 +87,8 @@ def flow_taylor_worker(next_orbit, Y0, P, times, order, max_steps, states, energ
         j = atomic_fetch_add(next_orbit, 0, 1)
 
 # ---- the flow on SIMD lanes: each lane flow_orbit bit for bit, with the vector step of crossings_lanes_worker
-# (_norms_lanes, steps_lanes, _evaluate_lanes: kernels.taylor's step and Horner evaluation per lane)
-from explorer.integrate.lane_parts import flow_lane_finish, lane_step, lane_take, steps_lanes  # noqa: E402
+# (norms_lanes, steps_lanes, _evaluate_lanes: kernels.taylor's step and Horner evaluation per lane)
+from explorer.integrate.lane_parts import flow_lane_finish, lane_step, lane_take, norms_lanes, steps_lanes  # noqa: E402
 from explorer.integrate.simd import next_bit, vbits, vmask, vselect  # noqa: E402
 from explorer.kernels.checks import is_finite  # noqa: E402
 from explorer.kernels.clock import compensated_add  # noqa: E402
@@ -177,7 +177,7 @@ def flow_lanes_worker(next_orbit, Y0, P, times, order, max_steps, states, energy
                                    L_E0, states, energy_error, status, info)
     while active > 0:
         taylor_coefficients_lanes(P, X, order, W)
-        fin, normal = _norms_lanes(X, order, e_p, e_q, NORM)
+        fin, normal = norms_lanes(X, order, DIM, e_p, e_q, NORM)
         bits = steps_lanes(NORM, fin, normal, L_on, L_t, tend, factor, hv, L_last, L_go)
         while bits != 0:
             l, bits = next_bit(bits)

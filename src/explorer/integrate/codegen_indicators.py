@@ -125,7 +125,7 @@ def indicators_taylor_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_s
 # accumulators after a step lane by lane with the scalar kernels (their cost is small beside the recurrence)
 from explorer.integrate.lane_parts import (  # noqa: E402
     indicator_cancel_lanes, indicator_ends_lanes, indicator_lane_finish, indicator_lane_start,
-    indicator_norms_lanes, indicator_status, lane_step, next_history_time, steps_lanes)
+    indicator_status, lane_step, next_history_time, norms_lanes, steps_lanes)
 from explorer.integrate.simd import next_bit  # noqa: E402
 
 
@@ -170,7 +170,7 @@ def indicators_lanes_worker(next_orbit, Y0, V0, W0, n, nvec, P, T, order, max_st
                                     out_ext, out_status, out_final, out_steps, out_w)
             return
         taylor_coefficients_lanes(P, X, order, Wk)
-        fin, normal = indicator_norms_lanes(X, order, n, e_p, e_q, NORM)
+        fin, normal = norms_lanes(X, order, n, e_p, e_q, NORM)
         bits = steps_lanes(NORM, fin, normal, L_on, L_t, T, factor, hv, L_last, L_go)
         while bits != 0:
             l, bits = next_bit(bits)

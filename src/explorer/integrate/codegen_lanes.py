@@ -10,7 +10,7 @@ possible.  A lane that may hold a root, or stops, is finished lane by lane with 
 A lane whose orbit stops takes the next one from a queue shared by the workers (one group of LANES lanes
 per thread: analysis.system_sections.run_driver, or ``prange`` in :mod:`explorer.integrate.lanes` for the
 engine's phi = phi0); an orbit's rows depend neither on its lane nor on the thread count.  A lane's start,
-finish and status and the vector step size do not depend on the system: they are in
+finish and status, the step's norms and the vector step size do not depend on the system: they are in
 :mod:`explorer.integrate.lane_parts`, compiled once for all systems.
 """
 from __future__ import annotations
@@ -20,36 +20,14 @@ __all__ = ["render"]
 SOURCE = '''
 
 # ---- crossings on SIMD lanes (explorer.analysis.system_sections): each lane crossings_orbit bit for bit
-from explorer.integrate.simd import next_bit, vbits, vmask, vmax_gt, vmin_lt, vradius_power_core, vselect  # noqa: E402
+from explorer.integrate.simd import next_bit, vbits, vmask, vselect  # noqa: E402
 from explorer.kernels.clock import compensated_add  # noqa: E402
 from explorer.kernels.events import excluded_by_variation, sign_change, tail_term  # noqa: E402
-from explorer.kernels.power import is_normal  # noqa: E402
 from explorer.integrate.lane_parts import (  # noqa: E402
-    lane_finish, lane_start, lane_status, lane_step, steps_lanes)
+    lane_finish, lane_start, lane_status, lane_step, norms_lanes, steps_lanes)
 
 #: all lanes' bits
 _ALL_LANES = (1 << LANES) - 1
-
-
-@njit(error_model="numpy")
-def _norms_lanes(X, order, e_p, e_q, NORM):
-    """kernels.taylor.step_size per lane: NORM = (a, bm, s/a, s/bm, min((s/a)^e_p, (s/bm)^e_q)), the
-    last valid where s/a and s/bm are positive normal.  Returns the bits of the lanes whose
-    coefficients of orders order - 1 and order are finite, and of those with s/a, s/bm normal."""
-    op = order * XS
-    oq = (order - 1) * XS
-    s = vsplat(1.0)
-    a = vzero()
-    bm = vzero()
-{norms}
-    u = s / a
-    v = s / bm
-    vstore(NORM, 0, a)
-    vstore(NORM, LANES, bm)
-    vstore(NORM, 2 * LANES, u)
-    vstore(NORM, 3 * LANES, v)
-    vstore(NORM, 4 * LANES, vmin_lt(vradius_power_core(v, e_q), vradius_power_core(u, e_p)))
-    return vbits(fin), vbits(is_normal(u) & is_normal(v))
 
 
 @njit(error_model="numpy")
@@ -158,7 +136,7 @@ def crossings_lanes_worker(next_orbit, Y0, P, a, b, keep, cols, direction, tmax,
                 for i in range(DIM):
                     for l in range(LANES):
                         X[k, i, l] = -X[k, i, l]
-        fin, normal = _norms_lanes(X, order, e_p, e_q, NORM)
+        fin, normal = norms_lanes(X, order, DIM, e_p, e_q, NORM)
         bits = steps_lanes(NORM, fin, normal, L_on, L_t, tmax, factor, hv, L_last, L_go)
         while bits != 0:
             l, bits = next_bit(bits)
@@ -220,17 +198,9 @@ def _lines(template, dim, indent):
 def render(system) -> str:
     """The driver's source for ``system``: the loops over the state written out, one vector each."""
     n = system.dimension
-    norms = "\n".join([
-        _lines("x{i} = vload(X, {i} * LANES)", n, 4), _lines("p{i} = vload(X, op + {i} * LANES)", n, 4),
-        _lines("q{i} = vload(X, oq + {i} * LANES)", n, 4),
-        # step_size's order: per row, s, then a, then bm (each a running maximum)
-        "\n".join(f"    s = vmax_gt(abs(x{i}), s)\n    a = vmax_gt(abs(p{i}), a)\n    bm = vmax_gt(abs(q{i}), bm)"
-                  for i in range(n)),
-        "    fin = " + " & ".join(f"is_finite(p{i}) & is_finite(q{i})" for i in range(n))])
     section_y = "\n".join(f"    y{i} = vload(Y, {i} * LANES)\n    sy = sy + y{i}\n    g = g + a[{i}] * y{i}"
                           for i in range(n))
     return SOURCE.format(
-        norms=norms,
         eval_start=_lines("y{i} = vload(X, o + {i} * LANES)", n, 4),
         eval_step=_lines("y{i} = y{i} * h + vload(X, o + {i} * LANES)", n, 8),
         eval_store=_lines("vstore(Y, {i} * LANES, y{i})", n, 4),

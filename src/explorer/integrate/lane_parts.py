@@ -197,9 +197,9 @@ def indicator_early(acc, v, w, n, nvec, sali_stop, megno_level, tmin, since):
 
 
 @njit(error_model="numpy")
-def indicator_norms_lanes(X, order, n, e_p, e_q, NORM):
-    """_norms_lanes over the orbit's rows :n only, as taylor_step (its finiteness test and
-    kernels.taylor.step_size on X[:n]): NORM = (a, bm, s/a, s/bm, min((s/a)^e_p, (s/bm)^e_q)).
+def norms_lanes(X, order, n, e_p, e_q, NORM):
+    """kernels.taylor.step_size per lane over the rows :n of X (the orbit's rows), with taylor_step's
+    finiteness test of the last two orders: NORM = (a, bm, s/a, s/bm, min((s/a)^e_p, (s/bm)^e_q)).
     Returns the bits of the finite lanes and of those with s/a, s/bm normal."""
     xs = X.shape[1] * LANES
     op = order * xs
