@@ -1,27 +1,27 @@
 """The Systems the tests share (docs/systems.md): one definition of each, so that the suite generates
 and compiles one module per system (explorer.integrate.codegen keys a module by the system's content
-hash and its name).  The examples of docs/systems.md write Hénon–Heiles with the same equations, name
-and reversor, so they use the same modules (tests/model/test_system.py checks the content hashes)."""
+hash and its name).  The examples of docs/systems.md write Hénon–Heiles with the same equations and
+name, so they use the same modules (tests/model/test_system.py checks the hashes)."""
 import sympy as sp
 
 import explorer as ex
 from explorer.model import classic
 
 x, y, px, py, lam = sp.symbols("x y px py lam")
-#: Hénon–Heiles is even in x: (x, y, px, py) -> (-x, y, px, -py) reverses time
+#: Hénon–Heiles is even in x: (x, y, px, py) -> (-x, y, px, -py) reverses time (classic's reversor)
 HH_REVERSOR = {x: -x, y: y, px: px, py: -py}
 
 
 def henon_heiles(value=1.0):
-    """:func:`explorer.model.classic.henon_heiles` at lam = ``value``: states (x, y, px, py)."""
+    """:func:`explorer.model.classic.henon_heiles` at lam = ``value``: states (x, y, px, py), its
+    reversor :data:`HH_REVERSOR`."""
     return classic.henon_heiles(value)
 
 
-def henon_heiles_reversible(value=1.0):
-    """Hénon–Heiles declaring :data:`HH_REVERSOR` (as docs/systems.md "Reversors")."""
+def henon_heiles_without_reversor(value=1.0):
+    """Hénon–Heiles declaring no reversor (what needs one refuses its map)."""
     hh = classic.henon_heiles(value)
-    return ex.System(dict(zip(hh.states, hh.rhs)), parameters=dict(hh.parameters), energy=hh.energy, name=hh.name,
-                     reversor=HH_REVERSOR)
+    return ex.System(dict(zip(hh.states, hh.rhs)), parameters=dict(hh.parameters), energy=hh.energy, name=hh.name)
 
 
 def oscillator():

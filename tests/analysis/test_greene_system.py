@@ -8,7 +8,7 @@ orbit (periodic.py) gives the same residue."""
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
-from systems import henon_heiles, henon_heiles_reversible, px, py, x, y
+from systems import henon_heiles, henon_heiles_without_reversor, px, py, x, y
 
 import explorer as ex
 from explorer.analysis import greene_core
@@ -22,7 +22,7 @@ AROUND = (0.3, 0.0)
 
 @pytest.fixture(scope="module")
 def smap():
-    return ex.SectionMap(henon_heiles_reversible(), E0, section=x, direction=+1, coords=(y, py), solve=px)
+    return ex.SectionMap(henon_heiles(), E0, section=x, direction=+1, coords=(y, py), solve=px)
 
 
 @pytest.fixture(scope="module")
@@ -63,11 +63,11 @@ def test_each_convergents_orbit_has_mackays_residue_at_its_energy_by_dop853_and_
 
 
 def test_a_map_without_a_reversor_or_a_system_itself_is_refused_naming_what_is_missing():
-    plain = ex.SectionMap(henon_heiles(), E0, section=x, direction=+1, coords=(y, py), solve=px)
+    plain = ex.SectionMap(henon_heiles_without_reversor(), E0, section=x, direction=+1, coords=(y, py), solve=px)
     with pytest.raises(ParameterError, match=r"reversor.*System\(\.\.\., reversor="):
         ex.greene(plain, "noble:5", qmax=11, around=AROUND, param="energy")
     with pytest.raises(ParameterError, match="greene takes a map.*SectionMap"):
-        ex.greene(henon_heiles_reversible(), "noble:5")
-    reversible = ex.SectionMap(henon_heiles_reversible(), E0, section=x, direction=+1, coords=(y, py), solve=px)
+        ex.greene(henon_heiles(), "noble:5")
+    reversible = ex.SectionMap(henon_heiles(), E0, section=x, direction=+1, coords=(y, py), solve=px)
     with pytest.raises(ParameterError, match="param must be one of lam, energy"):
         ex.greene(reversible, "noble:5", qmax=11, around=AROUND, param="mu")

@@ -5,7 +5,7 @@ import pickle
 
 import numpy as np
 import pytest
-from systems import henon_heiles, henon_heiles_reversible, px, py, x, y
+from systems import henon_heiles, henon_heiles_without_reversor, px, py, x, y
 
 import explorer as ex
 from explorer.analysis.maps import AreaPreservingMap
@@ -19,7 +19,7 @@ POINTS = [(0.1, 0.1), (-0.2, 0.15), (0.35, -0.05), (0.0, 0.3)]
 
 @pytest.fixture(scope="module")
 def smap():
-    return ex.SectionMap(henon_heiles_reversible(), E, section=x, direction=+1, coords=(y, py), solve=px)
+    return ex.SectionMap(henon_heiles(), E, section=x, direction=+1, coords=(y, py), solve=px)
 
 
 def central_differences(m, x0, step=1e-6):
@@ -50,7 +50,7 @@ def test_on_a_tilted_section_the_jacobian_preserves_the_restricted_symplectic_fo
     # on x = 0.1 - y with px from H: dx ^ dpx + dy ^ dpy = rho dy ^ dpy, rho = 1 - dpx/dpy = (px + py)/px,
     # so det DP(x) = rho(x) / rho(P(x)), which differs from 1.  The reversor does not map this section
     # to itself (it acts on no map here): the system is smap's, its generated code compiled once
-    tilted = ex.SectionMap(henon_heiles_reversible(), E, section=x + y - 0.1, direction=-1, coords=(y, py), solve=px)
+    tilted = ex.SectionMap(henon_heiles(), E, section=x + y - 0.1, direction=-1, coords=(y, py), solve=px)
 
     def rho(s):
         return (s[2] + s[3]) / s[2]
@@ -172,7 +172,7 @@ def test_a_reversor_that_flips_the_direction_does_not_act_on_the_map_and_what_ne
     with pytest.raises(ParameterError, match="Greene needs a reversor of the map: henon_heiles has no reversor "
                                              "that maps the section x = 0, crossed with direction \\+1"):
         flipped.require_reversor("Greene")
-    bare = ex.SectionMap(henon_heiles(), E, section=x, direction=+1, coords=(y, py), solve=px)
+    bare = ex.SectionMap(henon_heiles_without_reversor(), E, section=x, direction=+1, coords=(y, py), solve=px)
     with pytest.raises(ParameterError, match="henon_heiles declares no reversor"):
         bare.require_reversor("Greene")
 

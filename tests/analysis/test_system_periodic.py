@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
-from systems import henon_heiles_reversible, px, py, x, y
+from systems import henon_heiles, px, py, x, y
 
 import explorer as ex
 from explorer.analysis import manifolds as mf
@@ -23,7 +23,7 @@ HYPERBOLIC_GUESS = (-0.18, 0.0)
 
 @pytest.fixture(scope="module")
 def smap():
-    return ex.SectionMap(henon_heiles_reversible(), E, section=x, direction=+1, coords=(y, py), solve=px)
+    return ex.SectionMap(henon_heiles(), E, section=x, direction=+1, coords=(y, py), solve=px)
 
 
 @pytest.fixture(scope="module")

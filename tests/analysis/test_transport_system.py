@@ -3,7 +3,7 @@ of a System"): Hénon–Heiles (lam = 1) at E = 1/8 on x = 0, px > 0, in (y, py)
 point on the reversor's line py = 0.  The invariant: the two lobes of the turnstile have equal areas
 (the map preserves dy ^ dpy), each by Green's theorem on its arcs with a Richardson error estimate."""
 import pytest
-from systems import henon_heiles_reversible, px, py, x, y
+from systems import henon_heiles, px, py, x, y
 
 import explorer as ex
 from explorer.analysis import manifolds as mf
@@ -13,7 +13,7 @@ from explorer.model import ParameterError
 
 @pytest.fixture(scope="module")
 def smap():
-    return ex.SectionMap(henon_heiles_reversible(), 1.0 / 8.0, section=x, direction=+1, coords=(y, py), solve=px)
+    return ex.SectionMap(henon_heiles(), 1.0 / 8.0, section=x, direction=+1, coords=(y, py), solve=px)
 
 
 def test_the_two_lobes_of_a_systems_turnstile_have_equal_areas(smap):
