@@ -118,9 +118,10 @@ def _window(smap, window) -> tuple:
 class CellRaster:
     """The cells' values, classes and compared values, and how a batch of them is computed."""
 
-    def __init__(self, smap, centres, allowed, indicator, rule, threshold, options):
+    def __init__(self, smap, centres, allowed, indicator, threshold, options):
         n = allowed.shape[0]
-        self.smap, self.centres, self.indicator, self.rule, self.threshold = smap, centres, indicator, rule, threshold
+        self.smap, self.centres, self.indicator, self.threshold = smap, centres, indicator, threshold
+        self.rule = RULES[indicator]
         self.options = options
         self.values = np.full((n, n), np.nan)
         self.cls = np.where(allowed, FAILED, OUTSIDE).astype(np.int8)
@@ -280,7 +281,7 @@ def chaos_map(smap, resolution: int = 512, indicator: str = "megno", tmax: float
         options = {"tmax": T, "threads": threads, "early_stop": bool(early_stop)}
         if early_megno is not None:
             options["early_megno"] = validation.real("early_megno", early_megno, 2.0, lo_open=True)
-    raster = CellRaster(smap, centres, allowed, indicator, RULES[indicator], thr, options)
+    raster = CellRaster(smap, centres, allowed, indicator, thr, options)
     if exact:
         r, c = np.nonzero(allowed)
         raster.compute(r, c)

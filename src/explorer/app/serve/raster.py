@@ -9,7 +9,7 @@ from time import monotonic
 import numpy as np
 
 from explorer.analysis.chaos_map import TOLERANCE, CellRaster, refinement
-from explorer.analysis.classification import RULES, default_threshold
+from explorer.analysis.classification import default_threshold
 from explorer.analysis.rotation import frequency_diffusion
 from explorer.app.serve.overlays import elliptic_center, rotation_map
 from explorer.app.serve.settings import Settings, Window
@@ -91,7 +91,7 @@ def rasters(settings: Settings, window: Window, resolutions: tuple = RESOLUTIONS
         inside = np.asarray(settings.smap.allowed(np.stack([P1, P2], axis=-1)), bool)
         k = n // previous.shape[0]
         shown = np.where(inside, np.kron(previous, np.ones((k, k))), np.nan)
-        raster = CellRaster(None, None, inside, indicator, RULES[indicator], default_threshold(indicator, time), {})
+        raster = CellRaster(None, None, inside, indicator, default_threshold(indicator, time), {})
         steps = iter([np.nonzero(inside)])              # every cell, or those refinement asks for
         if adaptive and i:
             steps = refinement(raster, inside, n, previous.shape[0], TOLERANCE, n * n)
