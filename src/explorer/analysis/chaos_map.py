@@ -144,15 +144,15 @@ class CellRaster:
             rr, cc = r[a:a + BATCH], c[a:a + BATCH]
             if self.indicator == FREQUENCY:
                 v = frequency_diffusion(self.smap, self.centres[rr, cc], **self.options)
-                self.record(rr, cc, v, np.zeros(len(v), bool), np.isfinite(v))
+                self.record(rr, cc, v)
                 continue
             ind = indicators(self.smap, self.centres[rr, cc], which=(self.indicator,), **self.options)
-            v = np.asarray(ind.values[self.indicator], float)
-            early = np.zeros(len(v), bool) if ind.early is None else np.asarray(ind.early) > 0
-            self.record(rr, cc, v, early, np.asarray(ind.status) == 0)
+            self.record(rr, cc, ind.values[self.indicator], ind.early, np.asarray(ind.status) == 0)
 
-    def record(self, r, c, v, early, ok) -> None:
-        """Cells (r, c) computed: values ``v``, stopped ``early`` (chaotic), integrated to the end (``ok``)."""
+    def record(self, r, c, v, early=None, ok=None) -> None:
+        """Cells (r, c) computed: values ``v``, stopped ``early`` (chaotic), integrated to the end (``ok``;
+        None: none stopped early, all integrated to the end: classification.orbit_classes)."""
+        v = np.asarray(v, float)
         chaotic, ok = orbit_classes(v, self.indicator, self.threshold, early, ok)
         self.values[r, c] = v
         self.computed[r, c] = True

@@ -105,7 +105,7 @@ def rasters(settings: Settings, window: Window, resolutions: tuple = RESOLUTIONS
                     last, pending = monotonic(), 0
                 rr, cc = r[a:a + batch], c[a:a + batch]
                 v = np.asarray(cells(P1[rr, cc], P2[rr, cc]), float)
-                raster.record(rr, cc, v, np.zeros(len(v), bool), np.isfinite(v))
+                raster.record(rr, cc, v)
                 pending += len(rr)
         previous = np.where(inside, raster.values, np.nan)
         yield Image(window, n, previous, True, raster.computed & inside)
